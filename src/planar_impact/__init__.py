@@ -1,0 +1,37 @@
+"""planar_impact: exact planar one-point impact with Coulomb friction (numpy only).
+
+Djerassi, *Collision with friction; Part B: Poisson's and Stronge's hypotheses* (2009),
+with Part A's Newton law, Stronge's exact energetic law and the velocity-level
+Newton–Coulomb law of sequential-impulse engines.
+
+>>> import planar_impact as pi
+>>> problem = pi.builders.two_sleds(gamma=0.2, delta=0.85)
+>>> result = problem.solve(mu=0.3, e=0.8, hypothesis="poisson")
+>>> result.collision_type, round(result.vn_separation, 2)
+(3, 0.82)
+"""
+
+from . import builders, errors, laws, process
+from .builders import ImpactProblem, PlanarBody
+from .errors import STATUS_MESSAGES, ImpactInputError
+from .process import impulse_process, process_collision_type, sequential_impulses
+from .solver import HYPOTHESES, BatchResult, ImpactResult, solve, solve_batch
+
+__all__ = [
+    "HYPOTHESES",
+    "STATUS_MESSAGES",
+    "BatchResult",
+    "ImpactInputError",
+    "ImpactProblem",
+    "ImpactResult",
+    "PlanarBody",
+    "builders",
+    "errors",
+    "impulse_process",
+    "laws",
+    "process",
+    "process_collision_type",
+    "sequential_impulses",
+    "solve",
+    "solve_batch",
+]

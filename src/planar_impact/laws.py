@@ -1,0 +1,278 @@
+"""The five impact laws in closed form, vectorised over numpy arrays.
+
+Every function here takes the contact-space description of a problem (the paper's (A20)
+inverse-inertia terms ``m_nn, m_nt, m_tt``, the approach velocities ``v_n^A < 0`` and
+``v_t^A ≥ 0``, ``μ`` and ``e``) as arrays of one shape, and returns arrays of that shape.
+Rows are independent; invalid rows are screened by the caller (:mod:`planar_impact.solver`),
+which also turns the impulses into velocities and energies.
+
+Equation numbers are the paper's (Djerassi, Part B); "A" numbers are Part A's, restated in
+THEORY.md. The independent check of every law is :mod:`planar_impact.process`, which walks
+the impulse process segment by segment.
+
+Throughout, ``P`` is the normal impulse used as the clock of the impulse process; the
+process has at most two tangential phases (THEORY.md §2): forward sliding (``dI_t/dP = −μ``)
+until the slip vanishes at ``P_G = v_t^A/g`` (A58, with ``v_t^A`` for the misprinted
+``v_n^A``), then sticking (``dI_t/dP = −m_nt/m_tt``, if ``p ≥ 0``) or reverse sliding
+(``dI_t/dP = +μ``, if ``p < 0``), both of which last to the end of the impact.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+# Collision types (Poisson and Stronge numbering, the paper's Section 2).
+STICK_IN_COMPRESSION = 1
+STICK_IN_RESTITUTION = 2
+REVERSE_FROM_COMPRESSION = 3
+REVERSE_FROM_RESTITUTION = 4
+FORWARD_SLIDING = 5
+
+# Newton's law (Part A; Table 3's Newton rows) and newton-lcp number their types this way.
+NEWTON_STICK = 1
+NEWTON_REVERSE = 2
+NEWTON_FORWARD = 3
+
+
+class ContactTerms:
+    """The derived scalars of the paper shared by every law, computed once per batch.
+
+    ``delta`` (A20), ``g, h, p, q`` (A35), ``alpha`` (A34), ``r_m`` (A36) and the Table 1
+    ``case`` (1–5).
+    """
+
+    __slots__ = ("mnn", "mnt", "mtt", "vn_abs", "vt", "mu", "delta", "g", "h", "p", "q",
+                 "alpha", "r_m", "case")
+
+    def __init__(self, mnn, mnt, mtt, vn, vt, mu):
+        self.mnn, self.mnt, self.mtt, self.mu = mnn, mnt, mtt, mu
+        self.vn_abs = -vn
+        self.vt = vt
+        self.delta = mnn * mtt - mnt * mnt  # (A20)
+        mu_mtt = mu * mtt
+        mu_mnt = mu * mnt
+        self.g = mu_mtt - mnt  # (A35)
+        self.h = mnn - mu_mnt
+        self.p = mu_mtt + mnt
+        self.q = mnn + mu_mnt
+        self.alpha = vt / self.vn_abs  # (A34)
+        self.r_m = self.g / self.h  # (A36)
+        self.case = table1_case(self.g, self.h, self.p, self.q)
+
+
+def table1_case(g, h, p, q):
+    """Table 1 row (1–5) from the signs of ``g, h, p, q``.
+
+    Case 5 is ``g ≤ 0`` (needs ``h > 0``), Case 4 ``g > 0, h ≤ 0``, Case 3 ``g, h > 0, p < 0``,
+    Cases 1 and 2 ``g, h > 0, p ≥ 0`` told apart by the sign of ``q`` (comment g of the paper
+    lets equal signs join the remaining inequalities).
+    """
+    case = np.where(q >= 0, 1, 2).astype(np.int8)
+    case[p < 0] = 3
+    case[h <= 0] = 4
+    case[g <= 0] = 5
+    return case
+
+
+def poisson_type(terms: ContactTerms, e):
+    """Collision type (1–5) under Poisson's law by Table 1 (with (53)–(57))."""
+    alpha, r_m, case = terms.alpha, terms.r_m, terms.case
+    # Cases 1-3: α ≤ r_m → sticking/reverse sliding from compression (Types 1/3);
+    # r_m < α ≤ (1+e) r_m → from restitution (Types 2/4); beyond → forward sliding (Type 5).
+    # Equality at a boundary does not matter: the results are continuous there (comment a).
+    in_compression = alpha <= r_m
+    in_restitution = alpha <= (1.0 + e) * r_m
+    reverse = case == 3
+    ctype = np.where(
+        in_compression,
+        np.where(reverse, REVERSE_FROM_COMPRESSION, STICK_IN_COMPRESSION),
+        np.where(
+            in_restitution,
+            np.where(reverse, REVERSE_FROM_RESTITUTION, STICK_IN_RESTITUTION),
+            FORWARD_SLIDING,
+        ),
+    ).astype(np.int8)
+    ctype[case == 4] = STICK_IN_COMPRESSION  # Case 4: Type 1 for every α > 0 (57)
+    ctype[case == 5] = FORWARD_SLIDING  # Case 5: Type 5 for every α > 0 (55)
+    return ctype
+
+
+def poisson_impulses(terms: ContactTerms, e, ctype):
+    """``(I_n, I_t)`` by the paper's closed forms for the given collision types.
+
+    All five types share ``I_n = (1 + e) I_nc`` ((26), (29), (36), (44), (49)) and an
+    ``I_t`` affine in ``I_n``; they differ in ``I_nc`` and in that line:
+
+    * Type 1: ``I_nc = (m_tt + α m_nt)|v_n^A|/Δ`` (25); ``I_t = −(m_nt I_n + v_t^A)/m_tt`` (26).
+    * Type 2: ``I_n = (1 + e)|v_n^A|/h`` (29); ``I_t`` as Type 1 (29).
+    * Type 3: ``I_nc = [1 + 2μ m_nt α/g]|v_n^A|/q`` (34); ``I_t = μ I_n − 2μ v_t^A/g`` (36).
+    * Type 4: ``I_nc = |v_n^A|/h`` (40); ``I_t`` as Type 3 (44).
+    * Type 5: ``I_nc = |v_n^A|/h`` (48); ``I_t = −μ I_n`` (49).
+    """
+    mnt, mtt, mu, vt = terms.mnt, terms.mtt, terms.mu, terms.vt
+    compression_per_speed = np.where(
+        ctype == STICK_IN_COMPRESSION,
+        (mtt + terms.alpha * mnt) / terms.delta,  # (25)
+        np.where(
+            ctype == REVERSE_FROM_COMPRESSION,
+            (1.0 + 2.0 * mu * mnt * terms.alpha / terms.g) / terms.q,  # (34)
+            1.0 / terms.h,  # (29), (40), (48)
+        ),
+    )
+    normal_impulse = (1.0 + e) * terms.vn_abs * compression_per_speed
+    sticking = ctype <= STICK_IN_RESTITUTION
+    reverse = (ctype == REVERSE_FROM_COMPRESSION) | (ctype == REVERSE_FROM_RESTITUTION)
+    # I_t = slope · I_n + offset: (26)/(29) sticking, (36)/(44) reverse, (49) forward.
+    slope = np.where(sticking, -mnt / mtt, np.where(reverse, mu, -mu))
+    offset = np.where(sticking, -vt / mtt, np.where(reverse, -2.0 * mu * vt / terms.g, 0.0))
+    tangential_impulse = slope * normal_impulse + offset
+    return normal_impulse, tangential_impulse
+
+
+class TwoPhaseProcess:
+    """The impulse process of THEORY.md §2 in closed form: ``v_n`` piecewise linear in ``P``.
+
+    Phase 1 (forward sliding) has ``dv_n/dP = h`` and lasts until ``P_G = v_t^A/g`` (A58)
+    (forever if ``g ≤ 0``: Case 5). Phase 2 has ``dv_n/dP = Δ/m_tt`` when sticking
+    (``p ≥ 0``) or ``q`` when reverse sliding (``p < 0``), with ``dI_t/dP = −m_nt/m_tt`` or ``+μ``.
+    """
+
+    def __init__(self, terms: ContactTerms):
+        self.terms = terms
+        sticks = terms.p >= 0
+        self.sticks = sticks
+        with np.errstate(divide="ignore", invalid="ignore"):
+            self.p_g = np.where(terms.g > 0, terms.vt / terms.g, np.inf)  # (A58)
+        self.slope_n1 = terms.h
+        self.slope_n2 = np.where(sticks, terms.delta / terms.mtt, terms.q)
+        self.slope_t2 = np.where(sticks, -terms.mnt / terms.mtt, terms.mu)
+        # v_n where the slip vanishes (meaningless where P_G is infinite; masked below).
+        finite_g = np.isfinite(self.p_g)
+        self.vn_at_g = np.where(finite_g, -terms.vn_abs + terms.h * np.where(finite_g, self.p_g, 0.0), np.inf)
+        self.finite_g = finite_g
+
+    def impulse_where_vn_reaches(self, target):
+        """Smallest ``P`` at which ``v_n(P) = target`` (target ≥ 0 > v_n^A)."""
+        t = self.terms
+        in_phase1 = self.vn_at_g >= target  # includes P_G = ∞ (Case 5)
+        phase1 = (target + t.vn_abs) / self.slope_n1
+        phase2 = np.where(self.finite_g, self.p_g, 0.0) + (target - np.where(self.finite_g, self.vn_at_g, 0.0)) / self.slope_n2
+        return np.where(in_phase1, phase1, phase2), in_phase1
+
+    def tangential_impulse(self, normal_impulse):
+        mu = self.terms.mu
+        in_phase1 = normal_impulse <= self.p_g
+        phase2 = -mu * self.p_g + self.slope_t2 * (normal_impulse - np.where(self.finite_g, self.p_g, 0.0))
+        return np.where(in_phase1, -mu * normal_impulse, phase2)
+
+    def newton(self, e):
+        """Newton's law (A30) along the process: it ends where ``v_n = e|v_n^A|``."""
+        normal_impulse, forward = self.impulse_where_vn_reaches(e * self.terms.vn_abs)
+        ctype = np.where(forward, NEWTON_FORWARD, np.where(self.sticks, NEWTON_STICK, NEWTON_REVERSE))
+        compression, _ = self.impulse_where_vn_reaches(np.zeros_like(normal_impulse))
+        return normal_impulse, self.tangential_impulse(normal_impulse), ctype.astype(np.int8), compression
+
+    def stronge(self, e):
+        """Stronge's energetic law, exact: the normal work in restitution ``∫ v_n dP`` equals
+        ``e²`` times minus the normal work in compression (Stronge 2000; the paper's (60) with
+        the work integrated along the piecewise-linear path rather than by ½ I (v^S + v^A)·n).
+        """
+        t = self.terms
+        vn_a = -t.vn_abs
+        compression, compression_in_phase1 = self.impulse_where_vn_reaches(np.zeros_like(vn_a))
+        p_g = np.where(self.finite_g, self.p_g, 0.0)
+        vn_g = np.where(self.finite_g, self.vn_at_g, 0.0)
+        # Work of the normal impulse in compression (negative): trapezoids of v_n over P.
+        work_compression = np.where(
+            compression_in_phase1,
+            0.5 * vn_a * compression,
+            0.5 * (vn_a + vn_g) * p_g + 0.5 * vn_g * (compression - p_g),
+        )
+        work_target = -(e * e) * work_compression  # restitution work to reach, ≥ 0
+        # If the slip vanishes during restitution, the work done before it does.
+        work_to_g = 0.5 * vn_g * (p_g - compression)
+        ends_in_phase1 = compression_in_phase1 & (~self.finite_g | (work_to_g >= work_target))
+        # In phase 1 after compression v_n = h (P − P_c): ½ h x² = target.
+        end_phase1 = compression + np.sqrt(2.0 * work_target / self.slope_n1)
+        # In phase 2 from P0 with v0 ≥ 0 and slope k: v0 x + ½ k x² = remaining work; the
+        # rationalised root 2R/(v0 + √(v0² + 2kR)) stays accurate when v0² ≫ kR.
+        start = np.where(compression_in_phase1, p_g, compression)
+        v_start = np.where(compression_in_phase1, vn_g, 0.0)
+        remaining = np.where(compression_in_phase1, work_target - work_to_g, work_target)
+        remaining = np.maximum(remaining, 0.0)
+        root = np.sqrt(v_start * v_start + 2.0 * self.slope_n2 * remaining)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            step = np.where(remaining > 0, 2.0 * remaining / (v_start + root), 0.0)
+        end_phase2 = start + step
+        normal_impulse = np.where(ends_in_phase1, end_phase1, end_phase2)
+        reverse = ~self.sticks
+        ctype = np.where(
+            ends_in_phase1,
+            FORWARD_SLIDING,
+            np.where(
+                compression_in_phase1,
+                np.where(reverse, REVERSE_FROM_RESTITUTION, STICK_IN_RESTITUTION),
+                np.where(reverse, REVERSE_FROM_COMPRESSION, STICK_IN_COMPRESSION),
+            ),
+        ).astype(np.int8)
+        return normal_impulse, self.tangential_impulse(normal_impulse), ctype, compression
+
+
+def _positive_root(a, b, c):
+    """The '+√' root of ``a x² + b x + c = 0`` (a > 0), computed without cancellation."""
+    discriminant = b * b - 4.0 * a * c
+    root = np.sqrt(discriminant)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(b >= 0, -2.0 * c / (b + root), (-b + root) / (2.0 * a))
+
+
+def stronge_paper_restitution(terms: ContactTerms, e_energetic, ctype):
+    """The paper's Section 4 map from Stronge's ``e_e`` to Poisson's ``e_i``, per type.
+
+    Type 1 (64): ``(1+r) e_i² + r e_i − e_e² = 0``, ``r = α m_nt/m_tt`` (62).
+    Type 2 (67): ``(1+r+y) e_i² + (r+2y) e_i + y − e_e² = 0``, ``y = r(r_m/α − 1)`` (65)
+    (the paper prints ``m_m`` for ``r_m``), written ``y = (m_nt/m_tt)(r_m − α)`` so that α = 0
+    is harmless.
+    Type 3 (70): as Type 1 with ``s = 2μ m_nt α/g`` (68).
+    Type 4 (73): as Type 2 with ``s`` and ``z = s(r_m/α − 1) = (2μ m_nt/g)(r_m − α)`` (71).
+    Type 5 (74): ``e_i = e_e``.
+    NaN where the quadratic has no real root.
+    """
+    t = terms
+    e2 = e_energetic * e_energetic
+    sticking = ctype <= STICK_IN_RESTITUTION
+    ratio = np.where(sticking, t.mnt / t.mtt, 2.0 * t.mu * t.mnt / t.g)  # r/α or s/α
+    linear = ratio * t.alpha  # r (62) or s (68)
+    in_restitution = (ctype == STICK_IN_RESTITUTION) | (ctype == REVERSE_FROM_RESTITUTION)
+    shift = np.where(in_restitution, ratio * (t.r_m - t.alpha), 0.0)  # y (65) or z (71)
+    e_i = _positive_root(1.0 + linear + shift, linear + 2.0 * shift, shift - e2)
+    return np.where(ctype == FORWARD_SLIDING, e_energetic, e_i)
+
+
+def newton_lcp(terms: ContactTerms, e):
+    """The velocity-level Newton–Coulomb law of sequential-impulse engines.
+
+    ``v_n^S = e|v_n^A|`` (A30) with Coulomb friction at the end state: stick (``v_t^S = 0``)
+    if the cone ``|I_t| ≤ μ I_n`` allows it; else slide against the final slip,
+    ``I_t = −μ·sign(v_t^S)·I_n``. Forward sliding needs ``h > 0`` and ``v_t^S ≥ 0``; reverse
+    sliding ``q > 0`` and ``v_t^S ≤ 0``; for ``μ > 0`` at most one of the two is consistent
+    (their conditions differ by ``2μΔ > 0``). Returns ``(I_n, I_t, type, consistent)``.
+    """
+    t = terms
+    closing = (1.0 + e) * t.vn_abs  # required change of v_n
+    # Sticking: m_nn I_n + m_nt I_t = (1+e)|v_n^A|, m_nt I_n + m_tt I_t = −v_t^A (A22, A23).
+    stick_n = (t.mtt * closing + t.mnt * t.vt) / t.delta
+    stick_t = -(t.mnn * t.vt + t.mnt * closing) / t.delta
+    stick_ok = (stick_n >= 0) & (np.abs(stick_t) <= t.mu * stick_n)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        forward_n = closing / t.h
+        reverse_n = closing / t.q
+    forward_ok = (t.h > 0) & (t.vt - t.g * forward_n >= 0)
+    reverse_ok = (t.q > 0) & (t.vt + t.p * reverse_n <= 0)
+    normal_impulse = np.where(stick_ok, stick_n, np.where(forward_ok, forward_n, reverse_n))
+    tangential_impulse = np.where(
+        stick_ok, stick_t, np.where(forward_ok, -t.mu * forward_n, t.mu * reverse_n)
+    )
+    ctype = np.where(stick_ok, NEWTON_STICK, np.where(forward_ok, NEWTON_FORWARD, NEWTON_REVERSE))
+    consistent = stick_ok | forward_ok | reverse_ok
+    return normal_impulse, tangential_impulse, ctype.astype(np.int8), consistent

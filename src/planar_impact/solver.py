@@ -1,0 +1,352 @@
+"""The public solver: ``solve`` for one problem in generalized speeds, ``solve_batch`` for
+arrays of contact-space problems.
+
+Both screen their input, flip the tangent where ``v_t^A < 0`` (the theory assumes
+``v_t^A ≥ 0``; results come back in the caller's ``t``), run one law from
+:mod:`planar_impact.laws`, and complete the answer with (A22), (A23) and (A29).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+from . import errors, laws
+from .errors import ImpactInputError
+
+HYPOTHESES: tuple[str, ...] = ("newton", "poisson", "stronge", "stronge-paper", "newton-lcp")
+
+# Fields every result carries, scalar or batch (batch adds ``status``).
+RESULT_FIELDS = (
+    "normal_impulse",
+    "tangential_impulse",
+    "vn_approach",
+    "vn_separation",
+    "vt_approach",
+    "vt_separation",
+    "energy_change",
+    "collision_type",
+    "case",
+    "restitution_poisson",
+    "restitution_in_range",
+)
+
+
+def check_hypothesis(hypothesis: str) -> str:
+    if hypothesis not in HYPOTHESES:
+        raise ImpactInputError(
+            f"hypothesis: unknown law {hypothesis!r}; allowed: {', '.join(HYPOTHESES)}"
+        )
+    return hypothesis
+
+
+def contact_space_solution(hypothesis, mnn, mnt, mtt, vn, vt, mu, e):
+    """Run one law on contact-space arrays (vt ≥ 0, rows assumed valid).
+
+    Returns a dict of arrays: impulses, separation velocities (A22)/(A23), energy change
+    (A29), collision type, Table 1 case, the Poisson restitution used (``e_i``) and
+    ``consistent`` (False where the law has no consistent answer).
+    """
+    terms = laws.ContactTerms(mnn, mnt, mtt, vn, vt, mu)
+    consistent = np.ones(terms.case.shape, dtype=bool)
+    if hypothesis == "poisson":
+        ctype = laws.poisson_type(terms, e)
+        normal, tangential = laws.poisson_impulses(terms, e, ctype)
+        e_poisson = e * np.ones_like(normal)
+    elif hypothesis == "stronge-paper":
+        # Type from Table 1 with e_e in place of e (end of the paper's Section 4), then
+        # e_i by (64)/(67)/(70)/(73)/(74), then Poisson's closed forms with e_i.
+        ctype = laws.poisson_type(terms, e)
+        e_poisson = laws.stronge_paper_restitution(terms, e, ctype)
+        consistent = np.isfinite(e_poisson)
+        normal, tangential = laws.poisson_impulses(terms, e_poisson, ctype)
+    elif hypothesis == "newton-lcp":
+        normal, tangential, ctype, consistent = laws.newton_lcp(terms, e)
+        e_poisson = np.full(normal.shape, np.nan)  # not a process law: no I_nr/I_nc
+    else:
+        process = laws.TwoPhaseProcess(terms)
+        run = process.newton if hypothesis == "newton" else process.stronge
+        normal, tangential, ctype, compression = run(e)
+        # Poisson's e of the process each law runs, I_nr/I_nc (6).
+        e_poisson = (normal - compression) / compression
+    vn_separation = vn + mnn * normal + mnt * tangential  # (A22)
+    vt_separation = vt + mnt * normal + mtt * tangential  # (A23)
+    energy_change = 0.5 * normal * (vn_separation + vn) + 0.5 * tangential * (vt_separation + vt)  # (A29)
+    return {
+        "normal_impulse": normal,
+        "tangential_impulse": tangential,
+        "vn_separation": vn_separation,
+        "vt_separation": vt_separation,
+        "energy_change": energy_change,
+        "collision_type": ctype,
+        "case": terms.case,
+        "restitution_poisson": e_poisson,
+        "consistent": consistent,
+        "h": terms.h,
+        "g": terms.g,
+        "q": terms.q,
+        "p": terms.p,
+    }
+
+
+def row_status(mnn, mnt, mtt, vn, vt, mu, e):
+    """Status code per row (0 = solvable input); the first failing check wins."""
+    status = np.zeros(np.broadcast(mnn, mnt, mtt, vn, vt, mu, e).shape, dtype=np.int8)
+    finite = np.isfinite(mnn) & np.isfinite(mnt) & np.isfinite(mtt)
+    finite &= np.isfinite(vn) & np.isfinite(vt) & np.isfinite(mu) & np.isfinite(e)
+    # Later assignments win, so assign in reverse order of priority.
+    status[vn >= 0] = errors.NO_APPROACH
+    status[(e < 0) | (e > 1)] = errors.RESTITUTION_OUT_OF_RANGE
+    status[mu < 0] = errors.NEGATIVE_FRICTION
+    status[(mnn <= 0) | (mtt <= 0) | (mnn * mtt - mnt * mnt <= 0)] = errors.NOT_POSITIVE_DEFINITE
+    status[~finite] = errors.NON_FINITE
+    return status
+
+
+@dataclass(frozen=True)
+class BatchResult:
+    """Arrays of one shape (the broadcast of the inputs); NaN where ``status != 0``.
+
+    ``status`` codes are in :data:`planar_impact.errors.STATUS_MESSAGES`.
+    ``collision_type`` and ``case`` are 0 where the row is not solved.
+    ``restitution_in_range`` is False where the ``e_i`` used leaves [0, 1] (the paper's
+    Table 2 for ``"stronge-paper"``).
+    """
+
+    hypothesis: str
+    status: np.ndarray
+    normal_impulse: np.ndarray
+    tangential_impulse: np.ndarray
+    vn_approach: np.ndarray
+    vn_separation: np.ndarray
+    vt_approach: np.ndarray
+    vt_separation: np.ndarray
+    energy_change: np.ndarray
+    collision_type: np.ndarray
+    case: np.ndarray
+    restitution_poisson: np.ndarray
+    restitution_in_range: np.ndarray
+
+    def status_message(self, index) -> str:
+        return errors.STATUS_MESSAGES[int(self.status[index])]
+
+    def as_dict(self) -> dict:
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+
+def solve_batch(mnn, mnt, mtt, vn, vt, mu, e, hypothesis: str = "poisson") -> BatchResult:
+    """Solve many contact-space problems at once (vectorised; inputs broadcast).
+
+    Parameters are the (A20) inverse-inertia terms ``m_nn, m_nt, m_tt``, the approach
+    velocities ``v_n^A`` (must be < 0) and ``v_t^A`` (either sign: results are in the
+    caller's ``t``), friction ``μ ≥ 0`` and restitution ``e ∈ [0, 1]``.
+
+    A bad row never spoils the others: it gets a non-zero ``status`` and NaN outputs.
+    An unknown ``hypothesis`` raises :class:`ImpactInputError` (it concerns every row).
+    """
+    check_hypothesis(hypothesis)
+    arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (mnn, mnt, mtt, vn, vt, mu, e)))
+    mnn, mnt, mtt, vn, vt, mu, e = arrays
+    status = row_status(mnn, mnt, mtt, vn, vt, mu, e)
+    flipped = vt < 0
+    any_flipped = bool(flipped.any())
+    if any_flipped:  # t → −t: m_nt and v_t change sign, the rest does not.
+        mnt = np.where(flipped, -mnt, mnt)
+        vt_pos = np.abs(vt)
+    else:
+        vt_pos = vt
+    with np.errstate(all="ignore"):
+        out = contact_space_solution(hypothesis, mnn, mnt, mtt, vn, vt_pos, mu, e)
+    solved = status == 0
+    # Problems with no admissible answer, found only after the terms are known.
+    jam = solved & (out["h"] <= 0) & (out["g"] <= 0)
+    status[jam] = errors.PAINLEVE_JAM
+    reverse = _reverse_sliding(hypothesis, out["collision_type"])
+    status[solved & ~jam & reverse & (out["q"] <= 0)] = errors.REVERSE_SLIDING_Q_NONPOSITIVE
+    status[(status == 0) & ~out["consistent"]] = errors.NO_CONSISTENT_SOLUTION
+    tangential = out["tangential_impulse"]
+    vt_separation = out["vt_separation"]
+    if any_flipped:
+        tangential = np.where(flipped, -tangential, tangential)
+        vt_separation = np.where(flipped, -vt_separation, vt_separation)
+    e_poisson = out["restitution_poisson"]
+    result = {
+        "normal_impulse": out["normal_impulse"],
+        "tangential_impulse": tangential,
+        "vn_approach": vn.copy(),
+        "vn_separation": out["vn_separation"],
+        "vt_approach": vt.copy(),
+        "vt_separation": vt_separation,
+        "energy_change": out["energy_change"],
+        "collision_type": out["collision_type"],
+        "case": out["case"],
+        "restitution_poisson": e_poisson,
+        "restitution_in_range": (e_poisson >= 0) & (e_poisson <= 1),
+    }
+    bad = status != 0
+    if bad.any():
+        for name, values in result.items():
+            values = np.array(values, copy=True)
+            if values.dtype == bool:
+                values[bad] = False
+            elif values.dtype.kind == "i":
+                values[bad] = 0
+            else:
+                values[bad] = np.nan
+            result[name] = values
+    return BatchResult(hypothesis=hypothesis, status=status, **result)
+
+
+def _reverse_sliding(hypothesis, ctype):
+    if hypothesis in ("newton", "newton-lcp"):
+        return ctype == laws.NEWTON_REVERSE
+    return (ctype == laws.REVERSE_FROM_COMPRESSION) | (ctype == laws.REVERSE_FROM_RESTITUTION)
+
+
+@dataclass(frozen=True)
+class ImpactResult:
+    """One solved impact.
+
+    Impulses act on body B (``−R`` on A); ``t`` is the caller's tangent. Units follow the
+    inputs (SI: N·s, m/s, J). ``collision_type`` is 1–5 as in the paper for Poisson and
+    Stronge, and 1 stick, 2 reverse sliding, 3 forward sliding for ``newton`` and
+    ``newton-lcp``; ``case`` is the Table 1 row. ``restitution_poisson`` is the ``e_i`` of
+    Poisson's definition (6) the law amounts to (``e`` itself for Poisson, the mapped value
+    for ``stronge-paper``, ``I_nr/I_nc`` of the process for ``newton`` and ``stronge``, None
+    for ``newton-lcp``, which is not a process).
+    """
+
+    hypothesis: str
+    normal_impulse: float
+    tangential_impulse: float
+    delta_u: np.ndarray
+    u_after: np.ndarray
+    vn_approach: float
+    vn_separation: float
+    vt_approach: float
+    vt_separation: float
+    energy_change: float
+    collision_type: int
+    case: int
+    restitution_poisson: float | None
+    restitution_in_range: bool
+    mnn: float
+    mnt: float
+    mtt: float
+
+    @property
+    def energy_gained(self) -> bool:
+        """True where the law created kinetic energy (Newton's law can, Table 1 of Part A)."""
+        scale = abs(self.vn_approach) * self.normal_impulse + abs(self.vt_approach * self.tangential_impulse)
+        return self.energy_change > 1e-12 * scale
+
+
+def _as_vector(name: str, value, length: int | None = None) -> np.ndarray:
+    array = np.asarray(value, dtype=float)
+    if array.ndim != 1:
+        raise ImpactInputError(f"{name}: expected a 1-D vector, got shape {array.shape}")
+    if length is not None and array.shape[0] != length:
+        raise ImpactInputError(
+            f"{name}: length {array.shape[0]} does not match mass_matrix size {length}"
+        )
+    if not np.all(np.isfinite(array)):
+        raise ImpactInputError(f"{name}: must be finite, got {array.tolist()}")
+    return array
+
+
+def _check_scalar(name: str, value, low: float, high: float) -> float:
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise ImpactInputError(f"{name}: expected a number, got {value!r}") from None
+    if not np.isfinite(number) or not (low <= number <= high):
+        allowed = f"[{low}, {high}]" if np.isfinite(high) else f"≥ {low}"
+        raise ImpactInputError(f"{name}: {number!r} is not allowed; allowed: {allowed}")
+    return number
+
+
+def _check_mass_matrix(mass_matrix) -> np.ndarray:
+    matrix = np.asarray(mass_matrix, dtype=float)
+    if matrix.ndim != 2 or matrix.shape[0] != matrix.shape[1] or matrix.shape[0] == 0:
+        raise ImpactInputError(f"mass_matrix: must be square, got shape {matrix.shape}")
+    if not np.all(np.isfinite(matrix)):
+        raise ImpactInputError("mass_matrix: must be finite (contains NaN or inf)")
+    scale = np.max(np.abs(matrix))
+    asymmetry = np.max(np.abs(matrix - matrix.T))
+    if asymmetry > 1e-12 * scale:  # round-off of a symmetric assembly stays far below this
+        raise ImpactInputError(
+            f"mass_matrix: must be symmetric, largest |M − Mᵀ| is {asymmetry:.3g} "
+            f"(scale {scale:.3g})"
+        )
+    return matrix
+
+
+def solve(*, mass_matrix, wn, wt, u, mu, e, hypothesis: str = "poisson") -> ImpactResult:
+    """Solve one planar one-point impact with friction in generalized speeds.
+
+    Parameters
+    ----------
+    mass_matrix : (p, p) symmetric positive definite, kinetic energy ``½ uᵀ M u``.
+    wn, wt : (p,) the partial velocities of the contact ``v_r^R·n`` and ``v_r^R·t`` (A16);
+        ``n`` points from body A into body B. ``t`` may have either orientation.
+    u : (p,) generalized speeds just before the impact; must be approaching (``wn·u < 0``).
+    mu : friction coefficient ``μ ≥ 0``.  e : restitution in [0, 1] (Stronge's ``e_e`` for
+        the two Stronge laws).
+    hypothesis : one of :data:`HYPOTHESES`.
+
+    Raises :class:`ImpactInputError` (a ``ValueError``) naming the field, the value and
+    what is allowed; never returns NaN or inf.
+    """
+    check_hypothesis(hypothesis)
+    matrix = _check_mass_matrix(mass_matrix)
+    size = matrix.shape[0]
+    wn = _as_vector("wn", wn, size)
+    wt = _as_vector("wt", wt, size)
+    u = _as_vector("u", u, size)
+    mu = _check_scalar("mu", mu, 0.0, np.inf)
+    e = _check_scalar("e", e, 0.0, 1.0)
+    try:
+        factor = np.linalg.cholesky(matrix)
+    except np.linalg.LinAlgError:
+        raise ImpactInputError("mass_matrix: must be positive definite (Cholesky failed)") from None
+    # M⁻¹ w_n and M⁻¹ w_t through the Cholesky factor (two triangular solves).
+    rhs = np.stack([wn, wt], axis=1)
+    inv_w = np.linalg.solve(factor.T, np.linalg.solve(factor, rhs))
+    inv_wn, inv_wt = inv_w[:, 0], inv_w[:, 1]
+    mnn, mnt, mtt = float(wn @ inv_wn), float(wn @ inv_wt), float(wt @ inv_wt)  # (A20)
+    vn, vt = float(wn @ u), float(wt @ u)
+    batch = solve_batch(mnn, mnt, mtt, vn, vt, mu, e, hypothesis)
+    status = int(batch.status)
+    if status != errors.SOLVED:
+        detail = {
+            errors.NO_APPROACH: f"u: v_n^A = wn·u = {vn!r}; allowed: v_n^A < 0 (approach)",
+            errors.NOT_POSITIVE_DEFINITE: (
+                f"wn, wt: m_nn = {mnn!r}, m_nt = {mnt!r}, m_tt = {mtt!r} give "
+                f"Δ = {mnn * mtt - mnt * mnt!r}; allowed: Δ > 0 (wn and wt independent)"
+            ),
+        }.get(status, f"mu = {mu!r}, e = {e!r}: {errors.STATUS_MESSAGES[status]}")
+        raise ImpactInputError(f"{detail} [{errors.STATUS_MESSAGES[status]}]")
+    normal, tangential = float(batch.normal_impulse), float(batch.tangential_impulse)
+    delta_u = inv_wn * normal + inv_wt * tangential  # M Δu = w_n I_n + w_t I_t (A16)
+    return ImpactResult(
+        hypothesis=hypothesis,
+        normal_impulse=normal,
+        tangential_impulse=tangential,
+        delta_u=delta_u,
+        u_after=u + delta_u,
+        vn_approach=vn,
+        vn_separation=float(batch.vn_separation),
+        vt_approach=vt,
+        vt_separation=float(batch.vt_separation),
+        energy_change=float(batch.energy_change),
+        collision_type=int(batch.collision_type),
+        case=int(batch.case),
+        restitution_poisson=(
+            None if hypothesis == "newton-lcp" else float(batch.restitution_poisson)
+        ),
+        restitution_in_range=hypothesis == "newton-lcp" or bool(batch.restitution_in_range),
+        mnn=mnn,
+        mnt=mnt,
+        mtt=mtt,
+    )
