@@ -4,7 +4,9 @@ Every function here takes the contact-space description of a problem (the paper'
 inverse-inertia terms ``m_nn, m_nt, m_tt``, the approach velocities ``v_n^A < 0`` and
 ``v_t^A ≥ 0``, ``μ`` and ``e``) as arrays of one shape, and returns arrays of that shape.
 Rows are independent; invalid rows are screened by the caller (:mod:`planar_impact.solver`),
-which also turns the impulses into velocities and energies.
+which also turns the impulses into velocities and energies, and runs these kernels under
+``np.errstate(all="ignore")`` (branches not taken may divide by zero). The same kernels
+accept numpy float64 scalars, which is how the scalar solver stays fast.
 
 Equation numbers are the paper's (Djerassi, Part B); "A" numbers are Part A's, restated in
 THEORY.md. The independent check of every law is :mod:`planar_impact.process`, which walks
@@ -20,6 +22,22 @@ until the slip vanishes at ``P_G = v_t^A/g`` (A58, with ``v_t^A`` for the mispri
 from __future__ import annotations
 
 import numpy as np
+
+
+def where(condition, if_true, if_false):
+    """``np.where`` for arrays; a plain conditional for scalars, where ``np.where``'s fixed
+    cost would dominate (the scalar :func:`planar_impact.solve` runs these same kernels on
+    numpy float64 scalars)."""
+    if type(condition) is np.ndarray:
+        return where(condition, if_true, if_false)
+    return if_true if condition else if_false
+
+
+def as_type_code(values):
+    """Collision types and cases as int8 arrays, or Python ints for scalars."""
+    if type(values) is np.ndarray:
+        return values.astype(np.int8)
+    return int(values)
 
 # Collision types (Poisson and Stronge numbering, the paper's Section 2).
 STICK_IN_COMPRESSION = 1
@@ -67,11 +85,7 @@ def table1_case(g, h, p, q):
     Cases 1 and 2 ``g, h > 0, p ≥ 0`` told apart by the sign of ``q`` (comment g of the paper
     lets equal signs join the remaining inequalities).
     """
-    case = np.where(q >= 0, 1, 2).astype(np.int8)
-    case[p < 0] = 3
-    case[h <= 0] = 4
-    case[g <= 0] = 5
-    return case
+    return as_type_code(where(g <= 0, 5, where(h <= 0, 4, where(p < 0, 3, where(q >= 0, 1, 2)))))
 
 
 def poisson_type(terms: ContactTerms, e):
@@ -83,18 +97,18 @@ def poisson_type(terms: ContactTerms, e):
     in_compression = alpha <= r_m
     in_restitution = alpha <= (1.0 + e) * r_m
     reverse = case == 3
-    ctype = np.where(
+    ctype = where(
         in_compression,
-        np.where(reverse, REVERSE_FROM_COMPRESSION, STICK_IN_COMPRESSION),
-        np.where(
+        where(reverse, REVERSE_FROM_COMPRESSION, STICK_IN_COMPRESSION),
+        where(
             in_restitution,
-            np.where(reverse, REVERSE_FROM_RESTITUTION, STICK_IN_RESTITUTION),
+            where(reverse, REVERSE_FROM_RESTITUTION, STICK_IN_RESTITUTION),
             FORWARD_SLIDING,
         ),
-    ).astype(np.int8)
-    ctype[case == 4] = STICK_IN_COMPRESSION  # Case 4: Type 1 for every α > 0 (57)
-    ctype[case == 5] = FORWARD_SLIDING  # Case 5: Type 5 for every α > 0 (55)
-    return ctype
+    )
+    ctype = where(case == 4, STICK_IN_COMPRESSION, ctype)  # Case 4: Type 1 for every α > 0 (57)
+    ctype = where(case == 5, FORWARD_SLIDING, ctype)  # Case 5: Type 5 for every α > 0 (55)
+    return as_type_code(ctype)
 
 
 def poisson_impulses(terms: ContactTerms, e, ctype):
@@ -110,10 +124,10 @@ def poisson_impulses(terms: ContactTerms, e, ctype):
     * Type 5: ``I_nc = |v_n^A|/h`` (48); ``I_t = −μ I_n`` (49).
     """
     mnt, mtt, mu, vt = terms.mnt, terms.mtt, terms.mu, terms.vt
-    compression_per_speed = np.where(
+    compression_per_speed = where(
         ctype == STICK_IN_COMPRESSION,
         (mtt + terms.alpha * mnt) / terms.delta,  # (25)
-        np.where(
+        where(
             ctype == REVERSE_FROM_COMPRESSION,
             (1.0 + 2.0 * mu * mnt * terms.alpha / terms.g) / terms.q,  # (34)
             1.0 / terms.h,  # (29), (40), (48)
@@ -123,8 +137,8 @@ def poisson_impulses(terms: ContactTerms, e, ctype):
     sticking = ctype <= STICK_IN_RESTITUTION
     reverse = (ctype == REVERSE_FROM_COMPRESSION) | (ctype == REVERSE_FROM_RESTITUTION)
     # I_t = slope · I_n + offset: (26)/(29) sticking, (36)/(44) reverse, (49) forward.
-    slope = np.where(sticking, -mnt / mtt, np.where(reverse, mu, -mu))
-    offset = np.where(sticking, -vt / mtt, np.where(reverse, -2.0 * mu * vt / terms.g, 0.0))
+    slope = where(sticking, -mnt / mtt, where(reverse, mu, -mu))
+    offset = where(sticking, -vt / mtt, where(reverse, -2.0 * mu * vt / terms.g, 0.0))
     tangential_impulse = slope * normal_impulse + offset
     return normal_impulse, tangential_impulse
 
@@ -141,14 +155,13 @@ class TwoPhaseProcess:
         self.terms = terms
         sticks = terms.p >= 0
         self.sticks = sticks
-        with np.errstate(divide="ignore", invalid="ignore"):
-            self.p_g = np.where(terms.g > 0, terms.vt / terms.g, np.inf)  # (A58)
+        self.p_g = where(terms.g > 0, terms.vt / terms.g, np.inf)  # (A58)
         self.slope_n1 = terms.h
-        self.slope_n2 = np.where(sticks, terms.delta / terms.mtt, terms.q)
-        self.slope_t2 = np.where(sticks, -terms.mnt / terms.mtt, terms.mu)
+        self.slope_n2 = where(sticks, terms.delta / terms.mtt, terms.q)
+        self.slope_t2 = where(sticks, -terms.mnt / terms.mtt, terms.mu)
         # v_n where the slip vanishes (meaningless where P_G is infinite; masked below).
         finite_g = np.isfinite(self.p_g)
-        self.vn_at_g = np.where(finite_g, -terms.vn_abs + terms.h * np.where(finite_g, self.p_g, 0.0), np.inf)
+        self.vn_at_g = where(finite_g, -terms.vn_abs + terms.h * where(finite_g, self.p_g, 0.0), np.inf)
         self.finite_g = finite_g
 
     def impulse_where_vn_reaches(self, target):
@@ -156,21 +169,21 @@ class TwoPhaseProcess:
         t = self.terms
         in_phase1 = self.vn_at_g >= target  # includes P_G = ∞ (Case 5)
         phase1 = (target + t.vn_abs) / self.slope_n1
-        phase2 = np.where(self.finite_g, self.p_g, 0.0) + (target - np.where(self.finite_g, self.vn_at_g, 0.0)) / self.slope_n2
-        return np.where(in_phase1, phase1, phase2), in_phase1
+        phase2 = where(self.finite_g, self.p_g, 0.0) + (target - where(self.finite_g, self.vn_at_g, 0.0)) / self.slope_n2
+        return where(in_phase1, phase1, phase2), in_phase1
 
     def tangential_impulse(self, normal_impulse):
         mu = self.terms.mu
         in_phase1 = normal_impulse <= self.p_g
-        phase2 = -mu * self.p_g + self.slope_t2 * (normal_impulse - np.where(self.finite_g, self.p_g, 0.0))
-        return np.where(in_phase1, -mu * normal_impulse, phase2)
+        phase2 = -mu * self.p_g + self.slope_t2 * (normal_impulse - where(self.finite_g, self.p_g, 0.0))
+        return where(in_phase1, -mu * normal_impulse, phase2)
 
     def newton(self, e):
         """Newton's law (A30) along the process: it ends where ``v_n = e|v_n^A|``."""
         normal_impulse, forward = self.impulse_where_vn_reaches(e * self.terms.vn_abs)
-        ctype = np.where(forward, NEWTON_FORWARD, np.where(self.sticks, NEWTON_STICK, NEWTON_REVERSE))
-        compression, _ = self.impulse_where_vn_reaches(np.zeros_like(normal_impulse))
-        return normal_impulse, self.tangential_impulse(normal_impulse), ctype.astype(np.int8), compression
+        ctype = where(forward, NEWTON_FORWARD, where(self.sticks, NEWTON_STICK, NEWTON_REVERSE))
+        compression, _ = self.impulse_where_vn_reaches(0.0 * normal_impulse)
+        return normal_impulse, self.tangential_impulse(normal_impulse), as_type_code(ctype), compression
 
     def stronge(self, e):
         """Stronge's energetic law, exact: the normal work in restitution ``∫ v_n dP`` equals
@@ -179,11 +192,11 @@ class TwoPhaseProcess:
         """
         t = self.terms
         vn_a = -t.vn_abs
-        compression, compression_in_phase1 = self.impulse_where_vn_reaches(np.zeros_like(vn_a))
-        p_g = np.where(self.finite_g, self.p_g, 0.0)
-        vn_g = np.where(self.finite_g, self.vn_at_g, 0.0)
+        compression, compression_in_phase1 = self.impulse_where_vn_reaches(0.0 * vn_a)
+        p_g = where(self.finite_g, self.p_g, 0.0)
+        vn_g = where(self.finite_g, self.vn_at_g, 0.0)
         # Work of the normal impulse in compression (negative): trapezoids of v_n over P.
-        work_compression = np.where(
+        work_compression = where(
             compression_in_phase1,
             0.5 * vn_a * compression,
             0.5 * (vn_a + vn_g) * p_g + 0.5 * vn_g * (compression - p_g),
@@ -196,34 +209,32 @@ class TwoPhaseProcess:
         end_phase1 = compression + np.sqrt(2.0 * work_target / self.slope_n1)
         # In phase 2 from P0 with v0 ≥ 0 and slope k: v0 x + ½ k x² = remaining work; the
         # rationalised root 2R/(v0 + √(v0² + 2kR)) stays accurate when v0² ≫ kR.
-        start = np.where(compression_in_phase1, p_g, compression)
-        v_start = np.where(compression_in_phase1, vn_g, 0.0)
-        remaining = np.where(compression_in_phase1, work_target - work_to_g, work_target)
+        start = where(compression_in_phase1, p_g, compression)
+        v_start = where(compression_in_phase1, vn_g, 0.0)
+        remaining = where(compression_in_phase1, work_target - work_to_g, work_target)
         remaining = np.maximum(remaining, 0.0)
         root = np.sqrt(v_start * v_start + 2.0 * self.slope_n2 * remaining)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            step = np.where(remaining > 0, 2.0 * remaining / (v_start + root), 0.0)
+        step = where(remaining > 0, 2.0 * remaining / (v_start + root), 0.0)
         end_phase2 = start + step
-        normal_impulse = np.where(ends_in_phase1, end_phase1, end_phase2)
+        normal_impulse = where(ends_in_phase1, end_phase1, end_phase2)
         reverse = ~self.sticks
-        ctype = np.where(
+        ctype = where(
             ends_in_phase1,
             FORWARD_SLIDING,
-            np.where(
+            where(
                 compression_in_phase1,
-                np.where(reverse, REVERSE_FROM_RESTITUTION, STICK_IN_RESTITUTION),
-                np.where(reverse, REVERSE_FROM_COMPRESSION, STICK_IN_COMPRESSION),
+                where(reverse, REVERSE_FROM_RESTITUTION, STICK_IN_RESTITUTION),
+                where(reverse, REVERSE_FROM_COMPRESSION, STICK_IN_COMPRESSION),
             ),
-        ).astype(np.int8)
-        return normal_impulse, self.tangential_impulse(normal_impulse), ctype, compression
+        )
+        return normal_impulse, self.tangential_impulse(normal_impulse), as_type_code(ctype), compression
 
 
 def _positive_root(a, b, c):
     """The '+√' root of ``a x² + b x + c = 0`` (a > 0), computed without cancellation."""
     discriminant = b * b - 4.0 * a * c
     root = np.sqrt(discriminant)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(b >= 0, -2.0 * c / (b + root), (-b + root) / (2.0 * a))
+    return where(b >= 0, -2.0 * c / (b + root), (-b + root) / (2.0 * a))
 
 
 def stronge_paper_restitution(terms: ContactTerms, e_energetic, ctype):
@@ -241,12 +252,12 @@ def stronge_paper_restitution(terms: ContactTerms, e_energetic, ctype):
     t = terms
     e2 = e_energetic * e_energetic
     sticking = ctype <= STICK_IN_RESTITUTION
-    ratio = np.where(sticking, t.mnt / t.mtt, 2.0 * t.mu * t.mnt / t.g)  # r/α or s/α
+    ratio = where(sticking, t.mnt / t.mtt, 2.0 * t.mu * t.mnt / t.g)  # r/α or s/α
     linear = ratio * t.alpha  # r (62) or s (68)
     in_restitution = (ctype == STICK_IN_RESTITUTION) | (ctype == REVERSE_FROM_RESTITUTION)
-    shift = np.where(in_restitution, ratio * (t.r_m - t.alpha), 0.0)  # y (65) or z (71)
+    shift = where(in_restitution, ratio * (t.r_m - t.alpha), 0.0)  # y (65) or z (71)
     e_i = _positive_root(1.0 + linear + shift, linear + 2.0 * shift, shift - e2)
-    return np.where(ctype == FORWARD_SLIDING, e_energetic, e_i)
+    return where(ctype == FORWARD_SLIDING, e_energetic, e_i)
 
 
 def newton_lcp(terms: ContactTerms, e):
@@ -264,15 +275,14 @@ def newton_lcp(terms: ContactTerms, e):
     stick_n = (t.mtt * closing + t.mnt * t.vt) / t.delta
     stick_t = -(t.mnn * t.vt + t.mnt * closing) / t.delta
     stick_ok = (stick_n >= 0) & (np.abs(stick_t) <= t.mu * stick_n)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        forward_n = closing / t.h
-        reverse_n = closing / t.q
+    forward_n = closing / t.h
+    reverse_n = closing / t.q
     forward_ok = (t.h > 0) & (t.vt - t.g * forward_n >= 0)
     reverse_ok = (t.q > 0) & (t.vt + t.p * reverse_n <= 0)
-    normal_impulse = np.where(stick_ok, stick_n, np.where(forward_ok, forward_n, reverse_n))
-    tangential_impulse = np.where(
-        stick_ok, stick_t, np.where(forward_ok, -t.mu * forward_n, t.mu * reverse_n)
+    normal_impulse = where(stick_ok, stick_n, where(forward_ok, forward_n, reverse_n))
+    tangential_impulse = where(
+        stick_ok, stick_t, where(forward_ok, -t.mu * forward_n, t.mu * reverse_n)
     )
-    ctype = np.where(stick_ok, NEWTON_STICK, np.where(forward_ok, NEWTON_FORWARD, NEWTON_REVERSE))
+    ctype = where(stick_ok, NEWTON_STICK, where(forward_ok, NEWTON_FORWARD, NEWTON_REVERSE))
     consistent = stick_ok | forward_ok | reverse_ok
-    return normal_impulse, tangential_impulse, ctype.astype(np.int8), consistent
+    return normal_impulse, tangential_impulse, as_type_code(ctype), consistent

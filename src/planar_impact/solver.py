@@ -49,11 +49,11 @@ def contact_space_solution(hypothesis, mnn, mnt, mtt, vn, vt, mu, e):
     ``consistent`` (False where the law has no consistent answer).
     """
     terms = laws.ContactTerms(mnn, mnt, mtt, vn, vt, mu)
-    consistent = np.ones(terms.case.shape, dtype=bool)
+    consistent = np.True_
     if hypothesis == "poisson":
         ctype = laws.poisson_type(terms, e)
         normal, tangential = laws.poisson_impulses(terms, e, ctype)
-        e_poisson = e * np.ones_like(normal)
+        e_poisson = e + 0.0 * normal
     elif hypothesis == "stronge-paper":
         # Type from Table 1 with e_e in place of e (end of the paper's Section 4), then
         # e_i by (64)/(67)/(70)/(73)/(74), then Poisson's closed forms with e_i.
@@ -63,7 +63,7 @@ def contact_space_solution(hypothesis, mnn, mnt, mtt, vn, vt, mu, e):
         normal, tangential = laws.poisson_impulses(terms, e_poisson, ctype)
     elif hypothesis == "newton-lcp":
         normal, tangential, ctype, consistent = laws.newton_lcp(terms, e)
-        e_poisson = np.full(normal.shape, np.nan)  # not a process law: no I_nr/I_nc
+        e_poisson = np.nan * normal  # not a process law: no I_nr/I_nc
     else:
         process = laws.TwoPhaseProcess(terms)
         run = process.newton if hypothesis == "newton" else process.stronge
@@ -90,18 +90,35 @@ def contact_space_solution(hypothesis, mnn, mnt, mtt, vn, vt, mu, e):
     }
 
 
-def row_status(mnn, mnt, mtt, vn, vt, mu, e):
-    """Status code per row (0 = solvable input); the first failing check wins."""
-    status = np.zeros(np.broadcast(mnn, mnt, mtt, vn, vt, mu, e).shape, dtype=np.int8)
+def input_status(mnn, mnt, mtt, vn, vt, mu, e):
+    """Status code of the inputs per row (0 = solvable); the first failing check wins.
+
+    Works on arrays and on numpy scalars alike.
+    """
     finite = np.isfinite(mnn) & np.isfinite(mnt) & np.isfinite(mtt)
     finite &= np.isfinite(vn) & np.isfinite(vt) & np.isfinite(mu) & np.isfinite(e)
-    # Later assignments win, so assign in reverse order of priority.
-    status[vn >= 0] = errors.NO_APPROACH
-    status[(e < 0) | (e > 1)] = errors.RESTITUTION_OUT_OF_RANGE
-    status[mu < 0] = errors.NEGATIVE_FRICTION
-    status[(mnn <= 0) | (mtt <= 0) | (mnn * mtt - mnt * mnt <= 0)] = errors.NOT_POSITIVE_DEFINITE
-    status[~finite] = errors.NON_FINITE
-    return status
+    where = laws.where
+    with np.errstate(invalid="ignore", over="ignore"):
+        status = where(vn >= 0, errors.NO_APPROACH, errors.SOLVED)
+        status = where((e < 0) | (e > 1), errors.RESTITUTION_OUT_OF_RANGE, status)
+        status = where(mu < 0, errors.NEGATIVE_FRICTION, status)
+        not_pd = (mnn <= 0) | (mtt <= 0) | (mnn * mtt - mnt * mnt <= 0)
+        status = where(not_pd, errors.NOT_POSITIVE_DEFINITE, status)
+        status = where(finite, status, errors.NON_FINITE)
+    return laws.as_type_code(status)
+
+
+def answer_status(hypothesis, status, out):
+    """Status after solving: problems with no admissible answer show only once the terms
+    are known (a Painlevé-type jam, reverse sliding with ``q ≤ 0``, an inconsistent law)."""
+    where = laws.where
+    solved = status == errors.SOLVED
+    jam = (out["h"] <= 0) & (out["g"] <= 0)
+    q_fails = _reverse_sliding(hypothesis, out["collision_type"]) & (out["q"] <= 0)
+    answer = where(np.logical_not(out["consistent"]), errors.NO_CONSISTENT_SOLUTION, errors.SOLVED)
+    answer = where(q_fails, errors.REVERSE_SLIDING_Q_NONPOSITIVE, answer)
+    answer = where(jam, errors.PAINLEVE_JAM, answer)
+    return laws.as_type_code(where(solved, answer, status))
 
 
 @dataclass(frozen=True)
@@ -148,7 +165,7 @@ def solve_batch(mnn, mnt, mtt, vn, vt, mu, e, hypothesis: str = "poisson") -> Ba
     check_hypothesis(hypothesis)
     arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (mnn, mnt, mtt, vn, vt, mu, e)))
     mnn, mnt, mtt, vn, vt, mu, e = arrays
-    status = row_status(mnn, mnt, mtt, vn, vt, mu, e)
+    status = input_status(mnn, mnt, mtt, vn, vt, mu, e)
     flipped = vt < 0
     any_flipped = bool(flipped.any())
     if any_flipped:  # t → −t: m_nt and v_t change sign, the rest does not.
@@ -158,13 +175,7 @@ def solve_batch(mnn, mnt, mtt, vn, vt, mu, e, hypothesis: str = "poisson") -> Ba
         vt_pos = vt
     with np.errstate(all="ignore"):
         out = contact_space_solution(hypothesis, mnn, mnt, mtt, vn, vt_pos, mu, e)
-    solved = status == 0
-    # Problems with no admissible answer, found only after the terms are known.
-    jam = solved & (out["h"] <= 0) & (out["g"] <= 0)
-    status[jam] = errors.PAINLEVE_JAM
-    reverse = _reverse_sliding(hypothesis, out["collision_type"])
-    status[solved & ~jam & reverse & (out["q"] <= 0)] = errors.REVERSE_SLIDING_Q_NONPOSITIVE
-    status[(status == 0) & ~out["consistent"]] = errors.NO_CONSISTENT_SOLUTION
+    status = answer_status(hypothesis, status, out)
     tangential = out["tangential_impulse"]
     vt_separation = out["vt_separation"]
     if any_flipped:
@@ -270,8 +281,10 @@ def _check_mass_matrix(mass_matrix) -> np.ndarray:
     matrix = np.asarray(mass_matrix, dtype=float)
     if matrix.ndim != 2 or matrix.shape[0] != matrix.shape[1] or matrix.shape[0] == 0:
         raise ImpactInputError(f"mass_matrix: must be square, got shape {matrix.shape}")
-    if not np.all(np.isfinite(matrix)):
+    if not np.isfinite(matrix).all():
         raise ImpactInputError("mass_matrix: must be finite (contains NaN or inf)")
+    if np.array_equal(matrix, matrix.T):  # the usual case, and the cheap test
+        return matrix
     scale = np.max(np.abs(matrix))
     asymmetry = np.max(np.abs(matrix - matrix.T))
     if asymmetry > 1e-12 * scale:  # round-off of a symmetric assembly stays far below this
@@ -307,17 +320,25 @@ def solve(*, mass_matrix, wn, wt, u, mu, e, hypothesis: str = "poisson") -> Impa
     mu = _check_scalar("mu", mu, 0.0, np.inf)
     e = _check_scalar("e", e, 0.0, 1.0)
     try:
-        factor = np.linalg.cholesky(matrix)
+        np.linalg.cholesky(matrix)  # the positive-definiteness test
     except np.linalg.LinAlgError:
         raise ImpactInputError("mass_matrix: must be positive definite (Cholesky failed)") from None
-    # M⁻¹ w_n and M⁻¹ w_t through the Cholesky factor (two triangular solves).
-    rhs = np.stack([wn, wt], axis=1)
-    inv_w = np.linalg.solve(factor.T, np.linalg.solve(factor, rhs))
+    inv_w = np.linalg.solve(matrix, np.stack([wn, wt], axis=1))  # M⁻¹ w_n, M⁻¹ w_t
     inv_wn, inv_wt = inv_w[:, 0], inv_w[:, 1]
     mnn, mnt, mtt = float(wn @ inv_wn), float(wn @ inv_wt), float(wt @ inv_wt)  # (A20)
     vn, vt = float(wn @ u), float(wt @ u)
-    batch = solve_batch(mnn, mnt, mtt, vn, vt, mu, e, hypothesis)
-    status = int(batch.status)
+    # The batch kernels on numpy float64 scalars: same code, without array overhead.
+    sign = -1.0 if vt < 0 else 1.0  # t → −t where v_t^A < 0
+    scalars = [np.float64(x) for x in (mnn, sign * mnt, mtt, vn, sign * vt, mu, e)]
+    # μ, e, finiteness and M > 0 are checked above; what is left of input_status:
+    if not vn < 0:
+        status = errors.NO_APPROACH
+    elif not mnn * mtt - mnt * mnt > 0:  # M > 0 but w_n, w_t (nearly) parallel
+        status = errors.NOT_POSITIVE_DEFINITE
+    else:
+        with np.errstate(all="ignore"):
+            out = contact_space_solution(hypothesis, *scalars)
+        status = int(answer_status(hypothesis, errors.SOLVED, out))
     if status != errors.SOLVED:
         detail = {
             errors.NO_APPROACH: f"u: v_n^A = wn·u = {vn!r}; allowed: v_n^A < 0 (approach)",
@@ -327,7 +348,8 @@ def solve(*, mass_matrix, wn, wt, u, mu, e, hypothesis: str = "poisson") -> Impa
             ),
         }.get(status, f"mu = {mu!r}, e = {e!r}: {errors.STATUS_MESSAGES[status]}")
         raise ImpactInputError(f"{detail} [{errors.STATUS_MESSAGES[status]}]")
-    normal, tangential = float(batch.normal_impulse), float(batch.tangential_impulse)
+    normal, tangential = float(out["normal_impulse"]), sign * float(out["tangential_impulse"])
+    e_poisson = float(out["restitution_poisson"])
     delta_u = inv_wn * normal + inv_wt * tangential  # M Δu = w_n I_n + w_t I_t (A16)
     return ImpactResult(
         hypothesis=hypothesis,
@@ -336,16 +358,14 @@ def solve(*, mass_matrix, wn, wt, u, mu, e, hypothesis: str = "poisson") -> Impa
         delta_u=delta_u,
         u_after=u + delta_u,
         vn_approach=vn,
-        vn_separation=float(batch.vn_separation),
+        vn_separation=float(out["vn_separation"]),
         vt_approach=vt,
-        vt_separation=float(batch.vt_separation),
-        energy_change=float(batch.energy_change),
-        collision_type=int(batch.collision_type),
-        case=int(batch.case),
-        restitution_poisson=(
-            None if hypothesis == "newton-lcp" else float(batch.restitution_poisson)
-        ),
-        restitution_in_range=hypothesis == "newton-lcp" or bool(batch.restitution_in_range),
+        vt_separation=sign * float(out["vt_separation"]),
+        energy_change=float(out["energy_change"]),
+        collision_type=int(out["collision_type"]),
+        case=int(out["case"]),
+        restitution_poisson=None if hypothesis == "newton-lcp" else e_poisson,
+        restitution_in_range=hypothesis == "newton-lcp" or 0.0 <= e_poisson <= 1.0,
         mnn=mnn,
         mnt=mnt,
         mtt=mtt,
