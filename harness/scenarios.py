@@ -125,6 +125,11 @@ class ScenarioError(ValueError):
         self.errors = tuple(errors) or (self,)
         if len(self.errors) > 1:
             text = f"{len(self.errors)} errors:\n" + "\n".join(f"  {e}" for e in self.errors)
+        elif self.errors[0] is not self:
+            only = self.errors[0]
+            self.path, self.key, self.value = only.path, only.key, only.value
+            self.allowed, self.problem = only.allowed, only.problem
+            text = str(only)
         else:
             text = self._format(value)
         super().__init__(text)
@@ -830,8 +835,34 @@ def _read_engine_settings(reader: _Reader, raw, scenario: Scenario):
             reader.error(f"engine_settings.{engine}", "must be a table", table,
                          "setting = value pairs")
             continue
+        _check_engine_settings(reader, engine, table)
         settings[engine] = MappingProxyType(dict(table))
     return MappingProxyType(settings)
+
+
+def _check_engine_settings(reader: _Reader, engine: str, table: Mapping[str, Any]) -> None:
+    """Check override keys and values with the engine's adapter, when it can be imported."""
+    try:
+        from harness.engines import load_engine
+
+        adapter = load_engine(engine)
+    except Exception:  # not installed, or no adapter yet: the runner reports it
+        return
+    docs = getattr(adapter, "setting_docs", {})
+    known = tuple(sorted(docs))
+    for key, value in table.items():
+        if known and key not in docs:
+            reader.error(f"engine_settings.{engine}.{key}",
+                         f"unknown {engine} setting{_suggest(key, known)}", value,
+                         ", ".join(known))
+            return
+    for preset in PRESETS:
+        try:
+            adapter.settings(preset, dict(table))
+        except ValueError as error:
+            reader.error(f"engine_settings.{engine}", f"rejected by {engine}: {error}",
+                         dict(table), f"values the {engine} adapter accepts")
+            return
 
 
 def _check_points(reader: _Reader, scenario: Scenario) -> None:
