@@ -29,7 +29,7 @@ def where(condition, if_true, if_false):
     cost would dominate (the scalar :func:`planar_impact.solve` runs these same kernels on
     numpy float64 scalars)."""
     if type(condition) is np.ndarray:
-        return where(condition, if_true, if_false)
+        return np.where(condition, if_true, if_false)
     return if_true if condition else if_false
 
 
@@ -234,7 +234,9 @@ def _positive_root(a, b, c):
     """The '+√' root of ``a x² + b x + c = 0`` (a > 0), computed without cancellation."""
     discriminant = b * b - 4.0 * a * c
     root = np.sqrt(discriminant)
-    return where(b >= 0, -2.0 * c / (b + root), (-b + root) / (2.0 * a))
+    # b + root = 0 only when b = 0 and c = 0 (e_e = 0 with r or s = 0): the root is 0.
+    stable = where(b + root > 0, -2.0 * c / (b + root), 0.0)
+    return where(b >= 0, stable, (-b + root) / (2.0 * a))
 
 
 def stronge_paper_restitution(terms: ContactTerms, e_energetic, ctype):

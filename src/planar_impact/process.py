@@ -184,7 +184,7 @@ def process_collision_type(result: ProcessResult, newton_numbering: bool = False
     return 3 if in_compression else 4
 
 
-def sequential_impulses(mnn, mnt, mtt, vn, vt, mu, e, tolerance=1e-15, max_iterations=1_000_000):
+def sequential_impulses(mnn, mnt, mtt, vn, vt, mu, e, tolerance=1e-13, max_iterations=100_000):
     """``newton-lcp`` by projected Gauss–Seidel, as sequential-impulse engines solve it.
 
     Alternately: the normal impulse that brings ``v_n`` to ``e|v_n^A|`` (clamped ≥ 0), then
@@ -205,3 +205,31 @@ def sequential_impulses(mnn, mnt, mtt, vn, vt, mu, e, tolerance=1e-15, max_itera
         if change <= tolerance * (abs(normal) + abs(tangential)):
             return normal, tangential, iteration
     return normal, tangential, max_iterations
+
+
+def newton_lcp_modes(mnn, mnt, mtt, vn, vt, mu, e):
+    """Every consistent mode of the ``newton-lcp`` complementarity problem, by enumeration.
+
+    Tries sticking and sliding in both directions, each a linear 2×2 problem, and keeps those
+    that satisfy all of Coulomb's conditions. Returns ``[(mode, I_n, I_t), …]``; the law is
+    well posed where exactly one mode is returned. (PGS, :func:`sequential_impulses`, may
+    fail to converge: its normal step contracts by ``|1 − h/m_nn|``, above 1 when
+    ``μ|m_nt| > 2 m_nn``.)
+    """
+    closing = (1.0 + e) * -vn
+    modes = []
+    delta = mnn * mtt - mnt * mnt
+    stick_n = (mtt * closing + mnt * vt) / delta
+    stick_t = -(mnn * vt + mnt * closing) / delta
+    if stick_n >= 0 and abs(stick_t) <= mu * stick_n:
+        modes.append(("stick", stick_n, stick_t))
+    for direction in (1.0, -1.0):  # final slip along +t or −t, friction against it
+        slope = mnn - direction * mu * mnt
+        if slope <= 0:
+            continue
+        normal = closing / slope
+        tangential = -direction * mu * normal
+        slip = vt + mnt * normal + mtt * tangential
+        if direction * slip > 0:
+            modes.append(("slide+" if direction > 0 else "slide-", normal, tangential))
+    return modes

@@ -164,7 +164,9 @@ def solve_batch(mnn, mnt, mtt, vn, vt, mu, e, hypothesis: str = "poisson") -> Ba
     """
     check_hypothesis(hypothesis)
     arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (mnn, mnt, mtt, vn, vt, mu, e)))
-    mnn, mnt, mtt, vn, vt, mu, e = arrays
+    shape = arrays[0].shape
+    # Work on flat 1-D arrays (0-d inputs included), reshape the answers at the end.
+    mnn, mnt, mtt, vn, vt, mu, e = (np.ravel(a) for a in arrays)
     status = input_status(mnn, mnt, mtt, vn, vt, mu, e)
     flipped = vt < 0
     any_flipped = bool(flipped.any())
@@ -206,7 +208,8 @@ def solve_batch(mnn, mnt, mtt, vn, vt, mu, e, hypothesis: str = "poisson") -> Ba
             else:
                 values[bad] = np.nan
             result[name] = values
-    return BatchResult(hypothesis=hypothesis, status=status, **result)
+    result = {name: np.reshape(values, shape) for name, values in result.items()}
+    return BatchResult(hypothesis=hypothesis, status=np.reshape(status, shape), **result)
 
 
 def _reverse_sliding(hypothesis, ctype):
