@@ -453,6 +453,10 @@ class _Reader:
         dotted = f"{prefix}.{key}" if prefix else key
         if key not in table:
             if default is _NO_VALUE:
+                if allowed is None:
+                    bounds = [f"> {low:g}" if low_open else f">= {low:g}"] if low is not None else []
+                    bounds += [f"<= {high:g}"] if high is not None else []
+                    allowed = "a number" + (" " + " and ".join(bounds) if bounds else "")
                 return self.error(dotted, "missing required key", allowed=allowed)
             return default
         value = table[key]
