@@ -159,7 +159,8 @@ def ground_contact(body: Body, tolerance: float = DEFAULT_TOLERANCE) -> Contact:
     point_count = 2 if x_max - x_min > tolerance else 1
     # Ground surface at y = 0, body surface at y = gap: the point is midway.
     point = np.array([0.5 * (x_min + x_max), 0.5 * gap])
-    return Contact(point=point, normal=GROUND_NORMAL.copy(), gap=float(gap), point_count=point_count)
+    return Contact(point=point, normal=GROUND_NORMAL.copy(), gap=float(gap),
+                   point_count=point_count)
 
 
 def body_contact(body_a: Body, body_b: Body, tolerance: float = DEFAULT_TOLERANCE) -> Contact:

@@ -78,7 +78,8 @@ def main_validate(args: argparse.Namespace) -> int:
 # --------------------------------------------------------------------------------------------
 def add_new_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("name", metavar="NAME",
-                        help="scenario name (letters, digits, '_', '-', '.'); the file is NAME.toml")
+                        help="scenario name (letters, digits, '_', '-', '.'); "
+                        "the file is NAME.toml")
     parser.add_argument("--shape", choices=SHAPES, default="disk",
                         help="shape of the (first) body (default: disk)")
     kind = parser.add_mutually_exclusive_group()
@@ -177,7 +178,7 @@ angular_velocity = 0.0
 
 # [expect]                 # optional: what the laws should give (checked by validate)
 # case = 1                 # Table 1 row
-# [expect.collision_type]  # Poisson/Stronge 1-5; newton and newton-lcp 1 stick, 2 reverse, 3 forward
+# [expect.collision_type]  # Poisson/Stronge 1-5; Newton laws 1 stick, 2 reverse, 3 forward
 # poisson = 2
 # "newton-lcp" = 1
 # [expect.gate]            # optional tolerance the runner enforces (non-zero exit if exceeded)

@@ -192,7 +192,7 @@ class SweepSpec:
 
 @dataclass(frozen=True)
 class Gate:
-    """A tolerance the runner enforces: the engine's departure from ``law`` at most ``max_departure``."""
+    """A gate the runner enforces: the engine departs from ``law`` by at most ``max_departure``."""
 
     engine: str
     preset: str | None  # None: every preset
@@ -295,7 +295,7 @@ class Scenario:
             return points[0]
         index = which.index if isinstance(which, Point) else int(which)
         if not 0 <= index < len(points):
-            raise ScenarioError(f"point index out of range", path=self.path, key="point",
+            raise ScenarioError("point index out of range", path=self.path, key="point",
                                 value=index, allowed=f"0 … {len(points) - 1}")
         return points[index]
 
@@ -454,7 +454,9 @@ class _Reader:
         if key not in table:
             if default is _NO_VALUE:
                 if allowed is None:
-                    bounds = [f"> {low:g}" if low_open else f">= {low:g}"] if low is not None else []
+                    bounds = []
+                    if low is not None:
+                        bounds.append(f"> {low:g}" if low_open else f">= {low:g}")
                     bounds += [f"<= {high:g}"] if high is not None else []
                     allowed = "a number" + (" " + " and ".join(bounds) if bounds else "")
                 return self.error(dotted, "missing required key", allowed=allowed)
@@ -566,7 +568,8 @@ def _read_polygon(reader: _Reader, table, prefix):
         points.append(xy)
     vertices = np.array(points, dtype=float)
     edges = np.roll(vertices, -1, axis=0) - vertices
-    turns = edges[:, 0] * np.roll(edges, -1, axis=0)[:, 1] - edges[:, 1] * np.roll(edges, -1, axis=0)[:, 0]
+    following = np.roll(edges, -1, axis=0)
+    turns = edges[:, 0] * following[:, 1] - edges[:, 1] * following[:, 0]
     size = float(np.abs(vertices).max()) or 1.0
     if np.all(turns < 0):
         return reader.error(dotted, "vertices are clockwise", raw,
@@ -805,7 +808,8 @@ def _read_gates(reader: _Reader, raw, scenario: Scenario) -> list[Gate]:
             entries += [(f"{engine}.{p}", engine, p, v) for p, v in value.items()]
         else:
             entries.append((key, engine, preset or None, value))
-    sources = ", ".join([*scenario.engines, *(f"{e}.{p}" for e in scenario.engines for p in PRESETS)])
+    sources = ", ".join([*scenario.engines,
+                         *(f"{e}.{p}" for e in scenario.engines for p in PRESETS)])
     gates = []
     for key, engine, preset, value in entries:
         dotted = f"expect.gate.{key}"

@@ -30,8 +30,8 @@ FILES = sorted(SCENARIO_DIR.glob("*.toml"))
 SCENARIOS = load_scenarios()
 BY_NAME = {s.name: s for s in SCENARIOS}
 
-# Solver behaviour that disagrees with a scenario's physics, pinned so it cannot change
-# silently: (scenario, law) -> reason. The file leaves that law out of [expect].
+# Solver behaviour that disagrees with a scenario's physics: (scenario, law) -> reason. The
+# file then leaves that law out of [expect] and says why; none at present.
 KNOWN_SOLVER_ISSUES: dict[tuple[str, str], str] = {}
 
 
@@ -82,16 +82,6 @@ def test_every_law_is_expected_unless_a_known_issue(scenario):
     stated = set(scenario.expect.collision_type)
     missing = {law for law in scenario.laws if law not in stated}
     assert missing == {law for (name, law) in KNOWN_SOLVER_ISSUES if name == scenario.name}
-
-
-@pytest.mark.parametrize("key", list(KNOWN_SOLVER_ISSUES) or [None], ids=str)
-def test_known_solver_issues_are_still_there(key):
-    """Pinned: when the solver is fixed this fails, and the file's [expect] gets the law back."""
-    if key is None:
-        pytest.skip("no known solver issue at present")
-    name, law = key
-    with pytest.raises(ValueError):
-        BY_NAME[name].solve(law=law)
 
 
 @pytest.mark.parametrize("scenario, point", list(all_points()))
