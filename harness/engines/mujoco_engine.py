@@ -1,0 +1,484 @@
+"""MuJoCo adapter.
+
+MuJoCo has no restitution coefficient: a contact is a soft constraint whose reference
+acceleration is ``a_ref = -b·v - k·r`` (``r`` the penetration, ``v`` its rate); with an
+impedance ``d`` near 1 the constraint space follows it, so over an impact the normal
+direction behaves as a spring-damper that cannot pull. Its restitution follows from the
+damping ratio ``ζ = b / (2·sqrt(k))`` alone (:func:`restitution_of_damping_ratio`): the
+contact ends when ``k·r + b·v`` reaches 0, before the bodies separate, which is why
+``e = 0.5`` needs ``ζ = 0.2553`` and not the linear formula's 0.2155. Friction is soft too
+(a regularised cone); the ``accurate`` preset cannot make it Coulomb's.
+
+``accurate`` sets, from the scene's ``e``, ``solref = (-k, -b)`` (MuJoCo's direct form) with
+``ζ`` from the unilateral map and ``k`` such that the contact lasts ``contact_steps`` steps,
+and a flat ``solimp`` (``d = 0.9999`` at every depth). ``defaults`` is MuJoCo's
+``solref = (0.02, 1)``, ``solimp = (0.9, 0.95, 0.001, 0.5, 2)`` -- ``e`` is then not used
+(measured restitution ≈ 0.13).
+
+Planar motion: slide x, slide z and hinge y joints with an explicit ``<inertial>`` (mass and
+the scene's inertia). The scene's (x, y) is MuJoCo's (x, z); the hinge's angle and rate are
+``-θ`` and ``-ω``. Shapes: disk -> sphere; rod -> capsule along the body's x; box -> box;
+polygon -> mesh (the polygon extruded along y). Ground: an infinite plane, normal +z.
+``μ = 0`` uses ``condim = 1`` (frictionless contact); otherwise ``condim = 3``.
+
+Pair values: MuJoCo takes the larger friction of the two geoms, so the partner (plane, or
+``bodies[1]``) has friction 0 and ``bodies[0]`` has ``μ``; both geoms get the same
+``solref``/``solimp`` (MuJoCo averages them).
+
+Reuse: one compiled ``MjModel`` and ``MjData`` per geometry (shapes, masses, inertias). Each
+run writes every option and contact parameter into the model and calls ``mj_resetData``, so
+reruns are bit-identical. The contact impulse is MuJoCo's total constraint impulse on body B,
+``M·Δq̇`` (exact here: no gravity, no passive forces, constant mass matrix).
+
+Settings (``defaults`` | ``accurate``) are listed in :data:`SETTING_DOCS`.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from harness.engines import (
+    Engine,
+    EngineRun,
+    EngineSettingsError,
+    _check_choice,
+    _check_int,
+    _check_number,
+    _check_vector,
+    body_extent,
+    count_planar_points,
+    decide_status,
+    free_flight_poses,
+)
+from harness.scene import Scene
+
+# Fraction of a step of free flight by which the start is past the touching pose.
+_DETECTION_OVERLAP = 1e-6
+# Smallest restitution the unilateral spring-damper is asked for: e = 0 needs ζ = ∞.
+MIN_RESTITUTION = 1e-3
+
+SETTING_DOCS: dict[str, str] = {
+    "time_step": "s, opt.timestep (default 0.002)",
+    "integrator": "opt.integrator: Euler | implicit | implicitfast | RK4 (default Euler)",
+    "cone": "opt.cone: pyramidal | elliptic (default pyramidal)",
+    "solver": "opt.solver: Newton | CG | PGS (default Newton)",
+    "iterations": "opt.iterations (default 100)",
+    "tolerance": "opt.tolerance (default 1e-8)",
+    "ls_iterations": "opt.ls_iterations, line-search iterations (default 50)",
+    "noslip_iterations": "opt.noslip_iterations (default 0)",
+    "noslip_tolerance": "opt.noslip_tolerance (default 1e-6)",
+    "impratio": "opt.impratio, friction-to-normal impedance ratio (default 1)",
+    "solref": "[timeconst s, dampratio] or direct [-stiffness, -damping], or \"restitution\": "
+    "direct form from e and contact_steps (default [0.02, 1])",
+    "contact_steps": "steps a contact lasts when solref is \"restitution\"",
+    "solimp": "[dmin, dmax, width m, midpoint, power] (default [0.9, 0.95, 0.001, 0.5, 2])",
+    "margin": "m, geom margin: contacts become active this far apart (default 0)",
+    "max_steps": "step cap; reported as status no-separation when hit in contact",
+    "approach_steps": "steps of free flight before first touch (0 = touching at the first step)",
+}
+
+_DEFAULTS = {
+    "time_step": 0.002,
+    "integrator": "Euler",
+    "cone": "pyramidal",
+    "solver": "Newton",
+    "iterations": 100,
+    "tolerance": 1e-8,
+    "ls_iterations": 50,
+    "noslip_iterations": 0,
+    "noslip_tolerance": 1e-6,
+    "impratio": 1.0,
+    "solref": [0.02, 1.0],
+    "contact_steps": 100,
+    "solimp": [0.9, 0.95, 0.001, 0.5, 2.0],
+    "margin": 0.0,
+    "max_steps": 20000,
+    "approach_steps": 0.0,
+}
+PRESETS: dict[str, dict] = {
+    "defaults": dict(_DEFAULTS),
+    "accurate": dict(
+        _DEFAULTS,
+        # RK4 over a 0.5 ms contact of 50 steps reproduces the unilateral spring-damper's
+        # bounce to ~1e-5 (Euler's first-order error is ~0.5/contact_steps: -0.9% at e = 0.5
+        # with 100 steps, -4% at e = 0.1), at the cost of Euler with ~100 steps.
+        time_step=1e-5,
+        integrator="RK4",
+        solref="restitution",
+        contact_steps=50,
+        solimp=[0.9999, 0.9999, 0.001, 0.5, 2.0],
+    ),
+}
+
+_INTEGRATORS = {
+    "Euler": mujoco.mjtIntegrator.mjINT_EULER,
+    "RK4": mujoco.mjtIntegrator.mjINT_RK4,
+    "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT,
+    "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST,
+}
+_CONES = {"pyramidal": mujoco.mjtCone.mjCONE_PYRAMIDAL, "elliptic": mujoco.mjtCone.mjCONE_ELLIPTIC}
+_SOLVERS = {
+    "Newton": mujoco.mjtSolver.mjSOL_NEWTON,
+    "CG": mujoco.mjtSolver.mjSOL_CG,
+    "PGS": mujoco.mjtSolver.mjSOL_PGS,
+}
+
+
+# ---------------------------------------------------------------------- e <-> ζ
+def contact_time_factor(damping_ratio: float) -> float:
+    """``ω₀·T``: duration ``T`` of a unilateral spring-damper contact times its ``ω₀ = sqrt(k)``.
+
+    The penetration obeys ``r'' + 2ζω₀ r' + ω₀² r = 0`` from ``r = 0, r' = v₀`` until the
+    contact force ``2ζω₀ r' + ω₀² r`` returns to 0 (it cannot pull).
+    """
+    zeta = float(damping_ratio)
+    if zeta < 0:
+        raise ValueError(f"damping ratio must be >= 0, got {zeta}")
+    if zeta == 0.0:
+        return math.pi
+    if zeta < 1.0:
+        s = math.sqrt(1.0 - zeta * zeta)
+        return math.atan2(2.0 * zeta * s, -(1.0 - 2.0 * zeta * zeta)) / s
+    if zeta == 1.0:
+        return 2.0
+    sigma = math.sqrt(zeta * zeta - 1.0)
+    return math.atanh(2.0 * zeta * sigma / (2.0 * zeta * zeta - 1.0)) / sigma
+
+
+def restitution_of_damping_ratio(damping_ratio: float) -> float:
+    """Restitution of the unilateral spring-damper: ``e = exp(-ζ·ω₀T(ζ))``.
+
+    Closed form: in the underdamped case the force vanishes at phase
+    ``φ = atan2(2ζs, 2ζ² - 1)`` (``s = sqrt(1 - ζ²)``), where the exit speed is
+    ``v₀·exp(-ζφ/s)``; the overdamped branch is its analytic continuation.
+    ``e(0.2553) = 0.5``, ``e(1) = exp(-2)``, ``e → 1/(4ζ²)`` for large ``ζ``.
+    """
+    zeta = float(damping_ratio)
+    return math.exp(-zeta * contact_time_factor(zeta))
+
+
+def damping_ratio_for_restitution(restitution: float) -> float:
+    """Inverse of :func:`restitution_of_damping_ratio` (bisection to rounding).
+
+    ``e`` is clamped to ``[MIN_RESTITUTION, 1]``: ``e = 0`` would need ``ζ = ∞``.
+    """
+    e = min(max(float(restitution), MIN_RESTITUTION), 1.0)
+    if e == 1.0:
+        return 0.0
+    low, high = 0.0, 1.0
+    while restitution_of_damping_ratio(high) > e:
+        high *= 2.0
+    for _ in range(200):
+        middle = 0.5 * (low + high)
+        if restitution_of_damping_ratio(middle) > e:
+            low = middle
+        else:
+            high = middle
+        if high - low <= 1e-15 * high:
+            break
+    return 0.5 * (low + high)
+
+
+def restitution_solref(restitution: float, time_step: float, contact_steps: float) -> tuple[float, float, float]:
+    """Direct ``solref = (-k, -b)`` giving restitution ``e`` over ``contact_steps`` steps.
+
+    Returns ``(-k, -b, ζ)``. With ``d`` the (flat) impedance MuJoCo's constraint space follows
+    ``r'' = -b r' - k r`` (its ``K = k/d²``, ``B = b/d`` are scaled back by ``d``).
+    """
+    zeta = damping_ratio_for_restitution(restitution)
+    omega = contact_time_factor(zeta) / (contact_steps * time_step)
+    return (-omega * omega, -2.0 * zeta * omega, zeta)
+
+
+# ---------------------------------------------------------------------- model
+def _geom_xml(shape, name: str) -> tuple[str, str]:
+    """(asset xml, geom xml) for ``shape`` in the body frame (scene x -> x, scene y -> z)."""
+    if shape.kind == "disk":
+        return "", f'<geom name="{name}" type="sphere" size="{shape.radius!r}"/>'
+    if shape.kind == "rod":
+        half = shape.length / 2.0
+        return "", (
+            f'<geom name="{name}" type="capsule" size="{shape.radius!r}" '
+            f'fromto="{-half!r} 0 0 {half!r} 0 0"/>'
+        )
+    depth = 2.0 * body_extent(shape)
+    if shape.kind == "box":
+        return "", (
+            f'<geom name="{name}" type="box" '
+            f'size="{shape.width / 2.0!r} {depth / 2.0!r} {shape.height / 2.0!r}"/>'
+        )
+    vertices = " ".join(
+        f"{x!r} {side * depth / 2.0!r} {y!r}" for x, y in shape.vertices().tolist() for side in (-1.0, 1.0)
+    )
+    return (
+        f'<mesh name="{name}_mesh" vertex="{vertices}"/>',
+        f'<geom name="{name}" type="mesh" mesh="{name}_mesh"/>',
+    )
+
+
+def _model_xml(scene: Scene) -> str:
+    assets, bodies = [], []
+    for index, body in enumerate(scene.bodies):
+        asset, geom = _geom_xml(body.shape, f"g{index}")
+        assets.append(asset)
+        inertia = float(body.moment_of_inertia)
+        bodies.append(
+            f'<body name="b{index}">'
+            f'<joint name="b{index}_x" type="slide" axis="1 0 0"/>'
+            f'<joint name="b{index}_z" type="slide" axis="0 0 1"/>'
+            f'<joint name="b{index}_r" type="hinge" axis="0 1 0"/>'
+            f'<inertial pos="0 0 0" mass="{float(body.mass)!r}" '
+            f'diaginertia="{inertia!r} {inertia!r} {inertia!r}"/>'
+            f"{geom}</body>"
+        )
+    ground = '<geom name="ground" type="plane" size="0 0 1"/>' if scene.ground else ""
+    return (
+        '<mujoco model="planar-impact">'
+        '<option gravity="0 0 0"/>'
+        f"<asset>{''.join(assets)}</asset>"
+        f"<worldbody>{ground}{''.join(bodies)}</worldbody>"
+        "</mujoco>"
+    )
+
+
+def _geometry_key(scene: Scene) -> tuple:
+    parts = []
+    for body in scene.bodies:
+        shape = body.shape
+        if shape.kind == "disk":
+            geometry = (shape.radius,)
+        elif shape.kind == "rod":
+            geometry = (shape.length, shape.radius)
+        else:
+            geometry = tuple(map(tuple, shape.vertices().tolist()))
+        parts.append((shape.kind, geometry, float(body.mass), float(body.moment_of_inertia)))
+    return (scene.ground, tuple(parts))
+
+
+@dataclass
+class _Model:
+    model: mujoco.MjModel
+    data: mujoco.MjData
+    body_geoms: list[int]  # geom id of each scene body
+    body_ids: list[int]
+    scale: float
+
+
+class MujocoEngine(Engine):
+    name = "mujoco"
+    version = mujoco.__version__
+    presets = PRESETS
+    setting_docs = SETTING_DOCS
+
+    def __init__(self) -> None:
+        self._models: dict[tuple, _Model] = {}
+
+    def _validate_engine_settings(self, settings) -> None:
+        name = self.name
+        _check_choice(name, settings, "integrator", tuple(_INTEGRATORS))
+        _check_choice(name, settings, "cone", tuple(_CONES))
+        _check_choice(name, settings, "solver", tuple(_SOLVERS))
+        _check_int(name, settings, "iterations", low=1)
+        _check_number(name, settings, "tolerance", low=0.0)
+        _check_int(name, settings, "ls_iterations", low=1)
+        _check_int(name, settings, "noslip_iterations", low=0)
+        _check_number(name, settings, "noslip_tolerance", low=0.0)
+        _check_number(name, settings, "impratio", low=0.0, strict=True)
+        _check_number(name, settings, "contact_steps", low=1.0)
+        _check_vector(name, settings, "solimp", 5)
+        _check_number(name, settings, "margin", low=0.0)
+        solref = settings["solref"]
+        if solref != "restitution":
+            _check_vector(name, settings, "solref", 2)
+            if (solref[0] > 0) != (solref[1] > 0):
+                raise EngineSettingsError(
+                    f"engine {name!r}: setting 'solref' must be [timeconst > 0, dampratio > 0] or "
+                    f"[-stiffness <= 0, -damping <= 0] or \"restitution\", got {solref!r} "
+                    "(MuJoCo falls back to its defaults on mixed signs)"
+                )
+
+    def _model_for(self, scene: Scene) -> _Model:
+        key = _geometry_key(scene)
+        entry = self._models.get(key)
+        if entry is None:
+            model = mujoco.MjModel.from_xml_string(_model_xml(scene))
+            body_geoms = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, f"g{i}")
+                          for i in range(len(scene.bodies))]
+            body_ids = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"b{i}")
+                        for i in range(len(scene.bodies))]
+            entry = _Model(model, mujoco.MjData(model), body_geoms, body_ids,
+                           scale=max(body_extent(b.shape) for b in scene.bodies))
+            self._models[key] = entry
+        return entry
+
+    def _configure(self, entry: _Model, scene: Scene, settings: dict) -> dict:
+        """Write every option and contact parameter of this run into the model."""
+        m = entry.model
+        opt = m.opt
+        dt = float(settings["time_step"])
+        opt.timestep = dt
+        opt.integrator = _INTEGRATORS[settings["integrator"]]
+        opt.cone = _CONES[settings["cone"]]
+        opt.solver = _SOLVERS[settings["solver"]]
+        opt.iterations = int(settings["iterations"])
+        opt.tolerance = float(settings["tolerance"])
+        opt.ls_iterations = int(settings["ls_iterations"])
+        opt.noslip_iterations = int(settings["noslip_iterations"])
+        opt.noslip_tolerance = float(settings["noslip_tolerance"])
+        opt.impratio = float(settings["impratio"])
+        derived: dict = {}
+        if settings["solref"] == "restitution":
+            stiffness, damping, zeta = restitution_solref(
+                scene.restitution, dt, float(settings["contact_steps"])
+            )
+            solref = [stiffness, damping]
+            derived["damping_ratio"] = zeta
+            derived["restitution_target"] = restitution_of_damping_ratio(zeta)
+        else:
+            solref = [float(v) for v in settings["solref"]]
+        derived["solref"] = solref
+        mu = float(scene.friction)
+        condim = 1 if mu == 0.0 else 3
+        derived["condim"] = condim
+        m.geom_solref[:] = solref
+        m.geom_solimp[:] = [float(v) for v in settings["solimp"]]
+        m.geom_margin[:] = float(settings["margin"])
+        m.geom_gap[:] = 0.0
+        m.geom_condim[:] = condim
+        m.geom_friction[:] = 0.0
+        m.geom_friction[entry.body_geoms[0]] = [mu, 0.0, 0.0]
+        return derived
+
+    def _run(self, scene: Scene, settings: dict, preset: str | None) -> EngineRun:
+        start = time.perf_counter()
+        entry = self._model_for(scene)
+        m, d = entry.model, entry.data
+        derived = self._configure(entry, scene, settings)
+        dt = float(settings["time_step"])
+        mujoco.mj_resetData(m, d)
+        count = len(scene.bodies)
+        shift_x = -sum(b.position[0] for b in scene.bodies) / count
+        shift_y = 0.0 if scene.ground else -sum(b.position[1] for b in scene.bodies) / count
+        # A contact at exactly zero distance gets no constraint row in MuJoCo, so the start is
+        # a hair (_DETECTION_OVERLAP of a step of free flight) past the touching pose.
+        rewind = -(float(settings["approach_steps"]) - _DETECTION_OVERLAP) * dt
+        qpos, qvel = [], []
+        for body, pose in zip(scene.bodies, free_flight_poses(scene, rewind)):
+            qpos += [pose[0] + shift_x, pose[1] + shift_y, -pose[2]]
+            qvel += [body.velocity[0], body.velocity[1], -body.angular_velocity]
+        d.qpos[:] = qpos
+        d.qvel[:] = qvel
+        qvel_before = np.array(qvel)
+
+        step = mujoco.mj_step
+        max_steps = int(settings["max_steps"])
+        steps = contact_steps = 0
+        first_contact = None
+        max_points = 0
+        max_penetration = 0.0
+        normal = None
+        separated = False
+        geom_a = entry.body_geoms[0] if count == 2 else -1
+        while steps < max_steps:
+            step(m, d)
+            steps += 1
+            # Active contact constraints only: MuJoCo reports a contact at dist >= margin
+            # (its "gap" zone) but gives it no constraint row.
+            if not d.nefc:
+                if first_contact is not None:
+                    separated = True
+                    break
+                continue
+            contact_steps += 1
+            ncon = d.ncon
+            contact = d.contact
+            depth = -float(contact.dist.min())
+            if depth > max_penetration:
+                max_penetration = depth
+            if first_contact is None:
+                first_contact = steps
+                frame = contact.frame[0]
+                sign = -1.0 if (count == 2 and contact.geom2[0] == geom_a) else 1.0
+                length = math.hypot(frame[0], frame[2])
+                normal = (float(sign * frame[0] / length), float(sign * frame[2] / length))
+            if ncon > 1:
+                positions = contact.pos
+                planar = count_planar_points(((row[0], row[2]) for row in positions), entry.scale)
+                if planar > max_points:
+                    max_points = planar
+            elif max_points < 1:
+                max_points = 1
+            if not d.efc_force.any():  # every contact force zero: the impact is over
+                separated = True
+                break
+
+        qvel_after = d.qvel.copy()
+        velocities = tuple(
+            (float(qvel_after[3 * i]), float(qvel_after[3 * i + 1]), float(-qvel_after[3 * i + 2]))
+            for i in range(count)
+        )
+        drift = 0.0
+        for body_id, body in zip(entry.body_ids, scene.bodies):
+            y_axis = d.xmat[body_id].reshape(3, 3)[:, 1]
+            drift = max(drift, abs(float(d.xpos[body_id][1]))
+                        + math.hypot(float(y_axis[0]), float(y_axis[2])) * body_extent(body.shape))
+        if normal is not None:
+            # Constraint impulse on body B from momentum: M·Δq̇ of its slide joints.
+            body_b = scene.bodies[-1]
+            offset = 3 * (count - 1)
+            impulse_x = body_b.mass * (qvel_after[offset] - qvel_before[offset])
+            impulse_z = body_b.mass * (qvel_after[offset + 1] - qvel_before[offset + 1])
+            n_x, n_y = normal
+            normal_impulse = float(impulse_x * n_x + impulse_z * n_y)
+            tangential_impulse = float(impulse_x * n_y - impulse_z * n_x)
+        else:
+            normal_impulse = tangential_impulse = None
+        status = decide_status(
+            scene,
+            velocities,
+            contact_seen=first_contact is not None,
+            separated=separated,
+            max_contact_points=max_points,
+            out_of_plane_drift=drift,
+        )
+        notes = []
+        if settings["solref"] != "restitution":
+            notes.append("restitution e not used: MuJoCo's bounce comes from solref/solimp")
+        if settings["solref"] == "restitution" and scene.restitution < MIN_RESTITUTION:
+            notes.append(f"e below {MIN_RESTITUTION} needs an infinite damping ratio; used {MIN_RESTITUTION}")
+        if max_points > 1:
+            notes.append(f"{max_points} distinct in-plane contact points in one step")
+        return EngineRun(
+            engine=self.name,
+            engine_version=self.version,
+            scene_name=scene.name,
+            preset=preset,
+            settings=settings,
+            velocities=velocities,
+            status=status,
+            steps=steps,
+            contact_steps=contact_steps,
+            first_contact_step=first_contact,
+            max_contact_points=max_points,
+            max_penetration=float(max_penetration),
+            separated=separated,
+            step_cap_hit=(not separated and steps >= max_steps),
+            contact_normal=normal,
+            normal_impulse=normal_impulse,
+            tangential_impulse=tangential_impulse,
+            out_of_plane_drift=drift,
+            derived=derived,
+            notes=tuple(notes),
+            wall_time_s=time.perf_counter() - start,
+        )
+
+    def close(self) -> None:
+        self._models.clear()
+
+
+ENGINE_CLASS = MujocoEngine
