@@ -168,7 +168,9 @@ def solve_batch(mnn, mnt, mtt, vn, vt, mu, e, hypothesis: str = "poisson") -> Ba
     # Work on flat 1-D arrays (0-d inputs included), reshape the answers at the end.
     mnn, mnt, mtt, vn, vt, mu, e = (np.ravel(a) for a in arrays)
     status = input_status(mnn, mnt, mtt, vn, vt, mu, e)
-    flipped = vt < 0
+    # The theory's t makes v_t^A ≥ 0. Where v_t^A = 0 it also takes m_nt ≥ 0, so that a
+    # slip that develops runs along +t ("forward"): types then do not depend on the caller's t.
+    flipped = (vt < 0) | ((vt == 0) & (mnt < 0))
     any_flipped = bool(flipped.any())
     if any_flipped:  # t → −t: m_nt and v_t change sign, the rest does not.
         mnt = np.where(flipped, -mnt, mnt)
@@ -331,7 +333,7 @@ def solve(*, mass_matrix, wn, wt, u, mu, e, hypothesis: str = "poisson") -> Impa
     mnn, mnt, mtt = float(wn @ inv_wn), float(wn @ inv_wt), float(wt @ inv_wt)  # (A20)
     vn, vt = float(wn @ u), float(wt @ u)
     # The batch kernels on numpy float64 scalars: same code, without array overhead.
-    sign = -1.0 if vt < 0 else 1.0  # t → −t where v_t^A < 0
+    sign = -1.0 if vt < 0 or (vt == 0 and mnt < 0) else 1.0  # t → −t as in solve_batch
     scalars = [np.float64(x) for x in (mnn, sign * mnt, mtt, vn, sign * vt, mu, e)]
     # μ, e, finiteness and M > 0 are checked above; what is left of input_status:
     if not vn < 0:
