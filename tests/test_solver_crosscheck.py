@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from random_problems import random_problems, row
+from harness.random_problems import random_problems, row
 
 import planar_impact as pi
 from planar_impact.process import (

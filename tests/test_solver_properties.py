@@ -60,7 +60,7 @@ def test_poisson_and_exact_stronge_never_gain_energy(problem):
 def test_newton_energy_gain_is_reported_where_it_occurs():
     """Newton's law gains energy in a few percent of problems (Part A); the
     solver reports the gain (positive ΔE, ``energy_gained``), it does not hide it."""
-    from random_problems import random_problems
+    from harness.random_problems import random_problems
 
     draws = random_problems(20_000, seed=11)
     newton = pi.solve_batch(**draws, hypothesis="newton")

@@ -1,4 +1,4 @@
-"""Random contact-space impact problems shared by the solver tests.
+"""Random contact-space impact problems shared by the solver tests and benchmarks.
 
 Draws cover every Table 1 case and every collision type: ``m_nt`` over its whole admissible
 range ``|m_nt| < √(m_nn m_tt)``, friction from 0 to 2 (with exact zeros), restitution in
