@@ -384,6 +384,7 @@ class MujocoEngine(Engine):
         normal = None
         separated = False
         geom_a = entry.body_geoms[0] if count == 2 else -1
+        last_depth = math.inf
         while steps < max_steps:
             step(m, d)
             steps += 1
@@ -397,7 +398,7 @@ class MujocoEngine(Engine):
             contact_steps += 1
             ncon = d.ncon
             contact = d.contact
-            depth = -float(contact.dist.min())
+            depth = -float(contact.dist[0]) if ncon == 1 else -float(contact.dist.min())
             if depth > max_penetration:
                 max_penetration = depth
             if first_contact is None:
@@ -413,9 +414,12 @@ class MujocoEngine(Engine):
                     max_points = planar
             elif max_points < 1:
                 max_points = 1
-            if not d.efc_force.any():  # every contact force zero: the impact is over
+            # The contact can only end while the penetration shrinks; only then look at the
+            # forces (every contact force zero: the impact is over).
+            if depth < last_depth and not d.efc_force.any():
                 separated = True
                 break
+            last_depth = depth
 
         qvel_after = d.qvel.copy()
         velocities = tuple(

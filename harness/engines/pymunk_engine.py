@@ -133,6 +133,8 @@ class _SpaceEntry:
     bodies: list
     shapes: list
     recorder: _Recorder
+    space_values: tuple | None = None  # Space knobs last applied
+    pair_values: tuple | None = None  # (e, μ) last applied
 
 
 class PymunkEngine(Engine):
@@ -170,6 +172,7 @@ class PymunkEngine(Engine):
             shape = _make_shape(pm_body, body.shape)
             bodies.append(pm_body)
             shapes.append(shape)
+            space.add(pm_body)  # bodies stay; shapes are removed and re-added per run
         recorder = _Recorder()
         space.on_collision(post_solve=recorder)
         entry = _SpaceEntry(space, bodies, shapes, recorder)
@@ -181,20 +184,28 @@ class PymunkEngine(Engine):
         entry = self._space_for(scene)
         space, pm_bodies, shapes, recorder = entry.space, entry.bodies, entry.shapes, entry.recorder
         dt = float(settings["time_step"])
-        space.iterations = int(settings["iterations"])
-        space.collision_slop = float(settings["collision_slop"])
-        space.collision_bias = float(settings["collision_bias"])
-        space.collision_persistence = int(settings["collision_persistence"])
-        space.damping = float(settings["damping"])
+        space_values = (
+            int(settings["iterations"]),
+            float(settings["collision_slop"]),
+            float(settings["collision_bias"]),
+            int(settings["collision_persistence"]),
+            float(settings["damping"]),
+        )
+        if entry.space_values != space_values:
+            (space.iterations, space.collision_slop, space.collision_bias,
+             space.collision_persistence, space.damping) = space_values
+            entry.space_values = space_values
 
-        # Fresh arbiters: remove and re-add the dynamic bodies and shapes.
-        for pm_body, shape in zip(pm_bodies, shapes):
-            if pm_body.space is not None:
-                space.remove(pm_body, shape)
+        # Fresh arbiters: removing a shape drops the cached arbiters that involve it.
+        for shape in shapes:
+            if shape.space is not None:
+                space.remove(shape)
         e, mu = scene.restitution, scene.friction
-        shapes[0].elasticity, shapes[0].friction = e, mu
-        if len(shapes) == 2:
-            shapes[1].elasticity, shapes[1].friction = 1.0, 1.0
+        if entry.pair_values != (e, mu):
+            shapes[0].elasticity, shapes[0].friction = e, mu
+            if len(shapes) == 2:
+                shapes[1].elasticity, shapes[1].friction = 1.0, 1.0
+            entry.pair_values = (e, mu)
         # Shift x so that the bodies sit near the origin (precision; a symmetry of the scene).
         shift_x = -sum(b.position[0] for b in scene.bodies) / len(scene.bodies)
         rewind = -(settings["approach_steps"] + 1.0 - _DETECTION_OVERLAP) * dt
@@ -203,10 +214,7 @@ class PymunkEngine(Engine):
             pm_body.angle = pose[2]
             pm_body.velocity = body.velocity
             pm_body.angular_velocity = body.angular_velocity
-            pm_body.force = (0.0, 0.0)
-            pm_body.torque = 0.0
-        for pm_body, shape in zip(pm_bodies, shapes):
-            space.add(pm_body, shape)
+        space.add(*shapes)
         recorder.body_b = pm_bodies[-1]
 
         max_steps = int(settings["max_steps"])

@@ -1,0 +1,381 @@
+"""Engine-adapter overhead: the harness's cost per impact beside the engine's bare stepping.
+
+For every installed engine, preset and reference scene, in one run:
+
+* ``harness_us`` -- ``engine.run(scene, settings)`` per impact (settings resolved once,
+  caches warm): state set-up, stepping with per-step contact bookkeeping, read-out, status.
+* ``bare_us`` -- the same number of engine steps from the same start state in a tight
+  Python loop (``space.step`` / ``p.stepSimulation`` / ``mj_step``), with the state set
+  outside the timed region; for pymunk on a space without the harness's collision callback.
+* ``bare_reset_us`` -- the same loop with the state set-up timed too: the least any Python
+  harness must spend per impact.
+* ``ratio`` = ``harness_us / bare_us`` (target <= 1.3) and ``ratio_reset`` =
+  ``harness_us / bare_reset_us``.
+
+The velocity-level engines (pymunk, pybullet) resolve an impact in 2 steps, so their bare
+stepping is a few microseconds and fixed per-impact costs of any Python driver dominate
+``ratio``; ``ratio_reset`` isolates the harness's own bookkeeping. MuJoCo's soft contact takes
+~50 steps, where ``ratio`` is meaningful.
+
+The benchmark checks its own results: reruns are bit-identical, and pymunk/pybullet
+``accurate`` agree with ``planar_impact``'s ``newton-lcp`` to 1e-6 where the solver is importable.
+
+``python -m harness.bench_engines [--quick] [--json PATH]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import platform
+import sys
+import time
+from typing import Callable
+
+from harness.engines import (
+    ENGINE_NAMES,
+    EngineNotInstalled,
+    ke_norm,
+    load_engine,
+)
+from harness.scene import Body, Box, Disk, Rod, Scene
+
+RATIO_TARGET = 1.3
+
+
+# ---------------------------------------------------------------------- scenes
+def reference_scenes() -> dict[str, tuple[Scene, tuple[float, float], tuple[float, float]]]:
+    """Hand-built scenes: ``name -> (scene, contact point, normal from A into B)``.
+
+    * ``disk``: disk r 0.1 m, 1 kg, v (1, -1) m/s, no spin (sticks under newton-lcp).
+    * ``disk-spin``: the same with ω = 5 rad/s (slides).
+    * ``rod-45``: ENGINES.md's rod, 1 m capsule (cap radius 5 mm), 1 kg, inertia 1/12 kg m²,
+      45°, v (0.5, -1) m/s, e 0.5, μ 0.3 -> newton-lcp (0.7202, -0.2660, -2.1666).
+    * ``box-corner``: box 0.4 × 0.2 m, 1 kg, 30°, lowest corner on the ground, v (0.3, -1),
+      ω 0.5 rad/s.
+    * ``two-disks``: disks r 0.1 m (1 kg) and 0.15 m (2 kg) touching along 30°, with
+      oblique velocities and spin.
+    All with e = 0.5, μ = 0.3.
+    """
+    e, mu = 0.5, 0.3
+    scenes = {}
+    radius = 0.1
+    for name, spin in (("disk", 0.0), ("disk-spin", 5.0)):
+        body = Body("disk", Disk(radius), 1.0, (0.0, radius), 0.0, (1.0, -1.0), spin)
+        scenes[name] = (Scene((body,), e, mu, ground=True, name=name), (0.0, 0.0), (0.0, 1.0))
+
+    angle, length, cap = math.radians(45.0), 1.0, 0.005
+    cap_x, cap_y = -length / 2.0 * math.cos(angle), -length / 2.0 * math.sin(angle)
+    rod = Body("rod", Rod(length, cap), 1.0, (0.0, -cap_y + cap), angle, (0.5, -1.0), 0.0,
+               inertia=1.0 / 12.0)
+    scenes["rod-45"] = (Scene((rod,), e, mu, ground=True, name="rod-45"), (cap_x, 0.0), (0.0, 1.0))
+
+    angle = math.radians(30.0)
+    box = Box(0.4, 0.2)
+    c, s = math.cos(angle), math.sin(angle)
+    corners = [(c * x - s * y, s * x + c * y) for x, y in box.vertices().tolist()]
+    low = min(corners, key=lambda point: point[1])
+    body = Body("box", box, 1.0, (0.0, -low[1]), angle, (0.3, -1.0), 0.5)
+    scenes["box-corner"] = (Scene((body,), e, mu, ground=True, name="box-corner"), (low[0], 0.0),
+                            (0.0, 1.0))
+
+    r_a, r_b, phi = 0.1, 0.15, math.radians(30.0)
+    normal = (math.cos(phi), math.sin(phi))
+    a = Body("a", Disk(r_a), 1.0, (0.0, 0.0), 0.0, (1.0, 0.2), 0.0)
+    b = Body("b", Disk(r_b), 2.0, ((r_a + r_b) * normal[0], (r_a + r_b) * normal[1]), 0.3,
+             (-0.5, 0.0), 1.0)
+    contact = (r_a * normal[0], r_a * normal[1])
+    scenes["two-disks"] = (Scene((a, b), e, mu, ground=False, name="two-disks"), contact, normal)
+    return scenes
+
+
+def newton_lcp_velocities(scene: Scene, contact, normal):
+    """``planar_impact``'s ``newton-lcp`` post-impact velocities for a reference scene."""
+    import planar_impact as pi
+
+    def planar(body):
+        return pi.builders.PlanarBody(body.mass, body.moment_of_inertia, body.position,
+                                      body.velocity, body.angular_velocity)
+
+    if scene.ground:
+        problem = pi.builders.rigid_body_against_ground(planar(scene.bodies[0]), contact, normal)
+    else:
+        problem = pi.builders.two_bodies(planar(scene.bodies[0]), planar(scene.bodies[1]),
+                                         contact, normal)
+    return problem.solve(mu=scene.friction, e=scene.restitution, hypothesis="newton-lcp")
+
+
+# ---------------------------------------------------------------------- bare stepping
+def _bare_stepper(engine, scene: Scene, settings: dict) -> tuple[Callable[[], None], Callable[[int], None]]:
+    """``(prepare, step_n)``: set the run's start state; step the engine n times, nothing else."""
+    name = engine.name
+    if name == "pymunk":
+        import pymunk
+
+        from harness.engines import free_flight_poses
+        from harness.engines.pymunk_engine import _GROUND_HALF_WIDTH, _DETECTION_OVERLAP, _make_shape
+
+        space = pymunk.Space()
+        space.iterations = int(settings["iterations"])
+        space.collision_slop = float(settings["collision_slop"])
+        space.collision_bias = float(settings["collision_bias"])
+        space.collision_persistence = int(settings["collision_persistence"])
+        space.damping = float(settings["damping"])
+        if scene.ground:
+            w = _GROUND_HALF_WIDTH
+            ground = pymunk.Poly(space.static_body, [(-w, -w), (w, -w), (w, 0.0), (-w, 0.0)])
+            ground.elasticity = ground.friction = 1.0
+            space.add(ground)
+        bodies, shapes = [], []
+        for index, body in enumerate(scene.bodies):
+            pm_body = pymunk.Body(body.mass, body.moment_of_inertia)
+            shape = _make_shape(pm_body, body.shape)
+            shape.elasticity, shape.friction = (
+                (scene.restitution, scene.friction) if index == 0 else (1.0, 1.0)
+            )
+            space.add(pm_body)
+            bodies.append(pm_body)
+            shapes.append(shape)
+        dt = float(settings["time_step"])
+        rewind = -(settings["approach_steps"] + 1.0 - _DETECTION_OVERLAP) * dt
+        poses = free_flight_poses(scene, rewind)
+        shift_x = -sum(b.position[0] for b in scene.bodies) / len(scene.bodies)
+
+        def prepare() -> None:
+            for shape in shapes:
+                if shape.space is not None:
+                    space.remove(shape)
+            for body, pm_body, pose in zip(scene.bodies, bodies, poses):
+                pm_body.position = (pose[0] + shift_x, pose[1])
+                pm_body.angle = pose[2]
+                pm_body.velocity = body.velocity
+                pm_body.angular_velocity = body.angular_velocity
+            space.add(*shapes)
+
+        def step_n(count: int) -> None:
+            step = space.step
+            for _ in range(count):
+                step(dt)
+
+        return prepare, step_n
+
+    if name == "pybullet":
+        import pybullet as p
+
+        from harness.engines import free_flight_poses
+
+        engine.run(scene, settings)  # builds (or reuses) the world
+        world = engine._world_for(scene, settings)
+        client, uids = world.client, world.bodies
+        dt = float(settings["time_step"])
+        poses = free_flight_poses(scene, -float(settings["approach_steps"]) * dt)
+        count = len(scene.bodies)
+        shift_x = -sum(b.position[0] for b in scene.bodies) / count
+        shift_y = 0.0 if scene.ground else -sum(b.position[1] for b in scene.bodies) / count
+
+        def prepare() -> None:
+            for index, uid in enumerate(uids):
+                p.resetJointState(uid, 0, 10.0 * index * (world.scale + 1.0), 0.0, physicsClientId=client)
+                p.resetJointState(uid, 1, 1.0e3, 0.0, physicsClientId=client)
+            p.performCollisionDetection(physicsClientId=client)
+            for body, uid, pose in zip(scene.bodies, uids, poses):
+                p.resetJointState(uid, 0, pose[0] + shift_x, body.velocity[0], physicsClientId=client)
+                p.resetJointState(uid, 1, pose[1] + shift_y, body.velocity[1], physicsClientId=client)
+                p.resetJointState(uid, 2, -pose[2], -body.angular_velocity, physicsClientId=client)
+
+        def step_n(count_steps: int) -> None:
+            step = p.stepSimulation
+            for _ in range(count_steps):
+                step(physicsClientId=client)
+
+        return prepare, step_n
+
+    if name == "mujoco":
+        import mujoco
+
+        from harness.engines import free_flight_poses
+        from harness.engines.mujoco_engine import _DETECTION_OVERLAP
+
+        entry = engine._model_for(scene)
+        m, d = entry.model, entry.data
+        engine._configure(entry, scene, settings)
+        dt = float(settings["time_step"])
+        poses = free_flight_poses(scene, -(float(settings["approach_steps"]) - _DETECTION_OVERLAP) * dt)
+        count = len(scene.bodies)
+        shift_x = -sum(b.position[0] for b in scene.bodies) / count
+        shift_y = 0.0 if scene.ground else -sum(b.position[1] for b in scene.bodies) / count
+        qpos, qvel = [], []
+        for body, pose in zip(scene.bodies, poses):
+            qpos += [pose[0] + shift_x, pose[1] + shift_y, -pose[2]]
+            qvel += [body.velocity[0], body.velocity[1], -body.angular_velocity]
+
+        def prepare() -> None:
+            engine._configure(entry, scene, settings)
+            mujoco.mj_resetData(m, d)
+            d.qpos[:] = qpos
+            d.qvel[:] = qvel
+
+        def step_n(count_steps: int) -> None:
+            step = mujoco.mj_step
+            for _ in range(count_steps):
+                step(m, d)
+
+        return prepare, step_n
+    raise ValueError(f"no bare stepper for engine {name!r}")
+
+
+# ---------------------------------------------------------------------- timing
+def _time_harness(engine, scene, settings, impacts: int, rounds: int) -> float:
+    best = math.inf
+    run = engine.run
+    for _ in range(rounds):
+        start = time.perf_counter()
+        for _ in range(impacts):
+            run(scene, settings)
+        best = min(best, (time.perf_counter() - start) / impacts)
+    return best
+
+
+def _time_bare(prepare, step_n, steps: int, impacts: int, rounds: int, include_reset: bool) -> float:
+    best = math.inf
+    clock = time.perf_counter
+    for _ in range(rounds):
+        total = 0.0
+        if include_reset:
+            start = clock()
+            for _ in range(impacts):
+                prepare()
+                step_n(steps)
+            total = clock() - start
+        else:
+            for _ in range(impacts):
+                prepare()
+                start = clock()
+                step_n(steps)
+                total += clock() - start
+        best = min(best, total / impacts)
+    return best
+
+
+def run_engine_overhead_benchmark(quick: bool = True) -> dict:
+    """Measure harness vs bare stepping per engine, preset and scene; returns a dict.
+
+    ``{"engines": {name: {"available": bool, "reason": str|None, "rows": [...]}}, ...}``;
+    each row has ``scene, preset, steps, harness_us, bare_us, bare_reset_us, ratio,
+    ratio_reset, deterministic, newton_lcp_error`` (None where not applicable) and
+    ``meets_target`` (ratio <= 1.3).
+    """
+    scenes = reference_scenes()
+    chosen = ("disk", "rod-45", "two-disks") if quick else tuple(scenes)
+    impacts = {"pymunk": 400, "pybullet": 200, "mujoco": 20} if quick else {
+        "pymunk": 3000, "pybullet": 1000, "mujoco": 150}
+    rounds = 3 if quick else 7
+    try:
+        import planar_impact  # noqa: F401
+
+        have_solver = True
+    except ImportError:
+        have_solver = False
+
+    report: dict = {
+        "quick": quick,
+        "ratio_target": RATIO_TARGET,
+        "python": platform.python_version(),
+        "machine": platform.machine(),
+        "engines": {},
+    }
+    for name in ENGINE_NAMES:
+        try:
+            engine = load_engine(name)
+        except EngineNotInstalled as error:
+            report["engines"][name] = {"available": False, "reason": str(error), "rows": []}
+            continue
+        rows = []
+        for preset in ("defaults", "accurate"):
+            settings = engine.settings(preset)
+            for scene_name in chosen:
+                scene, contact, normal = scenes[scene_name]
+                first = engine.run(scene, settings)  # warm caches
+                again = engine.run(scene, settings)
+                deterministic = first == again
+                law_error = None
+                if have_solver and name in ("pymunk", "pybullet"):
+                    law = newton_lcp_velocities(scene, contact, normal)
+                    diff = first.u_after - law.u_after
+                    law_error = ke_norm(scene, diff) / ke_norm(scene, scene.state())
+                steps = first.steps
+                prepare, step_n = _bare_stepper(engine, scene, settings)
+                count = impacts[name]
+                harness = _time_harness(engine, scene, settings, count, rounds)
+                bare = _time_bare(prepare, step_n, steps, count, rounds, include_reset=False)
+                bare_reset = _time_bare(prepare, step_n, steps, count, rounds, include_reset=True)
+                engine.run(scene, settings)  # leave the engine's caches in a clean state
+                rows.append({
+                    "scene": scene_name,
+                    "preset": preset,
+                    "steps": steps,
+                    "status": first.status,
+                    "harness_us": harness * 1e6,
+                    "bare_us": bare * 1e6,
+                    "bare_reset_us": bare_reset * 1e6,
+                    "ratio": harness / bare,
+                    "ratio_reset": harness / bare_reset,
+                    "meets_target": harness / bare <= RATIO_TARGET,
+                    "deterministic": deterministic,
+                    "newton_lcp_error": law_error,
+                })
+        report["engines"][name] = {"available": True, "reason": None, "version": engine.version,
+                                   "rows": rows}
+    return report
+
+
+def format_table(report: dict) -> str:
+    """The benchmark as a plain-text table."""
+    lines = [
+        f"engine overhead per impact (quick={report['quick']}; target ratio <= {report['ratio_target']})",
+        f"{'engine':9} {'preset':9} {'scene':11} {'steps':>5} {'harness µs':>11} {'bare µs':>9} "
+        f"{'bare+reset µs':>13} {'ratio':>6} {'ratio(reset)':>12} {'det':>4} {'vs newton-lcp':>13}",
+    ]
+    for name, entry in report["engines"].items():
+        if not entry["available"]:
+            lines.append(f"{name:9} not available: {entry['reason']}")
+            continue
+        for row in entry["rows"]:
+            law = "" if row["newton_lcp_error"] is None else f"{row['newton_lcp_error']:.1e}"
+            lines.append(
+                f"{name:9} {row['preset']:9} {row['scene']:11} {row['steps']:5d} "
+                f"{row['harness_us']:11.1f} {row['bare_us']:9.1f} {row['bare_reset_us']:13.1f} "
+                f"{row['ratio']:6.2f} {row['ratio_reset']:12.2f} {'yes' if row['deterministic'] else 'NO':>4} "
+                f"{law:>13}"
+            )
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m harness.bench_engines", description=__doc__.split("\n")[0])
+    parser.add_argument("--quick", action="store_true", help="fewer scenes and repetitions")
+    parser.add_argument("--json", metavar="PATH", help="also write the results as JSON")
+    args = parser.parse_args(argv)
+    report = run_engine_overhead_benchmark(quick=args.quick)
+    print(format_table(report))
+    if args.json:
+        with open(args.json, "w", encoding="utf-8") as handle:
+            json.dump(report, handle, indent=2)
+    bad = [
+        (name, row["scene"], row["preset"])
+        for name, entry in report["engines"].items()
+        for row in entry["rows"]
+        if not row["deterministic"]
+        or (row["preset"] == "accurate" and row["newton_lcp_error"] is not None
+            and row["newton_lcp_error"] > 1e-6)
+    ]
+    if bad:
+        print(f"self-check failed (not bit-identical, or accurate off newton-lcp by > 1e-6): {bad}",
+              file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
