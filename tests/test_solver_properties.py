@@ -100,9 +100,10 @@ def test_energy_gained_flag_on_a_known_case():
        st.sampled_from(["poisson", "stronge", "stronge-paper", "newton"]))
 def test_continuity_across_type_boundaries(problem, boundary, law):
     if law == "stronge-paper":
-        # Continuous for e_e > 0 only (see test_paper_stronge_mapping_jumps_at_zero_restitution);
-        # near e_e = 0 its slope grows like 1/e_e, so keep e_e away from 0.
+        # The paper's mapping is continuous only for e_e > 0 and, at α = (1+e)r_m, only for
+        # m_nt ≥ 0 (see the two pinned tests below); near e_e = 0 its slope grows like 1/e_e.
         assume(problem["e"] >= 0.05)
+        assume(boundary == 1.0 or problem["mnt"] >= 0)
     terms = pi.laws.ContactTerms(*(np.float64(problem[k]) for k in ("mnn", "mnt", "mtt", "vn", "vt", "mu")))
     assume(terms.case in (1, 2, 3) and terms.r_m > 0.05)
     factor = 1.0 if boundary == 1.0 else 1.0 + problem["e"]
@@ -175,6 +176,21 @@ def test_paper_stronge_mapping_jumps_at_zero_restitution():
     assert float(above.restitution_poisson) == 0.0
     exact = solve(dict(problem, vt=0.999 * r_m), "stronge")
     assert abs(float(exact.vn_separation)) < 1e-12
+
+
+def test_paper_stronge_mapping_jumps_at_the_forward_sliding_boundary_when_mnt_negative():
+    """Pinned property of the paper's Section 4: at α = (1+e_e) r_m, e_i = e_e is a root of
+    (66), as the paper says, but for m_nt < 0 (r < 0, y > 0) the other root is larger and the
+    '+√' root of (67) picks it, so e_i jumps from ≈ 1 (Type 2) to e_e (Type 5)."""
+    problem = dict(mnn=1.0, mnt=-0.75, mtt=1.0, vn=-1.0, mu=1.0, e=0.5)
+    r_m = (1.0 + 0.75) / (1.0 + 0.75)  # g/h
+    below = solve(dict(problem, vt=(1 - 1e-6) * 1.5 * r_m), "stronge-paper")
+    above = solve(dict(problem, vt=(1 + 1e-6) * 1.5 * r_m), "stronge-paper")
+    assert (int(below.collision_type), int(above.collision_type)) == (2, 5)
+    assert float(below.restitution_poisson) == pytest.approx(1.0, abs=1e-4)  # α 1e-6 off
+    assert float(above.restitution_poisson) == 0.5
+    exact = [solve(dict(problem, vt=f * 1.5 * r_m), "stronge") for f in (1 - 1e-6, 1 + 1e-6)]
+    assert float(exact[0].normal_impulse) == pytest.approx(float(exact[1].normal_impulse), rel=1e-5)
 
 
 @settings(max_examples=200, deadline=None)

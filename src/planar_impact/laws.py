@@ -78,37 +78,35 @@ class ContactTerms:
         self.case = table1_case(self.g, self.h, self.p, self.q)
 
 
-def table1_case(g, h, p, q):
-    """Table 1 row (1–5) from the signs of ``g, h, p, q``.
+# Table 1 row by a 4-bit code: 8·[g ≤ 0] + 4·[h ≤ 0] + 2·[p < 0] + [q < 0]. The first
+# condition that holds decides: g ≤ 0 → 5, else h ≤ 0 → 4, else p < 0 → 3, else q < 0 → 2,
+# else 1 (comment g of the paper lets equal signs join the remaining inequalities).
+_CASE_BY_CODE = np.array([1, 2, 3, 3, 4, 4, 4, 4, 5, 5, 5, 5, 5, 5, 5, 5], dtype=np.int8)
 
-    Case 5 is ``g ≤ 0`` (needs ``h > 0``), Case 4 ``g > 0, h ≤ 0``, Case 3 ``g, h > 0, p < 0``,
-    Cases 1 and 2 ``g, h > 0, p ≥ 0`` told apart by the sign of ``q`` (comment g of the paper
-    lets equal signs join the remaining inequalities).
-    """
-    return as_type_code(where(g <= 0, 5, where(h <= 0, 4, where(p < 0, 3, where(q >= 0, 1, 2)))))
+# Poisson type by (case, region of α): region 0 is α ≤ r_m (from compression), 1 is
+# r_m < α ≤ (1+e) r_m (from restitution), 2 is beyond (forward sliding). Cases 1-2 stick,
+# Case 3 reverses; Case 4 is Type 1 for every α > 0 (57) and Case 5 Type 5 (55).
+_POISSON_TYPE_BY_CASE_REGION = np.array(
+    [[0, 0, 0], [1, 2, 5], [1, 2, 5], [3, 4, 5], [1, 1, 1], [5, 5, 5]], dtype=np.int8
+)
+
+
+def table1_case(g, h, p, q):
+    """Table 1 row (1–5) from the signs of ``g, h, p, q`` (A35)."""
+    code = np.add(np.multiply(g <= 0, 8, dtype=np.int8), np.multiply(h <= 0, 4, dtype=np.int8), dtype=np.int8)
+    code = np.add(code, np.add(np.multiply(p < 0, 2, dtype=np.int8), q < 0, dtype=np.int8), dtype=np.int8)
+    return _CASE_BY_CODE[code]
 
 
 def poisson_type(terms: ContactTerms, e):
-    """Collision type (1–5) under Poisson's law by Table 1 (with (53)–(57))."""
-    alpha, r_m, case = terms.alpha, terms.r_m, terms.case
-    # Cases 1-3: α ≤ r_m → sticking/reverse sliding from compression (Types 1/3);
-    # r_m < α ≤ (1+e) r_m → from restitution (Types 2/4); beyond → forward sliding (Type 5).
-    # Equality at a boundary does not matter: the results are continuous there (comment a).
-    in_compression = alpha <= r_m
-    in_restitution = alpha <= (1.0 + e) * r_m
-    reverse = case == 3
-    ctype = where(
-        in_compression,
-        where(reverse, REVERSE_FROM_COMPRESSION, STICK_IN_COMPRESSION),
-        where(
-            in_restitution,
-            where(reverse, REVERSE_FROM_RESTITUTION, STICK_IN_RESTITUTION),
-            FORWARD_SLIDING,
-        ),
-    )
-    ctype = where(case == 4, STICK_IN_COMPRESSION, ctype)  # Case 4: Type 1 for every α > 0 (57)
-    ctype = where(case == 5, FORWARD_SLIDING, ctype)  # Case 5: Type 5 for every α > 0 (55)
-    return as_type_code(ctype)
+    """Collision type (1–5) under Poisson's law by Table 1 (with (53)–(57)).
+
+    Equality at a region boundary does not matter: the results are continuous there
+    (comment a).
+    """
+    alpha, r_m = terms.alpha, terms.r_m
+    region = np.add(alpha > r_m, alpha > (1.0 + e) * r_m, dtype=np.int8)
+    return _POISSON_TYPE_BY_CASE_REGION[terms.case, region]
 
 
 def poisson_impulses(terms: ContactTerms, e, ctype):
@@ -276,11 +274,16 @@ def newton_lcp(terms: ContactTerms, e):
     # Sticking: m_nn I_n + m_nt I_t = (1+e)|v_n^A|, m_nt I_n + m_tt I_t = −v_t^A (A22, A23).
     stick_n = (t.mtt * closing + t.mnt * t.vt) / t.delta
     stick_t = -(t.mnn * t.vt + t.mnt * closing) / t.delta
-    stick_ok = (stick_n >= 0) & (np.abs(stick_t) <= t.mu * stick_n)
+    # Each test allows rounding (1e-12 of its terms): on the cone's edge, |m_nt| = μ m_tt,
+    # stick and slide coincide and exact tests could both fail by an ulp.
+    rounding = 1e-12
+    cone = t.mu * stick_n
+    stick_ok = (stick_n >= 0) & (np.abs(stick_t) <= cone + rounding * (np.abs(stick_t) + cone))
     forward_n = closing / t.h
     reverse_n = closing / t.q
-    forward_ok = (t.h > 0) & (t.vt - t.g * forward_n >= 0)
-    reverse_ok = (t.q > 0) & (t.vt + t.p * reverse_n <= 0)
+    slide_terms = np.abs(t.mnt) + t.mu * t.mtt
+    forward_ok = (t.h > 0) & (t.vt - t.g * forward_n >= -rounding * (t.vt + slide_terms * forward_n))
+    reverse_ok = (t.q > 0) & (t.vt + t.p * reverse_n <= rounding * (t.vt + slide_terms * reverse_n))
     normal_impulse = where(stick_ok, stick_n, where(forward_ok, forward_n, reverse_n))
     tangential_impulse = where(
         stick_ok, stick_t, where(forward_ok, -t.mu * forward_n, t.mu * reverse_n)
