@@ -1,0 +1,89 @@
+"""pymunk against its own law (planar_impact's newton-lcp), and its defaults pinned."""
+
+from __future__ import annotations
+
+import pytest
+
+pytest.importorskip("pymunk", reason="pymunk not installed (pip install pymunk==7.3.1)")
+
+from harness.bench_engines import newton_lcp_velocities, reference_scenes  # noqa: E402
+from harness.engines import ke_norm, load_engine  # noqa: E402
+from harness.scene import Body, Disk, Scene  # noqa: E402
+
+SCENES = reference_scenes()
+
+
+@pytest.fixture(scope="module")
+def engine():
+    return load_engine("pymunk")
+
+
+def departure(scene, run, law) -> float:
+    """‖u_engine − u_law‖_M / ‖u_before‖_M."""
+    return ke_norm(scene, run.u_after - law.u_after) / ke_norm(scene, scene.state())
+
+
+@pytest.mark.parametrize("scene_name", ["disk", "disk-spin", "rod-45", "box-corner", "two-disks"])
+def test_accurate_equals_newton_lcp(engine, scene_name):
+    scene, contact, normal = SCENES[scene_name]
+    law = newton_lcp_velocities(scene, contact, normal)
+    run = engine.run(scene, preset="accurate")
+    # Reason for 1e-6 (the issue's gate): measured <= 5e-11 -- rounding, plus the start 1e-9
+    # of a step short of the rewind (contact found at the scene's pose turned by 1e-9·ω·dt).
+    assert departure(scene, run, law) <= 1e-6
+    # The engine's reported impulse is the law's. Reason for 1e-8 N s: same as above.
+    assert run.normal_impulse == pytest.approx(law.normal_impulse, abs=1e-8)
+    assert run.tangential_impulse == pytest.approx(law.tangential_impulse, abs=1e-8)
+
+
+def test_rod_slip_reversal_values(engine):
+    # ENGINES.md's rod: newton-lcp gives (0.7202, -0.2660, -2.1666). Reason for 5e-5: the
+    # printed 4 digits.
+    scene = SCENES["rod-45"][0]
+    run = engine.run(scene, preset="accurate")
+    assert run.u_after == pytest.approx([0.7202, -0.2660, -2.1666], abs=5e-5)
+
+
+@pytest.mark.parametrize(
+    "scene_name, measured",
+    [("rod-45", 1.8442e-05), ("box-corner", 1.5287e-05), ("disk", 0.0), ("two-disks", 4.78e-11)],
+)
+def test_defaults_departure_pinned(engine, scene_name, measured):
+    # pymunk's default 10 iterations leave coupled contacts (rod, box corner) unconverged by
+    # ~1e-5; a lone disk is exact. Reason for the band: the values are deterministic, 10%
+    # leaves room for another platform's rounding in the iteration; 1e-10 absolute for the
+    # exact cases (rounding and the 1e-9-step start offset).
+    scene, contact, normal = SCENES[scene_name]
+    law = newton_lcp_velocities(scene, contact, normal)
+    value = departure(scene, engine.run(scene, preset="defaults"), law)
+    assert value == pytest.approx(measured, rel=0.1, abs=1e-10)
+
+
+def test_iterations_below_20_are_wrong_for_coupled_contact(engine):
+    # ENGINES.md: coupled contacts need >= 20 iterations. Measured here: 2 iterations depart
+    # by ~1e-2, 20 by ~1e-9 (reason for the bounds: an order of magnitude around each).
+    scene, contact, normal = SCENES["rod-45"]
+    law = newton_lcp_velocities(scene, contact, normal)
+    few = departure(scene, engine.run(scene, preset="accurate", overrides={"iterations": 2}), law)
+    enough = departure(scene, engine.run(scene, preset="accurate", overrides={"iterations": 20}), law)
+    assert few > 1e-3
+    assert enough < 1e-7
+
+
+def test_product_rule_gives_the_pair_exactly_e(engine):
+    # Frictionless straight drop: the bounce is e·v exactly (the ground shape has 1, 1).
+    for e in (0.0, 0.3, 1.0):
+        scene = Scene((Body("d", Disk(0.1), 1.0, (0.0, 0.1), 0.0, (0.0, -2.0), 0.0),), e, 0.0,
+                      ground=True, name="drop")
+        run = engine.run(scene, preset="defaults")
+        # Reason for 1e-12: one impulse on one row, exact to rounding.
+        assert run.velocities[0][1] == pytest.approx(2.0 * e, abs=1e-12)
+
+
+def test_collision_slop_moves_positions_only(engine):
+    # ENGINES.md: slop and bias act on positions, not velocities -- bit-identical velocities.
+    scene = SCENES["rod-45"][0]
+    base = engine.run(scene, preset="accurate")
+    changed = engine.run(scene, preset="accurate", overrides={"collision_slop": 0.0,
+                                                               "collision_bias": 0.5})
+    assert changed.velocities == base.velocities
