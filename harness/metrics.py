@@ -1,0 +1,132 @@
+"""Metrics comparing engines with the laws: departures, contact velocities, the split.
+
+Departure (the one error measure of the harness)
+    ``departure(u, u_law) = ‖u − u_law‖_M / ‖u_before‖_M`` with ``‖x‖_M = sqrt(xᵀ M x)``,
+    ``M`` the scene's mass matrix: the relative error of the post-impact speeds in the
+    kinetic-energy norm. It is independent of units and of the body's size, equals 0 for an
+    exact match and is about 1 when the post-impact motion is as wrong as the motion itself.
+
+The split
+    An engine departs from Poisson for two reasons (ENGINES.md): the law it solves, and how
+    well it solves it. For sequential-impulse engines the law is ``newton-lcp`` (restitution
+    as a target on ``v_n``, Coulomb friction at the end state), so
+
+    * ``law_part = departure(u_newton_lcp, u_poisson)`` -- the law's own distance from
+      Poisson (a property of the scenario, the same for every engine);
+    * ``solve_part = departure(u_engine, u_newton_lcp)`` -- how well the engine solves it;
+    * ``total = departure(u_engine, u_poisson) ≤ law_part + solve_part`` (triangle inequality).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Mapping, Sequence
+
+import numpy as np
+
+#: Slip speed, relative to the approach speed, below which an end state counts as sticking
+#: when an engine record is classified (engines reaching their law stick to ~1e-12).
+STICK_TOLERANCE = 1e-6
+
+
+def ke_norm(mass_matrix: np.ndarray, u: Sequence[float] | np.ndarray) -> float:
+    """``sqrt(uᵀ M u)``, the kinetic-energy norm (``sqrt(2 E)``)."""
+    u = np.asarray(u, dtype=float)
+    return math.sqrt(max(float(u @ np.asarray(mass_matrix, dtype=float) @ u), 0.0))
+
+
+def departure(mass_matrix, u, u_law, u_before) -> float:
+    """``‖u − u_law‖_M / ‖u_before‖_M``; NaN when either speed vector is missing/non-finite."""
+    if u is None or u_law is None:
+        return math.nan
+    u, u_law = np.asarray(u, dtype=float), np.asarray(u_law, dtype=float)
+    if not (np.all(np.isfinite(u)) and np.all(np.isfinite(u_law))):
+        return math.nan
+    scale = ke_norm(mass_matrix, u_before)
+    return ke_norm(mass_matrix, u - u_law) / scale if scale > 0 else math.nan
+
+
+def departures(mass_matrix, u, law_speeds: Mapping[str, object], u_before) -> dict[str, float]:
+    """``{law: departure(u, u_law)}`` for every law that was solved."""
+    return {law: departure(mass_matrix, u, u_law, u_before)
+            for law, u_law in law_speeds.items() if u_law is not None}
+
+
+def energy_change(mass_matrix, u_before, u_after) -> float:
+    """``½ u_afterᵀ M u_after − ½ u_beforeᵀ M u_before`` (J)."""
+    return 0.5 * (ke_norm(mass_matrix, u_after) ** 2 - ke_norm(mass_matrix, u_before) ** 2)
+
+
+def contact_velocities(problem, u) -> tuple[float, float]:
+    """``(v_n, v_t) = (w_n·u, w_t·u)``: the contact's normal and tangential velocity (m/s)."""
+    u = np.asarray(u, dtype=float)
+    return float(problem.wn @ u), float(problem.wt @ u)
+
+
+def delassus(problem) -> tuple[float, float, float]:
+    """``(m_nn, m_nt, m_tt)`` of (A20)."""
+    inverse_w = np.linalg.solve(problem.mass_matrix, np.stack([problem.wn, problem.wt], axis=1))
+    wn_inv, wt_inv = inverse_w[:, 0], inverse_w[:, 1]
+    return float(problem.wn @ wn_inv), float(problem.wn @ wt_inv), float(problem.wt @ wt_inv)
+
+
+def impulses_from_velocities(problem, u_after) -> tuple[float, float, float]:
+    """The contact impulse ``(I_n, I_t)`` that best explains ``u_after``, and the residual.
+
+    From (A22)/(A23): ``[[m_nn, m_nt], [m_nt, m_tt]] (I_n, I_t) = (Δv_n, Δv_t)``. The residual
+    ``‖Δu − M⁻¹(w_n I_n + w_t I_t)‖_M / ‖u_before‖_M`` is 0 when the change of speeds is a
+    single contact impulse at the contact point (it is not when an engine's configuration
+    moved during the impact, or a second point touched).
+    """
+    u_after = np.asarray(u_after, dtype=float)
+    delta_u = u_after - problem.u
+    mnn, mnt, mtt = delassus(problem)
+    dvn, dvt = float(problem.wn @ delta_u), float(problem.wt @ delta_u)
+    det = mnn * mtt - mnt * mnt
+    normal = (mtt * dvn - mnt * dvt) / det
+    tangential = (mnn * dvt - mnt * dvn) / det
+    explained = np.linalg.solve(problem.mass_matrix, problem.wn * normal + problem.wt * tangential)
+    residual = departure(problem.mass_matrix, delta_u, explained, problem.u)
+    return normal, tangential, residual
+
+
+def classify_end_state(vt_approach: float, vt_separation: float, vn_approach: float,
+                       tolerance: float = STICK_TOLERANCE) -> int | None:
+    """Newton numbering from the end state: 1 stick, 2 reverse sliding, 3 forward sliding.
+
+    Sticking means ``|v_t^S| ≤ tolerance·max(|v_n^A|, |v_t^A|)``. Without initial slip
+    (``v_t^A`` below the same tolerance) any final slip counts as forward, the solver's
+    convention for direct impact.
+    """
+    if vt_separation is None or not math.isfinite(vt_separation):
+        return None
+    scale = tolerance * max(abs(vn_approach), abs(vt_approach))
+    if abs(vt_separation) <= scale:
+        return 1
+    if abs(vt_approach) <= scale:
+        return 3
+    return 3 if (vt_separation > 0) == (vt_approach > 0) else 2
+
+
+def departure_split(engine_departure: Mapping[str, float],
+                    lcp_departure: Mapping[str, float]) -> dict[str, float]:
+    """The split of an engine's departure from Poisson (module docstring).
+
+    ``engine_departure`` is the engine record's ``departure``; ``lcp_departure`` the
+    ``newton-lcp`` law record's (its entry for ``poisson`` is the law part).
+    """
+    nan = math.nan
+    return {
+        "total": _finite(engine_departure.get("poisson", nan)),
+        "law_part": _finite(lcp_departure.get("poisson", nan)),
+        "solve_part": _finite(engine_departure.get("newton-lcp", nan)),
+    }
+
+
+def _finite(value) -> float:
+    return math.nan if value is None else float(value)
+
+
+__all__ = ["STICK_TOLERANCE", "classify_end_state", "contact_velocities", "delassus",
+           "departure", "departure_split", "departures", "energy_change",
+           "impulses_from_velocities", "ke_norm"]
