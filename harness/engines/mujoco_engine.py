@@ -409,7 +409,13 @@ class MujocoEngine(Engine):
                 normal = (float(sign * frame[0] / length), float(sign * frame[2] / length))
             if ncon > 1:
                 positions = contact.pos
-                planar = count_planar_points(((row[0], row[2]) for row in positions), entry.scale)
+                if ncon == 2:  # a prism's edge on the ground: the same point at ±y?
+                    tolerance = 1e-6 * entry.scale
+                    same = (abs(positions[0, 0] - positions[1, 0]) <= tolerance
+                            and abs(positions[0, 2] - positions[1, 2]) <= tolerance)
+                    planar = 1 if same else 2
+                else:
+                    planar = count_planar_points(((row[0], row[2]) for row in positions), entry.scale)
                 if planar > max_points:
                     max_points = planar
             elif max_points < 1:
