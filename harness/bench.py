@@ -194,7 +194,9 @@ def main(args) -> int:
     if "engines" in selected:
         from harness import bench_engines
 
-        table["engines"] = bench_engines.run_engine_overhead_benchmark(quick=args.quick)
+        report = bench_engines.run_engine_overhead_benchmark(quick=args.quick)
+        print(bench_engines.format_table(report))
+        table["engines"] = report
     if "speed_accuracy" in selected:
         try:
             from harness import bench_accuracy
