@@ -17,7 +17,7 @@ $(STAMP): pyproject.toml
 venv: $(STAMP)
 
 validate: $(STAMP)
-	$(BIN)/impact-harness validate-suite
+	$(BIN)/impact-harness suite
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q -n 2

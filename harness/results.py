@@ -104,7 +104,7 @@ class Results:
     provenance: dict = field(default_factory=dict)
     scenarios: dict = field(default_factory=dict)  # name -> description, tags, speed labels …
 
-    def scenarios(self) -> list[str]:
+    def scenario_names(self) -> list[str]:
         """Scenario names in run order."""
         return list(dict.fromkeys(record.scenario for record in self.records))
 
