@@ -247,9 +247,7 @@ def heatmap_figure(results: Results, path: Path, tag: str | None = None) -> Path
 def _heat_cmap():
     from matplotlib import colormaps
 
-    cmap = colormaps["YlOrRd"].copy()
-    cmap.set_bad("0.92")
-    return cmap
+    return colormaps["YlOrRd"].with_extremes(bad="0.92")
 
 
 def _row_name(results: Results, name: str) -> str:

@@ -223,14 +223,16 @@ def run(
     executor: str = "local",
     workers: int | None = None,
     scheduler: str | None = None,
-    log: TextIO | None = sys.stderr,
+    log: TextIO | None | str = "stderr",
     command: Sequence[str] | None = None,
 ) -> RunOutcome:
     """Run ``scenarios`` and return the records, the gates and the provenance.
 
     ``cache`` is a :class:`harness.cache.ResultCache` (None: no cache). ``log`` gets the
-    progress lines (None: quiet).
+    progress lines (a stream; ``"stderr"``, the default: ``sys.stderr`` at call time; None:
+    quiet).
     """
+    log = sys.stderr if log == "stderr" else log
     started = time.perf_counter()
     wanted_engines = [name for name in ENGINES if name in engines]
     needs_engines = any(not s.analytic_only and _engines_of(s, wanted_engines) for s in scenarios)
@@ -519,8 +521,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def execute(args, *, json_path: Path, command: Sequence[str] | None = None,
-            log: TextIO | None = sys.stderr) -> tuple[int, RunOutcome | None]:
+            log: TextIO | None | str = "stderr") -> tuple[int, RunOutcome | None]:
     """Run with parsed options; write the results file. Returns (exit status, outcome)."""
+    log = sys.stderr if log == "stderr" else log
     try:
         engines = parse_engines(args.engines)
         presets = parse_presets(args.preset)
