@@ -150,8 +150,14 @@ def write_results(path: Path | str, records: Iterable[Record], provenance: Mappi
         "scenarios": _jsonable(dict(scenarios or {})),
         "records": [record.as_dict() for record in records],
     }
+    # One record per line: small, and a diff of two results files reads record by record.
+    records_text = ",\n".join(json.dumps(record, ensure_ascii=False, allow_nan=False,
+                                         separators=(",", ":"))
+                              for record in document.pop("records"))
+    head = json.dumps(document, indent=1, ensure_ascii=False, allow_nan=False)
+    text = head[:-2] + ',\n "records": [\n' + records_text + "\n ]\n}\n"
     temporary = path.with_name(f".{path.name}.tmp")
-    temporary.write_text(json.dumps(document, indent=1, allow_nan=False) + "\n", encoding="utf-8")
+    temporary.write_text(text, encoding="utf-8")
     os.replace(temporary, path)
     return path
 
