@@ -289,7 +289,7 @@ def split_figure(rows: Sequence[dict], path: Path, tag: str | None = None) -> Pa
                 transform=ax.transAxes, ha="right", va="top", fontsize=7, color="0.3")
         ax.grid(True, which="major", color="0.93")
     axes[0].set_ylabel("solve part: engine vs newton-lcp\n(values ≤ 1e-12 drawn at 1e-12)")
-    axes[-1].legend(loc="center right", fontsize=8)
+    axes[-1].legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8, frameon=False)
     return _save(figure, path, tag=tag)
 
 

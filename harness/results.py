@@ -217,7 +217,6 @@ def machine() -> dict:
         "machine": platform.machine(),
         "processor": platform.processor() or None,
         "cpu_count": os.cpu_count(),
-        "hostname": platform.node(),
     }
 
 
