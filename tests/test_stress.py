@@ -63,14 +63,19 @@ def test_poisson_and_stronge_never_gain_energy_at_extreme_magnitudes(problem):
         assert float(result.energy_change) <= tolerance * scale, (law, problem)
 
 
+def _not_tiny(low, high):
+    """Floats in [low, high] that are 0 or at least 1e-6 in size: exact power-of-two scaling
+    needs every intermediate product to stay a normal number (tiny factors make subnormals)."""
+    return st.floats(low, high).filter(lambda x: x == 0.0 or abs(x) >= 1e-6)
+
+
 @st.composite
 def conditioned_problems(draw):
     mnn = 10.0 ** draw(st.floats(-3, 3))
     mtt = 10.0 ** draw(st.floats(-3, 3))
-    mnt = draw(st.floats(-0.95, 0.95, allow_subnormal=False)) * math.sqrt(mnn * mtt)
+    mnt = draw(_not_tiny(-0.95, 0.95)) * math.sqrt(mnn * mtt)
     return dict(mnn=mnn, mnt=mnt, mtt=mtt, vn=-(10.0 ** draw(st.floats(-3, 3))),
-                vt=draw(st.floats(-1e3, 1e3, allow_subnormal=False)), mu=draw(st.floats(0.0, 3.0, allow_subnormal=False)),
-                e=draw(st.floats(0.0, 1.0, allow_subnormal=False)))
+                vt=draw(_not_tiny(-1e3, 1e3)), mu=draw(_not_tiny(0.0, 3.0)), e=draw(_not_tiny(0.0, 1.0)))
 
 
 @settings(max_examples=200, deadline=None)
