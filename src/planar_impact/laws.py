@@ -122,16 +122,19 @@ def poisson_impulses(terms: ContactTerms, e, ctype):
     * Type 5: ``I_nc = |v_n^A|/h`` (48); ``I_t = −μ I_n`` (49).
     """
     mnt, mtt, mu, vt = terms.mnt, terms.mtt, terms.mu, terms.vt
-    compression_per_speed = where(
+    vn_abs = terms.vn_abs
+    # (25) and (34) multiplied through by |v_n^A| (α|v_n^A| = v_t^A): same values, and no
+    # overflow of α when |v_n^A| is tiny (near-grazing impacts).
+    compression = where(
         ctype == STICK_IN_COMPRESSION,
-        (mtt + terms.alpha * mnt) / terms.delta,  # (25)
+        (mtt * vn_abs + mnt * vt) / terms.delta,  # (25)
         where(
             ctype == REVERSE_FROM_COMPRESSION,
-            (1.0 + 2.0 * mu * mnt * terms.alpha / terms.g) / terms.q,  # (34)
-            1.0 / terms.h,  # (29), (40), (48)
+            (vn_abs + 2.0 * mu * mnt * vt / terms.g) / terms.q,  # (34)
+            vn_abs / terms.h,  # (29), (40), (48)
         ),
     )
-    normal_impulse = (1.0 + e) * terms.vn_abs * compression_per_speed
+    normal_impulse = (1.0 + e) * compression
     sticking = ctype <= STICK_IN_RESTITUTION
     reverse = (ctype == REVERSE_FROM_COMPRESSION) | (ctype == REVERSE_FROM_RESTITUTION)
     # I_t = slope · I_n + offset: (26)/(29) sticking, (36)/(44) reverse, (49) forward.
