@@ -78,24 +78,29 @@ class ContactTerms:
         self.case = table1_case(self.g, self.h, self.p, self.q)
 
 
-# Table 1 row by a 4-bit code: 8·[g ≤ 0] + 4·[h ≤ 0] + 2·[p < 0] + [q < 0]. The first
-# condition that holds decides: g ≤ 0 → 5, else h ≤ 0 → 4, else p < 0 → 3, else q < 0 → 2,
-# else 1 (comment g of the paper lets equal signs join the remaining inequalities).
-_CASE_BY_CODE = np.array([1, 2, 3, 3, 4, 4, 4, 4, 5, 5, 5, 5, 5, 5, 5, 5], dtype=np.int8)
+# Table 1 rows in priority order: the first condition that holds decides (g ≤ 0 → 5, else
+# h ≤ 0 → 4, else p < 0 → 3, else q < 0 → 2, else 1; comment g of the paper lets equal signs
+# join the remaining inequalities). Priority equals the row number, so the row is the largest
+# number whose condition holds, which numpy computes without a branch or a gather.
 
-# Poisson type by (case, region of α): region 0 is α ≤ r_m (from compression), 1 is
-# r_m < α ≤ (1+e) r_m (from restitution), 2 is beyond (forward sliding). Cases 1-2 stick,
-# Case 3 reverses; Case 4 is Type 1 for every α > 0 (57) and Case 5 Type 5 (55).
+# Poisson type by (case, region of α), flattened as ``3·case + region``: region 0 is α ≤ r_m
+# (from compression), 1 is r_m < α ≤ (1+e) r_m (from restitution), 2 is beyond (forward
+# sliding). Cases 1-2 stick, Case 3 reverses; Case 4 is Type 1 for every α > 0 (57) and
+# Case 5 Type 5 (55).
 _POISSON_TYPE_BY_CASE_REGION = np.array(
-    [[0, 0, 0], [1, 2, 5], [1, 2, 5], [3, 4, 5], [1, 1, 1], [5, 5, 5]], dtype=np.int8
+    [0, 0, 0, 1, 2, 5, 1, 2, 5, 3, 4, 5, 1, 1, 1, 5, 5, 5], dtype=np.int8
 )
 
 
 def table1_case(g, h, p, q):
     """Table 1 row (1–5) from the signs of ``g, h, p, q`` (A35)."""
-    code = np.add(np.multiply(g <= 0, 8, dtype=np.int8), np.multiply(h <= 0, 4, dtype=np.int8), dtype=np.int8)
-    code = np.add(code, np.add(np.multiply(p < 0, 2, dtype=np.int8), q < 0, dtype=np.int8), dtype=np.int8)
-    return _CASE_BY_CODE[code]
+    if type(g) is not np.ndarray:
+        return 5 if g <= 0 else 4 if h <= 0 else 3 if p < 0 else 2 if q < 0 else 1
+    case = np.multiply(g <= 0, 5, dtype=np.int8)
+    np.maximum(case, np.multiply(h <= 0, 4, dtype=np.int8), out=case)
+    np.maximum(case, np.multiply(p < 0, 3, dtype=np.int8), out=case)
+    np.maximum(case, np.multiply(q < 0, 2, dtype=np.int8), out=case)
+    return np.maximum(case, 1, out=case)
 
 
 def poisson_type(terms: ContactTerms, e):
@@ -105,8 +110,13 @@ def poisson_type(terms: ContactTerms, e):
     (comment a).
     """
     alpha, r_m = terms.alpha, terms.r_m
-    region = np.add(alpha > r_m, alpha > (1.0 + e) * r_m, dtype=np.int8)
-    return _POISSON_TYPE_BY_CASE_REGION[terms.case, region]
+    if type(alpha) is not np.ndarray:
+        region = int(alpha > r_m) + int(alpha > (1.0 + e) * r_m)
+        return int(_POISSON_TYPE_BY_CASE_REGION[3 * terms.case + region])
+    index = np.multiply(terms.case, 3, dtype=np.int8)
+    index += alpha > r_m
+    index += alpha > (1.0 + e) * r_m
+    return _POISSON_TYPE_BY_CASE_REGION.take(index)
 
 
 def poisson_impulses(terms: ContactTerms, e, ctype):
@@ -123,6 +133,8 @@ def poisson_impulses(terms: ContactTerms, e, ctype):
     """
     mnt, mtt, mu, vt = terms.mnt, terms.mtt, terms.mu, terms.vt
     vn_abs = terms.vn_abs
+    reverse = (ctype == REVERSE_FROM_COMPRESSION) | (ctype == REVERSE_FROM_RESTITUTION)
+    reverse_offset = 2.0 * mu * vt / terms.g  # 2μ v_t^A/g, in (34), (36) and (44)
     # (25) and (34) multiplied through by |v_n^A| (α|v_n^A| = v_t^A): same values, and no
     # overflow of α when |v_n^A| is tiny (near-grazing impacts).
     compression = where(
@@ -130,17 +142,17 @@ def poisson_impulses(terms: ContactTerms, e, ctype):
         (mtt * vn_abs + mnt * vt) / terms.delta,  # (25)
         where(
             ctype == REVERSE_FROM_COMPRESSION,
-            (vn_abs + 2.0 * mu * mnt * vt / terms.g) / terms.q,  # (34)
+            (vn_abs + mnt * reverse_offset) / terms.q,  # (34)
             vn_abs / terms.h,  # (29), (40), (48)
         ),
     )
     normal_impulse = (1.0 + e) * compression
-    sticking = ctype <= STICK_IN_RESTITUTION
-    reverse = (ctype == REVERSE_FROM_COMPRESSION) | (ctype == REVERSE_FROM_RESTITUTION)
-    # I_t = slope · I_n + offset: (26)/(29) sticking, (36)/(44) reverse, (49) forward.
-    slope = where(sticking, -mnt / mtt, where(reverse, mu, -mu))
-    offset = where(sticking, -vt / mtt, where(reverse, -2.0 * mu * vt / terms.g, 0.0))
-    tangential_impulse = slope * normal_impulse + offset
+    friction_limit = mu * normal_impulse
+    tangential_impulse = where(
+        ctype <= STICK_IN_RESTITUTION,
+        -(mnt * normal_impulse + vt) / mtt,  # (26), (29)
+        where(reverse, friction_limit - reverse_offset, -friction_limit),  # (36)/(44), (49)
+    )
     return normal_impulse, tangential_impulse
 
 

@@ -53,7 +53,7 @@ def contact_space_solution(hypothesis, mnn, mnt, mtt, vn, vt, mu, e):
     if hypothesis == "poisson":
         ctype = laws.poisson_type(terms, e)
         normal, tangential = laws.poisson_impulses(terms, e, ctype)
-        e_poisson = e + 0.0 * normal
+        e_poisson = e
     elif hypothesis == "stronge-paper":
         # Type from Table 1 with e_e in place of e (end of the paper's Section 4), then
         # e_i by (64)/(67)/(70)/(73)/(74), then Poisson's closed forms with e_i.
@@ -170,8 +170,8 @@ def solve_batch(mnn, mnt, mtt, vn, vt, mu, e, hypothesis: str = "poisson") -> Ba
     flat = [np.ravel(a) for a in arrays]
     size = flat[0].size
     result = {name: np.empty(size, dtype=dtype) for name, dtype in _BATCH_DTYPES.items()}
-    # Chunks small enough that the kernels' temporaries stay in cache (measured: 2-3x
-    # faster than whole-array passes at 10^6 rows).
+    # Chunks small enough that the kernels' temporaries stay in cache (measured at 10^6 rows:
+    # 8192 rows is the fastest, 1.2x faster than 65536 and 2x faster than 1024).
     for start in range(0, size, BATCH_CHUNK):
         rows = slice(start, start + BATCH_CHUNK)
         _solve_chunk(hypothesis, [a[rows] for a in flat], {k: v[rows] for k, v in result.items()})
@@ -180,7 +180,7 @@ def solve_batch(mnn, mnt, mtt, vn, vt, mu, e, hypothesis: str = "poisson") -> Ba
     return BatchResult(hypothesis=hypothesis, status=np.reshape(status, shape), **result)
 
 
-BATCH_CHUNK = 4096
+BATCH_CHUNK = 8192
 _BATCH_DTYPES = {
     "status": np.int8, "normal_impulse": float, "tangential_impulse": float, "vn_approach": float,
     "vn_separation": float, "vt_approach": float, "vt_separation": float, "energy_change": float,
@@ -197,7 +197,9 @@ def _solve_chunk(hypothesis, inputs, out):
     flipped = (vt < 0) | ((vt == 0) & (mnt < 0))
     any_flipped = bool(flipped.any())
     if any_flipped:  # t → −t: m_nt and v_t change sign, the rest does not.
-        mnt = np.where(flipped, -mnt, mnt)
+        # Multiplying by ±1 is exact, and far cheaper than a masked negative.
+        sign = np.where(flipped, -1.0, 1.0)
+        mnt = mnt * sign
         vt_pos = np.abs(vt)
     else:
         vt_pos = vt
@@ -205,12 +207,16 @@ def _solve_chunk(hypothesis, inputs, out):
         solution = contact_space_solution(hypothesis, mnn, mnt, mtt, vn, vt_pos, mu, e)
         # Fast screen: NaN fails every comparison; inf shows in the sum. Only rows failing
         # it go through the full check (which also clears a false alarm from overflow).
-        ok = (vn < 0) & (mu >= 0) & (e >= 0) & (e <= 1) & (mnn > 0) & (mtt > 0)
-        ok &= solution["delta"] > 0
-        ok &= np.isfinite(mnn + mnt + mtt + vn + vt + mu + e)
+        # m_nn > 0 and Δ > 0 imply m_tt > 0; NaN in m_nt, e or μ fails a comparison, and inf
+        # in m_nn, m_nt or m_tt makes Δ inf or NaN.
+        delta = solution["delta"]
+        ok = (vn < 0) & (mu >= 0) & (e >= 0) & (e <= 1) & (mnn > 0) & (delta > 0)
+        ok &= np.isfinite(delta + vn + vt + mu)
+        # Rows answer_status would flag (exactly its tests, so that it runs only when needed).
         trouble = (solution["h"] <= 0) & (solution["g"] <= 0)
-        trouble |= solution["q"] <= 0
-        trouble |= ~np.asarray(solution["consistent"])
+        trouble |= _reverse_sliding(hypothesis, solution["collision_type"]) & (solution["q"] <= 0)
+        if solution["consistent"] is not np.True_:
+            trouble |= ~solution["consistent"]
     status = out["status"]
     status[...] = errors.SOLVED
     if not ok.all():
@@ -223,8 +229,8 @@ def _solve_chunk(hypothesis, inputs, out):
     out["vn_separation"][...] = solution["vn_separation"]
     out["vt_separation"][...] = solution["vt_separation"]
     if any_flipped:
-        np.negative(out["tangential_impulse"], out=out["tangential_impulse"], where=flipped)
-        np.negative(out["vt_separation"], out=out["vt_separation"], where=flipped)
+        out["tangential_impulse"] *= sign
+        out["vt_separation"] *= sign
     out["vn_approach"][...] = vn
     out["vt_approach"][...] = vt
     out["energy_change"][...] = solution["energy_change"]
