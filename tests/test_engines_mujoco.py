@@ -265,3 +265,42 @@ def test_accurate_slip_falls_to_e_squared(engine, e):
     run = engine.run(drop(1.0, e, mu=0.3, vx=0.1), preset="accurate")
     vx, _, omega = run.velocities[0]
     assert (vx + omega * 0.1) / 0.1 == pytest.approx(e * e, abs=1.5e-3)
+
+
+# ---------------------------------------------------------------------- reuse of the cached model
+def test_run_equals_a_fresh_adapters_whatever_ran_before(engine):
+    # The model is rewritten only when settings, e or μ differ from what it holds: every run
+    # in a sequence over one geometry must equal the same run on a fresh adapter (new model).
+    from harness.engines.mujoco_engine import MujocoEngine
+
+    settings = engine.settings("accurate")
+    sequence = [
+        (drop(1.0, 0.5, mu=0.3, vx=0.5), settings),
+        (drop(1.0, 0.7, mu=0.3, vx=0.5), settings),  # e only
+        (drop(1.0, 0.7, mu=0.0, vx=0.5), settings),  # μ only: condim 1
+        (drop(1.0, 0.7, mu=0.3, vx=0.5), engine.settings("accurate", {"cone": "elliptic"})),
+        (drop(1.0, 0.7, mu=0.3, vx=0.5), engine.settings("defaults")),
+        (drop(1.0, 0.7, mu=0.3, vx=0.5), settings),
+    ]
+    for scene, values in sequence:
+        run = engine.run(scene, values)
+        fresh = MujocoEngine()
+        assert run == fresh.run(scene, values)
+        fresh.close()
+
+
+def test_settings_edited_in_place_reach_the_model(engine):
+    scene = drop(1.0, 0.5)
+    # A list of its own (settings() copies the preset shallowly: editing its list would edit
+    # the preset).
+    settings = engine.settings("defaults", {"solref": [0.02, 1.0]})
+    first = engine.run(scene, settings)
+    settings["solref"][1] = 0.5  # same dict and list objects, new damping ratio
+    second = engine.run(scene, settings)
+    assert second.derived["solref"] == [0.02, 0.5]
+    assert second.velocities[0][1] > first.velocities[0][1]  # less damping, higher bounce
+    reference = engine.run(scene, engine.settings("defaults", {"solref": [0.02, 0.5]}))
+    # Physics only: the base class's settings check, cached by identity, keeps the stale
+    # preset label "defaults" for the edited dict (reported, not this adapter's).
+    assert (second.velocities, second.steps, second.derived) == (
+        reference.velocities, reference.steps, reference.derived)
