@@ -111,52 +111,27 @@ def _bare_stepper(engine, scene: Scene, settings: dict) -> tuple[Callable[[], No
     """``(prepare, step_n)``: set the run's start state; step the engine n times, nothing else."""
     name = engine.name
     if name == "pymunk":
-        import pymunk
+        from harness.engines.pymunk_engine import (
+            _build_space,
+            _reset,
+            _space_step,
+            _space_values,
+            _start_states,
+        )
 
-        from harness.engines import free_flight_poses
-        from harness.engines.pymunk_engine import _GROUND_HALF_WIDTH, _DETECTION_OVERLAP, _make_shape
-
-        space = pymunk.Space()
-        space.iterations = int(settings["iterations"])
-        space.collision_slop = float(settings["collision_slop"])
-        space.collision_bias = float(settings["collision_bias"])
-        space.collision_persistence = int(settings["collision_persistence"])
-        space.damping = float(settings["damping"])
-        if scene.ground:
-            w = _GROUND_HALF_WIDTH
-            ground = pymunk.Poly(space.static_body, [(-w, -w), (w, -w), (w, 0.0), (-w, 0.0)])
-            ground.elasticity = ground.friction = 1.0
-            space.add(ground)
-        bodies, shapes = [], []
-        for index, body in enumerate(scene.bodies):
-            pm_body = pymunk.Body(body.mass, body.moment_of_inertia)
-            shape = _make_shape(pm_body, body.shape)
-            shape.elasticity, shape.friction = (
-                (scene.restitution, scene.friction) if index == 0 else (1.0, 1.0)
-            )
-            space.add(pm_body)
-            bodies.append(pm_body)
-            shapes.append(shape)
-        dt = float(settings["time_step"])
-        rewind = -(settings["approach_steps"] + 1.0 - _DETECTION_OVERLAP) * dt
-        poses = free_flight_poses(scene, rewind)
-        shift_x = -sum(b.position[0] for b in scene.bodies) / len(scene.bodies)
+        # A space of its own, without the harness's post_solve recorder; the reset is the
+        # harness's own (_reset: the same C calls on the same start state).
+        entry = _build_space(scene, record=False)
+        entry.configure(_space_values(settings), (scene.restitution, scene.friction))
+        starts = _start_states(scene, settings)
+        space_ptr, dt = entry.space_ptr, float(settings["time_step"])
 
         def prepare() -> None:
-            for shape in shapes:
-                if shape.space is not None:
-                    space.remove(shape)
-            for body, pm_body, pose in zip(scene.bodies, bodies, poses):
-                pm_body.position = (pose[0] + shift_x, pose[1])
-                pm_body.angle = pose[2]
-                pm_body.velocity = body.velocity
-                pm_body.angular_velocity = body.angular_velocity
-            space.add(*shapes)
+            _reset(entry, starts)
 
         def step_n(count: int) -> None:
-            step = space.step
             for _ in range(count):
-                step(dt)
+                _space_step(space_ptr, dt)
 
         return prepare, step_n
 
