@@ -138,31 +138,22 @@ def _bare_stepper(engine, scene: Scene, settings: dict) -> tuple[Callable[[], No
     if name == "pybullet":
         import pybullet as p
 
-        from harness.engines import free_flight_poses
+        from harness.engines.pybullet_engine import _reset
 
+        # The harness's world and its reset (_reset: the contact threshold, manifolds emptied
+        # when the last run left contacts -- the bare steps end where the harness's do -- and
+        # the start joint states).
         engine.run(scene, settings)  # builds (or reuses) the world
-        world = engine._world_for(scene, settings)
-        client, uids = world.client, world.bodies
-        dt = float(settings["time_step"])
-        poses = free_flight_poses(scene, -float(settings["approach_steps"]) * dt)
-        count = len(scene.bodies)
-        shift_x = -sum(b.position[0] for b in scene.bodies) / count
-        shift_y = 0.0 if scene.ground else -sum(b.position[1] for b in scene.bodies) / count
+        plan = engine._plan_for(scene, settings)
+        world, starts, client = plan.world, plan.starts, plan.world.client
 
         def prepare() -> None:
-            for index, uid in enumerate(uids):
-                p.resetJointState(uid, 0, 10.0 * index * (world.scale + 1.0), 0.0, physicsClientId=client)
-                p.resetJointState(uid, 1, 1.0e3, 0.0, physicsClientId=client)
-            p.performCollisionDetection(physicsClientId=client)
-            for body, uid, pose in zip(scene.bodies, uids, poses):
-                p.resetJointState(uid, 0, pose[0] + shift_x, body.velocity[0], physicsClientId=client)
-                p.resetJointState(uid, 1, pose[1] + shift_y, body.velocity[1], physicsClientId=client)
-                p.resetJointState(uid, 2, -pose[2], -body.angular_velocity, physicsClientId=client)
+            _reset(world, starts)
 
         def step_n(count_steps: int) -> None:
             step = p.stepSimulation
             for _ in range(count_steps):
-                step(physicsClientId=client)
+                step(client)
 
         return prepare, step_n
 

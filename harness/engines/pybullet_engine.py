@@ -30,6 +30,10 @@ created, so it is set again before every run. Before a run the bodies are parked
 each other and the plane and collision detection is run once, which empties the contact
 manifolds (Bullet warm-starts from them); sleeping is disabled.
 
+Cost: an impact is ~2 steps, so what depends only on the scene and the settings (world,
+start joint states, energy weights) is computed once per (scene, settings) pair of objects,
+and pybullet is called with positional arguments (its keyword parsing costs ~0.2 µs a call).
+
 Settings (``defaults`` | ``accurate``) are listed in :data:`SETTING_DOCS`; ``None`` means
 "not set: Bullet's default".
 """
@@ -52,12 +56,16 @@ from harness.engines import (
     _check_number,
     body_extent,
     count_planar_points,
-    decide_status,
+    energy_before,
+    energy_weights,
     free_flight_poses,
+    run_from_fields,
+    status_from,
 )
 from harness.scene import Scene
 
 _MAX_WORLDS = 8
+_MAX_PLANS = 256  # (scene, settings) pairs remembered; the cache is emptied when full
 _PARK_HEIGHT = 1.0e3  # m, where bodies wait (far above the plane) while contacts are cleared
 
 # setting key -> pybullet setPhysicsEngineParameter keyword
@@ -207,6 +215,68 @@ class _World:
     pair_values: tuple | None = None  # (e, μ) last set
     dirty: bool = True  # contacts may remain from the previous run
     threshold: float = 0.02
+    closed: bool = False  # disconnected (evicted or closed)
+
+
+_POLYGON_NOTE = ("polygon: pybullet keeps a link's convex-hull collision margin at 0.001 m, "
+                 "so contacts sit 1 mm outside the polygon")
+_MULTI_CONTACT_NOTE = "{} distinct in-plane contact points in one step"
+
+
+def _start_states(scene: Scene, settings: dict, bodies: list[int]) -> tuple:
+    """``(uid, x, v_x, z, v_z, -θ, -ω)`` per body: the joint states a run starts from."""
+    # Shift the scene near the origin (a symmetry): x always, y too without ground.
+    count = len(scene.bodies)
+    shift_x = -sum(b.position[0] for b in scene.bodies) / count
+    shift_y = 0.0 if scene.ground else -sum(b.position[1] for b in scene.bodies) / count
+    rewind = -float(settings["approach_steps"]) * float(settings["time_step"])
+    return tuple(
+        (uid, pose[0] + shift_x, body.velocity[0], pose[1] + shift_y, body.velocity[1],
+         -pose[2], -body.angular_velocity)
+        for body, uid, pose in zip(scene.bodies, bodies, free_flight_poses(scene, rewind))
+    )
+
+
+def _reset(world: _World, starts: tuple) -> None:
+    """The per-impact reset (shared with the benchmark): the process-wide contact threshold,
+    empty contact manifolds where the last run left contacts, and the start joint states."""
+    client = world.client
+    # Process-wide in Bullet: new manifolds take the value current at their creation.
+    p.setPhysicsEngineParameter(contactBreakingThreshold=world.threshold, physicsClientId=client)
+    reset = p.resetJointState
+    if world.dirty:
+        # Empty the contact manifolds: park the bodies apart, run collision detection.
+        for index, uid in enumerate(world.bodies):
+            reset(uid, 0, 10.0 * index * (world.scale + 1.0), 0.0, client)
+            reset(uid, 1, _PARK_HEIGHT, 0.0, client)
+        p.performCollisionDetection(client)
+    for uid, x, v_x, z, v_z, angle, rate in starts:
+        reset(uid, 0, x, v_x, client)
+        reset(uid, 1, z, v_z, client)
+        reset(uid, 2, angle, rate, client)
+
+
+class _Plan:
+    """Everything a run needs that depends only on the scene and the settings objects."""
+
+    __slots__ = ("scene", "settings", "world", "world_key", "pair_values", "starts", "dt",
+                 "max_steps", "weights", "before", "extents", "speed_scale", "notes")
+
+    def __init__(self, scene: Scene, settings: dict, world: _World, world_key: tuple):
+        self.scene = scene
+        self.settings = settings
+        self.world = world
+        self.world_key = world_key
+        self.pair_values = (scene.restitution, scene.friction)
+        self.starts = _start_states(scene, settings, world.bodies)
+        self.dt = float(settings["time_step"])
+        self.max_steps = int(settings["max_steps"])
+        self.weights = energy_weights(scene)
+        self.before = energy_before(scene)
+        self.extents = tuple(body_extent(body.shape) for body in scene.bodies)
+        self.speed_scale = float(max(1e-300, max(abs(v) for v in scene.state())))
+        polygon = any(body.shape.kind == "polygon" for body in scene.bodies)
+        self.notes = (_POLYGON_NOTE,) if polygon else ()
 
 
 class PybulletEngine(Engine):
@@ -217,6 +287,7 @@ class PybulletEngine(Engine):
 
     def __init__(self) -> None:
         self._worlds: OrderedDict[tuple, _World] = OrderedDict()
+        self._plans: dict[tuple[int, int], _Plan] = {}
         try:  # pybullet has no __version__; its API version is a date
             from importlib.metadata import version
 
@@ -241,7 +312,8 @@ class PybulletEngine(Engine):
         _check_number(name, settings, "angular_damping", low=0.0)
 
     # ------------------------------------------------------------------ worlds
-    def _world_for(self, scene: Scene, settings: dict) -> _World:
+    def _world_for(self, scene: Scene, settings: dict) -> tuple[_World, tuple]:
+        """The world for this geometry and these engine settings, and its cache key."""
         key = (
             tuple((k, settings[k]) for k in sorted(settings) if k not in _RUN_ONLY),
             _geometry_key(scene),
@@ -249,7 +321,7 @@ class PybulletEngine(Engine):
         world = self._worlds.get(key)
         if world is not None:
             self._worlds.move_to_end(key)
-            return world
+            return world, key
         client = p.connect(p.DIRECT)
         p.setGravity(0.0, 0.0, 0.0, physicsClientId=client)
         parameters = {
@@ -289,12 +361,30 @@ class PybulletEngine(Engine):
         self._worlds[key] = world
         while len(self._worlds) > _MAX_WORLDS:
             _, old = self._worlds.popitem(last=False)
+            old.closed = True
             p.disconnect(physicsClientId=old.client)
-        return world
+        return world, key
+
+    def _plan_for(self, scene: Scene, settings: dict) -> _Plan:
+        # Keyed by object identity; the plan holds both objects, so the ids stay theirs.
+        key = (id(scene), id(settings))
+        plan = self._plans.get(key)
+        if plan is not None and plan.scene is scene and plan.settings is settings and not plan.world.closed:
+            self._worlds.move_to_end(plan.world_key)  # least recently used goes first
+            return plan
+        plan = _Plan(scene, settings, *self._world_for(scene, settings))
+        # Remembered for a checked immutable scene and a settings dict the caller reuses.
+        if scene is self._last_scene and settings is (self._last_checked or (None, None))[1]:
+            if len(self._plans) >= _MAX_PLANS:
+                self._plans.clear()
+            self._plans[key] = plan
+        return plan
 
     def close(self) -> None:
+        self._plans.clear()
         while self._worlds:
             _, world = self._worlds.popitem()
+            world.closed = True
             try:
                 p.disconnect(physicsClientId=world.client)
             except Exception:  # pragma: no cover - already gone at exit
@@ -307,14 +397,13 @@ class PybulletEngine(Engine):
             pass
 
     @staticmethod
-    def _approaching(client, bodies, points, body_b, scene) -> bool:
+    def _approaching(states, bodies, points, body_b, speed_scale) -> bool:
         """Whether any contact point still closes (relative normal velocity < 0).
 
         Called on a step without impulse: a contact found early (before touch) carries no
         impulse while the bodies still approach, so that step is not a separation.
+        ``states``: the bodies' joint states now.
         """
-        states = [p.getJointStates(uid, (0, 1, 2), physicsClientId=client) for uid in bodies]
-        speed_scale = max(1e-300, max(abs(v) for v in scene.state()))
         for cp in points:
             sign = 1.0 if cp[1] == body_b else -1.0
             n_x, n_z = sign * cp[7][0], sign * cp[7][2]  # into body_b
@@ -334,38 +423,22 @@ class PybulletEngine(Engine):
     # ------------------------------------------------------------------ run
     def _run(self, scene: Scene, settings: dict, preset: str | None) -> EngineRun:
         start = time.perf_counter()
-        world = self._world_for(scene, settings)
+        plan = self._plan_for(scene, settings)
+        world = plan.world
         client, bodies = world.client, world.bodies
-        dt = float(settings["time_step"])
-        # Process-wide in Bullet: new manifolds take the value current at their creation.
-        p.setPhysicsEngineParameter(contactBreakingThreshold=world.threshold, physicsClientId=client)
-        pair_values = (scene.restitution, scene.friction)
+        dt = plan.dt
+        pair_values = plan.pair_values
         if world.pair_values != pair_values:
             p.changeDynamics(bodies[0], 2, restitution=pair_values[0], lateralFriction=pair_values[1],
                              physicsClientId=client)
             world.pair_values = pair_values
-        reset = p.resetJointState
-        if world.dirty:
-            # Empty the contact manifolds: park the bodies apart, run collision detection.
-            for index, uid in enumerate(bodies):
-                reset(uid, 0, 10.0 * index * (world.scale + 1.0), 0.0, physicsClientId=client)
-                reset(uid, 1, _PARK_HEIGHT, 0.0, physicsClientId=client)
-            p.performCollisionDetection(physicsClientId=client)
-
-        # Shift the scene near the origin (a symmetry): x always, y too without ground.
-        count = len(scene.bodies)
-        shift_x = -sum(b.position[0] for b in scene.bodies) / count
-        shift_y = 0.0 if scene.ground else -sum(b.position[1] for b in scene.bodies) / count
-        rewind = -float(settings["approach_steps"]) * dt
-        for body, uid, pose in zip(scene.bodies, bodies, free_flight_poses(scene, rewind)):
-            reset(uid, 0, pose[0] + shift_x, body.velocity[0], physicsClientId=client)
-            reset(uid, 1, pose[1] + shift_y, body.velocity[1], physicsClientId=client)
-            reset(uid, 2, -pose[2], -body.angular_velocity, physicsClientId=client)
+        _reset(world, plan.starts)
 
         body_b = bodies[-1]
-        get_contacts = p.getContactPoints
+        get_contacts, get_states = p.getContactPoints, p.getJointStates
         step = p.stepSimulation
-        max_steps = int(settings["max_steps"])
+        states = None
+        max_steps = plan.max_steps
         steps = contact_steps = 0
         first_contact = None
         max_points = 0
@@ -376,11 +449,12 @@ class PybulletEngine(Engine):
         separated = False
         last_points = ()
         while steps < max_steps:
-            step(physicsClientId=client)
+            step(client)
             steps += 1
             # No filter: Bullet's own body order (a filtered query flips the normal of a
             # swapped pair but not the friction directions). The world holds only this pair.
-            points = get_contacts(physicsClientId=client)
+            # Positional: bodyA, bodyB, linkIndexA, linkIndexB at their "any" defaults.
+            points = get_contacts(-1, -1, -2, -2, client)
             last_points = points
             if not points:
                 if first_contact is not None:
@@ -391,16 +465,16 @@ class PybulletEngine(Engine):
             step_x = step_z = 0.0
             step_normal = 0.0
             for cp in points:
-                # Force on cp[1]: normal force along cp[7] (on cp[2], towards cp[1]) plus the
-                # two lateral friction forces along their directions.
-                sign = 1.0 if cp[1] == body_b else -1.0
-                n = cp[7]
-                force_n = cp[9]
+                # Force on body A: normal force along n (the normal on B, towards A) plus
+                # the two lateral friction forces along their directions.
+                (_, body_a, _, _, _, _, _, n, distance, force_n,
+                 friction_1, direction_1, friction_2, direction_2) = cp
+                sign = 1.0 if body_a == body_b else -1.0
                 step_normal += force_n
-                step_x += sign * (force_n * n[0] + cp[10] * cp[11][0] + cp[12] * cp[13][0])
-                step_z += sign * (force_n * n[2] + cp[10] * cp[11][2] + cp[12] * cp[13][2])
-                if -cp[8] > max_penetration:
-                    max_penetration = -cp[8]
+                step_x += sign * (force_n * n[0] + friction_1 * direction_1[0] + friction_2 * direction_2[0])
+                step_z += sign * (force_n * n[2] + friction_1 * direction_1[2] + friction_2 * direction_2[2])
+                if -distance > max_penetration:
+                    max_penetration = -distance
             if first_contact is None:
                 first_contact = steps
                 cp = points[0]
@@ -411,29 +485,36 @@ class PybulletEngine(Engine):
                 planar = count_planar_points(((cp[6][0], cp[6][2]) for cp in points), world.scale)
             else:
                 planar = 1
-            max_points = max(max_points, planar)
+            if planar > max_points:
+                max_points = planar
             impulse_x += step_x * dt
             impulse_z += step_z * dt
             step_normal *= dt
-            peak_normal_step = max(peak_normal_step, step_normal)
-            if step_normal <= NO_IMPULSE_RELATIVE * peak_normal_step and not self._approaching(
-                client, bodies, points, body_b, scene
-            ):
-                separated = True
-                break
+            if step_normal > peak_normal_step:
+                peak_normal_step = step_normal
+            if step_normal <= NO_IMPULSE_RELATIVE * peak_normal_step:
+                states = [get_states(uid, (0, 1, 2), client) for uid in bodies]
+                if not self._approaching(states, bodies, points, body_b, plan.speed_scale):
+                    separated = True
+                    break
+            states = None
         world.dirty = bool(last_points)
 
         velocities = []
         drift = 0.0
-        for uid, body in zip(bodies, scene.bodies):
-            states = p.getJointStates(uid, (0, 1, 2), physicsClientId=client)
-            velocities.append((float(states[0][1]), float(states[1][1]), float(-states[2][1])))
-            link = p.getLinkState(uid, 2, physicsClientId=client)
+        get_link = p.getLinkState
+        if states is None:  # else read at the separation test, in this very state
+            states = [get_states(uid, (0, 1, 2), client) for uid in bodies]
+        for uid, extent, state in zip(bodies, plan.extents, states):
+            velocities.append((state[0][1], state[1][1], -state[2][1]))
+            link = get_link(uid, 2, 0, 0, client)
             # Out of plane: the centre's y, plus the tilt of the link's y axis times its size.
-            qx, qy, qz, qw = link[0 + 1]  # world orientation of the link frame
+            qx, qy, qz, qw = link[1]  # world orientation of the link frame
             tilt_x = 2.0 * (qx * qy - qz * qw)  # components of the link's y axis off (0, 1, 0)
             tilt_z = 2.0 * (qy * qz + qx * qw)
-            drift = max(drift, abs(link[0][1]) + math.hypot(tilt_x, tilt_z) * body_extent(body.shape))
+            body_drift = abs(link[0][1]) + math.hypot(tilt_x, tilt_z) * extent
+            if body_drift > drift:
+                drift = body_drift
         velocities = tuple(velocities)
         if normal is not None:
             n_x, n_y = normal
@@ -441,43 +522,41 @@ class PybulletEngine(Engine):
             tangential_impulse = impulse_x * n_y - impulse_z * n_x
         else:
             normal_impulse = tangential_impulse = None
-        status = decide_status(
-            scene,
+        status = status_from(
+            plan.weights,
+            plan.before,
             velocities,
             contact_seen=first_contact is not None,
             separated=separated,
             max_contact_points=max_points,
             out_of_plane_drift=drift,
         )
-        notes = []
-        if any(body.shape.kind == "polygon" for body in scene.bodies):
-            notes.append("polygon: pybullet keeps a link's convex-hull collision margin at "
-                         "0.001 m, so contacts sit 1 mm outside the polygon")
+        notes = plan.notes
         if max_points > 1:
-            notes.append(f"{max_points} distinct in-plane contact points in one step")
-        return EngineRun(
-            engine=self.name,
-            engine_version=self.version,
-            scene_name=scene.name,
-            preset=preset,
-            settings=settings,
-            velocities=velocities,
-            status=status,
-            steps=steps,
-            contact_steps=contact_steps,
-            first_contact_step=first_contact,
-            max_contact_points=max_points,
-            max_penetration=float(max_penetration),
-            separated=separated,
-            step_cap_hit=(not separated and steps >= max_steps),
-            contact_normal=normal,
-            normal_impulse=normal_impulse,
-            tangential_impulse=tangential_impulse,
-            out_of_plane_drift=drift,
-            derived={},
-            notes=tuple(notes),
-            wall_time_s=time.perf_counter() - start,
-        )
+            notes += (_MULTI_CONTACT_NOTE.format(max_points),)
+        return run_from_fields({
+            "engine": self.name,
+            "engine_version": self.version,
+            "scene_name": scene.name,
+            "preset": preset,
+            "settings": settings,
+            "velocities": velocities,
+            "status": status,
+            "steps": steps,
+            "contact_steps": contact_steps,
+            "first_contact_step": first_contact,
+            "max_contact_points": max_points,
+            "max_penetration": max_penetration,
+            "separated": separated,
+            "step_cap_hit": not separated and steps >= max_steps,
+            "contact_normal": normal,
+            "normal_impulse": normal_impulse,
+            "tangential_impulse": tangential_impulse,
+            "out_of_plane_drift": drift,
+            "derived": {},
+            "notes": notes,
+            "wall_time_s": time.perf_counter() - start,
+        })
 
 
 ENGINE_CLASS = PybulletEngine
