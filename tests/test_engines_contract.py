@@ -214,6 +214,44 @@ def test_no_contact_and_step_cap_statuses(engine):
         assert capped.status == "no-separation" and capped.step_cap_hit
 
 
+def test_runs_are_complete_engine_runs(engine):
+    # Adapters build EngineRun through run_from_fields (no dataclass __init__): every field
+    # is there and the run equals one built the ordinary way.
+    import dataclasses
+
+    run = engine.run(SCENES["two-disks"][0], preset="accurate")
+    values = {f.name: getattr(run, f.name) for f in dataclasses.fields(EngineRun)}
+    assert set(vars(run)) == set(values)
+    assert EngineRun(**values) == run
+    assert dataclasses.asdict(run)["steps"] == run.steps
+
+
+def test_reused_scene_and_settings_objects_give_identical_runs(engine):
+    # Adapters remember per (scene, settings) object; a different but equal settings dict, a
+    # settings dict changed in place, and a scene rebuilt from the same values all agree.
+    scene = SCENES["rod-45"][0]
+    settings = engine.settings("accurate")
+    first = engine.run(scene, settings)
+    assert engine.run(scene, settings) == first
+    assert engine.run(scene, dict(settings)) == first
+    twin = Scene(scene.bodies, scene.restitution, scene.friction, ground=scene.ground, name=scene.name)
+    assert engine.run(twin, settings) == first
+    settings["max_steps"] = 1
+    capped = engine.run(scene, settings)
+    assert capped.steps == 1 and capped.settings["max_steps"] == 1
+
+
+def test_mutable_scene_is_not_remembered(engine):
+    # A scene holding a list is unhashable, so it is checked and planned on every run: an
+    # in-place change of its state takes effect.
+    body = Body("disk", Disk(0.1), 1.0, [0.0, 0.1], 0.0, [0.0, -1.0], 0.0)
+    scene = Scene((body,), 0.5, 0.3, ground=True, name="mutable")
+    assert engine.run(scene, preset="accurate", overrides={"max_steps": 5}).status != "no-contact"
+    body.velocity[1] = 1.0  # now leaving the ground
+    body.position[1] = 0.2
+    assert engine.run(scene, preset="accurate", overrides={"max_steps": 5}).status == "no-contact"
+
+
 def test_ke_norm():
     scene = SCENES["two-disks"][0]
     u = scene.state()

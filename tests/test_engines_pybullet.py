@@ -117,3 +117,16 @@ def test_product_rule_gives_the_pair_exactly_e_and_mu(engine):
     run = engine.run(scene, preset="accurate")
     assert run.normal_impulse == pytest.approx(1.5, abs=1e-12)  # rounding
     assert run.tangential_impulse == pytest.approx(-0.3 * 1.5, abs=1e-12)
+
+
+def test_rerun_after_its_world_was_evicted(engine):
+    # At most 8 worlds stay connected: a run whose remembered world was disconnected (least
+    # recently used) gets a new one and the same, bit-identical result.
+    scene = SCENES["disk-spin"][0]
+    settings = engine.settings("accurate")
+    first = engine.run(scene, settings)
+    for radius in range(9):  # 9 other geometries with the same settings: 9 other worlds
+        other = drop(1.0)
+        body = other.bodies[0].moved(shape=Disk(0.11 + 0.01 * radius), position=(0.0, 0.11 + 0.01 * radius))
+        engine.run(Scene((body,), 0.5, 0.0, ground=True, name="drop"), settings)
+    assert engine.run(scene, settings) == first

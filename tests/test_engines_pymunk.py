@@ -8,7 +8,7 @@ pytest.importorskip("pymunk", reason="pymunk not installed (pip install pymunk==
 
 from harness.bench_engines import newton_lcp_velocities, reference_scenes  # noqa: E402
 from harness.engines import ke_norm, load_engine  # noqa: E402
-from harness.scene import Body, Disk, Scene  # noqa: E402
+from harness.scene import Body, Disk, Polygon, Scene  # noqa: E402
 
 SCENES = reference_scenes()
 
@@ -87,3 +87,37 @@ def test_collision_slop_moves_positions_only(engine):
     changed = engine.run(scene, preset="accurate", overrides={"collision_slop": 0.0,
                                                                "collision_bias": 0.5})
     assert changed.velocities == base.velocities
+
+
+def test_collision_persistence_0_reports_no_contact(engine):
+    # Chipmunk drops an arbiter older than collision_persistence steps; at 0 that is the
+    # step's own arbiter, before post-solve: it reaches the callback with 0 points and no
+    # impulse, the disk flies through the ground. Pinned: no contact, unchanged velocities.
+    scene = SCENES["disk"][0]
+    run = engine.run(scene, preset="accurate", overrides={"collision_persistence": 0, "max_steps": 5})
+    assert run.status == "no-contact" and run.contact_steps == 0
+    assert run.velocities == ((1.0, -1.0, 0.0),)
+    assert engine.run(scene, preset="accurate", overrides={"collision_persistence": 1}).status == "ok"
+
+
+def test_multi_contact_note_wording(engine):
+    # A box landing flat touches at two corners: the note reads like pybullet's and MuJoCo's.
+    from harness.scene import Box
+
+    body = Body("box", Box(0.4, 0.2), 1.0, (0.0, 0.1), 0.0, (0.0, -1.0), 0.0)
+    run = engine.run(Scene((body,), 0.5, 0.3, ground=True, name="flat"), preset="accurate")
+    assert run.status == "multi-contact" and run.max_contact_points == 2
+    assert run.notes == ("2 distinct in-plane contact points in one step",)
+
+
+def test_impulse_matches_momentum_change_when_chipmunk_swaps_the_shapes(engine):
+    # A triangle settling on the ground keeps contact for 4 steps, and Chipmunk swaps the
+    # arbiter's two polygons between steps: the impulse's side must be read every step.
+    # Frictionless, normal +y: the impulse is m·Δv_y. Reason for 1e-9: rounding.
+    triangle = Polygon(((-0.2, -0.1), (0.2, -0.1), (0.0, 0.2)))
+    body = Body("tri", triangle, 1.8353722470574683, (0.0, 0.12282730001257194),
+                -2.232087680744368, (1.2994285474803906, -0.8907175505069644), 0.1557745302318443)
+    scene = Scene((body,), 0.5, 0.0, ground=True, name="triangle-settling")
+    run = engine.run(scene, preset="accurate", overrides={"approach_steps": 2.5})
+    assert run.contact_steps > 1
+    assert run.normal_impulse == pytest.approx(body.mass * (run.velocities[0][1] - body.velocity[1]), abs=1e-9)

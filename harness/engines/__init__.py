@@ -252,7 +252,11 @@ class Engine(abc.ABC):
                 raise EngineSettingsError(
                     f"engine {self.name!r}: pass either a settings dict or overrides, not both"
                 )
-            resolved, used_preset = self._checked(settings)
+            cached = self._last_checked  # the fast path of _checked, inlined
+            if cached is not None and cached[0] is settings and cached[1] == settings:
+                resolved, used_preset = cached[1], cached[2]
+            else:
+                resolved, used_preset = self._checked(settings)
         if scene is not self._last_scene:
             _check_scene(self.name, scene)
             # Checked once per scene object: only a hashable (immutable) scene is remembered.
@@ -422,11 +426,12 @@ def status_from(
     """:func:`decide_status` from precomputed :func:`energy_weights` and :func:`energy_before`
     (adapters cache them per scene)."""
     after = 0.0
-    isfinite = math.isfinite
     for (mass, inertia), (vx, vy, omega) in zip(weights, velocities):
-        if not (isfinite(vx) and isfinite(vy) and isfinite(omega)):
-            return "blow-up"
         after += mass * (vx * vx + vy * vy) + inertia * omega * omega
+    # With positive masses and inertias a finite sum means finite velocities: test them
+    # one by one only when it is not.
+    if not math.isfinite(after) and not all(math.isfinite(v) for body in velocities for v in body):
+        return "blow-up"
     if after > _BLOW_UP_SQUARED * max(before, 1e-300):
         return "blow-up"
     if not contact_seen:

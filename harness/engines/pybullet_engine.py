@@ -423,7 +423,12 @@ class PybulletEngine(Engine):
     # ------------------------------------------------------------------ run
     def _run(self, scene: Scene, settings: dict, preset: str | None) -> EngineRun:
         start = time.perf_counter()
-        plan = self._plan_for(scene, settings)
+        plan = self._plans.get((id(scene), id(settings)))  # _plan_for's hit, inlined
+        if (plan is None or plan.scene is not scene or plan.settings is not settings
+                or plan.world.closed):
+            plan = self._plan_for(scene, settings)
+        else:
+            self._worlds.move_to_end(plan.world_key)  # least recently used goes first
         world = plan.world
         client, bodies = world.client, world.bodies
         dt = plan.dt

@@ -285,7 +285,9 @@ class PymunkEngine(Engine):
 
     def _run(self, scene: Scene, settings: dict, preset: str | None) -> EngineRun:
         start = time.perf_counter()
-        plan = self._plan_for(scene, settings)
+        plan = self._plans.get((id(scene), id(settings)))  # _plan_for's hit, inlined
+        if plan is None or plan.scene is not scene or plan.settings is not settings:
+            plan = self._plan_for(scene, settings)
         entry = plan.entry
         entry.configure(plan.space_values, plan.pair_values)
         _reset(entry, plan.starts)
@@ -305,7 +307,6 @@ class PymunkEngine(Engine):
         normal = None
         peak_normal_step = 0.0
         separated = False
-        b_first = False
         while steps < max_steps:
             _space_step(space_ptr, dt)
             steps += 1
@@ -325,12 +326,12 @@ class PymunkEngine(Engine):
                         max_penetration = depth
                 if count > max_points:
                     max_points = count
+                # The arbiter's shape order can change from step to step (Chipmunk swaps
+                # two shapes of the same type as it finds them): read it every step.
+                bodies_of(arbiter, out_a, out_b)
+                b_first = out_a[0] == body_b
                 if first_contact is None:
                     first_contact = steps
-                    # The arbiter's shape order is fixed for its life, which is this run's
-                    # contact (the run ends at the first step without one).
-                    bodies_of(arbiter, out_a, out_b)
-                    b_first = out_a[0] == body_b
                     n = point_set.normal  # from the first shape into the second
                     normal = (-n.x, -n.y) if b_first else (n.x, n.y)
                 impulse = impulse_of(arbiter)  # on the body of the arbiter's first shape
