@@ -5,17 +5,21 @@ For every installed engine, preset and reference scene, in one run:
 * ``harness_us`` -- ``engine.run(scene, settings)`` per impact (settings resolved once,
   caches warm): state set-up, stepping with per-step contact bookkeeping, read-out, status.
 * ``bare_us`` -- the same number of engine steps from the same start state in a tight
-  Python loop (``space.step`` / ``p.stepSimulation`` / ``mj_step``), with the state set
-  outside the timed region; for pymunk on a space without the harness's collision callback.
-* ``bare_reset_us`` -- the same loop with the state set-up timed too: the least any Python
-  harness must spend per impact.
+  Python loop, with the same step call as the adapter (``cpSpaceStep`` through pymunk's cffi
+  ``lib`` / ``p.stepSimulation`` / ``mj_step``) and the state set outside the timed region;
+  for pymunk on a space of its own without the harness's post_solve recorder.
+* ``bare_reset_us`` -- the same loop with the state set-up timed too, the set-up being the
+  adapter's own per-impact reset (pymunk and pybullet ``_reset``; MuJoCo ``_configure``,
+  ``mj_resetData`` and the start state): the least any Python harness must spend per impact.
+  Both sides do exactly the same reset.
 * ``ratio`` = ``harness_us / bare_us`` (target <= 1.3) and ``ratio_reset`` =
   ``harness_us / bare_reset_us``.
 
 The velocity-level engines (pymunk, pybullet) resolve an impact in 2 steps, so their bare
 stepping is a few microseconds and fixed per-impact costs of any Python driver dominate
-``ratio``; ``ratio_reset`` isolates the harness's own bookkeeping. MuJoCo's soft contact takes
-~50 steps, where ``ratio`` is meaningful.
+``ratio``; ``ratio_reset`` isolates the harness's own work: the per-step contact queries and
+the read-out the contract needs, the bookkeeping, the status and the result object.
+MuJoCo's soft contact takes ~50 steps, where ``ratio`` is meaningful.
 
 The benchmark checks its own results: reruns are bit-identical, and pymunk/pybullet
 ``accurate`` agree with ``planar_impact``'s ``newton-lcp`` to 1e-6 where the solver is importable.
