@@ -227,7 +227,10 @@ class TwoPhaseProcess:
         remaining = where(compression_in_phase1, work_target - work_to_g, work_target)
         remaining = np.maximum(remaining, 0.0)
         root = np.sqrt(v_start * v_start + 2.0 * self.slope_n2 * remaining)
-        step = where(remaining > 0, 2.0 * remaining / (v_start + root), 0.0)
+        # v0 = 0 with a subnormal remaining work (e ≈ 1e-162) makes 2kR, and the root,
+        # underflow to 0: there the step is √(2R/k), which does not underflow.
+        denominator = v_start + root
+        step = where(denominator > 0, 2.0 * remaining / denominator, np.sqrt(2.0 * remaining / self.slope_n2))
         end_phase2 = start + step
         normal_impulse = where(ends_in_phase1, end_phase1, end_phase2)
         reverse = ~self.sticks
