@@ -100,6 +100,34 @@ def test_settings_returns_fresh_copies(engine):
     assert engine.settings("accurate")["max_steps"] != 7
 
 
+def _list_setting(engine):
+    keys = [key for key, value in engine.settings("defaults").items() if isinstance(value, list)]
+    if not keys:
+        pytest.skip(f"{engine.name} has no list-valued setting")
+    return keys[0]
+
+
+def test_settings_list_values_do_not_alias_the_preset(engine):
+    key = _list_setting(engine)
+    before = list(engine.settings("defaults")[key])
+    edited = engine.settings("defaults")
+    edited[key][-1] = 0.5 if edited[key][-1] != 0.5 else 0.25
+    assert engine.settings("defaults")[key] == before
+    assert engine.presets["defaults"][key] == before
+
+
+def test_settings_list_edited_in_place_is_rechecked(engine):
+    # The fast path remembers the last settings dict; an in-place edit of one of its list
+    # values must be seen: the run is no longer the preset's.
+    key = _list_setting(engine)
+    scene = SCENES["disk"][0]
+    settings = engine.settings("defaults")
+    assert engine.run(scene, settings).preset == "defaults"
+    settings[key][-1] = 0.5 if settings[key][-1] != 0.5 else 0.25
+    run = engine.run(scene, settings)
+    assert run.preset is None and run.settings[key] == settings[key]
+
+
 def test_unknown_setting_names_engine_key_and_allowed(engine):
     with pytest.raises(EngineSettingsError) as caught:
         engine.settings("accurate", {"no_such_knob": 1})

@@ -81,6 +81,7 @@ Settings
 from __future__ import annotations
 
 import abc
+import copy
 import importlib
 import math
 import numbers
@@ -206,7 +207,8 @@ class Engine(abc.ABC):
             raise EngineSettingsError(
                 f"engine {self.name!r}: unknown preset {preset!r}; allowed: {sorted(self.presets)}"
             )
-        resolved = dict(self.presets[preset])
+        # Deep: list values (MuJoCo's solref, solimp) must not alias the preset's.
+        resolved = copy.deepcopy(dict(self.presets[preset]))
         for key, value in (overrides or {}).items():
             self._check_key(key)
             resolved[key] = value
@@ -272,7 +274,8 @@ class Engine(abc.ABC):
         cached = self._last_checked
         if cached is not None and cached[0] is settings and cached[1] == settings:
             return cached[1], cached[2]
-        resolved = dict(settings)
+        # Deep, so that an in-place edit of a list value fails the fast path's comparison.
+        resolved = copy.deepcopy(dict(settings))
         self.validate_settings(resolved)
         used_preset = next(
             (name for name, values in self.presets.items() if dict(values) == resolved), None
