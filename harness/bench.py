@@ -85,26 +85,37 @@ def output_write_time(size: int, repeat: int = 5) -> float:
 def solver_benchmark(quick: bool) -> dict:
     size = 1_000_000
     problems = random_problems(size, seed=1)
-    repeat = 3 if quick else 5
-    baseline = numpy_passes_time(size, repeat, keep=True)
-    reused = numpy_passes_time(size, repeat, keep=False)
-    results = {"size": size, "numpy_passes": BASELINE_PASSES, "numpy_passes_s": baseline,
-               "numpy_passes_reused_s": reused, "output_write_s": output_write_time(size, repeat),
-               "laws": {}}
+    rounds = 3 if quick else 5
     sample = random_problems(200, seed=2)
+    solved_share = {}
     for law in pi.HYPOTHESES:
-        batch = pi.solve_batch(**problems, hypothesis=law)
-        solved_share = float(np.mean(batch.status == 0))
+        solved_share[law] = float(np.mean(pi.solve_batch(**problems, hypothesis=law).status == 0))
         _check_against_process(law, sample)
-        seconds = _best_time(lambda: pi.solve_batch(**problems, hypothesis=law), repeat)
+    # Interleaved rounds, best of each: a burst of load on the shared machine then hits the
+    # baselines and the laws alike. Each call's result is dropped before the next, as the
+    # passes' are: a live result changes where the allocator puts the next one.
+    timed = {"kept": lambda: numpy_passes_time(size, 1, keep=True),
+             "reused": lambda: numpy_passes_time(size, 1, keep=False),
+             "write": lambda: output_write_time(size, 1)}
+    timed.update({law: (lambda law=law: _best_time(lambda: pi.solve_batch(**problems, hypothesis=law), 1))
+                  for law in pi.HYPOTHESES})
+    best = {name: float("inf") for name in timed}
+    for _ in range(rounds):
+        for name, measure in timed.items():
+            best[name] = min(best[name], measure())
+    baseline, reused = best["kept"], best["reused"]
+    results = {"size": size, "numpy_passes": BASELINE_PASSES, "numpy_passes_s": baseline,
+               "numpy_passes_reused_s": reused, "output_write_s": best["write"], "laws": {}}
+    for law in pi.HYPOTHESES:
+        seconds = best[law]
         results["laws"][law] = {
             "batch_s": seconds,
             "problems_per_s": size / seconds,
             "ratio_to_numpy_passes": seconds / baseline,
             "ratio_to_reused_passes": seconds / reused,
-            "solved_share": solved_share,
+            "solved_share": solved_share[law],
         }
-    results["scalar_solve_us"] = scalar_solve_times(repeat)
+    results["scalar_solve_us"] = scalar_solve_times(rounds)
     results["process_us"] = process_times(quick)
     results["batch_sizes"] = batch_size_scan(quick)
     return results

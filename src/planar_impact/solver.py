@@ -41,12 +41,14 @@ def check_hypothesis(hypothesis: str) -> str:
     return hypothesis
 
 
-def contact_space_solution(hypothesis, mnn, mnt, mtt, vn, vt, mu, e):
+def contact_space_solution(hypothesis, mnn, mnt, mtt, vn, vt, mu, e, out=None):
     """Run one law on contact-space arrays (vt ≥ 0, rows assumed valid).
 
     Returns a dict of arrays: impulses, separation velocities (A22)/(A23), energy change
     (A29), collision type, Table 1 case, the Poisson restitution used (``e_i``) and
-    ``consistent`` (False where the law has no consistent answer).
+    ``consistent`` (False where the law has no consistent answer). With ``out`` (a dict of
+    arrays), the separation velocities and the energy change are written there, saving a
+    copy each.
     """
     terms = laws.ContactTerms(mnn, mnt, mtt, vn, vt, mu)
     consistent = np.True_
@@ -70,9 +72,13 @@ def contact_space_solution(hypothesis, mnn, mnt, mtt, vn, vt, mu, e):
         normal, tangential, ctype, compression = run(e)
         # Poisson's e of the process each law runs, I_nr/I_nc (6).
         e_poisson = (normal - compression) / compression
-    vn_separation = vn + mnn * normal + mnt * tangential  # (A22)
-    vt_separation = vt + mnt * normal + mtt * tangential  # (A23)
-    energy_change = 0.5 * normal * (vn_separation + vn) + 0.5 * tangential * (vt_separation + vt)  # (A29)
+    if out is None:
+        out = {"vn_separation": None, "vt_separation": None, "energy_change": None}
+    vn_separation = np.add(vn, mnn * normal + mnt * tangential, out=out["vn_separation"])  # (A22)
+    vt_separation = np.add(vt, mnt * normal + mtt * tangential, out=out["vt_separation"])  # (A23)
+    energy_change = np.multiply(  # (A29)
+        0.5, normal * (vn_separation + vn) + tangential * (vt_separation + vt), out=out["energy_change"]
+    )
     return {
         "normal_impulse": normal,
         "tangential_impulse": tangential,
@@ -204,7 +210,7 @@ def _solve_chunk(hypothesis, inputs, out):
     else:
         vt_pos = vt
     with np.errstate(all="ignore"):
-        solution = contact_space_solution(hypothesis, mnn, mnt, mtt, vn, vt_pos, mu, e)
+        solution = contact_space_solution(hypothesis, mnn, mnt, mtt, vn, vt_pos, mu, e, out)
         # Fast screen: NaN fails every comparison; inf shows in the sum. Only rows failing
         # it go through the full check (which also clears a false alarm from overflow).
         # m_nn > 0 and Δ > 0 imply m_tt > 0; NaN in m_nt, e or μ fails a comparison, and inf
@@ -224,21 +230,25 @@ def _solve_chunk(hypothesis, inputs, out):
         status[bad] = input_status(mnn[bad], mnt[bad], mtt[bad], vn[bad], vt[bad], mu[bad], e[bad])
     if trouble.any():
         status[...] = answer_status(hypothesis, status, solution)
+    # vn_separation, vt_separation and energy_change are already in out.
     out["normal_impulse"][...] = solution["normal_impulse"]
-    out["tangential_impulse"][...] = solution["tangential_impulse"]
-    out["vn_separation"][...] = solution["vn_separation"]
-    out["vt_separation"][...] = solution["vt_separation"]
     if any_flipped:
-        out["tangential_impulse"] *= sign
+        np.multiply(solution["tangential_impulse"], sign, out=out["tangential_impulse"])
         out["vt_separation"] *= sign
+    else:
+        out["tangential_impulse"][...] = solution["tangential_impulse"]
     out["vn_approach"][...] = vn
     out["vt_approach"][...] = vt
-    out["energy_change"][...] = solution["energy_change"]
     out["collision_type"][...] = solution["collision_type"]
     out["case"][...] = solution["case"]
     e_poisson = solution["restitution_poisson"]
     out["restitution_poisson"][...] = e_poisson
-    out["restitution_in_range"][...] = (e_poisson >= 0) & (e_poisson <= 1)
+    if e_poisson is e:  # Poisson: e passed the screen wherever the row is solved
+        out["restitution_in_range"][...] = True
+    else:
+        out["restitution_in_range"][...] = (e_poisson >= 0) & (e_poisson <= 1)
+    if ok.all() and not trouble.any():
+        return
     bad = status != errors.SOLVED
     if bad.any():
         for name, values in out.items():
