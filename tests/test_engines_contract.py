@@ -284,3 +284,12 @@ def test_ke_norm():
     scene = SCENES["two-disks"][0]
     u = scene.state()
     assert ke_norm(scene, u) == pytest.approx(math.sqrt(u @ scene.mass_matrix() @ u), rel=1e-15)
+
+
+@pytest.mark.parametrize("field", ["position", "velocity"])
+def test_vector_of_wrong_length_names_body_and_field(engine, field):
+    values = {"position": (0.0, 0.1), "velocity": (0.0, -1.0)}
+    values[field] = (*values[field], 5.0)
+    body = Body("puck", Disk(0.1), 1.0, values["position"], 0.0, values["velocity"], 0.0)
+    with pytest.raises(ValueError, match=rf"'puck' {field} must be \(x, y\).*5\.0"):
+        engine.run(Scene((body,), 0.5, 0.3, ground=True, name="bad"), preset="accurate")

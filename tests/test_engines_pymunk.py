@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import pytest
 
 pytest.importorskip("pymunk", reason="pymunk not installed (pip install pymunk==7.3.1)")
 
 from harness.bench_engines import newton_lcp_velocities, reference_scenes  # noqa: E402
-from harness.engines import ke_norm, load_engine  # noqa: E402
+from harness.engines import EngineSettingsError, ke_norm, load_engine  # noqa: E402
 from harness.scene import Body, Disk, Polygon, Scene  # noqa: E402
 
 SCENES = reference_scenes()
@@ -89,15 +92,41 @@ def test_collision_slop_moves_positions_only(engine):
     assert changed.velocities == base.velocities
 
 
-def test_collision_persistence_0_reports_no_contact(engine):
+def test_collision_persistence_0_is_refused(engine):
     # Chipmunk drops an arbiter older than collision_persistence steps; at 0 that is the
-    # step's own arbiter, before post-solve: it reaches the callback with 0 points and no
-    # impulse, the disk flies through the ground. Pinned: no contact, unchanged velocities.
+    # step's own arbiter, before it is solved, and the disk flies through the ground. A
+    # setting that silently disables contact is refused, with the reason.
     scene = SCENES["disk"][0]
-    run = engine.run(scene, preset="accurate", overrides={"collision_persistence": 0, "max_steps": 5})
-    assert run.status == "no-contact" and run.contact_steps == 0
-    assert run.velocities == ((1.0, -1.0, 0.0),)
+    with pytest.raises(EngineSettingsError, match="collision_persistence.*>= 1"):
+        engine.run(scene, preset="accurate", overrides={"collision_persistence": 0})
     assert engine.run(scene, preset="accurate", overrides={"collision_persistence": 1}).status == "ok"
+
+
+def test_failed_reset_leaves_the_space_usable(tmp_path):
+    # A run that raises while setting the start state must put the shapes back: removing a
+    # shape that is not in the space makes Chipmunk abort() the whole process. Run in a
+    # child process so that a regression shows as a failed test, not a crashed worker.
+    script = tmp_path / "reset.py"
+    script.write_text(
+        "from harness.bench_engines import reference_scenes\n"
+        "from harness.engines import load_engine, pymunk_engine\n"
+        "engine = load_engine('pymunk')\n"
+        "scene = reference_scenes()['disk'][0]\n"
+        "first = engine.run(scene, preset='accurate')\n"
+        "real = pymunk_engine._set_velocity\n"
+        "def broken(*args):\n"
+        "    raise RuntimeError('setter failed')\n"
+        "pymunk_engine._set_velocity = broken\n"
+        "try:\n"
+        "    engine.run(scene, preset='accurate')\n"
+        "except RuntimeError:\n"
+        "    pass\n"
+        "pymunk_engine._set_velocity = real\n"
+        "assert engine.run(scene, preset='accurate') == first\n"
+        "print('usable')\n"
+    )
+    done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0 and "usable" in done.stdout, done.stderr[-2000:]
 
 
 def test_multi_contact_note_wording(engine):

@@ -477,6 +477,13 @@ def _check_scene(engine: str, scene: Scene) -> None:
     for body in scene.bodies:
         if body.shape.kind not in ("disk", "rod", "box", "polygon"):
             raise UnsupportedScene(f"engine {engine!r}: unknown shape {body.shape.kind!r}")
+        for field in ("position", "velocity"):
+            vector = getattr(body, field)
+            if len(vector) != 2:
+                raise UnsupportedScene(
+                    f"engine {engine!r}: body {body.name!r} {field} must be (x, y) in the plane, "
+                    f"got {tuple(vector)!r}"
+                )
         values = [body.mass, body.moment_of_inertia, *body.position, body.angle, *body.velocity,
                   body.angular_velocity]
         if not all(math.isfinite(v) for v in values) or body.mass <= 0 or body.moment_of_inertia <= 0:

@@ -57,7 +57,7 @@ SETTING_DOCS: dict[str, str] = {
     "iterations": "Space.iterations, impulse solver iterations per step (default 10)",
     "collision_slop": "m, Space.collision_slop, allowed overlap (default 0.1; positions only)",
     "collision_bias": "Space.collision_bias, overlap fraction left after 1 s (default (1-0.1)^60; positions only)",
-    "collision_persistence": "Space.collision_persistence, steps an arbiter is cached (default 3)",
+    "collision_persistence": "Space.collision_persistence, steps an arbiter is cached (default 3; >= 1, at 0 no contact is ever solved)",
     "damping": "Space.damping, velocity fraction kept after 1 s (default 1 = none)",
     "max_steps": "step cap; reported as status no-separation when hit in contact",
     "approach_steps": "steps of free flight before first touch (0 = touching at first detection)",
@@ -189,8 +189,15 @@ def _start_states(scene: Scene, settings: dict) -> tuple:
     # Shift x so that the bodies sit near the origin (precision; a symmetry of the scene).
     shift_x = -sum(b.position[0] for b in scene.bodies) / len(scene.bodies)
     rewind = -(settings["approach_steps"] + 1.0 - _DETECTION_OVERLAP) * dt
+    # Plain floats now, so that a value the C setters refuse (a numpy array, say) fails here,
+    # before _reset has taken any shape out of the space.
     return tuple(
-        ((pose[0] + shift_x, pose[1]), pose[2], body.velocity, body.angular_velocity)
+        (
+            (float(pose[0] + shift_x), float(pose[1])),
+            float(pose[2]),
+            (float(body.velocity[0]), float(body.velocity[1])),
+            float(body.angular_velocity),
+        )
         for body, pose in zip(scene.bodies, free_flight_poses(scene, rewind))
     )
 
@@ -206,13 +213,16 @@ def _reset(entry: _SpaceEntry, starts: tuple) -> None:
     shape_ptrs = entry.shape_ptrs
     for shape_ptr in shape_ptrs:
         _remove_shape(space_ptr, shape_ptr)
-    for body_ptr, (position, angle, velocity, angular_velocity) in zip(entry.body_ptrs, starts):
-        _set_position(body_ptr, position)
-        _set_angle(body_ptr, angle)
-        _set_velocity(body_ptr, velocity)
-        _set_angular_velocity(body_ptr, angular_velocity)
-    for shape_ptr in shape_ptrs:
-        _add_shape(space_ptr, shape_ptr)
+    try:
+        for body_ptr, (position, angle, velocity, angular_velocity) in zip(entry.body_ptrs, starts):
+            _set_position(body_ptr, position)
+            _set_angle(body_ptr, angle)
+            _set_velocity(body_ptr, velocity)
+            _set_angular_velocity(body_ptr, angular_velocity)
+    finally:
+        # Always back in: removing a shape that is not in the space makes Chipmunk abort().
+        for shape_ptr in shape_ptrs:
+            _add_shape(space_ptr, shape_ptr)
 
 
 _remove_shape = lib.cpSpaceRemoveShape
@@ -259,7 +269,8 @@ class PymunkEngine(Engine):
         _check_int(self.name, settings, "iterations", low=1)
         _check_number(self.name, settings, "collision_slop", low=0.0)
         _check_number(self.name, settings, "collision_bias", low=0.0, high=1.0)
-        _check_int(self.name, settings, "collision_persistence", low=0)
+        # At 0 Chipmunk drops each step's own arbiter before solving it: no contact, ever.
+        _check_int(self.name, settings, "collision_persistence", low=1)
         _check_number(self.name, settings, "damping", low=0.0, high=1.0)
 
     def _space_for(self, scene: Scene) -> _SpaceEntry:
