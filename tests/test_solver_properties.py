@@ -10,7 +10,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import planar_impact as pi
-from planar_impact import errors
+from planar_impact import errors, laws
 
 PROCESS_LAWS = ("newton", "poisson", "stronge")
 
@@ -277,6 +277,7 @@ GOOD = dict(mass_matrix=np.eye(3), wn=[0.0, 1.0, 0.1], wt=[1.0, 0.0, -0.2], u=[0
         (dict(u=[0.5, 1.0, 0.3]), ["v_n^A", "approach"]),
         (dict(wt=[0.0, 2.0, 0.2]), ["Δ", "wn and wt"]),
         (dict(hypothesis="hertz"), ["hypothesis", "hertz", "poisson"]),
+        (dict(u=[0.5, -1e160, 0.3]), ["u", "-1e+160", "float64", "rescale"]),
     ],
 )
 def test_bad_input_gets_a_clear_error(change, words):
@@ -297,6 +298,7 @@ def test_batch_flags_bad_rows_and_solves_the_others():
         (dict(mu=-0.2), errors.NEGATIVE_FRICTION),
         (dict(e=1.2), errors.RESTITUTION_OUT_OF_RANGE),
         (dict(vn=0.0), errors.NO_APPROACH),
+        (dict(vn=-1e300), errors.OUTPUT_OVERFLOW),  # finite inputs, energy ~ 1e600
     ]
     columns = {k: [] for k in good}
     for position in range(2 * len(bad_rows) + 1):
@@ -319,6 +321,19 @@ def test_batch_flags_bad_rows_and_solves_the_others():
                 assert batch.status_message(position) == errors.STATUS_MESSAGES[expected]
 
 
+@pytest.mark.parametrize("field", ["mnn", "mnt", "mtt", "vn", "vt", "mu", "e"])
+@pytest.mark.parametrize("value", [np.nan, np.inf, -np.inf])
+def test_every_non_finite_input_is_flagged_in_a_batch(field, value):
+    # The batch's fast screen lets most rows skip the full input check; no non-finite input
+    # may slip through it as solved.
+    good = dict(mnn=1.2, mnt=-0.3, mtt=0.8, vn=-1.0, vt=0.4, mu=0.3, e=0.6)
+    column = np.array([good[field], value, good[field]])
+    for law in pi.HYPOTHESES:
+        batch = pi.solve_batch(**{**good, field: column}, hypothesis=law)
+        assert list(batch.status) == [0, errors.NON_FINITE, 0], law
+        assert np.isnan(batch.normal_impulse[1]) and np.isfinite(batch.normal_impulse[[0, 2]]).all()
+
+
 def test_batch_broadcasts_and_keeps_shape():
     result = pi.solve_batch(1.0, 0.2, np.array([[0.5], [1.0]]), -1.0, np.array([0.0, 0.3, -0.3]), 0.4, 0.7)
     assert result.normal_impulse.shape == (2, 3) and result.status.shape == (2, 3)
@@ -338,3 +353,20 @@ def test_solve_never_returns_nan():
     values = [result.normal_impulse, result.tangential_impulse, result.vn_separation,
               result.vt_separation, result.energy_change, *result.u_after, *result.delta_u]
     assert all(math.isfinite(v) for v in values)
+
+
+def test_a_row_does_not_depend_on_its_neighbours_even_in_the_sign_of_zero():
+    # v_t = −0.0 with m_nt = −0.0: the row's zero tangential impulse must carry the same sign
+    # alone as beside a row whose tangent is flipped (same chunk).
+    alone = pi.solve_batch(1.0, -0.0, 1.0, -1.0, -0.0, 0.3, 0.5)
+    beside = pi.solve_batch([1.0, 1.0], [-0.0, 0.2], [1.0, 1.0], -1.0, [-0.0, -1.0], 0.3, 0.5)
+    for name in ("normal_impulse", "tangential_impulse", "vt_separation", "energy_change"):
+        assert np.asarray(getattr(alone, name)).tobytes() == getattr(beside, name)[:1].tobytes(), name
+
+
+def test_kernels_accept_zero_dimensional_arrays():
+    values = (1.2, -0.3, 0.8, -1.0, 0.4, 0.3)
+    from_arrays = laws.ContactTerms(*(np.array(x) for x in values))
+    from_scalars = laws.ContactTerms(*(np.float64(x) for x in values))
+    assert from_arrays.case == from_scalars.case
+    assert laws.poisson_type(from_arrays, np.array(0.5)) == laws.poisson_type(from_scalars, np.float64(0.5))

@@ -22,6 +22,7 @@ NO_APPROACH = 5
 PAINLEVE_JAM = 6
 REVERSE_SLIDING_Q_NONPOSITIVE = 7
 NO_CONSISTENT_SOLUTION = 8
+OUTPUT_OVERFLOW = 9
 
 STATUS_MESSAGES: dict[int, str] = {
     SOLVED: "solved",
@@ -43,5 +44,9 @@ STATUS_MESSAGES: dict[int, str] = {
     NO_CONSISTENT_SOLUTION: (
         "the law has no consistent solution for this row (no real e_i for the paper's "
         "Stronge mapping, or no consistent stick/slide mode for newton-lcp)"
+    ),
+    OUTPUT_OVERFLOW: (
+        "an output exceeds the float64 range (inputs too large in magnitude: the energy change, "
+        "of order v²/m, passes 1.8e308); rescale the units"
     ),
 }

@@ -94,7 +94,7 @@ _POISSON_TYPE_BY_CASE_REGION = np.array(
 
 def table1_case(g, h, p, q):
     """Table 1 row (1–5) from the signs of ``g, h, p, q`` (A35)."""
-    if type(g) is not np.ndarray:
+    if type(g) is not np.ndarray or g.ndim == 0:
         return 5 if g <= 0 else 4 if h <= 0 else 3 if p < 0 else 2 if q < 0 else 1
     case = np.multiply(g <= 0, 5, dtype=np.int8)
     np.maximum(case, np.multiply(h <= 0, 4, dtype=np.int8), out=case)
@@ -110,7 +110,7 @@ def poisson_type(terms: ContactTerms, e):
     (comment a).
     """
     alpha, r_m = terms.alpha, terms.r_m
-    if type(alpha) is not np.ndarray:
+    if type(alpha) is not np.ndarray or alpha.ndim == 0:
         region = int(alpha > r_m) + int(alpha > (1.0 + e) * r_m)
         return int(_POISSON_TYPE_BY_CASE_REGION[3 * terms.case + region])
     index = np.multiply(terms.case, 3, dtype=np.int8)
@@ -229,8 +229,13 @@ class TwoPhaseProcess:
         root = np.sqrt(v_start * v_start + 2.0 * self.slope_n2 * remaining)
         # v0 = 0 with a subnormal remaining work (e ≈ 1e-162) makes 2kR, and the root,
         # underflow to 0: there the step is √(2R/k), which does not underflow.
+        # remaining is NaN where the compression work overflowed: that row's step is 0.
         denominator = v_start + root
-        step = where(denominator > 0, 2.0 * remaining / denominator, np.sqrt(2.0 * remaining / self.slope_n2))
+        step = where(
+            remaining > 0,
+            where(denominator > 0, 2.0 * remaining / denominator, np.sqrt(2.0 * remaining / self.slope_n2)),
+            0.0,
+        )
         end_phase2 = start + step
         normal_impulse = where(ends_in_phase1, end_phase1, end_phase2)
         reverse = ~self.sticks

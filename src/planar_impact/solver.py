@@ -8,6 +8,7 @@ Both screen their input, flip the tangent where ``v_t^A < 0`` (the theory assume
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, fields
 
 import numpy as np
@@ -206,9 +207,8 @@ def _solve_chunk(hypothesis, inputs, out):
         # Multiplying by ±1 is exact, and far cheaper than a masked negative.
         sign = np.where(flipped, -1.0, 1.0)
         mnt = mnt * sign
-        vt_pos = np.abs(vt)
-    else:
-        vt_pos = vt
+    # |v_t| also on rows not flipped: v_t = −0.0 becomes +0.0 whatever its neighbours.
+    vt_pos = np.abs(vt)
     with np.errstate(all="ignore"):
         solution = contact_space_solution(hypothesis, mnn, mnt, mtt, vn, vt_pos, mu, e, out)
         # Fast screen: NaN fails every comparison; inf shows in the sum. Only rows failing
@@ -247,8 +247,13 @@ def _solve_chunk(hypothesis, inputs, out):
         out["restitution_in_range"][...] = True
     else:
         out["restitution_in_range"][...] = (e_poisson >= 0) & (e_poisson <= 1)
-    if ok.all() and not trouble.any():
+    # Finite inputs whose answer passes float64's range (|v| ≳ 1e154): flagged, not returned
+    # as a silent inf. The energy change multiplies impulses and velocities, so it overflows
+    # first and is non-finite whenever any of them is.
+    finite_answer = np.isfinite(out["energy_change"])
+    if ok.all() and not trouble.any() and finite_answer.all():
         return
+    status[(status == errors.SOLVED) & ~finite_answer] = errors.OUTPUT_OVERFLOW
     bad = status != errors.SOLVED
     if bad.any():
         for name, values in out.items():
@@ -377,7 +382,7 @@ def solve(*, mass_matrix, wn, wt, u, mu, e, hypothesis: str = "poisson") -> Impa
     vn, vt = float(wn @ u), float(wt @ u)
     # The batch kernels on numpy float64 scalars: same code, without array overhead.
     sign = -1.0 if vt < 0 or (vt == 0 and mnt < 0) else 1.0  # t → −t as in solve_batch
-    scalars = [np.float64(x) for x in (mnn, sign * mnt, mtt, vn, sign * vt, mu, e)]
+    scalars = [np.float64(x) for x in (mnn, sign * mnt, mtt, vn, abs(vt), mu, e)]
     # μ, e, finiteness and M > 0 are checked above; what is left of input_status:
     if not vn < 0:
         status = errors.NO_APPROACH
@@ -399,6 +404,12 @@ def solve(*, mass_matrix, wn, wt, u, mu, e, hypothesis: str = "poisson") -> Impa
     normal, tangential = float(out["normal_impulse"]), sign * float(out["tangential_impulse"])
     e_poisson = float(out["restitution_poisson"])
     delta_u = inv_wn * normal + inv_wt * tangential  # M Δu = w_n I_n + w_t I_t (A16)
+    if not (math.isfinite(float(out["energy_change"])) and np.isfinite(delta_u).all()):
+        raise ImpactInputError(
+            f"u: approach velocities v_n^A = {vn!r}, v_t^A = {vt!r} with mass_matrix scale "
+            f"{np.max(np.abs(matrix)):.3g} give energy change {float(out['energy_change'])!r} "
+            f"[{errors.STATUS_MESSAGES[errors.OUTPUT_OVERFLOW]}]"
+        )
     return ImpactResult(
         hypothesis=hypothesis,
         normal_impulse=normal,
