@@ -33,6 +33,9 @@ def test_output_write_covers_every_array_of_a_batch_result():
     arrays = [v for v in result.as_dict().values() if isinstance(v, np.ndarray)]
     assert len(arrays) == 12  # status + the 11 result fields
     assert sorted(map(str, bench.result_dtypes())) == sorted(str(v.dtype) for v in arrays)
+    # ... which is what the solver allocates per result, from its own table.
+    from planar_impact import solver
+    assert sorted(map(str, bench.result_dtypes())) == sorted(str(np.dtype(d)) for d in solver._BATCH_DTYPES.values())
     assert bench.output_write_time(10, repeat=1) > 0
 
 

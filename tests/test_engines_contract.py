@@ -116,6 +116,14 @@ def test_settings_list_values_do_not_alias_the_preset(engine):
     assert engine.presets["defaults"][key] == before
 
 
+def test_override_lists_are_copied(engine):
+    key = _list_setting(engine)
+    mine = list(engine.settings("defaults")[key])
+    settings = engine.settings("defaults", {key: mine})
+    mine[-1] = 0.5 if mine[-1] != 0.5 else 0.25
+    assert settings[key] != mine
+
+
 def test_settings_list_edited_in_place_is_rechecked(engine):
     # The fast path remembers the last settings dict; an in-place edit of one of its list
     # values must be seen: the run is no longer the preset's.

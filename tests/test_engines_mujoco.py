@@ -291,8 +291,6 @@ def test_run_equals_a_fresh_adapters_whatever_ran_before(engine):
 
 def test_settings_edited_in_place_reach_the_model(engine):
     scene = drop(1.0, 0.5)
-    # A list of its own (settings() copies the preset shallowly: editing its list would edit
-    # the preset).
     settings = engine.settings("defaults", {"solref": [0.02, 1.0]})
     first = engine.run(scene, settings)
     settings["solref"][1] = 0.5  # same dict and list objects, new damping ratio
@@ -300,7 +298,6 @@ def test_settings_edited_in_place_reach_the_model(engine):
     assert second.derived["solref"] == [0.02, 0.5]
     assert second.velocities[0][1] > first.velocities[0][1]  # less damping, higher bounce
     reference = engine.run(scene, engine.settings("defaults", {"solref": [0.02, 0.5]}))
-    # Physics only: the base class's settings check, cached by identity, keeps the stale
-    # preset label "defaults" for the edited dict (reported, not this adapter's).
     assert (second.velocities, second.steps, second.derived) == (
         reference.velocities, reference.steps, reference.derived)
+    assert second.preset is None  # the edited dict is no longer the preset

@@ -211,7 +211,7 @@ class Engine(abc.ABC):
         resolved = copy.deepcopy(dict(self.presets[preset]))
         for key, value in (overrides or {}).items():
             self._check_key(key)
-            resolved[key] = value
+            resolved[key] = copy.deepcopy(value)  # the caller's lists stay the caller's
         self.validate_settings(resolved)
         return resolved
 
