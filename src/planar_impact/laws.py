@@ -168,35 +168,49 @@ class TwoPhaseProcess:
         self.terms = terms
         sticks = terms.p >= 0
         self.sticks = sticks
-        self.p_g = where(terms.g > 0, terms.vt / terms.g, np.inf)  # (A58)
+        quotient = terms.vt / terms.g  # P_G (A58) where g > 0
+        # P_G is infinite where g ≤ 0 (Case 5: the forward slip never vanishes) and where the
+        # quotient overflows; those rows stay in phase 1 throughout.
+        finite_g = (terms.g > 0) & np.isfinite(quotient)
+        self.finite_g, self.infinite_g = finite_g, ~finite_g
+        # P_G and v_n(P_G) = v_n^A + h P_G, with 0 for an infinite P_G: the phase-2 formulas
+        # use them, and rows with an infinite P_G take phase 1 wherever they are used.
+        self.p_g = where(finite_g, quotient, 0.0)
+        self.vn_g = terms.h * self.p_g - terms.vn_abs
         self.slope_n1 = terms.h
         self.slope_n2 = where(sticks, terms.delta / terms.mtt, terms.q)
         self.slope_t2 = where(sticks, -terms.mnt / terms.mtt, terms.mu)
-        # v_n where the slip vanishes (meaningless where P_G is infinite; masked below).
-        finite_g = np.isfinite(self.p_g)
-        self.vn_at_g = where(finite_g, -terms.vn_abs + terms.h * where(finite_g, self.p_g, 0.0), np.inf)
-        self.finite_g = finite_g
 
     def impulse_where_vn_reaches(self, target):
-        """Smallest ``P`` at which ``v_n(P) = target`` (target ≥ 0 > v_n^A)."""
-        t = self.terms
-        in_phase1 = self.vn_at_g >= target  # includes P_G = ∞ (Case 5)
-        phase1 = (target + t.vn_abs) / self.slope_n1
-        phase2 = where(self.finite_g, self.p_g, 0.0) + (target - where(self.finite_g, self.vn_at_g, 0.0)) / self.slope_n2
+        """Smallest ``P`` at which ``v_n(P) = target`` (target ≥ 0 > v_n^A), and whether
+        that is in phase 1."""
+        in_phase1 = self.infinite_g | (self.vn_g >= target)
+        phase1 = (target + self.terms.vn_abs) / self.slope_n1
+        phase2 = self.p_g + (target - self.vn_g) / self.slope_n2
+        return where(in_phase1, phase1, phase2), in_phase1
+
+    def compression_impulse(self):
+        """``P_c``, the end of compression (``v_n = 0``): :meth:`impulse_where_vn_reaches`
+        at target 0, with the zero terms left out."""
+        in_phase1 = self.infinite_g | (self.vn_g >= 0.0)
+        phase1 = self.terms.vn_abs / self.slope_n1
+        phase2 = self.p_g - self.vn_g / self.slope_n2
         return where(in_phase1, phase1, phase2), in_phase1
 
     def tangential_impulse(self, normal_impulse):
-        mu = self.terms.mu
-        in_phase1 = normal_impulse <= self.p_g
-        phase2 = -mu * self.p_g + self.slope_t2 * (normal_impulse - where(self.finite_g, self.p_g, 0.0))
+        """``I_t(P)``: ``−μ P`` up to ``P_G``, then ``−μ P_G + slope_t2 (P − P_G)``."""
+        mu, p_g = self.terms.mu, self.p_g
+        in_phase1 = self.infinite_g | (normal_impulse <= p_g)
+        phase2 = self.slope_t2 * (normal_impulse - p_g) - mu * p_g
         return where(in_phase1, -mu * normal_impulse, phase2)
 
     def newton(self, e):
         """Newton's law (A30) along the process: it ends where ``v_n = e|v_n^A|``."""
         normal_impulse, forward = self.impulse_where_vn_reaches(e * self.terms.vn_abs)
-        ctype = where(forward, NEWTON_FORWARD, where(self.sticks, NEWTON_STICK, NEWTON_REVERSE))
-        compression, _ = self.impulse_where_vn_reaches(0.0 * normal_impulse)
-        return normal_impulse, self.tangential_impulse(normal_impulse), as_type_code(ctype), compression
+        # Stick (1) or reverse (2) after the slip vanishes; forward sliding (3) throughout.
+        ctype = where(forward, NEWTON_FORWARD, NEWTON_STICK + as_type_code(~self.sticks))
+        compression, _ = self.compression_impulse()
+        return normal_impulse, self.tangential_impulse(normal_impulse), ctype, compression
 
     def stronge(self, e):
         """Stronge's energetic law, exact: the normal work in restitution ``∫ v_n dP`` equals
@@ -204,20 +218,19 @@ class TwoPhaseProcess:
         the work integrated along the piecewise-linear path rather than by ½ I (v^S + v^A)·n).
         """
         t = self.terms
-        vn_a = -t.vn_abs
-        compression, compression_in_phase1 = self.impulse_where_vn_reaches(0.0 * vn_a)
-        p_g = where(self.finite_g, self.p_g, 0.0)
-        vn_g = where(self.finite_g, self.vn_at_g, 0.0)
-        # Work of the normal impulse in compression (negative): trapezoids of v_n over P.
-        work_compression = where(
-            compression_in_phase1,
-            0.5 * vn_a * compression,
-            0.5 * (vn_a + vn_g) * p_g + 0.5 * vn_g * (compression - p_g),
-        )
-        work_target = -(e * e) * work_compression  # restitution work to reach, ≥ 0
-        # If the slip vanishes during restitution, the work done before it does.
+        compression, compression_in_phase1 = self.compression_impulse()
+        p_g, vn_g = self.p_g, self.vn_g
+        # Work of v_n from P_c to P_G, a triangle (v_n = 0 at P_c): ≥ 0 whichever comes first.
         work_to_g = 0.5 * vn_g * (p_g - compression)
-        ends_in_phase1 = compression_in_phase1 & (~self.finite_g | (work_to_g >= work_target))
+        # Minus the work of the normal impulse in compression (≥ 0): trapezoids of v_n over P.
+        absorbed = where(
+            compression_in_phase1,
+            0.5 * t.vn_abs * compression,  # phase 1: v_n from v_n^A to 0
+            0.5 * (t.vn_abs - vn_g) * p_g + work_to_g,  # v_n^A → v_n(P_G), then v_n(P_G) → 0
+        )
+        work_target = (e * e) * absorbed  # restitution work to reach, ≥ 0
+        # If the slip vanishes during restitution, the work done before it does.
+        ends_in_phase1 = compression_in_phase1 & (self.infinite_g | (work_to_g >= work_target))
         # In phase 1 after compression v_n = h (P − P_c): ½ h x² = target.
         end_phase1 = compression + np.sqrt(2.0 * work_target / self.slope_n1)
         # In phase 2 from P0 with v0 ≥ 0 and slope k: v0 x + ½ k x² = remaining work; the
@@ -225,30 +238,22 @@ class TwoPhaseProcess:
         start = where(compression_in_phase1, p_g, compression)
         v_start = where(compression_in_phase1, vn_g, 0.0)
         remaining = where(compression_in_phase1, work_target - work_to_g, work_target)
-        remaining = np.maximum(remaining, 0.0)
-        root = np.sqrt(v_start * v_start + 2.0 * self.slope_n2 * remaining)
+        # remaining is NaN where the compression work overflowed: fmax makes it 0, so that
+        # row's step is 0.
+        twice_remaining = 2.0 * np.fmax(remaining, 0.0)
+        root = np.sqrt(v_start * v_start + self.slope_n2 * twice_remaining)
         # v0 = 0 with a subnormal remaining work (e ≈ 1e-162) makes 2kR, and the root,
         # underflow to 0: there the step is √(2R/k), which does not underflow.
-        # remaining is NaN where the compression work overflowed: that row's step is 0.
         denominator = v_start + root
-        step = where(
-            remaining > 0,
-            where(denominator > 0, 2.0 * remaining / denominator, np.sqrt(2.0 * remaining / self.slope_n2)),
-            0.0,
-        )
-        end_phase2 = start + step
-        normal_impulse = where(ends_in_phase1, end_phase1, end_phase2)
-        reverse = ~self.sticks
+        step = where(denominator > 0, twice_remaining / denominator, np.sqrt(twice_remaining / self.slope_n2))
+        normal_impulse = where(ends_in_phase1, end_phase1, start + step)
+        # Types 1-4 are 1 + (slip vanished in restitution) + 2·(reverse sliding after it).
         ctype = where(
             ends_in_phase1,
             FORWARD_SLIDING,
-            where(
-                compression_in_phase1,
-                where(reverse, REVERSE_FROM_RESTITUTION, STICK_IN_RESTITUTION),
-                where(reverse, REVERSE_FROM_COMPRESSION, STICK_IN_COMPRESSION),
-            ),
+            STICK_IN_COMPRESSION + as_type_code(compression_in_phase1) + 2 * as_type_code(~self.sticks),
         )
-        return normal_impulse, self.tangential_impulse(normal_impulse), as_type_code(ctype), compression
+        return normal_impulse, self.tangential_impulse(normal_impulse), ctype, compression
 
 
 def _positive_root(a, b, c):
