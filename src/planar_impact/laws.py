@@ -56,11 +56,12 @@ class ContactTerms:
     """The derived scalars of the paper shared by every law, computed once per batch.
 
     ``delta`` (A20), ``g, h, p, q`` (A35), ``alpha`` (A34), ``r_m`` (A36) and the Table 1
-    ``case`` (1–5).
+    ``case`` (1–5). ``alpha`` and ``r_m`` are computed on first use: only the Poisson-type
+    laws need them.
     """
 
     __slots__ = ("mnn", "mnt", "mtt", "vn_abs", "vt", "mu", "delta", "g", "h", "p", "q",
-                 "alpha", "r_m", "case")
+                 "_alpha", "_r_m", "case")
 
     def __init__(self, mnn, mnt, mtt, vn, vt, mu):
         self.mnn, self.mnt, self.mtt, self.mu = mnn, mnt, mtt, mu
@@ -73,9 +74,20 @@ class ContactTerms:
         self.h = mnn - mu_mnt
         self.p = mu_mtt + mnt
         self.q = mnn + mu_mnt
-        self.alpha = vt / self.vn_abs  # (A34)
-        self.r_m = self.g / self.h  # (A36)
+        self._alpha = self._r_m = None
         self.case = table1_case(self.g, self.h, self.p, self.q)
+
+    @property
+    def alpha(self):
+        if self._alpha is None:
+            self._alpha = self.vt / self.vn_abs  # (A34)
+        return self._alpha
+
+    @property
+    def r_m(self):
+        if self._r_m is None:
+            self._r_m = self.g / self.h  # (A36)
+        return self._r_m
 
 
 # Table 1 rows in priority order: the first condition that holds decides (g ≤ 0 → 5, else
@@ -260,9 +272,10 @@ def _positive_root(a, b, c):
     """The '+√' root of ``a x² + b x + c = 0`` (a > 0), computed without cancellation."""
     discriminant = b * b - 4.0 * a * c
     root = np.sqrt(discriminant)
+    b_plus_root = b + root
     # b + root = 0 only when b = 0 and c = 0 (e_e = 0 with r or s = 0): the root is 0.
-    stable = where(b + root > 0, -2.0 * c / (b + root), 0.0)
-    return where(b >= 0, stable, (-b + root) / (2.0 * a))
+    stable = where(b_plus_root > 0, -2.0 * c / b_plus_root, 0.0)
+    return where(b >= 0, stable, (root - b) / (2.0 * a))
 
 
 def stronge_paper_restitution(terms: ContactTerms, e_energetic, ctype):
@@ -306,16 +319,18 @@ def newton_lcp(terms: ContactTerms, e):
     # stick and slide coincide and exact tests could both fail by an ulp.
     rounding = 1e-12
     cone = t.mu * stick_n
-    stick_ok = (stick_n >= 0) & (np.abs(stick_t) <= cone + rounding * (np.abs(stick_t) + cone))
+    stick_size = np.abs(stick_t)
+    stick_ok = (stick_n >= 0) & (stick_size <= cone + rounding * (stick_size + cone))
     forward_n = closing / t.h
     reverse_n = closing / t.q
     slide_terms = np.abs(t.mnt) + t.mu * t.mtt
     forward_ok = (t.h > 0) & (t.vt - t.g * forward_n >= -rounding * (t.vt + slide_terms * forward_n))
     reverse_ok = (t.q > 0) & (t.vt + t.p * reverse_n <= rounding * (t.vt + slide_terms * reverse_n))
-    normal_impulse = where(stick_ok, stick_n, where(forward_ok, forward_n, reverse_n))
-    tangential_impulse = where(
-        stick_ok, stick_t, where(forward_ok, -t.mu * forward_n, t.mu * reverse_n)
-    )
-    ctype = where(stick_ok, NEWTON_STICK, where(forward_ok, NEWTON_FORWARD, NEWTON_REVERSE))
+    slide_n = where(forward_ok, forward_n, reverse_n)
+    normal_impulse = where(stick_ok, stick_n, slide_n)
+    # Sliding: I_t = −μ·sign(v_t^S)·I_n, −μ forward and +μ reverse.
+    tangential_impulse = where(stick_ok, stick_t, where(forward_ok, -t.mu, t.mu) * slide_n)
+    # Stick 1; else reverse 2 or forward 3 (NEWTON_REVERSE + 1).
+    ctype = where(stick_ok, NEWTON_STICK, NEWTON_REVERSE + as_type_code(forward_ok))
     consistent = stick_ok | forward_ok | reverse_ok
-    return normal_impulse, tangential_impulse, as_type_code(ctype), consistent
+    return normal_impulse, tangential_impulse, ctype, consistent

@@ -47,7 +47,8 @@ def contact_space_solution(hypothesis, mnn, mnt, mtt, vn, vt, mu, e, out=None):
 
     Returns a dict of arrays: impulses, separation velocities (A22)/(A23), energy change
     (A29), collision type, Table 1 case, the Poisson restitution used (``e_i``) and
-    ``consistent`` (False where the law has no consistent answer). With ``out`` (a dict of
+    ``consistent`` (False where the law has no consistent answer); ``consistent`` and
+    ``restitution_poisson`` may be numpy scalars standing for every row. With ``out`` (a dict of
     arrays), the separation velocities and the energy change are written there, saving a
     copy each.
     """
@@ -66,7 +67,7 @@ def contact_space_solution(hypothesis, mnn, mnt, mtt, vn, vt, mu, e, out=None):
         normal, tangential = laws.poisson_impulses(terms, e_poisson, ctype)
     elif hypothesis == "newton-lcp":
         normal, tangential, ctype, consistent = laws.newton_lcp(terms, e)
-        e_poisson = np.nan * normal  # not a process law: no I_nr/I_nc
+        e_poisson = np.float64(np.nan)  # not a process law: no I_nr/I_nc (NaN on every row)
     else:
         process = laws.TwoPhaseProcess(terms)
         run = process.newton if hypothesis == "newton" else process.stronge
