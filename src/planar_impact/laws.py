@@ -25,12 +25,31 @@ import numpy as np
 
 
 def where(condition, if_true, if_false):
-    """``np.where`` for arrays; a plain conditional for scalars, where ``np.where``'s fixed
-    cost would dominate (the scalar :func:`planar_impact.solve` runs these same kernels on
-    numpy float64 scalars)."""
-    if type(condition) is np.ndarray:
+    """``np.where``'s answer, bit for bit; a plain conditional for scalars, where numpy's
+    fixed cost would dominate (the scalar :func:`planar_impact.solve` runs these same
+    kernels on numpy float64 scalars).
+
+    For arrays it selects through a bit mask, ``false ^ ((true ^ false) & mask)`` on the
+    values' bits, with ``mask`` all ones where the condition holds: ``np.where`` branches
+    on every element, and with the unpredictable conditions of real rows that costs ~35 µs
+    per 8192 rows against ~11 µs for the four branch-free passes.
+    """
+    if type(condition) is not np.ndarray:
+        return if_true if condition else if_false
+    dtype = np.result_type(if_true, if_false)
+    small = condition.size < _MASKED_SELECT_MIN_SIZE
+    if small or condition.dtype != np.bool_ or dtype.kind not in "biuf":
         return np.where(condition, if_true, if_false)
-    return if_true if condition else if_false
+    bits = np.dtype(f"i{dtype.itemsize}")
+    true_bits = np.asarray(if_true, dtype).view(bits)
+    false_bits = np.asarray(if_false, dtype).view(bits)
+    selected = np.bitwise_and(true_bits ^ false_bits, np.negative(condition, dtype=bits))
+    selected ^= false_bits
+    return selected.view(dtype)
+
+
+# Below this many rows np.where's single pass is cheaper than the masked selection's four.
+_MASKED_SELECT_MIN_SIZE = 256
 
 
 def as_type_code(values):
