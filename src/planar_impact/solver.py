@@ -205,8 +205,9 @@ def _solve_chunk(hypothesis, inputs, out):
     flipped = (vt < 0) | ((vt == 0) & (mnt < 0))
     any_flipped = bool(flipped.any())
     if any_flipped:  # t → −t: m_nt and v_t change sign, the rest does not.
-        # Multiplying by ±1 is exact, and far cheaper than a masked negative.
-        sign = np.where(flipped, -1.0, 1.0)
+        # Multiplying by ±1 is exact, and far cheaper than a masked negative; ±1 by
+        # arithmetic, as np.where branches on every row.
+        sign = 1.0 - 2.0 * flipped
         mnt = mnt * sign
     # |v_t| also on rows not flipped: v_t = −0.0 becomes +0.0 whatever its neighbours.
     vt_pos = np.abs(vt)
