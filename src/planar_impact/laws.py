@@ -199,11 +199,12 @@ class TwoPhaseProcess:
         self.terms = terms
         sticks = terms.p >= 0
         self.sticks = sticks
+        self.reverses = np.logical_not(sticks)  # not ~: safe on Python bools too
         quotient = terms.vt / terms.g  # P_G (A58) where g > 0
         # P_G is infinite where g ≤ 0 (Case 5: the forward slip never vanishes) and where the
         # quotient overflows; those rows stay in phase 1 throughout.
         finite_g = (terms.g > 0) & np.isfinite(quotient)
-        self.finite_g, self.infinite_g = finite_g, ~finite_g
+        self.finite_g, self.infinite_g = finite_g, np.logical_not(finite_g)
         # P_G and v_n(P_G) = v_n^A + h P_G, with 0 for an infinite P_G: the phase-2 formulas
         # use them, and rows with an infinite P_G take phase 1 wherever they are used.
         self.p_g = where(finite_g, quotient, 0.0)
@@ -239,7 +240,7 @@ class TwoPhaseProcess:
         """Newton's law (A30) along the process: it ends where ``v_n = e|v_n^A|``."""
         normal_impulse, forward = self.impulse_where_vn_reaches(e * self.terms.vn_abs)
         # Stick (1) or reverse (2) after the slip vanishes; forward sliding (3) throughout.
-        ctype = where(forward, NEWTON_FORWARD, NEWTON_STICK + as_type_code(~self.sticks))
+        ctype = where(forward, NEWTON_FORWARD, NEWTON_STICK + as_type_code(self.reverses))
         compression, _ = self.compression_impulse()
         return normal_impulse, self.tangential_impulse(normal_impulse), ctype, compression
 
@@ -282,7 +283,7 @@ class TwoPhaseProcess:
         ctype = where(
             ends_in_phase1,
             FORWARD_SLIDING,
-            STICK_IN_COMPRESSION + as_type_code(compression_in_phase1) + 2 * as_type_code(~self.sticks),
+            STICK_IN_COMPRESSION + as_type_code(compression_in_phase1) + 2 * as_type_code(self.reverses),
         )
         return normal_impulse, self.tangential_impulse(normal_impulse), ctype, compression
 
