@@ -370,3 +370,21 @@ def test_kernels_accept_zero_dimensional_arrays():
     from_scalars = laws.ContactTerms(*(np.float64(x) for x in values))
     assert from_arrays.case == from_scalars.case
     assert laws.poisson_type(from_arrays, np.array(0.5)) == laws.poisson_type(from_scalars, np.float64(0.5))
+
+
+@pytest.mark.parametrize(
+    "a, b, c, expected",
+    [(1.0, 0.0, 1.0, None), (1.0, 1.0, 1.0, None), (1.0, 0.0, 0.0, 0.0), (1.0, 2.0, 1.0, -1.0),
+     (2.0, -3.0, 1.0, 1.0), (1.0, 3.0, -4.0, 1.0)],
+)
+def test_positive_root_is_the_plus_root_or_nan(a, b, c, expected):
+    # x² + 1 and x² + x + 1 have no real root: NaN (stronge-paper then flags the row), for
+    # scalars and arrays alike.
+    with np.errstate(invalid="ignore"):  # as the solver runs its kernels
+        answers = (laws._positive_root(np.float64(a), np.float64(b), np.float64(c)),
+                   laws._positive_root(np.full(300, a), np.full(300, b), np.full(300, c))[0])
+    for got in answers:
+        if expected is None:
+            assert np.isnan(got)
+        else:
+            assert got == pytest.approx(expected, abs=1e-15)

@@ -289,12 +289,14 @@ class TwoPhaseProcess:
 
 
 def _positive_root(a, b, c):
-    """The '+√' root of ``a x² + b x + c = 0`` (a > 0), computed without cancellation."""
+    """The '+√' root of ``a x² + b x + c = 0`` (a > 0), computed without cancellation; NaN
+    where there is no real root."""
     discriminant = b * b - 4.0 * a * c
-    root = np.sqrt(discriminant)
+    root = np.sqrt(discriminant)  # NaN where the discriminant is negative
     b_plus_root = b + root
     # b + root = 0 only when b = 0 and c = 0 (e_e = 0 with r or s = 0): the root is 0.
-    stable = where(b_plus_root > 0, -2.0 * c / b_plus_root, 0.0)
+    # 0·root keeps a NaN root NaN there (b + NaN > 0 is False).
+    stable = where(b_plus_root > 0, -2.0 * c / b_plus_root, 0.0 * root)
     return where(b >= 0, stable, (root - b) / (2.0 * a))
 
 
