@@ -399,6 +399,22 @@ def decide_status(
     )
 
 
+def geometry_key(scene: Scene) -> tuple:
+    """What an engine model depends on: ground or not, and per body its shape, mass and
+    inertia (not its state, ``e`` or ``μ``). Adapters key their reusable models by it."""
+    parts = []
+    for body in scene.bodies:
+        shape = body.shape
+        if shape.kind == "disk":
+            geometry = (shape.radius,)
+        elif shape.kind == "rod":
+            geometry = (shape.length, shape.radius)
+        else:
+            geometry = tuple(map(tuple, shape.vertices().tolist()))
+        parts.append((shape.kind, geometry, float(body.mass), float(body.moment_of_inertia)))
+    return (scene.ground, tuple(parts))
+
+
 def energy_weights(scene: Scene) -> tuple[tuple[float, float], ...]:
     """``(mass, moment of inertia)`` per body: the scene constants :func:`status_from` needs."""
     return tuple((body.mass, body.moment_of_inertia) for body in scene.bodies)

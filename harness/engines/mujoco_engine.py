@@ -82,6 +82,7 @@ from harness.engines import (
     count_planar_points,
     decide_status,
     free_flight_poses,
+    geometry_key,
 )
 from harness.scene import Scene
 
@@ -274,20 +275,6 @@ def _model_xml(scene: Scene) -> str:
     )
 
 
-def _geometry_key(scene: Scene) -> tuple:
-    parts = []
-    for body in scene.bodies:
-        shape = body.shape
-        if shape.kind == "disk":
-            geometry = (shape.radius,)
-        elif shape.kind == "rod":
-            geometry = (shape.length, shape.radius)
-        else:
-            geometry = tuple(map(tuple, shape.vertices().tolist()))
-        parts.append((shape.kind, geometry, float(body.mass), float(body.moment_of_inertia)))
-    return (scene.ground, tuple(parts))
-
-
 @dataclass
 class _Model:
     model: mujoco.MjModel
@@ -343,7 +330,7 @@ class MujocoEngine(Engine):
                 )
 
     def _model_for(self, scene: Scene) -> _Model:
-        key = _geometry_key(scene)
+        key = geometry_key(scene)
         entry = self._models.get(key)
         if entry is None:
             model = mujoco.MjModel.from_xml_string(_model_xml(scene))

@@ -59,6 +59,7 @@ from harness.engines import (
     energy_before,
     energy_weights,
     free_flight_poses,
+    geometry_key,
     run_from_fields,
     status_from,
 )
@@ -138,20 +139,6 @@ PRESETS: dict[str, dict] = {
 }
 
 _RUN_ONLY = ("max_steps", "approach_steps")
-
-
-def _geometry_key(scene: Scene) -> tuple:
-    parts = []
-    for body in scene.bodies:
-        shape = body.shape
-        if shape.kind == "disk":
-            geometry = (shape.radius,)
-        elif shape.kind == "rod":
-            geometry = (shape.length, shape.radius)
-        else:
-            geometry = tuple(map(tuple, shape.vertices().tolist()))
-        parts.append((shape.kind, geometry, float(body.mass), float(body.moment_of_inertia)))
-    return (scene.ground, tuple(parts))
 
 
 def _collision_shape(client: int, shape) -> int:
@@ -316,7 +303,7 @@ class PybulletEngine(Engine):
         """The world for this geometry and these engine settings, and its cache key."""
         key = (
             tuple((k, settings[k]) for k in sorted(settings) if k not in _RUN_ONLY),
-            _geometry_key(scene),
+            geometry_key(scene),
         )
         world = self._worlds.get(key)
         if world is not None:

@@ -41,6 +41,7 @@ from harness.engines import (
     energy_before,
     energy_weights,
     free_flight_poses,
+    geometry_key,
     run_from_fields,
     status_from,
 )
@@ -81,17 +82,6 @@ PRESETS: dict[str, dict] = {
 }
 
 _MULTI_CONTACT_NOTE = "{} distinct in-plane contact points in one step"
-
-
-def _shape_key(body) -> tuple:
-    shape = body.shape
-    if shape.kind == "disk":
-        geometry = (shape.radius,)
-    elif shape.kind == "rod":
-        geometry = (shape.length, shape.radius)
-    else:
-        geometry = tuple(map(tuple, shape.vertices().tolist()))
-    return (shape.kind, geometry, float(body.mass), float(body.moment_of_inertia))
 
 
 def _make_shape(pm_body: pymunk.Body, shape) -> pymunk.Shape:
@@ -274,7 +264,7 @@ class PymunkEngine(Engine):
         _check_number(self.name, settings, "damping", low=0.0, high=1.0)
 
     def _space_for(self, scene: Scene) -> _SpaceEntry:
-        key = (scene.ground, tuple(_shape_key(body) for body in scene.bodies))
+        key = geometry_key(scene)
         entry = self._spaces.get(key)
         if entry is None:
             entry = self._spaces[key] = _build_space(scene, record=True)
