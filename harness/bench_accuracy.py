@@ -89,16 +89,9 @@ TIE_FRACTION = 0.1  # settings whose mean time is within 10% are within timing n
 # ---------------------------------------------------------------------- laws
 def law_velocities(scene, contact, normal) -> dict[str, np.ndarray]:
     """Post-impact generalised speeds of ``scene`` under Poisson, Stronge and newton-lcp."""
-    import planar_impact as pi
+    from harness.geometry import impact_problem
 
-    def planar(body):
-        return pi.builders.PlanarBody(body.mass, body.moment_of_inertia, body.position,
-                                      body.velocity, body.angular_velocity)
-
-    if scene.ground:
-        problem = pi.builders.rigid_body_against_ground(planar(scene.bodies[0]), contact, normal)
-    else:
-        problem = pi.builders.two_bodies(planar(scene.bodies[0]), planar(scene.bodies[1]), contact, normal)
+    problem = impact_problem(scene, contact, normal)
     return {law: np.asarray(problem.solve(mu=scene.friction, e=scene.restitution, hypothesis=law).u_after,
                             dtype=float)
             for law in ("poisson", "stronge", "newton-lcp")}

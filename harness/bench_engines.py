@@ -96,17 +96,9 @@ def reference_scenes() -> dict[str, tuple[Scene, tuple[float, float], tuple[floa
 
 def newton_lcp_velocities(scene: Scene, contact, normal):
     """``planar_impact``'s ``newton-lcp`` post-impact velocities for a reference scene."""
-    import planar_impact as pi
+    from harness.geometry import impact_problem
 
-    def planar(body):
-        return pi.builders.PlanarBody(body.mass, body.moment_of_inertia, body.position,
-                                      body.velocity, body.angular_velocity)
-
-    if scene.ground:
-        problem = pi.builders.rigid_body_against_ground(planar(scene.bodies[0]), contact, normal)
-    else:
-        problem = pi.builders.two_bodies(planar(scene.bodies[0]), planar(scene.bodies[1]),
-                                         contact, normal)
+    problem = impact_problem(scene, contact, normal)
     return problem.solve(mu=scene.friction, e=scene.restitution, hypothesis="newton-lcp")
 
 

@@ -251,3 +251,17 @@ def contact_velocity(scene: Scene, contact: Contact) -> tuple[float, float]:
         velocity = velocity - point_velocity(scene.bodies[0], contact.point)
     normal = np.asarray(contact.normal, dtype=float)
     return float(velocity @ normal), float(velocity @ _tangent(normal))
+
+
+def impact_problem(scene: Scene, point, normal):
+    """The scene's impact as a :class:`planar_impact.builders.ImpactProblem`: the bodies'
+    masses, inertias and state with the contact at ``point`` along ``normal`` (A into B)."""
+    from planar_impact import builders
+
+    planar = [builders.PlanarBody(mass=b.mass, inertia=b.moment_of_inertia,
+                                  position=tuple(b.position), velocity=tuple(b.velocity),
+                                  angular_velocity=b.angular_velocity)
+              for b in scene.bodies]
+    if scene.ground:
+        return builders.rigid_body_against_ground(planar[0], point, normal=tuple(normal))
+    return builders.two_bodies(planar[0], planar[1], point, tuple(normal))

@@ -344,14 +344,7 @@ class Scenario:
             return builders.two_sleds(**parameters)
         scene = fixed.scene()
         contact = geometry.scene_contact(scene)
-        planar = [builders.PlanarBody(mass=b.mass, inertia=b.moment_of_inertia,
-                                      position=tuple(b.position), velocity=tuple(b.velocity),
-                                      angular_velocity=b.angular_velocity)
-                  for b in scene.bodies]
-        if scene.ground:
-            return builders.rigid_body_against_ground(planar[0], contact.point,
-                                                      normal=tuple(contact.normal))
-        return builders.two_bodies(planar[0], planar[1], contact.point, tuple(contact.normal))
+        return geometry.impact_problem(scene, contact.point, contact.normal)
 
     def solve(self, which=None, law: str = "poisson"):
         """Solve the analytic problem at a point under one law (``planar_impact.solve``)."""
