@@ -399,6 +399,12 @@ def decide_status(
     )
 
 
+def multi_contact_note(points: int) -> str:
+    """The run note every adapter gives when a step saw more than one contact point (the scene
+    is then outside one-point theory)."""
+    return f"{points} distinct in-plane contact points in one step"
+
+
 def geometry_key(scene: Scene) -> tuple:
     """What an engine model depends on: ground or not, and per body its shape, mass and
     inertia (not its state, ``e`` or ``μ``). Adapters key their reusable models by it."""

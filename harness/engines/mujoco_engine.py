@@ -83,6 +83,7 @@ from harness.engines import (
     decide_status,
     free_flight_poses,
     geometry_key,
+    multi_contact_note,
 )
 from harness.scene import Scene
 
@@ -507,7 +508,7 @@ class MujocoEngine(Engine):
         if settings["solref"] == "restitution" and scene.restitution < MIN_RESTITUTION:
             notes.append(f"e below {MIN_RESTITUTION} needs an infinite damping ratio; used {MIN_RESTITUTION}")
         if max_points > 1:
-            notes.append(f"{max_points} distinct in-plane contact points in one step")
+            notes.append(multi_contact_note(max_points))
         return EngineRun(
             engine=self.name,
             engine_version=self.version,

@@ -60,6 +60,7 @@ from harness.engines import (
     energy_weights,
     free_flight_poses,
     geometry_key,
+    multi_contact_note,
     run_from_fields,
     status_from,
 )
@@ -207,7 +208,6 @@ class _World:
 
 _POLYGON_NOTE = ("polygon: pybullet keeps a link's convex-hull collision margin at 0.001 m, "
                  "so contacts sit 1 mm outside the polygon")
-_MULTI_CONTACT_NOTE = "{} distinct in-plane contact points in one step"
 
 
 def _start_states(scene: Scene, settings: dict, bodies: list[int]) -> tuple:
@@ -525,7 +525,7 @@ class PybulletEngine(Engine):
         )
         notes = plan.notes
         if max_points > 1:
-            notes += (_MULTI_CONTACT_NOTE.format(max_points),)
+            notes += (multi_contact_note(max_points),)
         return run_from_fields({
             "engine": self.name,
             "engine_version": self.version,

@@ -42,6 +42,7 @@ from harness.engines import (
     energy_weights,
     free_flight_poses,
     geometry_key,
+    multi_contact_note,
     run_from_fields,
     status_from,
 )
@@ -80,8 +81,6 @@ PRESETS: dict[str, dict] = {
     # scene at ~0.1 µs per extra iteration. Slop and bias move positions only.
     "accurate": dict(_DEFAULTS, iterations=100),
 }
-
-_MULTI_CONTACT_NOTE = "{} distinct in-plane contact points in one step"
 
 
 def _make_shape(pm_body: pymunk.Body, shape) -> pymunk.Shape:
@@ -392,7 +391,7 @@ class PymunkEngine(Engine):
             "tangential_impulse": tangential_impulse,
             "out_of_plane_drift": None,
             "derived": {},
-            "notes": (_MULTI_CONTACT_NOTE.format(max_points),) if max_points > 1 else (),
+            "notes": (multi_contact_note(max_points),) if max_points > 1 else (),
             "wall_time_s": time.perf_counter() - start,
         })
 
