@@ -91,16 +91,21 @@ def theory_tangent(wn, wt, u, inverse):
     return -wt if vt < 0 or (vt == 0 and mnt < 0) else wt
 
 
+def theory_terms(scenario, point):
+    """``(m_nn, m_nt, m_tt, α)`` of a scenario point by hand (A20, A34), in the theory's t."""
+    problem = scenario.analytic_problem(point)
+    inverse = np.linalg.inv(problem.mass_matrix)
+    wn, u = problem.wn, problem.u
+    wt = theory_tangent(wn, problem.wt, u, inverse)
+    alpha = (wt @ u) / abs(wn @ u)
+    return wn @ inverse @ wn, wn @ inverse @ wt, wt @ inverse @ wt, alpha
+
+
 @pytest.mark.parametrize("scenario, point", list(all_points()))
 def test_expected_case_matches_table_1_by_hand(scenario, point):
     """Cross-check the solver's Table 1 row with the signs of g, h, p, q (THEORY.md §3)."""
-    problem = scenario.analytic_problem(point)
-    fixed = scenario.at(point)
-    inverse = np.linalg.inv(problem.mass_matrix)
-    wn, wt, u = problem.wn, problem.wt, problem.u
-    wt = theory_tangent(wn, wt, u, inverse)
-    mnn, mnt, mtt = wn @ inverse @ wn, wn @ inverse @ wt, wt @ inverse @ wt
-    mu = fixed.friction
+    mnn, mnt, mtt, _ = theory_terms(scenario, point)
+    mu = scenario.at(point).friction
     g, h, p, q = mu * mtt - mnt, mnn - mu * mnt, mu * mtt + mnt, mnn + mu * mnt
     # Exact zeros (mu = 0 disk: g = p = 0) are rounding-level otherwise; 1e-12 relative.
     eps = 1e-12 * max(mnn, mtt)
@@ -120,14 +125,9 @@ def test_expected_case_matches_table_1_by_hand(scenario, point):
 @pytest.mark.parametrize("scenario, point", list(all_points()))
 def test_poisson_type_follows_table_1_by_hand(scenario, point):
     """The stated Poisson type from alpha against r_m and (1 + e) r_m (THEORY.md §3)."""
-    problem = scenario.analytic_problem(point)
+    mnn, mnt, mtt, alpha = theory_terms(scenario, point)
     fixed = scenario.at(point)
-    inverse = np.linalg.inv(problem.mass_matrix)
-    wn, wt, u = problem.wn, problem.wt, problem.u
-    wt = theory_tangent(wn, wt, u, inverse)
-    mnn, mnt, mtt = wn @ inverse @ wn, wn @ inverse @ wt, wt @ inverse @ wt
     mu, e = fixed.friction, fixed.restitution
-    alpha = (wt @ u) / abs(wn @ u)
     g, h = mu * mtt - mnt, mnn - mu * mnt
     case = scenario.expected_case(point)
     if case == 4:
