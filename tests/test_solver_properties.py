@@ -387,4 +387,4 @@ def test_positive_root_is_the_plus_root_or_nan(a, b, c, expected):
         if expected is None:
             assert np.isnan(got)
         else:
-            assert got == pytest.approx(expected, abs=1e-15)
+            assert got == pytest.approx(expected, abs=1e-15)  # small integer coefficients: one rounding at most
