@@ -13,13 +13,13 @@ import sys
 
 # command name -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
-    "suite": ("harness.suite", "the validation suite (`make validate`): paper, run, report"),
-    "paper": ("harness.paper", "reproduce the paper's Table 3 into reports/paper-table3.md"),
-    "run": ("harness.runner", "run scenarios through every law and engine, write results"),
+    "suite": ("harness.run.suite", "the validation suite (`make validate`): paper, run, report"),
+    "paper": ("harness.report.table3", "reproduce the paper's Table 3 into reports/paper-table3.md"),
+    "run": ("harness.run.runner", "run scenarios through every law and engine, write results"),
     "report": ("harness.report", "write reports/index.html and reports/summary.md from results"),
-    "validate": ("harness.scenario_cli", "check scenario files"),
-    "new": ("harness.scenario_cli", "write a commented starting scenario file"),
-    "bench": ("harness.bench", "benchmarks: solver throughput, engine overhead, speed-accuracy"),
+    "validate": ("harness.scenarios.cli", "check scenario files"),
+    "new": ("harness.scenarios.cli", "write a commented starting scenario file"),
+    "bench": ("harness.bench.solver", "benchmarks: solver throughput, engine overhead, speed-accuracy"),
     "stress": ("harness.stress", "numerical stress of the solver and the engines"),
 }
 

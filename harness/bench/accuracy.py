@@ -1,0 +1,339 @@
+"""Speed against accuracy per engine (``impact-harness bench --speed-accuracy``).
+
+For every installed engine, a sweep of the knobs that trade cost for accuracy (time step,
+solver iterations, sub-steps, presets, MuJoCo's contact time constant and integrator) over
+four scenario families (:func:`harness.bench.engines.reference_scenes`):
+
+* ``disk``       disk r 0.1 m, v (1, −1) m/s (sticks under newton-lcp);
+* ``rod``        the 45° rod, v (0.5, −1) m/s: slip reversal under Poisson (THEORY.md §7);
+* ``box-corner`` a box corner with spin;
+* ``two-bodies`` two disks off-centre, both free.
+
+Measured per (engine, setting, family): wall time per impact (s; the least of ``repeats``
+runs, caches warm, set-up outside the timed region) and the departure
+``‖u_engine − u_law‖_M / ‖u_before‖_M`` from Poisson, from Stronge (exact energetic) and from
+the engine's own law:
+
+* pymunk, pybullet: ``newton-lcp`` (the velocity-level Newton–Coulomb law they solve);
+* MuJoCo: no closed form exists for its soft contact, so its own law is its converged limit:
+  the run at the sweep's most refined setting (RK4, the 0.5 ms contact resolved over 400
+  steps); the sweep holds the contact's duration and refines its time step.
+
+Outputs: ``pareto-<engine>.png`` in ``out_dir`` (time per impact vs departure from the own law,
+one panel per family, the Pareto front drawn, Poisson and Stronge departures as faint marks),
+and the table of the cheapest settings (least mean time per impact) whose worst departure
+from the own law over all families is ≤ 1% and ≤ 0.1%, or "not reachable". Plus the speed-up
+of :func:`harness.run.executor.run_tasks` from 1 to 2 local workers on a batch of engine impacts.
+Timings are measurements and are not cached.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+FAMILIES: dict[str, str] = {"disk": "disk", "rod": "rod-45", "box-corner": "box-corner", "two-bodies": "two-disks"}
+THRESHOLDS: tuple[float, ...] = (1e-2, 1e-3)
+OWN_LAW = {"pymunk": "newton-lcp", "pybullet": "newton-lcp", "mujoco": "converged"}
+
+
+# ---------------------------------------------------------------------- sweeps
+def sweep(engine_name: str, quick: bool) -> list[tuple[str, str, dict]]:
+    """``[(label, preset, overrides)]`` for one engine: the settings to measure."""
+    points: list[tuple[str, str, dict]] = []
+    if engine_name == "pymunk":
+        points.append(("defaults", "defaults", {}))
+        steps = (1 / 60, 1e-3) if quick else (1 / 60, 1e-3, 1e-4)
+        iterations = (1, 2, 5, 10, 20, 50, 100) if quick else (1, 2, 3, 5, 10, 20, 30, 50, 100, 200)
+        for dt in steps:
+            for count in iterations:
+                points.append((f"dt={dt:.3g} it={count}", "accurate", {"time_step": dt, "iterations": count}))
+    elif engine_name == "pybullet":
+        points.append(("defaults", "defaults", {}))
+        points.append(("defaults it=200", "defaults", {"num_solver_iterations": 200}))
+        iterations = (1, 2, 5, 10, 20, 50, 100) if quick else (1, 2, 3, 5, 10, 20, 30, 50, 100, 200)
+        for dt in ((1 / 240,) if quick else (1 / 240, 1e-3)):
+            for count in iterations:
+                points.append((f"dt={dt:.3g} it={count}", "accurate",
+                               {"time_step": dt, "num_solver_iterations": count}))
+        for sub in ((4,) if quick else (2, 4, 8)):
+            points.append((f"dt={1 / 240:.3g} it=10 sub={sub}", "accurate",
+                           {"num_solver_iterations": 10, "num_sub_steps": sub}))
+    elif engine_name == "mujoco":
+        points.append(("defaults", "defaults", {}))
+        for timeconst in ((0.005, 0.001) if quick else (0.01, 0.005, 0.002, 0.001)):
+            dt = timeconst / 20.0
+            points.append((f"solref tc={timeconst:g} dt={dt:.2g}", "defaults",
+                           {"solref": [timeconst, 1.0], "time_step": dt}))
+        # The accurate preset's spring-damper with the contact's duration held at 0.5 ms, so
+        # only the resolution changes: contact_steps steps of 0.5 ms / contact_steps.
+        contact_steps = (5, 10, 20, 50, 100) if quick else (5, 10, 20, 30, 50, 100, 200)
+        for integrator in ("Euler", "RK4"):
+            for count in contact_steps:
+                points.append((f"{integrator} contact_steps={count}", "accurate",
+                               {"integrator": integrator, "contact_steps": count,
+                                "time_step": CONTACT_DURATION_S / count}))
+        points.append((REFERENCE_LABEL, "accurate",
+                       {"integrator": "RK4", "contact_steps": 400, "time_step": CONTACT_DURATION_S / 400}))
+    return points
+
+
+REFERENCE_LABEL = "RK4 contact_steps=400 (reference)"
+CONTACT_DURATION_S = 5e-4  # MuJoCo's accurate preset: 50 steps of 1e-5 s
+TIE_FRACTION = 0.1  # settings whose mean time is within 10% are within timing noise
+
+
+# ---------------------------------------------------------------------- laws
+def law_velocities(scene, contact, normal) -> dict[str, np.ndarray]:
+    """Post-impact generalised speeds of ``scene`` under Poisson, Stronge and newton-lcp."""
+    from harness.scene.geometry import impact_problem
+
+    problem = impact_problem(scene, contact, normal)
+    return {law: np.asarray(problem.solve(mu=scene.friction, e=scene.restitution, hypothesis=law).u_after,
+                            dtype=float)
+            for law in ("poisson", "stronge", "newton-lcp")}
+
+
+def departure(scene, u_engine, u_law) -> float:
+    """``‖u_engine − u_law‖_M / ‖u_before‖_M`` (the runner's metric)."""
+    from harness.engines import ke_norm
+
+    difference = np.asarray(u_engine, dtype=float) - np.asarray(u_law, dtype=float)
+    return ke_norm(scene, difference) / ke_norm(scene, scene.state())
+
+
+# ---------------------------------------------------------------------- measuring
+def measure_engine(engine_name: str, quick: bool, progress=None) -> dict:
+    """All sweep points × families for one engine (runs inline: timings undisturbed)."""
+    from harness.scene.reference import reference_scenes
+    from harness.engines import load_engine
+
+    engine = load_engine(engine_name)
+    scenes = reference_scenes()
+    repeats = 3 if quick else 7
+    points = sweep(engine_name, quick)
+    laws = {family: law_velocities(*scenes[key]) for family, key in FAMILIES.items()}
+    rows = []
+    for index, (label, preset, overrides) in enumerate(points):
+        settings = engine.settings(preset, overrides)
+        for family, key in FAMILIES.items():
+            scene = scenes[key][0]
+            row = {"engine": engine_name, "setting": label, "preset": preset, "overrides": overrides,
+                   "family": family}
+            try:
+                run = engine.run(scene, settings)  # warm caches, and the answer
+                best = math.inf
+                for _ in range(repeats):
+                    started = time.perf_counter()
+                    engine.run(scene, settings)
+                    best = min(best, time.perf_counter() - started)
+            except Exception as error:  # noqa: BLE001 - a setting the engine refuses is a finding
+                row.update(error=f"{type(error).__name__}: {error}"[:200])
+                rows.append(row)
+                continue
+            u_after = run.u_after
+            finite = bool(np.all(np.isfinite(u_after)))
+            row.update(status=run.status, steps=run.steps, time_per_impact_s=best, u_after=u_after.tolist(),
+                       departure={law: (departure(scene, u_after, u) if finite else math.inf)
+                                  for law, u in laws[family].items()})
+            rows.append(row)
+        if progress is not None:
+            progress(index + 1, len(points))
+    # the own law: newton-lcp, or MuJoCo's converged reference run
+    for row in rows:
+        if "departure" not in row:
+            continue
+        if OWN_LAW[engine_name] == "newton-lcp":
+            row["departure"]["own"] = row["departure"]["newton-lcp"]
+        else:
+            reference = next(r for r in rows if r["setting"] == REFERENCE_LABEL and r["family"] == row["family"])
+            scene = scenes[FAMILIES[row["family"]]][0]
+            row["departure"]["own"] = departure(scene, row["u_after"], reference["u_after"])
+    return {"engine": engine_name, "version": engine.version, "own_law": OWN_LAW[engine_name], "rows": rows}
+
+
+def cheapest_settings(result: dict) -> dict:
+    """Per threshold: the setting of least mean time per impact whose worst own-law departure
+    over the families is within the threshold (MuJoCo's reference run itself excluded)."""
+    by_setting: dict[str, list[dict]] = {}
+    for row in result["rows"]:
+        by_setting.setdefault(row["setting"], []).append(row)
+    candidates = []
+    for label, rows in by_setting.items():
+        if label == REFERENCE_LABEL or any("departure" not in r or r["status"] != "ok" for r in rows):
+            continue
+        worst = max(r["departure"]["own"] for r in rows)
+        mean_time = float(np.mean([r["time_per_impact_s"] for r in rows]))
+        candidates.append((mean_time, worst, label))
+    table = {}
+    for threshold in THRESHOLDS:
+        reaching = sorted(c for c in candidates if c[1] <= threshold)
+        if reaching:
+            mean_time, worst, label = reaching[0]
+            ties = [c[2] for c in reaching[1:] if c[0] <= mean_time * (1 + TIE_FRACTION)]
+            table[f"{threshold:g}"] = {"setting": label, "time_per_impact_s": mean_time, "worst_departure": worst,
+                                       "within_timing_noise": ties}
+        else:
+            best = min(candidates, key=lambda c: c[1]) if candidates else None
+            table[f"{threshold:g}"] = {"setting": "not reachable",
+                                       "best_worst_departure": best[1] if best else None,
+                                       "best_setting": best[2] if best else None}
+    return table
+
+
+def pareto_front(points: list[tuple[float, float]]) -> list[tuple[float, float]]:
+    """Points not dominated in (time, departure), sorted by time."""
+    front, best = [], math.inf
+    for time_s, error in sorted(points):
+        if error < best:
+            front.append((time_s, error))
+            best = error
+    return front
+
+
+def write_pareto_figure(result: dict, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    figure, axes = plt.subplots(1, len(FAMILIES), figsize=(4.2 * len(FAMILIES), 4.0), sharey=True)
+    floor = 1e-17  # departures of exactly 0 are drawn here
+    for axis, family in zip(axes, FAMILIES):
+        rows = [r for r in result["rows"] if r["family"] == family and "departure" in r
+                and r["setting"] != REFERENCE_LABEL]
+        times = np.array([r["time_per_impact_s"] for r in rows]) * 1e6
+        for law, style in (("poisson", dict(marker="x", color="tab:grey", alpha=0.5)),
+                           ("stronge", dict(marker="+", color="tab:olive", alpha=0.5))):
+            values = np.array([max(r["departure"][law], floor) for r in rows])
+            axis.scatter(times, values, s=14, label=f"vs {law}", **style)
+        own = np.array([max(r["departure"]["own"], floor) for r in rows])
+        colours = ["tab:blue" if r["status"] == "ok" else "tab:red" for r in rows]
+        axis.scatter(times, own, s=18, c=colours, label=f"vs own law ({result['own_law']})", zorder=3)
+        front = pareto_front(list(zip(times.tolist(), own.tolist())))
+        if front:
+            axis.step(*zip(*front), where="post", color="tab:blue", linewidth=1)
+        for threshold in THRESHOLDS:
+            axis.axhline(threshold, color="black", linestyle=":", linewidth=0.8)
+        axis.set_xscale("log")
+        axis.set_yscale("log")
+        axis.set_title(family)
+        axis.set_xlabel("wall time per impact (µs)")
+        axis.grid(True, which="major", alpha=0.3)
+    axes[0].set_ylabel("departure ‖Δu‖_M / ‖u_before‖_M")
+    axes[0].legend(fontsize=7, loc="lower left")
+    figure.suptitle(f"{result['engine']} {result['version']}: cost vs accuracy (red: status not ok; "
+                    f"dotted: 1% and 0.1%)")
+    figure.tight_layout()
+    figure.savefig(path, dpi=110)
+    plt.close(figure)
+
+
+# ---------------------------------------------------------------------- scaling
+def impact_chunk(task: dict) -> list[list[float]]:
+    """``task["impacts"]`` engine impacts of one reference scene (top-level: worker processes)."""
+    from harness.scene.reference import reference_scenes
+    from harness.engines import load_engine
+
+    engine = load_engine(task["engine"])
+    scene = reference_scenes()[task["scene"]][0]
+    settings = engine.settings(task["preset"])
+    return [engine.run(scene, settings).u_after.tolist() for _ in range(task["impacts"])]
+
+
+def worker_speedup(quick: bool) -> dict:
+    """Wall time of a batch of engine impacts through run_tasks with 1 and with 2 workers."""
+    from harness.engines import EngineNotInstalled, load_engine
+    from harness.run.executor import default_workers, run_tasks
+
+    engine_name = None
+    # MuJoCo first: ~0.8 ms an impact, so the batch is compute, not pickling or start-up
+    for name in ("mujoco", "pybullet", "pymunk"):
+        try:
+            load_engine(name)
+            engine_name = name
+            break
+        except EngineNotInstalled:
+            continue
+    if engine_name is None:
+        return {"skipped": "no engine installed"}
+    per_impact_s = {"mujoco": 8e-4, "pybullet": 5e-5, "pymunk": 2e-4}[engine_name]  # rod-45, accurate
+    chunks = 16 if quick else 32
+    impacts = max(1, int((2.0 if quick else 10.0) / (per_impact_s * chunks)))  # ~2 s (10 s) serial
+    tasks = [{"engine": engine_name, "scene": "rod-45", "preset": "accurate", "impacts": impacts}] * chunks
+    import os
+
+    load_before = os.getloadavg()[0] if hasattr(os, "getloadavg") else None
+    timings = {}
+    results = {}
+    for workers in (1, 2):
+        started = time.perf_counter()
+        results[workers] = run_tasks(impact_chunk, tasks, workers=workers)
+        timings[workers] = time.perf_counter() - started
+    return {
+        "engine": engine_name, "scene": "rod-45", "preset": "accurate", "impacts": chunks * impacts,
+        "local_cores": default_workers(), "seconds_1_worker": timings[1], "seconds_2_workers": timings[2],
+        "speedup": timings[1] / timings[2], "identical_results": results[1] == results[2],
+        "load_average_before": load_before,
+        "note": "2-worker time includes starting the process pool; other load on the machine "
+                "lowers the speed-up (see load_average_before)",
+    }
+
+
+# ---------------------------------------------------------------------- entry point
+def format_table(report: dict) -> str:
+    lines = ["Cheapest settings reaching the engine's own law (worst over families):",
+             f"{'engine':9} {'own law':11} {'≤ 1%':44} {'≤ 0.1%':44}"]
+    for name, entry in report["engines"].items():
+        if "skipped" in entry:
+            lines.append(f"{name:9} skipped: {entry['skipped'][:90]}")
+            continue
+        cells = []
+        for threshold in THRESHOLDS:
+            cell = entry["cheapest"][f"{threshold:g}"]
+            if cell["setting"] == "not reachable":
+                best = cell["best_worst_departure"]
+                cells.append(f"not reachable (best {best:.2g})" if best is not None else "not reachable")
+            else:
+                ties = len(cell["within_timing_noise"])
+                cells.append(f"{cell['setting']} ({cell['time_per_impact_s'] * 1e6:.0f} µs"
+                             + (f", ~{ties} tie)" if ties else ")"))
+        lines.append(f"{name:9} {entry['own_law']:11} {cells[0]:44} {cells[1]:44}")
+    scaling = report["scaling"]
+    if "speedup" in scaling:
+        lines.append(f"run_tasks 1 → 2 workers ({scaling['impacts']} {scaling['engine']} impacts, "
+                     f"{scaling['local_cores']} cores): {scaling['seconds_1_worker']:.2f} s → "
+                     f"{scaling['seconds_2_workers']:.2f} s, speed-up {scaling['speedup']:.2f}×, "
+                     f"identical results: {scaling['identical_results']}")
+    return "\n".join(lines)
+
+
+def run(quick: bool, out_dir: Path) -> dict:
+    """The speed–accuracy benchmark; writes ``pareto-*.png`` into ``out_dir``, returns the table."""
+    from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine
+    from harness.run.executor import progress_printer
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    started = time.perf_counter()
+    report: dict = {"quick": quick, "families": FAMILIES, "thresholds": list(THRESHOLDS), "engines": {}}
+    for name in ENGINE_NAMES:
+        try:
+            load_engine(name)
+        except EngineNotInstalled as error:
+            report["engines"][name] = {"skipped": str(error)}
+            continue
+        result = measure_engine(name, quick, progress=None if quick else progress_printer(f"speed-accuracy {name}"))
+        result["cheapest"] = cheapest_settings(result)
+        path = out_dir / f"pareto-{name}.png"
+        write_pareto_figure(result, path)
+        result["figure"] = path.name
+        report["engines"][name] = result
+    report["scaling"] = worker_speedup(quick)
+    report["seconds"] = time.perf_counter() - started
+    print(format_table(report))
+    print(f"speed-accuracy: {report['seconds']:.1f} s; figures {out_dir}/pareto-*.png")
+    return report

@@ -1,0 +1,295 @@
+"""Engine-adapter overhead: the harness's cost per impact beside the engine's bare stepping.
+
+For every installed engine, preset and reference scene, in one run:
+
+* ``harness_us`` -- ``engine.run(scene, settings)`` per impact (settings resolved once,
+  caches warm): state set-up, stepping with per-step contact bookkeeping, read-out, status.
+* ``bare_us`` -- the same number of engine steps from the same start state in a tight
+  Python loop, with the same step call as the adapter (``cpSpaceStep`` through pymunk's cffi
+  ``lib`` / ``p.stepSimulation`` / ``mj_step``) and the state set outside the timed region;
+  for pymunk on a space of its own without the harness's post_solve recorder.
+* ``bare_reset_us`` -- the same loop with the state set-up timed too, the set-up being the
+  adapter's own per-impact reset (pymunk and pybullet ``_reset``; MuJoCo ``_configure``,
+  ``mj_resetData`` and the start state): the least any Python harness must spend per impact.
+  Both sides do exactly the same reset.
+* ``ratio`` = ``harness_us / bare_us`` (target <= 1.3) and ``ratio_reset`` =
+  ``harness_us / bare_reset_us``.
+
+The velocity-level engines (pymunk, pybullet) resolve an impact in 2 steps, so their bare
+stepping is a few microseconds and fixed per-impact costs of any Python driver dominate
+``ratio``; ``ratio_reset`` isolates the harness's own work: the per-step contact queries and
+the read-out the contract needs, the bookkeeping, the status and the result object.
+MuJoCo's soft contact takes ~50 steps, where ``ratio`` is meaningful.
+
+The benchmark checks its own results: reruns are bit-identical, and pymunk/pybullet
+``accurate`` agree with ``planar_impact``'s ``newton-lcp`` to 1e-6 where the solver is importable.
+
+``python -m harness.bench.engines [--quick] [--json PATH]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import platform
+import sys
+import time
+from typing import Callable
+
+from harness.engines import (
+    ENGINE_NAMES,
+    EngineNotInstalled,
+    ke_norm,
+    load_engine,
+)
+from harness.scene import Scene
+from harness.scene.reference import newton_lcp_velocities, reference_scenes
+
+RATIO_TARGET = 1.3
+
+
+# ---------------------------------------------------------------------- scenes
+def _bare_stepper(engine, scene: Scene, settings: dict) -> tuple[Callable[[], None], Callable[[int], None]]:
+    """``(prepare, step_n)``: set the run's start state; step the engine n times, nothing else."""
+    name = engine.name
+    if name == "pymunk":
+        from harness.engines.pymunk_engine import (
+            _build_space,
+            _reset,
+            _space_step,
+            _space_values,
+            _start_states,
+        )
+
+        # A space of its own, without the harness's post_solve recorder; the reset is the
+        # harness's own (_reset: the same C calls on the same start state).
+        entry = _build_space(scene, record=False)
+        entry.configure(_space_values(settings), (scene.restitution, scene.friction))
+        starts = _start_states(scene, settings)
+        space_ptr, dt = entry.space_ptr, float(settings["time_step"])
+
+        def prepare() -> None:
+            _reset(entry, starts)
+
+        def step_n(count: int) -> None:
+            for _ in range(count):
+                _space_step(space_ptr, dt)
+
+        return prepare, step_n
+
+    if name == "pybullet":
+        import pybullet as p
+
+        from harness.engines.pybullet_engine import _reset
+
+        # The harness's world and its reset (_reset: the contact threshold, manifolds emptied
+        # when the last run left contacts -- the bare steps end where the harness's do -- and
+        # the start joint states).
+        engine.run(scene, settings)  # builds (or reuses) the world
+        plan = engine._plan_for(scene, settings)
+        world, starts, client = plan.world, plan.starts, plan.world.client
+
+        def prepare() -> None:
+            _reset(world, starts)
+
+        def step_n(count_steps: int) -> None:
+            step = p.stepSimulation
+            for _ in range(count_steps):
+                step(client)
+
+        return prepare, step_n
+
+    if name == "mujoco":
+        import mujoco
+
+        from harness.engines import free_flight_poses
+        from harness.engines.mujoco_engine import _DETECTION_OVERLAP
+
+        entry = engine._model_for(scene)
+        m, d = entry.model, entry.data
+        engine._configure(entry, scene, settings)
+        dt = float(settings["time_step"])
+        poses = free_flight_poses(scene, -(float(settings["approach_steps"]) - _DETECTION_OVERLAP) * dt)
+        count = len(scene.bodies)
+        shift_x = -sum(b.position[0] for b in scene.bodies) / count
+        shift_y = 0.0 if scene.ground else -sum(b.position[1] for b in scene.bodies) / count
+        qpos, qvel = [], []
+        for body, pose in zip(scene.bodies, poses):
+            qpos += [pose[0] + shift_x, pose[1] + shift_y, -pose[2]]
+            qvel += [body.velocity[0], body.velocity[1], -body.angular_velocity]
+
+        def prepare() -> None:
+            engine._configure(entry, scene, settings)
+            mujoco.mj_resetData(m, d)
+            d.qpos[:] = qpos
+            d.qvel[:] = qvel
+
+        def step_n(count_steps: int) -> None:
+            step = mujoco.mj_step
+            for _ in range(count_steps):
+                step(m, d)
+
+        return prepare, step_n
+    raise ValueError(f"no bare stepper for engine {name!r}")
+
+
+# ---------------------------------------------------------------------- timing
+def _time_harness(engine, scene, settings, impacts: int, rounds: int) -> float:
+    best = math.inf
+    run = engine.run
+    for _ in range(rounds):
+        start = time.perf_counter()
+        for _ in range(impacts):
+            run(scene, settings)
+        best = min(best, (time.perf_counter() - start) / impacts)
+    return best
+
+
+def _time_bare(prepare, step_n, steps: int, impacts: int, rounds: int, include_reset: bool) -> float:
+    best = math.inf
+    clock = time.perf_counter
+    for _ in range(rounds):
+        total = 0.0
+        if include_reset:
+            start = clock()
+            for _ in range(impacts):
+                prepare()
+                step_n(steps)
+            total = clock() - start
+        else:
+            for _ in range(impacts):
+                prepare()
+                start = clock()
+                step_n(steps)
+                total += clock() - start
+        best = min(best, total / impacts)
+    return best
+
+
+def run_engine_overhead_benchmark(quick: bool = True) -> dict:
+    """Measure harness vs bare stepping per engine, preset and scene; returns a dict.
+
+    ``{"engines": {name: {"available": bool, "reason": str|None, "rows": [...]}}, ...}``;
+    each row has ``scene, preset, steps, harness_us, bare_us, bare_reset_us, ratio,
+    ratio_reset, deterministic, newton_lcp_error`` (None where not applicable) and
+    ``meets_target`` (ratio <= 1.3).
+    """
+    scenes = reference_scenes()
+    chosen = ("disk", "rod-45", "two-disks") if quick else tuple(scenes)
+    impacts = {"pymunk": 400, "pybullet": 200, "mujoco": 20} if quick else {
+        "pymunk": 3000, "pybullet": 1000, "mujoco": 150}
+    rounds = 5 if quick else 7
+    try:
+        import planar_impact  # noqa: F401
+
+        have_solver = True
+    except ImportError:
+        have_solver = False
+
+    report: dict = {
+        "quick": quick,
+        "ratio_target": RATIO_TARGET,
+        "python": platform.python_version(),
+        "machine": platform.machine(),
+        "engines": {},
+    }
+    for name in ENGINE_NAMES:
+        try:
+            engine = load_engine(name)
+        except EngineNotInstalled as error:
+            report["engines"][name] = {"available": False, "reason": str(error), "rows": []}
+            continue
+        rows = []
+        for preset in ("defaults", "accurate"):
+            settings = engine.settings(preset)
+            for scene_name in chosen:
+                scene, contact, normal = scenes[scene_name]
+                first = engine.run(scene, settings)  # warm caches
+                again = engine.run(scene, settings)
+                deterministic = first == again
+                law_error = None
+                if have_solver and name in ("pymunk", "pybullet"):
+                    law = newton_lcp_velocities(scene, contact, normal)
+                    diff = first.u_after - law.u_after
+                    law_error = ke_norm(scene, diff) / ke_norm(scene, scene.state())
+                steps = first.steps
+                prepare, step_n = _bare_stepper(engine, scene, settings)
+                count = impacts[name]
+                # Rounds interleaved (harness, bare, bare+reset; best of each): a burst of
+                # machine noise then hits all three alike instead of one of them.
+                harness = bare = bare_reset = math.inf
+                for _ in range(rounds):
+                    harness = min(harness, _time_harness(engine, scene, settings, count, 1))
+                    bare = min(bare, _time_bare(prepare, step_n, steps, count, 1, include_reset=False))
+                    bare_reset = min(bare_reset, _time_bare(prepare, step_n, steps, count, 1,
+                                                            include_reset=True))
+                engine.run(scene, settings)  # leave the engine's caches in a clean state
+                rows.append({
+                    "scene": scene_name,
+                    "preset": preset,
+                    "steps": steps,
+                    "status": first.status,
+                    "harness_us": harness * 1e6,
+                    "bare_us": bare * 1e6,
+                    "bare_reset_us": bare_reset * 1e6,
+                    "ratio": harness / bare,
+                    "ratio_reset": harness / bare_reset,
+                    "meets_target": harness / bare <= RATIO_TARGET,
+                    "deterministic": deterministic,
+                    "newton_lcp_error": law_error,
+                })
+        report["engines"][name] = {"available": True, "reason": None, "version": engine.version,
+                                   "rows": rows}
+    return report
+
+
+def format_table(report: dict) -> str:
+    """The benchmark as a plain-text table."""
+    lines = [
+        f"engine overhead per impact (quick={report['quick']}; target ratio <= {report['ratio_target']})",
+        f"{'engine':9} {'preset':9} {'scene':11} {'steps':>5} {'harness µs':>11} {'bare µs':>9} "
+        f"{'bare+reset µs':>13} {'ratio':>6} {'ratio(reset)':>12} {'det':>4} {'vs newton-lcp':>13}",
+    ]
+    for name, entry in report["engines"].items():
+        if not entry["available"]:
+            lines.append(f"{name:9} not available: {entry['reason']}")
+            continue
+        for row in entry["rows"]:
+            law = "" if row["newton_lcp_error"] is None else f"{row['newton_lcp_error']:.1e}"
+            lines.append(
+                f"{name:9} {row['preset']:9} {row['scene']:11} {row['steps']:5d} "
+                f"{row['harness_us']:11.1f} {row['bare_us']:9.1f} {row['bare_reset_us']:13.1f} "
+                f"{row['ratio']:6.2f} {row['ratio_reset']:12.2f} {'yes' if row['deterministic'] else 'NO':>4} "
+                f"{law:>13}"
+            )
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m harness.bench.engines", description=__doc__.split("\n")[0])
+    parser.add_argument("--quick", action="store_true", help="fewer scenes and repetitions")
+    parser.add_argument("--json", metavar="PATH", help="also write the results as JSON")
+    args = parser.parse_args(argv)
+    report = run_engine_overhead_benchmark(quick=args.quick)
+    print(format_table(report))
+    if args.json:
+        with open(args.json, "w", encoding="utf-8") as handle:
+            json.dump(report, handle, indent=2)
+    bad = [
+        (name, row["scene"], row["preset"])
+        for name, entry in report["engines"].items()
+        for row in entry["rows"]
+        if not row["deterministic"]
+        or (row["preset"] == "accurate" and row["newton_lcp_error"] is not None
+            and row["newton_lcp_error"] > 1e-6)
+    ]
+    if bad:
+        print(f"self-check failed (not bit-identical, or accurate off newton-lcp by > 1e-6): {bad}",
+              file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

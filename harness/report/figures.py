@@ -1,0 +1,327 @@
+"""The report's figures (matplotlib, Agg), each redrawn only when its inputs change.
+
+A figure's PNG carries the digest of its inputs and of this module in its metadata
+(:data:`TAG_KEY`); :func:`render_once` skips a figure whose file already holds that digest.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from harness.report.views import (
+    ENGINE_STYLE,
+    HEADLINE_LAWS,
+    HEAT_MAX,
+    HEAT_MIN,
+    LAW_ORDER,
+    LAW_STYLE,
+    X_FLOOR,
+    departure_grid,
+    engine_scenarios,
+    fmt_departure,
+    row_name,
+)
+from harness.run.records import ANALYTIC, Record, Results
+
+
+def new_figure(width: float, height: float):
+    from matplotlib.figure import Figure
+
+    return Figure(figsize=(width, height), layout="constrained")
+
+
+def save_png(figure, path: Path, dpi: int = 100, tag: str | None = None) -> Path:
+    """Save a PNG; ``tag`` (the digest of the figure's inputs) goes into its metadata."""
+    figure.savefig(path, dpi=dpi, metadata={TAG_KEY: tag} if tag else None)
+    return path
+
+
+TAG_KEY = "impact-harness-inputs"
+VOLATILE_FIELDS = ("wall_time_s", "cached")
+
+
+def stable_record(record: Record) -> dict:
+    """A record without what changes between identical runs (times, cache flags)."""
+    data = record.as_dict()
+    for key in VOLATILE_FIELDS:
+        data.pop(key, None)
+    if data.get("diagnostics"):
+        data["diagnostics"] = {k: v for k, v in data["diagnostics"].items()
+                               if k != "engine_wall_time_s"}
+    return data
+
+
+def inputs_digest(kind: str, payload) -> str:
+    """Digest of a figure's inputs and of the code drawing it (this module, matplotlib)."""
+    import hashlib
+    import json
+
+    import matplotlib
+
+    source = Path(__file__).read_bytes()
+    text = json.dumps([kind, payload], sort_keys=True, default=str)
+    return hashlib.sha256(source + matplotlib.__version__.encode() + text.encode()).hexdigest()
+
+
+def png_tag(path: Path) -> str | None:
+    """The inputs digest stored in a PNG by :func:`_save` (None if absent/unreadable)."""
+    try:
+        from PIL import Image
+
+        with Image.open(path) as image:
+            return image.text.get(TAG_KEY)
+    except Exception:  # a missing or broken file is simply redrawn
+        return None
+
+
+def render_once(kind: str, path: Path, payload, draw) -> Path | None:
+    """Draw a figure unless ``path`` already holds one drawn from the same inputs."""
+    tag = inputs_digest(kind, payload)
+    if path.exists() and png_tag(path) == tag:
+        return path
+    return draw(path, tag)
+
+
+def heatmap_figure(results: Results, path: Path, tag: str | None = None) -> Path | None:
+    """Departure from Poisson and from Stronge: scenario × engine, one panel per law × preset."""
+    from matplotlib.colors import LogNorm
+
+    labels = results.engine_labels()
+    if not labels:
+        return None
+    presets = list(dict.fromkeys(label.split(".")[1] for label in labels))
+    names = engine_scenarios(results)
+    panels = [(law, preset) for law in HEADLINE_LAWS for preset in presets]
+    figure = new_figure(2.2 + 0.95 * len(labels) * len(HEADLINE_LAWS), 1.3 + 0.25 * len(names))
+    axes = figure.subplots(1, len(panels), sharey=True, squeeze=False)[0]
+    norm = LogNorm(vmin=HEAT_MIN, vmax=HEAT_MAX)
+    cmap = heat_cmap()
+    image = None
+    for ax, (law, preset) in zip(axes, panels):
+        panel_labels = [label for label in labels if label.endswith("." + preset)]
+        _, values, flagged, skipped = departure_grid(results, law, panel_labels)
+        shown = np.where(np.isfinite(values), np.clip(values, HEAT_MIN, HEAT_MAX), np.nan)
+        image = ax.imshow(np.ma.masked_invalid(shown), cmap=cmap, norm=norm, aspect="auto")
+        for i in range(len(names)):
+            for j in range(len(panel_labels)):
+                if skipped[i, j] or not np.isfinite(values[i, j]):
+                    text, colour = ("skipped" if skipped[i, j] else "n/a"), "0.35"
+                else:
+                    text = fmt_departure(values[i, j]) + (" !" if flagged[i, j] else "")
+                    colour = "white" if values[i, j] > 0.08 else "black"
+                ax.text(j, i, text, ha="center", va="center", fontsize=7.5, color=colour)
+        ax.set_xticks(range(len(panel_labels)), [label.split(".")[0] for label in panel_labels],
+                      fontsize=8.5)
+        ax.xaxis.tick_top()
+        ax.set_title(f"from {LAW_STYLE[law][2]} — {preset}", fontsize=9, pad=16)
+        ax.set_yticks(range(len(names)), [row_name(results, n) for n in names], fontsize=8.5)
+        ax.tick_params(length=0)
+    figure.colorbar(image, ax=list(axes), shrink=0.6, pad=0.01,
+                    label="departure ‖u − u_law‖_M / ‖u_before‖_M")
+    return save_png(figure, path, dpi=110, tag=tag)
+
+
+def heat_cmap():
+    from matplotlib import colormaps
+
+    return colormaps["YlOrRd"].with_extremes(bad="0.92")
+
+
+def split_figure(rows: Sequence[dict], path: Path, tag: str | None = None) -> Path | None:
+    """Law part vs solve part of every engine record, log–log, one panel per preset."""
+    if not rows:
+        return None
+    presets = list(dict.fromkeys(row["preset"] for row in rows))
+    floor = 1e-12
+    figure = new_figure(4.6 * len(presets), 4.2)
+    axes = figure.subplots(1, len(presets), sharex=True, sharey=True, squeeze=False)[0]
+    for ax, preset in zip(axes, presets):
+        for engine, (colour, marker) in ENGINE_STYLE.items():
+            subset = [r for r in rows if r["preset"] == preset and r["engine"] == engine
+                      and math.isfinite(r["law_part"]) and math.isfinite(r["solve_part"])]
+            if not subset:
+                continue
+            x = np.maximum([r["law_part"] for r in subset], X_FLOOR)
+            y = np.maximum([r["solve_part"] for r in subset], floor)
+            ax.scatter(x, y, s=22, marker=marker, color=colour, alpha=0.75, label=engine,
+                       edgecolors="none")
+        ax.plot([floor, 10], [floor, 10], color="0.5", lw=0.8, ls="--")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlim(1e-4, 3)
+        ax.set_ylim(floor / 3, 3)
+        ax.axhline(1e-6, color="0.8", lw=0.6)
+        ax.axvline(X_FLOOR, color="0.85", lw=0.6)
+        ax.set_xlabel("law part: newton-lcp vs Poisson\n(≤ 1.5e-4, e.g. the laws agree, drawn at 1.5e-4)")
+        ax.set_title(f"{preset}", fontsize=10)
+        ax.text(0.03, 0.97, "above the diagonal: the solve\n(engine vs its own law) dominates",
+                transform=ax.transAxes, va="top", fontsize=7, color="0.3")
+        ax.text(0.97, 0.45, "below the diagonal:\nthe law itself dominates",
+                transform=ax.transAxes, ha="right", va="top", fontsize=7, color="0.3")
+        ax.grid(True, which="major", color="0.93")
+    axes[0].set_ylabel("solve part: engine vs newton-lcp\n(values ≤ 1e-12 drawn at 1e-12)")
+    axes[-1].legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8, frameon=False)
+    return save_png(figure, path, tag=tag)
+
+
+def impulse_figure(name: str, records: Sequence[Record], path: Path, tag: str | None = None) -> Path | None:
+    """Routh's graph (Fig. 1): I_t against I_n, each law's path and every end point."""
+    from planar_impact import impulse_process
+
+    laws = [r for r in records if r.source == ANALYTIC and r.ok]
+    if not laws:
+        return None
+    d = laws[0].diagnostics or {}
+    mnn, mnt, mtt, mu, e = (d.get(k) for k in ("mnn", "mnt", "mtt", "mu", "e"))
+    vn, vt = laws[0].vn_approach, laws[0].vt_approach
+    figure = new_figure(4.6, 3.4)
+    ax = figure.subplots()
+    extent = max([abs(r.normal_impulse) for r in records if r.normal_impulse is not None
+                  and math.isfinite(r.normal_impulse)] + [1e-12])
+    for law in ("newton", "poisson", "stronge"):
+        if not any(r.law == law for r in laws):
+            continue
+        colour, style, label = LAW_STYLE[law]
+        try:
+            process = impulse_process(mnn, mnt, mtt, vn, vt, mu, e, law)
+        except ValueError:
+            continue
+        xs = [v.normal_impulse for v in process.path]
+        ys = [v.tangential_impulse for v in process.path]
+        ax.plot(xs, ys, color=colour, ls=style, lw=1.4, label=label, zorder=3)
+        ax.plot(xs[-1:], ys[-1:], "o", color=colour, ms=4, zorder=3)
+    for r in laws:
+        if r.law in ("stronge-paper", "newton-lcp") and r.normal_impulse is not None:
+            colour, _, label = LAW_STYLE[r.law]
+            ax.plot([r.normal_impulse], [r.tangential_impulse], "D", ms=6, zorder=6,
+                    markerfacecolor="none", markeredgecolor=colour, markeredgewidth=1.5,
+                    label=label)
+    for r in records:
+        if r.source == ANALYTIC or r.normal_impulse is None or r.tangential_impulse is None:
+            continue
+        if not (math.isfinite(r.normal_impulse) and math.isfinite(r.tangential_impulse)):
+            continue
+        colour, marker = ENGINE_STYLE.get(r.source, ("k", "x"))
+        filled = r.preset == "accurate"
+        ax.plot([r.normal_impulse], [r.tangential_impulse], marker, ms=7, zorder=5,
+                markerfacecolor=colour if filled else "none", markeredgecolor=colour,
+                label=f"{r.label}" + ("" if r.ok else f" ({r.status})"))
+    # Routh's lines: compression ends (v_n = 0) and sticking (v_t = 0), and the cone.
+    x = np.linspace(0.0, 1.15 * extent, 50)
+    ax.plot(x, mu * x, color="0.75", lw=0.8, ls=":")
+    ax.plot(x, -mu * x, color="0.75", lw=0.8, ls=":", label="friction cone |I_t| = μ I_n")
+    if abs(mnt) > 1e-14 * mnn:
+        ax.plot(x, -(vn + mnn * x) / mnt, color="tab:cyan", lw=0.8, ls="--", label="v_n = 0")
+    else:
+        ax.axvline(-vn / mnn, color="tab:cyan", lw=0.8, ls="--", label="v_n = 0")
+    ax.plot(x, -(vt + mnt * x) / mtt, color="tab:olive", lw=0.8, ls="--", label="v_t = 0")
+    ys = [r.tangential_impulse for r in records if r.tangential_impulse is not None
+          and math.isfinite(r.tangential_impulse)]
+    span = max([abs(y) for y in ys] + [mu * extent, 0.1 * extent])
+    ax.set_ylim(-1.25 * span, 1.25 * span)
+    ax.set_xlim(0, 1.15 * extent)
+    ax.axhline(0, color="0.85", lw=0.6)
+    ax.set_xlabel("normal impulse I_n [N s]")
+    ax.set_ylabel("tangential impulse I_t [N s]")
+    ax.set_title(f"{name}: impulse diagram (Routh)", fontsize=9)
+    flagged = [r.label for r in records if r.source != ANALYTIC and not r.ok and not r.skipped]
+    if flagged:
+        ax.text(0.02, 0.02, "flagged by the engine: " + ", ".join(flagged), fontsize=7,
+                transform=ax.transAxes, color="tab:red")
+    return save_png(figure, path, dpi=90, tag=tag)
+
+
+def impulse_legend_figure(path: Path, tag: str | None = None) -> Path:
+    """The key shared by every impulse diagram (drawn once, not on each diagram)."""
+    from matplotlib.lines import Line2D
+
+    handles = [Line2D([], [], color=LAW_STYLE[law][0], ls=LAW_STYLE[law][1], lw=1.4,
+                      label=f"{LAW_STYLE[law][2]}: impulse path")
+               for law in ("poisson", "stronge", "newton")]
+    handles += [Line2D([], [], ls="none", marker="D", markerfacecolor="none", ms=6,
+                       markeredgewidth=1.5, markeredgecolor=LAW_STYLE[law][0],
+                       label=f"{LAW_STYLE[law][2]}: end point")
+                for law in ("stronge-paper", "newton-lcp")]
+    for engine, (colour, marker) in ENGINE_STYLE.items():
+        handles.append(Line2D([], [], ls="none", marker=marker, ms=7, markerfacecolor=colour,
+                              markeredgecolor=colour, label=f"{engine} accurate"))
+        handles.append(Line2D([], [], ls="none", marker=marker, ms=7, markerfacecolor="none",
+                              markeredgecolor=colour, label=f"{engine} defaults"))
+    handles += [Line2D([], [], color="0.75", ls=":", label="friction cone |I_t| = μ I_n"),
+                Line2D([], [], color="tab:cyan", ls="--", label="v_n = 0 (end of compression)"),
+                Line2D([], [], color="tab:olive", ls="--", label="v_t = 0 (slip stops)")]
+    figure = new_figure(9.5, 1.0)
+    figure.legend(handles=handles, loc="center", ncol=4, fontsize=7.5, frameon=False)
+    return save_png(figure, path, dpi=90, tag=tag)
+
+
+def type_boundaries(law_records: Sequence[Record]) -> list[tuple[float, int, int]]:
+    """``(parameter value, type before, type after)`` where the Poisson type changes.
+
+    The boundary lies somewhere between two sweep points; it is drawn midway.
+    """
+    points = sorted((r.point["value"], r.collision_type) for r in law_records
+                    if r.law == "poisson" and r.ok and r.point.get("value") is not None)
+    return [((a + b) / 2, ta, tb) for (a, ta), (b, tb) in zip(points, points[1:]) if ta != tb]
+
+
+def sweep_figure(name: str, info: dict, records: Sequence[Record], path: Path, tag: str | None = None) -> Path | None:
+    """Post-impact quantities against the swept parameter; laws lines, engines points."""
+    sweep = info.get("sweep") or {}
+    parameter = sweep.get("parameter", "parameter")
+    laws = [r for r in records if r.source == ANALYTIC]
+    engines = [r for r in records if r.source != ANALYTIC and r.u_after is not None]
+    panels = [("vn_separation", "v_n after [m/s]"), ("vt_separation", "v_t after [m/s]"),
+              ("energy_change", "energy change [J]")]
+    if engines:
+        panels.append(("departure", "engine departure from Poisson\n(0 drawn at 1e-16)"))
+    figure = new_figure(9.5, 5.6 if len(panels) > 3 else 3.2)
+    grid = figure.subplots(2 if len(panels) > 3 else 1, 2 if len(panels) > 3 else 3,
+                           squeeze=False)
+    axes = grid.ravel()
+    boundaries = type_boundaries(laws)
+    for ax, (field, label) in zip(axes, panels):
+        if field != "departure":
+            for law in LAW_ORDER:
+                subset = sorted((r.point["value"], getattr(r, field)) for r in laws
+                                if r.law == law and r.ok)
+                if subset:
+                    colour, style, law_label = LAW_STYLE[law]
+                    ax.plot(*zip(*subset), color=colour, ls=style, lw=1.3, label=law_label)
+        for engine_label in dict.fromkeys(r.label for r in engines):
+            subset = [r for r in engines if r.label == engine_label]
+            engine, preset = engine_label.split(".")
+            colour, marker = ENGINE_STYLE.get(engine, ("k", "x"))
+            if field == "departure":  # exact agreement (0) drawn at the 1e-16 floor
+                pts = [(r.point["value"], max(r.departure.get("poisson") or 0.0, 1e-16))
+                       for r in subset if r.departure.get("poisson") is not None]
+            else:
+                pts = [(r.point["value"], getattr(r, field)) for r in subset]
+            pts = [(x, y) for x, y in pts if y is not None and math.isfinite(y)]
+            if pts:
+                ax.plot(*zip(*pts), marker, ms=5, ls="none", label=engine_label,
+                        markerfacecolor=colour if preset == "accurate" else "none",
+                        markeredgecolor=colour)
+        if field == "departure":
+            ax.set_yscale("log")
+        for value, before, after in boundaries:
+            ax.axvline(value, color="0.6", lw=0.8, ls="--")
+            ax.text(value, 1.0, f"{before}→{after}", transform=ax.get_xaxis_transform(),
+                    ha="center", va="bottom", fontsize=7, color="0.35")
+        ax.set_xlabel(parameter)
+        ax.set_ylabel(label)
+        ax.grid(True, color="0.93")
+    handles, labels = axes[0].get_legend_handles_labels()
+    for ax in axes[1:]:
+        h, l = ax.get_legend_handles_labels()
+        handles += h
+        labels += l
+    unique = dict(zip(labels, handles))
+    figure.legend(unique.values(), unique.keys(), loc="outside lower center",
+                  ncol=min(6, len(unique)), fontsize=7, frameon=False)
+    figure.suptitle(f"{name}: sweep of {parameter} (dashed: Poisson type changes)", fontsize=9)
+    return save_png(figure, path, dpi=90, tag=tag)

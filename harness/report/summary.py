@@ -1,0 +1,62 @@
+"""``summary.md``: the report's headline numbers as a Markdown page."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from harness.report.views import (
+    HEADLINE_LAWS,
+    LAW_STYLE,
+    departure_grid,
+    fmt_departure,
+    row_name,
+)
+from harness.run.records import ANALYTIC, Results
+
+
+def write_summary(results: Results, out_dir: Path) -> Path:
+    prov = results.provenance
+    labels = results.engine_labels()
+    lines = ["# Planar impact with friction: engines against the exact laws", "",
+             "Departure of each engine (and preset) from the exact laws, "
+             "`‖u_engine − u_law‖_M / ‖u_before‖_M` (relative error of the post-impact "
+             "velocities in the kinetic-energy norm; sweeps: the largest over the sweep). "
+             "`!` marks a run the engine flagged, `skipped` an engine that did not run. "
+             "Figures, per-scenario tables and settings: [index.html](index.html); the "
+             "paper's Table 3: [paper-table3.md](paper-table3.md).", ""]
+    for law in HEADLINE_LAWS:
+        names, values, flagged, skipped = departure_grid(results, law, labels)
+        lines += [f"## Departure from {LAW_STYLE[law][2]}", "",
+                  "| scenario | " + " | ".join(labels) + " |",
+                  "|---|" + "---:|" * len(labels)]
+        for i, name in enumerate(names):
+            cells = ["skipped" if skipped[i, j] else
+                     fmt_departure(values[i, j]) + (" !" if flagged[i, j] else "")
+                     for j in range(len(labels))]
+            lines.append(f"| {row_name(results, name)} | " + " | ".join(cells) + " |")
+        lines.append("")
+    gates = prov.get("gates", [])
+    lines += ["## Gates", ""]
+    if gates:
+        lines += ["| scenario | gate | record | law | departure | max | result |",
+                  "|---|---|---|---|---:|---:|---|"]
+        for g in gates:
+            lines.append(f"| {g['scenario']} | {g['gate']} | {g['record']} | {g['law']} | "
+                         f"{fmt_departure(g['departure'])} | {fmt_departure(g['max_departure'])}"
+                         f" | {g['status']} |")
+    else:
+        lines.append("No gates in this run.")
+    flagged = [r for r in results.records if r.source != ANALYTIC and not r.ok]
+    lines += ["", "## Runs not ok", ""]
+    lines += [f"- {r.scenario} {r.point['label']} {r.label}: {r.status}" for r in flagged] or [
+        "None."]
+    versions = prov.get("versions", {})
+    git = prov.get("git", {})
+    lines += ["", "## Versions", "",
+              ", ".join(f"{k} {v}" for k, v in versions.items() if v is not None) + ".",
+              f"Commit `{git.get('commit')}`" + (" (uncommitted changes)" if git.get("dirty")
+                                                  else "")
+              + f"; results written {prov.get('created_utc', '')}.", ""]
+    path = out_dir / "summary.md"
+    path.write_text("\n".join(lines), encoding="utf-8")
+    return path

@@ -1,0 +1,11 @@
+"""Running scenarios: from a scenario to records, one way.
+
+* :mod:`~harness.run.runner` -- ``impact-harness run``: every point through every law and
+  engine, gates checked;
+* :mod:`~harness.run.executor` -- the local process pool or a Dask cluster;
+* :mod:`~harness.run.cache` -- engine runs cached by their inputs and the code;
+* :mod:`~harness.run.metrics` -- departures of an engine from a law;
+* :mod:`~harness.run.records` -- the records and the versioned results file;
+* :mod:`~harness.run.provenance` -- versions, commit and machine, for every output file;
+* :mod:`~harness.run.suite` -- ``impact-harness suite`` (``make validate``).
+"""

@@ -1,0 +1,180 @@
+"""Result records of a validation run and the versioned JSON file that holds them.
+
+One :class:`Record` per (scenario, sweep point, source), where the source is ``"analytic"``
+(one record per law) or an engine (one record per preset). The results file is::
+
+    {
+      "format": "impact-harness-results",
+      "format_version": 1,
+      "provenance": {...},     # versions, settings per engine and preset, commit, machine, time
+      "scenarios": {...},      # per scenario: description, tags, sweep, speed labels, gates
+      "records": [{...}, ...]  # Record.as_dict(), in run order
+    }
+
+Floats are written by ``repr`` (exact round trip); non-finite values (an engine that blew up)
+are written as ``null`` and the record's ``status`` says why.
+
+Record fields (units SI):
+
+``scenario``, ``point`` (``{"index", "parameter", "value", "label"}``), ``source``,
+``law`` (analytic records) or ``preset`` (engine records), ``u_before`` and ``u_after``
+(``(v_x, v_y, ω)`` of each body in file order, or a generalized system's own speeds),
+``vn_approach``, ``vt_approach``, ``vn_separation``, ``vt_separation`` (contact velocities,
+m/s, in the scene's ``t = (n_y, −n_x)``), ``energy_change`` (J), ``collision_type``
+(Poisson/Stronge numbering 1–5 for those laws; 1 stick, 2 reverse sliding, 3 forward sliding
+for the Newton laws and for engines, classified from the end state), ``normal_impulse``,
+``tangential_impulse`` (N s on body B), ``status`` (``"ok"``, an engine status of
+:data:`harness.engines.STATUSES`, ``"skipped: <reason>"`` or ``"error: <reason>"``),
+``wall_time_s``, ``departure`` (``{law: ‖u − u_law‖_M / ‖u_before‖_M}``), ``cached``
+(engine records: the result came from the cache) and ``diagnostics`` (engine records:
+steps, contact points, penetration, drift, the engine's own impulses, settings overrides).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from dataclasses import asdict, dataclass, field, fields
+from pathlib import Path
+from typing import Any, Iterable, Mapping
+
+FORMAT = "impact-harness-results"
+FORMAT_VERSION = 1
+DEFAULT_RESULTS = Path("reports") / "results.json"
+ANALYTIC = "analytic"
+
+
+@dataclass
+class Record:
+    """One (scenario, sweep point, source) result; see the module docstring for the fields."""
+
+    scenario: str
+    point: dict
+    source: str  # "analytic" or the engine name
+    law: str | None = None  # analytic records
+    preset: str | None = None  # engine records
+    u_before: list | None = None
+    u_after: list | None = None
+    vn_approach: float | None = None  # m/s
+    vt_approach: float | None = None  # m/s
+    vn_separation: float | None = None  # m/s
+    vt_separation: float | None = None  # m/s
+    energy_change: float | None = None  # J
+    collision_type: int | None = None
+    normal_impulse: float | None = None  # N s, on body B
+    tangential_impulse: float | None = None  # N s, along t
+    status: str = "ok"
+    wall_time_s: float = 0.0  # s
+    departure: dict = field(default_factory=dict)  # law -> relative KE-norm error
+    cached: bool = False
+    diagnostics: dict | None = None
+
+    @property
+    def label(self) -> str:
+        """``"poisson"`` for a law, ``"pymunk.accurate"`` for an engine run."""
+        return self.law if self.source == ANALYTIC else f"{self.source}.{self.preset}"
+
+    @property
+    def ok(self) -> bool:
+        return self.status == "ok"
+
+    @property
+    def skipped(self) -> bool:
+        return self.status.startswith("skipped")
+
+    def as_dict(self) -> dict:
+        return _jsonable(asdict(self))
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "Record":
+        names = {f.name for f in fields(cls)}
+        return cls(**{key: value for key, value in data.items() if key in names})
+
+
+@dataclass
+class Results:
+    """A results file in memory."""
+
+    records: list[Record]
+    provenance: dict = field(default_factory=dict)
+    scenarios: dict = field(default_factory=dict)  # name -> description, tags, speed labels …
+
+    def scenario_names(self) -> list[str]:
+        """Scenario names in run order."""
+        return list(dict.fromkeys(record.scenario for record in self.records))
+
+    def for_scenario(self, name: str) -> list[Record]:
+        return [record for record in self.records if record.scenario == name]
+
+    def engine_labels(self) -> list[str]:
+        """``engine.preset`` labels present, engines in registry order, ``defaults`` first."""
+        from harness.scenarios import ENGINES, PRESETS
+
+        present = {r.label for r in self.records if r.source != ANALYTIC}
+        return [f"{e}.{p}" for p in PRESETS for e in ENGINES if f"{e}.{p}" in present]
+
+
+def _jsonable(value: Any) -> Any:
+    """Plain JSON values; non-finite floats become None, numpy values plain Python."""
+    if isinstance(value, dict):
+        return {str(key): _jsonable(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(item) for item in value]
+    if hasattr(value, "tolist") and not isinstance(value, (str, bytes)):
+        return _jsonable(value.tolist())
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, Path):
+        return value.as_posix()
+    return value
+
+
+def write_results(path: Path | str, records: Iterable[Record], provenance: Mapping,
+                  scenarios: Mapping | None = None) -> Path:
+    """Write the results file (atomically) and return its path.
+
+    ``scenarios`` maps each scenario name to what the reports need besides the records
+    (description, tags, system, sweep parameter, labels of the speeds, gates).
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    document = {
+        "format": FORMAT,
+        "format_version": FORMAT_VERSION,
+        "provenance": _jsonable(dict(provenance)),
+        "scenarios": _jsonable(dict(scenarios or {})),
+        "records": [record.as_dict() for record in records],
+    }
+    # One record per line: small, and a diff of two results files reads record by record.
+    records_text = ",\n".join(json.dumps(record, ensure_ascii=False, allow_nan=False,
+                                         separators=(",", ":"))
+                              for record in document.pop("records"))
+    head = json.dumps(document, indent=1, ensure_ascii=False, allow_nan=False)
+    text = head[:-2] + ',\n "records": [\n' + records_text + "\n ]\n}\n"
+    temporary = path.with_name(f".{path.name}.tmp")
+    temporary.write_text(text, encoding="utf-8")
+    os.replace(temporary, path)
+    return path
+
+
+def read_results(path: Path | str) -> Results:
+    """Read a results file; a wrong format raises ``ValueError`` naming the file."""
+    path = Path(path)
+    try:
+        document = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise FileNotFoundError(
+            f"{path}: no results file; run `impact-harness run` (or `suite`) first") from None
+    if not isinstance(document, dict) or document.get("format") != FORMAT:
+        raise ValueError(f"{path}: not an impact-harness results file (format {FORMAT!r})")
+    if document.get("format_version") != FORMAT_VERSION:
+        raise ValueError(f"{path}: results format version {document.get('format_version')!r}; "
+                         f"this harness reads {FORMAT_VERSION}")
+    records = [Record.from_dict(item) for item in document.get("records", [])]
+    return Results(records=records, provenance=document.get("provenance", {}),
+                   scenarios=document.get("scenarios", {}))
+
+
+__all__ = ["ANALYTIC", "DEFAULT_RESULTS", "FORMAT", "FORMAT_VERSION", "Record", "Results",
+           "read_results", "write_results"]

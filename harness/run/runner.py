@@ -1,0 +1,570 @@
+"""``impact-harness run``: every scenario through every law and every engine that applies.
+
+::
+
+    impact-harness run                                  # every scenario, every engine, both presets
+    impact-harness run --tags quick --engines pymunk --preset accurate
+    impact-harness run scenarios/rod-45-slip-reversal.toml --json /tmp/rod.json
+    impact-harness run --no-cache --executor dask --scheduler tcp://host:8786
+
+What runs
+    For each scenario and sweep point, every law of the scenario (``planar_impact``, cheap, in
+    this process) and, for ``bodies`` systems, every selected engine × preset. Analytic-only
+    systems (``two-sled``, ``matrix``) never start an engine. An engine that is not installed
+    or cannot build the scene gives a record with status ``"skipped: <reason>"``; an engine
+    that blows up or never separates keeps the engine's status (``"blow-up"``,
+    ``"no-separation"`` …). Nothing is dropped silently.
+
+Parallelism and cache
+    One task per (scenario, point, engine, preset). Each is looked up in the result cache
+    (:class:`harness.run.cache.ResultCache`, key: the scene at the point, the engine and its
+    version, the complete settings and the code version); only the misses run, through
+    :func:`harness.run.executor.run_tasks` (local process pool, or Dask), and are stored. The
+    cache holds the engine's raw output; departures and the other derived numbers are
+    recomputed every run (microseconds).
+
+Exit status
+    0, or 1 when a scenario's ``[expect.gate]`` fails (each failing gate is named on stderr),
+    or 2 for bad arguments or scenario files.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any, Iterable, Sequence, TextIO
+
+import numpy as np
+
+from harness.run import metrics
+from harness.run.provenance import provenance
+from harness.run.records import ANALYTIC, DEFAULT_RESULTS, FORMAT, FORMAT_VERSION, Record, write_results
+from harness.scenarios import ENGINES, PRESETS, Scenario, load_scenarios
+
+DEFAULT_CACHE = Path(".cache") / "results"
+#: Below this many engine runs to do, the pool's start-up costs more than it saves.
+MIN_PARALLEL_TASKS = 200
+
+
+# --------------------------------------------------------------------------------------------
+# The engine task (runs in a worker process)
+# --------------------------------------------------------------------------------------------
+def engine_task(task: dict) -> dict:
+    """Simulate one (scene, engine, settings) task; a plain JSON-able dict comes back.
+
+    Top-level and picklable for the executor. The engine adapter (its clients and models)
+    is loaded once per worker process and reused. An engine that is missing here or cannot
+    build the scene gives ``{"status": "skipped: …"}``; any other exception
+    ``{"status": "error: …"}``, so a task never takes the run down.
+    """
+    from harness.engines import EngineNotInstalled, UnsupportedScene, load_engine
+
+    start = time.perf_counter()
+    try:
+        engine = load_engine(task["engine"])
+        run = engine.run(task["scene"], task["settings"])
+    except EngineNotInstalled as error:
+        return {"status": f"skipped: {error}", "wall_time_s": time.perf_counter() - start}
+    except UnsupportedScene as error:
+        return {"status": f"skipped: engine cannot build the scene: {error}",
+                "wall_time_s": time.perf_counter() - start}
+    except Exception as error:  # reported in the record, never dropped
+        return {"status": f"error: {type(error).__name__}: {error}",
+                "wall_time_s": time.perf_counter() - start}
+    return {
+        "status": run.status,
+        "velocities": [list(v) for v in run.velocities],
+        "steps": run.steps,
+        "contact_steps": run.contact_steps,
+        "first_contact_step": run.first_contact_step,
+        "max_contact_points": run.max_contact_points,
+        "max_penetration": run.max_penetration,
+        "separated": run.separated,
+        "step_cap_hit": run.step_cap_hit,
+        "contact_normal": None if run.contact_normal is None else list(run.contact_normal),
+        "engine_normal_impulse": run.normal_impulse,
+        "engine_tangential_impulse": run.tangential_impulse,
+        "out_of_plane_drift": run.out_of_plane_drift,
+        "derived": dict(run.derived),
+        "notes": list(run.notes),
+        "engine_wall_time_s": run.wall_time_s,
+        "wall_time_s": time.perf_counter() - start,
+    }
+
+
+# --------------------------------------------------------------------------------------------
+# Selecting what to run
+# --------------------------------------------------------------------------------------------
+@dataclass
+class GateResult:
+    """One ``[expect.gate]`` checked against one engine record."""
+
+    scenario: str
+    gate: str  # "pymunk.accurate" or "pymunk"
+    law: str
+    max_departure: float
+    point: str
+    record: str  # engine.preset
+    departure: float | None
+    status: str  # "pass", "FAIL" or "not checked: <why>"
+
+    @property
+    def failed(self) -> bool:
+        return self.status == "FAIL"
+
+    def describe(self) -> str:
+        where = f" at {self.point}" if self.point else ""
+        value = "n/a" if self.departure is None else f"{self.departure:.3g}"
+        return (f"scenario {self.scenario!r} [expect.gate] \"{self.gate}\" ({self.record}{where}): "
+                f"departure from {self.law} {value} vs max {self.max_departure:g}: {self.status}")
+
+
+@dataclass
+class RunOutcome:
+    records: list[Record]
+    gates: list[GateResult]
+    provenance: dict
+    scenarios: dict
+    cache_stats: dict = field(default_factory=dict)
+
+    @property
+    def failed_gates(self) -> list[GateResult]:
+        return [gate for gate in self.gates if gate.failed]
+
+
+def select_scenarios(files: Sequence[str | Path] | None = None,
+                     tags: str | Iterable[str] | None = None) -> list[Scenario]:
+    """The scenarios of ``files`` (files or directories; default the library) with ``tags``."""
+    return load_scenarios(list(files) if files else None, tags=tags or None)
+
+
+def parse_engines(text: str | Sequence[str] | None) -> tuple[str, ...]:
+    """``"pymunk,mujoco"`` (or a list) -> engine names; raises ``ValueError`` for unknown ones."""
+    if text is None:
+        return ENGINES
+    items = text.split(",") if isinstance(text, str) else [
+        part for item in text for part in str(item).split(",")]
+    names = tuple(dict.fromkeys(item.strip() for item in items if item.strip()))
+    unknown = [name for name in names if name not in ENGINES]
+    if unknown:
+        raise ValueError(f"--engines: unknown engine(s) {unknown}; allowed: {', '.join(ENGINES)}")
+    return names
+
+
+def parse_presets(text: str | None) -> tuple[str, ...]:
+    if text in (None, "all"):
+        return PRESETS
+    if text not in PRESETS:
+        raise ValueError(f"--preset: {text!r}; allowed: {', '.join(PRESETS)}, all")
+    return (text,)
+
+
+def speed_labels(scenario: Scenario) -> list[str]:
+    """Names of the generalized speeds, in the order of ``u``."""
+    if scenario.system == "two-sled":
+        return ["u1 [m/s]", "u3 [rad/s]", "u4 [m/s]", "u6 [rad/s]"]
+    if scenario.system == "matrix":
+        return [f"u{i + 1}" for i in range(len(scenario.matrix.u))]
+    return [f"{spec.name}.{q}" for spec in scenario.bodies
+            for q in ("v_x [m/s]", "v_y [m/s]", "ω [rad/s]")]
+
+
+def scenario_info(scenario: Scenario) -> dict:
+    """What the reports need to know about a scenario besides its records."""
+    return {
+        "description": scenario.description,
+        "tags": list(scenario.tags),
+        "system": scenario.system,
+        "path": None if scenario.path is None else str(scenario.path),
+        "analytic_only": scenario.analytic_only,
+        "laws": list(scenario.laws),
+        "sweep": None if scenario.sweep is None else {
+            "parameter": scenario.sweep.parameter, "values": list(scenario.sweep.values)},
+        "speed_labels": speed_labels(scenario),
+        "gates": [{"gate": g.source, "law": g.law, "max_departure": g.max_departure}
+                  for g in scenario.expect.gates],
+    }
+
+
+# --------------------------------------------------------------------------------------------
+# The run
+# --------------------------------------------------------------------------------------------
+def _point_dict(point) -> dict:
+    return {"index": point.index, "parameter": point.parameter, "value": point.value,
+            "label": point.label}
+
+
+def _scene_payload(scene) -> dict:
+    return asdict(scene)
+
+
+def _engine_status(engines: Sequence[str]) -> tuple[dict, dict]:
+    """``({engine: adapter}, {engine: reason it is skipped})``."""
+    from harness.engines import EngineNotInstalled, load_engine
+
+    loaded, missing = {}, {}
+    for name in engines:
+        try:
+            loaded[name] = load_engine(name)
+        except EngineNotInstalled as error:
+            missing[name] = str(error)
+    return loaded, missing
+
+
+def run(
+    scenarios: Sequence[Scenario],
+    *,
+    engines: Sequence[str] = ENGINES,
+    presets: Sequence[str] = PRESETS,
+    cache=None,
+    executor: str = "local",
+    workers: int | None = None,
+    scheduler: str | None = None,
+    log: TextIO | None | str = "stderr",
+    command: Sequence[str] | None = None,
+) -> RunOutcome:
+    """Run ``scenarios`` and return the records, the gates and the provenance.
+
+    ``cache`` is a :class:`harness.run.cache.ResultCache` (None: no cache). ``log`` gets the
+    progress lines (a stream; ``"stderr"``, the default: ``sys.stderr`` at call time; None:
+    quiet).
+    """
+    log = sys.stderr if log == "stderr" else log
+    started = time.perf_counter()
+    wanted_engines = [name for name in ENGINES if name in engines]
+    needs_engines = any(not s.analytic_only and _engines_of(s, wanted_engines) for s in scenarios)
+    loaded, missing = _engine_status(wanted_engines) if needs_engines else ({}, {})
+
+    # 1. Engine tasks: build, look up in the cache.
+    plan: list[tuple[Scenario, Any, str, str, dict]] = []  # (scenario, point, engine, preset, item)
+    tasks, task_keys, task_slots = [], [], []
+    for scenario in scenarios:
+        if scenario.analytic_only:
+            continue
+        for point in scenario.point_list():
+            scene = None
+            for engine_name in _engines_of(scenario, wanted_engines):
+                for preset in presets:
+                    item: dict = {}
+                    plan.append((scenario, point, engine_name, preset, item))
+                    if engine_name in missing:
+                        item["output"] = {"status": f"skipped: {missing[engine_name]}"}
+                        continue
+                    engine = loaded[engine_name]
+                    overrides = dict(scenario.engine_settings.get(engine_name, {}))
+                    item["overrides"] = overrides
+                    try:
+                        settings = engine.settings(preset, overrides)
+                    except ValueError as error:
+                        item["output"] = {"status": f"error: settings: {error}"}
+                        continue
+                    if scene is None:
+                        scene = scenario.scene(point)
+                    payload = {"kind": "engine-run", "engine": engine_name,
+                               "engine_version": engine.version, "settings": settings,
+                               "scene": _scene_payload(scene)}
+                    key = cache.key(payload) if cache is not None else None
+                    cached = cache.get(key) if cache is not None else None
+                    if cached is not None:
+                        item["output"], item["cached"] = cached, True
+                        continue
+                    tasks.append({"engine": engine_name, "settings": settings, "scene": scene})
+                    task_keys.append(key)
+                    task_slots.append(item)
+
+    # 2. Run the misses.
+    if tasks:
+        if log is not None:
+            print(f"engine runs: {len(tasks)} to simulate, {len(plan) - len(tasks)} cached or "
+                  f"skipped", file=log, flush=True)
+        outputs = _run_tasks(tasks, executor=executor, workers=workers, scheduler=scheduler,
+                             log=log)
+        for key, item, output in zip(task_keys, task_slots, outputs):
+            item["output"], item["cached"] = output, False
+            if cache is not None and not output["status"].startswith(("skipped", "error")):
+                cache.put(key, output)
+
+    # 3. Records, scenario by scenario.
+    by_scenario: dict[str, list] = {}
+    for entry in plan:
+        by_scenario.setdefault(entry[0].name, []).append(entry)
+    records: list[Record] = []
+    gates: list[GateResult] = []
+    infos: dict[str, dict] = {}
+    for number, scenario in enumerate(scenarios, 1):
+        tick = time.perf_counter()
+        infos[scenario.name] = scenario_info(scenario)
+        scenario_records: list[Record] = []
+        entries = by_scenario.get(scenario.name, [])
+        for point in scenario.point_list():
+            point_entries = [e for e in entries if e[1].index == point.index]
+            scenario_records += point_records(scenario, point, point_entries)
+        scenario_gates = check_gates(scenario, scenario_records)
+        records += scenario_records
+        gates += scenario_gates
+        if log is not None:
+            print(_progress_line(number, len(scenarios), scenario, scenario_records,
+                                 scenario_gates, time.perf_counter() - tick),
+                  file=log, flush=True)
+
+    settings_table = {
+        name: {preset: engine.settings(preset) for preset in PRESETS}
+        for name, engine in loaded.items()
+    }
+    stats = cache.stats if cache is not None else {"enabled": False, "hits": 0, "misses": 0}
+    info = provenance(
+        FORMAT, FORMAT_VERSION,
+        engine_settings=settings_table,
+        command=command,
+        engine_versions={name: engine.version for name, engine in loaded.items()},
+        engines_missing=missing,
+        engines=list(wanted_engines),
+        presets=list(presets),
+        executor={"executor": executor, "workers": workers, "scheduler": scheduler},
+        cache={**stats, "root": None if cache is None else str(cache.root),
+               "engine_runs": len(plan), "simulated": len(tasks)},
+        gates=[asdict(g) for g in gates],
+        wall_time_s=time.perf_counter() - started,
+    )
+    return RunOutcome(records=records, gates=gates, provenance=info, scenarios=infos,
+                      cache_stats=stats)
+
+
+def _engines_of(scenario: Scenario, wanted: Sequence[str]) -> list[str]:
+    if scenario.analytic_only:
+        return []
+    allowed = scenario.engines or ENGINES
+    return [name for name in wanted if name in allowed]
+
+
+def _run_tasks(tasks, *, executor, workers, scheduler, log) -> list[dict]:
+    try:
+        from harness.run.executor import progress_printer, run_tasks
+    except ImportError:  # the executor module is optional: run serially
+        return [engine_task(task) for task in tasks]
+    if executor == "local" and workers is None and len(tasks) < MIN_PARALLEL_TASKS:
+        workers = 1
+    progress = progress_printer("engine runs", stream=log) if log is not None else None
+    return run_tasks(engine_task, tasks, executor=executor, workers=workers,
+                     scheduler=scheduler, progress=progress)
+
+
+def point_records(scenario: Scenario, point, engine_entries: Sequence) -> list[Record]:
+    """The law records and the engine records of one sweep point."""
+    fixed = scenario.at(point)
+    mu, e = fixed.friction, fixed.restitution
+    problem = scenario.analytic_problem(point)
+    mass_matrix, u_before = problem.mass_matrix, problem.u
+    vn_approach, vt_approach = metrics.contact_velocities(problem, u_before)
+    point_info = _point_dict(point)
+    mnn, mnt, mtt = metrics.delassus(problem)
+    contact_space = {"mnn": mnn, "mnt": mnt, "mtt": mtt, "mu": mu, "e": e}
+
+    law_records: list[Record] = []
+    law_speeds: dict[str, np.ndarray | None] = {}
+    for law in scenario.laws:
+        tick = time.perf_counter()
+        try:
+            result = problem.solve(mu=mu, e=e, hypothesis=law)
+        except ValueError as error:
+            law_speeds[law] = None
+            law_records.append(Record(
+                scenario=scenario.name, point=point_info, source=ANALYTIC, law=law,
+                u_before=u_before.tolist(), vn_approach=vn_approach, vt_approach=vt_approach,
+                status=f"error: {error}", wall_time_s=time.perf_counter() - tick,
+                diagnostics=dict(contact_space)))
+            continue
+        law_speeds[law] = result.u_after
+        law_records.append(Record(
+            scenario=scenario.name, point=point_info, source=ANALYTIC, law=law,
+            u_before=u_before.tolist(), u_after=result.u_after.tolist(),
+            vn_approach=result.vn_approach, vt_approach=result.vt_approach,
+            vn_separation=result.vn_separation, vt_separation=result.vt_separation,
+            energy_change=result.energy_change, collision_type=result.collision_type,
+            normal_impulse=result.normal_impulse, tangential_impulse=result.tangential_impulse,
+            status="ok", wall_time_s=time.perf_counter() - tick,
+            diagnostics={**contact_space, "case": result.case,
+                         "restitution_poisson": result.restitution_poisson,
+                         "restitution_in_range": result.restitution_in_range}))
+    for record, law in zip(law_records, scenario.laws):
+        if law_speeds[law] is not None:
+            record.departure = metrics.departures(mass_matrix, law_speeds[law], law_speeds,
+                                                  u_before)
+
+    engine_records = [
+        engine_record(scenario, point_info, engine_name, preset, item, problem, law_speeds)
+        for _, _, engine_name, preset, item in engine_entries
+    ]
+    return law_records + engine_records
+
+
+def engine_record(scenario: Scenario, point_info: dict, engine_name: str, preset: str,
+                  item: dict, problem, law_speeds: dict) -> Record:
+    """An engine's record from its raw output and the point's law solutions."""
+    output = item["output"]
+    mass_matrix, u_before = problem.mass_matrix, problem.u
+    vn_approach, vt_approach = metrics.contact_velocities(problem, u_before)
+    record = Record(scenario=scenario.name, point=point_info, source=engine_name, preset=preset,
+                    u_before=u_before.tolist(), vn_approach=vn_approach,
+                    vt_approach=vt_approach, status=output["status"],
+                    wall_time_s=float(output.get("wall_time_s", 0.0)),
+                    cached=bool(item.get("cached", False)))
+    if "velocities" not in output:
+        return record
+    u_after = np.array([value for body in output["velocities"] for value in body], dtype=float)
+    finite = bool(np.all(np.isfinite(u_after)))
+    record.u_after = u_after.tolist()
+    diagnostics = {key: output.get(key) for key in (
+        "steps", "contact_steps", "first_contact_step", "max_contact_points", "max_penetration",
+        "separated", "step_cap_hit", "out_of_plane_drift", "contact_normal",
+        "engine_normal_impulse", "engine_tangential_impulse", "derived", "notes",
+        "engine_wall_time_s")}
+    diagnostics["settings_overrides"] = item.get("overrides", {})
+    if finite:
+        vn, vt = metrics.contact_velocities(problem, u_after)
+        record.vn_separation, record.vt_separation = vn, vt
+        record.energy_change = metrics.energy_change(mass_matrix, u_before, u_after)
+        record.collision_type = metrics.classify_end_state(vt_approach, vt, vn_approach)
+        normal, tangential, residual = metrics.impulses_from_velocities(problem, u_after)
+        diagnostics["impulse_from_velocities"] = [normal, tangential]
+        diagnostics["impulse_residual"] = residual
+        if output.get("engine_normal_impulse") is not None:
+            record.normal_impulse = output["engine_normal_impulse"]
+            record.tangential_impulse = output.get("engine_tangential_impulse")
+            diagnostics["impulse_source"] = "engine"
+        else:
+            record.normal_impulse, record.tangential_impulse = normal, tangential
+            diagnostics["impulse_source"] = "velocities"
+    record.departure = metrics.departures(mass_matrix, u_after, law_speeds, u_before)
+    record.diagnostics = diagnostics
+    return record
+
+
+def check_gates(scenario: Scenario, records: Sequence[Record]) -> list[GateResult]:
+    """Every ``[expect.gate]`` of ``scenario`` against its engine records."""
+    results = []
+    for gate in scenario.expect.gates:
+        matching = [r for r in records if r.source == gate.engine
+                    and (gate.preset is None or r.preset == gate.preset)]
+        if not matching:
+            results.append(GateResult(scenario.name, gate.source, gate.law, gate.max_departure,
+                                      "", gate.source, None,
+                                      "not checked: engine or preset not run"))
+            continue
+        for record in matching:
+            value = record.departure.get(gate.law)
+            if record.skipped:
+                status = f"not checked: {record.status}"
+            elif value is None or not math.isfinite(value):
+                status = "FAIL"
+            else:
+                status = "pass" if value <= gate.max_departure else "FAIL"
+            results.append(GateResult(scenario.name, gate.source, gate.law, gate.max_departure,
+                                      record.point["label"], record.label,
+                                      None if value is None or not math.isfinite(value)
+                                      else float(value), status))
+    return results
+
+
+def _progress_line(number, total, scenario, records, gates, seconds) -> str:
+    points = len(scenario.point_list())
+    laws = [r for r in records if r.source == ANALYTIC]
+    engines = [r for r in records if r.source != ANALYTIC]
+    cached = sum(r.cached for r in engines)
+    skipped = sum(r.skipped for r in engines)
+    flagged = sum(not r.ok and not r.skipped for r in engines)
+    parts = [f"{points} point{'s' if points != 1 else ''}",
+             f"{sum(r.ok for r in laws)}/{len(laws)} law solutions"]
+    if scenario.analytic_only:
+        parts.append("analytic only")
+    else:
+        parts.append(f"{len(engines)} engine runs ({cached} cached, {skipped} skipped, "
+                     f"{flagged} flagged)")
+    if gates:
+        failed = sum(g.failed for g in gates)
+        parts.append(f"gates {'FAILED ' + str(failed) if failed else 'ok'}")
+    width = len(str(total))
+    return f"[{number:>{width}}/{total}] {scenario.name}: " + ", ".join(parts)
+
+
+# --------------------------------------------------------------------------------------------
+# Command line
+# --------------------------------------------------------------------------------------------
+def add_common_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options shared by ``run`` and ``suite``."""
+    parser.add_argument("--tags", default=None,
+                        help="comma-separated tags (e.g. quick); scenarios with any of them")
+    parser.add_argument("--engines", default=None,
+                        help=f"comma-separated engines (default: all of {', '.join(ENGINES)})")
+    parser.add_argument("--preset", default="all", choices=(*PRESETS, "all"),
+                        help="engine preset(s) to run (default: all)")
+    parser.add_argument("--no-cache", action="store_true",
+                        help="simulate every engine run, ignoring and not filling the cache")
+    parser.add_argument("--cache-dir", type=Path, default=DEFAULT_CACHE,
+                        help=f"result cache directory (default: {DEFAULT_CACHE})")
+    parser.add_argument("--executor", default="local", choices=("local", "dask"),
+                        help="local process pool (default) or a Dask cluster")
+    parser.add_argument("--scheduler", default=None,
+                        help="Dask scheduler address (with --executor dask; default: a local cluster)")
+    parser.add_argument("--workers", type=int, default=None,
+                        help="local worker processes (default: all cores; small runs run inline)")
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("files", nargs="*", metavar="FILE",
+                        help="scenario files or directories (default: the library in scenarios/)")
+    add_common_arguments(parser)
+    parser.add_argument("--json", type=Path, default=DEFAULT_RESULTS,
+                        help=f"results file to write (default: {DEFAULT_RESULTS})")
+
+
+def execute(args, *, json_path: Path, command: Sequence[str] | None = None,
+            log: TextIO | None | str = "stderr") -> tuple[int, RunOutcome | None]:
+    """Run with parsed options; write the results file. Returns (exit status, outcome)."""
+    log = sys.stderr if log == "stderr" else log
+    try:
+        engines = parse_engines(args.engines)
+        presets = parse_presets(args.preset)
+        scenarios = select_scenarios(getattr(args, "files", None), args.tags)
+    except (ValueError, FileNotFoundError) as error:  # ScenarioError is a ValueError
+        print(f"impact-harness run: {error}", file=sys.stderr)
+        return 2, None
+    if not scenarios:
+        print("impact-harness run: no scenario selected", file=sys.stderr)
+        return 2, None
+    cache = None
+    if not args.no_cache:
+        try:
+            from harness.run.cache import ResultCache
+        except ImportError:
+            cache = None
+        else:
+            cache = ResultCache(root=args.cache_dir)
+    outcome = run(scenarios, engines=engines, presets=presets, cache=cache,
+                  executor=args.executor, workers=args.workers, scheduler=args.scheduler,
+                  log=log, command=command)
+    write_results(json_path, outcome.records, outcome.provenance, outcome.scenarios)
+    stats = outcome.provenance["cache"]
+    if log is not None:
+        print(f"wrote {json_path}: {len(outcome.records)} records from {len(scenarios)} "
+              f"scenarios; {stats['simulated']} engine runs simulated, {stats['hits']} from the "
+              f"cache; {outcome.provenance['wall_time_s']:.2f} s", file=log)
+        for name, reason in outcome.provenance["engines_missing"].items():
+            print(f"skipped engine {name}: {reason}", file=log)
+    for gate in outcome.failed_gates:
+        print(f"GATE FAILED: {gate.describe()}", file=sys.stderr)
+    return (1 if outcome.failed_gates else 0), outcome
+
+
+def main(args) -> int:
+    status, _ = execute(args, json_path=args.json, command=["impact-harness", "run", *sys.argv[2:]])
+    return status
+
+
+__all__ = ["GateResult", "RunOutcome", "add_arguments", "add_common_arguments", "check_gates",
+           "engine_record", "engine_task", "execute", "main", "parse_engines", "parse_presets",
+           "point_records", "run", "scenario_info", "select_scenarios"]

@@ -1,0 +1,71 @@
+"""``impact-harness suite``: the validation suite that ``make validate`` runs.
+
+Three steps, each timed on stderr::
+
+    1. the paper's Table 3     -> <out>/paper-table3.md, <out>/paper-table3.png
+    2. every scenario run      -> <out>/results.json   (engine runs cached in .cache/results)
+    3. the report              -> <out>/index.html, <out>/summary.md, <out>/figures/
+
+Options select scenarios and engines exactly as for ``impact-harness run`` (``--tags quick``
+for a fast subset, ``--out`` for another directory). The exit status is 1 when a scenario's
+gate fails or the paper's table has a miss no known erratum explains, else 0; the report is
+written either way.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from harness.run import runner
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--out", type=Path, default=Path("reports"),
+                        help="output directory (default: reports)")
+    runner.add_common_arguments(parser)
+
+
+def main(args) -> int:
+    from harness import report
+    from harness.report import table3 as paper
+    from harness.run.records import read_results
+
+    out: Path = args.out
+    started = time.perf_counter()
+
+    tick = time.perf_counter()
+    markdown, rows = paper.write_report(out)
+    cells = [cell for row in rows for cell in row["cells"]]
+    missed = [cell for cell in cells if not cell.reproduced]
+    unexplained = [cell for cell in missed if cell.reason.startswith("UNEXPLAINED")]
+    print(f"[1/3] Table 3: {len(cells) - len(missed)}/{len(cells)} printed cells reproduced, "
+          f"{len(missed)} known errata, {len(unexplained)} unexplained -> {markdown} "
+          f"({time.perf_counter() - tick:.1f} s)", file=sys.stderr, flush=True)
+
+    tick = time.perf_counter()
+    results_path = out / "results.json"
+    status, outcome = runner.execute(args, json_path=results_path,
+                                     command=["impact-harness", "suite", *sys.argv[2:]])
+    if outcome is None:
+        return status
+    print(f"[2/3] run: {len(outcome.records)} records -> {results_path} "
+          f"({time.perf_counter() - tick:.1f} s)", file=sys.stderr, flush=True)
+
+    tick = time.perf_counter()
+    written = report.write_report(read_results(results_path), out)
+    print(f"[3/3] report: {written['html']}, {written['summary']}, "
+          f"{len(written['figures'])} figures ({time.perf_counter() - tick:.1f} s)",
+          file=sys.stderr, flush=True)
+
+    failed = outcome.failed_gates
+    print(f"suite finished in {time.perf_counter() - started:.1f} s: "
+          + (f"{len(failed)} gate(s) FAILED" if failed else "all gates passed")
+          + (f", {len(unexplained)} unexplained Table 3 miss(es)" if unexplained else ""),
+          file=sys.stderr)
+    return 1 if failed or unexplained else status
+
+
+__all__ = ["add_arguments", "main"]

@@ -1,0 +1,153 @@
+"""Checks a scenario must pass before any engine runs: physics of every point, engine
+settings, and the ``[expect]`` table against the solver.
+
+The checks report through a :class:`harness.scenarios.reader.TableReader` (anything with its
+``error(key, problem, value, allowed)``), so every problem in a file is listed at once.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, Mapping
+
+import numpy as np
+
+from harness.engines import EngineNotInstalled, load_engine
+from harness.scene import geometry
+from harness.scenarios.errors import suggest
+from harness.scenarios.model import Point, Scenario
+from harness.scenarios.schema import ONE_POINT_TOLERANCE, PRESETS, SHAPE_FIELDS
+
+if TYPE_CHECKING:  # the reader imports the checks, not the other way round
+    from harness.scenarios.reader import TableReader
+
+
+def check_engine_settings(reader: TableReader, engine: str, table: Mapping[str, Any]) -> None:
+    """Check override keys and values with the engine's adapter, when it can be imported."""
+    try:
+        adapter = load_engine(engine)
+    except EngineNotInstalled:  # the runner reports the missing engine; a bug in an adapter raises
+        return
+    docs = getattr(adapter, "setting_docs", {})
+    known = tuple(sorted(docs))
+    for key, value in table.items():
+        if known and key not in docs:
+            reader.error(f"engine_settings.{engine}.{key}",
+                         f"unknown {engine} setting{suggest(key, known)}", value,
+                         ", ".join(known))
+            return
+    for preset in PRESETS:
+        try:
+            adapter.settings(preset, dict(table))
+        except ValueError as error:
+            reader.error(f"engine_settings.{engine}", f"rejected by {engine}: {error}",
+                         dict(table), f"values the {engine} adapter accepts")
+            return
+
+
+def check_points(reader: TableReader, scenario: Scenario) -> None:
+    """Every point must be a touching, approaching, one-point contact with e, μ in range."""
+    for point in scenario.point_list():
+        where = f" at sweep point {point.label}" if point.label else ""
+        fixed = scenario.at(point)
+        if not 0.0 <= fixed.restitution <= 1.0:
+            reader.error("sweep.values", f"restitution out of range{where}", fixed.restitution,
+                         "0 … 1")
+            continue
+        if not fixed.friction >= 0.0:
+            reader.error("sweep.values", f"friction out of range{where}", fixed.friction, ">= 0")
+            continue
+        if fixed.system == "bodies":
+            check_bodies(reader, fixed, where)
+        else:
+            check_analytic(reader, scenario, point, where)
+
+
+def check_bodies(reader: TableReader, fixed: Scenario, where: str) -> None:
+    for spec in fixed.bodies:
+        for key, value in (("mass", spec.mass), ("inertia", spec.inertia)):
+            if value is not None and not value > 0.0:
+                reader.error(f"body.{spec.name}.{key}", f"must be positive{where}", value, "> 0")
+                return
+        for key in SHAPE_FIELDS[spec.shape.kind]:
+            value = getattr(spec.shape, key, None)
+            if isinstance(value, float) and not value > 0.0:
+                reader.error(f"body.{spec.name}.{key}", f"must be positive{where}", value, "> 0")
+                return
+    scene = fixed.scene()
+    contact = geometry.scene_contact(scene, tolerance=ONE_POINT_TOLERANCE)
+    exact = geometry.scene_contact(scene)
+    placed = [s for s in fixed.bodies if s.position is not None]
+    position_key = (f"body.{placed[-1].name}.position" if placed else "body")
+    positions = [list(s.position) for s in placed]
+    if abs(exact.gap) > fixed.gap_tolerance:
+        state = "apart" if exact.gap > 0 else "overlapping"
+        reader.error(position_key, f"bodies must touch{where}: measured gap {exact.gap:.6g} m "
+                     f"({state})", positions if len(positions) > 1 else positions[0],
+                     f"|gap| <= gap_tolerance = {fixed.gap_tolerance:g} m")
+        return
+    if contact.point_count > 1:
+        angles = {s.name: s.angle_deg for s in fixed.bodies}
+        reader.error(f"body.{fixed.bodies[-1].name}.angle_deg",
+                     f"{contact.point_count} contact points within {ONE_POINT_TOLERANCE:g} m"
+                     f"{where} (a face lies flat on a face): outside one-point impact theory",
+                     angles, "a pose with a single closest point: turn the body")
+        return
+    vn, _ = geometry.contact_velocity(scene, exact)
+    if not vn < 0.0:
+        reader.error(f"body.{fixed.bodies[-1].name}.velocity",
+                     f"the bodies do not approach{where}: contact normal velocity v_n = "
+                     f"{vn:.6g} m/s", [list(s.velocity) for s in fixed.bodies],
+                     "velocities giving v_n < 0 along the normal "
+                     f"{np.round(exact.normal, 6).tolist()} (from A into B)")
+
+
+def check_analytic(reader: TableReader, scenario: Scenario, point: Point, where: str) -> None:
+    try:
+        problem = scenario.analytic_problem(point)
+    except ImportError:  # pragma: no cover - planar_impact is part of this project
+        return
+    except (TypeError, ValueError) as error:
+        reader.error("parameters" if scenario.system == "two-sled" else "mass_matrix",
+                     f"cannot build the problem{where}: {error}")
+        return
+    vn = float(np.asarray(problem.wn) @ np.asarray(problem.u))
+    if not vn < 0.0:
+        key = "parameters.u" if scenario.system == "two-sled" else "u"
+        reader.error(key, f"no approach{where}: v_n = wn·u = {vn:.6g}",
+                     list(np.asarray(problem.u)), "speeds giving wn·u < 0")
+
+
+def check_expectations(scenario: Scenario) -> list[str]:
+    """Compare ``[expect]`` with ``planar_impact``; one message per mismatch (empty: all agree)."""
+    import planar_impact
+
+    problems = []
+    where = scenario.path or scenario.name
+    for point in scenario.point_list():
+        at = f" at {point.label}" if point.label else ""
+        fixed = scenario.at(point)
+        problem = scenario.analytic_problem(point)
+        wanted_laws = set(scenario.expect.collision_type) | set(scenario.expect.energy_gain)
+        if scenario.expect.case is not None:
+            wanted_laws.add("poisson")
+        results = {}
+        for law in sorted(wanted_laws):
+            try:
+                results[law] = problem.solve(mu=fixed.friction, e=fixed.restitution,
+                                             hypothesis=law)
+            except (ValueError, planar_impact.ImpactInputError) as error:
+                problems.append(f"{where}: {law}{at}: the solver refused: {error}")
+        for law, result in results.items():
+            expected = scenario.expected_collision_type(law, point)
+            if expected is not None and result.collision_type != expected:
+                problems.append(f"{where}: expect.collision_type.{law}{at} = {expected}, but "
+                                f"the solver gives {result.collision_type}")
+            gain = scenario.expected_energy_gain(law, point)
+            if gain is not None and (result.energy_change > 0.0) != gain:
+                problems.append(f"{where}: expect.energy_gain.{law}{at} = {str(gain).lower()}, "
+                                f"but the energy change is {result.energy_change:.6g} J")
+        case = scenario.expected_case(point)
+        if case is not None and "poisson" in results and results["poisson"].case != case:
+            problems.append(f"{where}: expect.case{at} = {case}, but the solver gives "
+                            f"{results['poisson'].case}")
+    return problems

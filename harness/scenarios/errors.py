@@ -1,0 +1,58 @@
+"""Scenario errors: one message names the file, the key, the value and what is allowed."""
+
+from __future__ import annotations
+
+import difflib
+from typing import Any, Iterable
+
+#: Marks "no value given" (None is a value a file may hold).
+NO_VALUE = object()
+
+
+def show_value(value: Any) -> str:
+    """``repr(value)``, cut to 80 characters for a one-line message."""
+    text = repr(value)
+    return text if len(text) <= 80 else text[:77] + "..."
+
+
+class ScenarioError(ValueError):
+    """A bad scenario file. ``str()`` names the file, the key, the value and what is allowed.
+
+    One error per problem; when a file has several, the first one raised carries them all
+    in ``errors`` (each a :class:`ScenarioError`) and its message lists every one.
+    """
+
+    def __init__(self, message: str = "", *, path=None, key: str | None = None,
+                 value: Any = NO_VALUE, allowed: str | None = None,
+                 errors: Iterable["ScenarioError"] = ()):
+        self.path = None if path is None else str(path)
+        self.key = key
+        self.value = None if value is NO_VALUE else value
+        self.allowed = allowed
+        self.problem = message
+        self.errors = tuple(errors) or (self,)
+        if len(self.errors) > 1:
+            text = f"{len(self.errors)} errors:\n" + "\n".join(f"  {e}" for e in self.errors)
+        elif self.errors[0] is not self:
+            only = self.errors[0]
+            self.path, self.key, self.value = only.path, only.key, only.value
+            self.allowed, self.problem = only.allowed, only.problem
+            text = str(only)
+        else:
+            text = self._format(value)
+        super().__init__(text)
+
+    def _format(self, value) -> str:
+        parts = [self.path or "<scenario>"]
+        if self.key is not None:
+            parts.append(self.key if value is NO_VALUE else f"{self.key} = {show_value(value)}")
+        text = ": ".join(parts) + f": {self.problem}"
+        if self.allowed:
+            text += f" (allowed: {self.allowed})"
+        return text
+
+
+def suggest(word: str, choices: Iterable[str]) -> str:
+    """"; did you mean ...?" for the closest of ``choices``, or ""."""
+    close = difflib.get_close_matches(str(word), list(choices), n=1, cutoff=0.6)
+    return f"; did you mean {close[0]!r}?" if close else ""

@@ -1,0 +1,182 @@
+"""Engine stress: a disk and the 45° rod scaled over mass, size, speed, grazing, e, μ, step."""
+
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+ENGINE_ENERGY_TOLERANCE = 1e-6  # relative kinetic-energy gain counted for an engine
+DEEP_PENETRATION = 0.1  # of the body's extent
+
+OUTCOMES: dict[str, str] = {
+    "error": "the adapter or engine raised an exception",
+    "non-finite": "NaN or infinite post-impact velocities",
+    "blow-up": "kinetic-energy norm grew more than 1e3 times",
+    "energy-gain": f"kinetic energy gained (> {ENGINE_ENERGY_TOLERANCE:g} relative)",
+    "no-separation": "still in contact at the step cap",
+    "no-contact": "the engine never saw the contact (tunnelled or missed within the cap)",
+    "deep-penetration": f"penetration deeper than {DEEP_PENETRATION:g} of the body's extent",
+    "flagged": "another non-ok engine status (multi-contact, out-of-plane)",
+    "ok": "finite, separated, no energy gain, shallow",
+}
+OUTCOME_COLOURS = {"error": "#000000", "non-finite": "#7f0000", "blow-up": "#d7301f",
+                   "energy-gain": "#fc8d59", "no-separation": "#fdcc8a", "no-contact": "#ffffb2",
+                   "deep-penetration": "#c994c7",
+                   "flagged": "#bdbdbd", "ok": "#1a9850", "skipped": "#ffffff"}
+
+
+
+def engine_cases(quick: bool) -> list[dict]:
+    """Engine stress cases: ``{family, value, label, shape, mass, size, speed, grazing, e, mu, dt}``."""
+    base = {"mass": 1.0, "size": 1.0, "speed": 1.0, "grazing": 1.0, "e": 0.5, "mu": 0.3, "dt": None}
+    sweeps = {
+        "mass": [1e-6, 1e-3, 1e3, 1e6],
+        "size": [1e-4, 1e-2, 1e2, 1e3],
+        "speed": [1e-6, 1e-3, 1e2, 1e4],
+        "grazing": [1e-3, 1e-6, 1e-9],
+        "e-mu": [(0.0, 0.0), (0.0, 10.0), (1.0, 0.0), (1.0, 10.0)],
+        "time_step": [1e-6, 1e-4, 1e-2, 1e-1],
+    }
+    if not quick:
+        sweeps.update(
+            mass=[1e-6, 1e-4, 1e-2, 1e2, 1e4, 1e6],
+            size=[1e-4, 1e-3, 1e-2, 1e-1, 1e1, 1e2, 1e3],
+            speed=[1e-6, 1e-4, 1e-2, 1e1, 1e2, 1e3, 1e4],
+            grazing=[1e-1, 1e-2, 1e-3, 1e-4, 1e-6, 1e-9],
+            time_step=[1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 3e-2, 1e-1],
+        )
+    cases = []
+    for shape in ("disk", "rod"):
+        cases.append(dict(base, family="reference", value=1.0, label="reference", shape=shape))
+        for family, values in sweeps.items():
+            for value in values:
+                case = dict(base, family=family, shape=shape)
+                if family == "e-mu":
+                    case.update(e=value[0], mu=value[1], value=list(value), label=f"e={value[0]:g},mu={value[1]:g}")
+                else:
+                    key = {"time_step": "dt"}.get(family, family)
+                    case.update({key: value, "value": value, "label": f"{family}={value:g}"})
+                cases.append(case)
+    return cases
+
+
+def build_scene(case: dict):
+    """The stressed scene: a disk (r 0.1·size) or the 45° rod (1·size) on the ground."""
+    from harness.scene import Body, Disk, Rod, Scene
+
+    size, mass, speed = case["size"], case["mass"], case["speed"]
+    # approach direction: |v_n|/|v_t| = grazing ratio (1 = 45°)
+    vn = -speed * case["grazing"] / math.hypot(1.0, case["grazing"])
+    vt = speed / math.hypot(1.0, case["grazing"])
+    if case["shape"] == "disk":
+        radius = 0.1 * size
+        body = Body("disk", Disk(radius), mass, (0.0, radius), 0.0, (vt, vn), 0.0)
+    else:
+        angle, length, cap = math.radians(45.0), 1.0 * size, 0.005 * size
+        low_y = -length / 2.0 * math.sin(angle)
+        body = Body("rod", Rod(length, cap), mass, (0.0, -low_y + cap), angle, (vt, vn), 0.0,
+                    inertia=mass * length**2 / 12.0)
+    return Scene((body,), case["e"], case["mu"], ground=True, name=f"{case['shape']}:{case['label']}")
+
+
+def _outcome(run, scene, extent: float) -> str:
+    from harness.engines import ke_norm
+
+    u_after = np.asarray(run.u_after, dtype=float)
+    if not np.all(np.isfinite(u_after)):
+        return "non-finite"
+    if run.status == "blow-up":
+        return "blow-up"
+    before, after = ke_norm(scene, scene.state()), ke_norm(scene, u_after)
+    if after**2 > before**2 * (1.0 + ENGINE_ENERGY_TOLERANCE):
+        return "energy-gain"
+    if run.status == "no-separation":
+        return "no-separation"
+    if run.max_penetration > DEEP_PENETRATION * extent:
+        return "deep-penetration"
+    if run.status == "no-contact":
+        return "no-contact"
+    if run.status != "ok":
+        return "flagged"
+    return "ok"
+
+
+def run_engine_case(task: dict) -> dict:
+    """One engine stress run (top-level: runs in worker processes)."""
+    from harness.engines import body_extent, ke_norm, load_engine
+
+    case, engine_name, preset = task["case"], task["engine"], task["preset"]
+    scene = build_scene(case)
+    record = {"engine": engine_name, "preset": preset, "shape": case["shape"], "family": case["family"],
+              "label": case["label"], "value": case["value"]}
+    try:
+        engine = load_engine(engine_name)
+        overrides = {"time_step": case["dt"]} if case["dt"] is not None else None
+        if overrides and engine_name == "mujoco" and preset == "accurate":
+            # MuJoCo's accurate preset ties the contact's duration to steps: keep its spring
+            # fixed at the preset's 0.5 ms contact so the time step is what changes
+            overrides["contact_steps"] = max(1, int(round(5e-4 / case["dt"])))
+        settings = engine.settings(preset, overrides)
+        run = engine.run(scene, settings)
+    except Exception as error:  # noqa: BLE001 - any failure is an outcome to report
+        record.update(outcome="error", status="error", error=f"{type(error).__name__}: {error}"[:300])
+        return record
+    extent = body_extent(scene.bodies[0].shape)
+    u_before = scene.state()
+    u_after = np.asarray(run.u_after, dtype=float)
+    before = ke_norm(scene, u_before)
+    with np.errstate(all="ignore"):
+        energy_ratio = (ke_norm(scene, u_after) / before) ** 2 if np.all(np.isfinite(u_after)) else None
+    record.update(
+        outcome=_outcome(run, scene, extent),
+        status=run.status,
+        steps=run.steps,
+        max_penetration_relative=run.max_penetration / extent,
+        energy_ratio=energy_ratio,
+        u_after=[float(v) for v in u_after],
+        engine_version=run.engine_version,
+        wall_time_s=run.wall_time_s,
+    )
+    return record
+
+
+def engine_stress(quick: bool, executor: str = "local", workers: int | None = None,
+                  scheduler: str | None = None, use_cache: bool = True,
+                  cache_root: Path = Path(".cache/results"), progress=None) -> dict:
+    """All engine runs (cached), grouped; JSON-able."""
+    from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine
+    from harness.run.cache import ResultCache
+    from harness.run.executor import run_tasks
+
+    presets = ("accurate",) if quick else ("defaults", "accurate")
+    skipped, versions = {}, {}
+    for name in ENGINE_NAMES:
+        try:
+            versions[name] = load_engine(name).version
+        except EngineNotInstalled as error:
+            skipped[name] = str(error)
+    cases = engine_cases(quick)
+    tasks = [{"case": case, "engine": name, "preset": preset}
+             for name in versions for preset in presets for case in cases]
+    cache = ResultCache(cache_root, enabled=use_cache)
+    keys = [cache.key({"kind": "stress-engine", "task": task, "engine_version": versions[task["engine"]]})
+            for task in tasks]
+    records: list[dict | None] = [cache.get(key) for key in keys]
+    todo = [index for index, record in enumerate(records) if record is None]
+    started = time.perf_counter()
+    fresh = run_tasks(run_engine_case, [tasks[i] for i in todo], executor=executor, workers=workers,
+                      scheduler=scheduler, progress=progress)
+    for index, record in zip(todo, fresh):
+        records[index] = record
+        if record["outcome"] != "error" or "not installed" not in record.get("error", ""):
+            cache.put(keys[index], record)
+    counts: dict = {}
+    for record in records:
+        group = counts.setdefault(f"{record['engine']}/{record['preset']}", {name: 0 for name in OUTCOMES})
+        group[record["outcome"]] += 1
+    return {"versions": versions, "skipped": skipped, "presets": list(presets), "runs": records,
+            "counts": counts, "cache": cache.stats, "engine_seconds": time.perf_counter() - started,
+            "tasks_run": len(todo)}

@@ -1,0 +1,57 @@
+"""Smoke test of the speed–accuracy benchmark (the benchmark itself lives outside the suite)."""
+
+from __future__ import annotations
+
+import pytest
+
+from harness.bench import accuracy as bench_accuracy
+from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine
+
+
+def _engine_or_skip(name):
+    try:
+        return load_engine(name)
+    except EngineNotInstalled as error:
+        pytest.skip(str(error))
+
+
+@pytest.mark.parametrize("name", ENGINE_NAMES)
+def test_every_sweep_point_is_a_valid_setting(name):
+    engine = _engine_or_skip(name)
+    for quick in (True, False):
+        points = bench_accuracy.sweep(name, quick)
+        assert len({label for label, _, _ in points}) == len(points)  # labels identify points
+        for _, preset, overrides in points:
+            engine.settings(preset, overrides)  # raises EngineSettingsError on a bad key/value
+
+
+def test_pareto_front_and_cheapest_setting():
+    assert bench_accuracy.pareto_front([(3, 1e-3), (1, 1e-1), (2, 1e-1), (4, 1e-6)]) == [
+        (1, 1e-1), (3, 1e-3), (4, 1e-6)]
+    rows = []
+    for label, time_s, error in (("slow-exact", 3.0, 1e-9), ("fast-rough", 1.0, 5e-3), ("fastest-bad", 0.5, 0.2)):
+        for family in bench_accuracy.FAMILIES:
+            rows.append({"setting": label, "family": family, "status": "ok", "time_per_impact_s": time_s,
+                         "departure": {"own": error}})
+    table = bench_accuracy.cheapest_settings({"rows": rows})
+    assert table["0.01"]["setting"] == "fast-rough"
+    assert table["0.001"]["setting"] == "slow-exact"
+    rows = [dict(row, departure={"own": 0.5}) for row in rows]
+    assert bench_accuracy.cheapest_settings({"rows": rows})["0.01"]["setting"] == "not reachable"
+
+
+def test_measure_pymunk_on_two_points(monkeypatch):
+    _engine_or_skip("pymunk")
+    monkeypatch.setattr(bench_accuracy, "sweep", lambda name, quick: [
+        ("it=100", "accurate", {"time_step": 1e-3, "iterations": 100}),
+        ("it=1", "accurate", {"time_step": 1e-3, "iterations": 1})])
+    result = bench_accuracy.measure_engine("pymunk", quick=True)
+    rows = {(r["setting"], r["family"]): r for r in result["rows"]}
+    assert len(rows) == 2 * len(bench_accuracy.FAMILIES)
+    # the accurate setting solves newton-lcp to rounding on every family (ENGINES.md: ~1e-12);
+    # 1e-9 leaves room for the step's position update
+    for family in bench_accuracy.FAMILIES:
+        assert rows[("it=100", family)]["departure"]["own"] < 1e-9, family
+        assert rows[("it=100", family)]["time_per_impact_s"] > 0
+    # one iteration on the coupled rod is far off (ENGINES.md: 2-5 iterations are badly wrong)
+    assert rows[("it=1", "rod")]["departure"]["own"] > 1e-3

@@ -1,0 +1,303 @@
+"""The engine contract, checked for every installed engine (missing engines skip).
+
+Bit-exact comparisons where the computation is deterministic (reruns of one engine);
+tolerances, each with its reason, only where physics differs.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+
+import pytest
+
+from harness import engines
+from harness.engines import (
+    ENGINE_NAMES,
+    PRESET_NAMES,
+    STATUSES,
+    EngineNotInstalled,
+    EngineRun,
+    EngineSettingsError,
+    available_engines,
+    ke_norm,
+    load_engine,
+)
+from harness.scene import Body, Disk, Scene
+from harness.scene.reference import reference_scenes
+
+SCENES = reference_scenes()
+
+
+def _engine(name):
+    try:
+        return load_engine(name)
+    except EngineNotInstalled as error:
+        pytest.skip(f"{name} not installed: {error}")
+
+
+@pytest.fixture(params=ENGINE_NAMES)
+def engine(request):
+    return _engine(request.param)
+
+
+# ---------------------------------------------------------------------- registry
+def test_engine_names_and_presets():
+    assert ENGINE_NAMES == ("pymunk", "pybullet", "mujoco")
+    assert PRESET_NAMES == ("defaults", "accurate")
+
+
+def test_unknown_engine_name_lists_the_choices():
+    with pytest.raises(ValueError, match=r"unknown engine 'bullet'.*pymunk.*pybullet.*mujoco"):
+        load_engine("bullet")
+
+
+def test_available_engines_reports_every_engine():
+    report = available_engines()
+    assert set(report) == set(ENGINE_NAMES)
+    for reason in report.values():
+        assert reason is None or "pip install" in reason
+
+
+def test_missing_engine_raises_import_error_naming_install(monkeypatch):
+    # Simulate an uninstalled pymunk: a None entry in sys.modules makes `import pymunk` fail.
+    monkeypatch.setitem(sys.modules, "pymunk", None)
+    monkeypatch.delitem(engines._LOADED, "pymunk", raising=False)
+    with pytest.raises(EngineNotInstalled) as caught:
+        load_engine("pymunk")
+    error = caught.value
+    assert isinstance(error, ImportError)
+    assert error.engine == "pymunk"
+    assert "pip install pymunk==7.3.1" in str(error)
+    assert 'pip install -e ".[harness]"' in str(error)
+    report = available_engines()
+    assert report["pymunk"] is not None and "pymunk" in report["pymunk"]
+    # The other engines are unaffected (when installed).
+    for name in ("pybullet", "mujoco"):
+        try:
+            __import__(name)
+        except ImportError:
+            continue
+        assert report[name] is None
+
+
+# ---------------------------------------------------------------------- settings
+def test_presets_complete_and_json(engine):
+    assert set(engine.presets) == set(PRESET_NAMES)
+    keys = set(engine.setting_docs)
+    for preset in PRESET_NAMES:
+        settings = engine.settings(preset)
+        assert set(settings) == keys
+        assert json.loads(json.dumps(settings)) == settings  # plain JSON-able values
+        for key in ("time_step", "max_steps", "approach_steps"):
+            assert key in settings
+
+
+def test_settings_returns_fresh_copies(engine):
+    first = engine.settings("accurate")
+    first["max_steps"] = 7
+    assert engine.settings("accurate")["max_steps"] != 7
+
+
+def _list_setting(engine):
+    keys = [key for key, value in engine.settings("defaults").items() if isinstance(value, list)]
+    if not keys:
+        pytest.skip(f"{engine.name} has no list-valued setting")
+    return keys[0]
+
+
+def test_settings_list_values_do_not_alias_the_preset(engine):
+    key = _list_setting(engine)
+    before = list(engine.settings("defaults")[key])
+    edited = engine.settings("defaults")
+    edited[key][-1] = 0.5 if edited[key][-1] != 0.5 else 0.25
+    assert engine.settings("defaults")[key] == before
+    assert engine.presets["defaults"][key] == before
+
+
+def test_override_lists_are_copied(engine):
+    key = _list_setting(engine)
+    mine = list(engine.settings("defaults")[key])
+    settings = engine.settings("defaults", {key: mine})
+    mine[-1] = 0.5 if mine[-1] != 0.5 else 0.25
+    assert settings[key] != mine
+
+
+def test_settings_list_edited_in_place_is_rechecked(engine):
+    # The fast path remembers the last settings dict; an in-place edit of one of its list
+    # values must be seen: the run is no longer the preset's.
+    key = _list_setting(engine)
+    scene = SCENES["disk"][0]
+    settings = engine.settings("defaults")
+    assert engine.run(scene, settings).preset == "defaults"
+    settings[key][-1] = 0.5 if settings[key][-1] != 0.5 else 0.25
+    run = engine.run(scene, settings)
+    assert run.preset is None and run.settings[key] == settings[key]
+
+
+def test_unknown_setting_names_engine_key_and_allowed(engine):
+    with pytest.raises(EngineSettingsError) as caught:
+        engine.settings("accurate", {"no_such_knob": 1})
+    message = str(caught.value)
+    assert engine.name in message and "no_such_knob" in message and "time_step" in message
+    assert isinstance(caught.value, ValueError)
+
+
+def test_unknown_preset(engine):
+    with pytest.raises(ValueError, match="unknown preset 'fast'"):
+        engine.settings("fast")
+
+
+@pytest.mark.parametrize("key, value", [("time_step", 0.0), ("time_step", "1"), ("max_steps", 1.5),
+                                        ("approach_steps", -1.0)])
+def test_bad_common_setting_values(engine, key, value):
+    with pytest.raises(EngineSettingsError, match=key):
+        engine.settings("accurate", {key: value})
+
+
+def test_settings_dict_must_be_complete(engine):
+    settings = engine.settings("accurate")
+    del settings["max_steps"]
+    with pytest.raises(EngineSettingsError, match="max_steps"):
+        engine.run(SCENES["disk"][0], settings)
+
+
+def test_run_records_settings_and_preset(engine):
+    scene = SCENES["disk"][0]
+    run = engine.run(scene, preset="defaults")
+    assert run.preset == "defaults" and run.settings == engine.settings("defaults")
+    custom = engine.run(scene, preset="accurate", overrides={"max_steps": 12345})
+    assert custom.preset is None and custom.settings["max_steps"] == 12345
+
+
+# ---------------------------------------------------------------------- outputs
+@pytest.mark.parametrize("preset", PRESET_NAMES)
+@pytest.mark.parametrize("scene_name", sorted(SCENES))
+def test_every_reference_scene_runs_ok(engine, preset, scene_name):
+    scene = SCENES[scene_name][0]
+    run = engine.run(scene, preset=preset)
+    assert isinstance(run, EngineRun)
+    assert run.status == "ok", (run.status, run.notes)
+    assert run.status in STATUSES
+    assert len(run.velocities) == len(scene.bodies)
+    assert all(math.isfinite(v) for v in run.u_after)
+    assert run.separated and not run.step_cap_hit
+    assert 1 <= run.contact_steps <= run.steps <= run.settings["max_steps"]
+    assert run.first_contact_step == 1  # approach_steps 0: contact in the first step
+    assert run.max_contact_points == 1
+    assert run.max_penetration >= 0.0
+    assert run.normal_impulse is not None and run.normal_impulse > 0.0
+    n_x, n_y = run.contact_normal
+    # The engine's contact normal is the scene's. Reason for 1e-8: geometry exact to rounding;
+    # pymunk's start is 1e-9 of a step short of the full rewind, which tilts a disk pair's
+    # normal ~1e-10. MuJoCo's RK4 leaves the contact data of a later stage of the step, moved
+    # by the relative tangential speed (~1 m/s) times dt (1e-5 s) over 0.25 m: ~4e-5, so 1e-4.
+    expected = SCENES[scene_name][2]
+    tolerance = 1e-4 if run.settings.get("integrator") == "RK4" else 1e-8
+    assert math.hypot(n_x - expected[0], n_y - expected[1]) < tolerance
+    if engine.name == "pymunk":
+        assert run.out_of_plane_drift is None
+    else:
+        assert run.out_of_plane_drift == 0.0  # planar joints: exactly in the plane
+    assert run.wall_time_s > 0.0
+
+
+def test_impulse_matches_momentum_change(engine):
+    # Reason for 1e-9: the engines' reported contact impulses against m·Δv, both exact
+    # to rounding for one-step impacts; MuJoCo's is derived from momentum (equal by definition).
+    scene = SCENES["two-disks"][0]
+    run = engine.run(scene, preset="accurate")
+    body = scene.bodies[1]
+    dvx = run.velocities[1][0] - body.velocity[0]
+    dvy = run.velocities[1][1] - body.velocity[1]
+    n_x, n_y = run.contact_normal
+    t_x, t_y = n_y, -n_x
+    assert run.normal_impulse == pytest.approx(body.mass * (dvx * n_x + dvy * n_y), abs=1e-9)
+    assert run.tangential_impulse == pytest.approx(body.mass * (dvx * t_x + dvy * t_y), abs=1e-9)
+
+
+@pytest.mark.parametrize("preset", PRESET_NAMES)
+def test_bit_identical_reruns_even_after_other_scenes(engine, preset):
+    disk, rod, pair = SCENES["disk-spin"][0], SCENES["rod-45"][0], SCENES["two-disks"][0]
+    first = engine.run(disk, preset=preset)
+    engine.run(rod, preset=preset)
+    engine.run(pair, preset=preset)
+    engine.run(disk, preset="accurate" if preset == "defaults" else "defaults")
+    second = engine.run(disk, preset=preset)
+    assert first == second  # every field but wall time, floats bit for bit
+    assert first.u_after.tobytes() == second.u_after.tobytes()
+
+
+def test_e0_resting_contact_does_not_leak_into_next_run(engine):
+    # e = 0 leaves the bodies touching at the end: the next run must not inherit contact state.
+    base = SCENES["box-corner"][0]
+    plastic = Scene(base.bodies, 0.0, base.friction, ground=True, name="box-plastic")
+    first = engine.run(base, preset="defaults")
+    engine.run(plastic, preset="defaults")
+    assert engine.run(base, preset="defaults") == first
+
+
+def test_no_contact_and_step_cap_statuses(engine):
+    leaving = Scene((Body("disk", Disk(0.1), 1.0, (0.0, 0.2), 0.0, (0.0, 1.0), 0.0),), 0.5, 0.3,
+                    ground=True, name="leaving")
+    run = engine.run(leaving, preset="accurate", overrides={"max_steps": 5})
+    assert run.status == "no-contact" and run.steps == 5 and run.step_cap_hit
+    assert run.normal_impulse is None
+    capped = engine.run(SCENES["rod-45"][0], preset="accurate", overrides={"max_steps": 1})
+    assert capped.steps == 1
+    if engine.name == "mujoco":  # a soft contact lasts ~50 steps
+        assert capped.status == "no-separation" and capped.step_cap_hit
+
+
+def test_runs_are_complete_engine_runs(engine):
+    # Adapters build EngineRun through run_from_fields (no dataclass __init__): every field
+    # is there and the run equals one built the ordinary way.
+    import dataclasses
+
+    run = engine.run(SCENES["two-disks"][0], preset="accurate")
+    values = {f.name: getattr(run, f.name) for f in dataclasses.fields(EngineRun)}
+    assert set(vars(run)) == set(values)
+    assert EngineRun(**values) == run
+    assert dataclasses.asdict(run)["steps"] == run.steps
+
+
+def test_reused_scene_and_settings_objects_give_identical_runs(engine):
+    # Adapters remember per (scene, settings) object; a different but equal settings dict, a
+    # settings dict changed in place, and a scene rebuilt from the same values all agree.
+    scene = SCENES["rod-45"][0]
+    settings = engine.settings("accurate")
+    first = engine.run(scene, settings)
+    assert engine.run(scene, settings) == first
+    assert engine.run(scene, dict(settings)) == first
+    twin = Scene(scene.bodies, scene.restitution, scene.friction, ground=scene.ground, name=scene.name)
+    assert engine.run(twin, settings) == first
+    settings["max_steps"] = 1
+    capped = engine.run(scene, settings)
+    assert capped.steps == 1 and capped.settings["max_steps"] == 1
+
+
+def test_mutable_scene_is_not_remembered(engine):
+    # A scene holding a list is unhashable, so it is checked and planned on every run: an
+    # in-place change of its state takes effect.
+    body = Body("disk", Disk(0.1), 1.0, [0.0, 0.1], 0.0, [0.0, -1.0], 0.0)
+    scene = Scene((body,), 0.5, 0.3, ground=True, name="mutable")
+    assert engine.run(scene, preset="accurate", overrides={"max_steps": 5}).status != "no-contact"
+    body.velocity[1] = 1.0  # now leaving the ground
+    body.position[1] = 0.2
+    assert engine.run(scene, preset="accurate", overrides={"max_steps": 5}).status == "no-contact"
+
+
+def test_ke_norm():
+    scene = SCENES["two-disks"][0]
+    u = scene.state()
+    assert ke_norm(scene, u) == pytest.approx(math.sqrt(u @ scene.mass_matrix() @ u), rel=1e-15)
+
+
+@pytest.mark.parametrize("field", ["position", "velocity"])
+def test_vector_of_wrong_length_names_body_and_field(engine, field):
+    values = {"position": (0.0, 0.1), "velocity": (0.0, -1.0)}
+    values[field] = (*values[field], 5.0)
+    body = Body("puck", Disk(0.1), 1.0, values["position"], 0.0, values["velocity"], 0.0)
+    with pytest.raises(ValueError, match=rf"'puck' {field} must be \(x, y\).*5\.0"):
+        engine.run(Scene((body,), 0.5, 0.3, ground=True, name="bad"), preset="accurate")
