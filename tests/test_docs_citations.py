@@ -12,6 +12,7 @@ cited by title, never by number: the documents do not number them.
 from __future__ import annotations
 
 import re
+import sys
 import subprocess
 from pathlib import Path
 
@@ -118,7 +119,7 @@ def test_headings_ignore_code_blocks():
 
 
 def test_a_missing_document_and_a_missing_section_are_reported(tmp_path, monkeypatch):
-    monkeypatch.setattr(__import__(__name__), "ROOT", tmp_path)
+    monkeypatch.setattr(sys.modules[__name__], "ROOT", tmp_path)
     (tmp_path / "docs").mkdir()
     (tmp_path / "docs" / "theory.md").write_text("# Theory\n\n## Conventions\n")
     citing = tmp_path / "code.py"

@@ -5,7 +5,7 @@ solver iterations, sub-steps, presets, MuJoCo's contact time constant and integr
 four scenario families (:func:`harness.bench.engines.reference_scenes`):
 
 * ``disk``       disk r 0.1 m, v (1, −1) m/s (sticks under newton-lcp);
-* ``rod``        the 45° rod, v (0.5, −1) m/s: slip reversal under Poisson (THEORY.md §7);
+* ``rod``        the 45° rod, v (0.5, −1) m/s: slip reversal under Poisson (docs/theory.md, 'The velocity-level law (newton-lcp)');
 * ``box-corner`` a box corner with spin;
 * ``two-bodies`` two disks off-centre, both free.
 

@@ -2,7 +2,7 @@
 
 ``impact-harness paper`` writes ``reports/paper-table3.md`` and ``reports/paper-table3.png``:
 every printed cell beside the computed value for the paper's three laws, marked reproduced
-or not, with the reason for each miss (THEORY.md §6), and both Stronge versions side by
+or not, with the reason for each miss (docs/theory.md, 'Table 3 and its errata'), and both Stronge versions side by
 side. The equations win over the print: the solver is never tuned toward an erratum.
 """
 
@@ -26,7 +26,7 @@ CELL_LABELS = {
 }
 STRONGE_E_ENERGETIC = 0.8  # the paper's Section 5: e_e = 0.8 for every Stronge row
 
-# Why a printed cell is not reproduced (THEORY.md §6), keyed by (law, row within law, cell).
+# Why a printed cell is not reproduced (docs/theory.md, 'Table 3 and its errata'), keyed by (law, row within law, cell).
 MISS_REASONS = {
     ("poisson", 2, "vtS"): "misprint: (38) and the impulse process both give −0.181",
     ("poisson", 2, "dE"): (

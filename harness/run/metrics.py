@@ -7,7 +7,7 @@ Departure (the one error measure of the harness)
     exact match and is about 1 when the post-impact motion is as wrong as the motion itself.
 
 The split
-    An engine departs from Poisson for two reasons (ENGINES.md): the law it solves, and how
+    An engine departs from Poisson for two reasons (docs/engines.md, 'The engine contract'): the law it solves, and how
     well it solves it. For sequential-impulse engines the law is ``newton-lcp`` (restitution
     as a target on ``v_n``, Coulomb friction at the end state), so
 

@@ -1,6 +1,6 @@
 """Scenario files: TOML descriptions of one impact (or a sweep of impacts), read and checked.
 
-A scenario is a TOML file under ``scenarios/`` (format in ``docs/scenarios.md``) read into a
+A scenario is a TOML file under ``scenarios/`` (format in ``scenarios/README.md``) read into a
 frozen :class:`Scenario`. Three kinds of system:
 
 * ``bodies`` (the default): one body against the fixed ground (``[ground]``) or two free

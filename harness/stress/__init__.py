@@ -18,7 +18,7 @@ neighbouring inputs, relative to ``|I_n| + |I_t|``, must shrink with the distanc
 ulp it is rounding); Poisson and Stronge never gain energy (a gain above 1e-10 of the
 energy scale ``|v_n| I_n + |v_t I_t|`` plus the rounding allowance ``10 eps/c`` of a problem of
 conditioning ``c = Δ/(m_nn m_tt)`` is counted; raw gains above 1e-10 are reported apart). Newton's gains are counted too, as
-information (Newton can gain energy; THEORY.md §4).
+information (Newton can gain energy; docs/theory.md, 'Newton's law').
 
 Engines (every installed engine, via :func:`harness.engines.load_engine`): a disk and the
 45° rod against the ground, scaled in mass (1e-6 … 1e6 kg), size (1e-4 … 1e3 m), speed

@@ -48,10 +48,10 @@ def test_measure_pymunk_on_two_points(monkeypatch):
     result = bench_accuracy.measure_engine("pymunk", quick=True)
     rows = {(r["setting"], r["family"]): r for r in result["rows"]}
     assert len(rows) == 2 * len(bench_accuracy.FAMILIES)
-    # the accurate setting solves newton-lcp to rounding on every family (ENGINES.md: ~1e-12);
+    # the accurate setting solves newton-lcp to rounding on every family (docs/engines.md, 'pymunk': ~1e-12);
     # 1e-9 leaves room for the step's position update
     for family in bench_accuracy.FAMILIES:
         assert rows[("it=100", family)]["departure"]["own"] < 1e-9, family
         assert rows[("it=100", family)]["time_per_impact_s"] > 0
-    # one iteration on the coupled rod is far off (ENGINES.md: 2-5 iterations are badly wrong)
+    # one iteration on the coupled rod is far off (docs/engines.md, 'pymunk': 2-5 iterations are badly wrong)
     assert rows[("it=1", "rod")]["departure"]["own"] > 1e-3

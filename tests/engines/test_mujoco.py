@@ -73,7 +73,7 @@ def test_restitution_map_against_direct_integration(zeta):
 
 
 def test_restitution_map_values():
-    # ENGINES.md: e = 0.5 needs ζ = 0.2553, not the linear formula's 0.2155.
+    # docs/engines.md, 'MuJoCo': e = 0.5 needs ζ = 0.2553, not the linear formula's 0.2155.
     assert damping_ratio_for_restitution(0.5) == pytest.approx(0.25528, abs=1e-5)  # printed digits
     linear = math.exp(-0.2155 * math.pi / math.sqrt(1 - 0.2155**2))
     assert linear == pytest.approx(0.5, abs=1e-3)  # the linear formula's own answer
@@ -145,7 +145,7 @@ def test_accurate_departure_from_newton_lcp_pinned(engine, scene_name, measured)
 
 def test_accurate_disk_never_sticks(engine):
     # newton-lcp: the disk sticks (contact slip 1 m/s -> 0). MuJoCo leaves 0.265 of it
-    # (ENGINES.md: 0.2-0.26). Reason for 0.01 m/s: a pinned measurement, deterministic.
+    # (docs/engines.md, 'MuJoCo'). Reason for 0.01 m/s: a pinned measurement, deterministic.
     run = engine.run(SCENES["disk"][0], preset="accurate")
     vx, _, omega = run.velocities[0]
     slip_after = vx + omega * 0.1  # contact point velocity, r = (0, -0.1)
@@ -155,7 +155,7 @@ def test_accurate_disk_never_sticks(engine):
 @pytest.mark.parametrize("overrides", [{"cone": "elliptic"}, {"cone": "elliptic", "impratio": 100.0},
                                        {"noslip_iterations": 50}, {"solver": "PGS"}])
 def test_friction_knobs_do_not_cure_soft_friction(engine, overrides):
-    # ENGINES.md: impratio, noslip and the cone type leave the departure where it is.
+    # docs/engines.md, 'MuJoCo': impratio, noslip and the cone type leave the departure where it is.
     # Why: none of them changes the friction rows' reference a_t = -b·v_t (module docstring).
     # Reason for 1%: the measured spread of these variants is < 0.05%.
     scene, contact, normal = SCENES["disk"]
@@ -168,7 +168,7 @@ def test_friction_knobs_do_not_cure_soft_friction(engine, overrides):
 @pytest.mark.parametrize("e", [0.0, 0.5, 1.0])
 def test_defaults_ignore_e_and_bounce_at_0_112(engine, e):
     # Default solref (0.02, 1) and solimp (0.9, 0.95, ...): e is not used. Measured bounce
-    # 0.1118 starting at touch (ENGINES.md's ≈0.13 came from a different start phase: 0.1246
+    # 0.1118 starting at touch (an earlier note's ≈0.13 came from a different start phase: 0.1246
     # with approach_steps 0.5). Reason for 1e-3: a pinned, deterministic value.
     run = engine.run(drop(1.0, e), preset="defaults")
     assert run.velocities[0][1] == pytest.approx(0.1118, abs=1e-3)

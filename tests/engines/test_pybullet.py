@@ -100,7 +100,7 @@ def test_defaults_bounce_is_e_v_minus_slop_bias(engine, speed):
 
 @pytest.mark.parametrize("approach, measured", [(0.25, 0.24738), (0.5, 0.0)])
 def test_defaults_early_contact_bias(engine, approach, measured):
-    # ENGINES.md: the contact is found up to 0.02 m early and the solver aims at
+    # docs/engines.md, 'pybullet': the contact is found up to 0.02 m early and the solver aims at
     # e·|v| − gap/dt. Starting `approach` steps before touch at 1 m/s the gap at detection is
     # approach·dt·v, so the bounce is 0.5 − approach (floored at 0), minus the slop bias.
     # Reason for 5e-4 m/s: the slop/damping terms above. `accurate` ignores the phase.

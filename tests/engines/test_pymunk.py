@@ -40,7 +40,7 @@ def test_accurate_equals_newton_lcp(engine, scene_name):
 
 
 def test_rod_slip_reversal_values(engine):
-    # ENGINES.md's rod: newton-lcp gives (0.7202, -0.2660, -2.1666). Reason for 5e-5: the
+    # docs/engines.md, 'The reference scenes', the rod: newton-lcp gives (0.7202, -0.2660, -2.1666). Reason for 5e-5: the
     # printed 4 digits.
     scene = SCENES["rod-45"][0]
     run = engine.run(scene, preset="accurate")
@@ -63,7 +63,7 @@ def test_defaults_departure_pinned(engine, scene_name, measured):
 
 
 def test_iterations_below_20_are_wrong_for_coupled_contact(engine):
-    # ENGINES.md: coupled contacts need >= 20 iterations. Measured here: 2 iterations depart
+    # docs/engines.md, 'pymunk': coupled contacts need >= 20 iterations. Measured here: 2 iterations depart
     # by ~1e-2, 20 by ~1e-9 (reason for the bounds: an order of magnitude around each).
     scene, contact, normal = SCENES["rod-45"]
     law = newton_lcp_velocities(scene, contact, normal)
@@ -84,7 +84,7 @@ def test_product_rule_gives_the_pair_exactly_e(engine):
 
 
 def test_collision_slop_moves_positions_only(engine):
-    # ENGINES.md: slop and bias act on positions, not velocities -- bit-identical velocities.
+    # docs/engines.md, 'pymunk': slop and bias act on positions, not velocities -- bit-identical velocities.
     scene = SCENES["rod-45"][0]
     base = engine.run(scene, preset="accurate")
     changed = engine.run(scene, preset="accurate", overrides={"collision_slop": 0.0,

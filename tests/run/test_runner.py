@@ -18,7 +18,7 @@ from harness.scenarios import SCENARIO_DIR, load_scenario
 ROD = load_scenario(SCENARIO_DIR / "rod-45-slip-reversal.toml")
 TWO_SLED = load_scenario(SCENARIO_DIR / "two-sled-row2.toml")
 DISK_SWEEP = load_scenario(SCENARIO_DIR / "sweep-disk-alpha.toml")
-# Engines that solve newton-lcp exactly under `accurate` reach it to round-off (ENGINES.md:
+# Engines that solve newton-lcp exactly under `accurate` reach it to round-off (docs/engines.md, 'pymunk' and 'pybullet':
 # about 1e-12); the tests allow 1e-9 relative in the kinetic-energy norm.
 EXACT = 1e-9
 
@@ -99,7 +99,7 @@ def test_the_split_of_a_departure():
         assert split["law_part"] == records["newton-lcp"].departure["poisson"]
         # triangle inequality of the norm; 1e-12 absorbs round-off of the three norms
         assert split["total"] <= split["law_part"] + split["solve_part"] + 1e-12
-    # On this rod the law itself is ~20% from Poisson (ENGINES.md), the exact engines ~0.
+    # On this rod the law itself is ~20% from Poisson (docs/engines.md, 'The reference scenes'), the exact engines ~0.
     assert records["newton-lcp"].departure["poisson"] > 0.15
     assert records["pymunk.accurate"].departure["newton-lcp"] < EXACT
 
