@@ -245,12 +245,18 @@ def _fixed_point(system, mapping, max_iterations=30):
     scale = system.impulse_scale()
     impulses = mapping(np.zeros(size))
     determinate = True
+    previous = math.inf
     for _ in range(max_iterations):
         if not np.isfinite(impulses).all():
             return impulses, False, determinate
         residual = impulses - mapping(impulses)
-        if np.max(np.abs(residual)) <= FIXED_POINT_TOLERANCE * (scale + np.max(np.abs(impulses))):
-            return impulses, True, determinate
+        size_now = np.max(np.abs(residual))
+        bound = scale + np.max(np.abs(impulses))
+        # Iterate to rounding (an affine map needs one or two steps), stop when that stalls;
+        # accept when the residual is below the tolerance.
+        if size_now <= 1e-15 * bound or size_now > 0.5 * previous:
+            return impulses, size_now <= FIXED_POINT_TOLERANCE * bound, determinate
+        previous = size_now
         step = 1e-6 * (scale + np.max(np.abs(impulses)))
         jacobian = np.eye(size)
         for k in range(size):
@@ -262,7 +268,9 @@ def _fixed_point(system, mapping, max_iterations=30):
         correction, _, rank, _ = np.linalg.lstsq(jacobian, -residual, rcond=1e-9)
         determinate = rank == size
         impulses = impulses + correction
-    return impulses, False, determinate
+    residual = np.max(np.abs(impulses - mapping(impulses)))
+    bound = scale + np.max(np.abs(impulses))
+    return impulses, bool(residual <= FIXED_POINT_TOLERANCE * bound), determinate
 
 
 def _law_at(system, law, i, vn, vt, sign):
@@ -379,7 +387,7 @@ def _check_combination(system, law, types, signs, impulses, determinate, toleran
     for i, (ctype, sign) in enumerate(zip(types, signs)):
         if ctype == SEPARATING:
             continue
-        mnn, mnt, mtt = system.single_terms(i)
+        _mnn, mnt, _mtt = system.single_terms(i)
         vn, vt = system.effective_approach(i, seen)
         if _frame_sign(vt, mnt) != sign:
             return None
@@ -406,9 +414,9 @@ def _already_found(found, solution, system) -> bool:
     for other in found:
         if np.max(np.abs(other.impulses() - solution.impulses())) <= 1e-9 * scale:
             return True
-        if not (other.determinate and solution.determinate):
-            if np.max(np.abs(other.delta_u - solution.delta_u)) <= 1e-9 * _speed_of(system):
-                return True
+        family = not (other.determinate and solution.determinate)
+        if family and np.max(np.abs(other.delta_u - solution.delta_u)) <= 1e-9 * _speed_of(system):
+            return True
     return False
 
 
@@ -448,7 +456,7 @@ def newton_coulomb_solutions(system: ContactSystem) -> list[MultiContactSolution
         rhs = np.zeros(2 * count)
         signs = []
         for i, mode in enumerate(modes):
-            mnn, mnt, mtt = system.single_terms(i)
+            _mnn, mnt, _mtt = system.single_terms(i)
             sign = _frame_sign(float(approach[2 * i + 1]), mnt)
             signs.append(sign)
             n, t = 2 * i, 2 * i + 1
@@ -488,9 +496,7 @@ def _lcp_holds(system, modes, signs, solution, targets, tolerance) -> bool:
         if mode == LCP_STICK:
             if abs(tangential) > system.mu[i] * normal + impulse_tolerance:
                 return False
-        elif mode == LCP_FORWARD and slip < -tolerance:
-            return False
-        elif mode == LCP_REVERSE and slip > tolerance:
+        elif mode == LCP_FORWARD and slip < -tolerance or mode == LCP_REVERSE and slip > tolerance:
             return False
     return True
 
