@@ -11,7 +11,7 @@ Newton–Coulomb law of sequential-impulse engines.
 (3, 0.82)
 """
 
-from . import builders, errors, laws, process
+from . import builders, errors, laws, process, simultaneous
 from .builders import ImpactProblem, PlanarBody
 from .errors import STATUS_MESSAGES, ImpactInputError
 from .process import impulse_process, process_collision_type, sequential_impulses
@@ -32,6 +32,7 @@ __all__ = [
     "process",
     "process_collision_type",
     "sequential_impulses",
+    "simultaneous",
     "solve",
     "solve_batch",
 ]

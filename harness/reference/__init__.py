@@ -1,0 +1,1 @@
+"""Reference answers for situations the single-contact laws do not cover."""

@@ -1,0 +1,176 @@
+"""Event-driven reference for nearly simultaneous contacts of one body on the ground.
+
+A rigid-body answer for a body whose second feature (box corner, rod end cap) strikes just
+after the first: a sequence of single-contact impacts with exact free flight between them.
+The harness simulates impact windows without gravity, so free flight is
+``x(t) = x0 + v t``, ``θ(t) = θ0 + ω t``; a feature's height is then
+``y0 + v_y t + r_y(t) − radius``, with ``r`` rotating at ``ω``, and its next contact is the
+first root of that function, found by a sampled bracket and bisection to rounding.
+
+At each impact the single-contact law of :func:`planar_impact.solve` is applied at the
+feature's ground point. Features touching the ground *and* approaching at the same instant
+(an exactly flat face) are struck one after another in index order, and the result says so
+(``simultaneous``): that situation belongs to :mod:`planar_impact.simultaneous`.
+docs/multi-contact.md, 'Event-driven reference', describes the method and its limits.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+import planar_impact as pi
+from harness.geometry import local_core, rotation
+from harness.scene import Body, Scene
+
+# A feature counts as touching when its gap is below this fraction of the body's size: the
+# event times are found to rounding (~1e-16 of the size), so 1e-12 separates "touching" from
+# "just above the ground" with margin on both sides.
+TOUCH_TOLERANCE = 1e-12
+# A feature approaches when v_n < -1e-12 × the body's speed scale (rounding of v_n is ~1e-16
+# of it; engines' and the laws' velocities are compared to 1e-6 at best).
+APPROACH_TOLERANCE = 1e-12
+
+
+@dataclass(frozen=True)
+class ImpactEvent:
+    feature: int  # index of the core point (box corner, rod end cap)
+    time: float  # s since the start of the scene
+    collision_type: int  # the law's type (Poisson/Stronge 1–5; Newton 1–3)
+    vn_approach: float
+    vt_approach: float
+    simultaneous: bool  # another feature touched and approached at the same instant
+
+
+@dataclass(frozen=True)
+class EventSequence:
+    """The impacts in order, the final speeds ``(v_x, v_y, ω)`` and pose, and whether the
+    sequence ended because every feature separates (``finished``) rather than at a cap."""
+
+    law: str
+    events: tuple[ImpactEvent, ...]
+    velocity: tuple[float, float]
+    angular_velocity: float
+    position: tuple[float, float]
+    angle: float
+    time: float
+    finished: bool
+
+    def speeds(self) -> np.ndarray:
+        return np.array([*self.velocity, self.angular_velocity])
+
+
+def _feature_state(body: Body, position, angle):
+    points, radius = local_core(body.shape)
+    world = points @ rotation(angle).T + np.asarray(position, dtype=float)
+    return world, radius
+
+
+def _height(points_local, radius, position, angle, velocity, omega, t, k):
+    """Height above the ground of feature ``k``'s lowest surface point after free flight t."""
+    c, s = math.cos(angle + omega * t), math.sin(angle + omega * t)
+    x, y = points_local[k]
+    return position[1] + velocity[1] * t + (s * x + c * y) - radius
+
+
+def _first_contact(points_local, radius, position, angle, velocity, omega, horizon, size):
+    """Earliest ``t`` in ``(0, horizon]`` at which a feature reaches the ground from above,
+    with its index; ``(None, None)`` if none does."""
+    # Samples fine enough that no root pair fits between two of them: the body turns by at
+    # most 0.05 rad per sample.
+    samples = max(64, math.ceil(abs(omega) * horizon / 0.05) + 1)
+    times = np.linspace(0.0, horizon, samples + 1)
+    best_time, best_feature = None, None
+    for k in range(len(points_local)):
+        heights = [_height(points_local, radius, position, angle, velocity, omega, t, k)
+                   for t in times]
+        for a in range(samples):
+            low, high = times[a], times[a + 1]
+            h_low, h_high = heights[a], heights[a + 1]
+            if best_time is not None and low >= best_time:
+                break
+            if h_low > TOUCH_TOLERANCE * size and h_high <= 0.0:
+                for _ in range(200):  # bisection to rounding
+                    middle = 0.5 * (low + high)
+                    if middle in (low, high):
+                        break
+                    if _height(points_local, radius, position, angle, velocity, omega,
+                               middle, k) > 0.0:
+                        low = middle
+                    else:
+                        high = middle
+                if best_time is None or high < best_time:
+                    best_time, best_feature = high, k
+                break
+    return best_time, best_feature
+
+
+def event_sequence(scene: Scene, law: str = "poisson", max_impacts: int = 1000,
+                   horizon: float | None = None) -> EventSequence:
+    """Impacts and free flights of one body against the ground until every feature separates.
+
+    ``horizon`` (s) bounds the search for the next contact; by default the time for the body
+    to rise by its size at its current upward speed, or one turn when it does not rise.
+    """
+    if not scene.ground:
+        raise ValueError("event_sequence: only one body against the ground is built so far")
+    body = scene.bodies[0]
+    points_local, radius = local_core(body.shape)
+    size = float(np.max(np.linalg.norm(points_local, axis=1))) + radius
+    position = np.asarray(body.position, dtype=float)
+    angle = float(body.angle)
+    velocity = np.asarray(body.velocity, dtype=float)
+    omega = float(body.angular_velocity)
+    clock = 0.0
+    events: list[ImpactEvent] = []
+    finished = False
+    while len(events) < max_impacts:
+        world, _ = _feature_state(body, position, angle)
+        heights = world[:, 1] - radius
+        speed_scale = max(float(np.hypot(*velocity)) + abs(omega) * size, 1e-300)
+        struck = False
+        touching = [k for k in range(len(world)) if heights[k] <= TOUCH_TOLERANCE * size]
+        for k in touching:
+            point = np.array([world[k, 0], 0.0])
+            problem = pi.builders.rigid_body_against_ground(
+                pi.PlanarBody(mass=body.mass, inertia=body.moment_of_inertia,
+                              position=tuple(position), velocity=tuple(velocity),
+                              angular_velocity=omega), point)
+            vn = float(problem.wn @ problem.u)
+            if vn >= -APPROACH_TOLERANCE * speed_scale:
+                continue
+            others = [j for j in touching if j != k and _approach(problem, body, position,
+                      velocity, omega, world[j], radius) < -APPROACH_TOLERANCE * speed_scale]
+            result = problem.solve(mu=scene.friction, e=scene.restitution, hypothesis=law)
+            velocity = result.u_after[:2].copy()
+            omega = float(result.u_after[2])
+            events.append(ImpactEvent(k, clock, result.collision_type, result.vn_approach,
+                                      result.vt_approach, bool(others)))
+            struck = True
+            break
+        if struck:
+            continue
+        limit = horizon
+        if limit is None:
+            rise = velocity[1]
+            limit = (2.0 * size / rise) if rise > 0 else 2.0 * math.pi / max(abs(omega), 1e-3)
+        when, _feature = _first_contact(points_local, radius, position, angle, velocity, omega,
+                                       limit, size)
+        if when is None:
+            finished = True
+            break
+        position = position + velocity * when
+        angle = angle + omega * when
+        clock += when
+    return EventSequence(law=law, events=tuple(events), velocity=(float(velocity[0]),
+                         float(velocity[1])), angular_velocity=omega,
+                         position=(float(position[0]), float(position[1])), angle=angle,
+                         time=clock, finished=finished)
+
+
+def _approach(problem, body, position, velocity, omega, feature_point, radius):
+    """Normal velocity of the ground point under feature ``feature_point`` (m/s)."""
+    r_x = feature_point[0] - position[0]
+    return float(velocity[1] + omega * r_x)

@@ -1,0 +1,679 @@
+"""Several simultaneous contacts on one system (the paper's Section 5, eq. (75)).
+
+With ``m`` contacts the impulse–momentum balance (A12) becomes (75),
+``M Δu = Σ_i (w_n^(i) I_n^(i) + w_t^(i) I_t^(i))``, and each contact's velocity change picks
+up the other contacts' impulses through the cross terms of the Delassus matrix
+``W = J M⁻¹ Jᵀ`` (``J`` stacks the rows ``w_n^(i)``, ``w_t^(i)``). Three readings are built
+here (docs/multi-contact.md explains each, with a worked example):
+
+* :func:`coherent_solutions`: the paper's proposal after (75). Every combination of the
+  collision types (five for Poisson and the paper's Stronge, three for Newton) is evaluated
+  and tested for coherence; all coherent combinations are returned. A type's formulas are
+  applied to contact ``i`` with the *effective* approach velocities
+  ``v^A(i) + Σ_{j≠i} W_ij I^(j)`` (the (A22)/(A23) of contact ``i`` rewritten from (75)),
+  which makes each combination a fixed point of ``m`` single-contact laws.
+* :func:`newton_coulomb_solutions`: the velocity-level Newton–Coulomb law sequential-impulse
+  engines solve, by exact enumeration of the contact modes; :func:`projected_gauss_seidel`
+  is the engines' iteration, for the cross-check.
+* :func:`sequential_impacts` / :func:`all_orders`: the contacts taken one at a time with the
+  single-contact solver, in a given order, until none approaches.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import errors, laws, solver
+from .errors import ImpactInputError
+
+#: Laws of :func:`coherent_solutions` and their collision types (Newton numbers its three).
+TYPE_LAWS: dict[str, tuple[int, ...]] = {
+    "poisson": (1, 2, 3, 4, 5),
+    "stronge-paper": (1, 2, 3, 4, 5),
+    "newton": (1, 2, 3),
+}
+#: Type code of a contact that takes no impulse (only with ``allow_separating=True``).
+SEPARATING = 0
+
+# Newton–Coulomb contact modes (newton-lcp numbering, plus 0 for a contact that separates).
+LCP_SEPARATE, LCP_STICK, LCP_REVERSE, LCP_FORWARD = 0, 1, 2, 3
+
+# Relative tolerances. Impulses of one combination are the fixed point of an affine map
+# (Poisson, Newton) found to rounding, or of a smooth map (stronge-paper) found by Newton
+# iterations: 1e-10 of the impulse scale separates "converged" from "no fixed point" with
+# orders of magnitude to spare on both sides. Sign tests on velocities allow 1e-9 of the
+# approach speed: a velocity that should be exactly 0 (a sticking contact) comes out as a
+# sum of 2m products, each rounded to ~1e-16 of the approach speed times the condition of W.
+FIXED_POINT_TOLERANCE = 1e-10
+VELOCITY_TOLERANCE = 1e-9
+
+
+@dataclass(frozen=True)
+class ContactSystem:
+    """``m`` contacts on one system in generalized speeds, with the (A20) terms per pair.
+
+    ``delassus[2i + a, 2j + b]`` is ``w_a^(i) · M⁻¹ w_b^(j)`` with ``a, b`` = 0 (normal),
+    1 (tangent); ``approach[2i]``, ``approach[2i + 1]`` are ``v_n^A(i)``, ``v_t^A(i)``.
+    ``inverse_rows[i]`` holds ``M⁻¹ w_n^(i)`` and ``M⁻¹ w_t^(i)`` as columns, computed as
+    :func:`planar_impact.solve` computes them (so that ``m = 1`` matches it bit for bit).
+    """
+
+    mass_matrix: np.ndarray
+    wn: np.ndarray  # (m, p)
+    wt: np.ndarray  # (m, p)
+    u: np.ndarray  # (p,)
+    mu: np.ndarray  # (m,)
+    e: np.ndarray  # (m,)
+    inverse_rows: tuple[np.ndarray, ...]
+    delassus: np.ndarray  # (2m, 2m)
+    approach: np.ndarray  # (2m,)
+    terms: tuple[tuple[float, float, float], ...]  # (m_nn, m_nt, m_tt) per contact (A20)
+
+    @property
+    def count(self) -> int:
+        return self.wn.shape[0]
+
+    def single_terms(self, i: int) -> tuple[float, float, float]:
+        """``(m_nn, m_nt, m_tt)`` of contact ``i`` alone (A20), exactly as ``solve`` has them."""
+        return self.terms[i]
+
+    def effective_approach(self, i: int, impulses: np.ndarray) -> tuple[float, float]:
+        """``v^A(i) + Σ_{j≠i} W_ij I^(j)``: contact ``i``'s velocities once the other
+        contacts' impulses are applied, by (75) through (A16), (A22) and (A23)."""
+        vn, vt = float(self.approach[2 * i]), float(self.approach[2 * i + 1])
+        for j in range(self.count):
+            if j == i:
+                continue
+            block = self.delassus[2 * i:2 * i + 2, 2 * j:2 * j + 2]
+            vn += float(block[0, 0] * impulses[2 * j] + block[0, 1] * impulses[2 * j + 1])
+            vt += float(block[1, 0] * impulses[2 * j] + block[1, 1] * impulses[2 * j + 1])
+        return vn, vt
+
+    def delta_u(self, impulses: np.ndarray) -> np.ndarray:
+        """``Δu = Σ_i M⁻¹ (w_n^(i) I_n^(i) + w_t^(i) I_t^(i))``, (75)."""
+        total = None
+        for i, inverse in enumerate(self.inverse_rows):
+            term = inverse[:, 0] * impulses[2 * i] + inverse[:, 1] * impulses[2 * i + 1]
+            total = term if total is None else total + term
+        return total
+
+    def impulse_scale(self) -> float:
+        """A size for impulses: the largest approach speed over the smallest diagonal of W."""
+        speed = float(np.max(np.abs(self.approach)))
+        return speed / float(np.min(np.diag(self.delassus))) if speed > 0 else 1.0
+
+    def speed_scale(self) -> float:
+        return max(float(np.max(np.abs(self.approach))), 1e-300)
+
+
+def contact_system(*, mass_matrix, wn, wt, u, mu, e) -> ContactSystem:
+    """Check and assemble ``m`` contacts: ``wn``, ``wt`` are ``(m, p)`` (one row per contact),
+    ``mu`` and ``e`` scalars or length ``m``. Raises :class:`ImpactInputError`."""
+    matrix = solver._check_mass_matrix(mass_matrix)
+    size = matrix.shape[0]
+    try:
+        np.linalg.cholesky(matrix)
+    except np.linalg.LinAlgError:
+        raise ImpactInputError("mass_matrix: must be positive definite (Cholesky failed)") from None
+    wn_rows = np.atleast_2d(np.asarray(wn, dtype=float))
+    wt_rows = np.atleast_2d(np.asarray(wt, dtype=float))
+    if wn_rows.shape != wt_rows.shape or wn_rows.ndim != 2 or wn_rows.shape[1] != size:
+        raise ImpactInputError(
+            f"wn, wt: expected two (m, {size}) arrays, got {wn_rows.shape} and {wt_rows.shape}")
+    count = wn_rows.shape[0]
+    if count == 0 or not (np.isfinite(wn_rows).all() and np.isfinite(wt_rows).all()):
+        raise ImpactInputError("wn, wt: need at least one contact, all entries finite")
+    speeds = solver._as_vector("u", u, size)
+    mus = np.broadcast_to(np.asarray(mu, dtype=float), (count,)).copy()
+    restitutions = np.broadcast_to(np.asarray(e, dtype=float), (count,)).copy()
+    for i in range(count):
+        mus[i] = solver._check_scalar(f"mu[{i}]", mus[i], 0.0, np.inf)
+        restitutions[i] = solver._check_scalar(f"e[{i}]", restitutions[i], 0.0, 1.0)
+    # One solve per contact, as planar_impact.solve does it (bit identity for m = 1).
+    inverse_rows = tuple(np.linalg.solve(matrix, np.stack([wn_rows[i], wt_rows[i]], axis=1))
+                         for i in range(count))
+    rows = [wn_rows[i // 2] if i % 2 == 0 else wt_rows[i // 2] for i in range(2 * count)]
+    columns = [inverse_rows[j // 2][:, j % 2] for j in range(2 * count)]
+    delassus = np.array([[float(row @ column) for column in columns] for row in rows])
+    approach = np.array([float(row @ speeds) for row in rows])
+    terms = tuple((float(wn_rows[i] @ inverse[:, 0]), float(wn_rows[i] @ inverse[:, 1]),
+                   float(wt_rows[i] @ inverse[:, 1])) for i, inverse in enumerate(inverse_rows))
+    return ContactSystem(matrix, wn_rows, wt_rows, speeds, mus, restitutions, inverse_rows,
+                         delassus, approach, terms)
+
+
+@dataclass(frozen=True)
+class MultiContactSolution:
+    """One answer for ``m`` contacts. Arrays are per contact, in the caller's ``t``.
+
+    ``types``: the collision type per contact (Poisson/Stronge 1–5, Newton and Newton–Coulomb
+    1 stick, 2 reverse, 3 forward; 0 separating, no impulse). ``determinate`` is False where
+    the impulses of this combination are not unique (a one-parameter family, e.g. two sticking
+    contacts on one face of one body); then the minimum-norm correction is returned.
+    """
+
+    law: str
+    types: tuple[int, ...]
+    normal_impulse: np.ndarray
+    tangential_impulse: np.ndarray
+    delta_u: np.ndarray
+    u_after: np.ndarray
+    vn_approach: np.ndarray
+    vt_approach: np.ndarray
+    vn_separation: np.ndarray
+    vt_separation: np.ndarray
+    energy_change: float
+    determinate: bool
+
+    def impulses(self) -> np.ndarray:
+        """``(I_n^(1), I_t^(1), I_n^(2), ...)``."""
+        return np.ravel(np.column_stack([self.normal_impulse, self.tangential_impulse]))
+
+
+# ------------------------------------------------------------------------------------------
+# The paper's proposal: type combinations tested for coherence
+# ------------------------------------------------------------------------------------------
+def _frame_sign(vt: float, mnt: float) -> float:
+    """The single-contact solver's orientation of ``t``: −1 flips it so that ``v_t^A ≥ 0``
+    (and ``m_nt ≥ 0`` where ``v_t^A = 0``), as in ``solve_batch``."""
+    return -1.0 if vt < 0 or (vt == 0 and mnt < 0) else 1.0
+
+
+def _forced_impulses(law, ctype, mnn, mnt, mtt, vn, vt, mu, e):
+    """``(I_n, I_t)`` of one contact by the formulas of collision type ``ctype``, in a frame
+    with ``v_t ≥ 0`` (not checked: the coherence test does). Affine in ``(v_n, v_t)`` for
+    Poisson and Newton; homogeneous of degree 1 for the paper's Stronge."""
+    scalars = [np.float64(x) for x in (mnn, mnt, mtt, vn, vt, mu)]
+    terms = laws.ContactTerms(*scalars)
+    with np.errstate(all="ignore"):
+        if law == "poisson":  # (26), (29), (36), (44), (49)
+            return laws.poisson_impulses(terms, np.float64(e), ctype)
+        if law == "stronge-paper":  # e_i by (64), (67), (70), (73), (74), then Poisson
+            e_i = laws.stronge_paper_restitution(terms, np.float64(e), ctype)
+            return laws.poisson_impulses(terms, e_i, ctype)
+        # Newton (Part A): the two-phase process of THEORY.md §2 with the type forced.
+        vn_abs, target = terms.vn_abs, e * terms.vn_abs  # ends where v_n = e|v_n^A| (A30)
+        if ctype == laws.NEWTON_FORWARD:
+            normal = (target + vn_abs) / terms.h
+            return normal, -mu * normal
+        p_g = vt / terms.g  # (A58), with v_t^A for the misprinted v_n^A
+        vn_g = terms.h * p_g - vn_abs
+        sticks = ctype == laws.NEWTON_STICK
+        slope_n = terms.delta / mtt if sticks else terms.q
+        slope_t = -mnt / mtt if sticks else mu
+        normal = p_g + (target - vn_g) / slope_n
+        return normal, -mu * p_g + slope_t * (normal - p_g)
+
+
+#: How a type's formulas see the other contacts (docs/multi-contact.md, 'The paper's proposal').
+COUPLINGS = ("effective", "none")
+
+
+def _contact_map(system, law, ctypes, signs, coupling="effective"):
+    """The map ``I ↦ (forced impulses of every contact at its effective approach)``; with
+    ``coupling="none"`` every contact sees its own ``v^A`` and the map is constant."""
+
+    def apply(impulses):
+        if coupling == "none":
+            impulses = np.zeros(2 * system.count)
+        out = np.zeros(2 * system.count)
+        for i, (ctype, sign) in enumerate(zip(ctypes, signs)):
+            if ctype == SEPARATING:
+                continue
+            mnn, mnt, mtt = system.single_terms(i)
+            vn, vt = system.effective_approach(i, impulses)
+            normal, tangential = _forced_impulses(law, ctype, mnn, sign * mnt, mtt, vn,
+                                                  sign * vt, system.mu[i], system.e[i])
+            out[2 * i], out[2 * i + 1] = float(normal), sign * float(tangential)
+        return out
+
+    return apply
+
+
+def _fixed_point(system, mapping, max_iterations=30):
+    """Solve ``I = mapping(I)`` by Newton's method with a central-difference Jacobian.
+
+    Starts from ``mapping(0)``, the contacts' answers with no coupling; for ``m = 1`` that is
+    already the fixed point (the effective approach does not depend on ``I``), exactly.
+    Returns ``(I, converged, determinate)``.
+    """
+    size = 2 * system.count
+    scale = system.impulse_scale()
+    impulses = mapping(np.zeros(size))
+    determinate = True
+    previous = math.inf
+    for _ in range(max_iterations):
+        if not np.isfinite(impulses).all():
+            return impulses, False, determinate
+        residual = impulses - mapping(impulses)
+        size_now = np.max(np.abs(residual))
+        bound = scale + np.max(np.abs(impulses))
+        # Iterate to rounding (an affine map needs one or two steps), stop when that stalls;
+        # accept when the residual is below the tolerance.
+        if size_now <= 1e-15 * bound or size_now > 0.5 * previous:
+            return impulses, size_now <= FIXED_POINT_TOLERANCE * bound, determinate
+        previous = size_now
+        step = 1e-6 * (scale + np.max(np.abs(impulses)))
+        jacobian = np.eye(size)
+        for k in range(size):
+            shift = np.zeros(size)
+            shift[k] = step
+            jacobian[:, k] -= (mapping(impulses + shift) - mapping(impulses - shift)) / (2 * step)
+        if not np.isfinite(jacobian).all():
+            return impulses, False, determinate
+        correction, _, rank, _ = np.linalg.lstsq(jacobian, -residual, rcond=1e-9)
+        determinate = rank == size
+        impulses = impulses + correction
+    residual = np.max(np.abs(impulses - mapping(impulses)))
+    bound = scale + np.max(np.abs(impulses))
+    return impulses, bool(residual <= FIXED_POINT_TOLERANCE * bound), determinate
+
+
+def _law_at(system, law, i, vn, vt, sign):
+    """Contact ``i``'s own single-contact law at approach ``(vn, vt)``, in frame ``sign``:
+    the solver's contact-space kernel, or None where it has no answer."""
+    mnn, mnt, mtt = system.single_terms(i)
+    if not vn < 0 or not mnn * mtt - mnt * mnt > 0:
+        return None
+    scalars = [np.float64(x) for x in (mnn, sign * mnt, mtt, vn, sign * vt,
+                                       system.mu[i], system.e[i])]
+    with np.errstate(all="ignore"):
+        out = solver.contact_space_solution(law, *scalars)
+        status = int(solver.answer_status(law, errors.SOLVED, out))
+    return out if status == errors.SOLVED else None
+
+
+def _assemble(system, law, types, impulses, determinate):
+    """Velocities (A22)/(A23) per contact with (75)'s cross terms, Δu and (A29) summed."""
+    count = system.count
+    vn_s, vt_s = np.empty(count), np.empty(count)
+    for i in range(count):
+        mnn, mnt, mtt = system.single_terms(i)
+        vn, vt = system.effective_approach(i, impulses)
+        normal, tangential = impulses[2 * i], impulses[2 * i + 1]
+        # Same expressions as solve() (there with v^A in place of the effective approach).
+        vn_s[i] = vn + (mnn * normal + mnt * tangential)  # (A22)
+        vt_s[i] = vt + (mnt * normal + mtt * tangential)  # (A23)
+    vn_a, vt_a = system.approach[0::2], system.approach[1::2]
+    normal, tangential = impulses[0::2].copy(), impulses[1::2].copy()
+    energy = None  # (A29) summed over contacts: ½ Σ I·(v^S + v^A) = change of ½uᵀMu
+    for i in range(count):
+        term = normal[i] * (vn_s[i] + vn_a[i]) + tangential[i] * (vt_s[i] + vt_a[i])
+        energy = term if energy is None else energy + term
+    delta_u = system.delta_u(impulses)
+    return MultiContactSolution(
+        law=law, types=tuple(int(t) for t in types), normal_impulse=normal,
+        tangential_impulse=tangential, delta_u=delta_u, u_after=system.u + delta_u,
+        vn_approach=vn_a.copy(), vt_approach=vt_a.copy(), vn_separation=vn_s,
+        vt_separation=vt_s, energy_change=float(0.5 * energy), determinate=bool(determinate))
+
+
+def _paper_coherent(law, ctype, sign, solution, i, tolerance) -> bool:
+    """The paper's tests after (75): ``I_n > 0``, ``v_n^S ≥ 0`` and a ``v_t^S`` that fits the
+    type (0 sticking, against the initial slip reversing, with it forward)."""
+    if ctype == SEPARATING:
+        return solution.vn_separation[i] >= -tolerance
+    if not solution.normal_impulse[i] > 0 or solution.vn_separation[i] < -tolerance:
+        return False
+    slip = sign * solution.vt_separation[i]
+    if law == "newton":
+        kind = {1: "stick", 2: "reverse", 3: "forward"}[ctype]
+    else:
+        kind = {1: "stick", 2: "stick", 3: "reverse", 4: "reverse", 5: "forward"}[ctype]
+    if kind == "stick":
+        return abs(slip) <= tolerance
+    return slip <= tolerance if kind == "reverse" else slip >= -tolerance
+
+
+def coherent_solutions(system: ContactSystem, law: str = "poisson", *,
+                       coupling: str = "effective", allow_separating: bool = False
+                       ) -> list[MultiContactSolution]:
+    """Every coherent combination of collision types, the paper's proposal after (75).
+
+    For each type tuple ``(T_1 … T_m)`` and tangent orientation per contact, contact ``i``'s
+    impulses are given by type ``T_i``'s formulas at its effective approach velocities
+    ``v^A(i) + Σ_{j≠i} W_ij I^(j)``; the ``m`` contacts' formulas together fix the impulses
+    (a linear system for Poisson and Newton, a smooth one for ``"stronge-paper"``). The
+    combination is coherent when, at every contact, the single-contact law picks type
+    ``T_i`` by Table 1 for that effective approach (so the type's story holds: (53)–(57),
+    (A59)–(A61)), the orientation is the one ``solve`` would use, and the paper's tests hold:
+    ``I_n > 0``, ``v_n^S ≥ 0``, ``v_t^S`` fitting the type. docs/multi-contact.md, 'The
+    paper's proposal', gives the reasons.
+
+    ``coupling="none"`` is the literal alternative: every contact's formulas use its own
+    ``v^A(i)``, the other contacts enter only through (75) and the coherence tests; Table 1
+    then fixes one candidate combination, coherent or not.
+
+    ``allow_separating`` adds type 0 (no impulse, needs ``v_n^S ≥ 0``) at each contact; the
+    paper requires ``I_n > 0`` everywhere, so it is off by default.
+
+    Returns the coherent solutions, distinct impulses only (combinations that coincide, as
+    across a type boundary where the closed forms agree, are listed once: the first in
+    enumeration order), sorted by type tuple. For ``m = 1`` the list is the single answer of
+    :func:`planar_impact.solve` with the same law, bit for bit.
+    """
+    if law not in TYPE_LAWS:
+        raise ImpactInputError(f"law: {law!r}; allowed: {', '.join(TYPE_LAWS)}")
+    if coupling not in COUPLINGS:
+        raise ImpactInputError(f"coupling: {coupling!r}; allowed: {', '.join(COUPLINGS)}")
+    choices = ((SEPARATING,) if allow_separating else ()) + TYPE_LAWS[law]
+    count = system.count
+    tolerance = VELOCITY_TOLERANCE * system.speed_scale()
+    found: list[MultiContactSolution] = []
+    for types in itertools.product(choices, repeat=count):
+        for signs in itertools.product((1.0, -1.0), repeat=count):
+            if any(t == SEPARATING and s < 0 for t, s in zip(types, signs)):
+                continue  # the orientation does not matter without impulse
+            mapping = _contact_map(system, law, types, signs, coupling)
+            impulses, converged, determinate = _fixed_point(system, mapping)
+            if not converged:
+                continue
+            solution = _check_combination(system, law, types, signs, impulses, determinate,
+                                          tolerance, coupling)
+            if solution is not None and not _already_found(found, solution, system):
+                found.append(solution)
+    return found
+
+
+def _check_combination(system, law, types, signs, impulses, determinate, tolerance,
+                       coupling="effective"):
+    """The coherent solution of one combination at its fixed point, or None."""
+    final = impulses.copy()
+    seen = impulses if coupling == "effective" else np.zeros_like(impulses)
+    for i, (ctype, sign) in enumerate(zip(types, signs)):
+        if ctype == SEPARATING:
+            continue
+        _mnn, mnt, _mtt = system.single_terms(i)
+        vn, vt = system.effective_approach(i, seen)
+        if _frame_sign(vt, mnt) != sign:
+            return None
+        own = _law_at(system, law, i, vn, vt, sign)
+        if own is None or int(own["collision_type"]) != ctype:
+            return None
+        # The law's own impulses at this effective approach: equal to the fixed point to
+        # its tolerance, and for m = 1 exactly what solve() returns.
+        normal, tangential = float(own["normal_impulse"]), sign * float(own["tangential_impulse"])
+        scale = system.impulse_scale() + abs(normal) + abs(tangential)
+        if max(abs(normal - impulses[2 * i]), abs(tangential - impulses[2 * i + 1])) > (
+                FIXED_POINT_TOLERANCE * scale):
+            return None
+        final[2 * i], final[2 * i + 1] = normal, tangential
+    solution = _assemble(system, law, types, final, determinate)
+    for i, (ctype, sign) in enumerate(zip(types, signs)):
+        if not _paper_coherent(law, ctype, sign, solution, i, tolerance):
+            return None
+    return solution
+
+
+def _already_found(found, solution, system) -> bool:
+    scale = system.impulse_scale()
+    for other in found:
+        if np.max(np.abs(other.impulses() - solution.impulses())) <= 1e-9 * scale:
+            return True
+        family = not (other.determinate and solution.determinate)
+        if family and np.max(np.abs(other.delta_u - solution.delta_u)) <= 1e-9 * _speed_of(system):
+            return True
+    return False
+
+
+def _speed_of(system) -> float:
+    return float(np.max(np.abs(system.u))) + system.speed_scale()
+
+
+# ------------------------------------------------------------------------------------------
+# Velocity-level Newton–Coulomb law (what sequential-impulse engines solve)
+# ------------------------------------------------------------------------------------------
+def restitution_targets(system: ContactSystem) -> np.ndarray:
+    """``e_i |v_n^A(i)|`` where contact ``i`` approaches, else 0: the engines' targets."""
+    vn = system.approach[0::2]
+    return system.e * np.maximum(-vn, 0.0)
+
+
+def newton_coulomb_solutions(system: ContactSystem) -> list[MultiContactSolution]:
+    """All solutions of the Newton–Coulomb contact law, by enumerating the 4^m modes.
+
+    Per contact: either it separates (``I = 0``, ``v_n^S ≥ e|v_n^A|``), or ``v_n^S =
+    e|v_n^A|`` (A30) with ``I_n ≥ 0`` and Coulomb friction at the end state: stick
+    (``v_t^S = 0``, ``|I_t| ≤ μ I_n``) or slide against the final slip (``I_t = −μ I_n
+    sign(v_t^S)``). Each mode is a linear system in the 2m impulses (W's rows); its
+    inequalities decide whether it holds. Types: 0 separate, 1 stick, 2 reverse, 3 forward
+    (slip with or against the contact's approach slip, oriented as ``solve`` orients it).
+    For ``m = 1`` equals ``solve(..., hypothesis="newton-lcp")`` to rounding (a general
+    2×2 solve here, the closed form there).
+    """
+    count = system.count
+    targets = restitution_targets(system)
+    tolerance = VELOCITY_TOLERANCE * system.speed_scale()
+    delassus, approach = system.delassus, system.approach
+    found: list[MultiContactSolution] = []
+    for modes in itertools.product((LCP_STICK, LCP_FORWARD, LCP_REVERSE, LCP_SEPARATE),
+                                   repeat=count):
+        matrix = np.zeros((2 * count, 2 * count))
+        rhs = np.zeros(2 * count)
+        signs = []
+        for i, mode in enumerate(modes):
+            _mnn, mnt, _mtt = system.single_terms(i)
+            sign = _frame_sign(float(approach[2 * i + 1]), mnt)
+            signs.append(sign)
+            n, t = 2 * i, 2 * i + 1
+            if mode == LCP_SEPARATE:
+                matrix[n, n] = matrix[t, t] = 1.0
+                continue
+            matrix[n] = delassus[n]  # v_n^S = e|v_n^A|
+            rhs[n] = targets[i] - approach[n]
+            if mode == LCP_STICK:
+                matrix[t] = delassus[t]  # v_t^S = 0
+                rhs[t] = -approach[t]
+            else:  # I_t = ∓μ I_n, forward slides along +sign·t
+                slide = sign if mode == LCP_FORWARD else -sign
+                matrix[t, t] = 1.0
+                matrix[t, n] = slide * system.mu[i]
+        impulses, _, rank, _ = np.linalg.lstsq(matrix, rhs, rcond=1e-12)
+        if np.max(np.abs(matrix @ impulses - rhs)) > tolerance * (1.0 + np.max(np.abs(matrix))):
+            continue  # singular and inconsistent: this mode has no solution
+        solution = _assemble(system, "newton-coulomb", modes, impulses, rank == 2 * count)
+        if _lcp_holds(system, modes, signs, solution, targets, tolerance) and not _already_found(
+                found, solution, system):
+            found.append(solution)
+    return found
+
+
+def _lcp_holds(system, modes, signs, solution, targets, tolerance) -> bool:
+    for i, (mode, sign) in enumerate(zip(modes, signs)):
+        normal, tangential = solution.normal_impulse[i], solution.tangential_impulse[i]
+        slip = sign * solution.vt_separation[i]
+        if mode == LCP_SEPARATE:
+            if solution.vn_separation[i] < targets[i] - tolerance:
+                return False
+            continue
+        impulse_tolerance = 1e-9 * system.impulse_scale()
+        if normal < -impulse_tolerance:
+            return False
+        if mode == LCP_STICK:
+            if abs(tangential) > system.mu[i] * normal + impulse_tolerance:
+                return False
+        elif mode == LCP_FORWARD and slip < -tolerance or mode == LCP_REVERSE and slip > tolerance:
+            return False
+    return True
+
+
+@dataclass(frozen=True)
+class GaussSeidelResult:
+    impulses: np.ndarray  # (I_n^(1), I_t^(1), ...)
+    converged: bool
+    sweeps: int
+
+
+def projected_gauss_seidel(system: ContactSystem, max_sweeps: int = 100_000,
+                           tolerance: float = 1e-13) -> GaussSeidelResult:
+    """The engines' sequential-impulse iteration on the Newton–Coulomb law.
+
+    Each sweep visits the contacts in order: the normal impulse is corrected toward
+    ``v_n^S = e|v_n^A|`` and clamped at 0, then the tangential one toward ``v_t^S = 0`` and
+    clamped to ``|I_t| ≤ μ I_n``. Converged when a sweep changes no impulse by more than
+    ``tolerance`` times the impulse scale.
+    """
+    count = system.count
+    delassus, approach = system.delassus, system.approach
+    targets = restitution_targets(system)
+    impulses = np.zeros(2 * count)
+    scale = system.impulse_scale()
+    for sweep in range(1, max_sweeps + 1):
+        largest = 0.0
+        for i in range(count):
+            n, t = 2 * i, 2 * i + 1
+            vn = approach[n] + delassus[n] @ impulses
+            new_n = max(0.0, impulses[n] - (vn - targets[i]) / delassus[n, n])
+            largest = max(largest, abs(new_n - impulses[n]))
+            impulses[n] = new_n
+            vt = approach[t] + delassus[t] @ impulses
+            limit = system.mu[i] * impulses[n]
+            new_t = min(limit, max(-limit, impulses[t] - vt / delassus[t, t]))
+            largest = max(largest, abs(new_t - impulses[t]))
+            impulses[t] = new_t
+        if largest <= tolerance * scale:
+            return GaussSeidelResult(impulses, True, sweep)
+    return GaussSeidelResult(impulses, False, max_sweeps)
+
+
+# ------------------------------------------------------------------------------------------
+# Sequential reading: one contact at a time
+# ------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class SequentialResult:
+    """The contacts taken one at a time in ``order`` (repeated rounds) with one law.
+
+    ``impacts`` lists ``(contact, collision type)`` in the order they happened; ``capped``
+    is True when ``max_impacts`` stopped the sequence while a contact still approached.
+    """
+
+    order: tuple[int, ...]
+    law: str
+    impacts: tuple[tuple[int, int], ...]
+    u_after: np.ndarray
+    delta_u: np.ndarray
+    vn_separation: np.ndarray
+    vt_separation: np.ndarray
+    energy_change: float
+    capped: bool
+
+
+def sequential_impacts(system: ContactSystem, law: str, order, max_impacts: int = 10_000
+                       ) -> SequentialResult:
+    """Rounds over ``order``: each contact that approaches (``v_n < −10⁻¹²·speed``) gets a
+    single-contact impact by :func:`planar_impact.solve` with the current speeds; stop after
+    a round with no impact, or at ``max_impacts``."""
+    order = tuple(int(i) for i in order)
+    if sorted(order) != list(range(system.count)):
+        raise ImpactInputError(f"order: {order} is not a permutation of the {system.count} contacts")
+    speeds = system.u.copy()
+    threshold = -1e-12 * system.speed_scale()  # below rounding, above any real approach
+    impacts: list[tuple[int, int]] = []
+    capped = False
+    while True:
+        struck = False
+        for i in order:
+            if float(system.wn[i] @ speeds) >= threshold:
+                continue
+            if len(impacts) >= max_impacts:
+                capped = True
+                break
+            result = solver.solve(mass_matrix=system.mass_matrix, wn=system.wn[i], wt=system.wt[i],
+                                  u=speeds, mu=system.mu[i], e=system.e[i], hypothesis=law)
+            speeds = result.u_after
+            impacts.append((i, result.collision_type))
+            struck = True
+        if capped or not struck:
+            break
+    delta_u = speeds - system.u
+    kinetic = 0.5 * (speeds @ system.mass_matrix @ speeds - system.u @ system.mass_matrix @ system.u)
+    return SequentialResult(order=order, law=law, impacts=tuple(impacts), u_after=speeds,
+                            delta_u=delta_u, vn_separation=system.wn @ speeds,
+                            vt_separation=system.wt @ speeds, energy_change=float(kinetic),
+                            capped=capped)
+
+
+def all_orders(system: ContactSystem, law: str, max_impacts: int = 10_000
+               ) -> tuple[list[SequentialResult], float]:
+    """:func:`sequential_impacts` for every order of the contacts, and the spread: the
+    largest difference in any component of ``u_after`` between two orders."""
+    results = [sequential_impacts(system, law, order, max_impacts)
+               for order in itertools.permutations(range(system.count))]
+    finals = np.array([r.u_after for r in results])
+    spread = float(np.max(finals.max(axis=0) - finals.min(axis=0)))
+    return results, spread
+
+
+# ------------------------------------------------------------------------------------------
+# How many coherent solutions do random two-contact problems have?
+# ------------------------------------------------------------------------------------------
+def random_two_contact_system(rng: np.random.Generator, family: str = "generic") -> ContactSystem:
+    """One random approaching two-contact problem.
+
+    ``"generic"``: 4 generalized speeds, a random SPD mass matrix and random contact rows
+    (W is then regular). ``"body"``: one free rigid body (u = v_x, v_y, ω) touching two
+    obstacles at random points with random normals (W has rank 3: one rigid body cannot
+    have four independent contact velocities in the plane). μ ∈ [0, 1], e ∈ [0, 1] per
+    contact; ``u`` is redrawn until both contacts approach.
+    """
+    if family == "generic":
+        root = rng.normal(size=(4, 4))
+        mass_matrix = root @ root.T + 0.1 * np.eye(4)
+        wn, wt = rng.normal(size=(2, 4)), rng.normal(size=(2, 4))
+    elif family == "body":
+        mass, inertia = 10 ** rng.uniform(-0.5, 0.5), 10 ** rng.uniform(-1.5, 0.5)
+        mass_matrix = np.diag([mass, mass, inertia])
+        wn, wt = np.empty((2, 3)), np.empty((2, 3))
+        for i in range(2):
+            angle = rng.uniform(0, 2 * math.pi)
+            n = np.array([math.cos(angle), math.sin(angle)])
+            t = np.array([n[1], -n[0]])
+            r = rng.normal(size=2)
+            wn[i] = (n[0], n[1], r[0] * n[1] - r[1] * n[0])
+            wt[i] = (t[0], t[1], r[0] * t[1] - r[1] * t[0])
+    else:
+        raise ImpactInputError(f"family: {family!r}; allowed: generic, body")
+    while True:
+        u = rng.normal(size=mass_matrix.shape[0])
+        if np.all(wn @ u < 0):
+            break
+    return contact_system(mass_matrix=mass_matrix, wn=wn, wt=wt, u=u,
+                          mu=rng.uniform(0, 1, 2), e=rng.uniform(0, 1, 2))
+
+
+def coherent_count_distribution(problems: int = 1000, seed: int = 0, family: str = "generic",
+                                coupling: str = "effective",
+                                laws_to_count=("poisson", "stronge-paper", "newton",
+                                               "newton-coulomb")) -> dict[str, dict[str, int]]:
+    """For ``problems`` random two-contact systems, how often each law has 0, 1 or 2+
+    solutions (coherent combinations; for ``"newton-coulomb"``, LCP solutions), and how
+    often a coherent solution gains energy (key ``"gains"``, relative 1e-9 of ``½uᵀMu``)."""
+    rng = np.random.default_rng(seed)
+    counts = {law: {"0": 0, "1": 0, "2+": 0, "gains": 0} for law in laws_to_count}
+    for _ in range(problems):
+        system = random_two_contact_system(rng, family)
+        energy = 0.5 * float(system.u @ system.mass_matrix @ system.u)
+        for law in laws_to_count:
+            if law == "newton-coulomb":
+                found = newton_coulomb_solutions(system)
+            else:
+                found = coherent_solutions(system, law, coupling=coupling)
+            number = len(found)
+            counts[law]["0" if number == 0 else "1" if number == 1 else "2+"] += 1
+            counts[law]["gains"] += any(s.energy_change > 1e-9 * energy for s in found)
+    return counts
+
+
+if __name__ == "__main__":  # python -m planar_impact.simultaneous [problems] [seed]
+    import sys
+
+    count = int(sys.argv[1]) if len(sys.argv) > 1 else 1000
+    seed = int(sys.argv[2]) if len(sys.argv) > 2 else 0
+    for family in ("generic", "body"):
+        for coupling in COUPLINGS:
+            table = coherent_count_distribution(count, seed, family, coupling)
+            print(f"{family} coupling={coupling}: {table}")

@@ -1,0 +1,247 @@
+"""Several simultaneous contacts: planar_impact.simultaneous and the event-driven reference."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import planar_impact as pi
+from harness.geometry import place_on_ground
+from harness.reference.event_driven import event_sequence
+from harness.scene import Body, Box, Rod, Scene
+from planar_impact import simultaneous as sim
+
+TYPE_LAWS = ("poisson", "stronge-paper", "newton")
+
+
+def random_single(rng):
+    root = rng.normal(size=(3, 3))
+    mass_matrix = root @ root.T + 0.1 * np.eye(3)
+    wn, wt, u = rng.normal(size=3), rng.normal(size=3), rng.normal(size=3)
+    if wn @ u >= 0:
+        u = -u
+    return {"mass_matrix": mass_matrix, "wn": wn, "wt": wt, "u": u, "mu": rng.uniform(0, 1.5),
+                "e": rng.uniform(0, 1)}
+
+
+def single_as_system(problem):
+    return sim.contact_system(**{**problem, "wn": problem["wn"][None], "wt": problem["wt"][None]})
+
+
+@pytest.mark.parametrize("law", TYPE_LAWS)
+def test_one_contact_is_todays_law_bit_for_bit(law):
+    rng = np.random.default_rng(13)
+    for _ in range(60):
+        problem = random_single(rng)
+        found = sim.coherent_solutions(single_as_system(problem), law)
+        try:
+            expected = pi.solve(**problem, hypothesis=law)
+        except pi.ImpactInputError:
+            assert found == []
+            continue
+        assert len(found) == 1
+        (got,) = found
+        # Bit for bit: the same kernels on the same floats (docs/multi-contact.md, 'm = 1').
+        assert got.types == (expected.collision_type,)
+        assert got.normal_impulse[0] == expected.normal_impulse
+        assert got.tangential_impulse[0] == expected.tangential_impulse
+        assert np.array_equal(got.delta_u, expected.delta_u)
+        assert got.vn_separation[0] == expected.vn_separation
+        assert got.vt_separation[0] == expected.vt_separation
+        assert got.energy_change == expected.energy_change
+
+
+def test_one_contact_newton_coulomb_is_newton_lcp_to_rounding():
+    rng = np.random.default_rng(14)
+    for _ in range(100):
+        problem = random_single(rng)
+        found = sim.newton_coulomb_solutions(single_as_system(problem))
+        expected = pi.solve(**problem, hypothesis="newton-lcp")
+        assert len(found) == 1
+        got = found[0]
+        # A general 2×2 least-squares solve against the closed form: a few ulps of the
+        # impulse, far below 1e-12 of it unless Δ is tiny (these draws keep M well
+        # conditioned: the 0.1·I added to a Gram matrix).
+        scale = abs(expected.normal_impulse) + abs(expected.tangential_impulse)
+        assert abs(got.normal_impulse[0] - expected.normal_impulse) <= 1e-12 * scale
+        assert abs(got.tangential_impulse[0] - expected.tangential_impulse) <= 1e-12 * scale
+        assert got.types == (expected.collision_type,)
+
+
+# --- a box landing flat on its face ------------------------------------------------------
+
+def flat_box(vx=0.0, omega=0.0, mu=0.5, e=0.5):
+    """A 1 × 0.5 m box of 2 kg (I = 5/24 kg m²) falling flat at 1 m/s on two corners."""
+    mass, width, height = 2.0, 1.0, 0.5
+    inertia = mass * (width**2 + height**2) / 12.0
+    corners = [(-width / 2, -height / 2), (width / 2, -height / 2)]
+    wn = np.array([(0.0, 1.0, rx) for rx, _ in corners])  # n = +y: (n_x, n_y, r_x n_y − r_y n_x)
+    wt = np.array([(1.0, 0.0, -ry) for _, ry in corners])  # t = +x
+    return sim.contact_system(mass_matrix=np.diag([mass, mass, inertia]), wn=wn, wt=wt,
+                              u=[vx, -1.0, omega], mu=mu, e=e)
+
+
+def assert_mirror(solution):
+    """The mirror x → −x swaps the corners and flips t: I_n equal, I_t opposite, no v_x, ω."""
+    tolerance = 1e-12 * (1.0 + np.max(np.abs(solution.impulses())))
+    assert abs(solution.normal_impulse[0] - solution.normal_impulse[1]) <= tolerance
+    assert abs(solution.tangential_impulse[0] + solution.tangential_impulse[1]) <= tolerance
+    assert abs(solution.u_after[0]) <= 1e-12 and abs(solution.u_after[2]) <= 1e-12
+
+
+@pytest.mark.parametrize("law", TYPE_LAWS)
+@pytest.mark.parametrize("coupling", sim.COUPLINGS)
+def test_flat_box_solutions_are_symmetric(law, coupling):
+    found = sim.coherent_solutions(flat_box(), law, coupling=coupling)
+    # The effective reading has none for the paper's Stronge here (docs/multi-contact.md).
+    assert found or (law, coupling) == ("stronge-paper", "effective")
+    for solution in found:
+        assert_mirror(solution)
+
+
+def test_flat_box_newton_coulomb_and_gauss_seidel():
+    system = flat_box()
+    (solution,) = sim.newton_coulomb_solutions(system)
+    assert_mirror(solution)
+    # Both corners stick; v_y after = e·1 m/s, and the two tangential impulses are a family
+    # (equal and opposite, any size in the cone): not determinate.
+    assert solution.types == (1, 1) and not solution.determinate
+    assert solution.u_after[1] == pytest.approx(0.5, abs=1e-12)
+    pgs = sim.projected_gauss_seidel(system)
+    assert pgs.converged
+    # PGS lands on another member of the family: same Δu, same normal impulses.
+    assert np.allclose(system.delta_u(pgs.impulses), solution.delta_u, atol=1e-12)
+    assert np.allclose(pgs.impulses[0::2], solution.normal_impulse, atol=1e-12)
+
+
+def test_flat_box_hand_worked_example():
+    """docs/multi-contact.md, 'Worked example': the literal reading, by hand."""
+    (solution,) = sim.coherent_solutions(flat_box(), "poisson", coupling="none")
+    # m_nn = 1/2 + (1/2)²/(5/24) = 1.7, m_nt = ∓0.6, m_tt = 0.8; g = 0.4 − 0.6 < 0: Case 5,
+    # forward sliding; h = 1.7 − 0.5·0.6 = 1.4; I_n = (1 + 1/2)/1.4 = 15/14 by (48)–(49).
+    assert solution.types == (5, 5)
+    assert solution.normal_impulse == pytest.approx([15 / 14, 15 / 14], rel=1e-14)
+    assert solution.tangential_impulse == pytest.approx([15 / 28, -15 / 28], rel=1e-14)
+    assert solution.u_after[1] == pytest.approx(1 / 14, rel=1e-13)
+    assert solution.energy_change == pytest.approx(1 / 196 - 1, rel=1e-14)
+
+
+def test_flat_box_effective_reading_gains_energy():
+    """docs/multi-contact.md, 'Where energy is gained': both corners restitute an effective
+    approach of 4 m/s (I_n = 3 each), and the box leaves at 2 m/s."""
+    found = sim.coherent_solutions(flat_box(), "poisson", coupling="effective")
+    (solution,) = found
+    assert solution.normal_impulse == pytest.approx([3.0, 3.0], rel=1e-12)
+    assert solution.tangential_impulse == pytest.approx([-1.5, 1.5], rel=1e-12)
+    assert solution.energy_change == pytest.approx(0.5 * 2.0 * 2.0**2 - 1.0, rel=1e-9)
+
+
+def test_flat_box_sequential_orders_mirror_each_other():
+    results, spread = sim.all_orders(flat_box(), "poisson")
+    first, second = results
+    assert not first.capped and not second.capped
+    mirror = np.array([-1.0, 1.0, -1.0])
+    assert np.allclose(first.u_after, mirror * second.u_after, atol=1e-12)
+    assert spread == pytest.approx(2 * abs(first.u_after[2]), rel=1e-12)
+    assert spread > 0.1  # the order matters: the first corner struck sets the spin
+
+
+# --- properties on random two-contact problems -------------------------------------------
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.sampled_from(["generic", "body"]))
+def test_every_solution_satisfies_its_own_definition(seed, family):
+    system = sim.random_two_contact_system(np.random.default_rng(seed), family)
+    kinetic = 0.5 * system.u @ system.mass_matrix @ system.u
+    for law in TYPE_LAWS:
+        for solution in sim.coherent_solutions(system, law):
+            # (75): M Δu = Σ w I, and (A29) summed equals the change of ½ uᵀ M u.
+            forcing = system.wn.T @ solution.normal_impulse + system.wt.T @ solution.tangential_impulse
+            assert np.allclose(system.mass_matrix @ solution.delta_u, forcing, atol=1e-9 * (
+                1 + np.abs(forcing).max()))
+            after = 0.5 * solution.u_after @ system.mass_matrix @ solution.u_after
+            assert solution.energy_change == pytest.approx(after - kinetic, abs=1e-9 * kinetic)
+            assert np.all(solution.normal_impulse > 0)
+            assert np.all(solution.vn_separation >= -1e-9 * system.speed_scale())
+    targets = sim.restitution_targets(system)
+    for solution in sim.newton_coulomb_solutions(system):
+        active = solution.normal_impulse > 1e-9 * system.impulse_scale()
+        assert np.all(solution.vn_separation >= targets - 1e-9 * system.speed_scale())
+        assert np.allclose(solution.vn_separation[active], targets[active],
+                           atol=1e-9 * system.speed_scale())
+        assert np.all(np.abs(solution.tangential_impulse)
+                      <= system.mu * solution.normal_impulse + 1e-9 * system.impulse_scale())
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(0, 2**32 - 1))
+def test_gauss_seidel_finds_the_newton_coulomb_solution_when_it_converges(seed):
+    system = sim.random_two_contact_system(np.random.default_rng(seed), "generic")
+    pgs = sim.projected_gauss_seidel(system, max_sweeps=20_000)
+    found = sim.newton_coulomb_solutions(system)
+    if not pgs.converged or len(found) != 1:
+        return
+    # PGS stops at 1e-13 of the impulse scale per sweep; with W's conditioning on these
+    # draws the fixed point is within ~1e-9 of the exact one.
+    assert np.allclose(pgs.impulses, found[0].impulses(), atol=1e-7 * system.impulse_scale())
+
+
+def test_count_distribution_adds_up():
+    counts = sim.coherent_count_distribution(5, seed=3)
+    for law, table in counts.items():
+        assert table["0"] + table["1"] + table["2+"] == 5, law
+
+
+def test_literal_reading_has_at_most_one_candidate():
+    rng = np.random.default_rng(5)
+    for _ in range(10):
+        system = sim.random_two_contact_system(rng, "generic")
+        for law in TYPE_LAWS:
+            assert len(sim.coherent_solutions(system, law, coupling="none")) <= 1
+
+
+# --- event-driven reference --------------------------------------------------------------
+
+def tilted_box(tilt_degrees, vx=0.0):
+    body = Body("box", Box(1.0, 0.5), 2.0, (0.0, 1.0), angle=math.radians(tilt_degrees),
+                velocity=(vx, -1.0))
+    return Scene((place_on_ground(body),), restitution=0.5, friction=0.5, ground=True)
+
+
+def test_tilted_box_gives_a_sequence_of_impacts():
+    result = event_sequence(tilted_box(3.0), "poisson")
+    assert result.finished
+    features = [event.feature for event in result.events]
+    # Tilted counter-clockwise, corner 0 (−w/2, −h/2) is lowest and strikes first; the
+    # spin it receives brings corner 1 down, which strikes later.
+    assert features[:2] == [0, 1]
+    assert result.events[0].time == 0.0 and result.events[1].time > 0.0
+    assert not any(event.simultaneous for event in result.events)
+    # Every feature leaves the ground without approaching it again (no gravity).
+    assert result.velocity[1] > 0
+
+
+def test_vanishing_tilt_approaches_the_sequential_answer():
+    """As the tilt → 0 the sequence tends to the contacts struck one at a time in the order
+    the tilt chose (corner 0 first), not to a simultaneous law."""
+    results, _ = sim.all_orders(flat_box(), "poisson")
+    order_01 = next(r for r in results if r.order == (0, 1))
+    gaps = []
+    for tilt in (1.0, 0.1, 0.01):
+        answer = event_sequence(tilted_box(tilt), "poisson").speeds()
+        gaps.append(np.max(np.abs(answer - order_01.u_after)))
+    assert gaps[0] > gaps[1] > gaps[2]
+    assert gaps[2] < 1e-3  # linear in the tilt: ~1e-4 at 0.01°
+
+
+def test_rod_tilted_strikes_both_caps():
+    body = Body("rod", Rod(1.0, 0.05), 1.0, (0.0, 1.0), angle=math.radians(2.0),
+                velocity=(0.0, -1.0))
+    scene = Scene((place_on_ground(body),), restitution=0.8, friction=0.3, ground=True)
+    result = event_sequence(scene, "stronge")
+    assert result.finished
+    assert {event.feature for event in result.events} == {0, 1}
