@@ -22,8 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 
 import planar_impact as pi
-from harness.geometry import local_core, rotation
 from harness.scene import Body, Scene
+from harness.scene.geometry import local_core, rotation
 
 # A feature counts as touching when its gap is below this fraction of the body's size: the
 # event times are found to rounding (~1e-16 of the size), so 1e-12 separates "touching" from
