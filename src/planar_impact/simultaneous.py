@@ -195,7 +195,7 @@ def _forced_impulses(law, ctype, mnn, mnt, mtt, vn, vt, mu, e):
         if law == "stronge-paper":  # e_i by (64), (67), (70), (73), (74), then Poisson
             e_i = laws.stronge_paper_restitution(terms, np.float64(e), ctype)
             return laws.poisson_impulses(terms, e_i, ctype)
-        # Newton (Part A): the two-phase process of THEORY.md §2 with the type forced.
+        # Newton (Part A): the two-phase process of docs/theory.md, 'Newton's law', with the type forced.
         vn_abs, target = terms.vn_abs, e * terms.vn_abs  # ends where v_n = e|v_n^A| (A30)
         if ctype == laws.NEWTON_FORWARD:
             normal = (target + vn_abs) / terms.h

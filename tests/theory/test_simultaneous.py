@@ -40,7 +40,8 @@ def test_one_contact_is_todays_law_bit_for_bit(law):
             continue
         assert len(found) == 1
         (got,) = found
-        # Bit for bit: the same kernels on the same floats (docs/multi-contact.md, 'm = 1').
+        # Bit for bit: the same kernels on the same floats
+        # (docs/multi-contact.md, 'The paper's proposal').
         assert got.types == (expected.collision_type,)
         assert got.normal_impulse[0] == expected.normal_impulse
         assert got.tangential_impulse[0] == expected.tangential_impulse
@@ -114,7 +115,7 @@ def test_flat_box_newton_coulomb_and_gauss_seidel():
 
 
 def test_flat_box_hand_worked_example():
-    """docs/multi-contact.md, 'Worked example': the literal reading, by hand."""
+    """docs/multi-contact.md, 'Worked example: a box landing flat': the literal reading, by hand."""
     (solution,) = sim.coherent_solutions(flat_box(), "poisson", coupling="none")
     # m_nn = 1/2 + (1/2)²/(5/24) = 1.7, m_nt = ∓0.6, m_tt = 0.8; g = 0.4 − 0.6 < 0: Case 5,
     # forward sliding; h = 1.7 − 0.5·0.6 = 1.4; I_n = (1 + 1/2)/1.4 = 15/14 by (48)–(49).
