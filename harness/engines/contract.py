@@ -211,6 +211,27 @@ class ContactStep(NamedTuple):
         )
 
 
+class ContactRecord(NamedTuple):
+    """The raw per-step records of a run: kept as the adapter gave them (run frame), typed
+    on demand (the run's hot path does not build a record object per step)."""
+
+    shift: tuple[float, float]  # run frame = scene frame + shift
+    raw: tuple[tuple[int, RawContacts, tuple[BodyState, ...]], ...]  # (step, contacts, state)
+
+    def steps(self) -> tuple[ContactStep, ...]:
+        """The records as :class:`ContactStep` values in the scene frame."""
+        shift_x, shift_y = self.shift
+        return tuple(
+            ContactStep(
+                step,
+                tuple(ContactPoint(x - shift_x, y - shift_y, depth) for x, y, depth in points),
+                normal, impulse, pressure,
+                tuple((b[0] - shift_x, b[1] - shift_y, *b[2:]) for b in state),
+            )
+            for step, (points, normal, impulse, pressure), state in self.raw
+        )
+
+
 def nearest_feature(shape, state: Sequence[float], point: tuple[float, float]) -> int:
     """The feature of a body nearest to a scene-frame ``point``: for a polygon or a box the
     index of the nearest vertex (in ``shape.vertices()`` order), for a rod the end cap
@@ -262,7 +283,9 @@ class EngineRun:
     out_of_plane_drift: float | None  # m; None for 2-D engines
     energy_before: float  # J, kinetic energy of the scene's input state
     energy_after: float  # J, kinetic energy after the run
-    contacts: tuple[ContactStep, ...] = ()  # every step with contact, in order
+    # Every step with contact as the adapter reported it, ``(shift, ((step, RawContacts,
+    # states), ...))`` in the run frame (scene frame + shift); ``contacts`` is the typed view.
+    contact_record: tuple = ((0.0, 0.0), ())
     derived: Mapping[str, Any] = field(default_factory=dict)  # values computed from settings
     notes: tuple[str, ...] = ()
     wall_time_s: float = field(default=0.0, compare=False)  # s, build/reuse + stepping + readout
@@ -275,6 +298,11 @@ class EngineRun:
     @property
     def flagged(self) -> bool:
         return self.status is not Status.OK
+
+    @property
+    def contacts(self) -> tuple[ContactStep, ...]:
+        """Every step with contact, in order, in the scene frame."""
+        return ContactRecord(*self.contact_record).steps()
 
 
 class UnsupportedScene(ValueError):
@@ -539,9 +567,15 @@ class Engine(abc.ABC):
         ``settings`` is a complete settings dict (as ``settings()`` returns); when it is
         ``None`` the preset with the overrides is used.
         """
-        start_time = time.perf_counter()
-        resolved, used_preset = self._resolve(settings, preset, overrides)
-        self._checked_scene(scene)
+        start_time = _clock()
+        cached = self._last_checked  # _resolve's fast path, inlined (hot)
+        if (settings is not None and not overrides and cached is not None
+                and cached[0] is settings and cached[1] == settings):
+            resolved, used_preset = cached[1], cached[2]
+        else:
+            resolved, used_preset = self._resolve(settings, preset, overrides)
+        if scene is not self._last_scene:
+            self._checked_scene(scene)
         plans = self._plans
         plan = plans.get((id(scene), id(resolved))) if plans else None  # _plan_for's hit
         if plan is None or plan.scene is not scene or plan.settings is not resolved:
@@ -588,21 +622,18 @@ class Engine(abc.ABC):
     def _finish(self, plan: _Plan, preset, derived, records, final, steps, first_contact,
                 separated, drift, start_time) -> EngineRun:
         """The :class:`EngineRun` of a finished loop (all the run's bookkeeping)."""
-        velocities = tuple((body[3], body[4], body[5]) for body in final)
-        shift_x, shift_y = plan.shift
-        contacts = []
+        velocities = tuple([(body[3], body[4], body[5]) for body in final])
         max_points = 0
         max_penetration = 0.0
         impulse_x = impulse_y = 0.0
         engine_impulse = True
-        same_point = plan.same_point
-        for step_number, (points, normal, impulse, pressure), state in records:
+        for _, (points, _, impulse, _), _ in records:
             for point in points:
                 if point[2] > max_penetration:  # noqa: PLR1730 - hot path
                     max_penetration = point[2]
             count = len(points)
             if count > 1:
-                count = count_planar_points(((x, y) for x, y, _ in points), same_point)
+                count = count_planar_points([(x, y) for x, y, _ in points], plan.same_point)
             if count > max_points:  # noqa: PLR1730 - hot path
                 max_points = count
             if impulse is None:
@@ -610,12 +641,6 @@ class Engine(abc.ABC):
             else:
                 impulse_x += impulse[0]
                 impulse_y += impulse[1]
-            contacts.append(ContactStep(
-                step_number,
-                tuple(ContactPoint(x - shift_x, y - shift_y, depth) for x, y, depth in points),
-                normal, impulse, pressure,
-                tuple((b[0] - shift_x, b[1] - shift_y, *b[2:]) for b in state),
-            ))
         if records:
             normal = records[0][1][1]
             n_x, n_y = normal
@@ -638,13 +663,12 @@ class Engine(abc.ABC):
         notes = plan.notes
         if max_points > 1:
             notes += (multi_contact_note(max_points),)
-        settings = plan.settings
         return _run_from_fields({
             "engine": self.name,
             "engine_version": self.version,
             "scene_name": plan.scene.name,
             "preset": preset,
-            "settings": settings,
+            "settings": plan.settings,
             "velocities": velocities,
             "status": status,
             "status_reason": reason,
@@ -662,10 +686,10 @@ class Engine(abc.ABC):
             "out_of_plane_drift": drift,
             "energy_before": 0.5 * plan.before,
             "energy_after": 0.5 * after,
-            "contacts": tuple(contacts),
+            "contact_record": (plan.shift, tuple(records)),
             "derived": derived,
             "notes": notes,
-            "wall_time_s": time.perf_counter() - start_time,
+            "wall_time_s": _clock() - start_time,
         })
 
 
@@ -835,6 +859,7 @@ def _run_from_fields(values: dict) -> EngineRun:
     return run
 
 
+_clock = time.perf_counter
 _new_object: Callable = object.__new__
 _set_attribute: Callable = object.__setattr__
 
