@@ -50,9 +50,10 @@ Methods (``world`` is whatever the adapter builds; the base class only passes it
     One engine step, then the contact it left: ``None`` when the engine reports no active
     contact, else the tuple ``(points, normal, impulse, normal_impulse)`` (see
     :data:`RawContacts`), in the run frame.
-``_read_state(world) -> tuple[BodyState, ...]``
-    Every body's ``(x, y, θ, v_x, v_y, ω)`` now, in the run frame and the scene's sign
-    conventions.
+``_read_poses(world) -> tuple[Pose, ...]``, ``_read_velocities(world) -> tuple[Velocity, ...]``
+    Every body's ``(x, y, θ)`` (run frame) and ``(v_x, v_y, ω)`` now, in the scene's sign
+    conventions. Poses are read at every step with contact (the records), velocities where
+    a step without impulse must be told from a separation, and at the end.
 ``_out_of_plane_drift(world) -> float | None``
     Largest distance (m) a body point left the plane (3-D engines); ``None`` for 2-D ones.
 ``_notes(scene, settings) -> tuple[str, ...]``
@@ -172,6 +173,9 @@ STATUSES: dict[str, str] = {status.value: status.meaning for status in Status}
 
 #: One body's ``(x, y, θ, v_x, v_y, ω)``: m, m, rad, m/s, m/s, rad/s.
 BodyState = tuple[float, float, float, float, float, float]
+#: One body's ``(x, y, θ)`` (m, m, rad) and ``(v_x, v_y, ω)`` (m/s, m/s, rad/s).
+Pose = tuple[float, float, float]
+Velocity = tuple[float, float, float]
 
 #: What an adapter's ``_step`` returns for a step with contact, in the run frame:
 #: ``(points, normal, impulse, normal_impulse)`` --
@@ -200,13 +204,13 @@ class ContactStep(NamedTuple):
     normal: tuple[float, float]  # unit, from body A (or the ground) into body B
     impulse: tuple[float, float] | None  # N s on body B in this step; None: not exposed
     normal_impulse: float  # N s, the engine's own measure (>= 0)
-    bodies: tuple[BodyState, ...]  # every body's state after the step
+    poses: tuple[Pose, ...]  # every body's (x, y, θ) after the step
 
     def features(self, scene: Scene) -> tuple[tuple[int, ...], ...]:
         """Per point, which feature of each body touches (see :func:`nearest_feature`)."""
         return tuple(
             tuple(nearest_feature(body.shape, state, (point.x, point.y))
-                  for body, state in zip(scene.bodies, self.bodies))
+                  for body, state in zip(scene.bodies, self.poses))
             for point in self.points
         )
 
@@ -216,7 +220,7 @@ class ContactRecord(NamedTuple):
     on demand (the run's hot path does not build a record object per step)."""
 
     shift: tuple[float, float]  # run frame = scene frame + shift
-    raw: tuple[tuple[int, RawContacts, tuple[BodyState, ...]], ...]  # (step, contacts, state)
+    raw: tuple[tuple[int, RawContacts, tuple[Pose, ...]], ...]  # (step, contacts, poses)
 
     def steps(self) -> tuple[ContactStep, ...]:
         """The records as :class:`ContactStep` values in the scene frame."""
@@ -226,9 +230,9 @@ class ContactRecord(NamedTuple):
                 step,
                 tuple(ContactPoint(x - shift_x, y - shift_y, depth) for x, y, depth in points),
                 normal, impulse, pressure,
-                tuple((b[0] - shift_x, b[1] - shift_y, *b[2:]) for b in state),
+                tuple((x - shift_x, y - shift_y, angle) for x, y, angle in poses),
             )
-            for step, (points, normal, impulse, pressure), state in self.raw
+            for step, (points, normal, impulse, pressure), poses in self.raw
         )
 
 
@@ -396,8 +400,12 @@ class Engine(abc.ABC):
         """One engine step and the contact it left (``None``: no active contact)."""
 
     @abc.abstractmethod
-    def _read_state(self, world) -> tuple[BodyState, ...]:
-        """Every body's ``(x, y, θ, v_x, v_y, ω)`` now, in the run frame."""
+    def _read_poses(self, world) -> tuple[Pose, ...]:
+        """Every body's ``(x, y, θ)`` now, in the run frame."""
+
+    @abc.abstractmethod
+    def _read_velocities(self, world) -> tuple[Velocity, ...]:
+        """Every body's ``(v_x, v_y, ω)`` now."""
 
     def _out_of_plane_drift(self, world) -> float | None:
         """Largest out-of-plane distance (m) of a body point; ``None`` for a 2-D engine."""
@@ -585,7 +593,7 @@ class Engine(abc.ABC):
         world = plan.world
         derived = self._reset(world, plan.prepared)
 
-        step, read_state = self._step, self._read_state
+        step, read_poses = self._step, self._read_poses
         no_impulse = self.no_impulse_relative
         max_steps = plan.max_steps
         steps = 0
@@ -593,7 +601,7 @@ class Engine(abc.ABC):
         peak = 0.0
         separated = False
         records = []
-        state = None
+        velocities = None
         while steps < max_steps:
             raw = step(world)
             steps += 1
@@ -604,25 +612,25 @@ class Engine(abc.ABC):
                 continue
             if first_contact is None:
                 first_contact = steps
-            state = read_state(world)
-            records.append((steps, raw, state))
+            poses = read_poses(world)
+            records.append((steps, raw, poses))
             pressure = raw[3]
             if pressure > peak:  # noqa: PLR1730 - a compare is cheaper than max() here
                 peak = pressure
-            if pressure <= no_impulse * peak and not _approaching(state, raw, plan.speed_scale):
-                separated = True
-                break
-        if records and records[-1][0] == steps:
-            final = state  # read after this very step
-        else:
-            final = read_state(world)
-        return self._finish(plan, used_preset, derived, records, final, steps, first_contact,
-                            separated, self._out_of_plane_drift(world), start_time)
+            if pressure <= no_impulse * peak:
+                velocities = self._read_velocities(world)
+                if not _approaching(poses, velocities, raw, plan.speed_scale):
+                    separated = True
+                    break
+                velocities = None
+        if velocities is None:  # else read after this very step
+            velocities = self._read_velocities(world)
+        return self._finish(plan, used_preset, derived, records, velocities, steps,
+                            first_contact, separated, self._out_of_plane_drift(world), start_time)
 
-    def _finish(self, plan: _Plan, preset, derived, records, final, steps, first_contact,
+    def _finish(self, plan: _Plan, preset, derived, records, velocities, steps, first_contact,
                 separated, drift, start_time) -> EngineRun:
         """The :class:`EngineRun` of a finished loop (all the run's bookkeeping)."""
-        velocities = tuple([(body[3], body[4], body[5]) for body in final])
         max_points = 0
         max_penetration = 0.0
         impulse_x = impulse_y = 0.0
@@ -729,15 +737,16 @@ def free_flight_poses(scene: Scene, time_s: float) -> list[tuple[float, float, f
     return poses
 
 
-def _approaching(state: Sequence[BodyState], raw: RawContacts, speed_scale: float) -> bool:
+def _approaching(poses: Sequence[Pose], velocities: Sequence[Velocity], raw: RawContacts,
+                 speed_scale: float) -> bool:
     """Whether any contact point still closes (relative normal velocity below
     ``-APPROACH_RELATIVE·speed_scale``): a step without impulse is then not a separation
     (a contact found before touch carries none while the bodies still approach)."""
     n_x, n_y = raw[1]
-    last = len(state) - 1
+    last = len(poses) - 1
     for point_x, point_y, _ in raw[0]:
         relative = 0.0
-        for index, (x, y, _, vx, vy, omega) in enumerate(state):
+        for index, ((x, y, _), (vx, vy, omega)) in enumerate(zip(poses, velocities)):
             normal_velocity = (vx - omega * (point_y - y)) * n_x + (vy + omega * (point_x - x)) * n_y
             relative += normal_velocity if index == last else -normal_velocity
         if relative < -APPROACH_RELATIVE * speed_scale:

@@ -452,13 +452,18 @@ class MujocoEngine(Engine):
         # contact force as long as any constraint force is non-zero.
         return points, normal, None, sum(map(abs, d.efc_force.tolist())) * world.dt
 
-    def _read_state(self, world: _Model) -> tuple:
+    def _read_poses(self, world: _Model) -> tuple:
         # Python floats once (tolist): the same doubles as indexing the arrays, fewer calls.
-        qpos, qvel = world.data.qpos.tolist(), world.data.qvel.tolist()
+        qpos = world.data.qpos.tolist()
         if len(qpos) == 3:
-            return ((qpos[0], qpos[1], -qpos[2], qvel[0], qvel[1], -qvel[2]),)
-        return tuple([(qpos[i], qpos[i + 1], -qpos[i + 2], qvel[i], qvel[i + 1], -qvel[i + 2])
-                      for i in range(0, len(qpos), 3)])
+            return ((qpos[0], qpos[1], -qpos[2]),)
+        return tuple([(qpos[i], qpos[i + 1], -qpos[i + 2]) for i in range(0, len(qpos), 3)])
+
+    def _read_velocities(self, world: _Model) -> tuple:
+        qvel = world.data.qvel.tolist()
+        if len(qvel) == 3:
+            return ((qvel[0], qvel[1], -qvel[2]),)
+        return tuple([(qvel[i], qvel[i + 1], -qvel[i + 2]) for i in range(0, len(qvel), 3)])
 
     def _out_of_plane_drift(self, world: _Model) -> float:
         """The centre's y, plus the tilt of the body's y axis times its size."""

@@ -368,13 +368,21 @@ class PybulletEngine(Engine):
             step_normal * dt,
         )
 
-    def _read_state(self, world: _World) -> tuple:
+    def _read_poses(self, world: _World) -> tuple:
         client = world.client
-        states = []
+        poses = []
         for uid in world.bodies:
-            (x, vx, _, _), (z, vz, _, _), (angle, rate, _, _) = _get_states(uid, _JOINTS, client)
-            states.append((x, z, -angle, vx, vz, -rate))
-        return tuple(states)
+            (x, _, _, _), (z, _, _, _), (angle, _, _, _) = _get_states(uid, _JOINTS, client)
+            poses.append((x, z, -angle))
+        return tuple(poses)
+
+    def _read_velocities(self, world: _World) -> tuple:
+        client = world.client
+        velocities = []
+        for uid in world.bodies:
+            (_, vx, _, _), (_, vz, _, _), (_, rate, _, _) = _get_states(uid, _JOINTS, client)
+            velocities.append((vx, vz, -rate))
+        return tuple(velocities)
 
     def _out_of_plane_drift(self, world: _World) -> float:
         """The centre's y, plus the tilt of the link's y axis times the body's size."""

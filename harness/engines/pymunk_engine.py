@@ -272,13 +272,19 @@ class PymunkEngine(Engine):
             abs(step_x * normal[0] + step_y * normal[1]),
         )
 
-    def _read_state(self, world: _SpaceEntry) -> tuple:
-        states = []
+    def _read_poses(self, world: _SpaceEntry) -> tuple:
+        poses = []
         for body_ptr in world.body_ptrs:
-            position, velocity = _get_position(body_ptr), _get_velocity(body_ptr)
-            states.append((position.x, position.y, _get_angle(body_ptr), velocity.x, velocity.y,
-                           _get_angular_velocity(body_ptr)))
-        return tuple(states)
+            position = _get_position(body_ptr)
+            poses.append((position.x, position.y, _get_angle(body_ptr)))
+        return tuple(poses)
+
+    def _read_velocities(self, world: _SpaceEntry) -> tuple:
+        velocities = []
+        for body_ptr in world.body_ptrs:
+            velocity = _get_velocity(body_ptr)
+            velocities.append((velocity.x, velocity.y, _get_angular_velocity(body_ptr)))
+        return tuple(velocities)
 
 
 ENGINE_CLASS = PymunkEngine
