@@ -183,7 +183,8 @@ Velocity = tuple[float, float, float]
 #: is overlap); ``normal``: unit ``(n_x, n_y)`` from body A (or the ground) into body B (the
 #: last body); ``impulse``: ``(p_x, p_y)`` the contact impulse on body B in this step (N s),
 #: or ``None`` where the engine does not expose it; ``normal_impulse``: the engine's own
-#: measure of the step's normal impulse (N s, >= 0; exactly 0 when it applies none).
+#: measure of the step's normal impulse (N s, >= 0; exactly 0 when it applies none), or
+#: ``None`` when the adapter knows without measuring that the contact still pushes.
 RawContacts = tuple[tuple[tuple[float, float, float], ...], tuple[float, float],
                     "tuple[float, float] | None", float]
 
@@ -203,7 +204,7 @@ class ContactStep(NamedTuple):
     points: tuple[ContactPoint, ...]
     normal: tuple[float, float]  # unit, from body A (or the ground) into body B
     impulse: tuple[float, float] | None  # N s on body B in this step; None: not exposed
-    normal_impulse: float  # N s, the engine's own measure (>= 0)
+    normal_impulse: float | None  # N s, the engine's own measure (>= 0); None: not measured
     poses: tuple[Pose, ...]  # every body's (x, y, θ) after the step
 
     def features(self, scene: Scene) -> tuple[tuple[int, ...], ...]:
@@ -615,6 +616,8 @@ class Engine(abc.ABC):
             poses = read_poses(world)
             records.append((steps, raw, poses))
             pressure = raw[3]
+            if pressure is None:  # still pushing, by the adapter's knowledge
+                continue
             if pressure > peak:  # noqa: PLR1730 - a compare is cheaper than max() here
                 peak = pressure
             if pressure <= no_impulse * peak:

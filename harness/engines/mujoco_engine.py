@@ -279,6 +279,7 @@ class _Model:
     configured: tuple | None = None
     dt: float = 0.0  # s, the time step the model holds
     normal_sign: float = 0.0  # +1/-1 once the run's first contact is read, 0 before
+    last_depth: float = math.inf  # m, the previous contact step's largest penetration
 
 
 # Per-run constants computed once: the bisection for ζ costs ~14 µs, pure in its arguments.
@@ -366,6 +367,7 @@ class MujocoEngine(Engine):
         d.qpos[:] = qpos
         d.qvel[:] = qvel
         world.normal_sign = 0.0
+        world.last_depth = math.inf
         return derived
 
     def _configure(self, entry: _Model, scene: Scene, settings: dict) -> dict:
@@ -448,8 +450,14 @@ class MujocoEngine(Engine):
         frame = contact.frame.tolist()[0]
         length = math.hypot(frame[0], frame[2])
         normal = (sign * frame[0] / length, sign * frame[2] / length)
-        # No impulse vector per step (the run's comes from momentum); the step carries a
-        # contact force as long as any constraint force is non-zero.
+        # No impulse vector per step (the run's comes from momentum). While the penetration
+        # still grows the spring-damper pushes (k·r + b·r' > 0), so the forces are read only
+        # once it shrinks: the step carries force while any constraint force is non-zero.
+        depth = max(point[2] for point in points) if len(points) > 1 else points[0][2]
+        growing = depth >= world.last_depth
+        world.last_depth = depth
+        if growing:
+            return points, normal, None, None
         return points, normal, None, sum(map(abs, d.efc_force.tolist())) * world.dt
 
     def _read_poses(self, world: _Model) -> tuple:
