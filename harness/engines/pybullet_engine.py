@@ -198,6 +198,17 @@ _step_simulation = p.stepSimulation
 _JOINTS = (0, 1, 2)
 
 
+def _joint_triples(world: _World, field: int) -> tuple:
+    """Per body the joints' positions (``field`` 0) or rates (1) as the scene's
+    ``(x, y, θ)`` or ``(v_x, v_y, ω)``: the revolute joint turns the other way."""
+    client = world.client
+    triples = []
+    for uid in world.bodies:
+        slide_x, slide_z, hinge = _get_states(uid, _JOINTS, client)
+        triples.append((slide_x[field], slide_z[field], -hinge[field]))
+    return tuple(triples)
+
+
 class PybulletEngine(Engine):
     name = "pybullet"
     version = "3.2.7"
@@ -369,20 +380,10 @@ class PybulletEngine(Engine):
         )
 
     def _read_poses(self, world: _World) -> tuple:
-        client = world.client
-        poses = []
-        for uid in world.bodies:
-            (x, _, _, _), (z, _, _, _), (angle, _, _, _) = _get_states(uid, _JOINTS, client)
-            poses.append((x, z, -angle))
-        return tuple(poses)
+        return _joint_triples(world, 0)
 
     def _read_velocities(self, world: _World) -> tuple:
-        client = world.client
-        velocities = []
-        for uid in world.bodies:
-            (_, vx, _, _), (_, vz, _, _), (_, rate, _, _) = _get_states(uid, _JOINTS, client)
-            velocities.append((vx, vz, -rate))
-        return tuple(velocities)
+        return _joint_triples(world, 1)
 
     def _out_of_plane_drift(self, world: _World) -> float:
         """The centre's y, plus the tilt of the link's y axis times the body's size."""

@@ -273,18 +273,19 @@ class PymunkEngine(Engine):
         )
 
     def _read_poses(self, world: _SpaceEntry) -> tuple:
-        poses = []
-        for body_ptr in world.body_ptrs:
-            position = _get_position(body_ptr)
-            poses.append((position.x, position.y, _get_angle(body_ptr)))
-        return tuple(poses)
+        return _triples(world, _get_position, _get_angle)
 
     def _read_velocities(self, world: _SpaceEntry) -> tuple:
-        velocities = []
-        for body_ptr in world.body_ptrs:
-            velocity = _get_velocity(body_ptr)
-            velocities.append((velocity.x, velocity.y, _get_angular_velocity(body_ptr)))
-        return tuple(velocities)
+        return _triples(world, _get_velocity, _get_angular_velocity)
+
+
+def _triples(world: _SpaceEntry, vector_of, scalar_of) -> tuple:
+    """Per body ``(vector.x, vector.y, scalar)``: the pose or the velocities."""
+    triples = []
+    for body_ptr in world.body_ptrs:
+        vector = vector_of(body_ptr)
+        triples.append((vector.x, vector.y, scalar_of(body_ptr)))
+    return tuple(triples)
 
 
 ENGINE_CLASS = PymunkEngine
