@@ -318,7 +318,7 @@ def test_status_is_an_enum_that_serialises_as_its_value(engine):
 
 @pytest.mark.parametrize("scene_name", ["disk", "rod-45", "box-corner", "two-disks"])
 def test_contact_records_give_point_and_touching_feature(engine, scene_name):
-    scene, contact, normal = SCENES[scene_name]
+    scene, contact, _ = SCENES[scene_name]
     run = engine.run(scene, preset="accurate")
     records = run.contacts
     assert len(records) == run.contact_steps and records[0].step == run.first_contact_step
