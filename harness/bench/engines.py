@@ -6,11 +6,11 @@ For every installed engine, preset and reference scene, in one run:
   caches warm): state set-up, stepping with per-step contact bookkeeping, read-out, status.
 * ``bare_us`` -- the same number of engine steps from the same start state in a tight
   Python loop, with the same step call as the adapter (``cpSpaceStep`` through pymunk's cffi
-  ``lib`` / ``p.stepSimulation`` / ``mj_step``) and the state set outside the timed region;
-  for pymunk on a space of its own without the harness's post_solve recorder.
+  ``lib`` / ``p.stepSimulation`` / ``mj_step``) and the state set outside the timed region,
+  on a world of the stepper's own (pymunk: without the harness's post_solve recorder).
 * ``bare_reset_us`` -- the same loop with the state set-up timed too, the set-up being the
-  adapter's own per-impact reset (pymunk and pybullet ``_reset``; MuJoCo ``_configure``,
-  ``mj_resetData`` and the start state): the least any Python harness must spend per impact.
+  adapter's own per-impact reset (``Engine.bare_stepper``): the least any Python harness
+  must spend per impact.
   Both sides do exactly the same reset.
 * ``ratio`` = ``harness_us / bare_us`` (target <= 1.3) and ``ratio_reset`` =
   ``harness_us / bare_reset_us``.
@@ -52,86 +52,10 @@ RATIO_TARGET = 1.3
 # ---------------------------------------------------------------------- scenes
 def _bare_stepper(engine, scene: Scene, settings: dict) -> tuple[Callable[[], None], Callable[[int], None]]:
     """``(prepare, step_n)``: set the run's start state; step the engine n times, nothing else."""
-    name = engine.name
-    if name == "pymunk":
-        from harness.engines.pymunk_engine import (
-            _build_space,
-            _reset,
-            _space_step,
-            _space_values,
-            _start_states,
-        )
-
-        # A space of its own, without the harness's post_solve recorder; the reset is the
-        # harness's own (_reset: the same C calls on the same start state).
-        entry = _build_space(scene, record=False)
-        entry.configure(_space_values(settings), (scene.restitution, scene.friction))
-        starts = _start_states(scene, settings)
-        space_ptr, dt = entry.space_ptr, float(settings["time_step"])
-
-        def prepare() -> None:
-            _reset(entry, starts)
-
-        def step_n(count: int) -> None:
-            for _ in range(count):
-                _space_step(space_ptr, dt)
-
-        return prepare, step_n
-
-    if name == "pybullet":
-        import pybullet as p
-
-        from harness.engines.pybullet_engine import _reset
-
-        # The harness's world and its reset (_reset: the contact threshold, manifolds emptied
-        # when the last run left contacts -- the bare steps end where the harness's do -- and
-        # the start joint states).
-        engine.run(scene, settings)  # builds (or reuses) the world
-        plan = engine._plan_for(scene, settings)
-        world, starts, client = plan.world, plan.starts, plan.world.client
-
-        def prepare() -> None:
-            _reset(world, starts)
-
-        def step_n(count_steps: int) -> None:
-            step = p.stepSimulation
-            for _ in range(count_steps):
-                step(client)
-
-        return prepare, step_n
-
-    if name == "mujoco":
-        import mujoco
-
-        from harness.engines import free_flight_poses
-        from harness.engines.mujoco_engine import _DETECTION_OVERLAP
-
-        entry = engine._model_for(scene)
-        m, d = entry.model, entry.data
-        engine._configure(entry, scene, settings)
-        dt = float(settings["time_step"])
-        poses = free_flight_poses(scene, -(float(settings["approach_steps"]) - _DETECTION_OVERLAP) * dt)
-        count = len(scene.bodies)
-        shift_x = -sum(b.position[0] for b in scene.bodies) / count
-        shift_y = 0.0 if scene.ground else -sum(b.position[1] for b in scene.bodies) / count
-        qpos, qvel = [], []
-        for body, pose in zip(scene.bodies, poses):
-            qpos += [pose[0] + shift_x, pose[1] + shift_y, -pose[2]]
-            qvel += [body.velocity[0], body.velocity[1], -body.angular_velocity]
-
-        def prepare() -> None:
-            engine._configure(entry, scene, settings)
-            mujoco.mj_resetData(m, d)
-            d.qpos[:] = qpos
-            d.qvel[:] = qvel
-
-        def step_n(count_steps: int) -> None:
-            step = mujoco.mj_step
-            for _ in range(count_steps):
-                step(m, d)
-
-        return prepare, step_n
-    raise ValueError(f"no bare stepper for engine {name!r}")
+    # The engine's own reset and step call (Engine.bare_stepper), on a world of its own built
+    # without contact reporting (pymunk: no post_solve recorder).
+    stepper = engine.bare_stepper(scene, settings)
+    return stepper.reset, stepper.step
 
 
 # ---------------------------------------------------------------------- timing

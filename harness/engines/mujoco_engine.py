@@ -65,25 +65,17 @@ from __future__ import annotations
 
 import functools
 import math
-import time
 from dataclasses import dataclass
 
 import mujoco
 
-from harness.engines import (
-    Engine,
-    EngineRun,
+from harness.engines.contract import Engine, RawContacts, StepTiming, body_extent
+from harness.engines.settings import (
     EngineSettingsError,
-    _check_choice,
-    _check_int,
-    _check_number,
-    _check_vector,
-    body_extent,
-    count_planar_points,
-    decide_status,
-    free_flight_poses,
-    geometry_key,
-    multi_contact_note,
+    check_choice,
+    check_int,
+    check_number,
+    check_vector,
 )
 from harness.scene import Scene
 
@@ -283,9 +275,11 @@ class _Model:
     body_geoms: list[int]  # geom id of each scene body
     body_ids: list[int]
     extents: list[float]  # body_extent of each scene body's shape
-    scale: float
     # What the model holds now: (settings snapshot, e, μ, derived), see _configure.
     configured: tuple | None = None
+    dt: float = 0.0  # s, the time step the model holds
+    normal_sign: float = 0.0  # +1/-1 once the run's first contact is read, 0 before
+    last_depth: float = math.inf  # m, the previous contact step's largest penetration
 
 
 # Per-run constants computed once: the bisection for ζ costs ~14 µs, pure in its arguments.
@@ -294,7 +288,12 @@ _cached_restitution_solref = functools.lru_cache(maxsize=256)(restitution_solref
 
 def _snapshot(settings: dict) -> dict:
     """A copy of ``settings`` that later in-place edits of its lists cannot reach."""
-    return {key: list(value) if isinstance(value, list) else value for key, value in settings.items()}
+    return {key: list(value) if isinstance(value, list) else value
+            for key, value in settings.items()}
+
+
+_mj_step = mujoco.mj_step
+_reset_data = mujoco.mj_resetData
 
 
 class MujocoEngine(Engine):
@@ -302,48 +301,74 @@ class MujocoEngine(Engine):
     version = mujoco.__version__
     presets = PRESETS
     setting_docs = SETTING_DOCS
-
-    def __init__(self) -> None:
-        self._models: dict[tuple, _Model] = {}
+    # A contact at exactly zero distance gets no constraint row in MuJoCo, so the start is a
+    # hair (_DETECTION_OVERLAP of a step of free flight) past the touching pose.
+    timing = StepTiming(lead_steps=0.0, overlap=_DETECTION_OVERLAP)
+    # The soft contact's force fades continuously and MuJoCo makes it exactly 0 once the
+    # constraint is inactive: only an exact 0 counts as no impulse.
+    no_impulse_relative = 0.0
 
     def _validate_engine_settings(self, settings) -> None:
         name = self.name
-        _check_choice(name, settings, "integrator", tuple(_INTEGRATORS))
-        _check_choice(name, settings, "cone", tuple(_CONES))
-        _check_choice(name, settings, "solver", tuple(_SOLVERS))
-        _check_int(name, settings, "iterations", low=1)
-        _check_number(name, settings, "tolerance", low=0.0)
-        _check_int(name, settings, "ls_iterations", low=1)
-        _check_int(name, settings, "noslip_iterations", low=0)
-        _check_number(name, settings, "noslip_tolerance", low=0.0)
-        _check_number(name, settings, "impratio", low=0.0, strict=True)
-        _check_number(name, settings, "contact_steps", low=1.0)
-        _check_vector(name, settings, "solimp", 5)
-        _check_number(name, settings, "margin", low=0.0)
+        check_choice(name, settings, "integrator", tuple(_INTEGRATORS))
+        check_choice(name, settings, "cone", tuple(_CONES))
+        check_choice(name, settings, "solver", tuple(_SOLVERS))
+        check_int(name, settings, "iterations", low=1)
+        check_number(name, settings, "tolerance", low=0.0)
+        check_int(name, settings, "ls_iterations", low=1)
+        check_int(name, settings, "noslip_iterations", low=0)
+        check_number(name, settings, "noslip_tolerance", low=0.0)
+        check_number(name, settings, "impratio", low=0.0, strict=True)
+        check_number(name, settings, "contact_steps", low=1.0)
+        check_vector(name, settings, "solimp", 5)
+        check_number(name, settings, "margin", low=0.0)
         solref = settings["solref"]
         if solref != "restitution":
-            _check_vector(name, settings, "solref", 2)
+            check_vector(name, settings, "solref", 2)
             if (solref[0] > 0) != (solref[1] > 0):
                 raise EngineSettingsError(
-                    f"engine {name!r}: setting 'solref' must be [timeconst > 0, dampratio > 0] or "
-                    f"[-stiffness <= 0, -damping <= 0] or \"restitution\", got {solref!r} "
+                    f"engine {name!r}: setting 'solref' must be [timeconst > 0, dampratio > 0] "
+                    f"or [-stiffness <= 0, -damping <= 0] or \"restitution\", got {solref!r} "
                     "(MuJoCo falls back to its defaults on mixed signs)"
                 )
 
-    def _model_for(self, scene: Scene) -> _Model:
-        key = geometry_key(scene)
-        entry = self._models.get(key)
-        if entry is None:
-            model = mujoco.MjModel.from_xml_string(_model_xml(scene))
-            body_geoms = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, f"g{i}")
-                          for i in range(len(scene.bodies))]
-            body_ids = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"b{i}")
-                        for i in range(len(scene.bodies))]
-            extents = [body_extent(b.shape) for b in scene.bodies]
-            entry = _Model(model, mujoco.MjData(model), body_geoms, body_ids, extents,
-                           scale=max(extents))
-            self._models[key] = entry
-        return entry
+    def _build(self, scene: Scene, settings, *, contacts: bool = True) -> _Model:
+        model = mujoco.MjModel.from_xml_string(_model_xml(scene))
+        count = len(scene.bodies)
+        body_geoms = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, f"g{i}")
+                      for i in range(count)]
+        body_ids = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"b{i}")
+                    for i in range(count)]
+        extents = [body_extent(b.shape) for b in scene.bodies]
+        return _Model(model, mujoco.MjData(model), body_geoms, body_ids, extents)
+
+    def _notes(self, scene: Scene, settings) -> tuple[str, ...]:
+        if settings["solref"] != "restitution":
+            return ("restitution e not used: MuJoCo's bounce comes from solref/solimp",)
+        if scene.restitution < MIN_RESTITUTION:
+            note = (f"e below {MIN_RESTITUTION} needs an infinite damping ratio; "
+                    f"used {MIN_RESTITUTION}")
+            return (note,)
+        return ()
+
+    def _prepare(self, world: _Model, scene: Scene, settings, start) -> tuple:
+        qpos, qvel = [], []
+        for x, y, angle, vx, vy, omega in start:
+            qpos += [x, y, -angle]
+            qvel += [vx, vy, -omega]
+        return scene, settings, qpos, qvel
+
+    def _reset(self, world: _Model, prepared: tuple) -> dict:
+        """The run's options and contact parameters, fresh data, the start state."""
+        scene, settings, qpos, qvel = prepared
+        derived = self._configure(world, scene, settings)
+        m, d = world.model, world.data
+        _reset_data(m, d)
+        d.qpos[:] = qpos
+        d.qvel[:] = qvel
+        world.normal_sign = 0.0
+        world.last_depth = math.inf
+        return derived
 
     def _configure(self, entry: _Model, scene: Scene, settings: dict) -> dict:
         """Make the model hold every option and contact parameter of this run; its ``derived``.
@@ -354,7 +379,8 @@ class MujocoEngine(Engine):
         e, mu = scene.restitution, scene.friction
         last = entry.configured
         if last is None or last[1] != e or last[2] != mu or last[0] != settings:
-            entry.configured = last = (_snapshot(settings), e, mu, self._write_model(entry, scene, settings))
+            entry.configured = last = (_snapshot(settings), e, mu,
+                                       self._write_model(entry, scene, settings))
         derived = last[3]
         return {**derived, "solref": list(derived["solref"])}  # the caller's own copy
 
@@ -362,6 +388,7 @@ class MujocoEngine(Engine):
         m = entry.model
         opt = m.opt
         dt = float(settings["time_step"])
+        entry.dt = dt
         opt.timestep = dt
         opt.integrator = _INTEGRATORS[settings["integrator"]]
         opt.cone = _CONES[settings["cone"]]
@@ -395,146 +422,67 @@ class MujocoEngine(Engine):
         m.geom_friction[entry.body_geoms[0]] = [mu, 0.0, 0.0]
         return derived
 
-    def _run(self, scene: Scene, settings: dict, preset: str | None) -> EngineRun:
-        start = time.perf_counter()
-        entry = self._model_for(scene)
-        m, d = entry.model, entry.data
-        derived = self._configure(entry, scene, settings)
-        dt = float(settings["time_step"])
-        mujoco.mj_resetData(m, d)
-        count = len(scene.bodies)
-        shift_x = -sum(b.position[0] for b in scene.bodies) / count
-        shift_y = 0.0 if scene.ground else -sum(b.position[1] for b in scene.bodies) / count
-        # A contact at exactly zero distance gets no constraint row in MuJoCo, so the start is
-        # a hair (_DETECTION_OVERLAP of a step of free flight) past the touching pose.
-        rewind = -(float(settings["approach_steps"]) - _DETECTION_OVERLAP) * dt
-        qpos, qvel = [], []
-        for body, pose in zip(scene.bodies, free_flight_poses(scene, rewind)):
-            qpos += [pose[0] + shift_x, pose[1] + shift_y, -pose[2]]
-            qvel += [body.velocity[0], body.velocity[1], -body.angular_velocity]
-        d.qpos[:] = qpos
-        d.qvel[:] = qvel
+    def _advance(self, world: _Model) -> None:
+        _mj_step(world.model, world.data)
 
-        step = mujoco.mj_step
-        max_steps = int(settings["max_steps"])
-        steps = contact_steps = 0
-        first_contact = None
-        max_points = 0
-        max_penetration = 0.0
-        normal = None
-        separated = False
-        geom_a = entry.body_geoms[0] if count == 2 else -1
-        last_depth = math.inf
-        while steps < max_steps:
-            step(m, d)
-            steps += 1
-            # Active contact constraints only: MuJoCo reports a contact at dist >= margin
-            # (its "gap" zone) but gives it no constraint row.
-            if not d.nefc:
-                if first_contact is not None:
-                    separated = True
-                    break
-                continue
-            contact_steps += 1
-            ncon = d.ncon
-            if ncon == 1:
-                # The model has no other constraints, so every row is this contact's and
-                # carries its distance: efc_pos is ~4x cheaper to read than d.contact.
-                depth = -d.efc_pos.item(0)
-            else:
-                depth = -float(d.contact.dist.min())
-            if depth > max_penetration:
-                max_penetration = depth
-            if first_contact is None:
-                first_contact = steps
-                contact = d.contact
-                frame = contact.frame[0]
-                sign = -1.0 if (count == 2 and contact.geom2[0] == geom_a) else 1.0
-                length = math.hypot(frame[0], frame[2])
-                normal = (float(sign * frame[0] / length), float(sign * frame[2] / length))
-            if ncon > 1:
-                positions = d.contact.pos
-                if ncon == 2:  # a prism's edge on the ground: the same point at ±y?
-                    tolerance = 1e-6 * entry.scale
-                    same = (abs(positions[0, 0] - positions[1, 0]) <= tolerance
-                            and abs(positions[0, 2] - positions[1, 2]) <= tolerance)
-                    planar = 1 if same else 2
-                else:
-                    planar = count_planar_points(((row[0], row[2]) for row in positions), entry.scale)
-                if planar > max_points:
-                    max_points = planar
-            elif max_points < 1:
-                max_points = 1
-            # The contact can only end while the penetration shrinks; only then look at the
-            # forces (every contact force zero: the impact is over). any() of a short list
-            # is the same test as ndarray.any() at a fifth of the cost.
-            if depth < last_depth and not any(d.efc_force.tolist()):
-                separated = True
-                break
-            last_depth = depth
+    def _step(self, world: _Model) -> RawContacts | None:
+        d = world.data
+        _mj_step(world.model, d)
+        # Active contact constraints only: MuJoCo reports a contact at dist >= margin (its
+        # "gap" zone) but gives it no constraint row.
+        if not d.nefc:
+            return None
+        contact = d.contact
+        positions = contact.pos.tolist()
+        if len(positions) == 1:
+            # The model has no other constraints, so every row is this contact's and carries
+            # its distance: efc_pos is cheaper to read than contact.dist.
+            points = ((positions[0][0], positions[0][2], -d.efc_pos.item(0)),)
+        else:
+            points = tuple((position[0], position[2], -distance)
+                           for position, distance in zip(positions, contact.dist.tolist()))
+        sign = world.normal_sign
+        if sign == 0.0:  # a pair's geom order is fixed: read it at the run's first contact
+            # The normal points from geom1 into geom2; body A's geom second reverses it.
+            two_bodies = len(world.body_geoms) == 2
+            sign = world.normal_sign = (
+                -1.0 if two_bodies and contact.geom2.item(0) == world.body_geoms[0] else 1.0)
+        frame = contact.frame.tolist()[0]
+        length = math.hypot(frame[0], frame[2])
+        normal = (sign * frame[0] / length, sign * frame[2] / length)
+        # No impulse vector per step (the run's comes from momentum). While the penetration
+        # still grows the spring-damper pushes (k·r + b·r' > 0), so the forces are read only
+        # once it shrinks: the step carries force while any constraint force is non-zero.
+        depth = max(point[2] for point in points) if len(points) > 1 else points[0][2]
+        growing = depth >= world.last_depth
+        world.last_depth = depth
+        if growing:
+            return points, normal, None, None
+        return points, normal, None, sum(map(abs, d.efc_force.tolist())) * world.dt
 
+    def _read_poses(self, world: _Model) -> tuple:
         # Python floats once (tolist): the same doubles as indexing the arrays, fewer calls.
-        qvel_after = d.qvel.tolist()
-        velocities = tuple(
-            (qvel_after[3 * i], qvel_after[3 * i + 1], -qvel_after[3 * i + 2]) for i in range(count)
-        )
+        qpos = world.data.qpos.tolist()
+        if len(qpos) == 3:
+            return ((qpos[0], qpos[1], -qpos[2]),)
+        return tuple([(qpos[i], qpos[i + 1], -qpos[i + 2]) for i in range(0, len(qpos), 3)])
+
+    def _read_velocities(self, world: _Model) -> tuple:
+        qvel = world.data.qvel.tolist()
+        if len(qvel) == 3:
+            return ((qvel[0], qvel[1], -qvel[2]),)
+        return tuple([(qvel[i], qvel[i + 1], -qvel[i + 2]) for i in range(0, len(qvel), 3)])
+
+    def _out_of_plane_drift(self, world: _Model) -> float:
+        """The centre's y, plus the tilt of the body's y axis times its size."""
+        d = world.data
         drift = 0.0
         xpos, xmat = d.xpos.tolist(), d.xmat.tolist()
-        for body_id, extent in zip(entry.body_ids, entry.extents):
+        for body_id, extent in zip(world.body_ids, world.extents):
             rotation = xmat[body_id]  # row-major 3x3: the body's y axis is entries 1, 4, 7
-            drift = max(drift, abs(xpos[body_id][1]) + math.hypot(rotation[1], rotation[7]) * extent)
-        if normal is not None:
-            # Constraint impulse on body B from momentum: M·Δq̇ of its slide joints.
-            body_b = scene.bodies[-1]
-            offset = 3 * (count - 1)
-            impulse_x = body_b.mass * (qvel_after[offset] - qvel[offset])
-            impulse_z = body_b.mass * (qvel_after[offset + 1] - qvel[offset + 1])
-            n_x, n_y = normal
-            normal_impulse = float(impulse_x * n_x + impulse_z * n_y)
-            tangential_impulse = float(impulse_x * n_y - impulse_z * n_x)
-        else:
-            normal_impulse = tangential_impulse = None
-        status = decide_status(
-            scene,
-            velocities,
-            contact_seen=first_contact is not None,
-            separated=separated,
-            max_contact_points=max_points,
-            out_of_plane_drift=drift,
-        )
-        notes = []
-        if settings["solref"] != "restitution":
-            notes.append("restitution e not used: MuJoCo's bounce comes from solref/solimp")
-        if settings["solref"] == "restitution" and scene.restitution < MIN_RESTITUTION:
-            notes.append(f"e below {MIN_RESTITUTION} needs an infinite damping ratio; used {MIN_RESTITUTION}")
-        if max_points > 1:
-            notes.append(multi_contact_note(max_points))
-        return EngineRun(
-            engine=self.name,
-            engine_version=self.version,
-            scene_name=scene.name,
-            preset=preset,
-            settings=settings,
-            velocities=velocities,
-            status=status,
-            steps=steps,
-            contact_steps=contact_steps,
-            first_contact_step=first_contact,
-            max_contact_points=max_points,
-            max_penetration=float(max_penetration),
-            separated=separated,
-            step_cap_hit=(not separated and steps >= max_steps),
-            contact_normal=normal,
-            normal_impulse=normal_impulse,
-            tangential_impulse=tangential_impulse,
-            out_of_plane_drift=drift,
-            derived=derived,
-            notes=tuple(notes),
-            wall_time_s=time.perf_counter() - start,
-        )
-
-    def close(self) -> None:
-        self._models.clear()
+            drift = max(drift,
+                        abs(xpos[body_id][1]) + math.hypot(rotation[1], rotation[7]) * extent)
+        return drift
 
 
 ENGINE_CLASS = MujocoEngine

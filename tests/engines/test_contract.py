@@ -20,6 +20,7 @@ from harness.engines import (
     EngineNotInstalled,
     EngineRun,
     EngineSettingsError,
+    Status,
     available_engines,
     ke_norm,
     load_engine,
@@ -301,3 +302,66 @@ def test_vector_of_wrong_length_names_body_and_field(engine, field):
     body = Body("puck", Disk(0.1), 1.0, values["position"], 0.0, values["velocity"], 0.0)
     with pytest.raises(ValueError, match=rf"'puck' {field} must be \(x, y\).*5\.0"):
         engine.run(Scene((body,), 0.5, 0.3, ground=True, name="bad"), preset="accurate")
+
+
+# ---------------------------------------------------------------------- the contract's records
+def test_status_is_an_enum_that_serialises_as_its_value(engine):
+    run = engine.run(SCENES["disk"][0], preset="accurate")
+    assert run.status is Status.OK and run.status == "ok"
+    assert json.dumps({"status": run.status}) == '{"status": "ok"}'
+    assert [status.value for status in Status] == list(STATUSES)
+    assert all(Status(value).meaning == meaning for value, meaning in STATUSES.items())
+    capped = engine.run(SCENES["rod-45"][0], preset="accurate", overrides={"max_steps": 1})
+    if capped.status is Status.NO_SEPARATION:
+        assert "step cap" in capped.status_reason
+
+
+@pytest.mark.parametrize("scene_name", ["disk", "rod-45", "box-corner", "two-disks"])
+def test_contact_records_give_point_and_touching_feature(engine, scene_name):
+    scene, contact, _ = SCENES[scene_name]
+    run = engine.run(scene, preset="accurate")
+    records = run.contacts
+    assert len(records) == run.contact_steps and records[0].step == run.first_contact_step
+    first = records[0]
+    assert first.normal == run.contact_normal
+    # Reason for the tolerance: an engine reports the point after the step's motion (speeds
+    # up to ~1.2 m/s here) and may place it anywhere across the overlap, so one step of
+    # travel plus 1 mm (pybullet's polygon margin is the largest fixed offset).
+    tolerance = 2.0 * run.settings["time_step"] + 1e-3
+    for point in first.points:
+        assert math.hypot(point.x - contact[0], point.y - contact[1]) < tolerance
+    features = first.features(scene)
+    body = scene.bodies[-1]
+    if body.shape.kind == "rod":
+        assert features[0][-1] == 0  # the cap at -length/2 is the lower one at 45°
+    if body.shape.kind == "box":
+        # The lowest corner in the scene frame is the one that strikes.
+        c, s = math.cos(body.angle), math.sin(body.angle)
+        heights = [s * x + c * y for x, y in body.shape.vertices().tolist()]
+        assert features[0][-1] == heights.index(min(heights))
+    assert len(first.poses) == len(scene.bodies)
+
+
+def test_impulse_source_and_energies(engine):
+    scene = SCENES["two-disks"][0]
+    run = engine.run(scene, preset="accurate")
+    assert run.impulse_source == ("momentum" if engine.name == "mujoco" else "engine")
+    u_before, u_after = scene.state(), run.u_after
+    mass = scene.mass_matrix()
+    # Reason for rel 1e-14: the same sums as u^T M u in another order (rounding only).
+    assert run.energy_before == pytest.approx(0.5 * u_before @ mass @ u_before, rel=1e-14)
+    assert run.energy_after == pytest.approx(0.5 * u_after @ mass @ u_after, rel=1e-14)
+
+
+def test_bare_stepper_resets_steps_and_leaves_runs_unchanged(engine):
+    scene = SCENES["rod-45"][0]
+    settings = engine.settings("accurate")
+    first = engine.run(scene, settings)
+    stepper = engine.bare_stepper(scene, settings)
+    try:
+        for _ in range(2):
+            stepper.reset()
+            stepper.step(first.steps)
+    finally:
+        stepper.close()
+    assert engine.run(scene, settings) == first
