@@ -32,7 +32,7 @@ Friction under ``accurate``: the slip falls to ``e²`` of its start, and not at 
     the friction. Measured (disk, slip 0.1 m/s, μ 0.3): slip ratio 0.8103 / 0.4905 / 0.2506
     / 0.0908 / 0.0100 at e = 0.9 / 0.7 / 0.5 / 0.3 / 0.1, e² within 8e-4 (the cone saturates
     only as the normal force vanishes at the end). A larger slip saturates the cone early and
-    keeps more (reference disk, slip 1 m/s, e = 0.5: 0.265 -- ENGINES.md's "0.2-0.26").
+    keeps more (reference disk, slip 1 m/s, e = 0.5: 0.265; docs/engines.md, 'MuJoCo').
     At ``e = 1`` (ζ = 0, b = 0) both edges get the same ``a_ref = -k·r``, carry equal forces,
     and the tangential impulse is exactly 0: the bounce is frictionless whatever μ and the
     spin. ``disk-backspin-elastic`` comes out with v_x 1 and ω -20 as it went in; its 28.9%
