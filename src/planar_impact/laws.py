@@ -9,12 +9,12 @@ which also turns the impulses into velocities and energies, and runs these kerne
 accept numpy float64 scalars, which is how the scalar solver stays fast.
 
 Equation numbers are the paper's (Djerassi, Part B); "A" numbers are Part A's, restated in
-THEORY.md. The independent check of every law is :mod:`planar_impact.process`, which walks
-the impulse process segment by segment.
+docs/theory.md, 'Conventions'. The independent check of every law is
+:mod:`planar_impact.process`, which walks the impulse process segment by segment.
 
 Throughout, ``P`` is the normal impulse used as the clock of the impulse process; the
-process has at most two tangential phases (THEORY.md §2): forward sliding (``dI_t/dP = −μ``)
-until the slip vanishes at ``P_G = v_t^A/g`` (A58, with ``v_t^A`` for the misprinted
+process has at most two tangential phases (docs/theory.md, 'Routh's diagram and collision
+types'): forward sliding (``dI_t/dP = −μ``) until the slip vanishes at ``P_G = v_t^A/g`` (A58, with ``v_t^A`` for the misprinted
 ``v_n^A``), then sticking (``dI_t/dP = −m_nt/m_tt``, if ``p ≥ 0``) or reverse sliding
 (``dI_t/dP = +μ``, if ``p < 0``), both of which last to the end of the impact.
 """
@@ -188,7 +188,8 @@ def poisson_impulses(terms: ContactTerms, e, ctype):
 
 
 class TwoPhaseProcess:
-    """The impulse process of THEORY.md §2 in closed form: ``v_n`` piecewise linear in ``P``.
+    """The impulse process in closed form: ``v_n`` piecewise linear in ``P`` (docs/theory.md,
+    'Routh's diagram and collision types').
 
     Phase 1 (forward sliding) has ``dv_n/dP = h`` and lasts until ``P_G = v_t^A/g`` (A58)
     (forever if ``g ≤ 0``: Case 5). Phase 2 has ``dv_n/dP = Δ/m_tt`` when sticking
