@@ -76,17 +76,20 @@ class ContactTerms:
 
     ``delta`` (A20), ``g, h, p, q`` (A35), ``alpha`` (A34), ``r_m`` (A36) and the Table 1
     ``case`` (1–5). ``alpha`` and ``r_m`` are computed on first use: only the Poisson-type
-    laws need them.
+    laws need them. ``delta`` may be given: ``m_nn m_tt − m_nt²`` cancels catastrophically
+    when ``M⁻¹`` is dominated by one direction (a rod with ``m = 1e9``, ``I = 1e-9``), and a
+    caller holding the generalized speeds can form it without cancellation
+    (:func:`planar_impact.solver.contact_terms`).
     """
 
     __slots__ = ("mnn", "mnt", "mtt", "vn_abs", "vt", "mu", "delta", "g", "h", "p", "q",
                  "_alpha", "_r_m", "case")
 
-    def __init__(self, mnn, mnt, mtt, vn, vt, mu):
+    def __init__(self, mnn, mnt, mtt, vn, vt, mu, delta=None):
         self.mnn, self.mnt, self.mtt, self.mu = mnn, mnt, mtt, mu
         self.vn_abs = -vn
         self.vt = vt
-        self.delta = mnn * mtt - mnt * mnt  # (A20)
+        self.delta = mnn * mtt - mnt * mnt if delta is None else delta  # (A20)
         mu_mtt = mu * mtt
         mu_mnt = mu * mnt
         self.g = mu_mtt - mnt  # (A35)
