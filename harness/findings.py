@@ -143,11 +143,11 @@ def measure(count: int, seed: int) -> dict:
 def markdown(findings: dict) -> str:
     """The findings as Markdown tables."""
     lines = [
-        f"Findings on {findings['count']:,} random problems "
-        f"(`harness.random_problems`, seed {findings['seed']}).",
+        (f"Findings on {findings['count']:,} random problems "
+         f"(`harness.random_problems`, seed {findings['seed']})."),
         "",
-        f"(a) Projected Gauss–Seidel on problems whose `newton-lcp` answer slides "
-        f"({PGS_ITERATIONS} sweeps, relative change ≤ {PGS_TOLERANCE:g}):",
+        (f"(a) Projected Gauss–Seidel on problems whose `newton-lcp` answer slides "
+         f"({PGS_ITERATIONS} sweeps, relative change ≤ {PGS_TOLERANCE:g}):"),
         "",
         "| μ·abs(m_nt)/m_nn | sliding problems | not converged | fraction |",
         "|---|---:|---:|---:|",
