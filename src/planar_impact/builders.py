@@ -1,7 +1,8 @@
 """Builders of impact problems: ``M``, ``w_n``, ``w_t`` and ``u`` for common systems.
 
 * A free planar rigid body against the fixed ground, and two free planar bodies, with
-  ``u = (v_x, v_y, ω)`` per body and ``M = diag(m, m, I_G)`` (THEORY.md §1).
+  ``u = (v_x, v_y, ω)`` per body and ``M = diag(m, m, I_G)`` (docs/theory.md,
+  'Contact terms').
 * The paper's two-sled system (Section 5), a nonholonomic system with independent speeds
   ``(u1, u3, u4, u6)``.
 
@@ -105,7 +106,8 @@ TWO_SLED_PARAMETERS = dict(m=3.0, l=1.0, s=0.75, c=-0.5, q3=math.pi / 4, q6=7 * 
 def two_sleds(gamma: float, delta: float, m: float = 3.0, l: float = 1.0, s: float = 0.75,
               c: float = -0.5, q3: float = math.pi / 4, q6: float = 7 * math.pi / 4,
               u=(1.0, 0.1, 1.0, 0.1)) -> ImpactProblem:
-    """The two-sled collision of the paper's Section 5 (THEORY.md §6).
+    """The two-sled collision of the paper's Section 5 (docs/theory.md, 'The two-sled
+    example').
 
     Independent speeds ``u = (u1, u3, u4, u6)``; steering angles ``gamma`` (sled A) and
     ``delta`` (sled B) in rad. Per sled ``M = m [[1/cos²γ, −s tanγ], [−s tanγ, l²/3 + s²]]``.

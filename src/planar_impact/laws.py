@@ -9,12 +9,12 @@ which also turns the impulses into velocities and energies, and runs these kerne
 accept numpy float64 scalars, which is how the scalar solver stays fast.
 
 Equation numbers are the paper's (Djerassi, Part B); "A" numbers are Part A's, restated in
-THEORY.md. The independent check of every law is :mod:`planar_impact.process`, which walks
-the impulse process segment by segment.
+docs/theory.md, 'Conventions'. The independent check of every law is
+:mod:`planar_impact.process`, which walks the impulse process segment by segment.
 
 Throughout, ``P`` is the normal impulse used as the clock of the impulse process; the
-process has at most two tangential phases (THEORY.md §2): forward sliding (``dI_t/dP = −μ``)
-until the slip vanishes at ``P_G = v_t^A/g`` (A58, with ``v_t^A`` for the misprinted
+process has at most two tangential phases (docs/theory.md, 'Routh's diagram and collision
+types'): forward sliding (``dI_t/dP = −μ``) until the slip vanishes at ``P_G = v_t^A/g`` (A58, with ``v_t^A`` for the misprinted
 ``v_n^A``), then sticking (``dI_t/dP = −m_nt/m_tt``, if ``p ≥ 0``) or reverse sliding
 (``dI_t/dP = +μ``, if ``p < 0``), both of which last to the end of the impact.
 """
@@ -76,17 +76,20 @@ class ContactTerms:
 
     ``delta`` (A20), ``g, h, p, q`` (A35), ``alpha`` (A34), ``r_m`` (A36) and the Table 1
     ``case`` (1–5). ``alpha`` and ``r_m`` are computed on first use: only the Poisson-type
-    laws need them.
+    laws need them. ``delta`` may be given: ``m_nn m_tt − m_nt²`` cancels catastrophically
+    when ``M⁻¹`` is dominated by one direction (a rod with ``m = 1e9``, ``I = 1e-9``), and a
+    caller holding the generalized speeds can form it without cancellation
+    (:func:`planar_impact.solver.contact_terms`).
     """
 
     __slots__ = ("mnn", "mnt", "mtt", "vn_abs", "vt", "mu", "delta", "g", "h", "p", "q",
                  "_alpha", "_r_m", "case")
 
-    def __init__(self, mnn, mnt, mtt, vn, vt, mu):
+    def __init__(self, mnn, mnt, mtt, vn, vt, mu, delta=None):
         self.mnn, self.mnt, self.mtt, self.mu = mnn, mnt, mtt, mu
         self.vn_abs = -vn
         self.vt = vt
-        self.delta = mnn * mtt - mnt * mnt  # (A20)
+        self.delta = mnn * mtt - mnt * mnt if delta is None else delta  # (A20)
         mu_mtt = mu * mtt
         mu_mnt = mu * mnt
         self.g = mu_mtt - mnt  # (A35)
@@ -188,7 +191,8 @@ def poisson_impulses(terms: ContactTerms, e, ctype):
 
 
 class TwoPhaseProcess:
-    """The impulse process of THEORY.md §2 in closed form: ``v_n`` piecewise linear in ``P``.
+    """The impulse process in closed form: ``v_n`` piecewise linear in ``P`` (docs/theory.md,
+    'Routh's diagram and collision types').
 
     Phase 1 (forward sliding) has ``dv_n/dP = h`` and lasts until ``P_G = v_t^A/g`` (A58)
     (forever if ``g ≤ 0``: Case 5). Phase 2 has ``dv_n/dP = Δ/m_tt`` when sticking

@@ -2,8 +2,9 @@
 
 This is the second, independent implementation of the laws (the first is the closed forms
 of :mod:`planar_impact.laws`). It knows nothing of Table 1, collision types or ``α``: it
-only follows THEORY.md §2. With the normal impulse ``P`` as the clock, the contact velocities
-are linear in ``P`` inside each phase:
+only follows the impulse process of docs/theory.md, 'Routh's diagram and collision types'.
+With the normal impulse ``P`` as the clock, the contact velocities are linear in ``P`` inside
+each phase:
 
     dv_n/dP = m_nn + m_nt s,    dv_t/dP = m_nt + m_tt s,    s = dI_t/dP,
 

@@ -68,7 +68,8 @@ def test_newton_energy_gain_is_reported_where_it_occurs():
     scale = (np.abs(newton.normal_impulse * newton.vn_approach)
              + np.abs(newton.tangential_impulse * newton.vt_approach))
     gained = newton.energy_change > 1e-12 * scale
-    assert 0.005 < gained.mean() < 0.1  # THEORY.md: about 3% of the problems with reversal
+    # docs/theory.md, 'Newton's law': about 3% of the problems with reversal.
+    assert 0.005 < gained.mean() < 0.1
     # Forward sliding is Poisson's Type 5 exactly (comment f), so never a gain there.
     assert pi.laws.NEWTON_FORWARD not in set(np.unique(newton.collision_type[gained]))
     assert np.all(poisson.energy_change[gained] <= 1e-12 * scale[gained])
