@@ -21,6 +21,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "new": ("harness.scenarios.cli", "write a commented starting scenario file"),
     "bench": ("harness.bench.solver", "benchmarks: solver throughput, engine overhead, speed-accuracy"),
     "stress": ("harness.stress", "numerical stress of the solver and the engines"),
+    "findings": ("harness.report.findings", "re-measure the README's findings on the laws"),
 }
 
 

@@ -13,8 +13,8 @@ docs/theory.md, 'Conventions'. The independent check of every law is
 :mod:`planar_impact.process`, which walks the impulse process segment by segment.
 
 Throughout, ``P`` is the normal impulse used as the clock of the impulse process; the
-process has at most two tangential phases (docs/theory.md, 'Routh's diagram and collision
-types'): forward sliding (``dI_t/dP = −μ``) until the slip vanishes at ``P_G = v_t^A/g`` (A58, with ``v_t^A`` for the misprinted
+process has at most two tangential phases
+(docs/theory.md, 'Routh's diagram and collision types'): forward sliding (``dI_t/dP = −μ``) until the slip vanishes at ``P_G = v_t^A/g`` (A58, with ``v_t^A`` for the misprinted
 ``v_n^A``), then sticking (``dI_t/dP = −m_nt/m_tt``, if ``p ≥ 0``) or reverse sliding
 (``dI_t/dP = +μ``, if ``p < 0``), both of which last to the end of the impact.
 """

@@ -214,8 +214,9 @@ def newton_lcp_modes(mnn, mnt, mtt, vn, vt, mu, e):
     Tries sticking and sliding in both directions, each a linear 2×2 problem, and keeps those
     that satisfy all of Coulomb's conditions. Returns ``[(mode, I_n, I_t), …]``; the law is
     well posed where exactly one mode is returned. (PGS, :func:`sequential_impulses`, may
-    fail to converge: its normal step contracts by ``|1 − h/m_nn|``, above 1 when
-    ``μ|m_nt| > 2 m_nn``.)
+    fail to converge: while sliding its normal step multiplies the error by
+    ``|1 − h/m_nn| = μ|m_nt|/m_nn``, above 1 when ``μ|m_nt| > m_nn``; measured by
+    ``impact-harness findings``.)
     """
     closing = (1.0 + e) * -vn
     modes = []

@@ -72,6 +72,7 @@ class ContactSystem:
     delassus: np.ndarray  # (2m, 2m)
     approach: np.ndarray  # (2m,)
     terms: tuple[tuple[float, float, float], ...]  # (m_nn, m_nt, m_tt) per contact (A20)
+    deltas: tuple[float, ...]  # Δ per contact (A20), formed as planar_impact.solve forms it
 
     @property
     def count(self) -> int:
@@ -113,7 +114,7 @@ class ContactSystem:
 def contact_system(*, mass_matrix, wn, wt, u, mu, e) -> ContactSystem:
     """Check and assemble ``m`` contacts: ``wn``, ``wt`` are ``(m, p)`` (one row per contact),
     ``mu`` and ``e`` scalars or length ``m``. Raises :class:`ImpactInputError`."""
-    matrix = solver._check_mass_matrix(mass_matrix)
+    matrix = solver.check_mass_matrix(mass_matrix)
     size = matrix.shape[0]
     try:
         np.linalg.cholesky(matrix)
@@ -127,12 +128,12 @@ def contact_system(*, mass_matrix, wn, wt, u, mu, e) -> ContactSystem:
     count = wn_rows.shape[0]
     if count == 0 or not (np.isfinite(wn_rows).all() and np.isfinite(wt_rows).all()):
         raise ImpactInputError("wn, wt: need at least one contact, all entries finite")
-    speeds = solver._as_vector("u", u, size)
+    speeds = solver.as_vector("u", u, size)
     mus = np.broadcast_to(np.asarray(mu, dtype=float), (count,)).copy()
     restitutions = np.broadcast_to(np.asarray(e, dtype=float), (count,)).copy()
     for i in range(count):
-        mus[i] = solver._check_scalar(f"mu[{i}]", mus[i], 0.0, np.inf)
-        restitutions[i] = solver._check_scalar(f"e[{i}]", restitutions[i], 0.0, 1.0)
+        mus[i] = solver.check_scalar(f"mu[{i}]", mus[i], 0.0, np.inf)
+        restitutions[i] = solver.check_scalar(f"e[{i}]", restitutions[i], 0.0, 1.0)
     # One solve per contact, as planar_impact.solve does it (bit identity for m = 1).
     inverse_rows = tuple(np.linalg.solve(matrix, np.stack([wn_rows[i], wt_rows[i]], axis=1))
                          for i in range(count))
@@ -142,8 +143,9 @@ def contact_system(*, mass_matrix, wn, wt, u, mu, e) -> ContactSystem:
     approach = np.array([float(row @ speeds) for row in rows])
     terms = tuple((float(wn_rows[i] @ inverse[:, 0]), float(wn_rows[i] @ inverse[:, 1]),
                    float(wt_rows[i] @ inverse[:, 1])) for i, inverse in enumerate(inverse_rows))
+    deltas = tuple(solver.contact_terms(matrix, wn_rows[i], wt_rows[i])[3] for i in range(count))
     return ContactSystem(matrix, wn_rows, wt_rows, speeds, mus, restitutions, inverse_rows,
-                         delassus, approach, terms)
+                         delassus, approach, terms, deltas)
 
 
 @dataclass(frozen=True)
@@ -183,12 +185,12 @@ def _frame_sign(vt: float, mnt: float) -> float:
     return -1.0 if vt < 0 or (vt == 0 and mnt < 0) else 1.0
 
 
-def _forced_impulses(law, ctype, mnn, mnt, mtt, vn, vt, mu, e):
+def _forced_impulses(law, ctype, mnn, mnt, mtt, vn, vt, mu, e, delta=None):
     """``(I_n, I_t)`` of one contact by the formulas of collision type ``ctype``, in a frame
     with ``v_t ≥ 0`` (not checked: the coherence test does). Affine in ``(v_n, v_t)`` for
     Poisson and Newton; homogeneous of degree 1 for the paper's Stronge."""
     scalars = [np.float64(x) for x in (mnn, mnt, mtt, vn, vt, mu)]
-    terms = laws.ContactTerms(*scalars)
+    terms = laws.ContactTerms(*scalars, None if delta is None else np.float64(delta))
     with np.errstate(all="ignore"):
         if law == "poisson":  # (26), (29), (36), (44), (49)
             return laws.poisson_impulses(terms, np.float64(e), ctype)
@@ -227,7 +229,8 @@ def _contact_map(system, law, ctypes, signs, coupling="effective"):
             mnn, mnt, mtt = system.single_terms(i)
             vn, vt = system.effective_approach(i, impulses)
             normal, tangential = _forced_impulses(law, ctype, mnn, sign * mnt, mtt, vn,
-                                                  sign * vt, system.mu[i], system.e[i])
+                                                  sign * vt, system.mu[i], system.e[i],
+                                                  system.deltas[i])
             out[2 * i], out[2 * i + 1] = float(normal), sign * float(tangential)
         return out
 
@@ -277,12 +280,13 @@ def _law_at(system, law, i, vn, vt, sign):
     """Contact ``i``'s own single-contact law at approach ``(vn, vt)``, in frame ``sign``:
     the solver's contact-space kernel, or None where it has no answer."""
     mnn, mnt, mtt = system.single_terms(i)
-    if not vn < 0 or not mnn * mtt - mnt * mnt > 0:
+    delta = np.float64(system.deltas[i])
+    if not vn < 0 or not delta > 0:
         return None
     scalars = [np.float64(x) for x in (mnn, sign * mnt, mtt, vn, sign * vt,
                                        system.mu[i], system.e[i])]
     with np.errstate(all="ignore"):
-        out = solver.contact_space_solution(law, *scalars)
+        out = solver.contact_space_solution(law, *scalars, delta=delta)
         status = int(solver.answer_status(law, errors.SOLVED, out))
     return out if status == errors.SOLVED else None
 

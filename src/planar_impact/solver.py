@@ -416,7 +416,7 @@ class ImpactResult:
         return self.energy_change > 1e-12 * scale
 
 
-def _as_vector(name: str, value, length: int | None = None) -> np.ndarray:
+def as_vector(name: str, value, length: int | None = None) -> np.ndarray:
     array = np.asarray(value, dtype=float)
     if array.ndim != 1:
         raise ImpactInputError(f"{name}: expected a 1-D vector, got shape {array.shape}")
@@ -429,7 +429,7 @@ def _as_vector(name: str, value, length: int | None = None) -> np.ndarray:
     return array
 
 
-def _check_scalar(name: str, value, low: float, high: float) -> float:
+def check_scalar(name: str, value, low: float, high: float) -> float:
     try:
         number = float(value)
     except (TypeError, ValueError):
@@ -440,7 +440,7 @@ def _check_scalar(name: str, value, low: float, high: float) -> float:
     return number
 
 
-def _check_mass_matrix(mass_matrix) -> np.ndarray:
+def check_mass_matrix(mass_matrix) -> np.ndarray:
     matrix = np.asarray(mass_matrix, dtype=float)
     if matrix.ndim != 2 or matrix.shape[0] != matrix.shape[1] or matrix.shape[0] == 0:
         raise ImpactInputError(f"mass_matrix: must be square, got shape {matrix.shape}")
@@ -511,13 +511,13 @@ def solve(*, mass_matrix, wn, wt, u, mu, e, hypothesis: str = "poisson") -> Impa
     what is allowed; never returns NaN or inf.
     """
     check_hypothesis(hypothesis)
-    matrix = _check_mass_matrix(mass_matrix)
+    matrix = check_mass_matrix(mass_matrix)
     size = matrix.shape[0]
-    wn = _as_vector("wn", wn, size)
-    wt = _as_vector("wt", wt, size)
-    u = _as_vector("u", u, size)
-    mu = _check_scalar("mu", mu, 0.0, np.inf)
-    e = _check_scalar("e", e, 0.0, 1.0)
+    wn = as_vector("wn", wn, size)
+    wt = as_vector("wt", wt, size)
+    u = as_vector("u", u, size)
+    mu = check_scalar("mu", mu, 0.0, np.inf)
+    e = check_scalar("e", e, 0.0, 1.0)
     try:
         cholesky = np.linalg.cholesky(matrix)  # also the positive-definiteness test
     except np.linalg.LinAlgError:

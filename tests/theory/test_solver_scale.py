@@ -20,7 +20,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import planar_impact as pi
-from harness.random_problems import random_problems
+from harness.scene.random_problems import random_problems
 from planar_impact import builders, errors
 from planar_impact.solver import contact_space_solution
 

@@ -1,4 +1,4 @@
-"""harness.findings against independent computations on a small sample."""
+"""harness.report.findings against independent computations on a small sample."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import pytest
 
 import planar_impact as pi
 from harness import findings
-from harness.random_problems import random_problems, row
+from harness.scene.random_problems import random_problems, row
 from planar_impact.process import impulse_process, newton_lcp_modes, sequential_impulses
 
 SAMPLE = random_problems(3000, seed=5)

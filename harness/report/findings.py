@@ -1,6 +1,6 @@
 """``impact-harness findings``: re-measure the solver claims the README makes.
 
-On seeded random contact-space problems (:func:`harness.random_problems.random_problems`)
+On seeded random contact-space problems (:func:`harness.scene.random_problems.random_problems`)
 it measures, and prints as Markdown tables:
 
 (a) projected Gauss–Seidel (the ``newton-lcp`` law as sequential-impulse engines solve it,
@@ -9,13 +9,12 @@ it measures, and prints as Markdown tables:
     the tangential row sits on the cone's edge, ``I_t = ∓μ I_n`` and the normal step maps
     ``I_n`` to ``C/m_nn ± (μ m_nt/m_nn) I_n``: it diverges when ``μ|m_nt| > m_nn``.
 (b) the paper's Stronge mapping (``stronge-paper``) at ``α = (1+e) r_m`` (A34)/(A36) for
-    ``m_nt < 0``, where Type 2 or 4 meets Type 5 (docs/theory.md, 'The paper's Stronge
-    mapping'): how often ``I_n`` jumps by more than 1%, the median ``e_i`` just below the
-    boundary, and the median relative jump of ``I_n``.
+    ``m_nt < 0``, where Type 2 or 4 meets Type 5
+    (docs/theory.md, 'The paper's Stronge mapping'): how often ``I_n`` jumps by more than
+    1%, the median ``e_i`` just below the boundary, and the median relative jump of ``I_n``.
 (c) the fraction of random problems in which each law gains kinetic energy (A29).
 
-``python -m harness.findings`` runs it alone; the lead wires it as ``impact-harness
-findings`` through :func:`add_arguments` and :func:`main`.
+``impact-harness findings`` (or ``python -m harness.report.findings``) prints the table.
 """
 
 from __future__ import annotations
@@ -26,7 +25,7 @@ import itertools
 import numpy as np
 
 import planar_impact as pi
-from harness.random_problems import random_problems
+from harness.scene.random_problems import random_problems
 
 # PGS: iterations allowed, and the relative change below which it has converged (as in
 # planar_impact.process.sequential_impulses, whose defaults are 1e-13 and 100,000).
@@ -144,7 +143,7 @@ def markdown(findings: dict) -> str:
     """The findings as Markdown tables."""
     lines = [
         (f"Findings on {findings['count']:,} random problems "
-         f"(`harness.random_problems`, seed {findings['seed']})."),
+         f"(`harness.scene.random_problems`, seed {findings['seed']})."),
         "",
         (f"(a) Projected Gauss–Seidel on problems whose `newton-lcp` answer slides "
          f"({PGS_ITERATIONS} sweeps, relative change ≤ {PGS_TOLERANCE:g}):"),
@@ -192,7 +191,7 @@ def main(args) -> int:
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(prog="python -m harness.findings", description=__doc__)
+    parser = argparse.ArgumentParser(prog="python -m harness.report.findings", description=__doc__)
     add_arguments(parser)
     raise SystemExit(main(parser.parse_args()))
 
