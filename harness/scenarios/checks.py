@@ -178,6 +178,8 @@ FALLBACK_TIME_STEP = 1.0 / 60.0
 #: Samples of the post-impact free flight over the horizon (the gaps of a rotating body are
 #: smooth on this scale: 48 samples of a 50 ms horizon are ~1 ms apart).
 SEQUENCE_SAMPLES = 48
+#: Bisections refining a strike time found between two samples.
+STRIKE_BISECTIONS = 30
 #: Laws whose post-impact motion is followed: the engines' own law and the reference.
 SEQUENCE_LAWS = ("newton-lcp", "poisson")
 
@@ -266,19 +268,35 @@ def second_strike(scene: Scene, contact, horizon_s: float, step_s: float) -> Str
                 features.append((index, name, centre, radius))
     if not features:
         return None
+    def poses_at(speeds, time_s):
+        return [(x + speeds[3 * i] * time_s, y + speeds[3 * i + 1] * time_s,
+                 angle + speeds[3 * i + 2] * time_s) for i, (x, y, angle) in enumerate(start)]
+
+    def touching(speeds, time_s):
+        return next(((index, name) for index, name, centre, radius in features
+                     if _feature_gap(scene, index, centre, radius,
+                                     poses_at(speeds, time_s)) <= 0.0), None)
+
     earliest: Strike | None = None
     for motion, speeds, duration in motions:
+        previous = 0.0
         for time_s in np.linspace(0.0, duration, SEQUENCE_SAMPLES + 1)[1:]:
-            if earliest is not None and time_s >= earliest.time_s:
+            if earliest is not None and previous >= earliest.time_s:
                 break
-            poses = [(x + speeds[3 * i] * time_s, y + speeds[3 * i + 1] * time_s,
-                      angle + speeds[3 * i + 2] * time_s)
-                     for i, (x, y, angle) in enumerate(start)]
-            hit = next(((index, name) for index, name, centre, radius in features
-                        if _feature_gap(scene, index, centre, radius, poses) <= 0.0), None)
+            hit = touching(speeds, time_s)
             if hit is not None:
+                low, high = previous, float(time_s)
+                for _ in range(STRIKE_BISECTIONS):  # the strike time, to 2^-30 of a sample
+                    middle = 0.5 * (low + high)
+                    found = touching(speeds, middle)
+                    if found is None:
+                        low = middle
+                    else:
+                        high, hit = middle, found
                 index, name = hit
                 partner = "ground" if scene.ground else scene.bodies[1 - index].name
-                earliest = Strike(scene.bodies[index].name, name, partner, float(time_s), motion)
+                if earliest is None or high < earliest.time_s:
+                    earliest = Strike(scene.bodies[index].name, name, partner, high, motion)
                 break
+            previous = float(time_s)
     return earliest
