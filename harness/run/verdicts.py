@@ -97,7 +97,7 @@ class Tolerances:
     """
 
     separation: float = 1e-3
-    penetration: float = 0.05
+    penetration: float = 0.1
     impulse_residual: float = 2e-2
     impulse: float = 5e-2
     energy: float = 1e-6
