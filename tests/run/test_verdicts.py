@@ -34,10 +34,10 @@ def exact_run(scene, engine="pymunk", **changes) -> RunNumbers:
     """A perfect newton-lcp engine: its velocities and the impulse that produced them."""
     problem = problem_of(scene)
     result = problem.solve(mu=scene.friction, e=scene.restitution, hypothesis="newton-lcp")
-    fields = dict(engine=engine, status="ok", u_after=result.u_after, max_penetration=0.0,
-                  normal_impulse=result.normal_impulse,
-                  tangential_impulse=result.tangential_impulse, impulse_source="engine")
-    fields.update(changes)
+    fields = {"engine": engine, "status": "ok", "u_after": result.u_after,
+              "max_penetration": 0.0, "normal_impulse": result.normal_impulse,
+              "tangential_impulse": result.tangential_impulse, "impulse_source": "engine",
+              **changes}
     return RunNumbers(**fields)
 
 
