@@ -12,6 +12,7 @@ from harness.report.views import (
     row_name,
 )
 from harness.run.records import ANALYTIC, Results
+from harness.run.verdicts import reason_counts
 
 
 def write_summary(results: Results, out_dir: Path) -> Path:
@@ -21,7 +22,9 @@ def write_summary(results: Results, out_dir: Path) -> Path:
              "Departure of each engine (and preset) from the exact laws, "
              "`‖u_engine − u_law‖_M / ‖u_before‖_M` (relative error of the post-impact "
              "velocities in the kinetic-energy norm; sweeps: the largest over the sweep). "
-             "`!` marks a run the engine flagged, `skipped` an engine that did not run. "
+             "`!` marks a flagged run (not a single impact: the engine's status or a "
+             "failed verdict check, docs/verdicts.md), never included in the value; "
+             "`skipped` an engine that did not run. "
              "Figures, per-scenario tables and settings: [index.html](index.html); the "
              "paper's Table 3: [paper-table3.md](paper-table3.md).", ""]
     for law in HEADLINE_LAWS:
@@ -47,9 +50,16 @@ def write_summary(results: Results, out_dir: Path) -> Path:
     else:
         lines.append("No gates in this run.")
     flagged = [r for r in results.records if r.source != ANALYTIC and not r.ok]
+    engine_runs = [r for r in results.records if r.source != ANALYTIC and not r.skipped]
+    counts = reason_counts([r.reasons for r in engine_runs])
+    lines += ["", "## Verdicts", "",
+              f"{sum(r.ok for r in engine_runs)} of {len(engine_runs)} engine runs are single "
+              f"impacts; runs per reason (a run can fail several checks):", ""]
+    lines += [f"- {name}: {count}" for name, count in sorted(counts.items())] or ["- none"]
     lines += ["", "## Runs not ok", ""]
-    lines += [f"- {r.scenario} {r.point['label']} {r.label}: {r.status}" for r in flagged] or [
-        "None."]
+    lines += [f"- {r.scenario} {r.point['label']} {r.label}: {r.status}"
+              + (f" ({', '.join(r.failing_reasons)})" if r.failing_reasons else "")
+              for r in flagged] or ["None."]
     versions = prov.get("versions", {})
     git = prov.get("git", {})
     lines += ["", "## Versions", "",

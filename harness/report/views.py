@@ -82,9 +82,13 @@ def engine_scenarios(results: Results) -> list[str]:
 
 
 def worst_departure(records: Iterable[Record], law: str) -> tuple[float, bool, bool]:
-    """Largest departure from ``law`` over a scenario's points; (value, any flagged, all skipped)."""
+    """Largest departure from ``law`` over a scenario's points; (value, any flagged, all skipped).
+
+    Only ``ok`` runs (single impacts, harness/run/verdicts.py) enter the value: a flagged
+    run is not a departure of the engine from the law; it is shown by the flag and counted.
+    """
     records = list(records)
-    values = [r.departure.get(law) for r in records if not r.skipped]
+    values = [r.departure.get(law) for r in records if r.ok]
     values = [v for v in values if v is not None and math.isfinite(v)]
     flagged = any(not r.ok and not r.skipped for r in records)
     skipped = bool(records) and all(r.skipped for r in records)

@@ -1,10 +1,14 @@
 """Metrics comparing engines with the laws: departures, contact velocities, the split.
 
 Departure (the one error measure of the harness)
-    ``departure(u, u_law) = ‖u − u_law‖_M / ‖u_before‖_M`` with ``‖x‖_M = sqrt(xᵀ M x)``,
-    ``M`` the scene's mass matrix: the relative error of the post-impact speeds in the
-    kinetic-energy norm. It is independent of units and of the body's size, equals 0 for an
-    exact match and is about 1 when the post-impact motion is as wrong as the motion itself.
+    ``departure(u, u_law) = ‖u − u_law‖_M / s`` with ``‖x‖_M = sqrt(xᵀ M x)``, ``M`` the
+    scene's mass matrix and ``s`` the frame-free speed scale of the input
+    (:func:`frame_free_scale`): ``‖u_before‖_M`` in the ground's frame when there is ground,
+    ``‖u_before − u_cm‖_M`` in the centre-of-mass frame of two free bodies. It is the
+    relative error of the post-impact speeds in the kinetic-energy norm: independent of
+    units, of the body's size, of a common velocity added to every free body and of turning
+    the scene; 0 for an exact match and about 1 when the post-impact motion is as wrong as
+    the motion itself (docs/verdicts.md, 'A frame-free departure').
 
 The split
     An engine departs from Poisson for two reasons (docs/engines.md, 'The engine contract'): the law it solves, and how
@@ -35,20 +39,45 @@ def ke_norm(mass_matrix: np.ndarray, u: Sequence[float] | np.ndarray) -> float:
     return math.sqrt(max(float(u @ np.asarray(mass_matrix, dtype=float) @ u), 0.0))
 
 
-def departure(mass_matrix, u, u_law, u_before) -> float:
-    """``‖u − u_law‖_M / ‖u_before‖_M``; NaN when either speed vector is missing/non-finite."""
+def frame_free_scale(mass_matrix, u_before, *, free_bodies: bool = False) -> float:
+    """The kinetic-energy norm of ``u_before`` in the frame the impact defines.
+
+    ``free_bodies=False`` (a body against the fixed ground, or a generalised system): the
+    ground's frame, ``‖u_before‖_M``. ``free_bodies=True`` (``u = (v_x, v_y, ω)`` per free
+    body, no ground): the centre of mass's frame, ``‖u_before − P u_before‖_M`` with ``P``
+    the ``M``-orthogonal projection on the common translations ``T_x = (1, 0, 0, 1, 0, 0…)``,
+    ``T_y = (0, 1, 0, 0, 1, 0…)``, ``P = T (Tᵀ M T)⁻¹ Tᵀ M`` (it subtracts the centre of
+    mass's velocity from every body). That is ``sqrt(2 E_cm)``, unchanged by a velocity added
+    to every body (Galilean) and by turning the scene (``M`` weighs x and y alike).
+    """
+    u = np.asarray(u_before, dtype=float)
+    mass_matrix = np.asarray(mass_matrix, dtype=float)
+    if not free_bodies:
+        return ke_norm(mass_matrix, u)
+    translations = np.zeros((len(u), 2))
+    translations[0::3, 0] = 1.0
+    translations[1::3, 1] = 1.0
+    weighted = translations.T @ mass_matrix  # Tᵀ M
+    common = translations @ np.linalg.solve(weighted @ translations, weighted @ u)
+    return ke_norm(mass_matrix, u - common)
+
+
+def departure(mass_matrix, u, u_law, u_before, *, free_bodies: bool = False) -> float:
+    """``‖u − u_law‖_M / frame_free_scale(u_before)``; NaN when either speed vector is
+    missing or non-finite."""
     if u is None or u_law is None:
         return math.nan
     u, u_law = np.asarray(u, dtype=float), np.asarray(u_law, dtype=float)
     if not (np.all(np.isfinite(u)) and np.all(np.isfinite(u_law))):
         return math.nan
-    scale = ke_norm(mass_matrix, u_before)
+    scale = frame_free_scale(mass_matrix, u_before, free_bodies=free_bodies)
     return ke_norm(mass_matrix, u - u_law) / scale if scale > 0 else math.nan
 
 
-def departures(mass_matrix, u, law_speeds: Mapping[str, object], u_before) -> dict[str, float]:
+def departures(mass_matrix, u, law_speeds: Mapping[str, object], u_before, *,
+               free_bodies: bool = False) -> dict[str, float]:
     """``{law: departure(u, u_law)}`` for every law that was solved."""
-    return {law: departure(mass_matrix, u, u_law, u_before)
+    return {law: departure(mass_matrix, u, u_law, u_before, free_bodies=free_bodies)
             for law, u_law in law_speeds.items() if u_law is not None}
 
 
@@ -70,13 +99,14 @@ def delassus(problem) -> tuple[float, float, float]:
     return float(problem.wn @ wn_inv), float(problem.wn @ wt_inv), float(problem.wt @ wt_inv)
 
 
-def impulses_from_velocities(problem, u_after) -> tuple[float, float, float]:
+def impulses_from_velocities(problem, u_after, *,
+                             free_bodies: bool = False) -> tuple[float, float, float]:
     """The contact impulse ``(I_n, I_t)`` that best explains ``u_after``, and the residual.
 
     From (A22)/(A23): ``[[m_nn, m_nt], [m_nt, m_tt]] (I_n, I_t) = (Δv_n, Δv_t)``. The residual
-    ``‖Δu − M⁻¹(w_n I_n + w_t I_t)‖_M / ‖u_before‖_M`` is 0 when the change of speeds is a
-    single contact impulse at the contact point (it is not when an engine's configuration
-    moved during the impact, or a second point touched).
+    ``‖Δu − M⁻¹(w_n I_n + w_t I_t)‖_M`` over the frame-free scale of ``u_before`` is 0 when
+    the change of speeds is a single contact impulse at the contact point (it is not when an
+    engine's configuration moved during the impact, or a second point touched).
     """
     u_after = np.asarray(u_after, dtype=float)
     delta_u = u_after - problem.u
@@ -86,7 +116,8 @@ def impulses_from_velocities(problem, u_after) -> tuple[float, float, float]:
     normal = (mtt * dvn - mnt * dvt) / det
     tangential = (mnn * dvt - mnt * dvn) / det
     explained = np.linalg.solve(problem.mass_matrix, problem.wn * normal + problem.wt * tangential)
-    residual = departure(problem.mass_matrix, delta_u, explained, problem.u)
+    residual = departure(problem.mass_matrix, delta_u, explained, problem.u,
+                         free_bodies=free_bodies)
     return normal, tangential, residual
 
 
@@ -128,5 +159,5 @@ def _finite(value) -> float:
 
 
 __all__ = ["STICK_TOLERANCE", "classify_end_state", "contact_velocities", "delassus",
-           "departure", "departure_split", "departures", "energy_change",
+           "departure", "departure_split", "departures", "energy_change", "frame_free_scale",
            "impulses_from_velocities", "ke_norm"]

@@ -25,9 +25,14 @@ m/s, in the scene's ``t = (n_y, −n_x)``), ``energy_change`` (J), ``collision_t
 for the Newton laws and for engines, classified from the end state), ``normal_impulse``,
 ``tangential_impulse`` (N s on body B), ``status`` (``"ok"``, an engine status of
 :data:`harness.engines.STATUSES`, ``"skipped: <reason>"`` or ``"error: <reason>"``),
-``wall_time_s``, ``departure`` (``{law: ‖u − u_law‖_M / ‖u_before‖_M}``), ``cached``
-(engine records: the result came from the cache) and ``diagnostics`` (engine records:
-steps, contact points, penetration, drift, the engine's own impulses, settings overrides).
+``wall_time_s``, ``departure`` (``{law: ‖u − u_law‖_M / s}``, ``s`` the frame-free scale of
+:func:`harness.run.metrics.frame_free_scale`), ``cached`` (engine records: the result came
+from the cache), ``diagnostics`` (engine records: steps, contact points, penetration, drift,
+the engine's own impulses, settings overrides), ``verdict`` (engine records with output:
+``"single-impact"`` or ``"flagged"``) and ``reasons`` (each check the run fails, or a
+law-attributed energy gain: ``{name, value, tolerance, detail, attribution, fails}``; see
+:mod:`harness.run.verdicts`). A flagged run's ``status`` is never ``"ok"``: it is the
+engine's status, or the first failing reason's name.
 """
 
 from __future__ import annotations
@@ -69,6 +74,8 @@ class Record:
     departure: dict = field(default_factory=dict)  # law -> relative KE-norm error
     cached: bool = False
     diagnostics: dict | None = None
+    verdict: str | None = None  # engine records: "single-impact" | "flagged"
+    reasons: list = field(default_factory=list)  # engine records: verdicts.Reason dicts
 
     @property
     def label(self) -> str:
@@ -82,6 +89,11 @@ class Record:
     @property
     def skipped(self) -> bool:
         return self.status.startswith("skipped")
+
+    @property
+    def failing_reasons(self) -> list[str]:
+        """Names of the verdict's failing reasons (empty for a single impact)."""
+        return [r["name"] for r in self.reasons if r.get("fails", True)]
 
     def as_dict(self) -> dict:
         return _jsonable(asdict(self))

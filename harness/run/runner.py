@@ -40,7 +40,7 @@ from typing import Any, Iterable, Sequence, TextIO
 
 import numpy as np
 
-from harness.run import metrics
+from harness.run import metrics, verdicts
 from harness.run.provenance import provenance
 from harness.run.records import ANALYTIC, DEFAULT_RESULTS, FORMAT, FORMAT_VERSION, Record, write_results
 from harness.scenarios import ENGINES, PRESETS, Scenario, load_scenarios
@@ -88,12 +88,28 @@ def engine_task(task: dict) -> dict:
         "contact_normal": None if run.contact_normal is None else list(run.contact_normal),
         "engine_normal_impulse": run.normal_impulse,
         "engine_tangential_impulse": run.tangential_impulse,
+        "impulse_source": getattr(run, "impulse_source", None),
         "out_of_plane_drift": run.out_of_plane_drift,
         "derived": dict(run.derived),
         "notes": list(run.notes),
+        "contacts": _contact_steps(run),
         "engine_wall_time_s": run.wall_time_s,
         "wall_time_s": time.perf_counter() - start,
     }
+
+
+def _contact_steps(run) -> list[dict] | None:
+    """The run's per-step contact records as plain lists (None: the engine keeps none).
+
+    An engine whose run has ``contacts`` (the engines' ``ContactStep``: step, points
+    ``(x, y, depth)``, bodies ``(x, y, θ, v_x, v_y, ω)``, scene frame) feeds the verdict's
+    second-feature check (:mod:`harness.run.verdicts`).
+    """
+    steps = getattr(run, "contacts", None)
+    if steps is None:
+        return None
+    return [{"step": int(s.step), "points": [[float(v) for v in p[:3]] for p in s.points],
+             "bodies": [[float(v) for v in b] for b in s.bodies]} for s in steps]
 
 
 # --------------------------------------------------------------------------------------------
@@ -359,6 +375,7 @@ def point_records(scenario: Scenario, point, engine_entries: Sequence) -> list[R
     mu, e = fixed.friction, fixed.restitution
     problem = scenario.analytic_problem(point)
     mass_matrix, u_before = problem.mass_matrix, problem.u
+    free_bodies = fixed.system == "bodies" and not fixed.ground
     vn_approach, vt_approach = metrics.contact_velocities(problem, u_before)
     point_info = _point_dict(point)
     mnn, mnt, mtt = metrics.delassus(problem)
@@ -393,19 +410,35 @@ def point_records(scenario: Scenario, point, engine_entries: Sequence) -> list[R
     for record, law in zip(law_records, scenario.laws):
         if law_speeds[law] is not None:
             record.departure = metrics.departures(mass_matrix, law_speeds[law], law_speeds,
-                                                  u_before)
+                                                  u_before, free_bodies=free_bodies)
 
+    if not engine_entries:
+        return law_records
+    scene = scenario.scene(point)
+    try:  # the engines' own law, to attribute an energy gain (docs/verdicts.md)
+        lcp_gain = problem.solve(mu=mu, e=e, hypothesis="newton-lcp").energy_change
+    except ValueError:
+        lcp_gain = None
     engine_records = [
-        engine_record(scenario, point_info, engine_name, preset, item, problem, law_speeds)
+        engine_record(scenario, point_info, engine_name, preset, item, problem, law_speeds,
+                      scene=scene, law_energy_change=lcp_gain)
         for _, _, engine_name, preset, item in engine_entries
     ]
     return law_records + engine_records
 
 
 def engine_record(scenario: Scenario, point_info: dict, engine_name: str, preset: str,
-                  item: dict, problem, law_speeds: dict) -> Record:
-    """An engine's record from its raw output and the point's law solutions."""
+                  item: dict, problem, law_speeds: dict, *, scene=None,
+                  law_energy_change: float | None = None) -> Record:
+    """An engine's record from its raw output and the point's law solutions.
+
+    With ``scene`` (the engine's scene at this point) the record gets its verdict
+    (:func:`harness.run.verdicts.judge`): ``verdict`` and ``reasons``, and a run that fails
+    a check has the first failing reason as its ``status`` (never ``ok``).
+    ``law_energy_change`` is ``newton-lcp``'s energy change, to attribute a gain.
+    """
     output = item["output"]
+    free_bodies = scene is not None and not scene.ground
     mass_matrix, u_before = problem.mass_matrix, problem.u
     vn_approach, vt_approach = metrics.contact_velocities(problem, u_before)
     record = Record(scenario=scenario.name, point=point_info, source=engine_name, preset=preset,
@@ -429,7 +462,8 @@ def engine_record(scenario: Scenario, point_info: dict, engine_name: str, preset
         record.vn_separation, record.vt_separation = vn, vt
         record.energy_change = metrics.energy_change(mass_matrix, u_before, u_after)
         record.collision_type = metrics.classify_end_state(vt_approach, vt, vn_approach)
-        normal, tangential, residual = metrics.impulses_from_velocities(problem, u_after)
+        normal, tangential, residual = metrics.impulses_from_velocities(
+            problem, u_after, free_bodies=free_bodies)
         diagnostics["impulse_from_velocities"] = [normal, tangential]
         diagnostics["impulse_residual"] = residual
         if output.get("engine_normal_impulse") is not None:
@@ -439,8 +473,15 @@ def engine_record(scenario: Scenario, point_info: dict, engine_name: str, preset
         else:
             record.normal_impulse, record.tangential_impulse = normal, tangential
             diagnostics["impulse_source"] = "velocities"
-    record.departure = metrics.departures(mass_matrix, u_after, law_speeds, u_before)
+    record.departure = metrics.departures(mass_matrix, u_after, law_speeds, u_before,
+                                          free_bodies=free_bodies)
     record.diagnostics = diagnostics
+    if scene is not None:
+        verdict = verdicts.judge(scene, problem,
+                                 verdicts.numbers_from_output(engine_name, output),
+                                 law_energy_change=law_energy_change)
+        record.verdict, record.reasons = verdict.label, verdict.as_list()
+        record.status = verdict.status(record.status)
     return record
 
 
@@ -459,6 +500,8 @@ def check_gates(scenario: Scenario, records: Sequence[Record]) -> list[GateResul
             value = record.departure.get(gate.law)
             if record.skipped:
                 status = f"not checked: {record.status}"
+            elif record.verdict == verdicts.FLAGGED:  # not a single impact: no departure
+                status = f"not checked: flagged ({', '.join(record.failing_reasons)})"
             elif value is None or not math.isfinite(value):
                 status = "FAIL"
             else:

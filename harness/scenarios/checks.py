@@ -7,12 +7,13 @@ The checks report through a :class:`harness.scenarios.reader.TableReader` (anyth
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Mapping
 
 import numpy as np
 
 from harness.engines import EngineNotInstalled, load_engine
-from harness.scene import geometry
+from harness.scene import Body, Disk, Scene, geometry
 from harness.scenarios.errors import suggest
 from harness.scenarios.model import Point, Scenario
 from harness.scenarios.schema import ONE_POINT_TOLERANCE, PRESETS, SHAPE_FIELDS
@@ -99,6 +100,19 @@ def check_bodies(reader: TableReader, fixed: Scenario, where: str) -> None:
                      f"{vn:.6g} m/s", [list(s.velocity) for s in fixed.bodies],
                      "velocities giving v_n < 0 along the normal "
                      f"{np.round(exact.normal, 6).tolist()} (from A into B)")
+        return
+    if fixed.expect_sequence:
+        return
+    time_step, engine = engine_time_step(fixed)
+    strike = second_strike(scene, exact, SEQUENCE_HORIZON_STEPS * time_step, time_step)
+    if strike is not None:
+        reader.error("expect_sequence",
+                     f"a second feature strikes within the impact{where}: {strike.describe()}, "
+                     f"within {SEQUENCE_HORIZON_STEPS} steps of {engine} "
+                     f"({time_step:.3g} s each): the engines will see a sequence of impacts, "
+                     "not one", False,
+                     "expect_sequence = true (the runs are then judged, docs/verdicts.md), or "
+                     "a pose whose other corners/ends stay clear")
 
 
 def check_analytic(reader: TableReader, scenario: Scenario, point: Point, where: str) -> None:
@@ -151,3 +165,140 @@ def check_expectations(scenario: Scenario) -> list[str]:
             problems.append(f"{where}: expect.case{at} = {case}, but the solver gives "
                             f"{results['poisson'].case}")
     return problems
+
+
+# --------------------------------------------------------------------------------------------
+# A second feature within the impact (docs/verdicts.md, 'Sequences found before any run')
+# --------------------------------------------------------------------------------------------
+#: The horizon of the second-strike check, in steps of the coarsest engine time step: a
+#: rigid engine's contact lasts a step or two (pymunk and pybullet on the library: one to
+#: three), and what strikes later is a new impact after the run. A soft contact (MuJoCo's
+#: defaults) lasts longer; its runs are judged after they ran (docs/verdicts.md).
+SEQUENCE_HORIZON_STEPS = 2
+#: Time step (s) assumed when no engine of the scenario can be loaded (pymunk's 1/60 s).
+FALLBACK_TIME_STEP = 1.0 / 60.0
+#: Samples of the post-impact free flight over the horizon (the gaps of a rotating body are
+#: smooth on this scale: 48 samples of a 50 ms horizon are ~1 ms apart).
+SEQUENCE_SAMPLES = 48
+#: Bisections refining a strike time found between two samples.
+STRIKE_BISECTIONS = 30
+#: Laws whose post-impact motion is followed: the engines' own law and the reference.
+SEQUENCE_LAWS = ("newton-lcp", "poisson")
+
+
+@dataclass(frozen=True)
+class Strike:
+    """A feature other than the first contact's that reaches the partner."""
+
+    body: str
+    feature: str
+    partner: str
+    time_s: float  # after first touch
+    motion: str  # "before the impact" or "after the impact (<law>)"
+
+    def describe(self) -> str:
+        return (f"{self.body}'s {self.feature} reaches the {self.partner} "
+                f"{1e3 * self.time_s:.3g} ms after first touch, moving as {self.motion}")
+
+
+def engine_time_step(fixed: Scenario) -> tuple[float, str]:
+    """The coarsest time step (s) of the scenario's engines over both presets, and the
+    engine's name; :data:`FALLBACK_TIME_STEP` when none can be loaded."""
+    best, name = 0.0, ""
+    for engine in fixed.engines:
+        try:
+            adapter = load_engine(engine)
+        except EngineNotInstalled:
+            continue
+        overrides = dict(fixed.engine_settings.get(engine, {}))
+        for preset in PRESETS:
+            try:
+                step = float(adapter.settings(preset, overrides)["time_step"])
+            except (ValueError, KeyError):  # bad overrides are reported elsewhere
+                continue
+            if step > best:
+                best, name = step, engine
+    return (best, name) if best > 0 else (FALLBACK_TIME_STEP, "an engine at 1/60 s")
+
+
+def _feature_points(body: Body) -> list[tuple[str, np.ndarray, float]]:
+    """``(name, body-frame centre, radius)`` of each corner or end cap of ``body``."""
+    from harness.run.verdicts import feature_points
+
+    centres, radius, names = feature_points(body.shape)
+    return [(name, centre, radius) for name, centre, radius in
+            zip(names, centres, [radius] * len(names))]
+
+
+def _feature_gap(scene: Scene, index: int, centre: np.ndarray, radius: float,
+                 poses: list[tuple[float, float, float]]) -> float:
+    """Signed distance (m) from a feature of body ``index`` to its partner at ``poses``."""
+    x, y, angle = poses[index]
+    world = geometry.rotation(angle) @ centre + np.array([x, y])
+    if scene.ground:
+        return float(world[1]) - radius
+    other = 1 - index
+    partner = scene.bodies[other].moved(position=(poses[other][0], poses[other][1]),
+                                        angle=poses[other][2])
+    feature = Body("feature", Disk(radius), 1.0, (float(world[0]), float(world[1])))
+    return geometry.body_contact(partner, feature).gap
+
+
+def second_strike(scene: Scene, contact, horizon_s: float, step_s: float) -> Strike | None:
+    """The first feature other than the touching one to reach the partner within the impact.
+
+    The bodies move freely from the touching pose: with their approach speeds for one engine
+    step (an engine resolves the contact after it has found it), and with the post-impact
+    speeds of each of :data:`SEQUENCE_LAWS` for ``horizon_s``. A corner or end cap touching
+    at the start (gap within ``ONE_POINT_TOLERANCE``) is the first contact's and is skipped.
+    """
+    from planar_impact import ImpactInputError
+
+    problem = geometry.impact_problem(scene, contact.point, contact.normal)
+    motions = [("before the impact", problem.u, step_s)]
+    for law in SEQUENCE_LAWS:
+        try:
+            result = problem.solve(mu=scene.friction, e=scene.restitution, hypothesis=law)
+        except (ValueError, ImpactInputError):
+            continue
+        motions.append((f"after the impact ({law})", result.u_after, horizon_s))
+    start = [(b.position[0], b.position[1], b.angle) for b in scene.bodies]
+    features = []
+    for index, body in enumerate(scene.bodies):
+        for name, centre, radius in _feature_points(body):
+            if _feature_gap(scene, index, centre, radius, start) > ONE_POINT_TOLERANCE:
+                features.append((index, name, centre, radius))
+    if not features:
+        return None
+    def poses_at(speeds, time_s):
+        return [(x + speeds[3 * i] * time_s, y + speeds[3 * i + 1] * time_s,
+                 angle + speeds[3 * i + 2] * time_s) for i, (x, y, angle) in enumerate(start)]
+
+    def touching(speeds, time_s):
+        return next(((index, name) for index, name, centre, radius in features
+                     if _feature_gap(scene, index, centre, radius,
+                                     poses_at(speeds, time_s)) <= 0.0), None)
+
+    earliest: Strike | None = None
+    for motion, speeds, duration in motions:
+        previous = 0.0
+        for time_s in np.linspace(0.0, duration, SEQUENCE_SAMPLES + 1)[1:]:
+            if earliest is not None and previous >= earliest.time_s:
+                break
+            hit = touching(speeds, time_s)
+            if hit is not None:
+                low, high = previous, float(time_s)
+                for _ in range(STRIKE_BISECTIONS):  # the strike time, to 2^-30 of a sample
+                    middle = 0.5 * (low + high)
+                    found = touching(speeds, middle)
+                    if found is None:
+                        low = middle
+                    else:
+                        high, hit = middle, found
+                index, name = hit
+                partner = "ground" if scene.ground else scene.bodies[1 - index].name
+                if earliest is None or high < earliest.time_s:
+                    earliest = Strike(scene.bodies[index].name, name, partner, high, motion)
+                break
+            previous = float(time_s)
+    return earliest

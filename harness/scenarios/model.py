@@ -142,6 +142,8 @@ class Scenario:
     engine_settings: Mapping[str, Mapping[str, Any]] = field(
         default_factory=lambda: MappingProxyType({}))
     gap_tolerance: float = DEFAULT_GAP_TOLERANCE  # m
+    # True: the file knows a second feature strikes within the impact (validate allows it)
+    expect_sequence: bool = False
     path: Path | None = None
 
     # -- points ------------------------------------------------------------------------------

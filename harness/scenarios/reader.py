@@ -491,6 +491,10 @@ def parse_scenario(doc: Mapping[str, Any], path=None) -> Scenario:
     laws = reader.names(doc, "laws", "", LAWS, default=LAWS)
     gap_tolerance = reader.number(doc, "gap_tolerance", "", default=DEFAULT_GAP_TOLERANCE,
                                   low=0.0, low_open=True)
+    expect_sequence = doc.get("expect_sequence", False)
+    if not isinstance(expect_sequence, bool):
+        reader.error("expect_sequence", "must be true or false", expect_sequence, "true, false")
+        expect_sequence = False
 
     ground, bodies, parameters, matrix = False, (), MappingProxyType({}), None
     engines = ()
@@ -522,7 +526,7 @@ def parse_scenario(doc: Mapping[str, Any], path=None) -> Scenario:
     scenario = Scenario(name=name, description=description, tags=tags, restitution=restitution,
                         friction=friction, system=system, ground=ground, bodies=bodies,
                         parameters=parameters, matrix=matrix, engines=engines, laws=laws,
-                        gap_tolerance=gap_tolerance,
+                        gap_tolerance=gap_tolerance, expect_sequence=expect_sequence,
                         path=None if path is None else Path(path))
     if "sweep" in doc:
         sweep = _read_sweep(reader, doc, scenario)

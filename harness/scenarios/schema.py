@@ -55,7 +55,8 @@ BODY_SWEEP_FIELDS = ("mass", "inertia", "angle_deg", "angular_velocity", "veloci
                      "velocity.y")
 TOP_KEYS = {
     "bodies": ("name", "description", "tags", "system", "restitution", "friction", "engines",
-               "laws", "ground", "body", "gap_tolerance", "sweep", "expect", "engine_settings"),
+               "laws", "ground", "body", "gap_tolerance", "expect_sequence", "sweep", "expect",
+               "engine_settings"),
     "two-sled": ("name", "description", "tags", "system", "restitution", "friction", "laws",
                  "parameters", "sweep", "expect"),
     "matrix": ("name", "description", "tags", "system", "restitution", "friction", "laws",

@@ -36,6 +36,8 @@ def test_library_engine_runs_are_bit_identical_to_stored(tmp_path):
         (r["scenario"], r["point"], r["engine"], r["preset"]): r["u_after"]
         for r in json.loads(STORED.read_text())["runs"]
     }
-    assert set(current) == set(stored), "the set of engine runs changed"
+    # Scenarios added to the library since (the tilted sweeps) add runs; every stored run
+    # must still be there with the same bits.
+    assert set(stored) <= set(current), "stored engine runs are missing"
     changed = sorted(key for key in stored if current[key] != stored[key])
     assert not changed, f"{len(changed)} runs changed bits, first: {changed[:5]}"

@@ -1,0 +1,452 @@
+"""Verdicts: is an engine run a single impact, and if not, why not (docs/verdicts.md).
+
+An engine run is compared with the impact laws only when it *is* one impact at one contact
+point. Counting contact points per step is not enough (a second corner that strikes one step
+after the first is never counted), so every run is judged from its physics:
+
+* the engine's own status (blow-up, no-contact, no-separation, out-of-plane, multi-contact);
+* ``clipped``: a speed at an engine's velocity cap (pybullet clamps every joint speed to
+  100 m/s and 100 rad/s), before or after;
+* ``multi-contact``: a second feature of a body touched at some step (from the per-step
+  contact records, when the engine provides them);
+* ``not-separated``: the contact still closes at the end, ``v_n^S < −tol``;
+* ``penetration``: the deepest overlap above a bound scaled to the bodies' size;
+* ``impulse-residual``: the change of speeds ``Δu`` is not one impulse at the scene's contact
+  point (a second point, or a configuration that moved, supplied part of it);
+* ``impulse-mismatch``: the impulse the engine reports differs from the one ``Δu`` implies;
+* ``energy-gain``: kinetic energy grew. Attributed to the ``law`` when ``newton-lcp`` (the law
+  the sequential-impulse engines solve) gains energy on the same problem, else to the
+  ``numerics``. Only a gain from the numerics fails the run: a gain the law predicts is a
+  real departure of the law and stays in the averages.
+
+Every tolerance is a named field of :class:`Tolerances`, relative to a scale of the scene
+(:func:`scene_scales`), so a verdict does not change when the units do.
+
+The inputs are the numbers the runner already holds (:class:`RunNumbers`, built from the
+runner's engine output by :func:`numbers_from_output`), plus, optionally, the per-step contact
+records (:class:`StepContacts`) of engines that keep them.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+from harness.run import metrics
+
+#: Reason name -> what it says. Ordered: the first failing reason names the run's status.
+REASONS: dict[str, str] = {
+    "blow-up": "the engine's status: non-finite or exploding velocities",
+    "no-contact": "the engine's status: it never reported a contact",
+    "no-separation": "the engine's status: still in contact at its step cap",
+    "out-of-plane": "the engine's status: a body left the plane",
+    "clipped": "a speed sits at the engine's velocity cap: the engine did not simulate the "
+    "scene's speeds",
+    "multi-contact": "a second feature touched within the run (which, at which step)",
+    "not-separated": "the contact still closes at the end: v_n^S < -tolerance",
+    "penetration": "the deepest overlap exceeds the bound scaled to the bodies' size",
+    "impulse-residual": "the change of speeds is not one impulse at the contact point",
+    "impulse-mismatch": "the engine's impulse differs from the impulse the change of speeds "
+    "implies",
+    "energy-gain": "kinetic energy grew (attributed to the law when newton-lcp predicts a "
+    "gain, else to the numerics; only a numerics gain fails the run)",
+}
+ENGINE_STATUS_REASONS = ("blow-up", "no-contact", "no-separation", "out-of-plane",
+                         "multi-contact")
+SINGLE_IMPACT = "single-impact"
+FLAGGED = "flagged"
+
+#: Measured velocity caps: engine -> (largest |v_x|, |v_y| in m/s, largest |ω| in rad/s).
+#: pybullet (3.2.7) clamps every joint's speed to its ``maxJointVelocity``, 100 by default:
+#: a disk dropped at 150 m/s enters at 100 m/s, at 10⁶ m/s it leaves at [0, 100, 0] (e = 1)
+#: (docs/verdicts.md, 'Velocity caps'). pymunk 7.3.1 and MuJoCo 4.0.0 showed no cap up to
+#: 10⁶ m/s.
+SPEED_CAPS: dict[str, tuple[float, float]] = {"pybullet": (100.0, 100.0)}
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    """The verdict's named settings, each relative to a scale of the scene (docs/verdicts.md).
+
+    Attributes
+    ----------
+    separation : float
+        ``not-separated`` when ``v_n^S < −separation·|v_n^A|``.
+    penetration : float
+        ``penetration`` when the deepest overlap exceeds ``penetration`` times the smallest
+        body extent (largest distance from a body's centre of mass to its surface: the
+        lever-arm scale of the contact, :func:`body_extent`).
+    impulse_residual : float
+        ``impulse-residual`` when ``‖Δu − M⁻¹(w_n I_n + w_t I_t)‖_M`` exceeds this fraction of
+        the frame-free speed scale (:func:`harness.run.metrics.frame_free_scale`).
+    impulse : float
+        ``impulse-mismatch`` when ``|I_engine − I_implied|`` exceeds this fraction of the
+        impulse scale ``|v_n^A| / m_nn`` (a plastic frictionless impact's impulse).
+    energy : float
+        ``energy-gain`` when ``ΔE`` exceeds this fraction of the frame-free kinetic energy.
+    energy_beyond_law : float
+        A gain is the law's when ``newton-lcp`` gains energy too and the engine's gain exceeds
+        the law's by at most this fraction of the frame-free kinetic energy; beyond it (or
+        with no gain of the law) it is the numerics'.
+    cap : float
+        A speed counts as at a cap when ``|v| >= (1 − cap)·cap_value``.
+    """
+
+    separation: float = 1e-3
+    penetration: float = 0.1
+    impulse_residual: float = 2e-2
+    impulse: float = 5e-2
+    energy: float = 1e-6
+    energy_beyond_law: float = 1e-2
+    cap: float = 1e-9
+
+
+DEFAULT_TOLERANCES = Tolerances()
+
+
+@dataclass(frozen=True)
+class Reason:
+    """One check a run fails (or, for a law-attributed energy gain, a remark)."""
+
+    name: str  # a key of REASONS
+    value: float | None  # what was measured (units in ``detail``)
+    tolerance: float | None  # the bound it was held against (same units)
+    detail: str  # one line: where, which feature, which step, units
+    attribution: str | None = None  # energy-gain: "law" or "numerics"
+    fails: bool = True  # False: reported, not a failure (a gain the law predicts)
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """Every check of one engine run: a single impact only if no reason fails."""
+
+    reasons: tuple[Reason, ...] = ()
+
+    @property
+    def failing(self) -> tuple[Reason, ...]:
+        return tuple(r for r in self.reasons if r.fails)
+
+    @property
+    def single_impact(self) -> bool:
+        return not self.failing
+
+    @property
+    def label(self) -> str:
+        """``"single-impact"`` or ``"flagged"``."""
+        return SINGLE_IMPACT if self.single_impact else FLAGGED
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Failing reasons' names, in :data:`REASONS` order."""
+        return tuple(r.name for r in self.failing)
+
+    def status(self, engine_status: str) -> str:
+        """The record status: the engine's when the verdict keeps it, else the first failing
+        reason's name, else ``ok``. (The verdict drops the engine's ``multi-contact`` where it
+        judges the features touched instead of counting points.)"""
+        judged = engine_status == "ok" or (engine_status in ENGINE_STATUS_REASONS
+                                           and engine_status not in self.names)
+        if not judged:
+            return engine_status
+        return self.failing[0].name if self.failing else "ok"
+
+    def as_list(self) -> list[dict]:
+        return [reason.as_dict() for reason in self.reasons]
+
+
+@dataclass(frozen=True)
+class StepContacts:
+    """One step's contact as an engine recorded it, in the scene frame.
+
+    ``points``: ``(x, y, depth)`` per point (m; depth > 0 overlap); ``bodies``: every body's
+    ``(x, y, θ, v_x, v_y, ω)`` after the step. Matches the engines' ``ContactStep``.
+    """
+
+    step: int
+    points: tuple[tuple[float, float, float], ...]
+    bodies: tuple[tuple[float, ...], ...]
+
+
+@dataclass(frozen=True)
+class RunNumbers:
+    """What a verdict needs from one engine run (all in the scene frame, SI units)."""
+
+    engine: str
+    status: str
+    u_after: np.ndarray
+    max_penetration: float | None = None
+    normal_impulse: float | None = None  # engine's, N s on body B along the contact normal
+    tangential_impulse: float | None = None
+    impulse_source: str | None = None  # "engine" | "momentum" | None (unknown: engine)
+    contact_normal: tuple[float, float] | None = None
+    contacts: tuple[StepContacts, ...] | None = None  # None: the engine kept no records
+    notes: tuple[str, ...] = field(default_factory=tuple)
+
+
+def numbers_from_output(engine: str, output: Mapping[str, Any]) -> RunNumbers:
+    """:class:`RunNumbers` from the runner's engine-task output (see ``engine_task``)."""
+    contacts = output.get("contacts")
+    steps = None
+    if contacts is not None:
+        steps = tuple(StepContacts(int(c["step"]), tuple(tuple(p) for p in c["points"]),
+                                   tuple(tuple(b) for b in c["bodies"])) for c in contacts)
+    normal = output.get("contact_normal")
+    return RunNumbers(
+        engine=engine, status=str(output["status"]),
+        u_after=np.array([v for body in output["velocities"] for v in body], dtype=float),
+        max_penetration=output.get("max_penetration"),
+        normal_impulse=output.get("engine_normal_impulse"),
+        tangential_impulse=output.get("engine_tangential_impulse"),
+        impulse_source=output.get("impulse_source"),
+        contact_normal=None if normal is None else tuple(normal),
+        contacts=steps, notes=tuple(output.get("notes") or ()))
+
+
+@dataclass(frozen=True)
+class SceneScales:
+    """The scales the tolerances are relative to (see :func:`scene_scales`)."""
+
+    approach_speed: float  # |v_n^A|, m/s
+    impulse: float  # |v_n^A| / m_nn, N s
+    speed_norm: float  # frame-free ‖u_before‖_M, sqrt(kg) m/s
+    energy: float  # frame-free kinetic energy, J
+    size: float  # smallest body extent, m
+
+
+def body_extent(shape) -> float:
+    """Largest distance (m) from a body's centre of mass to its surface: a disk's radius, a
+    rod's half length plus its cap radius, a polygon's farthest vertex."""
+    kind = shape.kind
+    if kind == "disk":
+        return float(shape.radius)
+    if kind == "rod":
+        return float(shape.length / 2.0 + shape.radius)
+    vertices = np.asarray(shape.vertices(), dtype=float)
+    return float(np.max(np.hypot(vertices[:, 0], vertices[:, 1])))
+
+
+def scene_scales(scene, problem) -> SceneScales:
+    """Scales of one scene's impact: approach speed, impulse, speed norm, energy, size."""
+    vn_approach, _ = metrics.contact_velocities(problem, problem.u)
+    mnn, _, _ = metrics.delassus(problem)
+    speed_norm = metrics.frame_free_scale(problem.mass_matrix, problem.u,
+                                          free_bodies=not scene.ground)
+    return SceneScales(approach_speed=abs(vn_approach), impulse=abs(vn_approach) / mnn,
+                       speed_norm=speed_norm, energy=0.5 * speed_norm**2,
+                       size=min(body_extent(body.shape) for body in scene.bodies))
+
+
+def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = None,
+          tolerances: Tolerances = DEFAULT_TOLERANCES) -> Verdict:
+    """The verdict of one engine run of ``scene``.
+
+    Parameters
+    ----------
+    scene : harness.scene.Scene
+        The scene the engine ran (poses at first touch).
+    problem : planar_impact.builders.ImpactProblem
+        The scene's impact (``M``, ``w_n``, ``w_t``, ``u_before``).
+    run : RunNumbers
+        The engine's numbers.
+    law_energy_change : float, optional
+        ``newton-lcp``'s energy change on ``problem`` (J), to attribute a gain; None: the
+        attribution is ``numerics``.
+    tolerances : Tolerances
+        The named settings.
+    """
+    reasons: list[Reason] = []
+    if run.status == "multi-contact" and (run.contacts is not None or _one_feature(scene)):
+        pass  # judged below from the features touched, not from a count of points
+    elif run.status in ENGINE_STATUS_REASONS:
+        reasons.append(Reason(run.status, None, None, f"the engine's status: {run.status}"))
+    elif run.status != "ok":  # skipped or error: nothing to judge
+        return Verdict(tuple(reasons))
+    u_after = run.u_after
+    if not np.all(np.isfinite(u_after)):
+        if run.status != "blow-up":
+            reasons.append(Reason("blow-up", None, None, "non-finite velocities"))
+        return Verdict(tuple(reasons))
+    scales = scene_scales(scene, problem)
+    reasons += _clipped(run.engine, problem.u, u_after, tolerances)
+    if run.contacts is not None:
+        reasons += _second_features(scene, run.contacts, tolerances)
+    vn_after, _ = metrics.contact_velocities(problem, u_after)
+    bound = tolerances.separation * scales.approach_speed
+    if vn_after < -bound:
+        reasons.append(Reason("not-separated", vn_after, -bound,
+                              f"v_n^S = {vn_after:.4g} m/s < -{bound:.3g} m/s "
+                              f"({tolerances.separation:g}·|v_n^A|)"))
+    if run.max_penetration is not None:
+        bound = tolerances.penetration * scales.size
+        if run.max_penetration > bound:
+            reasons.append(Reason("penetration", run.max_penetration, bound,
+                                  f"deepest overlap {run.max_penetration:.3g} m > {bound:.3g} m "
+                                  f"({tolerances.penetration:g} of the smallest body extent "
+                                  f"{scales.size:g} m)"))
+    implied_n, implied_t, residual = impulse_from_velocities(problem, u_after,
+                                                             scales.speed_norm)
+    if residual > tolerances.impulse_residual:
+        reasons.append(Reason("impulse-residual", residual, tolerances.impulse_residual,
+                              f"‖Δu − M⁻¹(w_n I_n + w_t I_t)‖_M = {residual:.3g} of the "
+                              f"frame-free speed norm"))
+    if run.normal_impulse is not None and run.impulse_source != "momentum":
+        engine_t = run.tangential_impulse or 0.0
+        gap = math.hypot(run.normal_impulse - implied_n, engine_t - implied_t)
+        relative = gap / scales.impulse if scales.impulse > 0 else math.inf
+        if not relative <= tolerances.impulse:
+            reasons.append(Reason(
+                "impulse-mismatch", relative, tolerances.impulse,
+                f"engine (I_n, I_t) = ({run.normal_impulse:.4g}, {engine_t:.4g}) N s, implied "
+                f"by Δu ({implied_n:.4g}, {implied_t:.4g}) N s: differ by {relative:.3g} of "
+                f"|v_n^A|/m_nn = {scales.impulse:.3g} N s"))
+    gain = metrics.energy_change(problem.mass_matrix, problem.u, u_after)
+    bound = tolerances.energy * scales.energy
+    if gain > bound:
+        by_law = (law_energy_change is not None and law_energy_change > bound
+                  and gain <= law_energy_change + tolerances.energy_beyond_law * scales.energy)
+        reasons.append(Reason(
+            "energy-gain", gain, bound,
+            f"ΔE = +{gain:.4g} J ({gain / scales.energy:.3g} of the frame-free kinetic energy); "
+            + (f"newton-lcp gains {law_energy_change:.4g} J on this problem" if by_law
+               else "newton-lcp does not gain energy here" if not law_energy_change
+               or law_energy_change <= bound
+               else f"beyond newton-lcp's own gain of {law_energy_change:.4g} J"),
+            attribution="law" if by_law else "numerics", fails=not by_law))
+    order = list(REASONS)
+    reasons.sort(key=lambda r: order.index(r.name))
+    return Verdict(tuple(reasons))
+
+
+def impulse_from_velocities(problem, u_after, speed_norm: float) -> tuple[float, float, float]:
+    """``(I_n, I_t, residual)``: the impulse at the contact implied by ``Δu = u_after − u``.
+
+    ``M Δu`` is the generalised impulse the engine applied; projected on the contact's rows
+    ``w_n``, ``w_t`` in the metric of ``M⁻¹`` it gives the one contact impulse that explains
+    ``Δu`` best, (A22)/(A23): ``[[m_nn, m_nt], [m_nt, m_tt]] (I_n, I_t) = (w_n·Δu, w_t·Δu)``
+    (docs/theory.md, 'Contact space'). The residual ``‖Δu − M⁻¹(w_n I_n + w_t I_t)‖_M`` is
+    divided by ``speed_norm``; it is 0 when ``Δu`` is one impulse at that point.
+    """
+    normal, tangential, _ = metrics.impulses_from_velocities(problem, u_after)
+    delta_u = np.asarray(u_after, dtype=float) - problem.u
+    explained = np.linalg.solve(problem.mass_matrix,
+                                problem.wn * normal + problem.wt * tangential)
+    rest = metrics.ke_norm(problem.mass_matrix, delta_u - explained)
+    return normal, tangential, (rest / speed_norm if speed_norm > 0 else math.nan)
+
+
+def _clipped(engine: str, u_before: np.ndarray, u_after: np.ndarray,
+             tolerances: Tolerances) -> list[Reason]:
+    caps = SPEED_CAPS.get(engine)
+    if caps is None:
+        return []
+    found = []
+    for when, u in (("before", u_before), ("after", u_after)):
+        for index, value in enumerate(u):
+            cap = caps[1] if index % 3 == 2 else caps[0]
+            if abs(value) >= (1.0 - tolerances.cap) * cap:
+                name = ("v_x", "v_y", "ω")[index % 3]
+                unit = "rad/s" if index % 3 == 2 else "m/s"
+                found.append((when, index // 3, name, float(value), cap, unit))
+    if not found:
+        return []
+    when, body, name, value, cap, unit = found[0]
+    more = f" (and {len(found) - 1} more)" if len(found) > 1 else ""
+    return [Reason("clipped", abs(value), cap,
+                   f"body {body} {name} {when} = {value:.6g} {unit}, at {engine}'s cap "
+                   f"{cap:g} {unit}{more}")]
+
+
+# --------------------------------------------------------------------------------------------
+# Features: which corner / end cap of a body a contact point belongs to
+# --------------------------------------------------------------------------------------------
+def feature_points(shape) -> tuple[np.ndarray, float, tuple[str, ...]]:
+    """Body-frame centres of a shape's point features, their radius (m) and names.
+
+    A box or polygon has its vertices (radius 0), a rod its two end-cap centres (its cap
+    radius), a disk none: its whole surface is one feature.
+    """
+    kind = shape.kind
+    if kind == "disk":
+        return np.zeros((0, 2)), float(shape.radius), ()
+    if kind == "rod":
+        half = shape.length / 2.0
+        return (np.array([[-half, 0.0], [half, 0.0]]), float(shape.radius),
+                ("end cap at -length/2", "end cap at +length/2"))
+    vertices = np.asarray(shape.vertices(), dtype=float)
+    return vertices, 0.0, tuple(f"corner {i}" for i in range(len(vertices)))
+
+
+def feature_at(shape, state: Sequence[float], point: Sequence[float],
+               reach: float) -> int | None:
+    """Index of the point feature of ``shape`` (in pose ``state = (x, y, θ, …)``) within
+    ``reach`` of ``point`` (m, beyond the feature's radius); None when the point lies on a
+    face or side instead (or the shape is a disk)."""
+    centres, radius, _ = feature_points(shape)
+    if not len(centres):
+        return None
+    x, y, angle = state[0], state[1], state[2]
+    c, s = math.cos(angle), math.sin(angle)
+    world = centres @ np.array([[c, s], [-s, c]]) + np.array([x, y])
+    distances = np.hypot(world[:, 0] - point[0], world[:, 1] - point[1]) - radius
+    nearest = int(np.argmin(distances))
+    return nearest if distances[nearest] <= reach else None
+
+
+def _one_feature(scene) -> bool:
+    """Whether every body is a disk: its whole surface is one feature, so points an engine
+    reports in one step are one contact region (a 3-D engine's cylinder gives two)."""
+    return all(body.shape.kind == "disk" for body in scene.bodies)
+
+
+def _second_features(scene, contacts: Sequence[StepContacts],
+                     tolerances: Tolerances) -> list[Reason]:
+    """``multi-contact`` when a point touches a feature other than the first contact's.
+
+    The first point of the first step fixes the contact's features (per body: a corner, an
+    end cap, or a face). A later point belongs to another feature when, on some body, it
+    lies at a point feature that differs from the first one's.
+    """
+    first = None
+    for record in contacts:
+        for point in record.points:
+            features = []
+            for body, state in zip(scene.bodies, record.bodies):
+                reach = tolerances.penetration * body_extent(body.shape) + max(point[2], 0.0)
+                features.append(feature_at(body.shape, state, point[:2], reach))
+            if first is None:
+                first = features
+                continue
+            for index, (now, then) in enumerate(zip(features, first)):
+                if now is not None and now != then:
+                    body = scene.bodies[index]
+                    names = feature_points(body.shape)[2]
+                    return [Reason("multi-contact", float(record.step), None,
+                                   f"{body.name}'s {names[now]} touched at step "
+                                   f"{record.step} (the first contact was at "
+                                   + (names[then] if then is not None else "a face")
+                                   + ")")]
+    return []
+
+
+def reason_counts(reasons_per_run: Sequence[Sequence[Mapping[str, Any]]]) -> dict[str, int]:
+    """``{reason: runs failing it}`` over many runs' ``reasons`` lists (law-attributed
+    energy gains counted as ``energy-gain (law)``, not failing)."""
+    counts: dict[str, int] = {}
+    for reasons in reasons_per_run:
+        for reason in reasons:
+            name = reason["name"] if reason.get("fails", True) else f"{reason['name']} (law)"
+            counts[name] = counts.get(name, 0) + 1
+    return counts
+
+
+__all__ = ["DEFAULT_TOLERANCES", "REASONS", "SPEED_CAPS", "Reason", "RunNumbers",
+           "SceneScales", "StepContacts", "Tolerances", "Verdict", "body_extent", "feature_at",
+           "feature_points", "impulse_from_velocities", "judge", "numbers_from_output",
+           "reason_counts", "scene_scales"]
