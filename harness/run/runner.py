@@ -102,14 +102,14 @@ def _contact_steps(run) -> list[dict] | None:
     """The run's per-step contact records as plain lists (None: the engine keeps none).
 
     An engine whose run has ``contacts`` (the engines' ``ContactStep``: step, points
-    ``(x, y, depth)``, bodies ``(x, y, θ, v_x, v_y, ω)``, scene frame) feeds the verdict's
+    ``(x, y, depth)``, every body's pose ``(x, y, θ)`` after the step, scene frame) feeds the verdict's
     second-feature check (:mod:`harness.run.verdicts`).
     """
     steps = getattr(run, "contacts", None)
     if steps is None:
         return None
     return [{"step": int(s.step), "points": [[float(v) for v in p[:3]] for p in s.points],
-             "bodies": [[float(v) for v in b] for b in s.bodies]} for s in steps]
+             "bodies": [[float(v) for v in pose] for pose in s.poses]} for s in steps]
 
 
 # --------------------------------------------------------------------------------------------

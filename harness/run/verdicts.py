@@ -330,7 +330,7 @@ def impulse_from_velocities(problem, u_after, speed_norm: float) -> tuple[float,
     ``M Δu`` is the generalised impulse the engine applied; projected on the contact's rows
     ``w_n``, ``w_t`` in the metric of ``M⁻¹`` it gives the one contact impulse that explains
     ``Δu`` best, (A22)/(A23): ``[[m_nn, m_nt], [m_nt, m_tt]] (I_n, I_t) = (w_n·Δu, w_t·Δu)``
-    (docs/theory.md, 'Contact space'). The residual ``‖Δu − M⁻¹(w_n I_n + w_t I_t)‖_M`` is
+    (docs/theory.md, 'Contact terms'). The residual ``‖Δu − M⁻¹(w_n I_n + w_t I_t)‖_M`` is
     divided by ``speed_norm``; it is 0 when ``Δu`` is one impulse at that point.
     """
     normal, tangential, _ = metrics.impulses_from_velocities(problem, u_after)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import planar_impact as pi
-from harness import findings
+from harness.report import findings
 from harness.scene.random_problems import random_problems, row
 from planar_impact.process import impulse_process, newton_lcp_modes, sequential_impulses
 

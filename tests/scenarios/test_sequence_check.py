@@ -65,7 +65,7 @@ def test_no_other_library_point_has_a_second_strike_within_the_horizon():
 def test_a_strike_time_matches_the_closed_form_for_a_flat_rod():
     """A uniform thin rod lying almost flat, struck at one end with no friction: m_nn = 4/m
     (lever L/2, I = mL²/12), I_n = (1+e)·m·v/4, and the far end then comes down at
-    v·(1 + 3(1+e)/4) − (1+e)v/4 = v·(1 + (1+e)/2) (docs/theory.md, 'Contact space'). Its
+    v·(1 + 3(1+e)/4) − (1+e)v/4 = v·(1 + (1+e)/2) (docs/theory.md, 'Contact terms'). Its
     height L·sin θ is closed in L·sin θ / (v (1 + (1+e)/2)); the capsule's caps sit on the
     same line, so the same holds. Tolerance 1e-5 relative: the bisection's 2^-30 of a
     sample, and the tilt's O(θ²) change of the lever arms (θ = 0.1°: 3e-6)."""
