@@ -21,6 +21,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "new": ("harness.scenarios.cli", "write a commented starting scenario file"),
     "bench": ("harness.bench.solver", "benchmarks: solver throughput, engine overhead, speed-accuracy"),
     "stress": ("harness.stress", "numerical stress of the solver and the engines"),
+    "survey": ("harness.survey.cli", "departure distributions over families of impacts"),
 }
 
 

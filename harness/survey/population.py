@@ -31,9 +31,10 @@ from __future__ import annotations
 
 import math
 import tomllib
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 from harness.scenarios.errors import NO_VALUE, ScenarioError, suggest
 from harness.scenarios.reader import TableReader

@@ -25,9 +25,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from harness.scene import Body, Box, Disk, Polygon, Rod, Scene, geometry
 from harness.scenarios.errors import ScenarioError
 from harness.scenarios.schema import DEFAULT_GAP_TOLERANCE, ONE_POINT_TOLERANCE
+from harness.scene import Body, Box, Disk, Polygon, Rod, Scene, geometry
 from harness.survey.population import Population
 
 #: Why a draw was redrawn: reason -> what failed.
