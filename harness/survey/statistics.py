@@ -1,7 +1,7 @@
 """Departures of every run and their statistics per engine × preset × family × collision type.
 
 Departure is the harness's one error measure, ``‖u − u_law‖_M / ‖u_before‖_M``, computed by
-:func:`harness.run.metrics.departure` (docs/verdicts.md); the split of an engine's departure
+:func:`harness.run.metrics.departure`; the split of an engine's departure
 from Poisson follows harness/run/metrics.py: ``law_part`` = newton-lcp from Poisson (the
 same for every engine), ``solve_part`` = the engine from newton-lcp.
 
