@@ -1,0 +1,183 @@
+"""``impact-harness survey``: departure distributions over families of impacts.
+
+``impact-harness survey [POPULATION…] [--samples N] [--seed S] [--engines E,…] [--preset P,…]
+[--out DIR] [--quick] [--bare] [--pymunk-bulk] [--no-figures]``
+
+Every sample of every population goes through every law (one ``solve_batch`` call per law)
+and every engine and preset; the tables, the summary and the figures go to ``--out``
+(harness/survey/outputs.py lists them). ``--bare`` also times the engines' bare stepping of
+the same impacts, in the same run, and prints it beside the survey's time; ``--pymunk-bulk``
+runs pymunk through harness/survey/bulk_pymunk.py.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from harness.engines import ENGINE_NAMES, PRESET_NAMES, EngineNotInstalled, load_engine
+from harness.scenarios.errors import ScenarioError
+from harness.survey import laws as survey_laws
+from harness.survey import outputs, statistics
+from harness.survey.engines import bare_stepping, run_engine
+from harness.survey.population import resolve_populations
+from harness.survey.sampling import sample_population
+
+DEFAULT_SAMPLES = 2000
+QUICK_SAMPLES = 40  # per family: 7 families give 280 samples, for `make validate`
+DEFAULT_OUT = Path("reports") / "survey"
+
+
+def _names(values, allowed, option) -> list[str]:
+    names = [name for value in values or () for name in value.split(",") if name]
+    bad = [name for name in names if name not in allowed]
+    if bad:
+        raise SystemExit(f"impact-harness survey: {option}: unknown {bad}; allowed: "
+                         f"{', '.join(allowed)}")
+    return list(dict.fromkeys(names))
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("populations", nargs="*", metavar="POPULATION",
+                        help="population names (files of populations/) or paths; default all")
+    parser.add_argument("--samples", type=int, default=None,
+                        help=f"samples per population (default {DEFAULT_SAMPLES}; "
+                             f"--quick {QUICK_SAMPLES})")
+    parser.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
+    parser.add_argument("--engines", action="append", metavar="E[,E…]",
+                        help=f"engines (default every installed one of {', '.join(ENGINE_NAMES)})")
+    parser.add_argument("--preset", action="append", metavar="P[,P…]",
+                        help=f"presets (default {', '.join(PRESET_NAMES)})")
+    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"default {DEFAULT_OUT}")
+    parser.add_argument("--quick", action="store_true",
+                        help=f"{QUICK_SAMPLES} samples per population")
+    parser.add_argument("--bare", action="store_true",
+                        help="also time the engines' bare stepping of the same impacts")
+    parser.add_argument("--pymunk-bulk", action="store_true",
+                        help="run pymunk many impacts per space (bit-identical to one by one)")
+    parser.add_argument("--no-figures", action="store_true", help="skip the figures")
+
+
+def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: bool = False,
+               pymunk_bulk: bool = False, echo=print) -> dict:
+    """The survey in memory: ``{"samples", "runs", "statistics", "rejections", "timings",
+    "engine_results", "skipped"}`` (columns as ``{name: array}``)."""
+    clock = time.perf_counter
+    timings: dict[str, tuple[float, int]] = {}
+    begin = clock()
+    sets = [sample_population(population, samples, seed) for population in populations]
+    every = [sample for sample_set in sets for sample in sample_set.samples]
+    timings["sampling"] = (clock() - begin, len(every))
+    echo(f"sampled {len(every)} impacts from {len(sets)} populations "
+         f"in {timings['sampling'][0]:.2f} s")
+
+    begin = clock()
+    terms = survey_laws.contact_terms(every)
+    law_results = survey_laws.solve_laws(terms)
+    routh = survey_laws.routh_coordinates(terms)
+    timings["laws (contact terms + solve_batch × 5)"] = (clock() - begin, len(every))
+
+    scenes = [sample.scene for sample in every]
+    family = np.asarray([sample.population for sample in every])
+    index = np.asarray([sample.index for sample in every])
+    results, skipped = [], {}
+    for engine in engines:
+        try:
+            load_engine(engine)
+        except EngineNotInstalled as error:
+            skipped[engine] = str(error)
+            echo(f"skipping {engine}: {error}")
+            continue
+        for preset in presets:
+            result = run_engine(engine, preset, scenes, bulk=pymunk_bulk)
+            results.append(result)
+            timings[f"engine {engine} {preset}"] = (result.wall_s, len(scenes))
+            echo(f"{engine} {preset}: {len(scenes)} impacts in {result.wall_s:.2f} s "
+                 f"({result.wall_s / len(scenes) * 1e6:.0f} µs each)")
+            if bare:
+                bare_times = bare_stepping(engine, preset, scenes, result.steps)
+                timings[f"bare {engine} {preset} (steps only)"] = (bare_times["bare_s"],
+                                                                   len(scenes))
+                timings[f"bare {engine} {preset} (reset + steps)"] = (
+                    bare_times["bare_reset_s"], len(scenes))
+                echo(f"  bare stepping of the same impacts: {bare_times['bare_s']:.3f} s, "
+                     f"with the reset {bare_times['bare_reset_s']:.3f} s")
+
+    begin = clock()
+    runs = statistics.run_columns(family, index, terms, law_results, routh, results)
+    stats = statistics.statistics(runs) if results else {}
+    timings["departures + statistics"] = (clock() - begin, len(family) * max(len(results), 1))
+    return {
+        "samples": sample_columns(every, terms, law_results, routh),
+        "runs": runs,
+        "statistics": stats,
+        "rejections": {s.population.name: dict(s.rejections) for s in sets},
+        "timings": timings,
+        "engine_results": results,
+        "skipped": skipped,
+    }
+
+
+def sample_columns(every, terms, law_results, routh) -> dict:
+    """Columns of ``samples.parquet``."""
+    keys = list(dict.fromkeys(key for sample in every for key in sample.parameters))
+    columns = {
+        "family": np.asarray([s.population for s in every]),
+        "sample": np.asarray([s.index for s in every]),
+        "attempts": np.asarray([s.attempts for s in every]),
+    }
+    for key in keys:
+        columns[key] = np.asarray([float(s.parameters.get(key, np.nan)) for s in every])
+    for key in ("mnn", "mnt", "mtt", "vn", "vt"):
+        columns[key] = getattr(terms, key)
+    columns.update(routh)
+    poisson = law_results["poisson"].u_after
+    for law, result in law_results.items():
+        columns[f"{law}.status"] = result.batch.status.astype(np.int64)
+        columns[f"{law}.collision_type"] = result.batch.collision_type.astype(np.int64)
+        columns[f"{law}.energy_change"] = result.batch.energy_change
+        columns[f"{law}.from_poisson"] = statistics.row_departures(terms, result.u_after, poisson)
+    return columns
+
+
+def write_survey(survey: dict, out: Path, settings: dict, figures: bool = True) -> list[Path]:
+    """Write the tables, the summary and (unless ``figures`` is False) the figures."""
+    out.mkdir(parents=True, exist_ok=True)
+    written = [outputs.write_parquet(survey["samples"], out / "samples.parquet")]
+    if survey["engine_results"]:
+        written.append(outputs.write_parquet(survey["runs"], out / "runs.parquet"))
+        written.append(outputs.write_parquet(survey["statistics"], out / "statistics.parquet"))
+    if figures and survey["engine_results"]:
+        begin = time.perf_counter()
+        written += outputs.figures(survey["runs"], out / "figures")
+        survey["timings"]["figures"] = (time.perf_counter() - begin, 0)
+    summary = out / "summary.md"
+    summary.write_text(outputs.summary_markdown(survey["statistics"], survey["rejections"],
+                                                survey["timings"], settings), encoding="utf-8")
+    return written + [summary]
+
+
+def main(args: argparse.Namespace) -> int:
+    engines = _names(args.engines, ENGINE_NAMES, "--engines") or list(ENGINE_NAMES)
+    presets = _names(args.preset, PRESET_NAMES, "--preset") or list(PRESET_NAMES)
+    samples = args.samples or (QUICK_SAMPLES if args.quick else DEFAULT_SAMPLES)
+    if samples < 1:
+        print("impact-harness survey: --samples must be >= 1", file=sys.stderr)
+        return 2
+    try:
+        populations = resolve_populations(args.populations)
+        survey = run_survey(populations, samples, args.seed, engines, presets, bare=args.bare,
+                            pymunk_bulk=args.pymunk_bulk)
+    except ScenarioError as error:
+        print(f"impact-harness survey: {error}", file=sys.stderr)
+        return 2
+    settings = {"samples": samples, "seed": args.seed,
+                "engines": [r for r in engines if r not in survey["skipped"]],
+                "presets": presets}
+    written = write_survey(survey, args.out, settings, figures=not args.no_figures)
+    print(f"wrote {len(written)} files to {args.out}")
+    return 0

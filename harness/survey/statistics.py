@@ -1,0 +1,115 @@
+"""Departures of every run and their statistics per engine × preset × family × collision type.
+
+Departure is the harness's one error measure, ``‖u − u_law‖_M / ‖u_before‖_M``, computed by
+:func:`harness.run.metrics.departure`; the split of an engine's departure
+from Poisson follows harness/run/metrics.py: ``law_part`` = newton-lcp from Poisson (the
+same for every engine), ``solve_part`` = the engine from newton-lcp.
+
+Statistics are over the runs with status ``ok``: a flagged run (no contact, no separation,
+a blow-up, several contact points) is not the answer to one impact, so it is counted under
+its status instead. A run *gains energy* when its kinetic energy after exceeds the energy
+before by more than :data:`ENERGY_GAIN_TOLERANCE` of it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from harness.engines import STATUSES
+from harness.run import metrics
+
+#: Relative energy increase above which a run counts as gaining energy: engines' rounding is
+#: ~1e-15 of the energy and their iterative solvers stop ~1e-12 from their law; a gain a
+#: million times that is the law's or the numerics', not rounding.
+ENERGY_GAIN_TOLERANCE = 1e-9
+#: Quantiles reported, as (column suffix, quantile).
+QUANTILES = (("median", 0.5), ("p90", 0.9), ("p99", 0.99), ("max", 1.0))
+ALL_TYPES = 0  # the collision-type column's value for the row over every type
+
+
+def row_departures(terms, u, u_law) -> np.ndarray:
+    """``departure(u[i], u_law[i])`` for every row, through :func:`metrics.departure`."""
+    out = np.empty(len(terms))
+    for row in range(len(terms)):
+        dofs = int(terms.dofs[row])
+        out[row] = metrics.departure(terms.mass_matrix(row), u[row, :dofs], u_law[row, :dofs],
+                                     terms.u[row, :dofs])
+    return out
+
+
+def relative_energy_change(terms, u_after) -> np.ndarray:
+    """``(E_after − E_before) / E_before`` per row (kinetic energies ``½ uᵀMu``)."""
+    before = np.sum(terms.mass * terms.u**2, axis=1)
+    after = np.sum(terms.mass * u_after**2, axis=1)
+    return (after - before) / before
+
+
+def run_columns(family, sample_index, terms, laws, routh, engine_results) -> dict:
+    """One row per (sample, engine, preset): the columns of ``runs.parquet``."""
+    u_poisson, u_stronge = laws["poisson"].u_after, laws["stronge"].u_after
+    u_lcp = laws["newton-lcp"].u_after
+    law_part = row_departures(terms, u_lcp, u_poisson)
+    poisson_type = laws["poisson"].batch.collision_type.astype(np.int64)
+    columns: dict[str, list] = {}
+    for result in engine_results:
+        gain = relative_energy_change(terms, result.velocities)
+        block = {
+            "family": family,
+            "sample": sample_index,
+            "engine": np.full(len(terms), result.engine),
+            "preset": np.full(len(terms), result.preset),
+            "status": result.status,
+            "steps": result.steps,
+            "poisson_type": poisson_type,
+            "alpha": routh["alpha"],
+            "r_m": routh["r_m"],
+            "alpha_over_rm": routh["alpha_over_rm"],
+            "mu": terms.mu,
+            "e": terms.e,
+            "departure_poisson": row_departures(terms, result.velocities, u_poisson),
+            "departure_stronge": row_departures(terms, result.velocities, u_stronge),
+            "law_part": law_part,
+            "solve_part": row_departures(terms, result.velocities, u_lcp),
+            "energy_change_relative": gain,
+            "gains_energy": gain > ENERGY_GAIN_TOLERANCE,
+        }
+        for key, values in block.items():
+            columns.setdefault(key, []).append(np.asarray(values))
+    return {key: np.concatenate(parts) for key, parts in columns.items()}
+
+
+def _quantiles(values: np.ndarray, prefix: str) -> dict:
+    finite = values[np.isfinite(values)]
+    if finite.size == 0:
+        return {f"{prefix}_{name}": math.nan for name, _ in QUANTILES}
+    found = np.quantile(finite, [q for _, q in QUANTILES])
+    return {f"{prefix}_{name}": float(v) for (name, _), v in zip(QUANTILES, found)}
+
+
+def statistics(runs: dict) -> dict:
+    """Columns of ``statistics.parquet``: one row per engine × preset × family × Poisson type,
+    plus a row per engine × preset × family over every type (``poisson_type`` = 0)."""
+    keys = list(zip(runs["engine"], runs["preset"], runs["family"], runs["poisson_type"]))
+    groups: dict[tuple, list[int]] = {}
+    for row, (engine, preset, family, kind) in enumerate(keys):
+        groups.setdefault((engine, preset, family, int(kind)), []).append(row)
+        groups.setdefault((engine, preset, family, ALL_TYPES), []).append(row)
+    rows = []
+    for (engine, preset, family, kind), indices in sorted(groups.items()):
+        index = np.asarray(indices)
+        status = runs["status"][index]
+        ok = status == "ok"
+        row = {"engine": engine, "preset": preset, "family": family, "poisson_type": kind,
+               "n": int(index.size), "n_ok": int(ok.sum()),
+               "flagged_fraction": float(1.0 - ok.mean())}
+        for name in STATUSES:
+            if name != "ok":
+                row[f"flagged_{name}"] = float((status == name).mean())
+        row["energy_gain_fraction"] = float(runs["gains_energy"][index][ok].mean()) \
+            if ok.any() else math.nan
+        for column in ("departure_poisson", "departure_stronge", "law_part", "solve_part"):
+            row.update(_quantiles(runs[column][index][ok], column))
+        rows.append(row)
+    return {key: np.asarray([row[key] for row in rows]) for key in rows[0]} if rows else {}

@@ -1,0 +1,71 @@
+"""``impact-harness survey`` end to end on a few samples: the files, their columns, one-call
+reads, and the laws' departures against the solver's own types."""
+
+from __future__ import annotations
+
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+
+from harness.cli import main
+from harness.survey.population import resolve_populations
+
+SAMPLES = 3
+
+
+@pytest.fixture(scope="module")
+def survey_dir(tmp_path_factory):
+    out = tmp_path_factory.mktemp("survey")
+    code = main(["survey", "--samples", str(SAMPLES), "--seed", "5", "--engines", "pymunk",
+                 "--preset", "accurate", "--out", str(out), "--no-figures"])
+    assert code == 0
+    return out
+
+
+def test_tables_are_written_and_read_in_one_call(survey_dir):
+    families = {p.name for p in resolve_populations()}
+    samples = pq.read_table(survey_dir / "samples.parquet").to_pydict()
+    runs = pq.read_table(survey_dir / "runs.parquet").to_pydict()
+    stats = pq.read_table(survey_dir / "statistics.parquet").to_pydict()
+    assert len(samples["family"]) == SAMPLES * len(families)
+    assert set(samples["family"]) == families
+    assert len(runs["family"]) == SAMPLES * len(families)  # one engine, one preset
+    assert set(runs["engine"]) == {"pymunk"} and set(runs["preset"]) == {"accurate"}
+    # An "all types" row per family, and its n is every run of the family.
+    every = [i for i, kind in enumerate(stats["poisson_type"]) if kind == 0]
+    assert sorted(stats["family"][i] for i in every) == sorted(families)
+    assert all(stats["n"][i] == SAMPLES for i in every)
+
+
+def test_poisson_departs_from_itself_by_zero_and_newton_lcp_by_the_law_part(survey_dir):
+    samples = pq.read_table(survey_dir / "samples.parquet").to_pydict()
+    runs = pq.read_table(survey_dir / "runs.parquet").to_pydict()
+    assert np.all(np.asarray(samples["poisson.from_poisson"]) == 0.0)
+    # The runs' law part is the samples' newton-lcp departure (same rows, same order).
+    assert np.array_equal(np.asarray(runs["law_part"]), np.asarray(samples["newton-lcp.from_poisson"]))
+    assert set(samples["poisson.collision_type"]) <= {1, 2, 3, 4, 5}
+
+
+def test_summary_lists_every_family_and_the_timings(survey_dir):
+    text = (survey_dir / "summary.md").read_text()
+    for population in resolve_populations():
+        assert f"| pymunk | accurate | {population.name} | all |" in text
+    assert "## Rejected draws" in text and "| engine pymunk accurate |" in text
+
+
+def test_bad_engine_name_is_refused(capsys):
+    with pytest.raises(SystemExit, match="unknown \\['pymunck'\\]"):
+        main(["survey", "--engines", "pymunck", "--samples", "1"])
+
+
+def test_unknown_population_exits_2(capsys, tmp_path):
+    assert main(["survey", "no-such-family", "--out", str(tmp_path)]) == 2
+    assert "no population file" in capsys.readouterr().err
+
+
+def test_figures_are_written(tmp_path):
+    code = main(["survey", "spinning-disk", "--samples", "4", "--engines", "pymunk",
+                 "--out", str(tmp_path)])
+    assert code == 0
+    names = {path.name for path in (tmp_path / "figures").iterdir()}
+    assert {"map-pymunk.png", "map-pymunk.svg", "cdf-pymunk.png", "cdf-pymunk.svg"} <= names

@@ -1,0 +1,115 @@
+"""The survey's law stage against the scalar solver, Routh coordinates against Table 1, and
+the statistics on tables whose answers are known by construction."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from harness.run import metrics
+from harness.scene import geometry
+from harness.survey import laws, statistics
+from harness.survey.population import resolve_populations
+from harness.survey.sampling import sample_population
+
+
+@pytest.fixture(scope="module")
+def survey_samples():
+    return [s for p in resolve_populations() for s in sample_population(p, 6, seed=3).samples]
+
+
+def test_contact_terms_match_the_delassus_terms_of_each_problem(survey_samples):
+    terms = laws.contact_terms(survey_samples)
+    for row, sample in enumerate(survey_samples):
+        problem = geometry.impact_problem(sample.scene, sample.contact.point,
+                                          sample.contact.normal)
+        # metrics.delassus solves with the full M (np.linalg.solve): an independent path.
+        expected = metrics.delassus(problem)
+        got = (terms.mnn[row], terms.mnt[row], terms.mtt[row])
+        assert got == pytest.approx(expected, rel=1e-12, abs=1e-12 * expected[0])
+        assert terms.vn[row] == pytest.approx(float(problem.wn @ problem.u), rel=1e-12)
+
+
+def test_batch_speeds_after_match_the_scalar_solver(survey_samples):
+    terms = laws.contact_terms(survey_samples)
+    results = laws.solve_laws(terms)
+    for law, result in results.items():
+        assert np.all(result.batch.status == 0), law
+        for row, sample in enumerate(survey_samples):
+            problem = geometry.impact_problem(sample.scene, sample.contact.point,
+                                              sample.contact.normal)
+            scalar = problem.solve(mu=sample.scene.friction, e=sample.scene.restitution,
+                                   hypothesis=law)
+            dofs = int(terms.dofs[row])
+            # The same kernels on the same terms; only M⁻¹w is formed differently (division
+            # by the diagonal vs np.linalg.solve): agreement to rounding, 1e-12 of |u|_M.
+            error = metrics.departure(problem.mass_matrix, result.u_after[row, :dofs],
+                                      scalar.u_after, problem.u)
+            assert error < 1e-12, (law, row, error)
+
+
+def test_routh_ratio_places_each_poisson_type_where_table1_says(survey_samples):
+    terms = laws.contact_terms(survey_samples)
+    kinds = laws.solve_laws(terms, ("poisson",))["poisson"].batch.collision_type
+    routh = laws.routh_coordinates(terms)
+    ratio, e = routh["alpha_over_rm"], terms.e
+    tol = 1e-9  # boundaries are continuous (docs/theory.md): ties may fall either side
+    finite = np.isfinite(ratio)
+    assert finite.any()
+    for kind in (1, 3):
+        assert np.all(ratio[finite & (kinds == kind)] <= 1 + tol)
+    for kind in (2, 4):
+        chosen = finite & (kinds == kind)
+        assert np.all(ratio[chosen] >= 1 - tol) and np.all(ratio[chosen] <= 1 + e[chosen] + tol)
+    chosen = finite & (kinds == 5)
+    assert np.all(ratio[chosen] >= 1 + e[chosen] - tol)
+
+
+def _runs(values, status, kinds, gains):
+    count = len(values)
+    return {
+        "engine": np.array(["pymunk"] * count), "preset": np.array(["accurate"] * count),
+        "family": np.array(["f"] * count), "poisson_type": np.asarray(kinds),
+        "status": np.asarray(status), "gains_energy": np.asarray(gains),
+        "departure_poisson": np.asarray(values, dtype=float),
+        "departure_stronge": np.asarray(values, dtype=float) * 2,
+        "law_part": np.zeros(count), "solve_part": np.asarray(values, dtype=float),
+    }
+
+
+def test_statistics_quantiles_fractions_and_the_all_types_row():
+    values = np.arange(1.0, 101.0)  # 1 … 100
+    status = ["ok"] * 96 + ["no-separation"] * 3 + ["blow-up"]
+    kinds = [1] * 50 + [5] * 50
+    gains = [True] * 10 + [False] * 90
+    stats = statistics.statistics(_runs(values, status, kinds, gains))
+    rows = {int(k): i for i, k in enumerate(stats["poisson_type"])}
+    every = rows[statistics.ALL_TYPES]
+    assert stats["n"][every] == 100 and stats["n_ok"][every] == 96
+    assert stats["flagged_fraction"][every] == pytest.approx(0.04)
+    assert stats["flagged_no-separation"][every] == pytest.approx(0.03)
+    assert stats["flagged_blow-up"][every] == pytest.approx(0.01)
+    assert stats["energy_gain_fraction"][every] == pytest.approx(10 / 96)
+    # Quantiles over the ok runs only, values 1 … 96: median 48.5, max 96.
+    assert stats["departure_poisson_median"][every] == pytest.approx(48.5)
+    assert stats["departure_poisson_max"][every] == 96
+    assert stats["departure_stronge_max"][every] == 192
+    one = rows[1]
+    assert stats["n"][one] == 50 and stats["departure_poisson_median"][one] == pytest.approx(25.5)
+
+
+def test_row_departures_use_each_samples_own_mass_matrix(survey_samples):
+    terms = laws.contact_terms(survey_samples)
+    zero = statistics.row_departures(terms, terms.u, terms.u)
+    assert np.all(zero == 0.0)
+    # Reversing every speed departs by exactly 2 (|u - (-u)|_M = 2 |u|_M).
+    assert np.allclose(statistics.row_departures(terms, -terms.u, terms.u), 2.0, rtol=1e-14)
+
+
+def test_relative_energy_change_of_a_law_matches_the_solver(survey_samples):
+    terms = laws.contact_terms(survey_samples)
+    result = laws.solve_laws(terms, ("newton",))["newton"]
+    before = 0.5 * np.sum(terms.mass * terms.u**2, axis=1)
+    relative = statistics.relative_energy_change(terms, result.u_after)
+    # (A29)'s energy change from the batch, against the speeds after: rounding of |u|² sums.
+    assert np.allclose(relative * before, result.batch.energy_change, rtol=1e-9, atol=1e-12)
