@@ -13,6 +13,5 @@ Data flows through the modules in this order:
 * :mod:`~harness.survey.statistics` -- departures and their statistics per engine × preset
   × family × Poisson collision type;
 * :mod:`~harness.survey.outputs` -- Parquet tables, the Markdown summary and the figures;
-* :mod:`~harness.survey.cli` -- ``impact-harness survey``;
-* :mod:`~harness.survey.bulk_pymunk` -- many independent pymunk impacts in one space.
+* :mod:`~harness.survey.cli` -- ``impact-harness survey``.
 """

@@ -1,13 +1,12 @@
 """``impact-harness survey``: departure distributions over families of impacts.
 
 ``impact-harness survey [POPULATION…] [--samples N] [--seed S] [--engines E,…] [--preset P,…]
-[--out DIR] [--quick] [--bare] [--pymunk-bulk] [--no-figures]``
+[--out DIR] [--quick] [--bare] [--no-figures]``
 
 Every sample of every population goes through every law (one ``solve_batch`` call per law)
 and every engine and preset; the tables, the summary and the figures go to ``--out``
 (harness/survey/outputs.py lists them). ``--bare`` also times the engines' bare stepping of
-the same impacts, in the same run, and prints it beside the survey's time; ``--pymunk-bulk``
-runs pymunk through harness/survey/bulk_pymunk.py.
+the same impacts, in the same run, and prints it beside the survey's time.
 """
 
 from __future__ import annotations
@@ -57,13 +56,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help=f"{QUICK_SAMPLES} samples per population")
     parser.add_argument("--bare", action="store_true",
                         help="also time the engines' bare stepping of the same impacts")
-    parser.add_argument("--pymunk-bulk", action="store_true",
-                        help="run pymunk many impacts per space (bit-identical to one by one)")
     parser.add_argument("--no-figures", action="store_true", help="skip the figures")
 
 
-def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: bool = False,
-               pymunk_bulk: bool = False, echo=print) -> dict:
+def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: bool = False, echo=print) -> dict:
     """The survey in memory: ``{"samples", "runs", "statistics", "rejections", "timings",
     "engine_results", "skipped"}`` (columns as ``{name: array}``)."""
     clock = time.perf_counter
@@ -93,7 +89,7 @@ def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: 
             echo(f"skipping {engine}: {error}")
             continue
         for preset in presets:
-            result = run_engine(engine, preset, scenes, bulk=pymunk_bulk)
+            result = run_engine(engine, preset, scenes)
             results.append(result)
             timings[f"engine {engine} {preset}"] = (result.wall_s, len(scenes))
             echo(f"{engine} {preset}: {len(scenes)} impacts in {result.wall_s:.2f} s "
@@ -170,8 +166,7 @@ def main(args: argparse.Namespace) -> int:
         return 2
     try:
         populations = resolve_populations(args.populations)
-        survey = run_survey(populations, samples, args.seed, engines, presets, bare=args.bare,
-                            pymunk_bulk=args.pymunk_bulk)
+        survey = run_survey(populations, samples, args.seed, engines, presets, bare=args.bare)
     except ScenarioError as error:
         print(f"impact-harness survey: {error}", file=sys.stderr)
         return 2

@@ -2,8 +2,7 @@
 
 :func:`run_engine` is the survey's only call into the engines: today it runs the scenes one
 by one through ``harness.engines.load_engine(name).run(scene, settings)``; a bulk path
-(many impacts per engine world, harness/survey/bulk_pymunk.py) replaces its body without
-changing what it returns.
+(many impacts per engine world) replaces its body without changing what it returns.
 
 :func:`bare_stepping` times, for the same scenes, the engine's own stepping with the
 benchmark's bare steppers (harness/bench/engines.py): the same step call as the adapter in a
@@ -35,21 +34,11 @@ class EngineResults:
     wall_s: float  # s, the whole of run_engine
 
 
-def run_engine(engine_name: str, preset: str, scenes, *, bulk: bool = False) -> EngineResults:
-    """Run every scene through ``engine_name`` at ``preset`` (the swap point for bulk paths).
-
-    ``bulk=True`` runs pymunk through :func:`harness.survey.bulk_pymunk.run_bulk` (many
-    impacts per space, bit-identical to the adapter); other engines ignore it.
-    """
+def run_engine(engine_name: str, preset: str, scenes) -> EngineResults:
+    """Run every scene through ``engine_name`` at ``preset`` (the swap point for bulk paths)."""
     start = time.perf_counter()
     engine = load_engine(engine_name)
     settings = engine.settings(preset)  # one dict for every run: the adapters cache on it
-    if bulk and engine_name == "pymunk":
-        from harness.survey.bulk_pymunk import run_bulk
-
-        velocities, status, steps, _ = run_bulk(scenes, settings)
-        return EngineResults(engine_name, engine.version, preset, velocities, status, steps,
-                             time.perf_counter() - start)
     count = len(scenes)
     velocities = np.zeros((count, WIDTH))
     status = np.empty(count, dtype=object)
