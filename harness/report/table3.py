@@ -268,11 +268,11 @@ LAW_STYLES = {  # colour, line style, end marker
 }
 
 
-def write_figure(rows: list[dict], path: Path) -> list[Path]:
+def write_figure(rows: list[dict], path: Path, metadata: dict | None = None) -> list[Path]:
     """Routh's impulse diagram (the paper's Fig. 1) for the two δ = 0.85 configurations:
     each law's impulse path, and where the paper's printed Stronge Δu would put the end.
 
-    Written as PNG at ``path`` and as SVG beside it; returns both paths.
+    Written as PNG at ``path`` (with ``metadata``) and as SVG beside it; returns both.
     """
     from matplotlib.figure import Figure
 
@@ -319,7 +319,7 @@ def write_figure(rows: list[dict], path: Path) -> list[Path]:
         ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=3,
                   frameon=False)
     fig.suptitle("Table 3, two sleds: impulse paths of each law (Routh's graph)")
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=110, metadata=metadata)
     svg = path.with_suffix(".svg")
     fig.savefig(svg, metadata={"Date": None})
     return [path, svg]
