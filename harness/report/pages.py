@@ -103,8 +103,8 @@ def figures_html(directory: str, names: Sequence[str]) -> str:
 
 def write_page(out_dir: Path, file: str, body: Sequence[str]) -> Path:
     title = PAGE_TITLES[file]
-    parts = [page_head(title), "<p class='back'><a href='index.html'>← back to the report</a>"
-             "</p>", f"<h1>{escape_html(title)}</h1>", *body,
+    parts = [page_head(title), ("<p class='back'><a href='index.html'>← back to the report</a>"
+             "</p>"), f"<h1>{escape_html(title)}</h1>", *body,
              "<p class='back'><a href='index.html'>← back to the report</a></p></body></html>"]
     path = out_dir / file
     path.write_text("\n".join(parts), encoding="utf-8")
@@ -115,8 +115,8 @@ def write_bench_page(bench_json: Path, out_dir: Path) -> Path:
     """``bench.html`` from ``bench.json`` and the figures beside it."""
     data = json.loads(bench_json.read_text(encoding="utf-8"))
     names = copy_figures(bench_json.parent, out_dir / "bench")
-    body = ["<p>Written by <code>impact-harness bench</code>; machine-readable: "
-            "<a href='bench/bench.json'>bench.json</a>.</p>", figures_html("bench", names)]
+    body = [("<p>Written by <code>impact-harness bench</code>; machine-readable: "
+            "<a href='bench/bench.json'>bench.json</a>.</p>"), figures_html("bench", names)]
     copy = out_dir / "bench" / "bench.json"
     if bench_json.resolve() != copy.resolve():
         shutil.copyfile(bench_json, copy)

@@ -53,12 +53,12 @@ window.addEventListener('load', function () {
     if (el.scrollWidth > el.clientWidth + 1) { scrolling += 1; }
   });
   var out = document.createElement('pre');
-  out.id = '%s';
+  out.id = 'RESULT_ID';
   out.textContent = JSON.stringify({scrollWidth: root.scrollWidth, clientWidth: limit,
     height: root.scrollHeight, culprits: culprits.slice(0, 20), scrolling: scrolling});
   document.body.appendChild(out);
 });
-</script>""" % RESULT_ID
+</script>""".replace("RESULT_ID", RESULT_ID)
 
 
 def chromium(arguments: list[str], timeout: float = 120.0) -> subprocess.CompletedProcess:
@@ -81,7 +81,7 @@ def measure(page: Path, width: int) -> dict:
                          "--dump-dom", probe.resolve().as_uri()])
     finally:
         probe.unlink(missing_ok=True)
-    found = re.search(rf'<pre id="{RESULT_ID}">(.*?)</pre>', done.stdout, re.S)
+    found = re.search(rf'<pre id="{RESULT_ID}">(.*?)</pre>', done.stdout, re.DOTALL)
     if not found:
         raise RuntimeError(f"no layout result from Chromium for {page}: {done.stderr[-500:]}")
     import html as html_module
