@@ -40,23 +40,30 @@ th{background:#f4f4f4} td.l,th.l{text-align:left}
 tr.engine td{background:#fbfbf6} tr.flag td{background:#fff1f0}
 img{max-width:100%;height:auto} figure{margin:.6em 0} figcaption{font-size:.85em;color:#555}
 .pair{display:flex;flex-wrap:wrap;gap:14px;align-items:flex-start}
-.pair img.diagram{width:400px;max-width:100%}
+.pair img.diagram{width:380px;max-width:100%}
 .fail{color:#b00;font-weight:bold} .pass{color:#070} .muted{color:#777}
 nav.contents{font-size:.9em;background:#f8f8f8;border:1px solid #e4e4e4;padding:6px 12px;
 margin:.8em 0} nav.contents ol{margin:.2em 0;padding-left:1.4em}
 nav.contents ol.scenarios{columns:3;font-size:.92em} code{background:#f4f4f4;padding:0 3px}
 details{margin:.3em 0 .8em} summary{cursor:pointer;color:#335}
-.scroll{overflow-x:auto;max-width:100%} .pair>div{min-width:0;max-width:100%}
-td.note{white-space:normal;min-width:14em;max-width:30em;text-align:left;color:#733}
+.scroll{overflow-x:auto;max-width:100%}
+.pair{flex-wrap:nowrap;gap:10px} .pair>div{flex:0 1 auto;min-width:0} .pair>figure{flex:0 0 auto;margin:0}
+td.note,th.note{white-space:normal;min-width:11em;max-width:22em;text-align:left}
+td.wrap{white-space:normal;text-align:left;overflow-wrap:anywhere;max-width:70em}
+p.notes{font-size:.8em;color:#733;margin:-.4em 0 .8em;max-width:60em}
 .why dt{font-weight:bold;margin-top:.6em} .why dd{margin:.2em 0 .2em 1.2em;max-width:62em}
 .override{color:#a40;font-weight:bold} .back{font-size:.85em}
 """
 
 
 def header_cell(text: str) -> str:
-    """A header with its unit (``"v_x [m/s]"``) on a second line, to keep columns narrow."""
+    """A header with its unit (``"v_x [m/s]"``) on a second line, and a long body name
+    (``"dumbbell.v_x"``) broken after its dot, to keep columns narrow."""
     name, bracket, unit = str(text).partition(" [")
-    return escape_html(name) + (f"<br><span class='muted'>[{escape_html(unit)}</span>" if bracket else "")
+    body, dot, speed = name.rpartition(".")
+    head = (escape_html(body + dot) + "<br>" + escape_html(speed) if dot and len(name) > 8
+            else escape_html(name))
+    return head + (f"<br><span class='muted'>[{escape_html(unit)}</span>" if bracket else "")
 
 
 def html_table(header: Sequence[str], rows: Sequence[Sequence], left: int = 1,
@@ -72,9 +79,13 @@ def html_table(header: Sequence[str], rows: Sequence[Sequence], left: int = 1,
             "l" if i < left else "")
         return f'<td class="{cls}">{content}</td>' if cls else f"<td>{content}</td>"
 
-    out = ['<div class="scroll"><table><tr>' + "".join(
-        f'<th class="l">{header_cell(h)}</th>' if i < left else f"<th>{header_cell(h)}</th>"
-        for i, h in enumerate(header)) + "</tr>"]
+    def head(i: int, text) -> str:
+        cls = "note" if column_classes and column_classes[i] == "note" else (
+            "l" if i < left else "")
+        return f'<th class="{cls}">{header_cell(text)}</th>' if cls else f"<th>{header_cell(text)}</th>"
+
+    out = ['<div class="scroll"><table><tr>' + "".join(head(i, h) for i, h in enumerate(header))
+           + "</tr>"]
     for k, row in enumerate(rows):
         cls = f' class="{row_classes[k]}"' if row_classes and row_classes[k] else ""
         out.append(f"<tr{cls}>" + "".join(cell(i, content) for i, content in enumerate(row))
@@ -94,30 +105,40 @@ def sorted_point_records(records: Sequence[Record]) -> list[Record]:
     return laws + engines
 
 
-def status_cell(record: Record) -> str:
-    """A run's status, the engine's notes and, when the results carry one, its verdict."""
+def status_cell(record: Record, footnotes: dict[str, int]) -> str:
+    """A run's status (and verdict, when the results carry one), with footnote marks for
+    its notes and the verdict's reasons; ``footnotes`` maps each text to its number."""
     if record.source == ANALYTIC:
         return "" if record.ok else escape_html(record.status)
     verdict, reasons = run_verdict(record)
-    parts = []
-    if verdict is not None:
-        parts.append(f"<b>{escape_html(verdict)}</b>"
-                     + (": " + escape_html("; ".join(reasons)) if reasons else ""))
-    if not record.ok:
-        parts.append(f"<b>{escape_html(record.status)}</b>")
-    parts += [escape_html(note) for note in run_notes(record)]
-    return "<br>".join(parts) if parts else "ok"
+    words = [] if verdict is None else [f"<b>{escape_html(verdict)}</b>"]
+    if not record.ok or not words:
+        words.append(f"<b>{escape_html(record.status)}</b>" if not record.ok else "ok")
+    marks = []
+    for text in [*reasons, *run_notes(record)]:
+        number = footnotes.setdefault(text, len(footnotes) + 1)
+        marks.append(f"<sup>{number}</sup>")
+    return ", ".join(words) + ("&#8202;" + "".join(marks) if marks else "")
+
+
+def footnotes_html(footnotes: dict[str, int]) -> str:
+    """The notes under a table, numbered as the marks in its status column."""
+    if not footnotes:
+        return ""
+    return ("<p class='notes'>" + "<br>".join(
+        f"<sup>{number}</sup> {escape_html(text)}" for text, number in footnotes.items())
+        + "</p>")
 
 
 def velocity_table(records: Sequence[Record], speed_labels: Sequence[str]) -> str:
-    """Post-impact speeds of every law and engine at one point, side by side, each engine
-    run with its status, notes and verdict beside its departure."""
+    """Post-impact speeds of every law and engine at one point, side by side; each engine
+    run's status and verdict beside its departures, its notes as numbered footnotes."""
     ordered = sorted_point_records(records)
     size = len(ordered[0].u_before) if ordered and ordered[0].u_before else len(speed_labels)
     labels = list(speed_labels) if len(speed_labels) == size else [f"u{i + 1}" for i in range(size)]
     header = ["source", *labels, "v_n after [m/s]", "v_t after [m/s]", "ΔE [J]", "type",
-              "from Poisson", "from Stronge", "status and notes"]
-    rows, classes = [], []
+              "from Poisson", "from Stronge", "status"]
+    rows, classes, footnotes = [], [], {}
     if ordered and ordered[0].u_before:
         rows.append(["<i>before</i>", *(fmt_number(v) for v in ordered[0].u_before),
                      fmt_number(ordered[0].vn_approach), fmt_number(ordered[0].vt_approach),
@@ -137,12 +158,11 @@ def velocity_table(records: Sequence[Record], speed_labels: Sequence[str]) -> st
                      "–" if r.collision_type is None else str(r.collision_type),
                      fmt_departure(r.departure.get("poisson")),
                      fmt_departure(r.departure.get("stronge")),
-                     status_cell(r)])
+                     status_cell(r, footnotes)])
         classes.append("" if r.source == ANALYTIC else ("engine" if r.ok else "engine flag"))
-    column_classes = [""] * (len(header) - 1) + ["note"]
-    if all(row[-1] in ("", "ok") for row in rows):  # nothing but "ok": the column says nothing
-        header, rows, column_classes = header[:-1], [row[:-1] for row in rows], None
-    return html_table(header, rows, row_classes=classes, column_classes=column_classes)
+    column_classes = [""] * (len(header) - 1) + ["l"]
+    return (html_table(header, rows, row_classes=classes, column_classes=column_classes)
+            + footnotes_html(footnotes))
 
 
 def overrides_paragraph(records: Sequence[Record]) -> str:
@@ -173,7 +193,7 @@ def scenario_section(name: str, info: dict, records: Sequence[Record], figures: 
         parts.append(f"<p>Poisson types along the sweep: {escape_html(types)}.</p>")
         flagged = [r for r in records if r.source != ANALYTIC and not r.ok and not r.skipped]
         if flagged:
-            parts.append("<p>Flagged by the engine (drawn as red-edged crosses): "
+            parts.append("<p>Flagged by the engine (drawn ringed in red): "
                          + "; ".join(escape_html(f"{r.label} at {r.point['label']}: {r.status}")
                                      for r in flagged) + ".</p>")
         parts.append(f"<details><summary>post-impact velocities at each of the {len(points)} "
@@ -194,8 +214,11 @@ def scenario_section(name: str, info: dict, records: Sequence[Record], figures: 
         if name in figures.get("impulse", {}):
             diagram = figure_html(figures["impulse"][name], f"impulse diagram of {name}",
                                   css_class="diagram")
-        parts.append(f'<div class="pair"><div>{velocity_table(records, info.get("speed_labels", []))}'
-                     f"</div>{diagram}</div>")
+        table = velocity_table(records, info.get("speed_labels", []))
+        # One body's three speeds leave room for the diagram beside the table; two bodies'
+        # six do not at 1400 px, so the diagram goes below.
+        layout = "pair" if len(info.get("speed_labels", [])) <= 3 else "stack"
+        parts.append(f'<div class="{layout}"><div>{table}</div>{diagram}</div>')
     parts.append("</div>")
     return "\n".join(parts)
 
@@ -382,8 +405,8 @@ def split_table(rows: Sequence[dict]) -> str:
                         default=math.nan)
             cells.append(fmt_departure(solve))
         body.append(cells)
-    return html_table(["scenario", "law part (newton-lcp vs Poisson)",
-                   *[f"solve: {label}" for label in labels]], body)
+    return html_table(["scenario", "law part [newton-lcp vs Poisson]",
+                       *[f"solve part [{label}]" for label in labels]], body)
 
 
 def versions_html(provenance: dict) -> str:
@@ -403,7 +426,7 @@ def versions_html(provenance: dict) -> str:
              ["run wall time", escape_html(f"{provenance.get('wall_time_s', 0):.2f} s")]]
     for engine, reason in provenance.get("engines_missing", {}).items():
         rows.append([escape_html(f"skipped {engine}"), escape_html(reason)])
-    return html_table(["item", "value"], rows, left=2)
+    return html_table(["item", "value"], rows, left=2, column_classes=["l", "wrap"])
 
 
 PAGE_HEAD = ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
@@ -516,13 +539,14 @@ def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[di
                  "the contact frame), energy change, collision type (Poisson/Stronge 1–5: "
                  + "; ".join(f"{k} {v}" for k, v in TYPE_NAMES.items())
                  + "; Newton laws and engines: 1 stick, 2 reverse slide, 3 forward slide) and "
-                 "each engine run's status and notes. "
+                 "each engine run's status beside its departures (its notes numbered under "
+                 "the table). "
                  "The impulse diagram is Routh's graph (the paper's Fig. 1): the path of each "
                  "law's impulse and every end point; filled engine markers are "
                  "<i>accurate</i>, hollow <i>defaults</i>, and engines that land on the same "
                  "point are drawn side by side. Sweeps show post-impact quantities against "
                  "the swept parameter instead, laws as lines and engines as points (flagged "
-                 "runs as red-edged crosses), with the points where the Poisson collision type "
+                 "runs ringed in red), with the points where the Poisson collision type "
                  "changes dashed. Every figure links to its SVG.</p>")
     if "legend" in figures:
         parts.append(figure_html(figures["legend"], "key of the impulse diagrams"))

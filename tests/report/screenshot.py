@@ -48,14 +48,21 @@ window.addEventListener('load', function () {
         + ' right=' + Math.round(box.right));
     }
   });
-  var scrolling = 0;
+  var scrolling = 0, where = [];
   document.querySelectorAll('.scroll').forEach(function (el) {
-    if (el.scrollWidth > el.clientWidth + 1) { scrolling += 1; }
+    if (el.scrollWidth > el.clientWidth + 1) {
+      scrolling += 1;
+      var section = el.closest('[id]');
+      var first = el.querySelector('th');
+      where.push((section ? section.id : 'page') + ' (' + (first ? first.textContent : '')
+        + ') ' + el.scrollWidth + '>' + el.clientWidth);
+    }
   });
   var out = document.createElement('pre');
   out.id = 'RESULT_ID';
   out.textContent = JSON.stringify({scrollWidth: root.scrollWidth, clientWidth: limit,
-    height: root.scrollHeight, culprits: culprits.slice(0, 20), scrolling: scrolling});
+    height: root.scrollHeight, culprits: culprits.slice(0, 20), scrolling: scrolling,
+    scrolling_in: where.slice(0, 20)});
   document.body.appendChild(out);
 });
 </script>""".replace("RESULT_ID", RESULT_ID)
@@ -139,7 +146,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{name}: {state} (page {layout['scrollWidth']} px in a {layout['clientWidth']} px"
               f" window; {layout['scrolling']} wide tables scroll) -> {layout['screenshot']}")
         for culprit in layout["culprits"]:
-            print(f"    {culprit}")
+            print(f"    overflows: {culprit}")
+        for place in layout["scrolling_in"]:
+            print(f"    scrolls (px wide > shown): {place}")
     return 1 if any(layout["overflow"] for layout in layouts.values()) else 0
 
 
