@@ -36,7 +36,7 @@ h3{margin:1.4em 0 .3em} .lead{font-size:1.04em;max-width:62em}
 .facts{color:#555;font-size:.92em} .facts b{color:#222}
 table{border-collapse:collapse;font-size:.8em;margin:.4em 0 .8em}
 th,td{border:1px solid #ddd;padding:2px 6px;text-align:right;white-space:nowrap}
-th{background:#f4f4f4} td.l,th.l{text-align:left}
+th{background:#f4f4f4} td.l,th.l,th.wrap{text-align:left}
 tr.engine td{background:#fbfbf6} tr.flag td{background:#fff1f0}
 img{max-width:100%;height:auto} figure{margin:.6em 0} figcaption{font-size:.85em;color:#555}
 .pair{display:flex;flex-wrap:wrap;gap:14px;align-items:flex-start}
@@ -80,8 +80,8 @@ def html_table(header: Sequence[str], rows: Sequence[Sequence], left: int = 1,
         return f'<td class="{cls}">{content}</td>' if cls else f"<td>{content}</td>"
 
     def head(i: int, text) -> str:
-        cls = "note" if column_classes and column_classes[i] == "note" else (
-            "l" if i < left else "")
+        cls = column_classes[i] if column_classes and column_classes[i] in (
+            "note", "l", "wrap") else ("l" if i < left else "")
         return f'<th class="{cls}">{header_cell(text)}</th>' if cls else f"<th>{header_cell(text)}</th>"
 
     out = ['<div class="scroll"><table><tr>' + "".join(head(i, h) for i, h in enumerate(header))
@@ -161,6 +161,8 @@ def velocity_table(records: Sequence[Record], speed_labels: Sequence[str]) -> st
                      status_cell(r, footnotes)])
         classes.append("" if r.source == ANALYTIC else ("engine" if r.ok else "engine flag"))
     column_classes = [""] * (len(header) - 1) + ["l"]
+    if all(r.source == ANALYTIC and r.ok for r in ordered):  # laws only: no status to show
+        header, rows, column_classes = header[:-1], [row[:-1] for row in rows], None
     return (html_table(header, rows, row_classes=classes, column_classes=column_classes)
             + footnotes_html(footnotes))
 
@@ -215,9 +217,9 @@ def scenario_section(name: str, info: dict, records: Sequence[Record], figures: 
             diagram = figure_html(figures["impulse"][name], f"impulse diagram of {name}",
                                   css_class="diagram")
         table = velocity_table(records, info.get("speed_labels", []))
-        # One body's three speeds leave room for the diagram beside the table; two bodies'
-        # six do not at 1400 px, so the diagram goes below.
-        layout = "pair" if len(info.get("speed_labels", [])) <= 3 else "stack"
+        # Up to four speeds leave room for the diagram beside the table; two bodies' six do
+        # not at 1400 px, so the diagram goes below.
+        layout = "pair" if len(info.get("speed_labels", [])) <= 4 else "stack"
         parts.append(f'<div class="{layout}"><div>{table}</div>{diagram}</div>')
     parts.append("</div>")
     return "\n".join(parts)

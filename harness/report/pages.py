@@ -120,8 +120,12 @@ def write_bench_page(bench_json: Path, out_dir: Path) -> Path:
     copy = out_dir / "bench" / "bench.json"
     if bench_json.resolve() != copy.resolve():
         shutil.copyfile(bench_json, copy)
+    scalars = {key: value for key, value in data.items() if is_scalar(value)}
+    if scalars:  # top-level flags (quick …) in one table, not a heading each
+        body += json_html(scalars, "this run", 2)
     for key, value in data.items():
-        body += json_html(value, key.replace("_", " "), 2)
+        if not is_scalar(value):
+            body += json_html(value, key.replace("_", " "), 2)
     return write_page(out_dir, BENCH_PAGE, body)
 
 
