@@ -47,8 +47,9 @@ from harness.run.records import DEFAULT_RESULTS, Results, read_results
 
 
 def write_report(results: Results, out_dir: Path | str, sources: Sequence[Path] = ()) -> dict:
-    """Write index.html, summary.md, the figures (PNG and SVG) and, when ``bench/bench.json``
-    or ``stress/stress.md`` exist under ``out_dir`` or one of ``sources``, their pages;
+    """Write index.html, summary.md, the figures (PNG and SVG) and, when the benchmark's
+    ``bench.json`` or the stress test's ``stress.md`` exist (in ``bench/`` and ``stress/``
+    under ``out_dir`` or one of ``sources``), their pages;
     returns the paths written."""
     import matplotlib
 

@@ -6,6 +6,7 @@ A figure's PNG carries the digest of its inputs and of this module in its metada
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Sequence
 from pathlib import Path
@@ -106,7 +107,7 @@ def png_tag(path: Path) -> str | None:
 
         with Image.open(path) as image:
             return image.text.get(TAG_KEY)
-    except Exception:  # a missing or broken file is simply redrawn
+    except (OSError, ValueError):  # a missing or broken file is simply redrawn
         return None
 
 
@@ -358,7 +359,8 @@ def type_boundaries(law_records: Sequence[Record]) -> list[tuple[float, int, int
     """
     points = sorted((r.point["value"], r.collision_type) for r in law_records
                     if r.law == "poisson" and r.ok and r.point.get("value") is not None)
-    return [((a + b) / 2, ta, tb) for (a, ta), (b, tb) in zip(points, points[1:]) if ta != tb]
+    return [((a + b) / 2, ta, tb) for (a, ta), (b, tb) in itertools.pairwise(points)
+            if ta != tb]
 
 
 DEPARTURE_FLOOR = 1e-16  # exact agreement drawn here on the log axis (1e-14%)
@@ -398,11 +400,11 @@ def sweep_figure(name: str, info: dict, records: Sequence[Record], path: Path, t
                 points.append((r, r.point["value"], y))
         position = {id(r): (x, y) for r, x, y in points}
         if field == "departure":  # log axis: coincide = within 1% of a decade
-            def key(r):
+            def key(r, position=position):
                 return position[id(r)][0], math.log10(position[id(r)][1])
             tolerance = (1e-9, 0.01)
         else:  # coincide = within 1% of the panel's range
-            def key(r):
+            def key(r, position=position):
                 return position[id(r)]
             y_span = float(np.ptp([y for _, _, y in points])) if points else 0.0
             tolerance = (1e-9, 0.01 * (y_span or 1.0))

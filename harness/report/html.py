@@ -555,7 +555,7 @@ def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[di
     for name in names:
         parts.append(scenario_section(name, results.scenarios.get(name, {}),
                                       results.for_scenario(name), figures))
-    parts.append("<h2 id='table3'>Table 3 of the paper reproduced</h2>")
+    parts.append("<h2 id='table3'>Table 3 of Djerassi (2009, Part B) reproduced</h2>")
     parts.append(table3_html(figures.get("table3")))
     parts.append("<h2 id='versions'>Versions and settings</h2>" + versions_html(prov))
     parts.append("<h3>Engine settings per preset</h3><p>Bold where the presets differ. "

@@ -1,6 +1,6 @@
 """The report's further pages: the benchmarks (``bench.html``) and the stress test
 (``stress.html``), rendered from what ``impact-harness bench`` and ``impact-harness stress``
-wrote (``bench/bench.json``, ``stress/stress.md``) when those files exist.
+wrote (``bench.json`` in ``bench/``, ``stress.md`` in ``stress/``) when those files exist.
 
 Their figures are copied into ``<out>/bench/`` and ``<out>/stress/`` so that the report
 directory stays self-contained whatever directory the inputs came from.
