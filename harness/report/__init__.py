@@ -46,10 +46,12 @@ from harness.report.views import FIGURES, slug, split_rows
 from harness.run.records import DEFAULT_RESULTS, Results, read_results
 
 
-def write_report(results: Results, out_dir: Path | str, sources: Sequence[Path] = ()) -> dict:
+def write_report(results: Results, out_dir: Path | str,
+                 sources: Sequence[Path] = (DEFAULT_RESULTS.parent,)) -> dict:
     """Write index.html, summary.md, the figures (PNG and SVG) and, when the benchmark's
     ``bench.json`` or the stress test's ``stress.md`` exist (in ``bench/`` and ``stress/``
-    under ``out_dir`` or one of ``sources``), their pages;
+    under ``out_dir`` or one of ``sources``, by default where ``bench`` and ``stress`` write
+    them), their pages;
     returns the paths written."""
     import matplotlib
 
