@@ -17,6 +17,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "paper": ("harness.report.table3", "reproduce the paper's Table 3 into reports/paper-table3.md"),
     "run": ("harness.run.runner", "run scenarios through every law and engine, write results"),
     "report": ("harness.report", "write reports/index.html and reports/summary.md from results"),
+    "compare": ("harness.report.compare",
+                "compare two results files; exit 1 when a change exceeds --fail-above"),
     "validate": ("harness.scenarios.cli", "check scenario files"),
     "new": ("harness.scenarios.cli", "write a commented starting scenario file"),
     "bench": ("harness.bench.solver", "benchmarks: solver throughput, engine overhead, speed-accuracy"),

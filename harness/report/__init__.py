@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import time
+from collections.abc import Sequence
 from pathlib import Path
 
 from harness.report.figures import (
@@ -35,15 +36,23 @@ from harness.report.figures import (
     split_figure,
     stable_record,
     sweep_figure,
+    table3_figure,
+    table3_inputs,
 )
 from harness.report.html import write_html
+from harness.report.pages import write_pages
 from harness.report.summary import write_summary
 from harness.report.views import FIGURES, slug, split_rows
 from harness.run.records import DEFAULT_RESULTS, Results, read_results
 
 
-def write_report(results: Results, out_dir: Path | str) -> dict:
-    """Write index.html, summary.md and the figures; returns the paths written."""
+def write_report(results: Results, out_dir: Path | str,
+                 sources: Sequence[Path] = (DEFAULT_RESULTS.parent,)) -> dict:
+    """Write index.html, summary.md, the figures (PNG and SVG) and, when the benchmark's
+    ``bench.json`` or the stress test's ``stress.md`` exist (in ``bench/`` and ``stress/``
+    under ``out_dir`` or one of ``sources``, by default where ``bench`` and ``stress`` write
+    them), their pages;
+    returns the paths written."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -51,8 +60,9 @@ def write_report(results: Results, out_dir: Path | str) -> dict:
     figure_dir = out_dir / FIGURES
     figure_dir.mkdir(parents=True, exist_ok=True)
     figures: dict = {"impulse": {}, "sweep": {}}
-    if render_once("legend", figure_dir / "impulse-legend.png", [],
-               lambda path, tag: impulse_legend_figure(path, tag)):
+    engines = list(dict.fromkeys(label.split(".")[0] for label in results.engine_labels()))
+    if render_once("legend", figure_dir / "impulse-legend.png", engines,
+                   lambda path, tag: impulse_legend_figure(path, tag, engines)):
         figures["legend"] = "impulse-legend.png"
     stable = {name: [stable_record(r) for r in results.for_scenario(name)]
               for name in results.scenario_names()}
@@ -76,13 +86,17 @@ def write_report(results: Results, out_dir: Path | str) -> dict:
             if render_once("impulse", figure_dir / file, [name, stable[name]],
                        lambda path, tag: impulse_figure(name, records, path, tag)):
                 figures["impulse"][name] = file
-    wanted = {figures.get("heatmap"), figures.get("split"), figures.get("legend"),
+    if render_once("table3", figure_dir / "paper-table3.png", table3_inputs(),
+                   lambda path, tag: table3_figure(path, tag)):
+        figures["table3"] = "paper-table3.png"
+    pages = write_pages(out_dir, sources)
+    wanted = {figures.get("heatmap"), figures.get("table3"), figures.get("split"), figures.get("legend"),
               *figures["impulse"].values(),
               *figures["sweep"].values()}
     for stale in figure_dir.glob("*.png"):  # figures of scenarios no longer in the results
         if stale.name not in wanted:
             stale.unlink()
-    html_path = write_html(results, out_dir, figures, rows)
+    html_path = write_html(results, out_dir, figures, rows, pages)
     summary = write_summary(results, out_dir)
     return {"html": html_path, "summary": summary, "figures": sorted(figure_dir / f for f in wanted if f)}
 
@@ -101,7 +115,7 @@ def main(args) -> int:
         print(f"impact-harness report: {error}")
         return 2
     start = time.perf_counter()
-    written = write_report(results, args.out)
+    written = write_report(results, args.out, sources=[args.results.parent, Path("reports")])
     print(f"wrote {written['html']} and {written['summary']} with {len(written['figures'])} "
           f"figures in {time.perf_counter() - start:.1f} s")
     return 0

@@ -6,9 +6,10 @@ A figure's PNG carries the digest of its inputs and of this module in its metada
 
 from __future__ import annotations
 
+import itertools
 import math
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 
@@ -20,9 +21,11 @@ from harness.report.views import (
     LAW_ORDER,
     LAW_STYLE,
     X_FLOOR,
+    cell_records,
+    departure_cell,
     departure_grid,
     engine_scenarios,
-    fmt_departure,
+    parameter_name,
     row_name,
 )
 from harness.run.records import ANALYTIC, Record, Results
@@ -35,9 +38,39 @@ def new_figure(width: float, height: float):
 
 
 def save_png(figure, path: Path, dpi: int = 100, tag: str | None = None) -> Path:
-    """Save a PNG; ``tag`` (the digest of the figure's inputs) goes into its metadata."""
+    """Save a PNG and, beside it, the same figure as SVG (for a paper); ``tag`` (the digest
+    of the figure's inputs) goes into the PNG's metadata."""
     figure.savefig(path, dpi=dpi, metadata={TAG_KEY: tag} if tag else None)
+    # No date in the SVG, so that the same inputs give the same file.
+    figure.savefig(path.with_suffix(".svg"), metadata={"Date": None})
     return path
+
+
+def offset_transform(ax, index: int, count: int, step_points: float = 4.0):
+    """Data coordinates shifted sideways by ``step_points`` per engine, so that engines
+    landing on the same point are drawn side by side; the values themselves are unchanged."""
+    from matplotlib.transforms import offset_copy
+
+    shift = (index - (count - 1) / 2) * step_points
+    return offset_copy(ax.transData, fig=ax.figure, x=shift, y=0.0, units="points")
+
+
+def percent_axis(axis) -> None:
+    """Tick labels of a log axis of fractions, written in percent (0.01 -> 1%)."""
+    from matplotlib.ticker import FuncFormatter
+
+    axis.set_major_formatter(FuncFormatter(lambda value, _: percent_tick(value)))
+
+
+def percent_tick(value: float) -> str:
+    percent = 100.0 * value
+    if percent >= 1:
+        return f"{percent:.0f}%"
+    return f"{percent:.0e}%".replace("e-0", "e-")
+
+
+FLAG_STYLE = {"marker": "o", "markerfacecolor": "none", "markeredgecolor": "red",
+              "markeredgewidth": 1.4, "ms": 12}  # a red ring around a run the engine flagged
 
 
 TAG_KEY = "impact-harness-inputs"
@@ -74,16 +107,36 @@ def png_tag(path: Path) -> str | None:
 
         with Image.open(path) as image:
             return image.text.get(TAG_KEY)
-    except Exception:  # a missing or broken file is simply redrawn
+    except (OSError, ValueError):  # a missing or broken file is simply redrawn
         return None
 
 
 def render_once(kind: str, path: Path, payload, draw) -> Path | None:
-    """Draw a figure unless ``path`` already holds one drawn from the same inputs."""
+    """Draw a figure unless ``path`` (and its SVG) already hold one drawn from the same
+    inputs."""
     tag = inputs_digest(kind, payload)
-    if path.exists() and png_tag(path) == tag:
+    if path.exists() and path.with_suffix(".svg").exists() and png_tag(path) == tag:
         return path
     return draw(path, tag)
+
+
+def table3_inputs() -> str:
+    """What the Table 3 figure depends on besides this module: table3.py and its data."""
+    import hashlib
+
+    from harness.report import table3
+
+    source = Path(table3.__file__)
+    data = source.parent / "data" / "djerassi-table3.csv"
+    return hashlib.sha256(source.read_bytes() + data.read_bytes()).hexdigest()
+
+
+def table3_figure(path: Path, tag: str | None = None) -> Path:
+    """The paper's Table 3 impulse diagrams (``table3.write_figure``), tagged like the rest."""
+    from harness.report import table3
+
+    table3.write_figure(table3.reproduce_table3(), path, metadata={TAG_KEY: tag} if tag else None)
+    return path
 
 
 def heatmap_figure(results: Results, path: Path, tag: str | None = None) -> Path | None:
@@ -96,7 +149,7 @@ def heatmap_figure(results: Results, path: Path, tag: str | None = None) -> Path
     presets = list(dict.fromkeys(label.split(".")[1] for label in labels))
     names = engine_scenarios(results)
     panels = [(law, preset) for law in HEADLINE_LAWS for preset in presets]
-    figure = new_figure(2.2 + 0.95 * len(labels) * len(HEADLINE_LAWS), 1.3 + 0.25 * len(names))
+    figure = new_figure(2.2 + 0.95 * len(labels) * len(HEADLINE_LAWS), 1.6 + 0.25 * len(names))
     axes = figure.subplots(1, len(panels), sharey=True, squeeze=False)[0]
     norm = LogNorm(vmin=HEAT_MIN, vmax=HEAT_MAX)
     cmap = heat_cmap()
@@ -106,22 +159,25 @@ def heatmap_figure(results: Results, path: Path, tag: str | None = None) -> Path
         _, values, flagged, skipped = departure_grid(results, law, panel_labels)
         shown = np.where(np.isfinite(values), np.clip(values, HEAT_MIN, HEAT_MAX), np.nan)
         image = ax.imshow(np.ma.masked_invalid(shown), cmap=cmap, norm=norm, aspect="auto")
-        for i in range(len(names)):
-            for j in range(len(panel_labels)):
+        for i, name in enumerate(names):
+            for j, label in enumerate(panel_labels):
                 if skipped[i, j] or not np.isfinite(values[i, j]):
                     text, colour = ("skipped" if skipped[i, j] else "n/a"), "0.35"
                 else:
-                    text = fmt_departure(values[i, j]) + (" !" if flagged[i, j] else "")
+                    text = departure_cell(cell_records(results, name, label), law)
                     colour = "white" if values[i, j] > 0.08 else "black"
-                ax.text(j, i, text, ha="center", va="center", fontsize=7.5, color=colour)
+                ax.text(j, i, text, ha="center", va="center", fontsize=7.5, color=colour,
+                        fontweight="bold" if flagged[i, j] else "normal")
         ax.set_xticks(range(len(panel_labels)), [label.split(".")[0] for label in panel_labels],
                       fontsize=8.5)
         ax.xaxis.tick_top()
         ax.set_title(f"from {LAW_STYLE[law][2]} — {preset}", fontsize=9, pad=16)
         ax.set_yticks(range(len(names)), [row_name(results, n) for n in names], fontsize=8.5)
         ax.tick_params(length=0)
-    figure.colorbar(image, ax=list(axes), shrink=0.6, pad=0.01,
-                    label="departure ‖u − u_law‖_M / ‖u_before‖_M")
+    # Short label: the colour bar can be as short as one row (the caption gives the formula).
+    bar = figure.colorbar(image, ax=list(axes), shrink=1.0 if len(names) < 8 else 0.6,
+                          pad=0.01, label="departure [%]")
+    percent_axis(bar.ax.yaxis)
     return save_png(figure, path, dpi=110, tag=tag)
 
 
@@ -147,8 +203,12 @@ def split_figure(rows: Sequence[dict], path: Path, tag: str | None = None) -> Pa
                 continue
             x = np.maximum([r["law_part"] for r in subset], X_FLOOR)
             y = np.maximum([r["solve_part"] for r in subset], floor)
-            ax.scatter(x, y, s=22, marker=marker, color=colour, alpha=0.75, label=engine,
-                       edgecolors="none")
+            flagged = np.array([r["status"] != "ok" for r in subset])
+            ax.scatter(x[~flagged], y[~flagged], s=22, marker=marker, color=colour, alpha=0.75,
+                       label=engine, edgecolors="none")
+            if flagged.any():
+                ax.scatter(x[flagged], y[flagged], s=40, marker=marker, facecolors="none",
+                           edgecolors="red", linewidths=1.2, label="flagged by the engine")
         ax.plot([floor, 10], [floor, 10], color="0.5", lw=0.8, ls="--")
         ax.set_xscale("log")
         ax.set_yscale("log")
@@ -156,15 +216,24 @@ def split_figure(rows: Sequence[dict], path: Path, tag: str | None = None) -> Pa
         ax.set_ylim(floor / 3, 3)
         ax.axhline(1e-6, color="0.8", lw=0.6)
         ax.axvline(X_FLOOR, color="0.85", lw=0.6)
-        ax.set_xlabel("law part: newton-lcp vs Poisson\n(≤ 1.5e-4, e.g. the laws agree, drawn at 1.5e-4)")
+        ax.set_xlabel("law part: newton-lcp vs Poisson [%]")
+        percent_axis(ax.xaxis)
+        percent_axis(ax.yaxis)
         ax.set_title(f"{preset}", fontsize=10)
-        ax.text(0.03, 0.97, "above the diagonal: the solve\n(engine vs its own law) dominates",
-                transform=ax.transAxes, va="top", fontsize=7, color="0.3")
-        ax.text(0.97, 0.45, "below the diagonal:\nthe law itself dominates",
-                transform=ax.transAxes, ha="right", va="top", fontsize=7, color="0.3")
         ax.grid(True, which="major", color="0.93")
-    axes[0].set_ylabel("solve part: engine vs newton-lcp\n(values ≤ 1e-12 drawn at 1e-12)")
-    axes[-1].legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8, frameon=False)
+    axes[0].set_ylabel("solve part: engine vs newton-lcp [%]")
+    figure.suptitle("Above the dashed diagonal the solve (engine vs its own law) dominates, "
+                    "below it the law. Values below the axes' ends are drawn at them.",
+                    fontsize=8.5)
+    handles = {}
+    for ax in axes:
+        for handle, label in zip(*ax.get_legend_handles_labels()):
+            handles.setdefault(label, handle)
+    flag = handles.pop("flagged by the engine", None)
+    if flag is not None:  # last in the key
+        handles["flagged by the engine"] = flag
+    axes[-1].legend(handles.values(), handles.keys(), loc="center left",
+                    bbox_to_anchor=(1.01, 0.5), fontsize=8, frameon=False)
     return save_png(figure, path, tag=tag)
 
 
@@ -200,16 +269,23 @@ def impulse_figure(name: str, records: Sequence[Record], path: Path, tag: str | 
             ax.plot([r.normal_impulse], [r.tangential_impulse], "D", ms=6, zorder=6,
                     markerfacecolor="none", markeredgecolor=colour, markeredgewidth=1.5,
                     label=label)
-    for r in records:
-        if r.source == ANALYTIC or r.normal_impulse is None or r.tangential_impulse is None:
-            continue
-        if not (math.isfinite(r.normal_impulse) and math.isfinite(r.tangential_impulse)):
-            continue
+    drawn = [r for r in records if r.source != ANALYTIC and r.normal_impulse is not None
+             and r.tangential_impulse is not None and math.isfinite(r.normal_impulse)
+             and math.isfinite(r.tangential_impulse)]
+    ys_all = [abs(r.tangential_impulse) for r in drawn] + [mu * extent]
+    for r, index, count in coincident_groups(
+            drawn, lambda r: (r.normal_impulse, r.tangential_impulse),
+            (0.02 * extent, 0.02 * max(ys_all + [1e-12]))):
         colour, marker = ENGINE_STYLE.get(r.source, ("k", "x"))
         filled = r.preset == "accurate"
+        transform = offset_transform(ax, index, count, step_points=6.0)
+        ax.update_datalim([(r.normal_impulse, r.tangential_impulse)])
         ax.plot([r.normal_impulse], [r.tangential_impulse], marker, ms=7, zorder=5,
                 markerfacecolor=colour if filled else "none", markeredgecolor=colour,
-                label=f"{r.label}" + ("" if r.ok else f" ({r.status})"))
+                transform=transform, label=r.label)
+        if not r.ok:
+            ax.plot([r.normal_impulse], [r.tangential_impulse], zorder=7, ls="none",
+                    transform=transform, **FLAG_STYLE)
     # Routh's lines: compression ends (v_n = 0) and sticking (v_t = 0), and the cone.
     x = np.linspace(0.0, 1.15 * extent, 50)
     ax.plot(x, mu * x, color="0.75", lw=0.8, ls=":")
@@ -228,15 +304,30 @@ def impulse_figure(name: str, records: Sequence[Record], path: Path, tag: str | 
     ax.set_xlabel("normal impulse I_n [N s]")
     ax.set_ylabel("tangential impulse I_t [N s]")
     ax.set_title(f"{name}: impulse diagram (Routh)", fontsize=9)
-    flagged = [r.label for r in records if r.source != ANALYTIC and not r.ok and not r.skipped]
-    if flagged:
-        ax.text(0.02, 0.02, "flagged by the engine: " + ", ".join(flagged), fontsize=7,
-                transform=ax.transAxes, color="tab:red")
     return save_png(figure, path, dpi=90, tag=tag)
 
 
-def impulse_legend_figure(path: Path, tag: str | None = None) -> Path:
-    """The key shared by every impulse diagram (drawn once, not on each diagram)."""
+def coincident_groups(records, position, tolerance):
+    """``(record, index, count)``: records whose positions lie within ``tolerance`` (per
+    coordinate) of an earlier one share a group, and get consecutive indexes in it, so that
+    :func:`offset_transform` can draw them side by side."""
+    groups: list[tuple[tuple, list]] = []
+    for record in records:
+        x, y = position(record)
+        for (gx, gy), members in groups:
+            if abs(x - gx) <= tolerance[0] and abs(y - gy) <= tolerance[1]:
+                members.append(record)
+                break
+        else:
+            groups.append(((x, y), [record]))
+    return [(record, index, len(members)) for _, members in groups
+            for index, record in enumerate(members)]
+
+
+def impulse_legend_figure(path: Path, tag: str | None = None,
+                          engines: Sequence[str] | None = None) -> Path:
+    """The key shared by every impulse diagram (drawn once, not on each diagram); engines
+    are those in the results (all styled engines when None)."""
     from matplotlib.lines import Line2D
 
     handles = [Line2D([], [], color=LAW_STYLE[law][0], ls=LAW_STYLE[law][1], lw=1.4,
@@ -246,15 +337,17 @@ def impulse_legend_figure(path: Path, tag: str | None = None) -> Path:
                        markeredgewidth=1.5, markeredgecolor=LAW_STYLE[law][0],
                        label=f"{LAW_STYLE[law][2]}: end point")
                 for law in ("stronge-paper", "newton-lcp")]
-    for engine, (colour, marker) in ENGINE_STYLE.items():
+    for engine in engines if engines is not None else ENGINE_STYLE:
+        colour, marker = ENGINE_STYLE.get(engine, ("k", "x"))
         handles.append(Line2D([], [], ls="none", marker=marker, ms=7, markerfacecolor=colour,
                               markeredgecolor=colour, label=f"{engine} accurate"))
         handles.append(Line2D([], [], ls="none", marker=marker, ms=7, markerfacecolor="none",
                               markeredgecolor=colour, label=f"{engine} defaults"))
+    handles.append(Line2D([], [], ls="none", label="flagged by the engine", **FLAG_STYLE))
     handles += [Line2D([], [], color="0.75", ls=":", label="friction cone |I_t| = μ I_n"),
                 Line2D([], [], color="tab:cyan", ls="--", label="v_n = 0 (end of compression)"),
                 Line2D([], [], color="tab:olive", ls="--", label="v_t = 0 (slip stops)")]
-    figure = new_figure(9.5, 1.0)
+    figure = new_figure(9.5, 1.25)
     figure.legend(handles=handles, loc="center", ncol=4, fontsize=7.5, frameon=False)
     return save_png(figure, path, dpi=90, tag=tag)
 
@@ -266,7 +359,11 @@ def type_boundaries(law_records: Sequence[Record]) -> list[tuple[float, int, int
     """
     points = sorted((r.point["value"], r.collision_type) for r in law_records
                     if r.law == "poisson" and r.ok and r.point.get("value") is not None)
-    return [((a + b) / 2, ta, tb) for (a, ta), (b, tb) in zip(points, points[1:]) if ta != tb]
+    return [((a + b) / 2, ta, tb) for (a, ta), (b, tb) in itertools.pairwise(points)
+            if ta != tb]
+
+
+DEPARTURE_FLOOR = 1e-16  # exact agreement drawn here on the log axis (1e-14%)
 
 
 def sweep_figure(name: str, info: dict, records: Sequence[Record], path: Path, tag: str | None = None) -> Path | None:
@@ -278,7 +375,7 @@ def sweep_figure(name: str, info: dict, records: Sequence[Record], path: Path, t
     panels = [("vn_separation", "v_n after [m/s]"), ("vt_separation", "v_t after [m/s]"),
               ("energy_change", "energy change [J]")]
     if engines:
-        panels.append(("departure", "engine departure from Poisson\n(0 drawn at 1e-16)"))
+        panels.append(("departure", "engine departure from Poisson [%]\n(0 drawn at 1e-14%)"))
     figure = new_figure(9.5, 5.6 if len(panels) > 3 else 3.2)
     grid = figure.subplots(2 if len(panels) > 3 else 1, 2 if len(panels) > 3 else 3,
                            squeeze=False)
@@ -292,27 +389,47 @@ def sweep_figure(name: str, info: dict, records: Sequence[Record], path: Path, t
                 if subset:
                     colour, style, law_label = LAW_STYLE[law]
                     ax.plot(*zip(*subset), color=colour, ls=style, lw=1.3, label=law_label)
-        for engine_label in dict.fromkeys(r.label for r in engines):
-            subset = [r for r in engines if r.label == engine_label]
-            engine, preset = engine_label.split(".")
-            colour, marker = ENGINE_STYLE.get(engine, ("k", "x"))
-            if field == "departure":  # exact agreement (0) drawn at the 1e-16 floor
-                pts = [(r.point["value"], max(r.departure.get("poisson") or 0.0, 1e-16))
-                       for r in subset if r.departure.get("poisson") is not None]
+        points = []  # (record, x, y) of every engine run drawn on this panel
+        for r in engines:
+            if field == "departure":  # exact agreement (0) drawn at the DEPARTURE_FLOOR
+                value = r.departure.get("poisson")
+                y = None if value is None else max(value, DEPARTURE_FLOOR)
             else:
-                pts = [(r.point["value"], getattr(r, field)) for r in subset]
-            pts = [(x, y) for x, y in pts if y is not None and math.isfinite(y)]
-            if pts:
-                ax.plot(*zip(*pts), marker, ms=5, ls="none", label=engine_label,
-                        markerfacecolor=colour if preset == "accurate" else "none",
-                        markeredgecolor=colour)
+                y = getattr(r, field)
+            if y is not None and math.isfinite(y):
+                points.append((r, r.point["value"], y))
+        position = {id(r): (x, y) for r, x, y in points}
+        if field == "departure":  # log axis: coincide = within 1% of a decade
+            def key(r, position=position):
+                return position[id(r)][0], math.log10(position[id(r)][1])
+            tolerance = (1e-9, 0.01)
+        else:  # coincide = within 1% of the panel's range
+            def key(r, position=position):
+                return position[id(r)]
+            y_span = float(np.ptp([y for _, _, y in points])) if points else 0.0
+            tolerance = (1e-9, 0.01 * (y_span or 1.0))
+        groups = coincident_groups([r for r, _, _ in points], key, tolerance)
+        for r, index, count in groups:
+            x, y = position[id(r)]
+            engine, preset = r.label.split(".")
+            colour, marker = ENGINE_STYLE.get(engine, ("k", "x"))
+            transform = offset_transform(ax, index, count, step_points=4.0)
+            ax.update_datalim([(x, y)])  # shifted artists do not count for autoscaling
+            ax.plot([x], [y], marker, ms=5, ls="none", label=r.label, transform=transform,
+                    markerfacecolor=colour if preset == "accurate" else "none",
+                    markeredgecolor=colour)
+            if not r.ok:
+                ax.plot([x], [y], ls="none", transform=transform, label="flagged by the engine",
+                        **{**FLAG_STYLE, "ms": 10})
+        ax.autoscale_view()
         if field == "departure":
             ax.set_yscale("log")
+            percent_axis(ax.yaxis)
         for value, before, after in boundaries:
             ax.axvline(value, color="0.6", lw=0.8, ls="--")
             ax.text(value, 1.0, f"{before}→{after}", transform=ax.get_xaxis_transform(),
                     ha="center", va="bottom", fontsize=7, color="0.35")
-        ax.set_xlabel(parameter)
+        ax.set_xlabel(parameter_name(parameter))
         ax.set_ylabel(label)
         ax.grid(True, color="0.93")
     handles, labels = axes[0].get_legend_handles_labels()
@@ -322,6 +439,7 @@ def sweep_figure(name: str, info: dict, records: Sequence[Record], path: Path, t
         labels += l
     unique = dict(zip(labels, handles))
     figure.legend(unique.values(), unique.keys(), loc="outside lower center",
-                  ncol=min(6, len(unique)), fontsize=7, frameon=False)
-    figure.suptitle(f"{name}: sweep of {parameter} (dashed: Poisson type changes)", fontsize=9)
+                  ncol=min(5, len(unique)), fontsize=7, frameon=False)
+    figure.suptitle(f"{name}: sweep of {parameter_name(parameter)} (dashed: Poisson type "
+                    "changes)", fontsize=9)
     return save_png(figure, path, dpi=90, tag=tag)

@@ -5,18 +5,25 @@ from __future__ import annotations
 import math
 import re
 import time
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Sequence
 
 from harness.engines import ENGINE_NAMES, PRESET_NAMES
 from harness.report.views import (
+    ENGINE_WHY,
     FIGURES,
     LAW_ORDER,
     LAW_STYLE,
+    PRESET_WHY,
     TYPE_NAMES,
     escape_html,
     fmt_departure,
     fmt_number,
+    fmt_overrides,
+    overrides_of,
+    run_notes,
+    run_verdict,
+    scenario_overrides,
     slug,
 )
 from harness.run.records import ANALYTIC, Record, Results
@@ -29,34 +36,61 @@ h3{margin:1.4em 0 .3em} .lead{font-size:1.04em;max-width:62em}
 .facts{color:#555;font-size:.92em} .facts b{color:#222}
 table{border-collapse:collapse;font-size:.8em;margin:.4em 0 .8em}
 th,td{border:1px solid #ddd;padding:2px 6px;text-align:right;white-space:nowrap}
-th{background:#f4f4f4} td.l,th.l{text-align:left}
+th{background:#f4f4f4} td.l,th.l,th.wrap{text-align:left}
 tr.engine td{background:#fbfbf6} tr.flag td{background:#fff1f0}
 img{max-width:100%;height:auto} figure{margin:.6em 0} figcaption{font-size:.85em;color:#555}
 .pair{display:flex;flex-wrap:wrap;gap:14px;align-items:flex-start}
-.pair img.diagram{width:400px;max-width:100%}
+.pair img.diagram{width:380px;max-width:100%}
 .fail{color:#b00;font-weight:bold} .pass{color:#070} .muted{color:#777}
-nav{font-size:.85em;columns:3} code{background:#f4f4f4;padding:0 3px}
+nav.contents{font-size:.9em;background:#f8f8f8;border:1px solid #e4e4e4;padding:6px 12px;
+margin:.8em 0} nav.contents ol{margin:.2em 0;padding-left:1.4em}
+nav.contents ol.scenarios{columns:3;font-size:.92em} code{background:#f4f4f4;padding:0 3px}
 details{margin:.3em 0 .8em} summary{cursor:pointer;color:#335}
+.scroll{overflow-x:auto;max-width:100%}
+.pair{flex-wrap:nowrap;gap:10px} .pair>div{flex:0 1 auto;min-width:0} .pair>figure{flex:0 0 auto;margin:0}
+td.note,th.note{white-space:normal;min-width:11em;max-width:22em;text-align:left}
+td.wrap{white-space:normal;text-align:left;overflow-wrap:anywhere;max-width:70em}
+p.notes{font-size:.8em;color:#733;margin:-.4em 0 .8em;max-width:60em}
+.why dt{font-weight:bold;margin-top:.6em} .why dd{margin:.2em 0 .2em 1.2em;max-width:62em}
+.override{color:#a40;font-weight:bold} .back{font-size:.85em}
 """
 
 
 def header_cell(text: str) -> str:
-    """A header with its unit (``"v_x [m/s]"``) on a second line, to keep columns narrow."""
+    """A header with its unit (``"v_x [m/s]"``) on a second line, and a long body name
+    (``"dumbbell.v_x"``) broken after its dot, to keep columns narrow."""
     name, bracket, unit = str(text).partition(" [")
-    return escape_html(name) + (f"<br><span class='muted'>[{escape_html(unit)}</span>" if bracket else "")
+    body, dot, speed = name.rpartition(".")
+    head = (escape_html(body + dot) + "<br>" + escape_html(speed) if dot and len(name) > 8
+            else escape_html(name))
+    return head + (f"<br><span class='muted'>[{escape_html(unit)}</span>" if bracket else "")
 
 
 def html_table(header: Sequence[str], rows: Sequence[Sequence], left: int = 1,
-           row_classes: Sequence[str] | None = None) -> str:
-    out = ["<table><tr>" + "".join(
-        f'<th class="l">{header_cell(h)}</th>' if i < left else f"<th>{header_cell(h)}</th>"
-        for i, h in enumerate(header)) + "</tr>"]
+               row_classes: Sequence[str] | None = None,
+               column_classes: Sequence[str] | None = None) -> str:
+    """A table in a horizontally scrolling wrapper; cells are HTML already.
+
+    The first ``left`` columns are left-aligned; ``column_classes`` (one per column, "" for
+    none) overrides a column's class (e.g. ``"note"`` for wrapped text).
+    """
+    def cell(i: int, content) -> str:
+        cls = column_classes[i] if column_classes and column_classes[i] else (
+            "l" if i < left else "")
+        return f'<td class="{cls}">{content}</td>' if cls else f"<td>{content}</td>"
+
+    def head(i: int, text) -> str:
+        cls = column_classes[i] if column_classes and column_classes[i] in (
+            "note", "l", "wrap") else ("l" if i < left else "")
+        return f'<th class="{cls}">{header_cell(text)}</th>' if cls else f"<th>{header_cell(text)}</th>"
+
+    out = ['<div class="scroll"><table><tr>' + "".join(head(i, h) for i, h in enumerate(header))
+           + "</tr>"]
     for k, row in enumerate(rows):
         cls = f' class="{row_classes[k]}"' if row_classes and row_classes[k] else ""
-        out.append(f"<tr{cls}>" + "".join(
-            f'<td class="l">{cell}</td>' if i < left else f"<td>{cell}</td>"
-            for i, cell in enumerate(row)) + "</tr>")
-    out.append("</table>")
+        out.append(f"<tr{cls}>" + "".join(cell(i, content) for i, content in enumerate(row))
+                   + "</tr>")
+    out.append("</table></div>")
     return "\n".join(out)
 
 
@@ -71,14 +105,40 @@ def sorted_point_records(records: Sequence[Record]) -> list[Record]:
     return laws + engines
 
 
+def status_cell(record: Record, footnotes: dict[str, int]) -> str:
+    """A run's status (and verdict, when the results carry one), with footnote marks for
+    its notes and the verdict's reasons; ``footnotes`` maps each text to its number."""
+    if record.source == ANALYTIC:
+        return "" if record.ok else escape_html(record.status)
+    verdict, reasons = run_verdict(record)
+    words = [] if verdict is None else [f"<b>{escape_html(verdict)}</b>"]
+    if not record.ok or not words:
+        words.append(f"<b>{escape_html(record.status)}</b>" if not record.ok else "ok")
+    marks = []
+    for text in [*reasons, *run_notes(record)]:
+        number = footnotes.setdefault(text, len(footnotes) + 1)
+        marks.append(f"<sup>{number}</sup>")
+    return ", ".join(words) + ("&#8202;" + "".join(marks) if marks else "")
+
+
+def footnotes_html(footnotes: dict[str, int]) -> str:
+    """The notes under a table, numbered as the marks in its status column."""
+    if not footnotes:
+        return ""
+    return ("<p class='notes'>" + "<br>".join(
+        f"<sup>{number}</sup> {escape_html(text)}" for text, number in footnotes.items())
+        + "</p>")
+
+
 def velocity_table(records: Sequence[Record], speed_labels: Sequence[str]) -> str:
-    """Post-impact speeds of every law and engine at one point, side by side."""
+    """Post-impact speeds of every law and engine at one point, side by side; each engine
+    run's status and verdict beside its departures, its notes as numbered footnotes."""
     ordered = sorted_point_records(records)
     size = len(ordered[0].u_before) if ordered and ordered[0].u_before else len(speed_labels)
     labels = list(speed_labels) if len(speed_labels) == size else [f"u{i + 1}" for i in range(size)]
     header = ["source", *labels, "v_n after [m/s]", "v_t after [m/s]", "ΔE [J]", "type",
               "from Poisson", "from Stronge", "status"]
-    rows, classes = [], []
+    rows, classes, footnotes = [], [], {}
     if ordered and ordered[0].u_before:
         rows.append(["<i>before</i>", *(fmt_number(v) for v in ordered[0].u_before),
                      fmt_number(ordered[0].vn_approach), fmt_number(ordered[0].vt_approach),
@@ -86,19 +146,37 @@ def velocity_table(records: Sequence[Record], speed_labels: Sequence[str]) -> st
         classes.append("")
     for r in ordered:
         speeds = r.u_after or [None] * size
-        name = (LAW_STYLE.get(r.law, (None, None, r.law))[2] if r.source == ANALYTIC
-                else f"<b>{escape_html(r.label)}</b>")
-        status = escape_html(r.status if len(r.status) < 60 else r.status[:57] + "…")
+        if r.source == ANALYTIC:
+            name = LAW_STYLE.get(r.law, (None, None, r.law))[2]
+        else:
+            name = f"<b>{escape_html(r.label)}</b>"
+            if overrides_of(r):
+                name += (f"<br><span class='override'>[{escape_html(fmt_overrides(overrides_of(r)))}]"
+                         "</span>")
         rows.append([name, *(fmt_number(v) for v in speeds), fmt_number(r.vn_separation),
                      fmt_number(r.vt_separation), fmt_number(r.energy_change),
                      "–" if r.collision_type is None else str(r.collision_type),
                      fmt_departure(r.departure.get("poisson")),
                      fmt_departure(r.departure.get("stronge")),
-                     status if r.status != "ok" else "ok"])
+                     status_cell(r, footnotes)])
         classes.append("" if r.source == ANALYTIC else ("engine" if r.ok else "engine flag"))
-    if all(r.ok for r in ordered):  # every status "ok": the column says nothing
-        header, rows = header[:-1], [row[:-1] for row in rows]
-    return html_table(header, rows, row_classes=classes)
+    column_classes = [""] * (len(header) - 1) + ["l"]
+    if all(r.source == ANALYTIC and r.ok for r in ordered):  # laws only: no status to show
+        header, rows, column_classes = header[:-1], [row[:-1] for row in rows], None
+    return (html_table(header, rows, row_classes=classes, column_classes=column_classes)
+            + footnotes_html(footnotes))
+
+
+def overrides_paragraph(records: Sequence[Record]) -> str:
+    """What the scenario's ``[engine_settings]`` changed, or "" when nothing."""
+    found = scenario_overrides(records)
+    if not found:
+        return ""
+    items = "; ".join(f"{escape_html(engine)}: <code>{escape_html(fmt_overrides(values))}</code>"
+                      for engine, values in found.items())
+    return (f"<p class='override'>Engine settings overridden by this scenario "
+            f"(<code>[engine_settings]</code>): {items}. These runs are not the presets: their "
+            "labels carry the overrides, and the headline cells are marked “*”.</p>")
 
 
 def scenario_section(name: str, info: dict, records: Sequence[Record], figures: dict) -> str:
@@ -107,14 +185,19 @@ def scenario_section(name: str, info: dict, records: Sequence[Record], figures: 
     tags = ", ".join(info.get("tags", []))
     parts.append(f"<p>{escape_html(info.get('description', ''))} <span class='muted'>"
                  f"[{escape_html(info.get('system', ''))}; tags: {escape_html(tags)}]</span></p>")
+    parts.append(overrides_paragraph(records))
     laws = [r for r in records if r.source == ANALYTIC and r.law == "poisson" and r.ok]
     if info.get("sweep"):
         if name in figures.get("sweep", {}):
-            parts.append(f'<figure><img src="{FIGURES}/{figures["sweep"][name]}" '
-                         f'alt="sweep of {escape_html(name)}"></figure>')
+            parts.append(figure_html(figures["sweep"][name], f"sweep of {name}"))
         points = list(dict.fromkeys(r.point["index"] for r in records))
         types = " → ".join(str(r.collision_type) for r in sorted(laws, key=lambda r: r.point["index"]))
         parts.append(f"<p>Poisson types along the sweep: {escape_html(types)}.</p>")
+        flagged = [r for r in records if r.source != ANALYTIC and not r.ok and not r.skipped]
+        if flagged:
+            parts.append("<p>Flagged by the engine (drawn ringed in red): "
+                         + "; ".join(escape_html(f"{r.label} at {r.point['label']}: {r.status}")
+                                     for r in flagged) + ".</p>")
         parts.append(f"<details><summary>post-impact velocities at each of the {len(points)} "
                      "points</summary>")
         for index in points:
@@ -131,11 +214,91 @@ def scenario_section(name: str, info: dict, records: Sequence[Record], figures: 
                          f"e = {fmt_number(d.get('e'))}.</p>")
         diagram = ""
         if name in figures.get("impulse", {}):
-            diagram = (f'<img class="diagram" src="{FIGURES}/{figures["impulse"][name]}" '
-                       f'alt="impulse diagram of {escape_html(name)}">')
-        parts.append(f'<div class="pair"><div>{velocity_table(records, info.get("speed_labels", []))}'
-                     f"</div>{diagram}</div>")
+            diagram = figure_html(figures["impulse"][name], f"impulse diagram of {name}",
+                                  css_class="diagram")
+        table = velocity_table(records, info.get("speed_labels", []))
+        # Up to four speeds leave room for the diagram beside the table; two bodies' six do
+        # not at 1400 px, so the diagram goes below.
+        layout = "pair" if len(info.get("speed_labels", [])) <= 4 else "stack"
+        parts.append(f'<div class="{layout}"><div>{table}</div>{diagram}</div>')
     parts.append("</div>")
+    return "\n".join(parts)
+
+
+def figure_html(file: str, alt: str, css_class: str = "", caption: str = "") -> str:
+    """A figure's PNG, linked to its SVG (the vector version for a paper)."""
+    svg = Path(file).with_suffix(".svg").name
+    cls = f' class="{css_class}"' if css_class else ""
+    return (f'<figure><a href="{FIGURES}/{escape_html(svg)}"><img{cls} '
+            f'src="{FIGURES}/{escape_html(file)}" alt="{escape_html(alt)}"></a>'
+            + (f"<figcaption>{caption} <a href='{FIGURES}/{escape_html(svg)}'>SVG</a>"
+               "</figcaption>" if caption else "")
+            + "</figure>")
+
+
+def why_html(results: Results) -> str:
+    """Per engine and preset present: the law it solves, its biases, the settings that
+    matter, and the notes its runs carry (with how many runs carry each)."""
+    labels = results.engine_labels()
+    engines = list(dict.fromkeys(label.split(".")[0] for label in labels))
+    if not engines:
+        return "<p>No engine ran.</p>"
+    parts = ['<dl class="why">']
+    for engine in engines:
+        parts.append(f"<dt>{escape_html(engine)}</dt><dd>"
+                     f"{escape_html(ENGINE_WHY.get(engine, 'No description of this engine.'))}"
+                     "</dd>")
+        for label in labels:
+            if not label.startswith(engine + "."):
+                continue
+            preset = label.split(".")[1]
+            text = PRESET_WHY.get((engine, preset), "")
+            runs = [r for r in results.records if r.source != ANALYTIC and r.label == label]
+            notes: dict[str, int] = {}
+            for run in runs:
+                for note in run_notes(run):
+                    notes[note] = notes.get(note, 0) + 1
+            flagged = sum(1 for r in runs if not r.ok and not r.skipped)
+            overridden = sum(1 for r in runs if overrides_of(r))
+            extra = [f"{count} of {len(runs)} runs note: “{escape_html(note)}”"
+                     for note, count in notes.items()]
+            if flagged:
+                extra.append(f"{flagged} of {len(runs)} runs flagged by the engine")
+            if overridden:
+                extra.append(f"{overridden} of {len(runs)} runs with scenario overrides")
+            parts.append(f"<dd><b>{escape_html(preset)}</b>: {escape_html(text)}"
+                         + ("<br><span class='muted'>" + "; ".join(extra) + ".</span>"
+                            if extra else "") + "</dd>")
+    parts.append("</dl>")
+    return "\n".join(parts)
+
+
+def table3_html(figure: str | None) -> str:
+    """The paper's Table 3 reproduced, from the structured rows of ``table3``."""
+    from harness.report import table3
+
+    rows = table3.reproduce_table3()
+    parts = [f"<p>{escape_html(table3.table3_intro(rows))}</p>"]
+    if figure:
+        parts.append(figure_html(figure, "impulse diagrams of the Table 3 rows with δ = 0.85",
+                                 caption="Impulse paths of each law for the two δ = 0.85 rows; "
+                                 "the cross is where the paper's printed Stronge Δu puts the "
+                                 "end of the impact."))
+    for section in table3.table3_sections(rows):
+        parts.append(f"<h4>{escape_html(section.title)}</h4>")
+        parts += [f"<p>{escape_html(text)}</p>" for text in section.before]
+        body = []
+        for cells, missed in zip(section.rows, section.missed):
+            body.append([("<span class='fail'>no</span>" if missed and cell == "no"
+                          else escape_html(cell)) for cell in cells])
+        left = sum(1 for a in section.alignments[:2] if a == "l")
+        column_classes = ["l" if a == "l" else "" for a in section.alignments]
+        if section.header[-1] == "reason for a miss":
+            column_classes[-1] = "note"
+        parts.append(html_table(section.header, body, left=left,
+                                row_classes=["flag" if m else "" for m in section.missed],
+                                column_classes=column_classes))
+        parts += [f"<p>{escape_html(text)}</p>" for text in section.after]
     return "\n".join(parts)
 
 
@@ -244,8 +407,8 @@ def split_table(rows: Sequence[dict]) -> str:
                         default=math.nan)
             cells.append(fmt_departure(solve))
         body.append(cells)
-    return html_table(["scenario", "law part (newton-lcp vs Poisson)",
-                   *[f"solve: {label}" for label in labels]], body)
+    return html_table(["scenario", "law part [newton-lcp vs Poisson]",
+                       *[f"solve part [{label}]" for label in labels]], body)
 
 
 def versions_html(provenance: dict) -> str:
@@ -265,10 +428,46 @@ def versions_html(provenance: dict) -> str:
              ["run wall time", escape_html(f"{provenance.get('wall_time_s', 0):.2f} s")]]
     for engine, reason in provenance.get("engines_missing", {}).items():
         rows.append([escape_html(f"skipped {engine}"), escape_html(reason)])
-    return html_table(["item", "value"], rows, left=2)
+    return html_table(["item", "value"], rows, left=2, column_classes=["l", "wrap"])
 
 
-def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[dict]) -> Path:
+PAGE_HEAD = ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
+             "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
+             "<title>{title}</title><style>{css}</style></head><body>")
+
+
+def page_head(title: str) -> str:
+    return PAGE_HEAD.format(title=escape_html(title), css=CSS)
+
+
+def contents_html(names: Sequence[str], pages: dict) -> str:
+    """The table of contents at the top of the page (sections, scenarios, other pages)."""
+    scenarios = "".join(f"<li><a href='#{escape_html(slug(n))}'>{escape_html(n)}</a></li>"
+                        for n in names)
+    items = [("#headline", "Departure of every engine from the laws"),
+             ("#why", "Why: what each engine and preset solves"),
+             ("#split", "Law vs solve"), ("#gates", "Gates"),
+             ("#scenarios", "Scenarios")]
+    out = ["<nav class='contents'><b>Contents</b><ol>"]
+    for href, text in items:
+        out.append(f"<li><a href='{href}'>{text}</a>")
+        if href == "#scenarios":
+            out.append(f"<ol class='scenarios'>{scenarios}</ol>")
+        out.append("</li>")
+    out.append("<li><a href='#table3'>Table 3 of the paper</a></li>"
+               "<li><a href='#versions'>Versions and settings</a></li>")
+    for file, title in pages.items():
+        out.append(f"<li><a href='{escape_html(file)}'>{escape_html(title)}</a> "
+                   "<span class='muted'>(separate page)</span></li>")
+    out.append("</ol></nav>")
+    return "\n".join(out)
+
+
+def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[dict],
+               pages: dict | None = None) -> Path:
+    """Write ``index.html``; ``pages`` maps further pages of the report (``bench.html`` …)
+    to their titles, linked from the contents."""
+    pages = pages or {}
     prov = results.provenance
     names = results.scenario_names()
     gates = prov.get("gates", [])
@@ -277,11 +476,9 @@ def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[di
     flagged = [r for r in engine_records if not r.ok and not r.skipped]
     skipped = [r for r in engine_records if r.skipped]
     labels = results.engine_labels()
-    engines = sorted({label.split(".")[0] for label in labels})
+    engines = list(dict.fromkeys(label.split(".")[0] for label in labels))
     git = prov.get("git", {})
-    parts = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
-             "<title>Planar impact with friction: engines against the exact laws</title>",
-             f"<style>{CSS}</style></head><body>",
+    parts = [page_head("Planar impact with friction: engines against the exact laws"),
              "<h1>Planar impact with friction: physics engines against the exact laws</h1>"]
     parts.append(
         '<p class="lead">Every scenario here is one planar rigid-body impact with Coulomb '
@@ -289,12 +486,12 @@ def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[di
         "solved exactly under five impact laws by <code>planar_impact</code> (Poisson's and "
         "Stronge's hypotheses after Djerassi 2009, Newton's, and the velocity-level "
         "<code>newton-lcp</code> law that sequential-impulse engines solve) and simulated by "
-        f"the physics engines {escape_html(', '.join(engines) or '(none)')} with their out-of-the-box "
-        "<i>defaults</i> and with <i>accurate</i> settings. The <b>departure</b> of an engine "
-        "from a law is the error of its post-impact velocities in the kinetic-energy norm, "
-        "relative to the motion before the impact: ‖u<sub>engine</sub> − u<sub>law</sub>‖"
-        "<sub>M</sub> / ‖u<sub>before</sub>‖<sub>M</sub> (0 = identical, 10% = a tenth of the "
-        "motion is wrong).</p>")
+        f"the physics engines {escape_html(', '.join(engines) or '(none)')} with their "
+        "out-of-the-box <i>defaults</i> and with <i>accurate</i> settings. The "
+        "<b>departure</b> of an engine from a law is the error of its post-impact velocities "
+        "in the kinetic-energy norm, relative to the motion before the impact: "
+        "‖u<sub>engine</sub> − u<sub>law</sub>‖<sub>M</sub> / ‖u<sub>before</sub>‖<sub>M</sub>,"
+        " in percent throughout (0 = identical, 10% = a tenth of the motion is wrong).</p>")
     parts.append(
         f'<p class="facts"><b>{len(names)}</b> scenarios, <b>{len(results.records)}</b> '
         f"records; engine runs: <b>{len(engine_records)}</b> "
@@ -303,26 +500,27 @@ def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[di
            else f'<span class="pass">{len(gates)} passed</span>')
         + f"; commit <code>{escape_html(str(git.get('commit'))[:10])}</code>, "
         f"{escape_html(prov.get('created_utc', ''))}.</p>")
+    parts.append(contents_html(names, pages))
+    parts.append("<h2 id='headline'>Departure of every engine from the laws</h2>")
     if "heatmap" in figures:
-        parts.append(
-            f'<figure><img src="{FIGURES}/{figures["heatmap"]}" alt="departure heat map">'
-            "<figcaption>Departure from Poisson (left pair) and from exact Stronge (right pair), "
+        parts.append(figure_html(
+            figures["heatmap"], "departure heat map",
+            caption="Departure from Poisson (left pair) and from exact Stronge (right pair), "
             "engines out of the box (<i>defaults</i>) and tuned (<i>accurate</i>). Sweeps show "
-            "their largest departure over the sweep. “!” marks a run the engine itself flagged "
-            "(multi-contact, no separation …); grey cells were skipped. Light = agrees, dark "
-            "red = far off.</figcaption></figure>")
+            "their largest departure over the sweep. “!” after a value: the run holding that "
+            "value was flagged by the engine (multi-contact, no separation …); “(k!)”: k other "
+            "points of the sweep were flagged, not the one shown; “*”: the scenario overrides "
+            "the preset's settings (see its section); grey cells were skipped. Light = agrees, "
+            "dark red = far off."))
+    parts.append("<h2 id='why'>Why: what each engine and preset solves</h2>")
     parts.append(
         "<p>Most of the departure of pymunk and pybullet is the <b>law</b>, not the solver: "
         "they solve <code>newton-lcp</code> (restitution as a target on the normal velocity, "
         "Coulomb friction at the end state), which differs from Poisson and Stronge wherever "
-        "the slip stops or reverses during the impact. The next figure separates the two.</p>")
-    parts.append("<nav><b>Contents</b><br><a href='#split'>Law vs solve</a><br>"
-                 "<a href='#gates'>Gates</a><br><a href='#scenarios'>Scenarios</a><br>"
-                 + "".join(f"&nbsp;&nbsp;<a href='#{escape_html(slug(n))}'>{escape_html(n)}</a><br>"
-                           for n in names)
-                 + "<a href='#table3'>Table 3 of the paper</a><br>"
-                 "<a href='#versions'>Versions and settings</a></nav>")
-    parts.append("<h2 id='split'>Why engines depart: the law they solve vs how well they "
+        "the slip stops or reverses during the impact. MuJoCo solves no rigid impact law at "
+        "all. Per engine and preset (details and measurements: <code>docs/engines.md</code>):"
+        "</p>" + why_html(results))
+    parts.append("<h2 id='split'>Law vs solve: the law they solve against how well they "
                  "solve it</h2>")
     parts.append(
         "<p>Each point is one engine run. <b>Law part</b>: how far the engines' own law "
@@ -330,8 +528,7 @@ def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[di
         "the engine is from <code>newton-lcp</code>. The total departure from Poisson is at "
         "most their sum.</p>")
     if "split" in figures:
-        parts.append(f'<figure><img src="{FIGURES}/{figures["split"]}" alt="departure split">'
-                     "</figure>")
+        parts.append(figure_html(figures["split"], "departure split"))
     if rows:
         parts.append("<details><summary>the numbers (largest over sweep points)</summary>"
                      + split_table(rows) + "</details>")
@@ -341,35 +538,31 @@ def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[di
     parts.append("<h2 id='scenarios'>Scenarios</h2><p>Per scenario: post-impact speeds of "
                  "every law and engine (engine rows shaded; red when the engine flagged the "
                  "run), contact velocities after the impact (v<sub>n</sub>, v<sub>t</sub>, in "
-                 "the contact frame), energy change and collision type (Poisson/Stronge 1–5: "
+                 "the contact frame), energy change, collision type (Poisson/Stronge 1–5: "
                  + "; ".join(f"{k} {v}" for k, v in TYPE_NAMES.items())
-                 + "; Newton laws and engines: 1 stick, 2 reverse slide, 3 forward slide). "
+                 + "; Newton laws and engines: 1 stick, 2 reverse slide, 3 forward slide) and "
+                 "each engine run's status beside its departures (its notes numbered under "
+                 "the table). "
                  "The impulse diagram is Routh's graph (the paper's Fig. 1): the path of each "
                  "law's impulse and every end point; filled engine markers are "
-                 "<i>accurate</i>, hollow <i>defaults</i>. Sweeps show post-impact "
-                 "quantities against the swept parameter instead, laws as lines and engines "
-                 "as points, with the points where the Poisson collision type changes "
-                 "dashed.</p>")
+                 "<i>accurate</i>, hollow <i>defaults</i>, and engines that land on the same "
+                 "point are drawn side by side. Sweeps show post-impact quantities against "
+                 "the swept parameter instead, laws as lines and engines as points (flagged "
+                 "runs ringed in red), with the points where the Poisson collision type "
+                 "changes dashed. Every figure links to its SVG.</p>")
     if "legend" in figures:
-        parts.append(f'<figure><img src="{FIGURES}/{figures["legend"]}" '
-                     'alt="key of the impulse diagrams"></figure>')
+        parts.append(figure_html(figures["legend"], "key of the impulse diagrams"))
     for name in names:
         parts.append(scenario_section(name, results.scenarios.get(name, {}),
                                       results.for_scenario(name), figures))
-    parts.append("<h2 id='table3'>Table 3 of the paper reproduced</h2>")
-    paper = out_dir / "paper-table3.md"
-    if paper.exists():
-        parts.append("<p>From <a href='paper-table3.md'>paper-table3.md</a>, written by "
-                     "<code>impact-harness paper</code>.</p>")
-        parts.append(markdown_to_html(paper.read_text(encoding="utf-8"), heading_shift=2))
-    else:
-        parts.append("<p class='muted'>Not generated: run <code>impact-harness paper</code> "
-                     "(or <code>impact-harness suite</code>).</p>")
+    parts.append("<h2 id='table3'>Table 3 of Djerassi (2009, Part B) reproduced</h2>")
+    parts.append(table3_html(figures.get("table3")))
     parts.append("<h2 id='versions'>Versions and settings</h2>" + versions_html(prov))
     parts.append("<h3>Engine settings per preset</h3><p>Bold where the presets differ. "
                  "Scenario files may override settings "
-                 "(<code>[engine_settings.&lt;engine&gt;]</code>); the overrides are in each "
-                 "record's diagnostics in <code>results.json</code>.</p>" + settings_table(prov))
+                 "(<code>[engine_settings.&lt;engine&gt;]</code>); such runs carry the "
+                 "overrides in their labels and in each record's diagnostics in "
+                 "<code>results.json</code>.</p>" + settings_table(prov))
     parts.append(f"<p class='muted'>Report generated {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())} "
                  "by <code>impact-harness report</code>.</p></body></html>")
     path = out_dir / "index.html"

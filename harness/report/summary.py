@@ -7,6 +7,8 @@ from pathlib import Path
 from harness.report.views import (
     HEADLINE_LAWS,
     LAW_STYLE,
+    cell_records,
+    departure_cell,
     departure_grid,
     fmt_departure,
     row_name,
@@ -22,20 +24,20 @@ def write_summary(results: Results, out_dir: Path) -> Path:
              "Departure of each engine (and preset) from the exact laws, "
              "`‖u_engine − u_law‖_M / ‖u_before‖_M` (relative error of the post-impact "
              "velocities in the kinetic-energy norm; sweeps: the largest over the sweep). "
-             "`!` marks a flagged run (not a single impact: the engine's status or a "
-             "failed verdict check, docs/verdicts.md), never included in the value; "
-             "`skipped` an engine that did not run. "
+             "`(k!)` counts the flagged runs (not single impacts: the engine's status or a "
+             "failed verdict check, docs/verdicts.md), never included in the value; `*` marks "
+             "a scenario that overrides the engine's settings, `skipped` an engine that did "
+             "not run. "
              "Figures, per-scenario tables and settings: [index.html](index.html); the "
              "paper's Table 3: [paper-table3.md](paper-table3.md).", ""]
     for law in HEADLINE_LAWS:
-        names, values, flagged, skipped = departure_grid(results, law, labels)
+        names = departure_grid(results, law, labels)[0]
         lines += [f"## Departure from {LAW_STYLE[law][2]}", "",
                   "| scenario | " + " | ".join(labels) + " |",
                   "|---|" + "---:|" * len(labels)]
         for i, name in enumerate(names):
-            cells = ["skipped" if skipped[i, j] else
-                     fmt_departure(values[i, j]) + (" !" if flagged[i, j] else "")
-                     for j in range(len(labels))]
+            cells = [departure_cell(cell_records(results, name, label), law)
+                     for label in labels]
             lines.append(f"| {row_name(results, name)} | " + " | ".join(cells) + " |")
         lines.append("")
     gates = prov.get("gates", [])

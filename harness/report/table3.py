@@ -139,64 +139,84 @@ def _fmt(value: float, decimals: int) -> str:
     return f"{value:.{max(decimals, 1) + 1}f}"
 
 
-def write_markdown(rows: list[dict], path: Path, figure_name: str) -> None:
-    lines = ["# Table 3 of Djerassi (2009, Part B) reproduced", ""]
+@dataclass
+class Table3Section:
+    """One block of the reproduced Table 3: a heading, text before and after, and a table.
+
+    Cells are plain text; ``alignments`` holds ``"l"``, ``"r"`` or ``"c"`` per column and
+    ``missed`` the rows whose cell was not reproduced (both pages mark them). The Markdown
+    file and the HTML report are both written from these sections.
+    """
+
+    title: str
+    before: list[str]
+    header: list[str]
+    alignments: list[str]
+    rows: list[list[str]]
+    missed: list[bool]
+    after: list[str]
+
+
+def table3_intro(rows: list[dict]) -> str:
+    """The paragraph above the sections: how many cells reproduce, and the data used."""
     total = sum(len(r["cells"]) for r in rows)
     ok = sum(c.reproduced for r in rows for c in r["cells"])
-    lines += [
-        f"{ok} of {total} printed cells reproduced to the printed digits. Every miss is a known "
-        "erratum of the paper, explained below; the solver follows the paper's equations, not "
-        "its print. Two sleds, data of the paper's Section 5 (m = 3 kg, l = 1 m, s = 0.75 m, "
-        "c = −0.5 m, q3 = π/4, q6 = 7π/4, u1 = u4 = 1 m/s, u3 = u6 = 0.1 rad/s); `t` is chosen "
-        "so that v_t^A ≥ 0, as in the paper.",
-        "",
-        f"![Impulse diagrams of the δ = 0.85 rows]({figure_name})",
-        "",
-    ]
+    return (f"{ok} of {total} printed cells reproduced to the printed digits. Every miss is a "
+            "known erratum of the paper, explained below; the solver follows the paper's "
+            "equations, not its print. Two sleds, data of the paper's Section 5 (m = 3 kg, "
+            "l = 1 m, s = 0.75 m, c = −0.5 m, q3 = π/4, q6 = 7π/4, u1 = u4 = 1 m/s, "
+            "u3 = u6 = 0.1 rad/s); t is chosen so that v_t^A ≥ 0, as in the paper.")
+
+
+def table3_sections(rows: list[dict]) -> list[Table3Section]:
+    """Table 3 as structured sections: every printed row's cells, both Stronge versions, and
+    every law on every configuration."""
+    sections = []
     for entry in rows:
         row = entry["row"]
         law = entry["law"]
-        title = {"newton": "Newton", "poisson": "Poisson", "stronge": "Stronge (the paper's mapping)"}[law]
-        lines.append(
-            f"## {title}, row {entry['index']}: e = {row['e']}, μ = {row['mu']}, γ = {row['gamma']}, "
-            f"δ = {row['delta']}"
-        )
-        lines.append("")
+        title = {"newton": "Newton", "poisson": "Poisson",
+                 "stronge": "Stronge (the paper's mapping)"}[law]
         type_ok = entry["type_printed"] == entry["type_computed"]
-        lines.append(f"Collision type printed {entry['type_printed']}, computed {entry['type_computed']} "
-                     f"({'reproduced' if type_ok else 'NOT reproduced'}).")
-        lines.append("")
-        lines.append("| cell | printed | computed | reproduced | reason for a miss |")
-        lines.append("|---|---:|---:|:---:|---|")
-        for cell in entry["cells"]:
-            mark = "yes" if cell.reproduced else "**no**"
-            lines.append(f"| {CELL_LABELS[cell.name]} | {cell.printed} | {_fmt(cell.computed, cell.decimals)} "
-                         f"| {mark} | {cell.reason} |")
-        lines.append("")
-        if law == "stronge" and not all(c.reproduced for c in entry["cells"] if c.name.startswith("du")):
+        after = []
+        if law == "stronge" and not all(c.reproduced for c in entry["cells"]
+                                        if c.name.startswith("du")):
             residual, best = printed_du_residual(row)
-            lines.append(f"The printed Δu lies {residual:.3f} (kinetic-energy norm, √(ΔuᵀMΔu)) from the "
-                         f"nearest Δu any e_i reaches (e_i = {best:.3f} there); printing rounds Δu by "
-                         "at most 0.0005 per entry.")
-            lines.append("")
-    lines += ["## Both Stronge versions side by side", "",
-              "The paper maps Stronge's e_e to a Poisson e_i by (64)/(67)/(70)/(73)/(74), evaluating "
-              "the normal work as ½ I (v^S + v^A)·n, which is exact only where v_n is linear in the "
-              "normal impulse. The exact energetic law integrates ∫ v_n dP along the piecewise-"
-              "linear impulse path. They agree for forward sliding (type 5) only.", "",
-              "| row | law | type | e_i | Δu | v_n^S | v_t^S | ΔE [J] |", "|---|---|:---:|---:|---|---:|---:|---:|"]
+            after.append(f"The printed Δu lies {residual:.3f} (kinetic-energy norm, √(ΔuᵀMΔu)) "
+                         f"from the nearest Δu any e_i reaches (e_i = {best:.3f} there); "
+                         "printing rounds Δu by at most 0.0005 per entry.")
+        sections.append(Table3Section(
+            title=(f"{title}, row {entry['index']}: e = {row['e']}, μ = {row['mu']}, "
+                   f"γ = {row['gamma']}, δ = {row['delta']}"),
+            before=[(f"Collision type printed {entry['type_printed']}, computed "
+                    f"{entry['type_computed']} ({'reproduced' if type_ok else 'NOT reproduced'}).")],
+            header=["cell", "printed", "computed", "reproduced", "reason for a miss"],
+            alignments=["l", "r", "r", "c", "l"],
+            rows=[[CELL_LABELS[c.name], c.printed, _fmt(c.computed, c.decimals),
+                   "yes" if c.reproduced else "no", c.reason] for c in entry["cells"]],
+            missed=[not c.reproduced for c in entry["cells"]],
+            after=after))
+    stronge_rows = []
     for entry in rows:
         if entry["law"] != "stronge":
             continue
         for hypothesis in ("stronge-paper", "stronge"):
             res = entry["solutions"][hypothesis]
-            du = ", ".join(f"{x:.4f}" for x in res.delta_u)
-            lines.append(f"| {entry['index']} | {hypothesis} | {res.collision_type} | "
-                         f"{res.restitution_poisson:.4f} | ({du}) | {res.vn_separation:.4f} | "
-                         f"{res.vt_separation:.4f} | {res.energy_change:.4f} |")
-    lines += ["", "## All laws on every configuration", "",
-              "| e, μ, γ, δ | law | type | Δu | v_n^S | v_t^S | ΔE [J] |", "|---|---|:---:|---|---:|---:|---:|"]
-    seen = set()
+            stronge_rows.append([str(entry["index"]), hypothesis, str(res.collision_type),
+                                 f"{res.restitution_poisson:.4f}", _fmt_vector(res.delta_u),
+                                 f"{res.vn_separation:.4f}", f"{res.vt_separation:.4f}",
+                                 f"{res.energy_change:.4f}"])
+    sections.append(Table3Section(
+        title="Both Stronge versions side by side",
+        before=[("The paper maps Stronge's e_e to a Poisson e_i by (64)/(67)/(70)/(73)/(74), "
+                "evaluating the normal work as ½ I (v^S + v^A)·n, which is exact only where v_n "
+                "is linear in the normal impulse. The exact energetic law integrates ∫ v_n dP "
+                "along the piecewise-linear impulse path. They agree for forward sliding "
+                "(type 5) only.")],
+        header=["row", "law", "type", "e_i", "Δu", "v_n^S [m/s]", "v_t^S [m/s]", "ΔE [J]"],
+        alignments=["l", "l", "c", "r", "l", "r", "r", "r"],
+        rows=stronge_rows, missed=[False] * len(stronge_rows), after=[]))
+    all_rows, seen = [], set()
     for entry in rows:
         row = entry["row"]
         key = (row["mu"], row["gamma"], row["delta"])
@@ -204,11 +224,42 @@ def write_markdown(rows: list[dict], path: Path, figure_name: str) -> None:
             continue
         seen.add(key)
         for hypothesis, res in entry["solutions"].items():
-            du = ", ".join(f"{x:.4f}" for x in res.delta_u)
-            lines.append(f"| 0.8, {row['mu']}, {row['gamma']}, {row['delta']} | {hypothesis} | "
-                         f"{res.collision_type} | ({du}) | {res.vn_separation:.4f} | "
-                         f"{res.vt_separation:.4f} | {res.energy_change:.4f} |")
-    path.write_text("\n".join(lines) + "\n")
+            all_rows.append([f"0.8, {row['mu']}, {row['gamma']}, {row['delta']}", hypothesis,
+                             str(res.collision_type), _fmt_vector(res.delta_u),
+                             f"{res.vn_separation:.4f}", f"{res.vt_separation:.4f}",
+                             f"{res.energy_change:.4f}"])
+    sections.append(Table3Section(
+        title="All laws on every configuration", before=[],
+        header=["e, μ, γ, δ", "law", "type", "Δu", "v_n^S [m/s]", "v_t^S [m/s]", "ΔE [J]"],
+        alignments=["l", "l", "c", "l", "r", "r", "r"],
+        rows=all_rows, missed=[False] * len(all_rows), after=[]))
+    return sections
+
+
+def _fmt_vector(values) -> str:
+    return "(" + ", ".join(f"{x:.4f}" for x in values) + ")"
+
+
+MARKDOWN_ALIGN = {"l": "---", "r": "---:", "c": ":---:"}
+
+
+def write_markdown(rows: list[dict], path: Path, figure_name: str) -> None:
+    """``paper-table3.md`` from :func:`table3_sections`."""
+    lines = ["# Table 3 of Djerassi (2009, Part B) reproduced", "", table3_intro(rows), "",
+             f"![Impulse diagrams of the δ = 0.85 rows]({figure_name})", ""]
+    for section in table3_sections(rows):
+        lines += [f"## {section.title}", ""]
+        for text in section.before:
+            lines += [text, ""]
+        lines.append("| " + " | ".join(section.header) + " |")
+        lines.append("|" + "|".join(MARKDOWN_ALIGN[a] for a in section.alignments) + "|")
+        for cells, missed in zip(section.rows, section.missed):
+            shown = [f"**{c}**" if missed and c == "no" else c for c in cells]
+            lines.append("| " + " | ".join(shown) + " |")
+        lines.append("")
+        for text in section.after:
+            lines += [text, ""]
+    path.write_text("\n".join(lines).rstrip("\n") + "\n")
 
 
 LAW_STYLES = {  # colour, line style, end marker
@@ -217,22 +268,24 @@ LAW_STYLES = {  # colour, line style, end marker
 }
 
 
-def write_figure(rows: list[dict], path: Path) -> None:
+def write_figure(rows: list[dict], path: Path, metadata: dict | None = None) -> list[Path]:
     """Routh's impulse diagram (the paper's Fig. 1) for the two δ = 0.85 configurations:
-    each law's impulse path, and where the paper's printed Stronge Δu would put the end."""
-    import matplotlib
+    each law's impulse path, and where the paper's printed Stronge Δu would put the end.
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    Written as PNG at ``path`` (with ``metadata``) and as SVG beside it; returns both.
+    """
+    from matplotlib.figure import Figure
 
     configs = [entry for entry in rows if entry["law"] == "stronge" and entry["index"] in (2, 3)]
-    fig, axes = plt.subplots(1, len(configs), figsize=(6.2 * len(configs), 4.8), constrained_layout=True)
-    for ax, entry in zip(np.atleast_1d(axes), configs):
+    fig = Figure(figsize=(6.2 * len(configs), 5.4), layout="constrained")
+    axes = fig.subplots(1, len(configs), squeeze=False)[0]
+    for ax, entry in zip(axes, configs):
         row = entry["row"]
         problem = table3_problem(row)
         mu = float(row["mu"])
-        # The paths share their start; the inset zooms on where each law ends the impact.
-        inset = ax.inset_axes([0.5, 0.1, 0.46, 0.42])
+        # The paths share their start; the inset (upper left, where no path runs) zooms on
+        # where each law ends the impact.
+        inset = ax.inset_axes([0.08, 0.5, 0.4, 0.4])
         ends = []
         for hypothesis, (color, style, marker) in LAW_STYLES.items():
             result = entry["solutions"][hypothesis]
@@ -263,10 +316,13 @@ def write_figure(rows: list[dict], path: Path) -> None:
         ax.set_xlabel("normal impulse $I_n$ [N·s]")
         ax.set_ylabel("tangential impulse $I_t$ [N·s]")
         ax.set_title(f"γ = {row['gamma']}, δ = {row['delta']}, μ = {row['mu']}, e = 0.8")
-        ax.legend(fontsize=8, loc="upper left")
+        ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=3,
+                  frameon=False)
     fig.suptitle("Table 3, two sleds: impulse paths of each law (Routh's graph)")
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    fig.savefig(path, dpi=110, metadata=metadata)
+    svg = path.with_suffix(".svg")
+    fig.savefig(svg, metadata={"Date": None})
+    return [path, svg]
 
 
 def write_report(out_dir: Path) -> tuple[Path, list[dict]]:

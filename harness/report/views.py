@@ -8,7 +8,7 @@ from __future__ import annotations
 import html
 import math
 import re
-from typing import Iterable, Sequence
+from collections.abc import Iterable, Sequence
 
 import numpy as np
 
@@ -26,7 +26,7 @@ LAW_STYLE = {  # colour, line style, label
     "newton-lcp": ("tab:brown", ":", "newton-lcp (engines' law)"),
 }
 ENGINE_STYLE = {"pymunk": ("tab:blue", "o"), "pybullet": ("tab:orange", "s"),
-                "mujoco": ("tab:green", "^")}
+                "mujoco": ("tab:green", "^"), "box2d": ("tab:pink", "P")}
 TYPE_NAMES = {1: "stick in compression", 2: "stick in restitution",
               3: "reverse slide from compression", 4: "reverse slide from restitution",
               5: "forward slide"}
@@ -65,6 +65,32 @@ def slug(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]+", "-", name)
 
 
+# Axis names of the sweep parameters (harness/scenarios/schema.py, BODY_SWEEP_FIELDS).
+PARAMETER_NAMES = {"friction": "friction μ", "restitution": "restitution e"}
+BODY_FIELD_NAMES = {
+    "mass": "mass [kg]", "inertia": "inertia [kg m²]", "angle_deg": "angle [°]",
+    "angular_velocity": "angular velocity ω [rad/s]", "velocity.x": "velocity x [m/s]",
+    "velocity.y": "velocity y [m/s]", "radius": "radius [m]", "length": "length [m]",
+    "width": "width [m]", "height": "height [m]",
+}
+SLED_PARAMETER_NAMES = {"gamma": "steering angle γ [rad]", "delta": "steering angle δ [rad]",
+                        "m": "sled mass m [kg]", "l": "length l [m]", "s": "offset s [m]",
+                        "c": "offset c [m]", "q3": "angle q3 [rad]", "q6": "angle q6 [rad]"}
+
+
+def parameter_name(parameter: str) -> str:
+    """A sweep parameter as an axis label with its unit: ``body.disk.velocity.x`` ->
+    ``disk velocity x [m/s]``, ``friction`` -> ``friction μ``."""
+    if parameter in PARAMETER_NAMES:
+        return PARAMETER_NAMES[parameter]
+    head, _, rest = parameter.partition(".")
+    if head == "body":
+        body, _, field_name = rest.partition(".")
+        if field_name in BODY_FIELD_NAMES:
+            return f"{body} {BODY_FIELD_NAMES[field_name]}"
+    if head == "parameters" and rest in SLED_PARAMETER_NAMES:
+        return SLED_PARAMETER_NAMES[rest]
+    return parameter
 
 
 def escape_html(text) -> str:
@@ -82,21 +108,54 @@ def engine_scenarios(results: Results) -> list[str]:
 
 
 def worst_departure(records: Iterable[Record], law: str) -> tuple[float, bool, bool]:
-    """Largest departure from ``law`` over a scenario's points; (value, any flagged, all skipped).
+    """Largest departure from ``law`` over a scenario's single-impact runs.
 
-    Only ``ok`` runs (single impacts, harness/run/verdicts.py) enter the value: a flagged
-    run is not a departure of the engine from the law; it is shown by the flag and counted.
+    Returns ``(value, flagged, skipped)``. Only ``ok`` runs (single impacts,
+    harness/run/verdicts.py) enter the value: a flagged run is not a departure of the engine
+    from the law; ``flagged`` says that at least one run was flagged (shown by the flag and
+    counted by :func:`flagged_count`), ``skipped`` that every run was skipped.
     """
     records = list(records)
-    values = [r.departure.get(law) for r in records if r.ok]
-    values = [v for v in values if v is not None and math.isfinite(v)]
+    worst = worst_record(records, law)
     flagged = any(not r.ok and not r.skipped for r in records)
     skipped = bool(records) and all(r.skipped for r in records)
-    return (max(values) if values else math.nan), flagged, skipped
+    if worst is None:
+        return math.nan, flagged, skipped
+    return worst.departure[law], flagged, skipped
+
+
+def worst_record(records: Iterable[Record], law: str) -> Record | None:
+    """The single-impact (``ok``) run with the largest finite departure from ``law``."""
+    runs = [r for r in records if r.ok and r.departure.get(law) is not None
+            and math.isfinite(r.departure[law])]
+    return max(runs, key=lambda r: r.departure[law]) if runs else None
+
+
+def flagged_count(records: Iterable[Record]) -> int:
+    """How many runs were flagged (not single impacts); none of them is in a value."""
+    return sum(1 for r in records if not r.ok and not r.skipped)
+
+
+def departure_cell(records: Sequence[Record], law: str) -> str:
+    """A headline cell: the largest departure over the single-impact runs, ``(k!)`` when k
+    runs were flagged (kept out of the value), ``*`` if the scenario overrode the engine's
+    settings."""
+    records = list(records)
+    if not records or all(r.skipped for r in records):
+        return "skipped"
+    value, _, _ = worst_departure(records, law)
+    text = fmt_departure(value) if math.isfinite(value) else "flagged"
+    flagged = flagged_count(records)
+    if flagged:
+        text += f" ({flagged}!)"
+    if any(overrides_of(r) for r in records):
+        text += " *"
+    return text
 
 
 def departure_grid(results: Results, law: str, labels: Sequence[str]):
-    """``(scenarios, values[s, l], flagged[s, l], skipped[s, l])``, max over sweep points."""
+    """``(scenarios, values[s, l], flagged[s, l], skipped[s, l])``, max over sweep points;
+    ``flagged`` marks a cell whose maximum is a run the engine flagged."""
     names = engine_scenarios(results)
     values = np.full((len(names), len(labels)), np.nan)
     flagged = np.zeros_like(values, dtype=bool)
@@ -110,6 +169,64 @@ def departure_grid(results: Results, law: str, labels: Sequence[str]):
             else:
                 skipped[i, j] = True
     return names, values, flagged, skipped
+
+
+def cell_records(results: Results, name: str, label: str) -> list[Record]:
+    """The engine runs of one scenario under one ``engine.preset`` label."""
+    return [r for r in results.for_scenario(name) if r.source != ANALYTIC and r.label == label]
+
+
+# --------------------------------------------------------------------------------------------
+# Settings overrides, notes, verdicts
+# --------------------------------------------------------------------------------------------
+def overrides_of(record: Record) -> dict:
+    """A scenario's ``[engine_settings.<engine>]`` overrides as the runner stored them in the
+    record's diagnostics (``settings_overrides``); {} for a law or a run without any."""
+    return dict((record.diagnostics or {}).get("settings_overrides") or {})
+
+
+def fmt_overrides(overrides: dict) -> str:
+    """``iterations=1, time_step=0.001``; "" for none."""
+    return ", ".join(f"{key}={short_value(value)}" for key, value in overrides.items())
+
+
+def short_value(value) -> str:
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    if isinstance(value, str):
+        return value
+    import json
+
+    return json.dumps(value)
+
+
+def run_label(record: Record) -> str:
+    """A record's label with the scenario's overrides: ``pymunk.defaults [iterations=1]``."""
+    overrides = overrides_of(record)
+    return record.label + (f" [{fmt_overrides(overrides)}]" if overrides else "")
+
+
+def scenario_overrides(records: Iterable[Record]) -> dict[str, dict]:
+    """``engine -> overrides`` of a scenario (what its ``[engine_settings]`` set)."""
+    found: dict[str, dict] = {}
+    for record in records:
+        if record.source != ANALYTIC and overrides_of(record):
+            found.setdefault(record.source, overrides_of(record))
+    return found
+
+
+def run_notes(record: Record) -> list[str]:
+    """The engine's notes on a run (e.g. MuJoCo's "restitution e not used")."""
+    return [str(note) for note in (record.diagnostics or {}).get("notes") or []]
+
+
+def run_verdict(record: Record) -> tuple[str | None, list[str]]:
+    """``(verdict, reasons)`` when the results carry them (the run's verdict is computed by
+    harness/run, never here); ``(None, [])`` for older results."""
+    data = record.diagnostics or {}
+    verdict = getattr(record, "verdict", None) or data.get("verdict")
+    reasons = getattr(record, "reasons", None) or data.get("reasons") or []
+    return verdict, [str(reason) for reason in reasons]
 
 
 def split_rows(results: Results) -> list[dict]:
@@ -136,3 +253,53 @@ def row_name(results: Results, name: str) -> str:
     info = results.scenarios.get(name, {})
     sweep = info.get("sweep")
     return f"{name} (max of {len(sweep['values'])})" if sweep else name
+
+
+# --------------------------------------------------------------------------------------------
+# Why an engine lands where it does (docs/engines.md, per engine): one paragraph per engine
+# and one per preset. Shown in the report beside the numbers.
+# --------------------------------------------------------------------------------------------
+ENGINE_WHY = {
+    "pymunk": (
+        "Chipmunk2D solves the engines' velocity-level law (newton-lcp): within one step it "
+        "iterates impulses until the normal contact velocity is e times the approach speed, "
+        "with Coulomb friction judged at the end state. Its departure from Poisson and "
+        "Stronge is therefore mostly the law itself: wherever the slip stops or reverses "
+        "during the impact, newton-lcp ends elsewhere (docs/engines.md, 'pymunk')."),
+    "pybullet": (
+        "Bullet also solves newton-lcp (projected Gauss–Seidel), but out of the box it adds "
+        "two biases: contacts exist up to 2 cm before touch and the solver then aims at "
+        "e·|v_n| − gap/dt, and restitution is cut to zero below 0.2 m/s; a default contact "
+        "slop and link damping take about 0.2% more. Polygons keep a 1 mm collision margin "
+        "(docs/engines.md, 'pybullet')."),
+    "mujoco": (
+        "MuJoCo has no restitution coefficient: its contact is a soft spring–damper whose "
+        "bounce follows from the damping ratio alone. Friction is soft too: inside the cone "
+        "the slip decays with the same damping, so over the contact friction leaves about e² "
+        "of the slip, and at e = 1 (no damping) there is no friction at all. Its departures "
+        "are this soft contact, not a rigid-body impact law (docs/engines.md, 'MuJoCo')."),
+    "box2d": (
+        "Box2D solves the velocity-level law (newton-lcp) by sequential impulses, like "
+        "pymunk; its measured behaviour is in docs/engines.md, 'Box2D'."),
+}
+PRESET_WHY = {
+    ("pymunk", "defaults"): "10 solver iterations per step: exact on a lone contact, about "
+                            "1e-5 off on coupled contacts (a rod or a box corner).",
+    ("pymunk", "accurate"): "100 iterations: newton-lcp to rounding; only the iterations "
+                            "differ from defaults.",
+    ("pybullet", "defaults"): "Bullet's own defaults: 2 cm contact threshold, 0.2 m/s "
+                              "restitution threshold, contact slop and 0.04 1/s damping, "
+                              "so the bounce depends on where in a step the impact falls.",
+    ("pybullet", "accurate"): "threshold, position-error terms, warm starting and damping "
+                              "off, 100 iterations: newton-lcp to rounding (polygons: the "
+                              "1 mm margin remains).",
+    ("mujoco", "defaults"): "solref [0.02, 1] (critically damped): the scenario's e is not "
+                            "used (a 1 m/s drop bounces at 0.11 m/s for any e), and soft "
+                            "friction turns the body over the 20-step contact.",
+    ("mujoco", "accurate"): "the damping ratio is chosen from e (solref \"restitution\") over "
+                            "a 50-step contact, RK4 integration, impedance 0.9999: the bounce "
+                            "is e·v within 1e-4, but friction still removes only 1 − e² of "
+                            "the slip and none at e = 1.",
+    ("box2d", "defaults"): "Box2D's own defaults.",
+    ("box2d", "accurate"): "settings under which Box2D solves its law as exactly as it can.",
+}

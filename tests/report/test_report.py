@@ -2,16 +2,22 @@
 
 from __future__ import annotations
 
+import json
 import re
+import shutil
 from html.parser import HTMLParser
+from pathlib import Path
 
 import pytest
 
 from harness import report
-from harness.report import html, views
+from harness.report import html, table3, views
 from harness.run import runner
-from harness.run.records import read_results, write_results
+from harness.run.records import ANALYTIC, Record, read_results, write_results
 from harness.scenarios import load_scenarios
+
+LIBRARY = Path(__file__).resolve().parents[2] / "scenarios"
+OVERRIDE = "\n[engine_settings.pymunk]\niterations = 1\n"
 
 
 class Assets(HTMLParser):
@@ -34,22 +40,36 @@ class Assets(HTMLParser):
 @pytest.fixture(scope="module")
 def quick_report(tmp_path_factory):
     out = tmp_path_factory.mktemp("report")
-    # the quick set plus one sweep, so every kind of figure is drawn
-    scenarios = load_scenarios(tags="quick") + load_scenarios(tags="sweep")[:1]
+    # the quick set plus one sweep, so every kind of figure is drawn, and one scenario that
+    # overrides an engine setting (pymunk with a single iteration)
+    extra = tmp_path_factory.mktemp("scenarios")
+    text = (LIBRARY / "disk-oblique.toml").read_text(encoding="utf-8")
+    text = text.replace('name = "disk-oblique"', 'name = "disk-oblique-one-iteration"')
+    (extra / "disk-oblique-one-iteration.toml").write_text(text + OVERRIDE, encoding="utf-8")
+    scenarios = (load_scenarios(tags="quick") + load_scenarios(tags="sweep")[:1]
+                 + load_scenarios(extra))
     outcome = runner.run(scenarios, cache=None, workers=1, log=None)
     path = write_results(out / "results.json", outcome.records, outcome.provenance,
                          outcome.scenarios)
-    (out / "paper-table3.md").write_text(
-        "# Table 3\n\nText with `code`.\n\n![figure](paper-table3.png)\n\n"
-        "| cell | printed |\n|---|---:|\n| Δu1 | -0.209 |\n")
-    (out / "paper-table3.png").write_bytes(b"\x89PNG\r\n\x1a\n")
+    # inputs of the bench and stress pages, as `impact-harness bench` / `stress` write them
+    sources = tmp_path_factory.mktemp("inputs")
+    (sources / "bench").mkdir()
+    (sources / "bench" / "bench.json").write_text(json.dumps(
+        {"provenance": {"python": "3.11"}, "solver": {"laws": {
+            "poisson": {"batch_s": 0.05, "problems_per_s": 2.0e7},
+            "stronge": {"batch_s": 0.06, "problems_per_s": 1.7e7}}}}))
+    (sources / "bench" / "solver-throughput.png").write_bytes(b"\x89PNG\r\n\x1a\n")
+    (sources / "stress").mkdir()
+    (sources / "stress" / "stress.md").write_text(
+        "# Stress report\n\n## Solver\n\n| check | count |\n|---|---|\n| silent non finite | 0 |\n")
+    (sources / "stress" / "engine-grid.png").write_bytes(b"\x89PNG\r\n\x1a\n")
     results = read_results(path)
-    written = report.write_report(results, out)
+    written = report.write_report(results, out, sources=[sources])
     return out, results, written
 
 
 def test_report_writes_the_files(quick_report):
-    out, results, written = quick_report
+    out, _results, written = quick_report
     assert written["html"] == out / "index.html" and written["html"].stat().st_size > 10_000
     assert written["summary"] == out / "summary.md"
     for path in written["figures"]:
@@ -60,34 +80,109 @@ def test_report_writes_the_files(quick_report):
     assert any(n.startswith("sweep-") for n in names)
 
 
-def test_every_image_the_html_references_exists(quick_report):
-    out, results, _ = quick_report
+def test_every_figure_is_also_svg(quick_report):
+    out, _results, written = quick_report
+    for path in written["figures"]:
+        svg = path.with_suffix(".svg")
+        assert svg.is_file() and svg.read_text(encoding="utf-8").lstrip().startswith("<?xml")
+    assert (out / "figures" / "paper-table3.png").is_file()
+
+
+def local_targets(page: Path) -> tuple[list[str], Assets]:
     parser = Assets()
-    parser.feed((out / "index.html").read_text(encoding="utf-8"))
+    parser.feed(page.read_text(encoding="utf-8"))
+    return [*parser.images, *(h for h in parser.links if not h.startswith("#"))], parser
+
+
+def test_every_page_is_self_contained(quick_report):
+    """No external asset, no script, every image and link resolves inside the report."""
+    out, _results, _ = quick_report
+    pages = [out / "index.html", out / "bench.html", out / "stress.html"]
+    for page in pages:
+        targets, parser = local_targets(page)
+        assert parser.scripts == [], page.name
+        for target in targets:
+            assert not re.match(r"^[a-z]+://", target), f"external asset {target}"
+            assert (out / target.split("#")[0]).is_file(), f"{page.name}: missing {target}"
+        for href in parser.links:
+            if href.startswith("#"):
+                assert href[1:] in parser.ids, f"{page.name}: broken anchor {href}"
+    targets, parser = local_targets(out / "index.html")
     assert len(parser.images) >= 5
-    for src in parser.images:
-        assert not re.match(r"^[a-z]+://", src), f"external asset {src}"
-        assert (out / src).is_file(), f"missing {src}"
-    assert parser.scripts == []  # self-contained: no scripts, no stylesheets to fetch
-    for href in parser.links:
-        if href.startswith("#"):
-            assert href[1:] in parser.ids, f"broken anchor {href}"
+    assert "bench.html" in targets and "stress.html" in targets
+
+
+def test_the_report_directory_can_move(quick_report, tmp_path):
+    """`report --out DIR` is self-contained: a copy elsewhere has no broken link."""
+    out, _results, _ = quick_report
+    moved = tmp_path / "moved"
+    shutil.copytree(out, moved)
+    for page in moved.glob("*.html"):
+        for target in local_targets(page)[0]:
+            assert (moved / target.split("#")[0]).is_file(), f"{page.name}: {target}"
 
 
 def test_first_screen_and_contents(quick_report):
     out, results, _ = quick_report
     page = (out / "index.html").read_text(encoding="utf-8")
-    # title, what this is, then the headline heat map before any detail
-    assert page.index("<h1>") < page.index('class="lead"') < page.index("heatmap.png") \
-        < page.index("id='split'") < page.index("id='scenarios'")
+    # title, what this is, the contents, then the headline heat map before any detail
+    assert page.index("<h1>") < page.index('class="lead"') < page.index("class='contents'") \
+        < page.index("heatmap.png") < page.index("id='why'") < page.index("id='split'") \
+        < page.index("id='scenarios'")
     for name in results.scenario_names():
         assert f'id="{views.slug(name)}"' in page
-    assert "Table 3" in page and "<td>-0.209</td>" in page  # the paper's table embedded
+        assert f"href='#{views.slug(name)}'" in page
     assert "Versions and settings" in page and "pybullet" in page
 
 
-def test_summary_has_the_headline_tables(quick_report):
+def test_table3_is_html_from_the_structured_rows(quick_report):
+    out, _, _ = quick_report
+    page = (out / "index.html").read_text(encoding="utf-8")
+    section = page[page.index("id='table3'"):page.index("id='versions'")]
+    assert "|---" not in section and "**" not in section  # no Markdown left
+    printed = table3.load_table3()
+    assert printed and all(f"<td>{row['du1']}</td>" in section for row in printed)
+    rows = table3.reproduce_table3()
+    for sec in table3.table3_sections(rows):
+        assert views.escape_html(sec.title) in section
+    assert section.count("class=\"flag\"") == sum(
+        not c.reproduced for r in rows for c in r["cells"])
+
+
+def test_wide_tables_scroll_inside_the_page(quick_report):
+    out, _, _ = quick_report
+    page = (out / "index.html").read_text(encoding="utf-8")
+    assert ".scroll{overflow-x:auto" in page
+    assert page.count("<table") == page.count('<div class="scroll"><table')
+
+
+def test_why_notes_and_overrides_are_shown(quick_report):
     out, results, _ = quick_report
+    page = (out / "index.html").read_text(encoding="utf-8")
+    why = page[page.index("id='why'"):page.index("id='split'")]
+    for engine in {label.split(".")[0] for label in results.engine_labels()}:
+        assert f"<dt>{engine}</dt>" in why
+    # every note an engine made appears in its scenario's section, beside the run's numbers
+    for record in results.records:
+        for note in views.run_notes(record):
+            section = page[page.index(f'id="{views.slug(record.scenario)}"'):]
+            section = section[:section.index("</div>\n<div class=\"scenario\"")] \
+                if "</div>\n<div class=\"scenario\"" in section else section
+            assert views.escape_html(note) in section, (record.scenario, note)
+    # the overridden scenario: its labels and its section say so, the others do not
+    overridden = page[page.index('id="disk-oblique-one-iteration"'):]
+    assert "pymunk.defaults</b><br><span class='override'>[iterations=1]" in overridden
+    assert "Engine settings overridden by this scenario" in overridden
+    plain = page[page.index('id="disk-oblique"'):page.index('id="disk-oblique-one-iteration"')]
+    assert "[iterations=1]" not in plain
+    summary = (out / "summary.md").read_text(encoding="utf-8")
+    line = next(row for row in summary.splitlines()
+                if row.startswith("| disk-oblique-one-iteration |"))
+    assert line.count("*") >= 1
+
+
+def test_summary_has_the_headline_tables(quick_report):
+    out, _results, _ = quick_report
     summary = (out / "summary.md").read_text(encoding="utf-8")
     assert "## Departure from Poisson" in summary and "## Departure from Stronge" in summary
     assert "| rod-45-slip-reversal |" in summary and "pymunk.accurate" in summary
@@ -108,3 +203,84 @@ def test_formatting():
     assert views.fmt_departure(float("nan")) == "n/a"
     page = html.markdown_to_html("## Head\n\n| a | b |\n|---|---:|\n| 1 | `x` |\n")
     assert "<h3>Head</h3>" in page and "<code>x</code>" in page and "<td>1</td>" not in page
+
+
+def test_sweep_axes_name_the_quantity_and_its_unit():
+    assert views.parameter_name("friction") == "friction μ"
+    assert views.parameter_name("body.disk.velocity.x") == "disk velocity x [m/s]"
+    assert views.parameter_name("body.rod.angle_deg") == "rod angle [°]"
+    assert views.parameter_name("parameters.delta") == "steering angle δ [rad]"
+
+
+def sweep_run(index: int, departure: float, status: str = "ok", overrides=None) -> Record:
+    return Record(scenario="sweep", point={"index": index, "label": f"p={index}",
+                                           "value": float(index)},
+                  source="pybullet", preset="defaults", status=status,
+                  departure={"poisson": departure},
+                  diagnostics={"notes": [], "settings_overrides": overrides or {}})
+
+
+def test_flagged_runs_are_counted_never_in_the_value():
+    # the largest single-impact departure (3%) is the value; the flagged run is counted
+    runs = [sweep_run(0, 0.03), sweep_run(1, 0.01, "multi-contact"), sweep_run(2, 0.02)]
+    assert views.departure_cell(runs, "poisson") == "3% (1!)"
+    assert views.worst_departure(runs, "poisson") == (0.03, True, False)
+    # a flagged run with a larger departure does not become the value
+    runs[1] = sweep_run(1, 0.05, "multi-contact")
+    assert views.departure_cell(runs, "poisson") == "3% (1!)"
+    # every run flagged: no value at all
+    assert views.departure_cell([sweep_run(0, 0.05, "multi-contact")], "poisson") \
+        == "flagged (1!)"
+    # overrides are marked, skipped cells say so
+    assert views.departure_cell([sweep_run(0, 0.03, overrides={"iterations": 1})],
+                                "poisson") == "3% *"
+    assert views.departure_cell([sweep_run(0, 0.03, "skipped: no engine")], "poisson") \
+        == "skipped"
+
+
+def test_run_labels_carry_the_overrides():
+    run = sweep_run(0, 0.03, overrides={"iterations": 1, "time_step": 0.001})
+    assert views.run_label(run) == "pybullet.defaults [iterations=1, time_step=0.001]"
+    assert views.run_label(sweep_run(0, 0.03)) == "pybullet.defaults"
+    law = Record(scenario="s", point={"index": 0, "label": ""}, source=ANALYTIC, law="poisson")
+    assert views.run_label(law) == "poisson" and views.overrides_of(law) == {}
+
+
+def load_screenshot_script():
+    """tests/report/screenshot.py, loaded by path (the tests are not a package)."""
+    import importlib.util
+
+    path = Path(__file__).with_name("screenshot.py")
+    spec = importlib.util.spec_from_file_location("report_screenshot", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.mark.skipif(not Path("/usr/bin/chromium").exists(),
+                    reason="no /usr/bin/chromium: install it (apt-get install -y chromium) to "
+                           "screenshot the report")
+def test_screenshots_at_1400_px_show_no_horizontal_overflow(quick_report, tmp_path):
+    out, _, _ = quick_report
+    script = load_screenshot_script()
+    layouts = script.check_report(out, tmp_path / "shots", width=1400, height=1200)
+    assert set(layouts) == {"index.html", "bench.html", "stress.html"}
+    for name, layout in layouts.items():
+        assert layout["clientWidth"] >= 1300, name  # the window really was 1400 px wide
+        assert layout["scrollWidth"] <= layout["clientWidth"] + 1, (name, layout)
+        assert layout["culprits"] == [], (name, layout["culprits"])
+        shot = Path(layout["screenshot"])
+        assert shot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and shot.stat().st_size > 20_000
+
+
+def test_the_overflow_check_catches_a_wide_page(tmp_path):
+    """The check itself can fail: a table of unbreakable text, wider than the window, outside
+    any scrolling wrapper (what an unwrapped wide table does)."""
+    if not Path("/usr/bin/chromium").exists():
+        pytest.skip("no /usr/bin/chromium: install it (apt-get install -y chromium)")
+    script = load_screenshot_script()
+    (tmp_path / "index.html").write_text(
+        "<!DOCTYPE html><html><body><table><tr><td style='white-space:nowrap'>"
+        + "wide " * 600 + "</td></tr></table></body></html>", encoding="utf-8")
+    layout = script.check_report(tmp_path, tmp_path / "shots", height=400)["index.html"]
+    assert layout["overflow"] and layout["scrollWidth"] > 2000 and layout["culprits"]

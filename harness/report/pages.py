@@ -1,0 +1,155 @@
+"""The report's further pages: the benchmarks (``bench.html``) and the stress test
+(``stress.html``), rendered from what ``impact-harness bench`` and ``impact-harness stress``
+wrote (``bench.json`` in ``bench/``, ``stress.md`` in ``stress/``) when those files exist.
+
+Their figures are copied into ``<out>/bench/`` and ``<out>/stress/`` so that the report
+directory stays self-contained whatever directory the inputs came from.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+from collections.abc import Sequence
+from pathlib import Path
+
+from harness.report.html import html_table, markdown_to_html, page_head
+from harness.report.views import escape_html
+
+BENCH_PAGE, STRESS_PAGE = "bench.html", "stress.html"
+PAGE_TITLES = {BENCH_PAGE: "Benchmarks: speed and accuracy",
+               STRESS_PAGE: "Stress test: the solver and the engines at extremes"}
+
+
+def find_input(kind: str, file: str, sources: Sequence[Path]) -> Path | None:
+    """The first ``<source>/<kind>/<file>`` that exists."""
+    for source in sources:
+        path = Path(source) / kind / file
+        if path.is_file():
+            return path
+    return None
+
+
+def copy_figures(source_dir: Path, target_dir: Path) -> list[str]:
+    """Copy the PNG (and SVG) figures of ``source_dir`` into ``target_dir``; PNG names."""
+    target_dir.mkdir(parents=True, exist_ok=True)
+    names = []
+    for figure in sorted(source_dir.glob("*.png")) + sorted(source_dir.glob("*.svg")):
+        target = target_dir / figure.name
+        if figure.resolve() != target.resolve():
+            shutil.copyfile(figure, target)
+        if figure.suffix == ".png":
+            names.append(figure.name)
+    return names
+
+
+def fmt_value(value) -> str:
+    """A JSON value as a short cell."""
+    if isinstance(value, bool) or value is None:
+        return "–" if value is None else ("yes" if value else "no")
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            return "nan"
+        return f"{value:.4g}"
+    if isinstance(value, (dict, list)):
+        return escape_html(json.dumps(value))
+    return escape_html(value)
+
+
+def is_scalar(value) -> bool:
+    return not isinstance(value, (dict, list))
+
+
+def json_html(data, title: str, level: int = 2) -> list[str]:
+    """A JSON tree as headings and tables: scalars in a key/value table, a list of records
+    as one table, a dict whose values are all flat records as one table keyed by name."""
+    heading = f"h{min(level, 6)}"
+    parts = [f"<{heading}>{escape_html(title)}</{heading}>"] if title else []
+    if isinstance(data, list):
+        if data and all(isinstance(item, dict) for item in data):
+            columns = list(dict.fromkeys(key for item in data for key, value in item.items()
+                                         if is_scalar(value)))
+            parts.append(html_table(columns, [[fmt_value(item.get(c)) for c in columns]
+                                              for item in data], left=0))
+        else:
+            parts.append(f"<p>{fmt_value(data)}</p>")
+        return parts
+    if not isinstance(data, dict):
+        return parts + [f"<p>{fmt_value(data)}</p>"]
+    scalars = {k: v for k, v in data.items() if is_scalar(v)}
+    if scalars:
+        parts.append(html_table(["item", "value"], [[escape_html(k), fmt_value(v)]
+                                                    for k, v in scalars.items()], left=2))
+    nested = {k: v for k, v in data.items() if not is_scalar(v)}
+    flat_records = nested and all(isinstance(v, dict) and all(map(is_scalar, v.values()))
+                                  for v in nested.values())
+    if flat_records and len(nested) > 1:
+        columns = list(dict.fromkeys(key for value in nested.values() for key in value))
+        parts.append(html_table(["name", *columns],
+                                [[escape_html(name), *(fmt_value(value.get(c)) for c in columns)]
+                                 for name, value in nested.items()]))
+        return parts
+    for key, value in nested.items():
+        parts += json_html(value, str(key), level + 1)
+    return parts
+
+
+def figures_html(directory: str, names: Sequence[str]) -> str:
+    return "\n".join(f'<figure><img src="{directory}/{escape_html(name)}" '
+                     f'alt="{escape_html(name)}"><figcaption>{escape_html(name)}</figcaption>'
+                     "</figure>" for name in names)
+
+
+def write_page(out_dir: Path, file: str, body: Sequence[str]) -> Path:
+    title = PAGE_TITLES[file]
+    parts = [page_head(title), ("<p class='back'><a href='index.html'>← back to the report</a>"
+             "</p>"), f"<h1>{escape_html(title)}</h1>", *body,
+             "<p class='back'><a href='index.html'>← back to the report</a></p></body></html>"]
+    path = out_dir / file
+    path.write_text("\n".join(parts), encoding="utf-8")
+    return path
+
+
+def write_bench_page(bench_json: Path, out_dir: Path) -> Path:
+    """``bench.html`` from ``bench.json`` and the figures beside it."""
+    data = json.loads(bench_json.read_text(encoding="utf-8"))
+    names = copy_figures(bench_json.parent, out_dir / "bench")
+    body = [("<p>Written by <code>impact-harness bench</code>; machine-readable: "
+            "<a href='bench/bench.json'>bench.json</a>.</p>"), figures_html("bench", names)]
+    copy = out_dir / "bench" / "bench.json"
+    if bench_json.resolve() != copy.resolve():
+        shutil.copyfile(bench_json, copy)
+    scalars = {key: value for key, value in data.items() if is_scalar(value)}
+    if scalars:  # top-level flags (quick …) in one table, not a heading each
+        body += json_html(scalars, "this run", 2)
+    for key, value in data.items():
+        if not is_scalar(value):
+            body += json_html(value, key.replace("_", " "), 2)
+    return write_page(out_dir, BENCH_PAGE, body)
+
+
+def write_stress_page(stress_md: Path, out_dir: Path) -> Path:
+    """``stress.html`` from ``stress.md`` and the figures beside it."""
+    names = copy_figures(stress_md.parent, out_dir / "stress")
+    text = stress_md.read_text(encoding="utf-8")
+    lines = text.splitlines()
+    if lines and lines[0].startswith("# "):  # the page has its own title
+        text = "\n".join(lines[1:])
+    body = [markdown_to_html(text, heading_shift=1), "<h2>Figures</h2>",
+            figures_html("stress", names)]
+    return write_page(out_dir, STRESS_PAGE, body)
+
+
+def write_pages(out_dir: Path, sources: Sequence[Path]) -> dict[str, str]:
+    """Write the pages whose inputs exist; ``{file: title}`` of those written."""
+    written = {}
+    bench = find_input("bench", "bench.json", [out_dir, *sources])
+    if bench is not None:
+        write_bench_page(bench, out_dir)
+        written[BENCH_PAGE] = PAGE_TITLES[BENCH_PAGE]
+    stress = find_input("stress", "stress.md", [out_dir, *sources])
+    if stress is not None:
+        write_stress_page(stress, out_dir)
+        written[STRESS_PAGE] = PAGE_TITLES[STRESS_PAGE]
+    return written
