@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 from harness.report.views import (
@@ -12,6 +13,15 @@ from harness.report.views import (
     row_name,
 )
 from harness.run.records import ANALYTIC, Results
+
+_MARKDOWN_SPECIAL = re.compile(r"([\\`*_{}\[\]()#+!|~])")
+
+
+def escape(text) -> str:
+    """``text`` as literal Markdown: special characters backslash-escaped, ``<``/``>``/``&``
+    as entities, line breaks as spaces (a name from results.json cannot format the page)."""
+    text = str(text).replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+    return _MARKDOWN_SPECIAL.sub(r"\\\1", " ".join(text.splitlines()))
 
 
 def write_summary(results: Results, out_dir: Path) -> Path:
@@ -33,7 +43,7 @@ def write_summary(results: Results, out_dir: Path) -> Path:
             cells = ["skipped" if skipped[i, j] else
                      fmt_departure(values[i, j]) + (" !" if flagged[i, j] else "")
                      for j in range(len(labels))]
-            lines.append(f"| {row_name(results, name)} | " + " | ".join(cells) + " |")
+            lines.append(f"| {escape(row_name(results, name))} | " + " | ".join(cells) + " |")
         lines.append("")
     gates = prov.get("gates", [])
     lines += ["## Gates", ""]
@@ -41,15 +51,16 @@ def write_summary(results: Results, out_dir: Path) -> Path:
         lines += ["| scenario | gate | record | law | departure | max | result |",
                   "|---|---|---|---|---:|---:|---|"]
         for g in gates:
-            lines.append(f"| {g['scenario']} | {g['gate']} | {g['record']} | {g['law']} | "
+            lines.append(f"| {escape(g['scenario'])} | {escape(g['gate'])} | "
+                         f"{escape(g['record'])} | {escape(g['law'])} | "
                          f"{fmt_departure(g['departure'])} | {fmt_departure(g['max_departure'])}"
-                         f" | {g['status']} |")
+                         f" | {escape(g['status'])} |")
     else:
         lines.append("No gates in this run.")
     flagged = [r for r in results.records if r.source != ANALYTIC and not r.ok]
     lines += ["", "## Runs not ok", ""]
-    lines += [f"- {r.scenario} {r.point['label']} {r.label}: {r.status}" for r in flagged] or [
-        "None."]
+    lines += [f"- {escape(r.scenario)} {escape(r.point['label'])} {escape(r.label)}: "
+              f"{escape(r.status)}" for r in flagged] or ["None."]
     versions = prov.get("versions", {})
     git = prov.get("git", {})
     lines += ["", "## Versions", "",

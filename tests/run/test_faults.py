@@ -39,7 +39,8 @@ def run_cli(*argv, cwd=None, env=None, timeout=120):
     environment = dict(os.environ, PYTHONPATH=f"{ROOT / 'src'}{os.pathsep}{ROOT}")
     environment.update(env or {})
     done = subprocess.run([sys.executable, "-m", "harness.cli", *map(str, argv)], cwd=cwd,
-                          env=environment, capture_output=True, text=True, timeout=timeout)
+                          env=environment, capture_output=True, text=True, timeout=timeout,
+                          check=False)
     return done.returncode, done.stdout, done.stderr
 
 
@@ -221,7 +222,7 @@ def test_report_never_deletes_what_it_did_not_write(tmp_path):
 def test_report_on_a_broken_results_file_names_it(tmp_path):
     broken = tmp_path / "broken.json"
     broken.write_text('{"format": "impact-harness-results", "records": [', encoding="utf-8")
-    status, out, err = run_cli("report", "--results", broken, "--out", tmp_path / "out")
+    status, _, err = run_cli("report", "--results", broken, "--out", tmp_path / "out")
     assert status == 2
     assert str(broken) in err and "Traceback" not in err
 
@@ -248,8 +249,8 @@ HOSTILE = {  # file name -> (replace this line of disk-direct.toml, by this, key
                              "restitution"),
     "angle-huge-int": ("mass = 1.0", "mass = 1.0\nangle_deg = 1" + "0" * 400,
                        "body.disk.angle_deg"),
-    "gate-huge-int": ("[expect]", '[expect]\ngate."pymunk.accurate" = { law = "poisson", '
-                      'max_departure = 1' + "0" * 400 + " }",
+    "gate-huge-int": ("[expect]", ('[expect]\ngate."pymunk.accurate" = { law = "poisson", '
+                                   'max_departure = 1' + "0" * 400 + " }"),
                       "expect.gate.pymunk.accurate.max_departure"),
     "radius-huge": ("radius = 0.1", "radius = 1e300", "body.disk.radius"),
     "mass-huge": ("mass = 1.0", "mass = 1e300", "body.disk.mass"),
@@ -257,14 +258,14 @@ HOSTILE = {  # file name -> (replace this line of disk-direct.toml, by this, key
     "mass-subnormal": ("mass = 1.0", "mass = 5e-324", "body.disk.mass"),
     "velocity-huge": ("velocity = [0.0, -1.0]", "velocity = [0.0, -1e300]",
                       "body.disk.velocity[1]"),
-    "sweep-1e8": ("[expect]", "[sweep]\nparameter = \"friction\"\n"
-                  "values = { start = 0.0, stop = 1.0, num = 100000000 }\n[expect]",
+    "sweep-1e8": ("[expect]", ("[sweep]\nparameter = \"friction\"\n"
+                               "values = { start = 0.0, stop = 1.0, num = 100000000 }\n[expect]"),
                   "sweep.values.num"),
     "sweep-listed": ("[expect]", "[sweep]\nparameter = \"friction\"\nvalues = ["
                      + ", ".join(str(i / 200000) for i in range(200000)) + "]\n[expect]",
                      "sweep.values"),
-    "steps-forever": ("[expect]", "[engine_settings.pymunk]\nmax_steps = 1000000000\n"
-                      "time_step = 1e-300\n[expect]", "engine_settings.pymunk."),
+    "steps-forever": ("[expect]", ("[engine_settings.pymunk]\nmax_steps = 1000000000\n"
+                                   "time_step = 1e-300\n[expect]"), "engine_settings.pymunk."),
 }
 
 
@@ -330,7 +331,7 @@ def test_hostile_files_exit_2_and_the_good_ones_are_still_processed(tmp_path, co
 def test_a_bad_cache_entry_is_a_reported_miss(tmp_path, damage):
     cache = ResultCache(tmp_path)
     clean = engine_outputs(sweep_run(cache))
-    entry = sorted(tmp_path.rglob("*.json"))[0]
+    entry = min(tmp_path.rglob("*.json"))
     stored = json.loads(entry.read_text(encoding="utf-8"))
     record = stored["record"]
     if damage == "velocities-not-a-list":
@@ -437,7 +438,10 @@ def test_bad_arguments_are_one_line_and_exit_2_before_any_work(tmp_path, monkeyp
     def no_work(*args, **kwargs):
         raise AssertionError("scenarios loaded before the arguments were checked")
 
+    from harness.scenarios import library
+
     monkeypatch.setattr(runner, "select_scenarios", no_work)
+    monkeypatch.setattr(library, "load_scenarios_reporting", no_work)
     extra = () if option == "--json" else ("--json", str(tmp_path / "r.json"))
     status = cli.main(["run", str(DISK), option, value, *extra])
     err = capsys.readouterr().err
