@@ -712,7 +712,8 @@ def selection_of(args) -> dict:
     files = getattr(args, "files", None) or None
     tags = parse_tags_text(args.tags)
     return {"files": None if files is None else sorted(str(Path(f).resolve()) for f in files),
-            "tags": tags, "engines": list(parse_engines(args.engines)),
+            "tags": tags,
+            "engines": [name for name in ENGINES if name in parse_engines(args.engines)],
             "presets": list(parse_presets(args.preset))}
 
 
