@@ -133,6 +133,26 @@ def test_deleting_the_cache_mid_run_the_run_completes(tmp_path, monkeypatch):
     assert engine_outputs(outcome) == clean
 
 
+def test_a_shard_removed_between_mkdir_and_the_write_is_made_again(tmp_path, monkeypatch):
+    """The race of `rm -rf` during a run: the directory vanishes after put's mkdir."""
+    import tempfile
+
+    real_mkstemp = tempfile.mkstemp
+    removed = []
+
+    def remove_first(*args, **kwargs):
+        if not removed:
+            removed.append(True)
+            shutil.rmtree(tmp_path / "cache")
+        return real_mkstemp(*args, **kwargs)
+
+    cache = ResultCache(tmp_path / "cache")
+    key = cache.key({"n": 1})
+    monkeypatch.setattr(tempfile, "mkstemp", remove_first)
+    cache.put(key, {"status": "ok"})
+    assert removed and cache.get(key) == {"status": "ok"}
+
+
 def test_a_cache_that_cannot_be_written_costs_the_cache_not_the_run(tmp_path, monkeypatch):
     def refuse(self, key, record):
         raise PermissionError(13, "Permission denied", str(self.root))
