@@ -29,4 +29,4 @@ stress: $(STAMP)
 	$(BIN)/impact-harness stress --quick
 
 clean:
-	rm -rf $(VENV) .pytest_cache .hypothesis
+	rm -rf $(VENV) .pytest_cache .hypothesis .cache

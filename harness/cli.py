@@ -3,13 +3,28 @@
 Each command lives in its own module, which provides ``add_arguments(parser)`` and
 ``main(args) -> int``. Only the chosen command's module is imported, so ``impact-harness
 paper`` never pays for importing an engine or a plotting library it does not use.
+
+Exit status of every command:
+
+* 0 -- done, every check passed;
+* 1 -- done, but a check failed: a scenario's ``[expect.gate]`` (``run``, ``suite``) or an
+  unexplained Table 3 miss (``suite``);
+* 2 -- bad input: an option, a scenario file (each bad file is one line naming the file,
+  the key, the value and what is allowed; the good files are still processed) or a results
+  file; nothing is written that the input could not support;
+* 3 -- internal error: a bug in the harness (one line on stderr; set
+  ``IMPACT_HARNESS_TRACEBACK=1`` for the traceback). Finished engine runs stay in the cache.
+
+130 after Ctrl-C, as usual for a shell.
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
+import traceback
 
 # command name -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -25,17 +40,27 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "stress": ("harness.stress", "numerical stress of the solver and the engines"),
     "findings": ("harness.report.findings", "re-measure the README's findings on the laws"),
     "survey": ("harness.survey.cli", "departure distributions over families of impacts"),
+    "cache": ("harness.run.cache", "the result cache: info (where, how big), prune, clear"),
 }
+
+EXIT_STATUS_HELP = """exit status:
+  0 done, every check passed
+  1 done, but a gate (or, for suite, an unexplained Table 3 miss) failed
+  2 bad input: an option, a scenario file or a results file (one line each)
+  3 internal error: a bug in the harness (IMPACT_HARNESS_TRACEBACK=1 shows it)"""
 
 
 def build_parser(command: str | None) -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="impact-harness",
         description="Validation harness for planar rigid-body impact with friction.",
+        epilog=EXIT_STATUS_HELP, formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name, (module_name, help_text) in COMMANDS.items():
-        sub = subparsers.add_parser(name, help=help_text, description=help_text)
+        sub = subparsers.add_parser(name, help=help_text, description=help_text,
+                                    epilog=EXIT_STATUS_HELP,
+                                    formatter_class=argparse.RawDescriptionHelpFormatter)
         if name == command:
             module = importlib.import_module(module_name)
             add = getattr(module, f"add_{name}_arguments", None) or module.add_arguments
@@ -48,11 +73,22 @@ def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     command = next((arg for arg in argv if not arg.startswith("-")), None)
     parser = build_parser(command if command in COMMANDS else None)
-    args = parser.parse_args(argv)
+    args = parser.parse_args(argv)  # argparse exits with 2 on a bad option
     if getattr(args, "handler", None) is None:
         parser.print_help()
         return 2
-    return int(args.handler(args) or 0)
+    try:
+        return int(args.handler(args) or 0)
+    except KeyboardInterrupt:
+        print("impact-harness: interrupted; finished engine runs are in the cache",
+              file=sys.stderr)
+        return 130
+    except Exception as error:  # noqa: BLE001 - any bug: one line, the traceback on request
+        if os.environ.get("IMPACT_HARNESS_TRACEBACK"):
+            traceback.print_exc()
+        print(f"impact-harness {args.command}: internal error: {type(error).__name__}: {error} "
+              "(a bug; set IMPACT_HARNESS_TRACEBACK=1 for the traceback)", file=sys.stderr)
+        return 3
 
 
 if __name__ == "__main__":  # pragma: no cover

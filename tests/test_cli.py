@@ -99,8 +99,8 @@ def test_report_command(capsys, tmp_path):
 
 
 def test_report_without_results(capsys, tmp_path):
-    code, out, _ = cli(capsys, "report", "--results", tmp_path / "none.json", "--out", tmp_path)
-    assert code == 2 and "no results file" in out
+    code, _, err = cli(capsys, "report", "--results", tmp_path / "none.json", "--out", tmp_path)
+    assert code == 2 and "no results file" in err
 
 
 def test_suite_quick(capsys, tmp_path):

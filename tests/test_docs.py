@@ -34,6 +34,6 @@ def test_readme_layout_table_matches_the_tree():
     missing = sorted(path for path in listed if not (root / path).exists())
     assert not missing, f"the layout table lists paths that do not exist: {missing}"
     packages = {f"harness/{p.parent.name}/" for p in (root / "harness").glob("*/__init__.py")}
-    folders = {"src/planar_impact/", "scenarios/", "docs/", "reports/", "tests/"}
+    folders = {"src/planar_impact/", "scenarios/", "populations/", "docs/", "reports/", "tests/"}
     unlisted = sorted((packages | folders) - listed)
     assert not unlisted, f"the layout table misses {unlisted}"

@@ -24,6 +24,8 @@ swept parameter with the Poisson type boundaries marked; Table 3; versions and s
 from __future__ import annotations
 
 import argparse
+import json
+import sys
 import time
 from collections.abc import Sequence
 from pathlib import Path
@@ -93,12 +95,36 @@ def write_report(results: Results, out_dir: Path | str,
     wanted = {figures.get("heatmap"), figures.get("table3"), figures.get("split"), figures.get("legend"),
               *figures["impulse"].values(),
               *figures["sweep"].values()}
-    for stale in figure_dir.glob("*.png"):  # figures of scenarios no longer in the results
-        if stale.name not in wanted:
-            stale.unlink()
+    wanted.discard(None)
+    # every figure is drawn as PNG and SVG: both are this report's
+    wanted |= {str(Path(name).with_suffix(".svg")) for name in wanted}
+    _remove_stale_figures(figure_dir, wanted)
     html_path = write_html(results, out_dir, figures, rows, pages)
     summary = write_summary(results, out_dir)
-    return {"html": html_path, "summary": summary, "figures": sorted(figure_dir / f for f in wanted if f)}
+    return {"html": html_path, "summary": summary,
+            "figures": sorted(figure_dir / f for f in wanted if f.endswith(".png"))}
+
+
+#: The figures a report wrote into its directory; only these may be removed by a later report.
+WRITTEN = ".written-by-report.json"
+
+
+def _remove_stale_figures(figure_dir: Path, wanted: set) -> None:
+    """Remove the figures an earlier report wrote here that this one no longer draws.
+
+    Only names listed in :data:`WRITTEN` (by an earlier report) are ever removed: a file the
+    report did not write -- someone's figure, a tracked file -- stays.
+    """
+    manifest = figure_dir / WRITTEN
+    try:
+        written_before = set(json.loads(manifest.read_text(encoding="utf-8")))
+    except (OSError, ValueError, TypeError):
+        written_before = set()
+    for name in sorted(written_before - wanted):
+        stale = figure_dir / name
+        if Path(name).name == name and stale.suffix in (".png", ".svg"):  # only figures/
+            stale.unlink(missing_ok=True)
+    manifest.write_text(json.dumps(sorted(wanted), indent=0) + "\n", encoding="utf-8")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -111,8 +137,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def main(args) -> int:
     try:
         results = read_results(args.results)
-    except (FileNotFoundError, ValueError) as error:
-        print(f"impact-harness report: {error}")
+    except (FileNotFoundError, ValueError) as error:  # the message names the file
+        print(f"impact-harness report: {error}", file=sys.stderr)
         return 2
     start = time.perf_counter()
     written = write_report(results, args.out, sources=[args.results.parent, Path("reports")])

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 from harness.report.views import (
@@ -15,6 +16,15 @@ from harness.report.views import (
 )
 from harness.run.records import ANALYTIC, Results
 from harness.run.verdicts import reason_counts
+
+_MARKDOWN_SPECIAL = re.compile(r"([\\`*_{}\[\]()#+!|~])")
+
+
+def escape(text) -> str:
+    """``text`` as literal Markdown: special characters backslash-escaped, ``<``/``>``/``&``
+    as entities, line breaks as spaces (a name from results.json cannot format the page)."""
+    text = str(text).replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+    return _MARKDOWN_SPECIAL.sub(r"\\\1", " ".join(text.splitlines()))
 
 
 def write_summary(results: Results, out_dir: Path) -> Path:
@@ -38,7 +48,7 @@ def write_summary(results: Results, out_dir: Path) -> Path:
         for i, name in enumerate(names):
             cells = [departure_cell(cell_records(results, name, label), law)
                      for label in labels]
-            lines.append(f"| {row_name(results, name)} | " + " | ".join(cells) + " |")
+            lines.append(f"| {escape(row_name(results, name))} | " + " | ".join(cells) + " |")
         lines.append("")
     gates = prov.get("gates", [])
     lines += ["## Gates", ""]
@@ -46,9 +56,10 @@ def write_summary(results: Results, out_dir: Path) -> Path:
         lines += ["| scenario | gate | record | law | departure | max | result |",
                   "|---|---|---|---|---:|---:|---|"]
         for g in gates:
-            lines.append(f"| {g['scenario']} | {g['gate']} | {g['record']} | {g['law']} | "
+            lines.append(f"| {escape(g['scenario'])} | {escape(g['gate'])} | "
+                         f"{escape(g['record'])} | {escape(g['law'])} | "
                          f"{fmt_departure(g['departure'])} | {fmt_departure(g['max_departure'])}"
-                         f" | {g['status']} |")
+                         f" | {escape(g['status'])} |")
     else:
         lines.append("No gates in this run.")
     flagged = [r for r in results.records if r.source != ANALYTIC and not r.ok]
@@ -59,8 +70,9 @@ def write_summary(results: Results, out_dir: Path) -> Path:
               f"impacts; runs per reason (a run can fail several checks):", ""]
     lines += [f"- {name}: {count}" for name, count in sorted(counts.items())] or ["- none"]
     lines += ["", "## Runs not ok", ""]
-    lines += [f"- {r.scenario} {r.point['label']} {r.label}: {r.status}"
-              + (f" ({', '.join(r.failing_reasons)})" if r.failing_reasons else "")
+    lines += [f"- {escape(r.scenario)} {escape(r.point['label'])} {escape(r.label)}: "
+              f"{escape(r.status)}"
+              + (f" ({escape(', '.join(r.failing_reasons))})" if r.failing_reasons else "")
               for r in flagged] or ["None."]
     versions = prov.get("versions", {})
     git = prov.get("git", {})

@@ -1,11 +1,18 @@
 """Content-addressed cache of results: rerunning an unchanged suite does no engine work.
 
+Home: :func:`default_cache_dir` -- ``$IMPACT_HARNESS_CACHE_DIR`` when set, else
+``.cache/results`` under the project root (the checkout holding ``pyproject.toml``; ``make
+clean`` removes it), else, for an installed harness, ``$XDG_CACHE_HOME/impact-harness``
+(``~/.cache/impact-harness``). Never the working directory. Bounded by ``impact-harness cache
+prune`` (entries written by other code, or older than ``--older-than`` days) and ``cache
+clear``; ``cache info`` shows the size.
+
 A record is stored under the key ``sha256(canonical JSON of the payload + code version)``,
 where the payload names everything the result depends on (scenario, sweep point, engine and
 its version, settings ...) and :func:`code_version` hashes the source of ``planar_impact``
 and ``harness`` (engines included), so any code change invalidates every entry::
 
-    cache = ResultCache()                     # .cache/results, or enabled=False for --no-cache
+    cache = ResultCache()                     # default_cache_dir(), or enabled=False for --no-cache
     key = cache.key({"scenario": name, "point": 3, "engine": "pymunk", "version": v, "settings": s})
     record = cache.get(key)
     if record is None:
@@ -14,7 +21,10 @@ and ``harness`` (engines included), so any code change invalidates every entry::
 
 Files: one JSON file per key at ``root/<key[:2]>/<key>.json``, written atomically (a
 temporary file in the same directory, then ``os.replace``), so concurrent writers and an
-interrupted run never leave a half-written entry. An unreadable or corrupted file is a miss.
+interrupted run never leave a half-written entry; a temporary left by a killed writer is
+removed by the next run (:meth:`ResultCache.clean_temporaries`). An unreadable or corrupted
+file is a miss, and so is an entry the caller's ``check`` rejects (a record without finite
+velocities of the right shape): both are listed in :attr:`ResultCache.rejected`.
 """
 
 from __future__ import annotations
@@ -23,7 +33,9 @@ import hashlib
 import json
 import math
 import os
+import sys
 import tempfile
+import time
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
@@ -32,6 +44,22 @@ _HARNESS_DIR = Path(__file__).resolve().parent.parent  # harness/, from harness/
 _SOURCE_DIRS: tuple[Path, ...] = (_HARNESS_DIR.parent / "src" / "planar_impact", _HARNESS_DIR)
 
 CACHE_FORMAT = 1  # bump when the record layout changes
+#: Environment variable that moves the cache (tests, shared machines).
+CACHE_DIR_VARIABLE = "IMPACT_HARNESS_CACHE_DIR"
+#: A temporary file older than this (s) belongs to a writer that died: removed.
+STALE_TEMPORARY_S = 60.0
+
+
+def default_cache_dir() -> Path:
+    """The cache's one home; see the module docstring."""
+    override = os.environ.get(CACHE_DIR_VARIABLE)
+    if override:
+        return Path(override).expanduser().resolve()
+    project = _HARNESS_DIR.parent
+    if (project / "pyproject.toml").is_file():
+        return project / ".cache" / "results"
+    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(base) / "impact-harness"
 
 
 def _source_dirs() -> tuple[Path, ...]:
@@ -96,20 +124,22 @@ class ResultCache:
     Parameters
     ----------
     root
-        Directory of the cache (created on the first ``put``).
+        Directory of the cache (created on the first ``put``); default
+        :func:`default_cache_dir`.
     enabled
         ``False`` (the runner's ``--no-cache``): ``get`` always misses, ``put`` writes nothing.
     version
         Code version mixed into every key (default: :func:`code_version`); tests pass their own.
     """
 
-    def __init__(self, root: Path | str = Path(".cache/results"), enabled: bool = True,
+    def __init__(self, root: Path | str | None = None, enabled: bool = True,
                  version: str | None = None):
-        self.root = Path(root)
+        self.root = default_cache_dir() if root is None else Path(root)
         self.enabled = bool(enabled)
         self.version = code_version() if version is None else version
         self.hits = 0
         self.misses = 0
+        self.rejected: list[str] = []  # "<entry path>: <why>" of entries read as a miss
 
     def key(self, payload: dict) -> str:
         """sha256 hex of the canonical JSON of ``payload`` plus the code version."""
@@ -119,30 +149,54 @@ class ResultCache:
     def path(self, key: str) -> Path:
         return self.root / key[:2] / f"{key}.json"
 
-    def get(self, key: str) -> dict | None:
-        """The stored record, or ``None`` (a miss) when absent, disabled or unreadable."""
+    def get(self, key: str, check=None) -> dict | None:
+        """The stored record, or ``None`` (a miss) when absent, disabled or unreadable.
+
+        ``check(record)`` returns ``None`` for a usable record or a reason it is not; a
+        rejected or unreadable entry is a miss and is listed in :attr:`rejected`.
+        """
         if not self.enabled:
             self.misses += 1
             return None
+        path = self.path(key)
         try:
-            with open(self.path(key), encoding="utf-8") as handle:
+            with open(path, encoding="utf-8") as handle:
                 stored = json.load(handle)
             if not isinstance(stored, dict) or stored.get("key") != key or not isinstance(stored.get("record"), dict):
                 raise ValueError("not a cache entry")
-        except (OSError, ValueError):
+            reason = None if check is None else check(stored["record"])
+            if reason is not None:
+                raise ValueError(reason)
+        except FileNotFoundError:
+            self.misses += 1
+            return None
+        except (OSError, ValueError) as error:  # UnicodeDecodeError is a ValueError
+            self.rejected.append(f"{path}: {error}")
             self.misses += 1
             return None
         self.hits += 1
         return stored["record"]
 
     def put(self, key: str, record: dict) -> None:
-        """Store ``record`` (JSON-able dict) under ``key``; atomic; no-op when disabled."""
+        """Store ``record`` (JSON-able dict) under ``key``; atomic; no-op when disabled.
+
+        Raises ``OSError`` when the entry cannot be written (the caller decides whether that
+        matters); a shard directory removed under a running writer is made again once.
+        """
         if not self.enabled:
             return
         path = self.path(key)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        text = json.dumps({"key": key, "record": record}, default=_json_default)
-        descriptor, temporary = tempfile.mkstemp(prefix=f".{key[:8]}-", suffix=".tmp", dir=path.parent)
+        text = json.dumps({"key": key, "code_version": self.version, "record": record},
+                          default=_json_default)
+        for attempt in (1, 2):
+            path.parent.mkdir(parents=True, exist_ok=True)
+            try:
+                descriptor, temporary = tempfile.mkstemp(prefix=f".{key[:8]}-", suffix=".tmp",
+                                                         dir=path.parent)
+                break
+            except FileNotFoundError:  # the directory was removed (rm -rf) after mkdir
+                if attempt == 2:
+                    raise
         try:
             with os.fdopen(descriptor, "w", encoding="utf-8") as handle:
                 handle.write(text)
@@ -153,6 +207,69 @@ class ResultCache:
             except OSError:
                 pass
             raise
+
+    def _entries(self):
+        return self.root.glob("??/*.json") if self.root.is_dir() else iter(())
+
+    def clean_temporaries(self, older_than_s: float = STALE_TEMPORARY_S) -> int:
+        """Remove temporary files older than ``older_than_s`` (left by killed writers)."""
+        if not self.enabled or not self.root.is_dir():
+            return 0
+        removed, now = 0, time.time()
+        for temporary in self.root.glob("??/.*.tmp"):
+            try:
+                if now - temporary.stat().st_mtime > older_than_s:
+                    temporary.unlink()
+                    removed += 1
+            except OSError:  # another run removed or replaced it first
+                continue
+        return removed
+
+    def info(self) -> dict:
+        """``{"root", "entries", "bytes"}`` of the cache on disk."""
+        entries, size = 0, 0
+        for path in self._entries():
+            try:
+                size += path.stat().st_size
+                entries += 1
+            except OSError:
+                continue
+        return {"root": str(self.root), "entries": entries, "bytes": size}
+
+    def prune(self, max_age_days: float | None = None, other_versions: bool = True) -> dict:
+        """Remove entries written by other code (``other_versions``) or older than a bound.
+
+        Returns ``{"entries", "bytes"}`` removed. An entry that cannot be read is removed too.
+        """
+        removed, size, now = 0, 0, time.time()
+        self.clean_temporaries()
+        for path in list(self._entries()):
+            try:
+                status = path.stat()
+                old = max_age_days is not None and now - status.st_mtime > max_age_days * 86400
+                stale = False
+                if other_versions and not old:
+                    try:
+                        with open(path, encoding="utf-8") as handle:
+                            stale = json.load(handle).get("code_version") != self.version
+                    except (ValueError, AttributeError):
+                        stale = True
+                if old or stale:
+                    path.unlink()
+                    removed += 1
+                    size += status.st_size
+            except OSError:
+                continue
+        return {"entries": removed, "bytes": size}
+
+    def clear(self) -> dict:
+        """Remove every entry (and the directory)."""
+        before = self.info()
+        if self.root.is_dir():
+            import shutil
+
+            shutil.rmtree(self.root, ignore_errors=True)
+        return {"entries": before["entries"], "bytes": before["bytes"]}
 
     @property
     def stats(self) -> dict:
@@ -169,4 +286,33 @@ def _json_default(value: Any) -> Any:
     raise TypeError(f"cache record holds a value that is not JSON-able: {type(value).__name__}")
 
 
-__all__ = ["ResultCache", "canonical_json", "code_version"]
+# --------------------------------------------------------------------------------------------
+# impact-harness cache info|prune|clear
+# --------------------------------------------------------------------------------------------
+def add_arguments(parser) -> None:
+    parser.add_argument("action", choices=("info", "prune", "clear"),
+                        help="info: where and how big; prune: remove entries of other code "
+                        "versions (and older than --older-than); clear: remove everything")
+    parser.add_argument("--cache-dir", type=Path, default=None,
+                        help=f"cache directory (default: {default_cache_dir()})")
+    parser.add_argument("--older-than", type=float, default=None, metavar="DAYS",
+                        help="prune: also remove entries older than DAYS days")
+
+
+def main(args) -> int:
+    cache = ResultCache(args.cache_dir)
+    if args.action == "info":
+        info = cache.info()
+        print(f"{info['root']}: {info['entries']} entries, {info['bytes'] / 1e6:.1f} MB")
+        return 0
+    if args.older_than is not None and not args.older_than >= 0:
+        print(f"impact-harness cache: --older-than {args.older_than}: must be >= 0",
+              file=sys.stderr)
+        return 2
+    done = cache.prune(args.older_than) if args.action == "prune" else cache.clear()
+    print(f"{cache.root}: removed {done['entries']} entries, {done['bytes'] / 1e6:.1f} MB")
+    return 0
+
+
+__all__ = ["CACHE_DIR_VARIABLE", "ResultCache", "add_arguments", "canonical_json",
+           "code_version", "default_cache_dir", "main"]

@@ -27,6 +27,8 @@ from typing import Any, Callable, Iterable, Sequence
 EXECUTORS: tuple[str, ...] = ("local", "dask")
 
 DASK_INSTALL_HINT = 'pip install -e ".[dask]"'
+#: Seconds to wait for a Dask scheduler before giving up with a one-line error.
+CONNECT_TIMEOUT_S = 10.0
 
 
 class DaskNotInstalled(ImportError):
@@ -41,6 +43,24 @@ def default_workers() -> int:
         return max(1, os.cpu_count() or 1)
 
 
+def check_arguments(executor: str = "local", workers: int | None = None,
+                    scheduler: str | None = None) -> None:
+    """Raise ``ValueError`` (or :class:`DaskNotInstalled`) for options :func:`run_tasks` refuses.
+
+    Cheap, and called by the command line before any scenario is read, so a wrong option
+    costs a one-line message and no work.
+    """
+    if executor not in EXECUTORS:
+        raise ValueError(f"--executor {executor!r}: unknown; allowed: {', '.join(EXECUTORS)}")
+    if workers is not None and (isinstance(workers, bool) or int(workers) != workers
+                                or workers < 1):
+        raise ValueError(f"--workers {workers!r}: must be a positive integer")
+    if scheduler is not None and executor != "dask":
+        raise ValueError(f"--scheduler {scheduler!r}: needs --executor dask")
+    if executor == "dask":
+        _import_distributed()
+
+
 def run_tasks(
     function: Callable[[Any], Any],
     tasks: Iterable[Any],
@@ -48,6 +68,7 @@ def run_tasks(
     workers: int | None = None,
     scheduler: str | None = None,
     progress: Callable[[int, int], None] | None = None,
+    on_result: Callable[[int, Any], None] | None = None,
 ) -> list:
     """``[function(task) for task in tasks]``, spread over processes; results in task order.
 
@@ -70,11 +91,17 @@ def run_tasks(
     progress
         Called as ``progress(done, total)`` after each finished task (and once with
         ``(0, total)`` at the start).
+    on_result
+        Called as ``on_result(index, result)`` in this process as soon as task ``index``
+        finishes (the runner stores it in the cache then, so a kill loses only unfinished
+        tasks).
 
     Raises
     ------
     ValueError
         Unknown executor, ``workers < 1``, or a scheduler given to the local executor.
+    ConnectionError
+        The Dask scheduler cannot be reached.
     DaskNotInstalled
         ``executor="dask"`` without dask.distributed installed.
     Exception
@@ -91,17 +118,19 @@ def run_tasks(
     if progress is not None:
         progress(0, total)
     if executor == "dask":
-        return _run_dask(function, task_list, workers, scheduler, progress)
+        return _run_dask(function, task_list, workers, scheduler, progress, on_result)
     n_workers = min(workers or default_workers(), max(total, 1))
     if n_workers == 1 or total <= 1:
-        return _run_inline(function, task_list, progress)
-    return _run_pool(function, task_list, n_workers, progress)
+        return _run_inline(function, task_list, progress, on_result)
+    return _run_pool(function, task_list, n_workers, progress, on_result)
 
 
-def _run_inline(function, tasks: Sequence, progress) -> list:
+def _run_inline(function, tasks: Sequence, progress, on_result=None) -> list:
     results = []
     for index, task in enumerate(tasks):
         results.append(function(task))
+        if on_result is not None:
+            on_result(index, results[-1])
         if progress is not None:
             progress(index + 1, len(tasks))
     return results
@@ -116,7 +145,7 @@ def _call_chunk(function, chunk: Sequence) -> list:
     return [function(task) for task in chunk]
 
 
-def _run_pool(function, tasks: Sequence, workers: int, progress) -> list:
+def _run_pool(function, tasks: Sequence, workers: int, progress, on_result=None) -> list:
     total = len(tasks)
     size = _chunksize(total, workers)
     chunks = [tasks[start : start + size] for start in range(0, total, size)]
@@ -131,6 +160,10 @@ def _run_pool(function, tasks: Sequence, workers: int, progress) -> list:
                 for future in finished:
                     index = futures[future]
                     results[index] = future.result()  # re-raises the task's exception
+                    if on_result is not None:
+                        first = index * size
+                        for offset, result in enumerate(results[index]):
+                            on_result(first + offset, result)
                     done += len(chunks[index])
                     if progress is not None:
                         progress(done, total)
@@ -152,7 +185,7 @@ def _import_distributed():
     return Client, LocalCluster, as_completed
 
 
-def _run_dask(function, tasks: Sequence, workers, scheduler, progress) -> list:
+def _run_dask(function, tasks: Sequence, workers, scheduler, progress, on_result=None) -> list:
     Client, LocalCluster, as_completed = _import_distributed()
     cluster = None
     if scheduler is None:
@@ -165,7 +198,11 @@ def _run_dask(function, tasks: Sequence, workers, scheduler, progress) -> list:
         )
         client = Client(cluster)
     else:
-        client = Client(scheduler)
+        try:
+            client = Client(scheduler, timeout=CONNECT_TIMEOUT_S)
+        except (OSError, TimeoutError) as error:
+            raise ConnectionError(f"cannot reach the Dask scheduler {scheduler!r} within "
+                                  f"{CONNECT_TIMEOUT_S:g} s: {error}") from None
     try:
         total = len(tasks)
         if total == 0:
@@ -176,7 +213,10 @@ def _run_dask(function, tasks: Sequence, workers, scheduler, progress) -> list:
         results: list[Any] = [None] * total
         done = 0
         for future in as_completed(futures):
-            results[index_of[future.key]] = future.result()
+            index = index_of[future.key]
+            results[index] = future.result()
+            if on_result is not None:
+                on_result(index, results[index])
             done += 1
             if progress is not None:
                 progress(done, total)
@@ -204,4 +244,5 @@ def progress_printer(label: str, every_s: float = 2.0, stream=None) -> Callable[
     return report
 
 
-__all__ = ["EXECUTORS", "DaskNotInstalled", "default_workers", "progress_printer", "run_tasks"]
+__all__ = ["CONNECT_TIMEOUT_S", "EXECUTORS", "DaskNotInstalled", "check_arguments",
+           "default_workers", "progress_printer", "run_tasks"]

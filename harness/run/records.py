@@ -40,6 +40,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import tempfile
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any, Iterable, Mapping
@@ -164,10 +165,41 @@ def write_results(path: Path | str, records: Iterable[Record], provenance: Mappi
                               for record in document.pop("records"))
     head = json.dumps(document, indent=1, ensure_ascii=False, allow_nan=False)
     text = head[:-2] + ',\n "records": [\n' + records_text + "\n ]\n}\n"
-    temporary = path.with_name(f".{path.name}.tmp")
-    temporary.write_text(text, encoding="utf-8")
-    os.replace(temporary, path)
+    # A unique temporary in the same directory, then an atomic rename: two runs writing the
+    # same file at once each replace it whole; a reader never sees half a file.
+    descriptor, temporary = tempfile.mkstemp(prefix=f".{path.name}-", suffix=".tmp",
+                                             dir=path.parent)
+    try:
+        with os.fdopen(descriptor, "w", encoding="utf-8") as handle:
+            handle.write(text)
+        os.replace(temporary, path)
+    except BaseException:
+        try:
+            os.unlink(temporary)
+        except OSError:
+            pass
+        raise
     return path
+
+
+def check_writable(path: Path | str) -> str | None:
+    """``None`` when a results file can be written at ``path``, else the reason it cannot.
+
+    Checked before a run starts (creates the parent directory, and a temporary in it that it
+    removes), so a bad ``--json`` costs nothing.
+    """
+    path = Path(path)
+    if path.is_dir():
+        return "is a directory"
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        descriptor, temporary = tempfile.mkstemp(prefix=f".{path.name}-", suffix=".tmp",
+                                                 dir=path.parent)
+        os.close(descriptor)
+        os.unlink(temporary)
+    except OSError as error:
+        return f"cannot write there: {error.strerror or error}"
+    return None
 
 
 def read_results(path: Path | str) -> Results:
@@ -178,6 +210,10 @@ def read_results(path: Path | str) -> Results:
     except FileNotFoundError:
         raise FileNotFoundError(
             f"{path}: no results file; run `impact-harness run` (or `suite`) first") from None
+    except IsADirectoryError:
+        raise ValueError(f"{path}: is a directory, not a results file") from None
+    except (ValueError, OSError) as error:  # JSONDecodeError, UnicodeDecodeError
+        raise ValueError(f"{path}: not a readable results file: {error}") from None
     if not isinstance(document, dict) or document.get("format") != FORMAT:
         raise ValueError(f"{path}: not an impact-harness results file (format {FORMAT!r})")
     if document.get("format_version") != FORMAT_VERSION:
@@ -189,4 +225,4 @@ def read_results(path: Path | str) -> Results:
 
 
 __all__ = ["ANALYTIC", "DEFAULT_RESULTS", "FORMAT", "FORMAT_VERSION", "Record", "Results",
-           "read_results", "write_results"]
+           "check_writable", "read_results", "write_results"]

@@ -23,16 +23,38 @@ Parallelism and cache
     cache holds the engine's raw output; departures and the other derived numbers are
     recomputed every run (microseconds).
 
-Exit status
-    0, or 1 when a scenario's ``[expect.gate]`` fails (each failing gate is named on stderr),
-    or 2 for bad arguments or scenario files.
+    Each simulated result is stored in the cache the moment it finishes, so a run killed
+    half-way keeps its finished half and the rerun simulates only the rest. A cache that
+    cannot be written (removed, read-only) costs the cache, not the run: a warning says so.
+    A cache entry that fails :func:`check_engine_output` is a miss and is reported.
+
+Bounds
+    Each engine task has a time limit (:data:`TASK_TIME_LIMIT_S`, ``--task-time-limit``);
+    a task over it gets the status ``"error: time limit ..."`` (enforced with ``SIGALRM``
+    in the process running the task: the local pool and inline runs, not Dask workers).
+    Sweep sizes and engine step caps are bounded when the scenario is read
+    (:data:`harness.scenarios.schema.LIMITS`).
+
+Where the results go
+    ``--json PATH`` when given. Without it ``reports/results.json``, but only when that file
+    is absent or was written from the same selection (files, tags, engines, presets): a run
+    of other scenarios refuses (exit 2) rather than silently replace the suite's results;
+    ``--force`` replaces it anyway.
+
+Exit status (see :mod:`harness.cli`)
+    0 ok; 1 a scenario's ``[expect.gate]`` failed (each failing gate is named on stderr);
+    2 bad input: bad options or scenario files (each bad file is one line on stderr; the
+    good files still run and their results are written); 3 internal error (a record with
+    status ``"error: internal: ..."``, or an exception of the harness itself).
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import signal
 import sys
+import threading
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -42,12 +64,32 @@ import numpy as np
 
 from harness.run import metrics, verdicts
 from harness.run.provenance import provenance
-from harness.run.records import ANALYTIC, DEFAULT_RESULTS, FORMAT, FORMAT_VERSION, Record, write_results
+from harness.run.records import (
+    ANALYTIC,
+    DEFAULT_RESULTS,
+    FORMAT,
+    FORMAT_VERSION,
+    Record,
+    check_writable,
+    write_results,
+)
 from harness.scenarios import ENGINES, PRESETS, Scenario, load_scenarios
 
-DEFAULT_CACHE = Path(".cache") / "results"
 #: Below this many engine runs to do, the pool's start-up costs more than it saves.
 MIN_PARALLEL_TASKS = 200
+#: Wall-clock limit (s) of one engine task. The slowest library task (MuJoCo ``accurate``,
+#: 10 µs steps) takes about a second; a task 100 times slower is stuck, not working.
+TASK_TIME_LIMIT_S = 120.0
+#: Exit statuses (documented in harness.cli).
+EXIT_OK, EXIT_GATE_FAILED, EXIT_BAD_INPUT, EXIT_INTERNAL = 0, 1, 2, 3
+
+
+class TaskTimeLimit(Exception):
+    """An engine task ran past its time limit."""
+
+
+def _on_alarm(signum, frame):
+    raise TaskTimeLimit
 
 
 # --------------------------------------------------------------------------------------------
@@ -64,9 +106,18 @@ def engine_task(task: dict) -> dict:
     from harness.engines import EngineNotInstalled, UnsupportedScene, load_engine
 
     start = time.perf_counter()
+    limit = task.get("time_limit_s")
+    # SIGALRM works only in a process's main thread (pool workers, inline runs; not Dask).
+    alarm = bool(limit) and threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGALRM, _on_alarm) if alarm else None
     try:
+        if alarm:
+            signal.setitimer(signal.ITIMER_REAL, float(limit))
         engine = load_engine(task["engine"])
         run = engine.run(task["scene"], task["settings"])
+    except TaskTimeLimit:
+        return {"status": f"error: time limit: stopped after {limit:g} s (--task-time-limit)",
+                "wall_time_s": time.perf_counter() - start}
     except EngineNotInstalled as error:
         return {"status": f"skipped: {error}", "wall_time_s": time.perf_counter() - start}
     except UnsupportedScene as error:
@@ -75,6 +126,10 @@ def engine_task(task: dict) -> dict:
     except Exception as error:  # reported in the record, never dropped
         return {"status": f"error: {type(error).__name__}: {error}",
                 "wall_time_s": time.perf_counter() - start}
+    finally:
+        if alarm:
+            signal.setitimer(signal.ITIMER_REAL, 0)
+            signal.signal(signal.SIGALRM, previous)
     return {
         "status": run.status,
         "velocities": [list(v) for v in run.velocities],
@@ -112,6 +167,30 @@ def _contact_steps(run) -> list[dict] | None:
              "bodies": [[float(v) for v in pose] for pose in s.poses]} for s in steps]
 
 
+def check_engine_output(output, speeds: int) -> str | None:
+    """``None`` when ``output`` (a cached :func:`engine_task` result) is usable, else why not.
+
+    ``speeds`` is the number of generalized speeds of the scene (3 per body). An ``ok``
+    output must carry finite velocities; another engine status (a blow-up) may carry
+    non-finite ones, which the record then reports.
+    """
+    if not isinstance(output, dict) or not isinstance(output.get("status"), str):
+        return "no status"
+    if output["status"].startswith(("skipped", "error")):
+        return "a skipped or failed run is never cached"
+    velocities = output.get("velocities")
+    if (not isinstance(velocities, list) or len(velocities) * 3 != speeds
+            or not all(isinstance(body, list) and len(body) == 3 for body in velocities)):
+        return f"velocities {str(velocities)[:60]!r} are not {speeds // 3} lists of 3 numbers"
+    values = [value for body in velocities for value in body]
+    if not all(isinstance(value, (int, float)) and not isinstance(value, bool)
+               for value in values):
+        return "velocities hold a value that is not a number"
+    if output["status"] == "ok" and not all(math.isfinite(value) for value in values):
+        return "status ok with non-finite velocities"
+    return None
+
+
 # --------------------------------------------------------------------------------------------
 # Selecting what to run
 # --------------------------------------------------------------------------------------------
@@ -146,10 +225,16 @@ class RunOutcome:
     provenance: dict
     scenarios: dict
     cache_stats: dict = field(default_factory=dict)
+    warnings: list[str] = field(default_factory=list)  # cache problems, one line each
 
     @property
     def failed_gates(self) -> list[GateResult]:
         return [gate for gate in self.gates if gate.failed]
+
+    @property
+    def internal_errors(self) -> list[Record]:
+        """Records the harness itself failed to compute (a bug: exit status 3)."""
+        return [r for r in self.records if r.status.startswith("error: internal")]
 
 
 def select_scenarios(files: Sequence[str | Path] | None = None,
@@ -242,15 +327,24 @@ def run(
     scheduler: str | None = None,
     log: TextIO | None | str = "stderr",
     command: Sequence[str] | None = None,
+    time_limit_s: float | None = TASK_TIME_LIMIT_S,
+    selection: dict | None = None,
 ) -> RunOutcome:
     """Run ``scenarios`` and return the records, the gates and the provenance.
 
     ``cache`` is a :class:`harness.run.cache.ResultCache` (None: no cache). ``log`` gets the
     progress lines (a stream; ``"stderr"``, the default: ``sys.stderr`` at call time; None:
-    quiet).
+    quiet). ``time_limit_s`` bounds each engine task (None: no limit); ``selection`` (what
+    was asked for) goes into the provenance.
     """
     log = sys.stderr if log == "stderr" else log
     started = time.perf_counter()
+    warnings: list[str] = []
+    if cache is not None:
+        try:
+            cache.clean_temporaries()
+        except OSError as error:
+            warnings.append(f"cache {cache.root}: cannot clean temporaries: {error}")
     wanted_engines = [name for name in ENGINES if name in engines]
     needs_engines = any(not s.analytic_only and _engines_of(s, wanted_engines) for s in scenarios)
     loaded, missing = _engine_status(wanted_engines) if needs_engines else ({}, {})
@@ -284,25 +378,44 @@ def run(
                                "engine_version": engine.version, "settings": settings,
                                "scene": _scene_payload(scene)}
                     key = cache.key(payload) if cache is not None else None
-                    cached = cache.get(key) if cache is not None else None
+                    speeds = 3 * len(scene.bodies)
+                    cached = None if cache is None else cache.get(
+                        key, check=lambda output, speeds=speeds: check_engine_output(output,
+                                                                                   speeds))
                     if cached is not None:
                         item["output"], item["cached"] = cached, True
                         continue
-                    tasks.append({"engine": engine_name, "settings": settings, "scene": scene})
+                    tasks.append({"engine": engine_name, "settings": settings, "scene": scene,
+                                  "time_limit_s": time_limit_s})
                     task_keys.append(key)
                     task_slots.append(item)
+    if cache is not None:
+        warnings += [f"cache entry rejected (simulated again): {entry}"
+                     for entry in cache.rejected]
 
-    # 2. Run the misses.
+    # 2. Run the misses; store each in the cache as it finishes.
+    cache_failed: list[str] = []
+
+    def store(index: int, output: dict) -> None:
+        task_slots[index]["output"], task_slots[index]["cached"] = output, False
+        if cache is None or cache_failed or output["status"].startswith(("skipped", "error")):
+            return
+        try:
+            cache.put(task_keys[index], output)
+        except OSError as error:  # the run goes on without the cache
+            cache_failed.append(f"cache {cache.root}: cannot store results ({error}); "
+                                "the run goes on without the cache")
+
     if tasks:
         if log is not None:
             print(f"engine runs: {len(tasks)} to simulate, {len(plan) - len(tasks)} cached or "
                   f"skipped", file=log, flush=True)
-        outputs = _run_tasks(tasks, executor=executor, workers=workers, scheduler=scheduler,
-                             log=log)
-        for key, item, output in zip(task_keys, task_slots, outputs):
-            item["output"], item["cached"] = output, False
-            if cache is not None and not output["status"].startswith(("skipped", "error")):
-                cache.put(key, output)
+        _run_tasks(tasks, executor=executor, workers=workers, scheduler=scheduler, log=log,
+                   on_result=store)
+    warnings += cache_failed
+    if log is not None:
+        for warning in warnings:
+            print(f"warning: {warning}", file=log, flush=True)
 
     # 3. Records, scenario by scenario.
     by_scenario: dict[str, list] = {}
@@ -318,7 +431,7 @@ def run(
         entries = by_scenario.get(scenario.name, [])
         for point in scenario.point_list():
             point_entries = [e for e in entries if e[1].index == point.index]
-            scenario_records += point_records(scenario, point, point_entries)
+            scenario_records += _point_records_or_errors(scenario, point, point_entries)
         scenario_gates = check_gates(scenario, scenario_records)
         records += scenario_records
         gates += scenario_gates
@@ -343,11 +456,29 @@ def run(
         executor={"executor": executor, "workers": workers, "scheduler": scheduler},
         cache={**stats, "root": None if cache is None else str(cache.root),
                "engine_runs": len(plan), "simulated": len(tasks)},
+        selection=selection,
+        task_time_limit_s=time_limit_s,
         gates=[asdict(g) for g in gates],
         wall_time_s=time.perf_counter() - started,
     )
     return RunOutcome(records=records, gates=gates, provenance=info, scenarios=infos,
-                      cache_stats=stats)
+                      cache_stats=stats, warnings=warnings)
+
+
+def _point_records_or_errors(scenario: Scenario, point, engine_entries: Sequence) -> list[Record]:
+    """:func:`point_records`, or, when the harness fails on this point, one record per law
+    and engine run with status ``"error: internal: ..."``: one bad point costs its records,
+    not the run."""
+    try:
+        return point_records(scenario, point, engine_entries)
+    except Exception as error:  # noqa: BLE001 - a harness bug: in the records, exit status 3
+        status = f"error: internal: {type(error).__name__}: {error}"
+        info = _point_dict(point)
+        return ([Record(scenario=scenario.name, point=info, source=ANALYTIC, law=law,
+                        status=status) for law in scenario.laws]
+                + [Record(scenario=scenario.name, point=info, source=engine_name, preset=preset,
+                          status=status, cached=bool(item.get("cached", False)))
+                   for _, _, engine_name, preset, item in engine_entries])
 
 
 def _engines_of(scenario: Scenario, wanted: Sequence[str]) -> list[str]:
@@ -357,16 +488,14 @@ def _engines_of(scenario: Scenario, wanted: Sequence[str]) -> list[str]:
     return [name for name in wanted if name in allowed]
 
 
-def _run_tasks(tasks, *, executor, workers, scheduler, log) -> list[dict]:
-    try:
-        from harness.run.executor import progress_printer, run_tasks
-    except ImportError:  # the executor module is optional: run serially
-        return [engine_task(task) for task in tasks]
+def _run_tasks(tasks, *, executor, workers, scheduler, log, on_result=None) -> list[dict]:
+    from harness.run.executor import progress_printer, run_tasks
+
     if executor == "local" and workers is None and len(tasks) < MIN_PARALLEL_TASKS:
         workers = 1
     progress = progress_printer("engine runs", stream=log) if log is not None else None
     return run_tasks(engine_task, tasks, executor=executor, workers=workers,
-                     scheduler=scheduler, progress=progress)
+                     scheduler=scheduler, progress=progress, on_result=on_result)
 
 
 def point_records(scenario: Scenario, point, engine_entries: Sequence) -> list[Record]:
@@ -539,6 +668,8 @@ def _progress_line(number, total, scenario, records, gates, seconds) -> str:
 # --------------------------------------------------------------------------------------------
 def add_common_arguments(parser: argparse.ArgumentParser) -> None:
     """Options shared by ``run`` and ``suite``."""
+    from harness.run.cache import default_cache_dir
+
     parser.add_argument("--tags", default=None,
                         help="comma-separated tags (e.g. quick); scenarios with any of them")
     parser.add_argument("--engines", default=None,
@@ -547,50 +678,168 @@ def add_common_arguments(parser: argparse.ArgumentParser) -> None:
                         help="engine preset(s) to run (default: all)")
     parser.add_argument("--no-cache", action="store_true",
                         help="simulate every engine run, ignoring and not filling the cache")
-    parser.add_argument("--cache-dir", type=Path, default=DEFAULT_CACHE,
-                        help=f"result cache directory (default: {DEFAULT_CACHE})")
+    parser.add_argument("--cache-dir", type=Path, default=None,
+                        help=f"result cache directory (default: {default_cache_dir()}; "
+                        "see `impact-harness cache info`)")
     parser.add_argument("--executor", default="local", choices=("local", "dask"),
                         help="local process pool (default) or a Dask cluster")
     parser.add_argument("--scheduler", default=None,
                         help="Dask scheduler address (with --executor dask; default: a local cluster)")
     parser.add_argument("--workers", type=int, default=None,
                         help="local worker processes (default: all cores; small runs run inline)")
+    parser.add_argument("--task-time-limit", type=float, default=TASK_TIME_LIMIT_S,
+                        metavar="SECONDS",
+                        help=f"wall-clock limit of one engine run (default: {TASK_TIME_LIMIT_S:g})")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("files", nargs="*", metavar="FILE",
                         help="scenario files or directories (default: the library in scenarios/)")
     add_common_arguments(parser)
-    parser.add_argument("--json", type=Path, default=DEFAULT_RESULTS,
-                        help=f"results file to write (default: {DEFAULT_RESULTS})")
+    parser.add_argument("--json", type=Path, default=None,
+                        help=f"results file to write (default: {DEFAULT_RESULTS}, unless it "
+                        "holds another selection's results: see --force)")
+    parser.add_argument("--force", action="store_true",
+                        help=f"replace {DEFAULT_RESULTS} even when it holds the results of "
+                        "another selection of scenarios, engines or presets")
+
+
+def _fail(message: str) -> int:
+    print(f"impact-harness run: {message}", file=sys.stderr)
+    return EXIT_BAD_INPUT
+
+
+def check_arguments(args, json_path: Path | None) -> str | None:
+    """The first problem with the options, checked before any work; ``None`` when fine."""
+    from harness.run.executor import DaskNotInstalled
+    from harness.run.executor import check_arguments as check_executor
+
+    try:
+        parse_engines(args.engines)
+        parse_presets(args.preset)
+        check_executor(args.executor, args.workers, args.scheduler)
+    except (ValueError, DaskNotInstalled) as error:
+        return str(error)
+    limit = args.task_time_limit
+    if limit is not None and not (math.isfinite(limit) and limit > 0):
+        return f"--task-time-limit {limit}: must be a positive number of seconds"
+    if json_path is not None:
+        reason = check_writable(json_path)
+        if reason:
+            return f"--json {json_path}: {reason}"
+    if not args.no_cache and args.cache_dir is not None:
+        reason = _cache_dir_problem(Path(args.cache_dir))
+        if reason:
+            return f"--cache-dir {args.cache_dir}: {reason}"
+    return None
+
+
+def _cache_dir_problem(path: Path) -> str | None:
+    import os
+    import tempfile
+
+    if path.exists() and not path.is_dir():
+        return "is not a directory"
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        descriptor, temporary = tempfile.mkstemp(suffix=".tmp", prefix=".probe-", dir=path)
+        os.close(descriptor)
+        os.unlink(temporary)
+    except OSError as error:
+        return f"cannot write there: {error.strerror or error}"
+    return None
+
+
+def selection_of(args) -> dict:
+    """What a run was asked for: files (resolved; None for the library), tags, engines, presets."""
+    files = getattr(args, "files", None) or None
+    tags = parse_tags_text(args.tags)
+    return {"files": None if files is None else sorted(str(Path(f).resolve()) for f in files),
+            "tags": tags,
+            "engines": [name for name in ENGINES if name in parse_engines(args.engines)],
+            "presets": list(parse_presets(args.preset))}
+
+
+def parse_tags_text(text) -> list[str] | None:
+    from harness.scenarios import parse_tags
+
+    tags = parse_tags(text)
+    return None if tags is None else sorted(tags)
+
+
+def _describe_selection(selection: dict) -> str:
+    files = selection.get("files")
+    what = "the whole library" if not files else ", ".join(Path(f).name for f in files[:3]) + (
+        f" and {len(files) - 3} more" if len(files) > 3 else "")
+    if selection.get("tags"):
+        what += f" tagged {','.join(selection['tags'])}"
+    return (f"{what}; engines {','.join(selection.get('engines') or ENGINES)}; presets "
+            f"{','.join(selection.get('presets') or PRESETS)}")
+
+
+def _existing_selection(path: Path) -> dict | None:
+    """The selection recorded in an existing results file (files before it: the default)."""
+    import json
+
+    try:
+        document = json.loads(path.read_text(encoding="utf-8"))
+        recorded = document["provenance"].get("selection")
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        return None  # unreadable: nothing worth keeping is lost by replacing it
+    if recorded is None:  # written before selections were recorded: by the suite
+        recorded = {"files": None, "tags": None, "engines": list(ENGINES),
+                    "presets": list(PRESETS)}
+    return recorded
 
 
 def execute(args, *, json_path: Path, command: Sequence[str] | None = None,
-            log: TextIO | None | str = "stderr") -> tuple[int, RunOutcome | None]:
-    """Run with parsed options; write the results file. Returns (exit status, outcome)."""
+            log: TextIO | None | str = "stderr", guard: bool = False) -> tuple[int, RunOutcome | None]:
+    """Run with parsed options; write the results file. Returns (exit status, outcome).
+
+    Options are checked before any scenario is read. ``guard``: refuse to replace
+    ``json_path`` when it holds the results of another selection (``run`` without ``--json``).
+    Bad scenario files are reported one line each; the others still run (exit status 2).
+    """
+    from harness.scenarios.library import load_scenarios_reporting
+
     log = sys.stderr if log == "stderr" else log
-    try:
-        engines = parse_engines(args.engines)
-        presets = parse_presets(args.preset)
-        scenarios = select_scenarios(getattr(args, "files", None), args.tags)
-    except (ValueError, FileNotFoundError) as error:  # ScenarioError is a ValueError
+    problem = check_arguments(args, json_path)
+    if problem:
+        return _fail(problem), None
+    selection = selection_of(args)
+    if guard and json_path.exists() and not getattr(args, "force", False):
+        existing = _existing_selection(json_path)
+        if existing is not None and existing != selection:
+            return _fail(f"{json_path} holds the results of another selection "
+                         f"({_describe_selection(existing)}); write this run elsewhere with "
+                         f"--json PATH, or replace them with --force"), None
+    scenarios, errors = load_scenarios_reporting(getattr(args, "files", None) or None,
+                                                 tags=args.tags or None)
+    for error in errors:
         print(f"impact-harness run: {error}", file=sys.stderr)
-        return 2, None
     if not scenarios:
-        print("impact-harness run: no scenario selected", file=sys.stderr)
-        return 2, None
+        if not errors:
+            print("impact-harness run: no scenario selected", file=sys.stderr)
+        return EXIT_BAD_INPUT, None
     cache = None
     if not args.no_cache:
-        try:
-            from harness.run.cache import ResultCache
-        except ImportError:
-            cache = None
-        else:
-            cache = ResultCache(root=args.cache_dir)
-    outcome = run(scenarios, engines=engines, presets=presets, cache=cache,
-                  executor=args.executor, workers=args.workers, scheduler=args.scheduler,
-                  log=log, command=command)
-    write_results(json_path, outcome.records, outcome.provenance, outcome.scenarios)
+        from harness.run.cache import ResultCache
+
+        cache = ResultCache(root=args.cache_dir)
+    try:
+        outcome = run(scenarios, engines=parse_engines(args.engines),
+                      presets=parse_presets(args.preset), cache=cache, executor=args.executor,
+                      workers=args.workers, scheduler=args.scheduler, log=log, command=command,
+                      time_limit_s=args.task_time_limit, selection=selection)
+    except ConnectionError as error:  # an unreachable Dask scheduler
+        return _fail(str(error)), None
+    try:
+        write_results(json_path, outcome.records, outcome.provenance, outcome.scenarios)
+    except OSError as error:
+        print(f"impact-harness run: cannot write {json_path}: {error.strerror or error}; the "
+              "engine results are in the cache, a rerun simulates nothing again",
+              file=sys.stderr)
+        return EXIT_INTERNAL, outcome
     stats = outcome.provenance["cache"]
     if log is not None:
         print(f"wrote {json_path}: {len(outcome.records)} records from {len(scenarios)} "
@@ -600,14 +849,46 @@ def execute(args, *, json_path: Path, command: Sequence[str] | None = None,
             print(f"skipped engine {name}: {reason}", file=log)
     for gate in outcome.failed_gates:
         print(f"GATE FAILED: {gate.describe()}", file=sys.stderr)
-    return (1 if outcome.failed_gates else 0), outcome
+    for record in outcome.internal_errors:
+        print(f"INTERNAL ERROR: {record.scenario} {record.point['label']} {record.label}: "
+              f"{record.status}", file=sys.stderr)
+    if outcome.internal_errors:
+        return EXIT_INTERNAL, outcome
+    if errors:
+        return EXIT_BAD_INPUT, outcome
+    return (EXIT_GATE_FAILED if outcome.failed_gates else EXIT_OK), outcome
 
 
 def main(args) -> int:
-    status, _ = execute(args, json_path=args.json, command=["impact-harness", "run", *sys.argv[2:]])
+    guard = args.json is None
+    json_path = DEFAULT_RESULTS if guard else args.json
+    status, _ = execute(args, json_path=json_path, guard=guard,
+                        command=["impact-harness", "run", *sys.argv[2:]])
     return status
 
 
-__all__ = ["GateResult", "RunOutcome", "add_arguments", "add_common_arguments", "check_gates",
-           "engine_record", "engine_task", "execute", "main", "parse_engines", "parse_presets",
-           "point_records", "run", "scenario_info", "select_scenarios"]
+__all__ = [
+    "EXIT_BAD_INPUT",
+    "EXIT_GATE_FAILED",
+    "EXIT_INTERNAL",
+    "EXIT_OK",
+    "TASK_TIME_LIMIT_S",
+    "GateResult",
+    "RunOutcome",
+    "add_arguments",
+    "add_common_arguments",
+    "check_arguments",
+    "check_engine_output",
+    "check_gates",
+    "engine_record",
+    "engine_task",
+    "execute",
+    "main",
+    "parse_engines",
+    "parse_presets",
+    "point_records",
+    "run",
+    "scenario_info",
+    "select_scenarios",
+    "selection_of",
+]

@@ -3,13 +3,14 @@
 Three steps, each timed on stderr::
 
     1. the paper's Table 3     -> <out>/paper-table3.md, <out>/paper-table3.png
-    2. every scenario run      -> <out>/results.json   (engine runs cached in .cache/results)
+    2. every scenario run      -> <out>/results.json   (engine runs cached: `impact-harness cache info`)
     3. the report              -> <out>/index.html, <out>/summary.md, <out>/figures/
 
 Options select scenarios and engines exactly as for ``impact-harness run`` (``--tags quick``
-for a fast subset, ``--out`` for another directory). The exit status is 1 when a scenario's
-gate fails or the paper's table has a miss no known erratum explains, else 0; the report is
-written either way.
+for a fast subset, ``--out`` for another directory). The exit status (see :mod:`harness.cli`)
+is 1 when a scenario's gate fails or the paper's table has a miss no known erratum explains,
+2 for bad options or scenario files, 3 for an internal error, else 0; the report is written
+whenever the run wrote results.
 """
 
 from __future__ import annotations
@@ -65,6 +66,8 @@ def main(args) -> int:
           + (f"{len(failed)} gate(s) FAILED" if failed else "all gates passed")
           + (f", {len(unexplained)} unexplained Table 3 miss(es)" if unexplained else ""),
           file=sys.stderr)
+    if status >= 2:  # bad input (2) or an internal error (3) outranks a failed check
+        return status
     return 1 if failed or unexplained else status
 
 

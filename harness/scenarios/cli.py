@@ -3,7 +3,7 @@
 ``validate`` reads each scenario file, checks every key and every sweep point (bodies touch,
 approach, one contact point), and, unless ``--no-solve``, compares the ``[expect]`` collision
 types with the solver. It prints ``OK`` per good file and every error with its file, key,
-value and what is allowed; the exit status is 1 if any file is bad.
+value and what is allowed; the exit status is 2 (bad input) if any file is bad.
 
 ``new`` writes a commented starting file that validates as written.
 """
@@ -39,7 +39,7 @@ def main_validate(args: argparse.Namespace) -> int:
     if not files:
         print(f"no scenario files found in {', '.join(args.files) or SCENARIO_DIR}",
               file=sys.stderr)
-        return 1
+        return 2
     bad, names = 0, {}
     for path in files:
         errors: list[str] = []
@@ -67,7 +67,7 @@ def main_validate(args: argparse.Namespace) -> int:
     if not args.quiet or bad:
         print(f"{len(files) - bad} of {len(files)} scenario files OK"
               + (f", {bad} with errors" if bad else ""))
-    return 1 if bad else 0
+    return 2 if bad else 0
 
 
 # --------------------------------------------------------------------------------------------

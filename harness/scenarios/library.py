@@ -37,6 +37,45 @@ def parse_tags(tags) -> tuple[str, ...] | None:
     return tags or None
 
 
+def load_scenarios_reporting(paths_or_dir=None, tags=None
+                             ) -> tuple[list[Scenario], list[ScenarioError]]:
+    """The good scenarios under ``paths_or_dir`` and one error per problem in the others.
+
+    Like :func:`load_scenarios`, but a bad file costs only itself: the runner runs the good
+    files and reports the bad ones (each error is one line naming the file, the key, the
+    value and what is allowed). A scenario whose name another file already used is an error
+    and is left out. An unknown tag is an error and selects nothing.
+    """
+    scenarios, errors = [], []
+    for path in scenario_files(paths_or_dir):
+        try:
+            scenario = load_scenario(path)
+        except ScenarioError as error:
+            errors += error.errors
+            continue
+        scenarios.append(scenario)
+    seen: dict[str, Scenario] = {}
+    unique = []
+    for scenario in scenarios:
+        if scenario.name in seen:
+            errors.append(ScenarioError(f"the name is already used by {seen[scenario.name].path}",
+                                        path=scenario.path, key="name", value=scenario.name,
+                                        allowed="a name unique in the library"))
+            continue
+        seen[scenario.name] = scenario
+        unique.append(scenario)
+    wanted = parse_tags(tags)
+    if wanted is None or "all" in wanted:
+        return unique, errors
+    known = tag_sets(unique)
+    for tag in wanted:
+        if tag not in known:
+            errors.append(ScenarioError(f"no scenario has this tag{suggest(tag, known)}",
+                                        key="tags", value=tag,
+                                        allowed=", ".join(sorted(known))))
+    return [s for s in unique if set(s.tags) & set(wanted)], errors
+
+
 def load_scenarios(paths_or_dir=None, tags=None) -> list[Scenario]:
     """Load every scenario under ``paths_or_dir`` (default: ``scenarios/``).
 
@@ -44,30 +83,10 @@ def load_scenarios(paths_or_dir=None, tags=None) -> list[Scenario]:
     them; ``"all"`` keeps everything. Every file is read before any error is raised, and
     the error lists every bad file. Unknown tags and duplicate names are errors too.
     """
-    scenarios, errors = [], []
-    for path in scenario_files(paths_or_dir):
-        try:
-            scenarios.append(load_scenario(path))
-        except ScenarioError as error:
-            errors += error.errors
-    seen: dict[str, Scenario] = {}
-    for scenario in scenarios:
-        if scenario.name in seen:
-            errors.append(ScenarioError(f"the name is already used by {seen[scenario.name].path}",
-                                        path=scenario.path, key="name", value=scenario.name,
-                                        allowed="a name unique in the library"))
-        seen[scenario.name] = scenario
+    scenarios, errors = load_scenarios_reporting(paths_or_dir, tags)
     if errors:
         raise ScenarioError(errors=errors)
-    wanted = parse_tags(tags)
-    if wanted is None or "all" in wanted:
-        return scenarios
-    known = tag_sets(scenarios)
-    for tag in wanted:
-        if tag not in known:
-            raise ScenarioError(f"no scenario has this tag{suggest(tag, known)}", key="tags",
-                                value=tag, allowed=", ".join(sorted(known)))
-    return [s for s in scenarios if set(s.tags) & set(wanted)]
+    return scenarios
 
 
 def tag_sets(scenarios: Iterable[Scenario]) -> dict[str, tuple[str, ...]]:

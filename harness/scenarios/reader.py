@@ -37,14 +37,29 @@ from harness.scenarios.schema import (
     GATE_KEYS,
     LAW_TYPES,
     LAWS,
+    MAGNITUDES,
     NAME_PATTERN,
     PRESETS,
     SHAPE_FIELDS,
+    SWEEP_MAGNITUDE,
     SYSTEMS,
     TAG_PATTERN,
+    TINY,
     TOP_KEYS,
     TWO_SLED_KEYS,
+    limit,
 )
+
+#: Largest |value| of a number whose field has no MAGNITUDES entry.
+LARGEST_NUMBER = 1e12
+
+
+def magnitude_text(field: str | None) -> str:
+    """What :data:`MAGNITUDES` allows for ``field``, for error messages."""
+    small, large = MAGNITUDES[field] if field else (0.0, LARGEST_NUMBER)
+    small = max(small, TINY)
+    zero = "0 or " if MAGNITUDES.get(field, (0.0,))[0] == 0.0 else ""
+    return f"{zero}{small:g} <= |value| <= {large:g}"
 
 
 class TableReader:
@@ -75,7 +90,7 @@ class TableReader:
         return True
 
     def number(self, table, key, prefix, *, default=NO_VALUE, low=None, high=None,
-               low_open=False, allowed=None):
+               low_open=False, allowed=None, field=None):
         dotted = f"{prefix}.{key}" if prefix else key
         if key not in table:
             if default is NO_VALUE:
@@ -89,15 +104,23 @@ class TableReader:
             return default
         value = table[key]
         return self.check_number(dotted, value, low=low, high=high, low_open=low_open,
-                                 allowed=allowed)
+                                 allowed=allowed, field=field)
 
-    def check_number(self, dotted, value, *, low=None, high=None, low_open=False, allowed=None):
+    def check_number(self, dotted, value, *, low=None, high=None, low_open=False, allowed=None,
+                     field=None):
+        """``float(value)`` when a number within the bounds and the supported magnitude of
+        ``field`` (:data:`MAGNITUDES`), else an error (and ``None``)."""
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             return self.error(dotted, f"must be a number, not {type(value).__name__}", value,
                               allowed or "a finite number")
-        value = float(value)
-        if not math.isfinite(value):
+        try:
+            number = float(value)
+        except OverflowError:  # an integer beyond the largest float
+            return self.error(dotted, "out of the supported range", value,
+                              magnitude_text(field))
+        if not math.isfinite(number):
             return self.error(dotted, "must be finite", value, allowed or "a finite number")
+        value = number
         if low is not None and (value <= low if low_open else value < low):
             bound = f"> {low:g}" if low_open else f">= {low:g}"
             text = allowed or (f"{bound}" if high is None else f"{bound} and <= {high:g}")
@@ -105,9 +128,13 @@ class TableReader:
         if high is not None and value > high:
             text = allowed or (f"<= {high:g}" if low is None else f"{low:g} … {high:g}")
             return self.error(dotted, "out of range", value, text)
+        small, large = MAGNITUDES[field] if field else (0.0, LARGEST_NUMBER)
+        if abs(value) > large or (value != 0.0 and abs(value) < max(small, TINY)):
+            return self.error(dotted, "out of the supported range", value,
+                              magnitude_text(field))
         return value
 
-    def vector(self, table, key, prefix, length, *, default=NO_VALUE):
+    def vector(self, table, key, prefix, length, *, default=NO_VALUE, field=None):
         dotted = f"{prefix}.{key}" if prefix else key
         if key not in table:
             if default is NO_VALUE:
@@ -119,7 +146,8 @@ class TableReader:
             size = "" if length is None else f"{length} "
             return self.error(dotted, f"must be a list of {size}numbers", value,
                               f"e.g. {[0.0] * (length or 2)}")
-        numbers = [self.check_number(f"{dotted}[{i}]", v) for i, v in enumerate(value)]
+        numbers = [self.check_number(f"{dotted}[{i}]", v, field=field)
+                   for i, v in enumerate(value)]
         return None if any(n is None for n in numbers) else tuple(numbers)
 
     def string(self, table, key, prefix, *, default=NO_VALUE, choices=None, pattern=None,
@@ -164,15 +192,15 @@ def _read_shape(reader: TableReader, table, prefix):
     if kind is None:
         return None
     if kind == "disk":
-        radius = reader.number(table, "radius", prefix, low=0.0, low_open=True)
+        radius = reader.number(table, "radius", prefix, low=0.0, low_open=True, field="length")
         return None if radius is None else Disk(radius)
     if kind == "rod":
-        length = reader.number(table, "length", prefix, low=0.0, low_open=True)
-        radius = reader.number(table, "radius", prefix, low=0.0, low_open=True)
+        length = reader.number(table, "length", prefix, low=0.0, low_open=True, field="length")
+        radius = reader.number(table, "radius", prefix, low=0.0, low_open=True, field="length")
         return None if None in (length, radius) else Rod(length, radius)
     if kind == "box":
-        width = reader.number(table, "width", prefix, low=0.0, low_open=True)
-        height = reader.number(table, "height", prefix, low=0.0, low_open=True)
+        width = reader.number(table, "width", prefix, low=0.0, low_open=True, field="length")
+        height = reader.number(table, "height", prefix, low=0.0, low_open=True, field="length")
         return None if None in (width, height) else Box(width, height)
     return _read_polygon(reader, table, prefix)
 
@@ -188,7 +216,7 @@ def _read_polygon(reader: TableReader, table, prefix):
         return reader.error(dotted, "must be a list of [x, y] pairs", raw, allowed)
     points = []
     for i, vertex in enumerate(raw):
-        xy = [reader.check_number(f"{dotted}[{i}]", c) for c in vertex]
+        xy = [reader.check_number(f"{dotted}[{i}]", c, field="coordinate") for c in vertex]
         if None in xy:
             return None
         points.append(xy)
@@ -221,15 +249,18 @@ def _read_body(reader: TableReader, table, index: int, ground: bool) -> BodySpec
     reader.keys(table, prefix, BODY_KEYS + shape_keys,
                 f"a {kind} body" if shape_keys else "a body")
     shape = _read_shape(reader, table, prefix)
-    mass = reader.number(table, "mass", prefix, low=0.0, low_open=True)
-    inertia = reader.number(table, "inertia", prefix, default=None, low=0.0, low_open=True)
-    angle_deg = reader.number(table, "angle_deg", prefix, default=0.0)
-    velocity = reader.vector(table, "velocity", prefix, 2, default=(0.0, 0.0))
-    angular_velocity = reader.number(table, "angular_velocity", prefix, default=0.0)
+    mass = reader.number(table, "mass", prefix, low=0.0, low_open=True, field="mass")
+    inertia = reader.number(table, "inertia", prefix, default=None, low=0.0, low_open=True,
+                            field="inertia")
+    angle_deg = reader.number(table, "angle_deg", prefix, default=0.0, field="angle_deg")
+    velocity = reader.vector(table, "velocity", prefix, 2, default=(0.0, 0.0), field="speed")
+    angular_velocity = reader.number(table, "angular_velocity", prefix, default=0.0,
+                                     field="angular_velocity")
     if ground:
-        position = reader.vector(table, "position", prefix, 2, default=None)
+        position = reader.vector(table, "position", prefix, 2, default=None,
+                                 field="coordinate")
     else:
-        position = reader.vector(table, "position", prefix, 2)
+        position = reader.vector(table, "position", prefix, 2, field="coordinate")
     values = (name, shape, mass, angle_deg, velocity, angular_velocity)
     if any(v is None for v in values) or (not ground and position is None):
         return None
@@ -270,14 +301,14 @@ def _read_matrix(reader: TableReader, doc):
     else:
         rows = []
         for i, row in enumerate(raw):
-            numbers = [reader.check_number(f"mass_matrix[{i}][{j}]", v)
+            numbers = [reader.check_number(f"mass_matrix[{i}][{j}]", v, field="matrix")
                        for j, v in enumerate(row)]
             rows.append(None if None in numbers else tuple(numbers))
         rows = None if None in rows else tuple(rows)
     size = len(rows) if rows else None
-    wn = reader.vector(doc, "wn", "", size)
-    wt = reader.vector(doc, "wt", "", size)
-    u = reader.vector(doc, "u", "", size)
+    wn = reader.vector(doc, "wn", "", size, field="direction")
+    wt = reader.vector(doc, "wt", "", size, field="direction")
+    u = reader.vector(doc, "u", "", size, field="speed")
     if None in (rows, wn, wt, u):
         return None
     matrix = np.array(rows)
@@ -311,14 +342,15 @@ def _read_two_sled(reader: TableReader, doc):
         if values[key] is not None and not abs(values[key]) < math.pi / 2:
             values[key] = reader.error(f"parameters.{key}", "out of range", values[key],
                                        "a steering angle in rad, |angle| < π/2")
-    for key in ("m", "l"):
+    for key, field in (("m", "two_sled_mass"), ("l", "two_sled_length")):
         if key in table:
-            values[key] = reader.number(table, key, "parameters", low=0.0, low_open=True)
+            values[key] = reader.number(table, key, "parameters", low=0.0, low_open=True,
+                                        field=field)
     for key in ("s", "c", "q3", "q6"):
         if key in table:
-            values[key] = reader.number(table, key, "parameters")
+            values[key] = reader.number(table, key, "parameters", field="two_sled_offset")
     if "u" in table:
-        values["u"] = reader.vector(table, "u", "parameters", 4)
+        values["u"] = reader.vector(table, "u", "parameters", 4, field="speed")
     if any(v is None for v in values.values()):
         return None
     return MappingProxyType(values)
@@ -334,20 +366,28 @@ def _read_sweep(reader: TableReader, doc, scenario: Scenario) -> SweepSpec | Non
     if not reader.require(table, "values", "sweep"):
         return None
     raw = table["values"]
-    list_help = "a list of numbers or {start, stop, num} (num >= 2)"
+    most = int(limit("max_sweep_points"))
+    list_help = (f"a list of numbers or {{start, stop, num}} (2 <= num <= {most}; "
+                 "IMPACT_HARNESS_MAX_SWEEP_POINTS raises the bound)")
+    field = _sweep_field(parameter)
     if isinstance(raw, dict):
         reader.keys(raw, "sweep.values", ("start", "stop", "num"), "sweep.values")
-        start = reader.number(raw, "start", "sweep.values")
-        stop = reader.number(raw, "stop", "sweep.values")
+        start = reader.number(raw, "start", "sweep.values", field=field)
+        stop = reader.number(raw, "stop", "sweep.values", field=field)
         num = raw.get("num")
-        if isinstance(num, bool) or not isinstance(num, int) or num < 2:
-            reader.error("sweep.values.num", "must be an integer >= 2", num, list_help)
+        if isinstance(num, bool) or not isinstance(num, int) or not 2 <= num <= most:
+            reader.error("sweep.values.num", f"must be an integer >= 2 and <= {most}", num,
+                         list_help)
             return None
         if None in (start, stop):
             return None
         values = tuple(float(v) for v in np.linspace(start, stop, num))
+    elif isinstance(raw, list) and len(raw) > most:
+        return reader.error("sweep.values", f"lists {len(raw)} values", f"<{len(raw)} values>",
+                            list_help)
     elif isinstance(raw, list) and raw:
-        numbers = [reader.check_number(f"sweep.values[{i}]", v) for i, v in enumerate(raw)]
+        numbers = [reader.check_number(f"sweep.values[{i}]", v, field=field)
+                   for i, v in enumerate(raw)]
         if None in numbers:
             return None
         values = tuple(numbers)
@@ -359,6 +399,20 @@ def _read_sweep(reader: TableReader, doc, scenario: Scenario) -> SweepSpec | Non
     if parameter is None:
         return None
     return SweepSpec(parameter=parameter, values=values)
+
+
+def _sweep_field(parameter) -> str | None:
+    """The :data:`MAGNITUDES` entry that bounds the values of a sweep ``parameter``."""
+    if not isinstance(parameter, str):
+        return None
+    if parameter in SWEEP_MAGNITUDE:
+        return SWEEP_MAGNITUDE[parameter]
+    if parameter.startswith("parameters."):  # the two sleds' steering angles (rad)
+        return None
+    for suffix, field in SWEEP_MAGNITUDE.items():  # body.<name>.<field>
+        if parameter.endswith("." + suffix):
+            return field
+    return None
 
 
 def _per_point(reader, dotted, raw, count, check, allowed):
@@ -448,9 +502,10 @@ def _read_gates(reader: TableReader, raw, scenario: Scenario) -> list[Gate]:
             continue
         reader.keys(value, dotted, GATE_KEYS, "a gate")
         law = reader.string(value, "law", dotted, choices=LAWS)
-        limit = reader.number(value, "max_departure", dotted, low=0.0, low_open=True)
-        if law is not None and limit is not None:
-            gates.append(Gate(engine=engine, preset=preset, law=law, max_departure=limit))
+        largest = reader.number(value, "max_departure", dotted, low=0.0, low_open=True,
+                                field="max_departure")
+        if law is not None and largest is not None:
+            gates.append(Gate(engine=engine, preset=preset, law=law, max_departure=largest))
     return gates
 
 
@@ -469,9 +524,26 @@ def _read_engine_settings(reader: TableReader, raw, scenario: Scenario):
             reader.error(f"engine_settings.{engine}", "must be a table", table,
                          "setting = value pairs")
             continue
-        check_engine_settings(reader, engine, table)
+        if _check_work_bounds(reader, engine, table):
+            check_engine_settings(reader, engine, table)
         settings[engine] = MappingProxyType(dict(table))
     return MappingProxyType(settings)
+
+
+def _check_work_bounds(reader: TableReader, engine: str, table: Mapping) -> bool:
+    """Step cap and time step within :data:`LIMITS` (a run must end); False if not."""
+    ok = True
+    most = limit("max_engine_steps")
+    steps = table.get("max_steps")
+    if isinstance(steps, (int, float)) and not isinstance(steps, bool) and not steps <= most:
+        ok = reader.error(f"engine_settings.{engine}.max_steps", "too many steps", steps,
+                          f"at most {most:g} (IMPACT_HARNESS_MAX_ENGINE_STEPS raises it)")
+    smallest = limit("min_time_step")
+    step = table.get("time_step")
+    if isinstance(step, (int, float)) and not isinstance(step, bool) and 0 < step < smallest:
+        ok = reader.error(f"engine_settings.{engine}.time_step", "time step too small", step,
+                          f"at least {smallest:g} s (IMPACT_HARNESS_MIN_TIME_STEP lowers it)")
+    return ok is not None
 
 
 def parse_scenario(doc: Mapping[str, Any], path=None) -> Scenario:
@@ -486,11 +558,11 @@ def parse_scenario(doc: Mapping[str, Any], path=None) -> Scenario:
                          allowed="letters, digits, '_', '-' and '.'")
     description = reader.string(doc, "description", "", default="")
     tags = _read_tags(reader, doc)
-    restitution = reader.number(doc, "restitution", "", low=0.0, high=1.0)
-    friction = reader.number(doc, "friction", "", low=0.0)
+    restitution = reader.number(doc, "restitution", "", low=0.0, high=1.0, field="restitution")
+    friction = reader.number(doc, "friction", "", low=0.0, field="friction")
     laws = reader.names(doc, "laws", "", LAWS, default=LAWS)
     gap_tolerance = reader.number(doc, "gap_tolerance", "", default=DEFAULT_GAP_TOLERANCE,
-                                  low=0.0, low_open=True)
+                                  low=0.0, low_open=True, field="gap_tolerance")
     expect_sequence = doc.get("expect_sequence", False)
     if not isinstance(expect_sequence, bool):
         reader.error("expect_sequence", "must be true or false", expect_sequence, "true, false")
@@ -570,6 +642,10 @@ def load_scenario(path) -> Scenario:
     except OSError as error:
         raise ScenarioError(f"cannot read the file: {error.strerror or error}", path=path,
                             allowed="a readable .toml file") from None
+    except UnicodeDecodeError as error:
+        raise ScenarioError(f"not UTF-8 text: byte {error.object[error.start]:#04x} at offset "
+                            f"{error.start}", path=path,
+                            allowed="a TOML file encoded in UTF-8") from None
     try:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:

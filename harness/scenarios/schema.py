@@ -68,3 +68,68 @@ GATE_KEYS = ("law", "max_departure")
 NAME_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
 TAG_PATTERN = re.compile(r"^[a-z0-9][a-z0-9-]*$")
 DERIVED_TAGS = ("all",)
+
+#: Supported magnitudes of the numeric fields: ``(smallest, largest)`` allowed |value| (a
+#: smallest of 0 allows zero). Every number must also be 0 or at least :data:`TINY` in
+#: magnitude. Outside these the solver or an engine overflows, underflows or loses its
+#: conditioning (a 1e300 kg mass squares to infinity; a 5e-324 kg one inverts to it); inside
+#: them the mass matrix's condition number stays below about 1e16 / 1e4 (masses and lengths
+#: each span 8 decades at most), so the laws keep several correct digits.
+MAGNITUDES: dict[str, tuple[float, float]] = {
+    "mass": (1e-4, 1e4),  # kg
+    "inertia": (1e-10, 1e4),  # kg m^2
+    "length": (1e-4, 1e2),  # m: radius, length, width, height
+    "coordinate": (0.0, 1e3),  # m: position, polygon vertex
+    "speed": (0.0, 1e3),  # m/s: velocity components
+    "angular_velocity": (0.0, 1e4),  # rad/s
+    "angle_deg": (0.0, 1e4),  # degrees
+    "friction": (0.0, 1e3),  # mu
+    "restitution": (0.0, 1.0),  # e
+    "gap_tolerance": (1e-12, 1e-2),  # m
+    "max_departure": (1e-15, 1e6),  # relative, dimensionless
+    "matrix": (0.0, 1e6),  # mass-matrix entries
+    "direction": (0.0, 1e3),  # wn, wt entries
+    "two_sled_mass": (1e-4, 1e4),  # kg, parameters.m
+    "two_sled_length": (1e-4, 1e2),  # m, parameters.l
+    "two_sled_offset": (0.0, 1e3),  # parameters.s, c, q3, q6
+}
+#: Any non-zero number smaller in magnitude than this is refused (subnormals, 1e-300 ...).
+TINY = 1e-12
+#: Sweep parameter -> its MAGNITUDES entry (body parameters by their last part).
+SWEEP_MAGNITUDE = {
+    # restitution: check_points names the sweep point of a value outside 0 … 1
+    "friction": "friction", "mass": "mass",
+    "inertia": "inertia", "angle_deg": "angle_deg", "angular_velocity": "angular_velocity",
+    "velocity.x": "speed", "velocity.y": "speed", "radius": "length", "length": "length",
+    "width": "length", "height": "length", "parameters.m": "two_sled_mass",
+    "parameters.l": "two_sled_length", "parameters.s": "two_sled_offset",
+    "parameters.c": "two_sled_offset", "parameters.q3": "two_sled_offset",
+    "parameters.q6": "two_sled_offset",
+}
+
+#: Bounds on the work one file may ask for; each can be raised with the environment variable
+#: ``IMPACT_HARNESS_<NAME>`` (e.g. ``IMPACT_HARNESS_MAX_SWEEP_POINTS=5000``).
+LIMITS: dict[str, float] = {
+    # Every point is checked (geometry, solver) when read, then run on every engine and
+    # preset: 1000 points take about a minute to run; the library's largest sweep has 11.
+    "max_sweep_points": 1000,
+    # Engine step cap (settings max_steps): the library's largest is 20000 (MuJoCo).
+    "max_engine_steps": 1_000_000,
+    # Smallest engine time step (s); the library's smallest is 1e-5 (MuJoCo accurate).
+    "min_time_step": 1e-7,
+}
+
+
+def limit(name: str) -> float:
+    """``LIMITS[name]``, or the value of ``IMPACT_HARNESS_<NAME>`` when set and a number."""
+    import os
+
+    text = os.environ.get(f"IMPACT_HARNESS_{name.upper()}")
+    if text:
+        try:
+            value = float(text)
+        except ValueError:
+            raise ValueError(f"IMPACT_HARNESS_{name.upper()}={text!r}: not a number") from None
+        if value > 0:
+            return value
+    return LIMITS[name]

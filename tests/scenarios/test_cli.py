@@ -31,7 +31,7 @@ def test_validate_a_bad_file(capsys, tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text(GOOD.read_text().replace("mass = 1.0", "mass = -3.0"))
     code, out, _ = run(capsys, "validate", GOOD, bad)
-    assert code == 1
+    assert code == 2  # bad input
     assert "ERROR" in out and "bad.toml" in out and "body.disk.mass = -3.0" in out
     assert "allowed: > 0" in out
     assert "1 of 2 scenario files OK, 1 with errors" in out
@@ -41,7 +41,7 @@ def test_validate_reports_a_wrong_expectation(capsys, tmp_path):
     wrong = tmp_path / "wrong.toml"
     wrong.write_text(GOOD.read_text().replace("poisson = 2", "poisson = 5"))
     code, out, _ = run(capsys, "validate", wrong)
-    assert code == 1
+    assert code == 2
     assert "wrong.toml: expect.collision_type.poisson = 5, but the solver gives 2" in out
     code, out, _ = run(capsys, "validate", "--no-solve", wrong)
     assert code == 0
@@ -51,12 +51,12 @@ def test_validate_duplicate_names(capsys, tmp_path):
     copy = tmp_path / "copy.toml"
     copy.write_text(GOOD.read_text())
     code, out, _ = run(capsys, "validate", GOOD, copy)
-    assert code == 1 and "copy.toml: name = 'disk-oblique': the name is already used" in out
+    assert code == 2 and "copy.toml: name = 'disk-oblique': the name is already used" in out
 
 
 def test_validate_an_empty_directory(capsys, tmp_path):
     code, _, err = run(capsys, "validate", tmp_path)
-    assert code == 1 and "no scenario files" in err
+    assert code == 2 and "no scenario files" in err
 
 
 @pytest.mark.parametrize("shape", ["disk", "rod", "box", "polygon"])

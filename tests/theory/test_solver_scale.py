@@ -114,19 +114,27 @@ def test_any_scale_factor_scales_the_answer(problem, law, velocity_log, mass_log
     if base.status != errors.SOLVED:
         assert scaled.status == base.status
         return
-    # Sizes of the scaled answers, in log10 so that they cannot overflow here.
+    # Sizes of the scaled answers, in log10 so that they cannot overflow here; an exact 0
+    # (no energy change at e = 1, μ = 0) stays 0 at any scale: no size.
+    def log_size(value, exponent):
+        return math.log10(value) + exponent if value > 0 else -math.inf
+
+    # A rounding-level energy change (|ΔE| below 1e-12 of v²/m_nn) is noise: scaled, it may
+    # round to 0 or overflow; nothing is claimed where that noise would pass 1e290.
+    speed = abs(problem["vn"]) + abs(problem["vt"])
+    energy_unit_log = math.log10(speed * speed / problem["mnn"]) + 2 * velocity_log - mass_log
+    if abs(base.energy_change) <= 1e-12 * speed * speed / problem["mnn"]:
+        assume(energy_unit_log < 290)
     impulse_size = abs(base.normal_impulse) + abs(base.tangential_impulse)
-    log_sizes = [math.log10(impulse_size) + velocity_log - mass_log,
-                 math.log10(abs(base.vn_separation) + abs(base.vt_separation) + 1e-300)
-                 + velocity_log,
-                 math.log10(abs(base.energy_change) + 1e-300) + 2 * velocity_log - mass_log]
+    log_sizes = [log_size(impulse_size, velocity_log - mass_log),
+                 log_size(abs(base.vn_separation) + abs(base.vt_separation), velocity_log),
+                 log_size(abs(base.energy_change), 2 * velocity_log - mass_log)]
     if max(log_sizes) > 308.3:  # beyond float64's 1.8e308: must be flagged
         assert scaled.status == errors.OUTPUT_OVERFLOW
         return
     # Near the edges (inputs' own rounding may tip the answer over, or subnormal answers
     # carry absolute rather than relative errors) nothing is claimed.
     assume(max(log_sizes) < 307.9 and min(log_sizes[0], log_sizes[2]) > -290)
-    speed = abs(problem["vn"]) + abs(problem["vt"])
     impulse_scale = times_ten_to(speed / problem["mnn"], velocity_log - mass_log)
     velocity_scale = speed * s
     energy_scale = times_ten_to(speed * speed / problem["mnn"], 2 * velocity_log - mass_log)

@@ -1,0 +1,487 @@
+"""Fault injection: nothing lost, nothing hangs (issue 11).
+
+Each test reproduces one fault found by running the harness as a new user would: a kill or
+a deleted cache in the middle of a run, two runs at once, a run of one file over the suite's
+results, hostile scenario files, unbounded work, bad cache entries, bad command-line values.
+A kill is simulated in process by an exception from the engine task (what the main process
+sees when a worker dies or the user presses Ctrl-C); one test kills a real process.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+from harness import cli
+from harness.run import runner
+from harness.run.cache import ResultCache
+from harness.run.records import Record, read_results, write_results
+from harness.scenarios import SCENARIO_DIR, ScenarioError, load_scenario
+
+ROOT = Path(__file__).resolve().parents[2]
+DISK = SCENARIO_DIR / "disk-direct.toml"
+SWEEP = SCENARIO_DIR / "sweep-disk-alpha.toml"  # 9 sweep points: 9 engine runs per preset
+TWO_SLED = SCENARIO_DIR / "two-sled-row2.toml"  # analytic only: no engine
+
+
+def run_cli(*argv, cwd=None, env=None, timeout=120):
+    """``impact-harness ARGV`` in a subprocess: (exit status, stdout, stderr)."""
+    environment = dict(os.environ, PYTHONPATH=f"{ROOT / 'src'}{os.pathsep}{ROOT}")
+    environment.update(env or {})
+    done = subprocess.run([sys.executable, "-m", "harness.cli", *map(str, argv)], cwd=cwd,
+                          env=environment, capture_output=True, text=True, timeout=timeout,
+                          check=False)
+    return done.returncode, done.stdout, done.stderr
+
+
+def engine_outputs(outcome):
+    """(scenario, point, engine.preset) -> u_after of the engine records, to compare runs."""
+    return {(r.scenario, r.point["index"], r.label): r.u_after
+            for r in outcome.records if r.source != "analytic"}
+
+
+def sweep_run(cache, **options):
+    return runner.run([load_scenario(SWEEP)], engines=("pymunk",), presets=("defaults",),
+                      cache=cache, workers=1, log=None, **options)
+
+
+# --------------------------------------------------------------------------------------------
+# Finished work is kept; late failures lose nothing
+# --------------------------------------------------------------------------------------------
+def test_a_kill_mid_run_keeps_finished_results_and_the_rerun_recomputes_none(tmp_path,
+                                                                            monkeypatch):
+    clean = engine_outputs(sweep_run(None))
+    real_task = runner.engine_task
+    calls = []
+
+    def dies_at_the_fifth(task):
+        if len(calls) == 4:
+            raise KeyboardInterrupt  # the user's Ctrl-C, or a dead worker
+        calls.append(task)
+        return real_task(task)
+
+    monkeypatch.setattr(runner, "engine_task", dies_at_the_fifth)
+    with pytest.raises(KeyboardInterrupt):
+        sweep_run(ResultCache(tmp_path))
+    assert len(list(tmp_path.rglob("*.json"))) == 4  # each finished run stored at once
+
+    calls.clear()
+    monkeypatch.setattr(runner, "engine_task", lambda task: (calls.append(task),
+                                                             real_task(task))[1])
+    rerun = sweep_run(ResultCache(tmp_path))
+    assert len(calls) == 9 - 4  # nothing that had finished ran again
+    assert engine_outputs(rerun) == clean  # bit-identical to an uninterrupted run
+
+
+def test_a_real_kill_leaves_a_usable_cache(tmp_path):
+    """SIGKILL a real run part way, then rerun: the rerun's results equal a clean run's."""
+    cache_dir = tmp_path / "cache"
+    args = ("run", SWEEP, "--engines", "pymunk,pybullet", "--preset", "accurate",
+            "--workers", "1", "--cache-dir", cache_dir)
+    process = subprocess.Popen(
+        [sys.executable, "-m", "harness.cli", *map(str, args), "--json", tmp_path / "a.json"],
+        env=dict(os.environ, PYTHONPATH=f"{ROOT / 'src'}{os.pathsep}{ROOT}"),
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and process.poll() is None:
+        if len(list(cache_dir.rglob("*.json"))) >= 3:
+            break
+        time.sleep(0.02)
+    process.send_signal(signal.SIGKILL)
+    process.wait()
+    kept = len(list(cache_dir.rglob("*.json")))
+    assert kept >= 3  # written while the run was going, not at its end
+    (cache_dir / "ab").mkdir(exist_ok=True)
+    stale = cache_dir / "ab" / ".abcdef12-left-by-a-kill.tmp"
+    stale.write_bytes(b"")
+    os.utime(stale, (time.time() - 3600, time.time() - 3600))
+
+    status, _, err = run_cli(*args, "--json", tmp_path / "b.json")
+    assert status == 0, err
+    assert not stale.exists()  # the zero-size temporary of a killed writer is cleaned up
+    status, _, err = run_cli(*args[:-2], "--no-cache", "--json", tmp_path / "c.json")
+    assert status == 0, err
+    rerun, fresh = read_results(tmp_path / "b.json"), read_results(tmp_path / "c.json")
+    assert sum(r.cached for r in rerun.records) >= kept
+    assert [r.u_after for r in rerun.records] == [r.u_after for r in fresh.records]
+
+
+def test_deleting_the_cache_mid_run_the_run_completes(tmp_path, monkeypatch):
+    clean = engine_outputs(sweep_run(None))
+    real_task = runner.engine_task
+    cache_dir = tmp_path / "cache"
+    calls = []
+
+    def deletes_the_cache(task):
+        calls.append(task)
+        if len(calls) in (3, 6):
+            shutil.rmtree(cache_dir, ignore_errors=True)  # rm -rf by hand, twice
+        return real_task(task)
+
+    monkeypatch.setattr(runner, "engine_task", deletes_the_cache)
+    outcome = sweep_run(ResultCache(cache_dir))
+    assert engine_outputs(outcome) == clean
+
+
+def test_a_shard_removed_between_mkdir_and_the_write_is_made_again(tmp_path, monkeypatch):
+    """The race of `rm -rf` during a run: the directory vanishes after put's mkdir."""
+    import tempfile
+
+    real_mkstemp = tempfile.mkstemp
+    removed = []
+
+    def remove_first(*args, **kwargs):
+        if not removed:
+            removed.append(True)
+            shutil.rmtree(tmp_path / "cache")
+        return real_mkstemp(*args, **kwargs)
+
+    cache = ResultCache(tmp_path / "cache")
+    key = cache.key({"n": 1})
+    monkeypatch.setattr(tempfile, "mkstemp", remove_first)
+    cache.put(key, {"status": "ok"})
+    assert removed and cache.get(key) == {"status": "ok"}
+
+
+def test_a_cache_that_cannot_be_written_costs_the_cache_not_the_run(tmp_path, monkeypatch):
+    def refuse(self, key, record):
+        raise PermissionError(13, "Permission denied", str(self.root))
+
+    monkeypatch.setattr(ResultCache, "put", refuse)
+    outcome = sweep_run(ResultCache(tmp_path))
+    assert len(engine_outputs(outcome)) == 9
+    assert outcome.warnings and "Permission denied" in outcome.warnings[0]
+
+
+def test_an_internal_error_in_one_point_keeps_every_other_record(monkeypatch):
+    real = runner.metrics.departures
+    calls = []
+
+    def breaks_once(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 2:
+            raise ZeroDivisionError("injected")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(runner.metrics, "departures", breaks_once)
+    outcome = sweep_run(None)
+    errors = [r for r in outcome.records if r.status.startswith("error: internal")]
+    assert len(errors) >= 1 and "ZeroDivisionError: injected" in errors[0].status
+    assert len(outcome.records) == 9 * (len(load_scenario(SWEEP).laws) + 1)
+    assert outcome.internal_errors
+
+
+# --------------------------------------------------------------------------------------------
+# Results files
+# --------------------------------------------------------------------------------------------
+def test_two_writers_of_one_results_file_both_succeed_and_it_stays_valid(tmp_path):
+    path = tmp_path / "results.json"
+    records = [Record(scenario=f"s{i}", point={"index": 0, "parameter": None, "value": None,
+                                              "label": ""}, source="analytic", law="newton")
+               for i in range(2000)]
+    failures = []
+
+    def writer():
+        try:
+            for _ in range(15):
+                write_results(path, records, {"who": threading.get_ident()})
+        except Exception as error:  # noqa: BLE001 - every failure is the finding
+            failures.append(error)
+
+    threads = [threading.Thread(target=writer) for _ in range(4)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert failures == []
+    assert len(read_results(path).records) == 2000
+    assert not list(tmp_path.glob("*.tmp"))
+
+
+def test_run_of_one_file_does_not_replace_the_suites_results(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    status, _, err = run_cli("run", "--tags", "quick", "--engines", "pymunk", "--preset",
+                             "defaults", "--no-cache", cwd=tmp_path)
+    assert status == 0, err
+    suite_results = tmp_path / "reports" / "results.json"
+    before = suite_results.read_bytes()
+    status, _, err = run_cli("run", DISK, "--engines", "pymunk", "--no-cache", cwd=tmp_path)
+    assert status == 2
+    assert "reports/results.json" in err and "--json" in err and err.count("\n") == 1
+    assert suite_results.read_bytes() == before
+    status, _, err = run_cli("run", DISK, "--engines", "pymunk", "--no-cache", "--json",
+                             tmp_path / "mine.json", cwd=tmp_path)
+    assert status == 0, err
+    assert suite_results.read_bytes() == before
+
+
+def test_report_never_deletes_what_it_did_not_write(tmp_path):
+    from harness import report
+
+    results_path = tmp_path / "results.json"
+    outcome = runner.run([load_scenario(TWO_SLED)], log=None, workers=1)
+    write_results(results_path, outcome.records, outcome.provenance, outcome.scenarios)
+    figures = tmp_path / "figures"
+    figures.mkdir()
+    foreign = figures / "impulse-someone-elses.png"
+    foreign.write_bytes(b"not ours")
+    report.write_report(read_results(results_path), tmp_path)
+    assert foreign.read_bytes() == b"not ours"
+
+
+def test_report_on_a_broken_results_file_names_it(tmp_path):
+    broken = tmp_path / "broken.json"
+    broken.write_text('{"format": "impact-harness-results", "records": [', encoding="utf-8")
+    status, _, err = run_cli("report", "--results", broken, "--out", tmp_path / "out")
+    assert status == 2
+    assert str(broken) in err and "Traceback" not in err
+
+
+def test_summary_escapes_markdown_in_names_and_statuses(tmp_path):
+    from harness.report.summary import write_summary
+    from harness.run.records import Results
+
+    point = {"index": 0, "parameter": None, "value": None, "label": ""}
+    records = [Record(scenario="my_odd_name", point=point, source="pymunk", preset="defaults",
+                      status="error: a | b *c* <x>")]
+    text = write_summary(Results(records=records), tmp_path).read_text(encoding="utf-8")
+    line = next(line for line in text.splitlines() if line.startswith("- my"))
+    assert r"my\_odd\_name" in line and r"a \| b \*c\* &lt;x&gt;" in line
+
+
+# --------------------------------------------------------------------------------------------
+# Hostile scenario files: one line each, exit 2, the other files still processed
+# --------------------------------------------------------------------------------------------
+HOSTILE = {  # file name -> (replace this line of disk-direct.toml, by this, key named)
+    "mass-huge-int": ("mass = 1.0", "mass = 1" + "0" * 400, "body.disk.mass"),
+    "friction-huge-int": ("friction = 0.3", "friction = 1" + "0" * 400, "friction"),
+    "restitution-huge-int": ("restitution = 0.5", "restitution = 1" + "0" * 400,
+                             "restitution"),
+    "angle-huge-int": ("mass = 1.0", "mass = 1.0\nangle_deg = 1" + "0" * 400,
+                       "body.disk.angle_deg"),
+    "gate-huge-int": ("[expect]", ('[expect]\ngate."pymunk.accurate" = { law = "poisson", '
+                                   'max_departure = 1' + "0" * 400 + " }"),
+                      "expect.gate.pymunk.accurate.max_departure"),
+    "radius-huge": ("radius = 0.1", "radius = 1e300", "body.disk.radius"),
+    "mass-huge": ("mass = 1.0", "mass = 1e300", "body.disk.mass"),
+    "radius-tiny": ("radius = 0.1", "radius = 1e-300", "body.disk.radius"),
+    "mass-subnormal": ("mass = 1.0", "mass = 5e-324", "body.disk.mass"),
+    "velocity-huge": ("velocity = [0.0, -1.0]", "velocity = [0.0, -1e300]",
+                      "body.disk.velocity[1]"),
+    "sweep-1e8": ("[expect]", ("[sweep]\nparameter = \"friction\"\n"
+                               "values = { start = 0.0, stop = 1.0, num = 100000000 }\n[expect]"),
+                  "sweep.values.num"),
+    "sweep-listed": ("[expect]", "[sweep]\nparameter = \"friction\"\nvalues = ["
+                     + ", ".join(str(i / 200000) for i in range(200000)) + "]\n[expect]",
+                     "sweep.values"),
+    "steps-forever": ("[expect]", ("[engine_settings.pymunk]\nmax_steps = 1000000000\n"
+                                   "time_step = 1e-300\n[expect]"), "engine_settings.pymunk."),
+}
+
+
+def hostile_file(directory: Path, name: str) -> Path:
+    old, new, _ = HOSTILE[name]
+    text = DISK.read_text(encoding="utf-8")
+    assert old in text
+    text = text.replace(old, new, 1).replace('name = "disk-direct"', f'name = "{name}"')
+    path = directory / f"{name}.toml"
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+@pytest.mark.parametrize("name", sorted(HOSTILE))
+def test_a_hostile_file_is_one_line_naming_file_key_value_and_what_is_allowed(tmp_path, name):
+    path = hostile_file(tmp_path, name)
+    start = time.perf_counter()
+    with pytest.raises(ScenarioError) as raised:
+        load_scenario(path)
+    assert time.perf_counter() - start < 5  # refused before the work, not after
+    errors = raised.value.errors
+    for error in errors:
+        text = str(error)
+        assert "\n" not in text and str(path) in text and "allowed:" in text
+    assert errors[0].key.startswith(HOSTILE[name][2])
+
+
+def test_a_non_utf8_file_is_one_line_naming_it(tmp_path):
+    bad = tmp_path / "latin1.toml"
+    bad.write_bytes(DISK.read_bytes().replace(b"Disk (r", b"Disque \xe9 (r"))
+    shutil.copy(SCENARIO_DIR / "disk-oblique.toml", tmp_path)
+    from harness.scenarios.library import load_scenarios_reporting
+
+    scenarios, errors = load_scenarios_reporting([tmp_path])
+    assert [s.name for s in scenarios] == ["disk-oblique"]
+    assert len(errors) == 1 and str(bad) in str(errors[0]) and "UTF-8" in str(errors[0])
+
+
+@pytest.mark.parametrize("command", ["validate", "run"])
+def test_hostile_files_exit_2_and_the_good_ones_are_still_processed(tmp_path, command):
+    for name in ("mass-huge-int", "mass-subnormal", "radius-huge"):
+        hostile_file(tmp_path, name)
+    (tmp_path / "latin1.toml").write_bytes(b'name = "x\xe9"\n')
+    shutil.copy(SCENARIO_DIR / "disk-oblique.toml", tmp_path)
+    extra = ("--engines", "pymunk", "--preset", "defaults", "--no-cache", "--json",
+             tmp_path / "r.json") if command == "run" else ()
+    status, out, err = run_cli(command, tmp_path, *extra)
+    assert status == 2, out + err
+    assert "Traceback" not in out + err
+    lines = [line for line in (out + err).splitlines() if "allowed" in line]
+    assert len(lines) == 4
+    if command == "run":
+        assert read_results(tmp_path / "r.json").scenario_names() == ["disk-oblique"]
+    else:
+        assert "disk-oblique" in out
+
+
+# --------------------------------------------------------------------------------------------
+# Cache entries and the cache's home
+# --------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("damage", ["velocities-not-a-list", "four-components", "nan-ok",
+                                    "status-only", "not-json"])
+def test_a_bad_cache_entry_is_a_reported_miss(tmp_path, damage):
+    cache = ResultCache(tmp_path)
+    clean = engine_outputs(sweep_run(cache))
+    entry = min(tmp_path.rglob("*.json"))
+    stored = json.loads(entry.read_text(encoding="utf-8"))
+    record = stored["record"]
+    if damage == "velocities-not-a-list":
+        record["velocities"] = "oops"
+    elif damage == "four-components":
+        record["velocities"][0].append(0.0)
+    elif damage == "nan-ok":
+        record["status"], record["velocities"][0][0] = "ok", math.nan
+    elif damage == "status-only":
+        stored["record"] = {"status": "ok"}
+    text = json.dumps(stored) if damage != "not-json" else '{"key": "'
+    entry.write_text(text, encoding="utf-8")
+    again = ResultCache(tmp_path)
+    outcome = sweep_run(again)
+    assert engine_outputs(outcome) == clean
+    assert sum(not r.cached for r in outcome.records if r.source != "analytic") == 1
+    assert len(again.rejected) == 1 and str(entry) in again.rejected[0]
+    assert any(str(entry) in warning for warning in outcome.warnings)
+
+
+def test_the_cache_has_one_home_whatever_the_working_directory(tmp_path, monkeypatch):
+    from harness.run.cache import default_cache_dir
+
+    monkeypatch.delenv("IMPACT_HARNESS_CACHE_DIR", raising=False)
+    monkeypatch.chdir(tmp_path)
+    home = default_cache_dir()
+    assert home.is_absolute() and tmp_path not in home.parents
+    assert ResultCache().root == home
+    monkeypatch.setenv("IMPACT_HARNESS_CACHE_DIR", str(tmp_path / "elsewhere"))
+    assert default_cache_dir() == tmp_path / "elsewhere"
+
+
+def test_make_clean_removes_the_cache():
+    makefile = (ROOT / "Makefile").read_text(encoding="utf-8")
+    clean = makefile.split("\nclean:", 1)[1].split("\n\n", 1)[0]
+    assert ".cache" in clean
+
+
+def test_cache_prune_removes_entries_of_other_code_and_old_ones(tmp_path):
+    old_code = ResultCache(tmp_path, version="old")
+    old_code.put(old_code.key({"n": 1}), {"status": "ok"})
+    current = ResultCache(tmp_path, version="new")
+    current.put(current.key({"n": 1}), {"status": "ok"})
+    aged = current.key({"n": 2})
+    current.put(aged, {"status": "ok"})
+    os.utime(current.path(aged), (time.time() - 40 * 86400, time.time() - 40 * 86400))
+    assert current.info()["entries"] == 3
+    removed = current.prune(max_age_days=30)
+    assert removed["entries"] == 2
+    assert current.info()["entries"] == 1
+    current.clear()
+    assert current.info()["entries"] == 0
+
+
+def test_cache_command_info_prune_clear(tmp_path):
+    cache = ResultCache(tmp_path, version="other")
+    cache.put(cache.key({"n": 1}), {"status": "ok"})
+    status, out, _ = run_cli("cache", "info", "--cache-dir", tmp_path)
+    assert status == 0 and str(tmp_path) in out and "1 entr" in out
+    status, out, _ = run_cli("cache", "prune", "--cache-dir", tmp_path)
+    assert status == 0 and not list(tmp_path.rglob("*.json"))
+
+
+# --------------------------------------------------------------------------------------------
+# Bounds on work
+# --------------------------------------------------------------------------------------------
+def test_an_engine_task_that_runs_too_long_is_stopped(monkeypatch):
+    import harness.engines as engines_module
+
+    class Sleeper:
+        def run(self, scene, settings):
+            time.sleep(30)
+
+    monkeypatch.setattr(engines_module, "load_engine", lambda name: Sleeper())
+    start = time.perf_counter()
+    output = runner.engine_task({"engine": "pymunk", "settings": {}, "scene": None,
+                                 "time_limit_s": 0.3})
+    assert time.perf_counter() - start < 5
+    assert output["status"].startswith("error: time limit")
+
+
+# --------------------------------------------------------------------------------------------
+# Command-line values checked before any work; distinct exit codes
+# --------------------------------------------------------------------------------------------
+BAD_ARGUMENTS = {
+    "workers-zero": ("--workers", "0"),
+    "workers-negative": ("--workers", "-3"),
+    "scheduler-without-dask": ("--scheduler", "tcp://127.0.0.1:1"),
+    "json-in-proc": ("--json", "/proc/x/r.json"),
+    "json-is-a-directory": ("--json", "{tmp}"),
+    "cache-dir-in-proc": ("--cache-dir", "/proc/x"),
+    "cache-dir-is-a-file": ("--cache-dir", "{file}"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_ARGUMENTS))
+def test_bad_arguments_are_one_line_and_exit_2_before_any_work(tmp_path, monkeypatch, capsys,
+                                                               case):
+    a_file = tmp_path / "a-file"
+    a_file.write_text("x")
+    option, value = BAD_ARGUMENTS[case]
+    value = value.format(tmp=tmp_path, file=a_file)
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("scenarios loaded before the arguments were checked")
+
+    from harness.scenarios import library
+
+    monkeypatch.setattr(runner, "select_scenarios", no_work)
+    monkeypatch.setattr(library, "load_scenarios_reporting", no_work)
+    extra = () if option == "--json" else ("--json", str(tmp_path / "r.json"))
+    status = cli.main(["run", str(DISK), option, value, *extra])
+    err = capsys.readouterr().err
+    assert status == 2
+    assert err.count("\n") == 1 and option in err, err
+
+
+def test_an_internal_error_exits_3_with_one_line(tmp_path, monkeypatch, capsys):
+    def broken(*args, **kwargs):
+        raise RuntimeError("injected bug")
+
+    monkeypatch.setattr(runner, "run", broken)
+    status = cli.main(["run", str(DISK), "--json", str(tmp_path / "r.json"), "--no-cache"])
+    err = capsys.readouterr().err
+    assert status == 3
+    assert "internal error" in err and "injected bug" in err and "Traceback" not in err
+
+
+def test_exit_codes_are_documented_in_the_help():
+    parser = cli.build_parser(None)
+    for code in ("0", "1", "2", "3"):
+        assert f"  {code} " in parser.epilog
+    assert "exit" in (cli.__doc__ or "").lower()
