@@ -169,13 +169,18 @@ def _polygon_fixture(body, vertices, radius: float):
             f"{len(vertices)} vertices (it welds near vertices); try a larger length_scale"
         )
     fixture.shape.radius = radius
+    # The skin pads the scene's outline: a contact's overlap of the scene's bodies is its
+    # separation plus the skins (a rod's core sets its own userData to 0: inset by its skin).
+    fixture.userData = radius
     return fixture
 
 
 def _add_fixtures(b2_body, shape, length: float, skin: float) -> list:
     """The fixtures of one scene shape on ``b2_body`` (lengths times ``length``)."""
     if shape.kind == "disk":
-        return [b2_body.CreateCircleFixture(radius=shape.radius * length, density=0.0)]
+        disk = b2_body.CreateCircleFixture(radius=shape.radius * length, density=0.0)
+        disk.userData = 0.0  # a circle's radius is the disk's own
+        return [disk]
     if shape.kind == "rod":
         half, radius = shape.length / 2.0 * length, shape.radius * length
         caps = [b2_body.CreateCircleFixture(radius=radius, pos=(x, 0.0), density=0.0)
@@ -187,6 +192,9 @@ def _add_fixtures(b2_body, shape, length: float, skin: float) -> list:
             b2_body,
             [(-half, -thickness), (half, -thickness), (half, thickness), (-half, thickness)],
             core_skin)
+        core.userData = 0.0  # its skin lies inside the capsule's outline
+        for cap in caps:
+            cap.userData = 0.0
         return [*caps, core]
     vertices = [(x * length, y * length) for x, y in shape.vertices().tolist()]
     return [_polygon_fixture(b2_body, vertices, skin)]
@@ -276,7 +284,8 @@ def _world_manifold(contact, poses=None) -> tuple[tuple[float, float], list, lis
     """``(normal from fixture A to B, points, separations)`` of a contact, in world frame.
 
     b2WorldManifold::Initialize redone in Python (pybox2d's ``worldManifold`` returned an
-    uninitialised normal), with separations for the penetration. ``poses`` maps a body to
+    uninitialised normal), with the separations of the skinned shapes (Box2D's, negative
+    within the summed skins). ``poses`` maps a body to
     its ``_pose`` when the manifold was computed (the start of the step: after the step the
     bodies have moved, which would turn a circle pair's normal); by default the poses now.
     """
@@ -468,6 +477,8 @@ class Box2DEngine(Engine):
             if not contact.touching or contact.manifold.pointCount == 0:
                 continue
             contact_normal, contact_points, separations = _world_manifold(contact, poses)
+            # Overlap of the scene's outlines: the skins are padding, not the bodies.
+            padding = contact.fixtureA.userData + contact.fixtureB.userData
             # The impulse on scene body B (Box2D applies +P to fixture B's body).
             sign = 1.0 if contact.fixtureB.body == body_b else -1.0
             n_x, n_y = contact_normal
@@ -476,7 +487,7 @@ class Box2DEngine(Engine):
                 # Box2D's tangent is cross(n, 1) = (n_y, -n_x).
                 step_x += sign * (p_n * n_x + p_t * n_y)
                 step_y += sign * (p_n * n_y - p_t * n_x)
-            points.extend((x / length, y / length, -separation / length)
+            points.extend((x / length, y / length, -(separation + padding) / length)
                           for (x, y), separation in zip(contact_points, separations))
             if normal is None:
                 normal = (sign * n_x, sign * n_y)
