@@ -44,10 +44,11 @@ Masses and inertias are set with ``b2Body::SetMassData`` (fixtures have zero den
 Pair values: Box2D mixes ``friction = sqrt(μ_A·μ_B)`` and ``restitution = max(e_A, e_B)``;
 every fixture gets the pair's ``e`` and ``μ`` (``sqrt(μ·μ) == μ`` exactly in float32).
 
-Reuse: before each run the bodies are deactivated (which destroys their contacts and their
-broad-phase proxies), moved to the start state and reactivated, and the contact manager
-looks for new pairs, so a run never sees a previous run's contacts or warm-start impulses
-and reruns are bit-identical.
+Reuse: before each run every contact is destroyed (with its warm-start impulses), the bodies
+are set to the start state, their broad-phase proxies are touched and the contact manager
+looks for new pairs. The proxies themselves are kept: their ids set the order in which the
+contacts are created and solved, so keeping them makes reruns bit-identical whatever ran
+before (see :meth:`_World.place`).
 
 pybox2d's ``contact.worldManifold`` returned an uninitialised normal here: the adapter
 computes the world manifold itself, from the poses at the step's start (the manifold's).
@@ -215,12 +216,14 @@ class _World:
             self.fixtures.append(_polygon_fixture(
                 ground, [(-width, -width), (width, -width), (width, 0.0), (-width, 0.0)], skin))
         self.bodies = []
+        self.body_fixtures: list = []
         for body in scene.bodies:
             b2_body = self.world.CreateDynamicBody(position=(0.0, 0.0))
-            self.fixtures.extend(_add_fixtures(b2_body, body.shape, length, skin))
+            self.body_fixtures.extend(_add_fixtures(b2_body, body.shape, length, skin))
             b2_body.massData = b2.massData(
                 mass=body.mass, center=(0.0, 0.0), I=body.moment_of_inertia * length * length)
             self.bodies.append(b2_body)
+        self.fixtures.extend(self.body_fixtures)
         self.body_b = self.bodies[-1]
         self.length = length
         self.pair_values: tuple | None = None
@@ -248,17 +251,29 @@ class _World:
             self.pair_values = pair_values
 
     def place(self, starts: tuple) -> None:
-        """Fresh contacts and the start state ``((x, y), θ, (v_x, v_y), ω)`` (Box2D units)."""
+        """Fresh contacts and the start state ``((x, y), θ, (v_x, v_y), ω)`` (Box2D units).
+
+        The contacts (with their warm-start impulses) are destroyed; the broad-phase proxies
+        are kept. Box2D creates new contacts in the order of the proxies' ids (it sorts the
+        pairs it finds), and the contacts' order is the order the sweeps solve them in, which
+        moves an unconverged result (the rod under 8 sweeps). Ids come from a free list
+        shared with the tree's inner nodes, so destroying and recreating proxies (as
+        deactivating a body does) would change them with every run's history.
+        """
+        manager = self.world.contactManager
+        for contact in list(self.world.contacts):
+            manager.Destroy(contact)
         for b2_body, (position, angle, velocity, angular_velocity) in zip(self.bodies, starts):
-            b2_body.active = False  # destroys its contacts and broad-phase proxies
             b2_body.transform = (position, angle)
             b2_body.linearVelocity = velocity
             b2_body.angularVelocity = angular_velocity
-            b2_body.active = True
             b2_body.awake = True
-        # New proxies are paired at the next step's end; pair them now, so that the first
+        # A proxy whose fattened box still holds the body is not marked as moved by a new
+        # transform: touch every one, so that the pairs are looked up now and the first
         # step's collision pass already sees a contact touching at the start pose.
-        self.world.contactManager.FindNewContacts()
+        for fixture in self.body_fixtures:
+            fixture.Refilter()
+        manager.FindNewContacts()
 
     def at_cap(self, band: float) -> bool:
         """Whether a body's velocity reaches ``band`` times Box2D's per-step caps."""
