@@ -14,7 +14,8 @@ runs, caches warm, set-up outside the timed region) and the departure
 ``‖u_engine − u_law‖_M / ‖u_before‖_M`` from Poisson, from Stronge (exact energetic) and from
 the engine's own law:
 
-* pymunk, pybullet: ``newton-lcp`` (the velocity-level Newton–Coulomb law they solve);
+* pymunk, pybullet, Box2D: ``newton-lcp`` (the velocity-level Newton–Coulomb law they
+  solve);
 * MuJoCo: no closed form exists for its soft contact, so its own law is its converged limit:
   the run at the sweep's most refined setting (RK4, the 0.5 ms contact resolved over 400
   steps); the sweep holds the contact's duration and refines its time step.
@@ -37,7 +38,8 @@ import numpy as np
 
 FAMILIES: dict[str, str] = {"disk": "disk", "rod": "rod-45", "box-corner": "box-corner", "two-bodies": "two-disks"}
 THRESHOLDS: tuple[float, ...] = (1e-2, 1e-3)
-OWN_LAW = {"pymunk": "newton-lcp", "pybullet": "newton-lcp", "mujoco": "converged"}
+OWN_LAW = {"pymunk": "newton-lcp", "pybullet": "newton-lcp", "mujoco": "converged",
+           "box2d": "newton-lcp"}
 
 
 # ---------------------------------------------------------------------- sweeps
@@ -62,6 +64,14 @@ def sweep(engine_name: str, quick: bool) -> list[tuple[str, str, dict]]:
         for sub in ((4,) if quick else (2, 4, 8)):
             points.append((f"dt={1 / 240:.3g} it=10 sub={sub}", "accurate",
                            {"num_solver_iterations": 10, "num_sub_steps": sub}))
+    elif engine_name == "box2d":
+        points.append(("defaults", "defaults", {}))
+        # Box2D's own time step changes nothing for a one-step impact but the translation
+        # cap; the sweeps are what converge the coupled points (float32 floor ~1e-7).
+        iterations = (1, 2, 5, 8, 20, 100) if quick else (1, 2, 3, 5, 8, 10, 20, 50, 100, 200)
+        for count in iterations:
+            points.append((f"dt={1 / 60:.3g} it={count}", "accurate",
+                           {"velocity_iterations": count}))
     elif engine_name == "mujoco":
         points.append(("defaults", "defaults", {}))
         for timeconst in ((0.005, 0.001) if quick else (0.01, 0.005, 0.002, 0.001)):

@@ -101,8 +101,8 @@ def run_engine_overhead_benchmark(quick: bool = True) -> dict:
     """
     scenes = reference_scenes()
     chosen = ("disk", "rod-45", "two-disks") if quick else tuple(scenes)
-    impacts = {"pymunk": 400, "pybullet": 200, "mujoco": 20} if quick else {
-        "pymunk": 3000, "pybullet": 1000, "mujoco": 150}
+    impacts = {"pymunk": 400, "pybullet": 200, "mujoco": 20, "box2d": 40} if quick else {
+        "pymunk": 3000, "pybullet": 1000, "mujoco": 150, "box2d": 300}
     rounds = 5 if quick else 7
     try:
         import planar_impact  # noqa: F401
@@ -133,7 +133,7 @@ def run_engine_overhead_benchmark(quick: bool = True) -> dict:
                 again = engine.run(scene, settings)
                 deterministic = first == again
                 law_error = None
-                if have_solver and name in ("pymunk", "pybullet"):
+                if have_solver and name in ("pymunk", "pybullet", "box2d"):
                     law = newton_lcp_velocities(scene, contact, normal)
                     diff = first.u_after - law.u_after
                     law_error = ke_norm(scene, diff) / ke_norm(scene, scene.state())

@@ -40,6 +40,7 @@ _ENGINE_MODULES: dict[str, tuple[str, str, str]] = {
     "pymunk": ("harness.engines.pymunk_engine", "pymunk", "pymunk==7.3.1"),
     "pybullet": ("harness.engines.pybullet_engine", "pybullet", "pybullet==3.2.7"),
     "mujoco": ("harness.engines.mujoco_engine", "mujoco", "mujoco==4.0.0"),
+    "box2d": ("harness.engines.box2d_engine", "Box2D", "box2d==2.3.10"),
 }
 
 ENGINE_NAMES: tuple[str, ...] = tuple(_ENGINE_MODULES)

@@ -58,6 +58,10 @@ Methods (``world`` is whatever the adapter builds; the base class only passes it
     Largest distance (m) a body point left the plane (3-D engines); ``None`` for 2-D ones.
 ``_notes(scene, settings) -> tuple[str, ...]``
     Engine remarks on this run's set-up (default none).
+``_run_notes(world) -> tuple[str, ...]``
+    Engine remarks known only once the run is over, read from the world after the loop
+    (default none): what the engine did to this run that the set-up cannot tell, such as
+    Box2D clipping a velocity to its per-step translation cap.
 ``_validate_engine_settings(settings)``, ``_world_key(scene, settings)``,
 ``_release(world)``
     Engine-specific value checks; the world cache key; freeing an evicted world.
@@ -416,6 +420,10 @@ class Engine(abc.ABC):
         """Engine remarks on this run's set-up."""
         return ()
 
+    def _run_notes(self, world) -> tuple[str, ...]:
+        """Engine remarks on the run just finished, read from ``world`` after the loop."""
+        return ()
+
     def _world_key(self, scene: Scene, settings: Mapping[str, Any]) -> tuple:
         """What a world depends on (default: the geometry, :func:`geometry_key`)."""
         return geometry_key(scene)
@@ -629,10 +637,11 @@ class Engine(abc.ABC):
         if velocities is None:  # else read after this very step
             velocities = self._read_velocities(world)
         return self._finish(plan, used_preset, derived, records, velocities, steps,
-                            first_contact, separated, self._out_of_plane_drift(world), start_time)
+                            first_contact, separated, self._out_of_plane_drift(world),
+                            self._run_notes(world), start_time)
 
     def _finish(self, plan: _Plan, preset, derived, records, velocities, steps, first_contact,
-                separated, drift, start_time) -> EngineRun:
+                separated, drift, run_notes, start_time) -> EngineRun:
         """The :class:`EngineRun` of a finished loop (all the run's bookkeeping)."""
         max_points = 0
         max_penetration = 0.0
@@ -671,7 +680,7 @@ class Engine(abc.ABC):
             plan.before, after, velocities, steps=steps, contact_seen=first_contact is not None,
             separated=separated, max_contact_points=max_points, out_of_plane_drift=drift,
         )
-        notes = plan.notes
+        notes = plan.notes + run_notes if run_notes else plan.notes
         if max_points > 1:
             notes += (multi_contact_note(max_points),)
         return _run_from_fields({

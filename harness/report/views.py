@@ -26,7 +26,7 @@ LAW_STYLE = {  # colour, line style, label
     "newton-lcp": ("tab:brown", ":", "newton-lcp (engines' law)"),
 }
 ENGINE_STYLE = {"pymunk": ("tab:blue", "o"), "pybullet": ("tab:orange", "s"),
-                "mujoco": ("tab:green", "^"), "box2d": ("tab:pink", "P")}
+                "mujoco": ("tab:green", "^"), "box2d": ("tab:olive", "D")}
 TYPE_NAMES = {1: "stick in compression", 2: "stick in restitution",
               3: "reverse slide from compression", 4: "reverse slide from restitution",
               5: "forward slide"}

@@ -6,7 +6,8 @@ after the first is never counted), so every run is judged from its physics:
 
 * the engine's own status (blow-up, no-contact, no-separation, out-of-plane, multi-contact);
 * ``clipped``: a speed at an engine's velocity cap (pybullet clamps every joint speed to
-  100 m/s and 100 rad/s), before or after;
+  100 m/s and 100 rad/s; Box2D every body's speed to 2 m and its rate to π/2 rad per step,
+  caps the run reports in ``derived``), before or after;
 * ``multi-contact``: a second feature of a body touched at some step (from the per-step
   contact records, when the engine provides them);
 * ``not-separated``: the contact still closes at the end, ``v_n^S < −tol``;
@@ -66,6 +67,9 @@ FLAGGED = "flagged"
 #: (docs/verdicts.md, 'Velocity caps'). pymunk 7.3.1 and MuJoCo 4.0.0 showed no cap up to
 #: 10⁶ m/s.
 SPEED_CAPS: dict[str, tuple[float, float]] = {"pybullet": (100.0, 100.0)}
+#: A cap an engine computes in single precision (Box2D) holds a clipped speed within a few
+#: float32 roundings (6e-8 each) of it: a run-reported cap counts from this fraction below.
+RUN_CAP_BAND = 1e-6
 
 
 @dataclass(frozen=True)
@@ -188,6 +192,9 @@ class RunNumbers:
     contact_normal: tuple[float, float] | None = None
     contacts: tuple[StepContacts, ...] | None = None  # None: the engine kept no records
     notes: tuple[str, ...] = field(default_factory=tuple)
+    # The run's own caps on each body's speed |v| (m/s) and rate |ω| (rad/s), where they
+    # depend on the settings (Box2D: per step); None: the engine's caps, if any, are fixed.
+    speed_caps: tuple[float, float] | None = None
 
 
 def numbers_from_output(engine: str, output: Mapping[str, Any]) -> RunNumbers:
@@ -206,7 +213,15 @@ def numbers_from_output(engine: str, output: Mapping[str, Any]) -> RunNumbers:
         tangential_impulse=output.get("engine_tangential_impulse"),
         impulse_source=output.get("impulse_source"),
         contact_normal=None if normal is None else tuple(normal),
-        contacts=steps, notes=tuple(output.get("notes") or ()))
+        contacts=steps, notes=tuple(output.get("notes") or ()),
+        speed_caps=_run_caps(output.get("derived") or {}))
+
+
+def _run_caps(derived: Mapping[str, Any]) -> tuple[float, float] | None:
+    """The run's own ``(speed, rate)`` caps from its ``derived`` values, if it reports them."""
+    if "speed_cap" not in derived:
+        return None
+    return float(derived["speed_cap"]), float(derived["angular_speed_cap"])
 
 
 @dataclass(frozen=True)
@@ -274,7 +289,11 @@ def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = 
             reasons.append(Reason("blow-up", None, None, "non-finite velocities"))
         return Verdict(tuple(reasons))
     scales = scene_scales(scene, problem)
-    reasons += _clipped(run.engine, problem.u, u_after, tolerances)
+    if run.speed_caps is not None:
+        reasons += _clipped_magnitudes(run.engine, run.speed_caps, problem.u, u_after,
+                                       tolerances)
+    else:
+        reasons += _clipped(run.engine, problem.u, u_after, tolerances)
     if run.contacts is not None:
         reasons += _second_features(scene, run.contacts, tolerances)
     vn_after, _ = metrics.contact_velocities(problem, u_after)
@@ -361,6 +380,28 @@ def _clipped(engine: str, u_before: np.ndarray, u_after: np.ndarray,
     return [Reason("clipped", abs(value), cap,
                    f"body {body} {name} {when} = {value:.6g} {unit}, at {engine}'s cap "
                    f"{cap:g} {unit}{more}")]
+
+
+def _clipped_magnitudes(engine: str, caps: tuple[float, float], u_before: np.ndarray,
+                        u_after: np.ndarray, tolerances: Tolerances) -> list[Reason]:
+    """``clipped`` for caps on each body's speed ``|v|`` and rate ``|ω|`` (Box2D's)."""
+    band = 1.0 - max(tolerances.cap, RUN_CAP_BAND)
+    speed_cap, rate_cap = caps
+    found = []
+    for when, u in (("before", u_before), ("after", u_after)):
+        for body in range(len(u) // 3):
+            vx, vy, omega = (float(v) for v in u[3 * body : 3 * body + 3])
+            if math.hypot(vx, vy) >= band * speed_cap:
+                found.append((when, body, "|v|", math.hypot(vx, vy), speed_cap, "m/s"))
+            if abs(omega) >= band * rate_cap:
+                found.append((when, body, "|ω|", abs(omega), rate_cap, "rad/s"))
+    if not found:
+        return []
+    when, body, name, value, cap, unit = found[0]
+    more = f" (and {len(found) - 1} more)" if len(found) > 1 else ""
+    return [Reason("clipped", value, cap,
+                   f"body {body} {name} {when} = {value:.6g} {unit}, at {engine}'s cap "
+                   f"{cap:.6g} {unit} for this run's settings{more}")]
 
 
 # --------------------------------------------------------------------------------------------

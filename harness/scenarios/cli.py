@@ -124,7 +124,7 @@ description = "A {shape} {'struck by a disk' if two_body else 'hitting the groun
 tags = ["custom"]          # e.g. "quick", "slip-reversal"; "all" is implied
 restitution = 0.5          # e, in [0, 1]
 friction = 0.3             # mu, >= 0
-# engines = ["pymunk", "pybullet", "mujoco"]   # default: every engine
+# engines = ["pymunk", "pybullet", "mujoco", "box2d"]   # default: every engine
 # laws = ["newton", "poisson", "stronge", "stronge-paper", "newton-lcp"]   # default: all
 '''
     if not two_body:

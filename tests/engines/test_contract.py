@@ -30,6 +30,25 @@ from harness.scene.reference import reference_scenes
 
 SCENES = reference_scenes()
 
+# ---------------------------------------------------------------------- per-engine facts
+#: Native 2-D engines: bodies live in the plane by construction, no drift to measure
+#: (``out_of_plane_drift`` is None); the 3-D engines hold them there with planar joints.
+PLANAR_ENGINES = frozenset({"pymunk", "box2d"})
+#: Absolute agreement (m/s, N s, unit normals) of quantities that are exact up to the
+#: engine's arithmetic. Double precision: 1e-9, as for every engine but Box2D. Box2D computes
+#: in float32: one rounding is 6e-8 of a value of order 1, and positions, velocities and
+#: impulses here carry a few of them (measured <= 6e-8), so 1e-6.
+ROUNDING = {"box2d": 1e-6}
+DOUBLE_ROUNDING = 1e-9
+#: Reference scenes whose run is not "ok" under a preset, with why (docs/engines.md):
+#: Box2D's default polygon skin (0.01 m) makes the rod's core box reach the ground beside
+#: its 5 mm end cap, three contact points at once.
+NOT_OK = {("box2d", "rod-45", "defaults"): "multi-contact"}
+
+
+def rounding(engine) -> float:
+    return ROUNDING.get(engine.name, DOUBLE_ROUNDING)
+
 
 def _engine(name):
     try:
@@ -45,12 +64,12 @@ def engine(request):
 
 # ---------------------------------------------------------------------- registry
 def test_engine_names_and_presets():
-    assert ENGINE_NAMES == ("pymunk", "pybullet", "mujoco")
+    assert ENGINE_NAMES == ("pymunk", "pybullet", "mujoco", "box2d")
     assert PRESET_NAMES == ("defaults", "accurate")
 
 
 def test_unknown_engine_name_lists_the_choices():
-    with pytest.raises(ValueError, match=r"unknown engine 'bullet'.*pymunk.*pybullet.*mujoco"):
+    with pytest.raises(ValueError, match=r"unknown engine 'bullet'.*pymunk.*pybullet.*mujoco.*box2d"):
         load_engine("bullet")
 
 
@@ -75,9 +94,9 @@ def test_missing_engine_raises_import_error_naming_install(monkeypatch):
     report = available_engines()
     assert report["pymunk"] is not None and "pymunk" in report["pymunk"]
     # The other engines are unaffected (when installed).
-    for name in ("pybullet", "mujoco"):
+    for name in ENGINE_NAMES[1:]:
         try:
-            __import__(name)
+            __import__(engines._ENGINE_MODULES[name][1])  # the engine's importable package
         except ImportError:
             continue
         assert report[name] is None
@@ -179,14 +198,15 @@ def test_every_reference_scene_runs_ok(engine, preset, scene_name):
     scene = SCENES[scene_name][0]
     run = engine.run(scene, preset=preset)
     assert isinstance(run, EngineRun)
-    assert run.status == "ok", (run.status, run.notes)
+    expected_status = NOT_OK.get((engine.name, scene_name, preset), "ok")
+    assert run.status == expected_status, (run.status, run.notes)
     assert run.status in STATUSES
     assert len(run.velocities) == len(scene.bodies)
     assert all(math.isfinite(v) for v in run.u_after)
     assert run.separated and not run.step_cap_hit
     assert 1 <= run.contact_steps <= run.steps <= run.settings["max_steps"]
     assert run.first_contact_step == 1  # approach_steps 0: contact in the first step
-    assert run.max_contact_points == 1
+    assert (run.max_contact_points == 1) is (expected_status == "ok")
     assert run.max_penetration >= 0.0
     assert run.normal_impulse is not None and run.normal_impulse > 0.0
     n_x, n_y = run.contact_normal
@@ -194,10 +214,13 @@ def test_every_reference_scene_runs_ok(engine, preset, scene_name):
     # pymunk's start is 1e-9 of a step short of the full rewind, which tilts a disk pair's
     # normal ~1e-10. MuJoCo's RK4 leaves the contact data of a later stage of the step, moved
     # by the relative tangential speed (~1 m/s) times dt (1e-5 s) over 0.25 m: ~4e-5, so 1e-4.
+    # Box2D: float32 positions (ROUNDING).
     expected = SCENES[scene_name][2]
     tolerance = 1e-4 if run.settings.get("integrator") == "RK4" else 1e-8
+    if engine.name in ROUNDING:
+        tolerance = rounding(engine)
     assert math.hypot(n_x - expected[0], n_y - expected[1]) < tolerance
-    if engine.name == "pymunk":
+    if engine.name in PLANAR_ENGINES:
         assert run.out_of_plane_drift is None
     else:
         assert run.out_of_plane_drift == 0.0  # planar joints: exactly in the plane
@@ -205,8 +228,9 @@ def test_every_reference_scene_runs_ok(engine, preset, scene_name):
 
 
 def test_impulse_matches_momentum_change(engine):
-    # Reason for 1e-9: the engines' reported contact impulses against m·Δv, both exact
-    # to rounding for one-step impacts; MuJoCo's is derived from momentum (equal by definition).
+    # Reason for 1e-9 (ROUNDING for Box2D): the engines' reported contact impulses against
+    # m·Δv, both exact to rounding for one-step impacts; MuJoCo's is derived from momentum
+    # (equal by definition).
     scene = SCENES["two-disks"][0]
     run = engine.run(scene, preset="accurate")
     body = scene.bodies[1]
@@ -214,8 +238,10 @@ def test_impulse_matches_momentum_change(engine):
     dvy = run.velocities[1][1] - body.velocity[1]
     n_x, n_y = run.contact_normal
     t_x, t_y = n_y, -n_x
-    assert run.normal_impulse == pytest.approx(body.mass * (dvx * n_x + dvy * n_y), abs=1e-9)
-    assert run.tangential_impulse == pytest.approx(body.mass * (dvx * t_x + dvy * t_y), abs=1e-9)
+    tolerance = rounding(engine)
+    assert run.normal_impulse == pytest.approx(body.mass * (dvx * n_x + dvy * n_y), abs=tolerance)
+    assert run.tangential_impulse == pytest.approx(body.mass * (dvx * t_x + dvy * t_y),
+                                                   abs=tolerance)
 
 
 @pytest.mark.parametrize("preset", PRESET_NAMES)

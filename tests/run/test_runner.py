@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import harness.engines as engines_module
-from harness.engines import EngineNotInstalled, UnsupportedScene
+from harness.engines import ENGINE_NAMES, EngineNotInstalled, UnsupportedScene
 from harness.run import metrics, runner
 from harness.run.cache import ResultCache
 from harness.run.records import ANALYTIC, read_results, write_results
@@ -38,7 +38,7 @@ def test_one_record_per_scenario_point_and_source():
     for scenario in (ROD, DISK_SWEEP):
         records = [r for r in outcome.records if r.scenario == scenario.name]
         points = len(scenario.point_list())
-        assert len(records) == points * (len(scenario.laws) + 3 * 2)
+        assert len(records) == points * (len(scenario.laws) + len(ENGINE_NAMES) * 2)
         keys = {(r.point["index"], r.label) for r in records}
         assert len(keys) == len(records)
 
@@ -160,7 +160,7 @@ def test_cache_hits_give_the_same_records(tmp_path):
     cold = quiet_run([ROD], cache=ResultCache(tmp_path / "cache"))
     cache = ResultCache(tmp_path / "cache")
     warm = quiet_run([ROD], cache=cache)
-    assert cache.misses == 0 and cache.hits == 6
+    assert cache.misses == 0 and cache.hits == len(ENGINE_NAMES) * 2  # two presets
     assert warm.provenance["cache"]["simulated"] == 0
     strip = lambda r: {k: v for k, v in r.as_dict().items() if k not in ("wall_time_s", "cached")}
     for a, b in zip(cold.records, warm.records):
@@ -185,9 +185,9 @@ def test_results_file_round_trip_and_provenance(tmp_path):
     loaded = read_results(path)
     assert [r.as_dict() for r in loaded.records] == [r.as_dict() for r in outcome.records]
     prov = loaded.provenance
-    for package in ("numpy", "pymunk", "pybullet", "mujoco"):
+    for package in ("numpy", "pymunk", "pybullet", "mujoco", "box2d"):
         assert prov["versions"][package]
-    assert set(prov["engine_settings"]) == {"pymunk", "pybullet", "mujoco"}
+    assert set(prov["engine_settings"]) == set(ENGINE_NAMES)
     assert set(prov["engine_settings"]["pymunk"]) == {"defaults", "accurate"}
     for key in ("git", "machine", "created_utc", "code_version", "cache", "gates"):
         assert key in prov

@@ -117,8 +117,8 @@ def test_the_base_files_are_good(tmp_path):
         ('tags = ["quick"]', 'tags = ["all"]', ["tags", "derived"]),
         ('name = "probe"', 'name = "a probe"', ["name", "'a probe'", "not a valid name"]),
         ('[ground]', '[ground]\nlevel = 0.0', ["ground.level", "unknown key"]),
-        ('name = "probe"', 'name = "probe"\nengines = ["pymunk", "box2d"]',
-         ["engines", "box2d", "pymunk, pybullet, mujoco"]),
+        ('name = "probe"', 'name = "probe"\nengines = ["pymunk", "bullet3"]',
+         ["engines", "bullet3", "pymunk, pybullet, mujoco, box2d"]),
         ('name = "probe"', 'name = "probe"\nlaws = ["poison"]',
          ["laws", "poison", "did you mean 'poisson'"]),
     ],
@@ -276,13 +276,13 @@ def test_sweep_over_a_two_body_angle_checks_each_point(tmp_path):
     ("[expect]\ncolision_type = {}", ["expect.colision_type", "did you mean 'collision_type'"]),
     ('[expect.gate]\n"pymunk.acurate" = { law = "newton-lcp", max_departure = 1e-6 }',
      ["expect.gate.pymunk.acurate", "did you mean 'pymunk.accurate'"]),
-    ('[expect.gate]\n"box2d" = { law = "newton-lcp", max_departure = 1e-6 }',
-     ["expect.gate.box2d", "unknown engine"]),
+    ('[expect.gate]\n"bullet3" = { law = "newton-lcp", max_departure = 1e-6 }',
+     ["expect.gate.bullet3", "unknown engine"]),
     ('[expect.gate]\npymunk = { law = "newton-lcp", max_departure = -1.0 }',
      ["expect.gate.pymunk.max_departure", "-1.0", "> 0"]),
     ('[expect.gate]\npymunk = { law = "hooke", max_departure = 1.0 }',
      ["expect.gate.pymunk.law", "'hooke'", "newton, poisson"]),
-    ("[engine_settings]\nbox2d = { iterations = 3 }", ["engine_settings.box2d", "unknown key"]),
+    ("[engine_settings]\nbullet3 = { iterations = 3 }", ["engine_settings.bullet3", "unknown key"]),
 ])
 def test_bad_expectations(tmp_path, expect, parts):
     assert_names(error_of(tmp_path, GROUND + "\n" + expect + "\n"), "bad.toml", *parts)

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import planar_impact as pi
+from harness.engines import ENGINE_NAMES
 from harness.scenarios import (
     LAWS,
     SCENARIO_DIR,
@@ -245,7 +246,7 @@ def test_engine_scenes_list_engines_and_analytic_ones_none():
         if scenario.analytic_only:
             assert scenario.engines == () and not scenario.expect.gates
         else:
-            assert scenario.engines == ("pymunk", "pybullet", "mujoco")
+            assert scenario.engines == ENGINE_NAMES
 
 
 def test_gates_are_read():

@@ -1,0 +1,555 @@
+"""Box2D (pybox2d 2.3.10) adapter.
+
+The law Box2D solves: sequential impulses on a velocity-level Newton-Coulomb problem per
+contact point, in single precision (``float32``). In a step Box2D first updates contacts at
+the current positions (collision first), then integrates velocities, iterates impulses until
+each point's normal velocity reaches ``-e·v_rel`` (``v_rel`` the point's normal velocity before
+the step) with Coulomb friction at the end state -- ``planar_impact``'s ``"newton-lcp"`` for
+one point -- and finally moves the bodies. Collision-first means ``approach_steps = 0``
+starts the bodies at the scene's pose and the first step finds the contact there
+(``StepTiming(lead_steps=0)``).
+
+The restitution threshold: Box2D gives a point its bounce only when ``v_rel <
+-b2_velocityThreshold`` (1 m/s, compiled in); a slower impact gets ``e = 0``. The laws are
+homogeneous in lengths and velocities, so the adapter can run a scaled copy of the scene:
+lengths times ``L`` (``length_scale``), velocities times ``V`` (``velocity_scale``), time times
+``L/V`` (the time step passed to Box2D is ``time_step·L/V``), angular velocities times
+``V/L``, inertias times ``L²``, masses unchanged, impulses times ``V``. Everything read back
+is scaled back. Powers of two keep every scaling exact in binary floating point. ``"auto"``
+picks the smallest power of two ``V >= 1`` that lifts the impact speed Box2D sees at the
+first contact (measured once per scene and settings by a probe run in :meth:`_prepare`) to
+``2 · b2_velocityThreshold``.
+
+Other compiled-in limits: ``b2_maxTranslation`` (2 m per step) and ``b2_maxRotation`` (π/2
+per step) clip a body's velocity for good when a step would move it further. In scene units
+the caps are ``|v| <= 2 m / (L·time_step)`` and ``|ω| <= (π/2) / time_step`` (``V`` cancels):
+every run reports them in ``derived`` (``speed_cap``, ``angular_speed_cap``), and a run in
+which a velocity sat at a cap carries a note. Polygons carry a skin
+(``b2PolygonShape::m_radius``, ``b2_polygonRadius`` = 0.01 m by default): they collide as
+rounded shapes, a contact is active within the summed skins, and its point lies midway
+between the skinned surfaces.
+
+The start a hair deep: an exactly touching pose can round, in float32, to a hair apart, and
+the contact is then found a step late. The adapter moves the base class's start state
+``detection_overlap`` body extents further along the free flight (a time of
+``overlap·extent / impact speed``), a depth in lengths, which a fraction of a step
+(``StepTiming.overlap``) would not give for slow impacts.
+
+Bodies: one ``b2World`` per geometry, length scale and skin; the ground is a static box
+whose top face is ``y = 0``. A disk is a circle fixture; a box or polygon a polygon fixture;
+a rod (capsule) is two circles at ``(±length/2, 0)`` with a box between them on one body (the
+box's half-thickness is the cap radius less its skin, so the fixtures' union is the capsule).
+Masses and inertias are set with ``b2Body::SetMassData`` (fixtures have zero density).
+
+Pair values: Box2D mixes ``friction = sqrt(μ_A·μ_B)`` and ``restitution = max(e_A, e_B)``;
+every fixture gets the pair's ``e`` and ``μ`` (``sqrt(μ·μ) == μ`` exactly in float32).
+
+Reuse: before each run every contact is destroyed (with its warm-start impulses), the bodies
+are set to the start state, their broad-phase proxies are touched and the contact manager
+looks for new pairs. The proxies themselves are kept: their ids set the order in which the
+contacts are created and solved, so keeping them makes reruns bit-identical whatever ran
+before (see :meth:`_World.place`).
+
+pybox2d's ``contact.worldManifold`` returned an uninitialised normal here: the adapter
+computes the world manifold itself, from the poses at the step's start (the manifold's).
+
+Settings (``defaults`` | ``accurate``) are listed in :data:`SETTING_DOCS`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import Box2D
+from Box2D import b2
+
+from harness.engines.contract import (
+    Engine,
+    RawContacts,
+    StepTiming,
+    UnsupportedScene,
+    body_extent,
+    geometry_key,
+)
+from harness.engines.settings import EngineSettingsError, check_int, check_number
+from harness.scene import Scene
+
+VELOCITY_THRESHOLD = float(Box2D.b2_velocityThreshold)  # m/s (Box2D units), compiled in
+MAX_TRANSLATION = float(Box2D.b2_maxTranslation)  # m per step (Box2D units), compiled in
+MAX_ROTATION = float(Box2D.b2_maxRotation)  # rad per step, compiled in
+POLYGON_RADIUS = float(Box2D.b2_polygonRadius)  # m (Box2D units), the default polygon skin
+# "auto" lifts the first contact's approach speed to this multiple of the threshold: a margin
+# of 2 keeps float32 rounding of the solver's own v_rel (computed anew) far from the edge.
+_AUTO_MARGIN = 2.0
+# Start depth of the accurate preset, in body extents: ~4 float32 roundings of a coordinate
+# of the body's size, so that rounding cannot lift an exact touch off the ground.
+DETECTION_OVERLAP = 2.0**-22
+_MAX_AUTO_SCALE = 2.0**40  # a scene slower than 2^-39 m/s is refused rather than scaled
+_GROUND_EXTENT_FACTOR = 8.0  # ground half-width and depth, in body extents (float32 clipping)
+# A velocity Box2D clipped sits at the cap to float32 rounding: this band counts as "at".
+_CAP_BAND = 1.0 - 1e-6
+
+SETTING_DOCS: dict[str, str] = {
+    "time_step": "s (scene units), b2World::Step timeStep; Box2D has no default, 1/60 is its "
+    "manual's value",
+    "velocity_iterations": "b2World::Step velocityIterations, impulse sweeps per step (manual: 8)",
+    "position_iterations": "b2World::Step positionIterations, position-correction sweeps per "
+    "step (manual: 3; positions only)",
+    "warm_starting": "b2World::SetWarmStarting, start a step from the last step's impulses "
+    "(default True)",
+    "continuous_physics": "b2World::SetContinuousPhysics, time-of-impact sub-steps of "
+    "dynamic against static bodies (default True)",
+    "sub_stepping": "b2World::SetSubStepping, one time-of-impact event per step (debug; "
+    "default False)",
+    "allow_sleeping": "b2World::SetAllowSleeping, bodies at rest for 0.5 s sleep (default True)",
+    "polygon_radius": "m (Box2D units), skin of every polygon fixture (ground, box, polygon, "
+    "rod core); default b2_polygonRadius = 0.01",
+    "velocity_scale": "V, velocities times V and time times 1/V in Box2D, 1 = unscaled; "
+    "'auto' = smallest power of 2 >= 1 lifting the first contact's approach speed to "
+    "2 x b2_velocityThreshold (1 m/s)",
+    "length_scale": "L, lengths times L and time times L in Box2D (powers of 2 are exact); "
+    "1 = unscaled",
+    "detection_overlap": "start this fraction of the largest body extent deeper along the "
+    "path than the touching pose, so that float32 rounding cannot hide the first contact "
+    "(0 = start at the pose)",
+    "max_steps": "step cap; reported as status no-separation when hit in contact",
+    "approach_steps": "steps of free flight before first touch (0 = touching at first step)",
+}
+
+_DEFAULTS = {
+    "time_step": 1.0 / 60.0,
+    "velocity_iterations": 8,
+    "position_iterations": 3,
+    "warm_starting": True,
+    "continuous_physics": True,
+    "sub_stepping": False,
+    "allow_sleeping": True,
+    "polygon_radius": POLYGON_RADIUS,
+    "velocity_scale": 1.0,
+    "length_scale": 1.0,
+    "detection_overlap": 0.0,
+    "max_steps": 1000,
+    "approach_steps": 0.0,
+}
+PRESETS: dict[str, dict] = {
+    "defaults": dict(_DEFAULTS),
+    # Coupled points (rod, box corner) need more sweeps than 8; 100 reaches float32 rounding
+    # on every test scene. No skin: a skinned point lies off the surface (moment arm). No
+    # warm start or time-of-impact sub-step: nothing but the impact's own impulses. "auto"
+    # serves e at any impact speed (the threshold would zero it at or below 1 m/s).
+    "accurate": dict(
+        _DEFAULTS,
+        velocity_iterations=100,
+        warm_starting=False,
+        continuous_physics=False,
+        allow_sleeping=False,
+        polygon_radius=0.0,
+        velocity_scale="auto",
+        detection_overlap=DETECTION_OVERLAP,
+    ),
+}
+
+_BOOL_KEYS = ("warm_starting", "continuous_physics", "sub_stepping", "allow_sleeping")
+THRESHOLD_NOTE = "impact at or below b2_velocityThreshold (1 m/s): Box2D used e = 0"
+CLIPPED_NOTE = ("Box2D clipped a velocity (b2_maxTranslation 2 m or b2_maxRotation π/2 per "
+                "step; see derived speed_cap, angular_speed_cap)")
+
+
+# ---------------------------------------------------------------------- world building
+def _polygon_fixture(body, vertices, radius: float):
+    try:
+        fixture = body.CreatePolygonFixture(vertices=vertices, density=0.0)
+    except (AssertionError, ValueError, RuntimeError) as error:
+        raise UnsupportedScene(
+            f"engine 'box2d': polygon {vertices!r} refused by b2PolygonShape::Set ({error}); "
+            "try a larger length_scale"
+        ) from error
+    if fixture.shape.vertexCount != len(vertices):
+        raise UnsupportedScene(
+            f"engine 'box2d': b2PolygonShape::Set kept {fixture.shape.vertexCount} of "
+            f"{len(vertices)} vertices (it welds near vertices); try a larger length_scale"
+        )
+    fixture.shape.radius = radius
+    # The skin pads the scene's outline: a contact's overlap of the scene's bodies is its
+    # separation plus the skins (a rod's core sets its own userData to 0: inset by its skin).
+    fixture.userData = radius
+    return fixture
+
+
+def _add_fixtures(b2_body, shape, length: float, skin: float) -> list:
+    """The fixtures of one scene shape on ``b2_body`` (lengths times ``length``)."""
+    if shape.kind == "disk":
+        disk = b2_body.CreateCircleFixture(radius=shape.radius * length, density=0.0)
+        disk.userData = 0.0  # a circle's radius is the disk's own
+        return [disk]
+    if shape.kind == "rod":
+        half, radius = shape.length / 2.0 * length, shape.radius * length
+        caps = [b2_body.CreateCircleFixture(radius=radius, pos=(x, 0.0), density=0.0)
+                for x in (-half, half)]
+        # Core box inset by its skin: its rounded outline stays inside the capsule.
+        core_skin = min(skin, radius / 2.0)
+        thickness = radius - core_skin
+        core = _polygon_fixture(
+            b2_body,
+            [(-half, -thickness), (half, -thickness), (half, thickness), (-half, thickness)],
+            core_skin)
+        core.userData = 0.0  # its skin lies inside the capsule's outline
+        for cap in caps:
+            cap.userData = 0.0
+        return [*caps, core]
+    vertices = [(x * length, y * length) for x, y in shape.vertices().tolist()]
+    return [_polygon_fixture(b2_body, vertices, skin)]
+
+
+class _World:
+    """One b2World holding the scene's ground and bodies, and the current run's scales."""
+
+    def __init__(self, scene: Scene, length: float, skin: float):
+        self.world = b2.world(gravity=(0.0, 0.0), doSleep=True)
+        self.fixtures: list = []
+        self.extent = max(body_extent(body.shape) for body in scene.bodies)
+        if scene.ground:
+            # Half-width a few body extents: float32 clipping against a far ground vertex
+            # loses ~|vertex|·1e-7 m.
+            width = _GROUND_EXTENT_FACTOR * self.extent * length
+            ground = self.world.CreateStaticBody()
+            self.fixtures.append(_polygon_fixture(
+                ground, [(-width, -width), (width, -width), (width, 0.0), (-width, 0.0)], skin))
+        self.bodies = []
+        self.body_fixtures: list = []
+        for body in scene.bodies:
+            b2_body = self.world.CreateDynamicBody(position=(0.0, 0.0))
+            self.body_fixtures.extend(_add_fixtures(b2_body, body.shape, length, skin))
+            b2_body.massData = b2.massData(
+                mass=body.mass, center=(0.0, 0.0), I=body.moment_of_inertia * length * length)
+            self.bodies.append(b2_body)
+        self.fixtures.extend(self.body_fixtures)
+        self.body_b = self.bodies[-1]
+        self.length = length
+        self.pair_values: tuple | None = None
+        self.world_values: tuple | None = None
+        # The current run's (set by _reset): Box2D time step, sweeps, velocity scale, the
+        # caps in Box2D units, whether a velocity reached a cap, the run's set-up notes.
+        self.dt = 0.0
+        self.iterations = (0, 0)
+        self.velocity = 1.0
+        self.clipped = False
+        self.notes: tuple[str, ...] = ()
+
+    def configure(self, world_values: tuple, pair_values: tuple) -> None:
+        """Apply the world switches and the pair's (e, μ) where they changed."""
+        if self.world_values != world_values:
+            world = self.world
+            (world.warmStarting, world.continuousPhysics, world.subStepping,
+             world.allowSleeping) = world_values
+            self.world_values = world_values
+        if self.pair_values != pair_values:
+            restitution, friction = pair_values
+            for fixture in self.fixtures:
+                fixture.restitution = restitution
+                fixture.friction = friction
+            self.pair_values = pair_values
+
+    def place(self, starts: tuple) -> None:
+        """Fresh contacts and the start state ``((x, y), θ, (v_x, v_y), ω)`` (Box2D units).
+
+        The contacts (with their warm-start impulses) are destroyed; the broad-phase proxies
+        are kept. Box2D creates new contacts in the order of the proxies' ids (it sorts the
+        pairs it finds), and the contacts' order is the order the sweeps solve them in, which
+        moves an unconverged result (the rod under 8 sweeps). Ids come from a free list
+        shared with the tree's inner nodes, so destroying and recreating proxies (as
+        deactivating a body does) would change them with every run's history.
+        """
+        manager = self.world.contactManager
+        for contact in list(self.world.contacts):
+            manager.Destroy(contact)
+        for b2_body, (position, angle, velocity, angular_velocity) in zip(self.bodies, starts):
+            b2_body.transform = (position, angle)
+            b2_body.linearVelocity = velocity
+            b2_body.angularVelocity = angular_velocity
+            b2_body.awake = True
+        # A proxy whose fattened box still holds the body is not marked as moved by a new
+        # transform: touch every one, so that the pairs are looked up now and the first
+        # step's collision pass already sees a contact touching at the start pose.
+        for fixture in self.body_fixtures:
+            fixture.Refilter()
+        manager.FindNewContacts()
+
+    def at_cap(self, band: float) -> bool:
+        """Whether a body's velocity reaches ``band`` times Box2D's per-step caps."""
+        dt = self.dt
+        for b2_body in self.bodies:
+            vx, vy = b2_body.linearVelocity
+            if math.hypot(vx, vy) * dt > band * MAX_TRANSLATION:
+                return True
+            if abs(b2_body.angularVelocity) * dt > band * MAX_ROTATION:
+                return True
+        return False
+
+
+# ---------------------------------------------------------------------- contact readout
+def _pose(body) -> tuple[float, float, float, float]:
+    """``(x, y, cos θ, sin θ)`` of a Box2D body's transform now."""
+    transform = body.transform
+    x, y = transform.position
+    return x, y, transform.q.c, transform.q.s
+
+
+def _world_manifold(contact, poses=None) -> tuple[tuple[float, float], list, list]:
+    """``(normal from fixture A to B, points, separations)`` of a contact, in world frame.
+
+    b2WorldManifold::Initialize redone in Python (pybox2d's ``worldManifold`` returned an
+    uninitialised normal), with the separations of the skinned shapes (Box2D's, negative
+    within the summed skins). ``poses`` maps a body to
+    its ``_pose`` when the manifold was computed (the start of the step: after the step the
+    bodies have moved, which would turn a circle pair's normal); by default the poses now.
+    """
+    manifold = contact.manifold
+    fixture_a, fixture_b = contact.fixtureA, contact.fixtureB
+    body_a, body_b = fixture_a.body, fixture_b.body
+    radius_a, radius_b = fixture_a.shape.radius, fixture_b.shape.radius
+    pa_x, pa_y, ca, sa = poses[body_a] if poses and body_a in poses else _pose(body_a)
+    pb_x, pb_y, cb, sb = poses[body_b] if poses and body_b in poses else _pose(body_b)
+    kind = manifold.type_
+    points, separations = [], []
+    if kind == Box2D.b2Manifold.e_circles:
+        lx, ly = manifold.localPoint
+        ax, ay = ca * lx - sa * ly + pa_x, sa * lx + ca * ly + pa_y
+        lx, ly = manifold.points[0].localPoint
+        bx, by = cb * lx - sb * ly + pb_x, sb * lx + cb * ly + pb_y
+        dx, dy = bx - ax, by - ay
+        distance = math.hypot(dx, dy)
+        normal = (dx / distance, dy / distance) if distance > 0.0 else (1.0, 0.0)
+        c_ax, c_ay = ax + radius_a * normal[0], ay + radius_a * normal[1]
+        c_bx, c_by = bx - radius_b * normal[0], by - radius_b * normal[1]
+        points.append((0.5 * (c_ax + c_bx), 0.5 * (c_ay + c_by)))
+        separations.append(distance - radius_a - radius_b)
+        return normal, points, separations
+    face_a = kind == Box2D.b2Manifold.e_faceA
+    (c_ref, s_ref, p_ref_x, p_ref_y, r_ref) = (ca, sa, pa_x, pa_y, radius_a) if face_a else (
+        cb, sb, pb_x, pb_y, radius_b)
+    (c_inc, s_inc, p_inc_x, p_inc_y, r_inc) = (cb, sb, pb_x, pb_y, radius_b) if face_a else (
+        ca, sa, pa_x, pa_y, radius_a)
+    lx, ly = manifold.localNormal
+    nx, ny = c_ref * lx - s_ref * ly, s_ref * lx + c_ref * ly
+    lx, ly = manifold.localPoint
+    plane_x = c_ref * lx - s_ref * ly + p_ref_x
+    plane_y = s_ref * lx + c_ref * ly + p_ref_y
+    for index in range(manifold.pointCount):
+        lx, ly = manifold.points[index].localPoint
+        qx = c_inc * lx - s_inc * ly + p_inc_x
+        qy = s_inc * lx + c_inc * ly + p_inc_y
+        height = (qx - plane_x) * nx + (qy - plane_y) * ny
+        c_ref_x, c_ref_y = qx + (r_ref - height) * nx, qy + (r_ref - height) * ny
+        c_inc_x, c_inc_y = qx - r_inc * nx, qy - r_inc * ny
+        points.append((0.5 * (c_ref_x + c_inc_x), 0.5 * (c_ref_y + c_inc_y)))
+        separations.append(height - r_ref - r_inc)
+    if not face_a:
+        nx, ny = -nx, -ny  # Box2D's normal points from fixture A to fixture B
+    return (nx, ny), points, separations
+
+
+class _SpeedProbe(b2.contactListener):
+    """PreSolve listener: the normal approach speed at the first touching point, computed as
+    the solver computes ``v_rel`` (from the velocities before the step)."""
+
+    def __init__(self):
+        super().__init__()
+        self.speed: float | None = None
+
+    def PreSolve(self, contact, old_manifold):
+        if self.speed is not None or not contact.touching or contact.manifold.pointCount == 0:
+            return
+        normal, points, _ = _world_manifold(contact)
+        body_a, body_b = contact.fixtureA.body, contact.fixtureB.body
+        fastest = 0.0
+        for point in points:
+            va = body_a.GetLinearVelocityFromWorldPoint(point)
+            vb = body_b.GetLinearVelocityFromWorldPoint(point)
+            approach = -((vb[0] - va[0]) * normal[0] + (vb[1] - va[1]) * normal[1])
+            fastest = max(fastest, approach)
+        self.speed = fastest
+
+
+def _box2d_starts(start, velocity: float, length: float, advance: float = 0.0) -> tuple:
+    """The run-frame start states in Box2D units, ``advance`` s further along free flight."""
+    return tuple(
+        (
+            (float((x + vx * advance) * length), float((y + vy * advance) * length)),
+            float(angle + omega * advance),
+            (float(vx * velocity), float(vy * velocity)),
+            float(omega * velocity / length),
+        )
+        for x, y, angle, vx, vy, omega in start
+    )
+
+
+class _Prepared:
+    """A run's Box2D form: switches, pair values, sweeps, scales, start state, derived."""
+
+    __slots__ = ("derived", "dt", "iterations", "notes", "pair_values", "starts", "velocity",
+                 "world_values")
+
+
+# ---------------------------------------------------------------------- the adapter
+class Box2DEngine(Engine):
+    name = "box2d"
+    version = Box2D.__version__
+    presets = PRESETS
+    setting_docs = SETTING_DOCS
+    # Collision first: the first step finds the contact at the start pose. The start's
+    # hair of overlap is a depth in lengths (detection_overlap), added in _prepare.
+    timing = StepTiming(lead_steps=0.0, overlap=0.0)
+
+    def _validate_engine_settings(self, settings) -> None:
+        check_int(self.name, settings, "velocity_iterations", low=1)
+        check_int(self.name, settings, "position_iterations", low=0)
+        for key in _BOOL_KEYS:
+            if not isinstance(settings[key], bool):
+                raise EngineSettingsError(
+                    f"engine {self.name!r}: setting {key!r} must be true or false, "
+                    f"got {settings[key]!r}")
+        check_number(self.name, settings, "polygon_radius", low=0.0)
+        if settings["velocity_scale"] != "auto":
+            check_number(self.name, settings, "velocity_scale", low=0.0, strict=True)
+        check_number(self.name, settings, "length_scale", low=0.0, strict=True)
+        check_number(self.name, settings, "detection_overlap", low=0.0)
+
+    def _world_key(self, scene: Scene, settings) -> tuple:
+        return (geometry_key(scene), float(settings["length_scale"]),
+                float(settings["polygon_radius"]))
+
+    def _build(self, scene: Scene, settings, *, contacts: bool = True) -> _World:
+        return _World(scene, float(settings["length_scale"]), float(settings["polygon_radius"]))
+
+    def _prepare(self, world: _World, scene: Scene, settings, start) -> _Prepared:
+        prepared = _Prepared()
+        length = world.length
+        time_step = float(settings["time_step"])
+        prepared.world_values = tuple(bool(settings[key]) for key in _BOOL_KEYS)
+        prepared.pair_values = (float(scene.restitution), float(scene.friction))
+        prepared.iterations = (int(settings["velocity_iterations"]),
+                               int(settings["position_iterations"]))
+        # Measured for every plan: it tells whether the threshold zeroed the bounce.
+        probe_speed = _probe(world, prepared, _box2d_starts(start, 1.0, length),
+                             time_step * length, int(settings["max_steps"]))
+        scale = settings["velocity_scale"]
+        if scale == "auto":
+            scale = 1.0
+            if probe_speed is not None and probe_speed > 0.0:
+                target = _AUTO_MARGIN * VELOCITY_THRESHOLD
+                while scale * probe_speed < target and scale < _MAX_AUTO_SCALE:
+                    scale *= 2.0
+        velocity = prepared.velocity = float(scale)
+        # The overlap as a time along the path: depth = overlap·extent at the approach speed.
+        advance = 0.0
+        overlap = float(settings["detection_overlap"])
+        if overlap > 0.0 and probe_speed is not None and probe_speed > 0.0:
+            advance = overlap * world.extent / probe_speed
+        prepared.starts = _box2d_starts(start, velocity, length, advance)
+        prepared.dt = time_step * length / velocity
+        derived = {
+            "velocity_scale": velocity,
+            "length_scale": length,
+            "box2d_time_step": prepared.dt,
+            "speed_cap": MAX_TRANSLATION / (length * time_step),
+            "angular_speed_cap": MAX_ROTATION / time_step,
+        }
+        notes: tuple[str, ...] = ()
+        if probe_speed is not None:
+            derived["box2d_impact_speed"] = probe_speed * velocity
+            cleared = probe_speed * velocity > VELOCITY_THRESHOLD
+            derived["restitution_threshold_cleared"] = cleared
+            if not cleared and scene.restitution > 0.0:
+                notes = (THRESHOLD_NOTE,)
+        prepared.derived, prepared.notes = derived, notes
+        return prepared
+
+    def _reset(self, world: _World, prepared: _Prepared) -> dict:
+        world.configure(prepared.world_values, prepared.pair_values)
+        world.dt, world.iterations, world.velocity = (prepared.dt, prepared.iterations,
+                                                      prepared.velocity)
+        world.notes = prepared.notes
+        world.place(prepared.starts)
+        world.clipped = world.at_cap(1.0)  # already beyond a cap before the first step
+        return dict(prepared.derived)
+
+    def _advance(self, world: _World) -> None:
+        world.world.Step(world.dt, *world.iterations)
+
+    def _step(self, world: _World) -> RawContacts | None:
+        bodies = world.bodies
+        # Contacts are collided at the step's start: their geometry needs these poses.
+        poses = {b2_body: _pose(b2_body) for b2_body in bodies}
+        world.world.Step(world.dt, *world.iterations)
+        if not world.clipped:
+            world.clipped = world.at_cap(_CAP_BAND)
+        length, velocity, body_b = world.length, world.velocity, world.body_b
+        step_x = step_y = 0.0
+        points: list = []
+        normal = None
+        for contact in world.world.contacts:
+            if not contact.touching or contact.manifold.pointCount == 0:
+                continue
+            contact_normal, contact_points, separations = _world_manifold(contact, poses)
+            # Overlap of the scene's outlines: the skins are padding, not the bodies.
+            padding = contact.fixtureA.userData + contact.fixtureB.userData
+            # The impulse on scene body B (Box2D applies +P to fixture B's body).
+            sign = 1.0 if contact.fixtureB.body == body_b else -1.0
+            n_x, n_y = contact_normal
+            for point in contact.manifold.points:
+                p_n, p_t = point.normalImpulse, point.tangentImpulse
+                # Box2D's tangent is cross(n, 1) = (n_y, -n_x).
+                step_x += sign * (p_n * n_x + p_t * n_y)
+                step_y += sign * (p_n * n_y - p_t * n_x)
+            points.extend((x / length, y / length, -(separation + padding) / length)
+                          for (x, y), separation in zip(contact_points, separations))
+            if normal is None:
+                normal = (sign * n_x, sign * n_y)
+        if normal is None:
+            return None
+        step_x, step_y = step_x / velocity, step_y / velocity
+        return (tuple(points), normal, (step_x, step_y),
+                abs(step_x * normal[0] + step_y * normal[1]))
+
+    def _read_poses(self, world: _World) -> tuple:
+        length = world.length
+        poses = []
+        for b2_body in world.bodies:
+            x, y = b2_body.position
+            poses.append((x / length, y / length, b2_body.angle))
+        return tuple(poses)
+
+    def _read_velocities(self, world: _World) -> tuple:
+        velocity, rate = world.velocity, world.length / world.velocity
+        velocities = []
+        for b2_body in world.bodies:
+            vx, vy = b2_body.linearVelocity
+            velocities.append((vx / velocity, vy / velocity, b2_body.angularVelocity * rate))
+        return tuple(velocities)
+
+    def _run_notes(self, world: _World) -> tuple[str, ...]:
+        if world.clipped:
+            return (*world.notes, CLIPPED_NOTE)
+        return world.notes
+
+
+def _probe(world: _World, prepared: _Prepared, starts: tuple, dt: float,
+           max_steps: int) -> float | None:
+    """Box2D's approach speed (m/s, scene units) at the first contact of an unscaled run."""
+    world.configure(prepared.world_values, prepared.pair_values)
+    world.place(starts)
+    probe = _SpeedProbe()
+    b2_world = world.world
+    b2_world.contactListener = probe
+    try:
+        for _ in range(max_steps):
+            b2_world.Step(dt, *prepared.iterations)
+            if probe.speed is not None:
+                break
+    finally:
+        b2_world.contactListener = None
+    return probe.speed
+
+
+ENGINE_CLASS = Box2DEngine
