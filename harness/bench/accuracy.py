@@ -108,8 +108,8 @@ def departure(scene, u_engine, u_law) -> float:
 # ---------------------------------------------------------------------- measuring
 def measure_engine(engine_name: str, quick: bool, progress=None) -> dict:
     """All sweep points × families for one engine (runs inline: timings undisturbed)."""
-    from harness.scene.reference import reference_scenes
     from harness.engines import load_engine
+    from harness.scene.reference import reference_scenes
 
     engine = load_engine(engine_name)
     scenes = reference_scenes()
@@ -235,8 +235,8 @@ def write_pareto_figure(result: dict, path: Path) -> None:
 # ---------------------------------------------------------------------- scaling
 def impact_chunk(task: dict) -> list[list[float]]:
     """``task["impacts"]`` engine impacts of one reference scene (top-level: worker processes)."""
-    from harness.scene.reference import reference_scenes
     from harness.engines import load_engine
+    from harness.scene.reference import reference_scenes
 
     engine = load_engine(task["engine"])
     scene = reference_scenes()[task["scene"]][0]

@@ -171,7 +171,7 @@ def boundary_jumps(boundary: Boundary, law: str, count: int, seed: int, ulps: in
     """
     problems, value = boundary_problems(boundary, count, seed)
     grid = [value]
-    for step in range(ulps):
+    for _ in range(ulps):
         grid.insert(0, np.nextafter(grid[0], -np.inf))
         grid.append(np.nextafter(grid[-1], np.inf))
     impulses, statuses = [], []

@@ -103,8 +103,10 @@ TWO_SLED_PARAMETERS = dict(m=3.0, l=1.0, s=0.75, c=-0.5, q3=math.pi / 4, q6=7 * 
                            u=(1.0, 0.1, 1.0, 0.1))
 
 
-def two_sleds(gamma: float, delta: float, m: float = 3.0, l: float = 1.0, s: float = 0.75,
-              c: float = -0.5, q3: float = math.pi / 4, q6: float = 7 * math.pi / 4,
+def two_sleds(gamma: float, delta: float, m: float = 3.0,
+              l: float = 1.0,  # noqa: E741 -- the paper's name for the sled length
+              s: float = 0.75, c: float = -0.5, q3: float = math.pi / 4,
+              q6: float = 7 * math.pi / 4,
               u=(1.0, 0.1, 1.0, 0.1)) -> ImpactProblem:
     """The two-sled collision of the paper's Section 5 (docs/theory.md, 'The two-sled
     example').

@@ -165,7 +165,7 @@ def test_run_solver_only_writes_the_report(tmp_path, monkeypatch):
 
 def _tiny_solver_report() -> dict:
     report = {"families": {}, "boundaries": []}
-    for family, (parameter, problems) in stress_solver.solver_families(count=2, seed=0).items():
+    for family, (_parameter, problems) in stress_solver.solver_families(count=2, seed=0).items():
         report["families"][family] = {}
         for law in LAWS:
             summary = stress_solver.check_rows(stress_solver.solve_all(problems, law), problems)
