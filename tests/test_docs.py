@@ -16,7 +16,8 @@ def test_package_docstring_example_runs():
 
 def test_readme_solver_snippet_runs_and_prints_what_it_says():
     readme = (Path(__file__).parent.parent / "README.md").read_text()
-    snippet = re.search(r"## The solver in five lines\n\n```python\n(.*?)```", readme, re.S).group(1)
+    snippet = re.search(r"## The solver in five lines\n\n```python\n(.*?)```", readme,
+                        re.S).group(1)
     namespace: dict = {}
     exec(compile(snippet.replace("print(", "_ = ("), "README", "exec"), namespace)
     result = namespace["result"]

@@ -5,7 +5,8 @@ solver iterations, sub-steps, presets, MuJoCo's contact time constant and integr
 four scenario families (:func:`harness.bench.engines.reference_scenes`):
 
 * ``disk``       disk r 0.1 m, v (1, −1) m/s (sticks under newton-lcp);
-* ``rod``        the 45° rod, v (0.5, −1) m/s: slip reversal under Poisson (docs/theory.md, 'The velocity-level law (newton-lcp)');
+* ``rod``        the 45° rod, v (0.5, −1) m/s: slip reversal under Poisson (docs/theory.md,
+  'The velocity-level law (newton-lcp)');
 * ``box-corner`` a box corner with spin;
 * ``two-bodies`` two disks off-centre, both free.
 
@@ -36,7 +37,8 @@ from pathlib import Path
 
 import numpy as np
 
-FAMILIES: dict[str, str] = {"disk": "disk", "rod": "rod-45", "box-corner": "box-corner", "two-bodies": "two-disks"}
+FAMILIES: dict[str, str] = {"disk": "disk", "rod": "rod-45", "box-corner": "box-corner",
+                             "two-bodies": "two-disks"}
 THRESHOLDS: tuple[float, ...] = (1e-2, 1e-3)
 OWN_LAW = {"pymunk": "newton-lcp", "pybullet": "newton-lcp", "mujoco": "converged",
            "box2d": "newton-lcp"}
@@ -52,7 +54,8 @@ def sweep(engine_name: str, quick: bool) -> list[tuple[str, str, dict]]:
         iterations = (1, 2, 5, 10, 20, 50, 100) if quick else (1, 2, 3, 5, 10, 20, 30, 50, 100, 200)
         for dt in steps:
             for count in iterations:
-                points.append((f"dt={dt:.3g} it={count}", "accurate", {"time_step": dt, "iterations": count}))
+                points.append((f"dt={dt:.3g} it={count}", "accurate",
+                               {"time_step": dt, "iterations": count}))
     elif engine_name == "pybullet":
         points.append(("defaults", "defaults", {}))
         points.append(("defaults it=200", "defaults", {"num_solver_iterations": 200}))
@@ -87,7 +90,8 @@ def sweep(engine_name: str, quick: bool) -> list[tuple[str, str, dict]]:
                                {"integrator": integrator, "contact_steps": count,
                                 "time_step": CONTACT_DURATION_S / count}))
         points.append((REFERENCE_LABEL, "accurate",
-                       {"integrator": "RK4", "contact_steps": 400, "time_step": CONTACT_DURATION_S / 400}))
+                       {"integrator": "RK4", "contact_steps": 400,
+                        "time_step": CONTACT_DURATION_S / 400}))
     return points
 
 
@@ -102,8 +106,8 @@ def law_velocities(scene, contact, normal) -> dict[str, np.ndarray]:
     from harness.scene.geometry import impact_problem
 
     problem = impact_problem(scene, contact, normal)
-    return {law: np.asarray(problem.solve(mu=scene.friction, e=scene.restitution, hypothesis=law).u_after,
-                            dtype=float)
+    return {law: np.asarray(problem.solve(mu=scene.friction, e=scene.restitution,
+                                          hypothesis=law).u_after, dtype=float)
             for law in ("poisson", "stronge", "newton-lcp")}
 
 
@@ -118,8 +122,8 @@ def departure(scene, u_engine, u_law) -> float:
 # ---------------------------------------------------------------------- measuring
 def measure_engine(engine_name: str, quick: bool, progress=None) -> dict:
     """All sweep points × families for one engine (runs inline: timings undisturbed)."""
-    from harness.scene.reference import reference_scenes
     from harness.engines import load_engine
+    from harness.scene.reference import reference_scenes
 
     engine = load_engine(engine_name)
     scenes = reference_scenes()
@@ -131,8 +135,8 @@ def measure_engine(engine_name: str, quick: bool, progress=None) -> dict:
         settings = engine.settings(preset, overrides)
         for family, key in FAMILIES.items():
             scene = scenes[key][0]
-            row = {"engine": engine_name, "setting": label, "preset": preset, "overrides": overrides,
-                   "family": family}
+            row = {"engine": engine_name, "setting": label, "preset": preset,
+                   "overrides": overrides, "family": family}
             try:
                 run = engine.run(scene, settings)  # warm caches, and the answer
                 best = math.inf
@@ -146,7 +150,8 @@ def measure_engine(engine_name: str, quick: bool, progress=None) -> dict:
                 continue
             u_after = run.u_after
             finite = bool(np.all(np.isfinite(u_after)))
-            row.update(status=run.status, steps=run.steps, time_per_impact_s=best, u_after=u_after.tolist(),
+            row.update(status=run.status, steps=run.steps, time_per_impact_s=best,
+                       u_after=u_after.tolist(),
                        departure={law: (departure(scene, u_after, u) if finite else math.inf)
                                   for law, u in laws[family].items()})
             rows.append(row)
@@ -159,10 +164,12 @@ def measure_engine(engine_name: str, quick: bool, progress=None) -> dict:
         if OWN_LAW[engine_name] == "newton-lcp":
             row["departure"]["own"] = row["departure"]["newton-lcp"]
         else:
-            reference = next(r for r in rows if r["setting"] == REFERENCE_LABEL and r["family"] == row["family"])
+            reference = next(r for r in rows
+                             if r["setting"] == REFERENCE_LABEL and r["family"] == row["family"])
             scene = scenes[FAMILIES[row["family"]]][0]
             row["departure"]["own"] = departure(scene, row["u_after"], reference["u_after"])
-    return {"engine": engine_name, "version": engine.version, "own_law": OWN_LAW[engine_name], "rows": rows}
+    return {"engine": engine_name, "version": engine.version, "own_law": OWN_LAW[engine_name],
+            "rows": rows}
 
 
 def cheapest_settings(result: dict) -> dict:
@@ -173,7 +180,8 @@ def cheapest_settings(result: dict) -> dict:
         by_setting.setdefault(row["setting"], []).append(row)
     candidates = []
     for label, rows in by_setting.items():
-        if label == REFERENCE_LABEL or any("departure" not in r or r["status"] != "ok" for r in rows):
+        if label == REFERENCE_LABEL or any("departure" not in r or r["status"] != "ok"
+                                           for r in rows):
             continue
         worst = max(r["departure"]["own"] for r in rows)
         mean_time = float(np.mean([r["time_per_impact_s"] for r in rows]))
@@ -184,8 +192,8 @@ def cheapest_settings(result: dict) -> dict:
         if reaching:
             mean_time, worst, label = reaching[0]
             ties = [c[2] for c in reaching[1:] if c[0] <= mean_time * (1 + TIE_FRACTION)]
-            table[f"{threshold:g}"] = {"setting": label, "time_per_impact_s": mean_time, "worst_departure": worst,
-                                       "within_timing_noise": ties}
+            table[f"{threshold:g}"] = {"setting": label, "time_per_impact_s": mean_time,
+                                       "worst_departure": worst, "within_timing_noise": ties}
         else:
             best = min(candidates, key=lambda c: c[1]) if candidates else None
             table[f"{threshold:g}"] = {"setting": "not reachable",
@@ -222,7 +230,8 @@ def write_pareto_figure(result: dict, path: Path) -> None:
             axis.scatter(times, values, s=14, label=f"vs {law}", **style)
         own = np.array([max(r["departure"]["own"], floor) for r in rows])
         colours = ["tab:blue" if r["status"] == "ok" else "tab:red" for r in rows]
-        axis.scatter(times, own, s=18, c=colours, label=f"vs own law ({result['own_law']})", zorder=3)
+        axis.scatter(times, own, s=18, c=colours, label=f"vs own law ({result['own_law']})",
+                     zorder=3)
         front = pareto_front(list(zip(times.tolist(), own.tolist())))
         if front:
             axis.step(*zip(*front), where="post", color="tab:blue", linewidth=1)
@@ -235,8 +244,8 @@ def write_pareto_figure(result: dict, path: Path) -> None:
         axis.grid(True, which="major", alpha=0.3)
     axes[0].set_ylabel("departure ‖Δu‖_M / ‖u_before‖_M")
     axes[0].legend(fontsize=7, loc="lower left")
-    figure.suptitle(f"{result['engine']} {result['version']}: cost vs accuracy (red: status not ok; "
-                    f"dotted: 1% and 0.1%)")
+    figure.suptitle(f"{result['engine']} {result['version']}: cost vs accuracy "
+                    f"(red: status not ok; dotted: 1% and 0.1%)")
     figure.tight_layout()
     figure.savefig(path, dpi=110)
     plt.close(figure)
@@ -245,8 +254,8 @@ def write_pareto_figure(result: dict, path: Path) -> None:
 # ---------------------------------------------------------------------- scaling
 def impact_chunk(task: dict) -> list[list[float]]:
     """``task["impacts"]`` engine impacts of one reference scene (top-level: worker processes)."""
-    from harness.scene.reference import reference_scenes
     from harness.engines import load_engine
+    from harness.scene.reference import reference_scenes
 
     engine = load_engine(task["engine"])
     scene = reference_scenes()[task["scene"]][0]
@@ -270,10 +279,12 @@ def worker_speedup(quick: bool) -> dict:
             continue
     if engine_name is None:
         return {"skipped": "no engine installed"}
-    per_impact_s = {"mujoco": 8e-4, "pybullet": 5e-5, "pymunk": 2e-4}[engine_name]  # rod-45, accurate
+    # rod-45, accurate preset
+    per_impact_s = {"mujoco": 8e-4, "pybullet": 5e-5, "pymunk": 2e-4}[engine_name]
     chunks = 16 if quick else 32
     impacts = max(1, int((2.0 if quick else 10.0) / (per_impact_s * chunks)))  # ~2 s (10 s) serial
-    tasks = [{"engine": engine_name, "scene": "rod-45", "preset": "accurate", "impacts": impacts}] * chunks
+    tasks = [{"engine": engine_name, "scene": "rod-45", "preset": "accurate",
+              "impacts": impacts}] * chunks
     import os
 
     load_before = os.getloadavg()[0] if hasattr(os, "getloadavg") else None
@@ -284,8 +295,9 @@ def worker_speedup(quick: bool) -> dict:
         results[workers] = run_tasks(impact_chunk, tasks, workers=workers)
         timings[workers] = time.perf_counter() - started
     return {
-        "engine": engine_name, "scene": "rod-45", "preset": "accurate", "impacts": chunks * impacts,
-        "local_cores": default_workers(), "seconds_1_worker": timings[1], "seconds_2_workers": timings[2],
+        "engine": engine_name, "scene": "rod-45", "preset": "accurate",
+        "impacts": chunks * impacts, "local_cores": default_workers(),
+        "seconds_1_worker": timings[1], "seconds_2_workers": timings[2],
         "speedup": timings[1] / timings[2], "identical_results": results[1] == results[2],
         "load_average_before": load_before,
         "note": "2-worker time includes starting the process pool; other load on the machine "
@@ -306,7 +318,8 @@ def format_table(report: dict) -> str:
             cell = entry["cheapest"][f"{threshold:g}"]
             if cell["setting"] == "not reachable":
                 best = cell["best_worst_departure"]
-                cells.append(f"not reachable (best {best:.2g})" if best is not None else "not reachable")
+                cells.append(f"not reachable (best {best:.2g})" if best is not None
+                             else "not reachable")
             else:
                 ties = len(cell["within_timing_noise"])
                 cells.append(f"{cell['setting']} ({cell['time_per_impact_s'] * 1e6:.0f} µs"
@@ -329,14 +342,16 @@ def run(quick: bool, out_dir: Path) -> dict:
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
-    report: dict = {"quick": quick, "families": FAMILIES, "thresholds": list(THRESHOLDS), "engines": {}}
+    report: dict = {"quick": quick, "families": FAMILIES, "thresholds": list(THRESHOLDS),
+                    "engines": {}}
     for name in ENGINE_NAMES:
         try:
             load_engine(name)
         except EngineNotInstalled as error:
             report["engines"][name] = {"skipped": str(error)}
             continue
-        result = measure_engine(name, quick, progress=None if quick else progress_printer(f"speed-accuracy {name}"))
+        progress = None if quick else progress_printer(f"speed-accuracy {name}")
+        result = measure_engine(name, quick, progress=progress)
         result["cheapest"] = cheapest_settings(result)
         path = out_dir / f"pareto-{name}.png"
         write_pareto_figure(result, path)

@@ -14,8 +14,6 @@ from typing import Any, Mapping, Union
 
 import numpy as np
 
-from harness.scene import geometry
-from harness.scene import Body, Box, Contact, Disk, Polygon, Rod, Scene
 from harness.scenarios.errors import ScenarioError
 from harness.scenarios.schema import (
     ANALYTIC_SYSTEMS,
@@ -26,6 +24,7 @@ from harness.scenarios.schema import (
     TWO_SLED_DEFAULTS,
     TWO_SLED_KEYS,
 )
+from harness.scene import Body, Box, Contact, Disk, Polygon, Rod, Scene, geometry
 
 
 @dataclass(frozen=True)

@@ -81,7 +81,8 @@ class Box:
 
     def vertices(self) -> np.ndarray:
         half_w, half_h = self.width / 2.0, self.height / 2.0
-        return np.array([[-half_w, -half_h], [half_w, -half_h], [half_w, half_h], [-half_w, half_h]])
+        return np.array([[-half_w, -half_h], [half_w, -half_h], [half_w, half_h],
+                         [-half_w, half_h]])
 
 
 @dataclass(frozen=True)
@@ -159,7 +160,8 @@ class Scene:
         if self.ground and count != 1:
             raise ValueError(f"scene {self.name!r}: a ground scene has exactly 1 body, got {count}")
         if not self.ground and count != 2:
-            raise ValueError(f"scene {self.name!r}: a scene without ground has 2 bodies, got {count}")
+            raise ValueError(
+                f"scene {self.name!r}: a scene without ground has 2 bodies, got {count}")
 
     def state(self) -> np.ndarray:
         """All generalised speeds, ``(v_x, v_y, ω)`` per body in order."""

@@ -14,8 +14,9 @@ def reference_scenes() -> dict[str, tuple[Scene, tuple[float, float], tuple[floa
 
     * ``disk``: disk r 0.1 m, 1 kg, v (1, -1) m/s, no spin (sticks under newton-lcp).
     * ``disk-spin``: the same with ω = 5 rad/s (slides).
-    * ``rod-45``: the rod of the engine notes (docs/engines.md), 1 m capsule (cap radius 5 mm), 1 kg, inertia 1/12 kg m²,
-      45°, v (0.5, -1) m/s, e 0.5, μ 0.3 -> newton-lcp (0.7202, -0.2660, -2.1666).
+    * ``rod-45``: the rod of the engine notes (docs/engines.md), 1 m capsule (cap radius
+      5 mm), 1 kg, inertia 1/12 kg m², 45°, v (0.5, -1) m/s, e 0.5, μ 0.3 -> newton-lcp
+      (0.7202, -0.2660, -2.1666).
     * ``box-corner``: box 0.4 × 0.2 m, 1 kg, 30°, lowest corner on the ground, v (0.3, -1),
       ω 0.5 rad/s.
     * ``two-disks``: disks r 0.1 m (1 kg) and 0.15 m (2 kg) touching along 30°, with

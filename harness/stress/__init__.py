@@ -17,8 +17,9 @@ continuity at the boundaries (the *jump*: the largest change of ``(I_n, I_t)`` b
 neighbouring inputs, relative to ``|I_n| + |I_t|``, must shrink with the distance; across one
 ulp it is rounding); Poisson and Stronge never gain energy (a gain above 1e-10 of the
 energy scale ``|v_n| I_n + |v_t I_t|`` plus the rounding allowance ``10 eps/c`` of a problem of
-conditioning ``c = Δ/(m_nn m_tt)`` is counted; raw gains above 1e-10 are reported apart). Newton's gains are counted too, as
-information (Newton can gain energy; docs/theory.md, 'Newton's law').
+conditioning ``c = Δ/(m_nn m_tt)`` is counted; raw gains above 1e-10 are reported apart).
+Newton's gains are counted too, as information (Newton can gain energy; docs/theory.md,
+'Newton's law').
 
 Engines (every installed engine, via :func:`harness.engines.load_engine`): a disk and the
 45° rod against the ground, scaled in mass (1e-6 … 1e6 kg), size (1e-4 … 1e3 m), speed
@@ -71,8 +72,9 @@ def run(quick: bool, out_dir: Path, executor: str = "local", workers: int | None
     solver_s = time.perf_counter() - started
     started = time.perf_counter()
     if engines:
+        progress = None if quick else progress_printer("stress engines")
         engine_report = engine_stress(quick, executor, workers, scheduler, use_cache,
-                                      progress=None if quick else progress_printer("stress engines"))
+                                      progress=progress)
     else:
         engine_report = {"versions": {}, "skipped": {}, "presets": [], "runs": [], "counts": {},
                          "cache": {"hits": 0, "misses": 0}, "tasks_run": 0}
@@ -96,12 +98,15 @@ def run(quick: bool, out_dir: Path, executor: str = "local", workers: int | None
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("--quick", action="store_true", help="fewer cases; finishes in about a minute")
+    parser.add_argument("--quick", action="store_true",
+                        help="fewer cases; finishes in about a minute")
     parser.add_argument("--out", type=Path, default=Path("reports/stress"), help="output directory")
     parser.add_argument("--executor", choices=("local", "dask"), default="local",
                         help="where engine runs execute (default: a local process pool)")
-    parser.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")
-    parser.add_argument("--scheduler", default=None, help="Dask scheduler address (with --executor dask)")
+    parser.add_argument("--workers", type=int, default=None,
+                        help="worker processes (default: all cores)")
+    parser.add_argument("--scheduler", default=None,
+                        help="Dask scheduler address (with --executor dask)")
     parser.add_argument("--no-cache", action="store_true", help="rerun every engine case")
     parser.add_argument("--solver-only", action="store_true", help="skip the engines")
 
@@ -109,7 +114,8 @@ def add_arguments(parser) -> None:
 def main(args) -> int:
     started = time.perf_counter()
     report = run(args.quick, args.out, executor=args.executor, workers=args.workers,
-                 scheduler=args.scheduler, use_cache=not args.no_cache, engines=not args.solver_only)
+                 scheduler=args.scheduler, use_cache=not args.no_cache,
+                 engines=not args.solver_only)
     totals = report["solver"]["totals"]
     print(f"solver: {totals}")
     for group, counts in report["engines"]["counts"].items():
@@ -119,5 +125,6 @@ def main(args) -> int:
         print(f"{name}: skipped ({reason})")
     print(f"written {args.out / 'stress.md'} ({time.perf_counter() - started:.1f} s)")
     # exit status: the solver's guarantees (engines' failures are findings, not errors)
-    failed = totals["silent_non_finite"] or totals["energy_gain_poisson_stronge"] or totals["scalar_silent_non_finite"]
+    failed = (totals["silent_non_finite"] or totals["energy_gain_poisson_stronge"]
+              or totals["scalar_silent_non_finite"])
     return 1 if failed else 0

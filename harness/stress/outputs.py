@@ -30,8 +30,9 @@ def engine_grid_figure(engines: dict, path: Path) -> None:
             columns.append(column)
     grid = np.full((len(rows), len(columns)), order.index("skipped"))
     for record in engines["runs"]:
-        grid[rows.index(f"{record['engine']}/{record['preset']}"),
-             columns.index(f"{record['shape']}: {record['label']}")] = order.index(record["outcome"])
+        row_index = rows.index(f"{record['engine']}/{record['preset']}")
+        column_index = columns.index(f"{record['shape']}: {record['label']}")
+        grid[row_index, column_index] = order.index(record["outcome"])
     figure, axes = plt.subplots(figsize=(max(8, 0.32 * len(columns) + 3), 1.0 + 0.45 * len(rows)))
     axes.imshow(grid, cmap=ListedColormap([OUTCOME_COLOURS[name] for name in order]), vmin=-0.5,
                 vmax=len(order) - 0.5, aspect="auto")
@@ -42,7 +43,8 @@ def engine_grid_figure(engines: dict, path: Path) -> None:
     axes.grid(which="minor", color="white", linewidth=0.8)
     axes.tick_params(which="minor", length=0)
     used = sorted({order[v] for v in grid.ravel()}, key=order.index)
-    axes.legend(handles=[Patch(facecolor=OUTCOME_COLOURS[n], edgecolor="grey", label=n) for n in used],
+    axes.legend(handles=[Patch(facecolor=OUTCOME_COLOURS[n], edgecolor="grey", label=n)
+                         for n in used],
                 loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
     axes.set_title("Engine stress outcomes (engine/preset × stress case)")
     figure.tight_layout()
@@ -63,9 +65,11 @@ def boundary_jumps_figure(solver: dict, path: Path) -> None:
             if entry["boundary"] != name:
                 continue
             deltas = np.array(entry["deltas"])
-            jumps = np.array([np.nan if j is None else max(j, 1e-18) for j in entry["max_jump_at_delta"]])
+            jumps = np.array([np.nan if j is None else max(j, 1e-18)
+                              for j in entry["max_jump_at_delta"]])
             axis.loglog(deltas, jumps, marker="o", markersize=3, label=entry["law"])
-        axis.loglog([1e-15, 1e-2], [1e-15, 1e-2], color="grey", linestyle=":", linewidth=1, label="∝ δ")
+        axis.loglog([1e-15, 1e-2], [1e-15, 1e-2], color="grey", linestyle=":", linewidth=1,
+                    label="∝ δ")
         axis.set_title(name, fontsize=10)
         axis.grid(True, which="major", alpha=0.3)
     for axis in axes[-1]:
@@ -73,7 +77,8 @@ def boundary_jumps_figure(solver: dict, path: Path) -> None:
     for axis in axes[:, 0]:
         axis.set_ylabel("max |Δ(I_n, I_t)| / (|I_n|+|I_t|)")
     axes[0, 0].legend(fontsize=8)
-    figure.suptitle("Solver continuity: change of the impulses across each boundary (continuous ⇒ → 0 with δ)")
+    figure.suptitle("Solver continuity: change of the impulses across each boundary "
+                    "(continuous ⇒ → 0 with δ)")
     figure.tight_layout()
     figure.savefig(path, dpi=120)
     plt.close(figure)
@@ -93,14 +98,17 @@ def energy_figure(solver: dict, path: Path) -> None:
             xs = np.array([float(k) for k in by_value])
             ys = np.array([np.nan if v is None else v for v in by_value.values()])
             # symmetric log: sign(y)·log10(1 + |y|/1e-16)
-            axis.semilogx(xs, np.sign(ys) * np.log10(1 + np.abs(ys) / 1e-16), marker="o", markersize=3, label=law)
+            axis.semilogx(xs, np.sign(ys) * np.log10(1 + np.abs(ys) / 1e-16), marker="o",
+                          markersize=3, label=law)
         axis.axhline(0.0, color="grey", linewidth=0.8)
         axis.set_title(family)
-        axis.set_xlabel({"conditioning": "Δ/(m_nn m_tt)", "mass-ratio": "mass ratio k", "speed": "speed (m/s)", "grazing": "|v_n|/|v_t|",
+        axis.set_xlabel({"conditioning": "Δ/(m_nn m_tt)", "mass-ratio": "mass ratio k",
+                         "speed": "speed (m/s)", "grazing": "|v_n|/|v_t|",
                          "size": "size L (m)"}.get(family, family))
     np.atleast_1d(axes)[0].set_ylabel("max ΔE / (|v_n|I_n+|v_t I_t|)\nsign·log10(1+|x|/1e-16)")
     np.atleast_1d(axes)[0].legend(fontsize=8)
-    figure.suptitle("Largest energy change per stress value (> 0 is a gain; Newton may gain, Poisson/Stronge must not)")
+    figure.suptitle("Largest energy change per stress value "
+                    "(> 0 is a gain; Newton may gain, Poisson/Stronge must not)")
     figure.tight_layout()
     figure.savefig(path, dpi=120)
     plt.close(figure)
@@ -109,54 +117,68 @@ def energy_figure(solver: dict, path: Path) -> None:
 def stress_markdown(report: dict) -> str:
     solver, engines = report["solver"], report["engines"]
     lines = ["# Stress report", "",
-             f"Mode: {'quick' if report['quick'] else 'full'}; generated {report['provenance']['created_utc']}; "
-             f"solver {report['timings']['solver_s']:.1f} s, engines {report['timings']['engines_s']:.1f} s.", "",
+             f"Mode: {'quick' if report['quick'] else 'full'}; "
+             f"generated {report['provenance']['created_utc']}; "
+             f"solver {report['timings']['solver_s']:.1f} s, "
+             f"engines {report['timings']['engines_s']:.1f} s.", "",
              "## Solver", "", "| check | count |", "|---|---|"]
     for name, value in solver["totals"].items():
         lines.append(f"| {name.replace('_', ' ')} | {value} |")
-    lines += ["", "Per family (rows solved / rows; silent non-finite; energy-gain rows; largest relative "
-              "energy change):", "", "| family | law | solved | silent NaN | gain rows (beyond rounding) | gain rows > 1e-10 | max ΔE/scale |",
+    lines += ["", "Per family (rows solved / rows; silent non-finite; energy-gain rows; "
+              "largest relative energy change):", "",
+              "| family | law | solved | silent NaN | gain rows (beyond rounding) "
+              "| gain rows > 1e-10 | max ΔE/scale |",
               "|---|---|---|---|---|---|---|"]
     for family, per_law in solver["families"].items():
         for law, summary in per_law.items():
             gain = summary["max_relative_energy_gain"]
             lines.append(f"| {family} | {law} | {summary['solved']}/{summary['rows']} | "
-                         f"{summary['silent_non_finite']} | {summary['energy_gain_rows']} | {summary['energy_gain_rows_raw']} | "
+                         f"{summary['silent_non_finite']} | {summary['energy_gain_rows']} | "
+                         f"{summary['energy_gain_rows_raw']} | "
                          f"{'—' if gain is None else f'{gain:.2e}'} |")
     scalar = solver["scalar_api"]
-    lines += ["", f"Scalar `solve` on extreme bodies: {scalar['finite']} finite answers, {scalar['error']} "
-              f"ImpactInputError, {scalar['silent_non_finite']} silent non-finite.", "",
-              "Continuity across boundaries (max jump between neighbouring inputs ±4 ulps apart, and "
-              "at relative distance δ = 1e-15 / 1e-8 / 1e-2; figure `solver-boundary-jumps.png`):", "",
-              "| boundary | law | rows | max jump over ulps | δ=1e-15 | δ=1e-8 | δ=1e-2 |", "|---|---|---|---|---|---|---|"]
+    lines += ["", f"Scalar `solve` on extreme bodies: {scalar['finite']} finite answers, "
+              f"{scalar['error']} ImpactInputError, {scalar['silent_non_finite']} silent "
+              "non-finite.", "",
+              "Continuity across boundaries (max jump between neighbouring inputs ±4 ulps apart, "
+              "and at relative distance δ = 1e-15 / 1e-8 / 1e-2; "
+              "figure `solver-boundary-jumps.png`):", "",
+              "| boundary | law | rows | max jump over ulps | δ=1e-15 | δ=1e-8 | δ=1e-2 |",
+              "|---|---|---|---|---|---|---|"]
 
     def fmt(value):
         return "—" if value is None else f"{value:.1e}"
 
     for entry in solver["boundaries"]:
         at = dict(zip(entry["deltas"], entry["max_jump_at_delta"]))
-        pick = [at.get(min(at, key=lambda d: abs(math.log10(d) - target))) for target in (-15, -8, -2)]
-        lines.append(f"| {entry['boundary']} | {entry['law']} | {entry['rows_solved_on_both_sides']}/{entry['rows']} | "
+        pick = [at.get(min(at, key=lambda d: abs(math.log10(d) - target)))
+                for target in (-15, -8, -2)]
+        lines.append(f"| {entry['boundary']} | {entry['law']} | "
+                     f"{entry['rows_solved_on_both_sides']}/{entry['rows']} | "
                      f"{fmt(entry['max_ulp_jump'])} | {' | '.join(fmt(p) for p in pick)} |")
     lines += ["", "## Engines", "", "Outcomes (first that applies):", ""]
     lines += [f"- **{name}**: {text}" for name, text in OUTCOMES.items()]
-    lines += ["", "| engine/preset | " + " | ".join(OUTCOMES) + " |", "|---|" + "---|" * len(OUTCOMES)]
+    lines += ["", "| engine/preset | " + " | ".join(OUTCOMES) + " |",
+              "|---|" + "---|" * len(OUTCOMES)]
     for group, counts in engines["counts"].items():
         lines.append(f"| {group} | " + " | ".join(str(counts[name]) for name in OUTCOMES) + " |")
     for name, reason in engines["skipped"].items():
         lines.append(f"| {name} | skipped: {reason} |")
-    lines += ["", "Runs not ok:", "", "| engine/preset | case | outcome | status | energy ratio | penetration/extent |",
+    lines += ["", "Runs not ok:", "",
+              "| engine/preset | case | outcome | status | energy ratio | penetration/extent |",
               "|---|---|---|---|---|---|"]
     for record in engines["runs"]:
         if record["outcome"] != "ok":
             ratio = record.get("energy_ratio")
-            lines.append(f"| {record['engine']}/{record['preset']} | {record['shape']}: {record['label']} | "
+            lines.append(f"| {record['engine']}/{record['preset']} | "
+                         f"{record['shape']}: {record['label']} | "
                          f"{record['outcome']} | {record['status']} | {fmt(ratio)} | "
                          f"{fmt(record.get('max_penetration_relative'))} |"
                          + (f" {record['error'][:120]}" if record.get("error") else ""))
     cache = engines["cache"]
     lines += ["", f"Engine runs: {engines['tasks_run']} simulated, {cache['hits']} from the cache "
-              f"(`--no-cache` forces them).", "", "Figures: `engine-grid.png`, `solver-boundary-jumps.png`, "
+              f"(`--no-cache` forces them).", "",
+              "Figures: `engine-grid.png`, `solver-boundary-jumps.png`, "
               "`solver-energy.png`. Machine-readable: `stress.json`, `stress-engines.csv`.", ""]
     return "\n".join(lines)
 

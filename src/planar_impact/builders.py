@@ -35,7 +35,10 @@ class PlanarBody:
         return np.array([self.velocity[0], self.velocity[1], self.angular_velocity], dtype=float)
 
     def partial_velocities(self, point, direction) -> np.ndarray:
-        """``v_r·d`` for ``u = (v_x, v_y, ω)``: the point moves at ``(v_x − ω r_y, v_y + ω r_x)``."""
+        """``v_r·d`` for ``u = (v_x, v_y, ω)``.
+
+        The point moves at ``(v_x − ω r_y, v_y + ω r_x)``.
+        """
         r_x = point[0] - self.position[0]
         r_y = point[1] - self.position[1]
         d_x, d_y = direction
@@ -103,8 +106,10 @@ TWO_SLED_PARAMETERS = dict(m=3.0, l=1.0, s=0.75, c=-0.5, q3=math.pi / 4, q6=7 * 
                            u=(1.0, 0.1, 1.0, 0.1))
 
 
-def two_sleds(gamma: float, delta: float, m: float = 3.0, l: float = 1.0, s: float = 0.75,
-              c: float = -0.5, q3: float = math.pi / 4, q6: float = 7 * math.pi / 4,
+def two_sleds(gamma: float, delta: float, m: float = 3.0,
+              l: float = 1.0,  # noqa: E741 -- the paper's name for the sled length
+              s: float = 0.75, c: float = -0.5, q3: float = math.pi / 4,
+              q6: float = 7 * math.pi / 4,
               u=(1.0, 0.1, 1.0, 0.1)) -> ImpactProblem:
     """The two-sled collision of the paper's Section 5 (docs/theory.md, 'The two-sled
     example').
@@ -127,7 +132,8 @@ def two_sleds(gamma: float, delta: float, m: float = 3.0, l: float = 1.0, s: flo
     mass_matrix[2:, 2:] = block(delta)
     wn = np.array([-math.tan(gamma), -(c - s), -(math.sin(lam) - math.tan(delta) * math.cos(lam)),
                    (l - s) * math.cos(lam)])
-    wt = np.array([-1.0, 0.0, math.cos(lam) + math.tan(delta) * math.sin(lam), (l - s) * math.sin(lam)])
+    wt = np.array([-1.0, 0.0, math.cos(lam) + math.tan(delta) * math.sin(lam),
+                   (l - s) * math.sin(lam)])
     speeds = np.asarray(u, dtype=float)
     if wt @ speeds < 0:
         wt = -wt

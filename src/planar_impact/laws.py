@@ -14,9 +14,11 @@ docs/theory.md, 'Conventions'. The independent check of every law is
 
 Throughout, ``P`` is the normal impulse used as the clock of the impulse process; the
 process has at most two tangential phases
-(docs/theory.md, 'Routh's diagram and collision types'): forward sliding (``dI_t/dP = −μ``) until the slip vanishes at ``P_G = v_t^A/g`` (A58, with ``v_t^A`` for the misprinted
-``v_n^A``), then sticking (``dI_t/dP = −m_nt/m_tt``, if ``p ≥ 0``) or reverse sliding
-(``dI_t/dP = +μ``, if ``p < 0``), both of which last to the end of the impact.
+(docs/theory.md, 'Routh's diagram and collision types'): forward sliding
+(``dI_t/dP = −μ``) until the slip vanishes at ``P_G = v_t^A/g`` (A58, with ``v_t^A`` for
+the misprinted ``v_n^A``), then sticking (``dI_t/dP = −m_nt/m_tt``, if ``p ≥ 0``) or
+reverse sliding (``dI_t/dP = +μ``, if ``p < 0``), both of which last to the end of the
+impact.
 """
 
 from __future__ import annotations
@@ -281,13 +283,15 @@ class TwoPhaseProcess:
         # v0 = 0 with a subnormal remaining work (e ≈ 1e-162) makes 2kR, and the root,
         # underflow to 0: there the step is √(2R/k), which does not underflow.
         denominator = v_start + root
-        step = where(denominator > 0, twice_remaining / denominator, np.sqrt(twice_remaining / self.slope_n2))
+        step = where(denominator > 0, twice_remaining / denominator,
+                     np.sqrt(twice_remaining / self.slope_n2))
         normal_impulse = where(ends_in_phase1, end_phase1, start + step)
         # Types 1-4 are 1 + (slip vanished in restitution) + 2·(reverse sliding after it).
         ctype = where(
             ends_in_phase1,
             FORWARD_SLIDING,
-            STICK_IN_COMPRESSION + as_type_code(compression_in_phase1) + 2 * as_type_code(self.reverses),
+            STICK_IN_COMPRESSION + as_type_code(compression_in_phase1)
+            + 2 * as_type_code(self.reverses),
         )
         return normal_impulse, self.tangential_impulse(normal_impulse), ctype, compression
 
@@ -350,7 +354,8 @@ def newton_lcp(terms: ContactTerms, e):
     forward_n = closing / t.h
     reverse_n = closing / t.q
     slide_terms = np.abs(t.mnt) + t.mu * t.mtt
-    forward_ok = (t.h > 0) & (t.vt - t.g * forward_n >= -rounding * (t.vt + slide_terms * forward_n))
+    forward_ok = (t.h > 0) & (
+        t.vt - t.g * forward_n >= -rounding * (t.vt + slide_terms * forward_n))
     reverse_ok = (t.q > 0) & (t.vt + t.p * reverse_n <= rounding * (t.vt + slide_terms * reverse_n))
     slide_n = where(forward_ok, forward_n, reverse_n)
     normal_impulse = where(stick_ok, stick_n, slide_n)

@@ -197,7 +197,7 @@ def _forced_impulses(law, ctype, mnn, mnt, mtt, vn, vt, mu, e, delta=None):
         if law == "stronge-paper":  # e_i by (64), (67), (70), (73), (74), then Poisson
             e_i = laws.stronge_paper_restitution(terms, np.float64(e), ctype)
             return laws.poisson_impulses(terms, e_i, ctype)
-        # Newton (Part A): the two-phase process of docs/theory.md, 'Newton's law', with the type forced.
+        # Newton (Part A): docs/theory.md, 'Newton's law', two phases with the type forced.
         vn_abs, target = terms.vn_abs, e * terms.vn_abs  # ends where v_n = e|v_n^A| (A30)
         if ctype == laws.NEWTON_FORWARD:
             normal = (target + vn_abs) / terms.h
@@ -573,7 +573,8 @@ def sequential_impacts(system: ContactSystem, law: str, order, max_impacts: int 
     a round with no impact, or at ``max_impacts``."""
     order = tuple(int(i) for i in order)
     if sorted(order) != list(range(system.count)):
-        raise ImpactInputError(f"order: {order} is not a permutation of the {system.count} contacts")
+        raise ImpactInputError(
+            f"order: {order} is not a permutation of the {system.count} contacts")
     speeds = system.u.copy()
     threshold = -1e-12 * system.speed_scale()  # below rounding, above any real approach
     impacts: list[tuple[int, int]] = []
@@ -594,7 +595,8 @@ def sequential_impacts(system: ContactSystem, law: str, order, max_impacts: int 
         if capped or not struck:
             break
     delta_u = speeds - system.u
-    kinetic = 0.5 * (speeds @ system.mass_matrix @ speeds - system.u @ system.mass_matrix @ system.u)
+    kinetic = 0.5 * (speeds @ system.mass_matrix @ speeds
+                     - system.u @ system.mass_matrix @ system.u)
     return SequentialResult(order=order, law=law, impacts=tuple(impacts), u_after=speeds,
                             delta_u=delta_u, vn_separation=system.wn @ speeds,
                             vt_separation=system.wt @ speeds, energy_change=float(kinetic),

@@ -88,7 +88,8 @@ def contact_space_solution(hypothesis, mnn, mnt, mtt, vn, vt, mu, e, out=None, d
     vn_separation = np.add(vn, mnn * normal + mnt * tangential, out=out["vn_separation"])  # (A22)
     vt_separation = np.add(vt, mnt * normal + mtt * tangential, out=out["vt_separation"])  # (A23)
     energy_change = np.multiply(  # (A29)
-        0.5, normal * (vn_separation + vn) + tangential * (vt_separation + vt), out=out["energy_change"]
+        0.5, normal * (vn_separation + vn) + tangential * (vt_separation + vt),
+        out=out["energy_change"],
     )
     return {
         "normal_impulse": normal,
@@ -291,7 +292,8 @@ def _solve_chunk(hypothesis, inputs, out):
         for name, values in out.items():
             if name == "status" or name.endswith("approach"):
                 continue
-            values[bad] = False if values.dtype == bool else (0 if values.dtype.kind == "i" else np.nan)
+            values[bad] = (False if values.dtype == bool
+                           else (0 if values.dtype.kind == "i" else np.nan))
 
 
 def _scale_exponents(mnn, mtt, vn, vt):
@@ -412,7 +414,8 @@ class ImpactResult:
     @property
     def energy_gained(self) -> bool:
         """True where the law created kinetic energy (Newton's law can, Table 1 of Part A)."""
-        scale = abs(self.vn_approach) * self.normal_impulse + abs(self.vt_approach * self.tangential_impulse)
+        scale = (abs(self.vn_approach) * self.normal_impulse
+                 + abs(self.vt_approach * self.tangential_impulse))
         return self.energy_change > 1e-12 * scale
 
 

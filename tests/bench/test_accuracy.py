@@ -29,10 +29,11 @@ def test_pareto_front_and_cheapest_setting():
     assert bench_accuracy.pareto_front([(3, 1e-3), (1, 1e-1), (2, 1e-1), (4, 1e-6)]) == [
         (1, 1e-1), (3, 1e-3), (4, 1e-6)]
     rows = []
-    for label, time_s, error in (("slow-exact", 3.0, 1e-9), ("fast-rough", 1.0, 5e-3), ("fastest-bad", 0.5, 0.2)):
+    for label, time_s, error in (("slow-exact", 3.0, 1e-9), ("fast-rough", 1.0, 5e-3),
+                                 ("fastest-bad", 0.5, 0.2)):
         for family in bench_accuracy.FAMILIES:
-            rows.append({"setting": label, "family": family, "status": "ok", "time_per_impact_s": time_s,
-                         "departure": {"own": error}})
+            rows.append({"setting": label, "family": family, "status": "ok",
+                         "time_per_impact_s": time_s, "departure": {"own": error}})
     table = bench_accuracy.cheapest_settings({"rows": rows})
     assert table["0.01"]["setting"] == "fast-rough"
     assert table["0.001"]["setting"] == "slow-exact"
@@ -48,10 +49,11 @@ def test_measure_pymunk_on_two_points(monkeypatch):
     result = bench_accuracy.measure_engine("pymunk", quick=True)
     rows = {(r["setting"], r["family"]): r for r in result["rows"]}
     assert len(rows) == 2 * len(bench_accuracy.FAMILIES)
-    # the accurate setting solves newton-lcp to rounding on every family (docs/engines.md, 'pymunk': ~1e-12);
-    # 1e-9 leaves room for the step's position update
+    # the accurate setting solves newton-lcp to rounding on every family (docs/engines.md,
+    # 'pymunk': ~1e-12); 1e-9 leaves room for the step's position update
     for family in bench_accuracy.FAMILIES:
         assert rows[("it=100", family)]["departure"]["own"] < 1e-9, family
         assert rows[("it=100", family)]["time_per_impact_s"] > 0
-    # one iteration on the coupled rod is far off (docs/engines.md, 'pymunk': 2-5 iterations are badly wrong)
+    # one iteration on the coupled rod is far off (docs/engines.md, 'pymunk': 2-5 iterations
+    # are badly wrong)
     assert rows[("it=1", "rod")]["departure"]["own"] > 1e-3

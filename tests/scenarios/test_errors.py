@@ -158,7 +158,8 @@ def test_missing_file(tmp_path):
 # Shapes and poses
 # --------------------------------------------------------------------------------------------
 def test_flat_face_on_the_ground_is_outside_one_point_theory(tmp_path):
-    text = GROUND.replace('shape = "disk"\nradius = 0.1', 'shape = "box"\nwidth = 0.2\nheight = 0.1')
+    text = GROUND.replace('shape = "disk"\nradius = 0.1',
+                          'shape = "box"\nwidth = 0.2\nheight = 0.1')
     error = error_of(tmp_path, text)
     assert_names(error, "bad.toml", "body.disk.angle_deg", "2 contact points",
                  "outside one-point", "turn the body")
@@ -225,7 +226,8 @@ def test_two_body_errors(tmp_path, old, new, parts):
 def test_body_count(tmp_path):
     one_body = TWO_BODY[: TWO_BODY.index('[[body]]\nname = "b"')]
     assert_names(error_of(tmp_path, one_body), "bad.toml", "body", "exactly two")
-    two_on_ground = GROUND + GROUND[GROUND.index("[[body]]"):].replace('"disk"\nshape', '"d2"\nshape')
+    second_body = GROUND[GROUND.index("[[body]]"):].replace('"disk"\nshape', '"d2"\nshape')
+    two_on_ground = GROUND + second_body
     assert_names(error_of(tmp_path, two_on_ground), "exactly one [[body]]")
 
 

@@ -85,8 +85,8 @@ def test_every_law_is_expected_unless_a_known_issue(scenario):
 
 
 def theory_tangent(wn, wt, u, inverse):
-    """docs/theory.md, 'Conventions': t makes v_t^A >= 0; where v_t^A = 0 the solver also takes m_nt >= 0, so
-    that a slip developing from a direct impact counts as forward sliding."""
+    """docs/theory.md, 'Conventions': t makes v_t^A >= 0; where v_t^A = 0 the solver also
+    takes m_nt >= 0, so that a slip developing from a direct impact counts as forward sliding."""
     vt, mnt = wt @ u, wn @ inverse @ wt
     return -wt if vt < 0 or (vt == 0 and mnt < 0) else wt
 
@@ -103,7 +103,10 @@ def theory_terms(scenario, point):
 
 @pytest.mark.parametrize("scenario, point", list(all_points()))
 def test_expected_case_matches_table_1_by_hand(scenario, point):
-    """Cross-check the solver's Table 1 row with the signs of g, h, p, q (docs/theory.md, 'Contact terms')."""
+    """Cross-check the solver's Table 1 row with the signs of g, h, p, q.
+
+    docs/theory.md, 'Contact terms'.
+    """
     mnn, mnt, mtt, _ = theory_terms(scenario, point)
     mu = scenario.at(point).friction
     g, h, p, q = mu * mtt - mnt, mnn - mu * mnt, mu * mtt + mnt, mnn + mu * mnt
@@ -124,7 +127,10 @@ def test_expected_case_matches_table_1_by_hand(scenario, point):
 
 @pytest.mark.parametrize("scenario, point", list(all_points()))
 def test_poisson_type_follows_table_1_by_hand(scenario, point):
-    """The stated Poisson type from alpha against r_m and (1 + e) r_m (docs/theory.md, 'Poisson's law')."""
+    """The stated Poisson type from alpha against r_m and (1 + e) r_m.
+
+    docs/theory.md, 'Poisson's law'.
+    """
     mnn, mnt, mtt, alpha = theory_terms(scenario, point)
     fixed = scenario.at(point)
     mu, e = fixed.friction, fixed.restitution
@@ -203,7 +209,10 @@ def test_two_sled_rows_are_table_3(row, delta, mu, types):
 
 @pytest.mark.parametrize("name", ["matrix-rod-45", "rod-45-slip-reversal"])
 def test_rod_45_reproduces_engines_md(name):
-    """The rod of docs/engines.md, 'The reference scenes': post-impact velocities, printed to 4 decimals: tolerance 5e-5."""
+    """The rod of docs/engines.md, 'The reference scenes': post-impact velocities.
+
+    They are printed there to 4 decimals: tolerance 5e-5.
+    """
     scenario = BY_NAME[name]
     printed = {"poisson": (0.5449, -0.4127, -2.2988), "stronge": (0.5488, -0.3995, -2.3379),
                "newton": (0.5595, -0.3638, -2.4432), "newton-lcp": (0.7202, -0.2660, -2.1666)}
@@ -312,7 +321,8 @@ def test_analytic_problem_of_a_ground_scene_uses_the_contact_geometry():
     contact = scenario.contact()
     body = scenario.scene().bodies[0]
     r = contact.point - np.asarray(body.position)
-    # w_n = (n_x, n_y, r_x n_y - r_y n_x) with n = (0, 1) (docs/theory.md, 'Conventions'); exact arithmetic.
+    # w_n = (n_x, n_y, r_x n_y - r_y n_x) with n = (0, 1) (docs/theory.md, 'Conventions');
+    # exact arithmetic.
     np.testing.assert_allclose(problem.wn, [0.0, 1.0, r[0]], rtol=0, atol=1e-15)
     np.testing.assert_allclose(problem.wt, [1.0, 0.0, -r[1]], rtol=0, atol=1e-15)
     assert problem.mass_matrix[2, 2] == body.moment_of_inertia

@@ -15,7 +15,8 @@ from harness.stress import engines as stress_engines
 from harness.stress import solver as stress_solver
 
 LAWS = pi.HYPOTHESES
-OUTPUTS = ("normal_impulse", "tangential_impulse", "vn_separation", "vt_separation", "energy_change")
+OUTPUTS = ("normal_impulse", "tangential_impulse", "vn_separation", "vt_separation",
+           "energy_change")
 
 
 @st.composite
@@ -29,14 +30,15 @@ def extreme_problems(draw):
     # |v_n|/|v_t| down to 1e-12 (grazing); the overflow at ~1e-300 is pinned below
     vn = -speed * draw(st.floats(1e-12, 1.0))
     vt = speed * draw(st.one_of(st.floats(-1e9, 1e9), st.just(0.0)))
-    mu = draw(st.one_of(st.sampled_from([0.0, 10.0, 1e6]), st.floats(0.0, 20.0, allow_subnormal=False)))
+    mu = draw(st.one_of(st.sampled_from([0.0, 10.0, 1e6]),
+                        st.floats(0.0, 20.0, allow_subnormal=False)))
     e = draw(st.one_of(st.sampled_from([0.0, 1.0]), st.floats(0.0, 1.0)))
     return dict(mnn=mnn, mnt=mnt, mtt=mtt, vn=vn, vt=vt, mu=mu, e=e)
 
 
 def _solve(problem, law):
-    return pi.solve_batch(problem["mnn"], problem["mnt"], problem["mtt"], problem["vn"], problem["vt"],
-                          problem["mu"], problem["e"], hypothesis=law)
+    return pi.solve_batch(problem["mnn"], problem["mnt"], problem["mtt"], problem["vn"],
+                          problem["vt"], problem["mu"], problem["e"], hypothesis=law)
 
 
 # Found by hypothesis: the slip stops exactly at the end of compression (v_0 = 0) and the
@@ -67,9 +69,11 @@ def test_poisson_and_stronge_never_gain_energy_at_extreme_magnitudes(problem):
         if int(result.status) != 0:
             continue
         # ΔE by (A29) sums products of size |v|·I: rounding ~1e-16 of that scale, amplified by
-        # 1/c for a nearly singular M (c = Δ/(m_nn m_tt)); stress_solver.energy_tolerance allows both.
-        scale = abs(problem["vn"]) * float(result.normal_impulse) + abs(problem["vt"] * float(result.tangential_impulse))
-        tolerance = float(stress_solver.energy_tolerance(problem["mnn"], problem["mnt"], problem["mtt"]))
+        # 1/c for a nearly singular M (c = Δ/(m_nn m_tt)); energy_tolerance allows both.
+        scale = (abs(problem["vn"]) * float(result.normal_impulse)
+                 + abs(problem["vt"] * float(result.tangential_impulse)))
+        tolerance = float(stress_solver.energy_tolerance(problem["mnn"], problem["mnt"],
+                                                         problem["mtt"]))
         assert float(result.energy_change) <= tolerance * scale, (law, problem)
 
 
@@ -85,7 +89,8 @@ def conditioned_problems(draw):
     mtt = 10.0 ** draw(st.floats(-3, 3))
     mnt = draw(_not_tiny(-0.95, 0.95)) * math.sqrt(mnn * mtt)
     return dict(mnn=mnn, mnt=mnt, mtt=mtt, vn=-(10.0 ** draw(st.floats(-3, 3))),
-                vt=draw(_not_tiny(-1e3, 1e3)), mu=draw(_not_tiny(0.0, 3.0)), e=draw(_not_tiny(0.0, 1.0)))
+                vt=draw(_not_tiny(-1e3, 1e3)), mu=draw(_not_tiny(0.0, 3.0)),
+                e=draw(_not_tiny(0.0, 1.0)))
 
 
 @settings(max_examples=200, deadline=None)
@@ -102,7 +107,8 @@ def test_scaling_all_masses_by_k_scales_impulses_by_k(problem, power_of_two, log
         if int(reference.status) != 0:
             continue
         for k, exact in ((2.0**power_of_two, True), (10.0**log_k, False)):
-            scaled = dict(problem, mnn=problem["mnn"] / k, mnt=problem["mnt"] / k, mtt=problem["mtt"] / k)
+            scaled = dict(problem, mnn=problem["mnn"] / k, mnt=problem["mnt"] / k,
+                          mtt=problem["mtt"] / k)
             result = _solve(scaled, law)
             assert int(result.status) == 0
             impulses = np.array([result.normal_impulse, result.tangential_impulse]) / k
@@ -113,7 +119,8 @@ def test_scaling_all_masses_by_k_scales_impulses_by_k(problem, power_of_two, log
                 assert float(result.vt_separation) == float(reference.vt_separation)
             elif not exact:
                 size = float(np.sum(np.abs(expected)))
-                assert np.all(np.abs(impulses - expected) <= 1e-9 * size), (law, k, impulses, expected)
+                assert np.all(np.abs(impulses - expected) <= 1e-9 * size), (
+                    law, k, impulses, expected)
 
 
 @pytest.mark.parametrize("law", pi.HYPOTHESES)
@@ -128,10 +135,11 @@ def test_overflowing_alpha_is_not_a_silent_inf(law):
 def test_boundaries_are_continuous_to_rounding():
     for boundary in stress_solver.BOUNDARIES:
         entry = stress_solver.boundary_jumps(boundary, "poisson", count=30, seed=1, ulps=2,
-                                      deltas=np.array([1e-12, 1e-4]))
+                                             deltas=np.array([1e-12, 1e-4]))
         assert entry["rows_solved_on_both_sides"] > 0, boundary.name
         # across a few ulps the impulses move by rounding only (≲1e-13 measured; 1e-9 flags)
-        assert entry["max_ulp_jump"] < stress_solver.ULP_JUMP_TOLERANCE, (boundary.name, entry["max_ulp_jump"])
+        assert entry["max_ulp_jump"] < stress_solver.ULP_JUMP_TOLERANCE, (
+            boundary.name, entry["max_ulp_jump"])
         # continuity: the change shrinks with the distance δ (1e-12 vs 1e-4)
         small, large = entry["max_jump_at_delta"]
         assert small <= max(1e-9, 1e-3 * large), (boundary.name, small, large)
@@ -148,31 +156,35 @@ def test_solver_families_have_no_silent_nan():
 
 def test_engine_case_smoke():
     pytest.importorskip("pymunk", reason="pymunk is not installed")
-    cases = {case["label"] + case["shape"]: case for case in stress_engines.engine_cases(quick=True)}
-    record = stress_engines.run_engine_case({"case": cases["referencedisk"], "engine": "pymunk", "preset": "accurate"})
+    cases = {case["label"] + case["shape"]: case
+             for case in stress_engines.engine_cases(quick=True)}
+    record = stress_engines.run_engine_case({"case": cases["referencedisk"], "engine": "pymunk",
+                                             "preset": "accurate"})
     assert record["outcome"] == "ok" and len(record["u_after"]) == 3
-    record = stress_engines.run_engine_case({"case": cases["time_step=0.1rod"], "engine": "pymunk", "preset": "accurate"})
+    record = stress_engines.run_engine_case({"case": cases["time_step=0.1rod"],
+                                             "engine": "pymunk", "preset": "accurate"})
     assert record["outcome"] in stress_engines.OUTCOMES
 
 
 def test_run_solver_only_writes_the_report(tmp_path, monkeypatch):
     monkeypatch.setattr(stress, "solver_stress", lambda quick: _tiny_solver_report())
     report = stress.run(quick=True, out_dir=tmp_path, engines=False)
-    for name in ("stress.md", "stress.json", "stress-engines.csv", "solver-boundary-jumps.png", "solver-energy.png"):
+    for name in ("stress.md", "stress.json", "stress-engines.csv", "solver-boundary-jumps.png",
+                 "solver-energy.png"):
         assert (tmp_path / name).exists(), name
     assert report["solver"]["totals"]["silent_non_finite"] == 0
 
 
 def _tiny_solver_report() -> dict:
     report = {"families": {}, "boundaries": []}
-    for family, (parameter, problems) in stress_solver.solver_families(count=2, seed=0).items():
+    for family, (_parameter, problems) in stress_solver.solver_families(count=2, seed=0).items():
         report["families"][family] = {}
         for law in LAWS:
             summary = stress_solver.check_rows(stress_solver.solve_all(problems, law), problems)
             summary["max_relative_energy_change_by_parameter"] = {"1.0": 0.0}
             report["families"][family][law] = summary
-    report["boundaries"].append(stress_solver.boundary_jumps(stress_solver.BOUNDARIES[0], "poisson", 10, 0, ulps=1,
-                                                      deltas=np.array([1e-8])))
+    report["boundaries"].append(stress_solver.boundary_jumps(
+        stress_solver.BOUNDARIES[0], "poisson", 10, 0, ulps=1, deltas=np.array([1e-8])))
     report["scalar_api"] = stress_solver.scalar_api_checks(quick=True, seed=0)
     report["totals"] = {"silent_non_finite": 0, "energy_gain_poisson_stronge": 0,
                         "scalar_silent_non_finite": report["scalar_api"]["silent_non_finite"]}

@@ -8,7 +8,8 @@ from hypothesis.extra import numpy as hnp
 
 from planar_impact import laws
 
-SIZES = st.sampled_from([1, 7, laws._MASKED_SELECT_MIN_SIZE - 1, laws._MASKED_SELECT_MIN_SIZE, 1000])
+SIZES = st.sampled_from([1, 7, laws._MASKED_SELECT_MIN_SIZE - 1, laws._MASKED_SELECT_MIN_SIZE,
+                         1000])
 ANY_FLOAT = st.floats(allow_nan=True, allow_infinity=True, allow_subnormal=True)
 
 

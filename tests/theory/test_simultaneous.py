@@ -156,7 +156,8 @@ def test_every_solution_satisfies_its_own_definition(seed, family):
     for law in TYPE_LAWS:
         for solution in sim.coherent_solutions(system, law):
             # (75): M Δu = Σ w I, and (A29) summed equals the change of ½ uᵀ M u.
-            forcing = system.wn.T @ solution.normal_impulse + system.wt.T @ solution.tangential_impulse
+            forcing = (system.wn.T @ solution.normal_impulse
+                       + system.wt.T @ solution.tangential_impulse)
             assert np.allclose(system.mass_matrix @ solution.delta_u, forcing, atol=1e-9 * (
                 1 + np.abs(forcing).max()))
             after = 0.5 * solution.u_after @ system.mass_matrix @ solution.u_after

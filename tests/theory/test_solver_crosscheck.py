@@ -49,9 +49,11 @@ def near_type_boundary(batch, index, r, rel=1e-9):
     sign = -1.0 if r["vt"] < 0 else 1.0  # the theory's t makes v_t^A ≥ 0
     terms = pi.laws.ContactTerms(np.float64(r["mnn"]), sign * r["mnt"], r["mtt"], r["vn"],
                                  sign * r["vt"], r["mu"])
-    e = batch.restitution_poisson[index] if np.isfinite(batch.restitution_poisson[index]) else r["e"]
+    reported_e = batch.restitution_poisson[index]
+    e = reported_e if np.isfinite(reported_e) else r["e"]
     alpha, r_m = terms.alpha, terms.r_m
-    return any(abs(alpha - b) <= rel * max(abs(b), abs(alpha), 1e-300) for b in (r_m, (1 + e) * r_m))
+    return any(abs(alpha - b) <= rel * max(abs(b), abs(alpha), 1e-300)
+               for b in (r_m, (1 + e) * r_m))
 
 
 @pytest.mark.parametrize("law", ["newton", "poisson", "stronge"])
@@ -67,7 +69,8 @@ def test_closed_form_equals_impulse_process(problems, law):
         walked = impulse_process(**{**r, "mnt": sign * r["mnt"]}, law=law)
         scale = impulse_scale(r)
         assert abs(walked.normal_impulse - batch.normal_impulse[index]) <= IMPULSE_RTOL * scale, r
-        assert abs(sign * walked.tangential_impulse - batch.tangential_impulse[index]) <= IMPULSE_RTOL * scale, r
+        assert (abs(sign * walked.tangential_impulse - batch.tangential_impulse[index])
+                <= IMPULSE_RTOL * scale), r
         walked_type = process_collision_type(walked, newton_numbering=law == "newton")
         if walked_type != batch.collision_type[index] and not degenerate_tangent(r):
             if not near_type_boundary(batch, index, r):
@@ -97,7 +100,8 @@ def test_stronge_paper_is_poisson_with_the_mapped_restitution(problems):
         walked = impulse_process(**{**r, "e": e_i}, law="poisson")
         scale = impulse_scale(r)
         assert abs(walked.normal_impulse - batch.normal_impulse[index]) <= IMPULSE_RTOL * scale
-        assert abs(walked.tangential_impulse - batch.tangential_impulse[index]) <= IMPULSE_RTOL * scale
+        assert (abs(walked.tangential_impulse - batch.tangential_impulse[index])
+                <= IMPULSE_RTOL * scale)
         e_v = batch.vn_separation[index] / abs(r["vn"])
         # (61) mixes e_i and e_v, both O(1): absolute rounding tolerance, amplified by 1/Δ'.
         assert abs(1 - (1 + e_i) * (1 - e_v) - r["e"] ** 2) <= 1e-8, r
@@ -171,7 +175,8 @@ def test_scalar_solve_equals_batch(law):
         assert batch.status == 0
         for name in ("normal_impulse", "tangential_impulse", "vn_separation", "vt_separation",
                      "energy_change"):
-            assert getattr(single, name) == pytest.approx(float(getattr(batch, name)), rel=1e-12, abs=1e-12)
+            assert getattr(single, name) == pytest.approx(float(getattr(batch, name)),
+                                                          rel=1e-12, abs=1e-12)
         # (A16): M Δu = w_n I_n + w_t I_t, and the energy change is that of ½ uᵀMu (A29).
         np.testing.assert_allclose(matrix @ single.delta_u,
                                    wn * single.normal_impulse + wt * single.tangential_impulse,

@@ -105,7 +105,8 @@ def test_continuity_across_type_boundaries(problem, boundary, law):
         # m_nt ≥ 0 (see the two pinned tests below); near e_e = 0 its slope grows like 1/e_e.
         assume(problem["e"] >= 0.05)
         assume(boundary == 1.0 or problem["mnt"] >= 0)
-    terms = pi.laws.ContactTerms(*(np.float64(problem[k]) for k in ("mnn", "mnt", "mtt", "vn", "vt", "mu")))
+    terms = pi.laws.ContactTerms(*(np.float64(problem[k])
+                                   for k in ("mnn", "mnt", "mtt", "vn", "vt", "mu")))
     assume(terms.case in (1, 2, 3) and terms.r_m > 0.05)
     factor = 1.0 if boundary == 1.0 else 1.0 + problem["e"]
     alpha_boundary = factor * float(terms.r_m)
@@ -131,7 +132,8 @@ def test_frictionless_laws_coincide(problem):
     scale = impulse_scale(problem)
     for result in results.values():
         assert result.tangential_impulse == 0.0
-        assert float(result.normal_impulse) == pytest.approx(float(results["poisson"].normal_impulse), abs=1e-12 * scale)
+        assert float(result.normal_impulse) == pytest.approx(
+            float(results["poisson"].normal_impulse), abs=1e-12 * scale)
 
 
 @settings(max_examples=200, deadline=None)
@@ -144,7 +146,8 @@ def test_balanced_collision(problem):
         result = solve(problem, law)
         expected = (1 + problem["e"]) * abs(problem["vn"]) / problem["mnn"]
         assert float(result.normal_impulse) == pytest.approx(expected, rel=1e-12)
-        assert float(result.vn_separation) == pytest.approx(problem["e"] * abs(problem["vn"]), rel=1e-12, abs=1e-12 * abs(problem["vn"]))
+        assert float(result.vn_separation) == pytest.approx(
+            problem["e"] * abs(problem["vn"]), rel=1e-12, abs=1e-12 * abs(problem["vn"]))
         assert result.collision_type not in ((2,) if law.startswith("newton") else (3, 4))
 
 
@@ -155,7 +158,8 @@ def test_plastic_impact_ends_at_rest_normally(problem):
     mapping: see the next test."""
     for law in ("newton", "poisson", "stronge", "newton-lcp"):
         result = solve(problem, law)
-        assert abs(float(result.vn_separation)) <= 1e-12 * abs(problem["vn"]) * (1 + abs(problem["vt"]) / abs(problem["vn"]))
+        assert abs(float(result.vn_separation)) <= 1e-12 * abs(problem["vn"]) * (
+            1 + abs(problem["vt"]) / abs(problem["vn"]))
 
 
 def test_paper_stronge_mapping_jumps_at_zero_restitution():
@@ -207,9 +211,12 @@ def test_flipping_t_mirrors_the_result(problem, law):
     straight = solve(problem, law)
     flipped = solve(dict(problem, mnt=-problem["mnt"], vt=-problem["vt"]), law)
     scale = impulse_scale(problem)
-    assert float(flipped.normal_impulse) == pytest.approx(float(straight.normal_impulse), abs=1e-12 * scale)
-    assert float(flipped.tangential_impulse) == pytest.approx(-float(straight.tangential_impulse), abs=1e-12 * scale)
-    assert float(flipped.vt_separation) == pytest.approx(-float(straight.vt_separation), abs=1e-12 * (1 + abs(problem["vt"])))
+    assert float(flipped.normal_impulse) == pytest.approx(float(straight.normal_impulse),
+                                                          abs=1e-12 * scale)
+    assert float(flipped.tangential_impulse) == pytest.approx(
+        -float(straight.tangential_impulse), abs=1e-12 * scale)
+    assert float(flipped.vt_separation) == pytest.approx(
+        -float(straight.vt_separation), abs=1e-12 * (1 + abs(problem["vt"])))
     assert flipped.collision_type == straight.collision_type
 
 
@@ -222,26 +229,31 @@ def rotate(vector, angle):
 @given(st.floats(-math.pi, math.pi), st.floats(0.2, 5.0), st.floats(0.2, 5.0),
        st.floats(-2, 2), st.floats(-2, 2), st.floats(-3, 3), st.floats(0.0, 1.5),
        st.floats(0.0, 1.0), st.sampled_from(pi.HYPOTHESES))
-def test_rotating_a_rigid_body_scene_leaves_the_result_unchanged(angle, mass_a, mass_b, vx, vy, omega, mu, e, law):
+def test_rotating_a_rigid_body_scene_leaves_the_result_unchanged(angle, mass_a, mass_b, vx, vy,
+                                                                  omega, mu, e, law):
     point = (0.3, -0.1)
     normal = (0.28, 0.96)
 
     def scene(theta):
-        a = pi.PlanarBody(mass_a, 0.1 * mass_a, rotate((-0.5, -0.6), theta), rotate((0.2, 0.4), theta), 0.5)
-        b = pi.PlanarBody(mass_b, 0.2 * mass_b, rotate((0.6, 0.5), theta), rotate((vx, vy - 3.0), theta), omega)
+        a = pi.PlanarBody(mass_a, 0.1 * mass_a, rotate((-0.5, -0.6), theta),
+                          rotate((0.2, 0.4), theta), 0.5)
+        b = pi.PlanarBody(mass_b, 0.2 * mass_b, rotate((0.6, 0.5), theta),
+                          rotate((vx, vy - 3.0), theta), omega)
         return pi.builders.two_bodies(a, b, rotate(point, theta), rotate(normal, theta))
 
     base, turned = scene(0.0), scene(angle)
     assume(base.wn @ base.u < -1e-3)
     first = base.solve(mu=mu, e=e, hypothesis=law)
     second = turned.solve(mu=mu, e=e, hypothesis=law)
-    for name in ("normal_impulse", "tangential_impulse", "vn_separation", "vt_separation", "energy_change"):
+    for name in ("normal_impulse", "tangential_impulse", "vn_separation", "vt_separation",
+                 "energy_change"):
         assert getattr(second, name) == pytest.approx(getattr(first, name), rel=1e-9, abs=1e-12)
     # Velocities turn with the scene; angular velocities do not change.
     for body in (0, 1):
         vx0, vy0, w0 = first.u_after[3 * body: 3 * body + 3]
         expected = (*rotate((vx0, vy0), angle), w0)
-        np.testing.assert_allclose(second.u_after[3 * body: 3 * body + 3], expected, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(second.u_after[3 * body: 3 * body + 3], expected, rtol=1e-9,
+                                   atol=1e-12)
 
 
 # --- unreachable jams: why the status codes exist but cannot trigger with Δ > 0 --------------
@@ -251,7 +263,8 @@ def test_rotating_a_rigid_body_scene_leaves_the_result_unchanged(angle, mass_a, 
 def test_no_jam_and_positive_q_in_reverse_sliding_when_delta_positive(problem):
     """h ≤ 0 and g ≤ 0 together would need m_nn m_tt ≤ m_nt² (Δ ≤ 0); p < 0 forces
     q > Δ/m_tt > 0. The solver keeps both checks (statuses 6 and 7) for rounding at Δ → 0."""
-    terms = pi.laws.ContactTerms(*(np.float64(problem[k]) for k in ("mnn", "mnt", "mtt", "vn", "vt", "mu")))
+    terms = pi.laws.ContactTerms(*(np.float64(problem[k])
+                                   for k in ("mnn", "mnt", "mtt", "vn", "vt", "mu")))
     assert not (terms.h <= 0 and terms.g <= 0)
     if terms.p < 0:
         assert terms.q > 0
@@ -259,7 +272,8 @@ def test_no_jam_and_positive_q_in_reverse_sliding_when_delta_positive(problem):
 
 # --- bad input ------------------------------------------------------------------------------
 
-GOOD = dict(mass_matrix=np.eye(3), wn=[0.0, 1.0, 0.1], wt=[1.0, 0.0, -0.2], u=[0.5, -1.0, 0.3], mu=0.3, e=0.5)
+GOOD = dict(mass_matrix=np.eye(3), wn=[0.0, 1.0, 0.1], wt=[1.0, 0.0, -0.2], u=[0.5, -1.0, 0.3],
+            mu=0.3, e=0.5)
 
 
 @pytest.mark.parametrize(
@@ -317,7 +331,8 @@ def test_batch_flags_bad_rows_and_solves_the_others():
             else:
                 expected = bad_rows[position // 2][1]
                 assert batch.status[position] == expected, (law, position)
-                assert np.isnan(batch.normal_impulse[position]) and np.isnan(batch.energy_change[position])
+                assert np.isnan(batch.normal_impulse[position])
+                assert np.isnan(batch.energy_change[position])
                 assert batch.collision_type[position] == 0
                 assert batch.status_message(position) == errors.STATUS_MESSAGES[expected]
 
@@ -336,14 +351,16 @@ def test_every_non_finite_input_is_flagged_in_a_batch(field, value):
 
 
 def test_batch_broadcasts_and_keeps_shape():
-    result = pi.solve_batch(1.0, 0.2, np.array([[0.5], [1.0]]), -1.0, np.array([0.0, 0.3, -0.3]), 0.4, 0.7)
+    result = pi.solve_batch(1.0, 0.2, np.array([[0.5], [1.0]]), -1.0, np.array([0.0, 0.3, -0.3]),
+                            0.4, 0.7)
     assert result.normal_impulse.shape == (2, 3) and result.status.shape == (2, 3)
     scalar = pi.solve_batch(1.0, 0.2, 0.5, -1.0, 0.3, 0.4, 0.7)
     assert scalar.normal_impulse.shape == ()
 
 
 def test_unknown_law_in_batch_names_the_allowed_laws():
-    with pytest.raises(pi.ImpactInputError, match="allowed: newton, poisson, stronge, stronge-paper, newton-lcp"):
+    with pytest.raises(pi.ImpactInputError,
+                       match="allowed: newton, poisson, stronge, stronge-paper, newton-lcp"):
         pi.solve_batch(1.0, 0.0, 1.0, -1.0, 0.0, 0.3, 0.5, hypothesis="Poisson")
 
 
@@ -362,7 +379,8 @@ def test_a_row_does_not_depend_on_its_neighbours_even_in_the_sign_of_zero():
     alone = pi.solve_batch(1.0, -0.0, 1.0, -1.0, -0.0, 0.3, 0.5)
     beside = pi.solve_batch([1.0, 1.0], [-0.0, 0.2], [1.0, 1.0], -1.0, [-0.0, -1.0], 0.3, 0.5)
     for name in ("normal_impulse", "tangential_impulse", "vt_separation", "energy_change"):
-        assert np.asarray(getattr(alone, name)).tobytes() == getattr(beside, name)[:1].tobytes(), name
+        assert (np.asarray(getattr(alone, name)).tobytes()
+                == getattr(beside, name)[:1].tobytes()), name
 
 
 def test_kernels_accept_zero_dimensional_arrays():
@@ -370,7 +388,8 @@ def test_kernels_accept_zero_dimensional_arrays():
     from_arrays = laws.ContactTerms(*(np.array(x) for x in values))
     from_scalars = laws.ContactTerms(*(np.float64(x) for x in values))
     assert from_arrays.case == from_scalars.case
-    assert laws.poisson_type(from_arrays, np.array(0.5)) == laws.poisson_type(from_scalars, np.float64(0.5))
+    assert (laws.poisson_type(from_arrays, np.array(0.5))
+            == laws.poisson_type(from_scalars, np.float64(0.5)))
 
 
 @pytest.mark.parametrize(
@@ -388,4 +407,5 @@ def test_positive_root_is_the_plus_root_or_nan(a, b, c, expected):
         if expected is None:
             assert np.isnan(got)
         else:
-            assert got == pytest.approx(expected, abs=1e-15)  # small integer coefficients: one rounding at most
+            # small integer coefficients: one rounding at most
+            assert got == pytest.approx(expected, abs=1e-15)
