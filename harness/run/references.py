@@ -15,7 +15,10 @@ Three situations (docs/multi-contact.md, 'Which reference a run is compared with
   is the event-driven sequence of :func:`harness.reference.event_driven.event_sequence` with
   ``newton-lcp`` at each impact; the sequence with every other law of the scenario, and the
   m-contact laws on the features the sequence strikes (taken at the tilted pose, as if they
-  touched at once), show how far the tilt is from its flat limit.
+  touched at once), show how far the tilt is from its flat limit. The sequence cut after
+  each of its impacts (``event-driven/newton-lcp/after-k``) is kept too: an engine run ends
+  when its contact separates, which at larger tilts is before the next feature strikes, and
+  the record names the cut its run is nearest (``nearest_cut``).
 
 :func:`point_reference` builds a point's reference once; :func:`annotate` writes it into the
 point's records (``diagnostics["reference"]``; an engine record also gets its departure from
@@ -164,10 +167,16 @@ def _event_driven(scene, fixed) -> dict:
         speeds[f"event-driven/{law}"] = [float(v) for v in after]
         energy[f"event-driven/{law}"] = 0.5 * float(after @ mass_matrix @ after
                                                     - u_before @ mass_matrix @ u_before)
-        sequences[law] = {"impacts": [[e.feature, e.time, e.collision_type]
+        sequences[law] = {"impacts": [[int(e.feature), float(e.time), int(e.collision_type)]
                                       for e in sequence.events],
                           "finished": sequence.finished}
         struck += [e.feature for e in sequence.events]
+        if law == ENGINE_LAW:  # the sequence cut after k impacts: an engine run may stop there
+            for k in range(1, len(sequence.events)):
+                cut = event_sequence(scene, law, max_impacts=k).speeds()
+                speeds[f"event-driven/{law}/after-{k}"] = [float(v) for v in cut]
+                energy[f"event-driven/{law}/after-{k}"] = 0.5 * float(
+                    cut @ mass_matrix @ cut - u_before @ mass_matrix @ u_before)
     reference = {"kind": EVENT_DRIVEN, "primary": f"event-driven/{ENGINE_LAW}",
                  "sequences": sequences, "speeds": speeds, "energy_change": energy}
     features = sorted(set(struck))
@@ -210,6 +219,11 @@ def annotate(scenario, point, records: Sequence, reference: dict | None = None, 
                 free_bodies=scenario.system == "bodies" and not scenario.ground)
             primary = summary["departure"].get(reference.get("primary"), math.nan)
             summary["departure_from_primary"] = primary
+            if reference["kind"] == EVENT_DRIVEN:  # which cut of the sequence the run is nearest
+                cuts = {name: value for name, value in summary["departure"].items()
+                        if name.startswith(reference["primary"])}
+                nearest = min(cuts, key=lambda name: cuts[name])
+                summary["nearest_cut"] = [nearest, cuts[nearest]]
         if record.diagnostics is None:
             record.diagnostics = {}
         record.diagnostics["reference"] = summary
