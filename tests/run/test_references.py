@@ -163,3 +163,20 @@ def test_the_runner_says_which_reference_it_used(tmp_path):
         elif record.scenario == "flat-box" and record.u_after is not None:
             assert summary["primary"] == "newton-coulomb"
             assert math.isfinite(summary["departure_from_primary"])
+
+
+def test_the_library_has_a_flat_scene_without_and_one_with_several_coherent_poisson_solutions():
+    counts = {name: references.point_reference(
+        load_scenario(f"scenarios/{name}.toml"), None)["solutions"]["coherent/poisson/effective"]
+        for name in ("flat-box", "flat-box-several-poisson")}
+    assert counts["flat-box"] == 0 and counts["flat-box-several-poisson"] >= 2
+
+
+def test_random_flat_landings_are_flat_and_approach():
+    from harness.reference.flat_faces import flat_system, random_flat_scene
+
+    rng = np.random.default_rng(1)
+    for _ in range(20):
+        scene = random_flat_scene(rng)
+        system = flat_system(scene)
+        assert system.count == 2 and min(system.approach[0::2]) < 0.0
