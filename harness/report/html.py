@@ -535,6 +535,8 @@ def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[di
     parts.append("<h2 id='gates'>Gates</h2><p>Tolerance gates declared by the scenarios "
                  "(<code>[expect.gate]</code>); a failing gate makes <code>impact-harness "
                  "run</code> exit non-zero.</p>" + gates_html(prov))
+    from harness.report.contacts import contacts_section  # several contacts (issue 13)
+    parts.append(contacts_section(results)[0])
     parts.append("<h2 id='scenarios'>Scenarios</h2><p>Per scenario: post-impact speeds of "
                  "every law and engine (engine rows shaded; red when the engine flagged the "
                  "run), contact velocities after the impact (v<sub>n</sub>, v<sub>t</sub>, in "

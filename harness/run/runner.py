@@ -62,7 +62,7 @@ from typing import Any, Iterable, Sequence, TextIO
 
 import numpy as np
 
-from harness.run import metrics, verdicts
+from harness.run import metrics, references, verdicts
 from harness.run.provenance import provenance
 from harness.run.records import (
     ANALYTIC,
@@ -432,6 +432,7 @@ def run(
         for point in scenario.point_list():
             point_entries = [e for e in entries if e[1].index == point.index]
             scenario_records += _point_records_or_errors(scenario, point, point_entries)
+        infos[scenario.name]["references"] = references.collect(scenario_records)
         scenario_gates = check_gates(scenario, scenario_records)
         records += scenario_records
         gates += scenario_gates
@@ -541,6 +542,7 @@ def point_records(scenario: Scenario, point, engine_entries: Sequence) -> list[R
             record.departure = metrics.departures(mass_matrix, law_speeds[law], law_speeds,
                                                   u_before, free_bodies=free_bodies)
 
+    reference = references.annotate(scenario, point, law_records, keep_full=True)
     if not engine_entries:
         return law_records
     scene = scenario.scene(point)
@@ -553,6 +555,7 @@ def point_records(scenario: Scenario, point, engine_entries: Sequence) -> list[R
                       scene=scene, law_energy_change=lcp_gain)
         for _, _, engine_name, preset, item in engine_entries
     ]
+    references.annotate(scenario, point, engine_records, reference)
     return law_records + engine_records
 
 

@@ -46,7 +46,8 @@ def check_engine_settings(reader: TableReader, engine: str, table: Mapping[str, 
 
 
 def check_points(reader: TableReader, scenario: Scenario) -> None:
-    """Every point must be a touching, approaching, one-point contact with e, μ in range."""
+    """Every point must be a touching, approaching contact with e, μ in range: one point, or
+    a face lying flat where the file declares ``contacts = "simultaneous"``."""
     for point in scenario.point_list():
         where = f" at sweep point {point.label}" if point.label else ""
         fixed = scenario.at(point)
@@ -86,12 +87,17 @@ def check_bodies(reader: TableReader, fixed: Scenario, where: str) -> None:
                      f"({state})", positions if len(positions) > 1 else positions[0],
                      f"|gap| <= gap_tolerance = {fixed.gap_tolerance:g} m")
         return
-    if contact.point_count > 1:
-        angles = {s.name: s.angle_deg for s in fixed.bodies}
+    declared = fixed.contacts == "simultaneous"
+    angles = {s.name: s.angle_deg for s in fixed.bodies}
+    if contact.point_count > 1 and not declared:
         reader.error(f"body.{fixed.bodies[-1].name}.angle_deg",
                      f"{contact.point_count} contact points within {ONE_POINT_TOLERANCE:g} m"
                      f"{where} (a face lies flat on a face): outside one-point impact theory",
-                     angles, "a pose with a single closest point: turn the body")
+                     angles, "a pose with a single closest point (turn the body), or declare "
+                     'the flat face with contacts = "simultaneous"')
+        return
+    if declared:
+        check_simultaneous(reader, fixed, scene, contact.point_count, angles, where)
         return
     vn, _ = geometry.contact_velocity(scene, exact)
     if not vn < 0.0:
@@ -113,6 +119,29 @@ def check_bodies(reader: TableReader, fixed: Scenario, where: str) -> None:
                      "not one", False,
                      "expect_sequence = true (the runs are then judged, docs/verdicts.md), or "
                      "a pose whose other corners/ends stay clear")
+
+
+def check_simultaneous(reader: TableReader, fixed: Scenario, scene: Scene, point_count: int,
+                       angles: dict, where: str) -> None:
+    """A declared flat face (``contacts = "simultaneous"``): two or more contact points within
+    ONE_POINT_TOLERANCE, at least one approaching; not also a declared sequence."""
+    if fixed.expect_sequence:
+        reader.error("expect_sequence", 'contradicts contacts = "simultaneous"' + where, True,
+                     "one of them: a flat face (simultaneous) or a tilt (a sequence)")
+        return
+    if point_count < 2:
+        reader.error("contacts", f"declares a flat face, but a single point touches{where} "
+                     f"(no second point within {ONE_POINT_TOLERANCE:g} m)", angles,
+                     'a pose with a face lying flat, or contacts = "one" (the default)')
+        return
+    contacts = geometry.scene_contacts(scene, tolerance=ONE_POINT_TOLERANCE)
+    normal_speeds = [geometry.contact_velocity(scene, c)[0] for c in contacts]
+    if not min(normal_speeds) < 0.0:
+        reader.error(f"body.{fixed.bodies[-1].name}.velocity",
+                     f"no contact point approaches{where}: v_n = "
+                     f"{[round(v, 6) for v in normal_speeds]} m/s",
+                     [list(s.velocity) for s in fixed.bodies],
+                     "velocities giving v_n < 0 at one contact point at least")
 
 
 def check_analytic(reader: TableReader, scenario: Scenario, point: Point, where: str) -> None:

@@ -143,6 +143,8 @@ class Scenario:
     gap_tolerance: float = DEFAULT_GAP_TOLERANCE  # m
     # True: the file knows a second feature strikes within the impact (validate allows it)
     expect_sequence: bool = False
+    # "simultaneous": the file declares a face lying flat (several contact points at once)
+    contacts: str = "one"
     path: Path | None = None
 
     # -- points ------------------------------------------------------------------------------

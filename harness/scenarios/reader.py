@@ -30,6 +30,7 @@ from harness.scenarios.model import (
 )
 from harness.scenarios.schema import (
     BODY_KEYS,
+    CONTACT_KINDS,
     DEFAULT_GAP_TOLERANCE,
     DERIVED_TAGS,
     ENGINES,
@@ -567,6 +568,7 @@ def parse_scenario(doc: Mapping[str, Any], path=None) -> Scenario:
     if not isinstance(expect_sequence, bool):
         reader.error("expect_sequence", "must be true or false", expect_sequence, "true, false")
         expect_sequence = False
+    contacts = reader.string(doc, "contacts", "", default="one", choices=CONTACT_KINDS)
 
     ground, bodies, parameters, matrix = False, (), MappingProxyType({}), None
     engines = ()
@@ -599,6 +601,7 @@ def parse_scenario(doc: Mapping[str, Any], path=None) -> Scenario:
                         friction=friction, system=system, ground=ground, bodies=bodies,
                         parameters=parameters, matrix=matrix, engines=engines, laws=laws,
                         gap_tolerance=gap_tolerance, expect_sequence=expect_sequence,
+                        contacts=contacts or "one",
                         path=None if path is None else Path(path))
     if "sweep" in doc:
         sweep = _read_sweep(reader, doc, scenario)

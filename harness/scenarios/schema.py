@@ -42,6 +42,9 @@ DEFAULT_GAP_TOLERANCE = 1e-6
 #: Two closest points closer than this (m) in height count as a second contact point: a body
 #: must be turned at least this much away from lying flat to be a one-point contact.
 ONE_POINT_TOLERANCE = 1e-4
+#: ``contacts``: ``"one"`` (default), a single contact point; ``"simultaneous"``, a face lying
+#: flat (two or more points within ONE_POINT_TOLERANCE), compared with the m-contact laws.
+CONTACT_KINDS = ("one", "simultaneous")
 TWO_SLED_KEYS = ("gamma", "delta", "m", "l", "s", "c", "q3", "q6", "u")
 #: The two-sled parameters' defaults, from the builder's own signature (one source of truth).
 TWO_SLED_DEFAULTS = {
@@ -55,7 +58,8 @@ BODY_SWEEP_FIELDS = ("mass", "inertia", "angle_deg", "angular_velocity", "veloci
                      "velocity.y")
 TOP_KEYS = {
     "bodies": ("name", "description", "tags", "system", "restitution", "friction", "engines",
-               "laws", "ground", "body", "gap_tolerance", "expect_sequence", "sweep", "expect",
+               "laws", "ground", "body", "gap_tolerance", "expect_sequence", "contacts",
+               "sweep", "expect",
                "engine_settings"),
     "two-sled": ("name", "description", "tags", "system", "restitution", "friction", "laws",
                  "parameters", "sweep", "expect"),

@@ -221,6 +221,48 @@ def scene_contact(scene: Scene, tolerance: float = DEFAULT_TOLERANCE) -> Contact
     return body_contact(scene.bodies[0], scene.bodies[1], tolerance)
 
 
+def scene_contacts(scene: Scene, tolerance: float = DEFAULT_TOLERANCE) -> list[Contact]:
+    """Every contact point of a scene within ``tolerance`` (m) of the closest one, each a
+    one-point :class:`Contact` (``point_count`` 1), ordered along the tangent.
+
+    Against the ground: one contact per core point (box or polygon corner, rod end cap, the
+    disk's centre) whose surface lies within ``tolerance`` of the lowest; each keeps its own
+    height as its gap. Between two bodies: the ends of the shared support interval of
+    :func:`body_contact` when it finds two points, else its single point. A box lying flat
+    gives its two bottom corners; a box tilted so that its far corner is higher than
+    ``tolerance`` gives one (docs/multi-contact.md, 'Scenes with several contacts').
+    """
+    if scene.ground:
+        core, radius = world_core(scene.bodies[0])
+        lowest = float(core[:, 1].min())
+        near = core[core[:, 1] <= lowest + tolerance]
+        near = near[np.argsort(near[:, 0], kind="stable")]
+        return [Contact(point=np.array([float(x), 0.5 * (float(y) - radius)]),
+                        normal=GROUND_NORMAL.copy(), gap=float(y) - radius, point_count=1)
+                for x, y in near]
+    contact = body_contact(scene.bodies[0], scene.bodies[1], tolerance)
+    if contact.point_count == 1:
+        return [contact]
+    core_a, _ = world_core(scene.bodies[0])
+    core_b, _ = world_core(scene.bodies[1])
+    normal = np.asarray(contact.normal, dtype=float)
+    tangent = _tangent(normal)
+    a_lo, a_hi = _support_interval(core_a, normal, tangent, +1, tolerance)
+    b_lo, b_hi = _support_interval(core_b, normal, tangent, -1, tolerance)
+    offset = contact.point - float(contact.point @ tangent) * tangent  # the mid-plane
+    return [Contact(point=offset + along * tangent, normal=normal.copy(), gap=contact.gap,
+                    point_count=1) for along in (max(a_lo, b_lo), min(a_hi, b_hi))]
+
+
+def contact_rows(scene: Scene, contacts) -> tuple[np.ndarray, np.ndarray]:
+    """The rows ``w_n^(i)``, ``w_t^(i)`` of each contact, stacked ``(m, p)`` in the scene's
+    speeds (eq. (75) of the paper; docs/multi-contact.md, 'Setting: eq. (75)'), built as
+    :func:`impact_problem` builds the single contact's."""
+    problems = [impact_problem(scene, c.point, c.normal) for c in contacts]
+    return (np.array([p.wn for p in problems], dtype=float),
+            np.array([p.wt for p in problems], dtype=float))
+
+
 def lowest_point(body: Body) -> float:
     """The lowest ``y`` (m) of the body's surface."""
     core, radius = world_core(body)

@@ -29,6 +29,10 @@ from harness.scene import Scene, geometry
 FILES = sorted(SCENARIO_DIR.glob("*.toml"))
 SCENARIOS = load_scenarios()
 BY_NAME = {s.name: s for s in SCENARIOS}
+# Flat faces (contacts = "simultaneous") are outside the single-contact laws: they have no
+# [expect] types and are checked against the m-contact laws in tests/run/test_references.py.
+ONE_POINT = [s for s in SCENARIOS if s.contacts == "one"]
+FLAT = [s for s in SCENARIOS if s.contacts == "simultaneous"]
 
 # Solver behaviour that disagrees with a scenario's physics: (scenario, law) -> reason. The
 # file then leaves that law out of [expect] and says why; none at present.
@@ -36,7 +40,7 @@ KNOWN_SOLVER_ISSUES: dict[tuple[str, str], str] = {}
 
 
 def all_points():
-    for scenario in SCENARIOS:
+    for scenario in ONE_POINT:
         for point in scenario.point_list():
             yield pytest.param(scenario, point, id=f"{scenario.name}[{point.label}]"
                                if point.label else scenario.name)
@@ -71,13 +75,13 @@ def test_laws_match_the_solver():
     assert LAWS == tuple(pi.HYPOTHESES)
 
 
-@pytest.mark.parametrize("scenario", SCENARIOS, ids=[s.name for s in SCENARIOS])
+@pytest.mark.parametrize("scenario", ONE_POINT, ids=[s.name for s in ONE_POINT])
 def test_expected_types_match_the_solver(scenario):
     assert scenario.expect.collision_type, "every scenario states its expected types"
     assert check_expectations(scenario) == []
 
 
-@pytest.mark.parametrize("scenario", SCENARIOS, ids=[s.name for s in SCENARIOS])
+@pytest.mark.parametrize("scenario", ONE_POINT, ids=[s.name for s in ONE_POINT])
 def test_every_law_is_expected_unless_a_known_issue(scenario):
     stated = set(scenario.expect.collision_type)
     missing = {law for law in scenario.laws if law not in stated}
@@ -250,6 +254,23 @@ def test_engine_scenes_touch_at_one_point_and_approach(scenario, point):
     assert max(speeds) <= 2.5
 
 
+@pytest.mark.parametrize("scenario", FLAT, ids=[s.name for s in FLAT])
+def test_flat_scenes_touch_at_two_points_one_approaching_and_expect_no_single_law(scenario):
+    scene = scenario.scene()
+    contacts = geometry.scene_contacts(scene, tolerance=1e-4)  # ONE_POINT_TOLERANCE
+    assert len(contacts) == 2 and all(abs(c.gap) <= scenario.gap_tolerance for c in contacts)
+    assert min(geometry.contact_velocity(scene, c)[0] for c in contacts) < 0.0
+    assert not scenario.expect.collision_type and not scenario.expect_sequence
+
+
+def test_library_has_the_flat_scenes_of_issue_13():
+    """A box landing flat without slip, with slip, with spin, and a rod landing flat."""
+    shapes = {(s.bodies[0].shape.kind, s.bodies[0].velocity[0] != 0,
+               s.bodies[0].angular_velocity != 0) for s in FLAT}
+    assert {("box", False, False), ("box", True, False), ("box", False, True)} <= shapes
+    assert any(kind == "rod" for kind, _, _ in shapes)
+
+
 def test_engine_scenes_list_engines_and_analytic_ones_none():
     for scenario in SCENARIOS:
         if scenario.analytic_only:
@@ -345,7 +366,9 @@ def test_load_by_tags():
     quick = load_scenarios(tags="quick")
     assert quick and all("quick" in s.tags for s in quick)
     both = load_scenarios(tags="box,polygon")
-    assert {s.name for s in both} == {"box-corner", "box-corner-spin", "triangle-corner"}
+    assert {s.name for s in both} == {"box-corner", "box-corner-spin", "triangle-corner",
+                                      "flat-box", "flat-box-slip", "flat-box-spin",
+                                      "flat-box-several-poisson"}
     assert len(load_scenarios(tags=["all"])) == len(SCENARIOS)
     with pytest.raises(ScenarioError, match="no scenario has this tag.*did you mean 'quick'"):
         load_scenarios(tags="quik")

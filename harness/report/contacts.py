@@ -1,0 +1,115 @@
+"""The report's section on several contacts: flat faces and tilts (issue 13).
+
+One table per scenario whose reference is not the single-contact laws (the runner's
+``references`` in the scenario info, :mod:`harness.run.references`): per sweep point, the
+reference used, how many solutions each m-contact law has, and each engine's departure from
+the reference (``‖u − u_ref‖_M`` over the frame-free scale, docs/verdicts.md). For a tilt the
+table also gives how far the simultaneous Newton–Coulomb answer and the sequential reading at
+the tilted pose are from the event sequence, and which cut of the sequence each engine run is
+nearest. :func:`contacts_section` returns the HTML fragment and the same tables in Markdown.
+"""
+
+from __future__ import annotations
+
+import math
+from html import escape
+
+#: Solution counts shown, in this order: (key in the reference's "solutions", column title).
+COUNTS = (("newton-coulomb", "N–C"), ("coherent/poisson/effective", "P eff"),
+          ("coherent/poisson/none", "P lit"), ("coherent/stronge-paper/effective", "S eff"),
+          ("coherent/stronge-paper/none", "S lit"), ("coherent/newton/effective", "N eff"),
+          ("coherent/newton/none", "N lit"))
+
+INTRO = (
+    "Scenes with several contacts are compared with the reference that matches them "
+    "(docs/multi-contact.md, 'Which reference a run is compared with'): a face lying flat "
+    "(contacts = \"simultaneous\") with the m-contact Newton–Coulomb law, the engines' law; a "
+    "tilt (expect_sequence) with the event-driven sequence of single impacts (newton-lcp at "
+    "each). Counts are the solutions of each m-contact law: Newton–Coulomb (N–C) and the "
+    "coherent combinations of the paper's proposal after eq. (75) for Poisson (P), the "
+    "paper's Stronge (S) and Newton (N), with effective approaches (eff) or literally (lit). "
+    "Engine columns: departure from the reference; for a tilt, in brackets, the cut of the "
+    "sequence the run is nearest (full: all impacts; after-k: only the first k, with the "
+    "departure from that cut). N–C at pose, sequential at pose: departure of those answers, "
+    "taken at the tilted pose on the struck features, from the event sequence.")
+
+
+def _number(value) -> str:
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return "n/a"
+    return f"{value:.2g}" if isinstance(value, float) else str(value)
+
+
+def _rows(name: str, info: dict, records) -> tuple[list[str], list[list[str]]] | None:
+    references = [r for r in info.get("references", []) if r.get("kind") != "single-contact"]
+    if not references:
+        return None
+    engines = sorted({f"{r.source}.{r.preset}" for r in records if r.source != "analytic"})
+    tilt = any(r["kind"] == "event-driven" for r in references)
+    header = ["point", "reference", *[title for _, title in COUNTS]]
+    if tilt:
+        header += ["N–C at pose", "sequential at pose"]
+    header += engines
+    rows = []
+    for reference in references:
+        label = reference.get("point") or "(single point)"
+        counts = reference.get("solutions", {})
+        row = [label, f"{reference['kind']}: {reference.get('primary')}"]
+        row += [_number(counts.get(key)) for key, _ in COUNTS]
+        if tilt:
+            gaps = reference.get("departure_from_primary", {})
+            order = "-".join(str(i) for i in sorted(
+                {impact[0] for impact in reference.get("sequences", {}).get(
+                    "newton-lcp", {}).get("impacts", [])}, key=lambda f: _first_strike(
+                        reference, f)))
+            row += [_number(gaps.get("at-pose/newton-coulomb")),
+                    _number(gaps.get(f"at-pose/sequential/newton-lcp/{order}"))]
+        by_engine = {f"{r.source}.{r.preset}": r for r in records
+                     if r.source != "analytic" and r.point.get("label", "") == reference.get(
+                         "point", "")}
+        for engine in engines:
+            record = by_engine.get(engine)
+            summary = (record.diagnostics or {}).get("reference", {}) if record else {}
+            cell = _number(summary.get("departure_from_primary"))
+            if summary.get("nearest_cut"):
+                cut, value = summary["nearest_cut"]
+                cut = cut.rsplit("/", 1)[-1]
+                cell += " (full)" if cut == "newton-lcp" else f" ({cut}: {_number(value)})"
+            row.append(cell)
+        rows.append(row)
+    return header, rows
+
+
+def _first_strike(reference: dict, feature: int) -> float:
+    impacts = reference.get("sequences", {}).get("newton-lcp", {}).get("impacts", [])
+    return min(time for f, time, _ in impacts if f == feature)
+
+
+def contacts_section(results) -> tuple[str, str]:
+    """``(html, markdown)`` of the section; both empty when no scene has several contacts.
+
+    ``results`` is the report's :class:`harness.report.Results` (``scenarios`` with the
+    runner's per-point ``references``, ``for_scenario(name)`` its records)."""
+    html_parts, markdown_parts = [], []
+    for name, info in results.scenarios.items():
+        table = _rows(name, info, results.for_scenario(name))
+        if table is None:
+            continue
+        header, rows = table
+        html_parts.append(f"<h3>{escape(name)}</h3><table><tr>"
+                          + "".join(f"<th>{escape(h)}</th>" for h in header) + "</tr>"
+                          + "".join("<tr>" + "".join(f"<td>{escape(c)}</td>" for c in row)
+                                    + "</tr>" for row in rows) + "</table>")
+        markdown_parts.append(f"### {name}\n\n| " + " | ".join(header) + " |\n|"
+                              + "---|" * len(header) + "\n"
+                              + "".join("| " + " | ".join(row) + " |\n" for row in rows))
+    if not html_parts:
+        return "", ""
+    html = ("<h2 id='contacts'>Several contacts: flat faces and tilts</h2><p>"
+            + escape(INTRO) + "</p>" + "\n".join(html_parts))
+    markdown = "## Several contacts: flat faces and tilts\n\n" + INTRO + "\n\n" + "\n".join(
+        markdown_parts)
+    return html, markdown
+
+
+__all__ = ["contacts_section"]

@@ -1,0 +1,255 @@
+"""The reference each engine run is compared with, chosen by the situation of the scene.
+
+Three situations (docs/multi-contact.md, 'Which reference a run is compared with'):
+
+* ``single-contact``: one contact point, verified by the scenario checks. The single-contact
+  laws of ``planar_impact`` are the references (the law records); the engines' own law is
+  ``newton-lcp``.
+* ``simultaneous``: a face lying flat, declared with ``contacts = "simultaneous"``. The
+  references are the m-contact laws of :mod:`planar_impact.simultaneous` on the contact rows
+  of every touching point: the velocity-level Newton–Coulomb law (the engines' law, the
+  primary reference), every coherent solution of the paper's proposal after eq. (75) for
+  Poisson, the paper's Stronge and Newton under both readings (0, 1 or several each), and
+  the sequential reading in every order.
+* ``event-driven``: a tilt, declared with ``expect_sequence = true``. The primary reference
+  is the event-driven sequence of :func:`harness.reference.event_driven.event_sequence` with
+  ``newton-lcp`` at each impact; the sequence with every other law of the scenario, and the
+  m-contact laws on the features the sequence strikes (taken at the tilted pose, as if they
+  touched at once), show how far the tilt is from its flat limit. The sequence cut after
+  each of its impacts (``event-driven/newton-lcp/after-k``) is kept too: an engine run ends
+  when its contact separates, which at larger tilts is before the next feature strikes, and
+  the record names the cut its run is nearest (``nearest_cut``).
+
+:func:`point_reference` builds a point's reference once; :func:`annotate` writes it into the
+point's records (``diagnostics["reference"]``; an engine record also gets its departure from
+every reference, ``‖u − u_ref‖_M`` over the frame-free scale of
+:func:`harness.run.metrics.departure`); :func:`collect` gathers a scenario's references for
+its scenario info.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from harness.run import metrics
+
+SINGLE, SIMULTANEOUS, EVENT_DRIVEN, UNAVAILABLE = (
+    "single-contact", "simultaneous", "event-driven", "unavailable")
+#: The engines' own law (sequential impulses on a velocity-level Newton–Coulomb problem).
+ENGINE_LAW = "newton-lcp"
+#: Laws of the paper's proposal (``planar_impact.simultaneous.TYPE_LAWS``) and its readings.
+COHERENT_LAWS = ("poisson", "stronge-paper", "newton")
+COUPLINGS = ("effective", "none")
+#: Laws of the sequential reading of a flat face (one contact at a time, every order).
+SEQUENTIAL_LAWS = ("newton-lcp", "poisson")
+NEWTON_COULOMB = "newton-coulomb"
+
+
+def kind_of(scenario) -> str:
+    """The situation a scenario declares: simultaneous, event-driven or single-contact."""
+    if scenario.system != "bodies":
+        return SINGLE
+    if getattr(scenario, "contacts", "one") == "simultaneous":
+        return SIMULTANEOUS
+    if scenario.expect_sequence:
+        return EVENT_DRIVEN
+    return SINGLE
+
+
+def point_reference(scenario, point) -> dict:
+    """The reference of one sweep point as a JSON-able dict (module docstring).
+
+    Keys: ``kind``, ``contacts`` (how many contact points the reference has), ``primary``
+    (the name of the reference the engines are judged against), ``why`` (one line),
+    ``speeds`` (name -> ``u`` after), ``energy_change`` (name -> J), ``solutions`` (law and
+    reading -> how many solutions), ``departure_from_primary`` (name -> departure of that
+    reference from the primary) and, for a tilt, ``sequences`` (law -> impacts).
+    """
+    kind = kind_of(scenario)
+    if kind == SINGLE:
+        return {"kind": SINGLE, "contacts": 1, "primary": ENGINE_LAW,
+                "why": "one contact point (verified by the scenario checks): the "
+                       "single-contact laws"}
+    from harness.scenarios.schema import ONE_POINT_TOLERANCE
+    from harness.scene import geometry
+
+    fixed = scenario.at(point)
+    scene = scenario.scene(point)
+    if kind == SIMULTANEOUS:
+        contacts = geometry.scene_contacts(scene, tolerance=ONE_POINT_TOLERANCE)
+        reference = {"kind": SIMULTANEOUS, "contacts": len(contacts),
+                     "why": f"a face lying flat ({len(contacts)} contact points): the "
+                            "m-contact laws, eq. (75)"}
+        reference.update(_simultaneous(scene, contacts, fixed, prefix=""))
+        reference["primary"] = _first(reference["speeds"], NEWTON_COULOMB)
+    else:
+        reference = _event_driven(scene, fixed)
+    if reference.get("primary") is not None:
+        mass_matrix, u_before = scene.mass_matrix(), scene.state()
+        primary = reference["speeds"][reference["primary"]]
+        reference["departure_from_primary"] = {
+            name: metrics.departure(mass_matrix, speeds, primary, u_before,
+                                    free_bodies=not scene.ground)
+            for name, speeds in reference["speeds"].items()}
+    return reference
+
+
+def _first(speeds: dict, stem: str) -> str | None:
+    names = [name for name in speeds if name == stem or name.startswith(stem + "#")]
+    return names[0] if names else None
+
+
+def _named(stem: str, count: int, k: int) -> str:
+    """``stem`` for a unique solution, ``stem#k`` (k from 1) when there are several."""
+    return stem if count == 1 else f"{stem}#{k + 1}"
+
+
+def _simultaneous(scene, contacts, fixed, prefix: str) -> dict:
+    """Every m-contact law on the rows of ``contacts``: Newton–Coulomb, the coherent
+    solutions of the paper's proposal, the sequential reading in every order."""
+    from harness.scene import geometry
+    from planar_impact import ImpactInputError
+    from planar_impact import simultaneous as sim
+
+    wn, wt = geometry.contact_rows(scene, contacts)
+    system = sim.contact_system(mass_matrix=scene.mass_matrix(), wn=wn, wt=wt, u=scene.state(),
+                                mu=fixed.friction, e=fixed.restitution)
+    speeds, energy, counts = {}, {}, {}
+
+    def keep(name, u_after, energy_change):
+        speeds[prefix + name] = [float(v) for v in u_after]
+        energy[prefix + name] = float(energy_change)
+
+    found = sim.newton_coulomb_solutions(system)
+    counts[NEWTON_COULOMB] = len(found)
+    for k, solution in enumerate(found):
+        keep(_named(NEWTON_COULOMB, len(found), k), solution.u_after, solution.energy_change)
+    for law in COHERENT_LAWS:
+        for coupling in COUPLINGS:
+            try:
+                found = sim.coherent_solutions(system, law, coupling=coupling)
+            except ImpactInputError:  # a law that refuses the problem has no solution here
+                found = []
+            stem = f"coherent/{law}/{coupling}"
+            counts[stem] = len(found)
+            for k, solution in enumerate(found):
+                keep(_named(stem, len(found), k), solution.u_after, solution.energy_change)
+    for law in SEQUENTIAL_LAWS:
+        results, spread = sim.all_orders(system, law)
+        counts[f"sequential/{law}/order-spread"] = float(spread)
+        for result in results:
+            order = "-".join(str(i) for i in result.order)
+            keep(f"sequential/{law}/{order}", result.u_after, result.energy_change)
+    return {"speeds": speeds, "energy_change": energy, "solutions": counts}
+
+
+def _event_driven(scene, fixed) -> dict:
+    """The tilt's references: the event sequence per law, and the m-contact laws on the
+    features it strikes, taken at the tilted pose."""
+    from harness.reference.event_driven import event_sequence
+    from harness.scene import Contact, geometry
+
+    if not scene.ground:
+        return {"kind": UNAVAILABLE, "contacts": None, "primary": None,
+                "why": "a tilt between two bodies: the event-driven reference is built for one "
+                       "body on the ground only (docs/multi-contact.md, 'Event-driven "
+                       "reference')"}
+    laws = tuple(dict.fromkeys((ENGINE_LAW, *fixed.laws)))
+    speeds, energy, sequences = {}, {}, {}
+    mass_matrix, u_before = scene.mass_matrix(), scene.state()
+    struck: list[int] = []
+    for law in laws:
+        sequence = event_sequence(scene, law)
+        after = sequence.speeds()
+        speeds[f"event-driven/{law}"] = [float(v) for v in after]
+        energy[f"event-driven/{law}"] = 0.5 * float(after @ mass_matrix @ after
+                                                    - u_before @ mass_matrix @ u_before)
+        sequences[law] = {"impacts": [[int(e.feature), float(e.time), int(e.collision_type)]
+                                      for e in sequence.events],
+                          "finished": sequence.finished}
+        struck += [e.feature for e in sequence.events]
+        if law == ENGINE_LAW:  # the sequence cut after k impacts: an engine run may stop there
+            for k in range(1, len(sequence.events)):
+                cut = event_sequence(scene, law, max_impacts=k).speeds()
+                speeds[f"event-driven/{law}/after-{k}"] = [float(v) for v in cut]
+                energy[f"event-driven/{law}/after-{k}"] = 0.5 * float(
+                    cut @ mass_matrix @ cut - u_before @ mass_matrix @ u_before)
+    reference = {"kind": EVENT_DRIVEN, "primary": f"event-driven/{ENGINE_LAW}",
+                 "sequences": sequences, "speeds": speeds, "energy_change": energy}
+    features = sorted(set(struck))
+    reference["contacts"] = len(features)
+    reference["why"] = (f"a tilt (expect_sequence): the event-driven sequence with {ENGINE_LAW}; "
+                        f"features {features} struck")
+    if len(features) >= 2:  # the flat limit: the struck features as if they touched at once
+        world, radius = geometry.world_core(scene.bodies[0])
+        contacts = [Contact(point=np.array([world[k, 0], world[k, 1] - radius]),
+                            normal=np.array([0.0, 1.0]), gap=float(world[k, 1] - radius))
+                    for k in features]
+        extra = _simultaneous(scene, contacts, fixed, prefix="at-pose/")
+        speeds.update(extra["speeds"])
+        energy.update(extra["energy_change"])
+        reference["solutions"] = extra["solutions"]
+    return reference
+
+
+def annotate(scenario, point, records: Sequence, reference: dict | None = None, *,
+             keep_full: bool = False) -> dict:
+    """Write the point's reference into ``records`` and return it (built when None).
+
+    With ``keep_full`` the first record also carries the whole reference
+    (``diagnostics["reference_full"]``, read by :func:`collect`). Law records get
+    ``diagnostics["reference"] = {"kind", "primary", "applies"}``: the single-contact laws
+    apply only to a single-contact point. Engine records get the reference's kind and
+    primary, ``departure`` from every reference speed and ``departure_from_primary``.
+    """
+    if reference is None:
+        reference = point_reference(scenario, point)
+    for record in records:
+        summary = {"kind": reference["kind"], "primary": reference.get("primary")}
+        if record.source == "analytic":
+            summary["applies"] = reference["kind"] == SINGLE
+        elif record.u_after is not None and reference.get("speeds"):
+            u_before = np.asarray(record.u_before, dtype=float)
+            mass_matrix = _mass_matrix(scenario, point)
+            summary["departure"] = metrics.departures(
+                mass_matrix, record.u_after, reference["speeds"], u_before,
+                free_bodies=scenario.system == "bodies" and not scenario.ground)
+            primary = summary["departure"].get(reference.get("primary"), math.nan)
+            summary["departure_from_primary"] = primary
+            if reference["kind"] == EVENT_DRIVEN:  # which cut of the sequence the run is nearest
+                cuts = {name: value for name, value in summary["departure"].items()
+                        if name.startswith(reference["primary"])}
+                nearest = min(cuts, key=lambda name: cuts[name])
+                summary["nearest_cut"] = [nearest, cuts[nearest]]
+        if record.diagnostics is None:
+            record.diagnostics = {}
+        record.diagnostics["reference"] = summary
+    if keep_full and records:
+        records[0].diagnostics["reference_full"] = reference
+    return reference
+
+
+def _mass_matrix(scenario, point) -> np.ndarray:
+    scene = scenario.scene(point)
+    return scene.mass_matrix()
+
+
+def collect(records: Sequence) -> list[dict]:
+    """A scenario's references per point (for its scenario info), from the points' records:
+    ``[{"point": label, **reference}]`` in point order; the full reference is carried by the
+    first record of each point (:func:`annotate` with ``keep_full=True``)."""
+    seen, out = set(), []
+    for record in records:
+        full = (record.diagnostics or {}).get("reference_full")
+        if full is None or record.point["index"] in seen:
+            continue
+        seen.add(record.point["index"])
+        out.append({"point": record.point["label"], **full})
+    return out
+
+
+__all__ = ["COHERENT_LAWS", "COUPLINGS", "EVENT_DRIVEN", "SIMULTANEOUS", "SINGLE",
+           "annotate", "collect", "kind_of", "point_reference"]

@@ -1,0 +1,24 @@
+"""The report's section on several contacts (harness/report/contacts.py)."""
+
+from __future__ import annotations
+
+from harness.report.contacts import COUNTS, contacts_section
+from harness.run import runner
+from harness.run.records import Results
+from harness.scenarios import load_scenario
+
+
+def test_a_flat_scene_gets_a_table_and_a_single_contact_scene_none():
+    scenarios = [load_scenario("scenarios/flat-box.toml"),
+                 load_scenario("scenarios/box-corner.toml")]
+    outcome = runner.run(scenarios, engines=("pymunk",), presets=("accurate",), log=None)
+    results = Results(records=outcome.records, provenance=outcome.provenance,
+                      scenarios=outcome.scenarios)
+    html, markdown = contacts_section(results)
+    assert "<h3>flat-box</h3>" in html and "box-corner" not in html
+    row = next(line for line in markdown.splitlines() if line.startswith("| (single point)"))
+    cells = [cell.strip() for cell in row.strip("|").split("|")]
+    assert cells[1] == "simultaneous: newton-coulomb"
+    counts = outcome.scenarios["flat-box"]["references"][0]["solutions"]
+    assert cells[2:9] == [str(counts[key]) for key, _ in COUNTS]  # the reference's own counts
+    assert float(cells[-1]) <= 1e-6  # pymunk.accurate against Newton–Coulomb

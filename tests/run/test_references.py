@@ -1,0 +1,182 @@
+"""Which reference a run is compared with (harness/run/references.py), the m-contact geometry
+it needs (harness/scene/geometry.py), and the scenario checks for flat faces.
+
+Numbers worked by hand are compared at 1e-12 (a few roundings of O(1) values).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from harness.run import references, runner
+from harness.scenarios import ScenarioError, load_scenario
+from harness.scenarios.reader import parse_scenario
+from harness.scene import Body, Box, Rod, Scene, geometry
+
+HAND = 1e-12
+
+
+def flat_box_doc(**top) -> dict:
+    doc = {"name": "flat", "restitution": 0.5, "friction": 0.3, "ground": {},
+           "body": [{"name": "box", "shape": "box", "width": 1.0, "height": 0.2, "mass": 1.0,
+                     "velocity": [0.0, -1.0]}]}
+    doc.update(top)
+    return doc
+
+
+# ---------------------------------------------------------------------- geometry
+def test_a_flat_box_has_its_two_bottom_corners_as_contacts():
+    body = geometry.place_on_ground(Body("b", Box(1.0, 0.2), 1.0, (0.0, 3.0)))
+    contacts = geometry.scene_contacts(Scene((body,), 0.5, 0.3, ground=True))
+    assert [c.point[0] for c in contacts] == [-0.5, 0.5]
+    assert all(c.point_count == 1 and abs(c.gap) <= HAND for c in contacts)
+
+
+def test_a_tilt_above_the_tolerance_leaves_one_contact():
+    # 0.01° on a 1 m box lifts the far corner by 1.75e-4 m > 1e-4 m.
+    body = geometry.place_on_ground(Body("b", Box(1.0, 0.2), 1.0, (0.0, 3.0),
+                                         angle=math.radians(0.01)))
+    scene = Scene((body,), 0.5, 0.3, ground=True)
+    assert len(geometry.scene_contacts(scene, tolerance=1e-4)) == 1
+    assert len(geometry.scene_contacts(scene, tolerance=1e-3)) == 2
+
+
+def test_a_flat_rod_touches_under_both_end_caps():
+    body = geometry.place_on_ground(Body("r", Rod(1.0, 0.05), 1.0, (0.0, 3.0)))
+    contacts = geometry.scene_contacts(Scene((body,), 0.5, 0.3, ground=True))
+    np.testing.assert_allclose([c.point for c in contacts], [[-0.5, 0.0], [0.5, 0.0]],
+                               atol=HAND)
+
+
+def test_a_box_resting_flat_on_a_wider_box_touches_at_the_ends_of_the_shared_face():
+    lower = Body("a", Box(2.0, 0.2), 1.0, (0.0, 0.0))
+    upper = Body("b", Box(1.0, 0.2), 1.0, (0.3, 0.2), velocity=(0.0, -1.0))
+    contacts = geometry.scene_contacts(Scene((lower, upper), 0.5, 0.3))
+    np.testing.assert_allclose([c.point for c in contacts], [[-0.2, 0.1], [0.8, 0.1]],
+                               atol=HAND)
+    np.testing.assert_allclose([c.normal for c in contacts], [[0.0, 1.0]] * 2, atol=HAND)
+
+
+def test_contact_rows_of_a_flat_box_are_the_hand_rows():
+    """w_n = (0, 1, r_x), w_t = (1, 0, −r_y) at r = (∓0.5, −0.1) (docs/multi-contact.md,
+    'Worked example: a box landing flat', with this box's half-height)."""
+    body = geometry.place_on_ground(Body("b", Box(1.0, 0.2), 1.0, (0.0, 0.0)))
+    scene = Scene((body,), 0.5, 0.3, ground=True)
+    wn, wt = geometry.contact_rows(scene, geometry.scene_contacts(scene))
+    np.testing.assert_allclose(wn, [[0, 1, -0.5], [0, 1, 0.5]], atol=HAND)
+    np.testing.assert_allclose(wt, [[1, 0, 0.1], [1, 0, 0.1]], atol=HAND)
+
+
+# ---------------------------------------------------------------------- scenario checks
+def test_an_undeclared_flat_face_is_refused_and_the_message_names_the_way_out():
+    with pytest.raises(ScenarioError) as caught:
+        parse_scenario(flat_box_doc())
+    text = str(caught.value)
+    assert "2 contact points" in text and 'contacts = "simultaneous"' in text
+
+
+def test_a_declared_flat_face_is_accepted():
+    assert parse_scenario(flat_box_doc(contacts="simultaneous")).contacts == "simultaneous"
+
+
+def test_a_declared_flat_face_that_touches_at_one_point_is_refused():
+    doc = flat_box_doc(contacts="simultaneous")
+    doc["body"][0]["angle_deg"] = 5.0
+    with pytest.raises(ScenarioError, match="declares a flat face, but a single point touches"):
+        parse_scenario(doc)
+
+
+def test_a_flat_face_and_a_sequence_cannot_both_be_declared():
+    with pytest.raises(ScenarioError, match="contradicts"):
+        parse_scenario(flat_box_doc(contacts="simultaneous", expect_sequence=True))
+
+
+def test_a_flat_face_where_no_point_approaches_is_refused():
+    doc = flat_box_doc(contacts="simultaneous")
+    doc["body"][0]["velocity"] = [0.0, 1.0]
+    with pytest.raises(ScenarioError, match="no contact point approaches"):
+        parse_scenario(doc)
+
+
+def test_an_unknown_contacts_value_is_refused():
+    with pytest.raises(ScenarioError, match="unknown value"):
+        parse_scenario(flat_box_doc(contacts="two"))
+
+
+# ---------------------------------------------------------------------- references
+def test_single_contact_scenes_keep_the_single_contact_laws():
+    reference = references.point_reference(load_scenario("scenarios/box-corner.toml"), None)
+    assert reference["kind"] == "single-contact" and reference["primary"] == "newton-lcp"
+
+
+def test_a_flat_box_without_slip_is_compared_with_newton_coulomb_which_is_symmetric():
+    """Both corners stick and restitute e·|v_n^A| = 0.5 m/s: by symmetry the box leaves at
+    v_y = 0.5 m/s without slip or spin (docs/multi-contact.md, 'Worked example: a box landing
+    flat', 'Newton–Coulomb' paragraph)."""
+    scenario = load_scenario("scenarios/flat-box.toml")
+    reference = references.point_reference(scenario, None)
+    assert reference["kind"] == "simultaneous" and reference["contacts"] == 2
+    assert reference["primary"] == "newton-coulomb"
+    assert reference["solutions"]["newton-coulomb"] == 1
+    np.testing.assert_allclose(reference["speeds"]["newton-coulomb"], [0.0, 0.5, 0.0],
+                               atol=HAND)
+    # The two orders of the sequential reading are mirror images: v_x and ω change sign.
+    one, other = (np.array(reference["speeds"][f"sequential/poisson/{o}"]) for o in ("0-1", "1-0"))
+    np.testing.assert_allclose(one * [-1, 1, -1], other, atol=HAND)
+    assert reference["departure_from_primary"]["newton-coulomb"] == 0.0
+
+
+def test_every_coherent_solution_is_listed_and_counted():
+    reference = references.point_reference(load_scenario("scenarios/flat-rod.toml"), None)
+    for law in references.COHERENT_LAWS:
+        for coupling in references.COUPLINGS:
+            stem = f"coherent/{law}/{coupling}"
+            listed = [n for n in reference["speeds"] if n == stem or n.startswith(stem + "#")]
+            assert len(listed) == reference["solutions"][stem]
+
+
+def test_a_tilt_is_compared_with_the_event_driven_sequence():
+    scenario = load_scenario("scenarios/sweep-tilted-box.toml")
+    point = scenario.point_list()[0]
+    reference = references.point_reference(scenario, point)
+    assert reference["kind"] == "event-driven"
+    assert reference["primary"] == "event-driven/newton-lcp"
+    impacts = reference["sequences"]["newton-lcp"]["impacts"]
+    assert [impact[0] for impact in impacts][:2] == [0, 1]  # the low corner, then the other
+    assert reference["contacts"] == 2 and "at-pose/newton-coulomb" in reference["speeds"]
+
+
+def test_the_runner_says_which_reference_it_used(tmp_path):
+    scenarios = [load_scenario("scenarios/flat-box.toml"),
+                 load_scenario("scenarios/box-corner.toml")]
+    outcome = runner.run(scenarios, engines=("pymunk",), presets=("accurate",), log=None)
+    kinds = {name: [r["kind"] for r in info["references"]]
+             for name, info in outcome.scenarios.items()}
+    assert kinds == {"flat-box": ["simultaneous"], "box-corner": ["single-contact"]}
+    for record in outcome.records:
+        summary = record.diagnostics["reference"]
+        if record.source == "analytic":
+            assert summary["applies"] == (record.scenario == "box-corner")
+        elif record.scenario == "flat-box" and record.u_after is not None:
+            assert summary["primary"] == "newton-coulomb"
+            assert math.isfinite(summary["departure_from_primary"])
+
+
+def test_the_library_has_a_flat_scene_without_and_one_with_several_coherent_poisson_solutions():
+    counts = {name: references.point_reference(
+        load_scenario(f"scenarios/{name}.toml"), None)["solutions"]["coherent/poisson/effective"]
+        for name in ("flat-box", "flat-box-several-poisson")}
+    assert counts["flat-box"] == 0 and counts["flat-box-several-poisson"] >= 2
+
+
+def test_random_flat_landings_are_flat_and_approach():
+    from harness.reference.flat_faces import flat_system, random_flat_scene
+
+    rng = np.random.default_rng(1)
+    for _ in range(20):
+        scene = random_flat_scene(rng)
+        system = flat_system(scene)
+        assert system.count == 2 and min(system.approach[0::2]) < 0.0
