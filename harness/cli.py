@@ -29,14 +29,16 @@ import traceback
 # command name -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
     "suite": ("harness.run.suite", "the validation suite (`make validate`): paper, run, report"),
-    "paper": ("harness.report.table3", "reproduce the paper's Table 3 into reports/paper-table3.md"),
+    "paper": ("harness.report.table3",
+              "reproduce the paper's Table 3 into reports/paper-table3.md"),
     "run": ("harness.run.runner", "run scenarios through every law and engine, write results"),
     "report": ("harness.report", "write reports/index.html and reports/summary.md from results"),
     "compare": ("harness.report.compare",
                 "compare two results files; exit 1 when a change exceeds --fail-above"),
     "validate": ("harness.scenarios.cli", "check scenario files"),
     "new": ("harness.scenarios.cli", "write a commented starting scenario file"),
-    "bench": ("harness.bench.solver", "benchmarks: solver throughput, engine overhead, speed-accuracy"),
+    "bench": ("harness.bench.solver",
+              "benchmarks: solver throughput, engine overhead, speed-accuracy"),
     "stress": ("harness.stress", "numerical stress of the solver and the engines"),
     "findings": ("harness.report.findings", "re-measure the README's findings on the laws"),
     "survey": ("harness.survey.cli", "departure distributions over families of impacts"),

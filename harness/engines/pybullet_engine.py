@@ -76,14 +76,18 @@ SETTING_DOCS: dict[str, str] = {
     "num_sub_steps": "numSubSteps, sub-steps per step (default 0 = none)",
     "contact_breaking_threshold": "m, contactBreakingThreshold: contacts exist up to this gap "
     "(default 0.02; process-wide in Bullet, set before every run)",
-    "contact_erp": "contactERP, fraction of penetration corrected per step by velocity (default 0.2)",
+    "contact_erp": "contactERP, fraction of penetration corrected per step by velocity "
+    "(default 0.2)",
     "erp": "erp, joint error reduction (default 0.2; the planar chain's joints are exact)",
     "friction_erp": "frictionERP (default 0.2)",
     "contact_slop": "m, contactSlop, penetration left uncorrected (default 1e-5)",
-    "restitution_velocity_threshold": "m/s, restitution is 0 below this approach speed (default 0.2)",
-    "enable_cone_friction": "enableConeFriction, 1 = implicit cone, 0 = two-direction box (default 1)",
+    "restitution_velocity_threshold": "m/s, restitution is 0 below this approach speed "
+    "(default 0.2)",
+    "enable_cone_friction": "enableConeFriction, 1 = implicit cone, 0 = two-direction box "
+    "(default 1)",
     "solver_residual_threshold": "solverResidualThreshold, PGS stops below it (default 1e-7)",
-    "warm_starting_factor": "warmStartingFactor, share of last step's impulse re-applied (default 0.85)",
+    "warm_starting_factor": "warmStartingFactor, share of last step's impulse re-applied "
+    "(default 0.85)",
     "global_cfm": "globalCFM, constraint force mixing (default 0)",
     "use_split_impulse": "useSplitImpulse, 1 = position correction apart (rigid bodies; default 1)",
     "linear_damping": "1/s, per-link linearDamping (Bullet's default 0.04)",
@@ -143,7 +147,11 @@ def _collision_shape(client: int, shape) -> int:
             halfExtents=[shape.width / 2.0, depth / 2.0, shape.height / 2.0],
             physicsClientId=client,
         )
-    vertices = [[x, side * depth / 2.0, y] for x, y in shape.vertices().tolist() for side in (-1.0, 1.0)]
+    vertices = [
+        [x, side * depth / 2.0, y]
+        for x, y in shape.vertices().tolist()
+        for side in (-1.0, 1.0)
+    ]
     return p.createCollisionShape(p.GEOM_MESH, vertices=vertices, physicsClientId=client)
 
 

@@ -78,21 +78,23 @@ def write_report(results: Results, out_dir: Path | str,
     for name in results.scenario_names():
         records = results.for_scenario(name)
         info = results.scenarios.get(name, {})
+        # render_once calls its draw before returning: the closures use this pass's values
         if info.get("sweep"):
             file = f"sweep-{slug(name)}.png"
             if render_once("sweep", figure_dir / file, [name, info, stable[name]],
-                       lambda path, tag: sweep_figure(name, info, records, path, tag)):
+                       lambda path, tag: sweep_figure(name, info, records, path, tag)):  # noqa: B023
                 figures["sweep"][name] = file
         else:
             file = f"impulse-{slug(name)}.png"
             if render_once("impulse", figure_dir / file, [name, stable[name]],
-                       lambda path, tag: impulse_figure(name, records, path, tag)):
+                       lambda path, tag: impulse_figure(name, records, path, tag)):  # noqa: B023
                 figures["impulse"][name] = file
     if render_once("table3", figure_dir / "paper-table3.png", table3_inputs(),
                    lambda path, tag: table3_figure(path, tag)):
         figures["table3"] = "paper-table3.png"
     pages = write_pages(out_dir, sources)
-    wanted = {figures.get("heatmap"), figures.get("table3"), figures.get("split"), figures.get("legend"),
+    wanted = {figures.get("heatmap"), figures.get("table3"), figures.get("split"),
+              figures.get("legend"),
               *figures["impulse"].values(),
               *figures["sweep"].values()}
     wanted.discard(None)

@@ -45,7 +45,7 @@ def write_summary(results: Results, out_dir: Path) -> Path:
         lines += [f"## Departure from {LAW_STYLE[law][2]}", "",
                   "| scenario | " + " | ".join(labels) + " |",
                   "|---|" + "---:|" * len(labels)]
-        for i, name in enumerate(names):
+        for name in names:
             cells = [departure_cell(cell_records(results, name, label), law)
                      for label in labels]
             lines.append(f"| {escape(row_name(results, name))} | " + " | ".join(cells) + " |")

@@ -2,8 +2,9 @@
 
 ``impact-harness paper`` writes ``reports/paper-table3.md`` and ``reports/paper-table3.png``:
 every printed cell beside the computed value for the paper's three laws, marked reproduced
-or not, with the reason for each miss (docs/theory.md, 'Table 3 and its errata'), and both Stronge versions side by
-side. The equations win over the print: the solver is never tuned toward an erratum.
+or not, with the reason for each miss (docs/theory.md, 'Table 3 and its errata'), and both
+Stronge versions side by side. The equations win over the print: the solver is never tuned
+toward an erratum.
 """
 
 from __future__ import annotations
@@ -20,21 +21,26 @@ import planar_impact as pi
 
 CELLS = ("e", "du1", "du3", "du4", "du6", "vnA", "vnS", "vtA", "vtS", "dE")
 CELL_LABELS = {
-    "e": "e_i (Poisson e for e_e = 0.8)", "du1": "Δu1 [m/s]", "du3": "Δu3 [rad/s]", "du4": "Δu4 [m/s]",
-    "du6": "Δu6 [rad/s]", "vnA": "v_n^A [m/s]", "vnS": "v_n^S [m/s]", "vtA": "v_t^A [m/s]",
-    "vtS": "v_t^S [m/s]", "dE": "ΔE [J]",
+    "e": "e_i (Poisson e for e_e = 0.8)", "du1": "Δu1 [m/s]", "du3": "Δu3 [rad/s]",
+    "du4": "Δu4 [m/s]", "du6": "Δu6 [rad/s]", "vnA": "v_n^A [m/s]", "vnS": "v_n^S [m/s]",
+    "vtA": "v_t^A [m/s]", "vtS": "v_t^S [m/s]", "dE": "ΔE [J]",
 }
 STRONGE_E_ENERGETIC = 0.8  # the paper's Section 5: e_e = 0.8 for every Stronge row
 
-# Why a printed cell is not reproduced (docs/theory.md, 'Table 3 and its errata'), keyed by (law, row within law, cell).
+# Why a printed cell is not reproduced (docs/theory.md, 'Table 3 and its errata'),
+# keyed by (law, row within law, cell).
 MISS_REASONS = {
     ("poisson", 2, "vtS"): "misprint: (38) and the impulse process both give −0.181",
     ("poisson", 2, "dE"): (
         "follows from the misprinted v_t^S through (A29); the kinetic energy of the printed "
         "Δu itself gives −0.341"
     ),
-    ("stronge", 2, "e"): "the printed e_i does not satisfy (70) for this row's data, which gives 0.8496",
-    ("stronge", 3, "e"): "the printed e_i does not satisfy (64) for this row's data, which gives 0.8586",
+    ("stronge", 2, "e"): (
+        "the printed e_i does not satisfy (70) for this row's data, which gives 0.8496"
+    ),
+    ("stronge", 3, "e"): (
+        "the printed e_i does not satisfy (64) for this row's data, which gives 0.8586"
+    ),
 }
 STRONGE_DU_REASON = (
     "the printed Δu is not reachable by any e_i: Δu is affine in I_n, and the printed vector "
@@ -115,7 +121,8 @@ def reproduce_table3() -> list[dict]:
         # The e column is an input for Newton and Poisson; only Stronge's e_i is computed.
         names = CELLS if law == "stronge" else CELLS[1:]
         cells = [Cell(law, counters[law], name, row[name], float(values[name])) for name in names]
-        solutions = {h: solve_row(row, h) for h in ("newton", "poisson", "stronge-paper", "stronge", "newton-lcp")}
+        solutions = {h: solve_row(row, h)
+                     for h in ("newton", "poisson", "stronge-paper", "stronge", "newton-lcp")}
         rows.append({"row": row, "law": law, "index": counters[law], "hypothesis": hypothesis,
                      "result": result, "cells": cells, "solutions": solutions,
                      "type_printed": int(row["type"]), "type_computed": result.collision_type})
@@ -189,7 +196,8 @@ def table3_sections(rows: list[dict]) -> list[Table3Section]:
             title=(f"{title}, row {entry['index']}: e = {row['e']}, μ = {row['mu']}, "
                    f"γ = {row['gamma']}, δ = {row['delta']}"),
             before=[(f"Collision type printed {entry['type_printed']}, computed "
-                    f"{entry['type_computed']} ({'reproduced' if type_ok else 'NOT reproduced'}).")],
+                    f"{entry['type_computed']} "
+                    f"({'reproduced' if type_ok else 'NOT reproduced'}).")],
             header=["cell", "printed", "computed", "reproduced", "reason for a miss"],
             alignments=["l", "r", "r", "c", "l"],
             rows=[[CELL_LABELS[c.name], c.printed, _fmt(c.computed, c.decimals),
@@ -307,7 +315,7 @@ def write_figure(rows: list[dict], path: Path, metadata: dict | None = None) -> 
         inset.set_title("end of impact (zoom)", fontsize=8)
         inset.tick_params(labelsize=7)
         ax.indicate_inset_zoom(inset, edgecolor="0.5")
-        # The printed Stronge Δu, mapped back to impulses by least squares on M Δu = w_n I_n + w_t I_t.
+        # Printed Stronge Δu mapped back to impulses by least squares on M Δu = w_n I_n + w_t I_t.
         printed = np.array([float(row[k]) for k in ("du1", "du3", "du4", "du6")])
         basis = np.stack([problem.wn, problem.wt], axis=1)
         impulses, *_ = np.linalg.lstsq(basis, problem.mass_matrix @ printed, rcond=None)
@@ -336,7 +344,8 @@ def write_report(out_dir: Path) -> tuple[Path, list[dict]]:
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("--out", type=Path, default=Path("reports"), help="output directory (default: reports)")
+    parser.add_argument("--out", type=Path, default=Path("reports"),
+                        help="output directory (default: reports)")
 
 
 def main(args) -> int:
@@ -347,5 +356,6 @@ def main(args) -> int:
     print(f"Table 3: {len(cells) - len(missed)}/{len(cells)} printed cells reproduced; "
           f"{len(missed)} known errata; written {markdown}")
     for cell in unexplained:
-        print(f"  UNEXPLAINED miss: {cell.law} row {cell.row} {cell.name}: printed {cell.printed}, computed {cell.computed:.4f}")
+        print(f"  UNEXPLAINED miss: {cell.law} row {cell.row} {cell.name}: "
+              f"printed {cell.printed}, computed {cell.computed:.4f}")
     return 1 if unexplained else 0

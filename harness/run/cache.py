@@ -110,7 +110,9 @@ def _canonical(value: Any) -> Any:
         return _canonical(value.tolist())
     if isinstance(value, Path):
         return value.as_posix()
-    raise TypeError(f"cache payload holds a value that is not JSON-able: {type(value).__name__} {value!r}")
+    raise TypeError(
+        f"cache payload holds a value that is not JSON-able: {type(value).__name__} {value!r}"
+    )
 
 
 def canonical_json(payload: Any) -> str:
@@ -143,7 +145,9 @@ class ResultCache:
 
     def key(self, payload: dict) -> str:
         """sha256 hex of the canonical JSON of ``payload`` plus the code version."""
-        text = canonical_json({"payload": payload, "code_version": self.version, "format": CACHE_FORMAT})
+        text = canonical_json(
+            {"payload": payload, "code_version": self.version, "format": CACHE_FORMAT}
+        )
         return hashlib.sha256(text.encode()).hexdigest()
 
     def path(self, key: str) -> Path:
@@ -162,7 +166,8 @@ class ResultCache:
         try:
             with open(path, encoding="utf-8") as handle:
                 stored = json.load(handle)
-            if not isinstance(stored, dict) or stored.get("key") != key or not isinstance(stored.get("record"), dict):
+            if (not isinstance(stored, dict) or stored.get("key") != key
+                    or not isinstance(stored.get("record"), dict)):
                 raise ValueError("not a cache entry")
             reason = None if check is None else check(stored["record"])
             if reason is not None:

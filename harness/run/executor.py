@@ -109,7 +109,9 @@ def run_tasks(
     """
     if executor not in EXECUTORS:
         raise ValueError(f"unknown executor {executor!r}; allowed: {list(EXECUTORS)}")
-    if workers is not None and (isinstance(workers, bool) or int(workers) != workers or workers < 1):
+    if workers is not None and (
+        isinstance(workers, bool) or int(workers) != workers or workers < 1
+    ):
         raise ValueError(f"workers must be a positive integer or None, got {workers!r}")
     if scheduler is not None and executor != "dask":
         raise ValueError("a scheduler address needs executor='dask'")
@@ -152,7 +154,8 @@ def _run_pool(function, tasks: Sequence, workers: int, progress, on_result=None)
     results: list[list | None] = [None] * len(chunks)
     done = 0
     with ProcessPoolExecutor(max_workers=workers) as pool:
-        futures = {pool.submit(_call_chunk, function, chunk): index for index, chunk in enumerate(chunks)}
+        futures = {pool.submit(_call_chunk, function, chunk): index
+                   for index, chunk in enumerate(chunks)}
         pending = set(futures)
         try:
             while pending:
@@ -180,7 +183,8 @@ def _import_distributed():
         from distributed import Client, LocalCluster, as_completed
     except ImportError as error:
         raise DaskNotInstalled(
-            f"executor 'dask' needs dask.distributed ({error}); install it with `{DASK_INSTALL_HINT}`"
+            f"executor 'dask' needs dask.distributed ({error}); "
+            f"install it with `{DASK_INSTALL_HINT}`"
         ) from error
     return Client, LocalCluster, as_completed
 

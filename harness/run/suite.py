@@ -3,7 +3,7 @@
 Three steps, each timed on stderr::
 
     1. the paper's Table 3     -> <out>/paper-table3.md, <out>/paper-table3.png
-    2. every scenario run      -> <out>/results.json   (engine runs cached: `impact-harness cache info`)
+    2. every scenario run      -> <out>/results.json  (runs cached: `impact-harness cache info`)
     3. the report              -> <out>/index.html, <out>/summary.md, <out>/figures/
 
 Options select scenarios and engines exactly as for ``impact-harness run`` (``--tags quick``

@@ -16,7 +16,6 @@ from typing import Any, Iterable, Mapping
 
 import numpy as np
 
-from harness.scene import Box, Disk, Polygon, Rod
 from harness.scenarios.checks import check_engine_settings, check_points
 from harness.scenarios.errors import NO_VALUE, ScenarioError, suggest
 from harness.scenarios.model import (
@@ -50,6 +49,7 @@ from harness.scenarios.schema import (
     TWO_SLED_KEYS,
     limit,
 )
+from harness.scene import Box, Disk, Polygon, Rod
 
 #: Largest |value| of a number whose field has no MAGNITUDES entry.
 LARGEST_NUMBER = 1e12

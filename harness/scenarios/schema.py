@@ -10,9 +10,8 @@ import inspect
 import re
 from pathlib import Path
 
-from planar_impact import HYPOTHESES, builders
-
 from harness.engines import ENGINE_NAMES, PRESET_NAMES
+from planar_impact import HYPOTHESES, builders
 
 SCENARIO_DIR = Path(__file__).resolve().parent.parent.parent / "scenarios"
 

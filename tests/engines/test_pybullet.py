@@ -67,7 +67,8 @@ def test_polygon_hull_margin_is_a_pinned_departure(engine):
 
 @pytest.mark.parametrize(
     "scene_name, measured",
-    [("disk", 2.0528e-03), ("rod-45", 1.8061e-03), ("box-corner", 2.2122e-03), ("two-disks", 1.8330e-03)],
+    [("disk", 2.0528e-03), ("rod-45", 1.8061e-03), ("box-corner", 2.2122e-03),
+     ("two-disks", 1.8330e-03)],
 )
 def test_defaults_departure_pinned(engine, scene_name, measured):
     # Defaults depart by ~2e-3, touching at the start: the default contactSlop bias
@@ -75,7 +76,9 @@ def test_defaults_departure_pinned(engine, scene_name, measured):
     # Reason for 5%: deterministic values; room for another platform's rounding.
     scene, contact, normal = SCENES[scene_name]
     law = newton_lcp_velocities(scene, contact, normal)
-    assert departure(scene, engine.run(scene, preset="defaults"), law) == pytest.approx(measured, rel=0.05)
+    assert departure(scene, engine.run(scene, preset="defaults"), law) == pytest.approx(
+        measured, rel=0.05
+    )
 
 
 @pytest.mark.parametrize("speed", [0.05, 0.1, 0.19])
@@ -106,7 +109,9 @@ def test_defaults_early_contact_bias(engine, approach, measured):
     # Reason for 5e-4 m/s: the slop/damping terms above. `accurate` ignores the phase.
     run = engine.run(drop(1.0), preset="defaults", overrides={"approach_steps": approach})
     assert run.velocities[0][1] == pytest.approx(measured, abs=5e-4)
-    assert run.velocities[0][1] == pytest.approx(max(0.5 - approach - DEFAULT_SLOP / DT, 0.0), abs=5e-4)
+    assert run.velocities[0][1] == pytest.approx(
+        max(0.5 - approach - DEFAULT_SLOP / DT, 0.0), abs=5e-4
+    )
     exact = engine.run(drop(1.0), preset="accurate", overrides={"approach_steps": approach})
     assert exact.velocities[0][1] == pytest.approx(0.5, abs=1e-12)  # rounding
 
@@ -127,6 +132,7 @@ def test_rerun_after_its_world_was_evicted(engine):
     first = engine.run(scene, settings)
     for radius in range(9):  # 9 other geometries with the same settings: 9 other worlds
         other = drop(1.0)
-        body = other.bodies[0].moved(shape=Disk(0.11 + 0.01 * radius), position=(0.0, 0.11 + 0.01 * radius))
+        body = other.bodies[0].moved(shape=Disk(0.11 + 0.01 * radius),
+                                     position=(0.0, 0.11 + 0.01 * radius))
         engine.run(Scene((body,), 0.5, 0.0, ground=True, name="drop"), settings)
     assert engine.run(scene, settings) == first

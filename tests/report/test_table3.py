@@ -1,8 +1,8 @@
 """The paper's Table 3: reproducible cells to the printed digits, misprints pinned.
 
-The pinned corrections come from docs/theory.md, 'Table 3 and its errata', where each was computed two ways; here they
-are recomputed by the solver and must match to the 4 decimals given there (half a unit of
-the 4th decimal is the rounding of those printed corrections).
+The pinned corrections come from docs/theory.md, 'Table 3 and its errata', where each was
+computed two ways; here they are recomputed by the solver and must match to the 4 decimals
+given there (half a unit of the 4th decimal is the rounding of those printed corrections).
 """
 
 from __future__ import annotations

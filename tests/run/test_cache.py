@@ -61,7 +61,9 @@ def test_code_version_hashes_the_sources(tmp_path, monkeypatch):
     assert cache_module._code_version_of(dirs) != before
 
 
-@pytest.mark.parametrize("content", ["{not json", "", json.dumps({"key": "other", "record": {}}), "[1, 2]"])
+@pytest.mark.parametrize(
+    "content", ["{not json", "", json.dumps({"key": "other", "record": {}}), "[1, 2]"]
+)
 def test_corrupted_file_is_a_miss(tmp_path, content):
     cache = ResultCache(tmp_path)
     key = cache.key(PAYLOAD)

@@ -18,7 +18,8 @@ def solve_chunk(task: dict) -> dict:
     result = pi.solve_batch(problems["mnn"], problems["mnt"], problems["mtt"], problems["vn"],
                             problems["vt"], problems["mu"], problems["e"], hypothesis=task["law"])
     return {"seed": task["seed"], "law": task["law"],
-            "normal": result.normal_impulse.tobytes(), "tangential": result.tangential_impulse.tobytes(),
+            "normal": result.normal_impulse.tobytes(),
+            "tangential": result.tangential_impulse.tobytes(),
             "status": result.status.tobytes()}
 
 
@@ -28,7 +29,8 @@ def fail_on_three(task: int) -> int:
     return task * task
 
 
-TASKS = [{"seed": seed, "law": law, "count": 200} for seed in range(6) for law in ("poisson", "stronge")]
+TASKS = [{"seed": seed, "law": law, "count": 200}
+         for seed in range(6) for law in ("poisson", "stronge")]
 
 
 def test_pool_equals_inline_bit_for_bit():
@@ -40,7 +42,8 @@ def test_pool_equals_inline_bit_for_bit():
 
 def test_progress_reports_every_task_and_ends_at_total():
     seen = []
-    run_tasks(fail_on_three, [0, 1, 2], workers=2, progress=lambda done, total: seen.append((done, total)))
+    run_tasks(fail_on_three, [0, 1, 2], workers=2,
+              progress=lambda done, total: seen.append((done, total)))
     assert seen[0] == (0, 3) and seen[-1] == (3, 3)
     assert [done for done, _ in seen] == sorted(done for done, _ in seen)
 

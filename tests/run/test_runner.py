@@ -18,8 +18,9 @@ from harness.scenarios import SCENARIO_DIR, load_scenario
 ROD = load_scenario(SCENARIO_DIR / "rod-45-slip-reversal.toml")
 TWO_SLED = load_scenario(SCENARIO_DIR / "two-sled-row2.toml")
 DISK_SWEEP = load_scenario(SCENARIO_DIR / "sweep-disk-alpha.toml")
-# Engines that solve newton-lcp exactly under `accurate` reach it to round-off (docs/engines.md, 'pymunk' and 'pybullet':
-# about 1e-12); the tests allow 1e-9 relative in the kinetic-energy norm.
+# Engines that solve newton-lcp exactly under `accurate` reach it to round-off
+# (docs/engines.md, 'pymunk' and 'pybullet': about 1e-12); the tests allow 1e-9 relative
+# in the kinetic-energy norm.
 EXACT = 1e-9
 
 
@@ -99,7 +100,8 @@ def test_the_split_of_a_departure():
         assert split["law_part"] == records["newton-lcp"].departure["poisson"]
         # triangle inequality of the norm; 1e-12 absorbs round-off of the three norms
         assert split["total"] <= split["law_part"] + split["solve_part"] + 1e-12
-    # On this rod the law itself is ~20% from Poisson (docs/engines.md, 'The reference scenes'), the exact engines ~0.
+    # On this rod the law itself is ~20% from Poisson, the exact engines ~0
+    # (docs/engines.md, 'The reference scenes').
     assert records["newton-lcp"].departure["poisson"] > 0.15
     assert records["pymunk.accurate"].departure["newton-lcp"] < EXACT
 
@@ -162,7 +164,10 @@ def test_cache_hits_give_the_same_records(tmp_path):
     warm = quiet_run([ROD], cache=cache)
     assert cache.misses == 0 and cache.hits == len(ENGINE_NAMES) * 2  # two presets
     assert warm.provenance["cache"]["simulated"] == 0
-    strip = lambda r: {k: v for k, v in r.as_dict().items() if k not in ("wall_time_s", "cached")}
+
+    def strip(record):
+        return {k: v for k, v in record.as_dict().items() if k not in ("wall_time_s", "cached")}
+
     for a, b in zip(cold.records, warm.records):
         da, db = strip(a), strip(b)
         for d in (da, db):

@@ -42,7 +42,8 @@ def test_poisson_departs_from_itself_by_zero_and_newton_lcp_by_the_law_part(surv
     runs = pq.read_table(survey_dir / "runs.parquet").to_pydict()
     assert np.all(np.asarray(samples["poisson.from_poisson"]) == 0.0)
     # The runs' law part is the samples' newton-lcp departure (same rows, same order).
-    assert np.array_equal(np.asarray(runs["law_part"]), np.asarray(samples["newton-lcp.from_poisson"]))
+    assert np.array_equal(np.asarray(runs["law_part"]),
+                          np.asarray(samples["newton-lcp.from_poisson"]))
     assert set(samples["poisson.collision_type"]) <= {1, 2, 3, 4, 5}
 
 
