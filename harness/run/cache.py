@@ -34,11 +34,12 @@ import json
 import math
 import os
 import sys
-import tempfile
 import time
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
+
+from harness.run.files import write_text_atomically
 
 _HARNESS_DIR = Path(__file__).resolve().parent.parent  # harness/, from harness/run/
 _SOURCE_DIRS: tuple[Path, ...] = (_HARNESS_DIR.parent / "src" / "planar_impact", _HARNESS_DIR)
@@ -193,25 +194,7 @@ class ResultCache:
         path = self.path(key)
         text = json.dumps({"key": key, "code_version": self.version, "record": record},
                           default=_json_default)
-        for attempt in (1, 2):
-            path.parent.mkdir(parents=True, exist_ok=True)
-            try:
-                descriptor, temporary = tempfile.mkstemp(prefix=f".{key[:8]}-", suffix=".tmp",
-                                                         dir=path.parent)
-                break
-            except FileNotFoundError:  # the directory was removed (rm -rf) after mkdir
-                if attempt == 2:
-                    raise
-        try:
-            with os.fdopen(descriptor, "w", encoding="utf-8") as handle:
-                handle.write(text)
-            os.replace(temporary, path)
-        except BaseException:
-            try:
-                os.unlink(temporary)
-            except OSError:
-                pass
-            raise
+        write_text_atomically(path, text, prefix=f".{key[:8]}-", make_parent=True)
 
     def _entries(self):
         return self.root.glob("??/*.json") if self.root.is_dir() else iter(())

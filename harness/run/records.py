@@ -45,6 +45,8 @@ from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 
+from harness.run.files import write_text_atomically
+
 FORMAT = "impact-harness-results"
 FORMAT_VERSION = 1
 DEFAULT_RESULTS = Path("reports") / "results.json"
@@ -167,18 +169,7 @@ def write_results(path: Path | str, records: Iterable[Record], provenance: Mappi
     text = head[:-2] + ',\n "records": [\n' + records_text + "\n ]\n}\n"
     # A unique temporary in the same directory, then an atomic rename: two runs writing the
     # same file at once each replace it whole; a reader never sees half a file.
-    descriptor, temporary = tempfile.mkstemp(prefix=f".{path.name}-", suffix=".tmp",
-                                             dir=path.parent)
-    try:
-        with os.fdopen(descriptor, "w", encoding="utf-8") as handle:
-            handle.write(text)
-        os.replace(temporary, path)
-    except BaseException:
-        try:
-            os.unlink(temporary)
-        except OSError:
-            pass
-        raise
+    write_text_atomically(path, text)
     return path
 
 

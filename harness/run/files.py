@@ -1,0 +1,41 @@
+"""Writing a file so that no reader ever sees half of it and no finished file is lost."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+
+def write_text_atomically(path: Path, text: str, *, prefix: str | None = None,
+                          make_parent: bool = False) -> Path:
+    """Write ``text`` to ``path`` through a unique temporary file in the same directory and
+    an atomic rename: two writers each replace the file whole, a kill leaves at most a
+    ``.tmp`` file (which its owner cleans up), never a half-written ``path``.
+
+    ``make_parent`` creates the directory first, once more if it vanishes between the
+    ``mkdir`` and the temporary file (a cache removed with ``rm -rf`` during a run).
+    """
+    path = Path(path)
+    prefix = prefix or f".{path.name}-"
+    for attempt in (1, 2):
+        if make_parent:
+            path.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            descriptor, temporary = tempfile.mkstemp(prefix=prefix, suffix=".tmp",
+                                                     dir=path.parent)
+            break
+        except FileNotFoundError:  # the directory was removed after mkdir
+            if attempt == 2 or not make_parent:
+                raise
+    try:
+        with os.fdopen(descriptor, "w", encoding="utf-8") as handle:
+            handle.write(text)
+        os.replace(temporary, path)
+    except BaseException:
+        try:
+            os.unlink(temporary)
+        except OSError:
+            pass
+        raise
+    return path
