@@ -491,7 +491,8 @@ class Engine(abc.ABC):
 
     def _resolve(self, settings, preset, overrides) -> tuple[dict, str | None]:
         if settings is None:
-            return self.settings(preset, overrides), (preset if not overrides else None)
+            role = preset if preset in self.presets else self._role_named(preset)
+            return self.settings(role, overrides), (role if not overrides else None)
         if overrides:
             raise EngineSettingsError(
                 f"engine {self.name!r}: pass either a settings dict or overrides, not both"
