@@ -309,7 +309,8 @@ def test_a_gate_names_mujocos_second_preset_by_its_shown_name(tmp_path):
     text = GROUND + '\n[expect.gate]\n"mujoco.accurate" = { law = "newton", max_departure = 1 }\n'
     assert_names(error_of(tmp_path, text), "bad.toml", "expect.gate.mujoco.accurate",
                  "mujoco calls this preset 'mujoco.matched-bounce'")
-    text = GROUND + '\n[expect.gate]\n"pymunk.matched-bounce" = { law = "newton", max_departure = 1 }\n'
+    text = GROUND + ('\n[expect.gate]\n"pymunk.matched-bounce" = '
+                     '{ law = "newton", max_departure = 1 }\n')
     assert_names(error_of(tmp_path, text), "bad.toml", "expect.gate.pymunk.matched-bounce",
                  "unknown engine or preset")
 
