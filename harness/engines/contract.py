@@ -437,12 +437,13 @@ class Engine(abc.ABC):
     # ------------------------------------------------------------------ settings
     def settings(self, preset: str = "accurate",
                  overrides: Mapping[str, Any] | None = None) -> dict:
-        """A complete settings dict: ``preset`` with ``overrides`` applied and checked."""
+        """A complete settings dict: ``preset`` with ``overrides`` applied and checked.
+
+        ``preset`` is a role (``defaults``, ``accurate``) or the engine's name for one
+        (:meth:`preset_label`, e.g. MuJoCo's ``matched-bounce``).
+        """
         if preset not in self.presets:
-            raise EngineSettingsError(
-                f"engine {self.name!r}: unknown preset {preset!r}; "
-                f"allowed: {sorted(self.presets)}"
-            )
+            preset = self._role_named(preset)
         # Deep: list values (MuJoCo's solref, solimp) must not alias the preset's.
         resolved = copy.deepcopy(dict(self.presets[preset]))
         for key, value in (overrides or {}).items():
@@ -450,6 +451,24 @@ class Engine(abc.ABC):
             resolved[key] = copy.deepcopy(value)  # the caller's lists stay the caller's
         self.validate_settings(resolved)
         return resolved
+
+    def preset_label(self, role: str) -> str:
+        """The name users see for preset ``role`` (harness/engines/__init__.py, presets)."""
+        from harness.engines import preset_label  # the registry imports this module
+
+        return preset_label(self.name, role)
+
+    def _role_named(self, name: str) -> str:
+        from harness.engines import preset_role
+
+        try:
+            role = preset_role(self.name, name)
+        except ValueError as error:
+            raise EngineSettingsError(str(error)) from None
+        if role not in self.presets:
+            raise EngineSettingsError(
+                f"engine {self.name!r}: unknown preset {name!r}; allowed: {sorted(self.presets)}")
+        return role
 
     def _check_key(self, key: str) -> None:
         if key not in self.setting_docs:
@@ -472,7 +491,8 @@ class Engine(abc.ABC):
 
     def _resolve(self, settings, preset, overrides) -> tuple[dict, str | None]:
         if settings is None:
-            return self.settings(preset, overrides), (preset if not overrides else None)
+            role = preset if preset in self.presets else self._role_named(preset)
+            return self.settings(role, overrides), (role if not overrides else None)
         if overrides:
             raise EngineSettingsError(
                 f"engine {self.name!r}: pass either a settings dict or overrides, not both"

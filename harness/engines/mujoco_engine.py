@@ -9,7 +9,12 @@ contact ends when ``k·r + b·v`` reaches 0, before the bodies separate, which i
 ``e = 0.5`` needs ``ζ = 0.2553`` and not the linear formula's 0.2155. Friction is soft too,
 and under ``accurate`` the same damping sets how much of the slip it removes (below).
 
-``accurate`` sets, from the scene's ``e``, ``solref = (-k, -b)`` (MuJoCo's direct form) with
+Presets: ``defaults`` and ``matched-bounce``, the name this engine shows for the harness's
+``accurate`` role (harness/engines/__init__.py): it matches the bounce ``e·|v_n|``, but with
+friction leaving ``e²`` of the slip it creates kinetic energy in a part of the impacts with
+``m_nt ≠ 0`` (docs/engines.md, 'MuJoCo'); no setting that keeps the bounce prevents it.
+
+``matched-bounce`` sets, from the scene's ``e``, ``solref = (-k, -b)`` (MuJoCo's direct form) with
 ``ζ`` from the unilateral map and ``k`` such that the contact lasts ``contact_steps`` steps,
 and a flat ``solimp`` (``d = 0.9999`` at every depth). ``defaults`` is MuJoCo's
 ``solref = (0.02, 1)``, ``solimp = (0.9, 0.95, 0.001, 0.5, 2)`` -- ``e`` is then not used
@@ -21,7 +26,7 @@ the scene's inertia). The scene's (x, y) is MuJoCo's (x, z); the hinge's angle a
 polygon -> mesh (the polygon extruded along y). Ground: an infinite plane, normal +z.
 ``μ = 0`` uses ``condim = 1`` (frictionless contact); otherwise ``condim = 3``.
 
-Friction under ``accurate``: the slip falls to ``e²`` of its start, and not at all at e = 1
+Friction under ``matched-bounce``: the slip falls to ``e²`` of its start, and not at all at e = 1
     MuJoCo's friction rows have no spring term, only the contact's damping ``b``. Pyramidal
     cone: the two edge rows ``J_n ± μ·J_t`` both get ``a_ref = -b·(v_n ± μ·v_t) - k·r``;
     while both push, their difference gives the tangential reference ``a_t = -b·v_t`` (the
@@ -58,7 +63,8 @@ run makes the model hold every option and contact parameter of its settings, ``e
 ``mj_resetData``, so reruns are bit-identical. The contact impulse is MuJoCo's total constraint impulse on body B,
 ``M·Δq̇`` (exact here: no gravity, no passive forces, constant mass matrix).
 
-Settings (``defaults`` | ``accurate``) are listed in :data:`SETTING_DOCS`.
+Settings (``defaults`` | ``accurate``, shown as ``matched-bounce``) are listed in
+:data:`SETTING_DOCS`.
 """
 
 from __future__ import annotations

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from harness.engines import preset_label
 from harness.report.views import (
     ENGINE_STYLE,
     HEADLINE_LAWS,
@@ -146,7 +147,8 @@ def heatmap_figure(results: Results, path: Path, tag: str | None = None) -> Path
     labels = results.engine_labels()
     if not labels:
         return None
-    presets = list(dict.fromkeys(label.split(".")[1] for label in labels))
+    roles = results.engine_roles()  # parallel to labels: a panel per preset role
+    presets = list(dict.fromkeys(role for _, role in roles))
     names = engine_scenarios(results)
     panels = [(law, preset) for law in HEADLINE_LAWS for preset in presets]
     figure = new_figure(2.2 + 0.95 * len(labels) * len(HEADLINE_LAWS), 1.6 + 0.25 * len(names))
@@ -155,7 +157,7 @@ def heatmap_figure(results: Results, path: Path, tag: str | None = None) -> Path
     cmap = heat_cmap()
     image = None
     for ax, (law, preset) in zip(axes, panels):
-        panel_labels = [label for label in labels if label.endswith("." + preset)]
+        panel_labels = [label for label, (_, role) in zip(labels, roles) if role == preset]
         _, values, flagged, skipped = departure_grid(results, law, panel_labels)
         shown = np.where(np.isfinite(values), np.clip(values, HEAT_MIN, HEAT_MAX), np.nan)
         image = ax.imshow(np.ma.masked_invalid(shown), cmap=cmap, norm=norm, aspect="auto")
@@ -171,7 +173,8 @@ def heatmap_figure(results: Results, path: Path, tag: str | None = None) -> Path
         ax.set_xticks(range(len(panel_labels)), [label.split(".")[0] for label in panel_labels],
                       fontsize=8.5)
         ax.xaxis.tick_top()
-        ax.set_title(f"from {LAW_STYLE[law][2]} — {preset}", fontsize=9, pad=16)
+        ax.set_title(f"from {LAW_STYLE[law][2]} — {role_title(preset, roles)}", fontsize=9,
+                     pad=16)
         ax.set_yticks(range(len(names)), [row_name(results, n) for n in names], fontsize=8.5)
         ax.tick_params(length=0)
     # Short label: the colour bar can be as short as one row (the caption gives the formula).
@@ -179,6 +182,14 @@ def heatmap_figure(results: Results, path: Path, tag: str | None = None) -> Path
                           pad=0.01, label="departure [%]")
     percent_axis(bar.ax.yaxis)
     return save_png(figure, path, dpi=110, tag=tag)
+
+
+def role_title(role: str, pairs) -> str:
+    """A preset role as a panel title, with the engines' own names for it:
+    ``"accurate (mujoco: matched-bounce)"``."""
+    renamed = [f"{engine}: {preset_label(engine, role)}" for engine, r in pairs
+               if r == role and preset_label(engine, role) != role]
+    return f"{role} ({', '.join(renamed)})" if renamed else role
 
 
 def heat_cmap():
@@ -219,7 +230,8 @@ def split_figure(rows: Sequence[dict], path: Path, tag: str | None = None) -> Pa
         ax.set_xlabel("law part: newton-lcp vs Poisson [%]")
         percent_axis(ax.xaxis)
         percent_axis(ax.yaxis)
-        ax.set_title(f"{preset}", fontsize=10)
+        pairs = {(r["engine"], r["preset"]) for r in rows}
+        ax.set_title(role_title(preset, sorted(pairs)), fontsize=10)
         ax.grid(True, which="major", color="0.93")
     axes[0].set_ylabel("solve part: engine vs newton-lcp [%]")
     figure.suptitle("Above the dashed diagonal the solve (engine vs its own law) dominates, "
@@ -340,7 +352,8 @@ def impulse_legend_figure(path: Path, tag: str | None = None,
     for engine in engines if engines is not None else ENGINE_STYLE:
         colour, marker = ENGINE_STYLE.get(engine, ("k", "x"))
         handles.append(Line2D([], [], ls="none", marker=marker, ms=7, markerfacecolor=colour,
-                              markeredgecolor=colour, label=f"{engine} accurate"))
+                              markeredgecolor=colour,
+                              label=f"{engine} {preset_label(engine, 'accurate')}"))
         handles.append(Line2D([], [], ls="none", marker=marker, ms=7, markerfacecolor="none",
                               markeredgecolor=colour, label=f"{engine} defaults"))
     handles.append(Line2D([], [], ls="none", label="flagged by the engine", **FLAG_STYLE))
@@ -411,12 +424,11 @@ def sweep_figure(name: str, info: dict, records: Sequence[Record], path: Path, t
         groups = coincident_groups([r for r, _, _ in points], key, tolerance)
         for r, index, count in groups:
             x, y = position[id(r)]
-            engine, preset = r.label.split(".")
-            colour, marker = ENGINE_STYLE.get(engine, ("k", "x"))
+            colour, marker = ENGINE_STYLE.get(r.source, ("k", "x"))
             transform = offset_transform(ax, index, count, step_points=4.0)
             ax.update_datalim([(x, y)])  # shifted artists do not count for autoscaling
             ax.plot([x], [y], marker, ms=5, ls="none", label=r.label, transform=transform,
-                    markerfacecolor=colour if preset == "accurate" else "none",
+                    markerfacecolor=colour if r.preset == "accurate" else "none",
                     markeredgecolor=colour)
             if not r.ok:
                 ax.plot([x], [y], ls="none", transform=transform, label="flagged by the engine",

@@ -8,7 +8,7 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
-from harness.engines import ENGINE_NAMES, PRESET_NAMES
+from harness.engines import ENGINE_NAMES, PRESET_NAMES, preset_label
 from harness.report.views import (
     ENGINE_WHY,
     FIGURES,
@@ -240,7 +240,8 @@ def why_html(results: Results) -> str:
     """Per engine and preset present: the law it solves, its biases, the settings that
     matter, and the notes its runs carry (with how many runs carry each)."""
     labels = results.engine_labels()
-    engines = list(dict.fromkeys(label.split(".")[0] for label in labels))
+    roles = results.engine_roles()  # parallel to labels
+    engines = list(dict.fromkeys(engine for engine, _ in roles))
     if not engines:
         return "<p>No engine ran.</p>"
     parts = ['<dl class="why">']
@@ -248,11 +249,11 @@ def why_html(results: Results) -> str:
         parts.append(f"<dt>{escape_html(engine)}</dt><dd>"
                      f"{escape_html(ENGINE_WHY.get(engine, 'No description of this engine.'))}"
                      "</dd>")
-        for label in labels:
-            if not label.startswith(engine + "."):
+        for label, (source, role) in zip(labels, roles):
+            if source != engine:
                 continue
-            preset = label.split(".")[1]
-            text = PRESET_WHY.get((engine, preset), "")
+            preset = preset_label(engine, role)
+            text = PRESET_WHY.get((engine, role), "")
             runs = [r for r in results.records if r.source != ANALYTIC and r.label == label]
             notes: dict[str, int] = {}
             for run in runs:
@@ -266,7 +267,9 @@ def why_html(results: Results) -> str:
                 extra.append(f"{flagged} of {len(runs)} runs flagged by the engine")
             if overridden:
                 extra.append(f"{overridden} of {len(runs)} runs with scenario overrides")
-            parts.append(f"<dd><b>{escape_html(preset)}</b>: {escape_html(text)}"
+            head = f"<b>{escape_html(preset)}</b>" + (
+                "" if preset == role else f" (in the <i>{escape_html(role)}</i> role)")
+            parts.append(f"<dd>{head}: {escape_html(text)}"
                          + ("<br><span class='muted'>" + "; ".join(extra) + ".</span>"
                             if extra else "") + "</dd>")
     parts.append("</dl>")
@@ -352,11 +355,11 @@ def settings_table(provenance: dict) -> str:
     settings = provenance.get("engine_settings", {})
     parts = []
     for engine, presets in settings.items():
-        names = list(presets)
+        names = [preset_label(engine, role) for role in presets]
         keys = list(dict.fromkeys(k for p in presets.values() for k in p))
         rows = []
         for key in keys:
-            values = [presets[p].get(key) for p in names]
+            values = [presets[p].get(key) for p in presets]
             cells = [escape_html(json_short(v)) for v in values]
             if len(set(map(json_short, values))) > 1:
                 cells = [f"<b>{c}</b>" for c in cells]
@@ -487,7 +490,8 @@ def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[di
         "Stronge's hypotheses after Djerassi 2009, Newton's, and the velocity-level "
         "<code>newton-lcp</code> law that sequential-impulse engines solve) and simulated by "
         f"the physics engines {escape_html(', '.join(engines) or '(none)')} with their "
-        "out-of-the-box <i>defaults</i> and with <i>accurate</i> settings. The "
+        "out-of-the-box <i>defaults</i> and with <i>accurate</i> settings (for MuJoCo "
+        "<i>matched-bounce</i>: it matches the bounce, not a dissipative law). The "
         "<b>departure</b> of an engine from a law is the error of its post-impact velocities "
         "in the kinetic-energy norm, relative to the motion before the impact: "
         "‖u<sub>engine</sub> − u<sub>law</sub>‖<sub>M</sub> / ‖u<sub>before</sub>‖<sub>M</sub>,"
@@ -506,7 +510,8 @@ def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[di
         parts.append(figure_html(
             figures["heatmap"], "departure heat map",
             caption="Departure from Poisson (left pair) and from exact Stronge (right pair), "
-            "engines out of the box (<i>defaults</i>) and tuned (<i>accurate</i>). Sweeps show "
+            "engines out of the box (<i>defaults</i>) and tuned (<i>accurate</i>; MuJoCo: "
+            "<i>matched-bounce</i>). Sweeps show "
             "their largest departure over the sweep. “!” after a value: the run holding that "
             "value was flagged by the engine (multi-contact, no separation …); “(k!)”: k other "
             "points of the sweep were flagged, not the one shown; “*”: the scenario overrides "
@@ -547,7 +552,8 @@ def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[di
                  "the table). "
                  "The impulse diagram is Routh's graph (the paper's Fig. 1): the path of each "
                  "law's impulse and every end point; filled engine markers are "
-                 "<i>accurate</i>, hollow <i>defaults</i>, and engines that land on the same "
+                 "<i>accurate</i> (MuJoCo <i>matched-bounce</i>), hollow <i>defaults</i>, and "
+                 "engines that land on the same "
                  "point are drawn side by side. Sweeps show post-impact quantities against "
                  "the swept parameter instead, laws as lines and engines as points (flagged "
                  "runs ringed in red), with the points where the Poisson collision type "

@@ -82,8 +82,11 @@ class Record:
 
     @property
     def label(self) -> str:
-        """``"poisson"`` for a law, ``"pymunk.accurate"`` for an engine run."""
-        return self.law if self.source == ANALYTIC else f"{self.source}.{self.preset}"
+        """``"poisson"`` for a law, ``"pymunk.accurate"`` for an engine run: the engine and
+        the name it shows for the run's preset role (``"mujoco.matched-bounce"``)."""
+        from harness.engines import source_label
+
+        return self.law if self.source == ANALYTIC else source_label(self.source, self.preset)
 
     @property
     def ok(self) -> bool:
@@ -124,10 +127,18 @@ class Results:
 
     def engine_labels(self) -> list[str]:
         """``engine.preset`` labels present, engines in registry order, ``defaults`` first."""
+        from harness.engines import source_label
         from harness.scenarios import ENGINES, PRESETS
 
-        present = {r.label for r in self.records if r.source != ANALYTIC}
-        return [f"{e}.{p}" for p in PRESETS for e in ENGINES if f"{e}.{p}" in present]
+        present = {(r.source, r.preset) for r in self.records if r.source != ANALYTIC}
+        return [source_label(e, p) for p in PRESETS for e in ENGINES if (e, p) in present]
+
+    def engine_roles(self) -> list[tuple[str, str]]:
+        """``(engine, preset role)`` pairs present, in :meth:`engine_labels`' order."""
+        from harness.scenarios import ENGINES, PRESETS
+
+        present = {(r.source, r.preset) for r in self.records if r.source != ANALYTIC}
+        return [(e, p) for p in PRESETS for e in ENGINES if (e, p) in present]
 
 
 def _jsonable(value: Any) -> Any:

@@ -62,6 +62,7 @@ from typing import Any, Iterable, Sequence, TextIO
 
 import numpy as np
 
+from harness.engines import preset_choices, preset_role
 from harness.run import metrics, references, verdicts
 from harness.run.provenance import provenance
 from harness.run.records import (
@@ -257,11 +258,15 @@ def parse_engines(text: str | Sequence[str] | None) -> tuple[str, ...]:
 
 
 def parse_presets(text: str | None) -> tuple[str, ...]:
+    """``--preset``: ``all``, a preset role, or an engine's name for one (``matched-bounce``
+    selects the role MuJoCo gives that name, ``accurate``, for every engine)."""
     if text in (None, "all"):
         return PRESETS
-    if text not in PRESETS:
-        raise ValueError(f"--preset: {text!r}; allowed: {', '.join(PRESETS)}, all")
-    return (text,)
+    try:
+        return (preset_role(None, text),)
+    except ValueError:
+        raise ValueError(f"--preset: {text!r}; allowed: {', '.join(preset_choices())}, all") \
+            from None
 
 
 def speed_labels(scenario: Scenario) -> list[str]:
@@ -677,8 +682,9 @@ def add_common_arguments(parser: argparse.ArgumentParser) -> None:
                         help="comma-separated tags (e.g. quick); scenarios with any of them")
     parser.add_argument("--engines", default=None,
                         help=f"comma-separated engines (default: all of {', '.join(ENGINES)})")
-    parser.add_argument("--preset", default="all", choices=(*PRESETS, "all"),
-                        help="engine preset(s) to run (default: all)")
+    parser.add_argument("--preset", default="all", choices=(*preset_choices(), "all"),
+                        help="engine preset(s) to run (default: all); matched-bounce is "
+                        "MuJoCo's name for its accurate role and selects that role")
     parser.add_argument("--no-cache", action="store_true",
                         help="simulate every engine run, ignoring and not filling the cache")
     parser.add_argument("--cache-dir", type=Path, default=None,

@@ -70,13 +70,16 @@ class Gate:
     """A gate the runner enforces: the engine departs from ``law`` by at most ``max_departure``."""
 
     engine: str
-    preset: str | None  # None: every preset
+    preset: str | None  # a preset role (never an engine's name for it); None: every preset
     law: str
     max_departure: float  # relative, kinetic-energy norm
 
     @property
     def source(self) -> str:
-        return self.engine if self.preset is None else f"{self.engine}.{self.preset}"
+        """``"pymunk"``, ``"pymunk.accurate"``, ``"mujoco.matched-bounce"``: as users write it."""
+        from harness.engines import source_label
+
+        return source_label(self.engine, self.preset)
 
 
 @dataclass(frozen=True)

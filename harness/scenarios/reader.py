@@ -16,6 +16,7 @@ from typing import Any, Iterable, Mapping
 
 import numpy as np
 
+from harness.engines import preset_role, renamed_roles, source_label
 from harness.scenarios.checks import check_engine_settings, check_points
 from harness.scenarios.errors import NO_VALUE, ScenarioError, suggest
 from harness.scenarios.model import (
@@ -490,10 +491,21 @@ def _read_gates(reader: TableReader, raw, scenario: Scenario) -> list[Gate]:
         else:
             entries.append((key, engine, preset or None, value))
     sources = ", ".join([*scenario.engines,
-                         *(f"{e}.{p}" for e in scenario.engines for p in PRESETS)])
+                         *(source_label(e, p) for e in scenario.engines for p in PRESETS)])
     gates = []
     for key, engine, preset, value in entries:
         dotted = f"expect.gate.{key}"
+        if engine in scenario.engines and preset in renamed_roles(engine):
+            # A renamed role's old name (mujoco.accurate): say what it is called now.
+            reader.error(dotted, f"{engine} calls this preset "
+                         f"{source_label(engine, preset)!r}", value,
+                         f'"{source_label(engine, preset)}" = {{ ... }}')
+            continue
+        if engine in scenario.engines and preset is not None:
+            try:
+                preset = preset_role(engine, preset)  # the name users see -> its role
+            except ValueError:
+                pass  # reported below as unknown
         if engine not in scenario.engines or (preset is not None and preset not in PRESETS):
             reader.error(dotted, f"unknown engine or preset{suggest(key, sources.split(', '))}",
                          value, sources)

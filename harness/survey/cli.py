@@ -18,7 +18,14 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.engines import ENGINE_NAMES, PRESET_NAMES, EngineNotInstalled, load_engine
+from harness.engines import (
+    ENGINE_NAMES,
+    PRESET_NAMES,
+    EngineNotInstalled,
+    load_engine,
+    preset_choices,
+    preset_role,
+)
 from harness.scenarios.errors import ScenarioError
 from harness.survey import laws as survey_laws
 from harness.survey import outputs, statistics
@@ -50,7 +57,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--engines", action="append", metavar="E[,E…]",
                         help=f"engines (default every installed one of {', '.join(ENGINE_NAMES)})")
     parser.add_argument("--preset", action="append", metavar="P[,P…]",
-                        help=f"presets (default {', '.join(PRESET_NAMES)})")
+                        help=f"presets (default {', '.join(PRESET_NAMES)}; MuJoCo calls "
+                        "accurate matched-bounce, and either name selects it)")
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"default {DEFAULT_OUT}")
     parser.add_argument("--quick", action="store_true",
                         help=f"{QUICK_SAMPLES} samples per population")
@@ -159,7 +167,10 @@ def write_survey(survey: dict, out: Path, settings: dict, figures: bool = True) 
 
 def main(args: argparse.Namespace) -> int:
     engines = _names(args.engines, ENGINE_NAMES, "--engines") or list(ENGINE_NAMES)
-    presets = _names(args.preset, PRESET_NAMES, "--preset") or list(PRESET_NAMES)
+    # A preset's shown name (matched-bounce) selects its role for every engine.
+    presets = [preset_role(None, name) for name in
+               _names(args.preset, preset_choices(), "--preset")] or list(PRESET_NAMES)
+    presets = list(dict.fromkeys(presets))
     samples = args.samples or (QUICK_SAMPLES if args.quick else DEFAULT_SAMPLES)
     if samples < 1:
         print("impact-harness survey: --samples must be >= 1", file=sys.stderr)

@@ -19,6 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
+from harness.engines import preset_label
+
 TYPE_NAMES = {1: "1 stick (compr.)", 2: "2 stick (restit.)", 3: "3 reverse (compr.)",
               4: "4 reverse (restit.)", 5: "5 forward slide"}
 
@@ -65,7 +67,8 @@ def markdown_table(stats: dict, types: str = "all") -> str:
             continue
         value = {key: stats[key][row] for key in stats}
         lines.append(
-            f"| {value['engine']} | {value['preset']} | {value['family']} | "
+            f"| {value['engine']} | {preset_label(value['engine'], value['preset'])} | "
+            f"{value['family']} | "
             f"{'all' if kind == 0 else kind} | {value['n']} | "
             f"{_percent(value['flagged_fraction'])} | {_percent(value['energy_gain_fraction'])} | "
             f"{_number(value['departure_poisson_median'])} | "
@@ -172,7 +175,7 @@ def figures(runs: dict, directory: Path) -> list[Path]:
             _log_axis(left, "x")
             for axis in (left, right):
                 _log_axis(axis, "y")
-            left.set_ylabel(f"{preset}: departure from Poisson")
+            left.set_ylabel(f"{preset_label(engine, preset)}: departure from Poisson")
             right.set_xlabel("μ")
             left.set_xlabel("α / r_m (Table 1 cases 1–3: types change at 1 and 1 + e)")
         axes[0][0].legend(fontsize=7, markerscale=2)
@@ -194,7 +197,7 @@ def figures(runs: dict, directory: Path) -> list[Path]:
                               where="post", color=colours(index), label=family)
             _log_axis(axis, "x")
             axis.set_xlabel("departure from Poisson")
-            axis.set_title(f"{engine} {preset}")
+            axis.set_title(f"{engine} {preset_label(engine, preset)}")
         axes[0][0].set_ylabel("fraction of ok runs ≤ x")
         axes[0][0].legend(fontsize=7)
         figure.subplots_adjust(left=0.08, right=0.98, bottom=0.14, top=0.9, wspace=0.1)

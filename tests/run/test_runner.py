@@ -95,7 +95,7 @@ def test_engine_contact_velocities_and_impulses_come_from_its_speeds():
 
 def test_the_split_of_a_departure():
     records = by_label(quiet_run([ROD]).records)
-    for label in ("pymunk.defaults", "pybullet.defaults", "mujoco.accurate"):
+    for label in ("pymunk.defaults", "pybullet.defaults", "mujoco.matched-bounce"):
         split = metrics.departure_split(records[label].departure, records["newton-lcp"].departure)
         assert split["law_part"] == records["newton-lcp"].departure["poisson"]
         # triangle inequality of the norm; 1e-12 absorbs round-off of the three norms

@@ -172,7 +172,7 @@ TILTED = [load_scenario(SCENARIO_DIR / f"sweep-tilted-{kind}.toml") for kind in 
 # Engines whose post-impact motion is newton-lcp's (mujoco.defaults is soft and ignores e:
 # its far end comes down on another schedule, so the criterion below does not apply to it).
 NEWTON_LCP_ENGINES = ("pymunk.defaults", "pymunk.accurate", "pybullet.defaults",
-                      "pybullet.accurate", "mujoco.accurate")
+                      "pybullet.accurate", "mujoco.matched-bounce")
 
 
 @pytest.fixture(scope="module")

@@ -298,6 +298,23 @@ def test_gates_parse_quoted_and_dotted_keys(tmp_path):
     assert [g.source for g in gates] == ["pymunk.accurate", "pybullet.defaults", "mujoco"]
 
 
+def test_a_gate_names_mujocos_second_preset_by_its_shown_name(tmp_path):
+    """``mujoco.matched-bounce`` (quoted or dotted) gates the ``accurate`` role; the role's
+    old name is refused with the new one."""
+    for key in ('"mujoco.matched-bounce"', "mujoco.matched-bounce"):
+        text = GROUND + f'\n[expect.gate]\n{key} = {{ law = "newton", max_departure = 0.5 }}\n'
+        (gate,) = load_scenario(write(tmp_path, text, "ok.toml")).expect.gates
+        assert (gate.engine, gate.preset, gate.source) == ("mujoco", "accurate",
+                                                           "mujoco.matched-bounce")
+    text = GROUND + '\n[expect.gate]\n"mujoco.accurate" = { law = "newton", max_departure = 1 }\n'
+    assert_names(error_of(tmp_path, text), "bad.toml", "expect.gate.mujoco.accurate",
+                 "mujoco calls this preset 'mujoco.matched-bounce'")
+    text = GROUND + ('\n[expect.gate]\n"pymunk.matched-bounce" = '
+                     '{ law = "newton", max_departure = 1 }\n')
+    assert_names(error_of(tmp_path, text), "bad.toml", "expect.gate.pymunk.matched-bounce",
+                 "unknown engine or preset")
+
+
 def test_engine_settings_are_checked_by_the_adapter_when_installed(tmp_path):
     pytest.importorskip("pymunk")
     try:
