@@ -72,6 +72,7 @@ from typing import Any, Iterable, Sequence, TextIO
 import numpy as np
 
 from harness.run import metrics, verdicts
+from harness.run.history import contact_history
 from harness.run.provenance import provenance
 from harness.run.records import (
     ANALYTIC,
@@ -157,6 +158,11 @@ def engine_task(task: dict) -> dict:
         "derived": dict(run.derived),
         "notes": list(run.notes),
         "contacts": _contact_steps(run),
+        # For the contact history (harness.run.history): the step, and how many steps before
+        # the touching pose the run started (free flight, harness.engines.contract).
+        "time_step": float(run.settings["time_step"]),
+        "start_offset_steps": float(run.settings["approach_steps"] + engine.timing.lead_steps
+                                    - engine.timing.overlap),
         "engine_wall_time_s": run.wall_time_s,
         "wall_time_s": time.perf_counter() - start,
     }
@@ -166,14 +172,17 @@ def _contact_steps(run) -> list[dict] | None:
     """The run's per-step contact records as plain lists (None: the engine keeps none).
 
     An engine whose run has ``contacts`` (the engines' ``ContactStep``: step, points
-    ``(x, y, depth)``, every body's pose ``(x, y, θ)`` after the step, scene frame) feeds the verdict's
-    second-feature check (:mod:`harness.run.verdicts`).
+    ``(x, y, depth)``, every body's pose ``(x, y, θ)`` after the step, the impulse on body B
+    in the step or None, scene frame) feeds the verdict's second-feature check
+    (:mod:`harness.run.verdicts`) and the contact history (:mod:`harness.run.history`).
     """
     steps = getattr(run, "contacts", None)
     if steps is None:
         return None
     return [{"step": int(s.step), "points": [[float(v) for v in p[:3]] for p in s.points],
-             "bodies": [[float(v) for v in pose] for pose in s.poses]} for s in steps]
+             "bodies": [[float(v) for v in pose] for pose in s.poses],
+             "impulse": None if s.impulse is None else [float(v) for v in s.impulse]}
+            for s in steps]
 
 
 def check_engine_output(output, speeds: int) -> str | None:
@@ -658,6 +667,9 @@ def engine_record(scenario: Scenario, point_info: dict, engine_name: str, preset
         "engine_normal_impulse", "engine_tangential_impulse", "derived", "notes",
         "engine_wall_time_s")}
     diagnostics["settings_overrides"] = item.get("overrides", {})
+    if finite and item.get("history") and scene is not None:
+        diagnostics["history"] = contact_history(problem, output, scene,
+                                                 float(output.get("time_step") or 0.0))
     if finite:
         vn, vt = metrics.contact_velocities(problem, u_after)
         record.vn_separation, record.vt_separation = vn, vt
