@@ -41,6 +41,7 @@ from harness.report.figures import (
     table3_figure,
     table3_inputs,
 )
+from harness.report.history import history_figure, history_inputs
 from harness.report.html import write_html
 from harness.report.pages import write_pages
 from harness.report.summary import write_summary
@@ -89,13 +90,18 @@ def write_report(results: Results, out_dir: Path | str,
             if render_once("impulse", figure_dir / file, [name, stable[name]],
                        lambda path, tag: impulse_figure(name, records, path, tag)):  # noqa: B023
                 figures["impulse"][name] = file
+            file = f"history-{slug(name)}.png"  # the contact in time (harness.report.history)
+            if render_once("history", figure_dir / file, history_inputs(name, records),
+                           lambda path, tag, name=name, records=records:
+                           history_figure(name, records, path, tag)):
+                figures.setdefault("history", {})[name] = file
     if render_once("table3", figure_dir / "paper-table3.png", table3_inputs(),
                    lambda path, tag: table3_figure(path, tag)):
         figures["table3"] = "paper-table3.png"
     pages = write_pages(out_dir, sources)
     wanted = {figures.get("heatmap"), figures.get("table3"), figures.get("split"),
               figures.get("legend"),
-              *figures["impulse"].values(),
+              *figures["impulse"].values(), *figures.get("history", {}).values(),
               *figures["sweep"].values()}
     wanted.discard(None)
     # every figure is drawn as PNG and SVG: both are this report's

@@ -221,6 +221,10 @@ def scenario_section(name: str, info: dict, records: Sequence[Record], figures: 
         # not at 1400 px, so the diagram goes below.
         layout = "pair" if len(info.get("speed_labels", [])) <= 4 else "stack"
         parts.append(f'<div class="{layout}"><div>{table}</div>{diagram}</div>')
+        if name in figures.get("history", {}):  # the contact in time (report/history.py)
+            parts.append(figure_html(figures["history"][name], f"contact history of {name}",
+                                     caption="The contact step by step against each law's "
+                                     "impulse process (the paper's Fig. 1 in engine steps)."))
     parts.append("</div>")
     return "\n".join(parts)
 

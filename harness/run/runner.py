@@ -6,6 +6,15 @@
     impact-harness run --tags quick --engines pymunk --preset accurate
     impact-harness run scenarios/rod-45-slip-reversal.toml --json /tmp/rod.json
     impact-harness run --no-cache --executor dask --scheduler tcp://host:8786
+    impact-harness run --set pymunk.iterations=50 --set mujoco.integrator=Euler --json /tmp/x.json
+
+Settings overrides
+    ``--set ENGINE.KEY=VALUE`` (repeatable, also on ``suite``) overrides one setting in every
+    run of that engine, on top of the preset and of the scenario's ``[engine_settings]``. It
+    shows where a scenario's overrides do: the record's ``settings_overrides`` (the report's
+    labels), the complete settings in the cache key, and the provenance
+    (``settings_overrides``; ``engine_settings`` lists the presets as run). A bad engine, key
+    or value is bad input, checked before any work.
 
 What runs
     For each scenario and sweep point, every law of the scenario (``planar_impact``, cheap, in
@@ -64,6 +73,7 @@ import numpy as np
 
 from harness.engines import preset_choices, preset_role
 from harness.run import metrics, references, verdicts
+from harness.run.history import contact_history
 from harness.run.provenance import provenance
 from harness.run.records import (
     ANALYTIC,
@@ -149,6 +159,11 @@ def engine_task(task: dict) -> dict:
         "derived": dict(run.derived),
         "notes": list(run.notes),
         "contacts": _contact_steps(run),
+        # For the contact history (harness.run.history): the step, and how many steps before
+        # the touching pose the run started (free flight, harness.engines.contract).
+        "time_step": float(run.settings["time_step"]),
+        "start_offset_steps": float(run.settings["approach_steps"] + engine.timing.lead_steps
+                                    - engine.timing.overlap),
         "engine_wall_time_s": run.wall_time_s,
         "wall_time_s": time.perf_counter() - start,
     }
@@ -158,14 +173,17 @@ def _contact_steps(run) -> list[dict] | None:
     """The run's per-step contact records as plain lists (None: the engine keeps none).
 
     An engine whose run has ``contacts`` (the engines' ``ContactStep``: step, points
-    ``(x, y, depth)``, every body's pose ``(x, y, θ)`` after the step, scene frame) feeds the verdict's
-    second-feature check (:mod:`harness.run.verdicts`).
+    ``(x, y, depth)``, every body's pose ``(x, y, θ)`` after the step, the impulse on body B
+    in the step or None, scene frame) feeds the verdict's second-feature check
+    (:mod:`harness.run.verdicts`) and the contact history (:mod:`harness.run.history`).
     """
     steps = getattr(run, "contacts", None)
     if steps is None:
         return None
     return [{"step": int(s.step), "points": [[float(v) for v in p[:3]] for p in s.points],
-             "bodies": [[float(v) for v in pose] for pose in s.poses]} for s in steps]
+             "bodies": [[float(v) for v in pose] for pose in s.poses],
+             "impulse": None if s.impulse is None else [float(v) for v in s.impulse]}
+            for s in steps]
 
 
 def check_engine_output(output, speeds: int) -> str | None:
@@ -257,6 +275,56 @@ def parse_engines(text: str | Sequence[str] | None) -> tuple[str, ...]:
     return names
 
 
+def parse_overrides(items: Sequence[str], engines: Sequence[str] = ENGINES) -> dict[str, dict]:
+    """``["pymunk.iterations=50", ...]`` (``--set``) -> ``{"pymunk": {"iterations": 50}}``.
+
+    A value is read as JSON (``50``, ``1e-4``, ``true``, ``null``, ``[0.02, 1]``), else kept
+    as a string (``Euler``). Each is checked against the engine's settings under every preset
+    before any work; the first bad one raises ``ValueError`` with a one-line message naming
+    the engine, the key, the value and what is allowed. An engine that is not installed here
+    is checked for its name only (its runs are skipped anyway).
+    """
+    import json
+
+    from harness.engines import EngineNotInstalled, load_engine
+
+    overrides: dict[str, dict] = {}
+    for item in items:
+        target, equals, text = item.partition("=")
+        engine_name, dot, key = target.strip().partition(".")
+        where = f"--set {item}"
+        if not equals or not dot or not key:
+            raise ValueError(f"{where}: expected ENGINE.KEY=VALUE, e.g. pymunk.iterations=50")
+        if engine_name not in ENGINES:
+            raise ValueError(f"{where}: engine {engine_name!r}, key {key!r}, value {text!r}: "
+                             f"unknown engine; allowed: {', '.join(ENGINES)}")
+        if engine_name not in engines:
+            raise ValueError(f"{where}: engine {engine_name!r}, key {key!r}, value {text!r}: "
+                             f"engine not selected; allowed: {', '.join(engines)} (--engines)")
+        try:
+            value = json.loads(text)
+        except ValueError:
+            value = text
+        try:
+            engine = load_engine(engine_name)
+        except EngineNotInstalled:
+            overrides.setdefault(engine_name, {})[key] = value
+            continue
+        if key not in engine.setting_docs:
+            raise ValueError(f"{where}: engine {engine_name!r}, key {key!r}, value {text!r}: "
+                             f"unknown setting; allowed: {', '.join(sorted(engine.setting_docs))}")
+        candidate = {**overrides.get(engine_name, {}), key: value}
+        for preset in PRESETS:
+            try:
+                engine.settings(preset, candidate)
+            except ValueError as error:
+                # The settings' own message names the engine, the key and the value.
+                raise ValueError(f"{where} (preset {preset}): {error}; allowed: "
+                                 f"{engine.setting_docs[key]}") from None
+        overrides[engine_name] = candidate
+    return overrides
+
+
 def parse_presets(text: str | None) -> tuple[str, ...]:
     """``--preset``: ``all``, a preset role, or an engine's name for one (``matched-bounce``
     selects the role MuJoCo gives that name, ``accurate``, for every engine)."""
@@ -334,15 +402,24 @@ def run(
     command: Sequence[str] | None = None,
     time_limit_s: float | None = TASK_TIME_LIMIT_S,
     selection: dict | None = None,
+    overrides: dict[str, dict] | None = None,
+    history: bool | None = None,
 ) -> RunOutcome:
     """Run ``scenarios`` and return the records, the gates and the provenance.
 
     ``cache`` is a :class:`harness.run.cache.ResultCache` (None: no cache). ``log`` gets the
     progress lines (a stream; ``"stderr"``, the default: ``sys.stderr`` at call time; None:
     quiet). ``time_limit_s`` bounds each engine task (None: no limit); ``selection`` (what
-    was asked for) goes into the provenance.
+    was asked for) goes into the provenance. ``overrides`` (``{engine: {key: value}}``, from
+    ``--set``) apply to every run of that engine on top of the scenario's
+    ``[engine_settings]``; they land in each record's ``settings_overrides``, in the complete
+    settings hashed into the cache key, and in the provenance. ``history``: record the
+    per-step contact history (:mod:`harness.run.history`) in every engine record (True), in
+    none (False), or (None) in those of the scenarios without a sweep, whose impact the
+    report draws step by step.
     """
     log = sys.stderr if log == "stderr" else log
+    command_overrides = {name: dict(values) for name, values in (overrides or {}).items()}
     started = time.perf_counter()
     warnings: list[str] = []
     if cache is not None:
@@ -370,8 +447,10 @@ def run(
                         item["output"] = {"status": f"skipped: {missing[engine_name]}"}
                         continue
                     engine = loaded[engine_name]
-                    overrides = dict(scenario.engine_settings.get(engine_name, {}))
+                    overrides = {**scenario.engine_settings.get(engine_name, {}),
+                                 **command_overrides.get(engine_name, {})}
                     item["overrides"] = overrides
+                    item["history"] = (scenario.sweep is None) if history is None else history
                     try:
                         settings = engine.settings(preset, overrides)
                     except ValueError as error:
@@ -446,8 +525,8 @@ def run(
                                  scenario_gates, time.perf_counter() - tick),
                   file=log, flush=True)
 
-    settings_table = {
-        name: {preset: engine.settings(preset) for preset in PRESETS}
+    settings_table = {  # the presets as run: with the command line's --set overrides
+        name: {preset: engine.settings(preset, command_overrides.get(name)) for preset in PRESETS}
         for name, engine in loaded.items()
     }
     stats = cache.stats if cache is not None else {"enabled": False, "hits": 0, "misses": 0}
@@ -463,6 +542,8 @@ def run(
         cache={**stats, "root": None if cache is None else str(cache.root),
                "engine_runs": len(plan), "simulated": len(tasks)},
         selection=selection,
+        settings_overrides=command_overrides,
+        history="scenarios without a sweep" if history is None else history,
         task_time_limit_s=time_limit_s,
         gates=[asdict(g) for g in gates],
         wall_time_s=time.perf_counter() - started,
@@ -594,6 +675,9 @@ def engine_record(scenario: Scenario, point_info: dict, engine_name: str, preset
         "engine_normal_impulse", "engine_tangential_impulse", "derived", "notes",
         "engine_wall_time_s")}
     diagnostics["settings_overrides"] = item.get("overrides", {})
+    if finite and item.get("history") and scene is not None:
+        diagnostics["history"] = contact_history(problem, output, scene,
+                                                 float(output.get("time_step") or 0.0))
     if finite:
         vn, vt = metrics.contact_velocities(problem, u_after)
         record.vn_separation, record.vt_separation = vn, vt
@@ -696,6 +780,16 @@ def add_common_arguments(parser: argparse.ArgumentParser) -> None:
                         help="Dask scheduler address (with --executor dask; default: a local cluster)")
     parser.add_argument("--workers", type=int, default=None,
                         help="local worker processes (default: all cores; small runs run inline)")
+    parser.add_argument("--set", dest="settings_overrides", action="append", default=[],
+                        metavar="ENGINE.KEY=VALUE",
+                        help="override one engine setting in every run of that engine, on top "
+                        "of the preset and the scenario's [engine_settings] (repeatable; VALUE "
+                        "is JSON, else a string: --set pymunk.iterations=50 --set "
+                        "mujoco.integrator=Euler)")
+    parser.add_argument("--history", action=argparse.BooleanOptionalAction, default=None,
+                        help="record each engine run's per-step contact history (v_n, v_t, "
+                        "impulses, penetration, energy) in its record (default: only for "
+                        "scenarios without a sweep, the ones the report draws step by step)")
     parser.add_argument("--task-time-limit", type=float, default=TASK_TIME_LIMIT_S,
                         metavar="SECONDS",
                         help=f"wall-clock limit of one engine run (default: {TASK_TIME_LIMIT_S:g})")
@@ -727,6 +821,8 @@ def check_arguments(args, json_path: Path | None) -> str | None:
         parse_engines(args.engines)
         parse_presets(args.preset)
         check_executor(args.executor, args.workers, args.scheduler)
+        parse_overrides(getattr(args, "settings_overrides", None) or (),
+                        parse_engines(args.engines))
     except (ValueError, DaskNotInstalled) as error:
         return str(error)
     limit = args.task_time_limit
@@ -760,13 +856,18 @@ def _cache_dir_problem(path: Path) -> str | None:
 
 
 def selection_of(args) -> dict:
-    """What a run was asked for: files (resolved; None for the library), tags, engines, presets."""
+    """What a run was asked for: files (resolved; None for the library), tags, engines, presets
+    and, when any, the ``--set`` overrides."""
     files = getattr(args, "files", None) or None
     tags = parse_tags_text(args.tags)
-    return {"files": None if files is None else sorted(str(Path(f).resolve()) for f in files),
-            "tags": tags,
-            "engines": [name for name in ENGINES if name in parse_engines(args.engines)],
-            "presets": list(parse_presets(args.preset))}
+    selection = {"files": None if files is None else sorted(str(Path(f).resolve()) for f in files),
+                 "tags": tags,
+                 "engines": [name for name in ENGINES if name in parse_engines(args.engines)],
+                 "presets": list(parse_presets(args.preset))}
+    overrides = getattr(args, "settings_overrides", None)
+    if overrides:  # only then: a --set experiment never silently replaces the suite's results
+        selection["settings_overrides"] = sorted(overrides)
+    return selection
 
 
 def parse_tags_text(text) -> list[str] | None:
@@ -782,8 +883,11 @@ def _describe_selection(selection: dict) -> str:
         f" and {len(files) - 3} more" if len(files) > 3 else "")
     if selection.get("tags"):
         what += f" tagged {','.join(selection['tags'])}"
-    return (f"{what}; engines {','.join(selection.get('engines') or ENGINES)}; presets "
-            f"{','.join(selection.get('presets') or PRESETS)}")
+    described = (f"{what}; engines {','.join(selection.get('engines') or ENGINES)}; presets "
+                 f"{','.join(selection.get('presets') or PRESETS)}")
+    if selection.get("settings_overrides"):
+        described += f"; --set {' '.join(selection['settings_overrides'])}"
+    return described
 
 
 def _existing_selection(path: Path) -> dict | None:
@@ -836,10 +940,14 @@ def execute(args, *, json_path: Path, command: Sequence[str] | None = None,
 
         cache = ResultCache(root=args.cache_dir)
     try:
-        outcome = run(scenarios, engines=parse_engines(args.engines),
+        engines = parse_engines(args.engines)
+        outcome = run(scenarios, engines=engines,
                       presets=parse_presets(args.preset), cache=cache, executor=args.executor,
                       workers=args.workers, scheduler=args.scheduler, log=log, command=command,
-                      time_limit_s=args.task_time_limit, selection=selection)
+                      time_limit_s=args.task_time_limit, selection=selection,
+                      overrides=parse_overrides(getattr(args, "settings_overrides", None) or (),
+                                                engines),
+                      history=getattr(args, "history", None))
     except ConnectionError as error:  # an unreachable Dask scheduler
         return _fail(str(error)), None
     try:
@@ -894,6 +1002,7 @@ __all__ = [
     "execute",
     "main",
     "parse_engines",
+    "parse_overrides",
     "parse_presets",
     "point_records",
     "run",

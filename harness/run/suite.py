@@ -36,6 +36,10 @@ def main(args) -> int:
 
     out: Path = args.out
     started = time.perf_counter()
+    problem = runner.check_arguments(args, out / "results.json")
+    if problem:  # before any work, the Table 3 included
+        print(f"impact-harness suite: {problem}", file=sys.stderr)
+        return runner.EXIT_BAD_INPUT
 
     tick = time.perf_counter()
     markdown, rows = paper.write_report(out)

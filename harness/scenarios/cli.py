@@ -85,8 +85,13 @@ def add_new_arguments(parser: argparse.ArgumentParser) -> None:
     kind.add_argument("--two-body", dest="two_body", action="store_true",
                       help="two free bodies: the shape, struck by a disk")
     parser.set_defaults(two_body=False)
-    parser.add_argument("--out", type=Path, default=SCENARIO_DIR,
-                        help=f"directory to write to (default: {SCENARIO_DIR})")
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument("--out", type=Path, default=None,
+                       help="directory to write to (default: the current directory, so that a "
+                       "draft never joins the library and its tests unasked)")
+    where.add_argument("--library", action="store_true",
+                       help=f"write into the library ({SCENARIO_DIR}), which `run` and the "
+                       "tests read; without [expect] the tests check only what it declares")
     parser.add_argument("--force", action="store_true", help="overwrite an existing file")
 
 
@@ -194,7 +199,8 @@ def main_new(args: argparse.Namespace) -> int:
               "(allowed: letters, digits, '_', '-' and '.', starting with a letter or digit)",
               file=sys.stderr)
         return 2
-    path = Path(args.out) / f"{name}.toml"
+    directory = SCENARIO_DIR if args.library else Path(args.out or Path.cwd())
+    path = (directory / f"{name}.toml").resolve()
     if path.exists() and not args.force:
         print(f"impact-harness new: {path} exists (use --force to overwrite)", file=sys.stderr)
         return 1
@@ -206,5 +212,6 @@ def main_new(args: argparse.Namespace) -> int:
         print(f"impact-harness new: the generated file does not validate:\n{error}",
               file=sys.stderr)
         return 1
-    print(f"wrote {path}; edit it, then run: impact-harness validate {path}")
+    print(f"wrote {path}; edit it, then run: impact-harness validate {path} "
+          f"&& impact-harness run {path} --json results.json")
     return 0

@@ -77,13 +77,15 @@ def test_laws_match_the_solver():
 
 @pytest.mark.parametrize("scenario", ONE_POINT, ids=[s.name for s in ONE_POINT])
 def test_expected_types_match_the_solver(scenario):
-    assert scenario.expect.collision_type, "every scenario states its expected types"
+    # What a scenario declares in [expect] must hold; a user's scenario may declare nothing.
     assert check_expectations(scenario) == []
 
 
 @pytest.mark.parametrize("scenario", ONE_POINT, ids=[s.name for s in ONE_POINT])
 def test_every_law_is_expected_unless_a_known_issue(scenario):
     stated = set(scenario.expect.collision_type)
+    if not stated:
+        pytest.skip("declares no [expect] collision types (a user's scenario)")
     missing = {law for law in scenario.laws if law not in stated}
     assert missing == {law for (name, law) in KNOWN_SOLVER_ISSUES if name == scenario.name}
 
@@ -111,6 +113,8 @@ def test_expected_case_matches_table_1_by_hand(scenario, point):
 
     docs/theory.md, 'Contact terms'.
     """
+    if scenario.expected_case(point) is None:
+        pytest.skip("declares no [expect] case")
     mnn, mnt, mtt, _ = theory_terms(scenario, point)
     mu = scenario.at(point).friction
     g, h, p, q = mu * mtt - mnt, mnn - mu * mnt, mu * mtt + mnt, mnn + mu * mnt
@@ -135,6 +139,9 @@ def test_poisson_type_follows_table_1_by_hand(scenario, point):
 
     docs/theory.md, 'Poisson's law'.
     """
+    if (scenario.expected_case(point) is None
+            or scenario.expected_collision_type("poisson", point) is None):
+        pytest.skip("declares no [expect] case or Poisson type")
     mnn, mnt, mtt, alpha = theory_terms(scenario, point)
     fixed = scenario.at(point)
     mu, e = fixed.friction, fixed.restitution
