@@ -20,6 +20,10 @@ after the first is never counted), so every run is judged from its physics:
   ``numerics``. Only a gain from the numerics fails the run: a gain the law predicts is a
   real departure of the law and stays in the averages.
 
+A scene that declares a face lying flat (``contacts = "simultaneous"``) is judged against its
+declared contacts instead (:func:`judge_declared`): features outside them, each contact's
+separation, the impulses at all of them together, energy against the Newton–Coulomb reference.
+
 Every tolerance is a named field of :class:`Tolerances`, relative to a scale of the scene
 (:func:`scene_scales`), so a verdict does not change when the units do.
 
