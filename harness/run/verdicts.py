@@ -20,6 +20,10 @@ after the first is never counted), so every run is judged from its physics:
   ``numerics``. Only a gain from the numerics fails the run: a gain the law predicts is a
   real departure of the law and stays in the averages.
 
+A scene that declares a face lying flat (``contacts = "simultaneous"``) is judged against its
+declared contacts instead (:func:`judge_declared`): features outside them, each contact's
+separation, the impulses at all of them together, energy against the Newton–Coulomb reference.
+
 Every tolerance is a named field of :class:`Tolerances`, relative to a scale of the scene
 (:func:`scene_scales`), so a verdict does not change when the units do.
 
@@ -59,6 +63,10 @@ REASONS: dict[str, str] = {
 ENGINE_STATUS_REASONS = ("blow-up", "no-contact", "no-separation", "out-of-plane",
                          "multi-contact")
 SINGLE_IMPACT = "single-impact"
+#: The law a single-contact run's energy gain is attributed to: the engines' own.
+ENGINE_LAW = "newton-lcp"
+#: The law a run on declared simultaneous contacts is attributed to (the m-contact reference).
+NEWTON_COULOMB = "Newton–Coulomb"
 FLAGGED = "flagged"
 
 #: Measured velocity caps: engine -> (largest |v_x|, |v_y| in m/s, largest |ω| in rad/s).
@@ -259,7 +267,7 @@ def scene_scales(scene, problem) -> SceneScales:
 
 
 def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = None,
-          tolerances: Tolerances = DEFAULT_TOLERANCES) -> Verdict:
+          tolerances: Tolerances = DEFAULT_TOLERANCES, contacts=None) -> Verdict:
     """The verdict of one engine run of ``scene``.
 
     Parameters
@@ -272,10 +280,17 @@ def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = 
         The engine's numbers.
     law_energy_change : float, optional
         ``newton-lcp``'s energy change on ``problem`` (J), to attribute a gain; None: the
-        attribution is ``numerics``.
+        attribution is ``numerics``. With ``contacts``: the Newton–Coulomb reference's.
     tolerances : Tolerances
         The named settings.
+    contacts : sequence of harness.scene.Contact, optional
+        The contacts a scene declares to touch at once (``contacts = "simultaneous"``, from
+        :func:`declared_contacts`): the run is judged against all of them
+        (:func:`judge_declared`). None: one contact, ``problem``'s.
     """
+    if contacts is not None:
+        return judge_declared(scene, problem, run, contacts,
+                              law_energy_change=law_energy_change, tolerances=tolerances)
     reasons: list[Reason] = []
     if run.status == "multi-contact" and (run.contacts is not None or _one_feature(scene)):
         pass  # judged below from the features touched, not from a count of points
@@ -302,13 +317,7 @@ def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = 
         reasons.append(Reason("not-separated", vn_after, -bound,
                               f"v_n^S = {vn_after:.4g} m/s < -{bound:.3g} m/s "
                               f"({tolerances.separation:g}·|v_n^A|)"))
-    if run.max_penetration is not None:
-        bound = tolerances.penetration * scales.size
-        if run.max_penetration > bound:
-            reasons.append(Reason("penetration", run.max_penetration, bound,
-                                  f"deepest overlap {run.max_penetration:.3g} m > {bound:.3g} m "
-                                  f"({tolerances.penetration:g} of the smallest body extent "
-                                  f"{scales.size:g} m)"))
+    reasons += _penetration(run, scales, tolerances)
     implied_n, implied_t, residual = impulse_from_velocities(problem, u_after,
                                                              scales.speed_norm)
     if residual > tolerances.impulse_residual:
@@ -325,22 +334,44 @@ def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = 
                 f"engine (I_n, I_t) = ({run.normal_impulse:.4g}, {engine_t:.4g}) N s, implied "
                 f"by Δu ({implied_n:.4g}, {implied_t:.4g}) N s: differ by {relative:.3g} of "
                 f"|v_n^A|/m_nn = {scales.impulse:.3g} N s"))
-    gain = metrics.energy_change(problem.mass_matrix, problem.u, u_after)
-    bound = tolerances.energy * scales.energy
-    if gain > bound:
-        by_law = (law_energy_change is not None and law_energy_change > bound
-                  and gain <= law_energy_change + tolerances.energy_beyond_law * scales.energy)
-        reasons.append(Reason(
-            "energy-gain", gain, bound,
-            f"ΔE = +{gain:.4g} J ({gain / scales.energy:.3g} of the frame-free kinetic energy); "
-            + (f"newton-lcp gains {law_energy_change:.4g} J on this problem" if by_law
-               else "newton-lcp does not gain energy here" if not law_energy_change
-               or law_energy_change <= bound
-               else f"beyond newton-lcp's own gain of {law_energy_change:.4g} J"),
-            attribution="law" if by_law else "numerics", fails=not by_law))
+    reasons += _energy_gain(problem, u_after, scales, law_energy_change, tolerances,
+                            law=ENGINE_LAW)
     order = list(REASONS)
     reasons.sort(key=lambda r: order.index(r.name))
     return Verdict(tuple(reasons))
+
+
+def _penetration(run: RunNumbers, scales: SceneScales, tolerances: Tolerances) -> list[Reason]:
+    """``penetration`` when the deepest overlap exceeds its bound (0 or 1 reason)."""
+    if run.max_penetration is None:
+        return []
+    bound = tolerances.penetration * scales.size
+    if run.max_penetration <= bound:
+        return []
+    return [Reason("penetration", run.max_penetration, bound,
+                   f"deepest overlap {run.max_penetration:.3g} m > {bound:.3g} m "
+                   f"({tolerances.penetration:g} of the smallest body extent "
+                   f"{scales.size:g} m)")]
+
+
+def _energy_gain(problem, u_after, scales: SceneScales, law_energy_change: float | None,
+                 tolerances: Tolerances, *, law: str) -> list[Reason]:
+    """``energy-gain`` when kinetic energy grew, attributed to ``law`` (the reference the run
+    is judged against) when it gains too, else to the numerics (0 or 1 reason)."""
+    gain = metrics.energy_change(problem.mass_matrix, problem.u, u_after)
+    bound = tolerances.energy * scales.energy
+    if gain <= bound:
+        return []
+    by_law = (law_energy_change is not None and law_energy_change > bound
+              and gain <= law_energy_change + tolerances.energy_beyond_law * scales.energy)
+    return [Reason(
+        "energy-gain", gain, bound,
+        f"ΔE = +{gain:.4g} J ({gain / scales.energy:.3g} of the frame-free kinetic energy); "
+        + (f"{law} gains {law_energy_change:.4g} J on this problem" if by_law
+           else f"{law} does not gain energy here" if not law_energy_change
+           or law_energy_change <= bound
+           else f"beyond {law}'s own gain of {law_energy_change:.4g} J"),
+        attribution="law" if by_law else "numerics", fails=not by_law)]
 
 
 def impulse_from_velocities(problem, u_after, speed_norm: float) -> tuple[float, float, float]:
@@ -476,6 +507,183 @@ def _second_features(scene, contacts: Sequence[StepContacts],
     return []
 
 
+# --------------------------------------------------------------------------------------------
+# Declared simultaneous contacts: a face lying flat (contacts = "simultaneous")
+# --------------------------------------------------------------------------------------------
+def declared_contacts(scenario, scene) -> tuple | None:
+    """The contacts ``scene`` touches at once when its scenario declares them
+    (``contacts = "simultaneous"``), as the references take them
+    (:func:`harness.scene.geometry.scene_contacts` within the one-point tolerance); None for a
+    scenario of one contact (docs/verdicts.md, 'Declared simultaneous contacts')."""
+    from harness.run import references
+
+    if references.kind_of(scenario) != references.SIMULTANEOUS:
+        return None
+    from harness.scenarios.schema import ONE_POINT_TOLERANCE
+    from harness.scene import geometry
+
+    return tuple(geometry.scene_contacts(scene, tolerance=ONE_POINT_TOLERANCE))
+
+
+def judge_declared(scene, problem, run: RunNumbers, contacts, *,
+                   law_energy_change: float | None = None,
+                   tolerances: Tolerances = DEFAULT_TOLERANCES) -> Verdict:
+    """The verdict of an engine run of a scene declared to touch at ``contacts`` at once.
+
+    The checks of :func:`judge`, held against every declared contact instead of one: a
+    touching feature outside them is ``multi-contact`` (the engine's count of points is not a
+    reason: two points are what was declared); each contact must separate; ``Δu`` must be
+    explained by impulses at the declared contacts together (:func:`declared_impulses`), and
+    the engine's summed impulse must match their sum; an energy gain is the law's when the
+    Newton–Coulomb reference gains too (``law_energy_change``). docs/verdicts.md, 'Declared
+    simultaneous contacts'.
+    """
+    from harness.scene import geometry
+
+    reasons: list[Reason] = []
+    if run.status in ENGINE_STATUS_REASONS and run.status != "multi-contact":
+        reasons.append(Reason(run.status, None, None, f"the engine's status: {run.status}"))
+    elif run.status not in ("ok", "multi-contact"):  # skipped or error: nothing to judge
+        return Verdict(tuple(reasons))
+    u_after = run.u_after
+    if not np.all(np.isfinite(u_after)):
+        if run.status != "blow-up":
+            reasons.append(Reason("blow-up", None, None, "non-finite velocities"))
+        return Verdict(tuple(reasons))
+    wn, wt = geometry.contact_rows(scene, contacts)
+    scales = declared_scales(scene, problem, wn)
+    if run.speed_caps is not None:
+        reasons += _clipped_magnitudes(run.engine, run.speed_caps, problem.u, u_after,
+                                       tolerances)
+    else:
+        reasons += _clipped(run.engine, problem.u, u_after, tolerances)
+    if run.contacts is not None:
+        reasons += _undeclared_features(scene, contacts, run.contacts, tolerances)
+    reasons += _declared_separation(contacts, wn @ u_after, scales, tolerances)
+    reasons += _penetration(run, scales, tolerances)
+    impulses, residual = declared_impulses(problem.mass_matrix, wn, wt, problem.u, u_after,
+                                           scales.speed_norm)
+    if residual > tolerances.impulse_residual:
+        reasons.append(Reason("impulse-residual", residual, tolerances.impulse_residual,
+                              f"‖Δu − M⁻¹Σ_i(w_n^(i) I_n^(i) + w_t^(i) I_t^(i))‖_M = "
+                              f"{residual:.3g} of the frame-free speed norm, over the "
+                              f"{len(contacts)} declared contacts"))
+    if run.normal_impulse is not None and run.impulse_source != "momentum":
+        implied_n, implied_t = float(np.sum(impulses[0])), float(np.sum(impulses[1]))
+        engine_t = run.tangential_impulse or 0.0
+        gap = math.hypot(run.normal_impulse - implied_n, engine_t - implied_t)
+        relative = gap / scales.impulse if scales.impulse > 0 else math.inf
+        if not relative <= tolerances.impulse:
+            reasons.append(Reason(
+                "impulse-mismatch", relative, tolerances.impulse,
+                f"engine (ΣI_n, ΣI_t) = ({run.normal_impulse:.4g}, {engine_t:.4g}) N s, "
+                f"implied by Δu over the {len(contacts)} declared contacts ({implied_n:.4g}, "
+                f"{implied_t:.4g}) N s: differ by {relative:.3g} of "
+                f"max_i |v_n^A(i)|/m_nn(i) = {scales.impulse:.3g} N s"))
+    reasons += _energy_gain(problem, u_after, scales, law_energy_change, tolerances,
+                            law=NEWTON_COULOMB)
+    order = list(REASONS)
+    reasons.sort(key=lambda r: order.index(r.name))
+    return Verdict(tuple(reasons))
+
+
+def declared_scales(scene, problem, wn: np.ndarray) -> SceneScales:
+    """:func:`scene_scales` over declared contacts with rows ``wn`` (one per contact): the
+    approach speed is the largest ``|v_n^A(i)|`` and the impulse scale the largest
+    ``|v_n^A(i)| / m_nn(i)`` (a plastic frictionless impact at that contact alone)."""
+    single = scene_scales(scene, problem)
+    approach = np.abs(wn @ problem.u)
+    mnn = np.einsum("ij,ij->i", wn, np.linalg.solve(problem.mass_matrix, wn.T).T)
+    return SceneScales(approach_speed=float(approach.max()),
+                       impulse=float(np.max(approach / mnn)),
+                       speed_norm=single.speed_norm, energy=single.energy, size=single.size)
+
+
+def declared_impulses(mass_matrix, wn, wt, u_before, u_after,
+                      speed_norm: float) -> tuple[np.ndarray, float]:
+    """``((I_n, I_t), residual)``: the impulses at ``m`` contacts that best explain
+    ``Δu = u_after − u_before``, and what they leave unexplained.
+
+    ``M Δu`` is the generalised impulse the engine applied; at the contacts it is
+    ``Σ_i (w_n^(i) I_n^(i) + w_t^(i) I_t^(i))`` (eq. (75); docs/multi-contact.md, 'Setting:
+    eq. (75)'). The impulses minimise ``‖Δu − M⁻¹ W I‖_M`` over all ``2m`` columns of
+    ``M⁻¹W``, ``W = [w_n^(i), w_t^(i)]``: with ``M = L Lᵀ`` this is the least-squares problem
+    ``L⁻¹W I ≈ Lᵀ Δu`` (minimum-norm ``I`` where the columns are dependent, as two points of
+    one body on the ground are). For ``m = 1`` it is :func:`impulse_from_velocities`. The
+    split between contacts need not be unique, but the sums ``Σ I_n^(i)``, ``Σ I_t^(i)``
+    are when the contacts share a normal (a dependent combination moves no centre of mass,
+    so its normal and tangential parts each sum to zero). Returns ``(2, m)`` impulses (row 0
+    normal, row 1 tangential, N s) and the residual divided by ``speed_norm``.
+    """
+    mass_matrix = np.asarray(mass_matrix, dtype=float)
+    wn, wt = np.atleast_2d(wn), np.atleast_2d(wt)
+    delta_u = np.asarray(u_after, dtype=float) - np.asarray(u_before, dtype=float)
+    lower = np.linalg.cholesky(mass_matrix)
+    columns = np.linalg.solve(lower, np.vstack([wn, wt]).T)  # L⁻¹W: (p, 2m)
+    target = lower.T @ delta_u  # ‖x‖_M = ‖Lᵀx‖
+    impulses, *_ = np.linalg.lstsq(columns, target, rcond=None)
+    rest = float(np.linalg.norm(target - columns @ impulses))
+    return (impulses.reshape(2, len(wn)),
+            rest / speed_norm if speed_norm > 0 else math.nan)
+
+
+def _contact_name(contacts, index: int) -> str:
+    x, y = (float(v) for v in contacts[index].point)
+    return f"contact {index + 1} of {len(contacts)} at ({x:.4g}, {y:.4g}) m"
+
+
+def _declared_separation(contacts, vn_after: np.ndarray, scales: SceneScales,
+                         tolerances: Tolerances) -> list[Reason]:
+    """``not-separated`` when a declared contact still closes: ``v_n^S(i) < −tol·|v_n^A|``
+    (the worst one named; 0 or 1 reason)."""
+    bound = tolerances.separation * scales.approach_speed
+    closing = [i for i, v in enumerate(vn_after) if v < -bound]
+    if not closing:
+        return []
+    worst = min(closing, key=lambda i: vn_after[i])
+    more = f" (and {len(closing) - 1} more)" if len(closing) > 1 else ""
+    return [Reason("not-separated", float(vn_after[worst]), -bound,
+                   f"{_contact_name(contacts, worst)}: v_n^S = {vn_after[worst]:.4g} m/s "
+                   f"< -{bound:.3g} m/s ({tolerances.separation:g}·max_i |v_n^A(i)|){more}")]
+
+
+def _undeclared_features(scene, contacts, records: Sequence[StepContacts],
+                         tolerances: Tolerances) -> list[Reason]:
+    """``multi-contact`` when a point touches a feature none of the declared contacts has.
+
+    Each declared contact fixes, per body, the feature at its point in the scene's pose (a
+    corner, an end cap, or a face: None). A recorded point belongs to a declared contact when
+    on every body it lies on a face or at that contact's feature; else it is reported with
+    the body, the feature and the step.
+    """
+    def features_at(states, point, depth):
+        return tuple(feature_at(body.shape, state, point,
+                                tolerances.penetration * body_extent(body.shape)
+                                + max(depth, 0.0))
+                     for body, state in zip(scene.bodies, states))
+
+    poses = [(*body.position, body.angle) for body in scene.bodies]
+    declared = [features_at(poses, contact.point, 0.0) for contact in contacts]
+    for record in records:
+        for point in record.points:
+            features = features_at(record.bodies, point[:2], point[2])
+            if any(all(now is None or now == then for now, then in zip(features, allowed))
+                   for allowed in declared):
+                continue
+            index = next(k for k, now in enumerate(features) if now is not None
+                         and any(now != allowed[k] for allowed in declared))
+            body = scene.bodies[index]
+            names = feature_points(body.shape)[2]
+            held = sorted({allowed[index] for allowed in declared},
+                          key=lambda f: -1 if f is None else f)
+            listed = ", ".join("a face" if f is None else names[f] for f in held)
+            return [Reason("multi-contact", float(record.step), None,
+                           f"{body.name}'s {names[features[index]]} touched at step "
+                           f"{record.step}, outside the {len(contacts)} declared contacts "
+                           f"({listed})")]
+    return []
+
+
 def reason_counts(reasons_per_run: Sequence[Sequence[Mapping[str, Any]]]) -> dict[str, int]:
     """``{reason: runs failing it}`` over many runs' ``reasons`` lists (law-attributed
     energy gains counted as ``energy-gain (law)``, not failing)."""
@@ -488,6 +696,7 @@ def reason_counts(reasons_per_run: Sequence[Sequence[Mapping[str, Any]]]) -> dic
 
 
 __all__ = ["DEFAULT_TOLERANCES", "REASONS", "SPEED_CAPS", "Reason", "RunNumbers",
-           "SceneScales", "StepContacts", "Tolerances", "Verdict", "body_extent", "feature_at",
-           "feature_points", "impulse_from_velocities", "judge", "numbers_from_output",
-           "reason_counts", "scene_scales"]
+           "SceneScales", "StepContacts", "Tolerances", "Verdict", "body_extent",
+           "declared_contacts", "declared_impulses", "declared_scales", "feature_at",
+           "feature_points", "impulse_from_velocities", "judge", "judge_declared",
+           "numbers_from_output", "reason_counts", "scene_scales"]
