@@ -61,7 +61,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: bool = False, echo=print) -> dict:
     """The survey in memory: ``{"samples", "runs", "statistics", "rejections", "timings",
-    "engine_results", "skipped"}`` (columns as ``{name: array}``)."""
+    "engine_results", "skipped", "scenes"}`` (columns as ``{name: array}``)."""
     clock = time.perf_counter
     timings: dict[str, tuple[float, int]] = {}
     begin = clock()
@@ -118,6 +118,7 @@ def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: 
         "timings": timings,
         "engine_results": results,
         "skipped": skipped,
+        "scenes": scenes,
     }
 
 
