@@ -6,6 +6,7 @@ A figure's PNG carries the digest of its inputs and of this module in its metada
 
 from __future__ import annotations
 
+import functools
 import math
 from pathlib import Path
 from typing import Sequence
@@ -55,26 +56,50 @@ def stable_record(record: Record) -> dict:
     return data
 
 
+@functools.cache
+def _code_digest() -> bytes:
+    """What the code drawing the figures contributes to every digest (this module,
+    matplotlib's version): read once per process."""
+    import matplotlib
+
+    return Path(__file__).read_bytes() + matplotlib.__version__.encode()
+
+
 def inputs_digest(kind: str, payload) -> str:
     """Digest of a figure's inputs and of the code drawing it (this module, matplotlib)."""
     import hashlib
     import json
 
-    import matplotlib
-
-    source = Path(__file__).read_bytes()
     text = json.dumps([kind, payload], sort_keys=True, default=str)
-    return hashlib.sha256(source + matplotlib.__version__.encode() + text.encode()).hexdigest()
+    return hashlib.sha256(_code_digest() + text.encode()).hexdigest()
+
+
+_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 
 def png_tag(path: Path) -> str | None:
-    """The inputs digest stored in a PNG by :func:`_save` (None if absent/unreadable)."""
-    try:
-        from PIL import Image
+    """The inputs digest stored in a PNG by :func:`save_png` (None if absent/unreadable).
 
-        with Image.open(path) as image:
-            return image.text.get(TAG_KEY)
-    except Exception:  # a missing or broken file is simply redrawn
+    Read from the file's ``tEXt`` chunks, which matplotlib writes before the image data:
+    the chunks are walked up to the first ``IDAT`` and the pixels are never decoded.
+    """
+    key = TAG_KEY.encode("latin-1") + b"\0"
+    try:
+        with open(path, "rb") as file:
+            if file.read(8) != _PNG_SIGNATURE:
+                return None
+            while True:
+                header = file.read(8)
+                if len(header) < 8:
+                    return None
+                length, kind = int.from_bytes(header[:4], "big"), header[4:]
+                if kind in (b"IDAT", b"IEND"):
+                    return None
+                data = file.read(length)
+                file.seek(4, 1)  # the chunk's CRC
+                if kind == b"tEXt" and data.startswith(key):
+                    return data[len(key):].decode("latin-1")
+    except OSError:  # a missing or broken file is simply redrawn
         return None
 
 
