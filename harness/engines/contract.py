@@ -62,6 +62,18 @@ Methods (``world`` is whatever the adapter builds; the base class only passes it
 ``_release(world)``
     Engine-specific value checks; the world cache key; freeing an evicted world.
 
+Optional, for :meth:`Engine.run_many` (many independent impacts in one world; an adapter
+without them runs the impacts one by one)
+
+``_build_many(plans) -> (batch, worlds, derived)``
+    One world holding every plan's impact at its start state (``plan.prepared``, computed
+    with ``world=None``), one view per impact that ``_read_poses``, ``_read_velocities``
+    and ``_out_of_plane_drift`` accept, and each run's ``derived``.
+``_step_many(batch, active) -> {slot: RawContacts}``
+    One step of the whole batch; the contact of every active impact that has one.
+``_many_chunks(scenes)``, ``_retire(batch, slot)``, ``_release_many(batch)``
+    Which scenes share a batch; taking a finished impact out; freeing a batch.
+
 What the base class does, once for every engine
 -----------------------------------------------
 * Settings: presets, overrides, validation (``settings()``, ``validate_settings()``), the
@@ -86,6 +98,8 @@ What the base class does, once for every engine
   ``t = (n_y, -n_x)`` (from momentum, ``m_B·Δv_B``, where the engine reports no impulse: exact
   with no other forces); kinetic energy before and after; the :class:`Status` and its reason;
   the notes; the typed :class:`EngineRun` with every :class:`ContactStep` in the scene frame.
+* :meth:`Engine.run_many`: the same loop and bookkeeping for every impact of a batch, in
+  lockstep; the runs equal :meth:`Engine.run`'s bit for bit (tests/engines/test_run_many.py).
 * :meth:`Engine.bare_stepper`: reset and stepping without any of the above (the benchmark).
 
 Input: the scene
