@@ -110,11 +110,15 @@ def test_suite_quick(capsys, tmp_path):
                        "--cache-dir", tmp_path / "cache")
     assert code == 0, err
     for name in ("paper-table3.md", "paper-table3.png", "results.json", "index.html",
-                 "summary.md"):
+                 "summary.md", "survey/summary.md", "survey/statistics.parquet"):
         assert (out / name).is_file(), name
-    assert "[1/3] Table 3" in err and "[3/3] report" in err and "all gates passed" in err
+    assert "[1/4] Table 3" in err and "[3/4] survey" in err and "[4/4] report" in err
+    assert "all gates passed" in err
     page = (out / "index.html").read_text(encoding="utf-8")
     assert "Table 3 of Djerassi" in page  # the paper's table embedded in the page
+    assert "href='survey/summary.md'" in page
+    survey = (out / "survey" / "summary.md").read_text(encoding="utf-8")
+    assert "| pymunk | accurate | rod-ground | all | 20 |" in survey  # SURVEY_SAMPLES each
     # a warm rerun simulates nothing
     code, _, err = cli(capsys, "suite", "--tags", "quick", "--out", out,
                        "--cache-dir", tmp_path / "cache")

@@ -16,6 +16,8 @@
 * ``--engines``: the harness's cost per impact beside each engine's bare stepping
   (:mod:`harness.bench.engines`).
 * ``--speed-accuracy``: run time against error per engine (:mod:`harness.bench.accuracy`).
+* ``--survey``: the survey end to end beside the engines' bare stepping of the same impacts
+  (:mod:`harness.bench.survey`).
 
 With no selection, all of them run. Every benchmark checks its own answer before timing it
 (a fast wrong answer is no result). Figures and a machine-readable table go to
@@ -231,14 +233,15 @@ def add_arguments(parser) -> None:
     parser.add_argument("--engines", action="store_true", help="harness overhead per engine impact")
     parser.add_argument("--speed-accuracy", action="store_true",
                         help="run time against error per engine")
+    parser.add_argument("--survey", action="store_true",
+                        help="survey end to end beside the engines' bare stepping of its impacts")
     parser.add_argument("--quick", action="store_true", help="smaller sizes; finishes in minutes")
     parser.add_argument("--out", type=Path, default=Path("reports/bench"), help="output directory")
 
 
 def main(args) -> int:
-    selected = [name for name in ("solver", "engines", "speed_accuracy") if getattr(args, name)]
-    if not selected:
-        selected = ["solver", "engines", "speed_accuracy"]
+    names = ("solver", "engines", "speed_accuracy", "survey")
+    selected = [name for name in names if getattr(args, name)] or list(names)
     args.out.mkdir(parents=True, exist_ok=True)
     table = {"provenance": provenance(BENCH_FORMAT, BENCH_FORMAT_VERSION),
              "quick": bool(args.quick)}
@@ -260,6 +263,13 @@ def main(args) -> int:
             print(f"speed-accuracy benchmark unavailable: {error}")
         else:
             table["speed_accuracy"] = bench_accuracy.run(args.quick, args.out)
+    if "survey" in selected:
+        from harness.bench import survey as bench_survey
+
+        samples = bench_survey.QUICK_SAMPLES if args.quick else bench_survey.SAMPLES
+        report = bench_survey.run(samples)
+        print(bench_survey.format_report(report))
+        table["survey"] = report
     path = args.out / "bench.json"
     path.write_text(json.dumps(table, indent=1, default=str))
     print(f"written {path}")

@@ -66,6 +66,18 @@ Methods (``world`` is whatever the adapter builds; the base class only passes it
 ``_release(world)``
     Engine-specific value checks; the world cache key; freeing an evicted world.
 
+Optional, for :meth:`Engine.run_many` (many independent impacts in one world; an adapter
+without them runs the impacts one by one)
+
+``_build_many(plans) -> (batch, worlds, derived)``
+    One world holding every plan's impact at its start state (``plan.prepared``, computed
+    with ``world=None``), one view per impact that ``_read_poses``, ``_read_velocities``
+    and ``_out_of_plane_drift`` accept, and each run's ``derived``.
+``_step_many(batch, active) -> {slot: RawContacts}``
+    One step of the whole batch; the contact of every active impact that has one.
+``_many_chunks(scenes)``, ``_retire(batch, slot)``, ``_release_many(batch)``
+    Which scenes share a batch; taking a finished impact out; freeing a batch.
+
 What the base class does, once for every engine
 -----------------------------------------------
 * Settings: presets, overrides, validation (``settings()``, ``validate_settings()``), the
@@ -90,6 +102,8 @@ What the base class does, once for every engine
   ``t = (n_y, -n_x)`` (from momentum, ``m_B·Δv_B``, where the engine reports no impulse: exact
   with no other forces); kinetic energy before and after; the :class:`Status` and its reason;
   the notes; the typed :class:`EngineRun` with every :class:`ContactStep` in the scene frame.
+* :meth:`Engine.run_many`: the same loop and bookkeeping for every impact of a batch, in
+  lockstep; the runs equal :meth:`Engine.run`'s bit for bit (tests/engines/test_run_many.py).
 * :meth:`Engine.bare_stepper`: reset and stepping without any of the above (the benchmark).
 
 Input: the scene
@@ -141,6 +155,7 @@ SAME_POINT_RELATIVE = 1e-6
 
 _BLOW_UP_SQUARED = BLOW_UP_FACTOR**2
 _MAX_PLANS = 256  # (scene, settings) pairs remembered; the cache is emptied when full
+_DETACHED = object()  # _plan_for's world for run_many: the plan gets no world of its own
 
 
 class Status(enum.StrEnum):
@@ -342,6 +357,52 @@ class _Plan:
                  "weights", "world", "world_key")
 
 
+class _Progress:
+    """One run's loop state, and the rule that ends it (shared by :meth:`Engine.run` and
+    :meth:`Engine.run_many`).
+
+    The contact ends at a step, after contact began, with no contact, or whose normal
+    impulse is at most ``no_impulse_relative`` of the largest while no contact point still
+    closes (see the module docstring).
+    """
+
+    __slots__ = ("engine", "first_contact", "peak", "plan", "records", "separated",
+                 "velocities")
+
+    def __init__(self, engine: Engine, plan: _Plan) -> None:
+        self.engine, self.plan = engine, plan
+        self.first_contact = None
+        self.peak = 0.0
+        self.separated = False
+        self.records = []
+        self.velocities = None  # set where read at the step that ended the contact
+
+    def observe(self, raw: RawContacts | None, steps: int, world) -> bool:
+        """Take step ``steps``'s contact ``raw`` of ``world``; True when the run ends here."""
+        if raw is None:
+            if self.first_contact is not None:
+                self.separated = True
+                return True
+            return False
+        if self.first_contact is None:
+            self.first_contact = steps
+        engine = self.engine
+        poses = engine._read_poses(world)
+        self.records.append((steps, raw, poses))
+        pressure = raw[3]
+        if pressure is None:  # still pushing, by the adapter's knowledge
+            return False
+        if pressure > self.peak:  # noqa: PLR1730 - a compare is cheaper than max() here
+            self.peak = pressure
+        if pressure <= engine.no_impulse_relative * self.peak:
+            velocities = engine._read_velocities(world)
+            if not _approaching(poses, velocities, raw, self.plan.speed_scale):
+                self.separated = True
+                self.velocities = velocities
+                return True
+        return False
+
+
 class BareStepper:
     """Reset and step an engine with none of the run's bookkeeping (the benchmark's baseline).
 
@@ -433,6 +494,28 @@ class Engine(abc.ABC):
 
     def _validate_engine_settings(self, settings: Mapping[str, Any]) -> None:
         """Engine-specific value checks (override)."""
+
+    # Optional: many independent impacts in one world (run_many). An adapter that defines
+    # _build_many defines _step_many too; the others have defaults.
+    def _build_many(self, plans: Sequence[_Plan]) -> tuple[Any, Sequence[Any], Sequence[dict]]:
+        """``(batch, worlds, derived)``: one world stepping every plan's impact (its start
+        state ``plan.prepared``), a per-impact view each that ``_read_poses``,
+        ``_read_velocities`` and ``_out_of_plane_drift`` accept, and each run's ``derived``."""
+        raise NotImplementedError  # the base's marker: this adapter runs one impact at a time
+
+    def _step_many(self, batch, active: Sequence[int]) -> Mapping[int, RawContacts]:
+        """One step of the batch; ``{slot: contact}`` for the ``active`` slots with contact."""
+        raise NotImplementedError
+
+    def _many_chunks(self, scenes: Sequence[Scene]) -> Iterable[Sequence[int]]:
+        """Indices of the scenes that share one batch (default: all)."""
+        return [range(len(scenes))]
+
+    def _retire(self, batch, slot: int) -> None:
+        """Take a finished impact out of the batch (default: leave it)."""
+
+    def _release_many(self, batch) -> None:
+        """Free a batch (default: nothing to free)."""
 
     # ------------------------------------------------------------------ settings
     def settings(self, preset: str = "accurate",
@@ -551,6 +634,8 @@ class Engine(abc.ABC):
         plan.scene, plan.settings = scene, settings
         if world is None:
             plan.world, plan.world_key = self._world_for(scene, settings)
+        elif world is _DETACHED:
+            plan.world = plan.world_key = None
         else:
             plan.world, plan.world_key = world, None
         plan.shift, start = start_states(scene, settings, self.timing)
@@ -558,7 +643,7 @@ class Engine(abc.ABC):
         plan.dt = float(settings["time_step"])
         plan.max_steps = int(settings["max_steps"])
         plan.weights = energy_weights(scene)
-        plan.before = energy_before(scene)
+        plan.before = energy_before(scene, plan.weights)
         plan.speed_scale = float(max(1e-300, max(abs(v) for v in scene.state())))
         plan.same_point = SAME_POINT_RELATIVE * max(
             max(body_extent(body.shape) for body in scene.bodies), 1e-12)
@@ -622,47 +707,90 @@ class Engine(abc.ABC):
         world = plan.world
         derived = self._reset(world, plan.prepared)
 
-        step, read_poses = self._step, self._read_poses
-        no_impulse = self.no_impulse_relative
+        step = self._step
+        progress = _Progress(self, plan)
+        observe = progress.observe
         max_steps = plan.max_steps
         steps = 0
-        first_contact = None
-        peak = 0.0
-        separated = False
-        records = []
-        velocities = None
         while steps < max_steps:
-            raw = step(world)
             steps += 1
-            if raw is None:
-                if first_contact is not None:
-                    separated = True
-                    break
-                continue
-            if first_contact is None:
-                first_contact = steps
-            poses = read_poses(world)
-            records.append((steps, raw, poses))
-            pressure = raw[3]
-            if pressure is None:  # still pushing, by the adapter's knowledge
-                continue
-            if pressure > peak:  # noqa: PLR1730 - a compare is cheaper than max() here
-                peak = pressure
-            if pressure <= no_impulse * peak:
-                velocities = self._read_velocities(world)
-                if not _approaching(poses, velocities, raw, plan.speed_scale):
-                    separated = True
-                    break
-                velocities = None
+            if observe(step(world), steps, world):
+                break
+        return self._finish(plan, used_preset, derived, progress, world, steps, start_time)
+
+    def run_many(
+        self,
+        scenes: Sequence[Scene],
+        settings: Mapping[str, Any] | None = None,
+        *,
+        preset: str = "accurate",
+        overrides: Mapping[str, Any] | None = None,
+    ) -> list[EngineRun]:
+        """:meth:`run` of every scene, in order; the same runs, bit for bit.
+
+        An adapter that can step many independent impacts in one world (``_build_many``)
+        runs them so, chunk by chunk (``_many_chunks``), with the loop and the bookkeeping
+        of :meth:`run` per impact; any other adapter runs them one by one. ``wall_time_s``
+        of a batched run is its chunk's time shared equally.
+        """
+        if type(self)._build_many is Engine._build_many:
+            return [self.run(scene, settings, preset=preset, overrides=overrides)
+                    for scene in scenes]
+        resolved, used_preset = self._resolve(settings, preset, overrides)
+        plans = []
+        for scene in scenes:
+            self._checked_scene(scene)
+            plans.append(self._plan_for(scene, resolved, world=_DETACHED))
+        runs: list[EngineRun | None] = [None] * len(plans)
+        for chunk in self._many_chunks([plan.scene for plan in plans]):
+            start_time = _clock()
+            chunk_plans = [plans[index] for index in chunk]
+            batch, worlds, derived = self._build_many(chunk_plans)
+            try:
+                finished = self._run_chunk(batch, worlds, derived, chunk_plans, used_preset,
+                                           start_time)
+            finally:
+                self._release_many(batch)
+            share = (_clock() - start_time) / len(chunk)
+            for index, run in zip(chunk, finished):
+                _set_attribute(run, "wall_time_s", share)  # compare=False: equality unchanged
+                runs[index] = run
+        return runs
+
+    def _run_chunk(self, batch, worlds, derived, plans, preset, start_time) -> list[EngineRun]:
+        """The loop of :meth:`run` for every impact of one batch, in lockstep."""
+        progress = [_Progress(self, plan) for plan in plans]
+        finished: list[EngineRun | None] = [None] * len(plans)
+        active = list(range(len(plans)))
+        max_steps = plans[0].max_steps  # one settings dict for the whole batch
+        steps = 0
+        while active and steps < max_steps:
+            steps += 1
+            contacts = self._step_many(batch, active)
+            still = []
+            for slot in active:
+                if progress[slot].observe(contacts.get(slot), steps, worlds[slot]):
+                    finished[slot] = self._finish(plans[slot], preset, derived[slot],
+                                                  progress[slot], worlds[slot], steps,
+                                                  start_time)
+                    self._retire(batch, slot)
+                else:
+                    still.append(slot)
+            active = still
+        for slot in active:  # the step cap
+            finished[slot] = self._finish(plans[slot], preset, derived[slot], progress[slot],
+                                          worlds[slot], steps, start_time)
+        return finished
+
+    def _finish(self, plan: _Plan, preset, derived, progress: _Progress, world, steps,
+                start_time) -> EngineRun:
+        """The :class:`EngineRun` of a finished loop (all the run's bookkeeping)."""
+        records, first_contact = progress.records, progress.first_contact
+        separated, velocities = progress.separated, progress.velocities
         if velocities is None:  # else read after this very step
             velocities = self._read_velocities(world)
-        return self._finish(plan, used_preset, derived, records, velocities, steps,
-                            first_contact, separated, self._out_of_plane_drift(world),
-                            self._run_notes(world), start_time)
-
-    def _finish(self, plan: _Plan, preset, derived, records, velocities, steps, first_contact,
-                separated, drift, run_notes, start_time) -> EngineRun:
-        """The :class:`EngineRun` of a finished loop (all the run's bookkeeping)."""
+        drift = self._out_of_plane_drift(world)
+        run_notes = self._run_notes(world)
         max_points = 0
         max_penetration = 0.0
         impulse_x = impulse_y = 0.0
@@ -879,12 +1007,13 @@ def energy_weights(scene: Scene) -> tuple[tuple[float, float], ...]:
     return tuple((body.mass, body.moment_of_inertia) for body in scene.bodies)
 
 
-def energy_before(scene: Scene) -> float:
-    """Twice the kinetic energy of the scene's input state (the blow-up reference)."""
+def energy_before(scene: Scene, weights: Sequence[tuple[float, float]] | None = None) -> float:
+    """Twice the kinetic energy of the scene's input state (the blow-up reference);
+    ``weights``: :func:`energy_weights` of the scene when already computed."""
     before = 0.0
-    for body in scene.bodies:
+    for body, (mass, inertia) in zip(scene.bodies, weights or energy_weights(scene)):
         (ux, uy), uw = body.velocity, body.angular_velocity
-        before += body.mass * (ux * ux + uy * uy) + body.moment_of_inertia * uw * uw
+        before += mass * (ux * ux + uy * uy) + inertia * uw * uw
     return before
 
 

@@ -39,6 +39,13 @@ from harness.scene import Scene
 # then sees an overlap of ~1e-9·|v_n|·dt (> 0, so found; too small to matter).
 _DETECTION_OVERLAP = 1e-9
 _GROUND_HALF_WIDTH = 1.0e3  # m; the scene is shifted so the body sits near x = 0
+#: Impacts per space in run_many. Two-body scenes: one collision category bit each (bit 31
+#: is the ground's). Ground scenes: their bodies all overlap near the origin, so the
+#: broad phase pairs them all (then drops the pairs by group): a space stays small.
+MANY_PAIRS = 31
+MANY_GROUND = 32
+_GROUND_CATEGORY = 1 << 31
+_GROUND_GROUP = 1  # every body of a ground scene in a batch: they never touch each other
 
 SETTING_DOCS: dict[str, str] = {
     "time_step": "s, Space.step(dt); pymunk has no default, 1/60 is its examples' value",
@@ -124,16 +131,23 @@ class _SpaceEntry:
             self.pair_values = pair_values
 
 
+def _ground_shape(space: pymunk.Space, shape_filter: pymunk.ShapeFilter | None = None):
+    """The ground: a static box with top face ``y = 0`` and the partner's neutral e, μ."""
+    w = _GROUND_HALF_WIDTH
+    ground = pymunk.Poly(space.static_body, [(-w, -w), (w, -w), (w, 0.0), (-w, 0.0)], radius=0.0)
+    ground.elasticity = 1.0
+    ground.friction = 1.0
+    if shape_filter is not None:
+        ground.filter = shape_filter
+    return ground
+
+
 def _build_space(scene: Scene, record: bool) -> _SpaceEntry:
     """A space holding the scene's ground and bodies (``record``: with the post_solve recorder)."""
     space = pymunk.Space()
     space.gravity = (0.0, 0.0)
     if scene.ground:
-        w = _GROUND_HALF_WIDTH
-        ground = pymunk.Poly(space.static_body, [(-w, -w), (w, -w), (w, 0.0), (-w, 0.0)], radius=0.0)
-        ground.elasticity = 1.0
-        ground.friction = 1.0
-        space.add(ground)
+        space.add(_ground_shape(space))
     bodies, shapes = [], []
     for body in scene.bodies:
         pm_body = pymunk.Body(body.mass, body.moment_of_inertia)
@@ -240,43 +254,152 @@ class PymunkEngine(Engine):
         if arbiter is None:
             return None
         recorder.arbiter = None
-        point_set = _point_set_of(arbiter)
-        # 0 points: an arbiter dropped in this step (collision_persistence 0); pymunk's
-        # ContactPointSet rejects it, so the step counts as reporting no contact.
-        count = point_set.count
-        if not count:
-            return None
-        # The arbiter's shape order can change from step to step (Chipmunk swaps two shapes
-        # of the same type as it finds them): read it every step.
         out_a, out_b = self._bodies_out
         _bodies_of(arbiter, out_a, out_b)
-        n = point_set.normal  # from the first shape into the second
-        impulse = _impulse_of(arbiter)  # on the body of the arbiter's first shape
-        points = point_set.points
-        b_first = out_a[0] == world.body_ptrs[-1]
-        if b_first:
-            normal = (-n.x, -n.y)
-            step_x, step_y = impulse.x, impulse.y
-        else:
-            normal = (n.x, n.y)
-            step_x, step_y = -impulse.x, -impulse.y
-        contact_points = []
-        for index in range(count):
-            point = points[index]
-            on_b = point.pointA if b_first else point.pointB
-            contact_points.append((on_b.x, on_b.y, -point.distance))
-        return (
-            tuple(contact_points),
-            normal,
-            (step_x, step_y),
-            abs(step_x * normal[0] + step_y * normal[1]),
-        )
+        return _contact_of(arbiter, out_a[0] == world.body_ptrs[-1])
+
+    # ------------------------------------------------------------------ many impacts
+    def _many_chunks(self, scenes) -> list[list[int]]:
+        """Ground scenes :data:`MANY_GROUND` to a space, two-body scenes :data:`MANY_PAIRS`
+        (one collision category bit per pair)."""
+        chunks = []
+        for ground, size in ((True, MANY_GROUND), (False, MANY_PAIRS)):
+            rows = [index for index, scene in enumerate(scenes) if scene.ground == ground]
+            chunks += [rows[begin:begin + size] for begin in range(0, len(rows), size)]
+        return chunks
+
+    def _build_many(self, plans) -> tuple[_Batch, list, list]:
+        """One space for many impacts, each at its own run-frame coordinates.
+
+        The impacts overlap in space and are kept apart by shape filters: the bodies of
+        ground scenes share one group (never touch each other) and touch only the ground's
+        category; the bodies of the k-th two-body scene are in category ``1 << k`` only.
+        They share no dynamic body, so each impact's arithmetic is the one it has alone
+        (the tests compare them bit for bit).
+        """
+        space_values, _, _, dt = plans[0].prepared  # one settings dict for every plan
+        space = pymunk.Space()
+        space.gravity = (0.0, 0.0)
+        (space.iterations, space.collision_slop, space.collision_bias,
+         space.collision_persistence, space.damping) = space_values
+        if any(plan.scene.ground for plan in plans):
+            space.add(_ground_shape(space, pymunk.ShapeFilter(categories=_GROUND_CATEGORY)))
+        ground_filter = pymunk.ShapeFilter(group=_GROUND_GROUP, categories=_GROUND_CATEGORY,
+                                           mask=_GROUND_CATEGORY)
+        batch = _Batch(space, dt)
+        pair = 0
+        for slot, plan in enumerate(plans):
+            if plan.scene.ground:
+                shape_filter = ground_filter
+            else:
+                shape_filter = pymunk.ShapeFilter(categories=1 << pair, mask=1 << pair)
+                pair += 1
+            _, (e, mu), starts, _ = plan.prepared
+            bodies, shapes = [], []
+            for body, (mass, inertia), (position, angle, velocity, rate) in zip(
+                    plan.scene.bodies, plan.weights, starts):
+                pm_body = pymunk.Body(mass, inertia)
+                pm_body.position, pm_body.angle = position, angle
+                pm_body.velocity, pm_body.angular_velocity = velocity, rate
+                shape = _make_shape(pm_body, body.shape)
+                shape.filter = shape_filter
+                bodies.append(pm_body)
+                shapes.append(shape)
+            shapes[0].elasticity, shapes[0].friction = e, mu
+            if len(shapes) == 2:
+                shapes[1].elasticity = shapes[1].friction = 1.0
+            space.add(*bodies, *shapes)
+            slot_world = _Slot(bodies, shapes)
+            batch.slots.append(slot_world)
+            for body_ptr in slot_world.body_ptrs:
+                batch.slot_of[body_ptr] = slot
+        space.on_collision(post_solve=batch.record)
+        return batch, batch.slots, [{} for _ in plans]
+
+    def _step_many(self, batch: _Batch, active) -> dict:
+        arbiters = batch.arbiters
+        arbiters.clear()
+        _space_step(batch.space_ptr, batch.dt)
+        contacts = {}
+        out_a, out_b = self._bodies_out
+        slot_of, slots = batch.slot_of, batch.slots
+        for arbiter in arbiters:
+            _bodies_of(arbiter, out_a, out_b)
+            slot = slot_of.get(out_a[0])
+            if slot is None:  # body a is the ground
+                slot = slot_of[out_b[0]]
+            contact = _contact_of(arbiter, out_a[0] == slots[slot].body_ptrs[-1])
+            if contact is not None:
+                contacts[slot] = contact
+        return contacts
+
+    def _retire(self, batch: _Batch, slot: int) -> None:
+        world = batch.slots[slot]
+        batch.space.remove(*world.shapes, *world.bodies)
 
     def _read_poses(self, world: _SpaceEntry) -> tuple:
         return _triples(world, _get_position, _get_angle)
 
     def _read_velocities(self, world: _SpaceEntry) -> tuple:
         return _triples(world, _get_velocity, _get_angular_velocity)
+
+
+def _contact_of(arbiter, b_first: bool) -> RawContacts | None:
+    """The step's contact from its arbiter (``b_first``: body B is the arbiter's body a)."""
+    point_set = _point_set_of(arbiter)
+    # 0 points: an arbiter dropped in this step (collision_persistence 0); pymunk's
+    # ContactPointSet rejects it, so the step counts as reporting no contact.
+    count = point_set.count
+    if not count:
+        return None
+    # The arbiter's shape order can change from step to step (Chipmunk swaps two shapes of
+    # the same type as it finds them): the caller reads it every step.
+    n = point_set.normal  # from the first shape into the second
+    impulse = _impulse_of(arbiter)  # on the body of the arbiter's first shape
+    points = point_set.points
+    if b_first:
+        normal = (-n.x, -n.y)
+        step_x, step_y = impulse.x, impulse.y
+    else:
+        normal = (n.x, n.y)
+        step_x, step_y = -impulse.x, -impulse.y
+    contact_points = []
+    for index in range(count):
+        point = points[index]
+        on_b = point.pointA if b_first else point.pointB
+        contact_points.append((on_b.x, on_b.y, -point.distance))
+    return (
+        tuple(contact_points),
+        normal,
+        (step_x, step_y),
+        abs(step_x * normal[0] + step_y * normal[1]),
+    )
+
+
+class _Slot:
+    """One impact of a batch: what ``_read_poses`` and ``_read_velocities`` read."""
+
+    __slots__ = ("bodies", "body_ptrs", "shapes")
+
+    def __init__(self, bodies: list, shapes: list) -> None:
+        self.bodies, self.shapes = bodies, shapes
+        self.body_ptrs = tuple(body._body for body in bodies)
+
+
+class _Batch:
+    """A space holding many impacts, and the arbiters its last step solved."""
+
+    __slots__ = ("arbiters", "dt", "slot_of", "slots", "space", "space_ptr")
+
+    def __init__(self, space: pymunk.Space, dt: float) -> None:
+        self.space, self.space_ptr, self.dt = space, space._space, dt
+        self.slots: list[_Slot] = []
+        self.slot_of: dict = {}  # body pointer -> slot
+        self.arbiters: list = []
+
+    def record(self, arbiter: pymunk.Arbiter, space, data) -> None:
+        """post_solve callback: keep every arbiter of the step (one per impact at most)."""
+        self.arbiters.append(arbiter._arbiter)
 
 
 def _triples(world: _SpaceEntry, vector_of, scalar_of) -> tuple:

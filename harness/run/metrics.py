@@ -24,7 +24,7 @@ The split
 from __future__ import annotations
 
 import math
-from typing import Mapping, Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
@@ -72,6 +72,44 @@ def departure(mass_matrix, u, u_law, u_before, *, free_bodies: bool = False) -> 
         return math.nan
     scale = frame_free_scale(mass_matrix, u_before, free_bodies=free_bodies)
     return ke_norm(mass_matrix, u - u_law) / scale if scale > 0 else math.nan
+
+
+def departure_batch(mass, u, u_law, u_before, *, free_bodies=False) -> np.ndarray:
+    """:func:`departure` of every row at once: ``(n,)`` departures.
+
+    ``mass`` is ``(n, k, k)`` mass matrices or ``(n, k)`` their diagonals; ``u``, ``u_law``,
+    ``u_before`` are ``(n, k)``; ``free_bodies`` a bool or an ``(n,)`` bool array (the
+    frame of each row, as in :func:`frame_free_scale`). A row is NaN where :func:`departure`
+    is: non-finite speeds, or a zero scale. Rows padded with zero speeds (and any positive
+    mass) give the departure of their leading speeds, when they are not ``free_bodies``
+    rows (the centre of mass would count the padding as bodies).
+    """
+    u, u_law, u_before = (np.asarray(a, dtype=float) for a in (u, u_law, u_before))
+    mass = np.asarray(mass, dtype=float)
+    rows, size = u.shape
+    if mass.ndim == 2:
+        mass = mass[:, :, None] * np.eye(size)
+    free = np.broadcast_to(np.asarray(free_bodies, dtype=bool), (rows,))
+    relative = u_before
+    if free.any():  # the centre of mass's frame, as frame_free_scale
+        translations = np.zeros((size, 2))
+        translations[0::3, 0] = 1.0
+        translations[1::3, 1] = 1.0
+        weighted = np.einsum("ka,nkj->naj", translations, mass[free])  # Tᵀ M
+        common = np.linalg.solve(weighted @ translations,
+                                 weighted @ u_before[free][:, :, None])[:, :, 0]
+        relative = u_before.copy()
+        relative[free] -= common @ translations.T
+    scale = _ke_norms(mass, relative)
+    difference = _ke_norms(mass, u - u_law)
+    finite = np.all(np.isfinite(u), axis=1) & np.all(np.isfinite(u_law), axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(finite & (scale > 0), difference / scale, math.nan)
+
+
+def _ke_norms(mass: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """``sqrt(max(uᵀ M u, 0))`` per row (:func:`ke_norm` of every row)."""
+    return np.sqrt(np.maximum(np.einsum("ni,nij,nj->n", u, mass, u), 0.0))
 
 
 def departures(mass_matrix, u, law_speeds: Mapping[str, object], u_before, *,
@@ -159,5 +197,5 @@ def _finite(value) -> float:
 
 
 __all__ = ["STICK_TOLERANCE", "classify_end_state", "contact_velocities", "delassus",
-           "departure", "departure_split", "departures", "energy_change", "frame_free_scale",
-           "impulses_from_velocities", "ke_norm"]
+           "departure", "departure_batch", "departure_split", "departures", "energy_change",
+           "frame_free_scale", "impulses_from_velocities", "ke_norm"]

@@ -117,13 +117,26 @@ class Results:
     records: list[Record]
     provenance: dict = field(default_factory=dict)
     scenarios: dict = field(default_factory=dict)  # name -> description, tags, speed labels …
+    # scenario -> its records, built on first use; rebuilt when ``records`` is replaced or
+    # changes length (a report asks once per scenario and figure: a scan each was quadratic).
+    _by_scenario: tuple = field(default=(None, 0, {}), init=False, repr=False, compare=False)
 
     def scenario_names(self) -> list[str]:
         """Scenario names in run order."""
-        return list(dict.fromkeys(record.scenario for record in self.records))
+        return list(self._scenario_index())
 
     def for_scenario(self, name: str) -> list[Record]:
-        return [record for record in self.records if record.scenario == name]
+        """The records of scenario ``name``, in run order."""
+        return list(self._scenario_index().get(name, ()))
+
+    def _scenario_index(self) -> dict[str, list[Record]]:
+        records, length, index = self._by_scenario
+        if records is not self.records or length != len(self.records):
+            index = {}
+            for record in self.records:
+                index.setdefault(record.scenario, []).append(record)
+            self._by_scenario = (self.records, len(self.records), index)
+        return index
 
     def engine_labels(self) -> list[str]:
         """``engine.preset`` labels present, engines in registry order, ``defaults`` first."""

@@ -1,10 +1,13 @@
 """``impact-harness suite``: the validation suite that ``make validate`` runs.
 
-Three steps, each timed on stderr::
+Four steps, each timed on stderr::
 
     1. the paper's Table 3     -> <out>/paper-table3.md, <out>/paper-table3.png
     2. every scenario run      -> <out>/results.json  (runs cached: `impact-harness cache info`)
-    3. the report              -> <out>/index.html, <out>/summary.md, <out>/figures/
+    3. a quick survey          -> <out>/survey/summary.md, <out>/survey/*.parquet
+       (:data:`SURVEY_SAMPLES` samples of every population, the selected engines and
+       presets; harness/survey/)
+    4. the report              -> <out>/index.html, <out>/summary.md, <out>/figures/
 
 Options select scenarios and engines exactly as for ``impact-harness run`` (``--tags quick``
 for a fast subset, ``--out`` for another directory). The exit status (see :mod:`harness.cli`)
@@ -21,6 +24,11 @@ import time
 from pathlib import Path
 
 from harness.run import runner
+
+#: Samples per population in the suite's survey: 7 populations x 20 = 140 impacts per engine
+#: and preset, a few seconds with every engine (the distributions' tails need
+#: ``impact-harness survey``'s default 2,000).
+SURVEY_SAMPLES = 20
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -46,7 +54,7 @@ def main(args) -> int:
     cells = [cell for row in rows for cell in row["cells"]]
     missed = [cell for cell in cells if not cell.reproduced]
     unexplained = [cell for cell in missed if cell.reason.startswith("UNEXPLAINED")]
-    print(f"[1/3] Table 3: {len(cells) - len(missed)}/{len(cells)} printed cells reproduced, "
+    print(f"[1/4] Table 3: {len(cells) - len(missed)}/{len(cells)} printed cells reproduced, "
           f"{len(missed)} known errata, {len(unexplained)} unexplained -> {markdown} "
           f"({time.perf_counter() - tick:.1f} s)", file=sys.stderr, flush=True)
 
@@ -56,12 +64,17 @@ def main(args) -> int:
                                      command=["impact-harness", "suite", *sys.argv[2:]])
     if outcome is None:
         return status
-    print(f"[2/3] run: {len(outcome.records)} records -> {results_path} "
+    print(f"[2/4] run: {len(outcome.records)} records -> {results_path} "
+          f"({time.perf_counter() - tick:.1f} s)", file=sys.stderr, flush=True)
+
+    tick = time.perf_counter()
+    summary = quick_survey(args, out / "survey")
+    print(f"[3/4] survey: {SURVEY_SAMPLES} samples per population -> {summary} "
           f"({time.perf_counter() - tick:.1f} s)", file=sys.stderr, flush=True)
 
     tick = time.perf_counter()
     written = report.write_report(read_results(results_path), out)
-    print(f"[3/3] report: {written['html']}, {written['summary']}, "
+    print(f"[4/4] report: {written['html']}, {written['summary']}, "
           f"{len(written['figures'])} figures ({time.perf_counter() - tick:.1f} s)",
           file=sys.stderr, flush=True)
 
@@ -75,4 +88,21 @@ def main(args) -> int:
     return 1 if failed or unexplained else status
 
 
-__all__ = ["add_arguments", "main"]
+def quick_survey(args, out: Path) -> Path:
+    """The survey of every population at :data:`SURVEY_SAMPLES` samples through the engines
+    and presets the run selected; returns the written ``summary.md``."""
+    from harness.survey.cli import run_survey, write_survey
+    from harness.survey.population import resolve_populations
+
+    engines = runner.parse_engines(args.engines)
+    presets = runner.parse_presets(args.preset)
+    survey = run_survey(resolve_populations([]), SURVEY_SAMPLES, 0, engines, presets,
+                        echo=lambda _: None)
+    settings = {"samples": SURVEY_SAMPLES, "seed": 0,
+                "engines": [name for name in engines if name not in survey["skipped"]],
+                "presets": list(presets)}
+    write_survey(survey, out, settings, figures=False)
+    return out / "summary.md"
+
+
+__all__ = ["SURVEY_SAMPLES", "add_arguments", "main", "quick_survey"]

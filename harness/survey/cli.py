@@ -69,7 +69,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: bool = False, echo=print) -> dict:
     """The survey in memory: ``{"samples", "runs", "statistics", "rejections", "timings",
-    "engine_results", "skipped"}`` (columns as ``{name: array}``)."""
+    "engine_results", "skipped", "scenes"}`` (columns as ``{name: array}``)."""
     clock = time.perf_counter
     timings: dict[str, tuple[float, int]] = {}
     begin = clock()
@@ -97,11 +97,14 @@ def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: 
             echo(f"skipping {engine}: {error}")
             continue
         for preset in presets:
-            result = run_engine(engine, preset, scenes)
+            result = run_engine(engine, preset, scenes, terms.problems,
+                                law_results["newton-lcp"].batch.energy_change)
             results.append(result)
             timings[f"engine {engine} {preset}"] = (result.wall_s, len(scenes))
+            timings[f"verdicts {engine} {preset}"] = (result.judge_s, len(scenes))
             echo(f"{engine} {preset}: {len(scenes)} impacts in {result.wall_s:.2f} s "
-                 f"({result.wall_s / len(scenes) * 1e6:.0f} µs each)")
+                 f"({result.wall_s / len(scenes) * 1e6:.0f} µs each), verdicts "
+                 f"{result.judge_s:.2f} s")
             if bare:
                 bare_times = bare_stepping(engine, preset, scenes, result.steps)
                 timings[f"bare {engine} {preset} (steps only)"] = (bare_times["bare_s"],
@@ -123,6 +126,7 @@ def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: 
         "timings": timings,
         "engine_results": results,
         "skipped": skipped,
+        "scenes": scenes,
     }
 
 

@@ -1,8 +1,10 @@
 """Every sample through an engine and preset, and the engines' bare stepping of the same impacts.
 
-:func:`run_engine` is the survey's only call into the engines: today it runs the scenes one
-by one through ``harness.engines.load_engine(name).run(scene, settings)``; a bulk path
-(many impacts per engine world) replaces its body without changing what it returns.
+:func:`run_engine` is the survey's only call into the engines: it hands the scenes to
+``Engine.run_many`` (harness/engines/contract.py), which runs many impacts per engine world
+where the adapter can (pymunk) and one by one elsewhere, with the same result bit for bit.
+Every run is then judged by the verdict checks (:func:`harness.run.verdicts.judge`): a run
+is one impact only if it fails none, and its ``status`` is the first failing reason.
 
 :func:`bare_stepping` times, for the same scenes, the engine's own stepping with the
 benchmark's bare steppers (harness/bench/engines.py): the same step call as the adapter in a
@@ -18,7 +20,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from harness.engines import STATUSES, load_engine
+from harness.run import verdicts
 from harness.survey.laws import WIDTH
+
+#: Scenes handed to ``run_many`` at once: the runs (with their contact records) of one slice
+#: are judged and dropped before the next, so memory does not grow with the survey.
+SLICE = 2048
 
 
 @dataclass(frozen=True)
@@ -29,30 +36,66 @@ class EngineResults:
     engine_version: str
     preset: str
     velocities: np.ndarray  # (n, 6) post-impact speeds, padded like ContactTerms.u
-    status: np.ndarray  # (n,) str, one of harness.engines.STATUSES
+    engine_status: np.ndarray  # (n,) str, the engine's own status (harness.engines.STATUSES)
+    status: np.ndarray  # (n,) str, "ok" or the first failing verdict reason (verdicts.REASONS)
+    reasons: np.ndarray  # (n,) str, every failing verdict reason, comma-separated ("" if none)
     steps: np.ndarray  # (n,) steps simulated
-    wall_s: float  # s, the whole of run_engine
+    wall_s: float  # s, engine runs only (run_many)
+    judge_s: float  # s, the verdict checks
 
 
-def run_engine(engine_name: str, preset: str, scenes) -> EngineResults:
-    """Run every scene through ``engine_name`` at ``preset`` (the swap point for bulk paths)."""
-    start = time.perf_counter()
+def run_engine(engine_name: str, preset: str, scenes, problems=None,
+               law_energy_change=None) -> EngineResults:
+    """Run every scene through ``engine_name`` at ``preset`` and judge every run.
+
+    ``problems``: each scene's ``ImpactProblem`` (the verdicts' input; None: not judged, the
+    status is the engine's); ``law_energy_change``: newton-lcp's energy change per scene (J),
+    to attribute an energy gain to the law (docs/verdicts.md).
+    """
     engine = load_engine(engine_name)
     settings = engine.settings(preset)  # one dict for every run: the adapters cache on it
     count = len(scenes)
     velocities = np.zeros((count, WIDTH))
+    engine_status = np.empty(count, dtype=object)
     status = np.empty(count, dtype=object)
+    reasons = np.full(count, "", dtype=object)
     steps = np.zeros(count, dtype=np.int64)
-    run = engine.run
-    for row, scene in enumerate(scenes):
-        result = run(scene, settings)
-        speeds = result.u_after
-        velocities[row, :len(speeds)] = speeds
-        status[row] = result.status
-        steps[row] = result.steps
-    assert set(status) <= set(STATUSES), set(status) - set(STATUSES)
-    return EngineResults(engine_name, engine.version, preset, velocities, status.astype(str),
-                         steps, time.perf_counter() - start)
+    wall = judging = 0.0
+    clock = time.perf_counter
+    for begin in range(0, count, SLICE):
+        tick = clock()
+        runs = engine.run_many(scenes[begin:begin + SLICE], settings)
+        wall += clock() - tick
+        tick = clock()
+        for row, run in enumerate(runs, start=begin):
+            speeds = run.u_after
+            velocities[row, :len(speeds)] = speeds
+            engine_status[row] = status[row] = run.status.value
+            steps[row] = run.steps
+            if problems is not None:
+                gain = None if law_energy_change is None else float(law_energy_change[row])
+                verdict = verdicts.judge(scenes[row], problems[row],
+                                         run_numbers(engine_name, run),
+                                         law_energy_change=gain)
+                status[row] = verdict.status(run.status.value)
+                reasons[row] = ",".join(verdict.names)
+        judging += clock() - tick
+    assert set(engine_status) <= set(STATUSES), set(engine_status) - set(STATUSES)
+    return EngineResults(engine_name, engine.version, preset, velocities,
+                         engine_status.astype(str), status.astype(str), reasons.astype(str),
+                         steps, wall, judging)
+
+
+def run_numbers(engine_name: str, run) -> verdicts.RunNumbers:
+    """What the verdict reads of an ``EngineRun`` (the scene-frame contact records)."""
+    return verdicts.RunNumbers(
+        engine=engine_name, status=run.status.value, u_after=run.u_after,
+        max_penetration=run.max_penetration, normal_impulse=run.normal_impulse,
+        tangential_impulse=run.tangential_impulse, impulse_source=run.impulse_source,
+        contact_normal=run.contact_normal,
+        contacts=tuple(verdicts.StepContacts(step.step, tuple(step.points), step.poses)
+                       for step in run.contacts),
+        notes=run.notes)
 
 
 def bare_stepping(engine_name: str, preset: str, scenes, steps) -> dict[str, float]:

@@ -39,6 +39,8 @@ class ContactTerms:
     vt: np.ndarray  # m/s, in the harness's t = (n_y, −n_x)
     mu: np.ndarray
     e: np.ndarray
+    free_bodies: np.ndarray  # (n,) bool: two free bodies (departures in the centre-of-mass frame)
+    problems: tuple  # per sample, its planar_impact ImpactProblem (the verdicts' input)
 
     def __len__(self) -> int:
         return len(self.dofs)
@@ -55,9 +57,13 @@ def contact_terms(samples) -> ContactTerms:
     mass = np.ones((count, WIDTH))
     u, wn, wt = (np.zeros((count, WIDTH)) for _ in range(3))
     mu, e = np.empty(count), np.empty(count)
+    free_bodies = np.zeros(count, dtype=bool)
+    problems = []
     for row, sample in enumerate(samples):
         scene, contact = sample.scene, sample.contact
         problem = geometry.impact_problem(scene, contact.point, contact.normal)
+        problems.append(problem)
+        free_bodies[row] = not scene.ground
         size = len(problem.u)
         dofs[row] = size
         diagonal = np.diag(problem.mass_matrix)
@@ -69,7 +75,8 @@ def contact_terms(samples) -> ContactTerms:
     mnt = np.sum(wn * wt / mass, axis=1)
     mtt = np.sum(wt * wt / mass, axis=1)
     vn, vt = np.sum(wn * u, axis=1), np.sum(wt * u, axis=1)
-    return ContactTerms(dofs, mass, u, wn, wt, mnn, mnt, mtt, vn, vt, mu, e)
+    return ContactTerms(dofs, mass, u, wn, wt, mnn, mnt, mtt, vn, vt, mu, e, free_bodies,
+                        tuple(problems))
 
 
 @dataclass(frozen=True)

@@ -1,14 +1,17 @@
 """Departures of every run and their statistics per engine × preset × family × collision type.
 
-Departure is the harness's one error measure, ``‖u − u_law‖_M / ‖u_before‖_M``, computed by
-:func:`harness.run.metrics.departure`; the split of an engine's departure
-from Poisson follows harness/run/metrics.py: ``law_part`` = newton-lcp from Poisson (the
-same for every engine), ``solve_part`` = the engine from newton-lcp.
+Departure is the harness's one error measure, ``‖u − u_law‖_M / s`` with ``s`` the frame-free
+speed scale (the ground's frame, or the centre of mass's for two free bodies), computed for
+every row at once by :func:`harness.run.metrics.departure_batch`; the split of an engine's
+departure from Poisson follows harness/run/metrics.py: ``law_part`` = newton-lcp from
+Poisson (the same for every engine), ``solve_part`` = the engine from newton-lcp.
 
-Statistics are over the runs with status ``ok``: a flagged run (no contact, no separation,
-a blow-up, several contact points) is not the answer to one impact, so it is counted under
-its status instead. A run *gains energy* when its kinetic energy after exceeds the energy
-before by more than :data:`ENERGY_GAIN_TOLERANCE` of it.
+Statistics are over the runs whose verdict is one impact (status ``ok``,
+harness/run/verdicts.py): a flagged run (the engine's status, or a failing verdict check:
+a second feature touched, still closing, deep penetration, Δu not one impulse at the
+contact, a numerics energy gain, …) is not the answer to one impact, so it is counted under
+each reason it fails instead. A run *gains energy* when its kinetic energy after exceeds
+the energy before by more than :data:`ENERGY_GAIN_TOLERANCE` of it.
 """
 
 from __future__ import annotations
@@ -17,8 +20,7 @@ import math
 
 import numpy as np
 
-from harness.engines import STATUSES
-from harness.run import metrics
+from harness.run import metrics, verdicts
 
 #: Relative energy increase above which a run counts as gaining energy: engines' rounding is
 #: ~1e-15 of the energy and their iterative solvers stop ~1e-12 from their law; a gain a
@@ -30,13 +32,8 @@ ALL_TYPES = 0  # the collision-type column's value for the row over every type
 
 
 def row_departures(terms, u, u_law) -> np.ndarray:
-    """``departure(u[i], u_law[i])`` for every row, through :func:`metrics.departure`."""
-    out = np.empty(len(terms))
-    for row in range(len(terms)):
-        dofs = int(terms.dofs[row])
-        out[row] = metrics.departure(terms.mass_matrix(row), u[row, :dofs], u_law[row, :dofs],
-                                     terms.u[row, :dofs])
-    return out
+    """``departure(u[i], u_law[i])`` for every row (:func:`metrics.departure_batch`)."""
+    return metrics.departure_batch(terms.mass, u, u_law, terms.u, free_bodies=terms.free_bodies)
 
 
 def relative_energy_change(terms, u_after) -> np.ndarray:
@@ -61,6 +58,8 @@ def run_columns(family, sample_index, terms, laws, routh, engine_results) -> dic
             "engine": np.full(len(terms), result.engine),
             "preset": np.full(len(terms), result.preset),
             "status": result.status,
+            "engine_status": result.engine_status,
+            "reasons": result.reasons,
             "steps": result.steps,
             "poisson_type": poisson_type,
             "alpha": routh["alpha"],
@@ -104,9 +103,9 @@ def statistics(runs: dict) -> dict:
         row = {"engine": engine, "preset": preset, "family": family, "poisson_type": kind,
                "n": int(index.size), "n_ok": int(ok.sum()),
                "flagged_fraction": float(1.0 - ok.mean())}
-        for name in STATUSES:
-            if name != "ok":
-                row[f"flagged_{name}"] = float((status == name).mean())
+        failing = [set(filter(None, text.split(","))) for text in runs["reasons"][index]]
+        for name in verdicts.REASONS:  # a run failing several reasons counts under each
+            row[f"flagged_{name}"] = sum(name in names for names in failing) / index.size
         row["energy_gain_fraction"] = float(runs["gains_energy"][index][ok].mean()) \
             if ok.any() else math.nan
         for column in ("departure_poisson", "departure_stronge", "law_part", "solve_part"):

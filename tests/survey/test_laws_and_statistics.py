@@ -65,12 +65,15 @@ def test_routh_ratio_places_each_poisson_type_where_table1_says(survey_samples):
     assert np.all(ratio[chosen] >= 1 + e[chosen] - tol)
 
 
-def _runs(values, status, kinds, gains):
+def _runs(values, status, kinds, gains, reasons=None):
     count = len(values)
+    if reasons is None:  # one failing reason per flagged run: its status
+        reasons = ["" if name == "ok" else name for name in status]
     return {
         "engine": np.array(["pymunk"] * count), "preset": np.array(["accurate"] * count),
         "family": np.array(["f"] * count), "poisson_type": np.asarray(kinds),
-        "status": np.asarray(status), "gains_energy": np.asarray(gains),
+        "status": np.asarray(status), "reasons": np.asarray(reasons),
+        "gains_energy": np.asarray(gains),
         "departure_poisson": np.asarray(values, dtype=float),
         "departure_stronge": np.asarray(values, dtype=float) * 2,
         "law_part": np.zeros(count), "solve_part": np.asarray(values, dtype=float),
@@ -98,12 +101,35 @@ def test_statistics_quantiles_fractions_and_the_all_types_row():
     assert stats["n"][one] == 50 and stats["departure_poisson_median"][one] == pytest.approx(25.5)
 
 
-def test_row_departures_use_each_samples_own_mass_matrix(survey_samples):
+def test_a_run_failing_several_reasons_counts_under_each():
+    values = np.arange(1.0, 11.0)
+    status = ["ok"] * 7 + ["multi-contact", "multi-contact", "energy-gain"]
+    reasons = [""] * 7 + ["multi-contact,impulse-residual", "multi-contact", "energy-gain"]
+    stats = statistics.statistics(_runs(values, status, [1] * 10, [False] * 10, reasons))
+    every = list(stats["poisson_type"]).index(statistics.ALL_TYPES)
+    assert stats["flagged_fraction"][every] == pytest.approx(0.3)
+    assert stats["flagged_multi-contact"][every] == pytest.approx(0.2)
+    assert stats["flagged_impulse-residual"][every] == pytest.approx(0.1)
+    assert stats["flagged_energy-gain"][every] == pytest.approx(0.1)
+    assert stats["flagged_penetration"][every] == 0.0
+    assert stats["departure_poisson_max"][every] == 7  # flagged runs kept out
+
+
+def test_row_departures_use_each_samples_own_mass_matrix_and_frame(survey_samples):
     terms = laws.contact_terms(survey_samples)
+    assert terms.free_bodies.any() and not terms.free_bodies.all()
     zero = statistics.row_departures(terms, terms.u, terms.u)
     assert np.all(zero == 0.0)
-    # Reversing every speed departs by exactly 2 (|u - (-u)|_M = 2 |u|_M).
-    assert np.allclose(statistics.row_departures(terms, -terms.u, terms.u), 2.0, rtol=1e-14)
+    # Reversing every speed departs by 2 |u|_M over the frame-free scale: exactly 2 against
+    # the ground, more for two free bodies (their centre of mass's motion is not counted).
+    reversed_ = statistics.row_departures(terms, -terms.u, terms.u)
+    ground = ~terms.free_bodies
+    assert np.allclose(reversed_[ground], 2.0, rtol=1e-14)
+    expected = [metrics.departure(np.diag(terms.mass[row]), -terms.u[row], terms.u[row],
+                                  terms.u[row], free_bodies=True)
+                for row in np.flatnonzero(terms.free_bodies)]
+    assert np.allclose(reversed_[terms.free_bodies], expected, rtol=1e-12)  # einsum rounding
+    assert np.all(reversed_[terms.free_bodies] > 2.0)
 
 
 def test_relative_energy_change_of_a_law_matches_the_solver(survey_samples):

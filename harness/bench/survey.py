@@ -1,0 +1,74 @@
+"""``impact-harness bench --survey``: the survey end to end beside the engines' bare stepping.
+
+One run, two measurements on the same impacts:
+
+* ``survey_s`` -- :func:`harness.survey.cli.run_survey` in memory, everything but writing
+  files: sampling and checking every scene, the contact terms and the five laws
+  (``solve_batch``), every engine and preset (``Engine.run_many``), the verdict checks of
+  every run, the departures and the statistics;
+* ``bare_s`` -- for every engine and preset, the engine's own stepping of the same scenes
+  (as many steps as the survey's run took) with its own per-impact reset
+  (:func:`harness.survey.engines.bare_stepping`, ``bare_reset_s``): the least any Python
+  driver spends on these impacts. Worlds are built outside the timed region.
+
+``ratio = survey_s / bare_s`` (target :data:`RATIO_TARGET`). The stages' own times are
+printed too, so the gap is attributed.
+"""
+
+from __future__ import annotations
+
+import time
+
+from harness.engines import ENGINE_NAMES, PRESET_NAMES, EngineNotInstalled, load_engine
+from harness.survey.cli import run_survey
+from harness.survey.engines import bare_stepping
+from harness.survey.population import resolve_populations
+
+RATIO_TARGET = 1.5
+SAMPLES = 500  # per population
+QUICK_SAMPLES = 60
+
+
+def run(samples: int, engines=ENGINE_NAMES, presets=PRESET_NAMES, seed: int = 0) -> dict:
+    """``{"samples", "impacts", "survey_s", "bare_s", "ratio", "stages", "bare"}``."""
+    installed = []
+    for name in engines:
+        try:
+            load_engine(name)
+            installed.append(name)
+        except EngineNotInstalled:
+            continue
+    populations = resolve_populations([])
+    begin = time.perf_counter()
+    survey = run_survey(populations, samples, seed, installed, presets, echo=lambda _: None)
+    survey_s = time.perf_counter() - begin
+    bare = {}
+    for result in survey["engine_results"]:
+        bare[f"{result.engine} {result.preset}"] = bare_stepping(
+            result.engine, result.preset, survey["scenes"], result.steps)["bare_reset_s"]
+    bare_s = sum(bare.values())
+    return {"samples": samples, "impacts": len(survey["scenes"]), "engines": installed,
+            "presets": list(presets), "survey_s": survey_s, "bare_s": bare_s,
+            "ratio": survey_s / bare_s if bare_s > 0 else float("nan"),
+            "stages": {stage: seconds for stage, (seconds, _) in survey["timings"].items()},
+            "bare": bare}
+
+
+def format_report(report: dict) -> str:
+    """The printed table: the totals, then every stage and every engine's bare stepping."""
+    impacts = report["impacts"]
+    runs = impacts * len(report["bare"])
+    lines = [
+        (f"survey: {report['samples']} samples x {impacts // report['samples']} populations"
+         f" = {impacts} impacts, {len(report['bare'])} engine/preset pairs ({runs} engine "
+         "runs)"),
+        f"  survey end to end     {report['survey_s']:8.2f} s",
+        f"  bare stepping (reset + steps, same impacts) {report['bare_s']:8.3f} s",
+        f"  ratio {report['ratio']:.1f} (target <= {RATIO_TARGET})",
+        "  stages:",
+    ]
+    lines += [f"    {stage:<44} {seconds:8.3f} s" for stage, seconds in report["stages"].items()]
+    lines.append("  bare stepping per engine and preset:")
+    lines += [f"    {pair:<44} {seconds:8.3f} s ({seconds / impacts * 1e6:.1f} µs/impact)"
+              for pair, seconds in report["bare"].items()]
+    return "\n".join(lines)

@@ -1,0 +1,27 @@
+"""``figures.png_tag`` reads the digest from the PNG's text chunk, as Pillow does."""
+
+from __future__ import annotations
+
+import pytest
+
+from harness.report import figures
+
+
+def test_png_tag_reads_the_saved_digest_like_pillow(tmp_path):
+    image = pytest.importorskip("PIL.Image")
+    figure = figures.new_figure(2, 2)
+    figure.add_subplot().plot([0, 1], [1, 0])
+    path = figures.save_png(figure, tmp_path / "f.png", tag="d" * 64)
+    assert figures.png_tag(path) == "d" * 64
+    with image.open(path) as opened:
+        assert opened.text[figures.TAG_KEY] == figures.png_tag(path)
+    untagged = figures.save_png(figure, tmp_path / "g.png")
+    assert figures.png_tag(untagged) is None
+
+
+def test_png_tag_of_missing_truncated_and_foreign_files_is_none(tmp_path):
+    assert figures.png_tag(tmp_path / "none.png") is None
+    (tmp_path / "short.png").write_bytes(b"\x89PNG\r\n\x1a\n\x00\x00")
+    assert figures.png_tag(tmp_path / "short.png") is None
+    (tmp_path / "text.png").write_text("not a png")
+    assert figures.png_tag(tmp_path / "text.png") is None
