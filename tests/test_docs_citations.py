@@ -51,9 +51,10 @@ def headings(markdown: str) -> set[str]:
 
 
 def resolve(document: str, citing_file: Path) -> Path | None:
-    """The cited file, from the repository root or the citing file's folder, or for a bare
-    file name the tracked document of that name; None if there is none."""
-    for base in (ROOT, citing_file.parent):
+    """The cited file, from the repository root, the citing file's folder or the shipped
+    report folder (code names the files a report writes relative to its output folder), or
+    for a bare file name the tracked document of that name; None if there is none."""
+    for base in (ROOT, citing_file.parent, ROOT / "reports"):
         candidate = (base / document).resolve()
         if candidate.is_file() and candidate.is_relative_to(ROOT):
             return candidate

@@ -497,9 +497,13 @@ def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[di
         "out-of-the-box <i>defaults</i> and with <i>accurate</i> settings (for MuJoCo "
         "<i>matched-bounce</i>: it matches the bounce, not a dissipative law). The "
         "<b>departure</b> of an engine from a law is the error of its post-impact velocities "
-        "in the kinetic-energy norm, relative to the motion before the impact: "
-        "‖u<sub>engine</sub> − u<sub>law</sub>‖<sub>M</sub> / ‖u<sub>before</sub>‖<sub>M</sub>,"
-        " in percent throughout (0 = identical, 10% = a tenth of the motion is wrong).</p>")
+        "in the kinetic-energy norm, relative to the motion before the impact measured in a "
+        "frame no common velocity or rotation changes (the ground's, or the centre of mass's "
+        "for two free bodies): "
+        "‖u<sub>engine</sub> − u<sub>law</sub>‖<sub>M</sub> / ‖u<sub>before</sub>‖<sub>M, "
+        "frame-free</sub>, in percent throughout (0 = identical, 10% = a tenth of the motion "
+        "is wrong). Only single impacts have a departure: a run that fails a verdict check "
+        "(docs/verdicts.md) is shown with its reason and counted, never averaged in.</p>")
     parts.append(
         f'<p class="facts"><b>{len(names)}</b> scenarios, <b>{len(results.records)}</b> '
         f"records; engine runs: <b>{len(engine_records)}</b> "
@@ -516,9 +520,9 @@ def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[di
             caption="Departure from Poisson (left pair) and from exact Stronge (right pair), "
             "engines out of the box (<i>defaults</i>) and tuned (<i>accurate</i>; MuJoCo: "
             "<i>matched-bounce</i>). Sweeps show "
-            "their largest departure over the sweep. “!” after a value: the run holding that "
-            "value was flagged by the engine (multi-contact, no separation …); “(k!)”: k other "
-            "points of the sweep were flagged, not the one shown; “*”: the scenario overrides "
+            "their largest departure over the sweep's single impacts. “(k!)”: k runs were "
+            "flagged (multi-contact, not separated, …) and are not in the value; “*”: the "
+            "scenario overrides "
             "the preset's settings (see its section); grey cells were skipped. Light = agrees, "
             "dark red = far off."))
     parts.append("<h2 id='why'>Why: what each engine and preset solves</h2>")

@@ -32,7 +32,8 @@ def write_summary(results: Results, out_dir: Path) -> Path:
     labels = results.engine_labels()
     lines = ["# Planar impact with friction: engines against the exact laws", "",
              "Departure of each engine (and preset) from the exact laws, "
-             "`‖u_engine − u_law‖_M / ‖u_before‖_M` (relative error of the post-impact "
+             "`‖u_engine − u_law‖_M / ‖u_before‖_M` with `u_before` in the ground's frame, or "
+             "the centre of mass's for two free bodies (relative error of the post-impact "
              "velocities in the kinetic-energy norm; sweeps: the largest over the sweep). "
              "`(k!)` counts the flagged runs (not single impacts: the engine's status or a "
              "failed verdict check, docs/verdicts.md), never included in the value; `*` marks "
