@@ -257,12 +257,9 @@ def main(args) -> int:
         print(bench_engines.format_table(report))
         table["engines"] = report
     if "speed_accuracy" in selected:
-        try:
-            from harness.bench import accuracy as bench_accuracy
-        except ImportError as error:  # pragma: no cover - until the module lands
-            print(f"speed-accuracy benchmark unavailable: {error}")
-        else:
-            table["speed_accuracy"] = bench_accuracy.run(args.quick, args.out)
+        from harness.bench import accuracy as bench_accuracy
+
+        table["speed_accuracy"] = bench_accuracy.run(args.quick, args.out)
     if "survey" in selected:
         from harness.bench import survey as bench_survey
 

@@ -43,12 +43,13 @@ from harness.engines.contract import (
 )
 from harness.engines.settings import EngineSettingsError
 
-# engine name -> (adapter module, importable package the adapter needs, pinned requirement)
+# engine name -> (adapter module, importable package the adapter needs, distribution name);
+# the pinned version lives once, in pyproject.toml's `harness` extra (see pinned_requirement).
 _ENGINE_MODULES: dict[str, tuple[str, str, str]] = {
-    "pymunk": ("harness.engines.pymunk_engine", "pymunk", "pymunk==7.3.1"),
-    "pybullet": ("harness.engines.pybullet_engine", "pybullet", "pybullet==3.2.7"),
-    "mujoco": ("harness.engines.mujoco_engine", "mujoco", "mujoco==4.0.0"),
-    "box2d": ("harness.engines.box2d_engine", "Box2D", "box2d==2.3.10"),
+    "pymunk": ("harness.engines.pymunk_engine", "pymunk", "pymunk"),
+    "pybullet": ("harness.engines.pybullet_engine", "pybullet", "pybullet"),
+    "mujoco": ("harness.engines.mujoco_engine", "mujoco", "mujoco"),
+    "box2d": ("harness.engines.box2d_engine", "Box2D", "box2d"),
 }
 
 ENGINE_NAMES: tuple[str, ...] = tuple(_ENGINE_MODULES)
@@ -64,6 +65,23 @@ PRESET_NAMES: tuple[str, ...] = PRESET_ROLES
 _PRESET_NAMES: dict[str, dict[str, str]] = {
     "mujoco": {"accurate": "matched-bounce"},
 }
+
+
+def pinned_requirement(distribution: str) -> str:
+    """``distribution`` as pinned by this project's ``harness`` extra (``"pymunk==7.3.1"``),
+    read from the installed project's metadata; the bare name when that is unavailable."""
+    from importlib import metadata
+
+    try:
+        requirements = metadata.requires("planar-impact-harness") or []
+    except metadata.PackageNotFoundError:
+        return distribution
+    for requirement in requirements:
+        spec = requirement.split(";")[0].strip()
+        name = spec.split("==")[0].split(">=")[0].strip()
+        if name.lower() == distribution.lower():
+            return spec
+    return distribution
 
 
 def preset_label(engine: str, role: str | None) -> str | None:
@@ -118,7 +136,8 @@ class EngineNotInstalled(ImportError):
     """The engine's Python package cannot be imported."""
 
     def __init__(self, engine: str, reason: str = ""):
-        _, package, requirement = _ENGINE_MODULES[engine]
+        _, package, distribution = _ENGINE_MODULES[engine]
+        requirement = pinned_requirement(distribution)
         self.engine = engine
         self.install_command = f"pip install {requirement}"
         message = (

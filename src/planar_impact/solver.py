@@ -26,21 +26,6 @@ from .errors import ImpactInputError
 
 HYPOTHESES: tuple[str, ...] = ("newton", "poisson", "stronge", "stronge-paper", "newton-lcp")
 
-# Fields every result carries, scalar or batch (batch adds ``status``).
-RESULT_FIELDS = (
-    "normal_impulse",
-    "tangential_impulse",
-    "vn_approach",
-    "vn_separation",
-    "vt_approach",
-    "vt_separation",
-    "energy_change",
-    "collision_type",
-    "case",
-    "restitution_poisson",
-    "restitution_in_range",
-)
-
 
 def check_hypothesis(hypothesis: str) -> str:
     if hypothesis not in HYPOTHESES:
