@@ -365,10 +365,11 @@ def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[di
     else:
         parts.append("<p class='muted'>Not generated: run <code>impact-harness paper</code> "
                      "(or <code>impact-harness suite</code>).</p>")
-    if (out_dir / "survey" / "summary.md").exists():  # written by impact-harness suite
-        parts.append("<h2 id='survey'>Survey</h2><p>Departures over random families of "
-                     "impacts: <a href='survey/summary.md'>survey/summary.md</a> (a quick "
-                     "survey; <code>impact-harness survey</code> for the full one).</p>")
+    survey = Path("survey", "summary.md")  # written by impact-harness suite
+    if (out_dir / survey).exists():
+        parts.append(f"<h2 id='survey'>Survey</h2><p>Departures over random families of "
+                     f"impacts: <a href='{survey.as_posix()}'>the survey's summary</a> (a "
+                     f"quick survey; <code>impact-harness survey</code> for the full one).</p>")
     parts.append("<h2 id='versions'>Versions and settings</h2>" + versions_html(prov))
     parts.append("<h3>Engine settings per preset</h3><p>Bold where the presets differ. "
                  "Scenario files may override settings "
