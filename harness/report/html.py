@@ -573,10 +573,11 @@ def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[di
                                       results.for_scenario(name), figures))
     parts.append("<h2 id='table3'>Table 3 of Djerassi (2009, Part B) reproduced</h2>")
     parts.append(table3_html(figures.get("table3")))
-    if (out_dir / "survey" / "summary.md").exists():  # written by impact-harness suite
-        parts.append("<h2 id='survey'>Survey</h2><p>Departures over random families of "
-                     "impacts: <a href='survey/summary.md'>survey/summary.md</a> (a quick "
-                     "survey; <code>impact-harness survey</code> for the full one).</p>")
+    survey = Path("survey", "summary.md")  # written by impact-harness suite
+    if (out_dir / survey).exists():
+        parts.append(f"<h2 id='survey'>Survey</h2><p>Departures over random families of "
+                     f"impacts: <a href='{survey.as_posix()}'>the survey's summary</a> (a "
+                     f"quick survey; <code>impact-harness survey</code> for the full one).</p>")
     parts.append("<h2 id='versions'>Versions and settings</h2>" + versions_html(prov))
     parts.append("<h3>Engine settings per preset</h3><p>Bold where the presets differ. "
                  "Scenario files may override settings "

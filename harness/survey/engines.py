@@ -103,21 +103,24 @@ def bare_stepping(engine_name: str, preset: str, scenes, steps) -> dict[str, flo
 
     Returns ``{"bare_s": …, "bare_reset_s": …, "impacts": n}``: the sums over the scenes of
     one timed pass each (the survey's impacts are all different, so there is no best-of).
+    Each scene's stepper (``Engine.bare_stepper``, the benchmark's: a world of its own) is
+    closed after its pass: a pybullet world holds tens of MB.
     """
-    from harness.bench.engines import _bare_stepper
-
     engine = load_engine(engine_name)
     settings = engine.settings(preset)
     clock = time.perf_counter
     bare = bare_reset = 0.0
     for scene, count in zip(scenes, steps):
-        prepare, step_n = _bare_stepper(engine, scene, settings)
-        prepare()
-        begin = clock()
-        step_n(int(count))
-        bare += clock() - begin
-        begin = clock()
-        prepare()
-        step_n(int(count))
-        bare_reset += clock() - begin
+        stepper = engine.bare_stepper(scene, settings)
+        try:
+            stepper.reset()
+            begin = clock()
+            stepper.step(int(count))
+            bare += clock() - begin
+            begin = clock()
+            stepper.reset()
+            stepper.step(int(count))
+            bare_reset += clock() - begin
+        finally:
+            stepper.close()
     return {"bare_s": bare, "bare_reset_s": bare_reset, "impacts": len(scenes)}
