@@ -12,8 +12,8 @@ cited by title, never by number: the documents do not number them.
 from __future__ import annotations
 
 import re
-import sys
 import subprocess
+import sys
 from pathlib import Path
 
 import pytest

@@ -107,7 +107,7 @@ def law_velocities(scene, contact, normal) -> dict[str, np.ndarray]:
 
     problem = impact_problem(scene, contact, normal)
     return {law: np.asarray(problem.solve(mu=scene.friction, e=scene.restitution,
-                                          hypothesis=law).u_after, dtype=float)
+                                          law=law).u_after, dtype=float)
             for law in ("poisson", "stronge", "newton-lcp")}
 
 

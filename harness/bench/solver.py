@@ -93,8 +93,8 @@ def solver_benchmark(quick: bool) -> dict:
     rounds = 3 if quick else 5
     sample = random_problems(200, seed=2)
     solved_share = {}
-    for law in pi.HYPOTHESES:
-        solved_share[law] = float(np.mean(pi.solve_batch(**problems, hypothesis=law).status == 0))
+    for law in pi.LAWS:
+        solved_share[law] = float(np.mean(pi.solve_batch(**problems, law=law).status == 0))
         _check_against_process(law, sample)
     # Interleaved rounds, best of each: a burst of load on the shared machine then hits the
     # baselines and the laws alike. Each call's result is dropped before the next, as the
@@ -103,8 +103,8 @@ def solver_benchmark(quick: bool) -> dict:
              "reused": lambda: numpy_passes_time(size, 1, keep=False),
              "write": lambda: output_write_time(size, 1)}
     timed.update({law: (lambda law=law: _best_time(
-                            lambda: pi.solve_batch(**problems, hypothesis=law), 1))
-                  for law in pi.HYPOTHESES})
+                            lambda: pi.solve_batch(**problems, law=law), 1))
+                  for law in pi.LAWS})
     best = {name: float("inf") for name in timed}
     for _ in range(rounds):
         for name, measure in timed.items():
@@ -112,7 +112,7 @@ def solver_benchmark(quick: bool) -> dict:
     baseline, reused = best["kept"], best["reused"]
     results = {"size": size, "numpy_passes": BASELINE_PASSES, "numpy_passes_s": baseline,
                "numpy_passes_reused_s": reused, "output_write_s": best["write"], "laws": {}}
-    for law in pi.HYPOTHESES:
+    for law in pi.LAWS:
         seconds = best[law]
         results["laws"][law] = {
             "batch_s": seconds,
@@ -131,7 +131,7 @@ def _check_against_process(law: str, sample: dict) -> None:
     """A fast wrong answer is no answer: compare a sample with the exact impulse process."""
     if law == "newton-lcp":
         return  # checked against enumeration and PGS in the test suite; no process exists
-    batch = pi.solve_batch(**sample, hypothesis=law)
+    batch = pi.solve_batch(**sample, law=law)
     for index in range(len(sample["mnn"])):
         r = row(sample, index)
         if law == "stronge-paper":
@@ -147,11 +147,11 @@ def _check_against_process(law: str, sample: dict) -> None:
 def scalar_solve_times(repeat: int) -> dict:
     problem = pi.builders.two_sleds(gamma=0.2, delta=0.85)
     times = {}
-    for law in pi.HYPOTHESES:
+    for law in pi.LAWS:
         calls = 2000
         # B023: _best_time calls the closure at once, within this iteration.
         seconds = _best_time(
-            lambda: [problem.solve(mu=0.3, e=0.8, hypothesis=law)  # noqa: B023
+            lambda: [problem.solve(mu=0.3, e=0.8, law=law)  # noqa: B023
                      for _ in range(calls)],  # noqa: B023
             repeat)
         times[law] = seconds / calls * 1e6
@@ -176,13 +176,13 @@ def process_times(quick: bool) -> dict:
 def batch_size_scan(quick: bool) -> dict:
     sizes = [10**k for k in range(0, 7 if quick else 8)]
     largest = random_problems(sizes[-1], seed=4)
-    scan = {law: {} for law in pi.HYPOTHESES}
+    scan = {law: {} for law in pi.LAWS}
     for size in sizes:
         problems = {k: v[:size] for k, v in largest.items()}
         repeat = 3 if size >= 10**6 else 7
-        for law in pi.HYPOTHESES:
+        for law in pi.LAWS:
             # B023: _best_time calls the closure at once, within this iteration.
-            seconds = _best_time(lambda: pi.solve_batch(**problems, hypothesis=law),  # noqa: B023
+            seconds = _best_time(lambda: pi.solve_batch(**problems, law=law),  # noqa: B023
                                  repeat)
             scan[law][size] = size / seconds
     return scan

@@ -143,7 +143,7 @@ def event_sequence(scene: Scene, law: str = "poisson", max_impacts: int = 1000,
                 continue
             others = [j for j in touching if j != k and _approach(problem, body, position,
                       velocity, omega, world[j], radius) < -APPROACH_TOLERANCE * speed_scale]
-            result = problem.solve(mu=scene.friction, e=scene.restitution, hypothesis=law)
+            result = problem.solve(mu=scene.friction, e=scene.restitution, law=law)
             velocity = result.u_after[:2].copy()
             omega = float(result.u_after[2])
             events.append(ImpactEvent(k, clock, result.collision_type, result.vn_approach,

@@ -72,7 +72,7 @@ def pgs_converges(mnn, mnt, mtt, vn, vt, mu, e, iterations=PGS_ITERATIONS,
 
 def pgs_divergence(problems: dict) -> dict:
     """(a): per sliding problem, ``μ|m_nt|/m_nn`` and whether PGS failed to converge."""
-    lcp = pi.solve_batch(**problems, hypothesis="newton-lcp")
+    lcp = pi.solve_batch(**problems, law="newton-lcp")
     sliding = (lcp.status == 0) & (lcp.collision_type != pi.laws.NEWTON_STICK)
     sample = {name: values[sliding] for name, values in problems.items()}
     ratio = sample["mu"] * np.abs(sample["mnt"]) / sample["mnn"]
@@ -91,9 +91,9 @@ def stronge_paper_jump(problems: dict) -> dict:
     sample = {name: values[chosen] for name, values in problems.items()}
     boundary = (1.0 + sample["e"]) * (g[chosen] / h[chosen]) * -sample["vn"]  # (A36)
     below = pi.solve_batch(**dict(sample, vt=boundary * (1 - BOUNDARY_OFFSET)),
-                           hypothesis="stronge-paper")
+                           law="stronge-paper")
     above = pi.solve_batch(**dict(sample, vt=boundary * (1 + BOUNDARY_OFFSET)),
-                           hypothesis="stronge-paper")
+                           law="stronge-paper")
     both = (below.status == 0) & (above.status == 0)
     jump = np.where(both, np.abs(below.normal_impulse - above.normal_impulse)
                     / above.normal_impulse, np.nan)
@@ -104,7 +104,7 @@ def stronge_paper_jump(problems: dict) -> dict:
 def energy_gain(problems: dict, law: str) -> np.ndarray:
     """(c): per problem, True where ``law`` gains energy, False where it does not, and
     False for rows it cannot solve (returned with them in ``solved``)."""
-    result = pi.solve_batch(**problems, hypothesis=law)
+    result = pi.solve_batch(**problems, law=law)
     scale = (np.abs(result.vn_approach) * result.normal_impulse
              + np.abs(result.vt_approach * result.tangential_impulse))
     solved = result.status == 0

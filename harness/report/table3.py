@@ -102,10 +102,10 @@ def computed_cells(result: pi.ImpactResult) -> dict[str, float]:
     }
 
 
-def solve_row(row: dict, hypothesis: str) -> pi.ImpactResult:
+def solve_row(row: dict, solver_law: str) -> pi.ImpactResult:
     law = row["hypothesis"]
     e = STRONGE_E_ENERGETIC if law == "stronge" else float(row["e"])
-    return table3_problem(row).solve(mu=float(row["mu"]), e=e, hypothesis=hypothesis)
+    return table3_problem(row).solve(mu=float(row["mu"]), e=e, law=solver_law)
 
 
 def reproduce_table3() -> list[dict]:
@@ -115,15 +115,15 @@ def reproduce_table3() -> list[dict]:
         law = row["hypothesis"]
         counters[law] = counters.get(law, 0) + 1
         # Stronge's printed rows come from the paper's mapping: compare against it.
-        hypothesis = "stronge-paper" if law == "stronge" else law
-        result = solve_row(row, hypothesis)
+        solver_law = "stronge-paper" if law == "stronge" else law
+        result = solve_row(row, solver_law)
         values = computed_cells(result)
         # The e column is an input for Newton and Poisson; only Stronge's e_i is computed.
         names = CELLS if law == "stronge" else CELLS[1:]
         cells = [Cell(law, counters[law], name, row[name], float(values[name])) for name in names]
         solutions = {h: solve_row(row, h)
                      for h in ("newton", "poisson", "stronge-paper", "stronge", "newton-lcp")}
-        rows.append({"row": row, "law": law, "index": counters[law], "hypothesis": hypothesis,
+        rows.append({"row": row, "law": law, "index": counters[law], "hypothesis": solver_law,
                      "result": result, "cells": cells, "solutions": solutions,
                      "type_printed": int(row["type"]), "type_computed": result.collision_type})
     return rows
@@ -133,7 +133,7 @@ def printed_du_residual(row: dict) -> tuple[float, float]:
     """Distance (kinetic-energy norm) from the printed Δu to the nearest Δu any Poisson e_i
     gives, and the best e_i. Δu(e_i) = Δu_c·(1 + e_i) for fixed type: a line through 0."""
     problem = table3_problem(row)
-    base = problem.solve(mu=float(row["mu"]), e=0.0, hypothesis="poisson").delta_u  # e_i = 0
+    base = problem.solve(mu=float(row["mu"]), e=0.0, law="poisson").delta_u  # e_i = 0
     printed = np.array([float(row[k]) for k in ("du1", "du3", "du4", "du6")])
     matrix = problem.mass_matrix
     scale = float(base @ matrix @ base)
@@ -208,9 +208,9 @@ def table3_sections(rows: list[dict]) -> list[Table3Section]:
     for entry in rows:
         if entry["law"] != "stronge":
             continue
-        for hypothesis in ("stronge-paper", "stronge"):
-            res = entry["solutions"][hypothesis]
-            stronge_rows.append([str(entry["index"]), hypothesis, str(res.collision_type),
+        for solver_law in ("stronge-paper", "stronge"):
+            res = entry["solutions"][solver_law]
+            stronge_rows.append([str(entry["index"]), solver_law, str(res.collision_type),
                                  f"{res.restitution_poisson:.4f}", _fmt_vector(res.delta_u),
                                  f"{res.vn_separation:.4f}", f"{res.vt_separation:.4f}",
                                  f"{res.energy_change:.4f}"])
@@ -231,8 +231,8 @@ def table3_sections(rows: list[dict]) -> list[Table3Section]:
         if key in seen:
             continue
         seen.add(key)
-        for hypothesis, res in entry["solutions"].items():
-            all_rows.append([f"0.8, {row['mu']}, {row['gamma']}, {row['delta']}", hypothesis,
+        for solver_law, res in entry["solutions"].items():
+            all_rows.append([f"0.8, {row['mu']}, {row['gamma']}, {row['delta']}", solver_law,
                              str(res.collision_type), _fmt_vector(res.delta_u),
                              f"{res.vn_separation:.4f}", f"{res.vt_separation:.4f}",
                              f"{res.energy_change:.4f}"])
@@ -295,17 +295,17 @@ def write_figure(rows: list[dict], path: Path, metadata: dict | None = None) -> 
         # where each law ends the impact.
         inset = ax.inset_axes([0.08, 0.5, 0.4, 0.4])
         ends = []
-        for hypothesis, (color, style, marker) in LAW_STYLES.items():
-            result = entry["solutions"][hypothesis]
-            law = "poisson" if hypothesis in ("poisson", "stronge-paper") else hypothesis
-            e = result.restitution_poisson if hypothesis == "stronge-paper" else 0.8
+        for solver_law, (color, style, marker) in LAW_STYLES.items():
+            result = entry["solutions"][solver_law]
+            law = "poisson" if solver_law in ("poisson", "stronge-paper") else solver_law
+            e = result.restitution_poisson if solver_law == "stronge-paper" else 0.8
             walk = pi.impulse_process(result.mnn, result.mnt, result.mtt, result.vn_approach,
                                       result.vt_approach, mu, e, law)
             path_n = [v.normal_impulse for v in walk.path]
             path_t = [v.tangential_impulse for v in walk.path]
             for target in (ax, inset):
                 target.plot(path_n, path_t, style, color=color, lw=1.5,
-                            label=f"{hypothesis} (type {result.collision_type})")
+                            label=f"{solver_law} (type {result.collision_type})")
                 target.plot(path_n[-1:], path_t[-1:], marker, color=color, ms=7)
             ends.append((path_n[-1], path_t[-1]))
         ends = np.array(ends)

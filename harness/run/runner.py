@@ -602,7 +602,7 @@ def point_records(scenario: Scenario, point, engine_entries: Sequence) -> list[R
     for law in scenario.laws:
         tick = time.perf_counter()
         try:
-            result = problem.solve(mu=mu, e=e, hypothesis=law)
+            result = problem.solve(mu=mu, e=e, law=law)
         except ValueError as error:
             law_speeds[law] = None
             law_records.append(Record(
@@ -633,7 +633,7 @@ def point_records(scenario: Scenario, point, engine_entries: Sequence) -> list[R
         return law_records
     scene = scenario.scene(point)
     try:  # the engines' own law, to attribute an energy gain (docs/verdicts.md)
-        lcp_gain = problem.solve(mu=mu, e=e, hypothesis="newton-lcp").energy_change
+        lcp_gain = problem.solve(mu=mu, e=e, law="newton-lcp").energy_change
     except ValueError:
         lcp_gain = None
     declared = verdicts.declared_contacts(scenario, scene)  # a flat face: judged against all

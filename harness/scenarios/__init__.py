@@ -25,7 +25,7 @@ Modules, in the order data flows through them:
 ...     for point, scene in scenario.points():
 ...         problem = scenario.analytic_problem(point)
 ...         result = problem.solve(mu=scenario.friction_at(point),
-...                                e=scenario.restitution_at(point), hypothesis="poisson")
+...                                e=scenario.restitution_at(point), law="poisson")
 """
 
 from harness.scenarios.checks import check_expectations

@@ -13,10 +13,10 @@ from typing import TYPE_CHECKING, Any, Mapping
 import numpy as np
 
 from harness.engines import EngineNotInstalled, load_engine
-from harness.scene import Body, Disk, Scene, geometry
 from harness.scenarios.errors import suggest
 from harness.scenarios.model import Point, Scenario
 from harness.scenarios.schema import ONE_POINT_TOLERANCE, PRESETS, SHAPE_FIELDS
+from harness.scene import Body, Disk, Scene, geometry
 
 if TYPE_CHECKING:  # the reader imports the checks, not the other way round
     from harness.scenarios.reader import TableReader
@@ -177,7 +177,7 @@ def check_expectations(scenario: Scenario) -> list[str]:
         for law in sorted(wanted_laws):
             try:
                 results[law] = problem.solve(mu=fixed.friction, e=fixed.restitution,
-                                             hypothesis=law)
+                                             law=law)
             except (ValueError, planar_impact.ImpactInputError) as error:
                 problems.append(f"{where}: {law}{at}: the solver refused: {error}")
         for law, result in results.items():
@@ -287,7 +287,7 @@ def second_strike(scene: Scene, contact, horizon_s: float, step_s: float) -> Str
     motions = [("before the impact", problem.u, step_s)]
     for law in SEQUENCE_LAWS:
         try:
-            result = problem.solve(mu=scene.friction, e=scene.restitution, hypothesis=law)
+            result = problem.solve(mu=scene.friction, e=scene.restitution, law=law)
         except (ValueError, ImpactInputError):
             continue
         motions.append((f"after the impact ({law})", result.u_after, horizon_s))

@@ -232,7 +232,7 @@ class Scenario:
         """Solve the analytic problem at a point under one law (``planar_impact.solve``)."""
         fixed = self.at(which)
         return self.analytic_problem(which).solve(mu=fixed.friction, e=fixed.restitution,
-                                                  hypothesis=law)
+                                                  law=law)
 
     # -- expectations ------------------------------------------------------------------------
     def expected_collision_type(self, law: str, which=None) -> int | None:

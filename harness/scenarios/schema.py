@@ -1,6 +1,6 @@
 """The scenario file schema: the names, keys and limits every scenario module shares.
 
-Law, engine and preset names come from their one home (``planar_impact.HYPOTHESES``, the
+Law, engine and preset names come from their one home (``planar_impact.LAWS``, the
 engine registry); the two-sled defaults from ``planar_impact.builders.two_sleds``.
 """
 
@@ -10,13 +10,14 @@ import inspect
 import re
 from pathlib import Path
 
+import planar_impact
 from harness.engines import ENGINE_NAMES, PRESET_NAMES
-from planar_impact import HYPOTHESES, builders
+from planar_impact import builders
 
 SCENARIO_DIR = Path(__file__).resolve().parent.parent.parent / "scenarios"
 
-#: Impact laws, by the names of ``planar_impact.HYPOTHESES``.
-LAWS = HYPOTHESES
+#: Impact laws, by the names of ``planar_impact.LAWS``.
+LAWS: tuple[str, ...] = planar_impact.LAWS
 #: Collision types each law reports: Poisson/Stronge 1–5, Newton laws 1 stick, 2 reverse
 #: sliding, 3 forward sliding.
 LAW_TYPES = {

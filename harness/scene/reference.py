@@ -58,5 +58,5 @@ def reference_scenes() -> dict[str, tuple[Scene, tuple[float, float], tuple[floa
 def newton_lcp_velocities(scene: Scene, contact, normal):
     """``planar_impact``'s ``newton-lcp`` post-impact velocities for a reference scene."""
     problem = impact_problem(scene, contact, normal)
-    return problem.solve(mu=scene.friction, e=scene.restitution, hypothesis="newton-lcp")
+    return problem.solve(mu=scene.friction, e=scene.restitution, law="newton-lcp")
 

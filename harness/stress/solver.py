@@ -10,7 +10,7 @@ import numpy as np
 import planar_impact as pi
 from harness.scene.random_problems import random_problems
 
-LAWS: tuple[str, ...] = pi.HYPOTHESES
+LAWS: tuple[str, ...] = pi.LAWS
 ENERGY_LAWS: tuple[str, ...] = ("poisson", "stronge")  # must never gain energy
 ENERGY_GAIN_TOLERANCE = 1e-10  # relative to |v_n| I_n + |v_t I_t|: rounding of (A29)
 # Near-singular M (c = Δ/(m_nn m_tt) → 0) amplifies rounding like eps/c (measured: relative
@@ -27,7 +27,7 @@ def energy_tolerance(mnn, mnt, mtt):
 
 def solve_all(problems: dict, law: str):
     return pi.solve_batch(problems["mnn"], problems["mnt"], problems["mtt"], problems["vn"],
-                          problems["vt"], problems["mu"], problems["e"], hypothesis=law)
+                          problems["vt"], problems["mu"], problems["e"], law=law)
 
 
 def _ground_terms(mass, inertia, r_x, r_y):
@@ -277,7 +277,7 @@ def scalar_api_checks(quick: bool, seed: int) -> dict:
         try:
             result = problem.solve(mu=float(rng.choice([0.0, 0.3, 10.0])),
                                    e=float(rng.choice([0.0, 0.5, 1.0])),
-                                   hypothesis=str(rng.choice(LAWS)))
+                                   law=str(rng.choice(LAWS)))
         except pi.ImpactInputError as error:
             outcome["error"] += 1
             if len(outcome["examples_of_errors"]) < 3:

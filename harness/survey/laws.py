@@ -88,12 +88,12 @@ class LawResults:
     u_after: np.ndarray  # (n, 6); NaN where batch.status != 0
 
 
-def solve_laws(terms: ContactTerms, laws=planar_impact.HYPOTHESES) -> dict[str, LawResults]:
+def solve_laws(terms: ContactTerms, laws=planar_impact.LAWS) -> dict[str, LawResults]:
     """``{law: LawResults}``: one :func:`planar_impact.solve_batch` call per law."""
     results = {}
     for law in laws:
         batch = planar_impact.solve_batch(terms.mnn, terms.mnt, terms.mtt, terms.vn, terms.vt,
-                                          terms.mu, terms.e, hypothesis=law)
+                                          terms.mu, terms.e, law=law)
         impulse = (terms.wn * batch.normal_impulse[:, None]
                    + terms.wt * batch.tangential_impulse[:, None])
         results[law] = LawResults(law, batch, terms.u + impulse / terms.mass)  # (A16)

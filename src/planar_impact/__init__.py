@@ -6,7 +6,7 @@ Newton–Coulomb law of sequential-impulse engines.
 
 >>> import planar_impact as pi
 >>> problem = pi.builders.two_sleds(gamma=0.2, delta=0.85)
->>> result = problem.solve(mu=0.3, e=0.8, hypothesis="poisson")
+>>> result = problem.solve(mu=0.3, e=0.8, law="poisson")
 >>> result.collision_type, round(result.vn_separation, 2)
 (3, 0.82)
 """
@@ -15,10 +15,10 @@ from . import builders, errors, laws, process, simultaneous
 from .builders import ImpactProblem, PlanarBody
 from .errors import STATUS_MESSAGES, ImpactInputError
 from .process import impulse_process, process_collision_type, sequential_impulses
-from .solver import HYPOTHESES, BatchResult, ImpactResult, solve, solve_batch
+from .solver import LAWS, BatchResult, ImpactResult, solve, solve_batch
 
 __all__ = [
-    "HYPOTHESES",
+    "LAWS",
     "STATUS_MESSAGES",
     "BatchResult",
     "ImpactInputError",

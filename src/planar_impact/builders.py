@@ -54,9 +54,9 @@ class ImpactProblem:
     wt: np.ndarray
     u: np.ndarray
 
-    def solve(self, *, mu: float, e: float, hypothesis: str = "poisson") -> ImpactResult:
+    def solve(self, *, mu: float, e: float, law: str = "poisson") -> ImpactResult:
         return solve(mass_matrix=self.mass_matrix, wn=self.wn, wt=self.wt, u=self.u, mu=mu, e=e,
-                     hypothesis=hypothesis)
+                     law=law)
 
     def kinetic_energy(self, speeds=None) -> float:
         speeds = self.u if speeds is None else np.asarray(speeds, dtype=float)

@@ -446,7 +446,7 @@ def newton_coulomb_solutions(system: ContactSystem) -> list[MultiContactSolution
     sign(v_t^S)``). Each mode is a linear system in the 2m impulses (W's rows); its
     inequalities decide whether it holds. Types: 0 separate, 1 stick, 2 reverse, 3 forward
     (slip with or against the contact's approach slip, oriented as ``solve`` orients it).
-    For ``m = 1`` equals ``solve(..., hypothesis="newton-lcp")`` to rounding (a general
+    For ``m = 1`` equals ``solve(..., law="newton-lcp")`` to rounding (a general
     2×2 solve here, the closed form there).
     """
     count = system.count
@@ -588,7 +588,7 @@ def sequential_impacts(system: ContactSystem, law: str, order, max_impacts: int 
                 capped = True
                 break
             result = solver.solve(mass_matrix=system.mass_matrix, wn=system.wn[i], wt=system.wt[i],
-                                  u=speeds, mu=system.mu[i], e=system.e[i], hypothesis=law)
+                                  u=speeds, mu=system.mu[i], e=system.e[i], law=law)
             speeds = result.u_after
             impacts.append((i, result.collision_type))
             struck = True

@@ -24,18 +24,18 @@ import numpy as np
 from . import errors, laws
 from .errors import ImpactInputError
 
-HYPOTHESES: tuple[str, ...] = ("newton", "poisson", "stronge", "stronge-paper", "newton-lcp")
+LAWS: tuple[str, ...] = ("newton", "poisson", "stronge", "stronge-paper", "newton-lcp")
 
 
-def check_hypothesis(hypothesis: str) -> str:
-    if hypothesis not in HYPOTHESES:
+def check_law(law: str) -> str:
+    if law not in LAWS:
         raise ImpactInputError(
-            f"hypothesis: unknown law {hypothesis!r}; allowed: {', '.join(HYPOTHESES)}"
+            f"law: unknown law {law!r}; allowed: {', '.join(LAWS)}"
         )
-    return hypothesis
+    return law
 
 
-def contact_space_solution(hypothesis, mnn, mnt, mtt, vn, vt, mu, e, out=None, delta=None):
+def contact_space_solution(law, mnn, mnt, mtt, vn, vt, mu, e, out=None, delta=None):
     """Run one law on contact-space arrays (vt ≥ 0, rows assumed valid).
 
     Returns a dict of arrays: impulses, separation velocities (A22)/(A23), energy change
@@ -48,23 +48,23 @@ def contact_space_solution(hypothesis, mnn, mnt, mtt, vn, vt, mu, e, out=None, d
     """
     terms = laws.ContactTerms(mnn, mnt, mtt, vn, vt, mu, delta)
     consistent = np.True_
-    if hypothesis == "poisson":
+    if law == "poisson":
         ctype = laws.poisson_type(terms, e)
         normal, tangential = laws.poisson_impulses(terms, e, ctype)
         e_poisson = e
-    elif hypothesis == "stronge-paper":
+    elif law == "stronge-paper":
         # Type from Table 1 with e_e in place of e (end of the paper's Section 4), then
         # e_i by (64)/(67)/(70)/(73)/(74), then Poisson's closed forms with e_i.
         ctype = laws.poisson_type(terms, e)
         e_poisson = laws.stronge_paper_restitution(terms, e, ctype)
         consistent = np.isfinite(e_poisson)
         normal, tangential = laws.poisson_impulses(terms, e_poisson, ctype)
-    elif hypothesis == "newton-lcp":
+    elif law == "newton-lcp":
         normal, tangential, ctype, consistent = laws.newton_lcp(terms, e)
         e_poisson = np.float64(np.nan)  # not a process law: no I_nr/I_nc (NaN on every row)
     else:
         process = laws.TwoPhaseProcess(terms)
-        run = process.newton if hypothesis == "newton" else process.stronge
+        run = process.newton if law == "newton" else process.stronge
         normal, tangential, ctype, compression = run(e)
         # Poisson's e of the process each law runs, I_nr/I_nc (6).
         e_poisson = (normal - compression) / compression
@@ -117,13 +117,13 @@ def input_status(mnn, mnt, mtt, vn, vt, mu, e, finite=None, delta=None):
     return laws.as_type_code(status)
 
 
-def answer_status(hypothesis, status, out):
+def answer_status(law, status, out):
     """Status after solving: problems with no admissible answer show only once the terms
     are known (a Painlevé-type jam, reverse sliding with ``q ≤ 0``, an inconsistent law)."""
     where = laws.where
     solved = status == errors.SOLVED
     jam = (out["h"] <= 0) & (out["g"] <= 0)
-    q_fails = _reverse_sliding(hypothesis, out["collision_type"]) & (out["q"] <= 0)
+    q_fails = _reverse_sliding(law, out["collision_type"]) & (out["q"] <= 0)
     answer = where(np.logical_not(out["consistent"]), errors.NO_CONSISTENT_SOLUTION, errors.SOLVED)
     answer = where(q_fails, errors.REVERSE_SLIDING_Q_NONPOSITIVE, answer)
     answer = where(jam, errors.PAINLEVE_JAM, answer)
@@ -140,7 +140,7 @@ class BatchResult:
     Table 2 for ``"stronge-paper"``).
     """
 
-    hypothesis: str
+    law: str
     status: np.ndarray
     normal_impulse: np.ndarray
     tangential_impulse: np.ndarray
@@ -161,7 +161,7 @@ class BatchResult:
         return {f.name: getattr(self, f.name) for f in fields(self)}
 
 
-def solve_batch(mnn, mnt, mtt, vn, vt, mu, e, hypothesis: str = "poisson", *,
+def solve_batch(mnn, mnt, mtt, vn, vt, mu, e, law: str = "poisson", *,
                 delta=None) -> BatchResult:
     """Solve many contact-space problems at once (vectorised; inputs broadcast).
 
@@ -173,10 +173,10 @@ def solve_batch(mnn, mnt, mtt, vn, vt, mu, e, hypothesis: str = "poisson", *,
 
     A bad row never spoils the others: it gets a non-zero ``status`` and NaN outputs.
     Rows of any scale are solved (see the module docstring); ``status`` 9 marks only
-    answers that leave float64's range. An unknown ``hypothesis`` raises
+    answers that leave float64's range. An unknown ``law`` raises
     :class:`ImpactInputError` (it concerns every row).
     """
-    check_hypothesis(hypothesis)
+    check_law(law)
     values = [mnn, mnt, mtt, vn, vt, mu, e] + ([] if delta is None else [delta])
     arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in values))
     shape = arrays[0].shape
@@ -189,10 +189,10 @@ def solve_batch(mnn, mnt, mtt, vn, vt, mu, e, hypothesis: str = "poisson", *,
     for start in range(0, size, BATCH_CHUNK):
         rows = slice(start, start + BATCH_CHUNK)
         chunk = [a[rows] for a in flat] + [None] * (8 - len(flat))
-        _solve_chunk(hypothesis, chunk, {k: v[rows] for k, v in result.items()})
+        _solve_chunk(law, chunk, {k: v[rows] for k, v in result.items()})
     status = result.pop("status")
     result = {name: np.reshape(values, shape) for name, values in result.items()}
-    return BatchResult(hypothesis=hypothesis, status=np.reshape(status, shape), **result)
+    return BatchResult(law=law, status=np.reshape(status, shape), **result)
 
 
 BATCH_CHUNK = 8192
@@ -210,7 +210,7 @@ _BATCH_DTYPES = {
 }
 
 
-def _solve_chunk(hypothesis, inputs, out):
+def _solve_chunk(law, inputs, out):
     """Solve one chunk of rows, writing into the views ``out``."""
     mnn, mnt, mtt, vn, vt, mu, e, given_delta = inputs
     # The theory's t makes v_t^A ≥ 0. Where v_t^A = 0 it also takes m_nt ≥ 0, so that a
@@ -225,7 +225,7 @@ def _solve_chunk(hypothesis, inputs, out):
     # |v_t| also on rows not flipped: v_t = −0.0 becomes +0.0 whatever its neighbours.
     vt_pos = np.abs(vt)
     with np.errstate(all="ignore"):
-        solution = contact_space_solution(hypothesis, mnn, mnt, mtt, vn, vt_pos, mu, e, out,
+        solution = contact_space_solution(law, mnn, mnt, mtt, vn, vt_pos, mu, e, out,
                                           given_delta)
         # Fast screen: valid rows inside the safe range. NaN fails every comparison; inf in
         # m_nt makes Δ inf or NaN, inf in μ shows in the sum. Rows failing it (invalid, or
@@ -237,13 +237,13 @@ def _solve_chunk(hypothesis, inputs, out):
         ok &= np.isfinite(delta + mu)
         # Rows answer_status would flag (exactly its tests, so that it runs only when needed).
         trouble = (solution["h"] <= 0) & (solution["g"] <= 0)
-        trouble |= _reverse_sliding(hypothesis, solution["collision_type"]) & (solution["q"] <= 0)
+        trouble |= _reverse_sliding(law, solution["collision_type"]) & (solution["q"] <= 0)
         if solution["consistent"] is not np.True_:
             trouble |= ~solution["consistent"]
     status = out["status"]
     status[...] = errors.SOLVED
     if trouble.any():
-        status[...] = answer_status(hypothesis, status, solution)
+        status[...] = answer_status(law, status, solution)
     # vn_separation, vt_separation and energy_change are already in out.
     out["normal_impulse"][...] = solution["normal_impulse"]
     if any_flipped:
@@ -263,7 +263,7 @@ def _solve_chunk(hypothesis, inputs, out):
         out["restitution_in_range"][...] = (e_poisson >= 0) & (e_poisson <= 1)
     if not ok.all():
         rows = np.flatnonzero(~ok)
-        _solve_rows_scaled(hypothesis, rows, (mnn, mnt, mtt, vn, vt_pos, mu, e, given_delta),
+        _solve_rows_scaled(law, rows, (mnn, mnt, mtt, vn, vt_pos, mu, e, given_delta),
                            sign if any_flipped else None, out)
     # Finite inputs whose answer passes float64's range: flagged, not returned as a silent
     # inf. The energy change multiplies impulses and velocities, so it overflows first and
@@ -289,7 +289,7 @@ def _scale_exponents(mnn, mtt, vn, vt):
     return speed_exponent, mass_exponent
 
 
-def _solve_scaled(hypothesis, mnn, mnt, mtt, vn, vt, mu, e, speed_exponent, mass_exponent,
+def _solve_scaled(law, mnn, mnt, mtt, vn, vt, mu, e, speed_exponent, mass_exponent,
                   scaled_delta=None):
     """:func:`contact_space_solution` on the problem scaled by ``2^-speed_exponent`` in
     velocity and ``2^-mass_exponent`` in ``m``, with its answers scaled back.
@@ -305,7 +305,7 @@ def _solve_scaled(hypothesis, mnn, mnt, mtt, vn, vt, mu, e, speed_exponent, mass
     vn, vt = np.ldexp(vn, -speed_exponent), np.ldexp(vt, -speed_exponent)
     if scaled_delta is None:
         scaled_delta = mnn * mtt - mnt * mnt  # (A20)
-    solution = contact_space_solution(hypothesis, mnn, mnt, mtt, vn, vt, mu, e,
+    solution = contact_space_solution(law, mnn, mnt, mtt, vn, vt, mu, e,
                                       delta=scaled_delta)
     impulse_exponent = speed_exponent - mass_exponent
     for name, exponent in (("normal_impulse", impulse_exponent),
@@ -316,7 +316,7 @@ def _solve_scaled(hypothesis, mnn, mnt, mtt, vn, vt, mu, e, speed_exponent, mass
     return solution, scaled_delta
 
 
-def _solve_rows_scaled(hypothesis, rows, inputs, sign, out):
+def _solve_rows_scaled(law, rows, inputs, sign, out):
     """Solve ``rows`` of a chunk scaled to unit size, check their inputs in full, and write
     their answers and status into ``out`` (tangent already flipped in ``inputs``)."""
     mnn, mnt, mtt, vn, vt, mu, e, given_delta = (
@@ -330,12 +330,12 @@ def _solve_rows_scaled(hypothesis, rows, inputs, sign, out):
         if given_delta is not None:
             finite &= np.isfinite(given_delta)
             scaled_delta = np.ldexp(given_delta, -2 * mass_exponent)
-        solution, scaled_delta = _solve_scaled(hypothesis, mnn, mnt, mtt, vn, vt, mu, e,
+        solution, scaled_delta = _solve_scaled(law, mnn, mnt, mtt, vn, vt, mu, e,
                                                speed_exponent, mass_exponent, scaled_delta)
         scaled_mnn, scaled_mnt, scaled_mtt = (np.ldexp(m, -mass_exponent) for m in (mnn, mnt, mtt))
         status = input_status(scaled_mnn, scaled_mnt, scaled_mtt, vn, vt, mu, e, finite=finite,
                               delta=scaled_delta)
-        status = answer_status(hypothesis, status, solution)
+        status = answer_status(law, status, solution)
     tangential, vt_separation = solution["tangential_impulse"], solution["vt_separation"]
     if sign is not None:
         tangential, vt_separation = tangential * sign[rows], vt_separation * sign[rows]
@@ -359,8 +359,8 @@ def _solve_rows_scaled(hypothesis, rows, inputs, sign, out):
     out["status"][rows[overflow]] = errors.OUTPUT_OVERFLOW
 
 
-def _reverse_sliding(hypothesis, ctype):
-    if hypothesis in ("newton", "newton-lcp"):
+def _reverse_sliding(law, ctype):
+    if law in ("newton", "newton-lcp"):
         return ctype == laws.NEWTON_REVERSE
     return (ctype == laws.REVERSE_FROM_COMPRESSION) | (ctype == laws.REVERSE_FROM_RESTITUTION)
 
@@ -378,7 +378,7 @@ class ImpactResult:
     for ``newton-lcp``, which is not a process).
     """
 
-    hypothesis: str
+    law: str
     normal_impulse: float
     tangential_impulse: float
     delta_u: np.ndarray
@@ -482,7 +482,7 @@ def contact_terms(mass_matrix, wn, wt) -> tuple[float, float, float, float]:
             math.fsum(minor * minor for minor in minors))
 
 
-def solve(*, mass_matrix, wn, wt, u, mu, e, hypothesis: str = "poisson") -> ImpactResult:
+def solve(*, mass_matrix, wn, wt, u, mu, e, law: str = "poisson") -> ImpactResult:
     """Solve one planar one-point impact with friction in generalized speeds.
 
     Parameters
@@ -493,12 +493,12 @@ def solve(*, mass_matrix, wn, wt, u, mu, e, hypothesis: str = "poisson") -> Impa
     u : (p,) generalized speeds just before the impact; must be approaching (``wn·u < 0``).
     mu : friction coefficient ``μ ≥ 0``.  e : restitution in [0, 1] (Stronge's ``e_e`` for
         the two Stronge laws).
-    hypothesis : one of :data:`HYPOTHESES`.
+    law : one of :data:`LAWS`.
 
     Raises :class:`ImpactInputError` (a ``ValueError``) naming the field, the value and
     what is allowed; never returns NaN or inf.
     """
-    check_hypothesis(hypothesis)
+    check_law(law)
     matrix = check_mass_matrix(mass_matrix)
     size = matrix.shape[0]
     wn = as_vector("wn", wn, size)
@@ -535,11 +535,11 @@ def solve(*, mass_matrix, wn, wt, u, mu, e, hypothesis: str = "poisson") -> Impa
     else:
         with np.errstate(all="ignore"):
             if in_range:
-                out = contact_space_solution(hypothesis, *scalars, delta=delta)
+                out = contact_space_solution(law, *scalars, delta=delta)
             else:
-                out, _ = _solve_scaled(hypothesis, *scalars, speed_exponent, mass_exponent,
+                out, _ = _solve_scaled(law, *scalars, speed_exponent, mass_exponent,
                                        delta)
-        status = int(answer_status(hypothesis, errors.SOLVED, out))
+        status = int(answer_status(law, errors.SOLVED, out))
     if status != errors.SOLVED:
         detail = {
             errors.NO_APPROACH: f"u: v_n^A = wn·u = {vn!r}; allowed: v_n^A < 0 (approach)",
@@ -559,7 +559,7 @@ def solve(*, mass_matrix, wn, wt, u, mu, e, hypothesis: str = "poisson") -> Impa
             f"[{errors.STATUS_MESSAGES[errors.OUTPUT_OVERFLOW]}]"
         )
     return ImpactResult(
-        hypothesis=hypothesis,
+        law=law,
         normal_impulse=normal,
         tangential_impulse=tangential,
         delta_u=delta_u,
@@ -571,8 +571,8 @@ def solve(*, mass_matrix, wn, wt, u, mu, e, hypothesis: str = "poisson") -> Impa
         energy_change=float(out["energy_change"]),
         collision_type=int(out["collision_type"]),
         case=int(out["case"]),
-        restitution_poisson=None if hypothesis == "newton-lcp" else e_poisson,
-        restitution_in_range=hypothesis == "newton-lcp" or 0.0 <= e_poisson <= 1.0,
+        restitution_poisson=None if law == "newton-lcp" else e_poisson,
+        restitution_in_range=law == "newton-lcp" or 0.0 <= e_poisson <= 1.0,
         mnn=mnn,
         mnt=mnt,
         mtt=mtt,

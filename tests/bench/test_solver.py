@@ -12,7 +12,7 @@ from harness.scene.random_problems import random_problems
 
 def test_check_against_process_accepts_the_solver():
     sample = random_problems(50, seed=11)
-    for law in pi.HYPOTHESES:
+    for law in pi.LAWS:
         bench._check_against_process(law, sample)
 
 

@@ -218,7 +218,7 @@ def _poisson(scene):
                                  angular_velocity=body.angular_velocity)
     contact = geometry.scene_contact(scene)
     problem = builders.rigid_body_against_ground(planar, contact.point, normal=tuple(contact.normal))
-    return problem.solve(mu=scene.friction, e=scene.restitution, hypothesis="poisson")
+    return problem.solve(mu=scene.friction, e=scene.restitution, law="poisson")
 
 
 def test_backspin_elastic_scenario_bounces_without_friction(engine):

@@ -79,7 +79,7 @@ def test_energy_gain_flags_match_the_impulse_process(law):
     threshold's scale, where the two computations' rounding may fall either side."""
     sample = {name: values[:400] for name, values in SAMPLE.items()}
     gained, solved = findings.energy_gain(sample, law)
-    batch = pi.solve_batch(**sample, hypothesis=law)
+    batch = pi.solve_batch(**sample, law=law)
     for i in np.flatnonzero(solved):
         r = row(sample, int(i))
         if law == "newton-lcp" and len(newton_lcp_modes(**r)) != 1:

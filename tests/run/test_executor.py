@@ -16,7 +16,7 @@ def solve_chunk(task: dict) -> dict:
     """A real unit of work: one law over a slice of random contact-space problems."""
     problems = random_problems(task["count"], seed=task["seed"])
     result = pi.solve_batch(problems["mnn"], problems["mnt"], problems["mtt"], problems["vn"],
-                            problems["vt"], problems["mu"], problems["e"], hypothesis=task["law"])
+                            problems["vt"], problems["mu"], problems["e"], law=task["law"])
     return {"seed": task["seed"], "law": task["law"],
             "normal": result.normal_impulse.tobytes(),
             "tangential": result.tangential_impulse.tobytes(),

@@ -77,7 +77,7 @@ def test_pybullet_accurate_strikes_one_feature_first_so_it_misses_the_m_contact_
     struck = min(geometry.scene_contacts(scene, tolerance=1e-4),
                  key=lambda c: abs(c.point[0] - points[0].x))
     single = geometry.impact_problem(scene, struck.point, struck.normal).solve(
-        mu=scene.friction, e=scene.restitution, hypothesis="newton-lcp")
+        mu=scene.friction, e=scene.restitution, law="newton-lcp")
     # One rounding of O(1) speeds away from the single impact at the struck feature.
     np.testing.assert_allclose(np.ravel(first.velocities), single.u_after, atol=1e-12)
     whole = run("pybullet", scene)

@@ -50,7 +50,7 @@ def all_departures(laws, mu, e, problem, free_bodies):
     speeds = {}
     for law in laws:
         try:
-            speeds[law] = problem.solve(mu=mu, e=e, hypothesis=law).u_after
+            speeds[law] = problem.solve(mu=mu, e=e, law=law).u_after
         except ValueError:
             continue
     return {(a, b): metrics.departure(problem.mass_matrix, speeds[a], speeds[b], problem.u,

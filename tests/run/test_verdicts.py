@@ -33,7 +33,7 @@ def problem_of(scene):
 def exact_run(scene, engine="pymunk", **changes) -> RunNumbers:
     """A perfect newton-lcp engine: its velocities and the impulse that produced them."""
     problem = problem_of(scene)
-    result = problem.solve(mu=scene.friction, e=scene.restitution, hypothesis="newton-lcp")
+    result = problem.solve(mu=scene.friction, e=scene.restitution, law="newton-lcp")
     fields = {"engine": engine, "status": "ok", "u_after": result.u_after,
               "max_penetration": 0.0, "normal_impulse": result.normal_impulse,
               "tangential_impulse": result.tangential_impulse, "impulse_source": "engine",
@@ -106,7 +106,7 @@ def test_speeds_at_the_measured_cap_are_clipped(engine, clipped):
 def test_energy_gain_the_law_predicts_is_reported_not_failed():
     point = ROD_ENERGY.point_list()[0]
     scene, problem = ROD_ENERGY.scene(point), ROD_ENERGY.analytic_problem(point)
-    lcp = problem.solve(mu=scene.friction, e=scene.restitution, hypothesis="newton-lcp")
+    lcp = problem.solve(mu=scene.friction, e=scene.restitution, law="newton-lcp")
     assert lcp.energy_change > 0  # the file's premise
     run = exact_run(scene)
     verdict = judge(scene, problem, run, law_energy_change=lcp.energy_change)

@@ -50,10 +50,10 @@ def solve_all(scenario: Scenario, point: Point) -> dict:
     problem = scenario.analytic_problem(point)
     fixed = scenario.at(point)
     results = {}
-    for law in pi.HYPOTHESES:
+    for law in pi.LAWS:
         if (scenario.name, law) in KNOWN_SOLVER_ISSUES:
             continue
-        results[law] = problem.solve(mu=fixed.friction, e=fixed.restitution, hypothesis=law)
+        results[law] = problem.solve(mu=fixed.friction, e=fixed.restitution, law=law)
     return results
 
 
@@ -72,7 +72,7 @@ def test_library_size_and_names_are_unique():
 
 
 def test_laws_match_the_solver():
-    assert LAWS == tuple(pi.HYPOTHESES)
+    assert LAWS == tuple(pi.LAWS)
 
 
 @pytest.mark.parametrize("scenario", ONE_POINT, ids=[s.name for s in ONE_POINT])

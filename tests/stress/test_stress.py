@@ -14,7 +14,7 @@ from harness import stress
 from harness.stress import engines as stress_engines
 from harness.stress import solver as stress_solver
 
-LAWS = pi.HYPOTHESES
+LAWS = pi.LAWS
 OUTPUTS = ("normal_impulse", "tangential_impulse", "vn_separation", "vt_separation",
            "energy_change")
 
@@ -38,7 +38,7 @@ def extreme_problems(draw):
 
 def _solve(problem, law):
     return pi.solve_batch(problem["mnn"], problem["mnt"], problem["mtt"], problem["vn"],
-                          problem["vt"], problem["mu"], problem["e"], hypothesis=law)
+                          problem["vt"], problem["mu"], problem["e"], law=law)
 
 
 # Found by hypothesis: the slip stops exactly at the end of compression (v_0 = 0) and the
@@ -123,12 +123,12 @@ def test_scaling_all_masses_by_k_scales_impulses_by_k(problem, power_of_two, log
                     law, k, impulses, expected)
 
 
-@pytest.mark.parametrize("law", pi.HYPOTHESES)
+@pytest.mark.parametrize("law", pi.LAWS)
 def test_overflowing_alpha_is_not_a_silent_inf(law):
     """Found by the stress run: α = v_t/|v_n| ≈ 1e300 used to overflow (25) to I_n = inf
     with status 0. The closed forms now use α|v_n^A| = v_t^A; every law answers finitely or
     flags the row."""
-    result = pi.solve_batch(1e9, 5e8, 1e9, -1e-300, 1.0, 10.0, 0.0, hypothesis=law)
+    result = pi.solve_batch(1e9, 5e8, 1e9, -1e-300, 1.0, 10.0, 0.0, law=law)
     assert int(result.status) != 0 or np.isfinite(result.normal_impulse)
 
 

@@ -39,7 +39,7 @@ def test_batch_speeds_after_match_the_scalar_solver(survey_samples):
             problem = geometry.impact_problem(sample.scene, sample.contact.point,
                                               sample.contact.normal)
             scalar = problem.solve(mu=sample.scene.friction, e=sample.scene.restitution,
-                                   hypothesis=law)
+                                   law=law)
             dofs = int(terms.dofs[row])
             # The same kernels on the same terms; only M⁻¹w is formed differently (division
             # by the diagonal vs np.linalg.solve): agreement to rounding, 1e-12 of |u|_M.

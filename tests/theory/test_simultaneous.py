@@ -34,7 +34,7 @@ def test_one_contact_is_todays_law_bit_for_bit(law):
         problem = random_single(rng)
         found = sim.coherent_solutions(single_as_system(problem), law)
         try:
-            expected = pi.solve(**problem, hypothesis=law)
+            expected = pi.solve(**problem, law=law)
         except pi.ImpactInputError:
             assert found == []
             continue
@@ -56,7 +56,7 @@ def test_one_contact_newton_coulomb_is_newton_lcp_to_rounding():
     for _ in range(100):
         problem = random_single(rng)
         found = sim.newton_coulomb_solutions(single_as_system(problem))
-        expected = pi.solve(**problem, hypothesis="newton-lcp")
+        expected = pi.solve(**problem, law="newton-lcp")
         assert len(found) == 1
         got = found[0]
         # A general 2×2 least-squares solve against the closed form: a few ulps of the

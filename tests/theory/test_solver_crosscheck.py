@@ -58,7 +58,7 @@ def near_type_boundary(batch, index, r, rel=1e-9):
 
 @pytest.mark.parametrize("law", ["newton", "poisson", "stronge"])
 def test_closed_form_equals_impulse_process(problems, law):
-    batch = pi.solve_batch(**problems, hypothesis=law)
+    batch = pi.solve_batch(**problems, law=law)
     assert np.all(batch.status == 0)
     type_mismatches = []
     for index in range(COUNT):
@@ -80,10 +80,10 @@ def test_closed_form_equals_impulse_process(problems, law):
 
 def test_every_type_and_case_is_drawn(problems):
     """The cross-check means something only if the draws reach every branch."""
-    poisson = pi.solve_batch(**problems, hypothesis="poisson")
+    poisson = pi.solve_batch(**problems, law="poisson")
     assert set(np.unique(poisson.collision_type)) == {1, 2, 3, 4, 5}
     assert set(np.unique(poisson.case)) == {1, 2, 3, 4, 5}
-    newton = pi.solve_batch(**problems, hypothesis="newton")
+    newton = pi.solve_batch(**problems, law="newton")
     assert set(np.unique(newton.collision_type)) == {1, 2, 3}
 
 
@@ -91,7 +91,7 @@ def test_stronge_paper_is_poisson_with_the_mapped_restitution(problems):
     """The paper's mapping, checked two ways: the Poisson process run with the reported e_i
     gives the same impulses, and the result satisfies Stronge's definition as the paper
     evaluates it, e_e² = 1 − (1 + e_i)(1 − e_v) (61), with e_v = v_n^S/|v_n^A| (A30)."""
-    batch = pi.solve_batch(**problems, hypothesis="stronge-paper")
+    batch = pi.solve_batch(**problems, law="stronge-paper")
     solved = np.flatnonzero(batch.status == 0)
     assert solved.size > 0.99 * COUNT
     for index in solved:
@@ -108,7 +108,7 @@ def test_stronge_paper_is_poisson_with_the_mapped_restitution(problems):
 
 
 def test_stronge_paper_flags_e_i_outside_unit_interval(problems):
-    batch = pi.solve_batch(**problems, hypothesis="stronge-paper")
+    batch = pi.solve_batch(**problems, law="stronge-paper")
     solved = batch.status == 0
     outside = solved & ((batch.restitution_poisson > 1) | (batch.restitution_poisson < 0))
     assert outside.any(), "the draws should reach the paper's Table 2 limits"
@@ -117,7 +117,7 @@ def test_stronge_paper_flags_e_i_outside_unit_interval(problems):
 
 def test_newton_lcp_equals_the_unique_consistent_mode(problems):
     """Enumerate stick, slide+ and slide−; exactly one is consistent, and it is the answer."""
-    batch = pi.solve_batch(**problems, hypothesis="newton-lcp")
+    batch = pi.solve_batch(**problems, law="newton-lcp")
     assert np.all(batch.status == 0)
     assert set(np.unique(batch.collision_type)) == {1, 2, 3}
     for index in range(COUNT):
@@ -140,7 +140,7 @@ def test_newton_lcp_equals_projected_gauss_seidel():
     problems = random_problems(COUNT, seed=7, min_conditioning=0.05)
     converging = problems["mu"] * np.abs(problems["mnt"]) < 0.9 * problems["mnn"]
     problems = {name: values[converging] for name, values in problems.items()}
-    batch = pi.solve_batch(**problems, hypothesis="newton-lcp")
+    batch = pi.solve_batch(**problems, law="newton-lcp")
     assert np.all(batch.status == 0)
     assert set(np.unique(batch.collision_type)) == {1, 2, 3}
     for index in range(len(problems["mnn"])):
@@ -154,7 +154,7 @@ def test_newton_lcp_equals_projected_gauss_seidel():
         assert abs(tangential - batch.tangential_impulse[index]) <= 1e-10 * scale, r
 
 
-@pytest.mark.parametrize("law", pi.HYPOTHESES)
+@pytest.mark.parametrize("law", pi.LAWS)
 def test_scalar_solve_equals_batch(law):
     """``solve`` (numpy scalars, generalized speeds) and ``solve_batch`` (arrays) agree."""
     rng = np.random.default_rng(3)
@@ -167,11 +167,11 @@ def test_scalar_solve_equals_batch(law):
             u = -u
         mu, e = rng.uniform(0, 1.5), rng.uniform(0, 1)
         try:
-            single = pi.solve(mass_matrix=matrix, wn=wn, wt=wt, u=u, mu=mu, e=e, hypothesis=law)
+            single = pi.solve(mass_matrix=matrix, wn=wn, wt=wt, u=u, mu=mu, e=e, law=law)
         except pi.ImpactInputError:
             continue  # the batch check below must then flag the row as well
         batch = pi.solve_batch(single.mnn, single.mnt, single.mtt, single.vn_approach,
-                               single.vt_approach, mu, e, hypothesis=law)
+                               single.vt_approach, mu, e, law=law)
         assert batch.status == 0
         for name in ("normal_impulse", "tangential_impulse", "vn_separation", "vt_separation",
                      "energy_change"):

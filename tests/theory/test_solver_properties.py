@@ -31,7 +31,7 @@ def problems(draw, vt=slip, mu=friction, e=restitution):
 
 
 def solve(problem, law):
-    result = pi.solve_batch(**problem, hypothesis=law)
+    result = pi.solve_batch(**problem, law=law)
     assert result.status == 0, errors.STATUS_MESSAGES[int(result.status)]
     return result
 
@@ -63,8 +63,8 @@ def test_newton_energy_gain_is_reported_where_it_occurs():
     from harness.scene.random_problems import random_problems
 
     draws = random_problems(20_000, seed=11)
-    newton = pi.solve_batch(**draws, hypothesis="newton")
-    poisson = pi.solve_batch(**draws, hypothesis="poisson")
+    newton = pi.solve_batch(**draws, law="newton")
+    poisson = pi.solve_batch(**draws, law="poisson")
     scale = (np.abs(newton.normal_impulse * newton.vn_approach)
              + np.abs(newton.tangential_impulse * newton.vt_approach))
     gained = newton.energy_change > 1e-12 * scale
@@ -85,7 +85,7 @@ def test_energy_gained_flag_on_a_known_case():
     for vt_target in np.linspace(0.05, 2.0, 40):
         # Choose u with w_n·u = −1 and w_t·u = vt_target.
         u = np.linalg.solve(np.stack([wn, wt]), [-1.0, vt_target])
-        newton = pi.solve(mass_matrix=matrix, wn=wn, wt=wt, u=u, mu=0.2, e=1.0, hypothesis="newton")
+        newton = pi.solve(mass_matrix=matrix, wn=wn, wt=wt, u=u, mu=0.2, e=1.0, law="newton")
         if newton.energy_gained:
             poisson = pi.solve(mass_matrix=matrix, wn=wn, wt=wt, u=u, mu=0.2, e=1.0)
             assert newton.energy_change > 0 and newton.collision_type == pi.laws.NEWTON_REVERSE
@@ -142,7 +142,7 @@ def test_balanced_collision(problem):
     """m_nt = 0: no reverse sliding, I_n = (1 + e)|v_n^A|/m_nn and v_n^S = e|v_n^A| for every
     law (comment e)."""
     problem = dict(problem, mnt=0.0)
-    for law in pi.HYPOTHESES:
+    for law in pi.LAWS:
         result = solve(problem, law)
         expected = (1 + problem["e"]) * abs(problem["vn"]) / problem["mnn"]
         assert float(result.normal_impulse) == pytest.approx(expected, rel=1e-12)
@@ -206,7 +206,7 @@ def test_direct_impact_types(problem):
 
 
 @settings(max_examples=300, deadline=None)
-@given(problems(), st.sampled_from(pi.HYPOTHESES))
+@given(problems(), st.sampled_from(pi.LAWS))
 def test_flipping_t_mirrors_the_result(problem, law):
     straight = solve(problem, law)
     flipped = solve(dict(problem, mnt=-problem["mnt"], vt=-problem["vt"]), law)
@@ -228,7 +228,7 @@ def rotate(vector, angle):
 @settings(max_examples=200, deadline=None)
 @given(st.floats(-math.pi, math.pi), st.floats(0.2, 5.0), st.floats(0.2, 5.0),
        st.floats(-2, 2), st.floats(-2, 2), st.floats(-3, 3), st.floats(0.0, 1.5),
-       st.floats(0.0, 1.0), st.sampled_from(pi.HYPOTHESES))
+       st.floats(0.0, 1.0), st.sampled_from(pi.LAWS))
 def test_rotating_a_rigid_body_scene_leaves_the_result_unchanged(angle, mass_a, mass_b, vx, vy,
                                                                   omega, mu, e, law):
     point = (0.3, -0.1)
@@ -243,8 +243,8 @@ def test_rotating_a_rigid_body_scene_leaves_the_result_unchanged(angle, mass_a, 
 
     base, turned = scene(0.0), scene(angle)
     assume(base.wn @ base.u < -1e-3)
-    first = base.solve(mu=mu, e=e, hypothesis=law)
-    second = turned.solve(mu=mu, e=e, hypothesis=law)
+    first = base.solve(mu=mu, e=e, law=law)
+    second = turned.solve(mu=mu, e=e, law=law)
     for name in ("normal_impulse", "tangential_impulse", "vn_separation", "vt_separation",
                  "energy_change"):
         assert getattr(second, name) == pytest.approx(getattr(first, name), rel=1e-9, abs=1e-12)
@@ -291,7 +291,7 @@ GOOD = dict(mass_matrix=np.eye(3), wn=[0.0, 1.0, 0.1], wt=[1.0, 0.0, -0.2], u=[0
         (dict(e=-0.01), ["e", "-0.01", "[0.0, 1.0]"]),
         (dict(u=[0.5, 1.0, 0.3]), ["v_n^A", "approach"]),
         (dict(wt=[0.0, 2.0, 0.2]), ["Δ", "wn and wt"]),
-        (dict(hypothesis="hertz"), ["hypothesis", "hertz", "poisson"]),
+        (dict(law="hertz"), ["law", "hertz", "poisson"]),
         (dict(u=[0.5, -1e160, 0.3]), ["u", "-1e+160", "float64", "rescale"]),
     ],
 )
@@ -320,9 +320,9 @@ def test_batch_flags_bad_rows_and_solves_the_others():
         row = dict(good) if position % 2 == 0 else {**good, **bad_rows[position // 2][0]}
         for k in good:
             columns[k].append(row[k])
-    for law in pi.HYPOTHESES:
-        batch = pi.solve_batch(**{k: np.array(v) for k, v in columns.items()}, hypothesis=law)
-        alone = pi.solve_batch(**good, hypothesis=law)
+    for law in pi.LAWS:
+        batch = pi.solve_batch(**{k: np.array(v) for k, v in columns.items()}, law=law)
+        alone = pi.solve_batch(**good, law=law)
         for position in range(len(columns["mnn"])):
             if position % 2 == 0:
                 assert batch.status[position] == 0
@@ -344,8 +344,8 @@ def test_every_non_finite_input_is_flagged_in_a_batch(field, value):
     # may slip through it as solved.
     good = dict(mnn=1.2, mnt=-0.3, mtt=0.8, vn=-1.0, vt=0.4, mu=0.3, e=0.6)
     column = np.array([good[field], value, good[field]])
-    for law in pi.HYPOTHESES:
-        batch = pi.solve_batch(**{**good, field: column}, hypothesis=law)
+    for law in pi.LAWS:
+        batch = pi.solve_batch(**{**good, field: column}, law=law)
         assert list(batch.status) == [0, errors.NON_FINITE, 0], law
         assert np.isnan(batch.normal_impulse[1]) and np.isfinite(batch.normal_impulse[[0, 2]]).all()
 
@@ -361,12 +361,12 @@ def test_batch_broadcasts_and_keeps_shape():
 def test_unknown_law_in_batch_names_the_allowed_laws():
     with pytest.raises(pi.ImpactInputError,
                        match="allowed: newton, poisson, stronge, stronge-paper, newton-lcp"):
-        pi.solve_batch(1.0, 0.0, 1.0, -1.0, 0.0, 0.3, 0.5, hypothesis="Poisson")
+        pi.solve_batch(1.0, 0.0, 1.0, -1.0, 0.0, 0.3, 0.5, law="Poisson")
 
 
 def test_solve_never_returns_nan():
     """newton-lcp has no Poisson e_i; the scalar API says None instead of a silent NaN."""
-    result = pi.solve(**GOOD, hypothesis="newton-lcp")
+    result = pi.solve(**GOOD, law="newton-lcp")
     assert result.restitution_poisson is None
     values = [result.normal_impulse, result.tangential_impulse, result.vn_separation,
               result.vt_separation, result.energy_change, *result.u_after, *result.delta_u]

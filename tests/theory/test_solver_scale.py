@@ -58,7 +58,7 @@ exponent = st.integers(-996, 996)
 
 
 @settings(max_examples=300, deadline=None)
-@given(problem=moderate_problems(), law=st.sampled_from(pi.HYPOTHESES),
+@given(problem=moderate_problems(), law=st.sampled_from(pi.LAWS),
        velocity_exponent=exponent, mass_exponent=exponent)
 def test_power_of_two_scaling_is_exact_from_1e_minus_300_to_1e300(
         problem, law, velocity_exponent, mass_exponent):
@@ -69,8 +69,8 @@ def test_power_of_two_scaling_is_exact_from_1e_minus_300_to_1e300(
                for name, exponent in (("mnn", mass_exponent), ("mnt", mass_exponent),
                                       ("mtt", mass_exponent), ("vn", velocity_exponent),
                                       ("vt", velocity_exponent))))
-    base = pi.solve_batch(**problem, hypothesis=law)
-    scaled = pi.solve_batch(**scaled_inputs, hypothesis=law)
+    base = pi.solve_batch(**problem, law=law)
+    scaled = pi.solve_batch(**scaled_inputs, law=law)
     if base.status != errors.SOLVED:  # a jam or an inconsistent law is scale-free too
         assert scaled.status == base.status
         return
@@ -109,8 +109,8 @@ def test_any_scale_factor_scales_the_answer(problem, law, velocity_log, mass_log
     Energies ~ v²/m stay inside float64 for |log s| ≤ 300 only if |log k| ≤ 150 is not
     also extreme; rows whose answer leaves the range must report status 9."""
     s, k = 10.0**velocity_log, 10.0**mass_log
-    base = pi.solve_batch(**problem, hypothesis=law)
-    scaled = pi.solve_batch(**scaled_problem(problem, s, k), hypothesis=law)
+    base = pi.solve_batch(**problem, law=law)
+    scaled = pi.solve_batch(**scaled_problem(problem, s, k), law=law)
     if base.status != errors.SOLVED:
         assert scaled.status == base.status
         return
@@ -152,7 +152,7 @@ def test_any_scale_factor_scales_the_answer(problem, law, velocity_log, mass_log
 def test_tiny_approach_under_stronge_keeps_its_separation_speed():
     """Frictionless (μ = 0) impacts separate at e|v_n^A| under every law; before the
     scaling, Stronge's work (~v²) underflowed and v_n^S came back 0."""
-    for law in pi.HYPOTHESES:
+    for law in pi.LAWS:
         result = pi.solve_batch(1.0, 0.0, 1.0, -1e-162, 0.0, 0.0, 0.5, law)
         assert result.status == errors.SOLVED, law
         # 4 ulps: (1 + e)|v_n^A|/m_nn then v_n^A + m_nn I_n, a few roundings.
@@ -179,8 +179,8 @@ def test_rows_inside_the_safe_range_are_solved_as_given():
     draws = random_problems(5000, seed=21)
     draws["vt"] = np.abs(draws["vt"])
     draws["mnt"] = np.where(draws["vt"] == 0, np.abs(draws["mnt"]), draws["mnt"])  # no flip
-    for law in pi.HYPOTHESES:
-        batch = pi.solve_batch(**draws, hypothesis=law)
+    for law in pi.LAWS:
+        batch = pi.solve_batch(**draws, law=law)
         solved = batch.status == errors.SOLVED
         with np.errstate(all="ignore"):
             kernel = contact_space_solution(law, *draws.values())
@@ -245,9 +245,9 @@ def test_every_law_solves_the_heavy_rod(angle):
     ulps once Δ is; 1e-12 relative allows a thousandfold amplification by cancellation in
     the numerators (measured: below 1e-15). With the old Δ the error was unbounded."""
     problem = rod_problem(angle)
-    for law in pi.HYPOTHESES:
-        problem.solve(mu=10.0, e=0.5, hypothesis=law)  # raises if refused
-    result = problem.solve(mu=10.0, e=0.5, hypothesis="newton-lcp")
+    for law in pi.LAWS:
+        problem.solve(mu=10.0, e=0.5, law=law)  # raises if refused
+    result = problem.solve(mu=10.0, e=0.5, law="newton-lcp")
     normal, tangential = exact_stick(problem, 0.5)
     assert result.collision_type == pi.laws.NEWTON_STICK
     assert result.normal_impulse == pytest.approx(float(normal), rel=1e-12, abs=0.0)
@@ -255,7 +255,7 @@ def test_every_law_solves_the_heavy_rod(angle):
 
 
 @settings(max_examples=100, deadline=None)
-@given(problem=moderate_problems(), law=st.sampled_from(pi.HYPOTHESES),
+@given(problem=moderate_problems(), law=st.sampled_from(pi.LAWS),
        velocity_exponent=st.integers(-996, 996), mass_exponent=st.integers(-500, 500))
 def test_scalar_solve_scales_with_the_mass_matrix(problem, law, velocity_exponent,
                                                   mass_exponent):
@@ -269,7 +269,7 @@ def test_scalar_solve_scales_with_the_mass_matrix(problem, law, velocity_exponen
     wn = np.array([math.sqrt(mnn), 0.0])
     wt = np.array([mnt / math.sqrt(mnn), math.sqrt(max(mtt - mnt * mnt / mnn, 0.0))])
     u = np.linalg.solve(np.stack([wn, wt]), [problem["vn"], problem["vt"]])
-    kwargs = {"mu": problem["mu"], "e": problem["e"], "hypothesis": law}
+    kwargs = {"mu": problem["mu"], "e": problem["e"], "law": law}
     try:
         base = pi.solve(mass_matrix=np.eye(2), wn=wn, wt=wt, u=u, **kwargs)
     except pi.ImpactInputError:
