@@ -225,6 +225,19 @@ def numbers_from_output(engine: str, output: Mapping[str, Any]) -> RunNumbers:
         speed_caps=_run_caps(output.get("derived") or {}))
 
 
+def numbers_from_run(run) -> RunNumbers:
+    """:class:`RunNumbers` from an ``EngineRun`` itself (the survey and the stress grid, which
+    judge runs without going through the runner's task output)."""
+    return RunNumbers(
+        engine=run.engine, status=str(run.status), u_after=np.asarray(run.u_after, dtype=float),
+        max_penetration=run.max_penetration, normal_impulse=run.normal_impulse,
+        tangential_impulse=run.tangential_impulse, impulse_source=run.impulse_source,
+        contact_normal=run.contact_normal,
+        contacts=tuple(StepContacts(step.step, tuple(step.points), step.poses)
+                       for step in run.contacts),
+        notes=tuple(run.notes), speed_caps=_run_caps(run.derived or {}))
+
+
 def _run_caps(derived: Mapping[str, Any]) -> tuple[float, float] | None:
     """The run's own ``(speed, rate)`` caps from its ``derived`` values, if it reports them."""
     if "speed_cap" not in derived:
@@ -699,4 +712,4 @@ __all__ = ["DEFAULT_TOLERANCES", "REASONS", "SPEED_CAPS", "Reason", "RunNumbers"
            "SceneScales", "StepContacts", "Tolerances", "Verdict", "body_extent",
            "declared_contacts", "declared_impulses", "declared_scales", "feature_at",
            "feature_points", "impulse_from_velocities", "judge", "judge_declared",
-           "numbers_from_output", "reason_counts", "scene_scales"]
+           "numbers_from_output", "numbers_from_run", "reason_counts", "scene_scales"]

@@ -75,7 +75,7 @@ def run_engine(engine_name: str, preset: str, scenes, problems=None,
             if problems is not None:
                 gain = None if law_energy_change is None else float(law_energy_change[row])
                 verdict = verdicts.judge(scenes[row], problems[row],
-                                         run_numbers(engine_name, run),
+                                         verdicts.numbers_from_run(run),
                                          law_energy_change=gain)
                 status[row] = verdict.status(run.status.value)
                 reasons[row] = ",".join(verdict.names)
@@ -84,18 +84,6 @@ def run_engine(engine_name: str, preset: str, scenes, problems=None,
     return EngineResults(engine_name, engine.version, preset, velocities,
                          engine_status.astype(str), status.astype(str), reasons.astype(str),
                          steps, wall, judging)
-
-
-def run_numbers(engine_name: str, run) -> verdicts.RunNumbers:
-    """What the verdict reads of an ``EngineRun`` (the scene-frame contact records)."""
-    return verdicts.RunNumbers(
-        engine=engine_name, status=run.status.value, u_after=run.u_after,
-        max_penetration=run.max_penetration, normal_impulse=run.normal_impulse,
-        tangential_impulse=run.tangential_impulse, impulse_source=run.impulse_source,
-        contact_normal=run.contact_normal,
-        contacts=tuple(verdicts.StepContacts(step.step, tuple(step.points), step.poses)
-                       for step in run.contacts),
-        notes=run.notes)
 
 
 def bare_stepping(engine_name: str, preset: str, scenes, steps) -> dict[str, float]:
