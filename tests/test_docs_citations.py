@@ -3,7 +3,8 @@
 A citation is a path ending in ``.md`` in any tracked text file (code, tests, scenarios,
 docs, generated reports). It resolves against the repository root or the citing file's
 folder; a bare file name (no folder) also resolves to a tracked document of that name
-anywhere (code names the reports it writes, e.g. ``stress.md``, by file name). A section is cited by its title in quotes right after the path, as in
+anywhere (code names the reports it writes, e.g. ``stress.md``, by file name). A section
+is cited by its title in quotes right after the path, as in
 ``docs/theory.md, 'Stronge's law'`` (single or double quotes; an apostrophe followed by a
 letter belongs to the title); the title must be a heading of that document. Sections are
 cited by title, never by number: the documents do not number them.
@@ -144,7 +145,8 @@ def test_the_docs_hold_the_sections_other_files_cite():
     assert {"The engine contract", "pymunk", "pybullet", "MuJoCo", "Box2D"} <= engines
 
 
-@pytest.mark.parametrize("path", tracked_text_files(), ids=lambda path: path.relative_to(ROOT).as_posix())
+@pytest.mark.parametrize("path", tracked_text_files(),
+                         ids=lambda path: path.relative_to(ROOT).as_posix())
 def test_every_cited_document_and_section_exists(path):
     problems = citation_problems(path)
     assert not problems, "\n".join(problems)

@@ -50,7 +50,9 @@ RATIO_TARGET = 1.3
 
 
 # ---------------------------------------------------------------------- scenes
-def _bare_stepper(engine, scene: Scene, settings: dict) -> tuple[Callable[[], None], Callable[[int], None]]:
+def _bare_stepper(
+    engine, scene: Scene, settings: dict
+) -> tuple[Callable[[], None], Callable[[int], None]]:
     """``(prepare, step_n)``: set the run's start state; step the engine n times, nothing else."""
     # The engine's own reset and step call (Engine.bare_stepper), on a world of its own built
     # without contact reporting (pymunk: no post_solve recorder).
@@ -70,7 +72,9 @@ def _time_harness(engine, scene, settings, impacts: int, rounds: int) -> float:
     return best
 
 
-def _time_bare(prepare, step_n, steps: int, impacts: int, rounds: int, include_reset: bool) -> float:
+def _time_bare(
+    prepare, step_n, steps: int, impacts: int, rounds: int, include_reset: bool
+) -> float:
     best = math.inf
     clock = time.perf_counter
     for _ in range(rounds):
@@ -145,7 +149,8 @@ def run_engine_overhead_benchmark(quick: bool = True) -> dict:
                 harness = bare = bare_reset = math.inf
                 for _ in range(rounds):
                     harness = min(harness, _time_harness(engine, scene, settings, count, 1))
-                    bare = min(bare, _time_bare(prepare, step_n, steps, count, 1, include_reset=False))
+                    bare = min(bare, _time_bare(prepare, step_n, steps, count, 1,
+                                                include_reset=False))
                     bare_reset = min(bare_reset, _time_bare(prepare, step_n, steps, count, 1,
                                                             include_reset=True))
                 engine.run(scene, settings)  # leave the engine's caches in a clean state
@@ -171,7 +176,8 @@ def run_engine_overhead_benchmark(quick: bool = True) -> dict:
 def format_table(report: dict) -> str:
     """The benchmark as a plain-text table."""
     lines = [
-        f"engine overhead per impact (quick={report['quick']}; target ratio <= {report['ratio_target']})",
+        f"engine overhead per impact (quick={report['quick']}; "
+        f"target ratio <= {report['ratio_target']})",
         f"{'engine':9} {'preset':9} {'scene':11} {'steps':>5} {'harness µs':>11} {'bare µs':>9} "
         f"{'bare+reset µs':>13} {'ratio':>6} {'ratio(reset)':>12} {'det':>4} {'vs newton-lcp':>13}",
     ]
@@ -184,14 +190,16 @@ def format_table(report: dict) -> str:
             lines.append(
                 f"{name:9} {row['preset']:9} {row['scene']:11} {row['steps']:5d} "
                 f"{row['harness_us']:11.1f} {row['bare_us']:9.1f} {row['bare_reset_us']:13.1f} "
-                f"{row['ratio']:6.2f} {row['ratio_reset']:12.2f} {'yes' if row['deterministic'] else 'NO':>4} "
+                f"{row['ratio']:6.2f} {row['ratio_reset']:12.2f} "
+                f"{'yes' if row['deterministic'] else 'NO':>4} "
                 f"{law:>13}"
             )
     return "\n".join(lines)
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m harness.bench.engines", description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(prog="python -m harness.bench.engines",
+                                     description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true", help="fewer scenes and repetitions")
     parser.add_argument("--json", metavar="PATH", help="also write the results as JSON")
     args = parser.parse_args(argv)

@@ -489,10 +489,11 @@ class Engine(abc.ABC):
         """What a world depends on (default: the geometry, :func:`geometry_key`)."""
         return geometry_key(scene)
 
-    def _release(self, world) -> None:
+    def _release(self, world) -> None:  # noqa: B027 - optional hook, default does nothing
         """Free a world the cache evicts (default: nothing to free)."""
 
-    def _validate_engine_settings(self, settings: Mapping[str, Any]) -> None:
+    def _validate_engine_settings(  # noqa: B027 - optional hook, default checks nothing
+            self, settings: Mapping[str, Any]) -> None:
         """Engine-specific value checks (override)."""
 
     # Optional: many independent impacts in one world (run_many). An adapter that defines
@@ -511,10 +512,10 @@ class Engine(abc.ABC):
         """Indices of the scenes that share one batch (default: all)."""
         return [range(len(scenes))]
 
-    def _retire(self, batch, slot: int) -> None:
+    def _retire(self, batch, slot: int) -> None:  # noqa: B027 - optional hook, default keeps it
         """Take a finished impact out of the batch (default: leave it)."""
 
-    def _release_many(self, batch) -> None:
+    def _release_many(self, batch) -> None:  # noqa: B027 - optional hook, default frees nothing
         """Free a batch (default: nothing to free)."""
 
     # ------------------------------------------------------------------ settings
@@ -907,7 +908,8 @@ def _approaching(poses: Sequence[Pose], velocities: Sequence[Velocity], raw: Raw
     for point_x, point_y, _ in raw[0]:
         relative = 0.0
         for index, ((x, y, _), (vx, vy, omega)) in enumerate(zip(poses, velocities)):
-            normal_velocity = (vx - omega * (point_y - y)) * n_x + (vy + omega * (point_x - x)) * n_y
+            normal_velocity = ((vx - omega * (point_y - y)) * n_x
+                               + (vy + omega * (point_x - x)) * n_y)
             relative += normal_velocity if index == last else -normal_velocity
         if relative < -APPROACH_RELATIVE * speed_scale:
             return True

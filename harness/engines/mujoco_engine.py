@@ -60,8 +60,9 @@ Pair values: MuJoCo takes the larger friction of the two geoms, so the partner (
 Reuse: one compiled ``MjModel`` and ``MjData`` per geometry (shapes, masses, inertias). Each
 run makes the model hold every option and contact parameter of its settings, ``e`` and ``μ``
 (rewritten whenever they differ by value from what the model holds) and calls
-``mj_resetData``, so reruns are bit-identical. The contact impulse is MuJoCo's total constraint impulse on body B,
-``M·Δq̇`` (exact here: no gravity, no passive forces, constant mass matrix).
+``mj_resetData``, so reruns are bit-identical. The contact impulse is MuJoCo's total
+constraint impulse on body B, ``M·Δq̇`` (exact here: no gravity, no passive forces, constant
+mass matrix).
 
 Settings (``defaults`` | ``accurate``, shown as ``matched-bounce``) are listed in
 :data:`SETTING_DOCS`.
@@ -212,7 +213,9 @@ def damping_ratio_for_restitution(restitution: float) -> float:
     return 0.5 * (low + high)
 
 
-def restitution_solref(restitution: float, time_step: float, contact_steps: float) -> tuple[float, float, float]:
+def restitution_solref(
+    restitution: float, time_step: float, contact_steps: float
+) -> tuple[float, float, float]:
     """Direct ``solref = (-k, -b)`` giving restitution ``e`` over ``contact_steps`` steps.
 
     Returns ``(-k, -b, ζ)``. With ``d`` the (flat) impedance MuJoCo's constraint space follows
@@ -241,7 +244,8 @@ def _geom_xml(shape, name: str) -> tuple[str, str]:
             f'size="{shape.width / 2.0!r} {depth / 2.0!r} {shape.height / 2.0!r}"/>'
         )
     vertices = " ".join(
-        f"{x!r} {side * depth / 2.0!r} {y!r}" for x, y in shape.vertices().tolist() for side in (-1.0, 1.0)
+        f"{x!r} {side * depth / 2.0!r} {y!r}"
+        for x, y in shape.vertices().tolist() for side in (-1.0, 1.0)
     )
     return (
         f'<mesh name="{name}_mesh" vertex="{vertices}"/>',

@@ -51,8 +51,10 @@ SETTING_DOCS: dict[str, str] = {
     "time_step": "s, Space.step(dt); pymunk has no default, 1/60 is its examples' value",
     "iterations": "Space.iterations, impulse solver iterations per step (default 10)",
     "collision_slop": "m, Space.collision_slop, allowed overlap (default 0.1; positions only)",
-    "collision_bias": "Space.collision_bias, overlap fraction left after 1 s (default (1-0.1)^60; positions only)",
-    "collision_persistence": "Space.collision_persistence, steps an arbiter is cached (default 3; >= 1, at 0 no contact is ever solved)",
+    "collision_bias": "Space.collision_bias, overlap fraction left after 1 s "
+                      "(default (1-0.1)^60; positions only)",
+    "collision_persistence": "Space.collision_persistence, steps an arbiter is cached "
+                             "(default 3; >= 1, at 0 no contact is ever solved)",
     "damping": "Space.damping, velocity fraction kept after 1 s (default 1 = none)",
     "max_steps": "step cap; reported as status no-separation when hit in contact",
     "approach_steps": "steps of free flight before first touch (0 = touching at first detection)",

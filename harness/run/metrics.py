@@ -11,9 +11,9 @@ Departure (the one error measure of the harness)
     the motion itself (docs/verdicts.md, 'A frame-free departure').
 
 The split
-    An engine departs from Poisson for two reasons (docs/engines.md, 'The engine contract'): the law it solves, and how
-    well it solves it. For sequential-impulse engines the law is ``newton-lcp`` (restitution
-    as a target on ``v_n``, Coulomb friction at the end state), so
+    An engine departs from Poisson for two reasons (docs/engines.md, 'The engine contract'):
+    the law it solves, and how well it solves it. For sequential-impulse engines the law is
+    ``newton-lcp`` (restitution as a target on ``v_n``, Coulomb friction at the end state), so
 
     * ``law_part = departure(u_newton_lcp, u_poisson)`` -- the law's own distance from
       Poisson (a property of the scenario, the same for every engine);

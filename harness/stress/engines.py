@@ -30,7 +30,10 @@ OUTCOME_COLOURS = {"error": "#000000", "non-finite": "#7f0000", "blow-up": "#d73
 
 
 def engine_cases(quick: bool) -> list[dict]:
-    """Engine stress cases: ``{family, value, label, shape, mass, size, speed, grazing, e, mu, dt}``."""
+    """Engine stress cases.
+
+    Each is a dict ``{family, value, label, shape, mass, size, speed, grazing, e, mu, dt}``.
+    """
     base = {"mass": 1.0, "size": 1.0, "speed": 1.0, "grazing": 1.0, "e": 0.5, "mu": 0.3, "dt": None}
     sweeps = {
         "mass": [1e-6, 1e-3, 1e3, 1e6],
@@ -55,7 +58,8 @@ def engine_cases(quick: bool) -> list[dict]:
             for value in values:
                 case = dict(base, family=family, shape=shape)
                 if family == "e-mu":
-                    case.update(e=value[0], mu=value[1], value=list(value), label=f"e={value[0]:g},mu={value[1]:g}")
+                    case.update(e=value[0], mu=value[1], value=list(value),
+                                label=f"e={value[0]:g},mu={value[1]:g}")
                 else:
                     key = {"time_step": "dt"}.get(family, family)
                     case.update({key: value, "value": value, "label": f"{family}={value:g}"})
@@ -79,7 +83,8 @@ def build_scene(case: dict):
         low_y = -length / 2.0 * math.sin(angle)
         body = Body("rod", Rod(length, cap), mass, (0.0, -low_y + cap), angle, (vt, vn), 0.0,
                     inertia=mass * length**2 / 12.0)
-    return Scene((body,), case["e"], case["mu"], ground=True, name=f"{case['shape']}:{case['label']}")
+    return Scene((body,), case["e"], case["mu"], ground=True,
+                 name=f"{case['shape']}:{case['label']}")
 
 
 def _outcome(run, scene, extent: float) -> str:
@@ -110,8 +115,8 @@ def run_engine_case(task: dict) -> dict:
 
     case, engine_name, preset = task["case"], task["engine"], task["preset"]
     scene = build_scene(case)
-    record = {"engine": engine_name, "preset": preset, "shape": case["shape"], "family": case["family"],
-              "label": case["label"], "value": case["value"]}
+    record = {"engine": engine_name, "preset": preset, "shape": case["shape"],
+              "family": case["family"], "label": case["label"], "value": case["value"]}
     try:
         engine = load_engine(engine_name)
         overrides = {"time_step": case["dt"]} if case["dt"] is not None else None
@@ -122,14 +127,16 @@ def run_engine_case(task: dict) -> dict:
         settings = engine.settings(preset, overrides)
         run = engine.run(scene, settings)
     except Exception as error:  # noqa: BLE001 - any failure is an outcome to report
-        record.update(outcome="error", status="error", error=f"{type(error).__name__}: {error}"[:300])
+        record.update(outcome="error", status="error",
+                      error=f"{type(error).__name__}: {error}"[:300])
         return record
     extent = body_extent(scene.bodies[0].shape)
     u_before = scene.state()
     u_after = np.asarray(run.u_after, dtype=float)
     before = ke_norm(scene, u_before)
     with np.errstate(all="ignore"):
-        energy_ratio = (ke_norm(scene, u_after) / before) ** 2 if np.all(np.isfinite(u_after)) else None
+        energy_ratio = ((ke_norm(scene, u_after) / before) ** 2
+                        if np.all(np.isfinite(u_after)) else None)
     record.update(
         outcome=_outcome(run, scene, extent),
         status=run.status,
@@ -162,7 +169,8 @@ def engine_stress(quick: bool, executor: str = "local", workers: int | None = No
     tasks = [{"case": case, "engine": name, "preset": preset}
              for name in versions for preset in presets for case in cases]
     cache = ResultCache(cache_root, enabled=use_cache)
-    keys = [cache.key({"kind": "stress-engine", "task": task, "engine_version": versions[task["engine"]]})
+    keys = [cache.key({"kind": "stress-engine", "task": task,
+                       "engine_version": versions[task["engine"]]})
             for task in tasks]
     records: list[dict | None] = [cache.get(key) for key in keys]
     todo = [index for index, record in enumerate(records) if record is None]
@@ -175,7 +183,8 @@ def engine_stress(quick: bool, executor: str = "local", workers: int | None = No
             cache.put(keys[index], record)
     counts: dict = {}
     for record in records:
-        group = counts.setdefault(f"{record['engine']}/{record['preset']}", {name: 0 for name in OUTCOMES})
+        group = counts.setdefault(f"{record['engine']}/{record['preset']}",
+                                  {name: 0 for name in OUTCOMES})
         group[record["outcome"]] += 1
     return {"versions": versions, "skipped": skipped, "presets": list(presets), "runs": records,
             "counts": counts, "cache": cache.stats, "engine_seconds": time.perf_counter() - started,

@@ -67,7 +67,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-figures", action="store_true", help="skip the figures")
 
 
-def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: bool = False, echo=print) -> dict:
+def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: bool = False,
+               echo=print) -> dict:
     """The survey in memory: ``{"samples", "runs", "statistics", "rejections", "timings",
     "engine_results", "skipped", "scenes"}`` (columns as ``{name: array}``)."""
     clock = time.perf_counter

@@ -178,7 +178,7 @@ def sample_population(population: Population, count: int, seed: int) -> SampleSe
     for index in range(count):
         rng = sample_generator(seed, population.name, index)
         reasons: dict[str, int] = {}
-        for attempt in range(1, population.max_attempts + 1):
+        for attempt in range(1, population.max_attempts + 1):  # noqa: B007 - read after the loop
             scene, contact, drawn, reason = draw_scene(population, rng)
             if reason is None:
                 break

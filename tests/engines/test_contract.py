@@ -69,7 +69,8 @@ def test_engine_names_and_presets():
 
 
 def test_unknown_engine_name_lists_the_choices():
-    with pytest.raises(ValueError, match=r"unknown engine 'bullet'.*pymunk.*pybullet.*mujoco.*box2d"):
+    with pytest.raises(ValueError,
+                       match=r"unknown engine 'bullet'.*pymunk.*pybullet.*mujoco.*box2d"):
         load_engine("bullet")
 
 
@@ -297,7 +298,8 @@ def test_reused_scene_and_settings_objects_give_identical_runs(engine):
     first = engine.run(scene, settings)
     assert engine.run(scene, settings) == first
     assert engine.run(scene, dict(settings)) == first
-    twin = Scene(scene.bodies, scene.restitution, scene.friction, ground=scene.ground, name=scene.name)
+    twin = Scene(scene.bodies, scene.restitution, scene.friction, ground=scene.ground,
+                 name=scene.name)
     assert engine.run(twin, settings) == first
     settings["max_steps"] = 1
     capped = engine.run(scene, settings)

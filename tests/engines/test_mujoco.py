@@ -87,7 +87,8 @@ def test_restitution_map_values():
 @pytest.mark.parametrize("e", [0.001, 0.01, 0.1, 0.3, 0.5, 0.7, 0.9, 0.99])
 def test_restitution_map_inverts(e):
     # Reason for 1e-12: bisection to relative 1e-15 on a smooth monotone map.
-    assert restitution_of_damping_ratio(damping_ratio_for_restitution(e)) == pytest.approx(e, rel=1e-12)
+    round_trip = restitution_of_damping_ratio(damping_ratio_for_restitution(e))
+    assert round_trip == pytest.approx(e, rel=1e-12)
 
 
 def test_map_is_continuous_at_critical_damping():
@@ -106,7 +107,8 @@ def test_accurate_frictionless_bounce_within_one_percent(engine, e, speed):
     # The gate is 1%; measured <= 3e-5 (RK4 over 50 steps; the 1e-4 impedance
     # regularisation of solimp 0.9999). Pinned tighter, 1e-4, so a change shows.
     assert run.velocities[0][1] == pytest.approx(e * speed, rel=1e-4)
-    assert run.derived["damping_ratio"] == pytest.approx(damping_ratio_for_restitution(e), rel=1e-15)
+    assert run.derived["damping_ratio"] == pytest.approx(damping_ratio_for_restitution(e),
+                                                         rel=1e-15)
     assert run.derived["condim"] == 1  # μ = 0: frictionless contact
     # The contact lasts contact_steps (50) steps by construction; +2 for the start and stop.
     assert 49 <= run.contact_steps <= 52
@@ -140,7 +142,8 @@ def test_accurate_departure_from_newton_lcp_pinned(engine, scene_name, measured)
     # another platform's rounding in the solver.
     scene, contact, normal = SCENES[scene_name]
     law = newton_lcp_velocities(scene, contact, normal)
-    assert departure(scene, engine.run(scene, preset="accurate"), law) == pytest.approx(measured, rel=0.03)
+    run = engine.run(scene, preset="accurate")
+    assert departure(scene, run, law) == pytest.approx(measured, rel=0.03)
 
 
 def test_accurate_disk_never_sticks(engine):
@@ -152,7 +155,8 @@ def test_accurate_disk_never_sticks(engine):
     assert slip_after == pytest.approx(0.2651, abs=0.01)
 
 
-@pytest.mark.parametrize("overrides", [{"cone": "elliptic"}, {"cone": "elliptic", "impratio": 100.0},
+@pytest.mark.parametrize("overrides", [{"cone": "elliptic"},
+                                       {"cone": "elliptic", "impratio": 100.0},
                                        {"noslip_iterations": 50}, {"solver": "PGS"}])
 def test_friction_knobs_do_not_cure_soft_friction(engine, overrides):
     # docs/engines.md, 'MuJoCo': impratio, noslip and the cone type leave the departure where it is.
@@ -186,7 +190,8 @@ def test_defaults_departure_pinned(engine, scene_name, measured):
     # contact that turns the bodies. Reason for 3%: as above.
     scene, contact, normal = SCENES[scene_name]
     law = newton_lcp_velocities(scene, contact, normal)
-    assert departure(scene, engine.run(scene, preset="defaults"), law) == pytest.approx(measured, rel=0.03)
+    run = engine.run(scene, preset="defaults")
+    assert departure(scene, run, law) == pytest.approx(measured, rel=0.03)
 
 
 def test_max_rule_gives_the_pair_exactly_mu(engine):
@@ -217,7 +222,8 @@ def _poisson(scene):
                                  position=tuple(body.position), velocity=tuple(body.velocity),
                                  angular_velocity=body.angular_velocity)
     contact = geometry.scene_contact(scene)
-    problem = builders.rigid_body_against_ground(planar, contact.point, normal=tuple(contact.normal))
+    problem = builders.rigid_body_against_ground(planar, contact.point,
+                                                 normal=tuple(contact.normal))
     return problem.solve(mu=scene.friction, e=scene.restitution, law="poisson")
 
 

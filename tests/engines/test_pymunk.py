@@ -40,8 +40,8 @@ def test_accurate_equals_newton_lcp(engine, scene_name):
 
 
 def test_rod_slip_reversal_values(engine):
-    # docs/engines.md, 'The reference scenes', the rod: newton-lcp gives (0.7202, -0.2660, -2.1666). Reason for 5e-5: the
-    # printed 4 digits.
+    # docs/engines.md, 'The reference scenes', the rod: newton-lcp gives
+    # (0.7202, -0.2660, -2.1666). Reason for 5e-5: the printed 4 digits.
     scene = SCENES["rod-45"][0]
     run = engine.run(scene, preset="accurate")
     assert run.u_after == pytest.approx([0.7202, -0.2660, -2.1666], abs=5e-5)
@@ -63,12 +63,14 @@ def test_defaults_departure_pinned(engine, scene_name, measured):
 
 
 def test_iterations_below_20_are_wrong_for_coupled_contact(engine):
-    # docs/engines.md, 'pymunk': coupled contacts need >= 20 iterations. Measured here: 2 iterations depart
-    # by ~1e-2, 20 by ~1e-9 (reason for the bounds: an order of magnitude around each).
+    # docs/engines.md, 'pymunk': coupled contacts need >= 20 iterations. Measured here: 2
+    # iterations depart by ~1e-2, 20 by ~1e-9 (reason for the bounds: an order of magnitude
+    # around each).
     scene, contact, normal = SCENES["rod-45"]
     law = newton_lcp_velocities(scene, contact, normal)
     few = departure(scene, engine.run(scene, preset="accurate", overrides={"iterations": 2}), law)
-    enough = departure(scene, engine.run(scene, preset="accurate", overrides={"iterations": 20}), law)
+    enough = departure(scene, engine.run(scene, preset="accurate", overrides={"iterations": 20}),
+                       law)
     assert few > 1e-3
     assert enough < 1e-7
 
@@ -84,7 +86,8 @@ def test_product_rule_gives_the_pair_exactly_e(engine):
 
 
 def test_collision_slop_moves_positions_only(engine):
-    # docs/engines.md, 'pymunk': slop and bias act on positions, not velocities -- bit-identical velocities.
+    # docs/engines.md, 'pymunk': slop and bias act on positions, not velocities -- bit-identical
+    # velocities.
     scene = SCENES["rod-45"][0]
     base = engine.run(scene, preset="accurate")
     changed = engine.run(scene, preset="accurate", overrides={"collision_slop": 0.0,
@@ -99,7 +102,8 @@ def test_collision_persistence_0_is_refused(engine):
     scene = SCENES["disk"][0]
     with pytest.raises(EngineSettingsError, match="collision_persistence.*>= 1"):
         engine.run(scene, preset="accurate", overrides={"collision_persistence": 0})
-    assert engine.run(scene, preset="accurate", overrides={"collision_persistence": 1}).status == "ok"
+    run = engine.run(scene, preset="accurate", overrides={"collision_persistence": 1})
+    assert run.status == "ok"
 
 
 def test_failed_reset_leaves_the_space_usable(tmp_path):
@@ -149,4 +153,5 @@ def test_impulse_matches_momentum_change_when_chipmunk_swaps_the_shapes(engine):
     scene = Scene((body,), 0.5, 0.0, ground=True, name="triangle-settling")
     run = engine.run(scene, preset="accurate", overrides={"approach_steps": 2.5})
     assert run.contact_steps > 1
-    assert run.normal_impulse == pytest.approx(body.mass * (run.velocities[0][1] - body.velocity[1]), abs=1e-9)
+    momentum_change = body.mass * (run.velocities[0][1] - body.velocity[1])
+    assert run.normal_impulse == pytest.approx(momentum_change, abs=1e-9)
