@@ -43,7 +43,9 @@ from harness.engines import (
     ke_norm,
     load_engine,
 )
+from harness.run import verdicts
 from harness.scene import Scene
+from harness.scene.geometry import impact_problem
 from harness.scene.reference import newton_lcp_velocities, reference_scenes
 
 RATIO_TARGET = 1.3
@@ -136,6 +138,13 @@ def run_engine_overhead_benchmark(quick: bool = True) -> dict:
                 first = engine.run(scene, settings)  # warm caches
                 again = engine.run(scene, settings)
                 deterministic = first == again
+                # The verdict, as every suite, survey and stress run gets: a benchmarked run
+                # that is not the single impact it claims to be is marked, not timed silently.
+                problem = impact_problem(scene, contact, normal)
+                law_change = problem.solve(mu=scene.friction, e=scene.restitution,
+                                           law="newton-lcp").energy_change
+                verdict = verdicts.judge(scene, problem, verdicts.numbers_from_run(first),
+                                         law_energy_change=law_change)
                 law_error = None
                 if have_solver and name in ("pymunk", "pybullet", "box2d"):
                     law = newton_lcp_velocities(scene, contact, normal)
@@ -159,6 +168,7 @@ def run_engine_overhead_benchmark(quick: bool = True) -> dict:
                     "preset": preset,
                     "steps": steps,
                     "status": first.status,
+                    "verdict": "ok" if verdict.single_impact else ",".join(verdict.names),
                     "harness_us": harness * 1e6,
                     "bare_us": bare * 1e6,
                     "bare_reset_us": bare_reset * 1e6,
@@ -179,7 +189,8 @@ def format_table(report: dict) -> str:
         f"engine overhead per impact (quick={report['quick']}; "
         f"target ratio <= {report['ratio_target']})",
         f"{'engine':9} {'preset':9} {'scene':11} {'steps':>5} {'harness µs':>11} {'bare µs':>9} "
-        f"{'bare+reset µs':>13} {'ratio':>6} {'ratio(reset)':>12} {'det':>4} {'vs newton-lcp':>13}",
+        f"{'bare+reset µs':>13} {'ratio':>6} {'ratio(reset)':>12} {'det':>4} {'vs newton-lcp':>13} "
+        f"verdict",
     ]
     for name, entry in report["engines"].items():
         if not entry["available"]:
@@ -192,7 +203,7 @@ def format_table(report: dict) -> str:
                 f"{row['harness_us']:11.1f} {row['bare_us']:9.1f} {row['bare_reset_us']:13.1f} "
                 f"{row['ratio']:6.2f} {row['ratio_reset']:12.2f} "
                 f"{'yes' if row['deterministic'] else 'NO':>4} "
-                f"{law:>13}"
+                f"{law:>13} {row.get('verdict', '')}"
             )
     return "\n".join(lines)
 
