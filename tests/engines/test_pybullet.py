@@ -154,7 +154,9 @@ def test_reused_clients_equal_fresh_adapters(order, monkeypatch):
     # when one is idle. Every run through one adapter, over more geometries than it keeps
     # worlds, must equal bit for bit (EngineRun equality: every field but the wall time) a
     # run in a fresh adapter, whose clients are new: body ids, contact order, warm starts
-    # and per-client settings must not carry over from the client's earlier worlds.
+    # and per-client settings must not carry over from the client's earlier worlds. The
+    # sub-stepped settings go first: a client keeps numSubSteps and fixedTimeStep across
+    # resetSimulation, so it must not serve the presets (which leave sub-steps unset).
     import pybullet
 
     from harness.engines import pybullet_engine
@@ -166,20 +168,21 @@ def test_reused_clients_equal_fresh_adapters(order, monkeypatch):
     connect = pybullet.connect
     shared_connects = []
     shared = pybullet_engine.PybulletEngine()
+    sub_stepped = shared.settings("accurate", {"num_sub_steps": 2, "time_step": 1.0 / 120.0})
     try:
-        for preset in ("accurate", "defaults"):
+        for settings in (sub_stepped, shared.settings("accurate"), shared.settings("defaults")):
             for scene in scenes:
                 fresh = pybullet_engine.PybulletEngine()
                 try:
-                    expected = fresh.run(scene, preset=preset)
+                    expected = fresh.run(scene, settings)
                 finally:
                     fresh.close()
                 monkeypatch.setattr(pybullet, "connect",
                                     lambda *args: shared_connects.append(1) or connect(*args))
-                got = shared.run(scene, preset=preset)
+                got = shared.run(scene, settings)
                 monkeypatch.setattr(pybullet, "connect", connect)
-                assert got == expected, (preset, scene.name)
+                assert got == expected, (settings, scene.name)
     finally:
         shared.close()
-    # The reuse path was taken: per preset, one client per kept world and one idle.
-    assert len(shared_connects) <= 2 * (pybullet_engine._MAX_WORLDS + 1)
+    # The reuse path was taken: per settings, one client per kept world and one idle.
+    assert len(shared_connects) <= 3 * (pybullet_engine._MAX_WORLDS + 1)
