@@ -23,8 +23,15 @@ convex-plane collider uses exact support points).
 Pair values: Bullet multiplies the two restitutions and the two lateral frictions; the
 partner (plane, or ``bodies[1]``) gets 1, ``bodies[0]`` gets ``e`` and ``μ``.
 
-Reuse and determinism: one DIRECT client per (engine settings, geometry) -- at most
-:data:`_MAX_WORLDS` alive, least recently used disconnected. Bullet's
+Reuse and determinism: one world per (engine settings, geometry) -- at most
+:data:`_MAX_WORLDS` alive, least recently used released. A world is a DIRECT client of its
+own; connecting one costs ~20-50 ms, so a released world's client is emptied
+(``resetSimulation``, which deletes Bullet's dynamics world and makes a new one) and kept
+idle for the next world of the same engine settings (at most :data:`_MAX_IDLE` per
+settings), which is then built in it in ~1 ms. Per settings only: a client keeps some
+values across a reset (the time step, the sub-step count), and every value a world of the
+same settings sets is the same, so a reused client equals a new one bit for bit
+(tests/engines/test_pybullet.py checks runs against a fresh adapter's). Bullet's
 ``contactBreakingThreshold`` is a process-wide global read when a contact manifold is
 created, so it is set again before every run. Before a run the bodies are parked far from
 each other and the plane and collision detection is run once, which empties the contact
@@ -50,6 +57,8 @@ from harness.engines.settings import check_choice, check_int, check_number
 from harness.scene import Scene
 
 _MAX_WORLDS = 8
+_MAX_IDLE = 2  # emptied clients kept per engine settings (the survey needs 1: a new
+# geometry evicts one world and builds one)
 _PARK_HEIGHT = 1.0e3  # m, where bodies wait (far above the plane) while contacts are cleared
 
 # setting key -> pybullet setPhysicsEngineParameter keyword
@@ -186,7 +195,8 @@ def _planar_multibody(client: int, body) -> int:
 
 @dataclass
 class _World:
-    client: int
+    client: int  # -1 once released (its client may serve another world)
+    settings_key: tuple  # the engine settings (which idle clients it may take and give back)
     plane: int | None
     bodies: list[int]
     extents: tuple[float, ...]  # m, body_extent of each body (out-of-plane drift)
@@ -217,6 +227,11 @@ def _joint_triples(world: _World, field: int) -> tuple:
     return tuple(triples)
 
 
+def _settings_key(settings) -> tuple:
+    """The settings a world is built with (all but the per-run ones), as a key."""
+    return tuple((k, settings[k]) for k in sorted(settings) if k not in _RUN_ONLY)
+
+
 class PybulletEngine(Engine):
     name = "pybullet"
     version = "3.2.7"
@@ -225,6 +240,7 @@ class PybulletEngine(Engine):
     max_worlds = _MAX_WORLDS
 
     def __init__(self) -> None:
+        self._idle: dict[tuple, list[int]] = {}  # settings key -> emptied clients
         try:  # pybullet has no __version__; its API version is a date
             from importlib.metadata import PackageNotFoundError, version
 
@@ -251,13 +267,18 @@ class PybulletEngine(Engine):
     # ------------------------------------------------------------------ worlds
     def _world_key(self, scene: Scene, settings) -> tuple:
         """The engine settings a world is built with, and the geometry."""
-        return (
-            tuple((k, settings[k]) for k in sorted(settings) if k not in _RUN_ONLY),
-            geometry_key(scene),
-        )
+        return (_settings_key(settings), geometry_key(scene))
+
+    def _client(self, settings_key: tuple) -> int:
+        """An empty DIRECT client for ``settings_key``: an idle one, else a new one."""
+        idle = self._idle.get(settings_key)
+        if idle:
+            return idle.pop()
+        return p.connect(p.DIRECT)
 
     def _build(self, scene: Scene, settings, *, contacts: bool = True) -> _World:
-        client = p.connect(p.DIRECT)
+        settings_key = _settings_key(settings)
+        client = self._client(settings_key)
         p.setGravity(0.0, 0.0, 0.0, physicsClientId=client)
         parameters = {
             keyword: settings[key]
@@ -291,16 +312,38 @@ class PybulletEngine(Engine):
         extents = tuple(body_extent(b.shape) for b in scene.bodies)
         # A bare-stepping world never asks for contacts, so it never knows whether the last
         # run left some: it starts clean (no collision detection has run yet) and stays so.
-        return _World(client=client, plane=plane, bodies=bodies, extents=extents,
+        return _World(client=client, settings_key=settings_key, plane=plane, bodies=bodies,
+                      extents=extents,
                       scale=max(extents), dirty=contacts,
                       threshold=float(settings["contact_breaking_threshold"]),
                       dt=float(settings["time_step"]))
 
     def _release(self, world: _World) -> None:
+        """Empty the world's client and keep it idle for its settings, or disconnect it."""
+        client, world.client = world.client, -1
+        if client < 0:
+            return
+        idle = self._idle.setdefault(world.settings_key, [])
         try:
-            p.disconnect(physicsClientId=world.client)
+            if len(idle) < _MAX_IDLE:
+                p.resetSimulation(physicsClientId=client)
+                idle.append(client)
+            else:
+                p.disconnect(physicsClientId=client)
         except p.error:  # pragma: no cover - already gone at interpreter exit
             pass
+
+    def close(self) -> None:
+        """Release every cached world and plan, and disconnect the idle clients."""
+        super().close()
+        idle = self._idle
+        while idle:
+            _, clients = idle.popitem()
+            for client in clients:
+                try:
+                    p.disconnect(physicsClientId=client)
+                except p.error:  # pragma: no cover - already gone at interpreter exit
+                    pass
 
     def __del__(self):  # pragma: no cover - interpreter exit
         try:

@@ -136,3 +136,53 @@ def test_rerun_after_its_world_was_evicted(engine):
                                      position=(0.0, 0.11 + 0.01 * radius))
         engine.run(Scene((body,), 0.5, 0.0, ground=True, name="drop"), settings)
     assert engine.run(scene, settings) == first
+
+
+def survey_scenes(count_per_population=2):
+    """A few sampled survey scenes of every population (each a geometry of its own)."""
+    from harness.survey.population import resolve_populations
+    from harness.survey.sampling import sample_population
+
+    return [sample.scene
+            for population in resolve_populations()
+            for sample in sample_population(population, count_per_population, 7).samples]
+
+
+@pytest.mark.parametrize("order", ["forward", "reverse"])
+def test_reused_clients_equal_fresh_adapters(order, monkeypatch):
+    # A new geometry is built in an emptied (resetSimulation) client of an evicted world
+    # when one is idle. Every run through one adapter, over more geometries than it keeps
+    # worlds, must equal bit for bit (EngineRun equality: every field but the wall time) a
+    # run in a fresh adapter, whose clients are new: body ids, contact order, warm starts
+    # and per-client settings must not carry over from the client's earlier worlds. The
+    # sub-stepped settings go first: a client keeps numSubSteps and fixedTimeStep across
+    # resetSimulation, so it must not serve the presets (which leave sub-steps unset).
+    import pybullet
+
+    from harness.engines import pybullet_engine
+
+    scenes = [scene for scene, _, _ in SCENES.values()] + [triangle_scene()[0]] + survey_scenes()
+    if order == "reverse":
+        scenes.reverse()
+    assert len(scenes) > 2 * pybullet_engine._MAX_WORLDS  # worlds are evicted, clients reused
+    connect = pybullet.connect
+    shared_connects = []
+    shared = pybullet_engine.PybulletEngine()
+    sub_stepped = shared.settings("accurate", {"num_sub_steps": 2, "time_step": 1.0 / 120.0})
+    try:
+        for settings in (sub_stepped, shared.settings("accurate"), shared.settings("defaults")):
+            for scene in scenes:
+                fresh = pybullet_engine.PybulletEngine()
+                try:
+                    expected = fresh.run(scene, settings)
+                finally:
+                    fresh.close()
+                monkeypatch.setattr(pybullet, "connect",
+                                    lambda *args: shared_connects.append(1) or connect(*args))
+                got = shared.run(scene, settings)
+                monkeypatch.setattr(pybullet, "connect", connect)
+                assert got == expected, (settings, scene.name)
+    finally:
+        shared.close()
+    # The reuse path was taken: per settings, one client per kept world and one idle.
+    assert len(shared_connects) <= 3 * (pybullet_engine._MAX_WORLDS + 1)
