@@ -154,12 +154,19 @@ class ResultCache:
     def path(self, key: str) -> Path:
         return self.root / key[:2] / f"{key}.json"
 
-    def get(self, key: str, check=None) -> dict | None:
+    def get(self, key: str, check=None, *, count: bool = True) -> dict | None:
         """The stored record, or ``None`` (a miss) when absent, disabled or unreadable.
 
         ``check(record)`` returns ``None`` for a usable record or a reason it is not; a
-        rejected or unreadable entry is a miss and is listed in :attr:`rejected`.
+        rejected or unreadable entry is a miss and is listed in :attr:`rejected`. With
+        ``count=False`` the lookup stays out of :attr:`stats` (which count engine runs).
         """
+        if not count:
+            hits, misses = self.hits, self.misses
+            try:
+                return self.get(key, check)
+            finally:
+                self.hits, self.misses = hits, misses
         if not self.enabled:
             self.misses += 1
             return None
