@@ -46,12 +46,15 @@ from harness.run.files import write_text_atomically
 _HARNESS_DIR = Path(__file__).resolve().parent.parent  # harness/, from harness/run/
 #: The harness source (directories and files, relative to ``harness/``) that the cached
 #: values depend on: the engine runs (the adapters, the scene they build, ``engine_task`` in
-#: the runner) and the several-contact references (the references, the event-driven
-#: solver, the departures they hold). Add a module here when a cached value starts to
-#: depend on it; a listed path that is missing is an error, never silently skipped.
+#: the runner), the several-contact references (the references, the event-driven solver,
+#: the departures they hold) and each point's finished records (the scenario model, the
+#: runner, metrics, contact histories, verdicts, the record layout). Add a module here when
+#: a cached value starts to depend on it; a listed path that is missing is an error, never
+#: silently skipped.
 CACHED_CODE: tuple[str, ...] = (
-    "__init__.py", "engines", "scene", "reference", "run/__init__.py", "run/cache.py",
-    "run/runner.py", "run/references.py", "run/metrics.py",
+    "__init__.py", "engines", "scene", "reference", "scenarios", "run/__init__.py",
+    "run/cache.py", "run/runner.py", "run/references.py", "run/metrics.py", "run/verdicts.py",
+    "run/history.py", "run/records.py",
 )
 
 CACHE_FORMAT = 1  # bump when the record layout changes

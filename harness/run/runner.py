@@ -67,9 +67,9 @@ import signal
 import sys
 import threading
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields, is_dataclass
 from pathlib import Path
-from typing import Any, Iterable, Sequence, TextIO
+from typing import Any, Iterable, Mapping, Sequence, TextIO
 
 import numpy as np
 
@@ -464,6 +464,7 @@ def run(
                                "engine_version": engine.version, "settings": settings,
                                "scene": _scene_payload(scene)}
                     key = cache.key(payload) if cache is not None else None
+                    item["key"] = key
                     speeds = 3 * len(scene.bodies)
                     cached = None if cache is None else cache.get(
                         key, check=lambda output, speeds=speeds: check_engine_output(output,
@@ -517,8 +518,7 @@ def run(
         entries = by_scenario.get(scenario.name, [])
         for point in scenario.point_list():
             point_entries = [e for e in entries if e[1].index == point.index]
-            scenario_records += _point_records_or_errors(scenario, point, point_entries,
-                                                         cache=cache)
+            scenario_records += _point_records_cached(scenario, point, point_entries, cache)
         infos[scenario.name]["references"] = references.collect(scenario_records)
         scenario_gates = check_gates(scenario, scenario_records)
         records += scenario_records
@@ -553,6 +553,58 @@ def run(
     )
     return RunOutcome(records=records, gates=gates, provenance=info, scenarios=infos,
                       cache_stats=stats, warnings=warnings)
+
+
+def _definition(value: Any) -> Any:
+    """A scenario (or any of its parts) as plain JSON-able values for a cache key: every
+    field but the file's ``path`` (the records do not depend on where the file lies)."""
+    if is_dataclass(value) and not isinstance(value, type):
+        return {f.name: _definition(getattr(value, f.name)) for f in fields(value)
+                if f.name != "path"}
+    if isinstance(value, Mapping):
+        return {str(key): _definition(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_definition(item) for item in value]
+    return value
+
+
+def _point_records_cached(scenario: Scenario, point, engine_entries: Sequence,
+                          cache) -> list[Record]:
+    """:func:`_point_records_or_errors`, kept in ``cache`` when every input is cacheable.
+
+    A warm run spends most of its time rebuilding records from cached engine output
+    (departures, contact histories, verdicts): the finished records of a point depend only
+    on the scenario's definition, the point, and each engine run's cache key, overrides and
+    history flag, which make the key. A point with an engine run that was skipped or failed
+    (never cached) is rebuilt every run. Records read back differ from fresh ones only where
+    the results file already writes them alike (a non-finite float is ``None`` in both).
+    """
+    cacheable = cache is not None and cache.enabled and all(
+        item.get("key") is not None and isinstance(item.get("output"), dict)
+        and not str(item["output"].get("status", "")).startswith(("skipped", "error"))
+        for _, _, _, _, item in engine_entries)
+    if not cacheable:
+        return _point_records_or_errors(scenario, point, engine_entries, cache=cache)
+    key = cache.key({"kind": "point-records", "scenario": _definition(scenario),
+                     "point": point.index,
+                     "engine_runs": [[engine_name, preset, item["key"], item.get("overrides"),
+                                      item.get("history")]
+                                     for _, _, engine_name, preset, item in engine_entries]})
+    stored = cache.get(key, check=lambda entry: None if isinstance(entry.get("records"), list)
+                       else "no records", count=False)
+    if stored is not None:
+        records = [Record.from_dict(data) for data in stored["records"]]
+        engine_part = records[len(records) - len(engine_entries):] if engine_entries else []
+        for record, (_, _, _, _, item) in zip(engine_part, engine_entries):
+            record.cached = bool(item.get("cached", False))
+        return records
+    records = _point_records_or_errors(scenario, point, engine_entries, cache=cache)
+    if not any(record.status.startswith("error: internal") for record in records):
+        try:
+            cache.put(key, {"records": [record.as_dict() for record in records]})
+        except OSError:  # the run goes on without the cache (the engine runs' store warns)
+            pass
+    return records
 
 
 def _point_records_or_errors(scenario: Scenario, point, engine_entries: Sequence, *,
