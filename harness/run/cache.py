@@ -9,8 +9,10 @@ clear``; ``cache info`` shows the size.
 
 A record is stored under the key ``sha256(canonical JSON of the payload + code version)``,
 where the payload names everything the result depends on (scenario, sweep point, engine and
-its version, settings ...) and :func:`code_version` hashes the source of ``planar_impact``
-and ``harness`` (engines included), so any code change invalidates every entry::
+its version, settings ...) and :func:`code_version` hashes the source the stored values
+depend on (:data:`CACHED_CODE`: ``planar_impact``, the engines, the scene, the references
+and the run modules that compute what is stored), so a change there invalidates every
+entry, while a change to the report, the benchmarks or the CLI keeps the cache::
 
     cache = ResultCache()                     # default_cache_dir(), or enabled=False for --no-cache
     key = cache.key({"scenario": name, "point": 3, "engine": "pymunk", "version": v, "settings": s})
@@ -42,7 +44,18 @@ from typing import Any
 from harness.run.files import write_text_atomically
 
 _HARNESS_DIR = Path(__file__).resolve().parent.parent  # harness/, from harness/run/
-_SOURCE_DIRS: tuple[Path, ...] = (_HARNESS_DIR.parent / "src" / "planar_impact", _HARNESS_DIR)
+#: The harness source (directories and files, relative to ``harness/``) that the cached
+#: values depend on: the engine runs (the adapters, the scene they build, ``engine_task`` in
+#: the runner), the several-contact references (the references, the event-driven solver,
+#: the departures they hold) and each point's finished records (the scenario model, the
+#: runner, metrics, contact histories, verdicts, the record layout). Add a module here when
+#: a cached value starts to depend on it; a listed path that is missing is an error, never
+#: silently skipped.
+CACHED_CODE: tuple[str, ...] = (
+    "__init__.py", "engines", "scene", "reference", "scenarios", "run/__init__.py",
+    "run/cache.py", "run/runner.py", "run/references.py", "run/metrics.py", "run/verdicts.py",
+    "run/history.py", "run/records.py",
+)
 
 CACHE_FORMAT = 1  # bump when the record layout changes
 #: Environment variable that moves the cache (tests, shared machines).
@@ -63,23 +76,36 @@ def default_cache_dir() -> Path:
     return Path(base) / "impact-harness"
 
 
-def _source_dirs() -> tuple[Path, ...]:
-    dirs = list(_SOURCE_DIRS)
-    if not dirs[0].is_dir():  # installed (non-editable): use the imported package's location
-        import planar_impact
+def cached_code_sources(harness_dir: Path = _HARNESS_DIR,
+                        planar_impact_dir: Path | None = None) -> tuple[Path, ...]:
+    """The source paths :func:`code_version` hashes: ``planar_impact`` (beside ``harness/``
+    under ``src/``, else the imported package) and :data:`CACHED_CODE` under ``harness_dir``."""
+    if planar_impact_dir is None:
+        planar_impact_dir = harness_dir.parent / "src" / "planar_impact"
+        if not planar_impact_dir.is_dir():  # installed (non-editable): the imported package
+            import planar_impact
 
-        dirs[0] = Path(planar_impact.__file__).resolve().parent
-    return tuple(dirs)
+            planar_impact_dir = Path(planar_impact.__file__).resolve().parent
+    return (planar_impact_dir, *(harness_dir / name for name in CACHED_CODE))
 
 
 @lru_cache(maxsize=None)
-def _code_version_of(dirs: tuple[Path, ...]) -> str:
+def _code_version_of(sources: tuple[Path, ...]) -> str:
+    """sha256 over the ``*.py`` files of ``sources`` (directories, recursively, or files),
+    each named by its path from the source's parent."""
     digest = hashlib.sha256()
-    for directory in dirs:
-        for path in sorted(directory.rglob("*.py")):
-            if "__pycache__" in path.parts:
-                continue
-            digest.update(path.relative_to(directory.parent).as_posix().encode())
+    for source in sources:
+        if source.is_file():
+            files = [source]
+        elif source.is_dir():
+            files = sorted(path for path in source.rglob("*.py")
+                           if "__pycache__" not in path.parts)
+        else:
+            raise FileNotFoundError(f"{source}: listed in the cached code, but missing")
+        for path in files:
+            name = (f"{source.parent.name}/{source.name}" if path is source
+                    else path.relative_to(source.parent).as_posix())
+            digest.update(name.encode())
             digest.update(b"\0")
             digest.update(path.read_bytes())
             digest.update(b"\0")
@@ -87,11 +113,11 @@ def _code_version_of(dirs: tuple[Path, ...]) -> str:
 
 
 def code_version() -> str:
-    """sha256 of the source of ``planar_impact`` and ``harness`` (engines included).
+    """sha256 of the source the cached values depend on (:func:`cached_code_sources`).
 
     Computed once per process (the source does not change under a running process).
     """
-    return _code_version_of(_source_dirs())
+    return _code_version_of(cached_code_sources())
 
 
 def _canonical(value: Any) -> Any:
@@ -154,12 +180,19 @@ class ResultCache:
     def path(self, key: str) -> Path:
         return self.root / key[:2] / f"{key}.json"
 
-    def get(self, key: str, check=None) -> dict | None:
+    def get(self, key: str, check=None, *, count: bool = True) -> dict | None:
         """The stored record, or ``None`` (a miss) when absent, disabled or unreadable.
 
         ``check(record)`` returns ``None`` for a usable record or a reason it is not; a
-        rejected or unreadable entry is a miss and is listed in :attr:`rejected`.
+        rejected or unreadable entry is a miss and is listed in :attr:`rejected`. With
+        ``count=False`` the lookup stays out of :attr:`stats` (which count engine runs).
         """
+        if not count:
+            hits, misses = self.hits, self.misses
+            try:
+                return self.get(key, check)
+            finally:
+                self.hits, self.misses = hits, misses
         if not self.enabled:
             self.misses += 1
             return None
@@ -302,5 +335,5 @@ def main(args) -> int:
     return 0
 
 
-__all__ = ["CACHE_DIR_VARIABLE", "ResultCache", "add_arguments", "canonical_json",
-           "code_version", "default_cache_dir", "main"]
+__all__ = ["CACHED_CODE", "CACHE_DIR_VARIABLE", "ResultCache", "add_arguments",
+           "cached_code_sources", "canonical_json", "code_version", "default_cache_dir", "main"]

@@ -41,7 +41,7 @@ import json
 import math
 import os
 import tempfile
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import asdict, dataclass, field, fields, is_dataclass
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 
@@ -102,12 +102,17 @@ class Record:
         return [r["name"] for r in self.reasons if r.get("fails", True)]
 
     def as_dict(self) -> dict:
-        return _jsonable(asdict(self))
+        # A shallow dict of the fields: _jsonable copies the nested values anyway, so
+        # dataclasses.asdict's deep copy (most of the time of writing a results file) is waste.
+        return _jsonable({name: getattr(self, name) for name in _RECORD_FIELDS})
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "Record":
         names = {f.name for f in fields(cls)}
         return cls(**{key: value for key, value in data.items() if key in names})
+
+
+_RECORD_FIELDS = tuple(f.name for f in fields(Record))
 
 
 @dataclass
@@ -154,8 +159,17 @@ class Results:
         return [(e, p) for p in PRESETS for e in ENGINES if (e, p) in present]
 
 
+_PLAIN = (str, int, bool, type(None))
+
+
 def _jsonable(value: Any) -> Any:
-    """Plain JSON values; non-finite floats become None, numpy values plain Python."""
+    """Plain JSON values; non-finite floats become None, numpy values plain Python, nested
+    dataclasses dicts."""
+    kind = type(value)
+    if kind is float:  # the common cases first, by exact type: a results file has millions
+        return value if math.isfinite(value) else None
+    if kind in _PLAIN:
+        return value
     if isinstance(value, dict):
         return {str(key): _jsonable(item) for key, item in value.items()}
     if isinstance(value, (list, tuple)):
@@ -166,6 +180,8 @@ def _jsonable(value: Any) -> Any:
         return value if math.isfinite(value) else None
     if isinstance(value, Path):
         return value.as_posix()
+    if is_dataclass(value) and not isinstance(value, type):
+        return _jsonable(asdict(value))
     return value
 
 

@@ -30,7 +30,9 @@ Parallelism and cache
     version, the complete settings and the code version); only the misses run, through
     :func:`harness.run.executor.run_tasks` (local process pool, or Dask), and are stored. The
     cache holds the engine's raw output; departures and the other derived numbers are
-    recomputed every run (microseconds).
+    recomputed every run (microseconds). It also keeps each several-contact point's
+    reference (:func:`point_reference_cached`: up to a second of m-contact solving per
+    point), outside the hit and miss counts.
 
     Each simulated result is stored in the cache the moment it finishes, so a run killed
     half-way keeps its finished half and the rerun simulates only the rest. A cache that
@@ -65,9 +67,9 @@ import signal
 import sys
 import threading
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields, is_dataclass
 from pathlib import Path
-from typing import Any, Iterable, Sequence, TextIO
+from typing import Any, Iterable, Mapping, Sequence, TextIO
 
 import numpy as np
 
@@ -462,6 +464,7 @@ def run(
                                "engine_version": engine.version, "settings": settings,
                                "scene": _scene_payload(scene)}
                     key = cache.key(payload) if cache is not None else None
+                    item["key"] = key
                     speeds = 3 * len(scene.bodies)
                     cached = None if cache is None else cache.get(
                         key, check=lambda output, speeds=speeds: check_engine_output(output,
@@ -515,7 +518,7 @@ def run(
         entries = by_scenario.get(scenario.name, [])
         for point in scenario.point_list():
             point_entries = [e for e in entries if e[1].index == point.index]
-            scenario_records += _point_records_or_errors(scenario, point, point_entries)
+            scenario_records += _point_records_cached(scenario, point, point_entries, cache)
         infos[scenario.name]["references"] = references.collect(scenario_records)
         scenario_gates = check_gates(scenario, scenario_records)
         records += scenario_records
@@ -552,12 +555,65 @@ def run(
                       cache_stats=stats, warnings=warnings)
 
 
-def _point_records_or_errors(scenario: Scenario, point, engine_entries: Sequence) -> list[Record]:
+def _definition(value: Any) -> Any:
+    """A scenario (or any of its parts) as plain JSON-able values for a cache key: every
+    field but the file's ``path`` (the records do not depend on where the file lies)."""
+    if is_dataclass(value) and not isinstance(value, type):
+        return {f.name: _definition(getattr(value, f.name)) for f in fields(value)
+                if f.name != "path"}
+    if isinstance(value, Mapping):
+        return {str(key): _definition(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_definition(item) for item in value]
+    return value
+
+
+def _point_records_cached(scenario: Scenario, point, engine_entries: Sequence,
+                          cache) -> list[Record]:
+    """:func:`_point_records_or_errors`, kept in ``cache`` when every input is cacheable.
+
+    A warm run spends most of its time rebuilding records from cached engine output
+    (departures, contact histories, verdicts): the finished records of a point depend only
+    on the scenario's definition, the point, and each engine run's cache key, overrides and
+    history flag, which make the key. A point with an engine run that was skipped or failed
+    (never cached) is rebuilt every run. Records read back differ from fresh ones only where
+    the results file already writes them alike (a non-finite float is ``None`` in both).
+    """
+    cacheable = cache is not None and cache.enabled and all(
+        item.get("key") is not None and isinstance(item.get("output"), dict)
+        and not str(item["output"].get("status", "")).startswith(("skipped", "error"))
+        for _, _, _, _, item in engine_entries)
+    if not cacheable:
+        return _point_records_or_errors(scenario, point, engine_entries, cache=cache)
+    key = cache.key({"kind": "point-records", "scenario": _definition(scenario),
+                     "point": point.index,
+                     "engine_runs": [[engine_name, preset, item["key"], item.get("overrides"),
+                                      item.get("history")]
+                                     for _, _, engine_name, preset, item in engine_entries]})
+    stored = cache.get(key, check=lambda entry: None if isinstance(entry.get("records"), list)
+                       else "no records", count=False)
+    if stored is not None:
+        records = [Record.from_dict(data) for data in stored["records"]]
+        engine_part = records[len(records) - len(engine_entries):] if engine_entries else []
+        for record, (_, _, _, _, item) in zip(engine_part, engine_entries):
+            record.cached = bool(item.get("cached", False))
+        return records
+    records = _point_records_or_errors(scenario, point, engine_entries, cache=cache)
+    if not any(record.status.startswith("error: internal") for record in records):
+        try:
+            cache.put(key, {"records": [record.as_dict() for record in records]})
+        except OSError:  # the run goes on without the cache (the engine runs' store warns)
+            pass
+    return records
+
+
+def _point_records_or_errors(scenario: Scenario, point, engine_entries: Sequence, *,
+                             cache=None) -> list[Record]:
     """:func:`point_records`, or, when the harness fails on this point, one record per law
     and engine run with status ``"error: internal: ..."``: one bad point costs its records,
     not the run."""
     try:
-        return point_records(scenario, point, engine_entries)
+        return point_records(scenario, point, engine_entries, cache=cache)
     except Exception as error:  # noqa: BLE001 - a harness bug: in the records, exit status 3
         status = f"error: internal: {type(error).__name__}: {error}"
         info = _point_dict(point)
@@ -585,8 +641,13 @@ def _run_tasks(tasks, *, executor, workers, scheduler, log, on_result=None) -> l
                      scheduler=scheduler, progress=progress, on_result=on_result)
 
 
-def point_records(scenario: Scenario, point, engine_entries: Sequence) -> list[Record]:
-    """The law records and the engine records of one sweep point."""
+def point_records(scenario: Scenario, point, engine_entries: Sequence, *,
+                  cache=None) -> list[Record]:
+    """The law records and the engine records of one sweep point.
+
+    ``cache`` (a :class:`harness.run.cache.ResultCache`, or None) keeps the point's
+    reference (:func:`point_reference_cached`) between runs.
+    """
     fixed = scenario.at(point)
     mu, e = fixed.friction, fixed.restitution
     problem = scenario.analytic_problem(point)
@@ -628,7 +689,9 @@ def point_records(scenario: Scenario, point, engine_entries: Sequence) -> list[R
             record.departure = metrics.departures(mass_matrix, law_speeds[law], law_speeds,
                                                   u_before, free_bodies=free_bodies)
 
-    reference = references.annotate(scenario, point, law_records, keep_full=True)
+    reference = references.annotate(scenario, point, law_records,
+                                     point_reference_cached(scenario, point, cache),
+                                     keep_full=True)
     if not engine_entries:
         return law_records
     scene = scenario.scene(point)
@@ -646,6 +709,36 @@ def point_records(scenario: Scenario, point, engine_entries: Sequence) -> list[R
     ]
     references.annotate(scenario, point, engine_records, reference)
     return law_records + engine_records
+
+
+def point_reference_cached(scenario: Scenario, point, cache=None) -> dict:
+    """:func:`harness.run.references.point_reference`, read from ``cache`` when it holds it.
+
+    A several-contact reference (a flat face's m-contact laws, a tilt's event sequence) costs
+    up to a second per point, far more than the engine runs it judges; it depends only on
+    the scene at the point, its μ, e and laws and the situation the scenario declares, which
+    make the key. A single-contact reference costs nothing and is not stored.
+    """
+    kind = references.kind_of(scenario)
+    if cache is None or kind == references.SINGLE:
+        return references.point_reference(scenario, point)
+    from harness.scenarios.schema import ONE_POINT_TOLERANCE
+
+    fixed = scenario.at(point)
+    key = cache.key({"kind": "point-reference", "situation": kind,
+                     "scene": _scene_payload(scenario.scene(point)),
+                     "friction": fixed.friction, "restitution": fixed.restitution,
+                     "laws": list(fixed.laws), "one_point_tolerance": ONE_POINT_TOLERANCE})
+    cached = cache.get(key, check=lambda stored: None if isinstance(stored.get("kind"), str)
+                       else "no reference kind", count=False)
+    if cached is not None:
+        return cached
+    reference = references.point_reference(scenario, point)
+    try:
+        cache.put(key, reference)
+    except OSError:  # the run goes on without the cache (the engine runs' store warns)
+        pass
+    return reference
 
 
 def engine_record(scenario: Scenario, point_info: dict, engine_name: str, preset: str,
@@ -781,7 +874,8 @@ def add_common_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--executor", default="local", choices=("local", "dask"),
                         help="local process pool (default) or a Dask cluster")
     parser.add_argument("--scheduler", default=None,
-                        help="Dask scheduler address (with --executor dask; default: a local cluster)")
+                        help="Dask scheduler address (with --executor dask; default: a local "
+                        "cluster)")
     parser.add_argument("--workers", type=int, default=None,
                         help="local worker processes (default: all cores; small runs run inline)")
     parser.add_argument("--set", dest="settings_overrides", action="append", default=[],
@@ -910,7 +1004,8 @@ def _existing_selection(path: Path) -> dict | None:
 
 
 def execute(args, *, json_path: Path, command: Sequence[str] | None = None,
-            log: TextIO | None | str = "stderr", guard: bool = False) -> tuple[int, RunOutcome | None]:
+            log: TextIO | None | str = "stderr",
+            guard: bool = False) -> tuple[int, RunOutcome | None]:
     """Run with parsed options; write the results file. Returns (exit status, outcome).
 
     Options are checked before any scenario is read. ``guard``: refuse to replace
