@@ -6,6 +6,7 @@ A figure's PNG carries the digest of its inputs and of this module in its metada
 
 from __future__ import annotations
 
+import contextvars
 import dataclasses
 import functools
 import itertools
@@ -40,12 +41,19 @@ def new_figure(width: float, height: float):
     return Figure(figsize=(width, height), layout="constrained")
 
 
+#: Whether :func:`save_png` writes the SVG twin: set per figure by the report (``--svg``),
+#: since an SVG costs as much again as its PNG to write.
+SVG_TWIN: contextvars.ContextVar[bool] = contextvars.ContextVar("svg_twin", default=True)
+
+
 def save_png(figure, path: Path, dpi: int = 100, tag: str | None = None) -> Path:
-    """Save a PNG and, beside it, the same figure as SVG (for a paper); ``tag`` (the digest
-    of the figure's inputs) goes into the PNG's metadata."""
+    """Save a PNG and, beside it unless :data:`SVG_TWIN` says not, the same figure as SVG
+    (for a paper); ``tag`` (the digest of the figure's inputs) goes into the PNG's
+    metadata."""
     figure.savefig(path, dpi=dpi, metadata={TAG_KEY: tag} if tag else None)
-    # No date in the SVG, so that the same inputs give the same file.
-    figure.savefig(path.with_suffix(".svg"), metadata={"Date": None})
+    if SVG_TWIN.get():
+        # No date in the SVG, so that the same inputs give the same file.
+        figure.savefig(path.with_suffix(".svg"), metadata={"Date": None})
     return path
 
 
@@ -137,13 +145,24 @@ def png_tag(path: Path) -> str | None:
         return None
 
 
-def render_once(kind: str, path: Path, payload, draw) -> Path | None:
-    """Draw a figure unless ``path`` (and its SVG) already hold one drawn from the same
-    inputs."""
+def render_once(kind: str, path: Path, payload, draw, svg: bool = True) -> Path | None:
+    """Draw a figure unless ``path`` (and its SVG, when ``svg``) already hold one drawn from
+    the same inputs."""
     tag = inputs_digest(kind, payload)
-    if path.exists() and path.with_suffix(".svg").exists() and png_tag(path) == tag:
+    if is_current(path, tag, svg):
         return path
-    return draw(path, tag)
+    token = SVG_TWIN.set(svg)
+    try:
+        return draw(path, tag)
+    finally:
+        SVG_TWIN.reset(token)
+
+
+def is_current(path: Path, tag: str, svg: bool = True) -> bool:
+    """Whether ``path`` holds the figure drawn from the inputs whose digest is ``tag`` (and
+    its SVG twin exists, when ``svg``)."""
+    return (path.exists() and (not svg or path.with_suffix(".svg").exists())
+            and png_tag(path) == tag)
 
 
 def table3_inputs() -> str:
@@ -165,8 +184,13 @@ def table3_figure(path: Path, tag: str | None = None) -> Path:
     return path
 
 
-def heatmap_figure(results: Results, path: Path, tag: str | None = None) -> Path | None:
-    """Departure from Poisson and from Stronge: scenario × engine, one panel per law × preset."""
+def heatmap_figure(results: Results, path: Path, tag: str | None = None,
+                   names: Sequence[str] | None = None, title: str = "") -> Path | None:
+    """Departure from Poisson and from Stronge: scenario × engine, one panel per law × preset.
+
+    ``names`` restricts the rows (default: every scenario with engine records), for the
+    report's one heat map per tag at scale; ``title`` goes above the panels.
+    """
     from matplotlib.colors import LogNorm
 
     labels = results.engine_labels()
@@ -174,7 +198,9 @@ def heatmap_figure(results: Results, path: Path, tag: str | None = None) -> Path
         return None
     roles = results.engine_roles()  # parallel to labels: a panel per preset role
     presets = list(dict.fromkeys(role for _, role in roles))
-    names = engine_scenarios(results)
+    names = engine_scenarios(results) if names is None else list(names)
+    if not names:
+        return None
     panels = [(law, preset) for law in HEADLINE_LAWS for preset in presets]
     figure = new_figure(2.2 + 0.95 * len(labels) * len(HEADLINE_LAWS), 1.6 + 0.25 * len(names))
     axes = figure.subplots(1, len(panels), sharey=True, squeeze=False)[0]
@@ -183,7 +209,7 @@ def heatmap_figure(results: Results, path: Path, tag: str | None = None) -> Path
     image = None
     for ax, (law, preset) in zip(axes, panels):
         panel_labels = [label for label, (_, role) in zip(labels, roles) if role == preset]
-        _, values, flagged, skipped = departure_grid(results, law, panel_labels)
+        _, values, flagged, skipped = departure_grid(results, law, panel_labels, names)
         shown = np.where(np.isfinite(values), np.clip(values, HEAT_MIN, HEAT_MAX), np.nan)
         image = ax.imshow(np.ma.masked_invalid(shown), cmap=cmap, norm=norm, aspect="auto")
         for i, name in enumerate(names):
@@ -206,6 +232,8 @@ def heatmap_figure(results: Results, path: Path, tag: str | None = None) -> Path
     bar = figure.colorbar(image, ax=list(axes), shrink=1.0 if len(names) < 8 else 0.6,
                           pad=0.01, label="departure [%]")
     percent_axis(bar.ax.yaxis)
+    if title:
+        figure.suptitle(title, fontsize=10)
     return save_png(figure, path, dpi=110, tag=tag)
 
 

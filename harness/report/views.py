@@ -153,10 +153,12 @@ def departure_cell(records: Sequence[Record], law: str) -> str:
     return text
 
 
-def departure_grid(results: Results, law: str, labels: Sequence[str]):
+def departure_grid(results: Results, law: str, labels: Sequence[str],
+                   names: Sequence[str] | None = None):
     """``(scenarios, values[s, l], flagged[s, l], skipped[s, l])``, max over sweep points;
-    ``flagged`` marks a cell whose maximum is a run the engine flagged."""
-    names = engine_scenarios(results)
+    ``flagged`` marks a cell whose maximum is a run the engine flagged. ``names`` restricts
+    the rows (default: every scenario with engine records)."""
+    names = engine_scenarios(results) if names is None else list(names)
     values = np.full((len(names), len(labels)), np.nan)
     flagged = np.zeros_like(values, dtype=bool)
     skipped = np.zeros_like(values, dtype=bool)
