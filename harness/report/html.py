@@ -226,8 +226,9 @@ def scenario_section(name: str, info: dict, records: Sequence[Record], figures: 
         parts.append(f'<div class="{layout}"><div>{table}</div>{diagram}</div>')
         if name in figures.get("history", {}):  # the contact in time (report/history.py)
             parts.append(report_figure(figures, figures["history"][name],
-                                       f"contact history of {name}", caption="The contact step by step against each law's "
-                                     "impulse process (the paper's Fig. 1 in engine steps)."))
+                                       f"contact history of {name}",
+                                       caption="The contact step by step against each law's "
+                                       "impulse process (the paper's Fig. 1 in engine steps)."))
     parts.append("</div>")
     return "\n".join(parts)
 
