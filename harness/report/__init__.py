@@ -52,18 +52,19 @@ from harness.report.history import history_figure, history_inputs
 from harness.report.html import write_html
 from harness.report.pages import write_pages
 from harness.report.summary import write_summary
-from harness.report.views import FIGURES, engine_scenarios, slug, split_rows
+from harness.report.views import FIGURES, slug, split_rows
 from harness.run.records import DEFAULT_RESULTS, Results, read_results
 
 #: Above this many scenarios the report aggregates (``--scenario-figures auto``, ``--svg
-#: auto``): one heat map per tag (chunks of :data:`HEATMAP_ROWS` rows) instead of one row per
-#: scenario in a single image, no per-scenario figures unless asked for (``--figures-for``),
-#: SVG twins of the headline figures only, and the scenarios folded per tag. At 60 scenarios
-#: the single heat map is ~1,700 px tall and the per-scenario figures take ~1 min to draw on
-#: two cores; the shipped library (28 scenarios) stays below.
+#: auto``): the headline heat map has one row per family of scenarios (:func:`scenario_group`)
+#: instead of one per scenario, each scenario's departures are an HTML table folded under its
+#: family, no per-scenario figures are drawn unless asked for (``--figures-for``), only the
+#: headline figures get SVG twins, and the scenarios' sections are folded per family. At 60
+#: scenarios the one-row-per-scenario heat map is ~1,700 px tall and the per-scenario figures
+#: take ~1 min to draw on two cores; the shipped library (28 scenarios) stays below.
 MANY_SCENARIOS = 60
-#: Rows of one heat map when aggregated: ~1,100 px at 0.25 in per row and 110 dpi.
-HEATMAP_ROWS = 40
+#: Tags that select scenarios for a run rather than say what they are: never a family.
+SELECTION_TAGS = ("quick", "sweep", "slow")
 #: Figure kinds drawn once per report (not per scenario): their SVG twins are kept with
 #: ``--svg headline``.
 HEADLINE_KINDS = ("legend", "heatmap", "split", "table3")
@@ -91,9 +92,10 @@ class FigureTask:
 
 
 def scenario_group(info: dict) -> str:
-    """The tag a scenario is filed under when the report aggregates: its first tag."""
-    tags = info.get("tags") or []
-    return str(tags[0]) if tags else "untagged"
+    """The family a scenario is filed under when the report aggregates: its first tag that is
+    not one of :data:`SELECTION_TAGS` (``"untagged"`` when none is left)."""
+    tags = [str(t) for t in info.get("tags") or [] if t not in SELECTION_TAGS]
+    return tags[0] if tags else "untagged"
 
 
 def scenario_groups(results: Results, names: Sequence[str]) -> dict[str, list[str]]:
@@ -146,9 +148,7 @@ def write_report(results: Results, out_dir: Path | str,
     for task, path in zip(tasks, drawn):
         if path is None:
             continue
-        if task.slot[0] == "heatmaps":
-            figures.setdefault("heatmaps", []).append((task.slot[1], task.file))
-        elif len(task.slot) == 2:
+        if len(task.slot) == 2:
             figures.setdefault(task.slot[0], {})[task.slot[1]] = task.file
         else:
             figures[task.slot[0]] = task.file
@@ -181,23 +181,11 @@ def figure_tasks(results: Results, many: bool, scenario_figures: str,
     tasks = [FigureTask("legend", "impulse-legend.png", engines,
                         lambda path, tag: impulse_legend_figure(path, tag, engines),
                         ("legend",), headline_svg)]
-    if not many:
-        tasks.append(FigureTask("heatmap", "heatmap.png", stable,
-                                lambda path, tag: heatmap_figure(results, path, tag),
-                                ("heatmap",), headline_svg))
-    else:  # one heat map per tag, in chunks of HEATMAP_ROWS rows
-        rows_of = engine_scenarios(results)
-        for group, members in scenario_groups(results, rows_of).items():
-            chunks = [members[i:i + HEATMAP_ROWS] for i in range(0, len(members), HEATMAP_ROWS)]
-            for k, chunk in enumerate(chunks):
-                part = f" ({k + 1} of {len(chunks)})" if len(chunks) > 1 else ""
-                title = f"tag {group}{part}: {len(chunk)} scenarios"
-                tasks.append(FigureTask(
-                    "heatmap", f"heatmap-{slug(group)}-{k + 1}.png",
-                    [title, {name: stable[name] for name in chunk}],
-                    lambda path, tag, chunk=chunk, title=title: heatmap_figure(
-                        results, path, tag, names=chunk, title=title),
-                    ("heatmaps", title), headline_svg))
+    groups = scenario_groups(results, names) if many else None
+    # above MANY_SCENARIOS one row per family (the scenarios' rows are HTML tables instead)
+    tasks.append(FigureTask("heatmap", "heatmap.png", [groups, stable],
+                            lambda path, tag: heatmap_figure(results, path, tag, groups),
+                            ("heatmap",), headline_svg))
     rows = split_rows(results)
     tasks.append(FigureTask("split", "split.png", rows,
                             lambda path, tag: split_figure(rows, path, tag), ("split",),

@@ -9,13 +9,20 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from harness.engines import ENGINE_NAMES, PRESET_NAMES, preset_label
+from harness.report.figures import heat_cmap
 from harness.report.views import (
     ENGINE_WHY,
     FIGURES,
+    HEADLINE_LAWS,
+    HEAT_MAX,
+    HEAT_MIN,
     LAW_ORDER,
     LAW_STYLE,
     PRESET_WHY,
     TYPE_NAMES,
+    cell_records,
+    departure_cell,
+    departure_grid,
     escape_html,
     fmt_departure,
     fmt_number,
@@ -55,6 +62,7 @@ p.notes{font-size:.8em;color:#733;margin:-.4em 0 .8em;max-width:60em}
 .override{color:#a40;font-weight:bold} .back{font-size:.85em}
 nav.contents ol.groups{columns:4;font-size:.92em} nav.contents ol.groups ol{columns:1}
 details.group>summary{font-size:1.1em;margin:.4em 0}
+span.heat{display:block;margin:-2px -6px;padding:2px 6px}
 """
 
 
@@ -231,6 +239,38 @@ def scenario_section(name: str, info: dict, records: Sequence[Record], figures: 
                                        "impulse process (the paper's Fig. 1 in engine steps)."))
     parts.append("</div>")
     return "\n".join(parts)
+
+
+def departure_table_html(results: Results, names: Sequence[str]) -> str:
+    """The headline heat map's cells as an HTML table (one row per scenario, linked to its
+    section), coloured as the figure: cheap at any number of rows, where an image is not."""
+    from matplotlib.colors import LogNorm, to_hex
+
+    labels = results.engine_labels()
+    if not labels:
+        return ""
+    norm, cmap = LogNorm(vmin=HEAT_MIN, vmax=HEAT_MAX), heat_cmap()
+    header = ["scenario"] + [f"{LAW_STYLE[law][2]}: {label}" for law in HEADLINE_LAWS
+                             for label in labels]
+    rows = [[f"<a href='#{escape_html(slug(name))}'>{escape_html(name)}</a>"]
+            for name in names]
+    for law in HEADLINE_LAWS:
+        _, values, flagged, skipped = departure_grid(results, law, labels, names)
+        for i, name in enumerate(names):
+            for j, label in enumerate(labels):
+                value = values[i, j]
+                if skipped[i, j] or not math.isfinite(value):
+                    rows[i].append("<span class='muted'>"
+                                   + ("skipped" if skipped[i, j] else "n/a") + "</span>")
+                    continue
+                shade = float(norm(min(max(value, HEAT_MIN), HEAT_MAX)))
+                ink = "#fff" if value > 0.08 else "#000"  # as on the figure
+                text = escape_html(departure_cell(cell_records(results, name, label), law))
+                if flagged[i, j]:
+                    text = f"<b>{text}</b>"
+                rows[i].append(f"<span class='heat' style='background:{to_hex(cmap(shade))};"
+                               f"color:{ink}'>{text}</span>")
+    return html_table(header, rows)
 
 
 def figure_html(file: str, alt: str, css_class: str = "", caption: str = "",
@@ -554,16 +594,20 @@ def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[di
         "scenario overrides "
         "the preset's settings (see its section); grey cells were skipped. Light = agrees, "
         "dark red = far off.")
+    groups = figures.get("groups") or {}
+    if groups:  # many scenarios: a row per family in the figure, the scenarios in tables
+        caption = ("One row per family of scenarios (its first tag that is not a selection "
+                   "tag such as <i>quick</i>; how many in brackets): the colour is the median "
+                   "over the family's scenarios of each one's largest departure, the text "
+                   "<i>median / max</i>. " + caption)
     if "heatmap" in figures:
         parts.append(report_figure(figures, figures["heatmap"], "departure heat map",
                                    caption=caption))
-    if figures.get("heatmaps"):  # aggregated: one heat map per tag (and chunk of rows)
-        parts.append(f"<p>{len(names)} scenarios: one heat map per tag (a scenario's first "
-                     "tag), unfolded on demand. " + caption + "</p>")
-        for title, file in figures["heatmaps"]:
-            parts.append(f"<details><summary>{escape_html(title)}</summary>"
-                         + report_figure(figures, file, f"departure heat map, {title}")
-                         + "</details>")
+    if groups:
+        parts.append("<p>Every scenario's departures, per family (unfold one):</p>")
+        for tag, members in groups.items():
+            parts.append(f"<details><summary>{escape_html(tag)} ({len(members)} scenarios)"
+                         "</summary>" + departure_table_html(results, members) + "</details>")
     parts.append("<h2 id='why'>Why: what each engine and preset solves</h2>")
     parts.append(
         "<p>Most of the departure of pymunk and pybullet is the <b>law</b>, not the solver: "

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 import re
 from pathlib import Path
 
@@ -10,6 +9,7 @@ import pytest
 
 from harness import report
 from harness.report import figures as figures_module
+from harness.report.views import engine_scenarios, slug
 from harness.run import runner
 from harness.run.records import read_results, write_results
 from harness.scenarios import load_scenarios
@@ -72,24 +72,37 @@ def small_results(tmp_path_factory):
 def aggregated(small_results, tmp_path, monkeypatch):
     """A report of "many" scenarios: the threshold lowered below the quick set's size."""
     monkeypatch.setattr(report, "MANY_SCENARIOS", 2)
-    monkeypatch.setattr(report, "HEATMAP_ROWS", 2)
     written = report.write_report(small_results, tmp_path, workers=2,
                                   figures_for=[small_results.scenario_names()[0]])
     return small_results, tmp_path, written
 
 
-def test_many_scenarios_give_one_heat_map_per_tag_in_chunks(aggregated):
-    results, out, _ = aggregated
-    groups = report.scenario_groups(results, report.engine_scenarios(results))
-    expected = {f"heatmap-{report.slug(tag)}-{k + 1}.png" for tag, members in groups.items()
-                for k in range(math.ceil(len(members) / report.HEATMAP_ROWS))}
-    drawn = {p.name for p in (out / "figures").glob("heatmap*.png")}
-    assert drawn == expected and "heatmap.png" not in drawn
+def test_families_skip_selection_tags():
+    assert report.scenario_group({"tags": ["quick", "rod", "spin"]}) == "rod"
+    assert report.scenario_group({"tags": ["sweep"]}) == "untagged"
+    assert report.scenario_group({}) == "untagged"
+
+
+def test_many_scenarios_give_one_heat_map_row_per_family_and_a_table_per_family(aggregated):
+    results, out, written = aggregated
+    assert "heatmap.png" in {p.name for p in written["figures"]}
+    page = (out / "index.html").read_text(encoding="utf-8")
+    groups = report.scenario_groups(results, results.scenario_names())
+    assert len(groups) > 1  # the quick set spans several families
+    engine_rows = set(engine_scenarios(results))
+    for tag, members in groups.items():
+        start = page.index(f"<details><summary>{tag} ({len(members)} scenarios)</summary>")
+        table = page[start:page.index("</details>", start)]
+        # every scenario of the family links to its section, coloured cells where it ran
+        for name in members:
+            assert f"<a href='#{slug(name)}'>" in table
+        if engine_rows & set(members):
+            assert "class='heat' style='background:#" in table
 
 
 def test_many_scenarios_draw_scenario_figures_only_on_demand_and_svg_for_headline(aggregated):
     results, out, written = aggregated
-    first = report.slug(results.scenario_names()[0])
+    first = slug(results.scenario_names()[0])
     per_scenario = {p.name for p in written["figures"]
                     if p.name.startswith(("impulse-", "sweep-", "history-"))
                     and p.name != "impulse-legend.png"}
@@ -108,9 +121,9 @@ def test_many_scenarios_page_is_folded_per_tag_and_images_load_lazily(aggregated
     for tag, members in groups.items():
         # the section of every scenario lies inside its tag's <details>
         start = page.index(f"<details class='group'><summary><b>{tag}</b>")
-        end = page.index("</details>", page.index(f'id="{report.slug(members[-1])}"'))
+        end = page.index("</details>", page.index(f'id="{slug(members[-1])}"'))
         for name in members:
-            assert start < page.index(f'id="{report.slug(name)}"') < end
+            assert start < page.index(f'id="{slug(name)}"') < end
     # no SVG link to a file that was not written
     for href in re.findall(r"href=['\"](figures/[^'\"]+\.svg)['\"]", page):
         assert (out / href).is_file(), href
