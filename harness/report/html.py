@@ -8,6 +8,8 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
+import numpy as np
+
 from harness.engines import ENGINE_NAMES, PRESET_NAMES, preset_label
 from harness.report.figures import heat_cmap
 from harness.report.views import (
@@ -20,13 +22,13 @@ from harness.report.views import (
     LAW_STYLE,
     PRESET_WHY,
     TYPE_NAMES,
-    cell_records,
     departure_cell,
     departure_grid,
     escape_html,
     fmt_departure,
     fmt_number,
     fmt_overrides,
+    label_records,
     overrides_of,
     run_notes,
     run_verdict,
@@ -244,7 +246,7 @@ def scenario_section(name: str, info: dict, records: Sequence[Record], figures: 
 def departure_table_html(results: Results, names: Sequence[str]) -> str:
     """The headline heat map's cells as an HTML table (one row per scenario, linked to its
     section), coloured as the figure: cheap at any number of rows, where an image is not."""
-    from matplotlib.colors import LogNorm, to_hex
+    from matplotlib.colors import LogNorm
 
     labels = results.engine_labels()
     if not labels:
@@ -254,21 +256,26 @@ def departure_table_html(results: Results, names: Sequence[str]) -> str:
                              for label in labels]
     rows = [[f"<a href='#{escape_html(slug(name))}'>{escape_html(name)}</a>"]
             for name in names]
+    grouped = [label_records(results.for_scenario(name)) for name in names]
     for law in HEADLINE_LAWS:
         _, values, flagged, skipped = departure_grid(results, law, labels, names)
-        for i, name in enumerate(names):
+        # the colours of all cells at once (a colormap call per cell was most of the time)
+        rgb = np.asarray(cmap(norm(np.clip(np.nan_to_num(values, nan=HEAT_MIN), HEAT_MIN,
+                                           HEAT_MAX))))[..., :3]
+        rgb = np.rint(255 * rgb).astype(int)
+        for i in range(len(names)):
             for j, label in enumerate(labels):
                 value = values[i, j]
                 if skipped[i, j] or not math.isfinite(value):
                     rows[i].append("<span class='muted'>"
                                    + ("skipped" if skipped[i, j] else "n/a") + "</span>")
                     continue
-                shade = float(norm(min(max(value, HEAT_MIN), HEAT_MAX)))
+                colour = "#{:02x}{:02x}{:02x}".format(*rgb[i, j])
                 ink = "#fff" if value > 0.08 else "#000"  # as on the figure
-                text = escape_html(departure_cell(cell_records(results, name, label), law))
+                text = escape_html(departure_cell(grouped[i].get(label, []), law))
                 if flagged[i, j]:
                     text = f"<b>{text}</b>"
-                rows[i].append(f"<span class='heat' style='background:{to_hex(cmap(shade))};"
+                rows[i].append(f"<span class='heat' style='background:{colour};"
                                f"color:{ink}'>{text}</span>")
     return html_table(header, rows)
 
