@@ -24,17 +24,24 @@ swept parameter with the Poisson type boundaries marked; Table 3; versions and s
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import fnmatch
 import json
+import multiprocessing
+import os
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 from harness.report.figures import (
+    SVG_TWIN,
     heatmap_figure,
     impulse_figure,
     impulse_legend_figure,
-    render_once,
+    inputs_digest,
+    is_current,
     split_figure,
     stable_record,
     sweep_figure,
@@ -48,69 +55,220 @@ from harness.report.summary import write_summary
 from harness.report.views import FIGURES, slug, split_rows
 from harness.run.records import DEFAULT_RESULTS, Results, read_results
 
+#: Above this many scenarios the report aggregates (``--scenario-figures auto``, ``--svg
+#: auto``): the headline heat map has one row per family of scenarios (:func:`scenario_group`)
+#: instead of one per scenario, each scenario's departures are an HTML table folded under its
+#: family, no per-scenario figures are drawn unless asked for (``--figures-for``), only the
+#: headline figures get SVG twins, and the scenarios' sections are folded per family. At 60
+#: scenarios the one-row-per-scenario heat map is ~1,700 px tall and the per-scenario figures
+#: take ~1 min to draw on two cores; the shipped library (28 scenarios) stays below.
+MANY_SCENARIOS = 60
+#: Tags that select scenarios for a run rather than say what they are: never a family.
+SELECTION_TAGS = ("quick", "sweep", "slow")
+#: Figure kinds drawn once per report (not per scenario): their SVG twins are kept with
+#: ``--svg headline``.
+HEADLINE_KINDS = ("legend", "heatmap", "split", "table3")
+#: Rough drawing cost per kind [s] (PNG + SVG, measured at 1,000 scenarios): the pool draws
+#: the dearest first so that no worker is left with a heat map at the end.
+KIND_COST = {"heatmap": 10.0, "table3": 3.0, "sweep": 2.2, "split": 1.5, "history": 1.0,
+             "impulse": 0.5, "legend": 0.3}
+
+
+@dataclasses.dataclass(frozen=True)
+class FigureTask:
+    """One figure of the report: drawn by ``draw(path, tag)`` from inputs whose digest is
+    ``tag``; deterministic, so that any worker draws the same file.
+
+    ``slot`` says where the file goes in the report's ``figures`` mapping: ``(key,)`` or
+    ``(key, scenario)``; ``svg`` whether its SVG twin is written.
+    """
+
+    kind: str
+    file: str
+    payload: object
+    draw: Callable[[Path, str], Path | None]
+    slot: tuple
+    svg: bool = True
+
+
+def scenario_group(info: dict) -> str:
+    """The family a scenario is filed under when the report aggregates: its first tag that is
+    not one of :data:`SELECTION_TAGS` (``"untagged"`` when none is left)."""
+    tags = [str(t) for t in info.get("tags") or [] if t not in SELECTION_TAGS]
+    return tags[0] if tags else "untagged"
+
+
+def scenario_groups(results: Results, names: Sequence[str]) -> dict[str, list[str]]:
+    """``{tag: scenario names}`` in order of first appearance (:func:`scenario_group`)."""
+    groups: dict[str, list[str]] = {}
+    for name in names:
+        groups.setdefault(scenario_group(results.scenarios.get(name, {})), []).append(name)
+    return groups
+
 
 def write_report(results: Results, out_dir: Path | str,
-                 sources: Sequence[Path] = (DEFAULT_RESULTS.parent,)) -> dict:
+                 sources: Sequence[Path] = (DEFAULT_RESULTS.parent,), workers: int | None = None,
+                 scenario_figures: str = "auto", figures_for: Sequence[str] = (),
+                 svg: str = "auto") -> dict:
     """Write index.html, summary.md, the figures (PNG and SVG) and, when the benchmark's
     ``bench.json`` or the stress test's ``stress.md`` exist (in ``bench/`` and ``stress/``
     under ``out_dir`` or one of ``sources``, by default where ``bench`` and ``stress`` write
-    them), their pages;
-    returns the paths written."""
+    them), their pages; returns the paths written.
+
+    Parameters
+    ----------
+    workers
+        Processes drawing the figures (default: the machine's cores); 1 draws them here.
+    scenario_figures
+        ``"all"``, ``"none"`` or ``"auto"`` (all up to :data:`MANY_SCENARIOS` scenarios,
+        none above): whether each scenario gets its impulse diagram, sweep and history.
+    figures_for
+        Shell patterns (``fnmatch``) of scenario names whose figures are drawn anyway.
+    svg
+        ``"all"``, ``"headline"`` (SVG twins of :data:`HEADLINE_KINDS` only) or ``"auto"``
+        (all up to :data:`MANY_SCENARIOS` scenarios, headline above).
+    """
     import matplotlib
 
     matplotlib.use("Agg")
     out_dir = Path(out_dir)
     figure_dir = out_dir / FIGURES
     figure_dir.mkdir(parents=True, exist_ok=True)
-    figures: dict = {"impulse": {}, "sweep": {}}
-    engines = list(dict.fromkeys(label.split(".")[0] for label in results.engine_labels()))
-    if render_once("legend", figure_dir / "impulse-legend.png", engines,
-                   lambda path, tag: impulse_legend_figure(path, tag, engines)):
-        figures["legend"] = "impulse-legend.png"
-    stable = {name: [stable_record(r) for r in results.for_scenario(name)]
-              for name in results.scenario_names()}
-    if render_once("heatmap", figure_dir / "heatmap.png", stable,
-               lambda path, tag: heatmap_figure(results, path, tag)):
-        figures["heatmap"] = "heatmap.png"
-    rows = split_rows(results)
-    if render_once("split", figure_dir / "split.png", rows,
-               lambda path, tag: split_figure(rows, path, tag)):
-        figures["split"] = "split.png"
-    for name in results.scenario_names():
-        records = results.for_scenario(name)
-        info = results.scenarios.get(name, {})
-        # render_once calls its draw before returning: the closures use this pass's values
-        if info.get("sweep"):
-            file = f"sweep-{slug(name)}.png"
-            if render_once("sweep", figure_dir / file, [name, info, stable[name]],
-                       lambda path, tag: sweep_figure(name, info, records, path, tag)):  # noqa: B023
-                figures["sweep"][name] = file
+    names = results.scenario_names()
+    many = len(names) > MANY_SCENARIOS
+    if scenario_figures == "auto":
+        scenario_figures = "none" if many else "all"
+    if svg == "auto":
+        svg = "headline" if many else "all"
+    tasks = figure_tasks(results, many, scenario_figures, figures_for, svg)
+    drawn = draw_figures(tasks, figure_dir, workers)
+    figures: dict = {"impulse": {}, "sweep": {}, "svg": set(), "many": many,
+                     "groups": scenario_groups(results, names) if many else {},
+                     "scenario_figures": scenario_figures}
+    for task, path in zip(tasks, drawn):
+        if path is None:
+            continue
+        if len(task.slot) == 2:
+            figures.setdefault(task.slot[0], {})[task.slot[1]] = task.file
         else:
-            file = f"impulse-{slug(name)}.png"
-            if render_once("impulse", figure_dir / file, [name, stable[name]],
-                       lambda path, tag: impulse_figure(name, records, path, tag)):  # noqa: B023
-                figures["impulse"][name] = file
-            file = f"history-{slug(name)}.png"  # the contact in time (harness.report.history)
-            if render_once("history", figure_dir / file, history_inputs(name, records),
-                           lambda path, tag, name=name, records=records:
-                           history_figure(name, records, path, tag)):
-                figures.setdefault("history", {})[name] = file
-    if render_once("table3", figure_dir / "paper-table3.png", table3_inputs(),
-                   lambda path, tag: table3_figure(path, tag)):
-        figures["table3"] = "paper-table3.png"
+            figures[task.slot[0]] = task.file
+        if task.svg:
+            figures["svg"].add(task.file)
+    rows = split_rows(results)
     pages = write_pages(out_dir, sources)
-    wanted = {figures.get("heatmap"), figures.get("table3"), figures.get("split"),
-              figures.get("legend"),
-              *figures["impulse"].values(), *figures.get("history", {}).values(),
-              *figures["sweep"].values()}
-    wanted.discard(None)
-    # every figure is drawn as PNG and SVG: both are this report's
-    wanted |= {str(Path(name).with_suffix(".svg")) for name in wanted}
+    wanted = {task.file for task, path in zip(tasks, drawn) if path is not None}
+    wanted |= {str(Path(task.file).with_suffix(".svg")) for task, path in zip(tasks, drawn)
+               if path is not None and task.svg}
     _remove_stale_figures(figure_dir, wanted)
     html_path = write_html(results, out_dir, figures, rows, pages)
     summary = write_summary(results, out_dir)
     return {"html": html_path, "summary": summary,
             "figures": sorted(figure_dir / f for f in wanted if f.endswith(".png"))}
+
+
+def figure_tasks(results: Results, many: bool, scenario_figures: str,
+                 figures_for: Sequence[str], svg: str) -> list[FigureTask]:
+    """Every figure of the report, with the inputs its digest covers.
+
+    The closures read the values bound in this call (default arguments), never a loop's
+    later values.
+    """
+    names = results.scenario_names()
+    engines = list(dict.fromkeys(label.split(".")[0] for label in results.engine_labels()))
+    headline_svg = svg in ("all", "headline")
+    scenario_svg = svg == "all"
+    stable = {name: [stable_record(r) for r in results.for_scenario(name)] for name in names}
+    tasks = [FigureTask("legend", "impulse-legend.png", engines,
+                        lambda path, tag: impulse_legend_figure(path, tag, engines),
+                        ("legend",), headline_svg)]
+    groups = scenario_groups(results, names) if many else None
+    # above MANY_SCENARIOS one row per family (the scenarios' rows are HTML tables instead)
+    tasks.append(FigureTask("heatmap", "heatmap.png", [groups, stable],
+                            lambda path, tag: heatmap_figure(results, path, tag, groups),
+                            ("heatmap",), headline_svg))
+    rows = split_rows(results)
+    tasks.append(FigureTask("split", "split.png", rows,
+                            lambda path, tag: split_figure(rows, path, tag), ("split",),
+                            headline_svg))
+    for name in names:
+        if scenario_figures != "all" and not any(fnmatch.fnmatchcase(name, pattern)
+                                                 for pattern in figures_for):
+            continue
+        records = results.for_scenario(name)
+        info = results.scenarios.get(name, {})
+        if info.get("sweep"):
+            tasks.append(FigureTask(
+                "sweep", f"sweep-{slug(name)}.png", [name, info, stable[name]],
+                lambda path, tag, name=name, info=info, records=records:
+                sweep_figure(name, info, records, path, tag), ("sweep", name), scenario_svg))
+        else:
+            tasks.append(FigureTask(
+                "impulse", f"impulse-{slug(name)}.png", [name, stable[name]],
+                lambda path, tag, name=name, records=records:
+                impulse_figure(name, records, path, tag), ("impulse", name), scenario_svg))
+            # the contact in time (harness.report.history)
+            tasks.append(FigureTask(
+                "history", f"history-{slug(name)}.png", history_inputs(name, records),
+                lambda path, tag, name=name, records=records:
+                history_figure(name, records, path, tag), ("history", name), scenario_svg))
+    tasks.append(FigureTask("table3", "paper-table3.png", table3_inputs(),
+                            lambda path, tag: table3_figure(path, tag), ("table3",),
+                            headline_svg))
+    return tasks
+
+
+#: The figure tasks being drawn, read by the pool's forked workers (which inherit it: the
+#: closures and the results they read are never pickled).
+_PENDING: list[tuple[FigureTask, Path, str]] = []
+
+
+def _draw_pending(index: int) -> str | None:
+    task, path, tag = _PENDING[index]
+    token = SVG_TWIN.set(task.svg)
+    try:
+        drawn = task.draw(path, tag)
+    finally:
+        SVG_TWIN.reset(token)
+    return None if drawn is None else str(drawn)
+
+
+def draw_figures(tasks: Sequence[FigureTask], figure_dir: Path,
+                 workers: int | None = None) -> list[Path | None]:
+    """Draw the tasks whose files do not hold their current inputs' digest (the rest are
+    kept), in a pool of ``workers`` forked processes (default: the machine's cores) when more
+    than one figure is to be drawn; returns each task's file, or None where there was nothing
+    to draw.
+
+    Every task is deterministic and writes only its own files, so the pool changes when a
+    figure is drawn, never what it holds.
+    """
+    global _PENDING
+    result: list[Path | None] = []
+    stale = []
+    for index, task in enumerate(tasks):
+        path = figure_dir / task.file
+        tag = inputs_digest(task.kind, task.payload)
+        if is_current(path, tag, task.svg):
+            result.append(path)
+        else:
+            result.append(None)
+            stale.append((index, (task, path, tag)))
+    workers = workers or os.cpu_count() or 1
+    workers = min(workers, len(stale))
+    stale.sort(key=lambda item: -KIND_COST.get(item[1][0].kind, 1.0))
+    _PENDING = [item for _, item in stale]
+    try:
+        if workers <= 1 or "fork" not in multiprocessing.get_all_start_methods():
+            drawn = [_draw_pending(i) for i in range(len(_PENDING))]
+        else:
+            context = multiprocessing.get_context("fork")
+            with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
+                drawn = list(pool.map(_draw_pending, range(len(_PENDING))))
+    finally:
+        _PENDING = []
+    for (index, _), file in zip(stale, drawn):
+        result[index] = None if file is None else Path(file)
+    return result
 
 
 #: The figures a report wrote into its directory; only these may be removed by a later report.
@@ -140,6 +298,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help=f"results file from `impact-harness run` (default: {DEFAULT_RESULTS})")
     parser.add_argument("--out", type=Path, default=Path("reports"),
                         help="output directory (default: reports)")
+    parser.add_argument("--workers", type=int, default=None,
+                        help="processes drawing the figures (default: all cores; 1: none)")
+    parser.add_argument("--scenario-figures", choices=("auto", "all", "none"), default="auto",
+                        help="per-scenario figures: all, none, or auto (all up to "
+                             f"{MANY_SCENARIOS} scenarios, none above)")
+    parser.add_argument("--figures-for", action="append", default=[], metavar="PATTERN",
+                        help="draw the figures of the scenarios matching this shell pattern "
+                             "anyway (repeatable)")
+    parser.add_argument("--svg", choices=("auto", "all", "headline"), default="auto",
+                        help="SVG twins of every figure, of the headline figures only, or "
+                             f"auto (all up to {MANY_SCENARIOS} scenarios, headline above)")
 
 
 def main(args) -> int:
@@ -149,7 +318,11 @@ def main(args) -> int:
         print(f"impact-harness report: {error}", file=sys.stderr)
         return 2
     start = time.perf_counter()
-    written = write_report(results, args.out, sources=[args.results.parent, Path("reports")])
+    written = write_report(results, args.out, sources=[args.results.parent, Path("reports")],
+                           workers=getattr(args, "workers", None),
+                           scenario_figures=getattr(args, "scenario_figures", "auto"),
+                           figures_for=getattr(args, "figures_for", ()),
+                           svg=getattr(args, "svg", "auto"))
     print(f"wrote {written['html']} and {written['summary']} with {len(written['figures'])} "
           f"figures in {time.perf_counter() - start:.1f} s")
     return 0

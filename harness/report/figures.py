@@ -6,6 +6,7 @@ A figure's PNG carries the digest of its inputs and of this module in its metada
 
 from __future__ import annotations
 
+import contextvars
 import dataclasses
 import functools
 import itertools
@@ -28,6 +29,8 @@ from harness.report.views import (
     departure_cell,
     departure_grid,
     engine_scenarios,
+    flagged_count,
+    fmt_departure,
     parameter_name,
     row_name,
 )
@@ -40,12 +43,19 @@ def new_figure(width: float, height: float):
     return Figure(figsize=(width, height), layout="constrained")
 
 
+#: Whether :func:`save_png` writes the SVG twin: set per figure by the report (``--svg``),
+#: since an SVG costs as much again as its PNG to write.
+SVG_TWIN: contextvars.ContextVar[bool] = contextvars.ContextVar("svg_twin", default=True)
+
+
 def save_png(figure, path: Path, dpi: int = 100, tag: str | None = None) -> Path:
-    """Save a PNG and, beside it, the same figure as SVG (for a paper); ``tag`` (the digest
-    of the figure's inputs) goes into the PNG's metadata."""
+    """Save a PNG and, beside it unless :data:`SVG_TWIN` says not, the same figure as SVG
+    (for a paper); ``tag`` (the digest of the figure's inputs) goes into the PNG's
+    metadata."""
     figure.savefig(path, dpi=dpi, metadata={TAG_KEY: tag} if tag else None)
-    # No date in the SVG, so that the same inputs give the same file.
-    figure.savefig(path.with_suffix(".svg"), metadata={"Date": None})
+    if SVG_TWIN.get():
+        # No date in the SVG, so that the same inputs give the same file.
+        figure.savefig(path.with_suffix(".svg"), metadata={"Date": None})
     return path
 
 
@@ -137,13 +147,24 @@ def png_tag(path: Path) -> str | None:
         return None
 
 
-def render_once(kind: str, path: Path, payload, draw) -> Path | None:
-    """Draw a figure unless ``path`` (and its SVG) already hold one drawn from the same
-    inputs."""
+def render_once(kind: str, path: Path, payload, draw, svg: bool = True) -> Path | None:
+    """Draw a figure unless ``path`` (and its SVG, when ``svg``) already hold one drawn from
+    the same inputs."""
     tag = inputs_digest(kind, payload)
-    if path.exists() and path.with_suffix(".svg").exists() and png_tag(path) == tag:
+    if is_current(path, tag, svg):
         return path
-    return draw(path, tag)
+    token = SVG_TWIN.set(svg)
+    try:
+        return draw(path, tag)
+    finally:
+        SVG_TWIN.reset(token)
+
+
+def is_current(path: Path, tag: str, svg: bool = True) -> bool:
+    """Whether ``path`` holds the figure drawn from the inputs whose digest is ``tag`` (and
+    its SVG twin exists, when ``svg``)."""
+    return (path.exists() and (not svg or path.with_suffix(".svg").exists())
+            and png_tag(path) == tag)
 
 
 def table3_inputs() -> str:
@@ -165,8 +186,15 @@ def table3_figure(path: Path, tag: str | None = None) -> Path:
     return path
 
 
-def heatmap_figure(results: Results, path: Path, tag: str | None = None) -> Path | None:
-    """Departure from Poisson and from Stronge: scenario × engine, one panel per law × preset."""
+def heatmap_figure(results: Results, path: Path, tag: str | None = None,
+                   groups: dict[str, list[str]] | None = None) -> Path | None:
+    """Departure from Poisson and from Stronge: scenario × engine, one panel per law × preset.
+
+    With ``groups`` (``{family: scenario names}``, the report of many scenarios) a row is a
+    family instead of a scenario: its colour is the median over the family's scenarios of
+    each scenario's largest departure, its text ``median / max``, and ``(k!)`` counts the
+    flagged runs of the whole family (none of them in a value).
+    """
     from matplotlib.colors import LogNorm
 
     labels = results.engine_labels()
@@ -175,38 +203,82 @@ def heatmap_figure(results: Results, path: Path, tag: str | None = None) -> Path
     roles = results.engine_roles()  # parallel to labels: a panel per preset role
     presets = list(dict.fromkeys(role for _, role in roles))
     names = engine_scenarios(results)
+    if groups is not None:
+        present = set(names)
+        groups = {family: [n for n in members if n in present]
+                  for family, members in groups.items()}
+        groups = {family: members for family, members in groups.items() if members}
+        rows = [f"{family} ({len(members)})" for family, members in groups.items()]
+    else:
+        rows = [row_name(results, n) for n in names]
+    if not rows:
+        return None
     panels = [(law, preset) for law in HEADLINE_LAWS for preset in presets]
-    figure = new_figure(2.2 + 0.95 * len(labels) * len(HEADLINE_LAWS), 1.6 + 0.25 * len(names))
+    figure = new_figure(2.2 + 0.95 * len(labels) * len(HEADLINE_LAWS) * (1.6 if groups else 1),
+                        1.6 + 0.25 * len(rows))
     axes = figure.subplots(1, len(panels), sharey=True, squeeze=False)[0]
     norm = LogNorm(vmin=HEAT_MIN, vmax=HEAT_MAX)
     cmap = heat_cmap()
     image = None
     for ax, (law, preset) in zip(axes, panels):
         panel_labels = [label for label, (_, role) in zip(labels, roles) if role == preset]
-        _, values, flagged, skipped = departure_grid(results, law, panel_labels)
+        _, values, flagged, skipped = departure_grid(results, law, panel_labels, names)
+        texts = [[("skipped" if skipped[i, j] else "n/a") if skipped[i, j]
+                  or not np.isfinite(values[i, j])
+                  else departure_cell(cell_records(results, name, label), law)
+                  for j, label in enumerate(panel_labels)] for i, name in enumerate(names)]
+        if groups is not None:
+            values, flagged, skipped, texts = family_cells(results, groups, names, values,
+                                                           skipped, panel_labels)
         shown = np.where(np.isfinite(values), np.clip(values, HEAT_MIN, HEAT_MAX), np.nan)
         image = ax.imshow(np.ma.masked_invalid(shown), cmap=cmap, norm=norm, aspect="auto")
-        for i, name in enumerate(names):
-            for j, label in enumerate(panel_labels):
-                if skipped[i, j] or not np.isfinite(values[i, j]):
-                    text, colour = ("skipped" if skipped[i, j] else "n/a"), "0.35"
-                else:
-                    text = departure_cell(cell_records(results, name, label), law)
-                    colour = "white" if values[i, j] > 0.08 else "black"
-                ax.text(j, i, text, ha="center", va="center", fontsize=7.5, color=colour,
-                        fontweight="bold" if flagged[i, j] else "normal")
+        for i in range(len(rows)):
+            for j in range(len(panel_labels)):
+                colour = ("0.35" if skipped[i, j] or not np.isfinite(values[i, j])
+                          else "white" if values[i, j] > 0.08 else "black")
+                ax.text(j, i, texts[i][j], ha="center", va="center", fontsize=7.5,
+                        color=colour, fontweight="bold" if flagged[i, j] else "normal")
         ax.set_xticks(range(len(panel_labels)), [label.split(".")[0] for label in panel_labels],
                       fontsize=8.5)
         ax.xaxis.tick_top()
         ax.set_title(f"from {LAW_STYLE[law][2]} — {role_title(preset, roles)}", fontsize=9,
                      pad=16)
-        ax.set_yticks(range(len(names)), [row_name(results, n) for n in names], fontsize=8.5)
+        ax.set_yticks(range(len(rows)), rows, fontsize=8.5)
         ax.tick_params(length=0)
     # Short label: the colour bar can be as short as one row (the caption gives the formula).
-    bar = figure.colorbar(image, ax=list(axes), shrink=1.0 if len(names) < 8 else 0.6,
+    bar = figure.colorbar(image, ax=list(axes), shrink=1.0 if len(rows) < 8 else 0.6,
                           pad=0.01, label="departure [%]")
     percent_axis(bar.ax.yaxis)
     return save_png(figure, path, dpi=110, tag=tag)
+
+
+def family_cells(results: Results, groups: dict[str, list[str]], names: Sequence[str],
+                 values: np.ndarray, skipped: np.ndarray, labels: Sequence[str]):
+    """Per family (rows of :func:`heatmap_figure` with ``groups``): the median of the
+    scenarios' values, flagged and skipped cells, and the texts ``median / max (k!)``."""
+    row = {name: i for i, name in enumerate(names)}
+    shape = (len(groups), len(labels))
+    medians = np.full(shape, np.nan)
+    flagged = np.zeros(shape, dtype=bool)
+    all_skipped = np.zeros(shape, dtype=bool)
+    texts = []
+    for g, members in enumerate(groups.values()):
+        index = [row[name] for name in members]
+        line = []
+        for j, label in enumerate(labels):
+            column = values[index, j]
+            finite = column[np.isfinite(column)]
+            all_skipped[g, j] = bool(skipped[index, j].all())
+            count = sum(flagged_count(cell_records(results, name, label)) for name in members)
+            flagged[g, j] = count > 0
+            if finite.size:
+                medians[g, j] = float(np.median(finite))
+                text = f"{fmt_departure(medians[g, j])} / {fmt_departure(float(finite.max()))}"
+            else:
+                text = "skipped" if all_skipped[g, j] else "n/a"
+            line.append(text + (f" ({count}!)" if count else ""))
+        texts.append(line)
+    return medians, flagged, all_skipped, texts
 
 
 def role_title(role: str, pairs) -> str:

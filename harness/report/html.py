@@ -8,18 +8,27 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
+import numpy as np
+
 from harness.engines import ENGINE_NAMES, PRESET_NAMES, preset_label
+from harness.report.figures import heat_cmap
 from harness.report.views import (
     ENGINE_WHY,
     FIGURES,
+    HEADLINE_LAWS,
+    HEAT_MAX,
+    HEAT_MIN,
     LAW_ORDER,
     LAW_STYLE,
     PRESET_WHY,
     TYPE_NAMES,
+    departure_cell,
+    departure_grid,
     escape_html,
     fmt_departure,
     fmt_number,
     fmt_overrides,
+    label_records,
     overrides_of,
     run_notes,
     run_verdict,
@@ -53,6 +62,9 @@ td.wrap{white-space:normal;text-align:left;overflow-wrap:anywhere;max-width:70em
 p.notes{font-size:.8em;color:#733;margin:-.4em 0 .8em;max-width:60em}
 .why dt{font-weight:bold;margin-top:.6em} .why dd{margin:.2em 0 .2em 1.2em;max-width:62em}
 .override{color:#a40;font-weight:bold} .back{font-size:.85em}
+nav.contents ol.groups{columns:4;font-size:.92em} nav.contents ol.groups ol{columns:1}
+details.group>summary{font-size:1.1em;margin:.4em 0}
+span.heat{display:block;margin:-2px -6px;padding:2px 6px}
 """
 
 
@@ -189,7 +201,8 @@ def scenario_section(name: str, info: dict, records: Sequence[Record], figures: 
     laws = [r for r in records if r.source == ANALYTIC and r.law == "poisson" and r.ok]
     if info.get("sweep"):
         if name in figures.get("sweep", {}):
-            parts.append(figure_html(figures["sweep"][name], f"sweep of {name}"))
+            parts.append(report_figure(figures, figures["sweep"][name],
+                                       f"sweep of {name}"))
         points = list(dict.fromkeys(r.point["index"] for r in records))
         types = " → ".join(str(r.collision_type) for r in sorted(laws, key=lambda r: r.point["index"]))
         parts.append(f"<p>Poisson types along the sweep: {escape_html(types)}.</p>")
@@ -214,30 +227,80 @@ def scenario_section(name: str, info: dict, records: Sequence[Record], figures: 
                          f"e = {fmt_number(d.get('e'))}.</p>")
         diagram = ""
         if name in figures.get("impulse", {}):
-            diagram = figure_html(figures["impulse"][name], f"impulse diagram of {name}",
-                                  css_class="diagram")
+            diagram = report_figure(figures, figures["impulse"][name],
+                                    f"impulse diagram of {name}", css_class="diagram")
         table = velocity_table(records, info.get("speed_labels", []))
         # Up to four speeds leave room for the diagram beside the table; two bodies' six do
         # not at 1400 px, so the diagram goes below.
         layout = "pair" if len(info.get("speed_labels", [])) <= 4 else "stack"
         parts.append(f'<div class="{layout}"><div>{table}</div>{diagram}</div>')
         if name in figures.get("history", {}):  # the contact in time (report/history.py)
-            parts.append(figure_html(figures["history"][name], f"contact history of {name}",
-                                     caption="The contact step by step against each law's "
-                                     "impulse process (the paper's Fig. 1 in engine steps)."))
+            parts.append(report_figure(figures, figures["history"][name],
+                                       f"contact history of {name}",
+                                       caption="The contact step by step against each law's "
+                                       "impulse process (the paper's Fig. 1 in engine steps)."))
     parts.append("</div>")
     return "\n".join(parts)
 
 
-def figure_html(file: str, alt: str, css_class: str = "", caption: str = "") -> str:
-    """A figure's PNG, linked to its SVG (the vector version for a paper)."""
-    svg = Path(file).with_suffix(".svg").name
+def departure_table_html(results: Results, names: Sequence[str]) -> str:
+    """The headline heat map's cells as an HTML table (one row per scenario, linked to its
+    section), coloured as the figure: cheap at any number of rows, where an image is not."""
+    from matplotlib.colors import LogNorm
+
+    labels = results.engine_labels()
+    if not labels:
+        return ""
+    norm, cmap = LogNorm(vmin=HEAT_MIN, vmax=HEAT_MAX), heat_cmap()
+    header = ["scenario"] + [f"{LAW_STYLE[law][2]}: {label}" for law in HEADLINE_LAWS
+                             for label in labels]
+    rows = [[f"<a href='#{escape_html(slug(name))}'>{escape_html(name)}</a>"]
+            for name in names]
+    grouped = [label_records(results.for_scenario(name)) for name in names]
+    for law in HEADLINE_LAWS:
+        _, values, flagged, skipped = departure_grid(results, law, labels, names)
+        # the colours of all cells at once (a colormap call per cell was most of the time)
+        rgb = np.asarray(cmap(norm(np.clip(np.nan_to_num(values, nan=HEAT_MIN), HEAT_MIN,
+                                           HEAT_MAX))))[..., :3]
+        rgb = np.rint(255 * rgb).astype(int)
+        for i in range(len(names)):
+            for j, label in enumerate(labels):
+                value = values[i, j]
+                if skipped[i, j] or not math.isfinite(value):
+                    rows[i].append("<span class='muted'>"
+                                   + ("skipped" if skipped[i, j] else "n/a") + "</span>")
+                    continue
+                colour = "#{:02x}{:02x}{:02x}".format(*rgb[i, j])
+                ink = "#fff" if value > 0.08 else "#000"  # as on the figure
+                text = escape_html(departure_cell(grouped[i].get(label, []), law))
+                if flagged[i, j]:
+                    text = f"<b>{text}</b>"
+                rows[i].append(f"<span class='heat' style='background:{colour};"
+                               f"color:{ink}'>{text}</span>")
+    return html_table(header, rows)
+
+
+def figure_html(file: str, alt: str, css_class: str = "", caption: str = "",
+                svg: bool = True) -> str:
+    """A figure's PNG, loaded lazily (only when scrolled near: the page may hold hundreds),
+    linked to its SVG (the vector version for a paper) when ``svg``."""
+    vector = Path(file).with_suffix(".svg").name
     cls = f' class="{css_class}"' if css_class else ""
-    return (f'<figure><a href="{FIGURES}/{escape_html(svg)}"><img{cls} '
-            f'src="{FIGURES}/{escape_html(file)}" alt="{escape_html(alt)}"></a>'
-            + (f"<figcaption>{caption} <a href='{FIGURES}/{escape_html(svg)}'>SVG</a>"
-               "</figcaption>" if caption else "")
-            + "</figure>")
+    image = (f'<img{cls} loading="lazy" src="{FIGURES}/{escape_html(file)}" '
+             f'alt="{escape_html(alt)}">')
+    if svg:
+        image = f'<a href="{FIGURES}/{escape_html(vector)}">{image}</a>'
+    link = f" <a href='{FIGURES}/{escape_html(vector)}'>SVG</a>" if svg else ""
+    return ("<figure>" + image
+            + (f"<figcaption>{caption}{link}</figcaption>" if caption else "") + "</figure>")
+
+
+def report_figure(figures: dict, file: str, alt: str, css_class: str = "",
+                  caption: str = "") -> str:
+    """:func:`figure_html` for one of the report's figures, linked to its SVG when the
+    report wrote one (``figures["svg"]``)."""
+    return figure_html(file, alt, css_class=css_class, caption=caption,
+                       svg=file in figures.get("svg", ()))
 
 
 def why_html(results: Results) -> str:
@@ -447,10 +510,24 @@ def page_head(title: str) -> str:
     return PAGE_HEAD.format(title=escape_html(title), css=CSS)
 
 
-def contents_html(names: Sequence[str], pages: dict) -> str:
-    """The table of contents at the top of the page (sections, scenarios, other pages)."""
-    scenarios = "".join(f"<li><a href='#{escape_html(slug(n))}'>{escape_html(n)}</a></li>"
-                        for n in names)
+def scenario_links(names: Sequence[str]) -> str:
+    """The scenarios as a list of links to their sections."""
+    return "".join(f"<li><a href='#{escape_html(slug(n))}'>{escape_html(n)}</a></li>"
+                   for n in names)
+
+
+def contents_html(names: Sequence[str], pages: dict,
+                  groups: dict[str, list[str]] | None = None) -> str:
+    """The table of contents at the top of the page (sections, scenarios, other pages);
+    with ``groups`` (``{tag: names}``, a report of many scenarios) the scenarios are folded
+    per tag."""
+    if groups:
+        scenarios = "".join(
+            f"<li><details><summary>{escape_html(tag)} ({len(members)})</summary>"
+            f"<ol class='scenarios'>{scenario_links(members)}</ol></details></li>"
+            for tag, members in groups.items())
+    else:
+        scenarios = scenario_links(names)
     items = [("#headline", "Departure of every engine from the laws"),
              ("#why", "Why: what each engine and preset solves"),
              ("#split", "Law vs solve"), ("#gates", "Gates"),
@@ -459,7 +536,8 @@ def contents_html(names: Sequence[str], pages: dict) -> str:
     for href, text in items:
         out.append(f"<li><a href='{href}'>{text}</a>")
         if href == "#scenarios":
-            out.append(f"<ol class='scenarios'>{scenarios}</ol>")
+            kind = "groups" if groups else "scenarios"
+            out.append(f"<ol class='{kind}'>{scenarios}</ol>")
         out.append("</li>")
     out.append("<li><a href='#table3'>Table 3 of the paper</a></li>"
                "<li><a href='#versions'>Versions and settings</a></li>")
@@ -512,19 +590,31 @@ def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[di
            else f'<span class="pass">{len(gates)} passed</span>')
         + f"; commit <code>{escape_html(str(git.get('commit'))[:10])}</code>, "
         f"{escape_html(prov.get('created_utc', ''))}.</p>")
-    parts.append(contents_html(names, pages))
+    parts.append(contents_html(names, pages, figures.get("groups")))
     parts.append("<h2 id='headline'>Departure of every engine from the laws</h2>")
+    caption = (
+        "Departure from Poisson (left pair) and from exact Stronge (right pair), "
+        "engines out of the box (<i>defaults</i>) and tuned (<i>accurate</i>; MuJoCo: "
+        "<i>matched-bounce</i>). Sweeps show "
+        "their largest departure over the sweep's single impacts. “(k!)”: k runs were "
+        "flagged (multi-contact, not separated, …) and are not in the value; “*”: the "
+        "scenario overrides "
+        "the preset's settings (see its section); grey cells were skipped. Light = agrees, "
+        "dark red = far off.")
+    groups = figures.get("groups") or {}
+    if groups:  # many scenarios: a row per family in the figure, the scenarios in tables
+        caption = ("One row per family of scenarios (its first tag that is not a selection "
+                   "tag such as <i>quick</i>; how many in brackets): the colour is the median "
+                   "over the family's scenarios of each one's largest departure, the text "
+                   "<i>median / max</i>. " + caption)
     if "heatmap" in figures:
-        parts.append(figure_html(
-            figures["heatmap"], "departure heat map",
-            caption="Departure from Poisson (left pair) and from exact Stronge (right pair), "
-            "engines out of the box (<i>defaults</i>) and tuned (<i>accurate</i>; MuJoCo: "
-            "<i>matched-bounce</i>). Sweeps show "
-            "their largest departure over the sweep's single impacts. “(k!)”: k runs were "
-            "flagged (multi-contact, not separated, …) and are not in the value; “*”: the "
-            "scenario overrides "
-            "the preset's settings (see its section); grey cells were skipped. Light = agrees, "
-            "dark red = far off."))
+        parts.append(report_figure(figures, figures["heatmap"], "departure heat map",
+                                   caption=caption))
+    if groups:
+        parts.append("<p>Every scenario's departures, per family (unfold one):</p>")
+        for tag, members in groups.items():
+            parts.append(f"<details><summary>{escape_html(tag)} ({len(members)} scenarios)"
+                         "</summary>" + departure_table_html(results, members) + "</details>")
     parts.append("<h2 id='why'>Why: what each engine and preset solves</h2>")
     parts.append(
         "<p>Most of the departure of pymunk and pybullet is the <b>law</b>, not the solver: "
@@ -541,7 +631,7 @@ def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[di
         "the engine is from <code>newton-lcp</code>. The total departure from Poisson is at "
         "most their sum.</p>")
     if "split" in figures:
-        parts.append(figure_html(figures["split"], "departure split"))
+        parts.append(report_figure(figures, figures["split"], "departure split"))
     if rows:
         parts.append("<details><summary>the numbers (largest over sweep points)</summary>"
                      + split_table(rows) + "</details>")
@@ -567,10 +657,23 @@ def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[di
                  "runs ringed in red), with the points where the Poisson collision type "
                  "changes dashed. Every figure links to its SVG.</p>")
     if "legend" in figures:
-        parts.append(figure_html(figures["legend"], "key of the impulse diagrams"))
-    for name in names:
-        parts.append(scenario_section(name, results.scenarios.get(name, {}),
-                                      results.for_scenario(name), figures))
+        parts.append(report_figure(figures, figures["legend"],
+                                   "key of the impulse diagrams"))
+    if figures.get("many") and figures.get("scenario_figures") != "all":
+        parts.append(f"<p class='muted'>With {len(names)} scenarios the per-scenario figures "
+                     "are not drawn (they would take minutes); <code>impact-harness report "
+                     "--figures-for 'PATTERN'</code> draws those of the scenarios matching a "
+                     "pattern, <code>--scenario-figures all</code> every one.</p>")
+    groups = figures.get("groups") or {"": names}
+    for tag, members in groups.items():
+        if tag:  # many scenarios: folded per tag
+            parts.append(f"<details class='group'><summary><b>{escape_html(tag)}</b> "
+                         f"({len(members)} scenarios)</summary>")
+        for name in members:
+            parts.append(scenario_section(name, results.scenarios.get(name, {}),
+                                          results.for_scenario(name), figures))
+        if tag:
+            parts.append("</details>")
     parts.append("<h2 id='table3'>Table 3 of Djerassi (2009, Part B) reproduced</h2>")
     parts.append(table3_html(figures.get("table3")))
     survey = Path("survey", "summary.md")  # written by impact-harness suite

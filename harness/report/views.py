@@ -153,22 +153,34 @@ def departure_cell(records: Sequence[Record], law: str) -> str:
     return text
 
 
-def departure_grid(results: Results, law: str, labels: Sequence[str]):
+def departure_grid(results: Results, law: str, labels: Sequence[str],
+                   names: Sequence[str] | None = None):
     """``(scenarios, values[s, l], flagged[s, l], skipped[s, l])``, max over sweep points;
-    ``flagged`` marks a cell whose maximum is a run the engine flagged."""
-    names = engine_scenarios(results)
+    ``flagged`` marks a cell whose maximum is a run the engine flagged. ``names`` restricts
+    the rows (default: every scenario with engine records)."""
+    names = engine_scenarios(results) if names is None else list(names)
     values = np.full((len(names), len(labels)), np.nan)
     flagged = np.zeros_like(values, dtype=bool)
     skipped = np.zeros_like(values, dtype=bool)
     for i, name in enumerate(names):
-        records = results.for_scenario(name)
+        by_label = label_records(results.for_scenario(name))
         for j, label in enumerate(labels):
-            subset = [r for r in records if r.source != ANALYTIC and r.label == label]
+            subset = by_label.get(label)
             if subset:
                 values[i, j], flagged[i, j], skipped[i, j] = worst_departure(subset, law)
             else:
                 skipped[i, j] = True
     return names, values, flagged, skipped
+
+
+def label_records(records: Iterable[Record]) -> dict[str, list[Record]]:
+    """A scenario's engine runs grouped by ``engine.preset`` label (a record's label is
+    computed on each access: grouping once keeps a 1,000-scenario report linear)."""
+    grouped: dict[str, list[Record]] = {}
+    for record in records:
+        if record.source != ANALYTIC:
+            grouped.setdefault(record.label, []).append(record)
+    return grouped
 
 
 def cell_records(results: Results, name: str, label: str) -> list[Record]:
