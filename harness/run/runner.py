@@ -585,11 +585,14 @@ def _point_records_cached(scenario: Scenario, point, engine_entries: Sequence,
         for _, _, _, _, item in engine_entries)
     if not cacheable:
         return _point_records_or_errors(scenario, point, engine_entries, cache=cache)
-    key = cache.key({"kind": "point-records", "scenario": _definition(scenario),
-                     "point": point.index,
-                     "engine_runs": [[engine_name, preset, item["key"], item.get("overrides"),
-                                      item.get("history")]
-                                     for _, _, engine_name, preset, item in engine_entries]})
+    try:
+        key = cache.key({"kind": "point-records", "scenario": _definition(scenario),
+                         "point": point.index,
+                         "engine_runs": [[engine_name, preset, item["key"],
+                                          item.get("overrides"), item.get("history")]
+                                         for _, _, engine_name, preset, item in engine_entries]})
+    except TypeError:  # a definition holding a value without a canonical spelling: not kept
+        return _point_records_or_errors(scenario, point, engine_entries, cache=cache)
     stored = cache.get(key, check=lambda entry: None if isinstance(entry.get("records"), list)
                        else "no records", count=False)
     if stored is not None:
