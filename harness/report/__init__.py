@@ -4,6 +4,7 @@
 
     impact-harness report                                  # reports/results.json -> reports/
     impact-harness report --results /tmp/r.json --out /tmp/report
+    impact-harness report --figures-for 'rod-*' --workers 2   # many scenarios: some figures
 
 The HTML page is self-contained (inline CSS, no scripts, no external assets); its figures are
 PNG files in ``<out>/figures/`` beside it, and the Table 3 reproduction
@@ -11,6 +12,18 @@ PNG files in ``<out>/figures/`` beside it, and the Table 3 reproduction
 when present. Matplotlib (Agg) draws the figures; nothing here touches an engine or re-solves
 a scenario except the impulse paths of Routh's graph, which ``planar_impact.impulse_process``
 walks from the contact-space numbers stored in the results.
+
+At scale (more than :data:`MANY_SCENARIOS` scenarios) the page aggregates: the headline heat
+map has a row per family (median / max over its scenarios), each scenario's departures are
+a coloured HTML table folded under its family, the scenario sections are folded per family,
+and the per-scenario figures are drawn only on demand (``--figures-for PATTERN``,
+``--scenario-figures all``): at 1,000 scenarios they were ~1,000 of the ~1,003 figures and
+nearly all of a 260 s cold report. Only the headline figures (heat map, law vs solve, key,
+Table 3) get SVG twins then (``--svg headline``; ``--svg all`` for every one): an SVG costs
+about as much again as its PNG and is wanted for a paper's few figures, not for a thousand
+diagrams. Every image loads lazily. Figures are drawn in a pool of forked processes
+(``--workers``); each figure's PNG carries the digest of its inputs, so a warm report draws
+nothing.
 
 What the page shows, in order: what this is; the headline heat maps (departure of every
 engine and preset from Poisson and from Stronge, per scenario); the split of each engine's

@@ -214,9 +214,13 @@ def heatmap_figure(results: Results, path: Path, tag: str | None = None,
     if not rows:
         return None
     panels = [(law, preset) for law in HEADLINE_LAWS for preset in presets]
-    figure = new_figure(2.2 + 0.95 * len(labels) * len(HEADLINE_LAWS) * (1.6 if groups else 1),
-                        1.6 + 0.25 * len(rows))
-    axes = figure.subplots(1, len(panels), sharey=True, squeeze=False)[0]
+    if groups is None:  # the panels side by side
+        figure = new_figure(2.2 + 0.95 * len(labels) * len(HEADLINE_LAWS), 1.6 + 0.25 * len(rows))
+        axes = figure.subplots(1, len(panels), sharey=True, squeeze=False)[0]
+    else:  # wider cells ("median / max"): a row of panels per law
+        figure = new_figure(2.2 + 1.5 * len(labels), 2 * (1.1 + 0.25 * len(rows)))
+        axes = figure.subplots(len(HEADLINE_LAWS), len(presets), sharey=True,
+                               squeeze=False).ravel()
     norm = LogNorm(vmin=HEAT_MIN, vmax=HEAT_MAX)
     cmap = heat_cmap()
     image = None
