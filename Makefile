@@ -20,6 +20,7 @@ validate: $(STAMP)
 	$(BIN)/impact-harness suite
 
 test: $(STAMP)
+	$(BIN)/ruff check .
 	$(BIN)/python -m pytest -q -n 2
 
 bench: $(STAMP)

@@ -350,7 +350,8 @@ def split_figure(rows: Sequence[dict], path: Path, tag: str | None = None) -> Pa
     return save_png(figure, path, tag=tag)
 
 
-def impulse_figure(name: str, records: Sequence[Record], path: Path, tag: str | None = None) -> Path | None:
+def impulse_figure(name: str, records: Sequence[Record], path: Path,
+                   tag: str | None = None) -> Path | None:
     """Routh's graph (Fig. 1): I_t against I_n, each law's path and every end point."""
     from planar_impact import impulse_process
 
@@ -480,7 +481,8 @@ def type_boundaries(law_records: Sequence[Record]) -> list[tuple[float, int, int
 DEPARTURE_FLOOR = 1e-16  # exact agreement drawn here on the log axis (1e-14%)
 
 
-def sweep_figure(name: str, info: dict, records: Sequence[Record], path: Path, tag: str | None = None) -> Path | None:
+def sweep_figure(name: str, info: dict, records: Sequence[Record], path: Path,
+                 tag: str | None = None) -> Path | None:
     """Post-impact quantities against the swept parameter; laws lines, engines points."""
     sweep = info.get("sweep") or {}
     parameter = sweep.get("parameter", "parameter")
@@ -547,9 +549,9 @@ def sweep_figure(name: str, info: dict, records: Sequence[Record], path: Path, t
         ax.grid(True, color="0.93")
     handles, labels = axes[0].get_legend_handles_labels()
     for ax in axes[1:]:
-        h, l = ax.get_legend_handles_labels()
-        handles += h
-        labels += l
+        panel_handles, panel_labels = ax.get_legend_handles_labels()
+        handles += panel_handles
+        labels += panel_labels
     unique = dict(zip(labels, handles))
     figure.legend(unique.values(), unique.keys(), loc="outside lower center",
                   ncol=min(5, len(unique)), fontsize=7, frameon=False)

@@ -40,7 +40,8 @@ from harness.run.records import ANALYTIC, Record, Results
 CSS = """
 body{font-family:-apple-system,Segoe UI,Helvetica,Arial,sans-serif;margin:0 auto;max-width:1280px;
 padding:0 18px 40px;color:#222;line-height:1.45}
-h1{font-size:1.7em;margin:.6em 0 .2em} h2{border-bottom:1px solid #ddd;padding-bottom:.2em;margin-top:1.6em}
+h1{font-size:1.7em;margin:.6em 0 .2em}
+h2{border-bottom:1px solid #ddd;padding-bottom:.2em;margin-top:1.6em}
 h3{margin:1.4em 0 .3em} .lead{font-size:1.04em;max-width:62em}
 .facts{color:#555;font-size:.92em} .facts b{color:#222}
 table{border-collapse:collapse;font-size:.8em;margin:.4em 0 .8em}
@@ -56,7 +57,8 @@ margin:.8em 0} nav.contents ol{margin:.2em 0;padding-left:1.4em}
 nav.contents ol.scenarios{columns:3;font-size:.92em} code{background:#f4f4f4;padding:0 3px}
 details{margin:.3em 0 .8em} summary{cursor:pointer;color:#335}
 .scroll{overflow-x:auto;max-width:100%}
-.pair{flex-wrap:nowrap;gap:10px} .pair>div{flex:0 1 auto;min-width:0} .pair>figure{flex:0 0 auto;margin:0}
+.pair{flex-wrap:nowrap;gap:10px} .pair>div{flex:0 1 auto;min-width:0}
+.pair>figure{flex:0 0 auto;margin:0}
 td.note,th.note{white-space:normal;min-width:11em;max-width:22em;text-align:left}
 td.wrap{white-space:normal;text-align:left;overflow-wrap:anywhere;max-width:70em}
 p.notes{font-size:.8em;color:#733;margin:-.4em 0 .8em;max-width:60em}
@@ -94,7 +96,8 @@ def html_table(header: Sequence[str], rows: Sequence[Sequence], left: int = 1,
     def head(i: int, text) -> str:
         cls = column_classes[i] if column_classes and column_classes[i] in (
             "note", "l", "wrap") else ("l" if i < left else "")
-        return f'<th class="{cls}">{header_cell(text)}</th>' if cls else f"<th>{header_cell(text)}</th>"
+        cell = header_cell(text)
+        return f'<th class="{cls}">{cell}</th>' if cls else f"<th>{cell}</th>"
 
     out = ['<div class="scroll"><table><tr>' + "".join(head(i, h) for i, h in enumerate(header))
            + "</tr>"]
@@ -163,7 +166,8 @@ def velocity_table(records: Sequence[Record], speed_labels: Sequence[str]) -> st
         else:
             name = f"<b>{escape_html(r.label)}</b>"
             if overrides_of(r):
-                name += (f"<br><span class='override'>[{escape_html(fmt_overrides(overrides_of(r)))}]"
+                shown = escape_html(fmt_overrides(overrides_of(r)))
+                name += (f"<br><span class='override'>[{shown}]"
                          "</span>")
         rows.append([name, *(fmt_number(v) for v in speeds), fmt_number(r.vn_separation),
                      fmt_number(r.vt_separation), fmt_number(r.energy_change),
@@ -204,7 +208,8 @@ def scenario_section(name: str, info: dict, records: Sequence[Record], figures: 
             parts.append(report_figure(figures, figures["sweep"][name],
                                        f"sweep of {name}"))
         points = list(dict.fromkeys(r.point["index"] for r in records))
-        types = " → ".join(str(r.collision_type) for r in sorted(laws, key=lambda r: r.point["index"]))
+        in_order = sorted(laws, key=lambda r: r.point["index"])
+        types = " → ".join(str(r.collision_type) for r in in_order)
         parts.append(f"<p>Poisson types along the sweep: {escape_html(types)}.</p>")
         flagged = [r for r in records if r.source != ANALYTIC and not r.ok and not r.skipped]
         if flagged:
@@ -452,7 +457,8 @@ def gates_html(provenance: dict) -> str:
     rows = []
     for g in gates:
         cls = "fail" if g["status"] == "FAIL" else ("pass" if g["status"] == "pass" else "muted")
-        rows.append([escape_html(g["scenario"]), escape_html(g["gate"]), escape_html(g["record"]), escape_html(g["law"]),
+        rows.append([escape_html(g["scenario"]), escape_html(g["gate"]),
+                     escape_html(g["record"]), escape_html(g["law"]),
                      fmt_departure(g["departure"]), fmt_departure(g["max_departure"]),
                      f'<span class="{cls}">{escape_html(g["status"])}</span>'])
     return html_table(["scenario", "gate", "record", "law", "departure", "max", "result"], rows,
@@ -486,11 +492,13 @@ def versions_html(provenance: dict) -> str:
     git = provenance.get("git", {})
     machine = provenance.get("machine", {})
     cache = provenance.get("cache", {})
-    rows = [[escape_html(k), escape_html(v if v is not None else "not installed")] for k, v in versions.items()]
+    rows = [[escape_html(k), escape_html(v if v is not None else "not installed")]
+            for k, v in versions.items()]
     rows += [["git commit", escape_html(f"{git.get('commit')}" + (" (uncommitted changes)"
                                                           if git.get("dirty") else ""))],
              ["code version", escape_html(str(provenance.get("code_version", ""))[:16])],
-             ["machine", escape_html(f"{machine.get('platform')}, {machine.get('cpu_count')} cores")],
+             ["machine", escape_html(f"{machine.get('platform')}, "
+                                     f"{machine.get('cpu_count')} cores")],
              ["results written", escape_html(provenance.get("created_utc", ""))],
              ["command", f"<code>{escape_html(' '.join(provenance.get('command', [])))}</code>"],
              ["engine runs", escape_html(f"{cache.get('engine_runs')} ({cache.get('simulated')} "
@@ -687,7 +695,8 @@ def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[di
                  "(<code>[engine_settings.&lt;engine&gt;]</code>); such runs carry the "
                  "overrides in their labels and in each record's diagnostics in "
                  "<code>results.json</code>.</p>" + settings_table(prov))
-    parts.append(f"<p class='muted'>Report generated {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())} "
+    generated = time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())
+    parts.append(f"<p class='muted'>Report generated {generated} "
                  "by <code>impact-harness report</code>.</p></body></html>")
     path = out_dir / "index.html"
     path.write_text("\n".join(parts), encoding="utf-8")
