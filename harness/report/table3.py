@@ -131,15 +131,18 @@ def reproduce_table3() -> list[dict]:
 
 def printed_du_residual(row: dict) -> tuple[float, float]:
     """Distance (kinetic-energy norm) from the printed Δu to the nearest Δu any Poisson e_i
-    gives, and the best e_i. Δu(e_i) = Δu_c·(1 + e_i) for fixed type: a line through 0."""
+    gives, and that e_i. For a fixed collision type Δu is affine in e_i: I_n = (1 + e_i) I_nc
+    (6), and for types 1 and 3 I_t carries a constant offset ((26), (36)), so the reachable
+    Δu lie on the line through the e_i = 0 and e_i = 1 solutions, which misses the origin."""
     problem = table3_problem(row)
-    base = problem.solve(mu=float(row["mu"]), e=0.0, law="poisson").delta_u  # e_i = 0
+    mu = float(row["mu"])
+    at_zero = problem.solve(mu=mu, e=0.0, law="poisson").delta_u
+    direction = problem.solve(mu=mu, e=1.0, law="poisson").delta_u - at_zero
     printed = np.array([float(row[k]) for k in ("du1", "du3", "du4", "du6")])
     matrix = problem.mass_matrix
-    scale = float(base @ matrix @ base)
-    best_factor = float(printed @ matrix @ base) / scale  # = 1 + e_i
-    miss = printed - best_factor * base
-    return math.sqrt(float(miss @ matrix @ miss)), best_factor - 1.0
+    best_e = float((printed - at_zero) @ matrix @ direction) / float(direction @ matrix @ direction)
+    miss = printed - at_zero - best_e * direction
+    return math.sqrt(float(miss @ matrix @ miss)), best_e
 
 
 def _fmt(value: float, decimals: int) -> str:

@@ -116,3 +116,18 @@ def test_paper_command_writes_report_and_figure(tmp_path):
     assert "67 of 84 printed cells reproduced" in text
     assert "(38) and the impulse process both give −0.181" in text
     assert (tmp_path / "paper-table3.png").stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("index", [1, 2, 3])
+def test_a_reachable_du_is_at_distance_zero_and_its_e_is_found(table, index):
+    """Δu at any e_i is on the measured line (affine in e_i, missing the origin for types 1
+    and 3): put the solver's own Δu at e_i = 0.37 in the row and the distance is rounding
+    (1e-12 of |Δu| ~ 1) and the e_i found is 0.37 (to 1e-9: a quotient of such numbers)."""
+    row = dict(entry(table, "stronge", index)["row"])
+    problem = paper.table3_problem(row)
+    reachable = problem.solve(mu=float(row["mu"]), e=0.37, law="poisson").delta_u
+    row.update({key: repr(float(value)) for key, value in zip(("du1", "du3", "du4", "du6"),
+                                                               reachable)})
+    residual, best_e = paper.printed_du_residual(row)
+    assert residual <= 1e-12
+    assert best_e == pytest.approx(0.37, abs=1e-9)
