@@ -225,6 +225,26 @@ def numbers_from_output(engine: str, output: Mapping[str, Any]) -> RunNumbers:
         speed_caps=_run_caps(output.get("derived") or {}))
 
 
+def _impulse_mismatch(run: RunNumbers, implied_n: float, implied_t: float,
+                      scales: SceneScales, tolerances: Tolerances, *, engine: str,
+                      implied: str, scale: str) -> list[Reason]:
+    """``impulse-mismatch`` when the engine's own impulse (not one rebuilt from momentum)
+    differs from the one Δu implies by more than the tolerance, relative to ``scales.impulse``
+    (``engine``, ``implied`` and ``scale`` name the quantities in the message)."""
+    if run.normal_impulse is None or run.impulse_source == "momentum":
+        return []
+    engine_t = run.tangential_impulse or 0.0
+    gap = math.hypot(run.normal_impulse - implied_n, engine_t - implied_t)
+    relative = gap / scales.impulse if scales.impulse > 0 else math.inf
+    if relative <= tolerances.impulse:
+        return []
+    return [Reason(
+        "impulse-mismatch", relative, tolerances.impulse,
+        f"engine {engine} = ({run.normal_impulse:.4g}, {engine_t:.4g}) N s, implied "
+        f"{implied} ({implied_n:.4g}, {implied_t:.4g}) N s: differ by {relative:.3g} of "
+        f"{scale} = {scales.impulse:.3g} N s")]
+
+
 def numbers_from_run(run) -> RunNumbers:
     """:class:`RunNumbers` from an ``EngineRun`` itself (the survey and the stress grid, which
     judge runs without going through the runner's task output)."""
@@ -337,16 +357,9 @@ def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = 
         reasons.append(Reason("impulse-residual", residual, tolerances.impulse_residual,
                               f"‖Δu − M⁻¹(w_n I_n + w_t I_t)‖_M = {residual:.3g} of the "
                               f"frame-free speed norm"))
-    if run.normal_impulse is not None and run.impulse_source != "momentum":
-        engine_t = run.tangential_impulse or 0.0
-        gap = math.hypot(run.normal_impulse - implied_n, engine_t - implied_t)
-        relative = gap / scales.impulse if scales.impulse > 0 else math.inf
-        if not relative <= tolerances.impulse:
-            reasons.append(Reason(
-                "impulse-mismatch", relative, tolerances.impulse,
-                f"engine (I_n, I_t) = ({run.normal_impulse:.4g}, {engine_t:.4g}) N s, implied "
-                f"by Δu ({implied_n:.4g}, {implied_t:.4g}) N s: differ by {relative:.3g} of "
-                f"|v_n^A|/m_nn = {scales.impulse:.3g} N s"))
+    reasons += _impulse_mismatch(run, implied_n, implied_t, scales, tolerances,
+                                 engine="(I_n, I_t)", implied="by Δu",
+                                 scale="|v_n^A|/m_nn")
     reasons += _energy_gain(problem, u_after, scales, law_energy_change, tolerances,
                             law=ENGINE_LAW)
     order = list(REASONS)
@@ -581,18 +594,10 @@ def judge_declared(scene, problem, run: RunNumbers, contacts, *,
                               f"‖Δu − M⁻¹Σ_i(w_n^(i) I_n^(i) + w_t^(i) I_t^(i))‖_M = "
                               f"{residual:.3g} of the frame-free speed norm, over the "
                               f"{len(contacts)} declared contacts"))
-    if run.normal_impulse is not None and run.impulse_source != "momentum":
-        implied_n, implied_t = float(np.sum(impulses[0])), float(np.sum(impulses[1]))
-        engine_t = run.tangential_impulse or 0.0
-        gap = math.hypot(run.normal_impulse - implied_n, engine_t - implied_t)
-        relative = gap / scales.impulse if scales.impulse > 0 else math.inf
-        if not relative <= tolerances.impulse:
-            reasons.append(Reason(
-                "impulse-mismatch", relative, tolerances.impulse,
-                f"engine (ΣI_n, ΣI_t) = ({run.normal_impulse:.4g}, {engine_t:.4g}) N s, "
-                f"implied by Δu over the {len(contacts)} declared contacts ({implied_n:.4g}, "
-                f"{implied_t:.4g}) N s: differ by {relative:.3g} of "
-                f"max_i |v_n^A(i)|/m_nn(i) = {scales.impulse:.3g} N s"))
+    reasons += _impulse_mismatch(
+        run, float(np.sum(impulses[0])), float(np.sum(impulses[1])), scales, tolerances,
+        engine="(ΣI_n, ΣI_t)", implied=f"by Δu over the {len(contacts)} declared contacts",
+        scale="max_i |v_n^A(i)|/m_nn(i)")
     reasons += _energy_gain(problem, u_after, scales, law_energy_change, tolerances,
                             law=NEWTON_COULOMB)
     order = list(REASONS)
