@@ -96,10 +96,11 @@ def contacts_section(results) -> tuple[str, str]:
         if table is None:
             continue
         header, rows = table
-        html_parts.append(f"<h3>{escape(name)}</h3><table><tr>"
+        # In a scrolling wrapper, as every table of the page: these have a column per engine.
+        html_parts.append(f"<h3>{escape(name)}</h3><div class=\"scroll\"><table><tr>"
                           + "".join(f"<th>{escape(h)}</th>" for h in header) + "</tr>"
                           + "".join("<tr>" + "".join(f"<td>{escape(c)}</td>" for c in row)
-                                    + "</tr>" for row in rows) + "</table>")
+                                    + "</tr>" for row in rows) + "</table></div>")
         markdown_parts.append(f"### {name}\n\n| " + " | ".join(header) + " |\n|"
                               + "---|" * len(header) + "\n"
                               + "".join("| " + " | ".join(row) + " |\n" for row in rows))

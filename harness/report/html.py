@@ -525,7 +525,8 @@ def scenario_links(names: Sequence[str]) -> str:
 
 
 def contents_html(names: Sequence[str], pages: dict,
-                  groups: dict[str, list[str]] | None = None) -> str:
+                  groups: dict[str, list[str]] | None = None,
+                  extra: Sequence[tuple[str, str]] = ()) -> str:
     """The table of contents at the top of the page (sections, scenarios, other pages);
     with ``groups`` (``{tag: names}``, a report of many scenarios) the scenarios are folded
     per tag."""
@@ -547,6 +548,8 @@ def contents_html(names: Sequence[str], pages: dict,
             kind = "groups" if groups else "scenarios"
             out.append(f"<ol class='{kind}'>{scenarios}</ol>")
         out.append("</li>")
+    for href, text in extra:  # sections present only in some reports
+        out.append(f"<li><a href='{href}'>{escape_html(text)}</a></li>")
     out.append("<li><a href='#table3'>Table 3 of the paper</a></li>"
                "<li><a href='#versions'>Versions and settings</a></li>")
     for file, title in pages.items():
@@ -598,7 +601,8 @@ def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[di
            else f'<span class="pass">{len(gates)} passed</span>')
         + f"; commit <code>{escape_html(str(git.get('commit'))[:10])}</code>, "
         f"{escape_html(prov.get('created_utc', ''))}.</p>")
-    parts.append(contents_html(names, pages, figures.get("groups")))
+    contents_at = len(parts)  # filled in at the end: some sections appear only when present
+    parts.append("")
     parts.append("<h2 id='headline'>Departure of every engine from the laws</h2>")
     caption = (
         "Departure from Poisson (left pair) and from exact Stronge (right pair), "
@@ -699,5 +703,9 @@ def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[di
     parts.append(f"<p class='muted'>Report generated {generated} "
                  "by <code>impact-harness report</code>.</p></body></html>")
     path = out_dir / "index.html"
+    extra = [(href, title) for href, title in (("#contacts", "Several contacts"),
+                                               ("#survey", "Survey"))
+             if f"id='{href[1:]}'" in "".join(parts)]
+    parts[contents_at] = contents_html(names, pages, figures.get("groups"), extra)
     path.write_text("\n".join(parts), encoding="utf-8")
     return path

@@ -16,6 +16,8 @@ def test_a_flat_scene_gets_a_table_and_a_single_contact_scene_none():
                       scenarios=outcome.scenarios)
     html, markdown = contacts_section(results)
     assert "<h3>flat-box</h3>" in html and "box-corner" not in html
+    # every table scrolls in its own wrapper: a wide one must not widen the page
+    assert html.count("<table>") == html.count('<div class="scroll"><table>') > 0
     row = next(line for line in markdown.splitlines() if line.startswith("| (single point)"))
     cells = [cell.strip() for cell in row.strip("|").split("|")]
     assert cells[1] == "simultaneous: newton-coulomb"
