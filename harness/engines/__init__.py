@@ -39,7 +39,6 @@ from harness.engines.contract import (
     free_flight_poses,
     geometry_key,
     ke_norm,
-    nearest_feature,
 )
 from harness.engines.settings import EngineSettingsError
 
@@ -209,7 +208,6 @@ __all__ = [
     "geometry_key",
     "ke_norm",
     "load_engine",
-    "nearest_feature",
     "preset_choices",
     "preset_label",
     "preset_role",

@@ -226,13 +226,6 @@ class ContactStep(NamedTuple):
     normal_impulse: float | None  # N s, the engine's own measure (>= 0); None: not measured
     poses: tuple[Pose, ...]  # every body's (x, y, θ) after the step
 
-    def features(self, scene: Scene) -> tuple[tuple[int, ...], ...]:
-        """Per point, which feature of each body touches (see :func:`nearest_feature`)."""
-        return tuple(
-            tuple(nearest_feature(body.shape, state, (point.x, point.y))
-                  for body, state in zip(scene.bodies, self.poses))
-            for point in self.points
-        )
 
 
 class ContactRecord(NamedTuple):
@@ -254,23 +247,6 @@ class ContactRecord(NamedTuple):
             )
             for step, (points, normal, impulse, pressure), poses in self.raw
         )
-
-
-def nearest_feature(shape, state: Sequence[float], point: tuple[float, float]) -> int:
-    """The feature of a body nearest to a scene-frame ``point``: for a polygon or a box the
-    index of the nearest vertex (in ``shape.vertices()`` order), for a rod the end cap
-    (0 at ``-length/2``, 1 at ``+length/2``), for a disk 0."""
-    kind = shape.kind
-    if kind == "disk":
-        return 0
-    x, y, angle = state[0], state[1], state[2]
-    cos, sin = math.cos(angle), math.sin(angle)
-    dx, dy = point[0] - x, point[1] - y
-    local_x, local_y = cos * dx + sin * dy, -sin * dx + cos * dy  # rotate by -angle
-    if kind == "rod":
-        return 0 if local_x < 0.0 else 1
-    vertices = shape.vertices()
-    return int(np.argmin(np.hypot(vertices[:, 0] - local_x, vertices[:, 1] - local_y)))
 
 
 @dataclass(frozen=True)

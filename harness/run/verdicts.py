@@ -41,6 +41,7 @@ from typing import Any
 
 import numpy as np
 
+from harness.engines import body_extent
 from harness.run import metrics
 
 #: Reason name -> what it says. Ordered: the first failing reason names the run's status.
@@ -274,18 +275,6 @@ class SceneScales:
     speed_norm: float  # frame-free ‖u_before‖_M, sqrt(kg) m/s
     energy: float  # frame-free kinetic energy, J
     size: float  # smallest body extent, m
-
-
-def body_extent(shape) -> float:
-    """Largest distance (m) from a body's centre of mass to its surface: a disk's radius, a
-    rod's half length plus its cap radius, a polygon's farthest vertex."""
-    kind = shape.kind
-    if kind == "disk":
-        return float(shape.radius)
-    if kind == "rod":
-        return float(shape.length / 2.0 + shape.radius)
-    vertices = np.asarray(shape.vertices(), dtype=float)
-    return float(np.max(np.hypot(vertices[:, 0], vertices[:, 1])))
 
 
 def scene_scales(scene, problem) -> SceneScales:
@@ -714,7 +703,7 @@ def reason_counts(reasons_per_run: Sequence[Sequence[Mapping[str, Any]]]) -> dic
 
 
 __all__ = ["DEFAULT_TOLERANCES", "REASONS", "SPEED_CAPS", "Reason", "RunNumbers",
-           "SceneScales", "StepContacts", "Tolerances", "Verdict", "body_extent",
+           "SceneScales", "StepContacts", "Tolerances", "Verdict",
            "declared_contacts", "declared_impulses", "declared_scales", "feature_at",
            "feature_points", "impulse_from_velocities", "judge", "judge_declared",
            "numbers_from_output", "numbers_from_run", "reason_counts", "scene_scales"]
