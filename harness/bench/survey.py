@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import time
 
-from harness.engines import ENGINE_NAMES, PRESET_NAMES, EngineNotInstalled, load_engine
+from harness.engines import ENGINE_NAMES, PRESET_ROLES, EngineNotInstalled, load_engine
 from harness.survey.cli import run_survey
 from harness.survey.engines import bare_stepping
 from harness.survey.population import resolve_populations
@@ -29,7 +29,7 @@ SAMPLES = 500  # per population
 QUICK_SAMPLES = 60
 
 
-def run(samples: int, engines=ENGINE_NAMES, presets=PRESET_NAMES, seed: int = 0) -> dict:
+def run(samples: int, engines=ENGINE_NAMES, presets=PRESET_ROLES, seed: int = 0) -> dict:
     """``{"samples", "impacts", "survey_s", "bare_s", "ratio", "stages", "bare"}``."""
     installed = []
     for name in engines:

@@ -55,8 +55,6 @@ ENGINE_NAMES: tuple[str, ...] = tuple(_ENGINE_MODULES)
 
 #: The preset roles every engine has, in display order.
 PRESET_ROLES: tuple[str, ...] = ("defaults", "accurate")
-#: The roles under their historical name (scenario schema, CLIs).
-PRESET_NAMES: tuple[str, ...] = PRESET_ROLES
 
 # engine -> {role: the name users see}, where the role's name would mislead. MuJoCo's second
 # preset matches the bounce (e·|v_n|) but not a dissipative law: it creates kinetic energy in
@@ -189,7 +187,6 @@ __all__ = [
     "ENGINE_NAMES",
     "NO_IMPULSE_RELATIVE",
     "OUT_OF_PLANE_TOLERANCE",
-    "PRESET_NAMES",
     "PRESET_ROLES",
     "STATUSES",
     "BareStepper",

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.engines import ENGINE_NAMES, PRESET_NAMES, preset_label
+from harness.engines import ENGINE_NAMES, PRESET_ROLES, preset_label
 from harness.report.figures import heat_cmap
 from harness.report.views import (
     ENGINE_WHY,
@@ -112,7 +112,7 @@ def html_table(header: Sequence[str], rows: Sequence[Sequence], left: int = 1,
 def sorted_point_records(records: Sequence[Record]) -> list[Record]:
     laws = sorted((r for r in records if r.source == ANALYTIC),
                   key=lambda r: LAW_ORDER.index(r.law) if r.law in LAW_ORDER else 99)
-    ENGINES, PRESETS = ENGINE_NAMES, PRESET_NAMES
+    ENGINES, PRESETS = ENGINE_NAMES, PRESET_ROLES
 
     engines = sorted((r for r in records if r.source != ANALYTIC),
                      key=lambda r: (PRESETS.index(r.preset) if r.preset in PRESETS else 9,

@@ -11,7 +11,7 @@ import re
 from pathlib import Path
 
 import planar_impact
-from harness.engines import ENGINE_NAMES, PRESET_NAMES
+from harness.engines import ENGINE_NAMES, PRESET_ROLES
 from planar_impact import builders
 
 SCENARIO_DIR = Path(__file__).resolve().parent.parent.parent / "scenarios"
@@ -28,7 +28,7 @@ LAW_TYPES = {
     "newton-lcp": (1, 2, 3),
 }
 ENGINES = ENGINE_NAMES
-PRESETS = PRESET_NAMES
+PRESETS = PRESET_ROLES
 SYSTEMS = ("bodies", "two-sled", "matrix")
 ANALYTIC_SYSTEMS = ("two-sled", "matrix")
 SHAPE_FIELDS = {

@@ -20,7 +20,7 @@ import numpy as np
 
 from harness.engines import (
     ENGINE_NAMES,
-    PRESET_NAMES,
+    PRESET_ROLES,
     EngineNotInstalled,
     load_engine,
     preset_choices,
@@ -57,7 +57,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--engines", action="append", metavar="E[,E…]",
                         help=f"engines (default every installed one of {', '.join(ENGINE_NAMES)})")
     parser.add_argument("--preset", action="append", metavar="P[,P…]",
-                        help=f"presets (default {', '.join(PRESET_NAMES)}; MuJoCo calls "
+                        help=f"presets (default {', '.join(PRESET_ROLES)}; MuJoCo calls "
                         "accurate matched-bounce, and either name selects it)")
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"default {DEFAULT_OUT}")
     parser.add_argument("--quick", action="store_true",
@@ -174,7 +174,7 @@ def main(args: argparse.Namespace) -> int:
     engines = _names(args.engines, ENGINE_NAMES, "--engines") or list(ENGINE_NAMES)
     # A preset's shown name (matched-bounce) selects its role for every engine.
     presets = [preset_role(None, name) for name in
-               _names(args.preset, preset_choices(), "--preset")] or list(PRESET_NAMES)
+               _names(args.preset, preset_choices(), "--preset")] or list(PRESET_ROLES)
     presets = list(dict.fromkeys(presets))
     samples = args.samples or (QUICK_SAMPLES if args.quick else DEFAULT_SAMPLES)
     if samples < 1:

@@ -15,7 +15,7 @@ import pytest
 from harness import engines
 from harness.engines import (
     ENGINE_NAMES,
-    PRESET_NAMES,
+    PRESET_ROLES,
     STATUSES,
     EngineNotInstalled,
     EngineRun,
@@ -67,7 +67,7 @@ def engine(request):
 # ---------------------------------------------------------------------- registry
 def test_engine_names_and_presets():
     assert ENGINE_NAMES == ("pymunk", "pybullet", "mujoco", "box2d")
-    assert PRESET_NAMES == ("defaults", "accurate")
+    assert PRESET_ROLES == ("defaults", "accurate")
 
 
 def test_unknown_engine_name_lists_the_choices():
@@ -107,9 +107,9 @@ def test_missing_engine_raises_import_error_naming_install(monkeypatch):
 
 # ---------------------------------------------------------------------- settings
 def test_presets_complete_and_json(engine):
-    assert set(engine.presets) == set(PRESET_NAMES)
+    assert set(engine.presets) == set(PRESET_ROLES)
     keys = set(engine.setting_docs)
-    for preset in PRESET_NAMES:
+    for preset in PRESET_ROLES:
         settings = engine.settings(preset)
         assert set(settings) == keys
         assert json.loads(json.dumps(settings)) == settings  # plain JSON-able values
@@ -195,7 +195,7 @@ def test_run_records_settings_and_preset(engine):
 
 
 # ---------------------------------------------------------------------- outputs
-@pytest.mark.parametrize("preset", PRESET_NAMES)
+@pytest.mark.parametrize("preset", PRESET_ROLES)
 @pytest.mark.parametrize("scene_name", sorted(SCENES))
 def test_every_reference_scene_runs_ok(engine, preset, scene_name):
     scene = SCENES[scene_name][0]
@@ -247,7 +247,7 @@ def test_impulse_matches_momentum_change(engine):
                                                    abs=tolerance)
 
 
-@pytest.mark.parametrize("preset", PRESET_NAMES)
+@pytest.mark.parametrize("preset", PRESET_ROLES)
 def test_bit_identical_reruns_even_after_other_scenes(engine, preset):
     disk, rod, pair = SCENES["disk-spin"][0], SCENES["rod-45"][0], SCENES["two-disks"][0]
     first = engine.run(disk, preset=preset)

@@ -365,7 +365,7 @@ def test_hostile_files_exit_2_and_the_good_ones_are_still_processed(tmp_path, co
 def test_a_bad_cache_entry_is_a_reported_miss(tmp_path, damage):
     cache = ResultCache(tmp_path)
     clean = engine_outputs(sweep_run(cache))
-    entry = min(tmp_path.rglob("*.json"))
+    entry = min(engine_entries(tmp_path))  # an engine run's entry, not a finished point's
     stored = json.loads(entry.read_text(encoding="utf-8"))
     record = stored["record"]
     if damage == "velocities-not-a-list":
