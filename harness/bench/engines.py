@@ -42,6 +42,7 @@ from harness.engines import (
     EngineNotInstalled,
     ke_norm,
     load_engine,
+    preset_label,
 )
 from harness.run import verdicts
 from harness.scene import Scene
@@ -188,7 +189,7 @@ def format_table(report: dict) -> str:
     lines = [
         f"engine overhead per impact (quick={report['quick']}; "
         f"target ratio <= {report['ratio_target']})",
-        f"{'engine':9} {'preset':9} {'scene':11} {'steps':>5} {'harness µs':>11} {'bare µs':>9} "
+        f"{'engine':9} {'preset':14} {'scene':11} {'steps':>5} {'harness µs':>11} {'bare µs':>9} "
         f"{'bare+reset µs':>13} {'ratio':>6} {'ratio(reset)':>12} {'det':>4} {'vs newton-lcp':>13} "
         f"verdict",
     ]
@@ -199,7 +200,8 @@ def format_table(report: dict) -> str:
         for row in entry["rows"]:
             law = "" if row["newton_lcp_error"] is None else f"{row['newton_lcp_error']:.1e}"
             lines.append(
-                f"{name:9} {row['preset']:9} {row['scene']:11} {row['steps']:5d} "
+                f"{name:9} {preset_label(name, row['preset']):14} {row['scene']:11} "
+                f"{row['steps']:5d} "
                 f"{row['harness_us']:11.1f} {row['bare_us']:9.1f} {row['bare_reset_us']:13.1f} "
                 f"{row['ratio']:6.2f} {row['ratio_reset']:12.2f} "
                 f"{'yes' if row['deterministic'] else 'NO':>4} "

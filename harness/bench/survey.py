@@ -19,7 +19,13 @@ from __future__ import annotations
 
 import time
 
-from harness.engines import ENGINE_NAMES, PRESET_ROLES, EngineNotInstalled, load_engine
+from harness.engines import (
+    ENGINE_NAMES,
+    PRESET_ROLES,
+    EngineNotInstalled,
+    load_engine,
+    source_label,
+)
 from harness.survey.cli import run_survey
 from harness.survey.engines import bare_stepping
 from harness.survey.population import resolve_populations
@@ -44,7 +50,7 @@ def run(samples: int, engines=ENGINE_NAMES, presets=PRESET_ROLES, seed: int = 0)
     survey_s = time.perf_counter() - begin
     bare = {}
     for result in survey["engine_results"]:
-        bare[f"{result.engine} {result.preset}"] = bare_stepping(
+        bare[source_label(result.engine, result.preset)] = bare_stepping(
             result.engine, result.preset, survey["scenes"], result.steps)["bare_reset_s"]
     bare_s = sum(bare.values())
     return {"samples": samples, "impacts": len(survey["scenes"]), "engines": installed,

@@ -161,7 +161,7 @@ def engine_stress(quick: bool, executor: str = "local", workers: int | None = No
                   scheduler: str | None = None, use_cache: bool = True,
                   cache_root: Path = Path(".cache/results"), progress=None) -> dict:
     """All engine runs (cached), grouped; JSON-able."""
-    from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine
+    from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine, source_label
     from harness.run.cache import ResultCache
     from harness.run.executor import run_tasks
 
@@ -190,7 +190,7 @@ def engine_stress(quick: bool, executor: str = "local", workers: int | None = No
             cache.put(keys[index], record)
     counts: dict = {}
     for record in records:
-        group = counts.setdefault(f"{record['engine']}/{record['preset']}",
+        group = counts.setdefault(source_label(record["engine"], record["preset"]),
                                   {name: 0 for name in OUTCOMES})
         group[record["outcome"]] += 1
     return {"versions": versions, "skipped": skipped, "presets": list(presets), "runs": records,

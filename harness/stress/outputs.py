@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from harness.engines import source_label
 from harness.stress.engines import OUTCOME_COLOURS, OUTCOMES
 from harness.stress.solver import BOUNDARIES
 
@@ -21,7 +22,7 @@ def engine_grid_figure(engines: dict, path: Path) -> None:
     from matplotlib.patches import Patch
 
     order = list(OUTCOME_COLOURS)
-    rows = sorted({f"{r['engine']}/{r['preset']}" for r in engines["runs"]})
+    rows = sorted({source_label(r['engine'], r['preset']) for r in engines["runs"]})
     rows += [f"{name} (skipped)" for name in engines["skipped"]]
     columns = []
     for record in engines["runs"]:
@@ -30,7 +31,7 @@ def engine_grid_figure(engines: dict, path: Path) -> None:
             columns.append(column)
     grid = np.full((len(rows), len(columns)), order.index("skipped"))
     for record in engines["runs"]:
-        row_index = rows.index(f"{record['engine']}/{record['preset']}")
+        row_index = rows.index(source_label(record['engine'], record['preset']))
         column_index = columns.index(f"{record['shape']}: {record['label']}")
         grid[row_index, column_index] = order.index(record["outcome"])
     figure, axes = plt.subplots(figsize=(max(8, 0.32 * len(columns) + 3), 1.0 + 0.45 * len(rows)))
@@ -170,7 +171,7 @@ def stress_markdown(report: dict) -> str:
     for record in engines["runs"]:
         if record["outcome"] != "ok":
             ratio = record.get("energy_ratio")
-            lines.append(f"| {record['engine']}/{record['preset']} | "
+            lines.append(f"| {source_label(record['engine'], record['preset'])} | "
                          f"{record['shape']}: {record['label']} | "
                          f"{record['outcome']} | {record['status']} | {fmt(ratio)} | "
                          f"{fmt(record.get('max_penetration_relative'))} |"
