@@ -14,6 +14,7 @@ import numpy as np
 
 from harness.run.metrics import departure_split
 from harness.run.records import ANALYTIC, Record, Results
+from harness.run.references import SINGLE
 
 FIGURES = "figures"
 LAW_ORDER = ("poisson", "stronge", "stronge-paper", "newton", "newton-lcp")
@@ -102,9 +103,18 @@ def escape_html(text) -> str:
 # Data views
 # --------------------------------------------------------------------------------------------
 def engine_scenarios(results: Results) -> list[str]:
-    """Scenarios with engine records, in run order."""
+    """Scenarios with single-impact engine records, in run order (a scenario whose every
+    point is declared several contacts has its own section: the single-contact laws do not
+    apply to it)."""
     return [name for name in results.scenario_names()
-            if any(r.source != ANALYTIC for r in results.for_scenario(name))]
+            if any(r.source != ANALYTIC and single_contact(r) for r in results.for_scenario(name))]
+
+
+def single_contact(record: Record) -> bool:
+    """Whether ``record``'s point is one contact, where the single-contact laws apply (its
+    reference's kind, harness/run/references.py; results without references: yes)."""
+    reference = (record.diagnostics or {}).get("reference") or {}
+    return reference.get("kind", SINGLE) == SINGLE
 
 
 def worst_departure(records: Iterable[Record], law: str) -> tuple[float, bool, bool]:
@@ -125,9 +135,11 @@ def worst_departure(records: Iterable[Record], law: str) -> tuple[float, bool, b
 
 
 def worst_record(records: Iterable[Record], law: str) -> Record | None:
-    """The single-impact (``ok``) run with the largest finite departure from ``law``."""
+    """The single-impact (``ok``) run with the largest finite departure from ``law``, over
+    single-contact points only (a declared flat face departs from its own reference, not
+    from the single-contact laws)."""
     runs = [r for r in records if r.ok and r.departure.get(law) is not None
-            and math.isfinite(r.departure[law])]
+            and math.isfinite(r.departure[law]) and single_contact(r)]
     return max(runs, key=lambda r: r.departure[law]) if runs else None
 
 

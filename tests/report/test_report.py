@@ -12,8 +12,8 @@ import pytest
 
 from harness import report
 from harness.report import html, table3, views
-from harness.run import runner
-from harness.run.records import ANALYTIC, Record, read_results, write_results
+from harness.run import references, runner
+from harness.run.records import ANALYTIC, Record, Results, read_results, write_results
 from harness.scenarios import load_scenarios
 
 LIBRARY = Path(__file__).resolve().parents[2] / "scenarios"
@@ -284,3 +284,17 @@ def test_the_overflow_check_catches_a_wide_page(tmp_path):
         + "wide " * 600 + "</td></tr></table></body></html>", encoding="utf-8")
     layout = script.check_report(tmp_path, tmp_path / "shots", height=400)["index.html"]
     assert layout["overflow"] and layout["scrollWidth"] > 2000 and layout["culprits"]
+
+
+def test_several_contact_points_never_enter_a_single_contact_law_cell():
+    # a declared flat face (reference "simultaneous") departs from its own reference: its
+    # departure from the single-contact laws is not a value, and the scenario is not a row
+    flat = sweep_run(0, 0.5)
+    flat.diagnostics["reference"] = {"kind": "simultaneous", "primary": "newton-coulomb"}
+    single = sweep_run(1, 0.02)
+    single.diagnostics["reference"] = {"kind": references.SINGLE, "primary": "poisson"}
+    assert views.worst_departure([flat, single], "poisson") == (0.02, False, False)
+    assert views.worst_record([flat], "poisson") is None
+    assert views.single_contact(sweep_run(2, 0.1))  # results without references: one contact
+    assert views.engine_scenarios(Results([flat])) == []
+    assert views.engine_scenarios(Results([flat, single])) == ["sweep"]
