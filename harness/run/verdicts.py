@@ -37,6 +37,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field
+from itertools import chain
 from typing import Any
 
 import numpy as np
@@ -226,13 +227,19 @@ class ContactTrack:
         frame + shift), read without building a typed record per step: the numbers of
         ``EngineRun.contacts``, each coordinate less the shift."""
         (shift_x, shift_y), raw = contact_record
-        track = cls._of([step for step, _, _ in raw], [contacts[0] for _, contacts, _ in raw],
-                        [poses for _, _, poses in raw])
-        track.points[:, 0] -= shift_x
-        track.points[:, 1] -= shift_y
-        track.poses[:, :, 0] -= shift_x
-        track.poses[:, :, 1] -= shift_y
-        return track
+        steps = np.fromiter((step for step, _, _ in raw), np.int64, len(raw))
+        counts = [len(contacts[0]) for _, contacts, _ in raw]
+        bodies = len(raw[0][2]) if raw else 0
+        # every point is (x, y, depth) and every pose (x, y, θ): read as one flat run each
+        points = np.fromiter(chain.from_iterable(chain.from_iterable(
+            contacts[0] for _, contacts, _ in raw)), float, 3 * sum(counts)).reshape(-1, 3)
+        poses = np.fromiter(chain.from_iterable(chain.from_iterable(
+            poses for _, _, poses in raw)), float, 3 * bodies * len(raw))
+        poses = poses.reshape(len(raw), bodies, 3)
+        shift = np.array([shift_x, shift_y])
+        points[:, :2] -= shift
+        poses[:, :, :2] -= shift
+        return cls(steps, poses, points, np.repeat(np.arange(len(raw)), counts))
 
     @classmethod
     def _of(cls, steps: Sequence[int], points, states) -> ContactTrack:
@@ -413,7 +420,7 @@ def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = 
     elif run.status != "ok":  # skipped or error: nothing to judge
         return Verdict(tuple(reasons))
     u_after = run.u_after
-    if not np.all(np.isfinite(u_after)):
+    if not np.isfinite(u_after).all():
         if run.status != "blow-up":
             reasons.append(Reason("blow-up", None, None, "non-finite velocities"))
         return Verdict(tuple(reasons))
@@ -445,25 +452,6 @@ def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = 
     reasons += _energy_gain(gain, scales, law_energy_change, tolerances, law=ENGINE_LAW)
     reasons.sort(key=lambda reason: _REASON_ORDER[reason.name])
     return Verdict(tuple(reasons))
-
-
-def judge_many(scenes: Sequence, problems: Sequence, runs: Sequence[RunNumbers], *,
-               law_energy_change: Sequence[float] | None = None,
-               tolerances: Tolerances = DEFAULT_TOLERANCES,
-               terms: Sequence[SceneTerms] | None = None) -> list[Verdict]:
-    """:func:`judge` of ``runs[i]`` of ``scenes[i]`` (impact ``problems[i]``) for every ``i``.
-
-    ``law_energy_change[i]``: ``newton-lcp``'s energy change on ``problems[i]`` (None: every
-    gain is the numerics'); ``terms``: the scenes' :class:`SceneTerms` from
-    :func:`prepare_many`, to judge several runs of each scene (None: worked out here).
-    """
-    if terms is None:
-        terms = prepare_many(scenes, problems)
-    return [judge(scene, problem, run, tolerances=tolerances, terms=scene_terms,
-                  law_energy_change=None if law_energy_change is None
-                  else float(law_energy_change[row]))
-            for row, (scene, problem, run, scene_terms)
-            in enumerate(zip(scenes, problems, runs, terms, strict=True))]
 
 
 def prepare_many(scenes: Sequence, problems: Sequence) -> list[SceneTerms]:
@@ -887,5 +875,5 @@ __all__ = ["DEFAULT_TOLERANCES", "REASONS", "SPEED_CAPS", "BodyFeatures", "Conta
            "Reason", "RunNumbers", "SceneScales", "SceneTerms", "StepContacts", "Tolerances",
            "Verdict", "body_features", "declared_contacts", "declared_impulses",
            "declared_scales", "feature_at", "feature_points", "impulse_from_velocities",
-           "judge", "judge_declared", "judge_many", "numbers_from_output", "numbers_from_run",
+           "judge", "judge_declared", "numbers_from_output", "numbers_from_run",
            "prepare", "prepare_many", "reason_counts", "scene_scales"]
