@@ -190,7 +190,6 @@ class StepContacts:
     bodies: tuple[tuple[float, ...], ...]
 
 
-@dataclass(frozen=True)
 class ContactTrack:
     """A run's per-step contact records as arrays, in the scene frame, so that a check looks
     at every point of every step at once.
@@ -198,13 +197,40 @@ class ContactTrack:
     ``steps``: ``(R,)`` the step of each record; ``poses``: ``(R, B, 3)`` every body's
     ``(x, y, θ)`` after that step; ``points``: ``(P, 3)`` every point's ``(x, y, depth)`` (m;
     depth > 0 overlap), record by record in order; ``record``: ``(P,)`` the record (row of
-    ``steps``) each point belongs to.
+    ``steps``) each point belongs to; ``size``: ``P``. A track of an engine run's own record
+    (:meth:`from_record`) reads its arrays when a check first asks for them: most runs need
+    none (a disk's, or one point in all).
     """
 
-    steps: np.ndarray
-    poses: np.ndarray
-    points: np.ndarray
-    record: np.ndarray
+    __slots__ = ("_arrays", "_raw", "size")
+
+    def __init__(self, steps: np.ndarray, poses: np.ndarray, points: np.ndarray,
+                 record: np.ndarray):
+        self._arrays = (steps, poses, points, record)
+        self._raw = None
+        self.size = len(points)
+
+    @property
+    def steps(self) -> np.ndarray:
+        return self._read()[0]
+
+    @property
+    def poses(self) -> np.ndarray:
+        return self._read()[1]
+
+    @property
+    def points(self) -> np.ndarray:
+        return self._read()[2]
+
+    @property
+    def record(self) -> np.ndarray:
+        return self._read()[3]
+
+    def _read(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        if self._arrays is None:
+            self._arrays = _record_arrays(self._raw)
+            self._raw = None
+        return self._arrays
 
     @classmethod
     def from_steps(cls, records: Sequence[StepContacts]) -> ContactTrack:
@@ -224,22 +250,12 @@ class ContactTrack:
     @classmethod
     def from_record(cls, contact_record) -> ContactTrack:
         """The track of an ``EngineRun.contact_record`` ``(shift, raw)`` (run frame: scene
-        frame + shift), read without building a typed record per step: the numbers of
-        ``EngineRun.contacts``, each coordinate less the shift."""
-        (shift_x, shift_y), raw = contact_record
-        steps = np.fromiter((step for step, _, _ in raw), np.int64, len(raw))
-        counts = [len(contacts[0]) for _, contacts, _ in raw]
-        bodies = len(raw[0][2]) if raw else 0
-        # every point is (x, y, depth) and every pose (x, y, θ): read as one flat run each
-        points = np.fromiter(chain.from_iterable(chain.from_iterable(
-            contacts[0] for _, contacts, _ in raw)), float, 3 * sum(counts)).reshape(-1, 3)
-        poses = np.fromiter(chain.from_iterable(chain.from_iterable(
-            poses for _, _, poses in raw)), float, 3 * bodies * len(raw))
-        poses = poses.reshape(len(raw), bodies, 3)
-        shift = np.array([shift_x, shift_y])
-        points[:, :2] -= shift
-        poses[:, :, :2] -= shift
-        return cls(steps, poses, points, np.repeat(np.arange(len(raw)), counts))
+        frame + shift), read without building a typed record per step, and only when asked:
+        the numbers of ``EngineRun.contacts``, each coordinate less the shift."""
+        track = cls.__new__(cls)
+        track._arrays, track._raw = None, contact_record
+        track.size = sum(len(contacts[0]) for _, contacts, _ in contact_record[1])
+        return track
 
     @classmethod
     def _of(cls, steps: Sequence[int], points, states) -> ContactTrack:
@@ -252,6 +268,25 @@ class ContactTrack:
                          dtype=float).reshape(len(states), bodies, 3)
         return cls(np.asarray(steps, dtype=np.int64), poses, flat_points,
                    np.repeat(np.arange(len(counts)), counts))
+
+
+def _record_arrays(contact_record) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(steps, poses, points, record)`` of :class:`ContactTrack` from an engine run's raw
+    record ``(shift, raw)``."""
+    (shift_x, shift_y), raw = contact_record
+    steps = np.fromiter((step for step, _, _ in raw), np.int64, len(raw))
+    counts = [len(contacts[0]) for _, contacts, _ in raw]
+    bodies = len(raw[0][2]) if raw else 0
+    # every point is (x, y, depth) and every pose (x, y, θ): each read as one flat run
+    points = np.fromiter(chain.from_iterable(chain.from_iterable(
+        contacts[0] for _, contacts, _ in raw)), float, 3 * sum(counts)).reshape(-1, 3)
+    poses = np.fromiter(chain.from_iterable(chain.from_iterable(
+        poses for _, _, poses in raw)), float, 3 * bodies * len(raw))
+    poses = poses.reshape(len(raw), bodies, 3)
+    shift = np.array([shift_x, shift_y])
+    points[:, :2] -= shift
+    poses[:, :, :2] -= shift
+    return steps, poses, points, np.repeat(np.arange(len(raw)), counts)
 
 
 def _track(contacts: Sequence[StepContacts] | ContactTrack) -> ContactTrack:
@@ -432,7 +467,7 @@ def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = 
         reasons += _clipped(run.engine, problem.u, u_after, tolerances)
     if run.contacts is not None:
         reasons += _second_features(scene, run.contacts, tolerances, terms.features)
-    vn_after, _ = metrics.contact_velocities(problem, u_after)
+    vn_after = float(problem.wn @ u_after)  # metrics.contact_velocities' v_n
     bound = tolerances.separation * scales.approach_speed
     if vn_after < -bound:
         reasons.append(Reason("not-separated", vn_after, -bound,
@@ -550,8 +585,9 @@ def _clipped_magnitudes(engine: str, caps: tuple[float, float], u_before: np.nda
     speed_cap, rate_cap = caps
     found = []
     for when, u in (("before", u_before), ("after", u_after)):
-        for body in range(len(u) // 3):
-            vx, vy, omega = (float(v) for v in u[3 * body : 3 * body + 3])
+        values = np.asarray(u, dtype=float).tolist()
+        for body in range(len(values) // 3):
+            vx, vy, omega = values[3 * body : 3 * body + 3]
             if math.hypot(vx, vy) >= band * speed_cap:
                 found.append((when, body, "|v|", math.hypot(vx, vy), speed_cap, "m/s"))
             if abs(omega) >= band * rate_cap:
@@ -673,7 +709,7 @@ def _second_features(scene, contacts: Sequence[StepContacts] | ContactTrack,
     if all(not len(body.centres) for body in features):
         return []  # disks only: one feature each
     track = _track(contacts)
-    if len(track.points) < 2:
+    if track.size < 2:
         return []
     touched = _touched(features, track, tolerances)
     first = touched[0]
@@ -833,7 +869,7 @@ def _undeclared_features(scene, contacts, records: Sequence[StepContacts] | Cont
     """
     features = [body_features(body.shape) for body in scene.bodies]
     track = _track(records)
-    if not len(track.points):
+    if not track.size:
         return []
     poses = np.array([[(*body.position, body.angle) for body in scene.bodies]], dtype=float)
     at_declared = ContactTrack(np.zeros(1, dtype=np.int64), poses,

@@ -38,6 +38,7 @@ from harness.run.verdicts import (
     ENGINE_STATUS_REASONS,
     NEWTON_COULOMB,
     REASONS,
+    RUN_CAP_BAND,
     Reason,
     RunNumbers,
     SceneScales,
@@ -45,7 +46,6 @@ from harness.run.verdicts import (
     Tolerances,
     Verdict,
     _clipped,
-    _clipped_magnitudes,
     _declared_separation,
     _impulse_mismatch,
     _penetration,
@@ -185,6 +185,27 @@ def impulse_from_velocities(problem, u_after, speed_norm: float) -> tuple[float,
                                 problem.wn * normal + problem.wt * tangential)
     rest = metrics.ke_norm(problem.mass_matrix, delta_u - explained)
     return normal, tangential, (rest / speed_norm if speed_norm > 0 else math.nan)
+
+
+def _clipped_magnitudes(engine: str, caps: tuple[float, float], u_before: np.ndarray,
+                        u_after: np.ndarray, tolerances: Tolerances) -> list[Reason]:
+    band = 1.0 - max(tolerances.cap, RUN_CAP_BAND)
+    speed_cap, rate_cap = caps
+    found = []
+    for when, u in (("before", u_before), ("after", u_after)):
+        for body in range(len(u) // 3):
+            vx, vy, omega = (float(v) for v in u[3 * body : 3 * body + 3])
+            if math.hypot(vx, vy) >= band * speed_cap:
+                found.append((when, body, "|v|", math.hypot(vx, vy), speed_cap, "m/s"))
+            if abs(omega) >= band * rate_cap:
+                found.append((when, body, "|ω|", abs(omega), rate_cap, "rad/s"))
+    if not found:
+        return []
+    when, body, name, value, cap, unit = found[0]
+    more = f" (and {len(found) - 1} more)" if len(found) > 1 else ""
+    return [Reason("clipped", value, cap,
+                   f"body {body} {name} {when} = {value:.6g} {unit}, at {engine}'s cap "
+                   f"{cap:.6g} {unit} for this run's settings{more}")]
 
 
 def feature_at(shape, state: Sequence[float], point: Sequence[float],
