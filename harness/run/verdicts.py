@@ -670,9 +670,9 @@ def _features_at(features: BodyFeatures, poses: np.ndarray, points: np.ndarray,
     world = (features.centres @ rotations + poses[:, None, :2])[pose_of]
     distances = np.hypot(world[:, :, 0] - points[:, None, 0],
                          world[:, :, 1] - points[:, None, 1]) - features.radius
-    nearest = np.argmin(distances, axis=1)
-    within = distances[np.arange(count), nearest] <= reach
-    return np.where(within, nearest, -1)
+    # the least distance is the nearest one's (NaN, as argmin's pick, when there is one)
+    within = distances.min(axis=1) <= reach
+    return np.where(within, np.argmin(distances, axis=1), -1)
 
 
 def _touched(features: Sequence[BodyFeatures], track: ContactTrack,
