@@ -29,7 +29,10 @@ Every tolerance is a named field of :class:`Tolerances`, relative to a scale of 
 
 The inputs are the numbers the runner already holds (:class:`RunNumbers`, built from the
 runner's engine output by :func:`numbers_from_output`), plus, optionally, the per-step contact
-records (:class:`StepContacts`) of engines that keep them.
+records (:class:`StepContacts`, or as arrays :class:`ContactTrack`) of engines that keep them.
+What a scene alone determines (its scales, Delassus terms, bodies' features:
+:class:`SceneTerms`) can be worked out once by :func:`prepare` and passed to :func:`judge` for
+every run of that scene (the survey judges each scene once per engine and preset).
 """
 
 from __future__ import annotations
