@@ -29,7 +29,10 @@ Every tolerance is a named field of :class:`Tolerances`, relative to a scale of 
 
 The inputs are the numbers the runner already holds (:class:`RunNumbers`, built from the
 runner's engine output by :func:`numbers_from_output`), plus, optionally, the per-step contact
-records (:class:`StepContacts`) of engines that keep them.
+records (:class:`StepContacts`, or as arrays :class:`ContactTrack`) of engines that keep them.
+What a scene alone determines (its scales, Delassus terms, bodies' features:
+:class:`SceneTerms`) can be worked out once by :func:`prepare` and passed to :func:`judge` for
+every run of that scene (the survey judges each scene once per engine and preset).
 """
 
 from __future__ import annotations
@@ -37,6 +40,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field
+from itertools import chain
 from typing import Any
 
 import numpy as np
@@ -61,6 +65,8 @@ REASONS: dict[str, str] = {
     "energy-gain": "kinetic energy grew (attributed to the law when newton-lcp predicts a "
     "gain, else to the numerics; only a numerics gain fails the run)",
 }
+#: Reason name -> its place in :data:`REASONS` (a verdict lists its reasons in that order).
+_REASON_ORDER = {name: place for place, name in enumerate(REASONS)}
 ENGINE_STATUS_REASONS = ("blow-up", "no-contact", "no-separation", "out-of-plane",
                          "multi-contact")
 SINGLE_IMPACT = "single-impact"
@@ -187,6 +193,109 @@ class StepContacts:
     bodies: tuple[tuple[float, ...], ...]
 
 
+class ContactTrack:
+    """A run's per-step contact records as arrays, in the scene frame, so that a check looks
+    at every point of every step at once.
+
+    ``steps``: ``(R,)`` the step of each record; ``poses``: ``(R, B, 3)`` every body's
+    ``(x, y, θ)`` after that step; ``points``: ``(P, 3)`` every point's ``(x, y, depth)`` (m;
+    depth > 0 overlap), record by record in order; ``record``: ``(P,)`` the record (row of
+    ``steps``) each point belongs to; ``size``: ``P``. A track of an engine run's own record
+    (:meth:`from_record`) reads its arrays when a check first asks for them: most runs need
+    none (a disk's, or one point in all).
+    """
+
+    __slots__ = ("_arrays", "_raw", "size")
+
+    def __init__(self, steps: np.ndarray, poses: np.ndarray, points: np.ndarray,
+                 record: np.ndarray):
+        self._arrays = (steps, poses, points, record)
+        self._raw = None
+        self.size = len(points)
+
+    @property
+    def steps(self) -> np.ndarray:
+        return self._read()[0]
+
+    @property
+    def poses(self) -> np.ndarray:
+        return self._read()[1]
+
+    @property
+    def points(self) -> np.ndarray:
+        return self._read()[2]
+
+    @property
+    def record(self) -> np.ndarray:
+        return self._read()[3]
+
+    def _read(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        if self._arrays is None:
+            self._arrays = _record_arrays(self._raw)
+            self._raw = None
+        return self._arrays
+
+    @classmethod
+    def from_steps(cls, records: Sequence[StepContacts]) -> ContactTrack:
+        """The track of :class:`StepContacts` records (of each body only ``(x, y, θ)``)."""
+        return cls._of([record.step for record in records],
+                       [record.points for record in records],
+                       [record.bodies for record in records])
+
+    @classmethod
+    def from_output(cls, contacts: Sequence[Mapping[str, Any]]) -> ContactTrack:
+        """The track of the runner's engine-task output ``contacts`` (dicts with ``step``,
+        ``points`` and ``bodies``)."""
+        return cls._of([int(record["step"]) for record in contacts],
+                       [record["points"] for record in contacts],
+                       [record["bodies"] for record in contacts])
+
+    @classmethod
+    def from_record(cls, contact_record) -> ContactTrack:
+        """The track of an ``EngineRun.contact_record`` ``(shift, raw)`` (run frame: scene
+        frame + shift), read without building a typed record per step, and only when asked:
+        the numbers of ``EngineRun.contacts``, each coordinate less the shift."""
+        track = cls.__new__(cls)
+        track._arrays, track._raw = None, contact_record
+        track.size = sum(len(contacts[0]) for _, contacts, _ in contact_record[1])
+        return track
+
+    @classmethod
+    def _of(cls, steps: Sequence[int], points, states) -> ContactTrack:
+        """The track of per-record steps, point lists and body states."""
+        counts = [len(record) for record in points]
+        bodies = len(states[0]) if len(states) else 0
+        flat_points = np.array([point[:3] for record in points for point in record],
+                               dtype=float).reshape(-1, 3)
+        poses = np.array([[state[:3] for state in record] for record in states],
+                         dtype=float).reshape(len(states), bodies, 3)
+        return cls(np.asarray(steps, dtype=np.int64), poses, flat_points,
+                   np.repeat(np.arange(len(counts)), counts))
+
+
+def _record_arrays(contact_record) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(steps, poses, points, record)`` of :class:`ContactTrack` from an engine run's raw
+    record ``(shift, raw)``."""
+    (shift_x, shift_y), raw = contact_record
+    steps = np.fromiter((step for step, _, _ in raw), np.int64, len(raw))
+    counts = [len(contacts[0]) for _, contacts, _ in raw]
+    bodies = len(raw[0][2]) if raw else 0
+    # every point is (x, y, depth) and every pose (x, y, θ): each read as one flat run
+    points = np.fromiter(chain.from_iterable(chain.from_iterable(
+        contacts[0] for _, contacts, _ in raw)), float, 3 * sum(counts)).reshape(-1, 3)
+    poses = np.fromiter(chain.from_iterable(chain.from_iterable(
+        poses for _, _, poses in raw)), float, 3 * bodies * len(raw))
+    poses = poses.reshape(len(raw), bodies, 3)
+    shift = np.array([shift_x, shift_y])
+    points[:, :2] -= shift
+    poses[:, :, :2] -= shift
+    return steps, poses, points, np.repeat(np.arange(len(raw)), counts)
+
+
+def _track(contacts: Sequence[StepContacts] | ContactTrack) -> ContactTrack:
+    return contacts if isinstance(contacts, ContactTrack) else ContactTrack.from_steps(contacts)
+
+
 @dataclass(frozen=True)
 class RunNumbers:
     """What a verdict needs from one engine run (all in the scene frame, SI units)."""
@@ -199,7 +308,8 @@ class RunNumbers:
     tangential_impulse: float | None = None
     impulse_source: str | None = None  # "engine" | "momentum" | None (unknown: engine)
     contact_normal: tuple[float, float] | None = None
-    contacts: tuple[StepContacts, ...] | None = None  # None: the engine kept no records
+    # Per-step contact records (a ContactTrack: the same as arrays); None: the engine kept none
+    contacts: tuple[StepContacts, ...] | ContactTrack | None = None
     notes: tuple[str, ...] = field(default_factory=tuple)
     # The run's own caps on each body's speed |v| (m/s) and rate |ω| (rad/s), where they
     # depend on the settings (Box2D: per step); None: the engine's caps, if any, are fixed.
@@ -209,10 +319,7 @@ class RunNumbers:
 def numbers_from_output(engine: str, output: Mapping[str, Any]) -> RunNumbers:
     """:class:`RunNumbers` from the runner's engine-task output (see ``engine_task``)."""
     contacts = output.get("contacts")
-    steps = None
-    if contacts is not None:
-        steps = tuple(StepContacts(int(c["step"]), tuple(tuple(p) for p in c["points"]),
-                                   tuple(tuple(b) for b in c["bodies"])) for c in contacts)
+    steps = None if contacts is None else ContactTrack.from_output(contacts)
     normal = output.get("contact_normal")
     return RunNumbers(
         engine=engine, status=str(output["status"]),
@@ -254,8 +361,7 @@ def numbers_from_run(run) -> RunNumbers:
         max_penetration=run.max_penetration, normal_impulse=run.normal_impulse,
         tangential_impulse=run.tangential_impulse, impulse_source=run.impulse_source,
         contact_normal=run.contact_normal,
-        contacts=tuple(StepContacts(step.step, tuple(step.points), step.poses)
-                       for step in run.contacts),
+        contacts=ContactTrack.from_record(run.contact_record),
         notes=tuple(run.notes), speed_caps=_run_caps(run.derived or {}))
 
 
@@ -279,17 +385,43 @@ class SceneScales:
 
 def scene_scales(scene, problem) -> SceneScales:
     """Scales of one scene's impact: approach speed, impulse, speed norm, energy, size."""
-    vn_approach, _ = metrics.contact_velocities(problem, problem.u)
     mnn, _, _ = metrics.delassus(problem)
+    return _scales(scene, problem, mnn, [body_extent(body.shape) for body in scene.bodies])
+
+
+def _scales(scene, problem, mnn: float, extents: Sequence[float]) -> SceneScales:
+    """:func:`scene_scales` from the scene's ``m_nn`` and its bodies' extents."""
+    vn_approach, _ = metrics.contact_velocities(problem, problem.u)
     speed_norm = metrics.frame_free_scale(problem.mass_matrix, problem.u,
                                           free_bodies=not scene.ground)
     return SceneScales(approach_speed=abs(vn_approach), impulse=abs(vn_approach) / mnn,
-                       speed_norm=speed_norm, energy=0.5 * speed_norm**2,
-                       size=min(body_extent(body.shape) for body in scene.bodies))
+                       speed_norm=speed_norm, energy=0.5 * speed_norm**2, size=min(extents))
+
+
+@dataclass(frozen=True)
+class SceneTerms:
+    """What judging any run of one scene needs that no run changes (:func:`prepare`): worked
+    out once per scene, not once per run."""
+
+    scales: SceneScales
+    delassus: tuple[float, float, float]  # (m_nn, m_nt, m_tt) of the scene's contact
+    norm_before: float  # ‖u_before‖_M, the kinetic-energy norm before (sqrt(kg) m/s)
+    features: tuple[BodyFeatures, ...]  # every body's point features, in scene order
+    one_feature: bool  # every body a disk (:func:`_one_feature`)
+
+
+def prepare(scene, problem) -> SceneTerms:
+    """The :class:`SceneTerms` of ``scene`` and its impact ``problem``."""
+    features = tuple(body_features(body.shape) for body in scene.bodies)
+    delassus = metrics.delassus(problem)
+    return SceneTerms(_scales(scene, problem, delassus[0], [f.extent for f in features]),
+                      delassus, metrics.ke_norm(problem.mass_matrix, problem.u), features,
+                      _one_feature(scene))
 
 
 def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = None,
-          tolerances: Tolerances = DEFAULT_TOLERANCES, contacts=None) -> Verdict:
+          tolerances: Tolerances = DEFAULT_TOLERANCES, contacts=None,
+          terms: SceneTerms | None = None) -> Verdict:
     """The verdict of one engine run of ``scene``.
 
     Parameters
@@ -309,39 +441,44 @@ def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = 
         The contacts a scene declares to touch at once (``contacts = "simultaneous"``, from
         :func:`declared_contacts`): the run is judged against all of them
         (:func:`judge_declared`). None: one contact, ``problem``'s.
+    terms : SceneTerms, optional
+        ``prepare(scene, problem)``, when the caller judges several runs of one scene (the
+        survey: one per engine and preset); None: worked out here.
     """
     if contacts is not None:
         return judge_declared(scene, problem, run, contacts,
                               law_energy_change=law_energy_change, tolerances=tolerances)
+    if terms is None:
+        terms = prepare(scene, problem)
     reasons: list[Reason] = []
-    if run.status == "multi-contact" and (run.contacts is not None or _one_feature(scene)):
+    if run.status == "multi-contact" and (run.contacts is not None or terms.one_feature):
         pass  # judged below from the features touched, not from a count of points
     elif run.status in ENGINE_STATUS_REASONS:
         reasons.append(Reason(run.status, None, None, f"the engine's status: {run.status}"))
     elif run.status != "ok":  # skipped or error: nothing to judge
         return Verdict(tuple(reasons))
     u_after = run.u_after
-    if not np.all(np.isfinite(u_after)):
+    if not np.isfinite(u_after).all():
         if run.status != "blow-up":
             reasons.append(Reason("blow-up", None, None, "non-finite velocities"))
         return Verdict(tuple(reasons))
-    scales = scene_scales(scene, problem)
+    scales = terms.scales
     if run.speed_caps is not None:
         reasons += _clipped_magnitudes(run.engine, run.speed_caps, problem.u, u_after,
                                        tolerances)
     else:
         reasons += _clipped(run.engine, problem.u, u_after, tolerances)
     if run.contacts is not None:
-        reasons += _second_features(scene, run.contacts, tolerances)
-    vn_after, _ = metrics.contact_velocities(problem, u_after)
+        reasons += _second_features(scene, run.contacts, tolerances, terms.features)
+    vn_after = float(problem.wn @ u_after)  # metrics.contact_velocities' v_n
     bound = tolerances.separation * scales.approach_speed
     if vn_after < -bound:
         reasons.append(Reason("not-separated", vn_after, -bound,
                               f"v_n^S = {vn_after:.4g} m/s < -{bound:.3g} m/s "
                               f"({tolerances.separation:g}·|v_n^A|)"))
     reasons += _penetration(run, scales, tolerances)
-    implied_n, implied_t, residual = impulse_from_velocities(problem, u_after,
-                                                             scales.speed_norm)
+    implied_n, implied_t, residual = _implied_impulse(problem, terms.delassus, u_after,
+                                                      scales.speed_norm)
     if residual > tolerances.impulse_residual:
         reasons.append(Reason("impulse-residual", residual, tolerances.impulse_residual,
                               f"‖Δu − M⁻¹(w_n I_n + w_t I_t)‖_M = {residual:.3g} of the "
@@ -349,11 +486,15 @@ def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = 
     reasons += _impulse_mismatch(run, implied_n, implied_t, scales, tolerances,
                                  engine="(I_n, I_t)", implied="by Δu",
                                  scale="|v_n^A|/m_nn")
-    reasons += _energy_gain(problem, u_after, scales, law_energy_change, tolerances,
-                            law=ENGINE_LAW)
-    order = list(REASONS)
-    reasons.sort(key=lambda r: order.index(r.name))
+    gain = 0.5 * (metrics.ke_norm(problem.mass_matrix, u_after) ** 2 - terms.norm_before**2)
+    reasons += _energy_gain(gain, scales, law_energy_change, tolerances, law=ENGINE_LAW)
+    reasons.sort(key=lambda reason: _REASON_ORDER[reason.name])
     return Verdict(tuple(reasons))
+
+
+def prepare_many(scenes: Sequence, problems: Sequence) -> list[SceneTerms]:
+    """:func:`prepare` of every scene."""
+    return [prepare(scene, problem) for scene, problem in zip(scenes, problems, strict=True)]
 
 
 def _penetration(run: RunNumbers, scales: SceneScales, tolerances: Tolerances) -> list[Reason]:
@@ -369,11 +510,11 @@ def _penetration(run: RunNumbers, scales: SceneScales, tolerances: Tolerances) -
                    f"{scales.size:g} m)")]
 
 
-def _energy_gain(problem, u_after, scales: SceneScales, law_energy_change: float | None,
+def _energy_gain(gain: float, scales: SceneScales, law_energy_change: float | None,
                  tolerances: Tolerances, *, law: str) -> list[Reason]:
-    """``energy-gain`` when kinetic energy grew, attributed to ``law`` (the reference the run
-    is judged against) when it gains too, else to the numerics (0 or 1 reason)."""
-    gain = metrics.energy_change(problem.mass_matrix, problem.u, u_after)
+    """``energy-gain`` when kinetic energy grew by ``gain`` (J), attributed to ``law`` (the
+    reference the run is judged against) when it gains too, else to the numerics (0 or 1
+    reason)."""
     bound = tolerances.energy * scales.energy
     if gain <= bound:
         return []
@@ -398,8 +539,20 @@ def impulse_from_velocities(problem, u_after, speed_norm: float) -> tuple[float,
     (docs/theory.md, 'Contact terms'). The residual ``‖Δu − M⁻¹(w_n I_n + w_t I_t)‖_M`` is
     divided by ``speed_norm``; it is 0 when ``Δu`` is one impulse at that point.
     """
-    normal, tangential, _ = metrics.impulses_from_velocities(problem, u_after)
+    return _implied_impulse(problem, metrics.delassus(problem), u_after, speed_norm)
+
+
+def _implied_impulse(problem, delassus: tuple[float, float, float], u_after,
+                     speed_norm: float) -> tuple[float, float, float]:
+    """:func:`impulse_from_velocities` with the contact's ``(m_nn, m_nt, m_tt)`` given: the
+    impulse of ``metrics.impulses_from_velocities``, the same operations in the same order
+    (so the same roundings), without working the Delassus terms out again."""
     delta_u = np.asarray(u_after, dtype=float) - problem.u
+    mnn, mnt, mtt = delassus
+    dvn, dvt = float(problem.wn @ delta_u), float(problem.wt @ delta_u)
+    det = mnn * mtt - mnt * mnt
+    normal = (mtt * dvn - mnt * dvt) / det
+    tangential = (mnn * dvt - mnt * dvn) / det
     explained = np.linalg.solve(problem.mass_matrix,
                                 problem.wn * normal + problem.wt * tangential)
     rest = metrics.ke_norm(problem.mass_matrix, delta_u - explained)
@@ -435,8 +588,9 @@ def _clipped_magnitudes(engine: str, caps: tuple[float, float], u_before: np.nda
     speed_cap, rate_cap = caps
     found = []
     for when, u in (("before", u_before), ("after", u_after)):
-        for body in range(len(u) // 3):
-            vx, vy, omega = (float(v) for v in u[3 * body : 3 * body + 3])
+        values = np.asarray(u, dtype=float).tolist()
+        for body in range(len(values) // 3):
+            vx, vy, omega = values[3 * body : 3 * body + 3]
             if math.hypot(vx, vy) >= band * speed_cap:
                 found.append((when, body, "|v|", math.hypot(vx, vy), speed_cap, "m/s"))
             if abs(omega) >= band * rate_cap:
@@ -470,20 +624,71 @@ def feature_points(shape) -> tuple[np.ndarray, float, tuple[str, ...]]:
     return vertices, 0.0, tuple(f"corner {i}" for i in range(len(vertices)))
 
 
+@dataclass(frozen=True)
+class BodyFeatures:
+    """One body's point features in its own frame (:func:`feature_points`) and its extent
+    (:func:`body_extent`): what placing a contact point needs that no pose changes."""
+
+    centres: np.ndarray  # (k, 2), m, body frame
+    radius: float  # m
+    names: tuple[str, ...]
+    extent: float  # m
+
+
+def body_features(shape) -> BodyFeatures:
+    """The :class:`BodyFeatures` of ``shape``."""
+    centres, radius, names = feature_points(shape)
+    return BodyFeatures(centres, radius, names, body_extent(shape))
+
+
 def feature_at(shape, state: Sequence[float], point: Sequence[float],
                reach: float) -> int | None:
     """Index of the point feature of ``shape`` (in pose ``state = (x, y, θ, …)``) within
     ``reach`` of ``point`` (m, beyond the feature's radius); None when the point lies on a
     face or side instead (or the shape is a disk)."""
-    centres, radius, _ = feature_points(shape)
-    if not len(centres):
-        return None
-    x, y, angle = state[0], state[1], state[2]
-    c, s = math.cos(angle), math.sin(angle)
-    world = centres @ np.array([[c, s], [-s, c]]) + np.array([x, y])
-    distances = np.hypot(world[:, 0] - point[0], world[:, 1] - point[1]) - radius
-    nearest = int(np.argmin(distances))
-    return nearest if distances[nearest] <= reach else None
+    found = _features_at(body_features(shape), np.array([state[:3]], dtype=float),
+                         np.array([point[:2]], dtype=float), np.zeros(1, dtype=np.int64),
+                         np.array([reach], dtype=float))
+    return None if found[0] < 0 else int(found[0])
+
+
+def _features_at(features: BodyFeatures, poses: np.ndarray, points: np.ndarray,
+                 pose_of: np.ndarray, reach: np.ndarray) -> np.ndarray:
+    """For every point ``points[i] = (x, y, …)`` with the body in pose
+    ``poses[pose_of[i]] = (x, y, θ)``: the index of the body's point feature within
+    ``reach[i]`` of it (beyond the feature's radius), or -1 (a face or side; always for a
+    disk). The nearest feature is the one that counts, the first of equally near ones."""
+    count = len(points)
+    if not len(features.centres) or not count:
+        return np.full(count, -1, dtype=np.int64)
+    # math's cos and sin, one pose at a time: numpy's array ones may round differently
+    angles = poses[:, 2].tolist()
+    cos = np.array([math.cos(angle) for angle in angles])
+    sin = np.array([math.sin(angle) for angle in angles])
+    rotations = np.empty((len(angles), 2, 2))
+    rotations[:, 0, 0] = rotations[:, 1, 1] = cos
+    rotations[:, 0, 1] = sin
+    rotations[:, 1, 0] = -sin
+    # centres @ R per pose (a stack of the same 2-D products), then moved to the pose
+    world = (features.centres @ rotations + poses[:, None, :2])[pose_of]
+    distances = np.hypot(world[:, :, 0] - points[:, None, 0],
+                         world[:, :, 1] - points[:, None, 1]) - features.radius
+    # the least distance is the nearest one's (NaN, as argmin's pick, when there is one)
+    within = distances.min(axis=1) <= reach
+    return np.where(within, np.argmin(distances, axis=1), -1)
+
+
+def _touched(features: Sequence[BodyFeatures], track: ContactTrack,
+             tolerances: Tolerances) -> np.ndarray:
+    """``(P, B)``: per point of ``track`` and per body, the body's feature at that point
+    (:func:`_features_at` within ``penetration·extent`` plus the point's depth), or -1."""
+    depth = np.maximum(track.points[:, 2], 0.0)
+    touched = np.full((len(track.points), len(features)), -1, dtype=np.int64)
+    for index, body in enumerate(features):
+        touched[:, index] = _features_at(body, track.poses[:, index], track.points,
+                                         track.record,
+                                         tolerances.penetration * body.extent + depth)
+    return touched
 
 
 def _one_feature(scene) -> bool:
@@ -492,34 +697,37 @@ def _one_feature(scene) -> bool:
     return all(body.shape.kind == "disk" for body in scene.bodies)
 
 
-def _second_features(scene, contacts: Sequence[StepContacts],
-                     tolerances: Tolerances) -> list[Reason]:
+def _second_features(scene, contacts: Sequence[StepContacts] | ContactTrack,
+                     tolerances: Tolerances,
+                     features: Sequence[BodyFeatures] | None = None) -> list[Reason]:
     """``multi-contact`` when a point touches a feature other than the first contact's.
 
     The first point of the first step fixes the contact's features (per body: a corner, an
     end cap, or a face). A later point belongs to another feature when, on some body, it
-    lies at a point feature that differs from the first one's.
+    lies at a point feature that differs from the first one's. ``features``: the bodies'
+    :class:`BodyFeatures` (None: from ``scene``).
     """
-    first = None
-    for record in contacts:
-        for point in record.points:
-            features = []
-            for body, state in zip(scene.bodies, record.bodies):
-                reach = tolerances.penetration * body_extent(body.shape) + max(point[2], 0.0)
-                features.append(feature_at(body.shape, state, point[:2], reach))
-            if first is None:
-                first = features
-                continue
-            for index, (now, then) in enumerate(zip(features, first)):
-                if now is not None and now != then:
-                    body = scene.bodies[index]
-                    names = feature_points(body.shape)[2]
-                    return [Reason("multi-contact", float(record.step), None,
-                                   f"{body.name}'s {names[now]} touched at step "
-                                   f"{record.step} (the first contact was at "
-                                   + (names[then] if then is not None else "a face")
-                                   + ")")]
-    return []
+    if features is None:
+        features = [body_features(body.shape) for body in scene.bodies]
+    if all(not len(body.centres) for body in features):
+        return []  # disks only: one feature each
+    track = _track(contacts)
+    if track.size < 2:
+        return []
+    touched = _touched(features, track, tolerances)
+    first = touched[0]
+    other = (touched[1:] >= 0) & (touched[1:] != first)
+    later = np.flatnonzero(other.any(axis=1))
+    if not len(later):
+        return []
+    row = int(later[0])
+    index = int(np.argmax(other[row]))
+    now, then = int(touched[row + 1, index]), int(first[index])
+    step = int(track.steps[track.record[row + 1]])
+    body, names = scene.bodies[index], features[index].names
+    return [Reason("multi-contact", float(step), None,
+                   f"{body.name}'s {names[now]} touched at step {step} (the first contact "
+                   "was at " + (names[then] if then >= 0 else "a face") + ")")]
 
 
 # --------------------------------------------------------------------------------------------
@@ -587,10 +795,9 @@ def judge_declared(scene, problem, run: RunNumbers, contacts, *,
         run, float(np.sum(impulses[0])), float(np.sum(impulses[1])), scales, tolerances,
         engine="(ΣI_n, ΣI_t)", implied=f"by Δu over the {len(contacts)} declared contacts",
         scale="max_i |v_n^A(i)|/m_nn(i)")
-    reasons += _energy_gain(problem, u_after, scales, law_energy_change, tolerances,
-                            law=NEWTON_COULOMB)
-    order = list(REASONS)
-    reasons.sort(key=lambda r: order.index(r.name))
+    reasons += _energy_gain(metrics.energy_change(problem.mass_matrix, problem.u, u_after),
+                            scales, law_energy_change, tolerances, law=NEWTON_COULOMB)
+    reasons.sort(key=lambda reason: _REASON_ORDER[reason.name])
     return Verdict(tuple(reasons))
 
 
@@ -654,41 +861,42 @@ def _declared_separation(contacts, vn_after: np.ndarray, scales: SceneScales,
                    f"< -{bound:.3g} m/s ({tolerances.separation:g}·max_i |v_n^A(i)|){more}")]
 
 
-def _undeclared_features(scene, contacts, records: Sequence[StepContacts],
+def _undeclared_features(scene, contacts, records: Sequence[StepContacts] | ContactTrack,
                          tolerances: Tolerances) -> list[Reason]:
     """``multi-contact`` when a point touches a feature none of the declared contacts has.
 
     Each declared contact fixes, per body, the feature at its point in the scene's pose (a
-    corner, an end cap, or a face: None). A recorded point belongs to a declared contact when
+    corner, an end cap, or a face: -1). A recorded point belongs to a declared contact when
     on every body it lies on a face or at that contact's feature; else it is reported with
     the body, the feature and the step.
     """
-    def features_at(states, point, depth):
-        return tuple(feature_at(body.shape, state, point,
-                                tolerances.penetration * body_extent(body.shape)
-                                + max(depth, 0.0))
-                     for body, state in zip(scene.bodies, states))
-
-    poses = [(*body.position, body.angle) for body in scene.bodies]
-    declared = [features_at(poses, contact.point, 0.0) for contact in contacts]
-    for record in records:
-        for point in record.points:
-            features = features_at(record.bodies, point[:2], point[2])
-            if any(all(now is None or now == then for now, then in zip(features, allowed))
-                   for allowed in declared):
-                continue
-            index = next(k for k, now in enumerate(features) if now is not None
-                         and any(now != allowed[k] for allowed in declared))
-            body = scene.bodies[index]
-            names = feature_points(body.shape)[2]
-            held = sorted({allowed[index] for allowed in declared},
-                          key=lambda f: -1 if f is None else f)
-            listed = ", ".join("a face" if f is None else names[f] for f in held)
-            return [Reason("multi-contact", float(record.step), None,
-                           f"{body.name}'s {names[features[index]]} touched at step "
-                           f"{record.step}, outside the {len(contacts)} declared contacts "
-                           f"({listed})")]
-    return []
+    features = [body_features(body.shape) for body in scene.bodies]
+    track = _track(records)
+    if not track.size:
+        return []
+    poses = np.array([[(*body.position, body.angle) for body in scene.bodies]], dtype=float)
+    at_declared = ContactTrack(np.zeros(1, dtype=np.int64), poses,
+                               np.array([[*contact.point[:2], 0.0] for contact in contacts],
+                                        dtype=float).reshape(-1, 3),
+                               np.zeros(len(contacts), dtype=np.int64))
+    declared = _touched(features, at_declared, tolerances)  # (contacts, bodies)
+    touched = _touched(features, track, tolerances)  # (points, bodies)
+    # per point and declared contact: on every body a face or that contact's feature
+    fits = ((touched[:, None, :] < 0) | (touched[:, None, :] == declared[None])).all(axis=2)
+    outside = np.flatnonzero(~fits.any(axis=1))
+    if not len(outside):
+        return []
+    row = int(outside[0])
+    features_now = touched[row]
+    index = next(k for k, now in enumerate(features_now)
+                 if now >= 0 and np.any(now != declared[:, k]))
+    body, names = scene.bodies[index], features[index].names
+    held = sorted({int(allowed) for allowed in declared[:, index]})
+    listed = ", ".join("a face" if f < 0 else names[f] for f in held)
+    step = int(track.steps[track.record[row]])
+    return [Reason("multi-contact", float(step), None,
+                   f"{body.name}'s {names[features_now[index]]} touched at step {step}, "
+                   f"outside the {len(contacts)} declared contacts ({listed})")]
 
 
 def reason_counts(reasons_per_run: Sequence[Sequence[Mapping[str, Any]]]) -> dict[str, int]:
@@ -702,8 +910,9 @@ def reason_counts(reasons_per_run: Sequence[Sequence[Mapping[str, Any]]]) -> dic
     return counts
 
 
-__all__ = ["DEFAULT_TOLERANCES", "REASONS", "SPEED_CAPS", "Reason", "RunNumbers",
-           "SceneScales", "StepContacts", "Tolerances", "Verdict",
-           "declared_contacts", "declared_impulses", "declared_scales", "feature_at",
-           "feature_points", "impulse_from_velocities", "judge", "judge_declared",
-           "numbers_from_output", "numbers_from_run", "reason_counts", "scene_scales"]
+__all__ = ["DEFAULT_TOLERANCES", "REASONS", "SPEED_CAPS", "BodyFeatures", "ContactTrack",
+           "Reason", "RunNumbers", "SceneScales", "SceneTerms", "StepContacts", "Tolerances",
+           "Verdict", "body_features", "declared_contacts", "declared_impulses",
+           "declared_scales", "feature_at", "feature_points", "impulse_from_velocities",
+           "judge", "judge_declared", "numbers_from_output", "numbers_from_run",
+           "prepare", "prepare_many", "reason_counts", "scene_scales"]

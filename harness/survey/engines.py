@@ -4,7 +4,9 @@
 ``Engine.run_many`` (harness/engines/contract.py), which runs many impacts per engine world
 where the adapter can (pymunk) and one by one elsewhere, with the same result bit for bit.
 Every run is then judged by the verdict checks (:func:`harness.run.verdicts.judge`): a run
-is one impact only if it fails none, and its ``status`` is the first failing reason.
+is one impact only if it fails none, and its ``status`` is the first failing reason. What the
+checks need of a scene alone (:func:`harness.run.verdicts.prepare`) is worked out once for
+every engine and preset.
 
 :func:`bare_stepping` times, for the same scenes, the engine's own stepping with the
 benchmark's bare steppers (harness/bench/engines.py): the same step call as the adapter in a
@@ -62,6 +64,10 @@ def run_engine(engine_name: str, preset: str, scenes, problems=None,
     steps = np.zeros(count, dtype=np.int64)
     wall = judging = 0.0
     clock = time.perf_counter
+    if problems is not None:
+        tick = clock()
+        terms = _scene_terms(scenes, problems)
+        judging += clock() - tick
     for begin in range(0, count, SLICE):
         tick = clock()
         runs = engine.run_many(scenes[begin:begin + SLICE], settings)
@@ -76,7 +82,7 @@ def run_engine(engine_name: str, preset: str, scenes, problems=None,
                 gain = None if law_energy_change is None else float(law_energy_change[row])
                 verdict = verdicts.judge(scenes[row], problems[row],
                                          verdicts.numbers_from_run(run),
-                                         law_energy_change=gain)
+                                         law_energy_change=gain, terms=terms[row])
                 status[row] = verdict.status(run.status.value)
                 reasons[row] = ",".join(verdict.names)
         judging += clock() - tick
@@ -84,6 +90,26 @@ def run_engine(engine_name: str, preset: str, scenes, problems=None,
     return EngineResults(engine_name, engine.version, preset, velocities,
                          engine_status.astype(str), status.astype(str), reasons.astype(str),
                          steps, wall, judging)
+
+
+#: The verdicts' per-scene terms of the last scenes judged, ``(scenes, problems, terms)``:
+#: the survey judges the same scenes once per engine and preset, so they are worked out once.
+_LAST_TERMS: list = []
+
+
+def _scene_terms(scenes, problems) -> list:
+    """:func:`harness.run.verdicts.prepare_many` of ``scenes``, kept for the next call with
+    the very same scene and problem objects (held here, so their ids cannot be reused)."""
+    if _LAST_TERMS and _same_objects(_LAST_TERMS[0], scenes) and _same_objects(
+            _LAST_TERMS[1], problems):
+        return _LAST_TERMS[2]
+    terms = verdicts.prepare_many(scenes, problems)
+    _LAST_TERMS[:] = [tuple(scenes), tuple(problems), terms]
+    return terms
+
+
+def _same_objects(kept, given) -> bool:
+    return len(kept) == len(given) and all(a is b for a, b in zip(kept, given))
 
 
 def bare_stepping(engine_name: str, preset: str, scenes, steps) -> dict[str, float]:
