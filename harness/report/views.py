@@ -14,7 +14,7 @@ import numpy as np
 
 from harness.run.metrics import departure_split
 from harness.run.records import ANALYTIC, Record, Results
-from harness.run.references import SINGLE
+from harness.run.references import SIMULTANEOUS
 
 FIGURES = "figures"
 LAW_ORDER = ("poisson", "stronge", "stronge-paper", "newton", "newton-lcp")
@@ -103,18 +103,19 @@ def escape_html(text) -> str:
 # Data views
 # --------------------------------------------------------------------------------------------
 def engine_scenarios(results: Results) -> list[str]:
-    """Scenarios with single-impact engine records, in run order (a scenario whose every
-    point is declared several contacts has its own section: the single-contact laws do not
-    apply to it)."""
+    """Scenarios with engine records the single-contact laws can describe, in run order (a
+    scenario whose every point is a declared flat face has its own section)."""
     return [name for name in results.scenario_names()
             if any(r.source != ANALYTIC and single_contact(r) for r in results.for_scenario(name))]
 
 
 def single_contact(record: Record) -> bool:
-    """Whether ``record``'s point is one contact, where the single-contact laws apply (its
-    reference's kind, harness/run/references.py; results without references: yes)."""
+    """Whether the single-contact laws can describe ``record``'s run: not at a declared
+    flat face (reference ``simultaneous``, harness/run/references.py). A tilted landing's
+    run that ends before the second corner strikes is a single impact (its verdict says
+    so), so an event-driven point counts; results without references too."""
     reference = (record.diagnostics or {}).get("reference") or {}
-    return reference.get("kind", SINGLE) == SINGLE
+    return reference.get("kind") != SIMULTANEOUS
 
 
 def worst_departure(records: Iterable[Record], law: str) -> tuple[float, bool, bool]:
@@ -135,9 +136,9 @@ def worst_departure(records: Iterable[Record], law: str) -> tuple[float, bool, b
 
 
 def worst_record(records: Iterable[Record], law: str) -> Record | None:
-    """The single-impact (``ok``) run with the largest finite departure from ``law``, over
-    single-contact points only (a declared flat face departs from its own reference, not
-    from the single-contact laws)."""
+    """The single-impact (``ok``) run with the largest finite departure from ``law``, never
+    at a declared flat face (it departs from its own reference, not from the single-contact
+    laws)."""
     runs = [r for r in records if r.ok and r.departure.get(law) is not None
             and math.isfinite(r.departure[law]) and single_contact(r)]
     return max(runs, key=lambda r: r.departure[law]) if runs else None
