@@ -72,11 +72,18 @@ from __future__ import annotations
 
 import functools
 import math
+from collections import OrderedDict
 from dataclasses import dataclass
 
 import mujoco
 
-from harness.engines.contract import Engine, RawContacts, StepTiming, body_extent
+from harness.engines.contract import (
+    Engine,
+    RawContacts,
+    StepTiming,
+    body_extent,
+    geometry_key,
+)
 from harness.engines.settings import (
     EngineSettingsError,
     check_choice,
@@ -278,13 +285,152 @@ def _model_xml(scene: Scene) -> str:
     )
 
 
+# ---------------------------------------------------------------------- geometry
+# Shapes whose geometry is written into a compiled model (geom_size and what the compiler
+# derives from it); a mesh (polygon) is compiled: its convex hull, centroid and bounding
+# volumes come from the compiler's own arithmetic (qhull, volume integrals).
+_EDITABLE_KINDS = frozenset(("disk", "rod", "box"))
+# Compiled models a polygon world keeps (least recently used dropped first).
+_MAX_COMPILED = 32
+# The capsule's frame: fromto along +x turns the geom's z axis onto x (the compiler's quat).
+_CAPSULE_QUAT = (0.7071067811865476, 0.0, -0.7071067811865475, 0.0)
+_IDENTITY_QUAT = (1.0, 0.0, 0.0, 0.0)
+
+
+def _topology(scene: Scene) -> tuple:
+    """What a compiled model's layout depends on: ground or not, and the shape kinds."""
+    return (scene.ground, tuple(body.shape.kind for body in scene.bodies))
+
+
+def _rotate(vector: list[float], quat: tuple) -> list[float]:
+    """The compiler's ``mjuu_rotVecQuat``, operation for operation (the same roundings)."""
+    if vector[0] == 0 and vector[1] == 0 and vector[2] == 0:
+        return [0.0, 0.0, 0.0]
+    if quat == _IDENTITY_QUAT:
+        return list(vector)
+    w, x, y, z = quat
+    t0 = w * vector[0] + y * vector[2] - z * vector[1]
+    t1 = w * vector[1] + z * vector[0] - x * vector[2]
+    t2 = w * vector[2] + x * vector[1] - y * vector[0]
+    return [vector[0] + 2 * (y * t2 - z * t1),
+            vector[1] + 2 * (z * t0 - x * t2),
+            vector[2] + 2 * (x * t1 - y * t0)]
+
+
+def _geom_values(shape) -> tuple:
+    """``(geom_size, geom_rbound, geom_aabb, body bvh_aabb)`` the compiler gives ``shape``.
+
+    The sizes are those :func:`_geom_xml` writes (a capsule's half-length from its fromto,
+    exact); the bounding sphere and box are the compiler's formulas; the body's bounding
+    volume is the geom's box turned into the body frame corner by corner, as the
+    compiler's bounding-volume hierarchy does (``mjCBoundingVolumeHierarchy::MakeBVH``).
+    """
+    kind = shape.kind
+    if kind == "disk":
+        radius = float(shape.radius)
+        size, rbound, half, quat = [radius, 0.0, 0.0], radius, [radius] * 3, _IDENTITY_QUAT
+    elif kind == "rod":
+        radius, half_length = float(shape.radius), float(shape.length) / 2.0
+        size, rbound = [radius, half_length, 0.0], radius + half_length
+        half, quat = [radius, radius, half_length + radius], _CAPSULE_QUAT
+    else:
+        depth = 2.0 * body_extent(shape)
+        size = [float(shape.width) / 2.0, depth / 2.0, float(shape.height) / 2.0]
+        rbound = math.sqrt(size[0] * size[0] + size[1] * size[1] + size[2] * size[2])
+        half, quat = list(size), _IDENTITY_QUAT
+    low = [math.inf] * 3
+    high = [-math.inf] * 3
+    for corner in range(8):
+        vertex = [half[axis] if corner >> axis & 1 else -half[axis] for axis in range(3)]
+        turned = _rotate(vertex, quat)
+        for axis in range(3):
+            low[axis] = min(low[axis], turned[axis])
+            high[axis] = max(high[axis], turned[axis])
+    bvh = [(high[axis] + low[axis]) / 2 for axis in range(3)]
+    bvh += [(high[axis] - low[axis]) / 2 for axis in range(3)]
+    return size, rbound, [0.0, 0.0, 0.0, *half], bvh
+
+
+class _Geometry:
+    """One scene's geometry in the form a world takes it (computed once per plan)."""
+
+    __slots__ = ("bodies", "extents", "key", "xml")
+
+    def __init__(self, scene: Scene) -> None:
+        self.key = geometry_key(scene)
+        self.extents = [body_extent(body.shape) for body in scene.bodies]
+        if all(body.shape.kind in _EDITABLE_KINDS for body in scene.bodies):
+            # Per body: the geom's values, then mass and the (isotropic) inertia.
+            self.bodies = tuple(
+                (*_geom_values(body.shape), float(body.mass),
+                 [float(body.moment_of_inertia)] * 3)
+                for body in scene.bodies)
+            self.xml = None
+        else:
+            self.bodies = None
+            self.xml = _model_xml(scene)
+
+
+def _write_statistics(m: mujoco.MjModel, rbounds: list[float], masses: list[float],
+                      ground: bool) -> None:
+    """``m.stat`` as the compiler computes it (MuJoCo 4's ``mj_setConst`` leaves it alone).
+
+    ``meaninertia`` scales the solver's tolerance, so it must be the compiler's to the bit.
+    Every body, joint and geom sits at the origin at ``qpos0``; the bounding box of the
+    geoms' spheres (the infinite plane counts as radius 1) is ``±reach`` on every axis.
+    """
+    stat = m.stat
+    reach = max(rbounds)
+    if ground:
+        reach = max(reach, 1.0)
+    stat.center = [0.0, 0.0, 0.0]
+    count = len(rbounds)
+    mean_size = 0.0
+    for rbound in rbounds:
+        mean_size += max(rbound, 1e-5) / count
+    stat.meansize = mean_size
+    stat.extent = max(max(1e-5, reach - -reach), 2 * mean_size)
+    mean_mass = 0.0
+    for mass in masses:
+        mean_mass += mass
+    stat.meanmass = mean_mass / count
+    mean_inertia = 0.0
+    for diagonal in m.dof_M0.tolist():
+        mean_inertia += diagonal
+    stat.meaninertia = mean_inertia / m.nv
+
+
+def _layout(model: mujoco.MjModel) -> tuple:
+    """Every size of ``model`` that MjData's layout depends on (its integer ``n*`` counts)."""
+    global _SIZE_NAMES
+    if _SIZE_NAMES is None:
+        _SIZE_NAMES = tuple(name for name in dir(model)
+                            if name.startswith("n") and isinstance(getattr(model, name), int))
+    return tuple(getattr(model, name) for name in _SIZE_NAMES)
+
+
+_SIZE_NAMES: tuple | None = None
+
+
 @dataclass
 class _Model:
+    """A world: one compiled model per topology (ground, shape kinds) and its data.
+
+    Without a polygon the model's geometry is rewritten in place for each scene
+    (:meth:`MujocoEngine._hold`); with one, ``compiled`` keeps a compiled model per
+    geometry, all stepping the same ``MjData`` when their layouts agree.
+    """
+
     model: mujoco.MjModel
     data: mujoco.MjData
     body_geoms: list[int]  # geom id of each scene body
     body_ids: list[int]
     extents: list[float]  # body_extent of each scene body's shape
+    ground: bool = False
+    geometry: tuple | None = None  # geometry_key of the geometry the model holds
+    # Polygon worlds: geometry key -> [MjModel, configured]; layout -> MjData.
+    compiled: OrderedDict | None = None
+    datas: dict | None = None
     # What the model holds now: (settings snapshot, e, μ, derived), see _configure.
     configured: tuple | None = None
     dt: float = 0.0  # s, the time step the model holds
@@ -342,7 +488,11 @@ class MujocoEngine(Engine):
                     "(MuJoCo falls back to its defaults on mixed signs)"
                 )
 
+    def _world_key(self, scene: Scene, settings) -> tuple:
+        return _topology(scene)
+
     def _build(self, scene: Scene, settings, *, contacts: bool = True) -> _Model:
+        """The topology's model, compiled from ``scene`` (which it then holds)."""
         model = mujoco.MjModel.from_xml_string(_model_xml(scene))
         count = len(scene.bodies)
         body_geoms = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, f"g{i}")
@@ -350,7 +500,55 @@ class MujocoEngine(Engine):
         body_ids = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"b{i}")
                     for i in range(count)]
         extents = [body_extent(b.shape) for b in scene.bodies]
-        return _Model(model, mujoco.MjData(model), body_geoms, body_ids, extents)
+        data = mujoco.MjData(model)
+        world = _Model(model, data, body_geoms, body_ids, extents, ground=scene.ground,
+                       geometry=geometry_key(scene))
+        if not all(body.shape.kind in _EDITABLE_KINDS for body in scene.bodies):
+            world.compiled = OrderedDict({world.geometry: [model, None]})
+            world.datas = {_layout(model): data}
+        return world
+
+    def _hold(self, world: _Model, geometry: _Geometry) -> None:
+        """Make ``world`` hold ``geometry``: what a fresh compile of it gives, to the bit.
+
+        Editable shapes: the sizes, bounding volumes, masses and inertias are written into
+        the model, ``mj_setConst`` derives the rest (subtree masses, ``invweight0``,
+        ``dof_M0``, ``dof_length``) and :func:`_write_statistics` the statistics
+        (tests/engines/test_mujoco_geometry.py compares every array with a compile).
+        Polygons: a compiled model per geometry (kept, ``_MAX_COMPILED`` at most).
+        """
+        if geometry.bodies is not None:
+            m = world.model
+            for geom_id, body_id, (size, rbound, aabb, bvh, mass, inertia) in zip(
+                    world.body_geoms, world.body_ids, geometry.bodies):
+                m.geom_size[geom_id] = size
+                m.geom_rbound[geom_id] = rbound
+                m.geom_aabb[geom_id] = aabb
+                m.bvh_aabb[m.body_bvhadr[body_id]] = bvh
+                m.body_mass[body_id] = mass
+                m.body_inertia[body_id] = inertia
+            mujoco.mj_setConst(m, world.data)
+            _write_statistics(m, [values[1] for values in geometry.bodies],
+                              [values[4] for values in geometry.bodies], world.ground)
+        else:
+            compiled = world.compiled
+            compiled[world.geometry][1] = world.configured  # what the outgoing model holds
+            entry = compiled.get(geometry.key)
+            if entry is None:
+                entry = compiled[geometry.key] = [
+                    mujoco.MjModel.from_xml_string(geometry.xml), None]
+                while len(compiled) > _MAX_COMPILED:
+                    compiled.popitem(last=False)
+            compiled.move_to_end(geometry.key)
+            model = world.model = entry[0]
+            world.configured = entry[1]
+            layout = _layout(model)
+            data = world.datas.get(layout)
+            if data is None:
+                data = world.datas[layout] = mujoco.MjData(model)
+            world.data = data
+        world.geometry = geometry.key
+        world.extents = geometry.extents
 
     def _notes(self, scene: Scene, settings) -> tuple[str, ...]:
         if settings["solref"] != "restitution":
@@ -366,11 +564,17 @@ class MujocoEngine(Engine):
         for x, y, angle, vx, vy, omega in start:
             qpos += [x, y, -angle]
             qvel += [vx, vy, -omega]
-        return scene, settings, qpos, qvel
+        return scene, settings, qpos, qvel, _Geometry(scene)
 
     def _reset(self, world: _Model, prepared: tuple) -> dict:
-        """The run's options and contact parameters, fresh data, the start state."""
-        scene, settings, qpos, qvel = prepared
+        """The scene's geometry, the run's options and contact parameters, fresh data, the
+        start state."""
+        scene, settings, qpos, qvel, geometry = prepared
+        held = world.geometry
+        if held is not geometry.key:
+            if held != geometry.key:
+                self._hold(world, geometry)
+            world.geometry = geometry.key  # equal: the next run compares identities
         derived = self._configure(world, scene, settings)
         m, d = world.model, world.data
         _reset_data(m, d)
