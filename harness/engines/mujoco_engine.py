@@ -82,7 +82,6 @@ from harness.engines.contract import (
     RawContacts,
     StepTiming,
     body_extent,
-    geometry_key,
 )
 from harness.engines.settings import (
     EngineSettingsError,
@@ -295,6 +294,8 @@ _MAX_COMPILED = 32
 # The capsule's frame: fromto along +x turns the geom's z axis onto x (the compiler's quat).
 _CAPSULE_QUAT = (0.7071067811865476, 0.0, -0.7071067811865475, 0.0)
 _IDENTITY_QUAT = (1.0, 0.0, 0.0, 0.0)
+# The radius the compiler's statistics give an infinite plane (their bounding box).
+_PLANE_STAT_RADIUS = 0.01
 
 
 def _topology(scene: Scene) -> tuple:
@@ -317,8 +318,9 @@ def _rotate(vector: list[float], quat: tuple) -> list[float]:
             vector[2] + 2 * (x * t1 - y * t0)]
 
 
-def _geom_values(shape) -> tuple:
-    """``(geom_size, geom_rbound, geom_aabb, body bvh_aabb)`` the compiler gives ``shape``.
+def _geom_values(shape, extent: float) -> tuple:
+    """``(geom_size, geom_rbound, geom_aabb, body bvh_aabb)`` the compiler gives ``shape``
+    (``extent``: its :func:`body_extent`, which sets a box's depth).
 
     The sizes are those :func:`_geom_xml` writes (a capsule's half-length from its fromto,
     exact); the bounding sphere and box are the compiler's formulas; the body's bounding
@@ -334,7 +336,7 @@ def _geom_values(shape) -> tuple:
         size, rbound = [radius, half_length, 0.0], radius + half_length
         half, quat = [radius, radius, half_length + radius], _CAPSULE_QUAT
     else:
-        depth = 2.0 * body_extent(shape)
+        depth = 2.0 * extent
         size = [float(shape.width) / 2.0, depth / 2.0, float(shape.height) / 2.0]
         rbound = math.sqrt(size[0] * size[0] + size[1] * size[1] + size[2] * size[2])
         half, quat = list(size), _IDENTITY_QUAT
@@ -352,23 +354,40 @@ def _geom_values(shape) -> tuple:
 
 
 class _Geometry:
-    """One scene's geometry in the form a world takes it (computed once per plan)."""
+    """One scene's geometry in the form a world takes it (computed once per plan).
+
+    ``key`` identifies it (ground; per body the shape's kind and dimensions, mass and
+    inertia); ``bodies`` holds, for editable shapes, per body the geom's values
+    (:func:`_geom_values`), the mass and the inertia; ``xml`` the model of a scene with a
+    polygon.
+    """
 
     __slots__ = ("bodies", "extents", "key", "xml")
 
     def __init__(self, scene: Scene) -> None:
-        self.key = geometry_key(scene)
-        self.extents = [body_extent(body.shape) for body in scene.bodies]
-        if all(body.shape.kind in _EDITABLE_KINDS for body in scene.bodies):
-            # Per body: the geom's values, then mass and the (isotropic) inertia.
-            self.bodies = tuple(
-                (*_geom_values(body.shape), float(body.mass),
-                 [float(body.moment_of_inertia)] * 3)
-                for body in scene.bodies)
-            self.xml = None
-        else:
-            self.bodies = None
-            self.xml = _model_xml(scene)
+        parts, extents, bodies = [], [], []
+        for body in scene.bodies:
+            shape = body.shape
+            kind = shape.kind
+            extent = body_extent(shape)
+            mass, inertia = float(body.mass), float(body.moment_of_inertia)
+            extents.append(extent)
+            if kind == "disk":
+                dimensions = (shape.radius,)
+            elif kind == "rod":
+                dimensions = (shape.length, shape.radius)
+            elif kind == "box":
+                dimensions = (shape.width, shape.height)
+            else:
+                dimensions = tuple(map(tuple, shape.vertices().tolist()))
+                bodies = None
+            parts.append((kind, dimensions, mass, inertia))
+            if bodies is not None:
+                bodies.append((*_geom_values(shape, extent), mass, [inertia] * 3))
+        self.key = (scene.ground, tuple(parts))
+        self.extents = extents
+        self.bodies = bodies
+        self.xml = _model_xml(scene) if bodies is None else None
 
 
 def _write_statistics(m: mujoco.MjModel, rbounds: list[float], masses: list[float],
@@ -377,12 +396,13 @@ def _write_statistics(m: mujoco.MjModel, rbounds: list[float], masses: list[floa
 
     ``meaninertia`` scales the solver's tolerance, so it must be the compiler's to the bit.
     Every body, joint and geom sits at the origin at ``qpos0``; the bounding box of the
-    geoms' spheres (the infinite plane counts as radius 1) is ``±reach`` on every axis.
+    geoms' spheres is ``±reach`` on every axis, the infinite ground plane counting as
+    radius 0.01 (MuJoCo 4; measured, tests/engines/test_mujoco_geometry.py).
     """
     stat = m.stat
     reach = max(rbounds)
     if ground:
-        reach = max(reach, 1.0)
+        reach = max(reach, _PLANE_STAT_RADIUS)
     stat.center = [0.0, 0.0, 0.0]
     count = len(rbounds)
     mean_size = 0.0
@@ -426,7 +446,6 @@ class _Model:
     body_geoms: list[int]  # geom id of each scene body
     body_ids: list[int]
     extents: list[float]  # body_extent of each scene body's shape
-    ground: bool = False
     geometry: tuple | None = None  # geometry_key of the geometry the model holds
     # Polygon worlds: geometry key -> [MjModel, configured]; layout -> MjData.
     compiled: OrderedDict | None = None
@@ -501,8 +520,8 @@ class MujocoEngine(Engine):
                     for i in range(count)]
         extents = [body_extent(b.shape) for b in scene.bodies]
         data = mujoco.MjData(model)
-        world = _Model(model, data, body_geoms, body_ids, extents, ground=scene.ground,
-                       geometry=geometry_key(scene))
+        world = _Model(model, data, body_geoms, body_ids, extents,
+                       geometry=_Geometry(scene).key)
         if not all(body.shape.kind in _EDITABLE_KINDS for body in scene.bodies):
             world.compiled = OrderedDict({world.geometry: [model, None]})
             world.datas = {_layout(model): data}
@@ -529,7 +548,7 @@ class MujocoEngine(Engine):
                 m.body_inertia[body_id] = inertia
             mujoco.mj_setConst(m, world.data)
             _write_statistics(m, [values[1] for values in geometry.bodies],
-                              [values[4] for values in geometry.bodies], world.ground)
+                              [values[4] for values in geometry.bodies], geometry.key[0])
         else:
             compiled = world.compiled
             compiled[world.geometry][1] = world.configured  # what the outgoing model holds
@@ -587,18 +606,22 @@ class MujocoEngine(Engine):
     def _configure(self, entry: _Model, scene: Scene, settings: dict) -> dict:
         """Make the model hold every option and contact parameter of this run; its ``derived``.
 
-        Writing costs ~5 µs (~20 µs with the ζ bisection), so it is skipped when the model
-        already holds these settings, ``e`` and ``μ`` (compared by value, never by identity).
+        What the model already holds is not written again (compared by value, never by
+        identity): the options and the settings' contact parameters when the settings are
+        the same, the pair's ``solref``, ``condim`` and friction when ``e`` and ``μ`` are.
         """
         e, mu = scene.restitution, scene.friction
         last = entry.configured
-        if last is None or last[1] != e or last[2] != mu or last[0] != settings:
-            entry.configured = last = (_snapshot(settings), e, mu,
-                                       self._write_model(entry, scene, settings))
+        if last is None or last[0] != settings:
+            self._write_options(entry, settings)
+            last = None
+        if last is None or last[1] != e or last[2] != mu:
+            entry.configured = last = (last[0] if last else _snapshot(settings), e, mu,
+                                       self._write_pair(entry, scene, settings))
         derived = last[3]
         return {**derived, "solref": list(derived["solref"])}  # the caller's own copy
 
-    def _write_model(self, entry: _Model, scene: Scene, settings: dict) -> dict:
+    def _write_options(self, entry: _Model, settings: dict) -> None:
         m = entry.model
         opt = m.opt
         dt = float(settings["time_step"])
@@ -613,11 +636,18 @@ class MujocoEngine(Engine):
         opt.noslip_iterations = int(settings["noslip_iterations"])
         opt.noslip_tolerance = float(settings["noslip_tolerance"])
         opt.impratio = float(settings["impratio"])
+        m.geom_solimp[:] = [float(v) for v in settings["solimp"]]
+        m.geom_margin[:] = float(settings["margin"])
+        m.geom_gap[:] = 0.0
+
+    def _write_pair(self, entry: _Model, scene: Scene, settings: dict) -> dict:
+        """The pair's contact parameters (from ``e``, ``μ`` and the settings); ``derived``."""
+        m = entry.model
         derived: dict = {}
         if settings["solref"] == "restitution":
             stiffness, damping, zeta = _cached_restitution_solref(
-                scene.restitution, dt, float(settings["contact_steps"])
-            )
+                scene.restitution, float(settings["time_step"]),
+                float(settings["contact_steps"]))
             solref = [stiffness, damping]
             derived["damping_ratio"] = zeta
             derived["restitution_target"] = restitution_of_damping_ratio(zeta)
@@ -628,9 +658,6 @@ class MujocoEngine(Engine):
         condim = 1 if mu == 0.0 else 3
         derived["condim"] = condim
         m.geom_solref[:] = solref
-        m.geom_solimp[:] = [float(v) for v in settings["solimp"]]
-        m.geom_margin[:] = float(settings["margin"])
-        m.geom_gap[:] = 0.0
         m.geom_condim[:] = condim
         m.geom_friction[:] = 0.0
         m.geom_friction[entry.body_geoms[0]] = [mu, 0.0, 0.0]
