@@ -72,8 +72,10 @@ from __future__ import annotations
 
 import functools
 import math
+import struct
 from collections import OrderedDict
 from dataclasses import dataclass
+from fractions import Fraction
 
 import mujoco
 
@@ -358,11 +360,11 @@ class _Geometry:
 
     ``key`` identifies it (ground; per body the shape's kind and dimensions, mass and
     inertia); ``bodies`` holds, for editable shapes, per body the geom's values
-    (:func:`_geom_values`), the mass and the inertia; ``xml`` the model of a scene with a
-    polygon.
+    (:func:`_geom_values`), the mass and the inertia; ``None`` for a scene with a polygon,
+    which is compiled (from ``scene``).
     """
 
-    __slots__ = ("bodies", "extents", "key", "xml")
+    __slots__ = ("bodies", "extents", "key", "scene")
 
     def __init__(self, scene: Scene) -> None:
         parts, extents, bodies = [], [], []
@@ -387,7 +389,60 @@ class _Geometry:
         self.key = (scene.ground, tuple(parts))
         self.extents = extents
         self.bodies = bodies
-        self.xml = _model_xml(scene) if bodies is None else None
+        self.scene = scene
+
+
+def _xml_float32(value: float) -> float:
+    """The float32 MuJoCo's XML reader makes of ``repr(value)``, as a double.
+
+    The reader rounds the decimal to float32 directly; a spec takes the double and rounds
+    that. The two differ only where ``value`` lies exactly halfway between two float32 and
+    its shortest decimal does not: the decimal then decides the side.
+    """
+    rounded = _to_float32(value)
+    if rounded == value:
+        return value
+    mirror = value + (value - rounded)  # exact; a float32 only when value is halfway
+    if _to_float32(mirror) != mirror:
+        return rounded
+    decimal, exact = Fraction(repr(value)), Fraction(value)
+    if decimal == exact:
+        return rounded  # a true tie: to even, as the conversion did
+    return max(rounded, mirror) if decimal > exact else min(rounded, mirror)
+
+
+def _to_float32(value: float) -> float:
+    """``value`` rounded to float32 (to nearest, ties to even), as a double."""
+    return _FLOAT32.unpack(_FLOAT32.pack(value))[0]
+
+
+_FLOAT32 = struct.Struct("<f")
+
+
+def _write_spec(spec: mujoco.MjSpec, scene: Scene) -> None:
+    """Put ``scene``'s masses, inertias and shapes into a spec parsed from :func:`_model_xml`
+    of a scene of the same topology: the values that XML would give (compiled alike)."""
+    for index, body in enumerate(scene.bodies):
+        spec_body = spec.body(f"b{index}")
+        spec_body.mass = float(body.mass)
+        inertia = float(body.moment_of_inertia)
+        spec_body.inertia = [inertia, inertia, inertia]
+        shape, geom = body.shape, spec.geom(f"g{index}")
+        if shape.kind == "disk":
+            geom.size = [float(shape.radius), *geom.size[1:]]
+        elif shape.kind == "rod":
+            half = shape.length / 2.0
+            geom.size = [float(shape.radius), *geom.size[1:]]
+            geom.fromto = [-half, 0.0, 0.0, half, 0.0, 0.0]
+        elif shape.kind == "box":
+            depth = 2.0 * body_extent(shape)
+            geom.size = [shape.width / 2.0, depth / 2.0, shape.height / 2.0]
+        else:
+            depth = 2.0 * body_extent(shape)
+            spec.mesh(f"g{index}_mesh").uservert = [
+                _xml_float32(value)
+                for x, y in shape.vertices().tolist() for side in (-1.0, 1.0)
+                for value in (x, side * depth / 2.0, y)]
 
 
 def _write_statistics(m: mujoco.MjModel, rbounds: list[float], masses: list[float],
@@ -450,6 +505,7 @@ class _Model:
     # Polygon worlds: geometry key -> [MjModel, configured]; layout -> MjData.
     compiled: OrderedDict | None = None
     datas: dict | None = None
+    spec: mujoco.MjSpec | None = None  # polygon worlds: the parsed spec, never compiled
     # What the model holds now: (settings snapshot, e, μ, derived), see _configure.
     configured: tuple | None = None
     dt: float = 0.0  # s, the time step the model holds
@@ -525,6 +581,7 @@ class MujocoEngine(Engine):
         if not all(body.shape.kind in _EDITABLE_KINDS for body in scene.bodies):
             world.compiled = OrderedDict({world.geometry: [model, None]})
             world.datas = {_layout(model): data}
+            world.spec = mujoco.MjSpec.from_string(_model_xml(scene))
         return world
 
     def _hold(self, world: _Model, geometry: _Geometry) -> None:
@@ -534,7 +591,8 @@ class MujocoEngine(Engine):
         the model, ``mj_setConst`` derives the rest (subtree masses, ``invweight0``,
         ``dof_M0``, ``dof_length``) and :func:`_write_statistics` the statistics
         (tests/engines/test_mujoco_geometry.py compares every array with a compile).
-        Polygons: a compiled model per geometry (kept, ``_MAX_COMPILED`` at most).
+        Polygons: the topology's spec with the scene's values (:func:`_write_spec`),
+        compiled (kept, ``_MAX_COMPILED`` at most).
         """
         if geometry.bodies is not None:
             m = world.model
@@ -554,8 +612,9 @@ class MujocoEngine(Engine):
             compiled[world.geometry][1] = world.configured  # what the outgoing model holds
             entry = compiled.get(geometry.key)
             if entry is None:
-                entry = compiled[geometry.key] = [
-                    mujoco.MjModel.from_xml_string(geometry.xml), None]
+                spec = world.spec.copy()  # compiling fills a spec's mesh faces and normals
+                _write_spec(spec, geometry.scene)
+                entry = compiled[geometry.key] = [spec.compile(), None]
                 while len(compiled) > _MAX_COMPILED:
                     compiled.popitem(last=False)
             compiled.move_to_end(geometry.key)

@@ -11,12 +11,14 @@ these tests compare every array of the model and whole runs, bit for bit.
 from __future__ import annotations
 
 import math
+from fractions import Fraction
 
 import numpy as np
 import pytest
 
 mujoco = pytest.importorskip("mujoco", reason="mujoco not installed (pip install mujoco==4.0.0)")
 
+from harness.engines.contract import body_extent  # noqa: E402
 from harness.engines.mujoco_engine import (  # noqa: E402
     MujocoEngine,
     _Geometry,
@@ -157,3 +159,44 @@ def test_polygon_worlds_keep_compiled_models_and_share_data():
     assert len(world.compiled) == 3 and len(world.datas) == 1  # one MjData for the three
     fresh = [MujocoEngine().run(scene, settings) for scene in scenes]
     assert runs == fresh
+
+
+def halfway_decimals(count: int) -> list[float]:
+    """Doubles exactly halfway between two float32 whose shortest decimal lies on the other
+    side than rounding to even: rounding the double (a spec) and rounding the decimal (the
+    XML reader) give different float32."""
+    rng = np.random.default_rng(9)
+    found = []
+    while len(found) < count:
+        low = np.float32(rng.uniform(0.02, 0.4))
+        halfway = (float(low) + float(np.nextafter(low, np.float32(1.0)))) / 2.0
+        decimal, exact = Fraction(repr(halfway)), Fraction(halfway)
+        to_even_above = float(np.float32(halfway)) > halfway
+        if decimal != exact and (decimal > exact) != to_even_above:
+            found.append(halfway)
+    return found
+
+
+def test_polygon_vertices_halfway_between_float32_compile_as_from_xml():
+    # A spec would round these doubles to the other float32 than the XML reader does; the
+    # adapter feeds the spec the reader's float32 (_xml_float32).
+    values = halfway_decimals(6)
+    engine, worlds = MujocoEngine(), {}
+    scenes = []
+    for index in range(0, 6, 2):
+        x, y = values[index], values[index + 1]
+        points = ((x, -y), (0.05, 0.3), (-x, 0.1), (-0.2, -y))
+        body = Body("p", Polygon(points), 1.5, (0.0, 0.5), 0.0, (0.0, -1.0), 0.0)
+        scenes.append(Scene((body,), 0.5, 0.3, ground=True, name="halfway"))
+    for scene in [*scenes, scenes[0]]:
+        model = held_model(engine, worlds, scene)
+        compiled = mujoco.MjModel.from_xml_string(_model_xml(scene))
+        assert model_differences(model, compiled) == []
+    # Without the reader's rounding the spec's mesh would differ (the test can fail).
+    spec = mujoco.MjSpec.from_string(_model_xml(scenes[1]))
+    depth = 2.0 * body_extent(scenes[1].bodies[0].shape)
+    spec.mesh("g0_mesh").uservert = [value for x, y in scenes[1].bodies[0].shape.points
+                                     for side in (-1.0, 1.0)
+                                     for value in (x, side * depth / 2.0, y)]
+    naive = spec.compile()
+    assert model_differences(naive, mujoco.MjModel.from_xml_string(_model_xml(scenes[1])))
