@@ -57,12 +57,21 @@ Pair values: MuJoCo takes the larger friction of the two geoms, so the partner (
 ``bodies[1]``) has friction 0 and ``bodies[0]`` has ``μ``; both geoms get the same
 ``solref``/``solimp`` (MuJoCo averages them).
 
-Reuse: one compiled ``MjModel`` and ``MjData`` per geometry (shapes, masses, inertias). Each
-run makes the model hold every option and contact parameter of its settings, ``e`` and ``μ``
-(rewritten whenever they differ by value from what the model holds) and calls
-``mj_resetData``, so reruns are bit-identical. The contact impulse is MuJoCo's total
-constraint impulse on body B, ``M·Δq̇`` (exact here: no gravity, no passive forces, constant
-mass matrix).
+Reuse: one compiled ``MjModel`` and ``MjData`` per topology (ground or not, shape kinds),
+for ``run`` and ``run_many`` alike (``run_many`` is ``run`` per scene: the engine steps one
+impact per model, see docs/engines.md, 'MuJoCo'). For disks, rods and boxes a scene's
+sizes, bounding spheres and boxes, masses and inertias are written into the model,
+``mj_setConst`` derives subtree masses, ``invweight0``, ``dof_M0`` and ``dof_length``, and
+:func:`_write_statistics` the statistics (MuJoCo 4's ``mj_setConst`` leaves them; the
+solver reads ``meaninertia``): every array equals a fresh compile's, bit for bit
+(tests/engines/test_mujoco_geometry.py). A polygon's mesh goes through the compiler
+(hull, centroid, inertial frame): a copy of the topology's parsed spec takes the scene's
+values and is compiled, about half the cost of parsing XML; the models of a topology share
+one ``MjData`` per layout. Each run makes the model hold every option and contact parameter
+of its settings, ``e`` and ``μ`` (rewritten whenever they differ by value from what the
+model holds) and calls ``mj_resetData``, so reruns are bit-identical. The contact impulse
+is MuJoCo's total constraint impulse on body B, ``M·Δq̇`` (exact here: no gravity, no
+passive forces, constant mass matrix).
 
 Settings (``defaults`` | ``accurate``, shown as ``matched-bounce``) are listed in
 :data:`SETTING_DOCS`.
@@ -296,6 +305,7 @@ _MAX_COMPILED = 32
 # The capsule's frame: fromto along +x turns the geom's z axis onto x (the compiler's quat).
 _CAPSULE_QUAT = (0.7071067811865476, 0.0, -0.7071067811865475, 0.0)
 _IDENTITY_QUAT = (1.0, 0.0, 0.0, 0.0)
+_MJ_EPS = 1e-14  # mjEPS
 # The radius the compiler's statistics give an infinite plane (their bounding box).
 _PLANE_STAT_RADIUS = 0.01
 
@@ -342,16 +352,23 @@ def _geom_values(shape, extent: float) -> tuple:
         size = [float(shape.width) / 2.0, depth / 2.0, float(shape.height) / 2.0]
         rbound = math.sqrt(size[0] * size[0] + size[1] * size[1] + size[2] * size[2])
         half, quat = list(size), _IDENTITY_QUAT
-    low = [math.inf] * 3
-    high = [-math.inf] * 3
-    for corner in range(8):
-        vertex = [half[axis] if corner >> axis & 1 else -half[axis] for axis in range(3)]
-        turned = _rotate(vertex, quat)
-        for axis in range(3):
-            low[axis] = min(low[axis], turned[axis])
-            high[axis] = max(high[axis], turned[axis])
-    bvh = [(high[axis] + low[axis]) / 2 for axis in range(3)]
-    bvh += [(high[axis] - low[axis]) / 2 for axis in range(3)]
+    if quat == _IDENTITY_QUAT and min(half) > _MJ_EPS:
+        bvh = [0.0, 0.0, 0.0, *half]  # the corner loop below gives exactly this
+    else:
+        low = [math.inf] * 3
+        high = [-math.inf] * 3
+        for corner in range(8):
+            vertex = [half[axis] if corner >> axis & 1 else -half[axis] for axis in range(3)]
+            turned = _rotate(vertex, quat)
+            for axis in range(3):
+                low[axis] = min(low[axis], turned[axis])
+                high[axis] = max(high[axis], turned[axis])
+        for axis in range(3):  # the compiler inflates a flat box
+            if abs(low[axis] - high[axis]) < _MJ_EPS:
+                low[axis] -= _MJ_EPS
+                high[axis] += _MJ_EPS
+        bvh = [(high[axis] + low[axis]) / 2 for axis in range(3)]
+        bvh += [(high[axis] - low[axis]) / 2 for axis in range(3)]
     return size, rbound, [0.0, 0.0, 0.0, *half], bvh
 
 
