@@ -598,7 +598,6 @@ class MujocoEngine(Engine):
         if not all(body.shape.kind in _EDITABLE_KINDS for body in scene.bodies):
             world.compiled = OrderedDict({world.geometry: [model, None]})
             world.datas = {_layout(model): data}
-            world.spec = mujoco.MjSpec.from_string(_model_xml(scene))
         return world
 
     def _hold(self, world: _Model, geometry: _Geometry) -> None:
@@ -629,6 +628,8 @@ class MujocoEngine(Engine):
             compiled[world.geometry][1] = world.configured  # what the outgoing model holds
             entry = compiled.get(geometry.key)
             if entry is None:
+                if world.spec is None:  # parsed once, from any scene of the topology
+                    world.spec = mujoco.MjSpec.from_string(_model_xml(geometry.scene))
                 spec = world.spec.copy()  # compiling fills a spec's mesh faces and normals
                 _write_spec(spec, geometry.scene)
                 entry = compiled[geometry.key] = [spec.compile(), None]
