@@ -27,6 +27,7 @@ from harness.run import runner
 from harness.run.cache import ResultCache
 from harness.run.records import Record, read_results, write_results
 from harness.scenarios import SCENARIO_DIR, ScenarioError, load_scenario
+from harness.scenarios import reader as scenario_reader
 
 ROOT = Path(__file__).resolve().parents[2]
 DISK = SCENARIO_DIR / "disk-direct.toml"
@@ -314,12 +315,17 @@ def hostile_file(directory: Path, name: str) -> Path:
 
 
 @pytest.mark.parametrize("name", sorted(HOSTILE))
-def test_a_hostile_file_is_one_line_naming_file_key_value_and_what_is_allowed(tmp_path, name):
+def test_a_hostile_file_is_one_line_naming_file_key_value_and_what_is_allowed(tmp_path, name,
+                                                                               monkeypatch):
     path = hostile_file(tmp_path, name)
-    start = time.perf_counter()
+
+    def work_started(*args, **kwargs):
+        raise AssertionError("the scenario's points were built: refused after the work")
+
+    # refused before the work, not after (checked by what ran, not by a clock)
+    monkeypatch.setattr(scenario_reader, "check_points", work_started)
     with pytest.raises(ScenarioError) as raised:
         load_scenario(path)
-    assert time.perf_counter() - start < 5  # refused before the work, not after
     errors = raised.value.errors
     for error in errors:
         text = str(error)
@@ -443,7 +449,8 @@ def test_an_engine_task_that_runs_too_long_is_stopped(monkeypatch):
     start = time.perf_counter()
     output = runner.engine_task({"engine": "pymunk", "settings": {}, "scene": None,
                                  "time_limit_s": 0.3})
-    assert time.perf_counter() - start < 5
+    # stopped at the limit, not after the 30 s sleep (wide margin: the machine may be loaded)
+    assert time.perf_counter() - start < 20
     assert output["status"].startswith("error: time limit")
 
 
