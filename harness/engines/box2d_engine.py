@@ -88,6 +88,8 @@ _MAX_AUTO_SCALE = 2.0**40  # a scene slower than 2^-39 m/s is refused rather tha
 _GROUND_EXTENT_FACTOR = 8.0  # ground half-width and depth, in body extents (float32 clipping)
 # A velocity Box2D clipped sits at the cap to float32 rounding: this band counts as "at".
 _CAP_BAND = 1.0 - 1e-6
+# Where _place moves a body for a moment (Box2D units): no proxy's fattened box reaches it.
+_FAR_AWAY = (2.0**30, 2.0**30)
 
 SETTING_DOCS: dict[str, str] = {
     "time_step": "s (scene units), b2World::Step timeStep; Box2D has no default, 1/60 is its "
@@ -156,9 +158,9 @@ CLIPPED_NOTE = ("Box2D clipped a velocity (b2_maxTranslation 2 m or b2_maxRotati
 
 
 # ---------------------------------------------------------------------- world building
-def _polygon_fixture(body, vertices, radius: float):
+def _polygon_fixture(body, vertices, radius: float, group: dict):
     try:
-        fixture = body.CreatePolygonFixture(vertices=vertices, density=0.0)
+        fixture = body.CreatePolygonFixture(vertices=vertices, density=0.0, **group)
     except (AssertionError, ValueError, RuntimeError) as error:
         raise UnsupportedScene(
             f"engine 'box2d': polygon {vertices!r} refused by b2PolygonShape::Set ({error}); "
@@ -176,15 +178,16 @@ def _polygon_fixture(body, vertices, radius: float):
     return fixture
 
 
-def _add_fixtures(b2_body, shape, length: float, skin: float) -> list:
-    """The fixtures of one scene shape on ``b2_body`` (lengths times ``length``)."""
+def _add_fixtures(b2_body, shape, length: float, skin: float, group: dict) -> list:
+    """The fixtures of one scene shape on ``b2_body`` (lengths times ``length``; ``group``:
+    the collision filter's keywords, empty for Box2D's default filter)."""
     if shape.kind == "disk":
-        disk = b2_body.CreateCircleFixture(radius=shape.radius * length, density=0.0)
+        disk = b2_body.CreateCircleFixture(radius=shape.radius * length, density=0.0, **group)
         disk.userData = 0.0  # a circle's radius is the disk's own
         return [disk]
     if shape.kind == "rod":
         half, radius = shape.length / 2.0 * length, shape.radius * length
-        caps = [b2_body.CreateCircleFixture(radius=radius, pos=(x, 0.0), density=0.0)
+        caps = [b2_body.CreateCircleFixture(radius=radius, pos=(x, 0.0), density=0.0, **group)
                 for x in (-half, half)]
         # Core box inset by its skin: its rounded outline stays inside the capsule.
         core_skin = min(skin, radius / 2.0)
@@ -192,13 +195,85 @@ def _add_fixtures(b2_body, shape, length: float, skin: float) -> list:
         core = _polygon_fixture(
             b2_body,
             [(-half, -thickness), (half, -thickness), (half, thickness), (-half, thickness)],
-            core_skin)
+            core_skin, group)
         core.userData = 0.0  # its skin lies inside the capsule's outline
         for cap in caps:
             cap.userData = 0.0
         return [*caps, core]
     vertices = [(x * length, y * length) for x, y in shape.vertices().tolist()]
-    return [_polygon_fixture(b2_body, vertices, skin)]
+    return [_polygon_fixture(b2_body, vertices, skin, group)]
+
+
+def _add_impact(world, scene: Scene, length: float, skin: float, group: dict) -> tuple:
+    """``(fixtures, bodies, body_fixtures)``: the scene's ground and bodies in ``world``.
+
+    The bodies are made at the origin and placed by :func:`_place` (as every run is), so
+    that a world holding one impact and one holding many give their proxies the same state.
+    """
+    fixtures: list = []
+    if scene.ground:
+        # Half-width a few body extents: float32 clipping against a far ground vertex
+        # loses ~|vertex|·1e-7 m.
+        width = _GROUND_EXTENT_FACTOR * _extent(scene) * length
+        ground = world.CreateStaticBody()
+        fixtures.append(_polygon_fixture(
+            ground, [(-width, -width), (width, -width), (width, 0.0), (-width, 0.0)], skin,
+            group))
+    bodies, body_fixtures = [], []
+    for body in scene.bodies:
+        b2_body = world.CreateDynamicBody(position=(0.0, 0.0))
+        body_fixtures.extend(_add_fixtures(b2_body, body.shape, length, skin, group))
+        b2_body.massData = b2.massData(
+            mass=body.mass, center=(0.0, 0.0), I=body.moment_of_inertia * length * length)
+        bodies.append(b2_body)
+    fixtures.extend(body_fixtures)
+    return fixtures, bodies, body_fixtures
+
+
+def _extent(scene: Scene) -> float:
+    return max(body_extent(body.shape) for body in scene.bodies)
+
+
+def _set_pair_values(fixtures, pair_values: tuple) -> None:
+    restitution, friction = pair_values
+    for fixture in fixtures:
+        fixture.restitution = restitution
+        fixture.friction = friction
+
+
+def _set_switches(world, world_values: tuple) -> None:
+    (world.warmStarting, world.continuousPhysics, world.subStepping,
+     world.allowSleeping) = world_values
+
+
+def _place(bodies, starts: tuple) -> None:
+    """Put ``bodies`` at the start state ``((x, y), θ, (v_x, v_y), ω)`` (Box2D units), with
+    nothing kept from what they did before (their contacts must be gone already).
+
+    Two things of a body outlive a run and would steer the next: its sleep timer (reset by
+    putting it to sleep) and its proxies' fattened boxes, which decide which contacts exist
+    at the start and so the order Box2D creates and solves them in. Moving the body far away
+    and back makes Box2D fit every box anew around the start pose, as in a fresh world. The
+    proxies themselves, and so their ids, are kept (see :meth:`_World.place`).
+    """
+    for b2_body, (position, angle, velocity, angular_velocity) in zip(bodies, starts):
+        b2_body.awake = False  # also zeroes the sleep timer
+        b2_body.transform = (_FAR_AWAY, angle)
+        b2_body.transform = (position, angle)
+        b2_body.linearVelocity = velocity
+        b2_body.angularVelocity = angular_velocity
+        b2_body.awake = True
+
+
+def _at_cap(bodies, dt: float, band: float) -> bool:
+    """Whether a body's velocity reaches ``band`` times Box2D's per-step caps."""
+    for b2_body in bodies:
+        vx, vy = b2_body.linearVelocity
+        if math.hypot(vx, vy) * dt > band * MAX_TRANSLATION:
+            return True
+        if abs(b2_body.angularVelocity) * dt > band * MAX_ROTATION:
+            return True
+    return False
 
 
 class _World:
@@ -206,24 +281,9 @@ class _World:
 
     def __init__(self, scene: Scene, length: float, skin: float):
         self.world = b2.world(gravity=(0.0, 0.0), doSleep=True)
-        self.fixtures: list = []
-        self.extent = max(body_extent(body.shape) for body in scene.bodies)
-        if scene.ground:
-            # Half-width a few body extents: float32 clipping against a far ground vertex
-            # loses ~|vertex|·1e-7 m.
-            width = _GROUND_EXTENT_FACTOR * self.extent * length
-            ground = self.world.CreateStaticBody()
-            self.fixtures.append(_polygon_fixture(
-                ground, [(-width, -width), (width, -width), (width, 0.0), (-width, 0.0)], skin))
-        self.bodies = []
-        self.body_fixtures: list = []
-        for body in scene.bodies:
-            b2_body = self.world.CreateDynamicBody(position=(0.0, 0.0))
-            self.body_fixtures.extend(_add_fixtures(b2_body, body.shape, length, skin))
-            b2_body.massData = b2.massData(
-                mass=body.mass, center=(0.0, 0.0), I=body.moment_of_inertia * length * length)
-            self.bodies.append(b2_body)
-        self.fixtures.extend(self.body_fixtures)
+        self.fixtures, self.bodies, self.body_fixtures = _add_impact(
+            self.world, scene, length, skin, {})
+        self.extent = _extent(scene)
         self.body_b = self.bodies[-1]
         self.length = length
         self.pair_values: tuple | None = None
@@ -239,15 +299,10 @@ class _World:
     def configure(self, world_values: tuple, pair_values: tuple) -> None:
         """Apply the world switches and the pair's (e, μ) where they changed."""
         if self.world_values != world_values:
-            world = self.world
-            (world.warmStarting, world.continuousPhysics, world.subStepping,
-             world.allowSleeping) = world_values
+            _set_switches(self.world, world_values)
             self.world_values = world_values
         if self.pair_values != pair_values:
-            restitution, friction = pair_values
-            for fixture in self.fixtures:
-                fixture.restitution = restitution
-                fixture.friction = friction
+            _set_pair_values(self.fixtures, pair_values)
             self.pair_values = pair_values
 
     def place(self, starts: tuple) -> None:
@@ -263,28 +318,14 @@ class _World:
         manager = self.world.contactManager
         for contact in list(self.world.contacts):
             manager.Destroy(contact)
-        for b2_body, (position, angle, velocity, angular_velocity) in zip(self.bodies, starts):
-            b2_body.transform = (position, angle)
-            b2_body.linearVelocity = velocity
-            b2_body.angularVelocity = angular_velocity
-            b2_body.awake = True
-        # A proxy whose fattened box still holds the body is not marked as moved by a new
-        # transform: touch every one, so that the pairs are looked up now and the first
-        # step's collision pass already sees a contact touching at the start pose.
-        for fixture in self.body_fixtures:
-            fixture.Refilter()
+        _place(self.bodies, starts)
+        # The pairs touching at the start pose are looked up now, so that the first step's
+        # collision pass already sees them.
         manager.FindNewContacts()
 
     def at_cap(self, band: float) -> bool:
         """Whether a body's velocity reaches ``band`` times Box2D's per-step caps."""
-        dt = self.dt
-        for b2_body in self.bodies:
-            vx, vy = b2_body.linearVelocity
-            if math.hypot(vx, vy) * dt > band * MAX_TRANSLATION:
-                return True
-            if abs(b2_body.angularVelocity) * dt > band * MAX_ROTATION:
-                return True
-        return False
+        return _at_cap(self.bodies, self.dt, band)
 
 
 # ---------------------------------------------------------------------- contact readout
