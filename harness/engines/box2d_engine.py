@@ -58,6 +58,7 @@ Settings (``defaults`` | ``accurate``) are listed in :data:`SETTING_DOCS`.
 
 from __future__ import annotations
 
+import copy
 import math
 
 import Box2D
@@ -158,9 +159,17 @@ CLIPPED_NOTE = ("Box2D clipped a velocity (b2_maxTranslation 2 m or b2_maxRotati
 
 
 # ---------------------------------------------------------------------- world building
-def _polygon_fixture(body, vertices, radius: float, group: dict):
+def _polygon_fixture(body, vertices, radius: float, group: dict, skin_first: bool = False):
+    """A polygon fixture with skin ``radius``; ``skin_first``: the skin is set before the
+    fixture is made, so that its proxy's box is fitted to it (a body made at its start pose
+    by run_many; :func:`_place` refits the box of a body made at the origin)."""
     try:
-        fixture = body.CreatePolygonFixture(vertices=vertices, density=0.0, **group)
+        if skin_first:
+            shape = b2.polygonShape(vertices=vertices)
+            shape.radius = radius
+            fixture = body.CreateFixture(b2.fixtureDef(shape=shape, density=0.0, **group))
+        else:
+            fixture = body.CreatePolygonFixture(vertices=vertices, density=0.0, **group)
     except (AssertionError, ValueError, RuntimeError) as error:
         raise UnsupportedScene(
             f"engine 'box2d': polygon {vertices!r} refused by b2PolygonShape::Set ({error}); "
@@ -178,9 +187,11 @@ def _polygon_fixture(body, vertices, radius: float, group: dict):
     return fixture
 
 
-def _add_fixtures(b2_body, shape, length: float, skin: float, group: dict) -> list:
+def _add_fixtures(b2_body, shape, length: float, skin: float, group: dict,
+                  skin_first: bool = False) -> list:
     """The fixtures of one scene shape on ``b2_body`` (lengths times ``length``; ``group``:
-    the collision filter's keywords, empty for Box2D's default filter)."""
+    the collision filter's keywords, empty for Box2D's default filter; ``skin_first``: see
+    :func:`_polygon_fixture`)."""
     if shape.kind == "disk":
         disk = b2_body.CreateCircleFixture(radius=shape.radius * length, density=0.0, **group)
         disk.userData = 0.0  # a circle's radius is the disk's own
@@ -195,20 +206,22 @@ def _add_fixtures(b2_body, shape, length: float, skin: float, group: dict) -> li
         core = _polygon_fixture(
             b2_body,
             [(-half, -thickness), (half, -thickness), (half, thickness), (-half, thickness)],
-            core_skin, group)
+            core_skin, group, skin_first)
         core.userData = 0.0  # its skin lies inside the capsule's outline
         for cap in caps:
             cap.userData = 0.0
         return [*caps, core]
     vertices = [(x * length, y * length) for x, y in shape.vertices().tolist()]
-    return [_polygon_fixture(b2_body, vertices, skin, group)]
+    return [_polygon_fixture(b2_body, vertices, skin, group, skin_first)]
 
 
-def _add_impact(world, scene: Scene, length: float, skin: float, group: dict) -> tuple:
+def _add_impact(world, scene: Scene, length: float, skin: float, group: dict,
+                starts: tuple | None = None) -> tuple:
     """``(fixtures, bodies, body_fixtures)``: the scene's ground and bodies in ``world``.
 
-    The bodies are made at the origin and placed by :func:`_place` (as every run is), so
-    that a world holding one impact and one holding many give their proxies the same state.
+    The bodies are made at the origin, for :func:`_place` to put them at a run's start; or,
+    given ``starts`` (run_many), made there: their proxies then hold what :func:`_place`
+    gives them (boxes fitted around the start pose, a zero sleep timer).
     """
     fixtures: list = []
     if scene.ground:
@@ -220,11 +233,18 @@ def _add_impact(world, scene: Scene, length: float, skin: float, group: dict) ->
             ground, [(-width, -width), (width, -width), (width, 0.0), (-width, 0.0)], skin,
             group))
     bodies, body_fixtures = [], []
-    for body in scene.bodies:
-        b2_body = world.CreateDynamicBody(position=(0.0, 0.0))
-        body_fixtures.extend(_add_fixtures(b2_body, body.shape, length, skin, group))
+    for index, body in enumerate(scene.bodies):
+        if starts is None:
+            b2_body = world.CreateDynamicBody(position=(0.0, 0.0))
+        else:
+            position, angle = starts[index][:2]
+            b2_body = world.CreateDynamicBody(position=position, angle=angle)
+        body_fixtures.extend(_add_fixtures(b2_body, body.shape, length, skin, group,
+                                           skin_first=starts is not None))
         b2_body.massData = b2.massData(
             mass=body.mass, center=(0.0, 0.0), I=body.moment_of_inertia * length * length)
+        if starts is not None:
+            b2_body.linearVelocity, b2_body.angularVelocity = starts[index][2:]
         bodies.append(b2_body)
     fixtures.extend(body_fixtures)
     return fixtures, bodies, body_fixtures
@@ -283,7 +303,6 @@ class _World:
         self.world = b2.world(gravity=(0.0, 0.0), doSleep=True)
         self.fixtures, self.bodies, self.body_fixtures = _add_impact(
             self.world, scene, length, skin, {})
-        self.extent = _extent(scene)
         self.body_b = self.bodies[-1]
         self.length = length
         self.pair_values: tuple | None = None
@@ -390,9 +409,23 @@ def _world_manifold(contact, poses=None) -> tuple[tuple[float, float], list, lis
     return (nx, ny), points, separations
 
 
+def _approach_speed(contact) -> float:
+    """The normal approach speed at a touching contact's fastest point, computed as the
+    solver computes ``v_rel`` (from the velocities before the step: call from PreSolve)."""
+    normal, points, _ = _world_manifold(contact)
+    body_a, body_b = contact.fixtureA.body, contact.fixtureB.body
+    fastest = 0.0
+    for point in points:
+        va = body_a.GetLinearVelocityFromWorldPoint(point)
+        vb = body_b.GetLinearVelocityFromWorldPoint(point)
+        approach = -((vb[0] - va[0]) * normal[0] + (vb[1] - va[1]) * normal[1])
+        fastest = max(fastest, approach)
+    return fastest
+
+
 class _SpeedProbe(b2.contactListener):
-    """PreSolve listener: the normal approach speed at the first touching point, computed as
-    the solver computes ``v_rel`` (from the velocities before the step)."""
+    """PreSolve listener: the approach speed at the first touching contact
+    (:func:`_approach_speed`)."""
 
     def __init__(self):
         super().__init__()
@@ -401,15 +434,7 @@ class _SpeedProbe(b2.contactListener):
     def PreSolve(self, contact, old_manifold):
         if self.speed is not None or not contact.touching or contact.manifold.pointCount == 0:
             return
-        normal, points, _ = _world_manifold(contact)
-        body_a, body_b = contact.fixtureA.body, contact.fixtureB.body
-        fastest = 0.0
-        for point in points:
-            va = body_a.GetLinearVelocityFromWorldPoint(point)
-            vb = body_b.GetLinearVelocityFromWorldPoint(point)
-            approach = -((vb[0] - va[0]) * normal[0] + (vb[1] - va[1]) * normal[1])
-            fastest = max(fastest, approach)
-        self.speed = fastest
+        self.speed = _approach_speed(contact)
 
 
 def _box2d_starts(start, velocity: float, length: float, advance: float = 0.0) -> tuple:
@@ -426,10 +451,84 @@ def _box2d_starts(start, velocity: float, length: float, advance: float = 0.0) -
 
 
 class _Prepared:
-    """A run's Box2D form: switches, pair values, sweeps, scales, start state, derived."""
+    """A run's Box2D form: switches, pair values, sweeps, scales, start state, derived.
 
-    __slots__ = ("derived", "dt", "iterations", "notes", "pair_values", "starts", "velocity",
-                 "world_values")
+    ``probe``: what the probe run needs (the run-frame start state, the Box2D time step
+    without velocity scale, the step cap, the settings that act on the probe's result);
+    :func:`_scaled` fills in the rest from the probe's speed.
+    """
+
+    __slots__ = ("derived", "dt", "iterations", "notes", "pair_values", "probe", "starts",
+                 "velocity", "world_values")
+
+
+def _unprobed(scene: Scene, settings, start) -> _Prepared:
+    """A run's :class:`_Prepared` up to the probe run."""
+    prepared = _Prepared()
+    length = float(settings["length_scale"])
+    time_step = float(settings["time_step"])
+    prepared.world_values = tuple(bool(settings[key]) for key in _BOOL_KEYS)
+    prepared.pair_values = (float(scene.restitution), float(scene.friction))
+    prepared.iterations = (int(settings["velocity_iterations"]),
+                           int(settings["position_iterations"]))
+    prepared.probe = (start, length, time_step, int(settings["max_steps"]),
+                      settings["velocity_scale"], float(settings["detection_overlap"]),
+                      _extent(scene), float(scene.restitution))
+    return prepared
+
+
+def _probe_starts(prepared: _Prepared) -> tuple:
+    """The probe run's start state in Box2D units (unscaled velocities)."""
+    start, length = prepared.probe[:2]
+    return _box2d_starts(start, 1.0, length)
+
+
+def _probe_is_run(prepared: _Prepared) -> bool:
+    """Whether the probe run is the run itself up to its first contact: no velocity scale
+    and no start depth that the probe's speed would set."""
+    scale, overlap = prepared.probe[4:6]
+    return scale != "auto" and float(scale) == 1.0 and overlap == 0.0
+
+
+def _scaled(prepared: _Prepared, probe_speed: float | None) -> _Prepared:
+    """Complete ``prepared`` with the velocity scale, start state and derived values that
+    Box2D's approach speed at the first contact of the probe run (``probe_speed``) sets."""
+    start, length, time_step, _, scale, overlap, extent, restitution = prepared.probe
+    if scale == "auto":
+        scale = 1.0
+        if probe_speed is not None and probe_speed > 0.0:
+            target = _AUTO_MARGIN * VELOCITY_THRESHOLD
+            while scale * probe_speed < target and scale < _MAX_AUTO_SCALE:
+                scale *= 2.0
+    velocity = prepared.velocity = float(scale)
+    # The overlap as a time along the path: depth = overlap·extent at the approach speed.
+    advance = 0.0
+    if overlap > 0.0 and probe_speed is not None and probe_speed > 0.0:
+        advance = overlap * extent / probe_speed
+    prepared.starts = _box2d_starts(start, velocity, length, advance)
+    prepared.dt = time_step * length / velocity
+    prepared.derived = {
+        "velocity_scale": velocity,
+        "length_scale": length,
+        "box2d_time_step": prepared.dt,
+        "speed_cap": MAX_TRANSLATION / (length * time_step),
+        "angular_speed_cap": MAX_ROTATION / time_step,
+    }
+    prepared.notes = _speed_results(prepared.derived, probe_speed, velocity, restitution)
+    return prepared
+
+
+def _speed_results(derived: dict, probe_speed: float | None, velocity: float,
+                   restitution: float) -> tuple[str, ...]:
+    """Add the impact speed Box2D saw to ``derived``; the threshold's note if it zeroed e."""
+    if probe_speed is None:
+        return ()
+    derived["box2d_impact_speed"] = probe_speed * velocity
+    cleared = probe_speed * velocity > VELOCITY_THRESHOLD
+    derived["restitution_threshold_cleared"] = cleared
+    if not cleared and restitution > 0.0:
+        return (THRESHOLD_NOTE,)
+    return ()
 
 
 # ---------------------------------------------------------------------- the adapter
@@ -463,48 +562,15 @@ class Box2DEngine(Engine):
     def _build(self, scene: Scene, settings, *, contacts: bool = True) -> _World:
         return _World(scene, float(settings["length_scale"]), float(settings["polygon_radius"]))
 
-    def _prepare(self, world: _World, scene: Scene, settings, start) -> _Prepared:
-        prepared = _Prepared()
-        length = world.length
-        time_step = float(settings["time_step"])
-        prepared.world_values = tuple(bool(settings[key]) for key in _BOOL_KEYS)
-        prepared.pair_values = (float(scene.restitution), float(scene.friction))
-        prepared.iterations = (int(settings["velocity_iterations"]),
-                               int(settings["position_iterations"]))
+    def _prepare(self, world: _World | None, scene: Scene, settings, start) -> _Prepared:
+        prepared = _unprobed(scene, settings, start)
+        if world is None:  # run_many: _build_many probes every impact of a batch at once
+            return prepared
         # Measured for every plan: it tells whether the threshold zeroed the bounce.
-        probe_speed = _probe(world, prepared, _box2d_starts(start, 1.0, length),
-                             time_step * length, int(settings["max_steps"]))
-        scale = settings["velocity_scale"]
-        if scale == "auto":
-            scale = 1.0
-            if probe_speed is not None and probe_speed > 0.0:
-                target = _AUTO_MARGIN * VELOCITY_THRESHOLD
-                while scale * probe_speed < target and scale < _MAX_AUTO_SCALE:
-                    scale *= 2.0
-        velocity = prepared.velocity = float(scale)
-        # The overlap as a time along the path: depth = overlap·extent at the approach speed.
-        advance = 0.0
-        overlap = float(settings["detection_overlap"])
-        if overlap > 0.0 and probe_speed is not None and probe_speed > 0.0:
-            advance = overlap * world.extent / probe_speed
-        prepared.starts = _box2d_starts(start, velocity, length, advance)
-        prepared.dt = time_step * length / velocity
-        derived = {
-            "velocity_scale": velocity,
-            "length_scale": length,
-            "box2d_time_step": prepared.dt,
-            "speed_cap": MAX_TRANSLATION / (length * time_step),
-            "angular_speed_cap": MAX_ROTATION / time_step,
-        }
-        notes: tuple[str, ...] = ()
-        if probe_speed is not None:
-            derived["box2d_impact_speed"] = probe_speed * velocity
-            cleared = probe_speed * velocity > VELOCITY_THRESHOLD
-            derived["restitution_threshold_cleared"] = cleared
-            if not cleared and scene.restitution > 0.0:
-                notes = (THRESHOLD_NOTE,)
-        prepared.derived, prepared.notes = derived, notes
-        return prepared
+        _, length, time_step, max_steps = prepared.probe[:4]
+        probe_speed = _probe(world, prepared, _probe_starts(prepared), time_step * length,
+                             max_steps)
+        return _scaled(prepared, probe_speed)
 
     def _reset(self, world: _World, prepared: _Prepared) -> dict:
         world.configure(prepared.world_values, prepared.pair_values)
@@ -525,33 +591,108 @@ class Box2DEngine(Engine):
         world.world.Step(world.dt, *world.iterations)
         if not world.clipped:
             world.clipped = world.at_cap(_CAP_BAND)
-        length, velocity, body_b = world.length, world.velocity, world.body_b
-        step_x = step_y = 0.0
-        points: list = []
-        normal = None
-        for contact in world.world.contacts:
-            if not contact.touching or contact.manifold.pointCount == 0:
-                continue
-            contact_normal, contact_points, separations = _world_manifold(contact, poses)
-            # Overlap of the scene's outlines: the skins are padding, not the bodies.
-            padding = contact.fixtureA.userData + contact.fixtureB.userData
-            # The impulse on scene body B (Box2D applies +P to fixture B's body).
-            sign = 1.0 if contact.fixtureB.body == body_b else -1.0
-            n_x, n_y = contact_normal
-            for point in contact.manifold.points:
-                p_n, p_t = point.normalImpulse, point.tangentImpulse
-                # Box2D's tangent is cross(n, 1) = (n_y, -n_x).
-                step_x += sign * (p_n * n_x + p_t * n_y)
-                step_y += sign * (p_n * n_y - p_t * n_x)
-            points.extend((x / length, y / length, -(separation + padding) / length)
-                          for (x, y), separation in zip(contact_points, separations))
-            if normal is None:
-                normal = (sign * n_x, sign * n_y)
-        if normal is None:
-            return None
-        step_x, step_y = step_x / velocity, step_y / velocity
-        return (tuple(points), normal, (step_x, step_y),
-                abs(step_x * normal[0] + step_y * normal[1]))
+        return _contact_of(world.world.contacts, poses, world)
+
+    # ------------------------------------------------------------------ many impacts
+    def _many_chunks(self, scenes) -> list[range]:
+        """:data:`MANY_CHUNK` scenes in a row to a batch."""
+        return [range(begin, min(begin + MANY_CHUNK, len(scenes)))
+                for begin in range(0, len(scenes), MANY_CHUNK)]
+
+    def _build_many(self, plans) -> tuple[_Batch, list, list]:
+        """b2Worlds stepping many impacts, each impact as :meth:`run` steps it alone.
+
+        The impacts overlap in space (each at its own run-frame coordinates: moving one
+        would change its float32 roundings) and are kept apart by collision filters: every
+        fixture of impact k, its ground's included, is in group k+1 (always collide) with
+        mask 0 (collide with no other group). Box2D solves each island (an impact's bodies
+        and their touching contacts) by itself, collides contact by contact, and creates
+        the contacts of new pairs in the order of the proxies' ids, which keep each impact's
+        own order; time-of-impact events advance only their own bodies. So an impact's
+        arithmetic is the one it has alone (the tests compare them bit for bit).
+
+        First the probe runs of every impact in one world (unscaled, each impact put to
+        sleep once its speed is known); then one world per Box2D time step (the velocity
+        scales differ: a world steps by one time step, and warm starting scales impulses by
+        the ratio of consecutive steps). When the probe run is the run's own beginning (no
+        velocity scale or start depth to set), the runs measure the speed themselves.
+        ``sub_stepping`` handles one time-of-impact event per step in the whole world: each
+        impact then gets a world of its own.
+        """
+        prepared = [plan.prepared for plan in plans]
+        first = prepared[0]  # one settings dict for every plan
+        world_values, iterations = first.world_values, first.iterations
+        _, length, time_step, max_steps = first.probe[:4]
+        skin = float(plans[0].settings["polygon_radius"])
+        scenes = [plan.scene for plan in plans]
+        measure_in_run = _probe_is_run(first)
+        if not measure_in_run:
+            speeds = _probe_many(scenes, prepared, length, skin, time_step * length,
+                                 max_steps)
+            prepared = [_scaled(copy.copy(one), speed) for one, speed in zip(prepared, speeds)]
+        else:
+            prepared = [_scaled(copy.copy(one), None) for one in prepared]
+        groups: dict = {}
+        for slot, one in enumerate(prepared):
+            key = slot if world_values[2] else one.dt  # sub_stepping: a world per impact
+            groups.setdefault(key, []).append(slot)
+        batch = _Batch(len(plans))
+        for slots in groups.values():
+            dt = prepared[slots[0]].dt
+            world, views = _many_world([scenes[slot] for slot in slots],
+                                       [prepared[slot] for slot in slots], slots, length,
+                                       skin, world_values)
+            for slot, view in zip(slots, views):
+                view.world = len(batch.worlds)
+                view.dt, view.velocity = dt, prepared[slot].velocity
+                view.notes = prepared[slot].notes
+                view.clipped = _at_cap(view.bodies, dt, 1.0)
+                batch.slots[slot] = view
+            batch.worlds.append((world, dt, iterations))
+            if measure_in_run:
+                listener = _ManyProbe(views, measure_run=True)
+                world.contactListener = listener
+                batch.listeners.append((world, listener))
+        derived = [one.derived for one in prepared]
+        for view, values in zip(batch.slots, derived):
+            view.derived = values
+        return batch, batch.slots, derived
+
+    def _step_many(self, batch: _Batch, active) -> dict:
+        slots = batch.slots
+        # Contacts are collided at the step's start: their geometry needs these poses.
+        poses = [{b2_body: _pose(b2_body) for b2_body in slots[slot].bodies}
+                 for slot in active]
+        stepping = {slots[slot].world for slot in active}
+        for index, (world, dt, iterations) in enumerate(batch.worlds):
+            if index in stepping:
+                world.Step(dt, *iterations)
+        contacts = {}
+        for slot, slot_poses in zip(active, poses):
+            view = slots[slot]
+            if not view.clipped:
+                view.clipped = _at_cap(view.bodies, view.dt, _CAP_BAND)
+            # Every contact of an impact involves its body B (the ground's partner or the
+            # other body); the body's list keeps the world's order of them.
+            raw = _contact_of([edge.contact for edge in view.body_b.contacts], slot_poses, view)
+            if raw is not None:
+                contacts[slot] = raw
+        if batch.listeners:
+            batch.listeners = [(world, listener) for world, listener in batch.listeners
+                               if not listener.done(world)]
+        return contacts
+
+    def _retire(self, batch: _Batch, slot: int) -> None:
+        view = batch.slots[slot]
+        for b2_body in view.bodies:
+            b2_body.awake = False  # a sleeping impact is neither collided nor solved
+
+    def _release_many(self, batch: _Batch) -> None:
+        for world, _ in batch.listeners:
+            world.contactListener = None
+        batch.listeners = []
+        batch.worlds = []
+        batch.slots = []
 
     def _read_poses(self, world: _World) -> tuple:
         length = world.length
@@ -591,6 +732,153 @@ def _probe(world: _World, prepared: _Prepared, starts: tuple, dt: float,
     finally:
         b2_world.contactListener = None
     return probe.speed
+
+
+# ---------------------------------------------------------------------- many impacts
+#: Impacts per batch in run_many (measured: see docs/engines.md, Box2D).
+MANY_CHUNK = 64
+
+
+def _contact_of(contacts, poses: dict, world) -> RawContacts | None:
+    """The step's contact of one impact from its Box2D ``contacts`` (world order);
+    ``poses``: its bodies' poses at the step's start; ``world``: a :class:`_World` or
+    :class:`_Slot` (length and velocity scales, body B)."""
+    length, velocity, body_b = world.length, world.velocity, world.body_b
+    step_x = step_y = 0.0
+    points: list = []
+    normal = None
+    for contact in contacts:
+        if not contact.touching or contact.manifold.pointCount == 0:
+            continue
+        contact_normal, contact_points, separations = _world_manifold(contact, poses)
+        # Overlap of the scene's outlines: the skins are padding, not the bodies.
+        padding = contact.fixtureA.userData + contact.fixtureB.userData
+        # The impulse on scene body B (Box2D applies +P to fixture B's body).
+        sign = 1.0 if contact.fixtureB.body == body_b else -1.0
+        n_x, n_y = contact_normal
+        for point in contact.manifold.points:
+            p_n, p_t = point.normalImpulse, point.tangentImpulse
+            # Box2D's tangent is cross(n, 1) = (n_y, -n_x).
+            step_x += sign * (p_n * n_x + p_t * n_y)
+            step_y += sign * (p_n * n_y - p_t * n_x)
+        points.extend((x / length, y / length, -(separation + padding) / length)
+                      for (x, y), separation in zip(contact_points, separations))
+        if normal is None:
+            normal = (sign * n_x, sign * n_y)
+    if normal is None:
+        return None
+    step_x, step_y = step_x / velocity, step_y / velocity
+    return (tuple(points), normal, (step_x, step_y),
+            abs(step_x * normal[0] + step_y * normal[1]))
+
+
+class _Slot:
+    """One impact of a batch: what _read_poses, _read_velocities and _run_notes read (the
+    attributes of a :class:`_World` they use)."""
+
+    __slots__ = ("bodies", "body_b", "clipped", "derived", "dt", "length", "notes",
+                 "restitution", "velocity", "world")
+
+    def __init__(self, bodies: list, length: float) -> None:
+        self.bodies, self.body_b, self.length = bodies, bodies[-1], length
+        self.velocity, self.dt, self.clipped = 1.0, 0.0, False
+        self.notes: tuple[str, ...] = ()
+        self.derived: dict = {}
+        self.restitution = 0.0
+        self.world = 0  # index of its b2World in the batch
+
+
+class _Batch:
+    """The b2Worlds of a batch: ``(world, dt, iterations)`` each, every impact's
+    :class:`_Slot`, and the listeners still measuring approach speeds."""
+
+    __slots__ = ("listeners", "slots", "worlds")
+
+    def __init__(self, count: int) -> None:
+        self.worlds: list = []
+        self.slots: list = [None] * count
+        self.listeners: list = []
+
+
+def _many_world(scenes, prepared, slots, length: float, skin: float, world_values: tuple,
+                probe: bool = False) -> tuple:
+    """A b2World holding every scene at its start (``prepared``: its ``starts``, or the
+    probe's with ``probe``), and one :class:`_Slot` each (bodies' userData: the slot)."""
+    world = b2.world(gravity=(0.0, 0.0), doSleep=True)
+    _set_switches(world, world_values)
+    views = []
+    for slot, scene, one in zip(slots, scenes, prepared):
+        group = {"groupIndex": slot + 1, "maskBits": 0}
+        fixtures, bodies, _ = _add_impact(world, scene, length, skin, group,
+                                          _probe_starts(one) if probe else one.starts)
+        _set_pair_values(fixtures, one.pair_values)
+        for b2_body in bodies:
+            b2_body.userData = slot
+        view = _Slot(bodies, length)
+        view.restitution = one.pair_values[0]
+        views.append(view)
+    world.contactManager.FindNewContacts()
+    return world, views
+
+
+def _slot_of(contact) -> int:
+    """The batch slot of a contact (the ground's body has no userData)."""
+    slot = contact.fixtureB.body.userData
+    return contact.fixtureA.body.userData if slot is None else slot
+
+
+class _ManyProbe(b2.contactListener):
+    """PreSolve listener of a batch world: each impact's approach speed at its first
+    touching contact (:class:`_SpeedProbe` for many impacts)."""
+
+    def __init__(self, views, measure_run: bool = False):
+        super().__init__()
+        self.speeds: dict[int, float] = {}
+        self.views = {view.body_b.userData: view for view in views}
+        self.measure_run = measure_run  # the runs' own speeds: into derived and notes
+
+    def PreSolve(self, contact, old_manifold):
+        if not contact.touching or contact.manifold.pointCount == 0:
+            return
+        slot = _slot_of(contact)
+        if slot in self.speeds:
+            return
+        speed = self.speeds[slot] = _approach_speed(contact)
+        if self.measure_run:
+            view = self.views[slot]
+            view.notes = _speed_results(view.derived, speed, view.velocity, view.restitution)
+
+    def done(self, world) -> bool:
+        """Whether every impact's speed is known (the listener is then taken off)."""
+        if len(self.speeds) < len(self.views):
+            return False
+        world.contactListener = None
+        return True
+
+
+def _probe_many(scenes, prepared, length: float, skin: float, dt: float,
+                max_steps: int) -> list[float | None]:
+    """:func:`_probe` of every scene in one world: each impact sleeps once its speed is
+    known, as its probe run would stop."""
+    slots = list(range(len(scenes)))
+    world, views = _many_world(scenes, prepared, slots, length, skin,
+                               prepared[0].world_values, probe=True)
+    listener = _ManyProbe(views)
+    world.contactListener = listener
+    iterations = prepared[0].iterations
+    asleep: set[int] = set()
+    try:
+        for _ in range(max_steps):
+            world.Step(dt, *iterations)
+            for slot in listener.speeds.keys() - asleep:
+                for b2_body in views[slot].bodies:
+                    b2_body.awake = False
+                asleep.add(slot)
+            if len(asleep) == len(views):
+                break
+    finally:
+        world.contactListener = None
+    return [listener.speeds.get(slot) for slot in slots]
 
 
 ENGINE_CLASS = Box2DEngine
