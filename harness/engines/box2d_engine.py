@@ -594,6 +594,19 @@ class Box2DEngine(Engine):
         return _contact_of(world.world.contacts, poses, world)
 
     # ------------------------------------------------------------------ many impacts
+    def run_many(self, scenes, settings=None, *, preset="accurate", overrides=None) -> list:
+        """:meth:`Engine.run_many`; with ``sub_stepping`` the impacts run one by one.
+
+        Sub-stepping handles one time-of-impact event per step in the whole world and leaves
+        the world's step unfinished (the next ``b2World::Step`` only resumes it): impacts
+        sharing a world would steer each other.
+        """
+        resolved, _ = self._resolve(settings, preset, overrides)
+        if resolved["sub_stepping"]:
+            return [self.run(scene, settings, preset=preset, overrides=overrides)
+                    for scene in scenes]
+        return super().run_many(scenes, settings, preset=preset, overrides=overrides)
+
     def _many_chunks(self, scenes) -> list[range]:
         """:data:`MANY_CHUNK` scenes in a row to a batch."""
         return [range(begin, min(begin + MANY_CHUNK, len(scenes)))
@@ -616,8 +629,6 @@ class Box2DEngine(Engine):
         scales differ: a world steps by one time step, and warm starting scales impulses by
         the ratio of consecutive steps). When the probe run is the run's own beginning (no
         velocity scale or start depth to set), the runs measure the speed themselves.
-        ``sub_stepping`` handles one time-of-impact event per step in the whole world: each
-        impact then gets a world of its own.
         """
         prepared = [plan.prepared for plan in plans]
         first = prepared[0]  # one settings dict for every plan
@@ -634,8 +645,7 @@ class Box2DEngine(Engine):
             prepared = [_scaled(copy.copy(one), None) for one in prepared]
         groups: dict = {}
         for slot, one in enumerate(prepared):
-            key = slot if world_values[2] else one.dt  # sub_stepping: a world per impact
-            groups.setdefault(key, []).append(slot)
+            groups.setdefault(one.dt, []).append(slot)
         batch = _Batch(len(plans))
         for slots in groups.values():
             dt = prepared[slots[0]].dt
