@@ -98,7 +98,7 @@ def test_sub_stepping_runs_one_by_one(population_scenes):
     # depends on what its world ran before, and shared worlds would mix impacts. run_many
     # runs the impacts in order, as run does: two fresh engines give the same runs.
     scenes = population_scenes[::5]
-    batched_engine, single_engine = load_engine("box2d"), load_engine("box2d")
+    batched_engine, single_engine = box2d_engine.Box2DEngine(), box2d_engine.Box2DEngine()
     settings = batched_engine.settings("accurate", {"sub_stepping": True})
     assert batched_engine.run_many(scenes, settings) == [
         single_engine.run(scene, settings) for scene in scenes]
