@@ -182,9 +182,15 @@ def _polygon_fixture(body, vertices, radius: float, group: dict, skin_first: boo
         )
     fixture.shape.radius = radius
     # The skin pads the scene's outline: a contact's overlap of the scene's bodies is its
-    # separation plus the skins (a rod's core sets its own userData to 0: inset by its skin).
-    fixture.userData = radius
+    # separation plus the skins (a rod's core sets its own padding to 0: inset by its skin).
+    _set_fixture_data(fixture, radius)
     return fixture
+
+
+def _set_fixture_data(fixture, padding: float) -> None:
+    """userData ``(padding, radius)``: how far the fixture pads the scene's outline, and its
+    shape's radius as Box2D holds it (float32); the readout takes both in one call."""
+    fixture.userData = (padding, fixture.shape.radius)
 
 
 def _add_fixtures(b2_body, shape, length: float, skin: float, group: dict,
@@ -194,7 +200,7 @@ def _add_fixtures(b2_body, shape, length: float, skin: float, group: dict,
     :func:`_polygon_fixture`)."""
     if shape.kind == "disk":
         disk = b2_body.CreateCircleFixture(radius=shape.radius * length, density=0.0, **group)
-        disk.userData = 0.0  # a circle's radius is the disk's own
+        _set_fixture_data(disk, 0.0)  # a circle's radius is the disk's own
         return [disk]
     if shape.kind == "rod":
         half, radius = shape.length / 2.0 * length, shape.radius * length
@@ -207,9 +213,9 @@ def _add_fixtures(b2_body, shape, length: float, skin: float, group: dict,
             b2_body,
             [(-half, -thickness), (half, -thickness), (half, thickness), (-half, thickness)],
             core_skin, group, skin_first)
-        core.userData = 0.0  # its skin lies inside the capsule's outline
+        _set_fixture_data(core, 0.0)  # its skin lies inside the capsule's outline
         for cap in caps:
-            cap.userData = 0.0
+            _set_fixture_data(cap, 0.0)
         return [*caps, core]
     vertices = [(x * length, y * length) for x, y in shape.vertices().tolist()]
     return [_polygon_fixture(b2_body, vertices, skin, group, skin_first)]
@@ -288,8 +294,8 @@ def _place(bodies, starts: tuple) -> None:
 def _at_cap(bodies, dt: float, band: float) -> bool:
     """Whether a body's velocity reaches ``band`` times Box2D's per-step caps."""
     for b2_body in bodies:
-        vx, vy = b2_body.linearVelocity
-        if math.hypot(vx, vy) * dt > band * MAX_TRANSLATION:
+        linear = b2_body.linearVelocity
+        if math.hypot(linear.x, linear.y) * dt > band * MAX_TRANSLATION:
             return True
         if abs(b2_body.angularVelocity) * dt > band * MAX_ROTATION:
             return True
@@ -351,31 +357,49 @@ class _World:
 def _pose(body) -> tuple[float, float, float, float]:
     """``(x, y, cos θ, sin θ)`` of a Box2D body's transform now."""
     transform = body.transform
-    x, y = transform.position
-    return x, y, transform.q.c, transform.q.s
+    position, rotation = transform.position, transform.q
+    return position.x, position.y, rotation.c, rotation.s
+
+
+#: A body's identity (its C++ address): poses are keyed by it (a b2Body wrapper compares
+#: through a Python function, and each access to a contact's body makes a new wrapper).
+_body_id = Box2D._Box2D.b2Body___hash__
+_CIRCLES = Box2D.b2Manifold.e_circles
+_FACE_A = Box2D.b2Manifold.e_faceA
 
 
 def _world_manifold(contact, poses=None) -> tuple[tuple[float, float], list, list]:
+    """``(normal from fixture A to B, points, separations)`` of a contact, in world frame
+    (:func:`_manifold_geometry` of the contact's manifold, at the poses now)."""
+    manifold = contact.manifold
+    fixture_a, fixture_b = contact.fixtureA, contact.fixtureB
+    return _manifold_geometry(manifold, manifold.points, fixture_a.body, fixture_b.body,
+                              fixture_a.userData[1], fixture_b.userData[1], poses)
+
+
+def _manifold_geometry(manifold, manifold_points, body_a, body_b, radius_a: float,
+                       radius_b: float, poses) -> tuple[tuple[float, float], list, list]:
     """``(normal from fixture A to B, points, separations)`` of a contact, in world frame.
 
     b2WorldManifold::Initialize redone in Python (pybox2d's ``worldManifold`` returned an
     uninitialised normal), with the separations of the skinned shapes (Box2D's, negative
-    within the summed skins). ``poses`` maps a body to
+    within the summed skins). ``manifold_points``: the manifold's points in use; ``radius_a``,
+    ``radius_b``: the fixtures' shape radii; ``poses`` maps a body's :data:`_body_id` to
     its ``_pose`` when the manifold was computed (the start of the step: after the step the
     bodies have moved, which would turn a circle pair's normal); by default the poses now.
     """
-    manifold = contact.manifold
-    fixture_a, fixture_b = contact.fixtureA, contact.fixtureB
-    body_a, body_b = fixture_a.body, fixture_b.body
-    radius_a, radius_b = fixture_a.shape.radius, fixture_b.shape.radius
-    pa_x, pa_y, ca, sa = poses[body_a] if poses and body_a in poses else _pose(body_a)
-    pb_x, pb_y, cb, sb = poses[body_b] if poses and body_b in poses else _pose(body_b)
+    pose_a = poses.get(_body_id(body_a)) if poses else None
+    pose_b = poses.get(_body_id(body_b)) if poses else None
+    pa_x, pa_y, ca, sa = _pose(body_a) if pose_a is None else pose_a
+    pb_x, pb_y, cb, sb = _pose(body_b) if pose_b is None else pose_b
     kind = manifold.type_
     points, separations = [], []
-    if kind == Box2D.b2Manifold.e_circles:
-        lx, ly = manifold.localPoint
+    if kind == _CIRCLES:
+        local = manifold.localPoint
+        lx, ly = local.x, local.y
         ax, ay = ca * lx - sa * ly + pa_x, sa * lx + ca * ly + pa_y
-        lx, ly = manifold.points[0].localPoint
+        local = manifold_points[0].localPoint
+        lx, ly = local.x, local.y
         bx, by = cb * lx - sb * ly + pb_x, sb * lx + cb * ly + pb_y
         dx, dy = bx - ax, by - ay
         distance = math.hypot(dx, dy)
@@ -385,18 +409,21 @@ def _world_manifold(contact, poses=None) -> tuple[tuple[float, float], list, lis
         points.append((0.5 * (c_ax + c_bx), 0.5 * (c_ay + c_by)))
         separations.append(distance - radius_a - radius_b)
         return normal, points, separations
-    face_a = kind == Box2D.b2Manifold.e_faceA
+    face_a = kind == _FACE_A
     (c_ref, s_ref, p_ref_x, p_ref_y, r_ref) = (ca, sa, pa_x, pa_y, radius_a) if face_a else (
         cb, sb, pb_x, pb_y, radius_b)
     (c_inc, s_inc, p_inc_x, p_inc_y, r_inc) = (cb, sb, pb_x, pb_y, radius_b) if face_a else (
         ca, sa, pa_x, pa_y, radius_a)
-    lx, ly = manifold.localNormal
+    local = manifold.localNormal
+    lx, ly = local.x, local.y
     nx, ny = c_ref * lx - s_ref * ly, s_ref * lx + c_ref * ly
-    lx, ly = manifold.localPoint
+    local = manifold.localPoint
+    lx, ly = local.x, local.y
     plane_x = c_ref * lx - s_ref * ly + p_ref_x
     plane_y = s_ref * lx + c_ref * ly + p_ref_y
-    for index in range(manifold.pointCount):
-        lx, ly = manifold.points[index].localPoint
+    for manifold_point in manifold_points:
+        local = manifold_point.localPoint
+        lx, ly = local.x, local.y
         qx = c_inc * lx - s_inc * ly + p_inc_x
         qy = s_inc * lx + c_inc * ly + p_inc_y
         height = (qx - plane_x) * nx + (qy - plane_y) * ny
@@ -587,7 +614,7 @@ class Box2DEngine(Engine):
     def _step(self, world: _World) -> RawContacts | None:
         bodies = world.bodies
         # Contacts are collided at the step's start: their geometry needs these poses.
-        poses = {b2_body: _pose(b2_body) for b2_body in bodies}
+        poses = {_body_id(b2_body): _pose(b2_body) for b2_body in bodies}
         world.world.Step(world.dt, *world.iterations)
         if not world.clipped:
             world.clipped = world.at_cap(_CAP_BAND)
@@ -671,7 +698,7 @@ class Box2DEngine(Engine):
     def _step_many(self, batch: _Batch, active) -> dict:
         slots = batch.slots
         # Contacts are collided at the step's start: their geometry needs these poses.
-        poses = [{b2_body: _pose(b2_body) for b2_body in slots[slot].bodies}
+        poses = [{_body_id(b2_body): _pose(b2_body) for b2_body in slots[slot].bodies}
                  for slot in active]
         stepping = {slots[slot].world for slot in active}
         for index, (world, dt, iterations) in enumerate(batch.worlds):
@@ -708,7 +735,8 @@ class Box2DEngine(Engine):
         length = world.length
         poses = []
         for b2_body in world.bodies:
-            x, y = b2_body.position
+            position = b2_body.position
+            x, y = position.x, position.y
             poses.append((x / length, y / length, b2_body.angle))
         return tuple(poses)
 
@@ -716,7 +744,8 @@ class Box2DEngine(Engine):
         velocity, rate = world.velocity, world.length / world.velocity
         velocities = []
         for b2_body in world.bodies:
-            vx, vy = b2_body.linearVelocity
+            linear = b2_body.linearVelocity
+            vx, vy = linear.x, linear.y
             velocities.append((vx / velocity, vy / velocity, b2_body.angularVelocity * rate))
         return tuple(velocities)
 
@@ -751,22 +780,31 @@ MANY_CHUNK = 64
 
 def _contact_of(contacts, poses: dict, world) -> RawContacts | None:
     """The step's contact of one impact from its Box2D ``contacts`` (world order);
-    ``poses``: its bodies' poses at the step's start; ``world``: a :class:`_World` or
-    :class:`_Slot` (length and velocity scales, body B)."""
-    length, velocity, body_b = world.length, world.velocity, world.body_b
+    ``poses``: its bodies' poses at the step's start by :data:`_body_id`; ``world``: a
+    :class:`_World` or :class:`_Slot` (length and velocity scales, body B)."""
+    length, velocity, body_b = world.length, world.velocity, _body_id(world.body_b)
     step_x = step_y = 0.0
     points: list = []
     normal = None
     for contact in contacts:
-        if not contact.touching or contact.manifold.pointCount == 0:
+        if not contact.touching:
             continue
-        contact_normal, contact_points, separations = _world_manifold(contact, poses)
+        manifold = contact.manifold
+        manifold_points = manifold.points
+        if not manifold_points:
+            continue
+        fixture_a, fixture_b = contact.fixtureA, contact.fixtureB
+        (padding_a, radius_a), (padding_b, radius_b) = fixture_a.userData, fixture_b.userData
+        contact_body_b = fixture_b.body
+        contact_normal, contact_points, separations = _manifold_geometry(
+            manifold, manifold_points, fixture_a.body, contact_body_b, radius_a, radius_b,
+            poses)
         # Overlap of the scene's outlines: the skins are padding, not the bodies.
-        padding = contact.fixtureA.userData + contact.fixtureB.userData
+        padding = padding_a + padding_b
         # The impulse on scene body B (Box2D applies +P to fixture B's body).
-        sign = 1.0 if contact.fixtureB.body == body_b else -1.0
+        sign = 1.0 if _body_id(contact_body_b) == body_b else -1.0
         n_x, n_y = contact_normal
-        for point in contact.manifold.points:
+        for point in manifold_points:
             p_n, p_t = point.normalImpulse, point.tangentImpulse
             # Box2D's tangent is cross(n, 1) = (n_y, -n_x).
             step_x += sign * (p_n * n_x + p_t * n_y)
