@@ -654,8 +654,10 @@ class Box2DEngine(Engine):
         First the probe runs of every impact in one world (unscaled, each impact put to
         sleep once its speed is known); then one world per Box2D time step (the velocity
         scales differ: a world steps by one time step, and warm starting scales impulses by
-        the ratio of consecutive steps). When the probe run is the run's own beginning (no
-        velocity scale or start depth to set), the runs measure the speed themselves.
+        the ratio of consecutive steps). The largest group runs in the probe's world, placed
+        anew (:func:`_place` leaves nothing of the probe). When the probe run is the run's
+        own beginning (no velocity scale or start depth to set), the runs measure the speed
+        themselves.
         """
         prepared = [plan.prepared for plan in plans]
         first = prepared[0]  # one settings dict for every plan
@@ -664,9 +666,10 @@ class Box2DEngine(Engine):
         skin = float(plans[0].settings["polygon_radius"])
         scenes = [plan.scene for plan in plans]
         measure_in_run = _probe_is_run(first)
+        probe_world = None
         if not measure_in_run:
-            speeds = _probe_many(scenes, prepared, length, skin, time_step * length,
-                                 max_steps)
+            speeds, probe_world, probe_views = _probe_many(
+                scenes, prepared, length, skin, time_step * length, max_steps)
             prepared = [_scaled(copy.copy(one), speed) for one, speed in zip(prepared, speeds)]
         else:
             prepared = [_scaled(copy.copy(one), None) for one in prepared]
@@ -674,11 +677,18 @@ class Box2DEngine(Engine):
         for slot, one in enumerate(prepared):
             groups.setdefault(one.dt, []).append(slot)
         batch = _Batch(len(plans))
-        for slots in groups.values():
+        # The largest group runs in the probe's world (placed anew, as run places a
+        # world's bodies after its probe); the others in worlds of their own.
+        for slots in sorted(groups.values(), key=len, reverse=True):
             dt = prepared[slots[0]].dt
-            world, views = _many_world([scenes[slot] for slot in slots],
-                                       [prepared[slot] for slot in slots], slots, length,
-                                       skin, world_values)
+            if probe_world is not None:
+                world, views = probe_world, [probe_views[slot] for slot in slots]
+                _replace(world, probe_views, set(slots), prepared)
+                probe_world = None
+            else:
+                world, views = _many_world([scenes[slot] for slot in slots],
+                                           [prepared[slot] for slot in slots], slots, length,
+                                           skin, world_values)
             for slot, view in zip(slots, views):
                 view.world = len(batch.worlds)
                 view.dt, view.velocity = dt, prepared[slot].velocity
@@ -904,10 +914,25 @@ class _ManyProbe(b2.contactListener):
         return True
 
 
+def _replace(world, views, kept: set, prepared) -> None:
+    """Put the impacts ``kept`` of a probe world at their run's start (``prepared``), as
+    :meth:`_World.place` does; the others sleep (never collided or solved again)."""
+    manager = world.contactManager
+    for slot, view in enumerate(views):
+        if slot in kept:
+            for contact in [edge.contact for edge in view.body_b.contacts]:
+                manager.Destroy(contact)
+            _place(view.bodies, prepared[slot].starts)
+        else:
+            for b2_body in view.bodies:
+                b2_body.awake = False
+    manager.FindNewContacts()
+
+
 def _probe_many(scenes, prepared, length: float, skin: float, dt: float,
-                max_steps: int) -> list[float | None]:
+                max_steps: int) -> tuple[list[float | None], object, list]:
     """:func:`_probe` of every scene in one world: each impact sleeps once its speed is
-    known, as its probe run would stop."""
+    known, as its probe run would stop. ``(speeds, world, slots)``."""
     slots = list(range(len(scenes)))
     world, views = _many_world(scenes, prepared, slots, length, skin,
                                prepared[0].world_values, probe=True)
@@ -926,7 +951,7 @@ def _probe_many(scenes, prepared, length: float, skin: float, dt: float,
                 break
     finally:
         world.contactListener = None
-    return [listener.speeds.get(slot) for slot in slots]
+    return [listener.speeds.get(slot) for slot in slots], world, views
 
 
 ENGINE_CLASS = Box2DEngine
