@@ -60,6 +60,7 @@ from __future__ import annotations
 
 import copy
 import math
+from typing import NamedTuple
 
 import Box2D
 from Box2D import b2
@@ -222,18 +223,19 @@ def _add_fixtures(b2_body, shape, length: float, skin: float, group: dict,
 
 
 def _add_impact(world, scene: Scene, length: float, skin: float, group: dict,
-                starts: tuple | None = None) -> tuple:
+                starts: tuple | None = None, extent: float | None = None) -> tuple:
     """``(fixtures, bodies, body_fixtures)``: the scene's ground and bodies in ``world``.
 
     The bodies are made at the origin, for :func:`_place` to put them at a run's start; or,
     given ``starts`` (run_many), made there: their proxies then hold what :func:`_place`
-    gives them (boxes fitted around the start pose, a zero sleep timer).
+    gives them (boxes fitted around the start pose, a zero sleep timer). ``extent``: the
+    scene's :func:`_extent` when known.
     """
     fixtures: list = []
     if scene.ground:
         # Half-width a few body extents: float32 clipping against a far ground vertex
         # loses ~|vertex|·1e-7 m.
-        width = _GROUND_EXTENT_FACTOR * _extent(scene) * length
+        width = _GROUND_EXTENT_FACTOR * (_extent(scene) if extent is None else extent) * length
         ground = world.CreateStaticBody()
         fixtures.append(_polygon_fixture(
             ground, [(-width, -width), (width, -width), (width, 0.0), (-width, 0.0)], skin,
@@ -477,6 +479,19 @@ def _box2d_starts(start, velocity: float, length: float, advance: float = 0.0) -
     )
 
 
+class _ProbeInputs(NamedTuple):
+    """What the probe run needs, and the settings that act on its result."""
+
+    start: tuple  # run-frame start state (contract BodyState per body)
+    length: float  # length_scale
+    time_step: float  # s, scene units
+    max_steps: int
+    velocity_scale: float | str  # the setting: a number or "auto"
+    overlap: float  # detection_overlap, body extents
+    extent: float  # m, the largest body extent
+    restitution: float
+
+
 class _Prepared:
     """A run's Box2D form: switches, pair values, sweeps, scales, start state, derived.
 
@@ -498,23 +513,23 @@ def _unprobed(scene: Scene, settings, start) -> _Prepared:
     prepared.pair_values = (float(scene.restitution), float(scene.friction))
     prepared.iterations = (int(settings["velocity_iterations"]),
                            int(settings["position_iterations"]))
-    prepared.probe = (start, length, time_step, int(settings["max_steps"]),
-                      settings["velocity_scale"], float(settings["detection_overlap"]),
-                      _extent(scene), float(scene.restitution))
+    prepared.probe = _ProbeInputs(start, length, time_step, int(settings["max_steps"]),
+                                  settings["velocity_scale"],
+                                  float(settings["detection_overlap"]), _extent(scene),
+                                  float(scene.restitution))
     return prepared
 
 
 def _probe_starts(prepared: _Prepared) -> tuple:
     """The probe run's start state in Box2D units (unscaled velocities)."""
-    start, length = prepared.probe[:2]
-    return _box2d_starts(start, 1.0, length)
+    return _box2d_starts(prepared.probe.start, 1.0, prepared.probe.length)
 
 
 def _probe_is_run(prepared: _Prepared) -> bool:
     """Whether the probe run is the run itself up to its first contact: no velocity scale
     and no start depth that the probe's speed would set."""
-    scale, overlap = prepared.probe[4:6]
-    return scale != "auto" and float(scale) == 1.0 and overlap == 0.0
+    scale = prepared.probe.velocity_scale
+    return scale != "auto" and float(scale) == 1.0 and prepared.probe.overlap == 0.0
 
 
 def _scaled(prepared: _Prepared, probe_speed: float | None) -> _Prepared:
@@ -594,9 +609,9 @@ class Box2DEngine(Engine):
         if world is None:  # run_many: _build_many probes every impact of a batch at once
             return prepared
         # Measured for every plan: it tells whether the threshold zeroed the bounce.
-        _, length, time_step, max_steps = prepared.probe[:4]
-        probe_speed = _probe(world, prepared, _probe_starts(prepared), time_step * length,
-                             max_steps)
+        probe = prepared.probe
+        probe_speed = _probe(world, prepared, _probe_starts(prepared),
+                             probe.time_step * probe.length, probe.max_steps)
         return _scaled(prepared, probe_speed)
 
     def _reset(self, world: _World, prepared: _Prepared) -> dict:
@@ -662,7 +677,8 @@ class Box2DEngine(Engine):
         prepared = [plan.prepared for plan in plans]
         first = prepared[0]  # one settings dict for every plan
         world_values, iterations = first.world_values, first.iterations
-        _, length, time_step, max_steps = first.probe[:4]
+        length, time_step, max_steps = (first.probe.length, first.probe.time_step,
+                                        first.probe.max_steps)
         skin = float(plans[0].settings["polygon_radius"])
         scenes = [plan.scene for plan in plans]
         measure_in_run = _probe_is_run(first)
@@ -868,7 +884,8 @@ def _many_world(scenes, prepared, slots, length: float, skin: float, world_value
     for slot, scene, one in zip(slots, scenes, prepared):
         group = {"groupIndex": slot + 1, "maskBits": 0}
         fixtures, bodies, _ = _add_impact(world, scene, length, skin, group,
-                                          _probe_starts(one) if probe else one.starts)
+                                          _probe_starts(one) if probe else one.starts,
+                                          one.probe.extent)
         _set_pair_values(fixtures, one.pair_values)
         for b2_body in bodies:
             b2_body.userData = slot
