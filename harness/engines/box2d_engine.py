@@ -160,17 +160,10 @@ CLIPPED_NOTE = ("Box2D clipped a velocity (b2_maxTranslation 2 m or b2_maxRotati
 
 
 # ---------------------------------------------------------------------- world building
-def _polygon_fixture(body, vertices, radius: float, group: dict, skin_first: bool = False):
-    """A polygon fixture with skin ``radius``; ``skin_first``: the skin is set before the
-    fixture is made, so that its proxy's box is fitted to it (a body made at its start pose
-    by run_many; :func:`_place` refits the box of a body made at the origin)."""
+def _polygon_fixture(body, vertices, radius: float, keywords: dict | None = None):
+    """A polygon fixture with skin ``radius`` (``keywords``: more b2FixtureDef fields)."""
     try:
-        if skin_first:
-            shape = b2.polygonShape(vertices=vertices)
-            shape.radius = radius
-            fixture = body.CreateFixture(b2.fixtureDef(shape=shape, density=0.0, **group))
-        else:
-            fixture = body.CreatePolygonFixture(vertices=vertices, density=0.0, **group)
+        fixture = body.CreatePolygonFixture(vertices=vertices, density=0.0, **(keywords or {}))
     except (AssertionError, ValueError, RuntimeError) as error:
         raise UnsupportedScene(
             f"engine 'box2d': polygon {vertices!r} refused by b2PolygonShape::Set ({error}); "
@@ -194,18 +187,15 @@ def _set_fixture_data(fixture, padding: float) -> None:
     fixture.userData = (padding, fixture.shape.radius)
 
 
-def _add_fixtures(b2_body, shape, length: float, skin: float, group: dict,
-                  skin_first: bool = False) -> list:
-    """The fixtures of one scene shape on ``b2_body`` (lengths times ``length``; ``group``:
-    the collision filter's keywords, empty for Box2D's default filter; ``skin_first``: see
-    :func:`_polygon_fixture`)."""
+def _add_fixtures(b2_body, shape, length: float, skin: float) -> list:
+    """The fixtures of one scene shape on ``b2_body`` (lengths times ``length``)."""
     if shape.kind == "disk":
-        disk = b2_body.CreateCircleFixture(radius=shape.radius * length, density=0.0, **group)
+        disk = b2_body.CreateCircleFixture(radius=shape.radius * length, density=0.0)
         _set_fixture_data(disk, 0.0)  # a circle's radius is the disk's own
         return [disk]
     if shape.kind == "rod":
         half, radius = shape.length / 2.0 * length, shape.radius * length
-        caps = [b2_body.CreateCircleFixture(radius=radius, pos=(x, 0.0), density=0.0, **group)
+        caps = [b2_body.CreateCircleFixture(radius=radius, pos=(x, 0.0), density=0.0)
                 for x in (-half, half)]
         # Core box inset by its skin: its rounded outline stays inside the capsule.
         core_skin = min(skin, radius / 2.0)
@@ -213,49 +203,121 @@ def _add_fixtures(b2_body, shape, length: float, skin: float, group: dict,
         core = _polygon_fixture(
             b2_body,
             [(-half, -thickness), (half, -thickness), (half, thickness), (-half, thickness)],
-            core_skin, group, skin_first)
+            core_skin)
         _set_fixture_data(core, 0.0)  # its skin lies inside the capsule's outline
         for cap in caps:
             _set_fixture_data(cap, 0.0)
         return [*caps, core]
     vertices = [(x * length, y * length) for x, y in shape.vertices().tolist()]
-    return [_polygon_fixture(b2_body, vertices, skin, group, skin_first)]
+    return [_polygon_fixture(b2_body, vertices, skin)]
 
 
-def _add_impact(world, scene: Scene, length: float, skin: float, group: dict,
-                starts: tuple | None = None, extent: float | None = None) -> tuple:
-    """``(fixtures, bodies, body_fixtures)``: the scene's ground and bodies in ``world``.
-
-    The bodies are made at the origin, for :func:`_place` to put them at a run's start; or,
-    given ``starts`` (run_many), made there: their proxies then hold what :func:`_place`
-    gives them (boxes fitted around the start pose, a zero sleep timer). ``extent``: the
-    scene's :func:`_extent` when known.
-    """
+def _add_impact(world, scene: Scene, length: float, skin: float) -> tuple:
+    """``(fixtures, bodies, body_fixtures)``: the scene's ground and bodies in ``world``,
+    the bodies at the origin (:func:`_place` puts them at a run's start)."""
     fixtures: list = []
     if scene.ground:
-        # Half-width a few body extents: float32 clipping against a far ground vertex
-        # loses ~|vertex|·1e-7 m.
-        width = _GROUND_EXTENT_FACTOR * (_extent(scene) if extent is None else extent) * length
-        ground = world.CreateStaticBody()
         fixtures.append(_polygon_fixture(
-            ground, [(-width, -width), (width, -width), (width, 0.0), (-width, 0.0)], skin,
-            group))
+            world.CreateStaticBody(), _ground_vertices(_extent(scene), length), skin))
     bodies, body_fixtures = [], []
-    for index, body in enumerate(scene.bodies):
-        if starts is None:
-            b2_body = world.CreateDynamicBody(position=(0.0, 0.0))
-        else:
-            position, angle = starts[index][:2]
-            b2_body = world.CreateDynamicBody(position=position, angle=angle)
-        body_fixtures.extend(_add_fixtures(b2_body, body.shape, length, skin, group,
-                                           skin_first=starts is not None))
+    for body in scene.bodies:
+        b2_body = world.CreateDynamicBody(position=(0.0, 0.0))
+        body_fixtures.extend(_add_fixtures(b2_body, body.shape, length, skin))
         b2_body.massData = b2.massData(
             mass=body.mass, center=(0.0, 0.0), I=body.moment_of_inertia * length * length)
-        if starts is not None:
-            b2_body.linearVelocity, b2_body.angularVelocity = starts[index][2:]
         bodies.append(b2_body)
     fixtures.extend(body_fixtures)
     return fixtures, bodies, body_fixtures
+
+
+def _add_batch_impact(world, scene: Scene, group: int, pair_values: tuple, starts: tuple,
+                      length: float, skin: float, extent: float) -> list:
+    """:func:`_add_impact` for run_many, its bodies made at ``starts``, in collision group
+    ``group`` (mask 0: no other group), with the pair's ``(e, μ)``; the bodies.
+
+    The same Box2D objects, made through definitions filled field by field (pybox2d's
+    keyword constructors cost more than the rest of the build), and the same proxies as
+    :func:`_place` leaves: boxes fitted around the start pose (a body's skins are set
+    before its fixtures are made), a zero sleep timer.
+    """
+    restitution, friction = pair_values
+
+    def fixture(body, shape, padding: float):
+        definition = b2.fixtureDef()
+        definition.shape = shape
+        definition.density = 0.0
+        definition.restitution = restitution
+        definition.friction = friction
+        definition.groupIndex = group
+        definition.maskBits = 0
+        made = body.CreateFixture(definition)
+        _set_fixture_data(made, padding)
+        return made
+
+    def polygon(vertices, radius: float):
+        try:
+            shape = b2.polygonShape(vertices=vertices)
+        except (AssertionError, ValueError, RuntimeError) as error:
+            raise UnsupportedScene(
+                f"engine 'box2d': polygon {vertices!r} refused by b2PolygonShape::Set "
+                f"({error}); try a larger length_scale") from error
+        if shape.vertexCount != len(vertices):
+            raise UnsupportedScene(
+                f"engine 'box2d': b2PolygonShape::Set kept {shape.vertexCount} of "
+                f"{len(vertices)} vertices (it welds near vertices); try a larger length_scale")
+        shape.radius = radius
+        return shape
+
+    def circle(radius: float, x: float = 0.0):
+        shape = b2.circleShape()
+        shape.radius = radius
+        if x:
+            shape.pos = (x, 0.0)
+        return shape
+
+    if scene.ground:
+        # The ground as _add_impact makes it: skinned after it is made (its proxy's box
+        # is the default skin's, and a static body is never placed anew).
+        _polygon_fixture(world.CreateStaticBody(), _ground_vertices(extent, length), skin,
+                         {"groupIndex": group, "maskBits": 0,
+                          "restitution": restitution, "friction": friction})
+    bodies = []
+    for body, (position, angle, velocity, angular_velocity) in zip(scene.bodies, starts):
+        definition = b2.bodyDef()
+        definition.type = b2.dynamicBody
+        definition.position = position
+        definition.angle = angle
+        b2_body = world.CreateBody(definition)
+        shape = body.shape
+        if shape.kind == "disk":
+            fixture(b2_body, circle(shape.radius * length), 0.0)
+        elif shape.kind == "rod":
+            half, radius = shape.length / 2.0 * length, shape.radius * length
+            for x in (-half, half):
+                fixture(b2_body, circle(radius, x), 0.0)
+            core_skin = min(skin, radius / 2.0)
+            thickness = radius - core_skin
+            fixture(b2_body, polygon([(-half, -thickness), (half, -thickness),
+                                      (half, thickness), (-half, thickness)], core_skin), 0.0)
+        else:
+            vertices = [(x * length, y * length) for x, y in shape.vertices().tolist()]
+            fixture(b2_body, polygon(vertices, skin), skin)
+        mass_data = b2.massData()
+        mass_data.mass = body.mass
+        mass_data.center = (0.0, 0.0)
+        mass_data.I = body.moment_of_inertia * length * length
+        b2_body.massData = mass_data
+        b2_body.linearVelocity = velocity
+        b2_body.angularVelocity = angular_velocity
+        bodies.append(b2_body)
+    return bodies
+
+
+def _ground_vertices(extent: float, length: float) -> list:
+    """The ground box (top face ``y = 0``): half-width a few body extents (float32 clipping
+    against a far ground vertex loses ~|vertex|·1e-7 m)."""
+    width = _GROUND_EXTENT_FACTOR * extent * length
+    return [(-width, -width), (width, -width), (width, 0.0), (-width, 0.0)]
 
 
 def _extent(scene: Scene) -> float:
@@ -310,7 +372,7 @@ class _World:
     def __init__(self, scene: Scene, length: float, skin: float):
         self.world = b2.world(gravity=(0.0, 0.0), doSleep=True)
         self.fixtures, self.bodies, self.body_fixtures = _add_impact(
-            self.world, scene, length, skin, {})
+            self.world, scene, length, skin)
         self.body_b = self.bodies[-1]
         self.length = length
         self.pair_values: tuple | None = None
@@ -882,11 +944,9 @@ def _many_world(scenes, prepared, slots, length: float, skin: float, world_value
     _set_switches(world, world_values)
     views = []
     for slot, scene, one in zip(slots, scenes, prepared):
-        group = {"groupIndex": slot + 1, "maskBits": 0}
-        fixtures, bodies, _ = _add_impact(world, scene, length, skin, group,
-                                          _probe_starts(one) if probe else one.starts,
-                                          one.probe.extent)
-        _set_pair_values(fixtures, one.pair_values)
+        bodies = _add_batch_impact(world, scene, slot + 1, one.pair_values,
+                                   _probe_starts(one) if probe else one.starts, length, skin,
+                                   one.probe.extent)
         for b2_body in bodies:
             b2_body.userData = slot
         view = _Slot(bodies, length)
