@@ -45,10 +45,15 @@ Pair values: Box2D mixes ``friction = sqrt(μ_A·μ_B)`` and ``restitution = max
 every fixture gets the pair's ``e`` and ``μ`` (``sqrt(μ·μ) == μ`` exactly in float32).
 
 Reuse: before each run every contact is destroyed (with its warm-start impulses), the bodies
-are set to the start state, their broad-phase proxies are touched and the contact manager
-looks for new pairs. The proxies themselves are kept: their ids set the order in which the
-contacts are created and solved, so keeping them makes reruns bit-identical whatever ran
-before (see :meth:`_World.place`).
+are put to sleep (zeroing their sleep timers), moved far away and back to the start state
+(Box2D fits their proxies' boxes anew) and the contact manager looks for new pairs. The
+proxies themselves are kept: their ids set the order in which the contacts are created and
+solved, so keeping them makes reruns bit-identical whatever ran before (see
+:meth:`_World.place`, :func:`_place`).
+
+Many impacts (``run_many``): up to :data:`MANY_CHUNK` impacts share a b2World, kept apart by
+collision groups, with the runs of ``run`` bit for bit (see
+:meth:`Box2DEngine._build_many`).
 
 pybox2d's ``contact.worldManifold`` returned an uninitialised normal here: the adapter
 computes the world manifold itself, from the poses at the step's start (the manifold's).
@@ -863,7 +868,7 @@ def _probe(world: _World, prepared: _Prepared, starts: tuple, dt: float,
 
 # ---------------------------------------------------------------------- many impacts
 #: Impacts per batch in run_many (measured: see docs/engines.md, Box2D).
-MANY_CHUNK = 64
+MANY_CHUNK = 32
 
 
 def _contact_of(contacts, poses: dict, world) -> RawContacts | None:
