@@ -45,10 +45,15 @@ Pair values: Box2D mixes ``friction = sqrt(μ_A·μ_B)`` and ``restitution = max
 every fixture gets the pair's ``e`` and ``μ`` (``sqrt(μ·μ) == μ`` exactly in float32).
 
 Reuse: before each run every contact is destroyed (with its warm-start impulses), the bodies
-are set to the start state, their broad-phase proxies are touched and the contact manager
-looks for new pairs. The proxies themselves are kept: their ids set the order in which the
-contacts are created and solved, so keeping them makes reruns bit-identical whatever ran
-before (see :meth:`_World.place`).
+are put to sleep (zeroing their sleep timers), moved far away and back to the start state
+(Box2D fits their proxies' boxes anew) and the contact manager looks for new pairs. The
+proxies themselves are kept: their ids set the order in which the contacts are created and
+solved, so keeping them makes reruns bit-identical whatever ran before (see
+:meth:`_World.place`, :func:`_place`).
+
+Many impacts (``run_many``): up to :data:`MANY_CHUNK` impacts share a b2World, kept apart by
+collision groups, with the runs of ``run`` bit for bit (see
+:meth:`Box2DEngine._build_many`).
 
 pybox2d's ``contact.worldManifold`` returned an uninitialised normal here: the adapter
 computes the world manifold itself, from the poses at the step's start (the manifold's).
@@ -58,7 +63,9 @@ Settings (``defaults`` | ``accurate``) are listed in :data:`SETTING_DOCS`.
 
 from __future__ import annotations
 
+import copy
 import math
+from typing import NamedTuple
 
 import Box2D
 from Box2D import b2
@@ -88,6 +95,8 @@ _MAX_AUTO_SCALE = 2.0**40  # a scene slower than 2^-39 m/s is refused rather tha
 _GROUND_EXTENT_FACTOR = 8.0  # ground half-width and depth, in body extents (float32 clipping)
 # A velocity Box2D clipped sits at the cap to float32 rounding: this band counts as "at".
 _CAP_BAND = 1.0 - 1e-6
+# Where _place moves a body for a moment (Box2D units): no proxy's fattened box reaches it.
+_FAR_AWAY = (2.0**30, 2.0**30)
 
 SETTING_DOCS: dict[str, str] = {
     "time_step": "s (scene units), b2World::Step timeStep; Box2D has no default, 1/60 is its "
@@ -156,9 +165,10 @@ CLIPPED_NOTE = ("Box2D clipped a velocity (b2_maxTranslation 2 m or b2_maxRotati
 
 
 # ---------------------------------------------------------------------- world building
-def _polygon_fixture(body, vertices, radius: float):
+def _polygon_fixture(body, vertices, radius: float, keywords: dict | None = None):
+    """A polygon fixture with skin ``radius`` (``keywords``: more b2FixtureDef fields)."""
     try:
-        fixture = body.CreatePolygonFixture(vertices=vertices, density=0.0)
+        fixture = body.CreatePolygonFixture(vertices=vertices, density=0.0, **(keywords or {}))
     except (AssertionError, ValueError, RuntimeError) as error:
         raise UnsupportedScene(
             f"engine 'box2d': polygon {vertices!r} refused by b2PolygonShape::Set ({error}); "
@@ -171,16 +181,22 @@ def _polygon_fixture(body, vertices, radius: float):
         )
     fixture.shape.radius = radius
     # The skin pads the scene's outline: a contact's overlap of the scene's bodies is its
-    # separation plus the skins (a rod's core sets its own userData to 0: inset by its skin).
-    fixture.userData = radius
+    # separation plus the skins (a rod's core sets its own padding to 0: inset by its skin).
+    _set_fixture_data(fixture, radius)
     return fixture
+
+
+def _set_fixture_data(fixture, padding: float) -> None:
+    """userData ``(padding, radius)``: how far the fixture pads the scene's outline, and its
+    shape's radius as Box2D holds it (float32); the readout takes both in one call."""
+    fixture.userData = (padding, fixture.shape.radius)
 
 
 def _add_fixtures(b2_body, shape, length: float, skin: float) -> list:
     """The fixtures of one scene shape on ``b2_body`` (lengths times ``length``)."""
     if shape.kind == "disk":
         disk = b2_body.CreateCircleFixture(radius=shape.radius * length, density=0.0)
-        disk.userData = 0.0  # a circle's radius is the disk's own
+        _set_fixture_data(disk, 0.0)  # a circle's radius is the disk's own
         return [disk]
     if shape.kind == "rod":
         half, radius = shape.length / 2.0 * length, shape.radius * length
@@ -193,12 +209,166 @@ def _add_fixtures(b2_body, shape, length: float, skin: float) -> list:
             b2_body,
             [(-half, -thickness), (half, -thickness), (half, thickness), (-half, thickness)],
             core_skin)
-        core.userData = 0.0  # its skin lies inside the capsule's outline
+        _set_fixture_data(core, 0.0)  # its skin lies inside the capsule's outline
         for cap in caps:
-            cap.userData = 0.0
+            _set_fixture_data(cap, 0.0)
         return [*caps, core]
     vertices = [(x * length, y * length) for x, y in shape.vertices().tolist()]
     return [_polygon_fixture(b2_body, vertices, skin)]
+
+
+def _add_impact(world, scene: Scene, length: float, skin: float) -> tuple:
+    """``(fixtures, bodies, body_fixtures)``: the scene's ground and bodies in ``world``,
+    the bodies at the origin (:func:`_place` puts them at a run's start)."""
+    fixtures: list = []
+    if scene.ground:
+        fixtures.append(_polygon_fixture(
+            world.CreateStaticBody(), _ground_vertices(_extent(scene), length), skin))
+    bodies, body_fixtures = [], []
+    for body in scene.bodies:
+        b2_body = world.CreateDynamicBody(position=(0.0, 0.0))
+        body_fixtures.extend(_add_fixtures(b2_body, body.shape, length, skin))
+        b2_body.massData = b2.massData(
+            mass=body.mass, center=(0.0, 0.0), I=body.moment_of_inertia * length * length)
+        bodies.append(b2_body)
+    fixtures.extend(body_fixtures)
+    return fixtures, bodies, body_fixtures
+
+
+def _add_batch_impact(world, scene: Scene, group: int, pair_values: tuple, starts: tuple,
+                      length: float, skin: float, extent: float) -> list:
+    """:func:`_add_impact` for run_many, its bodies made at ``starts``, in collision group
+    ``group`` (mask 0: no other group), with the pair's ``(e, μ)``; the bodies.
+
+    The same Box2D objects, made through definitions filled field by field (pybox2d's
+    keyword constructors cost more than the rest of the build), and the same proxies as
+    :func:`_place` leaves: boxes fitted around the start pose (a body's skins are set
+    before its fixtures are made), a zero sleep timer.
+    """
+    restitution, friction = pair_values
+
+    def fixture(body, shape, padding: float):
+        definition = b2.fixtureDef()
+        definition.shape = shape
+        definition.density = 0.0
+        definition.restitution = restitution
+        definition.friction = friction
+        definition.groupIndex = group
+        definition.maskBits = 0
+        made = body.CreateFixture(definition)
+        _set_fixture_data(made, padding)
+        return made
+
+    def polygon(vertices, radius: float):
+        try:
+            shape = b2.polygonShape(vertices=vertices)
+        except (AssertionError, ValueError, RuntimeError) as error:
+            raise UnsupportedScene(
+                f"engine 'box2d': polygon {vertices!r} refused by b2PolygonShape::Set "
+                f"({error}); try a larger length_scale") from error
+        if shape.vertexCount != len(vertices):
+            raise UnsupportedScene(
+                f"engine 'box2d': b2PolygonShape::Set kept {shape.vertexCount} of "
+                f"{len(vertices)} vertices (it welds near vertices); try a larger length_scale")
+        shape.radius = radius
+        return shape
+
+    def circle(radius: float, x: float = 0.0):
+        shape = b2.circleShape()
+        shape.radius = radius
+        if x:
+            shape.pos = (x, 0.0)
+        return shape
+
+    if scene.ground:
+        # The ground as _add_impact makes it: skinned after it is made (its proxy's box
+        # is the default skin's, and a static body is never placed anew).
+        _polygon_fixture(world.CreateStaticBody(), _ground_vertices(extent, length), skin,
+                         {"groupIndex": group, "maskBits": 0,
+                          "restitution": restitution, "friction": friction})
+    bodies = []
+    for body, (position, angle, velocity, angular_velocity) in zip(scene.bodies, starts):
+        definition = b2.bodyDef()
+        definition.type = b2.dynamicBody
+        definition.position = position
+        definition.angle = angle
+        b2_body = world.CreateBody(definition)
+        shape = body.shape
+        if shape.kind == "disk":
+            fixture(b2_body, circle(shape.radius * length), 0.0)
+        elif shape.kind == "rod":
+            half, radius = shape.length / 2.0 * length, shape.radius * length
+            for x in (-half, half):
+                fixture(b2_body, circle(radius, x), 0.0)
+            core_skin = min(skin, radius / 2.0)
+            thickness = radius - core_skin
+            fixture(b2_body, polygon([(-half, -thickness), (half, -thickness),
+                                      (half, thickness), (-half, thickness)], core_skin), 0.0)
+        else:
+            vertices = [(x * length, y * length) for x, y in shape.vertices().tolist()]
+            fixture(b2_body, polygon(vertices, skin), skin)
+        mass_data = b2.massData()
+        mass_data.mass = body.mass
+        mass_data.center = (0.0, 0.0)
+        mass_data.I = body.moment_of_inertia * length * length
+        b2_body.massData = mass_data
+        b2_body.linearVelocity = velocity
+        b2_body.angularVelocity = angular_velocity
+        bodies.append(b2_body)
+    return bodies
+
+
+def _ground_vertices(extent: float, length: float) -> list:
+    """The ground box (top face ``y = 0``): half-width a few body extents (float32 clipping
+    against a far ground vertex loses ~|vertex|·1e-7 m)."""
+    width = _GROUND_EXTENT_FACTOR * extent * length
+    return [(-width, -width), (width, -width), (width, 0.0), (-width, 0.0)]
+
+
+def _extent(scene: Scene) -> float:
+    return max(body_extent(body.shape) for body in scene.bodies)
+
+
+def _set_pair_values(fixtures, pair_values: tuple) -> None:
+    restitution, friction = pair_values
+    for fixture in fixtures:
+        fixture.restitution = restitution
+        fixture.friction = friction
+
+
+def _set_switches(world, world_values: tuple) -> None:
+    (world.warmStarting, world.continuousPhysics, world.subStepping,
+     world.allowSleeping) = world_values
+
+
+def _place(bodies, starts: tuple) -> None:
+    """Put ``bodies`` at the start state ``((x, y), θ, (v_x, v_y), ω)`` (Box2D units), with
+    nothing kept from what they did before (their contacts must be gone already).
+
+    Two things of a body outlive a run and would steer the next: its sleep timer (reset by
+    putting it to sleep) and its proxies' fattened boxes, which decide which contacts exist
+    at the start and so the order Box2D creates and solves them in. Moving the body far away
+    and back makes Box2D fit every box anew around the start pose, as in a fresh world. The
+    proxies themselves, and so their ids, are kept (see :meth:`_World.place`).
+    """
+    for b2_body, (position, angle, velocity, angular_velocity) in zip(bodies, starts):
+        b2_body.awake = False  # also zeroes the sleep timer
+        b2_body.transform = (_FAR_AWAY, angle)
+        b2_body.transform = (position, angle)
+        b2_body.linearVelocity = velocity
+        b2_body.angularVelocity = angular_velocity
+        b2_body.awake = True
+
+
+def _at_cap(bodies, dt: float, band: float) -> bool:
+    """Whether a body's velocity reaches ``band`` times Box2D's per-step caps."""
+    for b2_body in bodies:
+        linear = b2_body.linearVelocity
+        if math.hypot(linear.x, linear.y) * dt > band * MAX_TRANSLATION:
+            return True
+        if abs(b2_body.angularVelocity) * dt > band * MAX_ROTATION:
+            return True
+    return False
 
 
 class _World:
@@ -206,24 +376,8 @@ class _World:
 
     def __init__(self, scene: Scene, length: float, skin: float):
         self.world = b2.world(gravity=(0.0, 0.0), doSleep=True)
-        self.fixtures: list = []
-        self.extent = max(body_extent(body.shape) for body in scene.bodies)
-        if scene.ground:
-            # Half-width a few body extents: float32 clipping against a far ground vertex
-            # loses ~|vertex|·1e-7 m.
-            width = _GROUND_EXTENT_FACTOR * self.extent * length
-            ground = self.world.CreateStaticBody()
-            self.fixtures.append(_polygon_fixture(
-                ground, [(-width, -width), (width, -width), (width, 0.0), (-width, 0.0)], skin))
-        self.bodies = []
-        self.body_fixtures: list = []
-        for body in scene.bodies:
-            b2_body = self.world.CreateDynamicBody(position=(0.0, 0.0))
-            self.body_fixtures.extend(_add_fixtures(b2_body, body.shape, length, skin))
-            b2_body.massData = b2.massData(
-                mass=body.mass, center=(0.0, 0.0), I=body.moment_of_inertia * length * length)
-            self.bodies.append(b2_body)
-        self.fixtures.extend(self.body_fixtures)
+        self.fixtures, self.bodies, self.body_fixtures = _add_impact(
+            self.world, scene, length, skin)
         self.body_b = self.bodies[-1]
         self.length = length
         self.pair_values: tuple | None = None
@@ -239,15 +393,10 @@ class _World:
     def configure(self, world_values: tuple, pair_values: tuple) -> None:
         """Apply the world switches and the pair's (e, μ) where they changed."""
         if self.world_values != world_values:
-            world = self.world
-            (world.warmStarting, world.continuousPhysics, world.subStepping,
-             world.allowSleeping) = world_values
+            _set_switches(self.world, world_values)
             self.world_values = world_values
         if self.pair_values != pair_values:
-            restitution, friction = pair_values
-            for fixture in self.fixtures:
-                fixture.restitution = restitution
-                fixture.friction = friction
+            _set_pair_values(self.fixtures, pair_values)
             self.pair_values = pair_values
 
     def place(self, starts: tuple) -> None:
@@ -263,59 +412,63 @@ class _World:
         manager = self.world.contactManager
         for contact in list(self.world.contacts):
             manager.Destroy(contact)
-        for b2_body, (position, angle, velocity, angular_velocity) in zip(self.bodies, starts):
-            b2_body.transform = (position, angle)
-            b2_body.linearVelocity = velocity
-            b2_body.angularVelocity = angular_velocity
-            b2_body.awake = True
-        # A proxy whose fattened box still holds the body is not marked as moved by a new
-        # transform: touch every one, so that the pairs are looked up now and the first
-        # step's collision pass already sees a contact touching at the start pose.
-        for fixture in self.body_fixtures:
-            fixture.Refilter()
+        _place(self.bodies, starts)
+        # The pairs touching at the start pose are looked up now, so that the first step's
+        # collision pass already sees them.
         manager.FindNewContacts()
 
     def at_cap(self, band: float) -> bool:
         """Whether a body's velocity reaches ``band`` times Box2D's per-step caps."""
-        dt = self.dt
-        for b2_body in self.bodies:
-            vx, vy = b2_body.linearVelocity
-            if math.hypot(vx, vy) * dt > band * MAX_TRANSLATION:
-                return True
-            if abs(b2_body.angularVelocity) * dt > band * MAX_ROTATION:
-                return True
-        return False
+        return _at_cap(self.bodies, self.dt, band)
 
 
 # ---------------------------------------------------------------------- contact readout
 def _pose(body) -> tuple[float, float, float, float]:
     """``(x, y, cos θ, sin θ)`` of a Box2D body's transform now."""
     transform = body.transform
-    x, y = transform.position
-    return x, y, transform.q.c, transform.q.s
+    position, rotation = transform.position, transform.q
+    return position.x, position.y, rotation.c, rotation.s
+
+
+#: A body's identity (its C++ address): poses are keyed by it (a b2Body wrapper compares
+#: through a Python function, and each access to a contact's body makes a new wrapper).
+_body_id = Box2D._Box2D.b2Body___hash__
+_CIRCLES = Box2D.b2Manifold.e_circles
+_FACE_A = Box2D.b2Manifold.e_faceA
 
 
 def _world_manifold(contact, poses=None) -> tuple[tuple[float, float], list, list]:
+    """``(normal from fixture A to B, points, separations)`` of a contact, in world frame
+    (:func:`_manifold_geometry` of the contact's manifold, at the poses now)."""
+    manifold = contact.manifold
+    fixture_a, fixture_b = contact.fixtureA, contact.fixtureB
+    return _manifold_geometry(manifold, manifold.points, fixture_a.body, fixture_b.body,
+                              fixture_a.userData[1], fixture_b.userData[1], poses)
+
+
+def _manifold_geometry(manifold, manifold_points, body_a, body_b, radius_a: float,
+                       radius_b: float, poses) -> tuple[tuple[float, float], list, list]:
     """``(normal from fixture A to B, points, separations)`` of a contact, in world frame.
 
     b2WorldManifold::Initialize redone in Python (pybox2d's ``worldManifold`` returned an
     uninitialised normal), with the separations of the skinned shapes (Box2D's, negative
-    within the summed skins). ``poses`` maps a body to
+    within the summed skins). ``manifold_points``: the manifold's points in use; ``radius_a``,
+    ``radius_b``: the fixtures' shape radii; ``poses`` maps a body's :data:`_body_id` to
     its ``_pose`` when the manifold was computed (the start of the step: after the step the
     bodies have moved, which would turn a circle pair's normal); by default the poses now.
     """
-    manifold = contact.manifold
-    fixture_a, fixture_b = contact.fixtureA, contact.fixtureB
-    body_a, body_b = fixture_a.body, fixture_b.body
-    radius_a, radius_b = fixture_a.shape.radius, fixture_b.shape.radius
-    pa_x, pa_y, ca, sa = poses[body_a] if poses and body_a in poses else _pose(body_a)
-    pb_x, pb_y, cb, sb = poses[body_b] if poses and body_b in poses else _pose(body_b)
+    pose_a = poses.get(_body_id(body_a)) if poses else None
+    pose_b = poses.get(_body_id(body_b)) if poses else None
+    pa_x, pa_y, ca, sa = _pose(body_a) if pose_a is None else pose_a
+    pb_x, pb_y, cb, sb = _pose(body_b) if pose_b is None else pose_b
     kind = manifold.type_
     points, separations = [], []
-    if kind == Box2D.b2Manifold.e_circles:
-        lx, ly = manifold.localPoint
+    if kind == _CIRCLES:
+        local = manifold.localPoint
+        lx, ly = local.x, local.y
         ax, ay = ca * lx - sa * ly + pa_x, sa * lx + ca * ly + pa_y
-        lx, ly = manifold.points[0].localPoint
+        local = manifold_points[0].localPoint
+        lx, ly = local.x, local.y
         bx, by = cb * lx - sb * ly + pb_x, sb * lx + cb * ly + pb_y
         dx, dy = bx - ax, by - ay
         distance = math.hypot(dx, dy)
@@ -325,18 +478,21 @@ def _world_manifold(contact, poses=None) -> tuple[tuple[float, float], list, lis
         points.append((0.5 * (c_ax + c_bx), 0.5 * (c_ay + c_by)))
         separations.append(distance - radius_a - radius_b)
         return normal, points, separations
-    face_a = kind == Box2D.b2Manifold.e_faceA
+    face_a = kind == _FACE_A
     (c_ref, s_ref, p_ref_x, p_ref_y, r_ref) = (ca, sa, pa_x, pa_y, radius_a) if face_a else (
         cb, sb, pb_x, pb_y, radius_b)
     (c_inc, s_inc, p_inc_x, p_inc_y, r_inc) = (cb, sb, pb_x, pb_y, radius_b) if face_a else (
         ca, sa, pa_x, pa_y, radius_a)
-    lx, ly = manifold.localNormal
+    local = manifold.localNormal
+    lx, ly = local.x, local.y
     nx, ny = c_ref * lx - s_ref * ly, s_ref * lx + c_ref * ly
-    lx, ly = manifold.localPoint
+    local = manifold.localPoint
+    lx, ly = local.x, local.y
     plane_x = c_ref * lx - s_ref * ly + p_ref_x
     plane_y = s_ref * lx + c_ref * ly + p_ref_y
-    for index in range(manifold.pointCount):
-        lx, ly = manifold.points[index].localPoint
+    for manifold_point in manifold_points:
+        local = manifold_point.localPoint
+        lx, ly = local.x, local.y
         qx = c_inc * lx - s_inc * ly + p_inc_x
         qy = s_inc * lx + c_inc * ly + p_inc_y
         height = (qx - plane_x) * nx + (qy - plane_y) * ny
@@ -349,9 +505,23 @@ def _world_manifold(contact, poses=None) -> tuple[tuple[float, float], list, lis
     return (nx, ny), points, separations
 
 
+def _approach_speed(contact) -> float:
+    """The normal approach speed at a touching contact's fastest point, computed as the
+    solver computes ``v_rel`` (from the velocities before the step: call from PreSolve)."""
+    normal, points, _ = _world_manifold(contact)
+    body_a, body_b = contact.fixtureA.body, contact.fixtureB.body
+    fastest = 0.0
+    for point in points:
+        va = body_a.GetLinearVelocityFromWorldPoint(point)
+        vb = body_b.GetLinearVelocityFromWorldPoint(point)
+        approach = -((vb[0] - va[0]) * normal[0] + (vb[1] - va[1]) * normal[1])
+        fastest = max(fastest, approach)
+    return fastest
+
+
 class _SpeedProbe(b2.contactListener):
-    """PreSolve listener: the normal approach speed at the first touching point, computed as
-    the solver computes ``v_rel`` (from the velocities before the step)."""
+    """PreSolve listener: the approach speed at the first touching contact
+    (:func:`_approach_speed`)."""
 
     def __init__(self):
         super().__init__()
@@ -360,15 +530,7 @@ class _SpeedProbe(b2.contactListener):
     def PreSolve(self, contact, old_manifold):
         if self.speed is not None or not contact.touching or contact.manifold.pointCount == 0:
             return
-        normal, points, _ = _world_manifold(contact)
-        body_a, body_b = contact.fixtureA.body, contact.fixtureB.body
-        fastest = 0.0
-        for point in points:
-            va = body_a.GetLinearVelocityFromWorldPoint(point)
-            vb = body_b.GetLinearVelocityFromWorldPoint(point)
-            approach = -((vb[0] - va[0]) * normal[0] + (vb[1] - va[1]) * normal[1])
-            fastest = max(fastest, approach)
-        self.speed = fastest
+        self.speed = _approach_speed(contact)
 
 
 def _box2d_starts(start, velocity: float, length: float, advance: float = 0.0) -> tuple:
@@ -384,11 +546,98 @@ def _box2d_starts(start, velocity: float, length: float, advance: float = 0.0) -
     )
 
 
-class _Prepared:
-    """A run's Box2D form: switches, pair values, sweeps, scales, start state, derived."""
+class _ProbeInputs(NamedTuple):
+    """What the probe run needs, and the settings that act on its result."""
 
-    __slots__ = ("derived", "dt", "iterations", "notes", "pair_values", "starts", "velocity",
-                 "world_values")
+    start: tuple  # run-frame start state (contract BodyState per body)
+    length: float  # length_scale
+    time_step: float  # s, scene units
+    max_steps: int
+    velocity_scale: float | str  # the setting: a number or "auto"
+    overlap: float  # detection_overlap, body extents
+    extent: float  # m, the largest body extent
+    restitution: float
+
+
+class _Prepared:
+    """A run's Box2D form: switches, pair values, sweeps, scales, start state, derived.
+
+    ``probe``: what the probe run needs (the run-frame start state, the Box2D time step
+    without velocity scale, the step cap, the settings that act on the probe's result);
+    :func:`_scaled` fills in the rest from the probe's speed.
+    """
+
+    __slots__ = ("derived", "dt", "iterations", "notes", "pair_values", "probe", "starts",
+                 "velocity", "world_values")
+
+
+def _unprobed(scene: Scene, settings, start) -> _Prepared:
+    """A run's :class:`_Prepared` up to the probe run."""
+    prepared = _Prepared()
+    length = float(settings["length_scale"])
+    time_step = float(settings["time_step"])
+    prepared.world_values = tuple(bool(settings[key]) for key in _BOOL_KEYS)
+    prepared.pair_values = (float(scene.restitution), float(scene.friction))
+    prepared.iterations = (int(settings["velocity_iterations"]),
+                           int(settings["position_iterations"]))
+    prepared.probe = _ProbeInputs(start, length, time_step, int(settings["max_steps"]),
+                                  settings["velocity_scale"],
+                                  float(settings["detection_overlap"]), _extent(scene),
+                                  float(scene.restitution))
+    return prepared
+
+
+def _probe_starts(prepared: _Prepared) -> tuple:
+    """The probe run's start state in Box2D units (unscaled velocities)."""
+    return _box2d_starts(prepared.probe.start, 1.0, prepared.probe.length)
+
+
+def _probe_is_run(prepared: _Prepared) -> bool:
+    """Whether the probe run is the run itself up to its first contact: no velocity scale
+    and no start depth that the probe's speed would set."""
+    scale = prepared.probe.velocity_scale
+    return scale != "auto" and float(scale) == 1.0 and prepared.probe.overlap == 0.0
+
+
+def _scaled(prepared: _Prepared, probe_speed: float | None) -> _Prepared:
+    """Complete ``prepared`` with the velocity scale, start state and derived values that
+    Box2D's approach speed at the first contact of the probe run (``probe_speed``) sets."""
+    start, length, time_step, _, scale, overlap, extent, restitution = prepared.probe
+    if scale == "auto":
+        scale = 1.0
+        if probe_speed is not None and probe_speed > 0.0:
+            target = _AUTO_MARGIN * VELOCITY_THRESHOLD
+            while scale * probe_speed < target and scale < _MAX_AUTO_SCALE:
+                scale *= 2.0
+    velocity = prepared.velocity = float(scale)
+    # The overlap as a time along the path: depth = overlap·extent at the approach speed.
+    advance = 0.0
+    if overlap > 0.0 and probe_speed is not None and probe_speed > 0.0:
+        advance = overlap * extent / probe_speed
+    prepared.starts = _box2d_starts(start, velocity, length, advance)
+    prepared.dt = time_step * length / velocity
+    prepared.derived = {
+        "velocity_scale": velocity,
+        "length_scale": length,
+        "box2d_time_step": prepared.dt,
+        "speed_cap": MAX_TRANSLATION / (length * time_step),
+        "angular_speed_cap": MAX_ROTATION / time_step,
+    }
+    prepared.notes = _speed_results(prepared.derived, probe_speed, velocity, restitution)
+    return prepared
+
+
+def _speed_results(derived: dict, probe_speed: float | None, velocity: float,
+                   restitution: float) -> tuple[str, ...]:
+    """Add the impact speed Box2D saw to ``derived``; the threshold's note if it zeroed e."""
+    if probe_speed is None:
+        return ()
+    derived["box2d_impact_speed"] = probe_speed * velocity
+    cleared = probe_speed * velocity > VELOCITY_THRESHOLD
+    derived["restitution_threshold_cleared"] = cleared
+    if not cleared and restitution > 0.0:
+        return (THRESHOLD_NOTE,)
+    return ()
 
 
 # ---------------------------------------------------------------------- the adapter
@@ -422,48 +671,15 @@ class Box2DEngine(Engine):
     def _build(self, scene: Scene, settings, *, contacts: bool = True) -> _World:
         return _World(scene, float(settings["length_scale"]), float(settings["polygon_radius"]))
 
-    def _prepare(self, world: _World, scene: Scene, settings, start) -> _Prepared:
-        prepared = _Prepared()
-        length = world.length
-        time_step = float(settings["time_step"])
-        prepared.world_values = tuple(bool(settings[key]) for key in _BOOL_KEYS)
-        prepared.pair_values = (float(scene.restitution), float(scene.friction))
-        prepared.iterations = (int(settings["velocity_iterations"]),
-                               int(settings["position_iterations"]))
+    def _prepare(self, world: _World | None, scene: Scene, settings, start) -> _Prepared:
+        prepared = _unprobed(scene, settings, start)
+        if world is None:  # run_many: _build_many probes every impact of a batch at once
+            return prepared
         # Measured for every plan: it tells whether the threshold zeroed the bounce.
-        probe_speed = _probe(world, prepared, _box2d_starts(start, 1.0, length),
-                             time_step * length, int(settings["max_steps"]))
-        scale = settings["velocity_scale"]
-        if scale == "auto":
-            scale = 1.0
-            if probe_speed is not None and probe_speed > 0.0:
-                target = _AUTO_MARGIN * VELOCITY_THRESHOLD
-                while scale * probe_speed < target and scale < _MAX_AUTO_SCALE:
-                    scale *= 2.0
-        velocity = prepared.velocity = float(scale)
-        # The overlap as a time along the path: depth = overlap·extent at the approach speed.
-        advance = 0.0
-        overlap = float(settings["detection_overlap"])
-        if overlap > 0.0 and probe_speed is not None and probe_speed > 0.0:
-            advance = overlap * world.extent / probe_speed
-        prepared.starts = _box2d_starts(start, velocity, length, advance)
-        prepared.dt = time_step * length / velocity
-        derived = {
-            "velocity_scale": velocity,
-            "length_scale": length,
-            "box2d_time_step": prepared.dt,
-            "speed_cap": MAX_TRANSLATION / (length * time_step),
-            "angular_speed_cap": MAX_ROTATION / time_step,
-        }
-        notes: tuple[str, ...] = ()
-        if probe_speed is not None:
-            derived["box2d_impact_speed"] = probe_speed * velocity
-            cleared = probe_speed * velocity > VELOCITY_THRESHOLD
-            derived["restitution_threshold_cleared"] = cleared
-            if not cleared and scene.restitution > 0.0:
-                notes = (THRESHOLD_NOTE,)
-        prepared.derived, prepared.notes = derived, notes
-        return prepared
+        probe = prepared.probe
+        probe_speed = _probe(world, prepared, _probe_starts(prepared),
+                             probe.time_step * probe.length, probe.max_steps)
+        return _scaled(prepared, probe_speed)
 
     def _reset(self, world: _World, prepared: _Prepared) -> dict:
         world.configure(prepared.world_values, prepared.pair_values)
@@ -480,43 +696,140 @@ class Box2DEngine(Engine):
     def _step(self, world: _World) -> RawContacts | None:
         bodies = world.bodies
         # Contacts are collided at the step's start: their geometry needs these poses.
-        poses = {b2_body: _pose(b2_body) for b2_body in bodies}
+        poses = {_body_id(b2_body): _pose(b2_body) for b2_body in bodies}
         world.world.Step(world.dt, *world.iterations)
         if not world.clipped:
             world.clipped = world.at_cap(_CAP_BAND)
-        length, velocity, body_b = world.length, world.velocity, world.body_b
-        step_x = step_y = 0.0
-        points: list = []
-        normal = None
-        for contact in world.world.contacts:
-            if not contact.touching or contact.manifold.pointCount == 0:
-                continue
-            contact_normal, contact_points, separations = _world_manifold(contact, poses)
-            # Overlap of the scene's outlines: the skins are padding, not the bodies.
-            padding = contact.fixtureA.userData + contact.fixtureB.userData
-            # The impulse on scene body B (Box2D applies +P to fixture B's body).
-            sign = 1.0 if contact.fixtureB.body == body_b else -1.0
-            n_x, n_y = contact_normal
-            for point in contact.manifold.points:
-                p_n, p_t = point.normalImpulse, point.tangentImpulse
-                # Box2D's tangent is cross(n, 1) = (n_y, -n_x).
-                step_x += sign * (p_n * n_x + p_t * n_y)
-                step_y += sign * (p_n * n_y - p_t * n_x)
-            points.extend((x / length, y / length, -(separation + padding) / length)
-                          for (x, y), separation in zip(contact_points, separations))
-            if normal is None:
-                normal = (sign * n_x, sign * n_y)
-        if normal is None:
-            return None
-        step_x, step_y = step_x / velocity, step_y / velocity
-        return (tuple(points), normal, (step_x, step_y),
-                abs(step_x * normal[0] + step_y * normal[1]))
+        return _contact_of(world.world.contacts, poses, world)
+
+    # ------------------------------------------------------------------ many impacts
+    def run_many(self, scenes, settings=None, *, preset="accurate", overrides=None) -> list:
+        """:meth:`Engine.run_many`; with ``sub_stepping`` the impacts run one by one.
+
+        Sub-stepping handles one time-of-impact event per step in the whole world and leaves
+        the world's step unfinished (the next ``b2World::Step`` only resumes it): impacts
+        sharing a world would steer each other.
+        """
+        resolved, _ = self._resolve(settings, preset, overrides)
+        if resolved["sub_stepping"]:
+            return [self.run(scene, settings, preset=preset, overrides=overrides)
+                    for scene in scenes]
+        return super().run_many(scenes, settings, preset=preset, overrides=overrides)
+
+    def _many_chunks(self, scenes) -> list[range]:
+        """:data:`MANY_CHUNK` scenes in a row to a batch."""
+        return [range(begin, min(begin + MANY_CHUNK, len(scenes)))
+                for begin in range(0, len(scenes), MANY_CHUNK)]
+
+    def _build_many(self, plans) -> tuple[_Batch, list, list]:
+        """b2Worlds stepping many impacts, each impact as :meth:`run` steps it alone.
+
+        The impacts overlap in space (each at its own run-frame coordinates: moving one
+        would change its float32 roundings) and are kept apart by collision filters: every
+        fixture of impact k, its ground's included, is in group k+1 (always collide) with
+        mask 0 (collide with no other group). Box2D solves each island (an impact's bodies
+        and their touching contacts) by itself, collides contact by contact, and creates
+        the contacts of new pairs in the order of the proxies' ids, which keep each impact's
+        own order; time-of-impact events advance only their own bodies. So an impact's
+        arithmetic is the one it has alone (the tests compare them bit for bit).
+
+        First the probe runs of every impact in one world (unscaled, each impact put to
+        sleep once its speed is known); then one world per Box2D time step (the velocity
+        scales differ: a world steps by one time step, and warm starting scales impulses by
+        the ratio of consecutive steps). The largest group runs in the probe's world, placed
+        anew (:func:`_place` leaves nothing of the probe). When the probe run is the run's
+        own beginning (no velocity scale or start depth to set), the runs measure the speed
+        themselves.
+        """
+        prepared = [plan.prepared for plan in plans]
+        first = prepared[0]  # one settings dict for every plan
+        world_values, iterations = first.world_values, first.iterations
+        length, time_step, max_steps = (first.probe.length, first.probe.time_step,
+                                        first.probe.max_steps)
+        skin = float(plans[0].settings["polygon_radius"])
+        scenes = [plan.scene for plan in plans]
+        measure_in_run = _probe_is_run(first)
+        probe_world = None
+        if not measure_in_run:
+            speeds, probe_world, probe_views = _probe_many(
+                scenes, prepared, length, skin, time_step * length, max_steps)
+            prepared = [_scaled(copy.copy(one), speed) for one, speed in zip(prepared, speeds)]
+        else:
+            prepared = [_scaled(copy.copy(one), None) for one in prepared]
+        groups: dict = {}
+        for slot, one in enumerate(prepared):
+            groups.setdefault(one.dt, []).append(slot)
+        batch = _Batch(len(plans))
+        # The largest group runs in the probe's world (placed anew, as run places a
+        # world's bodies after its probe); the others in worlds of their own.
+        for slots in sorted(groups.values(), key=len, reverse=True):
+            dt = prepared[slots[0]].dt
+            if probe_world is not None:
+                world, views = probe_world, [probe_views[slot] for slot in slots]
+                _replace(world, probe_views, set(slots), prepared)
+                probe_world = None
+            else:
+                world, views = _many_world([scenes[slot] for slot in slots],
+                                           [prepared[slot] for slot in slots], slots, length,
+                                           skin, world_values)
+            for slot, view in zip(slots, views):
+                view.world = len(batch.worlds)
+                view.dt, view.velocity = dt, prepared[slot].velocity
+                view.notes = prepared[slot].notes
+                view.clipped = _at_cap(view.bodies, dt, 1.0)
+                batch.slots[slot] = view
+            batch.worlds.append((world, dt, iterations))
+            if measure_in_run:
+                listener = _ManyProbe(views, measure_run=True)
+                world.contactListener = listener
+                batch.listeners.append((world, listener))
+        derived = [one.derived for one in prepared]
+        for view, values in zip(batch.slots, derived):
+            view.derived = values
+        return batch, batch.slots, derived
+
+    def _step_many(self, batch: _Batch, active) -> dict:
+        slots = batch.slots
+        # Contacts are collided at the step's start: their geometry needs these poses.
+        poses = [{_body_id(b2_body): _pose(b2_body) for b2_body in slots[slot].bodies}
+                 for slot in active]
+        stepping = {slots[slot].world for slot in active}
+        for index, (world, dt, iterations) in enumerate(batch.worlds):
+            if index in stepping:
+                world.Step(dt, *iterations)
+        contacts = {}
+        for slot, slot_poses in zip(active, poses):
+            view = slots[slot]
+            if not view.clipped:
+                view.clipped = _at_cap(view.bodies, view.dt, _CAP_BAND)
+            # Every contact of an impact involves its body B (the ground's partner or the
+            # other body); the body's list keeps the world's order of them.
+            raw = _contact_of([edge.contact for edge in view.body_b.contacts], slot_poses, view)
+            if raw is not None:
+                contacts[slot] = raw
+        if batch.listeners:
+            batch.listeners = [(world, listener) for world, listener in batch.listeners
+                               if not listener.done(world)]
+        return contacts
+
+    def _retire(self, batch: _Batch, slot: int) -> None:
+        view = batch.slots[slot]
+        for b2_body in view.bodies:
+            b2_body.awake = False  # a sleeping impact is neither collided nor solved
+
+    def _release_many(self, batch: _Batch) -> None:
+        for world, _ in batch.listeners:
+            world.contactListener = None
+        batch.listeners = []
+        batch.worlds = []
+        batch.slots = []
 
     def _read_poses(self, world: _World) -> tuple:
         length = world.length
         poses = []
         for b2_body in world.bodies:
-            x, y = b2_body.position
+            position = b2_body.position
+            x, y = position.x, position.y
             poses.append((x / length, y / length, b2_body.angle))
         return tuple(poses)
 
@@ -524,7 +837,8 @@ class Box2DEngine(Engine):
         velocity, rate = world.velocity, world.length / world.velocity
         velocities = []
         for b2_body in world.bodies:
-            vx, vy = b2_body.linearVelocity
+            linear = b2_body.linearVelocity
+            vx, vy = linear.x, linear.y
             velocities.append((vx / velocity, vy / velocity, b2_body.angularVelocity * rate))
         return tuple(velocities)
 
@@ -550,6 +864,176 @@ def _probe(world: _World, prepared: _Prepared, starts: tuple, dt: float,
     finally:
         b2_world.contactListener = None
     return probe.speed
+
+
+# ---------------------------------------------------------------------- many impacts
+#: Impacts per batch in run_many (measured: see docs/engines.md, Box2D).
+MANY_CHUNK = 32
+
+
+def _contact_of(contacts, poses: dict, world) -> RawContacts | None:
+    """The step's contact of one impact from its Box2D ``contacts`` (world order);
+    ``poses``: its bodies' poses at the step's start by :data:`_body_id`; ``world``: a
+    :class:`_World` or :class:`_Slot` (length and velocity scales, body B)."""
+    length, velocity, body_b = world.length, world.velocity, _body_id(world.body_b)
+    step_x = step_y = 0.0
+    points: list = []
+    normal = None
+    for contact in contacts:
+        if not contact.touching:
+            continue
+        manifold = contact.manifold
+        manifold_points = manifold.points
+        if not manifold_points:
+            continue
+        fixture_a, fixture_b = contact.fixtureA, contact.fixtureB
+        (padding_a, radius_a), (padding_b, radius_b) = fixture_a.userData, fixture_b.userData
+        contact_body_b = fixture_b.body
+        contact_normal, contact_points, separations = _manifold_geometry(
+            manifold, manifold_points, fixture_a.body, contact_body_b, radius_a, radius_b,
+            poses)
+        # Overlap of the scene's outlines: the skins are padding, not the bodies.
+        padding = padding_a + padding_b
+        # The impulse on scene body B (Box2D applies +P to fixture B's body).
+        sign = 1.0 if _body_id(contact_body_b) == body_b else -1.0
+        n_x, n_y = contact_normal
+        for point in manifold_points:
+            p_n, p_t = point.normalImpulse, point.tangentImpulse
+            # Box2D's tangent is cross(n, 1) = (n_y, -n_x).
+            step_x += sign * (p_n * n_x + p_t * n_y)
+            step_y += sign * (p_n * n_y - p_t * n_x)
+        points.extend((x / length, y / length, -(separation + padding) / length)
+                      for (x, y), separation in zip(contact_points, separations))
+        if normal is None:
+            normal = (sign * n_x, sign * n_y)
+    if normal is None:
+        return None
+    step_x, step_y = step_x / velocity, step_y / velocity
+    return (tuple(points), normal, (step_x, step_y),
+            abs(step_x * normal[0] + step_y * normal[1]))
+
+
+class _Slot:
+    """One impact of a batch: what _read_poses, _read_velocities and _run_notes read (the
+    attributes of a :class:`_World` they use)."""
+
+    __slots__ = ("bodies", "body_b", "clipped", "derived", "dt", "length", "notes",
+                 "restitution", "velocity", "world")
+
+    def __init__(self, bodies: list, length: float) -> None:
+        self.bodies, self.body_b, self.length = bodies, bodies[-1], length
+        self.velocity, self.dt, self.clipped = 1.0, 0.0, False
+        self.notes: tuple[str, ...] = ()
+        self.derived: dict = {}
+        self.restitution = 0.0
+        self.world = 0  # index of its b2World in the batch
+
+
+class _Batch:
+    """The b2Worlds of a batch: ``(world, dt, iterations)`` each, every impact's
+    :class:`_Slot`, and the listeners still measuring approach speeds."""
+
+    __slots__ = ("listeners", "slots", "worlds")
+
+    def __init__(self, count: int) -> None:
+        self.worlds: list = []
+        self.slots: list = [None] * count
+        self.listeners: list = []
+
+
+def _many_world(scenes, prepared, slots, length: float, skin: float, world_values: tuple,
+                probe: bool = False) -> tuple:
+    """A b2World holding every scene at its start (``prepared``: its ``starts``, or the
+    probe's with ``probe``), and one :class:`_Slot` each (bodies' userData: the slot)."""
+    world = b2.world(gravity=(0.0, 0.0), doSleep=True)
+    _set_switches(world, world_values)
+    views = []
+    for slot, scene, one in zip(slots, scenes, prepared):
+        bodies = _add_batch_impact(world, scene, slot + 1, one.pair_values,
+                                   _probe_starts(one) if probe else one.starts, length, skin,
+                                   one.probe.extent)
+        for b2_body in bodies:
+            b2_body.userData = slot
+        view = _Slot(bodies, length)
+        view.restitution = one.pair_values[0]
+        views.append(view)
+    world.contactManager.FindNewContacts()
+    return world, views
+
+
+def _slot_of(contact) -> int:
+    """The batch slot of a contact (the ground's body has no userData)."""
+    slot = contact.fixtureB.body.userData
+    return contact.fixtureA.body.userData if slot is None else slot
+
+
+class _ManyProbe(b2.contactListener):
+    """PreSolve listener of a batch world: each impact's approach speed at its first
+    touching contact (:class:`_SpeedProbe` for many impacts)."""
+
+    def __init__(self, views, measure_run: bool = False):
+        super().__init__()
+        self.speeds: dict[int, float] = {}
+        self.views = {view.body_b.userData: view for view in views}
+        self.measure_run = measure_run  # the runs' own speeds: into derived and notes
+
+    def PreSolve(self, contact, old_manifold):
+        if not contact.touching or contact.manifold.pointCount == 0:
+            return
+        slot = _slot_of(contact)
+        if slot in self.speeds:
+            return
+        speed = self.speeds[slot] = _approach_speed(contact)
+        if self.measure_run:
+            view = self.views[slot]
+            view.notes = _speed_results(view.derived, speed, view.velocity, view.restitution)
+
+    def done(self, world) -> bool:
+        """Whether every impact's speed is known (the listener is then taken off)."""
+        if len(self.speeds) < len(self.views):
+            return False
+        world.contactListener = None
+        return True
+
+
+def _replace(world, views, kept: set, prepared) -> None:
+    """Put the impacts ``kept`` of a probe world at their run's start (``prepared``), as
+    :meth:`_World.place` does; the others sleep (never collided or solved again)."""
+    manager = world.contactManager
+    for slot, view in enumerate(views):
+        if slot in kept:
+            for contact in [edge.contact for edge in view.body_b.contacts]:
+                manager.Destroy(contact)
+            _place(view.bodies, prepared[slot].starts)
+        else:
+            for b2_body in view.bodies:
+                b2_body.awake = False
+    manager.FindNewContacts()
+
+
+def _probe_many(scenes, prepared, length: float, skin: float, dt: float,
+                max_steps: int) -> tuple[list[float | None], object, list]:
+    """:func:`_probe` of every scene in one world: each impact sleeps once its speed is
+    known, as its probe run would stop. ``(speeds, world, slots)``."""
+    slots = list(range(len(scenes)))
+    world, views = _many_world(scenes, prepared, slots, length, skin,
+                               prepared[0].world_values, probe=True)
+    listener = _ManyProbe(views)
+    world.contactListener = listener
+    iterations = prepared[0].iterations
+    asleep: set[int] = set()
+    try:
+        for _ in range(max_steps):
+            world.Step(dt, *iterations)
+            for slot in listener.speeds.keys() - asleep:
+                for b2_body in views[slot].bodies:
+                    b2_body.awake = False
+                asleep.add(slot)
+            if len(asleep) == len(views):
+                break
+    finally:
+        world.contactListener = None
+    return [listener.speeds.get(slot) for slot in slots], world, views
 
 
 ENGINE_CLASS = Box2DEngine

@@ -1,0 +1,117 @@
+"""Box2D's ``run_many`` (many impacts per b2World) gives the runs of ``run`` bit for bit.
+
+``EngineRun`` equality compares every field but the wall time (velocities, status, steps,
+contact records, impulses, derived values, notes) as exact floats. The batches put impacts of
+different velocity scales, ground and two-body scenes, and probe runs of different lengths
+side by side (docs/engines.md, Box2D).
+"""
+
+from __future__ import annotations
+
+import pytest
+
+pytest.importorskip("Box2D", reason="Box2D not installed (pip install box2d==2.3.10)")
+
+from harness.engines import Status, UnsupportedScene, box2d_engine, load_engine
+from harness.scenarios.library import load_scenarios
+from harness.survey.population import resolve_populations
+from harness.survey.sampling import sample_population
+
+SAMPLES = 30  # per population: 210 impacts, several batches of MANY_CHUNK
+
+
+@pytest.fixture(scope="module")
+def engine():
+    return load_engine("box2d")
+
+
+@pytest.fixture(scope="module")
+def population_scenes():
+    return [sample.scene for population in resolve_populations([])
+            for sample in sample_population(population, SAMPLES, seed=5).samples]
+
+
+def _library_scenes(engine) -> list:
+    """Every scene of the library's scenarios that run Box2D and that it can build."""
+    scenes = []
+    for scenario in load_scenarios():
+        if scenario.analytic_only or (scenario.engines and "box2d" not in scenario.engines):
+            continue
+        for _, scene in scenario.points():
+            try:
+                engine.run(scene, preset="accurate")
+            except UnsupportedScene:
+                continue
+            scenes.append(scene)
+    return scenes
+
+
+def _mismatched(engine, scenes, settings) -> list[str]:
+    batched = engine.run_many(scenes, settings)
+    single = [engine.run(scene, settings) for scene in scenes]
+    assert len(batched) == len(single)
+    return [scene.name for scene, a, b in zip(scenes, batched, single) if a != b]
+
+
+@pytest.mark.parametrize("preset", ["defaults", "accurate"])
+def test_batched_equals_single_on_every_population(engine, population_scenes, preset):
+    assert not _mismatched(engine, population_scenes, engine.settings(preset))
+    # The batches are real ones: several chunks, ground and two-body scenes in each.
+    assert len(population_scenes) > 2 * box2d_engine.MANY_CHUNK
+    assert {scene.ground for scene in population_scenes[:box2d_engine.MANY_CHUNK]} == {
+        True, False}
+
+
+def test_accurate_batches_hold_several_velocity_scales(engine, population_scenes):
+    # "auto" gives impacts of one batch different Box2D time steps (one world each).
+    runs = engine.run_many(population_scenes[:box2d_engine.MANY_CHUNK], preset="accurate")
+    assert len({run.derived["velocity_scale"] for run in runs}) > 1
+
+
+@pytest.mark.parametrize("preset", ["defaults", "accurate"])
+def test_batched_equals_single_on_the_library(engine, preset):
+    scenes = _library_scenes(engine)
+    assert len(scenes) > 20
+    assert not _mismatched(engine, scenes, engine.settings(preset))
+
+
+def test_batched_equals_single_at_the_step_cap_and_without_contact(engine, population_scenes):
+    scenes = population_scenes[::7]
+    for overrides in ({"max_steps": 1}, {"max_steps": 3, "approach_steps": 20.0}):
+        for preset in ("defaults", "accurate"):
+            settings = engine.settings(preset, overrides)
+            assert not _mismatched(engine, scenes, settings)
+            statuses = {run.status for run in engine.run_many(scenes, settings)}
+            assert statuses & {Status.NO_SEPARATION, Status.NO_CONTACT}
+
+
+def test_batched_equals_single_with_sleeping_and_warm_starting(engine, population_scenes):
+    # Sleeping, warm starting and time-of-impact sub-steps act per island, with "auto"
+    # scales (several worlds a batch).
+    scenes = population_scenes[::5]
+    overrides = {"allow_sleeping": True, "warm_starting": True, "continuous_physics": True}
+    assert not _mismatched(engine, scenes, engine.settings("accurate", overrides))
+
+
+def test_sub_stepping_runs_one_by_one(population_scenes):
+    # sub_stepping leaves a world's step unfinished for the next Step: a lone run then
+    # depends on what its world ran before, and shared worlds would mix impacts. run_many
+    # runs the impacts in order, as run does: two fresh engines give the same runs.
+    scenes = population_scenes[::5]
+    batched_engine, single_engine = box2d_engine.Box2DEngine(), box2d_engine.Box2DEngine()
+    settings = batched_engine.settings("accurate", {"sub_stepping": True})
+    assert batched_engine.run_many(scenes, settings) == [
+        single_engine.run(scene, settings) for scene in scenes]
+
+
+def test_batched_notes_and_derived_come_from_each_impacts_own_probe(engine, population_scenes):
+    # defaults measure Box2D's impact speed during the run itself: slow impacts get the
+    # threshold's note, fast ones none, within one batch.
+    scenes = population_scenes[:box2d_engine.MANY_CHUNK]
+    runs = engine.run_many(scenes, preset="defaults")
+    cleared = [run.derived["restitution_threshold_cleared"] for run in runs]
+    assert True in cleared and False in cleared
+    for scene, run in zip(scenes, runs):
+        slow = run.derived["box2d_impact_speed"] <= box2d_engine.VELOCITY_THRESHOLD
+        assert run.derived["restitution_threshold_cleared"] == (not slow)
+        assert (box2d_engine.THRESHOLD_NOTE in run.notes) == (slow and scene.restitution > 0)
