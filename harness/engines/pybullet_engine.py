@@ -40,6 +40,20 @@ manifolds (Bullet warm-starts from them); sleeping is disabled.
 Cost: an impact is ~2 steps, so what depends only on the scene and the settings (world,
 start joint states, energy weights) is computed once per (scene, settings) pair of objects,
 and pybullet is called with positional arguments (its keyword parsing costs ~0.2 µs a call).
+Clients run without pybullet's TinyRenderer plugin, which meshed every new link's collision
+shape for rendering (most of ``createMultiBody``'s cost for a sphere).
+
+Many impacts (``run_many``, the survey): a new geometry needs new bodies, and
+``createMultiBody`` (~0.2-0.3 ms a body) is then the cost of an impact, so many impacts share one
+client (:data:`MANY_IMPACTS`, ground and two-body scenes apart) with one
+``stepSimulation`` and one ``getContactPoints`` a step, instead of a client reset each.
+Each impact lies in its own slice of the engine's y, the axis out of the scene's plane:
+the joints' rotations about y have exact zeros off the plane and Bullet's collision and
+Jacobian arithmetic works with differences of positions, so the x-z numbers are those of a
+lone run at y = 0, while slices :data:`_MANY_GAP` apart never meet in the broad phase.
+They share only the static plane, which joins no simulation islands. Finished impacts are
+removed. The runs equal :meth:`run`'s bit for bit (tests/engines/test_pybullet_many.py);
+moving impacts apart within the plane instead changes roundings (measured).
 
 Settings (``defaults`` | ``accurate``) are listed in :data:`SETTING_DOCS`; ``None`` means
 "not set: Bullet's default".
