@@ -74,7 +74,7 @@ _MAX_WORLDS = 8
 _MAX_IDLE = 2  # emptied clients kept per engine settings (the survey needs 1: a new
 # geometry evicts one world and builds one)
 #: Impacts per client in run_many (measured: see docs/engines.md, 'pybullet').
-MANY_IMPACTS = 64
+MANY_IMPACTS = 32
 _MANY_GAP = 1.0  # m, between two impacts' slices of the engine's y
 _PARK_HEIGHT = 1.0e3  # m, where bodies wait (far above the plane) while contacts are cleared
 

@@ -81,6 +81,18 @@ def test_batched_equals_single_at_the_step_cap_and_without_contact(engine, popul
         assert {run.status for run in batched} & {Status.NO_SEPARATION, Status.NO_CONTACT}
 
 
+@pytest.mark.parametrize("overrides", [
+    {"num_sub_steps": 2, "time_step": 1.0 / 120.0},  # kept by a client across resets
+    {"contact_breaking_threshold": 0.05, "approach_steps": 0.5},  # process-wide in Bullet
+])
+def test_batched_equals_single_under_other_settings(engine, population_scenes, overrides):
+    scenes = population_scenes[::5]
+    settings = engine.settings("defaults", overrides)
+    batched = engine.run_many(scenes, settings)
+    single = [engine.run(scene, settings) for scene in scenes]
+    assert not mismatches(scenes, batched, single)
+
+
 def test_batched_equals_a_fresh_adapters_single_runs(population_scenes):
     # The batch client is emptied and reused for the next batch of its settings, and kept
     # apart from the single runs' clients: a fresh adapter's lone runs are the reference.
