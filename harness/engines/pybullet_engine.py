@@ -44,13 +44,14 @@ Clients run without pybullet's TinyRenderer plugin, which meshed every new link'
 shape for rendering (most of ``createMultiBody``'s cost for a sphere).
 
 Many impacts (``run_many``, the survey): a new geometry needs new bodies, and
-``createMultiBody`` (~0.2-0.3 ms a body) is then the cost of an impact, so many impacts share one
-client (:data:`MANY_IMPACTS`, ground and two-body scenes apart) with one
+``createMultiBody`` (~0.2-0.3 ms a body) is then the cost of an impact, so many impacts
+share one client (:data:`MANY_IMPACTS`, ground and two-body scenes apart) with one
 ``stepSimulation`` and one ``getContactPoints`` a step, instead of a client reset each.
 Each impact lies in its own slice of the engine's y, the axis out of the scene's plane:
 the joints' rotations about y have exact zeros off the plane and Bullet's collision and
 Jacobian arithmetic works with differences of positions, so the x-z numbers are those of a
-lone run at y = 0, while slices :data:`_MANY_GAP` apart never meet in the broad phase.
+lone run at y = 0, while slices :data:`_MANY_GAP` (plus twice the contact breaking
+threshold) apart never meet.
 They share only the static plane, which joins no simulation islands. Finished impacts are
 removed. The runs equal :meth:`run`'s bit for bit (tests/engines/test_pybullet_many.py);
 moving impacts apart within the plane instead changes roundings (measured).
@@ -75,7 +76,7 @@ _MAX_IDLE = 2  # emptied clients kept per engine settings (the survey needs 1: a
 # geometry evicts one world and builds one)
 #: Impacts per client in run_many (measured: see docs/engines.md, 'pybullet').
 MANY_IMPACTS = 32
-_MANY_GAP = 1.0  # m, between two impacts' slices of the engine's y
+_MANY_GAP = 1.0  # m, between two impacts' slices of the engine's y (plus 2 x the threshold)
 _PARK_HEIGHT = 1.0e3  # m, where bodies wait (far above the plane) while contacts are cleared
 
 # setting key -> pybullet setPhysicsEngineParameter keyword
@@ -501,7 +502,6 @@ class PybulletEngine(Engine):
             return None
         return _contact_of(points, world.bodies[-1], world.dt)
 
-
     # ------------------------------------------------------------------ many impacts
     def _many_chunks(self, scenes) -> list[list[int]]:
         """Ground scenes and two-body scenes apart (a two-body world has no plane),
@@ -518,8 +518,9 @@ class PybulletEngine(Engine):
 
         The scene's plane is the engine's x-z plane, so an impact moved along y keeps its
         x-z arithmetic (the rotations about y have exact zeros off the plane, and Bullet
-        works with differences of positions): slices :data:`_MANY_GAP` apart never meet in
-        the broad phase, and share only the static plane, which joins no islands.
+        works with differences of positions): slices :data:`_MANY_GAP` plus twice the
+        contact breaking threshold apart never meet (no contact points, no broad-phase
+        pairs), and share only the static plane, which joins no islands.
         """
         settings = plans[0].settings  # one settings dict for every plan
         settings_key = _settings_key(settings)
@@ -529,11 +530,12 @@ class PybulletEngine(Engine):
         p.setPhysicsEngineParameter(contactBreakingThreshold=threshold, physicsClientId=client)
         plane = _add_plane(client) if plans[0].scene.ground else None
         batch = _Batch(client, settings_key, float(settings["time_step"]))
+        gap = _MANY_GAP + 2.0 * threshold  # contact points exist up to the threshold
         offset = previous = 0.0
         for slot, plan in enumerate(plans):
             extents = tuple(body_extent(b.shape) for b in plan.scene.bodies)
             if slot:
-                offset += previous + max(extents) + _MANY_GAP
+                offset += previous + max(extents) + gap
             previous = max(extents)
             bodies = _add_bodies(client, plan.scene, settings, offset)
             joints, (e, mu) = plan.prepared

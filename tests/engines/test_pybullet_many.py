@@ -84,6 +84,7 @@ def test_batched_equals_single_at_the_step_cap_and_without_contact(engine, popul
 @pytest.mark.parametrize("overrides", [
     {"num_sub_steps": 2, "time_step": 1.0 / 120.0},  # kept by a client across resets
     {"contact_breaking_threshold": 0.05, "approach_steps": 0.5},  # process-wide in Bullet
+    {"contact_breaking_threshold": 20.0},  # contacts found farther than adapter._MANY_GAP
 ])
 def test_batched_equals_single_under_other_settings(engine, population_scenes, overrides):
     scenes = population_scenes[::5]
