@@ -40,6 +40,21 @@ manifolds (Bullet warm-starts from them); sleeping is disabled.
 Cost: an impact is ~2 steps, so what depends only on the scene and the settings (world,
 start joint states, energy weights) is computed once per (scene, settings) pair of objects,
 and pybullet is called with positional arguments (its keyword parsing costs ~0.2 µs a call).
+Clients run without pybullet's TinyRenderer plugin, which meshed every new link's collision
+shape for rendering (most of ``createMultiBody``'s cost for a sphere).
+
+Many impacts (``run_many``, the survey): a new geometry needs new bodies, and
+``createMultiBody`` (~0.2-0.3 ms a body) is then the cost of an impact, so many impacts
+share one client (:data:`MANY_IMPACTS`, ground and two-body scenes apart) with one
+``stepSimulation`` and one ``getContactPoints`` a step, instead of a client reset each.
+Each impact lies in its own slice of the engine's y, the axis out of the scene's plane:
+the joints' rotations about y have exact zeros off the plane and Bullet's collision and
+Jacobian arithmetic works with differences of positions, so the x-z numbers are those of a
+lone run at y = 0, while slices :data:`_MANY_GAP` (plus twice the contact breaking
+threshold) apart never meet.
+They share only the static plane, which joins no simulation islands. Finished impacts are
+removed. The runs equal :meth:`run`'s bit for bit (tests/engines/test_pybullet_many.py);
+moving impacts apart within the plane instead changes roundings (measured).
 
 Settings (``defaults`` | ``accurate``) are listed in :data:`SETTING_DOCS`; ``None`` means
 "not set: Bullet's default".
@@ -59,6 +74,9 @@ from harness.scene import Scene
 _MAX_WORLDS = 8
 _MAX_IDLE = 2  # emptied clients kept per engine settings (the survey needs 1: a new
 # geometry evicts one world and builds one)
+#: Impacts per client in run_many (measured: see docs/engines.md, 'pybullet').
+MANY_IMPACTS = 32
+_MANY_GAP = 1.0  # m, between two impacts' slices of the engine's y (plus 2 x the threshold)
 _PARK_HEIGHT = 1.0e3  # m, where bodies wait (far above the plane) while contacts are cleared
 
 # setting key -> pybullet setPhysicsEngineParameter keyword
@@ -164,14 +182,15 @@ def _collision_shape(client: int, shape) -> int:
     return p.createCollisionShape(p.GEOM_MESH, vertices=vertices, physicsClientId=client)
 
 
-def _planar_multibody(client: int, body) -> int:
+def _planar_multibody(client: int, body, offset: float = 0.0) -> int:
+    """The body's planar chain, its base at ``offset`` along the engine's y (out of the plane)."""
     collision = _collision_shape(client, body.shape)
     mass, inertia = float(body.mass), float(body.moment_of_inertia)
     uid = p.createMultiBody(
         baseMass=0.0,
         baseCollisionShapeIndex=-1,
         baseVisualShapeIndex=-1,
-        basePosition=[0.0, 0.0, 0.0],
+        basePosition=[0.0, offset, 0.0],
         linkMasses=[0.0, 0.0, mass],
         linkCollisionShapeIndices=[-1, -1, collision],
         linkVisualShapeIndices=[-1, -1, -1],
@@ -193,6 +212,48 @@ def _planar_multibody(client: int, body) -> int:
     return uid
 
 
+def _configure(client: int, settings) -> None:
+    """No gravity and the engine settings that are set (the others stay Bullet's)."""
+    p.setGravity(0.0, 0.0, 0.0, physicsClientId=client)
+    parameters = {
+        keyword: settings[key]
+        for key, keyword in _ENGINE_PARAMETERS.items()
+        if settings[key] is not None
+    }
+    p.setPhysicsEngineParameter(physicsClientId=client, **parameters)
+
+
+def _add_plane(client: int) -> int:
+    """The ground: Bullet's static plane ``z = 0``, with the partner's neutral e and μ."""
+    plane_shape = p.createCollisionShape(p.GEOM_PLANE, physicsClientId=client)
+    plane = p.createMultiBody(0.0, plane_shape, physicsClientId=client)
+    p.changeDynamics(plane, -1, restitution=1.0, lateralFriction=1.0, physicsClientId=client)
+    return plane
+
+
+def _add_bodies(client: int, scene: Scene, settings, offset: float = 0.0) -> list[int]:
+    """The scene's bodies as planar chains (bases at ``offset`` along y), damped as set,
+    never sleeping; the partner body gets the neutral e and μ."""
+    bodies = []
+    for body in scene.bodies:
+        uid = _planar_multibody(client, body, offset)
+        for link in range(-1, 3):
+            p.changeDynamics(
+                uid,
+                link,
+                linearDamping=float(settings["linear_damping"]),
+                angularDamping=float(settings["angular_damping"]),
+                jointDamping=0.0,
+                activationState=p.ACTIVATION_STATE_DISABLE_SLEEPING,
+                physicsClientId=client,
+            )
+        bodies.append(uid)
+    if len(bodies) == 2:
+        p.changeDynamics(bodies[1], 2, restitution=1.0, lateralFriction=1.0,
+                         physicsClientId=client)
+    return bodies
+
+
 @dataclass
 class _World:
     client: int  # -1 once released (its client may serve another world)
@@ -205,6 +266,7 @@ class _World:
     dirty: bool = True  # contacts may remain from the previous run
     threshold: float = 0.02
     dt: float = 1.0 / 240.0  # s, the world's time step
+    offset: float = 0.0  # m, the bases' y (run_many: each impact at its own)
 
 
 _POLYGON_NOTE = ("polygon: pybullet keeps a link's convex-hull collision margin at 0.001 m, "
@@ -213,6 +275,7 @@ _POLYGON_NOTE = ("polygon: pybullet keeps a link's convex-hull collision margin 
 _get_contacts = p.getContactPoints
 _get_states = p.getJointStates
 _step_simulation = p.stepSimulation
+_reset_joints = p.resetJointStatesMultiDof
 _JOINTS = (0, 1, 2)
 
 
@@ -227,9 +290,73 @@ def _joint_triples(world: _World, field: int) -> tuple:
     return tuple(triples)
 
 
+def _set_joints(client: int, bodies, joints) -> None:
+    """Every body's joint positions and rates (``_prepare``'s form), one call per body:
+    the first reset of a new body's joints costs ~70 µs a call where a plane is in the
+    world (~20 µs for all three joints at once)."""
+    for uid, (x, v_x, z, v_z, angle, rate) in zip(bodies, joints):
+        # Lists: pybullet 3.2.7 crashes (segmentation fault) on tuples of values here.
+        _reset_joints(uid, _JOINTS, [[x], [z], [angle]], [[v_x], [v_z], [rate]],
+                      physicsClientId=client)
+
+
+def _contact_of(points, body_b: int, dt: float) -> RawContacts:
+    """One impact's contact from its points (``getContactPoints`` tuples, Bullet's order)."""
+    step_x = step_z = 0.0
+    step_normal = 0.0
+    contact_points = []
+    for cp in points:
+        # Force on body A: normal force along n (the normal on B, towards A) plus the two
+        # lateral friction forces along their directions.
+        (_, body_a, _, _, _, on_a, _, n, distance, force_n,
+         friction_1, direction_1, friction_2, direction_2) = cp
+        sign = 1.0 if body_a == body_b else -1.0
+        step_normal += force_n
+        step_x += sign * (force_n * n[0] + friction_1 * direction_1[0]
+                          + friction_2 * direction_2[0])
+        step_z += sign * (force_n * n[2] + friction_1 * direction_1[2]
+                          + friction_2 * direction_2[2])
+        contact_points.append((on_a[0], on_a[2], -distance))
+    cp = points[0]
+    sign = 1.0 if cp[1] == body_b else -1.0
+    n = cp[7]
+    length = math.hypot(n[0], n[2])
+    return (
+        tuple(contact_points),
+        (sign * n[0] / length, sign * n[2] / length),
+        (step_x * dt, step_z * dt),
+        step_normal * dt,
+    )
+
+
+def _connect() -> int:
+    """A new DIRECT client without its renderer plugin.
+
+    pybullet's built-in TinyRenderer makes a visual mesh of every new link from its
+    collision shape (a sphere's costs ~270 µs of a ~430 µs ``createMultiBody``); nothing
+    here renders. Plugins touch no physics (the bit-identity tests pin the runs).
+    """
+    client = p.connect(p.DIRECT)
+    renderer = p.loadPlugin("tinyRendererPlugin", physicsClientId=client)  # its id, if loaded
+    if renderer >= 0:
+        p.unloadPlugin(renderer, physicsClientId=client)
+    return client
+
+
 def _settings_key(settings) -> tuple:
     """The settings a world is built with (all but the per-run ones), as a key."""
     return tuple((k, settings[k]) for k in sorted(settings) if k not in _RUN_ONLY)
+
+
+class _Batch:
+    """A client holding many impacts (one :class:`_World` view each)."""
+
+    __slots__ = ("client", "dt", "settings_key", "slot_of", "slots")
+
+    def __init__(self, client: int, settings_key: tuple, dt: float) -> None:
+        self.client, self.settings_key, self.dt = client, settings_key, dt
+        self.slots: list[_World] = []
+        self.slot_of: dict[int, int] = {}  # body unique id -> slot
 
 
 class PybulletEngine(Engine):
@@ -241,6 +368,7 @@ class PybulletEngine(Engine):
 
     def __init__(self) -> None:
         self._idle: dict[tuple, list[int]] = {}  # settings key -> emptied clients
+        self._idle_many: dict[tuple, list[int]] = {}  # the same, for run_many's batches
         try:  # pybullet has no __version__; its API version is a date
             from importlib.metadata import PackageNotFoundError, version
 
@@ -274,41 +402,14 @@ class PybulletEngine(Engine):
         idle = self._idle.get(settings_key)
         if idle:
             return idle.pop()
-        return p.connect(p.DIRECT)
+        return _connect()
 
     def _build(self, scene: Scene, settings, *, contacts: bool = True) -> _World:
         settings_key = _settings_key(settings)
         client = self._client(settings_key)
-        p.setGravity(0.0, 0.0, 0.0, physicsClientId=client)
-        parameters = {
-            keyword: settings[key]
-            for key, keyword in _ENGINE_PARAMETERS.items()
-            if settings[key] is not None
-        }
-        p.setPhysicsEngineParameter(physicsClientId=client, **parameters)
-        plane = None
-        if scene.ground:
-            plane_shape = p.createCollisionShape(p.GEOM_PLANE, physicsClientId=client)
-            plane = p.createMultiBody(0.0, plane_shape, physicsClientId=client)
-            p.changeDynamics(plane, -1, restitution=1.0, lateralFriction=1.0,
-                             physicsClientId=client)
-        bodies = []
-        for body in scene.bodies:
-            uid = _planar_multibody(client, body)
-            for link in range(-1, 3):
-                p.changeDynamics(
-                    uid,
-                    link,
-                    linearDamping=float(settings["linear_damping"]),
-                    angularDamping=float(settings["angular_damping"]),
-                    jointDamping=0.0,
-                    activationState=p.ACTIVATION_STATE_DISABLE_SLEEPING,
-                    physicsClientId=client,
-                )
-            bodies.append(uid)
-        if len(bodies) == 2:
-            p.changeDynamics(bodies[1], 2, restitution=1.0, lateralFriction=1.0,
-                             physicsClientId=client)
+        _configure(client, settings)
+        plane = _add_plane(client) if scene.ground else None
+        bodies = _add_bodies(client, scene, settings)
         extents = tuple(body_extent(b.shape) for b in scene.bodies)
         # A bare-stepping world never asks for contacts, so it never knows whether the last
         # run left some: it starts clean (no collision detection has run yet) and stays so.
@@ -336,14 +437,14 @@ class PybulletEngine(Engine):
     def close(self) -> None:
         """Release every cached world and plan, and disconnect the idle clients."""
         super().close()
-        idle = self._idle
-        while idle:
-            _, clients = idle.popitem()
-            for client in clients:
-                try:
-                    p.disconnect(physicsClientId=client)
-                except p.error:  # pragma: no cover - already gone at interpreter exit
-                    pass
+        for idle in (self._idle, self._idle_many):
+            while idle:
+                _, clients = idle.popitem()
+                for client in clients:
+                    try:
+                        p.disconnect(physicsClientId=client)
+                    except p.error:  # pragma: no cover - already gone at interpreter exit
+                        pass
 
     def __del__(self):  # pragma: no cover - interpreter exit
         try:
@@ -356,11 +457,11 @@ class PybulletEngine(Engine):
         return (_POLYGON_NOTE,) if polygon else ()
 
     # ------------------------------------------------------------------ run
-    def _prepare(self, world: _World, scene: Scene, settings, start) -> tuple:
-        """The start joint states ``(uid, x, v_x, z, v_z, -θ, -ω)`` and the pair's (e, μ)."""
+    def _prepare(self, world: _World | None, scene: Scene, settings, start) -> tuple:
+        """The start joint states ``(x, v_x, z, v_z, -θ, -ω)`` per body and the pair's
+        (e, μ); ``world`` is not needed (``None`` for :meth:`run_many`)."""
         joints = tuple(
-            (uid, x, vx, y, vy, -angle, -omega)
-            for uid, (x, y, angle, vx, vy, omega) in zip(world.bodies, start)
+            (x, vx, y, vy, -angle, -omega) for x, y, angle, vx, vy, omega in start
         )
         return joints, (scene.restitution, scene.friction)
 
@@ -383,10 +484,7 @@ class PybulletEngine(Engine):
                 reset(uid, 0, 10.0 * index * (world.scale + 1.0), 0.0, client)
                 reset(uid, 1, _PARK_HEIGHT, 0.0, client)
             p.performCollisionDetection(client)
-        for uid, x, v_x, z, v_z, angle, rate in joints:
-            reset(uid, 0, x, v_x, client)
-            reset(uid, 1, z, v_z, client)
-            reset(uid, 2, angle, rate, client)
+        _set_joints(client, world.bodies, joints)
         return {}
 
     def _advance(self, world: _World) -> None:
@@ -402,33 +500,102 @@ class PybulletEngine(Engine):
         world.dirty = bool(points)
         if not points:
             return None
-        body_b = world.bodies[-1]
-        step_x = step_z = 0.0
-        step_normal = 0.0
-        contact_points = []
-        for cp in points:
-            # Force on body A: normal force along n (the normal on B, towards A) plus the two
-            # lateral friction forces along their directions.
-            (_, body_a, _, _, _, on_a, _, n, distance, force_n,
-             friction_1, direction_1, friction_2, direction_2) = cp
-            sign = 1.0 if body_a == body_b else -1.0
-            step_normal += force_n
-            step_x += sign * (force_n * n[0] + friction_1 * direction_1[0]
-                              + friction_2 * direction_2[0])
-            step_z += sign * (force_n * n[2] + friction_1 * direction_1[2]
-                              + friction_2 * direction_2[2])
-            contact_points.append((on_a[0], on_a[2], -distance))
-        cp = points[0]
-        sign = 1.0 if cp[1] == body_b else -1.0
-        n = cp[7]
-        length = math.hypot(n[0], n[2])
-        dt = world.dt
-        return (
-            tuple(contact_points),
-            (sign * n[0] / length, sign * n[2] / length),
-            (step_x * dt, step_z * dt),
-            step_normal * dt,
-        )
+        return _contact_of(points, world.bodies[-1], world.dt)
+
+    # ------------------------------------------------------------------ many impacts
+    def _many_chunks(self, scenes) -> list[list[int]]:
+        """Ground scenes and two-body scenes apart (a two-body world has no plane),
+        :data:`MANY_IMPACTS` to a world."""
+        chunks = []
+        for ground in (True, False):
+            rows = [index for index, scene in enumerate(scenes) if scene.ground == ground]
+            chunks += [rows[begin:begin + MANY_IMPACTS]
+                       for begin in range(0, len(rows), MANY_IMPACTS)]
+        return chunks
+
+    def _build_many(self, plans) -> tuple[_Batch, list[_World], list[dict]]:
+        """One client holding every plan's impact, each in its own slice of the engine's y.
+
+        The scene's plane is the engine's x-z plane, so an impact moved along y keeps its
+        x-z arithmetic (the rotations about y have exact zeros off the plane, and Bullet
+        works with differences of positions): slices :data:`_MANY_GAP` plus twice the
+        contact breaking threshold apart never meet (no contact points, no broad-phase
+        pairs), and share only the static plane, which joins no islands.
+        """
+        settings = plans[0].settings  # one settings dict for every plan
+        settings_key = _settings_key(settings)
+        client = self._many_client(settings_key)
+        _configure(client, settings)
+        threshold = float(settings["contact_breaking_threshold"])
+        p.setPhysicsEngineParameter(contactBreakingThreshold=threshold, physicsClientId=client)
+        plane = _add_plane(client) if plans[0].scene.ground else None
+        batch = _Batch(client, settings_key, float(settings["time_step"]))
+        gap = _MANY_GAP + 2.0 * threshold  # contact points exist up to the threshold
+        offset = previous = 0.0
+        for slot, plan in enumerate(plans):
+            extents = tuple(body_extent(b.shape) for b in plan.scene.bodies)
+            if slot:
+                offset += previous + max(extents) + gap
+            previous = max(extents)
+            bodies = _add_bodies(client, plan.scene, settings, offset)
+            joints, (e, mu) = plan.prepared
+            p.changeDynamics(bodies[0], 2, restitution=e, lateralFriction=mu,
+                             physicsClientId=client)
+            _set_joints(client, bodies, joints)
+            batch.slots.append(_World(client=client, settings_key=settings_key, plane=plane,
+                                      bodies=bodies, extents=extents, scale=previous,
+                                      pair_values=(e, mu), dirty=False,
+                                      threshold=threshold, dt=batch.dt, offset=offset))
+            for uid in bodies:
+                batch.slot_of[uid] = slot
+        return batch, batch.slots, [{} for _ in plans]
+
+    def _step_many(self, batch: _Batch, active) -> dict:
+        client = batch.client
+        _step_simulation(client)
+        points_of: dict[int, list] = {}
+        slot_of = batch.slot_of
+        for cp in _get_contacts(-1, -1, -2, -2, client):  # every pair, Bullet's order
+            slot = slot_of.get(cp[1])
+            if slot is None:  # body A is the plane
+                slot = slot_of[cp[2]]
+            points = points_of.get(slot)
+            if points is None:
+                points_of[slot] = [cp]
+            else:
+                points.append(cp)
+        slots, dt = batch.slots, batch.dt
+        return {slot: _contact_of(points, slots[slot].bodies[-1], dt)
+                for slot, points in points_of.items()}
+
+    def _retire(self, batch: _Batch, slot: int) -> None:
+        """Remove the impact's bodies: the next steps neither move nor collide them."""
+        world = batch.slots[slot]
+        for uid in world.bodies:
+            p.removeBody(uid, physicsClientId=batch.client)
+            del batch.slot_of[uid]
+
+    def _release_many(self, batch: _Batch) -> None:
+        """Empty the batch's client and keep it for the next batch of its settings."""
+        client, batch.client = batch.client, -1
+        for world in batch.slots:
+            world.client = -1
+        idle = self._idle_many.setdefault(batch.settings_key, [])
+        try:
+            if not idle:
+                p.resetSimulation(physicsClientId=client)
+                idle.append(client)
+            else:
+                p.disconnect(physicsClientId=client)
+        except p.error:  # pragma: no cover - already gone at interpreter exit
+            pass
+
+    def _many_client(self, settings_key: tuple) -> int:
+        """An empty DIRECT client for a batch of ``settings_key``: an idle one, else a new one."""
+        idle = self._idle_many.get(settings_key)
+        if idle:
+            return idle.pop()
+        return _connect()
 
     def _read_poses(self, world: _World) -> tuple:
         return _joint_triples(world, 0)
@@ -438,14 +605,14 @@ class PybulletEngine(Engine):
 
     def _out_of_plane_drift(self, world: _World) -> float:
         """The centre's y, plus the tilt of the link's y axis times the body's size."""
-        client = world.client
+        client, offset = world.client, world.offset
         drift = 0.0
         for uid, extent in zip(world.bodies, world.extents):
             link = p.getLinkState(uid, 2, 0, 0, client)
             qx, qy, qz, qw = link[1]  # world orientation of the link frame
             tilt_x = 2.0 * (qx * qy - qz * qw)  # components of the link's y axis off (0, 1, 0)
             tilt_z = 2.0 * (qy * qz + qx * qw)
-            body_drift = abs(link[0][1]) + math.hypot(tilt_x, tilt_z) * extent
+            body_drift = abs(link[0][1] - offset) + math.hypot(tilt_x, tilt_z) * extent
             if body_drift > drift:  # noqa: PLR1730 - the loop reads better with the test
                 drift = body_drift
         return drift
