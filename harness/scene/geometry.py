@@ -76,22 +76,12 @@ def world_core(body: Body) -> tuple[np.ndarray, float]:
     return turned + np.asarray(body.position, dtype=float), radius
 
 
-def _edges(core: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Edges of a core: a point gives one degenerate edge, a segment one, a polygon k."""
-    count = len(core)
-    if count == 1:
-        return [(core[0], core[0])]
-    if count == 2:
-        return [(core[0], core[1])]
-    return [(core[i], core[(i + 1) % count]) for i in range(count)]
-
-
 def _edge_points(points: list) -> list[tuple[float, float, float, float]]:
-    """The edges of :func:`_edges` for a core given as a list of ``(x, y)``: each as
-    ``(start x, start y, end x, end y)``."""
-    count = len(points)
-    ends = [0] if count == 1 else [1] if count == 2 else [*range(1, count), 0]
-    return [(x, y, *points[end]) for (x, y), end in zip(points, ends)]
+    """The edges of a core given as a list of ``(x, y)``, each as ``(start x, start y, end x,
+    end y)``: a point gives one degenerate edge, a segment one edge, a polygon one per side."""
+    if len(points) <= 2:  # a point's degenerate edge, a segment's one edge
+        return [(*points[0], *points[-1])]
+    return [(*start, *end) for start, end in zip(points, points[1:] + points[:1])]
 
 
 def _closest_pair(points_a: list, points_b: list) -> tuple[float, tuple, tuple]:
@@ -155,15 +145,16 @@ def _any_inside(points: list, polygon: list) -> bool:
                for x, y in points)
 
 
-def _axes(core: np.ndarray) -> list[np.ndarray]:
-    """Unit normals (both signs) of a core's edges; none for a point."""
+def _axis_list(points: list) -> list[tuple[float, float]]:
+    """Unit normals (both signs) of the edges of a core given as a list of ``(x, y)``; none
+    for a point."""
     axes = []
-    for a, b in _edges(core):
-        edge = b - a
-        length = math.hypot(edge[0], edge[1])
+    for sx, sy, ex, ey in _edge_points(points):
+        dx, dy = ex - sx, ey - sy
+        length = math.hypot(dx, dy)
         if length > 0.0:
-            normal = np.array([edge[1], -edge[0]]) / length
-            axes += [normal, -normal]
+            normal = (dy / length, -dx / length)
+            axes += [normal, (-normal[0], -normal[1])]
     return axes
 
 
@@ -176,13 +167,13 @@ def _largest(values: list) -> float:
     """``numpy.max`` of a list, to the bit: where the largest value is zero, numpy's own choice
     between 0.0 and -0.0 (Python's ``max`` keeps the first, numpy not always)."""
     largest = max(values)
-    return float(np.max(values)) if largest == 0.0 else largest
+    return float(np.max(values)) if largest == 0.0 and len(values) > 1 else largest
 
 
 def _smallest(values: list) -> float:
     """``numpy.min`` of a list, to the bit (see :func:`_largest`)."""
     smallest = min(values)
-    return float(np.min(values)) if smallest == 0.0 else smallest
+    return float(np.min(values)) if smallest == 0.0 and len(values) > 1 else smallest
 
 
 def _support_interval(core, normal, tangent, side, tolerance,
@@ -252,12 +243,17 @@ def core_separation(core_a: np.ndarray, core_b: np.ndarray):
                            (closest_b[1] - closest_a[1]) / distance])
         return distance, normal, closest_a, closest_b
     # Cores touch or overlap: the separating axis of least penetration (<= 0).
-    axes = _axes(core_a) + _axes(core_b)
+    axes = _axis_list(points_a) + _axis_list(points_b)
     if not axes:  # two coincident points (concentric disks): no defined direction
-        axes = [GROUND_NORMAL.copy()]
-    separations = [float((core_b @ axis).min() - (core_a @ axis).max()) for axis in axes]
-    best = int(np.argmax(separations))
-    return min(0.0, separations[best]), axes[best], closest_a, closest_b
+        axes = [(0.0, 1.0)]
+    # Each axis's products with both cores, as ``core @ axis`` would give them one at a time
+    # (a stack of matrix-vector products: the same product per axis, unlike ``core @ axes.T``).
+    columns = np.array(axes)[:, :, None]
+    along_b = np.matmul(core_b[None], columns)[:, :, 0].tolist()
+    along_a = np.matmul(core_a[None], columns)[:, :, 0].tolist()
+    separations = [min(b) - max(a) for a, b in zip(along_a, along_b)]
+    best = int(np.argmax(separations))  # the first largest, as Python's max would not tell
+    return min(0.0, separations[best]), np.array(axes[best]), closest_a, closest_b
 
 
 def core_contact(core_a: np.ndarray, radius_a: float, core_b: np.ndarray, radius_b: float,
