@@ -120,8 +120,8 @@ def statistics(runs: dict) -> dict:
     # reasons counts under each).
     ok_runs = runs["status"] == "ok"
     failing = [set(filter(None, text.split(","))) for text in runs["reasons"].tolist()]
-    fails = {name: np.array([name in names for names in failing], dtype=bool)
-             for name in verdicts.REASONS}
+    fails = np.array([[name in names for names in failing] for name in verdicts.REASONS],
+                     dtype=bool).reshape(len(verdicts.REASONS), len(failing))
     rows = []
     for (engine, preset, family, kind), indices in sorted(groups.items()):
         index = np.asarray(indices)
@@ -130,8 +130,8 @@ def statistics(runs: dict) -> dict:
         n_ok = int(ok.sum())
         row = {"engine": engine, "preset": preset, "family": family, "poisson_type": kind,
                "n": size, "n_ok": n_ok, "flagged_fraction": 1.0 - n_ok / size}
-        for name in verdicts.REASONS:
-            row[f"flagged_{name}"] = int(fails[name][index].sum()) / size
+        for name, count in zip(verdicts.REASONS, fails[:, index].sum(axis=1).tolist()):
+            row[f"flagged_{name}"] = count / size
         ok_index = index[ok]
         row["energy_gain_fraction"] = (int(runs["gains_energy"][ok_index].sum()) / n_ok
                                        if n_ok else math.nan)
