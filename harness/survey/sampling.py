@@ -139,6 +139,8 @@ def _touch(core_a: np.ndarray, radius_a: float, turned_b: np.ndarray, radius_b: 
 
 
 def _extent(body: Body) -> float:
+    if isinstance(body.shape, Disk):  # its core is the centre: hypot 0.0, then the radius
+        return 0.0 + float(body.shape.radius)
     core, radius = geometry.local_core(body.shape)
     return float(np.max(np.hypot(core[:, 0], core[:, 1]))) + radius
 
