@@ -31,9 +31,16 @@ QUANTILES = (("median", 0.5), ("p90", 0.9), ("p99", 0.99), ("max", 1.0))
 ALL_TYPES = 0  # the collision-type column's value for the row over every type
 
 
-def row_departures(terms, u, u_law) -> np.ndarray:
-    """``departure(u[i], u_law[i])`` for every row (:func:`metrics.departure_batch`)."""
-    return metrics.departure_batch(terms.mass, u, u_law, terms.u, free_bodies=terms.free_bodies)
+def row_departures(terms, u, u_law, scales=None) -> np.ndarray:
+    """``departure(u[i], u_law[i])`` for every row (:func:`metrics.departure_batch`);
+    ``scales``: :func:`row_scales` of ``terms``, for many departures of the same rows."""
+    scales = row_scales(terms) if scales is None else scales
+    return scales.departures(u, u_law)
+
+
+def row_scales(terms) -> metrics.RowScales:
+    """The mass matrices and frame-free scales of every row, computed once."""
+    return metrics.RowScales(terms.mass, terms.u, free_bodies=terms.free_bodies)
 
 
 def relative_energy_change(terms, u_after) -> np.ndarray:
@@ -47,7 +54,8 @@ def run_columns(family, sample_index, terms, laws, routh, engine_results) -> dic
     """One row per (sample, engine, preset): the columns of ``runs.parquet``."""
     u_poisson, u_stronge = laws["poisson"].u_after, laws["stronge"].u_after
     u_lcp = laws["newton-lcp"].u_after
-    law_part = row_departures(terms, u_lcp, u_poisson)
+    scales = row_scales(terms)
+    law_part = row_departures(terms, u_lcp, u_poisson, scales)
     poisson_type = laws["poisson"].batch.collision_type.astype(np.int64)
     columns: dict[str, list] = {}
     for result in engine_results:
@@ -67,10 +75,10 @@ def run_columns(family, sample_index, terms, laws, routh, engine_results) -> dic
             "alpha_over_rm": routh["alpha_over_rm"],
             "mu": terms.mu,
             "e": terms.e,
-            "departure_poisson": row_departures(terms, result.velocities, u_poisson),
-            "departure_stronge": row_departures(terms, result.velocities, u_stronge),
+            "departure_poisson": row_departures(terms, result.velocities, u_poisson, scales),
+            "departure_stronge": row_departures(terms, result.velocities, u_stronge, scales),
             "law_part": law_part,
-            "solve_part": row_departures(terms, result.velocities, u_lcp),
+            "solve_part": row_departures(terms, result.velocities, u_lcp, scales),
             "energy_change_relative": gain,
             "gains_energy": gain > ENERGY_GAIN_TOLERANCE,
         }
