@@ -93,7 +93,8 @@ def _closest_pair(points_a: list, points_b: list) -> tuple[float, tuple, tuple]:
     edge from ``s`` to ``e`` the closest point is ``s + t (e − s)`` with
     ``t = (x − s)·(e − s) / |e − s|²`` clamped to ``[0, 1]`` (``s`` itself for a point's
     degenerate edge). Plain floats: a core has a few points, where numpy's cost per call
-    exceeds the arithmetic (tests/scene/test_geometry.py compares with the array form).
+    exceeds the arithmetic (tests/scene/test_geometry_reference.py keeps the array form
+    and compares).
     """
     sqrt = math.sqrt
     best, on_a, on_b = math.inf, None, None
@@ -251,8 +252,10 @@ def core_separation(core_a: np.ndarray, core_b: np.ndarray):
     columns = np.array(axes)[:, :, None]
     along_b = np.matmul(core_b[None], columns)[:, :, 0].tolist()
     along_a = np.matmul(core_a[None], columns)[:, :, 0].tolist()
+    # Python's min and max may keep another zero than numpy's; a zero separation becomes
+    # min(0.0, ±0.0) = 0.0 below either way, and ±0.0 tie in the argmax.
     separations = [min(b) - max(a) for a, b in zip(along_a, along_b)]
-    best = int(np.argmax(separations))  # the first largest, as Python's max would not tell
+    best = int(np.argmax(separations))  # the first of the largest
     return min(0.0, separations[best]), np.array(axes[best]), closest_a, closest_b
 
 
