@@ -416,6 +416,7 @@ class Engine(abc.ABC):
     max_worlds: int | None = None
     _last_checked: tuple | None = None  # (settings passed, resolved copy, preset)
     _last_scene: Scene | None = None  # the last scene that passed the checks
+    _last_weights: tuple | None = None  # its energy_weights, from the checks
     _worlds: OrderedDict | None = None
     _plans: dict | None = None
 
@@ -573,9 +574,11 @@ class Engine(abc.ABC):
 
     def _checked_scene(self, scene: Scene) -> None:
         if scene is not self._last_scene:
-            check_scene(self.name, scene)
+            weights = check_scene(self.name, scene)
             # Checked once per scene object: only a hashable (immutable) scene is remembered.
-            self._last_scene = scene if _immutable(scene) else None
+            immutable = _immutable(scene)
+            self._last_scene = scene if immutable else None
+            self._last_weights = weights if immutable else None
 
     # ------------------------------------------------------------------ caches
     def _world_for(self, scene: Scene, settings: Mapping[str, Any]) -> tuple[Any, tuple]:
@@ -619,9 +622,14 @@ class Engine(abc.ABC):
         plan.prepared = self._prepare(plan.world, scene, settings, start)
         plan.dt = float(settings["time_step"])
         plan.max_steps = int(settings["max_steps"])
-        plan.weights = energy_weights(scene)
+        # The checks computed the inertias (a polygon's costs tens of µs); reuse them.
+        weights = self._last_weights if scene is self._last_scene else None
+        plan.weights = weights if weights is not None else energy_weights(scene)
         plan.before = energy_before(scene, plan.weights)
-        plan.speed_scale = float(max(1e-300, max(abs(v) for v in scene.state())))
+        # The largest of |v_x|, |v_y|, |ω| over the bodies (Scene.state()'s, without an array).
+        plan.speed_scale = float(max(1e-300, max(
+            abs(float(value)) for body in scene.bodies
+            for value in (*body.velocity, body.angular_velocity))))
         plan.same_point = SAME_POINT_RELATIVE * max(
             max(body_extent(body.shape) for body in scene.bodies), 1e-12)
         plan.notes = tuple(self._notes(scene, settings))
@@ -1021,8 +1029,10 @@ def _immutable(scene: Scene) -> bool:
     return True
 
 
-def check_scene(engine: str, scene: Scene) -> None:
-    """Raise :class:`UnsupportedScene` unless every adapter can build ``scene``."""
+def check_scene(engine: str, scene: Scene) -> tuple[tuple[float, float], ...]:
+    """Raise :class:`UnsupportedScene` unless every adapter can build ``scene``; return its
+    :func:`energy_weights` (the masses and inertias checked)."""
+    weights = []
     for body in scene.bodies:
         if body.shape.kind not in ("disk", "rod", "box", "polygon"):
             raise UnsupportedScene(f"engine {engine!r}: unknown shape {body.shape.kind!r}")
@@ -1033,16 +1043,18 @@ def check_scene(engine: str, scene: Scene) -> None:
                     f"engine {engine!r}: body {body.name!r} {name} must be (x, y) in the "
                     f"plane, got {tuple(vector)!r}"
                 )
-        values = [body.mass, body.moment_of_inertia, *body.position, body.angle,
-                  *body.velocity, body.angular_velocity]
-        if (not all(math.isfinite(v) for v in values) or body.mass <= 0
-                or body.moment_of_inertia <= 0):
+        inertia = body.moment_of_inertia  # computed once: a polygon's is not cheap
+        values = [body.mass, inertia, *body.position, body.angle, *body.velocity,
+                  body.angular_velocity]
+        if not all(math.isfinite(v) for v in values) or body.mass <= 0 or inertia <= 0:
             raise UnsupportedScene(
                 f"engine {engine!r}: body {body.name!r} needs finite state and positive mass "
-                f"and inertia (mass {body.mass}, inertia {body.moment_of_inertia})"
+                f"and inertia (mass {body.mass}, inertia {inertia})"
             )
+        weights.append((body.mass, inertia))
     if not (0.0 <= scene.restitution <= 1.0) or scene.friction < 0:
         raise UnsupportedScene(
             f"engine {engine!r}: needs 0 <= e <= 1 and μ >= 0, got e {scene.restitution}, "
             f"μ {scene.friction}"
         )
+    return tuple(weights)

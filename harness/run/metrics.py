@@ -82,29 +82,43 @@ def departure_batch(mass, u, u_law, u_before, *, free_bodies=False) -> np.ndarra
     frame of each row, as in :func:`frame_free_scale`). A row is NaN where :func:`departure`
     is: non-finite speeds, or a zero scale. Rows padded with zero speeds (and any positive
     mass) give the departure of their leading speeds, when they are not ``free_bodies``
-    rows (the centre of mass would count the padding as bodies).
+    rows (the centre of mass would count the padding as bodies). Many departures from the
+    same rows: :class:`RowScales` computes their scales once.
     """
-    u, u_law, u_before = (np.asarray(a, dtype=float) for a in (u, u_law, u_before))
-    mass = np.asarray(mass, dtype=float)
-    rows, size = u.shape
-    if mass.ndim == 2:
-        mass = mass[:, :, None] * np.eye(size)
-    free = np.broadcast_to(np.asarray(free_bodies, dtype=bool), (rows,))
-    relative = u_before
-    if free.any():  # the centre of mass's frame, as frame_free_scale
-        translations = np.zeros((size, 2))
-        translations[0::3, 0] = 1.0
-        translations[1::3, 1] = 1.0
-        weighted = np.einsum("ka,nkj->naj", translations, mass[free])  # Tᵀ M
-        common = np.linalg.solve(weighted @ translations,
-                                 weighted @ u_before[free][:, :, None])[:, :, 0]
-        relative = u_before.copy()
-        relative[free] -= common @ translations.T
-    scale = _ke_norms(mass, relative)
-    difference = _ke_norms(mass, u - u_law)
-    finite = np.all(np.isfinite(u), axis=1) & np.all(np.isfinite(u_law), axis=1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(finite & (scale > 0), difference / scale, math.nan)
+    return RowScales(mass, u_before, free_bodies=free_bodies).departures(u, u_law)
+
+
+class RowScales:
+    """The mass matrices and frame-free scales of ``n`` rows (:func:`departure_batch`'s
+    arguments ``mass``, ``u_before``, ``free_bodies``), for many departures of those rows."""
+
+    def __init__(self, mass, u_before, *, free_bodies=False) -> None:
+        u_before = np.asarray(u_before, dtype=float)
+        mass = np.asarray(mass, dtype=float)
+        rows, size = u_before.shape
+        if mass.ndim == 2:
+            mass = mass[:, :, None] * np.eye(size)
+        free = np.broadcast_to(np.asarray(free_bodies, dtype=bool), (rows,))
+        relative = u_before
+        if free.any():  # the centre of mass's frame, as frame_free_scale
+            translations = np.zeros((size, 2))
+            translations[0::3, 0] = 1.0
+            translations[1::3, 1] = 1.0
+            weighted = np.einsum("ka,nkj->naj", translations, mass[free])  # Tᵀ M
+            common = np.linalg.solve(weighted @ translations,
+                                     weighted @ u_before[free][:, :, None])[:, :, 0]
+            relative = u_before.copy()
+            relative[free] -= common @ translations.T
+        self.mass = mass  # (n, k, k)
+        self.scale = _ke_norms(mass, relative)  # (n,)
+
+    def departures(self, u, u_law) -> np.ndarray:
+        """``(n,)`` departures of ``u`` from ``u_law`` (both ``(n, k)``)."""
+        u, u_law = np.asarray(u, dtype=float), np.asarray(u_law, dtype=float)
+        difference = _ke_norms(self.mass, u - u_law)
+        finite = np.all(np.isfinite(u), axis=1) & np.all(np.isfinite(u_law), axis=1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(finite & (self.scale > 0), difference / self.scale, math.nan)
 
 
 def _ke_norms(mass: np.ndarray, u: np.ndarray) -> np.ndarray:
@@ -196,6 +210,6 @@ def _finite(value) -> float:
     return math.nan if value is None else float(value)
 
 
-__all__ = ["STICK_TOLERANCE", "classify_end_state", "contact_velocities", "delassus",
+__all__ = ["RowScales", "STICK_TOLERANCE", "classify_end_state", "contact_velocities", "delassus",
            "departure", "departure_batch", "departure_split", "departures", "energy_change",
            "frame_free_scale", "impulses_from_velocities", "ke_norm"]

@@ -62,71 +62,100 @@ def local_core(shape) -> tuple[np.ndarray, float]:
     raise TypeError(f"unknown shape {shape!r}; allowed: Disk, Rod, Box, Polygon")
 
 
+def turned_core(body: Body) -> tuple[np.ndarray, float]:
+    """Core points of ``body`` turned by its angle, before its position is added, and its
+    radius (m): :func:`world_core` is these plus the position, so a body moved without
+    turning needs only the addition."""
+    points, radius = local_core(body.shape)
+    return points @ rotation(body.angle).T, radius
+
+
 def world_core(body: Body) -> tuple[np.ndarray, float]:
     """Core points of ``body`` in the world frame (from its pose) and its radius (m)."""
-    points, radius = local_core(body.shape)
-    world = points @ rotation(body.angle).T + np.asarray(body.position, dtype=float)
-    return world, radius
+    turned, radius = turned_core(body)
+    return turned + np.asarray(body.position, dtype=float), radius
 
 
-def _edges(core: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Edges of a core: a point gives one degenerate edge, a segment one, a polygon k."""
-    count = len(core)
-    if count == 1:
-        return [(core[0], core[0])]
-    if count == 2:
-        return [(core[0], core[1])]
-    return [(core[i], core[(i + 1) % count]) for i in range(count)]
+def _edge_points(points: list) -> list[tuple[float, float, float, float]]:
+    """The edges of a core given as a list of ``(x, y)``, each as ``(start x, start y, end x,
+    end y)``: a point gives one degenerate edge, a segment one edge, a polygon one per side."""
+    if len(points) <= 2:  # a point's degenerate edge, a segment's one edge
+        return [(*points[0], *points[-1])]
+    return [(*start, *end) for start, end in zip(points, points[1:] + points[:1])]
 
 
-def _closest_on_segment(x: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    ab = b - a
-    length2 = float(ab @ ab)
-    if length2 == 0.0:
-        return a.copy()
-    t = min(1.0, max(0.0, float((x - a) @ ab) / length2))
-    return a + t * ab
+def _closest_pair(points_a: list, points_b: list) -> tuple[float, tuple, tuple]:
+    """The closest vertex-edge pair of two cores given as lists of ``(x, y)``:
+    ``(distance, point on A, point on B)``.
+
+    Every vertex of A against every edge of B, then every vertex of B against every edge of
+    A, keeping the first pair of least distance (exact for disjoint convex cores). On the
+    edge from ``s`` to ``e`` the closest point is ``s + t (e − s)`` with
+    ``t = (x − s)·(e − s) / |e − s|²`` clamped to ``[0, 1]`` (``s`` itself for a point's
+    degenerate edge). Plain floats: a core has a few points, where numpy's cost per call
+    exceeds the arithmetic (tests/scene/test_geometry_reference.py keeps the array form
+    and compares).
+    """
+    sqrt = math.sqrt
+    best, on_a, on_b = math.inf, None, None
+    for vertices, edges, vertex_on_a in ((points_a, _edge_points(points_b), True),
+                                         (points_b, _edge_points(points_a), False)):
+        for x, y in vertices:
+            for sx, sy, ex, ey in edges:
+                dx, dy = ex - sx, ey - sy
+                length2 = dx * dx + dy * dy
+                if length2 == 0.0:
+                    cx, cy = sx, sy
+                else:
+                    t = min(1.0, max(0.0, ((x - sx) * dx + (y - sy) * dy) / length2))
+                    cx, cy = sx + t * dx, sy + t * dy
+                offset_x, offset_y = cx - x, cy - y
+                distance = sqrt(offset_x * offset_x + offset_y * offset_y)
+                if distance < best:
+                    best = distance
+                    on_a, on_b = ((x, y), (cx, cy)) if vertex_on_a else ((cx, cy), (x, y))
+    return best, on_a, on_b
 
 
-def _cross(a: np.ndarray, b: np.ndarray) -> float:
-    return float(a[0] * b[1] - a[1] * b[0])
+def _cross(ax: float, ay: float, bx: float, by: float) -> float:
+    return ax * by - ay * bx
 
 
-def _segments_cross(a0, a1, b0, b1) -> bool:
-    """Proper crossing of two segments (touching ends are found by the distance test)."""
-    d1 = _cross(a1 - a0, b0 - a0)
-    d2 = _cross(a1 - a0, b1 - a0)
-    d3 = _cross(b1 - b0, a0 - b0)
-    d4 = _cross(b1 - b0, a1 - b0)
-    return d1 * d2 < 0.0 and d3 * d4 < 0.0
+def _cores_intersect(points_a: list, points_b: list) -> bool:
+    """Whether two cores (lists of ``(x, y)``) cross: an edge of one properly crosses an edge
+    of the other (touching ends are found by the distance test), or a point of one lies
+    strictly inside the other (a counter-clockwise convex polygon of 3 or more points)."""
+    edges_b = _edge_points(points_b)
+    for a0x, a0y, a1x, a1y in _edge_points(points_a):
+        ux, uy = a1x - a0x, a1y - a0y
+        for b0x, b0y, b1x, b1y in edges_b:
+            vx, vy = b1x - b0x, b1y - b0y
+            if (_cross(ux, uy, b0x - a0x, b0y - a0y) * _cross(ux, uy, b1x - a0x, b1y - a0y) < 0.0
+                    and _cross(vx, vy, a0x - b0x, a0y - b0y)
+                    * _cross(vx, vy, a1x - b0x, a1y - b0y) < 0.0):
+                return True
+    return _any_inside(points_a, points_b) or _any_inside(points_b, points_a)
 
 
-def _inside_polygon(x: np.ndarray, polygon: np.ndarray) -> bool:
-    """Strictly inside a counter-clockwise convex polygon (needs 3 or more vertices)."""
+def _any_inside(points: list, polygon: list) -> bool:
+    """Whether a point lies strictly inside a counter-clockwise convex ``polygon``."""
     if len(polygon) < 3:
         return False
-    return all(_cross(b - a, x - a) > 0.0 for a, b in _edges(polygon))
+    edges = _edge_points(polygon)
+    return any(all(_cross(ex - sx, ey - sy, x - sx, y - sy) > 0.0 for sx, sy, ex, ey in edges)
+               for x, y in points)
 
 
-def _cores_intersect(core_a: np.ndarray, core_b: np.ndarray) -> bool:
-    for a0, a1 in _edges(core_a):
-        for b0, b1 in _edges(core_b):
-            if _segments_cross(a0, a1, b0, b1):
-                return True
-    return any(_inside_polygon(x, core_b) for x in core_a) or any(
-        _inside_polygon(x, core_a) for x in core_b
-    )
-
-
-def _axes(core: np.ndarray) -> list[np.ndarray]:
-    """Unit normals (both signs) of a core's edges; none for a point."""
+def _axis_list(points: list) -> list[tuple[float, float]]:
+    """Unit normals (both signs) of the edges of a core given as a list of ``(x, y)``; none
+    for a point."""
     axes = []
-    for a, b in _edges(core):
-        edge = b - a
-        length = math.hypot(edge[0], edge[1])
+    for sx, sy, ex, ey in _edge_points(points):
+        dx, dy = ex - sx, ey - sy
+        length = math.hypot(dx, dy)
         if length > 0.0:
-            normal = np.array([edge[1], -edge[0]]) / length
-            axes += [normal, -normal]
+            normal = (dy / length, -dx / length)
+            axes += [normal, (-normal[0], -normal[1])]
     return axes
 
 
@@ -135,15 +164,34 @@ def _tangent(normal: np.ndarray) -> np.ndarray:
     return np.array([normal[1], -normal[0]])
 
 
-def _support_interval(core, normal, tangent, side, tolerance) -> tuple[float, float]:
+def _largest(values: list) -> float:
+    """``numpy.max`` of a list, to the bit: where the largest value is zero, numpy's own choice
+    between 0.0 and -0.0 (Python's ``max`` keeps the first, numpy not always)."""
+    largest = max(values)
+    return float(np.max(values)) if largest == 0.0 and len(values) > 1 else largest
+
+
+def _smallest(values: list) -> float:
+    """``numpy.min`` of a list, to the bit (see :func:`_largest`)."""
+    smallest = min(values)
+    return float(np.min(values)) if smallest == 0.0 and len(values) > 1 else smallest
+
+
+def _support_interval(core, normal, tangent, side, tolerance,
+                      along_normal: list | None = None) -> tuple[float, float]:
     """Tangential extent of the core points nearest the other body along ``normal``.
 
-    ``side = +1`` for body A (its points furthest along ``normal``), ``-1`` for body B.
+    ``side = +1`` for body A (its points furthest along ``normal``), ``-1`` for body B;
+    ``along_normal``: ``core @ normal`` as a list, when already known.
     """
-    heights = side * (core @ normal)
-    near = core[heights >= heights.max() - tolerance]
-    along = near @ tangent
-    return float(along.min()), float(along.max())
+    if along_normal is None:
+        along_normal = (core @ normal).tolist()
+    heights = [side * value for value in along_normal]
+    threshold = _largest(heights) - tolerance
+    near = [index for index, height in enumerate(heights) if height >= threshold]
+    # The near points' own product (numpy rounds one point's and several points' differently).
+    along = (core[near] @ tangent).tolist()
+    return _smallest(along), _largest(along)
 
 
 # --------------------------------------------------------------------------------------------
@@ -152,10 +200,17 @@ def _support_interval(core, normal, tangent, side, tolerance) -> tuple[float, fl
 def ground_contact(body: Body, tolerance: float = DEFAULT_TOLERANCE) -> Contact:
     """Contact between the fixed ground (half-space ``y <= 0``, body A) and ``body`` (B)."""
     core, radius = world_core(body)
-    lowest = float(core[:, 1].min())
+    return core_ground_contact(core, radius, tolerance)
+
+
+def core_ground_contact(core: np.ndarray, radius: float,
+                        tolerance: float = DEFAULT_TOLERANCE) -> Contact:
+    """:func:`ground_contact` of a body given by its world core and radius."""
+    points = core.tolist()
+    lowest = _smallest([y for _, y in points])
     gap = lowest - radius
-    near = core[core[:, 1] <= lowest + tolerance]
-    x_min, x_max = float(near[:, 0].min()), float(near[:, 0].max())
+    near = [x for x, y in points if y <= lowest + tolerance]
+    x_min, x_max = _smallest(near), _largest(near)
     point_count = 2 if x_max - x_min > tolerance else 1
     # Ground surface at y = 0, body surface at y = gap: the point is midway.
     point = np.array([0.5 * (x_min + x_max), 0.5 * gap])
@@ -167,51 +222,73 @@ def body_contact(body_a: Body, body_b: Body, tolerance: float = DEFAULT_TOLERANC
     """Contact between two convex bodies; the normal points from ``body_a`` into ``body_b``."""
     core_a, radius_a = world_core(body_a)
     core_b, radius_b = world_core(body_b)
-    scale = max(1.0, float(np.abs(np.vstack([core_a, core_b])).max()))
+    return core_contact(core_a, radius_a, core_b, radius_b, tolerance)
+
+
+def core_separation(core_a: np.ndarray, core_b: np.ndarray):
+    """How far apart two world cores are: ``(separation, normal, closest_a, closest_b)``.
+
+    ``separation`` (m) is the distance between the cores when they are apart, else minus
+    their least penetration (<= 0); ``normal`` the unit vector from A into B; ``closest_a``
+    and ``closest_b`` the cores' closest points (used when the cores are apart). The gap of
+    the bodies is ``separation − radius_a − radius_b``.
+    """
+    points_a, points_b = core_a.tolist(), core_b.tolist()
+    scale = max(1.0, max(abs(value) for point in points_a + points_b for value in point))
     touching_cores = 1e-12 * scale
 
-    # Closest vertex-edge pairs: exact for disjoint convex cores.
-    pairs = []
-    for vertex in core_a:
-        for b0, b1 in _edges(core_b):
-            closest = _closest_on_segment(vertex, b0, b1)
-            pairs.append((float(np.linalg.norm(closest - vertex)), vertex, closest))
-    for vertex in core_b:
-        for a0, a1 in _edges(core_a):
-            closest = _closest_on_segment(vertex, a0, a1)
-            pairs.append((float(np.linalg.norm(vertex - closest)), closest, vertex))
-    distance, closest_a, closest_b = min(pairs, key=lambda pair: pair[0])
+    distance, closest_a, closest_b = _closest_pair(points_a, points_b)
 
-    if distance > touching_cores and not _cores_intersect(core_a, core_b):
-        normal = (closest_b - closest_a) / distance
-        core_separation = distance
-    else:
-        # Cores touch or overlap: the separating axis of least penetration (<= 0).
-        axes = _axes(core_a) + _axes(core_b)
-        if not axes:  # two coincident points (concentric disks): no defined direction
-            axes = [GROUND_NORMAL.copy()]
-        separations = [float((core_b @ axis).min() - (core_a @ axis).max()) for axis in axes]
-        best = int(np.argmax(separations))
-        normal, core_separation = axes[best], min(0.0, separations[best])
+    if distance > touching_cores and not _cores_intersect(points_a, points_b):
+        normal = np.array([(closest_b[0] - closest_a[0]) / distance,
+                           (closest_b[1] - closest_a[1]) / distance])
+        return distance, normal, closest_a, closest_b
+    # Cores touch or overlap: the separating axis of least penetration (<= 0).
+    axes = _axis_list(points_a) + _axis_list(points_b)
+    if not axes:  # two coincident points (concentric disks): no defined direction
+        axes = [(0.0, 1.0)]
+    # Each axis's products with both cores, as ``core @ axis`` would give them one at a time
+    # (a stack of matrix-vector products: the same product per axis, unlike ``core @ axes.T``).
+    columns = np.array(axes)[:, :, None]
+    along_b = np.matmul(core_b[None], columns)[:, :, 0].tolist()
+    along_a = np.matmul(core_a[None], columns)[:, :, 0].tolist()
+    # Python's min and max may keep another zero than numpy's; a zero separation becomes
+    # min(0.0, ±0.0) = 0.0 below either way, and ±0.0 tie in the argmax.
+    separations = [min(b) - max(a) for a, b in zip(along_a, along_b)]
+    best = int(np.argmax(separations))  # the first of the largest
+    return min(0.0, separations[best]), np.array(axes[best]), closest_a, closest_b
+
+
+def core_contact(core_a: np.ndarray, radius_a: float, core_b: np.ndarray, radius_b: float,
+                 tolerance: float = DEFAULT_TOLERANCE, separation=None) -> Contact:
+    """:func:`body_contact` of two bodies given by their world cores and radii;
+    ``separation``: :func:`core_separation` of these cores, when already known."""
+    if separation is None:
+        separation = core_separation(core_a, core_b)
+    apart, normal, closest_a, closest_b = separation  # apart: the cores' separation (m)
 
     tangent = _tangent(normal)
-    a_lo, a_hi = _support_interval(core_a, normal, tangent, +1, tolerance)
-    b_lo, b_hi = _support_interval(core_b, normal, tangent, -1, tolerance)
+    along_normal_a, along_normal_b = (core_a @ normal).tolist(), (core_b @ normal).tolist()
+    a_lo, a_hi = _support_interval(core_a, normal, tangent, +1, tolerance, along_normal_a)
+    b_lo, b_hi = _support_interval(core_b, normal, tangent, -1, tolerance, along_normal_b)
     low, high = max(a_lo, b_lo), min(a_hi, b_hi)
     point_count = 2 if high - low > tolerance else 1
 
-    gap = core_separation - radius_a - radius_b
-    if point_count == 1 and core_separation > 0.0:
-        surface_a = closest_a + radius_a * normal
-        surface_b = closest_b - radius_b * normal
-        point = 0.5 * (surface_a + surface_b)
+    gap = apart - radius_a - radius_b
+    normal_x, normal_y = normal.tolist()
+    if point_count == 1 and apart > 0.0:
+        (ax, ay), (bx, by) = closest_a, closest_b
+        point = [0.5 * ((ax + radius_a * normal_x) + (bx - radius_b * normal_x)),
+                 0.5 * ((ay + radius_a * normal_y) + (by - radius_b * normal_y))]
     else:
         # Midway between the two support lines, at the middle of the shared interval.
-        plane_a = float((core_a @ normal).max()) + radius_a
-        plane_b = float((core_b @ normal).min()) - radius_b
+        plane_a = _largest(along_normal_a) + radius_a
+        plane_b = _smallest(along_normal_b) - radius_b
         along = 0.5 * (low + high) if high >= low else 0.5 * (max(a_lo, b_lo) + min(a_hi, b_hi))
-        point = along * tangent + 0.5 * (plane_a + plane_b) * normal
-    return Contact(point=point, normal=normal, gap=float(gap), point_count=point_count)
+        middle = 0.5 * (plane_a + plane_b)
+        point = [along * normal_y + middle * normal_x, along * -normal_x + middle * normal_y]
+    return Contact(point=np.array(point), normal=normal, gap=float(gap),
+                   point_count=point_count)
 
 
 def scene_contact(scene: Scene, tolerance: float = DEFAULT_TOLERANCE) -> Contact:

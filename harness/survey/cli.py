@@ -145,11 +145,13 @@ def sample_columns(every, terms, law_results, routh) -> dict:
         columns[key] = getattr(terms, key)
     columns.update(routh)
     poisson = law_results["poisson"].u_after
+    scales = statistics.row_scales(terms)
     for law, result in law_results.items():
         columns[f"{law}.status"] = result.batch.status.astype(np.int64)
         columns[f"{law}.collision_type"] = result.batch.collision_type.astype(np.int64)
         columns[f"{law}.energy_change"] = result.batch.energy_change
-        columns[f"{law}.from_poisson"] = statistics.row_departures(terms, result.u_after, poisson)
+        columns[f"{law}.from_poisson"] = statistics.row_departures(terms, result.u_after, poisson,
+                                                                   scales)
     return columns
 
 

@@ -69,6 +69,23 @@ def sample_generator(seed: int, population_name: str, index: int) -> np.random.G
     return np.random.default_rng([int(seed), zlib.crc32(population_name.encode()), int(index)])
 
 
+def _draw(distribution, rng):
+    """``distribution.draw(rng)``: the same value from the same generator state, cheaper.
+
+    ``Generator.uniform(low, high)`` is numpy's ``low + (high − low) · U`` with ``U`` the
+    generator's next double, which ``Generator.random()`` gives without the argument handling
+    that costs three times the draw (tests/survey/test_sampling.py compares every kind).
+    """
+    kind, values = distribution.kind, distribution.values
+    if kind == "uniform":
+        low = float(values[0])
+        return low + (float(values[1]) - low) * rng.random()
+    if kind == "log_uniform":
+        low = math.log(values[0])
+        return math.exp(low + (math.log(values[1]) - low) * rng.random())
+    return distribution.draw(rng)  # fixed (no draw) and choice
+
+
 def _shape(kind: str, values: dict):
     if kind == "disk":
         return Disk(values["radius"])
@@ -84,10 +101,10 @@ def _shape(kind: str, values: dict):
 
 
 def _draw_body(spec, rng, prefix: str, drawn: dict, mass: float | None = None) -> Body:
-    values = {key: distribution.draw(rng) for key, distribution in spec.shape_parameters}
-    mass = spec.mass.draw(rng) if mass is None else mass
-    angle_deg = spec.angle_deg.draw(rng)
-    spin = spec.angular_velocity.draw(rng)
+    values = {key: _draw(distribution, rng) for key, distribution in spec.shape_parameters}
+    mass = _draw(spec.mass, rng) if mass is None else mass
+    angle_deg = _draw(spec.angle_deg, rng)
+    spin = _draw(spec.angular_velocity, rng)
     drawn.update({f"{prefix}.{key}": float(value) for key, value in values.items()})
     drawn.update({f"{prefix}.mass": mass, f"{prefix}.angle_deg": angle_deg,
                   f"{prefix}.angular_velocity": spin})
@@ -95,24 +112,35 @@ def _draw_body(spec, rng, prefix: str, drawn: dict, mass: float | None = None) -
                 math.radians(angle_deg), (0.0, 0.0), float(spin))
 
 
-def _touch(body_a: Body, body_b: Body, direction: np.ndarray):
-    """B moved along ``direction`` from A's centre until it touches A (Newton, from outside),
-    and the exact contact there."""
-    offset = 2.0 * (_extent(body_a) + _extent(body_b)) + 1e-3  # surely apart
+def _touch(core_a: np.ndarray, radius_a: float, turned_b: np.ndarray, radius_b: float,
+           start: float, direction: np.ndarray):
+    """Where B touches A along ``direction`` from A's centre (Newton from ``start``, outside):
+    B's position and world core there and the cores' separation
+    (:func:`geometry.core_separation`).
+
+    On the cores: B's turned core plus its position is its world core
+    (:func:`geometry.world_core`) and the gap is the separation less both radii (as
+    :func:`geometry.core_contact` finds it), so no body is built and no contact finished
+    per step.
+    """
+    offset = start
     for _ in range(_PLACEMENT_ITERATIONS):
-        moved = body_b.moved(position=(float(offset * direction[0]),
-                                       float(offset * direction[1])))
-        contact = geometry.body_contact(body_a, moved)
-        if abs(contact.gap) <= _PLACEMENT_GAP:
+        position = (float(offset * direction[0]), float(offset * direction[1]))
+        core_b = turned_b + np.asarray(position, dtype=float)
+        separation = geometry.core_separation(core_a, core_b)
+        gap = separation[0] - radius_a - radius_b
+        if abs(gap) <= _PLACEMENT_GAP:
             break
-        closing = float(np.asarray(contact.normal) @ direction)  # d gap / d offset
+        closing = float(separation[1] @ direction)  # d gap / d offset
         if not closing > 0.0:
             break
-        offset -= contact.gap / closing
-    return moved, contact
+        offset -= gap / closing
+    return position, core_b, separation
 
 
 def _extent(body: Body) -> float:
+    if isinstance(body.shape, Disk):  # its core is the centre: hypot 0.0, then the radius
+        return 0.0 + float(body.shape.radius)
     core, radius = geometry.local_core(body.shape)
     return float(np.max(np.hypot(core[:, 0], core[:, 1]))) + radius
 
@@ -127,43 +155,66 @@ def _velocity(speed: float, direction_deg: float, normal) -> tuple[float, float]
 
 
 def draw_scene(population: Population, rng):
-    """One draw: ``(scene, its exact contact, drawn parameters, rejection reason or None)``."""
+    """One draw: ``(scene, its exact contact, drawn parameters, rejection reason or None)``.
+
+    The same scenes and contacts as building each body and calling
+    :func:`geometry.place_on_ground`, :func:`geometry.body_contact` and
+    :func:`geometry.scene_contact`, from the cores those compute
+    (tests/survey/test_sampling.py draws both ways and compares them bit for bit).
+    """
     drawn: dict = {}
-    e = population.restitution.draw(rng)
-    mu = population.friction.draw(rng)
-    speed = population.speed.draw(rng)
-    direction = population.direction_deg.draw(rng)
+    e = _draw(population.restitution, rng)
+    mu = _draw(population.friction, rng)
+    speed = _draw(population.speed, rng)
+    direction = _draw(population.direction_deg, rng)
     drawn.update(restitution=e, friction=mu, speed=speed, direction_deg=direction)
     if population.ground:
-        body = geometry.place_on_ground(_draw_body(population.bodies[0], rng, "b", drawn))
+        body = _draw_body(population.bodies[0], rng, "b", drawn)
+        turned, radius = geometry.turned_core(body)
+        # geometry.place_on_ground: lowered by its lowest point (its world core at the origin).
+        lowest = float((turned + np.zeros(2))[:, 1].min()) - radius
+        position = (0.0, 0.0 - lowest)
+        core = turned + np.asarray(position, dtype=float)
         normal = geometry.GROUND_NORMAL
-        body = body.moved(velocity=_velocity(speed, direction, normal))
+        body = body.moved(position=position, velocity=_velocity(speed, direction, normal))
         drawn["mass_ratio"] = math.nan
         scene = Scene((body,), float(e), float(mu), ground=True, name=population.name)
-        exact = geometry.ground_contact(body)
+        exact = geometry.core_ground_contact(core, radius)
+        one_point = geometry.core_ground_contact(core, radius, ONE_POINT_TOLERANCE)
     else:
         body_a = _draw_body(population.bodies[0], rng, "a", drawn)
-        ratio = population.mass_ratio.draw(rng) if population.mass_ratio is not None else None
+        ratio = _draw(population.mass_ratio, rng) if population.mass_ratio is not None else None
         body_b = _draw_body(population.bodies[1], rng, "b", drawn,
                            mass=None if ratio is None else ratio * body_a.mass)
         drawn["mass_ratio"] = body_b.mass / body_a.mass
-        placement = math.radians(population.placement_deg.draw(rng))
+        placement = math.radians(_draw(population.placement_deg, rng))
         drawn["placement_deg"] = math.degrees(placement)
         unit = np.array([math.cos(placement), math.sin(placement)])
-        body_b, exact = _touch(body_a, body_b, unit)
-        body_b = body_b.moved(velocity=_velocity(speed, direction, exact.normal))
+        core_a, radius_a = geometry.world_core(body_a)
+        turned_b, radius_b = geometry.turned_core(body_b)
+        start = 2.0 * (_extent(body_a) + _extent(body_b)) + 1e-3  # surely apart
+        position, core_b, separation = _touch(core_a, radius_a, turned_b, radius_b, start, unit)
+        exact = geometry.core_contact(core_a, radius_a, core_b, radius_b,
+                                      separation=separation)
+        one_point = geometry.core_contact(core_a, radius_a, core_b, radius_b,
+                                          ONE_POINT_TOLERANCE, separation)
+        body_b = body_b.moved(position=position,
+                              velocity=_velocity(speed, direction, exact.normal))
         scene = Scene((body_a, body_b), float(e), float(mu), ground=False, name=population.name)
         # Velocities do not move the contact: the one found by the placement is the scene's.
-    return scene, exact, drawn, check_scene(scene, exact)
+    return scene, exact, drawn, check_scene(scene, exact, one_point.point_count)
 
 
-def check_scene(scene: Scene, exact=None) -> str | None:
+def check_scene(scene: Scene, exact=None, one_point_count: int | None = None) -> str | None:
     """The first :data:`REJECTIONS` reason ``scene`` fails, or None when it passes
-    (``exact``: the scene's contact at the default tolerance, when already known)."""
+    (``exact``: the scene's contact at the default tolerance, ``one_point_count``: its
+    contact's point count at the one-point tolerance, when already known)."""
     exact = geometry.scene_contact(scene) if exact is None else exact
     if not abs(exact.gap) <= DEFAULT_GAP_TOLERANCE:
         return "no-touch"
-    if geometry.scene_contact(scene, tolerance=ONE_POINT_TOLERANCE).point_count > 1:
+    if one_point_count is None:
+        one_point_count = geometry.scene_contact(scene, ONE_POINT_TOLERANCE).point_count
+    if one_point_count > 1:
         return "two-points"
     vn, _ = geometry.contact_velocity(scene, exact)
     if not vn < 0.0:

@@ -397,3 +397,22 @@ def test_bare_stepper_resets_steps_and_leaves_runs_unchanged(engine):
     finally:
         stepper.close()
     assert engine.run(scene, settings) == first
+
+
+def test_the_checks_give_the_energy_weights_the_plan_uses():
+    # check_scene computes each body's inertia (a polygon's is not cheap) and hands the
+    # masses and inertias to the plan, which must hold what energy_weights computes.
+    from harness.engines import contract
+    from harness.scene import Polygon
+
+    triangle = Polygon(((-0.1, -0.05), (0.1, -0.05), (0.0, 0.1)))
+    scene = Scene((Body("a", triangle, 2.0, (0.0, 0.0), velocity=(0.1, 0.0)),
+                   Body("b", Disk(0.1), 1.5, (0.0, 0.2), velocity=(0.0, -1.0))), 0.5, 0.3)
+    assert contract.check_scene("pymunk", scene) == contract.energy_weights(scene)
+    pytest.importorskip("pymunk")
+    engine = load_engine("pymunk")
+    settings = engine.settings("accurate")
+    engine._checked_scene(scene)
+    plan = engine._plan_for(scene, settings, world=contract._DETACHED)
+    assert plan.weights == contract.energy_weights(scene)
+    assert plan.speed_scale == float(max(abs(v) for v in scene.state()))

@@ -3,10 +3,12 @@ the statistics on tables whose answers are known by construction."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
-from harness.run import metrics
+from harness.run import metrics, verdicts
 from harness.scene import geometry
 from harness.survey import laws, statistics
 from harness.survey.population import resolve_populations
@@ -139,3 +141,69 @@ def test_relative_energy_change_of_a_law_matches_the_solver(survey_samples):
     relative = statistics.relative_energy_change(terms, result.u_after)
     # (A29)'s energy change from the batch, against the speeds after: rounding of |u|² sums.
     assert np.allclose(relative * before, result.batch.energy_change, rtol=1e-9, atol=1e-12)
+
+
+def test_linear_quantile_is_numpys_to_the_bit():
+    rng = np.random.default_rng(4)
+    for _ in range(3000):
+        count = int(rng.integers(1, 400))
+        values = rng.lognormal(-8.0, 4.0, count)
+        if rng.random() < 0.3:  # ties and exact zeros
+            values = np.round(values * 1e3, 0) / 1e3
+        ordered = np.sort(values).tolist()
+        for _, q in statistics.QUANTILES + (("p10", 0.1), ("p25", 0.25), ("p75", 0.75)):
+            expected = float(np.quantile(values, q))
+            assert np.float64(statistics.linear_quantile(ordered, q)).tobytes() == \
+                np.float64(expected).tobytes(), (count, q)
+
+
+def reference_statistics(runs):
+    """statistics.statistics as first written: np.quantile and np.mean per group."""
+    keys = list(zip(runs["engine"], runs["preset"], runs["family"], runs["poisson_type"]))
+    groups = {}
+    for row, (engine, preset, family, kind) in enumerate(keys):
+        groups.setdefault((engine, preset, family, int(kind)), []).append(row)
+        groups.setdefault((engine, preset, family, statistics.ALL_TYPES), []).append(row)
+    rows = []
+    for (engine, preset, family, kind), indices in sorted(groups.items()):
+        index = np.asarray(indices)
+        ok = runs["status"][index] == "ok"
+        row = {"engine": engine, "preset": preset, "family": family, "poisson_type": kind,
+               "n": int(index.size), "n_ok": int(ok.sum()),
+               "flagged_fraction": float(1.0 - ok.mean())}
+        failing = [set(filter(None, text.split(","))) for text in runs["reasons"][index]]
+        for name in verdicts.REASONS:
+            row[f"flagged_{name}"] = sum(name in names for names in failing) / index.size
+        row["energy_gain_fraction"] = float(runs["gains_energy"][index][ok].mean()) \
+            if ok.any() else math.nan
+        for column in ("departure_poisson", "departure_stronge", "law_part", "solve_part"):
+            values = runs[column][index][ok]
+            finite = values[np.isfinite(values)]
+            for (name, _), value in zip(statistics.QUANTILES, np.quantile(
+                    finite, [q for _, q in statistics.QUANTILES]) if finite.size else
+                    [math.nan] * len(statistics.QUANTILES)):
+                row[f"{column}_{name}"] = float(value)
+        rows.append(row)
+    return {key: np.asarray([row[key] for row in rows]) for key in rows[0]}
+
+
+def test_statistics_are_the_per_group_numpy_statistics_to_the_bit():
+    rng = np.random.default_rng(9)
+    count = 5000
+    reasons = np.array(["", "", "", "multi-contact", "energy-gain,multi-contact", "penetration"])
+    reason = reasons[rng.integers(len(reasons), size=count)]
+    status = np.where(reason == "", "ok", np.char.partition(reason, ",")[:, 0])
+    runs = {"engine": rng.choice(["pymunk", "box2d"], count),
+            "preset": rng.choice(["defaults", "accurate"], count),
+            "family": rng.choice(["disk-disk", "rod-ground", "rare"], count, p=[0.5, 0.4999, 1e-4]),
+            "poisson_type": rng.integers(1, 6, count), "status": status, "reasons": reason,
+            "gains_energy": rng.random(count) < 0.1}
+    for column in ("departure_poisson", "departure_stronge", "law_part", "solve_part"):
+        values = rng.lognormal(-10.0, 5.0, count)
+        values[rng.random(count) < 0.05] = np.nan  # a law without an answer
+        runs[column] = values
+    got, expected = statistics.statistics(runs), reference_statistics(runs)
+    assert list(got) == list(expected)
+    for key in expected:
+        assert got[key].dtype == expected[key].dtype, key
+        assert got[key].tobytes() == expected[key].tobytes(), key
