@@ -108,7 +108,9 @@ def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dic
         "",
         (f"Samples per family: {settings['samples']}, seed {settings['seed']}; engines "
          f"{', '.join(settings['engines']) or 'none'}; presets "
-         f"{', '.join(settings['presets'])}."),
+         f"{', '.join(settings['presets'])}."
+         + "".join(f" Not run: {label} ({why})." for label, why in
+                   settings.get("left_out", {}).items())),
         ("Departure = ‖u − u_law‖_M / ‖u_before‖_M (kinetic-energy norm; two free bodies in "
          "their centre of mass's frame). Quantiles over runs judged one impact by the verdict "
          "checks (docs/verdicts.md); *flagged* = runs failing a check, kept out of the "

@@ -70,3 +70,20 @@ def test_figures_are_written(tmp_path):
     assert code == 0
     names = {path.name for path in (tmp_path / "figures").iterdir()}
     assert {"map-pymunk.png", "map-pymunk.svg", "cdf-pymunk.png", "cdf-pymunk.svg"} <= names
+
+
+def test_default_survey_leaves_mujoco_matched_bounce_out_and_says_so(tmp_path):
+    pytest.importorskip("mujoco")
+    # no --preset: MuJoCo at defaults only, and the summary names what was not run
+    assert main(["survey", "spinning-disk", "--samples", "1", "--engines", "mujoco",
+                 "--out", str(tmp_path / "default"), "--no-figures"]) == 0
+    runs = pq.read_table(tmp_path / "default" / "runs.parquet").to_pydict()
+    assert set(runs["preset"]) == {"defaults"}
+    assert "Not run: mujoco.matched-bounce" in (tmp_path / "default" / "summary.md").read_text()
+    # naming the presets runs every pair named
+    assert main(["survey", "spinning-disk", "--samples", "1", "--engines", "mujoco",
+                 "--preset", "defaults,accurate", "--out", str(tmp_path / "both"),
+                 "--no-figures"]) == 0
+    runs = pq.read_table(tmp_path / "both" / "runs.parquet").to_pydict()
+    assert set(runs["preset"]) == {"defaults", "accurate"}
+    assert "Not run" not in (tmp_path / "both" / "summary.md").read_text()
