@@ -27,10 +27,11 @@ from harness.engines import (
     preset_role,
     source_label,
 )
+from harness.run import verdicts
 from harness.scenarios.errors import ScenarioError
 from harness.survey import laws as survey_laws
 from harness.survey import outputs, statistics
-from harness.survey.engines import bare_stepping, run_engine
+from harness.survey.engines import bare_stepping, run_pairs
 from harness.survey.population import resolve_populations
 from harness.survey.sampling import sample_population
 
@@ -76,15 +77,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--bare", action="store_true",
                         help="also time the engines' bare stepping of the same impacts")
     parser.add_argument("--no-figures", action="store_true", help="skip the figures")
+    parser.add_argument("--workers", type=int, default=None,
+                        help="processes for the engine runs (default: every core; the "
+                             "results do not depend on it)")
 
 
 def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: bool = False,
-               left_out=None, echo=print) -> dict:
+               left_out=None, workers: int | None = None, echo=print) -> dict:
     """The survey in memory: ``{"samples", "runs", "statistics", "rejections", "timings",
     "engine_results", "skipped", "left_out", "scenes"}`` (columns as ``{name: array}``).
 
     ``left_out``: ``{(engine, preset): why}`` pairs not run (:data:`DEFAULT_LEFT_OUT` when
     the user named no preset); they are listed in the summary, not dropped silently.
+    ``workers``: processes for the engine runs (default: every core; the result does not
+    depend on it, harness/survey/engines.py ``run_pairs``). Per-pair ``engine`` and
+    ``verdicts`` timings are seconds on one core, summed over the pair's slices.
     """
     left_out = dict(left_out or {})
     clock = time.perf_counter
@@ -105,7 +112,7 @@ def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: 
     scenes = [sample.scene for sample in every]
     family = np.asarray([sample.population for sample in every])
     index = np.asarray([sample.index for sample in every])
-    results, skipped = [], {}
+    pairs, skipped = [], {}
     for engine in engines:
         try:
             load_engine(engine)
@@ -113,25 +120,31 @@ def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: 
             skipped[engine] = str(error)
             echo(f"skipping {engine}: {error}")
             continue
-        for preset in presets:
-            if (engine, preset) in left_out:
-                continue
-            result = run_engine(engine, preset, scenes, terms.problems,
-                                law_results["newton-lcp"].batch.energy_change)
-            results.append(result)
-            timings[f"engine {engine} {preset}"] = (result.wall_s, len(scenes))
-            timings[f"verdicts {engine} {preset}"] = (result.judge_s, len(scenes))
-            echo(f"{engine} {preset}: {len(scenes)} impacts in {result.wall_s:.2f} s "
-                 f"({result.wall_s / len(scenes) * 1e6:.0f} µs each), verdicts "
-                 f"{result.judge_s:.2f} s")
-            if bare:
-                bare_times = bare_stepping(engine, preset, scenes, result.steps)
-                timings[f"bare {engine} {preset} (steps only)"] = (bare_times["bare_s"],
-                                                                   len(scenes))
-                timings[f"bare {engine} {preset} (reset + steps)"] = (
-                    bare_times["bare_reset_s"], len(scenes))
-                echo(f"  bare stepping of the same impacts: {bare_times['bare_s']:.3f} s, "
-                     f"with the reset {bare_times['bare_reset_s']:.3f} s")
+        pairs += [(engine, preset) for preset in presets if (engine, preset) not in left_out]
+    begin = clock()
+    scene_terms = verdicts.prepare_many(scenes, terms.problems)
+    timings["verdict terms (once per scene)"] = (clock() - begin, len(scenes))
+    begin = clock()
+    results = run_pairs(pairs, scenes, terms.problems,
+                        law_results["newton-lcp"].batch.energy_change, scene_terms,
+                        workers=workers)
+    timings["engines and verdicts (wall, every pair)"] = (clock() - begin,
+                                                          len(scenes) * len(pairs))
+    for result in results:
+        engine, preset = result.engine, result.preset
+        timings[f"engine {engine} {preset}"] = (result.wall_s, len(scenes))
+        timings[f"verdicts {engine} {preset}"] = (result.judge_s, len(scenes))
+        echo(f"{engine} {preset}: {len(scenes)} impacts in {result.wall_s:.2f} s "
+             f"({result.wall_s / len(scenes) * 1e6:.0f} µs each), verdicts "
+             f"{result.judge_s:.2f} s")
+        if bare:
+            bare_times = bare_stepping(engine, preset, scenes, result.steps)
+            timings[f"bare {engine} {preset} (steps only)"] = (bare_times["bare_s"],
+                                                               len(scenes))
+            timings[f"bare {engine} {preset} (reset + steps)"] = (
+                bare_times["bare_reset_s"], len(scenes))
+            echo(f"  bare stepping of the same impacts: {bare_times['bare_s']:.3f} s, "
+                 f"with the reset {bare_times['bare_reset_s']:.3f} s")
 
     begin = clock()
     runs = statistics.run_columns(family, index, terms, law_results, routh, results)
@@ -207,7 +220,7 @@ def main(args: argparse.Namespace) -> int:
     try:
         populations = resolve_populations(args.populations)
         survey = run_survey(populations, samples, args.seed, engines, presets, bare=args.bare,
-                            left_out=left_out)
+                            left_out=left_out, workers=args.workers)
     except ScenarioError as error:
         print(f"impact-harness survey: {error}", file=sys.stderr)
         return 2

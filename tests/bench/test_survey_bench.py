@@ -15,6 +15,7 @@ def test_survey_bench_times_the_survey_and_the_bare_stepping_of_its_impacts():
     assert report["bare_s"] == pytest.approx(sum(report["bare"].values()))
     assert 0 < report["bare_s"] and 0 < report["survey_s"]
     assert report["ratio"] == pytest.approx(report["survey_s"] / report["bare_s"])
+    assert report["ratio_cores"] == pytest.approx(report["survey_cores_s"] / report["bare_s"])
     assert "engine pymunk accurate" in report["stages"]
     text = bench_survey.format_report(report)
     assert "ratio" in text and "pymunk.accurate" in text
