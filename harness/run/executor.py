@@ -6,22 +6,50 @@ One entry point, :func:`run_tasks`, used by the runner, the stress test and the 
     results = run_tasks(simulate_one, tasks, workers=1)            # inline, no pool
     results = run_tasks(simulate_one, tasks, executor="dask")      # a LocalCluster for the run
     results = run_tasks(simulate_one, tasks, executor="dask", scheduler="tcp://host:8786")
+    results = run_tasks(simulate_one, tasks, batch=simulate_many, group=engine_and_settings)
 
 Determinism
-    ``function(task)`` is called exactly once per task and the results come back in the order
-    of ``tasks`` whatever worker ran them or when it finished. Each call is independent (the
-    engine adapters clear per-run state), so a task's result does not depend on which worker
-    ran it nor on what it ran before: the local pool, inline execution and a Dask cluster give
-    bit-identical results (the tests check this).
+    The results come back in the order of ``tasks`` whatever worker ran them or when it
+    finished. Each call is independent (the engine adapters clear per-run state), so a
+    task's result does not depend on which worker ran it nor on what it ran before: the
+    local pool, inline execution and a Dask cluster give bit-identical results, and so do a
+    ``batch`` call and one ``function`` call per task (the tests check this).
 
-``function`` must be a top-level (picklable) function and each task picklable (plain dicts,
-tuples, numbers, strings, dataclasses of those).
+Chunks
+    Tasks travel in chunks: one pool submission, one Dask future, and with ``batch`` one
+    ``batch(chunk)`` call (the runner's :func:`harness.run.runner.engine_chunk`, one
+    ``Engine.run_many``) per chunk; ``group(task)`` keeps tasks of different keys (engine,
+    settings) apart. Results are still delivered task by task (``on_result``) as each chunk
+    finishes, so a kill loses at most the chunks under way. When ``batch`` raises, the
+    chunk's tasks run one by one through ``function``: a task that raises or overruns costs
+    only itself, and the exception of a task that raises there is re-raised once the chunk's
+    other results are delivered.
+
+    The size (:func:`chunk_size_for`): at least :data:`CHUNKS_PER_WORKER` chunks per worker,
+    at most :data:`MAX_CHUNK` tasks. Measured on the 2-core machine (under load, medians of
+    5): 1,000 pymunk engine tasks inline take 0.62 s one ``run`` each, 0.55 / 0.46 / 0.50 /
+    0.36 / 0.37 / 0.36 / 0.44 s in chunks of 4 / 8 / 16 / 32 / 64 / 128 / 256 (pymunk puts 32
+    impacts in a space); 2,000 mixed engine tasks (the four engines, both presets) show no
+    difference between 8 and 128 within the noise (about ±30%).
+
+Dask
+    One future per chunk: at 2,000 engine tasks one future per task made a local 2-worker
+    cluster 5.3 times slower than the local pool (``impact-harness bench --executors``);
+    chunks bring it to the pool's time (ratios 0.9-1.2 measured, very noisy). A local
+    cluster's workers are forked on Linux, as the pool's are (0.3 s to start against 2 s
+    spawned, and no second import of the engines). Below :data:`DASK_MIN_TASKS` tasks the
+    local executor runs them (``note`` says so): measured from 125 to 1,000 engine tasks the
+    cluster took 1.3-1.5 times the pool's time, about a second more, its start and shut-down.
+
+``function`` and ``batch`` must be top-level (picklable) functions and each task picklable
+(plain dicts, tuples, numbers, strings, dataclasses of those).
 """
 
 from __future__ import annotations
 
 import math
 import os
+import sys
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any, Callable, Hashable, Iterable, Sequence
 
@@ -30,10 +58,8 @@ EXECUTORS: tuple[str, ...] = ("local", "dask")
 DASK_INSTALL_HINT = 'pip install -e ".[dask]"'
 #: Seconds to wait for a Dask scheduler before giving up with a one-line error.
 CONNECT_TIMEOUT_S = 10.0
-#: Fewest tasks :func:`run_tasks` sends to Dask; fewer run on the local pool (or inline). A
-#: local 2-worker cluster costs ~2-3 s to start (two spawned interpreters that then import the
-#: engines), the local pool ~0.1 s: below this many engine tasks the start outweighs what
-#: the run takes (measured: docs/performance.md).
+#: Fewest tasks :func:`run_tasks` sends to Dask; fewer run on the local pool (or inline): a
+#: cluster's start and shut-down (about a second) outweigh what it saves (see the module doc).
 DASK_MIN_TASKS = 1000
 
 
@@ -191,8 +217,8 @@ def run_tasks(
 
 
 #: Most tasks in one chunk. A chunk is one ``Engine.run_many`` call (pymunk puts 32 ground
-#: impacts in a space) and, for the pool or Dask, one round trip; beyond 64 the measured
-#: wall time no longer falls (docs/performance.md) while a kill loses a larger chunk.
+#: impacts in a space) and, for the pool or Dask, one round trip; beyond 32-64 the measured
+#: wall time no longer falls (see the module doc) while a kill loses a larger chunk.
 MAX_CHUNK = 64
 #: Chunks per worker at least, when there are enough tasks: keeps both cores busy to the end.
 CHUNKS_PER_WORKER = 4
@@ -280,13 +306,20 @@ def _run_dask(function, batch, tasks: Sequence, chunks, workers, deliver, schedu
     Client, LocalCluster, as_completed = _import_distributed()
     cluster = None
     if scheduler is None:
-        cluster = LocalCluster(
-            n_workers=workers,
-            threads_per_worker=1,
-            processes=True,
-            host="127.0.0.1",
-            dashboard_address=None,
-        )
+        import dask
+
+        # Forked workers, as the local pool's on Linux: they start in ~0.3 s with the engines
+        # already imported; spawned ones (Dask's default) take ~2 s, then import them again.
+        method = "fork" if sys.platform.startswith("linux") else \
+            dask.config.get("distributed.worker.multiprocessing-method")
+        with dask.config.set({"distributed.worker.multiprocessing-method": method}):
+            cluster = LocalCluster(
+                n_workers=workers,
+                threads_per_worker=1,
+                processes=True,
+                host="127.0.0.1",
+                dashboard_address=None,
+            )
         client = Client(cluster)
     else:
         try:

@@ -30,19 +30,25 @@ Parallelism and cache
     version, the complete settings and the code version); only the misses run, through
     :func:`harness.run.executor.run_tasks` (local process pool, or Dask), and are stored. The
     cache holds the engine's raw output; departures and the other derived numbers are
-    recomputed every run (microseconds). It also keeps each several-contact point's
+    recomputed every run (microseconds). The misses travel in chunks of one engine and
+    settings (:func:`task_group`), each one :meth:`Engine.run_many` call
+    (:func:`engine_chunk`), whose runs equal one :meth:`Engine.run` each bit for bit
+    (``--chunk-size 1``: one ``run`` per task). It also keeps each several-contact point's
     reference (:func:`point_reference_cached`: up to a second of m-contact solving per
     point), outside the hit and miss counts.
 
-    Each simulated result is stored in the cache the moment it finishes, so a run killed
-    half-way keeps its finished half and the rerun simulates only the rest. A cache that
+    Each simulated result is stored in the cache the moment its chunk finishes, so a run
+    killed half-way keeps its finished chunks and the rerun simulates only the rest. A cache that
     cannot be written (removed, read-only) costs the cache, not the run: a warning says so.
     A cache entry that fails :func:`check_engine_output` is a miss and is reported.
 
 Bounds
     Each engine task has a time limit (:data:`TASK_TIME_LIMIT_S`, ``--task-time-limit``);
     a task over it gets the status ``"error: time limit ..."`` (enforced with ``SIGALRM``
-    in the process running the task: the local pool and inline runs, not Dask workers).
+    in the process running the task: the local pool and inline runs, not Dask workers). A
+    chunk gets one task's limit as a whole; a chunk over it, or one whose ``run_many``
+    raises, runs again task by task, each with its own limit, so only the task at fault gets
+    the error and the others their results.
     Sweep sizes and engine step caps are bounded when the scenario is read
     (:data:`harness.scenarios.schema.LIMITS`).
 
