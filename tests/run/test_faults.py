@@ -501,6 +501,7 @@ def test_an_engine_task_that_runs_too_long_is_stopped(monkeypatch):
 BAD_ARGUMENTS = {
     "workers-zero": ("--workers", "0"),
     "workers-negative": ("--workers", "-3"),
+    "chunk-size-zero": ("--chunk-size", "0"),
     "scheduler-without-dask": ("--scheduler", "tcp://127.0.0.1:1"),
     "json-in-proc": ("--json", "/proc/x/r.json"),
     "json-is-a-directory": ("--json", "{tmp}"),
