@@ -559,8 +559,12 @@ def run(
         if log is not None:
             print(f"engine runs: {len(tasks)} to simulate, {len(plan) - len(tasks)} cached or "
                   f"skipped", file=log, flush=True)
+        simulating = time.perf_counter()
         _run_tasks(tasks, executor=executor, workers=workers, scheduler=scheduler, log=log,
                    on_result=store, chunk_size=chunk_size)
+        if log is not None:
+            print(f"engine runs: {len(tasks)} simulated in "
+                  f"{time.perf_counter() - simulating:.2f} s", file=log, flush=True)
     warnings += cache_failed
     if log is not None:
         for warning in warnings:
