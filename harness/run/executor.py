@@ -33,9 +33,10 @@ Chunks
     difference between 8 and 128 within the noise (about ±30%).
 
 Dask
-    One future per chunk: at 2,000 engine tasks one future per task made a local 2-worker
-    cluster 5.3 times slower than the local pool (``impact-harness bench --executors``);
-    chunks bring it to the pool's time (ratios 0.9-1.2 measured, very noisy). A local
+    One future per chunk. At 2,000 engine tasks (``impact-harness bench --executors``, 2
+    workers, medians of 3) one future per task took 4.4 times the local pool's 2.98 s; in
+    chunks a cluster started for the run takes 1.31 times (3.89 s: about 0.9 s of start and
+    shut-down), a running one (``--scheduler``) 1.02 times. A local
     cluster's workers are forked on Linux, as the pool's are (0.3 s to start against 2 s
     spawned, and no second import of the engines). Below :data:`DASK_MIN_TASKS` tasks the
     local executor runs them (``note`` says so): measured from 125 to 1,000 engine tasks the
