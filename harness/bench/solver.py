@@ -18,6 +18,8 @@
 * ``--speed-accuracy``: run time against error per engine (:mod:`harness.bench.accuracy`).
 * ``--survey``: the survey end to end beside the engines' bare stepping of the same impacts
   (:mod:`harness.bench.survey`).
+* ``--executors``: 2,000 engine tasks through the local pool and a local 2-worker Dask
+  cluster (:mod:`harness.bench.executors`; needs ``pip install -e ".[dask]"``).
 
 With no selection, all of them run. Every benchmark checks its own answer before timing it
 (a fast wrong answer is no result). Figures and a machine-readable table go to
@@ -235,12 +237,15 @@ def add_arguments(parser) -> None:
                         help="run time against error per engine")
     parser.add_argument("--survey", action="store_true",
                         help="survey end to end beside the engines' bare stepping of its impacts")
+    parser.add_argument("--executors", action="store_true",
+                        help="2,000 engine tasks: local pool against a local 2-worker Dask "
+                        "cluster")
     parser.add_argument("--quick", action="store_true", help="smaller sizes; finishes in minutes")
     parser.add_argument("--out", type=Path, default=Path("reports/bench"), help="output directory")
 
 
 def main(args) -> int:
-    names = ("solver", "engines", "speed_accuracy", "survey")
+    names = ("solver", "engines", "speed_accuracy", "survey", "executors")
     selected = [name for name in names if getattr(args, name)] or list(names)
     args.out.mkdir(parents=True, exist_ok=True)
     table = {"provenance": provenance(BENCH_FORMAT, BENCH_FORMAT_VERSION),
@@ -267,6 +272,20 @@ def main(args) -> int:
         report = bench_survey.run(samples)
         print(bench_survey.format_report(report))
         table["survey"] = report
+    if "executors" in selected:
+        from harness.bench import executors as bench_executors
+        from harness.run.executor import DaskNotInstalled, _import_distributed
+
+        try:
+            _import_distributed()
+        except DaskNotInstalled as error:
+            print(f"executors: skipped: {error}")
+        else:
+            report = bench_executors.run(
+                repeats=bench_executors.QUICK_REPEATS if args.quick else bench_executors.REPEATS,
+                per_task=not args.quick)
+            print(bench_executors.format_report(report))
+            table["executors"] = report
     path = args.out / "bench.json"
     path.write_text(json.dumps(table, indent=1, default=str))
     print(f"written {path}")

@@ -30,19 +30,25 @@ Parallelism and cache
     version, the complete settings and the code version); only the misses run, through
     :func:`harness.run.executor.run_tasks` (local process pool, or Dask), and are stored. The
     cache holds the engine's raw output; departures and the other derived numbers are
-    recomputed every run (microseconds). It also keeps each several-contact point's
+    recomputed every run (microseconds). The misses travel in chunks of one engine and
+    settings (:func:`task_group`), each one :meth:`Engine.run_many` call
+    (:func:`engine_chunk`), whose runs equal one :meth:`Engine.run` each bit for bit
+    (``--chunk-size 1``: one ``run`` per task). It also keeps each several-contact point's
     reference (:func:`point_reference_cached`: up to a second of m-contact solving per
     point), outside the hit and miss counts.
 
-    Each simulated result is stored in the cache the moment it finishes, so a run killed
-    half-way keeps its finished half and the rerun simulates only the rest. A cache that
+    Each simulated result is stored in the cache the moment its chunk finishes, so a run
+    killed half-way keeps its finished chunks and the rerun simulates only the rest. A cache that
     cannot be written (removed, read-only) costs the cache, not the run: a warning says so.
     A cache entry that fails :func:`check_engine_output` is a miss and is reported.
 
 Bounds
     Each engine task has a time limit (:data:`TASK_TIME_LIMIT_S`, ``--task-time-limit``);
     a task over it gets the status ``"error: time limit ..."`` (enforced with ``SIGALRM``
-    in the process running the task: the local pool and inline runs, not Dask workers).
+    in the process running the task: the local pool and inline runs, not Dask workers). A
+    chunk gets one task's limit as a whole; a chunk over it, or one whose ``run_many``
+    raises, runs again task by task, each with its own limit, so only the task at fault gets
+    the error and the others their results.
     Sweep sizes and engine step caps are bounded when the scenario is read
     (:data:`harness.scenarios.schema.LIMITS`).
 
@@ -120,14 +126,10 @@ def engine_task(task: dict) -> dict:
 
     start = time.perf_counter()
     limit = task.get("time_limit_s")
-    # SIGALRM works only in a process's main thread (pool workers, inline runs; not Dask).
-    alarm = bool(limit) and threading.current_thread() is threading.main_thread()
-    previous = signal.signal(signal.SIGALRM, _on_alarm) if alarm else None
     try:
-        if alarm:
-            signal.setitimer(signal.ITIMER_REAL, float(limit))
-        engine = load_engine(task["engine"])
-        run = engine.run(task["scene"], task["settings"])
+        with _time_limit(limit):
+            engine = load_engine(task["engine"])
+            run = engine.run(task["scene"], task["settings"])
     except TaskTimeLimit:
         return {"status": f"error: time limit: stopped after {limit:g} s (--task-time-limit)",
                 "wall_time_s": time.perf_counter() - start}
@@ -139,10 +141,68 @@ def engine_task(task: dict) -> dict:
     except Exception as error:  # reported in the record, never dropped
         return {"status": f"error: {type(error).__name__}: {error}",
                 "wall_time_s": time.perf_counter() - start}
-    finally:
-        if alarm:
+    return _task_output(engine, run, time.perf_counter() - start)
+
+
+def engine_chunk(tasks: list[dict]) -> list[dict]:
+    """:func:`engine_task` of every task, through one :meth:`Engine.run_many` call.
+
+    The tasks share their engine and settings (the runner groups them so: :func:`task_group`);
+    the outputs equal :func:`engine_task`'s but for the wall times (each task gets an equal
+    share of the chunk's). The whole chunk has one task's time limit: a chunk is at most
+    :data:`harness.run.executor.MAX_CHUNK` runs of about a millisecond (a second at worst),
+    far under it. Anything else than finished runs raises (the time limit, a missing
+    engine, a scene it cannot build, an engine error), and the executor then runs the
+    chunk's tasks one by one through :func:`engine_task`, which names the task at fault and
+    keeps the others' results.
+    """
+    from harness.engines import load_engine
+
+    start = time.perf_counter()
+    first = tasks[0]
+    if any(task["engine"] != first["engine"] or task["settings"] != first["settings"]
+           for task in tasks):
+        raise ValueError("engine_chunk: tasks of one chunk must share engine and settings")
+    with _time_limit(first.get("time_limit_s")):
+        engine = load_engine(first["engine"])
+        runs = engine.run_many([task["scene"] for task in tasks], first["settings"])
+    share = (time.perf_counter() - start) / len(tasks)
+    return [_task_output(engine, run, share) for run in runs]
+
+
+def task_group(task: dict) -> str:
+    """The chunk key of an engine task: its engine and settings (one ``run_many`` each)."""
+    import json
+
+    return json.dumps([task["engine"], task["settings"], task.get("time_limit_s")],
+                      sort_keys=True, default=repr)
+
+
+class _time_limit:
+    """Raise :class:`TaskTimeLimit` in the block after ``limit`` seconds (None: no limit).
+
+    ``SIGALRM`` works only in a process's main thread (pool workers, inline runs); elsewhere
+    (Dask workers) the block runs unbounded.
+    """
+
+    def __init__(self, limit: float | None) -> None:
+        self.alarm = bool(limit) and threading.current_thread() is threading.main_thread()
+        self.limit = limit
+        self.previous = None
+
+    def __enter__(self) -> None:
+        if self.alarm:
+            self.previous = signal.signal(signal.SIGALRM, _on_alarm)
+            signal.setitimer(signal.ITIMER_REAL, float(self.limit))
+
+    def __exit__(self, *exc_info) -> None:
+        if self.alarm:
             signal.setitimer(signal.ITIMER_REAL, 0)
-            signal.signal(signal.SIGALRM, previous)
+            signal.signal(signal.SIGALRM, self.previous)
+
+
+def _task_output(engine, run, wall_time_s: float) -> dict:
+    """The plain JSON-able output of one finished engine run (what the cache keeps)."""
     return {
         "status": run.status,
         "velocities": [list(v) for v in run.velocities],
@@ -167,7 +227,7 @@ def engine_task(task: dict) -> dict:
         "start_offset_steps": float(run.settings["approach_steps"] + engine.timing.lead_steps
                                     - engine.timing.overlap),
         "engine_wall_time_s": run.wall_time_s,
-        "wall_time_s": time.perf_counter() - start,
+        "wall_time_s": wall_time_s,
     }
 
 
@@ -406,6 +466,7 @@ def run(
     selection: dict | None = None,
     overrides: dict[str, dict] | None = None,
     history: bool | None = None,
+    chunk_size: int | None = None,
 ) -> RunOutcome:
     """Run ``scenarios`` and return the records, the gates and the provenance.
 
@@ -418,7 +479,8 @@ def run(
     settings hashed into the cache key, and in the provenance. ``history``: record the
     per-step contact history (:mod:`harness.run.history`) in every engine record (True), in
     none (False), or (None) in those of the scenarios without a sweep, whose impact the
-    report draws step by step.
+    report draws step by step. ``chunk_size``: engine tasks per ``Engine.run_many`` call
+    (None: :func:`harness.run.executor.chunk_size_for`; 1: one ``Engine.run`` per task).
     """
     log = sys.stderr if log == "stderr" else log
     command_overrides = {name: dict(values) for name, values in (overrides or {}).items()}
@@ -497,8 +559,12 @@ def run(
         if log is not None:
             print(f"engine runs: {len(tasks)} to simulate, {len(plan) - len(tasks)} cached or "
                   f"skipped", file=log, flush=True)
+        simulating = time.perf_counter()
         _run_tasks(tasks, executor=executor, workers=workers, scheduler=scheduler, log=log,
-                   on_result=store)
+                   on_result=store, chunk_size=chunk_size)
+        if log is not None:
+            print(f"engine runs: {len(tasks)} simulated in "
+                  f"{time.perf_counter() - simulating:.2f} s", file=log, flush=True)
     warnings += cache_failed
     if log is not None:
         for warning in warnings:
@@ -634,14 +700,21 @@ def _engines_of(scenario: Scenario, wanted: Sequence[str]) -> list[str]:
     return [name for name in wanted if name in allowed]
 
 
-def _run_tasks(tasks, *, executor, workers, scheduler, log, on_result=None) -> list[dict]:
+def _run_tasks(tasks, *, executor, workers, scheduler, log, on_result=None,
+               chunk_size=None) -> list[dict]:
+    """The engine tasks through the executor: in chunks of one engine and settings, each one
+    :func:`engine_chunk` (``Engine.run_many``) call; ``chunk_size=1``: one :func:`engine_task`
+    (``Engine.run``) each, as before chunks."""
     from harness.run.executor import progress_printer, run_tasks
 
     if executor == "local" and workers is None and len(tasks) < MIN_PARALLEL_TASKS:
         workers = 1
     progress = progress_printer("engine runs", stream=log) if log is not None else None
+    note = None if log is None else (lambda text: print(text, file=log, flush=True))
+    batch = None if chunk_size == 1 else engine_chunk
     return run_tasks(engine_task, tasks, executor=executor, workers=workers,
-                     scheduler=scheduler, progress=progress, on_result=on_result)
+                     scheduler=scheduler, progress=progress, on_result=on_result,
+                     batch=batch, group=task_group, chunk_size=chunk_size, note=note)
 
 
 def point_records(scenario: Scenario, point, engine_entries: Sequence, *,
@@ -891,6 +964,10 @@ def add_common_arguments(parser: argparse.ArgumentParser) -> None:
                         help="record each engine run's per-step contact history (v_n, v_t, "
                         "impulses, penetration, energy) in its record (default: only for "
                         "scenarios without a sweep, the ones the report draws step by step)")
+    parser.add_argument("--chunk-size", type=int, default=None, metavar="N",
+                        help="engine runs per Engine.run_many call and per task sent to a "
+                        "worker (default: chosen from the run's size, at most "
+                        "64; 1: one Engine.run per task)")
     parser.add_argument("--task-time-limit", type=float, default=TASK_TIME_LIMIT_S,
                         metavar="SECONDS",
                         help=f"wall-clock limit of one engine run (default: {TASK_TIME_LIMIT_S:g})")
@@ -926,6 +1003,9 @@ def check_arguments(args, json_path: Path | None) -> str | None:
                         parse_engines(args.engines))
     except (ValueError, DaskNotInstalled) as error:
         return str(error)
+    chunk_size = getattr(args, "chunk_size", None)
+    if chunk_size is not None and chunk_size < 1:
+        return f"--chunk-size {chunk_size}: must be a positive integer"
     limit = args.task_time_limit
     if limit is not None and not (math.isfinite(limit) and limit > 0):
         return f"--task-time-limit {limit}: must be a positive number of seconds"
@@ -1049,7 +1129,8 @@ def execute(args, *, json_path: Path, command: Sequence[str] | None = None,
                       time_limit_s=args.task_time_limit, selection=selection,
                       overrides=parse_overrides(getattr(args, "settings_overrides", None) or (),
                                                 engines),
-                      history=getattr(args, "history", None))
+                      history=getattr(args, "history", None),
+                      chunk_size=getattr(args, "chunk_size", None))
     except ConnectionError as error:  # an unreachable Dask scheduler
         return _fail(str(error)), None
     try:
@@ -1100,6 +1181,7 @@ __all__ = [
     "check_engine_output",
     "check_gates",
     "engine_record",
+    "engine_chunk",
     "engine_task",
     "execute",
     "main",
@@ -1111,4 +1193,5 @@ __all__ = [
     "scenario_info",
     "select_scenarios",
     "selection_of",
+    "task_group",
 ]

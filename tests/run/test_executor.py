@@ -75,6 +75,7 @@ def test_dask_local_cluster_equals_local_executor_bit_for_bit():
         local = run_tasks(solve_chunk, TASKS, workers=2)
         seen = []
         distributed = run_tasks(solve_chunk, TASKS, executor="dask", workers=2,
+                                dask_min_tasks=0,  # a cluster, however few the tasks
                                 progress=lambda done, total: seen.append(done))
     finally:
         cloudpickle.unregister_pickle_by_value(sys.modules[__name__])

@@ -61,6 +61,7 @@ def sweep_run(cache, **options):
 # --------------------------------------------------------------------------------------------
 def test_a_kill_mid_run_keeps_finished_results_and_the_rerun_recomputes_none(tmp_path,
                                                                             monkeypatch):
+    """One engine run per task (``chunk_size=1``): a kill loses only the unfinished runs."""
     clean = engine_outputs(sweep_run(None))
     real_task = runner.engine_task
     calls = []
@@ -73,15 +74,45 @@ def test_a_kill_mid_run_keeps_finished_results_and_the_rerun_recomputes_none(tmp
 
     monkeypatch.setattr(runner, "engine_task", dies_at_the_fifth)
     with pytest.raises(KeyboardInterrupt):
-        sweep_run(ResultCache(tmp_path))
+        sweep_run(ResultCache(tmp_path), chunk_size=1)
     assert len(list(tmp_path.rglob("*.json"))) == 4  # each finished run stored at once
 
     calls.clear()
     monkeypatch.setattr(runner, "engine_task", lambda task: (calls.append(task),
                                                              real_task(task))[1])
-    rerun = sweep_run(ResultCache(tmp_path))
+    rerun = sweep_run(ResultCache(tmp_path), chunk_size=1)
     assert len(calls) == 9 - 4  # nothing that had finished ran again
     assert engine_outputs(rerun) == clean  # bit-identical to an uninterrupted run
+
+
+def test_a_kill_mid_run_keeps_finished_chunks(tmp_path, monkeypatch):
+    """Chunks of 4 runs (``Engine.run_many``): a kill in the second keeps the first's 4."""
+    clean = engine_outputs(sweep_run(None, chunk_size=1))
+    real_chunk = runner.engine_chunk
+    chunks = []
+
+    def dies_in_the_second_chunk(tasks):
+        if chunks:
+            raise KeyboardInterrupt
+        chunks.append(len(tasks))
+        return real_chunk(tasks)
+
+    monkeypatch.setattr(runner, "engine_chunk", dies_in_the_second_chunk)
+    with pytest.raises(KeyboardInterrupt):
+        sweep_run(ResultCache(tmp_path), chunk_size=4)
+    assert chunks == [4] and len(list(tmp_path.rglob("*.json"))) == 4
+
+    chunks.clear()
+    singles = []
+    real_task = runner.engine_task
+    monkeypatch.setattr(runner, "engine_chunk", lambda tasks: (chunks.append(len(tasks)),
+                                                               real_chunk(tasks))[1])
+    monkeypatch.setattr(runner, "engine_task", lambda task: (singles.append(task),
+                                                             real_task(task))[1])
+    rerun = sweep_run(ResultCache(tmp_path), chunk_size=4)
+    # the 5 runs left, nothing that had finished: a chunk of 4, and 1 alone (no batch)
+    assert chunks == [4] and len(singles) == 1
+    assert engine_outputs(rerun) == clean
 
 
 def engine_entries(cache_dir: Path) -> list[Path]:
@@ -144,8 +175,25 @@ def test_deleting_the_cache_mid_run_the_run_completes(tmp_path, monkeypatch):
         return real_task(task)
 
     monkeypatch.setattr(runner, "engine_task", deletes_the_cache)
-    outcome = sweep_run(ResultCache(cache_dir))
-    assert engine_outputs(outcome) == clean
+    outcome = sweep_run(ResultCache(cache_dir), chunk_size=1)
+    assert len(calls) == 9 and engine_outputs(outcome) == clean
+
+
+def test_deleting_the_cache_between_chunks_the_run_completes(tmp_path, monkeypatch):
+    clean = engine_outputs(sweep_run(None))
+    real_chunk = runner.engine_chunk
+    cache_dir = tmp_path / "cache"
+    chunks = []
+
+    def deletes_the_cache(tasks):
+        chunks.append(len(tasks))
+        if len(chunks) == 2:
+            shutil.rmtree(cache_dir, ignore_errors=True)
+        return real_chunk(tasks)
+
+    monkeypatch.setattr(runner, "engine_chunk", deletes_the_cache)
+    outcome = sweep_run(ResultCache(cache_dir), chunk_size=3)
+    assert chunks == [3, 3, 3] and engine_outputs(outcome) == clean
 
 
 def test_a_shard_removed_between_mkdir_and_the_write_is_made_again(tmp_path, monkeypatch):
@@ -460,6 +508,7 @@ def test_an_engine_task_that_runs_too_long_is_stopped(monkeypatch):
 BAD_ARGUMENTS = {
     "workers-zero": ("--workers", "0"),
     "workers-negative": ("--workers", "-3"),
+    "chunk-size-zero": ("--chunk-size", "0"),
     "scheduler-without-dask": ("--scheduler", "tcp://127.0.0.1:1"),
     "json-in-proc": ("--json", "/proc/x/r.json"),
     "json-is-a-directory": ("--json", "{tmp}"),
