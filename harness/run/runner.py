@@ -93,6 +93,8 @@ MIN_PARALLEL_TASKS = 200
 #: Wall-clock limit (s) of one engine task. The slowest library task (MuJoCo ``accurate``,
 #: 10 µs steps) takes about a second; a task 100 times slower is stuck, not working.
 TASK_TIME_LIMIT_S = 120.0
+#: The ``kind`` of a cache entry holding a whole scenario's records (:func:`_scenario_key`).
+SCENARIO_RECORDS = "scenario-records"
 #: Exit statuses (documented in harness.cli).
 EXIT_OK, EXIT_GATE_FAILED, EXIT_BAD_INPUT, EXIT_INTERNAL = 0, 1, 2, 3
 
@@ -608,7 +610,7 @@ def _scenario_key(scenario: Scenario, cache, loaded: Mapping, missing: Mapping,
     if any(name in missing or name not in loaded for name in engines):
         return None
     try:
-        return cache.key({"kind": "scenario-records", "scenario": _definition(scenario),
+        return cache.key({"kind": SCENARIO_RECORDS, "scenario": _definition(scenario),
                           "engines": [[name, loaded[name].version] for name in engines],
                           "presets": list(presets),
                           "overrides": {name: command_overrides.get(name, {})
@@ -633,12 +635,19 @@ def _stored_scenario_records(scenario: Scenario, cache, key: str | None,
 
     def check(entry) -> str | None:
         stored = entry.get("records")
+        if entry.get("kind") != SCENARIO_RECORDS:
+            return "not a scenario's records"
         if not isinstance(stored, list) or len(stored) != expected:
             return f"not {expected} records"
-        if not all(isinstance(data, dict) and data.get("scenario") == scenario.name
-                   and isinstance(data.get("status"), str) and isinstance(data.get("point"), dict)
-                   for data in stored):
-            return "a record of another scenario, or without status or point"
+        for data in stored:
+            if not (isinstance(data, dict) and data.get("scenario") == scenario.name
+                    and isinstance(data.get("status"), str)
+                    and isinstance(data.get("point"), dict)):
+                return "a record of another scenario, or without status or point"
+            if data["status"] == "ok" and not _finite_speeds(data.get("u_after"),
+                                                              data.get("u_before")):
+                return (f"{data.get('source')} record at point {data['point'].get('label')!r}: "
+                        "status ok without finite speeds after, as many as before")
         return None
 
     entry = cache.get(key, check=check, count=False)
@@ -649,6 +658,13 @@ def _stored_scenario_records(scenario: Scenario, cache, key: str | None,
     except TypeError as error:  # a field missing or of the wrong kind
         cache.rejected.append(f"{cache.path(key)}: {error}")
         return None
+
+
+def _finite_speeds(after, before) -> bool:
+    """``after`` is a list of finite numbers as long as the list ``before``."""
+    return (isinstance(after, list) and isinstance(before, list) and len(after) == len(before)
+            and all(isinstance(value, (int, float)) and not isinstance(value, bool)
+                    and math.isfinite(value) for value in after))
 
 
 def _store_scenario_records(cache, key: str | None, engine_entries: Sequence,
@@ -662,8 +678,10 @@ def _store_scenario_records(cache, key: str | None, engine_entries: Sequence,
                and not str(item["output"].get("status", "")).startswith(("skipped", "error"))
                for _, _, _, _, item in engine_entries):
         return
-    if any(record.status.startswith("error: internal") for record in records):
-        return
+    if any(record.status.startswith("error: internal")
+           or (record.ok and not _finite_speeds(record.u_after, record.u_before))
+           for record in records):
+        return  # (the second: a record the lookup would reject every run)
     stored = []
     for record in records:
         data = record.as_dict()
@@ -671,7 +689,7 @@ def _store_scenario_records(cache, key: str | None, engine_entries: Sequence,
             data["cached"] = True
         stored.append(data)
     try:
-        cache.put(key, {"records": stored})
+        cache.put(key, {"kind": SCENARIO_RECORDS, "records": stored})
     except OSError:  # the run goes on without the cache (the engine runs' store warns)
         pass
 
