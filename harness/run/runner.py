@@ -84,6 +84,7 @@ from harness.run.records import (
     FORMAT_VERSION,
     Record,
     check_writable,
+    record_line,
     write_results,
 )
 from harness.scenarios import ENGINES, PRESETS, Scenario, load_scenarios
@@ -249,6 +250,9 @@ class RunOutcome:
     scenarios: dict
     cache_stats: dict = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)  # cache problems, one line each
+    # Parallel to records: a record's line of the results file when read from the cache
+    # with it (unchanged since), else None (harness.run.records.write_results).
+    record_lines: list = field(default_factory=list)
 
     @property
     def failed_gates(self) -> list[GateResult]:
@@ -437,7 +441,7 @@ def run(
 
     # 0. Whole scenarios whose finished records the cache holds: one entry each.
     scenario_keys: dict[str, str | None] = {}
-    stored_records: dict[str, list[Record]] = {}
+    stored_records: dict[str, tuple[list[Record], list[str]]] = {}
     stored_runs = 0  # engine runs of the scenarios read whole from the cache
     for scenario in scenarios:
         key = scenario_keys[scenario.name] = _scenario_key(
@@ -447,7 +451,7 @@ def run(
                                          len(_engines_of(scenario, wanted_engines)))
         if found is not None:
             stored_records[scenario.name] = found
-            runs = sum(record.source != ANALYTIC for record in found)
+            runs = sum(record.source != ANALYTIC for record in found[0])
             cache.hits += runs  # each an engine run the cache spared, as when read one by one
             stored_runs += runs
 
@@ -528,13 +532,14 @@ def run(
     for entry in plan:
         by_scenario.setdefault(entry[0].name, []).append(entry)
     records: list[Record] = []
+    record_lines: list[str | None] = []
     gates: list[GateResult] = []
     infos: dict[str, dict] = {}
     for number, scenario in enumerate(scenarios, 1):
         tick = time.perf_counter()
         infos[scenario.name] = scenario_info(scenario)
         entries = by_scenario.get(scenario.name, [])
-        scenario_records = stored_records.get(scenario.name)
+        scenario_records, scenario_lines = stored_records.get(scenario.name, (None, None))
         if scenario_records is None:
             scenario_records = []
             for point in scenario.point_list():
@@ -542,6 +547,8 @@ def run(
                 scenario_records += _point_records_cached(scenario, point, point_entries, cache)
             _store_scenario_records(cache, scenario_keys.get(scenario.name), entries,
                                     scenario_records)
+            scenario_lines = [None] * len(scenario_records)
+        record_lines += scenario_lines
         infos[scenario.name]["references"] = references.collect(scenario_records)
         scenario_gates = check_gates(scenario, scenario_records)
         records += scenario_records
@@ -575,7 +582,7 @@ def run(
         wall_time_s=time.perf_counter() - started,
     )
     return RunOutcome(records=records, gates=gates, provenance=info, scenarios=infos,
-                      cache_stats=stats, warnings=warnings)
+                      cache_stats=stats, warnings=warnings, record_lines=record_lines)
 
 
 def _definition(value: Any) -> Any:
@@ -621,8 +628,10 @@ def _scenario_key(scenario: Scenario, cache, loaded: Mapping, missing: Mapping,
 
 
 def _stored_scenario_records(scenario: Scenario, cache, key: str | None,
-                             presets: Sequence[str], engine_count: int) -> list[Record] | None:
-    """The scenario's records from its cache entry (:func:`_scenario_key`), or None.
+                             presets: Sequence[str], engine_count: int
+                             ) -> tuple[list[Record], list[str]] | None:
+    """The scenario's records from its cache entry (:func:`_scenario_key`) with their lines
+    of the results file (:func:`harness.run.records.record_line`), or None.
 
     An entry is used only when it holds one record per law and engine run of every point,
     each of this scenario and readable as a :class:`Record`; any other is a miss, listed in
@@ -633,11 +642,8 @@ def _stored_scenario_records(scenario: Scenario, cache, key: str | None,
     points = len(scenario.point_list())
     expected = points * (len(scenario.laws) + engine_count * len(presets))
 
-    def check(entry) -> str | None:
-        stored = entry.get("records")
-        if entry.get("kind") != SCENARIO_RECORDS:
-            return "not a scenario's records"
-        if not isinstance(stored, list) or len(stored) != expected:
+    def check(stored: list) -> str | None:
+        if len(stored) != expected:
             return f"not {expected} records"
         for data in stored:
             if not (isinstance(data, dict) and data.get("scenario") == scenario.name
@@ -650,13 +656,13 @@ def _stored_scenario_records(scenario: Scenario, cache, key: str | None,
                         "status ok without finite speeds after, as many as before")
         return None
 
-    entry = cache.get(key, check=check, count=False)
+    entry = cache.get_lines(key, check=check)
     if entry is None:
         return None
     try:
-        return [Record.from_dict(data) for data in entry["records"]]
+        return [Record.from_dict(data) for data, _ in entry], [line for _, line in entry]
     except TypeError as error:  # a field missing or of the wrong kind
-        cache.rejected.append(f"{cache.path(key)}: {error}")
+        cache.rejected.append(f"{cache.lines_path(key)}: {error}")
         return None
 
 
@@ -671,7 +677,8 @@ def _store_scenario_records(cache, key: str | None, engine_entries: Sequence,
                             records: Sequence[Record]) -> None:
     """Keep a scenario's records under ``key`` when every engine run was cacheable (none
     skipped or failed) and no record is an internal error; as a warm run reads them back:
-    every engine record ``cached``."""
+    every engine record ``cached``. Stored as the lines the results file holds, one per
+    record, so a warm run writes them as read."""
     if key is None or cache is None or not cache.enabled:
         return
     if not all(isinstance(item.get("output"), dict) and item.get("key") is not None
@@ -682,14 +689,14 @@ def _store_scenario_records(cache, key: str | None, engine_entries: Sequence,
            or (record.ok and not _finite_speeds(record.u_after, record.u_before))
            for record in records):
         return  # (the second: a record the lookup would reject every run)
-    stored = []
+    lines = []
     for record in records:
         data = record.as_dict()
         if record.source != ANALYTIC:
             data["cached"] = True
-        stored.append(data)
+        lines.append(record_line(data))
     try:
-        cache.put(key, {"kind": SCENARIO_RECORDS, "records": stored})
+        cache.put_lines(key, lines)
     except OSError:  # the run goes on without the cache (the engine runs' store warns)
         pass
 
@@ -1192,7 +1199,8 @@ def execute(args, *, json_path: Path, command: Sequence[str] | None = None,
     except ConnectionError as error:  # an unreachable Dask scheduler
         return _fail(str(error)), None
     try:
-        write_results(json_path, outcome.records, outcome.provenance, outcome.scenarios)
+        write_results(json_path, outcome.records, outcome.provenance, outcome.scenarios,
+                      lines=outcome.record_lines or None)
     except OSError as error:
         print(f"impact-harness run: cannot write {json_path}: {error.strerror or error}; the "
               "engine results are in the cache, a rerun simulates nothing again",

@@ -98,16 +98,8 @@ def engine_entries(cache_dir: Path) -> list[Path]:
 
 
 def scenario_entries(cache_dir: Path) -> list[Path]:
-    """The cache's entries holding a whole scenario's records."""
-    found = []
-    for path in cache_dir.rglob("*.json"):
-        try:
-            record = json.loads(path.read_text(encoding="utf-8")).get("record")
-        except (OSError, ValueError):
-            continue
-        if isinstance(record, dict) and record.get("kind") == runner.SCENARIO_RECORDS:
-            found.append(path)
-    return found
+    """The cache's entries holding a whole scenario's records (``.jsonl``)."""
+    return list(cache_dir.rglob("*.jsonl"))
 
 
 def test_a_real_kill_leaves_a_usable_cache(tmp_path):

@@ -36,12 +36,7 @@ def _comparable(record) -> dict:
 
 
 def _scenario_entries(root) -> list:
-    found = []
-    for path in root.glob("??/*.json"):
-        stored = json.loads(path.read_text(encoding="utf-8"))
-        if stored["record"].get("kind") == runner.SCENARIO_RECORDS:
-            found.append(path)
-    return sorted(found)
+    return sorted(root.glob("??/*.jsonl"))
 
 
 class _CountingCache(ResultCache):
@@ -55,6 +50,10 @@ class _CountingCache(ResultCache):
         if count:  # a lookup with count=False calls get again with count=True
             self.lookups += 1
         return super().get(key, check, count=count)
+
+    def get_lines(self, key, check=None):
+        self.lookups += 1
+        return super().get_lines(key, check)
 
 
 def test_a_warm_run_reads_one_entry_per_scenario_and_equals_the_cold_run(tmp_path):
@@ -100,25 +99,33 @@ def test_the_warm_results_file_equals_the_cold_one_apart_from_timing(tmp_path):
         _results_without_timing(tmp_path / "cold.json")
 
 
-@pytest.mark.parametrize("damage", ["not-json", "one-record-short", "nan-ok", "another-kind",
+@pytest.mark.parametrize("damage", ["header-not-json", "line-not-json", "truncated",
+                                    "one-record-short", "nan-ok", "another-key",
                                     "another-scenario", "unknown-field"])
 def test_a_damaged_scenario_entry_is_a_reported_miss_and_rebuilt(tmp_path, damage):
     clean = _run([SWEEP], ResultCache(tmp_path))
     (entry,) = _scenario_entries(tmp_path)
-    stored = json.loads(entry.read_text(encoding="utf-8"))
-    records = stored["record"]["records"]
-    if damage == "one-record-short":
+    head, *lines = entry.read_text(encoding="utf-8").split("\n")[:-1]
+    header, records = json.loads(head), [json.loads(line) for line in lines]
+    if damage == "one-record-short":  # the header counts the lines: both agree
         records.pop()
+        header["count"] -= 1
     elif damage == "nan-ok":
         ok = next(r for r in records if r["status"] == "ok" and r["source"] != "analytic")
         ok["u_after"][0] = math.nan
-    elif damage == "another-kind":
-        stored["record"]["kind"] = "point-records"
+    elif damage == "another-key":
+        header["key"] = "0" * 64
     elif damage == "another-scenario":
         records[3]["scenario"] = "disk-direct"
     elif damage == "unknown-field":
         records[0]["not_a_field"] = 1
-    text = json.dumps(stored) if damage != "not-json" else '{"key": "'
+    text = "".join(f"{json.dumps(item)}\n" for item in (header, *records))
+    if damage == "header-not-json":
+        text = '{"key": "' + text
+    elif damage == "line-not-json":
+        text = text.replace("\n", "\n{", 2).replace("\n{", "\n", 1)
+    elif damage == "truncated":
+        text = text[:-10]
     entry.write_text(text, encoding="utf-8")
     again = ResultCache(tmp_path)
     outcome = _run([SWEEP], again)
