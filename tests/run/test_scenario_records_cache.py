@@ -251,3 +251,13 @@ def test_the_run_command_remembers_checks_in_its_cache_and_not_with_no_cache(tmp
     assert cli.main(["run", file, "--no-cache", "--json", str(tmp_path / "r.json")]) == 0
     assert len(counted_checks) == 2
     assert checks.passed_checks.root is None  # the run leaves the store disabled
+
+
+def test_cache_info_and_prune_see_the_scenario_entries(tmp_path):
+    ResultCache(tmp_path, version="old").put_lines("a" * 64, ['{"x":1}'])
+    ResultCache(tmp_path, version="new").put_lines("b" * 64, ['{"x":2}'])
+    cache = ResultCache(tmp_path, version="new")
+    assert cache.info()["entries"] == 2
+    assert cache.prune()["entries"] == 1  # written by other code
+    assert [path.name for path in _scenario_entries(tmp_path)] == ["b" * 64 + ".jsonl"]
+    assert cache.get_lines("b" * 64) == [({"x": 2}, '{"x":2}')]
