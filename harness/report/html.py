@@ -30,6 +30,7 @@ from harness.report.views import (
     fmt_overrides,
     label_records,
     overrides_of,
+    record_label,
     run_notes,
     run_verdict,
     scenario_overrides,
@@ -326,7 +327,7 @@ def why_html(results: Results) -> str:
                 continue
             preset = preset_label(engine, role)
             text = PRESET_WHY.get((engine, role), "")
-            runs = [r for r in results.records if r.source != ANALYTIC and r.label == label]
+            runs = [r for r in results.records if r.source != ANALYTIC and record_label(r) == label]
             notes: dict[str, int] = {}
             for run in runs:
                 for note in run_notes(run):
@@ -472,10 +473,13 @@ def split_table(rows: Sequence[dict]) -> str:
         grouped.setdefault((row["scenario"], row["label"]), []).append(row)
     labels = list(dict.fromkeys(row["label"] for row in rows))
     scenarios = list(dict.fromkeys(row["scenario"] for row in rows))
+    by_scenario: dict[str, list] = {}  # one pass: a scan per scenario was quadratic
+    for row in rows:
+        by_scenario.setdefault(row["scenario"], []).append(row)
     body = []
     for scenario in scenarios:
-        law_part = max((r["law_part"] for r in rows if r["scenario"] == scenario
-                        and math.isfinite(r["law_part"])), default=math.nan)
+        law_part = max((r["law_part"] for r in by_scenario[scenario]
+                        if math.isfinite(r["law_part"])), default=math.nan)
         cells = [escape_html(scenario), fmt_departure(law_part)]
         for label in labels:
             group = grouped.get((scenario, label), [])

@@ -21,7 +21,8 @@ entry, while a change to the report, the benchmarks or the CLI keeps the cache::
         record = simulate(...)
         cache.put(key, record)
 
-Files: one JSON file per key at ``root/<key[:2]>/<key>.json``, written atomically (a
+Files: one JSON file per key at ``root/<key[:2]>/<key>.json`` (``<key>.jsonl`` for an
+entry of many lines, :meth:`ResultCache.put_lines`: a scenario's records), written atomically (a
 temporary file in the same directory, then ``os.replace``), so concurrent writers and an
 interrupted run never leave a half-written entry; a temporary left by a killed writer is
 removed by the next run (:meth:`ResultCache.clean_temporaries`). An unreadable or corrupted
@@ -229,8 +230,67 @@ class ResultCache:
                           default=_json_default)
         write_text_atomically(path, text, prefix=f".{key[:8]}-", make_parent=True)
 
+    def lines_path(self, key: str) -> Path:
+        return self.root / key[:2] / f"{key}.jsonl"
+
+    def get_lines(self, key: str, check=None) -> list[tuple[Any, str]] | None:
+        """The ``(value, line)`` pairs stored by :meth:`put_lines`, or ``None`` (a miss).
+
+        Outside :attr:`stats`. A file that is not whole (truncated, a line missing or not
+        JSON, another key) or whose values ``check(values)`` rejects (``None``: usable, else
+        why not) is a miss listed in :attr:`rejected`.
+        """
+        if not self.enabled:
+            return None
+        path = self.lines_path(key)
+        try:
+            with open(path, encoding="utf-8", newline="") as handle:
+                text = handle.read()
+            head, _, body = text.partition("\n")
+            header = json.loads(head)
+            if (not isinstance(header, dict) or header.get("key") != key
+                    or not isinstance(header.get("count"), int)):
+                raise ValueError("not a cache entry")
+            if not text.endswith("\n"):
+                raise ValueError("truncated")
+            lines = body.split("\n")[:-1]  # never splitlines: U+2028 may sit inside a string
+            if len(lines) != header["count"]:
+                raise ValueError(f"{len(lines)} lines, not {header['count']}")
+            values = [json.loads(line) for line in lines]
+            reason = None if check is None else check(values)
+            if reason is not None:
+                raise ValueError(reason)
+        except FileNotFoundError:
+            return None
+        except (OSError, ValueError) as error:  # UnicodeDecodeError is a ValueError
+            self.rejected.append(f"{path}: {error}")
+            return None
+        return list(zip(values, lines))
+
+    def put_lines(self, key: str, lines: list[str]) -> None:
+        """Store one-line JSON texts under ``key``: a header line (the key, the code version,
+        how many lines follow), then the lines; atomic; no-op when disabled. A line holding a
+        newline is a ``ValueError``. Raises ``OSError`` as :meth:`put` does."""
+        if not self.enabled:
+            return
+        if any("\n" in line for line in lines):
+            raise ValueError("a cache line holds a newline")
+        header = json.dumps({"key": key, "code_version": self.version, "count": len(lines)})
+        text = "".join(f"{line}\n" for line in (header, *lines))
+        write_text_atomically(self.lines_path(key), text, prefix=f".{key[:8]}-",
+                              make_parent=True)
+
     def _entries(self):
-        return self.root.glob("??/*.json") if self.root.is_dir() else iter(())
+        if not self.root.is_dir():
+            return iter(())
+        return (path for pattern in ("??/*.json", "??/*.jsonl") for path in self.root.glob(pattern))
+
+    @staticmethod
+    def _stored_version(path: Path) -> Any:
+        """The code version an entry was written by (its first line for a ``.jsonl``)."""
+        with open(path, encoding="utf-8") as handle:
+            stored = json.loads(handle.readline() if path.suffix == ".jsonl" else handle.read())
+        return stored.get("code_version")
 
     def clean_temporaries(self, older_than_s: float = STALE_TEMPORARY_S) -> int:
         """Remove temporary files older than ``older_than_s`` (left by killed writers)."""
@@ -271,8 +331,7 @@ class ResultCache:
                 stale = False
                 if other_versions and not old:
                     try:
-                        with open(path, encoding="utf-8") as handle:
-                            stale = json.load(handle).get("code_version") != self.version
+                        stale = self._stored_version(path) != self.version
                     except (ValueError, AttributeError):
                         stale = True
                 if old or stale:

@@ -43,7 +43,7 @@ import os
 import tempfile
 from dataclasses import asdict, dataclass, field, fields, is_dataclass
 from pathlib import Path
-from typing import Any, Iterable, Mapping
+from typing import Any, Iterable, Mapping, Sequence
 
 from harness.run.files import write_text_atomically
 
@@ -108,11 +108,12 @@ class Record:
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "Record":
-        names = {f.name for f in fields(cls)}
+        names = _FIELD_SET if cls is Record else {f.name for f in fields(cls)}
         return cls(**{key: value for key, value in data.items() if key in names})
 
 
 _RECORD_FIELDS = tuple(f.name for f in fields(Record))
+_FIELD_SET = frozenset(_RECORD_FIELDS)  # from_dict's filter: fields() per record was slow
 
 
 @dataclass
@@ -185,26 +186,38 @@ def _jsonable(value: Any) -> Any:
     return value
 
 
+def record_line(data: Mapping) -> str:
+    """A record's line in a results file: ``data`` (:meth:`Record.as_dict`) as compact JSON
+    on one line (never a raw newline: JSON escapes them in strings)."""
+    return json.dumps(data, ensure_ascii=False, allow_nan=False, separators=(",", ":"))
+
+
 def write_results(path: Path | str, records: Iterable[Record], provenance: Mapping,
-                  scenarios: Mapping | None = None) -> Path:
+                  scenarios: Mapping | None = None, *,
+                  lines: Sequence[str | None] | None = None) -> Path:
     """Write the results file (atomically) and return its path.
 
     ``scenarios`` maps each scenario name to what the reports need besides the records
-    (description, tags, system, sweep parameter, labels of the speeds, gates).
+    (description, tags, system, sweep parameter, labels of the speeds, gates). ``lines``
+    (parallel to ``records``): a record's :func:`record_line` when already known (read from
+    the result cache with the record, which is unchanged since), else None.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    records = list(records)
+    if lines is None:
+        lines = [None] * len(records)
+    if len(lines) != len(records):
+        raise ValueError(f"{len(lines)} lines for {len(records)} records")
     document = {
         "format": FORMAT,
         "format_version": FORMAT_VERSION,
         "provenance": _jsonable(dict(provenance)),
         "scenarios": _jsonable(dict(scenarios or {})),
-        "records": [record.as_dict() for record in records],
     }
     # One record per line: small, and a diff of two results files reads record by record.
-    records_text = ",\n".join(json.dumps(record, ensure_ascii=False, allow_nan=False,
-                                         separators=(",", ":"))
-                              for record in document.pop("records"))
+    records_text = ",\n".join(record_line(record.as_dict()) if line is None else line
+                              for record, line in zip(records, lines))
     head = json.dumps(document, indent=1, ensure_ascii=False, allow_nan=False)
     text = head[:-2] + ',\n "records": [\n' + records_text + "\n ]\n}\n"
     # A unique temporary in the same directory, then an atomic rename: two runs writing the
@@ -256,4 +269,4 @@ def read_results(path: Path | str) -> Results:
 
 
 __all__ = ["ANALYTIC", "DEFAULT_RESULTS", "FORMAT", "FORMAT_VERSION", "Record", "Results",
-           "check_writable", "read_results", "write_results"]
+           "check_writable", "read_results", "record_line", "write_results"]

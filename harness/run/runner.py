@@ -90,6 +90,7 @@ from harness.run.records import (
     FORMAT_VERSION,
     Record,
     check_writable,
+    record_line,
     write_results,
 )
 from harness.scenarios import ENGINES, PRESETS, Scenario, load_scenarios
@@ -99,6 +100,8 @@ MIN_PARALLEL_TASKS = 200
 #: Wall-clock limit (s) of one engine task. The slowest library task (MuJoCo ``accurate``,
 #: 10 µs steps) takes about a second; a task 100 times slower is stuck, not working.
 TASK_TIME_LIMIT_S = 120.0
+#: The ``kind`` of a cache entry holding a whole scenario's records (:func:`_scenario_key`).
+SCENARIO_RECORDS = "scenario-records"
 #: Exit statuses (documented in harness.cli).
 EXIT_OK, EXIT_GATE_FAILED, EXIT_BAD_INPUT, EXIT_INTERNAL = 0, 1, 2, 3
 
@@ -307,6 +310,9 @@ class RunOutcome:
     scenarios: dict
     cache_stats: dict = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)  # cache problems, one line each
+    # Parallel to records: a record's line of the results file when read from the cache
+    # with it (unchanged since), else None (harness.run.records.write_results).
+    record_lines: list = field(default_factory=list)
 
     @property
     def failed_gates(self) -> list[GateResult]:
@@ -495,11 +501,27 @@ def run(
     needs_engines = any(not s.analytic_only and _engines_of(s, wanted_engines) for s in scenarios)
     loaded, missing = _engine_status(wanted_engines) if needs_engines else ({}, {})
 
+    # 0. Whole scenarios whose finished records the cache holds: one entry each.
+    scenario_keys: dict[str, str | None] = {}
+    stored_records: dict[str, tuple[list[Record], list[str]]] = {}
+    stored_runs = 0  # engine runs of the scenarios read whole from the cache
+    for scenario in scenarios:
+        key = scenario_keys[scenario.name] = _scenario_key(
+            scenario, cache, loaded, missing, wanted_engines, presets, command_overrides,
+            history)
+        found = _stored_scenario_records(scenario, cache, key, presets,
+                                         len(_engines_of(scenario, wanted_engines)))
+        if found is not None:
+            stored_records[scenario.name] = found
+            runs = sum(record.source != ANALYTIC for record in found[0])
+            cache.hits += runs  # each an engine run the cache spared, as when read one by one
+            stored_runs += runs
+
     # 1. Engine tasks: build, look up in the cache.
     plan: list[tuple[Scenario, Any, str, str, dict]] = []  # (scenario, point, engine, preset, item)
     tasks, task_keys, task_slots = [], [], []
     for scenario in scenarios:
-        if scenario.analytic_only:
+        if scenario.analytic_only or scenario.name in stored_records:
             continue
         for point in scenario.point_list():
             scene = None
@@ -557,7 +579,8 @@ def run(
 
     if tasks:
         if log is not None:
-            print(f"engine runs: {len(tasks)} to simulate, {len(plan) - len(tasks)} cached or "
+            print(f"engine runs: {len(tasks)} to simulate, "
+                  f"{len(plan) + stored_runs - len(tasks)} cached or "
                   f"skipped", file=log, flush=True)
         simulating = time.perf_counter()
         _run_tasks(tasks, executor=executor, workers=workers, scheduler=scheduler, log=log,
@@ -575,16 +598,23 @@ def run(
     for entry in plan:
         by_scenario.setdefault(entry[0].name, []).append(entry)
     records: list[Record] = []
+    record_lines: list[str | None] = []
     gates: list[GateResult] = []
     infos: dict[str, dict] = {}
     for number, scenario in enumerate(scenarios, 1):
         tick = time.perf_counter()
         infos[scenario.name] = scenario_info(scenario)
-        scenario_records: list[Record] = []
         entries = by_scenario.get(scenario.name, [])
-        for point in scenario.point_list():
-            point_entries = [e for e in entries if e[1].index == point.index]
-            scenario_records += _point_records_cached(scenario, point, point_entries, cache)
+        scenario_records, scenario_lines = stored_records.get(scenario.name, (None, None))
+        if scenario_records is None:
+            scenario_records = []
+            for point in scenario.point_list():
+                point_entries = [e for e in entries if e[1].index == point.index]
+                scenario_records += _point_records_cached(scenario, point, point_entries, cache)
+            _store_scenario_records(cache, scenario_keys.get(scenario.name), entries,
+                                    scenario_records)
+            scenario_lines = [None] * len(scenario_records)
+        record_lines += scenario_lines
         infos[scenario.name]["references"] = references.collect(scenario_records)
         scenario_gates = check_gates(scenario, scenario_records)
         records += scenario_records
@@ -609,7 +639,7 @@ def run(
         presets=list(presets),
         executor={"executor": executor, "workers": workers, "scheduler": scheduler},
         cache={**stats, "root": None if cache is None else str(cache.root),
-               "engine_runs": len(plan), "simulated": len(tasks)},
+               "engine_runs": len(plan) + stored_runs, "simulated": len(tasks)},
         selection=selection,
         settings_overrides=command_overrides,
         history="scenarios without a sweep" if history is None else history,
@@ -618,7 +648,7 @@ def run(
         wall_time_s=time.perf_counter() - started,
     )
     return RunOutcome(records=records, gates=gates, provenance=info, scenarios=infos,
-                      cache_stats=stats, warnings=warnings)
+                      cache_stats=stats, warnings=warnings, record_lines=record_lines)
 
 
 def _definition(value: Any) -> Any:
@@ -632,6 +662,109 @@ def _definition(value: Any) -> Any:
     if isinstance(value, (list, tuple)):
         return [_definition(item) for item in value]
     return value
+
+
+def _scenario_key(scenario: Scenario, cache, loaded: Mapping, missing: Mapping,
+                  wanted_engines: Sequence[str], presets: Sequence[str],
+                  command_overrides: Mapping, history: bool | None) -> str | None:
+    """The cache key of a scenario's finished records, or None when they are not kept.
+
+    A warm run of a large library spent most of its time looking up each engine run, each
+    point's records and reference (tens of thousands of small files) and computing their
+    keys (the settings, the scene at every point). A scenario's records depend only on its
+    definition (not its path), the engines that apply with their versions, the presets, the
+    ``--set`` overrides and the history flag (under the code version every key holds), which
+    make this key: one entry per scenario. Not kept when an engine of the scenario is missing
+    (its runs are skipped, and a skipped run is never cached).
+    """
+    if cache is None or not cache.enabled:
+        return None
+    engines = _engines_of(scenario, wanted_engines)
+    if any(name in missing or name not in loaded for name in engines):
+        return None
+    try:
+        return cache.key({"kind": SCENARIO_RECORDS, "scenario": _definition(scenario),
+                          "engines": [[name, loaded[name].version] for name in engines],
+                          "presets": list(presets),
+                          "overrides": {name: command_overrides.get(name, {})
+                                        for name in engines},
+                          "history": history})
+    except TypeError:  # a definition holding a value without a canonical spelling: not kept
+        return None
+
+
+def _stored_scenario_records(scenario: Scenario, cache, key: str | None,
+                             presets: Sequence[str], engine_count: int
+                             ) -> tuple[list[Record], list[str]] | None:
+    """The scenario's records from its cache entry (:func:`_scenario_key`) with their lines
+    of the results file (:func:`harness.run.records.record_line`), or None.
+
+    An entry is used only when it holds one record per law and engine run of every point,
+    each of this scenario and readable as a :class:`Record`; any other is a miss, listed in
+    the cache's ``rejected`` (the run's warnings) and rebuilt.
+    """
+    if key is None:
+        return None
+    points = len(scenario.point_list())
+    expected = points * (len(scenario.laws) + engine_count * len(presets))
+
+    def check(stored: list) -> str | None:
+        if len(stored) != expected:
+            return f"not {expected} records"
+        for data in stored:
+            if not (isinstance(data, dict) and data.get("scenario") == scenario.name
+                    and isinstance(data.get("status"), str)
+                    and isinstance(data.get("point"), dict)):
+                return "a record of another scenario, or without status or point"
+            if data["status"] == "ok" and not _finite_speeds(data.get("u_after"),
+                                                              data.get("u_before")):
+                return (f"{data.get('source')} record at point {data['point'].get('label')!r}: "
+                        "status ok without finite speeds after, as many as before")
+        return None
+
+    entry = cache.get_lines(key, check=check)
+    if entry is None:
+        return None
+    try:
+        return [Record.from_dict(data) for data, _ in entry], [line for _, line in entry]
+    except TypeError as error:  # a field missing or of the wrong kind
+        cache.rejected.append(f"{cache.lines_path(key)}: {error}")
+        return None
+
+
+def _finite_speeds(after, before) -> bool:
+    """``after`` is a list of finite numbers as long as the list ``before``."""
+    return (isinstance(after, list) and isinstance(before, list) and len(after) == len(before)
+            and all(isinstance(value, (int, float)) and not isinstance(value, bool)
+                    and math.isfinite(value) for value in after))
+
+
+def _store_scenario_records(cache, key: str | None, engine_entries: Sequence,
+                            records: Sequence[Record]) -> None:
+    """Keep a scenario's records under ``key`` when every engine run was cacheable (none
+    skipped or failed) and no record is an internal error; as a warm run reads them back:
+    every engine record ``cached``. Stored as the lines the results file holds, one per
+    record, so a warm run writes them as read."""
+    if key is None or cache is None or not cache.enabled:
+        return
+    if not all(isinstance(item.get("output"), dict) and item.get("key") is not None
+               and not str(item["output"].get("status", "")).startswith(("skipped", "error"))
+               for _, _, _, _, item in engine_entries):
+        return
+    if any(record.status.startswith("error: internal")
+           or (record.ok and not _finite_speeds(record.u_after, record.u_before))
+           for record in records):
+        return  # (the second: a record the lookup would reject every run)
+    lines = []
+    for record in records:
+        data = record.as_dict()
+        if record.source != ANALYTIC:
+            data["cached"] = True
+        lines.append(record_line(data))
+    try:
+        cache.put_lines(key, lines)
+    except OSError:  # the run goes on without the cache (the engine runs' store warns)
+        pass
 
 
 def _point_records_cached(scenario: Scenario, point, engine_entries: Sequence,
@@ -1108,8 +1241,21 @@ def execute(args, *, json_path: Path, command: Sequence[str] | None = None,
             return _fail(f"{json_path} holds the results of another selection "
                          f"({_describe_selection(existing)}); write this run elsewhere with "
                          f"--json PATH, or replace them with --force"), None
-    scenarios, errors = load_scenarios_reporting(getattr(args, "files", None) or None,
-                                                 tags=args.tags or None)
+    from harness.run.cache import default_cache_dir
+    from harness.scenarios.checks import use_passed_checks
+
+    # The cache also remembers which scenario texts passed the point checks (--no-cache:
+    # every file is checked again).
+    passed = use_passed_checks(None if args.no_cache else (args.cache_dir or default_cache_dir()))
+    try:
+        scenarios, errors = load_scenarios_reporting(getattr(args, "files", None) or None,
+                                                     tags=args.tags or None)
+    finally:
+        use_passed_checks(None)
+    if log is not None:
+        for problem in passed.problems:
+            print(f"warning: scenario checks store {problem} (the files were checked again)",
+                  file=log, flush=True)
     for error in errors:
         print(f"impact-harness run: {error}", file=sys.stderr)
     if not scenarios:
@@ -1134,7 +1280,8 @@ def execute(args, *, json_path: Path, command: Sequence[str] | None = None,
     except ConnectionError as error:  # an unreachable Dask scheduler
         return _fail(str(error)), None
     try:
-        write_results(json_path, outcome.records, outcome.provenance, outcome.scenarios)
+        write_results(json_path, outcome.records, outcome.provenance, outcome.scenarios,
+                      lines=outcome.record_lines or None)
     except OSError as error:
         print(f"impact-harness run: cannot write {json_path}: {error.strerror or error}; the "
               "engine results are in the cache, a rerun simulates nothing again",

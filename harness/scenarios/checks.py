@@ -7,7 +7,10 @@ The checks report through a :class:`harness.scenarios.reader.TableReader` (anyth
 
 from __future__ import annotations
 
+import hashlib
+import json
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING, Any, Mapping
 
 import numpy as np
@@ -331,3 +334,111 @@ def second_strike(scene: Scene, contact, horizon_s: float, step_s: float) -> Str
                 break
             previous = float(time_s)
     return earliest
+
+
+# --------------------------------------------------------------------------------------------
+# Checks passed, remembered by content (a warm run re-reads files, it need not re-check them)
+# --------------------------------------------------------------------------------------------
+class PassedChecks:
+    """The scenario texts that passed :func:`check_points`, kept in one file.
+
+    :func:`check_points` (the second-feature strike check above all) costs milliseconds per
+    file, most of a warm run's reading of a large library. Its outcome depends only on the
+    file's text, the code (the scenarios, the scene and the engines: the result cache's
+    :func:`harness.run.cache.code_version`), the limits of :data:`LIMITS` and which engines
+    are installed (:func:`engine_time_step`), so a text that passed is remembered under
+    ``sha256`` of those; a file with problems is checked again each time (its errors are
+    listed then). The store is ``root/scenario-checks.json``, replaced atomically; one that
+    cannot be read is empty (every file is checked again) and said in :attr:`problems`.
+    Disabled (``root=None``) nothing is remembered: the default, which
+    :func:`use_passed_checks` changes for a run.
+    """
+
+    FILE_NAME = "scenario-checks.json"
+    FORMAT = 1
+
+    def __init__(self, root=None):
+        self.root = None if root is None else Path(root)
+        self.problems: list[str] = []
+        self._passed: set[str] | None = None
+        self._added = False
+        self._context: str | None = None
+
+    @property
+    def path(self) -> Path | None:
+        return None if self.root is None else self.root / self.FILE_NAME
+
+    def key(self, text: str) -> str | None:
+        """The key of a scenario text (None when disabled)."""
+        if self.root is None:
+            return None
+        if self._context is None:
+            self._context = _checks_context()
+        return hashlib.sha256(f"{self._context}\0{text}".encode()).hexdigest()
+
+    def _load(self) -> set[str]:
+        if self._passed is None:
+            self._passed = set()
+            try:
+                stored = json.loads(self.path.read_text(encoding="utf-8"))
+                if (not isinstance(stored, dict) or stored.get("format") != self.FORMAT
+                        or not isinstance(stored.get("passed"), list)
+                        or not all(isinstance(k, str) and len(k) == 64
+                                   for k in stored["passed"])):
+                    raise ValueError("not a list of passed checks")
+                self._passed = set(stored["passed"])
+            except FileNotFoundError:
+                pass
+            except (OSError, ValueError) as error:  # every file is checked again
+                self.problems.append(f"{self.path}: {error}")
+        return self._passed
+
+    def passed(self, key: str | None) -> bool:
+        return key is not None and key in self._load()
+
+    def add(self, key: str | None) -> None:
+        if key is not None and key not in self._load():
+            self._passed.add(key)
+            self._added = True
+
+    def save(self) -> None:
+        """Write the store when it gained keys; a store that cannot be written is a problem
+        said, never an error (the next run checks again)."""
+        if self.root is None or not self._added:
+            return
+        from harness.run.files import write_text_atomically
+
+        text = json.dumps({"format": self.FORMAT, "passed": sorted(self._passed)})
+        try:
+            write_text_atomically(self.path, text, prefix=".checks-", make_parent=True)
+        except OSError as error:
+            self.problems.append(f"{self.path}: cannot write: {error}")
+        self._added = False
+
+
+def _checks_context() -> str:
+    """What a check's outcome depends on besides the file's text (see :class:`PassedChecks`)."""
+    from harness.engines import ENGINE_NAMES
+    from harness.run.cache import code_version
+    from harness.scenarios.schema import LIMITS, limit
+
+    installed = []
+    for name in ENGINE_NAMES:
+        try:
+            load_engine(name)
+            installed.append(name)
+        except EngineNotInstalled:
+            continue
+    return json.dumps({"code": code_version(), "limits": {k: limit(k) for k in sorted(LIMITS)},
+                       "engines": installed}, sort_keys=True)
+
+
+#: The store :func:`harness.scenarios.reader.load_scenario` consults (disabled by default).
+passed_checks = PassedChecks()
+
+
+def use_passed_checks(root=None) -> PassedChecks:
+    """Make ``root`` (None: disabled) the store of passed checks; returns it."""
+    global passed_checks
+    passed_checks = PassedChecks(root)
+    return passed_checks

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Iterable
 
+from harness.scenarios import checks
 from harness.scenarios.errors import ScenarioError, suggest
 from harness.scenarios.model import Scenario
 from harness.scenarios.reader import load_scenario
@@ -54,6 +55,7 @@ def load_scenarios_reporting(paths_or_dir=None, tags=None
             errors += error.errors
             continue
         scenarios.append(scenario)
+    checks.passed_checks.save()  # the texts that passed, for the next run (when enabled)
     seen: dict[str, Scenario] = {}
     unique = []
     for scenario in scenarios:

@@ -17,6 +17,7 @@ from typing import Any, Iterable, Mapping
 import numpy as np
 
 from harness.engines import preset_role, renamed_roles, source_label
+from harness.scenarios import checks
 from harness.scenarios.checks import check_engine_settings, check_points
 from harness.scenarios.errors import NO_VALUE, ScenarioError, suggest
 from harness.scenarios.model import (
@@ -559,8 +560,14 @@ def _check_work_bounds(reader: TableReader, engine: str, table: Mapping) -> bool
     return ok is not None
 
 
-def parse_scenario(doc: Mapping[str, Any], path=None) -> Scenario:
-    """Check a parsed TOML document and build its :class:`Scenario` (raises ScenarioError)."""
+def parse_scenario(doc: Mapping[str, Any], path=None, *, checks_key: str | None = None
+                   ) -> Scenario:
+    """Check a parsed TOML document and build its :class:`Scenario` (raises ScenarioError).
+
+    ``checks_key`` (:meth:`harness.scenarios.checks.PassedChecks.key` of the file's text):
+    the point checks are skipped when that text passed them before, and remembered when it
+    passes now.
+    """
     reader = TableReader(path)
     system = reader.string(doc, "system", "", default="bodies", choices=SYSTEMS)
     if system is None:
@@ -625,8 +632,10 @@ def parse_scenario(doc: Mapping[str, Any], path=None) -> Scenario:
             reader, doc["engine_settings"], scenario))
     if "expect" in doc:
         scenario = replace(scenario, expect=_read_expect(reader, doc, scenario))
-    if not reader.errors:
+    if not reader.errors and not checks.passed_checks.passed(checks_key):
         check_points(reader, scenario)
+        if not reader.errors:
+            checks.passed_checks.add(checks_key)
     if reader.errors:
         raise ScenarioError(errors=reader.errors)
     return scenario
@@ -666,4 +675,4 @@ def load_scenario(path) -> Scenario:
     except tomllib.TOMLDecodeError as error:
         raise ScenarioError(f"not valid TOML: {error}", path=path,
                             allowed="TOML 1.0 (https://toml.io)") from None
-    return parse_scenario(doc, path)
+    return parse_scenario(doc, path, checks_key=checks.passed_checks.key(text))

@@ -129,6 +129,11 @@ def engine_entries(cache_dir: Path) -> list[Path]:
     return entries
 
 
+def scenario_entries(cache_dir: Path) -> list[Path]:
+    """The cache's entries holding a whole scenario's records (``.jsonl``)."""
+    return list(cache_dir.rglob("*.jsonl"))
+
+
 def test_a_real_kill_leaves_a_usable_cache(tmp_path):
     """SIGKILL a real run part way, then rerun: the rerun's results equal a clean run's."""
     cache_dir = tmp_path / "cache"
@@ -432,6 +437,10 @@ def test_a_bad_cache_entry_is_a_reported_miss(tmp_path, damage):
         stored["record"] = {"status": "ok"}
     text = json.dumps(stored) if damage != "not-json" else '{"key": "'
     entry.write_text(text, encoding="utf-8")
+    # A rerun of the same selection reads the scenario's finished records, kept whole
+    # (test_scenario_records_cache damages that entry); without it, the engine runs' entries.
+    for whole in scenario_entries(tmp_path):
+        whole.unlink()
     again = ResultCache(tmp_path)
     outcome = sweep_run(again)
     assert engine_outputs(outcome) == clean

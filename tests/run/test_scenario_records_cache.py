@@ -1,0 +1,263 @@
+"""A scenario's finished records kept whole in the result cache (harness/run/runner.py,
+``_scenario_key``): a warm run reads one entry per scenario, its results equal the cold
+run's, and a damaged entry is reported and rebuilt, never trusted. Also the scenario checks
+remembered by the file's text (harness/scenarios/checks.py, ``PassedChecks``)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import pytest
+
+from harness import cli
+from harness.run import runner
+from harness.run.cache import ResultCache
+from harness.scenarios import SCENARIO_DIR, checks, load_scenario
+from harness.scenarios.library import load_scenarios_reporting
+
+ROD = load_scenario(SCENARIO_DIR / "rod-45-slip-reversal.toml")
+SWEEP = load_scenario(SCENARIO_DIR / "sweep-disk-alpha.toml")  # 9 points
+TWO_SLED = load_scenario(SCENARIO_DIR / "two-sled-row2.toml")  # analytic only
+ENGINES = ("pymunk",)
+
+
+def _run(scenarios, cache, **options):
+    return runner.run(scenarios, engines=ENGINES, cache=cache, log=None, workers=1, **options)
+
+
+def _comparable(record) -> dict:
+    data = record.as_dict()
+    for key in ("wall_time_s", "cached"):
+        data.pop(key)
+    if data["diagnostics"]:
+        data["diagnostics"].pop("engine_wall_time_s", None)
+    return data
+
+
+def _scenario_entries(root) -> list:
+    return sorted(root.glob("??/*.jsonl"))
+
+
+class _CountingCache(ResultCache):
+    """A cache that counts the entries it is asked for."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.lookups = 0
+
+    def get(self, key, check=None, *, count=True):
+        if count:  # a lookup with count=False calls get again with count=True
+            self.lookups += 1
+        return super().get(key, check, count=count)
+
+    def get_lines(self, key, check=None):
+        self.lookups += 1
+        return super().get_lines(key, check)
+
+
+def test_a_warm_run_reads_one_entry_per_scenario_and_equals_the_cold_run(tmp_path):
+    scenarios = [ROD, SWEEP, TWO_SLED]
+    cold = _run(scenarios, ResultCache(tmp_path))
+    assert len(_scenario_entries(tmp_path)) == 3
+    cache = _CountingCache(tmp_path)
+    warm = _run(scenarios, cache)
+    assert cache.lookups == 3  # not one per engine run, point and reference
+    assert [_comparable(r) for r in warm.records] == [_comparable(r) for r in cold.records]
+    assert warm.scenarios == cold.scenarios
+    assert all(r.cached for r in warm.records if r.source != "analytic")
+    engine_runs = sum(r.source != "analytic" for r in cold.records)
+    assert cache.hits == engine_runs and cache.misses == 0  # counted as engine runs spared
+    assert warm.provenance["cache"]["engine_runs"] == cold.provenance["cache"]["engine_runs"]
+    assert not warm.warnings
+
+
+def _results_without_timing(path) -> dict:
+    document = json.loads(path.read_text(encoding="utf-8"))
+    provenance = document["provenance"]
+    for key in ("wall_time_s", "cache", "created_utc", "command"):
+        provenance.pop(key, None)
+    for record in document["records"]:
+        record.pop("wall_time_s")
+        record.pop("cached")
+        (record["diagnostics"] or {}).pop("engine_wall_time_s", None)
+    return document
+
+
+def test_the_warm_results_file_equals_the_cold_one_apart_from_timing(tmp_path):
+    files = [SCENARIO_DIR / "rod-45-slip-reversal.toml", SCENARIO_DIR / "flat-rod.toml",
+             SCENARIO_DIR / "two-sled-row2.toml"]
+    common = ["--engines", "pymunk,box2d", "--cache-dir", str(tmp_path / "cache"),
+              "--workers", "1"]
+    assert cli.main(["run", *map(str, files), *common, "--json", str(tmp_path / "cold.json")]) \
+        == 0
+    assert cli.main(["run", *map(str, files), *common, "--json", str(tmp_path / "warm.json")]) \
+        == 0
+    warm = json.loads((tmp_path / "warm.json").read_text(encoding="utf-8"))
+    assert warm["provenance"]["cache"]["simulated"] == 0
+    assert _results_without_timing(tmp_path / "warm.json") == \
+        _results_without_timing(tmp_path / "cold.json")
+
+
+@pytest.mark.parametrize("damage", ["header-not-json", "line-not-json", "truncated",
+                                    "one-record-short", "nan-ok", "another-key",
+                                    "another-scenario", "unknown-field"])
+def test_a_damaged_scenario_entry_is_a_reported_miss_and_rebuilt(tmp_path, damage):
+    clean = _run([SWEEP], ResultCache(tmp_path))
+    (entry,) = _scenario_entries(tmp_path)
+    head, *lines = entry.read_text(encoding="utf-8").split("\n")[:-1]
+    header, records = json.loads(head), [json.loads(line) for line in lines]
+    if damage == "one-record-short":  # the header counts the lines: both agree
+        records.pop()
+        header["count"] -= 1
+    elif damage == "nan-ok":
+        ok = next(r for r in records if r["status"] == "ok" and r["source"] != "analytic")
+        ok["u_after"][0] = math.nan
+    elif damage == "another-key":
+        header["key"] = "0" * 64
+    elif damage == "another-scenario":
+        records[3]["scenario"] = "disk-direct"
+    elif damage == "unknown-field":
+        records[0]["not_a_field"] = 1
+    text = "".join(f"{json.dumps(item)}\n" for item in (header, *records))
+    if damage == "header-not-json":
+        text = '{"key": "' + text
+    elif damage == "line-not-json":
+        text = text.replace("\n", "\n{", 2).replace("\n{", "\n", 1)
+    elif damage == "truncated":
+        text = text[:-10]
+    entry.write_text(text, encoding="utf-8")
+    again = ResultCache(tmp_path)
+    outcome = _run([SWEEP], again)
+    assert [_comparable(r) for r in outcome.records] == [_comparable(r) for r in clean.records]
+    if damage == "unknown-field":  # unknown fields are dropped on reading, as in a results file
+        assert not again.rejected
+        return
+    assert len(again.rejected) == 1 and str(entry) in again.rejected[0]
+    assert any(str(entry) in warning for warning in outcome.warnings)
+    # rebuilt from the engine runs' entries (still cached), and stored whole again
+    assert all(r.cached for r in outcome.records if r.source != "analytic")
+    third = ResultCache(tmp_path)
+    _run([SWEEP], third)
+    assert not third.rejected
+
+
+def test_another_selection_is_another_entry(tmp_path):
+    _run([ROD], ResultCache(tmp_path))
+    _run([ROD], ResultCache(tmp_path), presets=("defaults",))
+    _run([ROD], ResultCache(tmp_path), overrides={"pymunk": {"iterations": 50}})
+    _run([ROD], ResultCache(tmp_path), history=False)
+    assert len(_scenario_entries(tmp_path)) == 4
+
+
+def test_a_scenario_with_a_missing_engine_is_not_kept_whole(tmp_path, monkeypatch):
+    from harness.engines import EngineNotInstalled
+
+    real = runner._engine_status
+
+    def pymunk_missing(engines):
+        loaded, missing = real(engines)
+        loaded.pop("pymunk", None)
+        missing["pymunk"] = str(EngineNotInstalled("pymunk", "not installed (test)"))
+        return loaded, missing
+
+    monkeypatch.setattr(runner, "_engine_status", pymunk_missing)
+    outcome = _run([ROD], ResultCache(tmp_path))
+    assert all(r.skipped for r in outcome.records if r.source != "analytic")
+    assert not _scenario_entries(tmp_path)
+
+
+def test_without_the_cache_no_scenario_entry(tmp_path):
+    _run([ROD], ResultCache(tmp_path, enabled=False))
+    assert not list(tmp_path.glob("??/*.json"))
+
+
+# --------------------------------------------------------------------------------------------
+# The scenario checks remembered by text
+# --------------------------------------------------------------------------------------------
+@pytest.fixture
+def counted_checks(monkeypatch):
+    """Count the calls of the point checks (the reader's reference to them)."""
+    from harness.scenarios import reader
+
+    calls = []
+    real = reader.check_points
+
+    def counting(table_reader, scenario):
+        calls.append(scenario.name)
+        return real(table_reader, scenario)
+
+    monkeypatch.setattr(reader, "check_points", counting)
+    yield calls
+    checks.use_passed_checks(None)
+
+
+def test_a_text_that_passed_the_checks_is_not_checked_again(tmp_path, counted_checks):
+    source = SCENARIO_DIR / "rod-45-slip-reversal.toml"
+    copy = tmp_path / "files" / source.name
+    copy.parent.mkdir()
+    copy.write_text(source.read_text(encoding="utf-8"), encoding="utf-8")
+    checks.use_passed_checks(tmp_path / "cache")
+    first, errors = load_scenarios_reporting([copy])
+    assert not errors and counted_checks == [ROD.name]
+    checks.use_passed_checks(tmp_path / "cache")  # a new run: the store read from disk
+    second, _ = load_scenarios_reporting([copy])
+    assert counted_checks == [ROD.name] and second == first
+    copy.write_text(copy.read_text(encoding="utf-8") + "\n# changed\n", encoding="utf-8")
+    checks.use_passed_checks(tmp_path / "cache")
+    load_scenarios_reporting([copy])
+    assert counted_checks == [ROD.name, ROD.name]  # another text: checked
+
+
+def test_a_file_with_problems_is_checked_every_time(tmp_path, counted_checks):
+    bad = tmp_path / "away.toml"
+    text = (SCENARIO_DIR / "disk-direct.toml").read_text(encoding="utf-8")
+    moving_away = text.split("[expect]")[0].replace("velocity = [0.0, -1.0]",
+                                                    "velocity = [0.0, 1.0]")
+    assert moving_away != text.split("[expect]")[0]
+    bad.write_text(moving_away, encoding="utf-8")
+    for _ in range(2):
+        checks.use_passed_checks(tmp_path / "cache")
+        scenarios, errors = load_scenarios_reporting([bad])
+        assert not scenarios and any("do not approach" in str(e) for e in errors)
+    assert len(counted_checks) == 2
+
+
+def test_a_damaged_checks_store_is_reported_and_every_file_checked(tmp_path, counted_checks):
+    (tmp_path / "cache").mkdir()
+    store = tmp_path / "cache" / checks.PassedChecks.FILE_NAME
+    store.write_text('{"format": 1, "passed": ["not a key"]}', encoding="utf-8")
+    passed = checks.use_passed_checks(tmp_path / "cache")
+    scenarios, errors = load_scenarios_reporting([SCENARIO_DIR / "disk-direct.toml"])
+    assert scenarios and not errors and len(counted_checks) == 1
+    assert len(passed.problems) == 1 and str(store) in passed.problems[0]
+    assert json.loads(store.read_text(encoding="utf-8"))["passed"] != ["not a key"]  # rewritten
+
+
+def test_by_default_nothing_is_remembered(tmp_path, counted_checks):
+    for _ in range(2):
+        load_scenarios_reporting([SCENARIO_DIR / "disk-direct.toml"])
+    assert len(counted_checks) == 2
+
+
+def test_the_run_command_remembers_checks_in_its_cache_and_not_with_no_cache(tmp_path,
+                                                                             counted_checks):
+    file = str(SCENARIO_DIR / "two-sled-row2.toml")
+    cache_dir = tmp_path / "cache"
+    for _ in range(2):
+        assert cli.main(["run", file, "--cache-dir", str(cache_dir), "--json",
+                         str(tmp_path / "r.json")]) == 0
+    assert len(counted_checks) == 1 and (cache_dir / checks.PassedChecks.FILE_NAME).is_file()
+    assert cli.main(["run", file, "--no-cache", "--json", str(tmp_path / "r.json")]) == 0
+    assert len(counted_checks) == 2
+    assert checks.passed_checks.root is None  # the run leaves the store disabled
+
+
+def test_cache_info_and_prune_see_the_scenario_entries(tmp_path):
+    ResultCache(tmp_path, version="old").put_lines("a" * 64, ['{"x":1}'])
+    ResultCache(tmp_path, version="new").put_lines("b" * 64, ['{"x":2}'])
+    cache = ResultCache(tmp_path, version="new")
+    assert cache.info()["entries"] == 2
+    assert cache.prune()["entries"] == 1  # written by other code
+    assert [path.name for path in _scenario_entries(tmp_path)] == ["b" * 64 + ".jsonl"]
+    assert cache.get_lines("b" * 64) == [({"x": 2}, '{"x":2}')]
