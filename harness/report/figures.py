@@ -113,11 +113,13 @@ def _record_fields() -> tuple[str, ...]:
 
 @functools.cache
 def _code_digest() -> bytes:
-    """What the code drawing the figures contributes to every digest (this module,
-    matplotlib's version): read once per process."""
+    """What the code drawing the figures contributes to every digest: every module of the
+    report package (a figure reads views, history and the rest as well as this module: an
+    edit to any of them redraws) and matplotlib's version."""
     import matplotlib
 
-    return Path(__file__).read_bytes() + matplotlib.__version__.encode()
+    sources = sorted(Path(__file__).parent.glob("*.py"))
+    return b"".join(path.read_bytes() for path in sources) + matplotlib.__version__.encode()
 
 
 def inputs_digest(kind: str, payload) -> str:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from harness.report import figures
@@ -25,3 +27,13 @@ def test_png_tag_of_missing_truncated_and_foreign_files_is_none(tmp_path):
     assert figures.png_tag(tmp_path / "short.png") is None
     (tmp_path / "text.png").write_text("not a png")
     assert figures.png_tag(tmp_path / "text.png") is None
+
+
+def test_figure_digests_cover_every_module_of_the_report_package():
+    # a figure reads views (departure grids, labels) and history as well as figures.py: an
+    # edit to views.py once left a stale heat map (its digest covered figures.py only)
+    from harness.report import figures, history, views
+
+    code = figures._code_digest()
+    for module in (figures, views, history):
+        assert Path(module.__file__).read_bytes() in code
