@@ -39,6 +39,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import fnmatch
+import gc
 import json
 import multiprocessing
 import os
@@ -334,6 +335,9 @@ def main(args) -> int:
     except (FileNotFoundError, ValueError) as error:  # the message names the file
         print(f"impact-harness report: {error}", file=sys.stderr)
         return 2
+    # The results live as long as this process: out of the collector's sight, which would
+    # otherwise walk their millions of containers each time the page's strings set it off.
+    gc.freeze()
     start = time.perf_counter()
     written = write_report(results, args.out, sources=[args.results.parent, Path("reports")],
                            workers=getattr(args, "workers", None),
