@@ -32,7 +32,6 @@ velocities of the right shape): both are listed in :attr:`ResultCache.rejected`.
 
 from __future__ import annotations
 
-import gc
 import hashlib
 import json
 import math
@@ -44,6 +43,7 @@ from pathlib import Path
 from typing import Any
 
 from harness.run.files import write_text_atomically
+from harness.run.records import collector_paused
 
 _HARNESS_DIR = Path(__file__).resolve().parent.parent  # harness/, from harness/run/
 #: The harness source (directories and files, relative to ``harness/``) that the cached
@@ -360,16 +360,11 @@ class ResultCache:
 
 
 def _parse_lines(lines: list[str]) -> list:
-    """Each line's JSON value, parsed with the cyclic garbage collector off: the containers
-    of a scenario's records set it off again and again, each time walking all those read so
-    far (a warm run reads every scenario's records), though none of them is garbage."""
-    enabled = gc.isenabled()
-    gc.disable()
-    try:
+    """Each line's JSON value, parsed with the cyclic garbage collector paused: the
+    containers of a scenario's records set it off again and again, each time walking all
+    those read so far (a warm run reads every scenario's records), though none is garbage."""
+    with collector_paused():
         return [json.loads(line) for line in lines]
-    finally:
-        if enabled:
-            gc.enable()
 
 
 def _json_default(value: Any) -> Any:

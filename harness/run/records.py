@@ -274,15 +274,18 @@ def check_writable(path: Path | str) -> str | None:
 def read_results(path: Path | str) -> Results:
     """Read a results file; a wrong format raises ``ValueError`` naming the file."""
     path = Path(path)
-    with _collector_paused():
+    with collector_paused():
         return _read_results(path)
 
 
 @contextlib.contextmanager
-def _collector_paused():
-    """The cyclic garbage collector off while a results file becomes objects: the millions
-    of containers parsed set it off again and again, each time walking every one made so far
-    (a quarter of reading a 56 MB file), though none of them can be garbage yet."""
+def collector_paused():
+    """The cyclic garbage collector off inside the block (as it was after it).
+
+    For reading results: the millions of containers parsed set the collector off again and
+    again, each time walking every container made so far (a quarter of reading a 56 MB
+    results file), though none of them can be garbage yet.
+    """
     enabled = gc.isenabled()
     gc.disable()
     try:
@@ -344,4 +347,4 @@ def _split_records(text: str) -> tuple[dict | None, list[str] | None]:
 
 
 __all__ = ["ANALYTIC", "DEFAULT_RESULTS", "FORMAT", "FORMAT_VERSION", "Record", "Results",
-           "check_writable", "read_results", "record_line", "write_results"]
+           "check_writable", "collector_paused", "read_results", "record_line", "write_results"]
