@@ -134,6 +134,8 @@ class Results:
     # scenario -> its records, built on first use; rebuilt when ``records`` is replaced or
     # changes length (a report asks once per scenario and figure: a scan each was quadratic).
     _by_scenario: tuple = field(default=(None, 0, {}), init=False, repr=False, compare=False)
+    _present: tuple = field(default=(None, 0, frozenset()), init=False, repr=False,
+                            compare=False)
     # (records, length, lines) as read_results found them: each record's line in the file.
     _lines: tuple = field(default=(None, 0, None), init=False, repr=False, compare=False)
 
@@ -166,17 +168,25 @@ class Results:
     def engine_labels(self) -> list[str]:
         """``engine.preset`` labels present, engines in registry order, ``defaults`` first."""
         from harness.engines import source_label
-        from harness.scenarios import ENGINES, PRESETS
 
-        present = {(r.source, r.preset) for r in self.records if r.source != ANALYTIC}
-        return [source_label(e, p) for p in PRESETS for e in ENGINES if (e, p) in present]
+        return [source_label(e, p) for e, p in self.engine_roles()]
 
     def engine_roles(self) -> list[tuple[str, str]]:
         """``(engine, preset role)`` pairs present, in :meth:`engine_labels`' order."""
         from harness.scenarios import ENGINES, PRESETS
 
-        present = {(r.source, r.preset) for r in self.records if r.source != ANALYTIC}
+        present = self._engine_runs()
         return [(e, p) for p in PRESETS for e in ENGINES if (e, p) in present]
+
+    def _engine_runs(self) -> frozenset:
+        """The ``(engine, preset)`` pairs of the records, found once per records list (a
+        report asks a dozen times, a scan of every record each)."""
+        records, length, present = self._present
+        if records is not self.records or length != len(self.records):
+            present = frozenset((r.source, r.preset) for r in self.records
+                                if r.source != ANALYTIC)
+            self._present = (self.records, len(self.records), present)
+        return present
 
 
 _PLAIN = (str, int, bool, type(None))
@@ -321,6 +331,9 @@ def _read_results(path: Path) -> Results:
     return results
 
 
+_DECODER = json.JSONDecoder()
+
+
 def _split_records(text: str) -> tuple[dict | None, list[str] | None]:
     """A results file laid out by :func:`write_results`, read as ``(document, record lines)``
     (the lines are what the report's figure digests hash); ``(None, None)`` for any other
@@ -332,10 +345,13 @@ def _split_records(text: str) -> tuple[dict | None, list[str] | None]:
         return None, None
     try:
         document = json.loads(text[:start] + "\n}")
-        body = text[start + len(RECORDS_START):len(text) - len(RECORDS_END)]
-        records = json.loads("[" + body + "]")
+        # the records' list parsed where it stands (no copy of the text)
+        records, end = _DECODER.raw_decode(text, start + len(RECORDS_START) - 2)
     except ValueError:
         return None, None
+    if end != len(text) - len(RECORDS_END) + 3:  # after "\n ]": where the file ends it
+        return None, None
+    body = text[start + len(RECORDS_START):len(text) - len(RECORDS_END)]
     if not isinstance(document, dict) or "records" in document:
         return None, None
     document["records"] = records
