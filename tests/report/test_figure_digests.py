@@ -107,11 +107,16 @@ def test_a_changed_record_redraws_its_figures_and_the_headline_only(results_file
     assert "impulse-legend.png" not in redrawn and "paper-table3.png" not in redrawn
 
 
-def test_a_report_with_nothing_to_draw_never_imports_matplotlib(results_file, tmp_path):
+@pytest.mark.parametrize("many", [False, True])
+def test_a_report_with_nothing_to_draw_never_imports_matplotlib(results_file, tmp_path,
+                                                                monkeypatch, many):
+    threshold = 1 if many else report.MANY_SCENARIOS  # many: the aggregated page's heat table
+    monkeypatch.setattr(report, "MANY_SCENARIOS", threshold)
     out = tmp_path / "report"
     report.write_report(read_results(results_file), out, workers=1)
     script = ("import sys\nfrom harness import report\n"
               "from harness.run.records import read_results\n"
+              f"report.MANY_SCENARIOS = {threshold}\n"
               f"report.write_report(read_results({str(results_file)!r}), {str(out)!r}, "
               "workers=1)\n"
               "print(json.dumps(sorted(m for m in sys.modules if m.split('.')[0] in "
