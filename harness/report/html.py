@@ -164,7 +164,7 @@ def velocity_table(records: Sequence[Record], speed_labels: Sequence[str]) -> st
         if r.source == ANALYTIC:
             name = LAW_STYLE.get(r.law, (None, None, r.law))[2]
         else:
-            name = f"<b>{escape_html(r.label)}</b>"
+            name = f"<b>{escape_html(record_label(r))}</b>"
             if overrides_of(r):
                 shown = escape_html(fmt_overrides(overrides_of(r)))
                 name += (f"<br><span class='override'>[{shown}]"
