@@ -1,13 +1,13 @@
 """The report's figures (matplotlib, Agg), each redrawn only when its inputs change.
 
-A figure's PNG carries the digest of its inputs and of this module in its metadata
-(:data:`TAG_KEY`); :func:`render_once` skips a figure whose file already holds that digest.
+A figure's PNG carries the digest of its inputs (a scenario's records by
+:func:`scenario_digests`) and of the report's code in its metadata (:data:`TAG_KEY`);
+:func:`render_once` skips a figure whose file already holds that digest.
 """
 
 from __future__ import annotations
 
 import contextvars
-import dataclasses
 import functools
 import hashlib
 import itertools
@@ -98,25 +98,6 @@ _VOLATILE_TEXT = re.compile(
     '"(?:' + "|".join((*VOLATILE_FIELDS, "engine_wall_time_s")) + r')":[^,{}\[\]"]*')
 
 
-def stable_record(record: Record) -> dict:
-    """A record's fields without what changes between identical runs (times, cache flags).
-
-    Shallow: the values are the record's own (a digest only reads them); ``Record.as_dict``
-    deep-copies every nested value.
-    """
-    data = {name: getattr(record, name) for name in _record_fields()
-            if name not in VOLATILE_FIELDS}
-    if data.get("diagnostics"):
-        data["diagnostics"] = {k: v for k, v in data["diagnostics"].items()
-                               if k != "engine_wall_time_s"}
-    return data
-
-
-@functools.cache
-def _record_fields() -> tuple[str, ...]:
-    return tuple(field.name for field in dataclasses.fields(Record))
-
-
 def scenario_digests(results: Results) -> dict[str, str]:
     """``{scenario: sha256 of its records}``, what every figure of a scenario (and the
     headline figures, of all) depends on besides the code.
@@ -140,17 +121,18 @@ def scenario_digests(results: Results) -> dict[str, str]:
 
 @functools.cache
 def _code_digest() -> bytes:
-    """What the code drawing the figures contributes to every digest (this module, the views
-    it draws, matplotlib's version): read once per process, without importing matplotlib
-    (a warm report draws nothing)."""
+    """What the code drawing the figures contributes to every digest: every module of the
+    report package (a figure reads views, history and the rest as well as this module: an
+    edit to any of them redraws) and matplotlib's version, read without importing it (a
+    warm report draws nothing)."""
     from importlib.metadata import PackageNotFoundError, version
 
     try:
         matplotlib_version = version("matplotlib")
     except PackageNotFoundError:  # not installed: nothing can be drawn either
         matplotlib_version = "none"
-    views = Path(__file__).with_name("views.py")
-    return Path(__file__).read_bytes() + views.read_bytes() + matplotlib_version.encode()
+    sources = sorted(Path(__file__).parent.glob("*.py"))
+    return b"".join(path.read_bytes() for path in sources) + matplotlib_version.encode()
 
 
 def inputs_digest(kind: str, payload) -> str:
