@@ -39,6 +39,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import fnmatch
+import gc
 import json
 import multiprocessing
 import os
@@ -55,8 +56,8 @@ from harness.report.figures import (
     impulse_legend_figure,
     inputs_digest,
     is_current,
+    scenario_digests,
     split_figure,
-    stable_record,
     sweep_figure,
     table3_figure,
     table3_inputs,
@@ -141,9 +142,6 @@ def write_report(results: Results, out_dir: Path | str,
         ``"all"``, ``"headline"`` (SVG twins of :data:`HEADLINE_KINDS` only) or ``"auto"``
         (all up to :data:`MANY_SCENARIOS` scenarios, headline above).
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
     out_dir = Path(out_dir)
     figure_dir = out_dir / FIGURES
     figure_dir.mkdir(parents=True, exist_ok=True)
@@ -153,7 +151,8 @@ def write_report(results: Results, out_dir: Path | str,
         scenario_figures = "none" if many else "all"
     if svg == "auto":
         svg = "headline" if many else "all"
-    tasks = figure_tasks(results, many, scenario_figures, figures_for, svg)
+    rows = split_rows(results)
+    tasks = figure_tasks(results, many, scenario_figures, figures_for, svg, rows)
     drawn = draw_figures(tasks, figure_dir, workers)
     figures: dict = {"impulse": {}, "sweep": {}, "svg": set(), "many": many,
                      "groups": scenario_groups(results, names) if many else {},
@@ -167,7 +166,6 @@ def write_report(results: Results, out_dir: Path | str,
             figures[task.slot[0]] = task.file
         if task.svg:
             figures["svg"].add(task.file)
-    rows = split_rows(results)
     pages = write_pages(out_dir, sources)
     wanted = {task.file for task, path in zip(tasks, drawn) if path is not None}
     wanted |= {str(Path(task.file).with_suffix(".svg")) for task, path in zip(tasks, drawn)
@@ -180,8 +178,10 @@ def write_report(results: Results, out_dir: Path | str,
 
 
 def figure_tasks(results: Results, many: bool, scenario_figures: str,
-                 figures_for: Sequence[str], svg: str) -> list[FigureTask]:
-    """Every figure of the report, with the inputs its digest covers.
+                 figures_for: Sequence[str], svg: str,
+                 rows: Sequence[dict] | None = None) -> list[FigureTask]:
+    """Every figure of the report, with the inputs its digest covers (a scenario's records
+    by their digest, :func:`scenario_digests`); ``rows``: :func:`split_rows` when known.
 
     The closures read the values bound in this call (default arguments), never a loop's
     later values.
@@ -190,16 +190,17 @@ def figure_tasks(results: Results, many: bool, scenario_figures: str,
     engines = list(dict.fromkeys(label.split(".")[0] for label in results.engine_labels()))
     headline_svg = svg in ("all", "headline")
     scenario_svg = svg == "all"
-    stable = {name: [stable_record(r) for r in results.for_scenario(name)] for name in names}
+    digests = scenario_digests(results)
+    records_digest = {name: digests.get(name, "") for name in names}
     tasks = [FigureTask("legend", "impulse-legend.png", engines,
                         lambda path, tag: impulse_legend_figure(path, tag, engines),
                         ("legend",), headline_svg)]
     groups = scenario_groups(results, names) if many else None
     # above MANY_SCENARIOS one row per family (the scenarios' rows are HTML tables instead)
-    tasks.append(FigureTask("heatmap", "heatmap.png", [groups, stable],
+    tasks.append(FigureTask("heatmap", "heatmap.png", [groups, records_digest],
                             lambda path, tag: heatmap_figure(results, path, tag, groups),
                             ("heatmap",), headline_svg))
-    rows = split_rows(results)
+    rows = split_rows(results) if rows is None else rows
     tasks.append(FigureTask("split", "split.png", rows,
                             lambda path, tag: split_figure(rows, path, tag), ("split",),
                             headline_svg))
@@ -211,17 +212,17 @@ def figure_tasks(results: Results, many: bool, scenario_figures: str,
         info = results.scenarios.get(name, {})
         if info.get("sweep"):
             tasks.append(FigureTask(
-                "sweep", f"sweep-{slug(name)}.png", [name, info, stable[name]],
+                "sweep", f"sweep-{slug(name)}.png", [name, info, records_digest[name]],
                 lambda path, tag, name=name, info=info, records=records:
                 sweep_figure(name, info, records, path, tag), ("sweep", name), scenario_svg))
         else:
             tasks.append(FigureTask(
-                "impulse", f"impulse-{slug(name)}.png", [name, stable[name]],
+                "impulse", f"impulse-{slug(name)}.png", [name, records_digest[name]],
                 lambda path, tag, name=name, records=records:
                 impulse_figure(name, records, path, tag), ("impulse", name), scenario_svg))
             # the contact in time (harness.report.history)
             tasks.append(FigureTask(
-                "history", f"history-{slug(name)}.png", history_inputs(name, records),
+                "history", f"history-{slug(name)}.png", history_inputs(name, records_digest[name]),
                 lambda path, tag, name=name, records=records:
                 history_figure(name, records, path, tag), ("history", name), scenario_svg))
     tasks.append(FigureTask("table3", "paper-table3.png", table3_inputs(),
@@ -266,6 +267,10 @@ def draw_figures(tasks: Sequence[FigureTask], figure_dir: Path,
         else:
             result.append(None)
             stale.append((index, (task, path, tag)))
+    if stale:  # matplotlib only when something is drawn (its import is a warm report's tenth)
+        import matplotlib
+
+        matplotlib.use("Agg")
     workers = workers or os.cpu_count() or 1
     workers = min(workers, len(stale))
     stale.sort(key=lambda item: -KIND_COST.get(item[1][0].kind, 1.0))
@@ -330,6 +335,9 @@ def main(args) -> int:
     except (FileNotFoundError, ValueError) as error:  # the message names the file
         print(f"impact-harness report: {error}", file=sys.stderr)
         return 2
+    # The results live as long as this process: out of the collector's sight, which would
+    # otherwise walk their millions of containers each time the page's strings set it off.
+    gc.freeze()
     start = time.perf_counter()
     written = write_report(results, args.out, sources=[args.results.parent, Path("reports")],
                            workers=getattr(args, "workers", None),

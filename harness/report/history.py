@@ -18,7 +18,7 @@ import math
 from collections.abc import Sequence
 from pathlib import Path
 
-from harness.report.figures import new_figure, save_png, stable_record
+from harness.report.figures import new_figure, save_png
 from harness.report.views import ENGINE_STYLE, LAW_STYLE
 from harness.run.records import ANALYTIC, Record
 
@@ -38,10 +38,12 @@ def history_records(records: Sequence[Record]) -> list[Record]:
     return drawn
 
 
-def history_inputs(name: str, records: Sequence[Record]) -> list:
-    """What the figure depends on (for :func:`harness.report.figures.render_once`)."""
+def history_inputs(name: str, records_digest: str) -> list:
+    """What the figure depends on (for :func:`harness.report.figures.render_once`): this
+    module and the scenario's records (their digest,
+    :func:`harness.report.figures.scenario_digests`)."""
     source = hashlib.sha256(Path(__file__).read_bytes()).hexdigest()
-    return [name, source, [stable_record(r) for r in records]]
+    return [name, source, records_digest]
 
 
 def history_figure(name: str, records: Sequence[Record], path: Path,

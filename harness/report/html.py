@@ -11,7 +11,6 @@ from pathlib import Path
 import numpy as np
 
 from harness.engines import ENGINE_NAMES, PRESET_ROLES, preset_label
-from harness.report.figures import heat_cmap
 from harness.report.views import (
     ENGINE_WHY,
     FIGURES,
@@ -165,7 +164,7 @@ def velocity_table(records: Sequence[Record], speed_labels: Sequence[str]) -> st
         if r.source == ANALYTIC:
             name = LAW_STYLE.get(r.law, (None, None, r.law))[2]
         else:
-            name = f"<b>{escape_html(r.label)}</b>"
+            name = f"<b>{escape_html(record_label(r))}</b>"
             if overrides_of(r):
                 shown = escape_html(fmt_overrides(overrides_of(r)))
                 name += (f"<br><span class='override'>[{shown}]"
@@ -249,15 +248,50 @@ def scenario_section(name: str, info: dict, records: Sequence[Record], figures: 
     return "\n".join(parts)
 
 
+#: The heat map's colours (:func:`harness.report.figures.heat_cmap`, ColorBrewer's YlOrRd as
+#: matplotlib defines it): the nine RGB stops, spread evenly over [0, 1].
+HEAT_STOPS = (
+    (1.0, 1.0, 0.8),
+    (1.0, 0.92941176470588238, 0.62745098039215685),
+    (0.99607843137254903, 0.85098039215686272, 0.46274509803921571),
+    (0.99607843137254903, 0.69803921568627447, 0.29803921568627451),
+    (0.99215686274509807, 0.55294117647058827, 0.23529411764705882),
+    (0.9882352941176471, 0.30588235294117649, 0.16470588235294117),
+    (0.8901960784313725, 0.10196078431372549, 0.10980392156862745),
+    (0.74117647058823533, 0.0, 0.14901960784313725),
+    (0.50196078431372548, 0.0, 0.14901960784313725),
+)
+HEAT_LEVELS = 256  # entries of the colour map's table, as matplotlib's
+
+
+def heat_colours(values: np.ndarray) -> np.ndarray:
+    """``(..., 3)`` integer RGB (0-255) of departures on the heat map's colour scale: the
+    colours matplotlib gives them (``heat_cmap()(LogNorm(HEAT_MIN, HEAT_MAX)(values))``,
+    NaN drawn as ``HEAT_MIN``), computed as it does, without importing it (a warm report
+    draws nothing, and matplotlib was a tenth of its time).
+    """
+    stops = np.asarray(HEAT_STOPS)
+    x = np.linspace(0.0, 1.0, len(stops))
+    grid = np.linspace(0.0, 1.0, HEAT_LEVELS)
+    ind = np.searchsorted(x, grid)[1:-1]
+    distance = (grid[1:-1] - x[ind - 1]) / (x[ind] - x[ind - 1])
+    table = np.concatenate([stops[:1], distance[:, None] * (stops[ind] - stops[ind - 1])
+                            + stops[ind - 1], stops[-1:]])
+    table = np.clip(table, 0.0, 1.0)
+    clipped = np.clip(np.nan_to_num(values, nan=HEAT_MIN), HEAT_MIN, HEAT_MAX)
+    ends = np.log10(np.array([HEAT_MIN, HEAT_MAX], dtype=float))
+    level = (np.log10(np.asarray(clipped, dtype=float)) - ends[0]) / (ends[1] - ends[0])
+    level = level * HEAT_LEVELS
+    level[level == HEAT_LEVELS] = HEAT_LEVELS - 1
+    return np.rint(255 * table[level.astype(int)]).astype(int)
+
+
 def departure_table_html(results: Results, names: Sequence[str]) -> str:
     """The headline heat map's cells as an HTML table (one row per scenario, linked to its
     section), coloured as the figure: cheap at any number of rows, where an image is not."""
-    from matplotlib.colors import LogNorm
-
     labels = results.engine_labels()
     if not labels:
         return ""
-    norm, cmap = LogNorm(vmin=HEAT_MIN, vmax=HEAT_MAX), heat_cmap()
     header = ["scenario"] + [f"{LAW_STYLE[law][2]}: {label}" for law in HEADLINE_LAWS
                              for label in labels]
     rows = [[f"<a href='#{escape_html(slug(name))}'>{escape_html(name)}</a>"]
@@ -265,10 +299,7 @@ def departure_table_html(results: Results, names: Sequence[str]) -> str:
     grouped = [label_records(results.for_scenario(name)) for name in names]
     for law in HEADLINE_LAWS:
         _, values, flagged, skipped = departure_grid(results, law, labels, names)
-        # the colours of all cells at once (a colormap call per cell was most of the time)
-        rgb = np.asarray(cmap(norm(np.clip(np.nan_to_num(values, nan=HEAT_MIN), HEAT_MIN,
-                                           HEAT_MAX))))[..., :3]
-        rgb = np.rint(255 * rgb).astype(int)
+        rgb = heat_colours(values)  # all cells at once (a call per cell was most of the time)
         for i in range(len(names)):
             for j, label in enumerate(labels):
                 value = values[i, j]

@@ -8,10 +8,10 @@ from pathlib import Path
 from harness.report.views import (
     HEADLINE_LAWS,
     LAW_STYLE,
-    cell_records,
     departure_cell,
-    departure_grid,
+    engine_scenarios,
     fmt_departure,
+    label_records,
     row_name,
 )
 from harness.run.records import ANALYTIC, Results
@@ -41,14 +41,14 @@ def write_summary(results: Results, out_dir: Path) -> Path:
              "not run. "
              "Figures, per-scenario tables and settings: [index.html](index.html); the "
              "paper's Table 3: [paper-table3.md](paper-table3.md).", ""]
+    names = engine_scenarios(results)  # the heat map's rows
+    grouped = {name: label_records(results.for_scenario(name)) for name in names}
     for law in HEADLINE_LAWS:
-        names = departure_grid(results, law, labels)[0]
         lines += [f"## Departure from {LAW_STYLE[law][2]}", "",
                   "| scenario | " + " | ".join(labels) + " |",
                   "|---|" + "---:|" * len(labels)]
         for name in names:
-            cells = [departure_cell(cell_records(results, name, label), law)
-                     for label in labels]
+            cells = [departure_cell(grouped[name].get(label, []), law) for label in labels]
             lines.append(f"| {escape(row_name(results, name))} | " + " | ".join(cells) + " |")
         lines.append("")
     gates = prov.get("gates", [])

@@ -43,6 +43,7 @@ from pathlib import Path
 from typing import Any
 
 from harness.run.files import write_text_atomically
+from harness.run.records import collector_paused
 
 _HARNESS_DIR = Path(__file__).resolve().parent.parent  # harness/, from harness/run/
 #: The harness source (directories and files, relative to ``harness/``) that the cached
@@ -256,7 +257,7 @@ class ResultCache:
             lines = body.split("\n")[:-1]  # never splitlines: U+2028 may sit inside a string
             if len(lines) != header["count"]:
                 raise ValueError(f"{len(lines)} lines, not {header['count']}")
-            values = [json.loads(line) for line in lines]
+            values = _parse_lines(lines)
             reason = None if check is None else check(values)
             if reason is not None:
                 raise ValueError(reason)
@@ -356,6 +357,14 @@ class ResultCache:
         total = self.hits + self.misses
         return {"enabled": self.enabled, "hits": self.hits, "misses": self.misses,
                 "hit_rate": self.hits / total if total else 0.0}
+
+
+def _parse_lines(lines: list[str]) -> list:
+    """Each line's JSON value, parsed with the cyclic garbage collector paused: the
+    containers of a scenario's records set it off again and again, each time walking all
+    those read so far (a warm run reads every scenario's records), though none is garbage."""
+    with collector_paused():
+        return [json.loads(line) for line in lines]
 
 
 def _json_default(value: Any) -> Any:

@@ -37,6 +37,8 @@ engine's status, or the first failing reason's name.
 
 from __future__ import annotations
 
+import contextlib
+import gc
 import json
 import math
 import os
@@ -108,6 +110,12 @@ class Record:
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "Record":
+        if cls is Record and data.keys() == _FIELD_SET:
+            # A record as written (every field, nothing else): its values as they are, without
+            # the keyword call and the filter, which were most of reading a results file.
+            record = object.__new__(Record)
+            record.__dict__.update(data)
+            return record
         names = _FIELD_SET if cls is Record else {f.name for f in fields(cls)}
         return cls(**{key: value for key, value in data.items() if key in names})
 
@@ -126,6 +134,19 @@ class Results:
     # scenario -> its records, built on first use; rebuilt when ``records`` is replaced or
     # changes length (a report asks once per scenario and figure: a scan each was quadratic).
     _by_scenario: tuple = field(default=(None, 0, {}), init=False, repr=False, compare=False)
+    _present: tuple = field(default=(None, 0, frozenset()), init=False, repr=False,
+                            compare=False)
+    # (records, length, lines) as read_results found them: each record's line in the file.
+    _lines: tuple = field(default=(None, 0, None), init=False, repr=False, compare=False)
+
+    def record_lines(self) -> list[str] | None:
+        """Each record's line in the results file it was read from (:func:`record_line`'s
+        text), parallel to :attr:`records`; None for results built in memory, or once
+        ``records`` was replaced or changed length since."""
+        records, length, lines = self._lines
+        if records is self.records and length == len(self.records):
+            return lines
+        return None
 
     def scenario_names(self) -> list[str]:
         """Scenario names in run order."""
@@ -147,17 +168,25 @@ class Results:
     def engine_labels(self) -> list[str]:
         """``engine.preset`` labels present, engines in registry order, ``defaults`` first."""
         from harness.engines import source_label
-        from harness.scenarios import ENGINES, PRESETS
 
-        present = {(r.source, r.preset) for r in self.records if r.source != ANALYTIC}
-        return [source_label(e, p) for p in PRESETS for e in ENGINES if (e, p) in present]
+        return [source_label(e, p) for e, p in self.engine_roles()]
 
     def engine_roles(self) -> list[tuple[str, str]]:
         """``(engine, preset role)`` pairs present, in :meth:`engine_labels`' order."""
         from harness.scenarios import ENGINES, PRESETS
 
-        present = {(r.source, r.preset) for r in self.records if r.source != ANALYTIC}
+        present = self._engine_runs()
         return [(e, p) for p in PRESETS for e in ENGINES if (e, p) in present]
+
+    def _engine_runs(self) -> frozenset:
+        """The ``(engine, preset)`` pairs of the records, found once per records list (a
+        report asks a dozen times, a scan of every record each)."""
+        records, length, present = self._present
+        if records is not self.records or length != len(self.records):
+            present = frozenset((r.source, r.preset) for r in self.records
+                                if r.source != ANALYTIC)
+            self._present = (self.records, len(self.records), present)
+        return present
 
 
 _PLAIN = (str, int, bool, type(None))
@@ -219,11 +248,17 @@ def write_results(path: Path | str, records: Iterable[Record], provenance: Mappi
     records_text = ",\n".join(record_line(record.as_dict()) if line is None else line
                               for record, line in zip(records, lines))
     head = json.dumps(document, indent=1, ensure_ascii=False, allow_nan=False)
-    text = head[:-2] + ',\n "records": [\n' + records_text + "\n ]\n}\n"
+    text = head[:-2] + RECORDS_START + records_text + RECORDS_END
     # A unique temporary in the same directory, then an atomic rename: two runs writing the
     # same file at once each replace it whole; a reader never sees half a file.
     write_text_atomically(path, text)
     return path
+
+
+#: What comes between the header and the first record line of a results file, and after the
+#: last: :func:`read_results` finds the record lines by them.
+RECORDS_START = ',\n "records": [\n'
+RECORDS_END = "\n ]\n}\n"
 
 
 def check_writable(path: Path | str) -> str | None:
@@ -249,8 +284,33 @@ def check_writable(path: Path | str) -> str | None:
 def read_results(path: Path | str) -> Results:
     """Read a results file; a wrong format raises ``ValueError`` naming the file."""
     path = Path(path)
+    with collector_paused():
+        return _read_results(path)
+
+
+@contextlib.contextmanager
+def collector_paused():
+    """The cyclic garbage collector off inside the block (as it was after it).
+
+    For reading results: the millions of containers parsed set the collector off again and
+    again, each time walking every container made so far (a quarter of reading a 56 MB
+    results file), though none of them can be garbage yet.
+    """
+    enabled = gc.isenabled()
+    gc.disable()
     try:
-        document = json.loads(path.read_text(encoding="utf-8"))
+        yield
+    finally:
+        if enabled:
+            gc.enable()
+
+
+def _read_results(path: Path) -> Results:
+    try:
+        text = path.read_text(encoding="utf-8")
+        document, lines = _split_records(text)
+        if document is None:  # not as write_results lays it out: read whole
+            document = json.loads(text)
     except FileNotFoundError:
         raise FileNotFoundError(
             f"{path}: no results file; run `impact-harness run` (or `suite`) first") from None
@@ -264,9 +324,43 @@ def read_results(path: Path | str) -> Results:
         raise ValueError(f"{path}: results format version {document.get('format_version')!r}; "
                          f"this harness reads {FORMAT_VERSION}")
     records = [Record.from_dict(item) for item in document.get("records", [])]
-    return Results(records=records, provenance=document.get("provenance", {}),
-                   scenarios=document.get("scenarios", {}))
+    results = Results(records=records, provenance=document.get("provenance", {}),
+                      scenarios=document.get("scenarios", {}))
+    if lines is not None and len(lines) == len(records):
+        results._lines = (records, len(records), lines)
+    return results
+
+
+_DECODER = json.JSONDecoder()
+
+
+def _split_records(text: str) -> tuple[dict | None, list[str] | None]:
+    """A results file laid out by :func:`write_results`, read as ``(document, record lines)``
+    (the lines are what the report's figure digests hash); ``(None, None)`` for any other
+    layout. A line never holds a raw newline (JSON escapes it), so ``",\\n"`` only
+    separates record lines, and the header's top-level ``"records"`` key is the only place
+    the text between the header and the records can be."""
+    start = text.find(RECORDS_START)
+    if start < 0 or not text.endswith(RECORDS_END):
+        return None, None
+    try:
+        document = json.loads(text[:start] + "\n}")
+        # the records' list parsed where it stands (no copy of the text)
+        records, end = _DECODER.raw_decode(text, start + len(RECORDS_START) - 2)
+    except ValueError:
+        return None, None
+    if end != len(text) - len(RECORDS_END) + 3:  # after "\n ]": where the file ends it
+        return None, None
+    body = text[start + len(RECORDS_START):len(text) - len(RECORDS_END)]
+    if not isinstance(document, dict) or "records" in document:
+        return None, None
+    document["records"] = records
+    lines = body.split(",\n") if body else []
+    if len(lines) != len(records) or not all(line[:1] == "{" and line[-1:] == "}"
+                                             for line in lines):
+        lines = None  # records laid out otherwise (indented): read, but no lines
+    return document, lines
 
 
 __all__ = ["ANALYTIC", "DEFAULT_RESULTS", "FORMAT", "FORMAT_VERSION", "Record", "Results",
-           "check_writable", "read_results", "record_line", "write_results"]
+           "check_writable", "collector_paused", "read_results", "record_line", "write_results"]

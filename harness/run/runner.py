@@ -90,6 +90,7 @@ from harness.run.records import (
     FORMAT_VERSION,
     Record,
     check_writable,
+    collector_paused,
     record_line,
     write_results,
 )
@@ -505,17 +506,18 @@ def run(
     scenario_keys: dict[str, str | None] = {}
     stored_records: dict[str, tuple[list[Record], list[str]]] = {}
     stored_runs = 0  # engine runs of the scenarios read whole from the cache
-    for scenario in scenarios:
-        key = scenario_keys[scenario.name] = _scenario_key(
-            scenario, cache, loaded, missing, wanted_engines, presets, command_overrides,
-            history)
-        found = _stored_scenario_records(scenario, cache, key, presets,
-                                         len(_engines_of(scenario, wanted_engines)))
-        if found is not None:
-            stored_records[scenario.name] = found
-            runs = sum(record.source != ANALYTIC for record in found[0])
-            cache.hits += runs  # each an engine run the cache spared, as when read one by one
-            stored_runs += runs
+    with collector_paused():  # nothing read here is garbage yet
+        for scenario in scenarios:
+            key = scenario_keys[scenario.name] = _scenario_key(
+                scenario, cache, loaded, missing, wanted_engines, presets, command_overrides,
+                history)
+            found = _stored_scenario_records(scenario, cache, key, presets,
+                                             len(_engines_of(scenario, wanted_engines)))
+            if found is not None:
+                stored_records[scenario.name] = found
+                runs = sum(record.source != ANALYTIC for record in found[0])
+                cache.hits += runs  # each an engine run the cache spared, as read one by one
+                stored_runs += runs
 
     # 1. Engine tasks: build, look up in the cache.
     plan: list[tuple[Scenario, Any, str, str, dict]] = []  # (scenario, point, engine, preset, item)

@@ -1,0 +1,126 @@
+"""A figure is redrawn when, and only when, its inputs change: the digests of the records."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from harness import report
+from harness.report.figures import scenario_digests
+from harness.report.views import slug
+from harness.run import runner
+from harness.run.records import Record, Results, read_results, write_results
+from harness.scenarios import load_scenarios
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _record(scenario: str, departure: float, **changes) -> Record:
+    return Record(scenario=scenario, point={"index": 0, "label": "p"}, source="pymunk",
+                  preset="defaults", u_after=[1.0, 2.0, 3.0], departure={"poisson": departure},
+                  diagnostics={"engine_wall_time_s": 0.5, "history": {"normal_impulse": [1.0]}},
+                  **changes)
+
+
+def test_digests_of_results_read_and_in_memory_agree_and_ignore_times(tmp_path):
+    records = [_record("a", 0.1), _record("b", 0.2), _record("a", 0.3)]
+    path = write_results(tmp_path / "r.json", records, {}, {})
+    digests = scenario_digests(read_results(path))
+    assert set(digests) == {"a", "b"}
+    assert scenario_digests(Results(records)) == digests
+    timed = [_record("a", 0.1, wall_time_s=9.0, cached=True), _record("b", 0.2),
+             _record("a", 0.3, wall_time_s=0.001)]
+    timed[1].diagnostics["engine_wall_time_s"] = 7.0
+    assert scenario_digests(Results(timed)) == digests
+
+
+@pytest.mark.parametrize("change", [
+    lambda r: r.departure.update(poisson=0.11),
+    lambda r: r.u_after.__setitem__(1, 2.0000000001),
+    lambda r: r.diagnostics["history"]["normal_impulse"].append(2.0),
+    lambda r: setattr(r, "status", "flagged"),
+])
+def test_any_other_change_changes_its_scenarios_digest_only(change):
+    records = [_record("a", 0.1), _record("b", 0.2)]
+    before = scenario_digests(Results(records))
+    change(records[0])
+    after = scenario_digests(Results(records))
+    assert after["a"] != before["a"] and after["b"] == before["b"]
+
+
+@pytest.fixture(scope="module")
+def results_file(tmp_path_factory):
+    """Two quick scenarios run once (no cache), written as `run` writes them."""
+    out = tmp_path_factory.mktemp("results")
+    scenarios = load_scenarios(tags="quick")[:2]
+    outcome = runner.run(scenarios, cache=None, workers=1, log=None)
+    return write_results(out / "results.json", outcome.records, outcome.provenance,
+                         outcome.scenarios)
+
+
+def _rewrite(source: Path, target: Path, change) -> Path:
+    """``source`` with ``change(record dict)`` applied to every record, as `run` writes."""
+    results = read_results(source)
+    data = [record.as_dict() for record in results.records]
+    for item in data:
+        change(item)
+    return write_results(target, [Record.from_dict(item) for item in data],
+                         results.provenance, results.scenarios)
+
+
+def _times(out: Path) -> dict[str, int]:
+    return {p.name: p.stat().st_mtime_ns for p in (out / "figures").glob("*.png")}
+
+
+def test_a_changed_record_redraws_its_figures_and_the_headline_only(results_file, tmp_path):
+    out = tmp_path / "report"
+    report.write_report(read_results(results_file), out, workers=1)
+    drawn = _times(out)
+    first, second = read_results(results_file).scenario_names()
+    assert {"heatmap.png", f"impulse-{slug(first)}.png",
+            f"impulse-{slug(second)}.png"} <= set(drawn)
+
+    def new_times(item):
+        item["wall_time_s"] = 123.0
+        if item["source"] != "analytic":
+            item["cached"] = not item["cached"]
+            (item["diagnostics"] or {})["engine_wall_time_s"] = 4.5
+
+    retimed = _rewrite(results_file, tmp_path / "retimed.json", new_times)
+    report.write_report(read_results(retimed), out, workers=1)
+    assert _times(out) == drawn  # only times changed: nothing redrawn
+
+    def departs(item):
+        if item["scenario"] == first and item["source"] != "analytic" and item["departure"]:
+            item["departure"]["poisson"] = 0.5
+
+    changed = _rewrite(retimed, tmp_path / "changed.json", departs)
+    report.write_report(read_results(changed), out, workers=1)
+    after = _times(out)
+    redrawn = {name for name in drawn if after[name] != drawn[name]}
+    assert {"heatmap.png", f"impulse-{slug(first)}.png"} <= redrawn
+    assert not any(slug(second) in name for name in redrawn)
+    assert "impulse-legend.png" not in redrawn and "paper-table3.png" not in redrawn
+
+
+@pytest.mark.parametrize("many", [False, True])
+def test_a_report_with_nothing_to_draw_never_imports_matplotlib(results_file, tmp_path,
+                                                                monkeypatch, many):
+    threshold = 1 if many else report.MANY_SCENARIOS  # many: the aggregated page's heat table
+    monkeypatch.setattr(report, "MANY_SCENARIOS", threshold)
+    out = tmp_path / "report"
+    report.write_report(read_results(results_file), out, workers=1)
+    script = ("import sys\nfrom harness import report\n"
+              "from harness.run.records import read_results\n"
+              f"report.MANY_SCENARIOS = {threshold}\n"
+              f"report.write_report(read_results({str(results_file)!r}), {str(out)!r}, "
+              "workers=1)\n"
+              "print(json.dumps(sorted(m for m in sys.modules if m.split('.')[0] in "
+              "('matplotlib', 'PIL'))))\n")
+    done = subprocess.run([sys.executable, "-c", "import json\n" + script], cwd=ROOT,
+                          capture_output=True, text=True, check=True)
+    assert json.loads(done.stdout.strip().splitlines()[-1]) == []
