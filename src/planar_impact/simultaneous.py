@@ -368,19 +368,167 @@ def coherent_solutions(system: ContactSystem, law: str = "poisson", *,
     count = system.count
     tolerance = VELOCITY_TOLERANCE * system.speed_scale()
     found: list[MultiContactSolution] = []
+    for types, signs in _candidates(system, law, choices, coupling, tolerance):
+        mapping = _contact_map(system, law, types, signs, coupling)
+        impulses, converged, determinate = _fixed_point(system, mapping)
+        if not converged:
+            continue
+        solution = _check_combination(system, law, types, signs, impulses, determinate,
+                                      tolerance, coupling)
+        if solution is not None and not _already_found(found, solution, system):
+            found.append(solution)
+    return found
+
+
+def _combinations(choices, count):
+    """Every (types, signs) in enumeration order: type tuples outer, orientations inner;
+    a separating contact takes only ``+1`` (the orientation does not matter without impulse)."""
     for types in itertools.product(choices, repeat=count):
         for signs in itertools.product((1.0, -1.0), repeat=count):
-            if any(t == SEPARATING and s < 0 for t, s in zip(types, signs)):
-                continue  # the orientation does not matter without impulse
-            mapping = _contact_map(system, law, types, signs, coupling)
-            impulses, converged, determinate = _fixed_point(system, mapping)
-            if not converged:
-                continue
-            solution = _check_combination(system, law, types, signs, impulses, determinate,
-                                          tolerance, coupling)
-            if solution is not None and not _already_found(found, solution, system):
-                found.append(solution)
-    return found
+            if not any(t == SEPARATING and s < 0 for t, s in zip(types, signs)):
+                yield types, signs
+
+
+def _candidates(system, law, choices, coupling, tolerance):
+    """The combinations that :func:`_check_combination` could accept, in enumeration order.
+
+    Every combination it could accept is kept (so the solutions, solved and checked by the
+    same code as before, are the same bit for bit); most of the others are dropped unsolved:
+
+    * ``coupling="none"``: each contact sees its own ``v^A(i)``, so the orientation test
+      (``_frame_sign``) and Table 1 at ``v^A(i)`` leave one (type, sign) per contact (plus
+      separating, where allowed): one candidate instead of ``(2·types)^m``.
+    * ``coupling="effective"`` with Poisson or Newton: the map is affine, and one batched
+      linear solve per combination screens it (:func:`_affine_screen`).
+    """
+    combinations = list(_combinations(choices, system.count))
+    if coupling == "none":
+        own = []
+        for i in range(system.count):
+            _mnn, mnt, _mtt = system.single_terms(i)
+            vn, vt = system.effective_approach(i, np.zeros(2 * system.count))  # as checked
+            sign = _frame_sign(vt, mnt)
+            law_out = _law_at(system, law, i, vn, vt, sign)
+            pairs = {(SEPARATING, 1.0)}
+            if law_out is not None:
+                pairs.add((int(law_out["collision_type"]), sign))
+            own.append(pairs)
+        return [(types, signs) for types, signs in combinations
+                if all((t, s) in own[i] for i, (t, s) in enumerate(zip(types, signs)))]
+    if law in ("poisson", "newton") and system.count > 1:
+        keep = _affine_screen(system, law, combinations, tolerance)
+        return [combination for combination, kept in zip(combinations, keep) if kept]
+    return combinations
+
+
+#: Screening bounds of :func:`_affine_screen`. A combination whose matrix ``1 − K`` has
+#: ``‖(1 − K)⁻¹‖₂`` above ``SCREEN_CONDITION`` goes to the full path unscreened. Below it, the
+#: fixed point the full path accepts (residual ≤ FIXED_POINT_TOLERANCE of the bound) lies
+#: within ``SCREEN_CONDITION · FIXED_POINT_TOLERANCE = 1e-6`` of the bound from the screen's
+#: solution; ``SCREEN_MARGIN`` (1e-4) leaves a factor 100 on top of that.
+SCREEN_CONDITION = 1e4
+SCREEN_MARGIN = 1e-4
+
+
+def _affine_pieces(system, law, choices):
+    """Per contact ``i`` and (type, sign): ``(c, G)`` with the forced impulses of
+    :func:`_contact_map` equal to ``c + G (v − v^A(i))`` at effective approach ``v``.
+
+    Poisson's closed forms ((26), (29), (36), (44), (49)) and Newton's two phases ((A30),
+    (A58)) are affine in ``(v_n, v_t)`` with the contact's terms fixed, so ``G`` is the
+    difference quotient over one whole approach speed: exact up to rounding, no truncation.
+    """
+    step = system.speed_scale()
+    pieces = {}
+    for i in range(system.count):
+        mnn, mnt, mtt = system.single_terms(i)
+        vn0, vt0 = float(system.approach[2 * i]), float(system.approach[2 * i + 1])
+        for ctype in choices:
+            for sign in (1.0, -1.0):
+                if ctype == SEPARATING:
+                    pieces[i, ctype, sign] = (np.zeros(2), np.zeros((2, 2)))
+                    continue
+                values = []
+                for vn, vt in ((vn0, vt0), (vn0 + step, vt0), (vn0, vt0 + step)):
+                    normal, tangential = _forced_impulses(
+                        law, ctype, mnn, sign * mnt, mtt, vn, sign * vt, system.mu[i],
+                        system.e[i], system.deltas[i])
+                    values.append((float(normal), sign * float(tangential)))
+                base = np.array(values[0])
+                slope = np.column_stack([(np.array(values[1]) - base) / step,
+                                         (np.array(values[2]) - base) / step])
+                pieces[i, ctype, sign] = (base, slope)
+    return pieces
+
+
+def _affine_screen(system, law, combinations, tolerance):
+    """For the effective reading with an affine law: which combinations may be coherent.
+
+    Contact ``i``'s impulses are ``c_i + G_i Σ_{j≠i} W_ij I^(j)`` (its type's formulas at the
+    effective approach of (75)), so a combination's fixed point solves ``(1 − K) I = c`` with
+    ``K_ij = G_i W_ij`` (``j ≠ i``), one batched solve for all combinations. A combination is
+    dropped only when that solution fails a necessary test of :func:`_check_combination` by
+    more than ``SCREEN_MARGIN`` of its scale: the orientation (``sign·v_t ≥ 0`` at the
+    effective approach), an approaching contact (``v_n < 0``), ``I_n > 0``, ``v_n^S ≥ 0``
+    and the type's slip, (A22)/(A23). Singular, ill-conditioned or non-finite systems are
+    kept. Returns a boolean per combination.
+    """
+    count, size = system.count, 2 * system.count
+    choices = sorted({t for types, _ in combinations for t in types})
+    pieces = _affine_pieces(system, law, choices)
+    number = len(combinations)
+    offsets = np.zeros((number, size))
+    slopes = np.zeros((number, size, size))  # block-diagonal G
+    for k, (types, signs) in enumerate(combinations):
+        for i, (ctype, sign) in enumerate(zip(types, signs)):
+            base, slope = pieces[i, ctype, sign]
+            offsets[k, 2 * i:2 * i + 2] = base
+            slopes[k, 2 * i:2 * i + 2, 2 * i:2 * i + 2] = slope
+    coupling = system.delassus.copy()
+    for i in range(count):
+        coupling[2 * i:2 * i + 2, 2 * i:2 * i + 2] = 0.0  # only the other contacts, (75)
+    matrices = np.eye(size) - slopes @ coupling
+    keep = np.ones(number, dtype=bool)
+    finite = np.isfinite(matrices).all(axis=(1, 2)) & np.isfinite(offsets).all(axis=1)
+    if not finite.any():
+        return keep
+    with np.errstate(all="ignore"):
+        smallest = np.linalg.svd(matrices[finite], compute_uv=False)[:, -1]
+        regular = smallest * SCREEN_CONDITION >= 1.0
+        index = np.flatnonzero(finite)[regular]
+        if index.size == 0:
+            return keep
+        impulses = np.linalg.solve(matrices[index], offsets[index][..., None])[..., 0]
+        effective = system.approach + impulses @ coupling.T  # v^A(i) + Σ_{j≠i} W_ij I^(j)
+        after = system.approach + impulses @ system.delassus.T  # v^S, (A22)/(A23) with (75)
+    bound = system.impulse_scale() + np.max(np.abs(impulses), axis=1)
+    impulse_margin = SCREEN_MARGIN * bound
+    row_sum = float(np.max(np.sum(np.abs(system.delassus), axis=1)))
+    speed_margin = tolerance + row_sum * impulse_margin
+    passes = np.isfinite(impulses).all(axis=1)
+    kinds = {1: "stick", 2: "reverse", 3: "forward"} if law == "newton" else {
+        1: "stick", 2: "stick", 3: "reverse", 4: "reverse", 5: "forward"}
+    for position, k in enumerate(index):
+        types, signs = combinations[k]
+        margin_i, margin_v = impulse_margin[position], speed_margin[position]
+        for i, (ctype, sign) in enumerate(zip(types, signs)):
+            n, t = 2 * i, 2 * i + 1
+            if ctype == SEPARATING:
+                ok = after[position, n] >= -margin_v
+            else:
+                slip = sign * after[position, t]
+                kind = kinds[ctype]
+                ok = (sign * effective[position, t] >= -margin_v
+                      and effective[position, n] < margin_v
+                      and impulses[position, n] > -margin_i
+                      and after[position, n] >= -margin_v
+                      and (abs(slip) <= margin_v if kind == "stick"
+                           else slip <= margin_v if kind == "reverse" else slip >= -margin_v))
+            if not ok:
+                passes[position] = False
+                break
+    keep[index] = passes | ~np.isfinite(impulses).all(axis=1)
+    return keep
 
 
 def _check_combination(system, law, types, signs, impulses, determinate, tolerance,
