@@ -415,10 +415,13 @@ def _candidates(system, law, choices, coupling, tolerance):
             own.append(pairs)
         return [(types, signs) for types, signs in combinations
                 if all((t, s) in own[i] for i, (t, s) in enumerate(zip(types, signs)))]
-    if law in ("poisson", "newton") and system.count > 1:
+    if system.count == 1:
+        return combinations
+    if law in ("poisson", "newton"):
         keep = _affine_screen(system, law, combinations, tolerance)
-        return [combination for combination, kept in zip(combinations, keep) if kept]
-    return combinations
+    else:
+        keep = _iterated_screen(system, law, combinations, tolerance)
+    return [combination for combination, kept in zip(combinations, keep) if kept]
 
 
 #: Screening bounds of :func:`_affine_screen`. A combination whose matrix ``1 − K`` has
@@ -428,6 +431,9 @@ def _candidates(system, law, choices, coupling, tolerance):
 #: solution; ``SCREEN_MARGIN`` (1e-4) leaves a factor 100 on top of that.
 SCREEN_CONDITION = 1e4
 SCREEN_MARGIN = 1e-4
+#: The paper's Stronge: an iteration that went non-finite is still solved by the full path if
+#: its residual had come within this fraction of the bound (:func:`_iterated_screen`).
+BROKEN_KEEP = 1e-2
 
 
 def _affine_pieces(system, law, choices):
@@ -499,17 +505,33 @@ def _affine_screen(system, law, combinations, tolerance):
         if index.size == 0:
             return keep
         impulses = np.linalg.solve(matrices[index], offsets[index][..., None])[..., 0]
-        effective = system.approach + impulses @ coupling.T  # v^A(i) + Σ_{j≠i} W_ij I^(j)
-        after = system.approach + impulses @ system.delassus.T  # v^S, (A22)/(A23) with (75)
+    finite_ends = np.isfinite(impulses).all(axis=1)
+    keep[index[finite_ends]] = _coherent_within_margin(
+        system, law, [combinations[k] for k in index[finite_ends]], impulses[finite_ends],
+        tolerance)
+    return keep
+
+
+def _coherent_within_margin(system, law, combinations, impulses, tolerance):
+    """Whether each combination, at its (approximate, finite) fixed point ``impulses``,
+    passes the necessary tests of :func:`_check_combination` and :func:`_paper_coherent`
+    widened by ``SCREEN_MARGIN``: the orientation (``sign·v_t ≥ 0`` at the effective
+    approach), an approaching contact (``v_n < 0``), ``I_n > 0``, ``v_n^S ≥ 0`` and the
+    type's slip, with ``v^S`` by (A22)/(A23) and (75)."""
+    count = system.count
+    coupling = system.delassus.copy()
+    for i in range(count):
+        coupling[2 * i:2 * i + 2, 2 * i:2 * i + 2] = 0.0
+    effective = system.approach + impulses @ coupling.T  # v^A(i) + Σ_{j≠i} W_ij I^(j)
+    after = system.approach + impulses @ system.delassus.T  # v^S
     bound = system.impulse_scale() + np.max(np.abs(impulses), axis=1)
     impulse_margin = SCREEN_MARGIN * bound
     row_sum = float(np.max(np.sum(np.abs(system.delassus), axis=1)))
     speed_margin = tolerance + row_sum * impulse_margin
-    passes = np.isfinite(impulses).all(axis=1)
+    passes = np.ones(len(combinations), dtype=bool)
     kinds = {1: "stick", 2: "reverse", 3: "forward"} if law == "newton" else {
         1: "stick", 2: "stick", 3: "reverse", 4: "reverse", 5: "forward"}
-    for position, k in enumerate(index):
-        types, signs = combinations[k]
+    for position, (types, signs) in enumerate(combinations):
         margin_i, margin_v = impulse_margin[position], speed_margin[position]
         for i, (ctype, sign) in enumerate(zip(types, signs)):
             n, t = 2 * i, 2 * i + 1
@@ -527,7 +549,110 @@ def _affine_screen(system, law, combinations, tolerance):
             if not ok:
                 passes[position] = False
                 break
-    keep[index] = passes | ~np.isfinite(impulses).all(axis=1)
+    return passes
+
+
+def _batched_map(system, law, types, signs):
+    """:func:`_contact_map` (effective reading) for many combinations at once: rows of
+    ``types``, ``signs`` (``(N, m)``) map rows of impulses ``(N, 2m)``, with the same
+    operations in the same order per element (the laws' kernels take arrays)."""
+    count = system.count
+    separating = types == SEPARATING
+    safe_types = np.where(separating, 1, types)
+
+    def apply(impulses, rows):
+        out = np.zeros_like(impulses)
+        for i in range(count):
+            mnn, mnt, mtt = system.single_terms(i)
+            vn = np.full(len(impulses), float(system.approach[2 * i]))
+            vt = np.full(len(impulses), float(system.approach[2 * i + 1]))
+            for j in range(count):  # v^A(i) + Σ_{j≠i} W_ij I^(j), as effective_approach
+                if j == i:
+                    continue
+                block = system.delassus[2 * i:2 * i + 2, 2 * j:2 * j + 2]
+                vn = vn + (block[0, 0] * impulses[:, 2 * j] + block[0, 1] * impulses[:, 2 * j + 1])
+                vt = vt + (block[1, 0] * impulses[:, 2 * j] + block[1, 1] * impulses[:, 2 * j + 1])
+            sign = signs[rows, i]
+            with np.errstate(all="ignore"):
+                terms = laws.ContactTerms(np.float64(mnn), sign * mnt, np.float64(mtt), vn,
+                                          sign * vt, np.float64(system.mu[i]),
+                                          np.float64(system.deltas[i]))
+                ctype = safe_types[rows, i]
+                e_i = laws.stronge_paper_restitution(terms, np.float64(system.e[i]), ctype)
+                normal, tangential = laws.poisson_impulses(terms, e_i, ctype)
+            out[:, 2 * i] = np.where(separating[rows, i], 0.0, normal)
+            out[:, 2 * i + 1] = np.where(separating[rows, i], 0.0, sign * tangential)
+        return out
+
+    return apply
+
+
+def _iterated_screen(system, law, combinations, tolerance, max_iterations=30):
+    """For the effective reading with the paper's Stronge (not affine): which combinations
+    may be coherent.
+
+    :func:`_fixed_point`'s Newton iteration (same start, steps and stopping rules, the
+    least-squares step by a batched pseudo-inverse with the same cut-off) runs on all
+    combinations at once. A combination is dropped when its iteration ends with a residual
+    above ``SCREEN_MARGIN`` of the bound (far from any fixed point the full path would
+    accept at FIXED_POINT_TOLERANCE), or at a point that fails a necessary test of
+    :func:`_check_combination` by more than ``SCREEN_MARGIN`` (as in :func:`_affine_screen`).
+    Non-finite ends are kept. Returns a boolean per combination.
+    """
+    size = 2 * system.count
+    types = np.array([t for t, _ in combinations], dtype=np.int64)
+    signs = np.array([s for _, s in combinations], dtype=float)
+    mapping = _batched_map(system, law, types, signs)
+    number = len(combinations)
+    scale = system.impulse_scale()
+    impulses = mapping(np.zeros((number, size)), np.arange(number))
+    starts_finite = np.isfinite(impulses).all(axis=1)
+    running = starts_finite.copy()
+    residual_size = np.full(number, np.inf)
+    closest = np.full(number, np.inf)  # smallest residual / bound along the iteration
+    previous = np.full(number, np.inf)
+    with np.errstate(all="ignore"):
+        for iteration in range(max_iterations + 1):
+            running &= np.isfinite(impulses).all(axis=1)
+            if not running.any():
+                break
+            rows = np.flatnonzero(running)
+            current = impulses[rows]
+            residual = current - mapping(current, rows)
+            size_now = np.max(np.abs(residual), axis=1)
+            residual_size[rows] = size_now
+            bound = scale + np.max(np.abs(current), axis=1)
+            closest[rows] = np.fmin(closest[rows], size_now / bound)
+            stops = (size_now <= 1e-15 * bound) | (size_now > 0.5 * previous[rows])
+            previous[rows] = size_now
+            running[rows[stops]] = False
+            go = ~stops & np.isfinite(size_now)
+            rows, current, residual = rows[go], current[go], residual[go]
+            if rows.size == 0 or iteration == max_iterations:
+                break
+            step = 1e-6 * (scale + np.max(np.abs(current), axis=1))
+            jacobian = np.broadcast_to(np.eye(size), (rows.size, size, size)).copy()
+            for k in range(size):
+                shift = np.zeros((rows.size, size))
+                shift[:, k] = step
+                jacobian[:, :, k] -= ((mapping(current + shift, rows)
+                                       - mapping(current - shift, rows)) / (2 * step)[:, None])
+            good = np.isfinite(jacobian).all(axis=(1, 2))
+            running[rows[~good]] = False
+            rows, current, residual = rows[good], current[good], residual[good]
+            correction = np.linalg.pinv(jacobian[good], rcond=1e-9) @ -residual[..., None]
+            impulses[rows] = current + correction[..., 0]
+    # A non-finite map anywhere on the way makes _fixed_point give up. Its start, map(0), is
+    # the same arithmetic on the same floats here, so those rows are dropped; rows that went
+    # non-finite later are kept if they had come near a fixed point (the two iterations'
+    # rounding might part there).
+    broke = starts_finite & ~(np.isfinite(impulses).all(axis=1) & np.isfinite(residual_size))
+    keep = broke & (closest <= BROKEN_KEEP)
+    bound = scale + np.max(np.abs(impulses), axis=1)
+    near = residual_size <= SCREEN_MARGIN * bound
+    candidates = np.flatnonzero(near & starts_finite & ~broke)
+    keep[candidates] = _coherent_within_margin(system, law, [combinations[k] for k in candidates],
+                                               impulses[candidates], tolerance)
     return keep
 
 
