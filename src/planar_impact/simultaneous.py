@@ -365,7 +365,6 @@ def coherent_solutions(system: ContactSystem, law: str = "poisson", *,
     if coupling not in COUPLINGS:
         raise ImpactInputError(f"coupling: {coupling!r}; allowed: {', '.join(COUPLINGS)}")
     choices = ((SEPARATING,) if allow_separating else ()) + TYPE_LAWS[law]
-    count = system.count
     tolerance = VELOCITY_TOLERANCE * system.speed_scale()
     found: list[MultiContactSolution] = []
     for types, signs in _candidates(system, law, choices, coupling, tolerance):
