@@ -430,6 +430,13 @@ def _candidates(system, law, choices, coupling, tolerance):
 #: solution; ``SCREEN_MARGIN`` (1e-4) leaves a factor 100 on top of that.
 SCREEN_CONDITION = 1e4
 SCREEN_MARGIN = 1e-4
+#: Singular ``1 − K`` (two contacts of one body: W has rank 3): singular values below
+#: ``SINGULAR_CUT`` of the largest are its null space; the rest must be at least
+#: ``SCREEN_SINGULAR_CONDITION`` for the screen, because the old path's pseudo-inverse, of a
+#: Jacobian blurred by ~1e-10, then differs from the exact one by ≲ 3e-10/0.01² = 3e-6 ≪
+#: SCREEN_MARGIN. Values in between are ambiguous and the combination is kept unscreened.
+SINGULAR_CUT = 1e-12
+SCREEN_SINGULAR_CONDITION = 1e-2
 #: The paper's Stronge: an iteration that went non-finite is still solved by the full path if
 #: its residual had come within this fraction of the bound (:func:`_iterated_screen`).
 BROKEN_KEEP = 1e-2
@@ -497,13 +504,31 @@ def _affine_screen(system, law, combinations, tolerance):
     finite = np.isfinite(matrices).all(axis=(1, 2)) & np.isfinite(offsets).all(axis=1)
     if not finite.any():
         return keep
+    index = np.flatnonzero(finite)
+    matrices, offsets = matrices[index], offsets[index]
     with np.errstate(all="ignore"):
-        smallest = np.linalg.svd(matrices[finite], compute_uv=False)[:, -1]
-        regular = smallest * SCREEN_CONDITION >= 1.0
-        index = np.flatnonzero(finite)[regular]
-        if index.size == 0:
-            return keep
-        impulses = np.linalg.solve(matrices[index], offsets[index][..., None])[..., 0]
+        left, values, right = np.linalg.svd(matrices)
+        # Singular values below SINGULAR_CUT of the largest are the null space (the old
+        # path's lstsq cuts at 1e-9; its difference-quotient Jacobian blurs them to ~1e-10).
+        # A row is screened when every other singular value is clearly regular.
+        null = values < SINGULAR_CUT * values[:, :1]
+        weakest_kept = np.min(np.where(null, np.inf, values), axis=1)
+        screened = weakest_kept >= np.where(null.any(axis=1), SCREEN_SINGULAR_CONDITION,
+                                            1.0 / SCREEN_CONDITION)
+        # _fixed_point's first step from I_0 = c: I_1 = c + (1 − K)⁺ (K c), with the
+        # pseudo-inverse's cut; for a regular matrix that is (1 − K)⁻¹ c, the fixed point.
+        inverse_values = np.where(null, 0.0, 1.0 / values)
+        pushed = offsets - np.einsum("kij,kj->ki", matrices, offsets)  # K c = c − (1 − K) c
+        impulses = offsets + np.einsum("kji,kj,klj,kl->ki", right, inverse_values, left,
+                                       pushed)
+        residual = np.einsum("kij,kj->ki", matrices, impulses) - offsets
+    bound = system.impulse_scale() + np.max(np.abs(impulses), axis=1)
+    # No fixed point: the least-squares residual, which no iterate of the old path beats,
+    # stays far above its acceptance (FIXED_POINT_TOLERANCE of the bound).
+    consistent = np.max(np.abs(residual), axis=1) <= SCREEN_MARGIN * bound
+    index, impulses = index[screened], impulses[screened]
+    keep[index[~consistent[screened]]] = False
+    index, impulses = index[consistent[screened]], impulses[consistent[screened]]
     finite_ends = np.isfinite(impulses).all(axis=1)
     keep[index[finite_ends]] = _coherent_within_margin(
         system, law, [combinations[k] for k in index[finite_ends]], impulses[finite_ends],
@@ -548,7 +573,47 @@ def _coherent_within_margin(system, law, combinations, impulses, tolerance):
             if not ok:
                 passes[position] = False
                 break
+    rows = np.flatnonzero(passes)
+    for i in range(count):
+        if rows.size:
+            own = _type_within_margin(system, law, i, [combinations[k] for k in rows],
+                                      effective[rows, 2 * i:2 * i + 2], speed_margin[rows])
+            passes[rows[~own]] = False
+            rows = rows[own]
     return passes
+
+
+def _type_within_margin(system, law, i, combinations, effective, margin):
+    """Whether Table 1 (the law's own type, as :func:`_law_at` finds it) could give contact
+    ``i`` its type of the combination anywhere within ``margin`` of the effective approach.
+
+    The type depends on the direction of the approach only (every law's formulas are
+    homogeneous of degree 1 in ``(v_n, v_t)``), through ``α = v_t/|v_n|`` (A34) in ordered
+    regions (Table 1 with (53)–(57); Newton's (A58)); ``α`` over the box of half-width
+    ``margin`` is extreme at its corners. So a contact is rejected only when the centre and
+    the four corners, all approaching and on the combination's side of ``v_t = 0``, agree on
+    one other type. Separating contacts pass."""
+    own = np.ones(len(combinations), dtype=bool)
+    types = np.array([types[i] for types, _ in combinations])
+    signs = np.array([signs[i] for _, signs in combinations])
+    offsets = np.array([(0.0, 0.0), (-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0)])
+    vn = effective[:, 0][:, None] + offsets[:, 0] * margin[:, None]
+    vt = signs[:, None] * (effective[:, 1][:, None] + offsets[:, 1] * margin[:, None])
+    clear = (types != SEPARATING) & (vn < 0).all(axis=1) & (vt >= 0).all(axis=1)
+    if not clear.any():
+        return own
+    mnn, mnt, mtt = system.single_terms(i)
+    rows = np.flatnonzero(clear)
+    shape = (rows.size, len(offsets))
+    with np.errstate(all="ignore"):
+        out = solver.contact_space_solution(
+            law, np.full(shape, mnn), np.broadcast_to(signs[rows, None] * mnt, shape).copy(),
+            np.full(shape, mtt), vn[rows], vt[rows], np.full(shape, system.mu[i]),
+            np.full(shape, system.e[i]), delta=np.full(shape, system.deltas[i]))
+    found = np.asarray(out["collision_type"], dtype=np.int64).reshape(shape)
+    agree = (found == found[:, :1]).all(axis=1) & (found[:, 0] != types[rows])
+    own[rows[agree]] = False
+    return own
 
 
 def _batched_map(system, law, types, signs):
