@@ -5,8 +5,8 @@
 and Newton, a batched Newton iteration for the paper's Stronge); the combinations it keeps
 are solved and checked by the same code as before. ``unscreened_coherent_solutions`` below
 is the implementation before the screen, kept as the reference: both must return the same
-solutions in the same order with the same floats. Thousands of problems:
-``python tests/theory/test_simultaneous_screen.py PROBLEMS SEED``.
+solutions in the same order with the same floats. Thousands of problems (and half as many
+random flat landings): ``python tests/theory/test_simultaneous_screen.py PROBLEMS SEED``.
 """
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ import sys
 import numpy as np
 import pytest
 
+from harness.reference import flat_faces
 from harness.run import references
 from harness.scenarios import load_scenario
 from planar_impact import simultaneous as sim
@@ -126,6 +127,27 @@ def test_library_flat_and_tilted_points_match_the_unscreened_path():
     assert solutions > 0
 
 
+def compare_flat(problems: int, seed: int) -> tuple[int, list[str]]:
+    """``(solutions, failures)`` over random flat landings (harness.reference.flat_faces:
+    a box or a rod lying flat, both ends on the ground), every law and reading."""
+    rng = np.random.default_rng(seed)
+    solutions, failures = 0, []
+    for k in range(problems):
+        system = flat_faces.flat_system(flat_faces.random_flat_scene(rng))
+        for law in TYPE_LAWS:
+            for coupling in sim.COUPLINGS:
+                solutions += len(sim.coherent_solutions(system, law, coupling=coupling))
+                failures += [f"flat {k} {law} {coupling}: {d}"
+                             for d in differences(system, law, coupling)]
+    return solutions, failures
+
+
+def test_random_flat_landings_match_the_unscreened_path():
+    solutions, failures = compare_flat(12, 0)
+    assert failures == []
+    assert solutions > 0
+
+
 def test_the_screen_drops_most_combinations():
     # The point of the screen: a handful of the 100 Poisson combinations reach the solve.
     rng = np.random.default_rng(5)
@@ -141,6 +163,8 @@ def test_the_screen_drops_most_combinations():
 
 if __name__ == "__main__":  # python tests/theory/test_simultaneous_screen.py PROBLEMS SEED
     count, found, failed = compare_random(int(sys.argv[1]), int(sys.argv[2]))
-    print(f"{count} cases, {found} solutions, {len(failed)} differences")
-    for line in failed:
+    print(f"random: {count} cases, {found} solutions, {len(failed)} differences")
+    flat_found, flat_failed = compare_flat(int(sys.argv[1]) // 2, int(sys.argv[2]))
+    print(f"flat landings: {flat_found} solutions, {len(flat_failed)} differences")
+    for line in failed + flat_failed:
         print(line)
