@@ -355,6 +355,11 @@ def coherent_solutions(system: ContactSystem, law: str = "poisson", *,
     ``allow_separating`` adds type 0 (no impulse, needs ``v_n^S ≥ 0``) at each contact; the
     paper requires ``I_n > 0`` everywhere, so it is off by default.
 
+    Combinations that cannot pass are dropped before their solve (:func:`_candidates`: the
+    literal reading's one candidate; batched screens with margins for the effective one); the
+    rest are solved and checked as without the screen, so the answer is the same bit for bit
+    (tests/theory/test_simultaneous_screen.py compares with the unscreened path).
+
     Returns the coherent solutions, distinct impulses only (combinations that coincide, as
     across a type boundary where the closed forms agree, are listed once: the first in
     enumeration order), sorted by type tuple. For ``m = 1`` the list is the single answer of
