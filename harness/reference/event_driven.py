@@ -83,9 +83,14 @@ def _first_contact(points_local, radius, position, angle, velocity, omega, horiz
     samples = max(64, math.ceil(abs(omega) * horizon / 0.05) + 1)
     times = np.linspace(0.0, horizon, samples + 1)
     best_time, best_feature = None, None
+    # _height's terms, the turn and the lift shared by every feature: the same operations
+    # in the same order on the same floats (Python floats: numpy scalars are slower).
+    instants = times.tolist()
+    turns = [(math.cos(angle + omega * t), math.sin(angle + omega * t)) for t in instants]
+    lifts = [position[1] + velocity[1] * t for t in instants]
     for k in range(len(points_local)):
-        heights = [_height(points_local, radius, position, angle, velocity, omega, t, k)
-                   for t in times]
+        x, y = (float(v) for v in points_local[k])
+        heights = [lift + (s * x + c * y) - radius for lift, (c, s) in zip(lifts, turns)]
         for a in range(samples):
             low, high = times[a], times[a + 1]
             h_low, h_high = heights[a], heights[a + 1]

@@ -355,6 +355,11 @@ def coherent_solutions(system: ContactSystem, law: str = "poisson", *,
     ``allow_separating`` adds type 0 (no impulse, needs ``v_n^S ≥ 0``) at each contact; the
     paper requires ``I_n > 0`` everywhere, so it is off by default.
 
+    Combinations that cannot pass are dropped before their solve (:func:`_candidates`: the
+    literal reading's one candidate; batched screens with margins for the effective one); the
+    rest are solved and checked as without the screen, so the answer is the same bit for bit
+    (tests/theory/test_simultaneous_screen.py compares with the unscreened path).
+
     Returns the coherent solutions, distinct impulses only (combinations that coincide, as
     across a type boundary where the closed forms agree, are listed once: the first in
     enumeration order), sorted by type tuple. For ``m = 1`` the list is the single answer of
@@ -365,22 +370,359 @@ def coherent_solutions(system: ContactSystem, law: str = "poisson", *,
     if coupling not in COUPLINGS:
         raise ImpactInputError(f"coupling: {coupling!r}; allowed: {', '.join(COUPLINGS)}")
     choices = ((SEPARATING,) if allow_separating else ()) + TYPE_LAWS[law]
-    count = system.count
     tolerance = VELOCITY_TOLERANCE * system.speed_scale()
     found: list[MultiContactSolution] = []
+    for types, signs in _candidates(system, law, choices, coupling, tolerance):
+        mapping = _contact_map(system, law, types, signs, coupling)
+        impulses, converged, determinate = _fixed_point(system, mapping)
+        if not converged:
+            continue
+        solution = _check_combination(system, law, types, signs, impulses, determinate,
+                                      tolerance, coupling)
+        if solution is not None and not _already_found(found, solution, system):
+            found.append(solution)
+    return found
+
+
+def _combinations(choices, count):
+    """Every (types, signs) in enumeration order: type tuples outer, orientations inner;
+    a separating contact takes only ``+1`` (the orientation does not matter without impulse)."""
     for types in itertools.product(choices, repeat=count):
         for signs in itertools.product((1.0, -1.0), repeat=count):
-            if any(t == SEPARATING and s < 0 for t, s in zip(types, signs)):
-                continue  # the orientation does not matter without impulse
-            mapping = _contact_map(system, law, types, signs, coupling)
-            impulses, converged, determinate = _fixed_point(system, mapping)
-            if not converged:
-                continue
-            solution = _check_combination(system, law, types, signs, impulses, determinate,
-                                          tolerance, coupling)
-            if solution is not None and not _already_found(found, solution, system):
-                found.append(solution)
-    return found
+            if not any(t == SEPARATING and s < 0 for t, s in zip(types, signs)):
+                yield types, signs
+
+
+def _candidates(system, law, choices, coupling, tolerance):
+    """The combinations that :func:`_check_combination` could accept, in enumeration order.
+
+    Every combination it could accept is kept (so the solutions, solved and checked by the
+    same code as before, are the same bit for bit); most of the others are dropped unsolved:
+
+    * ``coupling="none"``: each contact sees its own ``v^A(i)``, so the orientation test
+      (``_frame_sign``) and Table 1 at ``v^A(i)`` leave one (type, sign) per contact (plus
+      separating, where allowed): one candidate instead of ``(2·types)^m``.
+    * ``coupling="effective"`` with Poisson or Newton: the map is affine, and one batched
+      linear solve per combination screens it (:func:`_affine_screen`).
+    """
+    combinations = list(_combinations(choices, system.count))
+    if coupling == "none":
+        own = []
+        for i in range(system.count):
+            _mnn, mnt, _mtt = system.single_terms(i)
+            vn, vt = system.effective_approach(i, np.zeros(2 * system.count))  # as checked
+            sign = _frame_sign(vt, mnt)
+            law_out = _law_at(system, law, i, vn, vt, sign)
+            pairs = {(SEPARATING, 1.0)}
+            if law_out is not None:
+                pairs.add((int(law_out["collision_type"]), sign))
+            own.append(pairs)
+        return [(types, signs) for types, signs in combinations
+                if all((t, s) in own[i] for i, (t, s) in enumerate(zip(types, signs)))]
+    if system.count == 1:
+        return combinations
+    if law in ("poisson", "newton"):
+        keep = _affine_screen(system, law, combinations, tolerance)
+    else:
+        keep = _iterated_screen(system, law, combinations, tolerance)
+    return [combination for combination, kept in zip(combinations, keep) if kept]
+
+
+#: Screening bounds of :func:`_affine_screen`. A combination whose matrix ``1 − K`` has
+#: ``‖(1 − K)⁻¹‖₂`` above ``SCREEN_CONDITION`` goes to the full path unscreened. Below it, the
+#: fixed point the full path accepts (residual ≤ FIXED_POINT_TOLERANCE of the bound) lies
+#: within ``SCREEN_CONDITION · FIXED_POINT_TOLERANCE = 1e-6`` of the bound from the screen's
+#: solution; ``SCREEN_MARGIN`` (1e-4) leaves a factor 100 on top of that.
+SCREEN_CONDITION = 1e4
+SCREEN_MARGIN = 1e-4
+#: Singular ``1 − K`` (two contacts of one body: W has rank 3): singular values below
+#: ``SINGULAR_CUT`` of the largest are its null space; the rest must be at least
+#: ``SCREEN_SINGULAR_CONDITION`` for the screen, because the old path's pseudo-inverse, of a
+#: Jacobian blurred by ~1e-10, then differs from the exact one by ≲ 3e-10/0.01² = 3e-6 ≪
+#: SCREEN_MARGIN. Values in between are ambiguous and the combination is kept unscreened.
+SINGULAR_CUT = 1e-12
+SCREEN_SINGULAR_CONDITION = 1e-2
+#: The paper's Stronge: an iteration that went non-finite is still solved by the full path if
+#: its residual had come within this fraction of the bound (:func:`_iterated_screen`).
+BROKEN_KEEP = 1e-2
+
+
+def _affine_pieces(system, law, choices):
+    """Per contact ``i`` and (type, sign): ``(c, G)`` with the forced impulses of
+    :func:`_contact_map` equal to ``c + G (v − v^A(i))`` at effective approach ``v``.
+
+    Poisson's closed forms ((26), (29), (36), (44), (49)) and Newton's two phases ((A30),
+    (A58)) are affine in ``(v_n, v_t)`` with the contact's terms fixed, so ``G`` is the
+    difference quotient over one whole approach speed: exact up to rounding, no truncation.
+    """
+    step = system.speed_scale()
+    pieces = {}
+    for i in range(system.count):
+        mnn, mnt, mtt = system.single_terms(i)
+        vn0, vt0 = float(system.approach[2 * i]), float(system.approach[2 * i + 1])
+        for ctype in choices:
+            for sign in (1.0, -1.0):
+                if ctype == SEPARATING:
+                    pieces[i, ctype, sign] = (np.zeros(2), np.zeros((2, 2)))
+                    continue
+                values = []
+                for vn, vt in ((vn0, vt0), (vn0 + step, vt0), (vn0, vt0 + step)):
+                    normal, tangential = _forced_impulses(
+                        law, ctype, mnn, sign * mnt, mtt, vn, sign * vt, system.mu[i],
+                        system.e[i], system.deltas[i])
+                    values.append((float(normal), sign * float(tangential)))
+                base = np.array(values[0])
+                slope = np.column_stack([(np.array(values[1]) - base) / step,
+                                         (np.array(values[2]) - base) / step])
+                pieces[i, ctype, sign] = (base, slope)
+    return pieces
+
+
+def _affine_screen(system, law, combinations, tolerance):
+    """For the effective reading with an affine law: which combinations may be coherent.
+
+    Contact ``i``'s impulses are ``c_i + G_i Σ_{j≠i} W_ij I^(j)`` (its type's formulas at the
+    effective approach of (75)), so a combination's fixed point solves ``(1 − K) I = c`` with
+    ``K_ij = G_i W_ij`` (``j ≠ i``), one batched solve for all combinations. A combination is
+    dropped only when that solution fails a necessary test of :func:`_check_combination` by
+    more than ``SCREEN_MARGIN`` of its scale: the orientation (``sign·v_t ≥ 0`` at the
+    effective approach), an approaching contact (``v_n < 0``), ``I_n > 0``, ``v_n^S ≥ 0``
+    and the type's slip, (A22)/(A23). Singular, ill-conditioned or non-finite systems are
+    kept. Returns a boolean per combination.
+    """
+    count, size = system.count, 2 * system.count
+    choices = sorted({t for types, _ in combinations for t in types})
+    pieces = _affine_pieces(system, law, choices)
+    number = len(combinations)
+    offsets = np.zeros((number, size))
+    slopes = np.zeros((number, size, size))  # block-diagonal G
+    for k, (types, signs) in enumerate(combinations):
+        for i, (ctype, sign) in enumerate(zip(types, signs)):
+            base, slope = pieces[i, ctype, sign]
+            offsets[k, 2 * i:2 * i + 2] = base
+            slopes[k, 2 * i:2 * i + 2, 2 * i:2 * i + 2] = slope
+    coupling = system.delassus.copy()
+    for i in range(count):
+        coupling[2 * i:2 * i + 2, 2 * i:2 * i + 2] = 0.0  # only the other contacts, (75)
+    matrices = np.eye(size) - slopes @ coupling
+    keep = np.ones(number, dtype=bool)
+    finite = np.isfinite(matrices).all(axis=(1, 2)) & np.isfinite(offsets).all(axis=1)
+    if not finite.any():
+        return keep
+    index = np.flatnonzero(finite)
+    matrices, offsets = matrices[index], offsets[index]
+    with np.errstate(all="ignore"):
+        left, values, right = np.linalg.svd(matrices)
+        # Singular values below SINGULAR_CUT of the largest are the null space (the old
+        # path's lstsq cuts at 1e-9; its difference-quotient Jacobian blurs them to ~1e-10).
+        # A row is screened when every other singular value is clearly regular.
+        null = values < SINGULAR_CUT * values[:, :1]
+        weakest_kept = np.min(np.where(null, np.inf, values), axis=1)
+        screened = weakest_kept >= np.where(null.any(axis=1), SCREEN_SINGULAR_CONDITION,
+                                            1.0 / SCREEN_CONDITION)
+        # _fixed_point's first step from I_0 = c: I_1 = c + (1 − K)⁺ (K c), with the
+        # pseudo-inverse's cut; for a regular matrix that is (1 − K)⁻¹ c, the fixed point.
+        inverse_values = np.where(null, 0.0, 1.0 / values)
+        pushed = offsets - np.einsum("kij,kj->ki", matrices, offsets)  # K c = c − (1 − K) c
+        impulses = offsets + np.einsum("kji,kj,klj,kl->ki", right, inverse_values, left,
+                                       pushed)
+        residual = np.einsum("kij,kj->ki", matrices, impulses) - offsets
+    bound = system.impulse_scale() + np.max(np.abs(impulses), axis=1)
+    # No fixed point: the least-squares residual, which no iterate of the old path beats,
+    # stays far above its acceptance (FIXED_POINT_TOLERANCE of the bound).
+    consistent = np.max(np.abs(residual), axis=1) <= SCREEN_MARGIN * bound
+    index, impulses = index[screened], impulses[screened]
+    keep[index[~consistent[screened]]] = False
+    index, impulses = index[consistent[screened]], impulses[consistent[screened]]
+    finite_ends = np.isfinite(impulses).all(axis=1)
+    keep[index[finite_ends]] = _coherent_within_margin(
+        system, law, [combinations[k] for k in index[finite_ends]], impulses[finite_ends],
+        tolerance)
+    return keep
+
+
+def _coherent_within_margin(system, law, combinations, impulses, tolerance):
+    """Whether each combination, at its (approximate, finite) fixed point ``impulses``,
+    passes the necessary tests of :func:`_check_combination` and :func:`_paper_coherent`
+    widened by ``SCREEN_MARGIN``: the orientation (``sign·v_t ≥ 0`` at the effective
+    approach), an approaching contact (``v_n < 0``), ``I_n > 0``, ``v_n^S ≥ 0`` and the
+    type's slip, with ``v^S`` by (A22)/(A23) and (75)."""
+    count = system.count
+    coupling = system.delassus.copy()
+    for i in range(count):
+        coupling[2 * i:2 * i + 2, 2 * i:2 * i + 2] = 0.0
+    effective = system.approach + impulses @ coupling.T  # v^A(i) + Σ_{j≠i} W_ij I^(j)
+    after = system.approach + impulses @ system.delassus.T  # v^S
+    bound = system.impulse_scale() + np.max(np.abs(impulses), axis=1)
+    impulse_margin = SCREEN_MARGIN * bound
+    row_sum = float(np.max(np.sum(np.abs(system.delassus), axis=1)))
+    speed_margin = tolerance + row_sum * impulse_margin
+    passes = np.ones(len(combinations), dtype=bool)
+    kinds = {1: "stick", 2: "reverse", 3: "forward"} if law == "newton" else {
+        1: "stick", 2: "stick", 3: "reverse", 4: "reverse", 5: "forward"}
+    for position, (types, signs) in enumerate(combinations):
+        margin_i, margin_v = impulse_margin[position], speed_margin[position]
+        for i, (ctype, sign) in enumerate(zip(types, signs)):
+            n, t = 2 * i, 2 * i + 1
+            if ctype == SEPARATING:
+                ok = after[position, n] >= -margin_v
+            else:
+                slip = sign * after[position, t]
+                kind = kinds[ctype]
+                ok = (sign * effective[position, t] >= -margin_v
+                      and effective[position, n] < margin_v
+                      and impulses[position, n] > -margin_i
+                      and after[position, n] >= -margin_v
+                      and (abs(slip) <= margin_v if kind == "stick"
+                           else slip <= margin_v if kind == "reverse" else slip >= -margin_v))
+            if not ok:
+                passes[position] = False
+                break
+    rows = np.flatnonzero(passes)
+    for i in range(count):
+        if rows.size:
+            own = _type_within_margin(system, law, i, [combinations[k] for k in rows],
+                                      effective[rows, 2 * i:2 * i + 2], speed_margin[rows])
+            passes[rows[~own]] = False
+            rows = rows[own]
+    return passes
+
+
+def _type_within_margin(system, law, i, combinations, effective, margin):
+    """Whether Table 1 (the law's own type, as :func:`_law_at` finds it) could give contact
+    ``i`` its type of the combination anywhere within ``margin`` of the effective approach.
+
+    The type depends on the direction of the approach only (every law's formulas are
+    homogeneous of degree 1 in ``(v_n, v_t)``), through ``α = v_t/|v_n|`` (A34) in ordered
+    regions (Table 1 with (53)–(57); Newton's (A58)); ``α`` over the box of half-width
+    ``margin`` is extreme at its corners. So a contact is rejected only when the centre and
+    the four corners, all approaching and on the combination's side of ``v_t = 0``, agree on
+    one other type. Separating contacts pass."""
+    own = np.ones(len(combinations), dtype=bool)
+    types = np.array([types[i] for types, _ in combinations])
+    signs = np.array([signs[i] for _, signs in combinations])
+    offsets = np.array([(0.0, 0.0), (-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0)])
+    vn = effective[:, 0][:, None] + offsets[:, 0] * margin[:, None]
+    vt = signs[:, None] * (effective[:, 1][:, None] + offsets[:, 1] * margin[:, None])
+    clear = (types != SEPARATING) & (vn < 0).all(axis=1) & (vt >= 0).all(axis=1)
+    if not clear.any():
+        return own
+    mnn, mnt, mtt = system.single_terms(i)
+    rows = np.flatnonzero(clear)
+    shape = (rows.size, len(offsets))
+    with np.errstate(all="ignore"):
+        out = solver.contact_space_solution(
+            law, np.full(shape, mnn), np.broadcast_to(signs[rows, None] * mnt, shape).copy(),
+            np.full(shape, mtt), vn[rows], vt[rows], np.full(shape, system.mu[i]),
+            np.full(shape, system.e[i]), delta=np.full(shape, system.deltas[i]))
+    found = np.asarray(out["collision_type"], dtype=np.int64).reshape(shape)
+    agree = (found == found[:, :1]).all(axis=1) & (found[:, 0] != types[rows])
+    own[rows[agree]] = False
+    return own
+
+
+def _batched_map(system, law, types, signs):
+    """:func:`_contact_map` (effective reading) for many combinations at once: rows of
+    ``types``, ``signs`` (``(N, m)``) map rows of impulses ``(N, 2m)``, with the same
+    operations in the same order per element (the laws' kernels take arrays)."""
+    count = system.count
+    separating = types == SEPARATING
+    safe_types = np.where(separating, 1, types)
+
+    def apply(impulses, rows):
+        out = np.zeros_like(impulses)
+        for i in range(count):
+            mnn, mnt, mtt = system.single_terms(i)
+            vn = np.full(len(impulses), float(system.approach[2 * i]))
+            vt = np.full(len(impulses), float(system.approach[2 * i + 1]))
+            for j in range(count):  # v^A(i) + Σ_{j≠i} W_ij I^(j), as effective_approach
+                if j == i:
+                    continue
+                block = system.delassus[2 * i:2 * i + 2, 2 * j:2 * j + 2]
+                vn = vn + (block[0, 0] * impulses[:, 2 * j] + block[0, 1] * impulses[:, 2 * j + 1])
+                vt = vt + (block[1, 0] * impulses[:, 2 * j] + block[1, 1] * impulses[:, 2 * j + 1])
+            sign = signs[rows, i]
+            with np.errstate(all="ignore"):
+                terms = laws.ContactTerms(np.float64(mnn), sign * mnt, np.float64(mtt), vn,
+                                          sign * vt, np.float64(system.mu[i]),
+                                          np.float64(system.deltas[i]))
+                ctype = safe_types[rows, i]
+                e_i = laws.stronge_paper_restitution(terms, np.float64(system.e[i]), ctype)
+                normal, tangential = laws.poisson_impulses(terms, e_i, ctype)
+            out[:, 2 * i] = np.where(separating[rows, i], 0.0, normal)
+            out[:, 2 * i + 1] = np.where(separating[rows, i], 0.0, sign * tangential)
+        return out
+
+    return apply
+
+
+def _iterated_screen(system, law, combinations, tolerance, max_iterations=30):
+    """For the effective reading with the paper's Stronge (not affine): which combinations
+    may be coherent.
+
+    :func:`_fixed_point`'s Newton iteration (same start, steps and stopping rules, the
+    least-squares step by a batched pseudo-inverse with the same cut-off) runs on all
+    combinations at once. A combination is dropped when its iteration ends with a residual
+    above ``SCREEN_MARGIN`` of the bound (far from any fixed point the full path would
+    accept at FIXED_POINT_TOLERANCE), or at a point that fails a necessary test of
+    :func:`_check_combination` by more than ``SCREEN_MARGIN`` (as in :func:`_affine_screen`).
+    Non-finite ends are kept. Returns a boolean per combination.
+    """
+    size = 2 * system.count
+    types = np.array([t for t, _ in combinations], dtype=np.int64)
+    signs = np.array([s for _, s in combinations], dtype=float)
+    mapping = _batched_map(system, law, types, signs)
+    number = len(combinations)
+    scale = system.impulse_scale()
+    impulses = mapping(np.zeros((number, size)), np.arange(number))
+    starts_finite = np.isfinite(impulses).all(axis=1)
+    running = starts_finite.copy()
+    residual_size = np.full(number, np.inf)
+    closest = np.full(number, np.inf)  # smallest residual / bound along the iteration
+    previous = np.full(number, np.inf)
+    with np.errstate(all="ignore"):
+        for iteration in range(max_iterations + 1):
+            running &= np.isfinite(impulses).all(axis=1)
+            if not running.any():
+                break
+            rows = np.flatnonzero(running)
+            current = impulses[rows]
+            residual = current - mapping(current, rows)
+            size_now = np.max(np.abs(residual), axis=1)
+            residual_size[rows] = size_now
+            bound = scale + np.max(np.abs(current), axis=1)
+            closest[rows] = np.fmin(closest[rows], size_now / bound)
+            stops = (size_now <= 1e-15 * bound) | (size_now > 0.5 * previous[rows])
+            previous[rows] = size_now
+            running[rows[stops]] = False
+            go = ~stops & np.isfinite(size_now)
+            rows, current, residual = rows[go], current[go], residual[go]
+            if rows.size == 0 or iteration == max_iterations:
+                break
+            step = 1e-6 * (scale + np.max(np.abs(current), axis=1))
+            jacobian = np.broadcast_to(np.eye(size), (rows.size, size, size)).copy()
+            for k in range(size):
+                shift = np.zeros((rows.size, size))
+                shift[:, k] = step
+                jacobian[:, :, k] -= ((mapping(current + shift, rows)
+                                       - mapping(current - shift, rows)) / (2 * step)[:, None])
+            good = np.isfinite(jacobian).all(axis=(1, 2))
+            running[rows[~good]] = False
+            rows, current, residual = rows[good], current[good], residual[good]
+            correction = np.linalg.pinv(jacobian[good], rcond=1e-9) @ -residual[..., None]
+            impulses[rows] = current + correction[..., 0]
+    # A non-finite map anywhere on the way makes _fixed_point give up. Its start, map(0), is
+    # the same arithmetic on the same floats here, so those rows are dropped; rows that went
+    # non-finite later are kept if they had come near a fixed point (the two iterations'
+    # rounding might part there).
+    broke = starts_finite & ~(np.isfinite(impulses).all(axis=1) & np.isfinite(residual_size))
+    keep = broke & (closest <= BROKEN_KEEP)
+    bound = scale + np.max(np.abs(impulses), axis=1)
+    near = residual_size <= SCREEN_MARGIN * bound
+    candidates = np.flatnonzero(near & starts_finite & ~broke)
+    keep[candidates] = _coherent_within_margin(system, law, [combinations[k] for k in candidates],
+                                               impulses[candidates], tolerance)
+    return keep
 
 
 def _check_combination(system, law, types, signs, impulses, determinate, tolerance,
