@@ -2,7 +2,8 @@
 
 :func:`run_engine` is the survey's only call into the engines: it hands the scenes to
 ``Engine.run_many`` (harness/engines/contract.py), which runs many impacts per engine world
-where the adapter can (pymunk) and one by one elsewhere, with the same result bit for bit.
+where the adapter can (pymunk, pybullet, Box2D) and one by one elsewhere, with the same
+result bit for bit.
 Every run is then judged by the verdict checks (:func:`harness.run.verdicts.judge`): a run
 is one impact only if it fails none, and its ``status`` is the first failing reason. What the
 checks need of a scene alone (:func:`harness.run.verdicts.prepare`) is worked out once for
