@@ -184,8 +184,9 @@ def figures(runs: dict, directory: Path) -> list[Path]:
     families = sorted(set(runs["family"]))
     for engine in sorted(set(runs["engine"])):
         presets = sorted(set(runs["preset"][runs["engine"] == engine]))
+        # constrained layout: fixed fractions clipped the x labels of a one-preset figure
         figure, axes = plt.subplots(len(presets), 2, figsize=(10, 3.6 * len(presets)),
-                                    squeeze=False)
+                                    squeeze=False, layout="constrained")
         for (left, right), preset in zip(axes, presets):
             chosen = ok & (runs["engine"] == engine) & (runs["preset"] == preset)
             departure = np.maximum(runs["departure_poisson"][chosen], floor)
@@ -208,13 +209,11 @@ def figures(runs: dict, directory: Path) -> list[Path]:
             left.set_xlabel("α / r_m (Table 1 cases 1–3: types change at 1 and 1 + e)")
         axes[0][0].legend(fontsize=7, markerscale=2)
         figure.suptitle(f"{engine}: where on Routh's map it departs from Poisson")
-        figure.subplots_adjust(left=0.09, right=0.98, bottom=0.1, top=0.92, hspace=0.35,
-                               wspace=0.2)
         written += _save(figure, directory / f"map-{engine}")
         plt.close(figure)
 
         figure, axes = plt.subplots(1, len(presets), figsize=(5 * len(presets), 3.8),
-                                    sharey=True, squeeze=False)
+                                    sharey=True, squeeze=False, layout="constrained")
         for axis, preset in zip(axes[0], presets):
             for index, family in enumerate(families):
                 chosen = (ok & (runs["engine"] == engine) & (runs["preset"] == preset)
@@ -228,7 +227,6 @@ def figures(runs: dict, directory: Path) -> list[Path]:
             axis.set_title(f"{engine} {preset_label(engine, preset)}")
         axes[0][0].set_ylabel("fraction of ok runs ≤ x")
         axes[0][0].legend(fontsize=7)
-        figure.subplots_adjust(left=0.08, right=0.98, bottom=0.14, top=0.9, wspace=0.1)
         written += _save(figure, directory / f"cdf-{engine}")
         plt.close(figure)
     return written
