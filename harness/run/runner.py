@@ -35,7 +35,9 @@ Parallelism and cache
     (:func:`engine_chunk`), whose runs equal one :meth:`Engine.run` each bit for bit
     (``--chunk-size 1``: one ``run`` per task). It also keeps each several-contact point's
     reference (:func:`point_reference_cached`: up to a second of m-contact solving per
-    point), outside the hit and miss counts.
+    point), outside the hit and miss counts. The references it lacks are tasks of the same
+    executor (:func:`reference_task`, one chunk each, submitted ahead of the engine runs),
+    stored as each finishes; they equal the ones computed inline bit for bit.
 
     Each simulated result is stored in the cache the moment its chunk finishes, so a run
     killed half-way keeps its finished chunks and the rerun simulates only the rest. A cache that
