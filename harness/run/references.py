@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -70,14 +71,35 @@ def point_reference(scenario, point) -> dict:
     """
     kind = kind_of(scenario)
     if kind == SINGLE:
+        return scene_reference(kind, None, None)
+    return scene_reference(kind, scenario.scene(point), PointLaws.of(scenario.at(point)))
+
+
+@dataclass(frozen=True)
+class PointLaws:
+    """What a several-contact reference reads of the scenario at a point besides its scene:
+    plain values, so that a reference can be computed in another process."""
+
+    friction: float
+    restitution: float
+    laws: tuple[str, ...]
+
+    @classmethod
+    def of(cls, fixed) -> PointLaws:
+        """The friction, restitution and laws of ``fixed`` (a scenario at one point)."""
+        return cls(fixed.friction, fixed.restitution, tuple(fixed.laws))
+
+
+def scene_reference(kind: str, scene, fixed: PointLaws | None) -> dict:
+    """:func:`point_reference` from the situation ``kind`` (:func:`kind_of`), the scene at
+    the point and its :class:`PointLaws` (both unused for a single-contact point)."""
+    if kind == SINGLE:
         return {"kind": SINGLE, "contacts": 1, "primary": ENGINE_LAW,
                 "why": "one contact point (verified by the scenario checks): the "
                        "single-contact laws"}
     from harness.scenarios.schema import ONE_POINT_TOLERANCE
     from harness.scene import geometry
 
-    fixed = scenario.at(point)
-    scene = scenario.scene(point)
     if kind == SIMULTANEOUS:
         contacts = geometry.scene_contacts(scene, tolerance=ONE_POINT_TOLERANCE)
         reference = {"kind": SIMULTANEOUS, "contacts": len(contacts),
@@ -251,5 +273,5 @@ def collect(records: Sequence) -> list[dict]:
     return out
 
 
-__all__ = ["COHERENT_LAWS", "COUPLINGS", "EVENT_DRIVEN", "SIMULTANEOUS", "SINGLE",
-           "annotate", "collect", "kind_of", "point_reference"]
+__all__ = ["COHERENT_LAWS", "COUPLINGS", "EVENT_DRIVEN", "SIMULTANEOUS", "SINGLE", "PointLaws",
+           "annotate", "collect", "kind_of", "point_reference", "scene_reference"]

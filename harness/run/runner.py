@@ -35,7 +35,9 @@ Parallelism and cache
     (:func:`engine_chunk`), whose runs equal one :meth:`Engine.run` each bit for bit
     (``--chunk-size 1``: one ``run`` per task). It also keeps each several-contact point's
     reference (:func:`point_reference_cached`: up to a second of m-contact solving per
-    point), outside the hit and miss counts.
+    point), outside the hit and miss counts. The references it lacks are tasks of the same
+    executor (:func:`reference_task`, one chunk each, submitted ahead of the engine runs),
+    stored as each finishes; they equal the ones computed inline bit for bit.
 
     Each simulated result is stored in the cache the moment its chunk finishes, so a run
     killed half-way keeps its finished chunks and the rerun simulates only the rest. A cache that
@@ -103,6 +105,11 @@ MIN_PARALLEL_TASKS = 200
 TASK_TIME_LIMIT_S = 120.0
 #: The ``kind`` of a cache entry holding a whole scenario's records (:func:`_scenario_key`).
 SCENARIO_RECORDS = "scenario-records"
+#: The ``kind`` of a point's reference, as a task of the engine runs' executor and in the cache.
+POINT_REFERENCE = "point-reference"
+#: A reference task counts as this many engine runs when choosing the pool over inline work:
+#: a several-contact reference takes 0.1-1 s, an engine run about a millisecond.
+REFERENCE_TASK_WEIGHT = 100
 #: Exit statuses (documented in harness.cli).
 EXIT_OK, EXIT_GATE_FAILED, EXIT_BAD_INPUT, EXIT_INTERNAL = 0, 1, 2, 3
 
@@ -126,6 +133,8 @@ def engine_task(task: dict) -> dict:
     build the scene gives ``{"status": "skipped: …"}``; any other exception
     ``{"status": "error: …"}``, so a task never takes the run down.
     """
+    if task.get("kind") == POINT_REFERENCE:  # shares the engine runs' pool (the runner)
+        return reference_task(task)
     from harness.engines import EngineNotInstalled, UnsupportedScene, load_engine
 
     start = time.perf_counter()
@@ -175,9 +184,12 @@ def engine_chunk(tasks: list[dict]) -> list[dict]:
 
 
 def task_group(task: dict) -> str:
-    """The chunk key of an engine task: its engine and settings (one ``run_many`` each)."""
+    """The chunk key of an engine task: its engine and settings (one ``run_many`` each). A
+    point's reference task (:func:`reference_task`, up to a second) is a chunk of its own."""
     import json
 
+    if task.get("kind") == POINT_REFERENCE:
+        return json.dumps([POINT_REFERENCE, task["scenario"], task["point"]])
     return json.dumps([task["engine"], task["settings"], task.get("time_limit_s")],
                       sort_keys=True, default=repr)
 
@@ -562,6 +574,11 @@ def run(
                                   "time_limit_s": time_limit_s})
                     task_keys.append(key)
                     task_slots.append(item)
+    # Several-contact references the records will need and the cache lacks: tasks of the
+    # same executor, ahead of the engine runs (each takes up to a second).
+    reference_tasks, reference_keys = _reference_tasks(
+        [s for s in scenarios if s.name not in stored_records], cache)
+    computed_references: dict[tuple[str, int], dict] = {}
     if cache is not None:
         warnings += [f"cache entry rejected (simulated again): {entry}"
                      for entry in cache.rejected]
@@ -570,6 +587,14 @@ def run(
     cache_failed: list[str] = []
 
     def store(index: int, output: dict) -> None:
+        if index < len(reference_tasks):
+            task = reference_tasks[index]
+            if "reference" in output:  # else built inline, where its error is reported
+                computed_references[task["scenario"], task["point"]] = output["reference"]
+                if reference_keys[index] is not None:
+                    _store_reference(cache, reference_keys[index], output["reference"])
+            return
+        index -= len(reference_tasks)
         task_slots[index]["output"], task_slots[index]["cached"] = output, False
         if cache is None or cache_failed or output["status"].startswith(("skipped", "error")):
             return
@@ -579,17 +604,19 @@ def run(
             cache_failed.append(f"cache {cache.root}: cannot store results ({error}); "
                                 "the run goes on without the cache")
 
-    if tasks:
+    if tasks or reference_tasks:
         if log is not None:
             print(f"engine runs: {len(tasks)} to simulate, "
                   f"{len(plan) + stored_runs - len(tasks)} cached or "
-                  f"skipped", file=log, flush=True)
+                  f"skipped; {len(reference_tasks)} several-contact references to compute",
+                  file=log, flush=True)
         simulating = time.perf_counter()
-        _run_tasks(tasks, executor=executor, workers=workers, scheduler=scheduler, log=log,
-                   on_result=store, chunk_size=chunk_size)
+        _run_tasks(reference_tasks + tasks, executor=executor, workers=workers,
+                   scheduler=scheduler, log=log, on_result=store, chunk_size=chunk_size,
+                   weight=len(tasks) + REFERENCE_TASK_WEIGHT * len(reference_tasks))
         if log is not None:
-            print(f"engine runs: {len(tasks)} simulated in "
-                  f"{time.perf_counter() - simulating:.2f} s", file=log, flush=True)
+            print(f"engine runs: {len(tasks)} simulated, {len(reference_tasks)} references "
+                  f"computed in {time.perf_counter() - simulating:.2f} s", file=log, flush=True)
     warnings += cache_failed
     if log is not None:
         for warning in warnings:
@@ -612,7 +639,9 @@ def run(
             scenario_records = []
             for point in scenario.point_list():
                 point_entries = [e for e in entries if e[1].index == point.index]
-                scenario_records += _point_records_cached(scenario, point, point_entries, cache)
+                scenario_records += _point_records_cached(
+                    scenario, point, point_entries, cache,
+                    reference=computed_references.get((scenario.name, point.index)))
             _store_scenario_records(cache, scenario_keys.get(scenario.name), entries,
                                     scenario_records)
             scenario_lines = [None] * len(scenario_records)
@@ -770,7 +799,7 @@ def _store_scenario_records(cache, key: str | None, engine_entries: Sequence,
 
 
 def _point_records_cached(scenario: Scenario, point, engine_entries: Sequence,
-                          cache) -> list[Record]:
+                          cache, *, reference: dict | None = None) -> list[Record]:
     """:func:`_point_records_or_errors`, kept in ``cache`` when every input is cacheable.
 
     A warm run spends most of its time rebuilding records from cached engine output
@@ -779,13 +808,15 @@ def _point_records_cached(scenario: Scenario, point, engine_entries: Sequence,
     history flag, which make the key. A point with an engine run that was skipped or failed
     (never cached) is rebuilt every run. Records read back differ from fresh ones only where
     the results file already writes them alike (a non-finite float is ``None`` in both).
+    ``reference``: the point's reference when already computed (:func:`point_records`).
     """
     cacheable = cache is not None and cache.enabled and all(
         item.get("key") is not None and isinstance(item.get("output"), dict)
         and not str(item["output"].get("status", "")).startswith(("skipped", "error"))
         for _, _, _, _, item in engine_entries)
     if not cacheable:
-        return _point_records_or_errors(scenario, point, engine_entries, cache=cache)
+        return _point_records_or_errors(scenario, point, engine_entries, cache=cache,
+                                        reference=reference)
     try:
         key = cache.key({"kind": "point-records", "scenario": _definition(scenario),
                          "point": point.index,
@@ -793,7 +824,8 @@ def _point_records_cached(scenario: Scenario, point, engine_entries: Sequence,
                                           item.get("overrides"), item.get("history")]
                                          for _, _, engine_name, preset, item in engine_entries]})
     except TypeError:  # a definition holding a value without a canonical spelling: not kept
-        return _point_records_or_errors(scenario, point, engine_entries, cache=cache)
+        return _point_records_or_errors(scenario, point, engine_entries, cache=cache,
+                                        reference=reference)
     stored = cache.get(key, check=lambda entry: None if isinstance(entry.get("records"), list)
                        else "no records", count=False)
     if stored is not None:
@@ -802,7 +834,8 @@ def _point_records_cached(scenario: Scenario, point, engine_entries: Sequence,
         for record, (_, _, _, _, item) in zip(engine_part, engine_entries):
             record.cached = bool(item.get("cached", False))
         return records
-    records = _point_records_or_errors(scenario, point, engine_entries, cache=cache)
+    records = _point_records_or_errors(scenario, point, engine_entries, cache=cache,
+                                        reference=reference)
     if not any(record.status.startswith("error: internal") for record in records):
         try:
             cache.put(key, {"records": [record.as_dict() for record in records]})
@@ -812,12 +845,13 @@ def _point_records_cached(scenario: Scenario, point, engine_entries: Sequence,
 
 
 def _point_records_or_errors(scenario: Scenario, point, engine_entries: Sequence, *,
-                             cache=None) -> list[Record]:
+                             cache=None, reference: dict | None = None) -> list[Record]:
     """:func:`point_records`, or, when the harness fails on this point, one record per law
     and engine run with status ``"error: internal: ..."``: one bad point costs its records,
     not the run."""
     try:
-        return point_records(scenario, point, engine_entries, cache=cache)
+        return point_records(scenario, point, engine_entries, cache=cache,
+                             reference=reference)
     except Exception as error:  # noqa: BLE001 - a harness bug: in the records, exit status 3
         status = f"error: internal: {type(error).__name__}: {error}"
         info = _point_dict(point)
@@ -836,13 +870,16 @@ def _engines_of(scenario: Scenario, wanted: Sequence[str]) -> list[str]:
 
 
 def _run_tasks(tasks, *, executor, workers, scheduler, log, on_result=None,
-               chunk_size=None) -> list[dict]:
+               chunk_size=None, weight: int | None = None) -> list[dict]:
     """The engine tasks through the executor: in chunks of one engine and settings, each one
     :func:`engine_chunk` (``Engine.run_many``) call; ``chunk_size=1``: one :func:`engine_task`
-    (``Engine.run``) each, as before chunks."""
+    (``Engine.run``) each, as before chunks. Reference tasks (:func:`reference_task`) go one
+    per chunk. ``weight``: the work in engine runs (default: one per task); below
+    :data:`MIN_PARALLEL_TASKS` the local executor runs inline."""
     from harness.run.executor import progress_printer, run_tasks
 
-    if executor == "local" and workers is None and len(tasks) < MIN_PARALLEL_TASKS:
+    weight = len(tasks) if weight is None else weight
+    if executor == "local" and workers is None and weight < MIN_PARALLEL_TASKS:
         workers = 1
     progress = progress_printer("engine runs", stream=log) if log is not None else None
     note = None if log is None else (lambda text: print(text, file=log, flush=True))
@@ -853,11 +890,13 @@ def _run_tasks(tasks, *, executor, workers, scheduler, log, on_result=None,
 
 
 def point_records(scenario: Scenario, point, engine_entries: Sequence, *,
-                  cache=None) -> list[Record]:
+                  cache=None, reference: dict | None = None) -> list[Record]:
     """The law records and the engine records of one sweep point.
 
     ``cache`` (a :class:`harness.run.cache.ResultCache`, or None) keeps the point's
-    reference (:func:`point_reference_cached`) between runs.
+    reference (:func:`point_reference_cached`) between runs. ``reference``: the point's
+    reference already computed (a :func:`reference_task` of the run); None: read from the
+    cache or computed here.
     """
     fixed = scenario.at(point)
     mu, e = fixed.friction, fixed.restitution
@@ -900,9 +939,9 @@ def point_records(scenario: Scenario, point, engine_entries: Sequence, *,
             record.departure = metrics.departures(mass_matrix, law_speeds[law], law_speeds,
                                                   u_before, free_bodies=free_bodies)
 
-    reference = references.annotate(scenario, point, law_records,
-                                     point_reference_cached(scenario, point, cache),
-                                     keep_full=True)
+    if reference is None:
+        reference = point_reference_cached(scenario, point, cache)
+    reference = references.annotate(scenario, point, law_records, reference, keep_full=True)
     if not engine_entries:
         return law_records
     scene = scenario.scene(point)
@@ -930,26 +969,117 @@ def point_reference_cached(scenario: Scenario, point, cache=None) -> dict:
     the scene at the point, its μ, e and laws and the situation the scenario declares, which
     make the key. A single-contact reference costs nothing and is not stored.
     """
-    kind = references.kind_of(scenario)
-    if cache is None or kind == references.SINGLE:
+    key = _reference_key(scenario, point, cache)
+    if key is None:
         return references.point_reference(scenario, point)
-    from harness.scenarios.schema import ONE_POINT_TOLERANCE
-
-    fixed = scenario.at(point)
-    key = cache.key({"kind": "point-reference", "situation": kind,
-                     "scene": _scene_payload(scenario.scene(point)),
-                     "friction": fixed.friction, "restitution": fixed.restitution,
-                     "laws": list(fixed.laws), "one_point_tolerance": ONE_POINT_TOLERANCE})
-    cached = cache.get(key, check=lambda stored: None if isinstance(stored.get("kind"), str)
-                       else "no reference kind", count=False)
+    cached = _stored_reference(cache, key)
     if cached is not None:
         return cached
     reference = references.point_reference(scenario, point)
+    _store_reference(cache, key, reference)
+    return reference
+
+
+def _reference_key(scenario: Scenario, point, cache) -> str | None:
+    """The cache key of a point's several-contact reference (:func:`point_reference_cached`);
+    None without a cache or for a single-contact point (never stored)."""
+    kind = references.kind_of(scenario)
+    if cache is None or kind == references.SINGLE:
+        return None
+    from harness.scenarios.schema import ONE_POINT_TOLERANCE
+
+    fixed = scenario.at(point)
+    return cache.key({"kind": POINT_REFERENCE, "situation": kind,
+                      "scene": _scene_payload(scenario.scene(point)),
+                      "friction": fixed.friction, "restitution": fixed.restitution,
+                      "laws": list(fixed.laws), "one_point_tolerance": ONE_POINT_TOLERANCE})
+
+
+def _stored_reference(cache, key: str) -> dict | None:
+    return cache.get(key, check=lambda stored: None if isinstance(stored.get("kind"), str)
+                     else "no reference kind", count=False)
+
+
+def _store_reference(cache, key: str, reference: dict) -> None:
     try:
         cache.put(key, reference)
     except OSError:  # the run goes on without the cache (the engine runs' store warns)
         pass
-    return reference
+
+
+_BLAS_THREADS_SET: list[bool] = []
+
+
+def _one_blas_thread() -> None:
+    """In a worker process, keep numpy's OpenBLAS to one thread (once per process).
+
+    A reference is many small linear-algebra calls; in forked pool workers OpenBLAS's own
+    threads fight the other worker for the cores: measured on the 2-core machine, 141
+    references took 6.7 s on two workers as on one, 3.4 s with one BLAS thread each. The
+    main process is left alone. Where the library cannot be found, nothing changes.
+    """
+    import multiprocessing
+
+    if _BLAS_THREADS_SET or multiprocessing.parent_process() is None:
+        return
+    _BLAS_THREADS_SET.append(True)
+    import ctypes
+
+    try:
+        with open("/proc/self/maps") as maps:
+            paths = {line.split()[-1] for line in maps if "openblas" in line.lower()}
+    except OSError:
+        return
+    for path in sorted(paths):
+        try:
+            library = ctypes.CDLL(path)
+        except OSError:
+            continue
+        for name in ("scipy_openblas_set_num_threads64_", "openblas_set_num_threads64_",
+                     "openblas_set_num_threads"):
+            setter = getattr(library, name, None)
+            if setter is not None:
+                setter(1)
+                break
+
+
+def _reference_tasks(scenarios: Sequence[Scenario], cache) -> tuple[list[dict], list]:
+    """The reference tasks (:func:`reference_task`) of the several-contact points of
+    ``scenarios`` whose reference the cache does not hold, and their cache keys (None
+    without a cache)."""
+    tasks, keys = [], []
+    for scenario in scenarios:
+        if references.kind_of(scenario) == references.SINGLE:
+            continue
+        for point in scenario.point_list():
+            key = _reference_key(scenario, point, cache)
+            if key is not None and _stored_reference(cache, key) is not None:
+                continue
+            tasks.append({"kind": POINT_REFERENCE, "scenario": scenario.name,
+                          "point": point.index, "situation": references.kind_of(scenario),
+                          "scene": scenario.scene(point),
+                          "laws": references.PointLaws.of(scenario.at(point))})
+            keys.append(key)
+    return tasks, keys
+
+
+def reference_task(task: dict) -> dict:
+    """The several-contact reference of one point, computed in a worker process.
+
+    ``task`` holds the situation (``situation``, :func:`harness.run.references.kind_of`), the
+    ``scene`` at the point and its ``laws`` (:class:`harness.run.references.PointLaws`): a
+    scenario does not pickle. The result is ``{"reference": …}``
+    (:func:`harness.run.references.scene_reference`, the very dict the main process would
+    compute) or, when it raises, ``{"error": "…"}``: the main process then builds the
+    reference inline, where the exception becomes the point's internal-error records as
+    before (:func:`_point_records_or_errors`).
+    """
+    _one_blas_thread()
+    try:
+        return {"reference": references.scene_reference(task["situation"], task["scene"],
+                                                        task["laws"])}
+    except Exception as error:  # noqa: BLE001 - raised again, and reported, in the main process
+        return {"error": f"{type(error).__name__}: {error}"}
 
 
 def engine_record(scenario: Scenario, point_info: dict, engine_name: str, preset: str,

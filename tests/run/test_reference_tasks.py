@@ -1,0 +1,105 @@
+"""Several-contact references computed as tasks of the engine runs' executor
+(harness/run/runner.py, ``_reference_tasks`` and ``reference_task``): the same references,
+bit for bit, as the ones computed inline, kept in the cache as each finishes."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from harness.run import references, runner
+from harness.run.cache import ResultCache
+from harness.run.executor import run_tasks
+from harness.scenarios import SCENARIO_DIR, load_scenario
+
+#: Flat faces (m-contact laws) and tilts (event sequences), one to six points each.
+SEVERAL_CONTACT = [load_scenario(SCENARIO_DIR / f"{name}.toml") for name in (
+    "flat-rod", "flat-box-spin", "flat-box-several-poisson", "sweep-tilted-rod")]
+SINGLE_CONTACT = load_scenario(SCENARIO_DIR / "box-corner.toml")
+
+
+def _exact(value) -> str:
+    """``value`` spelled so that two floats are equal only when their bits are (repr is exact;
+    a NaN equals a NaN)."""
+    return json.dumps(value, sort_keys=True)
+
+
+def _without_timing(record) -> dict:
+    data = record.as_dict()
+    data.pop("wall_time_s", None)
+    (data.get("diagnostics") or {}).pop("engine_wall_time_s", None)
+    return data
+
+
+def test_only_the_several_contact_points_get_a_task():
+    tasks, keys = runner._reference_tasks([SINGLE_CONTACT, *SEVERAL_CONTACT], None)
+    expected = [(s.name, p.index) for s in SEVERAL_CONTACT for p in s.point_list()]
+    assert [(task["scenario"], task["point"]) for task in tasks] == expected
+    assert keys == [None] * len(tasks)
+
+
+def test_references_computed_in_the_pool_equal_the_inline_ones_bit_for_bit():
+    tasks, _ = runner._reference_tasks(SEVERAL_CONTACT, None)
+    pooled = run_tasks(runner.engine_task, tasks, workers=2, batch=runner.engine_chunk,
+                       group=runner.task_group)
+    by_name = {scenario.name: scenario for scenario in SEVERAL_CONTACT}
+    kinds = set()
+    for task, output in zip(tasks, pooled):
+        scenario = by_name[task["scenario"]]
+        point = scenario.point_list()[task["point"]]
+        inline = references.point_reference(scenario, point)
+        assert _exact(output["reference"]) == _exact(inline)
+        kinds.add(inline["kind"])
+    assert kinds == {references.SIMULTANEOUS, references.EVENT_DRIVEN}
+
+
+def test_each_reference_task_is_a_chunk_of_its_own():
+    tasks, _ = runner._reference_tasks(SEVERAL_CONTACT, None)
+    assert len({runner.task_group(task) for task in tasks}) == len(tasks)
+
+
+@pytest.mark.parametrize("use_cache", [False, True])
+def test_a_run_gives_the_same_records_as_with_references_computed_inline(
+        tmp_path, monkeypatch, use_cache):
+    scenarios = [*SEVERAL_CONTACT, SINGLE_CONTACT]
+    options = dict(engines=("pymunk",), workers=2, log=None)
+    pooled = runner.run(scenarios, cache=ResultCache(tmp_path / "pooled") if use_cache else None,
+                        **options)
+    monkeypatch.setattr(runner, "_reference_tasks", lambda scenarios, cache: ([], []))
+    inline = runner.run(scenarios, cache=ResultCache(tmp_path / "inline") if use_cache else None,
+                        **options)
+    assert ([_exact(_without_timing(r)) for r in pooled.records]
+            == [_exact(_without_timing(r)) for r in inline.records])
+    assert _exact(pooled.scenarios) == _exact(inline.scenarios)
+
+
+def test_each_reference_is_in_the_cache_once_the_run_is_over(tmp_path, monkeypatch):
+    cache = ResultCache(tmp_path)
+    runner.run(SEVERAL_CONTACT[:2], engines=("pymunk",), workers=2, log=None, cache=cache)
+
+    def never(*args):
+        raise AssertionError("computed again, not read from the cache")
+
+    monkeypatch.setattr(references, "point_reference", never)
+    for scenario in SEVERAL_CONTACT[:2]:
+        for point in scenario.point_list():
+            stored = runner.point_reference_cached(scenario, point, cache)
+            assert stored["kind"] == references.SIMULTANEOUS
+    # and a second run has no reference left to compute
+    assert runner._reference_tasks(SEVERAL_CONTACT[:2], cache) == ([], [])
+
+
+def test_a_reference_that_raises_in_its_task_gives_the_points_internal_error_records(
+        monkeypatch):
+    def broken(kind, scene, fixed):
+        raise RuntimeError("broken reference")
+
+    monkeypatch.setattr(references, "scene_reference", broken)
+    scenario = load_scenario(SCENARIO_DIR / "flat-rod.toml")
+    assert runner.reference_task(runner._reference_tasks([scenario], None)[0][0]) == {
+        "error": "RuntimeError: broken reference"}
+    outcome = runner.run([scenario], engines=("pymunk",), workers=1, log=None)
+    assert outcome.records
+    assert all(record.status == "error: internal: RuntimeError: broken reference"
+               for record in outcome.records)
