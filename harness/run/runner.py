@@ -1011,36 +1011,21 @@ _BLAS_THREADS_SET: list[bool] = []
 
 
 def _one_blas_thread() -> None:
-    """In a worker process, keep numpy's OpenBLAS to one thread (once per process).
+    """In a worker process, keep numpy's BLAS to one thread (once per process).
 
-    A reference is many small linear-algebra calls; in forked pool workers OpenBLAS's own
+    A reference is many small linear-algebra calls; in forked pool workers the BLAS's own
     threads fight the other worker for the cores: measured on the 2-core machine, 141
     references took 6.7 s on two workers as on one, 3.4 s with one BLAS thread each. The
-    main process is left alone. Where the library cannot be found, nothing changes.
+    main process is left alone (threadpoolctl finds and limits the BLAS numpy loaded).
     """
     import multiprocessing
 
     if _BLAS_THREADS_SET or multiprocessing.parent_process() is None:
         return
     _BLAS_THREADS_SET.append(True)
-    import ctypes
+    from threadpoolctl import threadpool_limits
 
-    try:
-        with open("/proc/self/maps") as maps:
-            paths = {line.split()[-1] for line in maps if "openblas" in line.lower()}
-    except OSError:
-        return
-    for path in sorted(paths):
-        try:
-            library = ctypes.CDLL(path)
-        except OSError:
-            continue
-        for name in ("scipy_openblas_set_num_threads64_", "openblas_set_num_threads64_",
-                     "openblas_set_num_threads"):
-            setter = getattr(library, name, None)
-            if setter is not None:
-                setter(1)
-                break
+    threadpool_limits(1, user_api="blas")
 
 
 def _reference_tasks(scenarios: Sequence[Scenario], cache) -> tuple[list[dict], list]:
