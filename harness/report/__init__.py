@@ -41,12 +41,10 @@ import dataclasses
 import fnmatch
 import gc
 import json
-import multiprocessing
 import os
 import sys
 import time
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 from harness.report.figures import (
@@ -67,6 +65,7 @@ from harness.report.html import write_html
 from harness.report.pages import write_pages
 from harness.report.summary import write_summary
 from harness.report.views import FIGURES, slug, split_rows
+from harness.run.executor import map_forked
 from harness.run.records import DEFAULT_RESULTS, Results, read_results
 
 #: Above this many scenarios the report aggregates (``--scenario-figures auto``, ``--svg
@@ -276,12 +275,7 @@ def draw_figures(tasks: Sequence[FigureTask], figure_dir: Path,
     stale.sort(key=lambda item: -KIND_COST.get(item[1][0].kind, 1.0))
     _PENDING = [item for _, item in stale]
     try:
-        if workers <= 1 or "fork" not in multiprocessing.get_all_start_methods():
-            drawn = [_draw_pending(i) for i in range(len(_PENDING))]
-        else:
-            context = multiprocessing.get_context("fork")
-            with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
-                drawn = list(pool.map(_draw_pending, range(len(_PENDING))))
+        drawn = map_forked(_draw_pending, range(len(_PENDING)), workers)
     finally:
         _PENDING = []
     for (index, _), file in zip(stale, drawn):

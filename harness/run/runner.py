@@ -83,6 +83,7 @@ import numpy as np
 
 from harness.engines import preset_choices, preset_role
 from harness.run import metrics, references, verdicts
+from harness.run.executor import one_blas_thread
 from harness.run.history import contact_history
 from harness.run.provenance import provenance
 from harness.run.records import (
@@ -1007,27 +1008,6 @@ def _store_reference(cache, key: str, reference: dict) -> None:
         pass
 
 
-_BLAS_THREADS_SET: list[bool] = []
-
-
-def _one_blas_thread() -> None:
-    """In a worker process, keep numpy's BLAS to one thread (once per process).
-
-    A reference is many small linear-algebra calls; in forked pool workers the BLAS's own
-    threads fight the other worker for the cores: measured on the 2-core machine, 141
-    references took 6.7 s on two workers as on one, 3.4 s with one BLAS thread each. The
-    main process is left alone (threadpoolctl finds and limits the BLAS numpy loaded).
-    """
-    import multiprocessing
-
-    if _BLAS_THREADS_SET or multiprocessing.parent_process() is None:
-        return
-    _BLAS_THREADS_SET.append(True)
-    from threadpoolctl import threadpool_limits
-
-    threadpool_limits(1, user_api="blas")
-
-
 def _reference_tasks(scenarios: Sequence[Scenario], cache) -> tuple[list[dict], list]:
     """The reference tasks (:func:`reference_task`) of the several-contact points of
     ``scenarios`` whose reference the cache does not hold, and their cache keys (None
@@ -1059,7 +1039,7 @@ def reference_task(task: dict) -> dict:
     reference inline, where the exception becomes the point's internal-error records as
     before (:func:`_point_records_or_errors`).
     """
-    _one_blas_thread()
+    one_blas_thread()  # a Dask worker has no pool initializer
     try:
         return {"reference": references.scene_reference(task["situation"], task["scene"],
                                                         task["laws"])}
