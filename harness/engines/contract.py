@@ -513,11 +513,6 @@ class Engine(abc.ABC):
         self.validate_settings(resolved)
         return resolved
 
-    def preset_label(self, role: str) -> str:
-        """The name users see for preset ``role`` (harness/engines/__init__.py, presets)."""
-        from harness.engines import preset_label  # the registry imports this module
-
-        return preset_label(self.name, role)
 
     def _role_named(self, name: str) -> str:
         from harness.engines import preset_role

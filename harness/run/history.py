@@ -42,7 +42,6 @@ How far to trust it
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
 
 import numpy as np
@@ -171,10 +170,4 @@ def _thin(rows: Sequence, limit: int) -> list:
     return [rows[i] for i in keep]
 
 
-def end_mismatch_ok(history: Mapping, tolerance: float) -> bool:
-    """Whether the rebuilt end speeds agree with the engine's within ``tolerance``."""
-    value = history.get("end_mismatch")
-    return value is not None and math.isfinite(value) and value <= tolerance
-
-
-__all__ = ["MAX_HISTORY_STEPS", "SOURCES", "contact_history", "end_mismatch_ok"]
+__all__ = ["MAX_HISTORY_STEPS", "SOURCES", "contact_history"]

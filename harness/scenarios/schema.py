@@ -66,7 +66,6 @@ TOP_KEYS = {
     "matrix": ("name", "description", "tags", "system", "restitution", "friction", "laws",
                "mass_matrix", "wn", "wt", "u", "sweep", "expect"),
 }
-ALL_TOP_KEYS = tuple(dict.fromkeys(key for keys in TOP_KEYS.values() for key in keys))
 EXPECT_KEYS = ("collision_type", "case", "energy_gain", "gate")
 GATE_KEYS = ("law", "max_departure")
 NAME_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")

@@ -17,16 +17,15 @@ tight loop, from the adapter's start state, the reset outside (``bare_s``) and i
 
 from __future__ import annotations
 
-import multiprocessing
 import os
 import time
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
 
 from harness.engines import STATUSES, load_engine
 from harness.run import verdicts
+from harness.run.executor import map_forked
 from harness.survey.laws import WIDTH
 
 #: Scenes handed to ``run_many`` at once: the runs (with their contact records) of one slice
@@ -71,7 +70,7 @@ def run_engine(engine_name: str, preset: str, scenes, problems=None,
     clock = time.perf_counter
     if problems is not None and terms is None:
         tick = clock()
-        terms = _scene_terms(scenes, problems)
+        terms = verdicts.prepare_many(scenes, problems)
         judging += clock() - tick
     for begin in range(0, count, SLICE):
         tick = clock()
@@ -125,17 +124,12 @@ def run_pairs(pairs, scenes, problems, law_energy_change, terms=None,
     workers = min(workers or os.cpu_count() or 1, slices)
     if problems is not None and terms is None:
         terms = verdicts.prepare_many(scenes, problems)
-    if workers <= 1 or "fork" not in multiprocessing.get_all_start_methods():
-        return [run_engine(engine, preset, scenes, problems, law_energy_change, terms)
-                for engine, preset in pairs]
     tasks = [(engine, preset, begin, min(begin + PAIR_SLICE, count))
              for engine, preset in pairs for begin in range(0, count, PAIR_SLICE)]
     tasks.sort(key=lambda task: -_ENGINE_COST.get(task[0], 1.0) * (task[3] - task[2]))
     _SHARED = (scenes, problems, law_energy_change, terms)
     try:
-        context = multiprocessing.get_context("fork")
-        with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
-            parts = dict(zip(tasks, pool.map(_run_slice, tasks)))
+        parts = dict(zip(tasks, map_forked(_run_slice, tasks, workers)))
     finally:
         _SHARED = ()
     joined = []
@@ -166,26 +160,6 @@ def _join(slices: list[EngineResults]) -> EngineResults:
         np.concatenate([part.reasons for part in slices]),
         np.concatenate([part.steps for part in slices]),
         sum(part.wall_s for part in slices), sum(part.judge_s for part in slices))
-
-
-#: The verdicts' per-scene terms of the last scenes judged, ``(scenes, problems, terms)``:
-#: the survey judges the same scenes once per engine and preset, so they are worked out once.
-_LAST_TERMS: list = []
-
-
-def _scene_terms(scenes, problems) -> list:
-    """:func:`harness.run.verdicts.prepare_many` of ``scenes``, kept for the next call with
-    the very same scene and problem objects (held here, so their ids cannot be reused)."""
-    if _LAST_TERMS and _same_objects(_LAST_TERMS[0], scenes) and _same_objects(
-            _LAST_TERMS[1], problems):
-        return _LAST_TERMS[2]
-    terms = verdicts.prepare_many(scenes, problems)
-    _LAST_TERMS[:] = [tuple(scenes), tuple(problems), terms]
-    return terms
-
-
-def _same_objects(kept, given) -> bool:
-    return len(kept) == len(given) and all(a is b for a, b in zip(kept, given))
 
 
 def bare_stepping(engine_name: str, preset: str, scenes, steps) -> dict[str, float]:

@@ -68,12 +68,12 @@ def test_records_keep_the_role_and_show_the_name():
 
 def test_the_adapter_takes_either_name_and_records_the_role():
     pytest.importorskip("mujoco")
-    from harness.engines import load_engine
+    from harness.engines import load_engine, preset_label
     from harness.scenarios import SCENARIO_DIR, load_scenario
 
     engine = load_engine("mujoco")
     assert engine.settings("matched-bounce") == engine.settings("accurate")
-    assert engine.preset_label("accurate") == "matched-bounce"
+    assert preset_label("mujoco", "accurate") == "matched-bounce"
     scene = load_scenario(SCENARIO_DIR / "disk-oblique.toml").scene()
     assert engine.run(scene, preset="matched-bounce").preset == "accurate"
     with pytest.raises(EngineSettingsError, match="unknown preset 'matched-bounce'"):

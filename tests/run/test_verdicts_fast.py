@@ -388,12 +388,14 @@ def test_survey_runs_get_the_reference_verdicts(engine_name, preset, survey_scen
 
 @pytest.mark.parametrize(("engine_name", "preset"), PAIRS)
 def test_the_survey_columns_are_the_reference_verdicts(engine_name, preset, survey_scenes):
-    """``run_engine``'s status and reasons, judged with the scene terms it keeps between
-    calls, are those of the reference (runs are deterministic: ``run_many`` again)."""
+    """``run_engine``'s status and reasons, judged with the scene terms it works out or is
+    given (as ``run_pairs`` gives them), are those of the reference (runs are deterministic:
+    ``run_many`` again)."""
     engine = engine_or_skip(engine_name)
     scenes, problems, lcp = survey_scenes
     results = run_engine(engine_name, preset, scenes, problems, lcp)
-    again = run_engine(engine_name, preset, scenes, problems, lcp)  # the kept terms
+    again = run_engine(engine_name, preset, scenes, problems, lcp,
+                       verdicts.prepare_many(scenes, problems))
     runs = engine.run_many(scenes, engine.settings(preset))
     for row, run in enumerate(runs):
         old = reference_judge(scenes[row], problems[row], reference_numbers_from_run(run),
