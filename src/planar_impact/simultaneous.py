@@ -622,9 +622,12 @@ def _type_within_margin(system, law, i, combinations, effective, margin):
 
 
 def _batched_map(system, law, types, signs):
-    """:func:`_contact_map` (effective reading) for many combinations at once: rows of
+    """:func:`_contact_map` (effective reading) of the paper's Stronge, the one non-affine
+    law, for many combinations at once: rows of
     ``types``, ``signs`` (``(N, m)``) map rows of impulses ``(N, 2m)``, with the same
     operations in the same order per element (the laws' kernels take arrays)."""
+    if law != "stronge-paper":  # the kernels below are that law's
+        raise ValueError(f"_batched_map serves stronge-paper, not {law!r}")
     count = system.count
     separating = types == SEPARATING
     safe_types = np.where(separating, 1, types)
@@ -666,7 +669,9 @@ def _iterated_screen(system, law, combinations, tolerance, max_iterations=30):
     above ``SCREEN_MARGIN`` of the bound (far from any fixed point the full path would
     accept at FIXED_POINT_TOLERANCE), or at a point that fails a necessary test of
     :func:`_check_combination` by more than ``SCREEN_MARGIN`` (as in :func:`_affine_screen`).
-    Non-finite ends are kept. Returns a boolean per combination.
+    A combination whose map is not finite at the start is dropped (the full path gives up
+    there too); one that went non-finite later is kept only if it had come within
+    ``BROKEN_KEEP`` of a fixed point. Returns a boolean per combination.
     """
     size = 2 * system.count
     types = np.array([t for t, _ in combinations], dtype=np.int64)
