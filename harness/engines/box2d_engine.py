@@ -164,158 +164,182 @@ CLIPPED_NOTE = ("Box2D clipped a velocity (b2_maxTranslation 2 m or b2_maxRotati
                 "step; see derived speed_cap, angular_speed_cap)")
 
 
+# ---------------------------------------------------------------------- poses
+# pybox2d's own functions, called directly in the per-step readout: each property access
+# (``body.transform``, ``contact.manifold``, ...) goes through a Python-level wrapper first.
+_B2 = Box2D._Box2D
+_get_transform = _B2.b2Body___GetTransform
+_get_position = _B2.b2Transform_position_get
+_get_rotation = _B2.b2Transform_q_get
+_get_angle = _B2.b2Body___GetAngle
+_get_linear_velocity = _B2.b2Body___GetLinearVelocity
+_get_angular_velocity = _B2.b2Body___GetAngularVelocity
+_body_contacts = _B2.b2Body___GetContactList_internal
+_world_contacts = _B2.b2World___GetContactList_internal
+_edge_contact = _B2.b2ContactEdge_contact_get
+_edge_next = _B2.b2ContactEdge_next_get
+_contact_next = _B2.b2Contact___GetNext
+_is_touching = _B2.b2Contact___IsTouching
+_get_manifold = _B2.b2Contact___GetManifold
+_get_fixture_a = _B2.b2Contact___GetFixtureA
+_get_fixture_b = _B2.b2Contact___GetFixtureB
+_fixture_data = _B2.b2Fixture___GetUserData
+_point_count = _B2.b2Manifold_pointCount_get
+_get_point = _B2.b2Manifold___GetPoint
+
+#: A body's identity (its C++ address): poses are keyed by it (a b2Body wrapper compares
+#: through a Python function, and each access to a contact's body makes a new wrapper).
+_body_id = _B2.b2Body___hash__
+_CIRCLES = Box2D.b2Manifold.e_circles
+_FACE_A = Box2D.b2Manifold.e_faceA
+
+
+def _pose(body) -> tuple[float, float, float, float]:
+    """``(x, y, cos θ, sin θ)`` of a Box2D body's transform now."""
+    transform = _get_transform(body)
+    position, rotation = _get_position(transform), _get_rotation(transform)
+    return position.x, position.y, rotation.c, rotation.s
+
+
+class _Poses:
+    """What the readout keeps of an impact's bodies between steps (a :class:`_World`'s and
+    a :class:`_Slot`'s base).
+
+    ``start``: every body's :func:`_pose` by :data:`_body_id` when the next step begins (a
+    step's contacts are collided at its start, and their geometry needs those poses; the
+    ground's pose, read once, never changes); ``now``: the scene's poses ``(x, y, θ)`` now,
+    what ``_read_poses`` returns. :meth:`read` refreshes both after a step, so the poses
+    are read once a step (the next step starts where this one ended).
+    """
+
+    __slots__ = ("bodies", "body_b", "body_b_id", "dynamic", "length", "now", "start")
+
+    def __init__(self, bodies: list, static: list, length: float) -> None:
+        self.bodies, self.body_b, self.length = bodies, bodies[-1], length
+        self.body_b_id = _body_id(self.body_b)
+        self.dynamic = [(b2_body, _body_id(b2_body)) for b2_body in bodies]
+        self.start = {_body_id(b2_body): _pose(b2_body) for b2_body in static}
+        self.now: tuple = ()
+
+    def read(self) -> None:
+        """Read the bodies' poses now (after placing them, and after every step)."""
+        length, start = self.length, self.start
+        now = []
+        for b2_body, key in self.dynamic:
+            transform = _get_transform(b2_body)
+            position, rotation = _get_position(transform), _get_rotation(transform)
+            x, y = position.x, position.y
+            start[key] = (x, y, rotation.c, rotation.s)
+            now.append((x / length, y / length, _get_angle(b2_body)))
+        self.now = tuple(now)
+
+
 # ---------------------------------------------------------------------- world building
-def _polygon_fixture(body, vertices, radius: float, keywords: dict | None = None):
-    """A polygon fixture with skin ``radius`` (``keywords``: more b2FixtureDef fields)."""
+def _polygon_shape(vertices, radius: float):
+    """A b2PolygonShape on ``vertices`` with skin ``radius``."""
     try:
-        fixture = body.CreatePolygonFixture(vertices=vertices, density=0.0, **(keywords or {}))
+        shape = b2.polygonShape(vertices=vertices)
     except (AssertionError, ValueError, RuntimeError) as error:
         raise UnsupportedScene(
             f"engine 'box2d': polygon {vertices!r} refused by b2PolygonShape::Set ({error}); "
-            "try a larger length_scale"
-        ) from error
-    if fixture.shape.vertexCount != len(vertices):
+            "try a larger length_scale") from error
+    if shape.vertexCount != len(vertices):
         raise UnsupportedScene(
-            f"engine 'box2d': b2PolygonShape::Set kept {fixture.shape.vertexCount} of "
-            f"{len(vertices)} vertices (it welds near vertices); try a larger length_scale"
-        )
-    fixture.shape.radius = radius
-    # The skin pads the scene's outline: a contact's overlap of the scene's bodies is its
-    # separation plus the skins (a rod's core sets its own padding to 0: inset by its skin).
-    _set_fixture_data(fixture, radius)
-    return fixture
+            f"engine 'box2d': b2PolygonShape::Set kept {shape.vertexCount} of "
+            f"{len(vertices)} vertices (it welds near vertices); try a larger length_scale")
+    shape.radius = radius
+    return shape
+
+
+def _circle_shape(radius: float, x: float = 0.0):
+    """A b2CircleShape of ``radius`` centred at ``(x, 0)`` on its body."""
+    shape = b2.circleShape()
+    shape.radius = radius
+    if x:
+        shape.pos = (x, 0.0)
+    return shape
 
 
 def _set_fixture_data(fixture, padding: float) -> None:
-    """userData ``(padding, radius)``: how far the fixture pads the scene's outline, and its
-    shape's radius as Box2D holds it (float32); the readout takes both in one call."""
-    fixture.userData = (padding, fixture.shape.radius)
+    """userData ``(padding, radius, body)``: how far the fixture pads the scene's outline,
+    its shape's radius as Box2D holds it (float32) and its body's :data:`_body_id`; the
+    readout takes all three in one call (a fixture's ``body`` would make a new wrapper)."""
+    fixture.userData = (padding, fixture.shape.radius, _body_id(fixture.body))
 
 
-def _add_fixtures(b2_body, shape, length: float, skin: float) -> list:
-    """The fixtures of one scene shape on ``b2_body`` (lengths times ``length``)."""
-    if shape.kind == "disk":
-        disk = b2_body.CreateCircleFixture(radius=shape.radius * length, density=0.0)
-        _set_fixture_data(disk, 0.0)  # a circle's radius is the disk's own
-        return [disk]
-    if shape.kind == "rod":
-        half, radius = shape.length / 2.0 * length, shape.radius * length
-        caps = [b2_body.CreateCircleFixture(radius=radius, pos=(x, 0.0), density=0.0)
-                for x in (-half, half)]
-        # Core box inset by its skin: its rounded outline stays inside the capsule.
-        core_skin = min(skin, radius / 2.0)
-        thickness = radius - core_skin
-        core = _polygon_fixture(
-            b2_body,
-            [(-half, -thickness), (half, -thickness), (half, thickness), (-half, thickness)],
-            core_skin)
-        _set_fixture_data(core, 0.0)  # its skin lies inside the capsule's outline
-        for cap in caps:
-            _set_fixture_data(cap, 0.0)
-        return [*caps, core]
-    vertices = [(x * length, y * length) for x, y in shape.vertices().tolist()]
-    return [_polygon_fixture(b2_body, vertices, skin)]
+def _add_impact(world, scene: Scene, length: float, skin: float, extent: float, *,
+                starts: tuple | None = None, group: int = 0,
+                pair_values: tuple | None = None) -> tuple[list, list, list]:
+    """``(bodies, ground, fixtures)``: the scene's ground and bodies in ``world``, the
+    bodies at ``starts`` (:func:`_place`'s form; None: at rest at the origin, for
+    :func:`_place` to move), the fixtures with the pair's ``(e, μ)`` (None: Box2D's
+    defaults, for :meth:`_World.configure` to set) in collision group ``group`` with mask
+    0 (0: no group, every fixture collides).
 
-
-def _add_impact(world, scene: Scene, length: float, skin: float) -> tuple:
-    """``(fixtures, bodies, body_fixtures)``: the scene's ground and bodies in ``world``,
-    the bodies at the origin (:func:`_place` puts them at a run's start)."""
-    fixtures: list = []
-    if scene.ground:
-        fixtures.append(_polygon_fixture(
-            world.CreateStaticBody(), _ground_vertices(_extent(scene), length), skin))
-    bodies, body_fixtures = [], []
-    for body in scene.bodies:
-        b2_body = world.CreateDynamicBody(position=(0.0, 0.0))
-        body_fixtures.extend(_add_fixtures(b2_body, body.shape, length, skin))
-        b2_body.massData = b2.massData(
-            mass=body.mass, center=(0.0, 0.0), I=body.moment_of_inertia * length * length)
-        bodies.append(b2_body)
-    fixtures.extend(body_fixtures)
-    return fixtures, bodies, body_fixtures
-
-
-def _add_batch_impact(world, scene: Scene, group: int, pair_values: tuple, starts: tuple,
-                      length: float, skin: float, extent: float) -> list:
-    """:func:`_add_impact` for run_many, its bodies made at ``starts``, in collision group
-    ``group`` (mask 0: no other group), with the pair's ``(e, μ)``; the bodies.
-
-    The same Box2D objects, made through definitions filled field by field (pybox2d's
-    keyword constructors cost more than the rest of the build), and the same proxies as
-    :func:`_place` leaves: boxes fitted around the start pose (a body's skins are set
-    before its fixtures are made), a zero sleep timer.
+    The objects are made through definitions filled field by field (pybox2d's keyword
+    constructors cost more than the rest of the build). A body's skins are set before its
+    fixtures are made, so their proxies' boxes are the ones :func:`_place` fits; the
+    ground's skin is set after (its proxy's box is the default skin's, as it always was: a
+    static body is never placed anew, and the box decides when contacts are created).
     """
-    restitution, friction = pair_values
+    fixture_definition = b2.fixtureDef()
+    fixture_definition.density = 0.0
+    if pair_values is not None:
+        fixture_definition.restitution, fixture_definition.friction = pair_values
+    if group:
+        fixture_definition.groupIndex = group
+        fixture_definition.maskBits = 0
+    fixtures = []
 
-    def fixture(body, shape, padding: float):
-        definition = b2.fixtureDef()
-        definition.shape = shape
-        definition.density = 0.0
-        definition.restitution = restitution
-        definition.friction = friction
-        definition.groupIndex = group
-        definition.maskBits = 0
-        made = body.CreateFixture(definition)
-        _set_fixture_data(made, padding)
-        return made
+    def add(body, shape, padding: float):
+        fixture_definition.shape = shape
+        fixture = body.CreateFixture(fixture_definition)  # copies the definition and shape
+        _set_fixture_data(fixture, padding)
+        fixtures.append(fixture)
+        return fixture
 
-    def polygon(vertices, radius: float):
-        try:
-            shape = b2.polygonShape(vertices=vertices)
-        except (AssertionError, ValueError, RuntimeError) as error:
-            raise UnsupportedScene(
-                f"engine 'box2d': polygon {vertices!r} refused by b2PolygonShape::Set "
-                f"({error}); try a larger length_scale") from error
-        if shape.vertexCount != len(vertices):
-            raise UnsupportedScene(
-                f"engine 'box2d': b2PolygonShape::Set kept {shape.vertexCount} of "
-                f"{len(vertices)} vertices (it welds near vertices); try a larger length_scale")
-        shape.radius = radius
-        return shape
-
-    def circle(radius: float, x: float = 0.0):
-        shape = b2.circleShape()
-        shape.radius = radius
-        if x:
-            shape.pos = (x, 0.0)
-        return shape
-
+    ground = []
     if scene.ground:
-        # The ground as _add_impact makes it: skinned after it is made (its proxy's box
-        # is the default skin's, and a static body is never placed anew).
-        _polygon_fixture(world.CreateStaticBody(), _ground_vertices(extent, length), skin,
-                         {"groupIndex": group, "maskBits": 0,
-                          "restitution": restitution, "friction": friction})
+        ground_body = world.CreateStaticBody()
+        fixture = add(ground_body, _polygon_shape(_ground_vertices(extent, length),
+                                                  POLYGON_RADIUS), skin)
+        fixture.shape.radius = skin
+        _set_fixture_data(fixture, skin)
+        ground.append(ground_body)
+    body_definition = b2.bodyDef()
+    body_definition.type = b2.dynamicBody
+    mass_data = b2.massData()
+    mass_data.center = (0.0, 0.0)
     bodies = []
-    for body, (position, angle, velocity, angular_velocity) in zip(scene.bodies, starts):
-        definition = b2.bodyDef()
-        definition.type = b2.dynamicBody
-        definition.position = position
-        definition.angle = angle
-        b2_body = world.CreateBody(definition)
+    for index, body in enumerate(scene.bodies):
+        if starts is not None:
+            body_definition.position, body_definition.angle = starts[index][:2]
+        b2_body = world.CreateBody(body_definition)
         shape = body.shape
         if shape.kind == "disk":
-            fixture(b2_body, circle(shape.radius * length), 0.0)
+            add(b2_body, _circle_shape(shape.radius * length), 0.0)  # the disk's own radius
         elif shape.kind == "rod":
             half, radius = shape.length / 2.0 * length, shape.radius * length
             for x in (-half, half):
-                fixture(b2_body, circle(radius, x), 0.0)
+                add(b2_body, _circle_shape(radius, x), 0.0)
+            # Core box inset by its skin: its rounded outline stays inside the capsule
+            # (padding 0: its skin lies inside the capsule's outline).
             core_skin = min(skin, radius / 2.0)
             thickness = radius - core_skin
-            fixture(b2_body, polygon([(-half, -thickness), (half, -thickness),
-                                      (half, thickness), (-half, thickness)], core_skin), 0.0)
+            add(b2_body, _polygon_shape([(-half, -thickness), (half, -thickness),
+                                         (half, thickness), (-half, thickness)], core_skin), 0.0)
         else:
             vertices = [(x * length, y * length) for x, y in shape.vertices().tolist()]
-            fixture(b2_body, polygon(vertices, skin), skin)
-        mass_data = b2.massData()
+            # The skin pads the scene's outline: a contact's overlap of the scene's bodies
+            # is its separation plus the skins.
+            add(b2_body, _polygon_shape(vertices, skin), skin)
         mass_data.mass = body.mass
-        mass_data.center = (0.0, 0.0)
         mass_data.I = body.moment_of_inertia * length * length
         b2_body.massData = mass_data
-        b2_body.linearVelocity = velocity
-        b2_body.angularVelocity = angular_velocity
+        if starts is not None:
+            _, _, b2_body.linearVelocity, b2_body.angularVelocity = starts[index]
         bodies.append(b2_body)
-    return bodies
+    return bodies, ground, fixtures
 
 
 def _ground_vertices(extent: float, length: float) -> list:
@@ -371,15 +395,17 @@ def _at_cap(bodies, dt: float, band: float) -> bool:
     return False
 
 
-class _World:
+class _World(_Poses):
     """One b2World holding the scene's ground and bodies, and the current run's scales."""
+
+    __slots__ = ("clipped", "dt", "fixtures", "iterations", "notes", "pair_values", "velocity",
+                 "world", "world_values")
 
     def __init__(self, scene: Scene, length: float, skin: float):
         self.world = b2.world(gravity=(0.0, 0.0), doSleep=True)
-        self.fixtures, self.bodies, self.body_fixtures = _add_impact(
-            self.world, scene, length, skin)
-        self.body_b = self.bodies[-1]
-        self.length = length
+        bodies, ground, self.fixtures = _add_impact(self.world, scene, length, skin,
+                                                    _extent(scene))
+        super().__init__(bodies, ground, length)
         self.pair_values: tuple | None = None
         self.world_values: tuple | None = None
         # The current run's (set by _reset): Box2D time step, sweeps, velocity scale, the
@@ -416,6 +442,7 @@ class _World:
         # The pairs touching at the start pose are looked up now, so that the first step's
         # collision pass already sees them.
         manager.FindNewContacts()
+        self.read()
 
     def at_cap(self, band: float) -> bool:
         """Whether a body's velocity reaches ``band`` times Box2D's per-step caps."""
@@ -423,44 +450,55 @@ class _World:
 
 
 # ---------------------------------------------------------------------- contact readout
-def _pose(body) -> tuple[float, float, float, float]:
-    """``(x, y, cos θ, sin θ)`` of a Box2D body's transform now."""
-    transform = body.transform
-    position, rotation = transform.position, transform.q
-    return position.x, position.y, rotation.c, rotation.s
+def _touching_in_body(body) -> list:
+    """The touching contacts of ``body``, oldest first (the order of pybox2d's
+    ``body.contacts``, which reverses Box2D's list: a new contact goes to its head)."""
+    touching = []
+    edge = _body_contacts(body)
+    while edge is not None:
+        contact = _edge_contact(edge)
+        if _is_touching(contact):
+            touching.append(contact)
+        edge = _edge_next(edge)
+    touching.reverse()
+    return touching
 
 
-#: A body's identity (its C++ address): poses are keyed by it (a b2Body wrapper compares
-#: through a Python function, and each access to a contact's body makes a new wrapper).
-_body_id = Box2D._Box2D.b2Body___hash__
-_CIRCLES = Box2D.b2Manifold.e_circles
-_FACE_A = Box2D.b2Manifold.e_faceA
+def _touching_in_world(world) -> list:
+    """The touching contacts of a b2World, oldest first (as pybox2d's ``world.contacts``)."""
+    touching = []
+    contact = _world_contacts(world)
+    while contact is not None:
+        if _is_touching(contact):
+            touching.append(contact)
+        contact = _contact_next(contact)
+    touching.reverse()
+    return touching
 
 
-def _world_manifold(contact, poses=None) -> tuple[tuple[float, float], list, list]:
+def _world_manifold(contact) -> tuple[tuple[float, float], list, list]:
     """``(normal from fixture A to B, points, separations)`` of a contact, in world frame
     (:func:`_manifold_geometry` of the contact's manifold, at the poses now)."""
     manifold = contact.manifold
     fixture_a, fixture_b = contact.fixtureA, contact.fixtureB
-    return _manifold_geometry(manifold, manifold.points, fixture_a.body, fixture_b.body,
-                              fixture_a.userData[1], fixture_b.userData[1], poses)
+    return _manifold_geometry(manifold, manifold.points, _pose(fixture_a.body),
+                              _pose(fixture_b.body), fixture_a.userData[1],
+                              fixture_b.userData[1])
 
 
-def _manifold_geometry(manifold, manifold_points, body_a, body_b, radius_a: float,
-                       radius_b: float, poses) -> tuple[tuple[float, float], list, list]:
+def _manifold_geometry(manifold, manifold_points, pose_a: tuple, pose_b: tuple,
+                       radius_a: float, radius_b: float) -> tuple[tuple[float, float], list, list]:
     """``(normal from fixture A to B, points, separations)`` of a contact, in world frame.
 
     b2WorldManifold::Initialize redone in Python (pybox2d's ``worldManifold`` returned an
     uninitialised normal), with the separations of the skinned shapes (Box2D's, negative
-    within the summed skins). ``manifold_points``: the manifold's points in use; ``radius_a``,
-    ``radius_b``: the fixtures' shape radii; ``poses`` maps a body's :data:`_body_id` to
-    its ``_pose`` when the manifold was computed (the start of the step: after the step the
-    bodies have moved, which would turn a circle pair's normal); by default the poses now.
+    within the summed skins). ``manifold_points``: the manifold's points in use; ``pose_a``,
+    ``pose_b``: the bodies' :func:`_pose` when the manifold was computed (the start of the
+    step: after the step the bodies have moved, which would turn a circle pair's normal);
+    ``radius_a``, ``radius_b``: the fixtures' shape radii.
     """
-    pose_a = poses.get(_body_id(body_a)) if poses else None
-    pose_b = poses.get(_body_id(body_b)) if poses else None
-    pa_x, pa_y, ca, sa = _pose(body_a) if pose_a is None else pose_a
-    pb_x, pb_y, cb, sb = _pose(body_b) if pose_b is None else pose_b
+    pa_x, pa_y, ca, sa = pose_a
+    pb_x, pb_y, cb, sb = pose_b
     kind = manifold.type_
     points, separations = [], []
     if kind == _CIRCLES:
@@ -694,13 +732,12 @@ class Box2DEngine(Engine):
         world.world.Step(world.dt, *world.iterations)
 
     def _step(self, world: _World) -> RawContacts | None:
-        bodies = world.bodies
-        # Contacts are collided at the step's start: their geometry needs these poses.
-        poses = {_body_id(b2_body): _pose(b2_body) for b2_body in bodies}
         world.world.Step(world.dt, *world.iterations)
         if not world.clipped:
             world.clipped = world.at_cap(_CAP_BAND)
-        return _contact_of(world.world.contacts, poses, world)
+        raw = _contact_of(_touching_in_world(world.world), world)  # at the step's start poses
+        world.read()  # the poses now: the records', and the next step's start
+        return raw
 
     # ------------------------------------------------------------------ many impacts
     def run_many(self, scenes, settings=None, *, preset="accurate", overrides=None) -> list:
@@ -789,24 +826,26 @@ class Box2DEngine(Engine):
         return batch, batch.slots, derived
 
     def _step_many(self, batch: _Batch, active) -> dict:
-        slots = batch.slots
-        # Contacts are collided at the step's start: their geometry needs these poses.
-        poses = [{_body_id(b2_body): _pose(b2_body) for b2_body in slots[slot].bodies}
-                 for slot in active]
-        stepping = {slots[slot].world for slot in active}
-        for index, (world, dt, iterations) in enumerate(batch.worlds):
-            if index in stepping:
-                world.Step(dt, *iterations)
+        slots, worlds = batch.slots, batch.worlds
+        if len(worlds) == 1:  # called with active impacts only
+            world, dt, iterations = worlds[0]
+            world.Step(dt, *iterations)
+        else:
+            stepping = {slots[slot].world for slot in active}
+            for index, (world, dt, iterations) in enumerate(worlds):
+                if index in stepping:
+                    world.Step(dt, *iterations)
         contacts = {}
-        for slot, slot_poses in zip(active, poses):
+        for slot in active:
             view = slots[slot]
             if not view.clipped:
                 view.clipped = _at_cap(view.bodies, view.dt, _CAP_BAND)
             # Every contact of an impact involves its body B (the ground's partner or the
             # other body); the body's list keeps the world's order of them.
-            raw = _contact_of([edge.contact for edge in view.body_b.contacts], slot_poses, view)
+            raw = _contact_of(_touching_in_body(view.body_b), view)
             if raw is not None:
                 contacts[slot] = raw
+            view.read()
         if batch.listeners:
             batch.listeners = [(world, listener) for world, listener in batch.listeners
                                if not listener.done(world)]
@@ -825,13 +864,7 @@ class Box2DEngine(Engine):
         batch.slots = []
 
     def _read_poses(self, world: _World) -> tuple:
-        length = world.length
-        poses = []
-        for b2_body in world.bodies:
-            position = b2_body.position
-            x, y = position.x, position.y
-            poses.append((x / length, y / length, b2_body.angle))
-        return tuple(poses)
+        return world.now  # read after the step (_Poses.read)
 
     def _read_velocities(self, world: _World) -> tuple:
         velocity, rate = world.velocity, world.length / world.velocity
@@ -871,31 +904,30 @@ def _probe(world: _World, prepared: _Prepared, starts: tuple, dt: float,
 MANY_CHUNK = 32
 
 
-def _contact_of(contacts, poses: dict, world) -> RawContacts | None:
-    """The step's contact of one impact from its Box2D ``contacts`` (world order);
-    ``poses``: its bodies' poses at the step's start by :data:`_body_id`; ``world``: a
-    :class:`_World` or :class:`_Slot` (length and velocity scales, body B)."""
-    length, velocity, body_b = world.length, world.velocity, _body_id(world.body_b)
+def _contact_of(touching: list, world) -> RawContacts | None:
+    """The step's contact of one impact from its ``touching`` Box2D contacts (oldest
+    first); ``world``: its :class:`_World` or :class:`_Slot` (scales, body B, the poses at
+    the step's start)."""
+    length, velocity, body_b = world.length, world.velocity, world.body_b_id
+    poses = world.start
     step_x = step_y = 0.0
     points: list = []
     normal = None
-    for contact in contacts:
-        if not contact.touching:
+    for contact in touching:
+        manifold = _get_manifold(contact)
+        count = _point_count(manifold)
+        if not count:
             continue
-        manifold = contact.manifold
-        manifold_points = manifold.points
-        if not manifold_points:
-            continue
-        fixture_a, fixture_b = contact.fixtureA, contact.fixtureB
-        (padding_a, radius_a), (padding_b, radius_b) = fixture_a.userData, fixture_b.userData
-        contact_body_b = fixture_b.body
+        manifold_points = [_get_point(manifold, index) for index in range(count)]
+        padding_a, radius_a, body_a_id = _fixture_data(_get_fixture_a(contact))
+        padding_b, radius_b, contact_body_b = _fixture_data(_get_fixture_b(contact))
         contact_normal, contact_points, separations = _manifold_geometry(
-            manifold, manifold_points, fixture_a.body, contact_body_b, radius_a, radius_b,
-            poses)
+            manifold, manifold_points, poses[body_a_id], poses[contact_body_b], radius_a,
+            radius_b)
         # Overlap of the scene's outlines: the skins are padding, not the bodies.
         padding = padding_a + padding_b
         # The impulse on scene body B (Box2D applies +P to fixture B's body).
-        sign = 1.0 if _body_id(contact_body_b) == body_b else -1.0
+        sign = 1.0 if contact_body_b == body_b else -1.0
         n_x, n_y = contact_normal
         for point in manifold_points:
             p_n, p_t = point.normalImpulse, point.tangentImpulse
@@ -913,15 +945,14 @@ def _contact_of(contacts, poses: dict, world) -> RawContacts | None:
             abs(step_x * normal[0] + step_y * normal[1]))
 
 
-class _Slot:
+class _Slot(_Poses):
     """One impact of a batch: what _read_poses, _read_velocities and _run_notes read (the
     attributes of a :class:`_World` they use)."""
 
-    __slots__ = ("bodies", "body_b", "clipped", "derived", "dt", "length", "notes",
-                 "restitution", "velocity", "world")
+    __slots__ = ("clipped", "derived", "dt", "notes", "restitution", "velocity", "world")
 
-    def __init__(self, bodies: list, length: float) -> None:
-        self.bodies, self.body_b, self.length = bodies, bodies[-1], length
+    def __init__(self, bodies: list, ground: list, length: float) -> None:
+        super().__init__(bodies, ground, length)
         self.velocity, self.dt, self.clipped = 1.0, 0.0, False
         self.notes: tuple[str, ...] = ()
         self.derived: dict = {}
@@ -949,15 +980,19 @@ def _many_world(scenes, prepared, slots, length: float, skin: float, world_value
     _set_switches(world, world_values)
     views = []
     for slot, scene, one in zip(slots, scenes, prepared):
-        bodies = _add_batch_impact(world, scene, slot + 1, one.pair_values,
-                                   _probe_starts(one) if probe else one.starts, length, skin,
-                                   one.probe.extent)
+        bodies, ground, _ = _add_impact(
+            world, scene, length, skin, one.probe.extent,
+            starts=_probe_starts(one) if probe else one.starts, group=slot + 1,
+            pair_values=one.pair_values)
         for b2_body in bodies:
             b2_body.userData = slot
-        view = _Slot(bodies, length)
+        view = _Slot(bodies, ground, length)
         view.restitution = one.pair_values[0]
         views.append(view)
     world.contactManager.FindNewContacts()
+    if not probe:
+        for view in views:
+            view.read()
     return world, views
 
 
@@ -1009,6 +1044,8 @@ def _replace(world, views, kept: set, prepared) -> None:
             for b2_body in view.bodies:
                 b2_body.awake = False
     manager.FindNewContacts()
+    for slot in kept:
+        views[slot].read()
 
 
 def _probe_many(scenes, prepared, length: float, skin: float, dt: float,
