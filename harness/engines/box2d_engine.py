@@ -260,21 +260,20 @@ def _circle_shape(radius: float, x: float = 0.0):
     return shape
 
 
-def _set_fixture_data(fixture, padding: float) -> None:
-    """userData ``(padding, radius, body)``: how far the fixture pads the scene's outline,
-    its shape's radius as Box2D holds it (float32) and its body's :data:`_body_id`; the
-    readout takes all three in one call (a fixture's ``body`` would make a new wrapper)."""
-    fixture.userData = (padding, fixture.shape.radius, _body_id(fixture.body))
-
-
 def _add_impact(world, scene: Scene, length: float, skin: float, extent: float, *,
-                starts: tuple | None = None, group: int = 0,
-                pair_values: tuple | None = None) -> tuple[list, list, list]:
+                starts: tuple | None = None, group: int = 0, pair_values: tuple | None = None,
+                inertias=None) -> tuple[list, list, list]:
     """``(bodies, ground, fixtures)``: the scene's ground and bodies in ``world``, the
     bodies at ``starts`` (:func:`_place`'s form; None: at rest at the origin, for
     :func:`_place` to move), the fixtures with the pair's ``(e, μ)`` (None: Box2D's
     defaults, for :meth:`_World.configure` to set) in collision group ``group`` with mask
-    0 (0: no group, every fixture collides).
+    0 (0: no group, every fixture collides). ``inertias``: the bodies' moments of inertia
+    in scene units when already known (a polygon's costs ~0.1 ms); None: the scene's.
+
+    Every fixture's userData is ``(padding, radius, body)``: how far it pads the scene's
+    outline, its shape's radius as Box2D holds it (float32) and its body's
+    :data:`_body_id`, which the readout takes in one call (a fixture's ``body`` or
+    ``shape`` would make a new wrapper each time).
 
     The objects are made through definitions filled field by field (pybox2d's keyword
     constructors cost more than the rest of the build). A body's skins are set before its
@@ -290,23 +289,25 @@ def _add_impact(world, scene: Scene, length: float, skin: float, extent: float, 
         fixture_definition.groupIndex = group
         fixture_definition.maskBits = 0
     fixtures = []
+    body_id = 0
 
-    def add(body, shape, padding: float):
+    def add(body, shape, padding: float) -> None:
         fixture_definition.shape = shape
         fixture = body.CreateFixture(fixture_definition)  # copies the definition and shape
-        _set_fixture_data(fixture, padding)
+        fixture.userData = (padding, shape.radius, body_id)
         fixtures.append(fixture)
-        return fixture
 
+    body_definition = b2.bodyDef()  # a static body at the origin
     ground = []
     if scene.ground:
-        ground_body = world.CreateStaticBody()
-        fixture = add(ground_body, _polygon_shape(_ground_vertices(extent, length),
-                                                  POLYGON_RADIUS), skin)
-        fixture.shape.radius = skin
-        _set_fixture_data(fixture, skin)
+        ground_body = world.CreateBody(body_definition)
+        body_id = _body_id(ground_body)
+        add(ground_body, _polygon_shape(_ground_vertices(extent, length), POLYGON_RADIUS),
+            skin)
+        ground_shape = fixtures[-1].shape
+        ground_shape.radius = skin
+        fixtures[-1].userData = (skin, ground_shape.radius, body_id)
         ground.append(ground_body)
-    body_definition = b2.bodyDef()
     body_definition.type = b2.dynamicBody
     mass_data = b2.massData()
     mass_data.center = (0.0, 0.0)
@@ -315,6 +316,7 @@ def _add_impact(world, scene: Scene, length: float, skin: float, extent: float, 
         if starts is not None:
             body_definition.position, body_definition.angle = starts[index][:2]
         b2_body = world.CreateBody(body_definition)
+        body_id = _body_id(b2_body)
         shape = body.shape
         if shape.kind == "disk":
             add(b2_body, _circle_shape(shape.radius * length), 0.0)  # the disk's own radius
@@ -334,7 +336,8 @@ def _add_impact(world, scene: Scene, length: float, skin: float, extent: float, 
             # is its separation plus the skins.
             add(b2_body, _polygon_shape(vertices, skin), skin)
         mass_data.mass = body.mass
-        mass_data.I = body.moment_of_inertia * length * length
+        inertia = body.moment_of_inertia if inertias is None else inertias[index]
+        mass_data.I = inertia * length * length
         b2_body.massData = mass_data
         if starts is not None:
             _, _, b2_body.linearVelocity, b2_body.angularVelocity = starts[index]
@@ -784,12 +787,11 @@ class Box2DEngine(Engine):
         length, time_step, max_steps = (first.probe.length, first.probe.time_step,
                                         first.probe.max_steps)
         skin = float(plans[0].settings["polygon_radius"])
-        scenes = [plan.scene for plan in plans]
         measure_in_run = _probe_is_run(first)
         probe_world = None
         if not measure_in_run:
             speeds, probe_world, probe_views = _probe_many(
-                scenes, prepared, length, skin, time_step * length, max_steps)
+                plans, prepared, length, skin, time_step * length, max_steps)
             prepared = [_scaled(copy.copy(one), speed) for one, speed in zip(prepared, speeds)]
         else:
             prepared = [_scaled(copy.copy(one), None) for one in prepared]
@@ -806,7 +808,7 @@ class Box2DEngine(Engine):
                 _replace(world, probe_views, set(slots), prepared)
                 probe_world = None
             else:
-                world, views = _many_world([scenes[slot] for slot in slots],
+                world, views = _many_world([plans[slot] for slot in slots],
                                            [prepared[slot] for slot in slots], slots, length,
                                            skin, world_values)
             for slot, view in zip(slots, views):
@@ -972,18 +974,18 @@ class _Batch:
         self.listeners: list = []
 
 
-def _many_world(scenes, prepared, slots, length: float, skin: float, world_values: tuple,
+def _many_world(plans, prepared, slots, length: float, skin: float, world_values: tuple,
                 probe: bool = False) -> tuple:
-    """A b2World holding every scene at its start (``prepared``: its ``starts``, or the
-    probe's with ``probe``), and one :class:`_Slot` each (bodies' userData: the slot)."""
+    """A b2World holding every plan's scene at its start (``prepared``: its ``starts``, or
+    the probe's with ``probe``), and one :class:`_Slot` each (bodies' userData: the slot)."""
     world = b2.world(gravity=(0.0, 0.0), doSleep=True)
     _set_switches(world, world_values)
     views = []
-    for slot, scene, one in zip(slots, scenes, prepared):
+    for slot, plan, one in zip(slots, plans, prepared):
         bodies, ground, _ = _add_impact(
-            world, scene, length, skin, one.probe.extent,
+            world, plan.scene, length, skin, one.probe.extent,
             starts=_probe_starts(one) if probe else one.starts, group=slot + 1,
-            pair_values=one.pair_values)
+            pair_values=one.pair_values, inertias=[inertia for _, inertia in plan.weights])
         for b2_body in bodies:
             b2_body.userData = slot
         view = _Slot(bodies, ground, length)
@@ -1048,12 +1050,12 @@ def _replace(world, views, kept: set, prepared) -> None:
         views[slot].read()
 
 
-def _probe_many(scenes, prepared, length: float, skin: float, dt: float,
+def _probe_many(plans, prepared, length: float, skin: float, dt: float,
                 max_steps: int) -> tuple[list[float | None], object, list]:
-    """:func:`_probe` of every scene in one world: each impact sleeps once its speed is
-    known, as its probe run would stop. ``(speeds, world, slots)``."""
-    slots = list(range(len(scenes)))
-    world, views = _many_world(scenes, prepared, slots, length, skin,
+    """:func:`_probe` of every plan's scene in one world: each impact sleeps once its speed
+    is known, as its probe run would stop. ``(speeds, world, slots)``."""
+    slots = list(range(len(plans)))
+    world, views = _many_world(plans, prepared, slots, length, skin,
                                prepared[0].world_values, probe=True)
     listener = _ManyProbe(views)
     world.contactListener = listener
