@@ -64,7 +64,9 @@ Settings (``defaults`` | ``accurate``) are listed in :data:`SETTING_DOCS`.
 from __future__ import annotations
 
 import copy
+import ctypes
 import math
+import struct
 from typing import NamedTuple
 
 import Box2D
@@ -164,9 +166,15 @@ CLIPPED_NOTE = ("Box2D clipped a velocity (b2_maxTranslation 2 m or b2_maxRotati
                 "step; see derived speed_cap, angular_speed_cap)")
 
 
-# ---------------------------------------------------------------------- poses
-# pybox2d's own functions, called directly in the per-step readout: each property access
-# (``body.transform``, ``contact.manifold``, ...) goes through a Python-level wrapper first.
+# ---------------------------------------------------------------------- reading Box2D's state
+# pybox2d makes a Python wrapper object for every struct a getter returns (~1 µs each, about
+# ten per contact and step), which cost the readout far more than Box2D's step. So the
+# per-step readout reads Box2D's own structs at their addresses instead, one unpack each:
+# b2Body (transform, sweep angle, velocities, contact list), b2ContactEdge and b2Contact with
+# its b2Manifold, in the layouts of Box2D 2.3 as pybox2d 2.3.10 compiles them (64-bit).
+# :func:`_layout_matches` checks every field against pybox2d's getters on a live world at
+# import, following no pointer it has not checked; where they differ, the getters read the
+# same values (``_READERS``). float32 fields become the same Python floats either way.
 _B2 = Box2D._Box2D
 _get_transform = _B2.b2Body___GetTransform
 _get_position = _B2.b2Transform_position_get
@@ -183,15 +191,166 @@ _is_touching = _B2.b2Contact___IsTouching
 _get_manifold = _B2.b2Contact___GetManifold
 _get_fixture_a = _B2.b2Contact___GetFixtureA
 _get_fixture_b = _B2.b2Contact___GetFixtureB
-_fixture_data = _B2.b2Fixture___GetUserData
 _point_count = _B2.b2Manifold_pointCount_get
 _get_point = _B2.b2Manifold___GetPoint
 
-#: A body's identity (its C++ address): poses are keyed by it (a b2Body wrapper compares
+#: A body's identity, its C++ address: poses are keyed by it (a b2Body wrapper compares
 #: through a Python function, and each access to a contact's body makes a new wrapper).
 _body_id = _B2.b2Body___hash__
 _CIRCLES = Box2D.b2Manifold.e_circles
 _FACE_A = Box2D.b2Manifold.e_faceA
+
+_string_at = ctypes.string_at
+#: b2Body: m_xf (p.x, p.y, q.s, q.c), m_sweep.a, m_linearVelocity, m_angularVelocity.
+_BODY = struct.Struct("@12x4f28xf4x3f")
+_BODY_CONTACTS = 136  # offset of b2Body::m_contactList
+_POINTER = struct.Struct("@P")
+#: b2ContactEdge: contact, next.
+_EDGE = struct.Struct("@8xP8xP")
+#: b2Contact: m_flags, m_next, m_fixtureA, m_fixtureB, m_manifold (both points' localPoint,
+#: normalImpulse, tangentImpulse; localNormal, localPoint, type, pointCount).
+_CONTACT = struct.Struct("@8xI12xP64x2P8x2f2f4x2f2f4x2f2fiI")
+_TOUCHING = 0x0002  # b2Contact::e_touchingFlag
+
+
+def _state_in_memory(body, address: int) -> tuple:
+    """``(x, y, sin θ, cos θ, θ, v_x, v_y, ω)`` of a body now (its transform, its sweep's
+    angle, its velocities), read at its address."""
+    return _BODY.unpack(_string_at(address, _BODY.size))
+
+
+def _state_by_getters(body, address: int) -> tuple:
+    """:func:`_state_in_memory` through pybox2d's getters."""
+    transform = _get_transform(body)
+    position, rotation = _get_position(transform), _get_rotation(transform)
+    velocity = _get_linear_velocity(body)
+    return (position.x, position.y, rotation.s, rotation.c, _get_angle(body), velocity.x,
+            velocity.y, _get_angular_velocity(body))
+
+
+def _touching_in_memory(body, address: int) -> list:
+    """The touching contacts of a body as :data:`_CONTACT` tuples, oldest first (the order
+    of pybox2d's ``body.contacts``, which reverses Box2D's list: a new contact goes to its
+    head), read at the body's address."""
+    touching = []
+    (edge,) = _POINTER.unpack(_string_at(address + _BODY_CONTACTS, _POINTER.size))
+    while edge:
+        contact, edge = _EDGE.unpack(_string_at(edge, _EDGE.size))
+        values = _CONTACT.unpack(_string_at(contact, _CONTACT.size))
+        if values[0] & _TOUCHING:
+            touching.append(values)
+    touching.reverse()
+    return touching
+
+
+def _touching_by_getters(body, address: int) -> list:
+    """:func:`_touching_in_memory` through pybox2d's getters."""
+    touching = []
+    edge = _body_contacts(body)
+    while edge is not None:
+        contact = _edge_contact(edge)
+        if _is_touching(contact):
+            touching.append(_contact_values(contact))
+        edge = _edge_next(edge)
+    touching.reverse()
+    return touching
+
+
+def _world_touching_in_memory(world) -> list:
+    """The touching contacts of a b2World as :data:`_CONTACT` tuples, oldest first (as
+    pybox2d's ``world.contacts``)."""
+    touching = []
+    head = _world_contacts(world)
+    contact = 0 if head is None else int(head.this)
+    while contact:
+        values = _CONTACT.unpack(_string_at(contact, _CONTACT.size))
+        if values[0] & _TOUCHING:
+            touching.append(values)
+        contact = values[1]
+    touching.reverse()
+    return touching
+
+
+def _world_touching_by_getters(world) -> list:
+    """:func:`_world_touching_in_memory` through pybox2d's getters."""
+    touching = []
+    contact = _world_contacts(world)
+    while contact is not None:
+        if _is_touching(contact):
+            touching.append(_contact_values(contact))
+        contact = _contact_next(contact)
+    touching.reverse()
+    return touching
+
+
+def _contact_values(contact) -> tuple:
+    """A contact as :data:`_CONTACT` unpacks it, through pybox2d's getters (the next
+    contact's address left 0, a point not in use zeros)."""
+    manifold = _get_manifold(contact)
+    count = _point_count(manifold)
+    values = [_TOUCHING if _is_touching(contact) else 0, 0,
+              int(_get_fixture_a(contact).this), int(_get_fixture_b(contact).this)]
+    for index in range(2):
+        if index < count:
+            point = _get_point(manifold, index)
+            local = point.localPoint
+            values += (local.x, local.y, point.normalImpulse, point.tangentImpulse)
+        else:
+            values += (0.0, 0.0, 0.0, 0.0)
+    normal, local = manifold.localNormal, manifold.localPoint
+    values += (normal.x, normal.y, local.x, local.y, manifold.type_, count)
+    return tuple(values)
+
+
+def _used(values: tuple) -> tuple:
+    """What the readout uses of a :data:`_CONTACT` tuple: the fixtures and the manifold's
+    fields, of its points only those in use (the others hold whatever was there)."""
+    count = values[17]
+    return (*values[2:4], *values[4:4 + 4 * count], *values[12:])
+
+
+def _layout_matches() -> bool:
+    """Whether :data:`_BODY`, :data:`_EDGE` and :data:`_CONTACT` read what pybox2d's getters
+    read, on a box landing nearly flat on a ground box (a manifold of two points, the
+    values distinct). A pointer is followed only once it equals the getters' own."""
+    world = b2.world(gravity=(0.0, 0.0), doSleep=False)
+    try:
+        ground = world.CreateStaticBody()
+        ground.CreatePolygonFixture(vertices=[(-4.0, -1.0), (4.0, -1.0), (4.0, 0.0),
+                                              (-4.0, 0.0)])
+        body = world.CreateDynamicBody(position=(0.25, 0.49), angle=0.0)
+        body.CreatePolygonFixture(box=(0.5, 0.5), density=1.0)
+        body.linearVelocity, body.angularVelocity = (0.75, -3.0), 0.5
+        world.Step(1.0 / 60.0, 8, 3)
+        address = _body_id(body)
+        if (address != int(body.this)
+                or _state_in_memory(body, address) != _state_by_getters(body, address)):
+            return False
+        (edge,) = _POINTER.unpack(_string_at(address + _BODY_CONTACTS, _POINTER.size))
+        first = _body_contacts(body)
+        if first is None or edge != int(first.this):
+            return False
+        contact, next_edge = _EDGE.unpack(_string_at(edge, _EDGE.size))
+        swig_contact = _edge_contact(first)
+        if (contact != int(swig_contact.this) or next_edge != 0 or _edge_next(first) is not None
+                or not _is_touching(swig_contact)):
+            return False
+        values = _CONTACT.unpack(_string_at(contact, _CONTACT.size))
+        if values[1] != 0 or _contact_next(swig_contact) is not None:
+            return False
+        expected = _contact_values(swig_contact)
+        return (values[0] & _TOUCHING == _TOUCHING and expected[17] == 2
+                and _used(values) == _used(expected)
+                and _touching_in_memory(body, address) == [values]
+                and _world_touching_in_memory(world) == [values])
+    except (ValueError, TypeError, AttributeError, struct.error):
+        return False
+
+
+_IN_MEMORY = _layout_matches()
+#: ``(state, touching of a body, touching of a world)``: the readers in use.
+_READERS = ((_state_in_memory, _touching_in_memory, _world_touching_in_memory) if _IN_MEMORY
+            else (_state_by_getters, _touching_by_getters, _world_touching_by_getters))
 
 
 def _pose(body) -> tuple[float, float, float, float]:
@@ -208,30 +367,34 @@ class _Poses:
     ``start``: every body's :func:`_pose` by :data:`_body_id` when the next step begins (a
     step's contacts are collided at its start, and their geometry needs those poses; the
     ground's pose, read once, never changes); ``now``: the scene's poses ``(x, y, θ)`` now,
-    what ``_read_poses`` returns. :meth:`read` refreshes both after a step, so the poses
-    are read once a step (the next step starts where this one ended).
+    what ``_read_poses`` returns; ``states``: every body's :func:`_state_in_memory` now.
+    :meth:`read` refreshes them after a step, so the bodies are read once a step (the next
+    step starts where this one ended). ``fixtures``: every fixture's userData by its address.
     """
 
-    __slots__ = ("bodies", "body_b", "body_b_id", "dynamic", "length", "now", "start")
+    __slots__ = ("bodies", "body_b", "body_b_id", "dynamic", "fixtures", "length", "now",
+                 "start", "states")
 
-    def __init__(self, bodies: list, static: list, length: float) -> None:
+    def __init__(self, bodies: list, static: list, fixtures: list, length: float) -> None:
         self.bodies, self.body_b, self.length = bodies, bodies[-1], length
         self.body_b_id = _body_id(self.body_b)
         self.dynamic = [(b2_body, _body_id(b2_body)) for b2_body in bodies]
         self.start = {_body_id(b2_body): _pose(b2_body) for b2_body in static}
+        self.fixtures = {int(fixture.this): fixture.userData for fixture in fixtures}
         self.now: tuple = ()
+        self.states: list = []
 
     def read(self) -> None:
-        """Read the bodies' poses now (after placing them, and after every step)."""
-        length, start = self.length, self.start
-        now = []
+        """Read the bodies now (after placing them, and after every step)."""
+        length, start, state_of = self.length, self.start, _READERS[0]
+        now, states = [], []
         for b2_body, key in self.dynamic:
-            transform = _get_transform(b2_body)
-            position, rotation = _get_position(transform), _get_rotation(transform)
-            x, y = position.x, position.y
-            start[key] = (x, y, rotation.c, rotation.s)
-            now.append((x / length, y / length, _get_angle(b2_body)))
-        self.now = tuple(now)
+            state = state_of(b2_body, key)
+            x, y, sin, cos, angle = state[:5]
+            start[key] = (x, y, cos, sin)
+            now.append((x / length, y / length, angle))
+            states.append(state)
+        self.now, self.states = tuple(now), states
 
 
 # ---------------------------------------------------------------------- world building
@@ -387,6 +550,16 @@ def _place(bodies, starts: tuple) -> None:
         b2_body.awake = True
 
 
+def _states_at_cap(states, dt: float, band: float) -> bool:
+    """:func:`_at_cap` of bodies read by :meth:`_Poses.read`."""
+    for state in states:
+        if math.hypot(state[5], state[6]) * dt > band * MAX_TRANSLATION:
+            return True
+        if abs(state[7]) * dt > band * MAX_ROTATION:
+            return True
+    return False
+
+
 def _at_cap(bodies, dt: float, band: float) -> bool:
     """Whether a body's velocity reaches ``band`` times Box2D's per-step caps."""
     for b2_body in bodies:
@@ -401,14 +574,14 @@ def _at_cap(bodies, dt: float, band: float) -> bool:
 class _World(_Poses):
     """One b2World holding the scene's ground and bodies, and the current run's scales."""
 
-    __slots__ = ("clipped", "dt", "fixtures", "iterations", "notes", "pair_values", "velocity",
-                 "world", "world_values")
+    __slots__ = ("clipped", "dt", "fixture_list", "iterations", "notes", "pair_values",
+                 "velocity", "world", "world_values")
 
     def __init__(self, scene: Scene, length: float, skin: float):
         self.world = b2.world(gravity=(0.0, 0.0), doSleep=True)
-        bodies, ground, self.fixtures = _add_impact(self.world, scene, length, skin,
-                                                    _extent(scene))
-        super().__init__(bodies, ground, length)
+        bodies, ground, self.fixture_list = _add_impact(self.world, scene, length, skin,
+                                                        _extent(scene))
+        super().__init__(bodies, ground, self.fixture_list, length)
         self.pair_values: tuple | None = None
         self.world_values: tuple | None = None
         # The current run's (set by _reset): Box2D time step, sweeps, velocity scale, the
@@ -425,7 +598,7 @@ class _World(_Poses):
             _set_switches(self.world, world_values)
             self.world_values = world_values
         if self.pair_values != pair_values:
-            _set_pair_values(self.fixtures, pair_values)
+            _set_pair_values(self.fixture_list, pair_values)
             self.pair_values = pair_values
 
     def place(self, starts: tuple) -> None:
@@ -453,63 +626,34 @@ class _World(_Poses):
 
 
 # ---------------------------------------------------------------------- contact readout
-def _touching_in_body(body) -> list:
-    """The touching contacts of ``body``, oldest first (the order of pybox2d's
-    ``body.contacts``, which reverses Box2D's list: a new contact goes to its head)."""
-    touching = []
-    edge = _body_contacts(body)
-    while edge is not None:
-        contact = _edge_contact(edge)
-        if _is_touching(contact):
-            touching.append(contact)
-        edge = _edge_next(edge)
-    touching.reverse()
-    return touching
-
-
-def _touching_in_world(world) -> list:
-    """The touching contacts of a b2World, oldest first (as pybox2d's ``world.contacts``)."""
-    touching = []
-    contact = _world_contacts(world)
-    while contact is not None:
-        if _is_touching(contact):
-            touching.append(contact)
-        contact = _contact_next(contact)
-    touching.reverse()
-    return touching
-
-
 def _world_manifold(contact) -> tuple[tuple[float, float], list, list]:
     """``(normal from fixture A to B, points, separations)`` of a contact, in world frame
     (:func:`_manifold_geometry` of the contact's manifold, at the poses now)."""
-    manifold = contact.manifold
     fixture_a, fixture_b = contact.fixtureA, contact.fixtureB
-    return _manifold_geometry(manifold, manifold.points, _pose(fixture_a.body),
+    return _manifold_geometry(_contact_values(contact), _pose(fixture_a.body),
                               _pose(fixture_b.body), fixture_a.userData[1],
                               fixture_b.userData[1])
 
 
-def _manifold_geometry(manifold, manifold_points, pose_a: tuple, pose_b: tuple,
-                       radius_a: float, radius_b: float) -> tuple[tuple[float, float], list, list]:
+def _manifold_geometry(values: tuple, pose_a: tuple, pose_b: tuple, radius_a: float,
+                       radius_b: float) -> tuple[tuple[float, float], list, list]:
     """``(normal from fixture A to B, points, separations)`` of a contact, in world frame.
 
     b2WorldManifold::Initialize redone in Python (pybox2d's ``worldManifold`` returned an
     uninitialised normal), with the separations of the skinned shapes (Box2D's, negative
-    within the summed skins). ``manifold_points``: the manifold's points in use; ``pose_a``,
-    ``pose_b``: the bodies' :func:`_pose` when the manifold was computed (the start of the
-    step: after the step the bodies have moved, which would turn a circle pair's normal);
-    ``radius_a``, ``radius_b``: the fixtures' shape radii.
+    within the summed skins). ``values``: the contact as :data:`_CONTACT` unpacks it;
+    ``pose_a``, ``pose_b``: the bodies' :func:`_pose` when the manifold was computed (the
+    start of the step: after the step the bodies have moved, which would turn a circle
+    pair's normal); ``radius_a``, ``radius_b``: the fixtures' shape radii.
     """
     pa_x, pa_y, ca, sa = pose_a
     pb_x, pb_y, cb, sb = pose_b
-    kind = manifold.type_
+    kind, count = values[16], values[17]
     points, separations = [], []
     if kind == _CIRCLES:
-        local = manifold.localPoint
-        lx, ly = local.x, local.y
+        lx, ly = values[14], values[15]  # the manifold's localPoint
         ax, ay = ca * lx - sa * ly + pa_x, sa * lx + ca * ly + pa_y
-        local = manifold_points[0].localPoint
-        lx, ly = local.x, local.y
+        lx, ly = values[4], values[5]  # its point's localPoint
         bx, by = cb * lx - sb * ly + pb_x, sb * lx + cb * ly + pb_y
         dx, dy = bx - ax, by - ay
         distance = math.hypot(dx, dy)
@@ -524,16 +668,13 @@ def _manifold_geometry(manifold, manifold_points, pose_a: tuple, pose_b: tuple,
         cb, sb, pb_x, pb_y, radius_b)
     (c_inc, s_inc, p_inc_x, p_inc_y, r_inc) = (cb, sb, pb_x, pb_y, radius_b) if face_a else (
         ca, sa, pa_x, pa_y, radius_a)
-    local = manifold.localNormal
-    lx, ly = local.x, local.y
+    lx, ly = values[12], values[13]  # localNormal
     nx, ny = c_ref * lx - s_ref * ly, s_ref * lx + c_ref * ly
-    local = manifold.localPoint
-    lx, ly = local.x, local.y
+    lx, ly = values[14], values[15]  # localPoint
     plane_x = c_ref * lx - s_ref * ly + p_ref_x
     plane_y = s_ref * lx + c_ref * ly + p_ref_y
-    for manifold_point in manifold_points:
-        local = manifold_point.localPoint
-        lx, ly = local.x, local.y
+    for first in range(4, 4 + 4 * count, 4):
+        lx, ly = values[first], values[first + 1]
         qx = c_inc * lx - s_inc * ly + p_inc_x
         qy = s_inc * lx + c_inc * ly + p_inc_y
         height = (qx - plane_x) * nx + (qy - plane_y) * ny
@@ -736,10 +877,12 @@ class Box2DEngine(Engine):
 
     def _step(self, world: _World) -> RawContacts | None:
         world.world.Step(world.dt, *world.iterations)
+        # At the step's start poses, before read() moves them on (to the records' poses now
+        # and the next step's start).
+        raw = _contact_of(_READERS[2](world.world), world)
+        world.read()
         if not world.clipped:
-            world.clipped = world.at_cap(_CAP_BAND)
-        raw = _contact_of(_touching_in_world(world.world), world)  # at the step's start poses
-        world.read()  # the poses now: the records', and the next step's start
+            world.clipped = _states_at_cap(world.states, world.dt, _CAP_BAND)
         return raw
 
     # ------------------------------------------------------------------ many impacts
@@ -838,16 +981,17 @@ class Box2DEngine(Engine):
                 if index in stepping:
                     world.Step(dt, *iterations)
         contacts = {}
+        touching_of = _READERS[1]
         for slot in active:
             view = slots[slot]
-            if not view.clipped:
-                view.clipped = _at_cap(view.bodies, view.dt, _CAP_BAND)
             # Every contact of an impact involves its body B (the ground's partner or the
             # other body); the body's list keeps the world's order of them.
-            raw = _contact_of(_touching_in_body(view.body_b), view)
+            raw = _contact_of(touching_of(view.body_b, view.body_b_id), view)
             if raw is not None:
                 contacts[slot] = raw
             view.read()
+            if not view.clipped:
+                view.clipped = _states_at_cap(view.states, view.dt, _CAP_BAND)
         if batch.listeners:
             batch.listeners = [(world, listener) for world, listener in batch.listeners
                                if not listener.done(world)]
@@ -870,12 +1014,10 @@ class Box2DEngine(Engine):
 
     def _read_velocities(self, world: _World) -> tuple:
         velocity, rate = world.velocity, world.length / world.velocity
-        velocities = []
-        for b2_body in world.bodies:
-            linear = b2_body.linearVelocity
-            vx, vy = linear.x, linear.y
-            velocities.append((vx / velocity, vy / velocity, b2_body.angularVelocity * rate))
-        return tuple(velocities)
+        # Read after the step (_Poses.read): the loop reads velocities only then, and
+        # the batch's _finish comes before _retire stops the bodies.
+        return tuple((vx / velocity, vy / velocity, omega * rate)
+                     for _, _, _, _, _, vx, vy, omega in world.states)
 
     def _run_notes(self, world: _World) -> tuple[str, ...]:
         if world.clipped:
@@ -908,31 +1050,28 @@ MANY_CHUNK = 32
 
 def _contact_of(touching: list, world) -> RawContacts | None:
     """The step's contact of one impact from its ``touching`` Box2D contacts (oldest
-    first); ``world``: its :class:`_World` or :class:`_Slot` (scales, body B, the poses at
-    the step's start)."""
+    first, as :data:`_CONTACT` tuples); ``world``: its :class:`_World` or :class:`_Slot`
+    (scales, body B, the poses at the step's start, the fixtures)."""
     length, velocity, body_b = world.length, world.velocity, world.body_b_id
-    poses = world.start
+    poses, fixtures = world.start, world.fixtures
     step_x = step_y = 0.0
     points: list = []
     normal = None
-    for contact in touching:
-        manifold = _get_manifold(contact)
-        count = _point_count(manifold)
+    for values in touching:
+        count = values[17]
         if not count:
             continue
-        manifold_points = [_get_point(manifold, index) for index in range(count)]
-        padding_a, radius_a, body_a_id = _fixture_data(_get_fixture_a(contact))
-        padding_b, radius_b, contact_body_b = _fixture_data(_get_fixture_b(contact))
+        padding_a, radius_a, body_a_id = fixtures[values[2]]
+        padding_b, radius_b, contact_body_b = fixtures[values[3]]
         contact_normal, contact_points, separations = _manifold_geometry(
-            manifold, manifold_points, poses[body_a_id], poses[contact_body_b], radius_a,
-            radius_b)
+            values, poses[body_a_id], poses[contact_body_b], radius_a, radius_b)
         # Overlap of the scene's outlines: the skins are padding, not the bodies.
         padding = padding_a + padding_b
         # The impulse on scene body B (Box2D applies +P to fixture B's body).
         sign = 1.0 if contact_body_b == body_b else -1.0
         n_x, n_y = contact_normal
-        for point in manifold_points:
-            p_n, p_t = point.normalImpulse, point.tangentImpulse
+        for first in range(6, 6 + 4 * count, 4):
+            p_n, p_t = values[first], values[first + 1]
             # Box2D's tangent is cross(n, 1) = (n_y, -n_x).
             step_x += sign * (p_n * n_x + p_t * n_y)
             step_y += sign * (p_n * n_y - p_t * n_x)
@@ -953,8 +1092,8 @@ class _Slot(_Poses):
 
     __slots__ = ("clipped", "derived", "dt", "notes", "restitution", "velocity", "world")
 
-    def __init__(self, bodies: list, ground: list, length: float) -> None:
-        super().__init__(bodies, ground, length)
+    def __init__(self, bodies: list, ground: list, fixtures: list, length: float) -> None:
+        super().__init__(bodies, ground, fixtures, length)
         self.velocity, self.dt, self.clipped = 1.0, 0.0, False
         self.notes: tuple[str, ...] = ()
         self.derived: dict = {}
@@ -982,13 +1121,13 @@ def _many_world(plans, prepared, slots, length: float, skin: float, world_values
     _set_switches(world, world_values)
     views = []
     for slot, plan, one in zip(slots, plans, prepared):
-        bodies, ground, _ = _add_impact(
+        bodies, ground, fixtures = _add_impact(
             world, plan.scene, length, skin, one.probe.extent,
             starts=_probe_starts(one) if probe else one.starts, group=slot + 1,
             pair_values=one.pair_values, inertias=[inertia for _, inertia in plan.weights])
         for b2_body in bodies:
             b2_body.userData = slot
-        view = _Slot(bodies, ground, length)
+        view = _Slot(bodies, ground, fixtures, length)
         view.restitution = one.pair_values[0]
         views.append(view)
     world.contactManager.FindNewContacts()
