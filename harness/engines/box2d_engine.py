@@ -18,7 +18,9 @@ lengths times ``L`` (``length_scale``), velocities times ``V`` (``velocity_scale
 is scaled back. Powers of two keep every scaling exact in binary floating point. ``"auto"``
 picks the smallest power of two ``V >= 1`` that lifts the impact speed Box2D sees at the
 first contact (measured once per scene and settings by a probe run in :meth:`_prepare`) to
-``2 · b2_velocityThreshold``.
+``2 · b2_velocityThreshold``. Where the probe run would be the run's own beginning (``V = 1``
+and no start depth, as under ``defaults``), the run measures that speed itself (a PreSolve
+listener until the first contact), in ``run`` as in ``run_many``.
 
 Other compiled-in limits: ``b2_maxTranslation`` (2 m per step) and ``b2_maxRotation`` (π/2
 per step) clip a body's velocity for good when a step would move it further. In scene units
@@ -57,6 +59,10 @@ collision groups, with the runs of ``run`` bit for bit (see
 
 pybox2d's ``contact.worldManifold`` returned an uninitialised normal here: the adapter
 computes the world manifold itself, from the poses at the step's start (the manifold's).
+Each step reads every body once (its pose then is the next step's start) and only the
+touching contacts, from Box2D's structs at their addresses where their layout is the one
+checked at import (see "reading Box2D's state" below): pybox2d's getters make a Python
+object for every struct they return, which cost many times Box2D's own step.
 
 Settings (``defaults`` | ``accurate``) are listed in :data:`SETTING_DOCS`.
 """
@@ -574,11 +580,18 @@ def _at_cap(bodies, dt: float, band: float) -> bool:
 class _World(_Poses):
     """One b2World holding the scene's ground and bodies, and the current run's scales."""
 
-    __slots__ = ("clipped", "dt", "fixture_list", "iterations", "notes", "pair_values",
-                 "velocity", "world", "world_values")
+    __slots__ = ("clipped", "derived", "dt", "fixture_list", "iterations", "measures", "notes",
+                 "pair_values", "restitution", "speed_probe", "velocity", "world",
+                 "world_values")
 
-    def __init__(self, scene: Scene, length: float, skin: float):
+    def __init__(self, scene: Scene, length: float, skin: float, measures: bool = True):
         self.world = b2.world(gravity=(0.0, 0.0), doSleep=True)
+        # Whether a run whose probe would be its own beginning measures the first contact's
+        # speed itself (not in the bare stepper: a listener costs a call per contact).
+        self.measures = measures
+        self.speed_probe: _SpeedProbe | None = None  # measuring the current run's speed
+        self.derived: dict = {}  # the current run's derived values
+        self.restitution = 0.0
         bodies, ground, self.fixture_list = _add_impact(self.world, scene, length, skin,
                                                         _extent(scene))
         super().__init__(bodies, ground, self.fixture_list, length)
@@ -851,12 +864,15 @@ class Box2DEngine(Engine):
                 float(settings["polygon_radius"]))
 
     def _build(self, scene: Scene, settings, *, contacts: bool = True) -> _World:
-        return _World(scene, float(settings["length_scale"]), float(settings["polygon_radius"]))
+        return _World(scene, float(settings["length_scale"]), float(settings["polygon_radius"]),
+                      measures=contacts)
 
     def _prepare(self, world: _World | None, scene: Scene, settings, start) -> _Prepared:
         prepared = _unprobed(scene, settings, start)
         if world is None:  # run_many: _build_many probes every impact of a batch at once
             return prepared
+        if _probe_is_run(prepared):  # the run measures the speed itself (_reset), as in a batch
+            return _scaled(prepared, None)
         # Measured for every plan: it tells whether the threshold zeroed the bounce.
         probe = prepared.probe
         probe_speed = _probe(world, prepared, _probe_starts(prepared),
@@ -870,13 +886,25 @@ class Box2DEngine(Engine):
         world.notes = prepared.notes
         world.place(prepared.starts)
         world.clipped = world.at_cap(1.0)  # already beyond a cap before the first step
-        return dict(prepared.derived)
+        derived = world.derived = dict(prepared.derived)
+        if world.speed_probe is not None:  # the last run met no contact
+            world.world.contactListener = world.speed_probe = None
+        if world.measures and _probe_is_run(prepared):
+            world.speed_probe = _SpeedProbe()
+            world.world.contactListener = world.speed_probe
+            world.restitution = prepared.probe.restitution
+        return derived
 
     def _advance(self, world: _World) -> None:
         world.world.Step(world.dt, *world.iterations)
 
     def _step(self, world: _World) -> RawContacts | None:
         world.world.Step(world.dt, *world.iterations)
+        probe = world.speed_probe
+        if probe is not None and probe.speed is not None:  # measured in this step's PreSolve
+            world.notes = _speed_results(world.derived, probe.speed, world.velocity,
+                                         world.restitution)
+            world.world.contactListener = world.speed_probe = None
         # At the step's start poses, before read() moves them on (to the records' poses now
         # and the next step's start).
         raw = _contact_of(_READERS[2](world.world), world)
