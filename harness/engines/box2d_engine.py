@@ -349,7 +349,7 @@ def _layout_matches() -> bool:
                 and _used(values) == _used(expected)
                 and _touching_in_memory(body, address) == [values]
                 and _world_touching_in_memory(world) == [values])
-    except (ValueError, TypeError, AttributeError, struct.error):
+    except (ValueError, TypeError, AttributeError, IndexError, struct.error):
         return False
 
 

@@ -1,0 +1,114 @@
+"""Box2D's per-step readout: Box2D's structs read at their addresses give what pybox2d's
+getters give, and a run measures its first contact's speed as the probe run would.
+
+The adapter reads b2Body, b2ContactEdge and b2Contact (with its b2Manifold) in the layouts it
+checks at import, and falls back to the getters when they do not match
+(harness/engines/box2d_engine.py, "reading Box2D's state"): both must give the same runs.
+"""
+
+from __future__ import annotations
+
+import struct
+
+import pytest
+
+pytest.importorskip("Box2D", reason="Box2D not installed (pip install box2d==2.3.10)")
+
+from harness.engines import box2d_engine
+from harness.engines.box2d_engine import Box2DEngine
+from harness.scene.reference import reference_scenes
+from harness.survey.population import resolve_populations
+from harness.survey.sampling import sample_population
+
+SAMPLES = 8  # per population: 56 impacts, two batches
+GETTERS = (box2d_engine._state_by_getters, box2d_engine._touching_by_getters,
+           box2d_engine._world_touching_by_getters)
+
+
+@pytest.fixture(scope="module")
+def population_scenes():
+    return [sample.scene for population in resolve_populations([])
+            for sample in sample_population(population, SAMPLES, seed=11).samples]
+
+
+def test_the_pinned_pybox2d_is_read_in_memory():
+    # Else every run silently takes the getters' path, several times slower.
+    assert box2d_engine._IN_MEMORY
+    assert box2d_engine._READERS[0] is box2d_engine._state_in_memory
+
+
+@pytest.mark.parametrize("name, wrong", [
+    ("_BODY", struct.Struct("@16x4f24xf4x3f")),  # the transform 4 bytes late
+    ("_BODY_CONTACTS", 128),  # another pointer of the body
+    ("_EDGE", struct.Struct("@P8xP8x")),  # other and prev for contact and next
+    ("_CONTACT", struct.Struct("@8xI12xP64x2P12x2f2f4x2f2f4x2f2fiI")),  # manifold 4 late
+])
+def test_the_layout_check_refuses_a_wrong_layout(monkeypatch, name, wrong):
+    assert box2d_engine._layout_matches()
+    monkeypatch.setattr(box2d_engine, name, wrong)
+    assert not box2d_engine._layout_matches()
+
+
+@pytest.mark.parametrize("preset", ["defaults", "accurate"])
+def test_memory_and_getters_give_the_same_runs(monkeypatch, population_scenes, preset):
+    in_memory = Box2DEngine()
+    settings = in_memory.settings(preset)
+    batched = in_memory.run_many(population_scenes, settings)
+    single = [in_memory.run(scene, settings) for scene in population_scenes]
+    monkeypatch.setattr(box2d_engine, "_READERS", GETTERS)
+    by_getters = Box2DEngine()
+    assert by_getters.run_many(population_scenes, settings) == batched
+    assert [by_getters.run(scene, settings) for scene in population_scenes] == single
+    # Contact steps of every kind were read: several contacts, two-point manifolds.
+    assert max(run.max_contact_points for run in batched) >= 2
+    assert sum(run.contact_steps for run in batched) > len(batched)
+
+
+def test_states_and_contacts_read_in_memory_are_the_getters(population_scenes):
+    engine = Box2DEngine()
+    settings = engine.settings("defaults")
+    compared = 0
+    for scene in population_scenes[::4]:
+        plan = engine._plan_for(scene, engine._resolve(settings, "defaults", None)[0])
+        world = plan.world
+        engine._reset(world, plan.prepared)
+        for _ in range(3):
+            engine._step(world)
+            for b2_body, address in world.dynamic:
+                assert (box2d_engine._state_in_memory(b2_body, address)
+                        == box2d_engine._state_by_getters(b2_body, address))
+                assert ([box2d_engine._used(values) for values in
+                         box2d_engine._touching_in_memory(b2_body, address)]
+                        == [box2d_engine._used(values) for values in
+                            box2d_engine._touching_by_getters(b2_body, address)])
+            touching = box2d_engine._world_touching_in_memory(world.world)
+            assert ([box2d_engine._used(values) for values in touching]
+                    == [box2d_engine._used(values) for values in
+                        box2d_engine._world_touching_by_getters(world.world)])
+            compared += len(touching)
+    assert compared > 0
+
+
+def test_a_run_measures_its_first_contact_speed_as_the_probe_would(monkeypatch):
+    scenes = [entry[0] for entry in reference_scenes().values()]
+    measuring = Box2DEngine()
+    settings = measuring.settings("defaults")
+    runs = [measuring.run(scene, settings) for scene in scenes]
+    assert all("box2d_impact_speed" in run.derived for run in runs)
+    # The probe run, as accurate settings need it, in place of the run's own measurement.
+    monkeypatch.setattr(box2d_engine, "_probe_is_run", lambda prepared: False)
+    probing = Box2DEngine()
+    assert [probing.run(scene, settings) for scene in scenes] == runs
+
+
+def test_the_bare_stepper_does_not_measure():
+    engine = Box2DEngine()
+    scene = reference_scenes()["rod-45"][0]
+    stepper = engine.bare_stepper(scene, engine.settings("defaults"))
+    try:
+        stepper.reset()
+        stepper.step(3)
+        assert stepper._world.speed_probe is None
+        assert stepper._world.world.contactListener is None
+    finally:
+        stepper.close()
