@@ -375,17 +375,20 @@ class _Poses:
     ground's pose, read once, never changes); ``now``: the scene's poses ``(x, y, θ)`` now,
     what ``_read_poses`` returns; ``states``: every body's :func:`_state_in_memory` now.
     :meth:`read` refreshes them after a step, so the bodies are read once a step (the next
-    step starts where this one ended). ``fixtures``: every fixture's userData by its address.
+    step starts where this one ended). ``fixtures``: every fixture's userData by its address;
+    ``by_id``: every body, the ground's included, by :data:`_body_id`.
     """
 
-    __slots__ = ("bodies", "body_b", "body_b_id", "dynamic", "fixtures", "length", "now",
-                 "start", "states")
+    __slots__ = ("bodies", "body_b", "body_b_id", "by_id", "dynamic", "fixtures", "length",
+                 "now", "start", "states")
 
     def __init__(self, bodies: list, static: list, fixtures: list, length: float) -> None:
         self.bodies, self.body_b, self.length = bodies, bodies[-1], length
         self.body_b_id = _body_id(self.body_b)
         self.dynamic = [(b2_body, _body_id(b2_body)) for b2_body in bodies]
         self.start = {_body_id(b2_body): _pose(b2_body) for b2_body in static}
+        self.by_id = {key: b2_body for b2_body, key in self.dynamic}
+        self.by_id.update((_body_id(b2_body), b2_body) for b2_body in static)
         self.fixtures = {int(fixture.this): fixture.userData for fixture in fixtures}
         self.now: tuple = ()
         self.states: list = []
@@ -639,13 +642,11 @@ class _World(_Poses):
 
 
 # ---------------------------------------------------------------------- contact readout
-def _world_manifold(contact) -> tuple[tuple[float, float], list, list]:
-    """``(normal from fixture A to B, points, separations)`` of a contact, in world frame
-    (:func:`_manifold_geometry` of the contact's manifold, at the poses now)."""
-    fixture_a, fixture_b = contact.fixtureA, contact.fixtureB
-    return _manifold_geometry(_contact_values(contact), _pose(fixture_a.body),
-                              _pose(fixture_b.body), fixture_a.userData[1],
-                              fixture_b.userData[1])
+def _contact_in(contact) -> tuple:
+    """A contact pybox2d hands over (a PreSolve's) as :data:`_CONTACT` unpacks it."""
+    if _IN_MEMORY:
+        return _CONTACT.unpack(_string_at(int(contact.this), _CONTACT.size))
+    return _contact_values(contact)
 
 
 def _manifold_geometry(values: tuple, pose_a: tuple, pose_b: tuple, radius_a: float,
@@ -700,11 +701,18 @@ def _manifold_geometry(values: tuple, pose_a: tuple, pose_b: tuple, radius_a: fl
     return (nx, ny), points, separations
 
 
-def _approach_speed(contact) -> float:
+def _approach_speed(values: tuple, view: _Poses) -> float:
     """The normal approach speed at a touching contact's fastest point, computed as the
-    solver computes ``v_rel`` (from the velocities before the step: call from PreSolve)."""
-    normal, points, _ = _world_manifold(contact)
-    body_a, body_b = contact.fixtureA.body, contact.fixtureB.body
+    solver computes ``v_rel`` (from the velocities before the step: call from PreSolve).
+    ``values``: the contact (:func:`_contact_in`); ``view``: its impact's :class:`_Poses`
+    (the fixtures and bodies)."""
+    _, radius_a, body_a_id = view.fixtures[values[2]]
+    _, radius_b, body_b_id = view.fixtures[values[3]]
+    body_a, body_b = view.by_id[body_a_id], view.by_id[body_b_id]
+    x_a, y_a, sin_a, cos_a = _READERS[0](body_a, body_a_id)[:4]  # the poses now
+    x_b, y_b, sin_b, cos_b = _READERS[0](body_b, body_b_id)[:4]
+    normal, points, _ = _manifold_geometry(values, (x_a, y_a, cos_a, sin_a),
+                                           (x_b, y_b, cos_b, sin_b), radius_a, radius_b)
     fastest = 0.0
     for point in points:
         va = body_a.GetLinearVelocityFromWorldPoint(point)
@@ -715,17 +723,20 @@ def _approach_speed(contact) -> float:
 
 
 class _SpeedProbe(b2.contactListener):
-    """PreSolve listener: the approach speed at the first touching contact
-    (:func:`_approach_speed`)."""
+    """PreSolve listener of a :class:`_World`: the approach speed at the first touching
+    contact (:func:`_approach_speed`)."""
 
-    def __init__(self):
+    def __init__(self, world: _World):
         super().__init__()
+        self.world = world
         self.speed: float | None = None
 
     def PreSolve(self, contact, old_manifold):
-        if self.speed is not None or not contact.touching or contact.manifold.pointCount == 0:
+        if self.speed is not None:
             return
-        self.speed = _approach_speed(contact)
+        values = _contact_in(contact)
+        if values[0] & _TOUCHING and values[17]:
+            self.speed = _approach_speed(values, self.world)
 
 
 def _box2d_starts(start, velocity: float, length: float, advance: float = 0.0) -> tuple:
@@ -890,7 +901,7 @@ class Box2DEngine(Engine):
         if world.speed_probe is not None:  # the last run met no contact
             world.world.contactListener = world.speed_probe = None
         if world.measures and _probe_is_run(prepared):
-            world.speed_probe = _SpeedProbe()
+            world.speed_probe = _SpeedProbe(world)
             world.world.contactListener = world.speed_probe
             world.restitution = prepared.probe.restitution
         return derived
@@ -1058,7 +1069,7 @@ def _probe(world: _World, prepared: _Prepared, starts: tuple, dt: float,
     """Box2D's approach speed (m/s, scene units) at the first contact of an unscaled run."""
     world.configure(prepared.world_values, prepared.pair_values)
     world.place(starts)
-    probe = _SpeedProbe()
+    probe = _SpeedProbe(world)
     b2_world = world.world
     b2_world.contactListener = probe
     try:
@@ -1165,12 +1176,6 @@ def _many_world(plans, prepared, slots, length: float, skin: float, world_values
     return world, views
 
 
-def _slot_of(contact) -> int:
-    """The batch slot of a contact (the ground's body has no userData)."""
-    slot = contact.fixtureB.body.userData
-    return contact.fixtureA.body.userData if slot is None else slot
-
-
 class _ManyProbe(b2.contactListener):
     """PreSolve listener of a batch world: each impact's approach speed at its first
     touching contact (:class:`_SpeedProbe` for many impacts)."""
@@ -1179,17 +1184,21 @@ class _ManyProbe(b2.contactListener):
         super().__init__()
         self.speeds: dict[int, float] = {}
         self.views = {view.body_b.userData: view for view in views}
+        # A contact's impact, by its fixture B (every fixture of an impact is its own).
+        self.slots = {fixture: slot for slot, view in self.views.items()
+                      for fixture in view.fixtures}
         self.measure_run = measure_run  # the runs' own speeds: into derived and notes
 
     def PreSolve(self, contact, old_manifold):
-        if not contact.touching or contact.manifold.pointCount == 0:
+        values = _contact_in(contact)
+        if not values[0] & _TOUCHING or not values[17]:
             return
-        slot = _slot_of(contact)
+        slot = self.slots[values[3]]
         if slot in self.speeds:
             return
-        speed = self.speeds[slot] = _approach_speed(contact)
+        view = self.views[slot]
+        speed = self.speeds[slot] = _approach_speed(values, view)
         if self.measure_run:
-            view = self.views[slot]
             view.notes = _speed_results(view.derived, speed, view.velocity, view.restitution)
 
     def done(self, world) -> bool:
