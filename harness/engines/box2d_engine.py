@@ -650,8 +650,9 @@ def _contact_in(contact) -> tuple:
 
 
 def _manifold_geometry(values: tuple, pose_a: tuple, pose_b: tuple, radius_a: float,
-                       radius_b: float) -> tuple[tuple[float, float], list, list]:
-    """``(normal from fixture A to B, points, separations)`` of a contact, in world frame.
+                       radius_b: float) -> tuple[tuple[float, float], list]:
+    """``(normal from fixture A to B, points (x, y, separation))`` of a contact, in world
+    frame.
 
     b2WorldManifold::Initialize redone in Python (pybox2d's ``worldManifold`` returned an
     uninitialised normal), with the separations of the skinned shapes (Box2D's, negative
@@ -663,7 +664,7 @@ def _manifold_geometry(values: tuple, pose_a: tuple, pose_b: tuple, radius_a: fl
     pa_x, pa_y, ca, sa = pose_a
     pb_x, pb_y, cb, sb = pose_b
     kind, count = values[16], values[17]
-    points, separations = [], []
+    points = []
     if kind == _CIRCLES:
         lx, ly = values[14], values[15]  # the manifold's localPoint
         ax, ay = ca * lx - sa * ly + pa_x, sa * lx + ca * ly + pa_y
@@ -674,9 +675,8 @@ def _manifold_geometry(values: tuple, pose_a: tuple, pose_b: tuple, radius_a: fl
         normal = (dx / distance, dy / distance) if distance > 0.0 else (1.0, 0.0)
         c_ax, c_ay = ax + radius_a * normal[0], ay + radius_a * normal[1]
         c_bx, c_by = bx - radius_b * normal[0], by - radius_b * normal[1]
-        points.append((0.5 * (c_ax + c_bx), 0.5 * (c_ay + c_by)))
-        separations.append(distance - radius_a - radius_b)
-        return normal, points, separations
+        points.append((0.5 * (c_ax + c_bx), 0.5 * (c_ay + c_by), distance - radius_a - radius_b))
+        return normal, points
     face_a = kind == _FACE_A
     (c_ref, s_ref, p_ref_x, p_ref_y, r_ref) = (ca, sa, pa_x, pa_y, radius_a) if face_a else (
         cb, sb, pb_x, pb_y, radius_b)
@@ -694,11 +694,11 @@ def _manifold_geometry(values: tuple, pose_a: tuple, pose_b: tuple, radius_a: fl
         height = (qx - plane_x) * nx + (qy - plane_y) * ny
         c_ref_x, c_ref_y = qx + (r_ref - height) * nx, qy + (r_ref - height) * ny
         c_inc_x, c_inc_y = qx - r_inc * nx, qy - r_inc * ny
-        points.append((0.5 * (c_ref_x + c_inc_x), 0.5 * (c_ref_y + c_inc_y)))
-        separations.append(height - r_ref - r_inc)
+        points.append((0.5 * (c_ref_x + c_inc_x), 0.5 * (c_ref_y + c_inc_y),
+                       height - r_ref - r_inc))
     if not face_a:
         nx, ny = -nx, -ny  # Box2D's normal points from fixture A to fixture B
-    return (nx, ny), points, separations
+    return (nx, ny), points
 
 
 def _approach_speed(values: tuple, view: _Poses) -> float:
@@ -711,12 +711,12 @@ def _approach_speed(values: tuple, view: _Poses) -> float:
     body_a, body_b = view.by_id[body_a_id], view.by_id[body_b_id]
     x_a, y_a, sin_a, cos_a = _READERS[0](body_a, body_a_id)[:4]  # the poses now
     x_b, y_b, sin_b, cos_b = _READERS[0](body_b, body_b_id)[:4]
-    normal, points, _ = _manifold_geometry(values, (x_a, y_a, cos_a, sin_a),
-                                           (x_b, y_b, cos_b, sin_b), radius_a, radius_b)
+    normal, points = _manifold_geometry(values, (x_a, y_a, cos_a, sin_a),
+                                        (x_b, y_b, cos_b, sin_b), radius_a, radius_b)
     fastest = 0.0
-    for point in points:
-        va = body_a.GetLinearVelocityFromWorldPoint(point)
-        vb = body_b.GetLinearVelocityFromWorldPoint(point)
+    for x, y, _ in points:
+        va = body_a.GetLinearVelocityFromWorldPoint((x, y))
+        vb = body_b.GetLinearVelocityFromWorldPoint((x, y))
         approach = -((vb[0] - va[0]) * normal[0] + (vb[1] - va[1]) * normal[1])
         fastest = max(fastest, approach)
     return fastest
@@ -1102,7 +1102,7 @@ def _contact_of(touching: list, world) -> RawContacts | None:
             continue
         padding_a, radius_a, body_a_id = fixtures[values[2]]
         padding_b, radius_b, contact_body_b = fixtures[values[3]]
-        contact_normal, contact_points, separations = _manifold_geometry(
+        contact_normal, contact_points = _manifold_geometry(
             values, poses[body_a_id], poses[contact_body_b], radius_a, radius_b)
         # Overlap of the scene's outlines: the skins are padding, not the bodies.
         padding = padding_a + padding_b
@@ -1114,8 +1114,8 @@ def _contact_of(touching: list, world) -> RawContacts | None:
             # Box2D's tangent is cross(n, 1) = (n_y, -n_x).
             step_x += sign * (p_n * n_x + p_t * n_y)
             step_y += sign * (p_n * n_y - p_t * n_x)
-        points.extend((x / length, y / length, -(separation + padding) / length)
-                      for (x, y), separation in zip(contact_points, separations))
+        for x, y, separation in contact_points:
+            points.append((x / length, y / length, -(separation + padding) / length))
         if normal is None:
             normal = (sign * n_x, sign * n_y)
     if normal is None:
