@@ -366,8 +366,8 @@ def _pose(body) -> tuple[float, float, float, float]:
     return position.x, position.y, rotation.c, rotation.s
 
 
-class _Poses:
-    """What the readout keeps of an impact's bodies between steps (a :class:`_World`'s and
+class _Readout:
+    """What the readout keeps of one impact's bodies and fixtures (a :class:`_World`'s and
     a :class:`_Slot`'s base).
 
     ``start``: every body's :func:`_pose` by :data:`_body_id` when the next step begins (a
@@ -560,7 +560,7 @@ def _place(bodies, starts: tuple) -> None:
 
 
 def _states_at_cap(states, dt: float, band: float) -> bool:
-    """:func:`_at_cap` of bodies read by :meth:`_Poses.read`."""
+    """:func:`_at_cap` of bodies read by :meth:`_Readout.read`."""
     for state in states:
         if math.hypot(state[5], state[6]) * dt > band * MAX_TRANSLATION:
             return True
@@ -580,7 +580,7 @@ def _at_cap(bodies, dt: float, band: float) -> bool:
     return False
 
 
-class _World(_Poses):
+class _World(_Readout):
     """One b2World holding the scene's ground and bodies, and the current run's scales."""
 
     __slots__ = ("clipped", "derived", "dt", "fixture_list", "iterations", "measures", "notes",
@@ -701,10 +701,10 @@ def _manifold_geometry(values: tuple, pose_a: tuple, pose_b: tuple, radius_a: fl
     return (nx, ny), points
 
 
-def _approach_speed(values: tuple, view: _Poses) -> float:
+def _approach_speed(values: tuple, view: _Readout) -> float:
     """The normal approach speed at a touching contact's fastest point, computed as the
     solver computes ``v_rel`` (from the velocities before the step: call from PreSolve).
-    ``values``: the contact (:func:`_contact_in`); ``view``: its impact's :class:`_Poses`
+    ``values``: the contact (:func:`_contact_in`); ``view``: its impact's :class:`_Readout`
     (the fixtures and bodies)."""
     _, radius_a, body_a_id = view.fixtures[values[2]]
     _, radius_b, body_b_id = view.fixtures[values[3]]
@@ -1049,11 +1049,11 @@ class Box2DEngine(Engine):
         batch.slots = []
 
     def _read_poses(self, world: _World) -> tuple:
-        return world.now  # read after the step (_Poses.read)
+        return world.now  # read after the step (_Readout.read)
 
     def _read_velocities(self, world: _World) -> tuple:
         velocity, rate = world.velocity, world.length / world.velocity
-        # Read after the step (_Poses.read): the loop reads velocities only then, and
+        # Read after the step (_Readout.read): the loop reads velocities only then, and
         # the batch's _finish comes before _retire stops the bodies.
         return tuple((vx / velocity, vy / velocity, omega * rate)
                      for _, _, _, _, _, vx, vy, omega in world.states)
@@ -1125,7 +1125,7 @@ def _contact_of(touching: list, world) -> RawContacts | None:
             abs(step_x * normal[0] + step_y * normal[1]))
 
 
-class _Slot(_Poses):
+class _Slot(_Readout):
     """One impact of a batch: what _read_poses, _read_velocities and _run_notes read (the
     attributes of a :class:`_World` they use)."""
 
