@@ -84,7 +84,7 @@ import math
 import operator
 import struct
 from collections import OrderedDict
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from fractions import Fraction
 
 import mujoco
@@ -374,14 +374,12 @@ def _geom_values(shape, extent: float) -> tuple:
     if quat == _IDENTITY_QUAT and min(half) > _MJ_EPS:
         bvh = [0.0, 0.0, 0.0, *half]  # the corner loop below gives exactly this
     else:
-        low = [math.inf] * 3
-        high = [-math.inf] * 3
-        for corner in range(8):
-            vertex = [half[axis] if corner >> axis & 1 else -half[axis] for axis in range(3)]
-            turned = _rotate(vertex, quat)
-            for axis in range(3):
-                low[axis] = min(low[axis], turned[axis])
-                high[axis] = max(high[axis], turned[axis])
+        half_x, half_y, half_z = half
+        corners = [_rotate([x, y, z], quat) for z in (-half_z, half_z)
+                   for y in (-half_y, half_y) for x in (-half_x, half_x)]  # the compiler's order
+        columns = list(zip(*corners))
+        low = [min(column) for column in columns]
+        high = [max(column) for column in columns]
         for axis in range(3):  # the compiler inflates a flat box
             if abs(low[axis] - high[axis]) < _MJ_EPS:
                 low[axis] -= _MJ_EPS
@@ -464,6 +462,19 @@ def _xml_float32(value: float) -> float:
     return max(rounded, mirror) if decimal > exact else min(rounded, mirror)
 
 
+def _xml_float32s(values: list[float]) -> list[float]:
+    """:func:`_xml_float32` of every value: the rounding in one pass of numpy (the same
+    float32 conversion, to nearest, ties to even); the rare halfway values one by one."""
+    array = np.array(values)
+    rounded = array.astype(np.float32).astype(float)
+    mirror = array + (array - rounded)
+    halfway = (rounded != array) & (mirror.astype(np.float32).astype(float) == mirror)
+    result = rounded.tolist()
+    for index in np.flatnonzero(halfway).tolist():
+        result[index] = _xml_float32(values[index])
+    return result
+
+
 def _to_float32(value: float) -> float:
     """``value`` rounded to float32 (to nearest, ties to even), as a double."""
     return _FLOAT32.unpack(_FLOAT32.pack(value))[0]
@@ -482,8 +493,8 @@ def _write_spec(spec: mujoco.MjSpec, geometry: _Geometry) -> None:
         spec_body.mass = mass
         spec_body.inertia = [inertia, inertia, inertia]
         if kind == "polygon":
-            spec.mesh(f"g{index}_mesh").uservert = [
-                _xml_float32(value) for value in _mesh_vertices(body.shape, extent)]
+            spec.mesh(f"g{index}_mesh").uservert = _xml_float32s(
+                _mesh_vertices(body.shape, extent))
             continue
         geom = spec.geom(f"g{index}")
         size = _geom_size(body.shape, extent)
@@ -577,6 +588,8 @@ class _Model:
     contact_rows: object = None  # (n, 13): dist, pos, frame of each contact slot
     first_contact: object = None  # the first slot's dist, pos and frame[:3]
     contact_address: int = 0  # where ``contact_rows`` starts
+    # Contact views made so far, by address (a polygon world's datas take turns).
+    contact_views: dict = field(default_factory=dict)
 
 
 def _use_data(world: _Model, data: mujoco.MjData) -> None:
@@ -594,25 +607,29 @@ _CONTACT_HEAD = 13
 
 
 def _contact_rows(world: _Model, contact) -> None:
-    """Keep a view of the data's contacts (``contact``: ``data.contact`` at a contact step)
-    as rows of ``dist, pos, frame`` unless the one kept starts where they start.
+    """Make ``world.contact_rows`` a view of the data's contacts as rows of ``dist, pos,
+    frame`` (``contact``: ``data.contact`` at a contact step).
 
     MuJoCo puts the contacts at the start of the data's arena (``mj_collision``), one fixed
     address for the data's life, and the bindings make new arrays of them at every read; a
     view over every slot the arena can hold, read up to ``ncon``, costs one read per step.
-    Checked at each run's first contact (the address, and the fields' order).
+    Checked at each run's first contact (the address; the fields' order when a view is
+    made); the views of a polygon world's datas are kept by address.
     """
     distances = contact.dist
     address = distances.ctypes.data
     if address == world.contact_address:
         return
-    stride = distances.strides[0]
-    if (contact.pos.ctypes.data - address, contact.frame.ctypes.data - address) != (8, 32):
-        raise RuntimeError("mujoco: mjContact no longer begins with dist, pos, frame")
-    rows = np.lib.stride_tricks.as_strided(
-        distances, shape=(world.data.narena // stride, _CONTACT_HEAD), strides=(stride, 8),
-        writeable=False)
-    world.contact_rows, world.first_contact = rows, rows[0, :7]
+    views = world.contact_views.get(address)
+    if views is None:
+        stride = distances.strides[0]
+        if (contact.pos.ctypes.data - address, contact.frame.ctypes.data - address) != (8, 32):
+            raise RuntimeError("mujoco: mjContact no longer begins with dist, pos, frame")
+        rows = np.lib.stride_tricks.as_strided(
+            distances, shape=(world.data.narena // stride, _CONTACT_HEAD),
+            strides=(stride, 8), writeable=False)
+        views = world.contact_views[address] = (rows, rows[0, :7])
+    world.contact_rows, world.first_contact = views
     world.contact_address = address
 
 
