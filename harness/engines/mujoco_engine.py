@@ -69,9 +69,10 @@ solver reads ``meaninertia``): every array equals a fresh compile's, bit for bit
 values and is compiled, about half the cost of parsing XML; the models of a topology share
 one ``MjData`` per layout. Each run makes the model hold every option and contact parameter
 of its settings, ``e`` and ``μ`` (rewritten whenever they differ by value from what the
-model holds) and calls ``mj_resetData``, so reruns are bit-identical. The contact impulse
-is MuJoCo's total constraint impulse on body B, ``M·Δq̇`` (exact here: no gravity, no
-passive forces, constant mass matrix).
+model holds) and calls ``mj_resetData``, so reruns are bit-identical. A step reads its
+contacts through one numpy view of the data's arena, made once per data
+(``_contact_rows``). The contact impulse is MuJoCo's total constraint impulse on body B,
+``M·Δq̇`` (exact here: no gravity, no passive forces, constant mass matrix).
 
 Settings (``defaults`` | ``accurate``, shown as ``matched-bounce``) are listed in
 :data:`SETTING_DOCS`.
