@@ -777,8 +777,10 @@ class MujocoEngine(Engine):
         for x, y, angle, vx, vy, omega in start:
             qpos += [x, y, -angle]
             qvel += [vx, vy, -omega]
-        # The base class has just checked the scene and computed its inertias: reused.
-        weights = self._last_weights if scene is self._last_scene else None
+        # The base class has just checked the scene and computed its inertias: reused (read
+        # defensively: they are the base's private caches).
+        checked = getattr(self, "_last_scene", None)
+        weights = getattr(self, "_last_weights", None) if scene is checked else None
         inertias = None if weights is None else [inertia for _, inertia in weights]
         return scene, settings, qpos, qvel, _Geometry(scene, inertias)
 
