@@ -69,9 +69,10 @@ solver reads ``meaninertia``): every array equals a fresh compile's, bit for bit
 values and is compiled, about half the cost of parsing XML; the models of a topology share
 one ``MjData`` per layout. Each run makes the model hold every option and contact parameter
 of its settings, ``e`` and ``μ`` (rewritten whenever they differ by value from what the
-model holds) and calls ``mj_resetData``, so reruns are bit-identical. The contact impulse
-is MuJoCo's total constraint impulse on body B, ``M·Δq̇`` (exact here: no gravity, no
-passive forces, constant mass matrix).
+model holds) and calls ``mj_resetData``, so reruns are bit-identical. A step reads its
+contacts through one numpy view of the data's arena, made once per data
+(``_contact_rows``). The contact impulse is MuJoCo's total constraint impulse on body B,
+``M·Δq̇`` (exact here: no gravity, no passive forces, constant mass matrix).
 
 Settings (``defaults`` | ``accurate``, shown as ``matched-bounce``) are listed in
 :data:`SETTING_DOCS`.
@@ -81,12 +82,14 @@ from __future__ import annotations
 
 import functools
 import math
+import operator
 import struct
 from collections import OrderedDict
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from fractions import Fraction
 
 import mujoco
+import numpy as np
 
 from harness.engines.contract import (
     Engine,
@@ -244,36 +247,54 @@ def restitution_solref(
 
 
 # ---------------------------------------------------------------------- model
-def _geom_xml(shape, name: str) -> tuple[str, str]:
-    """(asset xml, geom xml) for ``shape`` in the body frame (scene x -> x, scene y -> z)."""
-    if shape.kind == "disk":
-        return "", f'<geom name="{name}" type="sphere" size="{shape.radius!r}"/>'
-    if shape.kind == "rod":
-        half = shape.length / 2.0
+def _geom_size(shape, extent: float) -> list[float]:
+    """The geom's ``size`` as the compiler holds it, for a disk, rod or box in the body frame.
+
+    A sphere's ``[r, 0, 0]``; a capsule's ``[r, half-length, 0]`` (the half-length its fromto
+    along x gives, exact); a box's half-sizes, ``extent`` (its :func:`body_extent`, the depth
+    the prism gets along y) as the middle one. The one source of the sizes the XML, a spec
+    and an edited model get.
+    """
+    kind = shape.kind
+    if kind == "disk":
+        return [float(shape.radius), 0.0, 0.0]
+    if kind == "rod":
+        return [float(shape.radius), shape.length / 2.0, 0.0]
+    return [shape.width / 2.0, extent, shape.height / 2.0]
+
+
+def _mesh_vertices(shape, extent: float) -> list[float]:
+    """A polygon extruded along y to ``±extent``: ``x, y, z`` of every vertex, flat."""
+    return [value for x, y in shape.vertices().tolist() for side in (-extent, extent)
+            for value in (x, side, y)]
+
+
+def _geom_xml(shape, name: str, extent: float) -> tuple[str, str]:
+    """(asset xml, geom xml) for ``shape`` in the body frame (scene x -> x, scene y -> z);
+    ``extent``: its :func:`body_extent`."""
+    kind = shape.kind
+    if kind == "polygon":
+        vertices = " ".join(map(repr, _mesh_vertices(shape, extent)))
+        return (
+            f'<mesh name="{name}_mesh" vertex="{vertices}"/>',
+            f'<geom name="{name}" type="mesh" mesh="{name}_mesh"/>',
+        )
+    size = _geom_size(shape, extent)
+    if kind == "disk":
+        return "", f'<geom name="{name}" type="sphere" size="{size[0]!r}"/>'
+    if kind == "rod":
+        half = size[1]
         return "", (
-            f'<geom name="{name}" type="capsule" size="{shape.radius!r}" '
+            f'<geom name="{name}" type="capsule" size="{size[0]!r}" '
             f'fromto="{-half!r} 0 0 {half!r} 0 0"/>'
         )
-    depth = 2.0 * body_extent(shape)
-    if shape.kind == "box":
-        return "", (
-            f'<geom name="{name}" type="box" '
-            f'size="{shape.width / 2.0!r} {depth / 2.0!r} {shape.height / 2.0!r}"/>'
-        )
-    vertices = " ".join(
-        f"{x!r} {side * depth / 2.0!r} {y!r}"
-        for x, y in shape.vertices().tolist() for side in (-1.0, 1.0)
-    )
-    return (
-        f'<mesh name="{name}_mesh" vertex="{vertices}"/>',
-        f'<geom name="{name}" type="mesh" mesh="{name}_mesh"/>',
-    )
+    return "", f'<geom name="{name}" type="box" size="{" ".join(map(repr, size))}"/>'
 
 
 def _model_xml(scene: Scene) -> str:
     assets, bodies = [], []
     for index, body in enumerate(scene.bodies):
-        asset, geom = _geom_xml(body.shape, f"g{index}")
+        asset, geom = _geom_xml(body.shape, f"g{index}", body_extent(body.shape))
         assets.append(asset)
         inertia = float(body.moment_of_inertia)
         bodies.append(
@@ -334,35 +355,32 @@ def _geom_values(shape, extent: float) -> tuple:
     """``(geom_size, geom_rbound, geom_aabb, body bvh_aabb)`` the compiler gives ``shape``
     (``extent``: its :func:`body_extent`, which sets a box's depth).
 
-    The sizes are those :func:`_geom_xml` writes (a capsule's half-length from its fromto,
-    exact); the bounding sphere and box are the compiler's formulas; the body's bounding
-    volume is the geom's box turned into the body frame corner by corner, as the
-    compiler's bounding-volume hierarchy does (``mjCBoundingVolumeHierarchy::MakeBVH``).
+    The size is :func:`_geom_size`'s; the bounding sphere and box are the compiler's
+    formulas; the body's bounding volume is the geom's box turned into the body frame corner
+    by corner, as the compiler's bounding-volume hierarchy does
+    (``mjCBoundingVolumeHierarchy::MakeBVH``).
     """
+    size = _geom_size(shape, extent)
     kind = shape.kind
     if kind == "disk":
-        radius = float(shape.radius)
-        size, rbound, half, quat = [radius, 0.0, 0.0], radius, [radius] * 3, _IDENTITY_QUAT
+        radius = size[0]
+        rbound, half, quat = radius, [radius] * 3, _IDENTITY_QUAT
     elif kind == "rod":
-        radius, half_length = float(shape.radius), float(shape.length) / 2.0
-        size, rbound = [radius, half_length, 0.0], radius + half_length
+        radius, half_length = size[0], size[1]
+        rbound = radius + half_length
         half, quat = [radius, radius, half_length + radius], _CAPSULE_QUAT
     else:
-        depth = 2.0 * extent
-        size = [float(shape.width) / 2.0, depth / 2.0, float(shape.height) / 2.0]
         rbound = math.sqrt(size[0] * size[0] + size[1] * size[1] + size[2] * size[2])
         half, quat = list(size), _IDENTITY_QUAT
     if quat == _IDENTITY_QUAT and min(half) > _MJ_EPS:
         bvh = [0.0, 0.0, 0.0, *half]  # the corner loop below gives exactly this
     else:
-        low = [math.inf] * 3
-        high = [-math.inf] * 3
-        for corner in range(8):
-            vertex = [half[axis] if corner >> axis & 1 else -half[axis] for axis in range(3)]
-            turned = _rotate(vertex, quat)
-            for axis in range(3):
-                low[axis] = min(low[axis], turned[axis])
-                high[axis] = max(high[axis], turned[axis])
+        half_x, half_y, half_z = half
+        corners = [_rotate([x, y, z], quat) for z in (-half_z, half_z)
+                   for y in (-half_y, half_y) for x in (-half_x, half_x)]  # the compiler's order
+        columns = list(zip(*corners))
+        low = [min(column) for column in columns]
+        high = [max(column) for column in columns]
         for axis in range(3):  # the compiler inflates a flat box
             if abs(low[axis] - high[axis]) < _MJ_EPS:
                 low[axis] -= _MJ_EPS
@@ -372,36 +390,53 @@ def _geom_values(shape, extent: float) -> tuple:
     return size, rbound, [0.0, 0.0, 0.0, *half], bvh
 
 
+def _body_key(body, inertia: float) -> tuple:
+    """What a compiled model depends on of one body: shape kind and dimensions, mass and
+    inertia (``inertia``: its moment of inertia, a polygon's costs tens of µs)."""
+    shape = body.shape
+    kind = shape.kind
+    if kind == "disk":
+        dimensions = (shape.radius,)
+    elif kind == "rod":
+        dimensions = (shape.length, shape.radius)
+    elif kind == "box":
+        dimensions = (shape.width, shape.height)
+    else:
+        dimensions = tuple(map(tuple, shape.vertices().tolist()))
+    return (kind, dimensions, float(body.mass), float(inertia))
+
+
+def _geometry_key(scene: Scene) -> tuple:
+    """:attr:`_Geometry.key` of ``scene`` alone."""
+    return (scene.ground,
+            tuple(_body_key(body, body.moment_of_inertia) for body in scene.bodies))
+
+
 class _Geometry:
     """One scene's geometry in the form a world takes it (computed once per plan).
 
-    ``key`` identifies it (ground; per body the shape's kind and dimensions, mass and
-    inertia); ``bodies`` holds, for editable shapes, per body the geom's values
-    (:func:`_geom_values`), the mass and the inertia; ``None`` for a scene with a polygon,
-    which is compiled (from ``scene``).
+    ``key`` identifies it (ground; per body :func:`_body_key`: the shape's kind and
+    dimensions, mass and inertia); ``extents`` the bodies' :func:`body_extent`; ``bodies``
+    holds, for editable shapes, per body the geom's values (:func:`_geom_values`), the mass
+    and the inertia; ``None`` for a scene with a polygon, which is compiled (from ``scene``).
+    ``inertias``: the bodies' moments of inertia where already computed.
     """
 
     __slots__ = ("bodies", "extents", "key", "scene")
 
-    def __init__(self, scene: Scene) -> None:
+    def __init__(self, scene: Scene, inertias=None) -> None:
         parts, extents, bodies = [], [], []
-        for body in scene.bodies:
+        for index, body in enumerate(scene.bodies):
             shape = body.shape
-            kind = shape.kind
             extent = body_extent(shape)
-            mass, inertia = float(body.mass), float(body.moment_of_inertia)
             extents.append(extent)
-            if kind == "disk":
-                dimensions = (shape.radius,)
-            elif kind == "rod":
-                dimensions = (shape.length, shape.radius)
-            elif kind == "box":
-                dimensions = (shape.width, shape.height)
-            else:
-                dimensions = tuple(map(tuple, shape.vertices().tolist()))
+            part = _body_key(body, body.moment_of_inertia if inertias is None
+                             else inertias[index])
+            parts.append(part)
+            if shape.kind not in _EDITABLE_KINDS:
                 bodies = None
-            parts.append((kind, dimensions, mass, inertia))
-            if bodies is not None:
+            elif bodies is not None:
+                mass, inertia = part[2], part[3]
                 bodies.append((*_geom_values(shape, extent), mass, [inertia] * 3))
         self.key = (scene.ground, tuple(parts))
         self.extents = extents
@@ -428,6 +463,19 @@ def _xml_float32(value: float) -> float:
     return max(rounded, mirror) if decimal > exact else min(rounded, mirror)
 
 
+def _xml_float32s(values: list[float]) -> list[float]:
+    """:func:`_xml_float32` of every value: the rounding in one pass of numpy (the same
+    float32 conversion, to nearest, ties to even); the rare halfway values one by one."""
+    array = np.array(values)
+    rounded = array.astype(np.float32).astype(float)
+    mirror = array + (array - rounded)
+    halfway = (rounded != array) & (mirror.astype(np.float32).astype(float) == mirror)
+    result = rounded.tolist()
+    for index in np.flatnonzero(halfway).tolist():
+        result[index] = _xml_float32(values[index])
+    return result
+
+
 def _to_float32(value: float) -> float:
     """``value`` rounded to float32 (to nearest, ties to even), as a double."""
     return _FLOAT32.unpack(_FLOAT32.pack(value))[0]
@@ -436,30 +484,28 @@ def _to_float32(value: float) -> float:
 _FLOAT32 = struct.Struct("<f")
 
 
-def _write_spec(spec: mujoco.MjSpec, scene: Scene) -> None:
-    """Put ``scene``'s masses, inertias and shapes into a spec parsed from :func:`_model_xml`
-    of a scene of the same topology: the values that XML would give (compiled alike)."""
-    for index, body in enumerate(scene.bodies):
+def _write_spec(spec: mujoco.MjSpec, geometry: _Geometry) -> None:
+    """Put a scene's masses, inertias and shapes (its ``geometry``) into a spec parsed from
+    :func:`_model_xml` of a scene of the same topology: the values that XML would give
+    (compiled alike)."""
+    for index, (body, extent, (kind, _, mass, inertia)) in enumerate(
+            zip(geometry.scene.bodies, geometry.extents, geometry.key[1])):
         spec_body = spec.body(f"b{index}")
-        spec_body.mass = float(body.mass)
-        inertia = float(body.moment_of_inertia)
+        spec_body.mass = mass
         spec_body.inertia = [inertia, inertia, inertia]
-        shape, geom = body.shape, spec.geom(f"g{index}")
-        if shape.kind == "disk":
-            geom.size = [float(shape.radius), *geom.size[1:]]
-        elif shape.kind == "rod":
-            half = shape.length / 2.0
-            geom.size = [float(shape.radius), *geom.size[1:]]
-            geom.fromto = [-half, 0.0, 0.0, half, 0.0, 0.0]
-        elif shape.kind == "box":
-            depth = 2.0 * body_extent(shape)
-            geom.size = [shape.width / 2.0, depth / 2.0, shape.height / 2.0]
-        else:
-            depth = 2.0 * body_extent(shape)
-            spec.mesh(f"g{index}_mesh").uservert = [
-                _xml_float32(value)
-                for x, y in shape.vertices().tolist() for side in (-1.0, 1.0)
-                for value in (x, side * depth / 2.0, y)]
+        if kind == "polygon":
+            spec.mesh(f"g{index}_mesh").uservert = _xml_float32s(
+                _mesh_vertices(body.shape, extent))
+            continue
+        geom = spec.geom(f"g{index}")
+        size = _geom_size(body.shape, extent)
+        if kind == "box":
+            geom.size = size
+        else:  # the XML gives a sphere and a capsule their radius; a capsule its fromto
+            geom.size = [size[0], *geom.size[1:]]
+            if kind == "rod":
+                half = size[1]
+                geom.fromto = [-half, 0.0, 0.0, half, 0.0, 0.0]
 
 
 def _write_statistics(m: mujoco.MjModel, rbounds: list[float], masses: list[float],
@@ -494,14 +540,15 @@ def _write_statistics(m: mujoco.MjModel, rbounds: list[float], masses: list[floa
 
 def _layout(model: mujoco.MjModel) -> tuple:
     """Every size of ``model`` that MjData's layout depends on (its integer ``n*`` counts)."""
-    global _SIZE_NAMES
-    if _SIZE_NAMES is None:
-        _SIZE_NAMES = tuple(name for name in dir(model)
-                            if name.startswith("n") and isinstance(getattr(model, name), int))
-    return tuple(getattr(model, name) for name in _SIZE_NAMES)
+    global _SIZES
+    if _SIZES is None:
+        _SIZES = operator.attrgetter(*(
+            name for name in dir(model)
+            if name.startswith("n") and isinstance(getattr(model, name), int)))
+    return _SIZES(model)
 
 
-_SIZE_NAMES: tuple | None = None
+_SIZES: operator.attrgetter | None = None
 
 
 @dataclass
@@ -510,7 +557,9 @@ class _Model:
 
     Without a polygon the model's geometry is rewritten in place for each scene
     (:meth:`MujocoEngine._hold`); with one, ``compiled`` keeps a compiled model per
-    geometry, all stepping the same ``MjData`` when their layouts agree.
+    geometry, all stepping the same ``MjData`` when their layouts agree. The numpy views
+    (of the data: :func:`_use_data`; of the model's edited arrays: ``edits``) are made once:
+    each attribute read through the bindings makes a new array.
     """
 
     model: mujoco.MjModel
@@ -523,15 +572,74 @@ class _Model:
     compiled: OrderedDict | None = None
     datas: dict | None = None
     spec: mujoco.MjSpec | None = None  # polygon worlds: the parsed spec, never compiled
+    # Editable worlds: views of geom_size, geom_rbound, geom_aabb, bvh_aabb, body_mass and
+    # body_inertia, and each body's row of bvh_aabb.
+    edits: tuple | None = None
+    bvh_rows: list[int] | None = None
     # What the model holds now: (settings snapshot, e, μ, derived), see _configure.
     configured: tuple | None = None
     dt: float = 0.0  # s, the time step the model holds
     normal_sign: float = 0.0  # +1/-1 once the run's first contact is read, 0 before
     last_depth: float = math.inf  # m, the previous contact step's largest penetration
+    # Views of ``data`` (_use_data): qpos, qvel, xpos, xmat; the contacts (_contact_rows).
+    qpos: object = None
+    qvel: object = None
+    xpos: object = None
+    xmat: object = None
+    contact_rows: object = None  # (n, 13): dist, pos, frame of each contact slot
+    first_contact: object = None  # the first slot's dist, pos and frame[:3]
+    contact_address: int = 0  # where ``contact_rows`` starts
+    # Contact views made so far, by address (a polygon world's datas take turns).
+    contact_views: dict = field(default_factory=dict)
+
+
+def _use_data(world: _Model, data: mujoco.MjData) -> None:
+    """Make ``world`` step ``data``, with views of its arrays made once (they live in the
+    data's buffer, fixed for its life; the contacts' views are made at a first contact)."""
+    world.data = data
+    world.qpos, world.qvel = data.qpos, data.qvel
+    world.xpos, world.xmat = data.xpos, data.xmat
+    world.contact_rows = world.first_contact = None
+    world.contact_address = 0
+
+
+# MuJoCo's mjContact begins with dist, pos[3] and frame[9]: 13 doubles read as one row.
+_CONTACT_HEAD = 13
+
+
+def _contact_rows(world: _Model, contact) -> None:
+    """Make ``world.contact_rows`` a view of the data's contacts as rows of ``dist, pos,
+    frame`` (``contact``: ``data.contact`` at a contact step).
+
+    MuJoCo puts the contacts at the start of the data's arena (``mj_collision``), one fixed
+    address for the data's life, and the bindings make new arrays of them at every read; a
+    view over every slot the arena can hold, read up to ``ncon``, costs one read per step.
+    Checked at each run's first contact (the address; the fields' order when a view is
+    made); the views of a polygon world's datas are kept by address.
+    """
+    distances = contact.dist
+    address = distances.ctypes.data
+    if address == world.contact_address:
+        return
+    views = world.contact_views.get(address)
+    if views is None:
+        stride = distances.strides[0]
+        if (contact.pos.ctypes.data - address, contact.frame.ctypes.data - address) != (8, 32):
+            raise RuntimeError("mujoco: mjContact no longer begins with dist, pos, frame")
+        rows = np.lib.stride_tricks.as_strided(
+            distances, shape=(world.data.narena // stride, _CONTACT_HEAD),
+            strides=(stride, 8), writeable=False)
+        views = world.contact_views[address] = (rows, rows[0, :7])
+    world.contact_rows, world.first_contact = views
+    world.contact_address = address
 
 
 # Per-run constants computed once: the bisection for ζ costs ~14 µs, pure in its arguments.
-_cached_restitution_solref = functools.lru_cache(maxsize=256)(restitution_solref)
+@functools.lru_cache(maxsize=256)
+def _restitution_terms(restitution: float, time_step: float, contact_steps: float) -> tuple:
+    """``(solref, ζ, restitution of ζ)`` of :func:`restitution_solref`."""
+    stiffness, damping, zeta = restitution_solref(restitution, time_step, contact_steps)
+    return [stiffness, damping], zeta, restitution_of_damping_ratio(zeta)
 
 
 def _snapshot(settings: dict) -> dict:
@@ -542,6 +650,7 @@ def _snapshot(settings: dict) -> dict:
 
 _mj_step = mujoco.mj_step
 _reset_data = mujoco.mj_resetData
+_set_const = mujoco.mj_setConst
 
 
 class MujocoEngine(Engine):
@@ -594,8 +703,14 @@ class MujocoEngine(Engine):
         extents = [body_extent(b.shape) for b in scene.bodies]
         data = mujoco.MjData(model)
         world = _Model(model, data, body_geoms, body_ids, extents,
-                       geometry=_Geometry(scene).key)
-        if not all(body.shape.kind in _EDITABLE_KINDS for body in scene.bodies):
+                       geometry=_geometry_key(scene))
+        _use_data(world, data)
+        if all(body.shape.kind in _EDITABLE_KINDS for body in scene.bodies):
+            m = model
+            world.edits = (m.geom_size, m.geom_rbound, m.geom_aabb, m.bvh_aabb, m.body_mass,
+                           m.body_inertia)
+            world.bvh_rows = [int(m.body_bvhadr[body_id]) for body_id in body_ids]
+        else:
             world.compiled = OrderedDict({world.geometry: [model, None]})
             world.datas = {_layout(model): data}
         return world
@@ -611,16 +726,17 @@ class MujocoEngine(Engine):
         compiled (kept, ``_MAX_COMPILED`` at most).
         """
         if geometry.bodies is not None:
+            sizes, rbounds, aabbs, bvhs, masses, inertias = world.edits
+            for geom_id, body_id, bvh_row, (size, rbound, aabb, bvh, mass, inertia) in zip(
+                    world.body_geoms, world.body_ids, world.bvh_rows, geometry.bodies):
+                sizes[geom_id] = size
+                rbounds[geom_id] = rbound
+                aabbs[geom_id] = aabb
+                bvhs[bvh_row] = bvh
+                masses[body_id] = mass
+                inertias[body_id] = inertia
             m = world.model
-            for geom_id, body_id, (size, rbound, aabb, bvh, mass, inertia) in zip(
-                    world.body_geoms, world.body_ids, geometry.bodies):
-                m.geom_size[geom_id] = size
-                m.geom_rbound[geom_id] = rbound
-                m.geom_aabb[geom_id] = aabb
-                m.bvh_aabb[m.body_bvhadr[body_id]] = bvh
-                m.body_mass[body_id] = mass
-                m.body_inertia[body_id] = inertia
-            mujoco.mj_setConst(m, world.data)
+            _set_const(m, world.data)
             _write_statistics(m, [values[1] for values in geometry.bodies],
                               [values[4] for values in geometry.bodies], geometry.key[0])
         else:
@@ -631,7 +747,7 @@ class MujocoEngine(Engine):
                 if world.spec is None:  # parsed once, from any scene of the topology
                     world.spec = mujoco.MjSpec.from_string(_model_xml(geometry.scene))
                 spec = world.spec.copy()  # compiling fills a spec's mesh faces and normals
-                _write_spec(spec, geometry.scene)
+                _write_spec(spec, geometry)
                 entry = compiled[geometry.key] = [spec.compile(), None]
                 while len(compiled) > _MAX_COMPILED:
                     compiled.popitem(last=False)
@@ -642,7 +758,8 @@ class MujocoEngine(Engine):
             data = world.datas.get(layout)
             if data is None:
                 data = world.datas[layout] = mujoco.MjData(model)
-            world.data = data
+            if data is not world.data:
+                _use_data(world, data)
         world.geometry = geometry.key
         world.extents = geometry.extents
 
@@ -660,7 +777,12 @@ class MujocoEngine(Engine):
         for x, y, angle, vx, vy, omega in start:
             qpos += [x, y, -angle]
             qvel += [vx, vy, -omega]
-        return scene, settings, qpos, qvel, _Geometry(scene)
+        # The base class has just checked the scene and computed its inertias: reused (read
+        # defensively: they are the base's private caches).
+        checked = getattr(self, "_last_scene", None)
+        weights = getattr(self, "_last_weights", None) if scene is checked else None
+        inertias = None if weights is None else [inertia for _, inertia in weights]
+        return scene, settings, qpos, qvel, _Geometry(scene, inertias)
 
     def _reset(self, world: _Model, prepared: tuple) -> dict:
         """The scene's geometry, the run's options and contact parameters, fresh data, the
@@ -672,10 +794,9 @@ class MujocoEngine(Engine):
                 self._hold(world, geometry)
             world.geometry = geometry.key  # equal: the next run compares identities
         derived = self._configure(world, scene, settings)
-        m, d = world.model, world.data
-        _reset_data(m, d)
-        d.qpos[:] = qpos
-        d.qvel[:] = qvel
+        _reset_data(world.model, world.data)
+        world.qpos[:] = qpos
+        world.qvel[:] = qvel
         world.normal_sign = 0.0
         world.last_depth = math.inf
         return derived
@@ -685,7 +806,8 @@ class MujocoEngine(Engine):
 
         What the model already holds is not written again (compared by value, never by
         identity): the options and the settings' contact parameters when the settings are
-        the same, the pair's ``solref``, ``condim`` and friction when ``e`` and ``μ`` are.
+        the same, each of the pair's ``solref``, ``condim`` and friction that ``e`` and ``μ``
+        leave as they were.
         """
         e, mu = scene.restitution, scene.friction
         last = entry.configured
@@ -694,7 +816,7 @@ class MujocoEngine(Engine):
             last = None
         if last is None or last[1] != e or last[2] != mu:
             entry.configured = last = (last[0] if last else _snapshot(settings), e, mu,
-                                       self._write_pair(entry, scene, settings))
+                                       self._write_pair(entry, scene, settings, last))
         derived = last[3]
         return {**derived, "solref": list(derived["solref"])}  # the caller's own copy
 
@@ -717,27 +839,35 @@ class MujocoEngine(Engine):
         m.geom_margin[:] = float(settings["margin"])
         m.geom_gap[:] = 0.0
 
-    def _write_pair(self, entry: _Model, scene: Scene, settings: dict) -> dict:
-        """The pair's contact parameters (from ``e``, ``μ`` and the settings); ``derived``."""
+    def _write_pair(self, entry: _Model, scene: Scene, settings: dict,
+                    held: tuple | None) -> dict:
+        """The pair's contact parameters (from ``e``, ``μ`` and the settings); ``derived``.
+
+        ``held``: what the model holds under the same settings (``_configure``'s record),
+        whose equal values are not written again; ``None``: write every one.
+        """
         m = entry.model
         derived: dict = {}
         if settings["solref"] == "restitution":
-            stiffness, damping, zeta = _cached_restitution_solref(
+            solref, zeta, target = _restitution_terms(
                 scene.restitution, float(settings["time_step"]),
                 float(settings["contact_steps"]))
-            solref = [stiffness, damping]
             derived["damping_ratio"] = zeta
-            derived["restitution_target"] = restitution_of_damping_ratio(zeta)
+            derived["restitution_target"] = target
         else:
             solref = [float(v) for v in settings["solref"]]
         derived["solref"] = solref
         mu = float(scene.friction)
         condim = 1 if mu == 0.0 else 3
         derived["condim"] = condim
-        m.geom_solref[:] = solref
-        m.geom_condim[:] = condim
-        m.geom_friction[:] = 0.0
-        m.geom_friction[entry.body_geoms[0]] = [mu, 0.0, 0.0]
+        if held is None or held[3]["solref"] != solref:
+            m.geom_solref[:] = solref
+        if held is None or held[3]["condim"] != condim:
+            m.geom_condim[:] = condim
+        if held is None:
+            m.geom_friction[:] = 0.0
+        if held is None or float(held[2]) != mu:
+            m.geom_friction[entry.body_geoms[0]] = [mu, 0.0, 0.0]
         return derived
 
     def _advance(self, world: _Model) -> None:
@@ -750,28 +880,30 @@ class MujocoEngine(Engine):
         # "gap" zone) but gives it no constraint row.
         if not d.nefc:
             return None
-        contact = d.contact
-        positions = contact.pos.tolist()
-        if len(positions) == 1:
-            # The model has no other constraints, so every row is this contact's and carries
-            # its distance: efc_pos is cheaper to read than contact.dist.
-            points = ((positions[0][0], positions[0][2], -d.efc_pos.item(0)),)
-        else:
-            points = tuple((position[0], position[2], -distance)
-                           for position, distance in zip(positions, contact.dist.tolist()))
+        count = d.ncon
         sign = world.normal_sign
-        if sign == 0.0:  # a pair's geom order is fixed: read it at the run's first contact
-            # The normal points from geom1 into geom2; body A's geom second reverses it.
+        if sign == 0.0:  # the run's first contact
+            contact = d.contact
+            _contact_rows(world, contact)
+            # A pair's geom order is fixed: the normal points from geom1 into geom2, and
+            # body A's geom second reverses it.
             two_bodies = len(world.body_geoms) == 2
             sign = world.normal_sign = (
                 -1.0 if two_bodies and contact.geom2.item(0) == world.body_geoms[0] else 1.0)
-        frame = contact.frame.tolist()[0]
-        length = math.hypot(frame[0], frame[2])
-        normal = (sign * frame[0] / length, sign * frame[2] / length)
+        if count == 1:
+            distance, x, _, z, frame_x, _, frame_z = world.first_contact.tolist()
+            depth = -distance
+            points = ((x, z, depth),)
+        else:
+            rows = world.contact_rows[:count].tolist()
+            points = tuple([(row[1], row[3], -row[0]) for row in rows])
+            frame_x, frame_z = rows[0][4], rows[0][6]
+            depth = max([point[2] for point in points])
+        length = math.hypot(frame_x, frame_z)
+        normal = (sign * frame_x / length, sign * frame_z / length)
         # No impulse vector per step (the run's comes from momentum). While the penetration
         # still grows the spring-damper pushes (k·r + b·r' > 0), so the forces are read only
         # once it shrinks: the step carries force while any constraint force is non-zero.
-        depth = max(point[2] for point in points) if len(points) > 1 else points[0][2]
         growing = depth >= world.last_depth
         world.last_depth = depth
         if growing:
@@ -780,22 +912,21 @@ class MujocoEngine(Engine):
 
     def _read_poses(self, world: _Model) -> tuple:
         # Python floats once (tolist): the same doubles as indexing the arrays, fewer calls.
-        qpos = world.data.qpos.tolist()
+        qpos = world.qpos.tolist()
         if len(qpos) == 3:
             return ((qpos[0], qpos[1], -qpos[2]),)
         return tuple([(qpos[i], qpos[i + 1], -qpos[i + 2]) for i in range(0, len(qpos), 3)])
 
     def _read_velocities(self, world: _Model) -> tuple:
-        qvel = world.data.qvel.tolist()
+        qvel = world.qvel.tolist()
         if len(qvel) == 3:
             return ((qvel[0], qvel[1], -qvel[2]),)
         return tuple([(qvel[i], qvel[i + 1], -qvel[i + 2]) for i in range(0, len(qvel), 3)])
 
     def _out_of_plane_drift(self, world: _Model) -> float:
         """The centre's y, plus the tilt of the body's y axis times its size."""
-        d = world.data
         drift = 0.0
-        xpos, xmat = d.xpos.tolist(), d.xmat.tolist()
+        xpos, xmat = world.xpos.tolist(), world.xmat.tolist()
         for body_id, extent in zip(world.body_ids, world.extents):
             rotation = xmat[body_id]  # row-major 3x3: the body's y axis is entries 1, 4, 7
             drift = max(drift,
