@@ -90,12 +90,19 @@ def _make_shape(pm_body: pymunk.Body, shape) -> pymunk.Shape:
 def _new_shape_ptr(body_ptr, shape):
     """The C shape :func:`_make_shape` makes (the same constructor and arguments), without
     pymunk's wrapper: the caller frees it (``cpShapeFree``)."""
-    if shape.kind == "disk":
+    kind = shape.kind
+    if kind == "disk":
         return lib.cpCircleShapeNew(body_ptr, shape.radius, (0, 0))
-    if shape.kind == "rod":
+    if kind == "rod":
         half = shape.length / 2.0
         return lib.cpSegmentShapeNew(body_ptr, (-half, 0.0), (half, 0.0), shape.radius)
-    vertices = [tuple(v) for v in shape.vertices().tolist()]
+    if kind == "box":  # Box.vertices()'s values, without the array
+        half_w, half_h = shape.width / 2.0, shape.height / 2.0
+        vertices = [(-half_w, -half_h), (half_w, -half_h), (half_w, half_h), (-half_w, half_h)]
+    elif kind == "polygon":  # Polygon.vertices() is the points as floats
+        vertices = [(float(x), float(y)) for x, y in shape.points]
+    else:
+        vertices = [tuple(v) for v in shape.vertices().tolist()]
     return lib.cpPolyShapeNew(body_ptr, len(vertices), vertices, _IDENTITY, 0.0)
 
 
@@ -335,13 +342,15 @@ class PymunkEngine(Engine):
         _space_step(batch.space_ptr, batch.dt)
         contacts = {}
         out_a, out_b = self._bodies_out
-        slot_of, slots = batch.slot_of, batch.slots
+        slot_of = batch.slot_of
         for arbiter in arbiters:
             _bodies_of(arbiter, out_a, out_b)
-            slot = slot_of.get(out_a[0])
-            if slot is None:  # body a is the ground
-                slot = slot_of[out_b[0]]
-            contact = _contact_of(arbiter, out_a[0] == slots[slot].body_ptrs[-1])
+            found = slot_of.get(out_a[0])
+            if found is None:  # body a is the ground
+                slot, b_first = slot_of[out_b[0]][0], False
+            else:
+                slot, b_first = found
+            contact = _contact_of(arbiter, b_first)
             if contact is not None:
                 contacts[slot] = contact
         return contacts
@@ -394,10 +403,11 @@ def _contact_of(arbiter, b_first: bool) -> RawContacts | None:
 class _Slot:
     """One impact of a batch: what ``_read_poses`` and ``_read_velocities`` read."""
 
-    __slots__ = ("body_ptrs", "shape_ptrs")
+    __slots__ = ("body_ptrs", "in_space", "shape_ptrs")
 
-    def __init__(self, body_ptrs: tuple, shape_ptrs: tuple) -> None:
+    def __init__(self, body_ptrs, shape_ptrs) -> None:
         self.body_ptrs, self.shape_ptrs = body_ptrs, shape_ptrs
+        self.in_space = True  # not yet taken out (it may be half in while being built)
 
 
 class _Batch:
@@ -412,7 +422,7 @@ class _Batch:
     def __init__(self, space: pymunk.Space, dt: float) -> None:
         self.space, self.space_ptr, self.dt = space, space._space, dt
         self.slots: list[_Slot] = []
-        self.slot_of: dict = {}  # body pointer -> slot
+        self.slot_of: dict = {}  # body pointer -> (slot, whether it is the slot's body B)
         self.arbiters: list = []
 
     def record(self, arbiter: pymunk.Arbiter, space, data) -> None:
@@ -420,20 +430,28 @@ class _Batch:
         self.arbiters.append(arbiter._arbiter)
 
     def take_out(self, slot: int) -> None:
-        """Remove impact ``slot``'s shapes, then bodies, from the space (as ``Space.remove``;
-        what is not in it is skipped: removing it would make Chipmunk abort())."""
+        """Remove impact ``slot``'s shapes, then its bodies, from the space (as
+        ``Space.remove``), once."""
         world, space_ptr = self.slots[slot], self.space_ptr
-        for shape_ptr in world.shape_ptrs:
-            if lib.cpSpaceContainsShape(space_ptr, shape_ptr):
+        if world.in_space:
+            world.in_space = False
+            for shape_ptr in world.shape_ptrs:
                 _remove_shape(space_ptr, shape_ptr)
-        for body_ptr in world.body_ptrs:
-            if lib.cpSpaceContainsBody(space_ptr, body_ptr):
+            for body_ptr in world.body_ptrs:
                 _remove_body(space_ptr, body_ptr)
 
     def free(self) -> None:
         """Take every impact out of the space and free its C shapes and bodies (once)."""
-        for slot, world in enumerate(self.slots):
-            self.take_out(slot)
+        space_ptr = self.space_ptr
+        for world in self.slots:
+            if world.in_space:  # what is not in the space is skipped: Chipmunk would abort()
+                world.in_space = False
+                for shape_ptr in world.shape_ptrs:
+                    if lib.cpSpaceContainsShape(space_ptr, shape_ptr):
+                        _remove_shape(space_ptr, shape_ptr)
+                for body_ptr in world.body_ptrs:
+                    if lib.cpSpaceContainsBody(space_ptr, body_ptr):
+                        _remove_body(space_ptr, body_ptr)
             for shape_ptr in world.shape_ptrs:
                 lib.cpShapeFree(shape_ptr)
             for body_ptr in world.body_ptrs:
@@ -461,7 +479,8 @@ def _fill_batch(batch: _Batch, plans) -> None:
             pair += 1
         _, (e, mu), starts, _ = plan.prepared
         body_ptrs, shape_ptrs = [], []
-        batch.slots.append(_Slot(body_ptrs, shape_ptrs))
+        world = _Slot(body_ptrs, shape_ptrs)
+        batch.slots.append(world)
         for body, (mass, inertia), (position, angle, velocity, rate) in zip(
                 scene.bodies, plan.weights, starts):
             body_ptr = lib.cpBodyNew(mass, inertia)
@@ -476,10 +495,10 @@ def _fill_batch(batch: _Batch, plans) -> None:
         _set_pair(shape_ptrs, e, mu)
         for body_ptr in body_ptrs:
             lib.cpSpaceAddBody(space_ptr, body_ptr)
-            batch.slot_of[body_ptr] = slot
+            batch.slot_of[body_ptr] = (slot, body_ptr is body_ptrs[-1])
         for shape_ptr in shape_ptrs:
             _add_shape(space_ptr, shape_ptr)
-        batch.slots[slot] = _Slot(tuple(body_ptrs), tuple(shape_ptrs))
+        world.body_ptrs, world.shape_ptrs = tuple(body_ptrs), tuple(shape_ptrs)
 
 
 def _triples(world: _SpaceEntry, vector_of, scalar_of) -> tuple:
