@@ -1082,17 +1082,21 @@ def check_scene(engine: str, scene: Scene) -> tuple[tuple[float, float], ...]:
     for body in scene.bodies:
         if body.shape.kind not in ("disk", "rod", "box", "polygon"):
             raise UnsupportedScene(f"engine {engine!r}: unknown shape {body.shape.kind!r}")
-        for name in ("position", "velocity"):
-            vector = getattr(body, name)
-            if len(vector) != 2:
-                raise UnsupportedScene(
-                    f"engine {engine!r}: body {body.name!r} {name} must be (x, y) in the "
-                    f"plane, got {tuple(vector)!r}"
-                )
+        if len(body.position) != 2 or len(body.velocity) != 2:
+            for name in ("position", "velocity"):
+                vector = getattr(body, name)
+                if len(vector) != 2:
+                    raise UnsupportedScene(
+                        f"engine {engine!r}: body {body.name!r} {name} must be (x, y) in the "
+                        f"plane, got {tuple(vector)!r}"
+                    )
         inertia = body.moment_of_inertia  # computed once: a polygon's is not cheap
-        values = [body.mass, inertia, *body.position, body.angle, *body.velocity,
-                  body.angular_velocity]
-        if not all(math.isfinite(v) for v in values) or body.mass <= 0 or inertia <= 0:
+        values = (body.mass, inertia, *body.position, body.angle, *body.velocity,
+                  body.angular_velocity)
+        # A finite sum means finite values (one inf or nan makes it non-finite); only an
+        # overflowing sum of finite values needs the values checked one by one.
+        finite = math.isfinite(sum(values)) or all(math.isfinite(v) for v in values)
+        if not finite or body.mass <= 0 or inertia <= 0:
             raise UnsupportedScene(
                 f"engine {engine!r}: body {body.name!r} needs finite state and positive mass "
                 f"and inertia (mass {body.mass}, inertia {inertia})"

@@ -387,13 +387,15 @@ def _contact_of(arbiter, b_first: bool) -> RawContacts | None:
     else:
         normal = (n.x, n.y)
         step_x, step_y = -impulse.x, -impulse.y
-    contact_points = []
-    for index in range(count):
+    point = points[0]
+    on_b = point.pointA if b_first else point.pointB
+    contact_points = ((on_b.x, on_b.y, -point.distance),)
+    for index in range(1, count):  # Chipmunk reports at most 2
         point = points[index]
         on_b = point.pointA if b_first else point.pointB
-        contact_points.append((on_b.x, on_b.y, -point.distance))
+        contact_points += ((on_b.x, on_b.y, -point.distance),)
     return (
-        tuple(contact_points),
+        contact_points,
         normal,
         (step_x, step_y),
         abs(step_x * normal[0] + step_y * normal[1]),
@@ -502,12 +504,17 @@ def _fill_batch(batch: _Batch, plans) -> None:
 
 
 def _triples(world: _SpaceEntry, vector_of, scalar_of) -> tuple:
-    """Per body ``(vector.x, vector.y, scalar)``: the pose or the velocities."""
-    triples = []
-    for body_ptr in world.body_ptrs:
-        vector = vector_of(body_ptr)
-        triples.append((vector.x, vector.y, scalar_of(body_ptr)))
-    return tuple(triples)
+    """Per body ``(vector.x, vector.y, scalar)``: the pose or the velocities (a scene has
+    one or two bodies; unrolled, this is read at every contact step)."""
+    body_ptrs = world.body_ptrs
+    body_ptr = body_ptrs[0]
+    vector = vector_of(body_ptr)
+    first = (vector.x, vector.y, scalar_of(body_ptr))
+    if len(body_ptrs) == 1:
+        return (first,)
+    body_ptr = body_ptrs[1]
+    vector = vector_of(body_ptr)
+    return (first, (vector.x, vector.y, scalar_of(body_ptr)))
 
 
 ENGINE_CLASS = PymunkEngine

@@ -92,3 +92,22 @@ def test_an_adapters_drift_and_run_notes_hooks_are_called():
     scene_two = Scene((Body("a", Disk(0.1), 1.0, (0.0, 0.0), velocity=(1.0, 0.0)),
                        Body("b", Disk(0.1), 1.0, (0.2, 0.0), velocity=(-1.0, 0.0))), 1.0, 0.0)
     assert plain.run_many([scene_two]) == [plain.run(scene_two)]
+
+
+@pytest.mark.parametrize("field", ["mass", "position", "angle", "velocity", "angular_velocity",
+                                   "inertia"])
+@pytest.mark.parametrize("bad", [float("inf"), float("-inf"), float("nan")])
+def test_check_scene_refuses_any_non_finite_value(field, bad):
+    # The check adds the values first (a finite sum means finite values): one bad value
+    # anywhere must still be found.
+    good = Body("a", Disk(0.1), 1.0, (0.0, 0.1), velocity=(0.0, -1.0), inertia=0.01)
+    value = (bad, 0.0) if field in ("position", "velocity") else bad
+    scene = Scene((good.moved(**{field: value}),), 0.5, 0.3, ground=True)
+    with pytest.raises(contract.UnsupportedScene, match="finite"):
+        contract.check_scene("pymunk", scene)
+
+
+def test_check_scene_accepts_finite_values_whose_sum_overflows():
+    body = Body("a", Disk(0.1), 1.0e308, (0.0, 0.1), velocity=(1.0e308, -1.0), inertia=1.0e308)
+    scene = Scene((body,), 0.5, 0.3, ground=True)
+    assert contract.check_scene("pymunk", scene) == ((1.0e308, 1.0e308),)
