@@ -255,7 +255,8 @@ class PymunkEngine(Engine):
         return _build_space(scene, record=contacts)
 
     def _prepare(self, world: _SpaceEntry, scene: Scene, settings, start) -> tuple:
-        starts = tuple(((x, y), angle, (vx, vy), omega) for x, y, angle, vx, vy, omega in start)
+        starts = tuple([((x, y), angle, (vx, vy), omega)
+                        for x, y, angle, vx, vy, omega in start])  # a list: no generator
         return _space_values(settings), (scene.restitution, scene.friction), starts, \
             float(settings["time_step"])
 
