@@ -14,12 +14,14 @@ Ground: a static box (top face ``y = 0``) -- a static segment gives a normal off
 
 Reuse: one :class:`pymunk.Space` per geometry (shapes, masses, inertias). Before each run the
 dynamic shapes are removed and re-added, which drops Chipmunk's cached arbiters (their
-contact impulses would warm-start the next run), so reruns are bit-identical.
+contact impulses would warm-start the next run), so reruns are bit-identical. ``run_many``
+steps its batches one after the other in one space, emptied between them.
 
 Cost: an impact is ~2 steps of a few µs, so the per-impact path talks to Chipmunk through
 pymunk's cffi ``lib`` (the C calls pymunk's wrappers make, without their ``Vec2d``,
-``ContactPointSet`` and ``Space.add``/``remove`` bookkeeping), and what depends only on the
-scene and the settings is computed once per (scene, settings) pair of objects.
+``ContactPointSet`` and ``Space.add``/``remove`` bookkeeping; a batch's bodies and shapes are
+Chipmunk's own, freed by the batch), and what depends only on the scene and the settings is
+computed once per (scene, settings) pair of objects.
 
 Settings (``defaults`` | ``accurate``) are listed in :data:`SETTING_DOCS`.
 """
@@ -242,6 +244,7 @@ class PymunkEngine(Engine):
 
     def __init__(self) -> None:
         self._bodies_out = ffi.new("cpBody **"), ffi.new("cpBody **")
+        self._batch_space: _BatchSpace | None = None  # run_many's space between batches
 
     def _validate_engine_settings(self, settings) -> None:
         check_int(self.name, settings, "iterations", low=1)
@@ -325,16 +328,22 @@ class PymunkEngine(Engine):
         batch owns them and :meth:`_release_many` frees them.
         """
         space_values, _, _, dt = plans[0].prepared  # one settings dict for every plan
-        space = _new_space(space_values)
-        if any(plan.scene.ground for plan in plans):
+        # The last batch's space, empty again: a new space costs ~1 µs an impact (its pools
+        # are allocated and zeroed anew). Bodies and shapes are added in the same order,
+        # so each impact's arithmetic is the same (the tests compare runs bit for bit).
+        holder, self._batch_space = self._batch_space or _BatchSpace(), None
+        space = holder.space
+        (space.iterations, space.collision_slop, space.collision_bias,
+         space.collision_persistence, space.damping) = space_values
+        if not holder.ground and any(plan.scene.ground for plan in plans):
+            holder.ground = True  # kept: no two-body impact's filter accepts it
             space.add(_ground_shape(space, pymunk.ShapeFilter(categories=_GROUND_CATEGORY)))
-        batch = _Batch(space, dt)
+        batch = _Batch(holder, dt)
         try:
             _fill_batch(batch, plans)
         except BaseException:
             self._release_many(batch)
             raise
-        space.on_collision(post_solve=batch.record)
         return batch, batch.slots, [{} for _ in plans]
 
     def _step_many(self, batch: _Batch, active) -> dict:
@@ -361,6 +370,7 @@ class PymunkEngine(Engine):
 
     def _release_many(self, batch: _Batch) -> None:
         batch.free()
+        self._batch_space = batch.holder  # empty but for the ground: the next batch's
 
     def _read_poses(self, world: _SpaceEntry) -> tuple:
         return _triples(world, _get_position, _get_angle)
@@ -413,24 +423,38 @@ class _Slot:
         self.in_space = True  # not yet taken out (it may be half in while being built)
 
 
+class _BatchSpace:
+    """A space for batches of impacts (kept from one to the next), and the arbiters its
+    last step solved (its post_solve callback's list)."""
+
+    __slots__ = ("arbiters", "ground", "space", "space_ptr")
+
+    def __init__(self) -> None:
+        self.space = _new_space()
+        self.space_ptr = self.space._space
+        self.ground = False  # holds the ground
+        self.arbiters: list = []
+        self.space.on_collision(post_solve=self.record)
+
+    def record(self, arbiter: pymunk.Arbiter, space, data) -> None:
+        """post_solve callback: keep every arbiter of the step (one per impact at most)."""
+        self.arbiters.append(arbiter._arbiter)
+
+
 class _Batch:
-    """A space holding many impacts, and the arbiters its last step solved.
+    """Many impacts in one :class:`_BatchSpace`.
 
     Owns its impacts' C bodies and shapes (:meth:`free`); pymunk frees the space and the
     ground.
     """
 
-    __slots__ = ("arbiters", "dt", "slot_of", "slots", "space", "space_ptr")
+    __slots__ = ("arbiters", "dt", "holder", "slot_of", "slots", "space_ptr")
 
-    def __init__(self, space: pymunk.Space, dt: float) -> None:
-        self.space, self.space_ptr, self.dt = space, space._space, dt
+    def __init__(self, holder: _BatchSpace, dt: float) -> None:
+        self.holder, self.space_ptr, self.dt = holder, holder.space_ptr, dt
+        self.arbiters = holder.arbiters
         self.slots: list[_Slot] = []
         self.slot_of: dict = {}  # body pointer -> (slot, whether it is the slot's body B)
-        self.arbiters: list = []
-
-    def record(self, arbiter: pymunk.Arbiter, space, data) -> None:
-        """post_solve callback: keep every arbiter of the step (one per impact at most)."""
-        self.arbiters.append(arbiter._arbiter)
 
     def take_out(self, slot: int) -> None:
         """Remove impact ``slot``'s shapes, then its bodies, from the space (as

@@ -74,3 +74,23 @@ def test_release_frees_retired_and_running_impacts_once():
     assert not any(world.in_space for world in worlds) and batch.slots == []
     engine._release_many(batch)
     assert engine.run_many(scenes, settings) == [engine.run(scene, settings) for scene in scenes]
+
+
+def test_the_batch_space_serves_the_next_batches_whatever_their_settings():
+    # Every batch after the first steps in the first one's space (emptied, its ground kept):
+    # two-body impacts after ground ones, other iterations, another time step -- each run
+    # still the single run, bit for bit.
+    engine = load_engine("pymunk")
+    scenes = [sample.scene for population in resolve_populations([])
+              for sample in sample_population(population, 5, seed=2).samples]
+    ground_first = sorted(scenes, key=lambda scene: not scene.ground)
+    engine.run_many(ground_first[:1], preset="defaults")
+    space = engine._batch_space
+    assert space is not None and space.ground
+    for preset, overrides in (("defaults", None), ("accurate", None),
+                              ("accurate", {"time_step": 1.0 / 120.0, "iterations": 7})):
+        batched = engine.run_many(ground_first, preset=preset, overrides=overrides)
+        single = [engine.run(scene, preset=preset, overrides=overrides)
+                  for scene in ground_first]
+        assert batched == single
+        assert engine._batch_space is space
