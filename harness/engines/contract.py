@@ -328,9 +328,20 @@ class StepTiming:
 class _Plan:
     """Everything a run needs that depends only on the scene and the settings objects."""
 
-    __slots__ = ("before", "body_b_mass", "body_b_velocity", "dt", "max_steps", "notes",
-                 "prepared", "same_point", "scene", "settings", "shift", "speed_scale",
-                 "weights", "world", "world_key")
+    __slots__ = ("_same_point", "before", "body_b_mass", "body_b_velocity", "dt", "max_steps",
+                 "notes", "prepared", "scene", "settings", "shift", "speed_scale", "weights",
+                 "world", "world_key")
+
+    @property
+    def same_point(self) -> float:
+        """In-plane points closer than this (m) are one point (:data:`SAME_POINT_RELATIVE`
+        of the largest body extent); worked out on first use: only a step with several
+        points needs it, and a polygon's extent costs µs."""
+        tolerance = self._same_point
+        if tolerance is None:
+            tolerance = self._same_point = SAME_POINT_RELATIVE * max(
+                max(body_extent(body.shape) for body in self.scene.bodies), 1e-12)
+        return tolerance
 
 
 class _Progress:
@@ -419,6 +430,14 @@ class Engine(abc.ABC):
     _last_weights: tuple | None = None  # its energy_weights, from the checks
     _worlds: OrderedDict | None = None
     _plans: dict | None = None
+
+    _drift_hook: bool = False  # the adapter defines _out_of_plane_drift
+    _run_notes_hook: bool = False  # the adapter defines _run_notes
+
+    def __init_subclass__(cls, **kwargs) -> None:
+        super().__init_subclass__(**kwargs)
+        cls._drift_hook = cls._out_of_plane_drift is not Engine._out_of_plane_drift
+        cls._run_notes_hook = cls._run_notes is not Engine._run_notes
 
     # ------------------------------------------------------------------ adapter hooks
     @abc.abstractmethod
@@ -605,38 +624,56 @@ class Engine(abc.ABC):
             if self.max_worlds is not None:
                 self._worlds.move_to_end(plan.world_key)  # least recently used goes first
             return plan
-        plan = _Plan()
-        plan.scene, plan.settings = scene, settings
-        if world is None:
-            plan.world, plan.world_key = self._world_for(scene, settings)
+        cached_world = world is None
+        if cached_world:
+            world, world_key = self._world_for(scene, settings)
         elif world is _DETACHED:
-            plan.world = plan.world_key = None
+            world = world_key = None
         else:
-            plan.world, plan.world_key = world, None
-        plan.shift, start = start_states(scene, settings, self.timing)
-        plan.prepared = self._prepare(plan.world, scene, settings, start)
-        plan.dt = float(settings["time_step"])
-        plan.max_steps = int(settings["max_steps"])
+            world_key = None
         # The checks computed the inertias (a polygon's costs tens of µs); reuse them.
         weights = self._last_weights if scene is self._last_scene else None
-        plan.weights = weights if weights is not None else energy_weights(scene)
-        plan.before = energy_before(scene, plan.weights)
-        # The largest of |v_x|, |v_y|, |ω| over the bodies (Scene.state()'s, without an array).
-        plan.speed_scale = float(max(1e-300, max(
-            abs(float(value)) for body in scene.bodies
-            for value in (*body.velocity, body.angular_velocity))))
-        plan.same_point = SAME_POINT_RELATIVE * max(
-            max(body_extent(body.shape) for body in scene.bodies), 1e-12)
-        plan.notes = tuple(self._notes(scene, settings))
-        body_b = scene.bodies[-1]
-        plan.body_b_mass = float(body_b.mass)
-        plan.body_b_velocity = (body_b.velocity[0], body_b.velocity[1])
+        plan = self._new_plan(scene, settings, world, world_key,
+                              weights if weights is not None else energy_weights(scene))
         # Remembered for a checked immutable scene and a settings dict the caller reuses.
-        if (world is None and scene is self._last_scene
+        if (cached_world and scene is self._last_scene
                 and settings is (self._last_checked or (None, None))[1]):
             if len(plans) >= _MAX_PLANS:
                 plans.clear()
             plans[key] = plan
+        return plan
+
+    def _new_plan(self, scene: Scene, settings: dict, world, world_key,
+                  weights: tuple[tuple[float, float], ...]) -> _Plan:
+        """The :class:`_Plan` of ``scene`` under ``settings`` (``weights``: its
+        :func:`energy_weights`), for ``world`` (``None``: run_many's, built with the batch)."""
+        plan = _Plan()
+        plan.scene, plan.settings = scene, settings
+        plan.world, plan.world_key = world, world_key
+        plan.shift, start = start_states(scene, settings, self.timing)
+        plan.prepared = self._prepare(world, scene, settings, start)
+        plan.dt = float(settings["time_step"])
+        plan.max_steps = int(settings["max_steps"])
+        plan.weights = weights
+        bodies = scene.bodies
+        # energy_before and the largest of |v_x|, |v_y|, |ω| (Scene.state()'s) in one pass.
+        before = 0.0
+        speed_scale = 1e-300
+        for body, (mass, inertia) in zip(bodies, weights):
+            (ux, uy), uw = body.velocity, body.angular_velocity
+            before += mass * (ux * ux + uy * uy) + inertia * uw * uw
+            for value in (ux, uy, uw):
+                value = abs(float(value))
+                if value > speed_scale:  # noqa: PLR1730 - hot path
+                    speed_scale = value
+        plan.before = before
+        plan.speed_scale = speed_scale
+        plan._same_point = None
+        notes = self._notes(scene, settings)
+        plan.notes = notes if type(notes) is tuple else tuple(notes)
+        body_b = bodies[-1]
+        plan.body_b_mass = float(body_b.mass)
+        plan.body_b_velocity = (body_b.velocity[0], body_b.velocity[1])
         return plan
 
     def close(self) -> None:
@@ -718,9 +755,12 @@ class Engine(abc.ABC):
                     for scene in scenes]
         resolved, used_preset = self._resolve(settings, preset, overrides)
         plans = []
+        name, new_plan = self.name, self._new_plan
+        last_scene = weights = None
         for scene in scenes:
-            self._checked_scene(scene)
-            plans.append(self._plan_for(scene, resolved, world=_DETACHED))
+            if scene is not last_scene:  # a scene given twice in a row is checked once
+                weights, last_scene = check_scene(name, scene), scene
+            plans.append(new_plan(scene, resolved, None, None, weights))
         runs: list[EngineRun | None] = [None] * len(plans)
         for chunk in self._many_chunks([plan.scene for plan in plans]):
             start_time = _clock()
@@ -740,26 +780,28 @@ class Engine(abc.ABC):
     def _run_chunk(self, batch, worlds, derived, plans, preset, start_time) -> list[EngineRun]:
         """The loop of :meth:`run` for every impact of one batch, in lockstep."""
         progress = [_Progress(self, plan) for plan in plans]
+        observers = [one.observe for one in progress]
         finished: list[EngineRun | None] = [None] * len(plans)
         active = list(range(len(plans)))
         max_steps = plans[0].max_steps  # one settings dict for the whole batch
+        step_many, finish, retire = self._step_many, self._finish, self._retire
         steps = 0
         while active and steps < max_steps:
             steps += 1
-            contacts = self._step_many(batch, active)
+            contact_of = step_many(batch, active).get
             still = []
             for slot in active:
-                if progress[slot].observe(contacts.get(slot), steps, worlds[slot]):
-                    finished[slot] = self._finish(plans[slot], preset, derived[slot],
-                                                  progress[slot], worlds[slot], steps,
-                                                  start_time)
-                    self._retire(batch, slot)
+                world = worlds[slot]
+                if observers[slot](contact_of(slot), steps, world):
+                    finished[slot] = finish(plans[slot], preset, derived[slot], progress[slot],
+                                            world, steps, start_time)
+                    retire(batch, slot)
                 else:
                     still.append(slot)
             active = still
         for slot in active:  # the step cap
-            finished[slot] = self._finish(plans[slot], preset, derived[slot], progress[slot],
-                                          worlds[slot], steps, start_time)
+            finished[slot] = finish(plans[slot], preset, derived[slot], progress[slot],
+                                    worlds[slot], steps, start_time)
         return finished
 
     def _finish(self, plan: _Plan, preset, derived, progress: _Progress, world, steps,
@@ -769,8 +811,9 @@ class Engine(abc.ABC):
         separated, velocities = progress.separated, progress.velocities
         if velocities is None:  # else read after this very step
             velocities = self._read_velocities(world)
-        drift = self._out_of_plane_drift(world)
-        run_notes = self._run_notes(world)
+        # The base's hooks answer "nothing" without looking: not called (see __init_subclass__).
+        drift = self._out_of_plane_drift(world) if self._drift_hook else None
+        run_notes = self._run_notes(world) if self._run_notes_hook else ()
         max_points = 0
         max_penetration = 0.0
         impulse_x = impulse_y = 0.0
@@ -846,19 +889,27 @@ def start_states(scene: Scene, settings: Mapping[str, Any],
                  timing: StepTiming) -> tuple[tuple[float, float], tuple[BodyState, ...]]:
     """``(shift, states)``: the run frame's offset from the scene frame, and every body's
     start state in the run frame (rewound by free flight, see :class:`StepTiming`)."""
-    count = len(scene.bodies)
-    shift_x = -sum(b.position[0] for b in scene.bodies) / count
-    recentre_y = timing.recentre_y and not scene.ground
-    shift_y = -sum(b.position[1] for b in scene.bodies) / count if recentre_y else 0.0
+    bodies = scene.bodies
+    count = len(bodies)
+    sum_x = sum_y = 0  # as sum() adds
+    for body in bodies:
+        sum_x += body.position[0]
+        sum_y += body.position[1]
+    shift_x = -sum_x / count
+    recentre_y = timing.recentre_y
+    shift_y = -sum_y / count if recentre_y and not scene.ground else 0.0
     approach = settings["approach_steps"]
     rewind = -((approach + timing.lead_steps) - timing.overlap) * float(settings["time_step"])
     states = []
-    for body, (x, y, angle) in zip(scene.bodies, free_flight_poses(scene, rewind)):
-        if timing.recentre_y:
+    for body in bodies:  # free_flight_poses, inlined
+        (x, y), (vx, vy), rate = body.position, body.velocity, body.angular_velocity
+        x = x + vx * rewind
+        y = y + vy * rewind
+        if recentre_y:
             y = y + shift_y  # adds 0.0 with ground, as the 3-D adapters always did
         # Plain floats: a value a C setter refuses (a numpy array, say) fails here.
-        states.append((float(x + shift_x), float(y), float(angle), float(body.velocity[0]),
-                       float(body.velocity[1]), float(body.angular_velocity)))
+        states.append((float(x + shift_x), float(y), float(body.angle + rate * rewind),
+                       float(vx), float(vy), float(rate)))
     return (shift_x, shift_y), tuple(states)
 
 
@@ -1031,17 +1082,21 @@ def check_scene(engine: str, scene: Scene) -> tuple[tuple[float, float], ...]:
     for body in scene.bodies:
         if body.shape.kind not in ("disk", "rod", "box", "polygon"):
             raise UnsupportedScene(f"engine {engine!r}: unknown shape {body.shape.kind!r}")
-        for name in ("position", "velocity"):
-            vector = getattr(body, name)
-            if len(vector) != 2:
-                raise UnsupportedScene(
-                    f"engine {engine!r}: body {body.name!r} {name} must be (x, y) in the "
-                    f"plane, got {tuple(vector)!r}"
-                )
+        if len(body.position) != 2 or len(body.velocity) != 2:
+            for name in ("position", "velocity"):
+                vector = getattr(body, name)
+                if len(vector) != 2:
+                    raise UnsupportedScene(
+                        f"engine {engine!r}: body {body.name!r} {name} must be (x, y) in the "
+                        f"plane, got {tuple(vector)!r}"
+                    )
         inertia = body.moment_of_inertia  # computed once: a polygon's is not cheap
-        values = [body.mass, inertia, *body.position, body.angle, *body.velocity,
-                  body.angular_velocity]
-        if not all(math.isfinite(v) for v in values) or body.mass <= 0 or inertia <= 0:
+        values = (body.mass, inertia, *body.position, body.angle, *body.velocity,
+                  body.angular_velocity)
+        # A finite sum means finite values (one inf or nan makes it non-finite); only an
+        # overflowing sum of finite values needs the values checked one by one.
+        finite = math.isfinite(sum(values)) or all(math.isfinite(v) for v in values)
+        if not finite or body.mass <= 0 or inertia <= 0:
             raise UnsupportedScene(
                 f"engine {engine!r}: body {body.name!r} needs finite state and positive mass "
                 f"and inertia (mass {body.mass}, inertia {inertia})"

@@ -14,12 +14,14 @@ Ground: a static box (top face ``y = 0``) -- a static segment gives a normal off
 
 Reuse: one :class:`pymunk.Space` per geometry (shapes, masses, inertias). Before each run the
 dynamic shapes are removed and re-added, which drops Chipmunk's cached arbiters (their
-contact impulses would warm-start the next run), so reruns are bit-identical.
+contact impulses would warm-start the next run), so reruns are bit-identical. ``run_many``
+steps its batches one after the other in one space, emptied between them.
 
 Cost: an impact is ~2 steps of a few µs, so the per-impact path talks to Chipmunk through
 pymunk's cffi ``lib`` (the C calls pymunk's wrappers make, without their ``Vec2d``,
-``ContactPointSet`` and ``Space.add``/``remove`` bookkeeping), and what depends only on the
-scene and the settings is computed once per (scene, settings) pair of objects.
+``ContactPointSet`` and ``Space.add``/``remove`` bookkeeping; a batch's bodies and shapes are
+Chipmunk's own, freed by the batch), and what depends only on the scene and the settings is
+computed once per (scene, settings) pair of objects.
 
 Settings (``defaults`` | ``accurate``) are listed in :data:`SETTING_DOCS`.
 """
@@ -87,6 +89,45 @@ def _make_shape(pm_body: pymunk.Body, shape) -> pymunk.Shape:
     return pymunk.Poly(pm_body, [tuple(v) for v in shape.vertices().tolist()], radius=0.0)
 
 
+def _new_shape_ptr(body_ptr, shape):
+    """The C shape :func:`_make_shape` makes (the same constructor and arguments), without
+    pymunk's wrapper: the caller frees it (``cpShapeFree``)."""
+    kind = shape.kind
+    if kind == "disk":
+        return lib.cpCircleShapeNew(body_ptr, shape.radius, (0, 0))
+    if kind == "rod":
+        half = shape.length / 2.0
+        return lib.cpSegmentShapeNew(body_ptr, (-half, 0.0), (half, 0.0), shape.radius)
+    if kind == "box":  # Box.vertices()'s values, without the array
+        half_w, half_h = shape.width / 2.0, shape.height / 2.0
+        vertices = [(-half_w, -half_h), (half_w, -half_h), (half_w, half_h), (-half_w, half_h)]
+    elif kind == "polygon":  # Polygon.vertices() is the points as floats
+        vertices = [(float(x), float(y)) for x, y in shape.points]
+    else:
+        vertices = [tuple(v) for v in shape.vertices().tolist()]
+    return lib.cpPolyShapeNew(body_ptr, len(vertices), vertices, _IDENTITY, 0.0)
+
+
+def _new_space(space_values: tuple | None = None) -> pymunk.Space:
+    """An empty space without gravity; ``space_values``: :func:`_space_values` to apply."""
+    space = pymunk.Space()
+    space.gravity = (0.0, 0.0)
+    if space_values is not None:
+        (space.iterations, space.collision_slop, space.collision_bias,
+         space.collision_persistence, space.damping) = space_values
+    return space
+
+
+def _set_pair(shape_ptrs, e: float, mu: float) -> None:
+    """The pair's ``e`` and ``μ``: Chipmunk multiplies the shapes' values, so ``bodies[0]``'s
+    shape gets them and the partner's (if a body) the neutral 1."""
+    _set_elasticity(shape_ptrs[0], e)
+    _set_friction(shape_ptrs[0], mu)
+    if len(shape_ptrs) == 2:
+        _set_elasticity(shape_ptrs[1], 1.0)
+        _set_friction(shape_ptrs[1], 1.0)
+
+
 class _Recorder:
     """post_solve callback: keeps the step's arbiter; the run reads it after the step.
 
@@ -126,10 +167,7 @@ class _SpaceEntry:
              space.collision_persistence, space.damping) = space_values
             self.space_values = space_values
         if self.pair_values != pair_values:
-            shapes = self.shapes
-            shapes[0].elasticity, shapes[0].friction = pair_values
-            if len(shapes) == 2:
-                shapes[1].elasticity, shapes[1].friction = 1.0, 1.0
+            _set_pair(self.shape_ptrs, *pair_values)
             self.pair_values = pair_values
 
 
@@ -146,8 +184,7 @@ def _ground_shape(space: pymunk.Space, shape_filter: pymunk.ShapeFilter | None =
 
 def _build_space(scene: Scene, record: bool) -> _SpaceEntry:
     """A space holding the scene's ground and bodies (``record``: with the post_solve recorder)."""
-    space = pymunk.Space()
-    space.gravity = (0.0, 0.0)
+    space = _new_space()
     if scene.ground:
         space.add(_ground_shape(space))
     bodies, shapes = [], []
@@ -176,6 +213,8 @@ def _space_values(settings: dict) -> tuple:
 
 
 _remove_shape = lib.cpSpaceRemoveShape
+_remove_body = lib.cpSpaceRemoveBody
+_set_filter = lib.cpShapeSetFilter
 _add_shape = lib.cpSpaceAddShape
 _set_position = lib.cpBodySetPosition
 _set_angle = lib.cpBodySetAngle
@@ -189,6 +228,9 @@ _space_step = lib.cpSpaceStep  # Space.step without its Python bookkeeping (no c
 _point_set_of = lib.cpArbiterGetContactPointSet
 _impulse_of = lib.cpArbiterTotalImpulse
 _bodies_of = lib.cpArbiterGetBodies
+_set_elasticity = lib.cpShapeSetElasticity
+_set_friction = lib.cpShapeSetFriction
+_IDENTITY = (1.0, 0.0, 0.0, 1.0, 0.0, 0.0)  # pymunk's Transform.identity() for a Poly
 
 
 class PymunkEngine(Engine):
@@ -202,6 +244,7 @@ class PymunkEngine(Engine):
 
     def __init__(self) -> None:
         self._bodies_out = ffi.new("cpBody **"), ffi.new("cpBody **")
+        self._batch_space: _BatchSpace | None = None  # run_many's space between batches
 
     def _validate_engine_settings(self, settings) -> None:
         check_int(self.name, settings, "iterations", low=1)
@@ -215,7 +258,8 @@ class PymunkEngine(Engine):
         return _build_space(scene, record=contacts)
 
     def _prepare(self, world: _SpaceEntry, scene: Scene, settings, start) -> tuple:
-        starts = tuple(((x, y), angle, (vx, vy), omega) for x, y, angle, vx, vy, omega in start)
+        starts = tuple([((x, y), angle, (vx, vy), omega)
+                        for x, y, angle, vx, vy, omega in start])  # a list: no generator
         return _space_values(settings), (scene.restitution, scene.friction), starts, \
             float(settings["time_step"])
 
@@ -278,44 +322,28 @@ class PymunkEngine(Engine):
         category; the bodies of the k-th two-body scene are in category ``1 << k`` only.
         They share no dynamic body, so each impact's arithmetic is the one it has alone
         (the tests compare them bit for bit).
+
+        The bodies and shapes are Chipmunk's own (the C calls of pymunk's constructors and
+        setters, in the same order, without their wrappers: ~20 µs an impact saved); the
+        batch owns them and :meth:`_release_many` frees them.
         """
         space_values, _, _, dt = plans[0].prepared  # one settings dict for every plan
-        space = pymunk.Space()
-        space.gravity = (0.0, 0.0)
+        # The last batch's space, empty again: a new space costs ~1 µs an impact (its pools
+        # are allocated and zeroed anew). Bodies and shapes are added in the same order,
+        # so each impact's arithmetic is the same (the tests compare runs bit for bit).
+        holder, self._batch_space = self._batch_space or _BatchSpace(), None
+        space = holder.space
         (space.iterations, space.collision_slop, space.collision_bias,
          space.collision_persistence, space.damping) = space_values
-        if any(plan.scene.ground for plan in plans):
+        if not holder.ground and any(plan.scene.ground for plan in plans):
+            holder.ground = True  # kept: no two-body impact's filter accepts it
             space.add(_ground_shape(space, pymunk.ShapeFilter(categories=_GROUND_CATEGORY)))
-        ground_filter = pymunk.ShapeFilter(group=_GROUND_GROUP, categories=_GROUND_CATEGORY,
-                                           mask=_GROUND_CATEGORY)
-        batch = _Batch(space, dt)
-        pair = 0
-        for slot, plan in enumerate(plans):
-            if plan.scene.ground:
-                shape_filter = ground_filter
-            else:
-                shape_filter = pymunk.ShapeFilter(categories=1 << pair, mask=1 << pair)
-                pair += 1
-            _, (e, mu), starts, _ = plan.prepared
-            bodies, shapes = [], []
-            for body, (mass, inertia), (position, angle, velocity, rate) in zip(
-                    plan.scene.bodies, plan.weights, starts):
-                pm_body = pymunk.Body(mass, inertia)
-                pm_body.position, pm_body.angle = position, angle
-                pm_body.velocity, pm_body.angular_velocity = velocity, rate
-                shape = _make_shape(pm_body, body.shape)
-                shape.filter = shape_filter
-                bodies.append(pm_body)
-                shapes.append(shape)
-            shapes[0].elasticity, shapes[0].friction = e, mu
-            if len(shapes) == 2:
-                shapes[1].elasticity = shapes[1].friction = 1.0
-            space.add(*bodies, *shapes)
-            slot_world = _Slot(bodies, shapes)
-            batch.slots.append(slot_world)
-            for body_ptr in slot_world.body_ptrs:
-                batch.slot_of[body_ptr] = slot
-        space.on_collision(post_solve=batch.record)
+        batch = _Batch(holder, dt)
+        try:
+            _fill_batch(batch, plans)
+        except BaseException:
+            self._release_many(batch)
+            raise
         return batch, batch.slots, [{} for _ in plans]
 
     def _step_many(self, batch: _Batch, active) -> dict:
@@ -324,20 +352,25 @@ class PymunkEngine(Engine):
         _space_step(batch.space_ptr, batch.dt)
         contacts = {}
         out_a, out_b = self._bodies_out
-        slot_of, slots = batch.slot_of, batch.slots
+        slot_of = batch.slot_of
         for arbiter in arbiters:
             _bodies_of(arbiter, out_a, out_b)
-            slot = slot_of.get(out_a[0])
-            if slot is None:  # body a is the ground
-                slot = slot_of[out_b[0]]
-            contact = _contact_of(arbiter, out_a[0] == slots[slot].body_ptrs[-1])
+            found = slot_of.get(out_a[0])
+            if found is None:  # body a is the ground
+                slot, b_first = slot_of[out_b[0]][0], False
+            else:
+                slot, b_first = found
+            contact = _contact_of(arbiter, b_first)
             if contact is not None:
                 contacts[slot] = contact
         return contacts
 
     def _retire(self, batch: _Batch, slot: int) -> None:
-        world = batch.slots[slot]
-        batch.space.remove(*world.shapes, *world.bodies)
+        batch.take_out(slot)
+
+    def _release_many(self, batch: _Batch) -> None:
+        batch.free()
+        self._batch_space = batch.holder  # empty but for the ground: the next batch's
 
     def _read_poses(self, world: _SpaceEntry) -> tuple:
         return _triples(world, _get_position, _get_angle)
@@ -365,13 +398,15 @@ def _contact_of(arbiter, b_first: bool) -> RawContacts | None:
     else:
         normal = (n.x, n.y)
         step_x, step_y = -impulse.x, -impulse.y
-    contact_points = []
-    for index in range(count):
+    point = points[0]
+    on_b = point.pointA if b_first else point.pointB
+    contact_points = ((on_b.x, on_b.y, -point.distance),)
+    for index in range(1, count):  # Chipmunk reports at most 2
         point = points[index]
         on_b = point.pointA if b_first else point.pointB
-        contact_points.append((on_b.x, on_b.y, -point.distance))
+        contact_points += ((on_b.x, on_b.y, -point.distance),)
     return (
-        tuple(contact_points),
+        contact_points,
         normal,
         (step_x, step_y),
         abs(step_x * normal[0] + step_y * normal[1]),
@@ -381,36 +416,130 @@ def _contact_of(arbiter, b_first: bool) -> RawContacts | None:
 class _Slot:
     """One impact of a batch: what ``_read_poses`` and ``_read_velocities`` read."""
 
-    __slots__ = ("bodies", "body_ptrs", "shapes")
+    __slots__ = ("body_ptrs", "in_space", "shape_ptrs")
 
-    def __init__(self, bodies: list, shapes: list) -> None:
-        self.bodies, self.shapes = bodies, shapes
-        self.body_ptrs = tuple(body._body for body in bodies)
+    def __init__(self, body_ptrs, shape_ptrs) -> None:
+        self.body_ptrs, self.shape_ptrs = body_ptrs, shape_ptrs
+        self.in_space = True  # not yet taken out (it may be half in while being built)
 
 
-class _Batch:
-    """A space holding many impacts, and the arbiters its last step solved."""
+class _BatchSpace:
+    """A space for batches of impacts (kept from one to the next), and the arbiters its
+    last step solved (its post_solve callback's list)."""
 
-    __slots__ = ("arbiters", "dt", "slot_of", "slots", "space", "space_ptr")
+    __slots__ = ("arbiters", "ground", "space", "space_ptr")
 
-    def __init__(self, space: pymunk.Space, dt: float) -> None:
-        self.space, self.space_ptr, self.dt = space, space._space, dt
-        self.slots: list[_Slot] = []
-        self.slot_of: dict = {}  # body pointer -> slot
+    def __init__(self) -> None:
+        self.space = _new_space()
+        self.space_ptr = self.space._space
+        self.ground = False  # holds the ground
         self.arbiters: list = []
+        self.space.on_collision(post_solve=self.record)
 
     def record(self, arbiter: pymunk.Arbiter, space, data) -> None:
         """post_solve callback: keep every arbiter of the step (one per impact at most)."""
         self.arbiters.append(arbiter._arbiter)
 
 
+class _Batch:
+    """Many impacts in one :class:`_BatchSpace`.
+
+    Owns its impacts' C bodies and shapes (:meth:`free`); pymunk frees the space and the
+    ground.
+    """
+
+    __slots__ = ("arbiters", "dt", "holder", "slot_of", "slots", "space_ptr")
+
+    def __init__(self, holder: _BatchSpace, dt: float) -> None:
+        self.holder, self.space_ptr, self.dt = holder, holder.space_ptr, dt
+        self.arbiters = holder.arbiters
+        self.slots: list[_Slot] = []
+        self.slot_of: dict = {}  # body pointer -> (slot, whether it is the slot's body B)
+
+    def take_out(self, slot: int) -> None:
+        """Remove impact ``slot``'s shapes, then its bodies, from the space (as
+        ``Space.remove``), once."""
+        world, space_ptr = self.slots[slot], self.space_ptr
+        if world.in_space:
+            world.in_space = False
+            for shape_ptr in world.shape_ptrs:
+                _remove_shape(space_ptr, shape_ptr)
+            for body_ptr in world.body_ptrs:
+                _remove_body(space_ptr, body_ptr)
+
+    def free(self) -> None:
+        """Take every impact out of the space and free its C shapes and bodies (once)."""
+        space_ptr = self.space_ptr
+        for world in self.slots:
+            if world.in_space:  # what is not in the space is skipped: Chipmunk would abort()
+                world.in_space = False
+                for shape_ptr in world.shape_ptrs:
+                    if lib.cpSpaceContainsShape(space_ptr, shape_ptr):
+                        _remove_shape(space_ptr, shape_ptr)
+                for body_ptr in world.body_ptrs:
+                    if lib.cpSpaceContainsBody(space_ptr, body_ptr):
+                        _remove_body(space_ptr, body_ptr)
+            for shape_ptr in world.shape_ptrs:
+                lib.cpShapeFree(shape_ptr)
+            for body_ptr in world.body_ptrs:
+                lib.cpBodyFree(body_ptr)
+        self.slots, self.slot_of = [], {}
+
+
+def _fill_batch(batch: _Batch, plans) -> None:
+    """Every plan's bodies and shapes, at their start states, into ``batch``'s space.
+
+    The C calls (and their order) of the pymunk objects of an impact's own space:
+    ``Body(mass, inertia)`` and its setters, the shape's constructor and filter, ``e`` and
+    ``μ``, then ``Space.add`` (bodies first). Each object belongs to the batch as soon as
+    it exists, so that :meth:`_Batch.free` frees a half-built batch too.
+    """
+    space_ptr = batch.space_ptr
+    ground_filter = (_GROUND_GROUP, _GROUND_CATEGORY, _GROUND_CATEGORY)
+    pair = 0
+    for slot, plan in enumerate(plans):
+        scene = plan.scene
+        if scene.ground:
+            shape_filter = ground_filter
+        else:
+            shape_filter = (0, 1 << pair, 1 << pair)  # (group, categories, mask)
+            pair += 1
+        _, (e, mu), starts, _ = plan.prepared
+        body_ptrs, shape_ptrs = [], []
+        world = _Slot(body_ptrs, shape_ptrs)
+        batch.slots.append(world)
+        for body, (mass, inertia), (position, angle, velocity, rate) in zip(
+                scene.bodies, plan.weights, starts):
+            body_ptr = lib.cpBodyNew(mass, inertia)
+            body_ptrs.append(body_ptr)
+            _set_position(body_ptr, position)
+            _set_angle(body_ptr, angle)
+            _set_velocity(body_ptr, velocity)
+            _set_angular_velocity(body_ptr, rate)
+            shape_ptr = _new_shape_ptr(body_ptr, body.shape)
+            shape_ptrs.append(shape_ptr)
+            _set_filter(shape_ptr, shape_filter)
+        _set_pair(shape_ptrs, e, mu)
+        for body_ptr in body_ptrs:
+            lib.cpSpaceAddBody(space_ptr, body_ptr)
+            batch.slot_of[body_ptr] = (slot, body_ptr is body_ptrs[-1])
+        for shape_ptr in shape_ptrs:
+            _add_shape(space_ptr, shape_ptr)
+        world.body_ptrs, world.shape_ptrs = tuple(body_ptrs), tuple(shape_ptrs)
+
+
 def _triples(world: _SpaceEntry, vector_of, scalar_of) -> tuple:
-    """Per body ``(vector.x, vector.y, scalar)``: the pose or the velocities."""
-    triples = []
-    for body_ptr in world.body_ptrs:
-        vector = vector_of(body_ptr)
-        triples.append((vector.x, vector.y, scalar_of(body_ptr)))
-    return tuple(triples)
+    """Per body ``(vector.x, vector.y, scalar)``: the pose or the velocities (a scene has
+    one or two bodies; unrolled, this is read at every contact step)."""
+    body_ptrs = world.body_ptrs
+    body_ptr = body_ptrs[0]
+    vector = vector_of(body_ptr)
+    first = (vector.x, vector.y, scalar_of(body_ptr))
+    if len(body_ptrs) == 1:
+        return (first,)
+    body_ptr = body_ptrs[1]
+    vector = vector_of(body_ptr)
+    return (first, (vector.x, vector.y, scalar_of(body_ptr)))
 
 
 ENGINE_CLASS = PymunkEngine
