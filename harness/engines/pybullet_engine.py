@@ -76,6 +76,8 @@ _MAX_IDLE = 2  # emptied clients kept per engine settings (the survey needs 1: a
 # geometry evicts one world and builds one)
 #: Impacts per client in run_many (measured: see docs/engines.md, 'pybullet').
 MANY_IMPACTS = 32
+#: Impacts built in a run_many client before it is reset (~8 kB each stays until then).
+_MANY_RESET_AFTER = 1024
 _MANY_GAP = 1.0  # m, between two impacts' slices of the engine's y (plus 2 x the threshold)
 _PARK_HEIGHT = 1.0e3  # m, where bodies wait (far above the plane) while contacts are cleared
 
@@ -182,9 +184,18 @@ def _collision_shape(client: int, shape) -> int:
     return p.createCollisionShape(p.GEOM_MESH, vertices=vertices, physicsClientId=client)
 
 
-def _planar_multibody(client: int, body, offset: float = 0.0) -> int:
-    """The body's planar chain, its base at ``offset`` along the engine's y (out of the plane)."""
-    collision = _collision_shape(client, body.shape)
+# createMultiBody's link arguments that every chain shares (pybullet copies them in).
+_LINK_ORIGINS = [[0.0, 0.0, 0.0]] * 3
+_LINK_ROTATIONS = [[0.0, 0.0, 0.0, 1.0]] * 3
+_NO_VISUALS = [-1, -1, -1]
+_LINK_PARENTS = [0, 1, 2]
+_JOINT_TYPES = [p.JOINT_PRISMATIC, p.JOINT_PRISMATIC, p.JOINT_REVOLUTE]
+_JOINT_AXES = [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]]
+
+
+def _planar_multibody(client: int, body, collision: int, offset: float = 0.0) -> int:
+    """The body's planar chain, its last link of shape ``collision``, its base at ``offset``
+    along the engine's y (out of the plane)."""
     mass, inertia = float(body.mass), float(body.moment_of_inertia)
     uid = p.createMultiBody(
         baseMass=0.0,
@@ -193,14 +204,14 @@ def _planar_multibody(client: int, body, offset: float = 0.0) -> int:
         basePosition=[0.0, offset, 0.0],
         linkMasses=[0.0, 0.0, mass],
         linkCollisionShapeIndices=[-1, -1, collision],
-        linkVisualShapeIndices=[-1, -1, -1],
-        linkPositions=[[0.0, 0.0, 0.0]] * 3,
-        linkOrientations=[[0.0, 0.0, 0.0, 1.0]] * 3,
-        linkInertialFramePositions=[[0.0, 0.0, 0.0]] * 3,
-        linkInertialFrameOrientations=[[0.0, 0.0, 0.0, 1.0]] * 3,
-        linkParentIndices=[0, 1, 2],
-        linkJointTypes=[p.JOINT_PRISMATIC, p.JOINT_PRISMATIC, p.JOINT_REVOLUTE],
-        linkJointAxis=[[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]],
+        linkVisualShapeIndices=_NO_VISUALS,
+        linkPositions=_LINK_ORIGINS,
+        linkOrientations=_LINK_ROTATIONS,
+        linkInertialFramePositions=_LINK_ORIGINS,
+        linkInertialFrameOrientations=_LINK_ROTATIONS,
+        linkParentIndices=_LINK_PARENTS,
+        linkJointTypes=_JOINT_TYPES,
+        linkJointAxis=_JOINT_AXES,
         useMaximalCoordinates=False,
         physicsClientId=client,
     )
@@ -235,14 +246,17 @@ def _add_bodies(client: int, scene: Scene, settings, offset: float = 0.0) -> lis
     """The scene's bodies as planar chains (bases at ``offset`` along y), damped as set,
     never sleeping; the partner body gets the neutral e and μ."""
     bodies = []
+    linear_damping = float(settings["linear_damping"])
+    angular_damping = float(settings["angular_damping"])
     for body in scene.bodies:
-        uid = _planar_multibody(client, body, offset)
+        collision = _collision_shape(client, body.shape)
+        uid = _planar_multibody(client, body, collision, offset)
         for link in range(-1, 3):
             p.changeDynamics(
                 uid,
                 link,
-                linearDamping=float(settings["linear_damping"]),
-                angularDamping=float(settings["angular_damping"]),
+                linearDamping=linear_damping,
+                angularDamping=angular_damping,
                 jointDamping=0.0,
                 activationState=p.ACTIVATION_STATE_DISABLE_SLEEPING,
                 physicsClientId=client,
@@ -343,6 +357,28 @@ def _connect() -> int:
     return client
 
 
+@dataclass
+class _Client:
+    """A DIRECT client and what it keeps between uses."""
+
+    uid: int  # pybullet's physicsClientId
+    plane: int | None = None  # run_many: the static plane it keeps for ground batches
+    impacts: int = 0  # run_many: impacts built in it since it was last reset
+
+
+def _reset_client(client: _Client) -> None:
+    """Empty ``client``: Bullet deletes its dynamics world and makes a new one."""
+    p.resetSimulation(physicsClientId=client.uid)
+    client.plane, client.impacts = None, 0
+
+
+def _remove_bodies(client: int, worlds) -> None:
+    """Remove the bodies of ``worlds`` (batch impacts) from ``client``."""
+    for world in worlds:
+        for uid in world.bodies:
+            p.removeBody(uid, physicsClientId=client)
+
+
 def _settings_key(settings) -> tuple:
     """The settings a world is built with (all but the per-run ones), as a key."""
     return tuple((k, settings[k]) for k in sorted(settings) if k not in _RUN_ONLY)
@@ -351,12 +387,14 @@ def _settings_key(settings) -> tuple:
 class _Batch:
     """A client holding many impacts (one :class:`_World` view each)."""
 
-    __slots__ = ("client", "dt", "settings_key", "slot_of", "slots")
+    __slots__ = ("client", "dt", "held", "left", "pool_key", "slot_of", "slots")
 
-    def __init__(self, client: int, settings_key: tuple, dt: float) -> None:
-        self.client, self.settings_key, self.dt = client, settings_key, dt
+    def __init__(self, held: _Client, pool_key: tuple, dt: float) -> None:
+        self.held, self.pool_key, self.dt = held, pool_key, dt
+        self.client = held.uid  # -1 once released
         self.slots: list[_World] = []
         self.slot_of: dict[int, int] = {}  # body unique id -> slot
+        self.left: set[int] = set()  # slots whose bodies are still in the client
 
 
 class PybulletEngine(Engine):
@@ -367,8 +405,9 @@ class PybulletEngine(Engine):
     max_worlds = _MAX_WORLDS
 
     def __init__(self) -> None:
-        self._idle: dict[tuple, list[int]] = {}  # settings key -> emptied clients
-        self._idle_many: dict[tuple, list[int]] = {}  # the same, for run_many's batches
+        # Idle clients: ("world", settings key) -> emptied clients for run()'s worlds;
+        # ("many", settings key, ground) -> run_many's, with their plane (if ground) only.
+        self._idle: dict[tuple, list[_Client]] = {}
         try:  # pybullet has no __version__; its API version is a date
             from importlib.metadata import PackageNotFoundError, version
 
@@ -397,16 +436,27 @@ class PybulletEngine(Engine):
         """The engine settings a world is built with, and the geometry."""
         return (_settings_key(settings), geometry_key(scene))
 
-    def _client(self, settings_key: tuple) -> int:
-        """An empty DIRECT client for ``settings_key``: an idle one, else a new one."""
-        idle = self._idle.get(settings_key)
-        if idle:
-            return idle.pop()
-        return _connect()
+    def _take_client(self, pool_key: tuple) -> _Client:
+        """An idle client kept under ``pool_key``, else a new one."""
+        idle = self._idle.get(pool_key)
+        return idle.pop() if idle else _Client(_connect())
+
+    def _keep_client(self, pool_key: tuple, client: _Client, limit: int, empty) -> None:
+        """Keep ``client`` idle under ``pool_key`` once ``empty(client)`` has emptied it, if
+        fewer than ``limit`` are kept there; else disconnect it."""
+        idle = self._idle.setdefault(pool_key, [])
+        try:
+            if len(idle) < limit:
+                empty(client)
+                idle.append(client)
+            else:
+                p.disconnect(physicsClientId=client.uid)
+        except p.error:  # pragma: no cover - already gone at interpreter exit
+            pass
 
     def _build(self, scene: Scene, settings, *, contacts: bool = True) -> _World:
         settings_key = _settings_key(settings)
-        client = self._client(settings_key)
+        client = self._take_client(("world", settings_key)).uid
         _configure(client, settings)
         plane = _add_plane(client) if scene.ground else None
         bodies = _add_bodies(client, scene, settings)
@@ -422,29 +472,20 @@ class PybulletEngine(Engine):
     def _release(self, world: _World) -> None:
         """Empty the world's client and keep it idle for its settings, or disconnect it."""
         client, world.client = world.client, -1
-        if client < 0:
-            return
-        idle = self._idle.setdefault(world.settings_key, [])
-        try:
-            if len(idle) < _MAX_IDLE:
-                p.resetSimulation(physicsClientId=client)
-                idle.append(client)
-            else:
-                p.disconnect(physicsClientId=client)
-        except p.error:  # pragma: no cover - already gone at interpreter exit
-            pass
+        if client >= 0:
+            self._keep_client(("world", world.settings_key), _Client(client), _MAX_IDLE,
+                              _reset_client)
 
     def close(self) -> None:
         """Release every cached world and plan, and disconnect the idle clients."""
         super().close()
-        for idle in (self._idle, self._idle_many):
-            while idle:
-                _, clients = idle.popitem()
-                for client in clients:
-                    try:
-                        p.disconnect(physicsClientId=client)
-                    except p.error:  # pragma: no cover - already gone at interpreter exit
-                        pass
+        while self._idle:
+            _, clients = self._idle.popitem()
+            for client in clients:
+                try:
+                    p.disconnect(physicsClientId=client.uid)
+                except p.error:  # pragma: no cover - already gone at interpreter exit
+                    pass
 
     def __del__(self):  # pragma: no cover - interpreter exit
         try:
@@ -524,12 +565,18 @@ class PybulletEngine(Engine):
         """
         settings = plans[0].settings  # one settings dict for every plan
         settings_key = _settings_key(settings)
-        client = self._many_client(settings_key)
+        ground = plans[0].scene.ground
+        pool_key = ("many", settings_key, ground)
+        held = self._take_client(pool_key)
+        client = held.uid
+        if ground and held.plane is None:
+            held.plane = _add_plane(client)
+        plane = held.plane
+        held.impacts += len(plans)
         _configure(client, settings)
         threshold = float(settings["contact_breaking_threshold"])
         p.setPhysicsEngineParameter(contactBreakingThreshold=threshold, physicsClientId=client)
-        plane = _add_plane(client) if plans[0].scene.ground else None
-        batch = _Batch(client, settings_key, float(settings["time_step"]))
+        batch = _Batch(held, pool_key, float(settings["time_step"]))
         gap = _MANY_GAP + 2.0 * threshold  # contact points exist up to the threshold
         offset = previous = 0.0
         for slot, plan in enumerate(plans):
@@ -548,6 +595,7 @@ class PybulletEngine(Engine):
                                       threshold=threshold, dt=batch.dt, offset=offset))
             for uid in bodies:
                 batch.slot_of[uid] = slot
+            batch.left.add(slot)
         return batch, batch.slots, [{} for _ in plans]
 
     def _step_many(self, batch: _Batch, active) -> dict:
@@ -570,32 +618,27 @@ class PybulletEngine(Engine):
 
     def _retire(self, batch: _Batch, slot: int) -> None:
         """Remove the impact's bodies: the next steps neither move nor collide them."""
-        world = batch.slots[slot]
-        for uid in world.bodies:
-            p.removeBody(uid, physicsClientId=batch.client)
-            del batch.slot_of[uid]
+        _remove_bodies(batch.client, (batch.slots[slot],))
+        batch.left.discard(slot)
 
     def _release_many(self, batch: _Batch) -> None:
-        """Empty the batch's client and keep it for the next batch of its settings."""
-        client, batch.client = batch.client, -1
+        """Keep the batch's client for the next batch of its settings and kind, emptied of
+        the impacts still in it (a client reset costs more than a batch's stepping), and
+        reset after :data:`_MANY_RESET_AFTER` impacts (Bullet keeps every collision shape
+        made in a client, and refuses to remove one a removed body used)."""
+        batch.client = -1
+        left = [batch.slots[slot] for slot in sorted(batch.left)]
+        batch.left.clear()
         for world in batch.slots:
             world.client = -1
-        idle = self._idle_many.setdefault(batch.settings_key, [])
-        try:
-            if not idle:
-                p.resetSimulation(physicsClientId=client)
-                idle.append(client)
-            else:
-                p.disconnect(physicsClientId=client)
-        except p.error:  # pragma: no cover - already gone at interpreter exit
-            pass
 
-    def _many_client(self, settings_key: tuple) -> int:
-        """An empty DIRECT client for a batch of ``settings_key``: an idle one, else a new one."""
-        idle = self._idle_many.get(settings_key)
-        if idle:
-            return idle.pop()
-        return _connect()
+        def empty(client: _Client) -> None:
+            if client.impacts >= _MANY_RESET_AFTER:
+                _reset_client(client)
+            else:
+                _remove_bodies(client.uid, left)
+
+        self._keep_client(batch.pool_key, batch.held, 1, empty)
 
     def _read_poses(self, world: _World) -> tuple:
         return _joint_triples(world, 0)
