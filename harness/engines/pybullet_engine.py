@@ -63,7 +63,7 @@ Settings (``defaults`` | ``accurate``) are listed in :data:`SETTING_DOCS`; ``Non
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import pybullet as p
 
@@ -157,8 +157,9 @@ PRESETS: dict[str, dict] = {
 _RUN_ONLY = ("max_steps", "approach_steps")
 
 
-def _collision_shape(client: int, shape) -> int:
-    depth = 2.0 * body_extent(shape)  # out-of-plane thickness; any value works with the chain
+def _collision_shape(client: int, shape, extent: float) -> int:
+    """The shape's collision shape; ``extent`` is its :func:`body_extent`."""
+    depth = 2.0 * extent  # out-of-plane thickness; any value works with the chain
     if shape.kind == "disk":
         return p.createCollisionShape(p.GEOM_SPHERE, radius=shape.radius, physicsClientId=client)
     if shape.kind == "rod":
@@ -242,14 +243,16 @@ def _add_plane(client: int) -> int:
     return plane
 
 
-def _add_bodies(client: int, scene: Scene, settings, offset: float = 0.0) -> list[int]:
-    """The scene's bodies as planar chains (bases at ``offset`` along y), damped as set,
-    never sleeping; the partner body gets the neutral e and μ."""
+def _add_bodies(client: int, scene: Scene, settings, extents,
+                offset: float = 0.0) -> list[int]:
+    """The scene's bodies (``extents``: their :func:`body_extent`) as planar chains (bases at
+    ``offset`` along y), damped as set, never sleeping; the partner body gets the neutral
+    e and μ."""
     bodies = []
     linear_damping = float(settings["linear_damping"])
     angular_damping = float(settings["angular_damping"])
-    for body in scene.bodies:
-        collision = _collision_shape(client, body.shape)
+    for body, extent in zip(scene.bodies, extents):
+        collision = _collision_shape(client, body.shape, extent)
         uid = _planar_multibody(client, body, collision, offset)
         for link in range(-1, 3):
             p.changeDynamics(
@@ -281,6 +284,12 @@ class _World:
     threshold: float = 0.02
     dt: float = 1.0 / 240.0  # s, the world's time step
     offset: float = 0.0  # m, the bases' y (run_many: each impact at its own)
+    # Steps taken (one list per client use: a batch's impacts share their batch's), and the
+    # velocities read with the poses at step velocities_at: the run reads the poses of a
+    # contact step and then often its velocities, which one getJointStates call gives.
+    clock: list = field(default_factory=lambda: [0])
+    velocities_at: int = -1
+    velocities: tuple = ()
 
 
 _POLYGON_NOTE = ("polygon: pybullet keeps a link's convex-hull collision margin at 0.001 m, "
@@ -293,15 +302,18 @@ _reset_joints = p.resetJointStatesMultiDof
 _JOINTS = (0, 1, 2)
 
 
-def _joint_triples(world: _World, field: int) -> tuple:
-    """Per body the joints' positions (``field`` 0) or rates (1) as the scene's
-    ``(x, y, θ)`` or ``(v_x, v_y, ω)``: the revolute joint turns the other way."""
+def _read_joints(world: _World) -> tuple:
+    """Per body the joints' positions as the scene's ``(x, y, θ)`` (the revolute joint
+    turns the other way); the rates, read in the same calls, are kept on the world as
+    ``(v_x, v_y, ω)`` for :meth:`PybulletEngine._read_velocities` of the same step."""
     client = world.client
-    triples = []
+    poses, velocities = [], []
     for uid in world.bodies:
-        slide_x, slide_z, hinge = _get_states(uid, _JOINTS, client)
-        triples.append((slide_x[field], slide_z[field], -hinge[field]))
-    return tuple(triples)
+        (x, v_x, _, _), (z, v_z, _, _), (angle, rate, _, _) = _get_states(uid, _JOINTS, client)
+        poses.append((x, z, -angle))
+        velocities.append((v_x, v_z, -rate))
+    world.velocities, world.velocities_at = tuple(velocities), world.clock[0]
+    return tuple(poses)
 
 
 def _set_joints(client: int, bodies, joints) -> None:
@@ -387,7 +399,7 @@ def _settings_key(settings) -> tuple:
 class _Batch:
     """A client holding many impacts (one :class:`_World` view each)."""
 
-    __slots__ = ("client", "dt", "held", "left", "pool_key", "slot_of", "slots")
+    __slots__ = ("client", "clock", "dt", "held", "left", "pool_key", "slot_of", "slots")
 
     def __init__(self, held: _Client, pool_key: tuple, dt: float) -> None:
         self.held, self.pool_key, self.dt = held, pool_key, dt
@@ -395,6 +407,7 @@ class _Batch:
         self.slots: list[_World] = []
         self.slot_of: dict[int, int] = {}  # body unique id -> slot
         self.left: set[int] = set()  # slots whose bodies are still in the client
+        self.clock = [0]  # steps taken (its impacts' _World.clock)
 
 
 class PybulletEngine(Engine):
@@ -459,8 +472,8 @@ class PybulletEngine(Engine):
         client = self._take_client(("world", settings_key)).uid
         _configure(client, settings)
         plane = _add_plane(client) if scene.ground else None
-        bodies = _add_bodies(client, scene, settings)
         extents = tuple(body_extent(b.shape) for b in scene.bodies)
+        bodies = _add_bodies(client, scene, settings, extents)
         # A bare-stepping world never asks for contacts, so it never knows whether the last
         # run left some: it starts clean (no collision detection has run yet) and stays so.
         return _World(client=client, settings_key=settings_key, plane=plane, bodies=bodies,
@@ -526,14 +539,17 @@ class PybulletEngine(Engine):
                 reset(uid, 1, _PARK_HEIGHT, 0.0, client)
             p.performCollisionDetection(client)
         _set_joints(client, world.bodies, joints)
+        world.velocities_at = -1
         return {}
 
     def _advance(self, world: _World) -> None:
         _step_simulation(world.client)
+        world.clock[0] += 1
 
     def _step(self, world: _World) -> RawContacts | None:
         client = world.client
         _step_simulation(client)
+        world.clock[0] += 1
         # No filter: Bullet's own body order (a filtered query flips the normal of a swapped
         # pair but not the friction directions). The world holds only this pair.
         # Positional: bodyA, bodyB, linkIndexA, linkIndexB at their "any" defaults.
@@ -584,7 +600,7 @@ class PybulletEngine(Engine):
             if slot:
                 offset += previous + max(extents) + gap
             previous = max(extents)
-            bodies = _add_bodies(client, plan.scene, settings, offset)
+            bodies = _add_bodies(client, plan.scene, settings, extents, offset)
             joints, (e, mu) = plan.prepared
             p.changeDynamics(bodies[0], 2, restitution=e, lateralFriction=mu,
                              physicsClientId=client)
@@ -592,7 +608,8 @@ class PybulletEngine(Engine):
             batch.slots.append(_World(client=client, settings_key=settings_key, plane=plane,
                                       bodies=bodies, extents=extents, scale=previous,
                                       pair_values=(e, mu), dirty=False,
-                                      threshold=threshold, dt=batch.dt, offset=offset))
+                                      threshold=threshold, dt=batch.dt, offset=offset,
+                                      clock=batch.clock))
             for uid in bodies:
                 batch.slot_of[uid] = slot
             batch.left.add(slot)
@@ -601,6 +618,7 @@ class PybulletEngine(Engine):
     def _step_many(self, batch: _Batch, active) -> dict:
         client = batch.client
         _step_simulation(client)
+        batch.clock[0] += 1
         points_of: dict[int, list] = {}
         slot_of = batch.slot_of
         for cp in _get_contacts(-1, -1, -2, -2, client):  # every pair, Bullet's order
@@ -641,10 +659,12 @@ class PybulletEngine(Engine):
         self._keep_client(batch.pool_key, batch.held, 1, empty)
 
     def _read_poses(self, world: _World) -> tuple:
-        return _joint_triples(world, 0)
+        return _read_joints(world)
 
     def _read_velocities(self, world: _World) -> tuple:
-        return _joint_triples(world, 1)
+        if world.velocities_at != world.clock[0]:
+            _read_joints(world)
+        return world.velocities
 
     def _out_of_plane_drift(self, world: _World) -> float:
         """The centre's y, plus the tilt of the link's y axis times the body's size."""
