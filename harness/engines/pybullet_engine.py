@@ -55,6 +55,12 @@ threshold) apart never meet.
 They share only the static plane, which joins no simulation islands. Finished impacts are
 removed. The runs equal :meth:`run`'s bit for bit (tests/engines/test_pybullet_many.py);
 moving impacts apart within the plane instead changes roundings (measured).
+A batch's client is kept for the next batch of its settings and kind, with its plane, and
+emptied by removing the bodies left in it: a ``resetSimulation`` (~2 ms, Bullet remakes its
+dynamics world and memory pools) cost more than a batch's stepping. Bullet keeps every
+collision shape made in a client (it refuses to remove one a removed body used, ~8 kB an
+impact), so the client is reset after :data:`_MANY_RESET_AFTER` impacts
+(tests/engines/test_pybullet_clients.py: runs keep their bits across both).
 
 Settings (``defaults`` | ``accurate``) are listed in :data:`SETTING_DOCS`; ``None`` means
 "not set: Bullet's default".
