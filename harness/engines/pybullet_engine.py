@@ -78,9 +78,10 @@ from harness.engines.settings import check_choice, check_int, check_number
 from harness.scene import Scene
 
 _MAX_WORLDS = 8
-_MAX_IDLE = 2  # emptied clients kept per engine settings (the survey needs 1: a new
-# geometry evicts one world and builds one)
-#: Impacts per client in run_many (measured: see docs/engines.md, 'pybullet').
+_MAX_IDLE = 2  # emptied clients kept per engine settings (runs of new geometries one by
+# one need 1: a new geometry evicts one world and builds one)
+#: Impacts per client in run_many (measured: see docs/engines.md, 'pybullet'; with the
+#: batch client kept, 8 to 64 cost the same within the noise, 128 and 256 more).
 MANY_IMPACTS = 32
 #: Impacts built in a run_many client before it is reset (~8 kB each stays until then).
 _MANY_RESET_AFTER = 1024
