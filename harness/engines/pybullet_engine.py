@@ -55,6 +55,12 @@ threshold) apart never meet.
 They share only the static plane, which joins no simulation islands. Finished impacts are
 removed. The runs equal :meth:`run`'s bit for bit (tests/engines/test_pybullet_many.py);
 moving impacts apart within the plane instead changes roundings (measured).
+A batch's client is kept for the next batch of its settings and kind, with its plane, and
+emptied by removing the bodies left in it: a ``resetSimulation`` (~2 ms, Bullet remakes its
+dynamics world and memory pools) cost more than a batch's stepping. Bullet keeps every
+collision shape made in a client (it refuses to remove one a removed body used, ~8 kB an
+impact), so the client is reset after :data:`_MANY_RESET_AFTER` impacts
+(tests/engines/test_pybullet_clients.py: runs keep their bits across both).
 
 Settings (``defaults`` | ``accurate``) are listed in :data:`SETTING_DOCS`; ``None`` means
 "not set: Bullet's default".
@@ -63,7 +69,7 @@ Settings (``defaults`` | ``accurate``) are listed in :data:`SETTING_DOCS`; ``Non
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import pybullet as p
 
@@ -72,10 +78,13 @@ from harness.engines.settings import check_choice, check_int, check_number
 from harness.scene import Scene
 
 _MAX_WORLDS = 8
-_MAX_IDLE = 2  # emptied clients kept per engine settings (the survey needs 1: a new
-# geometry evicts one world and builds one)
-#: Impacts per client in run_many (measured: see docs/engines.md, 'pybullet').
+_MAX_IDLE = 2  # emptied clients kept per engine settings (runs of new geometries one by
+# one need 1: a new geometry evicts one world and builds one)
+#: Impacts per client in run_many (measured: see docs/engines.md, 'pybullet'; with the
+#: batch client kept, 8 to 64 cost the same within the noise, 128 and 256 more).
 MANY_IMPACTS = 32
+#: Impacts built in a run_many client before it is reset (~8 kB each stays until then).
+_MANY_RESET_AFTER = 1024
 _MANY_GAP = 1.0  # m, between two impacts' slices of the engine's y (plus 2 x the threshold)
 _PARK_HEIGHT = 1.0e3  # m, where bodies wait (far above the plane) while contacts are cleared
 
@@ -155,8 +164,9 @@ PRESETS: dict[str, dict] = {
 _RUN_ONLY = ("max_steps", "approach_steps")
 
 
-def _collision_shape(client: int, shape) -> int:
-    depth = 2.0 * body_extent(shape)  # out-of-plane thickness; any value works with the chain
+def _collision_shape(client: int, shape, extent: float) -> int:
+    """The shape's collision shape; ``extent`` is its :func:`body_extent`."""
+    depth = 2.0 * extent  # out-of-plane thickness; any value works with the chain
     if shape.kind == "disk":
         return p.createCollisionShape(p.GEOM_SPHERE, radius=shape.radius, physicsClientId=client)
     if shape.kind == "rod":
@@ -182,9 +192,19 @@ def _collision_shape(client: int, shape) -> int:
     return p.createCollisionShape(p.GEOM_MESH, vertices=vertices, physicsClientId=client)
 
 
-def _planar_multibody(client: int, body, offset: float = 0.0) -> int:
-    """The body's planar chain, its base at ``offset`` along the engine's y (out of the plane)."""
-    collision = _collision_shape(client, body.shape)
+# createMultiBody's link arguments that every chain shares (pybullet copies them in).
+_LINK_ORIGINS = [[0.0, 0.0, 0.0]] * 3
+_LINK_ROTATIONS = [[0.0, 0.0, 0.0, 1.0]] * 3
+_NO_VISUALS = [-1, -1, -1]
+_LINK_PARENTS = [0, 1, 2]
+_NO_FORCES = [0.0, 0.0, 0.0]
+_JOINT_TYPES = [p.JOINT_PRISMATIC, p.JOINT_PRISMATIC, p.JOINT_REVOLUTE]
+_JOINT_AXES = [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]]
+
+
+def _planar_multibody(client: int, body, collision: int, offset: float = 0.0) -> int:
+    """The body's planar chain, its last link of shape ``collision``, its base at ``offset``
+    along the engine's y (out of the plane)."""
     mass, inertia = float(body.mass), float(body.moment_of_inertia)
     uid = p.createMultiBody(
         baseMass=0.0,
@@ -193,22 +213,23 @@ def _planar_multibody(client: int, body, offset: float = 0.0) -> int:
         basePosition=[0.0, offset, 0.0],
         linkMasses=[0.0, 0.0, mass],
         linkCollisionShapeIndices=[-1, -1, collision],
-        linkVisualShapeIndices=[-1, -1, -1],
-        linkPositions=[[0.0, 0.0, 0.0]] * 3,
-        linkOrientations=[[0.0, 0.0, 0.0, 1.0]] * 3,
-        linkInertialFramePositions=[[0.0, 0.0, 0.0]] * 3,
-        linkInertialFrameOrientations=[[0.0, 0.0, 0.0, 1.0]] * 3,
-        linkParentIndices=[0, 1, 2],
-        linkJointTypes=[p.JOINT_PRISMATIC, p.JOINT_PRISMATIC, p.JOINT_REVOLUTE],
-        linkJointAxis=[[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]],
+        linkVisualShapeIndices=_NO_VISUALS,
+        linkPositions=_LINK_ORIGINS,
+        linkOrientations=_LINK_ROTATIONS,
+        linkInertialFramePositions=_LINK_ORIGINS,
+        linkInertialFrameOrientations=_LINK_ROTATIONS,
+        linkParentIndices=_LINK_PARENTS,
+        linkJointTypes=_JOINT_TYPES,
+        linkJointAxis=_JOINT_AXES,
         useMaximalCoordinates=False,
         physicsClientId=client,
     )
     # Mass and the inertia in one call (a call without mass= can zero it).
     p.changeDynamics(uid, 2, mass=mass, localInertiaDiagonal=[inertia, inertia, inertia],
                      physicsClientId=client)
-    for joint in range(3):
-        p.setJointMotorControl2(uid, joint, p.VELOCITY_CONTROL, force=0.0, physicsClientId=client)
+    # The joints' default velocity motors off: no force (one call for the three joints).
+    p.setJointMotorControlArray(uid, _LINK_PARENTS, p.VELOCITY_CONTROL, forces=_NO_FORCES,
+                                physicsClientId=client)
     return uid
 
 
@@ -231,22 +252,23 @@ def _add_plane(client: int) -> int:
     return plane
 
 
-def _add_bodies(client: int, scene: Scene, settings, offset: float = 0.0) -> list[int]:
-    """The scene's bodies as planar chains (bases at ``offset`` along y), damped as set,
-    never sleeping; the partner body gets the neutral e and μ."""
+def _add_bodies(client: int, scene: Scene, settings, extents,
+                offset: float = 0.0) -> list[int]:
+    """The scene's bodies (``extents``: their :func:`body_extent`) as planar chains (bases at
+    ``offset`` along y), damped as set, never sleeping; the partner body gets the neutral
+    e and μ."""
     bodies = []
-    for body in scene.bodies:
-        uid = _planar_multibody(client, body, offset)
-        for link in range(-1, 3):
-            p.changeDynamics(
-                uid,
-                link,
-                linearDamping=float(settings["linear_damping"]),
-                angularDamping=float(settings["angular_damping"]),
-                jointDamping=0.0,
-                activationState=p.ACTIVATION_STATE_DISABLE_SLEEPING,
-                physicsClientId=client,
-            )
+    linear_damping = float(settings["linear_damping"])
+    angular_damping = float(settings["angular_damping"])
+    for body, extent in zip(scene.bodies, extents):
+        collision = _collision_shape(client, body.shape, extent)
+        uid = _planar_multibody(client, body, collision, offset)
+        # On the shape's link only: the damping and sleeping are the multibody's, and the
+        # massless links' joint damping is 0 already (the runs keep their bits: the tests).
+        # A separate call from the mass's: one call with both changed the bits (measured).
+        p.changeDynamics(uid, 2, linearDamping=linear_damping, angularDamping=angular_damping,
+                         jointDamping=0.0, activationState=p.ACTIVATION_STATE_DISABLE_SLEEPING,
+                         physicsClientId=client)
         bodies.append(uid)
     if len(bodies) == 2:
         p.changeDynamics(bodies[1], 2, restitution=1.0, lateralFriction=1.0,
@@ -267,6 +289,12 @@ class _World:
     threshold: float = 0.02
     dt: float = 1.0 / 240.0  # s, the world's time step
     offset: float = 0.0  # m, the bases' y (run_many: each impact at its own)
+    # Steps taken (one list per client use: a batch's impacts share their batch's), and the
+    # velocities read with the poses at step velocities_at: the run reads the poses of a
+    # contact step and then often its velocities, which one getJointStates call gives.
+    clock: list = field(default_factory=lambda: [0])
+    velocities_at: int = -1
+    velocities: tuple = ()
 
 
 _POLYGON_NOTE = ("polygon: pybullet keeps a link's convex-hull collision margin at 0.001 m, "
@@ -279,15 +307,18 @@ _reset_joints = p.resetJointStatesMultiDof
 _JOINTS = (0, 1, 2)
 
 
-def _joint_triples(world: _World, field: int) -> tuple:
-    """Per body the joints' positions (``field`` 0) or rates (1) as the scene's
-    ``(x, y, θ)`` or ``(v_x, v_y, ω)``: the revolute joint turns the other way."""
+def _read_joints(world: _World) -> tuple:
+    """Per body the joints' positions as the scene's ``(x, y, θ)`` (the revolute joint
+    turns the other way); the rates, read in the same calls, are kept on the world as
+    ``(v_x, v_y, ω)`` for :meth:`PybulletEngine._read_velocities` of the same step."""
     client = world.client
-    triples = []
+    poses, velocities = [], []
     for uid in world.bodies:
-        slide_x, slide_z, hinge = _get_states(uid, _JOINTS, client)
-        triples.append((slide_x[field], slide_z[field], -hinge[field]))
-    return tuple(triples)
+        (x, v_x, _, _), (z, v_z, _, _), (angle, rate, _, _) = _get_states(uid, _JOINTS, client)
+        poses.append((x, z, -angle))
+        velocities.append((v_x, v_z, -rate))
+    world.velocities, world.velocities_at = tuple(velocities), world.clock[0]
+    return tuple(poses)
 
 
 def _set_joints(client: int, bodies, joints) -> None:
@@ -343,6 +374,28 @@ def _connect() -> int:
     return client
 
 
+@dataclass
+class _Client:
+    """A DIRECT client and what it keeps between uses."""
+
+    uid: int  # pybullet's physicsClientId
+    plane: int | None = None  # run_many: the static plane it keeps for ground batches
+    impacts: int = 0  # run_many: impacts built in it since it was last reset
+
+
+def _reset_client(client: _Client) -> None:
+    """Empty ``client``: Bullet deletes its dynamics world and makes a new one."""
+    p.resetSimulation(physicsClientId=client.uid)
+    client.plane, client.impacts = None, 0
+
+
+def _remove_bodies(client: int, worlds) -> None:
+    """Remove the bodies of ``worlds`` (batch impacts) from ``client``."""
+    for world in worlds:
+        for uid in world.bodies:
+            p.removeBody(uid, physicsClientId=client)
+
+
 def _settings_key(settings) -> tuple:
     """The settings a world is built with (all but the per-run ones), as a key."""
     return tuple((k, settings[k]) for k in sorted(settings) if k not in _RUN_ONLY)
@@ -351,12 +404,15 @@ def _settings_key(settings) -> tuple:
 class _Batch:
     """A client holding many impacts (one :class:`_World` view each)."""
 
-    __slots__ = ("client", "dt", "settings_key", "slot_of", "slots")
+    __slots__ = ("client", "clock", "dt", "held", "left", "pool_key", "slot_of", "slots")
 
-    def __init__(self, client: int, settings_key: tuple, dt: float) -> None:
-        self.client, self.settings_key, self.dt = client, settings_key, dt
+    def __init__(self, held: _Client, pool_key: tuple, dt: float) -> None:
+        self.held, self.pool_key, self.dt = held, pool_key, dt
+        self.client = held.uid  # -1 once released
         self.slots: list[_World] = []
         self.slot_of: dict[int, int] = {}  # body unique id -> slot
+        self.left: set[int] = set()  # slots whose bodies are still in the client
+        self.clock = [0]  # steps taken (its impacts' _World.clock)
 
 
 class PybulletEngine(Engine):
@@ -367,8 +423,9 @@ class PybulletEngine(Engine):
     max_worlds = _MAX_WORLDS
 
     def __init__(self) -> None:
-        self._idle: dict[tuple, list[int]] = {}  # settings key -> emptied clients
-        self._idle_many: dict[tuple, list[int]] = {}  # the same, for run_many's batches
+        # Idle clients: ("world", settings key) -> emptied clients for run()'s worlds;
+        # ("many", settings key, ground) -> run_many's, with their plane (if ground) only.
+        self._idle: dict[tuple, list[_Client]] = {}
         try:  # pybullet has no __version__; its API version is a date
             from importlib.metadata import PackageNotFoundError, version
 
@@ -397,20 +454,31 @@ class PybulletEngine(Engine):
         """The engine settings a world is built with, and the geometry."""
         return (_settings_key(settings), geometry_key(scene))
 
-    def _client(self, settings_key: tuple) -> int:
-        """An empty DIRECT client for ``settings_key``: an idle one, else a new one."""
-        idle = self._idle.get(settings_key)
-        if idle:
-            return idle.pop()
-        return _connect()
+    def _take_client(self, pool_key: tuple) -> _Client:
+        """An idle client kept under ``pool_key``, else a new one."""
+        idle = self._idle.get(pool_key)
+        return idle.pop() if idle else _Client(_connect())
+
+    def _keep_client(self, pool_key: tuple, client: _Client, limit: int, empty) -> None:
+        """Keep ``client`` idle under ``pool_key`` once ``empty(client)`` has emptied it, if
+        fewer than ``limit`` are kept there; else disconnect it."""
+        idle = self._idle.setdefault(pool_key, [])
+        try:
+            if len(idle) < limit:
+                empty(client)
+                idle.append(client)
+            else:
+                p.disconnect(physicsClientId=client.uid)
+        except p.error:  # pragma: no cover - already gone at interpreter exit
+            pass
 
     def _build(self, scene: Scene, settings, *, contacts: bool = True) -> _World:
         settings_key = _settings_key(settings)
-        client = self._client(settings_key)
+        client = self._take_client(("world", settings_key)).uid
         _configure(client, settings)
         plane = _add_plane(client) if scene.ground else None
-        bodies = _add_bodies(client, scene, settings)
         extents = tuple(body_extent(b.shape) for b in scene.bodies)
+        bodies = _add_bodies(client, scene, settings, extents)
         # A bare-stepping world never asks for contacts, so it never knows whether the last
         # run left some: it starts clean (no collision detection has run yet) and stays so.
         return _World(client=client, settings_key=settings_key, plane=plane, bodies=bodies,
@@ -422,29 +490,20 @@ class PybulletEngine(Engine):
     def _release(self, world: _World) -> None:
         """Empty the world's client and keep it idle for its settings, or disconnect it."""
         client, world.client = world.client, -1
-        if client < 0:
-            return
-        idle = self._idle.setdefault(world.settings_key, [])
-        try:
-            if len(idle) < _MAX_IDLE:
-                p.resetSimulation(physicsClientId=client)
-                idle.append(client)
-            else:
-                p.disconnect(physicsClientId=client)
-        except p.error:  # pragma: no cover - already gone at interpreter exit
-            pass
+        if client >= 0:
+            self._keep_client(("world", world.settings_key), _Client(client), _MAX_IDLE,
+                              _reset_client)
 
     def close(self) -> None:
         """Release every cached world and plan, and disconnect the idle clients."""
         super().close()
-        for idle in (self._idle, self._idle_many):
-            while idle:
-                _, clients = idle.popitem()
-                for client in clients:
-                    try:
-                        p.disconnect(physicsClientId=client)
-                    except p.error:  # pragma: no cover - already gone at interpreter exit
-                        pass
+        while self._idle:
+            _, clients = self._idle.popitem()
+            for client in clients:
+                try:
+                    p.disconnect(physicsClientId=client.uid)
+                except p.error:  # pragma: no cover - already gone at interpreter exit
+                    pass
 
     def __del__(self):  # pragma: no cover - interpreter exit
         try:
@@ -485,14 +544,17 @@ class PybulletEngine(Engine):
                 reset(uid, 1, _PARK_HEIGHT, 0.0, client)
             p.performCollisionDetection(client)
         _set_joints(client, world.bodies, joints)
+        world.velocities_at = -1
         return {}
 
     def _advance(self, world: _World) -> None:
         _step_simulation(world.client)
+        world.clock[0] += 1
 
     def _step(self, world: _World) -> RawContacts | None:
         client = world.client
         _step_simulation(client)
+        world.clock[0] += 1
         # No filter: Bullet's own body order (a filtered query flips the normal of a swapped
         # pair but not the friction directions). The world holds only this pair.
         # Positional: bodyA, bodyB, linkIndexA, linkIndexB at their "any" defaults.
@@ -524,12 +586,18 @@ class PybulletEngine(Engine):
         """
         settings = plans[0].settings  # one settings dict for every plan
         settings_key = _settings_key(settings)
-        client = self._many_client(settings_key)
+        ground = plans[0].scene.ground
+        pool_key = ("many", settings_key, ground)
+        held = self._take_client(pool_key)
+        client = held.uid
+        if ground and held.plane is None:
+            held.plane = _add_plane(client)
+        plane = held.plane
+        held.impacts += len(plans)
         _configure(client, settings)
         threshold = float(settings["contact_breaking_threshold"])
         p.setPhysicsEngineParameter(contactBreakingThreshold=threshold, physicsClientId=client)
-        plane = _add_plane(client) if plans[0].scene.ground else None
-        batch = _Batch(client, settings_key, float(settings["time_step"]))
+        batch = _Batch(held, pool_key, float(settings["time_step"]))
         gap = _MANY_GAP + 2.0 * threshold  # contact points exist up to the threshold
         offset = previous = 0.0
         for slot, plan in enumerate(plans):
@@ -537,7 +605,7 @@ class PybulletEngine(Engine):
             if slot:
                 offset += previous + max(extents) + gap
             previous = max(extents)
-            bodies = _add_bodies(client, plan.scene, settings, offset)
+            bodies = _add_bodies(client, plan.scene, settings, extents, offset)
             joints, (e, mu) = plan.prepared
             p.changeDynamics(bodies[0], 2, restitution=e, lateralFriction=mu,
                              physicsClientId=client)
@@ -545,14 +613,17 @@ class PybulletEngine(Engine):
             batch.slots.append(_World(client=client, settings_key=settings_key, plane=plane,
                                       bodies=bodies, extents=extents, scale=previous,
                                       pair_values=(e, mu), dirty=False,
-                                      threshold=threshold, dt=batch.dt, offset=offset))
+                                      threshold=threshold, dt=batch.dt, offset=offset,
+                                      clock=batch.clock))
             for uid in bodies:
                 batch.slot_of[uid] = slot
+            batch.left.add(slot)
         return batch, batch.slots, [{} for _ in plans]
 
     def _step_many(self, batch: _Batch, active) -> dict:
         client = batch.client
         _step_simulation(client)
+        batch.clock[0] += 1
         points_of: dict[int, list] = {}
         slot_of = batch.slot_of
         for cp in _get_contacts(-1, -1, -2, -2, client):  # every pair, Bullet's order
@@ -570,38 +641,35 @@ class PybulletEngine(Engine):
 
     def _retire(self, batch: _Batch, slot: int) -> None:
         """Remove the impact's bodies: the next steps neither move nor collide them."""
-        world = batch.slots[slot]
-        for uid in world.bodies:
-            p.removeBody(uid, physicsClientId=batch.client)
-            del batch.slot_of[uid]
+        _remove_bodies(batch.client, (batch.slots[slot],))
+        batch.left.discard(slot)
 
     def _release_many(self, batch: _Batch) -> None:
-        """Empty the batch's client and keep it for the next batch of its settings."""
-        client, batch.client = batch.client, -1
+        """Keep the batch's client for the next batch of its settings and kind, emptied of
+        the impacts still in it (a client reset costs more than a batch's stepping), and
+        reset after :data:`_MANY_RESET_AFTER` impacts (Bullet keeps every collision shape
+        made in a client, and refuses to remove one a removed body used)."""
+        batch.client = -1
+        left = [batch.slots[slot] for slot in sorted(batch.left)]
+        batch.left.clear()
         for world in batch.slots:
             world.client = -1
-        idle = self._idle_many.setdefault(batch.settings_key, [])
-        try:
-            if not idle:
-                p.resetSimulation(physicsClientId=client)
-                idle.append(client)
-            else:
-                p.disconnect(physicsClientId=client)
-        except p.error:  # pragma: no cover - already gone at interpreter exit
-            pass
 
-    def _many_client(self, settings_key: tuple) -> int:
-        """An empty DIRECT client for a batch of ``settings_key``: an idle one, else a new one."""
-        idle = self._idle_many.get(settings_key)
-        if idle:
-            return idle.pop()
-        return _connect()
+        def empty(client: _Client) -> None:
+            if client.impacts >= _MANY_RESET_AFTER:
+                _reset_client(client)
+            else:
+                _remove_bodies(client.uid, left)
+
+        self._keep_client(batch.pool_key, batch.held, 1, empty)
 
     def _read_poses(self, world: _World) -> tuple:
-        return _joint_triples(world, 0)
+        return _read_joints(world)
 
     def _read_velocities(self, world: _World) -> tuple:
-        return _joint_triples(world, 1)
+        if world.velocities_at != world.clock[0]:
+            _read_joints(world)
+        return world.velocities
 
     def _out_of_plane_drift(self, world: _World) -> float:
         """The centre's y, plus the tilt of the link's y axis times the body's size."""
