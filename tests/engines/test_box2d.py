@@ -159,8 +159,8 @@ def test_reruns_are_bit_identical_after_other_scenes(engine, preset):
 def test_reruns_are_bit_identical_whatever_number_of_resets_came_before(engine, scene_name):
     # Under defaults (8 sweeps) the rod's result depends on the order its contacts are
     # solved in. The same settings object reuses the plan (one reset a run), a new one
-    # plans anew (a probe run: two resets), a bare stepper resets once more: the order, set
-    # by the kept broad-phase proxies, must not depend on how many resets came before.
+    # plans anew, a bare stepper resets once more: the order, set by the kept broad-phase
+    # proxies, must not depend on how many resets came before.
     scene = SCENES[scene_name][0]
     settings = engine.settings("defaults")
     first = engine.run(scene, settings)
