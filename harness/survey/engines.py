@@ -50,13 +50,15 @@ class EngineResults:
 
 
 def run_engine(engine_name: str, preset: str, scenes, problems=None,
-               law_energy_change=None, terms=None) -> EngineResults:
+               law_energy_change=None, terms=None, arrays=None) -> EngineResults:
     """Run every scene through ``engine_name`` at ``preset`` and judge every run.
 
     ``problems``: each scene's ``ImpactProblem`` (the verdicts' input; None: not judged, the
     status is the engine's); ``law_energy_change``: newton-lcp's energy change per scene (J),
     to attribute an energy gain to the law (docs/verdicts.md); ``terms``: the scenes'
-    :func:`harness.run.verdicts.prepare` (worked out here when None).
+    :func:`harness.run.verdicts.prepare` and ``arrays`` their
+    :func:`harness.run.verdicts.term_arrays` (worked out here when None). The runs are judged
+    slice by slice with :func:`harness.run.verdicts.judge_many`, :func:`judge`'s verdicts.
     """
     engine = load_engine(engine_name)
     settings = engine.settings(preset)  # one dict for every run: the adapters cache on it
@@ -68,27 +70,32 @@ def run_engine(engine_name: str, preset: str, scenes, problems=None,
     steps = np.zeros(count, dtype=np.int64)
     wall = judging = 0.0
     clock = time.perf_counter
-    if problems is not None and terms is None:
+    if problems is not None and (terms is None or arrays is None):
         tick = clock()
-        terms = verdicts.prepare_many(scenes, problems)
+        terms = verdicts.prepare_many(scenes, problems) if terms is None else terms
+        arrays = verdicts.term_arrays(problems, terms) if arrays is None else arrays
         judging += clock() - tick
     for begin in range(0, count, SLICE):
         tick = clock()
         runs = engine.run_many(scenes[begin:begin + SLICE], settings)
         wall += clock() - tick
         tick = clock()
+        end = begin + len(runs)
         for row, run in enumerate(runs, start=begin):
-            speeds = run.u_after
-            velocities[row, :len(speeds)] = speeds
-            engine_status[row] = status[row] = run.status.value
+            speeds = run.velocities
+            velocities[row, :3 * len(speeds)] = [value for body in speeds for value in body]
+            engine_status[row] = run.status.value
             steps[row] = run.steps
-            if problems is not None:
-                gain = None if law_energy_change is None else float(law_energy_change[row])
-                verdict = verdicts.judge(scenes[row], problems[row],
-                                         verdicts.numbers_from_run(run),
-                                         law_energy_change=gain, terms=terms[row])
-                status[row] = verdict.status(run.status.value)
-                reasons[row] = ",".join(verdict.names)
+        if problems is None:
+            status[begin:end] = engine_status[begin:end]
+        else:
+            judged = verdicts.judge_many(
+                scenes[begin:end], problems[begin:end], runs, velocities[begin:end],
+                terms[begin:end], arrays.rows(begin, end),
+                law_energy_change=(None if law_energy_change is None
+                                   else law_energy_change[begin:end]))
+            for row, (verdict_status, names) in enumerate(judged, start=begin):
+                status[row], reasons[row] = verdict_status, names
         judging += clock() - tick
     assert set(engine_status) <= set(STATUSES), set(engine_status) - set(STATUSES)
     return EngineResults(engine_name, engine.version, preset, velocities,
