@@ -17,7 +17,6 @@ tight loop, from the adapter's start state, the reset outside (``bare_s``) and i
 
 from __future__ import annotations
 
-import os
 import time
 from dataclasses import dataclass
 
@@ -25,7 +24,6 @@ import numpy as np
 
 from harness.engines import STATUSES, load_engine
 from harness.run import verdicts
-from harness.run.executor import map_forked
 from harness.survey.laws import WIDTH
 
 #: Scenes handed to ``run_many`` at once: the runs (with their contact records) of one slice
@@ -101,72 +99,6 @@ def run_engine(engine_name: str, preset: str, scenes, problems=None,
     return EngineResults(engine_name, engine.version, preset, velocities,
                          engine_status.astype(str), status.astype(str), reasons.astype(str),
                          steps, wall, judging)
-
-
-#: Scenes of one ``run_engine`` task in :func:`run_pairs` (a pair's scenes are cut into
-#: slices so that two cores share the work of its costliest pair; any slice size gives the
-#: same runs, since ``run_many`` equals ``run`` scene by scene).
-PAIR_SLICE = 1024
-#: Relative cost per impact of each engine (measured with ``impact-harness bench --survey``):
-#: the costliest tasks start first, so the last task to finish is a short one.
-_ENGINE_COST = {"mujoco": 4.0, "pybullet": 3.0, "box2d": 2.0, "pymunk": 1.0}
-#: What the forked workers of :func:`run_pairs` read: ``(scenes, problems, energy, terms)``.
-_SHARED: tuple = ()
-
-
-def run_pairs(pairs, scenes, problems, law_energy_change, terms=None,
-              workers: int | None = None) -> list[EngineResults]:
-    """:func:`run_engine` of every ``(engine, preset)`` pair over ``scenes``, in pair order.
-
-    With more than one worker the pairs are cut into slices of :data:`PAIR_SLICE` scenes
-    and run in a pool of forked processes, which read the scenes, problems and verdict terms
-    (``terms``: :func:`harness.run.verdicts.prepare_many`, worked out here when None) from
-    this process's memory (pickling them cost more than judging them); the slices of a
-    pair are joined in scene order, so the result is the same for any ``workers``.
-    ``wall_s`` and ``judge_s`` are summed over the slices (time spent on one core).
-    """
-    global _SHARED
-    count = len(scenes)
-    slices = max(1, len(pairs)) * max(1, -(-count // PAIR_SLICE))
-    workers = min(workers or os.cpu_count() or 1, slices)
-    if problems is not None and terms is None:
-        terms = verdicts.prepare_many(scenes, problems)
-    tasks = [(engine, preset, begin, min(begin + PAIR_SLICE, count))
-             for engine, preset in pairs for begin in range(0, count, PAIR_SLICE)]
-    tasks.sort(key=lambda task: -_ENGINE_COST.get(task[0], 1.0) * (task[3] - task[2]))
-    _SHARED = (scenes, problems, law_energy_change, terms)
-    try:
-        parts = dict(zip(tasks, map_forked(_run_slice, tasks, workers)))
-    finally:
-        _SHARED = ()
-    joined = []
-    for engine, preset in pairs:
-        slices = [parts[task] for task in sorted(
-            (task for task in parts if task[:2] == (engine, preset)), key=lambda t: t[2])]
-        joined.append(_join(slices))
-    return joined
-
-
-def _run_slice(task) -> EngineResults:
-    engine, preset, begin, end = task
-    scenes, problems, energy, terms = _SHARED
-    return run_engine(engine, preset, scenes[begin:end],
-                      None if problems is None else problems[begin:end],
-                      None if energy is None else energy[begin:end],
-                      None if terms is None else terms[begin:end])
-
-
-def _join(slices: list[EngineResults]) -> EngineResults:
-    """One pair's slices, in scene order, as one :class:`EngineResults`."""
-    first = slices[0]
-    return EngineResults(
-        first.engine, first.engine_version, first.preset,
-        np.concatenate([part.velocities for part in slices]),
-        np.concatenate([part.engine_status for part in slices]),
-        np.concatenate([part.status for part in slices]),
-        np.concatenate([part.reasons for part in slices]),
-        np.concatenate([part.steps for part in slices]),
-        sum(part.wall_s for part in slices), sum(part.judge_s for part in slices))
 
 
 def bare_stepping(engine_name: str, preset: str, scenes, steps) -> dict[str, float]:
