@@ -669,8 +669,15 @@ def judge_many(scenes: Sequence, problems: Sequence, runs: Sequence, u_after: np
         fails["energy-gain"] = gains
     batched &= ~near
     checked = {name: flags.tolist() for name, flags in fails.items()}
+    tracks = {}
+    for row in np.flatnonzero(batched & ~arrays.one_feature).tolist():
+        track = ContactTrack.from_record(runs[row].contact_record)
+        if track.size >= 2:
+            tracks[row] = track
     checked["multi-contact"] = [False] * count
-    one_feature = arrays.one_feature.tolist()
+    for row, second in zip(tracks, _second_features_many(
+            list(tracks.values()), [terms[row].features for row in tracks], tol)):
+        checked["multi-contact"][row] = second
     results = []
     for row, run in enumerate(runs):
         if not batched[row]:
@@ -679,11 +686,6 @@ def judge_many(scenes: Sequence, problems: Sequence, runs: Sequence, u_after: np
                             law_energy_change=gain, tolerances=tol, terms=terms[row])
             results.append((verdict.status(status[row]), ",".join(verdict.names)))
             continue
-        if not one_feature[row]:
-            track = ContactTrack.from_record(run.contact_record)
-            if track.size >= 2:
-                checked["multi-contact"][row] = bool(
-                    _second_features(scenes[row], track, tol, terms[row].features))
         names = tuple(name for name in _BATCHED_REASONS if checked[name][row])
         results.append((_status(status[row], names), ",".join(names)))
     return results
@@ -926,6 +928,62 @@ def _second_features(scene, contacts: Sequence[StepContacts] | ContactTrack,
     return [Reason("multi-contact", float(step), None,
                    f"{body.name}'s {names[now]} touched at step {step} (the first contact "
                    "was at " + (names[then] if then >= 0 else "a face") + ")")]
+
+
+def _second_features_many(tracks: Sequence[ContactTrack],
+                          features: Sequence[Sequence[BodyFeatures]],
+                          tolerances: Tolerances) -> list[bool]:
+    """Whether :func:`_second_features` finds a second feature, for many runs at once
+    (``tracks[i]`` of a scene whose bodies have ``features[i]``).
+
+    The arithmetic of :func:`_features_at`, operation for operation on the same operands
+    (math's cos and sin per pose, the same ``(k, 2) @ (2, 2)`` products per pose), over the
+    points of every run whose body has ``k`` point features at once.
+    """
+    if not tracks:
+        return []
+    arrays = [track._read() for track in tracks]
+    counts = np.array([len(points) for _, _, points, _ in arrays])
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    total = int(counts.sum())
+    touched = np.full((total, 2), -1, dtype=np.int64)
+    groups: dict[tuple[int, int], list[int]] = {}
+    for run, bodies in enumerate(features):
+        for body, feature in enumerate(bodies):
+            if len(feature.centres):
+                groups.setdefault((body, len(feature.centres)), []).append(run)
+    for (body, _), runs in groups.items():
+        poses = np.concatenate([arrays[run][1][:, body] for run in runs])
+        angles = poses[:, 2].tolist()
+        cos = np.array([math.cos(angle) for angle in angles])
+        sin = np.array([math.sin(angle) for angle in angles])
+        rotations = np.empty((len(angles), 2, 2))
+        rotations[:, 0, 0] = rotations[:, 1, 1] = cos
+        rotations[:, 0, 1] = sin
+        rotations[:, 1, 0] = -sin
+        records = [len(arrays[run][1]) for run in runs]
+        centres = np.repeat(np.stack([features[run][body].centres for run in runs]), records,
+                            axis=0)
+        pose_offsets = np.concatenate([[0], np.cumsum(records)[:-1]])
+        pose_of = np.concatenate([arrays[run][3] + offset
+                                  for run, offset in zip(runs, pose_offsets)])
+        points = np.concatenate([arrays[run][2] for run in runs])
+        sizes = counts[runs]
+        radius = np.repeat([features[run][body].radius for run in runs], sizes)
+        reach = (np.repeat([tolerances.penetration * features[run][body].extent
+                            for run in runs], sizes) + np.maximum(points[:, 2], 0.0))
+        world = (centres @ rotations + poses[:, None, :2])[pose_of]
+        distances = np.hypot(world[:, :, 0] - points[:, None, 0],
+                             world[:, :, 1] - points[:, None, 1]) - radius[:, None]
+        within = distances.min(axis=1) <= reach
+        at = np.concatenate([np.arange(start, start + size)
+                             for start, size in zip(starts[runs], sizes)])
+        touched[at, body] = np.where(within, np.argmin(distances, axis=1), -1)
+    run_of = np.repeat(np.arange(len(tracks)), counts)
+    first = touched[starts][run_of]
+    other = (touched >= 0) & (touched != first)
+    other[starts] = False
+    return (np.bincount(run_of, weights=other.any(axis=1), minlength=len(tracks)) > 0).tolist()
 
 
 # --------------------------------------------------------------------------------------------
