@@ -29,7 +29,7 @@ from harness.engines import (
     load_engine,
     source_label,
 )
-from harness.survey.cli import run_survey
+from harness.survey.cli import run_survey, survey_scenes
 from harness.survey.engines import bare_stepping
 from harness.survey.population import resolve_populations
 
@@ -58,12 +58,13 @@ def run(samples: int, engines=ENGINE_NAMES, presets=PRESET_ROLES, seed: int = 0)
     run_survey(populations, samples, seed, installed, presets, workers=cores,
                echo=lambda _: None)
     survey_cores_s = time.perf_counter() - begin
+    scenes = survey_scenes(populations, samples, seed)
     bare = {}
     for result in survey["engine_results"]:
         bare[source_label(result.engine, result.preset)] = bare_stepping(
-            result.engine, result.preset, survey["scenes"], result.steps)["bare_reset_s"]
+            result.engine, result.preset, scenes, result.steps)["bare_reset_s"]
     bare_s = sum(bare.values())
-    return {"samples": samples, "impacts": len(survey["scenes"]), "engines": installed,
+    return {"samples": samples, "impacts": len(scenes), "engines": installed,
             "presets": list(presets), "survey_s": survey_s, "bare_s": bare_s,
             "ratio": survey_s / bare_s if bare_s > 0 else float("nan"),
             "cores": cores, "survey_cores_s": survey_cores_s,

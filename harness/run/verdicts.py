@@ -170,14 +170,19 @@ class Verdict:
         """The record status: the engine's when the verdict keeps it, else the first failing
         reason's name, else ``ok``. (The verdict drops the engine's ``multi-contact`` where it
         judges the features touched instead of counting points.)"""
-        judged = engine_status == "ok" or (engine_status in ENGINE_STATUS_REASONS
-                                           and engine_status not in self.names)
-        if not judged:
-            return engine_status
-        return self.failing[0].name if self.failing else "ok"
+        return _status(engine_status, self.names)
 
     def as_list(self) -> list[dict]:
         return [reason.as_dict() for reason in self.reasons]
+
+
+def _status(engine_status: str, names: Sequence[str]) -> str:
+    """:meth:`Verdict.status` of a verdict whose failing reasons are ``names``."""
+    judged = engine_status == "ok" or (engine_status in ENGINE_STATUS_REASONS
+                                       and engine_status not in names)
+    if not judged:
+        return engine_status
+    return names[0] if names else "ok"
 
 
 @dataclass(frozen=True)
@@ -497,6 +502,201 @@ def prepare_many(scenes: Sequence, problems: Sequence) -> list[SceneTerms]:
     return [prepare(scene, problem) for scene, problem in zip(scenes, problems, strict=True)]
 
 
+#: Columns of :class:`TermArrays` (two bodies × ``(v_x, v_y, ω)``; a ground scene is padded).
+ARRAY_WIDTH = 6
+#: How near its bound (relative to the rounding scale of the quantity) a value of the batched
+#: checks sends its run to :func:`judge`: the batched arithmetic (sums over the padded
+#: columns, a diagonal ``M`` divided out) rounds differently from :func:`judge`'s in the last
+#: bits, ~1e-16 of that scale; 1e-9 is a wide margin, and rarely reached (a value must lie
+#: within 1e-9 of its bound).
+NEAR = 1e-9
+
+
+@dataclass(frozen=True)
+class TermArrays:
+    """The :class:`SceneTerms` and impacts of many scenes as row arrays (:func:`term_arrays`),
+    for :func:`judge_many`. Rows whose mass matrix is not diagonal are ``diagonal`` False."""
+
+    mass: np.ndarray  # (n, 6) diagonal of M, 1 where padded
+    u: np.ndarray  # (n, 6) speeds before, 0 where padded
+    wn: np.ndarray  # (n, 6)
+    wt: np.ndarray  # (n, 6)
+    dofs: np.ndarray  # (n,) 3 or 6
+    diagonal: np.ndarray  # (n,) bool
+    delassus: np.ndarray  # (n, 3) SceneTerms.delassus
+    approach: np.ndarray  # (n,) SceneScales fields
+    impulse: np.ndarray
+    speed_norm: np.ndarray
+    energy: np.ndarray
+    size: np.ndarray
+    norm_before: np.ndarray  # (n,) SceneTerms.norm_before
+    one_feature: np.ndarray  # (n,) bool
+
+    def rows(self, begin: int, end: int) -> TermArrays:
+        """Rows ``begin:end``."""
+        return TermArrays(*(getattr(self, name)[begin:end] for name in self.__dataclass_fields__))
+
+
+def term_arrays(problems: Sequence, terms: Sequence[SceneTerms]) -> TermArrays:
+    """The :class:`TermArrays` of ``problems`` and their :func:`prepare` ``terms``."""
+    count = len(problems)
+    mass = np.ones((count, ARRAY_WIDTH))
+    u, wn, wt = (np.zeros((count, ARRAY_WIDTH)) for _ in range(3))
+    dofs = np.zeros(count, dtype=np.int64)
+    diagonal = np.zeros(count, dtype=bool)
+    for row, problem in enumerate(problems):
+        matrix = np.asarray(problem.mass_matrix, dtype=float)
+        size = len(problem.u)
+        if size > ARRAY_WIDTH:
+            continue  # not diagonal: judged one by one
+        dofs[row] = size
+        diagonal[row] = not np.count_nonzero(matrix - np.diag(np.diag(matrix)))
+        mass[row, :size] = np.diag(matrix)
+        u[row, :size], wn[row, :size], wt[row, :size] = problem.u, problem.wn, problem.wt
+    scales = [term.scales for term in terms]
+    return TermArrays(
+        mass, u, wn, wt, dofs, diagonal & np.all(mass > 0, axis=1),
+        np.array([term.delassus for term in terms], dtype=float).reshape(count, 3),
+        *(np.array([getattr(s, name) for s in scales], dtype=float)
+          for name in ("approach_speed", "impulse", "speed_norm", "energy", "size")),
+        np.array([term.norm_before for term in terms], dtype=float),
+        np.array([term.one_feature for term in terms], dtype=bool))
+
+
+def judge_many(scenes: Sequence, problems: Sequence, runs: Sequence, u_after: np.ndarray,
+               terms: Sequence[SceneTerms], arrays: TermArrays, *,
+               law_energy_change=None,
+               tolerances: Tolerances = DEFAULT_TOLERANCES) -> list[tuple[str, str]]:
+    """``(status, failing reasons comma-separated)`` of every engine run (``EngineRun``) of
+    ``scenes``: :func:`judge`'s ``Verdict.status`` and ``names``, the same to the last run.
+
+    The checks of :func:`judge` on every run at once, as arrays (``u_after``: the runs'
+    speeds, ``(n, 6)`` padded like :class:`TermArrays`; ``arrays``: :func:`term_arrays` of the
+    scenes). A run goes through :func:`judge` itself when the batch cannot settle it the same
+    way: an engine status other than ok or multi-contact, non-finite speeds, a mass matrix
+    that is not diagonal, or a value within :data:`NEAR` of its bound (where the batch's
+    roundings could decide otherwise). The second-feature check (``multi-contact``) is
+    :func:`judge`'s own, run by run.
+    """
+    count = len(runs)
+    if not count:
+        return []
+    tol = tolerances
+    status = [run.status.value for run in runs]
+    depths = [run.max_penetration for run in runs]
+    penetration = np.array([math.nan if depth is None else depth for depth in depths],
+                           dtype=float)
+    engine_impulse = np.full((count, 2), np.nan)
+    impulse_checked = np.zeros(count, dtype=bool)
+    run_caps = np.full((count, 2), np.nan)
+    for row, run in enumerate(runs):
+        if run.normal_impulse is not None and run.impulse_source != "momentum":
+            impulse_checked[row] = True
+            engine_impulse[row] = run.normal_impulse, run.tangential_impulse or 0.0
+        caps = _run_caps(run.derived or {})
+        if caps is not None:
+            run_caps[row] = caps
+    batched = (np.isin(status, ("ok", "multi-contact")) & np.isfinite(u_after).all(axis=1)
+               & arrays.diagonal & np.isfinite(penetration))
+    near = np.zeros(count, dtype=bool)
+    fails = {}
+    with np.errstate(all="ignore"):
+        # clipped: the run's own caps on |v| and |ω| (Box2D), else the engine's fixed ones
+        clipped = np.zeros(count, dtype=bool)
+        has_caps = ~np.isnan(run_caps[:, 0])
+        band = 1.0 - max(tol.cap, RUN_CAP_BAND)
+        for speeds in (arrays.u, u_after):
+            for body in range(ARRAY_WIDTH // 3):
+                present = has_caps & (arrays.dofs > 3 * body)
+                speed = np.hypot(speeds[:, 3 * body], speeds[:, 3 * body + 1])
+                rate = np.abs(speeds[:, 3 * body + 2])
+                for value, cap in ((speed, band * run_caps[:, 0]), (rate, band * run_caps[:, 1])):
+                    clipped |= present & (value >= cap)
+                    near |= present & (np.abs(value - cap) <= NEAR * np.abs(cap))
+        engines = {run.engine for run in runs}
+        for name in engines & set(SPEED_CAPS):
+            rows = np.array([run.engine == name for run in runs]) & ~has_caps
+            linear, angular = SPEED_CAPS[name]
+            bounds = np.array([linear, linear, angular] * (ARRAY_WIDTH // 3)) * (1.0 - tol.cap)
+            for speeds in (arrays.u, u_after):
+                clipped |= rows & (np.abs(speeds) >= bounds).any(axis=1)
+        fails["clipped"] = clipped
+        # not-separated
+        products = arrays.wn * u_after
+        vn_after = products.sum(axis=1)
+        bound = tol.separation * arrays.approach
+        fails["not-separated"] = vn_after < -bound
+        near |= np.abs(vn_after + bound) <= NEAR * (np.abs(products).sum(axis=1) + bound)
+        # penetration: the same product and comparison as _penetration
+        fails["penetration"] = ~(penetration <= tol.penetration * arrays.size)
+        # impulse-residual: (A22)/(A23) with M diagonal
+        delta = u_after - arrays.u
+        dvn, dvt = (arrays.wn * delta).sum(axis=1), (arrays.wt * delta).sum(axis=1)
+        mnn, mnt, mtt = arrays.delassus.T
+        det = mnn * mtt - mnt * mnt
+        conditioning = 1.0 + (mnn * mtt + mnt * mnt) / np.abs(det)
+        normal = (mtt * dvn - mnt * dvt) / det
+        tangential = (mnn * dvt - mnt * dvn) / det
+        explained = (arrays.wn * normal[:, None] + arrays.wt * tangential[:, None]) / arrays.mass
+        rest = np.sqrt(np.sum(arrays.mass * (delta - explained) ** 2, axis=1))
+        residual = rest / arrays.speed_norm
+        fails["impulse-residual"] = residual > tol.impulse_residual
+        spread = (np.sqrt(np.sum(arrays.mass * delta**2, axis=1))
+                  + np.sqrt(np.sum(arrays.mass * explained**2, axis=1))) / arrays.speed_norm
+        near |= ~(np.abs(residual - tol.impulse_residual) > NEAR * conditioning * (1.0 + spread))
+        # impulse-mismatch: the engine's own impulse against the implied one
+        gap = np.hypot(engine_impulse[:, 0] - normal, engine_impulse[:, 1] - tangential)
+        relative = gap / arrays.impulse
+        fails["impulse-mismatch"] = impulse_checked & (relative > tol.impulse)
+        sizes = (np.abs(engine_impulse).sum(axis=1) + np.abs(normal)
+                 + np.abs(tangential)) / arrays.impulse
+        near |= impulse_checked & ~(np.abs(relative - tol.impulse)
+                                    > NEAR * conditioning * (1.0 + sizes))
+        # energy-gain: only a gain beyond the law's fails
+        after = np.sum(arrays.mass * u_after**2, axis=1)
+        before = arrays.norm_before**2
+        gain = 0.5 * (after - before)
+        energy_bound = tol.energy * arrays.energy
+        rounding = NEAR * (after + before)
+        gains = gain > energy_bound
+        near |= ~(np.abs(gain - energy_bound) > rounding)
+        if law_energy_change is not None:
+            law = np.asarray(law_energy_change, dtype=float)
+            beyond = law + tol.energy_beyond_law * arrays.energy
+            by_law = (law > energy_bound) & (gain <= beyond)
+            near |= (law > energy_bound) & ~(np.abs(gain - beyond) > rounding + NEAR * np.abs(law))
+            gains &= ~by_law
+        fails["energy-gain"] = gains
+    batched &= ~near
+    checked = {name: flags.tolist() for name, flags in fails.items()}
+    tracks = {}
+    for row in np.flatnonzero(batched & ~arrays.one_feature).tolist():
+        track = ContactTrack.from_record(runs[row].contact_record)
+        if track.size >= 2:
+            tracks[row] = track
+    checked["multi-contact"] = [False] * count
+    for row, second in zip(tracks, _second_features_many(
+            list(tracks.values()), [terms[row].features for row in tracks], tol)):
+        checked["multi-contact"][row] = second
+    results = []
+    for row, run in enumerate(runs):
+        if not batched[row]:
+            gain = None if law_energy_change is None else float(law_energy_change[row])
+            verdict = judge(scenes[row], problems[row], numbers_from_run(run),
+                            law_energy_change=gain, tolerances=tol, terms=terms[row])
+            results.append((verdict.status(status[row]), ",".join(verdict.names)))
+            continue
+        names = tuple(name for name in _BATCHED_REASONS if checked[name][row])
+        results.append((_status(status[row], names), ",".join(names)))
+    return results
+
+
+#: The reasons :func:`judge_many` checks as arrays, in :data:`REASONS` order.
+_BATCHED_REASONS = tuple(name for name in REASONS
+                         if name in ("clipped", "multi-contact", "not-separated", "penetration",
+                                     "impulse-residual", "impulse-mismatch", "energy-gain"))
+
+
 def _penetration(run: RunNumbers, scales: SceneScales, tolerances: Tolerances) -> list[Reason]:
     """``penetration`` when the deepest overlap exceeds its bound (0 or 1 reason)."""
     if run.max_penetration is None:
@@ -730,6 +930,62 @@ def _second_features(scene, contacts: Sequence[StepContacts] | ContactTrack,
                    "was at " + (names[then] if then >= 0 else "a face") + ")")]
 
 
+def _second_features_many(tracks: Sequence[ContactTrack],
+                          features: Sequence[Sequence[BodyFeatures]],
+                          tolerances: Tolerances) -> list[bool]:
+    """Whether :func:`_second_features` finds a second feature, for many runs at once
+    (``tracks[i]`` of a scene whose bodies have ``features[i]``).
+
+    The arithmetic of :func:`_features_at`, operation for operation on the same operands
+    (math's cos and sin per pose, the same ``(k, 2) @ (2, 2)`` products per pose), over the
+    points of every run whose body has ``k`` point features at once.
+    """
+    if not tracks:
+        return []
+    arrays = [track._read() for track in tracks]
+    counts = np.array([len(points) for _, _, points, _ in arrays])
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    total = int(counts.sum())
+    touched = np.full((total, 2), -1, dtype=np.int64)
+    groups: dict[tuple[int, int], list[int]] = {}
+    for run, bodies in enumerate(features):
+        for body, feature in enumerate(bodies):
+            if len(feature.centres):
+                groups.setdefault((body, len(feature.centres)), []).append(run)
+    for (body, _), runs in groups.items():
+        poses = np.concatenate([arrays[run][1][:, body] for run in runs])
+        angles = poses[:, 2].tolist()
+        cos = np.array([math.cos(angle) for angle in angles])
+        sin = np.array([math.sin(angle) for angle in angles])
+        rotations = np.empty((len(angles), 2, 2))
+        rotations[:, 0, 0] = rotations[:, 1, 1] = cos
+        rotations[:, 0, 1] = sin
+        rotations[:, 1, 0] = -sin
+        records = [len(arrays[run][1]) for run in runs]
+        centres = np.repeat(np.stack([features[run][body].centres for run in runs]), records,
+                            axis=0)
+        pose_offsets = np.concatenate([[0], np.cumsum(records)[:-1]])
+        pose_of = np.concatenate([arrays[run][3] + offset
+                                  for run, offset in zip(runs, pose_offsets)])
+        points = np.concatenate([arrays[run][2] for run in runs])
+        sizes = counts[runs]
+        radius = np.repeat([features[run][body].radius for run in runs], sizes)
+        reach = (np.repeat([tolerances.penetration * features[run][body].extent
+                            for run in runs], sizes) + np.maximum(points[:, 2], 0.0))
+        world = (centres @ rotations + poses[:, None, :2])[pose_of]
+        distances = np.hypot(world[:, :, 0] - points[:, None, 0],
+                             world[:, :, 1] - points[:, None, 1]) - radius[:, None]
+        within = distances.min(axis=1) <= reach
+        at = np.concatenate([np.arange(start, start + size)
+                             for start, size in zip(starts[runs], sizes)])
+        touched[at, body] = np.where(within, np.argmin(distances, axis=1), -1)
+    run_of = np.repeat(np.arange(len(tracks)), counts)
+    first = touched[starts][run_of]
+    other = (touched >= 0) & (touched != first)
+    other[starts] = False
+    return (np.bincount(run_of, weights=other.any(axis=1), minlength=len(tracks)) > 0).tolist()
+
+
 # --------------------------------------------------------------------------------------------
 # Declared simultaneous contacts: a face lying flat (contacts = "simultaneous")
 # --------------------------------------------------------------------------------------------
@@ -914,5 +1170,6 @@ __all__ = ["DEFAULT_TOLERANCES", "REASONS", "SPEED_CAPS", "BodyFeatures", "Conta
            "Reason", "RunNumbers", "SceneScales", "SceneTerms", "StepContacts", "Tolerances",
            "Verdict", "body_features", "declared_contacts", "declared_impulses",
            "declared_scales", "feature_at", "feature_points", "impulse_from_velocities",
-           "judge", "judge_declared", "numbers_from_output", "numbers_from_run",
-           "prepare", "prepare_many", "reason_counts", "scene_scales"]
+           "TermArrays", "judge", "judge_declared", "judge_many", "numbers_from_output",
+           "numbers_from_run", "prepare", "prepare_many", "reason_counts", "scene_scales",
+           "term_arrays"]

@@ -12,6 +12,7 @@ the same impacts, in the same run, and prints it beside the survey's time.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from pathlib import Path
@@ -27,11 +28,11 @@ from harness.engines import (
     preset_role,
     source_label,
 )
-from harness.run import verdicts
 from harness.scenarios.errors import ScenarioError
 from harness.survey import laws as survey_laws
 from harness.survey import outputs, statistics
-from harness.survey.engines import bare_stepping, run_pairs
+from harness.survey.engines import bare_stepping
+from harness.survey.parts import run_parts
 from harness.survey.population import resolve_populations
 from harness.survey.sampling import sample_population
 
@@ -85,33 +86,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: bool = False,
                left_out=None, workers: int | None = None, echo=print) -> dict:
     """The survey in memory: ``{"samples", "runs", "statistics", "rejections", "timings",
-    "engine_results", "skipped", "left_out", "scenes"}`` (columns as ``{name: array}``).
+    "engine_results", "skipped", "left_out"}`` (columns as ``{name: array}``).
 
     ``left_out``: ``{(engine, preset): why}`` pairs not run (:data:`DEFAULT_LEFT_OUT` when
     the user named no preset); they are listed in the summary, not dropped silently.
-    ``workers``: processes for the engine runs (default: every core; the result does not
-    depend on it, harness/survey/engines.py ``run_pairs``). Per-pair ``engine`` and
-    ``verdicts`` timings are seconds on one core, summed over the pair's slices.
+    ``workers``: processes (default: every core; the result does not depend on it,
+    harness/survey/parts.py): each samples, solves, runs and judges parts of the samples.
+    The sampling, laws, verdict-terms and per-pair ``engine`` and ``verdicts`` timings are
+    seconds on one core, summed over the parts.
     """
     left_out = dict(left_out or {})
     clock = time.perf_counter
-    timings: dict[str, tuple[float, int]] = {}
-    begin = clock()
-    sets = [sample_population(population, samples, seed) for population in populations]
-    every = [sample for sample_set in sets for sample in sample_set.samples]
-    timings["sampling"] = (clock() - begin, len(every))
-    echo(f"sampled {len(every)} impacts from {len(sets)} populations "
-         f"in {timings['sampling'][0]:.2f} s")
-
-    begin = clock()
-    terms = survey_laws.contact_terms(every)
-    law_results = survey_laws.solve_laws(terms)
-    routh = survey_laws.routh_coordinates(terms)
-    timings["laws (contact terms + solve_batch × 5)"] = (clock() - begin, len(every))
-
-    scenes = [sample.scene for sample in every]
-    family = np.asarray([sample.population for sample in every])
-    index = np.asarray([sample.index for sample in every])
     pairs, skipped = [], {}
     for engine in engines:
         try:
@@ -122,51 +107,68 @@ def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: 
             continue
         pairs += [(engine, preset) for preset in presets if (engine, preset) not in left_out]
     begin = clock()
-    scene_terms = verdicts.prepare_many(scenes, terms.problems)
-    timings["verdict terms (once per scene)"] = (clock() - begin, len(scenes))
+    survey = run_parts(populations, samples, seed, pairs, workers or os.cpu_count() or 1)
+    wall = clock() - begin
+    impacts = samples * len(populations)
+    terms, results = survey.terms, survey.results
+    echo(f"sampled {impacts} impacts from {len(populations)} populations in "
+         f"{survey.timings['sampling']:.2f} s; {survey.parts} parts in {wall:.2f} s")
     begin = clock()
-    results = run_pairs(pairs, scenes, terms.problems,
-                        law_results["newton-lcp"].batch.energy_change, scene_terms,
-                        workers=workers)
-    timings["engines and verdicts (wall, every pair)"] = (clock() - begin,
-                                                          len(scenes) * len(pairs))
+    law_results = survey_laws.solve_laws(terms)
+    routh = survey_laws.routh_coordinates(terms)
+    timings: dict[str, tuple[float, int]] = {
+        "sampling": (survey.timings["sampling"], impacts),
+        "laws (contact terms + solve_batch × 5)": (survey.timings["laws"] + clock() - begin,
+                                                   impacts),
+        "verdict terms (once per scene)": (survey.timings["verdict terms"], impacts),
+        "parts (wall: sampling, laws, engines, verdicts)": (wall, impacts * max(len(pairs), 1)),
+    }
+    scenes = survey_scenes(populations, samples, seed) if bare and results else None
     for result in results:
         engine, preset = result.engine, result.preset
-        timings[f"engine {engine} {preset}"] = (result.wall_s, len(scenes))
-        timings[f"verdicts {engine} {preset}"] = (result.judge_s, len(scenes))
-        echo(f"{engine} {preset}: {len(scenes)} impacts in {result.wall_s:.2f} s "
-             f"({result.wall_s / len(scenes) * 1e6:.0f} µs each), verdicts "
+        timings[f"engine {engine} {preset}"] = (result.wall_s, impacts)
+        timings[f"verdicts {engine} {preset}"] = (result.judge_s, impacts)
+        echo(f"{engine} {preset}: {impacts} impacts in {result.wall_s:.2f} s "
+             f"({result.wall_s / impacts * 1e6:.0f} µs each), verdicts "
              f"{result.judge_s:.2f} s")
         if bare:
             bare_times = bare_stepping(engine, preset, scenes, result.steps)
-            timings[f"bare {engine} {preset} (steps only)"] = (bare_times["bare_s"],
-                                                               len(scenes))
+            timings[f"bare {engine} {preset} (steps only)"] = (bare_times["bare_s"], impacts)
             timings[f"bare {engine} {preset} (reset + steps)"] = (
-                bare_times["bare_reset_s"], len(scenes))
+                bare_times["bare_reset_s"], impacts)
             echo(f"  bare stepping of the same impacts: {bare_times['bare_s']:.3f} s, "
                  f"with the reset {bare_times['bare_reset_s']:.3f} s")
 
     begin = clock()
+    family = np.asarray([row.population for row in survey.rows])
+    index = np.asarray([row.index for row in survey.rows])
     runs = statistics.run_columns(family, index, terms, law_results, routh, results)
     stats = statistics.statistics(runs) if results else {}
-    timings["departures + statistics"] = (clock() - begin, len(family) * max(len(results), 1))
+    timings["departures + statistics"] = (clock() - begin, impacts * max(len(results), 1))
     return {
-        "samples": sample_columns(every, terms, law_results, routh),
+        "samples": sample_columns(survey.rows, terms, law_results, routh),
         "runs": runs,
         "statistics": stats,
-        "rejections": {s.population.name: dict(s.rejections) for s in sets},
+        "rejections": {population.name: rejected
+                       for population, rejected in zip(populations, survey.rejections)},
         "timings": timings,
         "engine_results": results,
         "skipped": skipped,
         "left_out": {source_label(engine, preset): why
                      for (engine, preset), why in left_out.items()
                      if engine in engines and preset in presets and engine not in skipped},
-        "scenes": scenes,
     }
 
 
+def survey_scenes(populations, samples: int, seed: int) -> list:
+    """The scenes of the survey's samples, in its row order (for the bare stepping)."""
+    return [sample.scene for population in populations
+            for sample in sample_population(population, samples, seed).samples]
+
+
 def sample_columns(every, terms, law_results, routh) -> dict:
-    """Columns of ``samples.parquet``."""
+    """Columns of ``samples.parquet`` (``every``: the samples, or their
+    :class:`harness.survey.parts.SampleRow`)."""
     keys = list(dict.fromkeys(key for sample in every for key in sample.parameters))
     columns = {
         "family": np.asarray([s.population for s in every]),

@@ -17,7 +17,6 @@ tight loop, from the adapter's start state, the reset outside (``bare_s``) and i
 
 from __future__ import annotations
 
-import os
 import time
 from dataclasses import dataclass
 
@@ -25,7 +24,6 @@ import numpy as np
 
 from harness.engines import STATUSES, load_engine
 from harness.run import verdicts
-from harness.run.executor import map_forked
 from harness.survey.laws import WIDTH
 
 #: Scenes handed to ``run_many`` at once: the runs (with their contact records) of one slice
@@ -50,13 +48,15 @@ class EngineResults:
 
 
 def run_engine(engine_name: str, preset: str, scenes, problems=None,
-               law_energy_change=None, terms=None) -> EngineResults:
+               law_energy_change=None, terms=None, arrays=None) -> EngineResults:
     """Run every scene through ``engine_name`` at ``preset`` and judge every run.
 
     ``problems``: each scene's ``ImpactProblem`` (the verdicts' input; None: not judged, the
     status is the engine's); ``law_energy_change``: newton-lcp's energy change per scene (J),
     to attribute an energy gain to the law (docs/verdicts.md); ``terms``: the scenes'
-    :func:`harness.run.verdicts.prepare` (worked out here when None).
+    :func:`harness.run.verdicts.prepare` and ``arrays`` their
+    :func:`harness.run.verdicts.term_arrays` (worked out here when None). The runs are judged
+    slice by slice with :func:`harness.run.verdicts.judge_many`, :func:`judge`'s verdicts.
     """
     engine = load_engine(engine_name)
     settings = engine.settings(preset)  # one dict for every run: the adapters cache on it
@@ -68,98 +68,37 @@ def run_engine(engine_name: str, preset: str, scenes, problems=None,
     steps = np.zeros(count, dtype=np.int64)
     wall = judging = 0.0
     clock = time.perf_counter
-    if problems is not None and terms is None:
+    if problems is not None and (terms is None or arrays is None):
         tick = clock()
-        terms = verdicts.prepare_many(scenes, problems)
+        terms = verdicts.prepare_many(scenes, problems) if terms is None else terms
+        arrays = verdicts.term_arrays(problems, terms) if arrays is None else arrays
         judging += clock() - tick
     for begin in range(0, count, SLICE):
         tick = clock()
         runs = engine.run_many(scenes[begin:begin + SLICE], settings)
         wall += clock() - tick
         tick = clock()
+        end = begin + len(runs)
         for row, run in enumerate(runs, start=begin):
-            speeds = run.u_after
-            velocities[row, :len(speeds)] = speeds
-            engine_status[row] = status[row] = run.status.value
+            speeds = run.velocities
+            velocities[row, :3 * len(speeds)] = [value for body in speeds for value in body]
+            engine_status[row] = run.status.value
             steps[row] = run.steps
-            if problems is not None:
-                gain = None if law_energy_change is None else float(law_energy_change[row])
-                verdict = verdicts.judge(scenes[row], problems[row],
-                                         verdicts.numbers_from_run(run),
-                                         law_energy_change=gain, terms=terms[row])
-                status[row] = verdict.status(run.status.value)
-                reasons[row] = ",".join(verdict.names)
+        if problems is None:
+            status[begin:end] = engine_status[begin:end]
+        else:
+            judged = verdicts.judge_many(
+                scenes[begin:end], problems[begin:end], runs, velocities[begin:end],
+                terms[begin:end], arrays.rows(begin, end),
+                law_energy_change=(None if law_energy_change is None
+                                   else law_energy_change[begin:end]))
+            for row, (verdict_status, names) in enumerate(judged, start=begin):
+                status[row], reasons[row] = verdict_status, names
         judging += clock() - tick
     assert set(engine_status) <= set(STATUSES), set(engine_status) - set(STATUSES)
     return EngineResults(engine_name, engine.version, preset, velocities,
                          engine_status.astype(str), status.astype(str), reasons.astype(str),
                          steps, wall, judging)
-
-
-#: Scenes of one ``run_engine`` task in :func:`run_pairs` (a pair's scenes are cut into
-#: slices so that two cores share the work of its costliest pair; any slice size gives the
-#: same runs, since ``run_many`` equals ``run`` scene by scene).
-PAIR_SLICE = 1024
-#: Relative cost per impact of each engine (measured with ``impact-harness bench --survey``):
-#: the costliest tasks start first, so the last task to finish is a short one.
-_ENGINE_COST = {"mujoco": 4.0, "pybullet": 3.0, "box2d": 2.0, "pymunk": 1.0}
-#: What the forked workers of :func:`run_pairs` read: ``(scenes, problems, energy, terms)``.
-_SHARED: tuple = ()
-
-
-def run_pairs(pairs, scenes, problems, law_energy_change, terms=None,
-              workers: int | None = None) -> list[EngineResults]:
-    """:func:`run_engine` of every ``(engine, preset)`` pair over ``scenes``, in pair order.
-
-    With more than one worker the pairs are cut into slices of :data:`PAIR_SLICE` scenes
-    and run in a pool of forked processes, which read the scenes, problems and verdict terms
-    (``terms``: :func:`harness.run.verdicts.prepare_many`, worked out here when None) from
-    this process's memory (pickling them cost more than judging them); the slices of a
-    pair are joined in scene order, so the result is the same for any ``workers``.
-    ``wall_s`` and ``judge_s`` are summed over the slices (time spent on one core).
-    """
-    global _SHARED
-    count = len(scenes)
-    slices = max(1, len(pairs)) * max(1, -(-count // PAIR_SLICE))
-    workers = min(workers or os.cpu_count() or 1, slices)
-    if problems is not None and terms is None:
-        terms = verdicts.prepare_many(scenes, problems)
-    tasks = [(engine, preset, begin, min(begin + PAIR_SLICE, count))
-             for engine, preset in pairs for begin in range(0, count, PAIR_SLICE)]
-    tasks.sort(key=lambda task: -_ENGINE_COST.get(task[0], 1.0) * (task[3] - task[2]))
-    _SHARED = (scenes, problems, law_energy_change, terms)
-    try:
-        parts = dict(zip(tasks, map_forked(_run_slice, tasks, workers)))
-    finally:
-        _SHARED = ()
-    joined = []
-    for engine, preset in pairs:
-        slices = [parts[task] for task in sorted(
-            (task for task in parts if task[:2] == (engine, preset)), key=lambda t: t[2])]
-        joined.append(_join(slices))
-    return joined
-
-
-def _run_slice(task) -> EngineResults:
-    engine, preset, begin, end = task
-    scenes, problems, energy, terms = _SHARED
-    return run_engine(engine, preset, scenes[begin:end],
-                      None if problems is None else problems[begin:end],
-                      None if energy is None else energy[begin:end],
-                      None if terms is None else terms[begin:end])
-
-
-def _join(slices: list[EngineResults]) -> EngineResults:
-    """One pair's slices, in scene order, as one :class:`EngineResults`."""
-    first = slices[0]
-    return EngineResults(
-        first.engine, first.engine_version, first.preset,
-        np.concatenate([part.velocities for part in slices]),
-        np.concatenate([part.engine_status for part in slices]),
-        np.concatenate([part.status for part in slices]),
-        np.concatenate([part.reasons for part in slices]),
-        np.concatenate([part.steps for part in slices]),
-        sum(part.wall_s for part in slices), sum(part.judge_s for part in slices))
 
 
 def bare_stepping(engine_name: str, preset: str, scenes, steps) -> dict[str, float]:

@@ -225,8 +225,15 @@ def check_scene(scene: Scene, exact=None, one_point_count: int | None = None) ->
 def sample_population(population: Population, count: int, seed: int) -> SampleSet:
     """``count`` accepted samples of ``population``; raises :class:`ScenarioError` when a
     sample needs more than ``population.max_attempts`` draws (the file names the remedy)."""
+    return sample_range(population, 0, count, seed)
+
+
+def sample_range(population: Population, begin: int, end: int, seed: int) -> SampleSet:
+    """Samples ``begin`` to ``end − 1`` of ``population`` (those of :func:`sample_population`:
+    each from its own generator) and the draws they rejected. A :class:`ScenarioError` for a
+    sample that needs too many draws carries its index as ``sample``."""
     result = SampleSet(population, seed)
-    for index in range(count):
+    for index in range(begin, end):
         rng = sample_generator(seed, population.name, index)
         reasons: dict[str, int] = {}
         for attempt in range(1, population.max_attempts + 1):  # noqa: B007 - read after the loop
@@ -237,11 +244,13 @@ def sample_population(population: Population, count: int, seed: int) -> SampleSe
             reasons[reason] = reasons.get(reason, 0) + 1
         else:
             worst = max(reasons, key=reasons.get)
-            raise ScenarioError(
+            error = ScenarioError(
                 f"sample {index} (seed {seed}) was rejected {population.max_attempts} times, "
                 f"mostly {worst!r}: {REJECTIONS[worst]}", path=population.path,
                 key="max_attempts", value=population.max_attempts,
                 allowed="narrower distributions that give touching, approaching, one-point "
                         "contacts, or a larger max_attempts")
+            error.sample = index
+            raise error
         result.samples.append(Sample(population.name, index, scene, contact, drawn, attempt))
     return result

@@ -118,32 +118,58 @@ def linear_quantile(ordered: list, q: float) -> float:
 def statistics(runs: dict) -> dict:
     """Columns of ``statistics.parquet``: one row per engine × preset × family × Poisson type,
     plus a row per engine × preset × family over every type (``poisson_type`` = 0)."""
-    keys = list(zip(runs["engine"].tolist(), runs["preset"].tolist(), runs["family"].tolist(),
-                    runs["poisson_type"].tolist()))
-    groups: dict[tuple, list[int]] = {}
-    for row, (engine, preset, family, kind) in enumerate(keys):
-        groups.setdefault((engine, preset, family, int(kind)), []).append(row)
-        groups.setdefault((engine, preset, family, ALL_TYPES), []).append(row)
+    count = len(runs["engine"])
+    if not count:
+        return {}
+    # Each key column as codes in sorted order, so the groups come out sorted as tuples.
+    names, codes = zip(*(np.unique(np.asarray(runs[key]), return_inverse=True)
+                         for key in ("engine", "preset", "family")))
+    kinds = np.asarray(runs["poisson_type"]).astype(np.int64)
+    kind_names, kind_codes = np.unique(np.concatenate([kinds, np.full(count, ALL_TYPES)]),
+                                       return_inverse=True)
+    # every run twice: under its Poisson type and under every type
+    pair = np.concatenate([codes[0] * len(names[1]) + codes[1]] * 2)
+    family = np.concatenate([codes[2]] * 2)
+    group = (pair * len(names[2]) + family) * len(kind_names) + kind_codes
+    rows_of = np.tile(np.arange(count), 2)
+    order = np.argsort(group, kind="stable")
+    present, starts, sizes = np.unique(group[order], return_index=True, return_counts=True)
+    member = rows_of[order]  # runs, group after group
     # Per run, once: one-impact or not, and each reason it fails (a run failing several
-    # reasons counts under each).
-    ok_runs = runs["status"] == "ok"
-    failing = [set(filter(None, text.split(","))) for text in runs["reasons"].tolist()]
-    fails = np.array([[name in names for names in failing] for name in verdicts.REASONS],
-                     dtype=bool).reshape(len(verdicts.REASONS), len(failing))
+    # reasons counts under each); the reasons' texts are few, each split once.
+    ok_runs = np.asarray(runs["status"]) == "ok"
+    texts, text_of = np.unique(np.asarray(runs["reasons"]), return_inverse=True)
+    failing = [set(filter(None, text.split(","))) for text in texts.tolist()]
+    fails = np.array([[name in names_ for names_ in failing] for name in verdicts.REASONS],
+                     dtype=bool).reshape(len(verdicts.REASONS), len(texts))[:, text_of]
+    group_of = np.repeat(np.arange(len(present)), sizes)
+    n_ok = np.bincount(group_of, weights=ok_runs[member], minlength=len(present))
+    flagged = [np.bincount(group_of, weights=fails[place][member], minlength=len(present))
+               for place in range(len(verdicts.REASONS))]
+    ok_member = ok_runs[member]
+    gains = np.asarray(runs["gains_energy"])[member]
+    gains_ok = np.bincount(group_of, weights=gains & ok_member, minlength=len(present))
+    columns = {column: np.asarray(runs[column])[member]
+               for column in ("departure_poisson", "departure_stronge", "law_part",
+                              "solve_part")}
     rows = []
-    for (engine, preset, family, kind), indices in sorted(groups.items()):
-        index = np.asarray(indices)
-        size = int(index.size)
-        ok = ok_runs[index]
-        n_ok = int(ok.sum())
-        row = {"engine": engine, "preset": preset, "family": family, "poisson_type": kind,
-               "n": size, "n_ok": n_ok, "flagged_fraction": 1.0 - n_ok / size}
-        for name, count in zip(verdicts.REASONS, fails[:, index].sum(axis=1).tolist()):
-            row[f"flagged_{name}"] = count / size
-        ok_index = index[ok]
-        row["energy_gain_fraction"] = (int(runs["gains_energy"][ok_index].sum()) / n_ok
-                                       if n_ok else math.nan)
-        for column in ("departure_poisson", "departure_stronge", "law_part", "solve_part"):
-            row.update(_quantiles(runs[column][ok_index], column))
+    pairs, families = len(names[1]), len(names[2])
+    for place, (code, start, size) in enumerate(zip(present.tolist(), starts.tolist(),
+                                                    sizes.tolist())):
+        kind = int(kind_names[code % len(kind_names)])
+        rest = code // len(kind_names)
+        family_code, pair_code = rest % families, rest // families
+        ok_count = int(n_ok[place])
+        row = {"engine": str(names[0][pair_code // pairs]),
+               "preset": str(names[1][pair_code % pairs]),
+               "family": str(names[2][family_code]), "poisson_type": kind,
+               "n": size, "n_ok": ok_count, "flagged_fraction": 1.0 - ok_count / size}
+        for name, counted in zip(verdicts.REASONS, flagged):
+            row[f"flagged_{name}"] = int(counted[place]) / size
+        row["energy_gain_fraction"] = (int(gains_ok[place]) / ok_count if ok_count
+                                       else math.nan)
+        ok_here = ok_member[start:start + size]
+        for column, values in columns.items():
+            row.update(_quantiles(values[start:start + size][ok_here], column))
         rows.append(row)
-    return {key: np.asarray([row[key] for row in rows]) for key in rows[0]} if rows else {}
+    return {key: np.asarray([row[key] for row in rows]) for key in rows[0]}

@@ -389,7 +389,7 @@ def test_survey_runs_get_the_reference_verdicts(engine_name, preset, survey_scen
 @pytest.mark.parametrize(("engine_name", "preset"), PAIRS)
 def test_the_survey_columns_are_the_reference_verdicts(engine_name, preset, survey_scenes):
     """``run_engine``'s status and reasons, judged with the scene terms it works out or is
-    given (as ``run_pairs`` gives them), are those of the reference (runs are deterministic:
+    given (as the survey's parts give them), are those of the reference (runs are deterministic:
     ``run_many`` again)."""
     engine = engine_or_skip(engine_name)
     scenes, problems, lcp = survey_scenes
