@@ -16,6 +16,13 @@ def write_text_atomically(path: Path, text: str, *, prefix: str | None = None,
     ``make_parent`` creates the directory first, once more if it vanishes between the
     ``mkdir`` and the temporary file (a cache removed with ``rm -rf`` during a run).
     """
+    return write_bytes_atomically(path, text.encode("utf-8"), prefix=prefix,
+                                  make_parent=make_parent)
+
+
+def write_bytes_atomically(path: Path, data: bytes, *, prefix: str | None = None,
+                           make_parent: bool = False) -> Path:
+    """:func:`write_text_atomically` for bytes."""
     path = Path(path)
     prefix = prefix or f".{path.name}-"
     for attempt in (1, 2):
@@ -29,8 +36,8 @@ def write_text_atomically(path: Path, text: str, *, prefix: str | None = None,
             if attempt == 2 or not make_parent:
                 raise
     try:
-        with os.fdopen(descriptor, "w", encoding="utf-8") as handle:
-            handle.write(text)
+        with os.fdopen(descriptor, "wb") as handle:
+            handle.write(data)
         os.replace(temporary, path)
     except BaseException:
         try:
