@@ -33,11 +33,13 @@ velocities of the right shape): both are listed in :attr:`ResultCache.rejected`.
 from __future__ import annotations
 
 import hashlib
+import itertools
 import json
 import math
 import os
 import sys
 import time
+import zlib
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
@@ -64,6 +66,11 @@ CACHE_FORMAT = 1  # bump when the record layout changes
 CACHE_DIR_VARIABLE = "IMPACT_HARNESS_CACHE_DIR"
 #: A temporary file older than this (s) belongs to a writer that died: removed.
 STALE_TEMPORARY_S = 60.0
+#: The scenario checks' store in the cache's directory
+#: (:class:`harness.scenarios.checks.PassedChecks`), and the names it had before (removed by
+#: ``prune``: they hold no code version).
+SCENARIO_CHECKS_STORE = "scenario-checks.pickle"
+OLD_CHECKS_STORES = ("scenario-checks.json",)
 
 
 def default_cache_dir() -> Path:
@@ -238,27 +245,56 @@ class ResultCache:
         """The ``(value, line)`` pairs stored by :meth:`put_lines`, or ``None`` (a miss).
 
         Outside :attr:`stats`. A file that is not whole (truncated, a line missing or not
-        JSON, another key) or whose values ``check(values)`` rejects (``None``: usable, else
-        why not) is a miss listed in :attr:`rejected`.
+        JSON, another key, a checksum that differs) or whose values ``check(values)`` rejects
+        (``None``: usable, else why not) is a miss listed in :attr:`rejected`.
+        """
+        entry = self.get_line_texts(key)
+        if entry is None:
+            return None
+        _, lines = entry
+        try:
+            values = _parse_lines(lines)
+            reason = None if check is None else check(values)
+            if reason is not None:
+                raise ValueError(reason)
+        except ValueError as error:
+            self.rejected.append(f"{self.lines_path(key)}: {error}")
+            return None
+        return list(zip(values, lines))
+
+    def get_line_texts(self, key: str, check_summary=None) -> tuple[Any, list[str]] | None:
+        """``(summary, lines)`` stored by :meth:`put_lines`, the lines as text (not parsed),
+        or ``None`` (a miss).
+
+        Outside :attr:`stats`. The entry must be whole: its key, as many lines as the header
+        counts, each a JSON object's text, and their CRC-32 as stored (an entry changed after
+        it was written is a miss); ``check_summary(summary)`` (``None``: usable, else why not)
+        may reject it. A rejected entry is listed in :attr:`rejected`.
         """
         if not self.enabled:
             return None
         path = self.lines_path(key)
         try:
-            with open(path, encoding="utf-8", newline="") as handle:
-                text = handle.read()
-            head, _, body = text.partition("\n")
-            header = json.loads(head)
+            with open(path, "rb") as handle:
+                data = handle.read()
+            head_end = data.find(b"\n")
+            header = json.loads(data[:head_end if head_end >= 0 else len(data)])
             if (not isinstance(header, dict) or header.get("key") != key
                     or not isinstance(header.get("count"), int)):
                 raise ValueError("not a cache entry")
-            if not text.endswith("\n"):
+            if not data.endswith(b"\n"):
                 raise ValueError("truncated")
+            body_bytes = memoryview(data)[head_end + 1:]
+            if header.get("crc32") != zlib.crc32(body_bytes):
+                raise ValueError("checksum differs: changed after it was written")
+            body = str(body_bytes, "utf-8")
             lines = body.split("\n")[:-1]  # never splitlines: U+2028 may sit inside a string
             if len(lines) != header["count"]:
                 raise ValueError(f"{len(lines)} lines, not {header['count']}")
-            values = _parse_lines(lines)
-            reason = None if check is None else check(values)
+            if not all(line[:1] == "{" and line[-1:] == "}" for line in lines):
+                raise ValueError("a line that is not a JSON object")
+            summary = header.get("summary")
+            reason = None if check_summary is None else check_summary(summary)
             if reason is not None:
                 raise ValueError(reason)
         except FileNotFoundError:
@@ -266,29 +302,43 @@ class ResultCache:
         except (OSError, ValueError) as error:  # UnicodeDecodeError is a ValueError
             self.rejected.append(f"{path}: {error}")
             return None
-        return list(zip(values, lines))
+        return summary, lines
 
-    def put_lines(self, key: str, lines: list[str]) -> None:
+    def put_lines(self, key: str, lines: list[str], summary: Any = None) -> None:
         """Store one-line JSON texts under ``key``: a header line (the key, the code version,
-        how many lines follow), then the lines; atomic; no-op when disabled. A line holding a
-        newline is a ``ValueError``. Raises ``OSError`` as :meth:`put` does."""
+        how many lines follow, their CRC-32 and ``summary``, a JSON-able value the reader
+        gets without parsing the lines), then the lines; atomic; no-op when disabled. A line
+        holding a newline is a ``ValueError``. Raises ``OSError`` as :meth:`put` does."""
         if not self.enabled:
             return
         if any("\n" in line for line in lines):
             raise ValueError("a cache line holds a newline")
-        header = json.dumps({"key": key, "code_version": self.version, "count": len(lines)})
-        text = "".join(f"{line}\n" for line in (header, *lines))
-        write_text_atomically(self.lines_path(key), text, prefix=f".{key[:8]}-",
+        body = "".join(f"{line}\n" for line in lines)
+        header = json.dumps({"key": key, "code_version": self.version, "count": len(lines),
+                             "crc32": zlib.crc32(body.encode("utf-8")), "summary": summary},
+                            ensure_ascii=False, allow_nan=False)
+        write_text_atomically(self.lines_path(key), f"{header}\n{body}", prefix=f".{key[:8]}-",
                               make_parent=True)
 
     def _entries(self):
+        """Every entry's path: the keyed entries and the scenario checks' store."""
         if not self.root.is_dir():
             return iter(())
-        return (path for pattern in ("??/*.json", "??/*.jsonl") for path in self.root.glob(pattern))
+        stores = (self.root / name for name in (SCENARIO_CHECKS_STORE, *OLD_CHECKS_STORES))
+        return itertools.chain(
+            (path for pattern in ("??/*.json", "??/*.jsonl") for path in self.root.glob(pattern)),
+            (path for path in stores if path.is_file()))
 
     @staticmethod
     def _stored_version(path: Path) -> Any:
-        """The code version an entry was written by (its first line for a ``.jsonl``)."""
+        """The code version an entry was written by (its first line for a ``.jsonl``; the
+        scenario checks' store keeps it in its pickled header dict)."""
+        if path.name == SCENARIO_CHECKS_STORE:
+            import pickle
+
+            with open(path, "rb") as handle:
+                stored = pickle.load(handle)  # written by this user's runs (root is theirs)
+            return stored.get("code_version")
         with open(path, encoding="utf-8") as handle:
             stored = json.loads(handle.readline() if path.suffix == ".jsonl" else handle.read())
         return stored.get("code_version")
@@ -333,7 +383,7 @@ class ResultCache:
                 if other_versions and not old:
                     try:
                         stale = self._stored_version(path) != self.version
-                    except (ValueError, AttributeError):
+                    except Exception:  # noqa: BLE001 - unreadable (not JSON, not a pickle)
                         stale = True
                 if old or stale:
                     path.unlink()
