@@ -53,9 +53,9 @@ class _CountingCache(ResultCache):
             self.lookups += 1
         return super().get(key, check, count=count)
 
-    def get_lines(self, key, check=None):
+    def get_line_texts(self, key, check_summary=None):
         self.lookups += 1
-        return super().get_lines(key, check)
+        return super().get_line_texts(key, check_summary)
 
 
 def test_a_warm_run_reads_one_entry_per_scenario_and_equals_the_cold_run(tmp_path):
@@ -72,6 +72,20 @@ def test_a_warm_run_reads_one_entry_per_scenario_and_equals_the_cold_run(tmp_pat
     assert cache.hits == engine_runs and cache.misses == 0  # counted as engine runs spared
     assert warm.provenance["cache"]["engine_runs"] == cold.provenance["cache"]["engine_runs"]
     assert not warm.warnings
+
+
+def test_warm_records_equal_those_of_a_run_without_the_cache_kept_once(tmp_path):
+    flat = load_scenario(SCENARIO_DIR / "flat-rod.toml")  # a several-contact reference
+    fresh = _run([ROD, flat], None)
+    _run([ROD, flat], ResultCache(tmp_path))
+    stored = [json.loads(path.read_text(encoding="utf-8"))["record"]
+              for path in tmp_path.glob("??/*.json")]
+    # engine runs and the flat face's reference; a point's records only in its scenario's
+    assert sorted("velocities" in entry for entry in stored) == [False] + [True] * 4
+    assert not any("records" in entry for entry in stored)
+    warm = _run([ROD, flat], ResultCache(tmp_path))
+    assert [_comparable(r) for r in warm.records] == [_comparable(r) for r in fresh.records]
+    assert warm.scenarios == fresh.scenarios
 
 
 def _results_without_timing(path) -> dict:
@@ -263,3 +277,17 @@ def test_cache_info_and_prune_see_the_scenario_entries(tmp_path):
     assert cache.prune()["entries"] == 1  # written by other code
     assert [path.name for path in _scenario_entries(tmp_path)] == ["b" * 64 + ".jsonl"]
     assert cache.get_lines("b" * 64) == [({"x": 2}, '{"x":2}')]
+
+
+def test_records_built_on_forked_workers_equal_those_built_inline(tmp_path, monkeypatch):
+    scenarios = [ROD, SWEEP, TWO_SLED, load_scenario(SCENARIO_DIR / "flat-rod.toml")]
+    inline = _run(scenarios, ResultCache(tmp_path / "inline"))
+    monkeypatch.setattr(runner, "MIN_PARALLEL_RECORDS", 1)
+    forked = runner.run(scenarios, engines=ENGINES, cache=ResultCache(tmp_path / "forked"),
+                        log=None, workers=2)
+    assert forked._records == [None] * len(inline.records)  # lines came back, not records
+    assert [_comparable(r) for r in forked.records] == [_comparable(r) for r in inline.records]
+    assert forked.scenarios == inline.scenarios and forked.gates == inline.gates
+    # each worker stored its scenarios' entries, as the inline build does
+    assert ([path.name for path in _scenario_entries(tmp_path / "forked")]
+            == [path.name for path in _scenario_entries(tmp_path / "inline")])
