@@ -242,13 +242,16 @@ def write_results(path: Path | str, records: Iterable[Record], provenance: Mappi
         "format": FORMAT,
         "format_version": FORMAT_VERSION,
         "provenance": _jsonable(dict(provenance)),
-        "scenarios": _jsonable(dict(scenarios or {})),
     }
-    # One record per line: small, and a diff of two results files reads record by record.
+    # One scenario per line, one record per line: a diff of two results files reads record by
+    # record, and the compact lines are written by json's C encoder (indented text is not).
+    scenario_lines = ",".join(f"\n  {record_line(str(name))}: {record_line(info)}"
+                              for name, info in _jsonable(dict(scenarios or {})).items())
     records_text = ",\n".join(record_line(record.as_dict()) if line is None else line
                               for record, line in zip(records, lines))
     head = json.dumps(document, indent=1, ensure_ascii=False, allow_nan=False)
-    text = head[:-2] + RECORDS_START + records_text + RECORDS_END
+    text = (head[:-2] + ',\n "scenarios": {' + scenario_lines + ("\n }" if scenario_lines else "}")
+            + RECORDS_START + records_text + RECORDS_END)
     # A unique temporary in the same directory, then an atomic rename: two runs writing the
     # same file at once each replace it whole; a reader never sees half a file.
     write_text_atomically(path, text)
