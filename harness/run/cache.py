@@ -32,6 +32,7 @@ velocities of the right shape): both are listed in :attr:`ResultCache.rejected`.
 
 from __future__ import annotations
 
+import base64
 import hashlib
 import itertools
 import json
@@ -44,7 +45,7 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
-from harness.run.files import write_text_atomically
+from harness.run.files import write_bytes_atomically, write_text_atomically
 from harness.run.records import collector_paused
 
 _HARNESS_DIR = Path(__file__).resolve().parent.parent  # harness/, from harness/run/
@@ -251,7 +252,7 @@ class ResultCache:
         entry = self.get_line_texts(key)
         if entry is None:
             return None
-        _, lines = entry
+        _, lines, _ = entry
         try:
             values = _parse_lines(lines)
             reason = None if check is None else check(values)
@@ -262,14 +263,16 @@ class ResultCache:
             return None
         return list(zip(values, lines))
 
-    def get_line_texts(self, key: str, check_summary=None) -> tuple[Any, list[str]] | None:
-        """``(summary, lines)`` stored by :meth:`put_lines`, the lines as text (not parsed),
-        or ``None`` (a miss).
+    def get_line_texts(self, key: str, check_summary=None
+                       ) -> tuple[Any, list[str], bytes | None] | None:
+        """``(summary, lines, data)`` stored by :meth:`put_lines`, the lines as text (not
+        parsed), or ``None`` (a miss).
 
         Outside :attr:`stats`. The entry must be whole: its key, as many lines as the header
-        counts, each a JSON object's text, and their CRC-32 as stored (an entry changed after
-        it was written is a miss); ``check_summary(summary)`` (``None``: usable, else why not)
-        may reject it. A rejected entry is listed in :attr:`rejected`.
+        counts, each a JSON object's text, and the CRC-32 of the lines and ``data`` as stored
+        (an entry changed after it was written is a miss); ``check_summary(summary)``
+        (``None``: usable, else why not) may reject it. A rejected entry is listed in
+        :attr:`rejected`.
         """
         if not self.enabled:
             return None
@@ -285,7 +288,9 @@ class ResultCache:
             if not data.endswith(b"\n"):
                 raise ValueError("truncated")
             body_bytes = memoryview(data)[head_end + 1:]
-            if header.get("crc32") != zlib.crc32(body_bytes):
+            extra = header.get("data")
+            extra = None if extra is None else base64.b64decode(extra, validate=True)
+            if header.get("crc32") != zlib.crc32(extra or b"", zlib.crc32(body_bytes)):
                 raise ValueError("checksum differs: changed after it was written")
             body = str(body_bytes, "utf-8")
             lines = body.split("\n")[:-1]  # never splitlines: U+2028 may sit inside a string
@@ -299,26 +304,30 @@ class ResultCache:
                 raise ValueError(reason)
         except FileNotFoundError:
             return None
-        except (OSError, ValueError) as error:  # UnicodeDecodeError is a ValueError
+        except (OSError, ValueError) as error:  # UnicodeDecodeError, binascii.Error too
             self.rejected.append(f"{path}: {error}")
             return None
-        return summary, lines
+        return summary, lines, extra
 
-    def put_lines(self, key: str, lines: list[str], summary: Any = None) -> None:
+    def put_lines(self, key: str, lines: list[str], summary: Any = None,
+                  data: bytes | None = None) -> None:
         """Store one-line JSON texts under ``key``: a header line (the key, the code version,
-        how many lines follow, their CRC-32 and ``summary``, a JSON-able value the reader
-        gets without parsing the lines), then the lines; atomic; no-op when disabled. A line
-        holding a newline is a ``ValueError``. Raises ``OSError`` as :meth:`put` does."""
+        how many lines follow, ``summary``, a JSON-able value the reader gets without parsing
+        the lines, ``data``, bytes kept beside them in base64, and the CRC-32 of the lines
+        and the data), then the lines; atomic; no-op when disabled. A line holding a newline
+        is a ``ValueError``. Raises ``OSError`` as :meth:`put` does."""
         if not self.enabled:
             return
         if any("\n" in line for line in lines):
             raise ValueError("a cache line holds a newline")
-        body = "".join(f"{line}\n" for line in lines)
+        body = "".join(f"{line}\n" for line in lines).encode("utf-8")
         header = json.dumps({"key": key, "code_version": self.version, "count": len(lines),
-                             "crc32": zlib.crc32(body.encode("utf-8")), "summary": summary},
+                             "crc32": zlib.crc32(data or b"", zlib.crc32(body)),
+                             "summary": summary,
+                             "data": None if data is None else base64.b64encode(data).decode()},
                             ensure_ascii=False, allow_nan=False)
-        write_text_atomically(self.lines_path(key), f"{header}\n{body}", prefix=f".{key[:8]}-",
-                              make_parent=True)
+        write_bytes_atomically(self.lines_path(key), header.encode("utf-8") + b"\n" + body,
+                               prefix=f".{key[:8]}-", make_parent=True)
 
     def _entries(self):
         """Every entry's path: the keyed entries and the scenario checks' store."""

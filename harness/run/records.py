@@ -42,12 +42,13 @@ import gc
 import json
 import math
 import os
+import pickle
 import tempfile
 from dataclasses import asdict, dataclass, field, fields, is_dataclass
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 
-from harness.run.files import write_text_atomically
+from harness.run.files import write_bytes_atomically, write_text_atomically
 
 FORMAT = "impact-harness-results"
 FORMAT_VERSION = 1
@@ -221,23 +222,31 @@ def record_line(data: Mapping) -> str:
     return json.dumps(data, ensure_ascii=False, allow_nan=False, separators=(",", ":"))
 
 
-def write_results(path: Path | str, records: Iterable[Record], provenance: Mapping,
+def write_results(path: Path | str, records: Iterable[Record | None], provenance: Mapping,
                   scenarios: Mapping | None = None, *,
-                  lines: Sequence[str | None] | None = None) -> Path:
-    """Write the results file (atomically) and return its path.
+                  lines: Sequence[str | None] | None = None,
+                  pickled: Sequence[bytes] | None = None) -> Path:
+    """Write the results file (atomically) and its companion (:func:`companion_path`), and
+    return the file's path.
 
     ``scenarios`` maps each scenario name to what the reports need besides the records
     (description, tags, system, sweep parameter, labels of the speeds, gates). ``lines``
     (parallel to ``records``): a record's :func:`record_line` when already known (read from
-    the result cache with the record, which is unchanged since), else None.
+    the result cache with the record, which is unchanged since; the record may then be
+    None), else None. ``pickled``: the records as the companion holds them, pickled lists of
+    :meth:`Record.as_dict` (in order, all of them), when known; without it the companion is
+    written only when every record is at hand.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     records = list(records)
-    if lines is None:
-        lines = [None] * len(records)
+    lines = [None] * len(records) if lines is None else list(lines)
     if len(lines) != len(records):
         raise ValueError(f"{len(lines)} lines for {len(records)} records")
+    datas = None
+    if pickled is None and all(line is None for line in lines):
+        datas = [record.as_dict() for record in records]
+        lines = [record_line(data) for data in datas]
     document = {
         "format": FORMAT,
         "format_version": FORMAT_VERSION,
@@ -255,7 +264,78 @@ def write_results(path: Path | str, records: Iterable[Record], provenance: Mappi
     # A unique temporary in the same directory, then an atomic rename: two runs writing the
     # same file at once each replace it whole; a reader never sees half a file.
     write_text_atomically(path, text)
+    if datas is not None:
+        pickled = [pickle.dumps(datas, protocol=pickle.HIGHEST_PROTOCOL)]
+    _write_companion(path, len(records), pickled)
     return path
+
+
+#: The ``format`` of a results file's companion (:func:`companion_path`).
+COMPANION_FORMAT = "impact-harness-results-companion"
+
+
+def companion_path(path: Path | str) -> Path:
+    """The companion of the results file ``path``: ``<name>.pickle`` beside it.
+
+    It holds the same records as the file, pickled (plain dicts, lists, strings and numbers:
+    nothing else is unpickled), which :func:`read_results` loads several times faster than
+    it parses the JSON. It is used only while the results file is the one it was written
+    with (the file's size, modification time and inode, recorded in it, still match: each
+    write replaces the file by a new one); anything else reads the JSON, which stays the
+    results. Deleting it costs only speed.
+    """
+    path = Path(path)
+    return path.with_name(path.name + ".pickle")
+
+
+def _write_companion(path: Path, count: int, pickled: Sequence[bytes] | None) -> None:
+    """Write (or, when the records' pickles are not at hand, remove) ``path``'s companion; a
+    companion that cannot be written is no error (the results file is whole)."""
+    companion = companion_path(path)
+    try:
+        if pickled is None:
+            companion.unlink(missing_ok=True)
+            return
+        status = path.stat()
+        header = {"format": COMPANION_FORMAT, "results_size": status.st_size,
+                  "results_mtime_ns": status.st_mtime_ns, "results_inode": status.st_ino,
+                  "records": count, "parts": len(pickled)}
+        write_bytes_atomically(companion, pickle.dumps(header) + b"".join(pickled))
+    except OSError:
+        pass
+
+
+class _PlainUnpickler(pickle.Unpickler):
+    """An unpickler of plain values only: no class or function is ever looked up (a
+    companion holds dicts, lists, strings, numbers, booleans and None)."""
+
+    def find_class(self, module, name):
+        raise pickle.UnpicklingError(f"{module}.{name}: a companion holds plain values only")
+
+
+def _read_companion(path: Path, status: os.stat_result) -> list | None:
+    """The record dicts of ``path``'s companion when it matches the file (``status``), else
+    None (absent, written for another file, damaged: the JSON is read)."""
+    try:
+        with open(companion_path(path), "rb") as handle:
+            header = _PlainUnpickler(handle).load()
+            if not (isinstance(header, dict) and header.get("format") == COMPANION_FORMAT
+                    and header.get("results_size") == status.st_size
+                    and header.get("results_mtime_ns") == status.st_mtime_ns
+                    and header.get("results_inode") == status.st_ino
+                    and isinstance(header.get("parts"), int)):
+                return None
+            datas: list = []
+            for _ in range(header["parts"]):  # one pickle each: an unpickler (memo) each
+                part = _PlainUnpickler(handle).load()
+                if not isinstance(part, list):
+                    return None
+                datas += part
+    except Exception:  # noqa: BLE001 - an unreadable companion is only slower reading
+        return None
+    if len(datas) != header.get("records") or not all(isinstance(d, dict) for d in datas):
+        return None
+    return datas
 
 
 #: What comes between the header and the first record line of a results file, and after the
@@ -310,8 +390,15 @@ def collector_paused():
 
 def _read_results(path: Path) -> Results:
     try:
-        text = path.read_text(encoding="utf-8")
-        document, lines = _split_records(text)
+        with open(path, encoding="utf-8") as handle:
+            status = os.fstat(handle.fileno())
+            text = handle.read()
+        datas = _read_companion(path, status)
+        document, lines = (_split_head(text, len(datas)) if datas is not None
+                           else (None, None))
+        if document is None:  # no companion for this file: its records parsed
+            datas = None
+            document, lines = _split_records(text)
         if document is None:  # not as write_results lays it out: read whole
             document = json.loads(text)
     except FileNotFoundError:
@@ -326,12 +413,31 @@ def _read_results(path: Path) -> Results:
     if document.get("format_version") != FORMAT_VERSION:
         raise ValueError(f"{path}: results format version {document.get('format_version')!r}; "
                          f"this harness reads {FORMAT_VERSION}")
-    records = [Record.from_dict(item) for item in document.get("records", [])]
+    items = datas if datas is not None else document.get("records", [])
+    records = [Record.from_dict(item) for item in items]
     results = Results(records=records, provenance=document.get("provenance", {}),
                       scenarios=document.get("scenarios", {}))
     if lines is not None and len(lines) == len(records):
         results._lines = (records, len(records), lines)
     return results
+
+
+def _split_head(text: str, count: int) -> tuple[dict | None, list[str] | None]:
+    """A results file laid out by :func:`write_results` with ``count`` records, read as
+    ``(document without its records, record lines)`` (the records come from its
+    companion); ``(None, None)`` for any other."""
+    start = text.find(RECORDS_START)
+    if start < 0 or not text.endswith(RECORDS_END):
+        return None, None
+    try:
+        document = json.loads(text[:start] + "\n}")
+    except ValueError:
+        return None, None
+    body = text[start + len(RECORDS_START):len(text) - len(RECORDS_END)]
+    lines = body.split(",\n") if body else []
+    if not isinstance(document, dict) or "records" in document or len(lines) != count:
+        return None, None
+    return document, lines
 
 
 _DECODER = json.JSONDecoder()
@@ -366,4 +472,5 @@ def _split_records(text: str) -> tuple[dict | None, list[str] | None]:
 
 
 __all__ = ["ANALYTIC", "DEFAULT_RESULTS", "FORMAT", "FORMAT_VERSION", "Record", "Results",
-           "check_writable", "collector_paused", "read_results", "record_line", "write_results"]
+           "check_writable", "collector_paused", "companion_path", "read_results", "record_line",
+           "write_results"]

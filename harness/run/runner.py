@@ -73,6 +73,7 @@ import argparse
 import gc
 import json
 import math
+import pickle
 import signal
 import sys
 import threading
@@ -331,7 +332,8 @@ class RunOutcome:
     def __init__(self, records: Sequence[Record | None], gates: list[GateResult],
                  provenance: dict, scenarios: dict, cache_stats: dict | None = None,
                  warnings: list[str] | None = None, record_lines: Sequence | None = None,
-                 internal: Sequence[int] = ()) -> None:
+                 internal: Sequence[int] = (), record_pickles: Sequence[bytes] | None = None
+                 ) -> None:
         self._records = list(records)
         self.gates = gates
         self.provenance = provenance
@@ -343,6 +345,8 @@ class RunOutcome:
         if len(self.record_lines) != len(self._records):
             raise ValueError(f"{len(self.record_lines)} lines for {len(self._records)} records")
         self._internal = list(internal)  # positions of the internal-error records
+        # The records pickled in parts, for the results file's companion (write_results).
+        self.record_pickles = None if record_pickles is None else list(record_pickles)
 
     @property
     def records(self) -> list[Record]:
@@ -666,6 +670,7 @@ def run(
                              workers=1 if executor == "local" and workers == 1 else workers)
     records: list[Record | None] = []
     record_lines: list[str] = []
+    record_pickles: list[bytes] | None = []
     internal: list[int] = []
     gates: list[GateResult] = []
     infos: dict[str, dict] = {}
@@ -675,6 +680,10 @@ def run(
         internal += [len(records) + position for position in result.internal]
         records += result.records if result.records is not None else [None] * len(result.lines)
         record_lines += result.lines
+        if result.pickled is None or record_pickles is None:
+            record_pickles = None
+        else:
+            record_pickles.append(result.pickled)
         infos[scenario.name]["references"] = result.summary["references"]
         scenario_gates = [GateResult(**gate) for gate in result.summary["gates"]]
         gates += scenario_gates
@@ -707,7 +716,7 @@ def run(
     )
     return RunOutcome(records=records, gates=gates, provenance=info, scenarios=infos,
                       cache_stats=stats, warnings=warnings, record_lines=record_lines,
-                      internal=internal)
+                      internal=internal, record_pickles=record_pickles)
 
 
 def _definition(value: Any) -> Any:
@@ -757,12 +766,15 @@ class _Built:
     """A scenario's finished records: the results file's ``lines`` (one per record), the
     records themselves when built in this process (None: read from the cache or built on a
     worker, parsed from the lines when asked for), the ``summary`` the run needs of them
-    (:func:`_summary`) and the positions of internal-error records."""
+    (:func:`_summary`), the positions of internal-error records and the records pickled."""
 
     lines: list[str]
     summary: dict
     records: list[Record] | None = None
     internal: list[int] = field(default_factory=list)
+    # The records' dicts (Record.as_dict, as the lines hold them) pickled, for the results
+    # file's companion (harness.run.records.companion_path); None when not at hand.
+    pickled: bytes | None = None
 
 
 def _stored_scenario(scenario: Scenario, cache, key: str | None, presets: Sequence[str],
@@ -796,11 +808,11 @@ def _stored_scenario(scenario: Scenario, cache, key: str | None, presets: Sequen
     entry = cache.get_line_texts(key, check_summary=check)
     if entry is None:
         return None
-    summary, lines = entry
+    summary, lines, pickled = entry
     if len(lines) != expected:
         cache.rejected.append(f"{cache.lines_path(key)}: {len(lines)} lines, not {expected}")
         return None
-    return _Built(lines=lines, summary=summary)
+    return _Built(lines=lines, summary=summary, pickled=pickled)
 
 
 #: The counts of a scenario's records its summary keeps (for the progress line, the hits).
@@ -900,7 +912,8 @@ def _build_scenario(scenario: Scenario, entries: Sequence, cache, computed_refer
     internal = [i for i, r in enumerate(records) if r.status.startswith("error: internal")]
     if not internal:
         _store_scenario(cache, key, entries, records, datas, lines, summary)
-    return _Built(lines=lines, summary=summary, records=records, internal=internal)
+    return _Built(lines=lines, summary=summary, records=records, internal=internal,
+                  pickled=pickle.dumps(datas, protocol=pickle.HIGHEST_PROTOCOL))
 
 
 def _finite_speeds(after, before) -> bool:
@@ -927,13 +940,15 @@ def _store_scenario(cache, key: str | None, engine_entries: Sequence, records: S
     if any(record.ok and not _finite_speeds(record.u_after, record.u_before)
            for record in records):
         return
-    stored_lines = [line if record.source == ANALYTIC or record.cached
-                    else record_line({**data, "cached": True})
-                    for record, data, line in zip(records, datas, lines)]
+    stored_datas = [data if record.source == ANALYTIC or record.cached
+                    else {**data, "cached": True} for record, data in zip(records, datas)]
+    stored_lines = [line if stored is data else record_line(stored)
+                    for data, stored, line in zip(datas, stored_datas, lines)]
     counts = summary["counts"]
     stored_summary = {**summary, "counts": {**counts, "cached": counts["engine_runs"]}}
     try:
-        cache.put_lines(key, stored_lines, stored_summary)
+        cache.put_lines(key, stored_lines, stored_summary,
+                        pickle.dumps(stored_datas, protocol=pickle.HIGHEST_PROTOCOL))
     except OSError:  # the run goes on without the cache (the engine runs' store warns)
         pass
 
@@ -1471,7 +1486,7 @@ def execute(args, *, json_path: Path, command: Sequence[str] | None = None,
         return _fail(str(error)), None
     try:
         write_results(json_path, outcome._records, outcome.provenance, outcome.scenarios,
-                      lines=outcome.record_lines)
+                      lines=outcome.record_lines, pickled=outcome.record_pickles)
     except OSError as error:
         print(f"impact-harness run: cannot write {json_path}: {error.strerror or error}; the "
               "engine results are in the cache, a rerun simulates nothing again",

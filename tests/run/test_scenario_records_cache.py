@@ -15,6 +15,7 @@ import pytest
 from harness import cli
 from harness.run import runner
 from harness.run.cache import ResultCache
+from harness.run.records import companion_path, read_results
 from harness.scenarios import SCENARIO_DIR, checks, load_scenario
 from harness.scenarios.library import load_scenarios_reporting
 
@@ -113,6 +114,12 @@ def test_the_warm_results_file_equals_the_cold_one_apart_from_timing(tmp_path):
     assert warm["provenance"]["cache"]["simulated"] == 0
     assert _results_without_timing(tmp_path / "warm.json") == \
         _results_without_timing(tmp_path / "cold.json")
+    for name in ("cold.json", "warm.json"):  # each companion holds its file's records
+        path = tmp_path / name
+        assert companion_path(path).is_file()
+        copy = tmp_path / f"copy-{name}"
+        copy.write_text(path.read_text(encoding="utf-8"), encoding="utf-8")
+        assert read_results(path).records == read_results(copy).records
 
 
 @pytest.mark.parametrize("damage", ["header-not-json", "line-not-json", "truncated",
