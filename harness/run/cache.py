@@ -22,12 +22,16 @@ entry, while a change to the report, the benchmarks or the CLI keeps the cache::
         cache.put(key, record)
 
 Files: one JSON file per key at ``root/<key[:2]>/<key>.json`` (``<key>.jsonl`` for an
-entry of many lines, :meth:`ResultCache.put_lines`: a scenario's records), written atomically (a
-temporary file in the same directory, then ``os.replace``), so concurrent writers and an
-interrupted run never leave a half-written entry; a temporary left by a killed writer is
-removed by the next run (:meth:`ResultCache.clean_temporaries`). An unreadable or corrupted
-file is a miss, and so is an entry the caller's ``check`` rejects (a record without finite
-velocities of the right shape): both are listed in :attr:`ResultCache.rejected`.
+entry of many lines, :meth:`ResultCache.put_lines`: a scenario's records, their lines as the
+results file holds them after a header with their summary, their pickled dicts and a CRC-32
+of both), written atomically (a temporary file in the same directory, then ``os.replace``),
+so concurrent writers and an interrupted run never leave a half-written entry; a temporary
+left by a killed writer is removed by the next run (:meth:`ResultCache.clean_temporaries`).
+An unreadable, corrupted or edited file is a miss, and so is an entry the caller's ``check``
+rejects (a record without finite velocities of the right shape): both are listed in
+:attr:`ResultCache.rejected`. Beside the entries, ``root/scenario-checks.pickle`` keeps the
+scenario files that passed their checks (:class:`harness.scenarios.checks.PassedChecks`);
+``cache info``, ``prune`` and ``clear`` count and remove it with them.
 """
 
 from __future__ import annotations
@@ -52,7 +56,7 @@ _HARNESS_DIR = Path(__file__).resolve().parent.parent  # harness/, from harness/
 #: The harness source (directories and files, relative to ``harness/``) that the cached
 #: values depend on: the engine runs (the adapters, the scene they build, ``engine_task`` in
 #: the runner), the several-contact references (the references, the event-driven solver,
-#: the departures they hold) and each point's finished records (the scenario model, the
+#: the departures they hold) and each scenario's finished records (the scenario model, the
 #: runner, metrics, contact histories, verdicts, the record layout). Add a module here when
 #: a cached value starts to depend on it; a listed path that is missing is an error, never
 #: silently skipped.

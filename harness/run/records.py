@@ -12,7 +12,14 @@ One :class:`Record` per (scenario, sweep point, source), where the source is ``"
     }
 
 Floats are written by ``repr`` (exact round trip); non-finite values (an engine that blew up)
-are written as ``null`` and the record's ``status`` says why.
+are written as ``null`` and the record's ``status`` says why. Each scenario's info and each
+record is one line of compact JSON.
+
+Beside the file, :func:`write_results` keeps its *companion*, ``<name>.pickle``
+(:func:`companion_path`): the same records pickled as plain values, which
+:func:`read_results` loads several times faster than it parses the JSON, and uses only while
+the JSON file is the very one it was written with. The JSON stays the results (``compare``,
+any other reader); the companion can be deleted at no cost but speed.
 
 Record fields (units SI):
 

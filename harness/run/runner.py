@@ -29,8 +29,12 @@ Parallelism and cache
     (:class:`harness.run.cache.ResultCache`, key: the scene at the point, the engine and its
     version, the complete settings and the code version); only the misses run, through
     :func:`harness.run.executor.run_tasks` (local process pool, or Dask), and are stored. The
-    cache holds the engine's raw output; departures and the other derived numbers are
-    recomputed every run (microseconds). The misses travel in chunks of one engine and
+    cache holds the engine's raw output, and each scenario's finished records whole
+    (:func:`_scenario_key`: one entry per scenario, the records' lines of the results file
+    with the summary a run needs of them, so a warm run reads, parses and checks no record).
+    A large run builds the records (departures, verdicts, contact histories) of the other
+    scenarios on forked workers (:func:`_build_scenarios`), which store their entries and
+    send back lines only. The misses travel in chunks of one engine and
     settings (:func:`task_group`), each one :meth:`Engine.run_many` call
     (:func:`engine_chunk`), whose runs equal one :meth:`Engine.run` each bit for bit
     (``--chunk-size 1``: one ``run`` per task). It also keeps each several-contact point's
