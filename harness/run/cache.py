@@ -40,11 +40,12 @@ import base64
 import hashlib
 import itertools
 import json
-import math
 import os
 import sys
 import time
 import zlib
+from collections.abc import Mapping
+from dataclasses import fields, is_dataclass
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
@@ -134,31 +135,28 @@ def code_version() -> str:
     return _code_version_of(cached_code_sources())
 
 
-def _canonical(value: Any) -> Any:
-    """JSON-able form of ``value`` with a single spelling per value (floats by ``repr``)."""
-    if isinstance(value, dict):
-        return {str(key): _canonical(item) for key, item in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_canonical(item) for item in value]
-    if isinstance(value, bool) or value is None or isinstance(value, str):
-        return value
-    if isinstance(value, int):
-        return value
-    if isinstance(value, float):
-        # repr round-trips exactly; non-finite values are not JSON
-        return {"float": repr(value)} if not math.isfinite(value) else value
+def _canonical_default(value: Any) -> Any:
+    """The JSON-able form of a value json does not know: numpy values as lists or numbers,
+    paths as POSIX text, dataclasses as their fields, read-only mappings as dicts."""
     if hasattr(value, "tolist"):  # numpy scalars and arrays
-        return _canonical(value.tolist())
+        return value.tolist()
     if isinstance(value, Path):
         return value.as_posix()
+    if is_dataclass(value) and not isinstance(value, type):
+        return {f.name: getattr(value, f.name) for f in fields(value)}
+    if isinstance(value, Mapping):
+        return dict(value)
     raise TypeError(
         f"cache payload holds a value that is not JSON-able: {type(value).__name__} {value!r}"
     )
 
 
 def canonical_json(payload: Any) -> str:
-    """Canonical JSON text: sorted keys, no spaces, floats exact."""
-    return json.dumps(_canonical(payload), sort_keys=True, separators=(",", ":"), allow_nan=False)
+    """Canonical JSON text: sorted keys, no spaces, floats exact (``repr``; a non-finite one
+    spelled ``NaN`` or ``Infinity``: a key's text, never read back), dataclasses as their
+    fields; written by json's C encoder (a task's scene and settings are hashed for every
+    engine run)."""
+    return json.dumps(payload, sort_keys=True, separators=(",", ":"), default=_canonical_default)
 
 
 class ResultCache:

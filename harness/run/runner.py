@@ -163,7 +163,7 @@ def engine_task(task: dict) -> dict:
     except Exception as error:  # reported in the record, never dropped
         return {"status": f"error: {type(error).__name__}: {error}",
                 "wall_time_s": time.perf_counter() - start}
-    return _task_output(engine, run, time.perf_counter() - start)
+    return _stored_by_worker(task, _task_output(engine, run, time.perf_counter() - start))
 
 
 def engine_chunk(tasks: list[dict]) -> list[dict]:
@@ -189,7 +189,33 @@ def engine_chunk(tasks: list[dict]) -> list[dict]:
         engine = load_engine(first["engine"])
         runs = engine.run_many([task["scene"] for task in tasks], first["settings"])
     share = (time.perf_counter() - start) / len(tasks)
-    return [_task_output(engine, run, share) for run in runs]
+    return [_stored_by_worker(task, _task_output(engine, run, share))
+            for task, run in zip(tasks, runs)]
+
+
+#: Keys of an engine task's output, popped by the runner: the worker stored it in the cache,
+#: or could not (why) (:func:`_stored_by_worker`).
+STORED_BY_WORKER, STORE_FAILED_IN_WORKER = "stored_by_worker", "store_failed_in_worker"
+
+
+def _stored_by_worker(task: dict, output: dict) -> dict:
+    """``output``, stored in the result cache by the process that ran the task when the
+    task says where (``task["store"]``: root, code version and key; the local pool), and
+    marked so (:data:`STORED_BY_WORKER`, or why not: :data:`STORE_FAILED_IN_WORKER`). A
+    skipped or failed run is never stored."""
+    where = task.get("store")
+    if where is None or output["status"].startswith(("skipped", "error")):
+        return output
+    from harness.run.cache import ResultCache
+
+    root, version, key = where
+    try:
+        ResultCache(root, version=version).put(key, output)
+    except OSError as error:
+        output[STORE_FAILED_IN_WORKER] = str(error)
+        return output
+    output[STORED_BY_WORKER] = True
+    return output
 
 
 def task_group(task: dict) -> str:
@@ -496,8 +522,23 @@ def _point_dict(point) -> dict:
             "label": point.label}
 
 
-def _scene_payload(scene) -> dict:
-    return asdict(scene)
+def _scene_payload(scene):
+    """The scene as a cache key's payload holds it: the dataclass itself, hashed field by
+    field (:func:`harness.run.cache.canonical_json`), never copied."""
+    return scene
+
+
+def _settings_of(engine, preset: str, overrides: dict, memo: dict) -> dict | str:
+    """``engine.settings(preset, overrides)``, or the ``ValueError``'s message; computed
+    once per engine, preset and overrides (a deep copy and a check each: thousands of tasks
+    share a handful)."""
+    key = (engine.name, preset, json.dumps(overrides, sort_keys=True, default=repr))
+    if key not in memo:
+        try:
+            memo[key] = engine.settings(preset, overrides)
+        except ValueError as error:
+            memo[key] = str(error)
+    return memo[key]
 
 
 def _engine_status(engines: Sequence[str]) -> tuple[dict, dict]:
@@ -574,7 +615,11 @@ def run(
             cache.hits += runs  # each an engine run the cache spared, as read one by one
             stored_runs += runs
 
-    # 1. Engine tasks: build, look up in the cache.
+    # 1. Engine tasks: build, look up in the cache. On the local pool each worker stores the
+    # results it simulates (in parallel, as each chunk finishes); Dask's may lie elsewhere.
+    store_in_worker = (None if cache is None or not cache.enabled or executor != "local"
+                       else (str(cache.root), cache.version))
+    settings_memo: dict = {}
     plan: list[tuple[Scenario, Any, str, str, dict]] = []  # (scenario, point, engine, preset, item)
     tasks, task_keys, task_slots = [], [], []
     for scenario in scenarios:
@@ -594,10 +639,9 @@ def run(
                                  **command_overrides.get(engine_name, {})}
                     item["overrides"] = overrides
                     item["history"] = (scenario.sweep is None) if history is None else history
-                    try:
-                        settings = engine.settings(preset, overrides)
-                    except ValueError as error:
-                        item["output"] = {"status": f"error: settings: {error}"}
+                    settings = _settings_of(engine, preset, overrides, settings_memo)
+                    if isinstance(settings, str):
+                        item["output"] = {"status": f"error: settings: {settings}"}
                         continue
                     if scene is None:
                         scene = scenario.scene(point)
@@ -614,7 +658,9 @@ def run(
                         item["output"], item["cached"] = cached, True
                         continue
                     tasks.append({"engine": engine_name, "settings": settings, "scene": scene,
-                                  "time_limit_s": time_limit_s})
+                                  "time_limit_s": time_limit_s,
+                                  "store": None if store_in_worker is None
+                                  else (*store_in_worker, key)})
                     task_keys.append(key)
                     task_slots.append(item)
     # Several-contact references the records will need and the cache lacks: tasks of the
@@ -637,8 +683,14 @@ def run(
                     _store_reference(cache, reference_keys[index], output["reference"])
             return
         index -= len(reference_tasks)
+        stored = output.pop(STORED_BY_WORKER, False)
+        problem = output.pop(STORE_FAILED_IN_WORKER, None)
         task_slots[index]["output"], task_slots[index]["cached"] = output, False
-        if cache is None or cache_failed or output["status"].startswith(("skipped", "error")):
+        if problem is not None and not cache_failed:
+            cache_failed.append(f"cache {cache.root}: cannot store results ({problem}); "
+                                "the run goes on without the cache")
+        if (stored or cache is None or cache_failed
+                or output["status"].startswith(("skipped", "error"))):
             return
         try:
             cache.put(task_keys[index], output)

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import pickle
 from dataclasses import replace
 
@@ -298,3 +299,24 @@ def test_records_built_on_forked_workers_equal_those_built_inline(tmp_path, monk
     # each worker stored its scenarios' entries, as the inline build does
     assert ([path.name for path in _scenario_entries(tmp_path / "forked")]
             == [path.name for path in _scenario_entries(tmp_path / "inline")])
+
+
+def test_on_the_local_pool_each_worker_stores_the_runs_it_simulates(tmp_path, monkeypatch):
+    stored_here = []
+    real_put = ResultCache.put
+    main = os.getpid()
+
+    def put(self, key, record):
+        if os.getpid() == main and "velocities" in record:
+            stored_here.append(key)
+        return real_put(self, key, record)
+
+    monkeypatch.setattr(ResultCache, "put", put)  # the forked workers inherit it
+    cold = runner.run([SWEEP], engines=ENGINES, cache=ResultCache(tmp_path), log=None,
+                      workers=2)
+    assert cold.provenance["cache"]["simulated"] == 18 and stored_here == []
+    for path in _scenario_entries(tmp_path):  # the scenario kept whole aside, every run read
+        path.unlink()
+    again = ResultCache(tmp_path)
+    _run([SWEEP], again)
+    assert again.hits == 18 and again.misses == 0
