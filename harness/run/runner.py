@@ -82,7 +82,7 @@ import signal
 import sys
 import threading
 import time
-from dataclasses import asdict, dataclass, field, fields, is_dataclass
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence, TextIO
 
@@ -775,17 +775,11 @@ def run(
                       internal=internal, record_pickles=record_pickles)
 
 
-def _definition(value: Any) -> Any:
-    """A scenario (or any of its parts) as plain JSON-able values for a cache key: every
-    field but the file's ``path`` (the records do not depend on where the file lies)."""
-    if is_dataclass(value) and not isinstance(value, type):
-        return {f.name: _definition(getattr(value, f.name)) for f in fields(value)
-                if f.name != "path"}
-    if isinstance(value, Mapping):
-        return {str(key): _definition(item) for key, item in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_definition(item) for item in value]
-    return value
+def _definition(scenario: Scenario) -> dict:
+    """A scenario as a cache key's payload holds it: every field but the file's ``path`` (the
+    records do not depend on where the file lies); the nested dataclasses and mappings are
+    spelled by :func:`harness.run.cache.canonical_json`."""
+    return {f.name: getattr(scenario, f.name) for f in fields(scenario) if f.name != "path"}
 
 
 def _scenario_key(scenario: Scenario, cache, loaded: Mapping, missing: Mapping,
