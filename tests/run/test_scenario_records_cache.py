@@ -320,3 +320,36 @@ def test_on_the_local_pool_each_worker_stores_the_runs_it_simulates(tmp_path, mo
     again = ResultCache(tmp_path)
     _run([SWEEP], again)
     assert again.hits == 18 and again.misses == 0
+
+
+def test_a_passed_text_is_not_parsed_again_and_gets_its_files_path(tmp_path, monkeypatch):
+    from harness.scenarios import reader
+
+    source = SCENARIO_DIR / "sweep-disk-alpha.toml"
+    first, second = tmp_path / "a" / source.name, tmp_path / "b" / source.name
+    for copy in (first, second):
+        copy.parent.mkdir()
+        copy.write_text(source.read_text(encoding="utf-8"), encoding="utf-8")
+    try:
+        checks.use_passed_checks(tmp_path / "cache")
+        (read,), _ = load_scenarios_reporting([first])
+        checks.use_passed_checks(tmp_path / "cache")  # the next run: the store read from disk
+        monkeypatch.setattr(reader.tomllib, "loads", None)  # parsing would raise
+        (again,), errors = load_scenarios_reporting([second])
+    finally:
+        checks.use_passed_checks(None)
+    assert not errors and again.path == second
+    assert again == replace(read, path=second) and again.point_list() == read.point_list()
+
+
+def test_cache_info_and_prune_see_the_scenario_checks_store(tmp_path):
+    try:
+        checks.use_passed_checks(tmp_path)
+        load_scenarios_reporting([SCENARIO_DIR / "disk-direct.toml"])
+    finally:
+        checks.use_passed_checks(None)
+    store = tmp_path / checks.PassedChecks.FILE_NAME
+    assert ResultCache(tmp_path).info()["entries"] == 1
+    assert ResultCache(tmp_path).prune()["entries"] == 0  # this code's: kept
+    assert ResultCache(tmp_path, version="other").prune()["entries"] == 1
+    assert not store.exists()
