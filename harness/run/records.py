@@ -201,8 +201,9 @@ _PLAIN = (str, int, bool, type(None))
 
 
 def _jsonable(value: Any) -> Any:
-    """Plain JSON values; non-finite floats become None, numpy values plain Python, nested
-    dataclasses dicts."""
+    """Plain JSON values of the built-in types only (what the JSON reads back, and all a
+    results file's companion may hold); non-finite floats become None, numpy values and
+    subclasses of str, int and float plain Python, nested dataclasses dicts."""
     kind = type(value)
     if kind is float:  # the common cases first, by exact type: a results file has millions
         return value if math.isfinite(value) else None
@@ -212,10 +213,14 @@ def _jsonable(value: Any) -> Any:
         return {str(key): _jsonable(item) for key, item in value.items()}
     if isinstance(value, (list, tuple)):
         return [_jsonable(item) for item in value]
-    if hasattr(value, "tolist") and not isinstance(value, (str, bytes)):
+    if isinstance(value, str):  # a str subclass (an engine's Status): its plain text
+        return value[:]
+    if hasattr(value, "tolist") and not isinstance(value, bytes):
         return _jsonable(value.tolist())
-    if isinstance(value, float):
-        return value if math.isfinite(value) else None
+    if isinstance(value, float):  # subclasses as plain floats, as in the JSON
+        return float(value) if math.isfinite(value) else None
+    if isinstance(value, int) and not isinstance(value, bool):
+        return int(value)
     if isinstance(value, Path):
         return value.as_posix()
     if is_dataclass(value) and not isinstance(value, type):

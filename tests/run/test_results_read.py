@@ -171,3 +171,26 @@ def _companion_parts(path):
     with open(companion_path(path), "rb") as handle:
         header = pickle.load(handle)
         return header, handle.read()
+
+
+def test_subclasses_of_plain_types_are_written_as_their_plain_values(tmp_path, monkeypatch):
+    import enum
+
+    import numpy as np
+
+    class Kind(enum.StrEnum):
+        OK = "ok"
+
+    class Level(enum.IntEnum):
+        TWO = 2
+
+    record = Record(scenario="a", point={"index": 0, "label": ""}, source="pymunk",
+                    preset="defaults", status=Kind.OK, collision_type=Level.TWO,
+                    u_after=[np.float64(0.5), np.int64(3)], diagnostics={"kind": Kind.OK})
+    path = write_results(tmp_path / "r.json", [record], {}, {})
+    parsed = _without_companion(path, tmp_path)
+    monkeypatch.setattr(records_module, "_split_records", None)  # the companion is read
+    read = read_results(path)
+    assert read.records == parsed.records
+    assert [type(v) for v in (read.records[0].status, read.records[0].collision_type,
+                              *read.records[0].u_after)] == [str, int, float, int]
