@@ -288,7 +288,7 @@ def write_results(path: Path | str, records: Iterable[Record | None], provenance
     write_text_atomically(path, text)
     if datas is not None:
         pickled = [pickle.dumps(datas, protocol=pickle.HIGHEST_PROTOCOL)]
-    _write_companion(path, len(records), pickled)
+    _write_companion(path, lines, pickled)
     return path
 
 
@@ -310,9 +310,12 @@ def companion_path(path: Path | str) -> Path:
     return path.with_name(path.name + ".pickle")
 
 
-def _write_companion(path: Path, count: int, pickled: Sequence[bytes] | None) -> None:
-    """Write (or, when the records' pickles are not at hand, remove) ``path``'s companion; a
-    companion that cannot be written is no error (the results file is whole)."""
+def _write_companion(path: Path, lines: Sequence[str], pickled: Sequence[bytes] | None
+                     ) -> None:
+    """Write (or, when the records' pickles are not at hand, remove) ``path``'s companion:
+    a header, the records' dicts in ``pickled`` parts, then the records' ``lines`` of the
+    file (what ``Results.record_lines`` gives); a companion that cannot be written is no
+    error (the results file is whole)."""
     companion = companion_path(path)
     try:
         if pickled is None:
@@ -321,8 +324,9 @@ def _write_companion(path: Path, count: int, pickled: Sequence[bytes] | None) ->
         status = path.stat()
         header = {"format": COMPANION_FORMAT, "results_size": status.st_size,
                   "results_mtime_ns": status.st_mtime_ns, "results_inode": status.st_ino,
-                  "records": count, "parts": len(pickled)}
-        write_bytes_atomically(companion, pickle.dumps(header) + b"".join(pickled))
+                  "records": len(lines), "parts": len(pickled)}
+        write_bytes_atomically(companion, pickle.dumps(header) + b"".join(pickled)
+                               + pickle.dumps(list(lines), protocol=pickle.HIGHEST_PROTOCOL))
     except OSError:
         pass
 
@@ -335,9 +339,10 @@ class _PlainUnpickler(pickle.Unpickler):
         raise pickle.UnpicklingError(f"{module}.{name}: a companion holds plain values only")
 
 
-def _read_companion(path: Path, status: os.stat_result) -> list | None:
-    """The record dicts of ``path``'s companion when it matches the file (``status``), else
-    None (absent, written for another file, damaged: the JSON is read)."""
+def _read_companion(path: Path, status: os.stat_result
+                    ) -> tuple[list[dict], list[str]] | None:
+    """The record dicts and lines of ``path``'s companion when it matches the file
+    (``status``), else None (absent, written for another file, damaged: the JSON is read)."""
     try:
         with open(companion_path(path), "rb") as handle:
             header = _PlainUnpickler(handle).load()
@@ -353,11 +358,14 @@ def _read_companion(path: Path, status: os.stat_result) -> list | None:
                 if not isinstance(part, list):
                     return None
                 datas += part
+            lines = _PlainUnpickler(handle).load()
     except Exception:  # noqa: BLE001 - an unreadable companion is only slower reading
         return None
-    if len(datas) != header.get("records") or not all(isinstance(d, dict) for d in datas):
+    if (len(datas) != header.get("records") or not all(isinstance(d, dict) for d in datas)
+            or not isinstance(lines, list) or len(lines) != len(datas)
+            or not all(isinstance(line, str) for line in lines)):
         return None
-    return datas
+    return datas, lines
 
 
 #: What comes between the header and the first record line of a results file, and after the
@@ -412,17 +420,18 @@ def collector_paused():
 
 def _read_results(path: Path) -> Results:
     try:
-        with open(path, encoding="utf-8") as handle:
+        with open(path, "rb") as handle:
             status = os.fstat(handle.fileno())
-            text = handle.read()
-        datas = _read_companion(path, status)
-        document, lines = (_split_head(text, len(datas)) if datas is not None
-                           else (None, None))
-        if document is None:  # no companion for this file: its records parsed
-            datas = None
-            document, lines = _split_records(text)
-        if document is None:  # not as write_results lays it out: read whole
-            document = json.loads(text)
+            data = handle.read()
+        companion = _read_companion(path, status)
+        document = None if companion is None else _head_of(data)
+        if document is not None:  # the records and their lines from the companion
+            datas, lines = companion
+        else:
+            text = str(data, "utf-8")
+            datas, (document, lines) = None, _split_records(text)
+            if document is None:  # not as write_results lays it out: read whole
+                document = json.loads(text)
     except FileNotFoundError:
         raise FileNotFoundError(
             f"{path}: no results file; run `impact-harness run` (or `suite`) first") from None
@@ -444,22 +453,17 @@ def _read_results(path: Path) -> Results:
     return results
 
 
-def _split_head(text: str, count: int) -> tuple[dict | None, list[str] | None]:
-    """A results file laid out by :func:`write_results` with ``count`` records, read as
-    ``(document without its records, record lines)`` (the records come from its
-    companion); ``(None, None)`` for any other."""
-    start = text.find(RECORDS_START)
-    if start < 0 or not text.endswith(RECORDS_END):
-        return None, None
+def _head_of(data: bytes) -> dict | None:
+    """The document before the records of a results file laid out by :func:`write_results`
+    (its records then come from the companion), else None."""
+    start = data.find(RECORDS_START.encode())
+    if start < 0 or not data.endswith(RECORDS_END.encode()):
+        return None
     try:
-        document = json.loads(text[:start] + "\n}")
+        document = json.loads(str(data[:start], "utf-8") + "\n}")
     except ValueError:
-        return None, None
-    body = text[start + len(RECORDS_START):len(text) - len(RECORDS_END)]
-    lines = body.split(",\n") if body else []
-    if not isinstance(document, dict) or "records" in document or len(lines) != count:
-        return None, None
-    return document, lines
+        return None
+    return document if isinstance(document, dict) and "records" not in document else None
 
 
 _DECODER = json.JSONDecoder()
