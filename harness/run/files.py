@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import tempfile
 from pathlib import Path
+from typing import Iterable
 
 
 def write_text_atomically(path: Path, text: str, *, prefix: str | None = None,
@@ -23,6 +24,14 @@ def write_text_atomically(path: Path, text: str, *, prefix: str | None = None,
 def write_bytes_atomically(path: Path, data: bytes, *, prefix: str | None = None,
                            make_parent: bool = False) -> Path:
     """:func:`write_text_atomically` for bytes."""
+    return write_parts_atomically(path, (data,), prefix=prefix, make_parent=make_parent)
+
+
+def write_parts_atomically(path: Path, parts: Iterable[bytes | str], *,
+                           prefix: str | None = None, make_parent: bool = False) -> Path:
+    """:func:`write_text_atomically` of the concatenation of ``parts`` (bytes, or text
+    written as UTF-8), written one after the other: a large file is never built whole in
+    memory first."""
     path = Path(path)
     prefix = prefix or f".{path.name}-"
     for attempt in (1, 2):
@@ -37,7 +46,8 @@ def write_bytes_atomically(path: Path, data: bytes, *, prefix: str | None = None
                 raise
     try:
         with os.fdopen(descriptor, "wb") as handle:
-            handle.write(data)
+            for part in parts:
+                handle.write(part.encode("utf-8") if isinstance(part, str) else part)
         os.replace(temporary, path)
     except BaseException:
         try:

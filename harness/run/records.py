@@ -46,6 +46,7 @@ from __future__ import annotations
 
 import contextlib
 import gc
+import itertools
 import json
 import math
 import os
@@ -55,7 +56,7 @@ from dataclasses import asdict, dataclass, field, fields, is_dataclass
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 
-from harness.run.files import write_bytes_atomically, write_text_atomically
+from harness.run.files import write_bytes_atomically, write_parts_atomically
 
 FORMAT = "impact-harness-results"
 FORMAT_VERSION = 1
@@ -278,18 +279,27 @@ def write_results(path: Path | str, records: Iterable[Record | None], provenance
     # record, and the compact lines are written by json's C encoder (indented text is not).
     scenario_lines = ",".join(f"\n  {record_line(str(name))}: {_plain_line(info)}"
                               for name, info in (scenarios or {}).items())
-    records_text = ",\n".join(record_line(record.as_dict()) if line is None else line
-                              for record, line in zip(records, lines))
+    lines = [record_line(record.as_dict()) if line is None else line
+             for record, line in zip(records, lines)]
     head = json.dumps(document, indent=1, ensure_ascii=False, allow_nan=False)
-    text = (head[:-2] + ',\n "scenarios": {' + scenario_lines + ("\n }" if scenario_lines else "}")
-            + RECORDS_START + records_text + RECORDS_END)
+    head = (head[:-2] + ',\n "scenarios": {' + scenario_lines + ("\n }" if scenario_lines else "}")
+            + RECORDS_START)
     # A unique temporary in the same directory, then an atomic rename: two runs writing the
-    # same file at once each replace it whole; a reader never sees half a file.
-    write_text_atomically(path, text)
+    # same file at once each replace it whole; a reader never sees half a file. Written line
+    # by line: the 56 MB of a large run are never copied into one text first.
+    write_parts_atomically(path, itertools.chain(
+        (head,), _separated(lines, ",\n"), (RECORDS_END,)))
     if datas is not None:
         pickled = [pickle.dumps(datas, protocol=pickle.HIGHEST_PROTOCOL)]
     _write_companion(path, lines, pickled)
     return path
+
+
+def _separated(parts: Sequence[str], separator: str) -> Iterable[str]:
+    """``parts`` with ``separator`` between each two, in pieces of a few hundred (what
+    ``separator.join(parts)`` writes, without the one large copy)."""
+    for start in range(0, len(parts), 512):
+        yield ("" if start == 0 else separator) + separator.join(parts[start:start + 512])
 
 
 #: The ``format`` of a results file's companion (:func:`companion_path`).
