@@ -22,34 +22,42 @@ entry, while a change to the report, the benchmarks or the CLI keeps the cache::
         cache.put(key, record)
 
 Files: one JSON file per key at ``root/<key[:2]>/<key>.json`` (``<key>.jsonl`` for an
-entry of many lines, :meth:`ResultCache.put_lines`: a scenario's records), written atomically (a
-temporary file in the same directory, then ``os.replace``), so concurrent writers and an
-interrupted run never leave a half-written entry; a temporary left by a killed writer is
-removed by the next run (:meth:`ResultCache.clean_temporaries`). An unreadable or corrupted
-file is a miss, and so is an entry the caller's ``check`` rejects (a record without finite
-velocities of the right shape): both are listed in :attr:`ResultCache.rejected`.
+entry of many lines, :meth:`ResultCache.put_lines`: a scenario's records, their lines as the
+results file holds them after a header with their summary, their pickled dicts and a CRC-32
+of both), written atomically (a temporary file in the same directory, then ``os.replace``),
+so concurrent writers and an interrupted run never leave a half-written entry; a temporary
+left by a killed writer is removed by the next run (:meth:`ResultCache.clean_temporaries`).
+An unreadable, corrupted or edited file is a miss, and so is an entry the caller's ``check``
+rejects (a record without finite velocities of the right shape): both are listed in
+:attr:`ResultCache.rejected`. Beside the entries, ``root/scenario-checks.pickle`` keeps the
+scenario files that passed their checks (:class:`harness.scenarios.checks.PassedChecks`);
+``cache info``, ``prune`` and ``clear`` count and remove it with them.
 """
 
 from __future__ import annotations
 
+import base64
 import hashlib
+import itertools
 import json
-import math
 import os
 import sys
 import time
+import zlib
+from collections.abc import Mapping
+from dataclasses import fields, is_dataclass
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
-from harness.run.files import write_text_atomically
+from harness.run.files import write_bytes_atomically, write_text_atomically
 from harness.run.records import collector_paused
 
 _HARNESS_DIR = Path(__file__).resolve().parent.parent  # harness/, from harness/run/
 #: The harness source (directories and files, relative to ``harness/``) that the cached
 #: values depend on: the engine runs (the adapters, the scene they build, ``engine_task`` in
 #: the runner), the several-contact references (the references, the event-driven solver,
-#: the departures they hold) and each point's finished records (the scenario model, the
+#: the departures they hold) and each scenario's finished records (the scenario model, the
 #: runner, metrics, contact histories, verdicts, the record layout). Add a module here when
 #: a cached value starts to depend on it; a listed path that is missing is an error, never
 #: silently skipped.
@@ -64,6 +72,11 @@ CACHE_FORMAT = 1  # bump when the record layout changes
 CACHE_DIR_VARIABLE = "IMPACT_HARNESS_CACHE_DIR"
 #: A temporary file older than this (s) belongs to a writer that died: removed.
 STALE_TEMPORARY_S = 60.0
+#: The scenario checks' store in the cache's directory
+#: (:class:`harness.scenarios.checks.PassedChecks`), and the names it had before (removed by
+#: ``prune``: they hold no code version).
+SCENARIO_CHECKS_STORE = "scenario-checks.pickle"
+OLD_CHECKS_STORES = ("scenario-checks.json",)
 
 
 def default_cache_dir() -> Path:
@@ -122,31 +135,28 @@ def code_version() -> str:
     return _code_version_of(cached_code_sources())
 
 
-def _canonical(value: Any) -> Any:
-    """JSON-able form of ``value`` with a single spelling per value (floats by ``repr``)."""
-    if isinstance(value, dict):
-        return {str(key): _canonical(item) for key, item in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_canonical(item) for item in value]
-    if isinstance(value, bool) or value is None or isinstance(value, str):
-        return value
-    if isinstance(value, int):
-        return value
-    if isinstance(value, float):
-        # repr round-trips exactly; non-finite values are not JSON
-        return {"float": repr(value)} if not math.isfinite(value) else value
+def _canonical_default(value: Any) -> Any:
+    """The JSON-able form of a value json does not know: numpy values as lists or numbers,
+    paths as POSIX text, dataclasses as their fields, read-only mappings as dicts."""
     if hasattr(value, "tolist"):  # numpy scalars and arrays
-        return _canonical(value.tolist())
+        return value.tolist()
     if isinstance(value, Path):
         return value.as_posix()
+    if is_dataclass(value) and not isinstance(value, type):
+        return {f.name: getattr(value, f.name) for f in fields(value)}
+    if isinstance(value, Mapping):
+        return dict(value)
     raise TypeError(
         f"cache payload holds a value that is not JSON-able: {type(value).__name__} {value!r}"
     )
 
 
 def canonical_json(payload: Any) -> str:
-    """Canonical JSON text: sorted keys, no spaces, floats exact."""
-    return json.dumps(_canonical(payload), sort_keys=True, separators=(",", ":"), allow_nan=False)
+    """Canonical JSON text: sorted keys, no spaces, floats exact (``repr``; a non-finite one
+    spelled ``NaN`` or ``Infinity``: a key's text, never read back), dataclasses as their
+    fields; written by json's C encoder (a task's scene and settings are hashed for every
+    engine run)."""
+    return json.dumps(payload, sort_keys=True, separators=(",", ":"), default=_canonical_default)
 
 
 class ResultCache:
@@ -238,57 +248,108 @@ class ResultCache:
         """The ``(value, line)`` pairs stored by :meth:`put_lines`, or ``None`` (a miss).
 
         Outside :attr:`stats`. A file that is not whole (truncated, a line missing or not
-        JSON, another key) or whose values ``check(values)`` rejects (``None``: usable, else
-        why not) is a miss listed in :attr:`rejected`.
+        JSON, another key, a checksum that differs) or whose values ``check(values)`` rejects
+        (``None``: usable, else why not) is a miss listed in :attr:`rejected`.
+        """
+        entry = self.get_line_texts(key)
+        if entry is None:
+            return None
+        _, lines, _ = entry
+        try:
+            values = _parse_lines(lines)
+            reason = None if check is None else check(values)
+            if reason is not None:
+                raise ValueError(reason)
+        except ValueError as error:
+            self.rejected.append(f"{self.lines_path(key)}: {error}")
+            return None
+        return list(zip(values, lines))
+
+    def get_line_texts(self, key: str, check_summary=None
+                       ) -> tuple[Any, list[str], bytes | None] | None:
+        """``(summary, lines, data)`` stored by :meth:`put_lines`, the lines as text (not
+        parsed), or ``None`` (a miss).
+
+        Outside :attr:`stats`. The entry must be whole: its key, as many lines as the header
+        counts, each a JSON object's text, and the CRC-32 of the lines and ``data`` as stored
+        (an entry changed after it was written is a miss); ``check_summary(summary)``
+        (``None``: usable, else why not) may reject it. A rejected entry is listed in
+        :attr:`rejected`.
         """
         if not self.enabled:
             return None
         path = self.lines_path(key)
         try:
-            with open(path, encoding="utf-8", newline="") as handle:
-                text = handle.read()
-            head, _, body = text.partition("\n")
-            header = json.loads(head)
+            with open(path, "rb") as handle:
+                data = handle.read()
+            head_end = data.find(b"\n")
+            header = json.loads(data[:head_end if head_end >= 0 else len(data)])
             if (not isinstance(header, dict) or header.get("key") != key
                     or not isinstance(header.get("count"), int)):
                 raise ValueError("not a cache entry")
-            if not text.endswith("\n"):
+            if not data.endswith(b"\n"):
                 raise ValueError("truncated")
+            body_bytes = memoryview(data)[head_end + 1:]
+            extra = header.get("data")
+            extra = None if extra is None else base64.b64decode(extra, validate=True)
+            if header.get("crc32") != zlib.crc32(extra or b"", zlib.crc32(body_bytes)):
+                raise ValueError("checksum differs: changed after it was written")
+            body = str(body_bytes, "utf-8")
             lines = body.split("\n")[:-1]  # never splitlines: U+2028 may sit inside a string
             if len(lines) != header["count"]:
                 raise ValueError(f"{len(lines)} lines, not {header['count']}")
-            values = _parse_lines(lines)
-            reason = None if check is None else check(values)
+            if not all(line[:1] == "{" and line[-1:] == "}" for line in lines):
+                raise ValueError("a line that is not a JSON object")
+            summary = header.get("summary")
+            reason = None if check_summary is None else check_summary(summary)
             if reason is not None:
                 raise ValueError(reason)
         except FileNotFoundError:
             return None
-        except (OSError, ValueError) as error:  # UnicodeDecodeError is a ValueError
+        except (OSError, ValueError) as error:  # UnicodeDecodeError, binascii.Error too
             self.rejected.append(f"{path}: {error}")
             return None
-        return list(zip(values, lines))
+        return summary, lines, extra
 
-    def put_lines(self, key: str, lines: list[str]) -> None:
+    def put_lines(self, key: str, lines: list[str], summary: Any = None,
+                  data: bytes | None = None) -> None:
         """Store one-line JSON texts under ``key``: a header line (the key, the code version,
-        how many lines follow), then the lines; atomic; no-op when disabled. A line holding a
-        newline is a ``ValueError``. Raises ``OSError`` as :meth:`put` does."""
+        how many lines follow, ``summary``, a JSON-able value the reader gets without parsing
+        the lines, ``data``, bytes kept beside them in base64, and the CRC-32 of the lines
+        and the data), then the lines; atomic; no-op when disabled. A line holding a newline
+        is a ``ValueError``. Raises ``OSError`` as :meth:`put` does."""
         if not self.enabled:
             return
         if any("\n" in line for line in lines):
             raise ValueError("a cache line holds a newline")
-        header = json.dumps({"key": key, "code_version": self.version, "count": len(lines)})
-        text = "".join(f"{line}\n" for line in (header, *lines))
-        write_text_atomically(self.lines_path(key), text, prefix=f".{key[:8]}-",
-                              make_parent=True)
+        body = "".join(f"{line}\n" for line in lines).encode("utf-8")
+        header = json.dumps({"key": key, "code_version": self.version, "count": len(lines),
+                             "crc32": zlib.crc32(data or b"", zlib.crc32(body)),
+                             "summary": summary,
+                             "data": None if data is None else base64.b64encode(data).decode()},
+                            ensure_ascii=False, allow_nan=False)
+        write_bytes_atomically(self.lines_path(key), header.encode("utf-8") + b"\n" + body,
+                               prefix=f".{key[:8]}-", make_parent=True)
 
     def _entries(self):
+        """Every entry's path: the keyed entries and the scenario checks' store."""
         if not self.root.is_dir():
             return iter(())
-        return (path for pattern in ("??/*.json", "??/*.jsonl") for path in self.root.glob(pattern))
+        stores = (self.root / name for name in (SCENARIO_CHECKS_STORE, *OLD_CHECKS_STORES))
+        return itertools.chain(
+            (path for pattern in ("??/*.json", "??/*.jsonl") for path in self.root.glob(pattern)),
+            (path for path in stores if path.is_file()))
 
     @staticmethod
     def _stored_version(path: Path) -> Any:
-        """The code version an entry was written by (its first line for a ``.jsonl``)."""
+        """The code version an entry was written by (its first line for a ``.jsonl``; the
+        scenario checks' store keeps it in its pickled header dict)."""
+        if path.name == SCENARIO_CHECKS_STORE:
+            import pickle
+
+            with open(path, "rb") as handle:
+                stored = pickle.load(handle)  # written by this user's runs (root is theirs)
+            return stored.get("code_version")
         with open(path, encoding="utf-8") as handle:
             stored = json.loads(handle.readline() if path.suffix == ".jsonl" else handle.read())
         return stored.get("code_version")
@@ -333,7 +394,7 @@ class ResultCache:
                 if other_versions and not old:
                     try:
                         stale = self._stored_version(path) != self.version
-                    except (ValueError, AttributeError):
+                    except Exception:  # noqa: BLE001 - unreadable (not JSON, not a pickle)
                         stale = True
                 if old or stale:
                     path.unlink()

@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import tempfile
 from pathlib import Path
+from typing import Iterable
 
 
 def write_text_atomically(path: Path, text: str, *, prefix: str | None = None,
@@ -16,6 +17,21 @@ def write_text_atomically(path: Path, text: str, *, prefix: str | None = None,
     ``make_parent`` creates the directory first, once more if it vanishes between the
     ``mkdir`` and the temporary file (a cache removed with ``rm -rf`` during a run).
     """
+    return write_bytes_atomically(path, text.encode("utf-8"), prefix=prefix,
+                                  make_parent=make_parent)
+
+
+def write_bytes_atomically(path: Path, data: bytes, *, prefix: str | None = None,
+                           make_parent: bool = False) -> Path:
+    """:func:`write_text_atomically` for bytes."""
+    return write_parts_atomically(path, (data,), prefix=prefix, make_parent=make_parent)
+
+
+def write_parts_atomically(path: Path, parts: Iterable[bytes | str], *,
+                           prefix: str | None = None, make_parent: bool = False) -> Path:
+    """:func:`write_text_atomically` of the concatenation of ``parts`` (bytes, or text
+    written as UTF-8), written one after the other: a large file is never built whole in
+    memory first."""
     path = Path(path)
     prefix = prefix or f".{path.name}-"
     for attempt in (1, 2):
@@ -29,8 +45,9 @@ def write_text_atomically(path: Path, text: str, *, prefix: str | None = None,
             if attempt == 2 or not make_parent:
                 raise
     try:
-        with os.fdopen(descriptor, "w", encoding="utf-8") as handle:
-            handle.write(text)
+        with os.fdopen(descriptor, "wb") as handle:
+            for part in parts:
+                handle.write(part.encode("utf-8") if isinstance(part, str) else part)
         os.replace(temporary, path)
     except BaseException:
         try:

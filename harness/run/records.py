@@ -12,7 +12,14 @@ One :class:`Record` per (scenario, sweep point, source), where the source is ``"
     }
 
 Floats are written by ``repr`` (exact round trip); non-finite values (an engine that blew up)
-are written as ``null`` and the record's ``status`` says why.
+are written as ``null`` and the record's ``status`` says why. Each scenario's info and each
+record is one line of compact JSON.
+
+Beside the file, :func:`write_results` keeps its *companion*, ``<name>.pickle``
+(:func:`companion_path`): the same records pickled as plain values, which
+:func:`read_results` loads several times faster than it parses the JSON, and uses only while
+the JSON file is the very one it was written with. The JSON stays the results (``compare``,
+any other reader); the companion can be deleted at no cost but speed.
 
 Record fields (units SI):
 
@@ -39,15 +46,17 @@ from __future__ import annotations
 
 import contextlib
 import gc
+import itertools
 import json
 import math
 import os
+import pickle
 import tempfile
 from dataclasses import asdict, dataclass, field, fields, is_dataclass
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 
-from harness.run.files import write_text_atomically
+from harness.run.files import write_bytes_atomically, write_parts_atomically
 
 FORMAT = "impact-harness-results"
 FORMAT_VERSION = 1
@@ -193,8 +202,9 @@ _PLAIN = (str, int, bool, type(None))
 
 
 def _jsonable(value: Any) -> Any:
-    """Plain JSON values; non-finite floats become None, numpy values plain Python, nested
-    dataclasses dicts."""
+    """Plain JSON values of the built-in types only (what the JSON reads back, and all a
+    results file's companion may hold); non-finite floats become None, numpy values and
+    subclasses of str, int and float plain Python, nested dataclasses dicts."""
     kind = type(value)
     if kind is float:  # the common cases first, by exact type: a results file has millions
         return value if math.isfinite(value) else None
@@ -204,15 +214,29 @@ def _jsonable(value: Any) -> Any:
         return {str(key): _jsonable(item) for key, item in value.items()}
     if isinstance(value, (list, tuple)):
         return [_jsonable(item) for item in value]
-    if hasattr(value, "tolist") and not isinstance(value, (str, bytes)):
+    if isinstance(value, str):  # a str subclass (an engine's Status): its plain text
+        return value[:]
+    if hasattr(value, "tolist") and not isinstance(value, bytes):
         return _jsonable(value.tolist())
-    if isinstance(value, float):
-        return value if math.isfinite(value) else None
+    if isinstance(value, float):  # subclasses as plain floats, as in the JSON
+        return float(value) if math.isfinite(value) else None
+    if isinstance(value, int) and not isinstance(value, bool):
+        return int(value)
     if isinstance(value, Path):
         return value.as_posix()
     if is_dataclass(value) and not isinstance(value, type):
         return _jsonable(asdict(value))
     return value
+
+
+def _plain_line(value: Any) -> str:
+    """:func:`record_line` of ``_jsonable(value)``, without walking ``value`` in Python when
+    json takes it as it is (a run's scenario infos, already plain: 2.7 MB at 1,000
+    scenarios)."""
+    try:
+        return record_line(value)
+    except (TypeError, ValueError):  # a value json does not know, or a non-finite float
+        return record_line(_jsonable(value))
 
 
 def record_line(data: Mapping) -> str:
@@ -221,38 +245,137 @@ def record_line(data: Mapping) -> str:
     return json.dumps(data, ensure_ascii=False, allow_nan=False, separators=(",", ":"))
 
 
-def write_results(path: Path | str, records: Iterable[Record], provenance: Mapping,
+def write_results(path: Path | str, records: Iterable[Record | None], provenance: Mapping,
                   scenarios: Mapping | None = None, *,
-                  lines: Sequence[str | None] | None = None) -> Path:
-    """Write the results file (atomically) and return its path.
+                  lines: Sequence[str | None] | None = None,
+                  pickled: Sequence[bytes] | None = None) -> Path:
+    """Write the results file (atomically) and its companion (:func:`companion_path`), and
+    return the file's path.
 
     ``scenarios`` maps each scenario name to what the reports need besides the records
     (description, tags, system, sweep parameter, labels of the speeds, gates). ``lines``
     (parallel to ``records``): a record's :func:`record_line` when already known (read from
-    the result cache with the record, which is unchanged since), else None.
+    the result cache with the record, which is unchanged since; the record may then be
+    None), else None. ``pickled``: the records as the companion holds them, pickled lists of
+    :meth:`Record.as_dict` (in order, all of them), when known; without it the companion is
+    written only when every record is at hand.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     records = list(records)
-    if lines is None:
-        lines = [None] * len(records)
+    lines = [None] * len(records) if lines is None else list(lines)
     if len(lines) != len(records):
         raise ValueError(f"{len(lines)} lines for {len(records)} records")
+    datas = None
+    if pickled is None and all(line is None for line in lines):
+        datas = [record.as_dict() for record in records]
+        lines = [record_line(data) for data in datas]
     document = {
         "format": FORMAT,
         "format_version": FORMAT_VERSION,
         "provenance": _jsonable(dict(provenance)),
-        "scenarios": _jsonable(dict(scenarios or {})),
     }
-    # One record per line: small, and a diff of two results files reads record by record.
-    records_text = ",\n".join(record_line(record.as_dict()) if line is None else line
-                              for record, line in zip(records, lines))
+    # One scenario per line, one record per line: a diff of two results files reads record by
+    # record, and the compact lines are written by json's C encoder (indented text is not).
+    scenario_lines = ",".join(f"\n  {record_line(str(name))}: {_plain_line(info)}"
+                              for name, info in (scenarios or {}).items())
+    lines = [record_line(record.as_dict()) if line is None else line
+             for record, line in zip(records, lines)]
     head = json.dumps(document, indent=1, ensure_ascii=False, allow_nan=False)
-    text = head[:-2] + RECORDS_START + records_text + RECORDS_END
+    head = (head[:-2] + ',\n "scenarios": {' + scenario_lines + ("\n }" if scenario_lines else "}")
+            + RECORDS_START)
     # A unique temporary in the same directory, then an atomic rename: two runs writing the
-    # same file at once each replace it whole; a reader never sees half a file.
-    write_text_atomically(path, text)
+    # same file at once each replace it whole; a reader never sees half a file. Written line
+    # by line: the 56 MB of a large run are never copied into one text first.
+    write_parts_atomically(path, itertools.chain(
+        (head,), _separated(lines, ",\n"), (RECORDS_END,)))
+    if datas is not None:
+        pickled = [pickle.dumps(datas, protocol=pickle.HIGHEST_PROTOCOL)]
+    _write_companion(path, lines, pickled)
     return path
+
+
+def _separated(parts: Sequence[str], separator: str) -> Iterable[str]:
+    """``parts`` with ``separator`` between each two, in pieces of a few hundred (what
+    ``separator.join(parts)`` writes, without the one large copy)."""
+    for start in range(0, len(parts), 512):
+        yield ("" if start == 0 else separator) + separator.join(parts[start:start + 512])
+
+
+#: The ``format`` of a results file's companion (:func:`companion_path`).
+COMPANION_FORMAT = "impact-harness-results-companion"
+
+
+def companion_path(path: Path | str) -> Path:
+    """The companion of the results file ``path``: ``<name>.pickle`` beside it.
+
+    It holds the same records as the file, pickled (plain dicts, lists, strings and numbers:
+    nothing else is unpickled), which :func:`read_results` loads several times faster than
+    it parses the JSON. It is used only while the results file is the one it was written
+    with (the file's size, modification time and inode, recorded in it, still match: each
+    write replaces the file by a new one); anything else reads the JSON, which stays the
+    results. Deleting it costs only speed.
+    """
+    path = Path(path)
+    return path.with_name(path.name + ".pickle")
+
+
+def _write_companion(path: Path, lines: Sequence[str], pickled: Sequence[bytes] | None
+                     ) -> None:
+    """Write (or, when the records' pickles are not at hand, remove) ``path``'s companion:
+    a header, the records' dicts in ``pickled`` parts, then the records' ``lines`` of the
+    file (what ``Results.record_lines`` gives); a companion that cannot be written is no
+    error (the results file is whole)."""
+    companion = companion_path(path)
+    try:
+        if pickled is None:
+            companion.unlink(missing_ok=True)
+            return
+        status = path.stat()
+        header = {"format": COMPANION_FORMAT, "results_size": status.st_size,
+                  "results_mtime_ns": status.st_mtime_ns, "results_inode": status.st_ino,
+                  "records": len(lines), "parts": len(pickled)}
+        write_bytes_atomically(companion, pickle.dumps(header) + b"".join(pickled)
+                               + pickle.dumps(list(lines), protocol=pickle.HIGHEST_PROTOCOL))
+    except OSError:
+        pass
+
+
+class _PlainUnpickler(pickle.Unpickler):
+    """An unpickler of plain values only: no class or function is ever looked up (a
+    companion holds dicts, lists, strings, numbers, booleans and None)."""
+
+    def find_class(self, module, name):
+        raise pickle.UnpicklingError(f"{module}.{name}: a companion holds plain values only")
+
+
+def _read_companion(path: Path, status: os.stat_result
+                    ) -> tuple[list[dict], list[str]] | None:
+    """The record dicts and lines of ``path``'s companion when it matches the file
+    (``status``), else None (absent, written for another file, damaged: the JSON is read)."""
+    try:
+        with open(companion_path(path), "rb") as handle:
+            header = _PlainUnpickler(handle).load()
+            if not (isinstance(header, dict) and header.get("format") == COMPANION_FORMAT
+                    and header.get("results_size") == status.st_size
+                    and header.get("results_mtime_ns") == status.st_mtime_ns
+                    and header.get("results_inode") == status.st_ino
+                    and isinstance(header.get("parts"), int)):
+                return None
+            datas: list = []
+            for _ in range(header["parts"]):  # one pickle each: an unpickler (memo) each
+                part = _PlainUnpickler(handle).load()
+                if not isinstance(part, list):
+                    return None
+                datas += part
+            lines = _PlainUnpickler(handle).load()
+    except Exception:  # noqa: BLE001 - an unreadable companion is only slower reading
+        return None
+    if (len(datas) != header.get("records") or not all(isinstance(d, dict) for d in datas)
+            or not isinstance(lines, list) or len(lines) != len(datas)
+            or not all(isinstance(line, str) for line in lines)):
+        return None
+    return datas, lines
 
 
 #: What comes between the header and the first record line of a results file, and after the
@@ -307,10 +430,18 @@ def collector_paused():
 
 def _read_results(path: Path) -> Results:
     try:
-        text = path.read_text(encoding="utf-8")
-        document, lines = _split_records(text)
-        if document is None:  # not as write_results lays it out: read whole
-            document = json.loads(text)
+        with open(path, "rb") as handle:
+            status = os.fstat(handle.fileno())
+            data = handle.read()
+        companion = _read_companion(path, status)
+        document = None if companion is None else _head_of(data)
+        if document is not None:  # the records and their lines from the companion
+            datas, lines = companion
+        else:
+            text = str(data, "utf-8")
+            datas, (document, lines) = None, _split_records(text)
+            if document is None:  # not as write_results lays it out: read whole
+                document = json.loads(text)
     except FileNotFoundError:
         raise FileNotFoundError(
             f"{path}: no results file; run `impact-harness run` (or `suite`) first") from None
@@ -323,12 +454,26 @@ def _read_results(path: Path) -> Results:
     if document.get("format_version") != FORMAT_VERSION:
         raise ValueError(f"{path}: results format version {document.get('format_version')!r}; "
                          f"this harness reads {FORMAT_VERSION}")
-    records = [Record.from_dict(item) for item in document.get("records", [])]
+    items = datas if datas is not None else document.get("records", [])
+    records = [Record.from_dict(item) for item in items]
     results = Results(records=records, provenance=document.get("provenance", {}),
                       scenarios=document.get("scenarios", {}))
     if lines is not None and len(lines) == len(records):
         results._lines = (records, len(records), lines)
     return results
+
+
+def _head_of(data: bytes) -> dict | None:
+    """The document before the records of a results file laid out by :func:`write_results`
+    (its records then come from the companion), else None."""
+    start = data.find(RECORDS_START.encode())
+    if start < 0 or not data.endswith(RECORDS_END.encode()):
+        return None
+    try:
+        document = json.loads(str(data[:start], "utf-8") + "\n}")
+    except ValueError:
+        return None
+    return document if isinstance(document, dict) and "records" not in document else None
 
 
 _DECODER = json.JSONDecoder()
@@ -363,4 +508,5 @@ def _split_records(text: str) -> tuple[dict | None, list[str] | None]:
 
 
 __all__ = ["ANALYTIC", "DEFAULT_RESULTS", "FORMAT", "FORMAT_VERSION", "Record", "Results",
-           "check_writable", "collector_paused", "read_results", "record_line", "write_results"]
+           "check_writable", "collector_paused", "companion_path", "read_results", "record_line",
+           "write_results"]

@@ -29,8 +29,12 @@ Parallelism and cache
     (:class:`harness.run.cache.ResultCache`, key: the scene at the point, the engine and its
     version, the complete settings and the code version); only the misses run, through
     :func:`harness.run.executor.run_tasks` (local process pool, or Dask), and are stored. The
-    cache holds the engine's raw output; departures and the other derived numbers are
-    recomputed every run (microseconds). The misses travel in chunks of one engine and
+    cache holds the engine's raw output, and each scenario's finished records whole
+    (:func:`_scenario_key`: one entry per scenario, the records' lines of the results file
+    with the summary a run needs of them, so a warm run reads, parses and checks no record).
+    A large run builds the records (departures, verdicts, contact histories) of the other
+    scenarios on forked workers (:func:`_build_scenarios`), which store their entries and
+    send back lines only. The misses travel in chunks of one engine and
     settings (:func:`task_group`), each one :meth:`Engine.run_many` call
     (:func:`engine_chunk`), whose runs equal one :meth:`Engine.run` each bit for bit
     (``--chunk-size 1``: one ``run`` per task). It also keeps each several-contact point's
@@ -70,12 +74,15 @@ Exit status (see :mod:`harness.cli`)
 from __future__ import annotations
 
 import argparse
+import gc
+import json
 import math
+import pickle
 import signal
 import sys
 import threading
 import time
-from dataclasses import asdict, dataclass, field, fields, is_dataclass
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence, TextIO
 
@@ -92,6 +99,7 @@ from harness.run.records import (
     FORMAT,
     FORMAT_VERSION,
     Record,
+    _jsonable,
     check_writable,
     collector_paused,
     record_line,
@@ -155,7 +163,7 @@ def engine_task(task: dict) -> dict:
     except Exception as error:  # reported in the record, never dropped
         return {"status": f"error: {type(error).__name__}: {error}",
                 "wall_time_s": time.perf_counter() - start}
-    return _task_output(engine, run, time.perf_counter() - start)
+    return _stored_by_worker(task, _task_output(engine, run, time.perf_counter() - start))
 
 
 def engine_chunk(tasks: list[dict]) -> list[dict]:
@@ -181,7 +189,33 @@ def engine_chunk(tasks: list[dict]) -> list[dict]:
         engine = load_engine(first["engine"])
         runs = engine.run_many([task["scene"] for task in tasks], first["settings"])
     share = (time.perf_counter() - start) / len(tasks)
-    return [_task_output(engine, run, share) for run in runs]
+    return [_stored_by_worker(task, _task_output(engine, run, share))
+            for task, run in zip(tasks, runs)]
+
+
+#: Keys of an engine task's output, popped by the runner: the worker stored it in the cache,
+#: or could not (why) (:func:`_stored_by_worker`).
+STORED_BY_WORKER, STORE_FAILED_IN_WORKER = "stored_by_worker", "store_failed_in_worker"
+
+
+def _stored_by_worker(task: dict, output: dict) -> dict:
+    """``output``, stored in the result cache by the process that ran the task when the
+    task says where (``task["store"]``: root, code version and key; the local pool), and
+    marked so (:data:`STORED_BY_WORKER`, or why not: :data:`STORE_FAILED_IN_WORKER`). A
+    skipped or failed run is never stored."""
+    where = task.get("store")
+    if where is None or output["status"].startswith(("skipped", "error")):
+        return output
+    from harness.run.cache import ResultCache
+
+    root, version, key = where
+    try:
+        ResultCache(root, version=version).put(key, output)
+    except OSError as error:
+        output[STORE_FAILED_IN_WORKER] = str(error)
+        return output
+    output[STORED_BY_WORKER] = True
+    return output
 
 
 def task_group(task: dict) -> str:
@@ -316,17 +350,51 @@ class GateResult:
                 f"departure from {self.law} {value} vs max {self.max_departure:g}: {self.status}")
 
 
-@dataclass
 class RunOutcome:
-    records: list[Record]
-    gates: list[GateResult]
-    provenance: dict
-    scenarios: dict
-    cache_stats: dict = field(default_factory=dict)
-    warnings: list[str] = field(default_factory=list)  # cache problems, one line each
-    # Parallel to records: a record's line of the results file when read from the cache
-    # with it (unchanged since), else None (harness.run.records.write_results).
-    record_lines: list = field(default_factory=list)
+    """What :func:`run` returns: the records, the gates, the provenance, each scenario's info.
+
+    ``record_lines`` (parallel to the records): each record's line of the results file
+    (:func:`harness.run.records.record_line`). A record read from the cache, or built on a
+    forked worker, travels as its line only and is parsed the first time :attr:`records` is
+    asked for (a warm run that only writes the results file never parses them).
+    """
+
+    def __init__(self, records: Sequence[Record | None], gates: list[GateResult],
+                 provenance: dict, scenarios: dict, cache_stats: dict | None = None,
+                 warnings: list[str] | None = None, record_lines: Sequence | None = None,
+                 internal: Sequence[int] = (), record_pickles: Sequence[bytes] | None = None
+                 ) -> None:
+        self._records = list(records)
+        self.gates = gates
+        self.provenance = provenance
+        self.scenarios = scenarios
+        self.cache_stats = {} if cache_stats is None else cache_stats
+        self.warnings = [] if warnings is None else warnings  # cache problems, one line each
+        self.record_lines = (list(record_lines) if record_lines is not None
+                             else [None] * len(self._records))
+        if len(self.record_lines) != len(self._records):
+            raise ValueError(f"{len(self.record_lines)} lines for {len(self._records)} records")
+        self._internal = list(internal)  # positions of the internal-error records
+        # The records pickled in parts, for the results file's companion (write_results).
+        self.record_pickles = None if record_pickles is None else list(record_pickles)
+
+    @property
+    def records(self) -> list[Record]:
+        """Every record, in run order (those held as lines parsed now, once)."""
+        if any(record is None for record in self._records):
+            with collector_paused():
+                self._records = [self._record_at(i) for i in range(len(self._records))]
+        return self._records
+
+    def _record_at(self, index: int) -> Record:
+        record = self._records[index]
+        if record is None:
+            record = Record.from_dict(json.loads(self.record_lines[index]))
+        return record
+
+    @property
+    def record_count(self) -> int:
+        return len(self._records)
 
     @property
     def failed_gates(self) -> list[GateResult]:
@@ -335,7 +403,7 @@ class RunOutcome:
     @property
     def internal_errors(self) -> list[Record]:
         """Records the harness itself failed to compute (a bug: exit status 3)."""
-        return [r for r in self.records if r.status.startswith("error: internal")]
+        return [self._record_at(index) for index in self._internal]
 
 
 def select_scenarios(files: Sequence[str | Path] | None = None,
@@ -454,8 +522,23 @@ def _point_dict(point) -> dict:
             "label": point.label}
 
 
-def _scene_payload(scene) -> dict:
-    return asdict(scene)
+def _scene_payload(scene):
+    """The scene as a cache key's payload holds it: the dataclass itself, hashed field by
+    field (:func:`harness.run.cache.canonical_json`), never copied."""
+    return scene
+
+
+def _settings_of(engine, preset: str, overrides: dict, memo: dict) -> dict | str:
+    """``engine.settings(preset, overrides)``, or the ``ValueError``'s message; computed
+    once per engine, preset and overrides (a deep copy and a check each: thousands of tasks
+    share a handful)."""
+    key = (engine.name, preset, json.dumps(overrides, sort_keys=True, default=repr))
+    if key not in memo:
+        try:
+            memo[key] = engine.settings(preset, overrides)
+        except ValueError as error:
+            memo[key] = str(error)
+    return memo[key]
 
 
 def _engine_status(engines: Sequence[str]) -> tuple[dict, dict]:
@@ -515,28 +598,32 @@ def run(
     needs_engines = any(not s.analytic_only and _engines_of(s, wanted_engines) for s in scenarios)
     loaded, missing = _engine_status(wanted_engines) if needs_engines else ({}, {})
 
-    # 0. Whole scenarios whose finished records the cache holds: one entry each.
+    # 0. Whole scenarios whose finished records the cache holds: one entry each, its lines
+    # kept as text (the results file's lines) beside the summary the run needs of them.
     scenario_keys: dict[str, str | None] = {}
-    stored_records: dict[str, tuple[list[Record], list[str]]] = {}
+    stored: dict[str, _Built] = {}
     stored_runs = 0  # engine runs of the scenarios read whole from the cache
-    with collector_paused():  # nothing read here is garbage yet
-        for scenario in scenarios:
-            key = scenario_keys[scenario.name] = _scenario_key(
-                scenario, cache, loaded, missing, wanted_engines, presets, command_overrides,
-                history)
-            found = _stored_scenario_records(scenario, cache, key, presets,
-                                             len(_engines_of(scenario, wanted_engines)))
-            if found is not None:
-                stored_records[scenario.name] = found
-                runs = sum(record.source != ANALYTIC for record in found[0])
-                cache.hits += runs  # each an engine run the cache spared, as read one by one
-                stored_runs += runs
+    for scenario in scenarios:
+        key = scenario_keys[scenario.name] = _scenario_key(
+            scenario, cache, loaded, missing, wanted_engines, presets, command_overrides,
+            history)
+        found = _stored_scenario(scenario, cache, key, presets,
+                                 len(_engines_of(scenario, wanted_engines)))
+        if found is not None:
+            stored[scenario.name] = found
+            runs = found.summary["counts"]["engine_runs"]
+            cache.hits += runs  # each an engine run the cache spared, as read one by one
+            stored_runs += runs
 
-    # 1. Engine tasks: build, look up in the cache.
+    # 1. Engine tasks: build, look up in the cache. On the local pool each worker stores the
+    # results it simulates (in parallel, as each chunk finishes); Dask's may lie elsewhere.
+    store_in_worker = (None if cache is None or not cache.enabled or executor != "local"
+                       else (str(cache.root), cache.version))
+    settings_memo: dict = {}
     plan: list[tuple[Scenario, Any, str, str, dict]] = []  # (scenario, point, engine, preset, item)
     tasks, task_keys, task_slots = [], [], []
     for scenario in scenarios:
-        if scenario.analytic_only or scenario.name in stored_records:
+        if scenario.analytic_only or scenario.name in stored:
             continue
         for point in scenario.point_list():
             scene = None
@@ -552,10 +639,9 @@ def run(
                                  **command_overrides.get(engine_name, {})}
                     item["overrides"] = overrides
                     item["history"] = (scenario.sweep is None) if history is None else history
-                    try:
-                        settings = engine.settings(preset, overrides)
-                    except ValueError as error:
-                        item["output"] = {"status": f"error: settings: {error}"}
+                    settings = _settings_of(engine, preset, overrides, settings_memo)
+                    if isinstance(settings, str):
+                        item["output"] = {"status": f"error: settings: {settings}"}
                         continue
                     if scene is None:
                         scene = scenario.scene(point)
@@ -572,14 +658,15 @@ def run(
                         item["output"], item["cached"] = cached, True
                         continue
                     tasks.append({"engine": engine_name, "settings": settings, "scene": scene,
-                                  "time_limit_s": time_limit_s})
+                                  "time_limit_s": time_limit_s,
+                                  "store": None if store_in_worker is None
+                                  else (*store_in_worker, key)})
                     task_keys.append(key)
                     task_slots.append(item)
     # Several-contact references the records will need and the cache lacks: tasks of the
     # same executor, ahead of the engine runs (each takes up to a second).
-    reference_tasks, reference_keys = _reference_tasks(
-        [s for s in scenarios if s.name not in stored_records], cache)
-    computed_references: dict[tuple[str, int], dict] = {}
+    reference_tasks, reference_keys, computed_references = _reference_tasks(
+        [s for s in scenarios if s.name not in stored], cache)
     if cache is not None:
         warnings += [f"cache entry rejected (simulated again): {entry}"
                      for entry in cache.rejected]
@@ -596,8 +683,14 @@ def run(
                     _store_reference(cache, reference_keys[index], output["reference"])
             return
         index -= len(reference_tasks)
+        stored = output.pop(STORED_BY_WORKER, False)
+        problem = output.pop(STORE_FAILED_IN_WORKER, None)
         task_slots[index]["output"], task_slots[index]["cached"] = output, False
-        if cache is None or cache_failed or output["status"].startswith(("skipped", "error")):
+        if problem is not None and not cache_failed:
+            cache_failed.append(f"cache {cache.root}: cannot store results ({problem}); "
+                                "the run goes on without the cache")
+        if (stored or cache is None or cache_failed
+                or output["status"].startswith(("skipped", "error"))):
             return
         try:
             cache.put(task_keys[index], output)
@@ -623,38 +716,36 @@ def run(
         for warning in warnings:
             print(f"warning: {warning}", file=log, flush=True)
 
-    # 3. Records, scenario by scenario.
+    # 3. Records, scenario by scenario: those not read whole from the cache built (on forked
+    # workers for a large run), each scenario's entry stored as it is built.
     by_scenario: dict[str, list] = {}
     for entry in plan:
         by_scenario.setdefault(entry[0].name, []).append(entry)
-    records: list[Record] = []
-    record_lines: list[str | None] = []
+    built = _build_scenarios([s for s in scenarios if s.name not in stored], by_scenario,
+                             cache, computed_references, scenario_keys,
+                             workers=1 if executor == "local" and workers == 1 else workers)
+    records: list[Record | None] = []
+    record_lines: list[str] = []
+    record_pickles: list[bytes] | None = []
+    internal: list[int] = []
     gates: list[GateResult] = []
     infos: dict[str, dict] = {}
     for number, scenario in enumerate(scenarios, 1):
-        tick = time.perf_counter()
         infos[scenario.name] = scenario_info(scenario)
-        entries = by_scenario.get(scenario.name, [])
-        scenario_records, scenario_lines = stored_records.get(scenario.name, (None, None))
-        if scenario_records is None:
-            scenario_records = []
-            for point in scenario.point_list():
-                point_entries = [e for e in entries if e[1].index == point.index]
-                scenario_records += _point_records_cached(
-                    scenario, point, point_entries, cache,
-                    reference=computed_references.get((scenario.name, point.index)))
-            _store_scenario_records(cache, scenario_keys.get(scenario.name), entries,
-                                    scenario_records)
-            scenario_lines = [None] * len(scenario_records)
-        record_lines += scenario_lines
-        infos[scenario.name]["references"] = references.collect(scenario_records)
-        scenario_gates = check_gates(scenario, scenario_records)
-        records += scenario_records
+        result = stored.get(scenario.name) or built[scenario.name]
+        internal += [len(records) + position for position in result.internal]
+        records += result.records if result.records is not None else [None] * len(result.lines)
+        record_lines += result.lines
+        if result.pickled is None or record_pickles is None:
+            record_pickles = None
+        else:
+            record_pickles.append(result.pickled)
+        infos[scenario.name]["references"] = result.summary["references"]
+        scenario_gates = [GateResult(**gate) for gate in result.summary["gates"]]
         gates += scenario_gates
         if log is not None:
-            print(_progress_line(number, len(scenarios), scenario, scenario_records,
-                                 scenario_gates, time.perf_counter() - tick),
-                  file=log, flush=True)
+            print(_progress_line(number, len(scenarios), scenario, result.summary["counts"],
+                                 scenario_gates), file=log, flush=True)
 
     settings_table = {  # the presets as run: with the command line's --set overrides
         name: {preset: engine.settings(preset, command_overrides.get(name)) for preset in PRESETS}
@@ -680,20 +771,15 @@ def run(
         wall_time_s=time.perf_counter() - started,
     )
     return RunOutcome(records=records, gates=gates, provenance=info, scenarios=infos,
-                      cache_stats=stats, warnings=warnings, record_lines=record_lines)
+                      cache_stats=stats, warnings=warnings, record_lines=record_lines,
+                      internal=internal, record_pickles=record_pickles)
 
 
-def _definition(value: Any) -> Any:
-    """A scenario (or any of its parts) as plain JSON-able values for a cache key: every
-    field but the file's ``path`` (the records do not depend on where the file lies)."""
-    if is_dataclass(value) and not isinstance(value, type):
-        return {f.name: _definition(getattr(value, f.name)) for f in fields(value)
-                if f.name != "path"}
-    if isinstance(value, Mapping):
-        return {str(key): _definition(item) for key, item in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_definition(item) for item in value]
-    return value
+def _definition(scenario: Scenario) -> dict:
+    """A scenario as a cache key's payload holds it: every field but the file's ``path`` (the
+    records do not depend on where the file lies); the nested dataclasses and mappings are
+    spelled by :func:`harness.run.cache.canonical_json`."""
+    return {f.name: getattr(scenario, f.name) for f in fields(scenario) if f.name != "path"}
 
 
 def _scenario_key(scenario: Scenario, cache, loaded: Mapping, missing: Mapping,
@@ -725,43 +811,159 @@ def _scenario_key(scenario: Scenario, cache, loaded: Mapping, missing: Mapping,
         return None
 
 
-def _stored_scenario_records(scenario: Scenario, cache, key: str | None,
-                             presets: Sequence[str], engine_count: int
-                             ) -> tuple[list[Record], list[str]] | None:
-    """The scenario's records from its cache entry (:func:`_scenario_key`) with their lines
-    of the results file (:func:`harness.run.records.record_line`), or None.
+@dataclass
+class _Built:
+    """A scenario's finished records: the results file's ``lines`` (one per record), the
+    records themselves when built in this process (None: read from the cache or built on a
+    worker, parsed from the lines when asked for), the ``summary`` the run needs of them
+    (:func:`_summary`), the positions of internal-error records and the records pickled."""
 
-    An entry is used only when it holds one record per law and engine run of every point,
-    each of this scenario and readable as a :class:`Record`; any other is a miss, listed in
+    lines: list[str]
+    summary: dict
+    records: list[Record] | None = None
+    internal: list[int] = field(default_factory=list)
+    # The records' dicts (Record.as_dict, as the lines hold them) pickled, for the results
+    # file's companion (harness.run.records.companion_path); None when not at hand.
+    pickled: bytes | None = None
+
+
+def _stored_scenario(scenario: Scenario, cache, key: str | None, presets: Sequence[str],
+                     engine_count: int) -> _Built | None:
+    """The scenario's finished records from its cache entry (:func:`_scenario_key`), as the
+    lines of the results file (not parsed) and their summary, or None.
+
+    The entry was checked when it was stored (:func:`_store_scenario`) and its checksum
+    shows it unchanged since; it is used only when it holds one line per law and engine
+    run of every point and a summary of the expected shape. Any other is a miss, listed in
     the cache's ``rejected`` (the run's warnings) and rebuilt.
     """
     if key is None:
         return None
-    points = len(scenario.point_list())
-    expected = points * (len(scenario.laws) + engine_count * len(presets))
+    expected = len(scenario.point_list()) * (len(scenario.laws) + engine_count * len(presets))
+    gate_fields = {f.name for f in fields(GateResult)}
 
-    def check(stored: list) -> str | None:
-        if len(stored) != expected:
+    def check(summary) -> str | None:
+        if not (isinstance(summary, dict) and isinstance(summary.get("references"), list)
+                and isinstance(summary.get("gates"), list)
+                and all(isinstance(g, dict) and g.keys() == gate_fields
+                        for g in summary["gates"])
+                and isinstance(summary.get("counts"), dict)
+                and summary["counts"].keys() == set(_COUNTS)
+                and all(isinstance(v, int) for v in summary["counts"].values())):
+            return "no summary of the records"
+        if summary["counts"]["records"] != expected:
             return f"not {expected} records"
-        for data in stored:
-            if not (isinstance(data, dict) and data.get("scenario") == scenario.name
-                    and isinstance(data.get("status"), str)
-                    and isinstance(data.get("point"), dict)):
-                return "a record of another scenario, or without status or point"
-            if data["status"] == "ok" and not _finite_speeds(data.get("u_after"),
-                                                              data.get("u_before")):
-                return (f"{data.get('source')} record at point {data['point'].get('label')!r}: "
-                        "status ok without finite speeds after, as many as before")
         return None
 
-    entry = cache.get_lines(key, check=check)
+    entry = cache.get_line_texts(key, check_summary=check)
     if entry is None:
         return None
-    try:
-        return [Record.from_dict(data) for data, _ in entry], [line for _, line in entry]
-    except TypeError as error:  # a field missing or of the wrong kind
-        cache.rejected.append(f"{cache.lines_path(key)}: {error}")
+    summary, lines, pickled = entry
+    if len(lines) != expected:
+        cache.rejected.append(f"{cache.lines_path(key)}: {len(lines)} lines, not {expected}")
         return None
+    return _Built(lines=lines, summary=summary, pickled=pickled)
+
+
+#: The counts of a scenario's records its summary keeps (for the progress line, the hits).
+_COUNTS = ("records", "points", "laws", "laws_ok", "engine_runs", "cached", "skipped",
+           "flagged")
+
+
+def _summary(scenario: Scenario, records: Sequence[Record]) -> dict:
+    """What the run needs of a scenario's records besides the records: each point's
+    reference (its scenario info), its gates (:func:`check_gates`) and the counts of the
+    progress line; plain JSON values, kept in the scenario's cache entry."""
+    laws = [r for r in records if r.source == ANALYTIC]
+    engines = [r for r in records if r.source != ANALYTIC]
+    counts = {"records": len(records), "points": len(scenario.point_list()),
+              "laws": len(laws), "laws_ok": sum(r.ok for r in laws),
+              "engine_runs": len(engines), "cached": sum(r.cached for r in engines),
+              "skipped": sum(r.skipped for r in engines),
+              "flagged": sum(not r.ok and not r.skipped for r in engines)}
+    return _jsonable({"references": references.collect(records),
+                      "gates": [asdict(gate) for gate in check_gates(scenario, records)],
+                      "counts": counts})
+
+
+#: Below this many records to build, forking workers costs more than it saves.
+MIN_PARALLEL_RECORDS = 1000
+#: What the forked record builders read (:func:`_build_job`): set around the pool only.
+_BUILD_STATE: tuple | None = None
+
+
+def _build_scenarios(scenarios: Sequence[Scenario], by_scenario: Mapping[str, list], cache,
+                     computed_references: Mapping, scenario_keys: Mapping, *,
+                     workers: int | None = None) -> dict[str, _Built]:
+    """:func:`_build_scenario` of each scenario, by name.
+
+    A large run (:data:`MIN_PARALLEL_RECORDS`) builds them on ``workers`` forked processes
+    (None: every core), which read the engine outputs and references from this process's
+    memory and send back the records' lines and summaries only (the records are parsed from
+    the lines when asked for: :attr:`RunOutcome.records`); each stores its scenarios' cache
+    entries. Records are the same either way (built by the same code from the same values).
+    """
+    from harness.run.executor import default_workers, map_forked
+
+    global _BUILD_STATE
+    workers = default_workers() if workers is None else workers
+    size = sum(len(s.point_list()) * len(s.laws) + len(by_scenario.get(s.name, ()))
+               for s in scenarios)  # records to build
+    if workers <= 1 or size < MIN_PARALLEL_RECORDS:
+        return {s.name: _build_scenario(s, by_scenario.get(s.name, []), cache,
+                                        computed_references, scenario_keys.get(s.name))
+                for s in scenarios}
+    # Small blocks, handed out as workers free up: scenarios differ a thousandfold in cost.
+    block = max(1, len(scenarios) // (workers * 16))
+    blocks = [list(range(start, min(start + block, len(scenarios))))
+              for start in range(0, len(scenarios), block)]
+    _BUILD_STATE = (scenarios, by_scenario, cache, computed_references, scenario_keys)
+    gc.freeze()  # the workers' collector never walks (and so copies) the inherited objects
+    try:
+        done = map_forked(_build_job, blocks, workers)
+    finally:
+        gc.unfreeze()
+        _BUILD_STATE = None
+    return {scenarios[index].name: result for indices, results in zip(blocks, done)
+            for index, result in zip(indices, results)}
+
+
+def _build_job(indices: list[int]) -> list[_Built]:
+    """The scenarios ``indices`` of :data:`_BUILD_STATE` built on a forked worker, without
+    their records (only lines travel back)."""
+    scenarios, by_scenario, cache, computed_references, scenario_keys = _BUILD_STATE
+    with collector_paused():  # a short-lived worker: nothing it builds is garbage yet
+        results = []
+        for index in indices:
+            scenario = scenarios[index]
+            result = _build_scenario(scenario, by_scenario.get(scenario.name, []), cache,
+                                     computed_references, scenario_keys.get(scenario.name))
+            result.records = None
+            results.append(result)
+        return results
+
+
+def _build_scenario(scenario: Scenario, entries: Sequence, cache, computed_references: Mapping,
+                    key: str | None) -> _Built:
+    """A scenario's records from its engine entries (``(scenario, point, engine, preset,
+    item)`` of the run's plan) and its points' references, with their lines and summary;
+    its cache entry stored when ``key`` (:func:`_store_scenario`)."""
+    by_point: dict[int, list] = {}
+    for entry in entries:
+        by_point.setdefault(entry[1].index, []).append(entry)
+    records: list[Record] = []
+    for point in scenario.point_list():
+        records += _point_records_or_errors(
+            scenario, point, by_point.get(point.index, []), cache=cache,
+            reference=computed_references.get((scenario.name, point.index)))
+    summary = _summary(scenario, records)
+    datas = [record.as_dict() for record in records]
+    lines = [record_line(data) for data in datas]
+    internal = [i for i, r in enumerate(records) if r.status.startswith("error: internal")]
+    if not internal:
+        _store_scenario(cache, key, entries, records, datas, lines, summary)
+    return _Built(lines=lines, summary=summary, records=records, internal=internal,
+                  pickled=pickle.dumps(datas, protocol=pickle.HIGHEST_PROTOCOL))
 
 
 def _finite_speeds(after, before) -> bool:
@@ -771,78 +973,34 @@ def _finite_speeds(after, before) -> bool:
                     and math.isfinite(value) for value in after))
 
 
-def _store_scenario_records(cache, key: str | None, engine_entries: Sequence,
-                            records: Sequence[Record]) -> None:
+def _store_scenario(cache, key: str | None, engine_entries: Sequence, records: Sequence[Record],
+                    datas: Sequence[dict], lines: Sequence[str], summary: dict) -> None:
     """Keep a scenario's records under ``key`` when every engine run was cacheable (none
-    skipped or failed) and no record is an internal error; as a warm run reads them back:
-    every engine record ``cached``. Stored as the lines the results file holds, one per
-    record, so a warm run writes them as read."""
+    skipped or failed) and none is an ok record without finite speeds (a record the lookup
+    would reject every run); as a warm run reads them back: every engine record ``cached``
+    (``datas``: each record's :meth:`Record.as_dict`, ``lines`` their lines). Stored as the
+    lines the results file holds, one per record, with the ``summary``, so a warm run
+    writes them as read."""
     if key is None or cache is None or not cache.enabled:
         return
     if not all(isinstance(item.get("output"), dict) and item.get("key") is not None
                and not str(item["output"].get("status", "")).startswith(("skipped", "error"))
                for _, _, _, _, item in engine_entries):
         return
-    if any(record.status.startswith("error: internal")
-           or (record.ok and not _finite_speeds(record.u_after, record.u_before))
+    if any(record.ok and not _finite_speeds(record.u_after, record.u_before)
            for record in records):
-        return  # (the second: a record the lookup would reject every run)
-    lines = []
-    for record in records:
-        data = record.as_dict()
-        if record.source != ANALYTIC:
-            data["cached"] = True
-        lines.append(record_line(data))
+        return
+    stored_datas = [data if record.source == ANALYTIC or record.cached
+                    else {**data, "cached": True} for record, data in zip(records, datas)]
+    stored_lines = [line if stored is data else record_line(stored)
+                    for data, stored, line in zip(datas, stored_datas, lines)]
+    counts = summary["counts"]
+    stored_summary = {**summary, "counts": {**counts, "cached": counts["engine_runs"]}}
     try:
-        cache.put_lines(key, lines)
+        cache.put_lines(key, stored_lines, stored_summary,
+                        pickle.dumps(stored_datas, protocol=pickle.HIGHEST_PROTOCOL))
     except OSError:  # the run goes on without the cache (the engine runs' store warns)
         pass
-
-
-def _point_records_cached(scenario: Scenario, point, engine_entries: Sequence,
-                          cache, *, reference: dict | None = None) -> list[Record]:
-    """:func:`_point_records_or_errors`, kept in ``cache`` when every input is cacheable.
-
-    A warm run spends most of its time rebuilding records from cached engine output
-    (departures, contact histories, verdicts): the finished records of a point depend only
-    on the scenario's definition, the point, and each engine run's cache key, overrides and
-    history flag, which make the key. A point with an engine run that was skipped or failed
-    (never cached) is rebuilt every run. Records read back differ from fresh ones only where
-    the results file already writes them alike (a non-finite float is ``None`` in both).
-    ``reference``: the point's reference when already computed (:func:`point_records`).
-    """
-    cacheable = cache is not None and cache.enabled and all(
-        item.get("key") is not None and isinstance(item.get("output"), dict)
-        and not str(item["output"].get("status", "")).startswith(("skipped", "error"))
-        for _, _, _, _, item in engine_entries)
-    if not cacheable:
-        return _point_records_or_errors(scenario, point, engine_entries, cache=cache,
-                                        reference=reference)
-    try:
-        key = cache.key({"kind": "point-records", "scenario": _definition(scenario),
-                         "point": point.index,
-                         "engine_runs": [[engine_name, preset, item["key"],
-                                          item.get("overrides"), item.get("history")]
-                                         for _, _, engine_name, preset, item in engine_entries]})
-    except TypeError:  # a definition holding a value without a canonical spelling: not kept
-        return _point_records_or_errors(scenario, point, engine_entries, cache=cache,
-                                        reference=reference)
-    stored = cache.get(key, check=lambda entry: None if isinstance(entry.get("records"), list)
-                       else "no records", count=False)
-    if stored is not None:
-        records = [Record.from_dict(data) for data in stored["records"]]
-        engine_part = records[len(records) - len(engine_entries):] if engine_entries else []
-        for record, (_, _, _, _, item) in zip(engine_part, engine_entries):
-            record.cached = bool(item.get("cached", False))
-        return records
-    records = _point_records_or_errors(scenario, point, engine_entries, cache=cache,
-                                        reference=reference)
-    if not any(record.status.startswith("error: internal") for record in records):
-        try:
-            cache.put(key, {"records": [record.as_dict() for record in records]})
-        except OSError:  # the run goes on without the cache (the engine runs' store warns)
-            pass
-    return records
 
 
 def _point_records_or_errors(scenario: Scenario, point, engine_entries: Sequence, *,
@@ -1008,24 +1166,28 @@ def _store_reference(cache, key: str, reference: dict) -> None:
         pass
 
 
-def _reference_tasks(scenarios: Sequence[Scenario], cache) -> tuple[list[dict], list]:
+def _reference_tasks(scenarios: Sequence[Scenario], cache
+                     ) -> tuple[list[dict], list, dict[tuple[str, int], dict]]:
     """The reference tasks (:func:`reference_task`) of the several-contact points of
-    ``scenarios`` whose reference the cache does not hold, and their cache keys (None
-    without a cache)."""
-    tasks, keys = [], []
+    ``scenarios`` whose reference the cache does not hold, their cache keys (None without a
+    cache), and the references the cache holds, by ``(scenario name, point index)`` (read
+    once here, handed to the records)."""
+    tasks, keys, found = [], [], {}
     for scenario in scenarios:
         if references.kind_of(scenario) == references.SINGLE:
             continue
         for point in scenario.point_list():
             key = _reference_key(scenario, point, cache)
-            if key is not None and _stored_reference(cache, key) is not None:
+            stored = None if key is None else _stored_reference(cache, key)
+            if stored is not None:
+                found[scenario.name, point.index] = stored
                 continue
             tasks.append({"kind": POINT_REFERENCE, "scenario": scenario.name,
                           "point": point.index, "situation": references.kind_of(scenario),
                           "scene": scenario.scene(point),
                           "laws": references.PointLaws.of(scenario.at(point))})
             keys.append(key)
-    return tasks, keys
+    return tasks, keys, found
 
 
 def reference_task(task: dict) -> dict:
@@ -1137,20 +1299,16 @@ def check_gates(scenario: Scenario, records: Sequence[Record]) -> list[GateResul
     return results
 
 
-def _progress_line(number, total, scenario, records, gates, seconds) -> str:
-    points = len(scenario.point_list())
-    laws = [r for r in records if r.source == ANALYTIC]
-    engines = [r for r in records if r.source != ANALYTIC]
-    cached = sum(r.cached for r in engines)
-    skipped = sum(r.skipped for r in engines)
-    flagged = sum(not r.ok and not r.skipped for r in engines)
+def _progress_line(number, total, scenario, counts: Mapping, gates) -> str:
+    """One scenario's line of the log from its records' counts (:func:`_summary`)."""
+    points, cached = counts["points"], counts["cached"]
     parts = [f"{points} point{'s' if points != 1 else ''}",
-             f"{sum(r.ok for r in laws)}/{len(laws)} law solutions"]
+             f"{counts['laws_ok']}/{counts['laws']} law solutions"]
     if scenario.analytic_only:
         parts.append("analytic only")
     else:
-        parts.append(f"{len(engines)} engine runs ({cached} cached, {skipped} skipped, "
-                     f"{flagged} flagged)")
+        parts.append(f"{counts['engine_runs']} engine runs ({cached} cached, "
+                     f"{counts['skipped']} skipped, {counts['flagged']} flagged)")
     if gates:
         failed = sum(g.failed for g in gates)
         parts.append(f"gates {'FAILED ' + str(failed) if failed else 'ok'}")
@@ -1377,8 +1535,8 @@ def execute(args, *, json_path: Path, command: Sequence[str] | None = None,
     except ConnectionError as error:  # an unreachable Dask scheduler
         return _fail(str(error)), None
     try:
-        write_results(json_path, outcome.records, outcome.provenance, outcome.scenarios,
-                      lines=outcome.record_lines or None)
+        write_results(json_path, outcome._records, outcome.provenance, outcome.scenarios,
+                      lines=outcome.record_lines, pickled=outcome.record_pickles)
     except OSError as error:
         print(f"impact-harness run: cannot write {json_path}: {error.strerror or error}; the "
               "engine results are in the cache, a rerun simulates nothing again",
@@ -1386,7 +1544,7 @@ def execute(args, *, json_path: Path, command: Sequence[str] | None = None,
         return EXIT_INTERNAL, outcome
     stats = outcome.provenance["cache"]
     if log is not None:
-        print(f"wrote {json_path}: {len(outcome.records)} records from {len(scenarios)} "
+        print(f"wrote {json_path}: {outcome.record_count} records from {len(scenarios)} "
               f"scenarios; {stats['simulated']} engine runs simulated, {stats['hits']} from the "
               f"cache; {outcome.provenance['wall_time_s']:.2f} s", file=log)
         for name, reason in outcome.provenance["engines_missing"].items():

@@ -7,15 +7,20 @@ The checks report through a :class:`harness.scenarios.reader.TableReader` (anyth
 
 from __future__ import annotations
 
+import copyreg
 import hashlib
+import io
 import json
-from dataclasses import dataclass
+import pickle
+from dataclasses import dataclass, replace
 from pathlib import Path
+from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, Mapping
 
 import numpy as np
 
 from harness.engines import EngineNotInstalled, load_engine
+from harness.run.cache import SCENARIO_CHECKS_STORE
 from harness.scenarios.errors import suggest
 from harness.scenarios.model import Point, Scenario
 from harness.scenarios.schema import ONE_POINT_TOLERANCE, PRESETS, SHAPE_FIELDS
@@ -340,27 +345,34 @@ def second_strike(scene: Scene, contact, horizon_s: float, step_s: float) -> Str
 # Checks passed, remembered by content (a warm run re-reads files, it need not re-check them)
 # --------------------------------------------------------------------------------------------
 class PassedChecks:
-    """The scenario texts that passed :func:`check_points`, kept in one file.
+    """The scenario texts that passed every check, each with the scenario read from it, kept
+    in one file.
 
-    :func:`check_points` (the second-feature strike check above all) costs milliseconds per
-    file, most of a warm run's reading of a large library. Its outcome depends only on the
-    file's text, the code (the scenarios, the scene and the engines: the result cache's
-    :func:`harness.run.cache.code_version`), the limits of :data:`LIMITS` and which engines
-    are installed (:func:`engine_time_step`), so a text that passed is remembered under
-    ``sha256`` of those; a file with problems is checked again each time (its errors are
-    listed then). The store is ``root/scenario-checks.json``, replaced atomically; one that
-    cannot be read is empty (every file is checked again) and said in :attr:`problems`.
+    Reading a file (TOML, the table checks) and :func:`check_points` (the second-feature
+    strike check above all) cost about a millisecond per file, most of a warm run of a large
+    library. Their outcome depends only on the file's text, the code (the scenarios, the
+    scene and the engines: the result cache's :func:`harness.run.cache.code_version`), the
+    limits of :data:`LIMITS` and which engines are installed (:func:`engine_time_step`), so
+    a text that passed is remembered under ``sha256`` of those with its :class:`Scenario`
+    (without the file's path, which the reader sets); a file with problems is checked again
+    each time (its errors are listed then).
+
+    The store is ``root/scenario-checks.pickle`` (the result cache's directory, which only
+    this user writes), replaced atomically; it keeps the scenarios of one code version and
+    context only (a store of another is emptied when next written), and ``impact-harness
+    cache info|prune|clear`` count and remove it with the cache's entries. One that cannot
+    be read is empty (every file is read and checked again) and said in :attr:`problems`.
     Disabled (``root=None``) nothing is remembered: the default, which
     :func:`use_passed_checks` changes for a run.
     """
 
-    FILE_NAME = "scenario-checks.json"
-    FORMAT = 1
+    FILE_NAME = SCENARIO_CHECKS_STORE
+    FORMAT = 2
 
     def __init__(self, root=None):
         self.root = None if root is None else Path(root)
         self.problems: list[str] = []
-        self._passed: set[str] | None = None
+        self._passed: dict[str, Scenario | None] | None = None
         self._added = False
         self._context: str | None = None
 
@@ -372,33 +384,45 @@ class PassedChecks:
         """The key of a scenario text (None when disabled)."""
         if self.root is None:
             return None
+        return hashlib.sha256(f"{self._context_text()}\0{text}".encode()).hexdigest()
+
+    def _context_text(self) -> str:
         if self._context is None:
             self._context = _checks_context()
-        return hashlib.sha256(f"{self._context}\0{text}".encode()).hexdigest()
+        return self._context
 
-    def _load(self) -> set[str]:
+    def _load(self) -> dict[str, Scenario | None]:
         if self._passed is None:
-            self._passed = set()
+            self._passed = {}
             try:
-                stored = json.loads(self.path.read_text(encoding="utf-8"))
+                with open(self.path, "rb") as handle:
+                    stored = pickle.load(handle)
                 if (not isinstance(stored, dict) or stored.get("format") != self.FORMAT
-                        or not isinstance(stored.get("passed"), list)
+                        or not isinstance(stored.get("scenarios"), dict)
                         or not all(isinstance(k, str) and len(k) == 64
-                                   for k in stored["passed"])):
-                    raise ValueError("not a list of passed checks")
-                self._passed = set(stored["passed"])
+                                   and isinstance(v, Scenario)
+                                   for k, v in stored["scenarios"].items())):
+                    raise ValueError("not a store of passed checks")
+                if stored.get("context") == self._context_text():
+                    self._passed = stored["scenarios"]
             except FileNotFoundError:
                 pass
-            except (OSError, ValueError) as error:  # every file is checked again
-                self.problems.append(f"{self.path}: {error}")
+            except Exception as error:  # noqa: BLE001 - any damage: every file checked again
+                self.problems.append(f"{self.path}: {type(error).__name__}: {error}")
+                self._added = True  # replaced by a good one
         return self._passed
 
     def passed(self, key: str | None) -> bool:
         return key is not None and key in self._load()
 
-    def add(self, key: str | None) -> None:
-        if key is not None and key not in self._load():
-            self._passed.add(key)
+    def scenario(self, key: str | None) -> Scenario | None:
+        """The scenario read from the text of ``key`` when it passed (its ``path`` None)."""
+        return None if key is None else self._load().get(key)
+
+    def add(self, key: str | None, scenario: Scenario | None = None) -> None:
+        """Remember that the text of ``key`` passed, with the ``scenario`` read from it."""
+        if key is not None and self._load().get(key) is None:
+            self._passed[key] = None if scenario is None else replace(scenario, path=None)
             self._added = True
 
     def save(self) -> None:
@@ -406,14 +430,29 @@ class PassedChecks:
         said, never an error (the next run checks again)."""
         if self.root is None or not self._added:
             return
-        from harness.run.files import write_text_atomically
+        from harness.run.cache import code_version
+        from harness.run.files import write_bytes_atomically
 
-        text = json.dumps({"format": self.FORMAT, "passed": sorted(self._passed)})
+        buffer = io.BytesIO()
+        pickler = pickle.Pickler(buffer, protocol=pickle.HIGHEST_PROTOCOL)
+        pickler.dispatch_table = {**copyreg.dispatch_table, MappingProxyType: _reduce_proxy}
+        pickler.dump({"format": self.FORMAT, "code_version": code_version(),
+                      "context": self._context_text(), "scenarios": self._passed or {}})
         try:
-            write_text_atomically(self.path, text, prefix=".checks-", make_parent=True)
+            write_bytes_atomically(self.path, buffer.getvalue(), prefix=".checks-",
+                                   make_parent=True)
         except OSError as error:
             self.problems.append(f"{self.path}: cannot write: {error}")
         self._added = False
+
+
+def _reduce_proxy(proxy: MappingProxyType):
+    """Pickle a read-only mapping (the scenario model's) as its items, read-only again."""
+    return _read_only, (dict(proxy),)
+
+
+def _read_only(items: dict) -> MappingProxyType:
+    return MappingProxyType(items)
 
 
 def _checks_context() -> str:

@@ -635,7 +635,7 @@ def parse_scenario(doc: Mapping[str, Any], path=None, *, checks_key: str | None 
     if not reader.errors and not checks.passed_checks.passed(checks_key):
         check_points(reader, scenario)
         if not reader.errors:
-            checks.passed_checks.add(checks_key)
+            checks.passed_checks.add(checks_key, scenario)
     if reader.errors:
         raise ScenarioError(errors=reader.errors)
     return scenario
@@ -670,9 +670,13 @@ def load_scenario(path) -> Scenario:
         raise ScenarioError(f"not UTF-8 text: byte {error.object[error.start]:#04x} at offset "
                             f"{error.start}", path=path,
                             allowed="a TOML file encoded in UTF-8") from None
+    checks_key = checks.passed_checks.key(text)
+    passed = checks.passed_checks.scenario(checks_key)
+    if passed is not None:  # this very text was read and passed every check before
+        return replace(passed, path=path)
     try:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:
         raise ScenarioError(f"not valid TOML: {error}", path=path,
                             allowed="TOML 1.0 (https://toml.io)") from None
-    return parse_scenario(doc, path, checks_key=checks.passed_checks.key(text))
+    return parse_scenario(doc, path, checks_key=checks_key)

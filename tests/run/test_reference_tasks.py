@@ -33,14 +33,14 @@ def _without_timing(record) -> dict:
 
 
 def test_only_the_several_contact_points_get_a_task():
-    tasks, keys = runner._reference_tasks([SINGLE_CONTACT, *SEVERAL_CONTACT], None)
+    tasks, keys, found = runner._reference_tasks([SINGLE_CONTACT, *SEVERAL_CONTACT], None)
     expected = [(s.name, p.index) for s in SEVERAL_CONTACT for p in s.point_list()]
     assert [(task["scenario"], task["point"]) for task in tasks] == expected
-    assert keys == [None] * len(tasks)
+    assert keys == [None] * len(tasks) and found == {}
 
 
 def test_references_computed_in_the_pool_equal_the_inline_ones_bit_for_bit():
-    tasks, _ = runner._reference_tasks(SEVERAL_CONTACT, None)
+    tasks, _, _ = runner._reference_tasks(SEVERAL_CONTACT, None)
     pooled = run_tasks(runner.engine_task, tasks, workers=2, batch=runner.engine_chunk,
                        group=runner.task_group)
     by_name = {scenario.name: scenario for scenario in SEVERAL_CONTACT}
@@ -55,7 +55,7 @@ def test_references_computed_in_the_pool_equal_the_inline_ones_bit_for_bit():
 
 
 def test_each_reference_task_is_a_chunk_of_its_own():
-    tasks, _ = runner._reference_tasks(SEVERAL_CONTACT, None)
+    tasks, _, _ = runner._reference_tasks(SEVERAL_CONTACT, None)
     assert len({runner.task_group(task) for task in tasks}) == len(tasks)
 
 
@@ -66,7 +66,7 @@ def test_a_run_gives_the_same_records_as_with_references_computed_inline(
     options = dict(engines=("pymunk",), workers=2, log=None)
     pooled = runner.run(scenarios, cache=ResultCache(tmp_path / "pooled") if use_cache else None,
                         **options)
-    monkeypatch.setattr(runner, "_reference_tasks", lambda scenarios, cache: ([], []))
+    monkeypatch.setattr(runner, "_reference_tasks", lambda scenarios, cache: ([], [], {}))
     inline = runner.run(scenarios, cache=ResultCache(tmp_path / "inline") if use_cache else None,
                         **options)
     assert ([_exact(_without_timing(r)) for r in pooled.records]
@@ -86,8 +86,12 @@ def test_each_reference_is_in_the_cache_once_the_run_is_over(tmp_path, monkeypat
         for point in scenario.point_list():
             stored = runner.point_reference_cached(scenario, point, cache)
             assert stored["kind"] == references.SIMULTANEOUS
-    # and a second run has no reference left to compute
-    assert runner._reference_tasks(SEVERAL_CONTACT[:2], cache) == ([], [])
+    # and a second run has no reference left to compute: each read once, for the records
+    tasks, keys, found = runner._reference_tasks(SEVERAL_CONTACT[:2], cache)
+    assert (tasks, keys) == ([], [])
+    assert sorted(found) == sorted((s.name, p.index) for s in SEVERAL_CONTACT[:2]
+                                   for p in s.point_list())
+    assert all(reference["kind"] == references.SIMULTANEOUS for reference in found.values())
 
 
 def test_a_reference_that_raises_in_its_task_gives_the_points_internal_error_records(

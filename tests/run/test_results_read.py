@@ -4,13 +4,16 @@ from __future__ import annotations
 
 import json
 import math
+import pickle
 
 import pytest
 
+from harness.run import records as records_module
 from harness.run.records import (
     Record,
     Results,
     collector_paused,
+    companion_path,
     read_results,
     record_line,
     write_results,
@@ -103,3 +106,91 @@ def test_the_collector_is_paused_inside_and_restored_after():
         assert not gc.isenabled()  # off before: left off
     finally:
         gc.enable()
+
+
+# --------------------------------------------------------------------------------------------
+# The companion (harness.run.records.companion_path): the records pickled beside the file
+# --------------------------------------------------------------------------------------------
+def _without_companion(path, tmp_path):
+    copy = tmp_path / "copy.json"  # the same text, no companion beside it
+    copy.write_text(path.read_text(encoding="utf-8"), encoding="utf-8")
+    assert not companion_path(copy).exists()
+    return read_results(copy)
+
+
+def test_a_file_read_through_its_companion_equals_the_file_parsed(tmp_path, monkeypatch):
+    path = write_results(tmp_path / "r.json", _records(), {"run": 1}, {"a": {"tags": []}})
+    assert companion_path(path).is_file()
+    parsed = _without_companion(path, tmp_path)
+    monkeypatch.setattr(records_module, "_split_records", None)  # the JSON's records unparsed
+    results = read_results(path)
+    assert results.records == parsed.records
+    assert results.record_lines() == parsed.record_lines()
+    assert (results.provenance, results.scenarios) == (parsed.provenance, parsed.scenarios)
+
+
+def test_the_companion_of_another_text_is_never_used(tmp_path):
+    path = write_results(tmp_path / "r.json", _records(), {}, {})
+    companion = companion_path(path).read_bytes()
+    text = path.read_text(encoding="utf-8").replace('"status":"ok"', '"status":"edited"', 1)
+    path.write_text(text, encoding="utf-8")
+    companion_path(path).write_bytes(companion)
+    assert read_results(path).records[0].status == "edited"
+
+
+def test_records_known_only_as_lines_remove_a_stale_companion(tmp_path):
+    path = write_results(tmp_path / "r.json", _records(), {}, {})
+    lines = read_results(path).record_lines()
+    write_results(path, [None] * len(lines), {}, {}, lines=lines)
+    assert not companion_path(path).exists()
+    assert read_results(path).records == _without_companion(path, tmp_path).records
+
+
+def test_a_companion_holding_anything_but_plain_values_is_not_unpickled(tmp_path):
+    path = write_results(tmp_path / "r.json", _records(), {}, {})
+    header, _ = _companion_parts(path)
+    called = []
+    tampered = pickle.dumps(header) + pickle.dumps([_Trap(called)] * 3)
+    companion_path(path).write_bytes(tampered)
+    assert read_results(path).records == _without_companion(path, tmp_path).records
+    assert not called
+
+
+class _Trap:
+    """Unpickling one would call ``list.append`` (a global looked up): a plain unpickler
+    refuses."""
+
+    def __init__(self, called):
+        self.called = called
+
+    def __reduce__(self):
+        return (self.called.append, ("unpickled",))
+
+
+def _companion_parts(path):
+    with open(companion_path(path), "rb") as handle:
+        header = pickle.load(handle)
+        return header, handle.read()
+
+
+def test_subclasses_of_plain_types_are_written_as_their_plain_values(tmp_path, monkeypatch):
+    import enum
+
+    import numpy as np
+
+    class Kind(enum.StrEnum):
+        OK = "ok"
+
+    class Level(enum.IntEnum):
+        TWO = 2
+
+    record = Record(scenario="a", point={"index": 0, "label": ""}, source="pymunk",
+                    preset="defaults", status=Kind.OK, collision_type=Level.TWO,
+                    u_after=[np.float64(0.5), np.int64(3)], diagnostics={"kind": Kind.OK})
+    path = write_results(tmp_path / "r.json", [record], {}, {})
+    parsed = _without_companion(path, tmp_path)
+    monkeypatch.setattr(records_module, "_split_records", None)  # the companion is read
+    read = read_results(path)
+    assert read.records == parsed.records
+    assert [type(v) for v in (read.records[0].status, read.records[0].collision_type,
+                              *read.records[0].u_after)] == [str, int, float, int]

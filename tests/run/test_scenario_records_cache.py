@@ -7,12 +7,16 @@ from __future__ import annotations
 
 import json
 import math
+import os
+import pickle
+from dataclasses import replace
 
 import pytest
 
 from harness import cli
 from harness.run import runner
 from harness.run.cache import ResultCache
+from harness.run.records import companion_path, read_results
 from harness.scenarios import SCENARIO_DIR, checks, load_scenario
 from harness.scenarios.library import load_scenarios_reporting
 
@@ -51,9 +55,9 @@ class _CountingCache(ResultCache):
             self.lookups += 1
         return super().get(key, check, count=count)
 
-    def get_lines(self, key, check=None):
+    def get_line_texts(self, key, check_summary=None):
         self.lookups += 1
-        return super().get_lines(key, check)
+        return super().get_line_texts(key, check_summary)
 
 
 def test_a_warm_run_reads_one_entry_per_scenario_and_equals_the_cold_run(tmp_path):
@@ -70,6 +74,20 @@ def test_a_warm_run_reads_one_entry_per_scenario_and_equals_the_cold_run(tmp_pat
     assert cache.hits == engine_runs and cache.misses == 0  # counted as engine runs spared
     assert warm.provenance["cache"]["engine_runs"] == cold.provenance["cache"]["engine_runs"]
     assert not warm.warnings
+
+
+def test_warm_records_equal_those_of_a_run_without_the_cache_kept_once(tmp_path):
+    flat = load_scenario(SCENARIO_DIR / "flat-rod.toml")  # a several-contact reference
+    fresh = _run([ROD, flat], None)
+    _run([ROD, flat], ResultCache(tmp_path))
+    stored = [json.loads(path.read_text(encoding="utf-8"))["record"]
+              for path in tmp_path.glob("??/*.json")]
+    # engine runs and the flat face's reference; a point's records only in its scenario's
+    assert sorted("velocities" in entry for entry in stored) == [False] + [True] * 4
+    assert not any("records" in entry for entry in stored)
+    warm = _run([ROD, flat], ResultCache(tmp_path))
+    assert [_comparable(r) for r in warm.records] == [_comparable(r) for r in fresh.records]
+    assert warm.scenarios == fresh.scenarios
 
 
 def _results_without_timing(path) -> dict:
@@ -97,11 +115,17 @@ def test_the_warm_results_file_equals_the_cold_one_apart_from_timing(tmp_path):
     assert warm["provenance"]["cache"]["simulated"] == 0
     assert _results_without_timing(tmp_path / "warm.json") == \
         _results_without_timing(tmp_path / "cold.json")
+    for name in ("cold.json", "warm.json"):  # each companion holds its file's records
+        path = tmp_path / name
+        assert companion_path(path).is_file()
+        copy = tmp_path / f"copy-{name}"
+        copy.write_text(path.read_text(encoding="utf-8"), encoding="utf-8")
+        assert read_results(path).records == read_results(copy).records
 
 
 @pytest.mark.parametrize("damage", ["header-not-json", "line-not-json", "truncated",
                                     "one-record-short", "nan-ok", "another-key",
-                                    "another-scenario", "unknown-field"])
+                                    "another-scenario", "unknown-field", "edited-value"])
 def test_a_damaged_scenario_entry_is_a_reported_miss_and_rebuilt(tmp_path, damage):
     clean = _run([SWEEP], ResultCache(tmp_path))
     (entry,) = _scenario_entries(tmp_path)
@@ -119,6 +143,8 @@ def test_a_damaged_scenario_entry_is_a_reported_miss_and_rebuilt(tmp_path, damag
         records[3]["scenario"] = "disk-direct"
     elif damage == "unknown-field":
         records[0]["not_a_field"] = 1
+    elif damage == "edited-value":  # still whole and readable: the checksum tells
+        records[1]["wall_time_s"] += 1.0
     text = "".join(f"{json.dumps(item)}\n" for item in (header, *records))
     if damage == "header-not-json":
         text = '{"key": "' + text
@@ -130,9 +156,6 @@ def test_a_damaged_scenario_entry_is_a_reported_miss_and_rebuilt(tmp_path, damag
     again = ResultCache(tmp_path)
     outcome = _run([SWEEP], again)
     assert [_comparable(r) for r in outcome.records] == [_comparable(r) for r in clean.records]
-    if damage == "unknown-field":  # unknown fields are dropped on reading, as in a results file
-        assert not again.rejected
-        return
     assert len(again.rejected) == 1 and str(entry) in again.rejected[0]
     assert any(str(entry) in warning for warning in outcome.warnings)
     # rebuilt from the engine runs' entries (still cached), and stored whole again
@@ -231,7 +254,8 @@ def test_a_damaged_checks_store_is_reported_and_every_file_checked(tmp_path, cou
     scenarios, errors = load_scenarios_reporting([SCENARIO_DIR / "disk-direct.toml"])
     assert scenarios and not errors and len(counted_checks) == 1
     assert len(passed.problems) == 1 and str(store) in passed.problems[0]
-    assert json.loads(store.read_text(encoding="utf-8"))["passed"] != ["not a key"]  # rewritten
+    rewritten = pickle.loads(store.read_bytes())
+    assert list(rewritten["scenarios"].values()) == [replace(scenarios[0], path=None)]
 
 
 def test_by_default_nothing_is_remembered(tmp_path, counted_checks):
@@ -261,3 +285,71 @@ def test_cache_info_and_prune_see_the_scenario_entries(tmp_path):
     assert cache.prune()["entries"] == 1  # written by other code
     assert [path.name for path in _scenario_entries(tmp_path)] == ["b" * 64 + ".jsonl"]
     assert cache.get_lines("b" * 64) == [({"x": 2}, '{"x":2}')]
+
+
+def test_records_built_on_forked_workers_equal_those_built_inline(tmp_path, monkeypatch):
+    scenarios = [ROD, SWEEP, TWO_SLED, load_scenario(SCENARIO_DIR / "flat-rod.toml")]
+    inline = _run(scenarios, ResultCache(tmp_path / "inline"))
+    monkeypatch.setattr(runner, "MIN_PARALLEL_RECORDS", 1)
+    forked = runner.run(scenarios, engines=ENGINES, cache=ResultCache(tmp_path / "forked"),
+                        log=None, workers=2)
+    assert forked._records == [None] * len(inline.records)  # lines came back, not records
+    assert [_comparable(r) for r in forked.records] == [_comparable(r) for r in inline.records]
+    assert forked.scenarios == inline.scenarios and forked.gates == inline.gates
+    # each worker stored its scenarios' entries, as the inline build does
+    assert ([path.name for path in _scenario_entries(tmp_path / "forked")]
+            == [path.name for path in _scenario_entries(tmp_path / "inline")])
+
+
+def test_on_the_local_pool_each_worker_stores_the_runs_it_simulates(tmp_path, monkeypatch):
+    stored_here = []
+    real_put = ResultCache.put
+    main = os.getpid()
+
+    def put(self, key, record):
+        if os.getpid() == main and "velocities" in record:
+            stored_here.append(key)
+        return real_put(self, key, record)
+
+    monkeypatch.setattr(ResultCache, "put", put)  # the forked workers inherit it
+    cold = runner.run([SWEEP], engines=ENGINES, cache=ResultCache(tmp_path), log=None,
+                      workers=2)
+    assert cold.provenance["cache"]["simulated"] == 18 and stored_here == []
+    for path in _scenario_entries(tmp_path):  # the scenario kept whole aside, every run read
+        path.unlink()
+    again = ResultCache(tmp_path)
+    _run([SWEEP], again)
+    assert again.hits == 18 and again.misses == 0
+
+
+def test_a_passed_text_is_not_parsed_again_and_gets_its_files_path(tmp_path, monkeypatch):
+    from harness.scenarios import reader
+
+    source = SCENARIO_DIR / "sweep-disk-alpha.toml"
+    first, second = tmp_path / "a" / source.name, tmp_path / "b" / source.name
+    for copy in (first, second):
+        copy.parent.mkdir()
+        copy.write_text(source.read_text(encoding="utf-8"), encoding="utf-8")
+    try:
+        checks.use_passed_checks(tmp_path / "cache")
+        (read,), _ = load_scenarios_reporting([first])
+        checks.use_passed_checks(tmp_path / "cache")  # the next run: the store read from disk
+        monkeypatch.setattr(reader.tomllib, "loads", None)  # parsing would raise
+        (again,), errors = load_scenarios_reporting([second])
+    finally:
+        checks.use_passed_checks(None)
+    assert not errors and again.path == second
+    assert again == replace(read, path=second) and again.point_list() == read.point_list()
+
+
+def test_cache_info_and_prune_see_the_scenario_checks_store(tmp_path):
+    try:
+        checks.use_passed_checks(tmp_path)
+        load_scenarios_reporting([SCENARIO_DIR / "disk-direct.toml"])
+    finally:
+        checks.use_passed_checks(None)
+    store = tmp_path / checks.PassedChecks.FILE_NAME
+    assert ResultCache(tmp_path).info()["entries"] == 1
+    assert ResultCache(tmp_path).prune()["entries"] == 0  # this code's: kept
+    assert ResultCache(tmp_path, version="other").prune()["entries"] == 1
+    assert not store.exists()
