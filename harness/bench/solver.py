@@ -274,10 +274,10 @@ def main(args) -> int:
         table["survey"] = report
     if "executors" in selected:
         from harness.bench import executors as bench_executors
-        from harness.run.executor import DaskNotInstalled, _import_distributed
+        from harness.run.executor import DaskNotInstalled, check_arguments
 
         try:
-            _import_distributed()
+            check_arguments("dask")
         except DaskNotInstalled as error:
             print(f"executors: skipped: {error}")
         else:

@@ -53,6 +53,7 @@ import math
 import multiprocessing
 import os
 import sys
+import threading
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any, Callable, Hashable, Iterable, Sequence
 
@@ -124,7 +125,8 @@ def run_tasks(
         without a pool, when ``workers == 1`` or there is at most one task.
         ``"dask"``: a ``dask.distributed.Client`` connected to ``scheduler`` or, without one, to
         a ``LocalCluster`` of ``workers`` single-threaded worker processes on loopback,
-        started for the run and shut down afterwards. Below ``dask_min_tasks`` tasks the
+        started for the run and shut down in the background once every result is delivered
+        (:func:`wait_for_shutdowns`). Below ``dask_min_tasks`` tasks the
         local executor runs them instead (``note`` says so).
     workers
         Local worker processes (``None``: all local cores). Ignored with ``scheduler``.
@@ -338,24 +340,29 @@ def _import_distributed():
     return Client, LocalCluster, as_completed
 
 
+def start_local_cluster(workers: int):
+    """A ``LocalCluster`` of ``workers`` single-threaded worker processes on loopback, as
+    :func:`run_tasks` starts for a run (the caller closes it)."""
+    _, LocalCluster, _ = _import_distributed()
+    import dask
+
+    # Forked workers, as the local pool's on Linux: they start in ~0.3 s with the engines
+    # already imported; spawned ones (Dask's default) take ~2 s, then import them again.
+    method = "fork" if sys.platform.startswith("linux") else \
+        dask.config.get("distributed.worker.multiprocessing-method")
+    with dask.config.set({"distributed.worker.multiprocessing-method": method}):
+        # No dashboard; the scheduler's HTTP routes (health, metrics) on a free port rather
+        # than 8787, which another cluster may hold (Dask then warns).
+        return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                            host="127.0.0.1", dashboard_address=None,
+                            scheduler_kwargs={"dashboard_address": ":0"})
+
+
 def _run_dask(function, batch, tasks: Sequence, chunks, workers, deliver, scheduler) -> None:
-    Client, LocalCluster, as_completed = _import_distributed()
+    Client, _, as_completed = _import_distributed()
     cluster = None
     if scheduler is None:
-        import dask
-
-        # Forked workers, as the local pool's on Linux: they start in ~0.3 s with the engines
-        # already imported; spawned ones (Dask's default) take ~2 s, then import them again.
-        method = "fork" if sys.platform.startswith("linux") else \
-            dask.config.get("distributed.worker.multiprocessing-method")
-        with dask.config.set({"distributed.worker.multiprocessing-method": method}):
-            cluster = LocalCluster(
-                n_workers=workers,
-                threads_per_worker=1,
-                processes=True,
-                host="127.0.0.1",
-                dashboard_address=None,
-            )
+        cluster = start_local_cluster(workers)
         client = Client(cluster)
     else:
         try:
@@ -364,22 +371,52 @@ def _run_dask(function, batch, tasks: Sequence, chunks, workers, deliver, schedu
             raise ConnectionError(f"cannot reach the Dask scheduler {scheduler!r} within "
                                   f"{CONNECT_TIMEOUT_S:g} s: {error}") from None
     try:
-        if not chunks:
-            return
-        # One future per chunk; pure=False: every chunk is its own key even when two are equal.
-        futures = [client.submit(call_chunk, function, batch, [tasks[i] for i in chunk],
-                                 pure=False) for chunk in chunks]
-        chunk_of = {future.key: chunk for future, chunk in zip(futures, chunks)}
-        try:
-            for future in as_completed(futures):
-                deliver(chunk_of[future.key], *future.result())
-        except BaseException:
-            client.cancel(futures)
-            raise
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
+        if chunks:
+            # One future per chunk; pure=False: every chunk is its own key even when two are
+            # equal.
+            futures = [client.submit(call_chunk, function, batch, [tasks[i] for i in chunk],
+                                     pure=False) for chunk in chunks]
+            chunk_of = {future.key: chunk for future, chunk in zip(futures, chunks)}
+            try:
+                for future in as_completed(futures):
+                    deliver(chunk_of[future.key], *future.result())
+            except BaseException:
+                client.cancel(futures)
+                raise
+    except BaseException:
+        _close(client, cluster)
+        raise
+    _close_in_background(client, cluster)
+
+
+def _close(client, cluster) -> None:
+    client.close()
+    if cluster is not None:
+        cluster.close()
+
+
+#: Clusters being shut down after their run delivered every result (see
+#: :func:`_close_in_background`).
+_CLOSING: list[threading.Thread] = []
+
+
+def _close_in_background(client, cluster) -> None:
+    """Shut a finished run's client (and the cluster started for it) down in a thread.
+
+    Every result is delivered by then; a local cluster takes about 0.3 s to stop, which the
+    caller spends building and writing its records instead of waiting. The thread is not a
+    daemon: the interpreter waits for it before exiting, so no worker outlives the command.
+    :func:`wait_for_shutdowns` waits for it sooner.
+    """
+    thread = threading.Thread(target=_close, args=(client, cluster), name="dask-shutdown")
+    thread.start()
+    _CLOSING.append(thread)
+
+
+def wait_for_shutdowns() -> None:
+    """Return once every cluster :func:`run_tasks` started has stopped."""
+    while _CLOSING:
+        _CLOSING.pop().join()
 
 
 def progress_printer(label: str, every_s: float = 2.0, stream=None) -> Callable[[int, int], None]:
@@ -401,4 +438,5 @@ def progress_printer(label: str, every_s: float = 2.0, stream=None) -> Callable[
 
 __all__ = ["CONNECT_TIMEOUT_S", "DASK_MIN_TASKS", "EXECUTORS", "MAX_CHUNK", "DaskNotInstalled",
            "call_chunk", "check_arguments", "chunk_size_for", "default_workers", "make_chunks",
-           "map_forked", "one_blas_thread", "progress_printer", "run_tasks"]
+           "map_forked", "one_blas_thread", "progress_printer", "run_tasks",
+           "start_local_cluster", "wait_for_shutdowns"]

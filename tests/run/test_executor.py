@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import multiprocessing
 import sys
 
 import numpy as np
 import pytest
 
 import planar_impact as pi
-from harness.run.executor import DaskNotInstalled, run_tasks
+from harness.run.executor import DaskNotInstalled, run_tasks, wait_for_shutdowns
 from harness.scene.random_problems import random_problems
 
 
@@ -81,5 +82,9 @@ def test_dask_local_cluster_equals_local_executor_bit_for_bit():
         cloudpickle.unregister_pickle_by_value(sys.modules[__name__])
     assert distributed == local
     assert seen[-1] == len(TASKS)
+    # The cluster stops in the background; once waited for, none of its processes is left.
+    wait_for_shutdowns()
+    assert not [child for child in multiprocessing.active_children()
+                if "Dask" in child.name or "worker" in child.name.lower()]
     # the arrays are real answers, not empty: some rows solved
     assert np.any(np.frombuffer(local[0]["status"], dtype=np.int8) == 0)
