@@ -187,6 +187,21 @@ def departure_grid(results: Results, law: str, labels: Sequence[str],
     return names, values, flagged, skipped
 
 
+def engine_roles(results: Results) -> list[tuple[str, str]]:
+    """``Results.engine_roles``: the ``(engine, preset role)`` pairs present, presets in
+    order, engines in registry order, read from :mod:`harness.engines` (the scenario
+    package that ``Results`` reads them from takes a third of a warm report's imports)."""
+    from harness.engines import ENGINE_NAMES, PRESET_ROLES
+
+    present = {(r.source, r.preset) for r in results.records if r.source != ANALYTIC}
+    return [(e, p) for p in PRESET_ROLES for e in ENGINE_NAMES if (e, p) in present]
+
+
+def engine_labels(results: Results) -> list[str]:
+    """``Results.engine_labels`` (:func:`engine_roles`' pairs as labels)."""
+    return [_engine_label(engine, role) for engine, role in engine_roles(results)]
+
+
 @functools.cache
 def _engine_label(source: str, preset: str | None) -> str:
     from harness.engines import source_label
