@@ -189,12 +189,19 @@ def split_order(results: Results) -> tuple[list[str], list[str]]:
 @dataclass
 class Prepared:
     """The report's per-scenario pieces: ``digests`` of the records, the engine ``labels``,
-    each scenario's :func:`scenario_view`, and the ``cache`` they came from."""
+    each scenario's :func:`scenario_view`, the ``cache`` they came from, and
+    ``records_digest``, of every record in order (what a piece made of all of them reads)."""
 
     digests: dict[str, str]
     labels: list[str]
     views: dict[str, dict]
     cache: FragmentCache = field(repr=False)
+    records_digest: str = ""
+
+    def whole(self, kind: str, make: Callable[[], str]) -> str:
+        """A piece made of every record (``kind`` names it), from the cache while no record
+        changed."""
+        return self.cache.get(f"{kind}\0{self.records_digest}", make)
 
 
 def prepare(results: Results, out_dir: Path | None = None,
@@ -207,7 +214,17 @@ def prepare(results: Results, out_dir: Path | None = None,
     digests = scenario_digests(results) if digests is None else digests
     cache = FragmentCache(None if out_dir is None else Path(out_dir) / CACHE_FILE,
                           cache_context(labels))
+    names = results.scenario_names()
     views = {name: cache.get(f"view\0{name}\0{digests.get(name, '')}",
                              lambda name=name: scenario_view(results.for_scenario(name), labels))
-             for name in results.scenario_names()}
-    return Prepared(digests, labels, views, cache)
+             for name in names}
+    # every scenario's digest, and the order of the records across scenarios (a run of a
+    # scenario's records after another's: the first appearances a piece may show)
+    order, previous = [], None
+    for record in results.records:
+        if record.scenario != previous:
+            order.append(record.scenario)
+            previous = record.scenario
+    inputs = json.dumps([[[name, digests.get(name, "")] for name in names], order])
+    return Prepared(digests, labels, views, cache,
+                    hashlib.sha256(inputs.encode()).hexdigest())

@@ -196,13 +196,18 @@ def overrides_paragraph(records: Sequence[Record]) -> str:
             "labels carry the overrides, and the headline cells are marked “*”.</p>")
 
 
+#: What :func:`scenario_section` reads of a scenario's description (``Results.scenarios``).
+SECTION_INFO = ("description", "system", "tags", "sweep", "speed_labels")
+
+
 def cached_section(name: str, results: Results, figures: dict, prepared: Prepared) -> str:
     """:func:`scenario_section`, kept in the report's cache under what it reads: the
     scenario's records (their digest), its description and its figures' files."""
     info = results.scenarios.get(name, {})
     files = [[kind, figures.get(kind, {}).get(name)] for kind in ("impulse", "sweep", "history")]
     svg = figures.get("svg", ())
-    inputs = json.dumps([info, [[kind, file, file in svg] for kind, file in files]],
+    read = {key: info[key] for key in SECTION_INFO if key in info}  # not the references
+    inputs = json.dumps([read, [[kind, file, file in svg] for kind, file in files]],
                         sort_keys=True, default=str)
     key = f"section\0{name}\0{prepared.digests.get(name, '')}\0{inputs}"
     return prepared.cache.get(key, lambda: scenario_section(name, info,
@@ -693,7 +698,7 @@ def write_html(results: Results, out_dir: Path, figures: dict, pages: dict | Non
         "Coulomb friction at the end state), which differs from Poisson and Stronge wherever "
         "the slip stops or reverses during the impact. MuJoCo solves no rigid impact law at "
         "all. Per engine and preset (details and measurements: <code>docs/engines.md</code>):"
-        "</p>" + why_html(results))
+        "</p>" + prepared.whole("why", lambda: why_html(results)))
     parts.append("<h2 id='split'>Law vs solve: the law they solve against how well they "
                  "solve it</h2>")
     parts.append(
@@ -703,7 +708,7 @@ def write_html(results: Results, out_dir: Path, figures: dict, pages: dict | Non
         "most their sum.</p>")
     if "split" in figures:
         parts.append(report_figure(figures, figures["split"], "departure split"))
-    numbers = split_table(results, prepared)
+    numbers = prepared.whole("split", lambda: split_table(results, prepared))
     if numbers:
         parts.append("<details><summary>the numbers (largest over sweep points)</summary>"
                      + numbers + "</details>")
