@@ -23,7 +23,9 @@ Table 3) get SVG twins then (``--svg headline``; ``--svg all`` for every one): a
 about as much again as its PNG and is wanted for a paper's few figures, not for a thousand
 diagrams. Every image loads lazily. Figures are drawn in a pool of forked processes
 (``--workers``); each figure's PNG carries the digest of its inputs, so a warm report draws
-nothing.
+nothing. Likewise each scenario's HTML section and headline cells are kept in
+``<out>/.report-fragments.json`` under the digest of its records
+(:mod:`harness.report.fragments`): a warm report formats only what changed.
 
 What the page shows, in order: what this is; the headline heat maps (departure of every
 engine and preset from Poisson and from Stronge, per scenario); the split of each engine's
@@ -60,12 +62,12 @@ from harness.report.figures import (
     table3_figure,
     table3_inputs,
 )
+from harness.report.fragments import prepare
 from harness.report.history import history_figure, history_inputs
 from harness.report.html import write_html
 from harness.report.pages import write_pages
 from harness.report.summary import write_summary
-from harness.report.views import FIGURES, slug, split_rows
-from harness.run.executor import map_forked
+from harness.report.views import FIGURES, engine_labels, slug, split_rows
 from harness.run.records import DEFAULT_RESULTS, Results, read_results
 
 #: Above this many scenarios the report aggregates (``--scenario-figures auto``, ``--svg
@@ -81,10 +83,11 @@ SELECTION_TAGS = ("quick", "sweep", "slow")
 #: Figure kinds drawn once per report (not per scenario): their SVG twins are kept with
 #: ``--svg headline``.
 HEADLINE_KINDS = ("legend", "heatmap", "split", "table3")
-#: Rough drawing cost per kind [s] (PNG + SVG, measured at 1,000 scenarios): the pool draws
-#: the dearest first so that no worker is left with a heat map at the end.
-KIND_COST = {"heatmap": 10.0, "table3": 3.0, "sweep": 2.2, "split": 1.5, "history": 1.0,
-             "impulse": 0.5, "legend": 0.3}
+#: Rough drawing cost per kind [s] (PNG + SVG, measured at 1,000 scenarios: the headline
+#: figures with the heat map's row per family): the pool draws the dearest first so that no
+#: worker is left with the dearest at the end.
+KIND_COST = {"split": 3.0, "heatmap": 2.6, "sweep": 2.2, "table3": 1.9, "history": 1.0,
+             "impulse": 0.5, "legend": 0.35}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -150,8 +153,8 @@ def write_report(results: Results, out_dir: Path | str,
         scenario_figures = "none" if many else "all"
     if svg == "auto":
         svg = "headline" if many else "all"
-    rows = split_rows(results)
-    tasks = figure_tasks(results, many, scenario_figures, figures_for, svg, rows)
+    prepared = prepare(results, out_dir)
+    tasks = figure_tasks(results, many, scenario_figures, figures_for, svg, prepared.digests)
     drawn = draw_figures(tasks, figure_dir, workers)
     figures: dict = {"impulse": {}, "sweep": {}, "svg": set(), "many": many,
                      "groups": scenario_groups(results, names) if many else {},
@@ -170,26 +173,27 @@ def write_report(results: Results, out_dir: Path | str,
     wanted |= {str(Path(task.file).with_suffix(".svg")) for task, path in zip(tasks, drawn)
                if path is not None and task.svg}
     _remove_stale_figures(figure_dir, wanted)
-    html_path = write_html(results, out_dir, figures, rows, pages)
-    summary = write_summary(results, out_dir)
+    html_path = write_html(results, out_dir, figures, pages, prepared)
+    summary = write_summary(results, out_dir, prepared)
+    prepared.cache.save()
     return {"html": html_path, "summary": summary,
             "figures": sorted(figure_dir / f for f in wanted if f.endswith(".png"))}
 
 
 def figure_tasks(results: Results, many: bool, scenario_figures: str,
                  figures_for: Sequence[str], svg: str,
-                 rows: Sequence[dict] | None = None) -> list[FigureTask]:
+                 digests: dict[str, str] | None = None) -> list[FigureTask]:
     """Every figure of the report, with the inputs its digest covers (a scenario's records
-    by their digest, :func:`scenario_digests`); ``rows``: :func:`split_rows` when known.
+    by their digest, ``digests``: :func:`scenario_digests` when known).
 
     The closures read the values bound in this call (default arguments), never a loop's
     later values.
     """
     names = results.scenario_names()
-    engines = list(dict.fromkeys(label.split(".")[0] for label in results.engine_labels()))
+    engines = list(dict.fromkeys(label.split(".")[0] for label in engine_labels(results)))
     headline_svg = svg in ("all", "headline")
     scenario_svg = svg == "all"
-    digests = scenario_digests(results)
+    digests = scenario_digests(results) if digests is None else digests
     records_digest = {name: digests.get(name, "") for name in names}
     tasks = [FigureTask("legend", "impulse-legend.png", engines,
                         lambda path, tag: impulse_legend_figure(path, tag, engines),
@@ -199,10 +203,10 @@ def figure_tasks(results: Results, many: bool, scenario_figures: str,
     tasks.append(FigureTask("heatmap", "heatmap.png", [groups, records_digest],
                             lambda path, tag: heatmap_figure(results, path, tag, groups),
                             ("heatmap",), headline_svg))
-    rows = split_rows(results) if rows is None else rows
-    tasks.append(FigureTask("split", "split.png", rows,
-                            lambda path, tag: split_figure(rows, path, tag), ("split",),
-                            headline_svg))
+    # the split rows are the records' (views.split_rows): drawn from them only when stale
+    tasks.append(FigureTask("split", "split.png", records_digest,
+                            lambda path, tag: split_figure(split_rows(results), path, tag),
+                            ("split",), headline_svg))
     for name in names:
         if scenario_figures != "all" and not any(fnmatch.fnmatchcase(name, pattern)
                                                  for pattern in figures_for):
@@ -274,6 +278,8 @@ def draw_figures(tasks: Sequence[FigureTask], figure_dir: Path,
     workers = min(workers, len(stale))
     stale.sort(key=lambda item: -KIND_COST.get(item[1][0].kind, 1.0))
     _PENDING = [item for _, item in stale]
+    from harness.run.executor import map_forked  # multiprocessing: only when drawing
+
     try:
         drawn = map_forked(_draw_pending, range(len(_PENDING)), workers)
     finally:

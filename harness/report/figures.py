@@ -28,12 +28,14 @@ from harness.report.views import (
     LAW_ORDER,
     LAW_STYLE,
     X_FLOOR,
-    cell_records,
     departure_cell,
     departure_grid,
+    engine_labels,
+    engine_roles,
     engine_scenarios,
     flagged_count,
     fmt_departure,
+    label_records,
     parameter_name,
     row_name,
 )
@@ -125,14 +127,31 @@ def _code_digest() -> bytes:
     report package (a figure reads views, history and the rest as well as this module: an
     edit to any of them redraws) and matplotlib's version, read without importing it (a
     warm report draws nothing)."""
+    sources = sorted(Path(__file__).parent.glob("*.py"))
+    return b"".join(path.read_bytes() for path in sources) + _matplotlib_version()
+
+
+def _matplotlib_version() -> bytes:
+    """Matplotlib's version file (``matplotlib/_version.py``, which setuptools-scm writes),
+    found without importing matplotlib or ``importlib.metadata`` (a tenth of a warm
+    report's imports); else its version from the package's metadata, ``b"none"`` when it
+    is not installed (nothing can be drawn then either)."""
+    from importlib.util import find_spec
+
+    spec = find_spec("matplotlib")
+    if spec is None:
+        return b"none"
+    for location in spec.submodule_search_locations or ():
+        try:
+            return (Path(location) / "_version.py").read_bytes()
+        except OSError:
+            continue
     from importlib.metadata import PackageNotFoundError, version
 
     try:
-        matplotlib_version = version("matplotlib")
-    except PackageNotFoundError:  # not installed: nothing can be drawn either
-        matplotlib_version = "none"
-    sources = sorted(Path(__file__).parent.glob("*.py"))
-    return b"".join(path.read_bytes() for path in sources) + matplotlib_version.encode()
+        return version("matplotlib").encode()
+    except PackageNotFoundError:
+        return b"none"
 
 
 def inputs_digest(kind: str, payload) -> str:
@@ -221,10 +240,10 @@ def heatmap_figure(results: Results, path: Path, tag: str | None = None,
     """
     from matplotlib.colors import LogNorm
 
-    labels = results.engine_labels()
+    labels = engine_labels(results)
     if not labels:
         return None
-    roles = results.engine_roles()  # parallel to labels: a panel per preset role
+    roles = engine_roles(results)  # parallel to labels: a panel per preset role
     presets = list(dict.fromkeys(role for _, role in roles))
     names = engine_scenarios(results)
     if groups is not None:
@@ -238,6 +257,8 @@ def heatmap_figure(results: Results, path: Path, tag: str | None = None,
     if not rows:
         return None
     panels = [(law, preset) for law in HEADLINE_LAWS for preset in presets]
+    # each scenario's runs by label once (a scan of its records per cell was most of the time)
+    grouped = {name: label_records(results.for_scenario(name)) for name in names}
     if groups is None:  # the panels side by side
         figure = new_figure(2.2 + 0.95 * len(labels) * len(HEADLINE_LAWS), 1.6 + 0.25 * len(rows))
         axes = figure.subplots(1, len(panels), sharey=True, squeeze=False)[0]
@@ -250,14 +271,16 @@ def heatmap_figure(results: Results, path: Path, tag: str | None = None,
     image = None
     for ax, (law, preset) in zip(axes, panels):
         panel_labels = [label for label, (_, role) in zip(labels, roles) if role == preset]
-        _, values, flagged, skipped = departure_grid(results, law, panel_labels, names)
-        texts = [[("skipped" if skipped[i, j] else "n/a") if skipped[i, j]
-                  or not np.isfinite(values[i, j])
-                  else departure_cell(cell_records(results, name, label), law)
-                  for j, label in enumerate(panel_labels)] for i, name in enumerate(names)]
+        _, values, flagged, skipped = departure_grid(results, law, panel_labels, names,
+                                                     grouped)
         if groups is not None:
-            values, flagged, skipped, texts = family_cells(results, groups, names, values,
+            values, flagged, skipped, texts = family_cells(grouped, groups, names, values,
                                                            skipped, panel_labels)
+        else:
+            texts = [[("skipped" if skipped[i, j] else "n/a") if skipped[i, j]
+                      or not np.isfinite(values[i, j])
+                      else departure_cell(grouped[name].get(label, []), law)
+                      for j, label in enumerate(panel_labels)] for i, name in enumerate(names)]
         shown = np.where(np.isfinite(values), np.clip(values, HEAT_MIN, HEAT_MAX), np.nan)
         image = ax.imshow(np.ma.masked_invalid(shown), cmap=cmap, norm=norm, aspect="auto")
         for i in range(len(rows)):
@@ -280,10 +303,12 @@ def heatmap_figure(results: Results, path: Path, tag: str | None = None,
     return save_png(figure, path, dpi=110, tag=tag)
 
 
-def family_cells(results: Results, groups: dict[str, list[str]], names: Sequence[str],
-                 values: np.ndarray, skipped: np.ndarray, labels: Sequence[str]):
+def family_cells(grouped: dict[str, dict[str, list[Record]]], groups: dict[str, list[str]],
+                 names: Sequence[str], values: np.ndarray, skipped: np.ndarray,
+                 labels: Sequence[str]):
     """Per family (rows of :func:`heatmap_figure` with ``groups``): the median of the
-    scenarios' values, flagged and skipped cells, and the texts ``median / max (k!)``."""
+    scenarios' values, flagged and skipped cells, and the texts ``median / max (k!)``;
+    ``grouped``: each scenario's engine runs by label (:func:`views.label_records`)."""
     row = {name: i for i, name in enumerate(names)}
     shape = (len(groups), len(labels))
     medians = np.full(shape, np.nan)
@@ -297,7 +322,7 @@ def family_cells(results: Results, groups: dict[str, list[str]], names: Sequence
             column = values[index, j]
             finite = column[np.isfinite(column)]
             all_skipped[g, j] = bool(skipped[index, j].all())
-            count = sum(flagged_count(cell_records(results, name, label)) for name in members)
+            count = sum(flagged_count(grouped[name].get(label, [])) for name in members)
             flagged[g, j] = count > 0
             if finite.size:
                 medians[g, j] = float(np.median(finite))

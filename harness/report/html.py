@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import hashlib
+import json
 import math
 import re
 import time
@@ -10,7 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.engines import ENGINE_NAMES, PRESET_ROLES, preset_label
+from harness.engines import ENGINE_NAMES, PRESET_ROLES, preset_label, source_label
+from harness.report.fragments import Prepared, prepare, split_order
 from harness.report.views import (
     ENGINE_WHY,
     FIGURES,
@@ -21,13 +24,11 @@ from harness.report.views import (
     LAW_STYLE,
     PRESET_WHY,
     TYPE_NAMES,
-    departure_cell,
-    departure_grid,
+    engine_roles,
     escape_html,
     fmt_departure,
     fmt_number,
     fmt_overrides,
-    label_records,
     overrides_of,
     record_label,
     run_notes,
@@ -195,6 +196,24 @@ def overrides_paragraph(records: Sequence[Record]) -> str:
             "labels carry the overrides, and the headline cells are marked “*”.</p>")
 
 
+#: What :func:`scenario_section` reads of a scenario's description (``Results.scenarios``).
+SECTION_INFO = ("description", "system", "tags", "sweep", "speed_labels")
+
+
+def cached_section(name: str, results: Results, figures: dict, prepared: Prepared) -> str:
+    """:func:`scenario_section`, kept in the report's cache under what it reads: the
+    scenario's records (their digest), its description and its figures' files."""
+    info = results.scenarios.get(name, {})
+    files = [[kind, figures.get(kind, {}).get(name)] for kind in ("impulse", "sweep", "history")]
+    svg = figures.get("svg", ())
+    read = {key: info[key] for key in SECTION_INFO if key in info}  # not the references
+    inputs = json.dumps([read, [[kind, file, file in svg] for kind, file in files]],
+                        sort_keys=True, default=str)
+    key = f"section\0{name}\0{prepared.digests.get(name, '')}\0{inputs}"
+    return prepared.cache.get(key, lambda: scenario_section(name, info,
+                                                           results.for_scenario(name), figures))
+
+
 def scenario_section(name: str, info: dict, records: Sequence[Record], figures: dict) -> str:
     parts = [f'<div class="scenario" id="{escape_html(slug(name))}">',
              f"<h3>{escape_html(name)}</h3>"]
@@ -286,35 +305,44 @@ def heat_colours(values: np.ndarray) -> np.ndarray:
     return np.rint(255 * table[level.astype(int)]).astype(int)
 
 
-def departure_table_html(results: Results, names: Sequence[str]) -> str:
+def departure_table_html(names: Sequence[str], prepared: Prepared) -> str:
     """The headline heat map's cells as an HTML table (one row per scenario, linked to its
-    section), coloured as the figure: cheap at any number of rows, where an image is not."""
-    labels = results.engine_labels()
+    section), coloured as the figure: cheap at any number of rows, where an image is not.
+    The cells are the scenarios' views (:func:`harness.report.fragments.scenario_view`)."""
+    labels = prepared.labels
     if not labels:
         return ""
     header = ["scenario"] + [f"{LAW_STYLE[law][2]}: {label}" for law in HEADLINE_LAWS
                              for label in labels]
     rows = [[f"<a href='#{escape_html(slug(name))}'>{escape_html(name)}</a>"]
             for name in names]
-    grouped = [label_records(results.for_scenario(name)) for name in names]
     for law in HEADLINE_LAWS:
-        _, values, flagged, skipped = departure_grid(results, law, labels, names)
+        cells = [prepared.views[name][law] for name in names]
+        values = np.array([[cell[0] for cell in row] for row in cells], dtype=float)
+        values = values.reshape(len(names), len(labels))
         rgb = heat_colours(values)  # all cells at once (a call per cell was most of the time)
-        for i in range(len(names)):
-            for j, label in enumerate(labels):
-                value = values[i, j]
-                if skipped[i, j] or not math.isfinite(value):
+        for i, row in enumerate(cells):
+            for j, (value, flagged, skipped, text) in enumerate(row):
+                if skipped or not math.isfinite(value):
                     rows[i].append("<span class='muted'>"
-                                   + ("skipped" if skipped[i, j] else "n/a") + "</span>")
+                                   + ("skipped" if skipped else "n/a") + "</span>")
                     continue
                 colour = "#{:02x}{:02x}{:02x}".format(*rgb[i, j])
                 ink = "#fff" if value > 0.08 else "#000"  # as on the figure
-                text = escape_html(departure_cell(grouped[i].get(label, []), law))
-                if flagged[i, j]:
+                text = escape_html(text)
+                if flagged:
                     text = f"<b>{text}</b>"
                 rows[i].append(f"<span class='heat' style='background:{colour};"
                                f"color:{ink}'>{text}</span>")
     return html_table(header, rows)
+
+
+def cached_departure_table(names: Sequence[str], prepared: Prepared) -> str:
+    """:func:`departure_table_html`, kept in the report's cache under its scenarios' names
+    and records digests (a family's table changes only with its scenarios' records)."""
+    inputs = json.dumps([[name, prepared.digests.get(name, "")] for name in names])
+    key = f"departures\0{hashlib.sha256(inputs.encode()).hexdigest()}"
+    return prepared.cache.get(key, lambda: departure_table_html(names, prepared))
 
 
 def figure_html(file: str, alt: str, css_class: str = "", caption: str = "",
@@ -343,11 +371,15 @@ def report_figure(figures: dict, file: str, alt: str, css_class: str = "",
 def why_html(results: Results) -> str:
     """Per engine and preset present: the law it solves, its biases, the settings that
     matter, and the notes its runs carry (with how many runs carry each)."""
-    labels = results.engine_labels()
-    roles = results.engine_roles()  # parallel to labels
+    roles = engine_roles(results)
+    labels = [source_label(engine, role) for engine, role in roles]
     engines = list(dict.fromkeys(engine for engine, _ in roles))
     if not engines:
         return "<p>No engine ran.</p>"
+    runs_of: dict[str, list[Record]] = {}  # one pass: a scan of every record per label was slow
+    for record in results.records:
+        if record.source != ANALYTIC:
+            runs_of.setdefault(record_label(record), []).append(record)
     parts = ['<dl class="why">']
     for engine in engines:
         parts.append(f"<dt>{escape_html(engine)}</dt><dd>"
@@ -358,7 +390,7 @@ def why_html(results: Results) -> str:
                 continue
             preset = preset_label(engine, role)
             text = PRESET_WHY.get((engine, role), "")
-            runs = [r for r in results.records if r.source != ANALYTIC and record_label(r) == label]
+            runs = runs_of.get(label, [])
             notes: dict[str, int] = {}
             for run in runs:
                 for note in run_notes(run):
@@ -475,8 +507,6 @@ def settings_table(provenance: dict) -> str:
 
 
 def json_short(value) -> str:
-    import json
-
     if isinstance(value, float):
         return f"{value:.6g}"
     return json.dumps(value) if not isinstance(value, str) else value
@@ -497,26 +527,22 @@ def gates_html(provenance: dict) -> str:
                   left=4)
 
 
-def split_table(rows: Sequence[dict]) -> str:
-    """Per scenario and engine.preset: the largest total, law part and solve part."""
-    grouped: dict[tuple, list] = {}
-    for row in rows:
-        grouped.setdefault((row["scenario"], row["label"]), []).append(row)
-    labels = list(dict.fromkeys(row["label"] for row in rows))
-    scenarios = list(dict.fromkeys(row["scenario"] for row in rows))
-    by_scenario: dict[str, list] = {}  # one pass: a scan per scenario was quadratic
-    for row in rows:
-        by_scenario.setdefault(row["scenario"], []).append(row)
+def split_table(results: Results, prepared: Prepared) -> str:
+    """Per scenario and engine.preset: the largest total, law part and solve part (the
+    scenarios' :func:`harness.report.fragments.split_view`, in the order of
+    :func:`harness.report.views.split_rows`); "" when there is no row."""
+    scenarios, labels = split_order(results)
+    if not scenarios:
+        return ""
     body = []
     for scenario in scenarios:
-        law_part = max((r["law_part"] for r in by_scenario[scenario]
-                        if math.isfinite(r["law_part"])), default=math.nan)
-        cells = [escape_html(scenario), fmt_departure(law_part)]
+        split = prepared.views[scenario]["split"]
+        law_part = split["law_part"]
+        cells = [escape_html(scenario), fmt_departure(math.nan if law_part is None
+                                                      else law_part)]
         for label in labels:
-            group = grouped.get((scenario, label), [])
-            solve = max((r["solve_part"] for r in group if math.isfinite(r["solve_part"])),
-                        default=math.nan)
-            cells.append(fmt_departure(solve))
+            solve = split["solve"].get(label)
+            cells.append(fmt_departure(math.nan if solve is None else solve))
         body.append(cells)
     return html_table(["scenario", "law part [newton-lcp vs Poisson]",
                        *[f"solve part [{label}]" for label in labels]], body)
@@ -594,11 +620,14 @@ def contents_html(names: Sequence[str], pages: dict,
     return "\n".join(out)
 
 
-def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[dict],
-               pages: dict | None = None) -> Path:
+def write_html(results: Results, out_dir: Path, figures: dict, pages: dict | None = None,
+               prepared: Prepared | None = None) -> Path:
     """Write ``index.html``; ``pages`` maps further pages of the report (``bench.html`` …)
-    to their titles, linked from the contents."""
+    to their titles, linked from the contents; ``prepared``: the scenarios' pieces
+    (:func:`harness.report.fragments.prepare`, computed here when not given), whose cache
+    keeps each scenario's section for the next report."""
     pages = pages or {}
+    prepared = prepare(results) if prepared is None else prepared
     prov = results.provenance
     names = results.scenario_names()
     gates = prov.get("gates", [])
@@ -606,7 +635,7 @@ def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[di
     engine_records = [r for r in results.records if r.source != ANALYTIC]
     flagged = [r for r in engine_records if not r.ok and not r.skipped]
     skipped = [r for r in engine_records if r.skipped]
-    labels = results.engine_labels()
+    labels = prepared.labels
     engines = list(dict.fromkeys(label.split(".")[0] for label in labels))
     git = prov.get("git", {})
     parts = [page_head("Planar impact with friction: engines against the exact laws"),
@@ -661,7 +690,7 @@ def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[di
         parts.append("<p>Every scenario's departures, per family (unfold one):</p>")
         for tag, members in groups.items():
             parts.append(f"<details><summary>{escape_html(tag)} ({len(members)} scenarios)"
-                         "</summary>" + departure_table_html(results, members) + "</details>")
+                         "</summary>" + cached_departure_table(members, prepared) + "</details>")
     parts.append("<h2 id='why'>Why: what each engine and preset solves</h2>")
     parts.append(
         "<p>Most of the departure of pymunk and pybullet is the <b>law</b>, not the solver: "
@@ -669,7 +698,7 @@ def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[di
         "Coulomb friction at the end state), which differs from Poisson and Stronge wherever "
         "the slip stops or reverses during the impact. MuJoCo solves no rigid impact law at "
         "all. Per engine and preset (details and measurements: <code>docs/engines.md</code>):"
-        "</p>" + why_html(results))
+        "</p>" + prepared.whole("why", lambda: why_html(results)))
     parts.append("<h2 id='split'>Law vs solve: the law they solve against how well they "
                  "solve it</h2>")
     parts.append(
@@ -679,9 +708,10 @@ def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[di
         "most their sum.</p>")
     if "split" in figures:
         parts.append(report_figure(figures, figures["split"], "departure split"))
-    if rows:
+    numbers = prepared.whole("split", lambda: split_table(results, prepared))
+    if numbers:
         parts.append("<details><summary>the numbers (largest over sweep points)</summary>"
-                     + split_table(rows) + "</details>")
+                     + numbers + "</details>")
     parts.append("<h2 id='gates'>Gates</h2><p>Tolerance gates declared by the scenarios "
                  "(<code>[expect.gate]</code>); a failing gate makes <code>impact-harness "
                  "run</code> exit non-zero.</p>" + gates_html(prov))
@@ -717,8 +747,7 @@ def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[di
             parts.append(f"<details class='group'><summary><b>{escape_html(tag)}</b> "
                          f"({len(members)} scenarios)</summary>")
         for name in members:
-            parts.append(scenario_section(name, results.scenarios.get(name, {}),
-                                          results.for_scenario(name), figures))
+            parts.append(cached_section(name, results, figures, prepared))
         if tag:
             parts.append("</details>")
     parts.append("<h2 id='table3'>Table 3 of Djerassi (2009, Part B) reproduced</h2>")
@@ -740,7 +769,7 @@ def write_html(results: Results, out_dir: Path, figures: dict, rows: Sequence[di
     path = out_dir / "index.html"
     extra = [(href, title) for href, title in (("#contacts", "Several contacts"),
                                                ("#survey", "Survey"))
-             if f"id='{href[1:]}'" in "".join(parts)]
+             if any(f"id='{href[1:]}'" in part for part in parts)]
     parts[contents_at] = contents_html(names, pages, figures.get("groups"), extra)
     path.write_text("\n".join(parts), encoding="utf-8")
     return path

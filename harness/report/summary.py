@@ -5,15 +5,8 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from harness.report.views import (
-    HEADLINE_LAWS,
-    LAW_STYLE,
-    departure_cell,
-    engine_scenarios,
-    fmt_departure,
-    label_records,
-    row_name,
-)
+from harness.report.fragments import Prepared, prepare
+from harness.report.views import HEADLINE_LAWS, LAW_STYLE, fmt_departure, row_name
 from harness.run.records import ANALYTIC, Results
 from harness.run.verdicts import reason_counts
 
@@ -27,9 +20,12 @@ def escape(text) -> str:
     return _MARKDOWN_SPECIAL.sub(r"\\\1", " ".join(text.splitlines()))
 
 
-def write_summary(results: Results, out_dir: Path) -> Path:
+def write_summary(results: Results, out_dir: Path, prepared: Prepared | None = None) -> Path:
+    """Write ``summary.md``; ``prepared``: the scenarios' views
+    (:func:`harness.report.fragments.prepare`, computed here when not given)."""
     prov = results.provenance
-    labels = results.engine_labels()
+    prepared = prepare(results) if prepared is None else prepared
+    labels = prepared.labels
     lines = ["# Planar impact with friction: engines against the exact laws", "",
              "Departure of each engine (and preset) from the exact laws, "
              "`‖u_engine − u_law‖_M / ‖u_before‖_M` with `u_before` in the ground's frame, or "
@@ -41,14 +37,14 @@ def write_summary(results: Results, out_dir: Path) -> Path:
              "not run. "
              "Figures, per-scenario tables and settings: [index.html](index.html); the "
              "paper's Table 3: [paper-table3.md](paper-table3.md).", ""]
-    names = engine_scenarios(results)  # the heat map's rows
-    grouped = {name: label_records(results.for_scenario(name)) for name in names}
+    # the heat map's rows (views.engine_scenarios)
+    names = [name for name, view in prepared.views.items() if view["engine"]]
     for law in HEADLINE_LAWS:
         lines += [f"## Departure from {LAW_STYLE[law][2]}", "",
                   "| scenario | " + " | ".join(labels) + " |",
                   "|---|" + "---:|" * len(labels)]
         for name in names:
-            cells = [departure_cell(grouped[name].get(label, []), law) for label in labels]
+            cells = [cell[3] for cell in prepared.views[name][law]]  # views.departure_cell
             lines.append(f"| {escape(row_name(results, name))} | " + " | ".join(cells) + " |")
         lines.append("")
     gates = prov.get("gates", [])

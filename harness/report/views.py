@@ -168,16 +168,19 @@ def departure_cell(records: Sequence[Record], law: str) -> str:
 
 
 def departure_grid(results: Results, law: str, labels: Sequence[str],
-                   names: Sequence[str] | None = None):
+                   names: Sequence[str] | None = None,
+                   grouped: dict[str, dict[str, list[Record]]] | None = None):
     """``(scenarios, values[s, l], flagged[s, l], skipped[s, l])``, max over sweep points;
     ``flagged`` marks a cell whose maximum is a run the engine flagged. ``names`` restricts
-    the rows (default: every scenario with engine records)."""
+    the rows (default: every scenario with engine records); ``grouped``: their runs by
+    label (:func:`label_records`) when known."""
     names = engine_scenarios(results) if names is None else list(names)
     values = np.full((len(names), len(labels)), np.nan)
     flagged = np.zeros_like(values, dtype=bool)
     skipped = np.zeros_like(values, dtype=bool)
     for i, name in enumerate(names):
-        by_label = label_records(results.for_scenario(name))
+        by_label = (label_records(results.for_scenario(name)) if grouped is None
+                    else grouped[name])
         for j, label in enumerate(labels):
             subset = by_label.get(label)
             if subset:
@@ -185,6 +188,21 @@ def departure_grid(results: Results, law: str, labels: Sequence[str],
             else:
                 skipped[i, j] = True
     return names, values, flagged, skipped
+
+
+def engine_roles(results: Results) -> list[tuple[str, str]]:
+    """``Results.engine_roles``: the ``(engine, preset role)`` pairs present, presets in
+    order, engines in registry order, read from :mod:`harness.engines` (the scenario
+    package that ``Results`` reads them from takes a third of a warm report's imports)."""
+    from harness.engines import ENGINE_NAMES, PRESET_ROLES
+
+    present = {(r.source, r.preset) for r in results.records if r.source != ANALYTIC}
+    return [(e, p) for p in PRESET_ROLES for e in ENGINE_NAMES if (e, p) in present]
+
+
+def engine_labels(results: Results) -> list[str]:
+    """``Results.engine_labels`` (:func:`engine_roles`' pairs as labels)."""
+    return [_engine_label(engine, role) for engine, role in engine_roles(results)]
 
 
 @functools.cache
@@ -209,12 +227,6 @@ def label_records(records: Iterable[Record]) -> dict[str, list[Record]]:
         if record.source != ANALYTIC:
             grouped.setdefault(record_label(record), []).append(record)
     return grouped
-
-
-def cell_records(results: Results, name: str, label: str) -> list[Record]:
-    """The engine runs of one scenario under one ``engine.preset`` label."""
-    return [r for r in results.for_scenario(name)
-            if r.source != ANALYTIC and record_label(r) == label]
 
 
 # --------------------------------------------------------------------------------------------

@@ -1,0 +1,230 @@
+"""What the report computes per scenario, kept between reports as the figures are.
+
+A report of 1,000 scenarios formats ~28,000 records into ~2,400 velocity tables and ~16,000
+headline cells: most of a warm report's time, when nothing has changed since the last one.
+Each scenario's pieces -- its HTML section and its :func:`scenario_view` (headline cells,
+departure split) -- are stored in ``<out>/`` :data:`CACHE_FILE` under a key made of the
+scenario's records digest (:func:`harness.report.figures.scenario_digests`) and whatever
+else the piece reads; a later report reuses a piece whose key is unchanged and computes the
+rest. The file as a whole holds only for the same code (:func:`cache_context`): an edit to
+the report, or another set of engine labels, starts it afresh.
+
+The cache changes when a piece is computed, never what it holds: a stored piece is the JSON
+of what the code returned (the code returns only JSON values, so that a computed and a read
+piece are the same).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from harness.report.views import (
+    HEADLINE_LAWS,
+    departure_cell,
+    engine_labels,
+    label_records,
+    record_label,
+    single_contact,
+    worst_departure,
+)
+from harness.run.records import ANALYTIC, Record, Results
+
+#: The cache's file in the report's directory.
+CACHE_FILE = ".report-fragments.json"
+
+
+def cache_context(labels: Sequence[str]) -> str:
+    """What every stored piece depends on besides its own key: the report's code (with
+    matplotlib's version, :func:`harness.report.figures._code_digest`), the metrics module
+    (the departure split), the engine labels and the engines' and presets' order."""
+    from harness.engines import ENGINE_NAMES, PRESET_ROLES
+    from harness.report.figures import _code_digest
+    from harness.run import metrics
+
+    digest = hashlib.sha256(_code_digest())
+    digest.update(Path(metrics.__file__).read_bytes())
+    digest.update(json.dumps([list(labels), list(ENGINE_NAMES), list(PRESET_ROLES)]).encode())
+    return digest.hexdigest()
+
+
+class FragmentCache:
+    """Pieces of a report by key, read from ``path`` when it was written for ``context``;
+    :meth:`save` keeps only the pieces this report asked for."""
+
+    def __init__(self, path: Path | None, context: str):
+        self.path = path
+        self.context = context
+        self.stored: dict = {}
+        self.kept: dict = {}
+        self.computed = 0
+        if path is None:
+            return
+        try:  # newline="": the offsets count the characters as written
+            with open(path, encoding="utf-8", newline="") as handle:
+                text = handle.read()
+            head, _, texts = text.partition("\n")
+            data = json.loads(head)
+            if data.get("context") == context:
+                self.stored = dict(data["entries"])
+                self.stored.update((key, texts[start:end])
+                                   for key, (start, end) in data["texts"].items())
+        except (OSError, ValueError, AttributeError, KeyError, TypeError):  # computed anew
+            self.stored = {}
+
+    def get(self, key: str, make: Callable[[], object]):
+        """The piece stored under ``key``, else ``make()`` (as its JSON reads back)."""
+        if key in self.kept:
+            return self.kept[key]
+        if key in self.stored:
+            value = self.stored[key]
+        else:
+            self.computed += 1
+            value = make()
+        self.kept[key] = value
+        return value
+
+    def save(self) -> None:
+        """Write the pieces asked for (written whole and then renamed: a report stopped
+        half-way leaves the previous file).
+
+        The file is a line of JSON -- the context, the pieces that are not text, and where
+        each text piece is -- followed by the text pieces one after another: the sections
+        are most of it, and reading them as JSON strings took longer than the rest of a
+        warm report.
+        """
+        if self.path is None or (not self.computed and self.kept.keys() == self.stored.keys()):
+            return
+        entries, spans, texts, at = {}, {}, [], 0
+        for key, value in self.kept.items():
+            if isinstance(value, str):
+                spans[key] = (at, at + len(value))
+                texts.append(value)
+                at += len(value)
+            else:
+                entries[key] = value
+        head = json.dumps({"context": self.context, "entries": entries, "texts": spans})
+        partial = self.path.with_name(self.path.name + f".{os.getpid()}.tmp")
+        with open(partial, "w", encoding="utf-8", newline="") as handle:
+            handle.write(head + "\n" + "".join(texts))
+        os.replace(partial, self.path)
+
+
+def scenario_view(records: Sequence[Record], labels: Sequence[str]) -> dict:
+    """What the headline tables and the split table show of one scenario.
+
+    ``engine``: whether it has engine runs the single-contact laws describe (a row of the
+    heat map and of ``summary.md``); per headline law, per label ``[value, flagged, skipped,
+    text]`` (:func:`harness.report.views.worst_departure` and ``departure_cell``; a label
+    without runs is skipped); ``split``: its departure split (:func:`split_view`).
+    """
+    by_label = label_records(records)
+    view: dict = {"engine": any(r.source != ANALYTIC and single_contact(r) for r in records)}
+    for law in HEADLINE_LAWS:
+        cells = []
+        for label in labels:
+            subset = by_label.get(label)
+            if subset:
+                value, flagged, skipped = worst_departure(subset, law)
+            else:
+                value, flagged, skipped = math.nan, False, True
+            cells.append([float(value), bool(flagged), bool(skipped),
+                          departure_cell(subset or [], law)])
+        view[law] = cells
+    view["split"] = split_view(records)
+    return view
+
+
+def split_view(records: Sequence[Record]) -> dict:
+    """One scenario's rows of :func:`harness.report.views.split_rows` reduced to what the
+    split table shows: the largest finite law part (None if none), per label (in the rows'
+    order) the largest finite solve part (None if none); no rows: ``{}``."""
+    from harness.run.metrics import departure_split
+
+    lcp = {r.point["index"]: r for r in records
+           if r.source == ANALYTIC and r.law == "newton-lcp" and r.ok}
+    law_part = -math.inf
+    solve: dict[str, float] = {}
+    for record in records:
+        if record.source == ANALYTIC or record.skipped or record.u_after is None:
+            continue
+        law_record = lcp.get(record.point["index"])
+        if law_record is None:
+            continue
+        split = departure_split(record.departure, law_record.departure)
+        label = record_label(record)
+        solve.setdefault(label, -math.inf)
+        if math.isfinite(split["law_part"]):
+            law_part = max(law_part, split["law_part"])
+        if math.isfinite(split["solve_part"]):
+            solve[label] = max(solve[label], split["solve_part"])
+    if not solve:
+        return {}
+    return {"law_part": None if law_part == -math.inf else law_part,
+            "solve": {label: None if value == -math.inf else value
+                      for label, value in solve.items()}}
+
+
+def split_order(results: Results) -> tuple[list[str], list[str]]:
+    """The scenarios and labels of :func:`harness.report.views.split_rows`, in the order of
+    their first row, without computing the rows."""
+    lcp = {(r.scenario, r.point["index"]) for r in results.records
+           if r.source == ANALYTIC and r.law == "newton-lcp" and r.ok}
+    scenarios: dict[str, None] = {}
+    labels: dict[str, None] = {}
+    for record in results.records:
+        if (record.source == ANALYTIC or record.u_after is None or record.skipped
+                or (record.scenario, record.point["index"]) not in lcp):
+            continue
+        scenarios[record.scenario] = None
+        labels[record_label(record)] = None
+    return list(scenarios), list(labels)
+
+
+@dataclass
+class Prepared:
+    """The report's per-scenario pieces: ``digests`` of the records, the engine ``labels``,
+    each scenario's :func:`scenario_view`, the ``cache`` they came from, and
+    ``records_digest``, of every record in order (what a piece made of all of them reads)."""
+
+    digests: dict[str, str]
+    labels: list[str]
+    views: dict[str, dict]
+    cache: FragmentCache = field(repr=False)
+    records_digest: str = ""
+
+    def whole(self, kind: str, make: Callable[[], str]) -> str:
+        """A piece made of every record (``kind`` names it), from the cache while no record
+        changed."""
+        return self.cache.get(f"{kind}\0{self.records_digest}", make)
+
+
+def prepare(results: Results, out_dir: Path | None = None,
+            digests: dict[str, str] | None = None) -> Prepared:
+    """The views of every scenario, from ``<out_dir>/`` :data:`CACHE_FILE` where their
+    records are unchanged (``out_dir`` None: computed, nothing kept)."""
+    from harness.report.figures import scenario_digests
+
+    labels = engine_labels(results)
+    digests = scenario_digests(results) if digests is None else digests
+    cache = FragmentCache(None if out_dir is None else Path(out_dir) / CACHE_FILE,
+                          cache_context(labels))
+    names = results.scenario_names()
+    views = {name: cache.get(f"view\0{name}\0{digests.get(name, '')}",
+                             lambda name=name: scenario_view(results.for_scenario(name), labels))
+             for name in names}
+    # every scenario's digest, and the order of the records across scenarios (a run of a
+    # scenario's records after another's: the first appearances a piece may show)
+    order, previous = [], None
+    for record in results.records:
+        if record.scenario != previous:
+            order.append(record.scenario)
+            previous = record.scenario
+    inputs = json.dumps([[[name, digests.get(name, "")] for name in names], order])
+    return Prepared(digests, labels, views, cache,
+                    hashlib.sha256(inputs.encode()).hexdigest())
