@@ -42,6 +42,9 @@ class ImpactEvent:
     vn_approach: float
     vt_approach: float
     simultaneous: bool  # another feature touched and approached at the same instant
+    # (v_x, v_y, ω) just after this impact: the speeds of the sequence cut here
+    # (event_sequence with max_impacts = the impact's number), without running it again.
+    speeds_after: tuple[float, float, float]
 
 
 @dataclass(frozen=True)
@@ -82,33 +85,34 @@ def _first_contact(points_local, radius, position, angle, velocity, omega, horiz
     # most 0.05 rad per sample.
     samples = max(64, math.ceil(abs(omega) * horizon / 0.05) + 1)
     times = np.linspace(0.0, horizon, samples + 1)
+    # _height's terms at every sample, as arrays: the same IEEE operations in the same order
+    # on the same floats, so the same heights bit for bit (the turn's cosine and sine by
+    # math's, as _height takes them; numpy's may differ in the last bit).
+    turns = (angle + omega * times).tolist()
+    cosines = np.array(list(map(math.cos, turns)))
+    sines = np.array(list(map(math.sin, turns)))
+    lifts = position[1] + velocity[1] * times
+    x, y = points_local[:, 0, None], points_local[:, 1, None]
+    heights = lifts + (sines * x + cosines * y) - radius  # (features, samples + 1)
+    # The first sample interval per feature that starts above the touch tolerance and ends
+    # on or below the ground: the bracket of its first root.
+    crossing = (heights[:, :-1] > TOUCH_TOLERANCE * size) & (heights[:, 1:] <= 0.0)
     best_time, best_feature = None, None
-    # _height's terms, the turn and the lift shared by every feature: the same operations
-    # in the same order on the same floats (Python floats: numpy scalars are slower).
-    instants = times.tolist()
-    turns = [(math.cos(angle + omega * t), math.sin(angle + omega * t)) for t in instants]
-    lifts = [position[1] + velocity[1] * t for t in instants]
-    for k in range(len(points_local)):
-        x, y = (float(v) for v in points_local[k])
-        heights = [lift + (s * x + c * y) - radius for lift, (c, s) in zip(lifts, turns)]
-        for a in range(samples):
-            low, high = times[a], times[a + 1]
-            h_low, h_high = heights[a], heights[a + 1]
-            if best_time is not None and low >= best_time:
+    for k in np.flatnonzero(crossing.any(axis=1)).tolist():
+        a = int(np.argmax(crossing[k]))
+        low, high = times[a], times[a + 1]
+        if best_time is not None and low >= best_time:  # it cannot strike first
+            continue
+        for _ in range(200):  # bisection to rounding
+            middle = 0.5 * (low + high)
+            if middle in (low, high):
                 break
-            if h_low > TOUCH_TOLERANCE * size and h_high <= 0.0:
-                for _ in range(200):  # bisection to rounding
-                    middle = 0.5 * (low + high)
-                    if middle in (low, high):
-                        break
-                    if _height(points_local, radius, position, angle, velocity, omega,
-                               middle, k) > 0.0:
-                        low = middle
-                    else:
-                        high = middle
-                if best_time is None or high < best_time:
-                    best_time, best_feature = high, k
-                break
+            if _height(points_local, radius, position, angle, velocity, omega, middle, k) > 0.0:
+                low = middle
+            else:
+                high = middle
+        if best_time is None or high < best_time:
+            best_time, best_feature = high, k
     return best_time, best_feature
 
 
@@ -152,7 +156,8 @@ def event_sequence(scene: Scene, law: str = "poisson", max_impacts: int = 1000,
             velocity = result.u_after[:2].copy()
             omega = float(result.u_after[2])
             events.append(ImpactEvent(k, clock, result.collision_type, result.vn_approach,
-                                      result.vt_approach, bool(others)))
+                                      result.vt_approach, bool(others),
+                                      (float(velocity[0]), float(velocity[1]), omega)))
             struck = True
             break
         if struck:
