@@ -185,21 +185,16 @@ def _frame_sign(vt: float, mnt: float) -> float:
     return -1.0 if vt < 0 or (vt == 0 and mnt < 0) else 1.0
 
 
-def _forced_impulses(law, ctype, mnn, mnt, mtt, vn, vt, mu, e, delta=None):
-    """``(I_n, I_t)`` of one contact by the formulas of collision type ``ctype``, in a frame
-    with ``v_t ≥ 0`` (not checked: the coherence test does). Affine in ``(v_n, v_t)`` for
-    Poisson and Newton; homogeneous of degree 1 for the paper's Stronge."""
-    scalars = [np.float64(x) for x in (mnn, mnt, mtt, vn, vt, mu)]
-    terms = laws.ContactTerms(*scalars, None if delta is None else np.float64(delta))
-    with np.errstate(all="ignore"):
-        return _type_impulses(law, terms, np.float64(e), ctype)
-
-
 def _type_impulses(law, terms, e, ctype):
-    """:func:`_forced_impulses` on a :class:`~planar_impact.laws.ContactTerms` of numpy
-    scalars or arrays (``ctype`` then an array of types): the same operations in the same
-    order per element, so a batch gives the scalar answers bit for bit. Call under
-    ``np.errstate(all="ignore")``."""
+    """``(I_n, I_t)`` of a contact by the formulas of collision type ``ctype``, in a frame
+    with ``v_t ≥ 0`` (not checked: the coherence test does). Affine in ``(v_n, v_t)`` for
+    Poisson and Newton; homogeneous of degree 1 for the paper's Stronge.
+
+    ``terms``: a :class:`~planar_impact.laws.ContactTerms` of numpy scalars or arrays
+    (``ctype`` then an array of types). Every element takes the same operations in the same
+    order, so a batch gives each element's scalar answer bit for bit. Call under
+    ``np.errstate(all="ignore")``.
+    """
     if law == "poisson":  # (26), (29), (36), (44), (49)
         return laws.poisson_impulses(terms, e, ctype)
     if law == "stronge-paper":  # e_i by (64), (67), (70), (73), (74), then Poisson
@@ -231,8 +226,8 @@ def _contact_map(system, law, types, signs, coupling="effective"):
 
     ``types``, ``signs`` (``(N, m)``): one combination per row. The returned ``apply(I,
     rows)`` maps rows of impulses ``(R, 2m)``, row ``r`` by combination ``rows[r]``. Each
-    element takes the operations of one contact's scalar formulas (:func:`_forced_impulses`
-    at :meth:`ContactSystem.effective_approach`) in the same order: a combination's answer
+    element takes the operations of one contact's formulas (:func:`_type_impulses` at
+    :meth:`ContactSystem.effective_approach`) in the same order: a combination's answer
     does not depend on the batch it is in, bit for bit.
     """
     if law not in TYPE_LAWS:  # the kernels below are those laws'
@@ -316,7 +311,10 @@ def _fixed_points(system, law, combinations, coupling="effective", max_iteration
             break
         current = impulses[rows]
         bound = scale + np.max(np.abs(current), axis=1)
-        mapped, jacobian = _map_and_jacobian(mapping, current, rows, 1e-6 * bound)
+        if coupling == "none":  # a constant map: the first residual is 0 and ends it
+            mapped, jacobian = mapping(current, rows), None
+        else:  # the map and, from the same call, its Jacobian (most rows go on)
+            mapped, jacobian = _map_and_jacobian(mapping, current, rows, 1e-6 * bound)
         residual = current - mapped
         size_now = np.max(np.abs(residual), axis=1)
         # Iterate to rounding (an affine map needs one or two steps), stop when that stalls;
@@ -327,6 +325,9 @@ def _fixed_points(system, law, combinations, coupling="effective", max_iteration
         previous[rows] = size_now
         for position in np.flatnonzero(~stops).tolist():
             row = rows[position]
+            if jacobian is None:  # a constant map went on: no fixed point to find
+                running[row] = False
+                continue
             if not np.isfinite(jacobian[position]).all():
                 running[row] = False
                 continue
@@ -526,24 +527,30 @@ def _affine_pieces(system, law, choices):
     """
     step = system.speed_scale()
     pieces = {}
+    typed = [ctype for ctype in choices if ctype != SEPARATING]
     for i in range(system.count):
+        if SEPARATING in choices:
+            for sign in (1.0, -1.0):
+                pieces[i, SEPARATING, sign] = (np.zeros(2), np.zeros((2, 2)))
         mnn, mnt, mtt = system.single_terms(i)
         vn0, vt0 = float(system.approach[2 * i]), float(system.approach[2 * i + 1])
-        for ctype in choices:
-            for sign in (1.0, -1.0):
-                if ctype == SEPARATING:
-                    pieces[i, ctype, sign] = (np.zeros(2), np.zeros((2, 2)))
-                    continue
-                values = []
-                for vn, vt in ((vn0, vt0), (vn0 + step, vt0), (vn0, vt0 + step)):
-                    normal, tangential = _forced_impulses(
-                        law, ctype, mnn, sign * mnt, mtt, vn, sign * vt, system.mu[i],
-                        system.e[i], system.deltas[i])
-                    values.append((float(normal), sign * float(tangential)))
-                base = np.array(values[0])
-                slope = np.column_stack([(np.array(values[1]) - base) / step,
-                                         (np.array(values[2]) - base) / step])
-                pieces[i, ctype, sign] = (base, slope)
+        # Every (type, sign) at v^A(i) and one speed step along v_n and along v_t, in one
+        # batch of _type_impulses (element by element the scalar answers).
+        keys = [(ctype, sign) for ctype in typed for sign in (1.0, -1.0)]
+        points = ((vn0, vt0), (vn0 + step, vt0), (vn0, vt0 + step))
+        ctypes = np.array([ctype for ctype, _ in keys for _ in points], dtype=np.int64)
+        signs = np.array([sign for _, sign in keys for _ in points])
+        vn = np.array([vn for _ in keys for vn, _ in points])
+        vt = np.array([vt for _ in keys for _, vt in points])
+        with np.errstate(all="ignore"):
+            terms = laws.ContactTerms(np.float64(mnn), signs * mnt, np.float64(mtt), vn,
+                                      signs * vt, np.float64(system.mu[i]),
+                                      np.float64(system.deltas[i]))
+            normal, tangential = _type_impulses(law, terms, np.float64(system.e[i]), ctypes)
+        values = np.column_stack([normal, signs * tangential]).reshape(len(keys), 3, 2)
+        for (ctype, sign), (base, along_n, along_t) in zip(keys, values):
+            slope = np.column_stack([(along_n - base) / step, (along_t - base) / step])
+            pieces[i, ctype, sign] = (base, slope)
     return pieces
 
 
