@@ -85,21 +85,30 @@ def _first_contact(points_local, radius, position, angle, velocity, omega, horiz
     # most 0.05 rad per sample.
     samples = max(64, math.ceil(abs(omega) * horizon / 0.05) + 1)
     times = np.linspace(0.0, horizon, samples + 1)
-    # _height's terms at every sample, as arrays: the same IEEE operations in the same order
-    # on the same floats, so the same heights bit for bit (the turn's cosine and sine by
-    # math's, as _height takes them; numpy's may differ in the last bit).
-    turns = (angle + omega * times).tolist()
-    cosines = np.array(list(map(math.cos, turns)))
-    sines = np.array(list(map(math.sin, turns)))
+    turns = angle + omega * times  # _height's terms as arrays: the same floats
     lifts = position[1] + velocity[1] * times
+    # Heights by numpy's cosine and sine, which may differ from math's (that _height takes)
+    # by a few ulps: a difference below 4e-15 of the lift and size. They only pick the
+    # sample intervals that may bracket a root, with a margin 250 times that; each picked
+    # interval is then tested on _height's own values, bit for bit as one scan with math.
+    margins = 1e-12 * (size + np.abs(lifts))
     x, y = points_local[:, 0, None], points_local[:, 1, None]
-    heights = lifts + (sines * x + cosines * y) - radius  # (features, samples + 1)
-    # The first sample interval per feature that starts above the touch tolerance and ends
-    # on or below the ground: the bracket of its first root.
-    crossing = (heights[:, :-1] > TOUCH_TOLERANCE * size) & (heights[:, 1:] <= 0.0)
+    heights = lifts + (np.sin(turns) * x + np.cos(turns) * y) - radius  # (features, samples + 1)
+    maybe = ((heights[:, :-1] > TOUCH_TOLERANCE * size - margins[:-1])
+             & (heights[:, 1:] <= margins[1:]))
+    first_bracket = {}
+    for k, a in zip(*(index.tolist() for index in np.nonzero(maybe))):  # k, then a, in order
+        if k in first_bracket:
+            continue
+        x_k, y_k = (float(v) for v in points_local[k])
+        h_low, h_high = (lifts[b] + (math.sin(turns[b]) * x_k + math.cos(turns[b]) * y_k)
+                         - radius for b in (a, a + 1))
+        # The first sample interval of feature k that starts above the touch tolerance and
+        # ends on or below the ground: the bracket of its first root.
+        if h_low > TOUCH_TOLERANCE * size and h_high <= 0.0:
+            first_bracket[k] = a
     best_time, best_feature = None, None
-    for k in np.flatnonzero(crossing.any(axis=1)).tolist():
-        a = int(np.argmax(crossing[k]))
+    for k, a in sorted(first_bracket.items()):
         low, high = times[a], times[a + 1]
         if best_time is not None and low >= best_time:  # it cannot strike first
             continue
