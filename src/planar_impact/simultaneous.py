@@ -572,11 +572,13 @@ def _affine_screen(system, law, combinations, tolerance):
     number = len(combinations)
     offsets = np.zeros((number, size))
     slopes = np.zeros((number, size, size))  # block-diagonal G
-    for k, (types, signs) in enumerate(combinations):
-        for i, (ctype, sign) in enumerate(zip(types, signs)):
-            base, slope = pieces[i, ctype, sign]
-            offsets[k, 2 * i:2 * i + 2] = base
-            slopes[k, 2 * i:2 * i + 2, 2 * i:2 * i + 2] = slope
+    for i in range(count):  # contact i's piece of every combination, gathered
+        keys = [(ctype, sign) for (contact, ctype, sign) in pieces if contact == i]
+        which = {key: k for k, key in enumerate(keys)}
+        chosen = [which[types[i], signs[i]] for types, signs in combinations]
+        offsets[:, 2 * i:2 * i + 2] = np.array([pieces[i, c, s][0] for c, s in keys])[chosen]
+        slopes[:, 2 * i:2 * i + 2, 2 * i:2 * i + 2] = np.array(
+            [pieces[i, c, s][1] for c, s in keys])[chosen]
     coupling = system.delassus.copy()
     for i in range(count):
         coupling[2 * i:2 * i + 2, 2 * i:2 * i + 2] = 0.0  # only the other contacts, (75)
@@ -633,27 +635,18 @@ def _coherent_within_margin(system, law, combinations, impulses, tolerance):
     impulse_margin = SCREEN_MARGIN * bound
     row_sum = float(np.max(np.sum(np.abs(system.delassus), axis=1)))
     speed_margin = tolerance + row_sum * impulse_margin
-    passes = np.ones(len(combinations), dtype=bool)
-    kinds = {1: "stick", 2: "reverse", 3: "forward"} if law == "newton" else {
-        1: "stick", 2: "stick", 3: "reverse", 4: "reverse", 5: "forward"}
-    for position, (types, signs) in enumerate(combinations):
-        margin_i, margin_v = impulse_margin[position], speed_margin[position]
-        for i, (ctype, sign) in enumerate(zip(types, signs)):
-            n, t = 2 * i, 2 * i + 1
-            if ctype == SEPARATING:
-                ok = after[position, n] >= -margin_v
-            else:
-                slip = sign * after[position, t]
-                kind = kinds[ctype]
-                ok = (sign * effective[position, t] >= -margin_v
-                      and effective[position, n] < margin_v
-                      and impulses[position, n] > -margin_i
-                      and after[position, n] >= -margin_v
-                      and (abs(slip) <= margin_v if kind == "stick"
-                           else slip <= margin_v if kind == "reverse" else slip >= -margin_v))
-            if not ok:
-                passes[position] = False
-                break
+    types = np.array([t for t, _ in combinations], dtype=np.int64).reshape(-1, count)
+    signs = np.array([s for _, s in combinations], dtype=float).reshape(-1, count)
+    # Per combination and contact: 0 stick, 1 reverse, 2 forward (the paper's tests).
+    kinds = np.array([0, 0, 1, 2]) if law == "newton" else np.array([0, 0, 0, 1, 1, 2])
+    kind = kinds[types]  # a separating contact's entry is unused
+    margin_i, margin_v = impulse_margin[:, None], speed_margin[:, None]
+    slip = signs * after[:, 1::2]
+    slip_ok = np.where(kind == 0, np.abs(slip) <= margin_v,
+                       np.where(kind == 1, slip <= margin_v, slip >= -margin_v))
+    typed_ok = ((signs * effective[:, 1::2] >= -margin_v) & (effective[:, 0::2] < margin_v)
+                & (impulses[:, 0::2] > -margin_i) & (after[:, 0::2] >= -margin_v) & slip_ok)
+    passes = np.where(types == SEPARATING, after[:, 0::2] >= -margin_v, typed_ok).all(axis=1)
     rows = np.flatnonzero(passes)
     for i in range(count):
         if rows.size:
