@@ -42,6 +42,9 @@ class ImpactEvent:
     vn_approach: float
     vt_approach: float
     simultaneous: bool  # another feature touched and approached at the same instant
+    # (v_x, v_y, ω) just after this impact: the speeds of the sequence cut here
+    # (event_sequence with max_impacts = the impact's number), without running it again.
+    speeds_after: tuple[float, float, float]
 
 
 @dataclass(frozen=True)
@@ -82,33 +85,43 @@ def _first_contact(points_local, radius, position, angle, velocity, omega, horiz
     # most 0.05 rad per sample.
     samples = max(64, math.ceil(abs(omega) * horizon / 0.05) + 1)
     times = np.linspace(0.0, horizon, samples + 1)
+    turns = angle + omega * times  # _height's terms as arrays: the same floats
+    lifts = position[1] + velocity[1] * times
+    # Heights by numpy's cosine and sine, which may differ from math's (that _height takes)
+    # by a few ulps: a difference below 4e-15 of the lift and size. They only pick the
+    # sample intervals that may bracket a root, with a margin 250 times that; each picked
+    # interval is then tested on _height's own values, bit for bit as one scan with math.
+    margins = 1e-12 * (size + np.abs(lifts))
+    x, y = points_local[:, 0, None], points_local[:, 1, None]
+    heights = lifts + (np.sin(turns) * x + np.cos(turns) * y) - radius  # (features, samples + 1)
+    maybe = ((heights[:, :-1] > TOUCH_TOLERANCE * size - margins[:-1])
+             & (heights[:, 1:] <= margins[1:]))
+    first_bracket = {}
+    for k, a in zip(*(index.tolist() for index in np.nonzero(maybe))):  # k, then a, in order
+        if k in first_bracket:
+            continue
+        x_k, y_k = (float(v) for v in points_local[k])
+        h_low, h_high = (lifts[b] + (math.sin(turns[b]) * x_k + math.cos(turns[b]) * y_k)
+                         - radius for b in (a, a + 1))
+        # The first sample interval of feature k that starts above the touch tolerance and
+        # ends on or below the ground: the bracket of its first root.
+        if h_low > TOUCH_TOLERANCE * size and h_high <= 0.0:
+            first_bracket[k] = a
     best_time, best_feature = None, None
-    # _height's terms, the turn and the lift shared by every feature: the same operations
-    # in the same order on the same floats (Python floats: numpy scalars are slower).
-    instants = times.tolist()
-    turns = [(math.cos(angle + omega * t), math.sin(angle + omega * t)) for t in instants]
-    lifts = [position[1] + velocity[1] * t for t in instants]
-    for k in range(len(points_local)):
-        x, y = (float(v) for v in points_local[k])
-        heights = [lift + (s * x + c * y) - radius for lift, (c, s) in zip(lifts, turns)]
-        for a in range(samples):
-            low, high = times[a], times[a + 1]
-            h_low, h_high = heights[a], heights[a + 1]
-            if best_time is not None and low >= best_time:
+    for k, a in sorted(first_bracket.items()):
+        low, high = times[a], times[a + 1]
+        if best_time is not None and low >= best_time:  # it cannot strike first
+            continue
+        for _ in range(200):  # bisection to rounding
+            middle = 0.5 * (low + high)
+            if middle in (low, high):
                 break
-            if h_low > TOUCH_TOLERANCE * size and h_high <= 0.0:
-                for _ in range(200):  # bisection to rounding
-                    middle = 0.5 * (low + high)
-                    if middle in (low, high):
-                        break
-                    if _height(points_local, radius, position, angle, velocity, omega,
-                               middle, k) > 0.0:
-                        low = middle
-                    else:
-                        high = middle
-                if best_time is None or high < best_time:
-                    best_time, best_feature = high, k
-                break
+            if _height(points_local, radius, position, angle, velocity, omega, middle, k) > 0.0:
+                low = middle
+            else:
+                high = middle
+        if best_time is None or high < best_time:
+            best_time, best_feature = high, k
     return best_time, best_feature
 
 
@@ -152,7 +165,8 @@ def event_sequence(scene: Scene, law: str = "poisson", max_impacts: int = 1000,
             velocity = result.u_after[:2].copy()
             omega = float(result.u_after[2])
             events.append(ImpactEvent(k, clock, result.collision_type, result.vn_approach,
-                                      result.vt_approach, bool(others)))
+                                      result.vt_approach, bool(others),
+                                      (float(velocity[0]), float(velocity[1]), omega)))
             struck = True
             break
         if struck:

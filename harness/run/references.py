@@ -194,8 +194,8 @@ def _event_driven(scene, fixed) -> dict:
                           "finished": sequence.finished}
         struck += [e.feature for e in sequence.events]
         if law == ENGINE_LAW:  # the sequence cut after k impacts: an engine run may stop there
-            for k in range(1, len(sequence.events)):
-                cut = event_sequence(scene, law, max_impacts=k).speeds()
+            for k in range(1, len(sequence.events)):  # the prefix of the whole sequence
+                cut = np.array(sequence.events[k - 1].speeds_after)
                 speeds[f"event-driven/{law}/after-{k}"] = [float(v) for v in cut]
                 energy[f"event-driven/{law}/after-{k}"] = 0.5 * float(
                     cut @ mass_matrix @ cut - u_before @ mass_matrix @ u_before)

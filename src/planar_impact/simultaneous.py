@@ -185,95 +185,163 @@ def _frame_sign(vt: float, mnt: float) -> float:
     return -1.0 if vt < 0 or (vt == 0 and mnt < 0) else 1.0
 
 
-def _forced_impulses(law, ctype, mnn, mnt, mtt, vn, vt, mu, e, delta=None):
-    """``(I_n, I_t)`` of one contact by the formulas of collision type ``ctype``, in a frame
+def _type_impulses(law, terms, e, ctype):
+    """``(I_n, I_t)`` of a contact by the formulas of collision type ``ctype``, in a frame
     with ``v_t ≥ 0`` (not checked: the coherence test does). Affine in ``(v_n, v_t)`` for
-    Poisson and Newton; homogeneous of degree 1 for the paper's Stronge."""
-    scalars = [np.float64(x) for x in (mnn, mnt, mtt, vn, vt, mu)]
-    terms = laws.ContactTerms(*scalars, None if delta is None else np.float64(delta))
-    with np.errstate(all="ignore"):
-        if law == "poisson":  # (26), (29), (36), (44), (49)
-            return laws.poisson_impulses(terms, np.float64(e), ctype)
-        if law == "stronge-paper":  # e_i by (64), (67), (70), (73), (74), then Poisson
-            e_i = laws.stronge_paper_restitution(terms, np.float64(e), ctype)
-            return laws.poisson_impulses(terms, e_i, ctype)
-        # Newton (Part A): docs/theory.md, 'Newton's law', two phases with the type forced.
-        vn_abs, target = terms.vn_abs, e * terms.vn_abs  # ends where v_n = e|v_n^A| (A30)
-        if ctype == laws.NEWTON_FORWARD:
-            normal = (target + vn_abs) / terms.h
-            return normal, -mu * normal
-        p_g = vt / terms.g  # (A58), with v_t^A for the misprinted v_n^A
-        vn_g = terms.h * p_g - vn_abs
-        sticks = ctype == laws.NEWTON_STICK
-        slope_n = terms.delta / mtt if sticks else terms.q
-        slope_t = -mnt / mtt if sticks else mu
-        normal = p_g + (target - vn_g) / slope_n
-        return normal, -mu * p_g + slope_t * (normal - p_g)
+    Poisson and Newton; homogeneous of degree 1 for the paper's Stronge.
+
+    ``terms``: a :class:`~planar_impact.laws.ContactTerms` of numpy scalars or arrays
+    (``ctype`` then an array of types). Every element takes the same operations in the same
+    order, so a batch gives each element's scalar answer bit for bit. Call under
+    ``np.errstate(all="ignore")``.
+    """
+    if law == "poisson":  # (26), (29), (36), (44), (49)
+        return laws.poisson_impulses(terms, e, ctype)
+    if law == "stronge-paper":  # e_i by (64), (67), (70), (73), (74), then Poisson
+        e_i = laws.stronge_paper_restitution(terms, e, ctype)
+        return laws.poisson_impulses(terms, e_i, ctype)
+    # Newton (Part A): docs/theory.md, 'Newton's law', two phases with the type forced.
+    mnt, mtt, mu = terms.mnt, terms.mtt, terms.mu
+    vn_abs, target = terms.vn_abs, e * terms.vn_abs  # ends where v_n = e|v_n^A| (A30)
+    forward = ctype == laws.NEWTON_FORWARD
+    forward_normal = (target + vn_abs) / terms.h  # forward sliding throughout
+    p_g = terms.vt / terms.g  # (A58), with v_t^A for the misprinted v_n^A
+    vn_g = terms.h * p_g - vn_abs
+    sticks = ctype == laws.NEWTON_STICK
+    slope_n = laws.where(sticks, terms.delta / mtt, terms.q)
+    slope_t = laws.where(sticks, -mnt / mtt, mu)
+    normal = p_g + (target - vn_g) / slope_n
+    return (laws.where(forward, forward_normal, normal),
+            laws.where(forward, -mu * forward_normal, -mu * p_g + slope_t * (normal - p_g)))
 
 
 #: How a type's formulas see the other contacts (docs/multi-contact.md, 'The paper's proposal').
 COUPLINGS = ("effective", "none")
 
 
-def _contact_map(system, law, ctypes, signs, coupling="effective"):
-    """The map ``I ↦ (forced impulses of every contact at its effective approach)``; with
-    ``coupling="none"`` every contact sees its own ``v^A`` and the map is constant."""
+def _contact_map(system, law, types, signs, coupling="effective"):
+    """The map ``I ↦ (forced impulses of every contact at its effective approach)`` for many
+    combinations at once; with ``coupling="none"`` every contact sees its own ``v^A`` and
+    the map is constant.
 
-    def apply(impulses):
+    ``types``, ``signs`` (``(N, m)``): one combination per row. The returned ``apply(I,
+    rows)`` maps rows of impulses ``(R, 2m)``, row ``r`` by combination ``rows[r]``. Each
+    element takes the operations of one contact's formulas (:func:`_type_impulses` at
+    :meth:`ContactSystem.effective_approach`) in the same order: a combination's answer
+    does not depend on the batch it is in, bit for bit.
+    """
+    if law not in TYPE_LAWS:  # the kernels below are those laws'
+        raise ValueError(f"_contact_map serves {', '.join(TYPE_LAWS)}, not {law!r}")
+    count = system.count
+    separating = types == SEPARATING
+    safe_types = np.where(separating, 1, types)
+
+    def apply(impulses, rows):
         if coupling == "none":
-            impulses = np.zeros(2 * system.count)
-        out = np.zeros(2 * system.count)
-        for i, (ctype, sign) in enumerate(zip(ctypes, signs)):
-            if ctype == SEPARATING:
-                continue
+            impulses = np.zeros_like(impulses)
+        out = np.zeros_like(impulses)
+        for i in range(count):
             mnn, mnt, mtt = system.single_terms(i)
-            vn, vt = system.effective_approach(i, impulses)
-            normal, tangential = _forced_impulses(law, ctype, mnn, sign * mnt, mtt, vn,
-                                                  sign * vt, system.mu[i], system.e[i],
-                                                  system.deltas[i])
-            out[2 * i], out[2 * i + 1] = float(normal), sign * float(tangential)
+            vn = np.full(len(impulses), float(system.approach[2 * i]))
+            vt = np.full(len(impulses), float(system.approach[2 * i + 1]))
+            for j in range(count):  # v^A(i) + Σ_{j≠i} W_ij I^(j), as effective_approach
+                if j == i:
+                    continue
+                block = system.delassus[2 * i:2 * i + 2, 2 * j:2 * j + 2]
+                vn = vn + (block[0, 0] * impulses[:, 2 * j] + block[0, 1] * impulses[:, 2 * j + 1])
+                vt = vt + (block[1, 0] * impulses[:, 2 * j] + block[1, 1] * impulses[:, 2 * j + 1])
+            sign = signs[rows, i]
+            with np.errstate(all="ignore"):
+                terms = laws.ContactTerms(np.float64(mnn), sign * mnt, np.float64(mtt), vn,
+                                          sign * vt, np.float64(system.mu[i]),
+                                          np.float64(system.deltas[i]))
+                normal, tangential = _type_impulses(law, terms, np.float64(system.e[i]),
+                                                    safe_types[rows, i])
+            out[:, 2 * i] = np.where(separating[rows, i], 0.0, normal)
+            out[:, 2 * i + 1] = np.where(separating[rows, i], 0.0, sign * tangential)
         return out
 
     return apply
 
 
-def _fixed_point(system, mapping, max_iterations=30):
-    """Solve ``I = mapping(I)`` by Newton's method with a central-difference Jacobian.
+def _map_and_jacobian(mapping, impulses, rows, step):
+    """``mapping`` at ``impulses`` (rows ``(R, 2m)``) and the Jacobian of ``I − mapping(I)``
+    there by central differences of half-width ``step`` (per row), from one batched call.
 
-    Starts from ``mapping(0)``, the contacts' answers with no coupling; for ``m = 1`` that is
-    already the fixed point (the effective approach does not depend on ``I``), exactly.
-    Returns ``(I, converged, determinate)``.
+    Column ``k`` is ``e_k − (map(I + step e_k) − map(I − step e_k)) / (2 step)``, formed as
+    :func:`_fixed_points` and :func:`_iterated_screen` need it.
     """
-    size = 2 * system.count
+    number, size = impulses.shape
+    shifts = np.zeros((size, number, size))
+    for k in range(size):
+        shifts[k, :, k] = step
+    points = np.concatenate([impulses[None], impulses[None] + shifts, impulses[None] - shifts])
+    values = mapping(points.reshape(-1, size), np.tile(rows, 1 + 2 * size)).reshape(
+        1 + 2 * size, number, size)
+    jacobian = np.broadcast_to(np.eye(size), (number, size, size)).copy()
+    for k in range(size):
+        jacobian[:, :, k] -= (values[1 + k] - values[1 + size + k]) / (2 * step)[:, None]
+    return values[0], jacobian
+
+
+def _fixed_points(system, law, combinations, coupling="effective", max_iterations=30):
+    """Solve ``I = map(I)`` (:func:`_contact_map`) for each combination by Newton's method
+    with a central-difference Jacobian. Returns ``(I, converged, determinate)`` per row.
+
+    Starts from ``map(0)``, the contacts' answers with no coupling; for ``m = 1`` that is
+    already the fixed point (the effective approach does not depend on ``I``), exactly.
+    Every row iterates on its own (its own stopping and its own least-squares step); the
+    combinations share only the batched evaluations of the map, so a row's result does not
+    depend on the others, bit for bit.
+    """
+    number, size = len(combinations), 2 * system.count
+    types = np.array([t for t, _ in combinations], dtype=np.int64).reshape(number, -1)
+    signs = np.array([s for _, s in combinations], dtype=float).reshape(number, -1)
+    mapping = _contact_map(system, law, types, signs, coupling)
     scale = system.impulse_scale()
-    impulses = mapping(np.zeros(size))
-    determinate = True
-    previous = math.inf
+    impulses = mapping(np.zeros((number, size)), np.arange(number))
+    converged = np.zeros(number, dtype=bool)
+    determinate = np.ones(number, dtype=bool)
+    previous = np.full(number, math.inf)
+    running = np.ones(number, dtype=bool)
     for _ in range(max_iterations):
-        if not np.isfinite(impulses).all():
-            return impulses, False, determinate
-        residual = impulses - mapping(impulses)
-        size_now = np.max(np.abs(residual))
-        bound = scale + np.max(np.abs(impulses))
+        running &= np.isfinite(impulses).all(axis=1)  # a non-finite iterate: not converged
+        rows = np.flatnonzero(running)
+        if rows.size == 0:
+            break
+        current = impulses[rows]
+        bound = scale + np.max(np.abs(current), axis=1)
+        if coupling == "none":  # a constant map: the first residual is 0 and ends it
+            mapped, jacobian = mapping(current, rows), None
+        else:  # the map and, from the same call, its Jacobian (most rows go on)
+            mapped, jacobian = _map_and_jacobian(mapping, current, rows, 1e-6 * bound)
+        residual = current - mapped
+        size_now = np.max(np.abs(residual), axis=1)
         # Iterate to rounding (an affine map needs one or two steps), stop when that stalls;
         # accept when the residual is below the tolerance.
-        if size_now <= 1e-15 * bound or size_now > 0.5 * previous:
-            return impulses, size_now <= FIXED_POINT_TOLERANCE * bound, determinate
-        previous = size_now
-        step = 1e-6 * (scale + np.max(np.abs(impulses)))
-        jacobian = np.eye(size)
-        for k in range(size):
-            shift = np.zeros(size)
-            shift[k] = step
-            jacobian[:, k] -= (mapping(impulses + shift) - mapping(impulses - shift)) / (2 * step)
-        if not np.isfinite(jacobian).all():
-            return impulses, False, determinate
-        correction, _, rank, _ = np.linalg.lstsq(jacobian, -residual, rcond=1e-9)
-        determinate = rank == size
-        impulses = impulses + correction
-    residual = np.max(np.abs(impulses - mapping(impulses)))
-    bound = scale + np.max(np.abs(impulses))
-    return impulses, bool(residual <= FIXED_POINT_TOLERANCE * bound), determinate
+        stops = (size_now <= 1e-15 * bound) | (size_now > 0.5 * previous[rows])
+        converged[rows[stops]] = size_now[stops] <= FIXED_POINT_TOLERANCE * bound[stops]
+        running[rows[stops]] = False
+        previous[rows] = size_now
+        for position in np.flatnonzero(~stops).tolist():
+            row = rows[position]
+            if jacobian is None:  # a constant map went on: no fixed point to find
+                running[row] = False
+                continue
+            if not np.isfinite(jacobian[position]).all():
+                running[row] = False
+                continue
+            correction, _, rank, _ = np.linalg.lstsq(jacobian[position], -residual[position],
+                                                     rcond=1e-9)
+            determinate[row] = rank == size
+            impulses[row] = current[position] + correction
+    rows = np.flatnonzero(running)  # out of iterations: accept below the tolerance
+    if rows.size:
+        current = impulses[rows]
+        residual = np.max(np.abs(current - mapping(current, rows)), axis=1)
+        bound = scale + np.max(np.abs(current), axis=1)
+        converged[rows] = residual <= FIXED_POINT_TOLERANCE * bound
+    return impulses, converged, determinate
 
 
 def _law_at(system, law, i, vn, vt, sign):
@@ -372,12 +440,14 @@ def coherent_solutions(system: ContactSystem, law: str = "poisson", *,
     choices = ((SEPARATING,) if allow_separating else ()) + TYPE_LAWS[law]
     tolerance = VELOCITY_TOLERANCE * system.speed_scale()
     found: list[MultiContactSolution] = []
-    for types, signs in _candidates(system, law, choices, coupling, tolerance):
-        mapping = _contact_map(system, law, types, signs, coupling)
-        impulses, converged, determinate = _fixed_point(system, mapping)
+    candidates = _candidates(system, law, choices, coupling, tolerance)
+    if not candidates:
+        return found
+    fixed = zip(*_fixed_points(system, law, candidates, coupling))
+    for (types, signs), (impulses, converged, determinate) in zip(candidates, fixed):
         if not converged:
             continue
-        solution = _check_combination(system, law, types, signs, impulses, determinate,
+        solution = _check_combination(system, law, types, signs, impulses, bool(determinate),
                                       tolerance, coupling)
         if solution is not None and not _already_found(found, solution, system):
             found.append(solution)
@@ -457,24 +527,30 @@ def _affine_pieces(system, law, choices):
     """
     step = system.speed_scale()
     pieces = {}
+    typed = [ctype for ctype in choices if ctype != SEPARATING]
     for i in range(system.count):
+        if SEPARATING in choices:
+            for sign in (1.0, -1.0):
+                pieces[i, SEPARATING, sign] = (np.zeros(2), np.zeros((2, 2)))
         mnn, mnt, mtt = system.single_terms(i)
         vn0, vt0 = float(system.approach[2 * i]), float(system.approach[2 * i + 1])
-        for ctype in choices:
-            for sign in (1.0, -1.0):
-                if ctype == SEPARATING:
-                    pieces[i, ctype, sign] = (np.zeros(2), np.zeros((2, 2)))
-                    continue
-                values = []
-                for vn, vt in ((vn0, vt0), (vn0 + step, vt0), (vn0, vt0 + step)):
-                    normal, tangential = _forced_impulses(
-                        law, ctype, mnn, sign * mnt, mtt, vn, sign * vt, system.mu[i],
-                        system.e[i], system.deltas[i])
-                    values.append((float(normal), sign * float(tangential)))
-                base = np.array(values[0])
-                slope = np.column_stack([(np.array(values[1]) - base) / step,
-                                         (np.array(values[2]) - base) / step])
-                pieces[i, ctype, sign] = (base, slope)
+        # Every (type, sign) at v^A(i) and one speed step along v_n and along v_t, in one
+        # batch of _type_impulses (element by element the scalar answers).
+        keys = [(ctype, sign) for ctype in typed for sign in (1.0, -1.0)]
+        points = ((vn0, vt0), (vn0 + step, vt0), (vn0, vt0 + step))
+        ctypes = np.array([ctype for ctype, _ in keys for _ in points], dtype=np.int64)
+        signs = np.array([sign for _, sign in keys for _ in points])
+        vn = np.array([vn for _ in keys for vn, _ in points])
+        vt = np.array([vt for _ in keys for _, vt in points])
+        with np.errstate(all="ignore"):
+            terms = laws.ContactTerms(np.float64(mnn), signs * mnt, np.float64(mtt), vn,
+                                      signs * vt, np.float64(system.mu[i]),
+                                      np.float64(system.deltas[i]))
+            normal, tangential = _type_impulses(law, terms, np.float64(system.e[i]), ctypes)
+        values = np.column_stack([normal, signs * tangential]).reshape(len(keys), 3, 2)
+        for (ctype, sign), (base, along_n, along_t) in zip(keys, values):
+            slope = np.column_stack([(along_n - base) / step, (along_t - base) / step])
+            pieces[i, ctype, sign] = (base, slope)
     return pieces
 
 
@@ -496,11 +572,13 @@ def _affine_screen(system, law, combinations, tolerance):
     number = len(combinations)
     offsets = np.zeros((number, size))
     slopes = np.zeros((number, size, size))  # block-diagonal G
-    for k, (types, signs) in enumerate(combinations):
-        for i, (ctype, sign) in enumerate(zip(types, signs)):
-            base, slope = pieces[i, ctype, sign]
-            offsets[k, 2 * i:2 * i + 2] = base
-            slopes[k, 2 * i:2 * i + 2, 2 * i:2 * i + 2] = slope
+    for i in range(count):  # contact i's piece of every combination, gathered
+        keys = [(ctype, sign) for (contact, ctype, sign) in pieces if contact == i]
+        which = {key: k for k, key in enumerate(keys)}
+        chosen = [which[types[i], signs[i]] for types, signs in combinations]
+        offsets[:, 2 * i:2 * i + 2] = np.array([pieces[i, c, s][0] for c, s in keys])[chosen]
+        slopes[:, 2 * i:2 * i + 2, 2 * i:2 * i + 2] = np.array(
+            [pieces[i, c, s][1] for c, s in keys])[chosen]
     coupling = system.delassus.copy()
     for i in range(count):
         coupling[2 * i:2 * i + 2, 2 * i:2 * i + 2] = 0.0  # only the other contacts, (75)
@@ -520,7 +598,7 @@ def _affine_screen(system, law, combinations, tolerance):
         weakest_kept = np.min(np.where(null, np.inf, values), axis=1)
         screened = weakest_kept >= np.where(null.any(axis=1), SCREEN_SINGULAR_CONDITION,
                                             1.0 / SCREEN_CONDITION)
-        # _fixed_point's first step from I_0 = c: I_1 = c + (1 − K)⁺ (K c), with the
+        # _fixed_points' first step from I_0 = c: I_1 = c + (1 − K)⁺ (K c), with the
         # pseudo-inverse's cut; for a regular matrix that is (1 − K)⁻¹ c, the fixed point.
         inverse_values = np.where(null, 0.0, 1.0 / values)
         pushed = offsets - np.einsum("kij,kj->ki", matrices, offsets)  # K c = c − (1 − K) c
@@ -557,27 +635,18 @@ def _coherent_within_margin(system, law, combinations, impulses, tolerance):
     impulse_margin = SCREEN_MARGIN * bound
     row_sum = float(np.max(np.sum(np.abs(system.delassus), axis=1)))
     speed_margin = tolerance + row_sum * impulse_margin
-    passes = np.ones(len(combinations), dtype=bool)
-    kinds = {1: "stick", 2: "reverse", 3: "forward"} if law == "newton" else {
-        1: "stick", 2: "stick", 3: "reverse", 4: "reverse", 5: "forward"}
-    for position, (types, signs) in enumerate(combinations):
-        margin_i, margin_v = impulse_margin[position], speed_margin[position]
-        for i, (ctype, sign) in enumerate(zip(types, signs)):
-            n, t = 2 * i, 2 * i + 1
-            if ctype == SEPARATING:
-                ok = after[position, n] >= -margin_v
-            else:
-                slip = sign * after[position, t]
-                kind = kinds[ctype]
-                ok = (sign * effective[position, t] >= -margin_v
-                      and effective[position, n] < margin_v
-                      and impulses[position, n] > -margin_i
-                      and after[position, n] >= -margin_v
-                      and (abs(slip) <= margin_v if kind == "stick"
-                           else slip <= margin_v if kind == "reverse" else slip >= -margin_v))
-            if not ok:
-                passes[position] = False
-                break
+    types = np.array([t for t, _ in combinations], dtype=np.int64).reshape(-1, count)
+    signs = np.array([s for _, s in combinations], dtype=float).reshape(-1, count)
+    # Per combination and contact: 0 stick, 1 reverse, 2 forward (the paper's tests).
+    kinds = np.array([0, 0, 1, 2]) if law == "newton" else np.array([0, 0, 0, 1, 1, 2])
+    kind = kinds[types]  # a separating contact's entry is unused
+    margin_i, margin_v = impulse_margin[:, None], speed_margin[:, None]
+    slip = signs * after[:, 1::2]
+    slip_ok = np.where(kind == 0, np.abs(slip) <= margin_v,
+                       np.where(kind == 1, slip <= margin_v, slip >= -margin_v))
+    typed_ok = ((signs * effective[:, 1::2] >= -margin_v) & (effective[:, 0::2] < margin_v)
+                & (impulses[:, 0::2] > -margin_i) & (after[:, 0::2] >= -margin_v) & slip_ok)
+    passes = np.where(types == SEPARATING, after[:, 0::2] >= -margin_v, typed_ok).all(axis=1)
     rows = np.flatnonzero(passes)
     for i in range(count):
         if rows.size:
@@ -621,49 +690,11 @@ def _type_within_margin(system, law, i, combinations, effective, margin):
     return own
 
 
-def _batched_map(system, law, types, signs):
-    """:func:`_contact_map` (effective reading) of the paper's Stronge, the one non-affine
-    law, for many combinations at once: rows of
-    ``types``, ``signs`` (``(N, m)``) map rows of impulses ``(N, 2m)``, with the same
-    operations in the same order per element (the laws' kernels take arrays)."""
-    if law != "stronge-paper":  # the kernels below are that law's
-        raise ValueError(f"_batched_map serves stronge-paper, not {law!r}")
-    count = system.count
-    separating = types == SEPARATING
-    safe_types = np.where(separating, 1, types)
-
-    def apply(impulses, rows):
-        out = np.zeros_like(impulses)
-        for i in range(count):
-            mnn, mnt, mtt = system.single_terms(i)
-            vn = np.full(len(impulses), float(system.approach[2 * i]))
-            vt = np.full(len(impulses), float(system.approach[2 * i + 1]))
-            for j in range(count):  # v^A(i) + Σ_{j≠i} W_ij I^(j), as effective_approach
-                if j == i:
-                    continue
-                block = system.delassus[2 * i:2 * i + 2, 2 * j:2 * j + 2]
-                vn = vn + (block[0, 0] * impulses[:, 2 * j] + block[0, 1] * impulses[:, 2 * j + 1])
-                vt = vt + (block[1, 0] * impulses[:, 2 * j] + block[1, 1] * impulses[:, 2 * j + 1])
-            sign = signs[rows, i]
-            with np.errstate(all="ignore"):
-                terms = laws.ContactTerms(np.float64(mnn), sign * mnt, np.float64(mtt), vn,
-                                          sign * vt, np.float64(system.mu[i]),
-                                          np.float64(system.deltas[i]))
-                ctype = safe_types[rows, i]
-                e_i = laws.stronge_paper_restitution(terms, np.float64(system.e[i]), ctype)
-                normal, tangential = laws.poisson_impulses(terms, e_i, ctype)
-            out[:, 2 * i] = np.where(separating[rows, i], 0.0, normal)
-            out[:, 2 * i + 1] = np.where(separating[rows, i], 0.0, sign * tangential)
-        return out
-
-    return apply
-
-
 def _iterated_screen(system, law, combinations, tolerance, max_iterations=30):
     """For the effective reading with the paper's Stronge (not affine): which combinations
     may be coherent.
 
-    :func:`_fixed_point`'s Newton iteration (same start, steps and stopping rules, the
+    :func:`_fixed_points`' Newton iteration (same start, steps and stopping rules, the
     least-squares step by a batched pseudo-inverse with the same cut-off) runs on all
     combinations at once. A combination is dropped when its iteration ends with a residual
     above ``SCREEN_MARGIN`` of the bound (far from any fixed point the full path would
@@ -676,7 +707,7 @@ def _iterated_screen(system, law, combinations, tolerance, max_iterations=30):
     size = 2 * system.count
     types = np.array([t for t, _ in combinations], dtype=np.int64)
     signs = np.array([s for _, s in combinations], dtype=float)
-    mapping = _batched_map(system, law, types, signs)
+    mapping = _contact_map(system, law, types, signs)
     number = len(combinations)
     scale = system.impulse_scale()
     impulses = mapping(np.zeros((number, size)), np.arange(number))
@@ -692,10 +723,14 @@ def _iterated_screen(system, law, combinations, tolerance, max_iterations=30):
                 break
             rows = np.flatnonzero(running)
             current = impulses[rows]
-            residual = current - mapping(current, rows)
+            bound = scale + np.max(np.abs(current), axis=1)
+            if iteration < max_iterations:  # the map and, from the same call, its Jacobian
+                mapped, jacobian = _map_and_jacobian(mapping, current, rows, 1e-6 * bound)
+            else:
+                mapped = mapping(current, rows)
+            residual = current - mapped
             size_now = np.max(np.abs(residual), axis=1)
             residual_size[rows] = size_now
-            bound = scale + np.max(np.abs(current), axis=1)
             closest[rows] = np.fmin(closest[rows], size_now / bound)
             stops = (size_now <= 1e-15 * bound) | (size_now > 0.5 * previous[rows])
             previous[rows] = size_now
@@ -704,19 +739,13 @@ def _iterated_screen(system, law, combinations, tolerance, max_iterations=30):
             rows, current, residual = rows[go], current[go], residual[go]
             if rows.size == 0 or iteration == max_iterations:
                 break
-            step = 1e-6 * (scale + np.max(np.abs(current), axis=1))
-            jacobian = np.broadcast_to(np.eye(size), (rows.size, size, size)).copy()
-            for k in range(size):
-                shift = np.zeros((rows.size, size))
-                shift[:, k] = step
-                jacobian[:, :, k] -= ((mapping(current + shift, rows)
-                                       - mapping(current - shift, rows)) / (2 * step)[:, None])
+            jacobian = jacobian[go]
             good = np.isfinite(jacobian).all(axis=(1, 2))
             running[rows[~good]] = False
             rows, current, residual = rows[good], current[good], residual[good]
             correction = np.linalg.pinv(jacobian[good], rcond=1e-9) @ -residual[..., None]
             impulses[rows] = current + correction[..., 0]
-    # A non-finite map anywhere on the way makes _fixed_point give up. Its start, map(0), is
+    # A non-finite map anywhere on the way makes _fixed_points give up. Its start, map(0), is
     # the same arithmetic on the same floats here, so those rows are dropped; rows that went
     # non-finite later are kept if they had come near a fixed point (the two iterations'
     # rounding might part there).

@@ -2,16 +2,19 @@
 
 ``coherent_solutions`` drops most type combinations before their fixed-point solve
 (``_candidates``: the literal reading's single candidate, a batched linear solve for Poisson
-and Newton, a batched Newton iteration for the paper's Stronge); the combinations it keeps
-are solved and checked by the same code as before. ``unscreened_coherent_solutions`` below
-is the implementation before the screen, kept as the reference: both must return the same
-solutions in the same order with the same floats. Thousands of problems (and half as many
+and Newton, a batched Newton iteration for the paper's Stronge), and solves the ones it keeps
+together (``_fixed_points``: the map evaluated for every combination and every Jacobian
+column in one batched call); they are checked by the same code as before.
+``unscreened_coherent_solutions`` below is the implementation before the screen and the
+batch, one combination at a time on scalars, kept as the reference: both must return the
+same solutions in the same order with the same floats. Thousands of problems (and half as many
 random flat landings): ``python tests/theory/test_simultaneous_screen.py PROBLEMS SEED``.
 """
 
 from __future__ import annotations
 
 import itertools
+import math
 import sys
 
 import numpy as np
@@ -20,6 +23,7 @@ import pytest
 from harness.reference import flat_faces
 from harness.run import references
 from harness.scenarios import load_scenario
+from planar_impact import laws
 from planar_impact import simultaneous as sim
 
 TYPE_LAWS = ("poisson", "stronge-paper", "newton")
@@ -27,8 +31,86 @@ FIELDS = ("normal_impulse", "tangential_impulse", "delta_u", "u_after", "vn_appr
           "vt_approach", "vn_separation", "vt_separation")
 
 
+def scalar_forced_impulses(law, ctype, mnn, mnt, mtt, vn, vt, mu, e, delta=None):
+    """One contact's impulses by type ``ctype``'s formulas, on numpy scalars (as before)."""
+    scalars = [np.float64(x) for x in (mnn, mnt, mtt, vn, vt, mu)]
+    terms = laws.ContactTerms(*scalars, None if delta is None else np.float64(delta))
+    with np.errstate(all="ignore"):
+        if law == "poisson":
+            return laws.poisson_impulses(terms, np.float64(e), ctype)
+        if law == "stronge-paper":
+            e_i = laws.stronge_paper_restitution(terms, np.float64(e), ctype)
+            return laws.poisson_impulses(terms, e_i, ctype)
+        vn_abs, target = terms.vn_abs, e * terms.vn_abs
+        if ctype == laws.NEWTON_FORWARD:
+            normal = (target + vn_abs) / terms.h
+            return normal, -mu * normal
+        p_g = vt / terms.g
+        vn_g = terms.h * p_g - vn_abs
+        sticks = ctype == laws.NEWTON_STICK
+        slope_n = terms.delta / mtt if sticks else terms.q
+        slope_t = -mnt / mtt if sticks else mu
+        normal = p_g + (target - vn_g) / slope_n
+        return normal, -mu * p_g + slope_t * (normal - p_g)
+
+
+def scalar_contact_map(system, law, ctypes, signs, coupling="effective"):
+    """One combination's map ``I ↦ forced impulses at the effective approach`` (as before)."""
+
+    def apply(impulses):
+        if coupling == "none":
+            impulses = np.zeros(2 * system.count)
+        out = np.zeros(2 * system.count)
+        for i, (ctype, sign) in enumerate(zip(ctypes, signs)):
+            if ctype == sim.SEPARATING:
+                continue
+            mnn, mnt, mtt = system.single_terms(i)
+            vn, vt = system.effective_approach(i, impulses)
+            normal, tangential = scalar_forced_impulses(law, ctype, mnn, sign * mnt, mtt, vn,
+                                                        sign * vt, system.mu[i], system.e[i],
+                                                        system.deltas[i])
+            out[2 * i], out[2 * i + 1] = float(normal), sign * float(tangential)
+        return out
+
+    return apply
+
+
+def scalar_fixed_point(system, mapping, max_iterations=30):
+    """One combination's Newton iteration with a central-difference Jacobian (as before):
+    ``(I, converged, determinate)``."""
+    size = 2 * system.count
+    scale = system.impulse_scale()
+    impulses = mapping(np.zeros(size))
+    determinate = True
+    previous = math.inf
+    for _ in range(max_iterations):
+        if not np.isfinite(impulses).all():
+            return impulses, False, determinate
+        residual = impulses - mapping(impulses)
+        size_now = np.max(np.abs(residual))
+        bound = scale + np.max(np.abs(impulses))
+        if size_now <= 1e-15 * bound or size_now > 0.5 * previous:
+            return impulses, size_now <= sim.FIXED_POINT_TOLERANCE * bound, determinate
+        previous = size_now
+        step = 1e-6 * (scale + np.max(np.abs(impulses)))
+        jacobian = np.eye(size)
+        for k in range(size):
+            shift = np.zeros(size)
+            shift[k] = step
+            jacobian[:, k] -= (mapping(impulses + shift) - mapping(impulses - shift)) / (2 * step)
+        if not np.isfinite(jacobian).all():
+            return impulses, False, determinate
+        correction, _, rank, _ = np.linalg.lstsq(jacobian, -residual, rcond=1e-9)
+        determinate = rank == size
+        impulses = impulses + correction
+    residual = np.max(np.abs(impulses - mapping(impulses)))
+    bound = scale + np.max(np.abs(impulses))
+    return impulses, bool(residual <= sim.FIXED_POINT_TOLERANCE * bound), determinate
+
+
 def unscreened_coherent_solutions(system, law, coupling="effective", allow_separating=False):
-    """``coherent_solutions`` before the screen: every combination through the fixed point."""
+    """``coherent_solutions`` before the screen and the batch: every combination through its
+    own scalar fixed point."""
     choices = ((sim.SEPARATING,) if allow_separating else ()) + sim.TYPE_LAWS[law]
     tolerance = sim.VELOCITY_TOLERANCE * system.speed_scale()
     found = []
@@ -36,8 +118,8 @@ def unscreened_coherent_solutions(system, law, coupling="effective", allow_separ
         for signs in itertools.product((1.0, -1.0), repeat=system.count):
             if any(t == sim.SEPARATING and s < 0 for t, s in zip(types, signs)):
                 continue
-            mapping = sim._contact_map(system, law, types, signs, coupling)
-            impulses, converged, determinate = sim._fixed_point(system, mapping)
+            mapping = scalar_contact_map(system, law, types, signs, coupling)
+            impulses, converged, determinate = scalar_fixed_point(system, mapping)
             if not converged:
                 continue
             solution = sim._check_combination(system, law, types, signs, impulses,
