@@ -66,7 +66,8 @@ def test_a_warm_run_reads_one_entry_per_scenario_and_equals_the_cold_run(tmp_pat
     assert len(_scenario_entries(tmp_path)) == 3
     cache = _CountingCache(tmp_path)
     warm = _run(scenarios, cache)
-    assert cache.lookups == 3  # not one per engine run, point and reference
+    # one per scenario (not one per engine run, point and reference) and each engine's facts
+    assert cache.lookups == 3 + len(ENGINES)
     assert [_comparable(r) for r in warm.records] == [_comparable(r) for r in cold.records]
     assert warm.scenarios == cold.scenarios
     assert all(r.cached for r in warm.records if r.source != "analytic")
@@ -178,11 +179,12 @@ def test_a_scenario_with_a_missing_engine_is_not_kept_whole(tmp_path, monkeypatc
 
     real = runner._engine_status
 
-    def pymunk_missing(engines):
-        loaded, missing = real(engines)
-        loaded.pop("pymunk", None)
+    def pymunk_missing(engines, cache=None):
+        versions, missing, settings = real(engines, cache)
+        versions.pop("pymunk", None)
+        settings.pop("pymunk", None)
         missing["pymunk"] = str(EngineNotInstalled("pymunk", "not installed (test)"))
-        return loaded, missing
+        return versions, missing, settings
 
     monkeypatch.setattr(runner, "_engine_status", pymunk_missing)
     outcome = _run([ROD], ResultCache(tmp_path))
