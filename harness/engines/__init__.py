@@ -21,6 +21,8 @@ in the adapters, so reports and scenario files can be read where the engine is n
 from __future__ import annotations
 
 import importlib
+import json
+import os
 
 from harness.engines.contract import (
     BLOW_UP_FACTOR,
@@ -170,6 +172,31 @@ def load_engine(name: str) -> Engine:
     return engine
 
 
+def install_fingerprint(name: str) -> str | None:
+    """What identifies the installed package of engine ``name``, found without importing it:
+    the file its import loads (path, size, modification time) and its distribution's
+    version; None when no such package is found (then :func:`load_engine` fails at once).
+
+    A reinstall, upgrade or removal changes it, so what was learnt by loading the adapter
+    (its version, its settings) can be kept under it (:mod:`harness.run.engine_facts`).
+    """
+    from importlib import metadata, util
+
+    _, package, distribution = _ENGINE_MODULES[name]
+    try:
+        spec = util.find_spec(package)
+    except (ImportError, ValueError):
+        return None
+    if spec is None or not spec.origin or not os.path.isfile(spec.origin):
+        return None
+    stat = os.stat(spec.origin)
+    try:
+        version = metadata.version(distribution)
+    except metadata.PackageNotFoundError:
+        version = None
+    return json.dumps([spec.origin, stat.st_size, stat.st_mtime_ns, version])
+
+
 def available_engines() -> dict[str, str | None]:
     """``{engine: None}`` when it loads, else ``{engine: reason}`` (with the install command)."""
     report: dict[str, str | None] = {}
@@ -203,6 +230,7 @@ __all__ = [
     "body_extent",
     "free_flight_poses",
     "geometry_key",
+    "install_fingerprint",
     "ke_norm",
     "load_engine",
     "preset_choices",

@@ -88,7 +88,7 @@ from typing import Any, Iterable, Mapping, Sequence, TextIO
 
 import numpy as np
 
-from harness.engines import preset_choices, preset_role
+from harness.engines import load_engine, preset_choices, preset_role
 from harness.run import metrics, references, verdicts
 from harness.run.executor import one_blas_thread
 from harness.run.history import contact_history
@@ -541,17 +541,14 @@ def _settings_of(engine, preset: str, overrides: dict, memo: dict) -> dict | str
     return memo[key]
 
 
-def _engine_status(engines: Sequence[str]) -> tuple[dict, dict]:
-    """``({engine: adapter}, {engine: reason it is skipped})``."""
-    from harness.engines import EngineNotInstalled, load_engine
+def _engine_status(engines: Sequence[str], cache=None) -> tuple[dict, dict, dict]:
+    """``({engine: version}, {engine: reason it is skipped}, {engine: {preset: settings}})``
+    of the installed engines, without importing those whose facts ``cache`` keeps
+    (:mod:`harness.run.engine_facts`)."""
+    from harness.run.engine_facts import engine_facts
 
-    loaded, missing = {}, {}
-    for name in engines:
-        try:
-            loaded[name] = load_engine(name)
-        except EngineNotInstalled as error:
-            missing[name] = str(error)
-    return loaded, missing
+    facts = engine_facts(engines, cache)
+    return facts.versions, facts.missing, facts.settings
 
 
 def run(
@@ -596,7 +593,8 @@ def run(
             warnings.append(f"cache {cache.root}: cannot clean temporaries: {error}")
     wanted_engines = [name for name in ENGINES if name in engines]
     needs_engines = any(not s.analytic_only and _engines_of(s, wanted_engines) for s in scenarios)
-    loaded, missing = _engine_status(wanted_engines) if needs_engines else ({}, {})
+    versions, missing, preset_settings = (_engine_status(wanted_engines, cache) if needs_engines
+                                          else ({}, {}, {}))
 
     # 0. Whole scenarios whose finished records the cache holds: one entry each, its lines
     # kept as text (the results file's lines) beside the summary the run needs of them.
@@ -605,7 +603,7 @@ def run(
     stored_runs = 0  # engine runs of the scenarios read whole from the cache
     for scenario in scenarios:
         key = scenario_keys[scenario.name] = _scenario_key(
-            scenario, cache, loaded, missing, wanted_engines, presets, command_overrides,
+            scenario, cache, versions, missing, wanted_engines, presets, command_overrides,
             history)
         found = _stored_scenario(scenario, cache, key, presets,
                                  len(_engines_of(scenario, wanted_engines)))
@@ -634,7 +632,7 @@ def run(
                     if engine_name in missing:
                         item["output"] = {"status": f"skipped: {missing[engine_name]}"}
                         continue
-                    engine = loaded[engine_name]
+                    engine = load_engine(engine_name)  # loaded once, only for runs to build
                     overrides = {**scenario.engine_settings.get(engine_name, {}),
                                  **command_overrides.get(engine_name, {})}
                     item["overrides"] = overrides
@@ -748,15 +746,17 @@ def run(
                                  scenario_gates), file=log, flush=True)
 
     settings_table = {  # the presets as run: with the command line's --set overrides
-        name: {preset: engine.settings(preset, command_overrides.get(name)) for preset in PRESETS}
-        for name, engine in loaded.items()
+        name: (preset_settings[name] if name not in command_overrides else
+               {preset: load_engine(name).settings(preset, command_overrides[name])
+                for preset in PRESETS})
+        for name in versions
     }
     stats = cache.stats if cache is not None else {"enabled": False, "hits": 0, "misses": 0}
     info = provenance(
         FORMAT, FORMAT_VERSION,
         engine_settings=settings_table,
         command=command,
-        engine_versions={name: engine.version for name, engine in loaded.items()},
+        engine_versions=dict(versions),
         engines_missing=missing,
         engines=list(wanted_engines),
         presets=list(presets),
@@ -782,7 +782,7 @@ def _definition(scenario: Scenario) -> dict:
     return {f.name: getattr(scenario, f.name) for f in fields(scenario) if f.name != "path"}
 
 
-def _scenario_key(scenario: Scenario, cache, loaded: Mapping, missing: Mapping,
+def _scenario_key(scenario: Scenario, cache, versions: Mapping, missing: Mapping,
                   wanted_engines: Sequence[str], presets: Sequence[str],
                   command_overrides: Mapping, history: bool | None) -> str | None:
     """The cache key of a scenario's finished records, or None when they are not kept.
@@ -798,11 +798,11 @@ def _scenario_key(scenario: Scenario, cache, loaded: Mapping, missing: Mapping,
     if cache is None or not cache.enabled:
         return None
     engines = _engines_of(scenario, wanted_engines)
-    if any(name in missing or name not in loaded for name in engines):
+    if any(name in missing or name not in versions for name in engines):
         return None
     try:
         return cache.key({"kind": SCENARIO_RECORDS, "scenario": _definition(scenario),
-                          "engines": [[name, loaded[name].version] for name in engines],
+                          "engines": [[name, versions[name]] for name in engines],
                           "presets": list(presets),
                           "overrides": {name: command_overrides.get(name, {})
                                         for name in engines},

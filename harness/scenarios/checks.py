@@ -388,7 +388,7 @@ class PassedChecks:
 
     def _context_text(self) -> str:
         if self._context is None:
-            self._context = _checks_context()
+            self._context = _checks_context(self.root)
         return self._context
 
     def _load(self) -> dict[str, Scenario | None]:
@@ -455,19 +455,17 @@ def _read_only(items: dict) -> MappingProxyType:
     return MappingProxyType(items)
 
 
-def _checks_context() -> str:
-    """What a check's outcome depends on besides the file's text (see :class:`PassedChecks`)."""
+def _checks_context(root=None) -> str:
+    """What a check's outcome depends on besides the file's text (see :class:`PassedChecks`);
+    which engines are installed is read from the result cache at ``root`` where it is kept
+    (:mod:`harness.run.engine_facts`: no engine is imported for it on a warm run)."""
     from harness.engines import ENGINE_NAMES
-    from harness.run.cache import code_version
+    from harness.run.cache import ResultCache, code_version
+    from harness.run.engine_facts import engine_facts
     from harness.scenarios.schema import LIMITS, limit
 
-    installed = []
-    for name in ENGINE_NAMES:
-        try:
-            load_engine(name)
-            installed.append(name)
-        except EngineNotInstalled:
-            continue
+    installed = list(engine_facts(ENGINE_NAMES, None if root is None else ResultCache(root))
+                     .versions)
     return json.dumps({"code": code_version(), "limits": {k: limit(k) for k in sorted(LIMITS)},
                        "engines": installed}, sort_keys=True)
 

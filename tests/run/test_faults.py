@@ -75,7 +75,7 @@ def test_a_kill_mid_run_keeps_finished_results_and_the_rerun_recomputes_none(tmp
     monkeypatch.setattr(runner, "engine_task", dies_at_the_fifth)
     with pytest.raises(KeyboardInterrupt):
         sweep_run(ResultCache(tmp_path), chunk_size=1)
-    assert len(list(tmp_path.rglob("*.json"))) == 4  # each finished run stored at once
+    assert len(engine_entries(tmp_path)) == 4  # each finished run stored at once
 
     calls.clear()
     monkeypatch.setattr(runner, "engine_task", lambda task: (calls.append(task),
@@ -100,7 +100,7 @@ def test_a_kill_mid_run_keeps_finished_chunks(tmp_path, monkeypatch):
     monkeypatch.setattr(runner, "engine_chunk", dies_in_the_second_chunk)
     with pytest.raises(KeyboardInterrupt):
         sweep_run(ResultCache(tmp_path), chunk_size=4)
-    assert chunks == [4] and len(list(tmp_path.rglob("*.json"))) == 4
+    assert chunks == [4] and len(engine_entries(tmp_path)) == 4
 
     chunks.clear()
     singles = []

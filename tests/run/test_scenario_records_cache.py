@@ -14,8 +14,10 @@ from dataclasses import replace
 import pytest
 
 from harness import cli
+from harness.engines import ENGINE_NAMES
 from harness.run import runner
 from harness.run.cache import ResultCache
+from harness.run.engine_facts import ENGINE_FACTS, engine_facts
 from harness.run.records import companion_path, read_results
 from harness.scenarios import SCENARIO_DIR, checks, load_scenario
 from harness.scenarios.library import load_scenarios_reporting
@@ -66,7 +68,8 @@ def test_a_warm_run_reads_one_entry_per_scenario_and_equals_the_cold_run(tmp_pat
     assert len(_scenario_entries(tmp_path)) == 3
     cache = _CountingCache(tmp_path)
     warm = _run(scenarios, cache)
-    assert cache.lookups == 3  # not one per engine run, point and reference
+    # one per scenario (not one per engine run, point and reference) and each engine's facts
+    assert cache.lookups == 3 + len(ENGINES)
     assert [_comparable(r) for r in warm.records] == [_comparable(r) for r in cold.records]
     assert warm.scenarios == cold.scenarios
     assert all(r.cached for r in warm.records if r.source != "analytic")
@@ -80,8 +83,9 @@ def test_warm_records_equal_those_of_a_run_without_the_cache_kept_once(tmp_path)
     flat = load_scenario(SCENARIO_DIR / "flat-rod.toml")  # a several-contact reference
     fresh = _run([ROD, flat], None)
     _run([ROD, flat], ResultCache(tmp_path))
-    stored = [json.loads(path.read_text(encoding="utf-8"))["record"]
-              for path in tmp_path.glob("??/*.json")]
+    stored = [record for path in tmp_path.glob("??/*.json")
+              if (record := json.loads(path.read_text(encoding="utf-8"))["record"]).get("kind")
+              != ENGINE_FACTS]
     # engine runs and the flat face's reference; a point's records only in its scenario's
     assert sorted("velocities" in entry for entry in stored) == [False] + [True] * 4
     assert not any("records" in entry for entry in stored)
@@ -178,11 +182,12 @@ def test_a_scenario_with_a_missing_engine_is_not_kept_whole(tmp_path, monkeypatc
 
     real = runner._engine_status
 
-    def pymunk_missing(engines):
-        loaded, missing = real(engines)
-        loaded.pop("pymunk", None)
+    def pymunk_missing(engines, cache=None):
+        versions, missing, settings = real(engines, cache)
+        versions.pop("pymunk", None)
+        settings.pop("pymunk", None)
         missing["pymunk"] = str(EngineNotInstalled("pymunk", "not installed (test)"))
-        return loaded, missing
+        return versions, missing, settings
 
     monkeypatch.setattr(runner, "_engine_status", pymunk_missing)
     outcome = _run([ROD], ResultCache(tmp_path))
@@ -349,7 +354,9 @@ def test_cache_info_and_prune_see_the_scenario_checks_store(tmp_path):
     finally:
         checks.use_passed_checks(None)
     store = tmp_path / checks.PassedChecks.FILE_NAME
-    assert ResultCache(tmp_path).info()["entries"] == 1
+    # the store and the installed engines' facts (which engines the checks depend on)
+    facts = len(engine_facts(ENGINE_NAMES).versions)
+    assert ResultCache(tmp_path).info()["entries"] == 1 + facts
     assert ResultCache(tmp_path).prune()["entries"] == 0  # this code's: kept
-    assert ResultCache(tmp_path, version="other").prune()["entries"] == 1
+    assert ResultCache(tmp_path, version="other").prune()["entries"] == 1 + facts
     assert not store.exists()

@@ -1,0 +1,83 @@
+"""Which engines are installed, their versions and preset settings, without importing them.
+
+A warm run needs of the engines only what keys and provenance hold: which are installed,
+each one's version and its presets' settings. Importing MuJoCo, pybullet, Box2D and pymunk
+to learn that took about a second, a third of a warm run of a large library. So what the
+loaded adapter reported is kept in the result cache under the engine's
+:func:`harness.engines.install_fingerprint` (the file its import loads, with its size and
+modification time, and its distribution's version) and the code version every key holds
+(which covers the adapters): a reinstall, an upgrade, a removal or an adapter change is a
+miss, and the engine is loaded again. An engine whose package is not found, or that fails to
+import, is loaded each time (failing is fast) and never kept.
+"""
+
+from __future__ import annotations
+
+import base64
+import pickle
+from dataclasses import dataclass, field
+from typing import Sequence
+
+from harness import engines as registry
+from harness.engines import EngineNotInstalled, install_fingerprint
+from harness.scenarios import PRESETS
+
+#: The cache entries' ``kind``.
+ENGINE_FACTS = "engine-facts"
+
+
+@dataclass
+class EngineFacts:
+    """``versions`` (installed engines, in the order asked), ``missing`` (engine: why it is
+    skipped) and ``settings`` (installed engine: {preset: ``adapter.settings(preset, None)``})."""
+
+    versions: dict[str, str] = field(default_factory=dict)
+    missing: dict[str, str] = field(default_factory=dict)
+    settings: dict[str, dict[str, dict]] = field(default_factory=dict)
+
+
+def engine_facts(names: Sequence[str], cache=None) -> EngineFacts:
+    """The :class:`EngineFacts` of ``names``, read from ``cache`` (a
+    :class:`harness.run.cache.ResultCache`; None or disabled: every engine loaded) where it
+    holds them for the installed package, else learnt by loading the adapter and kept."""
+    facts = EngineFacts()
+    for name in names:
+        fingerprint = install_fingerprint(name)
+        key = None
+        if fingerprint is not None and cache is not None and cache.enabled:
+            key = cache.key({"kind": ENGINE_FACTS, "engine": name, "install": fingerprint})
+            stored = _stored(cache, key, name)
+            if stored is not None:
+                facts.versions[name], facts.settings[name] = stored
+                continue
+        try:
+            adapter = registry.load_engine(name)  # looked up at call time (tests replace it)
+        except EngineNotInstalled as error:
+            facts.missing[name] = str(error)
+            continue
+        facts.versions[name] = adapter.version
+        facts.settings[name] = {preset: adapter.settings(preset, None) for preset in PRESETS}
+        if key is not None:
+            pickled = pickle.dumps((adapter.version, facts.settings[name]),
+                                   protocol=pickle.HIGHEST_PROTOCOL)
+            try:
+                cache.put(key, {"kind": ENGINE_FACTS, "engine": name,
+                                "pickled": base64.b64encode(pickled).decode()})
+            except OSError:  # not kept: the next run loads the engine again
+                pass
+    return facts
+
+
+def _stored(cache, key: str, name: str) -> tuple[str, dict] | None:
+    """``(version, settings)`` kept under ``key``, or None (absent or not of that shape)."""
+    record = cache.get(key, count=False)
+    if record is None or record.get("engine") != name:
+        return None
+    try:
+        version, settings = pickle.loads(base64.b64decode(record["pickled"]))
+    except Exception:  # noqa: BLE001 - a damaged entry: load the engine again
+        return None
+    if not (isinstance(version, str) and isinstance(settings, dict)
+            and set(settings) == set(PRESETS)):
+        return None
+    return version, settings
