@@ -878,7 +878,7 @@ class Box2DEngine(Engine):
         return _World(scene, float(settings["length_scale"]), float(settings["polygon_radius"]),
                       measures=contacts)
 
-    def _prepare(self, world: _World | None, scene: Scene, settings, start) -> _Prepared:
+    def _prepare(self, world: _World | None, scene: Scene, settings, start, weights) -> _Prepared:
         prepared = _unprobed(scene, settings, start)
         if world is None:  # run_many: _build_many probes every impact of a batch at once
             return prepared
@@ -925,18 +925,14 @@ class Box2DEngine(Engine):
         return raw
 
     # ------------------------------------------------------------------ many impacts
-    def run_many(self, scenes, settings=None, *, preset="accurate", overrides=None) -> list:
-        """:meth:`Engine.run_many`; with ``sub_stepping`` the impacts run one by one.
+    def _runs_alone(self, settings) -> bool:
+        """With ``sub_stepping`` the impacts run one by one (:meth:`Engine.run_many`).
 
         Sub-stepping handles one time-of-impact event per step in the whole world and leaves
         the world's step unfinished (the next ``b2World::Step`` only resumes it): impacts
         sharing a world would steer each other.
         """
-        resolved, _ = self._resolve(settings, preset, overrides)
-        if resolved["sub_stepping"]:
-            return [self.run(scene, settings, preset=preset, overrides=overrides)
-                    for scene in scenes]
-        return super().run_many(scenes, settings, preset=preset, overrides=overrides)
+        return bool(settings["sub_stepping"])
 
     def _many_chunks(self, scenes) -> list[range]:
         """:data:`MANY_CHUNK` scenes in a row to a batch."""

@@ -35,10 +35,12 @@ Methods (``world`` is whatever the adapter builds; the base class only passes it
     A world holding the ground (``scene.ground``) and the scene's bodies with their shapes,
     masses and inertias. ``contacts=False``: for :meth:`Engine.bare_stepper`, no contact
     reporting needed. Worlds are cached by :meth:`_world_key` (default: the geometry).
-``_prepare(world, scene, settings, start) -> prepared``
+``_prepare(world, scene, settings, start, weights) -> prepared``
     Everything a reset needs that depends only on the scene and the settings: the engine's
     own form of the start state ``start`` (one :data:`BodyState` per body, in the run frame),
-    ``e``, ``μ`` and the per-run settings. Computed once per (scene, settings) pair.
+    ``e``, ``μ`` and the per-run settings. ``weights``: the scene's checked ``(mass,
+    moment of inertia)`` per body (:func:`check_scene`; a polygon's inertia is not cheap to
+    compute again). Computed once per (scene, settings) pair.
 ``_reset(world, prepared) -> dict``
     Make the world hold the prepared settings, ``e``, ``μ`` and start state, with fresh
     per-run state (contact caches, warm starts): identical inputs must give bit-identical
@@ -77,6 +79,8 @@ without them runs the impacts one by one)
     One step of the whole batch; the contact of every active impact that has one.
 ``_many_chunks(scenes)``, ``_retire(batch, slot)``, ``_release_many(batch)``
     Which scenes share a batch; taking a finished impact out; freeing a batch.
+``_runs_alone(settings) -> bool``
+    Whether impacts under these (checked) settings must run one by one (default ``False``).
 
 What the base class does, once for every engine
 -----------------------------------------------
@@ -137,6 +141,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from harness.collector import collector_paused
 from harness.engines.settings import EngineSettingsError, check_int, check_number
 from harness.scene import Scene
 
@@ -446,8 +451,9 @@ class Engine(abc.ABC):
 
     @abc.abstractmethod
     def _prepare(self, world, scene: Scene, settings: Mapping[str, Any],
-                 start: tuple[BodyState, ...]):
-        """The engine's form of the start state, ``e``, ``μ`` and per-run settings."""
+                 start: tuple[BodyState, ...], weights: tuple[tuple[float, float], ...]):
+        """The engine's form of the start state, ``e``, ``μ`` and per-run settings
+        (``weights``: the scene's checked masses and inertias)."""
 
     @abc.abstractmethod
     def _reset(self, world, prepared) -> dict:
@@ -513,6 +519,11 @@ class Engine(abc.ABC):
 
     def _release_many(self, batch) -> None:  # noqa: B027 - optional hook, default frees nothing
         """Free a batch (default: nothing to free)."""
+
+    def _runs_alone(self, settings: Mapping[str, Any]) -> bool:
+        """Whether impacts under ``settings`` must run one by one, not in a batch (default:
+        never; e.g. Box2D's sub-stepping, which couples the impacts of one world)."""
+        return False
 
     # ------------------------------------------------------------------ settings
     def settings(self, preset: str = "accurate",
@@ -651,7 +662,7 @@ class Engine(abc.ABC):
         plan.scene, plan.settings = scene, settings
         plan.world, plan.world_key = world, world_key
         plan.shift, start = start_states(scene, settings, self.timing)
-        plan.prepared = self._prepare(world, scene, settings, start)
+        plan.prepared = self._prepare(world, scene, settings, start, weights)
         plan.dt = float(settings["time_step"])
         plan.max_steps = int(settings["max_steps"])
         plan.weights = weights
@@ -747,13 +758,24 @@ class Engine(abc.ABC):
 
         An adapter that can step many independent impacts in one world (``_build_many``)
         runs them so, chunk by chunk (``_many_chunks``), with the loop and the bookkeeping
-        of :meth:`run` per impact; any other adapter runs them one by one. ``wall_time_s``
-        of a batched run is its chunk's time shared equally.
+        of :meth:`run` per impact; any other adapter, or settings the adapter's
+        :meth:`_runs_alone` refuses to batch, runs them one by one. ``wall_time_s`` of a
+        batched run is its chunk's time shared equally. The cyclic garbage collector is
+        paused meanwhile (the many small tuples made cannot be garbage yet).
         """
-        if type(self)._build_many is Engine._build_many:
-            return [self.run(scene, settings, preset=preset, overrides=overrides)
-                    for scene in scenes]
-        resolved, used_preset = self._resolve(settings, preset, overrides)
+        with collector_paused():
+            if type(self)._build_many is Engine._build_many:
+                return [self.run(scene, settings, preset=preset, overrides=overrides)
+                        for scene in scenes]
+            resolved, used_preset = self._resolve(settings, preset, overrides)
+            if self._runs_alone(resolved):
+                return [self.run(scene, settings, preset=preset, overrides=overrides)
+                        for scene in scenes]
+            return self._run_batched(scenes, resolved, used_preset)
+
+    def _run_batched(self, scenes: Sequence[Scene], resolved: dict,
+                     used_preset: str | None) -> list[EngineRun]:
+        """:meth:`run_many` chunk by chunk in batches (``resolved``: the checked settings)."""
         plans = []
         name, new_plan = self.name, self._new_plan
         last_scene = weights = None
@@ -991,6 +1013,9 @@ def count_planar_points(points: Iterable[tuple[float, float]], tolerance: float)
     A 3-D engine may report a prism's edge touching the ground as two points at ±y; they
     are the same point of the planar problem.
     """
+    if type(points) is list and len(points) == 2:  # a prism's edge, every 3-D contact step
+        (x, y), (a, b) = points
+        return 2 if abs(a - x) > tolerance or abs(b - y) > tolerance else 1
     distinct: list[tuple[float, float]] = []
     for x, y in points:
         if all(abs(x - a) > tolerance or abs(y - b) > tolerance for a, b in distinct):

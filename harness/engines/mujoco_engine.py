@@ -772,17 +772,13 @@ class MujocoEngine(Engine):
             return (note,)
         return ()
 
-    def _prepare(self, world: _Model, scene: Scene, settings, start) -> tuple:
+    def _prepare(self, world: _Model, scene: Scene, settings, start, weights) -> tuple:
         qpos, qvel = [], []
         for x, y, angle, vx, vy, omega in start:
             qpos += [x, y, -angle]
             qvel += [vx, vy, -omega]
-        # The base class has just checked the scene and computed its inertias: reused (read
-        # defensively: they are the base's private caches).
-        checked = getattr(self, "_last_scene", None)
-        weights = getattr(self, "_last_weights", None) if scene is checked else None
-        inertias = None if weights is None else [inertia for _, inertia in weights]
-        return scene, settings, qpos, qvel, _Geometry(scene, inertias)
+        # The checks computed the inertias (a polygon's costs tens of µs): reused.
+        return scene, settings, qpos, qvel, _Geometry(scene, [inertia for _, inertia in weights])
 
     def _reset(self, world: _Model, prepared: tuple) -> dict:
         """The scene's geometry, the run's options and contact parameters, fresh data, the

@@ -516,7 +516,7 @@ class PybulletEngine(Engine):
         return (_POLYGON_NOTE,) if polygon else ()
 
     # ------------------------------------------------------------------ run
-    def _prepare(self, world: _World | None, scene: Scene, settings, start) -> tuple:
+    def _prepare(self, world: _World | None, scene: Scene, settings, start, weights) -> tuple:
         """The start joint states ``(x, v_x, z, v_z, -θ, -ω)`` per body and the pair's
         (e, μ); ``world`` is not needed (``None`` for :meth:`run_many`)."""
         joints = tuple(

@@ -257,7 +257,7 @@ class PymunkEngine(Engine):
     def _build(self, scene: Scene, settings, *, contacts: bool = True) -> _SpaceEntry:
         return _build_space(scene, record=contacts)
 
-    def _prepare(self, world: _SpaceEntry, scene: Scene, settings, start) -> tuple:
+    def _prepare(self, world: _SpaceEntry, scene: Scene, settings, start, weights) -> tuple:
         starts = tuple([((x, y), angle, (vx, vy), omega)
                         for x, y, angle, vx, vy, omega in start])  # a list: no generator
         return _space_values(settings), (scene.restitution, scene.friction), starts, \

@@ -44,8 +44,6 @@ engine's status, or the first failing reason's name.
 
 from __future__ import annotations
 
-import contextlib
-import gc
 import itertools
 import json
 import math
@@ -56,6 +54,7 @@ from dataclasses import asdict, dataclass, field, fields, is_dataclass
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 
+from harness.collector import collector_paused
 from harness.run.files import write_bytes_atomically, write_parts_atomically
 
 FORMAT = "impact-harness-results"
@@ -409,23 +408,6 @@ def read_results(path: Path | str) -> Results:
     path = Path(path)
     with collector_paused():
         return _read_results(path)
-
-
-@contextlib.contextmanager
-def collector_paused():
-    """The cyclic garbage collector off inside the block (as it was after it).
-
-    For reading results: the millions of containers parsed set the collector off again and
-    again, each time walking every container made so far (a quarter of reading a 56 MB
-    results file), though none of them can be garbage yet.
-    """
-    enabled = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if enabled:
-            gc.enable()
 
 
 def _read_results(path: Path) -> Results:

@@ -12,7 +12,6 @@ from harness.run import records as records_module
 from harness.run.records import (
     Record,
     Results,
-    collector_paused,
     companion_path,
     read_results,
     record_line,
@@ -90,22 +89,6 @@ def test_from_dict_keeps_missing_fields_an_error_and_defaults_fresh():
     assert second.departure == {} and first.reasons is not second.reasons
     whole = _records()[1].as_dict()
     assert Record.from_dict(whole) == _records()[1]
-
-
-def test_the_collector_is_paused_inside_and_restored_after():
-    import gc
-
-    assert gc.isenabled()
-    with collector_paused():
-        assert not gc.isenabled()
-    assert gc.isenabled()
-    gc.disable()
-    try:
-        with collector_paused():
-            pass
-        assert not gc.isenabled()  # off before: left off
-    finally:
-        gc.enable()
 
 
 # --------------------------------------------------------------------------------------------
