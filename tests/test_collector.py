@@ -7,7 +7,6 @@ import gc
 import pytest
 
 from harness.collector import collector_paused
-from harness.run import records
 
 
 def test_the_collector_is_paused_inside_and_restored_after():
@@ -28,8 +27,3 @@ def test_the_collector_is_restored_when_the_block_raises():
     with pytest.raises(RuntimeError), collector_paused():
         raise RuntimeError("inside")
     assert gc.isenabled()
-
-
-def test_the_run_side_uses_the_shared_function():
-    # harness.run imports it from here: one function, not a copy that could drift.
-    assert records.collector_paused is collector_paused

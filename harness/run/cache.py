@@ -51,8 +51,8 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
+from harness.collector import collector_paused
 from harness.run.files import write_bytes_atomically, write_text_atomically
-from harness.run.records import collector_paused
 
 _HARNESS_DIR = Path(__file__).resolve().parent.parent  # harness/, from harness/run/
 #: The harness source (directories and files, relative to ``harness/``) that the cached

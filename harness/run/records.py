@@ -112,9 +112,9 @@ class Record:
         return [r["name"] for r in self.reasons if r.get("fails", True)]
 
     def as_dict(self) -> dict:
-        # A shallow dict of the fields: _jsonable copies the nested values anyway, so
+        # A shallow dict of the fields: plain_value copies the nested values anyway, so
         # dataclasses.asdict's deep copy (most of the time of writing a results file) is waste.
-        return _jsonable({name: getattr(self, name) for name in _RECORD_FIELDS})
+        return plain_value({name: getattr(self, name) for name in _RECORD_FIELDS})
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "Record":
@@ -200,7 +200,7 @@ class Results:
 _PLAIN = (str, int, bool, type(None))
 
 
-def _jsonable(value: Any) -> Any:
+def plain_value(value: Any) -> Any:
     """Plain JSON values of the built-in types only (what the JSON reads back, and all a
     results file's companion may hold); non-finite floats become None, numpy values and
     subclasses of str, int and float plain Python, nested dataclasses dicts."""
@@ -210,13 +210,13 @@ def _jsonable(value: Any) -> Any:
     if kind in _PLAIN:
         return value
     if isinstance(value, dict):
-        return {str(key): _jsonable(item) for key, item in value.items()}
+        return {str(key): plain_value(item) for key, item in value.items()}
     if isinstance(value, (list, tuple)):
-        return [_jsonable(item) for item in value]
+        return [plain_value(item) for item in value]
     if isinstance(value, str):  # a str subclass (an engine's Status): its plain text
         return value[:]
     if hasattr(value, "tolist") and not isinstance(value, bytes):
-        return _jsonable(value.tolist())
+        return plain_value(value.tolist())
     if isinstance(value, float):  # subclasses as plain floats, as in the JSON
         return float(value) if math.isfinite(value) else None
     if isinstance(value, int) and not isinstance(value, bool):
@@ -224,18 +224,18 @@ def _jsonable(value: Any) -> Any:
     if isinstance(value, Path):
         return value.as_posix()
     if is_dataclass(value) and not isinstance(value, type):
-        return _jsonable(asdict(value))
+        return plain_value(asdict(value))
     return value
 
 
 def _plain_line(value: Any) -> str:
-    """:func:`record_line` of ``_jsonable(value)``, without walking ``value`` in Python when
+    """:func:`record_line` of ``plain_value(value)``, without walking ``value`` in Python when
     json takes it as it is (a run's scenario infos, already plain: 2.7 MB at 1,000
     scenarios)."""
     try:
         return record_line(value)
     except (TypeError, ValueError):  # a value json does not know, or a non-finite float
-        return record_line(_jsonable(value))
+        return record_line(plain_value(value))
 
 
 def record_line(data: Mapping) -> str:
@@ -272,7 +272,7 @@ def write_results(path: Path | str, records: Iterable[Record | None], provenance
     document = {
         "format": FORMAT,
         "format_version": FORMAT_VERSION,
-        "provenance": _jsonable(dict(provenance)),
+        "provenance": plain_value(dict(provenance)),
     }
     # One scenario per line, one record per line: a diff of two results files reads record by
     # record, and the compact lines are written by json's C encoder (indented text is not).
@@ -490,5 +490,5 @@ def _split_records(text: str) -> tuple[dict | None, list[str] | None]:
 
 
 __all__ = ["ANALYTIC", "DEFAULT_RESULTS", "FORMAT", "FORMAT_VERSION", "Record", "Results",
-           "check_writable", "collector_paused", "companion_path", "read_results", "record_line",
-           "write_results"]
+           "check_writable", "companion_path", "plain_value", "read_results",
+           "record_line", "write_results"]

@@ -88,6 +88,7 @@ from typing import Any, Iterable, Mapping, Sequence, TextIO
 
 import numpy as np
 
+from harness.collector import collector_paused
 from harness.engines import load_engine, preset_choices, preset_role
 from harness.run import metrics, references, verdicts
 from harness.run.executor import one_blas_thread
@@ -99,9 +100,8 @@ from harness.run.records import (
     FORMAT,
     FORMAT_VERSION,
     Record,
-    _jsonable,
     check_writable,
-    collector_paused,
+    plain_value,
     record_line,
     write_results,
 )
@@ -881,7 +881,7 @@ def _summary(scenario: Scenario, records: Sequence[Record]) -> dict:
               "engine_runs": len(engines), "cached": sum(r.cached for r in engines),
               "skipped": sum(r.skipped for r in engines),
               "flagged": sum(not r.ok and not r.skipped for r in engines)}
-    return _jsonable({"references": references.collect(records),
+    return plain_value({"references": references.collect(records),
                       "gates": [asdict(gate) for gate in check_gates(scenario, records)],
                       "counts": counts})
 
