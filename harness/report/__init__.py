@@ -21,10 +21,11 @@ and the per-scenario figures are drawn only on demand (``--figures-for PATTERN``
 nearly all of a 260 s cold report. Only the headline figures (heat map, law vs solve, key,
 Table 3) get SVG twins then (``--svg headline``; ``--svg all`` for every one): an SVG costs
 about as much again as its PNG and is wanted for a paper's few figures, not for a thousand
-diagrams. Every image loads lazily. Figures are drawn in a pool of forked processes
-(``--workers``); each figure's PNG carries the digest of its inputs, so a warm report draws
-nothing. Likewise each scenario's HTML section and headline cells are kept in
-``<out>/.report-fragments.json`` under the digest of its records
+diagrams (the split figure's thousands of markers are an image in its SVG, its axes and
+text vector). Every image loads lazily. Figures are drawn in a pool of forked processes
+(``--workers``) while this process builds the page; each figure's PNG carries the digest
+of its inputs, so a warm report draws nothing. Likewise each scenario's HTML section and
+headline cells are kept in ``<out>/.report-fragments.json`` under the digest of its records
 (:mod:`harness.report.fragments`): a warm report formats only what changed.
 
 What the page shows, in order: what this is; the headline heat maps (departure of every
