@@ -326,7 +326,12 @@ def start_drawing(tasks: Sequence[FigureTask], figure_dir: Path, workers: int | 
     if not stale:  # matplotlib only when something is drawn (its import is a warm report's tenth)
         return expected, lambda: result
     workers = min(workers or os.cpu_count() or 1, len(stale))
-    _warm_matplotlib()
+    if workers > 1:
+        _warm_matplotlib()
+    else:
+        import matplotlib
+
+        matplotlib.use("Agg")
     stale.sort(key=lambda item: -KIND_COST.get(item[1][0].kind, 1.0))
     _PENDING = [item for _, item in stale]
     pool, futures = None, []
