@@ -21,10 +21,11 @@ and the per-scenario figures are drawn only on demand (``--figures-for PATTERN``
 nearly all of a 260 s cold report. Only the headline figures (heat map, law vs solve, key,
 Table 3) get SVG twins then (``--svg headline``; ``--svg all`` for every one): an SVG costs
 about as much again as its PNG and is wanted for a paper's few figures, not for a thousand
-diagrams. Every image loads lazily. Figures are drawn in a pool of forked processes
-(``--workers``); each figure's PNG carries the digest of its inputs, so a warm report draws
-nothing. Likewise each scenario's HTML section and headline cells are kept in
-``<out>/.report-fragments.json`` under the digest of its records
+diagrams (the split figure's thousands of markers are an image in its SVG, its axes and
+text vector). Every image loads lazily. Figures are drawn in a pool of forked processes
+(``--workers``) while this process builds the page; each figure's PNG carries the digest
+of its inputs, so a warm report draws nothing. Likewise each scenario's HTML section and
+headline cells are kept in ``<out>/.report-fragments.json`` under the digest of its records
 (:mod:`harness.report.fragments`): a warm report formats only what changed.
 
 What the page shows, in order: what this is; the headline heat maps (departure of every
@@ -43,10 +44,12 @@ import dataclasses
 import fnmatch
 import gc
 import json
+import multiprocessing
 import os
 import sys
 import time
 from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 from harness.report.figures import (
@@ -64,7 +67,7 @@ from harness.report.figures import (
 )
 from harness.report.fragments import prepare
 from harness.report.history import history_figure, history_inputs
-from harness.report.html import write_html
+from harness.report.html import html_page
 from harness.report.pages import write_pages
 from harness.report.summary import write_summary
 from harness.report.views import FIGURES, engine_labels, slug, split_rows
@@ -83,10 +86,10 @@ SELECTION_TAGS = ("quick", "sweep", "slow")
 #: Figure kinds drawn once per report (not per scenario): their SVG twins are kept with
 #: ``--svg headline``.
 HEADLINE_KINDS = ("legend", "heatmap", "split", "table3")
-#: Rough drawing cost per kind [s] (PNG + SVG, measured at 1,000 scenarios: the headline
+#: Rough drawing cost per kind [s] (CPU, PNG + SVG, measured at 1,000 scenarios: the headline
 #: figures with the heat map's row per family): the pool draws the dearest first so that no
 #: worker is left with the dearest at the end.
-KIND_COST = {"split": 3.0, "heatmap": 2.6, "sweep": 2.2, "table3": 1.9, "history": 1.0,
+KIND_COST = {"heatmap": 2.5, "sweep": 2.2, "table3": 1.7, "split": 1.8, "history": 1.0,
              "impulse": 0.5, "legend": 0.35}
 
 
@@ -153,12 +156,42 @@ def write_report(results: Results, out_dir: Path | str,
         scenario_figures = "none" if many else "all"
     if svg == "auto":
         svg = "headline" if many else "all"
-    prepared = prepare(results, out_dir)
-    tasks = figure_tasks(results, many, scenario_figures, figures_for, svg, prepared.digests)
-    drawn = draw_figures(tasks, figure_dir, workers)
+    digests = scenario_digests(results)
+    tasks = figure_tasks(results, many, scenario_figures, figures_for, svg, digests)
+    # The figures are drawn by forked workers while this process builds the page, which
+    # needs only their names: it assumes that every figure to be drawn has something to
+    # show, and is built again in the rare case one had not.
+    expected, finish_drawing = start_drawing(tasks, figure_dir, workers)
+    try:
+        prepared = prepare(results, out_dir, digests)
+        groups = scenario_groups(results, names) if many else {}
+        pages = write_pages(out_dir, sources)
+        page = html_page(results, out_dir, figure_map(tasks, expected, many, groups,
+                                                      scenario_figures), pages, prepared)
+    finally:  # the pool ends either way
+        drawn = finish_drawing()
+    if drawn != expected:
+        page = html_page(results, out_dir, figure_map(tasks, drawn, many, groups,
+                                                      scenario_figures), pages, prepared)
+    wanted = {task.file for task, path in zip(tasks, drawn) if path is not None}
+    wanted |= {str(Path(task.file).with_suffix(".svg")) for task, path in zip(tasks, drawn)
+               if path is not None and task.svg}
+    _remove_stale_figures(figure_dir, wanted)
+    html_path = out_dir / "index.html"
+    html_path.write_text(page, encoding="utf-8")
+    summary = write_summary(results, out_dir, prepared)
+    prepared.cache.save()
+    return {"html": html_path, "summary": summary,
+            "figures": sorted(figure_dir / f for f in wanted if f.endswith(".png"))}
+
+
+def figure_map(tasks: Sequence[FigureTask], drawn: Sequence[Path | None], many: bool,
+               groups: dict[str, list[str]], scenario_figures: str) -> dict:
+    """What the page knows of the figures (:func:`harness.report.html.html_page`): each
+    drawn task's file in its slot, the files with an SVG twin and how the scenarios are
+    shown."""
     figures: dict = {"impulse": {}, "sweep": {}, "svg": set(), "many": many,
-                     "groups": scenario_groups(results, names) if many else {},
-                     "scenario_figures": scenario_figures}
+                     "groups": groups, "scenario_figures": scenario_figures}
     for task, path in zip(tasks, drawn):
         if path is None:
             continue
@@ -168,16 +201,7 @@ def write_report(results: Results, out_dir: Path | str,
             figures[task.slot[0]] = task.file
         if task.svg:
             figures["svg"].add(task.file)
-    pages = write_pages(out_dir, sources)
-    wanted = {task.file for task, path in zip(tasks, drawn) if path is not None}
-    wanted |= {str(Path(task.file).with_suffix(".svg")) for task, path in zip(tasks, drawn)
-               if path is not None and task.svg}
-    _remove_stale_figures(figure_dir, wanted)
-    html_path = write_html(results, out_dir, figures, pages, prepared)
-    summary = write_summary(results, out_dir, prepared)
-    prepared.cache.save()
-    return {"html": html_path, "summary": summary,
-            "figures": sorted(figure_dir / f for f in wanted if f.endswith(".png"))}
+    return figures
 
 
 def figure_tasks(results: Results, many: bool, scenario_figures: str,
@@ -249,6 +273,21 @@ def _draw_pending(index: int) -> str | None:
     return None if drawn is None else str(drawn)
 
 
+def _warm_matplotlib() -> None:
+    """Import what the figures draw with and load the font, once here rather than in every
+    forked worker, which inherit them (~0.5 s of CPU per worker)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.backends.backend_agg
+    import matplotlib.backends.backend_svg  # noqa: F401
+    from matplotlib.figure import Figure
+
+    figure = Figure(figsize=(1, 1))
+    figure.text(0.5, 0.5, "0")
+    figure.canvas.draw()  # the first text drawn in a process loads the font
+
+
 def draw_figures(tasks: Sequence[FigureTask], figure_dir: Path,
                  workers: int | None = None) -> list[Path | None]:
     """Draw the tasks whose files do not hold their current inputs' digest (the rest are
@@ -259,34 +298,68 @@ def draw_figures(tasks: Sequence[FigureTask], figure_dir: Path,
     Every task is deterministic and writes only its own files, so the pool changes when a
     figure is drawn, never what it holds.
     """
+    return start_drawing(tasks, figure_dir, workers)[1]()
+
+
+def start_drawing(tasks: Sequence[FigureTask], figure_dir: Path, workers: int | None = None
+                  ) -> tuple[list[Path], Callable[[], list[Path | None]]]:
+    """:func:`draw_figures` started: the pool's workers draw while this process goes on.
+
+    Returns each task's file as it will be if every figure drawn has something to show,
+    and the function that waits for the drawing and returns what :func:`draw_figures` does
+    (with one worker, it draws then). The workers are forked here: what they read (the
+    tasks, the results) is as it is now.
+    """
     global _PENDING
+    expected: list[Path] = []
     result: list[Path | None] = []
     stale = []
     for index, task in enumerate(tasks):
         path = figure_dir / task.file
+        expected.append(path)
         tag = inputs_digest(task.kind, task.payload)
         if is_current(path, tag, task.svg):
             result.append(path)
         else:
             result.append(None)
             stale.append((index, (task, path, tag)))
-    if stale:  # matplotlib only when something is drawn (its import is a warm report's tenth)
+    if not stale:  # matplotlib only when something is drawn (its import is a warm report's tenth)
+        return expected, lambda: result
+    workers = min(workers or os.cpu_count() or 1, len(stale))
+    if workers > 1:
+        _warm_matplotlib()
+    else:
         import matplotlib
 
         matplotlib.use("Agg")
-    workers = workers or os.cpu_count() or 1
-    workers = min(workers, len(stale))
     stale.sort(key=lambda item: -KIND_COST.get(item[1][0].kind, 1.0))
     _PENDING = [item for _, item in stale]
-    from harness.run.executor import map_forked  # multiprocessing: only when drawing
+    pool, futures = None, []
+    if workers > 1 and "fork" in multiprocessing.get_all_start_methods():
+        from harness.run.executor import one_blas_thread
 
-    try:
-        drawn = map_forked(_draw_pending, range(len(_PENDING)), workers)
-    finally:
-        _PENDING = []
-    for (index, _), file in zip(stale, drawn):
-        result[index] = None if file is None else Path(file)
-    return result
+        # all workers are forked at the first submit (before the pool starts its thread)
+        pool = ProcessPoolExecutor(max_workers=workers, initializer=one_blas_thread,
+                                   mp_context=multiprocessing.get_context("fork"))
+        futures = [pool.submit(_draw_pending, index) for index in range(len(_PENDING))]
+    pending = _PENDING
+
+    def finish() -> list[Path | None]:
+        global _PENDING
+        try:
+            if pool is None:
+                drawn = [_draw_pending(index) for index in range(len(pending))]
+            else:
+                drawn = [future.result() for future in futures]
+        finally:
+            if pool is not None:
+                pool.shutdown(cancel_futures=True)
+            _PENDING = []
+        for (index, _), file in zip(stale, drawn):
+            result[index] = None if file is None else Path(file)
+        return result
+
+    return expected, finish
 
 
 #: The figures a report wrote into its directory; only these may be removed by a later report.

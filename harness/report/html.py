@@ -626,6 +626,15 @@ def write_html(results: Results, out_dir: Path, figures: dict, pages: dict | Non
     to their titles, linked from the contents; ``prepared``: the scenarios' pieces
     (:func:`harness.report.fragments.prepare`, computed here when not given), whose cache
     keeps each scenario's section for the next report."""
+    path = out_dir / "index.html"
+    path.write_text(html_page(results, out_dir, figures, pages, prepared), encoding="utf-8")
+    return path
+
+
+def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None = None,
+              prepared: Prepared | None = None) -> str:
+    """The text of ``index.html`` (:func:`write_html`); reads nothing of the figures but
+    their names in ``figures``, so that it can be built while they are drawn."""
     pages = pages or {}
     prepared = prepare(results) if prepared is None else prepared
     prov = results.provenance
@@ -766,10 +775,8 @@ def write_html(results: Results, out_dir: Path, figures: dict, pages: dict | Non
     generated = time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())
     parts.append(f"<p class='muted'>Report generated {generated} "
                  "by <code>impact-harness report</code>.</p></body></html>")
-    path = out_dir / "index.html"
     extra = [(href, title) for href, title in (("#contacts", "Several contacts"),
                                                ("#survey", "Survey"))
              if any(f"id='{href[1:]}'" in part for part in parts)]
     parts[contents_at] = contents_html(names, pages, figures.get("groups"), extra)
-    path.write_text("\n".join(parts), encoding="utf-8")
-    return path
+    return "\n".join(parts)

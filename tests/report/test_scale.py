@@ -137,3 +137,20 @@ def test_few_scenarios_keep_one_heat_map_every_figure_and_every_svg(small_result
     assert all(p.with_suffix(".svg").is_file() for p in written["figures"])
     page = Path(written["html"]).read_text(encoding="utf-8")
     assert "<details class='group'>" not in page
+
+
+def test_a_figure_with_nothing_to_show_leaves_the_page_built_while_drawing(small_results,
+                                                                          tmp_path, monkeypatch):
+    """The page is built while the pool draws, assuming every figure has something to
+    show; one that has not (here the split) is missing from it as from a page built after."""
+    monkeypatch.setattr(report, "split_figure", lambda rows, path, tag: None)
+    pages = {}
+    for workers in (1, 2):
+        out = tmp_path / f"workers-{workers}"
+        written = report.write_report(small_results, out, workers=workers)
+        assert out / "figures" / "split.png" not in written["figures"]
+        assert out / "figures" / "heatmap.png" in written["figures"]
+        pages[workers] = re.sub(r"Report generated [^<]*", "",
+                                (out / "index.html").read_text(encoding="utf-8"))
+    assert "split.png" not in pages[2] and "heatmap.png" in pages[2]
+    assert pages[1] == pages[2]
