@@ -33,14 +33,16 @@ Chunks
     difference between 8 and 128 within the noise (about ±30%).
 
 Dask
-    One future per chunk. At 2,000 engine tasks (``impact-harness bench --executors``, 2
-    workers, medians of 3) one future per task took 4.4 times the local pool's 2.98 s; in
-    chunks a cluster started for the run takes 1.31 times (3.89 s: about 0.9 s of start and
-    shut-down), a running one (``--scheduler``) 1.02 times. A local
-    cluster's workers are forked on Linux, as the pool's are (0.3 s to start against 2 s
-    spawned, and no second import of the engines). Below :data:`DASK_MIN_TASKS` tasks the
-    local executor runs them (``note`` says so): measured from 125 to 1,000 engine tasks the
-    cluster took 1.3-1.5 times the pool's time, about a second more, its start and shut-down.
+    One future per chunk. A local cluster's workers are forked on Linux, as the pool's are
+    (0.3 s to start against 2 s spawned, and no second import of the engines), and a cluster
+    started for the run stops in a background thread once every result is delivered: the
+    caller builds and writes its records meanwhile (:func:`wait_for_shutdowns`). At 2,000
+    engine tasks (``impact-harness bench --executors``, 2 workers, medians of 3 on an idle
+    machine) the local pool took 1.71 s; Dask 2.00 s with a cluster started for the call
+    (1.17 times, then 0.10 s of shutdown), 2.01 s on a running one, and 15.4 s with one
+    future per task (9.0 times). Below :data:`DASK_MIN_TASKS` tasks the local executor
+    runs them (``note`` says so): measured from 125 to 1,000 engine tasks the cluster took
+    1.3-1.5 times the pool's time, about a second more, its start and shut-down.
 
 ``function`` and ``batch`` must be top-level (picklable) functions and each task picklable
 (plain dicts, tuples, numbers, strings, dataclasses of those).
