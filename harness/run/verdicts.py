@@ -852,6 +852,20 @@ def feature_at(shape, state: Sequence[float], point: Sequence[float],
     return None if found[0] < 0 else int(found[0])
 
 
+def _rotations(poses: np.ndarray) -> np.ndarray:
+    """Each pose's ``(x, y, θ)`` rotation as the matrix ``R`` with ``p @ R`` turning a row
+    vector ``p`` by ``θ``; stacked, shape ``(n, 2, 2)``."""
+    # math's cos and sin, one pose at a time: numpy's array ones may round differently
+    angles = poses[:, 2].tolist()
+    cos = np.array([math.cos(angle) for angle in angles])
+    sin = np.array([math.sin(angle) for angle in angles])
+    rotations = np.empty((len(angles), 2, 2))
+    rotations[:, 0, 0] = rotations[:, 1, 1] = cos
+    rotations[:, 0, 1] = sin
+    rotations[:, 1, 0] = -sin
+    return rotations
+
+
 def _features_at(features: BodyFeatures, poses: np.ndarray, points: np.ndarray,
                  pose_of: np.ndarray, reach: np.ndarray) -> np.ndarray:
     """For every point ``points[i] = (x, y, …)`` with the body in pose
@@ -861,14 +875,7 @@ def _features_at(features: BodyFeatures, poses: np.ndarray, points: np.ndarray,
     count = len(points)
     if not len(features.centres) or not count:
         return np.full(count, -1, dtype=np.int64)
-    # math's cos and sin, one pose at a time: numpy's array ones may round differently
-    angles = poses[:, 2].tolist()
-    cos = np.array([math.cos(angle) for angle in angles])
-    sin = np.array([math.sin(angle) for angle in angles])
-    rotations = np.empty((len(angles), 2, 2))
-    rotations[:, 0, 0] = rotations[:, 1, 1] = cos
-    rotations[:, 0, 1] = sin
-    rotations[:, 1, 0] = -sin
+    rotations = _rotations(poses)
     # centres @ R per pose (a stack of the same 2-D products), then moved to the pose
     world = (features.centres @ rotations + poses[:, None, :2])[pose_of]
     distances = np.hypot(world[:, :, 0] - points[:, None, 0],
@@ -954,13 +961,7 @@ def _second_features_many(tracks: Sequence[ContactTrack],
                 groups.setdefault((body, len(feature.centres)), []).append(run)
     for (body, _), runs in groups.items():
         poses = np.concatenate([arrays[run][1][:, body] for run in runs])
-        angles = poses[:, 2].tolist()
-        cos = np.array([math.cos(angle) for angle in angles])
-        sin = np.array([math.sin(angle) for angle in angles])
-        rotations = np.empty((len(angles), 2, 2))
-        rotations[:, 0, 0] = rotations[:, 1, 1] = cos
-        rotations[:, 0, 1] = sin
-        rotations[:, 1, 0] = -sin
+        rotations = _rotations(poses)
         records = [len(arrays[run][1]) for run in runs]
         centres = np.repeat(np.stack([features[run][body].centres for run in runs]), records,
                             axis=0)
