@@ -44,12 +44,10 @@ import dataclasses
 import fnmatch
 import gc
 import json
-import multiprocessing
 import os
 import sys
 import time
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 from harness.report.figures import (
@@ -334,26 +332,15 @@ def start_drawing(tasks: Sequence[FigureTask], figure_dir: Path, workers: int | 
         matplotlib.use("Agg")
     stale.sort(key=lambda item: -KIND_COST.get(item[1][0].kind, 1.0))
     _PENDING = [item for _, item in stale]
-    pool, futures = None, []
-    if workers > 1 and "fork" in multiprocessing.get_all_start_methods():
-        from harness.run.executor import one_blas_thread
+    from harness.run.executor import start_forked
 
-        # all workers are forked at the first submit (before the pool starts its thread)
-        pool = ProcessPoolExecutor(max_workers=workers, initializer=one_blas_thread,
-                                   mp_context=multiprocessing.get_context("fork"))
-        futures = [pool.submit(_draw_pending, index) for index in range(len(_PENDING))]
-    pending = _PENDING
+    drawing = start_forked(_draw_pending, range(len(_PENDING)), workers)
 
     def finish() -> list[Path | None]:
         global _PENDING
         try:
-            if pool is None:
-                drawn = [_draw_pending(index) for index in range(len(pending))]
-            else:
-                drawn = [future.result() for future in futures]
+            drawn = drawing()
         finally:
-            if pool is not None:
-                pool.shutdown(cancel_futures=True)
             _PENDING = []
         for (index, _), file in zip(stale, drawn):
             result[index] = None if file is None else Path(file)

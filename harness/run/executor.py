@@ -306,12 +306,30 @@ def map_forked(function: Callable[[Any], Any], items: Sequence, workers: int) ->
     set before the call (scenes, figure closures) is never pickled; only ``items`` and the
     results are. Runs inline with one worker, one item, or where fork is unavailable.
     """
+    return start_forked(function, items, workers)()
+
+
+def start_forked(function: Callable[[Any], Any], items: Sequence,
+                 workers: int) -> Callable[[], list]:
+    """:func:`map_forked` started: the workers are forked and at work when this returns, and
+    this process may go on; the function returned waits for them and gives the results (it
+    runs ``function`` itself, then, where :func:`map_forked` would run inline)."""
+    items = list(items)
     if workers <= 1 or len(items) <= 1 or "fork" not in multiprocessing.get_all_start_methods():
-        return [function(item) for item in items]
-    context = multiprocessing.get_context("fork")
-    with ProcessPoolExecutor(max_workers=workers, mp_context=context,
-                             initializer=one_blas_thread) as pool:
-        return list(pool.map(function, items))
+        return lambda: [function(item) for item in items]
+    # With fork, every worker is forked at the first submit, before the pool's own thread
+    # starts: what they inherit is this process as it is now.
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("fork"),
+                               initializer=one_blas_thread)
+    futures = [pool.submit(function, item) for item in items]
+
+    def results() -> list:
+        try:
+            return [future.result() for future in futures]
+        finally:
+            pool.shutdown(cancel_futures=True)
+
+    return results
 
 
 def _run_pool(function, batch, tasks: Sequence, chunks, workers: int, deliver) -> None:
@@ -441,4 +459,4 @@ def progress_printer(label: str, every_s: float = 2.0, stream=None) -> Callable[
 __all__ = ["CONNECT_TIMEOUT_S", "DASK_MIN_TASKS", "EXECUTORS", "MAX_CHUNK", "DaskNotInstalled",
            "call_chunk", "check_arguments", "chunk_size_for", "default_workers", "make_chunks",
            "map_forked", "one_blas_thread", "progress_printer", "run_tasks",
-           "start_local_cluster", "wait_for_shutdowns"]
+           "start_forked", "start_local_cluster", "wait_for_shutdowns"]
