@@ -50,6 +50,9 @@ LCP_SEPARATE, LCP_STICK, LCP_REVERSE, LCP_FORWARD = 0, 1, 2, 3
 # sum of 2m products, each rounded to ~1e-16 of the approach speed times the condition of W.
 FIXED_POINT_TOLERANCE = 1e-10
 VELOCITY_TOLERANCE = 1e-9
+#: A fixed-point iteration stops at a residual this far below the bound: a few units of
+#: double rounding (~1.1e-16 each), where a further Newton step can no longer shrink it.
+ROUNDING_RESIDUAL = 1e-15
 
 
 @dataclass(frozen=True)
@@ -319,7 +322,7 @@ def _fixed_points(system, law, combinations, coupling="effective", max_iteration
         size_now = np.max(np.abs(residual), axis=1)
         # Iterate to rounding (an affine map needs one or two steps), stop when that stalls;
         # accept when the residual is below the tolerance.
-        stops = (size_now <= 1e-15 * bound) | (size_now > 0.5 * previous[rows])
+        stops = (size_now <= ROUNDING_RESIDUAL * bound) | (size_now > 0.5 * previous[rows])
         converged[rows[stops]] = size_now[stops] <= FIXED_POINT_TOLERANCE * bound[stops]
         running[rows[stops]] = False
         previous[rows] = size_now
@@ -732,7 +735,7 @@ def _iterated_screen(system, law, combinations, tolerance, max_iterations=30):
             size_now = np.max(np.abs(residual), axis=1)
             residual_size[rows] = size_now
             closest[rows] = np.fmin(closest[rows], size_now / bound)
-            stops = (size_now <= 1e-15 * bound) | (size_now > 0.5 * previous[rows])
+            stops = (size_now <= ROUNDING_RESIDUAL * bound) | (size_now > 0.5 * previous[rows])
             previous[rows] = size_now
             running[rows[stops]] = False
             go = ~stops & np.isfinite(size_now)
