@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import multiprocessing
 import sys
 
@@ -9,7 +10,12 @@ import numpy as np
 import pytest
 
 import planar_impact as pi
-from harness.run.executor import DaskNotInstalled, run_tasks, wait_for_shutdowns
+from harness.run.executor import (
+    DaskNotInstalled,
+    HeartbeatAfterClose,
+    run_tasks,
+    wait_for_shutdowns,
+)
 from harness.scene.random_problems import random_problems
 
 
@@ -88,3 +94,23 @@ def test_dask_local_cluster_equals_local_executor_bit_for_bit():
                 if "Dask" in child.name or "worker" in child.name.lower()]
     # the arrays are real answers, not empty: some rows solved
     assert np.any(np.frombuffer(local[0]["status"], dtype=np.int8) == 0)
+
+
+def _record(message: str, error: BaseException | None) -> logging.LogRecord:
+    exc_info = (type(error), error, None) if error is not None else None
+    return logging.LogRecord("distributed.worker", logging.ERROR, __file__, 1, message, None,
+                             exc_info)
+
+
+def test_heartbeat_filter_drops_only_the_shutdown_race_record():
+    comm = pytest.importorskip("distributed.comm.core",
+                               reason='dask is not installed (pip install -e ".[dask]")')
+    race = HeartbeatAfterClose()
+    closed = comm.CommClosedError("in <TCP (closed) ConnectionPool.heartbeat_worker>")
+    assert not race.filter(_record(
+        "Failed to communicate with scheduler during heartbeat.", closed))
+    # the same words for any other failure, and any other message, still reach the log
+    assert race.filter(_record("Failed to communicate with scheduler during heartbeat.",
+                               OSError("connection refused")))
+    assert race.filter(_record("Failed to communicate with scheduler during heartbeat.", None))
+    assert race.filter(_record("Compute Failed", closed))
