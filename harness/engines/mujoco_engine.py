@@ -71,7 +71,8 @@ one ``MjData`` per layout. Each run makes the model hold every option and contac
 of its settings, ``e`` and ``μ`` (rewritten whenever they differ by value from what the
 model holds) and calls ``mj_resetData``, so reruns are bit-identical. A step reads its
 contacts through one numpy view of the data's arena, made once per data
-(``_contact_rows``). The contact impulse is MuJoCo's total constraint impulse on body B,
+(``_contact_rows``), and its constraint forces through views of the same arena made once
+per run and row count (``_force_view``). The contact impulse is MuJoCo's total constraint impulse on body B,
 ``M·Δq̇`` (exact here: no gravity, no passive forces, constant mass matrix).
 
 Settings (``defaults`` | ``accurate``, shown as ``matched-bounce``) are listed in
@@ -658,7 +659,10 @@ class _Model:
     xmat: object = None
     contact_rows: object = None  # (n, 13): dist, pos, frame of each contact slot
     first_contact: object = None  # the first slot's dist, pos and frame[:3]
-    contact_address: int = 0  # where ``contact_rows`` starts
+    contact_address: int = 0  # where ``contact_rows`` starts: the data's arena
+    arena: object = None  # the arena as doubles, from ``contact_address``
+    # This run's views of efc_force in ``arena``, by (ncon, nefc) (_force_view).
+    force_views: dict = field(default_factory=dict)
     # Contact views made so far, by address (a polygon world's datas take turns).
     contact_views: dict = field(default_factory=dict)
 
@@ -669,7 +673,7 @@ def _use_data(world: _Model, data: mujoco.MjData) -> None:
     world.data = data
     world.qpos, world.qvel = data.qpos, data.qvel
     world.xpos, world.xmat = data.xpos, data.xmat
-    world.contact_rows = world.first_contact = None
+    world.contact_rows = world.first_contact = world.arena = None
     world.contact_address = 0
 
 
@@ -699,9 +703,30 @@ def _contact_rows(world: _Model, contact) -> None:
         rows = np.lib.stride_tricks.as_strided(
             distances, shape=(world.data.narena // stride, _CONTACT_HEAD),
             strides=(stride, 8), writeable=False)
-        views = world.contact_views[address] = (rows, rows[0, :7])
-    world.contact_rows, world.first_contact = views
+        arena = np.lib.stride_tricks.as_strided(
+            distances, shape=(world.data.narena // 8,), strides=(8,), writeable=False)
+        views = world.contact_views[address] = (rows, rows[0, :7], arena)
+    world.contact_rows, world.first_contact, world.arena = views
     world.contact_address = address
+
+
+def _force_view(world: _Model, count: int, rows: int):
+    """``data.efc_force`` (``rows`` long, ``count`` contacts) as a view of the arena, kept in
+    ``world.force_views`` for the rest of the run (read through the bindings, a new array
+    each step: ~1 µs).
+
+    MuJoCo allocates the constraint arrays in the arena after the contacts, in a fixed
+    order of sizes that, in these planar models (dense Jacobian, one island), follow from
+    the contact and row counts alone; the address is taken afresh in each run, at the first
+    step with each pair of counts. Returns the bindings' array where the view cannot be
+    made (an address off the arena's doubles).
+    """
+    forces = world.data.efc_force
+    offset, rest = divmod(forces.ctypes.data - world.contact_address, 8)
+    if rest or offset < 0 or offset + rows > len(world.arena):
+        return forces
+    view = world.force_views[count, rows] = world.arena[offset:offset + rows]
+    return view
 
 
 # Per-run constants computed once: the solve for ζ costs ~10 µs, pure in its arguments.
@@ -865,6 +890,8 @@ class MujocoEngine(Engine):
         world.qvel[:] = qvel
         world.normal_sign = 0.0
         world.last_depth = math.inf
+        if world.force_views:
+            world.force_views = {}
         return derived
 
     def _configure(self, entry: _Model, scene: Scene, settings: dict) -> dict:
@@ -944,7 +971,8 @@ class MujocoEngine(Engine):
         _mj_step(world.model, d)
         # Active contact constraints only: MuJoCo reports a contact at dist >= margin (its
         # "gap" zone) but gives it no constraint row.
-        if not d.nefc:
+        constraints = d.nefc
+        if not constraints:
             return None
         count = d.ncon
         sign = world.normal_sign
@@ -974,7 +1002,10 @@ class MujocoEngine(Engine):
         world.last_depth = depth
         if growing:
             return points, normal, None, None
-        return points, normal, None, sum(map(abs, d.efc_force.tolist())) * world.dt
+        forces = world.force_views.get((count, constraints))
+        if forces is None:
+            forces = _force_view(world, count, constraints)
+        return points, normal, None, sum(map(abs, forces.tolist())) * world.dt
 
     def _read_poses(self, world: _Model) -> tuple:
         # Python floats once (tolist): the same doubles as indexing the arrays, fewer calls.
