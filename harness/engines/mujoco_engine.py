@@ -72,8 +72,9 @@ of its settings, ``e`` and ``μ`` (rewritten whenever they differ by value from 
 model holds) and calls ``mj_resetData``, so reruns are bit-identical. A step reads its
 contacts through one numpy view of the data's arena, made once per data
 (``_contact_rows``), and its constraint forces through views of the same arena made once
-per run and row count (``_force_view``). The contact impulse is MuJoCo's total constraint impulse on body B,
-``M·Δq̇`` (exact here: no gravity, no passive forces, constant mass matrix).
+per run and row count (``_force_view``). The contact impulse is MuJoCo's total constraint
+impulse on body B, ``M·Δq̇`` (exact here: no gravity, no passive forces, constant mass
+matrix).
 
 Settings (``defaults`` | ``accurate``, shown as ``matched-bounce``) are listed in
 :data:`SETTING_DOCS`.
@@ -263,15 +264,16 @@ def _sure_bracket(e: float) -> tuple[float, float]:
     """``(below, above)``: at every ``ζ <= below`` the computed map exceeds ``e``, at every
     ``ζ >= above`` it does not; ``(0, inf)`` where that could not be made sure.
 
-    A secant iteration on ``ζ·ω₀T(ζ) = -ln e``, from the linear (bilateral) damping ratio,
-    finds the root; the ends lie where the map is ``margin·e`` from ``e``, checked there.
-    ``margin = 1e-13·(1 + ζ⁴)`` is ~100 times the rounding noise of the computed map
-    (measured: 2e-16 of ``e`` at ζ = 0.25, 1e-14 at 2, 4e-12 at 8, 3e-11 at 16; the
-    overdamped branch's ``atanh`` argument nears 1 as ``1 - 1/(8ζ⁴)``): beyond an end the
-    true map, monotone, only moves further from ``e`` and the computed one cannot cross it.
+    A secant iteration on ``ζ·ω₀T(ζ) = -ln e``, from the linear (bilateral) damping ratio
+    (``e -> 1/(4ζ²)`` when overdamped), finds the root; the ends lie where the map is
+    ``margin·e`` from ``e``, checked there. ``margin = 1e-13·(1 + ζ⁴)`` is ~100 times the
+    rounding noise of the computed map (measured: 2e-16 of ``e`` at ζ = 0.25, 1e-14 at 2,
+    4e-12 at 8, 3e-11 at 16; the overdamped branch's ``atanh`` argument nears 1 as
+    ``1 - 1/(8ζ⁴)``): beyond an end the true map, monotone, only moves further from ``e``
+    and the computed one cannot cross it.
     """
     target = -math.log(e)
-    if e > _CRITICAL_RESTITUTION:  # the linear formula's ζ, or e -> 1/(4ζ²) when overdamped
+    if e > _CRITICAL_RESTITUTION:
         zeta = target / math.sqrt(math.pi * math.pi + target * target)
     else:
         zeta = 0.5 / math.sqrt(e)
