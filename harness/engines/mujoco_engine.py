@@ -71,8 +71,10 @@ one ``MjData`` per layout. Each run makes the model hold every option and contac
 of its settings, ``e`` and ``μ`` (rewritten whenever they differ by value from what the
 model holds) and calls ``mj_resetData``, so reruns are bit-identical. A step reads its
 contacts through one numpy view of the data's arena, made once per data
-(``_contact_rows``). The contact impulse is MuJoCo's total constraint impulse on body B,
-``M·Δq̇`` (exact here: no gravity, no passive forces, constant mass matrix).
+(``_contact_rows``), and its constraint forces through views of the same arena made once
+per run and row count (``_force_view``). The contact impulse is MuJoCo's total constraint
+impulse on body B, ``M·Δq̇`` (exact here: no gravity, no passive forces, constant mass
+matrix).
 
 Settings (``defaults`` | ``accurate``, shown as ``matched-bounce``) are listed in
 :data:`SETTING_DOCS`.
@@ -214,11 +216,33 @@ def restitution_of_damping_ratio(damping_ratio: float) -> float:
 def damping_ratio_for_restitution(restitution: float) -> float:
     """Inverse of :func:`restitution_of_damping_ratio` (bisection to rounding).
 
-    ``e`` is clamped to ``[MIN_RESTITUTION, 1]``: ``e = 0`` would need ``ζ = ∞``.
+    ``e`` is clamped to ``[MIN_RESTITUTION, 1]``: ``e = 0`` would need ``ζ = ∞``. The
+    bisection evaluates the map only near the root: a point outside :func:`_sure_bracket`
+    goes to the side the map would send it, so the steps and the result are those of
+    evaluating it everywhere (:func:`_bisect_damping_ratio`), bit for bit
+    (tests/engines/test_mujoco_speed_paths.py), with about half the evaluations.
     """
     e = min(max(float(restitution), MIN_RESTITUTION), 1.0)
     if e == 1.0:
         return 0.0
+    below, above = _sure_bracket(e)
+    low, high = 0.0, 1.0
+    while high <= below or (high < above and restitution_of_damping_ratio(high) > e):
+        high *= 2.0
+    for _ in range(200):
+        middle = 0.5 * (low + high)
+        if middle <= below or (middle < above and restitution_of_damping_ratio(middle) > e):
+            low = middle
+        else:
+            high = middle
+        if high - low <= 1e-15 * high:
+            break
+    return 0.5 * (low + high)
+
+
+def _bisect_damping_ratio(e: float) -> float:
+    """The bisection of :func:`damping_ratio_for_restitution` evaluating the map at every
+    point (``e`` in ``[MIN_RESTITUTION, 1)``): the reference its shortcut is tested against."""
     low, high = 0.0, 1.0
     while restitution_of_damping_ratio(high) > e:
         high *= 2.0
@@ -231,6 +255,55 @@ def damping_ratio_for_restitution(restitution: float) -> float:
         if high - low <= 1e-15 * high:
             break
     return 0.5 * (low + high)
+
+
+_CRITICAL_RESTITUTION = math.exp(-2.0)  # e at ζ = 1
+
+
+def _sure_bracket(e: float) -> tuple[float, float]:
+    """``(below, above)``: at every ``ζ <= below`` the computed map exceeds ``e``, at every
+    ``ζ >= above`` it does not; ``(0, inf)`` where that could not be made sure.
+
+    A secant iteration on ``ζ·ω₀T(ζ) = -ln e``, from the linear (bilateral) damping ratio
+    (``e -> 1/(4ζ²)`` when overdamped), finds the root; the ends lie where the map is
+    ``margin·e`` from ``e``, checked there. ``margin = 1e-13·(1 + ζ⁴)`` is ~100 times the
+    rounding noise of the computed map (measured: 2e-16 of ``e`` at ζ = 0.25, 1e-14 at 2,
+    4e-12 at 8, 3e-11 at 16; the overdamped branch's ``atanh`` argument nears 1 as
+    ``1 - 1/(8ζ⁴)``): beyond an end the true map, monotone, only moves further from ``e``
+    and the computed one cannot cross it.
+    """
+    target = -math.log(e)
+    if e > _CRITICAL_RESTITUTION:
+        zeta = target / math.sqrt(math.pi * math.pi + target * target)
+    else:
+        zeta = 0.5 / math.sqrt(e)
+    other = zeta * 1.001
+    gap = zeta * contact_time_factor(zeta) - target
+    other_gap = other * contact_time_factor(other) - target
+    slope = step = 0.0
+    for _ in range(20):
+        if gap == other_gap:
+            break
+        slope = (gap - other_gap) / (zeta - other)
+        step = gap / slope
+        other, other_gap = zeta, gap
+        zeta -= step
+        if not 0.0 < zeta < math.inf:
+            return 0.0, math.inf
+        gap = zeta * contact_time_factor(zeta) - target
+        if abs(step) <= 1e-14 * zeta * (1.0 + zeta**4):  # down to the map's noise
+            break
+    if not slope > 0.0:
+        return 0.0, math.inf
+    margin = 1e-13 * (1.0 + zeta**4)
+    width = 2.0 * margin / slope + 4.0 * abs(step)
+    for _ in range(3):
+        below, above = zeta - width, zeta + width
+        if (below > 0.0 and restitution_of_damping_ratio(below) - e > margin * e
+                and e - restitution_of_damping_ratio(above) > margin * e):
+            return below, above
+        width *= 16.0
+    return 0.0, math.inf
 
 
 def restitution_solref(
@@ -588,7 +661,10 @@ class _Model:
     xmat: object = None
     contact_rows: object = None  # (n, 13): dist, pos, frame of each contact slot
     first_contact: object = None  # the first slot's dist, pos and frame[:3]
-    contact_address: int = 0  # where ``contact_rows`` starts
+    contact_address: int = 0  # where ``contact_rows`` starts: the data's arena
+    arena: object = None  # the arena as doubles, from ``contact_address``
+    # This run's views of efc_force in ``arena``, by (ncon, nefc) (_force_view).
+    force_views: dict = field(default_factory=dict)
     # Contact views made so far, by address (a polygon world's datas take turns).
     contact_views: dict = field(default_factory=dict)
 
@@ -599,7 +675,7 @@ def _use_data(world: _Model, data: mujoco.MjData) -> None:
     world.data = data
     world.qpos, world.qvel = data.qpos, data.qvel
     world.xpos, world.xmat = data.xpos, data.xmat
-    world.contact_rows = world.first_contact = None
+    world.contact_rows = world.first_contact = world.arena = None
     world.contact_address = 0
 
 
@@ -629,12 +705,33 @@ def _contact_rows(world: _Model, contact) -> None:
         rows = np.lib.stride_tricks.as_strided(
             distances, shape=(world.data.narena // stride, _CONTACT_HEAD),
             strides=(stride, 8), writeable=False)
-        views = world.contact_views[address] = (rows, rows[0, :7])
-    world.contact_rows, world.first_contact = views
+        arena = np.lib.stride_tricks.as_strided(
+            distances, shape=(world.data.narena // 8,), strides=(8,), writeable=False)
+        views = world.contact_views[address] = (rows, rows[0, :7], arena)
+    world.contact_rows, world.first_contact, world.arena = views
     world.contact_address = address
 
 
-# Per-run constants computed once: the bisection for ζ costs ~14 µs, pure in its arguments.
+def _force_view(world: _Model, count: int, rows: int):
+    """``data.efc_force`` (``rows`` long, ``count`` contacts) as a view of the arena, kept in
+    ``world.force_views`` for the rest of the run (read through the bindings, a new array
+    each step: ~1 µs).
+
+    MuJoCo allocates the constraint arrays in the arena after the contacts, in a fixed
+    order of sizes that, in these planar models (dense Jacobian, one island), follow from
+    the contact and row counts alone; the address is taken afresh in each run, at the first
+    step with each pair of counts. Returns the bindings' array where the view cannot be
+    made (an address off the arena's doubles).
+    """
+    forces = world.data.efc_force
+    offset, rest = divmod(forces.ctypes.data - world.contact_address, 8)
+    if rest or offset < 0 or offset + rows > len(world.arena):
+        return forces
+    view = world.force_views[count, rows] = world.arena[offset:offset + rows]
+    return view
+
+
+# Per-run constants computed once: the solve for ζ costs ~10 µs, pure in its arguments.
 @functools.lru_cache(maxsize=256)
 def _restitution_terms(restitution: float, time_step: float, contact_steps: float) -> tuple:
     """``(solref, ζ, restitution of ζ)`` of :func:`restitution_solref`."""
@@ -795,6 +892,8 @@ class MujocoEngine(Engine):
         world.qvel[:] = qvel
         world.normal_sign = 0.0
         world.last_depth = math.inf
+        if world.force_views:
+            world.force_views = {}
         return derived
 
     def _configure(self, entry: _Model, scene: Scene, settings: dict) -> dict:
@@ -874,7 +973,8 @@ class MujocoEngine(Engine):
         _mj_step(world.model, d)
         # Active contact constraints only: MuJoCo reports a contact at dist >= margin (its
         # "gap" zone) but gives it no constraint row.
-        if not d.nefc:
+        constraints = d.nefc
+        if not constraints:
             return None
         count = d.ncon
         sign = world.normal_sign
@@ -904,7 +1004,10 @@ class MujocoEngine(Engine):
         world.last_depth = depth
         if growing:
             return points, normal, None, None
-        return points, normal, None, sum(map(abs, d.efc_force.tolist())) * world.dt
+        forces = world.force_views.get((count, constraints))
+        if forces is None:
+            forces = _force_view(world, count, constraints)
+        return points, normal, None, sum(map(abs, forces.tolist())) * world.dt
 
     def _read_poses(self, world: _Model) -> tuple:
         # Python floats once (tolist): the same doubles as indexing the arrays, fewer calls.

@@ -2,7 +2,9 @@
 it leaves alone between runs, equal what the bindings read and what a fresh model holds.
 
 The adapter reads each step's contacts through one numpy view of the data's arena
-(``_contact_rows``), not through ``data.contact``, and rewrites a pair's ``solref``,
+(``_contact_rows``), not through ``data.contact``, its constraint forces through views of the
+same arena made once per run and row count (``_force_view``), not through
+``data.efc_force``, and rewrites a pair's ``solref``,
 ``condim`` and friction only when they change. These tests read the same values the slow
 way, step by step and run by run, bit for bit.
 """
@@ -37,7 +39,8 @@ class _CheckedReads(MujocoEngine):
     """The adapter, each contact step compared with ``data.contact`` read the slow way."""
 
     def __init__(self) -> None:
-        self.steps = self.multi = 0
+        self.steps = self.multi = self.forces = 0
+        self.force_shapes: set[tuple[int, int]] = set()
         self.addresses: set[int] = set()
 
     def _step(self, world):
@@ -58,6 +61,10 @@ class _CheckedReads(MujocoEngine):
         assert bits(raw[1]) == bits(normal)
         if count == 1:  # the distance the adapter read before: every row carries it
             assert bits([-d.efc_pos.item(0)]) == bits([raw[0][0][2]])
+        if raw[3] is not None:
+            assert bits([raw[3]]) == bits([sum(map(abs, d.efc_force.tolist())) * world.dt])
+            self.forces += 1
+            self.force_shapes.add((count, d.nefc))
         self.steps += 1
         self.multi += count > 1
         self.addresses.add(world.contact_address)
@@ -75,6 +82,18 @@ def test_contact_view_reads_what_the_bindings_read(preset):
     assert engine.steps > 10 * len(scenes)
     assert engine.multi > 0
     assert len(engine.addresses) > len({(s.ground, len(s.bodies)) for s in scenes})
+    assert engine.forces > 5 * len(scenes) and len(engine.force_shapes) >= 2
+
+
+@pytest.mark.parametrize("overrides", [{"cone": "elliptic"}, {"noslip_iterations": 10},
+                                       {"solver": "CG", "integrator": "implicitfast"}])
+def test_force_views_read_what_the_bindings_read_under_other_options(overrides):
+    # Other cones, solvers and integrators make other row counts and constraint arrays.
+    scenes = [sample.scene for population in resolve_populations([])
+              for sample in sample_population(population, 4, seed=5).samples]
+    engine = _CheckedReads()
+    engine.run_many(scenes, engine.settings("defaults", overrides=overrides))
+    assert engine.forces > 2 * len(scenes)
 
 
 def test_polygon_world_switching_datas_reads_each_datas_contacts():
