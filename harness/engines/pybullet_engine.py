@@ -164,18 +164,21 @@ PRESETS: dict[str, dict] = {
 _RUN_ONLY = ("max_steps", "approach_steps")
 
 
+# Bullet's capsule runs along its frame's z; turned +90° about y, z goes to x.
+_CAPSULE_ALONG_X = p.getQuaternionFromEuler([0.0, math.pi / 2.0, 0.0])
+
+
 def _collision_shape(client: int, shape, extent: float) -> int:
     """The shape's collision shape; ``extent`` is its :func:`body_extent`."""
     depth = 2.0 * extent  # out-of-plane thickness; any value works with the chain
     if shape.kind == "disk":
         return p.createCollisionShape(p.GEOM_SPHERE, radius=shape.radius, physicsClientId=client)
     if shape.kind == "rod":
-        # Bullet's capsule runs along its frame's z; turn it +90° about y so z goes to x.
         return p.createCollisionShape(
             p.GEOM_CAPSULE,
             radius=shape.radius,
             height=shape.length,
-            collisionFrameOrientation=p.getQuaternionFromEuler([0.0, math.pi / 2.0, 0.0]),
+            collisionFrameOrientation=_CAPSULE_ALONG_X,
             physicsClientId=client,
         )
     if shape.kind == "box":
