@@ -66,8 +66,8 @@ timed): about three quarters inside pybullet -- ``createMultiBody`` a third (pyb
 serialises each new body's description and parses it back in the client; only
 ``batchPositions``' copies of one shape skip that), stepping a fifth -- and about a tenth
 in this module's Python. pybullet 3.2.7 has no call reading several bodies' joint states,
-``changeDynamics`` takes no inertia at creation and no fold of its calls keeps the bits, and
-batch sizes 4 to 64 cost the same within the noise.
+``createMultiBody`` takes no inertia, the ``changeDynamics`` folds tried change the bits
+(docs/engines.md), and batch sizes 4 to 64 cost the same within the noise.
 
 Settings (``defaults`` | ``accurate``) are listed in :data:`SETTING_DOCS`; ``None`` means
 "not set: Bullet's default".
