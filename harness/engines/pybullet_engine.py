@@ -61,6 +61,13 @@ dynamics world and memory pools) cost more than a batch's stepping. Bullet keeps
 collision shape made in a client (it refuses to remove one a removed body used, ~8 kB an
 impact), so the client is reset after :data:`_MANY_RESET_AFTER` impacts
 (tests/engines/test_pybullet_clients.py: runs keep their bits across both).
+Where a batch's time goes (700 survey scenes, process CPU, measured with every pybullet call
+timed): about three quarters inside pybullet -- ``createMultiBody`` a third (pybullet
+serialises each new body's description and parses it back in the client; only
+``batchPositions``' copies of one shape skip that), stepping a fifth -- and about a tenth
+in this module's Python. pybullet 3.2.7 has no call reading several bodies' joint states,
+``createMultiBody`` takes no inertia, the ``changeDynamics`` folds tried change the bits
+(docs/engines.md), and batch sizes 4 to 64 cost the same within the noise.
 
 Settings (``defaults`` | ``accurate``) are listed in :data:`SETTING_DOCS`; ``None`` means
 "not set: Bullet's default".
@@ -164,18 +171,21 @@ PRESETS: dict[str, dict] = {
 _RUN_ONLY = ("max_steps", "approach_steps")
 
 
+# Bullet's capsule runs along its frame's z; turned +90° about y, z goes to x.
+_CAPSULE_ALONG_X = p.getQuaternionFromEuler([0.0, math.pi / 2.0, 0.0])
+
+
 def _collision_shape(client: int, shape, extent: float) -> int:
     """The shape's collision shape; ``extent`` is its :func:`body_extent`."""
     depth = 2.0 * extent  # out-of-plane thickness; any value works with the chain
     if shape.kind == "disk":
         return p.createCollisionShape(p.GEOM_SPHERE, radius=shape.radius, physicsClientId=client)
     if shape.kind == "rod":
-        # Bullet's capsule runs along its frame's z; turn it +90° about y so z goes to x.
         return p.createCollisionShape(
             p.GEOM_CAPSULE,
             radius=shape.radius,
             height=shape.length,
-            collisionFrameOrientation=p.getQuaternionFromEuler([0.0, math.pi / 2.0, 0.0]),
+            collisionFrameOrientation=_CAPSULE_ALONG_X,
             physicsClientId=client,
         )
     if shape.kind == "box":
@@ -276,7 +286,7 @@ def _add_bodies(client: int, scene: Scene, settings, extents,
     return bodies
 
 
-@dataclass
+@dataclass(slots=True)
 class _World:
     client: int  # -1 once released (its client may serve another world)
     settings_key: tuple  # the engine settings (which idle clients it may take and give back)
@@ -310,15 +320,22 @@ _JOINTS = (0, 1, 2)
 def _read_joints(world: _World) -> tuple:
     """Per body the joints' positions as the scene's ``(x, y, θ)`` (the revolute joint
     turns the other way); the rates, read in the same calls, are kept on the world as
-    ``(v_x, v_y, ω)`` for :meth:`PybulletEngine._read_velocities` of the same step."""
-    client = world.client
-    poses, velocities = [], []
-    for uid in world.bodies:
-        (x, v_x, _, _), (z, v_z, _, _), (angle, rate, _, _) = _get_states(uid, _JOINTS, client)
-        poses.append((x, z, -angle))
-        velocities.append((v_x, v_z, -rate))
-    world.velocities, world.velocities_at = tuple(velocities), world.clock[0]
-    return tuple(poses)
+    ``(v_x, v_y, ω)`` for :meth:`PybulletEngine._read_velocities` of the same step.
+
+    Called at every contact step of every impact: one body and two are written out (no
+    lists, no loop), the survey's only cases besides none.
+    """
+    client, bodies = world.client, world.bodies
+    (x, v_x, _, _), (z, v_z, _, _), (angle, rate, _, _) = _get_states(bodies[0], _JOINTS,
+                                                                       client)
+    world.velocities_at = world.clock[0]
+    if len(bodies) == 1:
+        world.velocities = ((v_x, v_z, -rate),)
+        return ((x, z, -angle),)
+    (x_b, v_x_b, _, _), (z_b, v_z_b, _, _), (angle_b, rate_b, _, _) = _get_states(
+        bodies[1], _JOINTS, client)  # a scene has one body or two
+    world.velocities = ((v_x, v_z, -rate), (v_x_b, v_z_b, -rate_b))
+    return ((x, z, -angle), (x_b, z_b, -angle_b))
 
 
 def _set_joints(client: int, bodies, joints) -> None:
@@ -404,13 +421,15 @@ def _settings_key(settings) -> tuple:
 class _Batch:
     """A client holding many impacts (one :class:`_World` view each)."""
 
-    __slots__ = ("client", "clock", "dt", "held", "left", "pool_key", "slot_of", "slots")
+    __slots__ = ("body_b", "client", "clock", "dt", "held", "left", "pool_key", "slot_of",
+                 "slots")
 
     def __init__(self, held: _Client, pool_key: tuple, dt: float) -> None:
         self.held, self.pool_key, self.dt = held, pool_key, dt
         self.client = held.uid  # -1 once released
         self.slots: list[_World] = []
-        self.slot_of: dict[int, int] = {}  # body unique id -> slot
+        self.slot_of: dict[int, int | None] = {}  # body unique id -> slot (the plane: None)
+        self.body_b: list[int] = []  # per slot, its body B's unique id (bodies[-1])
         self.left: set[int] = set()  # slots whose bodies are still in the client
         self.clock = [0]  # steps taken (its impacts' _World.clock)
 
@@ -599,25 +618,30 @@ class PybulletEngine(Engine):
         p.setPhysicsEngineParameter(contactBreakingThreshold=threshold, physicsClientId=client)
         batch = _Batch(held, pool_key, float(settings["time_step"]))
         gap = _MANY_GAP + 2.0 * threshold  # contact points exist up to the threshold
+        slots, slot_of, body_b, dt = batch.slots, batch.slot_of, batch.body_b, batch.dt
+        if plane is not None:
+            slot_of[plane] = None  # _step_many: look at the contact's other body
         offset = previous = 0.0
         for slot, plan in enumerate(plans):
-            extents = tuple(body_extent(b.shape) for b in plan.scene.bodies)
+            scene = plan.scene
+            extents = tuple([body_extent(body.shape) for body in scene.bodies])
+            size = max(extents)
             if slot:
-                offset += previous + max(extents) + gap
-            previous = max(extents)
-            bodies = _add_bodies(client, plan.scene, settings, extents, offset)
+                offset += previous + size + gap
+            previous = size
+            bodies = _add_bodies(client, scene, settings, extents, offset)
             joints, (e, mu) = plan.prepared
             p.changeDynamics(bodies[0], 2, restitution=e, lateralFriction=mu,
                              physicsClientId=client)
             _set_joints(client, bodies, joints)
-            batch.slots.append(_World(client=client, settings_key=settings_key, plane=plane,
-                                      bodies=bodies, extents=extents, scale=previous,
-                                      pair_values=(e, mu), dirty=False,
-                                      threshold=threshold, dt=batch.dt, offset=offset,
-                                      clock=batch.clock))
+            slots.append(_World(client=client, settings_key=settings_key, plane=plane,
+                                bodies=bodies, extents=extents, scale=size, pair_values=(e, mu),
+                                dirty=False, threshold=threshold, dt=dt, offset=offset,
+                                clock=batch.clock))
             for uid in bodies:
-                batch.slot_of[uid] = slot
-            batch.left.add(slot)
+                slot_of[uid] = slot
+            body_b.append(bodies[-1])
+        batch.left.update(range(len(plans)))
         return batch, batch.slots, [{} for _ in plans]
 
     def _step_many(self, batch: _Batch, active) -> dict:
@@ -625,9 +649,9 @@ class PybulletEngine(Engine):
         _step_simulation(client)
         batch.clock[0] += 1
         points_of: dict[int, list] = {}
-        slot_of = batch.slot_of
+        slot_of = batch.slot_of  # the plane's id -> None
         for cp in _get_contacts(-1, -1, -2, -2, client):  # every pair, Bullet's order
-            slot = slot_of.get(cp[1])
+            slot = slot_of[cp[1]]
             if slot is None:  # body A is the plane
                 slot = slot_of[cp[2]]
             points = points_of.get(slot)
@@ -635,8 +659,8 @@ class PybulletEngine(Engine):
                 points_of[slot] = [cp]
             else:
                 points.append(cp)
-        slots, dt = batch.slots, batch.dt
-        return {slot: _contact_of(points, slots[slot].bodies[-1], dt)
+        body_b, dt = batch.body_b, batch.dt
+        return {slot: _contact_of(points, body_b[slot], dt)
                 for slot, points in points_of.items()}
 
     def _retire(self, batch: _Batch, slot: int) -> None:

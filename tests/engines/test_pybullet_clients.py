@@ -93,3 +93,38 @@ def test_velocities_are_read_again_after_a_step_or_a_reset(population_scenes):
         assert engine._read_velocities(world) == hit  # not the start's, read before the step
     finally:
         engine.close()
+
+
+def read_joint_by_joint(world):
+    """Every body's ``(x, y, θ)`` and ``(v_x, v_y, ω)``, one ``getJointState`` per joint."""
+    poses, velocities = [], []
+    for uid in world.bodies:
+        (x, v_x), (z, v_z), (angle, rate) = (
+            pybullet.getJointState(uid, joint, physicsClientId=world.client)[:2]
+            for joint in (0, 1, 2))
+        poses.append((x, z, -angle))
+        velocities.append((v_x, v_z, -rate))
+    return tuple(poses), tuple(velocities)
+
+
+@pytest.mark.parametrize("ground", [True, False])
+def test_a_steps_poses_and_rates_are_each_bodys_own_in_a_batch(population_scenes, ground):
+    # Three impacts of one kind in one batch client, stepped into contact: each view reads
+    # its own bodies (one for a ground scene, two otherwise), in the scene's conventions.
+    engine = adapter.PybulletEngine()
+    try:
+        settings = engine.settings("accurate")
+        scenes = [scene for scene in population_scenes if scene.ground == ground][:3]
+        plans = [engine._plan_for(scene, settings) for scene in scenes]
+        batch, worlds, _ = engine._build_many(plans)
+        try:
+            for _ in range(3):
+                engine._step_many(batch, range(len(worlds)))
+            for world, scene in zip(worlds, scenes):
+                assert len(world.bodies) == len(scene.bodies)
+                poses = engine._read_poses(world)
+                assert (poses, engine._read_velocities(world)) == read_joint_by_joint(world)
+        finally:
+            engine._release_many(batch)
+    finally:
+        engine.close()
