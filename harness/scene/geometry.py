@@ -29,6 +29,7 @@ All functions return :class:`harness.scene.Contact` with
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -84,6 +85,15 @@ def _edge_points(points: list) -> list[tuple[float, float, float, float]]:
     return [(*start, *end) for start, end in zip(points, points[1:] + points[:1])]
 
 
+def _edge_steps(points: list) -> list[tuple[float, float, float, float, float]]:
+    """:func:`_edge_points` as ``(start x, start y, Δx, Δy, |Δ|²)``."""
+    steps = []
+    for sx, sy, ex, ey in _edge_points(points):
+        dx, dy = ex - sx, ey - sy
+        steps.append((sx, sy, dx, dy, dx * dx + dy * dy))
+    return steps
+
+
 def _closest_pair(points_a: list, points_b: list) -> tuple[float, tuple, tuple]:
     """The closest vertex-edge pair of two cores given as lists of ``(x, y)``:
     ``(distance, point on A, point on B)``.
@@ -98,16 +108,19 @@ def _closest_pair(points_a: list, points_b: list) -> tuple[float, tuple, tuple]:
     """
     sqrt = math.sqrt
     best, on_a, on_b = math.inf, None, None
-    for vertices, edges, vertex_on_a in ((points_a, _edge_points(points_b), True),
-                                         (points_b, _edge_points(points_a), False)):
+    for vertices, edges, vertex_on_a in ((points_a, _edge_steps(points_b), True),
+                                         (points_b, _edge_steps(points_a), False)):
         for x, y in vertices:
-            for sx, sy, ex, ey in edges:
-                dx, dy = ex - sx, ey - sy
-                length2 = dx * dx + dy * dy
+            for sx, sy, dx, dy, length2 in edges:
                 if length2 == 0.0:
                     cx, cy = sx, sy
                 else:
-                    t = min(1.0, max(0.0, ((x - sx) * dx + (y - sy) * dy) / length2))
+                    # min(1.0, max(0.0, t)) without the calls: 0.0 unless t > 0.0 (NaN too)
+                    t = ((x - sx) * dx + (y - sy) * dy) / length2
+                    if not t > 0.0:
+                        t = 0.0
+                    elif not t < 1.0:
+                        t = 1.0
                     cx, cy = sx + t * dx, sy + t * dy
                 offset_x, offset_y = cx - x, cy - y
                 distance = sqrt(offset_x * offset_x + offset_y * offset_y)
@@ -115,10 +128,6 @@ def _closest_pair(points_a: list, points_b: list) -> tuple[float, tuple, tuple]:
                     best = distance
                     on_a, on_b = ((x, y), (cx, cy)) if vertex_on_a else ((cx, cy), (x, y))
     return best, on_a, on_b
-
-
-def _cross(ax: float, ay: float, bx: float, by: float) -> float:
-    return ax * by - ay * bx
 
 
 def _cores_intersect(points_a: list, points_b: list) -> bool:
@@ -130,9 +139,12 @@ def _cores_intersect(points_a: list, points_b: list) -> bool:
         ux, uy = a1x - a0x, a1y - a0y
         for b0x, b0y, b1x, b1y in edges_b:
             vx, vy = b1x - b0x, b1y - b0y
-            if (_cross(ux, uy, b0x - a0x, b0y - a0y) * _cross(ux, uy, b1x - a0x, b1y - a0y) < 0.0
-                    and _cross(vx, vy, a0x - b0x, a0y - b0y)
-                    * _cross(vx, vy, a1x - b0x, a1y - b0y) < 0.0):
+            # cross products u × (b − a0) and v × (a − b0), written out: a call per
+            # product cost more than the product
+            if ((ux * (b0y - a0y) - uy * (b0x - a0x)) * (ux * (b1y - a0y) - uy * (b1x - a0x))
+                    < 0.0
+                    and (vx * (a0y - b0y) - vy * (a0x - b0x))
+                    * (vx * (a1y - b0y) - vy * (a1x - b0x)) < 0.0):
                 return True
     return _any_inside(points_a, points_b) or _any_inside(points_b, points_a)
 
@@ -141,9 +153,15 @@ def _any_inside(points: list, polygon: list) -> bool:
     """Whether a point lies strictly inside a counter-clockwise convex ``polygon``."""
     if len(polygon) < 3:
         return False
-    edges = _edge_points(polygon)
-    return any(all(_cross(ex - sx, ey - sy, x - sx, y - sy) > 0.0 for sx, sy, ex, ey in edges)
-               for x, y in points)
+    edges = _edge_steps(polygon)
+    for x, y in points:
+        # the cross product Δ × ((x, y) − start) > 0.0 on every edge
+        for sx, sy, dx, dy, _ in edges:
+            if not dx * (y - sy) - dy * (x - sx) > 0.0:
+                break
+        else:
+            return True
+    return False
 
 
 def _axis_list(points: list) -> list[tuple[float, float]]:
@@ -234,7 +252,7 @@ def core_separation(core_a: np.ndarray, core_b: np.ndarray):
     the bodies is ``separation − radius_a − radius_b``.
     """
     points_a, points_b = core_a.tolist(), core_b.tolist()
-    scale = max(1.0, max(abs(value) for point in points_a + points_b for value in point))
+    scale = max(1.0, max(map(abs, itertools.chain.from_iterable(points_a + points_b))))
     touching_cores = 1e-12 * scale
 
     distance, closest_a, closest_b = _closest_pair(points_a, points_b)
