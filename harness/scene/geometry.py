@@ -183,16 +183,29 @@ def _tangent(normal: np.ndarray) -> np.ndarray:
 
 
 def _largest(values: list) -> float:
-    """``numpy.max`` of a list, to the bit: where the largest value is zero, numpy's own choice
-    between 0.0 and -0.0 (Python's ``max`` keeps the first, numpy not always)."""
+    """``numpy.max`` of a list, to the bit: where the largest value is zero and the list holds
+    zeros of both signs (or a NaN), numpy's own choice between 0.0 and -0.0 (Python's ``max``
+    keeps the first, numpy not always)."""
     largest = max(values)
-    return float(np.max(values)) if largest == 0.0 and len(values) > 1 else largest
+    if largest == 0.0 and len(values) > 1 and not _one_zero_sign(values):
+        return float(np.max(values))
+    return largest
 
 
 def _smallest(values: list) -> float:
     """``numpy.min`` of a list, to the bit (see :func:`_largest`)."""
     smallest = min(values)
-    return float(np.min(values)) if smallest == 0.0 and len(values) > 1 else smallest
+    if smallest == 0.0 and len(values) > 1 and not _one_zero_sign(values):
+        return float(np.min(values))
+    return smallest
+
+
+def _one_zero_sign(values: list) -> bool:
+    """Whether the zeros of ``values`` all have one sign and none is NaN: numpy's extreme is
+    then a zero of that sign, as Python's is (a ground body's lowest point lies at exactly
+    0.0, so most ground contacts would otherwise ask numpy, at ~10 µs a call)."""
+    signs = {math.copysign(1.0, value) for value in values if value == 0.0}
+    return len(signs) == 1 and all(value == value for value in values)
 
 
 def _support_interval(core, normal, tangent, side, tolerance,

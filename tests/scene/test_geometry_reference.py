@@ -213,7 +213,11 @@ def test_ground_contacts_give_the_reference_contact():
 
 
 @pytest.mark.parametrize("values", [[0.0, -0.0], [-0.0, 0.0], [-0.0, 0.0, 0.0, -1.0],
-                                    [1.0, -0.0, 0.0, 0.0, -0.0], [-2.0, -0.0], [3.0, 3.0]])
+                                    [1.0, -0.0, 0.0, 0.0, -0.0], [-2.0, -0.0], [3.0, 3.0],
+                                    [0.0, 0.0, 1.0], [-0.0, 1.0, -0.0], [0.0, -1.0, 0.0],
+                                    [0.0, math.nan], [math.nan, 0.0, 0.5], [-0.0, math.nan],
+                                    [0.0, 2.0, 1.0, 0.0, 3.0, 0.0, 4.0, 5.0, 6.0, -0.0],
+                                    [-0.0] * 9 + [1.0], [0.0] * 17 + [-1.0]])
 def test_largest_and_smallest_keep_numpys_signed_zero(values):
     # World cores seldom hold -0.0 (the products that turn them add +0.0), so the random
     # cases above rarely reach the choice between zeros; it is checked here directly.
