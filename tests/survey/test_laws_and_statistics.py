@@ -261,3 +261,35 @@ def test_statistics_are_the_per_group_numpy_statistics_to_the_bit():
     for key in expected:
         assert got[key].dtype == expected[key].dtype, key
         assert got[key].tobytes() == expected[key].tobytes(), key
+
+
+@pytest.mark.parametrize("values", [["b", "a", "c", "a", ""], [""], ["x"] * 5,
+                                    ["mujoco", "box2d", "pymunk", "pybullet"] * 50,
+                                    ["", "multi-contact", "clipped,multi-contact", "clipped"] * 7,
+                                    ["é", "e", "E", "ée"]])
+def test_sorted_codes_are_numpys_unique(values):
+    names, codes = statistics._sorted_codes(values)
+    expected_names, expected_codes = np.unique(np.asarray(values), return_inverse=True)
+    assert names.dtype == expected_names.dtype
+    assert names.tolist() == expected_names.tolist()
+    assert codes.tolist() == expected_codes.tolist()
+
+
+def test_sample_columns_hold_each_drawn_parameter_or_nan():
+    from harness.survey.cli import sample_columns
+    # Rows of every population interleaved (the survey's order is population by population):
+    # the blocks of equal names must land in their own rows.
+    sets = [sample_population(p, 5, seed=4).samples for p in resolve_populations()]
+    every = [sample for row in zip(*sets) for sample in row]
+    terms = laws.contact_terms(every)
+    law_results = laws.solve_laws(terms)
+    columns = sample_columns(every, terms, law_results, laws.routh_coordinates(terms))
+    # the columns as first written: every name in order of appearance, one value per sample
+    keys = list(dict.fromkeys(key for sample in every for key in sample.parameters))
+    found = [key for key in columns if key in keys]
+    assert found == keys
+    assert set(keys) > {"a.mass", "b.mass", "mass_ratio", "placement_deg", "b.sides"}
+    for key in keys:
+        expected = np.asarray([float(s.parameters.get(key, np.nan)) for s in every])
+        assert columns[key].dtype == expected.dtype
+        assert columns[key].tobytes() == expected.tobytes(), key
