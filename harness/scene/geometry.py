@@ -77,26 +77,26 @@ def world_core(body: Body) -> tuple[np.ndarray, float]:
     return turned + np.asarray(body.position, dtype=float), radius
 
 
-def _edge_points(points: list) -> list[tuple[float, float, float, float]]:
+def _edges(points: list) -> list[tuple[float, ...]]:
     """The edges of a core given as a list of ``(x, y)``, each as ``(start x, start y, end x,
-    end y)``: a point gives one degenerate edge, a segment one edge, a polygon one per side."""
+    end y, Δx, Δy, |Δ|²)`` (``Δ`` = end − start): a point gives one degenerate edge, a
+    segment one edge, a polygon one per side. Worked out once per pair of cores, for every
+    test on them."""
     if len(points) <= 2:  # a point's degenerate edge, a segment's one edge
-        return [(*points[0], *points[-1])]
-    return [(*start, *end) for start, end in zip(points, points[1:] + points[:1])]
-
-
-def _edge_steps(points: list) -> list[tuple[float, float, float, float, float]]:
-    """:func:`_edge_points` as ``(start x, start y, Δx, Δy, |Δ|²)``."""
-    steps = []
-    for sx, sy, ex, ey in _edge_points(points):
+        pairs = [(points[0], points[-1])]
+    else:
+        pairs = zip(points, points[1:] + points[:1])
+    edges = []
+    for (sx, sy), (ex, ey) in pairs:
         dx, dy = ex - sx, ey - sy
-        steps.append((sx, sy, dx, dy, dx * dx + dy * dy))
-    return steps
+        edges.append((sx, sy, ex, ey, dx, dy, dx * dx + dy * dy))
+    return edges
 
 
-def _closest_pair(points_a: list, points_b: list) -> tuple[float, tuple, tuple]:
-    """The closest vertex-edge pair of two cores given as lists of ``(x, y)``:
-    ``(distance, point on A, point on B)``.
+def _closest_pair(points_a: list, points_b: list, edges_a: list,
+                  edges_b: list) -> tuple[float, tuple, tuple]:
+    """The closest vertex-edge pair of two cores given as lists of ``(x, y)`` and their
+    :func:`_edges`: ``(distance, point on A, point on B)``.
 
     Every vertex of A against every edge of B, then every vertex of B against every edge of
     A, keeping the first pair of least distance (exact for disjoint convex cores). On the
@@ -108,10 +108,9 @@ def _closest_pair(points_a: list, points_b: list) -> tuple[float, tuple, tuple]:
     """
     sqrt = math.sqrt
     best, on_a, on_b = math.inf, None, None
-    for vertices, edges, vertex_on_a in ((points_a, _edge_steps(points_b), True),
-                                         (points_b, _edge_steps(points_a), False)):
+    for vertices, edges, vertex_on_a in ((points_a, edges_b, True), (points_b, edges_a, False)):
         for x, y in vertices:
-            for sx, sy, dx, dy, length2 in edges:
+            for sx, sy, _, _, dx, dy, length2 in edges:
                 if length2 == 0.0:
                     cx, cy = sx, sy
                 else:
@@ -130,15 +129,13 @@ def _closest_pair(points_a: list, points_b: list) -> tuple[float, tuple, tuple]:
     return best, on_a, on_b
 
 
-def _cores_intersect(points_a: list, points_b: list) -> bool:
-    """Whether two cores (lists of ``(x, y)``) cross: an edge of one properly crosses an edge
-    of the other (touching ends are found by the distance test), or a point of one lies
-    strictly inside the other (a counter-clockwise convex polygon of 3 or more points)."""
-    edges_b = _edge_points(points_b)
-    for a0x, a0y, a1x, a1y in _edge_points(points_a):
-        ux, uy = a1x - a0x, a1y - a0y
-        for b0x, b0y, b1x, b1y in edges_b:
-            vx, vy = b1x - b0x, b1y - b0y
+def _cores_intersect(points_a: list, points_b: list, edges_a: list, edges_b: list) -> bool:
+    """Whether two cores (lists of ``(x, y)`` and their :func:`_edges`) cross: an edge of one
+    properly crosses an edge of the other (touching ends are found by the distance test), or
+    a point of one lies strictly inside the other (a counter-clockwise convex polygon of 3 or
+    more points)."""
+    for a0x, a0y, a1x, a1y, ux, uy, _ in edges_a:
+        for b0x, b0y, b1x, b1y, vx, vy, _ in edges_b:
             # cross products u × (b − a0) and v × (a − b0), written out: a call per
             # product cost more than the product
             if ((ux * (b0y - a0y) - uy * (b0x - a0x)) * (ux * (b1y - a0y) - uy * (b1x - a0x))
@@ -146,17 +143,18 @@ def _cores_intersect(points_a: list, points_b: list) -> bool:
                     and (vx * (a0y - b0y) - vy * (a0x - b0x))
                     * (vx * (a1y - b0y) - vy * (a1x - b0x)) < 0.0):
                 return True
-    return _any_inside(points_a, points_b) or _any_inside(points_b, points_a)
+    return (_any_inside(points_a, points_b, edges_b)
+            or _any_inside(points_b, points_a, edges_a))
 
 
-def _any_inside(points: list, polygon: list) -> bool:
-    """Whether a point lies strictly inside a counter-clockwise convex ``polygon``."""
+def _any_inside(points: list, polygon: list, edges: list) -> bool:
+    """Whether a point lies strictly inside a counter-clockwise convex ``polygon`` (its
+    :func:`_edges` given)."""
     if len(polygon) < 3:
         return False
-    edges = _edge_steps(polygon)
     for x, y in points:
         # the cross product Δ × ((x, y) − start) > 0.0 on every edge
-        for sx, sy, dx, dy, _ in edges:
+        for sx, sy, _, _, dx, dy, _ in edges:
             if not dx * (y - sy) - dy * (x - sx) > 0.0:
                 break
         else:
@@ -164,12 +162,10 @@ def _any_inside(points: list, polygon: list) -> bool:
     return False
 
 
-def _axis_list(points: list) -> list[tuple[float, float]]:
-    """Unit normals (both signs) of the edges of a core given as a list of ``(x, y)``; none
-    for a point."""
+def _axis_list(edges: list) -> list[tuple[float, float]]:
+    """Unit normals (both signs) of a core's :func:`_edges`; none for a point."""
     axes = []
-    for sx, sy, ex, ey in _edge_points(points):
-        dx, dy = ex - sx, ey - sy
+    for _, _, _, _, dx, dy, _ in edges:
         length = math.hypot(dx, dy)
         if length > 0.0:
             normal = (dy / length, -dx / length)
@@ -268,14 +264,16 @@ def core_separation(core_a: np.ndarray, core_b: np.ndarray):
     scale = max(1.0, max(map(abs, itertools.chain.from_iterable(points_a + points_b))))
     touching_cores = 1e-12 * scale
 
-    distance, closest_a, closest_b = _closest_pair(points_a, points_b)
+    edges_a, edges_b = _edges(points_a), _edges(points_b)
+    distance, closest_a, closest_b = _closest_pair(points_a, points_b, edges_a, edges_b)
 
-    if distance > touching_cores and not _cores_intersect(points_a, points_b):
+    if distance > touching_cores and not _cores_intersect(points_a, points_b, edges_a,
+                                                          edges_b):
         normal = np.array([(closest_b[0] - closest_a[0]) / distance,
                            (closest_b[1] - closest_a[1]) / distance])
         return distance, normal, closest_a, closest_b
     # Cores touch or overlap: the separating axis of least penetration (<= 0).
-    axes = _axis_list(points_a) + _axis_list(points_b)
+    axes = _axis_list(edges_a) + _axis_list(edges_b)
     if not axes:  # two coincident points (concentric disks): no defined direction
         axes = [(0.0, 1.0)]
     # Each axis's products with both cores, as ``core @ axis`` would give them one at a time
