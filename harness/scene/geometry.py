@@ -205,20 +205,28 @@ def _one_zero_sign(values: list) -> bool:
 
 
 def _support_interval(core, normal, tangent, side, tolerance,
-                      along_normal: list | None = None) -> tuple[float, float]:
+                      along_normal: list | None = None,
+                      intervals: dict | None = None) -> tuple[float, float]:
     """Tangential extent of the core points nearest the other body along ``normal``.
 
     ``side = +1`` for body A (its points furthest along ``normal``), ``-1`` for body B;
-    ``along_normal``: ``core @ normal`` as a list, when already known.
+    ``along_normal``: ``core @ normal`` as a list, when already known; ``intervals``: the
+    extents already found for this core and tangent, by their near points (another tolerance
+    mostly picks the same points).
     """
     if along_normal is None:
         along_normal = (core @ normal).tolist()
     heights = [side * value for value in along_normal]
     threshold = _largest(heights) - tolerance
     near = [index for index, height in enumerate(heights) if height >= threshold]
+    if intervals is not None and tuple(near) in intervals:
+        return intervals[tuple(near)]
     # The near points' own product (numpy rounds one point's and several points' differently).
     along = (core[near] @ tangent).tolist()
-    return _smallest(along), _largest(along)
+    interval = _smallest(along), _largest(along)
+    if intervals is not None:
+        intervals[tuple(near)] = interval
+    return interval
 
 
 # --------------------------------------------------------------------------------------------
@@ -292,14 +300,32 @@ def core_contact(core_a: np.ndarray, radius_a: float, core_b: np.ndarray, radius
                  tolerance: float = DEFAULT_TOLERANCE, separation=None) -> Contact:
     """:func:`body_contact` of two bodies given by their world cores and radii;
     ``separation``: :func:`core_separation` of these cores, when already known."""
+    return core_contacts(core_a, radius_a, core_b, radius_b, (tolerance,), separation)[0]
+
+
+def core_contacts(core_a: np.ndarray, radius_a: float, core_b: np.ndarray, radius_b: float,
+                  tolerances, separation=None) -> list[Contact]:
+    """:func:`core_contact` at each of ``tolerances``, the products along the normal and
+    tangent formed once for all of them."""
     if separation is None:
         separation = core_separation(core_a, core_b)
-    apart, normal, closest_a, closest_b = separation  # apart: the cores' separation (m)
+    tangent = _tangent(separation[1])
+    along_normal_a = (core_a @ separation[1]).tolist()
+    along_normal_b = (core_b @ separation[1]).tolist()
+    intervals_a: dict = {}
+    intervals_b: dict = {}
+    return [_core_contact(core_a, radius_a, core_b, radius_b, tolerance, separation, tangent,
+                          along_normal_a, along_normal_b, intervals_a, intervals_b)
+            for tolerance in tolerances]
 
-    tangent = _tangent(normal)
-    along_normal_a, along_normal_b = (core_a @ normal).tolist(), (core_b @ normal).tolist()
-    a_lo, a_hi = _support_interval(core_a, normal, tangent, +1, tolerance, along_normal_a)
-    b_lo, b_hi = _support_interval(core_b, normal, tangent, -1, tolerance, along_normal_b)
+
+def _core_contact(core_a, radius_a, core_b, radius_b, tolerance, separation, tangent,
+                  along_normal_a, along_normal_b, intervals_a, intervals_b) -> Contact:
+    apart, normal, closest_a, closest_b = separation  # apart: the cores' separation (m)
+    a_lo, a_hi = _support_interval(core_a, normal, tangent, +1, tolerance, along_normal_a,
+                                   intervals_a)
+    b_lo, b_hi = _support_interval(core_b, normal, tangent, -1, tolerance, along_normal_b,
+                                   intervals_b)
     low, high = max(a_lo, b_lo), min(a_hi, b_hi)
     point_count = 2 if high - low > tolerance else 1
 

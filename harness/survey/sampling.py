@@ -291,10 +291,9 @@ def draw_scene(population: Population, rng):
         turned_b, radius_b = geometry.turned_core(body_b)
         start = 2.0 * (_extent(body_a) + _extent(body_b)) + 1e-3  # surely apart
         position, core_b, separation = _touch(core_a, radius_a, turned_b, radius_b, start, unit)
-        exact = geometry.core_contact(core_a, radius_a, core_b, radius_b,
-                                      separation=separation)
-        one_point = geometry.core_contact(core_a, radius_a, core_b, radius_b,
-                                          ONE_POINT_TOLERANCE, separation)
+        exact, one_point = geometry.core_contacts(
+            core_a, radius_a, core_b, radius_b,
+            (geometry.DEFAULT_TOLERANCE, ONE_POINT_TOLERANCE), separation)
         body_b = body_b.moved(position=position,
                               velocity=_velocity(speed, direction, exact.normal))
         scene = Scene((body_a, body_b), float(e), float(mu), ground=False, name=population.name)
