@@ -29,6 +29,7 @@ All functions return :class:`harness.scene.Contact` with
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -76,17 +77,26 @@ def world_core(body: Body) -> tuple[np.ndarray, float]:
     return turned + np.asarray(body.position, dtype=float), radius
 
 
-def _edge_points(points: list) -> list[tuple[float, float, float, float]]:
+def _edges(points: list) -> list[tuple[float, ...]]:
     """The edges of a core given as a list of ``(x, y)``, each as ``(start x, start y, end x,
-    end y)``: a point gives one degenerate edge, a segment one edge, a polygon one per side."""
+    end y, Δx, Δy, |Δ|²)`` (``Δ`` = end − start): a point gives one degenerate edge, a
+    segment one edge, a polygon one per side. Worked out once per pair of cores, for every
+    test on them."""
     if len(points) <= 2:  # a point's degenerate edge, a segment's one edge
-        return [(*points[0], *points[-1])]
-    return [(*start, *end) for start, end in zip(points, points[1:] + points[:1])]
+        pairs = [(points[0], points[-1])]
+    else:
+        pairs = zip(points, points[1:] + points[:1])
+    edges = []
+    for (sx, sy), (ex, ey) in pairs:
+        dx, dy = ex - sx, ey - sy
+        edges.append((sx, sy, ex, ey, dx, dy, dx * dx + dy * dy))
+    return edges
 
 
-def _closest_pair(points_a: list, points_b: list) -> tuple[float, tuple, tuple]:
-    """The closest vertex-edge pair of two cores given as lists of ``(x, y)``:
-    ``(distance, point on A, point on B)``.
+def _closest_pair(points_a: list, points_b: list, edges_a: list,
+                  edges_b: list) -> tuple[float, tuple, tuple]:
+    """The closest vertex-edge pair of two cores given as lists of ``(x, y)`` and their
+    :func:`_edges`: ``(distance, point on A, point on B)``.
 
     Every vertex of A against every edge of B, then every vertex of B against every edge of
     A, keeping the first pair of least distance (exact for disjoint convex cores). On the
@@ -98,16 +108,18 @@ def _closest_pair(points_a: list, points_b: list) -> tuple[float, tuple, tuple]:
     """
     sqrt = math.sqrt
     best, on_a, on_b = math.inf, None, None
-    for vertices, edges, vertex_on_a in ((points_a, _edge_points(points_b), True),
-                                         (points_b, _edge_points(points_a), False)):
+    for vertices, edges, vertex_on_a in ((points_a, edges_b, True), (points_b, edges_a, False)):
         for x, y in vertices:
-            for sx, sy, ex, ey in edges:
-                dx, dy = ex - sx, ey - sy
-                length2 = dx * dx + dy * dy
+            for sx, sy, _, _, dx, dy, length2 in edges:
                 if length2 == 0.0:
                     cx, cy = sx, sy
                 else:
-                    t = min(1.0, max(0.0, ((x - sx) * dx + (y - sy) * dy) / length2))
+                    # min(1.0, max(0.0, t)) without the calls: 0.0 unless t > 0.0 (NaN too)
+                    t = ((x - sx) * dx + (y - sy) * dy) / length2
+                    if not t > 0.0:
+                        t = 0.0
+                    elif not t < 1.0:
+                        t = 1.0
                     cx, cy = sx + t * dx, sy + t * dy
                 offset_x, offset_y = cx - x, cy - y
                 distance = sqrt(offset_x * offset_x + offset_y * offset_y)
@@ -117,41 +129,43 @@ def _closest_pair(points_a: list, points_b: list) -> tuple[float, tuple, tuple]:
     return best, on_a, on_b
 
 
-def _cross(ax: float, ay: float, bx: float, by: float) -> float:
-    return ax * by - ay * bx
-
-
-def _cores_intersect(points_a: list, points_b: list) -> bool:
-    """Whether two cores (lists of ``(x, y)``) cross: an edge of one properly crosses an edge
-    of the other (touching ends are found by the distance test), or a point of one lies
-    strictly inside the other (a counter-clockwise convex polygon of 3 or more points)."""
-    edges_b = _edge_points(points_b)
-    for a0x, a0y, a1x, a1y in _edge_points(points_a):
-        ux, uy = a1x - a0x, a1y - a0y
-        for b0x, b0y, b1x, b1y in edges_b:
-            vx, vy = b1x - b0x, b1y - b0y
-            if (_cross(ux, uy, b0x - a0x, b0y - a0y) * _cross(ux, uy, b1x - a0x, b1y - a0y) < 0.0
-                    and _cross(vx, vy, a0x - b0x, a0y - b0y)
-                    * _cross(vx, vy, a1x - b0x, a1y - b0y) < 0.0):
+def _cores_intersect(points_a: list, points_b: list, edges_a: list, edges_b: list) -> bool:
+    """Whether two cores (lists of ``(x, y)`` and their :func:`_edges`) cross: an edge of one
+    properly crosses an edge of the other (touching ends are found by the distance test), or
+    a point of one lies strictly inside the other (a counter-clockwise convex polygon of 3 or
+    more points)."""
+    for a0x, a0y, a1x, a1y, ux, uy, _ in edges_a:
+        for b0x, b0y, b1x, b1y, vx, vy, _ in edges_b:
+            # cross products u × (b − a0) and v × (a − b0), written out: a call per
+            # product cost more than the product
+            if ((ux * (b0y - a0y) - uy * (b0x - a0x)) * (ux * (b1y - a0y) - uy * (b1x - a0x))
+                    < 0.0
+                    and (vx * (a0y - b0y) - vy * (a0x - b0x))
+                    * (vx * (a1y - b0y) - vy * (a1x - b0x)) < 0.0):
                 return True
-    return _any_inside(points_a, points_b) or _any_inside(points_b, points_a)
+    return (_any_inside(points_a, points_b, edges_b)
+            or _any_inside(points_b, points_a, edges_a))
 
 
-def _any_inside(points: list, polygon: list) -> bool:
-    """Whether a point lies strictly inside a counter-clockwise convex ``polygon``."""
+def _any_inside(points: list, polygon: list, edges: list) -> bool:
+    """Whether a point lies strictly inside a counter-clockwise convex ``polygon`` (its
+    :func:`_edges` given)."""
     if len(polygon) < 3:
         return False
-    edges = _edge_points(polygon)
-    return any(all(_cross(ex - sx, ey - sy, x - sx, y - sy) > 0.0 for sx, sy, ex, ey in edges)
-               for x, y in points)
+    for x, y in points:
+        # the cross product Δ × ((x, y) − start) > 0.0 on every edge
+        for sx, sy, _, _, dx, dy, _ in edges:
+            if not dx * (y - sy) - dy * (x - sx) > 0.0:
+                break
+        else:
+            return True
+    return False
 
 
-def _axis_list(points: list) -> list[tuple[float, float]]:
-    """Unit normals (both signs) of the edges of a core given as a list of ``(x, y)``; none
-    for a point."""
+def _axis_list(edges: list) -> list[tuple[float, float]]:
+    """Unit normals (both signs) of a core's :func:`_edges`; none for a point."""
     axes = []
-    for sx, sy, ex, ey in _edge_points(points):
-        dx, dy = ex - sx, ey - sy
+    for _, _, _, _, dx, dy, _ in edges:
         length = math.hypot(dx, dy)
         if length > 0.0:
             normal = (dy / length, -dx / length)
@@ -165,33 +179,54 @@ def _tangent(normal: np.ndarray) -> np.ndarray:
 
 
 def _largest(values: list) -> float:
-    """``numpy.max`` of a list, to the bit: where the largest value is zero, numpy's own choice
-    between 0.0 and -0.0 (Python's ``max`` keeps the first, numpy not always)."""
+    """``numpy.max`` of a list, to the bit: where the largest value is zero and the list holds
+    zeros of both signs (or a NaN), numpy's own choice between 0.0 and -0.0 (Python's ``max``
+    keeps the first, numpy not always)."""
     largest = max(values)
-    return float(np.max(values)) if largest == 0.0 and len(values) > 1 else largest
+    if largest == 0.0 and len(values) > 1 and not _one_zero_sign(values):
+        return float(np.max(values))
+    return largest
 
 
 def _smallest(values: list) -> float:
     """``numpy.min`` of a list, to the bit (see :func:`_largest`)."""
     smallest = min(values)
-    return float(np.min(values)) if smallest == 0.0 and len(values) > 1 else smallest
+    if smallest == 0.0 and len(values) > 1 and not _one_zero_sign(values):
+        return float(np.min(values))
+    return smallest
+
+
+def _one_zero_sign(values: list) -> bool:
+    """Whether the zeros of ``values`` all have one sign and none is NaN: numpy's extreme is
+    then a zero of that sign, as Python's is (a ground body's lowest point lies at exactly
+    0.0, so most ground contacts would otherwise ask numpy, at ~10 µs a call)."""
+    signs = {math.copysign(1.0, value) for value in values if value == 0.0}
+    return len(signs) == 1 and all(value == value for value in values)
 
 
 def _support_interval(core, normal, tangent, side, tolerance,
-                      along_normal: list | None = None) -> tuple[float, float]:
+                      along_normal: list | None = None,
+                      intervals: dict | None = None) -> tuple[float, float]:
     """Tangential extent of the core points nearest the other body along ``normal``.
 
     ``side = +1`` for body A (its points furthest along ``normal``), ``-1`` for body B;
-    ``along_normal``: ``core @ normal`` as a list, when already known.
+    ``along_normal``: ``core @ normal`` as a list, when already known; ``intervals``: the
+    extents already found for this core and tangent, by their near points (another tolerance
+    mostly picks the same points).
     """
     if along_normal is None:
         along_normal = (core @ normal).tolist()
     heights = [side * value for value in along_normal]
     threshold = _largest(heights) - tolerance
     near = [index for index, height in enumerate(heights) if height >= threshold]
+    if intervals is not None and tuple(near) in intervals:
+        return intervals[tuple(near)]
     # The near points' own product (numpy rounds one point's and several points' differently).
     along = (core[near] @ tangent).tolist()
-    return _smallest(along), _largest(along)
+    interval = _smallest(along), _largest(along)
+    if intervals is not None:
+        intervals[tuple(near)] = interval
+    return interval
 
 
 # --------------------------------------------------------------------------------------------
@@ -234,17 +269,19 @@ def core_separation(core_a: np.ndarray, core_b: np.ndarray):
     the bodies is ``separation − radius_a − radius_b``.
     """
     points_a, points_b = core_a.tolist(), core_b.tolist()
-    scale = max(1.0, max(abs(value) for point in points_a + points_b for value in point))
+    scale = max(1.0, max(map(abs, itertools.chain.from_iterable(points_a + points_b))))
     touching_cores = 1e-12 * scale
 
-    distance, closest_a, closest_b = _closest_pair(points_a, points_b)
+    edges_a, edges_b = _edges(points_a), _edges(points_b)
+    distance, closest_a, closest_b = _closest_pair(points_a, points_b, edges_a, edges_b)
 
-    if distance > touching_cores and not _cores_intersect(points_a, points_b):
+    if distance > touching_cores and not _cores_intersect(points_a, points_b, edges_a,
+                                                          edges_b):
         normal = np.array([(closest_b[0] - closest_a[0]) / distance,
                            (closest_b[1] - closest_a[1]) / distance])
         return distance, normal, closest_a, closest_b
     # Cores touch or overlap: the separating axis of least penetration (<= 0).
-    axes = _axis_list(points_a) + _axis_list(points_b)
+    axes = _axis_list(edges_a) + _axis_list(edges_b)
     if not axes:  # two coincident points (concentric disks): no defined direction
         axes = [(0.0, 1.0)]
     # Each axis's products with both cores, as ``core @ axis`` would give them one at a time
@@ -263,14 +300,32 @@ def core_contact(core_a: np.ndarray, radius_a: float, core_b: np.ndarray, radius
                  tolerance: float = DEFAULT_TOLERANCE, separation=None) -> Contact:
     """:func:`body_contact` of two bodies given by their world cores and radii;
     ``separation``: :func:`core_separation` of these cores, when already known."""
+    return core_contacts(core_a, radius_a, core_b, radius_b, (tolerance,), separation)[0]
+
+
+def core_contacts(core_a: np.ndarray, radius_a: float, core_b: np.ndarray, radius_b: float,
+                  tolerances, separation=None) -> list[Contact]:
+    """:func:`core_contact` at each of ``tolerances``, the products along the normal and
+    tangent formed once for all of them."""
     if separation is None:
         separation = core_separation(core_a, core_b)
-    apart, normal, closest_a, closest_b = separation  # apart: the cores' separation (m)
+    tangent = _tangent(separation[1])
+    along_normal_a = (core_a @ separation[1]).tolist()
+    along_normal_b = (core_b @ separation[1]).tolist()
+    intervals_a: dict = {}
+    intervals_b: dict = {}
+    return [_core_contact(core_a, radius_a, core_b, radius_b, tolerance, separation, tangent,
+                          along_normal_a, along_normal_b, intervals_a, intervals_b)
+            for tolerance in tolerances]
 
-    tangent = _tangent(normal)
-    along_normal_a, along_normal_b = (core_a @ normal).tolist(), (core_b @ normal).tolist()
-    a_lo, a_hi = _support_interval(core_a, normal, tangent, +1, tolerance, along_normal_a)
-    b_lo, b_hi = _support_interval(core_b, normal, tangent, -1, tolerance, along_normal_b)
+
+def _core_contact(core_a, radius_a, core_b, radius_b, tolerance, separation, tangent,
+                  along_normal_a, along_normal_b, intervals_a, intervals_b) -> Contact:
+    apart, normal, closest_a, closest_b = separation  # apart: the cores' separation (m)
+    a_lo, a_hi = _support_interval(core_a, normal, tangent, +1, tolerance, along_normal_a,
+                                   intervals_a)
+    b_lo, b_hi = _support_interval(core_b, normal, tangent, -1, tolerance, along_normal_b,
+                                   intervals_b)
     low, high = max(a_lo, b_lo), min(a_hi, b_hi)
     point_count = 2 if high - low > tolerance else 1
 

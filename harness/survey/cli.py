@@ -169,14 +169,22 @@ def survey_scenes(populations, samples: int, seed: int) -> list:
 def sample_columns(every, terms, law_results, routh) -> dict:
     """Columns of ``samples.parquet`` (``every``: the samples, or their
     :class:`harness.survey.parts.SampleRow`)."""
-    keys = list(dict.fromkeys(key for sample in every for key in sample.parameters))
     columns = {
         "family": np.asarray([s.population for s in every]),
         "sample": np.asarray([s.index for s in every]),
         "attempts": np.asarray([s.attempts for s in every]),
     }
-    for key in keys:
-        columns[key] = np.asarray([float(s.parameters.get(key, np.nan)) for s in every])
+    # The drawn parameters, NaN where a sample has none of that name; the samples of one
+    # population draw the same names in the same order, so they fill the columns as a block.
+    blocks: dict[tuple, list[int]] = {}
+    for row, sample in enumerate(every):
+        blocks.setdefault(tuple(sample.parameters), []).append(row)
+    keys = list(dict.fromkeys(key for names in blocks for key in names))
+    columns.update((key, np.full(len(every), np.nan)) for key in keys)
+    for names, rows in blocks.items():
+        values = np.array([list(every[row].parameters.values()) for row in rows], dtype=float)
+        for place, key in enumerate(names):
+            columns[key][rows] = values[:, place]
     for key in ("mnn", "mnt", "mtt", "vn", "vt"):
         columns[key] = getattr(terms, key)
     columns.update(routh)

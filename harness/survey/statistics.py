@@ -115,6 +115,21 @@ def linear_quantile(ordered: list, q: float) -> float:
     return high - step * (1 - gamma) if gamma >= 0.5 else low + step * gamma
 
 
+def _sorted_codes(values) -> tuple[np.ndarray, np.ndarray]:
+    """``numpy.unique(values, return_inverse=True)`` of a column of few distinct texts: each
+    text coded in order of appearance by a dict, then the few codes ranked by sorting the
+    distinct texts (numpy sorts every row's text, ~5x the time)."""
+    array = np.asarray(values)
+    first_seen: dict = {}
+    codes = np.fromiter((first_seen.setdefault(value, len(first_seen))
+                         for value in array.tolist()), dtype=np.intp, count=len(array))
+    distinct = np.asarray(list(first_seen), dtype=array.dtype)
+    order = np.argsort(distinct, kind="stable")
+    rank = np.empty(len(order), dtype=np.intp)
+    rank[order] = np.arange(len(order))
+    return distinct[order], rank[codes]
+
+
 def statistics(runs: dict) -> dict:
     """Columns of ``statistics.parquet``: one row per engine × preset × family × Poisson type,
     plus a row per engine × preset × family over every type (``poisson_type`` = 0)."""
@@ -122,8 +137,7 @@ def statistics(runs: dict) -> dict:
     if not count:
         return {}
     # Each key column as codes in sorted order, so the groups come out sorted as tuples.
-    names, codes = zip(*(np.unique(np.asarray(runs[key]), return_inverse=True)
-                         for key in ("engine", "preset", "family")))
+    names, codes = zip(*(_sorted_codes(runs[key]) for key in ("engine", "preset", "family")))
     kinds = np.asarray(runs["poisson_type"]).astype(np.int64)
     kind_names, kind_codes = np.unique(np.concatenate([kinds, np.full(count, ALL_TYPES)]),
                                        return_inverse=True)
@@ -138,7 +152,7 @@ def statistics(runs: dict) -> dict:
     # Per run, once: one-impact or not, and each reason it fails (a run failing several
     # reasons counts under each); the reasons' texts are few, each split once.
     ok_runs = np.asarray(runs["status"]) == "ok"
-    texts, text_of = np.unique(np.asarray(runs["reasons"]), return_inverse=True)
+    texts, text_of = _sorted_codes(runs["reasons"])
     failing = [set(filter(None, text.split(","))) for text in texts.tolist()]
     fails = np.array([[name in names_ for names_ in failing] for name in verdicts.REASONS],
                      dtype=bool).reshape(len(verdicts.REASONS), len(texts))[:, text_of]

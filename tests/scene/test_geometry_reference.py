@@ -213,10 +213,42 @@ def test_ground_contacts_give_the_reference_contact():
 
 
 @pytest.mark.parametrize("values", [[0.0, -0.0], [-0.0, 0.0], [-0.0, 0.0, 0.0, -1.0],
-                                    [1.0, -0.0, 0.0, 0.0, -0.0], [-2.0, -0.0], [3.0, 3.0]])
+                                    [1.0, -0.0, 0.0, 0.0, -0.0], [-2.0, -0.0], [3.0, 3.0],
+                                    [0.0, 0.0, 1.0], [-0.0, 1.0, -0.0], [0.0, -1.0, 0.0],
+                                    [0.0, math.nan], [math.nan, 0.0, 0.5], [-0.0, math.nan],
+                                    [0.0, 2.0, 1.0, 0.0, 3.0, 0.0, 4.0, 5.0, 6.0, -0.0],
+                                    [-0.0] * 9 + [1.0], [0.0] * 17 + [-1.0]])
 def test_largest_and_smallest_keep_numpys_signed_zero(values):
     # World cores seldom hold -0.0 (the products that turn them add +0.0), so the random
     # cases above rarely reach the choice between zeros; it is checked here directly.
     assert np.float64(geometry._largest(values)).tobytes() == np.max(values).tobytes()
     assert np.float64(geometry._smallest(values)).tobytes() == np.min(values).tobytes()
 
+
+
+def test_contacts_at_several_tolerances_are_each_tolerances_reference_contact():
+    # core_contacts shares the support intervals of equal near points between tolerances:
+    # random pairs and faces lying flat (where the tolerances pick different near points),
+    # tolerances in either order.
+    rng = np.random.default_rng(404)
+    flat = 0
+    for index in range(1500):
+        if index % 2:
+            a = Body("a", random_shape(rng), 1.0, (0.0, 0.0), random_angle(rng))
+            position = rng.uniform(-1.0, 1.0, 2) * float(rng.choice([0.0, 0.1, 0.5, 1.0]))
+            b = Body("b", random_shape(rng), 1.0, (float(position[0]), float(position[1])),
+                     random_angle(rng))
+        else:
+            a = Body("a", Box(float(rng.uniform(0.2, 1.0)), 0.5), 1.0, (0.0, 0.0))
+            tilt = float(rng.choice([0.0, 1e-8, 1e-5, 1e-3]))
+            b = Body("b", Box(float(rng.uniform(0.1, 1.0)), 0.5), 1.0,
+                     (float(rng.uniform(-0.5, 0.5)), 0.5 + float(rng.choice([0.0, 1e-10]))),
+                     tilt)
+        core_a, radius_a = geometry.world_core(a)
+        core_b, radius_b = geometry.world_core(b)
+        for tolerances in ((1e-9, 1e-6, 1e-3), (1e-3, 1e-9)):
+            found = geometry.core_contacts(core_a, radius_a, core_b, radius_b, tolerances)
+            expected = [reference_body_contact(a, b, tolerance) for tolerance in tolerances]
+            assert [bits(contact) for contact in found] == [bits(e) for e in expected], (a, b)
+            flat += len({e.point_count for e in expected}) > 1
+    assert flat > 50  # the tolerances disagree on the point count often enough

@@ -3,6 +3,7 @@ the statistics on tables whose answers are known by construction."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -30,6 +31,59 @@ def test_contact_terms_match_the_delassus_terms_of_each_problem(survey_samples):
         got = (terms.mnn[row], terms.mnt[row], terms.mtt[row])
         assert got == pytest.approx(expected, rel=1e-12, abs=1e-12 * expected[0])
         assert terms.vn[row] == pytest.approx(float(problem.wn @ problem.u), rel=1e-12)
+
+
+def reference_contact_terms(samples) -> laws.ContactTerms:
+    """contact_terms as it was: each row's problem from geometry.impact_problem (the
+    builders), copied into the padded arrays."""
+    count = len(samples)
+    dofs = np.zeros(count, dtype=np.int64)
+    mass = np.ones((count, laws.WIDTH))
+    u, wn, wt = (np.zeros((count, laws.WIDTH)) for _ in range(3))
+    mu, e = np.empty(count), np.empty(count)
+    free_bodies = np.zeros(count, dtype=bool)
+    problems = []
+    for row, sample in enumerate(samples):
+        scene, contact = sample.scene, sample.contact
+        problem = geometry.impact_problem(scene, contact.point, contact.normal)
+        problems.append(problem)
+        free_bodies[row] = not scene.ground
+        size = len(problem.u)
+        dofs[row] = size
+        mass[row, :size] = np.diag(problem.mass_matrix)
+        u[row, :size], wn[row, :size], wt[row, :size] = problem.u, problem.wn, problem.wt
+        mu[row], e[row] = scene.friction, scene.restitution
+    mnn = np.sum(wn * wn / mass, axis=1)
+    mnt = np.sum(wn * wt / mass, axis=1)
+    mtt = np.sum(wt * wt / mass, axis=1)
+    vn, vt = np.sum(wn * u, axis=1), np.sum(wt * u, axis=1)
+    return laws.ContactTerms(dofs, mass, u, wn, wt, mnn, mnt, mtt, vn, vt, mu, e, free_bodies,
+                             tuple(problems))
+
+
+def test_contact_terms_are_the_builders_problems_bit_for_bit():
+    samples = [s for p in resolve_populations()
+               for s in sample_population(p, 60, seed=11).samples]
+    found, expected = laws.contact_terms(samples), reference_contact_terms(samples)
+    for field in dataclasses.fields(laws.ContactTerms):
+        if field.name == "problems":
+            continue
+        got, want = getattr(found, field.name), getattr(expected, field.name)
+        assert got.dtype == want.dtype and got.shape == want.shape, field.name
+        assert got.tobytes() == want.tobytes(), field.name
+    assert len(found.problems) == len(samples)
+    for got, want in zip(found.problems, expected.problems):
+        for name in ("mass_matrix", "wn", "wt", "u"):
+            a, b = getattr(got, name), getattr(want, name)
+            assert a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
+
+
+def test_contact_terms_refuse_a_zero_normal_as_the_builders_do(survey_samples):
+    sample = survey_samples[0]
+    flat = dataclasses.replace(sample, contact=dataclasses.replace(sample.contact,
+                                                                   normal=np.zeros(2)))
+    with pytest.raises(ValueError, match="finite non-zero"):
+        laws.contact_terms([survey_samples[1], flat])
 
 
 def test_batch_speeds_after_match_the_scalar_solver(survey_samples):
@@ -207,3 +261,35 @@ def test_statistics_are_the_per_group_numpy_statistics_to_the_bit():
     for key in expected:
         assert got[key].dtype == expected[key].dtype, key
         assert got[key].tobytes() == expected[key].tobytes(), key
+
+
+@pytest.mark.parametrize("values", [["b", "a", "c", "a", ""], [""], ["x"] * 5,
+                                    ["mujoco", "box2d", "pymunk", "pybullet"] * 50,
+                                    ["", "multi-contact", "clipped,multi-contact", "clipped"] * 7,
+                                    ["é", "e", "E", "ée"]])
+def test_sorted_codes_are_numpys_unique(values):
+    names, codes = statistics._sorted_codes(values)
+    expected_names, expected_codes = np.unique(np.asarray(values), return_inverse=True)
+    assert names.dtype == expected_names.dtype
+    assert names.tolist() == expected_names.tolist()
+    assert codes.tolist() == expected_codes.tolist()
+
+
+def test_sample_columns_hold_each_drawn_parameter_or_nan():
+    from harness.survey.cli import sample_columns
+    # Rows of every population interleaved (the survey's order is population by population):
+    # the blocks of equal names must land in their own rows.
+    sets = [sample_population(p, 5, seed=4).samples for p in resolve_populations()]
+    every = [sample for row in zip(*sets) for sample in row]
+    terms = laws.contact_terms(every)
+    law_results = laws.solve_laws(terms)
+    columns = sample_columns(every, terms, law_results, laws.routh_coordinates(terms))
+    # the columns as first written: every name in order of appearance, one value per sample
+    keys = list(dict.fromkeys(key for sample in every for key in sample.parameters))
+    found = [key for key in columns if key in keys]
+    assert found == keys
+    assert set(keys) > {"a.mass", "b.mass", "mass_ratio", "placement_deg", "b.sides"}
+    for key in keys:
+        expected = np.asarray([float(s.parameters.get(key, np.nan)) for s in every])
+        assert columns[key].dtype == expected.dtype
+        assert columns[key].tobytes() == expected.tobytes(), key

@@ -237,3 +237,47 @@ def test_cheap_draws_are_the_distributions_own():
             value = sampling._draw(distribution, fast)
             expected = distribution.draw(reference)
             assert type(value) is type(expected) and repr(value) == repr(expected)
+
+
+@pytest.mark.parametrize("seed", [0, 7, 2**32 - 1, 2**32, 2**70 + 3])
+def test_sample_generators_are_numpys_seeding_of_each_index(seed):
+    # Seeds of one and several 32-bit words, names of every length, ranges from 0, across
+    # the word boundary of 2**31 and past 2**32 (where the index takes two words).
+    for name in ("disk-disk", "box-on-box-face", ""):
+        for begin, end in ((0, 40), (2**31 - 2, 2**31 + 2), (2**32 - 2, 2**32 + 2)):
+            indices = []
+            for index, generator in sampling.sample_generators(seed, name, begin, end):
+                reference = sampling.sample_generator(seed, name, index)
+                assert generator.bit_generator.state == reference.bit_generator.state
+                assert generator.random(3).tolist() == reference.random(3).tolist()
+                indices.append(index)
+            assert indices == list(range(begin, end))
+
+
+def reference_sample_range(population, begin, end, seed):
+    """sample_range as it drew before sample_generators: numpy's own seeding per index."""
+    samples, rejections = [], {reason: 0 for reason in sampling.REJECTIONS}
+    for index in range(begin, end):
+        rng = sampling.sample_generator(seed, population.name, index)
+        for attempt in range(1, population.max_attempts + 1):  # noqa: B007 - read after
+            scene, contact, drawn, reason = sampling.draw_scene(population, rng)
+            if reason is None:
+                break
+            rejections[reason] += 1
+        samples.append((index, scene, contact, drawn, attempt))
+    return samples, rejections
+
+
+@pytest.mark.parametrize("name", [p.name for p in resolve_populations()])
+def test_sample_range_draws_the_samples_of_numpys_seeding(name):
+    population = resolve_populations([name])[0]
+    for seed, begin, end in ((0, 0, 150), (2026, 37, 90)):
+        expected, rejections = reference_sample_range(population, begin, end, seed)
+        found = sampling.sample_range(population, begin, end, seed)
+        assert found.rejections == rejections
+        assert len(found.samples) == len(expected)
+        for sample, (index, scene, contact, drawn, attempts) in zip(found.samples, expected):
+            assert sample.index == index and sample.attempts == attempts
+            assert repr(sample.scene) == repr(scene) and sample.scene == scene
+            assert contact_bits(sample.contact) == contact_bits(contact)
+            assert repr(sample.parameters) == repr(drawn)
