@@ -417,11 +417,17 @@ class SceneTerms:
 
 def prepare(scene, problem) -> SceneTerms:
     """The :class:`SceneTerms` of ``scene`` and its impact ``problem``."""
+    return _prepare(scene, problem, metrics.delassus(problem))
+
+
+def _prepare(scene, problem, delassus: tuple[float, float, float]) -> SceneTerms:
+    """:func:`prepare` with the scene's ``metrics.delassus`` given."""
     features = tuple(body_features(body.shape) for body in scene.bodies)
-    delassus = metrics.delassus(problem)
-    return SceneTerms(_scales(scene, problem, delassus[0], [f.extent for f in features]),
-                      delassus, metrics.ke_norm(problem.mass_matrix, problem.u), features,
-                      _one_feature(scene))
+    scales = _scales(scene, problem, delassus[0], [f.extent for f in features])
+    # Against the ground the frame-free norm is ke_norm(M, u) itself: not worked out twice.
+    norm_before = (scales.speed_norm if scene.ground
+                   else metrics.ke_norm(problem.mass_matrix, problem.u))
+    return SceneTerms(scales, delassus, norm_before, features, _one_feature(scene))
 
 
 def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = None,
@@ -499,7 +505,31 @@ def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = 
 
 def prepare_many(scenes: Sequence, problems: Sequence) -> list[SceneTerms]:
     """:func:`prepare` of every scene."""
-    return [prepare(scene, problem) for scene, problem in zip(scenes, problems, strict=True)]
+    return [_prepare(scene, problem, delassus) for scene, problem, delassus
+            in zip(scenes, problems, _delassus_many(problems), strict=True)]
+
+
+def _delassus_many(problems: Sequence) -> list[tuple[float, float, float]]:
+    """``metrics.delassus`` of every problem, its solves stacked by the mass matrix's size:
+    numpy's stacked solve makes the same LAPACK call per matrix as a single one, and each
+    product is the same 1-D product on the same operands, so the values are the same."""
+    found: list = [None] * len(problems)
+    sizes: dict[tuple[int, ...], list[int]] = {}
+    for row, problem in enumerate(problems):
+        sizes.setdefault(np.shape(problem.mass_matrix), []).append(row)
+    for shape, rows in sizes.items():
+        if len(shape) != 2:  # not a matrix: metrics.delassus says what is wrong
+            for row in rows:
+                found[row] = metrics.delassus(problems[row])
+            continue
+        matrices = np.array([problems[row].mass_matrix for row in rows], dtype=float)
+        columns = np.array([np.stack([problems[row].wn, problems[row].wt], axis=1)
+                            for row in rows], dtype=float)
+        for row, inverse_w in zip(rows, np.linalg.solve(matrices, columns)):
+            wn, wt = problems[row].wn, problems[row].wt
+            wn_inv, wt_inv = inverse_w[:, 0], inverse_w[:, 1]
+            found[row] = float(wn @ wn_inv), float(wn @ wt_inv), float(wt @ wt_inv)
+    return found
 
 
 #: Columns of :class:`TermArrays` (two bodies × ``(v_x, v_y, ω)``; a ground scene is padded).

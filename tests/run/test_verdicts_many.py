@@ -120,3 +120,24 @@ def test_second_features_of_many_runs_are_each_runs(engine_name, preset, survey_
                 scenes[row], verdicts.ContactTrack.from_record(record), tolerances, bodies))
                 for row, record, bodies in zip(order, records, features)]
             assert verdicts._second_features_many(records, features, tolerances) == expected
+
+
+def _terms_bits(terms) -> tuple:
+    """Every number of a ``SceneTerms``, exactly (``repr`` of a float round-trips)."""
+    return (repr(terms.scales), repr(terms.delassus), repr(terms.norm_before),
+            terms.one_feature, [(body.centres.tobytes(), body.radius, body.names, body.extent)
+                                for body in terms.features])
+
+
+def test_prepare_many_is_prepare_scene_by_scene(survey_scenes):
+    """The stacked Delassus solves of ``prepare_many`` (one body against the ground and two
+    bodies mixed) give ``prepare``'s terms to the last bit."""
+    scenes, problems, _, prepared = survey_scenes
+    assert {len(problem.u) for problem in problems} == {3, 6}
+    expected = [_terms_bits(verdicts.prepare(scene, problem))
+                for scene, problem in zip(scenes, problems)]
+    assert [_terms_bits(terms) for terms in prepared] == expected
+    shuffled = np.random.default_rng(1).permutation(len(scenes)).tolist()
+    assert ([_terms_bits(terms) for terms in verdicts.prepare_many(
+        [scenes[row] for row in shuffled], [problems[row] for row in shuffled])]
+            == [expected[row] for row in shuffled])
