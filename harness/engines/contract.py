@@ -845,7 +845,11 @@ class Engine(abc.ABC):
                 if point[2] > max_penetration:  # noqa: PLR1730 - hot path
                     max_penetration = point[2]
             count = len(points)
-            if count > 1:
+            if count == 2:  # count_planar_points' two points (a prism's edge, in 3-D), inlined
+                (x, y, _), (a, b, _) = points
+                same = plan.same_point
+                count = 2 if abs(a - x) > same or abs(b - y) > same else 1
+            elif count > 2:
                 count = count_planar_points([(x, y) for x, y, _ in points], plan.same_point)
             if count > max_points:  # noqa: PLR1730 - hot path
                 max_points = count
@@ -1039,8 +1043,28 @@ def body_extent(shape) -> float:
         return float(shape.radius)
     if kind == "rod":
         return float(shape.length / 2.0 + shape.radius)
+    # A box's or polygon's costs µs of numpy, and every run, check and adapter asks for it:
+    # remembered per shape value (equal shapes, equal vertices, the same extent).
+    try:
+        return _EXTENTS[shape]
+    except KeyError:
+        pass
+    except TypeError:  # a shape that does not hash: worked out each time
+        return _vertex_extent(shape)
+    if len(_EXTENTS) >= _MAX_EXTENTS:
+        _EXTENTS.clear()
+    extent = _EXTENTS[shape] = _vertex_extent(shape)
+    return extent
+
+
+def _vertex_extent(shape) -> float:
+    """:func:`body_extent` of a shape with vertices (a box or polygon)."""
     vertices = shape.vertices()
     return float(np.max(np.hypot(vertices[:, 0], vertices[:, 1])))
+
+
+_EXTENTS: dict = {}  # box or polygon -> its body_extent
+_MAX_EXTENTS = 4096  # shapes remembered; emptied when full (a survey samples thousands)
 
 
 def geometry_key(scene: Scene) -> tuple:

@@ -417,11 +417,17 @@ class SceneTerms:
 
 def prepare(scene, problem) -> SceneTerms:
     """The :class:`SceneTerms` of ``scene`` and its impact ``problem``."""
+    return _prepare(scene, problem, metrics.delassus(problem))
+
+
+def _prepare(scene, problem, delassus: tuple[float, float, float]) -> SceneTerms:
+    """:func:`prepare` with the scene's ``metrics.delassus`` given."""
     features = tuple(body_features(body.shape) for body in scene.bodies)
-    delassus = metrics.delassus(problem)
-    return SceneTerms(_scales(scene, problem, delassus[0], [f.extent for f in features]),
-                      delassus, metrics.ke_norm(problem.mass_matrix, problem.u), features,
-                      _one_feature(scene))
+    scales = _scales(scene, problem, delassus[0], [f.extent for f in features])
+    # Against the ground the frame-free norm is ke_norm(M, u) itself: not worked out twice.
+    norm_before = (scales.speed_norm if scene.ground
+                   else metrics.ke_norm(problem.mass_matrix, problem.u))
+    return SceneTerms(scales, delassus, norm_before, features, _one_feature(scene))
 
 
 def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = None,
@@ -499,7 +505,31 @@ def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = 
 
 def prepare_many(scenes: Sequence, problems: Sequence) -> list[SceneTerms]:
     """:func:`prepare` of every scene."""
-    return [prepare(scene, problem) for scene, problem in zip(scenes, problems, strict=True)]
+    return [_prepare(scene, problem, delassus) for scene, problem, delassus
+            in zip(scenes, problems, _delassus_many(problems), strict=True)]
+
+
+def _delassus_many(problems: Sequence) -> list[tuple[float, float, float]]:
+    """``metrics.delassus`` of every problem, its solves stacked by the mass matrix's size:
+    numpy's stacked solve makes the same LAPACK call per matrix as a single one, and each
+    product is the same 1-D product on the same operands, so the values are the same."""
+    found: list = [None] * len(problems)
+    sizes: dict[tuple[int, ...], list[int]] = {}
+    for row, problem in enumerate(problems):
+        sizes.setdefault(np.shape(problem.mass_matrix), []).append(row)
+    for shape, rows in sizes.items():
+        if len(shape) != 2:  # not a matrix: metrics.delassus says what is wrong
+            for row in rows:
+                found[row] = metrics.delassus(problems[row])
+            continue
+        matrices = np.array([problems[row].mass_matrix for row in rows], dtype=float)
+        columns = np.array([np.stack([problems[row].wn, problems[row].wt], axis=1)
+                            for row in rows], dtype=float)
+        for row, inverse_w in zip(rows, np.linalg.solve(matrices, columns)):
+            wn, wt = problems[row].wn, problems[row].wt
+            wn_inv, wt_inv = inverse_w[:, 0], inverse_w[:, 1]
+            found[row] = float(wn @ wn_inv), float(wn @ wt_inv), float(wt @ wt_inv)
+    return found
 
 
 #: Columns of :class:`TermArrays` (two bodies × ``(v_x, v_y, ω)``; a ground scene is padded).
@@ -669,14 +699,11 @@ def judge_many(scenes: Sequence, problems: Sequence, runs: Sequence, u_after: np
         fails["energy-gain"] = gains
     batched &= ~near
     checked = {name: flags.tolist() for name, flags in fails.items()}
-    tracks = {}
-    for row in np.flatnonzero(batched & ~arrays.one_feature).tolist():
-        track = ContactTrack.from_record(runs[row].contact_record)
-        if track.size >= 2:
-            tracks[row] = track
+    featured = np.flatnonzero(batched & ~arrays.one_feature).tolist()
     checked["multi-contact"] = [False] * count
-    for row, second in zip(tracks, _second_features_many(
-            list(tracks.values()), [terms[row].features for row in tracks], tol)):
+    for row, second in zip(featured, _second_features_many(
+            [runs[row].contact_record for row in featured],
+            [terms[row].features for row in featured], tol)):
         checked["multi-contact"][row] = second
     results = []
     for row, run in enumerate(runs):
@@ -937,54 +964,98 @@ def _second_features(scene, contacts: Sequence[StepContacts] | ContactTrack,
                    "was at " + (names[then] if then >= 0 else "a face") + ")")]
 
 
-def _second_features_many(tracks: Sequence[ContactTrack],
+def _records_many(contact_records: Sequence) -> tuple[np.ndarray, ...]:
+    """Many runs' raw contact records ``(shift, raw)`` (``EngineRun.contact_record``) as flat
+    arrays in the scene frame, read in a few passes over all of them (not run by run).
+
+    Returns ``(poses, points, record_of_point, run_of_record, run_of_point, point_counts)``:
+    ``poses`` ``(R, 2, 3)`` every record's bodies' ``(x, y, θ)`` (a one-body run's second
+    body NaN), ``points`` ``(P, 3)`` every point's ``(x, y, depth)``, run by run and record by
+    record in order, the record (row of ``poses``) and run of each point, the run of each
+    record, and ``(runs,)`` each run's number of points. The numbers of :class:`ContactTrack`
+    (the same subtraction of each run's shift).
+    """
+    raws = [raw for _, raw in contact_records]
+    record_counts = np.fromiter(map(len, raws), np.int64, len(raws))
+    every = list(chain.from_iterable(raws))
+    point_lists = [contacts[0] for _, contacts, _ in every]
+    pose_lists = [poses for _, _, poses in every]
+    per_record = np.fromiter(map(len, point_lists), np.int64, len(every))
+    total = int(per_record.sum())
+    # every point is (x, y, depth) and every pose (x, y, θ): each read as one flat run
+    points = np.fromiter(chain.from_iterable(chain.from_iterable(point_lists)), float,
+                         3 * total).reshape(-1, 3)
+    bodies = np.fromiter(map(len, pose_lists), np.int64, len(every))
+    rows = np.fromiter(chain.from_iterable(chain.from_iterable(pose_lists)), float,
+                       3 * int(bodies.sum())).reshape(-1, 3)
+    run_of_record = np.repeat(np.arange(len(raws)), record_counts)
+    record_of_point = np.repeat(np.arange(len(every)), per_record)
+    run_of_point = run_of_record[record_of_point]
+    shifts = np.array([shift for shift, _ in contact_records], dtype=float).reshape(-1, 2)
+    points[:, :2] -= shifts[run_of_point]
+    record_of_row = np.repeat(np.arange(len(every)), bodies)
+    rows[:, :2] -= shifts[run_of_record[record_of_row]]
+    first_rows = np.cumsum(bodies) - bodies
+    poses = np.full((len(every), 2, 3), np.nan)
+    poses[record_of_row, np.arange(len(rows)) - first_rows[record_of_row]] = rows
+    point_counts = np.bincount(run_of_point, minlength=len(raws))
+    return poses, points, record_of_point, run_of_record, run_of_point, point_counts
+
+
+def _second_features_many(contact_records: Sequence,
                           features: Sequence[Sequence[BodyFeatures]],
                           tolerances: Tolerances) -> list[bool]:
     """Whether :func:`_second_features` finds a second feature, for many runs at once
-    (``tracks[i]`` of a scene whose bodies have ``features[i]``).
+    (``contact_records[i]``, an ``EngineRun.contact_record``, of a scene whose bodies have
+    ``features[i]``).
 
     The arithmetic of :func:`_features_at`, operation for operation on the same operands
     (math's cos and sin per pose, the same ``(k, 2) @ (2, 2)`` products per pose), over the
-    points of every run whose body has ``k`` point features at once.
+    points of every run whose body has ``k`` point features at once. A run of fewer than two
+    points has no second one.
     """
-    if not tracks:
+    if not contact_records:
         return []
-    arrays = [track._read() for track in tracks]
-    counts = np.array([len(points) for _, _, points, _ in arrays])
-    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    total = int(counts.sum())
-    touched = np.full((total, 2), -1, dtype=np.int64)
+    (poses, points, record_of_point, run_of_record, run_of_point,
+     counts) = _records_many(contact_records)
+    if not len(points):
+        return [False] * len(contact_records)
+    touched = np.full((len(points), 2), -1, dtype=np.int64)
+    eligible = counts >= 2
     groups: dict[tuple[int, int], list[int]] = {}
-    for run, bodies in enumerate(features):
-        for body, feature in enumerate(bodies):
+    for run in np.flatnonzero(eligible).tolist():
+        for body, feature in enumerate(features[run]):
             if len(feature.centres):
                 groups.setdefault((body, len(feature.centres)), []).append(run)
+    depth = np.maximum(points[:, 2], 0.0)
     for (body, _), runs in groups.items():
-        poses = np.concatenate([arrays[run][1][:, body] for run in runs])
-        rotations = _rotations(poses)
-        records = [len(arrays[run][1]) for run in runs]
-        centres = np.repeat(np.stack([features[run][body].centres for run in runs]), records,
-                            axis=0)
-        pose_offsets = np.concatenate([[0], np.cumsum(records)[:-1]])
-        pose_of = np.concatenate([arrays[run][3] + offset
-                                  for run, offset in zip(runs, pose_offsets)])
-        points = np.concatenate([arrays[run][2] for run in runs])
-        sizes = counts[runs]
-        radius = np.repeat([features[run][body].radius for run in runs], sizes)
-        reach = (np.repeat([tolerances.penetration * features[run][body].extent
-                            for run in runs], sizes) + np.maximum(points[:, 2], 0.0))
-        world = (centres @ rotations + poses[:, None, :2])[pose_of]
-        distances = np.hypot(world[:, :, 0] - points[:, None, 0],
-                             world[:, :, 1] - points[:, None, 1]) - radius[:, None]
+        in_group = np.zeros(len(contact_records), dtype=bool)
+        in_group[runs] = True
+        position = np.full(len(contact_records), -1, dtype=np.int64)
+        position[runs] = np.arange(len(runs))
+        records = in_group[run_of_record]
+        at = np.flatnonzero(in_group[run_of_point])
+        group_poses = poses[records, body]
+        rotations = _rotations(group_poses)
+        centres = np.stack([features[run][body].centres for run in runs])[
+            position[run_of_record[records]]]
+        pose_of = (np.cumsum(records) - 1)[record_of_point[at]]
+        group_points = points[at]
+        owner = position[run_of_point[at]]
+        radius = np.array([features[run][body].radius for run in runs])[owner]
+        reach = (np.array([tolerances.penetration * features[run][body].extent
+                           for run in runs])[owner] + depth[at])
+        world = (centres @ rotations + group_poses[:, None, :2])[pose_of]
+        distances = np.hypot(world[:, :, 0] - group_points[:, None, 0],
+                             world[:, :, 1] - group_points[:, None, 1]) - radius[:, None]
         within = distances.min(axis=1) <= reach
-        at = np.concatenate([np.arange(start, start + size)
-                             for start, size in zip(starts[runs], sizes)])
         touched[at, body] = np.where(within, np.argmin(distances, axis=1), -1)
-    run_of = np.repeat(np.arange(len(tracks)), counts)
-    first = touched[starts][run_of]
+    starts = np.cumsum(counts) - counts
+    first = touched[np.minimum(starts, max(len(points) - 1, 0))][run_of_point]
     other = (touched >= 0) & (touched != first)
-    other[starts] = False
-    return (np.bincount(run_of, weights=other.any(axis=1), minlength=len(tracks)) > 0).tolist()
+    other[starts[counts > 0]] = False
+    return ((np.bincount(run_of_point, weights=other.any(axis=1),
+                         minlength=len(contact_records)) > 0) & eligible).tolist()
 
 
 # --------------------------------------------------------------------------------------------

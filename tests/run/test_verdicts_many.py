@@ -97,3 +97,47 @@ def test_a_value_on_its_bound_is_left_to_judge(survey_scenes):
         expected = one_by_one(scenes, problems, runs, prepared, lcp, tolerances)
         assert verdicts.judge_many(scenes, problems, runs, speeds(runs), prepared, arrays,
                                    law_energy_change=lcp, tolerances=tolerances) == expected
+
+
+@pytest.mark.parametrize(("engine_name", "preset"), PAIRS)
+def test_second_features_of_many_runs_are_each_runs(engine_name, preset, survey_scenes):
+    """The batched second-feature check reads every run's raw records at once: the same
+    answer as the check of each run's own track, for every run (runs without contact and of
+    one point included), at the default tolerances and a tight penetration reach, and with
+    the runs shuffled (runs of one and of two bodies interleaved)."""
+    try:
+        engine = load_engine(engine_name)
+    except EngineNotInstalled as error:
+        pytest.skip(str(error))
+    scenes, _, _, prepared = survey_scenes
+    runs = engine.run_many(scenes, engine.settings(preset))
+    shuffled = np.random.default_rng(0).permutation(len(runs)).tolist()
+    for tolerances in (DEFAULT_TOLERANCES, Tolerances(penetration=1e-3)):
+        for order in (range(len(runs)), shuffled):
+            records = [runs[row].contact_record for row in order]
+            features = [prepared[row].features for row in order]
+            expected = [bool(verdicts._second_features(
+                scenes[row], verdicts.ContactTrack.from_record(record), tolerances, bodies))
+                for row, record, bodies in zip(order, records, features)]
+            assert verdicts._second_features_many(records, features, tolerances) == expected
+
+
+def _terms_bits(terms) -> tuple:
+    """Every number of a ``SceneTerms``, exactly (``repr`` of a float round-trips)."""
+    return (repr(terms.scales), repr(terms.delassus), repr(terms.norm_before),
+            terms.one_feature, [(body.centres.tobytes(), body.radius, body.names, body.extent)
+                                for body in terms.features])
+
+
+def test_prepare_many_is_prepare_scene_by_scene(survey_scenes):
+    """The stacked Delassus solves of ``prepare_many`` (one body against the ground and two
+    bodies mixed) give ``prepare``'s terms to the last bit."""
+    scenes, problems, _, prepared = survey_scenes
+    assert {len(problem.u) for problem in problems} == {3, 6}
+    expected = [_terms_bits(verdicts.prepare(scene, problem))
+                for scene, problem in zip(scenes, problems)]
+    assert [_terms_bits(terms) for terms in prepared] == expected
+    shuffled = np.random.default_rng(1).permutation(len(scenes)).tolist()
+    assert ([_terms_bits(terms) for terms in verdicts.prepare_many(
+        [scenes[row] for row in shuffled], [problems[row] for row in shuffled])]
+            == [expected[row] for row in shuffled])
