@@ -4,8 +4,8 @@ Sample ``i`` of population ``P`` at seed ``s`` is drawn from its own generator,
 ``numpy.random.default_rng([s, crc32(P.name), i])``: it does not depend on how many samples
 are asked for, nor on the other populations. :func:`sample_generators` puts one generator in
 those states for a range of samples, seeded as numpy seeds them but for every index at once
-(~5 µs of CPU per sample instead of numpy's ~20, a tenth of drawing a scene). A draw that
-fails a check is redrawn from the same generator and counted under its reason
+(numpy's own seeding costs ~130 µs per sample, more than half of drawing a scene). A draw
+that fails a check is redrawn from the same generator and counted under its reason
 (:data:`REJECTIONS`); nothing is dropped silently. The checks are a scenario point's
 (harness/scenarios/checks.py): the bodies touch (|gap| within the default gap tolerance), at
 one point (no second closest point within the one-point tolerance) and approach
