@@ -2,14 +2,11 @@
 
 Sample ``i`` of population ``P`` at seed ``s`` is drawn from its own generator,
 ``numpy.random.default_rng([s, crc32(P.name), i])``: it does not depend on how many samples
-are asked for, nor on the other populations. :func:`sample_generators` puts one generator in
-those states for a range of samples, seeded as numpy seeds them but for every index at once
-(numpy's own seeding costs ~130 µs per sample, more than half of drawing a scene). A draw
-that fails a check is redrawn from the same generator and counted under its reason
-(:data:`REJECTIONS`); nothing is dropped silently. The checks are a scenario point's
-(harness/scenarios/checks.py): the bodies touch (|gap| within the default gap tolerance), at
-one point (no second closest point within the one-point tolerance) and approach
-(``v_n < 0``).
+are asked for, nor on the other populations. A draw that fails a check is redrawn from the
+same generator and counted under its reason (:data:`REJECTIONS`); nothing is dropped
+silently. The checks are a scenario point's (harness/scenarios/checks.py): the bodies touch
+(|gap| within the default gap tolerance), at one point (no second closest point within the
+one-point tolerance) and approach (``v_n < 0``).
 
 Placement. A ground body is turned by its angle and lowered onto ``y = 0``. Body A of a
 two-body scene sits at the origin; body B is brought towards it along the placement
@@ -70,100 +67,6 @@ class SampleSet:
 def sample_generator(seed: int, population_name: str, index: int) -> np.random.Generator:
     """The generator of sample ``index`` (see the module docstring)."""
     return np.random.default_rng([int(seed), zlib.crc32(population_name.encode()), int(index)])
-
-
-# numpy's SeedSequence (numpy/random/bit_generator.pyx) and PCG64 seeding (pcg64.h) constants.
-_MASK32 = 0xFFFFFFFF
-_INIT_A, _MULT_A, _INIT_B, _MULT_B = 0x43B0D7E5, 0x931E8875, 0x8B51F9DD, 0x58F38DED
-_MIX_MULT_L, _MIX_MULT_R = 0xCA01F9DD, 0x4973F715
-_POOL_SIZE = 4
-_PCG_MULTIPLIER = (2549297995355413924 << 64) + 4865540595714422341
-_MASK128 = (1 << 128) - 1
-
-
-def _words(value: int) -> list[int]:
-    """A non-negative integer as SeedSequence takes it: 32-bit words, least significant first
-    (``[0]`` for 0)."""
-    words = [value & _MASK32]
-    value >>= 32
-    while value:
-        words.append(value & _MASK32)
-        value >>= 32
-    return words
-
-
-def _seed_states(entropy: list) -> list[tuple[int, int]]:
-    """PCG64's ``(state, inc)`` after ``PCG64(SeedSequence(words))``, for rows of entropy
-    words: ``entropy`` lists the words, each an int (the same in every row) or a uint64 array
-    of 32-bit values (one per row).
-
-    SeedSequence's hash constants advance the same way whatever the words, so the hashing
-    runs on whole columns; every product of two 32-bit values fits in 64 bits, and a
-    difference that wraps modulo 2**64 is still right modulo 2**32.
-    """
-    hash_const = _INIT_A
-
-    def hashmix(value):
-        nonlocal hash_const
-        value = value ^ hash_const
-        hash_const = (hash_const * _MULT_A) & _MASK32
-        value = (value * hash_const) & _MASK32
-        return value ^ (value >> 16)
-
-    def mix(x, y):
-        result = (_MIX_MULT_L * x - _MIX_MULT_R * y) & _MASK32
-        return result ^ (result >> 16)
-
-    pool = [hashmix(entropy[i] if i < len(entropy) else 0) for i in range(_POOL_SIZE)]
-    for source in range(_POOL_SIZE):
-        for target in range(_POOL_SIZE):
-            if source != target:
-                pool[target] = mix(pool[target], hashmix(pool[source]))
-    for source in range(_POOL_SIZE, len(entropy)):
-        for target in range(_POOL_SIZE):
-            pool[target] = mix(pool[target], hashmix(entropy[source]))
-    # generate_state(4, uint64): eight 32-bit words drawn from the pool in turn.
-    hash_const = _INIT_B
-    state_words = []
-    for position in range(8):
-        value = pool[position % _POOL_SIZE] ^ hash_const
-        hash_const = (hash_const * _MULT_B) & _MASK32
-        value = (value * hash_const) & _MASK32
-        state_words.append(np.asarray(value ^ (value >> 16), dtype=np.uint64))
-    rows = np.broadcast_arrays(*state_words)
-    states = []
-    for w0, w1, w2, w3, w4, w5, w6, w7 in zip(*(row.reshape(-1).tolist() for row in rows)):
-        # pcg64_set_seed: seed words (high, low) then increment words (high, low), and
-        # pcg_setseq_128_srandom_r: inc = 2·seq + 1, state = (inc + seed)·M + inc.
-        initial = ((w0 | w1 << 32) << 64) | (w2 | w3 << 32)
-        sequence = ((w4 | w5 << 32) << 64) | (w6 | w7 << 32)
-        inc = ((sequence << 1) | 1) & _MASK128
-        states.append((((inc + initial) * _PCG_MULTIPLIER + inc) & _MASK128, inc))
-    return states
-
-
-def sample_generators(seed: int, population_name: str, begin: int, end: int):
-    """For ``index`` from ``begin`` to ``end − 1``: ``(index, generator)``, the generator in
-    the state of :func:`sample_generator` ``(seed, population_name, index)``.
-
-    It is one generator, put in each index's state in turn: draw from it before the next.
-    """
-    prefix = [int(seed), zlib.crc32(population_name.encode())]
-    indices = range(begin, end)
-    if not indices:
-        return
-    if prefix[0] < 0 or end - 1 > _MASK32:  # numpy's error; words varying with the index
-        for index in indices:
-            yield index, sample_generator(seed, population_name, index)
-        return
-    columns = [word for value in prefix for word in _words(value)]
-    states = _seed_states(columns + [np.arange(begin, end, dtype=np.uint64)])
-    bit_generator = np.random.PCG64(0)
-    generator = np.random.Generator(bit_generator)
-    for index, (state, inc) in zip(indices, states):
-        bit_generator.state = {"bit_generator": "PCG64", "state": {"state": state, "inc": inc},
-                               "has_uint32": 0, "uinteger": 0}
-        yield index, generator
 
 
 def _draw(distribution, rng):
@@ -329,7 +232,8 @@ def sample_range(population: Population, begin: int, end: int, seed: int) -> Sam
     each from its own generator) and the draws they rejected. A :class:`ScenarioError` for a
     sample that needs too many draws carries its index as ``sample``."""
     result = SampleSet(population, seed)
-    for index, rng in sample_generators(seed, population.name, begin, end):
+    for index in range(begin, end):
+        rng = sample_generator(seed, population.name, index)
         reasons: dict[str, int] = {}
         for attempt in range(1, population.max_attempts + 1):  # noqa: B007 - read after the loop
             scene, contact, drawn, reason = draw_scene(population, rng)
