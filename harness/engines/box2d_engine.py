@@ -189,7 +189,6 @@ _get_angle = _B2.b2Body___GetAngle
 _get_linear_velocity = _B2.b2Body___GetLinearVelocity
 _get_angular_velocity = _B2.b2Body___GetAngularVelocity
 _body_contacts = _B2.b2Body___GetContactList_internal
-_world_contacts = _B2.b2World___GetContactList_internal
 _edge_contact = _B2.b2ContactEdge_contact_get
 _edge_next = _B2.b2ContactEdge_next_get
 _contact_next = _B2.b2Contact___GetNext
@@ -219,37 +218,84 @@ _CONTACT = struct.Struct("@8xI12xP64x2P8x2f2f4x2f2f4x2f2fiI")
 _TOUCHING = 0x0002  # b2Contact::e_touchingFlag
 
 
-def _state_in_memory(body, address: int) -> tuple:
-    """``(x, y, sin θ, cos θ, θ, v_x, v_y, ω)`` of a body now (its transform, its sweep's
-    angle, its velocities), read at its address."""
-    return _BODY.unpack(_string_at(address, _BODY.size))
+def _state_struct() -> struct.Struct:
+    """:data:`_BODY` and ``m_contactList`` in one read (a body's :func:`_state_in_memory`)."""
+    return struct.Struct(f"{_BODY.format}{_BODY_CONTACTS - _BODY.size}xP")
 
 
-def _state_by_getters(body, address: int) -> tuple:
-    """:func:`_state_in_memory` through pybox2d's getters."""
+# The structs are read in place, through a ctypes buffer over each (made once per address: a
+# buffer costs as much as ctypes.string_at, which copies; unpacking a buffer costs a third).
+def _buffer(address: int, size: int):
+    """Box2D's ``size`` bytes at ``address`` as a buffer ``struct`` unpacks in place."""
+    return (ctypes.c_char * size).from_address(address)
+
+
+class _Memory:
+    """The buffers (:func:`_buffer`) one readout reads Box2D's structs through.
+
+    ``body``: a body's state and contact list (:func:`_state_struct`), by the body's address
+    (:data:`_body_id`); ``edges``, ``contacts``: b2ContactEdge and b2Contact by address.
+    Contacts come and go, but Box2D's block allocator gives a freed contact's memory only to
+    another contact and keeps it until its world goes: a kept buffer reads a contact that is
+    listed now (only listed addresses are read). The buffers live as long as the readout,
+    which does not outlive its world's bodies.
+    """
+
+    __slots__ = ("bodies", "contacts", "edges", "state")
+
+    def __init__(self) -> None:
+        self.state = _state_struct()
+        self.bodies: dict[int, object] = {}
+        self.edges: dict[int, object] = {}
+        self.contacts: dict[int, object] = {}
+
+    def body(self, address: int):
+        buffer = self.bodies.get(address)
+        if buffer is None:
+            buffer = self.bodies[address] = _buffer(address, self.state.size)
+        return buffer
+
+
+def _state_in_memory(body, address: int, memory: _Memory) -> tuple:
+    """``(x, y, sin θ, cos θ, θ, v_x, v_y, ω, contact list)`` of a body now (its transform,
+    its sweep's angle, its velocities, the address of its first b2ContactEdge), read at its
+    address."""
+    return memory.state.unpack_from(memory.body(address))
+
+
+def _state_by_getters(body, address: int, memory: _Memory) -> tuple:
+    """:func:`_state_in_memory` through pybox2d's getters (the contact list left 0)."""
     transform = _get_transform(body)
     position, rotation = _get_position(transform), _get_rotation(transform)
     velocity = _get_linear_velocity(body)
     return (position.x, position.y, rotation.s, rotation.c, _get_angle(body), velocity.x,
-            velocity.y, _get_angular_velocity(body))
+            velocity.y, _get_angular_velocity(body), 0)
 
 
-def _touching_in_memory(body, address: int) -> list:
+def _touching_in_memory(body, state: tuple, memory: _Memory) -> list:
     """The touching contacts of a body as :data:`_CONTACT` tuples, oldest first (the order
     of pybox2d's ``body.contacts``, which reverses Box2D's list: a new contact goes to its
-    head), read at the body's address."""
+    head); ``state``: the body's :func:`_state_in_memory` now (its contact list)."""
     touching = []
-    (edge,) = _POINTER.unpack(_string_at(address + _BODY_CONTACTS, _POINTER.size))
+    edges, contacts = memory.edges, memory.contacts
+    edge_struct, contact_struct = _EDGE, _CONTACT
+    edge = state[8]
     while edge:
-        contact, edge = _EDGE.unpack(_string_at(edge, _EDGE.size))
-        values = _CONTACT.unpack(_string_at(contact, _CONTACT.size))
+        buffer = edges.get(edge)
+        if buffer is None:
+            buffer = edges[edge] = _buffer(edge, edge_struct.size)
+        contact, edge = edge_struct.unpack_from(buffer)
+        buffer = contacts.get(contact)
+        if buffer is None:
+            buffer = contacts[contact] = _buffer(contact, contact_struct.size)
+        values = contact_struct.unpack_from(buffer)
         if values[0] & _TOUCHING:
             touching.append(values)
     touching.reverse()
     return touching
 
 
-def _touching_by_getters(body, address: int) -> list:
+def _touching_by_getters(body, state: tuple, memory: _Memory) -> list:
     """:func:`_touching_in_memory` through pybox2d's getters."""
     touching = []
     edge = _body_contacts(body)
@@ -258,33 +304,6 @@ def _touching_by_getters(body, address: int) -> list:
         if _is_touching(contact):
             touching.append(_contact_values(contact))
         edge = _edge_next(edge)
-    touching.reverse()
-    return touching
-
-
-def _world_touching_in_memory(world) -> list:
-    """The touching contacts of a b2World as :data:`_CONTACT` tuples, oldest first (as
-    pybox2d's ``world.contacts``)."""
-    touching = []
-    head = _world_contacts(world)
-    contact = 0 if head is None else int(head.this)
-    while contact:
-        values = _CONTACT.unpack(_string_at(contact, _CONTACT.size))
-        if values[0] & _TOUCHING:
-            touching.append(values)
-        contact = values[1]
-    touching.reverse()
-    return touching
-
-
-def _world_touching_by_getters(world) -> list:
-    """:func:`_world_touching_in_memory` through pybox2d's getters."""
-    touching = []
-    contact = _world_contacts(world)
-    while contact is not None:
-        if _is_touching(contact):
-            touching.append(_contact_values(contact))
-        contact = _contact_next(contact)
     touching.reverse()
     return touching
 
@@ -329,8 +348,11 @@ def _layout_matches() -> bool:
         body.linearVelocity, body.angularVelocity = (0.75, -3.0), 0.5
         world.Step(1.0 / 60.0, 8, 3)
         address = _body_id(body)
-        if (address != int(body.this)
-                or _state_in_memory(body, address) != _state_by_getters(body, address)):
+        if address != int(body.this):
+            return False
+        memory = _Memory()
+        state = _BODY.unpack(_string_at(address, _BODY.size))
+        if state != _state_by_getters(body, address, memory)[:8]:
             return False
         (edge,) = _POINTER.unpack(_string_at(address + _BODY_CONTACTS, _POINTER.size))
         first = _body_contacts(body)
@@ -345,18 +367,19 @@ def _layout_matches() -> bool:
         if values[1] != 0 or _contact_next(swig_contact) is not None:
             return False
         expected = _contact_values(swig_contact)
+        in_place = _state_in_memory(body, address, memory)
         return (values[0] & _TOUCHING == _TOUCHING and expected[17] == 2
                 and _used(values) == _used(expected)
-                and _touching_in_memory(body, address) == [values]
-                and _world_touching_in_memory(world) == [values])
+                and in_place == (*state, edge)
+                and _touching_in_memory(body, in_place, memory) == [values])
     except (ValueError, TypeError, AttributeError, IndexError, struct.error):
         return False
 
 
 _IN_MEMORY = _layout_matches()
-#: ``(state, touching of a body, touching of a world)``: the readers in use.
-_READERS = ((_state_in_memory, _touching_in_memory, _world_touching_in_memory) if _IN_MEMORY
-            else (_state_by_getters, _touching_by_getters, _world_touching_by_getters))
+#: ``(state, touching of a body)``: the readers in use.
+_READERS = ((_state_in_memory, _touching_in_memory) if _IN_MEMORY
+            else (_state_by_getters, _touching_by_getters))
 
 
 def _pose(body) -> tuple[float, float, float, float]:
@@ -374,13 +397,14 @@ class _Readout:
     step's contacts are collided at its start, and their geometry needs those poses; the
     ground's pose, read once, never changes); ``now``: the scene's poses ``(x, y, θ)`` now,
     what ``_read_poses`` returns; ``states``: every body's :func:`_state_in_memory` now.
-    :meth:`read` refreshes them after a step, so the bodies are read once a step (the next
-    step starts where this one ended). ``fixtures``: every fixture's userData by its address;
-    ``by_id``: every body, the ground's included, by :data:`_body_id`.
+    :meth:`read` refreshes them after placing the bodies and :meth:`read_step` after a step,
+    so the bodies are read once a step (the next step starts where this one ended).
+    ``fixtures``: every fixture's userData by its address; ``by_id``: every body, the
+    ground's included, by :data:`_body_id`; ``memory``: the readers' buffers.
     """
 
     __slots__ = ("bodies", "body_b", "body_b_id", "by_id", "dynamic", "fixtures", "length",
-                 "now", "start", "states")
+                 "memory", "now", "start", "states")
 
     def __init__(self, bodies: list, static: list, fixtures: list, length: float) -> None:
         self.bodies, self.body_b, self.length = bodies, bodies[-1], length
@@ -390,19 +414,33 @@ class _Readout:
         self.by_id = {key: b2_body for b2_body, key in self.dynamic}
         self.by_id.update((_body_id(b2_body), b2_body) for b2_body in static)
         self.fixtures = {int(fixture.this): fixture.userData for fixture in fixtures}
+        self.memory = _Memory()
         self.now: tuple = ()
         self.states: list = []
 
     def read(self) -> None:
-        """Read the bodies now (after placing them, and after every step)."""
-        length, start, state_of = self.length, self.start, _READERS[0]
-        now, states = [], []
-        for b2_body, key in self.dynamic:
-            state = state_of(b2_body, key)
+        """Read the bodies now (after placing them)."""
+        state_of, memory = _READERS[0], self.memory
+        self._take([state_of(b2_body, key, memory) for b2_body, key in self.dynamic])
+
+    def read_step(self) -> RawContacts | None:
+        """After a step: its contact (:func:`_contact_of`: body B's touching contacts, at the
+        poses the step started from), then the bodies now (as :meth:`read`)."""
+        state_of, memory = _READERS[0], self.memory
+        states = [state_of(b2_body, key, memory) for b2_body, key in self.dynamic]
+        # Every contact of an impact involves its body B (the ground's partner or the other
+        # body, the last one); the body's list keeps the world's order of them.
+        raw = _contact_of(_READERS[1](self.body_b, states[-1], memory), self)
+        self._take(states)
+        return raw
+
+    def _take(self, states: list) -> None:
+        length, start = self.length, self.start
+        now = []
+        for (_, key), state in zip(self.dynamic, states):
             x, y, sin, cos, angle = state[:5]
             start[key] = (x, y, cos, sin)
             now.append((x / length, y / length, angle))
-            states.append(state)
         self.now, self.states = tuple(now), states
 
 
@@ -709,8 +747,9 @@ def _approach_speed(values: tuple, view: _Readout) -> float:
     _, radius_a, body_a_id = view.fixtures[values[2]]
     _, radius_b, body_b_id = view.fixtures[values[3]]
     body_a, body_b = view.by_id[body_a_id], view.by_id[body_b_id]
-    x_a, y_a, sin_a, cos_a = _READERS[0](body_a, body_a_id)[:4]  # the poses now
-    x_b, y_b, sin_b, cos_b = _READERS[0](body_b, body_b_id)[:4]
+    memory = view.memory
+    x_a, y_a, sin_a, cos_a = _READERS[0](body_a, body_a_id, memory)[:4]  # the poses now
+    x_b, y_b, sin_b, cos_b = _READERS[0](body_b, body_b_id, memory)[:4]
     normal, points = _manifold_geometry(values, (x_a, y_a, cos_a, sin_a),
                                         (x_b, y_b, cos_b, sin_b), radius_a, radius_b)
     fastest = 0.0
@@ -916,10 +955,7 @@ class Box2DEngine(Engine):
             world.notes = _speed_results(world.derived, probe.speed, world.velocity,
                                          world.restitution)
             world.world.contactListener = world.speed_probe = None
-        # At the step's start poses, before read() moves them on (to the records' poses now
-        # and the next step's start).
-        raw = _contact_of(_READERS[2](world.world), world)
-        world.read()
+        raw = world.read_step()
         if not world.clipped:
             world.clipped = _states_at_cap(world.states, world.dt, _CAP_BAND)
         return raw
@@ -1016,15 +1052,11 @@ class Box2DEngine(Engine):
                 if index in stepping:
                     world.Step(dt, *iterations)
         contacts = {}
-        touching_of = _READERS[1]
         for slot in active:
             view = slots[slot]
-            # Every contact of an impact involves its body B (the ground's partner or the
-            # other body); the body's list keeps the world's order of them.
-            raw = _contact_of(touching_of(view.body_b, view.body_b_id), view)
+            raw = view.read_step()
             if raw is not None:
                 contacts[slot] = raw
-            view.read()
             if not view.clipped:
                 view.clipped = _states_at_cap(view.states, view.dt, _CAP_BAND)
         if batch.listeners:
@@ -1051,8 +1083,8 @@ class Box2DEngine(Engine):
         velocity, rate = world.velocity, world.length / world.velocity
         # Read after the step (_Readout.read): the loop reads velocities only then, and
         # the batch's _finish comes before _retire stops the bodies.
-        return tuple((vx / velocity, vy / velocity, omega * rate)
-                     for _, _, _, _, _, vx, vy, omega in world.states)
+        return tuple((state[5] / velocity, state[6] / velocity, state[7] * rate)
+                     for state in world.states)
 
     def _run_notes(self, world: _World) -> tuple[str, ...]:
         if world.clipped:

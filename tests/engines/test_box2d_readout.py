@@ -21,8 +21,7 @@ from harness.survey.population import resolve_populations
 from harness.survey.sampling import sample_population
 
 SAMPLES = 8  # per population: 56 impacts, two batches
-GETTERS = (box2d_engine._state_by_getters, box2d_engine._touching_by_getters,
-           box2d_engine._world_touching_by_getters)
+GETTERS = (box2d_engine._state_by_getters, box2d_engine._touching_by_getters)
 
 
 @pytest.fixture(scope="module")
@@ -74,18 +73,21 @@ def test_states_and_contacts_read_in_memory_are_the_getters(population_scenes):
         engine._reset(world, plan.prepared)
         for _ in range(3):
             engine._step(world)
+            memory = box2d_engine._Memory()  # fresh buffers: none made before this step
             for b2_body, address in world.dynamic:
-                assert (box2d_engine._state_in_memory(b2_body, address)
-                        == box2d_engine._state_by_getters(b2_body, address))
-                assert ([box2d_engine._used(values) for values in
-                         box2d_engine._touching_in_memory(b2_body, address)]
+                state = box2d_engine._state_in_memory(b2_body, address, memory)
+                assert state[:8] == box2d_engine._state_by_getters(b2_body, address, memory)[:8]
+                touching = box2d_engine._touching_in_memory(b2_body, state, memory)
+                assert ([box2d_engine._used(values) for values in touching]
                         == [box2d_engine._used(values) for values in
-                            box2d_engine._touching_by_getters(b2_body, address)])
-            touching = box2d_engine._world_touching_in_memory(world.world)
-            assert ([box2d_engine._used(values) for values in touching]
-                    == [box2d_engine._used(values) for values in
-                        box2d_engine._world_touching_by_getters(world.world)])
-            compared += len(touching)
+                            box2d_engine._touching_by_getters(b2_body, state, memory)])
+                compared += len(touching)
+            # The world's contacts are its body B's (the readout walks that body's list).
+            assert ([box2d_engine._used(values) for values in box2d_engine._touching_in_memory(
+                world.body_b, box2d_engine._state_in_memory(world.body_b, world.body_b_id,
+                                                            memory), memory)]
+                    == [box2d_engine._used(box2d_engine._contact_values(contact))
+                        for contact in world.world.contacts if contact.touching])
     assert compared > 0
 
 
