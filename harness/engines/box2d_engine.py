@@ -382,18 +382,12 @@ _READERS = ((_state_in_memory, _touching_in_memory) if _IN_MEMORY
             else (_state_by_getters, _touching_by_getters))
 
 
-def _pose(body) -> tuple[float, float, float, float]:
-    """``(x, y, cos θ, sin θ)`` of a Box2D body's transform now."""
-    transform = _get_transform(body)
-    position, rotation = _get_position(transform), _get_rotation(transform)
-    return position.x, position.y, rotation.c, rotation.s
-
-
 class _Readout:
     """What the readout keeps of one impact's bodies and fixtures (a :class:`_World`'s and
     a :class:`_Slot`'s base).
 
-    ``start``: every body's :func:`_pose` by :data:`_body_id` when the next step begins (a
+    ``start``: every body's pose ``(x, y, cos θ, sin θ)`` by :data:`_body_id` when the next
+    step begins (a
     step's contacts are collided at its start, and their geometry needs those poses; the
     ground's pose, read once, never changes); ``now``: the scene's poses ``(x, y, θ)`` now,
     what ``_read_poses`` returns; ``states``: every body's :func:`_state_in_memory` now.
@@ -410,11 +404,15 @@ class _Readout:
         self.bodies, self.body_b, self.length = bodies, bodies[-1], length
         self.body_b_id = _body_id(self.body_b)
         self.dynamic = [(b2_body, _body_id(b2_body)) for b2_body in bodies]
-        self.start = {_body_id(b2_body): _pose(b2_body) for b2_body in static}
         self.by_id = {key: b2_body for b2_body, key in self.dynamic}
-        self.by_id.update((_body_id(b2_body), b2_body) for b2_body in static)
         self.fixtures = {int(fixture.this): fixture.userData for fixture in fixtures}
         self.memory = _Memory()
+        self.start = {}
+        for b2_body in static:
+            key = _body_id(b2_body)
+            self.by_id[key] = b2_body
+            x, y, sin, cos = _READERS[0](b2_body, key, self.memory)[:4]
+            self.start[key] = (x, y, cos, sin)
         self.now: tuple = ()
         self.states: list = []
 
@@ -445,11 +443,29 @@ class _Readout:
 
 
 # ---------------------------------------------------------------------- world building
+# A fixture copies its shape (b2Fixture::Create clones it), so one shape of each kind is filled
+# anew for every fixture: making a shape through pybox2d costs several µs, refilling it a
+# fraction (pybox2d's vertices setter, unrolled below, makes the same calls).
+_POLYGON = b2.polygonShape()
+_CIRCLE = b2.circleShape()
+_set_vertex = _B2.b2PolygonShape_set_vertex
+_set_vertex_count = _B2.b2PolygonShape_vertexCount_set
+_set_vertices = _B2.b2PolygonShape___set_vertices_internal  # b2PolygonShape::Set
+
+
 def _polygon_shape(vertices, radius: float):
-    """A b2PolygonShape on ``vertices`` with skin ``radius``."""
+    """The shared b2PolygonShape set on ``vertices`` with skin ``radius`` (until the next
+    call: a fixture made of it keeps a copy)."""
+    shape = _POLYGON
     try:
-        shape = b2.polygonShape(vertices=vertices)
-    except (AssertionError, ValueError, RuntimeError) as error:
+        if not 2 <= len(vertices) <= Box2D.b2_maxPolygonVertices:
+            raise ValueError(f"{len(vertices)} vertices, at most "
+                             f"{Box2D.b2_maxPolygonVertices}")
+        for index, (x, y) in enumerate(vertices):
+            _set_vertex(shape, index, x, y)
+        _set_vertex_count(shape, len(vertices))
+        _set_vertices(shape)
+    except (AssertionError, ValueError, RuntimeError, TypeError) as error:
         raise UnsupportedScene(
             f"engine 'box2d': polygon {vertices!r} refused by b2PolygonShape::Set ({error}); "
             "try a larger length_scale") from error
@@ -462,11 +478,11 @@ def _polygon_shape(vertices, radius: float):
 
 
 def _circle_shape(radius: float, x: float = 0.0):
-    """A b2CircleShape of ``radius`` centred at ``(x, 0)`` on its body."""
-    shape = b2.circleShape()
+    """The shared b2CircleShape set to ``radius``, centred at ``(x, 0)`` on its body (until
+    the next call: a fixture made of it keeps a copy)."""
+    shape = _CIRCLE
     shape.radius = radius
-    if x:
-        shape.pos = (x, 0.0)
+    shape.pos = (x, 0.0)
     return shape
 
 
@@ -695,7 +711,8 @@ def _manifold_geometry(values: tuple, pose_a: tuple, pose_b: tuple, radius_a: fl
     b2WorldManifold::Initialize redone in Python (pybox2d's ``worldManifold`` returned an
     uninitialised normal), with the separations of the skinned shapes (Box2D's, negative
     within the summed skins). ``values``: the contact as :data:`_CONTACT` unpacks it;
-    ``pose_a``, ``pose_b``: the bodies' :func:`_pose` when the manifold was computed (the
+    ``pose_a``, ``pose_b``: the bodies' ``(x, y, cos θ, sin θ)`` when the manifold was
+    computed (the
     start of the step: after the step the bodies have moved, which would turn a circle
     pair's normal); ``radius_a``, ``radius_b``: the fixtures' shape radii.
     """
