@@ -987,10 +987,22 @@ class Box2DEngine(Engine):
         """
         return bool(settings["sub_stepping"])
 
-    def _many_chunks(self, scenes) -> list[range]:
-        """:data:`MANY_CHUNK` scenes in a row to a batch."""
-        return [range(begin, min(begin + MANY_CHUNK, len(scenes)))
-                for begin in range(0, len(scenes), MANY_CHUNK)]
+    def _many_chunks(self, scenes) -> list[list[int]]:
+        """Up to :data:`MANY_CHUNK` scenes to a batch, those of one :func:`_speed_class`
+        together (in their order; a class's scenes split evenly among its batches).
+
+        ``auto`` gives each velocity scale a world of its own, and an impact outside its
+        batch's probe world's group is built a second time (:meth:`_build_many`): batches
+        of one class keep those few. Which scenes share a batch changes no run.
+        """
+        classes: dict[int, list[int]] = {}
+        for index, scene in enumerate(scenes):
+            classes.setdefault(_speed_class(scene), []).append(index)
+        chunks = []
+        for indices in classes.values():
+            size = -(-len(indices) // -(-len(indices) // MANY_CHUNK))  # ceil(n / batches)
+            chunks += [indices[begin:begin + size] for begin in range(0, len(indices), size)]
+        return chunks
 
     def _build_many(self, plans) -> tuple[_Batch, list, list]:
         """b2Worlds stepping many impacts, each impact as :meth:`run` steps it alone.
@@ -1130,6 +1142,47 @@ def _probe(world: _World, prepared: _Prepared, starts: tuple, dt: float,
 # ---------------------------------------------------------------------- many impacts
 #: Impacts per batch in run_many (measured: see docs/engines.md, Box2D).
 MANY_CHUNK = 32
+
+
+def _approach_estimate(scene: Scene) -> float:
+    """The normal approach speed at first touch (m/s), as the bodies' centres and a ground
+    body's lowest point give it: about the speed the probe run measures (exact for a disk
+    on the ground or two disks), for :func:`_speed_class`."""
+    if scene.ground:
+        (body,) = scene.bodies
+        shape, angle = body.shape, body.angle
+        cos, sin = math.cos(angle), math.sin(angle)
+        if shape.kind == "disk":
+            offsets = [(0.0, 0.0)]
+        elif shape.kind == "rod":
+            offsets = [(-shape.length / 2.0, 0.0), (shape.length / 2.0, 0.0)]
+        elif shape.kind == "box":
+            half_w, half_h = shape.width / 2.0, shape.height / 2.0
+            offsets = [(-half_w, -half_h), (half_w, -half_h), (half_w, half_h),
+                       (-half_w, half_h)]
+        else:
+            offsets = shape.points
+        # The lowest point's x offset from the centre (the ground's normal is +y).
+        _, lever = min((sin * x + cos * y, cos * x - sin * y) for x, y in offsets)
+        return -(body.velocity[1] + body.angular_velocity * lever)
+    body_a, body_b = scene.bodies
+    d_x = body_b.position[0] - body_a.position[0]
+    d_y = body_b.position[1] - body_a.position[1]
+    distance = math.hypot(d_x, d_y)
+    if distance == 0.0:
+        return 0.0
+    return -((body_b.velocity[0] - body_a.velocity[0]) * d_x
+             + (body_b.velocity[1] - body_a.velocity[1]) * d_y) / distance
+
+
+def _speed_class(scene: Scene) -> int:
+    """The binary exponent of :func:`_approach_estimate` relative to the speed ``auto``
+    lifts impacts to, 1 at and above it: scenes of one class likely get one ``auto``
+    velocity scale."""
+    speed = _approach_estimate(scene) / (_AUTO_MARGIN * VELOCITY_THRESHOLD)
+    if not 0.0 < speed < 1.0 or not math.isfinite(speed):
+        return 1
+    return max(math.frexp(speed)[1], -64)
 
 
 def _contact_of(touching: list, world) -> RawContacts | None:
