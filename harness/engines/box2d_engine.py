@@ -71,6 +71,7 @@ from __future__ import annotations
 
 import copy
 import ctypes
+import functools
 import math
 import struct
 from typing import NamedTuple
@@ -220,7 +221,13 @@ _TOUCHING = 0x0002  # b2Contact::e_touchingFlag
 
 def _state_struct() -> struct.Struct:
     """:data:`_BODY` and ``m_contactList`` in one read (a body's :func:`_state_in_memory`)."""
-    return struct.Struct(f"{_BODY.format}{_BODY_CONTACTS - _BODY.size}xP")
+    return _body_and_contacts(_BODY.format, _BODY_CONTACTS)
+
+
+@functools.lru_cache(maxsize=4)
+def _body_and_contacts(body_format: str, contacts_offset: int) -> struct.Struct:
+    """:func:`_state_struct`, made once per layout (a Struct parses its format when made)."""
+    return struct.Struct(f"{body_format}{contacts_offset - struct.calcsize(body_format)}xP")
 
 
 # The structs are read in place, through a ctypes buffer over each (made once per address: a
@@ -394,11 +401,12 @@ class _Readout:
     :meth:`read` refreshes them after placing the bodies and :meth:`read_step` after a step,
     so the bodies are read once a step (the next step starts where this one ended).
     ``fixtures``: every fixture's userData by its address; ``by_id``: every body, the
-    ground's included, by :data:`_body_id`; ``memory``: the readers' buffers.
+    ground's included, by :data:`_body_id`; ``memory``: the readers' buffers, ``buffers``
+    the bodies' (None where the getters read).
     """
 
-    __slots__ = ("bodies", "body_b", "body_b_id", "by_id", "dynamic", "fixtures", "length",
-                 "memory", "now", "start", "states")
+    __slots__ = ("bodies", "body_b", "body_b_id", "buffers", "by_id", "dynamic", "fixtures",
+                 "length", "memory", "now", "start", "states")
 
     def __init__(self, bodies: list, static: list, fixtures: list, length: float) -> None:
         self.bodies, self.body_b, self.length = bodies, bodies[-1], length
@@ -413,6 +421,8 @@ class _Readout:
             self.by_id[key] = b2_body
             x, y, sin, cos = _READERS[0](b2_body, key, self.memory)[:4]
             self.start[key] = (x, y, cos, sin)
+        self.buffers = ([self.memory.body(key) for _, key in self.dynamic]
+                        if _READERS[0] is _state_in_memory else None)
         self.now: tuple = ()
         self.states: list = []
 
@@ -424,8 +434,13 @@ class _Readout:
     def read_step(self) -> RawContacts | None:
         """After a step: its contact (:func:`_contact_of`: body B's touching contacts, at the
         poses the step started from), then the bodies now (as :meth:`read`)."""
-        state_of, memory = _READERS[0], self.memory
-        states = [state_of(b2_body, key, memory) for b2_body, key in self.dynamic]
+        memory, buffers = self.memory, self.buffers
+        if buffers is not None:  # _state_in_memory, on the buffers made once
+            unpack = memory.state.unpack_from
+            states = [unpack(buffer) for buffer in buffers]
+        else:
+            state_of = _READERS[0]
+            states = [state_of(b2_body, key, memory) for b2_body, key in self.dynamic]
         # Every contact of an impact involves its body B (the ground's partner or the other
         # body, the last one); the body's list keeps the world's order of them.
         raw = _contact_of(_READERS[1](self.body_b, states[-1], memory), self)
@@ -614,22 +629,12 @@ def _place(bodies, starts: tuple) -> None:
 
 
 def _states_at_cap(states, dt: float, band: float) -> bool:
-    """:func:`_at_cap` of bodies read by :meth:`_Readout.read`."""
+    """Whether a body's velocity reaches ``band`` times Box2D's per-step caps (``states``:
+    the bodies as :meth:`_Readout.read` reads them)."""
     for state in states:
         if math.hypot(state[5], state[6]) * dt > band * MAX_TRANSLATION:
             return True
         if abs(state[7]) * dt > band * MAX_ROTATION:
-            return True
-    return False
-
-
-def _at_cap(bodies, dt: float, band: float) -> bool:
-    """Whether a body's velocity reaches ``band`` times Box2D's per-step caps."""
-    for b2_body in bodies:
-        linear = b2_body.linearVelocity
-        if math.hypot(linear.x, linear.y) * dt > band * MAX_TRANSLATION:
-            return True
-        if abs(b2_body.angularVelocity) * dt > band * MAX_ROTATION:
             return True
     return False
 
@@ -689,10 +694,6 @@ class _World(_Readout):
         # collision pass already sees them.
         manager.FindNewContacts()
         self.read()
-
-    def at_cap(self, band: float) -> bool:
-        """Whether a body's velocity reaches ``band`` times Box2D's per-step caps."""
-        return _at_cap(self.bodies, self.dt, band)
 
 
 # ---------------------------------------------------------------------- contact readout
@@ -952,7 +953,8 @@ class Box2DEngine(Engine):
                                                       prepared.velocity)
         world.notes = prepared.notes
         world.place(prepared.starts)
-        world.clipped = world.at_cap(1.0)  # already beyond a cap before the first step
+        # Already beyond a cap before the first step (place read the bodies).
+        world.clipped = _states_at_cap(world.states, world.dt, 1.0)
         derived = world.derived = dict(prepared.derived)
         if world.speed_probe is not None:  # the last run met no contact
             world.world.contactListener = world.speed_probe = None
@@ -1058,7 +1060,7 @@ class Box2DEngine(Engine):
                 view.world = len(batch.worlds)
                 view.dt, view.velocity = dt, prepared[slot].velocity
                 view.notes = prepared[slot].notes
-                view.clipped = _at_cap(view.bodies, dt, 1.0)
+                view.clipped = _states_at_cap(view.states, dt, 1.0)  # read when placed
                 batch.slots[slot] = view
             batch.worlds.append((world, dt, iterations))
             if measure_in_run:
