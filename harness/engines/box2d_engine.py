@@ -572,7 +572,7 @@ def _add_impact(world, scene: Scene, length: float, skin: float, extent: float, 
             add(b2_body, _polygon_shape([(-half, -thickness), (half, -thickness),
                                          (half, thickness), (-half, thickness)], core_skin), 0.0)
         else:
-            vertices = [(x * length, y * length) for x, y in shape.vertices().tolist()]
+            vertices = [(x * length, y * length) for x, y in _outline(shape)]
             # The skin pads the scene's outline: a contact's overlap of the scene's bodies
             # is its separation plus the skins.
             add(b2_body, _polygon_shape(vertices, skin), skin)
@@ -584,6 +584,15 @@ def _add_impact(world, scene: Scene, length: float, skin: float, extent: float, 
             _, _, b2_body.linearVelocity, b2_body.angularVelocity = starts[index]
         bodies.append(b2_body)
     return bodies, ground, fixtures
+
+
+def _outline(shape) -> list:
+    """A box's or polygon's vertices as ``shape.vertices()`` gives them, as Python floats
+    (without the numpy array, which costs more than the rest of the body)."""
+    if shape.kind == "box":
+        half_w, half_h = shape.width / 2.0, shape.height / 2.0
+        return [(-half_w, -half_h), (half_w, -half_h), (half_w, half_h), (-half_w, half_h)]
+    return [(float(x), float(y)) for x, y in shape.points]
 
 
 def _ground_vertices(extent: float, length: float) -> list:
@@ -713,9 +722,8 @@ def _manifold_geometry(values: tuple, pose_a: tuple, pose_b: tuple, radius_a: fl
     uninitialised normal), with the separations of the skinned shapes (Box2D's, negative
     within the summed skins). ``values``: the contact as :data:`_CONTACT` unpacks it;
     ``pose_a``, ``pose_b``: the bodies' ``(x, y, cos θ, sin θ)`` when the manifold was
-    computed (the
-    start of the step: after the step the bodies have moved, which would turn a circle
-    pair's normal); ``radius_a``, ``radius_b``: the fixtures' shape radii.
+    computed (the start of the step: after the step the bodies have moved, which would turn
+    a circle pair's normal); ``radius_a``, ``radius_b``: the fixtures' shape radii.
     """
     pa_x, pa_y, ca, sa = pose_a
     pb_x, pb_y, cb, sb = pose_b
