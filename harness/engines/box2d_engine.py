@@ -1198,7 +1198,10 @@ def _speed_class(scene: Scene) -> int:
 def _contact_of(touching: list, world) -> RawContacts | None:
     """The step's contact of one impact from its ``touching`` Box2D contacts (oldest
     first, as :data:`_CONTACT` tuples); ``world``: its :class:`_World` or :class:`_Slot`
-    (scales, body B, the poses at the step's start, the fixtures)."""
+    (scales, body B, the poses at the step's start, the fixtures).
+
+    Each contact's geometry is :func:`_manifold_geometry`'s, written out here (the hot
+    path: every step of every impact), operation for operation."""
     length, velocity, body_b = world.length, world.velocity, world.body_b_id
     poses, fixtures = world.start, world.fixtures
     step_x = step_y = 0.0
@@ -1210,20 +1213,56 @@ def _contact_of(touching: list, world) -> RawContacts | None:
             continue
         padding_a, radius_a, body_a_id = fixtures[values[2]]
         padding_b, radius_b, contact_body_b = fixtures[values[3]]
-        contact_normal, contact_points = _manifold_geometry(
-            values, poses[body_a_id], poses[contact_body_b], radius_a, radius_b)
+        pa_x, pa_y, ca, sa = poses[body_a_id]
+        pb_x, pb_y, cb, sb = poses[contact_body_b]
         # Overlap of the scene's outlines: the skins are padding, not the bodies.
         padding = padding_a + padding_b
+        if values[16] == _CIRCLES:
+            lx, ly = values[14], values[15]  # the manifold's localPoint
+            ax, ay = ca * lx - sa * ly + pa_x, sa * lx + ca * ly + pa_y
+            lx, ly = values[4], values[5]  # its point's localPoint
+            bx, by = cb * lx - sb * ly + pb_x, sb * lx + cb * ly + pb_y
+            dx, dy = bx - ax, by - ay
+            distance = math.hypot(dx, dy)
+            if distance > 0.0:
+                n_x, n_y = dx / distance, dy / distance
+            else:
+                n_x, n_y = 1.0, 0.0
+            c_ax, c_ay = ax + radius_a * n_x, ay + radius_a * n_y
+            c_bx, c_by = bx - radius_b * n_x, by - radius_b * n_y
+            points.append((0.5 * (c_ax + c_bx) / length, 0.5 * (c_ay + c_by) / length,
+                           -(distance - radius_a - radius_b + padding) / length))
+        else:
+            if values[16] == _FACE_A:
+                c_ref, s_ref, p_ref_x, p_ref_y, r_ref = ca, sa, pa_x, pa_y, radius_a
+                c_inc, s_inc, p_inc_x, p_inc_y, r_inc = cb, sb, pb_x, pb_y, radius_b
+            else:
+                c_ref, s_ref, p_ref_x, p_ref_y, r_ref = cb, sb, pb_x, pb_y, radius_b
+                c_inc, s_inc, p_inc_x, p_inc_y, r_inc = ca, sa, pa_x, pa_y, radius_a
+            lx, ly = values[12], values[13]  # localNormal
+            n_x, n_y = c_ref * lx - s_ref * ly, s_ref * lx + c_ref * ly
+            lx, ly = values[14], values[15]  # localPoint
+            plane_x = c_ref * lx - s_ref * ly + p_ref_x
+            plane_y = s_ref * lx + c_ref * ly + p_ref_y
+            for first in range(4, 4 + 4 * count, 4):
+                lx, ly = values[first], values[first + 1]
+                qx = c_inc * lx - s_inc * ly + p_inc_x
+                qy = s_inc * lx + c_inc * ly + p_inc_y
+                height = (qx - plane_x) * n_x + (qy - plane_y) * n_y
+                c_ref_x, c_ref_y = qx + (r_ref - height) * n_x, qy + (r_ref - height) * n_y
+                c_inc_x, c_inc_y = qx - r_inc * n_x, qy - r_inc * n_y
+                points.append((0.5 * (c_ref_x + c_inc_x) / length,
+                               0.5 * (c_ref_y + c_inc_y) / length,
+                               -(height - r_ref - r_inc + padding) / length))
+            if values[16] != _FACE_A:
+                n_x, n_y = -n_x, -n_y  # Box2D's normal points from fixture A to fixture B
         # The impulse on scene body B (Box2D applies +P to fixture B's body).
         sign = 1.0 if contact_body_b == body_b else -1.0
-        n_x, n_y = contact_normal
         for first in range(6, 6 + 4 * count, 4):
             p_n, p_t = values[first], values[first + 1]
             # Box2D's tangent is cross(n, 1) = (n_y, -n_x).
             step_x += sign * (p_n * n_x + p_t * n_y)
             step_y += sign * (p_n * n_y - p_t * n_x)
-        for x, y, separation in contact_points:
-            points.append((x / length, y / length, -(separation + padding) / length))
         if normal is None:
             normal = (sign * n_x, sign * n_y)
     if normal is None:
