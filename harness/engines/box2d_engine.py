@@ -465,6 +465,10 @@ _CIRCLE = b2.circleShape()
 _set_vertex = _B2.b2PolygonShape_set_vertex
 _set_vertex_count = _B2.b2PolygonShape_vertexCount_set
 _set_vertices = _B2.b2PolygonShape___set_vertices_internal  # b2PolygonShape::Set
+# What b2World.CreateBody and b2Body.CreateFixture call once they have checked their
+# arguments and found no fixtures or shapes to add (a definition is always given here).
+_create_body = _B2.b2World___CreateBody
+_create_fixture = _B2.b2Body___CreateFixture
 
 
 def _polygon_shape(vertices, radius: float):
@@ -533,14 +537,14 @@ def _add_impact(world, scene: Scene, length: float, skin: float, extent: float, 
 
     def add(body, shape, padding: float) -> None:
         fixture_definition.shape = shape
-        fixture = body.CreateFixture(fixture_definition)  # copies the definition and shape
+        fixture = _create_fixture(body, fixture_definition)  # copies the definition, shape
         fixture.userData = (padding, shape.radius, body_id)
         fixtures.append(fixture)
 
     body_definition = b2.bodyDef()  # a static body at the origin
     ground = []
     if scene.ground:
-        ground_body = world.CreateBody(body_definition)
+        ground_body = _create_body(world, body_definition)
         body_id = _body_id(ground_body)
         add(ground_body, _polygon_shape(_ground_vertices(extent, length), POLYGON_RADIUS),
             skin)
@@ -555,7 +559,7 @@ def _add_impact(world, scene: Scene, length: float, skin: float, extent: float, 
     for index, body in enumerate(scene.bodies):
         if starts is not None:
             body_definition.position, body_definition.angle = starts[index][:2]
-        b2_body = world.CreateBody(body_definition)
+        b2_body = _create_body(world, body_definition)
         body_id = _body_id(b2_body)
         shape = body.shape
         if shape.kind == "disk":
