@@ -69,8 +69,8 @@ Settings (``defaults`` | ``accurate``) are listed in :data:`SETTING_DOCS`.
 
 from __future__ import annotations
 
-import copy
 import ctypes
+import functools
 import math
 import struct
 from typing import NamedTuple
@@ -189,7 +189,6 @@ _get_angle = _B2.b2Body___GetAngle
 _get_linear_velocity = _B2.b2Body___GetLinearVelocity
 _get_angular_velocity = _B2.b2Body___GetAngularVelocity
 _body_contacts = _B2.b2Body___GetContactList_internal
-_world_contacts = _B2.b2World___GetContactList_internal
 _edge_contact = _B2.b2ContactEdge_contact_get
 _edge_next = _B2.b2ContactEdge_next_get
 _contact_next = _B2.b2Contact___GetNext
@@ -219,37 +218,90 @@ _CONTACT = struct.Struct("@8xI12xP64x2P8x2f2f4x2f2f4x2f2fiI")
 _TOUCHING = 0x0002  # b2Contact::e_touchingFlag
 
 
-def _state_in_memory(body, address: int) -> tuple:
-    """``(x, y, sin θ, cos θ, θ, v_x, v_y, ω)`` of a body now (its transform, its sweep's
-    angle, its velocities), read at its address."""
-    return _BODY.unpack(_string_at(address, _BODY.size))
+def _state_struct() -> struct.Struct:
+    """:data:`_BODY` and ``m_contactList`` in one read (a body's :func:`_state_in_memory`)."""
+    return _body_and_contacts(_BODY.format, _BODY_CONTACTS)
 
 
-def _state_by_getters(body, address: int) -> tuple:
-    """:func:`_state_in_memory` through pybox2d's getters."""
+@functools.lru_cache(maxsize=4)
+def _body_and_contacts(body_format: str, contacts_offset: int) -> struct.Struct:
+    """:func:`_state_struct`, made once per layout (a Struct parses its format when made)."""
+    return struct.Struct(f"{body_format}{contacts_offset - struct.calcsize(body_format)}xP")
+
+
+# The structs are read in place, through a ctypes buffer over each (made once per address: a
+# buffer costs as much as ctypes.string_at, which copies; unpacking a buffer costs a third).
+def _buffer(address: int, size: int):
+    """Box2D's ``size`` bytes at ``address`` as a buffer ``struct`` unpacks in place."""
+    return (ctypes.c_char * size).from_address(address)
+
+
+class _Memory:
+    """The buffers (:func:`_buffer`) one readout reads Box2D's structs through.
+
+    ``body``: a body's state and contact list (:func:`_state_struct`), by the body's address
+    (:data:`_body_id`); ``edges``, ``contacts``: b2ContactEdge and b2Contact by address.
+    Contacts come and go, but Box2D's block allocator gives a freed contact's memory only to
+    another contact and keeps it until its world goes: a kept buffer reads a contact that is
+    listed now (only listed addresses are read). The buffers live as long as the readout,
+    which does not outlive its world's bodies.
+    """
+
+    __slots__ = ("bodies", "contacts", "edges", "state")
+
+    def __init__(self) -> None:
+        self.state = _state_struct()
+        self.bodies: dict[int, object] = {}
+        self.edges: dict[int, object] = {}
+        self.contacts: dict[int, object] = {}
+
+    def body(self, address: int):
+        buffer = self.bodies.get(address)
+        if buffer is None:
+            buffer = self.bodies[address] = _buffer(address, self.state.size)
+        return buffer
+
+
+def _state_in_memory(body, address: int, memory: _Memory) -> tuple:
+    """``(x, y, sin θ, cos θ, θ, v_x, v_y, ω, contact list)`` of a body now (its transform,
+    its sweep's angle, its velocities, the address of its first b2ContactEdge), read at its
+    address."""
+    return memory.state.unpack_from(memory.body(address))
+
+
+def _state_by_getters(body, address: int, memory: _Memory) -> tuple:
+    """:func:`_state_in_memory` through pybox2d's getters (the contact list left 0)."""
     transform = _get_transform(body)
     position, rotation = _get_position(transform), _get_rotation(transform)
     velocity = _get_linear_velocity(body)
     return (position.x, position.y, rotation.s, rotation.c, _get_angle(body), velocity.x,
-            velocity.y, _get_angular_velocity(body))
+            velocity.y, _get_angular_velocity(body), 0)
 
 
-def _touching_in_memory(body, address: int) -> list:
+def _touching_in_memory(body, state: tuple, memory: _Memory) -> list:
     """The touching contacts of a body as :data:`_CONTACT` tuples, oldest first (the order
     of pybox2d's ``body.contacts``, which reverses Box2D's list: a new contact goes to its
-    head), read at the body's address."""
+    head); ``state``: the body's :func:`_state_in_memory` now (its contact list)."""
     touching = []
-    (edge,) = _POINTER.unpack(_string_at(address + _BODY_CONTACTS, _POINTER.size))
+    edges, contacts = memory.edges, memory.contacts
+    edge_struct, contact_struct = _EDGE, _CONTACT
+    edge = state[8]
     while edge:
-        contact, edge = _EDGE.unpack(_string_at(edge, _EDGE.size))
-        values = _CONTACT.unpack(_string_at(contact, _CONTACT.size))
+        buffer = edges.get(edge)
+        if buffer is None:
+            buffer = edges[edge] = _buffer(edge, edge_struct.size)
+        contact, edge = edge_struct.unpack_from(buffer)
+        buffer = contacts.get(contact)
+        if buffer is None:
+            buffer = contacts[contact] = _buffer(contact, contact_struct.size)
+        values = contact_struct.unpack_from(buffer)
         if values[0] & _TOUCHING:
             touching.append(values)
     touching.reverse()
     return touching
 
 
-def _touching_by_getters(body, address: int) -> list:
+def _touching_by_getters(body, state: tuple, memory: _Memory) -> list:
     """:func:`_touching_in_memory` through pybox2d's getters."""
     touching = []
     edge = _body_contacts(body)
@@ -258,33 +310,6 @@ def _touching_by_getters(body, address: int) -> list:
         if _is_touching(contact):
             touching.append(_contact_values(contact))
         edge = _edge_next(edge)
-    touching.reverse()
-    return touching
-
-
-def _world_touching_in_memory(world) -> list:
-    """The touching contacts of a b2World as :data:`_CONTACT` tuples, oldest first (as
-    pybox2d's ``world.contacts``)."""
-    touching = []
-    head = _world_contacts(world)
-    contact = 0 if head is None else int(head.this)
-    while contact:
-        values = _CONTACT.unpack(_string_at(contact, _CONTACT.size))
-        if values[0] & _TOUCHING:
-            touching.append(values)
-        contact = values[1]
-    touching.reverse()
-    return touching
-
-
-def _world_touching_by_getters(world) -> list:
-    """:func:`_world_touching_in_memory` through pybox2d's getters."""
-    touching = []
-    contact = _world_contacts(world)
-    while contact is not None:
-        if _is_touching(contact):
-            touching.append(_contact_values(contact))
-        contact = _contact_next(contact)
     touching.reverse()
     return touching
 
@@ -329,8 +354,11 @@ def _layout_matches() -> bool:
         body.linearVelocity, body.angularVelocity = (0.75, -3.0), 0.5
         world.Step(1.0 / 60.0, 8, 3)
         address = _body_id(body)
-        if (address != int(body.this)
-                or _state_in_memory(body, address) != _state_by_getters(body, address)):
+        if address != int(body.this):
+            return False
+        memory = _Memory()
+        state = _BODY.unpack(_string_at(address, _BODY.size))
+        if state != _state_by_getters(body, address, memory)[:8]:
             return False
         (edge,) = _POINTER.unpack(_string_at(address + _BODY_CONTACTS, _POINTER.size))
         first = _body_contacts(body)
@@ -345,73 +373,117 @@ def _layout_matches() -> bool:
         if values[1] != 0 or _contact_next(swig_contact) is not None:
             return False
         expected = _contact_values(swig_contact)
+        in_place = _state_in_memory(body, address, memory)
         return (values[0] & _TOUCHING == _TOUCHING and expected[17] == 2
                 and _used(values) == _used(expected)
-                and _touching_in_memory(body, address) == [values]
-                and _world_touching_in_memory(world) == [values])
+                and in_place == (*state, edge)
+                and _touching_in_memory(body, in_place, memory) == [values])
     except (ValueError, TypeError, AttributeError, IndexError, struct.error):
         return False
 
 
 _IN_MEMORY = _layout_matches()
-#: ``(state, touching of a body, touching of a world)``: the readers in use.
-_READERS = ((_state_in_memory, _touching_in_memory, _world_touching_in_memory) if _IN_MEMORY
-            else (_state_by_getters, _touching_by_getters, _world_touching_by_getters))
-
-
-def _pose(body) -> tuple[float, float, float, float]:
-    """``(x, y, cos θ, sin θ)`` of a Box2D body's transform now."""
-    transform = _get_transform(body)
-    position, rotation = _get_position(transform), _get_rotation(transform)
-    return position.x, position.y, rotation.c, rotation.s
+#: ``(state, touching of a body)``: the readers in use.
+_READERS = ((_state_in_memory, _touching_in_memory) if _IN_MEMORY
+            else (_state_by_getters, _touching_by_getters))
 
 
 class _Readout:
     """What the readout keeps of one impact's bodies and fixtures (a :class:`_World`'s and
     a :class:`_Slot`'s base).
 
-    ``start``: every body's :func:`_pose` by :data:`_body_id` when the next step begins (a
+    ``start``: every body's pose ``(x, y, cos θ, sin θ)`` by :data:`_body_id` when the next
+    step begins (a
     step's contacts are collided at its start, and their geometry needs those poses; the
     ground's pose, read once, never changes); ``now``: the scene's poses ``(x, y, θ)`` now,
     what ``_read_poses`` returns; ``states``: every body's :func:`_state_in_memory` now.
-    :meth:`read` refreshes them after a step, so the bodies are read once a step (the next
-    step starts where this one ended). ``fixtures``: every fixture's userData by its address;
-    ``by_id``: every body, the ground's included, by :data:`_body_id`.
+    :meth:`read` refreshes them after placing the bodies and :meth:`read_step` after a step,
+    so the bodies are read once a step (the next step starts where this one ended).
+    ``fixtures``: every fixture's userData by its address; ``by_id``: every body, the
+    ground's included, by :data:`_body_id`; ``memory``: the readers' buffers, ``buffers``
+    the bodies' (None where the getters read).
     """
 
-    __slots__ = ("bodies", "body_b", "body_b_id", "by_id", "dynamic", "fixtures", "length",
-                 "now", "start", "states")
+    __slots__ = ("bodies", "body_b", "body_b_id", "buffers", "by_id", "dynamic", "fixtures",
+                 "length", "memory", "now", "start", "states")
 
     def __init__(self, bodies: list, static: list, fixtures: list, length: float) -> None:
         self.bodies, self.body_b, self.length = bodies, bodies[-1], length
         self.body_b_id = _body_id(self.body_b)
         self.dynamic = [(b2_body, _body_id(b2_body)) for b2_body in bodies]
-        self.start = {_body_id(b2_body): _pose(b2_body) for b2_body in static}
         self.by_id = {key: b2_body for b2_body, key in self.dynamic}
-        self.by_id.update((_body_id(b2_body), b2_body) for b2_body in static)
         self.fixtures = {int(fixture.this): fixture.userData for fixture in fixtures}
+        self.memory = _Memory()
+        self.start = {}
+        for b2_body in static:
+            key = _body_id(b2_body)
+            self.by_id[key] = b2_body
+            x, y, sin, cos = _READERS[0](b2_body, key, self.memory)[:4]
+            self.start[key] = (x, y, cos, sin)
+        self.buffers = ([self.memory.body(key) for _, key in self.dynamic]
+                        if _READERS[0] is _state_in_memory else None)
         self.now: tuple = ()
         self.states: list = []
 
     def read(self) -> None:
-        """Read the bodies now (after placing them, and after every step)."""
-        length, start, state_of = self.length, self.start, _READERS[0]
-        now, states = [], []
-        for b2_body, key in self.dynamic:
-            state = state_of(b2_body, key)
+        """Read the bodies now (after placing them)."""
+        state_of, memory = _READERS[0], self.memory
+        self._take([state_of(b2_body, key, memory) for b2_body, key in self.dynamic])
+
+    def read_step(self) -> RawContacts | None:
+        """After a step: its contact (:func:`_contact_of`: body B's touching contacts, at the
+        poses the step started from), then the bodies now (as :meth:`read`)."""
+        memory, buffers = self.memory, self.buffers
+        if buffers is not None:  # _state_in_memory, on the buffers made once
+            unpack = memory.state.unpack_from
+            states = [unpack(buffer) for buffer in buffers]
+        else:
+            state_of = _READERS[0]
+            states = [state_of(b2_body, key, memory) for b2_body, key in self.dynamic]
+        # Every contact of an impact involves its body B (the ground's partner or the other
+        # body, the last one); the body's list keeps the world's order of them.
+        raw = _contact_of(_READERS[1](self.body_b, states[-1], memory), self)
+        self._take(states)
+        return raw
+
+    def _take(self, states: list) -> None:
+        length, start = self.length, self.start
+        now = []
+        for (_, key), state in zip(self.dynamic, states):
             x, y, sin, cos, angle = state[:5]
             start[key] = (x, y, cos, sin)
             now.append((x / length, y / length, angle))
-            states.append(state)
         self.now, self.states = tuple(now), states
 
 
 # ---------------------------------------------------------------------- world building
+# A fixture copies its shape (b2Fixture::Create clones it), so one shape of each kind is filled
+# anew for every fixture: making a shape through pybox2d costs several µs, refilling it a
+# fraction (pybox2d's vertices setter, unrolled below, makes the same calls).
+_POLYGON = b2.polygonShape()
+_CIRCLE = b2.circleShape()
+_set_vertex = _B2.b2PolygonShape_set_vertex
+_set_vertex_count = _B2.b2PolygonShape_vertexCount_set
+_set_vertices = _B2.b2PolygonShape___set_vertices_internal  # b2PolygonShape::Set
+# What b2World.CreateBody and b2Body.CreateFixture call once they have checked their
+# arguments and found no fixtures or shapes to add (a definition is always given here).
+_create_body = _B2.b2World___CreateBody
+_create_fixture = _B2.b2Body___CreateFixture
+
+
 def _polygon_shape(vertices, radius: float):
-    """A b2PolygonShape on ``vertices`` with skin ``radius``."""
+    """The shared b2PolygonShape set on ``vertices`` with skin ``radius`` (until the next
+    call: a fixture made of it keeps a copy)."""
+    shape = _POLYGON
     try:
-        shape = b2.polygonShape(vertices=vertices)
-    except (AssertionError, ValueError, RuntimeError) as error:
+        if not 2 <= len(vertices) <= Box2D.b2_maxPolygonVertices:
+            raise ValueError(f"{len(vertices)} vertices, at most "
+                             f"{Box2D.b2_maxPolygonVertices}")
+        for index, (x, y) in enumerate(vertices):
+            _set_vertex(shape, index, x, y)
+        _set_vertex_count(shape, len(vertices))
+        _set_vertices(shape)
+    except (AssertionError, ValueError, RuntimeError, TypeError) as error:
         raise UnsupportedScene(
             f"engine 'box2d': polygon {vertices!r} refused by b2PolygonShape::Set ({error}); "
             "try a larger length_scale") from error
@@ -424,11 +496,11 @@ def _polygon_shape(vertices, radius: float):
 
 
 def _circle_shape(radius: float, x: float = 0.0):
-    """A b2CircleShape of ``radius`` centred at ``(x, 0)`` on its body."""
-    shape = b2.circleShape()
+    """The shared b2CircleShape set to ``radius``, centred at ``(x, 0)`` on its body (until
+    the next call: a fixture made of it keeps a copy)."""
+    shape = _CIRCLE
     shape.radius = radius
-    if x:
-        shape.pos = (x, 0.0)
+    shape.pos = (x, 0.0)
     return shape
 
 
@@ -465,14 +537,14 @@ def _add_impact(world, scene: Scene, length: float, skin: float, extent: float, 
 
     def add(body, shape, padding: float) -> None:
         fixture_definition.shape = shape
-        fixture = body.CreateFixture(fixture_definition)  # copies the definition and shape
+        fixture = _create_fixture(body, fixture_definition)  # copies the definition, shape
         fixture.userData = (padding, shape.radius, body_id)
         fixtures.append(fixture)
 
     body_definition = b2.bodyDef()  # a static body at the origin
     ground = []
     if scene.ground:
-        ground_body = world.CreateBody(body_definition)
+        ground_body = _create_body(world, body_definition)
         body_id = _body_id(ground_body)
         add(ground_body, _polygon_shape(_ground_vertices(extent, length), POLYGON_RADIUS),
             skin)
@@ -487,7 +559,7 @@ def _add_impact(world, scene: Scene, length: float, skin: float, extent: float, 
     for index, body in enumerate(scene.bodies):
         if starts is not None:
             body_definition.position, body_definition.angle = starts[index][:2]
-        b2_body = world.CreateBody(body_definition)
+        b2_body = _create_body(world, body_definition)
         body_id = _body_id(b2_body)
         shape = body.shape
         if shape.kind == "disk":
@@ -503,7 +575,7 @@ def _add_impact(world, scene: Scene, length: float, skin: float, extent: float, 
             add(b2_body, _polygon_shape([(-half, -thickness), (half, -thickness),
                                          (half, thickness), (-half, thickness)], core_skin), 0.0)
         else:
-            vertices = [(x * length, y * length) for x, y in shape.vertices().tolist()]
+            vertices = [(x * length, y * length) for x, y in _outline(shape)]
             # The skin pads the scene's outline: a contact's overlap of the scene's bodies
             # is its separation plus the skins.
             add(b2_body, _polygon_shape(vertices, skin), skin)
@@ -515,6 +587,15 @@ def _add_impact(world, scene: Scene, length: float, skin: float, extent: float, 
             _, _, b2_body.linearVelocity, b2_body.angularVelocity = starts[index]
         bodies.append(b2_body)
     return bodies, ground, fixtures
+
+
+def _outline(shape) -> list:
+    """A box's or polygon's vertices as ``shape.vertices()`` gives them, as Python floats
+    (without the numpy array, which costs more than the rest of the body)."""
+    if shape.kind == "box":
+        half_w, half_h = shape.width / 2.0, shape.height / 2.0
+        return [(-half_w, -half_h), (half_w, -half_h), (half_w, half_h), (-half_w, half_h)]
+    return [(float(x), float(y)) for x, y in shape.points]
 
 
 def _ground_vertices(extent: float, length: float) -> list:
@@ -560,22 +641,12 @@ def _place(bodies, starts: tuple) -> None:
 
 
 def _states_at_cap(states, dt: float, band: float) -> bool:
-    """:func:`_at_cap` of bodies read by :meth:`_Readout.read`."""
+    """Whether a body's velocity reaches ``band`` times Box2D's per-step caps (``states``:
+    the bodies as :meth:`_Readout.read` reads them)."""
     for state in states:
         if math.hypot(state[5], state[6]) * dt > band * MAX_TRANSLATION:
             return True
         if abs(state[7]) * dt > band * MAX_ROTATION:
-            return True
-    return False
-
-
-def _at_cap(bodies, dt: float, band: float) -> bool:
-    """Whether a body's velocity reaches ``band`` times Box2D's per-step caps."""
-    for b2_body in bodies:
-        linear = b2_body.linearVelocity
-        if math.hypot(linear.x, linear.y) * dt > band * MAX_TRANSLATION:
-            return True
-        if abs(b2_body.angularVelocity) * dt > band * MAX_ROTATION:
             return True
     return False
 
@@ -636,10 +707,6 @@ class _World(_Readout):
         manager.FindNewContacts()
         self.read()
 
-    def at_cap(self, band: float) -> bool:
-        """Whether a body's velocity reaches ``band`` times Box2D's per-step caps."""
-        return _at_cap(self.bodies, self.dt, band)
-
 
 # ---------------------------------------------------------------------- contact readout
 def _contact_in(contact) -> tuple:
@@ -657,9 +724,9 @@ def _manifold_geometry(values: tuple, pose_a: tuple, pose_b: tuple, radius_a: fl
     b2WorldManifold::Initialize redone in Python (pybox2d's ``worldManifold`` returned an
     uninitialised normal), with the separations of the skinned shapes (Box2D's, negative
     within the summed skins). ``values``: the contact as :data:`_CONTACT` unpacks it;
-    ``pose_a``, ``pose_b``: the bodies' :func:`_pose` when the manifold was computed (the
-    start of the step: after the step the bodies have moved, which would turn a circle
-    pair's normal); ``radius_a``, ``radius_b``: the fixtures' shape radii.
+    ``pose_a``, ``pose_b``: the bodies' ``(x, y, cos θ, sin θ)`` when the manifold was
+    computed (the start of the step: after the step the bodies have moved, which would turn
+    a circle pair's normal); ``radius_a``, ``radius_b``: the fixtures' shape radii.
     """
     pa_x, pa_y, ca, sa = pose_a
     pb_x, pb_y, cb, sb = pose_b
@@ -709,8 +776,9 @@ def _approach_speed(values: tuple, view: _Readout) -> float:
     _, radius_a, body_a_id = view.fixtures[values[2]]
     _, radius_b, body_b_id = view.fixtures[values[3]]
     body_a, body_b = view.by_id[body_a_id], view.by_id[body_b_id]
-    x_a, y_a, sin_a, cos_a = _READERS[0](body_a, body_a_id)[:4]  # the poses now
-    x_b, y_b, sin_b, cos_b = _READERS[0](body_b, body_b_id)[:4]
+    memory = view.memory
+    x_a, y_a, sin_a, cos_a = _READERS[0](body_a, body_a_id, memory)[:4]  # the poses now
+    x_b, y_b, sin_b, cos_b = _READERS[0](body_b, body_b_id, memory)[:4]
     normal, points = _manifold_geometry(values, (x_a, y_a, cos_a, sin_a),
                                         (x_b, y_b, cos_b, sin_b), radius_a, radius_b)
     fastest = 0.0
@@ -775,6 +843,13 @@ class _Prepared:
 
     __slots__ = ("derived", "dt", "iterations", "notes", "pair_values", "probe", "starts",
                  "velocity", "world_values")
+
+    def unprobed(self) -> _Prepared:
+        """A copy of what :func:`_unprobed` sets (copy.copy costs several times more)."""
+        copied = _Prepared()
+        copied.world_values, copied.pair_values = self.world_values, self.pair_values
+        copied.iterations, copied.probe = self.iterations, self.probe
+        return copied
 
 
 def _unprobed(scene: Scene, settings, start) -> _Prepared:
@@ -896,7 +971,8 @@ class Box2DEngine(Engine):
                                                       prepared.velocity)
         world.notes = prepared.notes
         world.place(prepared.starts)
-        world.clipped = world.at_cap(1.0)  # already beyond a cap before the first step
+        # Already beyond a cap before the first step (place read the bodies).
+        world.clipped = _states_at_cap(world.states, world.dt, 1.0)
         derived = world.derived = dict(prepared.derived)
         if world.speed_probe is not None:  # the last run met no contact
             world.world.contactListener = world.speed_probe = None
@@ -916,10 +992,7 @@ class Box2DEngine(Engine):
             world.notes = _speed_results(world.derived, probe.speed, world.velocity,
                                          world.restitution)
             world.world.contactListener = world.speed_probe = None
-        # At the step's start poses, before read() moves them on (to the records' poses now
-        # and the next step's start).
-        raw = _contact_of(_READERS[2](world.world), world)
-        world.read()
+        raw = world.read_step()
         if not world.clipped:
             world.clipped = _states_at_cap(world.states, world.dt, _CAP_BAND)
         return raw
@@ -934,10 +1007,22 @@ class Box2DEngine(Engine):
         """
         return bool(settings["sub_stepping"])
 
-    def _many_chunks(self, scenes) -> list[range]:
-        """:data:`MANY_CHUNK` scenes in a row to a batch."""
-        return [range(begin, min(begin + MANY_CHUNK, len(scenes)))
-                for begin in range(0, len(scenes), MANY_CHUNK)]
+    def _many_chunks(self, scenes) -> list[list[int]]:
+        """Up to :data:`MANY_CHUNK` scenes to a batch, those of one :func:`_speed_class`
+        together (in their order; a class's scenes split evenly among its batches).
+
+        ``auto`` gives each velocity scale a world of its own, and an impact outside its
+        batch's probe world's group is built a second time (:meth:`_build_many`): batches
+        of one class keep those few. Which scenes share a batch changes no run.
+        """
+        classes: dict[int, list[int]] = {}
+        for index, scene in enumerate(scenes):
+            classes.setdefault(_speed_class(scene), []).append(index)
+        chunks = []
+        for indices in classes.values():
+            size = -(-len(indices) // -(-len(indices) // MANY_CHUNK))  # ceil(n / batches)
+            chunks += [indices[begin:begin + size] for begin in range(0, len(indices), size)]
+        return chunks
 
     def _build_many(self, plans) -> tuple[_Batch, list, list]:
         """b2Worlds stepping many impacts, each impact as :meth:`run` steps it alone.
@@ -970,9 +1055,9 @@ class Box2DEngine(Engine):
         if not measure_in_run:
             speeds, probe_world, probe_views = _probe_many(
                 plans, prepared, length, skin, time_step * length, max_steps)
-            prepared = [_scaled(copy.copy(one), speed) for one, speed in zip(prepared, speeds)]
+            prepared = [_scaled(one.unprobed(), speed) for one, speed in zip(prepared, speeds)]
         else:
-            prepared = [_scaled(copy.copy(one), None) for one in prepared]
+            prepared = [_scaled(one.unprobed(), None) for one in prepared]
         groups: dict = {}
         for slot, one in enumerate(prepared):
             groups.setdefault(one.dt, []).append(slot)
@@ -993,7 +1078,7 @@ class Box2DEngine(Engine):
                 view.world = len(batch.worlds)
                 view.dt, view.velocity = dt, prepared[slot].velocity
                 view.notes = prepared[slot].notes
-                view.clipped = _at_cap(view.bodies, dt, 1.0)
+                view.clipped = _states_at_cap(view.states, dt, 1.0)  # read when placed
                 batch.slots[slot] = view
             batch.worlds.append((world, dt, iterations))
             if measure_in_run:
@@ -1016,15 +1101,11 @@ class Box2DEngine(Engine):
                 if index in stepping:
                     world.Step(dt, *iterations)
         contacts = {}
-        touching_of = _READERS[1]
         for slot in active:
             view = slots[slot]
-            # Every contact of an impact involves its body B (the ground's partner or the
-            # other body); the body's list keeps the world's order of them.
-            raw = _contact_of(touching_of(view.body_b, view.body_b_id), view)
+            raw = view.read_step()
             if raw is not None:
                 contacts[slot] = raw
-            view.read()
             if not view.clipped:
                 view.clipped = _states_at_cap(view.states, view.dt, _CAP_BAND)
         if batch.listeners:
@@ -1051,8 +1132,8 @@ class Box2DEngine(Engine):
         velocity, rate = world.velocity, world.length / world.velocity
         # Read after the step (_Readout.read): the loop reads velocities only then, and
         # the batch's _finish comes before _retire stops the bodies.
-        return tuple((vx / velocity, vy / velocity, omega * rate)
-                     for _, _, _, _, _, vx, vy, omega in world.states)
+        return tuple((state[5] / velocity, state[6] / velocity, state[7] * rate)
+                     for state in world.states)
 
     def _run_notes(self, world: _World) -> tuple[str, ...]:
         if world.clipped:
@@ -1083,10 +1164,54 @@ def _probe(world: _World, prepared: _Prepared, starts: tuple, dt: float,
 MANY_CHUNK = 32
 
 
+def _approach_estimate(scene: Scene) -> float:
+    """The normal approach speed at first touch (m/s), as the bodies' centres and a ground
+    body's lowest point give it: about the speed the probe run measures (exact for a disk
+    on the ground or two disks), for :func:`_speed_class`."""
+    if scene.ground:
+        (body,) = scene.bodies
+        shape, angle = body.shape, body.angle
+        cos, sin = math.cos(angle), math.sin(angle)
+        if shape.kind == "disk":
+            offsets = [(0.0, 0.0)]
+        elif shape.kind == "rod":
+            offsets = [(-shape.length / 2.0, 0.0), (shape.length / 2.0, 0.0)]
+        elif shape.kind == "box":
+            half_w, half_h = shape.width / 2.0, shape.height / 2.0
+            offsets = [(-half_w, -half_h), (half_w, -half_h), (half_w, half_h),
+                       (-half_w, half_h)]
+        else:
+            offsets = shape.points
+        # The lowest point's x offset from the centre (the ground's normal is +y).
+        _, lever = min((sin * x + cos * y, cos * x - sin * y) for x, y in offsets)
+        return -(body.velocity[1] + body.angular_velocity * lever)
+    body_a, body_b = scene.bodies
+    d_x = body_b.position[0] - body_a.position[0]
+    d_y = body_b.position[1] - body_a.position[1]
+    distance = math.hypot(d_x, d_y)
+    if distance == 0.0:
+        return 0.0
+    return -((body_b.velocity[0] - body_a.velocity[0]) * d_x
+             + (body_b.velocity[1] - body_a.velocity[1]) * d_y) / distance
+
+
+def _speed_class(scene: Scene) -> int:
+    """The binary exponent of :func:`_approach_estimate` relative to the speed ``auto``
+    lifts impacts to, 1 at and above it: scenes of one class likely get one ``auto``
+    velocity scale."""
+    speed = _approach_estimate(scene) / (_AUTO_MARGIN * VELOCITY_THRESHOLD)
+    if not 0.0 < speed < 1.0 or not math.isfinite(speed):
+        return 1
+    return max(math.frexp(speed)[1], -64)
+
+
 def _contact_of(touching: list, world) -> RawContacts | None:
     """The step's contact of one impact from its ``touching`` Box2D contacts (oldest
     first, as :data:`_CONTACT` tuples); ``world``: its :class:`_World` or :class:`_Slot`
-    (scales, body B, the poses at the step's start, the fixtures)."""
+    (scales, body B, the poses at the step's start, the fixtures).
+
+    Each contact's geometry is :func:`_manifold_geometry`'s, written out here (the hot
+    path: every step of every impact), operation for operation."""
     length, velocity, body_b = world.length, world.velocity, world.body_b_id
     poses, fixtures = world.start, world.fixtures
     step_x = step_y = 0.0
@@ -1098,20 +1223,56 @@ def _contact_of(touching: list, world) -> RawContacts | None:
             continue
         padding_a, radius_a, body_a_id = fixtures[values[2]]
         padding_b, radius_b, contact_body_b = fixtures[values[3]]
-        contact_normal, contact_points = _manifold_geometry(
-            values, poses[body_a_id], poses[contact_body_b], radius_a, radius_b)
+        pa_x, pa_y, ca, sa = poses[body_a_id]
+        pb_x, pb_y, cb, sb = poses[contact_body_b]
         # Overlap of the scene's outlines: the skins are padding, not the bodies.
         padding = padding_a + padding_b
+        if values[16] == _CIRCLES:
+            lx, ly = values[14], values[15]  # the manifold's localPoint
+            ax, ay = ca * lx - sa * ly + pa_x, sa * lx + ca * ly + pa_y
+            lx, ly = values[4], values[5]  # its point's localPoint
+            bx, by = cb * lx - sb * ly + pb_x, sb * lx + cb * ly + pb_y
+            dx, dy = bx - ax, by - ay
+            distance = math.hypot(dx, dy)
+            if distance > 0.0:
+                n_x, n_y = dx / distance, dy / distance
+            else:
+                n_x, n_y = 1.0, 0.0
+            c_ax, c_ay = ax + radius_a * n_x, ay + radius_a * n_y
+            c_bx, c_by = bx - radius_b * n_x, by - radius_b * n_y
+            points.append((0.5 * (c_ax + c_bx) / length, 0.5 * (c_ay + c_by) / length,
+                           -(distance - radius_a - radius_b + padding) / length))
+        else:
+            if values[16] == _FACE_A:
+                c_ref, s_ref, p_ref_x, p_ref_y, r_ref = ca, sa, pa_x, pa_y, radius_a
+                c_inc, s_inc, p_inc_x, p_inc_y, r_inc = cb, sb, pb_x, pb_y, radius_b
+            else:
+                c_ref, s_ref, p_ref_x, p_ref_y, r_ref = cb, sb, pb_x, pb_y, radius_b
+                c_inc, s_inc, p_inc_x, p_inc_y, r_inc = ca, sa, pa_x, pa_y, radius_a
+            lx, ly = values[12], values[13]  # localNormal
+            n_x, n_y = c_ref * lx - s_ref * ly, s_ref * lx + c_ref * ly
+            lx, ly = values[14], values[15]  # localPoint
+            plane_x = c_ref * lx - s_ref * ly + p_ref_x
+            plane_y = s_ref * lx + c_ref * ly + p_ref_y
+            for first in range(4, 4 + 4 * count, 4):
+                lx, ly = values[first], values[first + 1]
+                qx = c_inc * lx - s_inc * ly + p_inc_x
+                qy = s_inc * lx + c_inc * ly + p_inc_y
+                height = (qx - plane_x) * n_x + (qy - plane_y) * n_y
+                c_ref_x, c_ref_y = qx + (r_ref - height) * n_x, qy + (r_ref - height) * n_y
+                c_inc_x, c_inc_y = qx - r_inc * n_x, qy - r_inc * n_y
+                points.append((0.5 * (c_ref_x + c_inc_x) / length,
+                               0.5 * (c_ref_y + c_inc_y) / length,
+                               -(height - r_ref - r_inc + padding) / length))
+            if values[16] != _FACE_A:
+                n_x, n_y = -n_x, -n_y  # Box2D's normal points from fixture A to fixture B
         # The impulse on scene body B (Box2D applies +P to fixture B's body).
         sign = 1.0 if contact_body_b == body_b else -1.0
-        n_x, n_y = contact_normal
         for first in range(6, 6 + 4 * count, 4):
             p_n, p_t = values[first], values[first + 1]
             # Box2D's tangent is cross(n, 1) = (n_y, -n_x).
             step_x += sign * (p_n * n_x + p_t * n_y)
             step_y += sign * (p_n * n_y - p_t * n_x)
-        for x, y, separation in contact_points:
-            points.append((x / length, y / length, -(separation + padding) / length))
         if normal is None:
             normal = (sign * n_x, sign * n_y)
     if normal is None:

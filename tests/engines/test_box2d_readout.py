@@ -21,8 +21,7 @@ from harness.survey.population import resolve_populations
 from harness.survey.sampling import sample_population
 
 SAMPLES = 8  # per population: 56 impacts, two batches
-GETTERS = (box2d_engine._state_by_getters, box2d_engine._touching_by_getters,
-           box2d_engine._world_touching_by_getters)
+GETTERS = (box2d_engine._state_by_getters, box2d_engine._touching_by_getters)
 
 
 @pytest.fixture(scope="module")
@@ -74,18 +73,21 @@ def test_states_and_contacts_read_in_memory_are_the_getters(population_scenes):
         engine._reset(world, plan.prepared)
         for _ in range(3):
             engine._step(world)
+            memory = box2d_engine._Memory()  # fresh buffers: none made before this step
             for b2_body, address in world.dynamic:
-                assert (box2d_engine._state_in_memory(b2_body, address)
-                        == box2d_engine._state_by_getters(b2_body, address))
-                assert ([box2d_engine._used(values) for values in
-                         box2d_engine._touching_in_memory(b2_body, address)]
+                state = box2d_engine._state_in_memory(b2_body, address, memory)
+                assert state[:8] == box2d_engine._state_by_getters(b2_body, address, memory)[:8]
+                touching = box2d_engine._touching_in_memory(b2_body, state, memory)
+                assert ([box2d_engine._used(values) for values in touching]
                         == [box2d_engine._used(values) for values in
-                            box2d_engine._touching_by_getters(b2_body, address)])
-            touching = box2d_engine._world_touching_in_memory(world.world)
-            assert ([box2d_engine._used(values) for values in touching]
-                    == [box2d_engine._used(values) for values in
-                        box2d_engine._world_touching_by_getters(world.world)])
-            compared += len(touching)
+                            box2d_engine._touching_by_getters(b2_body, state, memory)])
+                compared += len(touching)
+            # The world's contacts are its body B's (the readout walks that body's list).
+            assert ([box2d_engine._used(values) for values in box2d_engine._touching_in_memory(
+                world.body_b, box2d_engine._state_in_memory(world.body_b, world.body_b_id,
+                                                            memory), memory)]
+                    == [box2d_engine._used(box2d_engine._contact_values(contact))
+                        for contact in world.world.contacts if contact.touching])
     assert compared > 0
 
 
@@ -112,3 +114,55 @@ def test_the_bare_stepper_does_not_measure():
         assert stepper._world.world.contactListener is None
     finally:
         stepper.close()
+
+
+def _contact_by_geometry(touching: list, world):
+    """``_contact_of`` with each contact's geometry from ``_manifold_geometry`` (the
+    reference the readout writes out inline)."""
+    length, velocity, body_b = world.length, world.velocity, world.body_b_id
+    step_x = step_y = 0.0
+    points, normal = [], None
+    for values in touching:
+        count = values[17]
+        if not count:
+            continue
+        padding_a, radius_a, body_a_id = world.fixtures[values[2]]
+        padding_b, radius_b, contact_body_b = world.fixtures[values[3]]
+        (n_x, n_y), contact_points = box2d_engine._manifold_geometry(
+            values, world.start[body_a_id], world.start[contact_body_b], radius_a, radius_b)
+        sign = 1.0 if contact_body_b == body_b else -1.0
+        for first in range(6, 6 + 4 * count, 4):
+            p_n, p_t = values[first], values[first + 1]
+            step_x += sign * (p_n * n_x + p_t * n_y)
+            step_y += sign * (p_n * n_y - p_t * n_x)
+        points += [(x / length, y / length, -(separation + padding_a + padding_b) / length)
+                   for x, y, separation in contact_points]
+        if normal is None:
+            normal = (sign * n_x, sign * n_y)
+    if normal is None:
+        return None
+    step_x, step_y = step_x / velocity, step_y / velocity
+    return (tuple(points), normal, (step_x, step_y),
+            abs(step_x * normal[0] + step_y * normal[1]))
+
+
+def test_the_contact_readout_is_the_manifold_geometrys(monkeypatch):
+    # More samples than the module's: a face-B manifold (two polygons, the reference face
+    # on fixture B) is rare.
+    scenes = [sample.scene for population in resolve_populations([])
+              for sample in sample_population(population, 30, seed=11).samples]
+    kinds = []
+    readout = box2d_engine._contact_of
+
+    def compared(touching, world):
+        raw = readout(touching, world)
+        assert raw == _contact_by_geometry(touching, world)
+        kinds.extend(values[16] for values in touching if values[17])
+        return raw
+
+    monkeypatch.setattr(box2d_engine, "_contact_of", compared)
+    engine = Box2DEngine()
+    for preset in ("defaults", "accurate"):
+        engine.run_many(scenes, preset=preset)
+    # Circle, face-A and face-B manifolds were all read.
+    assert set(kinds) == {0, 1, 2}
