@@ -77,7 +77,6 @@ import argparse
 import gc
 import json
 import math
-import pickle
 import signal
 import sys
 import threading
@@ -100,10 +99,11 @@ from harness.run.records import (
     FORMAT,
     FORMAT_VERSION,
     Record,
+    RecordBlock,
     check_writable,
     plain_value,
     record_line,
-    write_results,
+    write_result_blocks,
 )
 from harness.scenarios import ENGINES, PRESETS, Scenario, load_scenarios
 
@@ -353,30 +353,37 @@ class GateResult:
 class RunOutcome:
     """What :func:`run` returns: the records, the gates, the provenance, each scenario's info.
 
-    ``record_lines`` (parallel to the records): each record's line of the results file
-    (:func:`harness.run.records.record_line`). A record read from the cache, or built on a
-    forked worker, travels as its line only and is parsed the first time :attr:`records` is
-    asked for (a warm run that only writes the results file never parses them).
+    ``blocks``: the records as the results file holds them, one
+    :class:`harness.run.records.RecordBlock` per scenario, in order. A record read from the
+    cache, or built on a forked worker, travels in its block only and is parsed the first time
+    :attr:`records` is asked for (a warm run that only writes the results file never decodes
+    them).
     """
 
     def __init__(self, records: Sequence[Record | None], gates: list[GateResult],
                  provenance: dict, scenarios: dict, cache_stats: dict | None = None,
-                 warnings: list[str] | None = None, record_lines: Sequence | None = None,
-                 internal: Sequence[int] = (), record_pickles: Sequence[bytes] | None = None
-                 ) -> None:
+                 warnings: list[str] | None = None, blocks: Sequence[RecordBlock] = (),
+                 internal: Sequence[int] = ()) -> None:
         self._records = list(records)
         self.gates = gates
         self.provenance = provenance
         self.scenarios = scenarios
         self.cache_stats = {} if cache_stats is None else cache_stats
         self.warnings = [] if warnings is None else warnings  # cache problems, one line each
-        self.record_lines = (list(record_lines) if record_lines is not None
-                             else [None] * len(self._records))
-        if len(self.record_lines) != len(self._records):
-            raise ValueError(f"{len(self.record_lines)} lines for {len(self._records)} records")
+        self.blocks = list(blocks)
+        if sum(block.count for block in self.blocks) != len(self._records):
+            raise ValueError(f"{sum(block.count for block in self.blocks)} lines for "
+                             f"{len(self._records)} records")
         self._internal = list(internal)  # positions of the internal-error records
-        # The records pickled in parts, for the results file's companion (write_results).
-        self.record_pickles = None if record_pickles is None else list(record_pickles)
+        self._lines: list[str] | None = None
+
+    @property
+    def record_lines(self) -> list[str]:
+        """Each record's line of the results file (:func:`harness.run.records.record_line`),
+        in run order: the blocks' lines, decoded once."""
+        if self._lines is None:
+            self._lines = [line for block in self.blocks for line in block.lines()]
+        return self._lines
 
     @property
     def records(self) -> list[Record]:
@@ -723,8 +730,7 @@ def run(
                              cache, computed_references, scenario_keys,
                              workers=1 if executor == "local" and workers == 1 else workers)
     records: list[Record | None] = []
-    record_lines: list[str] = []
-    record_pickles: list[bytes] | None = []
+    blocks: list[RecordBlock] = []
     internal: list[int] = []
     gates: list[GateResult] = []
     infos: dict[str, dict] = {}
@@ -732,12 +738,9 @@ def run(
         infos[scenario.name] = scenario_info(scenario)
         result = stored.get(scenario.name) or built[scenario.name]
         internal += [len(records) + position for position in result.internal]
-        records += result.records if result.records is not None else [None] * len(result.lines)
-        record_lines += result.lines
-        if result.pickled is None or record_pickles is None:
-            record_pickles = None
-        else:
-            record_pickles.append(result.pickled)
+        records += (result.records if result.records is not None
+                    else [None] * result.block.count)
+        blocks.append(result.block)
         infos[scenario.name]["references"] = result.summary["references"]
         scenario_gates = [GateResult(**gate) for gate in result.summary["gates"]]
         gates += scenario_gates
@@ -771,15 +774,7 @@ def run(
         wall_time_s=time.perf_counter() - started,
     )
     return RunOutcome(records=records, gates=gates, provenance=info, scenarios=infos,
-                      cache_stats=stats, warnings=warnings, record_lines=record_lines,
-                      internal=internal, record_pickles=record_pickles)
-
-
-def _definition(scenario: Scenario) -> dict:
-    """A scenario as a cache key's payload holds it: every field but the file's ``path`` (the
-    records do not depend on where the file lies); the nested dataclasses and mappings are
-    spelled by :func:`harness.run.cache.canonical_json`."""
-    return {f.name: getattr(scenario, f.name) for f in fields(scenario) if f.name != "path"}
+                      cache_stats=stats, warnings=warnings, blocks=blocks, internal=internal)
 
 
 def _scenario_key(scenario: Scenario, cache, versions: Mapping, missing: Mapping,
@@ -792,8 +787,10 @@ def _scenario_key(scenario: Scenario, cache, versions: Mapping, missing: Mapping
     keys (the settings, the scene at every point). A scenario's records depend only on its
     definition (not its path), the engines that apply with their versions, the presets, the
     ``--set`` overrides and the history flag (under the code version every key holds), which
-    make this key: one entry per scenario. Not kept when an engine of the scenario is missing
-    (its runs are skipped, and a skipped run is never cached).
+    make this key: one entry per scenario (the definition by its digest,
+    :attr:`Scenario.definition_digest`, spelled once per scenario text). Not kept when an
+    engine of the scenario is missing (its runs are skipped, and a skipped run is never
+    cached).
     """
     if cache is None or not cache.enabled:
         return None
@@ -801,7 +798,7 @@ def _scenario_key(scenario: Scenario, cache, versions: Mapping, missing: Mapping
     if any(name in missing or name not in versions for name in engines):
         return None
     try:
-        return cache.key({"kind": SCENARIO_RECORDS, "scenario": _definition(scenario),
+        return cache.key({"kind": SCENARIO_RECORDS, "scenario": scenario.definition_digest,
                           "engines": [[name, versions[name]] for name in engines],
                           "presets": list(presets),
                           "overrides": {name: command_overrides.get(name, {})
@@ -813,24 +810,22 @@ def _scenario_key(scenario: Scenario, cache, versions: Mapping, missing: Mapping
 
 @dataclass
 class _Built:
-    """A scenario's finished records: the results file's ``lines`` (one per record), the
-    records themselves when built in this process (None: read from the cache or built on a
-    worker, parsed from the lines when asked for), the ``summary`` the run needs of them
-    (:func:`_summary`), the positions of internal-error records and the records pickled."""
+    """A scenario's finished records: as the results file and its companion hold them
+    (``block``), the records themselves when built in this process (None: read from the
+    cache or built on a worker, parsed from the block when asked for), the ``summary`` the
+    run needs of them (:func:`_summary`) and the positions of internal-error records."""
 
-    lines: list[str]
+    block: RecordBlock
     summary: dict
     records: list[Record] | None = None
     internal: list[int] = field(default_factory=list)
-    # The records' dicts (Record.as_dict, as the lines hold them) pickled, for the results
-    # file's companion (harness.run.records.companion_path); None when not at hand.
-    pickled: bytes | None = None
 
 
 def _stored_scenario(scenario: Scenario, cache, key: str | None, presets: Sequence[str],
                      engine_count: int) -> _Built | None:
     """The scenario's finished records from its cache entry (:func:`_scenario_key`), as the
-    lines of the results file (not parsed) and their summary, or None.
+    results file and its companion hold them (neither decoded nor parsed) with their summary,
+    or None.
 
     The entry was checked when it was stored (:func:`_store_scenario`) and its checksum
     shows it unchanged since; it is used only when it holds one line per law and engine
@@ -855,14 +850,15 @@ def _stored_scenario(scenario: Scenario, cache, key: str | None, presets: Sequen
             return f"not {expected} records"
         return None
 
-    entry = cache.get_line_texts(key, check_summary=check)
+    entry = cache.get_block(key, check_summary=check)
     if entry is None:
         return None
-    summary, lines, pickled = entry
-    if len(lines) != expected:
-        cache.rejected.append(f"{cache.lines_path(key)}: {len(lines)} lines, not {expected}")
+    summary, text, count, parts = entry
+    if count != expected or len(parts) != 2:
+        cache.rejected.append(f"{cache.lines_path(key)}: {count} lines and {len(parts)} "
+                              f"parts, not {expected} and 2")
         return None
-    return _Built(lines=lines, summary=summary, pickled=pickled)
+    return _Built(block=RecordBlock(text, count, *parts), summary=summary)
 
 
 #: The counts of a scenario's records its summary keeps (for the progress line, the hits).
@@ -959,11 +955,11 @@ def _build_scenario(scenario: Scenario, entries: Sequence, cache, computed_refer
     summary = _summary(scenario, records)
     datas = [record.as_dict() for record in records]
     lines = [record_line(data) for data in datas]
+    block = RecordBlock.of_lines(lines, datas)
     internal = [i for i, r in enumerate(records) if r.status.startswith("error: internal")]
     if not internal:
-        _store_scenario(cache, key, entries, records, datas, lines, summary)
-    return _Built(lines=lines, summary=summary, records=records, internal=internal,
-                  pickled=pickle.dumps(datas, protocol=pickle.HIGHEST_PROTOCOL))
+        _store_scenario(cache, key, entries, records, datas, lines, block, summary)
+    return _Built(block=block, summary=summary, records=records, internal=internal)
 
 
 def _finite_speeds(after, before) -> bool:
@@ -974,13 +970,14 @@ def _finite_speeds(after, before) -> bool:
 
 
 def _store_scenario(cache, key: str | None, engine_entries: Sequence, records: Sequence[Record],
-                    datas: Sequence[dict], lines: Sequence[str], summary: dict) -> None:
+                    datas: Sequence[dict], lines: Sequence[str], block: RecordBlock,
+                    summary: dict) -> None:
     """Keep a scenario's records under ``key`` when every engine run was cacheable (none
     skipped or failed) and none is an ok record without finite speeds (a record the lookup
     would reject every run); as a warm run reads them back: every engine record ``cached``
-    (``datas``: each record's :meth:`Record.as_dict`, ``lines`` their lines). Stored as the
-    lines the results file holds, one per record, with the ``summary``, so a warm run
-    writes them as read."""
+    (``datas``: each record's :meth:`Record.as_dict`, ``lines`` their lines, ``block`` them
+    as written). Stored as the results file and its companion hold them
+    (:class:`RecordBlock`), with the ``summary``, so a warm run writes them as read."""
     if key is None or cache is None or not cache.enabled:
         return
     if not all(isinstance(item.get("output"), dict) and item.get("key") is not None
@@ -994,11 +991,13 @@ def _store_scenario(cache, key: str | None, engine_entries: Sequence, records: S
                     else {**data, "cached": True} for record, data in zip(records, datas)]
     stored_lines = [line if stored is data else record_line(stored)
                     for data, stored, line in zip(datas, stored_datas, lines)]
+    if stored_lines != lines:
+        block = RecordBlock.of_lines(stored_lines, stored_datas)
     counts = summary["counts"]
     stored_summary = {**summary, "counts": {**counts, "cached": counts["engine_runs"]}}
     try:
         cache.put_lines(key, stored_lines, stored_summary,
-                        pickle.dumps(stored_datas, protocol=pickle.HIGHEST_PROTOCOL))
+                        (block.pickled_datas, block.pickled_lines))
     except OSError:  # the run goes on without the cache (the engine runs' store warns)
         pass
 
@@ -1535,8 +1534,7 @@ def execute(args, *, json_path: Path, command: Sequence[str] | None = None,
     except ConnectionError as error:  # an unreachable Dask scheduler
         return _fail(str(error)), None
     try:
-        write_results(json_path, outcome._records, outcome.provenance, outcome.scenarios,
-                      lines=outcome.record_lines, pickled=outcome.record_pickles)
+        write_result_blocks(json_path, outcome.blocks, outcome.provenance, outcome.scenarios)
     except OSError as error:
         print(f"impact-harness run: cannot write {json_path}: {error.strerror or error}; the "
               "engine results are in the cache, a rerun simulates nothing again",

@@ -12,7 +12,7 @@ import hashlib
 import io
 import json
 import pickle
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, Mapping
@@ -422,7 +422,12 @@ class PassedChecks:
     def add(self, key: str | None, scenario: Scenario | None = None) -> None:
         """Remember that the text of ``key`` passed, with the ``scenario`` read from it."""
         if key is not None and self._load().get(key) is None:
-            self._passed[key] = None if scenario is None else replace(scenario, path=None)
+            if scenario is not None:
+                try:  # spelled now, kept with it and in the store: no run spells it again
+                    scenario.definition_digest  # noqa: B018 - computed and kept with it
+                except TypeError:  # no canonical spelling: the runner keeps no records of it
+                    pass
+            self._passed[key] = None if scenario is None else scenario.located(None)
             self._added = True
 
     def save(self) -> None:
