@@ -89,8 +89,7 @@ import numpy as np
 
 from harness.collector import collector_paused
 from harness.engines import load_engine, preset_choices, preset_role
-from harness.run import metrics, references, verdicts
-from harness.run.executor import one_blas_thread
+from harness.run import metrics, references
 from harness.run.history import contact_history
 from harness.run.provenance import provenance
 from harness.run.records import (
@@ -106,6 +105,9 @@ from harness.run.records import (
     write_result_blocks,
 )
 from harness.scenarios import ENGINES, PRESETS, Scenario, load_scenarios
+
+# harness.run.verdicts and harness.run.executor (a process pool's modules) are imported where
+# used: a warm run, whose records come whole from the cache, needs neither.
 
 #: Below this many engine runs to do, the pool's start-up costs more than it saves.
 MIN_PARALLEL_TASKS = 200
@@ -899,9 +901,11 @@ def _build_scenarios(scenarios: Sequence[Scenario], by_scenario: Mapping[str, li
     the lines when asked for: :attr:`RunOutcome.records`); each stores its scenarios' cache
     entries. Records are the same either way (built by the same code from the same values).
     """
+    global _BUILD_STATE
+    if not scenarios:  # a warm run's: every scenario's records read whole from the cache
+        return {}
     from harness.run.executor import default_workers, map_forked
 
-    global _BUILD_STATE
     workers = default_workers() if workers is None else workers
     size = sum(len(s.point_list()) * len(s.laws) + len(by_scenario.get(s.name, ()))
                for s in scenarios)  # records to build
@@ -1056,6 +1060,8 @@ def point_records(scenario: Scenario, point, engine_entries: Sequence, *,
     reference already computed (a :func:`reference_task` of the run); None: read from the
     cache or computed here.
     """
+    from harness.run import verdicts
+
     fixed = scenario.at(point)
     mu, e = fixed.friction, fixed.restitution
     problem = scenario.analytic_problem(point)
@@ -1200,6 +1206,8 @@ def reference_task(task: dict) -> dict:
     reference inline, where the exception becomes the point's internal-error records as
     before (:func:`_point_records_or_errors`).
     """
+    from harness.run.executor import one_blas_thread
+
     one_blas_thread()  # a Dask worker has no pool initializer
     try:
         return {"reference": references.scene_reference(task["situation"], task["scene"],
@@ -1219,6 +1227,8 @@ def engine_record(scenario: Scenario, point_info: dict, engine_name: str, preset
     ``law_energy_change`` is ``newton-lcp``'s energy change, to attribute a gain;
     ``contacts``: a flat face's declared contacts (:func:`verdicts.declared_contacts`).
     """
+    from harness.run import verdicts
+
     output = item["output"]
     free_bodies = scene is not None and not scene.ground
     mass_matrix, u_before = problem.mass_matrix, problem.u
@@ -1272,6 +1282,8 @@ def engine_record(scenario: Scenario, point_info: dict, engine_name: str, preset
 
 def check_gates(scenario: Scenario, records: Sequence[Record]) -> list[GateResult]:
     """Every ``[expect.gate]`` of ``scenario`` against its engine records."""
+    from harness.run import verdicts
+
     results = []
     for gate in scenario.expect.gates:
         matching = [r for r in records if r.source == gate.engine
