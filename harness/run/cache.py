@@ -41,10 +41,12 @@ import hashlib
 import itertools
 import json
 import os
+import secrets
 import sys
 import time
 import zlib
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from dataclasses import fields, is_dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -137,9 +139,29 @@ def code_version() -> str:
     return _code_version_of(cached_code_sources())
 
 
+class Spelled:
+    """A value spelled once as canonical JSON (:attr:`text`), for the payloads of many keys
+    that hold it (a point's scene, in the key of each of its engine runs): a key's text holds
+    it exactly as if the value itself were in the payload."""
+
+    __slots__ = ("text",)
+
+    def __init__(self, value: Any) -> None:
+        self.text = canonical_json(value)
+
+
+#: The stand-in of a :class:`Spelled` value while its payload is spelled around it: a string
+#: no payload holds (random), which json writes as it is (letters and digits only).
+_SPELLED_MARK = f"spelled{secrets.token_hex(16)}"
+
+
 def _canonical_default(value: Any) -> Any:
     """The JSON-able form of a value json does not know: numpy values as lists or numbers,
-    paths as POSIX text, dataclasses as their fields, read-only mappings as dicts."""
+    paths as POSIX text, dataclasses as their fields, read-only mappings as dicts; a
+    :class:`Spelled` value as :data:`_SPELLED_MARK` (:func:`canonical_json` splices its text
+    in)."""
+    if isinstance(value, Spelled):
+        return _SPELLED_MARK
     if hasattr(value, "tolist"):  # numpy scalars and arrays
         return value.tolist()
     if isinstance(value, Path):
@@ -157,8 +179,22 @@ def canonical_json(payload: Any) -> str:
     """Canonical JSON text: sorted keys, no spaces, floats exact (``repr``; a non-finite one
     spelled ``NaN`` or ``Infinity``: a key's text, never read back), dataclasses as their
     fields; written by json's C encoder (a task's scene and settings are hashed for every
-    engine run)."""
-    return json.dumps(payload, sort_keys=True, separators=(",", ":"), default=_canonical_default)
+    engine run). A :class:`Spelled` value is its text, spliced in where json wrote its
+    stand-in (in the order json met them)."""
+    spelled: list[str] = []
+
+    def default(value: Any) -> Any:
+        if isinstance(value, Spelled):
+            spelled.append(value.text)
+        return _canonical_default(value)
+
+    text = json.dumps(payload, sort_keys=True, separators=(",", ":"), default=default)
+    if not spelled:
+        return text
+    pieces = text.split(f'"{_SPELLED_MARK}"')
+    if len(pieces) != len(spelled) + 1:  # cannot be: the stand-in is random
+        raise ValueError("a payload holds the stand-in of a spelled value")
+    return "".join(itertools.chain.from_iterable(zip(pieces, [*spelled, ""])))
 
 
 class ResultCache:
@@ -183,6 +219,41 @@ class ResultCache:
         self.hits = 0
         self.misses = 0
         self.rejected: list[str] = []  # "<entry path>: <why>" of entries read as a miss
+        # shard -> the names in its directory, while listed() is active (None: not listed)
+        self._listing: dict[str, set[str] | None] | None = None
+
+    @contextmanager
+    def listed(self) -> Iterator[None]:
+        """Within: whether an entry exists is read from a listing of its shard's directory,
+        made at the first lookup there, not by opening the file: the misses of a cold run
+        (thousands of entries that are not there) cost a set lookup each. An entry another
+        process writes meanwhile is a miss (its run simulated again); those this cache puts
+        are listed."""
+        self._listing = {}
+        try:
+            yield
+        finally:
+            self._listing = None
+
+    def _unlisted(self, key: str, suffix: str) -> bool:
+        """True when :meth:`listed` is active and the shard's listing lacks the entry."""
+        if self._listing is None:
+            return False
+        shard = key[:2]
+        if shard not in self._listing:
+            try:
+                self._listing[shard] = set(os.listdir(self.root / shard))
+            except FileNotFoundError:
+                self._listing[shard] = set()
+            except OSError:  # not listed: the entries are opened
+                self._listing[shard] = None
+        names = self._listing[shard]
+        return names is not None and f"{key}{suffix}" not in names
+
+    def _list(self, path: Path) -> None:
+        """Add an entry this cache wrote to its shard's listing, when one is made."""
+        if self._listing is not None and self._listing.get(path.parent.name) is not None:
+            self._listing[path.parent.name].add(path.name)
 
     def key(self, payload: dict) -> str:
         """sha256 hex of the canonical JSON of ``payload`` plus the code version."""
@@ -207,7 +278,7 @@ class ResultCache:
                 return self.get(key, check)
             finally:
                 self.hits, self.misses = hits, misses
-        if not self.enabled:
+        if not self.enabled or self._unlisted(key, ".json"):
             self.misses += 1
             return None
         path = self.path(key)
@@ -242,6 +313,7 @@ class ResultCache:
         text = json.dumps({"key": key, "code_version": self.version, "record": record},
                           default=_json_default)
         write_text_atomically(path, text, prefix=f".{key[:8]}-", make_parent=True)
+        self._list(path)
 
     def lines_path(self, key: str) -> Path:
         return self.root / key[:2] / f"{key}.jsonl"
@@ -280,7 +352,7 @@ class ResultCache:
         changed after it was written is a miss); ``check_summary(summary)`` (``None``:
         usable, else why not) may reject it. A rejected entry is listed in :attr:`rejected`.
         """
-        if not self.enabled:
+        if not self.enabled or self._unlisted(key, ".jsonl"):
             return None
         path = self.lines_path(key)
         try:
@@ -337,6 +409,7 @@ class ResultCache:
         write_parts_atomically(self.lines_path(key), (header.encode("utf-8"), b"\n", text,
                                                       *parts),
                                prefix=f".{key[:8]}-", make_parent=True)
+        self._list(self.lines_path(key))
 
     def _entries(self):
         """Every entry's path: the keyed entries and the scenario checks' store."""

@@ -81,6 +81,7 @@ import signal
 import sys
 import threading
 import time
+from contextlib import nullcontext
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence, TextIO
@@ -90,6 +91,7 @@ import numpy as np
 from harness.collector import collector_paused
 from harness.engines import load_engine, preset_choices, preset_role
 from harness.run import metrics, references
+from harness.run.cache import Spelled
 from harness.run.history import contact_history
 from harness.run.provenance import provenance
 from harness.run.records import (
@@ -605,78 +607,90 @@ def run(
     versions, missing, preset_settings = (_engine_status(wanted_engines, cache) if needs_engines
                                           else ({}, {}, {}))
 
-    # 0. Whole scenarios whose finished records the cache holds: one entry each, its lines
-    # kept as text (the results file's lines) beside the summary the run needs of them.
-    scenario_keys: dict[str, str | None] = {}
-    stored: dict[str, _Built] = {}
-    stored_runs = 0  # engine runs of the scenarios read whole from the cache
-    for scenario in scenarios:
-        key = scenario_keys[scenario.name] = _scenario_key(
-            scenario, cache, versions, missing, wanted_engines, presets, command_overrides,
-            history)
-        found = _stored_scenario(scenario, cache, key, presets,
-                                 len(_engines_of(scenario, wanted_engines)))
-        if found is not None:
-            stored[scenario.name] = found
-            runs = found.summary["counts"]["engine_runs"]
-            cache.hits += runs  # each an engine run the cache spared, as read one by one
-            stored_runs += runs
+    # The lookups below find most entries absent on a cold run: read from listings of the
+    # cache's directories (ResultCache.listed), not by opening each file.
+    with cache.listed() if cache is not None else nullcontext():
+        # 0. Whole scenarios whose finished records the cache holds: one entry each, its lines
+        # kept as text (the results file's lines) beside the summary the run needs of them.
+        scenario_keys: dict[str, str | None] = {}
+        stored: dict[str, _Built] = {}
+        stored_runs = 0  # engine runs of the scenarios read whole from the cache
+        for scenario in scenarios:
+            key = scenario_keys[scenario.name] = _scenario_key(
+                scenario, cache, versions, missing, wanted_engines, presets, command_overrides,
+                history)
+            found = _stored_scenario(scenario, cache, key, presets,
+                                     len(_engines_of(scenario, wanted_engines)))
+            if found is not None:
+                stored[scenario.name] = found
+                runs = found.summary["counts"]["engine_runs"]
+                cache.hits += runs  # each an engine run the cache spared, as read one by one
+                stored_runs += runs
 
-    # 1. Engine tasks: build, look up in the cache. On the local pool each worker stores the
-    # results it simulates (in parallel, as each chunk finishes); Dask's may lie elsewhere.
-    store_in_worker = (None if cache is None or not cache.enabled or executor != "local"
-                       else (str(cache.root), cache.version))
-    settings_memo: dict = {}
-    plan: list[tuple[Scenario, Any, str, str, dict]] = []  # (scenario, point, engine, preset, item)
-    tasks, task_keys, task_slots = [], [], []
-    for scenario in scenarios:
-        if scenario.analytic_only or scenario.name in stored:
-            continue
-        for point in scenario.point_list():
-            scene = None
-            for engine_name in _engines_of(scenario, wanted_engines):
-                for preset in presets:
-                    item: dict = {}
-                    plan.append((scenario, point, engine_name, preset, item))
-                    if engine_name in missing:
-                        item["output"] = {"status": f"skipped: {missing[engine_name]}"}
-                        continue
-                    engine = load_engine(engine_name)  # loaded once, only for runs to build
-                    overrides = {**scenario.engine_settings.get(engine_name, {}),
-                                 **command_overrides.get(engine_name, {})}
-                    item["overrides"] = overrides
-                    item["history"] = (scenario.sweep is None) if history is None else history
-                    settings = _settings_of(engine, preset, overrides, settings_memo)
-                    if isinstance(settings, str):
-                        item["output"] = {"status": f"error: settings: {settings}"}
-                        continue
-                    if scene is None:
-                        scene = scenario.scene(point)
-                    payload = {"kind": "engine-run", "engine": engine_name,
-                               "engine_version": engine.version, "settings": settings,
-                               "scene": _scene_payload(scene)}
-                    key = cache.key(payload) if cache is not None else None
-                    item["key"] = key
-                    speeds = 3 * len(scene.bodies)
-                    cached = None if cache is None else cache.get(
-                        key, check=lambda output, speeds=speeds: check_engine_output(output,
-                                                                                   speeds))
-                    if cached is not None:
-                        item["output"], item["cached"] = cached, True
-                        continue
-                    tasks.append({"engine": engine_name, "settings": settings, "scene": scene,
-                                  "time_limit_s": time_limit_s,
-                                  "store": None if store_in_worker is None
-                                  else (*store_in_worker, key)})
-                    task_keys.append(key)
-                    task_slots.append(item)
-    # Several-contact references the records will need and the cache lacks: tasks of the
-    # same executor, ahead of the engine runs (each takes up to a second).
-    reference_tasks, reference_keys, computed_references = _reference_tasks(
-        [s for s in scenarios if s.name not in stored], cache)
-    if cache is not None:
-        warnings += [f"cache entry rejected (simulated again): {entry}"
-                     for entry in cache.rejected]
+        # 1. Engine tasks: build, look up in the cache. On the local pool each worker stores the
+        # results it simulates (in parallel, as each chunk finishes); Dask's may lie elsewhere.
+        store_in_worker = (None if cache is None or not cache.enabled or executor != "local"
+                           else (str(cache.root), cache.version))
+        settings_memo: dict = {}
+        spelled_settings: dict[int, Spelled] = {}  # by id of settings_memo's values
+        # (scenario, point, engine, preset, item)
+        plan: list[tuple[Scenario, Any, str, str, dict]] = []
+        tasks, task_keys, task_slots = [], [], []
+        for scenario in scenarios:
+            if scenario.analytic_only or scenario.name in stored:
+                continue
+            for point in scenario.point_list():
+                scene = None
+                for engine_name in _engines_of(scenario, wanted_engines):
+                    for preset in presets:
+                        item: dict = {}
+                        plan.append((scenario, point, engine_name, preset, item))
+                        if engine_name in missing:
+                            item["output"] = {"status": f"skipped: {missing[engine_name]}"}
+                            continue
+                        engine = load_engine(engine_name)  # loaded once, for runs to build
+                        overrides = {**scenario.engine_settings.get(engine_name, {}),
+                                     **command_overrides.get(engine_name, {})}
+                        item["overrides"] = overrides
+                        item["history"] = (scenario.sweep is None if history is None
+                                           else history)
+                        settings = _settings_of(engine, preset, overrides, settings_memo)
+                        if isinstance(settings, str):
+                            item["output"] = {"status": f"error: settings: {settings}"}
+                            continue
+                        if scene is None:
+                            scene = scenario.scene(point)
+                            # spelled once for the keys of all the point's engine runs
+                            spelled_scene = (None if cache is None
+                                             else Spelled(_scene_payload(scene)))
+                        if cache is not None and id(settings) not in spelled_settings:
+                            spelled_settings[id(settings)] = Spelled(settings)
+                        payload = {"kind": "engine-run", "engine": engine_name,
+                                   "engine_version": engine.version,
+                                   "settings": spelled_settings.get(id(settings)),
+                                   "scene": spelled_scene}
+                        key = cache.key(payload) if cache is not None else None
+                        item["key"] = key
+                        speeds = 3 * len(scene.bodies)
+                        cached = None if cache is None else cache.get(
+                            key, check=lambda output, speeds=speeds: check_engine_output(output,
+                                                                                       speeds))
+                        if cached is not None:
+                            item["output"], item["cached"] = cached, True
+                            continue
+                        tasks.append({"engine": engine_name, "settings": settings, "scene": scene,
+                                      "time_limit_s": time_limit_s,
+                                      "store": None if store_in_worker is None
+                                      else (*store_in_worker, key)})
+                        task_keys.append(key)
+                        task_slots.append(item)
+        # Several-contact references the records will need and the cache lacks: tasks of the
+        # same executor, ahead of the engine runs (each takes up to a second).
+        reference_tasks, reference_keys, computed_references = _reference_tasks(
+            [s for s in scenarios if s.name not in stored], cache)
+        if cache is not None:
+            warnings += [f"cache entry rejected (simulated again): {entry}"
+                         for entry in cache.rejected]
 
     # 2. Run the misses; store each in the cache as it finishes.
     cache_failed: list[str] = []
@@ -1494,6 +1508,14 @@ def execute(args, *, json_path: Path, command: Sequence[str] | None = None,
     ``json_path`` when it holds the results of another selection (``run`` without ``--json``).
     Bad scenario files are reported one line each; the others still run (exit status 2).
     """
+    from harness.run.engine_facts import fingerprints_remembered
+
+    with fingerprints_remembered():
+        return _execute(args, json_path=json_path, command=command, log=log, guard=guard)
+
+
+def _execute(args, *, json_path: Path, command: Sequence[str] | None,
+             log: TextIO | None | str, guard: bool) -> tuple[int, RunOutcome | None]:
     from harness.scenarios.library import load_scenarios_reporting
 
     log = sys.stderr if log == "stderr" else log
