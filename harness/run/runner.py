@@ -688,6 +688,9 @@ def run(
         # same executor, ahead of the engine runs (each takes up to a second).
         reference_tasks, reference_keys, computed_references = _reference_tasks(
             [s for s in scenarios if s.name not in stored], cache)
+        if store_in_worker is not None:  # each stored by the worker computing it, as runs
+            for task, key in zip(reference_tasks, reference_keys):
+                task["store"] = None if key is None else (*store_in_worker, key)
         if cache is not None:
             warnings += [f"cache entry rejected (simulated again): {entry}"
                          for entry in cache.rejected]
@@ -700,7 +703,12 @@ def run(
             task = reference_tasks[index]
             if "reference" in output:  # else built inline, where its error is reported
                 computed_references[task["scenario"], task["point"]] = output["reference"]
-                if reference_keys[index] is not None:
+                stored = output.pop(STORED_BY_WORKER, False)
+                problem = output.pop(STORE_FAILED_IN_WORKER, None)
+                if problem is not None and not cache_failed:
+                    cache_failed.append(f"cache {cache.root}: cannot store results ({problem}); "
+                                        "the run goes on without the cache")
+                if not (stored or cache_failed or reference_keys[index] is None):
                     _store_reference(cache, reference_keys[index], output["reference"])
             return
         index -= len(reference_tasks)
@@ -1214,7 +1222,8 @@ def reference_task(task: dict) -> dict:
 
     ``task`` holds the situation (``situation``, :func:`harness.run.references.kind_of`), the
     ``scene`` at the point and its ``laws`` (:class:`harness.run.references.PointLaws`): a
-    scenario does not pickle. The result is ``{"reference": …}``
+    scenario does not pickle; ``store`` where the worker keeps the reference (or None). The
+    result is ``{"reference": …}``
     (:func:`harness.run.references.scene_reference`, the very dict the main process would
     compute) or, when it raises, ``{"error": "…"}``: the main process then builds the
     reference inline, where the exception becomes the point's internal-error records as
@@ -1224,10 +1233,29 @@ def reference_task(task: dict) -> dict:
 
     one_blas_thread()  # a Dask worker has no pool initializer
     try:
-        return {"reference": references.scene_reference(task["situation"], task["scene"],
-                                                        task["laws"])}
+        reference = references.scene_reference(task["situation"], task["scene"], task["laws"])
     except Exception as error:  # noqa: BLE001 - raised again, and reported, in the main process
         return {"error": f"{type(error).__name__}: {error}"}
+    return _reference_stored_by_worker(task, {"reference": reference})
+
+
+def _reference_stored_by_worker(task: dict, output: dict) -> dict:
+    """:func:`_stored_by_worker` of a reference task's output: the reference stored under
+    ``task["store"]`` when given (the local pool: the main process then spells and writes
+    none of them)."""
+    where = task.get("store")
+    if where is None:
+        return output
+    from harness.run.cache import ResultCache
+
+    root, version, key = where
+    try:
+        ResultCache(root, version=version).put(key, output["reference"])
+    except OSError as error:
+        output[STORE_FAILED_IN_WORKER] = str(error)
+        return output
+    output[STORED_BY_WORKER] = True
+    return output
 
 
 def engine_record(scenario: Scenario, point_info: dict, engine_name: str, preset: str,
