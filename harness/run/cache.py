@@ -22,11 +22,12 @@ entry, while a change to the report, the benchmarks or the CLI keeps the cache::
         cache.put(key, record)
 
 Files: one JSON file per key at ``root/<key[:2]>/<key>.json`` (``<key>.jsonl`` for an
-entry of many lines, :meth:`ResultCache.put_lines`: a scenario's records, their lines as the
-results file holds them after a header with their summary, their pickled dicts and a CRC-32
-of both), written atomically (a temporary file in the same directory, then ``os.replace``),
-so concurrent writers and an interrupted run never leave a half-written entry; a temporary
-left by a killed writer is removed by the next run (:meth:`ResultCache.clean_temporaries`).
+entry of many lines, :meth:`ResultCache.put_lines`: a scenario's records, a header line with
+their summary, the sizes of what follows and its CRC-32, then their lines as the results file
+holds them, then their dicts and their lines pickled, raw bytes), written atomically (a
+temporary file in the same directory, then ``os.replace``), so concurrent writers and an
+interrupted run never leave a half-written entry; a temporary left by a killed writer is
+removed by the next run (:meth:`ResultCache.clean_temporaries`).
 An unreadable, corrupted or edited file is a miss, and so is an entry the caller's ``check``
 rejects (a record without finite velocities of the right shape): both are listed in
 :attr:`ResultCache.rejected`. Beside the entries, ``root/scenario-checks.pickle`` keeps the
@@ -36,23 +37,24 @@ scenario files that passed their checks (:class:`harness.scenarios.checks.Passed
 
 from __future__ import annotations
 
-import base64
-import binascii
 import hashlib
 import itertools
 import json
 import os
+import secrets
 import sys
 import time
 import zlib
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from dataclasses import fields, is_dataclass
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
 from harness.collector import collector_paused
-from harness.run.files import write_bytes_atomically, write_text_atomically
+from harness.run.files import write_parts_atomically, write_text_atomically
+from harness.run.records import LINE_SEPARATOR  # an entry's lines as a results file holds them
 
 _HARNESS_DIR = Path(__file__).resolve().parent.parent  # harness/, from harness/run/
 #: The harness source (directories and files, relative to ``harness/``) that the cached
@@ -69,6 +71,7 @@ CACHED_CODE: tuple[str, ...] = (
 )
 
 CACHE_FORMAT = 1  # bump when the record layout changes
+
 #: Environment variable that moves the cache (tests, shared machines).
 CACHE_DIR_VARIABLE = "IMPACT_HARNESS_CACHE_DIR"
 #: A temporary file older than this (s) belongs to a writer that died: removed.
@@ -136,9 +139,29 @@ def code_version() -> str:
     return _code_version_of(cached_code_sources())
 
 
+class Spelled:
+    """A value spelled once as canonical JSON (:attr:`text`), for the payloads of many keys
+    that hold it (a point's scene, in the key of each of its engine runs): a key's text holds
+    it exactly as if the value itself were in the payload."""
+
+    __slots__ = ("text",)
+
+    def __init__(self, value: Any) -> None:
+        self.text = canonical_json(value)
+
+
+#: The stand-in of a :class:`Spelled` value while its payload is spelled around it: a string
+#: no payload holds (random), which json writes as it is (letters and digits only).
+_SPELLED_MARK = f"spelled{secrets.token_hex(16)}"
+
+
 def _canonical_default(value: Any) -> Any:
     """The JSON-able form of a value json does not know: numpy values as lists or numbers,
-    paths as POSIX text, dataclasses as their fields, read-only mappings as dicts."""
+    paths as POSIX text, dataclasses as their fields, read-only mappings as dicts; a
+    :class:`Spelled` value as :data:`_SPELLED_MARK` (:func:`canonical_json` splices its text
+    in)."""
+    if isinstance(value, Spelled):
+        return _SPELLED_MARK
     if hasattr(value, "tolist"):  # numpy scalars and arrays
         return value.tolist()
     if isinstance(value, Path):
@@ -156,8 +179,22 @@ def canonical_json(payload: Any) -> str:
     """Canonical JSON text: sorted keys, no spaces, floats exact (``repr``; a non-finite one
     spelled ``NaN`` or ``Infinity``: a key's text, never read back), dataclasses as their
     fields; written by json's C encoder (a task's scene and settings are hashed for every
-    engine run)."""
-    return json.dumps(payload, sort_keys=True, separators=(",", ":"), default=_canonical_default)
+    engine run). A :class:`Spelled` value is its text, spliced in where json wrote its
+    stand-in (in the order json met them)."""
+    spelled: list[str] = []
+
+    def default(value: Any) -> Any:
+        if isinstance(value, Spelled):
+            spelled.append(value.text)
+        return _canonical_default(value)
+
+    text = json.dumps(payload, sort_keys=True, separators=(",", ":"), default=default)
+    if not spelled:
+        return text
+    pieces = text.split(f'"{_SPELLED_MARK}"')
+    if len(pieces) != len(spelled) + 1:  # cannot be: the stand-in is random
+        raise ValueError("a payload holds the stand-in of a spelled value")
+    return "".join(itertools.chain.from_iterable(zip(pieces, [*spelled, ""])))
 
 
 class ResultCache:
@@ -182,6 +219,41 @@ class ResultCache:
         self.hits = 0
         self.misses = 0
         self.rejected: list[str] = []  # "<entry path>: <why>" of entries read as a miss
+        # shard -> the names in its directory, while listed() is active (None: not listed)
+        self._listing: dict[str, set[str] | None] | None = None
+
+    @contextmanager
+    def listed(self) -> Iterator[None]:
+        """Within: whether an entry exists is read from a listing of its shard's directory,
+        made at the first lookup there, not by opening the file: the misses of a cold run
+        (thousands of entries that are not there) cost a set lookup each. An entry another
+        process writes meanwhile is a miss (its run simulated again); those this cache puts
+        are listed."""
+        self._listing = {}
+        try:
+            yield
+        finally:
+            self._listing = None
+
+    def _unlisted(self, key: str, suffix: str) -> bool:
+        """True when :meth:`listed` is active and the shard's listing lacks the entry."""
+        if self._listing is None:
+            return False
+        shard = key[:2]
+        if shard not in self._listing:
+            try:
+                self._listing[shard] = set(os.listdir(self.root / shard))
+            except FileNotFoundError:
+                self._listing[shard] = set()
+            except OSError:  # not listed: the entries are opened
+                self._listing[shard] = None
+        names = self._listing[shard]
+        return names is not None and f"{key}{suffix}" not in names
+
+    def _list(self, path: Path) -> None:
+        """Add an entry this cache wrote to its shard's listing, when one is made."""
+        if self._listing is not None and self._listing.get(path.parent.name) is not None:
+            self._listing[path.parent.name].add(path.name)
 
     def key(self, payload: dict) -> str:
         """sha256 hex of the canonical JSON of ``payload`` plus the code version."""
@@ -206,7 +278,7 @@ class ResultCache:
                 return self.get(key, check)
             finally:
                 self.hits, self.misses = hits, misses
-        if not self.enabled:
+        if not self.enabled or self._unlisted(key, ".json"):
             self.misses += 1
             return None
         path = self.path(key)
@@ -241,6 +313,7 @@ class ResultCache:
         text = json.dumps({"key": key, "code_version": self.version, "record": record},
                           default=_json_default)
         write_text_atomically(path, text, prefix=f".{key[:8]}-", make_parent=True)
+        self._list(path)
 
     def lines_path(self, key: str) -> Path:
         return self.root / key[:2] / f"{key}.jsonl"
@@ -248,15 +321,16 @@ class ResultCache:
     def get_lines(self, key: str, check=None) -> list[tuple[Any, str]] | None:
         """The ``(value, line)`` pairs stored by :meth:`put_lines`, or ``None`` (a miss).
 
-        Outside :attr:`stats`. A file that is not whole (truncated, a line missing or not
-        JSON, another key, a checksum that differs) or whose values ``check(values)`` rejects
-        (``None``: usable, else why not) is a miss listed in :attr:`rejected`.
+        Outside :attr:`stats`. A file that is not whole (see :meth:`get_block`) or whose
+        values ``check(values)`` rejects (``None``: usable, else why not) is a miss listed in
+        :attr:`rejected`.
         """
-        entry = self.get_line_texts(key)
+        entry = self.get_block(key)
         if entry is None:
             return None
-        _, lines, _ = entry
+        _, text, count, _ = entry
         try:
+            lines = split_block(text, count)
             values = _parse_lines(lines)
             reason = None if check is None else check(values)
             if reason is not None:
@@ -266,73 +340,76 @@ class ResultCache:
             return None
         return list(zip(values, lines))
 
-    def get_line_texts(self, key: str, check_summary=None
-                       ) -> tuple[Any, list[str], bytes | None] | None:
-        """``(summary, lines, data)`` stored by :meth:`put_lines`, the lines as text (not
-        parsed), or ``None`` (a miss).
+    def get_block(self, key: str, check_summary=None
+                  ) -> tuple[Any, memoryview, int, list[memoryview]] | None:
+        """``(summary, text, count, parts)`` stored by :meth:`put_lines`: the ``count`` lines
+        as one UTF-8 ``text`` (joined by :data:`LINE_SEPARATOR`, neither decoded nor split:
+        a warm run copies it into the results file as it is) and the byte ``parts``, or
+        ``None`` (a miss).
 
-        Outside :attr:`stats`. The entry must be whole: its key, as many lines as the header
-        counts, each a JSON object's text, and the CRC-32 of the lines and ``data`` as stored
-        (an entry changed after it was written is a miss); ``check_summary(summary)``
-        (``None``: usable, else why not) may reject it. A rejected entry is listed in
-        :attr:`rejected`.
+        Outside :attr:`stats`. The entry must be whole: its key, the sizes its header gives
+        adding up to the file's, and the CRC-32 of the text and the parts as stored (an entry
+        changed after it was written is a miss); ``check_summary(summary)`` (``None``:
+        usable, else why not) may reject it. A rejected entry is listed in :attr:`rejected`.
         """
-        if not self.enabled:
+        if not self.enabled or self._unlisted(key, ".jsonl"):
             return None
         path = self.lines_path(key)
         try:
             with open(path, "rb") as handle:
-                data = handle.read()
-            head_end = data.find(b"\n")
-            header = json.loads(data[:head_end if head_end >= 0 else len(data)])
+                raw = handle.read()
+            head_end = raw.find(b"\n")
+            header = json.loads(raw[:head_end if head_end >= 0 else len(raw)])
+            data = memoryview(raw)  # slices of it copy nothing
+            sizes = header.get("sizes") if isinstance(header, dict) else None
             if (not isinstance(header, dict) or header.get("key") != key
-                    or not isinstance(header.get("count"), int)):
+                    or not isinstance(header.get("count"), int)
+                    or not isinstance(sizes, list) or not sizes
+                    or not all(isinstance(size, int) and size >= 0 for size in sizes)):
                 raise ValueError("not a cache entry")
-            if not data.endswith(b"\n"):
+            if head_end + 1 + sum(sizes) != len(data):
                 raise ValueError("truncated")
-            body_bytes = memoryview(data)[head_end + 1:]
-            extra = header.get("data")
-            # strict: only the alphabet and padding, as b64encode wrote (no regex, unlike
-            # b64decode(validate=True): a tenth of a warm run of a large library)
-            extra = None if extra is None else binascii.a2b_base64(extra, strict_mode=True)
-            if header.get("crc32") != zlib.crc32(extra or b"", zlib.crc32(body_bytes)):
+            if header.get("crc32") != zlib.crc32(data[head_end + 1:]):
                 raise ValueError("checksum differs: changed after it was written")
-            body = str(body_bytes, "utf-8")
-            lines = body.split("\n")[:-1]  # never splitlines: U+2028 may sit inside a string
-            if len(lines) != header["count"]:
-                raise ValueError(f"{len(lines)} lines, not {header['count']}")
-            if not all(line[:1] == "{" and line[-1:] == "}" for line in lines):
-                raise ValueError("a line that is not a JSON object")
+            if (sizes[0] == 0) != (header["count"] == 0):
+                raise ValueError(f"{header['count']} lines in {sizes[0]} bytes")
+            bounds = list(itertools.accumulate(sizes, initial=head_end + 1))
+            text, *parts = (data[start:stop] for start, stop in zip(bounds, bounds[1:]))
             summary = header.get("summary")
             reason = None if check_summary is None else check_summary(summary)
             if reason is not None:
                 raise ValueError(reason)
         except FileNotFoundError:
             return None
-        except (OSError, ValueError) as error:  # UnicodeDecodeError, binascii.Error too
+        except (OSError, ValueError) as error:  # UnicodeDecodeError is a ValueError
             self.rejected.append(f"{path}: {error}")
             return None
-        return summary, lines, extra
+        return summary, text, header["count"], parts
 
-    def put_lines(self, key: str, lines: list[str], summary: Any = None,
-                  data: bytes | None = None) -> None:
+    def put_lines(self, key: str, lines: Sequence[str], summary: Any = None,
+                  parts: Sequence[bytes] = ()) -> None:
         """Store one-line JSON texts under ``key``: a header line (the key, the code version,
-        how many lines follow, ``summary``, a JSON-able value the reader gets without parsing
-        the lines, ``data``, bytes kept beside them in base64, and the CRC-32 of the lines
-        and the data), then the lines; atomic; no-op when disabled. A line holding a newline
-        is a ``ValueError``. Raises ``OSError`` as :meth:`put` does."""
+        how many lines follow, ``summary``, a JSON-able value the reader gets without reading
+        the lines, the sizes of what follows and its CRC-32), then the lines joined by
+        :data:`LINE_SEPARATOR` as UTF-8, then the byte ``parts`` as they are; atomic; no-op
+        when disabled. A line holding a newline is a ``ValueError``. Raises ``OSError`` as
+        :meth:`put` does."""
         if not self.enabled:
             return
         if any("\n" in line for line in lines):
             raise ValueError("a cache line holds a newline")
-        body = "".join(f"{line}\n" for line in lines).encode("utf-8")
+        text = LINE_SEPARATOR.join(lines).encode("utf-8")
+        crc = zlib.crc32(text)
+        for part in parts:
+            crc = zlib.crc32(part, crc)
         header = json.dumps({"key": key, "code_version": self.version, "count": len(lines),
-                             "crc32": zlib.crc32(data or b"", zlib.crc32(body)),
-                             "summary": summary,
-                             "data": None if data is None else base64.b64encode(data).decode()},
+                             "sizes": [len(text), *(len(part) for part in parts)],
+                             "crc32": crc, "summary": summary},
                             ensure_ascii=False, allow_nan=False)
-        write_bytes_atomically(self.lines_path(key), header.encode("utf-8") + b"\n" + body,
+        write_parts_atomically(self.lines_path(key), (header.encode("utf-8"), b"\n", text,
+                                                      *parts),
                                prefix=f".{key[:8]}-", make_parent=True)
+        self._list(self.lines_path(key))
 
     def _entries(self):
         """Every entry's path: the keyed entries and the scenario checks' store."""
@@ -421,6 +498,15 @@ class ResultCache:
         total = self.hits + self.misses
         return {"enabled": self.enabled, "hits": self.hits, "misses": self.misses,
                 "hit_rate": self.hits / total if total else 0.0}
+
+
+def split_block(text: bytes | memoryview, count: int) -> list[str]:
+    """The ``count`` lines of a block of text that :meth:`ResultCache.put_lines` stored
+    (``ValueError`` when it holds another number of lines)."""
+    lines = str(text, "utf-8").split(LINE_SEPARATOR) if count else []
+    if len(lines) != count:
+        raise ValueError(f"{len(lines)} lines, not {count}")
+    return lines
 
 
 def _parse_lines(lines: list[str]) -> list:

@@ -15,8 +15,9 @@ from __future__ import annotations
 
 import base64
 import pickle
+from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Sequence
+from typing import Iterator, Sequence
 
 from harness import engines as registry
 from harness.engines import EngineNotInstalled, install_fingerprint
@@ -42,7 +43,7 @@ def engine_facts(names: Sequence[str], cache=None) -> EngineFacts:
     holds them for the installed package, else learnt by loading the adapter and kept."""
     facts = EngineFacts()
     for name in names:
-        fingerprint = install_fingerprint(name)
+        fingerprint = _fingerprint(name)
         key = None
         if fingerprint is not None and cache is not None and cache.enabled:
             key = cache.key({"kind": ENGINE_FACTS, "engine": name, "install": fingerprint})
@@ -66,6 +67,31 @@ def engine_facts(names: Sequence[str], cache=None) -> EngineFacts:
             except OSError:  # not kept: the next run loads the engine again
                 pass
     return facts
+
+
+#: Each engine's install fingerprint while :func:`fingerprints_remembered` is active.
+_FINGERPRINTS: dict[str, str | None] | None = None
+
+
+@contextmanager
+def fingerprints_remembered() -> Iterator[None]:
+    """Within: each engine's :func:`install_fingerprint` found once (a command asks twice,
+    for the scenario checks' context and for the run; each is a search of the installed
+    packages' metadata)."""
+    global _FINGERPRINTS
+    previous, _FINGERPRINTS = _FINGERPRINTS, {}
+    try:
+        yield
+    finally:
+        _FINGERPRINTS = previous
+
+
+def _fingerprint(name: str) -> str | None:
+    if _FINGERPRINTS is None:
+        return install_fingerprint(name)
+    if name not in _FINGERPRINTS:
+        _FINGERPRINTS[name] = install_fingerprint(name)
+    return _FINGERPRINTS[name]
 
 
 def _stored(cache, key: str, name: str) -> tuple[str, dict] | None:

@@ -55,12 +55,14 @@ from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 
 from harness.collector import collector_paused
-from harness.run.files import write_bytes_atomically, write_parts_atomically
+from harness.run.files import write_parts_atomically
 
 FORMAT = "impact-harness-results"
 FORMAT_VERSION = 1
 DEFAULT_RESULTS = Path("reports") / "results.json"
 ANALYTIC = "analytic"
+#: Between two record lines of a results file (a line never holds a raw newline).
+LINE_SEPARATOR = ",\n"
 
 
 @dataclass
@@ -244,10 +246,38 @@ def record_line(data: Mapping) -> str:
     return json.dumps(data, ensure_ascii=False, allow_nan=False, separators=(",", ":"))
 
 
+@dataclass
+class RecordBlock:
+    """Consecutive records of a results file as they are written: their ``count`` lines
+    (:func:`record_line`) joined by :data:`LINE_SEPARATOR` as UTF-8 ``text``, and, for the
+    companion (:func:`companion_path`), the list of their dicts (:meth:`Record.as_dict`) and
+    the list of their lines, each pickled. A run writes a scenario's block read from the
+    result cache as it is: no record is parsed, encoded or pickled again."""
+
+    text: bytes | memoryview
+    count: int
+    pickled_datas: bytes | memoryview
+    pickled_lines: bytes | memoryview
+
+    @classmethod
+    def of_lines(cls, lines: Sequence[str], datas: Sequence[dict] | None = None,
+                 pickled_datas: bytes | None = None) -> "RecordBlock":
+        """The block of records whose ``lines`` are known and whose dicts are ``datas``
+        (or, already pickled, ``pickled_datas``; one of the two)."""
+        if pickled_datas is None:
+            pickled_datas = pickle.dumps(list(datas), protocol=pickle.HIGHEST_PROTOCOL)
+        return cls(text=LINE_SEPARATOR.join(lines).encode("utf-8"), count=len(lines),
+                   pickled_datas=pickled_datas,
+                   pickled_lines=pickle.dumps(list(lines), protocol=pickle.HIGHEST_PROTOCOL))
+
+    def lines(self) -> list[str]:
+        """The records' lines, decoded and split."""
+        return str(self.text, "utf-8").split(LINE_SEPARATOR) if self.count else []
+
+
 def write_results(path: Path | str, records: Iterable[Record | None], provenance: Mapping,
                   scenarios: Mapping | None = None, *,
-                  lines: Sequence[str | None] | None = None,
-                  pickled: Sequence[bytes] | None = None) -> Path:
+                  lines: Sequence[str | None] | None = None) -> Path:
     """Write the results file (atomically) and its companion (:func:`companion_path`), and
     return the file's path.
 
@@ -255,20 +285,28 @@ def write_results(path: Path | str, records: Iterable[Record | None], provenance
     (description, tags, system, sweep parameter, labels of the speeds, gates). ``lines``
     (parallel to ``records``): a record's :func:`record_line` when already known (read from
     the result cache with the record, which is unchanged since; the record may then be
-    None), else None. ``pickled``: the records as the companion holds them, pickled lists of
-    :meth:`Record.as_dict` (in order, all of them), when known; without it the companion is
-    written only when every record is at hand.
+    None), else None. :func:`write_result_blocks` writes records already laid out.
     """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     records = list(records)
     lines = [None] * len(records) if lines is None else list(lines)
     if len(lines) != len(records):
         raise ValueError(f"{len(lines)} lines for {len(records)} records")
-    datas = None
-    if pickled is None and all(line is None for line in lines):
-        datas = [record.as_dict() for record in records]
-        lines = [record_line(data) for data in datas]
+    datas = [None if record is None else record.as_dict() for record in records]
+    lines = [record_line(data) if line is None else line for data, line in zip(datas, lines)]
+    if any(data is None for data in datas):  # a record known by its line only
+        with collector_paused():
+            datas = [json.loads(line) if data is None else data
+                     for data, line in zip(datas, lines)]
+    return write_result_blocks(path, [RecordBlock.of_lines(lines, datas)], provenance,
+                               scenarios)
+
+
+def write_result_blocks(path: Path | str, blocks: Sequence[RecordBlock], provenance: Mapping,
+                        scenarios: Mapping | None = None) -> Path:
+    """:func:`write_results` of the records of ``blocks``, in order."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    blocks = [block for block in blocks if block.count]
     document = {
         "format": FORMAT,
         "format_version": FORMAT_VERSION,
@@ -278,27 +316,26 @@ def write_results(path: Path | str, records: Iterable[Record | None], provenance
     # record, and the compact lines are written by json's C encoder (indented text is not).
     scenario_lines = ",".join(f"\n  {record_line(str(name))}: {_plain_line(info)}"
                               for name, info in (scenarios or {}).items())
-    lines = [record_line(record.as_dict()) if line is None else line
-             for record, line in zip(records, lines)]
     head = json.dumps(document, indent=1, ensure_ascii=False, allow_nan=False)
     head = (head[:-2] + ',\n "scenarios": {' + scenario_lines + ("\n }" if scenario_lines else "}")
             + RECORDS_START)
     # A unique temporary in the same directory, then an atomic rename: two runs writing the
-    # same file at once each replace it whole; a reader never sees half a file. Written line
-    # by line: the 56 MB of a large run are never copied into one text first.
+    # same file at once each replace it whole; a reader never sees half a file. Written block
+    # by block: the 56 MB of a large run are never copied into one text first.
+    separator = LINE_SEPARATOR.encode()
     write_parts_atomically(path, itertools.chain(
-        (head,), _separated(lines, ",\n"), (RECORDS_END,)))
-    if datas is not None:
-        pickled = [pickle.dumps(datas, protocol=pickle.HIGHEST_PROTOCOL)]
-    _write_companion(path, lines, pickled)
+        (head,), _separated([block.text for block in blocks], separator), (RECORDS_END,)))
+    _write_companion(path, blocks)
     return path
 
 
-def _separated(parts: Sequence[str], separator: str) -> Iterable[str]:
-    """``parts`` with ``separator`` between each two, in pieces of a few hundred (what
-    ``separator.join(parts)`` writes, without the one large copy)."""
-    for start in range(0, len(parts), 512):
-        yield ("" if start == 0 else separator) + separator.join(parts[start:start + 512])
+def _separated(parts: Sequence, separator) -> Iterable:
+    """``parts`` with ``separator`` between each two (what ``separator.join(parts)`` writes,
+    without the one large copy)."""
+    for number, part in enumerate(parts):
+        if number:
+            yield separator
+        yield part
 
 
 #: The ``format`` of a results file's companion (:func:`companion_path`).
@@ -319,23 +356,21 @@ def companion_path(path: Path | str) -> Path:
     return path.with_name(path.name + ".pickle")
 
 
-def _write_companion(path: Path, lines: Sequence[str], pickled: Sequence[bytes] | None
-                     ) -> None:
-    """Write (or, when the records' pickles are not at hand, remove) ``path``'s companion:
-    a header, the records' dicts in ``pickled`` parts, then the records' ``lines`` of the
-    file (what ``Results.record_lines`` gives); a companion that cannot be written is no
-    error (the results file is whole)."""
+def _write_companion(path: Path, blocks: Sequence[RecordBlock]) -> None:
+    """Write ``path``'s companion: a header, then the records' dicts in the ``blocks``'
+    pickled parts, then their lines of the file (what ``Results.record_lines`` gives) in
+    pickled parts; a companion that cannot be written is no error (the results file is
+    whole, and a companion of another file is never used)."""
     companion = companion_path(path)
     try:
-        if pickled is None:
-            companion.unlink(missing_ok=True)
-            return
         status = path.stat()
         header = {"format": COMPANION_FORMAT, "results_size": status.st_size,
                   "results_mtime_ns": status.st_mtime_ns, "results_inode": status.st_ino,
-                  "records": len(lines), "parts": len(pickled)}
-        write_bytes_atomically(companion, pickle.dumps(header) + b"".join(pickled)
-                               + pickle.dumps(list(lines), protocol=pickle.HIGHEST_PROTOCOL))
+                  "records": sum(block.count for block in blocks), "parts": len(blocks),
+                  "line_parts": len(blocks)}
+        write_parts_atomically(companion, (pickle.dumps(header),
+                                           *(block.pickled_datas for block in blocks),
+                                           *(block.pickled_lines for block in blocks)))
     except OSError:
         pass
 
@@ -359,7 +394,8 @@ def _read_companion(path: Path, status: os.stat_result
                     and header.get("results_size") == status.st_size
                     and header.get("results_mtime_ns") == status.st_mtime_ns
                     and header.get("results_inode") == status.st_ino
-                    and isinstance(header.get("parts"), int)):
+                    and isinstance(header.get("parts"), int)
+                    and isinstance(header.get("line_parts"), int)):
                 return None
             datas: list = []
             for _ in range(header["parts"]):  # one pickle each: an unpickler (memo) each
@@ -367,7 +403,12 @@ def _read_companion(path: Path, status: os.stat_result
                 if not isinstance(part, list):
                     return None
                 datas += part
-            lines = _PlainUnpickler(handle).load()
+            lines: list = []
+            for _ in range(header["line_parts"]):
+                part = _PlainUnpickler(handle).load()
+                if not isinstance(part, list):
+                    return None
+                lines += part
     except Exception:  # noqa: BLE001 - an unreadable companion is only slower reading
         return None
     if (len(datas) != header.get("records") or not all(isinstance(d, dict) for d in datas)
@@ -489,6 +530,7 @@ def _split_records(text: str) -> tuple[dict | None, list[str] | None]:
     return document, lines
 
 
-__all__ = ["ANALYTIC", "DEFAULT_RESULTS", "FORMAT", "FORMAT_VERSION", "Record", "Results",
-           "check_writable", "companion_path", "plain_value", "read_results",
-           "record_line", "write_results"]
+__all__ = ["ANALYTIC", "DEFAULT_RESULTS", "FORMAT", "FORMAT_VERSION", "LINE_SEPARATOR",
+           "Record", "RecordBlock", "Results", "check_writable", "companion_path",
+           "plain_value", "read_results", "record_line", "write_result_blocks",
+           "write_results"]

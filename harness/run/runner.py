@@ -77,11 +77,11 @@ import argparse
 import gc
 import json
 import math
-import pickle
 import signal
 import sys
 import threading
 import time
+from contextlib import nullcontext
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence, TextIO
@@ -90,8 +90,8 @@ import numpy as np
 
 from harness.collector import collector_paused
 from harness.engines import load_engine, preset_choices, preset_role
-from harness.run import metrics, references, verdicts
-from harness.run.executor import one_blas_thread
+from harness.run import metrics, references
+from harness.run.cache import Spelled
 from harness.run.history import contact_history
 from harness.run.provenance import provenance
 from harness.run.records import (
@@ -100,12 +100,16 @@ from harness.run.records import (
     FORMAT,
     FORMAT_VERSION,
     Record,
+    RecordBlock,
     check_writable,
     plain_value,
     record_line,
-    write_results,
+    write_result_blocks,
 )
 from harness.scenarios import ENGINES, PRESETS, Scenario, load_scenarios
+
+# harness.run.verdicts and harness.run.executor (a process pool's modules) are imported where
+# used: a warm run, whose records come whole from the cache, needs neither.
 
 #: Below this many engine runs to do, the pool's start-up costs more than it saves.
 MIN_PARALLEL_TASKS = 200
@@ -353,30 +357,37 @@ class GateResult:
 class RunOutcome:
     """What :func:`run` returns: the records, the gates, the provenance, each scenario's info.
 
-    ``record_lines`` (parallel to the records): each record's line of the results file
-    (:func:`harness.run.records.record_line`). A record read from the cache, or built on a
-    forked worker, travels as its line only and is parsed the first time :attr:`records` is
-    asked for (a warm run that only writes the results file never parses them).
+    ``blocks``: the records as the results file holds them, one
+    :class:`harness.run.records.RecordBlock` per scenario, in order. A record read from the
+    cache, or built on a forked worker, travels in its block only and is parsed the first time
+    :attr:`records` is asked for (a warm run that only writes the results file never decodes
+    them).
     """
 
     def __init__(self, records: Sequence[Record | None], gates: list[GateResult],
                  provenance: dict, scenarios: dict, cache_stats: dict | None = None,
-                 warnings: list[str] | None = None, record_lines: Sequence | None = None,
-                 internal: Sequence[int] = (), record_pickles: Sequence[bytes] | None = None
-                 ) -> None:
+                 warnings: list[str] | None = None, blocks: Sequence[RecordBlock] = (),
+                 internal: Sequence[int] = ()) -> None:
         self._records = list(records)
         self.gates = gates
         self.provenance = provenance
         self.scenarios = scenarios
         self.cache_stats = {} if cache_stats is None else cache_stats
         self.warnings = [] if warnings is None else warnings  # cache problems, one line each
-        self.record_lines = (list(record_lines) if record_lines is not None
-                             else [None] * len(self._records))
-        if len(self.record_lines) != len(self._records):
-            raise ValueError(f"{len(self.record_lines)} lines for {len(self._records)} records")
+        self.blocks = list(blocks)
+        if sum(block.count for block in self.blocks) != len(self._records):
+            raise ValueError(f"{sum(block.count for block in self.blocks)} lines for "
+                             f"{len(self._records)} records")
         self._internal = list(internal)  # positions of the internal-error records
-        # The records pickled in parts, for the results file's companion (write_results).
-        self.record_pickles = None if record_pickles is None else list(record_pickles)
+        self._lines: list[str] | None = None
+
+    @property
+    def record_lines(self) -> list[str]:
+        """Each record's line of the results file (:func:`harness.run.records.record_line`),
+        in run order: the blocks' lines, decoded once."""
+        if self._lines is None:
+            self._lines = [line for block in self.blocks for line in block.lines()]
+        return self._lines
 
     @property
     def records(self) -> list[Record]:
@@ -596,78 +607,93 @@ def run(
     versions, missing, preset_settings = (_engine_status(wanted_engines, cache) if needs_engines
                                           else ({}, {}, {}))
 
-    # 0. Whole scenarios whose finished records the cache holds: one entry each, its lines
-    # kept as text (the results file's lines) beside the summary the run needs of them.
-    scenario_keys: dict[str, str | None] = {}
-    stored: dict[str, _Built] = {}
-    stored_runs = 0  # engine runs of the scenarios read whole from the cache
-    for scenario in scenarios:
-        key = scenario_keys[scenario.name] = _scenario_key(
-            scenario, cache, versions, missing, wanted_engines, presets, command_overrides,
-            history)
-        found = _stored_scenario(scenario, cache, key, presets,
-                                 len(_engines_of(scenario, wanted_engines)))
-        if found is not None:
-            stored[scenario.name] = found
-            runs = found.summary["counts"]["engine_runs"]
-            cache.hits += runs  # each an engine run the cache spared, as read one by one
-            stored_runs += runs
+    # The lookups below find most entries absent on a cold run: read from listings of the
+    # cache's directories (ResultCache.listed), not by opening each file.
+    with cache.listed() if cache is not None else nullcontext():
+        # 0. Whole scenarios whose finished records the cache holds: one entry each, its lines
+        # kept as text (the results file's lines) beside the summary the run needs of them.
+        scenario_keys: dict[str, str | None] = {}
+        stored: dict[str, _Built] = {}
+        stored_runs = 0  # engine runs of the scenarios read whole from the cache
+        for scenario in scenarios:
+            key = scenario_keys[scenario.name] = _scenario_key(
+                scenario, cache, versions, missing, wanted_engines, presets, command_overrides,
+                history)
+            found = _stored_scenario(scenario, cache, key, presets,
+                                     len(_engines_of(scenario, wanted_engines)))
+            if found is not None:
+                stored[scenario.name] = found
+                runs = found.summary["counts"]["engine_runs"]
+                cache.hits += runs  # each an engine run the cache spared, as read one by one
+                stored_runs += runs
 
-    # 1. Engine tasks: build, look up in the cache. On the local pool each worker stores the
-    # results it simulates (in parallel, as each chunk finishes); Dask's may lie elsewhere.
-    store_in_worker = (None if cache is None or not cache.enabled or executor != "local"
-                       else (str(cache.root), cache.version))
-    settings_memo: dict = {}
-    plan: list[tuple[Scenario, Any, str, str, dict]] = []  # (scenario, point, engine, preset, item)
-    tasks, task_keys, task_slots = [], [], []
-    for scenario in scenarios:
-        if scenario.analytic_only or scenario.name in stored:
-            continue
-        for point in scenario.point_list():
-            scene = None
-            for engine_name in _engines_of(scenario, wanted_engines):
-                for preset in presets:
-                    item: dict = {}
-                    plan.append((scenario, point, engine_name, preset, item))
-                    if engine_name in missing:
-                        item["output"] = {"status": f"skipped: {missing[engine_name]}"}
-                        continue
-                    engine = load_engine(engine_name)  # loaded once, only for runs to build
-                    overrides = {**scenario.engine_settings.get(engine_name, {}),
-                                 **command_overrides.get(engine_name, {})}
-                    item["overrides"] = overrides
-                    item["history"] = (scenario.sweep is None) if history is None else history
-                    settings = _settings_of(engine, preset, overrides, settings_memo)
-                    if isinstance(settings, str):
-                        item["output"] = {"status": f"error: settings: {settings}"}
-                        continue
-                    if scene is None:
-                        scene = scenario.scene(point)
-                    payload = {"kind": "engine-run", "engine": engine_name,
-                               "engine_version": engine.version, "settings": settings,
-                               "scene": _scene_payload(scene)}
-                    key = cache.key(payload) if cache is not None else None
-                    item["key"] = key
-                    speeds = 3 * len(scene.bodies)
-                    cached = None if cache is None else cache.get(
-                        key, check=lambda output, speeds=speeds: check_engine_output(output,
-                                                                                   speeds))
-                    if cached is not None:
-                        item["output"], item["cached"] = cached, True
-                        continue
-                    tasks.append({"engine": engine_name, "settings": settings, "scene": scene,
-                                  "time_limit_s": time_limit_s,
-                                  "store": None if store_in_worker is None
-                                  else (*store_in_worker, key)})
-                    task_keys.append(key)
-                    task_slots.append(item)
-    # Several-contact references the records will need and the cache lacks: tasks of the
-    # same executor, ahead of the engine runs (each takes up to a second).
-    reference_tasks, reference_keys, computed_references = _reference_tasks(
-        [s for s in scenarios if s.name not in stored], cache)
-    if cache is not None:
-        warnings += [f"cache entry rejected (simulated again): {entry}"
-                     for entry in cache.rejected]
+        # 1. Engine tasks: build, look up in the cache. On the local pool each worker stores the
+        # results it simulates (in parallel, as each chunk finishes); Dask's may lie elsewhere.
+        store_in_worker = (None if cache is None or not cache.enabled or executor != "local"
+                           else (str(cache.root), cache.version))
+        settings_memo: dict = {}
+        spelled_settings: dict[int, Spelled] = {}  # by id of settings_memo's values
+        # (scenario, point, engine, preset, item)
+        plan: list[tuple[Scenario, Any, str, str, dict]] = []
+        tasks, task_keys, task_slots = [], [], []
+        for scenario in scenarios:
+            if scenario.analytic_only or scenario.name in stored:
+                continue
+            for point in scenario.point_list():
+                scene = None
+                for engine_name in _engines_of(scenario, wanted_engines):
+                    for preset in presets:
+                        item: dict = {}
+                        plan.append((scenario, point, engine_name, preset, item))
+                        if engine_name in missing:
+                            item["output"] = {"status": f"skipped: {missing[engine_name]}"}
+                            continue
+                        engine = load_engine(engine_name)  # loaded once, for runs to build
+                        overrides = {**scenario.engine_settings.get(engine_name, {}),
+                                     **command_overrides.get(engine_name, {})}
+                        item["overrides"] = overrides
+                        item["history"] = (scenario.sweep is None if history is None
+                                           else history)
+                        settings = _settings_of(engine, preset, overrides, settings_memo)
+                        if isinstance(settings, str):
+                            item["output"] = {"status": f"error: settings: {settings}"}
+                            continue
+                        if scene is None:
+                            scene = scenario.scene(point)
+                            # spelled once for the keys of all the point's engine runs
+                            spelled_scene = (None if cache is None
+                                             else Spelled(_scene_payload(scene)))
+                        if cache is not None and id(settings) not in spelled_settings:
+                            spelled_settings[id(settings)] = Spelled(settings)
+                        payload = {"kind": "engine-run", "engine": engine_name,
+                                   "engine_version": engine.version,
+                                   "settings": spelled_settings.get(id(settings)),
+                                   "scene": spelled_scene}
+                        key = cache.key(payload) if cache is not None else None
+                        item["key"] = key
+                        speeds = 3 * len(scene.bodies)
+                        cached = None if cache is None else cache.get(
+                            key, check=lambda output, speeds=speeds: check_engine_output(output,
+                                                                                       speeds))
+                        if cached is not None:
+                            item["output"], item["cached"] = cached, True
+                            continue
+                        tasks.append({"engine": engine_name, "settings": settings, "scene": scene,
+                                      "time_limit_s": time_limit_s,
+                                      "store": None if store_in_worker is None
+                                      else (*store_in_worker, key)})
+                        task_keys.append(key)
+                        task_slots.append(item)
+        # Several-contact references the records will need and the cache lacks: tasks of the
+        # same executor, ahead of the engine runs (each takes up to a second).
+        reference_tasks, reference_keys, computed_references = _reference_tasks(
+            [s for s in scenarios if s.name not in stored], cache)
+        if store_in_worker is not None:  # each stored by the worker computing it, as runs
+            for task, key in zip(reference_tasks, reference_keys):
+                task["store"] = None if key is None else (*store_in_worker, key)
+        if cache is not None:
+            warnings += [f"cache entry rejected (simulated again): {entry}"
+                         for entry in cache.rejected]
 
     # 2. Run the misses; store each in the cache as it finishes.
     cache_failed: list[str] = []
@@ -677,7 +703,12 @@ def run(
             task = reference_tasks[index]
             if "reference" in output:  # else built inline, where its error is reported
                 computed_references[task["scenario"], task["point"]] = output["reference"]
-                if reference_keys[index] is not None:
+                stored = output.pop(STORED_BY_WORKER, False)
+                problem = output.pop(STORE_FAILED_IN_WORKER, None)
+                if problem is not None and not cache_failed:
+                    cache_failed.append(f"cache {cache.root}: cannot store results ({problem}); "
+                                        "the run goes on without the cache")
+                if not (stored or cache_failed or reference_keys[index] is None):
                     _store_reference(cache, reference_keys[index], output["reference"])
             return
         index -= len(reference_tasks)
@@ -723,8 +754,7 @@ def run(
                              cache, computed_references, scenario_keys,
                              workers=1 if executor == "local" and workers == 1 else workers)
     records: list[Record | None] = []
-    record_lines: list[str] = []
-    record_pickles: list[bytes] | None = []
+    blocks: list[RecordBlock] = []
     internal: list[int] = []
     gates: list[GateResult] = []
     infos: dict[str, dict] = {}
@@ -732,12 +762,9 @@ def run(
         infos[scenario.name] = scenario_info(scenario)
         result = stored.get(scenario.name) or built[scenario.name]
         internal += [len(records) + position for position in result.internal]
-        records += result.records if result.records is not None else [None] * len(result.lines)
-        record_lines += result.lines
-        if result.pickled is None or record_pickles is None:
-            record_pickles = None
-        else:
-            record_pickles.append(result.pickled)
+        records += (result.records if result.records is not None
+                    else [None] * result.block.count)
+        blocks.append(result.block)
         infos[scenario.name]["references"] = result.summary["references"]
         scenario_gates = [GateResult(**gate) for gate in result.summary["gates"]]
         gates += scenario_gates
@@ -771,15 +798,7 @@ def run(
         wall_time_s=time.perf_counter() - started,
     )
     return RunOutcome(records=records, gates=gates, provenance=info, scenarios=infos,
-                      cache_stats=stats, warnings=warnings, record_lines=record_lines,
-                      internal=internal, record_pickles=record_pickles)
-
-
-def _definition(scenario: Scenario) -> dict:
-    """A scenario as a cache key's payload holds it: every field but the file's ``path`` (the
-    records do not depend on where the file lies); the nested dataclasses and mappings are
-    spelled by :func:`harness.run.cache.canonical_json`."""
-    return {f.name: getattr(scenario, f.name) for f in fields(scenario) if f.name != "path"}
+                      cache_stats=stats, warnings=warnings, blocks=blocks, internal=internal)
 
 
 def _scenario_key(scenario: Scenario, cache, versions: Mapping, missing: Mapping,
@@ -792,8 +811,10 @@ def _scenario_key(scenario: Scenario, cache, versions: Mapping, missing: Mapping
     keys (the settings, the scene at every point). A scenario's records depend only on its
     definition (not its path), the engines that apply with their versions, the presets, the
     ``--set`` overrides and the history flag (under the code version every key holds), which
-    make this key: one entry per scenario. Not kept when an engine of the scenario is missing
-    (its runs are skipped, and a skipped run is never cached).
+    make this key: one entry per scenario (the definition by its digest,
+    :attr:`Scenario.definition_digest`, spelled once per scenario text). Not kept when an
+    engine of the scenario is missing (its runs are skipped, and a skipped run is never
+    cached).
     """
     if cache is None or not cache.enabled:
         return None
@@ -801,7 +822,7 @@ def _scenario_key(scenario: Scenario, cache, versions: Mapping, missing: Mapping
     if any(name in missing or name not in versions for name in engines):
         return None
     try:
-        return cache.key({"kind": SCENARIO_RECORDS, "scenario": _definition(scenario),
+        return cache.key({"kind": SCENARIO_RECORDS, "scenario": scenario.definition_digest,
                           "engines": [[name, versions[name]] for name in engines],
                           "presets": list(presets),
                           "overrides": {name: command_overrides.get(name, {})
@@ -813,24 +834,22 @@ def _scenario_key(scenario: Scenario, cache, versions: Mapping, missing: Mapping
 
 @dataclass
 class _Built:
-    """A scenario's finished records: the results file's ``lines`` (one per record), the
-    records themselves when built in this process (None: read from the cache or built on a
-    worker, parsed from the lines when asked for), the ``summary`` the run needs of them
-    (:func:`_summary`), the positions of internal-error records and the records pickled."""
+    """A scenario's finished records: as the results file and its companion hold them
+    (``block``), the records themselves when built in this process (None: read from the
+    cache or built on a worker, parsed from the block when asked for), the ``summary`` the
+    run needs of them (:func:`_summary`) and the positions of internal-error records."""
 
-    lines: list[str]
+    block: RecordBlock
     summary: dict
     records: list[Record] | None = None
     internal: list[int] = field(default_factory=list)
-    # The records' dicts (Record.as_dict, as the lines hold them) pickled, for the results
-    # file's companion (harness.run.records.companion_path); None when not at hand.
-    pickled: bytes | None = None
 
 
 def _stored_scenario(scenario: Scenario, cache, key: str | None, presets: Sequence[str],
                      engine_count: int) -> _Built | None:
     """The scenario's finished records from its cache entry (:func:`_scenario_key`), as the
-    lines of the results file (not parsed) and their summary, or None.
+    results file and its companion hold them (neither decoded nor parsed) with their summary,
+    or None.
 
     The entry was checked when it was stored (:func:`_store_scenario`) and its checksum
     shows it unchanged since; it is used only when it holds one line per law and engine
@@ -855,14 +874,15 @@ def _stored_scenario(scenario: Scenario, cache, key: str | None, presets: Sequen
             return f"not {expected} records"
         return None
 
-    entry = cache.get_line_texts(key, check_summary=check)
+    entry = cache.get_block(key, check_summary=check)
     if entry is None:
         return None
-    summary, lines, pickled = entry
-    if len(lines) != expected:
-        cache.rejected.append(f"{cache.lines_path(key)}: {len(lines)} lines, not {expected}")
+    summary, text, count, parts = entry
+    if count != expected or len(parts) != 2:
+        cache.rejected.append(f"{cache.lines_path(key)}: {count} lines and {len(parts)} "
+                              f"parts, not {expected} and 2")
         return None
-    return _Built(lines=lines, summary=summary, pickled=pickled)
+    return _Built(block=RecordBlock(text, count, *parts), summary=summary)
 
 
 #: The counts of a scenario's records its summary keeps (for the progress line, the hits).
@@ -903,9 +923,11 @@ def _build_scenarios(scenarios: Sequence[Scenario], by_scenario: Mapping[str, li
     the lines when asked for: :attr:`RunOutcome.records`); each stores its scenarios' cache
     entries. Records are the same either way (built by the same code from the same values).
     """
+    global _BUILD_STATE
+    if not scenarios:  # a warm run's: every scenario's records read whole from the cache
+        return {}
     from harness.run.executor import default_workers, map_forked
 
-    global _BUILD_STATE
     workers = default_workers() if workers is None else workers
     size = sum(len(s.point_list()) * len(s.laws) + len(by_scenario.get(s.name, ()))
                for s in scenarios)  # records to build
@@ -959,11 +981,11 @@ def _build_scenario(scenario: Scenario, entries: Sequence, cache, computed_refer
     summary = _summary(scenario, records)
     datas = [record.as_dict() for record in records]
     lines = [record_line(data) for data in datas]
+    block = RecordBlock.of_lines(lines, datas)
     internal = [i for i, r in enumerate(records) if r.status.startswith("error: internal")]
     if not internal:
-        _store_scenario(cache, key, entries, records, datas, lines, summary)
-    return _Built(lines=lines, summary=summary, records=records, internal=internal,
-                  pickled=pickle.dumps(datas, protocol=pickle.HIGHEST_PROTOCOL))
+        _store_scenario(cache, key, entries, records, datas, lines, block, summary)
+    return _Built(block=block, summary=summary, records=records, internal=internal)
 
 
 def _finite_speeds(after, before) -> bool:
@@ -974,13 +996,14 @@ def _finite_speeds(after, before) -> bool:
 
 
 def _store_scenario(cache, key: str | None, engine_entries: Sequence, records: Sequence[Record],
-                    datas: Sequence[dict], lines: Sequence[str], summary: dict) -> None:
+                    datas: Sequence[dict], lines: Sequence[str], block: RecordBlock,
+                    summary: dict) -> None:
     """Keep a scenario's records under ``key`` when every engine run was cacheable (none
     skipped or failed) and none is an ok record without finite speeds (a record the lookup
     would reject every run); as a warm run reads them back: every engine record ``cached``
-    (``datas``: each record's :meth:`Record.as_dict`, ``lines`` their lines). Stored as the
-    lines the results file holds, one per record, with the ``summary``, so a warm run
-    writes them as read."""
+    (``datas``: each record's :meth:`Record.as_dict`, ``lines`` their lines, ``block`` them
+    as written). Stored as the results file and its companion hold them
+    (:class:`RecordBlock`), with the ``summary``, so a warm run writes them as read."""
     if key is None or cache is None or not cache.enabled:
         return
     if not all(isinstance(item.get("output"), dict) and item.get("key") is not None
@@ -994,11 +1017,13 @@ def _store_scenario(cache, key: str | None, engine_entries: Sequence, records: S
                     else {**data, "cached": True} for record, data in zip(records, datas)]
     stored_lines = [line if stored is data else record_line(stored)
                     for data, stored, line in zip(datas, stored_datas, lines)]
+    if stored_lines != lines:
+        block = RecordBlock.of_lines(stored_lines, stored_datas)
     counts = summary["counts"]
     stored_summary = {**summary, "counts": {**counts, "cached": counts["engine_runs"]}}
     try:
         cache.put_lines(key, stored_lines, stored_summary,
-                        pickle.dumps(stored_datas, protocol=pickle.HIGHEST_PROTOCOL))
+                        (block.pickled_datas, block.pickled_lines))
     except OSError:  # the run goes on without the cache (the engine runs' store warns)
         pass
 
@@ -1057,6 +1082,8 @@ def point_records(scenario: Scenario, point, engine_entries: Sequence, *,
     reference already computed (a :func:`reference_task` of the run); None: read from the
     cache or computed here.
     """
+    from harness.run import verdicts
+
     fixed = scenario.at(point)
     mu, e = fixed.friction, fixed.restitution
     problem = scenario.analytic_problem(point)
@@ -1195,18 +1222,40 @@ def reference_task(task: dict) -> dict:
 
     ``task`` holds the situation (``situation``, :func:`harness.run.references.kind_of`), the
     ``scene`` at the point and its ``laws`` (:class:`harness.run.references.PointLaws`): a
-    scenario does not pickle. The result is ``{"reference": …}``
+    scenario does not pickle; ``store`` where the worker keeps the reference (or None). The
+    result is ``{"reference": …}``
     (:func:`harness.run.references.scene_reference`, the very dict the main process would
     compute) or, when it raises, ``{"error": "…"}``: the main process then builds the
     reference inline, where the exception becomes the point's internal-error records as
     before (:func:`_point_records_or_errors`).
     """
+    from harness.run.executor import one_blas_thread
+
     one_blas_thread()  # a Dask worker has no pool initializer
     try:
-        return {"reference": references.scene_reference(task["situation"], task["scene"],
-                                                        task["laws"])}
+        reference = references.scene_reference(task["situation"], task["scene"], task["laws"])
     except Exception as error:  # noqa: BLE001 - raised again, and reported, in the main process
         return {"error": f"{type(error).__name__}: {error}"}
+    return _reference_stored_by_worker(task, {"reference": reference})
+
+
+def _reference_stored_by_worker(task: dict, output: dict) -> dict:
+    """:func:`_stored_by_worker` of a reference task's output: the reference stored under
+    ``task["store"]`` when given (the local pool: the main process then spells and writes
+    none of them)."""
+    where = task.get("store")
+    if where is None:
+        return output
+    from harness.run.cache import ResultCache
+
+    root, version, key = where
+    try:
+        ResultCache(root, version=version).put(key, output["reference"])
+    except OSError as error:
+        output[STORE_FAILED_IN_WORKER] = str(error)
+        return output
+    output[STORED_BY_WORKER] = True
+    return output
 
 
 def engine_record(scenario: Scenario, point_info: dict, engine_name: str, preset: str,
@@ -1220,6 +1269,8 @@ def engine_record(scenario: Scenario, point_info: dict, engine_name: str, preset
     ``law_energy_change`` is ``newton-lcp``'s energy change, to attribute a gain;
     ``contacts``: a flat face's declared contacts (:func:`verdicts.declared_contacts`).
     """
+    from harness.run import verdicts
+
     output = item["output"]
     free_bodies = scene is not None and not scene.ground
     mass_matrix, u_before = problem.mass_matrix, problem.u
@@ -1273,6 +1324,8 @@ def engine_record(scenario: Scenario, point_info: dict, engine_name: str, preset
 
 def check_gates(scenario: Scenario, records: Sequence[Record]) -> list[GateResult]:
     """Every ``[expect.gate]`` of ``scenario`` against its engine records."""
+    from harness.run import verdicts
+
     results = []
     for gate in scenario.expect.gates:
         matching = [r for r in records if r.source == gate.engine
@@ -1483,6 +1536,14 @@ def execute(args, *, json_path: Path, command: Sequence[str] | None = None,
     ``json_path`` when it holds the results of another selection (``run`` without ``--json``).
     Bad scenario files are reported one line each; the others still run (exit status 2).
     """
+    from harness.run.engine_facts import fingerprints_remembered
+
+    with fingerprints_remembered():
+        return _execute(args, json_path=json_path, command=command, log=log, guard=guard)
+
+
+def _execute(args, *, json_path: Path, command: Sequence[str] | None,
+             log: TextIO | None | str, guard: bool) -> tuple[int, RunOutcome | None]:
     from harness.scenarios.library import load_scenarios_reporting
 
     log = sys.stderr if log == "stderr" else log
@@ -1535,8 +1596,7 @@ def execute(args, *, json_path: Path, command: Sequence[str] | None = None,
     except ConnectionError as error:  # an unreachable Dask scheduler
         return _fail(str(error)), None
     try:
-        write_results(json_path, outcome._records, outcome.provenance, outcome.scenarios,
-                      lines=outcome.record_lines, pickled=outcome.record_pickles)
+        write_result_blocks(json_path, outcome.blocks, outcome.provenance, outcome.scenarios)
     except OSError as error:
         print(f"impact-harness run: cannot write {json_path}: {error.strerror or error}; the "
               "engine results are in the cache, a rerun simulates nothing again",

@@ -64,7 +64,7 @@ def main(args) -> int:
                                      command=["impact-harness", "suite", *sys.argv[2:]])
     if outcome is None:
         return status
-    print(f"[2/4] run: {len(outcome.records)} records -> {results_path} "
+    print(f"[2/4] run: {outcome.record_count} records -> {results_path} "
           f"({time.perf_counter() - tick:.1f} s)", file=sys.stderr, flush=True)
 
     tick = time.perf_counter()

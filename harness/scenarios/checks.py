@@ -11,8 +11,9 @@ import copyreg
 import hashlib
 import io
 import json
+import math
 import pickle
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, Mapping
@@ -243,19 +244,35 @@ def engine_time_step(fixed: Scenario) -> tuple[float, str]:
     engine's name; :data:`FALLBACK_TIME_STEP` when none can be loaded."""
     best, name = 0.0, ""
     for engine in fixed.engines:
-        try:
-            adapter = load_engine(engine)
-        except EngineNotInstalled:
-            continue
         overrides = dict(fixed.engine_settings.get(engine, {}))
         for preset in PRESETS:
-            try:
-                step = float(adapter.settings(preset, overrides)["time_step"])
-            except (ValueError, KeyError):  # bad overrides are reported elsewhere
-                continue
-            if step > best:
+            step = _preset_time_step(engine, preset, overrides)
+            if step is not None and step > best:
                 best, name = step, engine
     return (best, name) if best > 0 else (FALLBACK_TIME_STEP, "an engine at 1/60 s")
+
+
+#: :func:`_preset_time_step` by engine, preset and overrides (a library's files share a few:
+#: an adapter's settings, copied and validated, were a fifth of reading a file anew).
+_TIME_STEPS: dict[tuple[str, str, str], float | None] = {}
+
+
+def _preset_time_step(engine: str, preset: str, overrides: dict) -> float | None:
+    """The time step (s) of ``engine`` at ``preset`` with ``overrides``; None when the engine
+    is not installed or the overrides are bad (reported elsewhere)."""
+    try:
+        key = (engine, preset, json.dumps(overrides, sort_keys=True))
+    except (TypeError, ValueError):  # a value json cannot spell: not remembered
+        key = None
+    if key is not None and key in _TIME_STEPS:
+        return _TIME_STEPS[key]
+    try:
+        step = float(load_engine(engine).settings(preset, overrides)["time_step"])
+    except (EngineNotInstalled, ValueError, KeyError):
+        step = None
+    if key is not None:
+        _TIME_STEPS[key] = step
+    return step
 
 
 def _feature_points(body: Body) -> list[tuple[str, np.ndarray, float]]:
@@ -279,6 +296,33 @@ def _feature_gap(scene: Scene, index: int, centre: np.ndarray, radius: float,
                                         angle=poses[other][2])
     feature = Body("feature", Disk(radius), 1.0, (float(world[0]), float(world[1])))
     return geometry.body_contact(partner, feature).gap
+
+
+def _ground_gap(c: float, s: float, height: float, x: float, y: float, radius: float
+                ) -> float:
+    """:func:`_feature_gap` above the ground: the height of the feature at body-frame ``(x,
+    y)`` on a body at ``height`` turned by the angle of cosine ``c`` and sine ``s``, less its
+    radius (the same sums as the rotation matrix's product)."""
+    return (s * x + c * y) + height - radius
+
+
+def _first_ground_touch(start: list, features: list, speeds, times: np.ndarray) -> int | None:
+    """The first of ``times`` at which a feature (``(body index, name, body-frame x, y,
+    radius)``) of a body starting at ``start`` poses and moving at ``speeds`` touches the
+    ground, as an index, or None: the sums of :func:`_ground_gap` over arrays of times, in
+    the same order (the angles' cosines and sines by :mod:`math`, as there), so the sample
+    found is the one the sample-by-sample scan finds."""
+    turns = []
+    for i, (_, y, angle) in enumerate(start):
+        angles = (angle + speeds[3 * i + 2] * times).tolist()
+        turns.append((np.array([math.cos(a) for a in angles]),
+                      np.array([math.sin(a) for a in angles]), y + speeds[3 * i + 1] * times))
+    touched = np.zeros(len(times), dtype=bool)
+    for index, _, x, y, radius in features:
+        c, s, heights = turns[index]
+        touched |= _ground_gap(c, s, heights, x, y, radius) <= 0.0
+    hits = np.flatnonzero(touched)
+    return int(hits[0]) if hits.size else None
 
 
 def second_strike(scene: Scene, contact, horizon_s: float, step_s: float) -> Strike | None:
@@ -307,19 +351,36 @@ def second_strike(scene: Scene, contact, horizon_s: float, step_s: float) -> Str
                 features.append((index, name, centre, radius))
     if not features:
         return None
+    # On the ground (most files) a feature's gap is its height: plain floats, no arrays.
+    ground_features = [(index, name, float(centre[0]), float(centre[1]), radius)
+                       for index, name, centre, radius in features]
+
     def poses_at(speeds, time_s):
         return [(x + speeds[3 * i] * time_s, y + speeds[3 * i + 1] * time_s,
                  angle + speeds[3 * i + 2] * time_s) for i, (x, y, angle) in enumerate(start)]
 
     def touching(speeds, time_s):
+        poses = poses_at(speeds, time_s)
+        if scene.ground:
+            turns = [(math.cos(angle), math.sin(angle), y) for _, y, angle in poses]
+            for index, name, x, y, radius in ground_features:
+                c, s, height = turns[index]
+                if _ground_gap(c, s, height, x, y, radius) <= 0.0:
+                    return index, name
+            return None
         return next(((index, name) for index, name, centre, radius in features
-                     if _feature_gap(scene, index, centre, radius,
-                                     poses_at(speeds, time_s)) <= 0.0), None)
+                     if _feature_gap(scene, index, centre, radius, poses) <= 0.0), None)
 
     earliest: Strike | None = None
     for motion, speeds, duration in motions:
-        previous = 0.0
-        for time_s in np.linspace(0.0, duration, SEQUENCE_SAMPLES + 1)[1:]:
+        times = np.linspace(0.0, duration, SEQUENCE_SAMPLES + 1)[1:]
+        first = 0
+        if scene.ground:  # the samples before the first touch skipped in one pass of arrays
+            first = _first_ground_touch(start, ground_features, speeds, times)
+            if first is None:
+                continue
+        previous = 0.0 if first == 0 else float(times[first - 1])
+        for time_s in times[first:]:
             if earliest is not None and previous >= earliest.time_s:
                 break
             hit = touching(speeds, time_s)
@@ -422,7 +483,12 @@ class PassedChecks:
     def add(self, key: str | None, scenario: Scenario | None = None) -> None:
         """Remember that the text of ``key`` passed, with the ``scenario`` read from it."""
         if key is not None and self._load().get(key) is None:
-            self._passed[key] = None if scenario is None else replace(scenario, path=None)
+            if scenario is not None:
+                try:  # spelled now, kept with it and in the store: no run spells it again
+                    scenario.definition_digest  # noqa: B018 - computed and kept with it
+                except TypeError:  # no canonical spelling: the runner keeps no records of it
+                    pass
+            self._passed[key] = None if scenario is None else scenario.located(None)
             self._added = True
 
     def save(self) -> None:

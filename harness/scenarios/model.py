@@ -6,8 +6,11 @@ get and the ``planar_impact.ImpactProblem`` the laws get.
 
 from __future__ import annotations
 
+import copy
+import hashlib
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
+from functools import cached_property
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Mapping, Union
@@ -149,6 +152,27 @@ class Scenario:
     # "simultaneous": the file declares a face lying flat (several contact points at once)
     contacts: str = "one"
     path: Path | None = None
+
+    # -- identity ----------------------------------------------------------------------------
+    @cached_property
+    def definition_digest(self) -> str:
+        """sha256 of every field but the file's ``path`` spelled as canonical JSON
+        (:func:`harness.run.cache.canonical_json`): what a scenario's records depend on (the
+        runner's cache key of them). Spelled once per scenario object and kept with it (in the
+        store of passed checks too, :meth:`located` copies it): a warm run of a large library
+        spent a tenth of its time spelling definitions. ``TypeError`` for a value without a
+        canonical spelling."""
+        from harness.run.cache import canonical_json
+
+        definition = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "path"}
+        return hashlib.sha256(canonical_json(definition).encode()).hexdigest()
+
+    def located(self, path: Path | None) -> "Scenario":
+        """This scenario read from the file ``path``: a copy with its path set, keeping what
+        was computed of it (:attr:`definition_digest`, which the path does not change)."""
+        located = copy.copy(self)
+        object.__setattr__(located, "path", path)  # frozen; path is in no cached value
+        return located
 
     # -- points ------------------------------------------------------------------------------
     @property

@@ -673,7 +673,7 @@ def load_scenario(path) -> Scenario:
     checks_key = checks.passed_checks.key(text)
     passed = checks.passed_checks.scenario(checks_key)
     if passed is not None:  # this very text was read and passed every check before
-        return replace(passed, path=path)
+        return passed.located(path)
     try:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:

@@ -85,3 +85,36 @@ def test_payload_must_be_json_able():
     assert canonical_json({"b": 1.5, "a": (1, 2)}) == '{"a":[1,2],"b":1.5}'
     with pytest.raises(TypeError, match="not JSON-able"):
         ResultCache("unused", version="v").key({"x": object()})
+
+
+def test_a_spelled_value_keys_as_the_value_itself():
+    from harness.run.cache import Spelled
+    from harness.scenarios import SCENARIO_DIR, load_scenario
+
+    cache = ResultCache("unused", version="v1")
+    scenario = load_scenario(SCENARIO_DIR / "sweep-tilted-box.toml")
+    settings = {"time_step": 1e-4, "solref": [0.02, 1.0], "name": 'a "quoted" \u2713'}
+    for point in scenario.point_list():
+        scene = scenario.scene(point)
+        plain = {"kind": "engine-run", "scene": scene, "settings": settings, "n": [scene]}
+        spelled = {"kind": "engine-run", "scene": Spelled(scene), "settings": Spelled(settings),
+                   "n": [Spelled(scene)]}
+        assert canonical_json(spelled) == canonical_json(plain)
+        assert cache.key(spelled) == cache.key(plain)
+
+
+def test_a_listed_cache_finds_what_it_puts_and_what_was_there(tmp_path):
+    cache = ResultCache(tmp_path)
+    there, later, own = (cache.key({"n": n}) for n in range(3))
+    cache.put(there, RECORD)
+    cache.put_lines(there, ['{"x":1}'])
+    with cache.listed():
+        assert cache.get(there) == RECORD
+        assert cache.get_lines(there) == [({"x": 1}, '{"x":1}')]
+        assert cache.get(own) is None and cache.get(later) is None  # both listed absent
+        ResultCache(tmp_path).put(later, RECORD)  # another process, after the listing
+        cache.put(own, RECORD)
+        assert cache.get(own) == RECORD
+        assert cache.get(later) is None  # a miss: simulated again, never wrong
+    assert cache.get(later) == RECORD  # outside: every entry opened
+    assert (cache.hits, cache.misses) == (3, 3)

@@ -74,9 +74,16 @@ def test_a_run_gives_the_same_records_as_with_references_computed_inline(
     assert _exact(pooled.scenarios) == _exact(inline.scenarios)
 
 
-def test_each_reference_is_in_the_cache_once_the_run_is_over(tmp_path, monkeypatch):
+@pytest.mark.parametrize("workers", [1, 2])
+def test_each_reference_is_in_the_cache_once_the_run_is_over(tmp_path, monkeypatch, workers):
     cache = ResultCache(tmp_path)
-    runner.run(SEVERAL_CONTACT[:2], engines=("pymunk",), workers=2, log=None, cache=cache)
+    in_main = []
+    real = runner._store_reference
+    monkeypatch.setattr(runner, "_store_reference",
+                        lambda *args: in_main.append(args[1]) or real(*args))
+    runner.run(SEVERAL_CONTACT[:2], engines=("pymunk",), workers=workers, log=None, cache=cache)
+    # on the local executor each task stores its reference where it ran (a worker, or inline)
+    assert in_main == []
 
     def never(*args):
         raise AssertionError("computed again, not read from the cache")

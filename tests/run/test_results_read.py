@@ -11,10 +11,12 @@ import pytest
 from harness.run import records as records_module
 from harness.run.records import (
     Record,
+    RecordBlock,
     Results,
     companion_path,
     read_results,
     record_line,
+    write_result_blocks,
     write_results,
 )
 
@@ -121,12 +123,28 @@ def test_the_companion_of_another_text_is_never_used(tmp_path):
     assert read_results(path).records[0].status == "edited"
 
 
-def test_records_known_only_as_lines_remove_a_stale_companion(tmp_path):
+def test_records_known_only_as_lines_are_in_the_new_companion(tmp_path, monkeypatch):
     path = write_results(tmp_path / "r.json", _records(), {}, {})
     lines = read_results(path).record_lines()
     write_results(path, [None] * len(lines), {}, {}, lines=lines)
-    assert not companion_path(path).exists()
-    assert read_results(path).records == _without_companion(path, tmp_path).records
+    parsed = _without_companion(path, tmp_path)
+    monkeypatch.setattr(records_module, "_split_records", None)  # only the companion serves
+    results = read_results(path)
+    assert results.records == parsed.records
+    assert results.record_lines() == lines
+
+
+def test_blocks_are_written_as_the_records_of_one_file(tmp_path):
+    records = _records()
+    whole = write_results(tmp_path / "whole.json", records, {"run": 1}, {"a": {"tags": []}})
+    datas = [record.as_dict() for record in records]
+    blocks = [RecordBlock.of_lines([record_line(data) for data in part], part)
+              for part in (datas[:1], [], datas[1:])]
+    parts = write_result_blocks(tmp_path / "parts.json", blocks, {"run": 1},
+                                {"a": {"tags": []}})
+    assert parts.read_bytes() == whole.read_bytes()
+    assert read_results(parts).records == read_results(whole).records
+    assert read_results(parts).record_lines() == read_results(whole).record_lines()
 
 
 def test_a_companion_holding_anything_but_plain_values_is_not_unpickled(tmp_path):

@@ -45,6 +45,21 @@ def _scenario_entries(root) -> list:
     return sorted(root.glob("??/*.jsonl"))
 
 
+def _entry_parts(path) -> tuple[dict, list[str], list[bytes]]:
+    """A scenario entry's header, lines and byte parts, as ``ResultCache.put_lines`` lays them
+    out: the header's line, then the pieces of the sizes it gives."""
+    data = path.read_bytes()
+    head_end = data.index(b"\n")
+    header = json.loads(data[:head_end])
+    pieces, start = [], head_end + 1
+    for size in header["sizes"]:
+        pieces.append(data[start:start + size])
+        start += size
+    assert start == len(data)
+    text, *parts = pieces
+    return header, text.decode("utf-8").split(",\n"), parts
+
+
 class _CountingCache(ResultCache):
     """A cache that counts the entries it is asked for."""
 
@@ -57,9 +72,9 @@ class _CountingCache(ResultCache):
             self.lookups += 1
         return super().get(key, check, count=count)
 
-    def get_line_texts(self, key, check_summary=None):
+    def get_block(self, key, check_summary=None):
         self.lookups += 1
-        return super().get_line_texts(key, check_summary)
+        return super().get_block(key, check_summary)
 
 
 def test_a_warm_run_reads_one_entry_per_scenario_and_equals_the_cold_run(tmp_path):
@@ -133,8 +148,8 @@ def test_the_warm_results_file_equals_the_cold_one_apart_from_timing(tmp_path):
 def test_a_damaged_scenario_entry_is_a_reported_miss_and_rebuilt(tmp_path, damage):
     clean = _run([SWEEP], ResultCache(tmp_path))
     (entry,) = _scenario_entries(tmp_path)
-    head, *lines = entry.read_text(encoding="utf-8").split("\n")[:-1]
-    header, records = json.loads(head), [json.loads(line) for line in lines]
+    header, lines, parts = _entry_parts(entry)
+    records = [json.loads(line) for line in lines]
     if damage == "one-record-short":  # the header counts the lines: both agree
         records.pop()
         header["count"] -= 1
@@ -149,14 +164,17 @@ def test_a_damaged_scenario_entry_is_a_reported_miss_and_rebuilt(tmp_path, damag
         records[0]["not_a_field"] = 1
     elif damage == "edited-value":  # still whole and readable: the checksum tells
         records[1]["wall_time_s"] += 1.0
-    text = "".join(f"{json.dumps(item)}\n" for item in (header, *records))
+    text = ",\n".join(json.dumps(record) for record in records)
+    if damage == "line-not-json":
+        text = text.replace("\n", "\n{", 1)
+    body = text.encode("utf-8")
+    header["sizes"] = [len(body), *(len(part) for part in parts)]  # whole, unless truncated
+    data = json.dumps(header).encode("utf-8") + b"\n" + body + b"".join(parts)
     if damage == "header-not-json":
-        text = '{"key": "' + text
-    elif damage == "line-not-json":
-        text = text.replace("\n", "\n{", 2).replace("\n{", "\n", 1)
+        data = b'{"key": "' + data
     elif damage == "truncated":
-        text = text[:-10]
-    entry.write_text(text, encoding="utf-8")
+        data = data[:-10]
+    entry.write_bytes(data)
     again = ResultCache(tmp_path)
     outcome = _run([SWEEP], again)
     assert [_comparable(r) for r in outcome.records] == [_comparable(r) for r in clean.records]

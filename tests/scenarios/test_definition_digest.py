@@ -1,0 +1,48 @@
+"""Scenario.definition_digest: what a scenario's cached records are keyed by."""
+
+from __future__ import annotations
+
+import pickle
+from dataclasses import fields, replace
+from pathlib import Path
+
+from harness.run.cache import canonical_json
+from harness.scenarios import SCENARIO_DIR, checks, load_scenario
+from harness.scenarios.reader import load_scenario as read_file
+
+ROD = load_scenario(SCENARIO_DIR / "rod-45-slip-reversal.toml")
+
+
+def test_the_digest_is_of_every_field_but_the_path():
+    import hashlib
+
+    definition = {f.name: getattr(ROD, f.name) for f in fields(ROD) if f.name != "path"}
+    assert ROD.definition_digest == hashlib.sha256(
+        canonical_json(definition).encode()).hexdigest()
+    assert replace(ROD, path=Path("elsewhere.toml")).definition_digest == ROD.definition_digest
+    assert replace(ROD, friction=ROD.friction + 0.1).definition_digest != ROD.definition_digest
+
+
+def test_located_keeps_the_digest_and_sets_the_path():
+    digest = ROD.definition_digest
+    moved = ROD.located(Path("other.toml"))
+    assert moved.path == Path("other.toml") and moved == replace(ROD, path=Path("other.toml"))
+    assert "definition_digest" in vars(moved) and moved.definition_digest == digest
+
+
+def test_a_scenario_from_the_passed_checks_store_comes_with_its_digest(tmp_path):
+    path = SCENARIO_DIR / "rod-45-slip-reversal.toml"
+    store = checks.use_passed_checks(tmp_path)
+    try:
+        first = read_file(path)  # read, checked, remembered with its digest
+        store.save()
+        assert "definition_digest" in vars(first)
+        checks.use_passed_checks(tmp_path)
+        again = read_file(path)  # from the store: not read again
+    finally:
+        checks.use_passed_checks(None)
+    assert "definition_digest" in vars(again) and again.path == path
+    assert again.definition_digest == first.definition_digest == ROD.definition_digest
+    stored = pickle.loads((tmp_path / checks.PassedChecks.FILE_NAME).read_bytes())
+    (kept,) = stored["scenarios"].values()
+    assert vars(kept)["definition_digest"] == ROD.definition_digest and kept.path is None
