@@ -700,45 +700,62 @@ def _coherent_within_margin(system, law, combinations, impulses, tolerance):
                 & (impulses[:, 0::2] > -margin_i) & (after[:, 0::2] >= -margin_v) & slip_ok)
     passes = np.where(types == SEPARATING, after[:, 0::2] >= -margin_v, typed_ok).all(axis=1)
     rows = np.flatnonzero(passes)
-    for i in range(count):
-        if rows.size:
-            own = _type_within_margin(system, law, i, [combinations[k] for k in rows],
-                                      effective[rows, 2 * i:2 * i + 2], speed_margin[rows])
-            passes[rows[~own]] = False
-            rows = rows[own]
+    if rows.size:
+        passes[rows[~_types_within_margin(system, law, types[rows], signs[rows],
+                                          effective[rows], speed_margin[rows])]] = False
     return passes
 
 
-def _type_within_margin(system, law, i, combinations, effective, margin):
-    """Whether Table 1 (the law's own type, as :func:`_law_at` finds it) could give contact
-    ``i`` its type of the combination anywhere within ``margin`` of the effective approach.
+def _types_within_margin(system, law, types, signs, effective, margin):
+    """Whether Table 1 (the law's own type, as :func:`_law_at` finds it) could give every
+    contact its type of the combination anywhere within ``margin`` of its effective
+    approach: one boolean per combination (``types``, ``signs`` ``(N, m)``, ``effective``
+    ``(N, 2m)``, ``margin`` ``(N,)``).
 
     The type depends on the direction of the approach only (every law's formulas are
     homogeneous of degree 1 in ``(v_n, v_t)``), through ``α = v_t/|v_n|`` (A34) in ordered
     regions (Table 1 with (53)–(57); Newton's (A58)); ``α`` over the box of half-width
     ``margin`` is extreme at its corners. So a contact is rejected only when the centre and
     the four corners, all approaching and on the combination's side of ``v_t = 0``, agree on
-    one other type. Separating contacts pass."""
-    own = np.ones(len(combinations), dtype=bool)
-    types = np.array([types[i] for types, _ in combinations])
-    signs = np.array([signs[i] for _, signs in combinations])
+    one other type. Separating contacts pass. Every contact's corners go through one batched
+    call of the solver's kernel (element by element its scalar answer).
+    """
+    own = np.ones(len(types), dtype=bool)
     offsets = np.array([(0.0, 0.0), (-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0)])
-    vn = effective[:, 0][:, None] + offsets[:, 0] * margin[:, None]
-    vt = signs[:, None] * (effective[:, 1][:, None] + offsets[:, 1] * margin[:, None])
-    clear = (types != SEPARATING) & (vn < 0).all(axis=1) & (vt >= 0).all(axis=1)
-    if not clear.any():
+    parts = []  # per contact: its clear rows, their approaches and its terms
+    for i in range(system.count):
+        vn = effective[:, 2 * i][:, None] + offsets[:, 0] * margin[:, None]
+        vt = signs[:, i, None] * (effective[:, 2 * i + 1][:, None]
+                                  + offsets[:, 1] * margin[:, None])
+        clear = (types[:, i] != SEPARATING) & (vn < 0).all(axis=1) & (vt >= 0).all(axis=1)
+        rows = np.flatnonzero(clear)
+        if rows.size:
+            parts.append((i, rows, vn[rows], vt[rows]))
+    if not parts:
         return own
-    mnn, mnt, mtt = system.single_terms(i)
-    rows = np.flatnonzero(clear)
-    shape = (rows.size, len(offsets))
+    shapes = [(rows.size, len(offsets)) for _, rows, _, _ in parts]
+    terms = [(system.single_terms(i), system.mu[i], system.e[i], system.deltas[i])
+             for i, _, _, _ in parts]
+
+    def stacked(per_contact):
+        return np.concatenate([np.broadcast_to(value, shape).reshape(-1)
+                               for value, shape in zip(per_contact, shapes)])
+
+    signs_of = [signs[rows, i, None] for i, rows, _, _ in parts]
     with np.errstate(all="ignore"):
         out = solver.contact_space_solution(
-            law, np.full(shape, mnn), np.broadcast_to(signs[rows, None] * mnt, shape).copy(),
-            np.full(shape, mtt), vn[rows], vt[rows], np.full(shape, system.mu[i]),
-            np.full(shape, system.e[i]), delta=np.full(shape, system.deltas[i]))
-    found = np.asarray(out["collision_type"], dtype=np.int64).reshape(shape)
-    agree = (found == found[:, :1]).all(axis=1) & (found[:, 0] != types[rows])
-    own[rows[agree]] = False
+            law, stacked([t[0][0] for t in terms]),
+            stacked([sign * t[0][1] for sign, t in zip(signs_of, terms)]),
+            stacked([t[0][2] for t in terms]), stacked([vn for _, _, vn, _ in parts]),
+            stacked([vt for _, _, _, vt in parts]), stacked([t[1] for t in terms]),
+            stacked([t[2] for t in terms]), delta=stacked([t[3] for t in terms]))
+    found = np.split(np.asarray(out["collision_type"], dtype=np.int64),
+                     np.cumsum([rows * columns for rows, columns in shapes])[:-1])
+    for (i, rows, _, _), shape, contact_found in zip(parts, shapes, found):
+        contact_found = contact_found.reshape(shape)
+        agree = ((contact_found == contact_found[:, :1]).all(axis=1)
+                 & (contact_found[:, 0] != types[rows, i]))
+        own[rows[agree]] = False
     return own
 
 
