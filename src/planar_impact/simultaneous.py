@@ -580,29 +580,30 @@ def _affine_pieces(system, law, choices):
     step = system.speed_scale()
     pieces = {}
     typed = [ctype for ctype in choices if ctype != SEPARATING]
+    keys = [(ctype, sign) for ctype in typed for sign in (1.0, -1.0)]
+    # Every contact's every (type, sign) at v^A(i) and one speed step along v_n and along
+    # v_t, in one batch of _type_impulses (element by element the scalar answers).
+    columns = []  # per element: m_nn, sign, m_tt, v_n, v_t, μ, Δ, e, type
+    for i in range(system.count):
+        mnn, _mnt, mtt = system.single_terms(i)
+        vn0, vt0 = float(system.approach[2 * i]), float(system.approach[2 * i + 1])
+        points = ((vn0, vt0), (vn0 + step, vt0), (vn0, vt0 + step))
+        columns += [(mnn, sign, mtt, vn, vt, system.mu[i], system.deltas[i], system.e[i], ctype)
+                    for ctype, sign in keys for vn, vt in points]
+    mnn, signs, mtt, vn, vt, mu, delta, e, ctypes = np.array(columns).T
+    mnt = np.repeat([system.single_terms(i)[1] for i in range(system.count)], 3 * len(keys))
+    with np.errstate(all="ignore"):
+        terms = laws.ContactTerms(mnn, signs * mnt, mtt, vn, signs * vt, mu, delta)
+        normal, tangential = _type_impulses(law, terms, e, ctypes.astype(np.int64))
+    values = np.column_stack([normal, signs * tangential]).reshape(system.count, len(keys), 3, 2)
+    # G's columns: the difference quotients along v_n and along v_t.
+    slopes = ((values[:, :, 1:] - values[:, :, :1]) / step).transpose(0, 1, 3, 2)
     for i in range(system.count):
         if SEPARATING in choices:
             for sign in (1.0, -1.0):
                 pieces[i, SEPARATING, sign] = (np.zeros(2), np.zeros((2, 2)))
-        mnn, mnt, mtt = system.single_terms(i)
-        vn0, vt0 = float(system.approach[2 * i]), float(system.approach[2 * i + 1])
-        # Every (type, sign) at v^A(i) and one speed step along v_n and along v_t, in one
-        # batch of _type_impulses (element by element the scalar answers).
-        keys = [(ctype, sign) for ctype in typed for sign in (1.0, -1.0)]
-        points = ((vn0, vt0), (vn0 + step, vt0), (vn0, vt0 + step))
-        ctypes = np.array([ctype for ctype, _ in keys for _ in points], dtype=np.int64)
-        signs = np.array([sign for _, sign in keys for _ in points])
-        vn = np.array([vn for _ in keys for vn, _ in points])
-        vt = np.array([vt for _ in keys for _, vt in points])
-        with np.errstate(all="ignore"):
-            terms = laws.ContactTerms(np.float64(mnn), signs * mnt, np.float64(mtt), vn,
-                                      signs * vt, np.float64(system.mu[i]),
-                                      np.float64(system.deltas[i]))
-            normal, tangential = _type_impulses(law, terms, np.float64(system.e[i]), ctypes)
-        values = np.column_stack([normal, signs * tangential]).reshape(len(keys), 3, 2)
-        for (ctype, sign), (base, along_n, along_t) in zip(keys, values):
-            slope = np.column_stack([(along_n - base) / step, (along_t - base) / step])
-            pieces[i, ctype, sign] = (base, slope)
+        for k, (ctype, sign) in enumerate(keys):
+            pieces[i, ctype, sign] = (values[i, k, 0], slopes[i, k])
     return pieces
 
 
