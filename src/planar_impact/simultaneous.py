@@ -227,44 +227,75 @@ def _contact_map(system, law, types, signs, coupling="effective"):
     combinations at once; with ``coupling="none"`` every contact sees its own ``v^A`` and
     the map is constant.
 
-    ``types``, ``signs`` (``(N, m)``): one combination per row. The returned ``apply(I,
-    rows)`` maps rows of impulses ``(R, 2m)``, row ``r`` by combination ``rows[r]``. Each
-    element takes the operations of one contact's formulas (:func:`_type_impulses` at
-    :meth:`ContactSystem.effective_approach`) in the same order: a combination's answer
-    does not depend on the batch it is in, bit for bit.
+    ``types``, ``signs`` (``(N, m)``): one combination per row. The returned
+    :class:`_ContactMap` maps rows of impulses ``(R, 2m)``, row ``r`` by combination
+    ``rows[r]``. Each element takes the operations of one contact's formulas
+    (:func:`_type_impulses` at :meth:`ContactSystem.effective_approach`) in the same order:
+    a combination's answer does not depend on the batch it is in, bit for bit.
     """
     if law not in TYPE_LAWS:  # the kernels below are those laws'
         raise ValueError(f"_contact_map serves {', '.join(TYPE_LAWS)}, not {law!r}")
-    count = system.count
-    separating = types == SEPARATING
-    safe_types = np.where(separating, 1, types)
+    return _ContactMap(system, law, types, signs, coupling)
 
-    def apply(impulses, rows):
-        if coupling == "none":
-            impulses = np.zeros_like(impulses)
-        out = np.zeros_like(impulses)
-        for i in range(count):
-            mnn, mnt, mtt = system.single_terms(i)
-            vn = np.full(len(impulses), float(system.approach[2 * i]))
-            vt = np.full(len(impulses), float(system.approach[2 * i + 1]))
-            for j in range(count):  # v^A(i) + Σ_{j≠i} W_ij I^(j), as effective_approach
-                if j == i:
-                    continue
-                block = system.delassus[2 * i:2 * i + 2, 2 * j:2 * j + 2]
-                vn = vn + (block[0, 0] * impulses[:, 2 * j] + block[0, 1] * impulses[:, 2 * j + 1])
-                vt = vt + (block[1, 0] * impulses[:, 2 * j] + block[1, 1] * impulses[:, 2 * j + 1])
-            sign = signs[rows, i]
-            with np.errstate(all="ignore"):
-                terms = laws.ContactTerms(np.float64(mnn), sign * mnt, np.float64(mtt), vn,
-                                          sign * vt, np.float64(system.mu[i]),
-                                          np.float64(system.deltas[i]))
-                normal, tangential = _type_impulses(law, terms, np.float64(system.e[i]),
-                                                    safe_types[rows, i])
-            out[:, 2 * i] = np.where(separating[rows, i], 0.0, normal)
-            out[:, 2 * i + 1] = np.where(separating[rows, i], 0.0, sign * tangential)
+
+class _ContactMap:
+    """:func:`_contact_map`'s map. All contacts' formulas run in one batched call of
+    :func:`_type_impulses` (the contact's terms, μ and e given per element), so that numpy's
+    fixed cost per operation is paid once per evaluation, not once per contact."""
+
+    def __init__(self, system, law, types, signs, coupling):
+        self.system, self.law, self.coupling = system, law, coupling
+        self.signs = signs
+        self.separating = types == SEPARATING
+        self.safe_types = np.where(self.separating, 1, types)
+        count = system.count
+        # Per contact: m_nn, m_nt, m_tt (A20), μ, Δ (A20), e; one column per contact.
+        self.constants = np.array([[*system.single_terms(i), system.mu[i], system.deltas[i],
+                                    system.e[i]] for i in range(count)]).T
+        # The other contacts' blocks of W per contact, in the order effective_approach sums.
+        self.blocks = [[(j, system.delassus[2 * i:2 * i + 2, 2 * j:2 * j + 2])
+                        for j in range(count) if j != i] for i in range(count)]
+
+    def __call__(self, impulses, rows):
+        """The map at ``impulses`` ``(R, 2m)``, row ``r`` by combination ``rows[r]``."""
+        count = self.system.count
+        forced = self.forced([impulses] * count, [rows] * count)
+        out = np.empty_like(impulses)
+        for i, values in enumerate(forced):
+            out[:, 2 * i:2 * i + 2] = values
         return out
 
-    return apply
+    def forced(self, points, rows):
+        """Contact ``i``'s forced ``(I_n, I_t)`` at the impulses ``points[i]`` ``(R_i, 2m)``
+        (row ``r`` by combination ``rows[i][r]``), for every contact ``i`` in one batch:
+        a list of ``(R_i, 2)`` arrays."""
+        system, count = self.system, self.system.count
+        vn_parts, vt_parts, sign_parts, type_parts, separating_parts = [], [], [], [], []
+        for i in range(count):
+            impulses = points[i]
+            if self.coupling == "none":
+                impulses = np.zeros_like(impulses)
+            vn = np.full(len(impulses), float(system.approach[2 * i]))
+            vt = np.full(len(impulses), float(system.approach[2 * i + 1]))
+            for j, block in self.blocks[i]:  # v^A(i) + Σ_{j≠i} W_ij I^(j), as effective_approach
+                vn = vn + (block[0, 0] * impulses[:, 2 * j] + block[0, 1] * impulses[:, 2 * j + 1])
+                vt = vt + (block[1, 0] * impulses[:, 2 * j] + block[1, 1] * impulses[:, 2 * j + 1])
+            vn_parts.append(vn)
+            vt_parts.append(vt)
+            sign_parts.append(self.signs[rows[i], i])
+            type_parts.append(self.safe_types[rows[i], i])
+            separating_parts.append(self.separating[rows[i], i])
+        sizes = [len(part) for part in vn_parts]
+        mnn, mnt, mtt, mu, delta, e = np.repeat(self.constants, sizes, axis=1)
+        sign = np.concatenate(sign_parts)
+        with np.errstate(all="ignore"):
+            terms = laws.ContactTerms(mnn, sign * mnt, mtt, np.concatenate(vn_parts),
+                                      sign * np.concatenate(vt_parts), mu, delta)
+            normal, tangential = _type_impulses(self.law, terms, e, np.concatenate(type_parts))
+        separating = np.concatenate(separating_parts)
+        values = np.column_stack([np.where(separating, 0.0, normal),
+                                  np.where(separating, 0.0, sign * tangential)])
+        return np.split(values, np.cumsum(sizes)[:-1])
 
 
 def _map_and_jacobian(mapping, impulses, rows, step):
@@ -272,19 +303,32 @@ def _map_and_jacobian(mapping, impulses, rows, step):
     there by central differences of half-width ``step`` (per row), from one batched call.
 
     Column ``k`` is ``e_k − (map(I + step e_k) − map(I − step e_k)) / (2 step)``, formed as
-    :func:`_fixed_points` and :func:`_iterated_screen` need it.
+    :func:`_fixed_points` and :func:`_iterated_screen` need it. Contact ``i``'s impulses
+    depend on the other contacts' only (its effective approach, (75)): a shift of its own
+    two components leaves its inputs, and so its outputs, unchanged bit for bit, and its
+    difference there is ``map(I) − map(I)`` (0, or NaN where the map is not finite); only
+    the other contacts' shifts are evaluated.
     """
     number, size = impulses.shape
+    count = size // 2
     shifts = np.zeros((size, number, size))
     for k in range(size):
         shifts[k, :, k] = step
-    points = np.concatenate([impulses[None], impulses[None] + shifts, impulses[None] - shifts])
-    values = mapping(points.reshape(-1, size), np.tile(rows, 1 + 2 * size)).reshape(
-        1 + 2 * size, number, size)
-    jacobian = np.broadcast_to(np.eye(size), (number, size, size)).copy()
-    for k in range(size):
-        jacobian[:, :, k] -= (values[1 + k] - values[1 + size + k]) / (2 * step)[:, None]
-    return values[0], jacobian
+    plus, minus = impulses[None] + shifts, impulses[None] - shifts
+    others = [[k for k in range(size) if k // 2 != i] for i in range(count)]
+    points = [np.concatenate([impulses[None], plus[columns], minus[columns]]).reshape(-1, size)
+              for columns in others]
+    forced = mapping.forced(points, [np.tile(rows, 1 + 2 * len(columns)) for columns in others])
+    mapped = np.empty_like(impulses)
+    differences = np.empty((number, size, size))  # [row, output, column k]
+    for i, (columns, values) in enumerate(zip(others, forced)):
+        values = values.reshape(1 + 2 * len(columns), number, 2)
+        mapped[:, 2 * i:2 * i + 2] = values[0]
+        shifted = values[1:1 + len(columns)] - values[1 + len(columns):]  # [k, row, output]
+        differences[:, 2 * i:2 * i + 2, columns] = shifted.transpose(1, 2, 0)
+        differences[:, 2 * i:2 * i + 2, 2 * i:2 * i + 2] = (values[0] - values[0])[:, :, None]
+    jacobian = np.eye(size) - differences / (2 * step)[:, None, None]
+    return mapped, jacobian
 
 
 def _fixed_points(system, law, combinations, coupling="effective", max_iterations=30):
@@ -315,7 +359,8 @@ def _fixed_points(system, law, combinations, coupling="effective", max_iteration
         current = impulses[rows]
         bound = scale + np.max(np.abs(current), axis=1)
         if coupling == "none":  # a constant map: the first residual is 0 and ends it
-            mapped, jacobian = mapping(current, rows), None
+            # Its value anywhere is map(0), the current iterate, bit for bit: no evaluation.
+            mapped, jacobian = current.copy(), None
         else:  # the map and, from the same call, its Jacobian (most rows go on)
             mapped, jacobian = _map_and_jacobian(mapping, current, rows, 1e-6 * bound)
         residual = current - mapped
@@ -478,7 +523,6 @@ def _candidates(system, law, choices, coupling, tolerance):
     * ``coupling="effective"`` with Poisson or Newton: the map is affine, and one batched
       linear solve per combination screens it (:func:`_affine_screen`).
     """
-    combinations = list(_combinations(choices, system.count))
     if coupling == "none":
         own = []
         for i in range(system.count):
@@ -490,8 +534,13 @@ def _candidates(system, law, choices, coupling, tolerance):
             if law_out is not None:
                 pairs.add((int(law_out["collision_type"]), sign))
             own.append(pairs)
-        return [(types, signs) for types, signs in combinations
+        # Only types some contact may take can appear: enumerating those (in the order of
+        # choices) lists the kept combinations in enumeration order, without the others.
+        possible = {ctype for pairs in own for ctype, _ in pairs}
+        return [(types, signs) for types, signs in _combinations(
+                    [ctype for ctype in choices if ctype in possible], system.count)
                 if all((t, s) in own[i] for i, (t, s) in enumerate(zip(types, signs)))]
+    combinations = list(_combinations(choices, system.count))
     if system.count == 1:
         return combinations
     if law in ("poisson", "newton"):
@@ -531,29 +580,30 @@ def _affine_pieces(system, law, choices):
     step = system.speed_scale()
     pieces = {}
     typed = [ctype for ctype in choices if ctype != SEPARATING]
+    keys = [(ctype, sign) for ctype in typed for sign in (1.0, -1.0)]
+    # Every contact's every (type, sign) at v^A(i) and one speed step along v_n and along
+    # v_t, in one batch of _type_impulses (element by element the scalar answers).
+    columns = []  # per element: m_nn, sign, m_tt, v_n, v_t, μ, Δ, e, type
+    for i in range(system.count):
+        mnn, _mnt, mtt = system.single_terms(i)
+        vn0, vt0 = float(system.approach[2 * i]), float(system.approach[2 * i + 1])
+        points = ((vn0, vt0), (vn0 + step, vt0), (vn0, vt0 + step))
+        columns += [(mnn, sign, mtt, vn, vt, system.mu[i], system.deltas[i], system.e[i], ctype)
+                    for ctype, sign in keys for vn, vt in points]
+    mnn, signs, mtt, vn, vt, mu, delta, e, ctypes = np.array(columns).T
+    mnt = np.repeat([system.single_terms(i)[1] for i in range(system.count)], 3 * len(keys))
+    with np.errstate(all="ignore"):
+        terms = laws.ContactTerms(mnn, signs * mnt, mtt, vn, signs * vt, mu, delta)
+        normal, tangential = _type_impulses(law, terms, e, ctypes.astype(np.int64))
+    values = np.column_stack([normal, signs * tangential]).reshape(system.count, len(keys), 3, 2)
+    # G's columns: the difference quotients along v_n and along v_t.
+    slopes = ((values[:, :, 1:] - values[:, :, :1]) / step).transpose(0, 1, 3, 2)
     for i in range(system.count):
         if SEPARATING in choices:
             for sign in (1.0, -1.0):
                 pieces[i, SEPARATING, sign] = (np.zeros(2), np.zeros((2, 2)))
-        mnn, mnt, mtt = system.single_terms(i)
-        vn0, vt0 = float(system.approach[2 * i]), float(system.approach[2 * i + 1])
-        # Every (type, sign) at v^A(i) and one speed step along v_n and along v_t, in one
-        # batch of _type_impulses (element by element the scalar answers).
-        keys = [(ctype, sign) for ctype in typed for sign in (1.0, -1.0)]
-        points = ((vn0, vt0), (vn0 + step, vt0), (vn0, vt0 + step))
-        ctypes = np.array([ctype for ctype, _ in keys for _ in points], dtype=np.int64)
-        signs = np.array([sign for _, sign in keys for _ in points])
-        vn = np.array([vn for _ in keys for vn, _ in points])
-        vt = np.array([vt for _ in keys for _, vt in points])
-        with np.errstate(all="ignore"):
-            terms = laws.ContactTerms(np.float64(mnn), signs * mnt, np.float64(mtt), vn,
-                                      signs * vt, np.float64(system.mu[i]),
-                                      np.float64(system.deltas[i]))
-            normal, tangential = _type_impulses(law, terms, np.float64(system.e[i]), ctypes)
-        values = np.column_stack([normal, signs * tangential]).reshape(len(keys), 3, 2)
-        for (ctype, sign), (base, along_n, along_t) in zip(keys, values):
-            slope = np.column_stack([(along_n - base) / step, (along_t - base) / step])
-            pieces[i, ctype, sign] = (base, slope)
+        for k, (ctype, sign) in enumerate(keys):
+            pieces[i, ctype, sign] = (values[i, k, 0], slopes[i, k])
     return pieces
 
 
@@ -651,45 +701,62 @@ def _coherent_within_margin(system, law, combinations, impulses, tolerance):
                 & (impulses[:, 0::2] > -margin_i) & (after[:, 0::2] >= -margin_v) & slip_ok)
     passes = np.where(types == SEPARATING, after[:, 0::2] >= -margin_v, typed_ok).all(axis=1)
     rows = np.flatnonzero(passes)
-    for i in range(count):
-        if rows.size:
-            own = _type_within_margin(system, law, i, [combinations[k] for k in rows],
-                                      effective[rows, 2 * i:2 * i + 2], speed_margin[rows])
-            passes[rows[~own]] = False
-            rows = rows[own]
+    if rows.size:
+        passes[rows[~_types_within_margin(system, law, types[rows], signs[rows],
+                                          effective[rows], speed_margin[rows])]] = False
     return passes
 
 
-def _type_within_margin(system, law, i, combinations, effective, margin):
-    """Whether Table 1 (the law's own type, as :func:`_law_at` finds it) could give contact
-    ``i`` its type of the combination anywhere within ``margin`` of the effective approach.
+def _types_within_margin(system, law, types, signs, effective, margin):
+    """Whether Table 1 (the law's own type, as :func:`_law_at` finds it) could give every
+    contact its type of the combination anywhere within ``margin`` of its effective
+    approach: one boolean per combination (``types``, ``signs`` ``(N, m)``, ``effective``
+    ``(N, 2m)``, ``margin`` ``(N,)``).
 
     The type depends on the direction of the approach only (every law's formulas are
     homogeneous of degree 1 in ``(v_n, v_t)``), through ``α = v_t/|v_n|`` (A34) in ordered
     regions (Table 1 with (53)–(57); Newton's (A58)); ``α`` over the box of half-width
     ``margin`` is extreme at its corners. So a contact is rejected only when the centre and
     the four corners, all approaching and on the combination's side of ``v_t = 0``, agree on
-    one other type. Separating contacts pass."""
-    own = np.ones(len(combinations), dtype=bool)
-    types = np.array([types[i] for types, _ in combinations])
-    signs = np.array([signs[i] for _, signs in combinations])
+    one other type. Separating contacts pass. Every contact's corners go through one batched
+    call of the solver's kernel (element by element its scalar answer).
+    """
+    own = np.ones(len(types), dtype=bool)
     offsets = np.array([(0.0, 0.0), (-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0)])
-    vn = effective[:, 0][:, None] + offsets[:, 0] * margin[:, None]
-    vt = signs[:, None] * (effective[:, 1][:, None] + offsets[:, 1] * margin[:, None])
-    clear = (types != SEPARATING) & (vn < 0).all(axis=1) & (vt >= 0).all(axis=1)
-    if not clear.any():
+    parts = []  # per contact: its clear rows, their approaches and its terms
+    for i in range(system.count):
+        vn = effective[:, 2 * i][:, None] + offsets[:, 0] * margin[:, None]
+        vt = signs[:, i, None] * (effective[:, 2 * i + 1][:, None]
+                                  + offsets[:, 1] * margin[:, None])
+        clear = (types[:, i] != SEPARATING) & (vn < 0).all(axis=1) & (vt >= 0).all(axis=1)
+        rows = np.flatnonzero(clear)
+        if rows.size:
+            parts.append((i, rows, vn[rows], vt[rows]))
+    if not parts:
         return own
-    mnn, mnt, mtt = system.single_terms(i)
-    rows = np.flatnonzero(clear)
-    shape = (rows.size, len(offsets))
+    shapes = [(rows.size, len(offsets)) for _, rows, _, _ in parts]
+    terms = [(system.single_terms(i), system.mu[i], system.e[i], system.deltas[i])
+             for i, _, _, _ in parts]
+
+    def stacked(per_contact):
+        return np.concatenate([np.broadcast_to(value, shape).reshape(-1)
+                               for value, shape in zip(per_contact, shapes)])
+
+    signs_of = [signs[rows, i, None] for i, rows, _, _ in parts]
     with np.errstate(all="ignore"):
         out = solver.contact_space_solution(
-            law, np.full(shape, mnn), np.broadcast_to(signs[rows, None] * mnt, shape).copy(),
-            np.full(shape, mtt), vn[rows], vt[rows], np.full(shape, system.mu[i]),
-            np.full(shape, system.e[i]), delta=np.full(shape, system.deltas[i]))
-    found = np.asarray(out["collision_type"], dtype=np.int64).reshape(shape)
-    agree = (found == found[:, :1]).all(axis=1) & (found[:, 0] != types[rows])
-    own[rows[agree]] = False
+            law, stacked([t[0][0] for t in terms]),
+            stacked([sign * t[0][1] for sign, t in zip(signs_of, terms)]),
+            stacked([t[0][2] for t in terms]), stacked([vn for _, _, vn, _ in parts]),
+            stacked([vt for _, _, _, vt in parts]), stacked([t[1] for t in terms]),
+            stacked([t[2] for t in terms]), delta=stacked([t[3] for t in terms]))
+    found = np.split(np.asarray(out["collision_type"], dtype=np.int64),
+                     np.cumsum([rows * columns for rows, columns in shapes])[:-1])
+    for (i, rows, _, _), shape, contact_found in zip(parts, shapes, found):
+        contact_found = contact_found.reshape(shape)
+        agree = ((contact_found == contact_found[:, :1]).all(axis=1)
+                 & (contact_found[:, 0] != types[rows, i]))
+        own[rows[agree]] = False
     return own
 
 

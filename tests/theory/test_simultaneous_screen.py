@@ -243,6 +243,105 @@ def test_the_screen_drops_most_combinations():
         assert len(effective) < len(every) / 2
 
 
+def random_system(rng, count):
+    """A random approaching system of ``count`` contacts on ``2 count`` generalized speeds."""
+    size = 2 * count
+    root = rng.normal(size=(size, size))
+    wn, wt = rng.normal(size=(count, size)), rng.normal(size=(count, size))
+    while True:
+        u = rng.normal(size=size)
+        if np.all(wn @ u < 0):
+            break
+    return sim.contact_system(mass_matrix=root @ root.T + 0.1 * np.eye(size), wn=wn, wt=wt, u=u,
+                              mu=rng.uniform(0, 1, count), e=rng.uniform(0, 1, count))
+
+
+def whole_map_jacobian(mapping, impulses, rows, step):
+    """The central-difference Jacobian as formed before the block structure: both shifted
+    points of every column through the whole map."""
+    number, size = impulses.shape
+    jacobian = np.broadcast_to(np.eye(size), (number, size, size)).copy()
+    for k in range(size):
+        shift = np.zeros((number, size))
+        shift[:, k] = step
+        jacobian[:, :, k] -= (mapping(impulses + shift, rows)
+                              - mapping(impulses - shift, rows)) / (2 * step)[:, None]
+    return mapping(impulses, rows), jacobian
+
+
+def assert_same_floats(got, expected):
+    np.testing.assert_array_equal(got, expected)  # NaN where NaN (its sign bit is free)
+    numbers = ~np.isnan(expected)
+    assert np.array_equal(np.signbit(got[numbers]), np.signbit(expected[numbers]))
+
+
+@pytest.mark.parametrize("count", [2, 3])
+def test_the_block_jacobian_is_the_whole_map_jacobian_bit_for_bit(count):
+    # _map_and_jacobian evaluates a contact only at the other contacts' shifts; its own
+    # columns must still come out as the whole map's differences, NaN rows included.
+    rng = np.random.default_rng(count)
+    for _ in range(4):
+        system = random_system(rng, count)
+        for law in TYPE_LAWS:
+            combinations = list(sim._combinations((sim.SEPARATING,) + sim.TYPE_LAWS[law],
+                                                  count))
+            types = np.array([t for t, _ in combinations], dtype=np.int64)
+            signs = np.array([s for _, s in combinations], dtype=float)
+            mapping = sim._contact_map(system, law, types, signs)
+            impulses = rng.normal(size=(len(combinations), 2 * count)) * system.impulse_scale()
+            impulses[::7, 0] = np.nan
+            impulses[1::7, 1] = 0.0
+            rows = rng.permutation(len(combinations))
+            step = 1e-6 * (system.impulse_scale() + np.max(np.abs(impulses), axis=1))
+            got = sim._map_and_jacobian(mapping, impulses, rows, step)
+            expected = whole_map_jacobian(mapping, impulses, rows, step)
+            assert np.isfinite(got[1]).any() and np.isnan(got[1]).any()
+            for new, old in zip(got, expected):
+                assert_same_floats(new, old)
+
+
+def test_the_batched_map_is_each_contacts_scalar_formulas():
+    # One batched call for every contact gives each contact's scalar answer, bit for bit.
+    rng = np.random.default_rng(11)
+    for count in (2, 3):
+        system = random_system(rng, count)
+        for law in TYPE_LAWS:
+            combinations = list(sim._combinations((sim.SEPARATING,) + sim.TYPE_LAWS[law],
+                                                  count))
+            types = np.array([t for t, _ in combinations], dtype=np.int64)
+            signs = np.array([s for _, s in combinations], dtype=float)
+            impulses = rng.normal(size=(len(combinations), 2 * count)) * system.impulse_scale()
+            got = sim._contact_map(system, law, types, signs)(impulses,
+                                                               np.arange(len(combinations)))
+            for row, (ctypes, csigns) in enumerate(combinations):
+                expected = scalar_contact_map(system, law, ctypes, csigns)(impulses[row])
+                assert_same_floats(got[row], expected)
+
+
+@pytest.mark.parametrize("separating", [False, True])
+def test_literal_candidates_are_the_filtered_enumeration(separating):
+    # _candidates enumerates only the types some contact may take: the same list, in the
+    # same order, as filtering every combination by each contact's own (type, sign).
+    rng = np.random.default_rng(3)
+    for k in range(20):
+        system = sim.random_two_contact_system(rng, "generic" if k % 2 else "body")
+        tolerance = sim.VELOCITY_TOLERANCE * system.speed_scale()
+        for law in TYPE_LAWS:
+            choices = ((sim.SEPARATING,) if separating else ()) + sim.TYPE_LAWS[law]
+            own = []
+            for i in range(system.count):
+                vn, vt = system.effective_approach(i, np.zeros(2 * system.count))
+                sign = sim._frame_sign(vt, system.single_terms(i)[1])
+                found = sim._law_at(system, law, i, vn, vt, sign)
+                own.append({(sim.SEPARATING, 1.0)} | (
+                    set() if found is None else {(int(found["collision_type"]), sign)}))
+            expected = [(types, signs) for types, signs in sim._combinations(choices, 2)
+                        if all((t, s) in own[i] for i, (t, s) in enumerate(zip(types, signs)))]
+            got = sim._candidates(system, law, choices, "none", tolerance)
+            assert got == expected
+            assert len(expected) >= (4 if separating else 1)
+
+
 if __name__ == "__main__":  # python tests/theory/test_simultaneous_screen.py PROBLEMS SEED
     count, found, failed = compare_random(int(sys.argv[1]), int(sys.argv[2]))
     print(f"random: {count} cases, {found} solutions, {len(failed)} differences")
