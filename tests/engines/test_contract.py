@@ -52,16 +52,9 @@ def rounding(engine) -> float:
     return ROUNDING.get(engine.name, DOUBLE_ROUNDING)
 
 
-def _engine(name):
-    try:
-        return load_engine(name)
-    except EngineNotInstalled as error:
-        pytest.skip(f"{name} not installed: {error}")
-
-
 @pytest.fixture(params=ENGINE_NAMES)
-def engine(request):
-    return _engine(request.param)
+def engine(load_or_skip, request):
+    return load_or_skip(request.param)
 
 
 # ---------------------------------------------------------------------- registry

@@ -8,16 +8,9 @@ import math
 
 import pytest
 
-from harness.engines import EngineNotInstalled, contract, load_engine
+from harness.engines import contract
 from harness.engines.contract import Engine, count_planar_points
 from harness.scene.reference import reference_scenes
-
-
-def _engine(name):
-    try:
-        return load_engine(name)
-    except EngineNotInstalled as error:
-        pytest.skip(str(error))
 
 
 @pytest.fixture(scope="module")
@@ -54,13 +47,13 @@ def test_two_points_apart_are_two_and_close_are_one():
 
 
 # ---------------------------------------------------------------------- _runs_alone
-def test_the_base_never_runs_alone():
-    engine = _engine("pymunk")
+def test_the_base_never_runs_alone(load_or_skip):
+    engine = load_or_skip("pymunk")
     assert engine._runs_alone(engine.settings("accurate")) is False
 
 
-def test_run_many_runs_one_by_one_where_the_adapter_says_so(scenes, monkeypatch):
-    engine = _engine("pymunk")
+def test_run_many_runs_one_by_one_where_the_adapter_says_so(load_or_skip, scenes, monkeypatch):
+    engine = load_or_skip("pymunk")
     settings = engine.settings("accurate")
     single = [engine.run(scene, settings) for scene in scenes]
 
@@ -72,8 +65,8 @@ def test_run_many_runs_one_by_one_where_the_adapter_says_so(scenes, monkeypatch)
     assert engine.run_many(scenes, settings) == single
 
 
-def test_box2d_leaves_run_many_to_the_base_and_runs_sub_stepping_alone():
-    engine = _engine("box2d")
+def test_box2d_leaves_run_many_to_the_base_and_runs_sub_stepping_alone(load_or_skip):
+    engine = load_or_skip("box2d")
     assert type(engine).run_many is Engine.run_many
     assert engine._runs_alone(engine.settings("accurate", {"sub_stepping": True}))
     assert not engine._runs_alone(engine.settings("accurate", {"sub_stepping": False}))
@@ -82,9 +75,9 @@ def test_box2d_leaves_run_many_to_the_base_and_runs_sub_stepping_alone():
 # ---------------------------------------------------------------------- the collector
 @pytest.mark.parametrize("name", ["pymunk", "mujoco"])  # batched, and one by one
 @pytest.mark.parametrize("enabled_before", [True, False])
-def test_run_many_pauses_the_collector_and_restores_it(name, enabled_before, scenes,
+def test_run_many_pauses_the_collector_and_restores_it(load_or_skip, name, enabled_before, scenes,
                                                        monkeypatch):
-    engine = _engine(name)
+    engine = load_or_skip(name)
     seen = []
     step = engine._step_many if type(engine)._build_many is not Engine._build_many else None
     if step is not None:
@@ -105,10 +98,10 @@ def test_run_many_pauses_the_collector_and_restores_it(name, enabled_before, sce
 
 
 # ---------------------------------------------------------------------- _prepare's weights
-def test_mujoco_prepare_takes_the_weights_it_is_given(scenes):
+def test_mujoco_prepare_takes_the_weights_it_is_given(load_or_skip, scenes):
     # The geometry is built from the checked inertias passed in, not recomputed or read
     # from the base's caches: different weights give a different geometry key.
-    engine = _engine("mujoco")
+    engine = load_or_skip("mujoco")
     settings = engine.settings("accurate")
     scene = scenes[0]
     weights = contract.check_scene("mujoco", scene)

@@ -8,19 +8,12 @@ from __future__ import annotations
 
 import pytest
 
-from harness.engines import ENGINE_NAMES, EngineNotInstalled, Status, load_engine
+from harness.engines import ENGINE_NAMES, Status
 from harness.scene.reference import reference_scenes
 from harness.survey.population import resolve_populations
 from harness.survey.sampling import sample_population
 
 SAMPLES = 40  # per population: several pymunk chunks of each kind (32 ground, 31 two-body)
-
-
-def _engine(name):
-    try:
-        return load_engine(name)
-    except EngineNotInstalled as error:
-        pytest.skip(str(error))
 
 
 @pytest.fixture(scope="module")
@@ -30,8 +23,8 @@ def population_scenes():
 
 
 @pytest.mark.parametrize("preset", ["defaults", "accurate"])
-def test_pymunk_batched_equals_single_on_every_population(population_scenes, preset):
-    engine = _engine("pymunk")
+def test_pymunk_batched_equals_single_on_every_population(load_or_skip, population_scenes, preset):
+    engine = load_or_skip("pymunk")
     settings = engine.settings(preset)
     batched = engine.run_many(population_scenes, settings)
     single = [engine.run(scene, settings) for scene in population_scenes]
@@ -44,8 +37,8 @@ def test_pymunk_batched_equals_single_on_every_population(population_scenes, pre
 
 
 @pytest.mark.parametrize("name", ENGINE_NAMES)
-def test_every_engine_batched_equals_single_on_the_reference_scenes(name):
-    engine = _engine(name)
+def test_every_engine_batched_equals_single_on_the_reference_scenes(load_or_skip, name):
+    engine = load_or_skip(name)
     scenes = [scene for scene, _, _ in reference_scenes().values()]
     for preset in ("defaults", "accurate"):
         batched = engine.run_many(scenes, preset=preset)
@@ -54,8 +47,8 @@ def test_every_engine_batched_equals_single_on_the_reference_scenes(name):
         assert all(run.preset == preset for run in batched)
 
 
-def test_pymunk_batched_step_cap_and_no_contact_equal_single(population_scenes):
-    engine = _engine("pymunk")
+def test_pymunk_batched_step_cap_and_no_contact_equal_single(load_or_skip, population_scenes):
+    engine = load_or_skip("pymunk")
     scenes = population_scenes[::10]
     for overrides in ({"max_steps": 1}, {"max_steps": 2, "approach_steps": 5.0}):
         batched = engine.run_many(scenes, overrides=overrides)
@@ -64,5 +57,5 @@ def test_pymunk_batched_step_cap_and_no_contact_equal_single(population_scenes):
         assert {run.status for run in batched} & {Status.NO_SEPARATION, Status.NO_CONTACT}
 
 
-def test_run_many_of_nothing_is_empty():
-    assert _engine("pymunk").run_many([]) == []
+def test_run_many_of_nothing_is_empty(load_or_skip):
+    assert load_or_skip("pymunk").run_many([]) == []
