@@ -67,9 +67,10 @@ from harness.report.fragments import prepare
 from harness.report.history import history_figure, history_inputs
 from harness.report.html import html_page
 from harness.report.pages import write_pages
+from harness.report.reading import read_for_report
 from harness.report.summary import write_summary
 from harness.report.views import FIGURES, engine_labels, slug, split_rows
-from harness.run.records import DEFAULT_RESULTS, Results, read_results
+from harness.run.records import DEFAULT_RESULTS, Results
 
 #: Above this many scenarios the report aggregates (``--scenario-figures auto``, ``--svg
 #: auto``): the headline heat map has one row per family of scenarios (:func:`scenario_group`)
@@ -391,7 +392,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def main(args) -> int:
     try:
-        results = read_results(args.results)
+        results = read_for_report(args.results)  # the records only when asked for
     except (FileNotFoundError, ValueError) as error:  # the message names the file
         print(f"impact-harness report: {error}", file=sys.stderr)
         return 2

@@ -13,13 +13,13 @@ import hashlib
 import itertools
 import json
 import math
-import re
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
 from harness.engines import preset_label
+from harness.report.reading import LazyResults, scenario_digest
 from harness.report.views import (
     ENGINE_STYLE,
     HEADLINE_LAWS,
@@ -92,12 +92,6 @@ FLAG_STYLE = {"marker": "o", "markerfacecolor": "none", "markeredgecolor": "red"
 
 
 TAG_KEY = "impact-harness-inputs"
-VOLATILE_FIELDS = ("wall_time_s", "cached")
-#: A volatile field with its value in a record's line of the results file (also the
-#: engine's own time in the diagnostics): the value is a number, a bool or null. Nothing in a
-#: string matches, since a quote inside a JSON string is escaped.
-_VOLATILE_TEXT = re.compile(
-    '"(?:' + "|".join((*VOLATILE_FIELDS, "engine_wall_time_s")) + r')":[^,{}\[\]"]*')
 
 
 def scenario_digests(results: Results) -> dict[str, str]:
@@ -105,20 +99,22 @@ def scenario_digests(results: Results) -> dict[str, str]:
     headline figures, of all) depends on besides the code.
 
     Hashed from each record's line in the results file (:func:`harness.run.records.
-    record_line`), as read (``Results.record_lines``) or else written anew, without the
-    fields that change between identical runs (:data:`VOLATILE_FIELDS`, the engine's own
-    time): a warm report hashes text instead of encoding 28,000 records again, which was
-    half of its time at 1,000 scenarios. Any other change to a record changes its
-    scenario's digest.
+    record_line`), as read (``Results.record_lines``, or the bytes of the file for
+    :class:`~harness.report.reading.LazyResults`) or else written anew, without the fields
+    that change between identical runs (:data:`~harness.report.reading.VOLATILE_FIELDS`, the
+    engine's own time: :func:`~harness.report.reading.scenario_digest`): a warm report hashes
+    text instead of encoding 28,000 records again, which was half of its time at 1,000
+    scenarios. Any other change to a record changes its scenario's digest.
     """
+    if isinstance(results, LazyResults):
+        return dict(results.digests)
     lines = results.record_lines()
     if lines is None:  # built in memory: the lines the results file would hold
         lines = [record_line(record.as_dict()) for record in results.records]
     texts: dict[str, list[str]] = {}
     for record, line in zip(results.records, lines):
         texts.setdefault(record.scenario, []).append(line)
-    return {name: hashlib.sha256(_VOLATILE_TEXT.sub("", "\n".join(parts)).encode()).hexdigest()
-            for name, parts in texts.items()}
+    return {name: scenario_digest(parts) for name, parts in texts.items()}
 
 
 @functools.cache

@@ -209,6 +209,7 @@ def prepare(results: Results, out_dir: Path | None = None,
     """The views of every scenario, from ``<out_dir>/`` :data:`CACHE_FILE` where their
     records are unchanged (``out_dir`` None: computed, nothing kept)."""
     from harness.report.figures import scenario_digests
+    from harness.report.reading import record_scenarios
 
     labels = engine_labels(results)
     digests = scenario_digests(results) if digests is None else digests
@@ -221,10 +222,10 @@ def prepare(results: Results, out_dir: Path | None = None,
     # every scenario's digest, and the order of the records across scenarios (a run of a
     # scenario's records after another's: the first appearances a piece may show)
     order, previous = [], None
-    for record in results.records:
-        if record.scenario != previous:
-            order.append(record.scenario)
-            previous = record.scenario
+    for scenario in record_scenarios(results):
+        if scenario != previous:
+            order.append(scenario)
+            previous = scenario
     inputs = json.dumps([[[name, digests.get(name, "")] for name in names], order])
     return Prepared(digests, labels, views, cache,
                     hashlib.sha256(inputs.encode()).hexdigest())
