@@ -63,7 +63,7 @@ from harness.report.figures import (
     table3_figure,
     table3_inputs,
 )
-from harness.report.fragments import prepare
+from harness.report.fragments import open_cache, prepare
 from harness.report.history import history_figure, history_inputs
 from harness.report.html import html_page
 from harness.report.pages import write_pages
@@ -155,14 +155,15 @@ def write_report(results: Results, out_dir: Path | str,
         scenario_figures = "none" if many else "all"
     if svg == "auto":
         svg = "headline" if many else "all"
-    digests = scenario_digests(results)
+    cache = open_cache(results, out_dir)  # also of the digests of lines hashed before
+    digests = scenario_digests(results, cache.get)
     tasks = figure_tasks(results, many, scenario_figures, figures_for, svg, digests)
     # The figures are drawn by forked workers while this process builds the page, which
     # needs only their names: it assumes that every figure to be drawn has something to
     # show, and is built again in the rare case one had not.
     expected, finish_drawing = start_drawing(tasks, figure_dir, workers)
     try:
-        prepared = prepare(results, out_dir, digests)
+        prepared = prepare(results, out_dir, digests, cache)
         groups = scenario_groups(results, names) if many else {}
         pages = write_pages(out_dir, sources)
         page = html_page(results, out_dir, figure_map(tasks, expected, many, groups,

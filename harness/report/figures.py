@@ -94,7 +94,7 @@ FLAG_STYLE = {"marker": "o", "markerfacecolor": "none", "markeredgecolor": "red"
 TAG_KEY = "impact-harness-inputs"
 
 
-def scenario_digests(results: Results) -> dict[str, str]:
+def scenario_digests(results: Results, known=None) -> dict[str, str]:
     """``{scenario: sha256 of its records}``, what every figure of a scenario (and the
     headline figures, of all) depends on besides the code.
 
@@ -104,10 +104,12 @@ def scenario_digests(results: Results) -> dict[str, str]:
     that change between identical runs (:data:`~harness.report.reading.VOLATILE_FIELDS`, the
     engine's own time: :func:`~harness.report.reading.scenario_digest`): a warm report hashes
     text instead of encoding 28,000 records again, which was half of its time at 1,000
-    scenarios. Any other change to a record changes its scenario's digest.
+    scenarios. Any other change to a record changes its scenario's digest. ``known``: where
+    :meth:`LazyResults.scenario_digests <harness.report.reading.LazyResults.scenario_digests>`
+    finds the digests of lines it hashed before (a report's fragment cache's ``get``).
     """
     if isinstance(results, LazyResults):
-        return dict(results.digests)
+        return results.scenario_digests(known)
     lines = results.record_lines()
     if lines is None:  # built in memory: the lines the results file would hold
         lines = [record_line(record.as_dict()) for record in results.records]

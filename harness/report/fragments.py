@@ -204,17 +204,24 @@ class Prepared:
         return self.cache.get(f"{kind}\0{self.records_digest}", make)
 
 
+def open_cache(results: Results, out_dir: Path | None = None) -> FragmentCache:
+    """The fragment cache of a report of ``results`` in ``out_dir`` (None: nothing kept)."""
+    return FragmentCache(None if out_dir is None else Path(out_dir) / CACHE_FILE,
+                         cache_context(engine_labels(results)))
+
+
 def prepare(results: Results, out_dir: Path | None = None,
-            digests: dict[str, str] | None = None) -> Prepared:
-    """The views of every scenario, from ``<out_dir>/`` :data:`CACHE_FILE` where their
-    records are unchanged (``out_dir`` None: computed, nothing kept)."""
+            digests: dict[str, str] | None = None,
+            cache: FragmentCache | None = None) -> Prepared:
+    """The views of every scenario, from ``<out_dir>/`` :data:`CACHE_FILE` (or ``cache``,
+    :func:`open_cache`'s) where their records are unchanged (``out_dir`` None: computed,
+    nothing kept)."""
     from harness.report.figures import scenario_digests
     from harness.report.reading import record_scenarios
 
     labels = engine_labels(results)
-    digests = scenario_digests(results) if digests is None else digests
-    cache = FragmentCache(None if out_dir is None else Path(out_dir) / CACHE_FILE,
-                          cache_context(labels))
+    cache = open_cache(results, out_dir) if cache is None else cache
+    digests = scenario_digests(results, cache.get) if digests is None else digests
     names = results.scenario_names()
     views = {name: cache.get(f"view\0{name}\0{digests.get(name, '')}",
                              lambda name=name: scenario_view(results.for_scenario(name), labels))

@@ -21,6 +21,8 @@ import json
 import os
 import pickle
 import re
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 from harness.run.records import (
@@ -51,6 +53,12 @@ _LINE_START = b'{"scenario":"'
 _STRING = rb'"(?:[^"\\]|\\.)*"'
 _SOURCE_PRESET = re.compile(rb'"source":"([^"\\]*)","law":(?:null|' + _STRING
                             + rb'),"preset":(?:null|"([^"\\]*)")')
+#: How a record's line starts when its scenario, point, source and preset hold no escape (and
+#: the point's label no brace): the scenario, the source and the preset (or None).
+_LINE_HEAD = (rb'\{"scenario":"([^"\\]*)","point":\{[^{}]*\},"source":"([^"\\]*)",'
+              rb'"law":(?:null|"[^"\\]*"),"preset":(?:null|"([^"\\]*)")')
+_FIRST_LINE = re.compile(_LINE_HEAD)
+_NEXT_LINE = re.compile(rb"\n" + _LINE_HEAD)  # a raw newline only ends a line
 
 
 def scenario_digest(lines) -> str:
@@ -67,18 +75,43 @@ class LazyResults:
     ``(source, preset)`` pairs present come from the file's lines; anything else (``records``,
     ``for_scenario`` ...) from the records, read in full the first time it is asked for."""
 
-    def __init__(self, path: Path, status: os.stat_result, document: dict,
-                 record_scenarios: list[str], digests: dict[str, str],
-                 pairs: frozenset | None, scenarios_digest: str | None = None):
+    def __init__(self, path: Path, status: os.stat_result, document: dict, body: bytes,
+                 lines: _Lines, scenarios_digest: str | None = None):
         self.path = path
         self.provenance = document.get("provenance", {})
         self.scenarios = document.get("scenarios", {})
-        self.record_scenarios = record_scenarios
-        self.digests = digests
-        self._status = status
-        self._pairs = pairs
+        self.record_scenarios = lines.names
         self.scenarios_digest = scenarios_digest
+        self._body = body
+        self._segments = lines.segments
+        self._pairs = lines.pairs
+        self._status = status
         self._results: Results | None = None
+
+    def scenario_digests(self, known: Callable[[str, Callable[[], str]], str] | None = None
+                         ) -> dict[str, str]:
+        """``{scenario: digest of its records}`` (:func:`scenario_digest`'s).
+
+        ``known(key, make)``, when given, returns the digest kept under ``key`` -- a digest
+        of the scenario's lines exactly as they are, volatile fields included -- or else
+        ``make()``: a report of the very file it read last hashes its text once, without
+        taking the volatile fields out.
+        """
+        digests = {}
+        view = memoryview(self._body)
+        for name, segments in self._segments.items():
+            def make(segments=segments) -> str:
+                text = b"\n".join(view[start:end] for start, end in segments)
+                return scenario_digest(text.replace(b",\n", b"\n").split(b"\n"))
+
+            if known is None:
+                digests[name] = make()
+                continue
+            exact = hashlib.sha256()
+            for index, (start, end) in enumerate(segments):
+                exact.update(view[start:end] if index == 0 else b"\n" + view[start:end])
+            digests[name] = known(f"digest\0{exact.hexdigest()}", make)
+        return digests
 
     def full(self) -> Results:
         """The results with their records (read once)."""
@@ -106,7 +139,7 @@ class LazyResults:
 
     def source_presets(self) -> frozenset:
         """The ``(source, preset)`` pairs of the records (analytic ones included)."""
-        if self._pairs is None:
+        if self._pairs is None:  # a line the reading could not tell
             self._pairs = frozenset((r.source, r.preset) for r in self.records)
         return self._pairs
 
@@ -171,11 +204,72 @@ def _lazy(path: Path, status: os.stat_result, data: bytes, count: int) -> LazyRe
             or document.get("format_version") != FORMAT_VERSION):
         return None
     body = data[start + len(RECORDS_START):len(data) - len(RECORDS_END)]
+    lines = _lines(body, count) or _lines_one_by_one(body, count)
+    if lines is None:
+        return None
+    # write_results puts the scenarios last in the head, after a newline only structure has:
+    # their text is what a digest of them needs (else one of their JSON is made)
+    at = data.rfind(b'\n "scenarios": {', 0, start)
+    return LazyResults(path, status, document, body, lines,
+                       None if at < 0 else hashlib.sha256(data[at:start]).hexdigest())
+
+
+@dataclass
+class _Lines:
+    """The record lines of a results file: the scenario of each, where each scenario's lines
+    are in the file's records (``[start, end)`` byte spans of consecutive lines, separated by
+    ``",\\n"`` as in the file) and the ``(source, preset)`` pairs present (None: unknown)."""
+
+    names: list[str]
+    segments: dict[str, list[tuple[int, int]]]
+    pairs: frozenset | None
+
+
+def _segments(names: list[str], starts: list[int], length: int
+              ) -> dict[str, list[tuple[int, int]]]:
+    """Each scenario's spans of consecutive lines, from the lines' scenarios and starts."""
+    segments: dict[str, list[tuple[int, int]]] = {}
+    previous = None
+    for index, name in enumerate(names):
+        end = starts[index + 1] - 2 if index + 1 < len(starts) else length
+        if name == previous:
+            spans = segments[name]
+            spans[-1] = (spans[-1][0], end)
+        else:
+            segments.setdefault(name, []).append((starts[index], end))
+            previous = name
+    return segments
+
+
+def _lines(body: bytes, count: int) -> _Lines | None:
+    """:class:`_Lines` of ``body`` found in one pass, when every one of its ``count`` lines
+    starts as :data:`_LINE_HEAD` reads (no escape in the scenario, source or preset, a point
+    without braces in its label); else None."""
+    first = _FIRST_LINE.match(body)
+    if first is None or body.count(b"\n") != count - 1:
+        return None
+    heads = [first, *_NEXT_LINE.finditer(body)]
+    if len(heads) != count:
+        return None
+    starts = [0] + [head.start() + 1 for head in heads[1:]]
+    if any(body[at - 2] != ord(",") for at in starts[1:]):
+        return None
+    names = [str(head[1], "utf-8") for head in heads]
+    pairs = frozenset((str(source, "utf-8"), None if preset is None else str(preset, "utf-8"))
+                      for source, preset in {(head[2], head[3]) for head in heads})
+    return _Lines(names, _segments(names, starts, len(body)), pairs)
+
+
+def _lines_one_by_one(body: bytes, count: int) -> _Lines | None:
+    """:class:`_Lines` line by line (names with escapes: decoded as JSON; pairs unknown
+    where a line does not start as :data:`_LINE_HEAD` reads); None when ``body`` is not
+    ``count`` record lines."""
     lines = body.split(b",\n") if body else []
     if len(lines) != count:
         return None
     names: list[str] = []
-    texts: dict[str, list[bytes]] = {}
+    starts: list[int] = []
+    at = 0
     pairs: set | None = set()
     for line in lines:
         if not (line.startswith(_LINE_START) and line.endswith(b"}")):
@@ -187,7 +281,8 @@ def _lazy(path: Path, status: os.stat_result, data: bytes, count: int) -> LazyRe
         except (ValueError, KeyError, TypeError):
             return None
         names.append(name)
-        texts.setdefault(name, []).append(line)
+        starts.append(at)
+        at += len(line) + 2
         if pairs is not None:
             found = _SOURCE_PRESET.search(line, 0, 4096)
             if found is None:  # an escape in the source or preset: the records will say
@@ -196,13 +291,8 @@ def _lazy(path: Path, status: os.stat_result, data: bytes, count: int) -> LazyRe
                 preset = found[2]
                 pairs.add((str(found[1], "utf-8"), None if preset is None
                            else str(preset, "utf-8")))
-    digests = {name: scenario_digest(parts) for name, parts in texts.items()}
-    # write_results puts the scenarios last in the head, after a newline only structure has:
-    # their text is what a digest of them needs (else one of their JSON is made)
-    at = data.rfind(b'\n "scenarios": {', 0, start)
-    return LazyResults(path, status, document, names, digests,
-                       None if pairs is None else frozenset(pairs),
-                       None if at < 0 else hashlib.sha256(data[at:start]).hexdigest())
+    return _Lines(names, _segments(names, starts, len(body)),
+                  None if pairs is None else frozenset(pairs))
 
 
 def scenarios_digest(results) -> str:

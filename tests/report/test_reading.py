@@ -12,6 +12,7 @@ from pathlib import Path
 import pytest
 
 from harness import report
+from harness.report import reading
 from harness.report.figures import scenario_digests
 from harness.report.reading import (
     LazyResults,
@@ -21,7 +22,15 @@ from harness.report.reading import (
     source_presets,
 )
 from harness.report.views import engine_labels
-from harness.run.records import Record, Results, companion_path, read_results, write_results
+from harness.run.records import (
+    RECORDS_END,
+    RECORDS_START,
+    Record,
+    Results,
+    companion_path,
+    read_results,
+    write_results,
+)
 
 ROOT = Path(__file__).resolve().parents[2]
 LIBRARY = ROOT / "reports" / "results.json"  # the shipped library's results, read only
@@ -37,7 +46,12 @@ def written(tmp_path_factory) -> Path:
 
 
 def _same_reading(lazy: LazyResults, full: Results) -> None:
-    assert lazy.digests == scenario_digests(full)
+    digests = scenario_digests(full)
+    assert lazy.scenario_digests() == digests
+    kept: dict[str, str] = {}
+    assert lazy.scenario_digests(lambda key, make: kept.setdefault(key, make())) == digests
+    assert len(kept) == len(digests)  # one for each scenario's exact lines
+    assert lazy.scenario_digests(lambda key, make: kept[key]) == digests
     assert lazy.scenario_names() == full.scenario_names()
     assert record_scenarios(lazy) == record_scenarios(full)
     assert source_presets(lazy) == source_presets(full)
@@ -64,18 +78,33 @@ def _record(scenario: str, source: str = "pymunk", preset: str | None = "default
                   wall_time_s=0.25, diagnostics={"engine_wall_time_s": 0.5})
 
 
-def test_names_with_escapes_interleaved_scenarios_and_analytic_records(tmp_path):
-    records = [_record('a "quoted" name'), _record("ü\\back", label='"source":"x"'),
+@pytest.mark.parametrize("label", ["p", '"source":"x"', "{braces}"])
+def test_names_with_escapes_interleaved_scenarios_and_analytic_records(tmp_path, label):
+    records = [_record('a "quoted" name'), _record("ü\\back", label=label),
                _record('a "quoted" name', source="analytic", preset=None),
                _record("plain", source="box2d", preset="accurate"),
-               _record("ü\\back", source="mujoco")]
+               _record("ü\\back", source="mujoco"), _record("plain", source="pybullet")]
     path = write_results(tmp_path / "r.json", records, {}, {"plain": {"tags": ["t"]}})
     lazy = read_for_report(path)
     assert isinstance(lazy, LazyResults)
     _same_reading(lazy, read_results(path))
     assert source_presets(lazy) == {("pymunk", "defaults"), ("box2d", "accurate"),
-                                    ("mujoco", "defaults")}
+                                    ("mujoco", "defaults"), ("pybullet", "defaults")}
     assert not lazy.loaded
+
+
+def test_plain_lines_are_read_in_one_pass_with_what_one_by_one_finds(tmp_path):
+    records = [_record("a"), _record("b", source="analytic", preset=None), _record("a"),
+               _record("c", source="box2d", preset="accurate")]
+    body = write_results(tmp_path / "r.json", records, {}, {}).read_bytes()
+    body = body[body.index(RECORDS_START.encode()) + len(RECORDS_START):-len(RECORDS_END)]
+    found = reading._lines(body, 4)
+    assert found is not None and found == reading._lines_one_by_one(body, 4)
+    lines = body.split(b",\n")
+    starts = [sum(len(line) + 2 for line in lines[:index]) for index in range(4)]
+    assert found.names == ["a", "b", "a", "c"]
+    assert found.segments["a"] == [(0, len(lines[0])), (starts[2], starts[2] + len(lines[2]))]
+    assert found.segments["c"] == [(starts[3], len(body))]
 
 
 def test_without_a_matching_companion_the_file_is_read_in_full(tmp_path):
