@@ -431,6 +431,16 @@ def why_html(results: Results) -> str:
     return "\n".join(parts)
 
 
+def cached_table3(figure: str | None, prepared: Prepared) -> str:
+    """:func:`table3_html`, kept in the report's cache under what it reads: ``table3`` and
+    its data (:func:`harness.report.figures.table3_inputs`), the solver's code and
+    ``figure``."""
+    from harness.report.figures import solver_digest, table3_inputs
+
+    key = f"table3\0{table3_inputs()}\0{solver_digest()}\0{figure}"
+    return prepared.cache.get(key, lambda: table3_html(figure))
+
+
 def table3_html(figure: str | None) -> str:
     """The paper's Table 3 reproduced, from the structured rows of ``table3``."""
     from harness.report import table3
@@ -778,7 +788,7 @@ def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None
         if tag:
             parts.append("</details>")
     parts.append("<h2 id='table3'>Table 3 of Djerassi (2009, Part B) reproduced</h2>")
-    parts.append(table3_html(figures.get("table3")))
+    parts.append(cached_table3(figures.get("table3"), prepared))
     survey = Path("survey", "summary.md")  # written by impact-harness suite
     if (out_dir / survey).exists():
         parts.append(f"<h2 id='survey'>Survey</h2><p>Departures over random families of "

@@ -57,8 +57,7 @@ _SOURCE_PRESET = re.compile(rb'"source":"([^"\\]*)","law":(?:null|' + _STRING
 #: the point's label no brace): the scenario, the source and the preset (or None).
 _LINE_HEAD = (rb'\{"scenario":"([^"\\]*)","point":\{[^{}]*\},"source":"([^"\\]*)",'
               rb'"law":(?:null|"[^"\\]*"),"preset":(?:null|"([^"\\]*)")')
-_FIRST_LINE = re.compile(_LINE_HEAD)
-_NEXT_LINE = re.compile(rb"\n" + _LINE_HEAD)  # a raw newline only ends a line
+_LINE_HEAD_AT = re.compile(_LINE_HEAD)
 
 
 def scenario_digest(lines) -> str:
@@ -75,14 +74,14 @@ class LazyResults:
     ``(source, preset)`` pairs present come from the file's lines; anything else (``records``,
     ``for_scenario`` ...) from the records, read in full the first time it is asked for."""
 
-    def __init__(self, path: Path, status: os.stat_result, document: dict, body: bytes,
+    def __init__(self, path: Path, status: os.stat_result, document: dict, data: bytes,
                  lines: _Lines, scenarios_digest: str | None = None):
         self.path = path
         self.provenance = document.get("provenance", {})
         self.scenarios = document.get("scenarios", {})
         self.record_scenarios = lines.names
         self.scenarios_digest = scenarios_digest
-        self._body = body
+        self._data = data  # the file, where the lines' spans are
         self._segments = lines.segments
         self._pairs = lines.pairs
         self._status = status
@@ -98,7 +97,7 @@ class LazyResults:
         taking the volatile fields out.
         """
         digests = {}
-        view = memoryview(self._body)
+        view = memoryview(self._data)
         for name, segments in self._segments.items():
             def make(segments=segments) -> str:
                 text = b"\n".join(view[start:end] for start, end in segments)
@@ -203,14 +202,14 @@ def _lazy(path: Path, status: os.stat_result, data: bytes, count: int) -> LazyRe
             or document.get("format") != FORMAT
             or document.get("format_version") != FORMAT_VERSION):
         return None
-    body = data[start + len(RECORDS_START):len(data) - len(RECORDS_END)]
-    lines = _lines(body, count) or _lines_one_by_one(body, count)
+    begin, end = start + len(RECORDS_START), len(data) - len(RECORDS_END)  # the record lines
+    lines = _lines(data, begin, end, count) or _lines_one_by_one(data, begin, end, count)
     if lines is None:
         return None
     # write_results puts the scenarios last in the head, after a newline only structure has:
     # their text is what a digest of them needs (else one of their JSON is made)
     at = data.rfind(b'\n "scenarios": {', 0, start)
-    return LazyResults(path, status, document, body, lines,
+    return LazyResults(path, status, document, data, lines,
                        None if at < 0 else hashlib.sha256(data[at:start]).hexdigest())
 
 
@@ -225,57 +224,62 @@ class _Lines:
     pairs: frozenset | None
 
 
-def _segments(names: list[str], starts: list[int], length: int
+def _segments(names: list[str], starts: list[int], end: int
               ) -> dict[str, list[tuple[int, int]]]:
-    """Each scenario's spans of consecutive lines, from the lines' scenarios and starts."""
+    """Each scenario's spans of consecutive lines, from the lines' scenarios and starts and
+    where the last line ends."""
     segments: dict[str, list[tuple[int, int]]] = {}
     previous = None
     for index, name in enumerate(names):
-        end = starts[index + 1] - 2 if index + 1 < len(starts) else length
+        stop = starts[index + 1] - 2 if index + 1 < len(starts) else end
         if name == previous:
             spans = segments[name]
-            spans[-1] = (spans[-1][0], end)
+            spans[-1] = (spans[-1][0], stop)
         else:
-            segments.setdefault(name, []).append((starts[index], end))
+            segments.setdefault(name, []).append((starts[index], stop))
             previous = name
     return segments
 
 
-def _lines(body: bytes, count: int) -> _Lines | None:
-    """:class:`_Lines` of ``body`` found in one pass, when every one of its ``count`` lines
-    starts as :data:`_LINE_HEAD` reads (no escape in the scenario, source or preset, a point
-    without braces in its label); else None."""
-    first = _FIRST_LINE.match(body)
-    if first is None or body.count(b"\n") != count - 1:
-        return None
-    heads = [first, *_NEXT_LINE.finditer(body)]
-    if len(heads) != count:
-        return None
-    starts = [0] + [head.start() + 1 for head in heads[1:]]
-    if any(body[at - 2] != ord(",") for at in starts[1:]):
+def _lines(data: bytes, begin: int, end: int, count: int) -> _Lines | None:
+    """:class:`_Lines` of the ``count`` record lines in ``data[begin:end]``, found by their
+    newlines (a raw newline only ends a line), when every line starts as :data:`_LINE_HEAD`
+    reads (no escape in the scenario, source or preset, a point without braces in its
+    label); else None."""
+    starts = [begin]
+    find = data.find
+    at = find(b"\n", begin, end)
+    while at >= 0 and len(starts) < count:
+        starts.append(at + 1)
+        at = find(b"\n", at + 1, end)
+    if at >= 0 or len(starts) != count or any(data[start - 2] != 44 for start in starts[1:]):
+        return None  # 44: the comma before each newline
+    match = _LINE_HEAD_AT.match
+    heads = [match(data, at, end) for at in starts]
+    if None in heads:
         return None
     names = [str(head[1], "utf-8") for head in heads]
     pairs = frozenset((str(source, "utf-8"), None if preset is None else str(preset, "utf-8"))
                       for source, preset in {(head[2], head[3]) for head in heads})
-    return _Lines(names, _segments(names, starts, len(body)), pairs)
+    return _Lines(names, _segments(names, starts, end), pairs)
 
 
-def _lines_one_by_one(body: bytes, count: int) -> _Lines | None:
+def _lines_one_by_one(data: bytes, begin: int, end: int, count: int) -> _Lines | None:
     """:class:`_Lines` line by line (names with escapes: decoded as JSON; pairs unknown
-    where a line does not start as :data:`_LINE_HEAD` reads); None when ``body`` is not
-    ``count`` record lines."""
-    lines = body.split(b",\n") if body else []
+    where a line does not start as :data:`_LINE_HEAD` reads); None when ``data[begin:end]``
+    is not ``count`` record lines."""
+    lines = data[begin:end].split(b",\n") if end > begin else []
     if len(lines) != count:
         return None
     names: list[str] = []
     starts: list[int] = []
-    at = 0
+    at = begin
     pairs: set | None = set()
     for line in lines:
         if not (line.startswith(_LINE_START) and line.endswith(b"}")):
             return None
-        end = line.find(b'"', len(_LINE_START))
-        name = line[len(_LINE_START):end]
+        stop = line.find(b'"', len(_LINE_START))
+        name = line[len(_LINE_START):stop]
         try:
             name = json.loads(line)["scenario"] if b"\\" in name else str(name, "utf-8")
         except (ValueError, KeyError, TypeError):
@@ -291,7 +295,7 @@ def _lines_one_by_one(body: bytes, count: int) -> _Lines | None:
                 preset = found[2]
                 pairs.add((str(found[1], "utf-8"), None if preset is None
                            else str(preset, "utf-8")))
-    return _Lines(names, _segments(names, starts, len(body)),
+    return _Lines(names, _segments(names, starts, end),
                   None if pairs is None else frozenset(pairs))
 
 

@@ -96,15 +96,18 @@ def test_names_with_escapes_interleaved_scenarios_and_analytic_records(tmp_path,
 def test_plain_lines_are_read_in_one_pass_with_what_one_by_one_finds(tmp_path):
     records = [_record("a"), _record("b", source="analytic", preset=None), _record("a"),
                _record("c", source="box2d", preset="accurate")]
-    body = write_results(tmp_path / "r.json", records, {}, {}).read_bytes()
-    body = body[body.index(RECORDS_START.encode()) + len(RECORDS_START):-len(RECORDS_END)]
-    found = reading._lines(body, 4)
-    assert found is not None and found == reading._lines_one_by_one(body, 4)
-    lines = body.split(b",\n")
-    starts = [sum(len(line) + 2 for line in lines[:index]) for index in range(4)]
+    data = write_results(tmp_path / "r.json", records, {}, {}).read_bytes()
+    begin = data.index(RECORDS_START.encode()) + len(RECORDS_START)
+    end = len(data) - len(RECORDS_END)
+    found = reading._lines(data, begin, end, 4)
+    assert found is not None and found == reading._lines_one_by_one(data, begin, end, 4)
+    assert reading._lines(data, begin, end, 3) is None  # not the companion's count
+    lines = data[begin:end].split(b",\n")
+    starts = [begin + sum(len(line) + 2 for line in lines[:index]) for index in range(4)]
     assert found.names == ["a", "b", "a", "c"]
-    assert found.segments["a"] == [(0, len(lines[0])), (starts[2], starts[2] + len(lines[2]))]
-    assert found.segments["c"] == [(starts[3], len(body))]
+    assert found.segments["a"] == [(begin, begin + len(lines[0])),
+                                   (starts[2], starts[2] + len(lines[2]))]
+    assert found.segments["c"] == [(starts[3], end)]
 
 
 def test_without_a_matching_companion_the_file_is_read_in_full(tmp_path):
