@@ -59,9 +59,23 @@ def save_png(figure, path: Path, dpi: int = 100, tag: str | None = None) -> Path
     metadata."""
     figure.savefig(path, dpi=dpi, metadata={TAG_KEY: tag} if tag else None)
     if SVG_TWIN.get():
-        # No date in the SVG, so that the same inputs give the same file.
-        figure.savefig(path.with_suffix(".svg"), metadata={"Date": None})
+        save_svg_twin(figure, path)
     return path
+
+
+def save_svg_twin(figure, path: Path) -> Path:
+    """The SVG beside the PNG ``path`` just saved from ``figure``, laid out as the PNG was.
+
+    The constrained layout found for the PNG is kept (its engine set aside): laying the
+    figure out again for the SVG was a third of the dearest figure's time (the heat map's
+    ~100 texts measured again, at 1,000 scenarios), and moves nothing by more than the
+    difference in text extents between the two resolutions (< 0.5 pt).
+    """
+    figure.set_layout_engine("none")
+    svg = path.with_suffix(".svg")
+    # No date in the SVG, so that the same inputs give the same file.
+    figure.savefig(svg, metadata={"Date": None})
+    return svg
 
 
 def offset_transform(ax, index: int, count: int, step_points: float = 4.0):
