@@ -26,7 +26,10 @@ text vector). Every image loads lazily. Figures are drawn in a pool of forked pr
 (``--workers``) while this process builds the page; each figure's PNG carries the digest
 of its inputs, so a warm report draws nothing. Likewise each scenario's HTML section and
 headline cells are kept in ``<out>/.report-fragments.json`` under the digest of its records
-(:mod:`harness.report.fragments`): a warm report formats only what changed.
+(:mod:`harness.report.fragments`): a warm report formats only what changed, and reads the
+records themselves only when something is to be formatted (:mod:`harness.report.reading`:
+what it needs of them otherwise -- their digests, order, engines -- comes from the lines of
+the results file).
 
 What the page shows, in order: what this is; the headline heat maps (departure of every
 engine and preset from Poisson and from Stronge, per scenario); the split of each engine's
