@@ -66,7 +66,7 @@ from harness.report.figures import (
     table3_figure,
     table3_inputs,
 )
-from harness.report.fragments import open_cache, prepare
+from harness.report.fragments import DIGESTS_FILE, open_cache, prepare
 from harness.report.history import history_figure, history_inputs
 from harness.report.html import html_page
 from harness.report.pages import write_pages
@@ -158,8 +158,9 @@ def write_report(results: Results, out_dir: Path | str,
         scenario_figures = "none" if many else "all"
     if svg == "auto":
         svg = "headline" if many else "all"
-    cache = open_cache(results, out_dir)  # also of the digests of lines hashed before
-    digests = scenario_digests(results, cache.get)
+    cache = open_cache(results, out_dir)
+    known = open_cache(results, out_dir, DIGESTS_FILE)  # digests of lines hashed before
+    digests = scenario_digests(results, known.get)
     tasks = figure_tasks(results, many, scenario_figures, figures_for, svg, digests)
     # The figures are drawn by forked workers while this process builds the page, which
     # needs only their names: it assumes that every figure to be drawn has something to
@@ -184,6 +185,7 @@ def write_report(results: Results, out_dir: Path | str,
     html_path.write_text(page, encoding="utf-8")
     summary = write_summary(results, out_dir, prepared)
     prepared.cache.save()
+    known.save()
     return {"html": html_path, "summary": summary,
             "figures": sorted(figure_dir / f for f in wanted if f.endswith(".png"))}
 

@@ -37,6 +37,11 @@ from harness.run.records import ANALYTIC, Record, Results
 
 #: The cache's file in the report's directory.
 CACHE_FILE = ".report-fragments.json"
+#: The file of the scenarios' digests by the digest of their exact lines
+#: (:meth:`harness.report.reading.LazyResults.scenario_digests`): apart, so that a results
+#: file written anew with the same records (only their times change) rewrites this small
+#: file, not the pieces.
+DIGESTS_FILE = ".report-digests.json"
 
 
 def cache_context(labels: Sequence[str]) -> str:
@@ -205,9 +210,11 @@ class Prepared:
         return self.cache.get(f"{kind}\0{self.records_digest}", make)
 
 
-def open_cache(results: Results, out_dir: Path | None = None) -> FragmentCache:
-    """The fragment cache of a report of ``results`` in ``out_dir`` (None: nothing kept)."""
-    return FragmentCache(None if out_dir is None else Path(out_dir) / CACHE_FILE,
+def open_cache(results: Results, out_dir: Path | None = None,
+               name: str = CACHE_FILE) -> FragmentCache:
+    """The fragment cache of a report of ``results`` in ``out_dir`` (None: nothing kept),
+    in its file ``name`` there."""
+    return FragmentCache(None if out_dir is None else Path(out_dir) / name,
                          cache_context(engine_labels(results)))
 
 
