@@ -26,7 +26,10 @@ text vector). Every image loads lazily. Figures are drawn in a pool of forked pr
 (``--workers``) while this process builds the page; each figure's PNG carries the digest
 of its inputs, so a warm report draws nothing. Likewise each scenario's HTML section and
 headline cells are kept in ``<out>/.report-fragments.json`` under the digest of its records
-(:mod:`harness.report.fragments`): a warm report formats only what changed.
+(:mod:`harness.report.fragments`): a warm report formats only what changed, and reads the
+records themselves only when something is to be formatted (:mod:`harness.report.reading`:
+what it needs of them otherwise -- their digests, order, engines -- comes from the lines of
+the results file).
 
 What the page shows, in order: what this is; the headline heat maps (departure of every
 engine and preset from Poisson and from Stronge, per scenario); the split of each engine's
@@ -63,13 +66,14 @@ from harness.report.figures import (
     table3_figure,
     table3_inputs,
 )
-from harness.report.fragments import prepare
+from harness.report.fragments import DIGESTS_FILE, open_cache, prepare
 from harness.report.history import history_figure, history_inputs
 from harness.report.html import html_page
 from harness.report.pages import write_pages
+from harness.report.reading import read_for_report
 from harness.report.summary import write_summary
 from harness.report.views import FIGURES, engine_labels, slug, split_rows
-from harness.run.records import DEFAULT_RESULTS, Results, read_results
+from harness.run.records import DEFAULT_RESULTS, Results
 
 #: Above this many scenarios the report aggregates (``--scenario-figures auto``, ``--svg
 #: auto``): the headline heat map has one row per family of scenarios (:func:`scenario_group`)
@@ -154,14 +158,16 @@ def write_report(results: Results, out_dir: Path | str,
         scenario_figures = "none" if many else "all"
     if svg == "auto":
         svg = "headline" if many else "all"
-    digests = scenario_digests(results)
+    cache = open_cache(results, out_dir)
+    known = open_cache(results, out_dir, DIGESTS_FILE)  # digests of lines hashed before
+    digests = scenario_digests(results, known.get)
     tasks = figure_tasks(results, many, scenario_figures, figures_for, svg, digests)
     # The figures are drawn by forked workers while this process builds the page, which
     # needs only their names: it assumes that every figure to be drawn has something to
     # show, and is built again in the rare case one had not.
     expected, finish_drawing = start_drawing(tasks, figure_dir, workers)
     try:
-        prepared = prepare(results, out_dir, digests)
+        prepared = prepare(results, out_dir, digests, cache)
         groups = scenario_groups(results, names) if many else {}
         pages = write_pages(out_dir, sources)
         page = html_page(results, out_dir, figure_map(tasks, expected, many, groups,
@@ -179,6 +185,7 @@ def write_report(results: Results, out_dir: Path | str,
     html_path.write_text(page, encoding="utf-8")
     summary = write_summary(results, out_dir, prepared)
     prepared.cache.save()
+    known.save()
     return {"html": html_path, "summary": summary,
             "figures": sorted(figure_dir / f for f in wanted if f.endswith(".png"))}
 
@@ -391,7 +398,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def main(args) -> int:
     try:
-        results = read_results(args.results)
+        results = read_for_report(args.results)  # the records only when asked for
     except (FileNotFoundError, ValueError) as error:  # the message names the file
         print(f"impact-harness report: {error}", file=sys.stderr)
         return 2

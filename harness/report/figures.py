@@ -13,13 +13,13 @@ import hashlib
 import itertools
 import json
 import math
-import re
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
 from harness.engines import preset_label
+from harness.report.reading import LazyResults, scenario_digest
 from harness.report.views import (
     ENGINE_STYLE,
     HEADLINE_LAWS,
@@ -59,9 +59,23 @@ def save_png(figure, path: Path, dpi: int = 100, tag: str | None = None) -> Path
     metadata."""
     figure.savefig(path, dpi=dpi, metadata={TAG_KEY: tag} if tag else None)
     if SVG_TWIN.get():
-        # No date in the SVG, so that the same inputs give the same file.
-        figure.savefig(path.with_suffix(".svg"), metadata={"Date": None})
+        save_svg_twin(figure, path)
     return path
+
+
+def save_svg_twin(figure, path: Path) -> Path:
+    """The SVG beside the PNG ``path`` just saved from ``figure``, laid out as the PNG was.
+
+    The constrained layout found for the PNG is kept (its engine set aside): laying the
+    figure out again for the SVG was a third of the dearest figure's time (the heat map's
+    ~100 texts measured again, at 1,000 scenarios), and moves nothing by more than the
+    difference in text extents between the two resolutions (< 0.5 pt).
+    """
+    figure.set_layout_engine("none")
+    svg = path.with_suffix(".svg")
+    # No date in the SVG, so that the same inputs give the same file.
+    figure.savefig(svg, metadata={"Date": None})
+    return svg
 
 
 def offset_transform(ax, index: int, count: int, step_points: float = 4.0):
@@ -92,33 +106,31 @@ FLAG_STYLE = {"marker": "o", "markerfacecolor": "none", "markeredgecolor": "red"
 
 
 TAG_KEY = "impact-harness-inputs"
-VOLATILE_FIELDS = ("wall_time_s", "cached")
-#: A volatile field with its value in a record's line of the results file (also the
-#: engine's own time in the diagnostics): the value is a number, a bool or null. Nothing in a
-#: string matches, since a quote inside a JSON string is escaped.
-_VOLATILE_TEXT = re.compile(
-    '"(?:' + "|".join((*VOLATILE_FIELDS, "engine_wall_time_s")) + r')":[^,{}\[\]"]*')
 
 
-def scenario_digests(results: Results) -> dict[str, str]:
+def scenario_digests(results: Results, known=None) -> dict[str, str]:
     """``{scenario: sha256 of its records}``, what every figure of a scenario (and the
     headline figures, of all) depends on besides the code.
 
     Hashed from each record's line in the results file (:func:`harness.run.records.
-    record_line`), as read (``Results.record_lines``) or else written anew, without the
-    fields that change between identical runs (:data:`VOLATILE_FIELDS`, the engine's own
-    time): a warm report hashes text instead of encoding 28,000 records again, which was
-    half of its time at 1,000 scenarios. Any other change to a record changes its
-    scenario's digest.
+    record_line`), as read (``Results.record_lines``, or the bytes of the file for
+    :class:`~harness.report.reading.LazyResults`) or else written anew, without the fields
+    that change between identical runs (:data:`~harness.report.reading.VOLATILE_FIELDS`, the
+    engine's own time: :func:`~harness.report.reading.scenario_digest`): a warm report hashes
+    text instead of encoding 28,000 records again, which was half of its time at 1,000
+    scenarios. Any other change to a record changes its scenario's digest. ``known``: where
+    :meth:`LazyResults.scenario_digests <harness.report.reading.LazyResults.scenario_digests>`
+    finds the digests of lines it hashed before (a report's fragment cache's ``get``).
     """
+    if isinstance(results, LazyResults):
+        return results.scenario_digests(known)
     lines = results.record_lines()
     if lines is None:  # built in memory: the lines the results file would hold
         lines = [record_line(record.as_dict()) for record in results.records]
     texts: dict[str, list[str]] = {}
     for record, line in zip(results.records, lines):
         texts.setdefault(record.scenario, []).append(line)
-    return {name: hashlib.sha256(_VOLATILE_TEXT.sub("", "\n".join(parts)).encode()).hexdigest()
-            for name, parts in texts.items()}
+    return {name: scenario_digest(parts) for name, parts in texts.items()}
 
 
 @functools.cache
@@ -213,12 +225,25 @@ def is_current(path: Path, tag: str, svg: bool = True) -> bool:
 
 
 def table3_inputs() -> str:
-    """What the Table 3 figure depends on besides this module: table3.py and its data."""
-    from harness.report import table3
-
-    source = Path(table3.__file__)
+    """What the Table 3 figure depends on besides this module: table3.py and its data (read,
+    not imported: a warm report solves nothing)."""
+    source = Path(__file__).with_name("table3.py")
     data = source.parent / "data" / "djerassi-table3.csv"
     return hashlib.sha256(source.read_bytes() + data.read_bytes()).hexdigest()
+
+
+@functools.cache
+def solver_digest() -> str:
+    """The sha256 of the modules of ``planar_impact`` (read, not imported), which solves what
+    the Table 3 reproduction shows."""
+    from importlib.util import find_spec
+
+    spec = find_spec("planar_impact")
+    digest = hashlib.sha256()
+    for folder in (spec.submodule_search_locations or []) if spec else []:
+        for path in sorted(Path(folder).glob("*.py")):
+            digest.update(path.name.encode() + b"\0" + path.read_bytes())
+    return digest.hexdigest()
 
 
 def table3_figure(path: Path, tag: str | None = None) -> Path:

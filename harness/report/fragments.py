@@ -37,18 +37,24 @@ from harness.run.records import ANALYTIC, Record, Results
 
 #: The cache's file in the report's directory.
 CACHE_FILE = ".report-fragments.json"
+#: The file of the scenarios' digests by the digest of their exact lines
+#: (:meth:`harness.report.reading.LazyResults.scenario_digests`): apart, so that a results
+#: file written anew with the same records (only their times change) rewrites this small
+#: file, not the pieces.
+DIGESTS_FILE = ".report-digests.json"
 
 
 def cache_context(labels: Sequence[str]) -> str:
     """What every stored piece depends on besides its own key: the report's code (with
     matplotlib's version, :func:`harness.report.figures._code_digest`), the metrics module
     (the departure split), the engine labels and the engines' and presets' order."""
+    from importlib.util import find_spec
+
     from harness.engines import ENGINE_NAMES, PRESET_ROLES
     from harness.report.figures import _code_digest
-    from harness.run import metrics
 
     digest = hashlib.sha256(_code_digest())
-    digest.update(Path(metrics.__file__).read_bytes())
+    digest.update(Path(find_spec("harness.run.metrics").origin).read_bytes())  # not imported
     digest.update(json.dumps([list(labels), list(ENGINE_NAMES), list(PRESET_ROLES)]).encode())
     return digest.hexdigest()
 
@@ -204,16 +210,26 @@ class Prepared:
         return self.cache.get(f"{kind}\0{self.records_digest}", make)
 
 
+def open_cache(results: Results, out_dir: Path | None = None,
+               name: str = CACHE_FILE) -> FragmentCache:
+    """The fragment cache of a report of ``results`` in ``out_dir`` (None: nothing kept),
+    in its file ``name`` there."""
+    return FragmentCache(None if out_dir is None else Path(out_dir) / name,
+                         cache_context(engine_labels(results)))
+
+
 def prepare(results: Results, out_dir: Path | None = None,
-            digests: dict[str, str] | None = None) -> Prepared:
-    """The views of every scenario, from ``<out_dir>/`` :data:`CACHE_FILE` where their
-    records are unchanged (``out_dir`` None: computed, nothing kept)."""
+            digests: dict[str, str] | None = None,
+            cache: FragmentCache | None = None) -> Prepared:
+    """The views of every scenario, from ``<out_dir>/`` :data:`CACHE_FILE` (or ``cache``,
+    :func:`open_cache`'s) where their records are unchanged (``out_dir`` None: computed,
+    nothing kept)."""
     from harness.report.figures import scenario_digests
+    from harness.report.reading import record_scenarios
 
     labels = engine_labels(results)
-    digests = scenario_digests(results) if digests is None else digests
-    cache = FragmentCache(None if out_dir is None else Path(out_dir) / CACHE_FILE,
-                          cache_context(labels))
+    cache = open_cache(results, out_dir) if cache is None else cache
+    digests = scenario_digests(results, cache.get) if digests is None else digests
     names = results.scenario_names()
     views = {name: cache.get(f"view\0{name}\0{digests.get(name, '')}",
                              lambda name=name: scenario_view(results.for_scenario(name), labels))
@@ -221,10 +237,10 @@ def prepare(results: Results, out_dir: Path | None = None,
     # every scenario's digest, and the order of the records across scenarios (a run of a
     # scenario's records after another's: the first appearances a piece may show)
     order, previous = [], None
-    for record in results.records:
-        if record.scenario != previous:
-            order.append(record.scenario)
-            previous = record.scenario
+    for scenario in record_scenarios(results):
+        if scenario != previous:
+            order.append(scenario)
+            previous = scenario
     inputs = json.dumps([[[name, digests.get(name, "")] for name in names], order])
     return Prepared(digests, labels, views, cache,
                     hashlib.sha256(inputs.encode()).hexdigest())

@@ -14,6 +14,7 @@ import numpy as np
 
 from harness.engines import ENGINE_NAMES, PRESET_ROLES, preset_label, source_label
 from harness.report.fragments import Prepared, prepare, split_order
+from harness.report.reading import scenarios_digest
 from harness.report.views import (
     ENGINE_WHY,
     FIGURES,
@@ -198,6 +199,24 @@ def overrides_paragraph(records: Sequence[Record]) -> str:
 
 #: What :func:`scenario_section` reads of a scenario's description (``Results.scenarios``).
 SECTION_INFO = ("description", "system", "tags", "sweep", "speed_labels")
+
+
+def record_counts(results: Results) -> list[int]:
+    """``[records, engine runs, flagged engine runs, skipped engine runs]``, as the page's
+    facts line counts them."""
+    engine_records = [r for r in results.records if r.source != ANALYTIC]
+    return [len(results.records), len(engine_records),
+            sum(not r.ok and not r.skipped for r in engine_records),
+            sum(r.skipped for r in engine_records)]
+
+
+def cached_contacts(results: Results, prepared: Prepared) -> str:
+    """The HTML of :func:`harness.report.contacts.contacts_section`, kept in the report's
+    cache under what it reads: every record and what the runner says of each scenario."""
+    from harness.report.contacts import contacts_section  # several contacts (issue 13)
+
+    key = f"contacts\0{prepared.records_digest}\0{scenarios_digest(results)}"
+    return prepared.cache.get(key, lambda: contacts_section(results)[0])
 
 
 def cached_section(name: str, results: Results, figures: dict, prepared: Prepared) -> str:
@@ -410,6 +429,16 @@ def why_html(results: Results) -> str:
                             if extra else "") + "</dd>")
     parts.append("</dl>")
     return "\n".join(parts)
+
+
+def cached_table3(figure: str | None, prepared: Prepared) -> str:
+    """:func:`table3_html`, kept in the report's cache under what it reads: ``table3`` and
+    its data (:func:`harness.report.figures.table3_inputs`), the solver's code and
+    ``figure``."""
+    from harness.report.figures import solver_digest, table3_inputs
+
+    key = f"table3\0{table3_inputs()}\0{solver_digest()}\0{figure}"
+    return prepared.cache.get(key, lambda: table3_html(figure))
 
 
 def table3_html(figure: str | None) -> str:
@@ -641,9 +670,9 @@ def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None
     names = results.scenario_names()
     gates = prov.get("gates", [])
     failed = [g for g in gates if g["status"] == "FAIL"]
-    engine_records = [r for r in results.records if r.source != ANALYTIC]
-    flagged = [r for r in engine_records if not r.ok and not r.skipped]
-    skipped = [r for r in engine_records if r.skipped]
+    # counts of every record: kept while no record changed (they are all read otherwise)
+    records, engine_runs, flagged, skipped = prepared.whole("counts",
+                                                            lambda: record_counts(results))
     labels = prepared.labels
     engines = list(dict.fromkeys(label.split(".")[0] for label in labels))
     git = prov.get("git", {})
@@ -667,9 +696,9 @@ def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None
         "is wrong). Only single impacts have a departure: a run that fails a verdict check "
         "(docs/verdicts.md) is shown with its reason and counted, never averaged in.</p>")
     parts.append(
-        f'<p class="facts"><b>{len(names)}</b> scenarios, <b>{len(results.records)}</b> '
-        f"records; engine runs: <b>{len(engine_records)}</b> "
-        f"({len(flagged)} flagged, {len(skipped)} skipped); gates: "
+        f'<p class="facts"><b>{len(names)}</b> scenarios, <b>{records}</b> '
+        f"records; engine runs: <b>{engine_runs}</b> "
+        f"({flagged} flagged, {skipped} skipped); gates: "
         + (f'<span class="fail">{len(failed)} of {len(gates)} FAILED</span>' if failed
            else f'<span class="pass">{len(gates)} passed</span>')
         + f"; commit <code>{escape_html(str(git.get('commit'))[:10])}</code>, "
@@ -724,8 +753,7 @@ def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None
     parts.append("<h2 id='gates'>Gates</h2><p>Tolerance gates declared by the scenarios "
                  "(<code>[expect.gate]</code>); a failing gate makes <code>impact-harness "
                  "run</code> exit non-zero.</p>" + gates_html(prov))
-    from harness.report.contacts import contacts_section  # several contacts (issue 13)
-    parts.append(contacts_section(results)[0])
+    parts.append(cached_contacts(results, prepared))
     parts.append("<h2 id='scenarios'>Scenarios</h2><p>Per scenario: post-impact speeds of "
                  "every law and engine (engine rows shaded; red when the engine flagged the "
                  "run), contact velocities after the impact (v<sub>n</sub>, v<sub>t</sub>, in "
@@ -760,7 +788,7 @@ def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None
         if tag:
             parts.append("</details>")
     parts.append("<h2 id='table3'>Table 3 of Djerassi (2009, Part B) reproduced</h2>")
-    parts.append(table3_html(figures.get("table3")))
+    parts.append(cached_table3(figures.get("table3"), prepared))
     survey = Path("survey", "summary.md")  # written by impact-harness suite
     if (out_dir / survey).exists():
         parts.append(f"<h2 id='survey'>Survey</h2><p>Departures over random families of "

@@ -8,7 +8,6 @@ from pathlib import Path
 from harness.report.fragments import Prepared, prepare
 from harness.report.views import HEADLINE_LAWS, LAW_STYLE, fmt_departure, row_name
 from harness.run.records import ANALYTIC, Results
-from harness.run.verdicts import reason_counts
 
 _MARKDOWN_SPECIAL = re.compile(r"([\\`*_{}\[\]()#+!|~])")
 
@@ -18,6 +17,26 @@ def escape(text) -> str:
     as entities, line breaks as spaces (a name from results.json cannot format the page)."""
     text = str(text).replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
     return _MARKDOWN_SPECIAL.sub(r"\\\1", " ".join(text.splitlines()))
+
+
+def runs_lines(results: Results) -> list[str]:
+    """The lines of ``summary.md`` on the engine runs: how many are single impacts, the runs
+    per reason and every run not ok."""
+    from harness.run.verdicts import reason_counts
+
+    flagged = [r for r in results.records if r.source != ANALYTIC and not r.ok]
+    engine_runs = [r for r in results.records if r.source != ANALYTIC and not r.skipped]
+    counts = reason_counts([r.reasons for r in engine_runs])
+    lines = ["", "## Verdicts", "",
+             f"{sum(r.ok for r in engine_runs)} of {len(engine_runs)} engine runs are single "
+             f"impacts; runs per reason (a run can fail several checks):", ""]
+    lines += [f"- {name}: {count}" for name, count in sorted(counts.items())] or ["- none"]
+    lines += ["", "## Runs not ok", ""]
+    lines += [f"- {escape(r.scenario)} {escape(r.point['label'])} {escape(r.label)}: "
+              f"{escape(r.status)}"
+              + (f" ({escape(', '.join(r.failing_reasons))})" if r.failing_reasons else "")
+              for r in flagged] or ["None."]
+    return lines
 
 
 def write_summary(results: Results, out_dir: Path, prepared: Prepared | None = None) -> Path:
@@ -59,18 +78,8 @@ def write_summary(results: Results, out_dir: Path, prepared: Prepared | None = N
                          f" | {escape(g['status'])} |")
     else:
         lines.append("No gates in this run.")
-    flagged = [r for r in results.records if r.source != ANALYTIC and not r.ok]
-    engine_runs = [r for r in results.records if r.source != ANALYTIC and not r.skipped]
-    counts = reason_counts([r.reasons for r in engine_runs])
-    lines += ["", "## Verdicts", "",
-              f"{sum(r.ok for r in engine_runs)} of {len(engine_runs)} engine runs are single "
-              f"impacts; runs per reason (a run can fail several checks):", ""]
-    lines += [f"- {name}: {count}" for name, count in sorted(counts.items())] or ["- none"]
-    lines += ["", "## Runs not ok", ""]
-    lines += [f"- {escape(r.scenario)} {escape(r.point['label'])} {escape(r.label)}: "
-              f"{escape(r.status)}"
-              + (f" ({escape(', '.join(r.failing_reasons))})" if r.failing_reasons else "")
-              for r in flagged] or ["None."]
+    # kept while no record changed: these read every record
+    lines += prepared.whole("summary-runs", lambda: runs_lines(results))
     versions = prov.get("versions", {})
     git = prov.get("git", {})
     lines += ["", "## Versions", "",

@@ -331,6 +331,7 @@ def write_figure(rows: list[dict], path: Path, metadata: dict | None = None) -> 
                   frameon=False)
     fig.suptitle("Table 3, two sleds: impulse paths of each law (Routh's graph)")
     fig.savefig(path, dpi=110, metadata=metadata)
+    fig.set_layout_engine("none")  # the PNG's layout, not found again (figures.save_svg_twin)
     svg = path.with_suffix(".svg")
     fig.savefig(svg, metadata={"Date": None})
     return [path, svg]

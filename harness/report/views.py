@@ -195,8 +195,9 @@ def engine_roles(results: Results) -> list[tuple[str, str]]:
     order, engines in registry order, read from :mod:`harness.engines` (the scenario
     package that ``Results`` reads them from takes a third of a warm report's imports)."""
     from harness.engines import ENGINE_NAMES, PRESET_ROLES
+    from harness.report.reading import source_presets
 
-    present = {(r.source, r.preset) for r in results.records if r.source != ANALYTIC}
+    present = source_presets(results)  # from the file's lines when the report read them
     return [(e, p) for p in PRESET_ROLES for e in ENGINE_NAMES if (e, p) in present]
 
 

@@ -1,0 +1,327 @@
+"""Reading a results file for the report: its records built only when something asks.
+
+A warm report of 1,000 scenarios finds nearly every piece it shows in its caches (the
+figures' digests, :mod:`harness.report.fragments`): what it needs of the records is then
+their digests per scenario, their order and the engines and presets present, all of which
+the record lines of the file give without building a record. Unpickling and building the
+28,000 records (:func:`harness.run.records.read_results`) was a third of such a report.
+
+:func:`read_for_report` reads the file's bytes and returns a :class:`LazyResults`, which
+builds the records (by :func:`~harness.run.records.read_results`) the first time anything
+asks for them, so that what it gives never depends on what was cached. It reads the bytes
+only when the file is exactly as :func:`~harness.run.records.write_results` wrote it -- its
+pickle companion, written with it, still names its size, modification time and inode and
+the number of its records -- and otherwise reads the file as before.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import pickle
+import re
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from harness.run.records import (
+    ANALYTIC,
+    COMPANION_FORMAT,
+    FORMAT,
+    FORMAT_VERSION,
+    RECORDS_END,
+    RECORDS_START,
+    Results,
+    companion_path,
+    read_results,
+)
+
+#: A record's fields that change between identical runs: the figures' and fragments' digests
+#: leave them out (:func:`harness.report.figures.scenario_digests`).
+VOLATILE_FIELDS = ("wall_time_s", "cached")
+#: A volatile field with its value in a record's line of the results file (also the
+#: engine's own time in the diagnostics): the value is a number, a bool or null. Nothing in a
+#: string matches, since a quote inside a JSON string is escaped.
+VOLATILE_TEXT = re.compile(
+    '"(?:' + "|".join((*VOLATILE_FIELDS, "engine_wall_time_s")) + r')":[^,{}\[\]"]*')
+_VOLATILE_BYTES = re.compile(VOLATILE_TEXT.pattern.encode())
+#: How :func:`harness.run.records.record_line` starts a record's line.
+_LINE_START = b'{"scenario":"'
+#: A record's engine and preset where :func:`~harness.run.records.record_line` writes them
+#: (after its scenario and point): JSON strings, the law's and the preset's or null.
+_STRING = rb'"(?:[^"\\]|\\.)*"'
+_SOURCE_PRESET = re.compile(rb'"source":"([^"\\]*)","law":(?:null|' + _STRING
+                            + rb'),"preset":(?:null|"([^"\\]*)")')
+#: How a record's line starts when its scenario, point, source and preset hold no escape (and
+#: the point's label no brace): the scenario, the source and the preset (or None).
+_LINE_HEAD = (rb'\{"scenario":"([^"\\]*)","point":\{[^{}]*\},"source":"([^"\\]*)",'
+              rb'"law":(?:null|"[^"\\]*"),"preset":(?:null|"([^"\\]*)")')
+_LINE_HEAD_AT = re.compile(_LINE_HEAD)
+
+
+def scenario_digest(lines) -> str:
+    """The digest of one scenario's record lines (``str`` or ``bytes``, in run order): the
+    sha256 of their text joined by newlines, without :data:`VOLATILE_TEXT`."""
+    if lines and isinstance(lines[0], str):
+        return hashlib.sha256(VOLATILE_TEXT.sub("", "\n".join(lines)).encode()).hexdigest()
+    return hashlib.sha256(_VOLATILE_BYTES.sub(b"", b"\n".join(lines))).hexdigest()
+
+
+class LazyResults:
+    """:class:`harness.run.records.Results` as the report reads it: ``provenance``,
+    ``scenarios``, the scenario of every record in order, each scenario's digest and the
+    ``(source, preset)`` pairs present come from the file's lines; anything else (``records``,
+    ``for_scenario`` ...) from the records, read in full the first time it is asked for."""
+
+    def __init__(self, path: Path, status: os.stat_result, document: dict, data: bytes,
+                 lines: _Lines, scenarios_digest: str | None = None):
+        self.path = path
+        self.provenance = document.get("provenance", {})
+        self.scenarios = document.get("scenarios", {})
+        self.record_scenarios = lines.names
+        self.scenarios_digest = scenarios_digest
+        self._data = data  # the file, where the lines' spans are
+        self._segments = lines.segments
+        self._pairs = lines.pairs
+        self._status = status
+        self._results: Results | None = None
+
+    def scenario_digests(self, known: Callable[[str, Callable[[], str]], str] | None = None
+                         ) -> dict[str, str]:
+        """``{scenario: digest of its records}`` (:func:`scenario_digest`'s).
+
+        ``known(key, make)``, when given, returns the digest kept under ``key`` -- a digest
+        of the scenario's lines exactly as they are, volatile fields included -- or else
+        ``make()``: a report of the very file it read last hashes its text once, without
+        taking the volatile fields out.
+        """
+        digests = {}
+        view = memoryview(self._data)
+        for name, segments in self._segments.items():
+            def make(segments=segments) -> str:
+                text = b"\n".join(view[start:end] for start, end in segments)
+                return scenario_digest(text.replace(b",\n", b"\n").split(b"\n"))
+
+            if known is None:
+                digests[name] = make()
+                continue
+            exact = hashlib.sha256()
+            for index, (start, end) in enumerate(segments):
+                exact.update(view[start:end] if index == 0 else b"\n" + view[start:end])
+            digests[name] = known(f"digest\0{exact.hexdigest()}", make)
+        return digests
+
+    def full(self) -> Results:
+        """The results with their records (read once)."""
+        if self._results is None:
+            results = read_results(self.path)
+            status = self.path.stat()
+            if (status.st_size, status.st_mtime_ns, status.st_ino) != (
+                    self._status.st_size, self._status.st_mtime_ns, self._status.st_ino):
+                raise ValueError(f"{self.path}: the results file changed while being read")
+            self._results = results
+        return self._results
+
+    @property
+    def loaded(self) -> bool:
+        """Whether the records were read."""
+        return self._results is not None
+
+    @property
+    def records(self) -> list:
+        return self.full().records
+
+    def scenario_names(self) -> list[str]:
+        """Scenario names in run order."""
+        return list(dict.fromkeys(self.record_scenarios))
+
+    def source_presets(self) -> frozenset:
+        """The ``(source, preset)`` pairs of the records (analytic ones included)."""
+        if self._pairs is None:  # a line the reading could not tell
+            self._pairs = frozenset((r.source, r.preset) for r in self.records)
+        return self._pairs
+
+    def __getattr__(self, name: str):
+        if name.startswith("__"):  # copy, pickle: not the records' Results
+            raise AttributeError(name)
+        return getattr(self.full(), name)
+
+
+class _PlainUnpickler(pickle.Unpickler):
+    """Plain values only: a companion's header is a dict of strings and numbers."""
+
+    def find_class(self, module, name):
+        raise pickle.UnpicklingError(f"{module}.{name}: a companion holds plain values only")
+
+
+def _companion_records(path: Path, status: os.stat_result) -> int | None:
+    """How many records ``path``'s companion says the file holds, when it was written with
+    this very file (``status``); else None."""
+    try:
+        with open(companion_path(path), "rb") as handle:
+            header = _PlainUnpickler(handle).load()
+    except Exception:  # noqa: BLE001 - absent or damaged: the file is read in full
+        return None
+    if not (isinstance(header, dict) and header.get("format") == COMPANION_FORMAT
+            and header.get("results_size") == status.st_size
+            and header.get("results_mtime_ns") == status.st_mtime_ns
+            and header.get("results_inode") == status.st_ino
+            and isinstance(header.get("records"), int)):
+        return None
+    return header["records"]
+
+
+def read_for_report(path: Path | str) -> LazyResults | Results:
+    """The results in ``path`` for :func:`harness.report.write_report`: a
+    :class:`LazyResults` when the file is as ``write_results`` wrote it, else
+    :func:`~harness.run.records.read_results`'s (which raises its errors)."""
+    path = Path(path)
+    try:
+        with open(path, "rb") as handle:
+            status = os.fstat(handle.fileno())
+            count = _companion_records(path, status)
+            data = handle.read() if count is not None else b""
+    except OSError:
+        count = None
+    lazy = None if count is None else _lazy(path, status, data, count)
+    return read_results(path) if lazy is None else lazy
+
+
+def _lazy(path: Path, status: os.stat_result, data: bytes, count: int) -> LazyResults | None:
+    """:class:`LazyResults` from the file's bytes, None when they are not laid out as
+    expected (or not this harness's format: :func:`read_results` then says why)."""
+    start = data.find(RECORDS_START.encode())
+    if start < 0 or not data.endswith(RECORDS_END.encode()):
+        return None
+    try:
+        document = json.loads(str(data[:start], "utf-8") + "\n}")
+    except ValueError:
+        return None
+    if (not isinstance(document, dict) or "records" in document
+            or document.get("format") != FORMAT
+            or document.get("format_version") != FORMAT_VERSION):
+        return None
+    begin, end = start + len(RECORDS_START), len(data) - len(RECORDS_END)  # the record lines
+    lines = _lines(data, begin, end, count) or _lines_one_by_one(data, begin, end, count)
+    if lines is None:
+        return None
+    # write_results puts the scenarios last in the head, after a newline only structure has:
+    # their text is what a digest of them needs (else one of their JSON is made)
+    at = data.rfind(b'\n "scenarios": {', 0, start)
+    return LazyResults(path, status, document, data, lines,
+                       None if at < 0 else hashlib.sha256(data[at:start]).hexdigest())
+
+
+@dataclass
+class _Lines:
+    """The record lines of a results file: the scenario of each, where each scenario's lines
+    are in the file's records (``[start, end)`` byte spans of consecutive lines, separated by
+    ``",\\n"`` as in the file) and the ``(source, preset)`` pairs present (None: unknown)."""
+
+    names: list[str]
+    segments: dict[str, list[tuple[int, int]]]
+    pairs: frozenset | None
+
+
+def _segments(names: list[str], starts: list[int], end: int
+              ) -> dict[str, list[tuple[int, int]]]:
+    """Each scenario's spans of consecutive lines, from the lines' scenarios and starts and
+    where the last line ends."""
+    segments: dict[str, list[tuple[int, int]]] = {}
+    previous = None
+    for index, name in enumerate(names):
+        stop = starts[index + 1] - 2 if index + 1 < len(starts) else end
+        if name == previous:
+            spans = segments[name]
+            spans[-1] = (spans[-1][0], stop)
+        else:
+            segments.setdefault(name, []).append((starts[index], stop))
+            previous = name
+    return segments
+
+
+def _lines(data: bytes, begin: int, end: int, count: int) -> _Lines | None:
+    """:class:`_Lines` of the ``count`` record lines in ``data[begin:end]``, found by their
+    newlines (a raw newline only ends a line), when every line starts as :data:`_LINE_HEAD`
+    reads (no escape in the scenario, source or preset, a point without braces in its
+    label); else None."""
+    starts = [begin]
+    find = data.find
+    at = find(b"\n", begin, end)
+    while at >= 0 and len(starts) < count:
+        starts.append(at + 1)
+        at = find(b"\n", at + 1, end)
+    if at >= 0 or len(starts) != count or any(data[start - 2] != 44 for start in starts[1:]):
+        return None  # 44: the comma before each newline
+    match = _LINE_HEAD_AT.match
+    heads = [match(data, at, end) for at in starts]
+    if None in heads:
+        return None
+    names = [str(head[1], "utf-8") for head in heads]
+    pairs = frozenset((str(source, "utf-8"), None if preset is None else str(preset, "utf-8"))
+                      for source, preset in {(head[2], head[3]) for head in heads})
+    return _Lines(names, _segments(names, starts, end), pairs)
+
+
+def _lines_one_by_one(data: bytes, begin: int, end: int, count: int) -> _Lines | None:
+    """:class:`_Lines` line by line (names with escapes: decoded as JSON; pairs unknown
+    where a line does not start as :data:`_LINE_HEAD` reads); None when ``data[begin:end]``
+    is not ``count`` record lines."""
+    lines = data[begin:end].split(b",\n") if end > begin else []
+    if len(lines) != count:
+        return None
+    names: list[str] = []
+    starts: list[int] = []
+    at = begin
+    pairs: set | None = set()
+    for line in lines:
+        if not (line.startswith(_LINE_START) and line.endswith(b"}")):
+            return None
+        stop = line.find(b'"', len(_LINE_START))
+        name = line[len(_LINE_START):stop]
+        try:
+            name = json.loads(line)["scenario"] if b"\\" in name else str(name, "utf-8")
+        except (ValueError, KeyError, TypeError):
+            return None
+        names.append(name)
+        starts.append(at)
+        at += len(line) + 2
+        if pairs is not None:
+            found = _SOURCE_PRESET.search(line, 0, 4096)
+            if found is None:  # an escape in the source or preset: the records will say
+                pairs = None
+            else:
+                preset = found[2]
+                pairs.add((str(found[1], "utf-8"), None if preset is None
+                           else str(preset, "utf-8")))
+    return _Lines(names, _segments(names, starts, end),
+                  None if pairs is None else frozenset(pairs))
+
+
+def scenarios_digest(results) -> str:
+    """A digest of ``results.scenarios`` (what the runner says of each scenario): of their
+    text in the file when the report read it (:class:`LazyResults`), else of their JSON."""
+    if isinstance(results, LazyResults) and results.scenarios_digest is not None:
+        return results.scenarios_digest
+    text = json.dumps(results.scenarios, sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def record_scenarios(results) -> list[str]:
+    """The scenario of every record, in order (from the lines when ``results`` has them)."""
+    known = getattr(results, "record_scenarios", None)
+    if isinstance(known, list):
+        return known
+    return [record.scenario for record in results.records]
+
+
+def source_presets(results) -> frozenset:
+    """The ``(source, preset)`` pairs of the records, engine ones only."""
+    known = getattr(results, "source_presets", None)
+    pairs = known() if callable(known) else {(r.source, r.preset) for r in results.records}
+    return frozenset(pair for pair in pairs if pair[0] != ANALYTIC)
+
+
+__all__ = ["LazyResults", "read_for_report", "record_scenarios", "scenario_digest",
+           "scenarios_digest", "source_presets"]
