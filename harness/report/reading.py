@@ -19,7 +19,6 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import pickle
 import re
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -27,13 +26,13 @@ from pathlib import Path
 
 from harness.run.records import (
     ANALYTIC,
-    COMPANION_FORMAT,
     FORMAT,
     FORMAT_VERSION,
     RECORDS_END,
     RECORDS_START,
     Results,
     companion_path,
+    read_companion_header,
     read_results,
 )
 
@@ -148,28 +147,15 @@ class LazyResults:
         return getattr(self.full(), name)
 
 
-class _PlainUnpickler(pickle.Unpickler):
-    """Plain values only: a companion's header is a dict of strings and numbers."""
-
-    def find_class(self, module, name):
-        raise pickle.UnpicklingError(f"{module}.{name}: a companion holds plain values only")
-
-
 def _companion_records(path: Path, status: os.stat_result) -> int | None:
     """How many records ``path``'s companion says the file holds, when it was written with
     this very file (``status``); else None."""
     try:
         with open(companion_path(path), "rb") as handle:
-            header = _PlainUnpickler(handle).load()
+            header = read_companion_header(handle, status)
     except Exception:  # noqa: BLE001 - absent or damaged: the file is read in full
         return None
-    if not (isinstance(header, dict) and header.get("format") == COMPANION_FORMAT
-            and header.get("results_size") == status.st_size
-            and header.get("results_mtime_ns") == status.st_mtime_ns
-            and header.get("results_inode") == status.st_ino
-            and isinstance(header.get("records"), int)):
-        return None
-    return header["records"]
+    return None if header is None else header["records"]
 
 
 def read_for_report(path: Path | str) -> LazyResults | Results:

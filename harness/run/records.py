@@ -383,19 +383,30 @@ class _PlainUnpickler(pickle.Unpickler):
         raise pickle.UnpicklingError(f"{module}.{name}: a companion holds plain values only")
 
 
+def read_companion_header(handle, status: os.stat_result) -> dict | None:
+    """The header of the companion open in ``handle`` when it was written with the results
+    file whose ``os.stat`` is ``status`` (the same size, modification time and inode), else
+    None. Raises what unpickling raises on a damaged companion."""
+    header = _PlainUnpickler(handle).load()
+    if not (isinstance(header, dict) and header.get("format") == COMPANION_FORMAT
+            and header.get("results_size") == status.st_size
+            and header.get("results_mtime_ns") == status.st_mtime_ns
+            and header.get("results_inode") == status.st_ino
+            and isinstance(header.get("records"), int)
+            and isinstance(header.get("parts"), int)
+            and isinstance(header.get("line_parts"), int)):
+        return None
+    return header
+
+
 def _read_companion(path: Path, status: os.stat_result
                     ) -> tuple[list[dict], list[str]] | None:
     """The record dicts and lines of ``path``'s companion when it matches the file
     (``status``), else None (absent, written for another file, damaged: the JSON is read)."""
     try:
         with open(companion_path(path), "rb") as handle:
-            header = _PlainUnpickler(handle).load()
-            if not (isinstance(header, dict) and header.get("format") == COMPANION_FORMAT
-                    and header.get("results_size") == status.st_size
-                    and header.get("results_mtime_ns") == status.st_mtime_ns
-                    and header.get("results_inode") == status.st_ino
-                    and isinstance(header.get("parts"), int)
-                    and isinstance(header.get("line_parts"), int)):
+            header = read_companion_header(handle, status)
+            if header is None:
                 return None
             datas: list = []
             for _ in range(header["parts"]):  # one pickle each: an unpickler (memo) each
@@ -532,5 +543,5 @@ def _split_records(text: str) -> tuple[dict | None, list[str] | None]:
 
 __all__ = ["ANALYTIC", "DEFAULT_RESULTS", "FORMAT", "FORMAT_VERSION", "LINE_SEPARATOR",
            "Record", "RecordBlock", "Results", "check_writable", "companion_path",
-           "plain_value", "read_results", "record_line", "write_result_blocks",
-           "write_results"]
+           "plain_value", "read_companion_header", "read_results", "record_line",
+           "write_result_blocks", "write_results"]
