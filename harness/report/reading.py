@@ -34,6 +34,7 @@ from harness.run.records import (
     companion_path,
     read_companion_header,
     read_results,
+    results_head,
 )
 
 #: A record's fields that change between identical runs: the figures' and fragments' digests
@@ -177,17 +178,11 @@ def read_for_report(path: Path | str) -> LazyResults | Results:
 def _lazy(path: Path, status: os.stat_result, data: bytes, count: int) -> LazyResults | None:
     """:class:`LazyResults` from the file's bytes, None when they are not laid out as
     expected (or not this harness's format: :func:`read_results` then says why)."""
-    start = data.find(RECORDS_START.encode())
-    if start < 0 or not data.endswith(RECORDS_END.encode()):
-        return None
-    try:
-        document = json.loads(str(data[:start], "utf-8") + "\n}")
-    except ValueError:
-        return None
-    if (not isinstance(document, dict) or "records" in document
-            or document.get("format") != FORMAT
+    document = results_head(data)
+    if (document is None or document.get("format") != FORMAT
             or document.get("format_version") != FORMAT_VERSION):
         return None
+    start = data.find(RECORDS_START.encode())  # found: results_head found it
     begin, end = start + len(RECORDS_START), len(data) - len(RECORDS_END)  # the record lines
     lines = _lines(data, begin, end, count) or _lines_one_by_one(data, begin, end, count)
     if lines is None:

@@ -468,7 +468,7 @@ def _read_results(path: Path) -> Results:
             status = os.fstat(handle.fileno())
             data = handle.read()
         companion = _read_companion(path, status)
-        document = None if companion is None else _head_of(data)
+        document = None if companion is None else results_head(data)
         if document is not None:  # the records and their lines from the companion
             datas, lines = companion
         else:
@@ -497,9 +497,10 @@ def _read_results(path: Path) -> Results:
     return results
 
 
-def _head_of(data: bytes) -> dict | None:
-    """The document before the records of a results file laid out by :func:`write_results`
-    (its records then come from the companion), else None."""
+def results_head(data: bytes) -> dict | None:
+    """The document before the records of a results file's bytes laid out by
+    :func:`write_results` (its records then come from the companion, or from the record
+    lines), else None. Its format is not checked here."""
     start = data.find(RECORDS_START.encode())
     if start < 0 or not data.endswith(RECORDS_END.encode()):
         return None
@@ -543,5 +544,5 @@ def _split_records(text: str) -> tuple[dict | None, list[str] | None]:
 
 __all__ = ["ANALYTIC", "DEFAULT_RESULTS", "FORMAT", "FORMAT_VERSION", "LINE_SEPARATOR",
            "Record", "RecordBlock", "Results", "check_writable", "companion_path",
-           "plain_value", "read_companion_header", "read_results", "record_line",
+           "plain_value", "read_companion_header", "read_results", "record_line", "results_head",
            "write_result_blocks", "write_results"]
