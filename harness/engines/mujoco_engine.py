@@ -216,33 +216,11 @@ def restitution_of_damping_ratio(damping_ratio: float) -> float:
 def damping_ratio_for_restitution(restitution: float) -> float:
     """Inverse of :func:`restitution_of_damping_ratio` (bisection to rounding).
 
-    ``e`` is clamped to ``[MIN_RESTITUTION, 1]``: ``e = 0`` would need ``ζ = ∞``. The
-    bisection evaluates the map only near the root: a point outside :func:`_sure_bracket`
-    goes to the side the map would send it, so the steps and the result are those of
-    evaluating it everywhere (:func:`_bisect_damping_ratio`), bit for bit
-    (tests/engines/test_mujoco_speed_paths.py), with about half the evaluations.
+    ``e`` is clamped to ``[MIN_RESTITUTION, 1]``: ``e = 0`` would need ``ζ = ∞``.
     """
     e = min(max(float(restitution), MIN_RESTITUTION), 1.0)
     if e == 1.0:
         return 0.0
-    below, above = _sure_bracket(e)
-    low, high = 0.0, 1.0
-    while high <= below or (high < above and restitution_of_damping_ratio(high) > e):
-        high *= 2.0
-    for _ in range(200):
-        middle = 0.5 * (low + high)
-        if middle <= below or (middle < above and restitution_of_damping_ratio(middle) > e):
-            low = middle
-        else:
-            high = middle
-        if high - low <= 1e-15 * high:
-            break
-    return 0.5 * (low + high)
-
-
-def _bisect_damping_ratio(e: float) -> float:
-    """The bisection of :func:`damping_ratio_for_restitution` evaluating the map at every
-    point (``e`` in ``[MIN_RESTITUTION, 1)``): the reference its shortcut is tested against."""
     low, high = 0.0, 1.0
     while restitution_of_damping_ratio(high) > e:
         high *= 2.0
@@ -255,55 +233,6 @@ def _bisect_damping_ratio(e: float) -> float:
         if high - low <= 1e-15 * high:
             break
     return 0.5 * (low + high)
-
-
-_CRITICAL_RESTITUTION = math.exp(-2.0)  # e at ζ = 1
-
-
-def _sure_bracket(e: float) -> tuple[float, float]:
-    """``(below, above)``: at every ``ζ <= below`` the computed map exceeds ``e``, at every
-    ``ζ >= above`` it does not; ``(0, inf)`` where that could not be made sure.
-
-    A secant iteration on ``ζ·ω₀T(ζ) = -ln e``, from the linear (bilateral) damping ratio
-    (``e -> 1/(4ζ²)`` when overdamped), finds the root; the ends lie where the map is
-    ``margin·e`` from ``e``, checked there. ``margin = 1e-13·(1 + ζ⁴)`` is ~100 times the
-    rounding noise of the computed map (measured: 2e-16 of ``e`` at ζ = 0.25, 1e-14 at 2,
-    4e-12 at 8, 3e-11 at 16; the overdamped branch's ``atanh`` argument nears 1 as
-    ``1 - 1/(8ζ⁴)``): beyond an end the true map, monotone, only moves further from ``e``
-    and the computed one cannot cross it.
-    """
-    target = -math.log(e)
-    if e > _CRITICAL_RESTITUTION:
-        zeta = target / math.sqrt(math.pi * math.pi + target * target)
-    else:
-        zeta = 0.5 / math.sqrt(e)
-    other = zeta * 1.001
-    gap = zeta * contact_time_factor(zeta) - target
-    other_gap = other * contact_time_factor(other) - target
-    slope = step = 0.0
-    for _ in range(20):
-        if gap == other_gap:
-            break
-        slope = (gap - other_gap) / (zeta - other)
-        step = gap / slope
-        other, other_gap = zeta, gap
-        zeta -= step
-        if not 0.0 < zeta < math.inf:
-            return 0.0, math.inf
-        gap = zeta * contact_time_factor(zeta) - target
-        if abs(step) <= 1e-14 * zeta * (1.0 + zeta**4):  # down to the map's noise
-            break
-    if not slope > 0.0:
-        return 0.0, math.inf
-    margin = 1e-13 * (1.0 + zeta**4)
-    width = 2.0 * margin / slope + 4.0 * abs(step)
-    for _ in range(3):
-        below, above = zeta - width, zeta + width
-        if (below > 0.0 and restitution_of_damping_ratio(below) - e > margin * e
-                and e - restitution_of_damping_ratio(above) > margin * e):
-            return below, above
-        width *= 16.0
-    return 0.0, math.inf
 
 
 def restitution_solref(
