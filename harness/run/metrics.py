@@ -81,7 +81,8 @@ def departure(mass_matrix, u, u_law, u_before, *, free_bodies: bool = False) -> 
     if u is None or u_law is None:
         return math.nan
     u, u_law = np.asarray(u, dtype=float), np.asarray(u_law, dtype=float)
-    if not (np.isfinite(u).all() and np.isfinite(u_law).all()):
+    # The same test as np.isfinite(x).all(), a few times cheaper on a few speeds.
+    if not (all(map(math.isfinite, u.tolist())) and all(map(math.isfinite, u_law.tolist()))):
         return math.nan
     scale = frame_free_scale(mass_matrix, u_before, free_bodies=free_bodies)
     return ke_norm(mass_matrix, u - u_law) / scale if scale > 0 else math.nan
