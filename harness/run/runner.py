@@ -1096,6 +1096,7 @@ def point_records(scenario: Scenario, point, engine_entries: Sequence, *,
 
     law_records: list[Record] = []
     law_speeds: dict[str, np.ndarray | None] = {}
+    law_gains: dict[str, float] = {}  # the energy change of each law solved
     for law in scenario.laws:
         tick = time.perf_counter()
         try:
@@ -1109,6 +1110,7 @@ def point_records(scenario: Scenario, point, engine_entries: Sequence, *,
                 diagnostics=dict(contact_space)))
             continue
         law_speeds[law] = result.u_after
+        law_gains[law] = result.energy_change
         law_records.append(Record(
             scenario=scenario.name, point=point_info, source=ANALYTIC, law=law,
             u_before=u_before.tolist(), u_after=result.u_after.tolist(),
@@ -1131,10 +1133,13 @@ def point_records(scenario: Scenario, point, engine_entries: Sequence, *,
     if not engine_entries:
         return law_records
     scene = scenario.scene(point)
-    try:  # the engines' own law, to attribute an energy gain (docs/verdicts.md)
-        lcp_gain = problem.solve(mu=mu, e=e, law="newton-lcp").energy_change
-    except ValueError:
-        lcp_gain = None
+    if "newton-lcp" in law_speeds:  # solved above (or failed: the same solve fails again)
+        lcp_gain = law_gains.get("newton-lcp")
+    else:
+        try:  # the engines' own law, to attribute an energy gain (docs/verdicts.md)
+            lcp_gain = problem.solve(mu=mu, e=e, law="newton-lcp").energy_change
+        except ValueError:
+            lcp_gain = None
     declared = verdicts.declared_contacts(scenario, scene)  # a flat face: judged against all
     if declared is not None:  # a gain is the law's when the Newton–Coulomb reference gains
         lcp_gain = reference.get("energy_change", {}).get(reference.get("primary"))
