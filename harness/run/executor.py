@@ -354,6 +354,8 @@ def _import_distributed():
         import distributed  # noqa: F401
         from distributed import Client, LocalCluster, as_completed
     except ImportError as error:
+        if (error.name or "").partition(".")[0] not in ("dask", "distributed"):
+            raise  # installed, but something it imports fails: its own error says what
         raise DaskNotInstalled(
             f"executor 'dask' needs dask.distributed ({error}); "
             f"install it with `{DASK_INSTALL_HINT}`"

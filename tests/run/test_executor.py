@@ -72,6 +72,19 @@ def test_missing_dask_names_the_install_command(monkeypatch):
         run_tasks(fail_on_three, [1, 2], executor="dask")
 
 
+def test_a_failing_import_inside_dask_is_not_called_missing_dask(monkeypatch):
+    pytest.importorskip("distributed", reason='dask is not installed (pip install -e ".[dask]")')
+    # A module named like a standard one in the working folder (a stray timeit.py) breaks
+    # distributed's own imports: that error is shown as it is, not as "install dask".
+    for name in [name for name in sys.modules if name.partition(".")[0] == "distributed"]:
+        monkeypatch.delitem(sys.modules, name)  # imported afresh (restored after the test)
+    monkeypatch.setitem(sys.modules, "timeit", None)  # `import timeit` fails
+    with pytest.raises(ImportError) as caught:
+        run_tasks(fail_on_three, [1, 2], executor="dask", dask_min_tasks=0)
+    assert not isinstance(caught.value, DaskNotInstalled)
+    assert caught.value.name == "timeit"
+
+
 def test_dask_local_cluster_equals_local_executor_bit_for_bit():
     pytest.importorskip("distributed", reason='dask is not installed (pip install -e ".[dask]")')
     import cloudpickle
