@@ -54,12 +54,13 @@ def frame_free_scale(mass_matrix, u_before, *, free_bodies: bool = False) -> flo
     mass_matrix = np.asarray(mass_matrix, dtype=float)
     # A record asks for the scale of the same input once per departure and per contact
     # step: the last answer is kept, keyed by the very bits of the input.
+    global _last_scale
     key = (mass_matrix.shape, mass_matrix.tobytes(), u.shape, u.tobytes(), bool(free_bodies))
     last = _last_scale
     if last is not None and last[0] == key:
         return last[1]
     scale = _frame_free_scale(mass_matrix, u, free_bodies)
-    globals()["_last_scale"] = (key, scale)
+    _last_scale = (key, scale)
     return scale
 
 
@@ -160,6 +161,7 @@ def contact_velocities(problem, u) -> tuple[float, float]:
 
 def delassus(problem) -> tuple[float, float, float]:
     """``(m_nn, m_nt, m_tt)`` of (A20)."""
+    global _last_delassus
     mass_matrix, wn, wt = problem.mass_matrix, problem.wn, problem.wt
     # Asked again for the same problem by the record, its verdict and every contact step:
     # the last answer is kept, keyed by the very bits (and types) of the inputs.
@@ -171,7 +173,7 @@ def delassus(problem) -> tuple[float, float, float]:
     inverse_w = np.linalg.solve(mass_matrix, np.stack([wn, wt], axis=1))
     wn_inv, wt_inv = inverse_w[:, 0], inverse_w[:, 1]
     found = float(wn @ wn_inv), float(wn @ wt_inv), float(wt @ wt_inv)
-    globals()["_last_delassus"] = (key, found)
+    _last_delassus = (key, found)
     return found
 
 
