@@ -1,4 +1,4 @@
-"""Shared test configuration.
+"""Shared test configuration, and the ``load_or_skip`` fixture of the engine tests.
 
 Hypothesis runs derandomized (the same examples on every run, here and in CI), so a
 property test fails or passes for a reason in the code, never by the draw of a seed; set
@@ -9,8 +9,24 @@ from __future__ import annotations
 
 import os
 
+import pytest
 from hypothesis import settings
 
 settings.register_profile("deterministic", derandomize=True, deadline=None)
 settings.register_profile("explore", deadline=None)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "deterministic"))
+
+
+@pytest.fixture(scope="session")
+def load_or_skip():
+    """``load_or_skip(name)``: the engine ``name``, or the test skipped if it is not installed."""
+
+    from harness.engines import EngineNotInstalled, load_engine
+
+    def load(name: str):
+        try:
+            return load_engine(name)
+        except EngineNotInstalled as error:
+            pytest.skip(f"{name} not installed: {error}")
+
+    return load

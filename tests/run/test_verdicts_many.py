@@ -13,7 +13,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from harness.engines import ENGINE_NAMES, PRESET_ROLES, EngineNotInstalled, load_engine
+from harness.engines import ENGINE_NAMES, PRESET_ROLES, load_engine
 from harness.run import verdicts
 from harness.run.verdicts import DEFAULT_TOLERANCES, Tolerances
 from harness.survey import laws as survey_laws
@@ -56,11 +56,8 @@ def speeds(runs) -> np.ndarray:
 
 
 @pytest.mark.parametrize(("engine_name", "preset"), PAIRS)
-def test_judge_many_is_judge_run_by_run(engine_name, preset, survey_scenes):
-    try:
-        engine = load_engine(engine_name)
-    except EngineNotInstalled as error:
-        pytest.skip(str(error))
+def test_judge_many_is_judge_run_by_run(load_or_skip, engine_name, preset, survey_scenes):
+    engine = load_or_skip(engine_name)
     scenes, problems, lcp, prepared = survey_scenes
     runs = engine.run_many(scenes, engine.settings(preset))
     arrays = verdicts.term_arrays(problems, prepared)
@@ -100,15 +97,13 @@ def test_a_value_on_its_bound_is_left_to_judge(survey_scenes):
 
 
 @pytest.mark.parametrize(("engine_name", "preset"), PAIRS)
-def test_second_features_of_many_runs_are_each_runs(engine_name, preset, survey_scenes):
+def test_second_features_of_many_runs_are_each_runs(load_or_skip, engine_name, preset,
+                                                    survey_scenes):
     """The batched second-feature check reads every run's raw records at once: the same
     answer as the check of each run's own track, for every run (runs without contact and of
     one point included), at the default tolerances and a tight penetration reach, and with
     the runs shuffled (runs of one and of two bodies interleaved)."""
-    try:
-        engine = load_engine(engine_name)
-    except EngineNotInstalled as error:
-        pytest.skip(str(error))
+    engine = load_or_skip(engine_name)
     scenes, _, _, prepared = survey_scenes
     runs = engine.run_many(scenes, engine.settings(preset))
     shuffled = np.random.default_rng(0).permutation(len(runs)).tolist()
