@@ -5,7 +5,8 @@ The stored file holds survey scenes (every float as ``float.hex``) and, per pres
 fingerprint of each run of them -- a SHA-256 of the velocities, status, steps, impulses,
 contact record, derived values and notes -- recorded with the adapter at commit 41a1da8
 (``run_many``, batches of scenes in a row). A change to the adapter's arithmetic, its
-settings or its records must regenerate the file on purpose.
+settings or its records must regenerate the file on purpose:
+``python tests/engines/test_box2d_survey_identity.py COMMIT`` (:func:`write_stored`).
 """
 
 from __future__ import annotations
@@ -76,6 +77,21 @@ def _scene(record: dict) -> Scene:
                  record["ground"], record["name"])
 
 
+def write_stored(commit: str, path: Path = STORED) -> None:
+    """Record the stored file anew from the adapter as it is now, at ``commit``."""
+    from harness.survey.cli import survey_scenes
+    from harness.survey.population import resolve_populations
+
+    scenes = survey_scenes(resolve_populations([]), SAMPLES, 0)
+    engine = load_engine("box2d")
+    runs = {preset: [fingerprint(run) for run in engine.run_many(scenes,
+                                                                 engine.settings(preset))]
+            for preset in ("defaults", "accurate")}
+    path.write_text(json.dumps({"commit": commit,
+                                "scenes": [scene_record(scene) for scene in scenes],
+                                "runs": runs}, indent=0))
+
+
 @pytest.fixture(scope="module")
 def stored():
     data = json.loads(STORED.read_text())
@@ -100,3 +116,9 @@ def test_survey_runs_are_bit_identical_to_stored(stored, preset):
     assert not changed, f"{len(changed)} runs changed bits, first: {changed[:5]}"
     single = [fingerprint(engine.run(scene, settings)) for scene in scenes[::5]]
     assert single == runs[preset][::5]
+
+
+if __name__ == "__main__":
+    import sys
+
+    write_stored(sys.argv[1])
