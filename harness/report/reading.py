@@ -46,15 +46,10 @@ VOLATILE_FIELDS = ("wall_time_s", "cached")
 VOLATILE_TEXT = re.compile(
     '"(?:' + "|".join((*VOLATILE_FIELDS, "engine_wall_time_s")) + r')":[^,{}\[\]"]*')
 _VOLATILE_BYTES = re.compile(VOLATILE_TEXT.pattern.encode())
-#: How :func:`harness.run.records.record_line` starts a record's line.
-_LINE_START = b'{"scenario":"'
-#: A record's engine and preset where :func:`~harness.run.records.record_line` writes them
-#: (after its scenario and point): JSON strings, the law's and the preset's or null.
-_STRING = rb'"(?:[^"\\]|\\.)*"'
-_SOURCE_PRESET = re.compile(rb'"source":"([^"\\]*)","law":(?:null|' + _STRING
-                            + rb'),"preset":(?:null|"([^"\\]*)")')
 #: How a record's line starts when its scenario, point, source and preset hold no escape (and
-#: the point's label no brace): the scenario, the source and the preset (or None).
+#: the point's label no brace): the scenario, the source and the preset (or None). Scenario
+#: names cannot hold an escape (the scenario schema's name pattern); any other file is read
+#: in full.
 _LINE_HEAD = (rb'\{"scenario":"([^"\\]*)","point":\{[^{}]*\},"source":"([^"\\]*)",'
               rb'"law":(?:null|"[^"\\]*"),"preset":(?:null|"([^"\\]*)")')
 _LINE_HEAD_AT = re.compile(_LINE_HEAD)
@@ -138,8 +133,6 @@ class LazyResults:
 
     def source_presets(self) -> frozenset:
         """The ``(source, preset)`` pairs of the records (analytic ones included)."""
-        if self._pairs is None:  # a line the reading could not tell
-            self._pairs = frozenset((r.source, r.preset) for r in self.records)
         return self._pairs
 
     def __getattr__(self, name: str):
@@ -184,7 +177,7 @@ def _lazy(path: Path, status: os.stat_result, data: bytes, count: int) -> LazyRe
         return None
     start = data.find(RECORDS_START.encode())  # found: results_head found it
     begin, end = start + len(RECORDS_START), len(data) - len(RECORDS_END)  # the record lines
-    lines = _lines(data, begin, end, count) or _lines_one_by_one(data, begin, end, count)
+    lines = _lines(data, begin, end, count)
     if lines is None:
         return None
     # write_results puts the scenarios last in the head, after a newline only structure has:
@@ -198,11 +191,11 @@ def _lazy(path: Path, status: os.stat_result, data: bytes, count: int) -> LazyRe
 class _Lines:
     """The record lines of a results file: the scenario of each, where each scenario's lines
     are in the file's records (``[start, end)`` byte spans of consecutive lines, separated by
-    ``",\\n"`` as in the file) and the ``(source, preset)`` pairs present (None: unknown)."""
+    ``",\\n"`` as in the file) and the ``(source, preset)`` pairs present."""
 
     names: list[str]
     segments: dict[str, list[tuple[int, int]]]
-    pairs: frozenset | None
+    pairs: frozenset
 
 
 def _segments(names: list[str], starts: list[int], end: int
@@ -243,41 +236,6 @@ def _lines(data: bytes, begin: int, end: int, count: int) -> _Lines | None:
     pairs = frozenset((str(source, "utf-8"), None if preset is None else str(preset, "utf-8"))
                       for source, preset in {(head[2], head[3]) for head in heads})
     return _Lines(names, _segments(names, starts, end), pairs)
-
-
-def _lines_one_by_one(data: bytes, begin: int, end: int, count: int) -> _Lines | None:
-    """:class:`_Lines` line by line (names with escapes: decoded as JSON; pairs unknown
-    where a line does not start as :data:`_LINE_HEAD` reads); None when ``data[begin:end]``
-    is not ``count`` record lines."""
-    lines = data[begin:end].split(b",\n") if end > begin else []
-    if len(lines) != count:
-        return None
-    names: list[str] = []
-    starts: list[int] = []
-    at = begin
-    pairs: set | None = set()
-    for line in lines:
-        if not (line.startswith(_LINE_START) and line.endswith(b"}")):
-            return None
-        stop = line.find(b'"', len(_LINE_START))
-        name = line[len(_LINE_START):stop]
-        try:
-            name = json.loads(line)["scenario"] if b"\\" in name else str(name, "utf-8")
-        except (ValueError, KeyError, TypeError):
-            return None
-        names.append(name)
-        starts.append(at)
-        at += len(line) + 2
-        if pairs is not None:
-            found = _SOURCE_PRESET.search(line, 0, 4096)
-            if found is None:  # an escape in the source or preset: the records will say
-                pairs = None
-            else:
-                preset = found[2]
-                pairs.add((str(found[1], "utf-8"), None if preset is None
-                           else str(preset, "utf-8")))
-    return _Lines(names, _segments(names, starts, end),
-                  None if pairs is None else frozenset(pairs))
 
 
 def scenarios_digest(results) -> str:
