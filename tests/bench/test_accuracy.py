@@ -5,19 +5,12 @@ from __future__ import annotations
 import pytest
 
 from harness.bench import accuracy as bench_accuracy
-from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine
-
-
-def _engine_or_skip(name):
-    try:
-        return load_engine(name)
-    except EngineNotInstalled as error:
-        pytest.skip(str(error))
+from harness.engines import ENGINE_NAMES
 
 
 @pytest.mark.parametrize("name", ENGINE_NAMES)
-def test_every_sweep_point_is_a_valid_setting(name):
-    engine = _engine_or_skip(name)
+def test_every_sweep_point_is_a_valid_setting(name, load_or_skip):
+    engine = load_or_skip(name)
     for quick in (True, False):
         points = bench_accuracy.sweep(name, quick)
         assert len({label for label, _, _ in points}) == len(points)  # labels identify points
@@ -41,8 +34,8 @@ def test_pareto_front_and_cheapest_setting():
     assert bench_accuracy.cheapest_settings({"rows": rows})["0.01"]["setting"] == "not reachable"
 
 
-def test_measure_pymunk_on_two_points(monkeypatch):
-    _engine_or_skip("pymunk")
+def test_measure_pymunk_on_two_points(monkeypatch, load_or_skip):
+    load_or_skip("pymunk")
     monkeypatch.setattr(bench_accuracy, "sweep", lambda name, quick: [
         ("it=100", "accurate", {"time_step": 1e-3, "iterations": 100}),
         ("it=1", "accurate", {"time_step": 1e-3, "iterations": 1})])

@@ -47,20 +47,15 @@ def newton_coulomb(scene):
     return solutions[0].u_after
 
 
-def run(engine_name, scene, **overrides):
-    from harness.engines import EngineNotInstalled, load_engine
-
-    try:
-        engine = load_engine(engine_name)
-    except EngineNotInstalled as error:
-        pytest.skip(str(error))
+def run(engine, scene, **overrides):
+    """``engine``'s ``accurate`` run of ``scene`` with ``overrides``."""
     return engine.run(scene, engine.settings("accurate", overrides))
 
 
 @pytest.mark.parametrize("scenario", CLOSING, ids=[s.name for s in CLOSING])
-def test_pymunk_accurate_matches_the_m_contact_velocity_level_law(scenario):
+def test_pymunk_accurate_matches_the_m_contact_velocity_level_law(scenario, load_or_skip):
     scene = scenario.scene()
-    outcome = run("pymunk", scene)
+    outcome = run(load_or_skip("pymunk"), scene)
     u_after = np.ravel(outcome.velocities)
     assert outcome.max_contact_points == 2  # it saw the face, not one corner
     departure = metrics.departure(scene.mass_matrix(), u_after, newton_coulomb(scene),
@@ -69,9 +64,10 @@ def test_pymunk_accurate_matches_the_m_contact_velocity_level_law(scenario):
 
 
 @pytest.mark.parametrize("scenario", CLOSING, ids=[s.name for s in CLOSING])
-def test_pybullet_accurate_strikes_one_feature_first_so_it_misses_the_m_contact_law(scenario):
+def test_pybullet_accurate_strikes_one_feature_first_so_it_misses_the_m_contact_law(
+        scenario, load_or_skip):
     scene = scenario.scene()
-    first = run("pybullet", scene, max_steps=1)
+    first = run(load_or_skip("pybullet"), scene, max_steps=1)
     (points,) = [step.points for step in first.contacts]
     assert len(points) == 1  # one contact point in the step that resolves the impact
     struck = min(geometry.scene_contacts(scene, tolerance=1e-4),
@@ -80,21 +76,22 @@ def test_pybullet_accurate_strikes_one_feature_first_so_it_misses_the_m_contact_
         mu=scene.friction, e=scene.restitution, law="newton-lcp")
     # One rounding of O(1) speeds away from the single impact at the struck feature.
     np.testing.assert_allclose(np.ravel(first.velocities), single.u_after, atol=1e-12)
-    whole = run("pybullet", scene)
+    whole = run(load_or_skip("pybullet"), scene)
     departure = metrics.departure(scene.mass_matrix(), np.ravel(whole.velocities),
                                   newton_coulomb(scene), scene.state())
     assert departure > 1e-2  # far outside the 1e-6 match: a different problem, not rounding
 
 
 @pytest.mark.parametrize("scenario", OPENING, ids=[s.name for s in OPENING])
-def test_where_one_end_recedes_pymunk_sees_one_point_and_pybullet_misses_the_impact(scenario):
+def test_where_one_end_recedes_pymunk_sees_one_point_and_pybullet_misses_the_impact(
+        scenario, load_or_skip):
     """Pinned: pymunk reports one contact point and lands 0.17 from Newton–Coulomb (whose
     receding end still takes an impulse, its v_n^S would turn negative otherwise) and within
     1e-2 of the sequential reading; pybullet takes the receding corner as its one point and
     returns the approach speeds unchanged (to rounding, 1e-12)."""
     scene = scenario.scene()
     reference = newton_coulomb(scene)
-    pymunk_run = run("pymunk", scene)
+    pymunk_run = run(load_or_skip("pymunk"), scene)
     u_pymunk = np.ravel(pymunk_run.velocities)
     assert pymunk_run.max_contact_points == 1
     assert metrics.departure(scene.mass_matrix(), u_pymunk, reference, scene.state()) > 1e-1
@@ -105,5 +102,5 @@ def test_where_one_end_recedes_pymunk_sees_one_point_and_pybullet_misses_the_imp
         u=scene.state(), mu=scene.friction, e=scene.restitution)
     sequential = sim.sequential_impacts(system, "newton-lcp", (0, 1)).u_after
     assert metrics.departure(scene.mass_matrix(), u_pymunk, sequential, scene.state()) < 1e-2
-    pybullet_run = run("pybullet", scene)
+    pybullet_run = run(load_or_skip("pybullet"), scene)
     np.testing.assert_allclose(np.ravel(pybullet_run.velocities), scene.state(), atol=1e-12)

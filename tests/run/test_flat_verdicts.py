@@ -226,16 +226,12 @@ def test_pymunk_accurate_is_a_clean_impact_on_every_flat_scene(flat_records):
             record.scenario, record.reasons)
 
 
-def test_pybullet_accurate_stops_with_the_corner_it_struck_first_coming_down(flat_records):
+def test_pybullet_accurate_stops_with_the_corner_it_struck_first_coming_down(flat_records,
+                                                                          load_or_skip):
     """Independent criterion: pybullet's first step reports one point; the verdict must name
     that corner as the declared contact still closing at the end (pybullet resolved the other
     corner in its second step, inside the ground, and its run ended when that one opened)."""
-    from harness.engines import EngineNotInstalled, load_engine
-
-    try:
-        engine = load_engine("pybullet")
-    except EngineNotInstalled as error:
-        pytest.skip(str(error))
+    engine = load_or_skip("pybullet")
     assert CLOSING
     for scenario in CLOSING:
         scene = scenario.scene()

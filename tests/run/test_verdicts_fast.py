@@ -26,10 +26,8 @@ from harness import engines as engines_module
 from harness.engines import (
     ENGINE_NAMES,
     PRESET_ROLES,
-    EngineNotInstalled,
     UnsupportedScene,
     body_extent,
-    load_engine,
 )
 from harness.run import metrics, runner, verdicts
 from harness.run.verdicts import (
@@ -342,13 +340,6 @@ def same(new: Verdict, old: Verdict) -> bool:
     return repr(new) == repr(old)
 
 
-def engine_or_skip(name: str):
-    try:
-        return load_engine(name)
-    except EngineNotInstalled as error:
-        pytest.skip(str(error))
-
-
 @pytest.fixture(scope="module")
 def survey_scenes():
     """Scenes of every population, their impacts and newton-lcp's energy changes."""
@@ -360,8 +351,9 @@ def survey_scenes():
 
 
 @pytest.mark.parametrize(("engine_name", "preset"), PAIRS)
-def test_survey_runs_get_the_reference_verdicts(engine_name, preset, survey_scenes):
-    engine = engine_or_skip(engine_name)
+def test_survey_runs_get_the_reference_verdicts(engine_name, preset, survey_scenes,
+                                                load_or_skip):
+    engine = load_or_skip(engine_name)
     scenes, problems, lcp = survey_scenes
     runs = engine.run_many(scenes, engine.settings(preset))
     prepared = verdicts.prepare_many(scenes, problems)
@@ -387,11 +379,12 @@ def test_survey_runs_get_the_reference_verdicts(engine_name, preset, survey_scen
 
 
 @pytest.mark.parametrize(("engine_name", "preset"), PAIRS)
-def test_the_survey_columns_are_the_reference_verdicts(engine_name, preset, survey_scenes):
+def test_the_survey_columns_are_the_reference_verdicts(engine_name, preset, survey_scenes,
+                                                       load_or_skip):
     """``run_engine``'s status and reasons, judged with the scene terms it works out or is
     given (as the survey's parts give them), are those of the reference (runs are deterministic:
     ``run_many`` again)."""
-    engine = engine_or_skip(engine_name)
+    engine = load_or_skip(engine_name)
     scenes, problems, lcp = survey_scenes
     results = run_engine(engine_name, preset, scenes, problems, lcp)
     again = run_engine(engine_name, preset, scenes, problems, lcp,
@@ -427,8 +420,9 @@ def library_points():
 
 @pytest.mark.slow
 @pytest.mark.parametrize(("engine_name", "preset"), PAIRS)
-def test_library_runs_get_the_reference_verdicts(engine_name, preset, monkeypatch):
-    engine = engine_or_skip(engine_name)
+def test_library_runs_get_the_reference_verdicts(engine_name, preset, monkeypatch,
+                                                 load_or_skip):
+    engine = load_or_skip(engine_name)
     settings = engine.settings(preset)
     judged = declared_judged = 0
     for scenario, point in library_points():
