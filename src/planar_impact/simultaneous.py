@@ -371,18 +371,19 @@ def _fixed_points(system, law, combinations, coupling="effective", max_iteration
         converged[rows[stops]] = size_now[stops] <= FIXED_POINT_TOLERANCE * bound[stops]
         running[rows[stops]] = False
         previous[rows] = size_now
-        for position in np.flatnonzero(~stops).tolist():
-            row = rows[position]
-            if jacobian is None:  # a constant map went on: no fixed point to find
-                running[row] = False
-                continue
-            if not np.isfinite(jacobian[position]).all():
-                running[row] = False
-                continue
-            correction, _, rank, _ = np.linalg.lstsq(jacobian[position], -residual[position],
-                                                     rcond=1e-9)
-            determinate[row] = rank == size
-            impulses[row] = current[position] + correction
+        going = np.flatnonzero(~stops)
+        if going.size == 0:
+            continue
+        if jacobian is None:  # a constant map went on: no fixed point to find
+            running[rows[going]] = False
+            continue
+        finite = np.isfinite(jacobian[going]).all(axis=(1, 2))
+        running[rows[going[~finite]]] = False
+        going = going[finite]
+        # Each row's own least-squares step (np.linalg.lstsq's, bit for bit), in one call.
+        correction, rank = _lstsq_rows(jacobian[going], -residual[going], rcond=1e-9)
+        determinate[rows[going]] = rank == size
+        impulses[rows[going]] = current[going] + correction
     rows = np.flatnonzero(running)  # out of iterations: accept below the tolerance
     if rows.size:
         current = impulses[rows]
@@ -390,6 +391,34 @@ def _fixed_points(system, law, combinations, coupling="effective", max_iteration
         bound = scale + np.max(np.abs(current), axis=1)
         converged[rows] = residual <= FIXED_POINT_TOLERANCE * bound
     return impulses, converged, determinate
+
+
+def _lstsq_failed(*_args):
+    raise np.linalg.LinAlgError("SVD did not converge in Linear Least Squares")
+
+
+def _lstsq_rows(matrices, rhs, rcond):
+    """:func:`numpy.linalg.lstsq` of each matrix ``matrices[k]`` ``(N, r, c)`` and right-hand
+    side ``rhs[k]`` ``(N, r)``: the solutions ``(N, c)`` and the ranks ``(N,)``.
+
+    ``np.linalg.lstsq`` takes one matrix per call and spends ~45 µs around LAPACK's ~15 µs
+    for a 4 × 4; its own gufunc (``numpy.linalg._umath_linalg.lstsq``, the same ``gelsd``
+    call on each matrix, with the same workspace for matrices of one shape) takes the stack
+    at once and gives each row ``np.linalg.lstsq``'s answer bit for bit
+    (tests/theory/test_simultaneous_lstsq.py). A numpy without that gufunc gets the loop.
+    """
+    if len(matrices) == 0:
+        return np.empty((0, matrices.shape[-1])), np.empty(0, dtype=np.int64)
+    gufunc = getattr(getattr(np.linalg, "_umath_linalg", None), "lstsq", None)
+    if gufunc is None:
+        answers = [np.linalg.lstsq(matrix, side, rcond=rcond)
+                   for matrix, side in zip(matrices, rhs)]
+        return (np.array([answer[0] for answer in answers]),
+                np.array([answer[2] for answer in answers], dtype=np.int64))
+    with np.errstate(call=_lstsq_failed, invalid="call", over="ignore", divide="ignore",
+                     under="ignore"):  # as np.linalg.lstsq calls it
+        solution, _, rank, _ = gufunc(matrices, rhs[..., None], rcond, signature="ddd->ddid")
+    return solution[..., 0], rank
 
 
 def _law_at(system, law, i, vn, vt, sign):
@@ -900,8 +929,10 @@ def newton_coulomb_solutions(system: ContactSystem) -> list[MultiContactSolution
     tolerance = VELOCITY_TOLERANCE * system.speed_scale()
     delassus, approach = system.delassus, system.approach
     found: list[MultiContactSolution] = []
-    for modes in itertools.product((LCP_STICK, LCP_FORWARD, LCP_REVERSE, LCP_SEPARATE),
-                                   repeat=count):
+    every_mode = list(itertools.product((LCP_STICK, LCP_FORWARD, LCP_REVERSE, LCP_SEPARATE),
+                                        repeat=count))
+    systems = []  # per mode: its matrix, right-hand side and orientations
+    for modes in every_mode:
         matrix = np.zeros((2 * count, 2 * count))
         rhs = np.zeros(2 * count)
         signs = []
@@ -922,7 +953,11 @@ def newton_coulomb_solutions(system: ContactSystem) -> list[MultiContactSolution
                 slide = sign if mode == LCP_FORWARD else -sign
                 matrix[t, t] = 1.0
                 matrix[t, n] = slide * system.mu[i]
-        impulses, _, rank, _ = np.linalg.lstsq(matrix, rhs, rcond=1e-12)
+        systems.append((matrix, rhs, signs))
+    # Every mode's least-squares solve in one call (each np.linalg.lstsq's answer, bit for bit).
+    solved = _lstsq_rows(np.array([matrix for matrix, _, _ in systems]),
+                         np.array([rhs for _, rhs, _ in systems]), rcond=1e-12)
+    for modes, (matrix, rhs, signs), impulses, rank in zip(every_mode, systems, *solved):
         if np.max(np.abs(matrix @ impulses - rhs)) > tolerance * (1.0 + np.max(np.abs(matrix))):
             continue  # singular and inconsistent: this mode has no solution
         solution = _assemble(system, "newton-coulomb", modes, impulses, rank == 2 * count)
