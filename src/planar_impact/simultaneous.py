@@ -126,6 +126,14 @@ class ContactSystem:
         return self._scales[1]
 
     @functools.cached_property
+    def checked_contacts(self) -> tuple[solver.CheckedContact, ...]:
+        """Each contact as :func:`planar_impact.solve` prepares it (checked at assembly), for
+        :func:`solver.solve_contact`: one contact at many speeds, as :func:`sequential_impacts`
+        strikes it."""
+        return tuple(solver.checked_contact(self.mass_matrix, self.wn[i], self.wt[i])
+                     for i in range(self.count))
+
+    @functools.cached_property
     def _scales(self) -> tuple[float, float]:
         """:meth:`impulse_scale` and :meth:`speed_scale`, formed once (asked per check)."""
         speed = float(np.max(np.abs(self.approach)))
@@ -1072,8 +1080,10 @@ def sequential_impacts(system: ContactSystem, law: str, order, max_impacts: int 
             if len(impacts) >= max_impacts:
                 capped = True
                 break
-            result = solver.solve(mass_matrix=system.mass_matrix, wn=system.wn[i], wt=system.wt[i],
-                                  u=speeds, mu=system.mu[i], e=system.e[i], law=law)
+            solver.check_law(law)  # as solve() would, at the first impact
+            # solve() of contact i, its M⁻¹ w and (A20) terms formed once per system.
+            result = solver.solve_contact(system.checked_contacts[i], speeds,
+                                          float(system.mu[i]), float(system.e[i]), law)
             speeds = result.u_after
             impacts.append((i, result.collision_type))
             struck = True
