@@ -21,6 +21,7 @@ here (docs/multi-contact.md explains each, with a worked example):
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from dataclasses import dataclass
@@ -36,6 +37,9 @@ TYPE_LAWS: dict[str, tuple[int, ...]] = {
     "stronge-paper": (1, 2, 3, 4, 5),
     "newton": (1, 2, 3),
 }
+#: The laws whose type formulas are affine in the approach velocities (and so their maps in
+#: the impulses): screened before their solve by :func:`_affine_screen`.
+AFFINE_LAWS = ("poisson", "newton")
 #: Type code of a contact that takes no impulse (only with ``allow_separating=True``).
 SEPARATING = 0
 
@@ -88,14 +92,23 @@ class ContactSystem:
     def effective_approach(self, i: int, impulses: np.ndarray) -> tuple[float, float]:
         """``v^A(i) + Σ_{j≠i} W_ij I^(j)``: contact ``i``'s velocities once the other
         contacts' impulses are applied, by (75) through (A16), (A22) and (A23)."""
-        vn, vt = float(self.approach[2 * i]), float(self.approach[2 * i + 1])
-        for j in range(self.count):
-            if j == i:
-                continue
-            block = self.delassus[2 * i:2 * i + 2, 2 * j:2 * j + 2]
-            vn += float(block[0, 0] * impulses[2 * j] + block[0, 1] * impulses[2 * j + 1])
-            vt += float(block[1, 0] * impulses[2 * j] + block[1, 1] * impulses[2 * j + 1])
+        vn, vt = self._plain[0][i]
+        for j, (w_nn, w_nt, w_tn, w_tt) in self._plain[1][i]:
+            normal, tangential = float(impulses[2 * j]), float(impulses[2 * j + 1])
+            vn += w_nn * normal + w_nt * tangential
+            vt += w_tn * normal + w_tt * tangential
         return vn, vt
+
+    @functools.cached_property
+    def _plain(self):
+        """Per contact: ``(v_n^A, v_t^A)`` and the other contacts' blocks of W as
+        ``(j, (w_nn, w_nt, w_tn, w_tt))``, plain floats (the same products and sums as on
+        the arrays' numpy scalars, without their cost per operation)."""
+        approach = [(float(self.approach[2 * i]), float(self.approach[2 * i + 1]))
+                    for i in range(self.count)]
+        blocks = [[(j, tuple(self.delassus[2 * i:2 * i + 2, 2 * j:2 * j + 2].ravel().tolist()))
+                   for j in range(self.count) if j != i] for i in range(self.count)]
+        return approach, blocks
 
     def delta_u(self, impulses: np.ndarray) -> np.ndarray:
         """``Δu = Σ_i M⁻¹ (w_n^(i) I_n^(i) + w_t^(i) I_t^(i))``, (75)."""
@@ -107,11 +120,25 @@ class ContactSystem:
 
     def impulse_scale(self) -> float:
         """A size for impulses: the largest approach speed over the smallest diagonal of W."""
-        speed = float(np.max(np.abs(self.approach)))
-        return speed / float(np.min(np.diag(self.delassus))) if speed > 0 else 1.0
+        return self._scales[0]
 
     def speed_scale(self) -> float:
-        return max(float(np.max(np.abs(self.approach))), 1e-300)
+        return self._scales[1]
+
+    @functools.cached_property
+    def checked_contacts(self) -> tuple[solver.CheckedContact, ...]:
+        """Each contact as :func:`planar_impact.solve` prepares it (checked at assembly), for
+        :func:`solver.solve_contact`: one contact at many speeds, as :func:`sequential_impacts`
+        strikes it."""
+        return tuple(solver.checked_contact(self.mass_matrix, self.wn[i], self.wt[i])
+                     for i in range(self.count))
+
+    @functools.cached_property
+    def _scales(self) -> tuple[float, float]:
+        """:meth:`impulse_scale` and :meth:`speed_scale`, formed once (asked per check)."""
+        speed = float(np.max(np.abs(self.approach)))
+        impulse = speed / float(np.min(np.diag(self.delassus))) if speed > 0 else 1.0
+        return impulse, max(speed, 1e-300)
 
 
 def contact_system(*, mass_matrix, wn, wt, u, mu, e) -> ContactSystem:
@@ -252,9 +279,9 @@ class _ContactMap:
         # Per contact: m_nn, m_nt, m_tt (A20), μ, Δ (A20), e; one column per contact.
         self.constants = np.array([[*system.single_terms(i), system.mu[i], system.deltas[i],
                                     system.e[i]] for i in range(count)]).T
-        # The other contacts' blocks of W per contact, in the order effective_approach sums.
-        self.blocks = [[(j, system.delassus[2 * i:2 * i + 2, 2 * j:2 * j + 2])
-                        for j in range(count) if j != i] for i in range(count)]
+        # v^A(i) and the other contacts' blocks of W per contact, in the order
+        # effective_approach sums them, as floats (the same products as the arrays' entries).
+        self.approach, self.blocks = system._plain
 
     def __call__(self, impulses, rows):
         """The map at ``impulses`` ``(R, 2m)``, row ``r`` by combination ``rows[r]``."""
@@ -269,22 +296,41 @@ class _ContactMap:
         """Contact ``i``'s forced ``(I_n, I_t)`` at the impulses ``points[i]`` ``(R_i, 2m)``
         (row ``r`` by combination ``rows[i][r]``), for every contact ``i`` in one batch:
         a list of ``(R_i, 2)`` arrays."""
-        system, count = self.system, self.system.count
-        vn_parts, vt_parts, sign_parts, type_parts, separating_parts = [], [], [], [], []
-        for i in range(count):
+        approaches = []
+        for i in range(self.system.count):
             impulses = points[i]
             if self.coupling == "none":
                 impulses = np.zeros_like(impulses)
-            vn = np.full(len(impulses), float(system.approach[2 * i]))
-            vt = np.full(len(impulses), float(system.approach[2 * i + 1]))
-            for j, block in self.blocks[i]:  # v^A(i) + Σ_{j≠i} W_ij I^(j), as effective_approach
-                vn = vn + (block[0, 0] * impulses[:, 2 * j] + block[0, 1] * impulses[:, 2 * j + 1])
-                vt = vt + (block[1, 0] * impulses[:, 2 * j] + block[1, 1] * impulses[:, 2 * j + 1])
-            vn_parts.append(vn)
-            vt_parts.append(vt)
-            sign_parts.append(self.signs[rows[i], i])
-            type_parts.append(self.safe_types[rows[i], i])
-            separating_parts.append(self.separating[rows[i], i])
+            approaches.append(self.effective(i, [impulses[:, k] for k in range(impulses.shape[1])],
+                                             len(impulses)))
+        return self.at_approach(approaches, rows)
+
+    def effective(self, i, columns, length):
+        """Contact ``i``'s effective approach ``(v_n, v_t)`` from the impulse columns
+        ``columns`` (``columns[k]`` the ``k``-th impulse component, arrays of one shape):
+        ``v^A(i) + Σ_{j≠i} W_ij I^(j)``, summed as :meth:`ContactSystem.effective_approach`."""
+        vn, vt = self.approach[i]
+        if not self.blocks[i]:  # no other contact: v^A(i) on every element
+            return np.full(length, vn), np.full(length, vt)
+        for j, (w_nn, w_nt, w_tn, w_tt) in self.blocks[i]:
+            normal, tangential = columns[2 * j], columns[2 * j + 1]
+            # v + (…) with v the scalar v^A(i) first: the same additions as np.full's array.
+            vn = vn + (w_nn * normal + w_nt * tangential)
+            vt = vt + (w_tn * normal + w_tt * tangential)
+        return vn, vt
+
+    def at_approach(self, approaches, rows):
+        """Contact ``i``'s forced ``(I_n, I_t)`` at the effective approach ``approaches[i]``
+        (two arrays, any shape, flattened in C order) of the combinations ``rows[i]`` (one per
+        flattened element), for every contact in one batch of :func:`_type_impulses`: a list
+        of ``(size_i, 2)`` arrays."""
+        vn_parts, vt_parts, sign_parts, type_parts, separating_parts = [], [], [], [], []
+        for i, ((vn, vt), contact_rows) in enumerate(zip(approaches, rows)):
+            vn_parts.append(np.ravel(vn))
+            vt_parts.append(np.ravel(vt))
+            sign_parts.append(self.signs[contact_rows, i])
+            type_parts.append(self.safe_types[contact_rows, i])
+            separating_parts.append(self.separating[contact_rows, i])
         sizes = [len(part) for part in vn_parts]
         mnn, mnt, mtt, mu, delta, e = np.repeat(self.constants, sizes, axis=1)
         sign = np.concatenate(sign_parts)
@@ -303,22 +349,44 @@ def _map_and_jacobian(mapping, impulses, rows, step):
     there by central differences of half-width ``step`` (per row), from one batched call.
 
     Column ``k`` is ``e_k − (map(I + step e_k) − map(I − step e_k)) / (2 step)``, formed as
-    :func:`_fixed_points` and :func:`_iterated_screen` need it. Contact ``i``'s impulses
+    :func:`_fixed_points` needs it. Contact ``i``'s impulses
     depend on the other contacts' only (its effective approach, (75)): a shift of its own
     two components leaves its inputs, and so its outputs, unchanged bit for bit, and its
     difference there is ``map(I) − map(I)`` (0, or NaN where the map is not finite); only
-    the other contacts' shifts are evaluated.
+    the other contacts' shifts are evaluated. The shifted points are never built whole:
+    contact ``i``'s effective approach takes, per impulse component, the column of every
+    evaluation (``I``, then ``I ± step e_k`` for each other column ``k``) as one array, with
+    the values ``I + step e_k`` has (``I_c + 0.0`` in the columns ``c ≠ k``).
     """
     number, size = impulses.shape
     count = size // 2
-    shifts = np.zeros((size, number, size))
-    for k in range(size):
-        shifts[k, :, k] = step
-    plus, minus = impulses[None] + shifts, impulses[None] - shifts
     others = [[k for k in range(size) if k // 2 != i] for i in range(count)]
-    points = [np.concatenate([impulses[None], plus[columns], minus[columns]]).reshape(-1, size)
-              for columns in others]
-    forced = mapping.forced(points, [np.tile(rows, 1 + 2 * len(columns)) for columns in others])
+    plain = impulses.T  # [column, row]
+    # I ± step e_k off column k: I + 0.0 (−0.0 + 0.0 is +0.0) and I − 0.0 (which is I).
+    unshifted = plain + 0.0
+    raised, lowered = plain + step, plain - step
+    approaches, tiled = [], []
+    for i, columns in enumerate(others):
+        shifts = len(columns)
+        stacked = []
+        for c in range(size):
+            if c // 2 == i:  # contact i's own components do not enter its approach
+                stacked.append(None)
+                continue
+            # Evaluation 0 at I, 1..n at I + step e_k, n+1..2n at I − step e_k (k in columns).
+            evaluations = np.empty((1 + 2 * shifts, number))
+            evaluations[0] = plain[c]
+            evaluations[1:1 + shifts] = unshifted[c]
+            evaluations[1 + shifts:] = plain[c]
+            where_c = columns.index(c)
+            evaluations[1 + where_c] = raised[c]
+            evaluations[1 + shifts + where_c] = lowered[c]
+            stacked.append(evaluations)
+        if mapping.coupling == "none":  # as forced: every contact sees its own v^A
+            stacked = [None if block is None else np.zeros_like(block) for block in stacked]
+        approaches.append(mapping.effective(i, stacked, (1 + 2 * shifts) * number))
+        tiled.append(np.tile(rows, 1 + 2 * shifts))
+    forced = mapping.at_approach(approaches, tiled)
     mapped = np.empty_like(impulses)
     differences = np.empty((number, size, size))  # [row, output, column k]
     for i, (columns, values) in enumerate(zip(others, forced)):
@@ -371,18 +439,19 @@ def _fixed_points(system, law, combinations, coupling="effective", max_iteration
         converged[rows[stops]] = size_now[stops] <= FIXED_POINT_TOLERANCE * bound[stops]
         running[rows[stops]] = False
         previous[rows] = size_now
-        for position in np.flatnonzero(~stops).tolist():
-            row = rows[position]
-            if jacobian is None:  # a constant map went on: no fixed point to find
-                running[row] = False
-                continue
-            if not np.isfinite(jacobian[position]).all():
-                running[row] = False
-                continue
-            correction, _, rank, _ = np.linalg.lstsq(jacobian[position], -residual[position],
-                                                     rcond=1e-9)
-            determinate[row] = rank == size
-            impulses[row] = current[position] + correction
+        going = np.flatnonzero(~stops)
+        if going.size == 0:
+            continue
+        if jacobian is None:  # a constant map went on: no fixed point to find
+            running[rows[going]] = False
+            continue
+        finite = np.isfinite(jacobian[going]).all(axis=(1, 2))
+        running[rows[going[~finite]]] = False
+        going = going[finite]
+        # Each row's own least-squares step (np.linalg.lstsq's, bit for bit), in one call.
+        correction, rank = _lstsq_rows(jacobian[going], -residual[going], rcond=1e-9)
+        determinate[rows[going]] = rank == size
+        impulses[rows[going]] = current[going] + correction
     rows = np.flatnonzero(running)  # out of iterations: accept below the tolerance
     if rows.size:
         current = impulses[rows]
@@ -390,6 +459,34 @@ def _fixed_points(system, law, combinations, coupling="effective", max_iteration
         bound = scale + np.max(np.abs(current), axis=1)
         converged[rows] = residual <= FIXED_POINT_TOLERANCE * bound
     return impulses, converged, determinate
+
+
+def _lstsq_failed(*_args):
+    raise np.linalg.LinAlgError("SVD did not converge in Linear Least Squares")
+
+
+def _lstsq_rows(matrices, rhs, rcond):
+    """:func:`numpy.linalg.lstsq` of each matrix ``matrices[k]`` ``(N, r, c)`` and right-hand
+    side ``rhs[k]`` ``(N, r)``: the solutions ``(N, c)`` and the ranks ``(N,)``.
+
+    ``np.linalg.lstsq`` takes one matrix per call and spends ~45 µs around LAPACK's ~15 µs
+    for a 4 × 4; its own gufunc (``numpy.linalg._umath_linalg.lstsq``, the same ``gelsd``
+    call on each matrix, with the same workspace for matrices of one shape) takes the stack
+    at once and gives each row ``np.linalg.lstsq``'s answer bit for bit
+    (tests/theory/test_simultaneous_lstsq.py). A numpy without that gufunc gets the loop.
+    """
+    if len(matrices) == 0:
+        return np.empty((0, matrices.shape[-1])), np.empty(0, dtype=np.int64)
+    gufunc = getattr(getattr(np.linalg, "_umath_linalg", None), "lstsq", None)
+    if gufunc is None:
+        answers = [np.linalg.lstsq(matrix, side, rcond=rcond)
+                   for matrix, side in zip(matrices, rhs)]
+        return (np.array([answer[0] for answer in answers]),
+                np.array([answer[2] for answer in answers], dtype=np.int64))
+    with np.errstate(call=_lstsq_failed, invalid="call", over="ignore", divide="ignore",
+                     under="ignore"):  # as np.linalg.lstsq calls it
+        solution, _, rank, _ = gufunc(matrices, rhs[..., None], rcond, signature="ddd->ddid")
+    return solution[..., 0], rank
 
 
 def _law_at(system, law, i, vn, vt, sign):
@@ -472,8 +569,10 @@ def coherent_solutions(system: ContactSystem, law: str = "poisson", *,
     paper requires ``I_n > 0`` everywhere, so it is off by default.
 
     Combinations that cannot pass are dropped before their solve (:func:`_candidates`: the
-    literal reading's one candidate; batched screens with margins for the effective one); the
-    rest are solved and checked as without the screen, so the answer is the same bit for bit
+    literal reading's one candidate; a batched screen with margins for the effective one of
+    Poisson and Newton) or, for the paper's Stronge under the effective reading, after it and
+    before the checks (:func:`_coherent_within_margin` at the fixed points); the rest are
+    solved and checked as without a screen, so the answer is the same bit for bit
     (tests/theory/test_simultaneous_screen.py compares with the unscreened path).
 
     Returns the coherent solutions, distinct impulses only (combinations that coincide, as
@@ -491,7 +590,13 @@ def coherent_solutions(system: ContactSystem, law: str = "poisson", *,
     candidates = _candidates(system, law, choices, coupling, tolerance)
     if not candidates:
         return found
-    fixed = zip(*_fixed_points(system, law, candidates, coupling))
+    impulses, converged, determinate = _fixed_points(system, law, candidates, coupling)
+    if law not in AFFINE_LAWS and coupling == "effective" and system.count > 1:
+        # The paper's Stronge is screened after its solve, at the fixed points themselves.
+        rows = np.flatnonzero(converged)  # finite: their residual passed the tolerance
+        converged[rows] = _coherent_within_margin(
+            system, law, [candidates[k] for k in rows], impulses[rows], tolerance)
+    fixed = zip(impulses, converged, determinate)
     for (types, signs), (impulses, converged, determinate) in zip(candidates, fixed):
         if not converged:
             continue
@@ -522,6 +627,11 @@ def _candidates(system, law, choices, coupling, tolerance):
       separating, where allowed): one candidate instead of ``(2·types)^m``.
     * ``coupling="effective"`` with Poisson or Newton: the map is affine, and one batched
       linear solve per combination screens it (:func:`_affine_screen`).
+    * ``coupling="effective"`` with the paper's Stronge: every combination. Its map is not
+      affine: a screen would run the Newton iteration of :func:`_fixed_points` itself, and
+      with that iteration batched the full solve of every combination costs about as much
+      as such a screen alone. :func:`coherent_solutions` screens the converged ones at their
+      fixed points instead (:func:`_coherent_within_margin`, necessary tests with margins).
     """
     if coupling == "none":
         own = []
@@ -541,12 +651,9 @@ def _candidates(system, law, choices, coupling, tolerance):
                     [ctype for ctype in choices if ctype in possible], system.count)
                 if all((t, s) in own[i] for i, (t, s) in enumerate(zip(types, signs)))]
     combinations = list(_combinations(choices, system.count))
-    if system.count == 1:
+    if system.count == 1 or law not in AFFINE_LAWS:
         return combinations
-    if law in ("poisson", "newton"):
-        keep = _affine_screen(system, law, combinations, tolerance)
-    else:
-        keep = _iterated_screen(system, law, combinations, tolerance)
+    keep = _affine_screen(system, law, combinations, tolerance)
     return [combination for combination, kept in zip(combinations, keep) if kept]
 
 
@@ -564,9 +671,6 @@ SCREEN_MARGIN = 1e-4
 #: SCREEN_MARGIN. Values in between are ambiguous and the combination is kept unscreened.
 SINGULAR_CUT = 1e-12
 SCREEN_SINGULAR_CONDITION = 1e-2
-#: The paper's Stronge: an iteration that went non-finite is still solved by the full path if
-#: its residual had come within this fraction of the bound (:func:`_iterated_screen`).
-BROKEN_KEEP = 1e-2
 
 
 def _affine_pieces(system, law, choices):
@@ -677,7 +781,13 @@ def _coherent_within_margin(system, law, combinations, impulses, tolerance):
     passes the necessary tests of :func:`_check_combination` and :func:`_paper_coherent`
     widened by ``SCREEN_MARGIN``: the orientation (``sign·v_t ≥ 0`` at the effective
     approach), an approaching contact (``v_n < 0``), ``I_n > 0``, ``v_n^S ≥ 0`` and the
-    type's slip, with ``v^S`` by (A22)/(A23) and (75)."""
+    type's slip, with ``v^S`` by (A22)/(A23) and (75).
+
+    ``impulses`` are the affine screen's solutions (within ``SCREEN_CONDITION ·
+    FIXED_POINT_TOLERANCE`` of the bound from the fixed point the full path accepts), or,
+    for the paper's Stronge, the full path's fixed points themselves (within
+    ``FIXED_POINT_TOLERANCE`` of the impulses :func:`_check_combination` takes): far inside
+    the margins either way."""
     count = system.count
     coupling = system.delassus.copy()
     for i in range(count):
@@ -760,75 +870,6 @@ def _types_within_margin(system, law, types, signs, effective, margin):
     return own
 
 
-def _iterated_screen(system, law, combinations, tolerance, max_iterations=30):
-    """For the effective reading with the paper's Stronge (not affine): which combinations
-    may be coherent.
-
-    :func:`_fixed_points`' Newton iteration (same start, steps and stopping rules, the
-    least-squares step by a batched pseudo-inverse with the same cut-off) runs on all
-    combinations at once. A combination is dropped when its iteration ends with a residual
-    above ``SCREEN_MARGIN`` of the bound (far from any fixed point the full path would
-    accept at FIXED_POINT_TOLERANCE), or at a point that fails a necessary test of
-    :func:`_check_combination` by more than ``SCREEN_MARGIN`` (as in :func:`_affine_screen`).
-    A combination whose map is not finite at the start is dropped (the full path gives up
-    there too); one that went non-finite later is kept only if it had come within
-    ``BROKEN_KEEP`` of a fixed point. Returns a boolean per combination.
-    """
-    size = 2 * system.count
-    types = np.array([t for t, _ in combinations], dtype=np.int64)
-    signs = np.array([s for _, s in combinations], dtype=float)
-    mapping = _contact_map(system, law, types, signs)
-    number = len(combinations)
-    scale = system.impulse_scale()
-    impulses = mapping(np.zeros((number, size)), np.arange(number))
-    starts_finite = np.isfinite(impulses).all(axis=1)
-    running = starts_finite.copy()
-    residual_size = np.full(number, np.inf)
-    closest = np.full(number, np.inf)  # smallest residual / bound along the iteration
-    previous = np.full(number, np.inf)
-    with np.errstate(all="ignore"):
-        for iteration in range(max_iterations + 1):
-            running &= np.isfinite(impulses).all(axis=1)
-            if not running.any():
-                break
-            rows = np.flatnonzero(running)
-            current = impulses[rows]
-            bound = scale + np.max(np.abs(current), axis=1)
-            if iteration < max_iterations:  # the map and, from the same call, its Jacobian
-                mapped, jacobian = _map_and_jacobian(mapping, current, rows, 1e-6 * bound)
-            else:
-                mapped = mapping(current, rows)
-            residual = current - mapped
-            size_now = np.max(np.abs(residual), axis=1)
-            residual_size[rows] = size_now
-            closest[rows] = np.fmin(closest[rows], size_now / bound)
-            stops = (size_now <= ROUNDING_RESIDUAL * bound) | (size_now > 0.5 * previous[rows])
-            previous[rows] = size_now
-            running[rows[stops]] = False
-            go = ~stops & np.isfinite(size_now)
-            rows, current, residual = rows[go], current[go], residual[go]
-            if rows.size == 0 or iteration == max_iterations:
-                break
-            jacobian = jacobian[go]
-            good = np.isfinite(jacobian).all(axis=(1, 2))
-            running[rows[~good]] = False
-            rows, current, residual = rows[good], current[good], residual[good]
-            correction = np.linalg.pinv(jacobian[good], rcond=1e-9) @ -residual[..., None]
-            impulses[rows] = current + correction[..., 0]
-    # A non-finite map anywhere on the way makes _fixed_points give up. Its start, map(0), is
-    # the same arithmetic on the same floats here, so those rows are dropped; rows that went
-    # non-finite later are kept if they had come near a fixed point (the two iterations'
-    # rounding might part there).
-    broke = starts_finite & ~(np.isfinite(impulses).all(axis=1) & np.isfinite(residual_size))
-    keep = broke & (closest <= BROKEN_KEEP)
-    bound = scale + np.max(np.abs(impulses), axis=1)
-    near = residual_size <= SCREEN_MARGIN * bound
-    candidates = np.flatnonzero(near & starts_finite & ~broke)
-    keep[candidates] = _coherent_within_margin(system, law, [combinations[k] for k in candidates],
-                                               impulses[candidates], tolerance)
-    return keep
-
-
 def _check_combination(system, law, types, signs, impulses, determinate, tolerance,
                        coupling="effective"):
     """The coherent solution of one combination at its fixed point, or None."""
@@ -900,8 +941,10 @@ def newton_coulomb_solutions(system: ContactSystem) -> list[MultiContactSolution
     tolerance = VELOCITY_TOLERANCE * system.speed_scale()
     delassus, approach = system.delassus, system.approach
     found: list[MultiContactSolution] = []
-    for modes in itertools.product((LCP_STICK, LCP_FORWARD, LCP_REVERSE, LCP_SEPARATE),
-                                   repeat=count):
+    every_mode = list(itertools.product((LCP_STICK, LCP_FORWARD, LCP_REVERSE, LCP_SEPARATE),
+                                        repeat=count))
+    systems = []  # per mode: its matrix, right-hand side and orientations
+    for modes in every_mode:
         matrix = np.zeros((2 * count, 2 * count))
         rhs = np.zeros(2 * count)
         signs = []
@@ -922,7 +965,11 @@ def newton_coulomb_solutions(system: ContactSystem) -> list[MultiContactSolution
                 slide = sign if mode == LCP_FORWARD else -sign
                 matrix[t, t] = 1.0
                 matrix[t, n] = slide * system.mu[i]
-        impulses, _, rank, _ = np.linalg.lstsq(matrix, rhs, rcond=1e-12)
+        systems.append((matrix, rhs, signs))
+    # Every mode's least-squares solve in one call (each np.linalg.lstsq's answer, bit for bit).
+    solved = _lstsq_rows(np.array([matrix for matrix, _, _ in systems]),
+                         np.array([rhs for _, rhs, _ in systems]), rcond=1e-12)
+    for modes, (matrix, rhs, signs), impulses, rank in zip(every_mode, systems, *solved):
         if np.max(np.abs(matrix @ impulses - rhs)) > tolerance * (1.0 + np.max(np.abs(matrix))):
             continue  # singular and inconsistent: this mode has no solution
         solution = _assemble(system, "newton-coulomb", modes, impulses, rank == 2 * count)
@@ -1033,8 +1080,10 @@ def sequential_impacts(system: ContactSystem, law: str, order, max_impacts: int 
             if len(impacts) >= max_impacts:
                 capped = True
                 break
-            result = solver.solve(mass_matrix=system.mass_matrix, wn=system.wn[i], wt=system.wt[i],
-                                  u=speeds, mu=system.mu[i], e=system.e[i], law=law)
+            solver.check_law(law)  # as solve() would, at the first impact
+            # solve() of contact i, its M⁻¹ w and (A20) terms formed once per system.
+            result = solver.solve_contact(system.checked_contacts[i], speeds,
+                                          float(system.mu[i]), float(system.e[i]), law)
             speeds = result.u_after
             impacts.append((i, result.collision_type))
             struck = True

@@ -506,6 +506,28 @@ def solve(*, mass_matrix, wn, wt, u, mu, e, law: str = "poisson") -> ImpactResul
     u = as_vector("u", u, size)
     mu = check_scalar("mu", mu, 0.0, np.inf)
     e = check_scalar("e", e, 0.0, 1.0)
+    return solve_contact(checked_contact(matrix, wn, wt), u, mu, e, law)
+
+
+@dataclass(frozen=True)
+class CheckedContact:
+    """What :func:`solve` derives from ``M``, ``w_n`` and ``w_t`` alone (:func:`checked_contact`),
+    for a caller that solves one contact at several speeds (:func:`solve_contact`)."""
+
+    matrix: np.ndarray
+    wn: np.ndarray
+    wt: np.ndarray
+    inv_w: np.ndarray  # M⁻¹ w_n, M⁻¹ w_t as columns
+    mnn: float  # (A20)
+    mnt: float
+    mtt: float
+    minors: list  # _gram_minors: Δ (A20) is the sum of their squares
+
+
+def checked_contact(matrix, wn, wt) -> CheckedContact:
+    """The contact of :func:`solve` with its inputs already checked (float arrays of matching
+    sizes, ``matrix`` symmetric and finite); raises :class:`ImpactInputError` where ``M`` is
+    not positive definite."""
     try:
         cholesky = np.linalg.cholesky(matrix)  # also the positive-definiteness test
     except np.linalg.LinAlgError:
@@ -513,11 +535,20 @@ def solve(*, mass_matrix, wn, wt, u, mu, e, law: str = "poisson") -> ImpactResul
     inv_w = np.linalg.solve(matrix, np.stack([wn, wt], axis=1))  # M⁻¹ w_n, M⁻¹ w_t
     inv_wn, inv_wt = inv_w[:, 0], inv_w[:, 1]
     mnn, mnt, mtt = float(wn @ inv_wn), float(wn @ inv_wt), float(wt @ inv_wt)  # (A20)
+    return CheckedContact(matrix, wn, wt, inv_w, mnn, mnt, mtt, _gram_minors(cholesky, inv_w))
+
+
+def solve_contact(contact: CheckedContact, u, mu: float, e: float, law: str) -> ImpactResult:
+    """:func:`solve` of a :class:`CheckedContact` at speeds ``u`` (a finite float vector of
+    its size), with ``mu``, ``e`` and ``law`` already checked: the same answer bit for bit."""
+    matrix, wn, wt, inv_w = contact.matrix, contact.wn, contact.wt, contact.inv_w
+    inv_wn, inv_wt = inv_w[:, 0], inv_w[:, 1]
+    mnn, mnt, mtt = contact.mnn, contact.mnt, contact.mtt
     vn, vt = float(wn @ u), float(wt @ u)
     # The batch kernels on numpy float64 scalars: same code, without array overhead.
     sign = -1.0 if vt < 0 or (vt == 0 and mnt < 0) else 1.0  # t → −t as in solve_batch
     scalars = [np.float64(x) for x in (mnn, sign * mnt, mtt, vn, abs(vt), mu, e)]
-    minors = _gram_minors(cholesky, inv_w)
+    minors = contact.minors
     in_range = (_SAFE_LOW < -vn < _SAFE_HIGH and abs(vt) < _SAFE_HIGH
                 and _SAFE_LOW < mnn < _SAFE_HIGH and _SAFE_LOW < mtt < _SAFE_HIGH)
     if in_range:

@@ -1,0 +1,165 @@
+"""The several-contact references are bit for bit those of the code before session 7's
+speed-ups (event sequences, coherent solutions, Newton–Coulomb and sequential readings).
+
+The stored file holds several-contact points (every scene float as ``float.hex``) and a
+fingerprint of each point's reference (:func:`harness.run.references.scene_reference`): a
+SHA-256 of the reference as JSON, every float exact (``repr`` round-trips). The points are
+the library's several-contact points (flat faces, the tilted box and rod), perturbed copies
+of them (:func:`harness.bench.many_scenarios.perturbed_copies`) and the library's points
+with other frictions and restitutions (:data:`EXTREMES`). They were recorded with the code
+at commit 17570bc. A change to a reference's arithmetic must regenerate the file on
+purpose: ``python tests/reference/test_reference_identity.py COMMIT`` (:func:`write_stored`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import tempfile
+from pathlib import Path
+
+import pytest
+
+from harness.run import references
+from harness.run.references import PointLaws, scene_reference
+from harness.scene.model import Body, Box, Disk, Polygon, Rod, Scene
+
+STORED = Path(__file__).parent.parent / "data" / "several-contact-references-17570bc.json"
+#: The perturbed copies: perturbed_copies(COPIES, COPY_SEED), their several-contact points.
+COPIES, COPY_SEED = 185, 1
+#: (friction, restitution) of the library's points again: ends of the ranges, and a plastic
+#: impact with friction, whose event sequences chatter (~40 impacts; with μ = 1 they run to
+#: the 1,000-impact cap, a second per point: too slow here).
+EXTREMES = ((0.0, 0.0), (0.0, 1.0), (0.3, 0.0), (1.0, 1.0))
+_SHAPES = {"disk": Disk, "rod": Rod, "box": Box, "polygon": Polygon}
+
+
+def fingerprint(reference: dict) -> str:
+    """SHA-256 (hex) of a reference as JSON, every float exact (``repr`` round-trips)."""
+    return hashlib.sha256(json.dumps(reference, sort_keys=True).encode()).hexdigest()
+
+
+def _hex(value):
+    if isinstance(value, (tuple, list)):
+        return [_hex(item) for item in value]
+    return float(value).hex()
+
+
+def _unhex(value):
+    if isinstance(value, list):
+        return tuple(_unhex(item) for item in value)
+    return float.fromhex(value)
+
+
+def point_record(name: str, kind: str, scene: Scene, laws: PointLaws) -> dict:
+    """A several-contact point as JSON, every float exact."""
+    bodies = []
+    for body in scene.bodies:
+        shape = body.shape
+        bodies.append({"name": body.name, "kind": shape.kind,
+                       "shape": {field.name: _hex(getattr(shape, field.name))
+                                 for field in dataclasses.fields(shape)},
+                       "mass": _hex(body.mass), "position": _hex(body.position),
+                       "angle": _hex(body.angle), "velocity": _hex(body.velocity),
+                       "angular_velocity": _hex(body.angular_velocity),
+                       "inertia": None if body.inertia is None else _hex(body.inertia)})
+    return {"name": name, "kind": kind, "scene_name": scene.name, "ground": scene.ground,
+            "bodies": bodies, "restitution": _hex(scene.restitution),
+            "friction": _hex(scene.friction),
+            "laws": {"friction": _hex(laws.friction), "restitution": _hex(laws.restitution),
+                     "laws": list(laws.laws)}}
+
+
+def _point(record: dict) -> tuple[str, Scene, PointLaws]:
+    bodies = []
+    for body in record["bodies"]:
+        shape = _SHAPES[body["kind"]](**{name: _unhex(value)
+                                         for name, value in body["shape"].items()})
+        bodies.append(Body(body["name"], shape, _unhex(body["mass"]), _unhex(body["position"]),
+                           _unhex(body["angle"]), _unhex(body["velocity"]),
+                           _unhex(body["angular_velocity"]),
+                           None if body["inertia"] is None else _unhex(body["inertia"])))
+    scene = Scene(tuple(bodies), _unhex(record["restitution"]), _unhex(record["friction"]),
+                  record["ground"], record["scene_name"])
+    laws = record["laws"]
+    return record["kind"], scene, PointLaws(_unhex(laws["friction"]),
+                                            _unhex(laws["restitution"]), tuple(laws["laws"]))
+
+
+def several_contact_points(scenarios) -> list[tuple[str, str, Scene, PointLaws]]:
+    """``(name, kind, scene, laws)`` of every several-contact point of ``scenarios``."""
+    points = []
+    for scenario in scenarios:
+        kind = references.kind_of(scenario)
+        if kind == references.SINGLE:
+            continue
+        for point in scenario.point_list():
+            points.append((f"{scenario.name}#{point.index}", kind, scenario.scene(point),
+                           PointLaws.of(scenario.at(point))))
+    return points
+
+
+def recorded_points() -> list[tuple[str, str, Scene, PointLaws]]:
+    """The points :func:`write_stored` records (module docstring)."""
+    from harness.bench.many_scenarios import write_copies
+    from harness.scenarios import load_scenarios
+
+    library = several_contact_points(load_scenarios())
+    with tempfile.TemporaryDirectory() as directory:
+        write_copies(Path(directory), COPIES, COPY_SEED)
+        copies = several_contact_points(load_scenarios(directory))
+    extremes = []
+    for name, kind, scene, laws in library:
+        for friction, restitution in EXTREMES:
+            extremes.append((f"{name}/mu={friction}/e={restitution}", kind,
+                             dataclasses.replace(scene, friction=friction,
+                                                 restitution=restitution),
+                             dataclasses.replace(laws, friction=friction,
+                                                 restitution=restitution)))
+    return library + copies + extremes
+
+
+def write_stored(commit: str, path: Path = STORED) -> None:
+    """Record the stored file anew from the references as they are now, at ``commit``."""
+    points = recorded_points()
+    path.write_text(json.dumps({
+        "commit": commit,
+        "points": [point_record(name, kind, scene, laws) for name, kind, scene, laws in points],
+        "fingerprints": [fingerprint(scene_reference(kind, scene, laws))
+                         for _, kind, scene, laws in points]}, indent=0))
+
+
+@pytest.fixture(scope="module")
+def stored():
+    data = json.loads(STORED.read_text())
+    return data["points"], data["fingerprints"]
+
+
+def test_the_stored_points_read_back_exactly(stored):
+    records, _ = stored
+    for record in records:
+        kind, scene, laws = _point(record)
+        assert point_record(record["name"], kind, scene, laws) == record
+
+
+def test_the_stored_points_cover_both_situations_and_both_shapes(stored):
+    records, _ = stored
+    kinds = {(record["kind"], record["bodies"][0]["kind"]) for record in records}
+    assert kinds == {(situation, shape) for situation in (references.SIMULTANEOUS,
+                                                          references.EVENT_DRIVEN)
+                     for shape in ("box", "rod")}
+    assert len(records) > 150
+
+
+def test_references_are_bit_identical_to_stored(stored):
+    records, fingerprints = stored
+    changed = [record["name"] for record, then in zip(records, fingerprints)
+               if fingerprint(scene_reference(*_point(record))) != then]
+    assert not changed, f"{len(changed)} of {len(records)} references changed bits: {changed[:5]}"
+
+
+if __name__ == "__main__":
+    import sys
+
+    write_stored(sys.argv[1])
