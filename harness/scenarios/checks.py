@@ -559,17 +559,22 @@ class PassedChecks:
         from harness.run.cache import code_version
         from harness.run.files import write_bytes_atomically
 
-        buffer = io.BytesIO()
-        pickler = pickle.Pickler(buffer, protocol=pickle.HIGHEST_PROTOCOL)
-        pickler.dispatch_table = {**copyreg.dispatch_table, MappingProxyType: _reduce_proxy}
-        pickler.dump({"format": self.FORMAT, "code_version": code_version(),
-                      "context": self._context_text(), "scenarios": self._passed or {}})
+        data = pickled({"format": self.FORMAT, "code_version": code_version(),
+                        "context": self._context_text(), "scenarios": self._passed or {}})
         try:
-            write_bytes_atomically(self.path, buffer.getvalue(), prefix=".checks-",
-                                   make_parent=True)
+            write_bytes_atomically(self.path, data, prefix=".checks-", make_parent=True)
         except OSError as error:
             self.problems.append(f"{self.path}: cannot write: {error}")
         self._added = False
+
+
+def pickled(value: Any) -> bytes:
+    """``pickle.dumps(value)`` where ``value`` may hold read-only mappings (scenarios do)."""
+    buffer = io.BytesIO()
+    pickler = pickle.Pickler(buffer, protocol=pickle.HIGHEST_PROTOCOL)
+    pickler.dispatch_table = {**copyreg.dispatch_table, MappingProxyType: _reduce_proxy}
+    pickler.dump(value)
+    return buffer.getvalue()
 
 
 def _reduce_proxy(proxy: MappingProxyType):
