@@ -68,12 +68,15 @@ def check_points(reader: TableReader, scenario: Scenario) -> None:
             reader.error("sweep.values", f"friction out of range{where}", fixed.friction, ">= 0")
             continue
         if fixed.system == "bodies":
-            check_bodies(reader, fixed, where)
+            check_bodies(reader, scenario, point, fixed, where)
         else:
             check_analytic(reader, scenario, point, where)
 
 
-def check_bodies(reader: TableReader, fixed: Scenario, where: str) -> None:
+def check_bodies(reader: TableReader, scenario: Scenario, point: Point, fixed: Scenario,
+                 where: str) -> None:
+    """The bodies' values at ``point`` (``fixed``: ``scenario.at(point)``), then their contact
+    and the second-strike check."""
     for spec in fixed.bodies:
         for key, value in (("mass", spec.mass), ("inertia", spec.inertia)):
             if value is not None and not value > 0.0:
@@ -84,7 +87,7 @@ def check_bodies(reader: TableReader, fixed: Scenario, where: str) -> None:
             if isinstance(value, float) and not value > 0.0:
                 reader.error(f"body.{spec.name}.{key}", f"must be positive{where}", value, "> 0")
                 return
-    scene = fixed.scene()
+    scene = scenario.scene(point)  # kept with the scenario, for the run to come
     contact, exact = geometry.scene_contact_each(
         scene, (ONE_POINT_TOLERANCE, geometry.DEFAULT_TOLERANCE))
     placed = [s for s in fixed.bodies if s.position is not None]

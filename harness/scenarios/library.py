@@ -8,7 +8,7 @@ from typing import Iterable
 
 from harness.scenarios import checks
 from harness.scenarios.errors import ScenarioError, suggest
-from harness.scenarios.model import Scenario
+from harness.scenarios.model import KEPT_SCENES, Scenario
 from harness.scenarios.reader import read_scenario_text, scenario_from_text
 from harness.scenarios.schema import SCENARIO_DIR
 
@@ -117,10 +117,11 @@ def _load_files(files: list[Path], workers: int) -> list[Scenario | ScenarioErro
     count = min(workers * PIECES_PER_WORKER, len(to_check))
     pieces = [to_check[start::count] for start in range(count)]
     for piece, data in zip(pieces, map_forked(_check_piece, pieces, workers)):
-        for (index, _, _, key), outcome in zip(piece, pickle.loads(data)):
+        for (index, _, _, key), (outcome, scenes) in zip(piece, pickle.loads(data)):
             outcomes[index] = outcome
             if isinstance(outcome, Scenario):  # passed: remembered here, not in the worker
                 checks.passed_checks.add(key, outcome)
+                object.__setattr__(outcome, KEPT_SCENES, scenes)
     return outcomes
 
 
@@ -133,8 +134,11 @@ def _checked(path: Path, text: str, key: str | None) -> Scenario | ScenarioError
 
 def _check_piece(piece: list[tuple]) -> bytes:
     """A worker's outcomes of a piece of :func:`_load_files`, pickled (scenarios hold
-    read-only mappings, which plain pickle refuses)."""
-    return checks.pickled([_checked(path, text, key) for _, path, text, key in piece])
+    read-only mappings, which plain pickle refuses), each with the scenes its checks built
+    (a scenario's pickle leaves them out; sent, they cost a tenth of building them anew)."""
+    outcomes = [_checked(path, text, key) for _, path, text, key in piece]
+    return checks.pickled([(outcome, getattr(outcome, KEPT_SCENES, None) or {})
+                           for outcome in outcomes])
 
 
 def _load_engines() -> None:
