@@ -1571,12 +1571,10 @@ def _execute(args, *, json_path: Path, command: Sequence[str] | None,
     # The cache also remembers which scenario texts passed the point checks (--no-cache:
     # every file is checked again).
     passed = use_passed_checks(None if args.no_cache else (args.cache_dir or default_cache_dir()))
-    from harness.run.executor import default_workers
-
     try:  # the files to check on the local cores (as many as the run's workers)
-        scenarios, errors = load_scenarios_reporting(
-            getattr(args, "files", None) or None, tags=args.tags or None,
-            workers=min(args.workers or default_workers(), default_workers()))
+        scenarios, errors = load_scenarios_reporting(getattr(args, "files", None) or None,
+                                                     tags=args.tags or None,
+                                                     workers=args.workers)
     finally:
         use_passed_checks(None)
     if log is not None:

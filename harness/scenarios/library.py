@@ -39,16 +39,17 @@ def parse_tags(tags) -> tuple[str, ...] | None:
     return tags or None
 
 
-def load_scenarios_reporting(paths_or_dir=None, tags=None, *, workers: int = 1
+def load_scenarios_reporting(paths_or_dir=None, tags=None, *, workers: int | None = 1
                              ) -> tuple[list[Scenario], list[ScenarioError]]:
     """The good scenarios under ``paths_or_dir`` and one error per problem in the others.
 
     Like :func:`load_scenarios`, but a bad file costs only itself: the runner runs the good
     files and reports the bad ones (each error is one line naming the file, the key, the
     value and what is allowed). A scenario whose name another file already used is an error
-    and is left out. An unknown tag is an error and selects nothing. ``workers`` > 1: the
-    files to check, when there are many, are checked on that many forked workers (the same
-    scenarios and errors, in the same order).
+    and is left out. An unknown tag is an error and selects nothing. ``workers`` > 1 (None:
+    every local core): the files to check, when there are many, are checked on that many
+    forked workers, at most one per local core (the same scenarios and errors, in the same
+    order).
     """
     scenarios, errors = [], []
     for outcome in _load_files(scenario_files(paths_or_dir), workers):
@@ -87,7 +88,7 @@ FORKED_CHECKS_MIN_FILES = 64
 PIECES_PER_WORKER = 4
 
 
-def _load_files(files: list[Path], workers: int) -> list[Scenario | ScenarioError]:
+def _load_files(files: list[Path], workers: int | None) -> list[Scenario | ScenarioError]:
     """Per file in turn, its :class:`Scenario` or the :class:`ScenarioError` reading it
     raised (:func:`harness.scenarios.reader.load_scenario`): the texts that passed the
     checks before (:data:`harness.scenarios.checks.passed_checks`) taken from there, the
@@ -107,7 +108,13 @@ def _load_files(files: list[Path], workers: int) -> list[Scenario | ScenarioErro
             outcomes[index] = passed.located(path)
         else:
             to_check.append((index, path, text, key))
-    if workers <= 1 or len(to_check) < FORKED_CHECKS_MIN_FILES:
+    forked = workers != 1 and len(to_check) >= FORKED_CHECKS_MIN_FILES
+    if forked:  # imported here: a run whose files passed before (a warm run) forks nothing
+        from harness.run.executor import default_workers
+
+        workers = min(workers or default_workers(), default_workers())
+        forked = workers > 1
+    if not forked:
         for index, path, text, key in to_check:
             outcomes[index] = _checked(path, text, key)
         return outcomes

@@ -37,7 +37,9 @@ def described(outcome):
 
 
 @pytest.fixture
-def library_dir(tmp_path):
+def library_dir(tmp_path, monkeypatch):
+    """Enough files to fork for, on two workers however many cores the machine has."""
+    monkeypatch.setattr(executor, "default_workers", lambda: 2)
     directory = tmp_path / "scenarios"
     many_scenarios.write_copies(directory, library.FORKED_CHECKS_MIN_FILES + 10, seed=3)
     bad_files(directory)
@@ -56,7 +58,8 @@ def test_forked_checks_give_the_scenarios_and_errors_of_checks_in_order(library_
     inline = described(load_scenarios_reporting(library_dir, workers=1))
     monkeypatch.setattr(executor, "map_forked", spy)
     assert described(load_scenarios_reporting(library_dir, workers=2)) == inline
-    assert forked == [2 * library.PIECES_PER_WORKER]  # the forked path was taken
+    assert described(load_scenarios_reporting(library_dir, workers=None)) == inline
+    assert forked == [2 * library.PIECES_PER_WORKER] * 2  # the forked path was taken
     scenarios, errors = inline
     assert len(scenarios) == library.FORKED_CHECKS_MIN_FILES + 11
     assert {e[2] for e in errors} >= {None, "name", "friction", "expect_sequence"}
