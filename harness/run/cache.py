@@ -45,7 +45,7 @@ import secrets
 import sys
 import time
 import zlib
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import fields, is_dataclass
 from functools import lru_cache
@@ -197,6 +197,11 @@ def canonical_json(payload: Any) -> str:
     return "".join(itertools.chain.from_iterable(zip(pieces, [*spelled, ""])))
 
 
+#: The stand-in of :meth:`ResultCache.slot_key`'s slot (a random string, spelled as json
+#: spells it).
+_SLOT = Spelled(f"slot{secrets.token_hex(16)}")
+
+
 class ResultCache:
     """Results on disk, keyed by a content hash of what they depend on.
 
@@ -257,10 +262,30 @@ class ResultCache:
 
     def key(self, payload: dict) -> str:
         """sha256 hex of the canonical JSON of ``payload`` plus the code version."""
-        text = canonical_json(
+        return hashlib.sha256(self._key_text(payload).encode()).hexdigest()
+
+    def _key_text(self, payload: dict) -> str:
+        return canonical_json(
             {"payload": payload, "code_version": self.version, "format": CACHE_FORMAT}
         )
-        return hashlib.sha256(text.encode()).hexdigest()
+
+    def slot_key(self, payload: dict, slot: str) -> Callable[[Spelled], str]:
+        """The :meth:`key` of ``payload`` with a :class:`Spelled` value in ``slot``, as a
+        function of that value: ``slot_key(payload, slot)(spelled) == key({**payload, slot:
+        spelled})``, the text around the slot spelled and hashed once (a run's engine runs of
+        one engine and settings differ in their scene only)."""
+        pieces = self._key_text({**payload, slot: _SLOT}).split(_SLOT.text)
+        if len(pieces) != 2:  # cannot be: the slot's stand-in is random
+            raise ValueError("a payload holds the stand-in of a slot")
+        head, tail = hashlib.sha256(pieces[0].encode()), pieces[1].encode()
+
+        def key(spelled: Spelled) -> str:
+            digest = head.copy()
+            digest.update(spelled.text.encode())
+            digest.update(tail)
+            return digest.hexdigest()
+
+        return key
 
     def path(self, key: str) -> Path:
         return self.root / key[:2] / f"{key}.json"

@@ -632,7 +632,8 @@ def run(
         store_in_worker = (None if cache is None or not cache.enabled or executor != "local"
                            else (str(cache.root), cache.version))
         settings_memo: dict = {}
-        spelled_settings: dict[int, Spelled] = {}  # by id of settings_memo's values
+        # ResultCache.slot_key by engine and id of settings_memo's values
+        keys_of: dict = {}
         # (scenario, point, engine, preset, item)
         plan: list[tuple[Scenario, Any, str, str, dict]] = []
         tasks, task_keys, task_slots = [], [], []
@@ -663,13 +664,15 @@ def run(
                             # spelled once for the keys of all the point's engine runs
                             spelled_scene = (None if cache is None
                                              else Spelled(_scene_payload(scene)))
-                        if cache is not None and id(settings) not in spelled_settings:
-                            spelled_settings[id(settings)] = Spelled(settings)
-                        payload = {"kind": "engine-run", "engine": engine_name,
-                                   "engine_version": engine.version,
-                                   "settings": spelled_settings.get(id(settings)),
-                                   "scene": spelled_scene}
-                        key = cache.key(payload) if cache is not None else None
+                        key = None
+                        if cache is not None:  # the key's text around the scene made once
+                            key_of = keys_of.get((engine_name, id(settings)))
+                            if key_of is None:
+                                key_of = keys_of[engine_name, id(settings)] = cache.slot_key(
+                                    {"kind": "engine-run", "engine": engine_name,
+                                     "engine_version": engine.version,
+                                     "settings": Spelled(settings)}, "scene")
+                            key = key_of(spelled_scene)
                         item["key"] = key
                         speeds = 3 * len(scene.bodies)
                         cached = None if cache is None else cache.get(
@@ -1568,9 +1571,10 @@ def _execute(args, *, json_path: Path, command: Sequence[str] | None,
     # The cache also remembers which scenario texts passed the point checks (--no-cache:
     # every file is checked again).
     passed = use_passed_checks(None if args.no_cache else (args.cache_dir or default_cache_dir()))
-    try:
+    try:  # the files to check on the local cores (as many as the run's workers)
         scenarios, errors = load_scenarios_reporting(getattr(args, "files", None) or None,
-                                                     tags=args.tags or None)
+                                                     tags=args.tags or None,
+                                                     workers=args.workers)
     finally:
         use_passed_checks(None)
     if log is not None:

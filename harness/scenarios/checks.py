@@ -68,12 +68,15 @@ def check_points(reader: TableReader, scenario: Scenario) -> None:
             reader.error("sweep.values", f"friction out of range{where}", fixed.friction, ">= 0")
             continue
         if fixed.system == "bodies":
-            check_bodies(reader, fixed, where)
+            check_bodies(reader, scenario, point, fixed, where)
         else:
             check_analytic(reader, scenario, point, where)
 
 
-def check_bodies(reader: TableReader, fixed: Scenario, where: str) -> None:
+def check_bodies(reader: TableReader, scenario: Scenario, point: Point, fixed: Scenario,
+                 where: str) -> None:
+    """The bodies' values at ``point`` (``fixed``: ``scenario.at(point)``), then their contact
+    and the second-strike check."""
     for spec in fixed.bodies:
         for key, value in (("mass", spec.mass), ("inertia", spec.inertia)):
             if value is not None and not value > 0.0:
@@ -84,9 +87,9 @@ def check_bodies(reader: TableReader, fixed: Scenario, where: str) -> None:
             if isinstance(value, float) and not value > 0.0:
                 reader.error(f"body.{spec.name}.{key}", f"must be positive{where}", value, "> 0")
                 return
-    scene = fixed.scene()
-    contact = geometry.scene_contact(scene, tolerance=ONE_POINT_TOLERANCE)
-    exact = geometry.scene_contact(scene)
+    scene = scenario.scene(point)  # kept with the scenario, for the run to come
+    contact, exact = geometry.scene_contact_each(
+        scene, (ONE_POINT_TOLERANCE, geometry.DEFAULT_TOLERANCE))
     placed = [s for s in fixed.bodies if s.position is not None]
     position_key = (f"body.{placed[-1].name}.position" if placed else "body")
     positions = [list(s.position) for s in placed]
@@ -260,8 +263,8 @@ _TIME_STEPS: dict[tuple[str, str, str], float | None] = {}
 def _preset_time_step(engine: str, preset: str, overrides: dict) -> float | None:
     """The time step (s) of ``engine`` at ``preset`` with ``overrides``; None when the engine
     is not installed or the overrides are bad (reported elsewhere)."""
-    try:
-        key = (engine, preset, json.dumps(overrides, sort_keys=True))
+    try:  # most files override nothing: no spelling for them
+        key = (engine, preset, json.dumps(overrides, sort_keys=True) if overrides else "{}")
     except (TypeError, ValueError):  # a value json cannot spell: not remembered
         key = None
     if key is not None and key in _TIME_STEPS:
@@ -325,6 +328,64 @@ def _first_ground_touch(start: list, features: list, speeds, times: np.ndarray) 
     return int(hits[0]) if hits.size else None
 
 
+#: Relative slack of :func:`_first_body_touch`'s bound: far above the rounding of the gaps it
+#: bounds (a few ulps of the coordinates), far below any gap that matters.
+BOUND_SLACK = 1e-9
+
+
+def _first_body_touch(scene: Scene, start: list, features: list, speeds,
+                      times: np.ndarray) -> int | None:
+    """The first of ``times`` (as an index) at which a feature (``(body index, name,
+    body-frame centre, radius)``) of one of two bodies starting at ``start`` poses and moving
+    at ``speeds`` may touch the other body, or None when none can.
+
+    A lower bound of :func:`_feature_gap` over arrays of times: the partner's core lies
+    within its extent (the farthest core point from its centre of mass) of its position, so
+    the feature's gap is at least its centre's distance from that position less the extent
+    and both radii. A sample where the bound exceeds :data:`BOUND_SLACK` (relative to the
+    coordinates) has no touch; the sample-by-sample scan from the index returned finds what
+    it finds from the first sample.
+    """
+    moving = []
+    for i, (x, y, angle) in enumerate(start):
+        moving.append((x + speeds[3 * i] * times, y + speeds[3 * i + 1] * times,
+                       angle + speeds[3 * i + 2] * times))
+    extents = []
+    for body in scene.bodies:
+        core, core_radius = geometry.local_core(body.shape)
+        extents.append((float(np.max(np.hypot(core[:, 0], core[:, 1]))), core_radius))
+    possible = np.zeros(len(times), dtype=bool)
+    for index, _, centre, radius in features:
+        x, y, angle = moving[index]
+        cos, sin = np.cos(angle), np.sin(angle)
+        feature_x = cos * centre[0] - sin * centre[1] + x
+        feature_y = sin * centre[0] + cos * centre[1] + y
+        partner_x, partner_y, _ = moving[1 - index]
+        extent, partner_radius = extents[1 - index]
+        reach = extent + partner_radius + radius
+        bound = np.hypot(feature_x - partner_x, feature_y - partner_y) - reach
+        scale = 1.0 + np.abs(feature_x) + np.abs(feature_y) + np.abs(partner_x) \
+            + np.abs(partner_y) + reach
+        possible |= bound <= BOUND_SLACK * scale
+    hits = np.flatnonzero(possible)
+    return int(hits[0]) if hits.size else None
+
+
+#: :func:`_sample_times` by duration (the durations are a few engines' steps and horizons).
+_SAMPLE_TIMES: dict[float, np.ndarray] = {}
+
+
+def _sample_times(duration: float) -> np.ndarray:
+    """The :data:`SEQUENCE_SAMPLES` sample times over ``(0, duration]`` (read-only: shared)."""
+    times = _SAMPLE_TIMES.get(duration)
+    if times is None:
+        times = np.linspace(0.0, duration, SEQUENCE_SAMPLES + 1)[1:]
+        times.flags.writeable = False
+        if len(_SAMPLE_TIMES) < 64:  # durations other than the engines' are not kept
+            _SAMPLE_TIMES[duration] = times
+    return times
+
+
 def second_strike(scene: Scene, contact, horizon_s: float, step_s: float) -> Strike | None:
     """The first feature other than the touching one to reach the partner within the impact.
 
@@ -373,12 +434,14 @@ def second_strike(scene: Scene, contact, horizon_s: float, step_s: float) -> Str
 
     earliest: Strike | None = None
     for motion, speeds, duration in motions:
-        times = np.linspace(0.0, duration, SEQUENCE_SAMPLES + 1)[1:]
-        first = 0
-        if scene.ground:  # the samples before the first touch skipped in one pass of arrays
+        times = _sample_times(duration)
+        # The samples before the first (possible) touch skipped in one pass of arrays.
+        if scene.ground:
             first = _first_ground_touch(start, ground_features, speeds, times)
-            if first is None:
-                continue
+        else:
+            first = _first_body_touch(scene, start, features, speeds, times)
+        if first is None:
+            continue
         previous = 0.0 if first == 0 else float(times[first - 1])
         for time_s in times[first:]:
             if earliest is not None and previous >= earliest.time_s:
@@ -499,17 +562,22 @@ class PassedChecks:
         from harness.run.cache import code_version
         from harness.run.files import write_bytes_atomically
 
-        buffer = io.BytesIO()
-        pickler = pickle.Pickler(buffer, protocol=pickle.HIGHEST_PROTOCOL)
-        pickler.dispatch_table = {**copyreg.dispatch_table, MappingProxyType: _reduce_proxy}
-        pickler.dump({"format": self.FORMAT, "code_version": code_version(),
-                      "context": self._context_text(), "scenarios": self._passed or {}})
+        data = pickled({"format": self.FORMAT, "code_version": code_version(),
+                        "context": self._context_text(), "scenarios": self._passed or {}})
         try:
-            write_bytes_atomically(self.path, buffer.getvalue(), prefix=".checks-",
-                                   make_parent=True)
+            write_bytes_atomically(self.path, data, prefix=".checks-", make_parent=True)
         except OSError as error:
             self.problems.append(f"{self.path}: cannot write: {error}")
         self._added = False
+
+
+def pickled(value: Any) -> bytes:
+    """``pickle.dumps(value)`` where ``value`` may hold read-only mappings (scenarios do)."""
+    buffer = io.BytesIO()
+    pickler = pickle.Pickler(buffer, protocol=pickle.HIGHEST_PROTOCOL)
+    pickler.dispatch_table = {**copyreg.dispatch_table, MappingProxyType: _reduce_proxy}
+    pickler.dump(value)
+    return buffer.getvalue()
 
 
 def _reduce_proxy(proxy: MappingProxyType):

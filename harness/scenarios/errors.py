@@ -42,6 +42,11 @@ class ScenarioError(ValueError):
             text = self._format(value)
         super().__init__(text)
 
+    def __reduce__(self):
+        """Pickled as it is (the forked checks send their errors back): its fields and
+        message kept, where the default would call ``__init__`` again with the message."""
+        return _unpickled, (type(self), self.args), self.__dict__
+
     def _format(self, value) -> str:
         parts = [self.path or "<scenario>"]
         if self.key is not None:
@@ -50,6 +55,10 @@ class ScenarioError(ValueError):
         if self.allowed:
             text += f" (allowed: {self.allowed})"
         return text
+
+
+def _unpickled(cls: type, args: tuple) -> ScenarioError:
+    return cls.__new__(cls, *args)  # its fields follow (__reduce__'s state)
 
 
 def suggest(word: str, choices: Iterable[str]) -> str:

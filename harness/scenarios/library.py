@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import pickle
 from pathlib import Path
 from typing import Iterable
 
 from harness.scenarios import checks
 from harness.scenarios.errors import ScenarioError, suggest
-from harness.scenarios.model import Scenario
-from harness.scenarios.reader import load_scenario
+from harness.scenarios.model import KEPT_SCENES, Scenario
+from harness.scenarios.reader import read_scenario_text, scenario_from_text
 from harness.scenarios.schema import SCENARIO_DIR
 
 
@@ -38,23 +39,24 @@ def parse_tags(tags) -> tuple[str, ...] | None:
     return tags or None
 
 
-def load_scenarios_reporting(paths_or_dir=None, tags=None
+def load_scenarios_reporting(paths_or_dir=None, tags=None, *, workers: int | None = 1
                              ) -> tuple[list[Scenario], list[ScenarioError]]:
     """The good scenarios under ``paths_or_dir`` and one error per problem in the others.
 
     Like :func:`load_scenarios`, but a bad file costs only itself: the runner runs the good
     files and reports the bad ones (each error is one line naming the file, the key, the
     value and what is allowed). A scenario whose name another file already used is an error
-    and is left out. An unknown tag is an error and selects nothing.
+    and is left out. An unknown tag is an error and selects nothing. ``workers`` > 1 (None:
+    every local core): the files to check, when there are many, are checked on that many
+    forked workers, at most one per local core (the same scenarios and errors, in the same
+    order).
     """
     scenarios, errors = [], []
-    for path in scenario_files(paths_or_dir):
-        try:
-            scenario = load_scenario(path)
-        except ScenarioError as error:
-            errors += error.errors
-            continue
-        scenarios.append(scenario)
+    for outcome in _load_files(scenario_files(paths_or_dir), workers):
+        if isinstance(outcome, ScenarioError):
+            errors += outcome.errors
+        else:
+            scenarios.append(outcome)
     checks.passed_checks.save()  # the texts that passed, for the next run (when enabled)
     seen: dict[str, Scenario] = {}
     unique = []
@@ -76,6 +78,85 @@ def load_scenarios_reporting(paths_or_dir=None, tags=None
                                         key="tags", value=tag,
                                         allowed=", ".join(sorted(known))))
     return [s for s in unique if set(s.tags) & set(wanted)], errors
+
+
+#: Fewer files to check than this are checked in this process: forking the workers and
+#: sending the scenarios back would cost more than checking them (about a millisecond each).
+FORKED_CHECKS_MIN_FILES = 64
+#: The files to check are dealt (one each in turn: a library's files of one kind lie
+#: together, and a sweep costs its points) into this many pieces per worker.
+PIECES_PER_WORKER = 4
+
+
+def _load_files(files: list[Path], workers: int | None) -> list[Scenario | ScenarioError]:
+    """Per file in turn, its :class:`Scenario` or the :class:`ScenarioError` reading it
+    raised (:func:`harness.scenarios.reader.load_scenario`): the texts that passed the
+    checks before (:data:`harness.scenarios.checks.passed_checks`) taken from there, the
+    others checked here or, many of them and ``workers`` > 1, on forked workers."""
+    outcomes: list[Scenario | ScenarioError | None] = [None] * len(files)
+    to_check = []  # (index, path, text, checks key)
+    for index, path in enumerate(files):
+        path = Path(path)
+        try:
+            text = read_scenario_text(path)
+        except ScenarioError as error:
+            outcomes[index] = error
+            continue
+        key = checks.passed_checks.key(text)
+        passed = checks.passed_checks.scenario(key)
+        if passed is not None:  # this very text was read and passed every check before
+            outcomes[index] = passed.located(path)
+        else:
+            to_check.append((index, path, text, key))
+    forked = workers != 1 and len(to_check) >= FORKED_CHECKS_MIN_FILES
+    if forked:  # imported here: a run whose files passed before (a warm run) forks nothing
+        from harness.run.executor import default_workers
+
+        workers = min(workers or default_workers(), default_workers())
+        forked = workers > 1
+    if not forked:
+        for index, path, text, key in to_check:
+            outcomes[index] = _checked(path, text, key)
+        return outcomes
+    from harness.run.executor import map_forked
+
+    _load_engines()  # imported here once, not by each worker
+    count = min(workers * PIECES_PER_WORKER, len(to_check))
+    pieces = [to_check[start::count] for start in range(count)]
+    for piece, data in zip(pieces, map_forked(_check_piece, pieces, workers)):
+        for (index, _, _, key), (outcome, scenes) in zip(piece, pickle.loads(data)):
+            outcomes[index] = outcome
+            if isinstance(outcome, Scenario):  # passed: remembered here, not in the worker
+                checks.passed_checks.add(key, outcome)
+                object.__setattr__(outcome, KEPT_SCENES, scenes)
+    return outcomes
+
+
+def _checked(path: Path, text: str, key: str | None) -> Scenario | ScenarioError:
+    try:
+        return scenario_from_text(text, path, key)
+    except ScenarioError as error:
+        return error
+
+
+def _check_piece(piece: list[tuple]) -> bytes:
+    """A worker's outcomes of a piece of :func:`_load_files`, pickled (scenarios hold
+    read-only mappings, which plain pickle refuses), each with the scenes its checks built
+    (a scenario's pickle leaves them out; sent, they cost a tenth of building them anew)."""
+    outcomes = [_checked(path, text, key) for _, path, text, key in piece]
+    return checks.pickled([(outcome, getattr(outcome, KEPT_SCENES, None) or {})
+                           for outcome in outcomes])
+
+
+def _load_engines() -> None:
+    """Import the installed engines' adapters (the checks ask them for settings)."""
+    from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine
+
+    for name in ENGINE_NAMES:
+        try:
+            load_engine(name)
+        except EngineNotInstalled:
+            pass
 
 
 def load_scenarios(paths_or_dir=None, tags=None) -> list[Scenario]:

@@ -29,6 +29,9 @@ from harness.scenarios.schema import (
 )
 from harness.scene import Body, Box, Contact, Disk, Polygon, Rod, Scene, geometry
 
+#: Where a :class:`Scenario` keeps its scenes by point index (:meth:`Scenario.scene`).
+KEPT_SCENES = "_scenes"
+
 
 @dataclass(frozen=True)
 class BodySpec:
@@ -221,13 +224,33 @@ class Scenario:
 
     # -- what the sources get ----------------------------------------------------------------
     def scene(self, which: Union[Point, int, None] = None) -> Scene | None:
-        """The :class:`harness.scene.Scene` at a point (None for analytic-only systems)."""
+        """The :class:`harness.scene.Scene` at a point (None for analytic-only systems).
+
+        Built once per point and kept with this scenario object, outside its fields and its
+        pickles (the scene is immutable): the checks, the run's plan, its references and its
+        records each ask for every point's scene, several times over.
+        """
         if self.analytic_only:
             return None
-        fixed = self.at(which)
-        bodies = tuple(spec.body(on_ground=fixed.ground) for spec in fixed.bodies)
-        return Scene(bodies=bodies, restitution=fixed.restitution, friction=fixed.friction,
-                     ground=fixed.ground, name=self.name)
+        point = self.point(which)
+        scenes = self.__dict__.get(KEPT_SCENES)
+        if scenes is None:
+            scenes = {}
+            object.__setattr__(self, KEPT_SCENES, scenes)  # frozen: not a field
+        scene = scenes.get(point.index)
+        if scene is None:
+            fixed = self.at(point)
+            bodies = tuple(spec.body(on_ground=fixed.ground) for spec in fixed.bodies)
+            scene = scenes[point.index] = Scene(
+                bodies=bodies, restitution=fixed.restitution, friction=fixed.friction,
+                ground=fixed.ground, name=self.name)
+        return scene
+
+    def __getstate__(self) -> dict:
+        """Pickled and copied without the scenes :meth:`scene` kept (built again on demand)."""
+        state = dict(self.__dict__)
+        state.pop(KEPT_SCENES, None)
+        return state
 
     def contact(self, which: Union[Point, int, None] = None,
                 tolerance: float = geometry.DEFAULT_TOLERANCE) -> Contact | None:
@@ -248,7 +271,7 @@ class Scenario:
         if fixed.system == "two-sled":
             parameters = {**TWO_SLED_DEFAULTS, **fixed.parameters}
             return builders.two_sleds(**parameters)
-        scene = fixed.scene()
+        scene = self.scene(which)  # fixed.scene(): kept with this scenario, not with fixed
         contact = geometry.scene_contact(scene)
         return geometry.impact_problem(scene, contact.point, contact.normal)
 

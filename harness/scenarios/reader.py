@@ -661,8 +661,18 @@ def _read_tags(reader: TableReader, doc) -> tuple[str, ...] | None:
 def load_scenario(path) -> Scenario:
     """Read and check one scenario file (raises :class:`ScenarioError`)."""
     path = Path(path)
+    text = read_scenario_text(path)
+    checks_key = checks.passed_checks.key(text)
+    passed = checks.passed_checks.scenario(checks_key)
+    if passed is not None:  # this very text was read and passed every check before
+        return passed.located(path)
+    return scenario_from_text(text, path, checks_key)
+
+
+def read_scenario_text(path: Path) -> str:
+    """The text of a scenario file (raises :class:`ScenarioError`: unreadable, not UTF-8)."""
     try:
-        text = path.read_text(encoding="utf-8")
+        return path.read_text(encoding="utf-8")
     except OSError as error:
         raise ScenarioError(f"cannot read the file: {error.strerror or error}", path=path,
                             allowed="a readable .toml file") from None
@@ -670,10 +680,11 @@ def load_scenario(path) -> Scenario:
         raise ScenarioError(f"not UTF-8 text: byte {error.object[error.start]:#04x} at offset "
                             f"{error.start}", path=path,
                             allowed="a TOML file encoded in UTF-8") from None
-    checks_key = checks.passed_checks.key(text)
-    passed = checks.passed_checks.scenario(checks_key)
-    if passed is not None:  # this very text was read and passed every check before
-        return passed.located(path)
+
+
+def scenario_from_text(text: str, path: Path, checks_key: str | None = None) -> Scenario:
+    """Parse and check the text of the scenario file ``path`` (raises :class:`ScenarioError`);
+    ``checks_key`` as for :func:`parse_scenario`."""
     try:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:

@@ -353,6 +353,17 @@ def scene_contact(scene: Scene, tolerance: float = DEFAULT_TOLERANCE) -> Contact
     return body_contact(scene.bodies[0], scene.bodies[1], tolerance)
 
 
+def scene_contact_each(scene: Scene, tolerances) -> list[Contact]:
+    """:func:`scene_contact` at each of ``tolerances``, the cores and the separation found
+    once for all of them (the scenario checks ask for two tolerances at every point)."""
+    if scene.ground:
+        core, radius = world_core(scene.bodies[0])
+        return [core_ground_contact(core, radius, tolerance) for tolerance in tolerances]
+    core_a, radius_a = world_core(scene.bodies[0])
+    core_b, radius_b = world_core(scene.bodies[1])
+    return core_contacts(core_a, radius_a, core_b, radius_b, tolerances)
+
+
 def scene_contacts(scene: Scene, tolerance: float = DEFAULT_TOLERANCE) -> list[Contact]:
     """Every contact point of a scene within ``tolerance`` (m) of the closest one, each a
     one-point :class:`Contact` (``point_count`` 1), ordered along the tangent.

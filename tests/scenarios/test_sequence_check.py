@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import tomllib
 
+import numpy as np
 import pytest
 
 from harness.scenarios import SCENARIO_DIR, ScenarioError, load_scenarios, parse_scenario
@@ -82,3 +83,54 @@ def test_a_strike_time_matches_the_closed_form_for_a_flat_rod():
     strike = second_strike(scene, geometry.scene_contact(scene), 1.0, 1e-9)
     expected = length * math.sin(theta) / (speed * (1.0 + (1.0 + e) / 2.0))
     assert strike.time_s == pytest.approx(expected, rel=1e-5)
+
+
+def _touching_pair(rng):
+    """Two bodies of random shapes, turns and speeds, B moved along the normal to touch A."""
+    from harness.scene import Body, Box, Disk, Polygon, Rod
+
+    def shape():
+        return rng.choice([Disk(float(rng.uniform(0.02, 0.3))),
+                           Rod(float(rng.uniform(0.2, 1.0)), float(rng.uniform(0.005, 0.05))),
+                           Box(float(rng.uniform(0.1, 0.8)), float(rng.uniform(0.05, 0.5))),
+                           Polygon(((0.0, 0.3), (-0.2, -0.1), (0.25, -0.15)))])
+
+    def speeds():
+        return tuple(rng.uniform(-3.0, 3.0, 2).tolist()), float(rng.uniform(-20.0, 20.0))
+
+    (va, wa), (vb, wb) = speeds(), speeds()
+    a = Body("a", shape(), 1.0, (0.0, 0.0), float(rng.uniform(-3.2, 3.2)), va, wa)
+    b = Body("b", shape(), float(rng.uniform(0.2, 2.0)),
+             tuple((rng.uniform(-0.4, 0.4, 2) + (0.0, 0.9)).tolist()),
+             float(rng.uniform(-3.2, 3.2)), vb, wb)
+    contact = geometry.body_contact(a, b)
+    shifted = np.asarray(b.position) - contact.gap * np.asarray(contact.normal)
+    return a, b.moved(position=(float(shifted[0]), float(shifted[1])))
+
+
+def test_two_bodies_strike_as_found_by_the_full_sample_by_sample_scan(monkeypatch):
+    """Between two bodies the samples no feature can reach are skipped on a bound of the gap
+    (checks._first_body_touch); the strike found (body, feature, time to the bit, motion)
+    is the one the scan from the first sample finds, strike or none."""
+    from harness.scenarios import checks
+    from harness.scene import Scene
+
+    rng = np.random.default_rng(2026)
+    found = []
+    for _ in range(300):
+        a, b = _touching_pair(rng)
+        scene = Scene((a, b), float(rng.uniform(0.0, 1.0)), float(rng.uniform(0.0, 1.0)))
+        contact = geometry.scene_contact(scene)
+        horizon = float(rng.choice([1.0 / 30.0, 0.2, 1.0]))
+        found.append(second_strike(scene, contact, horizon, horizon / 2.0))
+    with monkeypatch.context() as patch:
+        patch.setattr(checks, "_first_body_touch", lambda *args: 0)
+        rng = np.random.default_rng(2026)
+        for strike in found:
+            a, b = _touching_pair(rng)
+            scene = Scene((a, b), float(rng.uniform(0.0, 1.0)), float(rng.uniform(0.0, 1.0)))
+            contact = geometry.scene_contact(scene)
+            horizon = float(rng.choice([1.0 / 30.0, 0.2, 1.0]))
+            assert second_strike(scene, contact, horizon, horizon / 2.0) == strike
+    strikes = sum(s is not None for s in found)
+    assert 30 < strikes < 270, strikes  # strikes and single impacts both among them

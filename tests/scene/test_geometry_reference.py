@@ -252,3 +252,32 @@ def test_contacts_at_several_tolerances_are_each_tolerances_reference_contact():
             assert [bits(contact) for contact in found] == [bits(e) for e in expected], (a, b)
             flat += len({e.point_count for e in expected}) > 1
     assert flat > 50  # the tolerances disagree on the point count often enough
+
+
+def test_scene_contact_each_is_scene_contact_at_each_tolerance():
+    # The scenario checks' two contacts of a point from one world core per body: ground
+    # scenes (resting and lifted bodies, faces flat) and pairs, tolerances in either order.
+    from harness.scene import Scene
+
+    rng = np.random.default_rng(1123)
+    flat = 0
+    for index in range(1000):
+        a = Body("a", random_shape(rng), 1.0, tuple(rng.uniform(-0.5, 0.5, 2).tolist()),
+                 random_angle(rng))
+        if index % 4 == 3:  # a box tilted off lying flat by less than some tolerances
+            a = Body("a", Box(float(rng.uniform(0.1, 1.0)), 0.5), 1.0, (0.0, 1.0),
+                     float(rng.choice([0.0, 1e-8, 1e-5, 1e-3])))
+        if index % 2:
+            scene = Scene((a if index % 8 == 1 else geometry.place_on_ground(a),), 0.5, 0.3,
+                          ground=True)
+        else:
+            position = rng.uniform(-1.0, 1.0, 2) * float(rng.choice([0.0, 0.1, 0.5, 1.0]))
+            b = Body("b", random_shape(rng), 1.0, (float(position[0]), float(position[1])),
+                     random_angle(rng))
+            scene = Scene((a, b), 0.5, 0.3)
+        for tolerances in ((1e-4, geometry.DEFAULT_TOLERANCE), (1e-9, 1e-3, 1e-6)):
+            found = geometry.scene_contact_each(scene, tolerances)
+            expected = [geometry.scene_contact(scene, tolerance) for tolerance in tolerances]
+            assert [bits(c) for c in found] == [bits(e) for e in expected], scene
+            flat += len({e.point_count for e in expected}) > 1
+    assert flat > 20  # tolerances that disagree on the point count are among them
