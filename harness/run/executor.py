@@ -33,16 +33,32 @@ Chunks
     difference between 8 and 128 within the noise (about ±30%).
 
 Dask
-    One future per chunk. A local cluster's workers are forked on Linux, as the pool's are
-    (0.3 s to start against 2 s spawned, and no second import of the engines), and a cluster
-    started for the run stops in a background thread once every result is delivered: the
-    caller builds and writes its records meanwhile (:func:`wait_for_shutdowns`). At 2,000
-    engine tasks (``impact-harness bench --executors``, 2 workers, medians of 3 on an idle
-    machine) the local pool took 1.71 s; Dask 2.00 s with a cluster started for the call
-    (1.17 times, then 0.10 s of shutdown), 2.01 s on a running one, and 15.4 s with one
-    future per task (9.0 times). Below :data:`DASK_MIN_TASKS` tasks the local executor
-    runs them (``note`` says so): measured from 125 to 1,000 engine tasks the cluster took
-    1.3-1.5 times the pool's time, about a second more, its start and shut-down.
+    One graph of one future per chunk (:class:`DaskChunk`). A local cluster's workers are
+    forked on Linux, as the pool's are (0.3 s to start against 2 s spawned, and no second
+    import of the engines), and a cluster started for the run stops in a background thread
+    once every result is delivered: the caller builds and writes its records meanwhile
+    (:func:`wait_for_shutdowns`).
+
+    What a started cluster costs beyond the pool, measured inside one run of 2,000 engine
+    tasks on the 2-core machine (under load; CPU seconds are steadier than wall ones there):
+    the cluster's start, 0.16-0.43 s of wall time but 0.05-0.1 s of CPU (waiting for the
+    forked workers to register); its shutdown, 0.1-0.3 s, after the run; then CPU taken from
+    the cores the workers compute on. That was once 1.2-1.5 s of CPU more than the pool
+    (3.1-3.6 s against 1.9-2.1 s): submitting 32 chunks one by one, 0.2-1.2 s, was Dask
+    walking every task's scene for futures inside (a :class:`DaskChunk` is not walked:
+    0.03-0.07 s now); each worker's event loop took 0.3 s of CPU beside 0.75 s of engine
+    runs (a stack sampler every 10 ms, event-loop ticks every 20 ms in all five servers,
+    /proc read every 0.5 s, a recursive size estimate of every result:
+    :data:`QUIET_CLUSTER_CONFIG`, :func:`call_dask_chunk`; 0.11-0.18 s now). What is left is
+    about 0.3-0.45 s of CPU more than the pool whatever the number of tasks (500 to 4,000),
+    the scheduler's and the workers' own loops, so the cluster's share falls as the run
+    grows: 1.5 times the pool's CPU at 1,000 tasks, 1.2 at 2,000, 1.1 at 4,000.
+    ``impact-harness bench --executors`` (2,000 tasks, 2 workers, medians of 3, three runs
+    under load): Dask / local 0.85, 1.13 and 1.15 with a cluster started for the call (1.39,
+    1.50 and 1.57 before), 0.68-0.74 on a running cluster. Hence :data:`DASK_MIN_TASKS`:
+    below it the local executor runs the tasks (``note`` says so). A fresh ``impact-harness
+    run --executor dask`` pays also for importing dask.distributed (0.6 s of CPU), which the
+    local pool never imports.
 
 ``function`` and ``batch`` must be top-level (picklable) functions and each task picklable
 (plain dicts, tuples, numbers, strings, dataclasses of those).
@@ -66,8 +82,9 @@ DASK_INSTALL_HINT = 'pip install -e ".[dask]"'
 #: Seconds to wait for a Dask scheduler before giving up with a one-line error.
 CONNECT_TIMEOUT_S = 10.0
 #: Fewest tasks :func:`run_tasks` sends to Dask; fewer run on the local pool (or inline): a
-#: cluster's start and shut-down (about a second) outweigh what it saves (see the module doc).
-DASK_MIN_TASKS = 1000
+#: started cluster costs about 0.3-0.45 s of CPU more than the pool whatever the number of
+#: tasks, 1.5 times the pool's CPU at 1,000 engine tasks and 1.2 at 2,000 (the module doc).
+DASK_MIN_TASKS = 2000
 
 
 class DaskNotInstalled(ImportError):
