@@ -53,12 +53,13 @@ Dask
     about 0.3-0.45 s of CPU more than the pool whatever the number of tasks (500 to 4,000),
     the scheduler's and the workers' own loops, so the cluster's share falls as the run
     grows: 1.5 times the pool's CPU at 1,000 tasks, 1.2 at 2,000, 1.1 at 4,000.
-    ``impact-harness bench --executors`` (2,000 tasks, 2 workers, medians of 3, three runs
-    under load): Dask / local 0.85, 1.13 and 1.15 with a cluster started for the call (1.39,
-    1.50 and 1.57 before), 0.68-0.74 on a running cluster. Hence :data:`DASK_MIN_TASKS`:
-    below it the local executor runs the tasks (``note`` says so). A fresh ``impact-harness
-    run --executor dask`` pays also for importing dask.distributed (0.6 s of CPU), which the
-    local pool never imports.
+    ``impact-harness bench --executors`` (2,000 tasks, 2 workers, medians of 3, runs under
+    load): Dask / local 0.85, 1.13, 1.15 and 1.00 with a cluster started for the call, each
+    run alternated with one before these changes (1.39, 1.50, 1.57 and 1.33), and 1.24 and
+    0.95 in two runs of the full bench; on a running cluster 0.65-1.05. Hence
+    :data:`DASK_MIN_TASKS`: below it the local executor runs the tasks (``note`` says so). A
+    fresh ``impact-harness run --executor dask`` pays also for importing dask.distributed
+    (0.6 s of CPU), which the local pool never imports.
 
 ``function`` and ``batch`` must be top-level (picklable) functions and each task picklable
 (plain dicts, tuples, numbers, strings, dataclasses of those).
