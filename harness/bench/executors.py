@@ -17,7 +17,9 @@ installed engine, both presets), each through :func:`harness.run.executor.run_ta
 
 And what a user waits for: ``impact-harness run --no-cache`` end to end (a fresh interpreter,
 exit included, so the background shutdown is paid where it is not overlapped) on the
-scenario files behind those tasks, with ``--executor local`` and ``--executor dask``.
+scenario files behind those tasks, with ``--executor local`` and ``--executor dask``; and,
+apart, what importing dask.distributed adds to a fresh interpreter (``import distributed``:
+the harness's imports with and without it), which only the Dask command pays.
 
 ``ratio = dask / local`` (target :data:`RATIO_TARGET`; ``dask running / local`` and the
 command's ``run dask / run local`` too). The outputs of every way are checked equal to the
@@ -138,6 +140,7 @@ def run(count: int = TASKS, repeats: int = REPEATS, per_task: bool = True,
         if end_to_end:
             command_ways = {f"run {executor}": _run_command(files, Path(folder), executor)
                             for executor in ("local", "dask")}
+            command_ways["import distributed"] = _import_cost("distributed")
             for way in command_ways:
                 seconds[way] = []
             for _ in range(repeats):
@@ -176,18 +179,49 @@ def _run_command(files: Path, folder: Path, executor: str):
     return call
 
 
+def _import_cost(module: str):
+    """A timer of what importing ``module`` adds to a fresh interpreter that imports the
+    runner: the wall time of both imports less that of the runner's alone."""
+    base = [sys.executable, "-c", "import harness.run.runner"]
+    both = [sys.executable, "-c", f"import harness.run.runner, {module}"]
+
+    def wall(command: list[str]) -> float:
+        begin = time.perf_counter()
+        subprocess.run(command, capture_output=True, check=True)
+        return time.perf_counter() - begin
+
+    return lambda: wall(both) - wall(base)
+
+
+#: What each way's time holds, printed under the table.
+INCLUDED = {
+    "local": "pool start (forked workers), every chunk, every result delivered, pool shutdown",
+    "dask": "LocalCluster start (scheduler, forked workers), the chunks, every result "
+            "delivered; not its shutdown (after, in the background: dask shutdown)",
+    "dask running": "the chunks on a cluster already running (no start, no shutdown)",
+    "run local": "a fresh interpreter end to end: imports, reading the files, the run, "
+                 "records, exit",
+    "run dask": "the same with --executor dask: also importing distributed, the cluster's "
+                "start and, at exit, the end of its shutdown",
+}
+
+
 def format_report(report: dict) -> str:
     """The printed table: each way's median and spread, then the ratios."""
     lines = [f"executors: {report['tasks']} engine tasks ({', '.join(report['engines'])}; both "
              f"presets), {report['workers']} workers, {report['repeats']} interleaved repeats"]
     for way, values in report["seconds"].items():
-        lines.append(f"  {way:<16} {report['median'][way]:7.2f} s  (min {min(values):.2f}, max "
+        lines.append(f"  {way:<18} {report['median'][way]:7.2f} s  (min {min(values):.2f}, max "
                      f"{max(values):.2f})")
+    lines.append("  times hold:")
+    lines.extend(f"    {way}: {what}" for way, what in INCLUDED.items()
+                 if way in report["seconds"])
     lines.append(f"  ratio dask / local {report['ratio']:.2f} (target <= {RATIO_TARGET}); "
                  f"running cluster / local {report['ratio_running']:.2f}")
     if report.get("ratio_command") is not None:
         lines.append(f"  impact-harness run --no-cache on the {report['files']} files of those "
-                     f"tasks, end to end: dask / local {report['ratio_command']:.2f}")
+                     f"tasks, end to end: dask / local {report['ratio_command']:.2f} (importing "
+                     f"distributed alone adds {report['median']['import distributed']:.2f} s)")
     if report["ratio_per_task"] is not None:
         lines.append(f"  one future per task (before chunks) / local "
                      f"{report['ratio_per_task']:.2f}")

@@ -33,16 +33,33 @@ Chunks
     difference between 8 and 128 within the noise (about ±30%).
 
 Dask
-    One future per chunk. A local cluster's workers are forked on Linux, as the pool's are
-    (0.3 s to start against 2 s spawned, and no second import of the engines), and a cluster
-    started for the run stops in a background thread once every result is delivered: the
-    caller builds and writes its records meanwhile (:func:`wait_for_shutdowns`). At 2,000
-    engine tasks (``impact-harness bench --executors``, 2 workers, medians of 3 on an idle
-    machine) the local pool took 1.71 s; Dask 2.00 s with a cluster started for the call
-    (1.17 times, then 0.10 s of shutdown), 2.01 s on a running one, and 15.4 s with one
-    future per task (9.0 times). Below :data:`DASK_MIN_TASKS` tasks the local executor
-    runs them (``note`` says so): measured from 125 to 1,000 engine tasks the cluster took
-    1.3-1.5 times the pool's time, about a second more, its start and shut-down.
+    One graph of one future per chunk (:class:`DaskChunk`). A local cluster's workers are
+    forked on Linux, as the pool's are (0.3 s to start against 2 s spawned, and no second
+    import of the engines), and a cluster started for the run stops in a background thread
+    once every result is delivered: the caller builds and writes its records meanwhile
+    (:func:`wait_for_shutdowns`).
+
+    What a started cluster costs beyond the pool, measured inside one run of 2,000 engine
+    tasks on the 2-core machine (under load; CPU seconds are steadier than wall ones there):
+    the cluster's start, 0.16-0.43 s of wall time but 0.05-0.1 s of CPU (waiting for the
+    forked workers to register); its shutdown, 0.1-0.3 s, after the run; then CPU taken from
+    the cores the workers compute on. That was once 1.2-1.5 s of CPU more than the pool
+    (3.1-3.6 s against 1.9-2.1 s): submitting 32 chunks one by one, 0.2-1.2 s, was Dask
+    walking every task's scene for futures inside (a :class:`DaskChunk` is not walked:
+    0.03-0.07 s now); each worker's event loop took 0.3 s of CPU beside 0.75 s of engine
+    runs (a stack sampler every 10 ms, event-loop ticks every 20 ms in all five servers,
+    /proc read every 0.5 s, a recursive size estimate of every result:
+    :data:`QUIET_CLUSTER_CONFIG`, :func:`call_dask_chunk`; 0.11-0.18 s now). What is left is
+    about 0.3-0.45 s of CPU more than the pool whatever the number of tasks (500 to 4,000),
+    the scheduler's and the workers' own loops, so the cluster's share falls as the run
+    grows: 1.5 times the pool's CPU at 1,000 tasks, 1.2 at 2,000, 1.1 at 4,000.
+    ``impact-harness bench --executors`` (2,000 tasks, 2 workers, medians of 3, runs under
+    load): Dask / local 0.85, 1.13, 1.15 and 1.00 with a cluster started for the call, each
+    run alternated with one before these changes (1.39, 1.50, 1.57 and 1.33), and 1.24 and
+    0.95 in two runs of the full bench; on a running cluster 0.65-1.05. Hence
+    :data:`DASK_MIN_TASKS`: below it the local executor runs the tasks (``note`` says so). A
+    fresh ``impact-harness run --executor dask`` pays also for importing dask.distributed
+    (0.6 s of CPU), which the local pool never imports.
 
 ``function`` and ``batch`` must be top-level (picklable) functions and each task picklable
 (plain dicts, tuples, numbers, strings, dataclasses of those).
@@ -66,8 +83,9 @@ DASK_INSTALL_HINT = 'pip install -e ".[dask]"'
 #: Seconds to wait for a Dask scheduler before giving up with a one-line error.
 CONNECT_TIMEOUT_S = 10.0
 #: Fewest tasks :func:`run_tasks` sends to Dask; fewer run on the local pool (or inline): a
-#: cluster's start and shut-down (about a second) outweigh what it saves (see the module doc).
-DASK_MIN_TASKS = 1000
+#: started cluster costs about 0.3-0.45 s of CPU more than the pool whatever the number of
+#: tasks, 1.5 times the pool's CPU at 1,000 engine tasks and 1.2 at 2,000 (the module doc).
+DASK_MIN_TASKS = 2000
 
 
 class DaskNotInstalled(ImportError):
@@ -390,6 +408,20 @@ def _quiet_heartbeat_race() -> None:
         worker_log.addFilter(HeartbeatAfterClose())
 
 
+#: Dask settings of a cluster :func:`start_local_cluster` starts: its periodic
+#: bookkeeping, which feeds the dashboard (not started) and costs CPU for every second the
+#: cluster runs, on the two cores its workers compute on. Each worker's event loop sampled
+#: the computing thread's stack every 10 ms (the profiler) and every one of the five servers
+#: (scheduler, two nannies, two workers) measured its loop every 20 ms and read /proc every
+#: 0.5 s (the system monitor): measured on 2,000 engine tasks, each worker's event loop took
+#: 0.3 s of CPU beside 0.75 s of engine runs. The memory monitor (which would stop a worker
+#: running out of memory) is kept, and a loop blocked longer than Dask's limit (3 s) is still
+#: reported.
+QUIET_CLUSTER_CONFIG = {"distributed.worker.profile.enabled": False,
+                        "distributed.admin.tick.interval": "500ms",
+                        "distributed.admin.system-monitor.interval": "5s"}
+
+
 def start_local_cluster(workers: int):
     """A ``LocalCluster`` of ``workers`` single-threaded worker processes on loopback, as
     :func:`run_tasks` starts for a run (the caller closes it)."""
@@ -402,7 +434,8 @@ def start_local_cluster(workers: int):
     # already imported; spawned ones (Dask's default) take ~2 s, then import them again.
     method = "fork" if sys.platform.startswith("linux") else \
         dask.config.get("distributed.worker.multiprocessing-method")
-    with dask.config.set({"distributed.worker.multiprocessing-method": method}):
+    with dask.config.set({"distributed.worker.multiprocessing-method": method,
+                          **QUIET_CLUSTER_CONFIG}):
         # No dashboard; the scheduler's HTTP routes (health, metrics) on a free port rather
         # than 8787, which another cluster may hold (Dask then warns).
         return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
@@ -410,12 +443,54 @@ def start_local_cluster(workers: int):
                             scheduler_kwargs={"dashboard_address": ":0"})
 
 
+class DaskChunk:
+    """One chunk as a Dask task's single argument: the chunk's tasks kept opaque.
+
+    Dask walks every list, tuple and dict argument of a submitted task, to the last number,
+    looking for futures inside (``dask._task_spec.parse_input``): measured on 2,000 engine
+    tasks (32 chunks of scenes and settings), 0.3-0.7 s of the main process before the
+    last chunk was on its way, while the workers it competes with for the two cores ran
+    the first ones. An object of this class is not walked; it pickles as its fields.
+    """
+
+    __slots__ = ("function", "batch", "tasks")
+
+    def __init__(self, function, batch, tasks: list) -> None:
+        self.function, self.batch, self.tasks = function, batch, tasks
+
+    def __reduce__(self):
+        return DaskChunk, (self.function, self.batch, self.tasks)
+
+
+def call_dask_chunk(chunk: DaskChunk) -> bytes:
+    """:func:`call_chunk` of a :class:`DaskChunk` on a Dask worker (one BLAS thread, as the
+    local pool's initializer gives its workers), pickled as Dask would pickle it.
+
+    Pickled here, in the worker's computing thread: a result that is a list of dicts is
+    walked by the worker's event loop to estimate its size (``dask.sizeof``, a recursive
+    sample of every nested list and dict; about a tenth of a second per worker for 2,000
+    engine outputs, on the two cores the workers compute on); the size of bytes is their
+    length. The caller unpickles them (:func:`_unpickle_chunk_result`), as Dask would.
+    """
+    from distributed.protocol.pickle import dumps
+
+    one_blas_thread()
+    return dumps(call_chunk(chunk.function, chunk.batch, chunk.tasks))
+
+
+def _unpickle_chunk_result(blob: bytes) -> tuple[list, tuple[int, Exception] | None]:
+    from distributed.protocol.pickle import loads
+
+    return loads(blob)
+
+
 def _run_dask(function, batch, tasks: Sequence, chunks, workers, deliver, scheduler) -> None:
     Client, _, as_completed = _import_distributed()
     cluster = None
     if scheduler is None:
         cluster = start_local_cluster(workers)
-        client = Client(cluster)
+        # Results straight from the workers, not relayed by the scheduler.
+        client = Client(cluster, direct_to_workers=True)
     else:
         try:
             client = Client(scheduler, timeout=CONNECT_TIMEOUT_S)
@@ -424,14 +499,18 @@ def _run_dask(function, batch, tasks: Sequence, chunks, workers, deliver, schedu
                                   f"{CONNECT_TIMEOUT_S:g} s: {error}") from None
     try:
         if chunks:
-            # One future per chunk; pure=False: every chunk is its own key even when two are
+            # One future per chunk, all in one graph (one message to the scheduler, run in
+            # the chunks' order); pure=False: every chunk is its own key even when two are
             # equal.
-            futures = [client.submit(call_chunk, function, batch, [tasks[i] for i in chunk],
-                                     pure=False) for chunk in chunks]
+            futures = client.map(call_dask_chunk, [
+                DaskChunk(function, batch, [tasks[i] for i in chunk]) for chunk in chunks],
+                pure=False)
             chunk_of = {future.key: chunk for future, chunk in zip(futures, chunks)}
             try:
-                for future in as_completed(futures):
-                    deliver(chunk_of[future.key], *future.result())
+                # with_results: each result is fetched as its chunk finishes, in the
+                # client's event loop, rather than one blocking round trip per chunk.
+                for future, blob in as_completed(futures, with_results=True):
+                    deliver(chunk_of[future.key], *_unpickle_chunk_result(blob))
             except BaseException:
                 client.cancel(futures)
                 raise
@@ -488,8 +567,8 @@ def progress_printer(label: str, every_s: float = 2.0, stream=None) -> Callable[
     return report
 
 
-__all__ = ["CONNECT_TIMEOUT_S", "DASK_MIN_TASKS", "EXECUTORS", "MAX_CHUNK", "DaskNotInstalled",
-           "HeartbeatAfterClose",
-           "call_chunk", "check_arguments", "chunk_size_for", "default_workers", "make_chunks",
-           "map_forked", "one_blas_thread", "progress_printer", "run_tasks",
-           "start_forked", "start_local_cluster", "wait_for_shutdowns"]
+__all__ = ["CONNECT_TIMEOUT_S", "DASK_MIN_TASKS", "EXECUTORS", "MAX_CHUNK", "DaskChunk",
+           "DaskNotInstalled", "HeartbeatAfterClose", "call_chunk", "call_dask_chunk",
+           "check_arguments", "chunk_size_for", "default_workers", "make_chunks", "map_forked",
+           "one_blas_thread", "progress_printer", "run_tasks", "start_forked",
+           "start_local_cluster", "wait_for_shutdowns"]
