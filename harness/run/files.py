@@ -71,7 +71,7 @@ def _replace_atomically(path: Path | str, write, prefix: str | None,
         except FileNotFoundError:  # no directory yet, or removed after the mkdir
             if attempt == 3 or not make_parent:
                 raise
-            os.makedirs(directory or ".", exist_ok=True)
+            os.makedirs(directory or os.curdir, exist_ok=True)
     try:
         try:
             write(descriptor)
@@ -98,4 +98,4 @@ def _create_temporary(directory: str, prefix: str) -> tuple[int, str]:
             return os.open(temporary, _CREATE, 0o600), temporary
         except FileExistsError:
             continue
-    return tempfile.mkstemp(prefix=prefix, suffix=".tmp", dir=directory or None)
+    return tempfile.mkstemp(prefix=prefix, suffix=".tmp", dir=directory or os.curdir)
