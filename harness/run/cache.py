@@ -53,7 +53,7 @@ from pathlib import Path
 from typing import Any
 
 from harness.collector import collector_paused
-from harness.run.files import write_parts_atomically, write_text_atomically
+from harness.run.files import write_bytes_atomically, write_parts_atomically
 from harness.run.records import LINE_SEPARATOR  # an entry's lines as a results file holds them
 
 _HARNESS_DIR = Path(__file__).resolve().parent.parent  # harness/, from harness/run/
@@ -255,10 +255,11 @@ class ResultCache:
         names = self._listing[shard]
         return names is not None and f"{key}{suffix}" not in names
 
-    def _list(self, path: Path) -> None:
-        """Add an entry this cache wrote to its shard's listing, when one is made."""
-        if self._listing is not None and self._listing.get(path.parent.name) is not None:
-            self._listing[path.parent.name].add(path.name)
+    def _list(self, shard: str, name: str) -> None:
+        """Add an entry this cache wrote (file ``name`` in directory ``shard``) to its
+        shard's listing, when one is made."""
+        if self._listing is not None and self._listing.get(shard) is not None:
+            self._listing[shard].add(name)
 
     def key(self, payload: dict) -> str:
         """sha256 hex of the canonical JSON of ``payload`` plus the code version."""
@@ -334,11 +335,14 @@ class ResultCache:
         """
         if not self.enabled:
             return
-        path = self.path(key)
-        text = json.dumps({"key": key, "code_version": self.version, "record": record},
-                          default=_json_default)
-        write_text_atomically(path, text, prefix=f".{key[:8]}-", make_parent=True)
-        self._list(path)
+        # The path as text, the shard made only when missing: a cold run puts thousands of
+        # small entries, whose pathlib objects and mkdir calls cost as much as their writes.
+        path = os.path.join(self.root, key[:2], f"{key}.json")
+        text = _ENTRY_ENCODER.encode({"key": key, "code_version": self.version,
+                                      "record": record})
+        write_bytes_atomically(path, text.encode("utf-8"), prefix=f".{key[:8]}-",
+                               make_parent=True)
+        self._list(key[:2], f"{key}.json")
 
     def lines_path(self, key: str) -> Path:
         return self.root / key[:2] / f"{key}.jsonl"
@@ -434,7 +438,7 @@ class ResultCache:
         write_parts_atomically(self.lines_path(key), (header.encode("utf-8"), b"\n", text,
                                                       *parts),
                                prefix=f".{key[:8]}-", make_parent=True)
-        self._list(self.lines_path(key))
+        self._list(key[:2], f"{key}.jsonl")
 
     def _entries(self):
         """Every entry's path: the keyed entries and the scenario checks' store."""
@@ -548,6 +552,13 @@ def _json_default(value: Any) -> Any:
     if isinstance(value, Path):
         return value.as_posix()
     raise TypeError(f"cache record holds a value that is not JSON-able: {type(value).__name__}")
+
+
+#: The encoder of :meth:`ResultCache.put`'s entries (what ``json.dumps(entry,
+#: default=_json_default)`` writes), made once: ``json.dumps`` with a ``default`` builds a
+#: new encoder per call. No check for cycles (a record is a tree, made by the runner; one
+#: holding a cycle would end in a ``RecursionError`` instead of a ``ValueError``).
+_ENTRY_ENCODER = json.JSONEncoder(default=_json_default, check_circular=False)
 
 
 # --------------------------------------------------------------------------------------------

@@ -83,6 +83,7 @@ import threading
 import time
 from contextlib import nullcontext
 from dataclasses import asdict, dataclass, field, fields
+from functools import lru_cache
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence, TextIO
 
@@ -210,16 +211,23 @@ def _stored_by_worker(task: dict, output: dict) -> dict:
     where = task.get("store")
     if where is None or output["status"].startswith(("skipped", "error")):
         return output
-    from harness.run.cache import ResultCache
-
     root, version, key = where
     try:
-        ResultCache(root, version=version).put(key, output)
+        _worker_cache(root, version).put(key, output)
     except OSError as error:
         output[STORE_FAILED_IN_WORKER] = str(error)
         return output
     output[STORED_BY_WORKER] = True
     return output
+
+
+@lru_cache(maxsize=4)
+def _worker_cache(root, version: str):
+    """The :class:`~harness.run.cache.ResultCache` a worker stores its runs in: one per
+    cache and code version, made at the first task (a put keeps no state in it)."""
+    from harness.run.cache import ResultCache
+
+    return ResultCache(root, version=version)
 
 
 def task_group(task: dict) -> str:
@@ -286,21 +294,25 @@ def _task_output(engine, run, wall_time_s: float) -> dict:
     }
 
 
-def _contact_steps(run) -> list[dict] | None:
-    """The run's per-step contact records as plain lists (None: the engine keeps none).
+def _contact_steps(run) -> list[dict]:
+    """The run's per-step contact records as plain lists.
 
-    An engine whose run has ``contacts`` (the engines' ``ContactStep``: step, points
-    ``(x, y, depth)``, every body's pose ``(x, y, θ)`` after the step, the impulse on body B
-    in the step or None, scene frame) feeds the verdict's second-feature check
-    (:mod:`harness.run.verdicts`) and the contact history (:mod:`harness.run.history`).
+    An engine run keeps, per step with contact (its ``contacts``, the engines'
+    ``ContactStep``): the step, the points ``(x, y, depth)``, every body's pose ``(x, y, θ)``
+    after the step, the impulse on body B in the step or None, scene frame. They feed the
+    verdict's second-feature check (:mod:`harness.run.verdicts`) and the contact history
+    (:mod:`harness.run.history`). Read from the run's raw records (``contact_record``, run
+    frame) moved to the scene frame by the very subtraction ``contacts`` makes, without
+    building its typed steps first.
     """
-    steps = getattr(run, "contacts", None)
-    if steps is None:
-        return None
-    return [{"step": int(s.step), "points": [[float(v) for v in p[:3]] for p in s.points],
-             "bodies": [[float(v) for v in pose] for pose in s.poses],
-             "impulse": None if s.impulse is None else [float(v) for v in s.impulse]}
-            for s in steps]
+    (shift_x, shift_y), raw = run.contact_record
+    return [{"step": int(step),
+             "points": [[float(x - shift_x), float(y - shift_y), float(depth)]
+                        for x, y, depth in points],
+             "bodies": [[float(x - shift_x), float(y - shift_y), float(angle)]
+                        for x, y, angle in poses],
+             "impulse": None if impulse is None else [float(v) for v in impulse]}
+            for step, (points, _normal, impulse, _pressure), poses in raw]
 
 
 def check_engine_output(output, speeds: int) -> str | None:

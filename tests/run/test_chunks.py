@@ -3,6 +3,7 @@ bit for bit, in task order; a task that fails or overruns inside a chunk costs o
 
 from __future__ import annotations
 
+import math
 import time
 
 import pytest
@@ -200,3 +201,40 @@ def test_dask_chunks_of_engine_tasks_equal_the_local_pool_bit_for_bit():
                             **chunked)
     assert [without_times(out) for out in distributed] == [without_times(out) for out in local]
     assert sorted(delivered) == list(range(len(tasks)))
+
+
+# --------------------------------------------------------------------------------------------
+# A task's contact steps, read from the run's raw records, equal its typed view's
+# --------------------------------------------------------------------------------------------
+def typed_view_steps(run) -> list[dict]:
+    """The contact steps as ``EngineRun.contacts`` gives them, made plain."""
+    return [{"step": int(s.step), "points": [[float(v) for v in p] for p in s.points],
+             "bodies": [[float(v) for v in pose] for pose in s.poses],
+             "impulse": None if s.impulse is None else [float(v) for v in s.impulse]}
+            for s in run.contacts]
+
+
+def exact(value):
+    """``value`` with every float spelled in hex and every type named: equal only when
+    bit-identical (``-0.0`` and ``0.0`` differ, a NaN equals itself)."""
+    if isinstance(value, dict):
+        return {key: exact(item) for key, item in value.items()}
+    if isinstance(value, list):
+        return [exact(item) for item in value]
+    if isinstance(value, float):
+        return ("float", "nan" if math.isnan(value) else value.hex())
+    return (type(value).__name__, value)
+
+
+def test_contact_steps_equal_the_typed_view_bit_for_bit():
+    tasks = library_tasks()
+    seen = {"shifted": 0, "impulses": 0, "several points": 0, "several bodies": 0}
+    for task in tasks[::7]:
+        run = load_engine(task["engine"]).run(task["scene"], task["settings"])
+        steps = runner._contact_steps(run)
+        assert exact(steps) == exact(typed_view_steps(run))
+        seen["shifted"] += run.contact_record[0] != (0.0, 0.0) and bool(steps)
+        seen["impulses"] += any(step["impulse"] is not None for step in steps)
+        seen["several points"] += any(len(step["points"]) > 1 for step in steps)
+        seen["several bodies"] += any(len(step["bodies"]) > 1 for step in steps)
+    assert all(seen.values()), seen  # every case met

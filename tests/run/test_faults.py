@@ -203,20 +203,18 @@ def test_deleting_the_cache_between_chunks_the_run_completes(tmp_path, monkeypat
 
 def test_a_shard_removed_between_mkdir_and_the_write_is_made_again(tmp_path, monkeypatch):
     """The race of `rm -rf` during a run: the directory vanishes after put's mkdir."""
-    import tempfile
-
-    real_mkstemp = tempfile.mkstemp
+    real_makedirs = os.makedirs
     removed = []
 
-    def remove_first(*args, **kwargs):
-        if not removed:
-            removed.append(True)
+    def made_then_removed(name, *args, **kwargs):
+        real_makedirs(name, *args, **kwargs)
+        if not removed and os.path.basename(name) == key[:2]:  # the shard, made
+            removed.append(name)
             shutil.rmtree(tmp_path / "cache")
-        return real_mkstemp(*args, **kwargs)
 
     cache = ResultCache(tmp_path / "cache")
     key = cache.key({"n": 1})
-    monkeypatch.setattr(tempfile, "mkstemp", remove_first)
+    monkeypatch.setattr(os, "makedirs", made_then_removed)
     cache.put(key, {"status": "ok"})
     assert removed and cache.get(key) == {"status": "ok"}
 

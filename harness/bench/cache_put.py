@@ -1,0 +1,86 @@
+"""The cost of storing one engine run in the result cache, as a pool worker stores it.
+
+``python -m harness.bench.cache_put [--runs 600] [--repeats 3]`` runs the library's engine
+tasks once (both presets, every installed engine, repeated up to ``--runs``), then, per
+repeat, puts their outputs (:func:`harness.run.runner.engine_task`'s, what
+``_stored_by_worker`` stores) into a fresh cache directory whose shards already exist (as
+after the first few hundred puts of a cold run) and prints the time per put: wall, and the
+process's user and system CPU (the median repeat by user CPU). A cold run of the 1,000-file
+benchmark puts 16,056 of them, on the pool's workers.
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import os
+import tempfile
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+
+def engine_outputs(runs: int) -> list[dict]:
+    """``runs`` outputs of the library's engine tasks (cycled when there are fewer), skipped
+    runs left out."""
+    outputs = list(itertools.islice(_library_outputs(), runs))
+    if not outputs:
+        raise SystemExit("cache_put: no engine is installed")
+    return [outputs[index % len(outputs)] for index in range(runs)]
+
+
+def _library_outputs() -> Iterator[dict]:
+    """The output of each engine task of the library (both presets), run as it is asked for."""
+    from harness.engines import EngineNotInstalled, load_engine
+    from harness.run import runner
+    from harness.scenarios import load_scenarios
+
+    for scenario in load_scenarios(None):
+        for point in scenario.point_list():
+            for name in runner._engines_of(scenario, ("pymunk", "pybullet", "mujoco", "box2d")):
+                try:
+                    engine = load_engine(name)
+                except EngineNotInstalled:
+                    continue
+                for preset in ("defaults", "accurate"):
+                    settings = engine.settings(preset, scenario.engine_settings.get(name, {}))
+                    output = runner.engine_task({"engine": name, "scene": scenario.scene(point),
+                                                 "settings": settings})
+                    if "velocities" in output:
+                        yield output
+
+
+def time_puts(outputs: list[dict], root: Path) -> tuple[float, float, float]:
+    """``(wall, user, system)`` seconds per put of every output into a cache at ``root``."""
+    from harness.run.cache import ResultCache
+
+    cache = ResultCache(root, version="bench")
+    keys = [cache.key({"run": index}) for index in range(len(outputs))]
+    for shard in {key[:2] for key in keys}:
+        (root / shard).mkdir(parents=True, exist_ok=True)
+    before, start = os.times(), time.perf_counter()
+    for key, output in zip(keys, outputs):
+        cache.put(key, output)
+    wall, after = time.perf_counter() - start, os.times()
+    return (wall / len(keys), (after.user - before.user) / len(keys),
+            (after.system - before.system) / len(keys))
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=600, help="engine outputs to put")
+    parser.add_argument("--repeats", type=int, default=3)
+    args = parser.parse_args(argv)
+    outputs = engine_outputs(args.runs)
+    with tempfile.TemporaryDirectory(prefix="cache-put-") as directory:
+        timings = sorted((time_puts(outputs, Path(directory) / f"cache{repeat}")
+                          for repeat in range(args.repeats)), key=lambda timing: timing[1])
+    wall, user, system = timings[len(timings) // 2]
+    print(f"cache put of {len(outputs)} engine runs: {wall * 1e6:.0f} us wall, "
+          f"{user * 1e6:.0f} us user CPU, {system * 1e6:.0f} us system CPU per put "
+          f"(median of {args.repeats})")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
