@@ -47,6 +47,7 @@ import dataclasses
 import fnmatch
 import gc
 import json
+import multiprocessing
 import os
 import sys
 import time
@@ -101,7 +102,8 @@ class FigureTask:
     ``tag``; deterministic, so that any worker draws the same file.
 
     ``slot`` says where the file goes in the report's ``figures`` mapping: ``(key,)`` or
-    ``(key, scenario)``; ``svg`` whether its SVG twin is written.
+    ``(key, scenario)``; ``svg`` whether its SVG twin is written; ``reads_records``
+    whether ``draw`` reads the records (a figure of Table 3 or the key reads none).
     """
 
     kind: str
@@ -110,6 +112,7 @@ class FigureTask:
     draw: Callable[[Path, str], Path | None]
     slot: tuple
     svg: bool = True
+    reads_records: bool = True
 
 
 def scenario_group(info: dict) -> str:
@@ -165,7 +168,8 @@ def write_report(results: Results, out_dir: Path | str,
     # The figures are drawn by forked workers while this process builds the page, which
     # needs only their names: it assumes that every figure to be drawn has something to
     # show, and is built again in the rare case one had not.
-    expected, finish_drawing = start_drawing(tasks, figure_dir, workers)
+    expected, finish_drawing = start_drawing(tasks, figure_dir, workers,
+                                             read_records=lambda: read_records(results))
     try:
         prepared = prepare(results, out_dir, digests, cache)
         groups = scenario_groups(results, names) if many else {}
@@ -188,6 +192,22 @@ def write_report(results: Results, out_dir: Path | str,
     known.save()
     return {"html": html_path, "summary": summary,
             "figures": sorted(figure_dir / f for f in wanted if f.endswith(".png"))}
+
+
+def read_records(results: Results) -> None:
+    """Read the records of ``results`` now if they were not (:class:`~harness.report.
+    reading.LazyResults`), and keep them out of the collector's sight when the caller keeps
+    its results so (:func:`main`: ``gc.freeze``).
+
+    Called before the workers that draw from the records are forked: they inherit them,
+    where each read them again otherwise (a second of CPU each at 1,000 scenarios, and as
+    much again in collections walking them); the page reads them anyway.
+    """
+    if getattr(results, "loaded", True):
+        return
+    results.full()
+    if gc.get_freeze_count():  # what main read is frozen: these join it (and are not copied
+        gc.freeze()            # into a forked worker by a collection touching them)
 
 
 def figure_map(tasks: Sequence[FigureTask], drawn: Sequence[Path | None], many: bool,
@@ -226,7 +246,7 @@ def figure_tasks(results: Results, many: bool, scenario_figures: str,
     records_digest = {name: digests.get(name, "") for name in names}
     tasks = [FigureTask("legend", "impulse-legend.png", engines,
                         lambda path, tag: impulse_legend_figure(path, tag, engines),
-                        ("legend",), headline_svg)]
+                        ("legend",), headline_svg, reads_records=False)]
     groups = scenario_groups(results, names) if many else None
     # above MANY_SCENARIOS one row per family (the scenarios' rows are HTML tables instead)
     tasks.append(FigureTask("heatmap", "heatmap.png", [groups, records_digest],
@@ -259,7 +279,7 @@ def figure_tasks(results: Results, many: bool, scenario_figures: str,
                 history_figure(name, records, path, tag), ("history", name), scenario_svg))
     tasks.append(FigureTask("table3", "paper-table3.png", table3_inputs(),
                             lambda path, tag: table3_figure(path, tag), ("table3",),
-                            headline_svg))
+                            headline_svg, reads_records=False))
     return tasks
 
 
@@ -306,7 +326,8 @@ def draw_figures(tasks: Sequence[FigureTask], figure_dir: Path,
     return start_drawing(tasks, figure_dir, workers)[1]()
 
 
-def start_drawing(tasks: Sequence[FigureTask], figure_dir: Path, workers: int | None = None
+def start_drawing(tasks: Sequence[FigureTask], figure_dir: Path, workers: int | None = None,
+                  read_records: Callable[[], None] | None = None
                   ) -> tuple[list[Path], Callable[[], list[Path | None]]]:
     """:func:`draw_figures` started: the pool's workers draw while this process goes on.
 
@@ -314,6 +335,11 @@ def start_drawing(tasks: Sequence[FigureTask], figure_dir: Path, workers: int | 
     and the function that waits for the drawing and returns what :func:`draw_figures` does
     (with one worker, it draws then). The workers are forked here: what they read (the
     tasks, the results) is as it is now.
+
+    ``read_records`` (:func:`read_records`), when given, reads the records here before the
+    workers drawing from them are forked, so that they inherit them instead of each reading
+    them; the figures that read none (:attr:`FigureTask.reads_records`) are forked first,
+    in a pool of their own, and drawn meanwhile.
     """
     global _PENDING
     expected: list[Path] = []
@@ -337,16 +363,42 @@ def start_drawing(tasks: Sequence[FigureTask], figure_dir: Path, workers: int | 
         import matplotlib
 
         matplotlib.use("Agg")
-    stale.sort(key=lambda item: -KIND_COST.get(item[1][0].kind, 1.0))
+    # Those that read no record first: forked before the records are read (below).
+    stale.sort(key=lambda item: (item[1][0].reads_records,
+                                 -KIND_COST.get(item[1][0].kind, 1.0)))
     _PENDING = [item for _, item in stale]
     from harness.run.executor import start_forked
 
-    drawing = start_forked(_draw_pending, range(len(_PENDING)), workers)
+    reading = [i for i, (task, _, _) in enumerate(_PENDING) if task.reads_records]
+    stages = []  # (pending indexes, the function waiting for their drawing)
+    if read_records is not None and reading and workers > 1 and "fork" in (
+            multiprocessing.get_all_start_methods()):
+        first = range(reading[0])  # read no record
+        if len(first):
+            stages.append((first, _start_pool(first, min(len(first), max(1, workers // 2)))))
+        try:
+            read_records()
+        except BaseException:
+            _wait_quietly(stages)  # the first pool ends either way
+            _PENDING = []
+            raise
+        stages.append((reading, _start_pool(reading, min(len(reading), workers))))
+    else:
+        stages.append((range(len(_PENDING)),
+                       start_forked(_draw_pending, range(len(_PENDING)), workers)))
 
     def finish() -> list[Path | None]:
         global _PENDING
+        drawn: list[str | None] = [None] * len(_PENDING)
         try:
-            drawn = drawing()
+            for number, (indexes, drawing) in enumerate(stages):
+                try:
+                    files = drawing()
+                except BaseException:
+                    _wait_quietly(stages[number + 1:])  # every pool ends either way
+                    raise
+                for index, file in zip(indexes, files):
+                    drawn[index] = file
         finally:
             _PENDING = []
         for (index, _), file in zip(stale, drawn):
@@ -354,6 +406,37 @@ def start_drawing(tasks: Sequence[FigureTask], figure_dir: Path, workers: int | 
         return result
 
     return expected, finish
+
+
+def _start_pool(indexes: Sequence[int], workers: int) -> Callable[[], list]:
+    """``_draw_pending`` of ``indexes`` started in a pool of ``workers`` forked processes,
+    even for one figure (``start_forked`` draws a lone one here, when waited for: this
+    process has the page to build meanwhile); returns the function that waits for them."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    from harness.run.executor import one_blas_thread
+
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("fork"),
+                               initializer=one_blas_thread)
+    futures = [pool.submit(_draw_pending, index) for index in indexes]
+
+    def results() -> list:
+        try:
+            return [future.result() for future in futures]
+        finally:
+            pool.shutdown(cancel_futures=True)
+
+    return results
+
+
+def _wait_quietly(stages) -> None:
+    """Wait for the pools of ``stages`` (``(indexes, wait)`` of :func:`start_drawing`) to end,
+    their errors set aside for the one being raised."""
+    for _, drawing in stages:
+        try:
+            drawing()
+        except Exception:  # noqa: BLE001, S112 - the error being raised is the one reported
+            continue
 
 
 #: The figures a report wrote into its directory; only these may be removed by a later report.

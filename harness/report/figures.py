@@ -83,7 +83,7 @@ def lay_out(figure, dpi: float) -> None:
     try:
         engine.execute(figure)
     finally:
-        figure.dpi = resolution  # an SVG embeds its images at the figure's own resolution
+        figure.dpi = resolution  # the figure as it was (as savefig leaves it)
     figure.set_layout_engine("none")
 
 
