@@ -18,8 +18,8 @@ map has a row per family (median / max over its scenarios), each scenario's depa
 a coloured HTML table folded under its family, the scenario sections are folded per family,
 and the per-scenario figures are drawn only on demand (``--figures-for PATTERN``,
 ``--scenario-figures all``): at 1,000 scenarios they were ~1,000 of the ~1,003 figures and
-nearly all of a 260 s cold report. Only the headline figures (heat map, law vs solve, key,
-Table 3) get SVG twins then (``--svg headline``; ``--svg all`` for every one): an SVG costs
+nearly all of a 260 s cold report (the key of the impulse diagrams is drawn only with one
+of them). Only the headline figures (heat map, law vs solve, key, Table 3) get SVG twins then (``--svg headline``; ``--svg all`` for every one): an SVG costs
 about as much again as its PNG and is wanted for a paper's few figures, not for a thousand
 diagrams (the split figure's thousands of markers are an image in its SVG, its axes and
 text vector). Every image loads lazily. Figures are drawn in a pool of forked processes
@@ -244,9 +244,7 @@ def figure_tasks(results: Results, many: bool, scenario_figures: str,
     scenario_svg = svg == "all"
     digests = scenario_digests(results) if digests is None else digests
     records_digest = {name: digests.get(name, "") for name in names}
-    tasks = [FigureTask("legend", "impulse-legend.png", engines,
-                        lambda path, tag: impulse_legend_figure(path, tag, engines),
-                        ("legend",), headline_svg, reads_records=False)]
+    tasks = []
     groups = scenario_groups(results, names) if many else None
     # above MANY_SCENARIOS one row per family (the scenarios' rows are HTML tables instead)
     tasks.append(FigureTask("heatmap", "heatmap.png", [groups, records_digest],
@@ -277,6 +275,10 @@ def figure_tasks(results: Results, many: bool, scenario_figures: str,
                 "history", f"history-{slug(name)}.png", history_inputs(name, records_digest[name]),
                 lambda path, tag, name=name, records=records:
                 history_figure(name, records, path, tag), ("history", name), scenario_svg))
+    if any(task.kind == "impulse" for task in tasks):  # the key of these diagrams, once
+        tasks.insert(0, FigureTask("legend", "impulse-legend.png", engines,
+                                   lambda path, tag: impulse_legend_figure(path, tag, engines),
+                                   ("legend",), headline_svg, reads_records=False))
     tasks.append(FigureTask("table3", "paper-table3.png", table3_inputs(),
                             lambda path, tag: table3_figure(path, tag), ("table3",),
                             headline_svg, reads_records=False))
