@@ -14,18 +14,19 @@ a scenario except the impulse paths of Routh's graph, which ``planar_impact.impu
 walks from the contact-space numbers stored in the results.
 
 At scale (more than :data:`MANY_SCENARIOS` scenarios) the page aggregates: the headline heat
-map has a row per family (median / max over its scenarios), each scenario's departures are
-a coloured HTML table folded under its family, the scenario sections are folded per family,
+map has a row per family (median / max over its scenarios), each scenario's departures are a
+coloured HTML table folded under its family, the scenario sections are folded per family,
 and the per-scenario figures are drawn only on demand (``--figures-for PATTERN``,
 ``--scenario-figures all``): at 1,000 scenarios they were ~1,000 of the ~1,003 figures and
-nearly all of a 260 s cold report (the key of the impulse diagrams is drawn only with one
-of them). Only the headline figures (heat map, law vs solve, key, Table 3) get SVG twins then (``--svg headline``; ``--svg all`` for every one): an SVG costs
-about as much again as its PNG and is wanted for a paper's few figures, not for a thousand
-diagrams (the split figure's thousands of markers are an image in its SVG, its axes and
-text vector). Every image loads lazily. Figures are drawn in a pool of forked processes
-(``--workers``) while this process builds the page; each figure's PNG carries the digest
-of its inputs, so a warm report draws nothing. Likewise each scenario's HTML section and
-headline cells are kept in ``<out>/.report-fragments.json`` under the digest of its records
+nearly all of a 260 s cold report (the key of the impulse diagrams is drawn only with one of
+them). Only the headline figures (heat map, law vs solve, key, Table 3) get SVG twins then
+(``--svg headline``; ``--svg all`` for every one): an SVG costs about as much again as its
+PNG and is wanted for a paper's few figures, not for a thousand diagrams (the split figure's
+thousands of markers are an image in its SVG, its axes and text vector). Every image loads
+lazily. Figures are drawn in a pool of forked processes (``--workers``) while this process
+builds the page; each figure's PNG carries the digest of its inputs, so a warm report draws
+nothing. Likewise each scenario's HTML section and headline cells are kept in
+``<out>/.report-fragments.json`` under the digest of its records
 (:mod:`harness.report.fragments`): a warm report formats only what changed, and reads the
 records themselves only when something is to be formatted (:mod:`harness.report.reading`:
 what it needs of them otherwise -- their digests, order, engines -- comes from the lines of
@@ -205,9 +206,20 @@ def read_records(results: Results) -> None:
     """
     if getattr(results, "loaded", True):
         return
-    results.full()
-    if gc.get_freeze_count():  # what main read is frozen: these join it (and are not copied
-        gc.freeze()            # into a forked worker by a collection touching them)
+    if not gc.get_freeze_count():
+        results.full()
+        return
+    # What main read is frozen: these join it, frozen before the collector is on again (else
+    # its next collection walks every container just made, and a forked worker's
+    # collections copy the pages they touch).
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        results.full()
+    finally:
+        gc.freeze()
+        if enabled:
+            gc.enable()
 
 
 def figure_map(tasks: Sequence[FigureTask], drawn: Sequence[Path | None], many: bool,

@@ -138,3 +138,20 @@ def test_a_failed_reading_ends_the_pool_already_drawing_and_is_raised(tmp_path):
         report.start_drawing(tasks, tmp_path, workers=2, read_records=read_records)
     assert not report._PENDING  # the pool that drew the key has ended: its figure is whole
     assert (tmp_path / "no-records.png").is_file()
+
+
+def test_records_read_for_a_frozen_caller_are_frozen_with_what_it_read(lazy_results):
+    import gc
+
+    assert gc.get_freeze_count() == 0  # pytest freezes nothing: the library's use
+    report.read_records(lazy_results)
+    assert lazy_results.loaded and gc.get_freeze_count() == 0
+    lazy_results._results = None  # read again, for a frozen caller
+    try:
+        gc.freeze()  # as main does after reading the lines
+        frozen = gc.get_freeze_count()
+        report.read_records(lazy_results)
+        assert lazy_results.loaded and gc.get_freeze_count() > frozen
+        assert gc.isenabled()
+    finally:
+        gc.unfreeze()
