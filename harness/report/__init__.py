@@ -14,18 +14,19 @@ a scenario except the impulse paths of Routh's graph, which ``planar_impact.impu
 walks from the contact-space numbers stored in the results.
 
 At scale (more than :data:`MANY_SCENARIOS` scenarios) the page aggregates: the headline heat
-map has a row per family (median / max over its scenarios), each scenario's departures are
-a coloured HTML table folded under its family, the scenario sections are folded per family,
+map has a row per family (median / max over its scenarios), each scenario's departures are a
+coloured HTML table folded under its family, the scenario sections are folded per family,
 and the per-scenario figures are drawn only on demand (``--figures-for PATTERN``,
 ``--scenario-figures all``): at 1,000 scenarios they were ~1,000 of the ~1,003 figures and
-nearly all of a 260 s cold report. Only the headline figures (heat map, law vs solve, key,
-Table 3) get SVG twins then (``--svg headline``; ``--svg all`` for every one): an SVG costs
-about as much again as its PNG and is wanted for a paper's few figures, not for a thousand
-diagrams (the split figure's thousands of markers are an image in its SVG, its axes and
-text vector). Every image loads lazily. Figures are drawn in a pool of forked processes
-(``--workers``) while this process builds the page; each figure's PNG carries the digest
-of its inputs, so a warm report draws nothing. Likewise each scenario's HTML section and
-headline cells are kept in ``<out>/.report-fragments.json`` under the digest of its records
+nearly all of a 260 s cold report (the key of the impulse diagrams is drawn only with one of
+them). Only the headline figures (heat map, law vs solve, key, Table 3) get SVG twins then
+(``--svg headline``; ``--svg all`` for every one): an SVG costs about as much again as its
+PNG and is wanted for a paper's few figures, not for a thousand diagrams (the split figure's
+thousands of markers are an image in its SVG, its axes and text vector). Every image loads
+lazily. Figures are drawn in a pool of forked processes (``--workers``) while this process
+builds the page; each figure's PNG carries the digest of its inputs, so a warm report draws
+nothing. Likewise each scenario's HTML section and headline cells are kept in
+``<out>/.report-fragments.json`` under the digest of its records
 (:mod:`harness.report.fragments`): a warm report formats only what changed, and reads the
 records themselves only when something is to be formatted (:mod:`harness.report.reading`:
 what it needs of them otherwise -- their digests, order, engines -- comes from the lines of
@@ -47,6 +48,7 @@ import dataclasses
 import fnmatch
 import gc
 import json
+import multiprocessing
 import os
 import sys
 import time
@@ -101,7 +103,8 @@ class FigureTask:
     ``tag``; deterministic, so that any worker draws the same file.
 
     ``slot`` says where the file goes in the report's ``figures`` mapping: ``(key,)`` or
-    ``(key, scenario)``; ``svg`` whether its SVG twin is written.
+    ``(key, scenario)``; ``svg`` whether its SVG twin is written; ``reads_records``
+    whether ``draw`` reads the records (a figure of Table 3 or the key reads none).
     """
 
     kind: str
@@ -110,6 +113,7 @@ class FigureTask:
     draw: Callable[[Path, str], Path | None]
     slot: tuple
     svg: bool = True
+    reads_records: bool = True
 
 
 def scenario_group(info: dict) -> str:
@@ -165,7 +169,8 @@ def write_report(results: Results, out_dir: Path | str,
     # The figures are drawn by forked workers while this process builds the page, which
     # needs only their names: it assumes that every figure to be drawn has something to
     # show, and is built again in the rare case one had not.
-    expected, finish_drawing = start_drawing(tasks, figure_dir, workers)
+    expected, finish_drawing = start_drawing(tasks, figure_dir, workers,
+                                             read_records=lambda: read_records(results))
     try:
         prepared = prepare(results, out_dir, digests, cache)
         groups = scenario_groups(results, names) if many else {}
@@ -188,6 +193,33 @@ def write_report(results: Results, out_dir: Path | str,
     known.save()
     return {"html": html_path, "summary": summary,
             "figures": sorted(figure_dir / f for f in wanted if f.endswith(".png"))}
+
+
+def read_records(results: Results) -> None:
+    """Read the records of ``results`` now if they were not (:class:`~harness.report.
+    reading.LazyResults`), and keep them out of the collector's sight when the caller keeps
+    its results so (:func:`main`: ``gc.freeze``).
+
+    Called before the workers that draw from the records are forked: they inherit them,
+    where each read them again otherwise (a second of CPU each at 1,000 scenarios, and as
+    much again in collections walking them); the page reads them anyway.
+    """
+    if getattr(results, "loaded", True):
+        return
+    if not gc.get_freeze_count():
+        results.full()
+        return
+    # What main read is frozen: these join it, frozen before the collector is on again (else
+    # its next collection walks every container just made, and a forked worker's
+    # collections copy the pages they touch).
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        results.full()
+    finally:
+        gc.freeze()
+        if enabled:
+            gc.enable()
 
 
 def figure_map(tasks: Sequence[FigureTask], drawn: Sequence[Path | None], many: bool,
@@ -224,9 +256,7 @@ def figure_tasks(results: Results, many: bool, scenario_figures: str,
     scenario_svg = svg == "all"
     digests = scenario_digests(results) if digests is None else digests
     records_digest = {name: digests.get(name, "") for name in names}
-    tasks = [FigureTask("legend", "impulse-legend.png", engines,
-                        lambda path, tag: impulse_legend_figure(path, tag, engines),
-                        ("legend",), headline_svg)]
+    tasks = []
     groups = scenario_groups(results, names) if many else None
     # above MANY_SCENARIOS one row per family (the scenarios' rows are HTML tables instead)
     tasks.append(FigureTask("heatmap", "heatmap.png", [groups, records_digest],
@@ -257,9 +287,13 @@ def figure_tasks(results: Results, many: bool, scenario_figures: str,
                 "history", f"history-{slug(name)}.png", history_inputs(name, records_digest[name]),
                 lambda path, tag, name=name, records=records:
                 history_figure(name, records, path, tag), ("history", name), scenario_svg))
+    if any(task.kind == "impulse" for task in tasks):  # the key of these diagrams, once
+        tasks.insert(0, FigureTask("legend", "impulse-legend.png", engines,
+                                   lambda path, tag: impulse_legend_figure(path, tag, engines),
+                                   ("legend",), headline_svg, reads_records=False))
     tasks.append(FigureTask("table3", "paper-table3.png", table3_inputs(),
                             lambda path, tag: table3_figure(path, tag), ("table3",),
-                            headline_svg))
+                            headline_svg, reads_records=False))
     return tasks
 
 
@@ -306,7 +340,8 @@ def draw_figures(tasks: Sequence[FigureTask], figure_dir: Path,
     return start_drawing(tasks, figure_dir, workers)[1]()
 
 
-def start_drawing(tasks: Sequence[FigureTask], figure_dir: Path, workers: int | None = None
+def start_drawing(tasks: Sequence[FigureTask], figure_dir: Path, workers: int | None = None,
+                  read_records: Callable[[], None] | None = None
                   ) -> tuple[list[Path], Callable[[], list[Path | None]]]:
     """:func:`draw_figures` started: the pool's workers draw while this process goes on.
 
@@ -314,6 +349,11 @@ def start_drawing(tasks: Sequence[FigureTask], figure_dir: Path, workers: int | 
     and the function that waits for the drawing and returns what :func:`draw_figures` does
     (with one worker, it draws then). The workers are forked here: what they read (the
     tasks, the results) is as it is now.
+
+    ``read_records`` (:func:`read_records`), when given, reads the records here before the
+    workers drawing from them are forked, so that they inherit them instead of each reading
+    them; the figures that read none (:attr:`FigureTask.reads_records`) are forked first,
+    in a pool of their own, and drawn meanwhile.
     """
     global _PENDING
     expected: list[Path] = []
@@ -337,16 +377,42 @@ def start_drawing(tasks: Sequence[FigureTask], figure_dir: Path, workers: int | 
         import matplotlib
 
         matplotlib.use("Agg")
-    stale.sort(key=lambda item: -KIND_COST.get(item[1][0].kind, 1.0))
+    # Those that read no record first: forked before the records are read (below).
+    stale.sort(key=lambda item: (item[1][0].reads_records,
+                                 -KIND_COST.get(item[1][0].kind, 1.0)))
     _PENDING = [item for _, item in stale]
     from harness.run.executor import start_forked
 
-    drawing = start_forked(_draw_pending, range(len(_PENDING)), workers)
+    reading = [i for i, (task, _, _) in enumerate(_PENDING) if task.reads_records]
+    stages = []  # (pending indexes, the function waiting for their drawing)
+    if read_records is not None and reading and workers > 1 and "fork" in (
+            multiprocessing.get_all_start_methods()):
+        first = range(reading[0])  # read no record
+        if len(first):
+            stages.append((first, _start_pool(first, min(len(first), max(1, workers // 2)))))
+        try:
+            read_records()
+        except BaseException:
+            _wait_quietly(stages)  # the first pool ends either way
+            _PENDING = []
+            raise
+        stages.append((reading, _start_pool(reading, min(len(reading), workers))))
+    else:
+        stages.append((range(len(_PENDING)),
+                       start_forked(_draw_pending, range(len(_PENDING)), workers)))
 
     def finish() -> list[Path | None]:
         global _PENDING
+        drawn: list[str | None] = [None] * len(_PENDING)
         try:
-            drawn = drawing()
+            for number, (indexes, drawing) in enumerate(stages):
+                try:
+                    files = drawing()
+                except BaseException:
+                    _wait_quietly(stages[number + 1:])  # every pool ends either way
+                    raise
+                for index, file in zip(indexes, files):
+                    drawn[index] = file
         finally:
             _PENDING = []
         for (index, _), file in zip(stale, drawn):
@@ -354,6 +420,37 @@ def start_drawing(tasks: Sequence[FigureTask], figure_dir: Path, workers: int | 
         return result
 
     return expected, finish
+
+
+def _start_pool(indexes: Sequence[int], workers: int) -> Callable[[], list]:
+    """``_draw_pending`` of ``indexes`` started in a pool of ``workers`` forked processes,
+    even for one figure (``start_forked`` draws a lone one here, when waited for: this
+    process has the page to build meanwhile); returns the function that waits for them."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    from harness.run.executor import one_blas_thread
+
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("fork"),
+                               initializer=one_blas_thread)
+    futures = [pool.submit(_draw_pending, index) for index in indexes]
+
+    def results() -> list:
+        try:
+            return [future.result() for future in futures]
+        finally:
+            pool.shutdown(cancel_futures=True)
+
+    return results
+
+
+def _wait_quietly(stages) -> None:
+    """Wait for the pools of ``stages`` (``(indexes, wait)`` of :func:`start_drawing`) to end,
+    their errors set aside for the one being raised."""
+    for _, drawing in stages:
+        try:
+            drawing()
+        except Exception:  # noqa: BLE001, S112 - the error being raised is the one reported
+            continue
 
 
 #: The figures a report wrote into its directory; only these may be removed by a later report.

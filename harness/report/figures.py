@@ -57,19 +57,43 @@ def save_png(figure, path: Path, dpi: int = 100, tag: str | None = None) -> Path
     """Save a PNG and, beside it unless :data:`SVG_TWIN` says not, the same figure as SVG
     (for a paper); ``tag`` (the digest of the figure's inputs) goes into the PNG's
     metadata."""
+    lay_out(figure, dpi)
     figure.savefig(path, dpi=dpi, metadata={TAG_KEY: tag} if tag else None)
     if SVG_TWIN.get():
         save_svg_twin(figure, path)
     return path
 
 
+def lay_out(figure, dpi: float) -> None:
+    """Lay ``figure`` out once, as ``savefig`` at ``dpi`` would, and set its layout engine
+    aside, so that the PNG and its SVG twin are drawn with this layout.
+
+    ``savefig`` of a figure with a layout engine draws it twice: once, with the drawing
+    itself switched off, to lay it out (every text measured and every tick made again after
+    the layout moved the axes), then for real. The layout engine run here, at the PNG's
+    resolution (the text extents it measures depend on it), finds the same positions
+    without that first drawing, a fifth of a headline figure's time; the pixels are the
+    same (tests/report/test_figure_digests.py).
+    """
+    engine = figure.get_layout_engine()
+    if engine is None or not figure.axes:  # Figure.draw lays out only a figure with axes
+        return
+    resolution = figure.dpi
+    figure.dpi = dpi  # as savefig sets it while it saves
+    try:
+        engine.execute(figure)
+    finally:
+        figure.dpi = resolution  # the figure as it was (as savefig leaves it)
+    figure.set_layout_engine("none")
+
+
 def save_svg_twin(figure, path: Path) -> Path:
     """The SVG beside the PNG ``path`` just saved from ``figure``, laid out as the PNG was.
 
-    The constrained layout found for the PNG is kept (its engine set aside): laying the
-    figure out again for the SVG was a third of the dearest figure's time (the heat map's
-    ~100 texts measured again, at 1,000 scenarios), and moves nothing by more than the
-    difference in text extents between the two resolutions (< 0.5 pt).
+    The constrained layout found for the PNG is kept (:func:`lay_out` set its engine
+    aside): laying the figure out again for the SVG was a third of the dearest figure's
+    time (the heat map's ~100 texts measured again, at 1,000 scenarios), and moves nothing
+    by more than the difference in text extents between the two resolutions (< 0.5 pt).
     """
     figure.set_layout_engine("none")
     svg = path.with_suffix(".svg")

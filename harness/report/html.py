@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import math
@@ -75,6 +76,13 @@ span.heat{display:block;margin:-2px -6px;padding:2px 6px}
 def header_cell(text: str) -> str:
     """A header with its unit (``"v_x [m/s]"``) on a second line, and a long body name
     (``"dumbbell.v_x"``) broken after its dot, to keep columns narrow."""
+    return _header_cell(text) if isinstance(text, str) else _header_cell.__wrapped__(text)
+
+
+@functools.lru_cache(maxsize=1024)
+def _header_cell(text) -> str:
+    """:func:`header_cell`, each header formatted once (a page of 1,000 scenarios has 2,400
+    velocity tables of a dozen headers, nearly all alike)."""
     name, bracket, unit = str(text).partition(" [")
     body, dot, speed = name.rpartition(".")
     head = (escape_html(body + dot) + "<br>" + escape_html(speed) if dot and len(name) > 8
@@ -90,10 +98,10 @@ def html_table(header: Sequence[str], rows: Sequence[Sequence], left: int = 1,
     The first ``left`` columns are left-aligned; ``column_classes`` (one per column, "" for
     none) overrides a column's class (e.g. ``"note"`` for wrapped text).
     """
-    def cell(i: int, content) -> str:
+    def cell_open(i: int) -> str:  # a column's opening tag, made once per table
         cls = column_classes[i] if column_classes and column_classes[i] else (
             "l" if i < left else "")
-        return f'<td class="{cls}">{content}</td>' if cls else f"<td>{content}</td>"
+        return f'<td class="{cls}">' if cls else "<td>"
 
     def head(i: int, text) -> str:
         cls = column_classes[i] if column_classes and column_classes[i] in (
@@ -103,10 +111,12 @@ def html_table(header: Sequence[str], rows: Sequence[Sequence], left: int = 1,
 
     out = ['<div class="scroll"><table><tr>' + "".join(head(i, h) for i, h in enumerate(header))
            + "</tr>"]
+    rows = [row if isinstance(row, list | tuple) else list(row) for row in rows]
+    opens = [cell_open(i) for i in range(max(map(len, rows), default=0))]
     for k, row in enumerate(rows):
         cls = f' class="{row_classes[k]}"' if row_classes and row_classes[k] else ""
-        out.append(f"<tr{cls}>" + "".join(cell(i, content) for i, content in enumerate(row))
-                   + "</tr>")
+        out.append(f"<tr{cls}>" + "".join([f"{start}{content}</td>"
+                                           for start, content in zip(opens, row)]) + "</tr>")
     out.append("</table></div>")
     return "\n".join(out)
 

@@ -77,6 +77,22 @@ def aggregated(small_results, tmp_path, monkeypatch):
     return small_results, tmp_path, written
 
 
+def test_the_key_of_the_impulse_diagrams_is_drawn_only_with_one(small_results):
+    def kinds(**options):
+        arguments = {"many": True, "scenario_figures": "none", "figures_for": (),
+                     "svg": "headline", **options}
+        return [task.kind for task in report.figure_tasks(small_results, **arguments)]
+
+    names = small_results.scenario_names()
+    sweeps = [n for n in names if small_results.scenarios.get(n, {}).get("sweep")]
+    single = [n for n in names if n not in sweeps]
+    assert sweeps and single
+    assert "legend" not in kinds() and "impulse" not in kinds()  # many: no diagram
+    assert "legend" not in kinds(figures_for=sweeps)  # a sweep's figure has its own key
+    assert kinds(figures_for=single[:1]).count("legend") == 1
+    assert kinds(many=False, scenario_figures="all").count("legend") == 1
+
+
 def test_families_skip_selection_tags():
     assert report.scenario_group({"tags": ["quick", "rod", "spin"]}) == "rod"
     assert report.scenario_group({"tags": ["sweep"]}) == "untagged"
