@@ -27,7 +27,7 @@ How the speeds after step k follow
     one by about half the step's change (the force fades to 0 at separation, so the last step
     agrees). The pose before the first contact step is free flight from the scene's touching
     pose (the run starts ``start_offset_steps`` steps before it). The impulses then follow
-    from the speeds by (A22)/(A23) (:func:`harness.run.metrics.impulses_from_velocities`).
+    from the speeds by (A22)/(A23) (:func:`harness.run.metrics.impulse_series`).
 
 How far to trust it
     ``end_mismatch`` is ``‖u_K − u_end‖_M`` over the frame-free speed scale
@@ -96,7 +96,7 @@ def contact_history(problem, output: Mapping, scene, time_step: float) -> dict |
         speeds = _from_poses(steps, scene, float(output["start_offset_steps"]), time_step)
         if speeds is None:
             return None
-        impulses = [metrics.impulses_from_velocities(problem, u)[:2] for u in speeds]
+        impulses = metrics.impulse_series(problem, speeds)
     else:
         return None
     first = int(steps[0]["step"])

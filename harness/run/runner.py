@@ -1015,7 +1015,7 @@ def _store_scenario(cache, key: str | None, engine_entries: Sequence, records: S
         return
     stored_datas = [data if record.source == ANALYTIC or record.cached
                     else {**data, "cached": True} for record, data in zip(records, datas)]
-    stored_lines = [line if stored is data else record_line(stored)
+    stored_lines = [line if stored is data else _cached_line(line, stored)
                     for data, stored, line in zip(datas, stored_datas, lines)]
     if stored_lines != lines:
         block = RecordBlock.of_lines(stored_lines, stored_datas)
@@ -1026,6 +1026,20 @@ def _store_scenario(cache, key: str | None, engine_entries: Sequence, records: S
                         (block.pickled_datas, block.pickled_lines))
     except OSError:  # the run goes on without the cache (the engine runs' store warns)
         pass
+
+
+#: A not-cached record's line, from its field ``cached`` on (:class:`Record`'s field order).
+_NOT_CACHED = ',"cached":false'
+
+
+def _cached_line(line: str, stored: dict) -> str:
+    """:func:`record_line` of ``stored``, the record of ``line`` with ``cached`` true, by
+    editing the line: no quote outside a string precedes ``"cached"`` but the keys of
+    ``point`` and ``departure`` (none named so), so its first match is the field itself."""
+    at = line.find(f'{_NOT_CACHED},"diagnostics":')
+    if at < 0:  # not a line of this layout: spelled in full
+        return record_line(stored)
+    return f'{line[:at]},"cached":true{line[at + len(_NOT_CACHED):]}'
 
 
 def _point_records_or_errors(scenario: Scenario, point, engine_entries: Sequence, *,
