@@ -1157,9 +1157,12 @@ def point_records(scenario: Scenario, point, engine_entries: Sequence, *,
     declared = verdicts.declared_contacts(scenario, scene)  # a flat face: judged against all
     if declared is not None:  # a gain is the law's when the Newton–Coulomb reference gains
         lcp_gain = reference.get("energy_change", {}).get(reference.get("primary"))
+    # What judging any run of the point's scene needs: worked out once, not once per run.
+    terms = verdicts.prepare(scene, problem) if declared is None else None
     engine_records = [
         engine_record(scenario, point_info, engine_name, preset, item, problem, law_speeds,
-                      scene=scene, law_energy_change=lcp_gain, contacts=declared)
+                      scene=scene, law_energy_change=lcp_gain, contacts=declared,
+                      terms=terms)
         for _, _, engine_name, preset, item in engine_entries
     ]
     references.annotate(scenario, point, engine_records, reference)
@@ -1279,14 +1282,17 @@ def _reference_stored_by_worker(task: dict, output: dict) -> dict:
 
 def engine_record(scenario: Scenario, point_info: dict, engine_name: str, preset: str,
                   item: dict, problem, law_speeds: dict, *, scene=None,
-                  law_energy_change: float | None = None, contacts=None) -> Record:
+                  law_energy_change: float | None = None, contacts=None,
+                  terms=None) -> Record:
     """An engine's record from its raw output and the point's law solutions.
 
     With ``scene`` (the engine's scene at this point) the record gets its verdict
     (:func:`harness.run.verdicts.judge`): ``verdict`` and ``reasons``, and a run that fails
     a check has the first failing reason as its ``status`` (never ``ok``).
     ``law_energy_change`` is ``newton-lcp``'s energy change, to attribute a gain;
-    ``contacts``: a flat face's declared contacts (:func:`verdicts.declared_contacts`).
+    ``contacts``: a flat face's declared contacts (:func:`verdicts.declared_contacts`);
+    ``terms``: ``verdicts.prepare(scene, problem)`` when the caller has it (None: worked out
+    by the verdict).
     """
     from harness.run import verdicts
 
@@ -1335,7 +1341,8 @@ def engine_record(scenario: Scenario, point_info: dict, engine_name: str, preset
     if scene is not None:
         verdict = verdicts.judge(scene, problem,
                                  verdicts.numbers_from_output(engine_name, output),
-                                 law_energy_change=law_energy_change, contacts=contacts)
+                                 law_energy_change=law_energy_change, contacts=contacts,
+                                 terms=terms)
         record.verdict, record.reasons = verdict.label, verdict.as_list()
         record.status = verdict.status(record.status)
     return record
