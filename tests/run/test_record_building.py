@@ -1,0 +1,211 @@
+"""The faster pieces of building a run's records against what they replace, bit for bit.
+
+* :func:`metrics.departures` (the work its laws share done once) against
+  :func:`metrics.departure` law by law;
+* :func:`metrics.impulse_series` (a history's impulses) against
+  :func:`metrics.impulses_from_velocities`, step by step;
+* :func:`records.plain_value` (flat lists and dicts taken whole) against the walk it was,
+  item by item (:func:`walked_plain_value`, kept here as it was);
+* the runner's ``_cached_line`` (a stored line edited to ``cached``) against
+  :func:`records.record_line` of the edited record.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
+
+import numpy as np
+import pytest
+
+from harness.run import metrics, records, runner
+from harness.run.records import Record, plain_value, record_line
+
+
+def random_mass_matrix(rng, size):
+    root = rng.normal(size=(size, size))
+    return root @ root.T + size * np.eye(size)
+
+
+def same_float(a: float, b: float) -> bool:
+    """Equal bits, NaN equal to NaN."""
+    return (math.isnan(a) and math.isnan(b)) or (a == b and math.copysign(1, a)
+                                                  == math.copysign(1, b))
+
+
+def random_speeds(rng, size):
+    """Speeds, sometimes non-finite, sometimes missing, sometimes a list."""
+    kind = rng.integers(10)
+    if kind == 0:
+        return None
+    u = rng.normal(size=size) * 10.0 ** rng.integers(-3, 4)
+    if kind == 1:
+        u[rng.integers(size)] = rng.choice([math.nan, math.inf, -math.inf])
+    return u.tolist() if kind == 2 else u
+
+
+@pytest.mark.parametrize("free_bodies", [False, True])
+def test_departures_are_departure_law_by_law(free_bodies):
+    rng = np.random.default_rng(11)
+    for trial in range(400):
+        size = 6 if free_bodies else int(rng.choice([3, 6]))
+        mass_matrix = random_mass_matrix(rng, size)
+        u_before = (np.zeros(size) if trial % 50 == 0  # a zero scale: every departure NaN
+                    else rng.normal(size=size))
+        u = random_speeds(rng, size)
+        law_speeds = {law: random_speeds(rng, size)
+                      for law in ("newton", "poisson", "stronge", "newton-lcp")}
+        found = metrics.departures(mass_matrix, u, law_speeds, u_before,
+                                   free_bodies=free_bodies)
+        expected = {law: metrics.departure(mass_matrix, u, u_law, u_before,
+                                           free_bodies=free_bodies)
+                    for law, u_law in law_speeds.items() if u_law is not None}
+        assert list(found) == list(expected)
+        assert all(same_float(found[law], expected[law]) for law in expected)
+
+
+def test_departures_of_no_law_are_empty():
+    mass_matrix = np.eye(3)
+    assert metrics.departures(mass_matrix, [1.0, 0.0, 0.0], {}, [1.0, 1.0, 0.0]) == {}
+    assert metrics.departures(mass_matrix, None, {"poisson": None}, [1.0, 1.0, 0.0]) == {}
+
+
+def test_impulse_series_is_impulses_from_velocities_step_by_step():
+    rng = np.random.default_rng(12)
+    for _ in range(200):
+        size = int(rng.choice([3, 6]))
+        mass_matrix = random_mass_matrix(rng, size)
+        problem = SimpleNamespace(mass_matrix=mass_matrix, u=rng.normal(size=size),
+                                  wn=rng.normal(size=size), wt=rng.normal(size=size))
+        speeds = [rng.normal(size=size) for _ in range(int(rng.integers(1, 8)))]
+        found = metrics.impulse_series(problem, speeds)
+        expected = [metrics.impulses_from_velocities(problem, u)[:2] for u in speeds]
+        assert len(found) == len(expected)
+        for (normal, tangential), (normal_0, tangential_0) in zip(found, expected):
+            assert same_float(normal, normal_0) and same_float(tangential, tangential_0)
+
+
+_PLAIN = (str, int, bool, type(None))
+
+
+def walked_plain_value(value: Any) -> Any:
+    """records.plain_value as it was: every item walked one call at a time."""
+    kind = type(value)
+    if kind is float:
+        return value if math.isfinite(value) else None
+    if kind in _PLAIN:
+        return value
+    if isinstance(value, dict):
+        return {str(key): walked_plain_value(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [walked_plain_value(item) for item in value]
+    if isinstance(value, str):
+        return value[:]
+    if hasattr(value, "tolist") and not isinstance(value, bytes):
+        return walked_plain_value(value.tolist())
+    if isinstance(value, float):
+        return float(value) if math.isfinite(value) else None
+    if isinstance(value, int) and not isinstance(value, bool):
+        return int(value)
+    if isinstance(value, Path):
+        return value.as_posix()
+    from dataclasses import asdict, is_dataclass
+
+    if is_dataclass(value) and not isinstance(value, type):
+        return walked_plain_value(asdict(value))
+    return value
+
+
+class Label(str):
+    pass
+
+
+class Count(int):
+    pass
+
+
+@dataclass
+class Pair:
+    first: Any
+    second: Any
+
+
+def random_value(rng, depth=0):
+    """A nested value of every kind plain_value meets, flat lists and dicts most often."""
+    scalars = [lambda: float(rng.normal()), lambda: math.nan, lambda: math.inf,
+               lambda: -0.0, lambda: int(rng.integers(-5, 5)), lambda: bool(rng.integers(2)),
+               lambda: None, lambda: "text", lambda: Label("label"), lambda: Count(3),
+               lambda: np.float64(rng.normal()), lambda: np.int64(4), lambda: Path("a/b")]
+    kind = rng.integers(8 if depth < 3 else 1)
+    if kind == 0:
+        return scalars[rng.integers(len(scalars))]()
+    if kind in (1, 2):  # a flat list: floats, with a non-finite or another plain type
+        items = [float(x) for x in rng.normal(size=int(rng.integers(0, 6)))]
+        if items and rng.integers(3) == 0:
+            items[rng.integers(len(items))] = scalars[rng.integers(len(scalars))]()
+        return items if kind == 1 else tuple(items)
+    if kind == 3:  # a flat dict
+        keys = ["a", "b", "c", 1, None, Label("d")]
+        return {keys[rng.integers(len(keys)) if rng.integers(4) == 0 else i % 3]:
+                scalars[rng.integers(len(scalars))]() for i in range(int(rng.integers(0, 5)))}
+    if kind == 4:
+        return rng.normal(size=int(rng.integers(0, 4)))
+    if kind == 5:
+        return Pair(random_value(rng, depth + 1), random_value(rng, depth + 1))
+    if kind == 6:
+        return [random_value(rng, depth + 1) for _ in range(int(rng.integers(0, 4)))]
+    return {f"k{i}": random_value(rng, depth + 1) for i in range(int(rng.integers(0, 4)))}
+
+
+def plain_repr(value):
+    """The value with each float's bits and each value's exact type spelled out."""
+    if isinstance(value, dict):
+        return ("dict", type(value), [(plain_repr(k), plain_repr(v)) for k, v in value.items()])
+    if isinstance(value, list):
+        return ("list", type(value), [plain_repr(item) for item in value])
+    if isinstance(value, float):
+        return (type(value), value.hex())
+    return (type(value), value)
+
+
+def test_plain_value_is_the_walk_it_was():
+    rng = np.random.default_rng(13)
+    for _ in range(3000):
+        value = random_value(rng)
+        assert plain_repr(plain_value(value)) == plain_repr(walked_plain_value(value))
+
+
+def test_plain_value_copies_flat_lists_and_dicts():
+    items, table = [1.0, 2.0], {"a": 1.0}
+    assert plain_value(items) is not items and plain_value(table) is not table
+
+
+def engine_line_record(rng, label):
+    return Record(
+        scenario="disk-wall", point={"index": 0, "parameter": "mu", "value": 0.2,
+                                     "label": label},
+        source="pymunk", preset="defaults", u_before=[1.0, -2.0, 0.0],
+        u_after=rng.normal(size=3).tolist(), status="ok",
+        wall_time_s=float(rng.random()), departure={"poisson": float(rng.random()),
+                                                    "newton": math.nan},
+        diagnostics={"notes": [label, ',"cached":false,"diagnostics":'],
+                     "derived": {"cached": False}}, reasons=[{"name": "x", "fails": True}])
+
+
+@pytest.mark.parametrize("label", ["μ = 0.2", ',"cached":false,"diagnostics":{',
+                                   'quote " and \\ backslash', "line\nbreak"])
+def test_a_cached_line_is_the_line_of_the_cached_record(label):
+    rng = np.random.default_rng(14)
+    for _ in range(20):
+        data = engine_line_record(rng, label).as_dict()
+        stored = {**data, "cached": True}
+        assert runner._cached_line(record_line(data), stored) == record_line(stored)
+
+
+def test_a_line_of_another_layout_is_spelled_in_full():
+    stored = {"scenario": "s", "cached": True}
+    assert runner._cached_line('{"scenario":"s"}', stored) == record_line(stored)
+    assert records.record_line(stored) == '{"scenario":"s","cached":true}'
