@@ -1316,6 +1316,7 @@ def engine_record(scenario: Scenario, point_info: dict, engine_name: str, preset
         "engine_normal_impulse", "engine_tangential_impulse", "derived", "notes",
         "engine_wall_time_s")}
     diagnostics["settings_overrides"] = item.get("overrides", {})
+    implied = None  # the impulse Δu implies, for the verdict when its residual is finite
     if finite and item.get("history") and scene is not None:
         diagnostics["history"] = contact_history(problem, output, scene,
                                                  float(output.get("time_step") or 0.0))
@@ -1328,6 +1329,8 @@ def engine_record(scenario: Scenario, point_info: dict, engine_name: str, preset
             problem, u_after, free_bodies=free_bodies)
         diagnostics["impulse_from_velocities"] = [normal, tangential]
         diagnostics["impulse_residual"] = residual
+        if math.isfinite(residual):
+            implied = normal, tangential, residual
         if output.get("engine_normal_impulse") is not None:
             record.normal_impulse = output["engine_normal_impulse"]
             record.tangential_impulse = output.get("engine_tangential_impulse")
@@ -1342,7 +1345,7 @@ def engine_record(scenario: Scenario, point_info: dict, engine_name: str, preset
         verdict = verdicts.judge(scene, problem,
                                  verdicts.numbers_from_output(engine_name, output),
                                  law_energy_change=law_energy_change, contacts=contacts,
-                                 terms=terms)
+                                 terms=terms, implied=implied)
         record.verdict, record.reasons = verdict.label, verdict.as_list()
         record.status = verdict.status(record.status)
     return record

@@ -7,7 +7,9 @@
 * :func:`records.plain_value` (flat lists and dicts taken whole) against the walk it was,
   item by item (:func:`walked_plain_value`, kept here as it was);
 * the runner's ``_cached_line`` (a stored line edited to ``cached``) against
-  :func:`records.record_line` of the edited record.
+  :func:`records.record_line` of the edited record;
+* a verdict handed the point's prepared terms and the impulse its record implied against
+  the verdict worked out alone.
 """
 
 from __future__ import annotations
@@ -21,8 +23,10 @@ from typing import Any
 import numpy as np
 import pytest
 
-from harness.run import metrics, records, runner
+from harness.engines import EngineNotInstalled, load_engine
+from harness.run import metrics, records, runner, verdicts
 from harness.run.records import Record, plain_value, record_line
+from harness.scenarios import SCENARIO_DIR, load_scenario
 
 
 def random_mass_matrix(rng, size):
@@ -209,3 +213,48 @@ def test_a_line_of_another_layout_is_spelled_in_full():
     stored = {"scenario": "s", "cached": True}
     assert runner._cached_line('{"scenario":"s"}', stored) == record_line(stored)
     assert records.record_line(stored) == '{"scenario":"s","cached":true}'
+
+
+STRICT = verdicts.Tolerances(separation=1e-9, penetration=1e-3, impulse_residual=1e-12,
+                             impulse=1e-12, energy=1e-15, energy_beyond_law=1e-3, cap=0.999)
+
+
+@pytest.mark.parametrize("engine_name", ["pymunk", "box2d"])
+def test_a_verdict_given_its_terms_and_implied_impulse_is_the_one_worked_out(engine_name):
+    """engine_record hands the verdict the point's prepared terms and the impulse it already
+    implied from Δu: the verdict is the one judge works out alone, bit for bit, at the
+    default tolerances and at strict ones where every check fires."""
+    try:
+        engine = load_engine(engine_name)
+    except EngineNotInstalled as error:
+        pytest.skip(str(error))
+    settings = engine.settings("defaults")
+    judged = 0
+    for path in sorted(SCENARIO_DIR.glob("*.toml"))[::3]:
+        scenario = load_scenario(path)
+        if scenario.analytic_only:
+            continue
+        point = scenario.point_list()[0]
+        scene = scenario.scene(point)
+        if verdicts.declared_contacts(scenario, scene) is not None:
+            continue
+        problem = scenario.analytic_problem(point)
+        output = runner.engine_task({"engine": engine_name, "scene": scene,
+                                     "settings": settings})
+        if "velocities" not in output:
+            continue
+        u_after = np.array([v for body in output["velocities"] for v in body], dtype=float)
+        implied = metrics.impulses_from_velocities(problem, u_after,
+                                                   free_bodies=not scene.ground)
+        assert math.isfinite(implied[2])
+        terms = verdicts.prepare(scene, problem)
+        for tolerances in (verdicts.DEFAULT_TOLERANCES, STRICT):
+            alone = verdicts.judge(scene, problem,
+                                   verdicts.numbers_from_output(engine_name, output),
+                                   tolerances=tolerances)
+            given = verdicts.judge(scene, problem,
+                                   verdicts.numbers_from_output(engine_name, output),
+                                   tolerances=tolerances, terms=terms, implied=implied)
+            assert repr(given) == repr(alone), scenario.name
+        judged += 1
+    assert judged > 3
