@@ -145,9 +145,11 @@ def departures(mass_matrix, u, law_speeds: Mapping[str, object], u_before, *,
                free_bodies: bool = False) -> dict[str, float]:
     """``{law: departure(u, u_law)}`` for every law that was solved.
 
-    The same values, bit for bit, as :func:`departure` law by law: the same operations on
-    the same arrays, with what the laws share (``u``, its finiteness, the scale, the mass
-    matrix as an array) worked out once (a run asks for some 270,000 of them).
+    The same values, bit for bit, as :func:`departure` law by law (a run asks for some
+    270,000): what the laws share (``u``, its finiteness, the scale) is worked out once, and
+    the laws' ``(u − u_law)ᵀ M (u − u_law)`` as stacks of the very products
+    :func:`ke_norm` makes, one ``1×k`` by ``k×k`` then one ``1×k`` by ``k×1`` per law (numpy's
+    stacked matmul runs the same inner product per entry of the stack).
     """
     solved = [(law, u_law) for law, u_law in law_speeds.items() if u_law is not None]
     if u is None:
@@ -157,16 +159,19 @@ def departures(mass_matrix, u, law_speeds: Mapping[str, object], u_before, *,
         return {law: math.nan for law, _ in solved}
     scale = frame_free_scale(mass_matrix, u_before, free_bodies=free_bodies)
     mass_matrix = np.asarray(mass_matrix, dtype=float)
-    found = {}
-    for law, u_law in solved:
-        u_law = np.asarray(u_law, dtype=float)
-        if scale > 0 and all(map(math.isfinite, u_law.tolist())):
-            difference = u - u_law
-            # ke_norm(mass_matrix, difference), inline
-            found[law] = math.sqrt(max(float(difference @ mass_matrix @ difference), 0.0)) / scale
-        else:
-            found[law] = math.nan
-    return found
+    rows = [np.asarray(u_law, dtype=float) for _, u_law in solved]
+    if u.ndim != 1 or mass_matrix.shape != (len(u), len(u)) or any(
+            row.shape != u.shape for row in rows):  # not the usual shapes: law by law
+        return {law: departure(mass_matrix, u, u_law, u_before, free_bodies=free_bodies)
+                for law, u_law in solved}
+    stack = np.array(rows)
+    finite = np.isfinite(stack).all(axis=1).tolist()
+    with np.errstate(all="ignore"):  # rows with non-finite speeds are NaN below
+        differences = u - stack
+        squares = ((differences[:, None, :] @ mass_matrix)
+                   @ differences[:, :, None])[:, 0, 0].tolist()
+    return {law: (math.sqrt(max(square, 0.0)) / scale if scale > 0 and ok else math.nan)
+            for (law, _), square, ok in zip(solved, squares, finite)}
 
 
 def energy_change(mass_matrix, u_before, u_after) -> float:

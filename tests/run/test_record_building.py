@@ -46,6 +46,8 @@ def random_speeds(rng, size):
     if kind == 0:
         return None
     u = rng.normal(size=size) * 10.0 ** rng.integers(-3, 4)
+    if kind == 3:  # near the top of the float range: differences overflow
+        u *= 1.5e308 / np.max(np.abs(u))
     if kind == 1:
         u[rng.integers(size)] = rng.choice([math.nan, math.inf, -math.inf])
     return u.tolist() if kind == 2 else u
@@ -54,8 +56,8 @@ def random_speeds(rng, size):
 @pytest.mark.parametrize("free_bodies", [False, True])
 def test_departures_are_departure_law_by_law(free_bodies):
     rng = np.random.default_rng(11)
-    for trial in range(400):
-        size = 6 if free_bodies else int(rng.choice([3, 6]))
+    for trial in range(2000):
+        size = 6 if free_bodies else int(rng.choice([3, 4, 6, 9]))
         mass_matrix = random_mass_matrix(rng, size)
         u_before = (np.zeros(size) if trial % 50 == 0  # a zero scale: every departure NaN
                     else rng.normal(size=size))
@@ -69,6 +71,17 @@ def test_departures_are_departure_law_by_law(free_bodies):
                     for law, u_law in law_speeds.items() if u_law is not None}
         assert list(found) == list(expected)
         assert all(same_float(found[law], expected[law]) for law in expected)
+
+
+def test_departures_whose_difference_overflows_are_departure_law_by_law():
+    mass_matrix = np.array([[2.0]])  # one speed: an infinite difference gives inf, not NaN
+    u, u_before = np.array([1.5e308]), np.array([1.0])
+    law_speeds = {"poisson": np.array([-1e308]), "newton": np.zeros(1)}
+    with np.errstate(all="ignore"):
+        found = metrics.departures(mass_matrix, u, law_speeds, u_before)
+        expected = {law: metrics.departure(mass_matrix, u, u_law, u_before)
+                    for law, u_law in law_speeds.items()}
+    assert found == expected and found["poisson"] == math.inf
 
 
 def test_departures_of_no_law_are_empty():
