@@ -9,7 +9,9 @@
 * the runner's ``_cached_line`` (a stored line edited to ``cached``) against
   :func:`records.record_line` of the edited record;
 * a verdict handed the point's prepared terms and the impulse its record implied against
-  the verdict worked out alone.
+  the verdict worked out alone;
+* :func:`history.contact_history` (its rows' products stacked) against the history as it
+  was, row by row (:func:`stepwise_contact_history`).
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ import numpy as np
 import pytest
 
 from harness.engines import EngineNotInstalled, load_engine
-from harness.run import metrics, records, runner, verdicts
+from harness.run import history, metrics, records, runner, verdicts
 from harness.run.records import Record, plain_value, record_line
 from harness.scenarios import SCENARIO_DIR, load_scenario
 
@@ -271,3 +273,101 @@ def test_a_verdict_given_its_terms_and_implied_impulse_is_the_one_worked_out(eng
             assert repr(given) == repr(alone), scenario.name
         judged += 1
     assert judged > 3
+
+
+def stepwise_contact_history(problem, output, scene, time_step):
+    """history.contact_history as it was (its docstring aside): every row's speeds and
+    products one at a time, and a pose history's impulses through impulses_from_velocities."""
+    steps = output.get("contacts") or []
+    normal = output.get("contact_normal")
+    if not steps or normal is None or not time_step > 0:
+        return None
+    mass_matrix = np.asarray(problem.mass_matrix, dtype=float)
+    u_before = np.asarray(problem.u, dtype=float)
+    wn, wt = np.asarray(problem.wn, dtype=float), np.asarray(problem.wt, dtype=float)
+    if all(step.get("impulse") is not None for step in steps):
+        source = history.SOURCES[0]
+        n_x, n_y = float(normal[0]), float(normal[1])
+        response_n = np.linalg.solve(mass_matrix, wn)
+        response_t = np.linalg.solve(mass_matrix, wt)
+        total_x = total_y = 0.0
+        speeds, impulses = [], []
+        for step in steps:
+            p_x, p_y = step["impulse"]
+            total_x += p_x
+            total_y += p_y
+            p_n = total_x * n_x + total_y * n_y
+            p_t = total_x * n_y - total_y * n_x
+            speeds.append(u_before + response_n * p_n + response_t * p_t)
+            impulses.append((p_n, p_t))
+    elif output.get("start_offset_steps") is not None:
+        source = history.SOURCES[1]
+        speeds = history._from_poses(steps, scene, float(output["start_offset_steps"]),
+                                     time_step)
+        if speeds is None:
+            return None
+        impulses = [metrics.impulses_from_velocities(problem, u)[:2] for u in speeds]
+    else:
+        return None
+    first = int(steps[0]["step"])
+    rows = [(first - 1, 0.0, 0.0, u_before, 0.0)]
+    for step, u, (p_n, p_t) in zip(steps, speeds, impulses):
+        depth = max((point[2] for point in step["points"]), default=0.0)
+        rows.append((int(step["step"]), p_n, p_t, u, max(depth, 0.0)))
+    rows = history._thin(rows, history.MAX_HISTORY_STEPS + 1)
+    end = np.array([v for body in output["velocities"] for v in body], dtype=float)
+    mismatch = metrics.departure(mass_matrix, speeds[-1], end, u_before,
+                                 free_bodies=not scene.ground)
+    return {
+        "source": source,
+        "contact_steps": len(steps),
+        "end_mismatch": float(mismatch),
+        "step": [row[0] for row in rows],
+        "time_ms": [1e3 * time_step * (row[0] - first + 1) for row in rows],
+        "normal_impulse": [float(row[1]) for row in rows],
+        "tangential_impulse": [float(row[2]) for row in rows],
+        "vn": [float(wn @ row[3]) for row in rows],
+        "vt": [float(wt @ row[3]) for row in rows],
+        "penetration": [float(row[4]) for row in rows],
+        "kinetic_energy": [0.5 * float(row[3] @ mass_matrix @ row[3]) for row in rows],
+    }
+
+
+def random_history_case(rng, poses: bool):
+    """A problem, an engine output with contact steps (impulses, or poses only) and a scene
+    of ``bodies`` bodies, some runs longer than the stored history."""
+    bodies = int(rng.integers(1, 3))
+    size = 3 * bodies
+    problem = SimpleNamespace(mass_matrix=random_mass_matrix(rng, size),
+                              u=rng.normal(size=size), wn=rng.normal(size=size),
+                              wt=rng.normal(size=size))
+    count = int(rng.choice([1, 2, 7, 40, 450]))
+    first = int(rng.integers(1, 20))
+    steps = []
+    for index in range(count):
+        step = {"step": first + index,
+                "points": [tuple(rng.normal(size=3)) for _ in range(int(rng.integers(0, 3)))],
+                "bodies": [tuple(rng.normal(size=3)) for _ in range(bodies)]}
+        if not poses:
+            step["impulse"] = tuple(rng.normal(size=2) * 1e-3)
+        steps.append(step)
+    scene = SimpleNamespace(ground=bodies == 1, bodies=[SimpleNamespace(
+        position=tuple(rng.normal(size=2)), velocity=tuple(rng.normal(size=2)),
+        angle=float(rng.normal()), angular_velocity=float(rng.normal()))
+        for _ in range(bodies)])
+    output = {"contacts": steps, "contact_normal": tuple(rng.normal(size=2)),
+              "velocities": [tuple(rng.normal(size=3)) for _ in range(bodies)],
+              "start_offset_steps": 2.0 if poses else None}
+    return problem, output, scene
+
+
+@pytest.mark.parametrize("poses", [False, True])
+def test_contact_history_is_the_stepwise_one(poses):
+    rng = np.random.default_rng(15 + poses)
+    for _ in range(60):
+        problem, output, scene = random_history_case(rng, poses)
+        time_step = float(rng.choice([1e-3, 1 / 240]))
+        found = history.contact_history(problem, output, scene, time_step)
+        expected = stepwise_contact_history(problem, output, scene, time_step)
+        assert found.keys() == expected.keys()
+        assert plain_repr(found) == plain_repr(expected)
