@@ -160,18 +160,18 @@ def departures(mass_matrix, u, law_speeds: Mapping[str, object], u_before, *,
     scale = frame_free_scale(mass_matrix, u_before, free_bodies=free_bodies)
     mass_matrix = np.asarray(mass_matrix, dtype=float)
     rows = [np.asarray(u_law, dtype=float) for _, u_law in solved]
-    if u.ndim != 1 or mass_matrix.shape != (len(u), len(u)) or any(
-            row.shape != u.shape for row in rows):  # not the usual shapes: law by law
-        return {law: departure(mass_matrix, u, u_law, u_before, free_bodies=free_bodies)
-                for law, u_law in solved}
-    stack = np.array(rows)
-    finite = np.isfinite(stack).all(axis=1).tolist()
-    with np.errstate(all="ignore"):  # rows with non-finite speeds are NaN below
-        differences = u - stack
-        squares = ((differences[:, None, :] @ mass_matrix)
-                   @ differences[:, :, None])[:, 0, 0].tolist()
-    return {law: (math.sqrt(max(square, 0.0)) / scale if scale > 0 and ok else math.nan)
-            for (law, _), square, ok in zip(solved, squares, finite)}
+    if (u.ndim == 1 and mass_matrix.shape == (len(u), len(u))
+            and all(row.shape == u.shape for row in rows)):
+        stack = np.array(rows)
+        if scale > 0 and all(map(math.isfinite, stack.ravel().tolist())):
+            differences = u - stack
+            squares = ((differences[:, None, :] @ mass_matrix)
+                       @ differences[:, :, None])[:, 0, 0].tolist()
+            return {law: math.sqrt(max(square, 0.0)) / scale
+                    for (law, _), square in zip(solved, squares)}
+    # a law's speeds not finite, a zero scale or unusual shapes: law by law
+    return {law: departure(mass_matrix, u, u_law, u_before, free_bodies=free_bodies)
+            for law, u_law in solved}
 
 
 def energy_change(mass_matrix, u_before, u_after) -> float:
