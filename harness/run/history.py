@@ -27,7 +27,7 @@ How the speeds after step k follow
     one by about half the step's change (the force fades to 0 at separation, so the last step
     agrees). The pose before the first contact step is free flight from the scene's touching
     pose (the run starts ``start_offset_steps`` steps before it). The impulses then follow
-    from the speeds by (A22)/(A23) (:func:`harness.run.metrics.impulses_from_velocities`).
+    from the speeds by (A22)/(A23) (:func:`harness.run.metrics.impulse_series`).
 
 How far to trust it
     ``end_mismatch`` is ``‖u_K − u_end‖_M`` over the frame-free speed scale
@@ -96,7 +96,7 @@ def contact_history(problem, output: Mapping, scene, time_step: float) -> dict |
         speeds = _from_poses(steps, scene, float(output["start_offset_steps"]), time_step)
         if speeds is None:
             return None
-        impulses = [metrics.impulses_from_velocities(problem, u)[:2] for u in speeds]
+        impulses = metrics.impulse_series(problem, speeds)
     else:
         return None
     first = int(steps[0]["step"])
@@ -109,6 +109,12 @@ def contact_history(problem, output: Mapping, scene, time_step: float) -> dict |
     free_bodies = not scene.ground
     mismatch = metrics.departure(mass_matrix, speeds[-1], end, u_before,
                                  free_bodies=free_bodies)
+    # Each row's w_n·u, w_t·u and uᵀ M u as stacks of the very 1×k products the row's own
+    # would make (numpy's stacked matmul runs the same inner product per entry): bit for bit.
+    kept = np.array([row[3] for row in rows])
+    vn = (wn @ kept[:, :, None])[:, 0].tolist()
+    vt = (wt @ kept[:, :, None])[:, 0].tolist()
+    twice_energy = ((kept[:, None, :] @ mass_matrix) @ kept[:, :, None])[:, 0, 0].tolist()
     return {
         "source": source,
         "contact_steps": len(steps),
@@ -117,10 +123,10 @@ def contact_history(problem, output: Mapping, scene, time_step: float) -> dict |
         "time_ms": [1e3 * time_step * (row[0] - first + 1) for row in rows],
         "normal_impulse": [float(row[1]) for row in rows],
         "tangential_impulse": [float(row[2]) for row in rows],
-        "vn": [float(wn @ row[3]) for row in rows],
-        "vt": [float(wt @ row[3]) for row in rows],
+        "vn": vn,
+        "vt": vt,
         "penetration": [float(row[4]) for row in rows],
-        "kinetic_energy": [0.5 * float(row[3] @ mass_matrix @ row[3]) for row in rows],
+        "kinetic_energy": [0.5 * value for value in twice_energy],
     }
 
 
@@ -130,16 +136,19 @@ def _from_impulses(steps, normal, mass_matrix, u_before, wn, wt):
     response_n = np.linalg.solve(mass_matrix, wn)  # M⁻¹ w_n: speeds per unit P_n
     response_t = np.linalg.solve(mass_matrix, wt)
     total_x = total_y = 0.0
-    speeds, impulses = [], []
+    impulses = []
     for step in steps:
         p_x, p_y = step["impulse"]
         total_x += p_x
         total_y += p_y
         p_n = total_x * n_x + total_y * n_y
         p_t = total_x * n_y - total_y * n_x  # along t = (n_y, −n_x)
-        speeds.append(u_before + response_n * p_n + response_t * p_t)
         impulses.append((p_n, p_t))
-    return speeds, impulses
+    # u⁻ + M⁻¹w_n P_n + M⁻¹w_t P_t of every step at once: the same elementwise operations
+    # in the same order as step by step, so the same numbers.
+    p_n, p_t = np.array(impulses, dtype=float).reshape(-1, 2).T
+    speeds = u_before + response_n * p_n[:, None] + response_t * p_t[:, None]
+    return list(speeds), impulses
 
 
 def _from_poses(steps, scene, start_offset_steps: float, time_step: float):

@@ -143,9 +143,35 @@ def _ke_norms(mass: np.ndarray, u: np.ndarray) -> np.ndarray:
 
 def departures(mass_matrix, u, law_speeds: Mapping[str, object], u_before, *,
                free_bodies: bool = False) -> dict[str, float]:
-    """``{law: departure(u, u_law)}`` for every law that was solved."""
+    """``{law: departure(u, u_law)}`` for every law that was solved.
+
+    The same values, bit for bit, as :func:`departure` law by law (a run asks for some
+    270,000): what the laws share (``u``, its finiteness, the scale) is worked out once, and
+    the laws' ``(u − u_law)ᵀ M (u − u_law)`` as stacks of the very products
+    :func:`ke_norm` makes, one ``1×k`` by ``k×k`` then one ``1×k`` by ``k×1`` per law (numpy's
+    stacked matmul runs the same inner product per entry of the stack).
+    """
+    solved = [(law, u_law) for law, u_law in law_speeds.items() if u_law is not None]
+    if u is None:
+        return {law: math.nan for law, _ in solved}
+    u = np.asarray(u, dtype=float)
+    if not solved or not all(map(math.isfinite, u.tolist())):
+        return {law: math.nan for law, _ in solved}
+    scale = frame_free_scale(mass_matrix, u_before, free_bodies=free_bodies)
+    mass_matrix = np.asarray(mass_matrix, dtype=float)
+    rows = [np.asarray(u_law, dtype=float) for _, u_law in solved]
+    if (u.ndim == 1 and mass_matrix.shape == (len(u), len(u))
+            and all(row.shape == u.shape for row in rows)):
+        stack = np.array(rows)
+        if scale > 0 and all(map(math.isfinite, stack.ravel().tolist())):
+            differences = u - stack
+            squares = ((differences[:, None, :] @ mass_matrix)
+                       @ differences[:, :, None])[:, 0, 0].tolist()
+            return {law: math.sqrt(max(square, 0.0)) / scale
+                    for (law, _), square in zip(solved, squares)}
+    # a law's speeds not finite, a zero scale or unusual shapes: law by law
     return {law: departure(mass_matrix, u, u_law, u_before, free_bodies=free_bodies)
-            for law, u_law in law_speeds.items() if u_law is not None}
+            for law, u_law in solved}
 
 
 def energy_change(mass_matrix, u_before, u_after) -> float:
@@ -193,15 +219,29 @@ def impulses_from_velocities(problem, u_after, *,
     """
     u_after = np.asarray(u_after, dtype=float)
     delta_u = u_after - problem.u
-    mnn, mnt, mtt = delassus(problem)
-    dvn, dvt = float(problem.wn @ delta_u), float(problem.wt @ delta_u)
-    det = mnn * mtt - mnt * mnt
-    normal = (mtt * dvn - mnt * dvt) / det
-    tangential = (mnn * dvt - mnt * dvn) / det
+    normal, tangential = _impulse_of(problem, delassus(problem), delta_u)
     explained = np.linalg.solve(problem.mass_matrix, problem.wn * normal + problem.wt * tangential)
     residual = departure(problem.mass_matrix, delta_u, explained, problem.u,
                          free_bodies=free_bodies)
     return normal, tangential, residual
+
+
+def impulse_series(problem, speeds: Sequence) -> list[tuple[float, float]]:
+    """``(I_n, I_t)`` of :func:`impulses_from_velocities` for each of ``speeds`` (a run's
+    speeds step by step), bit for bit, without the residual nobody reads there."""
+    contact_space = delassus(problem)
+    return [_impulse_of(problem, contact_space, np.asarray(u, dtype=float) - problem.u)
+            for u in speeds]
+
+
+def _impulse_of(problem, contact_space: tuple[float, float, float],
+                delta_u: np.ndarray) -> tuple[float, float]:
+    """The impulse ``(I_n, I_t)`` of (A22)/(A23) behind the change of speeds ``delta_u``,
+    with ``contact_space`` the problem's :func:`delassus`."""
+    mnn, mnt, mtt = contact_space
+    dvn, dvt = float(problem.wn @ delta_u), float(problem.wt @ delta_u)
+    det = mnn * mtt - mnt * mnt
+    return (mtt * dvn - mnt * dvt) / det, (mnn * dvt - mnt * dvn) / det
 
 
 def classify_end_state(vt_approach: float, vt_separation: float, vn_approach: float,
@@ -243,4 +283,4 @@ def _finite(value) -> float:
 
 __all__ = ["RowScales", "STICK_TOLERANCE", "classify_end_state", "contact_velocities", "delassus",
            "departure", "departure_batch", "departure_split", "departures", "energy_change",
-           "frame_free_scale", "impulses_from_velocities", "ke_norm"]
+           "frame_free_scale", "impulse_series", "impulses_from_velocities", "ke_norm"]

@@ -212,9 +212,14 @@ def plain_value(value: Any) -> Any:
     if kind in _PLAIN:
         return value
     if isinstance(value, dict):
+        if set(map(type, value)) <= _STR:  # the keys as they are: str(key) is key
+            flat = _flat(value.values())
+            if flat is not None:
+                return dict(zip(value, flat))
         return {str(key): plain_value(item) for key, item in value.items()}
     if isinstance(value, (list, tuple)):
-        return [plain_value(item) for item in value]
+        flat = _flat(value)
+        return flat if flat is not None else [plain_value(item) for item in value]
     if isinstance(value, str):  # a str subclass (an engine's Status): its plain text
         return value[:]
     if hasattr(value, "tolist") and not isinstance(value, bytes):
@@ -228,6 +233,26 @@ def plain_value(value: Any) -> Any:
     if is_dataclass(value) and not isinstance(value, type):
         return plain_value(asdict(value))
     return value
+
+
+_STR = frozenset((str,))
+_PLAIN_TYPES = frozenset(_PLAIN)
+
+
+def _flat(items) -> list | None:
+    """``[plain_value(item) for item in items]`` when every item is a float or of
+    :data:`_PLAIN` (by exact type: what the columns of a record mostly are), worked out
+    without a call per item; None when some item is of another type."""
+    items = list(items)
+    kinds = set(map(type, items))
+    if kinds <= _PLAIN_TYPES:
+        return items
+    if float not in kinds or not kinds - {float} <= _PLAIN_TYPES:
+        return None
+    if kinds == {float} and all(map(math.isfinite, items)):
+        return items
+    return [item if type(item) is not float or math.isfinite(item) else None
+            for item in items]
 
 
 def _plain_line(value: Any) -> str:

@@ -1030,7 +1030,7 @@ def _store_scenario(cache, key: str | None, engine_entries: Sequence, records: S
         return
     stored_datas = [data if record.source == ANALYTIC or record.cached
                     else {**data, "cached": True} for record, data in zip(records, datas)]
-    stored_lines = [line if stored is data else record_line(stored)
+    stored_lines = [line if stored is data else _cached_line(line, stored)
                     for data, stored, line in zip(datas, stored_datas, lines)]
     if stored_lines != lines:
         block = RecordBlock.of_lines(stored_lines, stored_datas)
@@ -1041,6 +1041,20 @@ def _store_scenario(cache, key: str | None, engine_entries: Sequence, records: S
                         (block.pickled_datas, block.pickled_lines))
     except OSError:  # the run goes on without the cache (the engine runs' store warns)
         pass
+
+
+#: A not-cached record's line, from its field ``cached`` on (:class:`Record`'s field order).
+_NOT_CACHED = ',"cached":false'
+
+
+def _cached_line(line: str, stored: dict) -> str:
+    """:func:`record_line` of ``stored``, the record of ``line`` with ``cached`` true, by
+    editing the line: no quote outside a string precedes ``"cached"`` but the keys of
+    ``point`` and ``departure`` (none named so), so its first match is the field itself."""
+    at = line.find(f'{_NOT_CACHED},"diagnostics":')
+    if at < 0:  # not a line of this layout: spelled in full
+        return record_line(stored)
+    return f'{line[:at]},"cached":true{line[at + len(_NOT_CACHED):]}'
 
 
 def _point_records_or_errors(scenario: Scenario, point, engine_entries: Sequence, *,
@@ -1158,9 +1172,12 @@ def point_records(scenario: Scenario, point, engine_entries: Sequence, *,
     declared = verdicts.declared_contacts(scenario, scene)  # a flat face: judged against all
     if declared is not None:  # a gain is the law's when the Newton–Coulomb reference gains
         lcp_gain = reference.get("energy_change", {}).get(reference.get("primary"))
+    # What judging any run of the point's scene needs: worked out once, not once per run.
+    terms = verdicts.prepare(scene, problem) if declared is None else None
     engine_records = [
         engine_record(scenario, point_info, engine_name, preset, item, problem, law_speeds,
-                      scene=scene, law_energy_change=lcp_gain, contacts=declared)
+                      scene=scene, law_energy_change=lcp_gain, contacts=declared,
+                      terms=terms)
         for _, _, engine_name, preset, item in engine_entries
     ]
     references.annotate(scenario, point, engine_records, reference)
@@ -1280,14 +1297,17 @@ def _reference_stored_by_worker(task: dict, output: dict) -> dict:
 
 def engine_record(scenario: Scenario, point_info: dict, engine_name: str, preset: str,
                   item: dict, problem, law_speeds: dict, *, scene=None,
-                  law_energy_change: float | None = None, contacts=None) -> Record:
+                  law_energy_change: float | None = None, contacts=None,
+                  terms=None) -> Record:
     """An engine's record from its raw output and the point's law solutions.
 
     With ``scene`` (the engine's scene at this point) the record gets its verdict
     (:func:`harness.run.verdicts.judge`): ``verdict`` and ``reasons``, and a run that fails
     a check has the first failing reason as its ``status`` (never ``ok``).
     ``law_energy_change`` is ``newton-lcp``'s energy change, to attribute a gain;
-    ``contacts``: a flat face's declared contacts (:func:`verdicts.declared_contacts`).
+    ``contacts``: a flat face's declared contacts (:func:`verdicts.declared_contacts`);
+    ``terms``: ``verdicts.prepare(scene, problem)`` when the caller has it (None: worked out
+    by the verdict).
     """
     from harness.run import verdicts
 
@@ -1311,6 +1331,7 @@ def engine_record(scenario: Scenario, point_info: dict, engine_name: str, preset
         "engine_normal_impulse", "engine_tangential_impulse", "derived", "notes",
         "engine_wall_time_s")}
     diagnostics["settings_overrides"] = item.get("overrides", {})
+    implied = None  # the impulse Δu implies, for the verdict when its residual is finite
     if finite and item.get("history") and scene is not None:
         diagnostics["history"] = contact_history(problem, output, scene,
                                                  float(output.get("time_step") or 0.0))
@@ -1323,6 +1344,8 @@ def engine_record(scenario: Scenario, point_info: dict, engine_name: str, preset
             problem, u_after, free_bodies=free_bodies)
         diagnostics["impulse_from_velocities"] = [normal, tangential]
         diagnostics["impulse_residual"] = residual
+        if math.isfinite(residual):
+            implied = normal, tangential, residual
         if output.get("engine_normal_impulse") is not None:
             record.normal_impulse = output["engine_normal_impulse"]
             record.tangential_impulse = output.get("engine_tangential_impulse")
@@ -1336,7 +1359,8 @@ def engine_record(scenario: Scenario, point_info: dict, engine_name: str, preset
     if scene is not None:
         verdict = verdicts.judge(scene, problem,
                                  verdicts.numbers_from_output(engine_name, output),
-                                 law_energy_change=law_energy_change, contacts=contacts)
+                                 law_energy_change=law_energy_change, contacts=contacts,
+                                 terms=terms, implied=implied)
         record.verdict, record.reasons = verdict.label, verdict.as_list()
         record.status = verdict.status(record.status)
     return record

@@ -206,8 +206,8 @@ class ContactTrack:
     ``(x, y, θ)`` after that step; ``points``: ``(P, 3)`` every point's ``(x, y, depth)`` (m;
     depth > 0 overlap), record by record in order; ``record``: ``(P,)`` the record (row of
     ``steps``) each point belongs to; ``size``: ``P``. A track of an engine run's own record
-    (:meth:`from_record`) reads its arrays when a check first asks for them: most runs need
-    none (a disk's, or one point in all).
+    (:meth:`from_record`) or of a task's output (:meth:`from_output`) reads its arrays when a
+    check first asks for them: most runs need none (a disk's, or one point in all).
     """
 
     __slots__ = ("_arrays", "_raw", "size")
@@ -236,7 +236,8 @@ class ContactTrack:
 
     def _read(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         if self._arrays is None:
-            self._arrays = _record_arrays(self._raw)
+            read, raw = self._raw
+            self._arrays = read(raw)
             self._raw = None
         return self._arrays
 
@@ -250,10 +251,11 @@ class ContactTrack:
     @classmethod
     def from_output(cls, contacts: Sequence[Mapping[str, Any]]) -> ContactTrack:
         """The track of the runner's engine-task output ``contacts`` (dicts with ``step``,
-        ``points`` and ``bodies``)."""
-        return cls._of([int(record["step"]) for record in contacts],
-                       [record["points"] for record in contacts],
-                       [record["bodies"] for record in contacts])
+        ``points`` and ``bodies``), read only when asked (as :meth:`from_record`)."""
+        track = cls.__new__(cls)
+        track._arrays, track._raw = None, (_output_arrays, contacts)
+        track.size = sum(len(record["points"]) for record in contacts)
+        return track
 
     @classmethod
     def from_record(cls, contact_record) -> ContactTrack:
@@ -261,7 +263,7 @@ class ContactTrack:
         frame + shift), read without building a typed record per step, and only when asked:
         the numbers of ``EngineRun.contacts``, each coordinate less the shift."""
         track = cls.__new__(cls)
-        track._arrays, track._raw = None, contact_record
+        track._arrays, track._raw = None, (_record_arrays, contact_record)
         track.size = sum(len(contacts[0]) for _, contacts, _ in contact_record[1])
         return track
 
@@ -276,6 +278,15 @@ class ContactTrack:
                          dtype=float).reshape(len(states), bodies, 3)
         return cls(np.asarray(steps, dtype=np.int64), poses, flat_points,
                    np.repeat(np.arange(len(counts)), counts))
+
+
+def _output_arrays(contacts: Sequence[Mapping[str, Any]]
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(steps, poses, points, record)`` of :class:`ContactTrack` from an engine-task
+    output's ``contacts``."""
+    return ContactTrack._of([int(record["step"]) for record in contacts],
+                            [record["points"] for record in contacts],
+                            [record["bodies"] for record in contacts])._arrays
 
 
 def _record_arrays(contact_record) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -432,7 +443,8 @@ def _prepare(scene, problem, delassus: tuple[float, float, float]) -> SceneTerms
 
 def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = None,
           tolerances: Tolerances = DEFAULT_TOLERANCES, contacts=None,
-          terms: SceneTerms | None = None) -> Verdict:
+          terms: SceneTerms | None = None,
+          implied: tuple[float, float, float] | None = None) -> Verdict:
     """The verdict of one engine run of ``scene``.
 
     Parameters
@@ -455,6 +467,11 @@ def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = 
     terms : SceneTerms, optional
         ``prepare(scene, problem)``, when the caller judges several runs of one scene (the
         survey: one per engine and preset); None: worked out here.
+    implied : tuple of float, optional
+        ``metrics.impulses_from_velocities(problem, run.u_after, free_bodies=not
+        scene.ground)`` when the caller has it with a finite residual: the same numbers
+        :func:`impulse_from_velocities` works out (the same operations on the same values,
+        over the same frame-free scale); None: worked out here.
     """
     if contacts is not None:
         return judge_declared(scene, problem, run, contacts,
@@ -488,8 +505,9 @@ def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = 
                               f"v_n^S = {vn_after:.4g} m/s < -{bound:.3g} m/s "
                               f"({tolerances.separation:g}·|v_n^A|)"))
     reasons += _penetration(run, scales, tolerances)
-    implied_n, implied_t, residual = _implied_impulse(problem, terms.delassus, u_after,
-                                                      scales.speed_norm)
+    implied_n, implied_t, residual = (
+        implied if implied is not None
+        else _implied_impulse(problem, terms.delassus, u_after, scales.speed_norm))
     if residual > tolerances.impulse_residual:
         reasons.append(Reason("impulse-residual", residual, tolerances.impulse_residual,
                               f"‖Δu − M⁻¹(w_n I_n + w_t I_t)‖_M = {residual:.3g} of the "
