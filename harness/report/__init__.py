@@ -389,14 +389,17 @@ def start_drawing(tasks: Sequence[FigureTask], figure_dir: Path, workers: int | 
             multiprocessing.get_all_start_methods()):
         first = range(reading[0])  # read no record
         if len(first):
-            stages.append((first, _start_pool(first, min(len(first), max(1, workers // 2)))))
+            stages.append((first, start_forked(_draw_pending, first,
+                                               min(len(first), max(1, workers // 2)),
+                                               in_background=True)))
         try:
             read_records()
         except BaseException:
             _wait_quietly(stages)  # the first pool ends either way
             _PENDING = []
             raise
-        stages.append((reading, _start_pool(reading, min(len(reading), workers))))
+        stages.append((reading, start_forked(_draw_pending, reading,
+                                             min(len(reading), workers), in_background=True)))
     else:
         stages.append((range(len(_PENDING)),
                        start_forked(_draw_pending, range(len(_PENDING)), workers)))
@@ -420,27 +423,6 @@ def start_drawing(tasks: Sequence[FigureTask], figure_dir: Path, workers: int | 
         return result
 
     return expected, finish
-
-
-def _start_pool(indexes: Sequence[int], workers: int) -> Callable[[], list]:
-    """``_draw_pending`` of ``indexes`` started in a pool of ``workers`` forked processes,
-    even for one figure (``start_forked`` draws a lone one here, when waited for: this
-    process has the page to build meanwhile); returns the function that waits for them."""
-    from concurrent.futures import ProcessPoolExecutor
-
-    from harness.run.executor import one_blas_thread
-
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("fork"),
-                               initializer=one_blas_thread)
-    futures = [pool.submit(_draw_pending, index) for index in indexes]
-
-    def results() -> list:
-        try:
-            return [future.result() for future in futures]
-        finally:
-            pool.shutdown(cancel_futures=True)
-
-    return results
 
 
 def _wait_quietly(stages) -> None:

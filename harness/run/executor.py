@@ -328,13 +328,17 @@ def map_forked(function: Callable[[Any], Any], items: Sequence, workers: int) ->
     return start_forked(function, items, workers)()
 
 
-def start_forked(function: Callable[[Any], Any], items: Sequence,
-                 workers: int) -> Callable[[], list]:
+def start_forked(function: Callable[[Any], Any], items: Sequence, workers: int, *,
+                 in_background: bool = False) -> Callable[[], list]:
     """:func:`map_forked` started: the workers are forked and at work when this returns, and
     this process may go on; the function returned waits for them and gives the results (it
-    runs ``function`` itself, then, where :func:`map_forked` would run inline)."""
+    runs ``function`` itself, then, where :func:`map_forked` would run inline).
+    ``in_background``: fork even one worker for one item, so that this process can do other
+    work meanwhile (inline only where fork is unavailable)."""
     items = list(items)
-    if workers <= 1 or len(items) <= 1 or "fork" not in multiprocessing.get_all_start_methods():
+    workers = max(1, workers)
+    alone = not in_background and (workers == 1 or len(items) <= 1)
+    if alone or not items or "fork" not in multiprocessing.get_all_start_methods():
         return lambda: [function(item) for item in items]
     # With fork, every worker is forked at the first submit, before the pool's own thread
     # starts: what they inherit is this process as it is now.

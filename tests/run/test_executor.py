@@ -14,6 +14,7 @@ from harness.run.executor import (
     DaskNotInstalled,
     HeartbeatAfterClose,
     run_tasks,
+    start_forked,
     wait_for_shutdowns,
 )
 from harness.scene.random_problems import random_problems
@@ -127,3 +128,24 @@ def test_heartbeat_filter_drops_only_the_shutdown_race_record():
                                OSError("connection refused")))
     assert race.filter(_record("Failed to communicate with scheduler during heartbeat.", None))
     assert race.filter(_record("Compute Failed", closed))
+
+
+def _process_id(_item) -> int:
+    import os
+
+    return os.getpid()
+
+
+@pytest.mark.skipif("fork" not in multiprocessing.get_all_start_methods(), reason="no fork")
+def test_start_forked_runs_inline_or_in_the_background_as_asked():
+    """One item (or one worker) runs inline when waited for; ``in_background`` forks it, so
+    the caller works meanwhile; several items on several workers are forked either way."""
+    import os
+
+    here = os.getpid()
+    assert start_forked(_process_id, [0], 2)() == [here]
+    assert start_forked(_process_id, [0, 1], 1)() == [here, here]
+    (lone,) = start_forked(_process_id, [0], 1, in_background=True)()
+    assert lone != here
+    assert here not in start_forked(_process_id, [0, 1, 2], 2)()
+    assert start_forked(_process_id, [], 2, in_background=True)() == []
