@@ -73,7 +73,7 @@ def lay_out(figure, dpi: float) -> None:
     the layout moved the axes), then for real. The layout engine run here, at the PNG's
     resolution (the text extents it measures depend on it), finds the same positions
     without that first drawing, a fifth of a headline figure's time; the pixels are the
-    same (tests/report/test_figure_digests.py).
+    same (tests/report/test_drawing.py).
     """
     engine = figure.get_layout_engine()
     if engine is None or not figure.axes:  # Figure.draw lays out only a figure with axes

@@ -1049,10 +1049,12 @@ _NOT_CACHED = ',"cached":false'
 
 def _cached_line(line: str, stored: dict) -> str:
     """:func:`record_line` of ``stored``, the record of ``line`` with ``cached`` true, by
-    editing the line: no quote outside a string precedes ``"cached"`` but the keys of
-    ``point`` and ``departure`` (none named so), so its first match is the field itself."""
-    at = line.find(f'{_NOT_CACHED},"diagnostics":')
-    if at < 0:  # not a line of this layout: spelled in full
+    editing the line where the field is the line's only match (a key ``cached`` inside a
+    dict field, ``point`` or ``departure``, would match too: then, as for a line of another
+    layout, the line is spelled in full)."""
+    marker = f'{_NOT_CACHED},"diagnostics":'
+    at = line.find(marker)
+    if at < 0 or line.find(marker, at + 1) >= 0:
         return record_line(stored)
     return f'{line[:at]},"cached":true{line[at + len(_NOT_CACHED):]}'
 

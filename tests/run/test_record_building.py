@@ -371,3 +371,13 @@ def test_contact_history_is_the_stepwise_one(poses):
         expected = stepwise_contact_history(problem, output, scene, time_step)
         assert found.keys() == expected.keys()
         assert plain_repr(found) == plain_repr(expected)
+
+
+def test_a_dict_field_holding_the_cached_key_is_spelled_in_full():
+    """A key ``cached`` inside ``point`` (before the field in the line) matches the marker
+    too: the line is then spelled in full, not edited at the wrong place."""
+    rng = np.random.default_rng(15)
+    data = engine_line_record(rng, "label").as_dict()
+    data["point"] = {"a": 1, "cached": False, "diagnostics": 1}
+    stored = {**data, "cached": True}
+    assert runner._cached_line(record_line(data), stored) == record_line(stored)
