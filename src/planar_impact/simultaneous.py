@@ -473,20 +473,24 @@ def _lstsq_rows(matrices, rhs, rcond):
     for a 4 × 4; its own gufunc (``numpy.linalg._umath_linalg.lstsq``, the same ``gelsd``
     call on each matrix, with the same workspace for matrices of one shape) takes the stack
     at once and gives each row ``np.linalg.lstsq``'s answer bit for bit
-    (tests/theory/test_simultaneous_lstsq.py). A numpy without that gufunc gets the loop.
+    (tests/theory/test_simultaneous_lstsq.py). A numpy without that gufunc, or whose gufunc
+    takes other arguments, gets the loop.
     """
     if len(matrices) == 0:
         return np.empty((0, matrices.shape[-1])), np.empty(0, dtype=np.int64)
     gufunc = getattr(getattr(np.linalg, "_umath_linalg", None), "lstsq", None)
-    if gufunc is None:
-        answers = [np.linalg.lstsq(matrix, side, rcond=rcond)
-                   for matrix, side in zip(matrices, rhs)]
-        return (np.array([answer[0] for answer in answers]),
-                np.array([answer[2] for answer in answers], dtype=np.int64))
-    with np.errstate(call=_lstsq_failed, invalid="call", over="ignore", divide="ignore",
-                     under="ignore"):  # as np.linalg.lstsq calls it
-        solution, _, rank, _ = gufunc(matrices, rhs[..., None], rcond, signature="ddd->ddid")
-    return solution[..., 0], rank
+    if gufunc is not None:
+        try:
+            with np.errstate(call=_lstsq_failed, invalid="call", over="ignore",
+                             divide="ignore", under="ignore"):  # as np.linalg.lstsq calls it
+                solution, _, rank, _ = gufunc(matrices, rhs[..., None], rcond,
+                                              signature="ddd->ddid")
+            return solution[..., 0], rank
+        except TypeError:  # a numpy whose gufunc takes other arguments: the loop
+            pass
+    answers = [np.linalg.lstsq(matrix, side, rcond=rcond) for matrix, side in zip(matrices, rhs)]
+    return (np.array([answer[0] for answer in answers]),
+            np.array([answer[2] for answer in answers], dtype=np.int64))
 
 
 def _law_at(system, law, i, vn, vt, sign):

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
@@ -23,10 +25,16 @@ def stacks(seed=0):
 
 
 @pytest.mark.parametrize("rcond", [1e-9, 1e-12])
-@pytest.mark.parametrize("gufunc", [True, False])
+@pytest.mark.parametrize("gufunc", ["numpy's", "missing", "other arguments"])
 def test_each_row_is_np_linalg_lstsq_bit_for_bit(rcond, gufunc, monkeypatch):
-    if not gufunc:  # a numpy without the private gufunc takes the loop
+    if gufunc == "missing":  # a numpy without the private gufunc takes the loop
         monkeypatch.setattr(np.linalg, "_umath_linalg", None)
+    elif gufunc == "other arguments":  # so does one whose gufunc is called otherwise
+
+        def refuse(*_args, **_keywords):
+            raise TypeError("lstsq() takes other arguments")
+
+        monkeypatch.setattr(np.linalg, "_umath_linalg", SimpleNamespace(lstsq=refuse))
     ranks_seen = set()
     for matrices, rhs in stacks():
         solutions, ranks = sim._lstsq_rows(matrices, rhs, rcond=rcond)
