@@ -266,7 +266,8 @@ def impact_chunk(task: dict) -> list[list[float]]:
 def worker_speedup(quick: bool) -> dict:
     """Wall time of a batch of engine impacts through run_tasks with 1 and with 2 workers."""
     from harness.engines import EngineNotInstalled, load_engine
-    from harness.run.executor import default_workers, run_tasks
+    from harness.processes import default_workers
+    from harness.run.executor import run_tasks
 
     engine_name = None
     # MuJoCo first: ~0.8 ms an impact, so the batch is compute, not pickling or start-up

@@ -381,7 +381,7 @@ def start_drawing(tasks: Sequence[FigureTask], figure_dir: Path, workers: int | 
     stale.sort(key=lambda item: (item[1][0].reads_records,
                                  -KIND_COST.get(item[1][0].kind, 1.0)))
     _PENDING = [item for _, item in stale]
-    from harness.run.executor import start_forked
+    from harness.processes import start_forked
 
     reading = [i for i, (task, _, _) in enumerate(_PENDING) if task.reads_records]
     stages = []  # (pending indexes, the function waiting for their drawing)

@@ -67,15 +67,14 @@ Dask
 
 from __future__ import annotations
 
-import functools
 import logging
 import math
-import multiprocessing
-import os
 import sys
 import threading
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any, Callable, Hashable, Iterable, Sequence
+
+from harness.processes import default_workers, one_blas_thread
 
 EXECUTORS: tuple[str, ...] = ("local", "dask")
 
@@ -90,14 +89,6 @@ DASK_MIN_TASKS = 2000
 
 class DaskNotInstalled(ImportError):
     """``executor="dask"`` was asked for but dask.distributed cannot be imported."""
-
-
-def default_workers() -> int:
-    """Number of local cores this process may use."""
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:  # pragma: no cover - not Linux
-        return max(1, os.cpu_count() or 1)
 
 
 def check_arguments(executor: str = "local", workers: int | None = None,
@@ -298,61 +289,6 @@ def call_chunk(function, batch, chunk: Sequence) -> tuple[list, tuple[int, Excep
 def _run_inline(function, batch, tasks: Sequence, chunks, workers, deliver) -> None:
     for chunk in chunks:
         deliver(chunk, *call_chunk(function, batch, [tasks[index] for index in chunk]))
-
-
-@functools.cache
-def one_blas_thread() -> None:
-    """Keep numpy's BLAS to one thread in a worker process (once per process; the main
-    process is left alone). The local pools' initializer; tasks that may run on Dask
-    workers call it too.
-
-    Each worker is one of ``workers`` processes sharing the cores; a BLAS's own threads
-    fight the other workers for them: measured on the 2-core machine, 141 several-contact
-    references (many small linear-algebra calls) took 6.7 s on two workers as on one, 3.4 s
-    with one BLAS thread each.
-    """
-    if multiprocessing.parent_process() is None:
-        return
-    from threadpoolctl import threadpool_limits
-
-    threadpool_limits(1, user_api="blas")
-
-
-def map_forked(function: Callable[[Any], Any], items: Sequence, workers: int) -> list:
-    """``[function(item) for item in items]`` in a pool of ``workers`` forked processes.
-
-    The workers inherit this process's memory, so what ``function`` reads from module state
-    set before the call (scenes, figure closures) is never pickled; only ``items`` and the
-    results are. Runs inline with one worker, one item, or where fork is unavailable.
-    """
-    return start_forked(function, items, workers)()
-
-
-def start_forked(function: Callable[[Any], Any], items: Sequence, workers: int, *,
-                 in_background: bool = False) -> Callable[[], list]:
-    """:func:`map_forked` started: the workers are forked and at work when this returns, and
-    this process may go on; the function returned waits for them and gives the results (it
-    runs ``function`` itself, then, where :func:`map_forked` would run inline).
-    ``in_background``: fork even one worker for one item, so that this process can do other
-    work meanwhile (inline only where fork is unavailable)."""
-    items = list(items)
-    workers = max(1, workers)
-    alone = not in_background and (workers == 1 or len(items) <= 1)
-    if alone or not items or "fork" not in multiprocessing.get_all_start_methods():
-        return lambda: [function(item) for item in items]
-    # With fork, every worker is forked at the first submit, before the pool's own thread
-    # starts: what they inherit is this process as it is now.
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("fork"),
-                               initializer=one_blas_thread)
-    futures = [pool.submit(function, item) for item in items]
-
-    def results() -> list:
-        try:
-            return [future.result() for future in futures]
-        finally:
-            pool.shutdown(cancel_futures=True)
-
-    return results
 
 
 def _run_pool(function, batch, tasks: Sequence, chunks, workers: int, deliver) -> None:
@@ -573,6 +509,5 @@ def progress_printer(label: str, every_s: float = 2.0, stream=None) -> Callable[
 
 __all__ = ["CONNECT_TIMEOUT_S", "DASK_MIN_TASKS", "EXECUTORS", "MAX_CHUNK", "DaskChunk",
            "DaskNotInstalled", "HeartbeatAfterClose", "call_chunk", "call_dask_chunk",
-           "check_arguments", "chunk_size_for", "default_workers", "make_chunks", "map_forked",
-           "one_blas_thread", "progress_printer", "run_tasks", "start_forked",
+           "check_arguments", "chunk_size_for", "make_chunks", "progress_printer", "run_tasks",
            "start_local_cluster", "wait_for_shutdowns"]

@@ -941,7 +941,7 @@ def _build_scenarios(scenarios: Sequence[Scenario], by_scenario: Mapping[str, li
     global _BUILD_STATE
     if not scenarios:  # a warm run's: every scenario's records read whole from the cache
         return {}
-    from harness.run.executor import default_workers, map_forked
+    from harness.processes import default_workers, map_forked
 
     workers = default_workers() if workers is None else workers
     size = sum(len(s.point_list()) * len(s.laws) + len(by_scenario.get(s.name, ()))
@@ -1268,7 +1268,7 @@ def reference_task(task: dict) -> dict:
     reference inline, where the exception becomes the point's internal-error records as
     before (:func:`_point_records_or_errors`).
     """
-    from harness.run.executor import one_blas_thread
+    from harness.processes import one_blas_thread
 
     one_blas_thread()  # a Dask worker has no pool initializer
     try:

@@ -110,7 +110,7 @@ def _load_files(files: list[Path], workers: int | None) -> list[Scenario | Scena
             to_check.append((index, path, text, key))
     forked = workers != 1 and len(to_check) >= FORKED_CHECKS_MIN_FILES
     if forked:  # imported here: a run whose files passed before (a warm run) forks nothing
-        from harness.run.executor import default_workers
+        from harness.processes import default_workers
 
         workers = min(workers or default_workers(), default_workers())
         forked = workers > 1
@@ -118,7 +118,7 @@ def _load_files(files: list[Path], workers: int | None) -> list[Scenario | Scena
         for index, path, text, key in to_check:
             outcomes[index] = _checked(path, text, key)
         return outcomes
-    from harness.run.executor import map_forked
+    from harness.processes import map_forked
 
     _load_engines()  # imported here once, not by each worker
     count = min(workers * PIECES_PER_WORKER, len(to_check))

@@ -26,8 +26,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from harness.processes import map_forked
 from harness.run import verdicts
-from harness.run.executor import map_forked
 from harness.scenarios.errors import ScenarioError
 from harness.survey import laws as survey_laws
 from harness.survey.engines import EngineResults, run_engine

@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 
 import planar_impact as pi
+from harness.processes import start_forked
 from harness.run.executor import (
     DaskNotInstalled,
     HeartbeatAfterClose,
     run_tasks,
-    start_forked,
     wait_for_shutdowns,
 )
 from harness.scene.random_problems import random_problems
