@@ -37,7 +37,7 @@ def _library_outputs() -> Iterator[dict]:
 
     for scenario in load_scenarios(None):
         for point in scenario.point_list():
-            for name in runner._engines_of(scenario, ("pymunk", "pybullet", "mujoco", "box2d")):
+            for name in scenario.engines_among(("pymunk", "pybullet", "mujoco", "box2d")):
                 try:
                     engine = load_engine(name)
                 except EngineNotInstalled:

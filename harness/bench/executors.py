@@ -52,7 +52,7 @@ def engine_tasks(count: int = TASKS, directory: Path | None = None,
     """
     from harness.bench.many_scenarios import write_copies
     from harness.engines import EngineNotInstalled, load_engine
-    from harness.run.runner import TASK_TIME_LIMIT_S, _engines_of
+    from harness.run.runner import TASK_TIME_LIMIT_S
     from harness.scenarios import ENGINES, PRESETS, load_scenarios
 
     engines = {}
@@ -71,7 +71,7 @@ def engine_tasks(count: int = TASKS, directory: Path | None = None,
             sources = []  # the file of each task
             for scenario in load_scenarios(paths):
                 for point in scenario.point_list():
-                    names = [n for n in _engines_of(scenario, list(engines)) if n in engines]
+                    names = [n for n in scenario.engines_among(list(engines)) if n in engines]
                     scene = scenario.scene(point) if names else None
                     for name in names:
                         for preset in PRESETS:

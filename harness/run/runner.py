@@ -615,7 +615,7 @@ def run(
         except OSError as error:
             warnings.append(f"cache {cache.root}: cannot clean temporaries: {error}")
     wanted_engines = [name for name in ENGINES if name in engines]
-    needs_engines = any(not s.analytic_only and _engines_of(s, wanted_engines) for s in scenarios)
+    needs_engines = any(s.engines_among(wanted_engines) for s in scenarios)
     versions, missing, preset_settings = (_engine_status(wanted_engines, cache) if needs_engines
                                           else ({}, {}, {}))
 
@@ -632,7 +632,7 @@ def run(
                 scenario, cache, versions, missing, wanted_engines, presets, command_overrides,
                 history)
             found = _stored_scenario(scenario, cache, key, presets,
-                                     len(_engines_of(scenario, wanted_engines)))
+                                     len(scenario.engines_among(wanted_engines)))
             if found is not None:
                 stored[scenario.name] = found
                 runs = found.summary["counts"]["engine_runs"]
@@ -654,7 +654,7 @@ def run(
                 continue
             for point in scenario.point_list():
                 scene = None
-                for engine_name in _engines_of(scenario, wanted_engines):
+                for engine_name in scenario.engines_among(wanted_engines):
                     for preset in presets:
                         item: dict = {}
                         plan.append((scenario, point, engine_name, preset, item))
@@ -833,7 +833,7 @@ def _scenario_key(scenario: Scenario, cache, versions: Mapping, missing: Mapping
     """
     if cache is None or not cache.enabled:
         return None
-    engines = _engines_of(scenario, wanted_engines)
+    engines = scenario.engines_among(wanted_engines)
     if any(name in missing or name not in versions for name in engines):
         return None
     try:
@@ -1075,13 +1075,6 @@ def _point_records_or_errors(scenario: Scenario, point, engine_entries: Sequence
                 + [Record(scenario=scenario.name, point=info, source=engine_name, preset=preset,
                           status=status, cached=bool(item.get("cached", False)))
                    for _, _, engine_name, preset, item in engine_entries])
-
-
-def _engines_of(scenario: Scenario, wanted: Sequence[str]) -> list[str]:
-    if scenario.analytic_only:
-        return []
-    allowed = scenario.engines or ENGINES
-    return [name for name in wanted if name in allowed]
 
 
 def _run_tasks(tasks, *, executor, workers, scheduler, log, on_result=None,

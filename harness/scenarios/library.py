@@ -8,7 +8,7 @@ from typing import Iterable
 
 from harness.scenarios import checks
 from harness.scenarios.errors import ScenarioError, suggest
-from harness.scenarios.model import KEPT_SCENES, Scenario
+from harness.scenarios.model import Scenario
 from harness.scenarios.reader import read_scenario_text, scenario_from_text
 from harness.scenarios.schema import SCENARIO_DIR
 
@@ -128,7 +128,7 @@ def _load_files(files: list[Path], workers: int | None) -> list[Scenario | Scena
             outcomes[index] = outcome
             if isinstance(outcome, Scenario):  # passed: remembered here, not in the worker
                 checks.passed_checks.add(key, outcome)
-                object.__setattr__(outcome, KEPT_SCENES, scenes)
+                outcome.keep_scenes(scenes)
     return outcomes
 
 
@@ -144,8 +144,8 @@ def _check_piece(piece: list[tuple]) -> bytes:
     read-only mappings, which plain pickle refuses), each with the scenes its checks built
     (a scenario's pickle leaves them out; sent, they cost a tenth of building them anew)."""
     outcomes = [_checked(path, text, key) for _, path, text, key in piece]
-    return checks.pickled([(outcome, getattr(outcome, KEPT_SCENES, None) or {})
-                           for outcome in outcomes])
+    return checks.pickled([(outcome, outcome.kept_scenes() if isinstance(outcome, Scenario)
+                            else {}) for outcome in outcomes])
 
 
 def _load_engines() -> None:

@@ -22,6 +22,7 @@ from harness.scenarios.schema import (
     ANALYTIC_SYSTEMS,
     BODY_SWEEP_FIELDS,
     DEFAULT_GAP_TOLERANCE,
+    ENGINES,
     LAWS,
     SHAPE_FIELDS,
     TWO_SLED_DEFAULTS,
@@ -30,7 +31,7 @@ from harness.scenarios.schema import (
 from harness.scene import Body, Box, Contact, Disk, Polygon, Rod, Scene, geometry
 
 #: Where a :class:`Scenario` keeps its scenes by point index (:meth:`Scenario.scene`).
-KEPT_SCENES = "_scenes"
+_KEPT_SCENES = "_scenes"
 
 
 @dataclass(frozen=True)
@@ -182,6 +183,14 @@ class Scenario:
     def analytic_only(self) -> bool:
         return self.system in ANALYTIC_SYSTEMS
 
+    def engines_among(self, wanted) -> list[str]:
+        """The engines of ``wanted`` (in its order) this scenario runs: those its ``engines``
+        allow (every engine when it names none); none for an analytic-only system."""
+        if self.analytic_only:
+            return []
+        allowed = self.engines or ENGINES
+        return [name for name in wanted if name in allowed]
+
     def point_list(self) -> list[Point]:
         if self.sweep is None:
             return [Point(0)]
@@ -233,10 +242,10 @@ class Scenario:
         if self.analytic_only:
             return None
         point = self.point(which)
-        scenes = self.__dict__.get(KEPT_SCENES)
+        scenes = self.__dict__.get(_KEPT_SCENES)
         if scenes is None:
             scenes = {}
-            object.__setattr__(self, KEPT_SCENES, scenes)  # frozen: not a field
+            object.__setattr__(self, _KEPT_SCENES, scenes)  # frozen: not a field
         scene = scenes.get(point.index)
         if scene is None:
             fixed = self.at(point)
@@ -246,10 +255,20 @@ class Scenario:
                 ground=fixed.ground, name=self.name)
         return scene
 
+    def kept_scenes(self) -> dict:
+        """The scenes :meth:`scene` has built and kept so far, by point index (to send them
+        with a pickle of this scenario, which leaves them out)."""
+        return dict(self.__dict__.get(_KEPT_SCENES) or {})
+
+    def keep_scenes(self, scenes: Mapping[int, Scene]) -> None:
+        """Keep ``scenes`` (by point index, as :meth:`kept_scenes` gives them: built by this
+        scenario's :meth:`scene` elsewhere, in a worker) as if built here."""
+        object.__setattr__(self, _KEPT_SCENES, dict(scenes))  # frozen: not a field
+
     def __getstate__(self) -> dict:
         """Pickled and copied without the scenes :meth:`scene` kept (built again on demand)."""
         state = dict(self.__dict__)
-        state.pop(KEPT_SCENES, None)
+        state.pop(_KEPT_SCENES, None)
         return state
 
     def contact(self, which: Union[Point, int, None] = None,

@@ -80,13 +80,11 @@ def test_scenarios_checked_on_workers_are_remembered_as_passed(library_dir, tmp_
 
 
 def test_the_scenes_the_workers_built_come_back_with_their_scenarios(library_dir):
-    from harness.scenarios.model import KEPT_SCENES
-
     scenarios, _ = load_scenarios_reporting(library_dir, workers=2)
     bodies = [s for s in scenarios if not s.analytic_only]
-    assert bodies and all(KEPT_SCENES in s.__dict__ for s in bodies)
+    assert bodies
     for scenario in bodies:
-        kept = dict(scenario.__dict__[KEPT_SCENES])
+        kept = scenario.kept_scenes()
         assert sorted(kept) == [point.index for point in scenario.point_list()]
         fresh = scenario.located(scenario.path)  # a copy: keeps none
         assert all(fresh.scene(index) == scene for index, scene in kept.items())

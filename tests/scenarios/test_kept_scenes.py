@@ -10,7 +10,6 @@ import numpy as np
 
 from harness.scenarios import load_scenarios
 from harness.scenarios.checks import pickled
-from harness.scenarios.model import KEPT_SCENES
 
 SCENARIOS = [s for s in load_scenarios() if not s.analytic_only]
 
@@ -22,7 +21,7 @@ def test_a_kept_scene_is_the_scene_built_anew_at_each_point():
             scene = scenario.scene(point)
             assert scenario.scene(point.index) is scene
             fresh = copy.copy(scenario)  # keeps nothing: builds again
-            assert KEPT_SCENES not in fresh.__dict__
+            assert fresh.kept_scenes() == {}
             assert fresh.scene(point) == scene and fresh.scene(point) is not scene
             assert fresh.at(point).scene() == scene
         scenes = [scenario.scene(point) for point in scenario.point_list()]
@@ -42,7 +41,17 @@ def test_the_analytic_problem_is_the_kept_scenes():
 def test_pickles_and_copies_leave_the_scenes_out():
     scenario = next(s for s in SCENARIOS if s.sweep is not None)
     scenario.scene(1)
-    assert KEPT_SCENES in scenario.__dict__
+    assert 1 in scenario.kept_scenes()
     for other in (pickle.loads(pickled(scenario)), copy.copy(scenario),
                   scenario.located(None)):
-        assert other == scenario.located(other.path) and KEPT_SCENES not in other.__dict__
+        assert other == scenario.located(other.path) and other.kept_scenes() == {}
+
+
+def test_scenes_kept_elsewhere_are_served_as_built_here():
+    """``keep_scenes`` (the forked checks' scenes, sent back) makes ``scene`` serve them."""
+    scenario = next(s for s in SCENARIOS if s.sweep is not None)
+    built = {point.index: scenario.scene(point) for point in scenario.point_list()}
+    fresh = copy.copy(scenario)
+    fresh.keep_scenes(built)
+    assert all(fresh.scene(index) is scene for index, scene in built.items())
+    assert fresh.kept_scenes() == built and fresh.kept_scenes() is not built
