@@ -219,7 +219,7 @@ def impulses_from_velocities(problem, u_after, *,
     """
     u_after = np.asarray(u_after, dtype=float)
     delta_u = u_after - problem.u
-    normal, tangential = _impulse_of(problem, delassus(problem), delta_u)
+    normal, tangential = impulse_of(problem, delassus(problem), delta_u)
     explained = np.linalg.solve(problem.mass_matrix, problem.wn * normal + problem.wt * tangential)
     residual = departure(problem.mass_matrix, delta_u, explained, problem.u,
                          free_bodies=free_bodies)
@@ -230,11 +230,11 @@ def impulse_series(problem, speeds: Sequence) -> list[tuple[float, float]]:
     """``(I_n, I_t)`` of :func:`impulses_from_velocities` for each of ``speeds`` (a run's
     speeds step by step), bit for bit, without the residual nobody reads there."""
     contact_space = delassus(problem)
-    return [_impulse_of(problem, contact_space, np.asarray(u, dtype=float) - problem.u)
+    return [impulse_of(problem, contact_space, np.asarray(u, dtype=float) - problem.u)
             for u in speeds]
 
 
-def _impulse_of(problem, contact_space: tuple[float, float, float],
+def impulse_of(problem, contact_space: tuple[float, float, float],
                 delta_u: np.ndarray) -> tuple[float, float]:
     """The impulse ``(I_n, I_t)`` of (A22)/(A23) behind the change of speeds ``delta_u``,
     with ``contact_space`` the problem's :func:`delassus`."""
@@ -283,4 +283,5 @@ def _finite(value) -> float:
 
 __all__ = ["RowScales", "STICK_TOLERANCE", "classify_end_state", "contact_velocities", "delassus",
            "departure", "departure_batch", "departure_split", "departures", "energy_change",
-           "frame_free_scale", "impulse_series", "impulses_from_velocities", "ke_norm"]
+           "frame_free_scale", "impulse_of", "impulse_series", "impulses_from_velocities",
+           "ke_norm"]

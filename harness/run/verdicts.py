@@ -789,15 +789,11 @@ def impulse_from_velocities(problem, u_after, speed_norm: float) -> tuple[float,
 
 def _implied_impulse(problem, delassus: tuple[float, float, float], u_after,
                      speed_norm: float) -> tuple[float, float, float]:
-    """:func:`impulse_from_velocities` with the contact's ``(m_nn, m_nt, m_tt)`` given: the
+    """:func:`metrics.impulses_from_velocities` with the contact's ``(m_nn, m_nt, m_tt)`` given: the
     impulse of ``metrics.impulses_from_velocities``, the same operations in the same order
     (so the same roundings), without working the Delassus terms out again."""
     delta_u = np.asarray(u_after, dtype=float) - problem.u
-    mnn, mnt, mtt = delassus
-    dvn, dvt = float(problem.wn @ delta_u), float(problem.wt @ delta_u)
-    det = mnn * mtt - mnt * mnt
-    normal = (mtt * dvn - mnt * dvt) / det
-    tangential = (mnn * dvt - mnt * dvn) / det
+    normal, tangential = metrics.impulse_of(problem, delassus, delta_u)
     explained = np.linalg.solve(problem.mass_matrix,
                                 problem.wn * normal + problem.wt * tangential)
     rest = metrics.ke_norm(problem.mass_matrix, delta_u - explained)
