@@ -111,8 +111,13 @@ def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: 
     wall = clock() - begin
     impacts = samples * len(populations)
     terms, results = survey.terms, survey.results
+    # The busiest worker's CPU time against the parts' wall time: what the workers lose to
+    # each other and to the machine's other work (the parts' own cost is the CPU time).
     echo(f"sampled {impacts} impacts from {len(populations)} populations in "
-         f"{survey.timings['sampling']:.2f} s; {survey.parts} parts in {wall:.2f} s")
+         f"{survey.timings['sampling']:.2f} s; {survey.parts} parts in {wall:.2f} s on "
+         f"{len(survey.worker_cpu)} processes (CPU "
+         + ", ".join(f"{seconds:.2f}" for seconds in sorted(survey.worker_cpu.values()))
+         + " s)")
     begin = clock()
     law_results = survey_laws.solve_laws(terms)
     routh = survey_laws.routh_coordinates(terms)

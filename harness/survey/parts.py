@@ -20,6 +20,7 @@ the samples still to go), so the workers finish together.
 from __future__ import annotations
 
 import dataclasses
+import os
 import time
 from dataclasses import dataclass
 from typing import NamedTuple
@@ -62,6 +63,7 @@ class PartResult:
     results: list[EngineResults]  # per pair
     timings: dict  # stage -> seconds on one core
     refused: tuple | None = None  # (population, sample, ScenarioError fields) when refused
+    worker: tuple[int, float] = (0, 0.0)  # (process id, CPU seconds of this part)
 
 
 @dataclass(frozen=True)
@@ -74,6 +76,7 @@ class Survey:
     results: list[EngineResults]
     timings: dict  # stage -> seconds on one core, summed over the parts
     parts: int
+    worker_cpu: dict = dataclasses.field(default_factory=dict)  # process id -> CPU seconds
 
 
 def part_bounds(samples: int, workers: int) -> list[tuple[int, int]]:
@@ -115,6 +118,7 @@ def run_part(bounds: tuple[int, int]) -> PartResult:
     populations, seed, pairs = _SHARED
     begin, end = bounds
     clock = time.perf_counter
+    cpu = time.process_time()
     tick = clock()
     sets = []
     for position, population in enumerate(populations):
@@ -140,7 +144,8 @@ def run_part(bounds: tuple[int, int]) -> PartResult:
     return PartResult([SampleRow(s.population, s.index, s.attempts, s.parameters)
                        for s in every],
                       [sample_set.rejections for sample_set in sets],
-                      dataclasses.replace(terms, problems=()), results, timings)
+                      dataclasses.replace(terms, problems=()), results, timings,
+                      worker=(os.getpid(), time.process_time() - cpu))
 
 
 def _join(parts: list[PartResult], sizes: list[int], populations: int, pairs: int) -> Survey:
@@ -167,5 +172,8 @@ def _join(parts: list[PartResult], sizes: list[int], populations: int, pairs: in
     rejections = [{reason: sum(part.rejections[position][reason] for part in parts)
                    for reason in REJECTIONS} for position in range(populations)]
     timings = {stage: sum(part.timings[stage] for part in parts) for stage in parts[0].timings}
+    worker_cpu: dict[int, float] = {}
+    for part in parts:
+        worker_cpu[part.worker[0]] = worker_cpu.get(part.worker[0], 0.0) + part.worker[1]
     return Survey([rows[i] for i in order.tolist()], rejections, terms, results, timings,
-                  len(parts))
+                  len(parts), worker_cpu)

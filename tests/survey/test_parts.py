@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import os
 import tomllib
 
 import numpy as np
@@ -43,6 +44,19 @@ def test_parts_on_two_workers_join_to_the_survey_of_one_process(monkeypatch):
              for sample in sample_population(population, SAMPLES, 3).samples]
     assert two["samples"]["family"].tolist() == [sample.population for sample in every]
     assert two["samples"]["sample"].tolist() == [sample.index for sample in every]
+
+
+def test_the_parts_cpu_time_is_counted_per_process(monkeypatch):
+    """One process runs the single part itself; two workers' parts run in forked processes,
+    and their CPU times add up per process."""
+    pytest.importorskip("pymunk")
+    populations = resolve_populations([])[:2]
+    one = survey_parts.run_parts(populations, 4, 0, [("pymunk", "defaults")], workers=1)
+    assert list(one.worker_cpu) == [os.getpid()] and one.worker_cpu[os.getpid()] > 0
+    monkeypatch.setattr(survey_parts, "MIN_PART", 1)
+    two = survey_parts.run_parts(populations, 4, 0, [("pymunk", "defaults")], workers=2)
+    assert two.parts == 4 and 1 <= len(two.worker_cpu) <= 2
+    assert os.getpid() not in two.worker_cpu and all(s > 0 for s in two.worker_cpu.values())
 
 
 def test_parts_cover_the_samples_largest_first():
