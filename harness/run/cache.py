@@ -289,7 +289,12 @@ class ResultCache:
         return key
 
     def path(self, key: str) -> Path:
-        return self.root / key[:2] / f"{key}.json"
+        return Path(self._path_text(key))
+
+    def _path_text(self, key: str) -> str:
+        """Where the entry ``key`` lies, as text (a cold run's thousands of puts would pay
+        as much for pathlib objects as for their writes)."""
+        return os.path.join(self.root, key[:2], f"{key}.json")
 
     def get(self, key: str, check=None, *, count: bool = True) -> dict | None:
         """The stored record, or ``None`` (a miss) when absent, disabled or unreadable.
@@ -335,9 +340,9 @@ class ResultCache:
         """
         if not self.enabled:
             return
-        # The path as text, the shard made only when missing: a cold run puts thousands of
-        # small entries, whose pathlib objects and mkdir calls cost as much as their writes.
-        path = os.path.join(self.root, key[:2], f"{key}.json")
+        # The shard made only when missing: a cold run puts thousands of small entries,
+        # whose mkdir calls would cost as much as their writes.
+        path = self._path_text(key)
         text = _ENTRY_ENCODER.encode({"key": key, "code_version": self.version,
                                       "record": record})
         write_bytes_atomically(path, text.encode("utf-8"), prefix=f".{key[:8]}-",

@@ -9,7 +9,7 @@ from typing import Iterable
 from harness.scenarios import checks
 from harness.scenarios.errors import ScenarioError, suggest
 from harness.scenarios.model import Scenario
-from harness.scenarios.reader import read_scenario_text, scenario_from_text
+from harness.scenarios.reader import passed_before, read_scenario_text, scenario_from_text
 from harness.scenarios.schema import SCENARIO_DIR
 
 
@@ -102,10 +102,9 @@ def _load_files(files: list[Path], workers: int | None) -> list[Scenario | Scena
         except ScenarioError as error:
             outcomes[index] = error
             continue
-        key = checks.passed_checks.key(text)
-        passed = checks.passed_checks.scenario(key)
-        if passed is not None:  # this very text was read and passed every check before
-            outcomes[index] = passed.located(path)
+        passed, key = passed_before(text, path)
+        if passed is not None:
+            outcomes[index] = passed
         else:
             to_check.append((index, path, text, key))
     forked = workers != 1 and len(to_check) >= FORKED_CHECKS_MIN_FILES

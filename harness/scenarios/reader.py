@@ -662,11 +662,17 @@ def load_scenario(path) -> Scenario:
     """Read and check one scenario file (raises :class:`ScenarioError`)."""
     path = Path(path)
     text = read_scenario_text(path)
+    passed, checks_key = passed_before(text, path)
+    return passed if passed is not None else scenario_from_text(text, path, checks_key)
+
+
+def passed_before(text: str, path: Path) -> tuple[Scenario | None, str | None]:
+    """``(scenario, checks key)``: the scenario of ``text`` at ``path`` when this very text
+    was read and passed every check before (else None), and the key its checks are kept
+    under (:data:`harness.scenarios.checks.passed_checks`)."""
     checks_key = checks.passed_checks.key(text)
     passed = checks.passed_checks.scenario(checks_key)
-    if passed is not None:  # this very text was read and passed every check before
-        return passed.located(path)
-    return scenario_from_text(text, path, checks_key)
+    return (None if passed is None else passed.located(path)), checks_key
 
 
 def read_scenario_text(path: Path) -> str:
