@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.engines import ENGINE_NAMES, preset_label, source_label
+from harness.engines import ENGINE_NAMES, PRESET_ROLES, preset_label, source_label
 from harness.report.views import escape_html, fmt_departure
 
 #: The survey's directory under the report's.
@@ -180,8 +180,29 @@ def settings_paragraph(settings: dict, families: list[str]) -> str:
 
 
 def statistics_rows(stats: dict) -> list[int]:
-    """The rows of ``statistics.parquet`` over every collision type, in its order."""
-    return [row for row, kind in enumerate(stats.get("poisson_type", ())) if int(kind) == 0]
+    """The rows of ``statistics.parquet`` over every collision type, ordered as the rest of
+    the page orders engines and presets (out of the box first), then by family."""
+    def order(row: int) -> tuple:
+        engine, preset = str(stats["engine"][row]), str(stats["preset"][row])
+        return (ENGINE_NAMES.index(engine) if engine in ENGINE_NAMES else 99, engine,
+                PRESET_ROLES.index(preset) if preset in PRESET_ROLES else 99, preset,
+                str(stats["family"][row]))
+
+    return sorted((row for row, kind in enumerate(stats.get("poisson_type", ()))
+                   if int(kind) == 0), key=order)
+
+
+def _group_cells(stats: dict, rows: list[int]) -> list[list[str]]:
+    """The engine and preset cells of ``rows``, each written only where it changes (a
+    table of many families reads as blocks)."""
+    cells, previous = [], (None, None)
+    for row in rows:
+        engine = str(stats["engine"][row])
+        preset = preset_label(engine, stats["preset"][row])
+        cells.append([f"<b>{escape_html(engine)}</b>" if engine != previous[0] else "",
+                      escape_html(preset) if (engine, preset) != previous else ""])
+        previous = (engine, preset)
+    return cells
 
 
 def statistics_table(stats: dict) -> str:
@@ -191,17 +212,16 @@ def statistics_table(stats: dict) -> str:
 
     header = ["engine", "preset", "family", "n", "flagged", "gains E", "from Poisson: median",
               "p90", "max", "from Stronge: median", "p90", "max"]
-    rows, classes = [], []
-    for row in statistics_rows(stats):
-        engine = str(stats["engine"][row])
-        rows.append([escape_html(engine), escape_html(preset_label(engine, stats["preset"][row])),
-                     escape_html(stats["family"][row]), str(int(stats["n"][row])),
-                     _percent(stats["flagged_fraction"][row]),
+    order = statistics_rows(stats)
+    rows = []
+    for row, group in zip(order, _group_cells(stats, order)):
+        flagged = _percent(stats["flagged_fraction"][row])
+        rows.append([*group, escape_html(stats["family"][row]), str(int(stats["n"][row])),
+                     f"<b>{flagged}</b>" if stats["flagged_fraction"][row] > 0 else flagged,
                      _percent(stats["energy_gain_fraction"][row]),
                      *(fmt_departure(float(stats[f"departure_{law}_{name}"][row]))
                        for law in ("poisson", "stronge") for name in ("median", "p90", "max"))])
-        classes.append("flag" if stats["flagged_fraction"][row] > 0 else "")
-    return html_table(header, rows, left=3, row_classes=classes)
+    return html_table(header, rows, left=3)
 
 
 def reason_table(stats: dict) -> str:
@@ -216,11 +236,11 @@ def reason_table(stats: dict) -> str:
         return ""
     header = ["engine", "preset", "family", "n", "flagged",
               *(key.removeprefix("flagged_").replace("_", " ") for key in reasons)]
-    rows = [[escape_html(stats["engine"][row]),
-             escape_html(preset_label(str(stats["engine"][row]), stats["preset"][row])),
-             escape_html(stats["family"][row]), str(int(stats["n"][row])),
+    # a reason no run of the row fails is left blank: the eye finds the ones that matter
+    rows = [[*group, escape_html(stats["family"][row]), str(int(stats["n"][row])),
              _percent(stats["flagged_fraction"][row]),
-             *(_percent(stats[key][row]) for key in reasons)] for row in flagged]
+             *(_percent(stats[key][row]) if stats[key][row] > 0 else "" for key in reasons)]
+            for row, group in zip(flagged, _group_cells(stats, flagged))]
     return html_table(header, rows, left=3)
 
 
@@ -279,7 +299,7 @@ def survey_section(directory: Path, figures: dict) -> str:
         parts.append(
             f"<p><b>A quick look.</b> {samples} samples per family give a rough median; the "
             f"p90 lies between a family's two largest departures and the max is one run. The "
-            f"tails -- the rare bad impact, the p99 -- need the full survey: "
+            f"tails — the rare bad impact, the p99 — need the full survey: "
             f"<code>impact-harness survey</code> ({FULL_SAMPLES:,} samples per family by "
             f"default, about a minute on two cores).</p>")
     if not stats:
@@ -287,7 +307,7 @@ def survey_section(directory: Path, figures: dict) -> str:
     else:
         parts.append("<h3>Per engine, preset and family, every collision type</h3>"
                      "<p><i>n</i> runs; <i>flagged</i>: the fraction failing a verdict check "
-                     "(rows shaded red); <i>gains E</i>: checked runs ending with more kinetic "
+                     "(bold when any); <i>gains E</i>: checked runs ending with more kinetic "
                      "energy than they began with; the departure's median, 90th percentile "
                      "and maximum over the checked runs.</p>" + statistics_table(stats))
         reasons = reason_table(stats)
@@ -295,7 +315,9 @@ def survey_section(directory: Path, figures: dict) -> str:
             parts.append("<h3>Flagged runs by reason</h3><p>The rows with flagged runs; a run "
                          "failing several checks counts under each (docs/verdicts.md).</p>"
                          + reasons)
-        engines = sorted(set(np.asarray(stats["engine"]).tolist()))
+        engines = sorted(set(np.asarray(stats["engine"]).tolist()),
+                         key=lambda name: (ENGINE_NAMES.index(name) if name in ENGINE_NAMES
+                                           else 99, name))
         parts.append("<h3>Where and how often they depart</h3>")
         parts.append(figures_html(figures, engines, samples))
     files = "; ".join(

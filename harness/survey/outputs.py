@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.engines import preset_label
+from harness.engines import PRESET_ROLES, preset_label
 
 TYPE_NAMES = {1: "1 stick (compr.)", 2: "2 stick (restit.)", 3: "3 reverse (compr.)",
               4: "4 reverse (restit.)", 5: "5 forward slide"}
@@ -157,20 +157,14 @@ def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dic
     return "\n".join(lines) + "\n"
 
 
-def _log_axis(axis, which: str, percent: bool = False) -> None:
-    """Log scale with plain ``1e-05`` labels (mathtext tick labels cost most of a figure),
-    or with ``percent`` in percent as the report writes departures (0.01 -> ``1%``)."""
+def _log_axis(axis, which: str) -> None:
+    """Log scale with plain ``1e-05`` labels: mathtext tick labels cost most of a figure."""
     from matplotlib import ticker
-
-    from harness.report.figures import percent_axis
 
     getattr(axis, f"set_{which}scale")("log")
     target = axis.xaxis if which == "x" else axis.yaxis
     target.set_major_locator(ticker.LogLocator(numticks=6))
-    if percent:
-        percent_axis(target)
-    else:
-        target.set_major_formatter(ticker.LogFormatter(labelOnlyBase=True))
+    target.set_major_formatter(ticker.LogFormatter(labelOnlyBase=True))
     target.set_minor_locator(ticker.NullLocator())
 
 
@@ -178,9 +172,11 @@ def _log_axis(axis, which: str, percent: bool = False) -> None:
 DEPARTURE_FLOOR = 1e-8
 #: Resolution of the survey's PNGs.
 FIGURE_DPI = 110
-#: Colour of each Poisson collision type on the maps (Okabe-Ito: told apart with the common
-#: colour-vision deficiencies too).
-TYPE_COLOURS = {1: "#0072B2", 2: "#56B4E9", 3: "#D55E00", 4: "#E69F00", 5: "#009E73"}
+#: Colour and marker of each Poisson collision type on the maps (Okabe-Ito colours, told
+#: apart with the common colour-vision deficiencies too; a marker each for grey print):
+#: sticking blue, reverse sliding orange, forward sliding green, restitution the lighter.
+TYPE_STYLE = {1: ("#0072B2", "o"), 2: ("#56B4E9", "s"), 3: ("#D55E00", "^"),
+              4: ("#E69F00", "v"), 5: ("#009E73", "D")}
 
 
 def figure_engines(runs: dict) -> list[str]:
@@ -189,7 +185,24 @@ def figure_engines(runs: dict) -> list[str]:
 
 
 def _presets(runs: dict, engine: str) -> list[str]:
-    return sorted(set(np.asarray(runs["preset"])[np.asarray(runs["engine"]) == engine].tolist()))
+    """``engine``'s presets in ``runs``, out of the box first (:data:`PRESET_ROLES`'s order)."""
+    present = set(np.asarray(runs["preset"])[np.asarray(runs["engine"]) == engine].tolist())
+    return sorted(present, key=lambda preset: (PRESET_ROLES.index(preset)
+                                               if preset in PRESET_ROLES else 99, preset))
+
+
+def _floor_axis(target) -> None:
+    """Percent tick labels, the floor's written ``≤ floor``: every departure at or below it
+    (exact agreement among them) is drawn there."""
+    from matplotlib.ticker import FuncFormatter
+
+    from harness.report.figures import percent_tick
+
+    def label(value, _):
+        text = percent_tick(value)
+        return f"≤{text}" if value <= DEPARTURE_FLOOR * 1.001 else text
+
+    target.set_major_formatter(FuncFormatter(label))
 
 
 def map_figure(runs: dict, engine: str, path: Path, tag: str | None = None) -> Path:
@@ -202,7 +215,8 @@ def map_figure(runs: dict, engine: str, path: Path, tag: str | None = None) -> P
     presets = _presets(runs, engine)
     ok = runs["status"] == "ok"
     figure = new_figure(10, 3.2 * len(presets) + 0.5)
-    axes = figure.subplots(len(presets), 2, squeeze=False, sharey="row")
+    # one scale for every panel: the presets compared at a glance
+    axes = figure.subplots(len(presets), 2, squeeze=False, sharex="col", sharey=True)
     for (left, right), preset in zip(axes, presets):
         chosen = ok & (runs["engine"] == engine) & (runs["preset"] == preset)
         departure = np.maximum(runs["departure_poisson"][chosen], DEPARTURE_FLOOR)
@@ -212,15 +226,17 @@ def map_figure(runs: dict, engine: str, path: Path, tag: str | None = None) -> P
         for kind, label in TYPE_NAMES.items():
             mine = kinds == kind
             if mine.any():
-                style = {"s": 9, "color": TYPE_COLOURS[kind], "alpha": 0.8, "rasterized": True,
-                         "linewidths": 0}
+                colour, marker = TYPE_STYLE[kind]
+                style = {"s": 14, "color": colour, "marker": marker, "alpha": 0.8,
+                         "rasterized": True, "linewidths": 0}
                 left.scatter(ratio[mine], departure[mine], label=label, **style)
                 right.scatter(runs["mu"][chosen][mine], departure[mine], **style)
         left.axvline(1.0, color="0.5", lw=0.8)
         _log_axis(left, "x")
         for axis in (left, right):
-            _log_axis(axis, "y", percent=True)
+            _log_axis(axis, "y")
             axis.grid(True, which="major", color="0.92", lw=0.6)
+        _floor_axis(left.yaxis)
         left.set_ylabel("departure from Poisson")
         left.set_title(f"{preset_label(engine, preset)}: against α / r_m", fontsize=10)
         right.set_title(f"{preset_label(engine, preset)}: against μ", fontsize=10)
@@ -247,7 +263,7 @@ def cdf_figure(runs: dict, engine: str, path: Path, tag: str | None = None) -> P
     families = sorted(set(np.asarray(runs["family"]).tolist()))
     colours = colormaps["tab10"]
     figure = new_figure(4.6 * len(presets) + 0.4, 3.6)
-    axes = figure.subplots(1, len(presets), sharey=True, squeeze=False)[0]
+    axes = figure.subplots(1, len(presets), sharex=True, sharey=True, squeeze=False)[0]
     for axis, preset in zip(axes, presets):
         for index, family in enumerate(families):
             chosen = (ok & (runs["engine"] == engine) & (runs["preset"] == preset)
@@ -256,7 +272,9 @@ def cdf_figure(runs: dict, engine: str, path: Path, tag: str | None = None) -> P
             if values.size:
                 axis.step(values, np.arange(1, values.size + 1) / values.size,
                           where="post", color=colours(index % 10), label=family)
-        _log_axis(axis, "x", percent=True)
+        _log_axis(axis, "x")
+        _floor_axis(axis.xaxis)
+        axis.set_ylim(0, 1.03)
         axis.grid(True, which="major", color="0.92", lw=0.6)
         axis.set_xlabel("departure from Poisson")
         axis.set_title(f"{engine} {preset_label(engine, preset)}", fontsize=10)
