@@ -37,7 +37,9 @@ engine and preset from Poisson and from Stronge, per scenario); the split of eac
 departure into the law it solves and how well it solves it; the gates; per scenario the
 post-impact velocities of every law and engine side by side, the energy change and the
 impulse diagram (Fig. 1 of the paper), or for sweeps the post-impact quantities against the
-swept parameter with the Poisson type boundaries marked; Table 3; versions and settings.
+swept parameter with the Poisson type boundaries marked; Table 3; the survey in
+``<out>/survey/`` when there is one (what was surveyed and what was not, its table per engine
+× preset × family, its figures: :mod:`harness.report.survey`); versions and settings.
 """
 
 

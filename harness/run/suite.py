@@ -6,8 +6,10 @@ Four steps, each timed on stderr::
     2. every scenario run      -> <out>/results.json  (runs cached: `impact-harness cache info`)
     3. a quick survey          -> <out>/survey/summary.md, <out>/survey/*.parquet
        (:data:`SURVEY_SAMPLES` samples of every population, the selected engines and
-       presets; harness/survey/)
+       presets; harness/survey/), kept as it is while its inputs are unchanged
+       (:func:`survey_inputs`)
     4. the report              -> <out>/index.html, <out>/summary.md, <out>/figures/
+       (with the survey's section and figures, harness/report/survey.py)
 
 Options select scenarios and engines exactly as for ``impact-harness run`` (``--tags quick``
 for a fast subset, ``--out`` for another directory). The exit status (see :mod:`harness.cli`)
