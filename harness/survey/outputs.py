@@ -157,13 +157,14 @@ def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dic
     return "\n".join(lines) + "\n"
 
 
-def _log_axis(axis, which: str) -> None:
-    """Log scale with plain ``1e-05`` labels: mathtext tick labels cost most of a figure."""
+def _log_axis(axis, which: str, ticks: int = 6) -> None:
+    """Log scale with plain ``1e-05`` labels (mathtext tick labels cost most of a figure),
+    about ``ticks`` of them."""
     from matplotlib import ticker
 
     getattr(axis, f"set_{which}scale")("log")
     target = axis.xaxis if which == "x" else axis.yaxis
-    target.set_major_locator(ticker.LogLocator(numticks=6))
+    target.set_major_locator(ticker.LogLocator(numticks=ticks))
     target.set_major_formatter(ticker.LogFormatter(labelOnlyBase=True))
     target.set_minor_locator(ticker.NullLocator())
 
@@ -234,7 +235,7 @@ def map_figure(runs: dict, engine: str, path: Path, tag: str | None = None) -> P
         left.axvline(1.0, color="0.5", lw=0.8)
         _log_axis(left, "x")
         for axis in (left, right):
-            _log_axis(axis, "y")
+            _log_axis(axis, "y", ticks=12)  # every decade: where 10% ends and 1% begins
             axis.grid(True, which="major", color="0.92", lw=0.6)
         _floor_axis(left.yaxis)
         left.set_ylabel("departure from Poisson")
