@@ -163,7 +163,7 @@ def settings_paragraph(settings: dict, families: list[str]) -> str:
             f"({_names(families)}), seed {escape_html(settings.get('seed'))}, each run through "
             f"every engine and preset: {_names(pairs)}")
     if isinstance(samples, int) and families:
-        text += f" ({samples * len(families)} impacts each)"
+        text += f" ({samples * len(families)} impacts per engine and preset)"
     text += ".</p>"
     missing = []
     for label, why in settings.get("left_out", {}).items():
@@ -298,7 +298,7 @@ def survey_section(directory: Path, figures: dict) -> str:
     if isinstance(samples, int) and samples < FULL_SAMPLES:
         parts.append(
             f"<p><b>A quick look.</b> {samples} samples per family give a rough median; the "
-            f"p90 lies between a family's two largest departures and the max is one run. The "
+            f"p90 is one of a family's few largest departures and the max is one run. The "
             f"tails — the rare bad impact, the p99 — need the full survey: "
             f"<code>impact-harness survey</code> ({FULL_SAMPLES:,} samples per family by "
             f"default, about a minute on two cores).</p>")
