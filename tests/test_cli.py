@@ -119,12 +119,15 @@ def test_suite_quick(capsys, tmp_path):
     page = (out / "index.html").read_text(encoding="utf-8")
     assert "Table 3 of Djerassi" in page  # the paper's table embedded in the page
     assert f"href='{survey.as_posix()}'" in page
+    assert "<h2 id='survey'>" in page and "figures/survey-map-pymunk.png" in page
+    assert (out / "figures" / "survey-map-pymunk.png").is_file()
     table = (out / survey).read_text(encoding="utf-8")
     assert "| pymunk | accurate | rod-ground | all | 20 |" in table  # SURVEY_SAMPLES each
-    # a warm rerun simulates nothing
+    # a warm rerun simulates nothing and keeps the survey
     code, _, err = cli(capsys, "suite", "--tags", "quick", "--out", out,
                        "--cache-dir", tmp_path / "cache")
     assert code == 0 and "0 engine runs simulated" in err
+    assert "survey/summary.md (unchanged" in err
 
 
 def test_paper_command(capsys, tmp_path):

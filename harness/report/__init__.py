@@ -37,7 +37,9 @@ engine and preset from Poisson and from Stronge, per scenario); the split of eac
 departure into the law it solves and how well it solves it; the gates; per scenario the
 post-impact velocities of every law and engine side by side, the energy change and the
 impulse diagram (Fig. 1 of the paper), or for sweeps the post-impact quantities against the
-swept parameter with the Poisson type boundaries marked; Table 3; versions and settings.
+swept parameter with the Poisson type boundaries marked; Table 3; the survey in
+``<out>/survey/`` when there is one (what was surveyed and what was not, its table per engine
+× preset × family, its figures: :mod:`harness.report.survey`); versions and settings.
 """
 
 
@@ -74,6 +76,7 @@ from harness.report.html import html_page
 from harness.report.pages import write_pages
 from harness.report.reading import read_for_report
 from harness.report.summary import write_summary
+from harness.report.survey import survey_figure_tasks
 from harness.report.views import FIGURES, engine_labels, slug, split_rows
 from harness.run.records import DEFAULT_RESULTS, Results
 
@@ -89,12 +92,12 @@ MANY_SCENARIOS = 60
 SELECTION_TAGS = ("quick", "sweep", "slow")
 #: Figure kinds drawn once per report (not per scenario): their SVG twins are kept with
 #: ``--svg headline``.
-HEADLINE_KINDS = ("legend", "heatmap", "split", "table3")
+HEADLINE_KINDS = ("legend", "heatmap", "split", "table3", "survey_map", "survey_cdf")
 #: Rough drawing cost per kind [s] (CPU, PNG + SVG, measured at 1,000 scenarios: the headline
 #: figures with the heat map's row per family): the pool draws the dearest first so that no
 #: worker is left with the dearest at the end.
 KIND_COST = {"heatmap": 2.5, "sweep": 2.2, "table3": 1.7, "split": 1.8, "history": 1.0,
-             "impulse": 0.5, "legend": 0.35}
+             "impulse": 0.5, "legend": 0.35, "survey_map": 1.2, "survey_cdf": 0.6}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -166,6 +169,8 @@ def write_report(results: Results, out_dir: Path | str,
     known = open_cache(results, out_dir, DIGESTS_FILE)  # digests of lines hashed before
     digests = scenario_digests(results, known.get)
     tasks = figure_tasks(results, many, scenario_figures, figures_for, svg, digests)
+    # the survey's, when out_dir holds one (harness/report/survey.py): headline figures
+    tasks += survey_figure_tasks(out_dir, svg in ("all", "headline"))
     # The figures are drawn by forked workers while this process builds the page, which
     # needs only their names: it assumes that every figure to be drawn has something to
     # show, and is built again in the rare case one had not.

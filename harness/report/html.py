@@ -799,11 +799,10 @@ def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None
             parts.append("</details>")
     parts.append("<h2 id='table3'>Table 3 of Djerassi (2009, Part B) reproduced</h2>")
     parts.append(cached_table3(figures.get("table3"), prepared))
-    survey = Path("survey", "summary.md")  # written by impact-harness suite
-    if (out_dir / survey).exists():
-        parts.append(f"<h2 id='survey'>Survey</h2><p>Departures over random families of "
-                     f"impacts: <a href='{survey.as_posix()}'>the survey's summary</a> (a "
-                     f"quick survey; <code>impact-harness survey</code> for the full one).</p>")
+    # the survey in out_dir/survey (impact-harness suite's quick one), when there is one
+    from harness.report.survey import cached_survey_section
+
+    parts.append(cached_survey_section(out_dir, figures, prepared))
     parts.append("<h2 id='versions'>Versions and settings</h2>" + versions_html(prov))
     parts.append("<h3>Engine settings per preset</h3><p>Bold where the presets differ. "
                  "Scenario files may override settings "

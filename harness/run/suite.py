@@ -6,8 +6,10 @@ Four steps, each timed on stderr::
     2. every scenario run      -> <out>/results.json  (runs cached: `impact-harness cache info`)
     3. a quick survey          -> <out>/survey/summary.md, <out>/survey/*.parquet
        (:data:`SURVEY_SAMPLES` samples of every population, the selected engines and
-       presets; harness/survey/)
+       presets; harness/survey/), kept as it is while its inputs are unchanged
+       (:func:`survey_inputs`)
     4. the report              -> <out>/index.html, <out>/summary.md, <out>/figures/
+       (with the survey's section and figures, harness/report/survey.py)
 
 Options select scenarios and engines exactly as for ``impact-harness run`` (``--tags quick``
 for a fast subset, ``--out`` for another directory). The exit status (see :mod:`harness.cli`)
@@ -68,9 +70,10 @@ def main(args) -> int:
           f"({time.perf_counter() - tick:.1f} s)", file=sys.stderr, flush=True)
 
     tick = time.perf_counter()
-    summary = quick_survey(args, out / "survey")
+    summary, surveyed = quick_survey(args, out / "survey")
     print(f"[3/4] survey: {SURVEY_SAMPLES} samples per population -> {summary} "
-          f"({time.perf_counter() - tick:.1f} s)", file=sys.stderr, flush=True)
+          + ("" if surveyed else "(unchanged: same populations, settings, versions and code) ")
+          + f"({time.perf_counter() - tick:.1f} s)", file=sys.stderr, flush=True)
 
     tick = time.perf_counter()
     written = report.write_report(read_results(results_path), out)
@@ -88,21 +91,73 @@ def main(args) -> int:
     return 1 if failed or unexplained else status
 
 
-def quick_survey(args, out: Path) -> Path:
+def quick_survey(args, out: Path) -> tuple[Path, bool]:
     """The survey of every population at :data:`SURVEY_SAMPLES` samples through the engines
-    and presets the run selected; returns the written ``summary.md``."""
-    from harness.survey.cli import run_survey, write_survey
+    and presets the run selected; returns the written ``summary.md`` and whether the survey
+    ran (False: the one in ``out`` was made from the same inputs, :func:`survey_inputs`, and
+    is kept as it is)."""
+    from harness.survey.cli import SETTINGS_FILE, run_survey, write_survey
     from harness.survey.population import resolve_populations
 
     engines = runner.parse_engines(args.engines)
     presets = runner.parse_presets(args.preset)
-    survey = run_survey(resolve_populations([]), SURVEY_SAMPLES, 0, engines, presets,
+    populations = resolve_populations([])
+    inputs = survey_inputs(populations, engines, presets)
+    if _survey_is_current(out, inputs):
+        return out / "summary.md", False
+    survey = run_survey(populations, SURVEY_SAMPLES, 0, engines, presets,
                         echo=lambda _: None)
     settings = {"samples": SURVEY_SAMPLES, "seed": 0,
                 "engines": [name for name in engines if name not in survey["skipped"]],
-                "presets": list(presets)}
+                "presets": list(presets), "skipped": survey["skipped"],
+                "left_out": survey["left_out"], "inputs": inputs}
+    (out / SETTINGS_FILE).unlink(missing_ok=True)  # no key over files half rewritten
     write_survey(survey, out, settings, figures=False)
-    return out / "summary.md"
+    return out / "summary.md", True
 
 
-__all__ = ["SURVEY_SAMPLES", "add_arguments", "main", "quick_survey"]
+def survey_inputs(populations, engines, presets) -> str:
+    """The digest of what the quick survey's tables depend on: the populations (their files'
+    text), :data:`SURVEY_SAMPLES`, the seed, the engines and presets asked for, the installed
+    versions of Python, numpy, pyarrow and the engines (an engine installed since is run),
+    and the code -- what the run cache's entries depend on (the engines, scenes, verdicts,
+    metrics, ``planar_impact``: :func:`harness.run.cache.cached_code_sources`) and
+    ``harness/survey/``. Any edit to that code runs the survey again: coarse, and cheap to
+    get right."""
+    import hashlib
+    import json
+
+    from harness.run.cache import _code_version_of, cached_code_sources
+    from harness.run.provenance import PACKAGES, package_versions
+
+    survey_code = Path(__file__).resolve().parents[1] / "survey"
+    code = _code_version_of((*cached_code_sources(), survey_code))
+    text = json.dumps({
+        "populations": [[population.name, Path(population.path).read_text(encoding="utf-8")
+                         if population.path else repr(population)]
+                        for population in populations],
+        "samples": SURVEY_SAMPLES, "seed": 0, "engines": list(engines),
+        "presets": list(presets), "versions": package_versions((*PACKAGES, "pyarrow")),
+        "code": code}, sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _survey_is_current(out: Path, inputs: str) -> bool:
+    """Whether ``out`` holds a quick survey written from the inputs whose digest is
+    ``inputs``, every table of it present."""
+    import json
+
+    from harness.survey.cli import SETTINGS_FILE
+
+    try:
+        settings = json.loads((out / SETTINGS_FILE).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    tables = ["summary.md", "samples.parquet"]
+    if settings.get("engines"):
+        tables += ["runs.parquet", "statistics.parquet"]
+    return (isinstance(settings, dict) and settings.get("inputs") == inputs
+            and all((out / name).is_file() for name in tables))
+
+
+__all__ = ["SURVEY_SAMPLES", "add_arguments", "main", "quick_survey", "survey_inputs"]

@@ -12,6 +12,7 @@ the same impacts, in the same run, and prints it beside the survey's time.
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import sys
 import time
@@ -39,6 +40,8 @@ from harness.survey.sampling import sample_population
 DEFAULT_SAMPLES = 2000
 QUICK_SAMPLES = 40  # per family: 7 families give 280 samples, for `make validate`
 DEFAULT_OUT = Path("reports") / "survey"
+#: What a survey wrote down of its settings, beside its tables (harness/survey/outputs.py).
+SETTINGS_FILE = "settings.json"
 #: Engine and preset pairs a survey leaves out unless ``--preset`` names presets: MuJoCo's
 #: matched-bounce steps a stiff soft contact for hundreds of steps (about 1 ms of bare
 #: stepping per impact, more than every other pair together), so the default survey of
@@ -218,7 +221,13 @@ def write_survey(survey: dict, out: Path, settings: dict, figures: bool = True) 
     summary = out / "summary.md"
     summary.write_text(outputs.summary_markdown(survey["statistics"], survey["rejections"],
                                                 survey["timings"], settings), encoding="utf-8")
-    return written + [summary]
+    # What was surveyed, for the report (harness/report/survey.py) to read without Parquet.
+    shown = {**settings, "families": list(survey["rejections"]),
+             "skipped": settings.get("skipped", survey["skipped"]),
+             "left_out": settings.get("left_out", survey["left_out"])}
+    settings_path = out / SETTINGS_FILE
+    settings_path.write_text(json.dumps(shown, indent=1) + "\n", encoding="utf-8")
+    return written + [summary, settings_path]
 
 
 def main(args: argparse.Namespace) -> int:
@@ -241,7 +250,8 @@ def main(args: argparse.Namespace) -> int:
         return 2
     settings = {"samples": samples, "seed": args.seed,
                 "engines": [r for r in engines if r not in survey["skipped"]],
-                "presets": presets, "left_out": survey["left_out"]}
+                "presets": presets, "left_out": survey["left_out"],
+                "skipped": survey["skipped"]}
     written = write_survey(survey, args.out, settings, figures=not args.no_figures)
     print(f"wrote {len(written)} files to {args.out}")
     return 0

@@ -5,9 +5,14 @@
 * ``runs.parquet`` -- one row per sample × engine × preset (harness/survey/statistics.py);
 * ``statistics.parquet`` -- one row per engine × preset × family × Poisson type;
 * ``summary.md`` -- the statistics as Markdown tables, the rejected draws and the timings;
+* ``settings.json`` -- what was surveyed: samples, seed, engines, presets, the engines not
+  installed and the pairs left out (with why), and under ``inputs`` the digest
+  ``impact-harness suite`` keys its quick survey by (harness/run/suite.py);
 * ``figures/`` -- departure from Poisson against ``α / r_m`` and ``μ`` coloured by Poisson
-  collision type, per engine and preset; the departure CDF per engine, a line per family and
-  preset. PNG and SVG.
+  collision type, per engine and preset (:func:`map_figure`); the departure CDF per engine,
+  a line per family and preset (:func:`cdf_figure`). PNG and SVG. ``impact-harness suite``
+  writes none here: its report draws them from ``runs.parquet``, keyed by their inputs like
+  its other figures (harness/report/survey.py).
 
 Each table is one ``pandas.read_parquet(path)`` or ``polars.read_parquet(path)`` call.
 """
@@ -19,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.engines import preset_label
+from harness.engines import PRESET_ROLES, preset_label
 
 TYPE_NAMES = {1: "1 stick (compr.)", 2: "2 stick (restit.)", 3: "3 reverse (compr.)",
               4: "4 reverse (restit.)", 5: "5 forward slide"}
@@ -110,7 +115,9 @@ def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dic
          f"{', '.join(settings['engines']) or 'none'}; presets "
          f"{', '.join(settings['presets'])}."
          + "".join(f" Not run: {label} ({why})." for label, why in
-                   settings.get("left_out", {}).items())),
+                   settings.get("left_out", {}).items())
+         + "".join(f" Not installed: {engine} ({why})." for engine, why in
+                   settings.get("skipped", {}).items())),
         ("Departure = ‖u − u_law‖_M / ‖u_before‖_M (kinetic-energy norm; two free bodies in "
          "their centre of mass's frame). Quantiles over runs judged one impact by the verdict "
          "checks (docs/verdicts.md); *flagged* = runs failing a check, kept out of the "
@@ -150,83 +157,147 @@ def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dic
     return "\n".join(lines) + "\n"
 
 
-def _save(figure, stem: Path) -> list[Path]:
-    paths = [stem.with_suffix(".png"), stem.with_suffix(".svg")]
-    for path in paths:
-        figure.savefig(path, dpi=110 if path.suffix == ".png" else None)
-    return paths
-
-
-def _log_axis(axis, which: str) -> None:
-    """Log scale with plain ``1e-05`` labels: mathtext tick labels cost most of a figure."""
+def _log_axis(axis, which: str, ticks: int = 6) -> None:
+    """Log scale with plain ``1e-05`` labels (mathtext tick labels cost most of a figure),
+    about ``ticks`` of them."""
     from matplotlib import ticker
 
     getattr(axis, f"set_{which}scale")("log")
     target = axis.xaxis if which == "x" else axis.yaxis
-    target.set_major_locator(ticker.LogLocator(numticks=6))
+    target.set_major_locator(ticker.LogLocator(numticks=ticks))
     target.set_major_formatter(ticker.LogFormatter(labelOnlyBase=True))
     target.set_minor_locator(ticker.NullLocator())
 
 
+#: Departures below are drawn at this floor (log axes; exact agreement is 0).
+DEPARTURE_FLOOR = 1e-8
+#: Resolution of the survey's PNGs.
+FIGURE_DPI = 110
+#: Colour and marker of each Poisson collision type on the maps (Okabe-Ito colours, told
+#: apart with the common colour-vision deficiencies too; a marker each for grey print):
+#: sticking blue, reverse sliding orange, forward sliding green, restitution the lighter.
+TYPE_STYLE = {1: ("#0072B2", "o"), 2: ("#56B4E9", "s"), 3: ("#D55E00", "^"),
+              4: ("#E69F00", "v"), 5: ("#009E73", "D")}
+
+
+def figure_engines(runs: dict) -> list[str]:
+    """The engines with runs in ``runs``, one map and one CDF figure each."""
+    return sorted(set(np.asarray(runs["engine"]).tolist()))
+
+
+def _presets(runs: dict, engine: str) -> list[str]:
+    """``engine``'s presets in ``runs``, out of the box first (:data:`PRESET_ROLES`'s order)."""
+    present = set(np.asarray(runs["preset"])[np.asarray(runs["engine"]) == engine].tolist())
+    return sorted(present, key=lambda preset: (PRESET_ROLES.index(preset)
+                                               if preset in PRESET_ROLES else 99, preset))
+
+
+def _floor_axis(target) -> None:
+    """Percent tick labels, the floor's written ``≤ floor``: every departure at or below it
+    (exact agreement among them) is drawn there."""
+    from matplotlib.ticker import FuncFormatter
+
+    from harness.report.figures import percent_tick
+
+    def label(value, _):
+        text = percent_tick(value)
+        return f"≤{text}" if value <= DEPARTURE_FLOOR * 1.001 else text
+
+    target.set_major_formatter(FuncFormatter(label))
+
+
+def map_figure(runs: dict, engine: str, path: Path, tag: str | None = None) -> Path:
+    """Departure from Poisson against ``α / r_m`` and against ``μ``, a point per ok run of
+    ``engine``, coloured by the Poisson collision type; a row per preset. Saved as ``path``
+    (PNG, with its SVG twin unless :data:`harness.report.figures.SVG_TWIN` says not;
+    ``tag``: the digest of the inputs, kept in the PNG)."""
+    from harness.report.figures import new_figure, save_png
+
+    presets = _presets(runs, engine)
+    ok = runs["status"] == "ok"
+    figure = new_figure(10, 3.2 * len(presets) + 0.5)
+    # one scale for every panel: the presets compared at a glance
+    axes = figure.subplots(len(presets), 2, squeeze=False, sharex="col", sharey=True)
+    for (left, right), preset in zip(axes, presets):
+        chosen = ok & (runs["engine"] == engine) & (runs["preset"] == preset)
+        departure = np.maximum(runs["departure_poisson"][chosen], DEPARTURE_FLOOR)
+        kinds = runs["poisson_type"][chosen]
+        # α = 0 (no initial slip) sits at the left edge of the log axis.
+        ratio = np.maximum(runs["alpha_over_rm"][chosen], 1e-3)
+        for kind, label in TYPE_NAMES.items():
+            mine = kinds == kind
+            if mine.any():
+                colour, marker = TYPE_STYLE[kind]
+                style = {"s": 14, "color": colour, "marker": marker, "alpha": 0.8,
+                         "rasterized": True, "linewidths": 0}
+                left.scatter(ratio[mine], departure[mine], label=label, **style)
+                right.scatter(runs["mu"][chosen][mine], departure[mine], **style)
+        left.axvline(1.0, color="0.5", lw=0.8)
+        _log_axis(left, "x")
+        for axis in (left, right):
+            _log_axis(axis, "y", ticks=12)  # every decade: where 10% ends and 1% begins
+            axis.grid(True, which="major", color="0.92", lw=0.6)
+        _floor_axis(left.yaxis)
+        left.set_ylabel("departure from Poisson")
+        left.set_title(f"{preset_label(engine, preset)}: against α / r_m", fontsize=10)
+        right.set_title(f"{preset_label(engine, preset)}: against μ", fontsize=10)
+    axes[-1][0].set_xlabel("α / r_m (initial slip over Routh's sticking ratio; grey line: 1)")
+    axes[-1][1].set_xlabel("μ")
+    handles, labels = axes[0][0].get_legend_handles_labels()
+    if handles:  # once for the figure, outside the panels (it hid points inside one)
+        figure.legend(handles, labels, loc="outside lower center", ncols=len(handles),
+                      fontsize=8, markerscale=1.6, title="Poisson collision type",
+                      title_fontsize=8, frameon=False)
+    figure.suptitle(f"{engine}: where on Routh's map it departs from Poisson", fontsize=11)
+    return save_png(figure, path, dpi=FIGURE_DPI, tag=tag)
+
+
+def cdf_figure(runs: dict, engine: str, path: Path, tag: str | None = None) -> Path:
+    """The distribution of the departure from Poisson of ``engine``'s ok runs: a panel per
+    preset, a line per family. Saved as :func:`map_figure` saves."""
+    from matplotlib import colormaps
+
+    from harness.report.figures import new_figure, save_png
+
+    presets = _presets(runs, engine)
+    ok = runs["status"] == "ok"
+    families = sorted(set(np.asarray(runs["family"]).tolist()))
+    colours = colormaps["tab10"]
+    figure = new_figure(4.6 * len(presets) + 0.4, 3.6)
+    axes = figure.subplots(1, len(presets), sharex=True, sharey=True, squeeze=False)[0]
+    for axis, preset in zip(axes, presets):
+        for index, family in enumerate(families):
+            chosen = (ok & (runs["engine"] == engine) & (runs["preset"] == preset)
+                      & (runs["family"] == family))
+            values = np.sort(np.maximum(runs["departure_poisson"][chosen], DEPARTURE_FLOOR))
+            if values.size:
+                axis.step(values, np.arange(1, values.size + 1) / values.size,
+                          where="post", color=colours(index % 10), label=family)
+        _log_axis(axis, "x")
+        _floor_axis(axis.xaxis)
+        axis.set_ylim(0, 1.03)
+        axis.grid(True, which="major", color="0.92", lw=0.6)
+        axis.set_xlabel("departure from Poisson")
+        axis.set_title(f"{engine} {preset_label(engine, preset)}", fontsize=10)
+    axes[0].set_ylabel("fraction of ok runs ≤ x")
+    handles, labels = axes[0].get_legend_handles_labels()
+    if handles:
+        figure.legend(handles, labels, loc="outside right center", fontsize=8, frameon=False,
+                      title="family", title_fontsize=8)
+    return save_png(figure, path, dpi=FIGURE_DPI, tag=tag)
+
+
 def figures(runs: dict, directory: Path) -> list[Path]:
-    """Per engine, a departure map (a row per preset) and the CDFs (a panel per preset, a
-    line per family); returns the files written."""
+    """Per engine, a departure map (a row per preset, :func:`map_figure`) and the CDFs (a
+    panel per preset, a line per family, :func:`cdf_figure`); returns the files written
+    (PNG and SVG)."""
     import matplotlib
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     directory.mkdir(parents=True, exist_ok=True)
     written: list[Path] = []
-    colours = plt.get_cmap("tab10")
-    floor = 1e-8  # departures below are drawn at the floor (log axis; exact agreement is 0)
-    ok = runs["status"] == "ok"
-    families = sorted(set(runs["family"]))
-    for engine in sorted(set(runs["engine"])):
-        presets = sorted(set(runs["preset"][runs["engine"] == engine]))
-        # constrained layout: fixed fractions clipped the x labels of a one-preset figure
-        figure, axes = plt.subplots(len(presets), 2, figsize=(10, 3.6 * len(presets)),
-                                    squeeze=False, layout="constrained")
-        for (left, right), preset in zip(axes, presets):
-            chosen = ok & (runs["engine"] == engine) & (runs["preset"] == preset)
-            departure = np.maximum(runs["departure_poisson"][chosen], floor)
-            kinds = runs["poisson_type"][chosen]
-            # α = 0 (no initial slip) sits at the left edge of the log axis.
-            ratio = np.maximum(runs["alpha_over_rm"][chosen], 1e-3)
-            for kind, label in TYPE_NAMES.items():
-                mine = kinds == kind
-                if mine.any():
-                    left.scatter(ratio[mine], departure[mine], s=5, color=colours(kind - 1),
-                                 label=label, alpha=0.7, rasterized=True)
-                    right.scatter(runs["mu"][chosen][mine], departure[mine], s=5,
-                                  color=colours(kind - 1), alpha=0.7, rasterized=True)
-            left.axvline(1.0, color="0.5", lw=0.8)
-            _log_axis(left, "x")
-            for axis in (left, right):
-                _log_axis(axis, "y")
-            left.set_ylabel(f"{preset_label(engine, preset)}: departure from Poisson")
-            right.set_xlabel("μ")
-            left.set_xlabel("α / r_m (Table 1 cases 1–3: types change at 1 and 1 + e)")
-        axes[0][0].legend(fontsize=7, markerscale=2)
-        figure.suptitle(f"{engine}: where on Routh's map it departs from Poisson")
-        written += _save(figure, directory / f"map-{engine}")
-        plt.close(figure)
-
-        figure, axes = plt.subplots(1, len(presets), figsize=(5 * len(presets), 3.8),
-                                    sharey=True, squeeze=False, layout="constrained")
-        for axis, preset in zip(axes[0], presets):
-            for index, family in enumerate(families):
-                chosen = (ok & (runs["engine"] == engine) & (runs["preset"] == preset)
-                          & (runs["family"] == family))
-                values = np.sort(np.maximum(runs["departure_poisson"][chosen], floor))
-                if values.size:
-                    axis.step(values, np.arange(1, values.size + 1) / values.size,
-                              where="post", color=colours(index), label=family)
-            _log_axis(axis, "x")
-            axis.set_xlabel("departure from Poisson")
-            axis.set_title(f"{engine} {preset_label(engine, preset)}")
-        axes[0][0].set_ylabel("fraction of ok runs ≤ x")
-        axes[0][0].legend(fontsize=7)
-        written += _save(figure, directory / f"cdf-{engine}")
-        plt.close(figure)
+    for engine in figure_engines(runs):
+        for draw, stem in ((map_figure, "map"), (cdf_figure, "cdf")):
+            png = draw(runs, engine, directory / f"{stem}-{engine}.png")
+            written += [png, png.with_suffix(".svg")]
     return written
