@@ -210,30 +210,24 @@ _LINK_PARENTS = [0, 1, 2]
 _NO_FORCES = [0.0, 0.0, 0.0]
 _JOINT_TYPES = [p.JOINT_PRISMATIC, p.JOINT_PRISMATIC, p.JOINT_REVOLUTE]
 _JOINT_AXES = [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]]
+_ORIGIN = [0.0, 0.0, 0.0]
+_NO_ROTATION = [0.0, 0.0, 0.0, 1.0]
+_create_multibody = p.createMultiBody
 
 
 def _planar_multibody(client: int, body, collision: int, offset: float = 0.0) -> int:
     """The body's planar chain, its last link of shape ``collision``, its base at ``offset``
     along the engine's y (out of the plane)."""
     mass, inertia = float(body.mass), float(body.moment_of_inertia)
-    uid = p.createMultiBody(
-        baseMass=0.0,
-        baseCollisionShapeIndex=-1,
-        baseVisualShapeIndex=-1,
-        basePosition=[0.0, offset, 0.0],
-        linkMasses=[0.0, 0.0, mass],
-        linkCollisionShapeIndices=[-1, -1, collision],
-        linkVisualShapeIndices=_NO_VISUALS,
-        linkPositions=_LINK_ORIGINS,
-        linkOrientations=_LINK_ROTATIONS,
-        linkInertialFramePositions=_LINK_ORIGINS,
-        linkInertialFrameOrientations=_LINK_ROTATIONS,
-        linkParentIndices=_LINK_PARENTS,
-        linkJointTypes=_JOINT_TYPES,
-        linkJointAxis=_JOINT_AXES,
-        useMaximalCoordinates=False,
-        physicsClientId=client,
-    )
+    # Positional (pybullet's order; keywords cost ~0.2 µs each): baseMass,
+    # baseCollisionShapeIndex, baseVisualShapeIndex, basePosition, baseOrientation,
+    # baseInertialFramePosition, baseInertialFrameOrientation (their defaults), then the
+    # links' masses, collision and visual shapes, positions, orientations, inertial frame
+    # positions and orientations, parents, joint types and axes, useMaximalCoordinates.
+    uid = _create_multibody(0.0, -1, -1, [0.0, offset, 0.0], _NO_ROTATION, _ORIGIN,
+                            _NO_ROTATION, [0.0, 0.0, mass], [-1, -1, collision], _NO_VISUALS,
+                            _LINK_ORIGINS, _LINK_ROTATIONS, _LINK_ORIGINS, _LINK_ROTATIONS,
+                            _LINK_PARENTS, _JOINT_TYPES, _JOINT_AXES, 0, physicsClientId=client)
     # Mass and the inertia in one call (a call without mass= can zero it).
     p.changeDynamics(uid, 2, mass=mass, localInertiaDiagonal=[inertia, inertia, inertia],
                      physicsClientId=client)
@@ -349,13 +343,30 @@ def _set_joints(client: int, bodies, joints) -> None:
 
 
 def _contact_of(points, body_b: int, dt: float) -> RawContacts:
-    """One impact's contact from its points (``getContactPoints`` tuples, Bullet's order)."""
-    step_x = step_z = 0.0
-    step_normal = 0.0
-    contact_points = []
-    for cp in points:
-        # Force on body A: normal force along n (the normal on B, towards A) plus the two
-        # lateral friction forces along their directions.
+    """One impact's contact from its points (``getContactPoints`` tuples, Bullet's order).
+
+    Called at every contact step of every impact: the first point (most steps' only one)
+    is written out; the sums start from ``0.0 +`` as a loop from 0.0 would (a -0.0 term
+    gives 0.0).
+    """
+    # Force on body A: normal force along n (the normal on B, towards A) plus the two
+    # lateral friction forces along their directions.
+    (_, body_a, _, _, _, on_a, _, n, distance, force_n,
+     friction_1, direction_1, friction_2, direction_2) = points[0]
+    sign = 1.0 if body_a == body_b else -1.0
+    n_x, _, n_z = n
+    step_normal = 0.0 + force_n
+    step_x = 0.0 + sign * (force_n * n_x + friction_1 * direction_1[0]
+                           + friction_2 * direction_2[0])
+    step_z = 0.0 + sign * (force_n * n_z + friction_1 * direction_1[2]
+                           + friction_2 * direction_2[2])
+    length = math.hypot(n_x, n_z)
+    normal = (sign * n_x / length, sign * n_z / length)
+    if len(points) == 1:
+        return (((on_a[0], on_a[2], -distance),), normal, (step_x * dt, step_z * dt),
+                step_normal * dt)
+    contact_points = [(on_a[0], on_a[2], -distance)]
+    for cp in points[1:]:
         (_, body_a, _, _, _, on_a, _, n, distance, force_n,
          friction_1, direction_1, friction_2, direction_2) = cp
         sign = 1.0 if body_a == body_b else -1.0
@@ -365,16 +376,7 @@ def _contact_of(points, body_b: int, dt: float) -> RawContacts:
         step_z += sign * (force_n * n[2] + friction_1 * direction_1[2]
                           + friction_2 * direction_2[2])
         contact_points.append((on_a[0], on_a[2], -distance))
-    cp = points[0]
-    sign = 1.0 if cp[1] == body_b else -1.0
-    n = cp[7]
-    length = math.hypot(n[0], n[2])
-    return (
-        tuple(contact_points),
-        (sign * n[0] / length, sign * n[2] / length),
-        (step_x * dt, step_z * dt),
-        step_normal * dt,
-    )
+    return (tuple(contact_points), normal, (step_x * dt, step_z * dt), step_normal * dt)
 
 
 def _connect() -> int:
