@@ -415,6 +415,32 @@ def _remove_bodies(client: int, worlds) -> None:
             p.removeBody(uid, physicsClientId=client)
 
 
+def _slice_offsets(sizes: list[float], gap: float) -> list[float]:
+    """Each batch impact's y (its bases'), for impacts of ``sizes`` (m, their largest body
+    extents) made in list order: slices ``gap`` apart, laid out along y in bit-reversed
+    order of making (0, n/2, n/4, 3n/4, ...).
+
+    Bullet's broad phase keeps a bounding-volume tree that it does not rebalance as leaves
+    are added or moved: slices made in order along a line make it a chain, and every body
+    made, first moved (its start state) or removed then walks it (measured: ~0.3 µs per
+    body already in the client, each). Made in bit-reversed order, each new body splits
+    the longest gap so far, and the tree stays shallow.
+    """
+    count = len(sizes)
+    bits = max(count - 1, 0).bit_length()
+    # Slot order along y: by the bit reversal of the slot's index.
+    along = sorted(range(count), key=lambda slot: int(format(slot, f"0{bits}b")[::-1] or "0", 2))
+    offsets = [0.0] * count
+    offset = previous = 0.0
+    for place, slot in enumerate(along):
+        size = sizes[slot]
+        if place:
+            offset += previous + size + gap
+        previous = size
+        offsets[slot] = offset
+    return offsets
+
+
 def _settings_key(settings) -> tuple:
     """The settings a world is built with (all but the per-run ones), as a key."""
     return tuple((k, settings[k]) for k in sorted(settings) if k not in _RUN_ONLY)
@@ -623,14 +649,12 @@ class PybulletEngine(Engine):
         slots, slot_of, body_b, dt = batch.slots, batch.slot_of, batch.body_b, batch.dt
         if plane is not None:
             slot_of[plane] = None  # _step_many: look at the contact's other body
-        offset = previous = 0.0
+        every_extents = [tuple([body_extent(body.shape) for body in plan.scene.bodies])
+                         for plan in plans]
+        sizes = [max(extents) for extents in every_extents]
+        offsets = _slice_offsets(sizes, gap)
         for slot, plan in enumerate(plans):
-            scene = plan.scene
-            extents = tuple([body_extent(body.shape) for body in scene.bodies])
-            size = max(extents)
-            if slot:
-                offset += previous + size + gap
-            previous = size
+            scene, extents, size, offset = plan.scene, every_extents[slot], sizes[slot], offsets[slot]
             bodies = _add_bodies(client, scene, settings, extents, offset)
             joints, (e, mu) = plan.prepared
             p.changeDynamics(bodies[0], 2, restitution=e, lateralFriction=mu,
