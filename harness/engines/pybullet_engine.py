@@ -654,7 +654,8 @@ class PybulletEngine(Engine):
         sizes = [max(extents) for extents in every_extents]
         offsets = _slice_offsets(sizes, gap)
         for slot, plan in enumerate(plans):
-            scene, extents, size, offset = plan.scene, every_extents[slot], sizes[slot], offsets[slot]
+            scene, extents, size, offset = (plan.scene, every_extents[slot], sizes[slot],
+                                            offsets[slot])
             bodies = _add_bodies(client, scene, settings, extents, offset)
             joints, (e, mu) = plan.prepared
             p.changeDynamics(bodies[0], 2, restitution=e, lateralFriction=mu,
