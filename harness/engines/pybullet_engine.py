@@ -219,9 +219,10 @@ _NO_ROTATION = [0.0, 0.0, 0.0, 1.0]
 _create_multibody = p.createMultiBody
 
 
-def _planar_multibody(client: int, body, collision: int, offset: float = 0.0) -> int:
+def _planar_multibody(client: int, body, collision: int, offset: float = 0.0,
+                      pair_values: tuple[float, float] | None = None) -> int:
     """The body's planar chain, its last link of shape ``collision``, its base at ``offset``
-    along the engine's y (out of the plane)."""
+    along the engine's y (out of the plane); ``pair_values``: its (e, μ), if given."""
     mass, inertia = float(body.mass), float(body.moment_of_inertia)
     # Positional (pybullet's order; keywords cost ~0.2 µs each): baseMass,
     # baseCollisionShapeIndex, baseVisualShapeIndex, basePosition, baseOrientation,
@@ -232,9 +233,15 @@ def _planar_multibody(client: int, body, collision: int, offset: float = 0.0) ->
                             _NO_ROTATION, [0.0, 0.0, mass], [-1, -1, collision], _NO_VISUALS,
                             _LINK_ORIGINS, _LINK_ROTATIONS, _LINK_ORIGINS, _LINK_ROTATIONS,
                             _LINK_PARENTS, _JOINT_TYPES, _JOINT_AXES, 0, physicsClientId=client)
-    # Mass and the inertia in one call (a call without mass= can zero it).
-    p.changeDynamics(uid, 2, mass=mass, localInertiaDiagonal=[inertia, inertia, inertia],
-                     physicsClientId=client)
+    # Mass and the inertia in one call (a call without mass= can zero it); e and μ in the
+    # same call keep the runs' bits (tests/engines/test_pybullet_survey_identity.py).
+    if pair_values is None:
+        p.changeDynamics(uid, 2, mass=mass, localInertiaDiagonal=[inertia, inertia, inertia],
+                         physicsClientId=client)
+    else:
+        p.changeDynamics(uid, 2, mass=mass, localInertiaDiagonal=[inertia, inertia, inertia],
+                         restitution=pair_values[0], lateralFriction=pair_values[1],
+                         physicsClientId=client)
     # The joints' default velocity motors off: no force (one call for the three joints).
     p.setJointMotorControlArray(uid, _LINK_PARENTS, p.VELOCITY_CONTROL, forces=_NO_FORCES,
                                 physicsClientId=client)
@@ -260,17 +267,19 @@ def _add_plane(client: int) -> int:
     return plane
 
 
-def _add_bodies(client: int, scene: Scene, settings, extents,
-                offset: float = 0.0) -> list[int]:
+def _add_bodies(client: int, scene: Scene, settings, extents, offset: float = 0.0,
+                pair_values: tuple[float, float] | None = None) -> list[int]:
     """The scene's bodies (``extents``: their :func:`body_extent`) as planar chains (bases at
-    ``offset`` along y), damped as set, never sleeping; the partner body gets the neutral
-    e and μ."""
+    ``offset`` along y), damped as set, never sleeping; ``bodies[0]`` gets ``pair_values``
+    (e, μ) if given (else :meth:`PybulletEngine._reset` sets them), the partner body the
+    neutral e and μ."""
     bodies = []
     linear_damping = float(settings["linear_damping"])
     angular_damping = float(settings["angular_damping"])
     for body, extent in zip(scene.bodies, extents):
         collision = _collision_shape(client, body.shape, extent)
-        uid = _planar_multibody(client, body, collision, offset)
+        uid = _planar_multibody(client, body, collision, offset, pair_values)
+        pair_values = None  # bodies[0]'s only
         # On the shape's link only: the damping and sleeping are the multibody's, and the
         # massless links' joint damping is 0 already (the runs keep their bits: the tests).
         # A separate call from the mass's: one call with both changed the bits (measured).
@@ -660,10 +669,8 @@ class PybulletEngine(Engine):
         for slot, plan in enumerate(plans):
             scene, extents, size, offset = (plan.scene, every_extents[slot], sizes[slot],
                                             offsets[slot])
-            bodies = _add_bodies(client, scene, settings, extents, offset)
             joints, (e, mu) = plan.prepared
-            p.changeDynamics(bodies[0], 2, restitution=e, lateralFriction=mu,
-                             physicsClientId=client)
+            bodies = _add_bodies(client, scene, settings, extents, offset, (e, mu))
             _set_joints(client, bodies, joints)
             slots.append(_World(client=client, settings_key=settings_key, plane=plane,
                                 bodies=bodies, extents=extents, scale=size, pair_values=(e, mu),
