@@ -51,7 +51,9 @@ Each impact lies in its own slice of the engine's y, the axis out of the scene's
 the joints' rotations about y have exact zeros off the plane and Bullet's collision and
 Jacobian arithmetic works with differences of positions, so the x-z numbers are those of a
 lone run at y = 0, while slices :data:`_MANY_GAP` (plus twice the contact breaking
-threshold) apart never meet.
+threshold) apart never meet. The slices are laid out in bit-reversed order of making
+(:func:`_slice_offsets`): made in order along the line, they made Bullet's broad-phase tree
+a chain that every new, first-moved or removed body walked.
 They share only the static plane, which joins no simulation islands. Finished impacts are
 removed. The runs equal :meth:`run`'s bit for bit (tests/engines/test_pybullet_many.py);
 moving impacts apart within the plane instead changes roundings (measured).
@@ -63,11 +65,13 @@ impact), so the client is reset after :data:`_MANY_RESET_AFTER` impacts
 (tests/engines/test_pybullet_clients.py: runs keep their bits across both).
 Where a batch's time goes (700 survey scenes, process CPU, measured with every pybullet call
 timed): about three quarters inside pybullet -- ``createMultiBody`` a third (pybullet
-serialises each new body's description and parses it back in the client; only
-``batchPositions``' copies of one shape skip that), stepping a fifth -- and about a tenth
-in this module's Python. pybullet 3.2.7 has no call reading several bodies' joint states,
-``createMultiBody`` takes no inertia, the ``changeDynamics`` folds tried change the bits
-(docs/engines.md), and batch sizes 4 to 64 cost the same within the noise.
+serialises each new body's description and parses it back in the client, ~0.1 ms a call
+whatever it creates: a ``batchPositions`` call of one body costs as much, and only its
+copies of one shape share it), stepping a fifth -- and about a tenth in this module's
+Python; the client's reset then costs ~15 µs per body made since the last. pybullet 3.2.7
+has no call reading several bodies' joint states, ``createMultiBody`` takes no inertia, the
+``changeDynamics`` folds tried change the bits (docs/engines.md; so does e and μ in the
+damping call), and batch sizes 4 to 64 cost the same within the noise.
 
 Settings (``defaults`` | ``accurate``) are listed in :data:`SETTING_DOCS`; ``None`` means
 "not set: Bullet's default".
@@ -210,33 +214,34 @@ _LINK_PARENTS = [0, 1, 2]
 _NO_FORCES = [0.0, 0.0, 0.0]
 _JOINT_TYPES = [p.JOINT_PRISMATIC, p.JOINT_PRISMATIC, p.JOINT_REVOLUTE]
 _JOINT_AXES = [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]]
+_ORIGIN = [0.0, 0.0, 0.0]
+_NO_ROTATION = [0.0, 0.0, 0.0, 1.0]
+_create_multibody = p.createMultiBody
 
 
-def _planar_multibody(client: int, body, collision: int, offset: float = 0.0) -> int:
+def _planar_multibody(client: int, body, collision: int, offset: float = 0.0,
+                      pair_values: tuple[float, float] | None = None) -> int:
     """The body's planar chain, its last link of shape ``collision``, its base at ``offset``
-    along the engine's y (out of the plane)."""
+    along the engine's y (out of the plane); ``pair_values``: its (e, μ), if given."""
     mass, inertia = float(body.mass), float(body.moment_of_inertia)
-    uid = p.createMultiBody(
-        baseMass=0.0,
-        baseCollisionShapeIndex=-1,
-        baseVisualShapeIndex=-1,
-        basePosition=[0.0, offset, 0.0],
-        linkMasses=[0.0, 0.0, mass],
-        linkCollisionShapeIndices=[-1, -1, collision],
-        linkVisualShapeIndices=_NO_VISUALS,
-        linkPositions=_LINK_ORIGINS,
-        linkOrientations=_LINK_ROTATIONS,
-        linkInertialFramePositions=_LINK_ORIGINS,
-        linkInertialFrameOrientations=_LINK_ROTATIONS,
-        linkParentIndices=_LINK_PARENTS,
-        linkJointTypes=_JOINT_TYPES,
-        linkJointAxis=_JOINT_AXES,
-        useMaximalCoordinates=False,
-        physicsClientId=client,
-    )
-    # Mass and the inertia in one call (a call without mass= can zero it).
-    p.changeDynamics(uid, 2, mass=mass, localInertiaDiagonal=[inertia, inertia, inertia],
-                     physicsClientId=client)
+    # Positional (pybullet's order; keywords cost ~0.2 µs each): baseMass,
+    # baseCollisionShapeIndex, baseVisualShapeIndex, basePosition, baseOrientation,
+    # baseInertialFramePosition, baseInertialFrameOrientation (their defaults), then the
+    # links' masses, collision and visual shapes, positions, orientations, inertial frame
+    # positions and orientations, parents, joint types and axes, useMaximalCoordinates.
+    uid = _create_multibody(0.0, -1, -1, [0.0, offset, 0.0], _NO_ROTATION, _ORIGIN,
+                            _NO_ROTATION, [0.0, 0.0, mass], [-1, -1, collision], _NO_VISUALS,
+                            _LINK_ORIGINS, _LINK_ROTATIONS, _LINK_ORIGINS, _LINK_ROTATIONS,
+                            _LINK_PARENTS, _JOINT_TYPES, _JOINT_AXES, 0, physicsClientId=client)
+    # Mass and the inertia in one call (a call without mass= can zero it); e and μ in the
+    # same call keep the runs' bits (tests/engines/test_pybullet_survey_identity.py).
+    if pair_values is None:
+        p.changeDynamics(uid, 2, mass=mass, localInertiaDiagonal=[inertia, inertia, inertia],
+                         physicsClientId=client)
+    else:
+        p.changeDynamics(uid, 2, mass=mass, localInertiaDiagonal=[inertia, inertia, inertia],
+                         restitution=pair_values[0], lateralFriction=pair_values[1],
+                         physicsClientId=client)
     # The joints' default velocity motors off: no force (one call for the three joints).
     p.setJointMotorControlArray(uid, _LINK_PARENTS, p.VELOCITY_CONTROL, forces=_NO_FORCES,
                                 physicsClientId=client)
@@ -262,17 +267,19 @@ def _add_plane(client: int) -> int:
     return plane
 
 
-def _add_bodies(client: int, scene: Scene, settings, extents,
-                offset: float = 0.0) -> list[int]:
+def _add_bodies(client: int, scene: Scene, settings, extents, offset: float = 0.0,
+                pair_values: tuple[float, float] | None = None) -> list[int]:
     """The scene's bodies (``extents``: their :func:`body_extent`) as planar chains (bases at
-    ``offset`` along y), damped as set, never sleeping; the partner body gets the neutral
-    e and μ."""
+    ``offset`` along y), damped as set, never sleeping; ``bodies[0]`` gets ``pair_values``
+    (e, μ) if given (else :meth:`PybulletEngine._reset` sets them), the partner body the
+    neutral e and μ."""
     bodies = []
     linear_damping = float(settings["linear_damping"])
     angular_damping = float(settings["angular_damping"])
     for body, extent in zip(scene.bodies, extents):
         collision = _collision_shape(client, body.shape, extent)
-        uid = _planar_multibody(client, body, collision, offset)
+        uid = _planar_multibody(client, body, collision, offset, pair_values)
+        pair_values = None  # bodies[0]'s only
         # On the shape's link only: the damping and sleeping are the multibody's, and the
         # massless links' joint damping is 0 already (the runs keep their bits: the tests).
         # A separate call from the mass's: one call with both changed the bits (measured).
@@ -349,13 +356,30 @@ def _set_joints(client: int, bodies, joints) -> None:
 
 
 def _contact_of(points, body_b: int, dt: float) -> RawContacts:
-    """One impact's contact from its points (``getContactPoints`` tuples, Bullet's order)."""
-    step_x = step_z = 0.0
-    step_normal = 0.0
-    contact_points = []
-    for cp in points:
-        # Force on body A: normal force along n (the normal on B, towards A) plus the two
-        # lateral friction forces along their directions.
+    """One impact's contact from its points (``getContactPoints`` tuples, Bullet's order).
+
+    Called at every contact step of every impact: the first point (most steps' only one)
+    is written out; the sums start from ``0.0 +`` as a loop from 0.0 would (a -0.0 term
+    gives 0.0).
+    """
+    # Force on body A: normal force along n (the normal on B, towards A) plus the two
+    # lateral friction forces along their directions.
+    (_, body_a, _, _, _, on_a, _, n, distance, force_n,
+     friction_1, direction_1, friction_2, direction_2) = points[0]
+    sign = 1.0 if body_a == body_b else -1.0
+    n_x, _, n_z = n
+    step_normal = 0.0 + force_n
+    step_x = 0.0 + sign * (force_n * n_x + friction_1 * direction_1[0]
+                           + friction_2 * direction_2[0])
+    step_z = 0.0 + sign * (force_n * n_z + friction_1 * direction_1[2]
+                           + friction_2 * direction_2[2])
+    length = math.hypot(n_x, n_z)
+    normal = (sign * n_x / length, sign * n_z / length)
+    if len(points) == 1:
+        return (((on_a[0], on_a[2], -distance),), normal, (step_x * dt, step_z * dt),
+                step_normal * dt)
+    contact_points = [(on_a[0], on_a[2], -distance)]
+    for cp in points[1:]:
         (_, body_a, _, _, _, on_a, _, n, distance, force_n,
          friction_1, direction_1, friction_2, direction_2) = cp
         sign = 1.0 if body_a == body_b else -1.0
@@ -365,16 +389,7 @@ def _contact_of(points, body_b: int, dt: float) -> RawContacts:
         step_z += sign * (force_n * n[2] + friction_1 * direction_1[2]
                           + friction_2 * direction_2[2])
         contact_points.append((on_a[0], on_a[2], -distance))
-    cp = points[0]
-    sign = 1.0 if cp[1] == body_b else -1.0
-    n = cp[7]
-    length = math.hypot(n[0], n[2])
-    return (
-        tuple(contact_points),
-        (sign * n[0] / length, sign * n[2] / length),
-        (step_x * dt, step_z * dt),
-        step_normal * dt,
-    )
+    return (tuple(contact_points), normal, (step_x * dt, step_z * dt), step_normal * dt)
 
 
 def _connect() -> int:
@@ -411,6 +426,32 @@ def _remove_bodies(client: int, worlds) -> None:
     for world in worlds:
         for uid in world.bodies:
             p.removeBody(uid, physicsClientId=client)
+
+
+def _slice_offsets(sizes: list[float], gap: float) -> list[float]:
+    """Each batch impact's y (its bases'), for impacts of ``sizes`` (m, their largest body
+    extents) made in list order: slices ``gap`` apart, laid out along y in bit-reversed
+    order of making (0, n/2, n/4, 3n/4, ...).
+
+    Bullet's broad phase keeps a bounding-volume tree that it does not rebalance as leaves
+    are added or moved: slices made in order along a line make it a chain, and every body
+    made, first moved (its start state) or removed then walks it (measured: ~0.3 µs per
+    body already in the client, each). Made in bit-reversed order, each new body splits
+    the longest gap so far, and the tree stays shallow.
+    """
+    count = len(sizes)
+    bits = max(count - 1, 0).bit_length()
+    # Slot order along y: by the bit reversal of the slot's index.
+    along = sorted(range(count), key=lambda slot: int(format(slot, f"0{bits}b")[::-1] or "0", 2))
+    offsets = [0.0] * count
+    offset = previous = 0.0
+    for place, slot in enumerate(along):
+        size = sizes[slot]
+        if place:
+            offset += previous + size + gap
+        previous = size
+        offsets[slot] = offset
+    return offsets
 
 
 def _settings_key(settings) -> tuple:
@@ -621,18 +662,15 @@ class PybulletEngine(Engine):
         slots, slot_of, body_b, dt = batch.slots, batch.slot_of, batch.body_b, batch.dt
         if plane is not None:
             slot_of[plane] = None  # _step_many: look at the contact's other body
-        offset = previous = 0.0
+        every_extents = [tuple([body_extent(body.shape) for body in plan.scene.bodies])
+                         for plan in plans]
+        sizes = [max(extents) for extents in every_extents]
+        offsets = _slice_offsets(sizes, gap)
         for slot, plan in enumerate(plans):
-            scene = plan.scene
-            extents = tuple([body_extent(body.shape) for body in scene.bodies])
-            size = max(extents)
-            if slot:
-                offset += previous + size + gap
-            previous = size
-            bodies = _add_bodies(client, scene, settings, extents, offset)
+            scene, extents, size, offset = (plan.scene, every_extents[slot], sizes[slot],
+                                            offsets[slot])
             joints, (e, mu) = plan.prepared
-            p.changeDynamics(bodies[0], 2, restitution=e, lateralFriction=mu,
-                             physicsClientId=client)
+            bodies = _add_bodies(client, scene, settings, extents, offset, (e, mu))
             _set_joints(client, bodies, joints)
             slots.append(_World(client=client, settings_key=settings_key, plane=plane,
                                 bodies=bodies, extents=extents, scale=size, pair_values=(e, mu),

@@ -121,3 +121,26 @@ def test_chunks_keep_ground_and_two_body_scenes_apart(engine, population_scenes)
     for chunk in chunks:
         assert 0 < len(chunk) <= adapter.MANY_IMPACTS
         assert len({population_scenes[index].ground for index in chunk}) == 1
+
+
+@pytest.mark.parametrize("count", [1, 2, 5, 8, 32, 33])
+def test_slices_keep_their_gap_and_are_made_far_from_the_last(count):
+    sizes = [0.05 + 0.37 * ((7 * slot) % 11) for slot in range(count)]
+    gap = 1.04
+    offsets = adapter._slice_offsets(sizes, gap)
+    assert len(offsets) == count and offsets[0] == 0.0
+    # Every two slices at least their sizes plus the gap apart, to the sums' rounding (they
+    # never meet: the gap holds twice the contact threshold with a metre to spare) ...
+    along = sorted(range(count), key=offsets.__getitem__)
+    for below, above in zip(along, along[1:]):
+        assert offsets[above] - offsets[below] >= sizes[below] + sizes[above] + gap - 1e-12
+    # ... laid out in bit-reversed order of making (made in order along y, the broad
+    # phase's tree became a chain): the second slice made lies in the far half, and with
+    # a power of two the k-th made sits at place bit-reversed k.
+    place = {slot: rank for rank, slot in enumerate(along)}
+    if count > 2:
+        assert place[1] >= count // 2
+    if count & (count - 1) == 0:
+        bits = (count - 1).bit_length()
+        assert all(place[slot] == int(format(slot, f"0{bits}b")[::-1] or "0", 2)
+                   for slot in range(count))
