@@ -96,9 +96,21 @@ def save_svg_twin(figure, path: Path) -> Path:
     by more than the difference in text extents between the two resolutions (< 0.5 pt).
     """
     figure.set_layout_engine("none")
-    svg = path.with_suffix(".svg")
-    # No date in the SVG, so that the same inputs give the same file.
-    figure.savefig(svg, metadata={"Date": None})
+    return save_svg(figure, path.with_suffix(".svg"))
+
+
+#: The salt of the ids matplotlib gives an SVG's clip paths and glyphs (``svg.hashsalt``):
+#: fixed, since by default each file gets random ones.
+SVG_HASH_SALT = "planar-impact-harness"
+
+
+def save_svg(figure, svg: Path) -> Path:
+    """Save ``figure`` as the SVG ``svg``, the same bytes for the same figure: no date and
+    ids from :data:`SVG_HASH_SALT` (else a regenerated report changes every SVG)."""
+    from matplotlib import rc_context
+
+    with rc_context({"svg.hashsalt": SVG_HASH_SALT}):
+        figure.savefig(svg, metadata={"Date": None})
     return svg
 
 
