@@ -57,3 +57,19 @@ def test_a_file_named_like_the_outputs_elsewhere_counts(tree):
     (tree / "harness" / "reports" / "notes.md").write_text("b\n")
     assert git_commit(tree)["dirty"] is True
 
+
+
+def test_the_reports_caches_are_ignored():
+    """The report's caches change whenever the results file is written anew (the digests
+    are keyed by its exact lines): committed, they would leave a regenerated clone modified.
+    Nothing needs them there: a figure's PNG carries its own inputs digest."""
+    from pathlib import Path
+
+    from harness.report.fragments import CACHE_FILE, DIGESTS_FILE
+
+    root = Path(__file__).resolve().parents[2]
+    if not (root / ".git").exists():
+        pytest.skip("not a git checkout")
+    for name in (CACHE_FILE, DIGESTS_FILE):
+        ignored = subprocess.run(["git", "check-ignore", "-q", f"reports/{name}"], cwd=root)
+        assert ignored.returncode == 0, f"reports/{name} is not in .gitignore"
