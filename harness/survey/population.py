@@ -53,6 +53,8 @@ SHAPE_KEYS = {
     "box": ("width", "height"),
     "polygon": ("sides", "circumradius"),
 }
+#: The keys of every shape: checked against a body's shape only when the shape is known.
+ANY_SHAPE_KEYS = tuple(dict.fromkeys(key for keys in SHAPE_KEYS.values() for key in keys))
 BODY_KEYS = ("name", "shape", "mass", "angle_deg", "angular_velocity")
 TOP_KEYS = ("name", "description", "tags", "ground", "restitution", "friction", "mass_ratio",
             "approach", "placement", "body", "max_attempts")
@@ -186,8 +188,10 @@ def _read_body(reader: TableReader, table, index: int, *, mass_from_ratio: bool)
         prefix = f"body.{name}"
     shape = reader.string(table, "shape", prefix, choices=SHAPES)
     shape_keys = SHAPE_KEYS.get(shape, ())
-    reader.keys(table, prefix, BODY_KEYS + shape_keys,
-                f"a {shape} body" if shape_keys else "a body")
+    if shape_keys:
+        reader.keys(table, prefix, BODY_KEYS + shape_keys, f"a {shape} body")
+    else:  # a bad or missing shape is the one error: another shape's keys may be right
+        reader.keys(table, prefix, BODY_KEYS + ANY_SHAPE_KEYS, "a body")
     parameters = []
     for key in shape_keys:
         if key == "sides":

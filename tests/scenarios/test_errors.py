@@ -76,6 +76,22 @@ def assert_names(error: ScenarioError, *parts: str) -> None:
         assert part in message, f"{part!r} not in {message!r}"
 
 
+@pytest.mark.parametrize("shape", ['"sphere"', "3"])
+def test_a_bad_shape_is_the_one_error_of_its_body(tmp_path, shape):
+    """The rod's own keys are not reported as unknown because its shape is misspelt."""
+    text = GROUND.replace('shape = "disk"\nradius = 0.1',
+                          f"shape = {shape}\nlength = 1.0\nradius = 0.005")
+    error = error_of(tmp_path, text)
+    assert [e.key for e in error.errors] == ["body.disk.shape"], str(error)
+    assert_names(error, "disk, rod, box, polygon")
+
+
+def test_a_bad_shape_still_reports_a_key_no_shape_has(tmp_path):
+    text = GROUND.replace('shape = "disk"', 'shape = "sphere"\ncolour = "red"')
+    error = error_of(tmp_path, text)
+    assert sorted(e.key for e in error.errors) == ["body.disk.colour", "body.disk.shape"]
+
+
 def test_the_base_files_are_good(tmp_path):
     assert load_scenario(write(tmp_path, GROUND, "g.toml")).name == "probe"
     assert load_scenario(write(tmp_path, TWO_BODY, "t.toml")).name == "pair"
