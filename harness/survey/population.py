@@ -36,7 +36,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from harness.scenarios.errors import NO_VALUE, ScenarioError, suggest
+from harness.scenarios.errors import NO_VALUE, OptionError, ScenarioError, suggest
 from harness.scenarios.reader import TableReader
 from harness.scenarios.schema import NAME_PATTERN, TAG_PATTERN
 
@@ -322,8 +322,8 @@ def resolve_populations(names_or_paths=()) -> list[Population]:
         elif item in shipped:
             chosen.append(load_population(shipped[item]))
         else:
-            raise ScenarioError(f"no population file{suggest(item, shipped)}", key="POPULATION",
-                                value=item, allowed=", ".join(sorted(shipped)) + " or a path")
+            raise OptionError(f"no population file{suggest(item, shipped)}", key="POPULATION",
+                              value=item, allowed=", ".join(sorted(shipped)) + " or a path")
     names = [population.name for population in chosen]
     duplicated = sorted({name for name in names if names.count(name) > 1})
     if duplicated:
