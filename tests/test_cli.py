@@ -170,3 +170,12 @@ def test_report_into_reports_without_a_report_there(capsys, tmp_path, monkeypatc
     monkeypatch.chdir(tmp_path)
     code, _, err = cli(capsys, "report", "--results", "my.json")
     assert code == 2 and "no results file" in err
+
+
+@pytest.mark.parametrize("command, default", [("bench", "reports/bench"),
+                                              ("stress", "reports/stress")])
+def test_help_gives_the_default_output_directory(capsys, command, default):
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    help_text = " ".join(capsys.readouterr().out.split())
+    assert f"--out OUT output directory (default: {default}" in help_text
