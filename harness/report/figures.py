@@ -601,11 +601,24 @@ def type_boundaries(law_records: Sequence[Record]) -> list[tuple[float, int, int
 DEPARTURE_FLOOR = 1e-16  # exact agreement drawn here on the log axis (1e-14%)
 
 
+#: A sweep whose positive values span at least this factor is drawn on a logarithmic axis
+#: (the tilts 0.01° … 3°: on a linear one, four of six points share the first 1%).
+LOG_SWEEP_SPAN = 100.0
+
+
+def log_sweep_axis(values: Sequence[float]) -> bool:
+    """Whether a sweep over ``values`` is drawn on a logarithmic axis: all positive and
+    spanning :data:`LOG_SWEEP_SPAN` or more."""
+    values = [float(v) for v in values if v is not None]
+    return bool(values) and min(values) > 0 and max(values) >= LOG_SWEEP_SPAN * min(values)
+
+
 def sweep_figure(name: str, info: dict, records: Sequence[Record], path: Path,
                  tag: str | None = None) -> Path | None:
     """Post-impact quantities against the swept parameter; laws lines, engines points."""
     sweep = info.get("sweep") or {}
     parameter = sweep.get("parameter", "parameter")
+    log_x = log_sweep_axis(sweep.get("values") or [r.point["value"] for r in records])
     laws = [r for r in records if r.source == ANALYTIC]
     engines = [r for r in records if r.source != ANALYTIC and r.u_after is not None]
     panels = [("vn_separation", "v_n after [m/s]"), ("vt_separation", "v_t after [m/s]"),
@@ -657,6 +670,8 @@ def sweep_figure(name: str, info: dict, records: Sequence[Record], path: Path,
                 ax.plot([x], [y], ls="none", transform=transform, label="flagged by the engine",
                         **{**FLAG_STYLE, "ms": 10})
         ax.autoscale_view()
+        if log_x:
+            ax.set_xscale("log")
         if field == "departure":
             ax.set_yscale("log")
             percent_axis(ax.yaxis)
