@@ -57,8 +57,9 @@ def c_output_dropped() -> Iterator[None]:
 def import_quietly(name: str) -> ModuleType:
     """``importlib.import_module(name)``, with C's output dropped (:func:`c_output_dropped`)
     while the module is first imported."""
-    if name in sys.modules:
-        return sys.modules[name]
+    module = sys.modules.get(name)
+    if module is not None:  # None marks a module that must fail to import: it does below
+        return module
     with c_output_dropped():
         return importlib.import_module(name)
 
