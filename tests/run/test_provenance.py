@@ -51,10 +51,10 @@ def test_a_changed_source_file_is(tree):
 
 def test_a_file_named_like_the_outputs_elsewhere_counts(tree):
     (tree / "harness" / "reports").mkdir()
-    (tree / "harness" / "reports" / "notes.md").write_text("a\n")
+    (tree / "harness" / "reports" / "notes.txt").write_text("a\n")
     _git(tree, "add", ".")
     _git(tree, "commit", "-q", "-m", "notes")
-    (tree / "harness" / "reports" / "notes.md").write_text("b\n")
+    (tree / "harness" / "reports" / "notes.txt").write_text("b\n")
     assert git_commit(tree)["dirty"] is True
 
 
