@@ -134,3 +134,51 @@ def test_paper_command(capsys, tmp_path):
     code, out, _ = cli(capsys, "paper", "--out", tmp_path)
     assert code == 0 and "printed cells reproduced" in out
     assert (tmp_path / "paper-table3.md").is_file() and (tmp_path / "paper-table3.png").is_file()
+
+
+def _library_report(directory: Path) -> Path:
+    """A stand-in for the library's report in ``directory/reports``."""
+    (directory / "reports").mkdir()
+    index = directory / "reports" / "index.html"
+    index.write_text("the library's report")
+    return index
+
+
+def test_report_refuses_to_replace_the_library_report(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    index = _library_report(tmp_path)
+    mine = tmp_path / "my.json"
+    mine.write_text("{}")
+    code, _, err = cli(capsys, "report", "--results", mine)
+    assert code == 2
+    assert "reports/" in err and "--out" in err and "--force" in err
+    assert index.read_text() == "the library's report"
+
+
+@pytest.mark.parametrize("argv", [
+    ["--results", "reports/results.json"],  # the results the report was made from
+    ["--results", "reports/../reports/results.json"],  # the same file by another path
+    ["--results", "my.json", "--force"],
+    ["--results", "my.json", "--out", "reports"],  # the directory named: as asked
+])
+def test_report_replaces_the_library_report_when_expected(capsys, tmp_path, monkeypatch, argv):
+    monkeypatch.chdir(tmp_path)
+    _library_report(tmp_path)
+    # No results file: the refusal would come first, so this error says it was passed.
+    code, _, err = cli(capsys, "report", *argv)
+    assert code == 2 and "no results file" in err and "--force" not in err
+
+
+def test_report_into_reports_without_a_report_there(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    code, _, err = cli(capsys, "report", "--results", "my.json")
+    assert code == 2 and "no results file" in err
+
+
+@pytest.mark.parametrize("command, default", [("bench", "reports/bench"),
+                                              ("stress", "reports/stress")])
+def test_help_gives_the_default_output_directory(capsys, command, default):
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    help_text = " ".join(capsys.readouterr().out.split())
+    assert f"--out OUT output directory (default: {default}" in help_text

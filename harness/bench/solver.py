@@ -23,7 +23,9 @@
 
 With no selection, all of them run. Every benchmark checks its own answer before timing it
 (a fast wrong answer is no result). Figures and a machine-readable table go to
-``reports/bench/``.
+``reports/bench/`` (``--out``). The table, ``bench.json``, is updated, not replaced: a run of
+some sections replaces those and keeps the others already there, and its ``measured`` entry
+says when (and with which commit, whether ``--quick``) each section was measured.
 """
 
 from __future__ import annotations
@@ -241,7 +243,9 @@ def add_arguments(parser) -> None:
                         help="2,000 engine tasks: local pool against a local 2-worker Dask "
                         "cluster")
     parser.add_argument("--quick", action="store_true", help="smaller sizes; finishes in minutes")
-    parser.add_argument("--out", type=Path, default=Path("reports/bench"), help="output directory")
+    parser.add_argument("--out", type=Path, default=Path("reports/bench"),
+                        help="output directory (default: reports/bench); the sections run "
+                        "replace theirs in its bench.json, the others are kept")
 
 
 def main(args) -> int:
@@ -287,6 +291,38 @@ def main(args) -> int:
             print(bench_executors.format_report(report))
             table["executors"] = report
     path = args.out / "bench.json"
-    path.write_text(json.dumps(table, indent=1, default=str))
+    path.write_text(json.dumps(merged_table(path, table, names), indent=1, default=str))
     print(f"written {path}")
     return 0
+
+
+def merged_table(path: Path, table: dict, names: tuple[str, ...]) -> dict:
+    """``table`` (this run's sections among ``names``) with the sections of the existing
+    ``bench.json`` at ``path`` that this run did not measure, and ``measured``: for each
+    section, when, from which commit and whether ``--quick`` (a section kept from a file
+    without it gets that file's provenance). README tables and the bench page read the
+    file as a whole: a run of one section must not drop the others."""
+    this_run = {"created_utc": table["provenance"]["created_utc"],
+                "commit": table["provenance"]["git"]["commit"], "quick": table["quick"]}
+    try:
+        existing = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):  # none yet, or unreadable: this run's sections only
+        existing = {}
+    if not isinstance(existing, dict) or \
+            existing.get("provenance", {}).get("format") != BENCH_FORMAT:
+        existing = {}
+    before = existing.get("provenance", {})
+    measured_before = existing.get("measured") or {}
+    merged = dict(table)
+    measured = {}
+    for name in names:
+        if name in table:
+            measured[name] = this_run
+        elif name in existing:
+            merged[name] = existing[name]
+            measured[name] = measured_before.get(name) or {
+                "created_utc": before.get("created_utc"),
+                "commit": (before.get("git") or {}).get("commit"),
+                "quick": existing.get("quick")}
+    merged["measured"] = measured
+    return merged

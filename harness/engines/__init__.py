@@ -42,6 +42,7 @@ from harness.engines.contract import (
     geometry_key,
     ke_norm,
 )
+from harness.engines.quiet import import_quietly
 from harness.engines.settings import EngineSettingsError
 
 # engine name -> (adapter module, importable package the adapter needs, distribution name);
@@ -163,7 +164,7 @@ def load_engine(name: str) -> Engine:
         return _LOADED[name]
     module_name, package, _ = _ENGINE_MODULES[name]
     try:
-        importlib.import_module(package)
+        import_quietly(package)  # pybullet prints its build time from C
     except ImportError as error:  # the engine itself is missing or broken
         raise EngineNotInstalled(name, f"{type(error).__name__}: {error}") from error
     module = importlib.import_module(module_name)

@@ -82,11 +82,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-import pybullet as p
-
 from harness.engines.contract import Engine, RawContacts, body_extent, geometry_key
+from harness.engines.quiet import import_quietly
 from harness.engines.settings import check_choice, check_int, check_number
 from harness.scene import Scene
+
+p = import_quietly("pybullet")  # not `import pybullet as p`: it prints its build time
 
 _MAX_WORLDS = 8
 _MAX_IDLE = 2  # emptied clients kept per engine settings (runs of new geometries one by

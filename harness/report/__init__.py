@@ -6,6 +6,11 @@
     impact-harness report --results /tmp/r.json --out /tmp/report
     impact-harness report --figures-for 'rod-*' --workers 2   # many scenarios: some figures
 
+Without ``--out`` the report goes to ``reports/``, where it replaces an existing report only
+when made from ``reports/results.json`` (the results that report was made from, as ``make
+validate`` does): a report of another results file there is refused (exit status 2, before
+any work) unless ``--force`` -- as ``run`` refuses to replace another selection's results.
+
 The HTML page is self-contained (inline CSS, no scripts, no external assets); its figures are
 PNG files in ``<out>/figures/`` beside it, and the Table 3 reproduction
 (``<out>/paper-table3.md`` and ``.png``, written by ``impact-harness paper``) is embedded
@@ -88,6 +93,8 @@ from harness.run.records import DEFAULT_RESULTS, Results
 #: scenarios the one-row-per-scenario heat map is ~1,700 px tall and the per-scenario figures
 #: take ~1 min to draw on two cores; the shipped library (28 scenarios) stays below.
 MANY_SCENARIOS = 60
+#: Where ``report`` writes without ``--out`` (the library's report, beside ``run``'s results).
+DEFAULT_OUT = DEFAULT_RESULTS.parent
 #: Tags that select scenarios for a run rather than say what they are: never a family.
 SELECTION_TAGS = ("quick", "sweep", "slow")
 #: Figure kinds drawn once per report (not per scenario): their SVG twins are kept with
@@ -465,8 +472,13 @@ def _remove_stale_figures(figure_dir: Path, wanted: set) -> None:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--results", type=Path, default=DEFAULT_RESULTS,
                         help=f"results file from `impact-harness run` (default: {DEFAULT_RESULTS})")
-    parser.add_argument("--out", type=Path, default=Path("reports"),
-                        help="output directory (default: reports)")
+    parser.add_argument("--out", type=Path, default=None,
+                        help=f"output directory (default: {DEFAULT_OUT}; there only a report "
+                        f"of {DEFAULT_RESULTS} replaces an existing one: see --force)")
+    parser.add_argument("--force", action="store_true",
+                        help=f"without --out, replace the report in {DEFAULT_OUT}/ (its "
+                        f"index.html, summary.md and figures) even when made from another "
+                        f"results file than {DEFAULT_OUT}/results.json")
     parser.add_argument("--workers", type=int, default=None,
                         help="processes drawing the figures (default: all cores; 1: none)")
     parser.add_argument("--scenario-figures", choices=("auto", "all", "none"), default="auto",
@@ -480,7 +492,26 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              f"auto (all up to {MANY_SCENARIOS} scenarios, headline above)")
 
 
+def replaces_another_report(results: Path, out: Path) -> bool:
+    """Whether writing a report of ``results`` into ``out`` would replace a report made
+    from other results: ``out`` holds a report (``index.html``) and ``results`` is not
+    the results file in ``out`` (``reports/results.json`` for ``reports/``, which ``run``
+    writes and ``make validate`` reports)."""
+    if not (out / "index.html").exists():
+        return False
+    return Path(results).resolve() != (out / DEFAULT_RESULTS.name).resolve()
+
+
 def main(args) -> int:
+    out = args.out
+    if out is None:  # the default directory: refuse to replace another results' report
+        out = DEFAULT_OUT
+        if (not getattr(args, "force", False)
+                and replaces_another_report(args.results, out)):
+            print(f"impact-harness report: {out}/ holds the report of "
+                  f"{out / DEFAULT_RESULTS.name}, not of {args.results}; write this report "
+                  f"elsewhere with --out DIR, or replace it with --force", file=sys.stderr)
+            return 2
     try:
         results = read_for_report(args.results)  # the records only when asked for
     except (FileNotFoundError, ValueError) as error:  # the message names the file
@@ -490,7 +521,7 @@ def main(args) -> int:
     # otherwise walk their millions of containers each time the page's strings set it off.
     gc.freeze()
     start = time.perf_counter()
-    written = write_report(results, args.out, sources=[args.results.parent, Path("reports")],
+    written = write_report(results, out, sources=[args.results.parent, Path("reports")],
                            workers=getattr(args, "workers", None),
                            scenario_figures=getattr(args, "scenario_figures", "auto"),
                            figures_for=getattr(args, "figures_for", ()),

@@ -9,9 +9,13 @@ each pair it reports
 
 * the change of every departure, ``d_B − d_A`` (in percentage points: departures are
   fractions of the motion before the impact, shown in percent), and
-* the change of the post-impact speeds, ``‖u_B − u_A‖ / ‖u_before‖`` (Euclidean over the
-  generalized speeds, relative to the speeds before the impact; the results do not hold
-  the mass matrix, so this is not the kinetic-energy norm of the departures),
+* the change of the post-impact speeds, ``‖u_B − u_A‖_M / s``: in the kinetic-energy norm
+  of the departures, relative to the same frame-free scale ``s`` of the speeds before the
+  impact (:func:`harness.run.metrics.departure`; docs/verdicts.md) -- so a speed change and
+  a departure change are on one scale, and metres and radians per second are not mixed.
+  The results do not hold the mass matrix ``M``: it is read from the scenario's file (the
+  path the results record, else the file of that name in ``scenarios/``); a scenario whose
+  file is not found gets no speed change (``n/a``, and a line saying so),
 
 and a change of status (``ok`` against ``multi-contact`` …). A pair *exceeds* the threshold
 when the largest of its departure changes or its speed change is above ``--fail-above``,
@@ -31,7 +35,11 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
+from harness.run import metrics
 from harness.run.records import Record, Results, read_results
+from harness.scenarios.errors import ScenarioError
 
 DEFAULT_THRESHOLD = "1%"
 LAWS = ("poisson", "stronge", "stronge-paper", "newton", "newton-lcp")
@@ -50,7 +58,7 @@ class Change:
     departure_b: dict
     u_a: list | None
     u_b: list | None
-    speed_change: float  # ‖u_B − u_A‖ / ‖u_before‖, nan when either has no speeds
+    speed_change: float  # ‖u_B − u_A‖_M / s, nan without speeds or the scenario's M
 
     @property
     def departure_change(self) -> dict[str, float]:
@@ -91,19 +99,91 @@ def record_key(record: Record) -> tuple[str, str, str]:
     return record.scenario, str(record.point.get("label", record.point.get("index"))), record.label
 
 
-def speed_change(a: Record, b: Record) -> float:
-    """``‖u_B − u_A‖ / ‖u_before‖`` (Euclidean); nan when a record has no speeds."""
-    if not a.u_after or not b.u_after or len(a.u_after) != len(b.u_after):
+class MassMatrices:
+    """The mass matrix and frame of each (scenario, sweep point) of two results files,
+    from the scenarios' files, read once each; None for a scenario whose file is not found
+    (or no longer holds that scenario)."""
+
+    def __init__(self, *results: Results) -> None:
+        self.results = results
+        self.scenarios: dict = {}
+        self.points: dict = {}
+        self.missing: set[str] = set()
+
+    def candidates(self, name: str) -> list[Path]:
+        """Where the scenario's file may be: the paths the results record (B's first), then
+        the file of that name in the library (a results file made on another machine)."""
+        from harness.scenarios.schema import SCENARIO_DIR
+
+        paths = [info.get("path") for results in reversed(self.results)
+                 if isinstance(info := results.scenarios.get(name), dict)]
+        found = [Path(path) for path in paths if path]
+        found += [SCENARIO_DIR / path.name for path in found]
+        return found + [SCENARIO_DIR / f"{name}.toml"]
+
+    def scenario(self, name: str):
+        if name not in self.scenarios:
+            from harness.scenarios.reader import load_scenario
+
+            self.scenarios[name] = None
+            for path in dict.fromkeys(self.candidates(name)):
+                try:
+                    loaded = load_scenario(path) if path.is_file() else None
+                except ScenarioError:
+                    loaded = None
+                if loaded is not None and loaded.name == name:
+                    self.scenarios[name] = loaded
+                    break
+            else:
+                self.missing.add(name)
+        return self.scenarios[name]
+
+    def __call__(self, record: Record) -> tuple | None:
+        """``(M, free_bodies)`` at ``record``'s point, as the run weighed its departures."""
+        index = int(record.point.get("index") or 0)
+        key = (record.scenario, index)
+        if key not in self.points:
+            scenario = self.scenario(record.scenario)
+            try:
+                if scenario is None:
+                    raise LookupError(record.scenario)
+                fixed = scenario.at(index)
+                self.points[key] = (np.asarray(scenario.analytic_problem(index).mass_matrix,
+                                               dtype=float),
+                                    fixed.system == "bodies" and not fixed.ground)
+            except (LookupError, ValueError, TypeError, ScenarioError):
+                self.missing.add(record.scenario)
+                self.points[key] = None
+        return self.points[key]
+
+
+def speed_change(a: Record, b: Record, weights: tuple | None) -> float:
+    """``‖u_B − u_A‖_M / s``, ``s`` the frame-free kinetic-energy norm of the speeds before
+    (:func:`harness.run.metrics.frame_free_scale`): the departures' measure, so that a
+    common velocity of free bodies changes nothing. ``weights``: ``(M, free_bodies)``; nan
+    without them or when a record has no speeds."""
+    if weights is None or not a.u_after or not b.u_after or len(a.u_after) != len(b.u_after):
         return math.nan
     if any(v is None for v in (*a.u_after, *b.u_after)):
         return math.nan
-    before = b.u_before or a.u_before or []
-    scale = math.sqrt(sum(v * v for v in before)) or 1.0
-    return math.sqrt(sum((vb - va) ** 2 for va, vb in zip(a.u_after, b.u_after))) / scale
+    mass_matrix, free_bodies = weights
+    before = b.u_before or a.u_before
+    if before is None or len(before) != len(a.u_after) or len(before) != len(mass_matrix):
+        return math.nan
+    scale = metrics.frame_free_scale(mass_matrix, np.asarray(before, dtype=float),
+                                     free_bodies=free_bodies)
+    difference = np.asarray(b.u_after, dtype=float) - np.asarray(a.u_after, dtype=float)
+    return metrics.ke_norm(mass_matrix, difference) / scale if scale > 0 else math.nan
 
 
-def compare(a: Results, b: Results) -> tuple[list[Change], list[tuple], list[tuple]]:
-    """The changes of the records in both, and the keys only in A and only in B."""
+def compare(a: Results, b: Results,
+            weights: MassMatrices | None = None) -> tuple[list[Change], list[tuple], list[tuple]]:
+    """The changes of the records in both, and the keys only in A and only in B.
+
+    ``weights``: the mass matrices of the speed changes (default: from the scenarios' files,
+    :class:`MassMatrices`).
+    """
+    weights = MassMatrices(a, b) if weights is None else weights
     records_a = {record_key(r): r for r in a.records}
     records_b = {record_key(r): r for r in b.records}
     changes = []
@@ -111,8 +191,10 @@ def compare(a: Results, b: Results) -> tuple[list[Change], list[tuple], list[tup
         rb = records_b.get(key)
         if rb is None:
             continue
+        has_speeds = ra.u_after is not None and rb.u_after is not None
+        change = speed_change(ra, rb, weights(rb) if has_speeds else None)
         changes.append(Change(*key, ra.status, rb.status, dict(ra.departure),
-                              dict(rb.departure), ra.u_after, rb.u_after, speed_change(ra, rb)))
+                              dict(rb.departure), ra.u_after, rb.u_after, change))
     only_a = [key for key in records_a if key not in records_b]
     only_b = [key for key in records_b if key not in records_a]
     return changes, only_a, only_b
@@ -153,7 +235,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.description = __doc__.split("\n\n")[0].strip("`: ").replace("``", "")
     parser.epilog = (
         "Exit status: 0 when no matched record changed by more than --fail-above (departure "
-        "change in percentage points, or speed change ‖u_B − u_A‖/‖u_before‖) and none changed "
+        "change in percentage points, or speed change ‖u_B − u_A‖_M / s in the departures' "
+        "kinetic-energy norm, M from the scenario's file) and none changed "
         "status; 1 when one did; 2 on bad input (missing or invalid file, bad threshold, no "
         "record in common). Records only in one file are listed but do not fail.")
     parser.add_argument("a", type=Path, help="the reference results file (before)")
@@ -180,7 +263,8 @@ def main(args) -> int:
         except (OSError, ValueError, KeyError, TypeError) as error:
             print(f"impact-harness compare: {error}")
             return 2
-    changes, only_a, only_b = compare(*loaded)
+    weights = MassMatrices(*loaded)
+    changes, only_a, only_b = compare(*loaded, weights)
     if not changes:
         print(f"impact-harness compare: {args.a} and {args.b} have no record in common")
         return 2
@@ -203,6 +287,10 @@ def main(args) -> int:
         if keys:
             print(f"{len(keys)} records {label}, e.g. " + ", ".join(
                 " ".join(part for part in key if part) for key in keys[:3]))
+    if weights.missing:
+        names = sorted(weights.missing)
+        print(f"speeds not compared for {len(names)} scenarios whose file was not found "
+              f"(their mass matrix weighs the speeds), e.g. {', '.join(names[:3])}")
     print(f"compared {len(changes)} records ({len(changed)} changed at all): {len(exceeding)} "
           "changed by more than "
           f"{100 * threshold:g}% or changed status"
@@ -210,4 +298,5 @@ def main(args) -> int:
     return 1 if exceeding else 0
 
 
-__all__ = ["Change", "add_arguments", "compare", "main", "parse_threshold", "write_csv"]
+__all__ = ["Change", "MassMatrices", "add_arguments", "compare", "main", "parse_threshold",
+           "write_csv"]

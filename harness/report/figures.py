@@ -96,9 +96,21 @@ def save_svg_twin(figure, path: Path) -> Path:
     by more than the difference in text extents between the two resolutions (< 0.5 pt).
     """
     figure.set_layout_engine("none")
-    svg = path.with_suffix(".svg")
-    # No date in the SVG, so that the same inputs give the same file.
-    figure.savefig(svg, metadata={"Date": None})
+    return save_svg(figure, path.with_suffix(".svg"))
+
+
+#: The salt of the ids matplotlib gives an SVG's clip paths and glyphs (``svg.hashsalt``):
+#: fixed, since by default each file gets random ones.
+SVG_HASH_SALT = "planar-impact-harness"
+
+
+def save_svg(figure, svg: Path) -> Path:
+    """Save ``figure`` as the SVG ``svg``, the same bytes for the same figure: no date and
+    ids from :data:`SVG_HASH_SALT` (else a regenerated report changes every SVG)."""
+    from matplotlib import rc_context
+
+    with rc_context({"svg.hashsalt": SVG_HASH_SALT}):
+        figure.savefig(svg, metadata={"Date": None})
     return svg
 
 
@@ -589,11 +601,24 @@ def type_boundaries(law_records: Sequence[Record]) -> list[tuple[float, int, int
 DEPARTURE_FLOOR = 1e-16  # exact agreement drawn here on the log axis (1e-14%)
 
 
+#: A sweep whose positive values span at least this factor is drawn on a logarithmic axis
+#: (the tilts 0.01° … 3°: on a linear one, four of six points share the first 1%).
+LOG_SWEEP_SPAN = 100.0
+
+
+def log_sweep_axis(values: Sequence[float]) -> bool:
+    """Whether a sweep over ``values`` is drawn on a logarithmic axis: all positive and
+    spanning :data:`LOG_SWEEP_SPAN` or more."""
+    values = [float(v) for v in values if v is not None]
+    return bool(values) and min(values) > 0 and max(values) >= LOG_SWEEP_SPAN * min(values)
+
+
 def sweep_figure(name: str, info: dict, records: Sequence[Record], path: Path,
                  tag: str | None = None) -> Path | None:
     """Post-impact quantities against the swept parameter; laws lines, engines points."""
     sweep = info.get("sweep") or {}
     parameter = sweep.get("parameter", "parameter")
+    log_x = log_sweep_axis(sweep.get("values") or [r.point["value"] for r in records])
     laws = [r for r in records if r.source == ANALYTIC]
     engines = [r for r in records if r.source != ANALYTIC and r.u_after is not None]
     panels = [("vn_separation", "v_n after [m/s]"), ("vt_separation", "v_t after [m/s]"),
@@ -645,6 +670,8 @@ def sweep_figure(name: str, info: dict, records: Sequence[Record], path: Path,
                 ax.plot([x], [y], ls="none", transform=transform, label="flagged by the engine",
                         **{**FLAG_STYLE, "ms": 10})
         ax.autoscale_view()
+        if log_x:
+            ax.set_xscale("log")
         if field == "departure":
             ax.set_yscale("log")
             percent_axis(ax.yaxis)

@@ -330,13 +330,11 @@ def write_figure(rows: list[dict], path: Path, metadata: dict | None = None) -> 
         ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=3,
                   frameon=False)
     fig.suptitle("Table 3, two sleds: impulse paths of each law (Routh's graph)")
-    from harness.report.figures import lay_out
+    from harness.report.figures import lay_out, save_svg_twin
 
     lay_out(fig, 110)  # once, for the PNG and the SVG (figures.lay_out, save_svg_twin)
     fig.savefig(path, dpi=110, metadata=metadata)
-    svg = path.with_suffix(".svg")
-    fig.savefig(svg, metadata={"Date": None})
-    return [path, svg]
+    return [path, save_svg_twin(fig, path)]
 
 
 def write_report(out_dir: Path) -> tuple[Path, list[dict]]:

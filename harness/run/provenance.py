@@ -32,13 +32,22 @@ def package_versions(names: Iterable[str] = PACKAGES) -> dict:
     return versions
 
 
+#: Where the outputs are generated (top level of the tree): a change there is no change of
+#: the source. ``make validate`` rewrites ``reports/`` (the Table 3 files) before ``run``
+#: records its provenance, so counting them stamped every report on a clean clone dirty.
+GENERATED_DIRS = ("reports",)
+
+
 def git_commit(cwd: Path | None = None) -> dict:
-    """``{"commit": sha or None, "dirty": bool or None}`` of the source tree."""
+    """``{"commit": sha or None, "dirty": bool or None}`` of the source tree: dirty when a
+    tracked file outside :data:`GENERATED_DIRS` differs from the commit."""
     cwd = cwd or Path(__file__).resolve().parent.parent.parent
+    outside_outputs = [f":(top,exclude){name}" for name in GENERATED_DIRS]
     try:
         commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=cwd, capture_output=True,
                                 text=True, timeout=10).stdout.strip() or None
-        status = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
+        status = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no",
+                                 "--", ":(top)", *outside_outputs],
                                 cwd=cwd, capture_output=True, text=True, timeout=10)
         dirty = bool(status.stdout.strip()) if status.returncode == 0 else None
     except (OSError, subprocess.SubprocessError):
@@ -90,4 +99,5 @@ def provenance(kind: str, format_version: int, *, command: Iterable[str] | None 
     }
 
 
-__all__ = ["PACKAGES", "cpu_model", "git_commit", "machine", "package_versions", "provenance"]
+__all__ = ["GENERATED_DIRS", "PACKAGES", "cpu_model", "git_commit", "machine", "package_versions",
+           "provenance"]

@@ -49,9 +49,23 @@ def check_engine_settings(reader: TableReader, engine: str, table: Mapping[str, 
         try:
             adapter.settings(preset, dict(table))
         except ValueError as error:
-            reader.error(f"engine_settings.{engine}", f"rejected by {engine}: {error}",
-                         dict(table), f"values the {engine} adapter accepts")
+            # The key the adapter rejects on its own, else (a combination) the table.
+            bad = next((key for key in table if _rejects(adapter, preset, key, table[key])),
+                       None)
+            reader.error(f"engine_settings.{engine}" + (f".{bad}" if bad else ""),
+                         f"rejected by {engine}: {error}",
+                         table[bad] if bad else dict(table),
+                         f"values the {engine} adapter accepts")
             return
+
+
+def _rejects(adapter, preset: str, key: str, value: Any) -> bool:
+    """Whether ``adapter`` rejects the override ``key = value`` alone on ``preset``."""
+    try:
+        adapter.settings(preset, {key: value})
+    except ValueError:
+        return True
+    return False
 
 
 def check_points(reader: TableReader, scenario: Scenario) -> None:
@@ -115,7 +129,7 @@ def check_bodies(reader: TableReader, scenario: Scenario, point: Point, fixed: S
     if not vn < 0.0:
         reader.error(f"body.{fixed.bodies[-1].name}.velocity",
                      f"the bodies do not approach{where}: contact normal velocity v_n = "
-                     f"{vn:.6g} m/s", [list(s.velocity) for s in fixed.bodies],
+                     f"{vn:.6g} m/s{_other_velocities(fixed)}", list(fixed.bodies[-1].velocity),
                      "velocities giving v_n < 0 along the normal "
                      f"{np.round(exact.normal, 6).tolist()} (from A into B)")
         return
@@ -131,6 +145,14 @@ def check_bodies(reader: TableReader, scenario: Scenario, point: Point, fixed: S
                      "not one", False,
                      "expect_sequence = true (the runs are then judged, docs/verdicts.md), or "
                      "a pose whose other corners/ends stay clear")
+
+
+def _other_velocities(fixed: Scenario) -> str:
+    """The velocities of the bodies other than the last (whose velocity an approach error
+    names), which the approach depends on as well: ``" (with body.a.velocity = [1, 0])"``."""
+    others = ", ".join(f"body.{spec.name}.velocity = {list(spec.velocity)}"
+                       for spec in fixed.bodies[:-1])
+    return f" (with {others})" if others else ""
 
 
 def check_simultaneous(reader: TableReader, fixed: Scenario, scene: Scene, point_count: int,
@@ -151,8 +173,8 @@ def check_simultaneous(reader: TableReader, fixed: Scenario, scene: Scene, point
     if not min(normal_speeds) < 0.0:
         reader.error(f"body.{fixed.bodies[-1].name}.velocity",
                      f"no contact point approaches{where}: v_n = "
-                     f"{[round(v, 6) for v in normal_speeds]} m/s",
-                     [list(s.velocity) for s in fixed.bodies],
+                     f"{[round(v, 6) for v in normal_speeds]} m/s{_other_velocities(fixed)}",
+                     list(fixed.bodies[-1].velocity),
                      "velocities giving v_n < 0 at one contact point at least")
 
 

@@ -57,6 +57,20 @@ class ScenarioError(ValueError):
         return text
 
 
+class OptionError(ScenarioError):
+    """A bad command-line option or argument rather than a file's key: named as typed,
+    ``--tags 'nosuchtag': no scenario has this tag (allowed: ...)``, with no file."""
+
+    def _format(self, value) -> str:
+        text = self.key or "<option>"
+        if value is not NO_VALUE:
+            text += f" {show_value(value)}"
+        text += f": {self.problem}"
+        if self.allowed:
+            text += f" (allowed: {self.allowed})"
+        return text
+
+
 def _unpickled(cls: type, args: tuple) -> ScenarioError:
     return cls.__new__(cls, *args)  # its fields follow (__reduce__'s state)
 

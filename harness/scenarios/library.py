@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Iterable
 
 from harness.scenarios import checks
-from harness.scenarios.errors import ScenarioError, suggest
+from harness.scenarios.errors import OptionError, ScenarioError, suggest
 from harness.scenarios.model import Scenario
 from harness.scenarios.reader import passed_before, read_scenario_text, scenario_from_text
 from harness.scenarios.schema import SCENARIO_DIR
@@ -74,9 +74,9 @@ def load_scenarios_reporting(paths_or_dir=None, tags=None, *, workers: int | Non
     known = tag_sets(unique)
     for tag in wanted:
         if tag not in known:
-            errors.append(ScenarioError(f"no scenario has this tag{suggest(tag, known)}",
-                                        key="tags", value=tag,
-                                        allowed=", ".join(sorted(known))))
+            errors.append(OptionError(f"no scenario has this tag{suggest(tag, known)}",
+                                      key="--tags", value=tag,
+                                      allowed=", ".join(sorted(known))))
     return [s for s in unique if set(s.tags) & set(wanted)], errors
 
 

@@ -190,6 +190,10 @@ class TableReader:
         return tuple(value)
 
 
+#: The keys of every shape: checked against a body's shape only when the shape is known.
+ANY_SHAPE_FIELDS = tuple(dict.fromkeys(key for keys in SHAPE_FIELDS.values() for key in keys))
+
+
 def _read_shape(reader: TableReader, table, prefix):
     kind = reader.string(table, "shape", prefix, choices=tuple(SHAPE_FIELDS))
     if kind is None:
@@ -248,9 +252,10 @@ def _read_body(reader: TableReader, table, index: int, ground: bool) -> BodySpec
     if name is not None:
         prefix = f"body.{name}"
     kind = table.get("shape")
-    shape_keys = SHAPE_FIELDS.get(kind, ()) if isinstance(kind, str) else ()
-    reader.keys(table, prefix, BODY_KEYS + shape_keys,
-                f"a {kind} body" if shape_keys else "a body")
+    if isinstance(kind, str) and kind in SHAPE_FIELDS:
+        reader.keys(table, prefix, BODY_KEYS + SHAPE_FIELDS[kind], f"a {kind} body")
+    else:  # a bad or missing shape is the one error: another shape's keys may be right
+        reader.keys(table, prefix, BODY_KEYS + ANY_SHAPE_FIELDS, "a body")
     shape = _read_shape(reader, table, prefix)
     mass = reader.number(table, "mass", prefix, low=0.0, low_open=True, field="mass")
     inertia = reader.number(table, "inertia", prefix, default=None, low=0.0, low_open=True,

@@ -100,7 +100,8 @@ def run(quick: bool, out_dir: Path, executor: str = "local", workers: int | None
 def add_arguments(parser) -> None:
     parser.add_argument("--quick", action="store_true",
                         help="fewer cases; finishes in about a minute")
-    parser.add_argument("--out", type=Path, default=Path("reports/stress"), help="output directory")
+    parser.add_argument("--out", type=Path, default=Path("reports/stress"),
+                        help="output directory (default: reports/stress)")
     parser.add_argument("--executor", choices=("local", "dask"), default="local",
                         help="where engine runs execute (default: a local process pool)")
     parser.add_argument("--workers", type=int, default=None,

@@ -36,7 +36,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from harness.scenarios.errors import NO_VALUE, ScenarioError, suggest
+from harness.scenarios.errors import NO_VALUE, OptionError, ScenarioError, suggest
 from harness.scenarios.reader import TableReader
 from harness.scenarios.schema import NAME_PATTERN, TAG_PATTERN
 
@@ -53,6 +53,8 @@ SHAPE_KEYS = {
     "box": ("width", "height"),
     "polygon": ("sides", "circumradius"),
 }
+#: The keys of every shape: checked against a body's shape only when the shape is known.
+ANY_SHAPE_KEYS = tuple(dict.fromkeys(key for keys in SHAPE_KEYS.values() for key in keys))
 BODY_KEYS = ("name", "shape", "mass", "angle_deg", "angular_velocity")
 TOP_KEYS = ("name", "description", "tags", "ground", "restitution", "friction", "mass_ratio",
             "approach", "placement", "body", "max_attempts")
@@ -186,8 +188,10 @@ def _read_body(reader: TableReader, table, index: int, *, mass_from_ratio: bool)
         prefix = f"body.{name}"
     shape = reader.string(table, "shape", prefix, choices=SHAPES)
     shape_keys = SHAPE_KEYS.get(shape, ())
-    reader.keys(table, prefix, BODY_KEYS + shape_keys,
-                f"a {shape} body" if shape_keys else "a body")
+    if shape_keys:
+        reader.keys(table, prefix, BODY_KEYS + shape_keys, f"a {shape} body")
+    else:  # a bad or missing shape is the one error: another shape's keys may be right
+        reader.keys(table, prefix, BODY_KEYS + ANY_SHAPE_KEYS, "a body")
     parameters = []
     for key in shape_keys:
         if key == "sides":
@@ -318,8 +322,8 @@ def resolve_populations(names_or_paths=()) -> list[Population]:
         elif item in shipped:
             chosen.append(load_population(shipped[item]))
         else:
-            raise ScenarioError(f"no population file{suggest(item, shipped)}", key="POPULATION",
-                                value=item, allowed=", ".join(sorted(shipped)) + " or a path")
+            raise OptionError(f"no population file{suggest(item, shipped)}", key="POPULATION",
+                              value=item, allowed=", ".join(sorted(shipped)) + " or a path")
     names = [population.name for population in chosen]
     duplicated = sorted({name for name in names if names.count(name) > 1})
     if duplicated:

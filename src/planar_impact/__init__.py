@@ -11,7 +11,7 @@ Newton–Coulomb law of sequential-impulse engines.
 (3, 0.82)
 """
 
-from . import builders, errors, laws, process, simultaneous
+from . import builders, errors, laws, process
 from .builders import ImpactProblem, PlanarBody
 from .errors import STATUS_MESSAGES, ImpactInputError
 from .process import impulse_process, process_collision_type, sequential_impulses
@@ -36,3 +36,15 @@ __all__ = [
     "solve",
     "solve_batch",
 ]
+
+
+def __getattr__(name: str):
+    """``planar_impact.simultaneous``, imported on first use: imported here, it was in
+    ``sys.modules`` before ``python -m planar_impact.simultaneous`` ran it, which runpy
+    warns about (the module would run as two copies)."""
+    if name == "simultaneous":
+        import importlib
+
+        return importlib.import_module(f"{__name__}.simultaneous")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+

@@ -43,3 +43,48 @@ def test_output_write_covers_every_array_of_a_batch_result():
 @pytest.mark.parametrize("keep", [True, False])
 def test_numpy_passes_time_is_positive(keep):
     assert bench.numpy_passes_time(1000, repeat=1, keep=keep) > 0
+
+
+def _bench_args(out, **sections):
+    import argparse
+
+    parser = argparse.ArgumentParser()
+    bench.add_arguments(parser)
+    argv = ["--out", str(out), "--quick"] + [f"--{name.replace('_', '-')}" for name in sections]
+    return parser.parse_args(argv)
+
+
+def test_one_section_updates_its_part_of_bench_json(tmp_path, monkeypatch):
+    """``bench --solver`` replaces the solver section and keeps the survey's and the engines'
+    (README tables and the bench page read the whole file)."""
+    import json
+
+    measured = {"batch": {"poisson": 1.0}}
+    monkeypatch.setattr(bench, "solver_benchmark", lambda quick: measured)
+    monkeypatch.setattr(bench, "print_solver", lambda results: None)
+    monkeypatch.setattr(bench, "write_solver_figure", lambda results, path: None)
+    earlier = {"provenance": {"format": bench.BENCH_FORMAT, "created_utc": "2026-01-01T00:00:00Z",
+                              "git": {"commit": "abc"}},
+               "quick": False, "solver": {"batch": {"poisson": 9.0}},
+               "survey": {"ratio": 1.4}, "engines": {"pymunk": 2.0}}
+    (tmp_path / "bench.json").write_text(json.dumps(earlier))
+    assert bench.main(_bench_args(tmp_path, solver=True)) == 0
+    table = json.loads((tmp_path / "bench.json").read_text())
+    assert table["solver"] == measured
+    assert table["survey"] == {"ratio": 1.4} and table["engines"] == {"pymunk": 2.0}
+    assert table["measured"]["survey"] == {"created_utc": "2026-01-01T00:00:00Z",
+                                           "commit": "abc", "quick": False}
+    assert table["measured"]["solver"]["quick"] is True
+    assert table["measured"]["solver"]["created_utc"] == table["provenance"]["created_utc"]
+    assert set(table["measured"]) == {"solver", "survey", "engines"}
+
+
+def test_a_run_into_a_new_directory_holds_its_sections_only(tmp_path, monkeypatch):
+    import json
+
+    monkeypatch.setattr(bench, "solver_benchmark", lambda quick: {"batch": {}})
+    monkeypatch.setattr(bench, "print_solver", lambda results: None)
+    monkeypatch.setattr(bench, "write_solver_figure", lambda results, path: None)
+    assert bench.main(_bench_args(tmp_path / "new", solver=True)) == 0
+    table = json.loads((tmp_path / "new" / "bench.json").read_text())
+    assert set(table["measured"]) == {"solver"} and "survey" not in table

@@ -14,19 +14,20 @@ import pytest
 from harness import cli
 from harness.report import compare
 from harness.run.records import ANALYTIC, Record, write_results
+from harness.scenarios import SCENARIO_DIR
 
-U_BEFORE = [3.0, -4.0, 0.0]  # Euclidean norm 5
+U_BEFORE = [3.0, -4.0, 0.0]  # norm 5, Euclidean and in disk-direct's KE norm (1 kg)
 
 
 def engine_record(departure: float, u_after=(1.0, 2.0, 0.0), status: str = "ok",
-                  scenario: str = "disk", preset: str = "defaults") -> Record:
+                  scenario: str = "disk-direct", preset: str = "defaults") -> Record:
     return Record(scenario=scenario, point={"index": 0, "label": "", "value": None},
                   source="pymunk", preset=preset, u_before=list(U_BEFORE),
                   u_after=list(u_after), status=status,
                   departure={"poisson": departure, "stronge": departure})
 
 
-def law_record(scenario: str = "disk") -> Record:
+def law_record(scenario: str = "disk-direct") -> Record:
     return Record(scenario=scenario, point={"index": 0, "label": "", "value": None},
                   source=ANALYTIC, law="poisson", u_before=list(U_BEFORE),
                   u_after=[1.0, 2.0, 0.0], departure={"poisson": 0.0, "stronge": 0.0})
@@ -62,7 +63,7 @@ def test_speed_change_is_relative_to_the_speeds_before(tmp_path):
     before = results_file(tmp_path, "a.json", [engine_record(0.1, u_after=(1.0, 2.0, 0.0))])
     after = results_file(tmp_path, "b.json", [engine_record(0.1, u_after=(1.0, 2.1, 0.0))])
     changes, _, _ = compare.compare(*(compare.read_results(p) for p in (before, after)))
-    assert changes[0].speed_change == pytest.approx(0.1 / 5.0)  # |Δu| 0.1 over |u_before| 5
+    assert changes[0].speed_change == pytest.approx(0.1 / 5.0)  # Δv_y 0.1 (1 kg) over 5
     assert run_compare(before, after, "--fail-above", "2.5%") == 0
     assert run_compare(before, after, "--fail-above", "1.5%") == 1
 
@@ -114,3 +115,69 @@ def test_help_documents_the_exit_status(capsys):
     text = capsys.readouterr().out
     assert "Exit status: 0" in text and "1 when" in text and "2 on bad input" in text
     assert "--fail-above" in text and "--csv" in text
+
+
+ROD = "rod-45-slip-reversal"  # 1 kg, inertia 1/12 kg m^2, on the ground
+TWO_DISKS = "two-disks-off-centre"  # free disks of 1 kg and 2 kg: a frame-free scale
+
+
+def speeds_record(scenario, u_before, u_after) -> Record:
+    return Record(scenario=scenario, point={"index": 0, "label": "", "value": None},
+                  source="pymunk", preset="defaults", u_before=list(u_before),
+                  u_after=list(u_after), departure={"poisson": 0.1})
+
+
+def speed_change_of(tmp_path, scenario, u_before, u_a, u_b, scenarios=None) -> float:
+    files = [write_results(tmp_path / name, [speeds_record(scenario, u_before, u)], {"gates": []},
+                           scenarios or {})
+             for name, u in (("a.json", u_a), ("b.json", u_b))]
+    changes, _, _ = compare.compare(*(compare.read_results(f) for f in files))
+    return changes[0].speed_change
+
+
+def test_speed_change_weighs_the_speeds_by_the_mass_matrix(tmp_path):
+    """A change of the rod's spin alone: weighed by its inertia (1/12 kg m^2), as the
+    departures are, not counted as if rad/s were m/s."""
+    before = [0.5, -1.0, 0.0]  # ‖u‖_M = sqrt(1.25): 1 kg, no spin
+    change = speed_change_of(tmp_path, ROD, before, [0.1, 0.4, 1.0], [0.1, 0.4, 1.5],
+                             {ROD: {"path": str(SCENARIO_DIR / f"{ROD}.toml")}})
+    assert change == pytest.approx((1 / 12) ** 0.5 * 0.5 / 1.25 ** 0.5)
+    assert change < 0.3 * 0.5 / 1.25 ** 0.5  # the Euclidean measure said 0.45
+
+
+def test_speed_change_finds_a_moved_scenario_in_the_library(tmp_path):
+    """A results file made elsewhere records a path that does not exist here."""
+    moved = {ROD: {"path": "/elsewhere/scenarios/rod-45-slip-reversal.toml"}}
+    change = speed_change_of(tmp_path, ROD, [0.5, -1.0, 0.0], [0.0, 0.0, 1.0],
+                             [0.0, 0.0, 1.5], moved)
+    assert change == pytest.approx((1 / 12) ** 0.5 * 0.5 / 1.25 ** 0.5)
+
+
+def test_speed_change_is_frame_free_between_free_bodies(tmp_path):
+    """A common velocity of both free disks changes neither the departures nor this."""
+    before = [1.0, 0.0, 0.0, 0.0, -1.0, 5.0]
+    u_a = [0.2, 0.3, 0.0, 0.4, -0.2, 4.0]
+    u_b = [0.25, 0.3, 0.0, 0.4, -0.2, 4.0]
+    common = [3.0, 1.0, 0.0, 3.0, 1.0, 0.0]
+
+    def shifted(u):
+        return [v + c for v, c in zip(u, common)]
+
+    change = speed_change_of(tmp_path, TWO_DISKS, before, u_a, u_b)
+    moving = speed_change_of(tmp_path, TWO_DISKS, shifted(before), shifted(u_a), shifted(u_b))
+    assert change == pytest.approx(moving, rel=1e-12)
+    # the scale: before, relative to the centre of mass (1 kg at (1, 0), 2 kg at (0, -1))
+    centre = [1 / 3, -2 / 3]
+    relative_energy = ((1 - centre[0]) ** 2 + centre[1] ** 2
+                       + 2 * (centre[0] ** 2 + (-1 - centre[1]) ** 2)
+                       + 0.5 * 2 * 0.1 ** 2 * 5.0 ** 2)  # disk b's spin: m r^2 / 2
+    assert change == pytest.approx(0.05 / relative_energy ** 0.5)
+
+
+def test_a_scenario_without_its_file_gets_no_speed_change(tmp_path, capsys):
+    before = results_file(tmp_path, "a.json", [engine_record(0.1, scenario="gone")])
+    after = results_file(tmp_path, "b.json",
+                         [engine_record(0.1, u_after=(1.0, 9.0, 0.0), scenario="gone")])
+    assert run_compare(before, after) == 0  # the departures did not change
+    out = capsys.readouterr().out
+    assert "speeds not compared for 1 scenarios" in out and "gone" in out

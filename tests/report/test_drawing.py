@@ -72,6 +72,23 @@ def test_laid_out_once_the_png_and_svg_are_those_savefig_draws(tmp_path, dpi):
     assert text(saved.with_suffix(".svg")) == text(tmp_path / "before.svg")
 
 
+def test_the_same_figure_gives_the_same_svg_bytes(tmp_path):
+    """A regenerated report leaves an unchanged figure's SVG as it was (matplotlib gives
+    clip paths and glyphs random ids, and dates the file, unless told not to)."""
+    _agg()
+    token = figures_module.SVG_TWIN.set(True)
+    try:
+        first = figures_module.save_png(_laid_out_figure(), tmp_path / "first.png")
+        second = figures_module.save_png(_laid_out_figure(), tmp_path / "second.png")
+    finally:
+        figures_module.SVG_TWIN.reset(token)
+    svg = first.with_suffix(".svg").read_bytes()
+    assert b"clip-path" in svg  # the figure has ids that matplotlib would make random
+    assert b"<dc:date>" not in svg
+    assert svg == second.with_suffix(".svg").read_bytes()
+    assert first.read_bytes() == second.read_bytes()
+
+
 @pytest.fixture
 def lazy_results(tmp_path) -> LazyResults:
     record = Record(scenario="a", point={"index": 0, "label": "p"}, source="pymunk",

@@ -76,6 +76,22 @@ def assert_names(error: ScenarioError, *parts: str) -> None:
         assert part in message, f"{part!r} not in {message!r}"
 
 
+@pytest.mark.parametrize("shape", ['"sphere"', "3"])
+def test_a_bad_shape_is_the_one_error_of_its_body(tmp_path, shape):
+    """The rod's own keys are not reported as unknown because its shape is misspelt."""
+    text = GROUND.replace('shape = "disk"\nradius = 0.1',
+                          f"shape = {shape}\nlength = 1.0\nradius = 0.005")
+    error = error_of(tmp_path, text)
+    assert [e.key for e in error.errors] == ["body.disk.shape"], str(error)
+    assert_names(error, "disk, rod, box, polygon")
+
+
+def test_a_bad_shape_still_reports_a_key_no_shape_has(tmp_path):
+    text = GROUND.replace('shape = "disk"', 'shape = "sphere"\ncolour = "red"')
+    error = error_of(tmp_path, text)
+    assert sorted(e.key for e in error.errors) == ["body.disk.colour", "body.disk.shape"]
+
+
 def test_the_base_files_are_good(tmp_path):
     assert load_scenario(write(tmp_path, GROUND, "g.toml")).name == "probe"
     assert load_scenario(write(tmp_path, TWO_BODY, "t.toml")).name == "pair"
@@ -111,7 +127,7 @@ def test_the_base_files_are_good(tmp_path):
         ("restitution = 0.5", "restitution = nan", ["restitution", "nan", "finite"]),
         # not approaching, not touching (explicit position), derived tag, bad name
         ("velocity = [1.0, -1.0]", "velocity = [1.0, 1.0]",
-         ["body.disk.velocity", "[[1.0, 1.0]]", "do not approach", "v_n < 0"]),
+         ["body.disk.velocity = [1.0, 1.0]:", "do not approach", "v_n < 0"]),
         ("velocity = [1.0, -1.0]", "velocity = [1.0, -1.0]\nposition = [0.0, 0.3]",
          ["body.disk.position", "[0.0, 0.3]", "must touch", "0.2 m", "gap_tolerance"]),
         ('tags = ["quick"]', 'tags = ["all"]', ["tags", "derived"]),
@@ -218,6 +234,9 @@ def test_gap_tolerance_can_be_stated(tmp_path):
     ("position = [0.0, 0.0]\n", "", ["body.a.position", "missing required key"]),
     ('name = "b"', 'name = "a"', ["body[1].name", "share a name"]),
     ("velocity = [0.0, -1.0]", "velocity = [0.0, 1.0]", ["body.b.velocity", "do not approach"]),
+    # the value is the named body's, the other's beside it (its default too)
+    ("velocity = [0.0, -1.0]", "velocity = [0.0, 1.0]",
+     ["body.b.velocity = [0.0, 1.0]:", "(with body.a.velocity = [0.0, 0.0])"]),
 ])
 def test_two_body_errors(tmp_path, old, new, parts):
     assert_names(error_of(tmp_path, TWO_BODY.replace(old, new, 1)), "bad.toml", *parts)
@@ -285,6 +304,9 @@ def test_sweep_over_a_two_body_angle_checks_each_point(tmp_path):
     ('[expect.gate]\npymunk = { law = "hooke", max_departure = 1.0 }',
      ["expect.gate.pymunk.law", "'hooke'", "newton, poisson"]),
     ("[engine_settings]\nbullet3 = { iterations = 3 }", ["engine_settings.bullet3", "unknown key"]),
+    # a bad value names its key, not the whole table
+    ("[engine_settings]\npymunk = { iterations = -5, time_step = 0.001 }",
+     ["engine_settings.pymunk.iterations = -5:", "rejected by pymunk"]),
 ])
 def test_bad_expectations(tmp_path, expect, parts):
     assert_names(error_of(tmp_path, GROUND + "\n" + expect + "\n"), "bad.toml", *parts)
@@ -390,3 +412,10 @@ def test_load_scenarios_reports_every_bad_file(tmp_path):
     with pytest.raises(ScenarioError) as info:
         load_scenarios(tmp_path)
     assert_names(info.value, "a.toml", "b.toml", "body.disk.mass", "friction")
+
+
+def test_an_unknown_tag_names_the_option(tmp_path):
+    write(tmp_path, GROUND, "g.toml")
+    with pytest.raises(ScenarioError) as info:
+        load_scenarios([tmp_path / "g.toml"], tags="nosuchtag")
+    assert str(info.value).startswith("--tags 'nosuchtag': no scenario has this tag")

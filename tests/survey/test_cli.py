@@ -61,7 +61,8 @@ def test_bad_engine_name_is_refused(capsys):
 
 def test_unknown_population_exits_2(capsys, tmp_path):
     assert main(["survey", "no-such-family", "--out", str(tmp_path)]) == 2
-    assert "no population file" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "POPULATION 'no-such-family': no population file" in err and "<scenario>" not in err
 
 
 def test_figures_are_written(tmp_path):

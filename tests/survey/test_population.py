@@ -98,6 +98,15 @@ def test_a_bad_value_names_file_key_value_and_allowed(old, new, key, words):
     assert words in str(error)
 
 
+def test_a_bad_shape_is_the_one_error_of_its_body():
+    """The box's own keys are not reported as unknown because its shape is misspelt."""
+    error = _error(GOOD.replace('shape = "box"', 'shape = "sphere"', 1))
+    assert [e.key for e in error.errors] == ["body.box.shape"], str(error)
+    assert "disk, rod, box, polygon" in str(error)
+    error = _error(GOOD.replace('shape = "box"', 'shape = "sphere"\ncolour = "red"', 1))
+    assert sorted(e.key for e in error.errors) == ["body.box.colour", "body.box.shape"]
+
+
 def test_every_problem_is_listed_at_once():
     text = GOOD.replace("restitution = 0.5", "restitution = 2.0").replace("width = 0.4",
                                                                           "width = 0")

@@ -199,3 +199,22 @@ def test_literal_reading_has_at_most_one_candidate():
         system = sim.random_two_contact_system(rng, "generic")
         for law in TYPE_LAWS:
             assert len(sim.coherent_solutions(system, law, coupling="none")) <= 1
+
+
+def test_runs_as_a_script_without_the_double_import_warning():
+    """``python -m planar_impact.simultaneous`` (docs/multi-contact.md): the package does
+    not import the module first, so runpy does not warn that it would run twice."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    src = Path(__file__).resolve().parents[2] / "src"
+    done = subprocess.run([sys.executable, "-W", "error::RuntimeWarning", "-m",
+                           "planar_impact.simultaneous", "1", "0"], capture_output=True,
+                          text=True, env=dict(os.environ, PYTHONPATH=str(src)), timeout=300)
+    assert done.returncode == 0 and "RuntimeWarning" not in done.stderr, done.stderr
+    assert "generic coupling=none" in done.stdout
+    import planar_impact as pi
+
+    assert pi.simultaneous.coherent_solutions is sim.coherent_solutions  # still an attribute
