@@ -73,7 +73,7 @@ from harness.report.figures import (
     split_figure,
     sweep_figure,
     table3_figure,
-    table3_inputs,
+    table3_payload,
 )
 from harness.report.fragments import DIGESTS_FILE, open_cache, prepare
 from harness.report.history import history_figure, history_inputs
@@ -303,7 +303,7 @@ def figure_tasks(results: Results, many: bool, scenario_figures: str,
         tasks.insert(0, FigureTask("legend", "impulse-legend.png", engines,
                                    lambda path, tag: impulse_legend_figure(path, tag, engines),
                                    ("legend",), headline_svg, reads_records=False))
-    tasks.append(FigureTask("table3", "paper-table3.png", table3_inputs(),
+    tasks.append(FigureTask("table3", "paper-table3.png", table3_payload(),
                             lambda path, tag: table3_figure(path, tag), ("table3",),
                             headline_svg, reads_records=False))
     return tasks

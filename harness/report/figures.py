@@ -268,6 +268,11 @@ def table3_inputs() -> str:
     return hashlib.sha256(source.read_bytes() + data.read_bytes()).hexdigest()
 
 
+def table3_payload() -> list[str]:
+    """The inputs of the Table 3 figure: :func:`table3_inputs` and the solver's code."""
+    return [table3_inputs(), solver_digest()]
+
+
 @functools.cache
 def solver_digest() -> str:
     """The sha256 of the modules of ``planar_impact`` (read, not imported), which solves what

@@ -131,3 +131,24 @@ def test_a_reachable_du_is_at_distance_zero_and_its_e_is_found(table, index):
     residual, best_e = paper.printed_du_residual(row)
     assert residual <= 1e-12
     assert best_e == pytest.approx(0.37, abs=1e-9)
+
+
+def test_the_paper_figure_is_drawn_again_only_when_its_inputs_change(tmp_path, monkeypatch):
+    from harness.report import figures
+
+    figure = tmp_path / "paper-table3.png"
+    paper.write_report(tmp_path)
+    drawn = figure.stat().st_mtime_ns, figure.with_suffix(".svg").stat().st_mtime_ns
+    calls = []
+    monkeypatch.setattr(paper, "write_figure", lambda *args: calls.append(args))
+    paper.write_report(tmp_path)  # same table, same code: kept
+    assert calls == []
+    assert (figure.stat().st_mtime_ns, figure.with_suffix(".svg").stat().st_mtime_ns) == drawn
+    # the solver's code is an input: another digest redraws
+    monkeypatch.setattr(figures, "solver_digest", lambda: "another solver")
+    paper.write_report(tmp_path)
+    assert len(calls) == 1
+    figure.with_suffix(".svg").unlink()  # a missing twin redraws too
+    monkeypatch.undo()
+    paper.write_report(tmp_path)
+    assert figure.with_suffix(".svg").exists()
