@@ -131,9 +131,12 @@ def percent_axis(axis) -> None:
 
 
 def percent_tick(value: float) -> str:
+    """A log axis's tick as a percentage: ``10%``, ``0.1%``, ``0.01%``, then ``1e-3%``."""
     percent = 100.0 * value
     if percent >= 1:
         return f"{percent:.0f}%"
+    if percent >= 0.01:  # as written in the text and tables, not 1e-1%
+        return f"{percent:.2g}%"
     return f"{percent:.0e}%".replace("e-0", "e-")
 
 

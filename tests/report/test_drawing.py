@@ -172,3 +172,12 @@ def test_records_read_for_a_frozen_caller_are_frozen_with_what_it_read(lazy_resu
         assert gc.isenabled()
     finally:
         gc.unfreeze()
+
+
+@pytest.mark.parametrize(("value", "label"), [
+    (0.5, "50%"), (0.01, "1%"), (0.001, "0.1%"), (0.0001, "0.01%"), (0.0005, "0.05%"),
+    (1e-5, "1e-3%"), (1e-10, "1e-8%")])
+def test_percent_ticks_read_as_in_the_text(value, label):
+    from harness.report.figures import percent_tick
+
+    assert percent_tick(value) == label
