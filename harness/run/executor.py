@@ -33,11 +33,12 @@ Chunks
     difference between 8 and 128 within the noise (about ±30%).
 
 Dask
-    One graph of one future per chunk (:class:`DaskChunk`). A local cluster's workers are
-    forked on Linux, as the pool's are (0.3 s to start against 2 s spawned, and no second
-    import of the engines), and a cluster started for the run stops in a background thread
-    once every result is delivered: the caller builds and writes its records meanwhile
-    (:func:`wait_for_shutdowns`).
+    One graph of futures, each carrying a bundle of consecutive chunks (:class:`DaskChunk`,
+    :func:`bundle_sizes`): the first futures large, the last ones single chunks. A local
+    cluster's workers are forked on Linux, as the pool's are (0.3 s to start against 2 s
+    spawned, and no second import of the engines), and a cluster started for the run stops
+    in a background thread once every result is delivered: the caller builds and writes its
+    records meanwhile (:func:`wait_for_shutdowns`). A kill loses the bundles under way.
 
     What a started cluster costs beyond the pool, measured inside one run of 2,000 engine
     tasks on the 2-core machine (under load; CPU seconds are steadier than wall ones there):
@@ -49,17 +50,20 @@ Dask
     0.03-0.07 s now); each worker's event loop took 0.3 s of CPU beside 0.75 s of engine
     runs (a stack sampler every 10 ms, event-loop ticks every 20 ms in all five servers,
     /proc read every 0.5 s, a recursive size estimate of every result:
-    :data:`QUIET_CLUSTER_CONFIG`, :func:`call_dask_chunk`; 0.11-0.18 s now). What is left is
-    about 0.3-0.45 s of CPU more than the pool whatever the number of tasks (500 to 4,000),
-    the scheduler's and the workers' own loops, so the cluster's share falls as the run
-    grows: 1.5 times the pool's CPU at 1,000 tasks, 1.2 at 2,000, 1.1 at 4,000.
-    ``impact-harness bench --executors`` (2,000 tasks, 2 workers, medians of 3, runs under
-    load): Dask / local 0.85, 1.13, 1.15 and 1.00 with a cluster started for the call, each
-    run alternated with one before these changes (1.39, 1.50, 1.57 and 1.33), and 1.24 and
-    0.95 in two runs of the full bench; on a running cluster 0.65-1.05. Hence
-    :data:`DASK_MIN_TASKS`: below it the local executor runs the tasks (``note`` says so). A
-    fresh ``impact-harness run --executor dask`` pays also for importing dask.distributed
-    (0.6 s of CPU), which the local pool never imports.
+    :data:`QUIET_CLUSTER_CONFIG`, :func:`call_dask_chunk`). Then 0.3-0.45 s of CPU more than
+    the pool, most of it per future: each costs about 8 ms of CPU (4 ms in the main process's
+    event loop, scheduler and client, 4 ms in a worker's), against 2-120 ms for a chunk of
+    engine runs and 25 ms for a several-contact reference, a chunk of its own. One future
+    per chunk, the run of the 114 files of ``bench --executors`` (32 chunks of engine runs,
+    56 references) spent 0.66-0.74 s of CPU in the main process's event loop and 0.3 s in
+    each worker's; bundled (16 futures), 0.30-0.31 s and 0.15 s. Shortening the clusters'
+    other periodic work (memory monitors every second instead of 100 ms, no work stealing,
+    no HTTP routes) changed nothing measurable. ``impact-harness bench --executors`` gives
+    the ratios to the pool. Hence :data:`DASK_MIN_TASKS`: below it the local executor runs
+    the tasks (``note`` says so). A fresh ``impact-harness run --executor dask`` pays also
+    for importing dask.distributed (0.3 s of CPU, 0.3-0.5 s of wall time on a quiet
+    machine), which the local pool never imports; a run kept on the pool does not import it
+    (:func:`check_arguments` only looks it up).
 
 ``function`` and ``batch`` must be top-level (picklable) functions and each task picklable
 (plain dicts, tuples, numbers, strings, dataclasses of those).
