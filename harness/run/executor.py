@@ -51,15 +51,18 @@ Dask
     runs (a stack sampler every 10 ms, event-loop ticks every 20 ms in all five servers,
     /proc read every 0.5 s, a recursive size estimate of every result:
     :data:`QUIET_CLUSTER_CONFIG`, :func:`call_dask_chunk`). Then 0.3-0.45 s of CPU more than
-    the pool, most of it per future: each costs about 8 ms of CPU (4 ms in the main process's
+    the pool (0.7-0.9 s on a machine loaded 20 by other jobs), most of it per future: each
+    costs about 8 ms of CPU (4 ms in the main process's
     event loop, scheduler and client, 4 ms in a worker's), against 2-120 ms for a chunk of
     engine runs and 25 ms for a several-contact reference, a chunk of its own. One future
     per chunk, the run of the 114 files of ``bench --executors`` (32 chunks of engine runs,
     56 references) spent 0.66-0.74 s of CPU in the main process's event loop and 0.3 s in
     each worker's; bundled (16 futures), 0.30-0.31 s and 0.15 s. Shortening the clusters'
     other periodic work (memory monitors every second instead of 100 ms, no work stealing,
-    no HTTP routes) changed nothing measurable. ``impact-harness bench --executors`` gives
-    the ratios to the pool. Hence :data:`DASK_MIN_TASKS`: below it the local executor runs
+    no HTTP routes) changed nothing measurable. 2,000 engine tasks in one process, three
+    alternations under load 20: Dask's CPU 1.40-1.46 times the pool's with a future per
+    chunk, 1.18-1.35 bundled (``impact-harness bench --executors`` gives the wall-time
+    ratios; README). Hence :data:`DASK_MIN_TASKS`: below it the local executor runs
     the tasks (``note`` says so). A fresh ``impact-harness run --executor dask`` pays also
     for importing dask.distributed (0.3 s of CPU, 0.3-0.5 s of wall time on a quiet
     machine), which the local pool never imports; a run kept on the pool does not import it
@@ -86,8 +89,10 @@ DASK_INSTALL_HINT = 'pip install -e ".[dask]"'
 #: Seconds to wait for a Dask scheduler before giving up with a one-line error.
 CONNECT_TIMEOUT_S = 10.0
 #: Fewest tasks :func:`run_tasks` sends to Dask; fewer run on the local pool (or inline): a
-#: started cluster costs about 0.3-0.45 s of CPU more than the pool whatever the number of
-#: tasks, 1.5 times the pool's CPU at 1,000 engine tasks and 1.2 at 2,000 (the module doc).
+#: started cluster costs CPU beyond the pool's whatever the number of tasks (its start, its
+#: loops, ~8 ms per future): 1.5 times the pool's CPU at 1,000 engine tasks and 1.4 at 2,000
+#: with a future per chunk; bundled, 1.2-1.35 at 2,000 (under load; the module doc). Two
+#: runs at 1,000 (0.94 and 1.02) are too few, on a machine that loaded, to lower it.
 DASK_MIN_TASKS = 2000
 
 
@@ -515,10 +520,11 @@ def _run_dask(function, batch, tasks: Sequence, chunks, workers, deliver, schedu
 
 def _threads(client, workers: int, cluster) -> int:
     """Tasks the cluster runs at once: ``workers`` for a cluster started here (one thread
-    each), else the sum of the connected workers' threads (at least one)."""
+    each), else the sum of the connected workers' threads (``workers`` while none is
+    connected yet)."""
     if cluster is not None:
         return workers
-    return max(1, sum(client.nthreads().values()))
+    return sum(client.nthreads().values()) or workers
 
 
 def _deliver_bundle(bundle: list[list[int]], outcomes: list, deliver) -> None:

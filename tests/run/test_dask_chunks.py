@@ -30,6 +30,10 @@ def square_unless_three(task: int) -> int:
     return task * task
 
 
+def square(task: int) -> int:
+    return task * task
+
+
 class LooksLikeAFuture:
     """What Dask's argument walk turns into a reference to another task's result."""
 
@@ -95,6 +99,20 @@ def test_a_task_raising_in_a_bundle_delivers_the_bundles_other_results_first():
     first_bundle = bundle_sizes(40, 2)[0]  # chunks of one task: tasks 0 .. first_bundle - 1
     assert {(i, i * i) for i in range(first_bundle) if i != 3} <= set(delivered)
     assert 3 not in [index for index, _ in delivered]
+
+
+def test_a_running_cluster_of_ones_own_gives_the_local_pools_results():
+    tasks = list(range(30))
+    cluster = start_local_cluster(2)
+    try:
+        delivered = []
+        results = run_tasks(square, tasks, executor="dask",
+                            scheduler=cluster.scheduler_address, chunk_size=2, dask_min_tasks=0,
+                            on_result=lambda index, _: delivered.append(index))
+    finally:
+        cluster.close()
+    assert results == run_tasks(square, tasks, workers=2, chunk_size=2)
+    assert sorted(delivered) == tasks
 
 
 def kill_the_worker_on_seven(task: int) -> int:
