@@ -7,9 +7,9 @@ installed engine, both presets), each through :func:`harness.run.executor.run_ta
 
 * ``local`` -- the local process pool, in chunks (``Engine.run_many``), as ``run`` does;
 * ``dask`` -- a ``LocalCluster`` of 2 single-threaded workers started for the call, in
-  chunks, until every result is delivered (cluster start included); the cluster then stops
-  in the background (``dask shutdown``, timed apart: ``run`` spends it building and writing
-  its records);
+  chunks (futures carrying bundles of them), until every result is delivered (cluster
+  start included); the cluster then stops in the background (``dask shutdown``, timed
+  apart: ``run`` spends it building and writing its records);
 * ``dask running`` -- a cluster already running (``--scheduler``): the dispatch alone, its
   workers warm from an earlier run;
 * ``dask per task`` -- a started cluster, one ``Engine.run`` per task (``chunk_size=1``, as
