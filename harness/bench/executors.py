@@ -7,13 +7,13 @@ installed engine, both presets), each through :func:`harness.run.executor.run_ta
 
 * ``local`` -- the local process pool, in chunks (``Engine.run_many``), as ``run`` does;
 * ``dask`` -- a ``LocalCluster`` of 2 single-threaded workers started for the call, in
-  chunks, until every result is delivered (cluster start included); the cluster then stops
-  in the background (``dask shutdown``, timed apart: ``run`` spends it building and writing
-  its records);
+  chunks (futures carrying bundles of them), until every result is delivered (cluster
+  start included); the cluster then stops in the background (``dask shutdown``, timed
+  apart: ``run`` spends it building and writing its records);
 * ``dask running`` -- a cluster already running (``--scheduler``): the dispatch alone, its
   workers warm from an earlier run;
-* ``dask per task`` -- a started cluster, one future per task (``chunk_size=1``), as before
-  chunks (skipped with ``--quick``).
+* ``dask per task`` -- a started cluster, one ``Engine.run`` per task (``chunk_size=1``, as
+  before chunks; the futures carry bundles of them) (skipped with ``--quick``).
 
 And what a user waits for: ``impact-harness run --no-cache`` end to end (a fresh interpreter,
 exit included, so the background shutdown is paid where it is not overlapped) on the
@@ -223,6 +223,6 @@ def format_report(report: dict) -> str:
                      f"tasks, end to end: dask / local {report['ratio_command']:.2f} (importing "
                      f"distributed alone adds {report['median']['import distributed']:.2f} s)")
     if report["ratio_per_task"] is not None:
-        lines.append(f"  one future per task (before chunks) / local "
+        lines.append(f"  one Engine.run per task (chunk size 1) / local "
                      f"{report['ratio_per_task']:.2f}")
     return "\n".join(lines)

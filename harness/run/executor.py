@@ -33,11 +33,12 @@ Chunks
     difference between 8 and 128 within the noise (about ±30%).
 
 Dask
-    One graph of one future per chunk (:class:`DaskChunk`). A local cluster's workers are
-    forked on Linux, as the pool's are (0.3 s to start against 2 s spawned, and no second
-    import of the engines), and a cluster started for the run stops in a background thread
-    once every result is delivered: the caller builds and writes its records meanwhile
-    (:func:`wait_for_shutdowns`).
+    One graph of futures, each carrying a bundle of consecutive chunks (:class:`DaskChunk`,
+    :func:`bundle_sizes`): the first futures large, the last ones single chunks. A local
+    cluster's workers are forked on Linux, as the pool's are (0.3 s to start against 2 s
+    spawned, and no second import of the engines), and a cluster started for the run stops
+    in a background thread once every result is delivered: the caller builds and writes its
+    records meanwhile (:func:`wait_for_shutdowns`). A kill loses the bundles under way.
 
     What a started cluster costs beyond the pool, measured inside one run of 2,000 engine
     tasks on the 2-core machine (under load; CPU seconds are steadier than wall ones there):
@@ -49,17 +50,23 @@ Dask
     0.03-0.07 s now); each worker's event loop took 0.3 s of CPU beside 0.75 s of engine
     runs (a stack sampler every 10 ms, event-loop ticks every 20 ms in all five servers,
     /proc read every 0.5 s, a recursive size estimate of every result:
-    :data:`QUIET_CLUSTER_CONFIG`, :func:`call_dask_chunk`; 0.11-0.18 s now). What is left is
-    about 0.3-0.45 s of CPU more than the pool whatever the number of tasks (500 to 4,000),
-    the scheduler's and the workers' own loops, so the cluster's share falls as the run
-    grows: 1.5 times the pool's CPU at 1,000 tasks, 1.2 at 2,000, 1.1 at 4,000.
-    ``impact-harness bench --executors`` (2,000 tasks, 2 workers, medians of 3, runs under
-    load): Dask / local 0.85, 1.13, 1.15 and 1.00 with a cluster started for the call, each
-    run alternated with one before these changes (1.39, 1.50, 1.57 and 1.33), and 1.24 and
-    0.95 in two runs of the full bench; on a running cluster 0.65-1.05. Hence
-    :data:`DASK_MIN_TASKS`: below it the local executor runs the tasks (``note`` says so). A
-    fresh ``impact-harness run --executor dask`` pays also for importing dask.distributed
-    (0.6 s of CPU), which the local pool never imports.
+    :data:`QUIET_CLUSTER_CONFIG`, :func:`call_dask_chunk`). Then 0.3-0.45 s of CPU more than
+    the pool (0.7-0.9 s on a machine loaded 20 by other jobs), most of it per future: each
+    costs about 8 ms of CPU (4 ms in the main process's
+    event loop, scheduler and client, 4 ms in a worker's), against 2-120 ms for a chunk of
+    engine runs and 25 ms for a several-contact reference, a chunk of its own. One future
+    per chunk, the run of the 114 files of ``bench --executors`` (32 chunks of engine runs,
+    56 references) spent 0.66-0.74 s of CPU in the main process's event loop and 0.3 s in
+    each worker's; bundled (16 futures), 0.30-0.31 s and 0.15 s. Shortening the clusters'
+    other periodic work (memory monitors every second instead of 100 ms, no work stealing,
+    no HTTP routes) changed nothing measurable. 2,000 engine tasks in one process, three
+    alternations under load 20: Dask's CPU 1.40-1.46 times the pool's with a future per
+    chunk, 1.18-1.35 bundled (``impact-harness bench --executors`` gives the wall-time
+    ratios; README). Hence :data:`DASK_MIN_TASKS`: below it the local executor runs
+    the tasks (``note`` says so). A fresh ``impact-harness run --executor dask`` pays also
+    for importing dask.distributed (0.3 s of CPU, 0.3-0.5 s of wall time on a quiet
+    machine), which the local pool never imports; a run kept on the pool does not import it
+    (:func:`check_arguments` only looks it up).
 
 ``function`` and ``batch`` must be top-level (picklable) functions and each task picklable
 (plain dicts, tuples, numbers, strings, dataclasses of those).
@@ -82,8 +89,10 @@ DASK_INSTALL_HINT = 'pip install -e ".[dask]"'
 #: Seconds to wait for a Dask scheduler before giving up with a one-line error.
 CONNECT_TIMEOUT_S = 10.0
 #: Fewest tasks :func:`run_tasks` sends to Dask; fewer run on the local pool (or inline): a
-#: started cluster costs about 0.3-0.45 s of CPU more than the pool whatever the number of
-#: tasks, 1.5 times the pool's CPU at 1,000 engine tasks and 1.2 at 2,000 (the module doc).
+#: started cluster costs CPU beyond the pool's whatever the number of tasks (its start, its
+#: loops, ~8 ms per future): 1.5 times the pool's CPU at 1,000 engine tasks and 1.4 at 2,000
+#: with a future per chunk; bundled, 1.2-1.35 at 2,000 (under load; the module doc). Two
+#: runs at 1,000 (0.94 and 1.02) are too few, on a machine that loaded, to lower it.
 DASK_MIN_TASKS = 2000
 
 
@@ -106,7 +115,7 @@ def check_arguments(executor: str = "local", workers: int | None = None,
     if scheduler is not None and executor != "dask":
         raise ValueError(f"--scheduler {scheduler!r}: needs --executor dask")
     if executor == "dask":
-        _import_distributed()
+        _require_distributed()
 
 
 def run_tasks(
@@ -194,7 +203,7 @@ def run_tasks(
     if progress is not None:
         progress(0, total)
     if executor == "dask":
-        _import_distributed()  # asked for: missing is an error even for a run kept local
+        _require_distributed()  # asked for: missing is an error even for a run kept local
     if executor == "dask" and total < dask_min_tasks:
         if note is not None:
             note(f"executor dask: {total} tasks, fewer than {dask_min_tasks}: run on the local "
@@ -307,6 +316,23 @@ def _run_pool(function, batch, tasks: Sequence, chunks, workers: int, deliver) -
             raise
 
 
+def _require_distributed() -> None:
+    """Raise :class:`DaskNotInstalled` unless dask.distributed is installed, without importing
+    it: the import costs 0.3-0.5 s of CPU (measured on the 2-core machine), which a command
+    whose run stays on the local pool (fewer than :data:`DASK_MIN_TASKS` tasks) need not pay.
+    A broken installation fails at the import, when a run goes to Dask."""
+    import importlib.util
+
+    for name in ("dask", "distributed"):
+        if name in sys.modules:
+            found = sys.modules[name] is not None  # None: an import known to fail
+        else:
+            found = importlib.util.find_spec(name) is not None
+        if not found:
+            raise DaskNotInstalled(f"executor 'dask' needs dask.distributed (no module named "
+                                   f"{name!r}); install it with `{DASK_INSTALL_HINT}`")
+
+
 def _import_distributed():
     try:
         import distributed  # noqa: F401
@@ -384,7 +410,8 @@ def start_local_cluster(workers: int):
 
 
 class DaskChunk:
-    """One chunk as a Dask task's single argument: the chunk's tasks kept opaque.
+    """Chunks as one Dask task's single argument (a bundle, :func:`bundle_sizes`), their
+    tasks kept opaque.
 
     Dask walks every list, tuple and dict argument of a submitted task, to the last number,
     looking for futures inside (``dask._task_spec.parse_input``): measured on 2,000 engine
@@ -393,18 +420,44 @@ class DaskChunk:
     the first ones. An object of this class is not walked; it pickles as its fields.
     """
 
-    __slots__ = ("function", "batch", "tasks")
+    __slots__ = ("function", "batch", "chunks")
 
-    def __init__(self, function, batch, tasks: list) -> None:
-        self.function, self.batch, self.tasks = function, batch, tasks
+    def __init__(self, function, batch, chunks: list[list]) -> None:
+        self.function, self.batch, self.chunks = function, batch, chunks
 
     def __reduce__(self):
-        return DaskChunk, (self.function, self.batch, self.tasks)
+        return DaskChunk, (self.function, self.batch, self.chunks)
 
 
-def call_dask_chunk(chunk: DaskChunk) -> bytes:
-    """:func:`call_chunk` of a :class:`DaskChunk` on a Dask worker (one BLAS thread, as the
-    local pool's initializer gives its workers), pickled as Dask would pickle it.
+#: A Dask future's first bundle holds 1 / (this × the cluster's threads) of the chunks (see
+#: :func:`bundle_sizes`).
+BUNDLE_DIVISOR = 2
+
+
+def bundle_sizes(chunks: int, threads: int) -> list[int]:
+    """How many consecutive chunks each Dask future carries: each takes ``1 / (BUNDLE_DIVISOR
+    × threads)`` of the chunks not yet given out, at least one (guided self-scheduling), so
+    the first futures are large and the last ones single chunks that even out the end.
+
+    A future costs the cluster about 8 ms of CPU whatever it carries (measured on the 2-core
+    machine under load: 4 ms in the scheduler's and client's event loop, 4 ms in the
+    worker's), against 2-120 ms for a chunk of engine runs and about 25 ms for a
+    several-contact reference: one future per chunk (88 for the 114 files of ``bench
+    --executors``) cost 0.7 s of CPU; bundled, 16 futures.
+    """
+    sizes: list[int] = []
+    left = chunks
+    while left > 0:
+        size = max(1, left // (BUNDLE_DIVISOR * max(1, threads)))
+        sizes.append(size)
+        left -= size
+    return sizes
+
+
+def call_dask_chunk(bundle: DaskChunk) -> bytes:
+    """:func:`call_chunk` of each chunk of a :class:`DaskChunk` on a Dask worker (one BLAS
+    thread, as the local pool's initializer gives its workers), the list of their ``(results,
+    failure)`` pickled as Dask would pickle it.
 
     Pickled here, in the worker's computing thread: a result that is a list of dicts is
     walked by the worker's event loop to estimate its size (``dask.sizeof``, a recursive
@@ -415,10 +468,10 @@ def call_dask_chunk(chunk: DaskChunk) -> bytes:
     from distributed.protocol.pickle import dumps
 
     one_blas_thread()
-    return dumps(call_chunk(chunk.function, chunk.batch, chunk.tasks))
+    return dumps([call_chunk(bundle.function, bundle.batch, tasks) for tasks in bundle.chunks])
 
 
-def _unpickle_chunk_result(blob: bytes) -> tuple[list, tuple[int, Exception] | None]:
+def _unpickle_chunk_result(blob: bytes) -> list[tuple[list, tuple[int, Exception] | None]]:
     from distributed.protocol.pickle import loads
 
     return loads(blob)
@@ -439,18 +492,23 @@ def _run_dask(function, batch, tasks: Sequence, chunks, workers, deliver, schedu
                                   f"{CONNECT_TIMEOUT_S:g} s: {error}") from None
     try:
         if chunks:
-            # One future per chunk, all in one graph (one message to the scheduler, run in
-            # the chunks' order); pure=False: every chunk is its own key even when two are
-            # equal.
+            # One future per bundle of chunks, all in one graph (one message to the
+            # scheduler, run in the bundles' order: the largest first); pure=False: every
+            # bundle is its own key even when two are equal.
+            bundles, start = [], 0
+            for size in bundle_sizes(len(chunks), _threads(client, workers, cluster)):
+                bundles.append(chunks[start:start + size])
+                start += size
             futures = client.map(call_dask_chunk, [
-                DaskChunk(function, batch, [tasks[i] for i in chunk]) for chunk in chunks],
-                pure=False)
-            chunk_of = {future.key: chunk for future, chunk in zip(futures, chunks)}
+                DaskChunk(function, batch, [[tasks[i] for i in chunk] for chunk in bundle])
+                for bundle in bundles], pure=False)
+            bundle_of = {future.key: bundle for future, bundle in zip(futures, bundles)}
             try:
-                # with_results: each result is fetched as its chunk finishes, in the
-                # client's event loop, rather than one blocking round trip per chunk.
+                # with_results: each result is fetched as its bundle finishes, in the
+                # client's event loop, rather than one blocking round trip per bundle.
                 for future, blob in as_completed(futures, with_results=True):
-                    deliver(chunk_of[future.key], *_unpickle_chunk_result(blob))
+                    _deliver_bundle(bundle_of[future.key], _unpickle_chunk_result(blob),
+                                    deliver)
             except BaseException:
                 client.cancel(futures)
                 raise
@@ -458,6 +516,29 @@ def _run_dask(function, batch, tasks: Sequence, chunks, workers, deliver, schedu
         _close(client, cluster)
         raise
     _close_in_background(client, cluster)
+
+
+def _threads(client, workers: int, cluster) -> int:
+    """Tasks the cluster runs at once: ``workers`` for a cluster started here (one thread
+    each), else the sum of the connected workers' threads (``workers`` while none is
+    connected yet)."""
+    if cluster is not None:
+        return workers
+    return sum(client.nthreads().values()) or workers
+
+
+def _deliver_bundle(bundle: list[list[int]], outcomes: list, deliver) -> None:
+    """Every chunk's results of a finished bundle, then the first task exception among them
+    (as :func:`run_tasks` re-raises a chunk's once its other results are delivered)."""
+    first_error: BaseException | None = None
+    for chunk, (outputs, failure) in zip(bundle, outcomes):
+        try:
+            deliver(chunk, outputs, failure)
+        except Exception as error:  # noqa: BLE001 - re-raised once the bundle is delivered
+            if first_error is None:
+                first_error = error
+    if first_error is not None:
+        raise first_error
 
 
 def _close(client, cluster) -> None:

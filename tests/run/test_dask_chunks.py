@@ -1,5 +1,6 @@
-"""The Dask path's own pieces: the opaque chunk argument, the pickled chunk result and the
-quiet settings of a started cluster (the results themselves: test_executor.py)."""
+"""The Dask path's own pieces: the opaque bundle of chunks, the bundles' sizes, the pickled
+bundle result, a failure inside a bundle or of a worker, and the quiet settings of a started
+cluster (the results themselves: test_executor.py)."""
 
 from __future__ import annotations
 
@@ -8,11 +9,15 @@ import pickle
 import pytest
 
 from harness.run.executor import (
+    BUNDLE_DIVISOR,
     QUIET_CLUSTER_CONFIG,
     DaskChunk,
+    bundle_sizes,
     call_chunk,
     call_dask_chunk,
+    run_tasks,
     start_local_cluster,
+    wait_for_shutdowns,
 )
 
 distributed = pytest.importorskip("distributed",
@@ -22,6 +27,10 @@ distributed = pytest.importorskip("distributed",
 def square_unless_three(task: int) -> int:
     if task == 3:
         raise RuntimeError("task 3 failed")
+    return task * task
+
+
+def square(task: int) -> int:
     return task * task
 
 
@@ -38,24 +47,95 @@ def test_dask_does_not_walk_into_a_chunk():
     # A plain list of tasks is walked to the last item: a future inside is found ...
     assert isinstance(parse_input([{"scene": [LooksLikeAFuture()]}]), GraphNode)
     # ... a chunk is one opaque argument, handed over as it is.
-    chunk = DaskChunk(square_unless_three, None, [{"scene": [LooksLikeAFuture()]}])
+    chunk = DaskChunk(square_unless_three, None, [[{"scene": [LooksLikeAFuture()]}]])
     assert parse_input(chunk) is chunk
 
 
 def test_a_chunk_pickles_as_its_fields():
-    chunk = pickle.loads(pickle.dumps(DaskChunk(square_unless_three, None, [1, 2])))
-    assert (chunk.function, chunk.batch, chunk.tasks) == (square_unless_three, None, [1, 2])
+    chunk = pickle.loads(pickle.dumps(DaskChunk(square_unless_three, None, [[1, 2], [5]])))
+    assert (chunk.function, chunk.batch, chunk.chunks) == (square_unless_three, None,
+                                                           [[1, 2], [5]])
 
 
-def test_the_pickled_chunk_result_is_call_chunks():
+def test_the_pickled_bundle_result_is_call_chunk_of_each_chunk():
     from distributed.protocol.pickle import loads
 
-    tasks = [1, 2, 3, 4]
-    results, failure = loads(call_dask_chunk(DaskChunk(square_unless_three, None, tasks)))
-    expected, expected_failure = call_chunk(square_unless_three, None, tasks)
+    chunks = [[1, 2, 3, 4], [5, 6]]
+    outcomes = loads(call_dask_chunk(DaskChunk(square_unless_three, None, chunks)))
+    (results, failure), (other, no_failure) = outcomes
+    expected, expected_failure = call_chunk(square_unless_three, None, chunks[0])
     assert results == expected == [1, 4, None, 16]
     assert failure[0] == expected_failure[0] == 2
     assert type(failure[1]) is RuntimeError and str(failure[1]) == "task 3 failed"
+    assert other == [25, 36] and no_failure is None
+
+
+@pytest.mark.parametrize("chunks,threads", [(1, 2), (7, 2), (32, 2), (88, 2), (88, 1), (2000, 8)])
+def test_bundles_cover_every_chunk_largest_first_and_end_single(chunks, threads):
+    sizes = bundle_sizes(chunks, threads)
+    assert sum(sizes) == chunks and min(sizes) >= 1
+    assert sizes == sorted(sizes, reverse=True)  # the largest go first, the small even out
+    assert sizes[-1] == 1
+    # each takes its share of what is left: never more than 1 / (divisor x threads) of it
+    left = chunks
+    for size in sizes:
+        assert size == max(1, left // (BUNDLE_DIVISOR * threads))
+        left -= size
+
+
+def test_bundles_are_far_fewer_than_chunks_on_two_workers():
+    # the bench's 114 files: 32 chunks of engine runs and 56 references, one chunk each
+    assert len(bundle_sizes(88, 2)) <= 20
+    assert len(bundle_sizes(32, 2)) <= 14
+
+
+def test_a_task_raising_in_a_bundle_delivers_the_bundles_other_results_first():
+    delivered = []
+    with pytest.raises(RuntimeError, match="task 3"):
+        run_tasks(square_unless_three, list(range(40)), executor="dask", workers=2,
+                  chunk_size=1, dask_min_tasks=0,
+                  on_result=lambda index, result: delivered.append((index, result)))
+    wait_for_shutdowns()
+    first_bundle = bundle_sizes(40, 2)[0]  # chunks of one task: tasks 0 .. first_bundle - 1
+    assert {(i, i * i) for i in range(first_bundle) if i != 3} <= set(delivered)
+    assert 3 not in [index for index, _ in delivered]
+
+
+def test_a_running_cluster_of_ones_own_gives_the_local_pools_results():
+    tasks = list(range(30))
+    cluster = start_local_cluster(2)
+    try:
+        delivered = []
+        results = run_tasks(square, tasks, executor="dask",
+                            scheduler=cluster.scheduler_address, chunk_size=2, dask_min_tasks=0,
+                            on_result=lambda index, _: delivered.append(index))
+    finally:
+        cluster.close()
+    assert results == run_tasks(square, tasks, workers=2, chunk_size=2)
+    assert sorted(delivered) == tasks
+
+
+def kill_the_worker_on_seven(task: int) -> int:
+    if task == 7:
+        import os
+
+        os._exit(1)  # the worker process dies, as when an engine crashes
+    return task * task
+
+
+def test_a_worker_dying_fails_the_run_without_hanging_and_keeps_finished_results():
+    import time
+
+    delivered = []
+    begin = time.monotonic()
+    with pytest.raises(distributed.KilledWorker):
+        run_tasks(kill_the_worker_on_seven, list(range(40)), executor="dask", workers=2,
+                  chunk_size=1, dask_min_tasks=0,
+                  on_result=lambda index, result: delivered.append((index, result)))
+    wait_for_shutdowns()
+    assert time.monotonic() - begin < 60  # Dask gives up after a few restarts, no hang
+    assert all(result == index * index for index, result in delivered)
+    assert 7 not in [index for index, _ in delivered]
 
 
 def test_a_started_cluster_runs_without_the_dashboards_bookkeeping():

@@ -73,6 +73,30 @@ def test_missing_dask_names_the_install_command(monkeypatch):
         run_tasks(fail_on_three, [1, 2], executor="dask")
 
 
+def test_missing_dask_fails_the_argument_check(monkeypatch):
+    from harness.run.executor import check_arguments
+
+    monkeypatch.setitem(sys.modules, "distributed", None)
+    with pytest.raises(DaskNotInstalled, match=r'pip install -e "\.\[dask\]"'):
+        check_arguments("dask")
+
+
+def test_dask_is_imported_only_for_a_run_that_goes_to_dask():
+    pytest.importorskip("distributed", reason='dask is not installed (pip install -e ".[dask]")')
+    import subprocess
+
+    # A fresh interpreter: the argument check and a run kept on the local pool (below the
+    # threshold) leave dask.distributed unimported; its import costs 0.3-0.5 s.
+    code = ("import sys\n"
+            "from harness.run.executor import check_arguments, run_tasks\n"
+            "check_arguments('dask', 2)\n"
+            "assert run_tasks(abs, [-1, -2], executor='dask', workers=2) == [1, 2]\n"
+            "print('distributed' in sys.modules)\n")
+    finished = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                              check=True)
+    assert finished.stdout.strip() == "False"
+
+
 def test_a_failing_import_inside_dask_is_not_called_missing_dask(monkeypatch):
     pytest.importorskip("distributed", reason='dask is not installed (pip install -e ".[dask]")')
     # A module named like a standard one in the working folder (a stray timeit.py) breaks
