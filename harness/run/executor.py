@@ -147,8 +147,9 @@ def run_tasks(
         ``"dask"``: a ``dask.distributed.Client`` connected to ``scheduler`` or, without one, to
         a ``LocalCluster`` of ``workers`` single-threaded worker processes on loopback,
         started for the run and shut down in the background once every result is delivered
-        (:func:`wait_for_shutdowns`). Below ``dask_min_tasks`` tasks the
-        local executor runs them instead (``note`` says so).
+        (:func:`wait_for_shutdowns`). Below ``dask_min_tasks`` tasks, without a
+        ``scheduler``, the local executor runs them instead (``note`` says so); a named
+        scheduler gets every run.
     workers
         Local worker processes (``None``: all local cores). Ignored with ``scheduler``.
     scheduler
@@ -204,7 +205,9 @@ def run_tasks(
         progress(0, total)
     if executor == "dask":
         _require_distributed()  # asked for: missing is an error even for a run kept local
-    if executor == "dask" and total < dask_min_tasks:
+    # The threshold weighs a cluster's start against the pool's: a running cluster the user
+    # named (perhaps far larger than this machine) gets the runs whatever their number.
+    if executor == "dask" and scheduler is None and total < dask_min_tasks:
         if note is not None:
             note(f"executor dask: {total} tasks, fewer than {dask_min_tasks}: run on the local "
                  "pool, whose start costs less than a cluster's")

@@ -115,6 +115,25 @@ def test_a_running_cluster_of_ones_own_gives_the_local_pools_results():
     assert sorted(delivered) == tasks
 
 
+def on_which_worker(task: int) -> str:
+    from distributed import get_worker
+
+    return get_worker().address  # raises outside a Dask worker (the local pool, inline)
+
+
+def test_a_named_scheduler_gets_every_run_however_few():
+    cluster = start_local_cluster(2)
+    notes = []
+    try:
+        addresses = run_tasks(on_which_worker, [1, 2, 3], executor="dask",
+                              scheduler=cluster.scheduler_address, note=notes.append)
+        workers = set(cluster.scheduler_info["workers"])
+    finally:
+        cluster.close()
+    assert notes == []  # the default threshold (2,000 tasks) did not send them to the pool
+    assert set(addresses) <= workers and len(addresses) == 3
+
+
 def kill_the_worker_on_seven(task: int) -> int:
     if task == 7:
         import os
