@@ -394,12 +394,13 @@ class _Readout:
 
     ``start``: every body's pose ``(x, y, cos θ, sin θ)`` by :data:`_body_id` when the next
     step begins (a step's contacts are collided at its start, and their geometry needs those
-    poses; the ground's, read once, never changes); ``now``: the scene's poses ``(x, y, θ)`` now, what ``_read_poses`` returns;
-    ``states``: every body's :func:`_state_in_memory` now. :meth:`read` refreshes them after
-    placing the bodies and :meth:`read_step` after a step, so the bodies are read once a
-    step (the next step starts where this one ended). ``fixtures``: every fixture's userData
-    by its address; ``by_id``: every body, the ground's included, by :data:`_body_id`;
-    ``memory``: the readers' buffers, ``buffers`` the bodies' (None where the getters read).
+    poses; the ground's, read once, never changes); ``now``: the scene's poses ``(x, y, θ)``
+    now, what ``_read_poses`` returns; ``states``: every body's :func:`_state_in_memory` now.
+    :meth:`read` refreshes them after placing the bodies and :meth:`read_step` after a step,
+    so the bodies are read once a step (the next step starts where this one ended).
+    ``fixtures``: every fixture's userData by its address; ``by_id``: every body, the
+    ground's included, by :data:`_body_id`; ``memory``: the readers' buffers, ``buffers``
+    the bodies' (None where the getters read); ``keys``: the bodies' :data:`_body_id`.
     ``dt``: the run's Box2D time step and ``clipped`` whether a velocity reached a cap
     (:func:`_states_at_cap`), which :meth:`read_step` checks until one has.
     """
