@@ -393,24 +393,26 @@ class _Readout:
     a :class:`_Slot`'s base).
 
     ``start``: every body's pose ``(x, y, cos θ, sin θ)`` by :data:`_body_id` when the next
-    step begins (a
-    step's contacts are collided at its start, and their geometry needs those poses; the
-    ground's pose, read once, never changes); ``now``: the scene's poses ``(x, y, θ)`` now,
-    what ``_read_poses`` returns; ``states``: every body's :func:`_state_in_memory` now.
+    step begins (a step's contacts are collided at its start, and their geometry needs those
+    poses; the ground's, read once, never changes); ``now``: the scene's poses ``(x, y, θ)``
+    now, what ``_read_poses`` returns; ``states``: every body's :func:`_state_in_memory` now.
     :meth:`read` refreshes them after placing the bodies and :meth:`read_step` after a step,
     so the bodies are read once a step (the next step starts where this one ended).
     ``fixtures``: every fixture's userData by its address; ``by_id``: every body, the
     ground's included, by :data:`_body_id`; ``memory``: the readers' buffers, ``buffers``
-    the bodies' (None where the getters read).
+    the bodies' (None where the getters read); ``keys``: the bodies' :data:`_body_id`.
+    ``dt``: the run's Box2D time step and ``clipped`` whether a velocity reached a cap
+    (:func:`_states_at_cap`), which :meth:`read_step` checks until one has.
     """
 
-    __slots__ = ("bodies", "body_b", "body_b_id", "buffers", "by_id", "dynamic", "fixtures",
-                 "length", "memory", "now", "start", "states")
+    __slots__ = ("bodies", "body_b", "body_b_id", "buffers", "by_id", "clipped", "dt",
+                 "dynamic", "fixtures", "keys", "length", "memory", "now", "start", "states")
 
     def __init__(self, bodies: list, static: list, fixtures: list, length: float) -> None:
         self.bodies, self.body_b, self.length = bodies, bodies[-1], length
         self.body_b_id = _body_id(self.body_b)
         self.dynamic = [(b2_body, _body_id(b2_body)) for b2_body in bodies]
+        self.keys = [key for _, key in self.dynamic]
         self.by_id = {key: b2_body for b2_body, key in self.dynamic}
         self.fixtures = {int(fixture.this): fixture.userData for fixture in fixtures}
         self.memory = _Memory()
@@ -424,6 +426,7 @@ class _Readout:
                         if _READERS[0] is _state_in_memory else None)
         self.now: tuple = ()
         self.states: list = []
+        self.dt, self.clipped = 0.0, False
 
     def read(self) -> None:
         """Read the bodies now (after placing them)."""
@@ -432,25 +435,28 @@ class _Readout:
 
     def read_step(self) -> RawContacts | None:
         """After a step: its contact (:func:`_contact_of`: body B's touching contacts, at the
-        poses the step started from), then the bodies now (as :meth:`read`)."""
-        memory, buffers = self.memory, self.buffers
+        poses the step started from), then the bodies now (as :meth:`read`), and whether a
+        velocity reached a cap (``clipped``, from the first step that does)."""
+        buffers = self.buffers
         if buffers is not None:  # _state_in_memory, on the buffers made once
-            unpack = memory.state.unpack_from
+            unpack = self.memory.state.unpack_from
             states = [unpack(buffer) for buffer in buffers]
         else:
-            state_of = _READERS[0]
+            state_of, memory = _READERS[0], self.memory
             states = [state_of(b2_body, key, memory) for b2_body, key in self.dynamic]
         # Every contact of an impact involves its body B (the ground's partner or the other
         # body, the last one); the body's list keeps the world's order of them.
-        raw = _contact_of(_READERS[1](self.body_b, states[-1], memory), self)
+        touching = _READERS[1](self.body_b, states[-1], self.memory)
+        raw = _contact_of(touching, self) if touching else None
         self._take(states)
+        if not self.clipped:
+            self.clipped = _states_at_cap(states, self.dt, _CAP_BAND)
         return raw
 
     def _take(self, states: list) -> None:
         length, start = self.length, self.start
         now = []
-        for (_, key), state in zip(self.dynamic, states):
-            x, y, sin, cos, angle = state[:5]
+        for key, (x, y, sin, cos, angle, _, _, _, _) in zip(self.keys, states):
             start[key] = (x, y, cos, sin)
             now.append((x / length, y / length, angle))
         self.now, self.states = tuple(now), states
@@ -504,15 +510,32 @@ def _circle_shape(radius: float, x: float = 0.0):
     return shape
 
 
+class _Definitions:
+    """A body definition, a fixture definition (density 0) and a mass record (centre at the
+    origin), filled anew for every body and fixture of :func:`_add_impact`: the impacts of
+    a batch share one set (each costs several µs to make, as much as a fixture)."""
+
+    __slots__ = ("body", "fixture", "mass")
+
+    def __init__(self) -> None:
+        self.body = b2.bodyDef()
+        self.fixture = b2.fixtureDef()
+        self.fixture.density = 0.0
+        self.mass = b2.massData()
+        self.mass.center = (0.0, 0.0)
+
+
 def _add_impact(world, scene: Scene, length: float, skin: float, extent: float, *,
                 starts: tuple | None = None, group: int = 0, pair_values: tuple | None = None,
-                inertias=None) -> tuple[list, list, list]:
+                inertias=None, definitions: _Definitions | None = None
+                ) -> tuple[list, list, list]:
     """``(bodies, ground, fixtures)``: the scene's ground and bodies in ``world``, the
     bodies at ``starts`` (:func:`_place`'s form; None: at rest at the origin, for
     :func:`_place` to move), the fixtures with the pair's ``(e, μ)`` (None: Box2D's
     defaults, for :meth:`_World.configure` to set) in collision group ``group`` with mask
     0 (0: no group, every fixture collides). ``inertias``: the bodies' moments of inertia
     in scene units when already known (a polygon's costs ~0.1 ms); None: the scene's.
+    ``definitions``: the :class:`_Definitions` to fill (None: new ones).
 
     Every fixture's userData is ``(padding, radius, body)``: how far it pads the scene's
     outline, its shape's radius as Box2D holds it (float32) and its body's
@@ -525,8 +548,9 @@ def _add_impact(world, scene: Scene, length: float, skin: float, extent: float, 
     ground's skin is set after (its proxy's box is the default skin's, as it always was: a
     static body is never placed anew, and the box decides when contacts are created).
     """
-    fixture_definition = b2.fixtureDef()
-    fixture_definition.density = 0.0
+    if definitions is None:
+        definitions = _Definitions()
+    fixture_definition, body_definition = definitions.fixture, definitions.body
     if pair_values is not None:
         fixture_definition.restitution, fixture_definition.friction = pair_values
     if group:
@@ -541,9 +565,10 @@ def _add_impact(world, scene: Scene, length: float, skin: float, extent: float, 
         fixture.userData = (padding, shape.radius, body_id)
         fixtures.append(fixture)
 
-    body_definition = b2.bodyDef()  # a static body at the origin
     ground = []
-    if scene.ground:
+    if scene.ground:  # a static body at the origin (the definition may hold the last body)
+        body_definition.type = b2.staticBody
+        body_definition.position, body_definition.angle = (0.0, 0.0), 0.0
         ground_body = _create_body(world, body_definition)
         body_id = _body_id(ground_body)
         add(ground_body, _polygon_shape(_ground_vertices(extent, length), POLYGON_RADIUS),
@@ -553,8 +578,7 @@ def _add_impact(world, scene: Scene, length: float, skin: float, extent: float, 
         fixtures[-1].userData = (skin, ground_shape.radius, body_id)
         ground.append(ground_body)
     body_definition.type = b2.dynamicBody
-    mass_data = b2.massData()
-    mass_data.center = (0.0, 0.0)
+    mass_data = definitions.mass
     bodies = []
     for index, body in enumerate(scene.bodies):
         if starts is not None:
@@ -654,7 +678,7 @@ def _states_at_cap(states, dt: float, band: float) -> bool:
 class _World(_Readout):
     """One b2World holding the scene's ground and bodies, and the current run's scales."""
 
-    __slots__ = ("clipped", "derived", "dt", "fixture_list", "iterations", "measures", "notes",
+    __slots__ = ("derived", "fixture_list", "iterations", "measures", "notes",
                  "pair_values", "restitution", "speed_probe", "velocity", "world",
                  "world_values")
 
@@ -673,10 +697,8 @@ class _World(_Readout):
         self.world_values: tuple | None = None
         # The current run's (set by _reset): Box2D time step, sweeps, velocity scale, the
         # caps in Box2D units, whether a velocity reached a cap, the run's set-up notes.
-        self.dt = 0.0
         self.iterations = (0, 0)
         self.velocity = 1.0
-        self.clipped = False
         self.notes: tuple[str, ...] = ()
 
     def configure(self, world_values: tuple, pair_values: tuple) -> None:
@@ -992,10 +1014,7 @@ class Box2DEngine(Engine):
             world.notes = _speed_results(world.derived, probe.speed, world.velocity,
                                          world.restitution)
             world.world.contactListener = world.speed_probe = None
-        raw = world.read_step()
-        if not world.clipped:
-            world.clipped = _states_at_cap(world.states, world.dt, _CAP_BAND)
-        return raw
+        return world.read_step()
 
     # ------------------------------------------------------------------ many impacts
     def _runs_alone(self, settings) -> bool:
@@ -1106,8 +1125,6 @@ class Box2DEngine(Engine):
             raw = view.read_step()
             if raw is not None:
                 contacts[slot] = raw
-            if not view.clipped:
-                view.clipped = _states_at_cap(view.states, view.dt, _CAP_BAND)
         if batch.listeners:
             batch.listeners = [(world, listener) for world, listener in batch.listeners
                                if not listener.done(world)]
@@ -1132,8 +1149,8 @@ class Box2DEngine(Engine):
         velocity, rate = world.velocity, world.length / world.velocity
         # Read after the step (_Readout.read): the loop reads velocities only then, and
         # the batch's _finish comes before _retire stops the bodies.
-        return tuple((state[5] / velocity, state[6] / velocity, state[7] * rate)
-                     for state in world.states)
+        return tuple([(state[5] / velocity, state[6] / velocity, state[7] * rate)
+                      for state in world.states])
 
     def _run_notes(self, world: _World) -> tuple[str, ...]:
         if world.clipped:
@@ -1218,20 +1235,23 @@ def _contact_of(touching: list, world) -> RawContacts | None:
     points: list = []
     normal = None
     for values in touching:
-        count = values[17]
+        # Both points' localPoint and impulses (the second's unused with one point), the
+        # manifold's localNormal, localPoint, type and point count.
+        (_, _, fixture_a, fixture_b, l0_x, l0_y, n0, t0, l1_x, l1_y, n1, t1, normal_x,
+         normal_y, local_x, local_y, kind, count) = values
         if not count:
             continue
-        padding_a, radius_a, body_a_id = fixtures[values[2]]
-        padding_b, radius_b, contact_body_b = fixtures[values[3]]
+        padding_a, radius_a, body_a_id = fixtures[fixture_a]
+        padding_b, radius_b, contact_body_b = fixtures[fixture_b]
         pa_x, pa_y, ca, sa = poses[body_a_id]
         pb_x, pb_y, cb, sb = poses[contact_body_b]
         # Overlap of the scene's outlines: the skins are padding, not the bodies.
         padding = padding_a + padding_b
-        if values[16] == _CIRCLES:
-            lx, ly = values[14], values[15]  # the manifold's localPoint
-            ax, ay = ca * lx - sa * ly + pa_x, sa * lx + ca * ly + pa_y
-            lx, ly = values[4], values[5]  # its point's localPoint
-            bx, by = cb * lx - sb * ly + pb_x, sb * lx + cb * ly + pb_y
+        # The impulse on scene body B (Box2D applies +P to fixture B's body).
+        sign = 1.0 if contact_body_b == body_b else -1.0
+        if kind == _CIRCLES:
+            ax, ay = ca * local_x - sa * local_y + pa_x, sa * local_x + ca * local_y + pa_y
+            bx, by = cb * l0_x - sb * l0_y + pb_x, sb * l0_x + cb * l0_y + pb_y
             dx, dy = bx - ax, by - ay
             distance = math.hypot(dx, dy)
             if distance > 0.0:
@@ -1242,20 +1262,22 @@ def _contact_of(touching: list, world) -> RawContacts | None:
             c_bx, c_by = bx - radius_b * n_x, by - radius_b * n_y
             points.append((0.5 * (c_ax + c_bx) / length, 0.5 * (c_ay + c_by) / length,
                            -(distance - radius_a - radius_b + padding) / length))
+            # Box2D's tangent is cross(n, 1) = (n_y, -n_x).
+            step_x += sign * (n0 * n_x + t0 * n_y)
+            step_y += sign * (n0 * n_y - t0 * n_x)
         else:
-            if values[16] == _FACE_A:
+            if kind == _FACE_A:
                 c_ref, s_ref, p_ref_x, p_ref_y, r_ref = ca, sa, pa_x, pa_y, radius_a
                 c_inc, s_inc, p_inc_x, p_inc_y, r_inc = cb, sb, pb_x, pb_y, radius_b
             else:
                 c_ref, s_ref, p_ref_x, p_ref_y, r_ref = cb, sb, pb_x, pb_y, radius_b
                 c_inc, s_inc, p_inc_x, p_inc_y, r_inc = ca, sa, pa_x, pa_y, radius_a
-            lx, ly = values[12], values[13]  # localNormal
-            n_x, n_y = c_ref * lx - s_ref * ly, s_ref * lx + c_ref * ly
-            lx, ly = values[14], values[15]  # localPoint
-            plane_x = c_ref * lx - s_ref * ly + p_ref_x
-            plane_y = s_ref * lx + c_ref * ly + p_ref_y
-            for first in range(4, 4 + 4 * count, 4):
-                lx, ly = values[first], values[first + 1]
+            n_x, n_y = c_ref * normal_x - s_ref * normal_y, s_ref * normal_x + c_ref * normal_y
+            plane_x = c_ref * local_x - s_ref * local_y + p_ref_x
+            plane_y = s_ref * local_x + c_ref * local_y + p_ref_y
+            # Box2D's normal points from fixture A to fixture B: the impulses' normal.
+            f_x, f_y = (n_x, n_y) if kind == _FACE_A else (-n_x, -n_y)
+            for lx, ly, p_n, p_t in ((l0_x, l0_y, n0, t0), (l1_x, l1_y, n1, t1))[:count]:
                 qx = c_inc * lx - s_inc * ly + p_inc_x
                 qy = s_inc * lx + c_inc * ly + p_inc_y
                 height = (qx - plane_x) * n_x + (qy - plane_y) * n_y
@@ -1264,15 +1286,9 @@ def _contact_of(touching: list, world) -> RawContacts | None:
                 points.append((0.5 * (c_ref_x + c_inc_x) / length,
                                0.5 * (c_ref_y + c_inc_y) / length,
                                -(height - r_ref - r_inc + padding) / length))
-            if values[16] != _FACE_A:
-                n_x, n_y = -n_x, -n_y  # Box2D's normal points from fixture A to fixture B
-        # The impulse on scene body B (Box2D applies +P to fixture B's body).
-        sign = 1.0 if contact_body_b == body_b else -1.0
-        for first in range(6, 6 + 4 * count, 4):
-            p_n, p_t = values[first], values[first + 1]
-            # Box2D's tangent is cross(n, 1) = (n_y, -n_x).
-            step_x += sign * (p_n * n_x + p_t * n_y)
-            step_y += sign * (p_n * n_y - p_t * n_x)
+                step_x += sign * (p_n * f_x + p_t * f_y)
+                step_y += sign * (p_n * f_y - p_t * f_x)
+            n_x, n_y = f_x, f_y
         if normal is None:
             normal = (sign * n_x, sign * n_y)
     if normal is None:
@@ -1286,11 +1302,11 @@ class _Slot(_Readout):
     """One impact of a batch: what _read_poses, _read_velocities and _run_notes read (the
     attributes of a :class:`_World` they use)."""
 
-    __slots__ = ("clipped", "derived", "dt", "notes", "restitution", "velocity", "world")
+    __slots__ = ("derived", "notes", "restitution", "velocity", "world")
 
     def __init__(self, bodies: list, ground: list, fixtures: list, length: float) -> None:
         super().__init__(bodies, ground, fixtures, length)
-        self.velocity, self.dt, self.clipped = 1.0, 0.0, False
+        self.velocity = 1.0
         self.notes: tuple[str, ...] = ()
         self.derived: dict = {}
         self.restitution = 0.0
@@ -1316,11 +1332,13 @@ def _many_world(plans, prepared, slots, length: float, skin: float, world_values
     world = b2.world(gravity=(0.0, 0.0), doSleep=True)
     _set_switches(world, world_values)
     views = []
+    definitions = _Definitions()
     for slot, plan, one in zip(slots, plans, prepared):
         bodies, ground, fixtures = _add_impact(
             world, plan.scene, length, skin, one.probe.extent,
             starts=_probe_starts(one) if probe else one.starts, group=slot + 1,
-            pair_values=one.pair_values, inertias=[inertia for _, inertia in plan.weights])
+            pair_values=one.pair_values, inertias=[inertia for _, inertia in plan.weights],
+            definitions=definitions)
         for b2_body in bodies:
             b2_body.userData = slot
         view = _Slot(bodies, ground, fixtures, length)

@@ -41,11 +41,12 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from itertools import chain
+from operator import itemgetter
 from typing import Any
 
 import numpy as np
 
-from harness.engines import body_extent
+from harness.engines import Status, body_extent
 from harness.run import metrics
 
 #: Reason name -> what it says. Ordered: the first failing reason names the run's status.
@@ -630,20 +631,29 @@ def judge_many(scenes: Sequence, problems: Sequence, runs: Sequence, u_after: np
     if not count:
         return []
     tol = tolerances
-    status = [run.status.value for run in runs]
+    # str(status) is a Python-level call per run; the values by status, one lookup each
+    status = [_STATUS_VALUES.get(run.status) or run.status.value for run in runs]
     depths = [run.max_penetration for run in runs]
     penetration = np.array([math.nan if depth is None else depth for depth in depths],
                            dtype=float)
     engine_impulse = np.full((count, 2), np.nan)
     impulse_checked = np.zeros(count, dtype=bool)
     run_caps = np.full((count, 2), np.nan)
+    # gathered in lists and written at once (an array's item assignment costs ~1 µs)
+    impulse_rows, impulses, cap_rows, caps_found = [], [], [], []
     for row, run in enumerate(runs):
         if run.normal_impulse is not None and run.impulse_source != "momentum":
-            impulse_checked[row] = True
-            engine_impulse[row] = run.normal_impulse, run.tangential_impulse or 0.0
+            impulse_rows.append(row)
+            impulses.append((run.normal_impulse, run.tangential_impulse or 0.0))
         caps = _run_caps(run.derived or {})
         if caps is not None:
-            run_caps[row] = caps
+            cap_rows.append(row)
+            caps_found.append(caps)
+    if impulse_rows:
+        impulse_checked[impulse_rows] = True
+        engine_impulse[impulse_rows] = impulses
+    if cap_rows:
+        run_caps[cap_rows] = caps_found
     batched = (np.isin(status, ("ok", "multi-contact")) & np.isfinite(u_after).all(axis=1)
                & arrays.diagonal & np.isfinite(penetration))
     near = np.zeros(count, dtype=bool)
@@ -723,19 +733,29 @@ def judge_many(scenes: Sequence, problems: Sequence, runs: Sequence, u_after: np
             [runs[row].contact_record for row in featured],
             [terms[row].features for row in featured], tol)):
         checked["multi-contact"][row] = second
+    failing = np.zeros(count, dtype=bool)  # a batched reason fails (names to list)
+    for flags in fails.values():
+        failing |= flags
+    failing |= np.asarray(checked["multi-contact"], dtype=bool)
+    unjudged = (~batched).tolist()
+    failing = failing.tolist()
     results = []
     for row, run in enumerate(runs):
-        if not batched[row]:
+        if unjudged[row]:
             gain = None if law_energy_change is None else float(law_energy_change[row])
             verdict = judge(scenes[row], problems[row], numbers_from_run(run),
                             law_energy_change=gain, tolerances=tol, terms=terms[row])
             results.append((verdict.status(status[row]), ",".join(verdict.names)))
-            continue
-        names = tuple(name for name in _BATCHED_REASONS if checked[name][row])
-        results.append((_status(status[row], names), ",".join(names)))
+        elif failing[row]:
+            names = tuple(name for name in _BATCHED_REASONS if checked[name][row])
+            results.append((_status(status[row], names), ",".join(names)))
+        else:
+            results.append((_status(status[row], ()), ""))
     return results
 
 
+#: Every engine status's value, by status (:func:`judge_many`).
+_STATUS_VALUES = {status: status.value for status in Status}
 #: The reasons :func:`judge_many` checks as arrays, in :data:`REASONS` order.
 _BATCHED_REASONS = tuple(name for name in REASONS
                          if name in ("clipped", "multi-contact", "not-separated", "penetration",
@@ -898,8 +918,8 @@ def _rotations(poses: np.ndarray) -> np.ndarray:
     vector ``p`` by ``θ``; stacked, shape ``(n, 2, 2)``."""
     # math's cos and sin, one pose at a time: numpy's array ones may round differently
     angles = poses[:, 2].tolist()
-    cos = np.array([math.cos(angle) for angle in angles])
-    sin = np.array([math.sin(angle) for angle in angles])
+    cos = np.fromiter(map(math.cos, angles), float, len(angles))
+    sin = np.fromiter(map(math.sin, angles), float, len(angles))
     rotations = np.empty((len(angles), 2, 2))
     rotations[:, 0, 0] = rotations[:, 1, 1] = cos
     rotations[:, 0, 1] = sin
@@ -978,6 +998,9 @@ def _second_features(scene, contacts: Sequence[StepContacts] | ContactTrack,
                    "was at " + (names[then] if then >= 0 else "a face") + ")")]
 
 
+_FIRST, _SECOND, _THIRD = itemgetter(0), itemgetter(1), itemgetter(2)
+
+
 def _records_many(contact_records: Sequence) -> tuple[np.ndarray, ...]:
     """Many runs' raw contact records ``(shift, raw)`` (``EngineRun.contact_record``) as flat
     arrays in the scene frame, read in a few passes over all of them (not run by run).
@@ -992,8 +1015,9 @@ def _records_many(contact_records: Sequence) -> tuple[np.ndarray, ...]:
     raws = [raw for _, raw in contact_records]
     record_counts = np.fromiter(map(len, raws), np.int64, len(raws))
     every = list(chain.from_iterable(raws))
-    point_lists = [contacts[0] for _, contacts, _ in every]
-    pose_lists = [poses for _, _, poses in every]
+    # (step, contacts, poses) records: contacts[0] the points (C-level getters, not a loop)
+    point_lists = list(map(_FIRST, map(_SECOND, every)))
+    pose_lists = list(map(_THIRD, every))
     per_record = np.fromiter(map(len, point_lists), np.int64, len(every))
     total = int(per_record.sum())
     # every point is (x, y, depth) and every pose (x, y, θ): each read as one flat run
