@@ -588,7 +588,7 @@ class _Model:
     qvel: object = None
     xpos: object = None
     xmat: object = None
-    contact_rows: object = None  # (n, 13): dist, pos, frame of each contact slot
+    contact_rows: object = None  # (n, 7): dist, pos, frame[:3] of each contact slot
     first_contact: object = None  # the first slot's dist, pos and frame[:3]
     first_geom2: object = None  # the first slot's geom2 (1 int)
     contact_address: int = 0  # where ``contact_rows`` starts: the data's arena
@@ -613,14 +613,15 @@ def _use_data(world: _Model, data: mujoco.MjData) -> None:
         world.force_views = {}
 
 
-# MuJoCo's mjContact begins with dist, pos[3] and frame[9]: 13 doubles read as one row.
-_CONTACT_HEAD = 13
+# MuJoCo's mjContact begins with dist, pos[3] and frame[9]: the first 7 doubles (the frame's
+# first row is the normal) are read as one row.
+_CONTACT_HEAD = 7
 
 
 def _contact_rows(world: _Model, contact) -> None:
-    """Make ``world.contact_rows`` a view of the data's contacts as rows of ``dist, pos,
-    frame``, and ``world.first_geom2`` one of the first slot's ``geom2`` (``contact``:
-    ``data.contact`` at a contact step).
+    """Make ``world.contact_rows`` a view of the data's contacts as rows of ``dist, pos`` and
+    the normal (the frame's first row), and ``world.first_geom2`` one of the first slot's
+    ``geom2`` (``contact``: ``data.contact`` at a contact step).
 
     MuJoCo puts the contacts at the start of the data's arena (``mj_collision``; the arena
     is allocated with the data and ``mj_resetData`` points the contacts at its start), one
@@ -639,7 +640,7 @@ def _contact_rows(world: _Model, contact) -> None:
         strides=(stride, 8), writeable=False)
     arena = np.lib.stride_tricks.as_strided(
         distances, shape=(world.data.narena // 8,), strides=(8,), writeable=False)
-    views = (rows, rows[0, :7], contact.geom2[:1], arena, address)
+    views = (rows, rows[0], contact.geom2[:1], arena, address)
     world.contact_views[id(world.data)] = views
     (world.contact_rows, world.first_contact, world.first_geom2, world.arena,
      world.contact_address) = views

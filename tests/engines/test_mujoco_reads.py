@@ -50,7 +50,7 @@ class _CheckedReads(MujocoEngine):
         d = world.data
         contact = d.contact
         count = d.ncon
-        slow = np.column_stack([contact.dist, contact.pos, contact.frame])
+        slow = np.column_stack([contact.dist, contact.pos, contact.frame[:, :3]])
         assert bits(world.contact_rows[:count]) == bits(slow)
         points = tuple((x, z, -distance) for (x, _, z), distance
                        in zip(contact.pos.tolist(), contact.dist.tolist()))
