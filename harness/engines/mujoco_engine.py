@@ -590,6 +590,7 @@ class _Model:
     xmat: object = None
     contact_rows: object = None  # (n, 7): dist, pos, frame[:3] of each contact slot
     first_contact: object = None  # the first slot's dist, pos and frame[:3]
+    first_two: object = None  # the first two slots' rows
     first_geom2: object = None  # the first slot's geom2 (1 int)
     contact_address: int = 0  # where ``contact_rows`` starts: the data's arena
     arena: object = None  # the arena as doubles, from ``contact_address``
@@ -607,8 +608,8 @@ def _use_data(world: _Model, data: mujoco.MjData) -> None:
     world.data = data
     world.qpos, world.qvel = data.qpos, data.qvel
     world.xpos, world.xmat = data.xpos, data.xmat
-    (world.contact_rows, world.first_contact, world.first_geom2, world.arena,
-     world.contact_address) = world.contact_views.get(id(data), (None, None, None, None, 0))
+    (world.contact_rows, world.first_contact, world.first_two, world.first_geom2, world.arena,
+     world.contact_address) = world.contact_views.get(id(data), (None,) * 5 + (0,))
     if world.force_views:
         world.force_views = {}
 
@@ -640,9 +641,9 @@ def _contact_rows(world: _Model, contact) -> None:
         strides=(stride, 8), writeable=False)
     arena = np.lib.stride_tricks.as_strided(
         distances, shape=(world.data.narena // 8,), strides=(8,), writeable=False)
-    views = (rows, rows[0], contact.geom2[:1], arena, address)
+    views = (rows, rows[0], rows[:2], contact.geom2[:1], arena, address)
     world.contact_views[id(world.data)] = views
-    (world.contact_rows, world.first_contact, world.first_geom2, world.arena,
+    (world.contact_rows, world.first_contact, world.first_two, world.first_geom2, world.arena,
      world.contact_address) = views
 
 
@@ -928,6 +929,13 @@ class MujocoEngine(Engine):
             distance, x, _, z, frame_x, _, frame_z = world.first_contact.tolist()
             depth = -distance
             points = ((x, z, depth),)
+        elif count == 2:  # a prism's edge (±y): a third of the contact steps, unrolled
+            (distance, x, _, z, frame_x, _, frame_z), (other, other_x, _, other_z, _, _, _) = (
+                world.first_two.tolist())
+            depth, other = -distance, -other
+            points = ((x, z, depth), (other_x, other_z, other))
+            if other > depth:  # max() of the two
+                depth = other
         else:
             rows = world.contact_rows[:count].tolist()
             points = tuple([(row[1], row[3], -row[0]) for row in rows])
@@ -952,6 +960,9 @@ class MujocoEngine(Engine):
         qpos = world.qpos.tolist()
         if len(qpos) == 3:
             return ((qpos[0], qpos[1], -qpos[2]),)
+        if len(qpos) == 6:  # two bodies: unpacked, no loop (every contact step)
+            x, y, angle, other_x, other_y, other_angle = qpos
+            return ((x, y, -angle), (other_x, other_y, -other_angle))
         return tuple([(qpos[i], qpos[i + 1], -qpos[i + 2]) for i in range(0, len(qpos), 3)])
 
     def _read_velocities(self, world: _Model) -> tuple:
