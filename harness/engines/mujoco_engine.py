@@ -72,9 +72,9 @@ of its settings, ``e`` and ``μ`` (rewritten whenever they differ by value from 
 model holds) and calls ``mj_resetData``, so reruns are bit-identical. A step reads its
 contacts through one numpy view of the data's arena, made once per data
 (``_contact_rows``), and its constraint forces through views of the same arena made once
-per run and row count (``_force_view``). The contact impulse is MuJoCo's total constraint
-impulse on body B, ``M·Δq̇`` (exact here: no gravity, no passive forces, constant mass
-matrix).
+per row count (``_force_view``) and kept while the data, model and options stay. The
+contact impulse is MuJoCo's total constraint impulse on body B, ``M·Δq̇`` (exact here: no
+gravity, no passive forces, constant mass matrix).
 
 Settings (``defaults`` | ``accurate``, shown as ``matched-bounce``) are listed in
 :data:`SETTING_DOCS`.
@@ -84,7 +84,6 @@ from __future__ import annotations
 
 import functools
 import math
-import operator
 import struct
 from collections import OrderedDict
 from dataclasses import dataclass, field
@@ -323,8 +322,11 @@ def _model_xml(scene: Scene) -> str:
 # derives from it); a mesh (polygon) is compiled: its convex hull, centroid and bounding
 # volumes come from the compiler's own arithmetic (qhull, volume integrals).
 _EDITABLE_KINDS = frozenset(("disk", "rod", "box"))
-# Compiled models a polygon world keeps (least recently used dropped first).
-_MAX_COMPILED = 32
+# Compiled models a polygon world keeps (least recently used dropped first), ~120 kB each.
+# A compile costs ~0.5 ms, mostly the bindings' wrapper of the new model; a survey part
+# (at most 125 samples per family with two workers, harness/survey/parts.py) runs the same
+# polygons under each preset in turn, so the second preset finds them all compiled.
+_MAX_COMPILED = 128
 # The capsule's frame: fromto along +x turns the geom's z axis onto x (the compiler's quat).
 _CAPSULE_QUAT = (0.7071067811865476, 0.0, -0.7071067811865475, 0.0)
 _IDENTITY_QUAT = (1.0, 0.0, 0.0, 0.0)
@@ -540,17 +542,14 @@ def _write_statistics(m: mujoco.MjModel, rbounds: list[float], masses: list[floa
     stat.meaninertia = mean_inertia / m.nv
 
 
-def _layout(model: mujoco.MjModel) -> tuple:
-    """Every size of ``model`` that MjData's layout depends on (its integer ``n*`` counts)."""
-    global _SIZES
-    if _SIZES is None:
-        _SIZES = operator.attrgetter(*(
-            name for name in dir(model)
-            if name.startswith("n") and isinstance(getattr(model, name), int)))
-    return _SIZES(model)
+def _layout(model: mujoco.MjModel) -> bytes:
+    """Every size of ``model`` that MjData's layout depends on (its integer ``n*`` counts).
 
-
-_SIZES: operator.attrgetter | None = None
+    The bindings hold them in one array (``_sizes``, named by ``_size_fields``; one read,
+    ~1 µs, where the ~100 attributes read one by one cost ~25 µs a newly compiled polygon
+    model; tests/engines/test_mujoco_reads.py checks it against the attributes).
+    """
+    return model._sizes.tobytes()
 
 
 @dataclass
@@ -588,69 +587,76 @@ class _Model:
     qvel: object = None
     xpos: object = None
     xmat: object = None
-    contact_rows: object = None  # (n, 13): dist, pos, frame of each contact slot
+    contact_rows: object = None  # (n, 7): dist, pos, frame[:3] of each contact slot
     first_contact: object = None  # the first slot's dist, pos and frame[:3]
+    first_two: object = None  # the first two slots' rows
+    first_geom2: object = None  # the first slot's geom2 (1 int)
     contact_address: int = 0  # where ``contact_rows`` starts: the data's arena
     arena: object = None  # the arena as doubles, from ``contact_address``
-    # This run's views of efc_force in ``arena``, by (ncon, nefc) (_force_view).
+    # Views of efc_force in ``arena`` by (ncon, nefc) (_force_view), for the data, model
+    # and options held: emptied when one of them changes.
     force_views: dict = field(default_factory=dict)
-    # Contact views made so far, by address (a polygon world's datas take turns).
+    # Contact views made so far, by data (a polygon world's datas take turns).
     contact_views: dict = field(default_factory=dict)
 
 
 def _use_data(world: _Model, data: mujoco.MjData) -> None:
     """Make ``world`` step ``data``, with views of its arrays made once (they live in the
-    data's buffer, fixed for its life; the contacts' views are made at a first contact)."""
+    data's buffer and arena, fixed for its life; the contacts' views are made at the first
+    contact the data reports, :func:`_contact_rows`)."""
     world.data = data
     world.qpos, world.qvel = data.qpos, data.qvel
     world.xpos, world.xmat = data.xpos, data.xmat
-    world.contact_rows = world.first_contact = world.arena = None
-    world.contact_address = 0
+    (world.contact_rows, world.first_contact, world.first_two, world.first_geom2, world.arena,
+     world.contact_address) = world.contact_views.get(id(data), (None,) * 5 + (0,))
+    if world.force_views:
+        world.force_views = {}
 
 
-# MuJoCo's mjContact begins with dist, pos[3] and frame[9]: 13 doubles read as one row.
-_CONTACT_HEAD = 13
+# MuJoCo's mjContact begins with dist, pos[3] and frame[9]: the first 7 doubles (the frame's
+# first row is the normal) are read as one row.
+_CONTACT_HEAD = 7
 
 
 def _contact_rows(world: _Model, contact) -> None:
-    """Make ``world.contact_rows`` a view of the data's contacts as rows of ``dist, pos,
-    frame`` (``contact``: ``data.contact`` at a contact step).
+    """Make ``world.contact_rows`` a view of the data's contacts as rows of ``dist, pos`` and
+    the normal (the frame's first row), and ``world.first_geom2`` one of the first slot's
+    ``geom2`` (``contact``: ``data.contact`` at a contact step).
 
-    MuJoCo puts the contacts at the start of the data's arena (``mj_collision``), one fixed
-    address for the data's life, and the bindings make new arrays of them at every read; a
-    view over every slot the arena can hold, read up to ``ncon``, costs one read per step.
-    Checked at each run's first contact (the address; the fields' order when a view is
-    made); the views of a polygon world's datas are kept by address.
+    MuJoCo puts the contacts at the start of the data's arena (``mj_collision``; the arena
+    is allocated with the data and ``mj_resetData`` points the contacts at its start), one
+    fixed address for the data's life, and the bindings make new arrays of them at every
+    read (~10 µs with the address check); a view over every slot the arena can hold, read
+    up to ``ncon``, costs one read per step. Made at the data's first contact (the fields'
+    order checked) and kept by data (a polygon world's datas take turns).
     """
     distances = contact.dist
     address = distances.ctypes.data
-    if address == world.contact_address:
-        return
-    views = world.contact_views.get(address)
-    if views is None:
-        stride = distances.strides[0]
-        if (contact.pos.ctypes.data - address, contact.frame.ctypes.data - address) != (8, 32):
-            raise RuntimeError("mujoco: mjContact no longer begins with dist, pos, frame")
-        rows = np.lib.stride_tricks.as_strided(
-            distances, shape=(world.data.narena // stride, _CONTACT_HEAD),
-            strides=(stride, 8), writeable=False)
-        arena = np.lib.stride_tricks.as_strided(
-            distances, shape=(world.data.narena // 8,), strides=(8,), writeable=False)
-        views = world.contact_views[address] = (rows, rows[0, :7], arena)
-    world.contact_rows, world.first_contact, world.arena = views
-    world.contact_address = address
+    stride = distances.strides[0]
+    if (contact.pos.ctypes.data - address, contact.frame.ctypes.data - address) != (8, 32):
+        raise RuntimeError("mujoco: mjContact no longer begins with dist, pos, frame")
+    rows = np.lib.stride_tricks.as_strided(
+        distances, shape=(world.data.narena // stride, _CONTACT_HEAD),
+        strides=(stride, 8), writeable=False)
+    arena = np.lib.stride_tricks.as_strided(
+        distances, shape=(world.data.narena // 8,), strides=(8,), writeable=False)
+    views = (rows, rows[0], rows[:2], contact.geom2[:1], arena, address)
+    world.contact_views[id(world.data)] = views
+    (world.contact_rows, world.first_contact, world.first_two, world.first_geom2, world.arena,
+     world.contact_address) = views
 
 
 def _force_view(world: _Model, count: int, rows: int):
     """``data.efc_force`` (``rows`` long, ``count`` contacts) as a view of the arena, kept in
-    ``world.force_views`` for the rest of the run (read through the bindings, a new array
-    each step: ~1 µs).
+    ``world.force_views`` (read through the bindings, a new array each step: ~1 µs, and
+    ~5 µs more for its address).
 
     MuJoCo allocates the constraint arrays in the arena after the contacts, in a fixed
     order of sizes that, in these planar models (dense Jacobian, one island), follow from
-    the contact and row counts alone; the address is taken afresh in each run, at the first
-    step with each pair of counts. Returns the bindings' array where the view cannot be
-    made (an address off the arena's doubles).
+    the model's layout and options and the contact and row counts alone; the address is
+    taken at the first step with each pair of counts, and taken again after the data, the
+    model or the options change. Returns the bindings' array where the view cannot be made
+    (an address off the arena's doubles).
     """
     forces = world.data.efc_force
     offset, rest = divmod(forces.ctypes.data - world.contact_address, 8)
@@ -778,6 +784,8 @@ class MujocoEngine(Engine):
                 while len(compiled) > _MAX_COMPILED:
                     compiled.popitem(last=False)
             compiled.move_to_end(geometry.key)
+            if world.force_views:  # another model, maybe other options: other places
+                world.force_views = {}
             model = world.model = entry[0]
             world.configured = entry[1]
             layout = _layout(model)
@@ -821,8 +829,6 @@ class MujocoEngine(Engine):
         world.qvel[:] = qvel
         world.normal_sign = 0.0
         world.last_depth = math.inf
-        if world.force_views:
-            world.force_views = {}
         return derived
 
     def _configure(self, entry: _Model, scene: Scene, settings: dict) -> dict:
@@ -846,6 +852,8 @@ class MujocoEngine(Engine):
 
     def _write_options(self, entry: _Model, settings: dict) -> None:
         m = entry.model
+        if entry.force_views:  # the constraint arrays' places may differ under others
+            entry.force_views = {}
         opt = m.opt
         dt = float(settings["time_step"])
         entry.dt = dt
@@ -908,17 +916,25 @@ class MujocoEngine(Engine):
         count = d.ncon
         sign = world.normal_sign
         if sign == 0.0:  # the run's first contact
-            contact = d.contact
-            _contact_rows(world, contact)
+            if world.contact_rows is None:  # the data's first
+                _contact_rows(world, d.contact)
             # A pair's geom order is fixed: the normal points from geom1 into geom2, and
             # body A's geom second reverses it.
             two_bodies = len(world.body_geoms) == 2
             sign = world.normal_sign = (
-                -1.0 if two_bodies and contact.geom2.item(0) == world.body_geoms[0] else 1.0)
+                -1.0 if two_bodies and world.first_geom2.item(0) == world.body_geoms[0]
+                else 1.0)
         if count == 1:
             distance, x, _, z, frame_x, _, frame_z = world.first_contact.tolist()
             depth = -distance
             points = ((x, z, depth),)
+        elif count == 2:  # a prism's edge (±y): a third of the contact steps, unrolled
+            (distance, x, _, z, frame_x, _, frame_z), (other, other_x, _, other_z, _, _, _) = (
+                world.first_two.tolist())
+            depth, other = -distance, -other
+            points = ((x, z, depth), (other_x, other_z, other))
+            if other > depth:  # max() of the two
+                depth = other
         else:
             rows = world.contact_rows[:count].tolist()
             points = tuple([(row[1], row[3], -row[0]) for row in rows])
@@ -943,6 +959,9 @@ class MujocoEngine(Engine):
         qpos = world.qpos.tolist()
         if len(qpos) == 3:
             return ((qpos[0], qpos[1], -qpos[2]),)
+        if len(qpos) == 6:  # two bodies: unpacked, no loop (every contact step)
+            x, y, angle, other_x, other_y, other_angle = qpos
+            return ((x, y, -angle), (other_x, other_y, -other_angle))
         return tuple([(qpos[i], qpos[i + 1], -qpos[i + 2]) for i in range(0, len(qpos), 3)])
 
     def _read_velocities(self, world: _Model) -> tuple:

@@ -22,6 +22,8 @@ mujoco = pytest.importorskip("mujoco", reason="mujoco not installed (pip install
 
 from harness.engines.mujoco_engine import (  # noqa: E402
     MujocoEngine,
+    _layout,
+    _model_xml,
     _xml_float32,
     _xml_float32s,
 )
@@ -50,7 +52,7 @@ class _CheckedReads(MujocoEngine):
         d = world.data
         contact = d.contact
         count = d.ncon
-        slow = np.column_stack([contact.dist, contact.pos, contact.frame])
+        slow = np.column_stack([contact.dist, contact.pos, contact.frame[:, :3]])
         assert bits(world.contact_rows[:count]) == bits(slow)
         points = tuple((x, z, -distance) for (x, _, z), distance
                        in zip(contact.pos.tolist(), contact.dist.tolist()))
@@ -168,3 +170,22 @@ def test_float32_rounding_in_one_pass_equals_one_by_one():
     # Not vacuous: halfway values take both sides, unlike a plain float32 rounding.
     plain = np.array(halfway).astype(np.float32).astype(float).tolist()
     assert bits(_xml_float32s(halfway)) != bits(plain)
+
+
+def test_layout_holds_every_size_the_attributes_hold():
+    # _layout reads the bindings' array of sizes in one go: it must be every integer n*
+    # attribute, so that two models share an MjData exactly when all their sizes agree.
+    def polygon_model(count):
+        points = tuple((0.1 * math.cos(2 * math.pi * k / count),
+                        0.1 * math.sin(2 * math.pi * k / count)) for k in range(count))
+        body = Body("p", Polygon(points), 1.0, (0.0, 0.1), 0.0, (0.0, -1.0), 0.0)
+        return mujoco.MjModel.from_xml_string(
+            _model_xml(Scene((body,), 0.5, 0.3, ground=True)))
+
+    models = [polygon_model(count) for count in (3, 3, 6)]
+    for model in models:
+        names = sorted(name for name in dir(model) if name.startswith("n")
+                       and isinstance(getattr(model, name), int))
+        assert sorted(model._size_fields) == names
+        assert model._sizes.tolist() == [getattr(model, name) for name in model._size_fields]
+    assert _layout(models[0]) == _layout(models[1]) != _layout(models[2])
