@@ -133,11 +133,14 @@ def _first_contact(points_local, radius, position, angle, velocity, omega, horiz
 
 
 def event_sequence(scene: Scene, law: str = "poisson", max_impacts: int = 1000,
-                   horizon: float | None = None) -> EventSequence:
+                   horizon: float | None = None, *, shared: dict | None = None) -> EventSequence:
     """Impacts and free flights of one body against the ground until every feature separates.
 
     ``horizon`` (s) bounds the search for the next contact; by default the time for the body
     to rise by its size at its current upward speed, or one turn when it does not rise.
+    ``shared``: a dict the caller passes to the sequences of one scene under several laws,
+    which share their start: a flight or an impact problem already worked out for another
+    law (the same inputs, bit for bit) is taken from it, not worked out again.
     """
     if not scene.ground:
         raise ValueError("event_sequence: only one body against the ground is built so far")
@@ -168,7 +171,7 @@ def event_sequence(scene: Scene, law: str = "poisson", max_impacts: int = 1000,
                 continue
             others = [j for j in touching if j != k and _approach(problem, body, position,
                       velocity, omega, world[j], radius) < -APPROACH_TOLERANCE * speed_scale]
-            result = problem.solve(mu=scene.friction, e=scene.restitution, law=law)
+            result = _law_solver(problem, scene.friction, scene.restitution, shared)(law)
             velocity = result.u_after[:2].copy()
             omega = float(result.u_after[2])
             events.append(ImpactEvent(k, clock, result.collision_type, result.vn_approach,
@@ -182,8 +185,8 @@ def event_sequence(scene: Scene, law: str = "poisson", max_impacts: int = 1000,
         if limit is None:
             rise = velocity[1]
             limit = (2.0 * size / rise) if rise > 0 else 2.0 * math.pi / max(abs(omega), 1e-3)
-        when, _feature = _first_contact(points_local, radius, position, angle, velocity, omega,
-                                       limit, size)
+        when, _feature = _shared(shared, "flight", _first_contact, points_local, radius,
+                                 position, angle, velocity, omega, limit, size)
         if when is None:
             finished = True
             break
@@ -194,6 +197,31 @@ def event_sequence(scene: Scene, law: str = "poisson", max_impacts: int = 1000,
                          float(velocity[1])), angular_velocity=omega,
                          position=(float(position[0]), float(position[1])), angle=angle,
                          time=clock, finished=finished)
+
+
+def _shared(shared: dict | None, tag: str, function, *args):
+    """``function(*args)`` (floats and float arrays), kept in ``shared`` under ``tag`` and
+    the exact float64 bits of ``args`` when ``shared`` is a dict, and taken from there when
+    it holds it (bits, not values: -0.0 and 0.0, equal as keys, may give other answers)."""
+    if shared is None:
+        return function(*args)
+    key = (tag, *(np.shape(arg) for arg in args),
+           *(np.asarray(arg, dtype=float).tobytes() for arg in args))
+    found = shared.get(key)
+    if found is None:
+        found = shared[key] = function(*args)
+    return found
+
+
+def _law_solver(problem, mu, e, shared: dict | None):
+    """``problem.law_solver(mu=mu, e=e)`` (the problem checked once for every law), kept in
+    ``shared``: the sequences of a scene under several laws start with the same impact."""
+    return _shared(shared, "impact", _problem_solver, problem.mass_matrix, problem.wn,
+                   problem.wt, problem.u, mu, e)
+
+
+def _problem_solver(mass_matrix, wn, wt, u, mu, e):
+    return pi.builders.ImpactProblem(mass_matrix, wn, wt, u).law_solver(mu=mu, e=e)
 
 
 def _approach(problem, body, position, velocity, omega, feature_point, radius):

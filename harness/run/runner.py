@@ -1121,10 +1121,11 @@ def point_records(scenario: Scenario, point, engine_entries: Sequence, *,
     law_records: list[Record] = []
     law_speeds: dict[str, np.ndarray | None] = {}
     law_gains: dict[str, float] = {}  # the energy change of each law solved
+    solve_law = problem.law_solver(mu=mu, e=e)  # problem.solve, the problem checked once
     for law in scenario.laws:
         tick = time.perf_counter()
         try:
-            result = problem.solve(mu=mu, e=e, law=law)
+            result = solve_law(law)
         except ValueError as error:
             law_speeds[law] = None
             law_records.append(Record(
@@ -1161,7 +1162,7 @@ def point_records(scenario: Scenario, point, engine_entries: Sequence, *,
         lcp_gain = law_gains.get("newton-lcp")
     else:
         try:  # the engines' own law, to attribute an energy gain (docs/verdicts.md)
-            lcp_gain = problem.solve(mu=mu, e=e, law="newton-lcp").energy_change
+            lcp_gain = solve_law("newton-lcp").energy_change
         except ValueError:
             lcp_gain = None
     declared = verdicts.declared_contacts(scenario, scene)  # a flat face: judged against all

@@ -420,9 +420,10 @@ def second_strike(scene: Scene, contact, horizon_s: float, step_s: float) -> Str
 
     problem = geometry.impact_problem(scene, contact.point, contact.normal)
     motions = [("before the impact", problem.u, step_s)]
+    solve_law = problem.law_solver(mu=scene.friction, e=scene.restitution)  # checked once
     for law in SEQUENCE_LAWS:
         try:
-            result = problem.solve(mu=scene.friction, e=scene.restitution, law=law)
+            result = solve_law(law)
         except (ValueError, ImpactInputError):
             continue
         motions.append((f"after the impact ({law})", result.u_after, horizon_s))

@@ -13,11 +13,12 @@ The tangent is ``t = (n_y, −n_x)``, the normal turned clockwise by 90° (for t
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
-from .solver import ImpactResult, solve
+from .solver import ImpactResult, law_solver, solve
 
 
 @dataclass(frozen=True)
@@ -57,6 +58,12 @@ class ImpactProblem:
     def solve(self, *, mu: float, e: float, law: str = "poisson") -> ImpactResult:
         return solve(mass_matrix=self.mass_matrix, wn=self.wn, wt=self.wt, u=self.u, mu=mu, e=e,
                      law=law)
+
+    def law_solver(self, *, mu: float, e: float) -> Callable[[str], ImpactResult]:
+        """``solve_law(law)``, :meth:`solve` with ``law``: the problem checked once for all
+        the laws asked (:func:`planar_impact.solver.law_solver`)."""
+        return law_solver(mass_matrix=self.mass_matrix, wn=self.wn, wt=self.wt, u=self.u,
+                          mu=mu, e=e)
 
     def kinetic_energy(self, speeds=None) -> float:
         speeds = self.u if speeds is None else np.asarray(speeds, dtype=float)

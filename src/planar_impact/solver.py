@@ -17,6 +17,7 @@ solved as given, bit for bit as before the scaling existed.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, fields
 
 import numpy as np
@@ -499,6 +500,12 @@ def solve(*, mass_matrix, wn, wt, u, mu, e, law: str = "poisson") -> ImpactResul
     what is allowed; never returns NaN or inf.
     """
     check_law(law)
+    return solve_contact(*_checked_inputs(mass_matrix, wn, wt, u, mu, e), law)
+
+
+def _checked_inputs(mass_matrix, wn, wt, u, mu, e) -> tuple:
+    """What :func:`solve` checks and derives of its inputs besides the law, in its order:
+    ``(CheckedContact, u, mu, e)``, or the :class:`ImpactInputError` of the first bad one."""
     matrix = check_mass_matrix(mass_matrix)
     size = matrix.shape[0]
     wn = as_vector("wn", wn, size)
@@ -506,7 +513,25 @@ def solve(*, mass_matrix, wn, wt, u, mu, e, law: str = "poisson") -> ImpactResul
     u = as_vector("u", u, size)
     mu = check_scalar("mu", mu, 0.0, np.inf)
     e = check_scalar("e", e, 0.0, 1.0)
-    return solve_contact(checked_contact(matrix, wn, wt), u, mu, e, law)
+    return checked_contact(matrix, wn, wt), u, mu, e
+
+
+def law_solver(*, mass_matrix, wn, wt, u, mu, e) -> Callable[[str], ImpactResult]:
+    """``solve_law(law)``, :func:`solve` of these inputs with ``law``, bit for bit, raising
+    what it raises: the inputs are checked and ``M``'s factors worked out once for all the
+    laws asked (a sweep point solves its problem with every law of the scenario)."""
+    try:
+        checked, failure = _checked_inputs(mass_matrix, wn, wt, u, mu, e), None
+    except ValueError as error:  # ImpactInputError, or numpy's on a value not a number
+        checked, failure = None, error
+
+    def solve_law(law: str) -> ImpactResult:
+        check_law(law)
+        if failure is not None:  # the error solve raises, raised anew for each law
+            raise type(failure)(*failure.args)
+        return solve_contact(*checked, law)
+
+    return solve_law
 
 
 @dataclass(frozen=True)

@@ -140,3 +140,18 @@ def test_speeds_after_each_impact_are_the_cut_sequence(law, tilt):
         cut = event_sequence(scene, law, max_impacts=k)
         assert cut.events == whole.events[:k]
         assert np.array_equal(cut.speeds(), np.array(event.speeds_after))
+
+
+@pytest.mark.parametrize("tilt, vx", [(3.0, 0.0), (0.5, 0.4), (12.0, -0.7), (0.0, 0.2)])
+def test_sequences_sharing_their_start_are_those_computed_alone(tilt, vx):
+    """event_sequence with ``shared`` (a scene's sequences under several laws, their common
+    flights and first impact worked out once) gives each law's sequence bit for bit (repr
+    tells -0.0 from 0.0), in either order of the laws."""
+    scene = tilted_box(tilt, vx)
+    laws = ("newton-lcp", "poisson", "stronge", "newton", "stronge-paper")
+    alone = {law: repr(event_sequence(scene, law)) for law in laws}
+    for order in (laws, laws[::-1]):
+        shared: dict = {}
+        for law in order:
+            assert repr(event_sequence(scene, law, shared=shared)) == alone[law], law
+        assert any(key[0] == "flight" for key in shared)  # something was shared
