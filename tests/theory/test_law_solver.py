@@ -56,4 +56,5 @@ def test_every_bad_input_raises_what_solve_raises_for_each_law(change):
     inputs = {**_inputs(GROUND, 0.3, 0.8), **change}
     solve_law = law_solver(**inputs)
     for law in (*pi.LAWS, "no-such-law"):
-        assert _error(lambda: solve_law(law)) == _error(lambda: pi.solve(**inputs, law=law))
+        assert (_error(lambda law=law: solve_law(law))
+                == _error(lambda law=law: pi.solve(**inputs, law=law)))
