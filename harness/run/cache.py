@@ -109,7 +109,7 @@ def cached_code_sources(harness_dir: Path = _HARNESS_DIR,
 
 
 @lru_cache(maxsize=None)
-def _code_version_of(sources: tuple[Path, ...]) -> str:
+def code_version_of(sources: tuple[Path, ...]) -> str:
     """sha256 over the ``*.py`` files of ``sources`` (directories, recursively, or files),
     each named by its path from the source's parent."""
     digest = hashlib.sha256()
@@ -136,7 +136,7 @@ def code_version() -> str:
 
     Computed once per process (the source does not change under a running process).
     """
-    return _code_version_of(cached_code_sources())
+    return code_version_of(cached_code_sources())
 
 
 class Spelled:
@@ -595,4 +595,5 @@ def main(args) -> int:
 
 
 __all__ = ["CACHED_CODE", "CACHE_DIR_VARIABLE", "ResultCache", "add_arguments",
-           "cached_code_sources", "canonical_json", "code_version", "default_cache_dir", "main"]
+           "cached_code_sources", "canonical_json", "code_version", "code_version_of",
+           "default_cache_dir", "main"]

@@ -127,11 +127,11 @@ def survey_inputs(populations, engines, presets) -> str:
     import hashlib
     import json
 
-    from harness.run.cache import _code_version_of, cached_code_sources
+    from harness.run.cache import cached_code_sources, code_version_of
     from harness.run.provenance import PACKAGES, package_versions
 
     survey_code = Path(__file__).resolve().parents[1] / "survey"
-    code = _code_version_of((*cached_code_sources(), survey_code))
+    code = code_version_of((*cached_code_sources(), survey_code))
     text = json.dumps({
         "populations": [[population.name, Path(population.path).read_text(encoding="utf-8")
                          if population.path else repr(population)]
@@ -145,19 +145,13 @@ def survey_inputs(populations, engines, presets) -> str:
 def _survey_is_current(out: Path, inputs: str) -> bool:
     """Whether ``out`` holds a quick survey written from the inputs whose digest is
     ``inputs``, every table of it present."""
-    import json
+    from harness.report.survey import read_settings
 
-    from harness.survey.cli import SETTINGS_FILE
-
-    try:
-        settings = json.loads((out / SETTINGS_FILE).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return False
+    settings = read_settings(out)  # {} when missing, unreadable or not an object
     tables = ["summary.md", "samples.parquet"]
     if settings.get("engines"):
         tables += ["runs.parquet", "statistics.parquet"]
-    return (isinstance(settings, dict) and settings.get("inputs") == inputs
-            and all((out / name).is_file() for name in tables))
+    return settings.get("inputs") == inputs and all((out / name).is_file() for name in tables)
 
 
 __all__ = ["SURVEY_SAMPLES", "add_arguments", "main", "quick_survey", "survey_inputs"]

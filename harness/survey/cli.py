@@ -214,6 +214,9 @@ def write_survey(survey: dict, out: Path, settings: dict, figures: bool = True) 
     if survey["engine_results"]:
         written.append(outputs.write_parquet(survey["runs"], out / "runs.parquet"))
         written.append(outputs.write_parquet(survey["statistics"], out / "statistics.parquet"))
+    else:  # no engine ran: an earlier survey's tables here would be read as this one's
+        for stale in ("runs.parquet", "statistics.parquet"):
+            (out / stale).unlink(missing_ok=True)
     if figures and survey["engine_results"]:
         begin = time.perf_counter()
         written += outputs.figures(survey["runs"], out / "figures")

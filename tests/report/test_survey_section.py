@@ -212,3 +212,47 @@ def test_the_quick_survey_is_kept_while_its_inputs_are_unchanged(tmp_path, monke
     assert suite.quick_survey(args, out)[1] is True and (out / "runs.parquet").is_file()
     args.engines = "pymunk,box2d"  # other engines: surveyed again
     assert suite.quick_survey(args, out)[1] is True
+
+
+def test_the_quick_surveys_digest_follows_its_files_versions_and_code(tmp_path, monkeypatch):
+    from harness.run import cache, provenance
+    from harness.survey.population import load_population, population_files
+
+    shipped = population_files()[0]
+    copy = tmp_path / shipped.name
+    copy.write_text(shipped.read_text(encoding="utf-8"), encoding="utf-8")
+    engines, presets = ["pymunk"], ["accurate"]
+    before = suite.survey_inputs([load_population(copy)], engines, presets)
+    assert suite.survey_inputs([load_population(copy)], engines, presets) == before
+    copy.write_text(shipped.read_text(encoding="utf-8") + "\n# edited\n", encoding="utf-8")
+    assert suite.survey_inputs([load_population(copy)], engines, presets) != before
+    copy.write_text(shipped.read_text(encoding="utf-8"), encoding="utf-8")
+    versions = provenance.package_versions
+    monkeypatch.setattr(provenance, "package_versions",
+                        lambda names: {**versions(names), "pymunk": "0.0-other"})
+    assert suite.survey_inputs([load_population(copy)], engines, presets) != before
+    monkeypatch.undo()
+    monkeypatch.setattr(cache, "code_version_of", lambda sources: "other code")
+    assert suite.survey_inputs([load_population(copy)], engines, presets) != before
+
+
+def test_a_settings_file_that_is_not_an_object_reruns_the_survey(tmp_path, monkeypatch):
+    monkeypatch.setattr(suite, "SURVEY_SAMPLES", 2)
+    args = argparse.Namespace(engines="pymunk", preset="accurate")
+    out = tmp_path / "survey"
+    suite.quick_survey(args, out)
+    (out / survey_cli.SETTINGS_FILE).write_text("[1]", encoding="utf-8")
+    assert suite.quick_survey(args, out)[1] is True  # not a crash: surveyed again
+
+
+def test_a_survey_without_engines_removes_an_earlier_surveys_tables(results_path, tmp_path):
+    out = tmp_path / "survey"
+    for engines in (["pymunk"], []):
+        survey = survey_cli.run_survey(resolve_populations(["spinning-disk"]), 2, 0, engines,
+                                       ["accurate"], workers=1, echo=lambda _: None)
+        survey_cli.write_survey(survey, out, {"samples": 2, "seed": 0, "engines": engines,
+                                              "presets": ["accurate"]}, figures=False)
+        assert (out / "statistics.parquet").exists() == bool(engines)
+    written = report.write_report(read_results(results_path), tmp_path, workers=1,
+                                  scenario_figures="none")
+    assert "<table" not in section_of(written["html"].read_text(encoding="utf-8"))

@@ -55,10 +55,10 @@ def test_code_version_hashes_the_sources(tmp_path, monkeypatch):
     (package / "solver.py").write_text("x = 1\n")
     (harness_dir / "pymunk_engine.py").write_text("y = 1\n")
     dirs = (package, tmp_path / "harness")
-    before = cache_module._code_version_of(dirs)
+    before = cache_module.code_version_of(dirs)
     (harness_dir / "pymunk_engine.py").write_text("y = 2\n")  # an engine adapter changes
-    cache_module._code_version_of.cache_clear()
-    assert cache_module._code_version_of(dirs) != before
+    cache_module.code_version_of.cache_clear()
+    assert cache_module.code_version_of(dirs) != before
 
 
 @pytest.mark.parametrize(

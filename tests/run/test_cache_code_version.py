@@ -27,8 +27,8 @@ def _tree(root: Path) -> tuple[Path, Path]:
 
 
 def _version(harness_dir: Path, package: Path) -> str:
-    cache_module._code_version_of.cache_clear()
-    return cache_module._code_version_of(
+    cache_module.code_version_of.cache_clear()
+    return cache_module.code_version_of(
         cache_module.cached_code_sources(harness_dir, planar_impact_dir=package))
 
 
