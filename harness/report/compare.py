@@ -14,8 +14,10 @@ each pair it reports
   impact (:func:`harness.run.metrics.departure`; docs/verdicts.md) -- so a speed change and
   a departure change are on one scale, and metres and radians per second are not mixed.
   The results do not hold the mass matrix ``M``: it is read from the scenario's file (the
-  path the results record, else the file of that name in ``scenarios/``); a scenario whose
-  file is not found gets no speed change (``n/a``, and a line saying so),
+  path the results record, else the file of that name in ``scenarios/``) and checked
+  against the run's own energy change (½uᵀMu after minus before, recorded); a scenario
+  whose file is not found, or no longer has the masses its runs used, gets no speed change
+  (``n/a``, and a line saying so),
 
 and a change of status (``ok`` against ``multi-contact`` …). A pair *exceeds* the threshold
 when the largest of its departure changes or its speed change is above ``--fail-above``,
@@ -109,6 +111,7 @@ class MassMatrices:
         self.scenarios: dict = {}
         self.points: dict = {}
         self.missing: set[str] = set()
+        self.mismatched: set[str] = set()  # found, but not with the masses the runs used
 
     def candidates(self, name: str) -> list[Path]:
         """Where the scenario's file may be: the paths the results record (B's first), then
@@ -139,7 +142,32 @@ class MassMatrices:
         return self.scenarios[name]
 
     def __call__(self, record: Record) -> tuple | None:
-        """``(M, free_bodies)`` at ``record``'s point, as the run weighed its departures."""
+        """``(M, free_bodies)`` at ``record``'s point, as the run weighed its departures; None
+        where the file is not found or its masses are not the run's."""
+        weights = self._point_weights(record)
+        if weights is None or not self._masses_agree(record, weights[0]):
+            return None
+        return weights
+
+    def _masses_agree(self, record: Record, mass_matrix: np.ndarray) -> bool:
+        """Whether today's file weighs ``record``'s speeds as its run did: the record's own
+        energy change, ½(uᵀMu after − before), recomputed with ``mass_matrix`` (a file
+        edited since the run, another mass or inertia, fails it)."""
+        if record.u_before is None or record.u_after is None or record.energy_change is None:
+            return True  # nothing to check against
+        before = np.asarray(record.u_before, dtype=float)
+        after = np.asarray(record.u_after, dtype=float)
+        if before.shape != (len(mass_matrix),) or after.shape != before.shape:
+            self.mismatched.add(record.scenario)
+            return False
+        energy_before = 0.5 * before @ mass_matrix @ before
+        recomputed = 0.5 * after @ mass_matrix @ after - energy_before
+        if abs(recomputed - record.energy_change) > 1e-9 * max(energy_before, 1e-300):
+            self.mismatched.add(record.scenario)
+            return False
+        return True
+
+    def _point_weights(self, record: Record) -> tuple | None:
         index = int(record.point.get("index") or 0)
         key = (record.scenario, index)
         if key not in self.points:
@@ -291,6 +319,10 @@ def main(args) -> int:
         names = sorted(weights.missing)
         print(f"speeds not compared for {len(names)} scenarios whose file was not found "
               f"(their mass matrix weighs the speeds), e.g. {', '.join(names[:3])}")
+    if weights.mismatched:
+        names = sorted(weights.mismatched)
+        print(f"speeds not compared for {len(names)} scenarios whose file no longer has the "
+              f"masses their runs used (edited since?), e.g. {', '.join(names[:3])}")
     print(f"compared {len(changes)} records ({len(changed)} changed at all): {len(exceeding)} "
           "changed by more than "
           f"{100 * threshold:g}% or changed status"

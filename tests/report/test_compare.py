@@ -9,6 +9,7 @@ from __future__ import annotations
 import csv
 import json
 
+import numpy as np
 import pytest
 
 from harness import cli
@@ -181,3 +182,26 @@ def test_a_scenario_without_its_file_gets_no_speed_change(tmp_path, capsys):
     assert run_compare(before, after) == 0  # the departures did not change
     out = capsys.readouterr().out
     assert "speeds not compared for 1 scenarios" in out and "gone" in out
+
+
+@pytest.mark.parametrize("rod_mass", [1.0, 2.0])
+def test_speeds_are_weighed_only_by_a_file_with_the_runs_masses(tmp_path, capsys, rod_mass):
+    """The records' energy change, ½uᵀMu after minus before, says which masses weighed the
+    runs: a scenario file edited since (here, a rod of 2 kg) weighs no speeds."""
+    mass_matrix = rod_mass * np.diag([1.0, 1.0, 1 / 12])  # the rod's, at rod_mass kg
+    before, u_a, u_b = [0.5, -1.0, 0.0], [0.1, 0.4, 1.0], [0.1, 0.4, 1.5]
+    paths = []
+    for name, u_after in (("a.json", u_a), ("b.json", u_b)):
+        record = speeds_record(ROD, before, u_after)
+        record.energy_change = 0.5 * (np.dot(u_after, mass_matrix @ u_after)
+                                      - np.dot(before, mass_matrix @ before))
+        paths.append(write_results(tmp_path / name, [record], {"gates": []},
+                                   {ROD: {"path": str(SCENARIO_DIR / f"{ROD}.toml")}}))
+    assert run_compare(*paths, "--fail-above", "100%") == 0
+    out = capsys.readouterr().out
+    assert ("no longer has the masses" in out) == (rod_mass != 1.0)
+    changes, _, _ = compare.compare(*(compare.read_results(path) for path in paths))
+    if rod_mass == 1.0:
+        assert changes[0].speed_change == pytest.approx((1 / 12) ** 0.5 * 0.5 / 1.25 ** 0.5)
+    else:
+        assert np.isnan(changes[0].speed_change)  # n/a
