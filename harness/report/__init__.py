@@ -508,8 +508,9 @@ def main(args) -> int:
         out = DEFAULT_OUT
         if (not getattr(args, "force", False)
                 and replaces_another_report(args.results, out)):
-            print(f"impact-harness report: {out}/ holds the report of "
-                  f"{out / DEFAULT_RESULTS.name}, not of {args.results}; write this report "
+            print(f"impact-harness report: {out}/ holds a report, of "
+                  f"{out / DEFAULT_RESULTS.name} when made by the suite, and this one is of "
+                  f"{args.results}; write this report "
                   f"elsewhere with --out DIR, or replace it with --force", file=sys.stderr)
             return 2
     try:

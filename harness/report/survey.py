@@ -56,7 +56,7 @@ def _file_digest(path: Path) -> str:
 def figure_code_digest() -> str:
     """The sha256 of the module drawing the survey's figures (harness/survey/outputs.py,
     read, not imported); this package's modules are in every figure's digest already
-    (:func:`harness.report.figures._code_digest`)."""
+    (:func:`harness.report.figures.inputs_digest`)."""
     from importlib.util import find_spec
 
     spec = find_spec("harness.survey")
@@ -80,7 +80,7 @@ def read_columns(path: Path) -> dict:
     return {name: np.asarray(values) for name, values in pq.read_table(path).to_pydict().items()}
 
 
-def figure_engines(directory: Path) -> list[str]:
+def surveyed_engines(directory: Path) -> list[str]:
     """The engines the survey ran (a map and a CDF figure each), from its settings; without
     settings, from ``runs.parquet``."""
     settings = read_settings(directory)
@@ -106,7 +106,7 @@ def survey_figure_tasks(out_dir: Path, svg: bool) -> list:
     runs_path = directory / "runs.parquet"
     runs_digest = _file_digest(runs_path)
     tasks = []
-    for engine in figure_engines(directory):
+    for engine in surveyed_engines(directory):
         for kind in ("map", "cdf"):
             tasks.append(FigureTask(
                 f"survey_{kind}", f"survey-{kind}-{engine}.png",
