@@ -173,13 +173,18 @@ def scenario_digests(results: Results, known=None) -> dict[str, str]:
 
 
 @functools.cache
-def _code_digest() -> bytes:
+def code_digest() -> bytes:
     """What the code drawing the figures contributes to every digest: every module of the
     report package (a figure reads views, history and the rest as well as this module: an
-    edit to any of them redraws) and matplotlib's version, read without importing it (a
+    edit to any of them redraws), the engines' preset names users see (titles and legends
+    show them; harness/engines) and matplotlib's version, read without importing it (a
     warm report draws nothing)."""
+    from harness.engines import ENGINE_NAMES, renamed_roles
+
     sources = sorted(Path(__file__).parent.glob("*.py"))
-    return b"".join(path.read_bytes() for path in sources) + _matplotlib_version()
+    labels = json.dumps({engine: renamed_roles(engine) for engine in ENGINE_NAMES},
+                        sort_keys=True).encode()
+    return b"".join(path.read_bytes() for path in sources) + labels + _matplotlib_version()
 
 
 def _matplotlib_version() -> bytes:
@@ -208,7 +213,7 @@ def _matplotlib_version() -> bytes:
 def inputs_digest(kind: str, payload) -> str:
     """Digest of a figure's inputs and of the code drawing it (this module, matplotlib)."""
     text = json.dumps([kind, payload], sort_keys=True, default=str)
-    return hashlib.sha256(_code_digest() + text.encode()).hexdigest()
+    return hashlib.sha256(code_digest() + text.encode()).hexdigest()
 
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"

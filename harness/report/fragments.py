@@ -46,14 +46,14 @@ DIGESTS_FILE = ".report-digests.json"
 
 def cache_context(labels: Sequence[str]) -> str:
     """What every stored piece depends on besides its own key: the report's code (with
-    matplotlib's version, :func:`harness.report.figures._code_digest`), the metrics module
+    matplotlib's version, :func:`harness.report.figures.code_digest`), the metrics module
     (the departure split), the engine labels and the engines' and presets' order."""
     from importlib.util import find_spec
 
     from harness.engines import ENGINE_NAMES, PRESET_ROLES
-    from harness.report.figures import _code_digest
+    from harness.report.figures import code_digest
 
-    digest = hashlib.sha256(_code_digest())
+    digest = hashlib.sha256(code_digest())
     digest.update(Path(find_spec("harness.run.metrics").origin).read_bytes())  # not imported
     digest.update(json.dumps([list(labels), list(ENGINE_NAMES), list(PRESET_ROLES)]).encode())
     return digest.hexdigest()

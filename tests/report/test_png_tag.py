@@ -34,6 +34,23 @@ def test_figure_digests_cover_every_module_of_the_report_package():
     # edit to views.py once left a stale heat map (its digest covered figures.py only)
     from harness.report import figures, history, views
 
-    code = figures._code_digest()
+    code = figures.code_digest()
     for module in (figures, views, history):
         assert Path(module.__file__).read_bytes() in code
+
+
+def test_figure_digests_cover_the_preset_names_users_see(monkeypatch):
+    # titles and legends show preset_label's names (harness/engines): a rename redraws
+    from harness import engines
+    from harness.report import figures
+
+    figures.code_digest.cache_clear()  # computed once per process
+    before = figures.code_digest()
+    monkeypatch.setattr(engines, "renamed_roles",
+                        lambda engine: {"accurate": "renamed"} if engine == "pymunk" else {})
+    figures.code_digest.cache_clear()
+    try:
+        assert figures.code_digest() != before
+    finally:
+        monkeypatch.undo()
+        figures.code_digest.cache_clear()
