@@ -158,15 +158,22 @@ def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dic
 
 
 def _log_axis(axis, which: str, ticks: int = 6) -> None:
-    """Log scale with plain ``1e-05`` labels (mathtext tick labels cost most of a figure),
-    about ``ticks`` of them."""
+    """Log scale with plain labels, ``0.01`` to ``1000`` as decimals and ``1e-05`` beyond
+    (mathtext tick labels cost most of a figure), about ``ticks`` of them."""
     from matplotlib import ticker
 
     getattr(axis, f"set_{which}scale")("log")
     target = axis.xaxis if which == "x" else axis.yaxis
     target.set_major_locator(ticker.LogLocator(numticks=ticks))
-    target.set_major_formatter(ticker.LogFormatter(labelOnlyBase=True))
+    target.set_major_formatter(ticker.FuncFormatter(_decade_label))
     target.set_minor_locator(ticker.NullLocator())
+
+
+def _decade_label(value: float, _=None) -> str:
+    """A log axis's tick: ``0.01``, ``0.1``, ``1``, ``10``, ``100``, ``1000``, else ``1e-05``."""
+    if 0.01 <= value <= 1000:
+        return f"{value:g}"
+    return f"{value:.0e}"
 
 
 #: Departures below are drawn at this floor (log axes; exact agreement is 0).
