@@ -299,11 +299,14 @@ def main(args) -> int:
 def merged_table(path: Path, table: dict, names: tuple[str, ...]) -> dict:
     """``table`` (this run's sections among ``names``) with the sections of the existing
     ``bench.json`` at ``path`` that this run did not measure, and ``measured``: for each
-    section, when, from which commit and whether ``--quick`` (a section kept from a file
+    section, when, from which commit, with which versions, on which machine and whether
+    ``--quick`` (the top-level provenance is this run's only; a section kept from a file
     without it gets that file's provenance). README tables and the bench page read the
     file as a whole: a run of one section must not drop the others."""
-    this_run = {"created_utc": table["provenance"]["created_utc"],
-                "commit": table["provenance"]["git"]["commit"], "quick": table["quick"]}
+    ran = table["provenance"]
+    this_run = {"created_utc": ran["created_utc"], "commit": ran["git"]["commit"],
+                "quick": table["quick"], "versions": ran.get("versions"),
+                "machine": ran.get("machine")}
     try:
         existing = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError):  # none yet, or unreadable: this run's sections only
@@ -323,6 +326,7 @@ def merged_table(path: Path, table: dict, names: tuple[str, ...]) -> dict:
             measured[name] = measured_before.get(name) or {
                 "created_utc": before.get("created_utc"),
                 "commit": (before.get("git") or {}).get("commit"),
-                "quick": existing.get("quick")}
+                "quick": existing.get("quick"), "versions": before.get("versions"),
+                "machine": before.get("machine")}
     merged["measured"] = measured
     return merged

@@ -64,7 +64,8 @@ def test_one_section_updates_its_part_of_bench_json(tmp_path, monkeypatch):
     monkeypatch.setattr(bench, "print_solver", lambda results: None)
     monkeypatch.setattr(bench, "write_solver_figure", lambda results, path: None)
     earlier = {"provenance": {"format": bench.BENCH_FORMAT, "created_utc": "2026-01-01T00:00:00Z",
-                              "git": {"commit": "abc"}},
+                              "git": {"commit": "abc"}, "versions": {"pymunk": "6.0"},
+                              "machine": {"cpu_count": 64}},
                "quick": False, "solver": {"batch": {"poisson": 9.0}},
                "survey": {"ratio": 1.4}, "engines": {"pymunk": 2.0}}
     (tmp_path / "bench.json").write_text(json.dumps(earlier))
@@ -73,8 +74,13 @@ def test_one_section_updates_its_part_of_bench_json(tmp_path, monkeypatch):
     assert table["solver"] == measured
     assert table["survey"] == {"ratio": 1.4} and table["engines"] == {"pymunk": 2.0}
     assert table["measured"]["survey"] == {"created_utc": "2026-01-01T00:00:00Z",
-                                           "commit": "abc", "quick": False}
+                                           "commit": "abc", "quick": False,
+                                           "versions": {"pymunk": "6.0"},
+                                           "machine": {"cpu_count": 64}}
     assert table["measured"]["solver"]["quick"] is True
+    # the kept sections' machine and versions are theirs, not this run's
+    assert table["measured"]["solver"]["machine"] == table["provenance"]["machine"]
+    assert table["measured"]["solver"]["versions"] == table["provenance"]["versions"]
     assert table["measured"]["solver"]["created_utc"] == table["provenance"]["created_utc"]
     assert set(table["measured"]) == {"solver", "survey", "engines"}
 
