@@ -1,4 +1,5 @@
-"""Shared test configuration, and the ``load_or_skip`` fixture of the engine tests.
+"""Shared test configuration, and the ``load_or_skip`` and ``survey_identity`` fixtures of the
+engine tests.
 
 Hypothesis runs derandomized (the same examples on every run, here and in CI), so a
 property test fails or passes for a reason in the code, never by the draw of a seed; set
@@ -7,7 +8,9 @@ property test fails or passes for a reason in the code, never by the draw of a s
 
 from __future__ import annotations
 
+import importlib.util
 import os
+from pathlib import Path
 
 import pytest
 from hypothesis import settings
@@ -30,3 +33,14 @@ def load_or_skip():
             pytest.skip(f"{name} not installed: {error}")
 
     return load
+
+
+@pytest.fixture(scope="session")
+def survey_identity():
+    """tests/engines/survey_identity.py, the helper of the survey identity tests, loaded by path
+    (the tests are not a package)."""
+    path = Path(__file__).parent / "engines" / "survey_identity.py"
+    spec = importlib.util.spec_from_file_location("survey_identity", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
