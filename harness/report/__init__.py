@@ -286,7 +286,9 @@ def figure_tasks(results: Results, many: bool, scenario_figures: str,
         info = results.scenarios.get(name, {})
         if info.get("sweep"):
             tasks.append(FigureTask(
-                "sweep", f"sweep-{slug(name)}.png", [name, info, records_digest[name]],
+                # what the figure reads of the scenario: its sweep (not its file's path,
+                # which differs between checkouts and would redraw every clone's figures)
+                "sweep", f"sweep-{slug(name)}.png", [name, info["sweep"], records_digest[name]],
                 lambda path, tag, name=name, info=info, records=records:
                 sweep_figure(name, info, records, path, tag), ("sweep", name), scenario_svg))
         else:

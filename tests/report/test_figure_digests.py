@@ -124,3 +124,23 @@ def test_a_report_with_nothing_to_draw_never_imports_matplotlib(results_file, tm
     done = subprocess.run([sys.executable, "-c", "import json\n" + script], cwd=ROOT,
                           capture_output=True, text=True, check=True)
     assert json.loads(done.stdout.strip().splitlines()[-1]) == []
+
+
+def test_a_sweep_figures_digest_is_the_same_in_any_checkout():
+    """The results record each scenario file's absolute path; a figure reading only the
+    sweep must not be redrawn because the repository sits elsewhere (a fresh clone)."""
+    from harness.report.figures import inputs_digest
+
+    results = read_results(ROOT / "reports" / "results.json")
+
+    def sweep_tags():
+        return {task.file: inputs_digest(task.kind, task.payload)
+                for task in report.figure_tasks(results, False, "all", (), "none")
+                if task.kind == "sweep"}
+
+    here = sweep_tags()
+    assert here  # the library has sweeps
+    for info in results.scenarios.values():
+        if isinstance(info, dict) and info.get("path"):
+            info["path"] = "/elsewhere/" + Path(info["path"]).name
+    assert sweep_tags() == here
