@@ -18,14 +18,14 @@ tree at COMMIT::
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import hashlib
+import importlib.util
 import json
 from pathlib import Path
 from typing import NamedTuple
 
-from harness.scene.model import Body, Box, Disk, Polygon, Rod, Scene
+from harness.scene.model import Scene
 
 DATA = Path(__file__).parent.parent / "data"
 SAMPLES = 50  # per population
@@ -37,7 +37,12 @@ RUN_FIELDS = ("velocities", "status", "status_reason", "steps", "contact_steps",
               "step_cap_hit", "contact_normal", "normal_impulse", "tangential_impulse",
               "impulse_source", "out_of_plane_drift", "energy_before", "energy_after",
               "contact_record", "derived", "notes")
-_SHAPES = {"disk": Disk, "rod": Rod, "box": Box, "polygon": Polygon}
+# Scenes to JSON and back, every float exact: shared with the reference identity test.
+_spec = importlib.util.spec_from_file_location(
+    "exact_scenes", Path(__file__).parent.parent / "exact_scenes.py")
+exact_scenes = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(exact_scenes)
+scene_record, read_scene = exact_scenes.scene_record, exact_scenes.read_scene
 
 
 class Stored(NamedTuple):
@@ -61,47 +66,6 @@ def fingerprint(run, fields) -> str:
                    sorted(run.derived.items()) if name == "derived" else getattr(run, name)
                    for name in fields)
     return hashlib.sha256(repr(values).encode()).hexdigest()
-
-
-def _hex(value):
-    if isinstance(value, (tuple, list)):
-        return [_hex(item) for item in value]
-    return float(value).hex()
-
-
-def _unhex(value):
-    if isinstance(value, list):
-        return tuple(_unhex(item) for item in value)
-    return float.fromhex(value)
-
-
-def scene_record(scene: Scene) -> dict:
-    """A scene as JSON, every float exact (a shape as its fields, not what it caches)."""
-    bodies = []
-    for body in scene.bodies:
-        shape = {field.name: _hex(getattr(body.shape, field.name))
-                 for field in dataclasses.fields(body.shape)}
-        bodies.append({"name": body.name, "kind": body.shape.kind, "shape": shape,
-                       "mass": _hex(body.mass), "position": _hex(body.position),
-                       "angle": _hex(body.angle), "velocity": _hex(body.velocity),
-                       "angular_velocity": _hex(body.angular_velocity),
-                       "inertia": None if body.inertia is None else _hex(body.inertia)})
-    return {"name": scene.name, "ground": scene.ground, "bodies": bodies,
-            "restitution": _hex(scene.restitution), "friction": _hex(scene.friction)}
-
-
-def read_scene(record: dict) -> Scene:
-    """The scene of :func:`scene_record`."""
-    bodies = []
-    for body in record["bodies"]:
-        shape = _SHAPES[body["kind"]](**{name: _unhex(value)
-                                         for name, value in body["shape"].items()})
-        bodies.append(Body(body["name"], shape, _unhex(body["mass"]), _unhex(body["position"]),
-                           _unhex(body["angle"]), _unhex(body["velocity"]),
-                           _unhex(body["angular_velocity"]),
-                           None if body["inertia"] is None else _unhex(body["inertia"])))
-    return Scene(tuple(bodies), _unhex(record["restitution"]), _unhex(record["friction"]),
-                 record["ground"], record["name"])
 
 
 @functools.cache

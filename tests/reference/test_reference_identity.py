@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import importlib.util
 import json
 import tempfile
 from pathlib import Path
@@ -23,7 +24,14 @@ import pytest
 
 from harness.run import references
 from harness.run.references import PointLaws, scene_reference
-from harness.scene.model import Body, Box, Disk, Polygon, Rod, Scene
+from harness.scene.model import Scene
+
+# Scenes to JSON and back, every float exact: shared with the survey identity tests.
+_spec = importlib.util.spec_from_file_location(
+    "exact_scenes", Path(__file__).parent.parent / "exact_scenes.py")
+exact_scenes = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(exact_scenes)
+hexed, unhexed = exact_scenes.hexed, exact_scenes.unhexed
 
 STORED = Path(__file__).parent.parent / "data" / "several-contact-references-17570bc.json"
 #: The perturbed copies: perturbed_copies(COPIES, COPY_SEED), their several-contact points.
@@ -32,7 +40,6 @@ COPIES, COPY_SEED = 185, 1
 #: impact with friction, whose event sequences chatter (~40 impacts; with μ = 1 they run to
 #: the 1,000-impact cap, a second per point: too slow here).
 EXTREMES = ((0.0, 0.0), (0.0, 1.0), (0.3, 0.0), (1.0, 1.0))
-_SHAPES = {"disk": Disk, "rod": Rod, "box": Box, "polygon": Polygon}
 
 
 def fingerprint(reference: dict) -> str:
@@ -40,51 +47,20 @@ def fingerprint(reference: dict) -> str:
     return hashlib.sha256(json.dumps(reference, sort_keys=True).encode()).hexdigest()
 
 
-def _hex(value):
-    if isinstance(value, (tuple, list)):
-        return [_hex(item) for item in value]
-    return float(value).hex()
-
-
-def _unhex(value):
-    if isinstance(value, list):
-        return tuple(_unhex(item) for item in value)
-    return float.fromhex(value)
-
-
 def point_record(name: str, kind: str, scene: Scene, laws: PointLaws) -> dict:
     """A several-contact point as JSON, every float exact."""
-    bodies = []
-    for body in scene.bodies:
-        shape = body.shape
-        bodies.append({"name": body.name, "kind": shape.kind,
-                       "shape": {field.name: _hex(getattr(shape, field.name))
-                                 for field in dataclasses.fields(shape)},
-                       "mass": _hex(body.mass), "position": _hex(body.position),
-                       "angle": _hex(body.angle), "velocity": _hex(body.velocity),
-                       "angular_velocity": _hex(body.angular_velocity),
-                       "inertia": None if body.inertia is None else _hex(body.inertia)})
-    return {"name": name, "kind": kind, "scene_name": scene.name, "ground": scene.ground,
-            "bodies": bodies, "restitution": _hex(scene.restitution),
-            "friction": _hex(scene.friction),
-            "laws": {"friction": _hex(laws.friction), "restitution": _hex(laws.restitution),
+    record = exact_scenes.scene_record(scene)
+    record["scene_name"] = record.pop("name")
+    return {"name": name, "kind": kind, **record,
+            "laws": {"friction": hexed(laws.friction), "restitution": hexed(laws.restitution),
                      "laws": list(laws.laws)}}
 
 
 def _point(record: dict) -> tuple[str, Scene, PointLaws]:
-    bodies = []
-    for body in record["bodies"]:
-        shape = _SHAPES[body["kind"]](**{name: _unhex(value)
-                                         for name, value in body["shape"].items()})
-        bodies.append(Body(body["name"], shape, _unhex(body["mass"]), _unhex(body["position"]),
-                           _unhex(body["angle"]), _unhex(body["velocity"]),
-                           _unhex(body["angular_velocity"]),
-                           None if body["inertia"] is None else _unhex(body["inertia"])))
-    scene = Scene(tuple(bodies), _unhex(record["restitution"]), _unhex(record["friction"]),
-                  record["ground"], record["scene_name"])
+    scene = exact_scenes.read_scene({**record, "name": record["scene_name"]})
     laws = record["laws"]
-    return record["kind"], scene, PointLaws(_unhex(laws["friction"]),
-                                            _unhex(laws["restitution"]), tuple(laws["laws"]))
+    return record["kind"], scene, PointLaws(unhexed(laws["friction"]),
+                                            unhexed(laws["restitution"]), tuple(laws["laws"]))
 
 
 def several_contact_points(scenarios) -> list[tuple[str, str, Scene, PointLaws]]:
