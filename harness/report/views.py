@@ -280,7 +280,29 @@ def run_verdict(record: Record) -> tuple[str | None, list[str]]:
     data = record.diagnostics or {}
     verdict = getattr(record, "verdict", None) or data.get("verdict")
     reasons = getattr(record, "reasons", None) or data.get("reasons") or []
-    return verdict, [str(reason) for reason in reasons]
+    return verdict, [reason_sentence(reason) for reason in reasons]
+
+
+def reason_sentence(reason) -> str:
+    """One verdict reason as a reader's sentence: its name, then its detail (which already
+    says the measured value, the bound and the units), then what it means for the run. A
+    reason is a mapping (results files) or an object with the same fields (a ``Reason``);
+    a plain string (older results) is shown as it is."""
+    if isinstance(reason, str):
+        return reason
+    field = reason.get if isinstance(reason, dict) else (lambda key: getattr(reason, key, None))
+    name, detail = field("name") or "reason", field("detail")
+    value, tolerance = field("value"), field("tolerance")
+    if not detail and value is not None:
+        detail = (f"measured {value:.4g}" if tolerance is None
+                  else f"measured {value:.4g} against the bound {tolerance:.4g}")
+    text = f"{name}: {detail}" if detail else str(name)
+    attribution = field("attribution")
+    if attribution:
+        text += f" (attributed to {'the law' if attribution == 'law' else attribution})"
+    if field("fails") is False:
+        text += "; reported, not a failure"
+    return text
 
 
 def split_rows(results: Results) -> list[dict]:

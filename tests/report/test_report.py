@@ -300,3 +300,39 @@ def test_flat_face_points_never_enter_a_single_contact_law_cell():
     assert views.single_contact(sweep_run(2, 0.1))  # results without references: one contact
     assert views.engine_scenarios(Results([flat])) == []
     assert views.engine_scenarios(Results([flat, single])) == ["sweep"]
+
+
+#: What a Python repr looks like in a page: a dict or list literal of strings, or a bare
+#: None/True/False between separators (a sentence says "not a failure", never "False").
+PYTHON_REPR = re.compile(r"\{'|\['|: None[,}]|: (True|False)[,}]|np\.float64|array\(")
+
+
+def test_a_flagged_runs_reasons_read_as_sentences_never_as_python():
+    reason = {"name": "penetration", "value": 0.0057, "tolerance": 0.005,
+              "detail": "deepest overlap 0.0057 m > 0.005 m", "attribution": None,
+              "fails": True}
+    remark = {"name": "energy-gain", "value": 0.11, "tolerance": None,
+              "detail": "newton-lcp gains 0.1148 J on this problem", "attribution": "law",
+              "fails": False}
+    run = sweep_run(0, 0.03, "ok")
+    run.diagnostics.update(verdict="flagged", reasons=[reason, remark])
+    footnotes: dict[str, int] = {}
+    cell = html.status_cell(run, footnotes)
+    notes = html.footnotes_html(footnotes)
+    assert "<sup>1</sup>" in cell and "<sup>2</sup>" in cell
+    assert "penetration: deepest overlap 0.0057 m &gt; 0.005 m" in notes
+    assert ("energy-gain: newton-lcp gains 0.1148 J on this problem (attributed to the law);"
+            " reported, not a failure") in notes
+    assert not PYTHON_REPR.search(cell + notes)
+    # what the pattern catches: the page as it was before reasons were sentences
+    assert PYTHON_REPR.search(html.footnotes_html({str(reason): 1}))
+
+
+def test_no_python_repr_on_any_page(quick_report):
+    import html as html_module
+    out = quick_report[0]
+    for page in [out / "index.html", out / "summary.md", *out.glob("*.html")]:
+        text = html_module.unescape(page.read_text(encoding="utf-8"))
+        text = re.sub(r"<img[^>]*>|<svg.*?</svg>", "", text, flags=re.S)
+        match = PYTHON_REPR.search(text)
+        assert match is None, f"{page.name}: {text[max(0, match.start() - 80):match.end() + 80]}"
