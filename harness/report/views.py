@@ -13,7 +13,7 @@ from collections.abc import Iterable, Sequence
 
 import numpy as np
 
-from harness.run.metrics import departure_split
+from harness.run.metrics import departure_split, fmt_departure
 from harness.run.records import ANALYTIC, Record, Results
 from harness.run.references import SIMULTANEOUS
 
@@ -41,18 +41,6 @@ HEAT_MIN, HEAT_MAX = 1e-4, 1.0
 # --------------------------------------------------------------------------------------------
 # Formatting
 # --------------------------------------------------------------------------------------------
-def fmt_departure(value) -> str:
-    """A departure as a percentage: ``20.7%``, ``0.18%``, ``2e-12%``, ``0``; ``n/a``."""
-    if value is None or (isinstance(value, float) and not math.isfinite(value)):
-        return "n/a"
-    percent = 100.0 * value
-    if percent == 0:
-        return "0"
-    if percent < 0.01:
-        return f"{percent:.0e}%"
-    return f"{percent:.3g}%"
-
-
 def fmt_number(value, digits: int = 4) -> str:
     if value is None:
         return "–"

@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from harness.engines import PRESET_ROLES, preset_label
+from harness.run.metrics import fmt_departure
 
 TYPE_NAMES = {1: "1 stick (compr.)", 2: "2 stick (restit.)", 3: "3 reverse (compr.)",
               4: "4 reverse (restit.)", 5: "5 forward slide"}
@@ -47,23 +48,25 @@ def _arrow_values(values):
     return values
 
 
-def _number(value: float) -> str:
-    if value is None or not math.isfinite(value):
-        return "–"
-    if value == 0.0:
-        return "0"
-    return f"{value:.2g}" if abs(value) < 0.01 else f"{value:.3f}"
-
-
 def _percent(value: float) -> str:
     return "–" if not math.isfinite(value) else f"{100 * value:.1f}%"
 
 
+def _with_interval(value: dict, prefix: str) -> str:
+    """A quantile in percent with its bootstrap interval: ``2.6% [1.1%, 4.0%]``."""
+    low, high = value.get(f"{prefix}_low"), value.get(f"{prefix}_high")
+    text = fmt_departure(value[prefix])
+    if low is None or high is None or not (math.isfinite(low) and math.isfinite(high)):
+        return text
+    return f"{text} [{fmt_departure(low)}, {fmt_departure(high)}]"
+
+
 def markdown_table(stats: dict, types: str = "all") -> str:
-    """The statistics as a Markdown table: ``types="all"`` the rows over every type,
-    ``"each"`` the rows per Poisson type."""
-    header = ("| engine | preset | family | type | n | flagged | gains E | from Poisson: "
-              "median | p90 | p99 | max | from Stronge: median | p90 | max | law part: median "
+    """The statistics as a Markdown table, departures in percent: ``types="all"`` the rows
+    over every type, ``"each"`` the rows per Poisson type."""
+    header = ("| engine | preset | family | type | n | flagged | gains E | from Poisson, checked "
+              "runs: median [95% CI] | p90 [95% CI] | max | from Poisson, all runs: median "
+              "[95% CI] | p90 [95% CI] | from Stronge, checked: median | p90 | law part: median "
               "| solve part: median | p90 |")
     lines = [header, "|" + "---|" * (header.count("|") - 1)]
     for row in range(len(stats.get("engine", ()))):
@@ -74,17 +77,18 @@ def markdown_table(stats: dict, types: str = "all") -> str:
         lines.append(
             f"| {value['engine']} | {preset_label(value['engine'], value['preset'])} | "
             f"{value['family']} | "
-            f"{'all' if kind == 0 else kind} | {value['n']} | "
+            f"{'all types' if kind == 0 else kind} | {value['n']} | "
             f"{_percent(value['flagged_fraction'])} | {_percent(value['energy_gain_fraction'])} | "
-            f"{_number(value['departure_poisson_median'])} | "
-            f"{_number(value['departure_poisson_p90'])} | "
-            f"{_number(value['departure_poisson_p99'])} | "
-            f"{_number(value['departure_poisson_max'])} | "
-            f"{_number(value['departure_stronge_median'])} | "
-            f"{_number(value['departure_stronge_p90'])} | "
-            f"{_number(value['departure_stronge_max'])} | "
-            f"{_number(value['law_part_median'])} | {_number(value['solve_part_median'])} | "
-            f"{_number(value['solve_part_p90'])} |")
+            f"{_with_interval(value, 'departure_poisson_median')} | "
+            f"{_with_interval(value, 'departure_poisson_p90')} | "
+            f"{fmt_departure(value['departure_poisson_max'])} | "
+            f"{_with_interval(value, 'departure_poisson_all_median')} | "
+            f"{_with_interval(value, 'departure_poisson_all_p90')} | "
+            f"{fmt_departure(value['departure_stronge_median'])} | "
+            f"{fmt_departure(value['departure_stronge_p90'])} | "
+            f"{fmt_departure(value['law_part_median'])} | "
+            f"{fmt_departure(value['solve_part_median'])} | "
+            f"{fmt_departure(value['solve_part_p90'])} |")
     return "\n".join(lines)
 
 
@@ -119,9 +123,12 @@ def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dic
          + "".join(f" Not installed: {engine} ({why})." for engine, why in
                    settings.get("skipped", {}).items())),
         ("Departure = ‖u − u_law‖_M / ‖u_before‖_M (kinetic-energy norm; two free bodies in "
-         "their centre of mass's frame). Quantiles over runs judged one impact by the verdict "
-         "checks (docs/verdicts.md); *flagged* = runs failing a check, kept out of the "
-         "quantiles and counted by reason below; *gains E* = ok runs ending "
+         "their centre of mass's frame), in percent. *Checked runs*: the runs judged one "
+         "impact by the verdict checks (docs/verdicts.md); *all runs*: every run, flagged "
+         "ones included, so a large flagged share cannot hide the worst runs; *flagged* = "
+         "runs failing a check, counted by reason below. [95% CI]: a percentile-bootstrap "
+         "interval (1,000 resamples of the group's runs); with 20 runs a p90 is one of the "
+         "two largest. *gains E* = checked runs ending "
          "with more kinetic energy than they began with (by more than 1e-9 of it). "
          "*law part* = newton-lcp from Poisson, *solve part* = engine from newton-lcp."),
         "",

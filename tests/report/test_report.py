@@ -198,7 +198,7 @@ def test_a_rerun_with_the_same_results_redraws_nothing(quick_report):
 
 def test_formatting():
     assert views.fmt_departure(0.2073) == "20.7%"
-    assert views.fmt_departure(0.0) == "0"
+    assert views.fmt_departure(0.0) == "0%"
     assert views.fmt_departure(3e-14) == "3e-12%"
     assert views.fmt_departure(float("nan")) == "n/a"
     page = html.markdown_to_html("## Head\n\n| a | b |\n|---|---:|\n| 1 | `x` |\n")

@@ -50,7 +50,7 @@ def test_poisson_departs_from_itself_by_zero_and_newton_lcp_by_the_law_part(surv
 def test_summary_lists_every_family_and_the_timings(survey_dir):
     text = (survey_dir / "summary.md").read_text()
     for population in resolve_populations():
-        assert f"| pymunk | accurate | {population.name} | all |" in text
+        assert f"| pymunk | accurate | {population.name} | all types |" in text
     assert "## Rejected draws" in text and "| engine pymunk accurate |" in text
 
 
