@@ -207,13 +207,32 @@ def sample_columns(every, terms, law_results, routh) -> dict:
     return columns
 
 
+def table_metadata(settings: dict) -> dict:
+    """What every survey table carries in its Parquet metadata: what was surveyed (samples,
+    seed, engines, presets), the installed versions and each engine's preset settings as
+    run, so a table read alone says where it came from."""
+    from harness.run.provenance import package_versions
+
+    engine_settings = {}
+    for name in settings.get("engines", []):
+        engine = load_engine(name)
+        engine_settings[name] = {preset: engine.settings(preset)
+                                 for preset in settings.get("presets", [])}
+    return {"format": "impact-harness-survey", "settings": settings,
+            "versions": package_versions(), "engine_settings": engine_settings}
+
+
 def write_survey(survey: dict, out: Path, settings: dict, figures: bool = True) -> list[Path]:
     """Write the tables, the summary and (unless ``figures`` is False) the figures."""
     out.mkdir(parents=True, exist_ok=True)
-    written = [outputs.write_parquet(survey["samples"], out / "samples.parquet")]
+    about = table_metadata(settings)
+    written = [outputs.write_parquet(survey["samples"], out / "samples.parquet",
+                                     {**about, "table": "samples"})]
     if survey["engine_results"]:
-        written.append(outputs.write_parquet(survey["runs"], out / "runs.parquet"))
-        written.append(outputs.write_parquet(survey["statistics"], out / "statistics.parquet"))
+        written.append(outputs.write_parquet(survey["runs"], out / "runs.parquet",
+                                             {**about, "table": "runs"}))
+        written.append(outputs.write_parquet(survey["statistics"], out / "statistics.parquet",
+                                             {**about, "table": "statistics"}))
     else:  # no engine ran: an earlier survey's tables here would be read as this one's
         for stale in ("runs.parquet", "statistics.parquet"):
             (out / stale).unlink(missing_ok=True)

@@ -31,13 +31,59 @@ TYPE_NAMES = {1: "1 stick (compr.)", 2: "2 stick (restit.)", 3: "3 reverse (comp
               4: "4 reverse (restit.)", 5: "5 forward slide"}
 
 
-def write_parquet(columns: dict, path: Path) -> Path:
-    """Write ``{name: array}`` as one Parquet table."""
+#: Units of the survey tables' columns, stored in each column's Parquet metadata ("unit").
+#: Departures are fractions of the speed scale (docs/verdicts.md); the reports show them in
+#: percent.
+UNITS = {
+    "departure_poisson": "fraction", "departure_stronge": "fraction", "law_part": "fraction",
+    "solve_part": "fraction", "energy_change_relative": "fraction", "mu": "1", "e": "1",
+    "friction": "1", "restitution": "1", "alpha": "1", "r_m": "1", "alpha_over_rm": "1",
+    "speed": "m/s", "direction_deg": "deg", "placement_deg": "deg", "mass_ratio": "1",
+    "vn": "m/s", "vt": "m/s", "mnn": "1/kg", "mnt": "1/kg", "mtt": "1/kg", "steps": "1",
+    "flagged_fraction": "fraction", "energy_gain_fraction": "fraction",
+}
+#: Units of a drawn body parameter, by the part after the body's name (``box.width``).
+BODY_UNITS = {"mass": "kg", "angle_deg": "deg", "angular_velocity": "rad/s", "width": "m",
+              "height": "m", "length": "m", "radius": "m", "sides": "1"}
+#: The key of the table-wide metadata (JSON): what was surveyed, with which versions.
+METADATA_KEY = "impact_harness"
+
+
+def column_unit(name: str) -> str | None:
+    """The unit of a survey column, or None where it has none (names, codes, flags)."""
+    if name in UNITS:
+        return UNITS[name]
+    if name.startswith(("departure_", "flagged_")) or name.endswith(".from_poisson"):
+        return "fraction"  # quantiles, intervals and reason shares of the departures
+    if name.endswith(".energy_change"):
+        return "J"
+    _, _, field = name.rpartition(".")
+    return BODY_UNITS.get(field) if "." in name else None
+
+
+def write_parquet(columns: dict, path: Path, metadata: dict | None = None) -> Path:
+    """Write ``{name: array}`` as one Parquet table; each column carries its unit
+    (:func:`column_unit`) and the table ``metadata`` as JSON under :data:`METADATA_KEY`.
+    A column of comma-joined names (a run's failing ``reasons``) is written as a list column."""
+    import json
+
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    table = pa.table({name: _arrow_values(values) for name, values in columns.items()})
-    pq.write_table(table, path)
+    fields, arrays = [], []
+    for name, values in columns.items():
+        if name == "reasons":
+            array = pa.array([[part for part in str(text).split(",") if part]
+                              for text in np.asarray(values).tolist()], pa.list_(pa.string()))
+        else:
+            array = pa.array(_arrow_values(values))
+        unit = column_unit(name)
+        fields.append(pa.field(name, array.type,
+                               metadata=None if unit is None else {"unit": unit}))
+        arrays.append(array)
+    schema = pa.schema(fields, metadata=None if metadata is None else {
+        METADATA_KEY: json.dumps(metadata, sort_keys=True, default=str)})
+    pq.write_table(pa.Table.from_arrays(arrays, schema=schema), path)
     return path
 
 

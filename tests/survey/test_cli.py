@@ -88,3 +88,29 @@ def test_default_survey_leaves_mujoco_matched_bounce_out_and_says_so(tmp_path):
     runs = pq.read_table(tmp_path / "both" / "runs.parquet").to_pydict()
     assert set(runs["preset"]) == {"defaults", "accurate"}
     assert "Not run" not in (tmp_path / "both" / "summary.md").read_text()
+
+
+def test_tables_describe_themselves_and_keep_the_users_names(survey_dir):
+    import json
+
+    from harness.survey.outputs import METADATA_KEY
+
+    for name in ("samples", "runs", "statistics"):
+        schema = pq.read_schema(survey_dir / f"{name}.parquet")
+        about = json.loads(schema.metadata[METADATA_KEY.encode()])
+        assert about["table"] == name and about["settings"]["seed"] == 5
+        assert about["settings"]["samples"] == SAMPLES and "numpy" in about["versions"]
+        assert about["engine_settings"]["pymunk"]["accurate"]["iterations"] == 100
+    runs = pq.read_schema(survey_dir / "runs.parquet")
+    assert runs.field("departure_poisson").metadata == {b"unit": b"fraction"}
+    assert runs.field("reasons").type.value_type == "string"
+    reasons = pq.read_table(survey_dir / "runs.parquet").column("reasons").to_pylist()
+    assert all(isinstance(names, list) and "," not in "".join(names) for names in reasons)
+    # drawn parameters under the bodies' own names, as the population files write them
+    samples = pq.read_schema(survey_dir / "samples.parquet")
+    assert "rod.length" in samples.names and "slab.width" in samples.names
+    assert "polygon.sides" in samples.names and "box.height" in samples.names
+    bodies = {body.name for population in resolve_populations() for body in population.bodies}
+    drawn = {column.split(".")[0] for column in samples.names if column.endswith(".mass")}
+    assert drawn == bodies
+    assert samples.field("rod.length").metadata == {b"unit": b"m"}

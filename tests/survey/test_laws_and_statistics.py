@@ -288,7 +288,7 @@ def test_sample_columns_hold_each_drawn_parameter_or_nan():
     keys = list(dict.fromkeys(key for sample in every for key in sample.parameters))
     found = [key for key in columns if key in keys]
     assert found == keys
-    assert set(keys) > {"a.mass", "b.mass", "mass_ratio", "placement_deg", "b.sides"}
+    assert set(keys) > {"a.mass", "b.mass", "mass_ratio", "placement_deg", "polygon.sides"}
     for key in keys:
         expected = np.asarray([float(s.parameters.get(key, np.nan)) for s in every])
         assert columns[key].dtype == expected.dtype
