@@ -35,6 +35,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "report": ("harness.report", "write reports/index.html and reports/summary.md from results"),
     "compare": ("harness.report.compare",
                 "compare two results files; exit 1 when a change exceeds --fail-above"),
+    "export": ("harness.report.export",
+               "the records as one tidy table, a row per run × law (CSV or Parquet)"),
     "validate": ("harness.scenarios.cli", "check scenario files"),
     "new": ("harness.scenarios.cli", "write a commented starting scenario file"),
     "bench": ("harness.bench.solver",
