@@ -222,8 +222,10 @@ def label_records(records: Iterable[Record]) -> dict[str, list[Record]]:
 # Settings overrides, notes, verdicts
 # --------------------------------------------------------------------------------------------
 def overrides_of(record: Record) -> dict:
-    """A scenario's ``[engine_settings.<engine>]`` overrides as the runner stored them in the
-    record's diagnostics (``settings_overrides``); {} for a law or a run without any."""
+    """The settings a run changed from its preset, as the runner stored them in the record's
+    diagnostics (``settings_overrides``): a scenario's ``[engine_settings.<engine>]`` and the
+    command line's ``--set`` together (:func:`split_overrides` tells them apart); {} for a
+    law or a run without any."""
     return dict((record.diagnostics or {}).get("settings_overrides") or {})
 
 
@@ -243,18 +245,29 @@ def short_value(value) -> str:
 
 
 def run_label(record: Record) -> str:
-    """A record's label with the scenario's overrides: ``pymunk.defaults [iterations=1]``."""
+    """A record's label with its overrides: ``pymunk.defaults [iterations=1]``."""
     overrides = overrides_of(record)
     return record.label + (f" [{fmt_overrides(overrides)}]" if overrides else "")
 
 
 def scenario_overrides(records: Iterable[Record]) -> dict[str, dict]:
-    """``engine -> overrides`` of a scenario (what its ``[engine_settings]`` set)."""
+    """``engine -> overrides`` of a scenario's runs (its ``[engine_settings]`` and ``--set``)."""
     found: dict[str, dict] = {}
     for record in records:
         if record.source != ANALYTIC and overrides_of(record):
             found.setdefault(record.source, overrides_of(record))
     return found
+
+
+def split_overrides(record: Record, command: dict) -> tuple[dict, dict]:
+    """A run's overrides by where they were set: ``(from --set, from the scenario file)``.
+    ``command`` is the run's ``--set`` overrides (``provenance["settings_overrides"]``,
+    ``engine -> {key: value}``); a key set both ways took the command line's value."""
+    overrides = overrides_of(record)
+    given = (command or {}).get(record.source, {})
+    from_command = {key: value for key, value in overrides.items() if key in given}
+    return from_command, {key: value for key, value in overrides.items()
+                          if key not in from_command}
 
 
 def run_notes(record: Record) -> list[str]:

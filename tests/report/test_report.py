@@ -336,3 +336,25 @@ def test_no_python_repr_on_any_page(quick_report):
         text = re.sub(r"<img[^>]*>|<svg.*?</svg>", "", text, flags=re.S)
         match = PYTHON_REPR.search(text)
         assert match is None, f"{page.name}: {text[max(0, match.start() - 80):match.end() + 80]}"
+
+
+def test_overrides_are_labelled_by_where_they_were_set():
+    # pymunk ran with --set iterations=2 and its scenario set time_step: each is named as such
+    run = sweep_run(0, 0.03, overrides={"iterations": 2, "time_step": 0.001})
+    run.source = "pymunk"
+    command = {"pymunk": {"iterations": 2}}
+    assert views.split_overrides(run, command) == ({"iterations": 2}, {"time_step": 0.001})
+    text = html.overrides_paragraph([run], command)
+    assert "on the command line (<code>--set</code>): pymunk: <code>iterations=2</code>" in text
+    assert "by this scenario (<code>[engine_settings]</code>): pymunk: <code>time_step=0.001" \
+        in text
+    # only --set: nothing is said of the scenario
+    only = sweep_run(0, 0.03, overrides={"iterations": 2})
+    only.source = "pymunk"
+    text = html.overrides_paragraph([only], command)
+    assert "--set" in text and "by this scenario" not in text
+    # the engine notes say the runs are not the preset the text describes
+    results = Results(records=[only], provenance={"settings_overrides": command})
+    why = html.why_html(results)
+    assert "every run with <code>--set iterations=2</code>" in why
+    assert "runs with their scenario's overrides" not in why
