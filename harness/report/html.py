@@ -393,11 +393,12 @@ def cached_departure_table(names: Sequence[str], prepared: Prepared) -> str:
 
 def figure_html(file: str, alt: str, css_class: str = "", caption: str = "",
                 svg: bool = True) -> str:
-    """A figure's PNG, loaded lazily (only when scrolled near: the page may hold hundreds),
-    linked to its SVG (the vector version for a paper) when ``svg``."""
+    """A figure's PNG, linked to its SVG (the vector version for a paper) when ``svg``.
+    Loaded eagerly: a lazy image not yet scrolled to is left out of a printed page, and a
+    report holds at most a few hundred figures (per-scenario figures stop at 60 scenarios)."""
     vector = Path(file).with_suffix(".svg").name
     cls = f' class="{css_class}"' if css_class else ""
-    image = (f'<img{cls} loading="lazy" src="{FIGURES}/{escape_html(file)}" '
+    image = (f'<img{cls} src="{FIGURES}/{escape_html(file)}" '
              f'alt="{escape_html(alt)}">')
     if svg:
         image = f'<a href="{FIGURES}/{escape_html(vector)}">{image}</a>'
