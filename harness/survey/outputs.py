@@ -19,6 +19,7 @@ Each table is one ``pandas.read_parquet(path)`` or ``polars.read_parquet(path)``
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
@@ -65,7 +66,6 @@ def write_parquet(columns: dict, path: Path, metadata: dict | None = None) -> Pa
     """Write ``{name: array}`` as one Parquet table; each column carries its unit
     (:func:`column_unit`) and the table ``metadata`` as JSON under :data:`METADATA_KEY`.
     A column of comma-joined names (a run's failing ``reasons``) is written as a list column."""
-    import json
 
     import pyarrow as pa
     import pyarrow.parquet as pq
@@ -167,7 +167,10 @@ def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dic
          + "".join(f" Not run: {label} ({why})." for label, why in
                    settings.get("left_out", {}).items())
          + "".join(f" Not installed: {engine} ({why})." for engine, why in
-                   settings.get("skipped", {}).items())),
+                   settings.get("skipped", {}).items())
+         + "".join(f" Settings changed from every {engine} preset by --set: "
+                   + ", ".join(f"{key}={json.dumps(value)}" for key, value in values.items())
+                   + "." for engine, values in settings.get("overrides", {}).items())),
         ("Departure = ‖u − u_law‖_M / ‖u_before‖_M (kinetic-energy norm; two free bodies in "
          "their centre of mass's frame), in percent. *Checked runs*: the runs judged one "
          "impact by the verdict checks (docs/verdicts.md); *all runs*: every run, flagged "

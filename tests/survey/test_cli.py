@@ -114,3 +114,43 @@ def test_tables_describe_themselves_and_keep_the_users_names(survey_dir):
     drawn = {column.split(".")[0] for column in samples.names if column.endswith(".mass")}
     assert drawn == bodies
     assert samples.field("rod.length").metadata == {b"unit": b"m"}
+
+
+def test_set_changes_a_setting_of_every_preset_and_is_recorded(tmp_path):
+    import json
+
+    from harness.survey.outputs import METADATA_KEY
+
+    out = tmp_path / "survey"
+    code = main(["survey", "spinning-disk", "--samples", "2", "--engines", "pymunk",
+                 "--preset", "accurate", "--set", "pymunk.iterations=3", "--out", str(out),
+                 "--no-figures", "--workers", "1"])
+    assert code == 0
+    about = json.loads(pq.read_schema(out / "runs.parquet").metadata[METADATA_KEY.encode()])
+    assert about["settings"]["overrides"] == {"pymunk": {"iterations": 3}}
+    assert about["engine_settings"]["pymunk"]["accurate"]["iterations"] == 3
+    assert "by --set: iterations=3" in (out / "summary.md").read_text(encoding="utf-8")
+    assert main(["survey", "--samples", "2", "--engines", "pymunk", "--set",
+                 "pymunk.iterations=-1", "--out", str(out)]) == 2
+    assert main(["survey", "--samples", "2", "--engines", "pymunk", "--set",
+                 "mujoco.iterations=3", "--out", str(out)]) == 2  # engine not selected
+
+
+def test_without_out_another_survey_is_not_replaced(tmp_path, monkeypatch, capsys):
+    import json
+
+    monkeypatch.chdir(tmp_path)
+    existing = tmp_path / "reports" / "survey"
+    existing.mkdir(parents=True)
+    settings = {"samples": 20, "seed": 0, "engines": ["pymunk"], "presets": ["accurate"],
+                "families": ["spinning-disk"], "skipped": {}}
+    (existing / "settings.json").write_text(json.dumps(settings))
+    argv = ["survey", "spinning-disk", "--samples", "2", "--engines", "pymunk", "--preset",
+            "accurate", "--no-figures", "--workers", "1"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "reports/survey holds a survey of samples 20 (asked: 2)" in err and "--force" in err
+    assert sorted(p.name for p in existing.iterdir()) == ["settings.json"]  # untouched
+    assert main(argv + ["--force"]) == 0
+    # the same survey again replaces it without --force
+    assert main(argv) == 0
