@@ -37,7 +37,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
                 "compare two results files; exit 1 when a change exceeds --fail-above"),
     "export": ("harness.report.export",
                "the records as one tidy table, a row per run × law (CSV or Parquet)"),
-    "validate": ("harness.scenarios.cli", "check scenario files"),
+    "validate": ("harness.validate", "check scenario files and population files"),
     "new": ("harness.scenarios.cli", "write a commented starting scenario file"),
     "bench": ("harness.bench.solver",
               "benchmarks: solver throughput, engine overhead, speed-accuracy"),
