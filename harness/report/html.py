@@ -31,6 +31,7 @@ from harness.report.views import (
     fmt_departure,
     fmt_number,
     fmt_overrides,
+    has_library_scenarios,
     overrides_of,
     record_label,
     run_notes,
@@ -651,7 +652,7 @@ def scenario_links(names: Sequence[str]) -> str:
 
 def contents_html(names: Sequence[str], pages: dict,
                   groups: dict[str, list[str]] | None = None,
-                  extra: Sequence[tuple[str, str]] = ()) -> str:
+                  extra: Sequence[tuple[str, str]] = (), table3: bool = True) -> str:
     """The table of contents at the top of the page (sections, scenarios, other pages);
     with ``groups`` (``{tag: names}``, a report of many scenarios) the scenarios are folded
     per tag."""
@@ -675,8 +676,9 @@ def contents_html(names: Sequence[str], pages: dict,
         out.append("</li>")
     for href, text in extra:  # sections present only in some reports
         out.append(f"<li><a href='{href}'>{escape_html(text)}</a></li>")
-    out.append("<li><a href='#table3'>Table 3 of the paper</a></li>"
-               "<li><a href='#versions'>Versions and settings</a></li>")
+    if table3:
+        out.append("<li><a href='#table3'>Table 3 of the paper</a></li>")
+    out.append("<li><a href='#versions'>Versions and settings</a></li>")
     for file, title in pages.items():
         out.append(f"<li><a href='{escape_html(file)}'>{escape_html(title)}</a> "
                    "<span class='muted'>(separate page)</span></li>")
@@ -823,8 +825,10 @@ def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None
             parts.append(cached_section(name, results, figures, prepared))
         if tag:
             parts.append("</details>")
-    parts.append("<h2 id='table3'>Table 3 of Djerassi (2009, Part B) reproduced</h2>")
-    parts.append(cached_table3(figures.get("table3"), prepared))
+    library = has_library_scenarios(results)
+    if library:
+        parts.append("<h2 id='table3'>Table 3 of Djerassi (2009, Part B) reproduced</h2>")
+        parts.append(cached_table3(figures.get("table3"), prepared))
     # the survey in out_dir/survey (impact-harness suite's quick one), when there is one
     from harness.report.survey import cached_survey_section
 
@@ -842,5 +846,5 @@ def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None
     extra = [(href, title) for href, title in (("#contacts", "Several contacts"),
                                                ("#survey", "Survey"))
              if any(f"id='{href[1:]}'" in part for part in parts)]
-    parts[contents_at] = contents_html(names, pages, figures.get("groups"), extra)
+    parts[contents_at] = contents_html(names, pages, figures.get("groups"), extra, library)
     return "\n".join(parts)

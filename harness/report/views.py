@@ -10,6 +10,7 @@ import html
 import math
 import re
 from collections.abc import Iterable, Sequence
+from pathlib import Path
 
 import numpy as np
 
@@ -257,6 +258,20 @@ def scenario_overrides(records: Iterable[Record]) -> dict[str, dict]:
         if record.source != ANALYTIC and overrides_of(record):
             found.setdefault(record.source, overrides_of(record))
     return found
+
+
+def has_library_scenarios(results: Results) -> bool:
+    """True when some scenario of ``results`` is a file of the library (``scenarios/``): the
+    report then also reproduces the paper's Table 3, which the library's scenarios are about.
+    A report of a user's own scenarios shows only what applies to them."""
+    from harness.scenarios.schema import SCENARIO_DIR
+
+    library = SCENARIO_DIR.resolve()
+    for info in results.scenarios.values():
+        path = (info or {}).get("path")
+        if path and Path(path).resolve().parent == library:
+            return True
+    return False
 
 
 def split_overrides(record: Record, command: dict) -> tuple[dict, dict]:

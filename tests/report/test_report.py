@@ -358,3 +358,31 @@ def test_overrides_are_labelled_by_where_they_were_set():
     why = html.why_html(results)
     assert "every run with <code>--set iterations=2</code>" in why
     assert "runs with their scenario's overrides" not in why
+
+
+def test_a_page_says_where_its_numbers_come_from_and_when_they_are_older():
+    from harness.report.pages import provenance_html
+
+    made = {"created_utc": "2026-11-01T10:00:00Z", "git": {"commit": "a" * 40, "dirty": False},
+            "machine": {"cpu_model": "AMD EPYC"}}
+    same = provenance_html(made, {"git": {"commit": "a" * 40}}, "make bench")
+    assert "Measured 2026-11-01T10:00:00Z at commit <code>aaaaaaaaaa</code> on AMD EPYC" in same
+    assert "Older" not in same
+    older = provenance_html(made, {"git": {"commit": "b" * 40},
+                                   "created_utc": "2026-11-20T00:00:00Z"}, "make bench")
+    assert "<b>Older than the report</b>" in older and "bbbbbbbbbb" in older
+    assert "<code>make bench</code>" in older
+    assert "commit not recorded" in provenance_html({"time": "2026"}, {}, "make stress")
+
+
+def test_only_a_report_of_library_scenarios_reproduces_table3(tmp_path):
+    from harness.scenarios.schema import SCENARIO_DIR
+
+    mine = Results(records=[], scenarios={"mine": {"path": str(tmp_path / "mine.toml")}})
+    assert not views.has_library_scenarios(mine)
+    library = Results(records=[], scenarios={
+        "mine": {"path": str(tmp_path / "mine.toml")},
+        "disk-oblique": {"path": str(SCENARIO_DIR / "disk-oblique.toml")}})
+    assert views.has_library_scenarios(library)
+    assert "#table3" not in html.contents_html(["mine"], {}, None, (), False)
+    assert "#table3" in html.contents_html(["mine"], {}, None, (), True)
