@@ -122,7 +122,7 @@ def test_suite_quick(capsys, tmp_path):
     assert "<h2 id='survey'>" in page and "figures/survey-map-pymunk.png" in page
     assert (out / "figures" / "survey-map-pymunk.png").is_file()
     table = (out / survey).read_text(encoding="utf-8")
-    assert "| pymunk | accurate | rod-ground | all | 20 |" in table  # SURVEY_SAMPLES each
+    assert "| pymunk | accurate | rod-ground | all types | 20 |" in table  # SURVEY_SAMPLES each
     # a warm rerun simulates nothing and keeps the survey
     code, _, err = cli(capsys, "suite", "--tags", "quick", "--out", out,
                        "--cache-dir", tmp_path / "cache")

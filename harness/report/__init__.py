@@ -82,7 +82,7 @@ from harness.report.pages import write_pages
 from harness.report.reading import read_for_report
 from harness.report.summary import write_summary
 from harness.report.survey import survey_figure_tasks
-from harness.report.views import FIGURES, engine_labels, slug, split_rows
+from harness.report.views import FIGURES, engine_labels, has_library_scenarios, slug, split_rows
 from harness.run.records import DEFAULT_RESULTS, Results
 
 #: Above this many scenarios the report aggregates (``--scenario-figures auto``, ``--svg
@@ -186,7 +186,7 @@ def write_report(results: Results, out_dir: Path | str,
     try:
         prepared = prepare(results, out_dir, digests, cache)
         groups = scenario_groups(results, names) if many else {}
-        pages = write_pages(out_dir, sources)
+        pages = write_pages(out_dir, sources, results.provenance)
         page = html_page(results, out_dir, figure_map(tasks, expected, many, groups,
                                                       scenario_figures), pages, prepared)
     finally:  # the pool ends either way
@@ -305,9 +305,10 @@ def figure_tasks(results: Results, many: bool, scenario_figures: str,
         tasks.insert(0, FigureTask("legend", "impulse-legend.png", engines,
                                    lambda path, tag: impulse_legend_figure(path, tag, engines),
                                    ("legend",), headline_svg, reads_records=False))
-    tasks.append(FigureTask("table3", "paper-table3.png", table3_payload(),
-                            lambda path, tag: table3_figure(path, tag), ("table3",),
-                            headline_svg, reads_records=False))
+    if has_library_scenarios(results):  # the paper's table only beside the library
+        tasks.append(FigureTask("table3", "paper-table3.png", table3_payload(),
+                                lambda path, tag: table3_figure(path, tag), ("table3",),
+                                headline_svg, reads_records=False))
     return tasks
 
 
@@ -524,7 +525,9 @@ def main(args) -> int:
     # otherwise walk their millions of containers each time the page's strings set it off.
     gc.freeze()
     start = time.perf_counter()
-    written = write_report(results, out, sources=[args.results.parent, Path("reports")],
+    # the bench and stress pages beside the results only: a report of a user's results in
+    # another directory does not take the library's pages from reports/
+    written = write_report(results, out, sources=[args.results.parent],
                            workers=getattr(args, "workers", None),
                            scenario_figures=getattr(args, "scenario_figures", "auto"),
                            figures_for=getattr(args, "figures_for", ()),

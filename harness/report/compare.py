@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -230,18 +231,115 @@ def compare(a: Results, b: Results,
 
 def fmt_points(change: float) -> str:
     """A change of a fraction in percentage points, signed: ``+1.23 pp``."""
-    return f"{100.0 * change:+.3g} pp"
+    return "0 pp" if change == 0 else f"{100.0 * change:+.3g} pp"
 
 
-def write_csv(changes: list[Change], path: Path) -> Path:
-    """One row per matched pair: statuses, every departure in A and B and its change, the
-    speeds in A and B and the speed change."""
+def fmt_percent(value: float | None) -> str:
+    """A departure (a fraction) in percent, as every page shows it; blank when absent."""
+    return "" if value is None or not math.isfinite(value) else f"{100.0 * value:.3g}%"
+
+
+#: A change of a departure smaller than this (a fraction: 1e-9 %) is "unchanged": rounding
+#: of a rerun on another CPU stays far below it, any setting's effect far above.
+UNCHANGED = 1e-11
+
+
+@dataclass
+class SourceSummary:
+    """What changed for one source (``engine.preset`` or a law), against one law."""
+
+    source: str
+    matched: int
+    improved: int  # runs ok in both whose departure from the law is smaller in B
+    worse: int  # … larger in B
+    status_changed: int
+    flagged: int  # matched runs not ``ok`` in B
+    new: int  # only in B
+    gone: int  # only in A
+    median_change: float  # d_B − d_A over the runs ok in both (nan: none)
+    worst_change: float  # the change of largest size among them, signed (nan: none)
+    exceeding: int
+
+
+def summarise(changes: list[Change], only_a: list[tuple], only_b: list[tuple], law: str,
+              threshold: float) -> list[SourceSummary]:
+    """One :class:`SourceSummary` per source, engines first, in the order first seen."""
+    sources = list(dict.fromkeys([c.source for c in changes]
+                                 + [key[2] for key in (*only_a, *only_b)]))
+    rows = []
+    for source in sources:
+        mine = [c for c in changes if c.source == source]
+        # a flagged run's departure is not a departure from the law's situation: the
+        # median and worst are over runs ok in both files, the flagged are counted apart
+        deltas = np.array([c.departure_change[law] for c in mine
+                           if law in c.departure_change and c.status_a == c.status_b == "ok"])
+        worst = float(deltas[np.argmax(np.abs(deltas))]) if deltas.size else math.nan
+        rows.append(SourceSummary(
+            source=source, matched=len(mine),
+            improved=int(np.sum(deltas < -UNCHANGED)), worse=int(np.sum(deltas > UNCHANGED)),
+            status_changed=sum(c.status_changed for c in mine),
+            flagged=sum(c.status_b != "ok" for c in mine),
+            new=sum(key[2] == source for key in only_b),
+            gone=sum(key[2] == source for key in only_a),
+            median_change=float(np.median(deltas)) if deltas.size else math.nan,
+            worst_change=worst, exceeding=sum(c.exceeds(threshold) for c in mine)))
+    rows.sort(key=lambda row: row.source in LAWS)  # engines first: a law changes only
+    return rows                                      # with the solver
+
+
+def setting_differences(a: Results, b: Results) -> list[tuple[str, str, str]]:
+    """``(what, in A, in B)`` for every version, commit and engine setting that differs
+    between the two runs' provenance (settings as each preset resolved them)."""
+    pa, pb = a.provenance or {}, b.provenance or {}
+    rows = []
+    commit_a, commit_b = (p.get("git", {}).get("commit") or "" for p in (pa, pb))
+    if commit_a != commit_b:
+        rows.append(("commit", commit_a[:12] or "?", commit_b[:12] or "?"))
+    versions_a, versions_b = pa.get("versions", {}), pb.get("versions", {})
+    for name in sorted(set(versions_a) | set(versions_b)):
+        if versions_a.get(name) != versions_b.get(name):
+            rows.append((f"version of {name}", str(versions_a.get(name, "—")),
+                         str(versions_b.get(name, "—"))))
+    settings_a, settings_b = pa.get("engine_settings", {}), pb.get("engine_settings", {})
+    for engine in sorted(set(settings_a) | set(settings_b)):
+        presets_a, presets_b = settings_a.get(engine, {}), settings_b.get(engine, {})
+        for preset in sorted(set(presets_a) | set(presets_b)):
+            keys_a, keys_b = presets_a.get(preset, {}), presets_b.get(preset, {})
+            for key in sorted(set(keys_a) | set(keys_b)):
+                if keys_a.get(key) != keys_b.get(key):
+                    rows.append((f"{engine}.{preset}.{key}", json_text(keys_a.get(key, "—")),
+                                 json_text(keys_b.get(key, "—"))))
+    return rows
+
+
+def json_text(value) -> str:
+    """A setting's value as the scenario files write it (``null``, ``[0.02, 1.0]``)."""
+    return value if isinstance(value, str) else json.dumps(value)
+
+
+def speed_names(results: Results, change: Change, size: int) -> list[str]:
+    """The speeds' names of a change's scenario (``box.v_x [m/s]``), ``u1 …`` without."""
+    labels = (results.scenarios.get(change.scenario) or {}).get("speed_labels") or []
+    return list(labels) if len(labels) == size else [f"u{i + 1}" for i in range(size)]
+
+
+def write_csv(changes: list[Change], path: Path, b: Results | None = None) -> Path:
+    """One row per matched pair: statuses; every departure in A and B and its change, in
+    percent and percentage points (the unit of the terminal and the report); the speeds in
+    A and B, each named by its scenario (``speed_1_name`` = ``box.v_x [m/s]``); the speed
+    change in percent."""
     size = max((len(c.u_a or c.u_b or []) for c in changes), default=0)
     header = ["scenario", "point", "source", "status_a", "status_b"]
     for law in LAWS:
-        header += [f"departure_{law}_a", f"departure_{law}_b", f"departure_{law}_change"]
-    header += [f"u{i + 1}_a" for i in range(size)] + [f"u{i + 1}_b" for i in range(size)]
-    header += ["speed_change", "largest_change"]
+        header += [f"departure_{law}_a_pct", f"departure_{law}_b_pct",
+                   f"departure_{law}_change_pp"]
+    for i in range(size):
+        header += [f"speed_{i + 1}_name", f"speed_{i + 1}_a", f"speed_{i + 1}_b"]
+    header += ["speed_change_pct", "largest_change_pct"]
+
+    def percent(value):
+        return "" if value is None or not math.isfinite(value) else 100.0 * value
+
     with path.open("w", newline="", encoding="utf-8") as handle:
         writer = csv.writer(handle)
         writer.writerow(header)
@@ -249,15 +347,78 @@ def write_csv(changes: list[Change], path: Path) -> Path:
             row = [c.scenario, c.point, c.source, c.status_a, c.status_b]
             deltas = c.departure_change
             for law in LAWS:
-                row += [c.departure_a.get(law, ""), c.departure_b.get(law, ""),
-                        deltas.get(law, "")]
-            for speeds in (c.u_a, c.u_b):
-                speeds = list(speeds or [])
-                row += speeds + [""] * (size - len(speeds))
-            row += ["" if math.isnan(c.speed_change) else c.speed_change, c.largest]
+                row += [percent(c.departure_a.get(law)), percent(c.departure_b.get(law)),
+                        percent(deltas.get(law))]
+            count = len(c.u_a or c.u_b or [])
+            names = speed_names(b, c, count) if b is not None else [
+                f"u{i + 1}" for i in range(count)]
+            for i in range(size):
+                row += ([names[i], (c.u_a or [""] * count)[i], (c.u_b or [""] * count)[i]]
+                        if i < count else ["", "", ""])
+            row += [percent(c.speed_change), percent(c.largest)]
             writer.writerow(row)
     return path
 
+
+def row_cells(c: Change, law: str, threshold: float) -> list[str]:
+    """A matched pair against one law: before, after, change, speed change, status."""
+    before, after = c.departure_a.get(law), c.departure_b.get(law)
+    change = c.departure_change.get(law)
+    status = f"{c.status_a} → {c.status_b}" if c.status_changed else c.status_b
+    return ["EXCEEDS" if c.exceeds(threshold) else "ok",
+            c.scenario + (f" [{c.point}]" if c.point else ""), c.source,
+            fmt_percent(before) or "—", fmt_percent(after) or "—",
+            fmt_points(change) if change is not None else "—",
+            "n/a" if math.isnan(c.speed_change) else f"{100 * c.speed_change:.3g}%", status]
+
+
+ROW_HEADER = ["", "scenario", "source", "before", "after", "change", "speeds", "status"]
+SUMMARY_HEADER = ["source", "matched", "median change (ok)", "worst change (ok)", "improved",
+                  "worse",
+                  "status changed", "flagged in B", "new", "gone", "exceeding"]
+
+
+def summary_cells(row: SourceSummary) -> list[str]:
+    def points(value):
+        return "—" if math.isnan(value) else fmt_points(value)
+    return [row.source, str(row.matched), points(row.median_change), points(row.worst_change),
+            str(row.improved), str(row.worse), str(row.status_changed), str(row.flagged),
+            str(row.new), str(row.gone), str(row.exceeding)]
+
+
+def text_table(header: list[str], rows: list[list[str]]) -> str:
+    """Columns padded to their widest cell, for the terminal."""
+    widths = [max(len(str(cell)) for cell in column) for column in zip(header, *rows)]
+    return "\n".join("  ".join(str(cell).ljust(width) for cell, width in zip(line, widths))
+                     .rstrip() for line in [header, *rows])
+
+
+def write_html(path: Path, a_path: Path, b_path: Path, law: str, threshold: float,
+               summary: list[SourceSummary], rows: list[list[str]],
+               differences: list[tuple[str, str, str]]) -> Path:
+    """The comparison as a page: the per-source summary, what differs, every changed row."""
+    from harness.report.html import escape_html, html_table, page_head
+
+    parts = [page_head(f"compare {a_path.name} → {b_path.name}"),
+             f"<h1>What changed from <code>{escape_html(a_path)}</code> to "
+             f"<code>{escape_html(b_path)}</code></h1>",
+             f"<p>Departures from <b>{escape_html(law)}</b>, in percent of the motion before "
+             "the impact; changes in percentage points (pp). A row exceeds when a departure "
+             f"from any law or the speeds changed by more than {100 * threshold:g}%, or its "
+             "status changed.</p>",
+             "<h2>Per source</h2>",
+             html_table(SUMMARY_HEADER, [[escape_html(x) for x in summary_cells(r)]
+                                         for r in summary]),
+             "<h2>Versions and settings that differ</h2>",
+             html_table(["what", "before", "after"],
+                        [[escape_html(x) for x in row] for row in differences])
+             if differences else "<p>None: the same versions and settings.</p>",
+             "<h2>Changed runs</h2>",
+             html_table(ROW_HEADER, [[escape_html(x) for x in row] for row in rows], left=3)
+             if rows else "<p>No run changed.</p>",
+             "</body></html>"]
+    path.write_text("\n".join(parts), encoding="utf-8")
+    return path
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.description = __doc__.split("\n\n")[0].strip("`: ").replace("``", "")
@@ -272,8 +433,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--fail-above", default=DEFAULT_THRESHOLD, metavar="X",
                         help="largest allowed change, as a percentage (1%%) or a fraction "
                              f"(0.01); default {DEFAULT_THRESHOLD.replace('%', '%%')}")
+    parser.add_argument("--law", default="poisson", choices=LAWS,
+                        help="the law whose departures the rows and the summary show, before "
+                             "and after (default poisson); the gate weighs every law")
     parser.add_argument("--csv", type=Path, default=None, metavar="OUT",
-                        help="also write every matched pair (both values and the change) here")
+                        help="also write every matched pair (both values and the change, in "
+                             "percent) here")
+    parser.add_argument("--html", type=Path, default=None, metavar="OUT",
+                        help="also write the same tables as an HTML page here")
     parser.add_argument("--show", type=int, default=20, metavar="N",
                         help="print the N largest changes (default 20; 0 prints none)")
 
@@ -296,21 +463,26 @@ def main(args) -> int:
     if not changes:
         print(f"impact-harness compare: {args.a} and {args.b} have no record in common")
         return 2
+    law = getattr(args, "law", "poisson")
     changes.sort(key=lambda c: (not c.status_changed, -c.largest))
     exceeding = [c for c in changes if c.exceeds(threshold)]
-    if args.csv is not None:
-        write_csv(changes, args.csv)
     changed = [c for c in changes if c.status_changed or c.largest > 0]
-    for c in changed[:args.show]:
-        deltas = c.departure_change
-        worst_law = max(deltas, key=lambda law: abs(deltas[law])) if deltas else None
-        status = f"{c.status_a} -> {c.status_b}" if c.status_changed else c.status_b
-        speeds = "n/a" if math.isnan(c.speed_change) else f"{100 * c.speed_change:.3g}%"
-        law_text = (f"departure from {worst_law} {fmt_points(deltas[worst_law])}"
-                    if worst_law else "no departures")
-        mark = "EXCEEDS" if c.exceeds(threshold) else "ok"
-        point = f" [{c.point}]" if c.point else ""
-        print(f"{mark:7s} {c.scenario}{point} {c.source}: {law_text}; speeds {speeds}; {status}")
+    summary = summarise(changes, only_a, only_b, law, threshold)
+    differences = setting_differences(*loaded)
+    rows = [row_cells(c, law, threshold) for c in changed]
+    if args.csv is not None:
+        write_csv(changes, args.csv, loaded[1])
+    if getattr(args, "html", None) is not None:
+        write_html(args.html, args.a, args.b, law, threshold, summary, rows, differences)
+    print(f"departures from {law} in percent; changes in percentage points (pp)\n")
+    print(text_table(SUMMARY_HEADER, [summary_cells(row) for row in summary]))
+    if differences:
+        print("\nversions and settings that differ (before → after):")
+        for what, before, after in differences:
+            print(f"  {what}: {before} → {after}")
+    if rows[:args.show]:
+        print(f"\nthe {min(args.show, len(rows))} largest changes of {len(rows)}:")
+        print(text_table(ROW_HEADER, rows[:args.show]))
     for label, keys in (("only in A", only_a), ("only in B", only_b)):
         if keys:
             print(f"{len(keys)} records {label}, e.g. " + ", ".join(
@@ -323,12 +495,13 @@ def main(args) -> int:
         names = sorted(weights.mismatched)
         print(f"speeds not compared for {len(names)} scenarios whose file no longer has the "
               f"masses their runs used (edited since?), e.g. {', '.join(names[:3])}")
+    written = [str(p) for p in (args.csv, getattr(args, "html", None)) if p is not None]
     print(f"compared {len(changes)} records ({len(changed)} changed at all): {len(exceeding)} "
           "changed by more than "
           f"{100 * threshold:g}% or changed status"
-          + (f"; wrote {args.csv}" if args.csv is not None else ""))
+          + (f"; wrote {', '.join(written)}" if written else ""))
     return 1 if exceeding else 0
 
 
-__all__ = ["Change", "MassMatrices", "add_arguments", "compare", "main", "parse_threshold",
-           "write_csv"]
+__all__ = ["Change", "MassMatrices", "SourceSummary", "add_arguments", "compare", "main",
+           "parse_threshold", "setting_differences", "summarise", "write_csv", "write_html"]

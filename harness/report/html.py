@@ -31,12 +31,14 @@ from harness.report.views import (
     fmt_departure,
     fmt_number,
     fmt_overrides,
+    has_library_scenarios,
     overrides_of,
     record_label,
     run_notes,
     run_verdict,
     scenario_overrides,
     slug,
+    split_overrides,
 )
 from harness.run.records import ANALYTIC, Record, Results
 
@@ -195,16 +197,29 @@ def velocity_table(records: Sequence[Record], speed_labels: Sequence[str]) -> st
             + footnotes_html(footnotes))
 
 
-def overrides_paragraph(records: Sequence[Record]) -> str:
-    """What the scenario's ``[engine_settings]`` changed, or "" when nothing."""
+def overrides_paragraph(records: Sequence[Record], command: dict | None = None) -> str:
+    """What the runs of a scenario changed from the presets, by where it was set (the
+    command line's ``--set``, the scenario's ``[engine_settings]``), or "" when nothing."""
     found = scenario_overrides(records)
     if not found:
         return ""
-    items = "; ".join(f"{escape_html(engine)}: <code>{escape_html(fmt_overrides(values))}</code>"
-                      for engine, values in found.items())
-    return (f"<p class='override'>Engine settings overridden by this scenario "
-            f"(<code>[engine_settings]</code>): {items}. These runs are not the presets: their "
-            "labels carry the overrides, and the headline cells are marked “*”.</p>")
+    by_command, by_scenario = {}, {}
+    for engine in found:
+        run = next(r for r in records if r.source == engine and overrides_of(r))
+        from_command, from_scenario = split_overrides(run, command or {})
+        if from_command:
+            by_command[engine] = from_command
+        if from_scenario:
+            by_scenario[engine] = from_scenario
+    sentences = []
+    for where, values in (("on the command line (<code>--set</code>)", by_command),
+                          ("by this scenario (<code>[engine_settings]</code>)", by_scenario)):
+        if values:
+            items = "; ".join(f"{escape_html(engine)}: <code>{escape_html(fmt_overrides(v))}"
+                              "</code>" for engine, v in values.items())
+            sentences.append(f"Engine settings overridden {where}: {items}.")
+    return (f"<p class='override'>{' '.join(sentences)} These runs are not the presets: "
+            "their labels carry the overrides, and the headline cells are marked “*”.</p>")
 
 
 #: What :func:`scenario_section` reads of a scenario's description (``Results.scenarios``).
@@ -236,20 +251,23 @@ def cached_section(name: str, results: Results, figures: dict, prepared: Prepare
     files = [[kind, figures.get(kind, {}).get(name)] for kind in ("impulse", "sweep", "history")]
     svg = figures.get("svg", ())
     read = {key: info[key] for key in SECTION_INFO if key in info}  # not the references
-    inputs = json.dumps([read, [[kind, file, file in svg] for kind, file in files]],
+    command = (results.provenance or {}).get("settings_overrides") or {}
+    inputs = json.dumps([read, [[kind, file, file in svg] for kind, file in files], command],
                         sort_keys=True, default=str)
     key = f"section\0{name}\0{prepared.digests.get(name, '')}\0{inputs}"
-    return prepared.cache.get(key, lambda: scenario_section(name, info,
-                                                           results.for_scenario(name), figures))
+    return prepared.cache.get(key, lambda: scenario_section(
+        name, info, results.for_scenario(name), figures, command))
 
 
-def scenario_section(name: str, info: dict, records: Sequence[Record], figures: dict) -> str:
+def scenario_section(name: str, info: dict, records: Sequence[Record], figures: dict,
+                     command: dict | None = None) -> str:
+    """One scenario's section; ``command``: the run's ``--set`` overrides (provenance)."""
     parts = [f'<div class="scenario" id="{escape_html(slug(name))}">',
              f"<h3>{escape_html(name)}</h3>"]
     tags = ", ".join(info.get("tags", []))
     parts.append(f"<p>{escape_html(info.get('description', ''))} <span class='muted'>"
                  f"[{escape_html(info.get('system', ''))}; tags: {escape_html(tags)}]</span></p>")
-    parts.append(overrides_paragraph(records))
+    parts.append(overrides_paragraph(records, command))
     laws = [r for r in records if r.source == ANALYTIC and r.law == "poisson" and r.ok]
     if info.get("sweep"):
         if name in figures.get("sweep", {}):
@@ -376,11 +394,12 @@ def cached_departure_table(names: Sequence[str], prepared: Prepared) -> str:
 
 def figure_html(file: str, alt: str, css_class: str = "", caption: str = "",
                 svg: bool = True) -> str:
-    """A figure's PNG, loaded lazily (only when scrolled near: the page may hold hundreds),
-    linked to its SVG (the vector version for a paper) when ``svg``."""
+    """A figure's PNG, linked to its SVG (the vector version for a paper) when ``svg``.
+    Loaded eagerly: a lazy image not yet scrolled to is left out of a printed page, and a
+    report holds at most a few hundred figures (per-scenario figures stop at 60 scenarios)."""
     vector = Path(file).with_suffix(".svg").name
     cls = f' class="{css_class}"' if css_class else ""
-    image = (f'<img{cls} loading="lazy" src="{FIGURES}/{escape_html(file)}" '
+    image = (f'<img{cls} src="{FIGURES}/{escape_html(file)}" '
              f'alt="{escape_html(alt)}">')
     if svg:
         image = f'<a href="{FIGURES}/{escape_html(vector)}">{image}</a>'
@@ -401,6 +420,8 @@ def why_html(results: Results) -> str:
     """Per engine and preset present: the law it solves, its biases, the settings that
     matter, and the notes its runs carry (with how many runs carry each)."""
     roles = engine_roles(results)
+    command = (results.provenance or {}).get("settings_overrides") or {}
+    given = {engine: values for engine, values in command.items() if values}
     labels = [source_label(engine, role) for engine, role in roles]
     engines = list(dict.fromkeys(engine for engine, _ in roles))
     if not engines:
@@ -425,13 +446,18 @@ def why_html(results: Results) -> str:
                 for note in run_notes(run):
                     notes[note] = notes.get(note, 0) + 1
             flagged = sum(1 for r in runs if not r.ok and not r.skipped)
-            overridden = sum(1 for r in runs if overrides_of(r))
+            by_scenario = sum(1 for r in runs if split_overrides(r, command)[1])
             extra = [f"{count} of {len(runs)} runs note: “{escape_html(note)}”"
                      for note, count in notes.items()]
             if flagged:
                 extra.append(f"{flagged} of {len(runs)} runs flagged by the engine")
-            if overridden:
-                extra.append(f"{overridden} of {len(runs)} runs with scenario overrides")
+            if given.get(engine):
+                values = escape_html(fmt_overrides(given[engine]))
+                extra.append(f"every run with <code>--set {values}</code> (not the preset: "
+                             "the text above describes the preset)")
+            if by_scenario:
+                extra.append(f"{by_scenario} of {len(runs)} runs with their scenario's "
+                             "overrides")
             head = f"<b>{escape_html(preset)}</b>" + (
                 "" if preset == role else f" (in the <i>{escape_html(role)}</i> role)")
             parts.append(f"<dd>{head}: {escape_html(text)}"
@@ -626,7 +652,7 @@ def scenario_links(names: Sequence[str]) -> str:
 
 def contents_html(names: Sequence[str], pages: dict,
                   groups: dict[str, list[str]] | None = None,
-                  extra: Sequence[tuple[str, str]] = ()) -> str:
+                  extra: Sequence[tuple[str, str]] = (), table3: bool = True) -> str:
     """The table of contents at the top of the page (sections, scenarios, other pages);
     with ``groups`` (``{tag: names}``, a report of many scenarios) the scenarios are folded
     per tag."""
@@ -650,8 +676,9 @@ def contents_html(names: Sequence[str], pages: dict,
         out.append("</li>")
     for href, text in extra:  # sections present only in some reports
         out.append(f"<li><a href='{href}'>{escape_html(text)}</a></li>")
-    out.append("<li><a href='#table3'>Table 3 of the paper</a></li>"
-               "<li><a href='#versions'>Versions and settings</a></li>")
+    if table3:
+        out.append("<li><a href='#table3'>Table 3 of the paper</a></li>")
+    out.append("<li><a href='#versions'>Versions and settings</a></li>")
     for file, title in pages.items():
         out.append(f"<li><a href='{escape_html(file)}'>{escape_html(title)}</a> "
                    "<span class='muted'>(separate page)</span></li>")
@@ -722,8 +749,9 @@ def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None
         "<i>matched-bounce</i>). Sweeps show "
         "their largest departure over the sweep's single impacts. “(k!)”: k runs were "
         "flagged (multi-contact, not separated, …) and are not in the value; “*”: the "
-        "scenario overrides "
-        "the preset's settings (see its section); grey cells were skipped. Light = agrees, "
+        "runs' settings differ from the preset's, by the scenario's <code>[engine_settings]"
+        "</code> or the command line's <code>--set</code> (see its section); grey cells were "
+        "skipped. Light = agrees, "
         "dark red = far off.")
     groups = figures.get("groups") or {}
     if groups:  # many scenarios: a row per family in the figure, the scenarios in tables
@@ -797,15 +825,18 @@ def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None
             parts.append(cached_section(name, results, figures, prepared))
         if tag:
             parts.append("</details>")
-    parts.append("<h2 id='table3'>Table 3 of Djerassi (2009, Part B) reproduced</h2>")
-    parts.append(cached_table3(figures.get("table3"), prepared))
+    library = has_library_scenarios(results)
+    if library:
+        parts.append("<h2 id='table3'>Table 3 of Djerassi (2009, Part B) reproduced</h2>")
+        parts.append(cached_table3(figures.get("table3"), prepared))
     # the survey in out_dir/survey (impact-harness suite's quick one), when there is one
     from harness.report.survey import cached_survey_section
 
     parts.append(cached_survey_section(out_dir, figures, prepared))
     parts.append("<h2 id='versions'>Versions and settings</h2>" + versions_html(prov))
     parts.append("<h3>Engine settings per preset</h3><p>Bold where the presets differ. "
-                 "Scenario files may override settings "
+                 "The table is the presets as run, with the command line's <code>--set</code> "
+                 "overrides; scenario files may override settings too "
                  "(<code>[engine_settings.&lt;engine&gt;]</code>); such runs carry the "
                  "overrides in their labels and in each record's diagnostics in "
                  "<code>results.json</code>.</p>" + settings_table(prov))
@@ -815,5 +846,5 @@ def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None
     extra = [(href, title) for href, title in (("#contacts", "Several contacts"),
                                                ("#survey", "Survey"))
              if any(f"id='{href[1:]}'" in part for part in parts)]
-    parts[contents_at] = contents_html(names, pages, figures.get("groups"), extra)
+    parts[contents_at] = contents_html(names, pages, figures.get("groups"), extra, library)
     return "\n".join(parts)

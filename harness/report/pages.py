@@ -111,12 +111,36 @@ def write_page(out_dir: Path, file: str, body: Sequence[str]) -> Path:
     return path
 
 
-def write_bench_page(bench_json: Path, out_dir: Path) -> Path:
-    """``bench.html`` from ``bench.json`` and the figures beside it."""
+def provenance_html(made: dict, report: dict, command: str) -> str:
+    """Where a page's numbers come from (commit, date, machine) and, when that differs from
+    the report's own results, a warning that they may be stale and how to refresh them."""
+    commit = ((made.get("git") or {}).get("commit") or "")[:10]
+    dirty = " with uncommitted changes" if (made.get("git") or {}).get("dirty") else ""
+    when = made.get("created_utc") or made.get("time") or "an unknown date"
+    machine = made.get("machine")
+    machine = machine.get("cpu_model") or machine.get("machine") if isinstance(machine, dict) \
+        else machine
+    text = (f"Measured {escape_html(when)}"
+            + (f" at commit <code>{escape_html(commit)}</code>{dirty}" if commit
+               else " (commit not recorded)")
+            + (f" on {escape_html(machine)}" if machine else "") + ".")
+    report_commit = ((report.get("git") or {}).get("commit") or "")[:10]
+    if report_commit and commit != report_commit:
+        text += (f" <b>Older than the report</b>, whose results are from commit "
+                 f"<code>{escape_html(report_commit)}</code> "
+                 f"({escape_html(report.get('created_utc', ''))}): these numbers may not "
+                 f"describe that code. <code>{escape_html(command)}</code> measures them again.")
+    return f"<p class='provenance'>{text}</p>"
+
+
+def write_bench_page(bench_json: Path, out_dir: Path, report: dict | None = None) -> Path:
+    """``bench.html`` from ``bench.json`` and the figures beside it; ``report``: the
+    report's results' provenance (the page says when it is older)."""
     data = json.loads(bench_json.read_text(encoding="utf-8"))
     names = copy_figures(bench_json.parent, out_dir / "bench")
-    body = [("<p>Written by <code>impact-harness bench</code>; machine-readable: "
-            "<a href='bench/bench.json'>bench.json</a>.</p>"), figures_html("bench", names)]
+    body = [provenance_html(data.get("provenance") or {}, report or {}, "make bench"),
+            ("<p>Written by <code>impact-harness bench</code>; machine-readable: "
+             "<a href='bench/bench.json'>bench.json</a>.</p>"), figures_html("bench", names)]
     copy = out_dir / "bench" / "bench.json"
     if bench_json.resolve() != copy.resolve():
         shutil.copyfile(bench_json, copy)
@@ -129,27 +153,37 @@ def write_bench_page(bench_json: Path, out_dir: Path) -> Path:
     return write_page(out_dir, BENCH_PAGE, body)
 
 
-def write_stress_page(stress_md: Path, out_dir: Path) -> Path:
-    """``stress.html`` from ``stress.md`` and the figures beside it."""
+def write_stress_page(stress_md: Path, out_dir: Path, report: dict | None = None) -> Path:
+    """``stress.html`` from ``stress.md`` (and the provenance of ``stress.json`` beside it)
+    and the figures beside it."""
     names = copy_figures(stress_md.parent, out_dir / "stress")
+    try:
+        made = json.loads((stress_md.parent / "stress.json").read_text(
+            encoding="utf-8")).get("provenance") or {}
+    except (OSError, ValueError, AttributeError):
+        made = {}
     text = stress_md.read_text(encoding="utf-8")
     lines = text.splitlines()
     if lines and lines[0].startswith("# "):  # the page has its own title
         text = "\n".join(lines[1:])
-    body = [markdown_to_html(text, heading_shift=1), "<h2>Figures</h2>",
+    body = [provenance_html(made if isinstance(made, dict) else {}, report or {},
+                            "make stress"),
+            markdown_to_html(text, heading_shift=1), "<h2>Figures</h2>",
             figures_html("stress", names)]
     return write_page(out_dir, STRESS_PAGE, body)
 
 
-def write_pages(out_dir: Path, sources: Sequence[Path]) -> dict[str, str]:
-    """Write the pages whose inputs exist; ``{file: title}`` of those written."""
+def write_pages(out_dir: Path, sources: Sequence[Path],
+                report: dict | None = None) -> dict[str, str]:
+    """Write the pages whose inputs exist; ``{file: title}`` of those written. ``report``:
+    the provenance of the report's results, which each page compares its own with."""
     written = {}
     bench = find_input("bench", "bench.json", [out_dir, *sources])
     if bench is not None:
-        write_bench_page(bench, out_dir)
+        write_bench_page(bench, out_dir, report)
         written[BENCH_PAGE] = PAGE_TITLES[BENCH_PAGE]
     stress = find_input("stress", "stress.md", [out_dir, *sources])
     if stress is not None:
-        write_stress_page(stress, out_dir)
+        write_stress_page(stress, out_dir, report)
         written[STRESS_PAGE] = PAGE_TITLES[STRESS_PAGE]
     return written

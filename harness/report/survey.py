@@ -205,13 +205,27 @@ def _group_cells(stats: dict, rows: list[int]) -> list[list[str]]:
     return cells
 
 
+def _interval_cell(stats: dict, prefix: str, row: int) -> str:
+    """A quantile in percent, its 95% bootstrap interval below it in small type."""
+    value = fmt_departure(float(stats[prefix][row]))
+    low, high = (stats.get(f"{prefix}_{end}") for end in ("low", "high"))
+    if low is None or high is None or not (math.isfinite(low[row]) and math.isfinite(high[row])):
+        return value
+    return (f"{value}<br><small>[{fmt_departure(float(low[row]))}, "
+            f"{fmt_departure(float(high[row]))}]</small>")
+
+
 def statistics_table(stats: dict) -> str:
     """Per engine × preset × family over every collision type: runs, flagged and
-    energy-gaining fractions, the departure from Poisson and from Stronge."""
+    energy-gaining fractions, the departure from Poisson over the checked runs and over all
+    runs (each median and p90 with its bootstrap interval), and from Stronge."""
     from harness.report.html import html_table
 
-    header = ["engine", "preset", "family", "n", "flagged", "gains E", "from Poisson: median",
-              "p90", "max", "from Stronge: median", "p90", "max"]
+    every = "departure_poisson_all_median" in stats  # surveys before the all-runs columns
+    header = ["engine", "preset", "family", "n", "flagged", "gains E",
+              "from Poisson, checked runs: median", "p90", "max",
+              *(["from Poisson, all runs: median", "p90"] if every else []),
+              "from Stronge, checked: median", "p90"]
     order = statistics_rows(stats)
     rows = []
     for row, group in zip(order, _group_cells(stats, order)):
@@ -219,8 +233,14 @@ def statistics_table(stats: dict) -> str:
         rows.append([*group, escape_html(stats["family"][row]), str(int(stats["n"][row])),
                      f"<b>{flagged}</b>" if stats["flagged_fraction"][row] > 0 else flagged,
                      _percent(stats["energy_gain_fraction"][row]),
-                     *(fmt_departure(float(stats[f"departure_{law}_{name}"][row]))
-                       for law in ("poisson", "stronge") for name in ("median", "p90", "max"))])
+                     _interval_cell(stats, "departure_poisson_median", row),
+                     _interval_cell(stats, "departure_poisson_p90", row),
+                     fmt_departure(float(stats["departure_poisson_max"][row])),
+                     *([_interval_cell(stats, "departure_poisson_all_median", row),
+                        _interval_cell(stats, "departure_poisson_all_p90", row)]
+                       if every else []),
+                     *(fmt_departure(float(stats[f"departure_stronge_{name}"][row]))
+                       for name in ("median", "p90"))])
     return html_table(header, rows, left=3)
 
 
@@ -309,7 +329,11 @@ def survey_section(directory: Path, figures: dict) -> str:
                      "<p><i>n</i> runs; <i>flagged</i>: the fraction failing a verdict check "
                      "(bold when any); <i>gains E</i>: checked runs ending with more kinetic "
                      "energy than they began with; the departure's median, 90th percentile "
-                     "and maximum over the checked runs.</p>" + statistics_table(stats))
+                     "and maximum over the checked runs, and its median and 90th percentile "
+                     "over all runs, flagged ones included (where most runs are flagged the "
+                     "checked runs are the easy ones). Under each median and p90, in small "
+                     "type, its 95% percentile-bootstrap interval (1,000 resamples).</p>"
+                     + statistics_table(stats))
         reasons = reason_table(stats)
         if reasons:
             parts.append("<h3>Flagged runs by reason</h3><p>The rows with flagged runs; a run "

@@ -10,10 +10,11 @@ import html
 import math
 import re
 from collections.abc import Iterable, Sequence
+from pathlib import Path
 
 import numpy as np
 
-from harness.run.metrics import departure_split
+from harness.run.metrics import departure_split, fmt_departure
 from harness.run.records import ANALYTIC, Record, Results
 from harness.run.references import SIMULTANEOUS
 
@@ -41,18 +42,6 @@ HEAT_MIN, HEAT_MAX = 1e-4, 1.0
 # --------------------------------------------------------------------------------------------
 # Formatting
 # --------------------------------------------------------------------------------------------
-def fmt_departure(value) -> str:
-    """A departure as a percentage: ``20.7%``, ``0.18%``, ``2e-12%``, ``0``; ``n/a``."""
-    if value is None or (isinstance(value, float) and not math.isfinite(value)):
-        return "n/a"
-    percent = 100.0 * value
-    if percent == 0:
-        return "0"
-    if percent < 0.01:
-        return f"{percent:.0e}%"
-    return f"{percent:.3g}%"
-
-
 def fmt_number(value, digits: int = 4) -> str:
     if value is None:
         return "–"
@@ -234,8 +223,10 @@ def label_records(records: Iterable[Record]) -> dict[str, list[Record]]:
 # Settings overrides, notes, verdicts
 # --------------------------------------------------------------------------------------------
 def overrides_of(record: Record) -> dict:
-    """A scenario's ``[engine_settings.<engine>]`` overrides as the runner stored them in the
-    record's diagnostics (``settings_overrides``); {} for a law or a run without any."""
+    """The settings a run changed from its preset, as the runner stored them in the record's
+    diagnostics (``settings_overrides``): a scenario's ``[engine_settings.<engine>]`` and the
+    command line's ``--set`` together (:func:`split_overrides` tells them apart); {} for a
+    law or a run without any."""
     return dict((record.diagnostics or {}).get("settings_overrides") or {})
 
 
@@ -255,18 +246,43 @@ def short_value(value) -> str:
 
 
 def run_label(record: Record) -> str:
-    """A record's label with the scenario's overrides: ``pymunk.defaults [iterations=1]``."""
+    """A record's label with its overrides: ``pymunk.defaults [iterations=1]``."""
     overrides = overrides_of(record)
     return record.label + (f" [{fmt_overrides(overrides)}]" if overrides else "")
 
 
 def scenario_overrides(records: Iterable[Record]) -> dict[str, dict]:
-    """``engine -> overrides`` of a scenario (what its ``[engine_settings]`` set)."""
+    """``engine -> overrides`` of a scenario's runs (its ``[engine_settings]`` and ``--set``)."""
     found: dict[str, dict] = {}
     for record in records:
         if record.source != ANALYTIC and overrides_of(record):
             found.setdefault(record.source, overrides_of(record))
     return found
+
+
+def has_library_scenarios(results: Results) -> bool:
+    """True when some scenario of ``results`` is a file of the library (``scenarios/``): the
+    report then also reproduces the paper's Table 3, which the library's scenarios are about.
+    A report of a user's own scenarios shows only what applies to them."""
+    from harness.scenarios.schema import SCENARIO_DIR
+
+    library = SCENARIO_DIR.resolve()
+    for info in results.scenarios.values():
+        path = (info or {}).get("path")
+        if path and Path(path).resolve().parent == library:
+            return True
+    return False
+
+
+def split_overrides(record: Record, command: dict) -> tuple[dict, dict]:
+    """A run's overrides by where they were set: ``(from --set, from the scenario file)``.
+    ``command`` is the run's ``--set`` overrides (``provenance["settings_overrides"]``,
+    ``engine -> {key: value}``); a key set both ways took the command line's value."""
+    overrides = overrides_of(record)
+    given = (command or {}).get(record.source, {})
+    from_command = {key: value for key, value in overrides.items() if key in given}
+    return from_command, {key: value for key, value in overrides.items()
+                          if key not in from_command}
 
 
 def run_notes(record: Record) -> list[str]:
@@ -280,7 +296,29 @@ def run_verdict(record: Record) -> tuple[str | None, list[str]]:
     data = record.diagnostics or {}
     verdict = getattr(record, "verdict", None) or data.get("verdict")
     reasons = getattr(record, "reasons", None) or data.get("reasons") or []
-    return verdict, [str(reason) for reason in reasons]
+    return verdict, [reason_sentence(reason) for reason in reasons]
+
+
+def reason_sentence(reason) -> str:
+    """One verdict reason as a reader's sentence: its name, then its detail (which already
+    says the measured value, the bound and the units), then what it means for the run. A
+    reason is a mapping (results files) or an object with the same fields (a ``Reason``);
+    a plain string (older results) is shown as it is."""
+    if isinstance(reason, str):
+        return reason
+    field = reason.get if isinstance(reason, dict) else (lambda key: getattr(reason, key, None))
+    name, detail = field("name") or "reason", field("detail")
+    value, tolerance = field("value"), field("tolerance")
+    if not detail and value is not None:
+        detail = (f"measured {value:.4g}" if tolerance is None
+                  else f"measured {value:.4g} against the bound {tolerance:.4g}")
+    text = f"{name}: {detail}" if detail else str(name)
+    attribution = field("attribution")
+    if attribution:
+        text += f" (attributed to {'the law' if attribution == 'law' else attribution})"
+    if field("fails") is False:
+        text += "; reported, not a failure"
+    return text
 
 
 def split_rows(results: Results) -> list[dict]:

@@ -33,6 +33,19 @@ import numpy as np
 STICK_TOLERANCE = 1e-6
 
 
+def fmt_departure(value) -> str:
+    """A departure as every page shows it, in percent with its unit even at zero: ``20.7%``,
+    ``0.18%``, ``2e-12%``, ``0%``; ``n/a`` where there is none."""
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return "n/a"
+    percent = 100.0 * float(value)
+    if percent == 0:
+        return "0%"
+    if abs(percent) < 0.01:
+        return f"{percent:.0e}%"
+    return f"{percent:.3g}%"
+
+
 def ke_norm(mass_matrix: np.ndarray, u: Sequence[float] | np.ndarray) -> float:
     """``sqrt(uᵀ M u)``, the kinetic-energy norm (``sqrt(2 E)``)."""
     u = np.asarray(u, dtype=float)

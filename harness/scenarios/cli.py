@@ -26,9 +26,10 @@ SHAPES = ("disk", "rod", "box", "polygon")
 # --------------------------------------------------------------------------------------------
 # validate
 # --------------------------------------------------------------------------------------------
-def add_validate_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("files", nargs="*", metavar="FILE",
-                        help="scenario files or directories (default: every file in scenarios/)")
+def add_validate_arguments(parser: argparse.ArgumentParser,
+                           files_help: str = "scenario files or directories (default: every "
+                                             "file in scenarios/)") -> None:
+    parser.add_argument("files", nargs="*", metavar="FILE", help=files_help)
     parser.add_argument("--no-solve", action="store_true",
                         help="only check the files; do not compare [expect] with the solver")
     parser.add_argument("-q", "--quiet", action="store_true", help="print errors only")

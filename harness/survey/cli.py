@@ -75,7 +75,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         + ", ".join(source_label(*pair) for pair in DEFAULT_LEFT_OUT)
                         + "; MuJoCo calls accurate matched-bounce, and either name selects "
                         "it)")
-    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"default {DEFAULT_OUT}")
+    parser.add_argument("--out", type=Path, default=None,
+                        help=f"output directory (default {DEFAULT_OUT}; there a survey of other "
+                             "populations, samples, seed, engines, presets or settings is not "
+                             "replaced: see --force)")
+    parser.add_argument("--force", action="store_true",
+                        help=f"without --out, replace the survey in {DEFAULT_OUT} even when it "
+                             "surveyed something else")
+    parser.add_argument("--set", dest="settings_overrides", action="append", default=[],
+                        metavar="ENGINE.KEY=VALUE",
+                        help="change one engine setting from every preset, as `run --set` "
+                             "(repeatable); the tables and summary record it")
     parser.add_argument("--quick", action="store_true",
                         help=f"{QUICK_SAMPLES} samples per population")
     parser.add_argument("--bare", action="store_true",
@@ -87,7 +97,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: bool = False,
-               left_out=None, workers: int | None = None, echo=print) -> dict:
+               left_out=None, workers: int | None = None, echo=print,
+               overrides: dict | None = None) -> dict:
     """The survey in memory: ``{"samples", "runs", "statistics", "rejections", "timings",
     "engine_results", "skipped", "left_out"}`` (columns as ``{name: array}``).
 
@@ -110,7 +121,8 @@ def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: 
             continue
         pairs += [(engine, preset) for preset in presets if (engine, preset) not in left_out]
     begin = clock()
-    survey = run_parts(populations, samples, seed, pairs, workers or os.cpu_count() or 1)
+    survey = run_parts(populations, samples, seed, pairs, workers or os.cpu_count() or 1,
+                       overrides)
     wall = clock() - begin
     impacts = samples * len(populations)
     terms, results = survey.terms, survey.results
@@ -140,7 +152,8 @@ def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: 
              f"({result.wall_s / impacts * 1e6:.0f} µs each), verdicts "
              f"{result.judge_s:.2f} s")
         if bare:
-            bare_times = bare_stepping(engine, preset, scenes, result.steps)
+            bare_times = bare_stepping(engine, preset, scenes, result.steps,
+                                       (overrides or {}).get(engine))
             timings[f"bare {engine} {preset} (steps only)"] = (bare_times["bare_s"], impacts)
             timings[f"bare {engine} {preset} (reset + steps)"] = (
                 bare_times["bare_reset_s"], impacts)
@@ -207,13 +220,33 @@ def sample_columns(every, terms, law_results, routh) -> dict:
     return columns
 
 
+def table_metadata(settings: dict) -> dict:
+    """What every survey table carries in its Parquet metadata: what was surveyed (samples,
+    seed, engines, presets), the installed versions and each engine's preset settings as
+    run, so a table read alone says where it came from."""
+    from harness.run.provenance import package_versions
+
+    engine_settings = {}
+    for name in settings.get("engines", []):
+        engine = load_engine(name)
+        overrides = settings.get("overrides", {}).get(name)
+        engine_settings[name] = {preset: engine.settings(preset, overrides)
+                                 for preset in settings.get("presets", [])}
+    return {"format": "impact-harness-survey", "settings": settings,
+            "versions": package_versions(), "engine_settings": engine_settings}
+
+
 def write_survey(survey: dict, out: Path, settings: dict, figures: bool = True) -> list[Path]:
     """Write the tables, the summary and (unless ``figures`` is False) the figures."""
     out.mkdir(parents=True, exist_ok=True)
-    written = [outputs.write_parquet(survey["samples"], out / "samples.parquet")]
+    about = table_metadata(settings)
+    written = [outputs.write_parquet(survey["samples"], out / "samples.parquet",
+                                     {**about, "table": "samples"})]
     if survey["engine_results"]:
-        written.append(outputs.write_parquet(survey["runs"], out / "runs.parquet"))
-        written.append(outputs.write_parquet(survey["statistics"], out / "statistics.parquet"))
+        written.append(outputs.write_parquet(survey["runs"], out / "runs.parquet",
+                                             {**about, "table": "runs"}))
+        written.append(outputs.write_parquet(survey["statistics"], out / "statistics.parquet",
+                                             {**about, "table": "statistics"}))
     else:  # no engine ran: an earlier survey's tables here would be read as this one's
         for stale in ("runs.parquet", "statistics.parquet"):
             (out / stale).unlink(missing_ok=True)
@@ -244,17 +277,56 @@ def main(args: argparse.Namespace) -> int:
     if samples < 1:
         print("impact-harness survey: --samples must be >= 1", file=sys.stderr)
         return 2
+    from harness.run.runner import parse_overrides
+
+    try:
+        overrides = parse_overrides(args.settings_overrides, engines)
+    except ValueError as error:
+        print(f"impact-harness survey: {error}", file=sys.stderr)
+        return 2
     try:
         populations = resolve_populations(args.populations)
+    except ScenarioError as error:
+        print(f"impact-harness survey: {error}", file=sys.stderr)
+        return 2
+    out = DEFAULT_OUT if args.out is None else args.out
+    if args.out is None and not args.force:
+        other = other_survey(out, populations, samples, args.seed, engines, presets, overrides)
+        if other:
+            print(f"impact-harness survey: {out} holds a survey of {other}; write this one "
+                  "elsewhere with --out DIR, or replace it with --force", file=sys.stderr)
+            return 2
+    try:
         survey = run_survey(populations, samples, args.seed, engines, presets, bare=args.bare,
-                            left_out=left_out, workers=args.workers)
+                            left_out=left_out, workers=args.workers, overrides=overrides)
     except ScenarioError as error:
         print(f"impact-harness survey: {error}", file=sys.stderr)
         return 2
     settings = {"samples": samples, "seed": args.seed,
                 "engines": [r for r in engines if r not in survey["skipped"]],
                 "presets": presets, "left_out": survey["left_out"],
-                "skipped": survey["skipped"]}
-    written = write_survey(survey, args.out, settings, figures=not args.no_figures)
-    print(f"wrote {len(written)} files to {args.out}")
+                "skipped": survey["skipped"], "overrides": overrides}
+    written = write_survey(survey, out, settings, figures=not args.no_figures)
+    print(f"wrote {len(written)} files to {out}")
     return 0
+
+
+def other_survey(out: Path, populations, samples: int, seed: int, engines, presets,
+                 overrides: dict) -> str:
+    """What differs between the survey in ``out`` and the one asked for, as a phrase
+    (``"samples 20 (asked: 1000)"``); "" when ``out`` holds none, or the same survey."""
+    try:
+        found = json.loads((out / SETTINGS_FILE).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return ""
+    if not isinstance(found, dict):
+        return ""
+    asked = {"families": [p.name for p in populations], "samples": samples, "seed": seed,
+             "engines": list(engines), "presets": list(presets), "overrides": overrides}
+    found.setdefault("overrides", {})
+    found["engines"] = list(found.get("engines", [])) + list(found.get("skipped", {}))
+    differ = [f"{key} {json.dumps(found.get(key))} (asked: {json.dumps(value)})"
+              for key, value in asked.items()
+              if (sorted(found.get(key) or []) if isinstance(value, list) else found.get(key))
+              != (sorted(value) if isinstance(value, list) else value)]
+    return "; ".join(differ)

@@ -49,18 +49,21 @@ class EngineResults:
 
 
 def run_engine(engine_name: str, preset: str, scenes, problems=None,
-               law_energy_change=None, terms=None, arrays=None) -> EngineResults:
+               law_energy_change=None, terms=None, arrays=None,
+               overrides: dict | None = None) -> EngineResults:
     """Run every scene through ``engine_name`` at ``preset`` and judge every run.
 
     ``problems``: each scene's ``ImpactProblem`` (the verdicts' input; None: not judged, the
     status is the engine's); ``law_energy_change``: newton-lcp's energy change per scene (J),
     to attribute an energy gain to the law (docs/verdicts.md); ``terms``: the scenes'
     :func:`harness.run.verdicts.prepare` and ``arrays`` their
-    :func:`harness.run.verdicts.term_arrays` (worked out here when None). The runs are judged
-    slice by slice with :func:`harness.run.verdicts.judge_many`, :func:`judge`'s verdicts.
+    :func:`harness.run.verdicts.term_arrays` (worked out here when None); ``overrides``:
+    settings changed from the preset (``--set``). The runs are judged slice by slice with
+    :func:`harness.run.verdicts.judge_many`, :func:`judge`'s verdicts.
     """
     engine = load_engine(engine_name)
-    settings = engine.settings(preset)  # one dict for every run: the adapters cache on it
+    # one dict for every run: the adapters cache on it
+    settings = engine.settings(preset, overrides)
     count = len(scenes)
     velocities = np.zeros((count, WIDTH))
     engine_status = np.empty(count, dtype=object)
@@ -106,7 +109,8 @@ def run_engine(engine_name: str, preset: str, scenes, problems=None,
                          steps, wall, judging)
 
 
-def bare_stepping(engine_name: str, preset: str, scenes, steps) -> dict[str, float]:
+def bare_stepping(engine_name: str, preset: str, scenes, steps,
+                  overrides: dict | None = None) -> dict[str, float]:
     """Seconds of bare stepping of ``scenes`` (``steps[i]`` steps each, as the adapter took).
 
     Returns ``{"bare_s": …, "bare_reset_s": …, "impacts": n}``: the sums over the scenes of
@@ -115,7 +119,7 @@ def bare_stepping(engine_name: str, preset: str, scenes, steps) -> dict[str, flo
     closed after its pass: a pybullet world holds tens of MB.
     """
     engine = load_engine(engine_name)
-    settings = engine.settings(preset)
+    settings = engine.settings(preset, overrides)
     clock = time.perf_counter
     bare = bare_reset = 0.0
     for scene, count in zip(scenes, steps):

@@ -19,24 +19,71 @@ Each table is one ``pandas.read_parquet(path)`` or ``polars.read_parquet(path)``
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
 import numpy as np
 
 from harness.engines import PRESET_ROLES, preset_label
+from harness.run.metrics import fmt_departure
 
 TYPE_NAMES = {1: "1 stick (compr.)", 2: "2 stick (restit.)", 3: "3 reverse (compr.)",
               4: "4 reverse (restit.)", 5: "5 forward slide"}
 
 
-def write_parquet(columns: dict, path: Path) -> Path:
-    """Write ``{name: array}`` as one Parquet table."""
+#: Units of the survey tables' columns, stored in each column's Parquet metadata ("unit").
+#: Departures are fractions of the speed scale (docs/verdicts.md); the reports show them in
+#: percent.
+UNITS = {
+    "departure_poisson": "fraction", "departure_stronge": "fraction", "law_part": "fraction",
+    "solve_part": "fraction", "energy_change_relative": "fraction", "mu": "1", "e": "1",
+    "friction": "1", "restitution": "1", "alpha": "1", "r_m": "1", "alpha_over_rm": "1",
+    "speed": "m/s", "direction_deg": "deg", "placement_deg": "deg", "mass_ratio": "1",
+    "vn": "m/s", "vt": "m/s", "mnn": "1/kg", "mnt": "1/kg", "mtt": "1/kg", "steps": "1",
+    "flagged_fraction": "fraction", "energy_gain_fraction": "fraction",
+}
+#: Units of a drawn body parameter, by the part after the body's name (``box.width``).
+BODY_UNITS = {"mass": "kg", "angle_deg": "deg", "angular_velocity": "rad/s", "width": "m",
+              "height": "m", "length": "m", "radius": "m", "sides": "1"}
+#: The key of the table-wide metadata (JSON): what was surveyed, with which versions.
+METADATA_KEY = "impact_harness"
+
+
+def column_unit(name: str) -> str | None:
+    """The unit of a survey column, or None where it has none (names, codes, flags)."""
+    if name in UNITS:
+        return UNITS[name]
+    if name.startswith(("departure_", "flagged_")) or name.endswith(".from_poisson"):
+        return "fraction"  # quantiles, intervals and reason shares of the departures
+    if name.endswith(".energy_change"):
+        return "J"
+    _, _, field = name.rpartition(".")
+    return BODY_UNITS.get(field) if "." in name else None
+
+
+def write_parquet(columns: dict, path: Path, metadata: dict | None = None) -> Path:
+    """Write ``{name: array}`` as one Parquet table; each column carries its unit
+    (:func:`column_unit`) and the table ``metadata`` as JSON under :data:`METADATA_KEY`.
+    A column of comma-joined names (a run's failing ``reasons``) is written as a list column."""
+
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    table = pa.table({name: _arrow_values(values) for name, values in columns.items()})
-    pq.write_table(table, path)
+    fields, arrays = [], []
+    for name, values in columns.items():
+        if name == "reasons":
+            array = pa.array([[part for part in str(text).split(",") if part]
+                              for text in np.asarray(values).tolist()], pa.list_(pa.string()))
+        else:
+            array = pa.array(_arrow_values(values))
+        unit = column_unit(name)
+        fields.append(pa.field(name, array.type,
+                               metadata=None if unit is None else {"unit": unit}))
+        arrays.append(array)
+    schema = pa.schema(fields, metadata=None if metadata is None else {
+        METADATA_KEY: json.dumps(metadata, sort_keys=True, default=str)})
+    pq.write_table(pa.Table.from_arrays(arrays, schema=schema), path)
     return path
 
 
@@ -47,23 +94,25 @@ def _arrow_values(values):
     return values
 
 
-def _number(value: float) -> str:
-    if value is None or not math.isfinite(value):
-        return "–"
-    if value == 0.0:
-        return "0"
-    return f"{value:.2g}" if abs(value) < 0.01 else f"{value:.3f}"
-
-
 def _percent(value: float) -> str:
     return "–" if not math.isfinite(value) else f"{100 * value:.1f}%"
 
 
+def _with_interval(value: dict, prefix: str) -> str:
+    """A quantile in percent with its bootstrap interval: ``2.6% [1.1%, 4.0%]``."""
+    low, high = value.get(f"{prefix}_low"), value.get(f"{prefix}_high")
+    text = fmt_departure(value[prefix])
+    if low is None or high is None or not (math.isfinite(low) and math.isfinite(high)):
+        return text
+    return f"{text} [{fmt_departure(low)}, {fmt_departure(high)}]"
+
+
 def markdown_table(stats: dict, types: str = "all") -> str:
-    """The statistics as a Markdown table: ``types="all"`` the rows over every type,
-    ``"each"`` the rows per Poisson type."""
-    header = ("| engine | preset | family | type | n | flagged | gains E | from Poisson: "
-              "median | p90 | p99 | max | from Stronge: median | p90 | max | law part: median "
+    """The statistics as a Markdown table, departures in percent: ``types="all"`` the rows
+    over every type, ``"each"`` the rows per Poisson type."""
+    header = ("| engine | preset | family | type | n | flagged | gains E | from Poisson, checked "
+              "runs: median [95% CI] | p90 [95% CI] | max | from Poisson, all runs: median "
+              "[95% CI] | p90 [95% CI] | from Stronge, checked: median | p90 | law part: median "
               "| solve part: median | p90 |")
     lines = [header, "|" + "---|" * (header.count("|") - 1)]
     for row in range(len(stats.get("engine", ()))):
@@ -74,17 +123,18 @@ def markdown_table(stats: dict, types: str = "all") -> str:
         lines.append(
             f"| {value['engine']} | {preset_label(value['engine'], value['preset'])} | "
             f"{value['family']} | "
-            f"{'all' if kind == 0 else kind} | {value['n']} | "
+            f"{'all types' if kind == 0 else kind} | {value['n']} | "
             f"{_percent(value['flagged_fraction'])} | {_percent(value['energy_gain_fraction'])} | "
-            f"{_number(value['departure_poisson_median'])} | "
-            f"{_number(value['departure_poisson_p90'])} | "
-            f"{_number(value['departure_poisson_p99'])} | "
-            f"{_number(value['departure_poisson_max'])} | "
-            f"{_number(value['departure_stronge_median'])} | "
-            f"{_number(value['departure_stronge_p90'])} | "
-            f"{_number(value['departure_stronge_max'])} | "
-            f"{_number(value['law_part_median'])} | {_number(value['solve_part_median'])} | "
-            f"{_number(value['solve_part_p90'])} |")
+            f"{_with_interval(value, 'departure_poisson_median')} | "
+            f"{_with_interval(value, 'departure_poisson_p90')} | "
+            f"{fmt_departure(value['departure_poisson_max'])} | "
+            f"{_with_interval(value, 'departure_poisson_all_median')} | "
+            f"{_with_interval(value, 'departure_poisson_all_p90')} | "
+            f"{fmt_departure(value['departure_stronge_median'])} | "
+            f"{fmt_departure(value['departure_stronge_p90'])} | "
+            f"{fmt_departure(value['law_part_median'])} | "
+            f"{fmt_departure(value['solve_part_median'])} | "
+            f"{fmt_departure(value['solve_part_p90'])} |")
     return "\n".join(lines)
 
 
@@ -117,11 +167,17 @@ def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dic
          + "".join(f" Not run: {label} ({why})." for label, why in
                    settings.get("left_out", {}).items())
          + "".join(f" Not installed: {engine} ({why})." for engine, why in
-                   settings.get("skipped", {}).items())),
+                   settings.get("skipped", {}).items())
+         + "".join(f" Settings changed from every {engine} preset by --set: "
+                   + ", ".join(f"{key}={json.dumps(value)}" for key, value in values.items())
+                   + "." for engine, values in settings.get("overrides", {}).items())),
         ("Departure = ‖u − u_law‖_M / ‖u_before‖_M (kinetic-energy norm; two free bodies in "
-         "their centre of mass's frame). Quantiles over runs judged one impact by the verdict "
-         "checks (docs/verdicts.md); *flagged* = runs failing a check, kept out of the "
-         "quantiles and counted by reason below; *gains E* = ok runs ending "
+         "their centre of mass's frame), in percent. *Checked runs*: the runs judged one "
+         "impact by the verdict checks (docs/verdicts.md); *all runs*: every run, flagged "
+         "ones included, so a large flagged share cannot hide the worst runs; *flagged* = "
+         "runs failing a check, counted by reason below. [95% CI]: a percentile-bootstrap "
+         "interval (1,000 resamples of the group's runs); with 20 runs a p90 is one of the "
+         "two largest. *gains E* = checked runs ending "
          "with more kinetic energy than they began with (by more than 1e-9 of it). "
          "*law part* = newton-lcp from Poisson, *solve part* = engine from newton-lcp."),
         "",

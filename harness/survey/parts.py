@@ -40,7 +40,7 @@ from harness.survey.sampling import REJECTIONS, sample_range
 #: time than one of 448, for every pair), and the last parts, which decide when the workers
 #: finish, stay short.
 MIN_PART = 8
-#: What the forked workers read: ``(populations, seed, pairs)``.
+#: What the forked workers read: ``(populations, seed, pairs, overrides)``.
 _SHARED: tuple = ()
 
 
@@ -92,13 +92,15 @@ def part_bounds(samples: int, workers: int) -> list[tuple[int, int]]:
     return bounds
 
 
-def run_parts(populations, samples: int, seed: int, pairs, workers: int = 1) -> Survey:
+def run_parts(populations, samples: int, seed: int, pairs, workers: int = 1,
+              overrides: dict | None = None) -> Survey:
     """Every part of ``samples`` per population through every ``(engine, preset)`` pair, on
-    ``workers`` processes, joined. Raises the :class:`ScenarioError` of the first sample (in
-    population, then index order) that needs too many draws."""
+    ``workers`` processes, joined; ``overrides``: ``engine -> {setting: value}`` (``--set``)
+    applied over every preset of that engine. Raises the :class:`ScenarioError` of the first
+    sample (in population, then index order) that needs too many draws."""
     global _SHARED
     bounds = part_bounds(samples, workers)
-    _SHARED = (tuple(populations), seed, tuple(pairs))
+    _SHARED = (tuple(populations), seed, tuple(pairs), dict(overrides or {}))
     try:
         parts = map_forked(run_part, bounds, min(workers, len(bounds)))
     finally:
@@ -115,7 +117,7 @@ def run_parts(populations, samples: int, seed: int, pairs, workers: int = 1) -> 
 def run_part(bounds: tuple[int, int]) -> PartResult:
     """Samples ``bounds`` of every population, their contact terms, newton-lcp's energy
     change (the verdicts' attribution of a gain), every pair's runs and verdicts."""
-    populations, seed, pairs = _SHARED
+    populations, seed, pairs, overrides = _SHARED
     begin, end = bounds
     clock = time.perf_counter
     cpu = time.process_time()
@@ -139,7 +141,8 @@ def run_part(bounds: tuple[int, int]) -> PartResult:
     prepared = verdicts.prepare_many(scenes, terms.problems)
     arrays = verdicts.term_arrays(terms.problems, prepared)
     timings["verdict terms"] = clock() - tick
-    results = [run_engine(engine, preset, scenes, terms.problems, energy, prepared, arrays)
+    results = [run_engine(engine, preset, scenes, terms.problems, energy, prepared, arrays,
+                          overrides.get(engine))
                for engine, preset in pairs]
     return PartResult([SampleRow(s.population, s.index, s.attempts, s.parameters)
                        for s in every],

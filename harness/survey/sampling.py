@@ -100,7 +100,10 @@ def _shape(kind: str, values: dict):
     return Polygon(points)
 
 
-def _draw_body(spec, rng, prefix: str, drawn: dict, mass: float | None = None) -> Body:
+def _draw_body(spec, rng, drawn: dict, mass: float | None = None) -> Body:
+    """Draw one body of ``spec``; its drawn parameters go into ``drawn`` under the body's own
+    name as the population file writes it (``hex.sides``, ``box.width``)."""
+    prefix = spec.name
     values = {key: _draw(distribution, rng) for key, distribution in spec.shape_parameters}
     mass = _draw(spec.mass, rng) if mass is None else mass
     angle_deg = _draw(spec.angle_deg, rng)
@@ -169,7 +172,7 @@ def draw_scene(population: Population, rng):
     direction = _draw(population.direction_deg, rng)
     drawn.update(restitution=e, friction=mu, speed=speed, direction_deg=direction)
     if population.ground:
-        body = _draw_body(population.bodies[0], rng, "b", drawn)
+        body = _draw_body(population.bodies[0], rng, drawn)
         turned, radius = geometry.turned_core(body)
         # geometry.place_on_ground: lowered by its lowest point (its world core at the origin).
         lowest = float((turned + np.zeros(2))[:, 1].min()) - radius
@@ -182,9 +185,9 @@ def draw_scene(population: Population, rng):
         exact = geometry.core_ground_contact(core, radius)
         one_point = geometry.core_ground_contact(core, radius, ONE_POINT_TOLERANCE)
     else:
-        body_a = _draw_body(population.bodies[0], rng, "a", drawn)
+        body_a = _draw_body(population.bodies[0], rng, drawn)
         ratio = _draw(population.mass_ratio, rng) if population.mass_ratio is not None else None
-        body_b = _draw_body(population.bodies[1], rng, "b", drawn,
+        body_b = _draw_body(population.bodies[1], rng, drawn,
                            mass=None if ratio is None else ratio * body_a.mass)
         drawn["mass_ratio"] = body_b.mass / body_a.mass
         placement = math.radians(_draw(population.placement_deg, rng))

@@ -34,8 +34,13 @@ def law_record(scenario: str = "disk-direct") -> Record:
                   u_after=[1.0, 2.0, 0.0], departure={"poisson": 0.0, "stronge": 0.0})
 
 
-def results_file(tmp_path, name, records):
-    return write_results(tmp_path / name, records, {"gates": []}, {})
+def results_file(tmp_path, name, records, provenance=None, scenarios=None):
+    return write_results(tmp_path / name, records, {"gates": [], **(provenance or {})},
+                         scenarios or {})
+
+
+DISK_SPEEDS = {"disk-direct": {"speed_labels": ["disk.v_x [m/s]", "disk.v_y [m/s]",
+                                                "disk.ω [rad/s]"]}}
 
 
 def run_compare(*argv) -> int:
@@ -97,17 +102,58 @@ def test_bad_input_exits_2(tmp_path):
 
 def test_csv_holds_both_values_and_the_change(tmp_path):
     before = results_file(tmp_path, "a.json", [law_record(), engine_record(0.100)])
-    after = results_file(tmp_path, "b.json", [law_record(), engine_record(0.115)])
+    after = results_file(tmp_path, "b.json", [law_record(), engine_record(0.115)],
+                         scenarios=DISK_SPEEDS)
     out = tmp_path / "diff.csv"
     assert run_compare(before, after, "--csv", out) == 1
     rows = list(csv.DictReader(out.open()))
     assert sorted(row["source"] for row in rows) == ["poisson", "pymunk.defaults"]
     engine = next(row for row in rows if row["source"] == "pymunk.defaults")
-    assert float(engine["departure_poisson_a"]) == pytest.approx(0.100)
-    assert float(engine["departure_poisson_b"]) == pytest.approx(0.115)
-    assert float(engine["departure_poisson_change"]) == pytest.approx(0.015)
-    assert float(engine["speed_change"]) == 0.0
+    # one unit with the terminal and the report: percent, and percentage points
+    assert float(engine["departure_poisson_a_pct"]) == pytest.approx(10.0)
+    assert float(engine["departure_poisson_b_pct"]) == pytest.approx(11.5)
+    assert float(engine["departure_poisson_change_pp"]) == pytest.approx(1.5)
+    assert float(engine["speed_change_pct"]) == 0.0
+    # speeds named as the scenario names them, not u1, u2 …
+    assert engine["speed_1_name"] == "disk.v_x [m/s]" and float(engine["speed_2_b"]) == 2.0
     assert engine["status_a"] == engine["status_b"] == "ok"
+
+
+def test_summary_per_source_against_one_law_with_the_settings_that_differ(tmp_path, capsys):
+    settings = {"pymunk": {"defaults": {"iterations": 10, "time_step": 0.01}}}
+    before = results_file(
+        tmp_path, "a.json",
+        [law_record(), engine_record(0.100), engine_record(0.300, preset="accurate"),
+         engine_record(0.2, scenario="disk-oblique")],
+        {"versions": {"pymunk": "7.3.1"}, "engine_settings": settings})
+    changed = {"pymunk": {"defaults": {"iterations": 2, "time_step": 0.01}}}
+    after = results_file(
+        tmp_path, "b.json",
+        [law_record(), engine_record(0.115), engine_record(0.250, preset="accurate"),
+         engine_record(0.1, scenario="rod-45-slip-reversal")],
+        {"versions": {"pymunk": "7.4.0"}, "engine_settings": changed})
+    rows, only_a, only_b = compare.compare(*map(compare.read_results, (before, after)))
+    summary = {row.source: row for row in compare.summarise(rows, only_a, only_b, "poisson",
+                                                            0.01)}
+    defaults, accurate = summary["pymunk.defaults"], summary["pymunk.accurate"]
+    assert (defaults.matched, defaults.worse, defaults.improved) == (1, 1, 0)
+    assert defaults.worst_change == pytest.approx(0.015)
+    assert (defaults.new, defaults.gone) == (1, 1)  # one scenario only in B, one only in A
+    assert (accurate.improved, accurate.worse) == (1, 0)
+    assert accurate.median_change == pytest.approx(-0.05)
+    assert summary["poisson"].matched == 1 and summary["poisson"].worst_change == 0.0
+    differences = compare.setting_differences(*map(compare.read_results, (before, after)))
+    assert ("version of pymunk", "7.3.1", "7.4.0") in differences
+    assert ("pymunk.defaults.iterations", "10", "2") in differences
+    assert not any("time_step" in what for what, _, _ in differences)
+    # the terminal and the page show the same: the summary, the differences, before/after
+    page = tmp_path / "compare.html"
+    assert run_compare(before, after, "--html", page, "--law", "stronge") == 1
+    text = capsys.readouterr().out
+    assert "departures from stronge" in text and "pymunk.defaults.iterations: 10 → 2" in text
+    assert "10%" in text and "11.5%" in text and "+1.5 pp" in text
+    html = page.read_text(encoding="utf-8")
+    assert "Per source" in html and "pymunk.defaults.iterations" in html and "11.5%" in html
 
 
 def test_help_documents_the_exit_status(capsys):

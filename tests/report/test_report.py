@@ -198,7 +198,7 @@ def test_a_rerun_with_the_same_results_redraws_nothing(quick_report):
 
 def test_formatting():
     assert views.fmt_departure(0.2073) == "20.7%"
-    assert views.fmt_departure(0.0) == "0"
+    assert views.fmt_departure(0.0) == "0%"
     assert views.fmt_departure(3e-14) == "3e-12%"
     assert views.fmt_departure(float("nan")) == "n/a"
     page = html.markdown_to_html("## Head\n\n| a | b |\n|---|---:|\n| 1 | `x` |\n")
@@ -300,3 +300,89 @@ def test_flat_face_points_never_enter_a_single_contact_law_cell():
     assert views.single_contact(sweep_run(2, 0.1))  # results without references: one contact
     assert views.engine_scenarios(Results([flat])) == []
     assert views.engine_scenarios(Results([flat, single])) == ["sweep"]
+
+
+#: What a Python repr looks like in a page: a dict or list literal of strings, or a bare
+#: None/True/False between separators (a sentence says "not a failure", never "False").
+PYTHON_REPR = re.compile(r"\{'|\['|: None[,}]|: (True|False)[,}]|np\.float64|array\(")
+
+
+def test_a_flagged_runs_reasons_read_as_sentences_never_as_python():
+    reason = {"name": "penetration", "value": 0.0057, "tolerance": 0.005,
+              "detail": "deepest overlap 0.0057 m > 0.005 m", "attribution": None,
+              "fails": True}
+    remark = {"name": "energy-gain", "value": 0.11, "tolerance": None,
+              "detail": "newton-lcp gains 0.1148 J on this problem", "attribution": "law",
+              "fails": False}
+    run = sweep_run(0, 0.03, "ok")
+    run.diagnostics.update(verdict="flagged", reasons=[reason, remark])
+    footnotes: dict[str, int] = {}
+    cell = html.status_cell(run, footnotes)
+    notes = html.footnotes_html(footnotes)
+    assert "<sup>1</sup>" in cell and "<sup>2</sup>" in cell
+    assert "penetration: deepest overlap 0.0057 m &gt; 0.005 m" in notes
+    assert ("energy-gain: newton-lcp gains 0.1148 J on this problem (attributed to the law);"
+            " reported, not a failure") in notes
+    assert not PYTHON_REPR.search(cell + notes)
+    # what the pattern catches: the page as it was before reasons were sentences
+    assert PYTHON_REPR.search(html.footnotes_html({str(reason): 1}))
+
+
+def test_no_python_repr_on_any_page(quick_report):
+    import html as html_module
+    out = quick_report[0]
+    for page in [out / "index.html", out / "summary.md", *out.glob("*.html")]:
+        text = html_module.unescape(page.read_text(encoding="utf-8"))
+        text = re.sub(r"<img[^>]*>|<svg.*?</svg>", "", text, flags=re.S)
+        match = PYTHON_REPR.search(text)
+        assert match is None, f"{page.name}: {text[max(0, match.start() - 80):match.end() + 80]}"
+
+
+def test_overrides_are_labelled_by_where_they_were_set():
+    # pymunk ran with --set iterations=2 and its scenario set time_step: each is named as such
+    run = sweep_run(0, 0.03, overrides={"iterations": 2, "time_step": 0.001})
+    run.source = "pymunk"
+    command = {"pymunk": {"iterations": 2}}
+    assert views.split_overrides(run, command) == ({"iterations": 2}, {"time_step": 0.001})
+    text = html.overrides_paragraph([run], command)
+    assert "on the command line (<code>--set</code>): pymunk: <code>iterations=2</code>" in text
+    assert "by this scenario (<code>[engine_settings]</code>): pymunk: <code>time_step=0.001" \
+        in text
+    # only --set: nothing is said of the scenario
+    only = sweep_run(0, 0.03, overrides={"iterations": 2})
+    only.source = "pymunk"
+    text = html.overrides_paragraph([only], command)
+    assert "--set" in text and "by this scenario" not in text
+    # the engine notes say the runs are not the preset the text describes
+    results = Results(records=[only], provenance={"settings_overrides": command})
+    why = html.why_html(results)
+    assert "every run with <code>--set iterations=2</code>" in why
+    assert "runs with their scenario's overrides" not in why
+
+
+def test_a_page_says_where_its_numbers_come_from_and_when_they_are_older():
+    from harness.report.pages import provenance_html
+
+    made = {"created_utc": "2026-11-01T10:00:00Z", "git": {"commit": "a" * 40, "dirty": False},
+            "machine": {"cpu_model": "AMD EPYC"}}
+    same = provenance_html(made, {"git": {"commit": "a" * 40}}, "make bench")
+    assert "Measured 2026-11-01T10:00:00Z at commit <code>aaaaaaaaaa</code> on AMD EPYC" in same
+    assert "Older" not in same
+    older = provenance_html(made, {"git": {"commit": "b" * 40},
+                                   "created_utc": "2026-11-20T00:00:00Z"}, "make bench")
+    assert "<b>Older than the report</b>" in older and "bbbbbbbbbb" in older
+    assert "<code>make bench</code>" in older
+    assert "commit not recorded" in provenance_html({"time": "2026"}, {}, "make stress")
+
+
+def test_only_a_report_of_library_scenarios_reproduces_table3(tmp_path):
+    from harness.scenarios.schema import SCENARIO_DIR
+
+    mine = Results(records=[], scenarios={"mine": {"path": str(tmp_path / "mine.toml")}})
+    assert not views.has_library_scenarios(mine)
+    library = Results(records=[], scenarios={
+        "mine": {"path": str(tmp_path / "mine.toml")},
+        "disk-oblique": {"path": str(SCENARIO_DIR / "disk-oblique.toml")}})
+    assert views.has_library_scenarios(library)
+    assert "#table3" not in html.contents_html(["mine"], {}, None, (), False)
+    assert "#table3" in html.contents_html(["mine"], {}, None, (), True)

@@ -119,10 +119,27 @@ def test_the_table_is_the_surveys_statistics(surveyed):
     header, rows = table[0], table[1:]
     assert header[:6] == ["engine", "preset", "family", "n", "flagged", "gains E"]
     assert len(rows) == len(overall) == 2 * 2  # two presets, two families
-    shown = {(row[2], row[3], *row[6:]) for row in rows}
+    assert header[6:] == ["from Poisson, checked runs: median", "p90", "max",
+                          "from Poisson, all runs: median", "p90",
+                          "from Stronge, checked: median", "p90"]
+
+    def cell(i, prefix, interval=True):
+        text = fmt_departure(float(stats[prefix][i]))
+        low, high = stats[f"{prefix}_low"][i], stats[f"{prefix}_high"][i]
+        return (text, f"[{fmt_departure(float(low))}, {fmt_departure(float(high))}]"
+                if interval else "")
+
+    def split(text):  # a cell's value, then its interval in small type (if any)
+        value, _, rest = text.partition("[")
+        return value.strip(), f"[{rest.strip()}" if rest else ""
+
+    shown = {(row[2], row[3], *(split(text) for text in row[6:])) for row in rows}
     expected = {(str(stats["family"][i]), str(int(stats["n"][i])),
-                 *(fmt_departure(float(stats[f"departure_{law}_{name}"][i]))
-                   for law in ("poisson", "stronge") for name in ("median", "p90", "max")))
+                 cell(i, "departure_poisson_median"), cell(i, "departure_poisson_p90"),
+                 (fmt_departure(float(stats["departure_poisson_max"][i])), ""),
+                 cell(i, "departure_poisson_all_median"), cell(i, "departure_poisson_all_p90"),
+                 *((fmt_departure(float(stats[f"departure_stronge_{name}"][i])), "")
+                   for name in ("median", "p90")))
                 for i in overall}
     assert shown == expected
     assert {int(stats["n"][i]) for i in overall} == {SAMPLES}

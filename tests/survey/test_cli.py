@@ -50,7 +50,7 @@ def test_poisson_departs_from_itself_by_zero_and_newton_lcp_by_the_law_part(surv
 def test_summary_lists_every_family_and_the_timings(survey_dir):
     text = (survey_dir / "summary.md").read_text()
     for population in resolve_populations():
-        assert f"| pymunk | accurate | {population.name} | all |" in text
+        assert f"| pymunk | accurate | {population.name} | all types |" in text
     assert "## Rejected draws" in text and "| engine pymunk accurate |" in text
 
 
@@ -88,3 +88,69 @@ def test_default_survey_leaves_mujoco_matched_bounce_out_and_says_so(tmp_path):
     runs = pq.read_table(tmp_path / "both" / "runs.parquet").to_pydict()
     assert set(runs["preset"]) == {"defaults", "accurate"}
     assert "Not run" not in (tmp_path / "both" / "summary.md").read_text()
+
+
+def test_tables_describe_themselves_and_keep_the_users_names(survey_dir):
+    import json
+
+    from harness.survey.outputs import METADATA_KEY
+
+    for name in ("samples", "runs", "statistics"):
+        schema = pq.read_schema(survey_dir / f"{name}.parquet")
+        about = json.loads(schema.metadata[METADATA_KEY.encode()])
+        assert about["table"] == name and about["settings"]["seed"] == 5
+        assert about["settings"]["samples"] == SAMPLES and "numpy" in about["versions"]
+        assert about["engine_settings"]["pymunk"]["accurate"]["iterations"] == 100
+    runs = pq.read_schema(survey_dir / "runs.parquet")
+    assert runs.field("departure_poisson").metadata == {b"unit": b"fraction"}
+    assert runs.field("reasons").type.value_type == "string"
+    reasons = pq.read_table(survey_dir / "runs.parquet").column("reasons").to_pylist()
+    assert all(isinstance(names, list) and "," not in "".join(names) for names in reasons)
+    # drawn parameters under the bodies' own names, as the population files write them
+    samples = pq.read_schema(survey_dir / "samples.parquet")
+    assert "rod.length" in samples.names and "slab.width" in samples.names
+    assert "polygon.sides" in samples.names and "box.height" in samples.names
+    bodies = {body.name for population in resolve_populations() for body in population.bodies}
+    drawn = {column.split(".")[0] for column in samples.names if column.endswith(".mass")}
+    assert drawn == bodies
+    assert samples.field("rod.length").metadata == {b"unit": b"m"}
+
+
+def test_set_changes_a_setting_of_every_preset_and_is_recorded(tmp_path):
+    import json
+
+    from harness.survey.outputs import METADATA_KEY
+
+    out = tmp_path / "survey"
+    code = main(["survey", "spinning-disk", "--samples", "2", "--engines", "pymunk",
+                 "--preset", "accurate", "--set", "pymunk.iterations=3", "--out", str(out),
+                 "--no-figures", "--workers", "1"])
+    assert code == 0
+    about = json.loads(pq.read_schema(out / "runs.parquet").metadata[METADATA_KEY.encode()])
+    assert about["settings"]["overrides"] == {"pymunk": {"iterations": 3}}
+    assert about["engine_settings"]["pymunk"]["accurate"]["iterations"] == 3
+    assert "by --set: iterations=3" in (out / "summary.md").read_text(encoding="utf-8")
+    assert main(["survey", "--samples", "2", "--engines", "pymunk", "--set",
+                 "pymunk.iterations=-1", "--out", str(out)]) == 2
+    assert main(["survey", "--samples", "2", "--engines", "pymunk", "--set",
+                 "mujoco.iterations=3", "--out", str(out)]) == 2  # engine not selected
+
+
+def test_without_out_another_survey_is_not_replaced(tmp_path, monkeypatch, capsys):
+    import json
+
+    monkeypatch.chdir(tmp_path)
+    existing = tmp_path / "reports" / "survey"
+    existing.mkdir(parents=True)
+    settings = {"samples": 20, "seed": 0, "engines": ["pymunk"], "presets": ["accurate"],
+                "families": ["spinning-disk"], "skipped": {}}
+    (existing / "settings.json").write_text(json.dumps(settings))
+    argv = ["survey", "spinning-disk", "--samples", "2", "--engines", "pymunk", "--preset",
+            "accurate", "--no-figures", "--workers", "1"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "reports/survey holds a survey of samples 20 (asked: 2)" in err and "--force" in err
+    assert sorted(p.name for p in existing.iterdir()) == ["settings.json"]  # untouched
+    assert main(argv + ["--force"]) == 0
+    # the same survey again replaces it without --force
+    assert main(argv) == 0

@@ -98,7 +98,7 @@ def test_rejected_draws_are_counted_by_reason():
     # Half the draws lay the box flat on the ground: two contact points, redrawn.
     population = parse_population(tomllib.loads(BOX.replace("ANGLE", "{ choice = [0.0, 30.0] }")))
     sample_set = sample_population(population, 20, seed=1)
-    assert all(s.parameters["b.angle_deg"] == 30.0 for s in sample_set.samples)
+    assert all(s.parameters["box.angle_deg"] == 30.0 for s in sample_set.samples)
     assert sample_set.rejections["two-points"] == sum(s.attempts - 1 for s in sample_set.samples)
     assert sample_set.rejections["two-points"] > 0
 
@@ -150,15 +150,16 @@ def reference_draw_scene(population, rng):
     speed, direction = population.speed.draw(rng), population.direction_deg.draw(rng)
     drawn.update(restitution=e, friction=mu, speed=speed, direction_deg=direction)
     if population.ground:
-        body = geometry.place_on_ground(reference_body(population.bodies[0], rng, "b", drawn))
+        body = geometry.place_on_ground(
+            reference_body(population.bodies[0], rng, population.bodies[0].name, drawn))
         body = body.moved(velocity=sampling._velocity(speed, direction, geometry.GROUND_NORMAL))
         drawn["mass_ratio"] = math.nan
         scene = Scene((body,), float(e), float(mu), ground=True, name=population.name)
         exact = geometry.ground_contact(body)
     else:
-        body_a = reference_body(population.bodies[0], rng, "a", drawn)
+        body_a = reference_body(population.bodies[0], rng, population.bodies[0].name, drawn)
         ratio = population.mass_ratio.draw(rng) if population.mass_ratio is not None else None
-        body_b = reference_body(population.bodies[1], rng, "b", drawn,
+        body_b = reference_body(population.bodies[1], rng, population.bodies[1].name, drawn,
                                 mass=None if ratio is None else ratio * body_a.mass)
         drawn["mass_ratio"] = body_b.mass / body_a.mass
         placement = math.radians(population.placement_deg.draw(rng))

@@ -1,0 +1,126 @@
+"""``impact-harness export RESULTS --out FILE``: the records as one tidy long table.
+
+::
+
+    impact-harness export reports/results.json --out records.parquet   # or .csv
+
+One row per run × law: a law's record gives a row per law it is compared with (its departure
+from each), an engine run a row per law too, so "departure of pymunk.accurate from Poisson
+in scenario X" is one row and a pivot or group-by is one call in pandas, polars or a
+spreadsheet. Columns: ``scenario``, ``point`` (the sweep point's label, empty for a single
+point), ``point_index``, ``point_value``, ``source`` (``"poisson"`` or ``"pymunk.accurate"``),
+``engine`` (empty for a law), ``preset``, ``law`` (the law departed from), ``departure`` (a
+fraction, as in the results file; ``departure_pct`` in percent, as the reports show it),
+``status``, ``verdict``, ``reasons`` (the failing checks' names: a list column in Parquet,
+``;``-separated in CSV), ``overrides`` (the engine settings the run overrode, as JSON).
+Every column and its unit are also in the Parquet file's metadata.
+
+Exit status: 0 written; 2 bad input (results file missing or not a results file, an output
+that is not a new or regular ``.csv``/``.parquet`` file).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+from pathlib import Path
+
+from harness.run.records import ANALYTIC, Results, read_results
+
+COLUMNS = ("scenario", "point", "point_index", "point_value", "source", "engine", "preset",
+           "law", "departure", "departure_pct", "status", "verdict", "reasons", "overrides")
+UNITS = {"departure": "fraction", "departure_pct": "percent"}
+
+
+def long_rows(results: Results) -> list[dict]:
+    """One row per record × law it has a departure from, in the file's record order."""
+    rows = []
+    for record in results.records:
+        engine = "" if record.source == ANALYTIC else record.source
+        overrides = (record.diagnostics or {}).get("settings_overrides") or {}
+        common = {"scenario": record.scenario,
+                  "point": str(record.point.get("label") or ""),
+                  "point_index": int(record.point.get("index", 0)),
+                  "point_value": record.point.get("value"),
+                  "source": record.label, "engine": engine,
+                  "preset": record.preset or "", "status": record.status,
+                  "verdict": record.verdict or "",
+                  "reasons": list(record.failing_reasons),
+                  "overrides": json.dumps(overrides, sort_keys=True) if overrides else ""}
+        for law, departure in record.departure.items():
+            value = None if departure is None else float(departure)
+            rows.append({**common, "law": law, "departure": value,
+                         "departure_pct": None if value is None else 100.0 * value})
+    return rows
+
+
+def write_long(results: Results, path: Path) -> int:
+    """Write :func:`long_rows` to ``path`` (``.csv`` or ``.parquet``); the row count."""
+    rows = long_rows(results)
+    if path.suffix == ".parquet":
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        types = {"point_index": pa.int64(), "point_value": pa.float64(),
+                 "departure": pa.float64(), "departure_pct": pa.float64(),
+                 "reasons": pa.list_(pa.string())}
+        provenance = results.provenance or {}
+        schema = pa.schema(
+            [pa.field(name, types.get(name, pa.string()),
+                      metadata={"unit": UNITS[name]} if name in UNITS else None)
+             for name in COLUMNS],
+            metadata={"impact_harness": json.dumps(
+                {"format": "impact-harness-records-long",
+                 "created_utc": provenance.get("created_utc"), "git": provenance.get("git"),
+                 "versions": provenance.get("versions")}, sort_keys=True)})
+        values = {name: [row[name] for row in rows] for name in COLUMNS}
+        values["point_value"] = [v if isinstance(v, (int, float)) else None
+                                 for v in values["point_value"]]
+        pq.write_table(pa.table(values, schema=schema), path)
+    else:
+        with path.open("w", newline="", encoding="utf-8") as handle:
+            writer = csv.DictWriter(handle, COLUMNS)
+            writer.writeheader()
+            for row in rows:
+                writer.writerow({**row, "reasons": ";".join(row["reasons"]),
+                                 "point_value": "" if row["point_value"] is None
+                                 else row["point_value"],
+                                 "departure": "" if row["departure"] is None
+                                 else row["departure"],
+                                 "departure_pct": "" if row["departure_pct"] is None
+                                 else row["departure_pct"]})
+    return len(rows)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.description = __doc__.split("\n\n")[0].strip("`: ").replace("``", "")
+    parser.epilog = __doc__.split("\n\n")[-1]
+    parser.add_argument("results", type=Path, help="a results file (reports/results.json)")
+    parser.add_argument("--out", type=Path, required=True,
+                        help="the table to write: FILE.csv or FILE.parquet")
+
+
+def main(args) -> int:
+    out = args.out
+    if out.suffix not in (".csv", ".parquet"):
+        print(f"impact-harness export: --out {out}: the file must end in .csv or .parquet")
+        return 2
+    if out.exists() and not out.is_file():
+        print(f"impact-harness export: --out {out}: not a regular file; give a new or "
+              "regular file")
+        return 2
+    if not out.parent.is_dir():
+        print(f"impact-harness export: --out {out}: the directory {out.parent} does not exist")
+        return 2
+    try:
+        results = read_results(args.results)
+    except (OSError, ValueError, KeyError, TypeError) as error:
+        print(f"impact-harness export: {error}")
+        return 2
+    count = write_long(results, out)
+    print(f"wrote {count} rows (run × law) to {out}")
+    return 0
+
+
+__all__ = ["COLUMNS", "add_arguments", "long_rows", "main", "write_long"]
