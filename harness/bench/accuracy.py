@@ -212,41 +212,101 @@ def pareto_front(points: list[tuple[float, float]]) -> list[tuple[float, float]]
     return front
 
 
+def setting_label(row: dict, varying: set[str] | None = None) -> str:
+    """A point's setting as a reader names it: the overrides it sweeps (``iterations=50``;
+    only the ``varying`` keys when given: a time step every point shares says nothing), or
+    the preset's name."""
+    overrides = {key: value for key, value in (row.get("overrides") or {}).items()
+                 if varying is None or key in varying}
+    if not overrides:
+        return str(row.get("setting") or row.get("preset") or "")
+    return ", ".join(f"{key}={value:g}" if isinstance(value, float) else f"{key}={value}"
+                     for key, value in overrides.items())
+
+
+def varying_keys(rows: list[dict]) -> set[str]:
+    """The override keys whose value differs between ``rows``."""
+    seen: dict[str, set[str]] = {}
+    for row in rows:
+        for key, value in (row.get("overrides") or {}).items():
+            seen.setdefault(key, set()).add(repr(value))
+    keys = {key for key, values in seen.items() if len(values) > 1}
+    # a key some rows leave at the preset varies too
+    keys |= {key for key in seen if any(key not in (row.get("overrides") or {})
+                                        for row in rows)}
+    return keys
+
+
 def write_pareto_figure(result: dict, path: Path) -> None:
+    """Per family, wall time per impact against departure, one point per setting; the Pareto
+    front of the departures from the engine's own law is drawn and its points are labelled
+    with their setting; the legend sits below the panels, outside the data."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import LogLocator, NullFormatter
 
-    figure, axes = plt.subplots(1, len(FAMILIES), figsize=(4.2 * len(FAMILIES), 4.0), sharey=True)
+    figure, axes = plt.subplots(1, len(FAMILIES), figsize=(4.6 * len(FAMILIES), 6.6),
+                                sharey=True)
     floor = 1e-17  # departures of exactly 0 are drawn here
+    varying = varying_keys(result["rows"])
     for axis, family in zip(axes, FAMILIES):
         rows = [r for r in result["rows"] if r["family"] == family and "departure" in r
                 and r["setting"] != REFERENCE_LABEL]
         times = np.array([r["time_per_impact_s"] for r in rows]) * 1e6
-        for law, style in (("poisson", dict(marker="x", color="tab:grey", alpha=0.5)),
-                           ("stronge", dict(marker="+", color="tab:olive", alpha=0.5))):
+        for law, style in (("poisson", dict(marker="x", color="#777777", alpha=0.6)),
+                           ("stronge", dict(marker="+", color="#b8860b", alpha=0.7))):
             values = np.array([max(r["departure"][law], floor) for r in rows])
-            axis.scatter(times, values, s=14, label=f"vs {law}", **style)
+            axis.scatter(times, values, s=18, label=f"from {law} (every setting)", **style)
         own = np.array([max(r["departure"]["own"], floor) for r in rows])
-        colours = ["tab:blue" if r["status"] == "ok" else "tab:red" for r in rows]
-        axis.scatter(times, own, s=18, c=colours, label=f"vs own law ({result['own_law']})",
-                     zorder=3)
-        front = pareto_front(list(zip(times.tolist(), own.tolist())))
+        ok = np.array([r["status"] == "ok" for r in rows], dtype=bool)
+        axis.scatter(times[ok], own[ok], s=24, color="#0072b2", zorder=3,
+                     label=f"from its own law ({result['own_law']})")
+        axis.scatter(times[~ok], own[~ok], s=24, color="#d55e00", marker="s", zorder=3,
+                     label="status not ok (own law)")
+        front = pareto_front(list(zip(times[ok].tolist(), own[ok].tolist())))
         if front:
-            axis.step(*zip(*front), where="post", color="tab:blue", linewidth=1)
+            axis.step(*zip(*front), where="post", color="#0072b2", linewidth=1,
+                      label="Pareto front (numbered: settings below)")
+            # the front's points numbered on the plot, their settings listed under the panel
+            on_front = {point: None for point in front}
+            names = []
+            for row, time_us, value in zip(rows, times.tolist(), own.tolist()):
+                if row["status"] == "ok" and (time_us, value) in on_front \
+                        and on_front[(time_us, value)] is None:
+                    names.append(setting_label(row, varying))
+                    on_front[(time_us, value)] = len(names)
+                    axis.annotate(str(len(names)), (time_us, value), fontsize=9,
+                                  xytext=(4, 2), textcoords="offset points",
+                                  color="#0072b2", fontweight="bold")
+            listing = axis.text(0.0, -0.2, "\n".join(f"{number}  {name}" for number, name
+                                                    in enumerate(names, 1)),
+                                transform=axis.transAxes, va="top", ha="left", fontsize=8.5)
+            listing.set_in_layout(False)
         for threshold in THRESHOLDS:
             axis.axhline(threshold, color="black", linestyle=":", linewidth=0.8)
         axis.set_xscale("log")
         axis.set_yscale("log")
-        axis.set_title(family)
-        axis.set_xlabel("wall time per impact (µs)")
+        axis.yaxis.set_major_locator(LogLocator(base=10, numticks=7))
+        axis.xaxis.set_major_locator(LogLocator(base=10, numticks=5))
+        axis.xaxis.set_minor_formatter(NullFormatter())  # 2×10², 3×10² … overlapped
+        axis.set_title(family, fontsize=12)
+        axis.set_xlabel("wall time per impact [µs]", fontsize=11)
+        axis.tick_params(labelsize=10)
         axis.grid(True, which="major", alpha=0.3)
-    axes[0].set_ylabel("departure ‖Δu‖_M / ‖u_before‖_M")
-    axes[0].legend(fontsize=7, loc="lower left")
-    figure.suptitle(f"{result['engine']} {result['version']}: cost vs accuracy "
-                    f"(red: status not ok; dotted: 1% and 0.1%)")
-    figure.tight_layout()
+    axes[0].set_ylabel("departure ‖Δu‖_M / ‖u_before‖_M", fontsize=11)
+    handles, labels = axes[0].get_legend_handles_labels()
+    for axis in axes[1:]:  # a panel may have what the first lacks (a red point, a front)
+        for handle, label in zip(*axis.get_legend_handles_labels()):
+            if label not in labels:
+                handles.append(handle)
+                labels.append(label)
+    figure.legend(handles, labels, loc="upper center", ncol=len(labels), fontsize=10,
+                  frameon=False, bbox_to_anchor=(0.5, 0.955))
+    figure.suptitle(f"{result['engine']} {result['version']}: time against departure per "
+                    "setting (dotted: 1% and 0.1%)", fontsize=13)
+    figure.tight_layout(rect=(0, 0.3, 1, 0.93))
     figure.savefig(path, dpi=110)
     plt.close(figure)
 

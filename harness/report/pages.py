@@ -95,9 +95,41 @@ def json_html(data, title: str, level: int = 2) -> list[str]:
     return parts
 
 
+#: What to read in each figure of the bench and stress pages, by file name (``{engine}``: the
+#: part of the name after the prefix). A figure without an entry is captioned by its name.
+CAPTIONS = {
+    "pareto-": ("{engine}: the wall time per impact against the departure, one point per "
+                "setting and family. Blue: the departure from the engine's own law, grey and "
+                "gold: from Poisson and Stronge; the step line is the Pareto front of the blue "
+                "points, numbered, with each number's setting listed under its panel. Read the "
+                "leftmost point below a dotted line (1%, 0.1%): the cheapest setting that "
+                "reaches that accuracy."),
+    "solver-throughput": ("Problems solved per second by <code>solve_batch</code> against the "
+                          "batch size, per law; the dotted line is the pure-Python exact "
+                          "impulse process, one problem at a time."),
+    "engine-grid": ("Each engine and preset (rows) on each extreme stress scene (columns): "
+                    "the outcome of its run, coloured as the key says."),
+    "solver-energy": ("Per stress family, the largest relative change of kinetic energy "
+                      "against the family's parameter, for Poisson, Stronge and Newton: "
+                      "above zero is a gain."),
+    "solver-boundary-jumps": ("Per boundary of Table 1, the solution's jump when the "
+                              "problem crosses it by a tiny step, per law: a jump that does "
+                              "not shrink with the step is a discontinuity of the law."),
+}
+
+
+def caption(name: str) -> str:
+    """The caption of a page figure (:data:`CAPTIONS`), else its file name."""
+    stem = Path(name).stem
+    for prefix, text in CAPTIONS.items():
+        if stem.startswith(prefix):
+            return text.format(engine=escape_html(stem.removeprefix(prefix)))
+    return escape_html(name)
+
+
 def figures_html(directory: str, names: Sequence[str]) -> str:
     return "\n".join(f'<figure><img src="{directory}/{escape_html(name)}" '
-                     f'alt="{escape_html(name)}"><figcaption>{escape_html(name)}</figcaption>'
+                     f'alt="{escape_html(name)}"><figcaption>{caption(name)}</figcaption>'
                      "</figure>" for name in names)
 
 

@@ -386,3 +386,12 @@ def test_only_a_report_of_library_scenarios_reproduces_table3(tmp_path):
     assert views.has_library_scenarios(library)
     assert "#table3" not in html.contents_html(["mine"], {}, None, (), False)
     assert "#table3" in html.contents_html(["mine"], {}, None, (), True)
+
+
+def test_bench_and_stress_figures_have_captions_that_say_what_to_read():
+    from harness.report.pages import caption
+
+    assert "Pareto front" in caption("pareto-mujoco.png") and "mujoco" in caption(
+        "pareto-mujoco.png")
+    assert "batch size" in caption("solver-throughput.png")
+    assert caption("unknown-figure.png") == "unknown-figure.png"
