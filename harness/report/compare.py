@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import io
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -40,6 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from harness.run import metrics
+from harness.run.files import output_file_problem, write_text_atomically
 from harness.run.records import Record, Results, read_results
 from harness.scenarios.errors import ScenarioError
 
@@ -242,20 +244,21 @@ def write_csv(changes: list[Change], path: Path) -> Path:
         header += [f"departure_{law}_a", f"departure_{law}_b", f"departure_{law}_change"]
     header += [f"u{i + 1}_a" for i in range(size)] + [f"u{i + 1}_b" for i in range(size)]
     header += ["speed_change", "largest_change"]
-    with path.open("w", newline="", encoding="utf-8") as handle:
-        writer = csv.writer(handle)
-        writer.writerow(header)
-        for c in changes:
-            row = [c.scenario, c.point, c.source, c.status_a, c.status_b]
-            deltas = c.departure_change
-            for law in LAWS:
-                row += [c.departure_a.get(law, ""), c.departure_b.get(law, ""),
-                        deltas.get(law, "")]
-            for speeds in (c.u_a, c.u_b):
-                speeds = list(speeds or [])
-                row += speeds + [""] * (size - len(speeds))
-            row += ["" if math.isnan(c.speed_change) else c.speed_change, c.largest]
-            writer.writerow(row)
+    handle = io.StringIO(newline="")  # the rows in memory, then written atomically
+    writer = csv.writer(handle)
+    writer.writerow(header)
+    for c in changes:
+        row = [c.scenario, c.point, c.source, c.status_a, c.status_b]
+        deltas = c.departure_change
+        for law in LAWS:
+            row += [c.departure_a.get(law, ""), c.departure_b.get(law, ""),
+                    deltas.get(law, "")]
+        for speeds in (c.u_a, c.u_b):
+            speeds = list(speeds or [])
+            row += speeds + [""] * (size - len(speeds))
+        row += ["" if math.isnan(c.speed_change) else c.speed_change, c.largest]
+        writer.writerow(row)
+    write_text_atomically(path, handle.getvalue())
     return path
 
 
@@ -284,6 +287,11 @@ def main(args) -> int:
     except ValueError as error:
         print(f"impact-harness compare: {error}")
         return 2
+    if args.csv is not None:
+        problem = output_file_problem(args.csv)
+        if problem:
+            print(f"impact-harness compare: --csv {args.csv}: {problem}")
+            return 2
     loaded = []
     for path in (args.a, args.b):
         try:

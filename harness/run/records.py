@@ -49,13 +49,12 @@ import json
 import math
 import os
 import pickle
-import tempfile
 from dataclasses import asdict, dataclass, field, fields, is_dataclass
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 
 from harness.collector import collector_paused
-from harness.run.files import write_parts_atomically
+from harness.run.files import output_file_problem, write_parts_atomically
 
 FORMAT = "impact-harness-results"
 FORMAT_VERSION = 1
@@ -467,24 +466,22 @@ RECORDS_START = ',\n "records": [\n'
 RECORDS_END = "\n ]\n}\n"
 
 
-def check_writable(path: Path | str) -> str | None:
-    """``None`` when a results file can be written at ``path``, else the reason it cannot.
+def check_writable(path: Path | str, *, make_parent: bool = False) -> str | None:
+    """``None`` when a results file can be written at ``path``, else the reason it cannot
+    (:func:`harness.run.files.output_file_problem`: nothing there or a regular file, in an
+    existing writable directory).
 
-    Checked before a run starts (creates the parent directory, and a temporary in it that it
-    removes), so a bad ``--json`` costs nothing.
+    Checked before a run starts, so a bad ``--json`` costs nothing. ``make_parent``: the
+    directory is made (itself only) when missing -- for the default results file only, whose
+    ``reports/`` is the harness's own; a directory the user names must exist.
     """
     path = Path(path)
-    if path.is_dir():
-        return "is a directory"
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        descriptor, temporary = tempfile.mkstemp(prefix=f".{path.name}-", suffix=".tmp",
-                                                 dir=path.parent)
-        os.close(descriptor)
-        os.unlink(temporary)
-    except OSError as error:
-        return f"cannot write there: {error.strerror or error}"
-    return None
+    if make_parent and not os.path.lexists(path.parent) and path.parent.parent.is_dir():
+        try:
+            path.parent.mkdir()
+        except OSError as error:
+            return f"cannot make {path.parent}: {error.strerror or error}"
+    return output_file_problem(path)
 
 
 def read_results(path: Path | str) -> Results:

@@ -1491,7 +1491,7 @@ def check_arguments(args, json_path: Path | None) -> str | None:
     if limit is not None and not (math.isfinite(limit) and limit > 0):
         return f"--task-time-limit {limit}: must be a positive number of seconds"
     if json_path is not None:
-        reason = check_writable(json_path)
+        reason = check_writable(json_path, make_parent=json_path == DEFAULT_RESULTS)
         if reason:
             return f"--json {json_path}: {reason}"
     if not args.no_cache and args.cache_dir is not None:

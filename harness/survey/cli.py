@@ -29,6 +29,11 @@ from harness.engines import (
     preset_role,
     source_label,
 )
+from harness.run.files import (
+    make_output_directory,
+    output_directory_problem,
+    write_text_atomically,
+)
 from harness.scenarios.errors import ScenarioError
 from harness.survey import laws as survey_laws
 from harness.survey import outputs, statistics
@@ -222,14 +227,14 @@ def write_survey(survey: dict, out: Path, settings: dict, figures: bool = True) 
         written += outputs.figures(survey["runs"], out / "figures")
         survey["timings"]["figures"] = (time.perf_counter() - begin, 0)
     summary = out / "summary.md"
-    summary.write_text(outputs.summary_markdown(survey["statistics"], survey["rejections"],
-                                                survey["timings"], settings), encoding="utf-8")
+    write_text_atomically(summary, outputs.summary_markdown(
+        survey["statistics"], survey["rejections"], survey["timings"], settings))
     # What was surveyed, for the report (harness/report/survey.py) to read without Parquet.
     shown = {**settings, "families": list(survey["rejections"]),
              "skipped": settings.get("skipped", survey["skipped"]),
              "left_out": settings.get("left_out", survey["left_out"])}
     settings_path = out / SETTINGS_FILE
-    settings_path.write_text(json.dumps(shown, indent=1) + "\n", encoding="utf-8")
+    write_text_atomically(settings_path, json.dumps(shown, indent=1) + "\n")
     return written + [summary, settings_path]
 
 
@@ -244,6 +249,10 @@ def main(args: argparse.Namespace) -> int:
     if samples < 1:
         print("impact-harness survey: --samples must be >= 1", file=sys.stderr)
         return 2
+    problem = output_directory_problem(args.out)
+    if problem:  # before any work
+        print(f"impact-harness survey: --out {args.out}: {problem}", file=sys.stderr)
+        return 2
     try:
         populations = resolve_populations(args.populations)
         survey = run_survey(populations, samples, args.seed, engines, presets, bare=args.bare,
@@ -255,6 +264,7 @@ def main(args: argparse.Namespace) -> int:
                 "engines": [r for r in engines if r not in survey["skipped"]],
                 "presets": presets, "left_out": survey["left_out"],
                 "skipped": survey["skipped"]}
+    make_output_directory(args.out)  # the directory asked for (itself only)
     written = write_survey(survey, args.out, settings, figures=not args.no_figures)
     print(f"wrote {len(written)} files to {args.out}")
     return 0
