@@ -849,8 +849,8 @@ def _scenario_key(scenario: Scenario, cache, versions: Mapping, missing: Mapping
 
 @dataclass
 class _Built:
-    """A scenario's finished records: as the results file and its companion hold them
-    (``block``), the records themselves when built in this process (None: read from the
+    """A scenario's finished records: as the results file holds them (``block``), the
+    records themselves when built in this process (None: read from the
     cache or built on a worker, parsed from the block when asked for), the ``summary`` the
     run needs of them (:func:`_summary`) and the positions of internal-error records."""
 
@@ -863,7 +863,7 @@ class _Built:
 def _stored_scenario(scenario: Scenario, cache, key: str | None, presets: Sequence[str],
                      engine_count: int) -> _Built | None:
     """The scenario's finished records from its cache entry (:func:`_scenario_key`), as the
-    results file and its companion hold them (neither decoded nor parsed) with their summary,
+    results file holds them (neither decoded nor parsed) with their summary,
     or None.
 
     The entry was checked when it was stored (:func:`_store_scenario`) and its checksum
@@ -893,11 +893,11 @@ def _stored_scenario(scenario: Scenario, cache, key: str | None, presets: Sequen
     if entry is None:
         return None
     summary, text, count, parts = entry
-    if count != expected or len(parts) != 2:
+    if count != expected or parts:
         cache.rejected.append(f"{cache.lines_path(key)}: {count} lines and {len(parts)} "
-                              f"parts, not {expected} and 2")
+                              f"parts, not {expected} and none")
         return None
-    return _Built(block=RecordBlock(text, count, *parts), summary=summary)
+    return _Built(block=RecordBlock(text, count), summary=summary)
 
 
 #: The counts of a scenario's records its summary keeps (for the progress line, the hits).
@@ -996,10 +996,10 @@ def _build_scenario(scenario: Scenario, entries: Sequence, cache, computed_refer
     summary = _summary(scenario, records)
     datas = [record.as_dict() for record in records]
     lines = [record_line(data) for data in datas]
-    block = RecordBlock.of_lines(lines, datas)
+    block = RecordBlock.of_lines(lines)
     internal = [i for i, r in enumerate(records) if r.status.startswith("error: internal")]
     if not internal:
-        _store_scenario(cache, key, entries, records, datas, lines, block, summary)
+        _store_scenario(cache, key, entries, records, datas, lines, summary)
     return _Built(block=block, summary=summary, records=records, internal=internal)
 
 
@@ -1011,14 +1011,13 @@ def _finite_speeds(after, before) -> bool:
 
 
 def _store_scenario(cache, key: str | None, engine_entries: Sequence, records: Sequence[Record],
-                    datas: Sequence[dict], lines: Sequence[str], block: RecordBlock,
-                    summary: dict) -> None:
+                    datas: Sequence[dict], lines: Sequence[str], summary: dict) -> None:
     """Keep a scenario's records under ``key`` when every engine run was cacheable (none
     skipped or failed) and none is an ok record without finite speeds (a record the lookup
     would reject every run); as a warm run reads them back: every engine record ``cached``
-    (``datas``: each record's :meth:`Record.as_dict`, ``lines`` their lines, ``block`` them
-    as written). Stored as the results file and its companion hold them
-    (:class:`RecordBlock`), with the ``summary``, so a warm run writes them as read."""
+    (``datas``: each record's :meth:`Record.as_dict`, ``lines`` their lines). Stored as the
+    results file holds them (:class:`RecordBlock`), with the ``summary``, so a warm run
+    writes them as read."""
     if key is None or cache is None or not cache.enabled:
         return
     if not all(isinstance(item.get("output"), dict) and item.get("key") is not None
@@ -1032,13 +1031,10 @@ def _store_scenario(cache, key: str | None, engine_entries: Sequence, records: S
                     else {**data, "cached": True} for record, data in zip(records, datas)]
     stored_lines = [line if stored is data else _cached_line(line, stored)
                     for data, stored, line in zip(datas, stored_datas, lines)]
-    if stored_lines != lines:
-        block = RecordBlock.of_lines(stored_lines, stored_datas)
     counts = summary["counts"]
     stored_summary = {**summary, "counts": {**counts, "cached": counts["engine_runs"]}}
     try:
-        cache.put_lines(key, stored_lines, stored_summary,
-                        (block.pickled_datas, block.pickled_lines))
+        cache.put_lines(key, stored_lines, stored_summary)
     except OSError:  # the run goes on without the cache (the engine runs' store warns)
         pass
 
@@ -1494,26 +1490,12 @@ def check_arguments(args, json_path: Path | None) -> str | None:
         reason = check_writable(json_path, make_parent=json_path == DEFAULT_RESULTS)
         if reason:
             return f"--json {json_path}: {reason}"
-    if not args.no_cache and args.cache_dir is not None:
-        reason = _cache_dir_problem(Path(args.cache_dir))
+    if not args.no_cache:  # made and marked as the harness's, or refused when not its own
+        from harness.run.cache import ResultCache
+
+        reason = ResultCache(args.cache_dir, version="").prepare()
         if reason:
-            return f"--cache-dir {args.cache_dir}: {reason}"
-    return None
-
-
-def _cache_dir_problem(path: Path) -> str | None:
-    import os
-    import tempfile
-
-    if path.exists() and not path.is_dir():
-        return "is not a directory"
-    try:
-        path.mkdir(parents=True, exist_ok=True)
-        descriptor, temporary = tempfile.mkstemp(suffix=".tmp", prefix=".probe-", dir=path)
-        os.close(descriptor)
-        os.unlink(temporary)
-    except OSError as error:
-        return f"cannot write there: {error.strerror or error}"
+            return f"--cache-dir {ResultCache(args.cache_dir, version='').root}: {reason}"
     return None
 
 
