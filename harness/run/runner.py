@@ -124,8 +124,11 @@ POINT_REFERENCE = "point-reference"
 #: A reference task counts as this many engine runs when choosing the pool over inline work:
 #: a several-contact reference takes 0.1-1 s, an engine run about a millisecond.
 REFERENCE_TASK_WEIGHT = 100
-#: Exit statuses (documented in harness.cli).
-EXIT_OK, EXIT_GATE_FAILED, EXIT_BAD_INPUT, EXIT_INTERNAL = 0, 1, 2, 3
+#: Exit statuses (documented in harness.cli): EXIT_ENGINE_ERROR when an engine run ended in
+#: an error (an exception of the engine, a time limit): the results are written, but lack it.
+EXIT_OK, EXIT_GATE_FAILED, EXIT_BAD_INPUT, EXIT_INTERNAL, EXIT_ENGINE_ERROR = 0, 1, 2, 3, 4
+#: At most this many engine errors are printed one per line (then how many more).
+SHOWN_ENGINE_ERRORS = 20
 
 
 class TaskTimeLimit(Exception):
@@ -379,7 +382,7 @@ class RunOutcome:
     def __init__(self, records: Sequence[Record | None], gates: list[GateResult],
                  provenance: dict, scenarios: dict, cache_stats: dict | None = None,
                  warnings: list[str] | None = None, blocks: Sequence[RecordBlock] = (),
-                 internal: Sequence[int] = ()) -> None:
+                 internal: Sequence[int] = (), engine_errors: Sequence[int] = ()) -> None:
         self._records = list(records)
         self.gates = gates
         self.provenance = provenance
@@ -391,6 +394,7 @@ class RunOutcome:
             raise ValueError(f"{sum(block.count for block in self.blocks)} lines for "
                              f"{len(self._records)} records")
         self._internal = list(internal)  # positions of the internal-error records
+        self._engine_errors = list(engine_errors)  # positions of the engine-error records
         self._lines: list[str] | None = None
 
     @property
@@ -427,6 +431,12 @@ class RunOutcome:
     def internal_errors(self) -> list[Record]:
         """Records the harness itself failed to compute (a bug: exit status 3)."""
         return [self._record_at(index) for index in self._internal]
+
+    @property
+    def engine_errors(self) -> list[Record]:
+        """Engine runs that ended in an error (an exception of the engine, a time limit):
+        exit status 4, the results written without them."""
+        return [self._record_at(index) for index in self._engine_errors]
 
 
 def select_scenarios(files: Sequence[str | Path] | None = None,
@@ -771,12 +781,14 @@ def run(
     records: list[Record | None] = []
     blocks: list[RecordBlock] = []
     internal: list[int] = []
+    engine_errors: list[int] = []
     gates: list[GateResult] = []
     infos: dict[str, dict] = {}
     for number, scenario in enumerate(scenarios, 1):
         infos[scenario.name] = scenario_info(scenario)
         result = stored.get(scenario.name) or built[scenario.name]
         internal += [len(records) + position for position in result.internal]
+        engine_errors += [len(records) + position for position in result.engine_errors]
         records += (result.records if result.records is not None
                     else [None] * result.block.count)
         blocks.append(result.block)
@@ -813,7 +825,8 @@ def run(
         wall_time_s=time.perf_counter() - started,
     )
     return RunOutcome(records=records, gates=gates, provenance=info, scenarios=infos,
-                      cache_stats=stats, warnings=warnings, blocks=blocks, internal=internal)
+                      cache_stats=stats, warnings=warnings, blocks=blocks, internal=internal,
+                      engine_errors=engine_errors)
 
 
 def _scenario_key(scenario: Scenario, cache, versions: Mapping, missing: Mapping,
@@ -858,6 +871,7 @@ class _Built:
     summary: dict
     records: list[Record] | None = None
     internal: list[int] = field(default_factory=list)
+    engine_errors: list[int] = field(default_factory=list)  # positions, internal ones apart
 
 
 def _stored_scenario(scenario: Scenario, cache, key: str | None, presets: Sequence[str],
@@ -998,9 +1012,13 @@ def _build_scenario(scenario: Scenario, entries: Sequence, cache, computed_refer
     lines = [record_line(data) for data in datas]
     block = RecordBlock.of_lines(lines)
     internal = [i for i, r in enumerate(records) if r.status.startswith("error: internal")]
+    engine_errors = [i for i, r in enumerate(records) if r.source != ANALYTIC
+                     and r.status.startswith("error:")
+                     and not r.status.startswith("error: internal")]
     if not internal:
         _store_scenario(cache, key, entries, records, datas, lines, summary)
-    return _Built(block=block, summary=summary, records=records, internal=internal)
+    return _Built(block=block, summary=summary, records=records, internal=internal,
+                  engine_errors=engine_errors)
 
 
 def _finite_speeds(after, before) -> bool:
@@ -1637,10 +1655,19 @@ def _execute(args, *, json_path: Path, command: Sequence[str] | None,
     for record in outcome.internal_errors:
         print(f"INTERNAL ERROR: {record.scenario} {record.point['label']} {record.label}: "
               f"{record.status}", file=sys.stderr)
+    engine_errors = outcome.engine_errors
+    for record in engine_errors[:SHOWN_ENGINE_ERRORS]:
+        print(f"ENGINE ERROR: {record.scenario} {record.point['label']} {record.label}: "
+              f"{record.status}", file=sys.stderr)
+    if len(engine_errors) > SHOWN_ENGINE_ERRORS:
+        print(f"ENGINE ERROR: {len(engine_errors) - SHOWN_ENGINE_ERRORS} more (their records "
+              f"in {json_path})", file=sys.stderr)
     if outcome.internal_errors:
         return EXIT_INTERNAL, outcome
     if errors:
         return EXIT_BAD_INPUT, outcome
+    if engine_errors:
+        return EXIT_ENGINE_ERROR, outcome
     return (EXIT_GATE_FAILED if outcome.failed_gates else EXIT_OK), outcome
 
 
@@ -1654,6 +1681,7 @@ def main(args) -> int:
 
 __all__ = [
     "EXIT_BAD_INPUT",
+    "EXIT_ENGINE_ERROR",
     "EXIT_GATE_FAILED",
     "EXIT_INTERNAL",
     "EXIT_OK",
