@@ -10,6 +10,7 @@ from __future__ import annotations
 import contextvars
 import functools
 import hashlib
+import io
 import itertools
 import json
 import math
@@ -58,7 +59,7 @@ def save_png(figure, path: Path, dpi: int = 100, tag: str | None = None) -> Path
     (for a paper); ``tag`` (the digest of the figure's inputs) goes into the PNG's
     metadata."""
     lay_out(figure, dpi)
-    figure.savefig(path, dpi=dpi, metadata={TAG_KEY: tag} if tag else None)
+    _save_atomically(figure, path, "png", dpi=dpi, metadata={TAG_KEY: tag} if tag else None)
     if SVG_TWIN.get():
         save_svg_twin(figure, path)
     return path
@@ -110,8 +111,19 @@ def save_svg(figure, svg: Path) -> Path:
     from matplotlib import rc_context
 
     with rc_context({"svg.hashsalt": SVG_HASH_SALT}):
-        figure.savefig(svg, metadata={"Date": None})
+        _save_atomically(figure, svg, "svg", metadata={"Date": None})
     return svg
+
+
+def _save_atomically(figure, path: Path, kind: str, **options) -> None:
+    """``figure.savefig`` into memory, then written atomically over a regular file only
+    (:func:`harness.run.files.write_bytes_atomically`: never through a link or onto a
+    device planted at ``path``)."""
+    from harness.run.files import write_bytes_atomically
+
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format=kind, **options)
+    write_bytes_atomically(path, buffer.getvalue())
 
 
 def offset_transform(ax, index: int, count: int, step_points: float = 4.0):
