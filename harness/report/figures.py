@@ -59,7 +59,7 @@ def save_png(figure, path: Path, dpi: int = 100, tag: str | None = None) -> Path
     (for a paper); ``tag`` (the digest of the figure's inputs) goes into the PNG's
     metadata."""
     lay_out(figure, dpi)
-    _save_atomically(figure, path, "png", dpi=dpi, metadata={TAG_KEY: tag} if tag else None)
+    save_figure(figure, path, "png", dpi=dpi, metadata={TAG_KEY: tag} if tag else None)
     if SVG_TWIN.get():
         save_svg_twin(figure, path)
     return path
@@ -111,11 +111,11 @@ def save_svg(figure, svg: Path) -> Path:
     from matplotlib import rc_context
 
     with rc_context({"svg.hashsalt": SVG_HASH_SALT}):
-        _save_atomically(figure, svg, "svg", metadata={"Date": None})
+        save_figure(figure, svg, "svg", metadata={"Date": None})
     return svg
 
 
-def _save_atomically(figure, path: Path, kind: str, **options) -> None:
+def save_figure(figure, path: Path, kind: str, **options) -> None:
     """``figure.savefig`` into memory, then written atomically over a regular file only
     (:func:`harness.run.files.write_bytes_atomically`: never through a link or onto a
     device planted at ``path``)."""

@@ -35,8 +35,12 @@ def write_parquet(columns: dict, path: Path) -> Path:
     import pyarrow as pa
     import pyarrow.parquet as pq
 
+    from harness.run.files import write_bytes_atomically
+
     table = pa.table({name: _arrow_values(values) for name, values in columns.items()})
-    pq.write_table(table, path)
+    buffer = pa.BufferOutputStream()
+    pq.write_table(table, buffer)
+    write_bytes_atomically(path, buffer.getvalue().to_pybytes())  # over a regular file only
     return path
 
 

@@ -192,6 +192,25 @@ def test_the_results_file_has_the_mode_the_umask_gives(tmp_path):
     assert (tmp_path / "r.json").stat().st_mode & 0o777 == 0o644
 
 
+def test_a_link_planted_at_a_report_output_is_not_written_through(tmp_path):
+    import matplotlib
+
+    from harness.report.figures import save_png
+
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+
+    theirs = tmp_path / "theirs.png"
+    theirs.write_bytes(b"theirs")
+    planted = tmp_path / "figure.png"
+    planted.symlink_to(theirs)
+    figure = Figure()
+    figure.add_subplot().plot([0, 1], [0, 1])
+    with pytest.raises(OSError, match="symbolic link"):
+        save_png(figure, planted)
+    assert theirs.read_bytes() == b"theirs" and planted.is_symlink()
+
+
 @pytest.mark.parametrize("damage", ["format_version", "u_after"])
 def test_compare_and_report_refuse_results_not_of_this_format(tmp_path, capsys, damage):
     path = tmp_path / "r.json"
