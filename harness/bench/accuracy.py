@@ -37,6 +37,8 @@ from pathlib import Path
 
 import numpy as np
 
+from harness.run.files import save_figure
+
 FAMILIES: dict[str, str] = {"disk": "disk", "rod": "rod-45", "box-corner": "box-corner",
                              "two-bodies": "two-disks"}
 THRESHOLDS: tuple[float, ...] = (1e-2, 1e-3)
@@ -247,7 +249,7 @@ def write_pareto_figure(result: dict, path: Path) -> None:
     figure.suptitle(f"{result['engine']} {result['version']}: cost vs accuracy "
                     f"(red: status not ok; dotted: 1% and 0.1%)")
     figure.tight_layout()
-    figure.savefig(path, dpi=110)
+    save_figure(figure, path, "png", dpi=110)  # over a regular file only
     plt.close(figure)
 
 

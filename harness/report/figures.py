@@ -10,7 +10,6 @@ from __future__ import annotations
 import contextvars
 import functools
 import hashlib
-import io
 import itertools
 import json
 import math
@@ -40,6 +39,7 @@ from harness.report.views import (
     parameter_name,
     row_name,
 )
+from harness.run.files import save_figure
 from harness.run.records import ANALYTIC, Record, Results, record_line
 
 
@@ -113,17 +113,6 @@ def save_svg(figure, svg: Path) -> Path:
     with rc_context({"svg.hashsalt": SVG_HASH_SALT}):
         save_figure(figure, svg, "svg", metadata={"Date": None})
     return svg
-
-
-def save_figure(figure, path: Path, kind: str, **options) -> None:
-    """``figure.savefig`` into memory, then written atomically over a regular file only
-    (:func:`harness.run.files.write_bytes_atomically`: never through a link or onto a
-    device planted at ``path``)."""
-    from harness.run.files import write_bytes_atomically
-
-    buffer = io.BytesIO()
-    figure.savefig(buffer, format=kind, **options)
-    write_bytes_atomically(path, buffer.getvalue())
 
 
 def offset_transform(ax, index: int, count: int, step_points: float = 4.0):

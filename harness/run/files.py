@@ -97,6 +97,17 @@ def _replace_atomically(path: Path | str, write, prefix: str | None,
     return path
 
 
+def save_figure(figure, path: Path | str, kind: str, **options) -> Path | str:
+    """``figure.savefig`` (a matplotlib figure, as ``kind``: ``"png"``, ``"svg"``) into
+    memory, then written as :func:`write_bytes_atomically` writes: never through a link or
+    onto a device planted at ``path``. Returns ``path``."""
+    import io
+
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format=kind, **options)
+    return write_bytes_atomically(path, buffer.getvalue())
+
+
 def _create_temporary(directory: str, prefix: str) -> tuple[int, str]:
     """A new file ``<prefix><pid>-<n>.tmp`` in ``directory``, opened for writing:
     ``(descriptor, path)``, with the mode a new file gets (0666 less the umask: the file it
