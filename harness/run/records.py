@@ -199,9 +199,9 @@ _PLAIN = (str, int, bool, type(None))
 
 
 def plain_value(value: Any) -> Any:
-    """Plain JSON values of the built-in types only (what the JSON reads back, and all a
-    results file's companion may hold); non-finite floats become None, numpy values and
-    subclasses of str, int and float plain Python, nested dataclasses dicts."""
+    """Plain JSON values of the built-in types only (what the JSON reads back); non-finite
+    floats become None, numpy values and subclasses of str, int and float plain Python,
+    nested dataclasses dicts."""
     kind = type(value)
     if kind is float:  # the common cases first, by exact type: a results file has millions
         return value if math.isfinite(value) else None
