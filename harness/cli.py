@@ -51,7 +51,9 @@ EXIT_STATUS_HELP = """exit status:
   0 done, every check passed
   1 done, but a gate (or, for suite, an unexplained Table 3 miss) failed
   2 bad input: an option, a scenario file or a results file (one line each)
-  3 internal error: a bug in the harness (IMPACT_HARNESS_TRACEBACK=1 shows it)"""
+  3 internal error: a bug in the harness (IMPACT_HARNESS_TRACEBACK=1 shows it)
+  4 run and suite: done, results written, but an engine run ended in an error (an
+    exception of the engine, or its --task-time-limit): its record says which"""
 
 
 def build_parser(command: str | None) -> argparse.ArgumentParser:

@@ -37,6 +37,8 @@ from pathlib import Path
 
 import numpy as np
 
+from harness.run.files import save_figure
+
 FAMILIES: dict[str, str] = {"disk": "disk", "rod": "rod-45", "box-corner": "box-corner",
                              "two-bodies": "two-disks"}
 THRESHOLDS: tuple[float, ...] = (1e-2, 1e-3)
@@ -307,7 +309,7 @@ def write_pareto_figure(result: dict, path: Path) -> None:
     figure.suptitle(f"{result['engine']} {result['version']}: time against departure per "
                     "setting (dotted: 1% and 0.1%)", fontsize=13)
     figure.tight_layout(rect=(0, 0.3, 1, 0.93))
-    figure.savefig(path, dpi=110)
+    save_figure(figure, path, "png", dpi=110)  # over a regular file only
     plt.close(figure)
 
 

@@ -45,6 +45,7 @@ from harness.engines import (
     preset_label,
 )
 from harness.run import verdicts
+from harness.run.files import write_text_atomically
 from harness.scene import Scene
 from harness.scene.geometry import impact_problem
 from harness.scene.reference import newton_lcp_velocities, reference_scenes
@@ -219,8 +220,7 @@ def main(argv: list[str] | None = None) -> int:
     report = run_engine_overhead_benchmark(quick=args.quick)
     print(format_table(report))
     if args.json:
-        with open(args.json, "w", encoding="utf-8") as handle:
-            json.dump(report, handle, indent=2)
+        write_text_atomically(args.json, json.dumps(report, indent=2))  # regular files only
     bad = [
         (name, row["scene"], row["preset"])
         for name, entry in report["engines"].items()

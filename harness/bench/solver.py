@@ -31,12 +31,19 @@ says when (and with which commit, whether ``--quick``) each section was measured
 from __future__ import annotations
 
 import json
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
 import planar_impact as pi
+from harness.run.files import (
+    make_output_directory,
+    output_directory_problem,
+    save_figure,
+    write_text_atomically,
+)
 from harness.run.provenance import provenance
 from harness.scene.random_problems import random_problems, row
 
@@ -228,7 +235,7 @@ def write_solver_figure(results: dict, path: Path) -> None:
     ax.set_title("planar_impact.solve_batch throughput")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, "png", dpi=110)  # over a regular file only
     plt.close(fig)
 
 
@@ -251,7 +258,11 @@ def add_arguments(parser) -> None:
 def main(args) -> int:
     names = ("solver", "engines", "speed_accuracy", "survey", "executors")
     selected = [name for name in names if getattr(args, name)] or list(names)
-    args.out.mkdir(parents=True, exist_ok=True)
+    problem = output_directory_problem(args.out)
+    if problem:
+        print(f"impact-harness bench: --out {args.out}: {problem}", file=sys.stderr)
+        return 2
+    make_output_directory(args.out)  # the directory asked for (itself only)
     table = {"provenance": provenance(BENCH_FORMAT, BENCH_FORMAT_VERSION),
              "quick": bool(args.quick)}
     if "solver" in selected:
@@ -291,7 +302,8 @@ def main(args) -> int:
             print(bench_executors.format_report(report))
             table["executors"] = report
     path = args.out / "bench.json"
-    path.write_text(json.dumps(merged_table(path, table, names), indent=1, default=str))
+    write_text_atomically(path, json.dumps(merged_table(path, table, names), indent=1,
+                                           default=str))
     print(f"written {path}")
     return 0
 

@@ -83,6 +83,7 @@ from harness.report.reading import read_for_report
 from harness.report.summary import write_summary
 from harness.report.survey import survey_figure_tasks
 from harness.report.views import FIGURES, engine_labels, has_library_scenarios, slug, split_rows
+from harness.run.files import output_directory_problem, write_text_atomically
 from harness.run.records import DEFAULT_RESULTS, Results
 
 #: Above this many scenarios the report aggregates (``--scenario-figures auto``, ``--svg
@@ -199,7 +200,7 @@ def write_report(results: Results, out_dir: Path | str,
                if path is not None and task.svg}
     _remove_stale_figures(figure_dir, wanted)
     html_path = out_dir / "index.html"
-    html_path.write_text(page, encoding="utf-8")
+    write_text_atomically(html_path, page)
     summary = write_summary(results, out_dir, prepared)
     prepared.cache.save()
     known.save()
@@ -469,7 +470,7 @@ def _remove_stale_figures(figure_dir: Path, wanted: set) -> None:
         stale = figure_dir / name
         if Path(name).name == name and stale.suffix in (".png", ".svg"):  # only figures/
             stale.unlink(missing_ok=True)
-    manifest.write_text(json.dumps(sorted(wanted), indent=0) + "\n", encoding="utf-8")
+    write_text_atomically(manifest, json.dumps(sorted(wanted), indent=0) + "\n")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -516,6 +517,10 @@ def main(args) -> int:
                   f"{args.results}; write this report "
                   f"elsewhere with --out DIR, or replace it with --force", file=sys.stderr)
             return 2
+    problem = output_directory_problem(out)
+    if problem:  # before any work
+        print(f"impact-harness report: --out {out}: {problem}", file=sys.stderr)
+        return 2
     try:
         results = read_for_report(args.results)  # the records only when asked for
     except (FileNotFoundError, ValueError) as error:  # the message names the file

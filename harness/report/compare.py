@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import io
 import json
 import math
 from dataclasses import dataclass
@@ -41,6 +42,7 @@ from pathlib import Path
 import numpy as np
 
 from harness.run import metrics
+from harness.run.files import output_file_problem, write_text_atomically
 from harness.run.records import Record, Results, read_results
 from harness.scenarios.errors import ScenarioError
 
@@ -340,23 +342,24 @@ def write_csv(changes: list[Change], path: Path, b: Results | None = None) -> Pa
     def percent(value):
         return "" if value is None or not math.isfinite(value) else 100.0 * value
 
-    with path.open("w", newline="", encoding="utf-8") as handle:
-        writer = csv.writer(handle)
-        writer.writerow(header)
-        for c in changes:
-            row = [c.scenario, c.point, c.source, c.status_a, c.status_b]
-            deltas = c.departure_change
-            for law in LAWS:
-                row += [percent(c.departure_a.get(law)), percent(c.departure_b.get(law)),
-                        percent(deltas.get(law))]
-            count = len(c.u_a or c.u_b or [])
-            names = speed_names(b, c, count) if b is not None else [
-                f"u{i + 1}" for i in range(count)]
-            for i in range(size):
-                row += ([names[i], (c.u_a or [""] * count)[i], (c.u_b or [""] * count)[i]]
-                        if i < count else ["", "", ""])
-            row += [percent(c.speed_change), percent(c.largest)]
-            writer.writerow(row)
+    handle = io.StringIO(newline="")  # the rows in memory, then written atomically
+    writer = csv.writer(handle)
+    writer.writerow(header)
+    for c in changes:
+        row = [c.scenario, c.point, c.source, c.status_a, c.status_b]
+        deltas = c.departure_change
+        for law in LAWS:
+            row += [percent(c.departure_a.get(law)), percent(c.departure_b.get(law)),
+                    percent(deltas.get(law))]
+        count = len(c.u_a or c.u_b or [])
+        names = speed_names(b, c, count) if b is not None else [
+            f"u{i + 1}" for i in range(count)]
+        for i in range(size):
+            row += ([names[i], (c.u_a or [""] * count)[i], (c.u_b or [""] * count)[i]]
+                    if i < count else ["", "", ""])
+        row += [percent(c.speed_change), percent(c.largest)]
+        writer.writerow(row)
+    write_text_atomically(path, handle.getvalue())
     return path
 
 
@@ -417,7 +420,7 @@ def write_html(path: Path, a_path: Path, b_path: Path, law: str, threshold: floa
              html_table(ROW_HEADER, [[escape_html(x) for x in row] for row in rows], left=3)
              if rows else "<p>No run changed.</p>",
              "</body></html>"]
-    path.write_text("\n".join(parts), encoding="utf-8")
+    write_text_atomically(path, "\n".join(parts))
     return path
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -451,6 +454,11 @@ def main(args) -> int:
     except ValueError as error:
         print(f"impact-harness compare: {error}")
         return 2
+    for option, target in (("--csv", args.csv), ("--html", getattr(args, "html", None))):
+        problem = None if target is None else output_file_problem(target)
+        if problem:
+            print(f"impact-harness compare: {option} {target}: {problem}")
+            return 2
     loaded = []
     for path in (args.a, args.b):
         try:

@@ -23,9 +23,11 @@ from __future__ import annotations
 
 import argparse
 import csv
+import io
 import json
 from pathlib import Path
 
+from harness.run.files import output_file_problem, write_bytes_atomically, write_text_atomically
 from harness.run.records import ANALYTIC, Results, read_results
 
 COLUMNS = ("scenario", "point", "point_index", "point_value", "source", "engine", "preset",
@@ -77,19 +79,18 @@ def write_long(results: Results, path: Path) -> int:
         values = {name: [row[name] for row in rows] for name in COLUMNS}
         values["point_value"] = [v if isinstance(v, (int, float)) else None
                                  for v in values["point_value"]]
-        pq.write_table(pa.table(values, schema=schema), path)
+        buffer = pa.BufferOutputStream()
+        pq.write_table(pa.table(values, schema=schema), buffer)
+        write_bytes_atomically(path, buffer.getvalue().to_pybytes())  # a regular file only
     else:
-        with path.open("w", newline="", encoding="utf-8") as handle:
-            writer = csv.DictWriter(handle, COLUMNS)
-            writer.writeheader()
-            for row in rows:
-                writer.writerow({**row, "reasons": ";".join(row["reasons"]),
-                                 "point_value": "" if row["point_value"] is None
-                                 else row["point_value"],
-                                 "departure": "" if row["departure"] is None
-                                 else row["departure"],
-                                 "departure_pct": "" if row["departure_pct"] is None
-                                 else row["departure_pct"]})
+        handle = io.StringIO(newline="")
+        writer = csv.DictWriter(handle, COLUMNS)
+        writer.writeheader()
+        for row in rows:
+            writer.writerow({**row, "reasons": ";".join(row["reasons"]),
+                             **{key: "" if row[key] is None else row[key]
+                                for key in ("point_value", "departure", "departure_pct")}})
+        write_text_atomically(path, handle.getvalue())  # a regular file only
     return len(rows)
 
 
@@ -106,12 +107,9 @@ def main(args) -> int:
     if out.suffix not in (".csv", ".parquet"):
         print(f"impact-harness export: --out {out}: the file must end in .csv or .parquet")
         return 2
-    if out.exists() and not out.is_file():
-        print(f"impact-harness export: --out {out}: not a regular file; give a new or "
-              "regular file")
-        return 2
-    if not out.parent.is_dir():
-        print(f"impact-harness export: --out {out}: the directory {out.parent} does not exist")
+    problem = output_file_problem(out)
+    if problem:
+        print(f"impact-harness export: --out {out}: {problem}")
         return 2
     try:
         results = read_results(args.results)

@@ -39,6 +39,7 @@ from harness.report.views import (
     parameter_name,
     row_name,
 )
+from harness.run.files import save_figure
 from harness.run.records import ANALYTIC, Record, Results, record_line
 
 
@@ -58,7 +59,7 @@ def save_png(figure, path: Path, dpi: int = 100, tag: str | None = None) -> Path
     (for a paper); ``tag`` (the digest of the figure's inputs) goes into the PNG's
     metadata."""
     lay_out(figure, dpi)
-    figure.savefig(path, dpi=dpi, metadata={TAG_KEY: tag} if tag else None)
+    save_figure(figure, path, "png", dpi=dpi, metadata={TAG_KEY: tag} if tag else None)
     if SVG_TWIN.get():
         save_svg_twin(figure, path)
     return path
@@ -110,7 +111,7 @@ def save_svg(figure, svg: Path) -> Path:
     from matplotlib import rc_context
 
     with rc_context({"svg.hashsalt": SVG_HASH_SALT}):
-        figure.savefig(svg, metadata={"Date": None})
+        save_figure(figure, svg, "svg", metadata={"Date": None})
     return svg
 
 

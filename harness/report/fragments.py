@@ -19,7 +19,6 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -33,6 +32,7 @@ from harness.report.views import (
     single_contact,
     worst_departure,
 )
+from harness.run.files import write_parts_atomically
 from harness.run.records import ANALYTIC, Record, Results
 
 #: The cache's file in the report's directory.
@@ -115,10 +115,7 @@ class FragmentCache:
             else:
                 entries[key] = value
         head = json.dumps({"context": self.context, "entries": entries, "texts": spans})
-        partial = self.path.with_name(self.path.name + f".{os.getpid()}.tmp")
-        with open(partial, "w", encoding="utf-8", newline="") as handle:
-            handle.write(head + "\n" + "".join(texts))
-        os.replace(partial, self.path)
+        write_parts_atomically(self.path, (head, "\n", *texts))  # over a regular file only
 
 
 def scenario_view(records: Sequence[Record], labels: Sequence[str]) -> dict:

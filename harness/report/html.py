@@ -40,6 +40,7 @@ from harness.report.views import (
     slug,
     split_overrides,
 )
+from harness.run.files import write_text_atomically
 from harness.run.records import ANALYTIC, Record, Results
 
 CSS = """
@@ -693,7 +694,7 @@ def write_html(results: Results, out_dir: Path, figures: dict, pages: dict | Non
     (:func:`harness.report.fragments.prepare`, computed here when not given), whose cache
     keeps each scenario's section for the next report."""
     path = out_dir / "index.html"
-    path.write_text(html_page(results, out_dir, figures, pages, prepared), encoding="utf-8")
+    write_text_atomically(path, html_page(results, out_dir, figures, pages, prepared))
     return path
 
 

@@ -10,12 +10,12 @@ from __future__ import annotations
 
 import json
 import math
-import shutil
 from collections.abc import Sequence
 from pathlib import Path
 
 from harness.report.html import html_table, markdown_to_html, page_head
 from harness.report.views import escape_html
+from harness.run.files import write_bytes_atomically, write_text_atomically
 
 BENCH_PAGE, STRESS_PAGE = "bench.html", "stress.html"
 PAGE_TITLES = {BENCH_PAGE: "Benchmarks: speed and accuracy",
@@ -38,7 +38,7 @@ def copy_figures(source_dir: Path, target_dir: Path) -> list[str]:
     for figure in sorted(source_dir.glob("*.png")) + sorted(source_dir.glob("*.svg")):
         target = target_dir / figure.name
         if figure.resolve() != target.resolve():
-            shutil.copyfile(figure, target)
+            write_bytes_atomically(target, figure.read_bytes())  # over a regular file only
         if figure.suffix == ".png":
             names.append(figure.name)
     return names
@@ -139,7 +139,7 @@ def write_page(out_dir: Path, file: str, body: Sequence[str]) -> Path:
              "</p>"), f"<h1>{escape_html(title)}</h1>", *body,
              "<p class='back'><a href='index.html'>← back to the report</a></p></body></html>"]
     path = out_dir / file
-    path.write_text("\n".join(parts), encoding="utf-8")
+    write_text_atomically(path, "\n".join(parts))  # over a regular file only
     return path
 
 
@@ -175,7 +175,7 @@ def write_bench_page(bench_json: Path, out_dir: Path, report: dict | None = None
              "<a href='bench/bench.json'>bench.json</a>.</p>"), figures_html("bench", names)]
     copy = out_dir / "bench" / "bench.json"
     if bench_json.resolve() != copy.resolve():
-        shutil.copyfile(bench_json, copy)
+        write_bytes_atomically(copy, bench_json.read_bytes())
     scalars = {key: value for key, value in data.items() if is_scalar(value)}
     if scalars:  # top-level flags (quick …) in one table, not a heading each
         body += json_html(scalars, "this run", 2)

@@ -3,15 +3,15 @@
 A warm report of 1,000 scenarios finds nearly every piece it shows in its caches (the
 figures' digests, :mod:`harness.report.fragments`): what it needs of the records is then
 their digests per scenario, their order and the engines and presets present, all of which
-the record lines of the file give without building a record. Unpickling and building the
+the record lines of the file give without building a record. Parsing and building the
 28,000 records (:func:`harness.run.records.read_results`) was a third of such a report.
 
 :func:`read_for_report` reads the file's bytes and returns a :class:`LazyResults`, which
-builds the records (by :func:`~harness.run.records.read_results`) the first time anything
-asks for them, so that what it gives never depends on what was cached. It reads the bytes
-only when the file is exactly as :func:`~harness.run.records.write_results` wrote it -- its
-pickle companion, written with it, still names its size, modification time and inode and
-the number of its records -- and otherwise reads the file as before.
+builds the records (by :func:`~harness.run.records.read_results`, which checks them) the
+first time anything asks for them, so that what it gives never depends on what was cached.
+It does so only when the file is laid out as :func:`~harness.run.records.write_results`
+writes it (one record per line, each starting with its scenario, point, source, law and
+preset) and of this harness's format; any other file is read in full at once.
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ import hashlib
 import json
 import os
 import re
+import stat
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -31,8 +32,6 @@ from harness.run.records import (
     RECORDS_END,
     RECORDS_START,
     Results,
-    companion_path,
-    read_companion_header,
     read_results,
     results_head,
 )
@@ -47,11 +46,14 @@ VOLATILE_TEXT = re.compile(
     '"(?:' + "|".join((*VOLATILE_FIELDS, "engine_wall_time_s")) + r')":[^,{}\[\]"]*')
 _VOLATILE_BYTES = re.compile(VOLATILE_TEXT.pattern.encode())
 #: How a record's line starts when its scenario, point, source and preset hold no escape (and
-#: the point's label no brace): the scenario, the source and the preset (or None). Scenario
-#: names cannot hold an escape (the scenario schema's name pattern); any other file is read
-#: in full.
+#: the point's label no brace): the scenario, the source and the preset (or None), then the
+#: speeds before and after (lists of numbers, or null: a record without them is no record of
+#: this format). Scenario names cannot hold an escape (the scenario schema's name pattern);
+#: any other file is read in full (and :func:`~harness.run.records.read_results` says what
+#: is wrong with it).
 _LINE_HEAD = (rb'\{"scenario":"([^"\\]*)","point":\{[^{}]*\},"source":"([^"\\]*)",'
-              rb'"law":(?:null|"[^"\\]*"),"preset":(?:null|"([^"\\]*)")')
+              rb'"law":(?:null|"[^"\\]*"),"preset":(?:null|"([^"\\]*)"),'
+              rb'"u_before":(?:null|\[[^\[\]{}"]*\]),"u_after":(?:null|\[[^\[\]{}"]*\]),')
 _LINE_HEAD_AT = re.compile(_LINE_HEAD)
 
 
@@ -141,34 +143,22 @@ class LazyResults:
         return getattr(self.full(), name)
 
 
-def _companion_records(path: Path, status: os.stat_result) -> int | None:
-    """How many records ``path``'s companion says the file holds, when it was written with
-    this very file (``status``); else None."""
-    try:
-        with open(companion_path(path), "rb") as handle:
-            header = read_companion_header(handle, status)
-    except Exception:  # noqa: BLE001 - absent or damaged: the file is read in full
-        return None
-    return None if header is None else header["records"]
-
-
 def read_for_report(path: Path | str) -> LazyResults | Results:
     """The results in ``path`` for :func:`harness.report.write_report`: a
-    :class:`LazyResults` when the file is as ``write_results`` wrote it, else
+    :class:`LazyResults` when the file is as ``write_results`` writes it, else
     :func:`~harness.run.records.read_results`'s (which raises its errors)."""
     path = Path(path)
     try:
         with open(path, "rb") as handle:
             status = os.fstat(handle.fileno())
-            count = _companion_records(path, status)
-            data = handle.read() if count is not None else b""
+            data = handle.read() if stat.S_ISREG(status.st_mode) else b""
     except OSError:
-        count = None
-    lazy = None if count is None else _lazy(path, status, data, count)
+        data = b""
+    lazy = _lazy(path, status, data) if data else None
     return read_results(path) if lazy is None else lazy
 
 
-def _lazy(path: Path, status: os.stat_result, data: bytes, count: int) -> LazyResults | None:
+def _lazy(path: Path, status: os.stat_result, data: bytes) -> LazyResults | None:
     """:class:`LazyResults` from the file's bytes, None when they are not laid out as
     expected (or not this harness's format: :func:`read_results` then says why)."""
     document = results_head(data)
@@ -177,6 +167,7 @@ def _lazy(path: Path, status: os.stat_result, data: bytes, count: int) -> LazyRe
         return None
     start = data.find(RECORDS_START.encode())  # found: results_head found it
     begin, end = start + len(RECORDS_START), len(data) - len(RECORDS_END)  # the record lines
+    count = data.count(b"\n", begin, end) + 1 if end > begin else 0
     lines = _lines(data, begin, end, count)
     if lines is None:
         return None

@@ -7,6 +7,7 @@ from pathlib import Path
 
 from harness.report.fragments import Prepared, prepare
 from harness.report.views import HEADLINE_LAWS, LAW_STYLE, fmt_departure, row_name
+from harness.run.files import write_text_atomically
 from harness.run.records import ANALYTIC, Results
 
 _MARKDOWN_SPECIAL = re.compile(r"([\\`*_{}\[\]()#+!|~])")
@@ -88,5 +89,5 @@ def write_summary(results: Results, out_dir: Path, prepared: Prepared | None = N
                                                   else "")
               + f"; results written {prov.get('created_utc', '')}.", ""]
     path = out_dir / "summary.md"
-    path.write_text("\n".join(lines), encoding="utf-8")
+    write_text_atomically(path, "\n".join(lines))  # over a regular file only
     return path

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import csv
 import math
+import sys
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -18,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 import planar_impact as pi
+from harness.run.files import write_text_atomically
 
 CELLS = ("e", "du1", "du3", "du4", "du6", "vnA", "vnS", "vtA", "vtS", "dE")
 CELL_LABELS = {
@@ -270,7 +272,7 @@ def write_markdown(rows: list[dict], path: Path, figure_name: str) -> None:
         lines.append("")
         for text in section.after:
             lines += [text, ""]
-    path.write_text("\n".join(lines).rstrip("\n") + "\n")
+    write_text_atomically(path, "\n".join(lines).rstrip("\n") + "\n")  # regular files only
 
 
 LAW_STYLES = {  # colour, line style, end marker
@@ -330,10 +332,10 @@ def write_figure(rows: list[dict], path: Path, metadata: dict | None = None) -> 
         ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=3,
                   frameon=False)
     fig.suptitle("Table 3, two sleds: impulse paths of each law (Routh's graph)")
-    from harness.report.figures import lay_out, save_svg_twin
+    from harness.report.figures import lay_out, save_figure, save_svg_twin
 
     lay_out(fig, 110)  # once, for the PNG and the SVG (figures.lay_out, save_svg_twin)
-    fig.savefig(path, dpi=110, metadata=metadata)
+    save_figure(fig, path, "png", dpi=110, metadata=metadata)
     return [path, save_svg_twin(fig, path)]
 
 
@@ -357,6 +359,12 @@ def add_arguments(parser) -> None:
 
 
 def main(args) -> int:
+    from harness.run.files import output_directory_problem
+
+    problem = output_directory_problem(args.out)
+    if problem:
+        print(f"impact-harness paper: --out {args.out}: {problem}", file=sys.stderr)
+        return 2
     markdown, rows = write_report(args.out)
     cells = [c for r in rows for c in r["cells"]]
     missed = [c for c in cells if not c.reproduced]

@@ -21,18 +21,27 @@ entry, while a change to the report, the benchmarks or the CLI keeps the cache::
         record = simulate(...)
         cache.put(key, record)
 
-Files: one JSON file per key at ``root/<key[:2]>/<key>.json`` (``<key>.jsonl`` for an
-entry of many lines, :meth:`ResultCache.put_lines`: a scenario's records, a header line with
-their summary, the sizes of what follows and its CRC-32, then their lines as the results file
-holds them, then their dicts and their lines pickled, raw bytes), written atomically (a
-temporary file in the same directory, then ``os.replace``), so concurrent writers and an
-interrupted run never leave a half-written entry; a temporary left by a killed writer is
-removed by the next run (:meth:`ResultCache.clean_temporaries`).
-An unreadable, corrupted or edited file is a miss, and so is an entry the caller's ``check``
-rejects (a record without finite velocities of the right shape): both are listed in
-:attr:`ResultCache.rejected`. Beside the entries, ``root/scenario-checks.pickle`` keeps the
-scenario files that passed their checks (:class:`harness.scenarios.checks.PassedChecks`);
+Files: one file per key at ``root/<key[:2]>/<key>.json``: a header line (the key, the code
+version, the SHA-256 of what follows) and the record as JSON; ``<key>.jsonl`` for an entry of
+many lines (:meth:`ResultCache.put_lines`: a scenario's records, a header line with their
+summary, the sizes of what follows and its SHA-256, then their lines as the results file
+holds them). Plain data only: nothing read from the cache is unpickled, evaluated or
+imported. Written atomically (a temporary file in the same directory, then ``os.replace``),
+so concurrent writers and an interrupted run never leave a half-written entry; a temporary
+left by a killed writer is removed by the next run (:meth:`ResultCache.clean_temporaries`).
+An unreadable, corrupted or edited file (its checksum differs) is a miss, and so is an entry
+the caller's ``check`` rejects (a record without finite velocities of the right shape): both
+are listed in :attr:`ResultCache.rejected`, which the run prints as warnings, and the
+result is computed again. Beside the entries, ``root/passed-checks.json`` keeps the keys of
+the scenario texts that passed their checks (:class:`harness.scenarios.checks.PassedChecks`);
 ``cache info``, ``prune`` and ``clear`` count and remove it with them.
+
+The harness deletes only what it made: the cache's root carries the marker file
+:data:`CACHE_MARKER`, written when the harness creates the directory (or adopts an empty
+one, or one holding only cache entries); ``cache prune`` and ``cache clear`` refuse a
+directory without it (exit 2), and remove only the entries they recognise (the shard
+directories' ``<64 hex digits>.json``/``.jsonl`` files and temporaries, the checks' store),
+never the directory or anything else in it.
 """
 
 from __future__ import annotations
@@ -41,10 +50,10 @@ import hashlib
 import itertools
 import json
 import os
+import re
 import secrets
 import sys
 import time
-import zlib
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import fields, is_dataclass
@@ -53,7 +62,7 @@ from pathlib import Path
 from typing import Any
 
 from harness.collector import collector_paused
-from harness.run.files import write_bytes_atomically, write_parts_atomically
+from harness.run.files import write_parts_atomically, write_text_atomically
 from harness.run.records import LINE_SEPARATOR  # an entry's lines as a results file holds them
 
 _HARNESS_DIR = Path(__file__).resolve().parent.parent  # harness/, from harness/run/
@@ -70,7 +79,7 @@ CACHED_CODE: tuple[str, ...] = (
     "run/history.py", "run/records.py",
 )
 
-CACHE_FORMAT = 1  # bump when the record layout changes
+CACHE_FORMAT = 2  # bump when the record layout changes (2: SHA-256 checked, no pickle)
 
 #: Environment variable that moves the cache (tests, shared machines).
 CACHE_DIR_VARIABLE = "IMPACT_HARNESS_CACHE_DIR"
@@ -78,9 +87,20 @@ CACHE_DIR_VARIABLE = "IMPACT_HARNESS_CACHE_DIR"
 STALE_TEMPORARY_S = 60.0
 #: The scenario checks' store in the cache's directory
 #: (:class:`harness.scenarios.checks.PassedChecks`), and the names it had before (removed by
-#: ``prune``: they hold no code version).
-SCENARIO_CHECKS_STORE = "scenario-checks.pickle"
-OLD_CHECKS_STORES = ("scenario-checks.json",)
+#: ``prune`` and ``clear`` unread: the pickle is never loaded).
+SCENARIO_CHECKS_STORE = "passed-checks.json"
+OLD_CHECKS_STORES = ("scenario-checks.json", "scenario-checks.pickle")
+#: The file that marks a directory as a cache the harness made (see the module docstring).
+CACHE_MARKER = "IMPACT-HARNESS-CACHE"
+_MARKER_TEXT = ("impact-harness result cache: made by the harness; `impact-harness cache "
+                "clear` removes its entries\n")
+#: An entry's name in its shard directory, and a shard directory's name.
+_ENTRY_NAME = re.compile(r"[0-9a-f]{64}\.jsonl?")
+_SHARD_NAME = re.compile(r"[0-9a-f]{2}")
+
+
+class NotOurCache(Exception):
+    """A directory that is not a cache the harness made: nothing in it is removed."""
 
 
 def default_cache_dir() -> Path:
@@ -224,6 +244,7 @@ class ResultCache:
         self.hits = 0
         self.misses = 0
         self.rejected: list[str] = []  # "<entry path>: <why>" of entries read as a miss
+        self._root_seen = False  # whether this cache looked at its root's marker yet
         # shard -> the names in its directory, while listed() is active (None: not listed)
         self._listing: dict[str, set[str] | None] | None = None
 
@@ -299,9 +320,11 @@ class ResultCache:
     def get(self, key: str, check=None, *, count: bool = True) -> dict | None:
         """The stored record, or ``None`` (a miss) when absent, disabled or unreadable.
 
-        ``check(record)`` returns ``None`` for a usable record or a reason it is not; a
-        rejected or unreadable entry is a miss and is listed in :attr:`rejected`. With
-        ``count=False`` the lookup stays out of :attr:`stats` (which count engine runs).
+        The entry must be whole: its key, and the SHA-256 of the record's text as stored (an
+        entry changed after it was written is a miss). ``check(record)`` returns ``None``
+        for a usable record or a reason it is not; a rejected or unreadable entry is a miss
+        and is listed in :attr:`rejected`. With ``count=False`` the lookup stays out of
+        :attr:`stats` (which count engine runs).
         """
         if not count:
             hits, misses = self.hits, self.misses
@@ -312,14 +335,21 @@ class ResultCache:
         if not self.enabled or self._unlisted(key, ".json"):
             self.misses += 1
             return None
-        path = self.path(key)
+        path = self._path_text(key)
         try:
-            with open(path, encoding="utf-8") as handle:
-                stored = json.load(handle)
-            if (not isinstance(stored, dict) or stored.get("key") != key
-                    or not isinstance(stored.get("record"), dict)):
+            with open(path, "rb") as handle:
+                raw = handle.read()
+            head_end = raw.find(b"\n")
+            header = json.loads(raw[:head_end]) if head_end > 0 else None
+            if not isinstance(header, dict) or header.get("key") != key:
                 raise ValueError("not a cache entry")
-            reason = None if check is None else check(stored["record"])
+            body = memoryview(raw)[head_end + 1:]
+            if header.get("sha256") != hashlib.sha256(body).hexdigest():
+                raise ValueError("checksum differs: changed after it was written")
+            record = json.loads(str(body, "utf-8"))
+            if not isinstance(record, dict):
+                raise ValueError("not a cache entry")
+            reason = None if check is None else check(record)
             if reason is not None:
                 raise ValueError(reason)
         except FileNotFoundError:
@@ -330,24 +360,112 @@ class ResultCache:
             self.misses += 1
             return None
         self.hits += 1
-        return stored["record"]
+        return record
 
     def put(self, key: str, record: dict) -> None:
         """Store ``record`` (JSON-able dict) under ``key``; atomic; no-op when disabled.
 
         Raises ``OSError`` when the entry cannot be written (the caller decides whether that
-        matters); a shard directory removed under a running writer is made again once.
+        matters); the root (marked) and the shard directory are made when missing, again if
+        removed under a running writer.
         """
         if not self.enabled:
             return
-        # The shard made only when missing: a cold run puts thousands of small entries,
-        # whose mkdir calls would cost as much as their writes.
-        path = self._path_text(key)
-        text = _ENTRY_ENCODER.encode({"key": key, "code_version": self.version,
-                                      "record": record})
-        write_bytes_atomically(path, text.encode("utf-8"), prefix=f".{key[:8]}-",
-                               make_parent=True)
+        body = _ENTRY_ENCODER.encode(record).encode("utf-8")
+        header = json.dumps({"key": key, "code_version": self.version,
+                             "sha256": hashlib.sha256(body).hexdigest()})
+        self._write(self._path_text(key), (header.encode("utf-8"), b"\n", body), key)
         self._list(key[:2], f"{key}.json")
+
+    def _write(self, path: str, parts: tuple, key: str) -> None:
+        """Write an entry's ``parts`` at ``path`` atomically; the shard directory made when
+        missing (only then: a cold run puts thousands of small entries, whose mkdir calls
+        would cost as much as their writes), and the root first, marked, when it is missing.
+        At the first write, a root that exists empty and unmarked is marked (made by the
+        caller for the cache); one holding anything else is written into unmarked (the
+        caller chose it; ``prepare`` refuses it for a run), so never cleared."""
+        if not self._root_seen:
+            self._root_seen = True
+            try:
+                if not self.marked() and self.root.is_dir() and not any(self.root.iterdir()):
+                    self.make_root()
+            except OSError:
+                pass
+        for attempt in (1, 2, 3):
+            try:
+                write_parts_atomically(path, parts, prefix=f".{key[:8]}-")
+                return
+            except FileNotFoundError:
+                if attempt == 3:
+                    raise
+                if not os.path.isdir(self.root):
+                    self.make_root()
+                os.makedirs(os.path.dirname(path), exist_ok=True)
+
+    # ----------------------------------------------------------------------------------------
+    # The root and its marker: what tells the harness the directory is its own
+    # ----------------------------------------------------------------------------------------
+    @property
+    def marker(self) -> Path:
+        return self.root / CACHE_MARKER
+
+    def marked(self) -> bool:
+        """Whether the root carries the cache's marker (a regular file, not a link)."""
+        try:
+            return os.path.isfile(self.marker) and not os.path.islink(self.marker)
+        except OSError:
+            return False
+
+    def make_root(self) -> None:
+        """Make the root (with its parents: the user named it, or it is the default) and
+        mark it as the harness's."""
+        self.root.mkdir(parents=True, exist_ok=True)
+        write_text_atomically(self.marker, _MARKER_TEXT)
+
+    def prepare(self) -> str | None:
+        """Make the cache ready before a run: ``None``, or why the root is not usable.
+
+        A missing root is made and marked; an empty one, or one that holds only what a
+        cache holds (shard directories, the checks' store: a cache of a harness before the
+        marker), is marked; a marked one is used as it is. A directory holding anything else
+        is not a cache the harness made: refused (nothing in it is written or removed).
+        """
+        try:
+            if not self.root.exists():
+                self.make_root()
+                return None
+            if not self.root.is_dir():
+                return "is not a directory"
+            if self.marked():
+                if not os.access(self.root, os.W_OK | os.X_OK):
+                    return "cannot write there: not writable"
+                return None
+            foreign = sorted(name for name in os.listdir(self.root)
+                             if not self._cache_like(name))
+            if foreign:
+                return (f"not a cache the harness made (no {CACHE_MARKER} file, and it holds "
+                        f"{foreign[0]!r}{' ...' if len(foreign) > 1 else ''}): choose another "
+                        "--cache-dir, or a new or empty directory")
+            self.make_root()
+        except OSError as error:
+            return f"cannot write there: {error.strerror or error}"
+        return None
+
+    def _cache_like(self, name: str) -> bool:
+        """Whether ``name`` in the root is what a cache holds: a shard directory of entries
+        (and temporaries) only, or the checks' store."""
+        path = self.root / name
+        if name in (SCENARIO_CHECKS_STORE, *OLD_CHECKS_STORES):
+            return path.is_file() and not path.is_symlink()
+        if not (_SHARD_NAME.fullmatch(name) and path.is_dir() and not path.is_symlink()):
+            return False
+        return all(_ENTRY_NAME.fullmatch(inner) or _is_temporary(inner)
+                   for inner in os.listdir(path))
+
+    def _require_marked(self) -> None:
+        if not self.marked():
+            raise NotOurCache(f"{self.root}: not a cache the harness made (no {CACHE_MARKER} "
+                              "file in it): nothing removed")
 
     def lines_path(self, key: str) -> Path:
         return self.root / key[:2] / f"{key}.jsonl"
@@ -382,8 +500,8 @@ class ResultCache:
         ``None`` (a miss).
 
         Outside :attr:`stats`. The entry must be whole: its key, the sizes its header gives
-        adding up to the file's, and the CRC-32 of the text and the parts as stored (an entry
-        changed after it was written is a miss); ``check_summary(summary)`` (``None``:
+        adding up to the file's, and the SHA-256 of the text and the parts as stored (an
+        entry changed after it was written is a miss); ``check_summary(summary)`` (``None``:
         usable, else why not) may reject it. A rejected entry is listed in :attr:`rejected`.
         """
         if not self.enabled or self._unlisted(key, ".jsonl"):
@@ -403,7 +521,7 @@ class ResultCache:
                 raise ValueError("not a cache entry")
             if head_end + 1 + sum(sizes) != len(data):
                 raise ValueError("truncated")
-            if header.get("crc32") != zlib.crc32(data[head_end + 1:]):
+            if header.get("sha256") != hashlib.sha256(data[head_end + 1:]).hexdigest():
                 raise ValueError("checksum differs: changed after it was written")
             if (sizes[0] == 0) != (header["count"] == 0):
                 raise ValueError(f"{header['count']} lines in {sizes[0]} bytes")
@@ -424,7 +542,7 @@ class ResultCache:
                   parts: Sequence[bytes] = ()) -> None:
         """Store one-line JSON texts under ``key``: a header line (the key, the code version,
         how many lines follow, ``summary``, a JSON-able value the reader gets without reading
-        the lines, the sizes of what follows and its CRC-32), then the lines joined by
+        the lines, the sizes of what follows and its SHA-256), then the lines joined by
         :data:`LINE_SEPARATOR` as UTF-8, then the byte ``parts`` as they are; atomic; no-op
         when disabled. A line holding a newline is a ``ValueError``. Raises ``OSError`` as
         :meth:`put` does."""
@@ -433,40 +551,50 @@ class ResultCache:
         if any("\n" in line for line in lines):
             raise ValueError("a cache line holds a newline")
         text = LINE_SEPARATOR.join(lines).encode("utf-8")
-        crc = zlib.crc32(text)
+        digest = hashlib.sha256(text)
         for part in parts:
-            crc = zlib.crc32(part, crc)
+            digest.update(part)
         header = json.dumps({"key": key, "code_version": self.version, "count": len(lines),
                              "sizes": [len(text), *(len(part) for part in parts)],
-                             "crc32": crc, "summary": summary},
+                             "sha256": digest.hexdigest(), "summary": summary},
                             ensure_ascii=False, allow_nan=False)
-        write_parts_atomically(self.lines_path(key), (header.encode("utf-8"), b"\n", text,
-                                                      *parts),
-                               prefix=f".{key[:8]}-", make_parent=True)
+        self._write(os.fspath(self.lines_path(key)),
+                    (header.encode("utf-8"), b"\n", text, *parts), key)
         self._list(key[:2], f"{key}.jsonl")
 
-    def _entries(self):
-        """Every entry's path: the keyed entries and the scenario checks' store."""
+    def _entries(self) -> Iterator[Path]:
+        """Every entry's path: the keyed entries the shard directories hold (by name: a
+        file of any other name is never counted or removed) and the scenario checks'
+        stores."""
         if not self.root.is_dir():
-            return iter(())
-        stores = (self.root / name for name in (SCENARIO_CHECKS_STORE, *OLD_CHECKS_STORES))
-        return itertools.chain(
-            (path for pattern in ("??/*.json", "??/*.jsonl") for path in self.root.glob(pattern)),
-            (path for path in stores if path.is_file()))
+            return
+        for shard in sorted(os.listdir(self.root)):
+            directory = self.root / shard
+            if not _SHARD_NAME.fullmatch(shard) or directory.is_symlink():
+                continue
+            try:
+                names = os.listdir(directory)
+            except OSError:  # not a directory
+                continue
+            for name in names:
+                path = directory / name
+                if _ENTRY_NAME.fullmatch(name) and path.is_file() and not path.is_symlink():
+                    yield path
+        for name in (SCENARIO_CHECKS_STORE, *OLD_CHECKS_STORES):
+            path = self.root / name
+            if path.is_file() and not path.is_symlink():
+                yield path
 
     @staticmethod
     def _stored_version(path: Path) -> Any:
-        """The code version an entry was written by (its first line for a ``.jsonl``; the
-        scenario checks' store keeps it in its pickled header dict)."""
-        if path.name == SCENARIO_CHECKS_STORE:
-            import pickle
-
-            with open(path, "rb") as handle:
-                stored = pickle.load(handle)  # written by this user's runs (root is theirs)
-            return stored.get("code_version")
-        with open(path, encoding="utf-8") as handle:
-            stored = json.loads(handle.readline() if path.suffix == ".jsonl" else handle.read())
-        return stored.get("code_version")
+        """The code version an entry was written by (its header line; the checks' store is
+        one JSON document; an old store of another name has none)."""
+        if path.name in OLD_CHECKS_STORES:
+            return None  # never read (the old one was a pickle): removed by prune
+        with open(path, "rb") as handle:
+            text = handle.read() if path.name == SCENARIO_CHECKS_STORE else handle.readline()
+        stored = json.loads(text)
+        return stored.get("code_version") if isinstance(stored, dict) else None
 
     def clean_temporaries(self, older_than_s: float = STALE_TEMPORARY_S) -> int:
         """Remove temporary files older than ``older_than_s`` (left by killed writers)."""
@@ -475,7 +603,9 @@ class ResultCache:
         removed, now = 0, time.time()
         for temporary in self.root.glob("??/.*.tmp"):
             try:
-                if now - temporary.stat().st_mtime > older_than_s:
+                if (_SHARD_NAME.fullmatch(temporary.parent.name)
+                        and not temporary.is_symlink()
+                        and now - temporary.stat().st_mtime > older_than_s):
                     temporary.unlink()
                     removed += 1
             except OSError:  # another run removed or replaced it first
@@ -483,7 +613,7 @@ class ResultCache:
         return removed
 
     def info(self) -> dict:
-        """``{"root", "entries", "bytes"}`` of the cache on disk."""
+        """``{"root", "entries", "bytes", "marked"}`` of the cache on disk."""
         entries, size = 0, 0
         for path in self._entries():
             try:
@@ -491,13 +621,16 @@ class ResultCache:
                 entries += 1
             except OSError:
                 continue
-        return {"root": str(self.root), "entries": entries, "bytes": size}
+        return {"root": str(self.root), "entries": entries, "bytes": size,
+                "marked": self.marked()}
 
     def prune(self, max_age_days: float | None = None, other_versions: bool = True) -> dict:
         """Remove entries written by other code (``other_versions``) or older than a bound.
 
         Returns ``{"entries", "bytes"}`` removed. An entry that cannot be read is removed too.
+        Raises :class:`NotOurCache` (nothing removed) when the root is not marked.
         """
+        self._require_marked()
         removed, size, now = 0, 0, time.time()
         self.clean_temporaries()
         for path in list(self._entries()):
@@ -508,7 +641,7 @@ class ResultCache:
                 if other_versions and not old:
                     try:
                         stale = self._stored_version(path) != self.version
-                    except Exception:  # noqa: BLE001 - unreadable (not JSON, not a pickle)
+                    except (OSError, ValueError):  # unreadable, not JSON
                         stale = True
                 if old or stale:
                     path.unlink()
@@ -519,19 +652,37 @@ class ResultCache:
         return {"entries": removed, "bytes": size}
 
     def clear(self) -> dict:
-        """Remove every entry (and the directory)."""
-        before = self.info()
-        if self.root.is_dir():
-            import shutil
-
-            shutil.rmtree(self.root, ignore_errors=True)
-        return {"entries": before["entries"], "bytes": before["bytes"]}
+        """Remove every entry, the temporaries and the emptied shard directories; the root
+        and its marker stay (and anything else in it: never the harness's to remove).
+        Raises :class:`NotOurCache` (nothing removed) when the root is not marked."""
+        self._require_marked()
+        removed, size = 0, 0
+        for path in list(self._entries()):
+            try:
+                size += path.stat().st_size
+                path.unlink()
+                removed += 1
+            except OSError:
+                continue
+        self.clean_temporaries(older_than_s=-1.0)
+        for shard in os.listdir(self.root):
+            if _SHARD_NAME.fullmatch(shard) and not (self.root / shard).is_symlink():
+                try:
+                    (self.root / shard).rmdir()  # only when empty
+                except OSError:
+                    pass
+        return {"entries": removed, "bytes": size}
 
     @property
     def stats(self) -> dict:
         total = self.hits + self.misses
         return {"enabled": self.enabled, "hits": self.hits, "misses": self.misses,
                 "hit_rate": self.hits / total if total else 0.0}
+
+
+def _is_temporary(name: str) -> bool:
+    """A writer's temporary file name (:func:`harness.run.files.write_parts_atomically`)."""
+    return name.startswith(".") and name.endswith(".tmp")
 
 
 def split_block(text: bytes | memoryview, count: int) -> list[str]:
@@ -572,7 +723,10 @@ _ENTRY_ENCODER = json.JSONEncoder(default=_json_default, check_circular=False)
 def add_arguments(parser) -> None:
     parser.add_argument("action", choices=("info", "prune", "clear"),
                         help="info: where and how big; prune: remove entries of other code "
-                        "versions (and older than --older-than); clear: remove everything")
+                        "versions (and older than --older-than); clear: remove every entry. "
+                        "prune and clear remove only the cache's own entries, and only in a "
+                        f"directory the harness made (it holds {CACHE_MARKER}); any other is "
+                        "refused with exit 2")
     parser.add_argument("--cache-dir", type=Path, default=None,
                         help=f"cache directory (default: {default_cache_dir()})")
     parser.add_argument("--older-than", type=float, default=None, metavar="DAYS",
@@ -583,17 +737,26 @@ def main(args) -> int:
     cache = ResultCache(args.cache_dir)
     if args.action == "info":
         info = cache.info()
-        print(f"{info['root']}: {info['entries']} entries, {info['bytes'] / 1e6:.1f} MB")
+        note = "" if info["marked"] or not cache.root.exists() else (
+            f" (no {CACHE_MARKER} file: not a cache the harness made)")
+        print(f"{info['root']}: {info['entries']} entries, {info['bytes'] / 1e6:.1f} MB{note}")
         return 0
     if args.older_than is not None and not args.older_than >= 0:
         print(f"impact-harness cache: --older-than {args.older_than}: must be >= 0",
               file=sys.stderr)
         return 2
-    done = cache.prune(args.older_than) if args.action == "prune" else cache.clear()
+    if not cache.root.exists():
+        print(f"{cache.root}: no cache there: removed 0 entries")
+        return 0
+    try:
+        done = cache.prune(args.older_than) if args.action == "prune" else cache.clear()
+    except NotOurCache as error:
+        print(f"impact-harness cache: {error}", file=sys.stderr)
+        return 2
     print(f"{cache.root}: removed {done['entries']} entries, {done['bytes'] / 1e6:.1f} MB")
     return 0
 
 
-__all__ = ["CACHED_CODE", "CACHE_DIR_VARIABLE", "ResultCache", "add_arguments",
-           "cached_code_sources", "canonical_json", "code_version", "code_version_of",
-           "default_cache_dir", "main"]
+__all__ = ["CACHED_CODE", "CACHE_DIR_VARIABLE", "CACHE_MARKER", "NotOurCache", "ResultCache",
+           "add_arguments", "cached_code_sources", "canonical_json", "code_version",
+           "code_version_of", "default_cache_dir", "main"]

@@ -13,8 +13,6 @@ import, is loaded each time (failing is fast) and never kept.
 
 from __future__ import annotations
 
-import base64
-import pickle
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Iterator, Sequence
@@ -59,12 +57,10 @@ def engine_facts(names: Sequence[str], cache=None) -> EngineFacts:
         facts.versions[name] = adapter.version
         facts.settings[name] = {preset: adapter.settings(preset, None) for preset in PRESETS}
         if key is not None:
-            pickled = pickle.dumps((adapter.version, facts.settings[name]),
-                                   protocol=pickle.HIGHEST_PROTOCOL)
-            try:
+            try:  # plain JSON (the settings are numbers, strings, booleans and lists)
                 cache.put(key, {"kind": ENGINE_FACTS, "engine": name,
-                                "pickled": base64.b64encode(pickled).decode()})
-            except OSError:  # not kept: the next run loads the engine again
+                                "version": adapter.version, "settings": facts.settings[name]})
+            except (OSError, TypeError, ValueError):  # not kept: the next run loads it again
                 pass
     return facts
 
@@ -99,11 +95,9 @@ def _stored(cache, key: str, name: str) -> tuple[str, dict] | None:
     record = cache.get(key, count=False)
     if record is None or record.get("engine") != name:
         return None
-    try:
-        version, settings = pickle.loads(base64.b64decode(record["pickled"]))
-    except Exception:  # noqa: BLE001 - a damaged entry: load the engine again
-        return None
+    version, settings = record.get("version"), record.get("settings")
     if not (isinstance(version, str) and isinstance(settings, dict)
-            and set(settings) == set(PRESETS)):
+            and set(settings) == set(PRESETS)
+            and all(isinstance(values, dict) for values in settings.values())):
         return None
     return version, settings

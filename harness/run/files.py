@@ -1,9 +1,16 @@
-"""Writing a file so that no reader ever sees half of it and no finished file is lost."""
+"""Writing a file so that no reader ever sees half of it and no finished file is lost, only
+ever over a regular file (never a device, a directory or a symbolic link), with the
+permissions the user's umask gives a new file (0644 under the usual 022).
+
+:func:`output_file_problem` and :func:`output_directory_problem` say, before any work, why
+an output path the user gave cannot be written (a command exits 2 with that line).
+"""
 
 from __future__ import annotations
 
 import itertools
 import os
+import stat
 import tempfile
 from pathlib import Path
 from typing import Iterable
@@ -77,6 +84,9 @@ def _replace_atomically(path: Path | str, write, prefix: str | None,
             write(descriptor)
         finally:
             os.close(descriptor)
+        problem = _replaceable_problem(path)
+        if problem:  # never replace a device, a directory or a link with a file
+            raise NotRegularFile(f"{os.fspath(path)}: {problem}")
         os.replace(temporary, path)
     except BaseException:
         try:
@@ -87,15 +97,103 @@ def _replace_atomically(path: Path | str, write, prefix: str | None,
     return path
 
 
+def save_figure(figure, path: Path | str, kind: str, **options) -> Path | str:
+    """``figure.savefig`` (a matplotlib figure, as ``kind``: ``"png"``, ``"svg"``) into
+    memory, then written as :func:`write_bytes_atomically` writes: never through a link or
+    onto a device planted at ``path``. Returns ``path``."""
+    import io
+
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format=kind, **options)
+    return write_bytes_atomically(path, buffer.getvalue())
+
+
 def _create_temporary(directory: str, prefix: str) -> tuple[int, str]:
-    """A new file ``<prefix><pid>-<n>.tmp`` in ``directory`` (mode 0600, as ``mkstemp``
-    makes it), opened for writing: ``(descriptor, path)``. ``O_EXCL`` makes it this
-    writer's alone; a name already taken is passed over."""
+    """A new file ``<prefix><pid>-<n>.tmp`` in ``directory``, opened for writing:
+    ``(descriptor, path)``, with the mode a new file gets (0666 less the umask: the file it
+    becomes is an ordinary output, not a secret). ``O_EXCL`` makes it this writer's alone;
+    a name already taken is passed over."""
     stem = os.path.join(directory, f"{prefix}{os.getpid()}-")
     for _ in range(_NAMED_TRIES):
         temporary = f"{stem}{next(_TEMPORARY_NUMBERS)}.tmp"
         try:
-            return os.open(temporary, _CREATE, 0o600), temporary
+            return os.open(temporary, _CREATE, 0o666), temporary  # the umask applies
         except FileExistsError:
             continue
-    return tempfile.mkstemp(prefix=prefix, suffix=".tmp", dir=directory or os.curdir)
+    descriptor, temporary = tempfile.mkstemp(prefix=prefix, suffix=".tmp",
+                                             dir=directory or os.curdir)
+    os.fchmod(descriptor, 0o666 & ~_umask())  # mkstemp makes 0600
+    return descriptor, temporary
+
+
+def _umask() -> int:
+    """The process's umask (read by setting it and back: there is no other way)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+class NotRegularFile(OSError):
+    """An output path holds something other than a regular file: it is not replaced."""
+
+
+_KINDS = ((stat.S_ISLNK, "a symbolic link"), (stat.S_ISDIR, "a directory"),
+          (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+          (stat.S_ISFIFO, "a named pipe"), (stat.S_ISSOCK, "a socket"))
+
+
+def _replaceable_problem(path: Path | str) -> str | None:
+    """None when ``path`` holds nothing or a regular file, else what it is instead."""
+    try:
+        mode = os.lstat(path).st_mode
+    except FileNotFoundError:
+        return None
+    if stat.S_ISREG(mode):
+        return None
+    kind = next((name for test, name in _KINDS if test(mode)), "not a regular file")
+    return f"is {kind}, not a regular file: not replaced"
+
+
+def output_file_problem(path: Path | str) -> str | None:
+    """Why a file the user named cannot be written at ``path`` (``None``: it can): it must
+    be nothing yet or a regular file (not a link, a device or a directory), in a directory
+    that exists and takes a new file. Nothing is created or changed."""
+    path = Path(path)
+    problem = _replaceable_problem(path)
+    if problem:
+        return problem
+    parent = path.parent
+    if not parent.is_dir():
+        return (f"its directory {parent} does not exist (create it first: only a directory "
+                "the command asks for is ever made)")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        return f"its directory {parent} is not writable"
+    return None
+
+
+def output_directory_problem(path: Path | str) -> str | None:
+    """Why an output directory the user named cannot be used (``None``: it can): it must
+    be a directory (a link to one is fine) that takes new files, or nothing yet in an
+    existing directory (it is then made, itself only, not its parents)."""
+    path = Path(path)
+    if path.is_dir():
+        if not os.access(path, os.W_OK | os.X_OK):
+            return "is not a writable directory"
+        return None
+    if os.path.lexists(path):
+        kind = _replaceable_problem(path) or "is a regular file"
+        return f"{kind.split(',')[0]}, not a directory"
+    if not path.parent.is_dir():
+        return (f"its parent {path.parent} does not exist (create it first: only the named "
+                "directory itself is made)")
+    if not os.access(path.parent, os.W_OK | os.X_OK):
+        return f"cannot be made: {path.parent} is not writable"
+    return None
+
+
+def make_output_directory(path: Path | str) -> Path:
+    """Make the output directory ``path`` (itself only) when it is missing; returns it."""
+    path = Path(path)
+    if not path.is_dir():
+        path.mkdir()
+    return path

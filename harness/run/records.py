@@ -15,11 +15,9 @@ Floats are written by ``repr`` (exact round trip); non-finite values (an engine 
 are written as ``null`` and the record's ``status`` says why. Each scenario's info and each
 record is one line of compact JSON.
 
-Beside the file, :func:`write_results` keeps its *companion*, ``<name>.pickle``
-(:func:`companion_path`): the same records pickled as plain values, which
-:func:`read_results` loads several times faster than it parses the JSON, and uses only while
-the JSON file is the very one it was written with. The JSON stays the results (``compare``,
-any other reader); the companion can be deleted at no cost but speed.
+The file is the results' only form: plain JSON, read by ``json`` (no pickle beside it).
+:func:`read_results` refuses a file of another format or version, or a record without a
+field every record has (:data:`REQUIRED_FIELDS`), with a ``ValueError`` naming the file.
 
 Record fields (units SI):
 
@@ -48,14 +46,12 @@ import itertools
 import json
 import math
 import os
-import pickle
-import tempfile
 from dataclasses import asdict, dataclass, field, fields, is_dataclass
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 
 from harness.collector import collector_paused
-from harness.run.files import write_parts_atomically
+from harness.run.files import output_file_problem, write_parts_atomically
 
 FORMAT = "impact-harness-results"
 FORMAT_VERSION = 1
@@ -203,9 +199,9 @@ _PLAIN = (str, int, bool, type(None))
 
 
 def plain_value(value: Any) -> Any:
-    """Plain JSON values of the built-in types only (what the JSON reads back, and all a
-    results file's companion may hold); non-finite floats become None, numpy values and
-    subclasses of str, int and float plain Python, nested dataclasses dicts."""
+    """Plain JSON values of the built-in types only (what the JSON reads back); non-finite
+    floats become None, numpy values and subclasses of str, int and float plain Python,
+    nested dataclasses dicts."""
     kind = type(value)
     if kind is float:  # the common cases first, by exact type: a results file has millions
         return value if math.isfinite(value) else None
@@ -281,26 +277,17 @@ _LINE_ENCODER = json.JSONEncoder(ensure_ascii=False, allow_nan=False, separators
 @dataclass
 class RecordBlock:
     """Consecutive records of a results file as they are written: their ``count`` lines
-    (:func:`record_line`) joined by :data:`LINE_SEPARATOR` as UTF-8 ``text``, and, for the
-    companion (:func:`companion_path`), the list of their dicts (:meth:`Record.as_dict`) and
-    the list of their lines, each pickled. A run writes a scenario's block read from the
-    result cache as it is: no record is parsed, encoded or pickled again."""
+    (:func:`record_line`) joined by :data:`LINE_SEPARATOR` as UTF-8 ``text``. A run writes a
+    scenario's block read from the result cache as it is: no record is parsed or encoded
+    again."""
 
     text: bytes | memoryview
     count: int
-    pickled_datas: bytes | memoryview
-    pickled_lines: bytes | memoryview
 
     @classmethod
-    def of_lines(cls, lines: Sequence[str], datas: Sequence[dict] | None = None,
-                 pickled_datas: bytes | None = None) -> "RecordBlock":
-        """The block of records whose ``lines`` are known and whose dicts are ``datas``
-        (or, already pickled, ``pickled_datas``; one of the two)."""
-        if pickled_datas is None:
-            pickled_datas = pickle.dumps(list(datas), protocol=pickle.HIGHEST_PROTOCOL)
-        return cls(text=LINE_SEPARATOR.join(lines).encode("utf-8"), count=len(lines),
-                   pickled_datas=pickled_datas,
-                   pickled_lines=pickle.dumps(list(lines), protocol=pickle.HIGHEST_PROTOCOL))
+    def of_lines(cls, lines: Sequence[str]) -> "RecordBlock":
+        """The block of records whose ``lines`` are known."""
+        return cls(text=LINE_SEPARATOR.join(lines).encode("utf-8"), count=len(lines))
 
     def lines(self) -> list[str]:
         """The records' lines, decoded and split."""
@@ -310,8 +297,7 @@ class RecordBlock:
 def write_results(path: Path | str, records: Iterable[Record | None], provenance: Mapping,
                   scenarios: Mapping | None = None, *,
                   lines: Sequence[str | None] | None = None) -> Path:
-    """Write the results file (atomically) and its companion (:func:`companion_path`), and
-    return the file's path.
+    """Write the results file (atomically) and return its path.
 
     ``scenarios`` maps each scenario name to what the reports need besides the records
     (description, tags, system, sweep parameter, labels of the speeds, gates). ``lines``
@@ -323,14 +309,11 @@ def write_results(path: Path | str, records: Iterable[Record | None], provenance
     lines = [None] * len(records) if lines is None else list(lines)
     if len(lines) != len(records):
         raise ValueError(f"{len(lines)} lines for {len(records)} records")
-    datas = [None if record is None else record.as_dict() for record in records]
-    lines = [record_line(data) if line is None else line for data, line in zip(datas, lines)]
-    if any(data is None for data in datas):  # a record known by its line only
-        with collector_paused():
-            datas = [json.loads(line) if data is None else data
-                     for data, line in zip(datas, lines)]
-    return write_result_blocks(path, [RecordBlock.of_lines(lines, datas)], provenance,
-                               scenarios)
+    if any(record is None and line is None for record, line in zip(records, lines)):
+        raise ValueError("a record that is None has no line")
+    lines = [record_line(record.as_dict()) if line is None else line
+             for record, line in zip(records, lines)]
+    return write_result_blocks(path, [RecordBlock.of_lines(lines)], provenance, scenarios)
 
 
 def write_result_blocks(path: Path | str, blocks: Sequence[RecordBlock], provenance: Mapping,
@@ -357,7 +340,6 @@ def write_result_blocks(path: Path | str, blocks: Sequence[RecordBlock], provena
     separator = LINE_SEPARATOR.encode()
     write_parts_atomically(path, itertools.chain(
         (head,), _separated([block.text for block in blocks], separator), (RECORDS_END,)))
-    _write_companion(path, blocks)
     return path
 
 
@@ -370,121 +352,28 @@ def _separated(parts: Sequence, separator) -> Iterable:
         yield part
 
 
-#: The ``format`` of a results file's companion (:func:`companion_path`).
-COMPANION_FORMAT = "impact-harness-results-companion"
-
-
-def companion_path(path: Path | str) -> Path:
-    """The companion of the results file ``path``: ``<name>.pickle`` beside it.
-
-    It holds the same records as the file, pickled (plain dicts, lists, strings and numbers:
-    nothing else is unpickled), which :func:`read_results` loads several times faster than
-    it parses the JSON. It is used only while the results file is the one it was written
-    with (the file's size, modification time and inode, recorded in it, still match: each
-    write replaces the file by a new one); anything else reads the JSON, which stays the
-    results. Deleting it costs only speed.
-    """
-    path = Path(path)
-    return path.with_name(path.name + ".pickle")
-
-
-def _write_companion(path: Path, blocks: Sequence[RecordBlock]) -> None:
-    """Write ``path``'s companion: a header, then the records' dicts in the ``blocks``'
-    pickled parts, then their lines of the file (what ``Results.record_lines`` gives) in
-    pickled parts; a companion that cannot be written is no error (the results file is
-    whole, and a companion of another file is never used)."""
-    companion = companion_path(path)
-    try:
-        status = path.stat()
-        header = {"format": COMPANION_FORMAT, "results_size": status.st_size,
-                  "results_mtime_ns": status.st_mtime_ns, "results_inode": status.st_ino,
-                  "records": sum(block.count for block in blocks), "parts": len(blocks),
-                  "line_parts": len(blocks)}
-        write_parts_atomically(companion, (pickle.dumps(header),
-                                           *(block.pickled_datas for block in blocks),
-                                           *(block.pickled_lines for block in blocks)))
-    except OSError:
-        pass
-
-
-class _PlainUnpickler(pickle.Unpickler):
-    """An unpickler of plain values only: no class or function is ever looked up (a
-    companion holds dicts, lists, strings, numbers, booleans and None)."""
-
-    def find_class(self, module, name):
-        raise pickle.UnpicklingError(f"{module}.{name}: a companion holds plain values only")
-
-
-def read_companion_header(handle, status: os.stat_result) -> dict | None:
-    """The header of the companion open in ``handle`` when it was written with the results
-    file whose ``os.stat`` is ``status`` (the same size, modification time and inode), else
-    None. Raises what unpickling raises on a damaged companion."""
-    header = _PlainUnpickler(handle).load()
-    if not (isinstance(header, dict) and header.get("format") == COMPANION_FORMAT
-            and header.get("results_size") == status.st_size
-            and header.get("results_mtime_ns") == status.st_mtime_ns
-            and header.get("results_inode") == status.st_ino
-            and isinstance(header.get("records"), int)
-            and isinstance(header.get("parts"), int)
-            and isinstance(header.get("line_parts"), int)):
-        return None
-    return header
-
-
-def _read_companion(path: Path, status: os.stat_result
-                    ) -> tuple[list[dict], list[str]] | None:
-    """The record dicts and lines of ``path``'s companion when it matches the file
-    (``status``), else None (absent, written for another file, damaged: the JSON is read)."""
-    try:
-        with open(companion_path(path), "rb") as handle:
-            header = read_companion_header(handle, status)
-            if header is None:
-                return None
-            datas: list = []
-            for _ in range(header["parts"]):  # one pickle each: an unpickler (memo) each
-                part = _PlainUnpickler(handle).load()
-                if not isinstance(part, list):
-                    return None
-                datas += part
-            lines: list = []
-            for _ in range(header["line_parts"]):
-                part = _PlainUnpickler(handle).load()
-                if not isinstance(part, list):
-                    return None
-                lines += part
-    except Exception:  # noqa: BLE001 - an unreadable companion is only slower reading
-        return None
-    if (len(datas) != header.get("records") or not all(isinstance(d, dict) for d in datas)
-            or not isinstance(lines, list) or len(lines) != len(datas)
-            or not all(isinstance(line, str) for line in lines)):
-        return None
-    return datas, lines
-
-
 #: What comes between the header and the first record line of a results file, and after the
 #: last: :func:`read_results` finds the record lines by them.
 RECORDS_START = ',\n "records": [\n'
 RECORDS_END = "\n ]\n}\n"
 
 
-def check_writable(path: Path | str) -> str | None:
-    """``None`` when a results file can be written at ``path``, else the reason it cannot.
+def check_writable(path: Path | str, *, make_parent: bool = False) -> str | None:
+    """``None`` when a results file can be written at ``path``, else the reason it cannot
+    (:func:`harness.run.files.output_file_problem`: nothing there or a regular file, in an
+    existing writable directory).
 
-    Checked before a run starts (creates the parent directory, and a temporary in it that it
-    removes), so a bad ``--json`` costs nothing.
+    Checked before a run starts, so a bad ``--json`` costs nothing. ``make_parent``: the
+    directory is made (itself only) when missing -- for the default results file only, whose
+    ``reports/`` is the harness's own; a directory the user names must exist.
     """
     path = Path(path)
-    if path.is_dir():
-        return "is a directory"
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        descriptor, temporary = tempfile.mkstemp(prefix=f".{path.name}-", suffix=".tmp",
-                                                 dir=path.parent)
-        os.close(descriptor)
-        os.unlink(temporary)
-    except OSError as error:
-        return f"cannot write there: {error.strerror or error}"
-    return None
+    if make_parent and not os.path.lexists(path.parent) and path.parent.parent.is_dir():
+        try:
+            path.parent.mkdir()
+        except OSError as error:
+            return f"cannot make {path.parent}: {error.strerror or error}"
+    return output_file_problem(path)
 
 
 def read_results(path: Path | str) -> Results:
@@ -497,17 +386,11 @@ def read_results(path: Path | str) -> Results:
 def _read_results(path: Path) -> Results:
     try:
         with open(path, "rb") as handle:
-            status = os.fstat(handle.fileno())
             data = handle.read()
-        companion = _read_companion(path, status)
-        document = None if companion is None else results_head(data)
-        if document is not None:  # the records and their lines from the companion
-            datas, lines = companion
-        else:
-            text = str(data, "utf-8")
-            datas, (document, lines) = None, _split_records(text)
-            if document is None:  # not as write_results lays it out: read whole
-                document = json.loads(text)
+        text = str(data, "utf-8")
+        document, lines = _split_records(text)
+        if document is None:  # not as write_results lays it out: read whole
+            document = json.loads(text)
     except FileNotFoundError:
         raise FileNotFoundError(
             f"{path}: no results file; run `impact-harness run` (or `suite`) first") from None
@@ -520,19 +403,56 @@ def _read_results(path: Path) -> Results:
     if document.get("format_version") != FORMAT_VERSION:
         raise ValueError(f"{path}: results format version {document.get('format_version')!r}; "
                          f"this harness reads {FORMAT_VERSION}")
-    items = datas if datas is not None else document.get("records", [])
+    items = document.get("records", [])
+    problem = records_problem(items)
+    if problem:
+        raise ValueError(f"{path}: {problem}")
+    provenance, scenarios = document.get("provenance", {}), document.get("scenarios", {})
+    if not isinstance(provenance, dict) or not isinstance(scenarios, dict):
+        raise ValueError(f"{path}: 'provenance' and 'scenarios' must be JSON objects")
     records = [Record.from_dict(item) for item in items]
-    results = Results(records=records, provenance=document.get("provenance", {}),
-                      scenarios=document.get("scenarios", {}))
+    results = Results(records=records, provenance=provenance, scenarios=scenarios)
     if lines is not None and len(lines) == len(records):
         results._lines = (records, len(records), lines)
     return results
 
 
+#: The fields every record of a results file holds (a record without one is refused: a
+#: report or comparison of it would be wrong, not merely short).
+REQUIRED_FIELDS = ("scenario", "point", "source", "law", "preset", "u_before", "u_after",
+                   "status", "departure")
+#: The type of each required field (None allowed where a record may lack the value).
+_REQUIRED_TYPES = {"scenario": (str,), "point": (dict,), "source": (str,),
+                   "law": (str, type(None)), "preset": (str, type(None)),
+                   "u_before": (list, type(None)), "u_after": (list, type(None)),
+                   "status": (str,), "departure": (dict,)}
+
+
+def records_problem(items: Any) -> str | None:
+    """Why the records of a results file cannot be read (None: they can): each must be an
+    object holding :data:`REQUIRED_FIELDS` with values of their types; the first bad one
+    is named by its position."""
+    if not isinstance(items, list):
+        return "'records' must be a list"
+    for number, item in enumerate(items):
+        if not isinstance(item, dict):
+            return f"record {number}: not a JSON object"
+        missing = [name for name in REQUIRED_FIELDS if name not in item]
+        if missing:
+            return (f"record {number}: no {', '.join(missing)} (every record has "
+                    f"{', '.join(REQUIRED_FIELDS)}): not a complete results file")
+        for name in REQUIRED_FIELDS:
+            if not isinstance(item[name], _REQUIRED_TYPES[name]):
+                return (f"record {number}: {name} = {item[name]!r}: not a "
+                        + " or ".join("null" if kind is type(None) else kind.__name__
+                                      for kind in _REQUIRED_TYPES[name]))
+    return None
+
+
 def results_head(data: bytes) -> dict | None:
     """The document before the records of a results file's bytes laid out by
-    :func:`write_results` (its records then come from the companion, or from the record
-    lines), else None. Its format is not checked here."""
+    :func:`write_results` (its records then come from the record lines), else None. Its
+    format is not checked here."""
     start = data.find(RECORDS_START.encode())
     if start < 0 or not data.endswith(RECORDS_END.encode()):
         return None
@@ -575,6 +495,6 @@ def _split_records(text: str) -> tuple[dict | None, list[str] | None]:
 
 
 __all__ = ["ANALYTIC", "DEFAULT_RESULTS", "FORMAT", "FORMAT_VERSION", "LINE_SEPARATOR",
-           "Record", "RecordBlock", "Results", "check_writable", "companion_path",
-           "plain_value", "read_companion_header", "read_results", "record_line", "results_head",
+           "REQUIRED_FIELDS", "Record", "RecordBlock", "Results", "check_writable",
+           "plain_value", "read_results", "record_line", "records_problem", "results_head",
            "write_result_blocks", "write_results"]

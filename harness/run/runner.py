@@ -124,8 +124,11 @@ POINT_REFERENCE = "point-reference"
 #: A reference task counts as this many engine runs when choosing the pool over inline work:
 #: a several-contact reference takes 0.1-1 s, an engine run about a millisecond.
 REFERENCE_TASK_WEIGHT = 100
-#: Exit statuses (documented in harness.cli).
-EXIT_OK, EXIT_GATE_FAILED, EXIT_BAD_INPUT, EXIT_INTERNAL = 0, 1, 2, 3
+#: Exit statuses (documented in harness.cli): EXIT_ENGINE_ERROR when an engine run ended in
+#: an error (an exception of the engine, a time limit): the results are written, but lack it.
+EXIT_OK, EXIT_GATE_FAILED, EXIT_BAD_INPUT, EXIT_INTERNAL, EXIT_ENGINE_ERROR = 0, 1, 2, 3, 4
+#: At most this many engine errors are printed one per line (then how many more).
+SHOWN_ENGINE_ERRORS = 20
 
 
 class TaskTimeLimit(Exception):
@@ -379,7 +382,7 @@ class RunOutcome:
     def __init__(self, records: Sequence[Record | None], gates: list[GateResult],
                  provenance: dict, scenarios: dict, cache_stats: dict | None = None,
                  warnings: list[str] | None = None, blocks: Sequence[RecordBlock] = (),
-                 internal: Sequence[int] = ()) -> None:
+                 internal: Sequence[int] = (), engine_errors: Sequence[int] = ()) -> None:
         self._records = list(records)
         self.gates = gates
         self.provenance = provenance
@@ -391,6 +394,7 @@ class RunOutcome:
             raise ValueError(f"{sum(block.count for block in self.blocks)} lines for "
                              f"{len(self._records)} records")
         self._internal = list(internal)  # positions of the internal-error records
+        self._engine_errors = list(engine_errors)  # positions of the engine-error records
         self._lines: list[str] | None = None
 
     @property
@@ -427,6 +431,12 @@ class RunOutcome:
     def internal_errors(self) -> list[Record]:
         """Records the harness itself failed to compute (a bug: exit status 3)."""
         return [self._record_at(index) for index in self._internal]
+
+    @property
+    def engine_errors(self) -> list[Record]:
+        """Engine runs that ended in an error (an exception of the engine, a time limit):
+        exit status 4, the results written without them."""
+        return [self._record_at(index) for index in self._engine_errors]
 
 
 def select_scenarios(files: Sequence[str | Path] | None = None,
@@ -771,12 +781,14 @@ def run(
     records: list[Record | None] = []
     blocks: list[RecordBlock] = []
     internal: list[int] = []
+    engine_errors: list[int] = []
     gates: list[GateResult] = []
     infos: dict[str, dict] = {}
     for number, scenario in enumerate(scenarios, 1):
         infos[scenario.name] = scenario_info(scenario)
         result = stored.get(scenario.name) or built[scenario.name]
         internal += [len(records) + position for position in result.internal]
+        engine_errors += [len(records) + position for position in result.engine_errors]
         records += (result.records if result.records is not None
                     else [None] * result.block.count)
         blocks.append(result.block)
@@ -813,7 +825,8 @@ def run(
         wall_time_s=time.perf_counter() - started,
     )
     return RunOutcome(records=records, gates=gates, provenance=info, scenarios=infos,
-                      cache_stats=stats, warnings=warnings, blocks=blocks, internal=internal)
+                      cache_stats=stats, warnings=warnings, blocks=blocks, internal=internal,
+                      engine_errors=engine_errors)
 
 
 def _scenario_key(scenario: Scenario, cache, versions: Mapping, missing: Mapping,
@@ -849,8 +862,8 @@ def _scenario_key(scenario: Scenario, cache, versions: Mapping, missing: Mapping
 
 @dataclass
 class _Built:
-    """A scenario's finished records: as the results file and its companion hold them
-    (``block``), the records themselves when built in this process (None: read from the
+    """A scenario's finished records: as the results file holds them (``block``), the
+    records themselves when built in this process (None: read from the
     cache or built on a worker, parsed from the block when asked for), the ``summary`` the
     run needs of them (:func:`_summary`) and the positions of internal-error records."""
 
@@ -858,12 +871,13 @@ class _Built:
     summary: dict
     records: list[Record] | None = None
     internal: list[int] = field(default_factory=list)
+    engine_errors: list[int] = field(default_factory=list)  # positions, internal ones apart
 
 
 def _stored_scenario(scenario: Scenario, cache, key: str | None, presets: Sequence[str],
                      engine_count: int) -> _Built | None:
     """The scenario's finished records from its cache entry (:func:`_scenario_key`), as the
-    results file and its companion hold them (neither decoded nor parsed) with their summary,
+    results file holds them (neither decoded nor parsed) with their summary,
     or None.
 
     The entry was checked when it was stored (:func:`_store_scenario`) and its checksum
@@ -893,11 +907,11 @@ def _stored_scenario(scenario: Scenario, cache, key: str | None, presets: Sequen
     if entry is None:
         return None
     summary, text, count, parts = entry
-    if count != expected or len(parts) != 2:
+    if count != expected or parts:
         cache.rejected.append(f"{cache.lines_path(key)}: {count} lines and {len(parts)} "
-                              f"parts, not {expected} and 2")
+                              f"parts, not {expected} and none")
         return None
-    return _Built(block=RecordBlock(text, count, *parts), summary=summary)
+    return _Built(block=RecordBlock(text, count), summary=summary)
 
 
 #: The counts of a scenario's records its summary keeps (for the progress line, the hits).
@@ -996,11 +1010,15 @@ def _build_scenario(scenario: Scenario, entries: Sequence, cache, computed_refer
     summary = _summary(scenario, records)
     datas = [record.as_dict() for record in records]
     lines = [record_line(data) for data in datas]
-    block = RecordBlock.of_lines(lines, datas)
+    block = RecordBlock.of_lines(lines)
     internal = [i for i, r in enumerate(records) if r.status.startswith("error: internal")]
+    engine_errors = [i for i, r in enumerate(records) if r.source != ANALYTIC
+                     and r.status.startswith("error:")
+                     and not r.status.startswith("error: internal")]
     if not internal:
-        _store_scenario(cache, key, entries, records, datas, lines, block, summary)
-    return _Built(block=block, summary=summary, records=records, internal=internal)
+        _store_scenario(cache, key, entries, records, datas, lines, summary)
+    return _Built(block=block, summary=summary, records=records, internal=internal,
+                  engine_errors=engine_errors)
 
 
 def _finite_speeds(after, before) -> bool:
@@ -1011,14 +1029,13 @@ def _finite_speeds(after, before) -> bool:
 
 
 def _store_scenario(cache, key: str | None, engine_entries: Sequence, records: Sequence[Record],
-                    datas: Sequence[dict], lines: Sequence[str], block: RecordBlock,
-                    summary: dict) -> None:
+                    datas: Sequence[dict], lines: Sequence[str], summary: dict) -> None:
     """Keep a scenario's records under ``key`` when every engine run was cacheable (none
     skipped or failed) and none is an ok record without finite speeds (a record the lookup
     would reject every run); as a warm run reads them back: every engine record ``cached``
-    (``datas``: each record's :meth:`Record.as_dict`, ``lines`` their lines, ``block`` them
-    as written). Stored as the results file and its companion hold them
-    (:class:`RecordBlock`), with the ``summary``, so a warm run writes them as read."""
+    (``datas``: each record's :meth:`Record.as_dict`, ``lines`` their lines). Stored as the
+    results file holds them (:class:`RecordBlock`), with the ``summary``, so a warm run
+    writes them as read."""
     if key is None or cache is None or not cache.enabled:
         return
     if not all(isinstance(item.get("output"), dict) and item.get("key") is not None
@@ -1032,13 +1049,10 @@ def _store_scenario(cache, key: str | None, engine_entries: Sequence, records: S
                     else {**data, "cached": True} for record, data in zip(records, datas)]
     stored_lines = [line if stored is data else _cached_line(line, stored)
                     for data, stored, line in zip(datas, stored_datas, lines)]
-    if stored_lines != lines:
-        block = RecordBlock.of_lines(stored_lines, stored_datas)
     counts = summary["counts"]
     stored_summary = {**summary, "counts": {**counts, "cached": counts["engine_runs"]}}
     try:
-        cache.put_lines(key, stored_lines, stored_summary,
-                        (block.pickled_datas, block.pickled_lines))
+        cache.put_lines(key, stored_lines, stored_summary)
     except OSError:  # the run goes on without the cache (the engine runs' store warns)
         pass
 
@@ -1491,29 +1505,15 @@ def check_arguments(args, json_path: Path | None) -> str | None:
     if limit is not None and not (math.isfinite(limit) and limit > 0):
         return f"--task-time-limit {limit}: must be a positive number of seconds"
     if json_path is not None:
-        reason = check_writable(json_path)
+        reason = check_writable(json_path, make_parent=json_path == DEFAULT_RESULTS)
         if reason:
             return f"--json {json_path}: {reason}"
-    if not args.no_cache and args.cache_dir is not None:
-        reason = _cache_dir_problem(Path(args.cache_dir))
+    if not args.no_cache:  # made and marked as the harness's, or refused when not its own
+        from harness.run.cache import ResultCache
+
+        reason = ResultCache(args.cache_dir, version="").prepare()
         if reason:
-            return f"--cache-dir {args.cache_dir}: {reason}"
-    return None
-
-
-def _cache_dir_problem(path: Path) -> str | None:
-    import os
-    import tempfile
-
-    if path.exists() and not path.is_dir():
-        return "is not a directory"
-    try:
-        path.mkdir(parents=True, exist_ok=True)
-        descriptor, temporary = tempfile.mkstemp(suffix=".tmp", prefix=".probe-", dir=path)
-        os.close(descriptor)
-        os.unlink(temporary)
-    except OSError as error:
-        return f"cannot write there: {error.strerror or error}"
+            return f"--cache-dir {ResultCache(args.cache_dir, version='').root}: {reason}"
     return None
 
 
@@ -1655,10 +1655,19 @@ def _execute(args, *, json_path: Path, command: Sequence[str] | None,
     for record in outcome.internal_errors:
         print(f"INTERNAL ERROR: {record.scenario} {record.point['label']} {record.label}: "
               f"{record.status}", file=sys.stderr)
+    engine_errors = outcome.engine_errors
+    for record in engine_errors[:SHOWN_ENGINE_ERRORS]:
+        print(f"ENGINE ERROR: {record.scenario} {record.point['label']} {record.label}: "
+              f"{record.status}", file=sys.stderr)
+    if len(engine_errors) > SHOWN_ENGINE_ERRORS:
+        print(f"ENGINE ERROR: {len(engine_errors) - SHOWN_ENGINE_ERRORS} more (their records "
+              f"in {json_path})", file=sys.stderr)
     if outcome.internal_errors:
         return EXIT_INTERNAL, outcome
     if errors:
         return EXIT_BAD_INPUT, outcome
+    if engine_errors:
+        return EXIT_ENGINE_ERROR, outcome
     return (EXIT_GATE_FAILED if outcome.failed_gates else EXIT_OK), outcome
 
 
@@ -1672,6 +1681,7 @@ def main(args) -> int:
 
 __all__ = [
     "EXIT_BAD_INPUT",
+    "EXIT_ENGINE_ERROR",
     "EXIT_GATE_FAILED",
     "EXIT_INTERNAL",
     "EXIT_OK",

@@ -42,11 +42,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def main(args) -> int:
     from harness import report
     from harness.report import table3 as paper
+    from harness.run.files import make_output_directory, output_directory_problem
     from harness.run.records import read_results
 
     out: Path = args.out
     started = time.perf_counter()
-    problem = runner.check_arguments(args, out / "results.json")
+    problem = output_directory_problem(out)
+    if problem:
+        problem = f"--out {out}: {problem}"
+    else:
+        make_output_directory(out)  # the directory asked for (itself only)
+        problem = runner.check_arguments(args, out / "results.json")
     if problem:  # before any work, the Table 3 included
         print(f"impact-harness suite: {problem}", file=sys.stderr)
         return runner.EXIT_BAD_INPUT

@@ -492,34 +492,33 @@ def second_strike(scene: Scene, contact, horizon_s: float, step_s: float) -> Str
 # Checks passed, remembered by content (a warm run re-reads files, it need not re-check them)
 # --------------------------------------------------------------------------------------------
 class PassedChecks:
-    """The scenario texts that passed every check, each with the scenario read from it, kept
-    in one file.
+    """The keys of the scenario texts that passed every check, kept in one file.
 
-    Reading a file (TOML, the table checks) and :func:`check_points` (the second-feature
-    strike check above all) cost about a millisecond per file, most of a warm run of a large
-    library. Their outcome depends only on the file's text, the code (the scenarios, the
-    scene and the engines: the result cache's :func:`harness.run.cache.code_version`), the
-    limits of :data:`LIMITS` and which engines are installed (:func:`engine_time_step`), so
-    a text that passed is remembered under ``sha256`` of those with its :class:`Scenario`
-    (without the file's path, which the reader sets); a file with problems is checked again
-    each time (its errors are listed then).
+    :func:`check_points` (the second-feature strike check above all) costs about a
+    millisecond per file, much of a warm run of a large library. Its outcome depends only on
+    the file's text, the code (the scenarios, the scene and the engines: the result cache's
+    :func:`harness.run.cache.code_version`), the limits of :data:`LIMITS` and which engines
+    are installed (:func:`engine_time_step`), so a text that passed is remembered under
+    ``sha256`` of those: the file is read again (TOML, the table checks), its point checks
+    are not. A file with problems is checked again each time (its errors are listed then).
 
-    The store is ``root/scenario-checks.pickle`` (the result cache's directory, which only
-    this user writes), replaced atomically; it keeps the scenarios of one code version and
-    context only (a store of another is emptied when next written), and ``impact-harness
-    cache info|prune|clear`` count and remove it with the cache's entries. One that cannot
-    be read is empty (every file is read and checked again) and said in :attr:`problems`.
-    Disabled (``root=None``) nothing is remembered: the default, which
+    The store is ``root/passed-checks.json`` (in the result cache's directory): plain JSON,
+    the keys only -- nothing read from it is unpickled or evaluated, and a key only ever
+    skips checks of a text whose hash it is. It is replaced atomically; it keeps the keys of
+    one code version and context only (a store of another is emptied when next written), and
+    ``impact-harness cache info|prune|clear`` count and remove it with the cache's entries.
+    One that cannot be read is empty (every file is checked again) and said in
+    :attr:`problems`. Disabled (``root=None``) nothing is remembered: the default, which
     :func:`use_passed_checks` changes for a run.
     """
 
     FILE_NAME = SCENARIO_CHECKS_STORE
-    FORMAT = 2
+    FORMAT = 3
 
     def __init__(self, root=None):
         self.root = None if root is None else Path(root)
         self.problems: list[str] = []
-        self._passed: dict[str, Scenario | None] | None = None
+        self._passed: set[str] | None = None
         self._added = False
         self._context: str | None = None
 
@@ -538,23 +537,22 @@ class PassedChecks:
             self._context = _checks_context(self.root)
         return self._context
 
-    def _load(self) -> dict[str, Scenario | None]:
+    def _load(self) -> set[str]:
         if self._passed is None:
-            self._passed = {}
+            self._passed = set()
             try:
                 with open(self.path, "rb") as handle:
-                    stored = pickle.load(handle)
+                    stored = json.loads(handle.read())
                 if (not isinstance(stored, dict) or stored.get("format") != self.FORMAT
-                        or not isinstance(stored.get("scenarios"), dict)
+                        or not isinstance(stored.get("passed"), list)
                         or not all(isinstance(k, str) and len(k) == 64
-                                   and isinstance(v, Scenario)
-                                   for k, v in stored["scenarios"].items())):
+                                   for k in stored["passed"])):
                     raise ValueError("not a store of passed checks")
                 if stored.get("context") == self._context_text():
-                    self._passed = stored["scenarios"]
+                    self._passed = set(stored["passed"])
             except FileNotFoundError:
                 pass
-            except Exception as error:  # noqa: BLE001 - any damage: every file checked again
+            except (OSError, ValueError) as error:  # any damage: every file checked again
                 self.problems.append(f"{self.path}: {type(error).__name__}: {error}")
                 self._added = True  # replaced by a good one
         return self._passed
@@ -563,18 +561,14 @@ class PassedChecks:
         return key is not None and key in self._load()
 
     def scenario(self, key: str | None) -> Scenario | None:
-        """The scenario read from the text of ``key`` when it passed (its ``path`` None)."""
-        return None if key is None else self._load().get(key)
+        """None: the store keeps no scenarios (each file is read again; see the class)."""
+        return None
 
     def add(self, key: str | None, scenario: Scenario | None = None) -> None:
-        """Remember that the text of ``key`` passed, with the ``scenario`` read from it."""
-        if key is not None and self._load().get(key) is None:
-            if scenario is not None:
-                try:  # spelled now, kept with it and in the store: no run spells it again
-                    scenario.definition_digest  # noqa: B018 - computed and kept with it
-                except TypeError:  # no canonical spelling: the runner keeps no records of it
-                    pass
-            self._passed[key] = None if scenario is None else scenario.located(None)
+        """Remember that the text of ``key`` passed (``scenario``, read from it, is not
+        kept)."""
+        if key is not None and key not in self._load():
+            self._passed.add(key)
             self._added = True
 
     def save(self) -> None:
@@ -583,12 +577,17 @@ class PassedChecks:
         if self.root is None or not self._added:
             return
         from harness.run.cache import code_version
-        from harness.run.files import write_bytes_atomically
+        from harness.run.files import write_text_atomically
 
-        data = pickled({"format": self.FORMAT, "code_version": code_version(),
-                        "context": self._context_text(), "scenarios": self._passed or {}})
+        text = json.dumps({"format": self.FORMAT, "code_version": code_version(),
+                           "context": self._context_text(),
+                           "passed": sorted(self._passed or ())})
         try:
-            write_bytes_atomically(self.path, data, prefix=".checks-", make_parent=True)
+            if not self.root.is_dir():
+                from harness.run.cache import ResultCache
+
+                ResultCache(self.root, version="").make_root()  # made here: marked as ours
+            write_text_atomically(self.path, text, prefix=".checks-")
         except OSError as error:
             self.problems.append(f"{self.path}: cannot write: {error}")
         self._added = False

@@ -11,9 +11,16 @@ value and what is allowed; the exit status is 2 (bad input) if any file is bad.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
+from harness.run.files import (
+    make_output_directory,
+    output_directory_problem,
+    output_file_problem,
+    write_text_atomically,
+)
 from harness.scenarios.checks import check_expectations
 from harness.scenarios.errors import ScenarioError
 from harness.scenarios.library import scenario_files
@@ -201,12 +208,17 @@ def main_new(args: argparse.Namespace) -> int:
               file=sys.stderr)
         return 2
     directory = SCENARIO_DIR if args.library else Path(args.out or Path.cwd())
-    path = (directory / f"{name}.toml").resolve()
-    if path.exists() and not args.force:
+    path = (directory / f"{name}.toml").absolute()  # a link there is not followed
+    if os.path.lexists(path) and not args.force:
         print(f"impact-harness new: {path} exists (use --force to overwrite)", file=sys.stderr)
         return 1
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(scenario_template(name, args.shape, args.two_body), encoding="utf-8")
+    problem = output_directory_problem(directory) or (
+        None if not directory.is_dir() else output_file_problem(path))
+    if problem:
+        print(f"impact-harness new: {path}: {problem}", file=sys.stderr)
+        return 2
+    make_output_directory(directory)  # the directory asked for (itself only)
+    write_text_atomically(path, scenario_template(name, args.shape, args.two_body))
     try:
         load_scenario(path)
     except ScenarioError as error:  # pragma: no cover - the templates are tested

@@ -32,8 +32,10 @@ from harness.scenarios.model import (
 from harness.scenarios.schema import (
     BODY_KEYS,
     CONTACT_KINDS,
+    CONTROL_CHARACTER,
     DEFAULT_GAP_TOLERANCE,
     DERIVED_TAGS,
+    DESCRIPTION_ALLOWED,
     ENGINES,
     EXPECT_KEYS,
     GATE_KEYS,
@@ -170,6 +172,18 @@ class TableReader:
                               ", ".join(choices))
         if pattern is not None and not pattern.match(value):
             return self.error(dotted, "not a valid name", value, allowed)
+        return value
+
+    def line_of_text(self, table, key, prefix, *, default=NO_VALUE):
+        """A string (as :meth:`string`) that is one line of text: no control character
+        (:data:`CONTROL_CHARACTER`)."""
+        value = self.string(table, key, prefix, default=default)
+        if isinstance(value, str):
+            bad = CONTROL_CHARACTER.search(value)
+            if bad:
+                dotted = f"{prefix}.{key}" if prefix else key
+                return self.error(dotted, f"holds the control character {bad.group()!r} at "
+                                  f"offset {bad.start()}", value, DESCRIPTION_ALLOWED)
         return value
 
     def names(self, table, key, prefix, choices, *, default):
@@ -581,7 +595,7 @@ def parse_scenario(doc: Mapping[str, Any], path=None, *, checks_key: str | None 
                 "a scenario file" if system == "bodies" else f'a system = "{system}" file')
     name = reader.string(doc, "name", "", pattern=NAME_PATTERN,
                          allowed="letters, digits, '_', '-' and '.'")
-    description = reader.string(doc, "description", "", default="")
+    description = reader.line_of_text(doc, "description", "", default="")
     tags = _read_tags(reader, doc)
     restitution = reader.number(doc, "restitution", "", low=0.0, high=1.0, field="restitution")
     friction = reader.number(doc, "friction", "", low=0.0, field="friction")

@@ -69,6 +69,11 @@ TOP_KEYS = {
 EXPECT_KEYS = ("collision_type", "case", "energy_gain", "gate")
 GATE_KEYS = ("law", "max_departure")
 NAME_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
+#: A character a description may not hold: the C0 and C1 control characters (NUL, newline,
+#: carriage return, tab, escape ...) and the line and paragraph separators: a description is
+#: one line of text in the reports, the results file and a terminal.
+CONTROL_CHARACTER = re.compile("[\x00-\x1f\x7f-\x9f\u2028\u2029]")
+DESCRIPTION_ALLOWED = "one line of text, without control characters (no NUL, newline or tab)"
 TAG_PATTERN = re.compile(r"^[a-z0-9][a-z0-9-]*$")
 DERIVED_TAGS = ("all",)
 

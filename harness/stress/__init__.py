@@ -42,9 +42,11 @@ spread over local cores (:func:`harness.run.executor.run_tasks`; ``--executor da
 from __future__ import annotations
 
 import json
+import sys
 import time
 from pathlib import Path
 
+from harness.run.files import output_directory_problem, write_text_atomically
 from harness.run.provenance import provenance
 from harness.stress.engines import engine_stress
 from harness.stress.outputs import (
@@ -87,13 +89,13 @@ def run(quick: bool, out_dir: Path, executor: str = "local", workers: int | None
         "solver": solver,
         "engines": engine_report,
     }
-    (out_dir / "stress.json").write_text(json.dumps(report, indent=1, default=str))
+    write_text_atomically(out_dir / "stress.json", json.dumps(report, indent=1, default=str))
     write_engine_csv(engine_report, out_dir / "stress-engines.csv")
     boundary_jumps_figure(solver, out_dir / "solver-boundary-jumps.png")
     energy_figure(solver, out_dir / "solver-energy.png")
     if engine_report["runs"]:
         engine_grid_figure(engine_report, out_dir / "engine-grid.png")
-    (out_dir / "stress.md").write_text(stress_markdown(report))
+    write_text_atomically(out_dir / "stress.md", stress_markdown(report))
     return report
 
 
@@ -113,6 +115,10 @@ def add_arguments(parser) -> None:
 
 
 def main(args) -> int:
+    problem = output_directory_problem(args.out)
+    if problem:
+        print(f"impact-harness stress: --out {args.out}: {problem}", file=sys.stderr)
+        return 2
     started = time.perf_counter()
     report = run(args.quick, args.out, executor=args.executor, workers=args.workers,
                  scheduler=args.scheduler, use_cache=not args.no_cache,

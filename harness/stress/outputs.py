@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import csv
+import io
 import math
 from pathlib import Path
 
 import numpy as np
 
 from harness.engines import source_label
+from harness.run.files import save_figure, write_text_atomically
 from harness.stress.engines import OUTCOME_COLOURS, OUTCOMES
 from harness.stress.solver import BOUNDARIES
 
@@ -49,7 +51,7 @@ def engine_grid_figure(engines: dict, path: Path) -> None:
                 loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
     axes.set_title("Engine stress outcomes (engine/preset × stress case)")
     figure.tight_layout()
-    figure.savefig(path, dpi=120)
+    save_figure(figure, path, "png", dpi=120)  # over a regular file only
     plt.close(figure)
 
 
@@ -81,7 +83,7 @@ def boundary_jumps_figure(solver: dict, path: Path) -> None:
     figure.suptitle("Solver continuity: change of the impulses across each boundary "
                     "(continuous ⇒ → 0 with δ)")
     figure.tight_layout()
-    figure.savefig(path, dpi=120)
+    save_figure(figure, path, "png", dpi=120)  # over a regular file only
     plt.close(figure)
 
 
@@ -111,7 +113,7 @@ def energy_figure(solver: dict, path: Path) -> None:
     figure.suptitle("Largest energy change per stress value "
                     "(> 0 is a gain; Newton may gain, Poisson/Stronge must not)")
     figure.tight_layout()
-    figure.savefig(path, dpi=120)
+    save_figure(figure, path, "png", dpi=120)  # over a regular file only
     plt.close(figure)
 
 
@@ -187,8 +189,9 @@ def stress_markdown(report: dict) -> str:
 def write_engine_csv(engines: dict, path: Path) -> None:
     fields = ["engine", "preset", "shape", "family", "label", "outcome", "status", "steps",
               "energy_ratio", "max_penetration_relative", "wall_time_s", "error"]
-    with open(path, "w", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=fields, extrasaction="ignore")
-        writer.writeheader()
-        for record in engines["runs"]:
-            writer.writerow({name: record.get(name, "") for name in fields})
+    handle = io.StringIO(newline="")  # the rows in memory, then written atomically
+    writer = csv.DictWriter(handle, fieldnames=fields, extrasaction="ignore")
+    writer.writeheader()
+    for record in engines["runs"]:
+        writer.writerow({name: record.get(name, "") for name in fields})
+    write_text_atomically(path, handle.getvalue())

@@ -29,6 +29,11 @@ from harness.engines import (
     preset_role,
     source_label,
 )
+from harness.run.files import (
+    make_output_directory,
+    output_directory_problem,
+    write_text_atomically,
+)
 from harness.scenarios.errors import ScenarioError
 from harness.survey import laws as survey_laws
 from harness.survey import outputs, statistics
@@ -255,14 +260,14 @@ def write_survey(survey: dict, out: Path, settings: dict, figures: bool = True) 
         written += outputs.figures(survey["runs"], out / "figures")
         survey["timings"]["figures"] = (time.perf_counter() - begin, 0)
     summary = out / "summary.md"
-    summary.write_text(outputs.summary_markdown(survey["statistics"], survey["rejections"],
-                                                survey["timings"], settings), encoding="utf-8")
+    write_text_atomically(summary, outputs.summary_markdown(
+        survey["statistics"], survey["rejections"], survey["timings"], settings))
     # What was surveyed, for the report (harness/report/survey.py) to read without Parquet.
     shown = {**settings, "families": list(survey["rejections"]),
              "skipped": settings.get("skipped", survey["skipped"]),
              "left_out": settings.get("left_out", survey["left_out"])}
     settings_path = out / SETTINGS_FILE
-    settings_path.write_text(json.dumps(shown, indent=1) + "\n", encoding="utf-8")
+    write_text_atomically(settings_path, json.dumps(shown, indent=1) + "\n")
     return written + [summary, settings_path]
 
 
@@ -284,12 +289,16 @@ def main(args: argparse.Namespace) -> int:
     except ValueError as error:
         print(f"impact-harness survey: {error}", file=sys.stderr)
         return 2
+    out = DEFAULT_OUT if args.out is None else args.out
+    problem = output_directory_problem(out)
+    if problem:  # before any work
+        print(f"impact-harness survey: --out {out}: {problem}", file=sys.stderr)
+        return 2
     try:
         populations = resolve_populations(args.populations)
     except ScenarioError as error:
         print(f"impact-harness survey: {error}", file=sys.stderr)
         return 2
-    out = DEFAULT_OUT if args.out is None else args.out
     if args.out is None and not args.force:
         other = other_survey(out, populations, samples, args.seed, engines, presets, overrides)
         if other:
@@ -306,6 +315,7 @@ def main(args: argparse.Namespace) -> int:
                 "engines": [r for r in engines if r not in survey["skipped"]],
                 "presets": presets, "left_out": survey["left_out"],
                 "skipped": survey["skipped"], "overrides": overrides}
+    make_output_directory(out)  # the directory asked for (itself only)
     written = write_survey(survey, out, settings, figures=not args.no_figures)
     print(f"wrote {len(written)} files to {out}")
     return 0

@@ -234,7 +234,7 @@ def parse_population(doc: Mapping[str, Any], path=None) -> Population:
     reader.keys(doc, "", TOP_KEYS, "a population file")
     name = reader.string(doc, "name", "", pattern=NAME_PATTERN,
                          allowed="letters, digits, '_', '-' and '.'")
-    description = reader.string(doc, "description", "", default="")
+    description = reader.line_of_text(doc, "description", "", default="")
     tags = doc.get("tags", [])
     if not isinstance(tags, list) or not all(isinstance(t, str) and TAG_PATTERN.match(t)
                                              for t in tags):

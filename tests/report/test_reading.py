@@ -4,7 +4,7 @@ report from it is the report from the records."""
 
 from __future__ import annotations
 
-import os
+import json
 import re
 import shutil
 from pathlib import Path
@@ -27,7 +27,6 @@ from harness.run.records import (
     RECORDS_START,
     Record,
     Results,
-    companion_path,
     read_results,
     write_results,
 )
@@ -39,7 +38,7 @@ needs_library = pytest.mark.skipif(not LIBRARY.is_file(), reason="no reports/res
 
 @pytest.fixture(scope="module")
 def written(tmp_path_factory) -> Path:
-    """The library's results written again (with its companion), as `run` writes them."""
+    """The library's results written again, as `run` writes them."""
     library = read_results(LIBRARY)
     path = tmp_path_factory.mktemp("results") / "results.json"
     return write_results(path, library.records, library.provenance, library.scenarios)
@@ -112,7 +111,7 @@ def test_plain_lines_are_read_in_one_pass(tmp_path):
     found = reading._lines(data, begin, end, 4)
     assert found is not None
     assert found.pairs == {("pymunk", "defaults"), ("analytic", None), ("box2d", "accurate")}
-    assert reading._lines(data, begin, end, 3) is None  # not the companion's count
+    assert reading._lines(data, begin, end, 3) is None  # not the lines' count
     lines = data[begin:end].split(b",\n")
     starts = [begin + sum(len(line) + 2 for line in lines[:index]) for index in range(4)]
     assert found.names == ["a", "b", "a", "c"]
@@ -121,16 +120,21 @@ def test_plain_lines_are_read_in_one_pass(tmp_path):
     assert found.segments["c"] == [(starts[3], end)]
 
 
-def test_without_a_matching_companion_the_file_is_read_in_full(tmp_path):
+def test_a_file_laid_out_otherwise_is_read_in_full(tmp_path):
     path = write_results(tmp_path / "r.json", [_record("a"), _record("b")], {}, {})
     assert isinstance(read_for_report(path), LazyResults)
-    status = path.stat()
-    os.utime(path, ns=(status.st_atime_ns, status.st_mtime_ns + 1))  # not the file written
-    assert isinstance(read_for_report(path), Results)
-    write_results(path, [_record("a"), _record("b")], {}, {})
-    companion_path(path).unlink()
+    document = json.loads(path.read_text(encoding="utf-8"))
+    path.write_text(json.dumps(document, indent=2), encoding="utf-8")
     results = read_for_report(path)
     assert isinstance(results, Results) and results.scenario_names() == ["a", "b"]
+
+
+def test_a_record_without_its_speeds_is_refused_before_the_report(tmp_path):
+    path = write_results(tmp_path / "r.json", [_record("a"), _record("b")], {}, {})
+    text = path.read_text(encoding="utf-8")
+    path.write_text(text.replace('"u_after":[1.0,2.0,3.0],', "", 1), encoding="utf-8")
+    with pytest.raises(ValueError, match="record 0: no u_after"):
+        read_for_report(path)
 
 
 def test_a_file_that_is_not_results_says_so_as_before(tmp_path):

@@ -9,7 +9,7 @@ sees when a worker dies or the user presses Ctrl-C); one test kills a real proce
 
 from __future__ import annotations
 
-import json
+import importlib.util
 import math
 import os
 import shutil
@@ -28,6 +28,13 @@ from harness.run.cache import ResultCache
 from harness.run.records import Record, read_results, write_results
 from harness.scenarios import SCENARIO_DIR, ScenarioError, load_scenario
 from harness.scenarios import reader as scenario_reader
+
+# Entry files read and written by hand (shared by the cache tests).
+_spec = importlib.util.spec_from_file_location(
+    "cache_entries", Path(__file__).parent / "cache_entries.py")
+cache_entries = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(cache_entries)
+read_entry, write_entry = cache_entries.read_entry, cache_entries.write_entry
 
 ROOT = Path(__file__).resolve().parents[2]
 DISK = SCENARIO_DIR / "disk-direct.toml"
@@ -121,7 +128,7 @@ def engine_entries(cache_dir: Path) -> list[Path]:
     entries = []
     for path in cache_dir.rglob("*.json"):
         try:
-            record = json.loads(path.read_text(encoding="utf-8")).get("record")
+            record = read_entry(path)[1]
         except (OSError, ValueError):
             continue
         if isinstance(record, dict) and "velocities" in record:
@@ -423,8 +430,7 @@ def test_a_bad_cache_entry_is_a_reported_miss(tmp_path, damage):
     cache = ResultCache(tmp_path)
     clean = engine_outputs(sweep_run(cache))
     entry = min(engine_entries(tmp_path))  # an engine run's entry, not a finished point's
-    stored = json.loads(entry.read_text(encoding="utf-8"))
-    record = stored["record"]
+    header, record = read_entry(entry)
     if damage == "velocities-not-a-list":
         record["velocities"] = "oops"
     elif damage == "four-components":
@@ -432,9 +438,11 @@ def test_a_bad_cache_entry_is_a_reported_miss(tmp_path, damage):
     elif damage == "nan-ok":
         record["status"], record["velocities"][0][0] = "ok", math.nan
     elif damage == "status-only":
-        stored["record"] = {"status": "ok"}
-    text = json.dumps(stored) if damage != "not-json" else '{"key": "'
-    entry.write_text(text, encoding="utf-8")
+        record = {"status": "ok"}
+    # signed anew: a whole entry whose content the run's check rejects
+    write_entry(entry, header, record)
+    if damage == "not-json":
+        entry.write_text('{"key": "', encoding="utf-8")
     # A rerun of the same selection reads the scenario's finished records, kept whole
     # (test_scenario_records_cache damages that entry); without it, the engine runs' entries.
     for whole in scenario_entries(tmp_path):

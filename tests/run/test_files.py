@@ -78,7 +78,62 @@ def test_the_temporaries_of_a_killed_writer_are_what_the_cache_cleans(tmp_path):
     shard.mkdir()
     descriptor, temporary = files._create_temporary(str(shard), ".abcdef12-")
     os.close(descriptor)  # the writer killed before its rename
-    assert os.stat(temporary).st_mode & 0o777 == 0o600  # as mkstemp makes it
+    assert os.stat(temporary).st_mode & 0o777 == 0o666 & ~files._umask()
     assert cache.clean_temporaries() == 0  # a writer may still own it
     os.utime(temporary, (time.time() - 3600, time.time() - 3600))
     assert cache.clean_temporaries() == 1 and not os.path.exists(temporary)
+
+
+# --------------------------------------------------------------------------------------------
+# Written only over regular files, with the permissions a new file gets (issue 23, item 2)
+# --------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("mask", [0o022, 0o077, 0o002])
+def test_a_written_file_has_the_mode_the_umask_gives(tmp_path, monkeypatch, mask):
+    """0644 under the usual umask (never mkstemp's 0600), by the named temporary and by
+    mkstemp's fallback when every name is taken."""
+    monkeypatch.setattr(files, "_TEMPORARY_NUMBERS", itertools.count())
+    for number in range(files._NAMED_TRIES):
+        (tmp_path / f".y-{os.getpid()}-{number}.tmp").write_bytes(b"")
+    previous = os.umask(mask)
+    try:
+        fallback = files.write_text_atomically(tmp_path / "fallback", "{}", prefix=".y-")
+        named = files.write_text_atomically(tmp_path / "r.json", "{}")
+    finally:
+        os.umask(previous)
+    assert os.stat(named).st_mode & 0o777 == 0o666 & ~mask
+    assert os.stat(fallback).st_mode & 0o777 == 0o666 & ~mask
+
+
+def test_a_device_a_directory_or_a_link_is_never_replaced(tmp_path):
+    target = tmp_path / "theirs.txt"
+    target.write_text("theirs")
+    link = tmp_path / "link.json"
+    link.symlink_to(target)
+    directory = tmp_path / "dir.json"
+    directory.mkdir()
+    fifo = tmp_path / "pipe.json"
+    os.mkfifo(fifo)
+    for path, kind in ((link, "a symbolic link"), (directory, "a directory"),
+                       (fifo, "a named pipe")):
+        assert files.output_file_problem(path).startswith(f"is {kind}")
+        with pytest.raises(files.NotRegularFile, match=kind):
+            files.write_text_atomically(path, "mine")
+    assert target.read_text() == "theirs" and link.is_symlink()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["dir.json", "link.json", "pipe.json",
+                                                          "theirs.txt"]  # no temporary left
+    assert files.output_file_problem("/dev/null").startswith("is a character device")
+
+
+def test_an_output_file_needs_an_existing_directory(tmp_path):
+    assert files.output_file_problem(tmp_path / "r.json") is None
+    problem = files.output_file_problem(tmp_path / "new" / "r.json")
+    assert "does not exist" in problem and not (tmp_path / "new").exists()
+
+
+def test_an_output_directory_is_made_itself_only(tmp_path):
+    assert files.output_directory_problem(tmp_path / "out") is None
+    assert "does not exist" in files.output_directory_problem(tmp_path / "a" / "out")
+    (tmp_path / "file").write_text("x")
+    assert files.output_directory_problem(tmp_path / "file") == "is a regular file, not a directory"
+    files.make_output_directory(tmp_path / "out")
+    assert (tmp_path / "out").is_dir() and not (tmp_path / "a").exists()

@@ -3,12 +3,21 @@
 
 from __future__ import annotations
 
+import importlib.util
 import json
 from dataclasses import replace
+from pathlib import Path
 
 from harness.run import references, runner
 from harness.run.cache import ResultCache
 from harness.scenarios import load_scenario
+
+# Entry files read and written by hand (shared by the cache tests).
+_spec = importlib.util.spec_from_file_location(
+    "cache_entries", Path(__file__).parent / "cache_entries.py")
+cache_entries = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(cache_entries)
+read_entry, write_entry = cache_entries.read_entry, cache_entries.write_entry
 
 
 def _stored(cache: ResultCache) -> list:
@@ -35,9 +44,8 @@ def test_the_second_lookup_reads_the_cache_rather_than_solving_again(tmp_path):
     cache = ResultCache(tmp_path)
     runner.point_reference_cached(scenario, point, cache)
     (entry,) = _stored(cache)
-    stored = json.loads(entry.read_text())
-    stored["record"]["why"] = "read from the cache"
-    entry.write_text(json.dumps(stored))
+    header, record = read_entry(entry)
+    write_entry(entry, header, {**record, "why": "read from the cache"})  # whole, signed
     assert runner.point_reference_cached(scenario, point, cache)["why"] == "read from the cache"
 
 

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import math
-import pickle
 
 import pytest
 
@@ -13,7 +12,6 @@ from harness.run.records import (
     Record,
     RecordBlock,
     Results,
-    companion_path,
     read_results,
     record_line,
     write_result_blocks,
@@ -94,84 +92,73 @@ def test_from_dict_keeps_missing_fields_an_error_and_defaults_fresh():
 
 
 # --------------------------------------------------------------------------------------------
-# The companion (harness.run.records.companion_path): the records pickled beside the file
+# The file is the results' only form, and a file not of this format is refused (issue 23)
 # --------------------------------------------------------------------------------------------
-def _without_companion(path, tmp_path):
-    copy = tmp_path / "copy.json"  # the same text, no companion beside it
+def _parsed(path, tmp_path):
+    copy = tmp_path / "copy.json"  # the same text, read through the whole-document path
     copy.write_text(path.read_text(encoding="utf-8"), encoding="utf-8")
-    assert not companion_path(copy).exists()
     return read_results(copy)
 
 
-def test_a_file_read_through_its_companion_equals_the_file_parsed(tmp_path, monkeypatch):
-    path = write_results(tmp_path / "r.json", _records(), {"run": 1}, {"a": {"tags": []}})
-    assert companion_path(path).is_file()
-    parsed = _without_companion(path, tmp_path)
-    monkeypatch.setattr(records_module, "_split_records", None)  # the JSON's records unparsed
-    results = read_results(path)
-    assert results.records == parsed.records
-    assert results.record_lines() == parsed.record_lines()
-    assert (results.provenance, results.scenarios) == (parsed.provenance, parsed.scenarios)
+def test_nothing_but_the_results_file_is_written(tmp_path):
+    write_results(tmp_path / "r.json", _records(), {}, {})
+    assert [p.name for p in tmp_path.iterdir()] == ["r.json"]  # no pickle beside it
 
 
-def test_the_companion_of_another_text_is_never_used(tmp_path):
+def test_records_known_only_as_lines_are_written_as_those_lines(tmp_path):
     path = write_results(tmp_path / "r.json", _records(), {}, {})
-    companion = companion_path(path).read_bytes()
-    text = path.read_text(encoding="utf-8").replace('"status":"ok"', '"status":"edited"', 1)
-    path.write_text(text, encoding="utf-8")
-    companion_path(path).write_bytes(companion)
-    assert read_results(path).records[0].status == "edited"
-
-
-def test_records_known_only_as_lines_are_in_the_new_companion(tmp_path, monkeypatch):
-    path = write_results(tmp_path / "r.json", _records(), {}, {})
-    lines = read_results(path).record_lines()
+    first = read_results(path)
+    lines = first.record_lines()
     write_results(path, [None] * len(lines), {}, {}, lines=lines)
-    parsed = _without_companion(path, tmp_path)
-    monkeypatch.setattr(records_module, "_split_records", None)  # only the companion serves
     results = read_results(path)
-    assert results.records == parsed.records
-    assert results.record_lines() == lines
+    assert results.records == first.records and results.record_lines() == lines
+
+
+@pytest.mark.parametrize("version", [0, 2, "1", None])
+def test_a_file_of_another_format_version_is_refused(tmp_path, version):
+    path = write_results(tmp_path / "r.json", _records(), {}, {})
+    document = _plain(path)
+    document["format_version"] = version
+    path.write_text(json.dumps(document), encoding="utf-8")
+    with pytest.raises(ValueError, match="results format version"):
+        read_results(path)
+
+
+@pytest.mark.parametrize("field", records_module.REQUIRED_FIELDS)
+def test_a_record_missing_a_required_field_is_refused(tmp_path, field):
+    path = write_results(tmp_path / "r.json", _records(), {}, {})
+    text = path.read_text(encoding="utf-8")
+    document = _plain(path)
+    del document["records"][1][field]
+    for damaged in (json.dumps(document),  # read whole
+                    text.replace(record_line(_records()[1].as_dict()),
+                                 record_line(document["records"][1]))):  # as laid out
+        path.write_text(damaged, encoding="utf-8")
+        with pytest.raises(ValueError, match=f"record 1: no {field} "):
+            read_results(path)
+
+
+@pytest.mark.parametrize("value", ["fast", 3, {"x": 1}, True])
+def test_a_record_with_speeds_of_another_type_is_refused(tmp_path, value):
+    path = write_results(tmp_path / "r.json", _records(), {}, {})
+    document = _plain(path)
+    document["records"][0]["u_after"] = value
+    path.write_text(json.dumps(document), encoding="utf-8")
+    with pytest.raises(ValueError, match="record 0: u_after = .*: not a list or null"):
+        read_results(path)
 
 
 def test_blocks_are_written_as_the_records_of_one_file(tmp_path):
     records = _records()
     whole = write_results(tmp_path / "whole.json", records, {"run": 1}, {"a": {"tags": []}})
     datas = [record.as_dict() for record in records]
-    blocks = [RecordBlock.of_lines([record_line(data) for data in part], part)
+    blocks = [RecordBlock.of_lines([record_line(data) for data in part])
               for part in (datas[:1], [], datas[1:])]
     parts = write_result_blocks(tmp_path / "parts.json", blocks, {"run": 1},
                                 {"a": {"tags": []}})
     assert parts.read_bytes() == whole.read_bytes()
     assert read_results(parts).records == read_results(whole).records
     assert read_results(parts).record_lines() == read_results(whole).record_lines()
-
-
-def test_a_companion_holding_anything_but_plain_values_is_not_unpickled(tmp_path):
-    path = write_results(tmp_path / "r.json", _records(), {}, {})
-    header, _ = _companion_parts(path)
-    called = []
-    tampered = pickle.dumps(header) + pickle.dumps([_Trap(called)] * 3)
-    companion_path(path).write_bytes(tampered)
-    assert read_results(path).records == _without_companion(path, tmp_path).records
-    assert not called
-
-
-class _Trap:
-    """Unpickling one would call ``list.append`` (a global looked up): a plain unpickler
-    refuses."""
-
-    def __init__(self, called):
-        self.called = called
-
-    def __reduce__(self):
-        return (self.called.append, ("unpickled",))
-
-
-def _companion_parts(path):
-    with open(companion_path(path), "rb") as handle:
-        header = pickle.load(handle)
-        return header, handle.read()
 
 
 def test_subclasses_of_plain_types_are_written_as_their_plain_values(tmp_path, monkeypatch):
@@ -189,9 +176,9 @@ def test_subclasses_of_plain_types_are_written_as_their_plain_values(tmp_path, m
                     preset="defaults", status=Kind.OK, collision_type=Level.TWO,
                     u_after=[np.float64(0.5), np.int64(3)], diagnostics={"kind": Kind.OK})
     path = write_results(tmp_path / "r.json", [record], {}, {})
-    parsed = _without_companion(path, tmp_path)
-    monkeypatch.setattr(records_module, "_split_records", None)  # the companion is read
-    read = read_results(path)
+    parsed = _parsed(path, tmp_path)
+    monkeypatch.setattr(records_module, "_split_records", lambda text: (None, None))
+    read = read_results(path)  # the whole document parsed
     assert read.records == parsed.records
     assert [type(v) for v in (read.records[0].status, read.records[0].collision_type,
                               *read.records[0].u_after)] == [str, int, float, int]

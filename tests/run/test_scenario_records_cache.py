@@ -5,11 +5,12 @@ remembered by the file's text (harness/scenarios/checks.py, ``PassedChecks``).""
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import math
 import os
-import pickle
 from dataclasses import replace
+from pathlib import Path
 
 import pytest
 
@@ -18,9 +19,16 @@ from harness.engines import ENGINE_NAMES
 from harness.run import runner
 from harness.run.cache import ResultCache
 from harness.run.engine_facts import ENGINE_FACTS, engine_facts
-from harness.run.records import companion_path, read_results
+from harness.run.records import read_results
 from harness.scenarios import SCENARIO_DIR, checks, load_scenario
 from harness.scenarios.library import load_scenarios_reporting
+
+# Entry files read and written by hand (shared by the cache tests).
+_spec = importlib.util.spec_from_file_location(
+    "cache_entries", Path(__file__).parent / "cache_entries.py")
+cache_entries = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(cache_entries)
+read_entry = cache_entries.read_entry
 
 ROD = load_scenario(SCENARIO_DIR / "rod-45-slip-reversal.toml")
 SWEEP = load_scenario(SCENARIO_DIR / "sweep-disk-alpha.toml")  # 9 points
@@ -99,8 +107,7 @@ def test_warm_records_equal_those_of_a_run_without_the_cache_kept_once(tmp_path)
     fresh = _run([ROD, flat], None)
     _run([ROD, flat], ResultCache(tmp_path))
     stored = [record for path in tmp_path.glob("??/*.json")
-              if (record := json.loads(path.read_text(encoding="utf-8"))["record"]).get("kind")
-              != ENGINE_FACTS]
+              if (record := read_entry(path)[1]).get("kind") != ENGINE_FACTS]
     # engine runs and the flat face's reference; a point's records only in its scenario's
     assert sorted("velocities" in entry for entry in stored) == [False] + [True] * 4
     assert not any("records" in entry for entry in stored)
@@ -134,12 +141,9 @@ def test_the_warm_results_file_equals_the_cold_one_apart_from_timing(tmp_path):
     assert warm["provenance"]["cache"]["simulated"] == 0
     assert _results_without_timing(tmp_path / "warm.json") == \
         _results_without_timing(tmp_path / "cold.json")
-    for name in ("cold.json", "warm.json"):  # each companion holds its file's records
-        path = tmp_path / name
-        assert companion_path(path).is_file()
-        copy = tmp_path / f"copy-{name}"
-        copy.write_text(path.read_text(encoding="utf-8"), encoding="utf-8")
-        assert read_results(path).records == read_results(copy).records
+    assert not list(tmp_path.glob("*.pickle"))  # the results file is the only form
+    assert [r.u_after for r in read_results(tmp_path / "warm.json").records] == \
+        [r.u_after for r in read_results(tmp_path / "cold.json").records]
 
 
 @pytest.mark.parametrize("damage", ["header-not-json", "line-not-json", "truncated",
@@ -277,8 +281,9 @@ def test_a_damaged_checks_store_is_reported_and_every_file_checked(tmp_path, cou
     scenarios, errors = load_scenarios_reporting([SCENARIO_DIR / "disk-direct.toml"])
     assert scenarios and not errors and len(counted_checks) == 1
     assert len(passed.problems) == 1 and str(store) in passed.problems[0]
-    rewritten = pickle.loads(store.read_bytes())
-    assert list(rewritten["scenarios"].values()) == [replace(scenarios[0], path=None)]
+    rewritten = json.loads(store.read_text(encoding="utf-8"))  # plain JSON: keys only
+    assert rewritten["passed"] == [checks.passed_checks.key(
+        (SCENARIO_DIR / "disk-direct.toml").read_text(encoding="utf-8"))]
 
 
 def test_by_default_nothing_is_remembered(tmp_path, counted_checks):
@@ -301,6 +306,7 @@ def test_the_run_command_remembers_checks_in_its_cache_and_not_with_no_cache(tmp
 
 
 def test_cache_info_and_prune_see_the_scenario_entries(tmp_path):
+    ResultCache(tmp_path).make_root()  # marked as the harness's (a run does this)
     ResultCache(tmp_path, version="old").put_lines("a" * 64, ['{"x":1}'])
     ResultCache(tmp_path, version="new").put_lines("b" * 64, ['{"x":2}'])
     cache = ResultCache(tmp_path, version="new")
@@ -345,7 +351,7 @@ def test_on_the_local_pool_each_worker_stores_the_runs_it_simulates(tmp_path, mo
     assert again.hits == 18 and again.misses == 0
 
 
-def test_a_passed_text_is_not_parsed_again_and_gets_its_files_path(tmp_path, monkeypatch):
+def test_a_passed_text_is_not_checked_again_and_gets_its_files_path(tmp_path, monkeypatch):
     from harness.scenarios import reader
 
     source = SCENARIO_DIR / "sweep-disk-alpha.toml"
@@ -357,7 +363,7 @@ def test_a_passed_text_is_not_parsed_again_and_gets_its_files_path(tmp_path, mon
         checks.use_passed_checks(tmp_path / "cache")
         (read,), _ = load_scenarios_reporting([first])
         checks.use_passed_checks(tmp_path / "cache")  # the next run: the store read from disk
-        monkeypatch.setattr(reader.tomllib, "loads", None)  # parsing would raise
+        monkeypatch.setattr(reader, "check_points", None)  # checking would raise
         (again,), errors = load_scenarios_reporting([second])
     finally:
         checks.use_passed_checks(None)
@@ -366,6 +372,7 @@ def test_a_passed_text_is_not_parsed_again_and_gets_its_files_path(tmp_path, mon
 
 
 def test_cache_info_and_prune_see_the_scenario_checks_store(tmp_path):
+    ResultCache(tmp_path).make_root()  # marked as the harness's (a run does this)
     try:
         checks.use_passed_checks(tmp_path)
         load_scenarios_reporting([SCENARIO_DIR / "disk-direct.toml"])

@@ -137,6 +137,14 @@ def test_the_base_files_are_good(tmp_path):
          ["engines", "bullet3", "pymunk, pybullet, mujoco, box2d"]),
         ('name = "probe"', 'name = "probe"\nlaws = ["poison"]',
          ["laws", "poison", "did you mean 'poisson'"]),
+        # a description is one line of text: no NUL, newline or other control character
+        ('description = "a disk on the ground"', 'description = "a disk\\u0000"',
+         ["description", "'a disk\\x00'", "control character '\\x00' at offset 6",
+          "no NUL, newline or tab"]),
+        ('description = "a disk on the ground"', 'description = """a disk\non the ground"""',
+         ["description", "control character '\\n' at offset 6"]),
+        ('description = "a disk on the ground"', 'description = "a disk\\u001b[31m"',
+         ["description", "control character '\\x1b'"]),
     ],
 )
 def test_ground_file_errors(tmp_path, old, new, parts):

@@ -90,6 +90,10 @@ def test_the_good_example_parses():
      "approach.direction_deg", "-90 < direction_deg < 90"),
     ('shape = "box"', 'shape = "boxx"', "body.box.shape", "did you mean 'box'"),
     ("[ground]", "mass_ratio = 2.0\n[ground]", "mass_ratio", "only for two free bodies"),
+    ('name = "tiny"', 'name = "tiny"\ndescription = "a\\u0000b"', "description",
+     "control character '\\x00' at offset 1"),
+    ('name = "tiny"', 'name = "tiny"\ndescription = """two\nlines"""', "description",
+     "control character '\\n' at offset 3"),
 ])
 def test_a_bad_value_names_file_key_value_and_allowed(old, new, key, words):
     assert old in GOOD
