@@ -74,14 +74,14 @@ Dask
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 import sys
 import threading
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any, Callable, Hashable, Iterable, Sequence
 
-from harness.processes import default_workers, one_blas_thread
+from harness.processes import JobStopped, StoppablePool, default_workers, one_blas_thread
 
 EXECUTORS: tuple[str, ...] = ("local", "dask")
 
@@ -132,6 +132,8 @@ def run_tasks(
     chunk_size: int | None = None,
     dask_min_tasks: int = DASK_MIN_TASKS,
     note: Callable[[str], None] | None = None,
+    time_limit: Callable[[Any], float | None] | None = None,
+    stopped: Callable[[Any, str], Any] | None = None,
 ) -> list:
     """``[function(task) for task in tasks]``, spread over processes; results in task order.
 
@@ -175,6 +177,19 @@ def run_tasks(
         Fewest tasks sent to Dask (default :data:`DASK_MIN_TASKS`).
     note
         Called with a one-line remark on how the tasks ran (the local pool in place of Dask).
+    time_limit
+        ``time_limit(task)``: the seconds a task may run (None: no limit); a chunk has its
+        first task's limit as a whole (``group`` keeps tasks of different limits apart). On
+        the local executor a chunk over its limit is stopped by ending its worker process
+        (:class:`harness.processes.StoppablePool`; with a limit, even ``workers == 1`` runs
+        in a child process, since a signal never interrupts an engine's step in C); its
+        tasks then run again one per chunk, each with its own limit. Dask workers are not
+        stopped.
+    stopped
+        ``stopped(task, reason)``: the result of a task stopped alone, over its limit
+        (``reason``: ``"time limit: stopped after 5 s"``) or because its worker died; the
+        run goes on. Without it such a task raises :class:`harness.processes.JobStopped`
+        as a task that raises does.
 
     Raises
     ------
@@ -223,7 +238,10 @@ def run_tasks(
     else:
         size = chunk_size or chunk_size_for(total, n_workers, batched=batch is not None)
         chunks = make_chunks(task_list, size, group)
-    run = _run_dask if executor == "dask" else _run_inline if n_workers == 1 else _run_pool
+    limited = time_limit is not None and any(time_limit(task) is not None for task in task_list)
+    run = (_run_dask if executor == "dask" else
+           _run_inline if n_workers == 1 and not limited else
+           functools.partial(_run_pool, limit_of=time_limit, stopped=stopped))
     results: list[Any] = [None] * total
     delivered = [0]
 
@@ -303,20 +321,33 @@ def _run_inline(function, batch, tasks: Sequence, chunks, workers, deliver) -> N
         deliver(chunk, *call_chunk(function, batch, [tasks[index] for index in chunk]))
 
 
-def _run_pool(function, batch, tasks: Sequence, chunks, workers: int, deliver) -> None:
-    with ProcessPoolExecutor(max_workers=workers, initializer=one_blas_thread) as pool:
-        futures = {pool.submit(call_chunk, function, batch, [tasks[i] for i in chunk]): chunk
-                   for chunk in chunks}
-        pending = set(futures)
-        try:
-            while pending:
-                finished, pending = wait(pending, return_when=FIRST_COMPLETED)
-                for future in finished:
-                    deliver(futures[future], *future.result())
-        except BaseException:
-            for future in pending:
-                future.cancel()
-            raise
+def _run_pool(function, batch, tasks: Sequence, chunks, workers: int, deliver, *,
+              limit_of=None, stopped=None) -> None:
+    """The chunks on a :class:`StoppablePool` of ``workers`` processes. A chunk of several
+    tasks stopped (over its limit, or its worker died) runs again task by task, each with its
+    own limit, so that only the task at fault is stopped; a task stopped alone gets
+    ``stopped(task, reason)`` (or raises :class:`JobStopped`)."""
+    job = functools.partial(call_chunk, function, batch)
+    with StoppablePool(job, workers) as pool:
+        round_chunks = list(chunks)
+        while round_chunks:
+            again: list[list[int]] = []
+            limits = [None if limit_of is None else limit_of(tasks[chunk[0]])
+                      for chunk in round_chunks]
+            arguments = [[tasks[index] for index in chunk] for chunk in round_chunks]
+            for position, (kind, value) in pool.run(arguments, limits):
+                chunk = round_chunks[position]
+                if kind == "result":
+                    deliver(chunk, *value)
+                elif kind == "error":  # not a task's own exception (call_chunk keeps those)
+                    raise value
+                elif len(chunk) > 1:
+                    again += [[index] for index in chunk]
+                elif stopped is not None:
+                    deliver(chunk, [stopped(tasks[chunk[0]], value)], None)
+                else:
+                    deliver(chunk, [None], (0, JobStopped(value)))
+            round_chunks = again
 
 
 def _require_distributed() -> None:
