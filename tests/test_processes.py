@@ -94,7 +94,8 @@ KILLED_COMMANDS = {
 @pytest.mark.parametrize("command", sorted(KILLED_COMMANDS))
 def test_no_worker_outlives_a_command_killed_with_sigkill(tmp_path, command):
     argv = [str(part).format(tmp=tmp_path) for part in KILLED_COMMANDS[command]]
-    environment = dict(os.environ, PYTHONPATH=f"{ROOT / 'src'}{os.pathsep}{ROOT}")
+    environment = dict(os.environ, PYTHONPATH=f"{ROOT / 'src'}{os.pathsep}{ROOT}",
+                       IMPACT_HARNESS_MAX_SOLVER_ITERATIONS="1e10")  # a runaway engine
     process = subprocess.Popen([sys.executable, "-m", "harness.cli", *argv], env=environment,
                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:

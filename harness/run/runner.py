@@ -90,6 +90,7 @@ from typing import Any, Iterable, Mapping, Sequence, TextIO
 
 import numpy as np
 
+from harness import bounds
 from harness.collector import collector_paused
 from harness.engines import load_engine, preset_choices, preset_role
 from harness.run import metrics, references
@@ -467,6 +468,10 @@ def parse_overrides(items: Sequence[str], engines: Sequence[str] = ENGINES) -> d
         if key not in engine.setting_docs:
             raise ValueError(f"{where}: engine {engine_name!r}, key {key!r}, value {text!r}: "
                              f"unknown setting; allowed: {', '.join(sorted(engine.setting_docs))}")
+        reason = bounds.problem(key, value)  # the same table as a file's [engine_settings]
+        if reason is not None:
+            raise ValueError(f"{where}: engine {engine_name!r}, key {key!r}, value {text!r}: "
+                             f"{reason}")
         candidate = {**overrides.get(engine_name, {}), key: value}
         for preset in PRESETS:
             try:
@@ -1466,12 +1471,14 @@ def check_arguments(args, json_path: Path | None) -> str | None:
                         parse_engines(args.engines))
     except (ValueError, DaskNotInstalled) as error:
         return str(error)
-    chunk_size = getattr(args, "chunk_size", None)
-    if chunk_size is not None and chunk_size < 1:
-        return f"--chunk-size {chunk_size}: must be a positive integer"
-    limit = args.task_time_limit
-    if limit is not None and not (math.isfinite(limit) and limit > 0):
-        return f"--task-time-limit {limit}: must be a positive number of seconds"
+    try:
+        for option, value in (("workers", args.workers),
+                              ("chunk-size", getattr(args, "chunk_size", None)),
+                              ("task-time-limit", args.task_time_limit)):
+            if value is not None:
+                bounds.check(f"--{option} {value}", option, value)
+    except bounds.OutOfBounds as error:
+        return str(error)
     if json_path is not None:
         reason = check_writable(json_path)
         if reason:

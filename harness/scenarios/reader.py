@@ -16,6 +16,7 @@ from typing import Any, Iterable, Mapping
 
 import numpy as np
 
+from harness import bounds
 from harness.engines import preset_role, renamed_roles, source_label
 from harness.scenarios import checks
 from harness.scenarios.checks import check_engine_settings, check_points
@@ -31,6 +32,7 @@ from harness.scenarios.model import (
 )
 from harness.scenarios.schema import (
     BODY_KEYS,
+    BOUNDS,
     CONTACT_KINDS,
     DEFAULT_GAP_TOLERANCE,
     DERIVED_TAGS,
@@ -550,18 +552,15 @@ def _read_engine_settings(reader: TableReader, raw, scenario: Scenario):
 
 
 def _check_work_bounds(reader: TableReader, engine: str, table: Mapping) -> bool:
-    """Step cap and time step within :data:`LIMITS` (a run must end); False if not."""
+    """Every setting within its bounds (:data:`harness.bounds.BOUNDS`: the step cap and the
+    time step, so that a run ends, the approach and the solver's iterations); False if not.
+    The same table bounds ``--set`` and the Python API (``Engine.settings``)."""
     ok = True
-    most = limit("max_engine_steps")
-    steps = table.get("max_steps")
-    if isinstance(steps, (int, float)) and not isinstance(steps, bool) and not steps <= most:
-        ok = reader.error(f"engine_settings.{engine}.max_steps", "too many steps", steps,
-                          f"at most {most:g} (IMPACT_HARNESS_MAX_ENGINE_STEPS raises it)")
-    smallest = limit("min_time_step")
-    step = table.get("time_step")
-    if isinstance(step, (int, float)) and not isinstance(step, bool) and 0 < step < smallest:
-        ok = reader.error(f"engine_settings.{engine}.time_step", "time step too small", step,
-                          f"at least {smallest:g} s (IMPACT_HARNESS_MIN_TIME_STEP lowers it)")
+    for key, value in table.items():
+        reason = bounds.problem(key, value)
+        if reason is not None:
+            ok = reader.error(f"engine_settings.{engine}.{key}", "out of range", value,
+                              BOUNDS[key].allowed())
     return ok is not None
 
 

@@ -38,7 +38,7 @@ from typing import Any
 
 from harness.scenarios.errors import NO_VALUE, OptionError, ScenarioError, suggest
 from harness.scenarios.reader import TableReader
-from harness.scenarios.schema import NAME_PATTERN, TAG_PATTERN
+from harness.scenarios.schema import BOUNDS, NAME_PATTERN, TAG_PATTERN
 
 #: The shipped populations, beside ``scenarios/`` at the repository root.
 POPULATION_DIR = Path(__file__).resolve().parent.parent.parent / "populations"
@@ -194,8 +194,9 @@ def _read_body(reader: TableReader, table, index: int, *, mass_from_ratio: bool)
         reader.keys(table, prefix, BODY_KEYS + ANY_SHAPE_KEYS, "a body")
     parameters = []
     for key in shape_keys:
-        if key == "sides":
-            value = _distribution(reader, table, key, prefix, low=3, integer=True)
+        if key == "sides":  # bounded as every knob is (harness/bounds.py)
+            low, high = BOUNDS["sides"].range()
+            value = _distribution(reader, table, key, prefix, low=low, high=high, integer=True)
         else:
             value = _distribution(reader, table, key, prefix, low=0.0, low_open=True)
         parameters.append((key, value))
