@@ -32,6 +32,10 @@ LIMITS: dict[str, float] = {
     # Most iterations of an engine's solver per step: the library's largest is 100; a run
     # costs iterations x steps.
     "max_solver_iterations": 10_000,
+    # Largest scenario or population file read (bytes): the library's largest is 3 kB.
+    "max_input_bytes": 4 * 2**20,
+    # Largest results file read (bytes): the library's is about 2 MB, a 1,000-file run's 40.
+    "max_results_bytes": 2**31,
 }
 
 

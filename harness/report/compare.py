@@ -34,6 +34,7 @@ from __future__ import annotations
 import argparse
 import csv
 import math
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -278,28 +279,53 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="print the N largest changes (default 20; 0 prints none)")
 
 
+def csv_problem(path: Path) -> str | None:
+    """Why ``--csv PATH`` cannot be written (checked before any file is read), or None."""
+    try:
+        if path.exists() and not path.is_file():
+            return "is not a regular file (a directory or a device)"
+        if not path.parent.is_dir():
+            return f"no directory {path.parent}"
+    except OSError as error:  # a name too long, a loop of links
+        return error.strerror or str(error)
+    return None
+
+
+def _bad_input(message: str) -> int:
+    print(f"impact-harness compare: {message}", file=sys.stderr)
+    return 2
+
+
 def main(args) -> int:
     try:
         threshold = parse_threshold(args.fail_above)
     except ValueError as error:
-        print(f"impact-harness compare: {error}")
-        return 2
+        return _bad_input(str(error))
+    if args.csv is not None and (problem := csv_problem(Path(args.csv))):
+        return _bad_input(f"--csv {args.csv}: {problem}")
     loaded = []
     for path in (args.a, args.b):
         try:
             loaded.append(read_results(path))
         except (OSError, ValueError, KeyError, TypeError) as error:
-            print(f"impact-harness compare: {error}")
-            return 2
-    weights = MassMatrices(*loaded)
-    changes, only_a, only_b = compare(*loaded, weights)
+            return _bad_input(str(error))
+    try:
+        weights = MassMatrices(*loaded)
+        changes, only_a, only_b = compare(*loaded, weights)
+    except (TypeError, ValueError, KeyError, AttributeError, IndexError) as error:
+        # read_results checks a record's fields, not every value's type: a record whose
+        # speeds are not numbers fails here
+        return _bad_input(f"{args.a}, {args.b}: a record is malformed: "
+                          f"{type(error).__name__}: {str(error)[:200]}")
     if not changes:
-        print(f"impact-harness compare: {args.a} and {args.b} have no record in common")
-        return 2
+        return _bad_input(f"{args.a} and {args.b} have no record in common")
     changes.sort(key=lambda c: (not c.status_changed, -c.largest))
     exceeding = [c for c in changes if c.exceeds(threshold)]
     if args.csv is not None:
-        write_csv(changes, args.csv)
+        try:
+            write_csv(changes, args.csv)
+        except OSError as error:
+            return _bad_input(f"--csv {args.csv}: cannot write: {error.strerror or error}")
     changed = [c for c in changes if c.status_changed or c.largest > 0]
     for c in changed[:args.show]:
         deltas = c.departure_change

@@ -24,6 +24,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+from harness import inputs
 from harness.run.records import (
     ANALYTIC,
     FORMAT,
@@ -157,12 +158,10 @@ def read_for_report(path: Path | str) -> LazyResults | Results:
     :class:`LazyResults` when the file is as ``write_results`` wrote it, else
     :func:`~harness.run.records.read_results`'s (which raises its errors)."""
     path = Path(path)
-    try:
-        with open(path, "rb") as handle:
-            status = os.fstat(handle.fileno())
-            count = _companion_records(path, status)
-            data = handle.read() if count is not None else b""
-    except OSError:
+    try:  # a regular file of bounded size only (read_results then says what else it is)
+        data, status = inputs.read_bytes_and_status(path, cap_name="max_results_bytes")
+        count = _companion_records(path, status)
+    except (OSError, inputs.InputError):
         count = None
     lazy = None if count is None else _lazy(path, status, data, count)
     return read_results(path) if lazy is None else lazy

@@ -54,6 +54,7 @@ from dataclasses import asdict, dataclass, field, fields, is_dataclass
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 
+from harness import inputs
 from harness.collector import collector_paused
 from harness.run.files import write_parts_atomically
 
@@ -474,9 +475,9 @@ def check_writable(path: Path | str) -> str | None:
     removes), so a bad ``--json`` costs nothing.
     """
     path = Path(path)
-    if path.is_dir():
-        return "is a directory"
     try:
+        if path.is_dir():  # raises for a name too long
+            return "is a directory"
         path.parent.mkdir(parents=True, exist_ok=True)
         descriptor, temporary = tempfile.mkstemp(prefix=f".{path.name}-", suffix=".tmp",
                                                  dir=path.parent)
@@ -496,9 +497,8 @@ def read_results(path: Path | str) -> Results:
 
 def _read_results(path: Path) -> Results:
     try:
-        with open(path, "rb") as handle:
-            status = os.fstat(handle.fileno())
-            data = handle.read()
+        # a regular file of bounded size only: /dev/zero or a FIFO is refused, never read
+        data, status = inputs.read_bytes_and_status(path, cap_name="max_results_bytes")
         companion = _read_companion(path, status)
         document = None if companion is None else results_head(data)
         if document is not None:  # the records and their lines from the companion
@@ -513,15 +513,25 @@ def _read_results(path: Path) -> Results:
             f"{path}: no results file; run `impact-harness run` (or `suite`) first") from None
     except IsADirectoryError:
         raise ValueError(f"{path}: is a directory, not a results file") from None
-    except (ValueError, OSError) as error:  # JSONDecodeError, UnicodeDecodeError
+    except (ValueError, OSError) as error:  # JSONDecodeError, UnicodeDecodeError, InputError
         raise ValueError(f"{path}: not a readable results file: {error}") from None
+    except RecursionError:
+        raise ValueError(f"{path}: not a readable results file: nested too deep") from None
     if not isinstance(document, dict) or document.get("format") != FORMAT:
         raise ValueError(f"{path}: not an impact-harness results file (format {FORMAT!r})")
     if document.get("format_version") != FORMAT_VERSION:
         raise ValueError(f"{path}: results format version {document.get('format_version')!r}; "
                          f"this harness reads {FORMAT_VERSION}")
     items = datas if datas is not None else document.get("records", [])
-    records = [Record.from_dict(item) for item in items]
+    if not isinstance(items, list):
+        raise ValueError(f"{path}: 'records' is not a list of records")
+    records = []
+    for number, item in enumerate(items):
+        try:
+            records.append(Record.from_dict(item))
+        except (TypeError, KeyError, ValueError, AttributeError, RecursionError) as error:
+            raise ValueError(f"{path}: record {number} is malformed: {type(error).__name__}: "
+                             f"{str(error)[:200]}") from None
     results = Results(records=records, provenance=document.get("provenance", {}),
                       scenarios=document.get("scenarios", {}))
     if lines is not None and len(lines) == len(records):

@@ -16,7 +16,7 @@ from typing import Any, Iterable, Mapping
 
 import numpy as np
 
-from harness import bounds
+from harness import bounds, inputs
 from harness.engines import preset_role, renamed_roles, source_label
 from harness.scenarios import checks
 from harness.scenarios.checks import check_engine_settings, check_points
@@ -680,24 +680,28 @@ def passed_before(text: str, path: Path) -> tuple[Scenario | None, str | None]:
 
 
 def read_scenario_text(path: Path) -> str:
-    """The text of a scenario file (raises :class:`ScenarioError`: unreadable, not UTF-8)."""
+    """The text of a scenario file (raises :class:`ScenarioError`: unreadable, not a regular
+    file, too large, not UTF-8: :mod:`harness.inputs`)."""
     try:
-        return path.read_text(encoding="utf-8")
+        return inputs.read_text(path)
     except OSError as error:
         raise ScenarioError(f"cannot read the file: {error.strerror or error}", path=path,
                             allowed="a readable .toml file") from None
-    except UnicodeDecodeError as error:
-        raise ScenarioError(f"not UTF-8 text: byte {error.object[error.start]:#04x} at offset "
-                            f"{error.start}", path=path,
-                            allowed="a TOML file encoded in UTF-8") from None
+    except inputs.InputError as error:
+        problem, _, allowed = str(error).partition("; allowed: ")
+        raise ScenarioError(problem, path=path,
+                            allowed=allowed or "a TOML file encoded in UTF-8") from None
 
 
 def scenario_from_text(text: str, path: Path, checks_key: str | None = None) -> Scenario:
     """Parse and check the text of the scenario file ``path`` (raises :class:`ScenarioError`);
     ``checks_key`` as for :func:`parse_scenario`."""
     try:
-        doc = tomllib.loads(text)
+        doc = inputs.parse_toml(text)
     except tomllib.TOMLDecodeError as error:
         raise ScenarioError(f"not valid TOML: {error}", path=path,
                             allowed="TOML 1.0 (https://toml.io)") from None
+    except inputs.InputError as error:
+        problem, _, allowed = str(error).partition("; allowed: ")
+        raise ScenarioError(problem, path=path, allowed=allowed or None) from None
     return parse_scenario(doc, path, checks_key=checks_key)

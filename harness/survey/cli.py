@@ -249,7 +249,27 @@ def check_options(args: argparse.Namespace) -> tuple[list[str], list[str], int]:
                           ("seed", args.seed)):
         if value is not None:
             bounds.check(f"--{option} {value}", option, value)
+    problem = out_problem(Path(args.out))
+    if problem is not None:
+        raise ValueError(f"--out {args.out}: {problem}")
     return engines, presets, samples
+
+
+def out_problem(out: Path) -> str | None:
+    """Why the survey cannot write its files in the directory ``out`` (made when missing),
+    or None; checked before any work, so a bad ``--out`` costs nothing."""
+    import tempfile
+
+    try:
+        if out.exists() and not out.is_dir():
+            return "is not a directory"
+        out.mkdir(parents=True, exist_ok=True)
+        descriptor, probe = tempfile.mkstemp(prefix=".probe-", suffix=".tmp", dir=out)
+        os.close(descriptor)
+        os.unlink(probe)
+    except OSError as error:
+        return f"cannot write there: {error.strerror or error}"
+    return None
 
 
 def main(args: argparse.Namespace) -> int:
