@@ -52,7 +52,12 @@ def expand(items: list[str]) -> tuple[list[Path], list[str]]:
     populations, others = [], []
     for item in items:
         path = Path(item)
-        if path.is_dir():
+        try:
+            is_directory = path.is_dir()
+        except OSError:  # a name too long, a loop of links: the scenario check says so
+            others.append(item)
+            continue
+        if is_directory:
             files = sorted(path.glob("*.toml"))
             if files and all(is_population(f) for f in files):
                 populations += files

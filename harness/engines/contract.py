@@ -141,6 +141,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from harness import bounds
 from harness.collector import collector_paused
 from harness.engines.settings import EngineSettingsError, check_int, check_number
 from harness.scene import Scene
@@ -574,6 +575,11 @@ class Engine(abc.ABC):
         check_int(self.name, settings, "max_steps", low=1)
         check_number(self.name, settings, "approach_steps", low=0.0)
         self._validate_engine_settings(settings)
+        for key, value in settings.items():  # the bounds every way of setting them shares
+            reason = bounds.problem(key, value)
+            if reason is not None:
+                raise EngineSettingsError(
+                    f"engine {self.name!r}: setting {key!r} = {value!r}: {reason}")
 
     def _resolve(self, settings, preset, overrides) -> tuple[dict, str | None]:
         if settings is None:

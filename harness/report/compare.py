@@ -36,6 +36,7 @@ import csv
 import io
 import json
 import math
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -292,21 +293,25 @@ def summarise(changes: list[Change], only_a: list[tuple], only_b: list[tuple], l
 def setting_differences(a: Results, b: Results) -> list[tuple[str, str, str]]:
     """``(what, in A, in B)`` for every version, commit and engine setting that differs
     between the two runs' provenance (settings as each preset resolved them)."""
-    pa, pb = a.provenance or {}, b.provenance or {}
+    def mapping(value) -> dict:  # a hand-edited file may hold anything in its provenance
+        return value if isinstance(value, dict) else {}
+
+    pa, pb = mapping(a.provenance), mapping(b.provenance)
     rows = []
-    commit_a, commit_b = (p.get("git", {}).get("commit") or "" for p in (pa, pb))
+    commit_a, commit_b = (str(mapping(p.get("git")).get("commit") or "") for p in (pa, pb))
     if commit_a != commit_b:
         rows.append(("commit", commit_a[:12] or "?", commit_b[:12] or "?"))
-    versions_a, versions_b = pa.get("versions", {}), pb.get("versions", {})
+    versions_a, versions_b = mapping(pa.get("versions")), mapping(pb.get("versions"))
     for name in sorted(set(versions_a) | set(versions_b)):
         if versions_a.get(name) != versions_b.get(name):
             rows.append((f"version of {name}", str(versions_a.get(name, "—")),
                          str(versions_b.get(name, "—"))))
-    settings_a, settings_b = pa.get("engine_settings", {}), pb.get("engine_settings", {})
+    settings_a, settings_b = (mapping(pa.get("engine_settings")),
+                              mapping(pb.get("engine_settings")))
     for engine in sorted(set(settings_a) | set(settings_b)):
-        presets_a, presets_b = settings_a.get(engine, {}), settings_b.get(engine, {})
+        presets_a, presets_b = mapping(settings_a.get(engine)), mapping(settings_b.get(engine))
         for preset in sorted(set(presets_a) | set(presets_b)):
-            keys_a, keys_b = presets_a.get(preset, {}), presets_b.get(preset, {})
+            keys_a, keys_b = mapping(presets_a.get(preset)), mapping(presets_b.get(preset))
             for key in sorted(set(keys_a) | set(keys_b)):
                 if keys_a.get(key) != keys_b.get(key):
                     rows.append((f"{engine}.{preset}.{key}", json_text(keys_a.get(key, "—")),
@@ -321,8 +326,12 @@ def json_text(value) -> str:
 
 def speed_names(results: Results, change: Change, size: int) -> list[str]:
     """The speeds' names of a change's scenario (``box.v_x [m/s]``), ``u1 …`` without."""
-    labels = (results.scenarios.get(change.scenario) or {}).get("speed_labels") or []
-    return list(labels) if len(labels) == size else [f"u{i + 1}" for i in range(size)]
+    info = results.scenarios.get(change.scenario) if isinstance(results.scenarios, dict) \
+        else None
+    labels = info.get("speed_labels") if isinstance(info, dict) else None
+    if isinstance(labels, list) and len(labels) == size:
+        return [str(label) for label in labels]
+    return [f"u{i + 1}" for i in range(size)]
 
 
 def write_csv(changes: list[Change], path: Path, b: Results | None = None) -> Path:
@@ -448,29 +457,36 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="print the N largest changes (default 20; 0 prints none)")
 
 
+def _bad_input(message: str) -> int:
+    print(f"impact-harness compare: {message}", file=sys.stderr)
+    return 2
+
+
 def main(args) -> int:
     try:
         threshold = parse_threshold(args.fail_above)
     except ValueError as error:
-        print(f"impact-harness compare: {error}")
-        return 2
+        return _bad_input(str(error))
     for option, target in (("--csv", args.csv), ("--html", getattr(args, "html", None))):
         problem = None if target is None else output_file_problem(target)
         if problem:
-            print(f"impact-harness compare: {option} {target}: {problem}")
-            return 2
+            return _bad_input(f"{option} {target}: {problem}")
     loaded = []
     for path in (args.a, args.b):
         try:
             loaded.append(read_results(path))
         except (OSError, ValueError, KeyError, TypeError) as error:
-            print(f"impact-harness compare: {error}")
-            return 2
-    weights = MassMatrices(*loaded)
-    changes, only_a, only_b = compare(*loaded, weights)
+            return _bad_input(str(error))
+    try:
+        weights = MassMatrices(*loaded)
+        changes, only_a, only_b = compare(*loaded, weights)
+    except (TypeError, ValueError, KeyError, AttributeError, IndexError) as error:
+        # read_results checks a record's fields, not every value's type: a record whose
+        # speeds are not numbers fails here
+        return _bad_input(f"{args.a}, {args.b}: a record is malformed: "
+                          f"{type(error).__name__}: {str(error)[:200]}")
     if not changes:
-        print(f"impact-harness compare: {args.a} and {args.b} have no record in common")
-        return 2
+        return _bad_input(f"{args.a} and {args.b} have no record in common")
     law = getattr(args, "law", "poisson")
     changes.sort(key=lambda c: (not c.status_changed, -c.largest))
     exceeding = [c for c in changes if c.exceeds(threshold)]
@@ -478,10 +494,14 @@ def main(args) -> int:
     summary = summarise(changes, only_a, only_b, law, threshold)
     differences = setting_differences(*loaded)
     rows = [row_cells(c, law, threshold) for c in changed]
-    if args.csv is not None:
-        write_csv(changes, args.csv, loaded[1])
-    if getattr(args, "html", None) is not None:
-        write_html(args.html, args.a, args.b, law, threshold, summary, rows, differences)
+    try:
+        if args.csv is not None:
+            write_csv(changes, args.csv, loaded[1])
+        if getattr(args, "html", None) is not None:
+            write_html(args.html, args.a, args.b, law, threshold, summary, rows, differences)
+    except OSError as error:
+        return _bad_input(f"cannot write {error.filename or 'an output'}: "
+                          f"{error.strerror or error}")
     print(f"departures from {law} in percent; changes in percentage points (pp)\n")
     print(text_table(SUMMARY_HEADER, [summary_cells(row) for row in summary]))
     if differences:

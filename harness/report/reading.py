@@ -20,11 +20,11 @@ import hashlib
 import json
 import os
 import re
-import stat
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+from harness import inputs
 from harness.run.records import (
     ANALYTIC,
     FORMAT,
@@ -148,11 +148,9 @@ def read_for_report(path: Path | str) -> LazyResults | Results:
     :class:`LazyResults` when the file is as ``write_results`` writes it, else
     :func:`~harness.run.records.read_results`'s (which raises its errors)."""
     path = Path(path)
-    try:
-        with open(path, "rb") as handle:
-            status = os.fstat(handle.fileno())
-            data = handle.read() if stat.S_ISREG(status.st_mode) else b""
-    except OSError:
+    try:  # a regular file of bounded size only (read_results then says what else it is)
+        data, status = inputs.read_bytes_and_status(path, cap_name="max_results_bytes")
+    except (OSError, inputs.InputError):
         data = b""
     lazy = _lazy(path, status, data) if data else None
     return read_results(path) if lazy is None else lazy

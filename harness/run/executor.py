@@ -74,14 +74,14 @@ Dask
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 import sys
 import threading
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any, Callable, Hashable, Iterable, Sequence
 
-from harness.processes import default_workers, one_blas_thread
+from harness.processes import JobStopped, StoppablePool, default_workers, one_blas_thread
 
 EXECUTORS: tuple[str, ...] = ("local", "dask")
 
@@ -96,8 +96,25 @@ CONNECT_TIMEOUT_S = 10.0
 DASK_MIN_TASKS = 2000
 
 
+#: Seconds a Dask cluster may have no worker before the run stops (its workers died and
+#: were not restarted: the futures would wait for one forever).
+NO_WORKER_TIMEOUT_S = 60.0
+#: Seconds beyond a bundle's own time limits (the sum of its chunks') that the run waits
+#: for any result before it stops: room for a worker's restart and the cluster's queue.
+STALL_MARGIN_S = 60.0
+#: Seconds between two looks at a Dask run's finished futures and at its cluster's health.
+DASK_POLL_S = 0.02
+#: Seconds a client's or a started cluster's close may take.
+CLOSE_TIMEOUT_S = 30.0
+
+
 class DaskNotInstalled(ImportError):
     """``executor="dask"`` was asked for but dask.distributed cannot be imported."""
+
+
+class DaskRunFailed(ConnectionError):
+    """A Dask run stopped waiting: its cluster has no worker left, or no result came for
+    longer than any bundle's time limits allow (one line: what, and how long)."""
 
 
 def check_arguments(executor: str = "local", workers: int | None = None,
@@ -132,6 +149,8 @@ def run_tasks(
     chunk_size: int | None = None,
     dask_min_tasks: int = DASK_MIN_TASKS,
     note: Callable[[str], None] | None = None,
+    time_limit: Callable[[Any], float | None] | None = None,
+    stopped: Callable[[Any, str], Any] | None = None,
 ) -> list:
     """``[function(task) for task in tasks]``, spread over processes; results in task order.
 
@@ -175,6 +194,19 @@ def run_tasks(
         Fewest tasks sent to Dask (default :data:`DASK_MIN_TASKS`).
     note
         Called with a one-line remark on how the tasks ran (the local pool in place of Dask).
+    time_limit
+        ``time_limit(task)``: the seconds a task may run (None: no limit); a chunk has its
+        first task's limit as a whole (``group`` keeps tasks of different limits apart). On
+        the local executor a chunk over its limit is stopped by ending its worker process
+        (:class:`harness.processes.StoppablePool`; with a limit, even ``workers == 1`` runs
+        in a child process, since a signal never interrupts an engine's step in C); its
+        tasks then run again one per chunk, each with its own limit. Dask workers are not
+        stopped.
+    stopped
+        ``stopped(task, reason)``: the result of a task stopped alone, over its limit
+        (``reason``: ``"time limit: stopped after 5 s"``) or because its worker died; the
+        run goes on. Without it such a task raises :class:`harness.processes.JobStopped`
+        as a task that raises does.
 
     Raises
     ------
@@ -223,7 +255,10 @@ def run_tasks(
     else:
         size = chunk_size or chunk_size_for(total, n_workers, batched=batch is not None)
         chunks = make_chunks(task_list, size, group)
-    run = _run_dask if executor == "dask" else _run_inline if n_workers == 1 else _run_pool
+    limited = time_limit is not None and any(time_limit(task) is not None for task in task_list)
+    run = (functools.partial(_run_dask, limit_of=time_limit) if executor == "dask" else
+           _run_inline if n_workers == 1 and not limited else
+           functools.partial(_run_pool, limit_of=time_limit, stopped=stopped))
     results: list[Any] = [None] * total
     delivered = [0]
 
@@ -303,20 +338,33 @@ def _run_inline(function, batch, tasks: Sequence, chunks, workers, deliver) -> N
         deliver(chunk, *call_chunk(function, batch, [tasks[index] for index in chunk]))
 
 
-def _run_pool(function, batch, tasks: Sequence, chunks, workers: int, deliver) -> None:
-    with ProcessPoolExecutor(max_workers=workers, initializer=one_blas_thread) as pool:
-        futures = {pool.submit(call_chunk, function, batch, [tasks[i] for i in chunk]): chunk
-                   for chunk in chunks}
-        pending = set(futures)
-        try:
-            while pending:
-                finished, pending = wait(pending, return_when=FIRST_COMPLETED)
-                for future in finished:
-                    deliver(futures[future], *future.result())
-        except BaseException:
-            for future in pending:
-                future.cancel()
-            raise
+def _run_pool(function, batch, tasks: Sequence, chunks, workers: int, deliver, *,
+              limit_of=None, stopped=None) -> None:
+    """The chunks on a :class:`StoppablePool` of ``workers`` processes. A chunk of several
+    tasks stopped (over its limit, or its worker died) runs again task by task, each with its
+    own limit, so that only the task at fault is stopped; a task stopped alone gets
+    ``stopped(task, reason)`` (or raises :class:`JobStopped`)."""
+    job = functools.partial(call_chunk, function, batch)
+    with StoppablePool(job, workers) as pool:
+        round_chunks = list(chunks)
+        while round_chunks:
+            again: list[list[int]] = []
+            limits = [None if limit_of is None else limit_of(tasks[chunk[0]])
+                      for chunk in round_chunks]
+            arguments = [[tasks[index] for index in chunk] for chunk in round_chunks]
+            for position, (kind, value) in pool.run(arguments, limits):
+                chunk = round_chunks[position]
+                if kind == "result":
+                    deliver(chunk, *value)
+                elif kind == "error":  # not a task's own exception (call_chunk keeps those)
+                    raise value
+                elif len(chunk) > 1:
+                    again += [[index] for index in chunk]
+                elif stopped is not None:
+                    deliver(chunk, [stopped(tasks[chunk[0]], value)], None)
+                else:
+                    deliver(chunk, [None], (0, JobStopped(value)))
+            round_chunks = again
 
 
 def _require_distributed() -> None:
@@ -480,7 +528,8 @@ def _unpickle_chunk_result(blob: bytes) -> list[tuple[list, tuple[int, Exception
     return loads(blob)
 
 
-def _run_dask(function, batch, tasks: Sequence, chunks, workers, deliver, scheduler) -> None:
+def _run_dask(function, batch, tasks: Sequence, chunks, workers, deliver, scheduler, *,
+              limit_of=None) -> None:
     Client, _, as_completed = _import_distributed()
     cluster = None
     if scheduler is None:
@@ -506,10 +555,13 @@ def _run_dask(function, batch, tasks: Sequence, chunks, workers, deliver, schedu
                 DaskChunk(function, batch, [[tasks[i] for i in chunk] for chunk in bundle])
                 for bundle in bundles], pure=False)
             bundle_of = {future.key: bundle for future, bundle in zip(futures, bundles)}
+            stall_s = _stall_limit(bundles, tasks, limit_of)
             try:
                 # with_results: each result is fetched as its bundle finishes, in the
                 # client's event loop, rather than one blocking round trip per bundle.
-                for future, blob in as_completed(futures, with_results=True):
+                completed = as_completed(futures, with_results=True)
+                for future, blob in _finished(completed, len(futures), client, cluster,
+                                              stall_s):
                     _deliver_bundle(bundle_of[future.key], _unpickle_chunk_result(blob),
                                     deliver)
             except BaseException:
@@ -519,6 +571,58 @@ def _run_dask(function, batch, tasks: Sequence, chunks, workers, deliver, schedu
         _close(client, cluster)
         raise
     _close_in_background(client, cluster)
+
+
+def _stall_limit(bundles: list[list[list[int]]], tasks: Sequence, limit_of) -> float | None:
+    """Seconds without any result after which a Dask run is stuck: the largest sum of a
+    bundle's chunks' time limits (a thread runs a bundle's chunks one after the other) and
+    :data:`STALL_MARGIN_S`; None when some chunk has no limit."""
+    if limit_of is None:
+        return None
+    longest = 0.0
+    for bundle in bundles:
+        limits = [limit_of(tasks[chunk[0]]) for chunk in bundle]
+        if any(limit is None for limit in limits):
+            return None
+        longest = max(longest, sum(limits))
+    return longest + STALL_MARGIN_S
+
+
+def _finished(completed, count: int, client, cluster, stall_s: float | None):
+    """``(future, result)`` of each of ``count`` futures of ``completed`` (a Dask
+    ``as_completed``), as each finishes, and never a wait without an end: every look waits
+    at most :data:`DASK_POLL_S`; :class:`DaskRunFailed` when a cluster started here has had
+    no worker for :data:`NO_WORKER_TIMEOUT_S` (its workers died, and their tasks would wait
+    for one forever) or no result came for ``stall_s`` seconds (None: no such bound). A
+    future that erred raises its error (``KilledWorker`` when its task killed the worker
+    each time it ran)."""
+    import time
+
+    done = 0
+    last_result = time.monotonic()
+    workerless_since = None
+    while done < count:
+        if completed.has_ready():
+            item = next(completed)  # ready: no wait; a future that erred raises here
+            done += 1
+            last_result = time.monotonic()
+            yield item
+            continue
+        now = time.monotonic()
+        if stall_s is not None and now - last_result > stall_s:
+            raise DaskRunFailed(f"Dask: no result for {stall_s:g} s, longer than any "
+                                f"bundle's time limits allow; {done} of {count} bundles "
+                                "finished")
+        if cluster is not None:
+            if cluster.scheduler_info.get("workers"):
+                workerless_since = None
+            elif workerless_since is None:
+                workerless_since = now
+            elif now - workerless_since > NO_WORKER_TIMEOUT_S:
+                raise DaskRunFailed(f"Dask: the cluster has had no worker for "
+                                    f"{NO_WORKER_TIMEOUT_S:g} s; {done} of {count} bundles "
+                                    "finished")
+        time.sleep(DASK_POLL_S)
 
 
 def _threads(client, workers: int, cluster) -> int:
@@ -545,9 +649,16 @@ def _deliver_bundle(bundle: list[list[int]], outcomes: list, deliver) -> None:
 
 
 def _close(client, cluster) -> None:
-    client.close()
-    if cluster is not None:
-        cluster.close()
+    """Close the client and a cluster started for the run, each within
+    :data:`CLOSE_TIMEOUT_S` (a close that overruns is given up, with a warning)."""
+    for closing in (client, cluster):
+        if closing is None:
+            continue
+        try:
+            closing.close(timeout=CLOSE_TIMEOUT_S)
+        except (TimeoutError, OSError) as error:
+            logging.getLogger(__name__).warning("Dask: closing %s: %s", type(closing).__name__,
+                                                error)
 
 
 #: Clusters being shut down after their run delivered every result (see
@@ -569,9 +680,10 @@ def _close_in_background(client, cluster) -> None:
 
 
 def wait_for_shutdowns() -> None:
-    """Return once every cluster :func:`run_tasks` started has stopped."""
+    """Return once every cluster :func:`run_tasks` started has stopped (each close is
+    bounded: :data:`CLOSE_TIMEOUT_S` for the client and for the cluster)."""
     while _CLOSING:
-        _CLOSING.pop().join()
+        _CLOSING.pop().join(timeout=3 * CLOSE_TIMEOUT_S)
 
 
 def progress_printer(label: str, every_s: float = 2.0, stream=None) -> Callable[[int, int], None]:
@@ -592,6 +704,6 @@ def progress_printer(label: str, every_s: float = 2.0, stream=None) -> Callable[
 
 
 __all__ = ["CONNECT_TIMEOUT_S", "DASK_MIN_TASKS", "EXECUTORS", "MAX_CHUNK", "DaskChunk",
-           "DaskNotInstalled", "HeartbeatAfterClose", "call_chunk", "call_dask_chunk",
-           "check_arguments", "chunk_size_for", "make_chunks", "progress_printer", "run_tasks",
-           "start_local_cluster", "wait_for_shutdowns"]
+           "DaskNotInstalled", "DaskRunFailed", "HeartbeatAfterClose", "call_chunk",
+           "call_dask_chunk", "check_arguments", "chunk_size_for", "make_chunks",
+           "progress_printer", "run_tasks", "start_local_cluster", "wait_for_shutdowns"]

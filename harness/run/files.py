@@ -148,6 +148,8 @@ def _replaceable_problem(path: Path | str) -> str | None:
         mode = os.lstat(path).st_mode
     except FileNotFoundError:
         return None
+    except OSError as error:  # a name too long, a loop of links, a file for a directory
+        return f"cannot be used: {error.strerror or error}"
     if stat.S_ISREG(mode):
         return None
     kind = next((name for test, name in _KINDS if test(mode)), "not a regular file")
@@ -163,7 +165,11 @@ def output_file_problem(path: Path | str) -> str | None:
     if problem:
         return problem
     parent = path.parent
-    if not parent.is_dir():
+    try:
+        is_directory = parent.is_dir()
+    except OSError as error:
+        return f"cannot be used: {error.strerror or error}"
+    if not is_directory:
         return (f"its directory {parent} does not exist (create it first: only a directory "
                 "the command asks for is ever made)")
     if not os.access(parent, os.W_OK | os.X_OK):
@@ -176,6 +182,13 @@ def output_directory_problem(path: Path | str) -> str | None:
     be a directory (a link to one is fine) that takes new files, or nothing yet in an
     existing directory (it is then made, itself only, not its parents)."""
     path = Path(path)
+    try:
+        return _directory_problem(path)
+    except OSError as error:  # a name too long, a loop of links
+        return f"cannot be used: {error.strerror or error}"
+
+
+def _directory_problem(path: Path) -> str | None:
     if path.is_dir():
         if not os.access(path, os.W_OK | os.X_OK):
             return "is not a writable directory"

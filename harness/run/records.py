@@ -50,6 +50,7 @@ from dataclasses import asdict, dataclass, field, fields, is_dataclass
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 
+from harness import inputs
 from harness.collector import collector_paused
 from harness.run.files import output_file_problem, write_parts_atomically
 
@@ -368,12 +369,15 @@ def check_writable(path: Path | str, *, make_parent: bool = False) -> str | None
     ``reports/`` is the harness's own; a directory the user names must exist.
     """
     path = Path(path)
-    if make_parent and not os.path.lexists(path.parent) and path.parent.parent.is_dir():
-        try:
-            path.parent.mkdir()
-        except OSError as error:
-            return f"cannot make {path.parent}: {error.strerror or error}"
-    return output_file_problem(path)
+    try:  # a name too long raises
+        if make_parent and not os.path.lexists(path.parent) and path.parent.parent.is_dir():
+            try:
+                path.parent.mkdir()
+            except OSError as error:
+                return f"cannot make {path.parent}: {error.strerror or error}"
+        return output_file_problem(path)
+    except OSError as error:
+        return f"cannot write there: {error.strerror or error}"
 
 
 def read_results(path: Path | str) -> Results:
@@ -385,8 +389,8 @@ def read_results(path: Path | str) -> Results:
 
 def _read_results(path: Path) -> Results:
     try:
-        with open(path, "rb") as handle:
-            data = handle.read()
+        # a regular file of bounded size only: /dev/zero or a FIFO is refused, never read
+        data, _ = inputs.read_bytes_and_status(path, cap_name="max_results_bytes")
         text = str(data, "utf-8")
         document, lines = _split_records(text)
         if document is None:  # not as write_results lays it out: read whole
@@ -396,8 +400,10 @@ def _read_results(path: Path) -> Results:
             f"{path}: no results file; run `impact-harness run` (or `suite`) first") from None
     except IsADirectoryError:
         raise ValueError(f"{path}: is a directory, not a results file") from None
-    except (ValueError, OSError) as error:  # JSONDecodeError, UnicodeDecodeError
+    except (ValueError, OSError) as error:  # JSONDecodeError, UnicodeDecodeError, InputError
         raise ValueError(f"{path}: not a readable results file: {error}") from None
+    except RecursionError:
+        raise ValueError(f"{path}: not a readable results file: nested too deep") from None
     if not isinstance(document, dict) or document.get("format") != FORMAT:
         raise ValueError(f"{path}: not an impact-harness results file (format {FORMAT!r})")
     if document.get("format_version") != FORMAT_VERSION:
@@ -410,7 +416,13 @@ def _read_results(path: Path) -> Results:
     provenance, scenarios = document.get("provenance", {}), document.get("scenarios", {})
     if not isinstance(provenance, dict) or not isinstance(scenarios, dict):
         raise ValueError(f"{path}: 'provenance' and 'scenarios' must be JSON objects")
-    records = [Record.from_dict(item) for item in items]
+    records = []
+    for number, item in enumerate(items):
+        try:
+            records.append(Record.from_dict(item))
+        except (TypeError, KeyError, ValueError, AttributeError, RecursionError) as error:
+            raise ValueError(f"{path}: record {number} is malformed: {type(error).__name__}: "
+                             f"{str(error)[:200]}") from None
     results = Results(records=records, provenance=provenance, scenarios=scenarios)
     if lines is not None and len(lines) == len(records):
         results._lines = (records, len(records), lines)

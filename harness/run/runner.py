@@ -50,11 +50,14 @@ Parallelism and cache
 
 Bounds
     Each engine task has a time limit (:data:`TASK_TIME_LIMIT_S`, ``--task-time-limit``);
-    a task over it gets the status ``"error: time limit ..."`` (enforced with ``SIGALRM``
-    in the process running the task: the local pool and inline runs, not Dask workers). A
-    chunk gets one task's limit as a whole; a chunk over it, or one whose ``run_many``
-    raises, runs again task by task, each with its own limit, so only the task at fault gets
-    the error and the others their results.
+    a task over it gets the status ``"error: time limit: stopped after N s ..."`` and the run
+    goes on. The local executor enforces it by ending the worker process running the task
+    (:func:`harness.run.executor.run_tasks`; a run without a pool then runs its tasks in one
+    child process): a signal never interrupts an engine's step in C. Dask workers are not
+    stopped. A chunk gets one task's limit as a whole; a chunk over it, or one whose
+    ``run_many`` raises, runs again task by task, each with its own limit, so only the task
+    at fault gets the error and the others their results. A task whose worker dies (an
+    engine crash) gets ``"error: worker died ..."``.
     Sweep sizes and engine step caps are bounded when the scenario is read
     (:data:`harness.scenarios.schema.LIMITS`).
 
@@ -77,9 +80,7 @@ import argparse
 import gc
 import json
 import math
-import signal
 import sys
-import threading
 import time
 from contextlib import nullcontext
 from dataclasses import asdict, dataclass, field, fields
@@ -89,6 +90,7 @@ from typing import Any, Iterable, Mapping, Sequence, TextIO
 
 import numpy as np
 
+from harness import bounds
 from harness.collector import collector_paused
 from harness.engines import load_engine, preset_choices, preset_role
 from harness.run import metrics, references
@@ -131,14 +133,6 @@ EXIT_OK, EXIT_GATE_FAILED, EXIT_BAD_INPUT, EXIT_INTERNAL, EXIT_ENGINE_ERROR = 0,
 SHOWN_ENGINE_ERRORS = 20
 
 
-class TaskTimeLimit(Exception):
-    """An engine task ran past its time limit."""
-
-
-def _on_alarm(signum, frame):
-    raise TaskTimeLimit
-
-
 # --------------------------------------------------------------------------------------------
 # The engine task (runs in a worker process)
 # --------------------------------------------------------------------------------------------
@@ -155,14 +149,9 @@ def engine_task(task: dict) -> dict:
     from harness.engines import EngineNotInstalled, UnsupportedScene, load_engine
 
     start = time.perf_counter()
-    limit = task.get("time_limit_s")
     try:
-        with _time_limit(limit):
-            engine = load_engine(task["engine"])
-            run = engine.run(task["scene"], task["settings"])
-    except TaskTimeLimit:
-        return {"status": f"error: time limit: stopped after {limit:g} s (--task-time-limit)",
-                "wall_time_s": time.perf_counter() - start}
+        engine = load_engine(task["engine"])
+        run = engine.run(task["scene"], task["settings"])
     except EngineNotInstalled as error:
         return {"status": f"skipped: {error}", "wall_time_s": time.perf_counter() - start}
     except UnsupportedScene as error:
@@ -193,9 +182,8 @@ def engine_chunk(tasks: list[dict]) -> list[dict]:
     if any(task["engine"] != first["engine"] or task["settings"] != first["settings"]
            for task in tasks):
         raise ValueError("engine_chunk: tasks of one chunk must share engine and settings")
-    with _time_limit(first.get("time_limit_s")):
-        engine = load_engine(first["engine"])
-        runs = engine.run_many([task["scene"] for task in tasks], first["settings"])
+    engine = load_engine(first["engine"])
+    runs = engine.run_many([task["scene"] for task in tasks], first["settings"])
     share = (time.perf_counter() - start) / len(tasks)
     return [_stored_by_worker(task, _task_output(engine, run, share))
             for task, run in zip(tasks, runs)]
@@ -244,27 +232,21 @@ def task_group(task: dict) -> str:
                       sort_keys=True, default=repr)
 
 
-class _time_limit:
-    """Raise :class:`TaskTimeLimit` in the block after ``limit`` seconds (None: no limit).
+def task_time_limit(task: dict) -> float | None:
+    """The seconds a task may run (the executor stops it after them): an engine task's
+    ``time_limit_s``; a point's reference task has none."""
+    return None if task.get("kind") == POINT_REFERENCE else task.get("time_limit_s")
 
-    ``SIGALRM`` works only in a process's main thread (pool workers, inline runs); elsewhere
-    (Dask workers) the block runs unbounded.
-    """
 
-    def __init__(self, limit: float | None) -> None:
-        self.alarm = bool(limit) and threading.current_thread() is threading.main_thread()
-        self.limit = limit
-        self.previous = None
-
-    def __enter__(self) -> None:
-        if self.alarm:
-            self.previous = signal.signal(signal.SIGALRM, _on_alarm)
-            signal.setitimer(signal.ITIMER_REAL, float(self.limit))
-
-    def __exit__(self, *exc_info) -> None:
-        if self.alarm:
-            signal.setitimer(signal.ITIMER_REAL, 0)
-            signal.signal(signal.SIGALRM, self.previous)
+def stopped_task(task: dict, reason: str) -> dict:
+    """The output of a task the executor stopped (``reason``: over its time limit, or its
+    worker died), reported in its record as an error. A reference task's is empty: the
+    reference is then computed where the records are built, which reports its error."""
+    if task.get("kind") == POINT_REFERENCE:
+        return {}
+    over = reason.startswith("time limit")
+    return {"status": f"error: {reason}" + (" (--task-time-limit)" if over else ""),
+            "wall_time_s": float(task["time_limit_s"]) if over else 0.0}
 
 
 def _task_output(engine, run, wall_time_s: float) -> dict:
@@ -496,6 +478,10 @@ def parse_overrides(items: Sequence[str], engines: Sequence[str] = ENGINES) -> d
         if key not in engine.setting_docs:
             raise ValueError(f"{where}: engine {engine_name!r}, key {key!r}, value {text!r}: "
                              f"unknown setting; allowed: {', '.join(sorted(engine.setting_docs))}")
+        reason = bounds.problem(key, value)  # the same table as a file's [engine_settings]
+        if reason is not None:
+            raise ValueError(f"{where}: engine {engine_name!r}, key {key!r}, value {text!r}: "
+                             f"{reason}")
         candidate = {**overrides.get(engine_name, {}), key: value}
         for preset in PRESETS:
             try:
@@ -1108,7 +1094,8 @@ def _run_tasks(tasks, *, executor, workers, scheduler, log, on_result=None,
     batch = None if chunk_size == 1 else engine_chunk
     return run_tasks(engine_task, tasks, executor=executor, workers=workers,
                      scheduler=scheduler, progress=progress, on_result=on_result,
-                     batch=batch, group=task_group, chunk_size=chunk_size, note=note)
+                     batch=batch, group=task_group, chunk_size=chunk_size, note=note,
+                     time_limit=task_time_limit, stopped=stopped_task)
 
 
 def point_records(scenario: Scenario, point, engine_entries: Sequence, *,
@@ -1498,12 +1485,14 @@ def check_arguments(args, json_path: Path | None) -> str | None:
                         parse_engines(args.engines))
     except (ValueError, DaskNotInstalled) as error:
         return str(error)
-    chunk_size = getattr(args, "chunk_size", None)
-    if chunk_size is not None and chunk_size < 1:
-        return f"--chunk-size {chunk_size}: must be a positive integer"
-    limit = args.task_time_limit
-    if limit is not None and not (math.isfinite(limit) and limit > 0):
-        return f"--task-time-limit {limit}: must be a positive number of seconds"
+    try:
+        for option, value in (("workers", args.workers),
+                              ("chunk-size", getattr(args, "chunk_size", None)),
+                              ("task-time-limit", args.task_time_limit)):
+            if value is not None:
+                bounds.check(f"--{option} {value}", option, value)
+    except bounds.OutOfBounds as error:
+        return str(error)
     if json_path is not None:
         reason = check_writable(json_path, make_parent=json_path == DEFAULT_RESULTS)
         if reason:

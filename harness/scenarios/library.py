@@ -22,7 +22,11 @@ def scenario_files(paths_or_dir=None) -> list[Path]:
     files = []
     for entry in paths_or_dir:
         entry = Path(entry)
-        if entry.is_dir():
+        try:
+            is_directory = entry.is_dir()
+        except OSError:  # a name too long, a loop of links: reading it says so, per file
+            is_directory = False
+        if is_directory:
             files += sorted(entry.glob("*.toml"))
         else:
             files.append(entry)

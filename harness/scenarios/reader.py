@@ -16,6 +16,7 @@ from typing import Any, Iterable, Mapping
 
 import numpy as np
 
+from harness import bounds, inputs
 from harness.engines import preset_role, renamed_roles, source_label
 from harness.scenarios import checks
 from harness.scenarios.checks import check_engine_settings, check_points
@@ -31,6 +32,7 @@ from harness.scenarios.model import (
 )
 from harness.scenarios.schema import (
     BODY_KEYS,
+    BOUNDS,
     CONTACT_KINDS,
     CONTROL_CHARACTER,
     DEFAULT_GAP_TOLERANCE,
@@ -564,18 +566,15 @@ def _read_engine_settings(reader: TableReader, raw, scenario: Scenario):
 
 
 def _check_work_bounds(reader: TableReader, engine: str, table: Mapping) -> bool:
-    """Step cap and time step within :data:`LIMITS` (a run must end); False if not."""
+    """Every setting within its bounds (:data:`harness.bounds.BOUNDS`: the step cap and the
+    time step, so that a run ends, the approach and the solver's iterations); False if not.
+    The same table bounds ``--set`` and the Python API (``Engine.settings``)."""
     ok = True
-    most = limit("max_engine_steps")
-    steps = table.get("max_steps")
-    if isinstance(steps, (int, float)) and not isinstance(steps, bool) and not steps <= most:
-        ok = reader.error(f"engine_settings.{engine}.max_steps", "too many steps", steps,
-                          f"at most {most:g} (IMPACT_HARNESS_MAX_ENGINE_STEPS raises it)")
-    smallest = limit("min_time_step")
-    step = table.get("time_step")
-    if isinstance(step, (int, float)) and not isinstance(step, bool) and 0 < step < smallest:
-        ok = reader.error(f"engine_settings.{engine}.time_step", "time step too small", step,
-                          f"at least {smallest:g} s (IMPACT_HARNESS_MIN_TIME_STEP lowers it)")
+    for key, value in table.items():
+        reason = bounds.problem(key, value)
+        if reason is not None:
+            ok = reader.error(f"engine_settings.{engine}.{key}", "out of range", value,
+                              BOUNDS[key].allowed())
     return ok is not None
 
 
@@ -695,24 +694,28 @@ def passed_before(text: str, path: Path) -> tuple[Scenario | None, str | None]:
 
 
 def read_scenario_text(path: Path) -> str:
-    """The text of a scenario file (raises :class:`ScenarioError`: unreadable, not UTF-8)."""
+    """The text of a scenario file (raises :class:`ScenarioError`: unreadable, not a regular
+    file, too large, not UTF-8: :mod:`harness.inputs`)."""
     try:
-        return path.read_text(encoding="utf-8")
+        return inputs.read_text(path)
     except OSError as error:
         raise ScenarioError(f"cannot read the file: {error.strerror or error}", path=path,
                             allowed="a readable .toml file") from None
-    except UnicodeDecodeError as error:
-        raise ScenarioError(f"not UTF-8 text: byte {error.object[error.start]:#04x} at offset "
-                            f"{error.start}", path=path,
-                            allowed="a TOML file encoded in UTF-8") from None
+    except inputs.InputError as error:
+        problem, _, allowed = str(error).partition("; allowed: ")
+        raise ScenarioError(problem, path=path,
+                            allowed=allowed or "a TOML file encoded in UTF-8") from None
 
 
 def scenario_from_text(text: str, path: Path, checks_key: str | None = None) -> Scenario:
     """Parse and check the text of the scenario file ``path`` (raises :class:`ScenarioError`);
     ``checks_key`` as for :func:`parse_scenario`."""
     try:
-        doc = tomllib.loads(text)
+        doc = inputs.parse_toml(text)
     except tomllib.TOMLDecodeError as error:
         raise ScenarioError(f"not valid TOML: {error}", path=path,
                             allowed="TOML 1.0 (https://toml.io)") from None
+    except inputs.InputError as error:
+        problem, _, allowed = str(error).partition("; allowed: ")
+        raise ScenarioError(problem, path=path, allowed=allowed or None) from None
     return parse_scenario(doc, path, checks_key=checks_key)

@@ -11,6 +11,10 @@ import re
 from pathlib import Path
 
 import planar_impact
+
+# The bounds of the work one file may ask for and of every knob, one table for every way a
+# value is set (harness/bounds.py): re-exported, the scenario modules read them here.
+from harness.bounds import BOUNDS, LIMITS, limit  # noqa: F401
 from harness.engines import ENGINE_NAMES, PRESET_ROLES
 from planar_impact import builders
 
@@ -114,30 +118,3 @@ SWEEP_MAGNITUDE = {
     "parameters.c": "two_sled_offset", "parameters.q3": "two_sled_offset",
     "parameters.q6": "two_sled_offset",
 }
-
-#: Bounds on the work one file may ask for; each can be raised with the environment variable
-#: ``IMPACT_HARNESS_<NAME>`` (e.g. ``IMPACT_HARNESS_MAX_SWEEP_POINTS=5000``).
-LIMITS: dict[str, float] = {
-    # Every point is checked (geometry, solver) when read, then run on every engine and
-    # preset: 1000 points take about a minute to run; the library's largest sweep has 11.
-    "max_sweep_points": 1000,
-    # Engine step cap (settings max_steps): the library's largest is 20000 (MuJoCo).
-    "max_engine_steps": 1_000_000,
-    # Smallest engine time step (s); the library's smallest is 1e-5 (MuJoCo accurate).
-    "min_time_step": 1e-7,
-}
-
-
-def limit(name: str) -> float:
-    """``LIMITS[name]``, or the value of ``IMPACT_HARNESS_<NAME>`` when set and a number."""
-    import os
-
-    text = os.environ.get(f"IMPACT_HARNESS_{name.upper()}")
-    if text:
-        try:
-            value = float(text)
-        except ValueError:
-            raise ValueError(f"IMPACT_HARNESS_{name.upper()}={text!r}: not a number") from None
-        if value > 0:
-            return value
-    return LIMITS[name]

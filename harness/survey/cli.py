@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from harness import bounds
 from harness.engines import (
     ENGINE_NAMES,
     PRESET_ROLES,
@@ -58,11 +59,11 @@ DEFAULT_LEFT_OUT = {
 
 
 def _names(values, allowed, option) -> list[str]:
+    """The names of a comma-separated option; ``ValueError`` (bad input) for an unknown one."""
     names = [name for value in values or () for name in value.split(",") if name]
     bad = [name for name in names if name not in allowed]
     if bad:
-        raise SystemExit(f"impact-harness survey: {option}: unknown {bad}; allowed: "
-                         f"{', '.join(allowed)}")
+        raise ValueError(f"{option}: unknown {bad}; allowed: {', '.join(allowed)}")
     return list(dict.fromkeys(names))
 
 
@@ -271,17 +272,35 @@ def write_survey(survey: dict, out: Path, settings: dict, figures: bool = True) 
     return written + [summary, settings_path]
 
 
-def main(args: argparse.Namespace) -> int:
+def check_options(args: argparse.Namespace) -> tuple[list[str], list[str], int]:
+    """``(engines, presets, samples)`` of the options, each checked before any work (the
+    numbers against :data:`harness.bounds.BOUNDS`, as ``run``'s); ``ValueError`` names the
+    first bad one."""
     engines = _names(args.engines, ENGINE_NAMES, "--engines") or list(ENGINE_NAMES)
     # A preset's shown name (matched-bounce) selects its role for every engine.
     presets = [preset_role(None, name) for name in
                _names(args.preset, preset_choices(), "--preset")] or list(PRESET_ROLES)
     presets = list(dict.fromkeys(presets))
-    left_out = {} if args.preset else DEFAULT_LEFT_OUT
-    samples = args.samples or (QUICK_SAMPLES if args.quick else DEFAULT_SAMPLES)
-    if samples < 1:
-        print("impact-harness survey: --samples must be >= 1", file=sys.stderr)
+    samples = (QUICK_SAMPLES if args.quick else DEFAULT_SAMPLES) if args.samples is None \
+        else args.samples
+    for option, value in (("samples", samples), ("workers", args.workers),
+                          ("seed", args.seed)):
+        if value is not None:
+            bounds.check(f"--{option} {value}", option, value)
+    out = DEFAULT_OUT if args.out is None else Path(args.out)
+    problem = output_directory_problem(out)
+    if problem is not None:
+        raise ValueError(f"--out {out}: {problem}")
+    return engines, presets, samples
+
+
+def main(args: argparse.Namespace) -> int:
+    try:
+        engines, presets, samples = check_options(args)
+    except ValueError as error:
+        print(f"impact-harness survey: {error}", file=sys.stderr)
         return 2
+    left_out = {} if args.preset else DEFAULT_LEFT_OUT
     from harness.run.runner import parse_overrides
 
     try:
@@ -290,10 +309,6 @@ def main(args: argparse.Namespace) -> int:
         print(f"impact-harness survey: {error}", file=sys.stderr)
         return 2
     out = DEFAULT_OUT if args.out is None else args.out
-    problem = output_directory_problem(out)
-    if problem:  # before any work
-        print(f"impact-harness survey: --out {out}: {problem}", file=sys.stderr)
-        return 2
     try:
         populations = resolve_populations(args.populations)
     except ScenarioError as error:

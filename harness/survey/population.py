@@ -36,9 +36,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from harness import inputs
 from harness.scenarios.errors import NO_VALUE, OptionError, ScenarioError, suggest
 from harness.scenarios.reader import TableReader
-from harness.scenarios.schema import NAME_PATTERN, TAG_PATTERN
+from harness.scenarios.schema import BOUNDS, NAME_PATTERN, TAG_PATTERN
 
 #: The shipped populations, beside ``scenarios/`` at the repository root.
 POPULATION_DIR = Path(__file__).resolve().parent.parent.parent / "populations"
@@ -194,8 +195,9 @@ def _read_body(reader: TableReader, table, index: int, *, mass_from_ratio: bool)
         reader.keys(table, prefix, BODY_KEYS + ANY_SHAPE_KEYS, "a body")
     parameters = []
     for key in shape_keys:
-        if key == "sides":
-            value = _distribution(reader, table, key, prefix, low=3, integer=True)
+        if key == "sides":  # bounded as every knob is (harness/bounds.py)
+            low, high = BOUNDS["sides"].range()
+            value = _distribution(reader, table, key, prefix, low=low, high=high, integer=True)
         else:
             value = _distribution(reader, table, key, prefix, low=0.0, low_open=True)
         parameters.append((key, value))
@@ -293,14 +295,15 @@ def load_population(path) -> Population:
     """Read and check one population file."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        doc = inputs.parse_toml(inputs.read_text(path))
     except OSError as error:
         raise ScenarioError(f"cannot read the file: {error.strerror or error}", path=path) \
             from None
-    try:
-        doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:
         raise ScenarioError(f"not valid TOML: {error}", path=path) from None
+    except inputs.InputError as error:  # not a regular file, too large, not UTF-8, too deep
+        problem, _, allowed = str(error).partition("; allowed: ")
+        raise ScenarioError(problem, path=path, allowed=allowed or None) from None
     return parse_population(doc, path)
 
 

@@ -4,6 +4,7 @@ bit for bit, in task order; a task that fails or overruns inside a chunk costs o
 from __future__ import annotations
 
 import math
+import pickle
 import time
 
 import pytest
@@ -136,7 +137,11 @@ class FaultyEngine:
     and it takes the whole ``run_many`` with it."""
 
     def __init__(self, marked, fault):
-        self.real, self.marked, self.fault = load_engine("pymunk"), marked, fault
+        self.real, self.fault = load_engine("pymunk"), fault
+        self.marked = pickle.dumps(marked)  # a task run in a child process holds a copy
+
+    def _is_marked(self, scene):
+        return pickle.dumps(scene) == self.marked
 
     def __getattr__(self, name):
         return getattr(self.real, name)
@@ -147,12 +152,12 @@ class FaultyEngine:
         time.sleep(30)
 
     def run(self, scene, settings):
-        if scene is self.marked:
+        if self._is_marked(scene):
             self._trip()
         return self.real.run(scene, settings)
 
     def run_many(self, scenes, settings):
-        if any(scene is self.marked for scene in scenes):
+        if any(self._is_marked(scene) for scene in scenes):
             self._trip()
         return self.real.run_many(scenes, settings)
 
@@ -171,7 +176,8 @@ def test_an_engine_failure_inside_a_chunk_is_reported_and_the_others_are_kept(mo
                         lambda name: FaultyEngine(scenes[4], fault))
     delivered = {}
     outputs = run_tasks(runner.engine_task, tasks, workers=1, batch=runner.engine_chunk,
-                        group=runner.task_group, chunk_size=9, on_result=delivered.__setitem__)
+                        group=runner.task_group, chunk_size=9, on_result=delivered.__setitem__,
+                        time_limit=runner.task_time_limit, stopped=runner.stopped_task)
     expected = "error: time limit" if fault == "time limit" else "error: RuntimeError"
     assert outputs[4]["status"].startswith(expected)
     assert [without_times(out) for i, out in enumerate(outputs) if i != 4] == clean[:4] + clean[5:]

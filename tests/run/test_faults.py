@@ -59,6 +59,9 @@ def engine_outputs(outcome):
 
 
 def sweep_run(cache, **options):
+    # No time limit unless asked: the tasks then run in this process, where the tests count
+    # the calls (with a limit they run in a child process, which can be stopped).
+    options.setdefault("time_limit_s", None)
     return runner.run([load_scenario(SWEEP)], engines=("pymunk",), presets=("defaults",),
                       cache=cache, workers=1, log=None, **options)
 
@@ -501,18 +504,77 @@ def test_cache_command_info_prune_clear(tmp_path):
 # --------------------------------------------------------------------------------------------
 # Bounds on work
 # --------------------------------------------------------------------------------------------
-def test_an_engine_task_that_runs_too_long_is_stopped(monkeypatch):
+class StuckInC:
+    """An engine whose step never returns to Python: a regular expression backtracking
+    exponentially runs in C, where no signal handler (``SIGALRM``) ever runs."""
+
+    version = "stuck"
+
+    def run(self, scene, settings):
+        import re
+
+        re.match(r"(a+)+$", "a" * 60 + "b")
+
+    run_many = None
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_an_engine_task_stuck_in_c_is_stopped_and_the_run_goes_on(monkeypatch, workers):
     import harness.engines as engines_module
 
-    class Sleeper:
-        def run(self, scene, settings):
-            time.sleep(30)
+    real = engines_module.load_engine
+    monkeypatch.setattr(engines_module, "load_engine",
+                        lambda name: StuckInC() if name == "stuck" else real(name))
+    scene = load_scenario(DISK).scene(load_scenario(DISK).point_list()[0])
+    settings = real("pymunk").settings("defaults", {})
+    tasks = [{"engine": "pymunk", "settings": settings, "scene": scene, "time_limit_s": 30.0},
+             {"engine": "stuck", "settings": {}, "scene": scene, "time_limit_s": 1.0},
+             {"engine": "pymunk", "settings": settings, "scene": scene, "time_limit_s": 30.0}]
+    begin = time.monotonic()
+    outputs = runner._run_tasks(tasks, executor="local", workers=workers, scheduler=None,
+                                log=None)
+    assert time.monotonic() - begin < 20  # the stuck one alone would run for hours
+    assert outputs[1]["status"] == "error: time limit: stopped after 1 s (--task-time-limit)"
+    assert outputs[0]["status"] == outputs[2]["status"] == "ok"  # the others ran
+    assert outputs[0]["velocities"] == outputs[2]["velocities"]
 
-    monkeypatch.setattr(engines_module, "load_engine", lambda name: Sleeper())
-    output = runner.engine_task({"engine": "pymunk", "settings": {}, "scene": None,
-                                 "time_limit_s": 0.3})
-    # the limit's own status: a sleep that ran its 30 s would have no error at all
-    assert output["status"].startswith("error: time limit")
+
+def test_a_runaway_engine_is_stopped_within_seconds_of_its_limit(tmp_path):
+    """The issue's reproducer: pymunk with a billion solver iterations (beyond the bound,
+    raised for the test), a 3 s limit."""
+    begin = time.monotonic()
+    status, _, err = run_cli("run", DISK, "--engines", "pymunk", "--preset", "defaults",
+                             "--no-cache", "--set", "pymunk.iterations=1000000000",
+                             "--task-time-limit", "3", "--json", tmp_path / "r.json",
+                             env={"IMPACT_HARNESS_MAX_SOLVER_ITERATIONS": "1e10"})
+    assert time.monotonic() - begin < 30, err
+    records = read_results(tmp_path / "r.json").records
+    engine = [r for r in records if r.source != "analytic"]
+    assert [r.status for r in engine] == [
+        "error: time limit: stopped after 3 s (--task-time-limit)"]
+    assert all(r.status == "ok" for r in records if r.source == "analytic")
+
+
+def test_a_worker_that_dies_costs_its_task_only(monkeypatch):
+    import harness.engines as engines_module
+
+    class Crashes:
+        version = "crash"
+        run_many = None
+
+        def run(self, scene, settings):
+            os._exit(7)  # as an engine's segmentation fault ends the process
+
+    real = engines_module.load_engine
+    monkeypatch.setattr(engines_module, "load_engine",
+                        lambda name: Crashes() if name == "crash" else real(name))
+    scene = load_scenario(DISK).scene(load_scenario(DISK).point_list()[0])
+    settings = real("pymunk").settings("defaults", {})
+    tasks = [{"engine": name, "settings": settings, "scene": scene, "time_limit_s": 30.0}
+             for name in ("pymunk", "crash", "pymunk")]
+    outputs = runner._run_tasks(tasks, executor="local", workers=2, scheduler=None, log=None)
+    assert outputs[1]["status"] == "error: worker died (exit code 7)"
+    assert outputs[0]["status"] == outputs[2]["status"] == "ok"
 
 
 # --------------------------------------------------------------------------------------------

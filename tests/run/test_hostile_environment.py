@@ -222,8 +222,8 @@ def test_compare_and_report_refuse_results_not_of_this_format(tmp_path, capsys, 
     bad.write_text(json.dumps(document), encoding="utf-8")
     capsys.readouterr()
     assert cli.main(["compare", str(path), str(bad)]) == 2
-    out = capsys.readouterr().out
-    assert out.count("\n") == 1 and str(bad) in out
+    err = capsys.readouterr().err  # bad input: one line on stderr, as every command's
+    assert err.count("\n") == 1 and str(bad) in err
     assert cli.main(["report", "--results", str(bad), "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and str(bad) in err and not (tmp_path / "out").exists()

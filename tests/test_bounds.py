@@ -1,0 +1,109 @@
+"""One table of bounds for every knob, however it is set (issue 23 item 5): a scenario
+file's ``[engine_settings]``, ``--set``, the Python API, the command-line options and a
+population file all refuse the same values, with one line naming where the value came
+from, the key, the value and the allowed range (exit 2, before any work)."""
+
+from __future__ import annotations
+
+import pytest
+
+from harness import bounds, cli
+from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine
+from harness.engines.settings import EngineSettingsError
+from harness.scenarios import SCENARIO_DIR
+
+DISK = SCENARIO_DIR / "disk-direct.toml"
+POLYGONS = SCENARIO_DIR.parent / "populations" / "polygon-corner.toml"
+
+#: (setting, a value outside its bounds): the issue's reproducers.
+OUT_OF_BOUNDS_SETTINGS = [("time_step", 1e-8), ("max_steps", 10_000_000),
+                          ("iterations", 1_000_000_000), ("approach_steps", 1e12)]
+
+
+def test_every_preset_of_every_engine_is_within_the_bounds():
+    for name in ENGINE_NAMES:
+        try:
+            engine = load_engine(name)
+        except EngineNotInstalled:
+            continue
+        for preset in engine.presets:
+            for key, value in engine.settings(preset).items():
+                assert bounds.problem(key, value) is None, (name, preset, key, value)
+
+
+def no_work(monkeypatch):
+    def refuse(*args, **kwargs):
+        raise AssertionError("work started before the bounds were checked")
+
+    from harness.run import runner
+
+    monkeypatch.setattr(runner, "run", refuse)
+
+
+def one_line(capsys) -> str:
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1, err
+    return err
+
+
+@pytest.mark.parametrize("key,value", OUT_OF_BOUNDS_SETTINGS)
+def test_set_refuses_what_a_file_refuses(tmp_path, monkeypatch, capsys, key, value):
+    no_work(monkeypatch)
+    status = cli.main(["run", str(DISK), "--engines", "pymunk", "--no-cache",
+                       "--json", str(tmp_path / "r.json"), "--set", f"pymunk.{key}={value!r}"])
+    err = one_line(capsys)
+    assert status == 2
+    allowed = bounds.BOUNDS[key].allowed()
+    assert f"--set pymunk.{key}" in err and f"key {key!r}" in err and allowed in err
+
+    scenario = tmp_path / "scenario.toml"
+    scenario.write_text(DISK.read_text(encoding="utf-8")
+                        + f"\n[engine_settings.pymunk]\n{key} = {value!r}\n", encoding="utf-8")
+    assert cli.main(["validate", str(scenario)]) == 2
+    said = capsys.readouterr()
+    said = said.out + said.err
+    assert f"scenario.toml: engine_settings.pymunk.{key} = " in said and allowed in said
+
+    with pytest.raises(EngineSettingsError, match=f"setting '{key}' = .*out of range"):
+        load_engine("pymunk").settings("defaults", {key: value})
+
+
+@pytest.mark.parametrize("option,value", [("--samples", "1000000000"), ("--samples", "0"),
+                                          ("--workers", "0"), ("--workers", "100000"),
+                                          ("--seed", "-1"), ("--seed", "99999999999")])
+def test_survey_options_out_of_bounds_are_one_line_exit_2(tmp_path, capsys, option, value):
+    status = cli.main(["survey", "disk-disk", option, value, "--out", str(tmp_path / "s")])
+    err = one_line(capsys)
+    assert status == 2
+    knob = option.lstrip("-")
+    assert f"{option} {value}: {knob} = " in err and bounds.BOUNDS[knob].allowed() in err
+    assert not (tmp_path / "s").exists()
+
+
+@pytest.mark.parametrize("option,value", [("--workers", "100000"), ("--chunk-size", "0"),
+                                          ("--task-time-limit", "0"),
+                                          ("--task-time-limit", "1e9")])
+def test_run_options_out_of_bounds_are_one_line_exit_2(tmp_path, monkeypatch, capsys, option,
+                                                       value):
+    no_work(monkeypatch)
+    status = cli.main(["run", str(DISK), option, value, "--json", str(tmp_path / "r.json")])
+    err = one_line(capsys)
+    assert status == 2 and option in err
+
+
+def test_a_population_with_a_million_sides_is_refused(tmp_path, capsys):
+    population = tmp_path / "many-sides.toml"
+    population.write_text(POLYGONS.read_text(encoding="utf-8").replace(
+        "sides = { choice = [3, 5, 6, 8] }", "sides = 1000000"), encoding="utf-8")
+    status = cli.main(["survey", str(population), "--samples", "5", "--out",
+                       str(tmp_path / "s")])
+    err = one_line(capsys)
+    assert status == 2
+    assert "many-sides.toml: body.polygon.sides = 1000000" in err and "64" in err
+
+
+def test_a_bound_raised_through_the_environment_is_read_where_it_is_checked(monkeypatch):
+    assert bounds.problem("iterations", 20_000) is not None
+    monkeypatch.setenv("IMPACT_HARNESS_MAX_SOLVER_ITERATIONS", "1e5")
+    assert bounds.problem("iterations", 20_000) is None
+    assert bounds.problem("iterations", 2.5) is not None  # still an integer

@@ -1,0 +1,256 @@
+"""Fuzzing the command line with hostile input (issue 23): mutated scenario files,
+population files, command lines and results files, each through ``impact-harness``'s own
+``main`` in this process.
+
+Seeded and bounded (a fixed number of cases per kind, a time limit per case; about half a
+minute on the 2-core machine). Each case must end as a clean run (exit 0 or 1) or as bad
+input (exit 2, saying why on stderr): never a traceback, an internal error (exit 3) or a
+hang. A failure names the seed and the case, so it can be replayed alone.
+"""
+
+from __future__ import annotations
+
+import json
+import random
+import re
+import signal
+from pathlib import Path
+
+from harness import cli
+from harness.scenarios import SCENARIO_DIR
+
+ROOT = Path(__file__).resolve().parents[1]
+SEED = 20261128
+#: Seconds one case may take before it counts as a hang.
+CASE_LIMIT_S = 30
+
+#: Values that broke, or could break, a reader: huge, tiny, not finite, of the wrong type,
+#: nested, control characters, long.
+HOSTILE_VALUES = ["1e308", "-1e308", "1e-320", "nan", "inf", "-inf", "0", "-0.0", "-1",
+                  "1e12", "1000000000", "9" * 40, '"x"', '"\\u0000"', '"a\\nb"', "true", "[]",
+                  "{}", "[1, 2, 3]", "[" * 70 + "]" * 70, "{ a = 1 }", '"' + "x" * 5000 + '"']
+#: Scenario files whose mutants also go through ``run``: one point, quick to simulate.
+CHEAP = ("disk-direct.toml", "disk-oblique.toml", "two-sled-row1.toml", "matrix-rod-45.toml",
+         "rod-45-direct-plastic.toml", "disk-topspin.toml")
+NUMBER = re.compile(r"(?<![\w.\"])-?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?(?![\w.\"])")
+
+
+class Hang(Exception):
+    pass
+
+
+def _alarm(signum, frame):
+    raise Hang
+
+
+def run_main(argv: list[str], capsys) -> tuple[int, str, str]:
+    """``impact-harness ARGV`` in this process: (exit status, stdout, stderr)."""
+    previous = signal.signal(signal.SIGALRM, _alarm)
+    signal.setitimer(signal.ITIMER_REAL, CASE_LIMIT_S)
+    try:
+        try:
+            status = cli.main(argv)
+        except SystemExit as stop:  # argparse refusing an option
+            status = stop.code if isinstance(stop.code, int) else 2
+    except Hang:
+        status = "hang"
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+    said = capsys.readouterr()
+    return status, said.out, said.err
+
+
+def assert_clean(case: str, argv: list[str], status, out: str, err: str) -> None:
+    where = f"{case}: impact-harness {' '.join(argv)[:300]}"
+    assert status in (0, 1, 2), f"{where}: exit {status}\n{err[-600:]}"
+    assert "Traceback" not in out + err, f"{where}: a traceback\n{err[-600:]}"
+    assert "internal error" not in out + err, f"{where}: {err[-600:]}"
+    if status == 2:
+        assert (out + err).strip(), f"{where}: exit 2 without a word"
+
+
+def mutate_text(text: str, rng: random.Random) -> str:
+    """One to three edits of a TOML file's text: a number replaced by a hostile value, a line
+    dropped or repeated, bytes inserted, the text cut short."""
+    for _ in range(rng.randint(1, 3)):
+        kind = rng.choice(["number", "number", "number", "drop", "repeat", "insert", "cut"])
+        lines = text.split("\n")
+        if kind == "number":
+            spots = list(NUMBER.finditer(text))
+            if spots:
+                spot = rng.choice(spots)
+                text = text[:spot.start()] + rng.choice(HOSTILE_VALUES) + text[spot.end():]
+        elif kind == "drop" and len(lines) > 1:
+            del lines[rng.randrange(len(lines))]
+            text = "\n".join(lines)
+        elif kind == "repeat":
+            line = rng.randrange(len(lines))
+            lines.insert(line, lines[line])
+            text = "\n".join(lines)
+        elif kind == "insert":
+            at = rng.randrange(len(text) + 1)
+            text = text[:at] + rng.choice(["\x00", "[", "]]", "=", '"', "\\", "\n[[body]]\n",
+                                           "é", "\n[engine_settings.pymunk]\niterations = 0\n"]) \
+                + text[at:]
+        else:
+            text = text[:rng.randrange(len(text) + 1)]
+    return text
+
+
+def test_mutated_scenario_files(tmp_path, capsys):
+    rng = random.Random(SEED)
+    sources = sorted(SCENARIO_DIR.glob("*.toml"))
+    files = []
+    for number in range(200):
+        source = rng.choice(sources)
+        path = tmp_path / f"m{number}-{source.name}"
+        text = mutate_text(source.read_text(encoding="utf-8"), rng)
+        path.write_bytes(text.encode("utf-8", "surrogatepass") if rng.random() < 0.9
+                         else b"\xff\xfe" + text.encode("utf-8"))
+        files.append(path)
+    valid = []
+    for path in files:  # one by one: each its own line, or none
+        argv = ["validate", str(path)]
+        status, out, err = run_main(argv, capsys)
+        assert_clean(f"seed {SEED}, {path.name}", argv, status, out, err)
+        if status == 0:
+            valid.append(path)
+    # a few through `run` (the laws, one engine, no cache), those that passed `validate`
+    # and some that did not: bad ones refused, good ones run
+    cheap = [p for p in files if p.name.split("-", 1)[1] in CHEAP]
+    small = [p for p in cheap if p in valid][:8] + [p for p in cheap if p not in valid][:4]
+    for number, path in enumerate(small):
+        argv = ["run", str(path), "--engines", "pymunk", "--preset", "defaults", "--no-cache",
+                "--json", str(tmp_path / f"r{number}.json")]
+        assert_clean(f"seed {SEED}, run {path.name}", argv, *run_main(argv, capsys))
+
+
+def test_mutated_population_files(tmp_path, capsys):
+    rng = random.Random(SEED + 1)
+    sources = sorted((ROOT / "populations").glob("*.toml"))
+    for number in range(16):
+        source = rng.choice(sources)
+        path = tmp_path / f"p{number}-{source.name}"
+        path.write_text(mutate_text(source.read_text(encoding="utf-8"), rng), encoding="utf-8")
+        argv = ["survey", str(path), "--samples", "3", "--engines", "pymunk", "--preset",
+                "defaults", "--workers", "1", "--no-figures", "--out", str(tmp_path / "s")]
+        assert_clean(f"seed {SEED + 1}, {path.name}", argv, *run_main(argv, capsys))
+
+
+#: Options and hostile values for the command-line fuzz; a command always names one small
+#: scenario or population and one engine, so a line that is accepted runs in a second.
+OPTION_VALUES = {
+    "--workers": ["0", "-1", "1", "2", "1e9", "x", "99999999999999999999"],
+    "--chunk-size": ["0", "1", "-5", "1000000000"],
+    "--task-time-limit": ["0", "-1", "nan", "inf", "1e300", "30"],
+    "--set": ["pymunk.iterations=0", "pymunk.iterations=1e9", "pymunk.time_step=1e-8",
+              "pymunk.max_steps=10000000", "pymunk.approach_steps=1e12", "pymunk.bogus=1",
+              "bogus.x=1", "pymunk.iterations=[[[[1]]]]", "pymunk.time_step=\"x\"",
+              "pymunk.iterations=20", "=", "pymunk.=1"],
+    "--preset": ["defaults", "bogus", "all", ""],
+    "--json": ["{tmp}/a.json", "{tmp}", "/dev/null", "/proc/x/y.json", "{tmp}/" + "a" * 300,
+               "{tmp}/nested/new/r.json"],
+    "--samples": ["0", "-3", "1000000000", "2", "1e3"],
+    "--seed": ["-1", "0", "4294967296", "x"],
+    "--out": ["{tmp}/out", "/dev/null", "{tmp}/a-file", "{tmp}/" + "b" * 300],
+    "--engines": ["bogus", "pymunk", "pymunk,bogus", ""],
+}
+COMMAND_OPTIONS = {
+    "run": ["--workers", "--chunk-size", "--task-time-limit", "--set", "--preset", "--json"],
+    "survey": ["--samples", "--seed", "--workers", "--out", "--engines"],
+    "validate": [],
+}
+
+
+def test_hostile_command_lines(tmp_path, capsys):
+    rng = random.Random(SEED + 2)
+    (tmp_path / "a-file").write_text("x")
+    for number in range(60):
+        command = rng.choice(sorted(COMMAND_OPTIONS))
+        argv = [command]
+        if command == "run":
+            argv += [str(SCENARIO_DIR / "disk-direct.toml"), "--engines", "pymunk", "--no-cache"]
+        elif command == "survey":
+            argv += ["disk-disk", "--no-figures"]
+        else:
+            argv += [rng.choice([str(SCENARIO_DIR / "disk-direct.toml"), "/dev/zero",
+                                 str(tmp_path), "/nonexistent.toml", "x" * 5000])]
+        chosen = rng.sample(COMMAND_OPTIONS[command], k=min(len(COMMAND_OPTIONS[command]),
+                                                            rng.randint(1, 3)))
+        for option in chosen:
+            argv += [option, rng.choice(OPTION_VALUES[option]).format(tmp=tmp_path)]
+        if command == "run" and "--json" not in argv:
+            argv += ["--json", str(tmp_path / f"run{number}.json")]
+        if command == "survey":
+            if "--samples" not in argv or not _small(argv):
+                argv = _with(argv, "--samples", "2")
+            if "--out" not in argv:
+                argv += ["--out", str(tmp_path / "out")]
+            if "--engines" not in argv:
+                argv += ["--engines", "pymunk"]
+        assert_clean(f"seed {SEED + 2}, case {number}", argv, *run_main(argv, capsys))
+
+
+def _small(argv: list[str]) -> bool:
+    """Whether the ``--samples`` of a survey's command line is refused or small."""
+    text = argv[argv.index("--samples") + 1]
+    try:
+        return not 100 < int(text) <= 1_000_000
+    except ValueError:
+        return True
+
+
+def _with(argv: list[str], option: str, value: str) -> list[str]:
+    if option in argv:
+        at = argv.index(option)
+        return argv[:at] + [option, value] + argv[at + 2:]
+    return argv + [option, value]
+
+
+HOSTILE_JSON = [None, True, -1, 1e308, "x", "", [], {}, [[[[[]]]]], {"a": {"b": {}}},
+                "\u0000", 10**30]
+
+
+def mutate_json(document, rng: random.Random):
+    """A copy of a results file's document with one to three leaves or keys damaged."""
+    document = json.loads(json.dumps(document))
+    for _ in range(rng.randint(1, 3)):
+        parent, key = None, None
+        node = document
+        for _ in range(rng.randint(1, 6)):  # walk down to a random place
+            if isinstance(node, dict) and node:
+                key = rng.choice(sorted(node))
+            elif isinstance(node, list) and node:
+                key = rng.randrange(len(node))
+            else:
+                break
+            parent, node = node, node[key]
+        if parent is None:
+            continue
+        if isinstance(parent, dict) and rng.random() < 0.3:
+            del parent[key]
+        else:
+            parent[key] = rng.choice(HOSTILE_JSON)
+    return document
+
+
+def test_mutated_results_files(tmp_path, capsys):
+    good = tmp_path / "good.json"
+    argv = ["run", str(SCENARIO_DIR / "disk-direct.toml"), "--engines", "pymunk", "--preset",
+            "defaults", "--no-cache", "--json", str(good)]
+    assert run_main(argv, capsys)[0] == 0
+    document = json.loads(good.read_text(encoding="utf-8"))
+    rng = random.Random(SEED + 3)
+    for number in range(60):
+        path = tmp_path / f"bad{number}.json"
+        choice = rng.random()
+        if choice < 0.8:
+            path.write_text(json.dumps(mutate_json(document, rng)), encoding="utf-8")
+        elif choice < 0.9:
+            text = good.read_text(encoding="utf-8")
+            path.write_text(text[:rng.randrange(len(text))], encoding="utf-8")
+        else:
+            path.write_text("[" * 100_000 + "]" * 100_000, encoding="utf-8")
+        argv = ["compare", str(good), str(path), "--csv", str(tmp_path / "c.csv")]
+        assert_clean(f"seed {SEED + 3}, case {number}", argv, *run_main(argv, capsys))
