@@ -19,6 +19,8 @@ from . import fitting, metric
 from .records import MeasuredImpacts
 
 QUANTILES = (0.25, 0.5, 0.75, 0.9)
+#: Two laws whose objectives differ by less than this fraction are the same in practice.
+PRACTICAL_BAND = 0.01
 
 
 def error_summary(errors: np.ndarray) -> dict:
@@ -48,6 +50,7 @@ class LawResult:
     errors: dict  # error_summary of the normalized error at the fitted (μ, e)
     collision_types: dict[int, int]  # Routh's diagram: drops per collision type at the fit
     unsolved_cells: int
+    per_drop: dict  # quartiles of the drops' own best μ and e (aggregates only)
 
 
 # What the forked workers read (set before forking, never pickled).
@@ -59,7 +62,12 @@ def _fit_law(item: tuple[str, str, int, int]) -> LawResult:
     drop_errors = _SHARED["drop_errors"]
     table = fitting.error_table(drop_errors, law, _SHARED["mus"], _SHARED["es"])
     fitted = fitting.fit(drop_errors, table, objective)
+    unsolved = table.unsolved
     held = fitting.held_out(table, objective, seed=seed)
+    own = fitting.per_drop_fits(table, objective)
+    per_drop = {name: {f"q{q}": float(np.percentile(own[:, k], q)) for q in (25, 50, 75)}
+                for k, name in enumerate(("mu", "e"))}
+    del table
     boot = fitting.bootstrap(drop_errors, fitted, replicates=replicates, seed=seed)
     errors, status = drop_errors(law, fitted.mu, fitted.e)
     normalized = np.where(status == 0, errors["median-error"], np.nan)
@@ -68,7 +76,7 @@ def _fit_law(item: tuple[str, str, int, int]) -> LawResult:
                             fitted.e, law=law, delta=space.delta)
     types, counts = np.unique(result.collision_type[result.status == 0], return_counts=True)
     return LawResult(law, objective, fitted, held, boot, error_summary(normalized),
-                     {int(t): int(c) for t, c in zip(types, counts)}, table.unsolved)
+                     {int(t): int(c) for t, c in zip(types, counts)}, unsolved, per_drop)
 
 
 def fit_laws(impacts: MeasuredImpacts, objective: str, laws=pi.LAWS, *, replicates: int = 200,
@@ -99,6 +107,23 @@ class LawDifference:
     prediction_gap_median: float  # median over drops of ‖v̂_A − v̂_B‖ / ‖v‖ (centre of mass)
     prediction_gap_q99: float
     measurement_scale: float  # median normalized error of the better law: the data's noise
+    objective_value: float  # objective(B): the scale of the practical band
+
+    def verdict(self, band: float | None = None) -> str:
+        """Whether the data tell the laws apart, decided with a stated band: a difference
+        whose whole interval lies within ``band`` × objective(B) is no practical difference."""
+        band = PRACTICAL_BAND if band is None else band
+        low, high = self.interval.low, self.interval.high
+        if low <= 0 <= high:
+            return (f"the data do not tell {self.law_a} from {self.law_b} (the interval "
+                    "contains 0)")
+        limit = band * abs(self.objective_value)
+        better = self.law_a if high < 0 else self.law_b
+        if -limit <= low and high <= limit:
+            return (f"{better} is better by a resolvable amount, but the whole interval lies "
+                    f"within {band:.0%} of the objective: no practical difference")
+        return (f"{better} is better: the interval excludes 0 and exceeds {band:.0%} of the "
+                "objective")
 
 
 def compare_laws(impacts: MeasuredImpacts, objective: str, fit_a: fitting.Fit,
@@ -125,7 +150,7 @@ def compare_laws(impacts: MeasuredImpacts, objective: str, fit_a: fitting.Fit,
                          float(metric.aggregate(objective, a) - metric.aggregate(objective, b)),
                          fitting.Interval(*np.percentile(differences, tails)), confidence,
                          float(np.nanmedian(gap)), float(np.nanquantile(gap, 0.99)),
-                         float(better))
+                         float(better), float(metric.aggregate(objective, b)))
 
 
 def _speeds(impacts: MeasuredImpacts, fitted: fitting.Fit) -> np.ndarray:
@@ -149,3 +174,18 @@ def routh_position(impacts: MeasuredImpacts, mu: float) -> dict:
         "coupling_opposes_slip": int(np.count_nonzero(space.mnt * np.sign(space.vt) < 0)),
         "drops": len(impacts),
     }
+
+
+def law_gap(impacts: MeasuredImpacts, law_a: str, law_b: str, mus, e: float) -> dict:
+    """How far two laws' predictions lie apart at the same (μ, e), per μ: the median and
+    99th percentile over drops of ‖v̂_A − v̂_B‖ / ‖v‖ (centre of mass, measured |v|).
+    Where this is far below the measurement error, no fit of these data can separate them."""
+    from .predict import predict
+
+    mus = np.asarray(mus, dtype=float)
+    a = predict(impacts, law_a, mus[:, None], e).speeds_after
+    b = predict(impacts, law_b, mus[:, None], e).speeds_after
+    gap = metric.normalized_error(a, b) * np.hypot(b[..., 0], b[..., 1]) / np.hypot(
+        impacts.speeds_after[:, 0], impacts.speeds_after[:, 1])
+    return {float(mu): {"median": float(np.nanmedian(g)), "q99": float(np.nanquantile(g, 0.99))}
+            for mu, g in zip(mus, gap)}

@@ -23,6 +23,7 @@ import planar_impact as pi
 from . import analysis, fazeli, kharaz, metric, registry
 
 KHARAZ_ANGLES = (10, 20, 30, 40, 50, 60, 70, 80)
+GAP_MUS = (0.05, 0.1, 0.2, 0.3, 0.5, 1.0)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -55,6 +56,10 @@ def main(args) -> int:
     if args.workers is not None and args.workers < 1:
         print(f"impact-harness experiments: --workers {args.workers}: at least 1",
               file=sys.stderr)
+        return 2
+    if args.json and Path(args.json).exists() and not Path(args.json).is_file():
+        print(f"impact-harness experiments: --json {args.json}: exists and is not a regular "
+              "file (only a regular file is written over)", file=sys.stderr)
         return 2
     output: dict = {"objective": args.objective, "objective_means": metric.OBJECTIVES[
         args.objective], "post_speeds": args.post_speeds}
@@ -109,6 +114,13 @@ def fazeli_section(data: fazeli.FazeliData, args) -> dict:
               f"| {result.held_out.held_out:.4g} | {boot.mu.low:.3f}–{boot.mu.high:.3f}{clipped} "
               f"| {boot.e.low:.3f}–{boot.e.high:.3f} | {result.errors['q50']:.3f} "
               f"| {result.errors['q90']:.3f} | {types} |")
+    print("\nEach drop's own best (μ, e) on the grid, quartiles (a single drop rarely pins "
+          "both):\n")
+    for law, result in laws.items():
+        own = result.per_drop
+        print(f"- {law}: μ {own['mu']['q25']:.2f} / {own['mu']['q50']:.2f} / "
+              f"{own['mu']['q75']:.2f}; e {own['e']['q25']:.2f} / {own['e']['q50']:.2f} / "
+              f"{own['e']['q75']:.2f}")
     difference = analysis.compare_laws(target, args.objective, laws["poisson"].fit,
                                        laws["stronge"].fit, seed=args.seed)
     print(f"\n### Poisson against Stronge\n\nobjective(poisson) − objective(stronge) = "
@@ -118,9 +130,12 @@ def fazeli_section(data: fazeli.FazeliData, args) -> dict:
           f"{difference.prediction_gap_median:.2%} of |v| (median drop), "
           f"{difference.prediction_gap_q99:.2%} (99th percentile), against a median error of "
           f"{difference.measurement_scale:.1%} of either law.")
-    verdict = ("the data do not tell them apart" if difference.interval.low <= 0
-               <= difference.interval.high else "the interval excludes 0")
-    print(f"Verdict: {verdict}.")
+    print(f"Verdict: {difference.verdict()}.")
+    fixed_e = laws["poisson"].fit.e
+    gaps = analysis.law_gap(target, "poisson", "stronge", GAP_MUS, fixed_e)
+    print(f"At the same settings (e {fixed_e:.3f}) their predictions differ by (median / 99th "
+          "percentile of drops, % of |v|): " + "; ".join(
+              f"μ {mu:g}: {g['median']:.2%} / {g['q99']:.2%}" for mu, g in gaps.items()))
     routh = analysis.routh_position(target, laws["poisson"].fit.mu)
     print("\n### Where the drops lie on Routh's diagram (Poisson's fitted μ)\n")
     print("incidence |v_t|/|v_n| quartiles " + ", ".join(
@@ -130,7 +145,8 @@ def fazeli_section(data: fazeli.FazeliData, args) -> dict:
         " Collision types (Routh's regions) per law in the table above.")
     return {"provenance": data.provenance(), "paper_models": models,
             "laws": {law: _law_dict(result) for law, result in laws.items()},
-            "poisson_vs_stronge": difference, "routh": routh, "fit_seconds": seconds}
+            "poisson_vs_stronge": difference, "poisson_stronge_gap": gaps, "routh": routh,
+            "fit_seconds": seconds}
 
 
 def _law_dict(result: analysis.LawResult) -> dict:
@@ -139,7 +155,8 @@ def _law_dict(result: analysis.LawResult) -> dict:
             "bootstrap": {"replicates": boot.replicates, "confidence": boot.confidence,
                           "mu": boot.mu, "e": boot.e, "value": boot.value, "step": boot.step,
                           "at_window_edge": boot.at_window_edge},
-            "errors": result.errors, "collision_types": result.collision_types}
+            "errors": result.errors, "collision_types": result.collision_types,
+            "per_drop_fits": result.per_drop, "unsolved_cells": result.unsolved_cells}
 
 
 def kharaz_section() -> dict:

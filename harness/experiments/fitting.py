@@ -121,6 +121,15 @@ def _finer(values: np.ndarray, index: int, refine: int) -> np.ndarray:
     return np.round(np.arange(low, high + step / 2, step), 12)
 
 
+def per_drop_fits(table: ErrorTable, objective: str) -> np.ndarray:
+    """(N, 2): each drop's own best (μ, e) on the grid (first minimum in (μ, e) order).
+    A single drop rarely pins both: the spread of these is the data's, not the fit's."""
+    per_drop = table.errors[objective].reshape(-1, table.errors[objective].shape[-1])
+    cells = np.argmin(np.where(np.isnan(per_drop), np.inf, per_drop), axis=0)
+    rows, cols = np.divmod(cells, table.es.size)
+    return np.stack([table.mus[rows], table.es[cols]], axis=1)
+
+
 @dataclass(frozen=True)
 class HeldOut:
     folds: int

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import planar_impact as pi
-from harness.experiments import analysis, fazeli, metric, registry
+from harness.experiments import analysis, fazeli, fitting, metric, registry
 
 REAL_DIR = os.environ.get(registry.FAZELI_2017.env_var)
 needs_real = pytest.mark.skipif(
@@ -126,3 +126,14 @@ def test_real_files_reproduce_the_papers_median_errors():
         change = speeds - impacts.speeds_before
         coefficients = np.linalg.lstsq(basis[0], change[0], rcond=None)[0]
         np.testing.assert_allclose(basis[0] @ coefficients, change[0], atol=1e-9)
+
+
+def test_the_law_verdict_decides_with_a_stated_band():
+    def difference(low, high):
+        return analysis.LawDifference("poisson", "stronge", (low + high) / 2,
+                                      fitting.Interval(low, high), 0.95, 0.0, 0.0, 0.4, 1.0)
+
+    assert "do not tell" in difference(-0.001, 0.002).verdict()
+    assert "no practical difference" in difference(-0.009, -0.001).verdict()
+    assert difference(-0.05, -0.02).verdict().startswith("poisson is better")
+    assert difference(0.02, 0.05).verdict().startswith("stronge is better")
