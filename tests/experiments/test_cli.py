@@ -30,3 +30,35 @@ def test_a_data_path_that_is_no_directory_is_bad_input(tmp_path, capsys):
 def test_bad_options_are_refused_before_any_work(capsys):
     assert cli.main(["experiments", "--replicates", "3"]) == 2
     assert "--replicates 3" in capsys.readouterr().err
+
+
+def test_the_json_holds_aggregates_only(synthetic_copy, tmp_path, monkeypatch, capsys):
+    """The Fazeli data carry no licence: nothing per drop may leave the command. The
+    synthetic copy stands in for the real files (their hashes differ, so the check is
+    skipped here only)."""
+    import json
+
+    from harness.experiments import fazeli
+
+    directory, truth = synthetic_copy
+    real_load = fazeli.load
+    monkeypatch.setattr(fazeli, "load", lambda path: real_load(path, check_hashes=False))
+    out = tmp_path / "experiments.json"
+    assert cli.main(["experiments", "--data", str(directory), "--replicates", "10",
+                     "--workers", "1", "--objective", "impulse", "--json", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "### Every law fitted: objective impulse" in printed
+    document = json.loads(out.read_text())
+    assert document["objective"] == "impulse"
+    section = document["fazeli2017"]
+    assert set(section["laws"]) == {"newton", "poisson", "stronge", "stronge-paper",
+                                    "newton-lcp"}
+
+    def longest_list(value) -> int:
+        if isinstance(value, dict):
+            return max((longest_list(v) for v in value.values()), default=0)
+        if isinstance(value, list):
+            return max([len(value)] + [longest_list(v) for v in value])
+        return 0
+
+    assert longest_list(section) < truth["drops"] / 10
