@@ -49,6 +49,7 @@ class FazeliData:
     raw_flags: np.ndarray  # (2000, 6) bool, columns as registry.FAZELI_2017.quality_flags
     hashes: dict[str, str]  # file name -> SHA-256 (empty when not checked)
     directory: Path
+    pre_impact_angles: np.ndarray  # (N,) θ of states_i (the Jacobians are of an earlier pose)
 
     def flag_counts(self) -> dict[str, int]:
         names = [name for name, _ in registry.FAZELI_2017.quality_flags]
@@ -131,7 +132,7 @@ def load(directory: Path, check_hashes: bool = True) -> FazeliData:
                                    f"not the published offset {expected}")
     impacts = MeasuredImpacts("fazeli2017", mass_matrix(), before[:, 3:6].copy(),
                               after[:, 3:6].copy(), wn, wt, clean + 1)
-    return FazeliData(impacts, model_speeds, flags, hashes, directory)
+    return FazeliData(impacts, model_speeds, flags, hashes, directory, before[:, 2].copy())
 
 
 def without_post_offset(impacts: MeasuredImpacts) -> MeasuredImpacts:
