@@ -44,6 +44,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=0, help="seed of folds and bootstrap")
     parser.add_argument("--workers", type=int, default=None,
                         help="forked workers for the law fits (default: the local cores)")
+    parser.add_argument("--engines", default="all",
+                        help="engines for the Kharaz curves: 'all' (the installed ones), "
+                             "'none', or names separated by commas")
     parser.add_argument("--json", metavar="PATH", default=None,
                         help="also write the aggregates (with the data's SHA-256) as JSON")
 
@@ -56,6 +59,15 @@ def main(args) -> int:
     if args.workers is not None and args.workers < 1:
         print(f"impact-harness experiments: --workers {args.workers}: at least 1",
               file=sys.stderr)
+        return 2
+    from harness.engines import ENGINE_NAMES
+
+    engines = (list(ENGINE_NAMES) if args.engines == "all" else [] if args.engines == "none"
+               else [name.strip() for name in args.engines.split(",") if name.strip()])
+    unknown = [name for name in engines if name not in ENGINE_NAMES]
+    if unknown:
+        print(f"impact-harness experiments: --engines: unknown {', '.join(unknown)}; allowed: "
+              f"all, none or {', '.join(ENGINE_NAMES)}", file=sys.stderr)
         return 2
     if args.json and Path(args.json).exists() and not Path(args.json).is_file():
         print(f"impact-harness experiments: --json {args.json}: exists and is not a regular "
@@ -76,6 +88,7 @@ def main(args) -> int:
         output["fazeli2017"] = fazeli_section(data, args)
     output["ellipse_polygons"] = ellipse_section(data)
     output["kharaz2001"] = kharaz_section()
+    output["kharaz2001"]["engines"] = kharaz_engines_section(engines)
     if args.json:
         Path(args.json).write_text(json.dumps(output, indent=1, default=_plain) + "\n",
                                    encoding="utf-8")
@@ -222,6 +235,36 @@ def kharaz_section() -> dict:
                              "rebound_deg": c.rebound_deg, "spin": c.spin}
                        for law, c in curves.items()},
             "points": kharaz.POINTS, "uncertainty": kharaz.UNCERTAINTY}
+
+
+def kharaz_engines_section(engines: list[str]) -> list:
+    """The Kharaz curves through each engine and preset; flagged runs show their reason."""
+    from harness.engines import EngineNotInstalled, load_engine, preset_label
+
+    from . import engine_curves
+
+    if not engines:
+        return []
+    angles = np.array(KHARAZ_ANGLES, dtype=float)
+    print("\n### The Kharaz curves through the engines (e_t / rebound° / spin rad/s; a flagged "
+          "run shows the check it failed)\n")
+    print("| engine | preset | " + " | ".join(f"{a:.0f}°" for a in angles) + " |\n|---|---|"
+          + "---|" * angles.size)
+    results = []
+    for name in engines:
+        try:
+            engine = load_engine(name)
+        except EngineNotInstalled as missing:
+            print(f"| {name} | — | not installed: {missing} |")
+            continue
+        for preset in engine.presets:
+            curves = engine_curves.engine_curves(engine, preset, angles)
+            cells = [f"{curves.tangential_restitution[k]:.3f} / {curves.rebound_deg[k]:.1f} / "
+                     f"{curves.spin[k]:.0f}" if verdict == "ok" else f"flagged: {verdict}"
+                     for k, verdict in enumerate(curves.verdicts)]
+            print(f"| {name} | {preset_label(name, preset)} | " + " | ".join(cells) + " |")
+            results.append(curves)
+    return results
 
 
 def _plain(value):
