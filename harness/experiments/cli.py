@@ -85,7 +85,7 @@ def main(args) -> int:
         print(f"impact-harness experiments: {invalid}", file=sys.stderr)
         return 2
     if data is not None:
-        output["fazeli2017"] = fazeli_section(data, args)
+        output["fazeli2017"] = fazeli_section(data, args, engines)
     output["ellipse_polygons"] = ellipse_section(data)
     output["kharaz2001"] = kharaz_section()
     output["kharaz2001"]["engines"] = kharaz_engines_section(engines)
@@ -95,7 +95,7 @@ def main(args) -> int:
     return 0
 
 
-def fazeli_section(data: fazeli.FazeliData, args) -> dict:
+def fazeli_section(data: fazeli.FazeliData, args, engines: list[str]) -> dict:
     impacts = data.impacts
     print(f"## Fazeli et al. 2017: {len(impacts)} processed drops of {fazeli.RAW_DROPS}")
     for name, digest in data.hashes.items():
@@ -157,7 +157,9 @@ def fazeli_section(data: fazeli.FazeliData, args) -> dict:
         + f"; μ|m_nt|/m_nn {', '.join(f'{k} {v:.4f}' for k, v in routh['mu_coupling'].items())}"
         f"; m_nt opposes the slip in {routh['coupling_opposes_slip']} of {routh['drops']} drops."
         " Collision types (Routh's regions) per law in the table above.")
+    engine_results = drops_engines_section(engines, data, target, laws["poisson"].fit)
     return {"provenance": data.provenance(), "paper_models": models,
+            "engines_on_drops": engine_results,
             "laws": {law: _law_dict(result) for law, result in laws.items()},
             "poisson_vs_stronge": difference, "poisson_stronge_gap": gaps, "routh": routh,
             "fit_seconds": seconds}
@@ -171,6 +173,43 @@ def _law_dict(result: analysis.LawResult) -> dict:
                           "at_window_edge": boot.at_window_edge},
             "errors": result.errors, "collision_types": result.collision_types,
             "per_drop_fits": result.per_drop, "unsolved_cells": result.unsolved_cells}
+
+
+def drops_engines_section(engines: list[str], data: fazeli.FazeliData, target,
+                          fit) -> list[dict]:
+    """Every engine and preset on every drop at Poisson's fitted (μ, e)."""
+    from harness.engines import EngineNotInstalled, load_engine, preset_label
+
+    from . import drops_engines
+
+    if not engines:
+        return []
+    thetas, residual = drops_engines.jacobian_angles(target, data.pre_impact_angles)
+    print(f"\n### The engines on the drops (μ {fit.mu:.3f}, e {fit.e:.3f}: Poisson's fit)\n")
+    print(f"Each drop a placed {drops_engines.VERTICES}-gon at the angle of its published "
+          f"Jacobian (contact within {residual.max() * 1e3:.1g} mm of it); flagged runs are "
+          "counted with their reason, never scored.\n")
+    print("| engine | preset | single impacts | flagged (reason: drops) | median error | "
+          "q90 error |\n|---|---|---:|---|---:|---:|")
+    results = []
+    for name in engines:
+        try:
+            engine = load_engine(name)
+        except EngineNotInstalled as missing:
+            print(f"| {name} | — | — | not installed: {missing} | | |")
+            continue
+        for preset in engine.presets:
+            result = drops_engines.run_drops(engine, preset, target, thetas, fit.mu, fit.e)
+            counts = dict(result["verdicts"])
+            ok = counts.pop("ok", 0)
+            flagged = ", ".join(f"{k}: {v}" for k, v in counts.items()) or "none"
+            errors = result["errors"]
+            median = "—" if not errors["drops"] else f"{errors['q50']:.3f}"
+            q90 = "—" if not errors["drops"] else f"{errors['q90']:.3f}"
+            print(f"| {name} | {preset_label(name, preset)} | {ok} | {flagged} | {median} "
+                  f"| {q90} |")
+            results.append(result)
+    return results
 
 
 def ellipse_section(data: fazeli.FazeliData | None) -> dict:

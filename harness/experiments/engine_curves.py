@@ -38,7 +38,8 @@ def scene(incidence_deg: float):
     return Scene((body,), kharaz.E, kharaz.MU, ground=True, name=f"kharaz-{incidence_deg:g}")
 
 
-def _verdict(run, scene_) -> str:
+def judged(run, scene_) -> str:
+    """"ok" for a run judged a single impact, else the first failing check's name."""
     from harness.run import verdicts
     from harness.scene.geometry import impact_problem, scene_contact
 
@@ -58,7 +59,7 @@ def engine_curves(engine, preset: str, incidence_deg) -> EngineCurves:
     angles = np.atleast_1d(np.asarray(incidence_deg, dtype=float))
     scenes = [scene(float(a)) for a in angles]
     runs = engine.run_many(scenes, preset=preset)
-    names = tuple(_verdict(run, s) for run, s in zip(runs, scenes))
+    names = tuple(judged(run, s) for run, s in zip(runs, scenes))
     after = np.array([np.asarray(run.u_after, dtype=float)[:3] for run in runs])
     after[np.array(names) != "ok"] = np.nan
     before_x = kharaz.SPEED * np.sin(np.radians(angles))

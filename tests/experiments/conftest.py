@@ -43,6 +43,7 @@ def write_synthetic(directory, drops: int = 240, flagged: int = 40, noise: float
         after[i] = before[i] + result.delta_u
     after += rng.normal(0.0, noise, after.shape) * np.array([1.0, 1.0, 1 / 0.03])
     positions = np.zeros((drops, 3))
+    positions[:, 2] = theta + rng.normal(0.0, 0.02, drops)  # the real θ differs a frame's worth
     states_i = np.hstack([positions, before])
     published = after + np.array([0.0, fazeli.POST_VY_OFFSET, 0.0])
     states_f = np.hstack([positions, published])

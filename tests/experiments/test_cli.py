@@ -45,9 +45,11 @@ def test_the_json_holds_aggregates_only(synthetic_copy, tmp_path, monkeypatch, c
     monkeypatch.setattr(fazeli, "load", lambda path: real_load(path, check_hashes=False))
     out = tmp_path / "experiments.json"
     assert cli.main(["experiments", "--data", str(directory), "--replicates", "10",
-                     "--workers", "1", "--objective", "impulse", "--json", str(out)]) == 0
+                     "--workers", "1", "--objective", "impulse", "--engines", "pymunk",
+                     "--json", str(out)]) == 0
     printed = capsys.readouterr().out
     assert "### Every law fitted: objective impulse" in printed
+    assert "### The engines on the drops" in printed and "| pymunk | accurate | " in printed
     document = json.loads(out.read_text())
     assert document["objective"] == "impulse"
     section = document["fazeli2017"]
