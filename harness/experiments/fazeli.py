@@ -61,10 +61,11 @@ class FazeliData:
 
 def _loadmat(path: Path) -> dict:
     import scipy.io  # the field's standard reader of MAT-5 files (no code is run)
+    from scipy.io.matlab import MatReadError
 
     try:
         return scipy.io.loadmat(path)
-    except (ValueError, TypeError, OSError) as error:
+    except (MatReadError, ValueError, TypeError, OSError) as error:
         raise registry.DataInvalid(f"{path}: not a readable MAT-5 file ({error})") from None
 
 

@@ -163,3 +163,12 @@ def test_real_files_poisson_and_stronge_fit_alike_and_hold_out():
                                        results["stronge"].fit, replicates=200)
     verdict = difference.verdict()
     assert "do not tell" in verdict or "no practical difference" in verdict, verdict
+
+
+def test_a_file_that_is_no_mat_file_is_bad_input(tmp_path, synthetic_copy):
+    directory, _ = synthetic_copy
+    for name in ("v_models.mat", "ellipse_uniform.mat"):
+        shutil.copy(directory / name, tmp_path / name)
+    (tmp_path / "data_ellipse.mat").write_bytes(b"not a MAT file at all" * 10)
+    with pytest.raises(registry.DataInvalid, match="data_ellipse.mat"):
+        fazeli.load(tmp_path, check_hashes=False)
