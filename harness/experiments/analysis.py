@@ -161,8 +161,9 @@ def _speeds(impacts: MeasuredImpacts, fitted: fitting.Fit) -> np.ndarray:
 
 def routh_position(impacts: MeasuredImpacts, mu: float) -> dict:
     """Where the drops lie on Routh's diagram beside the collision types of each law's fit:
-    the incidence ratio |v_t|/|v_n|, the coupling μ|m_nt|/m_nn (the slope of the sliding
-    line's normal component against m_nn) and how many drops have m_nt opposing the slip."""
+    the incidence ratio |v_t|/|v_n|, the coupling μ|m_nt|/m_nn (how much a sliding friction
+    impulse changes v_n, relative to the normal impulse: the laws differ only through it)
+    and how many drops have m_nt opposing the slip."""
     space = impacts.contact_space()
     ratio = np.abs(space.vt) / np.abs(space.vn)
     coupling = mu * np.abs(space.mnt) / space.mnn
