@@ -44,6 +44,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "stress": ("harness.stress", "numerical stress of the solver and the engines"),
     "findings": ("harness.report.findings", "re-measure the README's findings on the laws"),
     "survey": ("harness.survey.cli", "departure distributions over families of impacts"),
+    "experiments": ("harness.experiments.cli",
+                    "the laws against measured impacts (Fazeli 2017 drops, Kharaz 2001)"),
     "cache": ("harness.run.cache", "the result cache: info (where, how big), prune, clear"),
 }
 

@@ -1,0 +1,318 @@
+"""``impact-harness experiments``: the laws against measured impacts.
+
+Prints, for the Fazeli et al. (2017) drops when a copy is given, the paper's six models
+scored by its metric, every law fitted by the named objective (held-out error, bootstrap
+intervals, collision types), Poisson against Stronge, and where the drops lie on Routh's
+diagram; then the Kharaz et al. (2001) curves for every law beside the recalled points.
+Only aggregates are printed or written: the Fazeli data carry no licence.
+Without a copy it says where to get one and goes on with the rest (exit 0).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+import planar_impact as pi
+
+from . import analysis, ellipse, fazeli, kharaz, metric, registry
+
+KHARAZ_ANGLES = (10, 20, 30, 40, 50, 60, 70, 80)
+GAP_MUS = (0.05, 0.1, 0.2, 0.3, 0.5, 1.0)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--data", metavar="DIR", default=None,
+                        help="directory holding the Fazeli et al. 2017 files (default: "
+                             f"${registry.FAZELI_2017.env_var})")
+    parser.add_argument("--objective", choices=sorted(metric.OBJECTIVES),
+                        default="median-error",
+                        help="what the fit minimises: " + "; ".join(
+                            f"{name}: {text}" for name, text in metric.OBJECTIVES.items()))
+    parser.add_argument("--post-speeds", choices=("published", "raw"), default="raw",
+                        help="post-impact speeds the laws are fitted to: raw (default; the "
+                             "processed v_y's +3gh offset removed, as an impulse law "
+                             "predicts) or as published (the six models' scores always use "
+                             "these, as the paper does)")
+    parser.add_argument("--replicates", type=int, default=200,
+                        help="bootstrap replicates (default 200)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of folds and bootstrap")
+    parser.add_argument("--workers", type=int, default=None,
+                        help="forked workers for the law fits (default: the local cores)")
+    parser.add_argument("--engines", default="all",
+                        help="engines for the Kharaz curves: 'all' (the installed ones), "
+                             "'none', or names separated by commas")
+    parser.add_argument("--json", metavar="PATH", default=None,
+                        help="also write the aggregates (with the data's SHA-256) as JSON")
+
+
+def main(args) -> int:
+    if args.replicates < 10:
+        print(f"impact-harness experiments: --replicates {args.replicates}: at least 10",
+              file=sys.stderr)
+        return 2
+    if args.workers is not None and args.workers < 1:
+        print(f"impact-harness experiments: --workers {args.workers}: at least 1",
+              file=sys.stderr)
+        return 2
+    from harness.engines import ENGINE_NAMES
+
+    engines = (list(ENGINE_NAMES) if args.engines == "all" else [] if args.engines == "none"
+               else [name.strip() for name in args.engines.split(",") if name.strip()])
+    unknown = [name for name in engines if name not in ENGINE_NAMES]
+    if unknown:
+        print(f"impact-harness experiments: --engines: unknown {', '.join(unknown)}; allowed: "
+              f"all, none or {', '.join(ENGINE_NAMES)}", file=sys.stderr)
+        return 2
+    if args.json and Path(args.json).exists() and not Path(args.json).is_file():
+        print(f"impact-harness experiments: --json {args.json}: exists and is not a regular "
+              "file (only a regular file is written over)", file=sys.stderr)
+        return 2
+    output: dict = {"objective": args.objective, "objective_means": metric.OBJECTIVES[
+        args.objective], "post_speeds": args.post_speeds}
+    try:
+        directory = registry.locate(registry.FAZELI_2017, args.data)
+        data = fazeli.load(directory)
+    except registry.DataMissing as missing:
+        print(f"Fazeli et al. 2017: skipped. {missing}\n")
+        data = None
+    except registry.DataInvalid as invalid:
+        print(f"impact-harness experiments: {invalid}", file=sys.stderr)
+        return 2
+    if data is not None:
+        output["fazeli2017"] = fazeli_section(data, args, engines)
+    output["ellipse_polygons"] = ellipse_section(data)
+    output["kharaz2001"] = kharaz_section()
+    output["kharaz2001"]["engines"] = kharaz_engines_section(engines)
+    if args.json:
+        Path(args.json).write_text(json.dumps(output, indent=1, default=_plain) + "\n",
+                                   encoding="utf-8")
+    return 0
+
+
+def fazeli_section(data: fazeli.FazeliData, args, engines: list[str]) -> dict:
+    impacts = data.impacts
+    print(f"## Fazeli et al. 2017: {len(impacts)} processed drops of {fazeli.RAW_DROPS}")
+    for name, digest in data.hashes.items():
+        print(f"- {name}: SHA-256 {digest} (matches the published file)")
+    print("- raw drops flagged: " + ", ".join(f"{k} {v}" for k, v in data.flag_counts().items()))
+    print("\n### The paper's metric on its six models (post-impact speeds as published)\n")
+    models = analysis.paper_models(data.model_speeds, impacts)
+    print("| model | median | q25 | q75 | q90 |\n|---|---:|---:|---:|---:|")
+    for name, summary in models.items():
+        print(f"| {name} | {summary['q50']:.3f} | {summary['q25']:.3f} | {summary['q75']:.3f} "
+              f"| {summary['q90']:.3f} |")
+    target = impacts if args.post_speeds == "published" else fazeli.without_post_offset(impacts)
+    started = time.perf_counter()
+    laws = analysis.fit_laws(target, args.objective, replicates=args.replicates,
+                             seed=args.seed, workers=args.workers)
+    seconds = time.perf_counter() - started
+    print(f"\n### Every law fitted: objective {args.objective} "
+          f"({metric.OBJECTIVES[args.objective]}); post-impact speeds {args.post_speeds}\n")
+    print(f"Grid μ 0..1 × e 0..1 step 0.01, refined to 0.001; 5-fold held-out by drop; "
+          f"{args.replicates} bootstrap replicates (95%, local grid step 0.002); "
+          f"{seconds:.1f} s.\n")
+    print("| law | μ | e | objective | held-out | μ 95% | e 95% | median error | q90 error "
+          "| collision types |\n|---|---:|---:|---:|---:|---|---|---:|---:|---|")
+    for law, result in laws.items():
+        fit, boot = result.fit, result.bootstrap
+        clipped = f" ({boot.at_window_edge} clipped)" if boot.at_window_edge else ""
+        edge = " (grid edge)" if fit.on_grid_edge else ""
+        types = ", ".join(f"{t}: {c}" for t, c in sorted(result.collision_types.items()))
+        print(f"| {law} | {fit.mu:.3f}{edge} | {fit.e:.3f} | {fit.value:.4g} "
+              f"| {result.held_out.held_out:.4g} | {boot.mu.low:.3f}–{boot.mu.high:.3f}{clipped} "
+              f"| {boot.e.low:.3f}–{boot.e.high:.3f} | {result.errors['q50']:.3f} "
+              f"| {result.errors['q90']:.3f} | {types} |")
+    print("\nEach drop's own best (μ, e) on the grid, quartiles (a single drop rarely pins "
+          "both):\n")
+    for law, result in laws.items():
+        own = result.per_drop
+        print(f"- {law}: μ {own['mu']['q25']:.2f} / {own['mu']['q50']:.2f} / "
+              f"{own['mu']['q75']:.2f}; e {own['e']['q25']:.2f} / {own['e']['q50']:.2f} / "
+              f"{own['e']['q75']:.2f}")
+    difference = analysis.compare_laws(target, args.objective, laws["poisson"].fit,
+                                       laws["stronge"].fit, seed=args.seed)
+    print(f"\n### Poisson against Stronge\n\nobjective(poisson) − objective(stronge) = "
+          f"{difference.objective_difference:.3g}, 95% interval "
+          f"{difference.interval.low:.3g} to {difference.interval.high:.3g} (paired bootstrap, "
+          "1000 replicates); their predictions of the centre's velocity differ by "
+          f"{difference.prediction_gap_median:.2%} of |v| (median drop), "
+          f"{difference.prediction_gap_q99:.2%} (99th percentile), against a median error of "
+          f"{difference.measurement_scale:.1%} of either law.")
+    print(f"Verdict: {difference.verdict()}.")
+    fixed_e = laws["poisson"].fit.e
+    gaps = analysis.law_gap(target, "poisson", "stronge", GAP_MUS, fixed_e)
+    print(f"At the same settings (e {fixed_e:.3f}) their predictions differ by (median / 99th "
+          "percentile of drops, % of |v|): " + "; ".join(
+              f"μ {mu:g}: {g['median']:.2%} / {g['q99']:.2%}" for mu, g in gaps.items()))
+    routh = analysis.routh_position(target, laws["poisson"].fit.mu)
+    print("\n### Where the drops lie on Routh's diagram (Poisson's fitted μ)\n")
+    print("incidence |v_t|/|v_n| quartiles " + ", ".join(
+        f"{k} {v:.3f}" for k, v in routh["incidence_ratio"].items())
+        + f"; μ|m_nt|/m_nn {', '.join(f'{k} {v:.4f}' for k, v in routh['mu_coupling'].items())}"
+        f"; m_nt opposes the slip in {routh['coupling_opposes_slip']} of {routh['drops']} drops."
+        " Collision types (Routh's regions) per law in the table above.")
+    engine_results = drops_engines_section(engines, data, target, laws["poisson"].fit)
+    return {"provenance": data.provenance(), "paper_models": models,
+            "engines_on_drops": engine_results,
+            "laws": {law: _law_dict(result) for law, result in laws.items()},
+            "poisson_vs_stronge": difference, "poisson_stronge_gap": gaps, "routh": routh,
+            "fit_seconds": seconds}
+
+
+def _law_dict(result: analysis.LawResult) -> dict:
+    boot = result.bootstrap
+    return {"fit": result.fit, "held_out": result.held_out,
+            "bootstrap": {"replicates": boot.replicates, "confidence": boot.confidence,
+                          "mu": boot.mu, "e": boot.e, "value": boot.value, "step": boot.step,
+                          "at_window_edge": boot.at_window_edge},
+            "errors": result.errors, "collision_types": result.collision_types,
+            "per_drop_fits": result.per_drop, "unsolved_cells": result.unsolved_cells}
+
+
+def drops_engines_section(engines: list[str], data: fazeli.FazeliData, target,
+                          fit) -> list[dict]:
+    """Every engine and preset on every drop at Poisson's fitted (μ, e)."""
+    from harness.engines import EngineNotInstalled, load_engine, preset_label
+
+    from . import drops_engines
+
+    if not engines:
+        return []
+    thetas, residual = drops_engines.jacobian_angles(target, data.pre_impact_angles)
+    print(f"\n### The engines on the drops (μ {fit.mu:.3f}, e {fit.e:.3f}: Poisson's fit)\n")
+    print(f"Each drop a placed {drops_engines.VERTICES}-gon at the angle of its published "
+          f"Jacobian (contact within {residual.max() * 1e3:.1g} mm of it); flagged runs are "
+          "counted with their reason, never scored.\n")
+    print("| engine | preset | single impacts | flagged (reason: drops) | median error | "
+          "q90 error |\n|---|---|---:|---|---:|---:|")
+    results = []
+    for name in engines:
+        try:
+            engine = load_engine(name)
+        except EngineNotInstalled as missing:
+            print(f"| {name} | — | — | not installed: {missing} | | |")
+            continue
+        for preset in engine.presets:
+            result = drops_engines.run_drops(engine, preset, target, thetas, fit.mu, fit.e)
+            counts = dict(result["verdicts"])
+            ok = counts.pop("ok", 0)
+            flagged = ", ".join(f"{k}: {v}" for k, v in counts.items()) or "none"
+            errors = result["errors"]
+            median = "—" if not errors["drops"] else f"{errors['q50']:.3f}"
+            q90 = "—" if not errors["drops"] else f"{errors['q90']:.3f}"
+            print(f"| {name} | {preset_label(name, preset)} | {ok} | {flagged} | {median} "
+                  f"| {q90} |")
+            results.append(result)
+    return results
+
+
+def ellipse_section(data: fazeli.FazeliData | None) -> dict:
+    """The geometric error of standing a polygon in for the ellipse (engines other than
+    MuJoCo take no ellipse), and the data's Jacobians against the pre-impact angle."""
+    a, b = fazeli.SEMI_AXES
+    print("\n## The ellipse as a polygon (for the engines)\n")
+    print("| vertices | shape gap mm | fixed: moment arm error mm | fixed: height error mm "
+          "| placed: moment arm error mm | placed: clearance to a 2nd contact mm |\n"
+          "|---:|---:|---:|---:|---:|---:|")
+    rows = [ellipse.moment_arm_error(a, b, n) for n in (8, 16, 32, 64)]
+    for row in rows:
+        print(f"| {row['vertices']} | {row['shape_gap'] * 1e3:.3f} | "
+              f"{row['fixed_moment_arm'] * 1e3:.3f} | {row['fixed_height'] * 1e3:.3f} | "
+              f"{row['placed_moment_arm'] * 1e3:.1g} | {row['placed_clearance_min'] * 1e3:.3f} |")
+    section: dict = {"polygons": rows}
+    if data is not None:
+        theta = data.pre_impact_angles
+        wn, wt = ellipse.jacobians(theta, a, b)
+        gap = np.hypot(wn[:, 2] - data.impacts.wn[:, 2], wt[:, 2] - data.impacts.wt[:, 2])
+        section["jacobian_vs_pre_angle_mm"] = {
+            "median": float(np.median(gap) * 1e3), "q99": float(np.quantile(gap, 0.99) * 1e3),
+            "max": float(np.max(gap) * 1e3)}
+        print("\nThe published Jacobians (pose one frame before impact) against the lowest point "
+              "at the pre-impact angle: the contact points lie "
+              f"{np.median(gap) * 1e3:.2f} mm apart on the median drop, "
+              f"{np.quantile(gap, 0.99) * 1e3:.2f} mm at the 99th percentile, "
+              f"{np.max(gap) * 1e3:.2f} mm at most.")
+    return section
+
+
+def kharaz_section() -> dict:
+    print(f"\n## Kharaz, Gorham & Salman 2001: 5 mm alumina sphere at {kharaz.SPEED} m/s "
+          f"(μ {kharaz.MU}, e {kharaz.E})\n")
+    limit = kharaz.sticking_limit_deg()
+    print(f"Rigid disk, I = 2/5 m r²: rolling at separation below {limit:.1f}°"
+          " (below it the real sphere's tangential compliance matters, which no rigid law "
+          "has). m_nt = 0 here, so every law gives the same curve.")
+    if not kharaz.VERIFIED:
+        print("Measured points: recalled from the paper's figures, not digitised; "
+              f"uncertainty ±{kharaz.UNCERTAINTY[0]} (e_t), ±{kharaz.UNCERTAINTY[1]}° "
+              f"(rebound), ±{kharaz.UNCERTAINTY[2]:.0f} rad/s (spin); verify before use.\n")
+    angles = np.array(KHARAZ_ANGLES, dtype=float)
+    curves = {law: kharaz.curves(law, angles) for law in pi.LAWS}
+    print("| incidence ° | " + " | ".join(f"{law} e_t / rebound° / spin" for law in pi.LAWS)
+          + " |\n|---:|" + "---|" * len(pi.LAWS))
+    for k, angle in enumerate(angles):
+        print(f"| {angle:.0f} | " + " | ".join(
+            f"{c.tangential_restitution[k]:.3f} / {c.rebound_deg[k]:.1f} / {c.spin[k]:.0f}"
+            for c in curves.values()) + " |")
+    print("\n| incidence ° | recalled e_t | rebound ° | spin rad/s | poisson e_t | rebound ° "
+          "| spin |\n|---:|---:|---:|---:|---:|---:|---:|")
+    at_points = kharaz.curves("poisson", [p.incidence_deg for p in kharaz.POINTS])
+    for k, point in enumerate(kharaz.POINTS):
+        print(f"| {point.incidence_deg:.0f} | {point.tangential_restitution:.2f} | "
+              f"{point.rebound_deg:.1f} | {point.spin:.0f} | "
+              f"{at_points.tangential_restitution[k]:.3f} | {at_points.rebound_deg[k]:.1f} | "
+              f"{at_points.spin[k]:.0f} |")
+    return {"citation": registry.KHARAZ_2001.citation, "verified_points": kharaz.VERIFIED,
+            "curves": {law: {"incidence_deg": c.incidence_deg,
+                             "tangential_restitution": c.tangential_restitution,
+                             "rebound_deg": c.rebound_deg, "spin": c.spin}
+                       for law, c in curves.items()},
+            "points": kharaz.POINTS, "uncertainty": kharaz.UNCERTAINTY}
+
+
+def kharaz_engines_section(engines: list[str]) -> list:
+    """The Kharaz curves through each engine and preset; flagged runs show their reason."""
+    from harness.engines import EngineNotInstalled, load_engine, preset_label
+
+    from . import engine_curves
+
+    if not engines:
+        return []
+    angles = np.array(KHARAZ_ANGLES, dtype=float)
+    print("\n### The Kharaz curves through the engines (e_t / rebound° / spin rad/s; a flagged "
+          "run shows the check it failed)\n")
+    print("| engine | preset | " + " | ".join(f"{a:.0f}°" for a in angles) + " |\n|---|---|"
+          + "---|" * angles.size)
+    results = []
+    for name in engines:
+        try:
+            engine = load_engine(name)
+        except EngineNotInstalled as missing:
+            print(f"| {name} | — | not installed: {missing} |")
+            continue
+        for preset in engine.presets:
+            curves = engine_curves.engine_curves(engine, preset, angles)
+            cells = [f"{curves.tangential_restitution[k]:.3f} / {curves.rebound_deg[k]:.1f} / "
+                     f"{curves.spin[k]:.0f}" if verdict == "ok" else f"flagged: {verdict}"
+                     for k, verdict in enumerate(curves.verdicts)]
+            print(f"| {name} | {preset_label(name, preset)} | " + " | ".join(cells) + " |")
+            results.append(curves)
+    return results
+
+
+def _plain(value):
+    """JSON for the dataclasses and numpy values of the results."""
+    if hasattr(value, "__dataclass_fields__"):
+        return {k: getattr(value, k) for k in value.__dataclass_fields__
+                if not isinstance(getattr(value, k), np.ndarray) or getattr(value, k).size < 64}
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    raise TypeError(f"not JSON: {type(value).__name__}")

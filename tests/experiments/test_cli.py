@@ -1,0 +1,66 @@
+"""``impact-harness experiments``: carries on without the data, refuses a bad copy."""
+
+from __future__ import annotations
+
+from harness import cli
+from harness.experiments import registry
+
+
+def test_without_the_data_it_says_where_to_get_them_and_carries_on(monkeypatch, capsys):
+    monkeypatch.delenv(registry.FAZELI_2017.env_var, raising=False)
+    assert cli.main(["experiments"]) == 0
+    out = capsys.readouterr().out
+    assert "Fazeli et al. 2017: skipped" in out and "planar-impact-dataset" in out
+    assert "## Kharaz, Gorham & Salman 2001" in out
+    assert "recalled from the paper's figures" in out  # the points' status is printed
+
+
+def test_a_copy_that_is_not_the_published_files_is_bad_input(synthetic_copy, capsys):
+    directory, _ = synthetic_copy
+    assert cli.main(["experiments", "--data", str(directory)]) == 2
+    error = capsys.readouterr().err.strip().splitlines()
+    assert len(error) == 1 and "is not the published file's" in error[0]
+
+
+def test_a_data_path_that_is_no_directory_is_bad_input(tmp_path, capsys):
+    assert cli.main(["experiments", "--data", str(tmp_path / "absent")]) == 2
+    assert "not a directory" in capsys.readouterr().err
+
+
+def test_bad_options_are_refused_before_any_work(capsys):
+    assert cli.main(["experiments", "--replicates", "3"]) == 2
+    assert "--replicates 3" in capsys.readouterr().err
+
+
+def test_the_json_holds_aggregates_only(synthetic_copy, tmp_path, monkeypatch, capsys):
+    """The Fazeli data carry no licence: nothing per drop may leave the command. The
+    synthetic copy stands in for the real files (their hashes differ, so the check is
+    skipped here only)."""
+    import json
+
+    from harness.experiments import fazeli
+
+    directory, truth = synthetic_copy
+    real_load = fazeli.load
+    monkeypatch.setattr(fazeli, "load", lambda path: real_load(path, check_hashes=False))
+    out = tmp_path / "experiments.json"
+    assert cli.main(["experiments", "--data", str(directory), "--replicates", "10",
+                     "--workers", "1", "--objective", "impulse", "--engines", "pymunk",
+                     "--json", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "### Every law fitted: objective impulse" in printed
+    assert "### The engines on the drops" in printed and "| pymunk | accurate | " in printed
+    document = json.loads(out.read_text())
+    assert document["objective"] == "impulse"
+    section = document["fazeli2017"]
+    assert set(section["laws"]) == {"newton", "poisson", "stronge", "stronge-paper",
+                                    "newton-lcp"}
+
+    def longest_list(value) -> int:
+        if isinstance(value, dict):
+            return max((longest_list(v) for v in value.values()), default=0)
+        if isinstance(value, list):
+            return max([len(value)] + [longest_list(v) for v in value])
+        return 0
+
+    assert longest_list(section) < truth["drops"] / 10
