@@ -266,7 +266,6 @@ def test_largest_and_smallest_keep_numpys_signed_zero(values):
 
 
 
-@pytest.mark.kernel_sensitive
 def test_contacts_at_several_tolerances_are_each_tolerances_reference_contact():
     # core_contacts shares the support intervals of equal near points between tolerances:
     # random pairs and faces lying flat (where the tolerances pick different near points),
