@@ -25,7 +25,10 @@ OLD_KERNEL = "Prescott"
 
 def kernel_environment() -> tuple[dict[str, str], list[str]]:
     """The environment of the second run, and what it changes (for the log)."""
-    from numpy._core._multiarray_umath import __cpu_dispatch__
+    try:
+        from numpy._core._multiarray_umath import __cpu_dispatch__
+    except ImportError:  # numpy < 2
+        from numpy.core._multiarray_umath import __cpu_dispatch__
 
     environment = dict(os.environ)
     changes = []
