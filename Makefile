@@ -1,6 +1,7 @@
 # Two commands set everything up on a fresh machine with Python 3.11:
 #   make validate   create .venv if missing, install, run the validation suite, write reports/
-#   make test       create .venv if missing, run the whole test suite
+#   make test       create .venv if missing, run the whole test suite, then its
+#                   numerically sensitive tests again on other kernels (tests/other_kernels.py)
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
@@ -22,6 +23,7 @@ validate: $(STAMP)
 test: $(STAMP)
 	$(BIN)/ruff check .
 	$(BIN)/python -m pytest -q -n 2
+	$(BIN)/python tests/other_kernels.py -n 2
 
 bench: $(STAMP)
 	$(BIN)/impact-harness bench --quick

@@ -4,6 +4,14 @@ engine tests.
 Hypothesis runs derandomized (the same examples on every run, here and in CI), so a
 property test fails or passes for a reason in the code, never by the draw of a seed; set
 ``HYPOTHESIS_PROFILE=explore`` to search with fresh random examples.
+
+Mark ``@pytest.mark.kernel_sensitive`` (or ``pytestmark = pytest.mark.kernel_sensitive`` for a
+whole module) every test whose outcome rests on arithmetic that BLAS, libm or SIMD kernels
+round differently on another CPU: a pin of stored results (compared within a stated bound,
+never bit for bit), a count, a decision, a finding. ``make test`` runs those tests a second
+time under another OpenBLAS kernel with numpy's SIMD dispatch off (tests/other_kernels.py,
+which also runs them by hand); the kernels in use head every run's output
+(:func:`pytest_report_header`). Keep them quick: they run twice.
 """
 
 from __future__ import annotations
@@ -18,6 +26,26 @@ from hypothesis import settings
 settings.register_profile("deterministic", derandomize=True, deadline=None)
 settings.register_profile("explore", deadline=None)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "deterministic"))
+
+
+def pytest_report_header(config) -> list[str]:
+    """The BLAS kernel and numpy's SIMD targets of this run (tests/other_kernels.py changes
+    them)."""
+    try:
+        from numpy._core._multiarray_umath import __cpu_dispatch__, __cpu_features__
+    except ImportError:  # numpy < 2
+        from numpy.core._multiarray_umath import __cpu_dispatch__, __cpu_features__
+
+    try:
+        from threadpoolctl import threadpool_info
+
+        blas = [f"{info.get('internal_api')} {info.get('architecture')}"
+                for info in threadpool_info() if info.get("user_api") == "blas"]
+    except ImportError:  # threadpoolctl comes with the harness extra
+        blas = []
+    simd = [target for target in __cpu_dispatch__ if __cpu_features__.get(target)]
+    return [f"kernels: BLAS {', '.join(blas) or 'unknown'}; numpy SIMD targets in use: "
+            f"{' '.join(simd) or 'none (baseline only)'}"]
 
 
 @pytest.fixture(scope="session")

@@ -30,8 +30,12 @@ PNG and is wanted for a paper's few figures, not for a thousand diagrams (the sp
 thousands of markers are an image in its SVG, its axes and text vector). Every image loads
 lazily. Figures are drawn in a pool of forked processes (``--workers``) while this process
 builds the page; each figure's PNG carries the digest of its inputs, so a warm report draws
-nothing. Likewise each scenario's HTML section and headline cells are kept in
-``<out>/.report-fragments.json`` under the digest of its records
+nothing. A scenario's records enter those digests by what they were made from (its file,
+the code, the installed versions, the settings) and what they decided (statuses, verdicts,
+collision types), never by their floats, whose last bits depend on the CPU: a fresh clone
+on another machine draws none of the committed figures again
+(:func:`harness.report.reading.scenario_digest`). Likewise each scenario's HTML section and
+headline cells are kept in ``<out>/.report-fragments.json`` under the digest of its records
 (:mod:`harness.report.fragments`): a warm report formats only what changed, and reads the
 records themselves only when something is to be formatted (:mod:`harness.report.reading`:
 what it needs of them otherwise -- their digests, order, engines -- comes from the lines of

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from harness.engines import preset_label
-from harness.report.reading import LazyResults, scenario_digest
+from harness.report.reading import LazyResults, inputs_digests, scenario_digest, with_inputs
 from harness.report.views import (
     ENGINE_STYLE,
     HEADLINE_LAWS,
@@ -150,15 +150,18 @@ TAG_KEY = "impact-harness-inputs"
 
 def scenario_digests(results: Results, known=None) -> dict[str, str]:
     """``{scenario: sha256 of its records}``, what every figure of a scenario (and the
-    headline figures, of all) depends on besides the code.
+    headline figures, of all) depends on besides the code: of what they decided and of what
+    they were made from, never of their floats' last bits, which depend on the CPU
+    (:func:`~harness.report.reading.scenario_digest`, ``inputs_digests``).
 
     Hashed from each record's line in the results file (:func:`harness.run.records.
     record_line`), as read (``Results.record_lines``, or the bytes of the file for
-    :class:`~harness.report.reading.LazyResults`) or else written anew, without the fields
-    that change between identical runs (:data:`~harness.report.reading.VOLATILE_FIELDS`, the
-    engine's own time: :func:`~harness.report.reading.scenario_digest`): a warm report hashes
-    text instead of encoding 28,000 records again, which was half of its time at 1,000
-    scenarios. Any other change to a record changes its scenario's digest. ``known``: where
+    :class:`~harness.report.reading.LazyResults`) or else written anew: only what they
+    decided is taken from them (:data:`~harness.report.reading.DECIDED_TEXT`; no time, no
+    float): a warm report hashes text instead of encoding 28,000 records again, which was
+    half of its time at 1,000 scenarios. A change to what a record decided, to a scenario's
+    definition, the code, the installed versions or the engines' settings changes the
+    digest; times, the cache's hits and a float's last bits do not. ``known``: where
     :meth:`LazyResults.scenario_digests <harness.report.reading.LazyResults.scenario_digests>`
     finds the digests of lines it hashed before (a report's fragment cache's ``get``).
     """
@@ -170,7 +173,8 @@ def scenario_digests(results: Results, known=None) -> dict[str, str]:
     texts: dict[str, list[str]] = {}
     for record, line in zip(results.records, lines):
         texts.setdefault(record.scenario, []).append(line)
-    return {name: scenario_digest(parts) for name, parts in texts.items()}
+    return with_inputs({name: scenario_digest(parts) for name, parts in texts.items()},
+                       inputs_digests(results.provenance, results.scenarios))
 
 
 @functools.cache

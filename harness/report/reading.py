@@ -36,15 +36,6 @@ from harness.run.records import (
     results_head,
 )
 
-#: A record's fields that change between identical runs: the figures' and fragments' digests
-#: leave them out (:func:`harness.report.figures.scenario_digests`).
-VOLATILE_FIELDS = ("wall_time_s", "cached")
-#: A volatile field with its value in a record's line of the results file (also the
-#: engine's own time in the diagnostics): the value is a number, a bool or null. Nothing in a
-#: string matches, since a quote inside a JSON string is escaped.
-VOLATILE_TEXT = re.compile(
-    '"(?:' + "|".join((*VOLATILE_FIELDS, "engine_wall_time_s")) + r')":[^,{}\[\]"]*')
-_VOLATILE_BYTES = re.compile(VOLATILE_TEXT.pattern.encode())
 #: How a record's line starts when its scenario, point, source and preset hold no escape (and
 #: the point's label no brace): the scenario, the source and the preset (or None), then the
 #: speeds before and after (lists of numbers, or null: a record without them is no record of
@@ -57,12 +48,70 @@ _LINE_HEAD = (rb'\{"scenario":"([^"\\]*)","point":\{[^{}]*\},"source":"([^"\\]*)
 _LINE_HEAD_AT = re.compile(_LINE_HEAD)
 
 
+#: What a record decided, as its line says it (a field of the record or of its diagnostics):
+#: which record it is (scenario, point, source, law, preset) and its status, verdict and
+#: collision type. Integers are taken whole and no float is (the lookahead), strings without
+#: escapes only (none of these fields has one).
+DECIDED_TEXT = re.compile(
+    r'"(?:scenario|index|label|source|law|preset|status|verdict|collision_type)":'
+    r'(?:"[^"\\]*"|null|true|false|-?\d+(?![.\deE]))')
+_DECIDED_BYTES = re.compile(DECIDED_TEXT.pattern.encode())
+#: What every record of a run was made from, in its provenance: the code that the cached
+#: values depend on, the installed versions and the engines' settings. Not the machine, the
+#: time, the executor or the cache's statistics.
+RUN_INPUTS = ("code_version", "versions", "engine_versions", "engine_settings",
+              "settings_overrides", "history", "task_time_limit_s")
+#: What the runner says of a scenario that is not what its records were made from: where its
+#: file is (a clone elsewhere is the same scenario) and its references (results, worked out
+#: from the file and the code like the records).
+NOT_INPUTS = ("path", "references")
+
+
 def scenario_digest(lines) -> str:
-    """The digest of one scenario's record lines (``str`` or ``bytes``, in run order): the
-    sha256 of their text joined by newlines, without :data:`VOLATILE_TEXT`."""
+    """The digest of what one scenario's record lines (``str`` or ``bytes``, in run order)
+    decided: the sha256 of their :data:`DECIDED_TEXT` -- which records there are, their
+    statuses, verdicts and collision types -- and nothing else of them.
+
+    Never of their floats: their last bits depend on the CPU (BLAS, libm and SIMD kernels),
+    and a fresh clone on another machine must find the committed figures current. The floats
+    follow from what the records were made from, the scenario's file, the code, the installed
+    versions and the settings (:func:`inputs_digests`, which :func:`with_inputs` adds); the
+    decided fields are there for a run that ends otherwise from the same inputs (a fault, a
+    time limit)."""
     if lines and isinstance(lines[0], str):
-        return hashlib.sha256(VOLATILE_TEXT.sub("", "\n".join(lines)).encode()).hexdigest()
-    return hashlib.sha256(_VOLATILE_BYTES.sub(b"", b"\n".join(lines))).hexdigest()
+        found = DECIDED_TEXT.findall("\n".join(lines))
+        return hashlib.sha256("\n".join(found).encode()).hexdigest()
+    return hashlib.sha256(b"\n".join(_DECIDED_BYTES.findall(b"\n".join(lines)))).hexdigest()
+
+
+def inputs_digests(provenance: dict, scenarios: dict) -> dict[str, str]:
+    """``{scenario: digest of what its records were made from}``: the run's
+    :data:`RUN_INPUTS` and what the runner says of the scenario but :data:`NOT_INPUTS` --
+    its definition's digest (:attr:`harness.scenarios.Scenario.definition_digest`: every
+    field of its file), laws, sweep, gates and descriptions."""
+    run = {key: provenance.get(key) for key in RUN_INPUTS}
+    # The settings the engines ran with are the code's (code_version) and the overrides
+    # given (kept exactly); the floats of those worked out (libm) are left out.
+    settings = _FLOAT_TEXT.sub("", json.dumps(run.pop("engine_settings"), sort_keys=True))
+    run_text = json.dumps([run, settings], sort_keys=True, default=str)
+    digests = {}
+    for name, info in scenarios.items():
+        described = {key: value for key, value in info.items() if key not in NOT_INPUTS}
+        text = json.dumps([run_text, name, described], sort_keys=True, default=str)
+        digests[name] = hashlib.sha256(text.encode()).hexdigest()
+    return digests
+
+
+#: A float as JSON writes it (``repr``: a point or an exponent).
+_FLOAT_TEXT = re.compile(r"-?\d+\.\d+(?:[eE][+-]?\d+)?|-?\d+[eE][+-]?\d+|-?Infinity|NaN")
+
+
+def with_inputs(decided: dict[str, str], inputs: dict[str, str]) -> dict[str, str]:
+    """Each scenario's digest: that of what its records decided (:func:`scenario_digest`)
+    with that of what they were made from (:func:`inputs_digests`; empty for a scenario the
+    results do not describe)."""
+    return {name: hashlib.sha256(f"{inputs.get(name, '')}\0{digest}".encode()).hexdigest()
+            for name, digest in decided.items()}
 
 
 class LazyResults:
@@ -86,7 +135,8 @@ class LazyResults:
 
     def scenario_digests(self, known: Callable[[str, Callable[[], str]], str] | None = None
                          ) -> dict[str, str]:
-        """``{scenario: digest of its records}`` (:func:`scenario_digest`'s).
+        """``{scenario: digest of its records}``: :func:`scenario_digest`'s of its lines,
+        :func:`with_inputs`.
 
         ``known(key, make)``, when given, returns the digest kept under ``key`` -- a digest
         of the scenario's lines exactly as they are, volatile fields included -- or else
@@ -107,7 +157,7 @@ class LazyResults:
             for index, (start, end) in enumerate(segments):
                 exact.update(view[start:end] if index == 0 else b"\n" + view[start:end])
             digests[name] = known(f"digest\0{exact.hexdigest()}", make)
-        return digests
+        return with_inputs(digests, inputs_digests(self.provenance, self.scenarios))
 
     def full(self) -> Results:
         """The results with their records (read once)."""
@@ -251,5 +301,6 @@ def source_presets(results) -> frozenset:
     return frozenset(pair for pair in pairs if pair[0] != ANALYTIC)
 
 
-__all__ = ["LazyResults", "read_for_report", "record_scenarios", "scenario_digest",
+__all__ = ["DECIDED_TEXT", "NOT_INPUTS", "RUN_INPUTS", "LazyResults", "inputs_digests",
+           "read_for_report", "record_scenarios", "scenario_digest", "with_inputs",
            "scenarios_digest", "source_presets"]

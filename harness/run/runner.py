@@ -517,9 +517,12 @@ def speed_labels(scenario: Scenario) -> list[str]:
 
 
 def scenario_info(scenario: Scenario) -> dict:
-    """What the reports need to know about a scenario besides its records."""
+    """What the reports need to know about a scenario besides its records (``definition``:
+    the digest of every field of its file, what the report's digests take its records to be
+    made from: :func:`harness.report.reading.inputs_digests`)."""
     return {
         "description": scenario.description,
+        "definition": scenario.definition_digest,
         "tags": list(scenario.tags),
         "system": scenario.system,
         "path": None if scenario.path is None else str(scenario.path),

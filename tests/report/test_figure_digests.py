@@ -1,12 +1,17 @@
-"""A figure is redrawn when, and only when, its inputs change: the digests of the records."""
+"""A figure is redrawn when, and only when, its inputs change: the digests of the records --
+of what they decided and what they were made from, never of their floats' last bits, which
+depend on the CPU (a fresh clone on another machine reuses the committed figures)."""
 
 from __future__ import annotations
 
+import copy
 import json
+import math
 import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from harness import report
@@ -38,18 +43,75 @@ def test_digests_of_results_read_and_in_memory_agree_and_ignore_times(tmp_path):
     assert scenario_digests(Results(timed)) == digests
 
 
+def _next_float(value):
+    """``value`` one unit in the last place up, inside lists and dicts too."""
+    if isinstance(value, float):
+        return float(np.nextafter(value, math.inf))
+    if isinstance(value, list):
+        return [_next_float(item) for item in value]
+    if isinstance(value, dict):
+        return {key: _next_float(item) for key, item in value.items()}
+    return value
+
+
 @pytest.mark.parametrize("change", [
-    lambda r: r.departure.update(poisson=0.11),
-    lambda r: r.u_after.__setitem__(1, 2.0000000001),
-    lambda r: r.diagnostics["history"]["normal_impulse"].append(2.0),
-    lambda r: setattr(r, "status", "flagged"),
+    lambda r: r.departure.update(poisson=float(np.nextafter(r.departure["poisson"], 1.0))),
+    lambda r: r.u_after.__setitem__(1, float(np.nextafter(2.0, 3.0))),
+    lambda r: r.u_after.__setitem__(1, 2.0000000001),  # a float moved further: still a float
+    lambda r: setattr(r, "diagnostics", _next_float(r.diagnostics)),
+    lambda r: setattr(r, "wall_time_s", 9.0), lambda r: setattr(r, "cached", True),
 ])
-def test_any_other_change_changes_its_scenarios_digest_only(change):
+def test_a_float_of_a_result_in_its_last_bits_or_a_time_changes_no_digest(change):
+    records = [_record("a", 0.1), _record("b", 0.2)]
+    before = scenario_digests(Results(records))
+    change(records[0])
+    assert scenario_digests(Results(records)) == before
+
+
+@pytest.mark.parametrize("change", [
+    lambda r: setattr(r, "status", "flagged"),
+    lambda r: setattr(r, "verdict", "flagged"),
+    lambda r: setattr(r, "collision_type", 3),
+    lambda r: r.point.update(index=1),
+    lambda r: setattr(r, "preset", "accurate"),
+])
+def test_a_change_of_what_a_record_decided_changes_its_scenarios_digest_only(change):
     records = [_record("a", 0.1), _record("b", 0.2)]
     before = scenario_digests(Results(records))
     change(records[0])
     after = scenario_digests(Results(records))
     assert after["a"] != before["a"] and after["b"] == before["b"]
+
+
+def test_a_change_of_what_made_the_records_changes_the_digests():
+    records = [_record("a", 0.1), _record("b", 0.2)]
+    provenance = {"code_version": "c0de", "versions": {"numpy": "2.4.6"},
+                  "engine_settings": {"pymunk": {"defaults": {"time_step": 0.01}}},
+                  "settings_overrides": {}, "machine": {"cpu_model": "AMD EPYC"}}
+    scenarios = {"a": {"definition": "d1", "path": "/here/a.toml"},
+                 "b": {"definition": "d2", "path": "/here/b.toml"}}
+    before = scenario_digests(Results(records, provenance, scenarios))
+
+    def digests(provenance_change=None, scenarios_change=None):
+        changed_provenance, changed_scenarios = copy.deepcopy((provenance, scenarios))
+        (provenance_change or (lambda p: None))(changed_provenance)
+        (scenarios_change or (lambda s: None))(changed_scenarios)
+        return scenario_digests(Results(records, changed_provenance, changed_scenarios))
+
+    # the code, an installed version, a setting given: every scenario's digest
+    for change in (lambda p: p.update(code_version="c0de2"),
+                   lambda p: p["versions"].update(numpy="2.5.0"),
+                   lambda p: p.update(settings_overrides={"pymunk.iterations": 20})):
+        after = digests(provenance_change=change)
+        assert after["a"] != before["a"] and after["b"] != before["b"]
+    # a scenario's definition: its digest only
+    after = digests(scenarios_change=lambda s: s["a"].update(definition="d1-edited"))
+    assert after["a"] != before["a"] and after["b"] == before["b"]
+    # where the files are, the machine, and a worked-out setting's last bit: none
+    assert digests(scenarios_change=lambda s: s["a"].update(path="/elsewhere/a.toml"),
+                   provenance_change=lambda p: p.update(
+                       machine={"cpu_model": "Intel Xeon"},
+                       engine_settings=_next_float(p["engine_settings"]))) == before
 
 
 @pytest.fixture(scope="module")
@@ -94,11 +156,16 @@ def test_a_changed_record_redraws_its_figures_and_the_headline_only(results_file
     report.write_report(read_results(retimed), out, workers=1)
     assert _times(out) == drawn  # only times changed: nothing redrawn
 
-    def departs(item):
-        if item["scenario"] == first and item["source"] != "analytic" and item["departure"]:
-            item["departure"]["poisson"] = 0.5
+    nudged = _rewrite(retimed, tmp_path / "nudged.json",
+                      lambda item: item.update(_next_float(item)))
+    report.write_report(read_results(nudged), out, workers=1)
+    assert _times(out) == drawn  # every float a last bit up (another CPU): nothing redrawn
 
-    changed = _rewrite(retimed, tmp_path / "changed.json", departs)
+    def decides_otherwise(item):
+        if item["scenario"] == first and item["source"] != "analytic":
+            item["status"] = "flagged"
+
+    changed = _rewrite(retimed, tmp_path / "changed.json", decides_otherwise)
     report.write_report(read_results(changed), out, workers=1)
     after = _times(out)
     redrawn = {name for name in drawn if after[name] != drawn[name]}

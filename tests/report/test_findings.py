@@ -13,6 +13,10 @@ from planar_impact.process import impulse_process, newton_lcp_modes, sequential_
 SAMPLE = random_problems(3000, seed=5)
 
 
+# the findings' counts and flags: run again on other kernels (tests/conftest.py)
+pytestmark = pytest.mark.kernel_sensitive
+
+
 def test_vectorised_pgs_agrees_with_the_scalar_loop():
     """The module's per-problem verdict equals the scalar sequential_impulses' (does it
     return before its last iteration?) on 120 sliding problems, spread over the ratios."""

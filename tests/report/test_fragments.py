@@ -78,8 +78,12 @@ def test_a_changed_record_recomputes_its_scenarios_pieces_only(library, tmp_path
     first = fragments.prepare(library, out)
     _page(library, out, first, many=True)
     first.cache.save()
-    changed = Results(copy.deepcopy(library.records), library.provenance, library.scenarios)
+    # Its file edited (what its digest follows, not its floats' bits: tests/report/
+    # test_figure_digests.py), and a departure with it.
+    changed = Results(copy.deepcopy(library.records), library.provenance,
+                      copy.deepcopy(library.scenarios))
     name = engine_scenarios(changed)[0]
+    changed.scenarios[name]["definition"] = "an edited file"
     run = next(r for r in changed.for_scenario(name) if r.source != "analytic" and r.ok)
     run.departure["poisson"] = 0.4321
     second = fragments.prepare(changed, out)

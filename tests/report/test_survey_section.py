@@ -222,6 +222,9 @@ def test_the_quick_survey_is_kept_while_its_inputs_are_unchanged(tmp_path, monke
     tables = {path.name: path.read_bytes() for path in out.glob("*.parquet")}
     assert suite.quick_survey(args, out)[1] is False  # same inputs: kept
     assert {path.name: path.read_bytes() for path in out.glob("*.parquet")} == tables
+    _nudge_floats(out / "runs.parquet")  # results a last bit apart (another CPU): still kept
+    assert (out / "runs.parquet").read_bytes() != tables["runs.parquet"]
+    assert suite.quick_survey(args, out)[1] is False
     monkeypatch.setattr(suite, "SURVEY_SAMPLES", 3)  # other inputs: surveyed again
     assert suite.quick_survey(args, out)[1] is True
     assert len(read_columns(out / "runs.parquet")["sample"]) == 3 * len(resolve_populations())
@@ -229,6 +232,39 @@ def test_the_quick_survey_is_kept_while_its_inputs_are_unchanged(tmp_path, monke
     assert suite.quick_survey(args, out)[1] is True and (out / "runs.parquet").is_file()
     args.engines = "pymunk,box2d"  # other engines: surveyed again
     assert suite.quick_survey(args, out)[1] is True
+
+
+def _nudge_floats(path: Path) -> None:
+    """Every float of the parquet table at ``path`` one unit in the last place up."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    table = pq.read_table(path)
+    for index, field in enumerate(table.schema):
+        if pa.types.is_float64(field.type):
+            values = table.column(index).to_numpy(zero_copy_only=False)
+            table = table.set_column(index, field, pa.array(np.nextafter(values, np.inf)))
+    pq.write_table(table, path)
+
+
+def test_the_quick_surveys_digest_is_the_same_under_other_kernels():
+    """Of inputs and code only: a process with another OpenBLAS kernel and numpy's SIMD
+    dispatch off (tests/other_kernels.py) works out the same digest."""
+    import importlib.util
+    import subprocess
+    import sys
+
+    spec = importlib.util.spec_from_file_location(
+        "other_kernels", Path(__file__).parent.parent / "other_kernels.py")
+    other_kernels = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(other_kernels)
+    environment, _ = other_kernels.kernel_environment()
+    script = ("from harness.run import suite\n"
+              "from harness.survey.population import resolve_populations\n"
+              "print(suite.survey_inputs(resolve_populations([]), ['pymunk'], ['accurate']))")
+    there = subprocess.run([sys.executable, "-c", script], env=environment, check=True,
+                           capture_output=True, text=True).stdout.split()[-1]
+    assert there == suite.survey_inputs(resolve_populations([]), ["pymunk"], ["accurate"])
 
 
 def test_the_quick_surveys_digest_follows_its_files_versions_and_code(tmp_path, monkeypatch):

@@ -24,6 +24,7 @@ def entry(table, law, index):
     return next(e for e in table if e["law"] == law and e["index"] == index)
 
 
+@pytest.mark.kernel_sensitive  # Table 3's cells and types, reproduced
 def test_rows_marked_ok_reproduce_every_printed_cell(table):
     for item in table:
         if item["row"]["status"] == "ok":
@@ -32,10 +33,12 @@ def test_rows_marked_ok_reproduce_every_printed_cell(table):
             assert item["type_computed"] == item["type_printed"]
 
 
+@pytest.mark.kernel_sensitive  # Table 3's cells and types, reproduced
 def test_every_collision_type_reproduces(table):
     assert [e["type_computed"] for e in table] == [e["type_printed"] for e in table]
 
 
+@pytest.mark.kernel_sensitive  # Table 3's cells and types, reproduced
 def test_every_miss_is_a_known_erratum(table):
     misses = [(c.law, c.row, c.name) for e in table for c in e["cells"] if not c.reproduced]
     assert all(not c.reason.startswith("UNEXPLAINED") for e in table for c in e["cells"])
@@ -48,6 +51,7 @@ def test_every_miss_is_a_known_erratum(table):
     ]
 
 
+@pytest.mark.kernel_sensitive  # Table 3's cells and types, reproduced
 def test_poisson_row2_cells_that_print_correctly_reproduce(table):
     """Δu and v_n^S of Poisson row 2 are right in print; only v_t^S and ΔE are not."""
     cells = {c.name: c for c in entry(table, "poisson", 2)["cells"]}
@@ -55,6 +59,7 @@ def test_poisson_row2_cells_that_print_correctly_reproduce(table):
         assert cells[name].reproduced
 
 
+@pytest.mark.kernel_sensitive  # Table 3's cells and types, reproduced
 def test_poisson_row2_misprints_pinned(table):
     result = entry(table, "poisson", 2)["result"]
     assert result.vt_separation == pytest.approx(-0.181, abs=0.5e-3)  # (38), not −0.035

@@ -19,6 +19,10 @@ from harness.scene import Body, Box, Rod, Scene, geometry
 HAND = 1e-12
 
 
+# coherent counts and the references' decisions: run again on other kernels (conftest.py)
+pytestmark = pytest.mark.kernel_sensitive
+
+
 def flat_box_doc(**top) -> dict:
     doc = {"name": "flat", "restitution": 0.5, "friction": 0.3, "ground": {},
            "body": [{"name": "box", "shape": "box", "width": 1.0, "height": 0.2, "mass": 1.0,

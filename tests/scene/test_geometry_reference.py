@@ -1,10 +1,13 @@
-"""The contact geometry against its straightforward form, to the last bit.
+"""The contact geometry against its straightforward form, to a few units in the last place.
 
 harness/scene/geometry.py finds the closest pair of two cores with plain floats and takes
 numpy's products only where it needs them; the functions below are the array form it
 replaced (every vertex-edge pair as numpy vectors, numpy reductions), kept here as the
-reference. Contacts must agree bit for bit, signed zeros included: sampling and the engine
-runs start from these contacts, and their results are compared bit for bit elsewhere.
+reference. The two agree bit for bit with OpenBLAS's Haswell kernels, but not with every
+kernel: both take products through numpy's ``@`` (BLAS), in different shapes, and an
+AVX-512 kernel rounds some of them differently in the last bit (issue 22). So the point
+count must be equal and the point, normal and gap within :data:`ULPS` units in the last place
+of the cores' scale (:func:`assert_same_contacts`).
 """
 
 from __future__ import annotations
@@ -135,11 +138,42 @@ def reference_body_contact(body_a, body_b, tolerance=geometry.DEFAULT_TOLERANCE)
 
 
 # -------------------------------------------------------------------------------- helpers
+#: How far a contact may be from the reference's, in units in the last place of the cores'
+#: scale: a product rounded differently in the last bit moves a point, gap or normal by about
+#: one unit, and a few such products meet in each.
+ULPS = 8
+
+
 def bits(contact: Contact) -> tuple:
     """Everything a contact holds, as bytes (so 0.0 and -0.0 differ)."""
     return (np.asarray(contact.point, dtype=float).tobytes(),
             np.asarray(contact.normal, dtype=float).tobytes(),
             np.float64(contact.gap).tobytes(), contact.point_count)
+
+
+def cores_scale(*bodies) -> float:
+    """The largest coordinate of the bodies' world cores and radii (at least 1)."""
+    values = [1.0]
+    for body in bodies:
+        core, radius = geometry.world_core(body)
+        values += [float(np.abs(core).max()), radius]
+    return max(values)
+
+
+def assert_same_contacts(found, expected, bodies, what) -> None:
+    """Contacts ``found`` are those ``expected`` (lists of them): point counts equal, points,
+    normals and gaps within :data:`ULPS` units in the last place of the ``bodies``' cores'
+    scale (:func:`cores_scale`, worked out only for contacts that differ at all)."""
+    assert len(found) == len(expected), what
+    for contact, reference in zip(found, expected):
+        if bits(contact) == bits(reference):
+            continue
+        assert contact.point_count == reference.point_count, what
+        bound = ULPS * float(np.spacing(cores_scale(*bodies)))
+        for name in ("point", "normal", "gap"):
+            departure = np.abs(np.asarray(getattr(contact, name), dtype=float)
+                               - np.asarray(getattr(reference, name), dtype=float)).max()
+            assert departure <= bound, f"{name} of {what}: {departure:.3g} > {bound:.3g}"
 
 
 def regular_polygon(sides, radius):
@@ -167,6 +201,7 @@ TOLERANCES = (geometry.DEFAULT_TOLERANCE, 1e-6)
 
 
 # ---------------------------------------------------------------------------------- tests
+@pytest.mark.kernel_sensitive
 def test_random_pairs_apart_touching_and_overlapping_give_the_reference_contact():
     rng = np.random.default_rng(20261122)
     branches = {"apart": 0, "cores touch or overlap": 0, "two points": 0}
@@ -177,12 +212,14 @@ def test_random_pairs_apart_touching_and_overlapping_give_the_reference_contact(
                  random_angle(rng))
         for tolerance in TOLERANCES:
             expected = reference_body_contact(a, b, tolerance)
-            assert bits(geometry.body_contact(a, b, tolerance)) == bits(expected), (a, b)
+            assert_same_contacts([geometry.body_contact(a, b, tolerance)], [expected], (a, b),
+                                 (a, b))
             branches["apart" if expected.gap > 0 else "cores touch or overlap"] += 1
             branches["two points"] += expected.point_count == 2
     assert min(branches.values()) > 100, branches  # every branch is exercised
 
 
+@pytest.mark.kernel_sensitive
 def test_faces_lying_exactly_on_faces_give_the_reference_contact():
     # Stacked boxes and polygons touching along a face: two points, exact zeros, ties.
     rng = np.random.default_rng(7)
@@ -198,9 +235,11 @@ def test_faces_lying_exactly_on_faces_give_the_reference_contact():
         for first, second in ((a, b), (b, a)):
             for tolerance in TOLERANCES:
                 expected = reference_body_contact(first, second, tolerance)
-                assert bits(geometry.body_contact(first, second, tolerance)) == bits(expected)
+                assert_same_contacts([geometry.body_contact(first, second, tolerance)],
+                                     [expected], (a, b), (first, second))
 
 
+@pytest.mark.kernel_sensitive
 def test_ground_contacts_give_the_reference_contact():
     rng = np.random.default_rng(11)
     for _ in range(2000):
@@ -209,7 +248,8 @@ def test_ground_contacts_give_the_reference_contact():
         for candidate in (body, geometry.place_on_ground(body)):
             for tolerance in TOLERANCES:
                 expected = reference_ground_contact(candidate, tolerance)
-                assert bits(geometry.ground_contact(candidate, tolerance)) == bits(expected)
+                assert_same_contacts([geometry.ground_contact(candidate, tolerance)],
+                                     [expected], (candidate,), candidate)
 
 
 @pytest.mark.parametrize("values", [[0.0, -0.0], [-0.0, 0.0], [-0.0, 0.0, 0.0, -1.0],
@@ -249,11 +289,12 @@ def test_contacts_at_several_tolerances_are_each_tolerances_reference_contact():
         for tolerances in ((1e-9, 1e-6, 1e-3), (1e-3, 1e-9)):
             found = geometry.core_contacts(core_a, radius_a, core_b, radius_b, tolerances)
             expected = [reference_body_contact(a, b, tolerance) for tolerance in tolerances]
-            assert [bits(contact) for contact in found] == [bits(e) for e in expected], (a, b)
+            assert_same_contacts(found, expected, (a, b), (a, b))
             flat += len({e.point_count for e in expected}) > 1
     assert flat > 50  # the tolerances disagree on the point count often enough
 
 
+@pytest.mark.kernel_sensitive
 def test_scene_contact_each_is_scene_contact_at_each_tolerance():
     # The scenario checks' two contacts of a point from one world core per body: ground
     # scenes (resting and lifted bodies, faces flat) and pairs, tolerances in either order.
@@ -278,6 +319,7 @@ def test_scene_contact_each_is_scene_contact_at_each_tolerance():
         for tolerances in ((1e-4, geometry.DEFAULT_TOLERANCE), (1e-9, 1e-3, 1e-6)):
             found = geometry.scene_contact_each(scene, tolerances)
             expected = [geometry.scene_contact(scene, tolerance) for tolerance in tolerances]
+            # Both are the library's own, from the same products: exact on every machine.
             assert [bits(c) for c in found] == [bits(e) for e in expected], scene
             flat += len({e.point_count for e in expected}) > 1
     assert flat > 20  # tolerances that disagree on the point count are among them
