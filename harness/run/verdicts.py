@@ -425,6 +425,9 @@ class SceneTerms:
     norm_before: float  # ‖u_before‖_M, the kinetic-energy norm before (sqrt(kg) m/s)
     features: tuple[BodyFeatures, ...]  # every body's point features, in scene order
     one_feature: bool  # every body a disk (:func:`_one_feature`)
+    # Per body, the feature at the scene's contact point in the touching pose (-1: a face):
+    # what the reference describes, one of the contact's features (:func:`contact_features`).
+    contact_features: tuple[int, ...] | None = None
 
 
 def prepare(scene, problem) -> SceneTerms:
@@ -439,7 +442,34 @@ def _prepare(scene, problem, delassus: tuple[float, float, float]) -> SceneTerms
     # Against the ground the frame-free norm is ke_norm(M, u) itself: not worked out twice.
     norm_before = (scales.speed_norm if scene.ground
                    else metrics.ke_norm(problem.mass_matrix, problem.u))
-    return SceneTerms(scales, delassus, norm_before, features, _one_feature(scene))
+    one_feature = _one_feature(scene)
+    return SceneTerms(scales, delassus, norm_before, features, one_feature,
+                      None if one_feature else contact_features(scene, features))
+
+
+def contact_features(scene, features: Sequence[BodyFeatures] | None = None,
+                     tolerances: Tolerances | None = None) -> tuple[int, ...]:
+    """Per body, the point feature (corner, end cap) at the scene's contact point in the
+    scene's pose (the touching pose the reference describes), or -1 for a face.
+
+    The engine's first recorded point alone cannot fix the contact's features: Box2D reports
+    a point computed before its step with the pose after it, through its polygon skin, so on
+    a spinning box the struck corner's first point lay 0.028 m from it and read as a face,
+    and the corner's next point became a false ``multi-contact`` (box-corner-spin, Box2D
+    ``defaults``). Both fix them (:func:`_second_features`).
+    """
+    from harness.scene import geometry
+
+    tolerances = DEFAULT_TOLERANCES if tolerances is None else tolerances
+    if features is None:
+        features = [body_features(body.shape) for body in scene.bodies]
+    point = np.asarray(geometry.scene_contact(scene).point, dtype=float)[:2]
+    found = []
+    for body, feature in zip(scene.bodies, features):
+        pose = np.array([[*body.position, body.angle]], dtype=float)
+        found.append(int(_features_at(feature, pose, point[None], np.zeros(1, dtype=np.int64),
+                                      np.array([tolerances.penetration * feature.extent]))[0]))
+    return tuple(found)
 
 
 def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = None,
@@ -498,7 +528,8 @@ def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = 
     else:
         reasons += _clipped(run.engine, problem.u, u_after, tolerances)
     if run.contacts is not None:
-        reasons += _second_features(scene, run.contacts, tolerances, terms.features)
+        reasons += _second_features(scene, run.contacts, tolerances, terms.features,
+                                    terms.contact_features)
     vn_after = float(problem.wn @ u_after)  # metrics.contact_velocities' v_n
     bound = tolerances.separation * scales.approach_speed
     if vn_after < -bound:
@@ -731,7 +762,8 @@ def judge_many(scenes: Sequence, problems: Sequence, runs: Sequence, u_after: np
     checked["multi-contact"] = [False] * count
     for row, second in zip(featured, _second_features_many(
             [runs[row].contact_record for row in featured],
-            [terms[row].features for row in featured], tol)):
+            [terms[row].features for row in featured], tol,
+            [terms[row].contact_features for row in featured])):
         checked["multi-contact"][row] = second
     failing = np.zeros(count, dtype=bool)  # a batched reason fails (names to list)
     for flags in fails.values():
@@ -967,13 +999,15 @@ def _one_feature(scene) -> bool:
 
 def _second_features(scene, contacts: Sequence[StepContacts] | ContactTrack,
                      tolerances: Tolerances,
-                     features: Sequence[BodyFeatures] | None = None) -> list[Reason]:
-    """``multi-contact`` when a point touches a feature other than the first contact's.
+                     features: Sequence[BodyFeatures] | None = None,
+                     fixed: Sequence[int] | None = None) -> list[Reason]:
+    """``multi-contact`` when a point touches a feature other than the contact's.
 
-    The first point of the first step fixes the contact's features (per body: a corner, an
-    end cap, or a face). A later point belongs to another feature when, on some body, it
-    lies at a point feature that differs from the first one's. ``features``: the bodies'
-    :class:`BodyFeatures` (None: from ``scene``).
+    The first point of the first step and ``fixed`` (None: nothing more), the features at
+    the scene's contact point (:func:`contact_features`), fix the contact's features (per
+    body: a corner, an end cap, or -1 for a face). A later point belongs to another feature
+    when, on some body, it lies at a point feature that is neither. ``features``: the
+    bodies' :class:`BodyFeatures` (None: from ``scene``).
     """
     if features is None:
         features = [body_features(body.shape) for body in scene.bodies]
@@ -985,6 +1019,8 @@ def _second_features(scene, contacts: Sequence[StepContacts] | ContactTrack,
     touched = _touched(features, track, tolerances)
     first = touched[0]
     other = (touched[1:] >= 0) & (touched[1:] != first)
+    if fixed is not None:
+        other &= touched[1:] != np.asarray(fixed, dtype=np.int64)
     later = np.flatnonzero(other.any(axis=1))
     if not len(later):
         return []
@@ -1042,7 +1078,8 @@ def _records_many(contact_records: Sequence) -> tuple[np.ndarray, ...]:
 
 def _second_features_many(contact_records: Sequence,
                           features: Sequence[Sequence[BodyFeatures]],
-                          tolerances: Tolerances) -> list[bool]:
+                          tolerances: Tolerances,
+                          fixed: Sequence[Sequence[int] | None] | None = None) -> list[bool]:
     """Whether :func:`_second_features` finds a second feature, for many runs at once
     (``contact_records[i]``, an ``EngineRun.contact_record``, of a scene whose bodies have
     ``features[i]``).
@@ -1050,7 +1087,8 @@ def _second_features_many(contact_records: Sequence,
     The arithmetic of :func:`_features_at`, operation for operation on the same operands
     (math's cos and sin per pose, the same ``(k, 2) @ (2, 2)`` products per pose), over the
     points of every run whose body has ``k`` point features at once. A run of fewer than two
-    points has no second one.
+    points has no second one. ``fixed[i]``: the features at run ``i``'s scene contact
+    (:func:`contact_features`), as :func:`_second_features`'s ``fixed`` (None: none).
     """
     if not contact_records:
         return []
@@ -1059,6 +1097,10 @@ def _second_features_many(contact_records: Sequence,
     if not len(points):
         return [False] * len(contact_records)
     touched = np.full((len(points), 2), -1, dtype=np.int64)
+    fixed_features = np.full((len(contact_records), 2), -1, dtype=np.int64)
+    for run, found in enumerate(fixed or ()):
+        if found is not None:
+            fixed_features[run, :len(found)] = found
     eligible = counts >= 2
     groups: dict[tuple[int, int], list[int]] = {}
     for run in np.flatnonzero(eligible).tolist():
@@ -1090,7 +1132,7 @@ def _second_features_many(contact_records: Sequence,
         touched[at, body] = np.where(within, np.argmin(distances, axis=1), -1)
     starts = np.cumsum(counts) - counts
     first = touched[np.minimum(starts, max(len(points) - 1, 0))][run_of_point]
-    other = (touched >= 0) & (touched != first)
+    other = (touched >= 0) & (touched != first) & (touched != fixed_features[run_of_point])
     other[starts[counts > 0]] = False
     return ((np.bincount(run_of_point, weights=other.any(axis=1),
                          minlength=len(contact_records)) > 0) & eligible).tolist()

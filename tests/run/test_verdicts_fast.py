@@ -52,6 +52,7 @@ from harness.run.verdicts import (
     feature_points,
 )
 from harness.scenarios import SCENARIO_DIR, load_scenario
+from harness.scene import geometry
 from harness.survey import laws as survey_laws
 from harness.survey.engines import run_engine
 from harness.survey.population import resolve_populations
@@ -225,6 +226,11 @@ def _one_feature(scene) -> bool:
 
 def _second_features(scene, contacts: Sequence[StepContacts],
                      tolerances: Tolerances) -> list[Reason]:
+    # the features at the scene's contact point in its pose are the contact's too
+    point = geometry.scene_contact(scene).point
+    at_contact = [feature_at(body.shape, (*body.position, body.angle), point,
+                             tolerances.penetration * body_extent(body.shape))
+                  for body in scene.bodies]
     first = None
     for record in contacts:
         for point in record.points:
@@ -236,7 +242,7 @@ def _second_features(scene, contacts: Sequence[StepContacts],
                 first = features
                 continue
             for index, (now, then) in enumerate(zip(features, first)):
-                if now is not None and now != then:
+                if now is not None and now != then and now != at_contact[index]:
                     body = scene.bodies[index]
                     names = feature_points(body.shape)[2]
                     return [Reason("multi-contact", float(record.step), None,
