@@ -58,6 +58,8 @@ REASONS: dict[str, str] = {
     "clipped": "a speed sits at the engine's velocity cap: the engine did not simulate the "
     "scene's speeds",
     "multi-contact": "a second feature touched within the run (which, at which step)",
+    "truncated-sequence": "the run ended while a feature still reaches the ground: it is only "
+    "the first impacts of the sequence its reference is",
     "not-separated": "the contact still closes at the end: v_n^S < -tolerance",
     "penetration": "the deepest overlap exceeds the bound scaled to the bodies' size",
     "impulse-residual": "the change of speeds is not one impulse at the contact point",
@@ -75,6 +77,8 @@ SINGLE_IMPACT = "single-impact"
 ENGINE_LAW = "newton-lcp"
 #: The law a run on declared simultaneous contacts is attributed to (the m-contact reference).
 NEWTON_COULOMB = "Newton–Coulomb"
+#: The law a run of a tilt's sequence of impacts is attributed to (its reference sequence).
+SEQUENCE_LAW = "the event-driven sequence with newton-lcp"
 FLAGGED = "flagged"
 
 #: Measured velocity caps: engine -> (largest |v_x|, |v_y| in m/s, largest |ω| in rad/s).
@@ -475,7 +479,8 @@ def contact_features(scene, features: Sequence[BodyFeatures] | None = None,
 def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = None,
           tolerances: Tolerances = DEFAULT_TOLERANCES, contacts=None,
           terms: SceneTerms | None = None,
-          implied: tuple[float, float, float] | None = None) -> Verdict:
+          implied: tuple[float, float, float] | None = None,
+          sequence: bool = False) -> Verdict:
     """The verdict of one engine run of ``scene``.
 
     Parameters
@@ -494,7 +499,11 @@ def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = 
     contacts : sequence of harness.scene.Contact, optional
         The contacts a scene declares to touch at once (``contacts = "simultaneous"``, from
         :func:`declared_contacts`): the run is judged against all of them
-        (:func:`judge_declared`). None: one contact, ``problem``'s.
+        (:func:`judge_declared`). None: one contact, ``problem``'s. With ``sequence``, the
+        features a tilt's reference sequence strikes (:func:`sequence_contacts`).
+    sequence : bool
+        ``contacts`` are struck one after another, a sequence the run must finish
+        (``truncated-sequence``).
     terms : SceneTerms, optional
         ``prepare(scene, problem)``, when the caller judges several runs of one scene (the
         survey: one per engine and preset); None: worked out here.
@@ -506,7 +515,8 @@ def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = 
     """
     if contacts is not None:
         return judge_declared(scene, problem, run, contacts,
-                              law_energy_change=law_energy_change, tolerances=tolerances)
+                              law_energy_change=law_energy_change, tolerances=tolerances,
+                              sequence=sequence)
     if terms is None:
         terms = prepare(scene, problem)
     reasons: list[Reason] = []
@@ -1156,9 +1166,58 @@ def declared_contacts(scenario, scene) -> tuple | None:
     return tuple(geometry.scene_contacts(scene, tolerance=ONE_POINT_TOLERANCE))
 
 
+def sequence_contacts(scenario, scene) -> tuple | None:
+    """The features a tilt's reference sequence strikes (``expect_sequence``: the
+    event-driven sequence with ``newton-lcp``), each as a contact at its ground point in the
+    scene's pose (as the references take them), in order of first strike; None for a
+    scenario whose reference is not a sequence (docs/verdicts.md, 'Sequences of impacts')."""
+    from harness.run import references
+
+    if references.kind_of(scenario) != references.EVENT_DRIVEN or not scene.ground:
+        return None
+    from harness.reference.event_driven import sequence_outline
+    from harness.scene import Contact, geometry
+
+    world, radius = geometry.world_core(scene.bodies[0])
+    return tuple(Contact(point=np.array([world[k, 0], world[k, 1] - radius]),
+                         normal=np.array([0.0, 1.0]), gap=float(world[k, 1] - radius))
+                 for k in sequence_outline(scene).features)
+
+
+def truncated_sequence(scene, run: RunNumbers, scales: SceneScales,
+                       tolerances: Tolerances = DEFAULT_TOLERANCES) -> list[Reason]:
+    """``truncated-sequence`` when the run's end state strikes the ground again: the body in
+    the pose of the run's last contact step, with the run's final speeds, in free flight,
+    has a feature that meets the ground faster than the separation tolerance
+    (``separation · |v_n^A|``). Such a run is only the first impacts of a sequence. Needs the
+    contact records and one body on the ground (else no reason)."""
+    from harness.reference.event_driven import next_strike
+
+    if run.contacts is None or not scene.ground:
+        return []
+    track = _track(run.contacts)
+    if not len(track.steps):
+        return []
+    x, y, angle = (float(v) for v in track.poses[-1, 0])
+    v_x, v_y, omega = (float(v) for v in run.u_after[:3])
+    body = scene.bodies[0].moved(position=(x, y), angle=angle, velocity=(v_x, v_y),
+                                 angular_velocity=omega)
+    found = next_strike(body, tolerances.separation * scales.approach_speed)
+    if found is None:
+        return []
+    feature, when = found
+    names = body_features(body.shape).names
+    step = int(track.steps[-1])
+    return [Reason("truncated-sequence", when, None,
+                   f"the run ended with {body.name}'s {names[feature]} still reaching the "
+                   f"ground {when:.3g} s after its last contact step ({step}): only the "
+                   "first impacts of the sequence")]
+
+
 def judge_declared(scene, problem, run: RunNumbers, contacts, *,
                    law_energy_change: float | None = None,
-                   tolerances: Tolerances = DEFAULT_TOLERANCES) -> Verdict:
+                   tolerances: Tolerances = DEFAULT_TOLERANCES,
+                   sequence: bool = False) -> Verdict:
     """The verdict of an engine run of a scene declared to touch at ``contacts`` at once.
 
     The checks of :func:`judge`, held against every declared contact instead of one: a
@@ -1168,6 +1227,10 @@ def judge_declared(scene, problem, run: RunNumbers, contacts, *,
     the engine's summed impulse must match their sum; an energy gain is the law's when the
     Newton–Coulomb reference gains too (``law_energy_change``). docs/verdicts.md, 'Declared
     simultaneous contacts'.
+
+    ``sequence``: the contacts are the features a tilt's reference sequence strikes one after
+    another (:func:`sequence_contacts`), not at once; the run must also have finished the
+    sequence (:func:`truncated_sequence`), and its energy is held against the sequence's.
     """
     from harness.scene import geometry
 
@@ -1190,6 +1253,8 @@ def judge_declared(scene, problem, run: RunNumbers, contacts, *,
         reasons += _clipped(run.engine, problem.u, u_after, tolerances)
     if run.contacts is not None:
         reasons += _undeclared_features(scene, contacts, run.contacts, tolerances)
+    if sequence:
+        reasons += truncated_sequence(scene, run, scales, tolerances)
     reasons += _declared_separation(contacts, wn @ u_after, scales, tolerances)
     reasons += _penetration(run, scales, tolerances)
     impulses, residual = declared_impulses(problem.mass_matrix, wn, wt, problem.u, u_after,
@@ -1204,7 +1269,8 @@ def judge_declared(scene, problem, run: RunNumbers, contacts, *,
         engine="(ΣI_n, ΣI_t)", implied=f"by Δu over the {len(contacts)} declared contacts",
         scale="max_i |v_n^A(i)|/m_nn(i)")
     reasons += _energy_gain(metrics.energy_change(problem.mass_matrix, problem.u, u_after),
-                            scales, law_energy_change, tolerances, law=NEWTON_COULOMB)
+                            scales, law_energy_change, tolerances,
+                            law=SEQUENCE_LAW if sequence else NEWTON_COULOMB)
     reasons.sort(key=lambda reason: _REASON_ORDER[reason.name])
     return Verdict(tuple(reasons))
 
@@ -1320,7 +1386,8 @@ def reason_counts(reasons_per_run: Sequence[Sequence[Mapping[str, Any]]]) -> dic
 
 __all__ = ["DEFAULT_TOLERANCES", "REASONS", "SPEED_CAPS", "BodyFeatures", "ContactTrack",
            "Reason", "RunNumbers", "SceneScales", "SceneTerms", "StepContacts", "Tolerances",
-           "Verdict", "body_features", "declared_contacts", "declared_impulses",
+           "Verdict", "body_features", "contact_features", "declared_contacts",
+           "declared_impulses", "sequence_contacts", "truncated_sequence",
            "declared_scales", "feature_at", "feature_points", "impulse_from_velocities",
            "TermArrays", "judge", "judge_declared", "judge_many", "numbers_from_output",
            "numbers_from_run", "prepare", "prepare_many", "reason_counts", "scene_scales",
