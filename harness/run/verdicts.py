@@ -60,6 +60,8 @@ REASONS: dict[str, str] = {
     "multi-contact": "a second feature touched within the run (which, at which step)",
     "truncated-sequence": "the run ended while a feature still reaches the ground: it is only "
     "the first impacts of the sequence its reference is",
+    "not-simultaneous": "on a face declared to strike at once, the declared contacts were "
+    "first struck at different steps: a sequence of impacts, not the simultaneous impact",
     "not-separated": "the contact still closes at the end: v_n^S < -tolerance",
     "penetration": "the deepest overlap exceeds the bound scaled to the bodies' size",
     "impulse-residual": "the change of speeds is not one impulse at the contact point",
@@ -1253,6 +1255,8 @@ def judge_declared(scene, problem, run: RunNumbers, contacts, *,
         reasons += _clipped(run.engine, problem.u, u_after, tolerances)
     if run.contacts is not None:
         reasons += _undeclared_features(scene, contacts, run.contacts, tolerances)
+        if not sequence:
+            reasons += staggered_strikes(scene, contacts, run.contacts, tolerances)
     if sequence:
         reasons += truncated_sequence(scene, run, scales, tolerances)
     reasons += _declared_separation(contacts, wn @ u_after, scales, tolerances)
@@ -1373,6 +1377,55 @@ def _undeclared_features(scene, contacts, records: Sequence[StepContacts] | Cont
                    f"outside the {len(contacts)} declared contacts ({listed})")]
 
 
+def first_strikes(scene, contacts, records: Sequence[StepContacts] | ContactTrack,
+                  tolerances: Tolerances = DEFAULT_TOLERANCES) -> list[int | None]:
+    """Per declared contact, the first step at which a recorded point lies at it (None:
+    never). A point lies at the declared contact whose feature (corner, end cap) it touches
+    on some body (:func:`_touched`, in the pose of its step); a point at no declared
+    contact's feature belongs to the nearest declared point (a face against a face)."""
+    features = [body_features(body.shape) for body in scene.bodies]
+    track = _track(records)
+    found: list[int | None] = [None] * len(contacts)
+    if not track.size:
+        return found
+    poses = np.array([[(*body.position, body.angle) for body in scene.bodies]], dtype=float)
+    where = np.array([[*contact.point[:2], 0.0] for contact in contacts],
+                     dtype=float).reshape(-1, 3)
+    declared = _touched(features, ContactTrack(np.zeros(1, dtype=np.int64), poses, where,
+                                               np.zeros(len(contacts), dtype=np.int64)),
+                        tolerances)  # (contacts, bodies)
+    touched = _touched(features, track, tolerances)  # (points, bodies)
+    at = ((touched[:, None, :] >= 0) & (touched[:, None, :] == declared[None])).any(axis=2)
+    distances = np.hypot(track.points[:, None, 0] - where[None, :, 0],
+                         track.points[:, None, 1] - where[None, :, 1])
+    nearest = np.argmin(distances, axis=1)
+    owner = np.where(at.any(axis=1), np.argmax(at, axis=1), nearest)
+    steps = track.steps[track.record]
+    for index in range(len(contacts)):
+        mine = steps[owner == index]
+        if len(mine):
+            found[index] = int(mine.min())
+    return found
+
+
+def staggered_strikes(scene, contacts, records: Sequence[StepContacts] | ContactTrack,
+                      tolerances: Tolerances = DEFAULT_TOLERANCES) -> list[Reason]:
+    """``not-simultaneous`` when two declared contacts were first struck at different steps
+    (:func:`first_strikes`): the engine did a sequence of impacts where the file declares
+    one simultaneous impact. The residual cannot tell: for one body on the ground the
+    declared contacts' columns span its speeds, so it is zero by construction. Contacts
+    never struck are not counted here (their separation is checked)."""
+    firsts = first_strikes(scene, contacts, records, tolerances)
+    struck = [(step, index) for index, step in enumerate(firsts) if step is not None]
+    if len(struck) < 2 or len({step for step, _ in struck}) == 1:
+        return []
+    (early, first), (late, last) = min(struck), max(struck)
+    return [Reason("not-simultaneous", float(late - early), 0.0,
+                   f"{_contact_name(contacts, first)} first struck at step {early}, "
+                   f"{_contact_name(contacts, last)} at step {late}: a sequence of impacts, "
+                   "not the simultaneous impact declared")]
+
+
 def reason_counts(reasons_per_run: Sequence[Sequence[Mapping[str, Any]]]) -> dict[str, int]:
     """``{reason: runs failing it}`` over many runs' ``reasons`` lists (law-attributed
     energy gains counted as ``energy-gain (law)``, not failing)."""
@@ -1387,7 +1440,8 @@ def reason_counts(reasons_per_run: Sequence[Sequence[Mapping[str, Any]]]) -> dic
 __all__ = ["DEFAULT_TOLERANCES", "REASONS", "SPEED_CAPS", "BodyFeatures", "ContactTrack",
            "Reason", "RunNumbers", "SceneScales", "SceneTerms", "StepContacts", "Tolerances",
            "Verdict", "body_features", "contact_features", "declared_contacts",
-           "declared_impulses", "sequence_contacts", "truncated_sequence",
+           "declared_impulses", "first_strikes", "sequence_contacts", "staggered_strikes",
+           "truncated_sequence",
            "declared_scales", "feature_at", "feature_points", "impulse_from_velocities",
            "TermArrays", "judge", "judge_declared", "judge_many", "numbers_from_output",
            "numbers_from_run", "prepare", "prepare_many", "reason_counts", "scene_scales",
