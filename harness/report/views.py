@@ -15,7 +15,7 @@ import numpy as np
 
 from harness.run.metrics import departure_split
 from harness.run.records import ANALYTIC, Record, Results
-from harness.run.references import SIMULTANEOUS
+from harness.run.references import SINGLE
 
 FIGURES = "figures"
 LAW_ORDER = ("poisson", "stronge", "stronge-paper", "newton", "newton-lcp")
@@ -111,12 +111,14 @@ def engine_scenarios(results: Results) -> list[str]:
 
 
 def single_contact(record: Record) -> bool:
-    """Whether the single-contact laws can describe ``record``'s run: not at a declared
-    flat face (reference ``simultaneous``, harness/run/references.py). A tilted landing's
-    run that ends before the second corner strikes is a single impact (its verdict says
-    so), so an event-driven point counts; results without references too."""
+    """Whether the single-contact laws can describe ``record``'s run: its point's reference
+    is the single-contact laws (harness/run/references.py), not a declared flat face
+    (``simultaneous``) nor a tilt (``event-driven``: its runs are judged against the whole
+    sequence of impacts, and a run of its first impact only is flagged
+    ``truncated-sequence``); results without references count. The other points have their
+    own section, with the references that apply (harness/report/contacts.py)."""
     reference = (record.diagnostics or {}).get("reference") or {}
-    return reference.get("kind") != SIMULTANEOUS
+    return reference.get("kind", SINGLE) == SINGLE
 
 
 def worst_departure(records: Iterable[Record], law: str) -> tuple[float, bool, bool]:
@@ -138,8 +140,8 @@ def worst_departure(records: Iterable[Record], law: str) -> tuple[float, bool, b
 
 def worst_record(records: Iterable[Record], law: str) -> Record | None:
     """The single-impact (``ok``) run with the largest finite departure from ``law``, never
-    at a declared flat face (it departs from its own reference, not from the single-contact
-    laws)."""
+    at a flat face or a tilt (it departs from its own reference, not from the single-contact
+    laws: :func:`single_contact`)."""
     runs = [r for r in records if r.ok and r.departure.get(law) is not None
             and math.isfinite(r.departure[law]) and single_contact(r)]
     return max(runs, key=lambda r: r.departure[law]) if runs else None

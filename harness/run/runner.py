@@ -1398,10 +1398,15 @@ def check_gates(scenario: Scenario, records: Sequence[Record]) -> list[GateResul
             continue
         for record in matching:
             value = record.departure.get(gate.law)
+            situation = ((record.diagnostics or {}).get("reference") or {}).get(
+                "kind", references.SINGLE)
             if record.skipped:
                 status = f"not checked: {record.status}"
             elif record.verdict == verdicts.FLAGGED:  # not a single impact: no departure
                 status = f"not checked: flagged ({', '.join(record.failing_reasons)})"
+            elif situation != references.SINGLE and value is None:  # a law that does not apply
+                status = (f"not checked: {gate.law} does not apply to a {situation} point "
+                          "(its references: docs/multi-contact.md)")
             elif value is None or not math.isfinite(value):
                 status = "FAIL"
             else:

@@ -316,3 +316,18 @@ def test_pybullet_accurate_misses_a_face_whose_far_end_recedes(flat_records):
         reason = record.reasons[0]
         assert f"contact {closing + 1} of 2" in reason["detail"]
         assert reason["value"] == pytest.approx(wn[closing] @ scene.state(), abs=1e-12)
+
+
+def test_flat_face_records_carry_no_single_contact_law_departures(flat_records):
+    """The single-contact laws do not describe a flat face (their five departures were all
+    equal there): an engine record holds departures from the m-contact references only,
+    and its departure from the primary one, Newton–Coulomb, among them."""
+    import planar_impact as pi
+
+    for record in flat_records:
+        assert record.departure, record.scenario
+        assert not set(record.departure) & set(pi.LAWS), sorted(record.departure)
+        primary = record.diagnostics["reference"]["primary"]
+        assert primary.startswith("newton-coulomb")
+        assert record.departure[primary] == record.diagnostics["reference"][
+            "departure_from_primary"]

@@ -265,14 +265,33 @@ def test_a_run_of_only_the_first_impact_is_truncated_and_not_counted():
     assert any_flagged and math.isnan(value)
 
 
-def test_flagged_tilted_runs_are_not_gated_or_averaged(tilted_records):
-    from harness.report.views import worst_departure
+def test_tilted_runs_carry_only_the_sequence_references_and_flagged_ones_show_as_flagged(
+        tilted_records):
+    """A tilt's engine records hold departures from its event-driven references only (never
+    the single-contact laws, which do not describe a sequence); the heat map and the
+    summary's law tables leave the tilt out, and its own table shows a flagged run as
+    flagged, with its reasons, never as a departure."""
+    from harness.report import contacts
+    from harness.report.views import engine_scenarios, worst_departure
+    from harness.run.records import Results
 
-    flagged = [r for r in tilted_records if r.verdict == verdicts.FLAGGED]
+    engine_records = [r for r in tilted_records if r.source != "analytic"]
+    for record in engine_records:
+        assert record.departure and all(name.startswith("event-driven/")
+                                        for name in record.departure), record.departure
+    flagged = [r for r in engine_records if r.verdict == verdicts.FLAGGED]
     assert flagged and all(r.status != "ok" and r.failing_reasons for r in flagged)
+    assert {"truncated-sequence"} <= {name for r in flagged for name in r.failing_reasons}
     for label in {r.label for r in flagged}:
-        subset = [r for r in tilted_records if r.label == label]
-        value, any_flagged, _ = worst_departure(subset, "newton-lcp")
-        ok_values = [r.departure["newton-lcp"] for r in subset if r.ok]
-        assert any_flagged
-        assert (math.isnan(value) and not ok_values) or value == max(ok_values)
+        value, any_flagged, _ = worst_departure([r for r in engine_records if r.label == label],
+                                                "poisson")
+        assert any_flagged and math.isnan(value)
+    results = Results(list(tilted_records))
+    assert engine_scenarios(results) == []
+    table = contacts._rows(TILTED[0].name, {"references": [
+        {"point": r.point["label"], "kind": "event-driven", "primary": "event-driven/newton-lcp"}
+        for r in tilted_records if r.scenario == TILTED[0].name and r.law == "poisson"]},
+        [r for r in tilted_records if r.scenario == TILTED[0].name])
+    cells = [cell for row in table[1] for cell in row]
+    shown = [c for c in cells if c.startswith("flagged: ")]
+    assert len(shown) == sum(1 for r in flagged if r.scenario == TILTED[0].name)
