@@ -431,9 +431,6 @@ class SceneTerms:
     norm_before: float  # ‖u_before‖_M, the kinetic-energy norm before (sqrt(kg) m/s)
     features: tuple[BodyFeatures, ...]  # every body's point features, in scene order
     one_feature: bool  # every body a disk (:func:`_one_feature`)
-    # Per body, the feature at the scene's contact point in the touching pose (-1: a face):
-    # what the reference describes, one of the contact's features (:func:`contact_features`).
-    contact_features: tuple[int, ...] | None = None
 
 
 def prepare(scene, problem) -> SceneTerms:
@@ -448,9 +445,7 @@ def _prepare(scene, problem, delassus: tuple[float, float, float]) -> SceneTerms
     # Against the ground the frame-free norm is ke_norm(M, u) itself: not worked out twice.
     norm_before = (scales.speed_norm if scene.ground
                    else metrics.ke_norm(problem.mass_matrix, problem.u))
-    one_feature = _one_feature(scene)
-    return SceneTerms(scales, delassus, norm_before, features, one_feature,
-                      None if one_feature else contact_features(scene, features))
+    return SceneTerms(scales, delassus, norm_before, features, _one_feature(scene))
 
 
 def contact_features(scene, features: Sequence[BodyFeatures] | None = None,
@@ -540,8 +535,7 @@ def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = 
     else:
         reasons += _clipped(run.engine, problem.u, u_after, tolerances)
     if run.contacts is not None:
-        reasons += _second_features(scene, run.contacts, tolerances, terms.features,
-                                    terms.contact_features)
+        reasons += _second_features(scene, run.contacts, tolerances, terms.features)
     vn_after = float(problem.wn @ u_after)  # metrics.contact_velocities' v_n
     bound = tolerances.separation * scales.approach_speed
     if vn_after < -bound:
@@ -775,7 +769,7 @@ def judge_many(scenes: Sequence, problems: Sequence, runs: Sequence, u_after: np
     for row, second in zip(featured, _second_features_many(
             [runs[row].contact_record for row in featured],
             [terms[row].features for row in featured], tol,
-            [terms[row].contact_features for row in featured])):
+            [scenes[row] for row in featured])):
         checked["multi-contact"][row] = second
     failing = np.zeros(count, dtype=bool)  # a batched reason fails (names to list)
     for flags in fails.values():
@@ -1011,15 +1005,15 @@ def _one_feature(scene) -> bool:
 
 def _second_features(scene, contacts: Sequence[StepContacts] | ContactTrack,
                      tolerances: Tolerances,
-                     features: Sequence[BodyFeatures] | None = None,
-                     fixed: Sequence[int] | None = None) -> list[Reason]:
+                     features: Sequence[BodyFeatures] | None = None) -> list[Reason]:
     """``multi-contact`` when a point touches a feature other than the contact's.
 
-    The first point of the first step and ``fixed`` (None: nothing more), the features at
-    the scene's contact point (:func:`contact_features`), fix the contact's features (per
-    body: a corner, an end cap, or -1 for a face). A later point belongs to another feature
-    when, on some body, it lies at a point feature that is neither. ``features``: the
-    bodies' :class:`BodyFeatures` (None: from ``scene``).
+    The first point of the first step and the scene's contact point
+    (:func:`contact_features`, worked out only when a later point is at another feature than
+    the first's) fix the contact's features (per body: a corner, an end cap, or -1 for a
+    face). A later point belongs to another feature when, on some body, it lies at a point
+    feature that is neither. ``features``: the bodies' :class:`BodyFeatures` (None: from
+    ``scene``).
     """
     if features is None:
         features = [body_features(body.shape) for body in scene.bodies]
@@ -1031,8 +1025,9 @@ def _second_features(scene, contacts: Sequence[StepContacts] | ContactTrack,
     touched = _touched(features, track, tolerances)
     first = touched[0]
     other = (touched[1:] >= 0) & (touched[1:] != first)
-    if fixed is not None:
-        other &= touched[1:] != np.asarray(fixed, dtype=np.int64)
+    if other.any():
+        other &= touched[1:] != np.asarray(contact_features(scene, features, tolerances),
+                                           dtype=np.int64)
     later = np.flatnonzero(other.any(axis=1))
     if not len(later):
         return []
@@ -1091,7 +1086,7 @@ def _records_many(contact_records: Sequence) -> tuple[np.ndarray, ...]:
 def _second_features_many(contact_records: Sequence,
                           features: Sequence[Sequence[BodyFeatures]],
                           tolerances: Tolerances,
-                          fixed: Sequence[Sequence[int] | None] | None = None) -> list[bool]:
+                          scenes: Sequence | None = None) -> list[bool]:
     """Whether :func:`_second_features` finds a second feature, for many runs at once
     (``contact_records[i]``, an ``EngineRun.contact_record``, of a scene whose bodies have
     ``features[i]``).
@@ -1099,8 +1094,9 @@ def _second_features_many(contact_records: Sequence,
     The arithmetic of :func:`_features_at`, operation for operation on the same operands
     (math's cos and sin per pose, the same ``(k, 2) @ (2, 2)`` products per pose), over the
     points of every run whose body has ``k`` point features at once. A run of fewer than two
-    points has no second one. ``fixed[i]``: the features at run ``i``'s scene contact
-    (:func:`contact_features`), as :func:`_second_features`'s ``fixed`` (None: none).
+    points has no second one. ``scenes[i]``: run ``i``'s scene, whose contact point fixes
+    the contact's features too, as in :func:`_second_features` (worked out only for a run
+    with a candidate); None: the first points alone.
     """
     if not contact_records:
         return []
@@ -1109,10 +1105,6 @@ def _second_features_many(contact_records: Sequence,
     if not len(points):
         return [False] * len(contact_records)
     touched = np.full((len(points), 2), -1, dtype=np.int64)
-    fixed_features = np.full((len(contact_records), 2), -1, dtype=np.int64)
-    for run, found in enumerate(fixed or ()):
-        if found is not None:
-            fixed_features[run, :len(found)] = found
     eligible = counts >= 2
     groups: dict[tuple[int, int], list[int]] = {}
     for run in np.flatnonzero(eligible).tolist():
@@ -1144,8 +1136,14 @@ def _second_features_many(contact_records: Sequence,
         touched[at, body] = np.where(within, np.argmin(distances, axis=1), -1)
     starts = np.cumsum(counts) - counts
     first = touched[np.minimum(starts, max(len(points) - 1, 0))][run_of_point]
-    other = (touched >= 0) & (touched != first) & (touched != fixed_features[run_of_point])
+    other = (touched >= 0) & (touched != first)
     other[starts[counts > 0]] = False
+    if scenes is not None:  # the scene's contact point: only where a run has a candidate
+        fixed = np.full((len(contact_records), 2), -1, dtype=np.int64)
+        for run in np.unique(run_of_point[other.any(axis=1)]).tolist():
+            found = contact_features(scenes[run], features[run], tolerances)
+            fixed[run, :len(found)] = found
+        other &= touched != fixed[run_of_point]
     return ((np.bincount(run_of_point, weights=other.any(axis=1),
                          minlength=len(contact_records)) > 0) & eligible).tolist()
 
