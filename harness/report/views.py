@@ -286,13 +286,16 @@ def run_verdict(record: Record) -> tuple[str | None, list[str]]:
 
 
 def split_rows(results: Results) -> list[dict]:
-    """The departure split of every engine record (metrics.departure_split)."""
+    """The departure split of every engine record at a single-contact point
+    (metrics.departure_split; a flat face's or a tilt's record holds no departure from the
+    single-contact laws, :func:`single_contact`)."""
 
     lcp = {(r.scenario, r.point["index"]): r for r in results.records
            if r.source == ANALYTIC and r.law == "newton-lcp" and r.ok}
     rows = []
     for record in results.records:
-        if record.source == ANALYTIC or record.skipped or record.u_after is None:
+        if (record.source == ANALYTIC or record.skipped or record.u_after is None
+                or not single_contact(record)):
             continue
         law_record = lcp.get((record.scenario, record.point["index"]))
         if law_record is None:
