@@ -99,7 +99,11 @@ What the base class does, once for every engine
 * The loop: step until the contact ends -- a step, after contact began, with no contact, or
   whose normal impulse is at most ``no_impulse_relative`` of the largest while no contact
   point still closes (relative normal velocity below ``-1e-9`` of the scene's largest speed)
-  -- or ``max_steps``.
+  -- or ``max_steps``. A scene whose reference is a sequence of impacts sets
+  ``Scene.run_until`` (s, the sequence's last impact after the first contact): a separation
+  ends the run only from ``ceil(run_until / time_step) +`` :data:`SEQUENCE_MARGIN_STEPS`
+  steps after the first contact on, so that every engine runs the whole sequence (a later
+  contact is recorded and resolved like the first; the run ends separated or at the cap).
 * The run's bookkeeping from the raw records: first contact and its normal; contact steps;
   distinct in-plane points per step (3-D engines report a prism's edge as two points at ±y);
   largest penetration; the summed impulse on body B projected onto the first normal and onto
@@ -158,6 +162,11 @@ OUT_OF_PLANE_TOLERANCE = 1e-9
 APPROACH_RELATIVE = 1e-9
 # In-plane points closer than this fraction of the largest body extent are one point.
 SAME_POINT_RELATIVE = 1e-6
+# Steps beyond a scene's ``run_until`` through which a separation does not end the run: an
+# engine resolves a strike up to a step or two from its exact time (it detects contacts at
+# the start or the end of a step, or through a skin), so the sequence's last strike may come
+# a step or two after the reference's.
+SEQUENCE_MARGIN_STEPS = 4
 
 _BLOW_UP_SQUARED = BLOW_UP_FACTOR**2
 _MAX_PLANS = 256  # (scene, settings) pairs remembered; the cache is emptied when full
@@ -335,8 +344,8 @@ class _Plan:
     """Everything a run needs that depends only on the scene and the settings objects."""
 
     __slots__ = ("_same_point", "before", "body_b_mass", "body_b_velocity", "dt", "max_steps",
-                 "notes", "prepared", "scene", "settings", "shift", "speed_scale", "weights",
-                 "world", "world_key")
+                 "notes", "prepared", "scene", "settings", "shift", "speed_scale", "until_steps",
+                 "weights", "world", "world_key")
 
     @property
     def same_point(self) -> float:
@@ -375,10 +384,12 @@ class _Progress:
         if raw is None:
             if self.first_contact is not None:
                 self.separated = True
-                return True
+                return steps - self.first_contact >= self.plan.until_steps
             return False
         if self.first_contact is None:
             self.first_contact = steps
+        self.separated = False  # a contact again, in a sequence of impacts (run_until)
+        self.velocities = None
         engine = self.engine
         poses = engine._read_poses(world)
         self.records.append((steps, raw, poses))
@@ -391,6 +402,8 @@ class _Progress:
             velocities = engine._read_velocities(world)
             if not _approaching(poses, velocities, raw, self.plan.speed_scale):
                 self.separated = True
+                if steps - self.first_contact < self.plan.until_steps:
+                    return False  # the sequence may not be over: read again at the end
                 self.velocities = velocities
                 return True
         return False
@@ -671,6 +684,10 @@ class Engine(abc.ABC):
         plan.prepared = self._prepare(world, scene, settings, start, weights)
         plan.dt = float(settings["time_step"])
         plan.max_steps = int(settings["max_steps"])
+        until = getattr(scene, "run_until", None)
+        # steps after the first contact before which a separation does not end the run
+        plan.until_steps = (0 if until is None
+                            else math.ceil(until / plan.dt) + SEQUENCE_MARGIN_STEPS)
         plan.weights = weights
         bodies = scene.bodies
         # energy_before and the largest of |v_x|, |v_y|, |ω| (Scene.state()'s) in one pass.

@@ -228,3 +228,55 @@ def _approach(problem, body, position, velocity, omega, feature_point, radius):
     """Normal velocity of the ground point under feature ``feature_point`` (m/s)."""
     r_x = feature_point[0] - position[0]
     return float(velocity[1] + omega * r_x)
+
+
+@dataclass(frozen=True)
+class SequenceOutline:
+    """What an engine run of a tilt needs from its reference sequence (``newton-lcp`` at each
+    impact, the primary reference): the features it strikes, in order of first strike, and
+    the time of its last impact after the first (s)."""
+
+    features: tuple[int, ...]
+    last_impact: float
+    finished: bool
+
+
+def sequence_outline(scene: Scene, law: str = "newton-lcp") -> SequenceOutline:
+    """The :class:`SequenceOutline` of ``scene``'s event sequence under ``law``."""
+    sequence = event_sequence(scene, law)
+    features = tuple(dict.fromkeys(event.feature for event in sequence.events))
+    last = sequence.events[-1].time if sequence.events else 0.0
+    return SequenceOutline(features, float(last), sequence.finished)
+
+
+def next_strike(body: Body, approach: float) -> tuple[int, float] | None:
+    """The first feature of ``body`` (its pose and speeds as given, in free flight) to strike
+    the ground, and when (s; 0 for a feature on or below the ground that approaches now);
+    None when none does within :func:`event_sequence`'s horizon.
+
+    A strike counts only when the feature meets the ground faster than ``approach`` (m/s,
+    > 0): a run's end state carries its engine's rounding, and a resting corner creeping
+    down at 1e-7 of the speeds is not another impact.
+    """
+    points_local, radius = local_core(body.shape)
+    size = float(np.max(np.linalg.norm(points_local, axis=1))) + radius
+    position = np.asarray(body.position, dtype=float)
+    angle, omega = float(body.angle), float(body.angular_velocity)
+    velocity = np.asarray(body.velocity, dtype=float)
+    world, _ = _feature_state(body, position, angle)
+
+    def normal_speed(k: int, when: float) -> float:
+        turn = angle + omega * when
+        x, y = points_local[k]
+        return float(velocity[1] + omega * (math.cos(turn) * x - math.sin(turn) * y))
+
+    for k in range(len(world)):
+        if world[k, 1] - radius <= TOUCH_TOLERANCE * size and normal_speed(k, 0.0) < -approach:
+            return k, 0.0
+    rise = velocity[1]
+    limit = (2.0 * size / rise) if rise > 0 else 2.0 * math.pi / max(abs(omega), 1e-3)
+    when, feature = _first_contact(points_local, radius, position, angle, velocity, omega,
+                                   limit, size)
+    if when is None or normal_speed(feature, when) >= -approach:
+        return None
+    return int(feature), float(when)

@@ -30,8 +30,12 @@ INTRO = (
     "paper's Stronge (S) and Newton (N), with effective approaches (eff) or literally (lit). "
     "Engine columns: departure from the reference; for a tilt, in brackets, the cut of the "
     "sequence the run is nearest (full: all impacts; after-k: only the first k, with the "
-    "departure from that cut). N–C at pose, sequential at pose: departure of those answers, "
-    "taken at the tilted pose on the struck features, from the event sequence.")
+    "departure from that cut). A flagged run is shown as 'flagged' with its reasons and its "
+    "number in square brackets, never as a departure: a tilt's runs run until the sequence's "
+    "last impact and one that stops short is truncated-sequence; a flat face struck corner "
+    "after corner is not-simultaneous (docs/verdicts.md). N–C at pose, sequential at pose: "
+    "departure of those answers, taken at the tilted pose on the struck features, from the "
+    "event sequence.")
 
 
 def _number(value) -> str:
@@ -75,6 +79,10 @@ def _rows(name: str, info: dict, records) -> tuple[list[str], list[list[str]]] |
                 cut, value = summary["nearest_cut"]
                 cut = cut.rsplit("/", 1)[-1]
                 cell += " (full)" if cut == "newton-lcp" else f" ({cut}: {_number(value)})"
+            if record is not None and record.skipped:
+                cell = "skipped"
+            elif record is not None and not record.ok:  # not the situation: never a departure
+                cell = f"flagged: {', '.join(record.failing_reasons) or record.status} [{cell}]"
             row.append(cell)
         rows.append(row)
     return header, rows

@@ -154,7 +154,8 @@ def split_view(records: Sequence[Record]) -> dict:
     law_part = -math.inf
     solve: dict[str, float] = {}
     for record in records:
-        if record.source == ANALYTIC or record.skipped or record.u_after is None:
+        if (record.source == ANALYTIC or record.skipped or record.u_after is None
+                or not single_contact(record)):  # as split_rows
             continue
         law_record = lcp.get(record.point["index"])
         if law_record is None:
@@ -182,7 +183,8 @@ def split_order(results: Results) -> tuple[list[str], list[str]]:
     labels: dict[str, None] = {}
     for record in results.records:
         if (record.source == ANALYTIC or record.u_after is None or record.skipped
-                or (record.scenario, record.point["index"]) not in lcp):
+                or (record.scenario, record.point["index"]) not in lcp
+                or not single_contact(record)):  # as split_rows
             continue
         scenarios[record.scenario] = None
         labels[record_label(record)] = None

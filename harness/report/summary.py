@@ -67,6 +67,12 @@ def write_summary(results: Results, out_dir: Path, prepared: Prepared | None = N
             cells = [cell[3] for cell in prepared.views[name][law]]  # views.departure_cell
             lines.append(f"| {escape(row_name(results, name))} | " + " | ".join(cells) + " |")
         lines.append("")
+    # flat faces and tilts: departures from the references that apply to them only
+    from harness.report.contacts import contacts_section
+
+    contacts = prepared.whole("summary-contacts", lambda: contacts_section(results)[1])
+    if contacts:
+        lines += [contacts, ""]
     gates = prov.get("gates", [])
     lines += ["## Gates", ""]
     if gates:

@@ -16,7 +16,7 @@ import numpy as np
 
 from harness.run.metrics import departure_split, fmt_departure
 from harness.run.records import ANALYTIC, Record, Results
-from harness.run.references import SIMULTANEOUS
+from harness.run.references import SINGLE
 
 FIGURES = "figures"
 LAW_ORDER = ("poisson", "stronge", "stronge-paper", "newton", "newton-lcp")
@@ -100,12 +100,14 @@ def engine_scenarios(results: Results) -> list[str]:
 
 
 def single_contact(record: Record) -> bool:
-    """Whether the single-contact laws can describe ``record``'s run: not at a declared
-    flat face (reference ``simultaneous``, harness/run/references.py). A tilted landing's
-    run that ends before the second corner strikes is a single impact (its verdict says
-    so), so an event-driven point counts; results without references too."""
+    """Whether the single-contact laws can describe ``record``'s run: its point's reference
+    is the single-contact laws (harness/run/references.py), not a declared flat face
+    (``simultaneous``) nor a tilt (``event-driven``: its runs are judged against the whole
+    sequence of impacts, and a run of its first impact only is flagged
+    ``truncated-sequence``); results without references count. The other points have their
+    own section, with the references that apply (harness/report/contacts.py)."""
     reference = (record.diagnostics or {}).get("reference") or {}
-    return reference.get("kind") != SIMULTANEOUS
+    return reference.get("kind", SINGLE) == SINGLE
 
 
 def worst_departure(records: Iterable[Record], law: str) -> tuple[float, bool, bool]:
@@ -127,8 +129,8 @@ def worst_departure(records: Iterable[Record], law: str) -> tuple[float, bool, b
 
 def worst_record(records: Iterable[Record], law: str) -> Record | None:
     """The single-impact (``ok``) run with the largest finite departure from ``law``, never
-    at a declared flat face (it departs from its own reference, not from the single-contact
-    laws)."""
+    at a flat face or a tilt (it departs from its own reference, not from the single-contact
+    laws: :func:`single_contact`)."""
     runs = [r for r in records if r.ok and r.departure.get(law) is not None
             and math.isfinite(r.departure[law]) and single_contact(r)]
     return max(runs, key=lambda r: r.departure[law]) if runs else None
@@ -322,13 +324,16 @@ def reason_sentence(reason) -> str:
 
 
 def split_rows(results: Results) -> list[dict]:
-    """The departure split of every engine record (metrics.departure_split)."""
+    """The departure split of every engine record at a single-contact point
+    (metrics.departure_split; a flat face's or a tilt's record holds no departure from the
+    single-contact laws, :func:`single_contact`)."""
 
     lcp = {(r.scenario, r.point["index"]): r for r in results.records
            if r.source == ANALYTIC and r.law == "newton-lcp" and r.ok}
     rows = []
     for record in results.records:
-        if record.source == ANALYTIC or record.skipped or record.u_after is None:
+        if (record.source == ANALYTIC or record.skipped or record.u_after is None
+                or not single_contact(record)):
             continue
         law_record = lcp.get((record.scenario, record.point["index"]))
         if law_record is None:

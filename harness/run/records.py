@@ -31,7 +31,9 @@ for the Newton laws and for engines, classified from the end state), ``normal_im
 ``tangential_impulse`` (N s on body B), ``status`` (``"ok"``, an engine status of
 :data:`harness.engines.STATUSES`, ``"skipped: <reason>"`` or ``"error: <reason>"``),
 ``wall_time_s``, ``departure`` (``{law: ‖u − u_law‖_M / s}``, ``s`` the frame-free scale of
-:func:`harness.run.metrics.frame_free_scale`), ``cached`` (engine records: the result came
+:func:`harness.run.metrics.frame_free_scale`; an engine record at a flat face or a tilt holds
+only the references that apply there, by name, :func:`harness.run.references.applicable`,
+never the single-contact laws), ``cached`` (engine records: the result came
 from the cache), ``diagnostics`` (engine records: steps, contact points, penetration, drift,
 the engine's own impulses, settings overrides), ``verdict`` (engine records with output:
 ``"single-impact"`` or ``"flagged"``) and ``reasons`` (each check the run fails, or a

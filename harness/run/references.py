@@ -226,7 +226,9 @@ def annotate(scenario, point, records: Sequence, reference: dict | None = None, 
     (``diagnostics["reference_full"]``, read by :func:`collect`). Law records get
     ``diagnostics["reference"] = {"kind", "primary", "applies"}``: the single-contact laws
     apply only to a single-contact point. Engine records get the reference's kind and
-    primary, ``departure`` from every reference speed and ``departure_from_primary``.
+    primary and ``departure_from_primary``; at a point whose reference is not the
+    single-contact laws, the record's ``departure`` holds only the references that apply to
+    its situation (:func:`applicable`), never the single-contact laws.
     """
     if reference is None:
         reference = point_reference(scenario, point)
@@ -237,22 +239,38 @@ def annotate(scenario, point, records: Sequence, reference: dict | None = None, 
         elif record.u_after is not None and reference.get("speeds"):
             u_before = np.asarray(record.u_before, dtype=float)
             mass_matrix = _mass_matrix(scenario, point)
-            summary["departure"] = metrics.departures(
-                mass_matrix, record.u_after, reference["speeds"], u_before,
+            departure = metrics.departures(
+                mass_matrix, record.u_after, applicable(reference), u_before,
                 free_bodies=scenario.system == "bodies" and not scenario.ground)
-            primary = summary["departure"].get(reference.get("primary"), math.nan)
+            record.departure = departure  # the single-contact laws' do not apply here
+            primary = departure.get(reference.get("primary"), math.nan)
             summary["departure_from_primary"] = primary
             if reference["kind"] == EVENT_DRIVEN:  # which cut of the sequence the run is nearest
-                cuts = {name: value for name, value in summary["departure"].items()
+                cuts = {name: value for name, value in departure.items()
                         if name.startswith(reference["primary"])}
                 nearest = min(cuts, key=lambda name: cuts[name])
                 summary["nearest_cut"] = [nearest, cuts[nearest]]
+        elif record.source != "analytic" and reference["kind"] != SINGLE:
+            record.departure = {}  # no reference for this situation, and not the laws'
+
         if record.diagnostics is None:
             record.diagnostics = {}
         record.diagnostics["reference"] = summary
     if keep_full and records:
         records[0].diagnostics["reference_full"] = reference
     return reference
+
+
+def applicable(reference: dict) -> dict:
+    """The reference speeds that apply to an engine run in the reference's situation, by
+    name: at a flat face every m-contact law (Newton–Coulomb, the paper's proposal, the
+    sequential reading), at a tilt the event-driven sequences and their cuts (not the
+    ``at-pose/`` answers, which are the flat limit's: a face that is not there)."""
+    speeds = reference.get("speeds") or {}
+    if reference["kind"] == EVENT_DRIVEN:
+        return {name: value for name, value in speeds.items()
+                if name.startswith("event-driven/")}
+    return dict(speeds)
 
 
 def _mass_matrix(scenario, point) -> np.ndarray:
@@ -275,4 +293,4 @@ def collect(records: Sequence) -> list[dict]:
 
 
 __all__ = ["COHERENT_LAWS", "COUPLINGS", "EVENT_DRIVEN", "SIMULTANEOUS", "SINGLE", "PointLaws",
-           "annotate", "collect", "kind_of", "point_reference", "scene_reference"]
+           "annotate", "applicable", "collect", "kind_of", "point_reference", "scene_reference"]

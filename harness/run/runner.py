@@ -83,7 +83,7 @@ import math
 import sys
 import time
 from contextlib import nullcontext
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import asdict, dataclass, field, fields, replace
 from functools import lru_cache
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence, TextIO
@@ -671,7 +671,7 @@ def run(
                             item["output"] = {"status": f"error: settings: {settings}"}
                             continue
                         if scene is None:
-                            scene = scenario.scene(point)
+                            scene = engine_scene(scenario, point)
                             # spelled once for the keys of all the point's engine runs
                             spelled_scene = (None if cache is None
                                              else Spelled(_scene_payload(scene)))
@@ -1161,7 +1161,7 @@ def point_records(scenario: Scenario, point, engine_entries: Sequence, *,
     reference = references.annotate(scenario, point, law_records, reference, keep_full=True)
     if not engine_entries:
         return law_records
-    scene = scenario.scene(point)
+    scene = engine_scene(scenario, point)
     if "newton-lcp" in law_speeds:  # solved above (or failed: the same solve fails again)
         lcp_gain = law_gains.get("newton-lcp")
     else:
@@ -1170,18 +1170,38 @@ def point_records(scenario: Scenario, point, engine_entries: Sequence, *,
         except ValueError:
             lcp_gain = None
     declared = verdicts.declared_contacts(scenario, scene)  # a flat face: judged against all
-    if declared is not None:  # a gain is the law's when the Newton–Coulomb reference gains
-        lcp_gain = reference.get("energy_change", {}).get(reference.get("primary"))
+    struck = verdicts.sequence_contacts(scenario, scene)  # a tilt: the features its sequence
+    sequence = struck is not None  # strikes, the run judged on finishing it
+    if sequence:
+        declared = struck
+    if declared is not None:  # a gain is the law's when the m-contact or sequence reference
+        lcp_gain = reference.get("energy_change", {}).get(reference.get("primary"))  # gains
     # What judging any run of the point's scene needs: worked out once, not once per run.
     terms = verdicts.prepare(scene, problem) if declared is None else None
     engine_records = [
         engine_record(scenario, point_info, engine_name, preset, item, problem, law_speeds,
                       scene=scene, law_energy_change=lcp_gain, contacts=declared,
-                      terms=terms)
+                      terms=terms, sequence=sequence)
         for _, _, engine_name, preset, item in engine_entries
     ]
     references.annotate(scenario, point, engine_records, reference)
     return law_records + engine_records
+
+
+def engine_scene(scenario: Scenario, point):
+    """The scene the engines run at ``point``: ``scenario.scene(point)``, and for a tilt whose
+    reference is a sequence of impacts (``expect_sequence``) with ``run_until`` set to the
+    sequence's last impact (``newton-lcp``, the primary reference), so that every engine runs
+    the whole sequence, not only its first impact (harness/engines/contract.py, 'The loop')."""
+    scene = scenario.scene(point)
+    if references.kind_of(scenario) != references.EVENT_DRIVEN or not scene.ground:
+        return scene
+    from harness.reference.event_driven import sequence_outline
+
+    outline = sequence_outline(scene)
+    if len(outline.features) < 2 and outline.last_impact == 0.0:
+        return scene  # one impact: the first separation ends it
+    return replace(scene, run_until=outline.last_impact)
 
 
 def point_reference_cached(scenario: Scenario, point, cache=None) -> dict:
@@ -1298,14 +1318,15 @@ def _reference_stored_by_worker(task: dict, output: dict) -> dict:
 def engine_record(scenario: Scenario, point_info: dict, engine_name: str, preset: str,
                   item: dict, problem, law_speeds: dict, *, scene=None,
                   law_energy_change: float | None = None, contacts=None,
-                  terms=None) -> Record:
+                  terms=None, sequence: bool = False) -> Record:
     """An engine's record from its raw output and the point's law solutions.
 
     With ``scene`` (the engine's scene at this point) the record gets its verdict
     (:func:`harness.run.verdicts.judge`): ``verdict`` and ``reasons``, and a run that fails
     a check has the first failing reason as its ``status`` (never ``ok``).
     ``law_energy_change`` is ``newton-lcp``'s energy change, to attribute a gain;
-    ``contacts``: a flat face's declared contacts (:func:`verdicts.declared_contacts`);
+    ``contacts``: a flat face's declared contacts (:func:`verdicts.declared_contacts`), or
+    with ``sequence`` the features a tilt's sequence strikes (:func:`verdicts.sequence_contacts`);
     ``terms``: ``verdicts.prepare(scene, problem)`` when the caller has it (None: worked out
     by the verdict).
     """
@@ -1360,7 +1381,7 @@ def engine_record(scenario: Scenario, point_info: dict, engine_name: str, preset
         verdict = verdicts.judge(scene, problem,
                                  verdicts.numbers_from_output(engine_name, output),
                                  law_energy_change=law_energy_change, contacts=contacts,
-                                 terms=terms, implied=implied)
+                                 terms=terms, implied=implied, sequence=sequence)
         record.verdict, record.reasons = verdict.label, verdict.as_list()
         record.status = verdict.status(record.status)
     return record
@@ -1381,10 +1402,15 @@ def check_gates(scenario: Scenario, records: Sequence[Record]) -> list[GateResul
             continue
         for record in matching:
             value = record.departure.get(gate.law)
+            situation = ((record.diagnostics or {}).get("reference") or {}).get(
+                "kind", references.SINGLE)
             if record.skipped:
                 status = f"not checked: {record.status}"
             elif record.verdict == verdicts.FLAGGED:  # not a single impact: no departure
                 status = f"not checked: flagged ({', '.join(record.failing_reasons)})"
+            elif situation != references.SINGLE and value is None:  # a law that does not apply
+                status = (f"not checked: {gate.law} does not apply to a {situation} point "
+                          "(its references: docs/multi-contact.md)")
             elif value is None or not math.isfinite(value):
                 status = "FAIL"
             else:

@@ -58,6 +58,10 @@ REASONS: dict[str, str] = {
     "clipped": "a speed sits at the engine's velocity cap: the engine did not simulate the "
     "scene's speeds",
     "multi-contact": "a second feature touched within the run (which, at which step)",
+    "truncated-sequence": "the run ended while a feature still reaches the ground: it is only "
+    "the first impacts of the sequence its reference is",
+    "not-simultaneous": "on a face declared to strike at once, the declared contacts were "
+    "first struck at different steps: a sequence of impacts, not the simultaneous impact",
     "not-separated": "the contact still closes at the end: v_n^S < -tolerance",
     "penetration": "the deepest overlap exceeds the bound scaled to the bodies' size",
     "impulse-residual": "the change of speeds is not one impulse at the contact point",
@@ -75,6 +79,8 @@ SINGLE_IMPACT = "single-impact"
 ENGINE_LAW = "newton-lcp"
 #: The law a run on declared simultaneous contacts is attributed to (the m-contact reference).
 NEWTON_COULOMB = "Newton–Coulomb"
+#: The law a run of a tilt's sequence of impacts is attributed to (its reference sequence).
+SEQUENCE_LAW = "the event-driven sequence with newton-lcp"
 FLAGGED = "flagged"
 
 #: Measured velocity caps: engine -> (largest |v_x|, |v_y| in m/s, largest |ω| in rad/s).
@@ -442,10 +448,36 @@ def _prepare(scene, problem, delassus: tuple[float, float, float]) -> SceneTerms
     return SceneTerms(scales, delassus, norm_before, features, _one_feature(scene))
 
 
+def contact_features(scene, features: Sequence[BodyFeatures] | None = None,
+                     tolerances: Tolerances | None = None) -> tuple[int, ...]:
+    """Per body, the point feature (corner, end cap) at the scene's contact point in the
+    scene's pose (the touching pose the reference describes), or -1 for a face.
+
+    The engine's first recorded point alone cannot fix the contact's features: Box2D reports
+    a point computed before its step with the pose after it, through its polygon skin, so on
+    a spinning box the struck corner's first point lay 0.028 m from it and read as a face,
+    and the corner's next point became a false ``multi-contact`` (box-corner-spin, Box2D
+    ``defaults``). Both fix them (:func:`_second_features`).
+    """
+    from harness.scene import geometry
+
+    tolerances = DEFAULT_TOLERANCES if tolerances is None else tolerances
+    if features is None:
+        features = [body_features(body.shape) for body in scene.bodies]
+    point = np.asarray(geometry.scene_contact(scene).point, dtype=float)[:2]
+    found = []
+    for body, feature in zip(scene.bodies, features):
+        pose = np.array([[*body.position, body.angle]], dtype=float)
+        found.append(int(_features_at(feature, pose, point[None], np.zeros(1, dtype=np.int64),
+                                      np.array([tolerances.penetration * feature.extent]))[0]))
+    return tuple(found)
+
+
 def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = None,
           tolerances: Tolerances = DEFAULT_TOLERANCES, contacts=None,
           terms: SceneTerms | None = None,
-          implied: tuple[float, float, float] | None = None) -> Verdict:
+          implied: tuple[float, float, float] | None = None,
+          sequence: bool = False) -> Verdict:
     """The verdict of one engine run of ``scene``.
 
     Parameters
@@ -464,7 +496,11 @@ def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = 
     contacts : sequence of harness.scene.Contact, optional
         The contacts a scene declares to touch at once (``contacts = "simultaneous"``, from
         :func:`declared_contacts`): the run is judged against all of them
-        (:func:`judge_declared`). None: one contact, ``problem``'s.
+        (:func:`judge_declared`). None: one contact, ``problem``'s. With ``sequence``, the
+        features a tilt's reference sequence strikes (:func:`sequence_contacts`).
+    sequence : bool
+        ``contacts`` are struck one after another, a sequence the run must finish
+        (``truncated-sequence``).
     terms : SceneTerms, optional
         ``prepare(scene, problem)``, when the caller judges several runs of one scene (the
         survey: one per engine and preset); None: worked out here.
@@ -476,7 +512,8 @@ def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = 
     """
     if contacts is not None:
         return judge_declared(scene, problem, run, contacts,
-                              law_energy_change=law_energy_change, tolerances=tolerances)
+                              law_energy_change=law_energy_change, tolerances=tolerances,
+                              sequence=sequence)
     if terms is None:
         terms = prepare(scene, problem)
     reasons: list[Reason] = []
@@ -731,7 +768,8 @@ def judge_many(scenes: Sequence, problems: Sequence, runs: Sequence, u_after: np
     checked["multi-contact"] = [False] * count
     for row, second in zip(featured, _second_features_many(
             [runs[row].contact_record for row in featured],
-            [terms[row].features for row in featured], tol)):
+            [terms[row].features for row in featured], tol,
+            [scenes[row] for row in featured])):
         checked["multi-contact"][row] = second
     failing = np.zeros(count, dtype=bool)  # a batched reason fails (names to list)
     for flags in fails.values():
@@ -968,12 +1006,14 @@ def _one_feature(scene) -> bool:
 def _second_features(scene, contacts: Sequence[StepContacts] | ContactTrack,
                      tolerances: Tolerances,
                      features: Sequence[BodyFeatures] | None = None) -> list[Reason]:
-    """``multi-contact`` when a point touches a feature other than the first contact's.
+    """``multi-contact`` when a point touches a feature other than the contact's.
 
-    The first point of the first step fixes the contact's features (per body: a corner, an
-    end cap, or a face). A later point belongs to another feature when, on some body, it
-    lies at a point feature that differs from the first one's. ``features``: the bodies'
-    :class:`BodyFeatures` (None: from ``scene``).
+    The first point of the first step and the scene's contact point
+    (:func:`contact_features`, worked out only when a later point is at another feature than
+    the first's) fix the contact's features (per body: a corner, an end cap, or -1 for a
+    face). A later point belongs to another feature when, on some body, it lies at a point
+    feature that is neither. ``features``: the bodies' :class:`BodyFeatures` (None: from
+    ``scene``).
     """
     if features is None:
         features = [body_features(body.shape) for body in scene.bodies]
@@ -985,6 +1025,9 @@ def _second_features(scene, contacts: Sequence[StepContacts] | ContactTrack,
     touched = _touched(features, track, tolerances)
     first = touched[0]
     other = (touched[1:] >= 0) & (touched[1:] != first)
+    if other.any():
+        other &= touched[1:] != np.asarray(contact_features(scene, features, tolerances),
+                                           dtype=np.int64)
     later = np.flatnonzero(other.any(axis=1))
     if not len(later):
         return []
@@ -1042,7 +1085,8 @@ def _records_many(contact_records: Sequence) -> tuple[np.ndarray, ...]:
 
 def _second_features_many(contact_records: Sequence,
                           features: Sequence[Sequence[BodyFeatures]],
-                          tolerances: Tolerances) -> list[bool]:
+                          tolerances: Tolerances,
+                          scenes: Sequence | None = None) -> list[bool]:
     """Whether :func:`_second_features` finds a second feature, for many runs at once
     (``contact_records[i]``, an ``EngineRun.contact_record``, of a scene whose bodies have
     ``features[i]``).
@@ -1050,7 +1094,9 @@ def _second_features_many(contact_records: Sequence,
     The arithmetic of :func:`_features_at`, operation for operation on the same operands
     (math's cos and sin per pose, the same ``(k, 2) @ (2, 2)`` products per pose), over the
     points of every run whose body has ``k`` point features at once. A run of fewer than two
-    points has no second one.
+    points has no second one. ``scenes[i]``: run ``i``'s scene, whose contact point fixes
+    the contact's features too, as in :func:`_second_features` (worked out only for a run
+    with a candidate); None: the first points alone.
     """
     if not contact_records:
         return []
@@ -1092,6 +1138,12 @@ def _second_features_many(contact_records: Sequence,
     first = touched[np.minimum(starts, max(len(points) - 1, 0))][run_of_point]
     other = (touched >= 0) & (touched != first)
     other[starts[counts > 0]] = False
+    if scenes is not None:  # the scene's contact point: only where a run has a candidate
+        fixed = np.full((len(contact_records), 2), -1, dtype=np.int64)
+        for run in np.unique(run_of_point[other.any(axis=1)]).tolist():
+            found = contact_features(scenes[run], features[run], tolerances)
+            fixed[run, :len(found)] = found
+        other &= touched != fixed[run_of_point]
     return ((np.bincount(run_of_point, weights=other.any(axis=1),
                          minlength=len(contact_records)) > 0) & eligible).tolist()
 
@@ -1114,9 +1166,58 @@ def declared_contacts(scenario, scene) -> tuple | None:
     return tuple(geometry.scene_contacts(scene, tolerance=ONE_POINT_TOLERANCE))
 
 
+def sequence_contacts(scenario, scene) -> tuple | None:
+    """The features a tilt's reference sequence strikes (``expect_sequence``: the
+    event-driven sequence with ``newton-lcp``), each as a contact at its ground point in the
+    scene's pose (as the references take them), in order of first strike; None for a
+    scenario whose reference is not a sequence (docs/verdicts.md, 'Sequences of impacts')."""
+    from harness.run import references
+
+    if references.kind_of(scenario) != references.EVENT_DRIVEN or not scene.ground:
+        return None
+    from harness.reference.event_driven import sequence_outline
+    from harness.scene import Contact, geometry
+
+    world, radius = geometry.world_core(scene.bodies[0])
+    return tuple(Contact(point=np.array([world[k, 0], world[k, 1] - radius]),
+                         normal=np.array([0.0, 1.0]), gap=float(world[k, 1] - radius))
+                 for k in sequence_outline(scene).features)
+
+
+def truncated_sequence(scene, run: RunNumbers, scales: SceneScales,
+                       tolerances: Tolerances = DEFAULT_TOLERANCES) -> list[Reason]:
+    """``truncated-sequence`` when the run's end state strikes the ground again: the body in
+    the pose of the run's last contact step, with the run's final speeds, in free flight,
+    has a feature that meets the ground faster than the separation tolerance
+    (``separation · |v_n^A|``). Such a run is only the first impacts of a sequence. Needs the
+    contact records and one body on the ground (else no reason)."""
+    from harness.reference.event_driven import next_strike
+
+    if run.contacts is None or not scene.ground:
+        return []
+    track = _track(run.contacts)
+    if not len(track.steps):
+        return []
+    x, y, angle = (float(v) for v in track.poses[-1, 0])
+    v_x, v_y, omega = (float(v) for v in run.u_after[:3])
+    body = scene.bodies[0].moved(position=(x, y), angle=angle, velocity=(v_x, v_y),
+                                 angular_velocity=omega)
+    found = next_strike(body, tolerances.separation * scales.approach_speed)
+    if found is None:
+        return []
+    feature, when = found
+    names = body_features(body.shape).names
+    step = int(track.steps[-1])
+    return [Reason("truncated-sequence", when, None,
+                   f"the run ended with {body.name}'s {names[feature]} still reaching the "
+                   f"ground {when:.3g} s after its last contact step ({step}): only the "
+                   "first impacts of the sequence")]
+
+
 def judge_declared(scene, problem, run: RunNumbers, contacts, *,
                    law_energy_change: float | None = None,
-                   tolerances: Tolerances = DEFAULT_TOLERANCES) -> Verdict:
+                   tolerances: Tolerances = DEFAULT_TOLERANCES,
+                   sequence: bool = False) -> Verdict:
     """The verdict of an engine run of a scene declared to touch at ``contacts`` at once.
 
     The checks of :func:`judge`, held against every declared contact instead of one: a
@@ -1126,6 +1227,10 @@ def judge_declared(scene, problem, run: RunNumbers, contacts, *,
     the engine's summed impulse must match their sum; an energy gain is the law's when the
     Newton–Coulomb reference gains too (``law_energy_change``). docs/verdicts.md, 'Declared
     simultaneous contacts'.
+
+    ``sequence``: the contacts are the features a tilt's reference sequence strikes one after
+    another (:func:`sequence_contacts`), not at once; the run must also have finished the
+    sequence (:func:`truncated_sequence`), and its energy is held against the sequence's.
     """
     from harness.scene import geometry
 
@@ -1148,6 +1253,10 @@ def judge_declared(scene, problem, run: RunNumbers, contacts, *,
         reasons += _clipped(run.engine, problem.u, u_after, tolerances)
     if run.contacts is not None:
         reasons += _undeclared_features(scene, contacts, run.contacts, tolerances)
+        if not sequence:
+            reasons += staggered_strikes(scene, contacts, run.contacts, tolerances)
+    if sequence:
+        reasons += truncated_sequence(scene, run, scales, tolerances)
     reasons += _declared_separation(contacts, wn @ u_after, scales, tolerances)
     reasons += _penetration(run, scales, tolerances)
     impulses, residual = declared_impulses(problem.mass_matrix, wn, wt, problem.u, u_after,
@@ -1162,7 +1271,8 @@ def judge_declared(scene, problem, run: RunNumbers, contacts, *,
         engine="(ΣI_n, ΣI_t)", implied=f"by Δu over the {len(contacts)} declared contacts",
         scale="max_i |v_n^A(i)|/m_nn(i)")
     reasons += _energy_gain(metrics.energy_change(problem.mass_matrix, problem.u, u_after),
-                            scales, law_energy_change, tolerances, law=NEWTON_COULOMB)
+                            scales, law_energy_change, tolerances,
+                            law=SEQUENCE_LAW if sequence else NEWTON_COULOMB)
     reasons.sort(key=lambda reason: _REASON_ORDER[reason.name])
     return Verdict(tuple(reasons))
 
@@ -1265,6 +1375,55 @@ def _undeclared_features(scene, contacts, records: Sequence[StepContacts] | Cont
                    f"outside the {len(contacts)} declared contacts ({listed})")]
 
 
+def first_strikes(scene, contacts, records: Sequence[StepContacts] | ContactTrack,
+                  tolerances: Tolerances = DEFAULT_TOLERANCES) -> list[int | None]:
+    """Per declared contact, the first step at which a recorded point lies at it (None:
+    never). A point lies at the declared contact whose feature (corner, end cap) it touches
+    on some body (:func:`_touched`, in the pose of its step); a point at no declared
+    contact's feature belongs to the nearest declared point (a face against a face)."""
+    features = [body_features(body.shape) for body in scene.bodies]
+    track = _track(records)
+    found: list[int | None] = [None] * len(contacts)
+    if not track.size:
+        return found
+    poses = np.array([[(*body.position, body.angle) for body in scene.bodies]], dtype=float)
+    where = np.array([[*contact.point[:2], 0.0] for contact in contacts],
+                     dtype=float).reshape(-1, 3)
+    declared = _touched(features, ContactTrack(np.zeros(1, dtype=np.int64), poses, where,
+                                               np.zeros(len(contacts), dtype=np.int64)),
+                        tolerances)  # (contacts, bodies)
+    touched = _touched(features, track, tolerances)  # (points, bodies)
+    at = ((touched[:, None, :] >= 0) & (touched[:, None, :] == declared[None])).any(axis=2)
+    distances = np.hypot(track.points[:, None, 0] - where[None, :, 0],
+                         track.points[:, None, 1] - where[None, :, 1])
+    nearest = np.argmin(distances, axis=1)
+    owner = np.where(at.any(axis=1), np.argmax(at, axis=1), nearest)
+    steps = track.steps[track.record]
+    for index in range(len(contacts)):
+        mine = steps[owner == index]
+        if len(mine):
+            found[index] = int(mine.min())
+    return found
+
+
+def staggered_strikes(scene, contacts, records: Sequence[StepContacts] | ContactTrack,
+                      tolerances: Tolerances = DEFAULT_TOLERANCES) -> list[Reason]:
+    """``not-simultaneous`` when two declared contacts were first struck at different steps
+    (:func:`first_strikes`): the engine did a sequence of impacts where the file declares
+    one simultaneous impact. The residual cannot tell: for one body on the ground the
+    declared contacts' columns span its speeds, so it is zero by construction. Contacts
+    never struck are not counted here (their separation is checked)."""
+    firsts = first_strikes(scene, contacts, records, tolerances)
+    struck = [(step, index) for index, step in enumerate(firsts) if step is not None]
+    if len(struck) < 2 or len({step for step, _ in struck}) == 1:
+        return []
+    (early, first), (late, last) = min(struck), max(struck)
+    return [Reason("not-simultaneous", float(late - early), 0.0,
+                   f"{_contact_name(contacts, first)} first struck at step {early}, "
+                   f"{_contact_name(contacts, last)} at step {late}: a sequence of impacts, "
+                   "not the simultaneous impact declared")]
+
+
 def reason_counts(reasons_per_run: Sequence[Sequence[Mapping[str, Any]]]) -> dict[str, int]:
     """``{reason: runs failing it}`` over many runs' ``reasons`` lists (law-attributed
     energy gains counted as ``energy-gain (law)``, not failing)."""
@@ -1278,7 +1437,9 @@ def reason_counts(reasons_per_run: Sequence[Sequence[Mapping[str, Any]]]) -> dic
 
 __all__ = ["DEFAULT_TOLERANCES", "REASONS", "SPEED_CAPS", "BodyFeatures", "ContactTrack",
            "Reason", "RunNumbers", "SceneScales", "SceneTerms", "StepContacts", "Tolerances",
-           "Verdict", "body_features", "declared_contacts", "declared_impulses",
+           "Verdict", "body_features", "contact_features", "declared_contacts",
+           "declared_impulses", "first_strikes", "sequence_contacts", "staggered_strikes",
+           "truncated_sequence",
            "declared_scales", "feature_at", "feature_points", "impulse_from_velocities",
            "TermArrays", "judge", "judge_declared", "judge_many", "numbers_from_output",
            "numbers_from_run", "prepare", "prepare_many", "reason_counts", "scene_scales",

@@ -163,8 +163,16 @@ class Scene:
     friction: float  # μ of the pair
     ground: bool = False
     name: str = ""
+    # An engine run of this scene goes on, through separations, until this time (s) after
+    # its first contact: the end of the sequence of impacts the scene's reference is (the
+    # event-driven reference's last impact). None: it ends at the first separation.
+    run_until: float | None = None
 
     def __post_init__(self) -> None:
+        if self.run_until is not None and not (math.isfinite(self.run_until)
+                                               and self.run_until >= 0.0):
+            raise ValueError(f"scene {self.name!r}: run_until must be a finite time >= 0 s, "
+                             f"got {self.run_until!r}")
         count = len(self.bodies)
         if self.ground and count != 1:
             raise ValueError(f"scene {self.name!r}: a ground scene has exactly 1 body, got {count}")

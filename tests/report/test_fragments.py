@@ -90,10 +90,10 @@ def test_a_changed_record_recomputes_its_scenarios_pieces_only(library, tmp_path
     assert second.cache.computed == 1  # its view
     assert "43.2%" in json.dumps(second.views[name])
     _page(changed, out, second, many=True)
-    # and its section, its family's table and the five pieces made of every record (the
-    # engines' notes, the split table, the page's counts, the several-contacts section and
-    # summary.md's runs)
-    assert second.cache.computed == 8
+    # and its section, its family's table and the six pieces made of every record (the
+    # engines' notes, the split table, the page's counts, the several-contacts section,
+    # summary.md's several-contacts tables and its runs)
+    assert second.cache.computed == 9
     assert _page(changed, tmp_path / "fresh", fragments.prepare(changed), many=True) == \
         _page(changed, out, second, many=True)
 

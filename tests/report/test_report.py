@@ -286,20 +286,23 @@ def test_the_overflow_check_catches_a_wide_page(tmp_path):
     assert layout["overflow"] and layout["scrollWidth"] > 2000 and layout["culprits"]
 
 
-def test_flat_face_points_never_enter_a_single_contact_law_cell():
-    # a declared flat face (reference "simultaneous") departs from its own reference: its
-    # departure from the single-contact laws is not a value, and the scenario is not a row;
-    # a tilted landing's single-impact run (event-driven reference) is one
+def test_flat_face_and_tilt_points_never_enter_a_single_contact_law_cell():
+    # a declared flat face (reference "simultaneous") and a tilt (reference "event-driven",
+    # its runs judged against the whole sequence) depart from their own references: their
+    # departure from the single-contact laws is not a value, and the scenario is not a row
     flat = sweep_run(0, 0.5)
     flat.diagnostics["reference"] = {"kind": references.SIMULTANEOUS,
                                      "primary": "newton-coulomb"}
-    single = sweep_run(1, 0.02)
-    single.diagnostics["reference"] = {"kind": references.EVENT_DRIVEN, "primary": "poisson"}
-    assert views.worst_departure([flat, single], "poisson") == (0.02, False, False)
-    assert views.worst_record([flat], "poisson") is None
-    assert views.single_contact(sweep_run(2, 0.1))  # results without references: one contact
-    assert views.engine_scenarios(Results([flat])) == []
-    assert views.engine_scenarios(Results([flat, single])) == ["sweep"]
+    tilt = sweep_run(1, 0.02)
+    tilt.diagnostics["reference"] = {"kind": references.EVENT_DRIVEN,
+                                     "primary": "event-driven/newton-lcp"}
+    single = sweep_run(2, 0.01)
+    single.diagnostics["reference"] = {"kind": references.SINGLE, "primary": "newton-lcp"}
+    assert views.worst_departure([flat, tilt, single], "poisson") == (0.01, False, False)
+    assert views.worst_record([flat, tilt], "poisson") is None
+    assert views.single_contact(sweep_run(3, 0.1))  # results without references: one contact
+    assert views.engine_scenarios(Results([flat, tilt])) == []
+    assert views.engine_scenarios(Results([flat, tilt, single])) == ["sweep"]
 
 
 #: What a Python repr looks like in a page: a dict or list literal of strings, or a bare

@@ -52,6 +52,7 @@ from harness.run.verdicts import (
     feature_points,
 )
 from harness.scenarios import SCENARIO_DIR, load_scenario
+from harness.scene import geometry
 from harness.survey import laws as survey_laws
 from harness.survey.engines import run_engine
 from harness.survey.population import resolve_populations
@@ -225,6 +226,11 @@ def _one_feature(scene) -> bool:
 
 def _second_features(scene, contacts: Sequence[StepContacts],
                      tolerances: Tolerances) -> list[Reason]:
+    # the features at the scene's contact point in its pose are the contact's too
+    point = geometry.scene_contact(scene).point
+    at_contact = [feature_at(body.shape, (*body.position, body.angle), point,
+                             tolerances.penetration * body_extent(body.shape))
+                  for body in scene.bodies]
     first = None
     for record in contacts:
         for point in record.points:
@@ -236,7 +242,7 @@ def _second_features(scene, contacts: Sequence[StepContacts],
                 first = features
                 continue
             for index, (now, then) in enumerate(zip(features, first)):
-                if now is not None and now != then:
+                if now is not None and now != then and now != at_contact[index]:
                     body = scene.bodies[index]
                     names = feature_points(body.shape)[2]
                     return [Reason("multi-contact", float(record.step), None,
@@ -245,6 +251,46 @@ def _second_features(scene, contacts: Sequence[StepContacts],
                                    + (names[then] if then is not None else "a face")
                                    + ")")]
     return []
+
+
+def _staggered(scene, contacts, records: Sequence[StepContacts],
+               tolerances: Tolerances) -> list[Reason]:
+    """``not-simultaneous``, one point at a time: each point belongs to the first declared
+    contact whose feature it touches on some body, else to the nearest declared point."""
+    declared = [[feature_at(body.shape, (*body.position, body.angle), contact.point,
+                            tolerances.penetration * body_extent(body.shape))
+                 for body in scene.bodies] for contact in contacts]
+    firsts: dict[int, int] = {}
+    for record in records:
+        for point in record.points:
+            owner = None
+            for index, features in enumerate(declared):
+                for body, state, feature in zip(scene.bodies, record.bodies, features):
+                    reach = tolerances.penetration * body_extent(body.shape) + max(point[2], 0)
+                    now = feature_at(body.shape, state, point[:2], reach)
+                    if now is not None and now == feature:
+                        owner = index
+                        break
+                if owner is not None:
+                    break
+            if owner is None:
+                owner = min(range(len(contacts)), key=lambda i: math.hypot(
+                    point[0] - contacts[i].point[0], point[1] - contacts[i].point[1]))
+            firsts.setdefault(owner, record.step)
+            firsts[owner] = min(firsts[owner], record.step)
+    if len(set(firsts.values())) < 2:
+        return []
+    (early, first), (late, last) = min((v, k) for k, v in firsts.items()), max(
+        (v, k) for k, v in firsts.items())
+    return [Reason("not-simultaneous", float(late - early), 0.0,
+                   f"{_contact_name(contacts, first)} first struck at step {early}, "
+                   f"{_contact_name(contacts, last)} at step {late}: a sequence of impacts, "
+                   "not the simultaneous impact declared")]
+
+
+def _contact_name(contacts, index: int) -> str:
+    x, y = (float(v) for v in contacts[index].point)
+    return f"contact {index + 1} of {len(contacts)} at ({x:.4g}, {y:.4g}) m"
 
 
 def reference_judge_declared(scene, problem, run: RunNumbers, contacts, *,
@@ -271,6 +317,7 @@ def reference_judge_declared(scene, problem, run: RunNumbers, contacts, *,
         reasons += _clipped(run.engine, problem.u, u_after, tolerances)
     if run.contacts is not None:
         reasons += _undeclared_features(scene, contacts, run.contacts, tolerances)
+        reasons += _staggered(scene, contacts, run.contacts, tolerances)
     reasons += _declared_separation(contacts, wn @ u_after, scales, tolerances)
     reasons += _penetration(run, scales, tolerances)
     impulses, residual = declared_impulses(problem.mass_matrix, wn, wt, problem.u, u_after,

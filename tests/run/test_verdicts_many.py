@@ -114,7 +114,8 @@ def test_second_features_of_many_runs_are_each_runs(load_or_skip, engine_name, p
             expected = [bool(verdicts._second_features(
                 scenes[row], verdicts.ContactTrack.from_record(record), tolerances, bodies))
                 for row, record, bodies in zip(order, records, features)]
-            assert verdicts._second_features_many(records, features, tolerances) == expected
+            assert verdicts._second_features_many(records, features, tolerances,
+                                                  [scenes[row] for row in order]) == expected
 
 
 def _terms_bits(terms) -> tuple:
