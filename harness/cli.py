@@ -25,6 +25,7 @@ import importlib
 import os
 import sys
 import traceback
+from pathlib import Path
 
 # command name -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -77,6 +78,22 @@ def build_parser(command: str | None) -> argparse.ArgumentParser:
     return parser
 
 
+def out_problem(out) -> str | None:
+    """Why ``--out`` (every command's is a directory) cannot be written into, or None (also
+    when it does not exist yet: the command makes it). Checked before any work."""
+    if out is None:
+        return None
+    path = Path(out)
+    try:
+        if path.exists() and not path.is_dir():
+            return "is not a directory (a file or a device); allowed: a directory"
+        if path.is_dir() and not os.access(path, os.W_OK | os.X_OK):
+            return "cannot write there: permission denied"
+    except OSError as error:  # a name too long, a loop of links
+        return f"{error.strerror or error}"
+    return None
+
+
 def main(argv: list[str] | None = None) -> int:
     # Nothing the command runs renders: MuJoCo then skips loading its OpenGL context (glfw,
     # ~80 ms of every command that loads the engines). A value the user set is kept.
@@ -87,6 +104,10 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)  # argparse exits with 2 on a bad option
     if getattr(args, "handler", None) is None:
         parser.print_help()
+        return 2
+    problem = out_problem(getattr(args, "out", None))
+    if problem is not None:
+        print(f"impact-harness {args.command}: --out {args.out}: {problem}", file=sys.stderr)
         return 2
     try:
         return int(args.handler(args) or 0)

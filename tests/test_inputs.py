@@ -147,3 +147,15 @@ def test_depth_is_counted_without_recursion():
         deep = [deep]
     with pytest.raises(inputs.InputError):
         inputs.check_depth(deep)
+
+
+@pytest.mark.parametrize("command", [["report"], ["paper"], ["stress", "--quick"],
+                                     ["bench", "--quick"], ["suite"], ["survey"],
+                                     ["new", "draft"]])
+@pytest.mark.parametrize("out", ["a-file", "/dev/null", "n" * 300])
+def test_every_commands_out_at_a_file_a_device_or_a_bad_name_is_one_line_exit_2(
+        tmp_path, capsys, command, out):
+    (tmp_path / "a-file").write_text("x")
+    out = out if out.startswith("/") else str(tmp_path / out)
+    one_line_exit_2(cli.main([*command, "--out", out]), capsys, "--out")
+    assert (tmp_path / "a-file").read_text() == "x"

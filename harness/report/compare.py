@@ -478,13 +478,18 @@ def main(args) -> int:
         except (OSError, ValueError, KeyError, TypeError) as error:
             return _bad_input(str(error))
     try:
-        weights = MassMatrices(*loaded)
-        changes, only_a, only_b = compare(*loaded, weights)
+        return _compare_and_show(args, loaded, threshold)
     except (TypeError, ValueError, KeyError, AttributeError, IndexError) as error:
         # read_results checks a record's fields, not every value's type: a record whose
-        # speeds are not numbers fails here
+        # speeds are not numbers, or whose name is not text, fails here
         return _bad_input(f"{args.a}, {args.b}: a record is malformed: "
                           f"{type(error).__name__}: {str(error)[:200]}")
+
+
+def _compare_and_show(args, loaded: list[Results], threshold: float) -> int:
+    """:func:`main` once both files are read: the comparison, printed."""
+    weights = MassMatrices(*loaded)
+    changes, only_a, only_b = compare(*loaded, weights)
     if not changes:
         return _bad_input(f"{args.a} and {args.b} have no record in common")
     law = getattr(args, "law", "poisson")

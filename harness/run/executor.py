@@ -68,8 +68,19 @@ Dask
     machine), which the local pool never imports; a run kept on the pool does not import it
     (:func:`check_arguments` only looks it up).
 
+Time limits and waits
+    The local pool is a :class:`harness.processes.StoppablePool`: a chunk over its time
+    limit (``time_limit``) is stopped by ending its worker process, a worker that dies costs
+    its chunk only, and its workers end with this process. No wait has no end: the pool
+    looks at its workers at least every second; a Dask run looks at its futures every
+    :data:`DASK_POLL_S` and stops (:class:`DaskRunFailed`) when a cluster started for it has
+    had no worker for :data:`NO_WORKER_TIMEOUT_S` or no result came for longer than the
+    bundles' time limits allow (:data:`STALL_MARGIN_S` beyond them); closing a client or a
+    cluster takes at most :data:`CLOSE_TIMEOUT_S` each.
+
 ``function`` and ``batch`` must be top-level (picklable) functions and each task picklable
-(plain dicts, tuples, numbers, strings, dataclasses of those).
+(plain dicts, tuples, numbers, strings, dataclasses of those); on the local pool, forked,
+``function`` is inherited rather than pickled.
 """
 
 from __future__ import annotations
