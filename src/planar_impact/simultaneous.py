@@ -21,6 +21,7 @@ here (docs/multi-contact.md explains each, with a worked example):
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import itertools
 import math
@@ -928,8 +929,98 @@ def restitution_targets(system: ContactSystem) -> np.ndarray:
     return system.e * np.maximum(-vn, 0.0)
 
 
+#: Outcomes of :func:`newton_coulomb` (docs/multi-contact.md, 'Newton–Coulomb for m contacts').
+NC_UNIQUE = "unique"
+NC_SPLIT_NOT_UNIQUE = "velocities unique, impulse split not unique"
+NC_SEVERAL = "several velocities"
+NC_NONE = "no solution"
+NC_STATUSES = (NC_UNIQUE, NC_SPLIT_NOT_UNIQUE, NC_SEVERAL, NC_NONE)
+#: Sweeps of projected Gauss–Seidel tried where the enumeration finds no mode that holds.
+NC_GAUSS_SEIDEL_SWEEPS = 2000
+
+
+@dataclass(frozen=True)
+class NewtonCoulombResult:
+    """The Newton–Coulomb law's answer on ``m`` contacts, counted by post-impact velocity.
+
+    ``solutions``: one per distinct ``u_after`` (relative 1e-9 of the speed scale), each
+    with ``determinate`` False where the impulses giving it are not unique (several modes,
+    or a family within one mode: a flat face's W is rank-deficient). ``status`` is one of
+    :data:`NC_STATUSES`; ``explanation`` says why in one line, and for ``"no solution"``
+    what the second method (projected Gauss–Seidel from zero) did. ``gauss_seidel`` is
+    that second method's result where it was run (only when the enumeration found none).
+    """
+
+    solutions: tuple[MultiContactSolution, ...]
+    status: str
+    explanation: str
+    gauss_seidel: GaussSeidelResult | None = None
+
+
+def newton_coulomb(system: ContactSystem) -> NewtonCoulombResult:
+    """:func:`newton_coulomb_solutions` with its outcome named (:class:`NewtonCoulombResult`).
+
+    Where no mode holds, projected Gauss–Seidel (the engines' iteration) is run from zero as
+    a second method: a converged iterate that satisfies the law is a solution the
+    enumeration missed and is returned (status by the same rule); otherwise the status is
+    ``"no solution"`` and the explanation gives how far the iterate grew.
+    """
+    found = newton_coulomb_solutions(system)
+    if found:
+        return NewtonCoulombResult(tuple(found), *_nc_status(found))
+    iteration = projected_gauss_seidel(system, max_sweeps=NC_GAUSS_SEIDEL_SWEEPS)
+    if iteration.converged:
+        solution = _as_lcp_solution(system, iteration.impulses)
+        if solution is not None:
+            status, why = _nc_status([solution])
+            return NewtonCoulombResult((solution,), status, why + "; found by projected "
+                                       "Gauss–Seidel, not by the enumeration", iteration)
+    size = float(np.max(np.abs(iteration.impulses))) / system.impulse_scale()
+    how = ("converged to an iterate that violates the law" if iteration.converged else
+           f"did not converge in {iteration.sweeps} sweeps (largest impulse "
+           f"{size:.3g} impulse scales)")
+    return NewtonCoulombResult(
+        (), NC_NONE, f"none of the 4^{system.count} contact modes holds (each mode's linear "
+        f"system solved and its inequalities tested, tolerance 1e-9 of the speed and impulse "
+        f"scales); projected Gauss–Seidel from zero {how}", iteration)
+
+
+def _nc_status(found) -> tuple[str, str]:
+    if len(found) > 1:
+        return NC_SEVERAL, f"{len(found)} solutions with distinct post-impact velocities"
+    if not found[0].determinate:
+        return NC_SPLIT_NOT_UNIQUE, ("one post-impact velocity; the impulses that give it form "
+                                     "a family (W is rank-deficient)")
+    return NC_UNIQUE, "one solution, impulses unique"
+
+
+def _as_lcp_solution(system, impulses):
+    """``impulses`` as a Newton–Coulomb solution when some mode's inequalities hold there."""
+    targets = restitution_targets(system)
+    tolerance = VELOCITY_TOLERANCE * system.speed_scale()
+    impulse_tolerance = 1e-9 * system.impulse_scale()
+    modes, signs = [], []
+    solution = _assemble(system, "newton-coulomb", (0,) * system.count, impulses, True)
+    for i in range(system.count):
+        _mnn, mnt, _mtt = system.single_terms(i)
+        sign = _frame_sign(float(system.approach[2 * i + 1]), mnt)
+        signs.append(sign)
+        if solution.normal_impulse[i] <= impulse_tolerance:
+            modes.append(LCP_SEPARATE)
+        elif abs(solution.vt_separation[i]) <= tolerance:
+            modes.append(LCP_STICK)
+        else:
+            modes.append(LCP_FORWARD if sign * solution.vt_separation[i] > 0 else LCP_REVERSE)
+    solution = _assemble(system, "newton-coulomb", modes, impulses, True)
+    active_ok = all(mode == LCP_SEPARATE or abs(solution.vn_separation[i] - targets[i])
+                    <= tolerance for i, mode in enumerate(modes))
+    return solution if active_ok and _lcp_holds(system, modes, signs, solution, targets,
+                                                tolerance) else None
+
+
 def newton_coulomb_solutions(system: ContactSystem) -> list[MultiContactSolution]:
-    """All solutions of the Newton–Coulomb contact law, by enumerating the 4^m modes.
+    """All solutions of the Newton–Coulomb contact law with distinct post-impact velocities,
+    by enumerating the 4^m modes.
 
     Per contact: either it separates (``I = 0``, ``v_n^S ≥ e|v_n^A|``), or ``v_n^S =
     e|v_n^A|`` (A30) with ``I_n ≥ 0`` and Coulomb friction at the end state: stick
@@ -939,6 +1030,13 @@ def newton_coulomb_solutions(system: ContactSystem) -> list[MultiContactSolution
     (slip with or against the contact's approach slip, oriented as ``solve`` orients it).
     For ``m = 1`` equals ``solve(..., law="newton-lcp")`` to rounding (a general
     2×2 solve here, the closed form there).
+
+    Solutions are counted by post-impact velocity: modes whose solutions give the same
+    ``Δu`` (relative 1e-9 of the speed scale) are one solution, listed once (the first in
+    enumeration order), with ``determinate`` False when their impulses differ (relative
+    1e-9 of the impulse scale) or the mode's system is singular. A flat face of one body has
+    a rank-deficient W, and its impulse split between the corners is then not unique while
+    the velocities are. :func:`newton_coulomb` names the outcome.
     """
     count = system.count
     targets = restitution_targets(system)
@@ -977,10 +1075,25 @@ def newton_coulomb_solutions(system: ContactSystem) -> list[MultiContactSolution
         if np.max(np.abs(matrix @ impulses - rhs)) > tolerance * (1.0 + np.max(np.abs(matrix))):
             continue  # singular and inconsistent: this mode has no solution
         solution = _assemble(system, "newton-coulomb", modes, impulses, rank == 2 * count)
-        if _lcp_holds(system, modes, signs, solution, targets, tolerance) and not _already_found(
-                found, solution, system):
+        if not _lcp_holds(system, modes, signs, solution, targets, tolerance):
+            continue
+        same = _same_velocity(found, solution, system)
+        if same is None:
             found.append(solution)
+        elif np.max(np.abs(found[same].impulses() - solution.impulses())) > (
+                1e-9 * system.impulse_scale()) and found[same].determinate:
+            # Another mode reaches the same velocities with other impulses: the split of the
+            # impulses between the contacts is not unique.
+            found[same] = dataclasses.replace(found[same], determinate=False)
     return found
+
+
+def _same_velocity(found, solution, system) -> int | None:
+    """The index of a solution in ``found`` with the same ``Δu`` (relative 1e-9), or None."""
+    for k, other in enumerate(found):
+        if np.max(np.abs(other.delta_u - solution.delta_u)) <= 1e-9 * _speed_of(system):
+            return k
+    return None
 
 
 def _lcp_holds(system, modes, signs, solution, targets, tolerance) -> bool:
