@@ -3,7 +3,8 @@
 A flat landing is a box or a rod lying flat on the ground (two contacts, one rigid body) with
 random size, speeds, spin, ``μ`` and ``e``. For each, the solutions of
 :func:`planar_impact.simultaneous.coherent_solutions` (Poisson, the paper's Stronge, Newton;
-both readings) and of :func:`~planar_impact.simultaneous.newton_coulomb_solutions` are
+the paper's literal reading and the effective extension) and of
+:func:`~planar_impact.simultaneous.newton_coulomb_solutions` (by post-impact velocity) are
 counted (0, 1, 2+), and the first scene of each count is kept as an example: this is how the
 library's flat scenes with none and with several coherent Poisson solutions were found.
 docs/multi-contact.md, 'Counting on flat landings', has the numbers::
@@ -19,7 +20,7 @@ from harness.scene import Body, Box, Rod, Scene, geometry
 from planar_impact import simultaneous as sim
 
 LAWS = ("poisson", "stronge-paper", "newton")
-COUPLINGS = ("effective", "none")
+COUPLINGS = ("literal", "effective")  # the paper's proposal, then the extension
 
 
 def random_flat_scene(rng: np.random.Generator) -> Scene:
@@ -91,6 +92,6 @@ if __name__ == "__main__":  # python -m harness.reference.flat_faces [problems] 
     print(f"{number} random flat landings, seed {seed}")
     for key, row in table.items():
         print(f"{key:24s} 0: {row['0']:5d}  1: {row['1']:5d}  2+: {row['2+']:5d}")
-    for key in ("poisson/effective", "poisson/none"):
+    for key in ("poisson/literal", "poisson/effective"):
         for bucket, scene in found[key].items():
             print(f"first {key} with {bucket}: {describe(scene)}")

@@ -201,6 +201,9 @@ class MultiContactSolution:
     vt_separation: np.ndarray
     energy_change: float
     determinate: bool
+    #: The literal reading only: whether every contact's type is the one Table 1 picks at its
+    #: own ``v^A(i)`` (the single-contact law's type); None under the other readings.
+    table1_types: bool | None = None
 
     def impulses(self) -> np.ndarray:
         """``(I_n^(1), I_t^(1), I_n^(2), ...)``."""
@@ -247,12 +250,14 @@ def _type_impulses(law, terms, e, ctype):
 
 
 #: How a type's formulas see the other contacts (docs/multi-contact.md, 'The paper's proposal').
-COUPLINGS = ("effective", "none")
+LITERAL, EFFECTIVE = "literal", "effective"
+#: The paper's proposal first (the default), then the named extension.
+COUPLINGS = (LITERAL, EFFECTIVE)
 
 
 def _contact_map(system, law, types, signs, coupling="effective"):
     """The map ``I ↦ (forced impulses of every contact at its effective approach)`` for many
-    combinations at once; with ``coupling="none"`` every contact sees its own ``v^A`` and
+    combinations at once; with ``coupling="literal"`` every contact sees its own ``v^A`` and
     the map is constant.
 
     ``types``, ``signs`` (``(N, m)``): one combination per row. The returned
@@ -300,7 +305,7 @@ class _ContactMap:
         approaches = []
         for i in range(self.system.count):
             impulses = points[i]
-            if self.coupling == "none":
+            if self.coupling == LITERAL:
                 impulses = np.zeros_like(impulses)
             approaches.append(self.effective(i, [impulses[:, k] for k in range(impulses.shape[1])],
                                              len(impulses)))
@@ -383,7 +388,7 @@ def _map_and_jacobian(mapping, impulses, rows, step):
             evaluations[1 + where_c] = raised[c]
             evaluations[1 + shifts + where_c] = lowered[c]
             stacked.append(evaluations)
-        if mapping.coupling == "none":  # as forced: every contact sees its own v^A
+        if mapping.coupling == LITERAL:  # as forced: every contact sees its own v^A
             stacked = [None if block is None else np.zeros_like(block) for block in stacked]
         approaches.append(mapping.effective(i, stacked, (1 + 2 * shifts) * number))
         tiled.append(np.tile(rows, 1 + 2 * shifts))
@@ -427,7 +432,7 @@ def _fixed_points(system, law, combinations, coupling="effective", max_iteration
             break
         current = impulses[rows]
         bound = scale + np.max(np.abs(current), axis=1)
-        if coupling == "none":  # a constant map: the first residual is 0 and ends it
+        if coupling == LITERAL:  # a constant map: the first residual is 0 and ends it
             # Its value anywhere is map(0), the current iterate, bit for bit: no evaluation.
             mapped, jacobian = current.copy(), None
         else:  # the map and, from the same call, its Jacobian (most rows go on)
@@ -552,7 +557,7 @@ def _paper_coherent(law, ctype, sign, solution, i, tolerance) -> bool:
 
 
 def coherent_solutions(system: ContactSystem, law: str = "poisson", *,
-                       coupling: str = "effective", allow_separating: bool = False
+                       coupling: str = LITERAL, allow_separating: bool = False
                        ) -> list[MultiContactSolution]:
     """Every coherent combination of collision types, the paper's proposal after (75).
 
@@ -596,7 +601,7 @@ def coherent_solutions(system: ContactSystem, law: str = "poisson", *,
     if not candidates:
         return found
     impulses, converged, determinate = _fixed_points(system, law, candidates, coupling)
-    if law not in AFFINE_LAWS and coupling == "effective" and system.count > 1:
+    if law not in AFFINE_LAWS and coupling == EFFECTIVE and system.count > 1:
         # The paper's Stronge is screened after its solve, at the fixed points themselves.
         rows = np.flatnonzero(converged)  # finite: their residual passed the tolerance
         converged[rows] = _coherent_within_margin(
@@ -627,9 +632,8 @@ def _candidates(system, law, choices, coupling, tolerance):
     Every combination it could accept is kept (so the solutions, solved and checked by the
     same code as before, are the same bit for bit); most of the others are dropped unsolved:
 
-    * ``coupling="none"``: each contact sees its own ``v^A(i)``, so the orientation test
-      (``_frame_sign``) and Table 1 at ``v^A(i)`` leave one (type, sign) per contact (plus
-      separating, where allowed): one candidate instead of ``(2·types)^m``.
+    * ``coupling="literal"``: each contact sees its own ``v^A(i)``, which fixes its tangent's
+      orientation: the ``types^m`` type tuples, one orientation each (the paper's ``5^m``).
     * ``coupling="effective"`` with Poisson or Newton: the map is affine, and one batched
       linear solve per combination screens it (:func:`_affine_screen`).
     * ``coupling="effective"`` with the paper's Stronge: every combination. Its map is not
@@ -638,23 +642,13 @@ def _candidates(system, law, choices, coupling, tolerance):
       as such a screen alone. :func:`coherent_solutions` screens the converged ones at their
       fixed points instead (:func:`_coherent_within_margin`, necessary tests with margins).
     """
-    if coupling == "none":
-        own = []
-        for i in range(system.count):
-            _mnn, mnt, _mtt = system.single_terms(i)
-            vn, vt = system.effective_approach(i, np.zeros(2 * system.count))  # as checked
-            sign = _frame_sign(vt, mnt)
-            law_out = _law_at(system, law, i, vn, vt, sign)
-            pairs = {(SEPARATING, 1.0)}
-            if law_out is not None:
-                pairs.add((int(law_out["collision_type"]), sign))
-            own.append(pairs)
-        # Only types some contact may take can appear: enumerating those (in the order of
-        # choices) lists the kept combinations in enumeration order, without the others.
-        possible = {ctype for pairs in own for ctype, _ in pairs}
-        return [(types, signs) for types, signs in _combinations(
-                    [ctype for ctype in choices if ctype in possible], system.count)
-                if all((t, s) in own[i] for i, (t, s) in enumerate(zip(types, signs)))]
+    if coupling == LITERAL:
+        # Each contact's tangent is oriented by its own v^A(i) (as solve() orients it); every
+        # type tuple is a candidate, the paper's tests decide (_check_combination).
+        signs = tuple(_frame_sign(float(system.approach[2 * i + 1]), system.single_terms(i)[1])
+                      for i in range(system.count))
+        return [(types, tuple(1.0 if t == SEPARATING else sign for t, sign in zip(types, signs)))
+                for types in itertools.product(choices, repeat=system.count)]
     combinations = list(_combinations(choices, system.count))
     if system.count == 1 or law not in AFFINE_LAWS:
         return combinations
@@ -879,9 +873,15 @@ def _check_combination(system, law, types, signs, impulses, determinate, toleran
                        coupling="effective"):
     """The coherent solution of one combination at its fixed point, or None."""
     final = impulses.copy()
-    seen = impulses if coupling == "effective" else np.zeros_like(impulses)
+    seen = impulses if coupling == EFFECTIVE else np.zeros_like(impulses)
     for i, (ctype, sign) in enumerate(zip(types, signs)):
         if ctype == SEPARATING:
+            continue
+        if coupling == LITERAL:  # the type's formulas at v^A(i) are the impulses: no Table 1
+            vt = float(system.approach[2 * i + 1])
+            if _frame_sign(vt, system.single_terms(i)[1]) != sign or not (
+                    np.isfinite(impulses[2 * i]) and np.isfinite(impulses[2 * i + 1])):
+                return None
             continue
         _mnn, mnt, _mtt = system.single_terms(i)
         vn, vt = system.effective_approach(i, seen)
@@ -902,7 +902,21 @@ def _check_combination(system, law, types, signs, impulses, determinate, toleran
     for i, (ctype, sign) in enumerate(zip(types, signs)):
         if not _paper_coherent(law, ctype, sign, solution, i, tolerance):
             return None
+    if coupling == LITERAL:
+        solution = dataclasses.replace(solution, table1_types=_table1_types(system, law, types))
     return solution
+
+
+def _table1_types(system, law, types) -> bool:
+    """Whether each contact's type is the single-contact law's at its own ``v^A(i)``."""
+    for i, ctype in enumerate(types):
+        if ctype == SEPARATING:
+            continue
+        vn, vt = float(system.approach[2 * i]), float(system.approach[2 * i + 1])
+        own = _law_at(system, law, i, vn, vt, _frame_sign(vt, system.single_terms(i)[1]))
+        if own is None or int(own["collision_type"]) != ctype:
+            return False
+    return True
 
 
 def _already_found(found, solution, system) -> bool:
