@@ -32,6 +32,8 @@ INTRO = (
     "paper's three tests hold. *eff: the effective reading, an extension, not the paper's: "
     "each contact's formulas see the other contacts' whole impulses in their approach, so "
     "restitution is counted twice (it gains energy on a symmetric flat box even with μ = 0). "
+    "\"+k at boundary\": solutions with a decision (Table 1's type, I_n > 0) inside the "
+    "rounding band, counted apart from the clearly coherent ones. "
     "Engine columns: departure from the reference; for a tilt, in brackets, the cut of the "
     "sequence the run is nearest (full: all impacts; after-k: only the first k, with the "
     "departure from that cut). N–C at pose, sequential at pose: departure of those answers, "
@@ -59,7 +61,7 @@ def _rows(name: str, info: dict, records) -> tuple[list[str], list[list[str]]] |
         label = reference.get("point") or "(single point)"
         counts = reference.get("solutions", {})
         row = [label, f"{reference['kind']}: {reference.get('primary')}"]
-        row += [_number(counts.get(key)) for key, _ in COUNTS]
+        row += [_count(counts, key) for key, _ in COUNTS]
         if tilt:
             gaps = reference.get("departure_from_primary", {})
             order = "-".join(str(i) for i in sorted(
@@ -82,6 +84,13 @@ def _rows(name: str, info: dict, records) -> tuple[list[str], list[list[str]]] |
             row.append(cell)
         rows.append(row)
     return header, rows
+
+
+def _count(counts: dict, key: str) -> str:
+    """A law's number of solutions, and those at the boundary of a decision apart."""
+    text = _number(counts.get(key))
+    boundary = counts.get(f"{key}/at-boundary")
+    return f"{text} (+{boundary} at boundary)" if boundary else text
 
 
 def _first_strike(reference: dict, feature: int) -> float:

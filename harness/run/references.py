@@ -160,9 +160,18 @@ def _simultaneous(scene, contacts, fixed, prefix: str) -> dict:
             except ImpactInputError:  # a law that refuses the problem has no solution here
                 found = []
             stem = f"coherent/{law}/{coupling}"
-            counts[stem] = len(found)
-            for k, solution in enumerate(found):
-                keep(_named(stem, len(found), k), solution.u_after, solution.energy_change)
+            # Counted apart: the clearly coherent solutions, and those with a decision inside
+            # the boundary band (planar_impact.simultaneous.BOUNDARY_BAND), which the last
+            # bit would otherwise keep or drop.
+            clear = [s for s in found if not s.at_boundary]
+            boundary = [s for s in found if s.at_boundary]
+            counts[stem] = len(clear)
+            counts[f"{stem}/at-boundary"] = len(boundary)
+            for k, solution in enumerate(clear):
+                keep(_named(stem, len(clear), k), solution.u_after, solution.energy_change)
+            for k, solution in enumerate(boundary):
+                keep(_named(f"{stem}/at-boundary", len(boundary), k), solution.u_after,
+                     solution.energy_change)
     for law in SEQUENTIAL_LAWS:
         results, spread = sim.all_orders(system, law)
         counts[f"sequential/{law}/order-spread"] = float(spread)

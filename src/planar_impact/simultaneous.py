@@ -58,6 +58,18 @@ VELOCITY_TOLERANCE = 1e-9
 #: A fixed-point iteration stops at a residual this far below the bound: a few units of
 #: double rounding (~1.1e-16 each), where a further Newton step can no longer shrink it.
 ROUNDING_RESIDUAL = 1e-15
+#: The boundary band of a coherence decision (docs/multi-contact.md, 'Decisions at a
+#: boundary'), relative: Table 1's type at an effective approach is at the boundary when a
+#: point within BOUNDARY_BAND of the approach speed gives another type (the type depends on
+#: α = v_t/|v_n| and on signs of g, h, p, q only); the tangent orientation when |v_t| is
+#: within it; the strict test I_n > 0 when |I_n| is within BOUNDARY_BAND of the impulse
+#: scale. Rounding moves these quantities by ~1e-16 times W's condition (≲ 1e-12 here), so
+#: a decision outside the band cannot flip on the last bit; inside it the solution is
+#: reported with ``at_boundary`` and both candidates named, instead of being kept or
+#: dropped by the last bit. At a type boundary the two types' closed forms agree (comment
+#: a of Table 1), to BOUNDARY_IMPULSE_TOLERANCE of the impulse scale within the band.
+BOUNDARY_BAND = 1e-9
+BOUNDARY_IMPULSE_TOLERANCE = 1e-6
 
 
 @dataclass(frozen=True)
@@ -204,6 +216,15 @@ class MultiContactSolution:
     #: The literal reading only: whether every contact's type is the one Table 1 picks at its
     #: own ``v^A(i)`` (the single-contact law's type); None under the other readings.
     table1_types: bool | None = None
+    #: Decisions of this solution that lie inside the boundary band (BOUNDARY_BAND), each
+    #: naming both candidates (e.g. "contact 0: Table 1 type 4 | 5"); empty when every
+    #: decision is clear.
+    boundary: tuple[str, ...] = ()
+
+    @property
+    def at_boundary(self) -> bool:
+        """True when some decision of this solution is inside the boundary band."""
+        return bool(self.boundary)
 
     def impulses(self) -> np.ndarray:
         """``(I_n^(1), I_t^(1), I_n^(2), ...)``."""
@@ -539,21 +560,35 @@ def _assemble(system, law, types, impulses, determinate):
         vt_separation=vt_s, energy_change=float(0.5 * energy), determinate=bool(determinate))
 
 
-def _paper_coherent(law, ctype, sign, solution, i, tolerance) -> bool:
+def _paper_coherent(law, ctype, sign, solution, i, tolerance, impulse_band):
     """The paper's tests after (75): ``I_n > 0``, ``v_n^S ≥ 0`` and a ``v_t^S`` that fits the
-    type (0 sticking, against the initial slip reversing, with it forward)."""
+    type (0 sticking, against the initial slip reversing, with it forward).
+
+    True or False; or, where the strict ``I_n > 0`` is decided inside ``impulse_band`` (an
+    impulse that is zero to rounding), a string naming both candidates. The non-strict
+    tests pass within ``tolerance`` of their cut: a value that is zero to rounding passes
+    them whichever its last bit, so they are never at a boundary.
+    """
     if ctype == SEPARATING:
-        return solution.vn_separation[i] >= -tolerance
-    if not solution.normal_impulse[i] > 0 or solution.vn_separation[i] < -tolerance:
+        return bool(solution.vn_separation[i] >= -tolerance)
+    normal = solution.normal_impulse[i]
+    if not normal > -impulse_band or solution.vn_separation[i] < -tolerance:
         return False
+    if not normal > impulse_band:
+        return ("I_n = 0 within the band (an impulse, or a separating contact)"
+                if _slip_fits(law, ctype, sign, solution, i, tolerance) else False)
+    return _slip_fits(law, ctype, sign, solution, i, tolerance)
+
+
+def _slip_fits(law, ctype, sign, solution, i, tolerance) -> bool:
     slip = sign * solution.vt_separation[i]
     if law == "newton":
         kind = {1: "stick", 2: "reverse", 3: "forward"}[ctype]
     else:
         kind = {1: "stick", 2: "stick", 3: "reverse", 4: "reverse", 5: "forward"}[ctype]
     if kind == "stick":
-        return abs(slip) <= tolerance
-    return slip <= tolerance if kind == "reverse" else slip >= -tolerance
+        return bool(abs(slip) <= tolerance)
+    return bool(slip <= tolerance if kind == "reverse" else slip >= -tolerance)
 
 
 def coherent_solutions(system: ContactSystem, law: str = "poisson", *,
@@ -871,8 +906,11 @@ def _types_within_margin(system, law, types, signs, effective, margin):
 
 def _check_combination(system, law, types, signs, impulses, determinate, tolerance,
                        coupling="effective"):
-    """The coherent solution of one combination at its fixed point, or None."""
+    """The coherent solution of one combination at its fixed point, or None; with its
+    decisions inside the boundary band named (``boundary``)."""
     final = impulses.copy()
+    boundary: list[str] = []
+    table_types = list(types)
     seen = impulses if coupling == EFFECTIVE else np.zeros_like(impulses)
     for i, (ctype, sign) in enumerate(zip(types, signs)):
         if ctype == SEPARATING:
@@ -885,26 +923,59 @@ def _check_combination(system, law, types, signs, impulses, determinate, toleran
             continue
         _mnn, mnt, _mtt = system.single_terms(i)
         vn, vt = system.effective_approach(i, seen)
+        band = BOUNDARY_BAND * (abs(vn) + abs(vt))
         if _frame_sign(vt, mnt) != sign:
-            return None
+            if abs(vt) > band:
+                return None
+            boundary.append(f"contact {i}: v_t = 0 within the band (either orientation)")
         own = _law_at(system, law, i, vn, vt, sign)
-        if own is None or int(own["collision_type"]) != ctype:
+        if own is None:
             return None
+        near = _types_near(system, law, i, vn, vt, sign, band)
+        own_type = int(own["collision_type"])
+        if ctype not in near:
+            return None
+        if len(near) > 1:  # Table 1 within the band gives several types: name them
+            boundary.append(f"contact {i}: Table 1 type "
+                            + " | ".join(str(t) for t in sorted(near)))
         # The law's own impulses at this effective approach: equal to the fixed point to
-        # its tolerance, and for m = 1 exactly what solve() returns.
+        # its tolerance (to BOUNDARY_IMPULSE_TOLERANCE where Table 1 picks the neighbouring
+        # type, whose formulas agree at the boundary), and for m = 1 exactly what solve()
+        # returns.
         normal, tangential = float(own["normal_impulse"]), sign * float(own["tangential_impulse"])
         scale = system.impulse_scale() + abs(normal) + abs(tangential)
+        allowed = FIXED_POINT_TOLERANCE if own_type == ctype else BOUNDARY_IMPULSE_TOLERANCE
         if max(abs(normal - impulses[2 * i]), abs(tangential - impulses[2 * i + 1])) > (
-                FIXED_POINT_TOLERANCE * scale):
+                allowed * scale):
             return None
         final[2 * i], final[2 * i + 1] = normal, tangential
-    solution = _assemble(system, law, types, final, determinate)
+        table_types[i] = own_type  # the type Table 1 gives here names the solution
+    solution = _assemble(system, law, table_types, final, determinate)
     for i, (ctype, sign) in enumerate(zip(types, signs)):
-        if not _paper_coherent(law, ctype, sign, solution, i, tolerance):
+        verdict = _paper_coherent(law, ctype, sign, solution, i, tolerance,
+                                  BOUNDARY_BAND * system.impulse_scale())
+        if verdict is False:
             return None
+        if verdict is not True:
+            boundary.append(f"contact {i}: {verdict}")
     if coupling == LITERAL:
         solution = dataclasses.replace(solution, table1_types=_table1_types(system, law, types))
-    return solution
+    return dataclasses.replace(solution, boundary=tuple(boundary)) if boundary else solution
+
+
+def _types_near(system, law, i, vn, vt, sign, band) -> set[int]:
+    """The types Table 1 gives contact ``i`` at ``(vn, vt)`` and at the four corners of the
+    box of half-width ``band`` around it (on the same side of ``v_t = 0``, approaching): α
+    is extreme at the corners, so these are the types within the band."""
+    found = set()
+    for dn, dt in ((0.0, 0.0), (-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0)):
+        corner_vn, corner_vt = vn + dn * band, vt + dt * band
+        if sign * corner_vt < 0:
+            corner_vt = 0.0
+        out = _law_at(system, law, i, corner_vn, corner_vt, sign)
+        if out is not None:
+            found.add(int(out["collision_type"]))
+    return found
 
 
 def _table1_types(system, law, types) -> bool:
@@ -920,12 +991,18 @@ def _table1_types(system, law, types) -> bool:
 
 
 def _already_found(found, solution, system) -> bool:
+    """Whether ``solution`` repeats one in ``found`` (same impulses, or same ``Δu`` within a
+    family); a repeat's boundary notes are merged into the kept one (``found`` is updated),
+    so that which combination came first cannot change what is reported."""
     scale = system.impulse_scale()
-    for other in found:
-        if np.max(np.abs(other.impulses() - solution.impulses())) <= 1e-9 * scale:
-            return True
+    for k, other in enumerate(found):
+        same = np.max(np.abs(other.impulses() - solution.impulses())) <= 1e-9 * scale
         family = not (other.determinate and solution.determinate)
-        if family and np.max(np.abs(other.delta_u - solution.delta_u)) <= 1e-9 * _speed_of(system):
+        if same or family and np.max(np.abs(other.delta_u - solution.delta_u)) <= (
+                1e-9 * _speed_of(system)):
+            notes = tuple(dict.fromkeys(other.boundary + solution.boundary))
+            if notes != other.boundary:
+                found[k] = dataclasses.replace(other, boundary=notes)
             return True
     return False
 
