@@ -7,7 +7,9 @@ SHA-256 of the reference as JSON, every float exact (``repr`` round-trips). The 
 the library's several-contact points (flat faces, the tilted box and rod), perturbed copies
 of them (:func:`harness.bench.many_scenarios.perturbed_copies`) and the library's points
 with other frictions and restitutions (:data:`EXTREMES`). They were recorded with the code
-at commit 17570bc. A change to a reference's arithmetic must regenerate the file on
+at commit 17570bc, and the fingerprints again at d67c6ce (the paper's literal reading made the
+default, solutions at the boundary of a decision counted apart, flat-box-several-poisson
+renamed flat-box-receding-end). A change to a reference's arithmetic must regenerate the file on
 purpose: ``python tests/reference/test_reference_identity.py COMMIT`` (:func:`write_stored`).
 """
 
