@@ -42,7 +42,8 @@ SINGLE, SIMULTANEOUS, EVENT_DRIVEN, UNAVAILABLE = (
     "single-contact", "simultaneous", "event-driven", "unavailable")
 #: The engines' own law (sequential impulses on a velocity-level Newton–Coulomb problem).
 ENGINE_LAW = "newton-lcp"
-#: Laws of the paper's proposal (``planar_impact.simultaneous.TYPE_LAWS``) and its readings.
+#: Laws of the paper's proposal (``planar_impact.simultaneous.TYPE_LAWS``); its literal reading
+#: and the effective extension.
 COHERENT_LAWS = ("poisson", "stronge-paper", "newton")
 #: The literal reading is the paper's proposal; "effective" is the named extension that
 #: counts restitution twice (docs/multi-contact.md, 'The paper's proposal').

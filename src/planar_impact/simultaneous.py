@@ -8,13 +8,15 @@ here (docs/multi-contact.md explains each, with a worked example):
 
 * :func:`coherent_solutions`: the paper's proposal after (75). Every combination of the
   collision types (five for Poisson and the paper's Stronge, three for Newton) is evaluated
-  and tested for coherence; all coherent combinations are returned. A type's formulas are
-  applied to contact ``i`` with the *effective* approach velocities
-  ``v^A(i) + Σ_{j≠i} W_ij I^(j)`` (the (A22)/(A23) of contact ``i`` rewritten from (75)),
-  which makes each combination a fixed point of ``m`` single-contact laws.
-* :func:`newton_coulomb_solutions`: the velocity-level Newton–Coulomb law sequential-impulse
-  engines solve, by exact enumeration of the contact modes; :func:`projected_gauss_seidel`
-  is the engines' iteration, for the cross-check.
+  and tested for coherence; all coherent combinations are returned. By default
+  (``coupling="literal"``, the paper's) each contact's type formulas are explicit in its own
+  ``v^A(i)``: 5^m evaluations, kept where the paper's three tests hold. The named extension
+  ``coupling="effective"`` applies them at ``v^A(i) + Σ_{j≠i} W_ij I^(j)``, a fixed point of
+  ``m`` single-contact laws, which counts restitution twice.
+* :func:`newton_coulomb` / :func:`newton_coulomb_solutions`: the velocity-level
+  Newton–Coulomb law sequential-impulse engines solve, by exact enumeration of the contact
+  modes, counted by post-impact velocity; :func:`projected_gauss_seidel` is the engines'
+  iteration, for the cross-check and as the second method where no mode holds.
 * :func:`sequential_impacts` / :func:`all_orders`: the contacts taken one at a time with the
   single-contact solver, in a given order, until none approaches.
 """
@@ -596,34 +598,42 @@ def coherent_solutions(system: ContactSystem, law: str = "poisson", *,
                        ) -> list[MultiContactSolution]:
     """Every coherent combination of collision types, the paper's proposal after (75).
 
-    For each type tuple ``(T_1 … T_m)`` and tangent orientation per contact, contact ``i``'s
-    impulses are given by type ``T_i``'s formulas at its effective approach velocities
-    ``v^A(i) + Σ_{j≠i} W_ij I^(j)``; the ``m`` contacts' formulas together fix the impulses
-    (a linear system for Poisson and Newton, a smooth one for ``"stronge-paper"``). The
-    combination is coherent when, at every contact, the single-contact law picks type
-    ``T_i`` by Table 1 for that effective approach (so the type's story holds: (53)–(57),
-    (A59)–(A61)), the orientation is the one ``solve`` would use, and the paper's tests hold:
-    ``I_n > 0``, ``v_n^S ≥ 0``, ``v_t^S`` fitting the type. docs/multi-contact.md, 'The
-    paper's proposal', gives the reasons.
+    ``coupling="literal"`` (default, the paper's proposal): for each type tuple
+    ``(T_1 … T_m)`` contact ``i``'s impulses are type ``T_i``'s formulas at its own
+    ``v^A(i)`` (tangent oriented as ``solve`` orients it); ``Δu`` by (75); the combination
+    is coherent when the paper's three tests hold at every contact with the final
+    velocities: ``I_n > 0``, ``v_n^S ≥ 0``, ``v_t^S`` fitting the type. Table 1 does not
+    filter (``table1_types`` marks the combination it would pick).
 
-    ``coupling="none"`` is the literal alternative: every contact's formulas use its own
-    ``v^A(i)``, the other contacts enter only through (75) and the coherence tests; Table 1
-    then fixes one candidate combination, coherent or not.
+    ``coupling="effective"`` (an extension, not the paper's; it counts restitution twice):
+    contact ``i``'s impulses are type ``T_i``'s formulas at its effective approach
+    ``v^A(i) + Σ_{j≠i} W_ij I^(j)``; the ``m`` contacts' formulas together fix the impulses
+    (a linear system for Poisson and Newton, a smooth one for ``"stronge-paper"``), and the
+    combination is coherent when, at every contact, the single-contact law picks type
+    ``T_i`` by Table 1 for that effective approach, the orientation is the one ``solve``
+    would use, and the paper's tests hold. docs/multi-contact.md, 'The paper's proposal',
+    gives the reasons.
+
+    Decisions inside the band :data:`BOUNDARY_BAND` (Table 1's type, the orientation at
+    ``v_t = 0``, ``I_n = 0``) keep the solution with ``at_boundary`` and both candidates in
+    ``boundary`` (docs/multi-contact.md, 'Decisions at a boundary').
 
     ``allow_separating`` adds type 0 (no impulse, needs ``v_n^S ≥ 0``) at each contact; the
     paper requires ``I_n > 0`` everywhere, so it is off by default.
 
     Combinations that cannot pass are dropped before their solve (:func:`_candidates`: the
-    literal reading's one candidate; a batched screen with margins for the effective one of
-    Poisson and Newton) or, for the paper's Stronge under the effective reading, after it and
-    before the checks (:func:`_coherent_within_margin` at the fixed points); the rest are
+    literal reading's one orientation per contact; a batched screen with margins for the
+    effective one of Poisson and Newton) or, for the paper's Stronge under the effective
+    reading, after it and before the checks (:func:`_coherent_within_margin` at the fixed
+    points); the rest are
     solved and checked as without a screen, so the answer is the same bit for bit
     (tests/theory/test_simultaneous_screen.py compares with the unscreened path).
 
     Returns the coherent solutions, distinct impulses only (combinations that coincide, as
     across a type boundary where the closed forms agree, are listed once: the first in
-    enumeration order), sorted by type tuple. For ``m = 1`` the list is the single answer of
-    :func:`planar_impact.solve` with the same law, bit for bit.
+    enumeration order), sorted by type tuple. For ``m = 1`` the effective reading's list is
+    the single answer of :func:`planar_impact.solve` with the same law, bit for bit, and so
+    is the literal reading's solution with ``table1_types``.
     """
     if law not in TYPE_LAWS:
         raise ImpactInputError(f"law: {law!r}; allowed: {', '.join(TYPE_LAWS)}")
