@@ -175,14 +175,16 @@ def poisson_type_boundary(terms: ContactTerms, e, ctype, band=TYPE_BAND):
     evaluated only on the rows near one (arrays), so a batch pays little for it.
     """
     g, h, p, q, alpha, r_m = terms.g, terms.h, terms.p, terms.q, terms.alpha, terms.r_m
-    abs_mnt = abs(terms.mnt)
-    scale_gp = band * (terms.mu * terms.mtt + abs_mnt)
-    scale_hq = band * (terms.mnn + terms.mu * abs_mnt)
-    width = band * (1.0 + abs(alpha))
     upper = (1.0 + e) * r_m
-    near = ((abs(g) <= scale_gp) | (abs(p) <= scale_gp) | (abs(h) <= scale_hq)
-            | (abs(q) <= scale_hq) | (abs(alpha - r_m) <= width + band * abs(r_m))
-            | (abs(alpha - upper) <= width + band * abs(upper)) | (alpha <= width))
+    # A superset of the rows near a boundary (twice the band), in few passes: with μ ≥ 0,
+    # max(|g|, |p|) = μ m_tt + |m_nt| and max(|h|, |q|) = m_nn + μ|m_nt| (A35), the scales
+    # of the case signs; α's band is widened to cover both region thresholds at once.
+    wide = 2.0 * band
+    abs_g, abs_p, abs_h, abs_q = abs(g), abs(p), abs(h), abs(q)
+    near = np.minimum(abs_g, abs_p) <= wide * np.maximum(abs_g, abs_p)
+    near |= np.minimum(abs_h, abs_q) <= wide * np.maximum(abs_h, abs_q)
+    width = wide * (1.0 + abs(alpha) + abs(upper) + abs(r_m))
+    near |= (abs(alpha - r_m) <= width) | (abs(alpha - upper) <= width) | (alpha <= width)
     if type(near) is not np.ndarray or near.ndim == 0:
         if not near:
             return False, 0
