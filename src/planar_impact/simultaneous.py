@@ -1366,7 +1366,7 @@ def random_two_contact_system(rng: np.random.Generator, family: str = "generic")
 
 
 def coherent_count_distribution(problems: int = 1000, seed: int = 0, family: str = "generic",
-                                coupling: str = "effective",
+                                coupling: str = LITERAL,
                                 laws_to_count=("poisson", "stronge-paper", "newton",
                                                "newton-coulomb")) -> dict[str, dict[str, int]]:
     """For ``problems`` random two-contact systems, how often each law has 0, 1 or 2+
