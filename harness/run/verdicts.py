@@ -70,8 +70,18 @@ REASONS: dict[str, str] = {
     "energy-gain": "kinetic energy grew (attributed to the law when newton-lcp predicts a "
     "gain, else to the numerics; only a numerics gain fails the run)",
 }
+#: Remarks a verdict lists after its reasons, never failures (not counted as reasons).
+REMARKS: dict[str, str] = {
+    "at-boundary": "a check's value lies within its rounding band of the check's bound: the "
+    "decision (named, with the other) could go either way on another CPU",
+}
+#: The rounding band of a verdict check (docs/verdicts.md, 'Decisions at a boundary'): a
+#: measured value within BOUNDARY_BAND of the larger of its magnitude and its bound's (for
+#: not-separated, of the sum of the products forming v_n^S) is at the boundary. The
+#: tolerances themselves are 1e-6 to 0.1 of their scales; rounding moves a value by ~1e-16.
+BOUNDARY_BAND = 1e-9
 #: Reason name -> its place in :data:`REASONS` (a verdict lists its reasons in that order).
-_REASON_ORDER = {name: place for place, name in enumerate(REASONS)}
+_REASON_ORDER = {name: place for place, name in enumerate(chain(REASONS, REMARKS))}
 ENGINE_STATUS_REASONS = ("blow-up", "no-contact", "no-separation", "out-of-plane",
                          "multi-contact")
 SINGLE_IMPACT = "single-impact"
@@ -538,6 +548,11 @@ def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = 
         reasons += _second_features(scene, run.contacts, tolerances, terms.features)
     vn_after = float(problem.wn @ u_after)  # metrics.contact_velocities' v_n
     bound = tolerances.separation * scales.approach_speed
+    reasons += _at_boundary("not-separated", vn_after, -bound, "v_n^S", "m/s",
+                            float(np.abs(problem.wn * u_after).sum()))
+    if run.max_penetration is not None:
+        reasons += _at_boundary("penetration", run.max_penetration,
+                                tolerances.penetration * scales.size, "deepest overlap", "m")
     if vn_after < -bound:
         reasons.append(Reason("not-separated", vn_after, -bound,
                               f"v_n^S = {vn_after:.4g} m/s < -{bound:.3g} m/s "
@@ -546,6 +561,8 @@ def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = 
     implied_n, implied_t, residual = (
         implied if implied is not None
         else _implied_impulse(problem, terms.delassus, u_after, scales.speed_norm))
+    reasons += _at_boundary("impulse-residual", residual, tolerances.impulse_residual,
+                            "residual", "of the speed norm")
     if residual > tolerances.impulse_residual:
         reasons.append(Reason("impulse-residual", residual, tolerances.impulse_residual,
                               f"‖Δu − M⁻¹(w_n I_n + w_t I_t)‖_M = {residual:.3g} of the "
@@ -554,6 +571,8 @@ def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = 
                                  engine="(I_n, I_t)", implied="by Δu",
                                  scale="|v_n^A|/m_nn")
     gain = 0.5 * (metrics.ke_norm(problem.mass_matrix, u_after) ** 2 - terms.norm_before**2)
+    reasons += _at_boundary("energy-gain", gain, tolerances.energy * scales.energy, "ΔE", "J",
+                            terms.norm_before**2)
     reasons += _energy_gain(gain, scales, law_energy_change, tolerances, law=ENGINE_LAW)
     reasons.sort(key=lambda reason: _REASON_ORDER[reason.name])
     return Verdict(tuple(reasons))
@@ -798,6 +817,21 @@ _STATUS_VALUES = {status: status.value for status in Status}
 _BATCHED_REASONS = tuple(name for name in REASONS
                          if name in ("clipped", "multi-contact", "not-separated", "penetration",
                                      "impulse-residual", "impulse-mismatch", "energy-gain"))
+
+
+def _at_boundary(check: str, value: float, bound: float, what: str, unit: str,
+                 scale: float = 0.0) -> list[Reason]:
+    """An ``at-boundary`` remark (never a failure) when ``value`` lies within
+    :data:`BOUNDARY_BAND` of ``bound`` (relative to the larger of their magnitudes and
+    ``scale``), naming the check and both outcomes; else nothing."""
+    if not (math.isfinite(value) and math.isfinite(bound)):
+        return []
+    band = BOUNDARY_BAND * max(abs(value), abs(bound), scale)
+    if abs(value - bound) > band:
+        return []
+    return [Reason("at-boundary", value, bound,
+                   f"{check}: {what} = {value!r} {unit} is within {band:.3g} of the bound "
+                   f"{bound!r}: passes | fails {check} on the last bit", fails=False)]
 
 
 def _penetration(run: RunNumbers, scales: SceneScales, tolerances: Tolerances) -> list[Reason]:
@@ -1261,6 +1295,8 @@ def judge_declared(scene, problem, run: RunNumbers, contacts, *,
     reasons += _penetration(run, scales, tolerances)
     impulses, residual = declared_impulses(problem.mass_matrix, wn, wt, problem.u, u_after,
                                            scales.speed_norm)
+    reasons += _at_boundary("impulse-residual", residual, tolerances.impulse_residual,
+                            "residual", "of the speed norm")
     if residual > tolerances.impulse_residual:
         reasons.append(Reason("impulse-residual", residual, tolerances.impulse_residual,
                               f"‖Δu − M⁻¹Σ_i(w_n^(i) I_n^(i) + w_t^(i) I_t^(i))‖_M = "
@@ -1426,20 +1462,22 @@ def staggered_strikes(scene, contacts, records: Sequence[StepContacts] | Contact
 
 def reason_counts(reasons_per_run: Sequence[Sequence[Mapping[str, Any]]]) -> dict[str, int]:
     """``{reason: runs failing it}`` over many runs' ``reasons`` lists (law-attributed
-    energy gains counted as ``energy-gain (law)``, not failing)."""
+    energy gains counted as ``energy-gain (law)``, not failing; remarks such as
+    ``at-boundary`` under their own name)."""
     counts: dict[str, int] = {}
     for reasons in reasons_per_run:
         for reason in reasons:
-            name = reason["name"] if reason.get("fails", True) else f"{reason['name']} (law)"
+            name = (reason["name"] if reason.get("fails", True) or reason["name"] in REMARKS
+                    else f"{reason['name']} (law)")
             counts[name] = counts.get(name, 0) + 1
     return counts
 
 
-__all__ = ["DEFAULT_TOLERANCES", "REASONS", "SPEED_CAPS", "BodyFeatures", "ContactTrack",
-           "Reason", "RunNumbers", "SceneScales", "SceneTerms", "StepContacts", "Tolerances",
-           "Verdict", "body_features", "contact_features", "declared_contacts",
-           "declared_impulses", "first_strikes", "sequence_contacts", "staggered_strikes",
-           "truncated_sequence",
+__all__ = ["BOUNDARY_BAND", "DEFAULT_TOLERANCES", "REASONS", "REMARKS", "SPEED_CAPS",
+           "BodyFeatures", "ContactTrack", "Reason", "RunNumbers", "SceneScales", "SceneTerms",
+           "StepContacts", "Tolerances", "Verdict", "body_features", "contact_features",
+           "declared_contacts", "declared_impulses", "first_strikes", "sequence_contacts",
+           "staggered_strikes", "truncated_sequence",
            "declared_scales", "feature_at", "feature_points", "impulse_from_velocities",
            "TermArrays", "judge", "judge_declared", "judge_many", "numbers_from_output",
            "numbers_from_run", "prepare", "prepare_many", "reason_counts", "scene_scales",

@@ -155,6 +155,92 @@ def poisson_type(terms: ContactTerms, e):
     return _POISSON_TYPE_BY_CASE_REGION.take(index)
 
 
+#: Table 1's boundary band (docs/theory.md, 'Decisions at a boundary'): the type is at the
+#: boundary where a sign of ``g, h, p, q`` (A35) is within TYPE_BAND of its scale
+#: (``μ m_tt + |m_nt|`` for g and p, ``m_nn + μ|m_nt|`` for h and q), or ``α`` (A34) within
+#: TYPE_BAND·(1 + |α|) of ``r_m``, of ``(1+e) r_m`` (53)–(57) or of 0 (the orientation of
+#: ``t``), and a point inside that band has another type. Rounding moves these by a few
+#: 1e-16 of their scale; 1e-9 leaves a factor 10^6 for the conditioning of the inputs.
+TYPE_BAND = 1e-9
+
+
+def poisson_type_boundary(terms: ContactTerms, e, ctype, band=TYPE_BAND):
+    """``(at_boundary, alternative)`` for the Table 1 types ``ctype`` of :func:`poisson_type`:
+    whether some point within ``band`` (see :data:`TYPE_BAND`) has another type, and the
+    smallest such type (0 where none). For Poisson the other type's closed forms agree with
+    ``ctype``'s at the boundary (comment a); the paper's Stronge mapping jumps at
+    ``α = (1+e) r_m`` (docs/theory.md, 'Findings', 3), so there the two candidates differ.
+
+    Rows far from every boundary are screened with a few comparisons; the candidates are
+    evaluated only on the rows near one (arrays), so a batch pays little for it.
+    """
+    g, h, p, q, alpha, r_m = terms.g, terms.h, terms.p, terms.q, terms.alpha, terms.r_m
+    upper = (1.0 + e) * r_m
+    # A superset of the rows near a boundary (twice the band), in few passes: with μ ≥ 0,
+    # max(|g|, |p|) = μ m_tt + |m_nt| and max(|h|, |q|) = m_nn + μ|m_nt| (A35), the scales
+    # of the case signs; α's band is widened to cover both region thresholds at once.
+    wide = 2.0 * band
+    abs_g, abs_p, abs_h, abs_q = abs(g), abs(p), abs(h), abs(q)
+    near = np.minimum(abs_g, abs_p) <= wide * np.maximum(abs_g, abs_p)
+    near |= np.minimum(abs_h, abs_q) <= wide * np.maximum(abs_h, abs_q)
+    width = wide * (1.0 + abs(alpha) + abs(upper) + abs(r_m))
+    near |= (abs(alpha - r_m) <= width) | (abs(alpha - upper) <= width) | (alpha <= width)
+    if type(near) is not np.ndarray or near.ndim == 0:
+        if not near:
+            return False, 0
+        alternative = _nearby_types(terms, e, ctype, band, None)
+        return bool(alternative), int(alternative)
+    at_boundary = np.zeros(near.shape, dtype=bool)
+    alternative = np.zeros(near.shape, dtype=np.int8)
+    rows = np.flatnonzero(near)
+    if rows.size:
+        found = _nearby_types(terms, e, ctype, band, rows)
+        at_boundary[rows] = found != 0
+        alternative[rows] = found
+    return at_boundary, alternative
+
+
+def _nearby_types(terms, e, ctype, band, rows):
+    """The smallest type other than ``ctype`` within ``band`` (0 where none), on ``rows``
+    (None: scalars). Candidates: ``α ± width`` with the case as it is; each of ``g, h, p, q``
+    at ``±`` its band with ``α`` as it is; and, where ``α`` is within the band of 0, the
+    other orientation of ``t`` (``m_nt → −m_nt`` at ``α = 0``)."""
+    def pick(value):
+        if rows is None or np.ndim(value) == 0:
+            return value
+        return np.asarray(value)[rows]
+
+    g, h, p, q = (pick(x) for x in (terms.g, terms.h, terms.p, terms.q))
+    mnn, mnt, mtt, mu = (pick(x) for x in (terms.mnn, terms.mnt, terms.mtt, terms.mu))
+    alpha, r_m, e, ctype = pick(terms.alpha), pick(terms.r_m), pick(e), pick(ctype)
+    scale_gp = band * (mu * mtt + abs(mnt))
+    scale_hq = band * (mnn + mu * abs(mnt))
+    width = band * (1.0 + abs(alpha))
+    case = table1_case(g, h, p, q)
+
+    def type_of(case, alpha, r_m):
+        region = (np.asarray(alpha > r_m, dtype=np.int8)
+                  + np.asarray(alpha > (1.0 + e) * r_m, dtype=np.int8))
+        return _POISSON_TYPE_BY_CASE_REGION.take(3 * np.asarray(case, dtype=np.int8) + region)
+
+    candidates = [type_of(case, alpha + width, r_m), type_of(case, np.maximum(alpha - width, 0.0),
+                                                             r_m)]
+    for shift in (-1.0, 1.0):
+        candidates.append(type_of(table1_case(g + shift * scale_gp, h, p, q), alpha, r_m))
+        candidates.append(type_of(table1_case(g, h + shift * scale_hq, p, q), alpha, r_m))
+        candidates.append(type_of(table1_case(g, h, p + shift * scale_gp, q), alpha, r_m))
+        candidates.append(type_of(table1_case(g, h, p, q + shift * scale_hq), alpha, r_m))
+    # The other orientation of t at α = 0: m_nt → −m_nt swaps g and p, and h and q (A35).
+    flipped = type_of(table1_case(p, q, g, h), np.zeros_like(alpha), p / q)
+    candidates.append(np.where(alpha <= width, flipped, ctype))
+    best = np.full(np.shape(ctype), 127, dtype=np.int16)
+    for candidate in candidates:
+        other = np.asarray(candidate, dtype=np.int16)
+        best = np.where((other != ctype) & (other < best), other, best)
+    best = np.where(best == 127, 0, best).astype(np.int8)
+    return best if rows is not None else int(best)
+
+
 def poisson_impulses(terms: ContactTerms, e, ctype):
     """``(I_n, I_t)`` by the paper's closed forms for the given collision types.
 

@@ -8,19 +8,22 @@ here (docs/multi-contact.md explains each, with a worked example):
 
 * :func:`coherent_solutions`: the paper's proposal after (75). Every combination of the
   collision types (five for Poisson and the paper's Stronge, three for Newton) is evaluated
-  and tested for coherence; all coherent combinations are returned. A type's formulas are
-  applied to contact ``i`` with the *effective* approach velocities
-  ``v^A(i) + Σ_{j≠i} W_ij I^(j)`` (the (A22)/(A23) of contact ``i`` rewritten from (75)),
-  which makes each combination a fixed point of ``m`` single-contact laws.
-* :func:`newton_coulomb_solutions`: the velocity-level Newton–Coulomb law sequential-impulse
-  engines solve, by exact enumeration of the contact modes; :func:`projected_gauss_seidel`
-  is the engines' iteration, for the cross-check.
+  and tested for coherence; all coherent combinations are returned. By default
+  (``coupling="literal"``, the paper's) each contact's type formulas are explicit in its own
+  ``v^A(i)``: 5^m evaluations, kept where the paper's three tests hold. The named extension
+  ``coupling="effective"`` applies them at ``v^A(i) + Σ_{j≠i} W_ij I^(j)``, a fixed point of
+  ``m`` single-contact laws, which counts restitution twice.
+* :func:`newton_coulomb` / :func:`newton_coulomb_solutions`: the velocity-level
+  Newton–Coulomb law sequential-impulse engines solve, by exact enumeration of the contact
+  modes, counted by post-impact velocity; :func:`projected_gauss_seidel` is the engines'
+  iteration, for the cross-check and as the second method where no mode holds.
 * :func:`sequential_impacts` / :func:`all_orders`: the contacts taken one at a time with the
   single-contact solver, in a given order, until none approaches.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import itertools
 import math
@@ -57,6 +60,18 @@ VELOCITY_TOLERANCE = 1e-9
 #: A fixed-point iteration stops at a residual this far below the bound: a few units of
 #: double rounding (~1.1e-16 each), where a further Newton step can no longer shrink it.
 ROUNDING_RESIDUAL = 1e-15
+#: The boundary band of a coherence decision, relative
+#: (docs/multi-contact.md, 'Decisions at a boundary'). Table 1's type at an effective
+#: approach is at the boundary when a point within BOUNDARY_BAND of the approach speed has
+#: another type (the type depends on α = v_t/|v_n| and the signs of g, h, p, q only); the
+#: tangent orientation when |v_t| is within it; the strict test I_n > 0 when |I_n| is
+#: within BOUNDARY_BAND of the impulse scale. Rounding moves these by ~1e-16 times W's
+#: condition (≲ 1e-12 here), so a decision outside the band cannot flip on the last bit;
+#: inside it the solution is reported with ``at_boundary`` and both candidates named,
+#: instead of being kept or dropped by the last bit. At a type boundary the two types'
+#: closed forms agree (comment a of Table 1) for Poisson and Newton; the paper's Stronge's
+#: jump at α = (1+e) r_m.
+BOUNDARY_BAND = 1e-9
 
 
 @dataclass(frozen=True)
@@ -200,6 +215,18 @@ class MultiContactSolution:
     vt_separation: np.ndarray
     energy_change: float
     determinate: bool
+    #: The literal reading only: whether every contact's type is the one Table 1 picks at its
+    #: own ``v^A(i)`` (the single-contact law's type); None under the other readings.
+    table1_types: bool | None = None
+    #: Decisions of this solution that lie inside the boundary band (BOUNDARY_BAND), each
+    #: naming both candidates (e.g. "contact 0: Table 1 type 4 | 5"); empty when every
+    #: decision is clear.
+    boundary: tuple[str, ...] = ()
+
+    @property
+    def at_boundary(self) -> bool:
+        """True when some decision of this solution is inside the boundary band."""
+        return bool(self.boundary)
 
     def impulses(self) -> np.ndarray:
         """``(I_n^(1), I_t^(1), I_n^(2), ...)``."""
@@ -246,12 +273,14 @@ def _type_impulses(law, terms, e, ctype):
 
 
 #: How a type's formulas see the other contacts (docs/multi-contact.md, 'The paper's proposal').
-COUPLINGS = ("effective", "none")
+LITERAL, EFFECTIVE = "literal", "effective"
+#: The paper's proposal first (the default), then the named extension.
+COUPLINGS = (LITERAL, EFFECTIVE)
 
 
 def _contact_map(system, law, types, signs, coupling="effective"):
     """The map ``I ↦ (forced impulses of every contact at its effective approach)`` for many
-    combinations at once; with ``coupling="none"`` every contact sees its own ``v^A`` and
+    combinations at once; with ``coupling="literal"`` every contact sees its own ``v^A`` and
     the map is constant.
 
     ``types``, ``signs`` (``(N, m)``): one combination per row. The returned
@@ -299,7 +328,7 @@ class _ContactMap:
         approaches = []
         for i in range(self.system.count):
             impulses = points[i]
-            if self.coupling == "none":
+            if self.coupling == LITERAL:
                 impulses = np.zeros_like(impulses)
             approaches.append(self.effective(i, [impulses[:, k] for k in range(impulses.shape[1])],
                                              len(impulses)))
@@ -382,7 +411,7 @@ def _map_and_jacobian(mapping, impulses, rows, step):
             evaluations[1 + where_c] = raised[c]
             evaluations[1 + shifts + where_c] = lowered[c]
             stacked.append(evaluations)
-        if mapping.coupling == "none":  # as forced: every contact sees its own v^A
+        if mapping.coupling == LITERAL:  # as forced: every contact sees its own v^A
             stacked = [None if block is None else np.zeros_like(block) for block in stacked]
         approaches.append(mapping.effective(i, stacked, (1 + 2 * shifts) * number))
         tiled.append(np.tile(rows, 1 + 2 * shifts))
@@ -426,7 +455,7 @@ def _fixed_points(system, law, combinations, coupling="effective", max_iteration
             break
         current = impulses[rows]
         bound = scale + np.max(np.abs(current), axis=1)
-        if coupling == "none":  # a constant map: the first residual is 0 and ends it
+        if coupling == LITERAL:  # a constant map: the first residual is 0 and ends it
             # Its value anywhere is map(0), the current iterate, bit for bit: no evaluation.
             mapped, jacobian = current.copy(), None
         else:  # the map and, from the same call, its Jacobian (most rows go on)
@@ -533,56 +562,78 @@ def _assemble(system, law, types, impulses, determinate):
         vt_separation=vt_s, energy_change=float(0.5 * energy), determinate=bool(determinate))
 
 
-def _paper_coherent(law, ctype, sign, solution, i, tolerance) -> bool:
+def _paper_coherent(law, ctype, sign, solution, i, tolerance, impulse_band):
     """The paper's tests after (75): ``I_n > 0``, ``v_n^S ≥ 0`` and a ``v_t^S`` that fits the
-    type (0 sticking, against the initial slip reversing, with it forward)."""
+    type (0 sticking, against the initial slip reversing, with it forward).
+
+    True or False; or, where the strict ``I_n > 0`` is decided inside ``impulse_band`` (an
+    impulse that is zero to rounding), a string naming both candidates. The non-strict
+    tests pass within ``tolerance`` of their cut: a value that is zero to rounding passes
+    them whichever its last bit, so they are never at a boundary.
+    """
     if ctype == SEPARATING:
-        return solution.vn_separation[i] >= -tolerance
-    if not solution.normal_impulse[i] > 0 or solution.vn_separation[i] < -tolerance:
+        return bool(solution.vn_separation[i] >= -tolerance)
+    normal = solution.normal_impulse[i]
+    if not normal > -impulse_band or solution.vn_separation[i] < -tolerance:
         return False
+    if not normal > impulse_band:
+        return ("I_n = 0 within the band (an impulse, or a separating contact)"
+                if _slip_fits(law, ctype, sign, solution, i, tolerance) else False)
+    return _slip_fits(law, ctype, sign, solution, i, tolerance)
+
+
+def _slip_fits(law, ctype, sign, solution, i, tolerance) -> bool:
     slip = sign * solution.vt_separation[i]
     if law == "newton":
         kind = {1: "stick", 2: "reverse", 3: "forward"}[ctype]
     else:
         kind = {1: "stick", 2: "stick", 3: "reverse", 4: "reverse", 5: "forward"}[ctype]
     if kind == "stick":
-        return abs(slip) <= tolerance
-    return slip <= tolerance if kind == "reverse" else slip >= -tolerance
+        return bool(abs(slip) <= tolerance)
+    return bool(slip <= tolerance if kind == "reverse" else slip >= -tolerance)
 
 
 def coherent_solutions(system: ContactSystem, law: str = "poisson", *,
-                       coupling: str = "effective", allow_separating: bool = False
+                       coupling: str = LITERAL, allow_separating: bool = False
                        ) -> list[MultiContactSolution]:
     """Every coherent combination of collision types, the paper's proposal after (75).
 
-    For each type tuple ``(T_1 … T_m)`` and tangent orientation per contact, contact ``i``'s
-    impulses are given by type ``T_i``'s formulas at its effective approach velocities
-    ``v^A(i) + Σ_{j≠i} W_ij I^(j)``; the ``m`` contacts' formulas together fix the impulses
-    (a linear system for Poisson and Newton, a smooth one for ``"stronge-paper"``). The
-    combination is coherent when, at every contact, the single-contact law picks type
-    ``T_i`` by Table 1 for that effective approach (so the type's story holds: (53)–(57),
-    (A59)–(A61)), the orientation is the one ``solve`` would use, and the paper's tests hold:
-    ``I_n > 0``, ``v_n^S ≥ 0``, ``v_t^S`` fitting the type. docs/multi-contact.md, 'The
-    paper's proposal', gives the reasons.
+    ``coupling="literal"`` (default, the paper's proposal): for each type tuple
+    ``(T_1 … T_m)`` contact ``i``'s impulses are type ``T_i``'s formulas at its own
+    ``v^A(i)`` (tangent oriented as ``solve`` orients it); ``Δu`` by (75); the combination
+    is coherent when the paper's three tests hold at every contact with the final
+    velocities: ``I_n > 0``, ``v_n^S ≥ 0``, ``v_t^S`` fitting the type. Table 1 does not
+    filter (``table1_types`` marks the combination it would pick).
 
-    ``coupling="none"`` is the literal alternative: every contact's formulas use its own
-    ``v^A(i)``, the other contacts enter only through (75) and the coherence tests; Table 1
-    then fixes one candidate combination, coherent or not.
+    ``coupling="effective"`` (an extension, not the paper's; it counts restitution twice):
+    contact ``i``'s impulses are type ``T_i``'s formulas at its effective approach
+    ``v^A(i) + Σ_{j≠i} W_ij I^(j)``; the ``m`` contacts' formulas together fix the impulses
+    (a linear system for Poisson and Newton, a smooth one for ``"stronge-paper"``), and the
+    combination is coherent when, at every contact, the single-contact law picks type
+    ``T_i`` by Table 1 for that effective approach, the orientation is the one ``solve``
+    would use, and the paper's tests hold. docs/multi-contact.md, 'The paper's proposal',
+    gives the reasons.
+
+    Decisions inside the band :data:`BOUNDARY_BAND` (Table 1's type, the orientation at
+    ``v_t = 0``, ``I_n = 0``) keep the solution with ``at_boundary`` and both candidates in
+    ``boundary`` (docs/multi-contact.md, 'Decisions at a boundary').
 
     ``allow_separating`` adds type 0 (no impulse, needs ``v_n^S ≥ 0``) at each contact; the
     paper requires ``I_n > 0`` everywhere, so it is off by default.
 
     Combinations that cannot pass are dropped before their solve (:func:`_candidates`: the
-    literal reading's one candidate; a batched screen with margins for the effective one of
-    Poisson and Newton) or, for the paper's Stronge under the effective reading, after it and
-    before the checks (:func:`_coherent_within_margin` at the fixed points); the rest are
+    literal reading's one orientation per contact; a batched screen with margins for the
+    effective one of Poisson and Newton) or, for the paper's Stronge under the effective
+    reading, after it and before the checks (:func:`_coherent_within_margin` at the fixed
+    points); the rest are
     solved and checked as without a screen, so the answer is the same bit for bit
     (tests/theory/test_simultaneous_screen.py compares with the unscreened path).
 
     Returns the coherent solutions, distinct impulses only (combinations that coincide, as
     across a type boundary where the closed forms agree, are listed once: the first in
-    enumeration order), sorted by type tuple. For ``m = 1`` the list is the single answer of
-    :func:`planar_impact.solve` with the same law, bit for bit.
+    enumeration order), sorted by type tuple. For ``m = 1`` the effective reading's list is
+    the single answer of :func:`planar_impact.solve` with the same law, bit for bit, and so
+    is the literal reading's solution with ``table1_types``.
     """
     if law not in TYPE_LAWS:
         raise ImpactInputError(f"law: {law!r}; allowed: {', '.join(TYPE_LAWS)}")
@@ -595,7 +646,7 @@ def coherent_solutions(system: ContactSystem, law: str = "poisson", *,
     if not candidates:
         return found
     impulses, converged, determinate = _fixed_points(system, law, candidates, coupling)
-    if law not in AFFINE_LAWS and coupling == "effective" and system.count > 1:
+    if law not in AFFINE_LAWS and coupling == EFFECTIVE and system.count > 1:
         # The paper's Stronge is screened after its solve, at the fixed points themselves.
         rows = np.flatnonzero(converged)  # finite: their residual passed the tolerance
         converged[rows] = _coherent_within_margin(
@@ -626,9 +677,8 @@ def _candidates(system, law, choices, coupling, tolerance):
     Every combination it could accept is kept (so the solutions, solved and checked by the
     same code as before, are the same bit for bit); most of the others are dropped unsolved:
 
-    * ``coupling="none"``: each contact sees its own ``v^A(i)``, so the orientation test
-      (``_frame_sign``) and Table 1 at ``v^A(i)`` leave one (type, sign) per contact (plus
-      separating, where allowed): one candidate instead of ``(2·types)^m``.
+    * ``coupling="literal"``: each contact sees its own ``v^A(i)``, which fixes its tangent's
+      orientation: the ``types^m`` type tuples, one orientation each (the paper's ``5^m``).
     * ``coupling="effective"`` with Poisson or Newton: the map is affine, and one batched
       linear solve per combination screens it (:func:`_affine_screen`).
     * ``coupling="effective"`` with the paper's Stronge: every combination. Its map is not
@@ -637,23 +687,13 @@ def _candidates(system, law, choices, coupling, tolerance):
       as such a screen alone. :func:`coherent_solutions` screens the converged ones at their
       fixed points instead (:func:`_coherent_within_margin`, necessary tests with margins).
     """
-    if coupling == "none":
-        own = []
-        for i in range(system.count):
-            _mnn, mnt, _mtt = system.single_terms(i)
-            vn, vt = system.effective_approach(i, np.zeros(2 * system.count))  # as checked
-            sign = _frame_sign(vt, mnt)
-            law_out = _law_at(system, law, i, vn, vt, sign)
-            pairs = {(SEPARATING, 1.0)}
-            if law_out is not None:
-                pairs.add((int(law_out["collision_type"]), sign))
-            own.append(pairs)
-        # Only types some contact may take can appear: enumerating those (in the order of
-        # choices) lists the kept combinations in enumeration order, without the others.
-        possible = {ctype for pairs in own for ctype, _ in pairs}
-        return [(types, signs) for types, signs in _combinations(
-                    [ctype for ctype in choices if ctype in possible], system.count)
-                if all((t, s) in own[i] for i, (t, s) in enumerate(zip(types, signs)))]
+    if coupling == LITERAL:
+        # Each contact's tangent is oriented by its own v^A(i) (as solve() orients it); every
+        # type tuple is a candidate, the paper's tests decide (_check_combination).
+        signs = tuple(_frame_sign(float(system.approach[2 * i + 1]), system.single_terms(i)[1])
+                      for i in range(system.count))
+        return [(types, tuple(1.0 if t == SEPARATING else sign for t, sign in zip(types, signs)))
+                for types in itertools.product(choices, repeat=system.count)]
     combinations = list(_combinations(choices, system.count))
     if system.count == 1 or law not in AFFINE_LAWS:
         return combinations
@@ -876,19 +916,43 @@ def _types_within_margin(system, law, types, signs, effective, margin):
 
 def _check_combination(system, law, types, signs, impulses, determinate, tolerance,
                        coupling="effective"):
-    """The coherent solution of one combination at its fixed point, or None."""
+    """The coherent solution of one combination at its fixed point, or None; with its
+    decisions inside the boundary band named (``boundary``)."""
     final = impulses.copy()
-    seen = impulses if coupling == "effective" else np.zeros_like(impulses)
+    boundary: list[str] = []
+    seen = impulses if coupling == EFFECTIVE else np.zeros_like(impulses)
     for i, (ctype, sign) in enumerate(zip(types, signs)):
         if ctype == SEPARATING:
             continue
+        if coupling == LITERAL:  # the type's formulas at v^A(i) are the impulses: no Table 1
+            vt = float(system.approach[2 * i + 1])
+            if _frame_sign(vt, system.single_terms(i)[1]) != sign or not (
+                    np.isfinite(impulses[2 * i]) and np.isfinite(impulses[2 * i + 1])):
+                return None
+            continue
         _mnn, mnt, _mtt = system.single_terms(i)
         vn, vt = system.effective_approach(i, seen)
+        band = BOUNDARY_BAND * (abs(vn) + abs(vt))
         if _frame_sign(vt, mnt) != sign:
-            return None
+            if abs(vt) > band:
+                return None
+            boundary.append(f"contact {i}: v_t = 0 within the band (either orientation)")
         own = _law_at(system, law, i, vn, vt, sign)
-        if own is None or int(own["collision_type"]) != ctype:
+        if own is None:
             return None
+        near = _types_near(system, law, i, vn, vt, sign, band)
+        own_type = int(own["collision_type"])
+        if ctype not in near:
+            return None
+        if len(near) > 1:  # Table 1 within the band gives several types: name them
+            boundary.append(f"contact {i}: Table 1 type "
+                            + " | ".join(str(t) for t in sorted(near)))
+        if own_type != ctype:
+            # Table 1 picks the neighbouring type inside the band: the combination's own
+            # formulas (the fixed point) stand, both types named. Poisson's closed forms agree
+            # across a boundary (comment a); the paper's Stronge's need not (docs/theory.md,
+            # 'Findings', 3), so its two candidates may both be listed.
+            continue
         # The law's own impulses at this effective approach: equal to the fixed point to
         # its tolerance, and for m = 1 exactly what solve() returns.
         normal, tangential = float(own["normal_impulse"]), sign * float(own["tangential_impulse"])
@@ -899,18 +963,57 @@ def _check_combination(system, law, types, signs, impulses, determinate, toleran
         final[2 * i], final[2 * i + 1] = normal, tangential
     solution = _assemble(system, law, types, final, determinate)
     for i, (ctype, sign) in enumerate(zip(types, signs)):
-        if not _paper_coherent(law, ctype, sign, solution, i, tolerance):
+        verdict = _paper_coherent(law, ctype, sign, solution, i, tolerance,
+                                  BOUNDARY_BAND * system.impulse_scale())
+        if verdict is False:
             return None
-    return solution
+        if verdict is not True:
+            boundary.append(f"contact {i}: {verdict}")
+    if coupling == LITERAL:
+        solution = dataclasses.replace(solution, table1_types=_table1_types(system, law, types))
+    return dataclasses.replace(solution, boundary=tuple(boundary)) if boundary else solution
+
+
+def _types_near(system, law, i, vn, vt, sign, band) -> set[int]:
+    """The types Table 1 gives contact ``i`` at ``(vn, vt)`` and at the four corners of the
+    box of half-width ``band`` around it (on the same side of ``v_t = 0``, approaching): α
+    is extreme at the corners, so these are the types within the band."""
+    found = set()
+    for dn, dt in ((0.0, 0.0), (-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0)):
+        corner_vn, corner_vt = vn + dn * band, vt + dt * band
+        if sign * corner_vt < 0:
+            corner_vt = 0.0
+        out = _law_at(system, law, i, corner_vn, corner_vt, sign)
+        if out is not None:
+            found.add(int(out["collision_type"]))
+    return found
+
+
+def _table1_types(system, law, types) -> bool:
+    """Whether each contact's type is the single-contact law's at its own ``v^A(i)``."""
+    for i, ctype in enumerate(types):
+        if ctype == SEPARATING:
+            continue
+        vn, vt = float(system.approach[2 * i]), float(system.approach[2 * i + 1])
+        own = _law_at(system, law, i, vn, vt, _frame_sign(vt, system.single_terms(i)[1]))
+        if own is None or int(own["collision_type"]) != ctype:
+            return False
+    return True
 
 
 def _already_found(found, solution, system) -> bool:
+    """Whether ``solution`` repeats one in ``found`` (same impulses, or same ``Δu`` within a
+    family); a repeat's boundary notes are merged into the kept one (``found`` is updated),
+    so that which combination came first cannot change what is reported."""
     scale = system.impulse_scale()
-    for other in found:
-        if np.max(np.abs(other.impulses() - solution.impulses())) <= 1e-9 * scale:
-            return True
+    for k, other in enumerate(found):
+        same = np.max(np.abs(other.impulses() - solution.impulses())) <= 1e-9 * scale
         family = not (other.determinate and solution.determinate)
-        if family and np.max(np.abs(other.delta_u - solution.delta_u)) <= 1e-9 * _speed_of(system):
+        if same or family and np.max(np.abs(other.delta_u - solution.delta_u)) <= (
+                1e-9 * _speed_of(system)):
+            notes = tuple(dict.fromkeys(other.boundary + solution.boundary))
+            if notes != other.boundary:
+                found[k] = dataclasses.replace(other, boundary=notes)
             return True
     return False
 
@@ -928,8 +1031,98 @@ def restitution_targets(system: ContactSystem) -> np.ndarray:
     return system.e * np.maximum(-vn, 0.0)
 
 
+#: Outcomes of :func:`newton_coulomb` (docs/multi-contact.md, 'Newton–Coulomb for m contacts').
+NC_UNIQUE = "unique"
+NC_SPLIT_NOT_UNIQUE = "velocities unique, impulse split not unique"
+NC_SEVERAL = "several velocities"
+NC_NONE = "no solution"
+NC_STATUSES = (NC_UNIQUE, NC_SPLIT_NOT_UNIQUE, NC_SEVERAL, NC_NONE)
+#: Sweeps of projected Gauss–Seidel tried where the enumeration finds no mode that holds.
+NC_GAUSS_SEIDEL_SWEEPS = 2000
+
+
+@dataclass(frozen=True)
+class NewtonCoulombResult:
+    """The Newton–Coulomb law's answer on ``m`` contacts, counted by post-impact velocity.
+
+    ``solutions``: one per distinct ``u_after`` (relative 1e-9 of the speed scale), each
+    with ``determinate`` False where the impulses giving it are not unique (several modes,
+    or a family within one mode: a flat face's W is rank-deficient). ``status`` is one of
+    :data:`NC_STATUSES`; ``explanation`` says why in one line, and for ``"no solution"``
+    what the second method (projected Gauss–Seidel from zero) did. ``gauss_seidel`` is
+    that second method's result where it was run (only when the enumeration found none).
+    """
+
+    solutions: tuple[MultiContactSolution, ...]
+    status: str
+    explanation: str
+    gauss_seidel: GaussSeidelResult | None = None
+
+
+def newton_coulomb(system: ContactSystem) -> NewtonCoulombResult:
+    """:func:`newton_coulomb_solutions` with its outcome named (:class:`NewtonCoulombResult`).
+
+    Where no mode holds, projected Gauss–Seidel (the engines' iteration) is run from zero as
+    a second method: a converged iterate that satisfies the law is a solution the
+    enumeration missed and is returned (status by the same rule); otherwise the status is
+    ``"no solution"`` and the explanation gives how far the iterate grew.
+    """
+    found = newton_coulomb_solutions(system)
+    if found:
+        return NewtonCoulombResult(tuple(found), *_nc_status(found))
+    iteration = projected_gauss_seidel(system, max_sweeps=NC_GAUSS_SEIDEL_SWEEPS)
+    if iteration.converged:
+        solution = _as_lcp_solution(system, iteration.impulses)
+        if solution is not None:
+            status, why = _nc_status([solution])
+            return NewtonCoulombResult((solution,), status, why + "; found by projected "
+                                       "Gauss–Seidel, not by the enumeration", iteration)
+    size = float(np.max(np.abs(iteration.impulses))) / system.impulse_scale()
+    how = ("converged to an iterate that violates the law" if iteration.converged else
+           f"did not converge in {iteration.sweeps} sweeps (largest impulse "
+           f"{size:.3g} impulse scales)")
+    return NewtonCoulombResult(
+        (), NC_NONE, f"none of the 4^{system.count} contact modes holds (each mode's linear "
+        f"system solved and its inequalities tested, tolerance 1e-9 of the speed and impulse "
+        f"scales); projected Gauss–Seidel from zero {how}", iteration)
+
+
+def _nc_status(found) -> tuple[str, str]:
+    if len(found) > 1:
+        return NC_SEVERAL, f"{len(found)} solutions with distinct post-impact velocities"
+    if not found[0].determinate:
+        return NC_SPLIT_NOT_UNIQUE, ("one post-impact velocity; the impulses that give it form "
+                                     "a family (W is rank-deficient)")
+    return NC_UNIQUE, "one solution, impulses unique"
+
+
+def _as_lcp_solution(system, impulses):
+    """``impulses`` as a Newton–Coulomb solution when some mode's inequalities hold there."""
+    targets = restitution_targets(system)
+    tolerance = VELOCITY_TOLERANCE * system.speed_scale()
+    impulse_tolerance = 1e-9 * system.impulse_scale()
+    modes, signs = [], []
+    solution = _assemble(system, "newton-coulomb", (0,) * system.count, impulses, True)
+    for i in range(system.count):
+        _mnn, mnt, _mtt = system.single_terms(i)
+        sign = _frame_sign(float(system.approach[2 * i + 1]), mnt)
+        signs.append(sign)
+        if solution.normal_impulse[i] <= impulse_tolerance:
+            modes.append(LCP_SEPARATE)
+        elif abs(solution.vt_separation[i]) <= tolerance:
+            modes.append(LCP_STICK)
+        else:
+            modes.append(LCP_FORWARD if sign * solution.vt_separation[i] > 0 else LCP_REVERSE)
+    solution = _assemble(system, "newton-coulomb", modes, impulses, True)
+    active_ok = all(mode == LCP_SEPARATE or abs(solution.vn_separation[i] - targets[i])
+                    <= tolerance for i, mode in enumerate(modes))
+    return solution if active_ok and _lcp_holds(system, modes, signs, solution, targets,
+                                                tolerance) else None
+
+
 def newton_coulomb_solutions(system: ContactSystem) -> list[MultiContactSolution]:
-    """All solutions of the Newton–Coulomb contact law, by enumerating the 4^m modes.
+    """All solutions of the Newton–Coulomb contact law with distinct post-impact velocities,
+    by enumerating the 4^m modes.
 
     Per contact: either it separates (``I = 0``, ``v_n^S ≥ e|v_n^A|``), or ``v_n^S =
     e|v_n^A|`` (A30) with ``I_n ≥ 0`` and Coulomb friction at the end state: stick
@@ -939,6 +1132,13 @@ def newton_coulomb_solutions(system: ContactSystem) -> list[MultiContactSolution
     (slip with or against the contact's approach slip, oriented as ``solve`` orients it).
     For ``m = 1`` equals ``solve(..., law="newton-lcp")`` to rounding (a general
     2×2 solve here, the closed form there).
+
+    Solutions are counted by post-impact velocity: modes whose solutions give the same
+    ``Δu`` (relative 1e-9 of the speed scale) are one solution, listed once (the first in
+    enumeration order), with ``determinate`` False when their impulses differ (relative
+    1e-9 of the impulse scale) or the mode's system is singular. A flat face of one body has
+    a rank-deficient W, and its impulse split between the corners is then not unique while
+    the velocities are. :func:`newton_coulomb` names the outcome.
     """
     count = system.count
     targets = restitution_targets(system)
@@ -977,10 +1177,25 @@ def newton_coulomb_solutions(system: ContactSystem) -> list[MultiContactSolution
         if np.max(np.abs(matrix @ impulses - rhs)) > tolerance * (1.0 + np.max(np.abs(matrix))):
             continue  # singular and inconsistent: this mode has no solution
         solution = _assemble(system, "newton-coulomb", modes, impulses, rank == 2 * count)
-        if _lcp_holds(system, modes, signs, solution, targets, tolerance) and not _already_found(
-                found, solution, system):
+        if not _lcp_holds(system, modes, signs, solution, targets, tolerance):
+            continue
+        same = _same_velocity(found, solution, system)
+        if same is None:
             found.append(solution)
+        elif np.max(np.abs(found[same].impulses() - solution.impulses())) > (
+                1e-9 * system.impulse_scale()) and found[same].determinate:
+            # Another mode reaches the same velocities with other impulses: the split of the
+            # impulses between the contacts is not unique.
+            found[same] = dataclasses.replace(found[same], determinate=False)
     return found
+
+
+def _same_velocity(found, solution, system) -> int | None:
+    """The index of a solution in ``found`` with the same ``Δu`` (relative 1e-9), or None."""
+    for k, other in enumerate(found):
+        if np.max(np.abs(other.delta_u - solution.delta_u)) <= 1e-9 * _speed_of(system):
+            return k
+    return None
 
 
 def _lcp_holds(system, modes, signs, solution, targets, tolerance) -> bool:
@@ -1151,14 +1366,17 @@ def random_two_contact_system(rng: np.random.Generator, family: str = "generic")
 
 
 def coherent_count_distribution(problems: int = 1000, seed: int = 0, family: str = "generic",
-                                coupling: str = "effective",
+                                coupling: str = LITERAL,
                                 laws_to_count=("poisson", "stronge-paper", "newton",
                                                "newton-coulomb")) -> dict[str, dict[str, int]]:
     """For ``problems`` random two-contact systems, how often each law has 0, 1 or 2+
-    solutions (coherent combinations; for ``"newton-coulomb"``, LCP solutions), and how
-    often a coherent solution gains energy (key ``"gains"``, relative 1e-9 of ``½uᵀMu``)."""
+    clearly coherent solutions (for ``"newton-coulomb"``, solutions with distinct post-impact
+    velocities), how often some solution is at the boundary of a decision (key
+    ``"boundary"``, not in the 0/1/2+ count), and how often a solution gains energy (key
+    ``"gains"``, relative 1e-9 of ``½uᵀMu``)."""
     rng = np.random.default_rng(seed)
-    counts = {law: {"0": 0, "1": 0, "2+": 0, "gains": 0} for law in laws_to_count}
+    counts = {law: {"0": 0, "1": 0, "2+": 0, "boundary": 0, "gains": 0}
+              for law in laws_to_count}
     for _ in range(problems):
         system = random_two_contact_system(rng, family)
         energy = 0.5 * float(system.u @ system.mass_matrix @ system.u)
@@ -1167,8 +1385,9 @@ def coherent_count_distribution(problems: int = 1000, seed: int = 0, family: str
                 found = newton_coulomb_solutions(system)
             else:
                 found = coherent_solutions(system, law, coupling=coupling)
-            number = len(found)
+            number = sum(not s.at_boundary for s in found)
             counts[law]["0" if number == 0 else "1" if number == 1 else "2+"] += 1
+            counts[law]["boundary"] += any(s.at_boundary for s in found)
             counts[law]["gains"] += any(s.energy_change > 1e-9 * energy for s in found)
     return counts
 

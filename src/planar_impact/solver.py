@@ -49,14 +49,17 @@ def contact_space_solution(law, mnn, mnt, mtt, vn, vt, mu, e, out=None, delta=No
     """
     terms = laws.ContactTerms(mnn, mnt, mtt, vn, vt, mu, delta)
     consistent = np.True_
+    at_boundary, alternative = np.False_, np.int8(0)  # laws not decided by Table 1
     if law == "poisson":
         ctype = laws.poisson_type(terms, e)
+        at_boundary, alternative = laws.poisson_type_boundary(terms, e, ctype)
         normal, tangential = laws.poisson_impulses(terms, e, ctype)
         e_poisson = e
     elif law == "stronge-paper":
         # Type from Table 1 with e_e in place of e (end of the paper's Section 4), then
         # e_i by (64)/(67)/(70)/(73)/(74), then Poisson's closed forms with e_i.
         ctype = laws.poisson_type(terms, e)
+        at_boundary, alternative = laws.poisson_type_boundary(terms, e, ctype)
         e_poisson = laws.stronge_paper_restitution(terms, e, ctype)
         consistent = np.isfinite(e_poisson)
         normal, tangential = laws.poisson_impulses(terms, e_poisson, ctype)
@@ -87,6 +90,8 @@ def contact_space_solution(law, mnn, mnt, mtt, vn, vt, mu, e, out=None, delta=No
         "case": terms.case,
         "restitution_poisson": e_poisson,
         "consistent": consistent,
+        "type_at_boundary": at_boundary,
+        "alternative_type": alternative,
         "delta": terms.delta,
         "h": terms.h,
         "g": terms.g,
@@ -138,7 +143,10 @@ class BatchResult:
     ``status`` codes are in :data:`planar_impact.errors.STATUS_MESSAGES`.
     ``collision_type`` and ``case`` are 0 where the row is not solved.
     ``restitution_in_range`` is False where the ``e_i`` used leaves [0, 1] (the paper's
-    Table 2 for ``"stronge-paper"``).
+    Table 2 for ``"stronge-paper"``). ``type_at_boundary`` is True where Table 1's type is
+    decided inside its band (:data:`planar_impact.laws.TYPE_BAND`: a point that close has
+    another type), ``alternative_type`` that other type (0 elsewhere); only ``poisson`` and
+    ``stronge-paper`` take their type from Table 1 (False and 0 for the other laws).
     """
 
     law: str
@@ -154,6 +162,8 @@ class BatchResult:
     case: np.ndarray
     restitution_poisson: np.ndarray
     restitution_in_range: np.ndarray
+    type_at_boundary: np.ndarray
+    alternative_type: np.ndarray
 
     def status_message(self, index) -> str:
         return errors.STATUS_MESSAGES[int(self.status[index])]
@@ -207,7 +217,7 @@ _BATCH_DTYPES = {
     "status": np.int8, "normal_impulse": float, "tangential_impulse": float, "vn_approach": float,
     "vn_separation": float, "vt_approach": float, "vt_separation": float, "energy_change": float,
     "collision_type": np.int8, "case": np.int8, "restitution_poisson": float,
-    "restitution_in_range": bool,
+    "restitution_in_range": bool, "type_at_boundary": bool, "alternative_type": np.int8,
 }
 
 
@@ -256,6 +266,8 @@ def _solve_chunk(law, inputs, out):
     out["vt_approach"][...] = vt
     out["collision_type"][...] = solution["collision_type"]
     out["case"][...] = solution["case"]
+    out["type_at_boundary"][...] = solution["type_at_boundary"]
+    out["alternative_type"][...] = solution["alternative_type"]
     e_poisson = solution["restitution_poisson"]
     out["restitution_poisson"][...] = e_poisson
     if e_poisson is e:  # Poisson: e passed the screen wherever the row is solved
@@ -348,6 +360,8 @@ def _solve_rows_scaled(law, rows, inputs, sign, out):
     out["energy_change"][rows] = solution["energy_change"]
     out["collision_type"][rows] = solution["collision_type"]
     out["case"][rows] = solution["case"]
+    out["type_at_boundary"][rows] = solution["type_at_boundary"]
+    out["alternative_type"][rows] = solution["alternative_type"]
     e_poisson = solution["restitution_poisson"]
     out["restitution_poisson"][rows] = e_poisson
     out["restitution_in_range"][rows] = (e_poisson >= 0) & (e_poisson <= 1)
@@ -396,6 +410,10 @@ class ImpactResult:
     mnn: float
     mnt: float
     mtt: float
+    #: Table 1's type decided inside its band (laws.TYPE_BAND), and the other candidate
+    #: (0 when clear; only poisson and stronge-paper take their type from Table 1).
+    type_at_boundary: bool = False
+    alternative_type: int = 0
 
     @property
     def energy_gained(self) -> bool:
@@ -632,4 +650,6 @@ def solve_contact(contact: CheckedContact, u, mu: float, e: float, law: str) -> 
         mnn=mnn,
         mnt=mnt,
         mtt=mtt,
+        type_at_boundary=bool(out["type_at_boundary"]),
+        alternative_type=int(out["alternative_type"]),
     )

@@ -31,7 +31,7 @@ def test_check_against_process_rejects_a_wrong_answer(monkeypatch):
 def test_output_write_covers_every_array_of_a_batch_result():
     result = pi.solve_batch([1.0, 2.0], 0.0, 1.0, -1.0, 0.5, 0.3, 0.5)
     arrays = [v for v in result.as_dict().values() if isinstance(v, np.ndarray)]
-    assert len(arrays) == 12  # status + the 11 result fields
+    assert len(arrays) == 14  # status + the 13 result fields
     assert sorted(map(str, bench.result_dtypes())) == sorted(str(v.dtype) for v in arrays)
     # ... which is what the solver allocates per result, from its own table.
     from planar_impact import solver

@@ -8,7 +8,10 @@ faces, the tilted box and rod), perturbed copies of them
 (:func:`harness.bench.many_scenarios.perturbed_copies`) and the library's points with other
 frictions and restitutions (:data:`EXTREMES`). They were recorded with the code at commit
 17570bc (first as SHA-256 fingerprints of each reference; the references themselves were
-written in later from the code of the day, each checked to have its stored fingerprint).
+written in later from the code of the day, each checked to have its stored fingerprint), and
+recorded again when the paper's literal reading became the default, solutions at the
+boundary of a decision were counted apart and flat-box-several-poisson was renamed
+flat-box-receding-end.
 
 Every kind, name, count, contact index and flag must be equal; every float within
 :func:`float_bound`: the references go through numpy's linear algebra (OpenBLAS/LAPACK,

@@ -31,7 +31,7 @@ def both_close(scenario) -> bool:
 
 #: Both ends approach: the engines meet the face as a face.
 CLOSING = [s for s in FLAT if both_close(s)]
-#: One end recedes at the start (``|ω| w/2 > |v_y|``): flat-box-several-poisson.
+#: One end recedes at the start (``|ω| w/2 > |v_y|``): flat-box-receding-end.
 OPENING = [s for s in FLAT if not both_close(s)]
 #: The gate of docs/verdicts.md for an engine that solves the law the reference solves.
 MATCH = 1e-6

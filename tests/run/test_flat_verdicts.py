@@ -244,7 +244,7 @@ def approaching(scenario) -> np.ndarray:
     return wn @ scene.state() < 0
 
 
-#: Both ends approach; and one end recedes at the start (flat-box-several-poisson).
+#: Both ends approach; and one end recedes at the start (flat-box-receding-end).
 CLOSING = [s for s in FLAT if approaching(s).all()]
 OPENING = [s for s in FLAT if not approaching(s).all()]
 

@@ -15,7 +15,7 @@ from harness.scenarios import SCENARIO_DIR, load_scenario
 
 #: Flat faces (m-contact laws) and tilts (event sequences), one to six points each.
 SEVERAL_CONTACT = [load_scenario(SCENARIO_DIR / f"{name}.toml") for name in (
-    "flat-rod", "flat-box-spin", "flat-box-several-poisson", "sweep-tilted-rod")]
+    "flat-rod", "flat-box-spin", "flat-box-receding-end", "sweep-tilted-rod")]
 SINGLE_CONTACT = load_scenario(SCENARIO_DIR / "box-corner.toml")
 
 

@@ -375,7 +375,7 @@ def test_load_by_tags():
     both = load_scenarios(tags="box,polygon")
     assert {s.name for s in both} == {"box-corner", "box-corner-spin", "triangle-corner",
                                       "flat-box", "flat-box-slip", "flat-box-spin",
-                                      "flat-box-several-poisson"}
+                                      "flat-box-receding-end"}
     assert len(load_scenarios(tags=["all"])) == len(SCENARIOS)
     with pytest.raises(ScenarioError, match="no scenario has this tag.*did you mean 'quick'"):
         load_scenarios(tags="quik")

@@ -1,10 +1,10 @@
 """The screened ``coherent_solutions`` against the unscreened one, bit for bit.
 
 ``coherent_solutions`` drops most type combinations before their fixed-point solve
-(``_candidates``: the literal reading's single candidate, a batched linear solve for Poisson
-and Newton; the paper's Stronge is screened after its solve, at its fixed points), and solves
-the ones it keeps together (``_fixed_points``: the map evaluated for every combination and
-every Jacobian column in one batched call); they are checked by the same code as before.
+(``_candidates``: the literal reading's one orientation per contact, a batched linear solve
+for Poisson and Newton; the paper's Stronge is screened after its solve, at its fixed points),
+and solves the ones it keeps together (``_fixed_points``: the map evaluated for every combination
+and every Jacobian column in one batched call); they are checked by the same code as before.
 ``unscreened_coherent_solutions`` below is the implementation before the screen and the
 batch, one combination at a time on scalars, kept as the reference: both must return the
 same solutions in the same order with the same floats. Thousands of problems (and half as many
@@ -58,7 +58,7 @@ def scalar_contact_map(system, law, ctypes, signs, coupling="effective"):
     """One combination's map ``I ↦ forced impulses at the effective approach`` (as before)."""
 
     def apply(impulses):
-        if coupling == "none":
+        if coupling == "literal":
             impulses = np.zeros(2 * system.count)
         out = np.zeros(2 * system.count)
         for i, (ctype, sign) in enumerate(zip(ctypes, signs)):
@@ -174,7 +174,7 @@ def test_random_two_contact_problems_match_the_unscreened_path(seed):
 def flat_systems() -> list[sim.ContactSystem]:
     """The contact systems of the library's flat-face and tilted-landing points, as the
     references build them (every point of flat-*.toml and sweep-tilted-*.toml)."""
-    names = ["flat-box", "flat-box-several-poisson", "flat-box-slip", "flat-box-spin",
+    names = ["flat-box", "flat-box-receding-end", "flat-box-slip", "flat-box-spin",
              "flat-rod", "sweep-tilted-box", "sweep-tilted-rod"]
     systems = []
     original = sim.coherent_solutions
@@ -246,11 +246,11 @@ def test_the_screen_drops_most_combinations(monkeypatch):
     monkeypatch.setattr(sim, "_check_combination", counted)
     for law in TYPE_LAWS:
         every = list(sim._combinations(sim.TYPE_LAWS[law], 2))
-        literal = sim._candidates(system, law, sim.TYPE_LAWS[law], "none", tolerance)
+        literal = sim._candidates(system, law, sim.TYPE_LAWS[law], "literal", tolerance)
         effective = sim._candidates(system, law, sim.TYPE_LAWS[law], "effective", tolerance)
         checked.clear()
-        sim.coherent_solutions(system, law)
-        assert len(literal) <= 1
+        sim.coherent_solutions(system, law, coupling="effective")
+        assert len(literal) == len(sim.TYPE_LAWS[law]) ** 2  # the paper's 5^m (3^m)
         if law in sim.AFFINE_LAWS:
             assert len(effective) < len(every) / 2
         else:
@@ -334,27 +334,23 @@ def test_the_batched_map_is_each_contacts_scalar_formulas():
 
 
 @pytest.mark.parametrize("separating", [False, True])
-def test_literal_candidates_are_the_filtered_enumeration(separating):
-    # _candidates enumerates only the types some contact may take: the same list, in the
-    # same order, as filtering every combination by each contact's own (type, sign).
+def test_literal_candidates_are_the_orientation_filtered_enumeration(separating):
+    # The literal reading's candidates: every type tuple (the paper's 5^m), each contact's
+    # tangent oriented by its own v^A(i), in enumeration order.
     rng = np.random.default_rng(3)
     for k in range(20):
         system = sim.random_two_contact_system(rng, "generic" if k % 2 else "body")
         tolerance = sim.VELOCITY_TOLERANCE * system.speed_scale()
         for law in TYPE_LAWS:
             choices = ((sim.SEPARATING,) if separating else ()) + sim.TYPE_LAWS[law]
-            own = []
-            for i in range(system.count):
-                vn, vt = system.effective_approach(i, np.zeros(2 * system.count))
-                sign = sim._frame_sign(vt, system.single_terms(i)[1])
-                found = sim._law_at(system, law, i, vn, vt, sign)
-                own.append({(sim.SEPARATING, 1.0)} | (
-                    set() if found is None else {(int(found["collision_type"]), sign)}))
+            own = [sim._frame_sign(float(system.approach[2 * i + 1]), system.single_terms(i)[1])
+                   for i in range(system.count)]
             expected = [(types, signs) for types, signs in sim._combinations(choices, 2)
-                        if all((t, s) in own[i] for i, (t, s) in enumerate(zip(types, signs)))]
-            got = sim._candidates(system, law, choices, "none", tolerance)
+                        if all(t == sim.SEPARATING or s == own[i]
+                               for i, (t, s) in enumerate(zip(types, signs)))]
+            got = sim._candidates(system, law, choices, "literal", tolerance)
             assert got == expected
-            assert len(expected) >= (4 if separating else 1)
+            assert len(expected) == len(choices) ** 2
 
 
 if __name__ == "__main__":  # python tests/theory/test_simultaneous_screen.py PROBLEMS SEED
