@@ -19,8 +19,8 @@ phase's end velocity:
   The extra ``Λ`` is Glocker and Pfeiffer's: it acts only where ``e P_nc`` alone would leave a
   contact penetrating (never for one contact, where ``Λ = 0`` and ``P_nr = e P_nc`` is (6)).
 
-Both phases are one problem, :func:`solve_phase`, with a base normal impulse ``b`` (0 for the
-compression, ``e P_nc`` for the restitution). Each is solved two independent ways:
+Both phases are one problem with a base normal impulse ``b`` (0 for the compression,
+``e P_nc`` for the restitution), solved two independent ways:
 :func:`phase_by_enumeration` (every stick / slide / separate mode, a linear system each, all
 solutions kept) and :func:`phase_by_lemke` (the phase as a linear complementarity problem in
 the planar friction cone's two edges, Lemke's complementary pivoting with a lexicographic
@@ -35,6 +35,7 @@ Types 1, 2 and 5 (docs/multi-contact.md, 'A two-phase Poisson law for m contacts
 
 from __future__ import annotations
 
+import functools
 import itertools
 from dataclasses import dataclass
 
@@ -107,78 +108,78 @@ class TwoPhaseSolution:
 # ------------------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class _Scaled:
-    """A phase in units where the approach speed and its impulse are 1 (tolerances are then
-    plain numbers)."""
+    """Phases of ``N`` problems with ``m`` contacts each, in units where each problem's
+    speed scale and its impulse are 1 (tolerances are then plain numbers)."""
 
-    delassus: np.ndarray  # W / w_min
-    start: np.ndarray  # v_start / V
-    base: np.ndarray  # b / (V / w_min), per contact
-    mu: np.ndarray
-    speed: float  # V
-    impulse: float  # V / w_min
+    delassus: np.ndarray  # (N, 2m, 2m): W / w_min
+    start: np.ndarray  # (N, 2m): v_start / V
+    base: np.ndarray  # (N, m): b / (V / w_min)
+    mu: np.ndarray  # (N, m)
+    speed: np.ndarray  # (N,): V
+    impulse: np.ndarray  # (N,): V / w_min
 
 
 def _scaled(delassus, start, base, mu, speed) -> _Scaled:
-    w_min = float(np.min(np.diag(delassus)))
-    if not w_min > 0:
-        raise ImpactInputError(f"delassus: diagonal must be positive, smallest is {w_min}")
+    """The ``N`` phases scaled; arguments as :func:`phases_by_enumeration`'s."""
+    delassus = np.asarray(delassus, dtype=float)
+    w_min = np.min(np.diagonal(delassus, axis1=-2, axis2=-1), axis=-1)
+    if not np.all(w_min > 0):
+        raise ImpactInputError(f"delassus: diagonal must be positive, smallest is "
+                               f"{float(np.min(w_min))}")
+    speed = np.asarray(speed, dtype=float)
+    if not np.all(speed > 0):
+        raise ImpactInputError(f"speed: must be positive, got {float(np.min(speed))}")
     impulse = speed / w_min
-    return _Scaled(np.asarray(delassus) / w_min, np.asarray(start) / speed,
-                   np.asarray(base, dtype=float) / impulse, np.asarray(mu, dtype=float),
-                   speed, impulse)
+    return _Scaled(delassus / w_min[:, None, None], np.asarray(start) / speed[:, None],
+                   np.asarray(base, dtype=float) / impulse[:, None],
+                   np.asarray(mu, dtype=float), speed, impulse)
 
 
-def _phase_holds(problem: _Scaled, modes, impulses, velocities) -> bool:
-    """The phase's inequalities at a candidate (scaled units)."""
+def _modes_hold(problem: _Scaled, normal_modes, friction_modes, impulses, velocities):
+    """``(N, K)``: whether the phase's inequalities hold at mode ``k``'s candidate (scaled
+    units): ``Λ ≥ 0``, ``v_n ≥ 0`` where ``Λ = 0``, the cone where sticking, the slip's sign
+    where sliding."""
     tolerance = SIGN_TOLERANCE
-    for i, (normal_mode, friction_mode) in enumerate(modes):
-        normal, tangential = impulses[2 * i], impulses[2 * i + 1]
-        vn, vt = velocities[2 * i], velocities[2 * i + 1]
-        if normal < problem.base[i] - tolerance:  # Λ ≥ 0
-            return False
-        if normal_mode == NORMAL_BASE and vn < -tolerance:  # v_n ≥ 0 where Λ = 0
-            return False
-        limit = problem.mu[i] * normal
-        if friction_mode == STICK and abs(tangential) > limit + tolerance:
-            return False
-        if friction_mode == SLIDE_POSITIVE and vt < -tolerance:
-            return False
-        if friction_mode == SLIDE_NEGATIVE and vt > tolerance:
-            return False
-    return True
+    normal, tangential = impulses[..., 0::2], impulses[..., 1::2]  # (N, K, m)
+    vn, vt = velocities[..., 0::2], velocities[..., 1::2]
+    base, mu = problem.base[:, None, :], problem.mu[:, None, :]
+    holds = normal >= base - tolerance
+    holds &= (normal_modes == NORMAL_ACTIVE) | (vn >= -tolerance)
+    holds &= (friction_modes != STICK) | (np.abs(tangential) <= mu * normal + tolerance)
+    holds &= (friction_modes != SLIDE_POSITIVE) | (vt >= -tolerance)
+    holds &= (friction_modes != SLIDE_NEGATIVE) | (vt <= tolerance)
+    return holds.all(axis=-1)
 
 
-def _mode_systems(problem: _Scaled, every_mode):
-    """Per mode the linear system (2m equations in the 2m scaled impulses)."""
-    count = len(problem.mu)
-    matrices = np.zeros((len(every_mode), 2 * count, 2 * count))
-    rhs = np.zeros((len(every_mode), 2 * count))
-    for k, modes in enumerate(every_mode):
-        for i, (normal_mode, friction_mode) in enumerate(modes):
-            n, t = 2 * i, 2 * i + 1
-            if normal_mode == NORMAL_BASE:  # P_n = b
-                matrices[k, n, n] = 1.0
-                rhs[k, n] = problem.base[i]
-            else:  # v_n = 0
-                matrices[k, n] = problem.delassus[n]
-                rhs[k, n] = -problem.start[n]
-            if friction_mode == STICK:  # v_t = 0
-                matrices[k, t] = problem.delassus[t]
-                rhs[k, t] = -problem.start[t]
-            else:  # P_t = ∓μ P_n, against the end slip
-                matrices[k, t, t] = 1.0
-                matrices[k, t, n] = problem.mu[i] if friction_mode == SLIDE_POSITIVE else (
-                    -problem.mu[i])
+def _mode_systems(problem: _Scaled, normal_modes, friction_modes):
+    """Per problem and mode (the ``(K, m)`` mode codes) the linear system: 2m equations in
+    the 2m scaled impulses, ``(N, K, 2m, 2m)`` and ``(N, K, 2m)``."""
+    kinds, count = normal_modes.shape
+    problems = problem.delassus.shape[0]
+    matrices = np.zeros((problems, kinds, 2 * count, 2 * count))
+    rhs = np.zeros((problems, kinds, 2 * count))
+    for i in range(count):
+        n, t = 2 * i, 2 * i + 1
+        base = normal_modes[:, i] == NORMAL_BASE
+        active, stick = ~base, friction_modes[:, i] == STICK
+        matrices[:, base, n, n] = 1.0  # P_n = b
+        rhs[:, base, n] = problem.base[:, i, None]
+        matrices[:, active, n] = problem.delassus[:, None, n]  # v_n = 0
+        rhs[:, active, n] = -problem.start[:, n, None]
+        matrices[:, stick, t] = problem.delassus[:, None, t]  # v_t = 0
+        rhs[:, stick, t] = -problem.start[:, t, None]
+        matrices[:, ~stick, t, t] = 1.0  # P_t = ∓μ P_n, against the end slip
+        sense = np.where(friction_modes[~stick, i] == SLIDE_POSITIVE, 1.0, -1.0)
+        matrices[:, ~stick, t, n] = problem.mu[:, i, None] * sense
     return matrices, rhs
 
 
-def _unscaled(problem: _Scaled, impulses, velocities, modes) -> PhaseSolution:
-    return PhaseSolution(impulses * problem.impulse, velocities * problem.speed,
+def _unscaled(problem: _Scaled, row: int, impulses, velocities, modes) -> PhaseSolution:
+    return PhaseSolution(impulses * problem.impulse[row], velocities * problem.speed[row],
                          tuple((int(a), int(b)) for a, b in modes))
 
 
-def _distinct(found: list[PhaseSolution], candidate: PhaseSolution, speed, impulse,
-              count) -> bool:
+def _distinct(found: list[PhaseSolution], candidate: PhaseSolution, speed, impulse) -> bool:
     for other in found:
         if np.max(np.abs(other.velocities - candidate.velocities)) > SAME_ANSWER * speed:
             continue
@@ -188,35 +189,55 @@ def _distinct(found: list[PhaseSolution], candidate: PhaseSolution, speed, impul
     return True
 
 
-def phase_by_enumeration(delassus, start, base, mu, speed) -> list[PhaseSolution]:
-    """Every solution of one phase, by its ``6^m`` modes (normal: ``Λ = 0`` or ``v_n = 0``;
-    friction: stick, slide with ``v_t ≥ 0``, slide with ``v_t ≤ 0``).
+def phases_by_enumeration(delassus, start, base, mu, speed) -> list[list[PhaseSolution]]:
+    """Every solution of each of ``N`` phases with ``m`` contacts, by the ``6^m`` modes
+    (normal: ``Λ = 0`` or ``v_n = 0``; friction: stick, slide with ``v_t ≥ 0``, slide with
+    ``v_t ≤ 0``), all problems' modes solved in one batched call.
 
-    ``delassus`` ``(2m, 2m)``, ``start`` ``(2m,)`` the contact velocities at the phase's
-    start, ``base`` ``(m,)`` the normal impulse each contact takes at least, ``speed`` a
-    positive speed scale (the largest approach speed). A singular mode is solved by the
-    pseudo-inverse and kept when consistent; where a mode's solutions are a family, its
-    minimum-norm member is tested, and the family's ends are other modes (a friction or
-    normal bound reached). Answers with the same velocities and normal impulses are listed
-    once.
+    ``delassus`` ``(N, 2m, 2m)``; ``start`` ``(N, 2m)`` the contact velocities at the
+    phase's start; ``base`` ``(N, m)`` the normal impulse each contact takes at least;
+    ``mu`` ``(N, m)``; ``speed`` ``(N,)`` positive speed scales (the largest approach
+    speed). A singular mode is solved by the pseudo-inverse and kept when consistent; where
+    a mode's solutions are a family, its minimum-norm member is tested, and the family's
+    ends are other modes (a friction or normal bound reached). Answers with the same
+    velocities and normal impulses are listed once.
     """
     problem = _scaled(delassus, start, base, mu, speed)
-    count = len(problem.mu)
+    problems, count = problem.mu.shape
+    normal_modes, friction_modes = _every_mode(count)
+    matrices, rhs = _mode_systems(problem, normal_modes, friction_modes)
+    solutions = np.einsum("nkij,nkj->nki", np.linalg.pinv(matrices, rcond=RANK_CUT), rhs)
+    residuals = np.max(np.abs(np.einsum("nkij,nkj->nki", matrices, solutions) - rhs), axis=-1)
+    velocities = problem.start[:, None, :] + np.einsum("nij,nkj->nki", problem.delassus,
+                                                        solutions)
+    kept = residuals <= RESIDUAL_TOLERANCE * (1.0 + np.abs(rhs).max(axis=-1))
+    kept &= _modes_hold(problem, normal_modes, friction_modes, solutions, velocities)
+    answers: list[list[PhaseSolution]] = [[] for _ in range(problems)]
+    for row, k in zip(*np.nonzero(kept)):
+        candidate = _unscaled(problem, row, solutions[row, k], velocities[row, k],
+                              zip(normal_modes[k], friction_modes[k]))
+        if _distinct(answers[row], candidate, problem.speed[row], problem.impulse[row]):
+            answers[row].append(candidate)
+    return answers
+
+
+def phase_by_enumeration(delassus, start, base, mu, speed) -> list[PhaseSolution]:
+    """:func:`phases_by_enumeration` of one phase (``delassus`` ``(2m, 2m)``, ``start``
+    ``(2m,)``, ``base`` and ``mu`` ``(m,)``, ``speed`` a positive float)."""
+    return phases_by_enumeration(np.asarray(delassus, dtype=float)[None],
+                                 np.asarray(start, dtype=float)[None],
+                                 np.asarray(base, dtype=float)[None],
+                                 np.asarray(mu, dtype=float)[None], [speed])[0]
+
+
+@functools.lru_cache(maxsize=8)
+def _every_mode(count: int) -> tuple[np.ndarray, np.ndarray]:
+    """The ``6^count`` modes as two ``(6^count, count)`` arrays of normal and friction codes."""
     per_contact = list(itertools.product((NORMAL_BASE, NORMAL_ACTIVE),
                                          (STICK, SLIDE_POSITIVE, SLIDE_NEGATIVE)))
-    every_mode = list(itertools.product(per_contact, repeat=count))
-    matrices, rhs = _mode_systems(problem, every_mode)
-    solutions = np.einsum("kij,kj->ki", np.linalg.pinv(matrices, rcond=RANK_CUT), rhs)
-    residuals = np.max(np.abs(np.einsum("kij,kj->ki", matrices, solutions) - rhs), axis=1)
-    velocities = problem.start + solutions @ problem.delassus.T
-    found: list[PhaseSolution] = []
-    for k in np.flatnonzero(residuals <= RESIDUAL_TOLERANCE * (1.0 + np.abs(rhs).max(axis=1))):
-        if not _phase_holds(problem, every_mode[k], solutions[k], velocities[k]):
-            continue
-        candidate = _unscaled(problem, solutions[k], velocities[k], every_mode[k])
-        if _distinct(found, candidate, problem.speed, problem.impulse, count):
-            found.append(candidate)
-    return found
+    modes = np.array(list(itertools.product(per_contact, repeat=count)), dtype=np.int8)
+    modes.setflags(write=False)
+    return modes[:, :, 0], modes[:, :, 1]
 
 
 def phase_lcp(delassus, start, base, mu) -> tuple[np.ndarray, np.ndarray]:
@@ -234,13 +255,18 @@ def phase_lcp(delassus, start, base, mu) -> tuple[np.ndarray, np.ndarray]:
     w_nt = delassus[np.ix_(normal, tangent)]
     w_tn = delassus[np.ix_(tangent, normal)]
     w_tt = delassus[np.ix_(tangent, tangent)]
-    identity, zero = np.eye(count), np.zeros((count, count))
-    matrix = np.block([
-        [w_nn, w_nt, -w_nt, zero],
-        [w_tn, w_tt, -w_tt, identity],
-        [-w_tn, -w_tt, w_tt, identity],
-        [np.diag(mu), -identity, -identity, zero],
-    ])
+    identity = np.eye(count)
+    blocks = np.s_[:count], np.s_[count:2 * count], np.s_[2 * count:3 * count], np.s_[3 * count:]
+    normal_rows, plus_rows, minus_rows, cone_rows = blocks
+    matrix = np.zeros((4 * count, 4 * count))
+    matrix[normal_rows, normal_rows] = w_nn
+    matrix[normal_rows, plus_rows], matrix[normal_rows, minus_rows] = w_nt, -w_nt
+    matrix[plus_rows, normal_rows], matrix[minus_rows, normal_rows] = w_tn, -w_tn
+    matrix[plus_rows, plus_rows] = matrix[minus_rows, minus_rows] = w_tt
+    matrix[plus_rows, minus_rows] = matrix[minus_rows, plus_rows] = -w_tt
+    matrix[plus_rows, cone_rows] = matrix[minus_rows, cone_rows] = identity
+    matrix[cone_rows, normal_rows] = np.diag(mu)
+    matrix[cone_rows, plus_rows] = matrix[cone_rows, minus_rows] = -identity
     vn0 = start[normal] + w_nn @ base  # velocities with the base impulses applied
     vt0 = start[tangent] + w_tn @ base
     return matrix, np.concatenate([vn0, vt0, -vt0, mu * base])
@@ -265,9 +291,9 @@ def lemke(matrix, q, max_pivots: int | None = None, pivot_tolerance: float = 1e-
     limit = max_pivots if max_pivots is not None else 50 * size
     for _ in range(limit):
         tableau[row] /= tableau[row, entering]
-        for other in range(size):
-            if other != row:
-                tableau[other] -= tableau[other, entering] * tableau[row]
+        factors = tableau[:, entering].copy()
+        factors[row] = 0.0
+        tableau -= np.outer(factors, tableau[row])
         leaving, basis[row] = basis[row], entering
         if leaving == z0:
             break
@@ -303,17 +329,22 @@ def _lexicographic_min(tableau, candidates, column, basis, z0, size) -> int:
 
 
 def phase_by_lemke(delassus, start, base, mu, speed) -> PhaseSolution | None:
-    """One solution of the phase by :func:`lemke` on :func:`phase_lcp` (scaled to unit speed
-    and impulse), or None where Lemke's algorithm ends on a ray."""
-    problem = _scaled(delassus, start, base, mu, speed)
-    count = len(problem.mu)
-    z = lemke(*phase_lcp(problem.delassus, problem.start, problem.base, problem.mu))
+    """One solution of one phase (arguments as :func:`phase_by_enumeration`'s) by
+    :func:`lemke` on :func:`phase_lcp`, scaled to unit speed and impulse; None where
+    Lemke's algorithm ends on a ray."""
+    problem = _scaled(np.asarray(delassus, dtype=float)[None], np.asarray(start)[None],
+                      np.asarray(base, dtype=float)[None], np.asarray(mu, dtype=float)[None],
+                      [speed])
+    delassus, start, base, mu = (problem.delassus[0], problem.start[0], problem.base[0],
+                                 problem.mu[0])
+    count = len(mu)
+    z = lemke(*phase_lcp(delassus, start, base, mu))
     if z is None:
         return None
     impulses = np.empty(2 * count)
-    impulses[0::2] = problem.base + z[:count]
+    impulses[0::2] = base + z[:count]
     impulses[1::2] = z[count:2 * count] - z[2 * count:3 * count]
-    velocities = problem.start + problem.delassus @ impulses
+    velocities = start + delassus @ impulses
     modes = []
     for i in range(count):
         normal_mode = NORMAL_ACTIVE if z[i] > SIGN_TOLERANCE else NORMAL_BASE
@@ -321,19 +352,13 @@ def phase_by_lemke(delassus, start, base, mu, speed) -> PhaseSolution | None:
         friction_mode = (SLIDE_POSITIVE if vt > SIGN_TOLERANCE else
                          SLIDE_NEGATIVE if vt < -SIGN_TOLERANCE else STICK)
         modes.append((normal_mode, friction_mode))
-    return _unscaled(problem, impulses, velocities, modes)
+    return _unscaled(problem, 0, impulses, velocities, modes)
 
 
-def solve_phase(delassus, start, base, mu, speed, method: str = "enumeration"
-                ) -> list[PhaseSolution]:
-    """One phase by ``method`` (:data:`METHODS`): every solution by enumeration, the one
-    Lemke's algorithm reaches (or none) by ``"lemke"``."""
-    if method == "enumeration":
-        return phase_by_enumeration(delassus, start, base, mu, speed)
-    if method == "lemke":
-        found = phase_by_lemke(delassus, start, base, mu, speed)
-        return [] if found is None else [found]
-    raise ImpactInputError(f"method: {method!r}; allowed: {', '.join(METHODS)}")
+def _check_method(method: str) -> str:
+    if method not in METHODS:
+        raise ImpactInputError(f"method: {method!r}; allowed: {', '.join(METHODS)}")
+    return method
 
 
 # ------------------------------------------------------------------------------------------
@@ -352,23 +377,61 @@ def poisson_two_phase(system: ContactSystem, method: str = "enumeration"
 
     Every answer by ``"enumeration"`` (a compression's every solution followed by each of
     its restitutions; answers with the same speeds after listed once), the one Lemke's
-    algorithm reaches by ``"lemke"``. Contacts that do not approach take part too: the
-    complementarity decides whether they take an impulse.
+    algorithm reaches (or none, where it ends on a ray) by ``"lemke"``. Contacts that do
+    not approach take part too: the complementarity decides whether they take an impulse.
     """
-    speed = system.speed_scale()
-    delassus, approach = system.delassus, system.approach
-    unique_split = normal_split_unique(system)
-    answers: list[TwoPhaseSolution] = []
-    for compression in solve_phase(delassus, approach, np.zeros(system.count), system.mu,
-                                   speed, method):
-        base = system.e * compression.impulses[0::2]
-        for restitution in solve_phase(delassus, compression.velocities, base, system.mu,
-                                       speed, method):
-            answer = _assemble(system, compression, restitution, unique_split)
-            if all(np.max(np.abs(answer.u_after - other.u_after)) > SAME_ANSWER * (
-                    speed + float(np.max(np.abs(system.u)))) for other in answers):
-                answers.append(answer)
+    return poisson_two_phase_many([system], method)[0]
+
+
+def poisson_two_phase_many(systems, method: str = "enumeration"
+                           ) -> list[list[TwoPhaseSolution]]:
+    """:func:`poisson_two_phase` of many systems; by enumeration, the systems with the same
+    number of contacts have each phase's modes solved in one batched call."""
+    _check_method(method)
+    systems = list(systems)
+    compressions: list[list[PhaseSolution]] = [[] for _ in systems]
+    for rows, phases in _phases(systems, method, [(i, s.approach, np.zeros(s.count))
+                                                  for i, s in enumerate(systems)]):
+        for row, found in zip(rows, phases):
+            compressions[row] = found
+    starts = [(i, phase.velocities, systems[i].e * phase.impulses[0::2])
+              for i, found in enumerate(compressions) for phase in found]
+    pairs = [(i, phase) for i, found in enumerate(compressions) for phase in found]
+    restitutions: list[list[PhaseSolution]] = [[] for _ in pairs]
+    for rows, phases in _phases(systems, method, starts):
+        for row, found in zip(rows, phases):
+            restitutions[row] = found
+    answers: list[list[TwoPhaseSolution]] = [[] for _ in systems]
+    unique_split = [normal_split_unique(system) for system in systems]
+    for (i, compression), found in zip(pairs, restitutions):
+        system = systems[i]
+        scale = SAME_ANSWER * (system.speed_scale() + float(np.max(np.abs(system.u))))
+        for restitution in found:
+            answer = _assemble(system, compression, restitution, unique_split[i])
+            if all(np.max(np.abs(answer.u_after - other.u_after)) > scale
+                   for other in answers[i]):
+                answers[i].append(answer)
     return answers
+
+
+def _phases(systems, method, starts):
+    """Each phase of ``starts`` (``(system index, start velocities, base)``), grouped by
+    contact count: yields ``(positions in starts, their solutions)``."""
+    groups: dict[int, list[int]] = {}
+    for position, (i, _, _) in enumerate(starts):
+        groups.setdefault(systems[i].count, []).append(position)
+    for positions in groups.values():
+        chosen = [starts[p] for p in positions]
+        owners = [systems[i] for i, _, _ in chosen]
+        if method == "enumeration":
+            yield positions, phases_by_enumeration(
+                np.array([s.delassus for s in owners]), np.array([v for _, v, _ in chosen]),
+                np.array([b for _, _, b in chosen]), np.array([s.mu for s in owners]),
+                np.array([s.speed_scale() for s in owners]))
+        else:
+            found = [phase_by_lemke(s.delassus, v, b, s.mu, s.speed_scale())
+                     for s, (_, v, b) in zip(owners, chosen)]
+            yield positions, [[] if phase is None else [phase] for phase in found]
 
 
 def _kinetic(system: ContactSystem, speeds) -> float:
