@@ -15,7 +15,8 @@ import math
 from html import escape
 
 #: Solution counts shown, in this order: (key in the reference's "solutions", column title).
-COUNTS = (("newton-coulomb", "N–C"), ("coherent/poisson/effective", "P eff"),
+COUNTS = (("newton-coulomb", "N–C"), ("two-phase/poisson", "P 2φ"),
+          ("coherent/poisson/effective", "P eff"),
           ("coherent/poisson/none", "P lit"), ("coherent/stronge-paper/effective", "S eff"),
           ("coherent/stronge-paper/none", "S lit"), ("coherent/newton/effective", "N eff"),
           ("coherent/newton/none", "N lit"))
@@ -25,12 +26,15 @@ INTRO = (
     "(docs/multi-contact.md, 'Which reference a run is compared with'): a face lying flat "
     "(contacts = \"simultaneous\") with the m-contact Newton–Coulomb law, the engines' law; a "
     "tilt (expect_sequence) with the event-driven sequence of single impacts (newton-lcp at "
-    "each). Counts are the solutions of each m-contact law: Newton–Coulomb (N–C) and the "
+    "each). Counts are the solutions of each m-contact law: Newton–Coulomb (N–C), the "
+    "two-phase Poisson law for m contacts (P 2φ: compression to zero approach, then e times "
+    "each contact's compression impulse, Coulomb friction in both phases), and the "
     "coherent combinations of the paper's proposal after eq. (75) for Poisson (P), the "
     "paper's Stronge (S) and Newton (N), with effective approaches (eff) or literally (lit). "
     "Engine columns: departure from the reference; for a tilt, in brackets, the cut of the "
     "sequence the run is nearest (full: all impacts; after-k: only the first k, with the "
-    "departure from that cut). N–C at pose, sequential at pose: departure of those answers, "
+    "departure from that cut); for a flat face, in square brackets, the departure from the "
+    "two-phase Poisson law. N–C at pose, sequential at pose: departure of those answers, "
     "taken at the tilted pose on the struck features, from the event sequence.")
 
 
@@ -75,6 +79,9 @@ def _rows(name: str, info: dict, records) -> tuple[list[str], list[list[str]]] |
                 cut, value = summary["nearest_cut"]
                 cut = cut.rsplit("/", 1)[-1]
                 cell += " (full)" if cut == "newton-lcp" else f" ({cut}: {_number(value)})"
+            two_phase = summary.get("departure", {}).get("two-phase/poisson")
+            if reference["kind"] == "simultaneous" and two_phase is not None:
+                cell += f" [P 2φ: {_number(two_phase)}]"
             row.append(cell)
         rows.append(row)
     return header, rows

@@ -43,8 +43,28 @@ EXTREMES = ((0.0, 0.0), (0.0, 1.0), (0.3, 0.0), (1.0, 1.0))
 
 
 def fingerprint(reference: dict) -> str:
-    """SHA-256 (hex) of a reference as JSON, every float exact (``repr`` round-trips)."""
-    return hashlib.sha256(json.dumps(reference, sort_keys=True).encode()).hexdigest()
+    """SHA-256 (hex) of a reference as JSON, every float exact (``repr`` round-trips), the
+    answers of laws added after the file was recorded left out (:data:`LATER_LAWS`)."""
+    return hashlib.sha256(json.dumps(recorded_part(reference), sort_keys=True).encode()
+                          ).hexdigest()
+
+
+#: References added after 17570bc, pinned by their own tests
+#: (tests/theory/test_multicontact.py, tests/run/test_references.py): left out of the
+#: fingerprint, so that the file pins the older references' bits unchanged.
+LATER_LAWS = (references.TWO_PHASE_POISSON,)
+
+
+def recorded_part(reference: dict) -> dict:
+    """``reference`` without the entries of :data:`LATER_LAWS` (also ``at-pose/…``)."""
+    def later(name: str) -> bool:
+        return any(name == law or name.startswith((law + "#", law + "/")) or
+                   name.startswith(("at-pose/" + law,)) for law in LATER_LAWS)
+
+    return {key: ({name: value for name, value in value.items() if not later(name)}
+                  if key in ("speeds", "energy_change", "solutions", "departure_from_primary")
+                  else value)
+            for key, value in reference.items()}
 
 
 def point_record(name: str, kind: str, scene: Scene, laws: PointLaws) -> dict:
