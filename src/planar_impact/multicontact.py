@@ -117,9 +117,10 @@ class _Scaled:
     mu: np.ndarray  # (N, m)
     speed: np.ndarray  # (N,): V
     impulse: np.ndarray  # (N,): V / w_min
+    sense: np.ndarray  # (N, m): +1/−1 friction held against that slip, 0 free
 
 
-def _scaled(delassus, start, base, mu, speed) -> _Scaled:
+def _scaled(delassus, start, base, mu, speed, sense=None) -> _Scaled:
     """The ``N`` phases scaled; arguments as :func:`phases_by_enumeration`'s."""
     delassus = np.asarray(delassus, dtype=float)
     w_min = np.min(np.diagonal(delassus, axis1=-2, axis2=-1), axis=-1)
@@ -130,9 +131,10 @@ def _scaled(delassus, start, base, mu, speed) -> _Scaled:
     if not np.all(speed > 0):
         raise ImpactInputError(f"speed: must be positive, got {float(np.min(speed))}")
     impulse = speed / w_min
+    mu = np.asarray(mu, dtype=float)
+    sense = np.zeros_like(mu) if sense is None else np.asarray(sense, dtype=float)
     return _Scaled(delassus / w_min[:, None, None], np.asarray(start) / speed[:, None],
-                   np.asarray(base, dtype=float) / impulse[:, None],
-                   np.asarray(mu, dtype=float), speed, impulse)
+                   np.asarray(base, dtype=float) / impulse[:, None], mu, speed, impulse, sense)
 
 
 def _modes_hold(problem: _Scaled, normal_modes, friction_modes, impulses, velocities):
@@ -145,9 +147,10 @@ def _modes_hold(problem: _Scaled, normal_modes, friction_modes, impulses, veloci
     base, mu = problem.base[:, None, :], problem.mu[:, None, :]
     holds = normal >= base - tolerance
     holds &= (normal_modes == NORMAL_ACTIVE) | (vn >= -tolerance)
-    holds &= (friction_modes != STICK) | (np.abs(tangential) <= mu * normal + tolerance)
-    holds &= (friction_modes != SLIDE_POSITIVE) | (vt >= -tolerance)
-    holds &= (friction_modes != SLIDE_NEGATIVE) | (vt <= tolerance)
+    held = problem.sense[:, None, :] != 0  # friction held: at the cone's edge by construction
+    holds &= held | (friction_modes != STICK) | (np.abs(tangential) <= mu * normal + tolerance)
+    holds &= held | (friction_modes != SLIDE_POSITIVE) | (vt >= -tolerance)
+    holds &= held | (friction_modes != SLIDE_NEGATIVE) | (vt <= tolerance)
     return holds.all(axis=-1)
 
 
@@ -171,6 +174,11 @@ def _mode_systems(problem: _Scaled, normal_modes, friction_modes):
         matrices[:, ~stick, t, t] = 1.0  # P_t = ∓μ P_n, against the end slip
         sense = np.where(friction_modes[~stick, i] == SLIDE_POSITIVE, 1.0, -1.0)
         matrices[:, ~stick, t, n] = problem.mu[:, i, None] * sense
+        held = problem.sense[:, i] != 0  # every mode: P_t = −sense μ P_n
+        matrices[held, :, t] = 0.0
+        matrices[held, :, t, t] = 1.0
+        matrices[held, :, t, n] = (problem.sense[held, i] * problem.mu[held, i])[:, None]
+        rhs[held, :, t] = 0.0
     return matrices, rhs
 
 
@@ -189,7 +197,8 @@ def _distinct(found: list[PhaseSolution], candidate: PhaseSolution, speed, impul
     return True
 
 
-def phases_by_enumeration(delassus, start, base, mu, speed) -> list[list[PhaseSolution]]:
+def phases_by_enumeration(delassus, start, base, mu, speed, sense=None
+                          ) -> list[list[PhaseSolution]]:
     """Every solution of each of ``N`` phases with ``m`` contacts, by the ``6^m`` modes
     (normal: ``Λ = 0`` or ``v_n = 0``; friction: stick, slide with ``v_t ≥ 0``, slide with
     ``v_t ≤ 0``), all problems' modes solved in one batched call.
@@ -197,12 +206,14 @@ def phases_by_enumeration(delassus, start, base, mu, speed) -> list[list[PhaseSo
     ``delassus`` ``(N, 2m, 2m)``; ``start`` ``(N, 2m)`` the contact velocities at the
     phase's start; ``base`` ``(N, m)`` the normal impulse each contact takes at least;
     ``mu`` ``(N, m)``; ``speed`` ``(N,)`` positive speed scales (the largest approach
-    speed). A singular mode is solved by the pseudo-inverse and kept when consistent; where
-    a mode's solutions are a family, its minimum-norm member is tested, and the family's
-    ends are other modes (a friction or normal bound reached). Answers with the same
-    velocities and normal impulses are listed once.
+    speed); ``sense`` ``(N, m)``, optional: where ±1, that contact's friction is held at
+    ``P_t = ∓μ P_n`` (against a slip of that sign) whatever its end slip. A singular mode
+    is solved by the pseudo-inverse and kept when consistent; where a mode's solutions are
+    a family, its minimum-norm member is tested, and the family's ends are other modes (a
+    friction or normal bound reached). Answers with the same velocities and normal impulses
+    are listed once.
     """
-    problem = _scaled(delassus, start, base, mu, speed)
+    problem = _scaled(delassus, start, base, mu, speed, sense)
     problems, count = problem.mu.shape
     normal_modes, friction_modes = _every_mode(count)
     matrices, rhs = _mode_systems(problem, normal_modes, friction_modes)
@@ -221,13 +232,13 @@ def phases_by_enumeration(delassus, start, base, mu, speed) -> list[list[PhaseSo
     return answers
 
 
-def phase_by_enumeration(delassus, start, base, mu, speed) -> list[PhaseSolution]:
+def phase_by_enumeration(delassus, start, base, mu, speed, sense=None) -> list[PhaseSolution]:
     """:func:`phases_by_enumeration` of one phase (``delassus`` ``(2m, 2m)``, ``start``
-    ``(2m,)``, ``base`` and ``mu`` ``(m,)``, ``speed`` a positive float)."""
-    return phases_by_enumeration(np.asarray(delassus, dtype=float)[None],
-                                 np.asarray(start, dtype=float)[None],
-                                 np.asarray(base, dtype=float)[None],
-                                 np.asarray(mu, dtype=float)[None], [speed])[0]
+    ``(2m,)``, ``base``, ``mu``, ``sense`` ``(m,)``, ``speed`` a positive float)."""
+    return phases_by_enumeration(
+        np.asarray(delassus, dtype=float)[None], np.asarray(start, dtype=float)[None],
+        np.asarray(base, dtype=float)[None], np.asarray(mu, dtype=float)[None], [speed],
+        None if sense is None else np.asarray(sense, dtype=float)[None])[0]
 
 
 @functools.lru_cache(maxsize=8)
@@ -240,36 +251,47 @@ def _every_mode(count: int) -> tuple[np.ndarray, np.ndarray]:
     return modes[:, :, 0], modes[:, :, 1]
 
 
-def phase_lcp(delassus, start, base, mu) -> tuple[np.ndarray, np.ndarray]:
+def phase_lcp(delassus, start, base, mu, sense=None
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The phase as an LCP ``w = M z + q ≥ 0, z ≥ 0, zᵀw = 0`` (Anitescu & Potra's
     velocity-level form; in the plane the friction cone has two edges, so it is exact).
 
-    ``z = (Λ, β⁺, β⁻, λ)`` per block of ``m``: ``P_n = b + Λ``, ``P_t = β⁺ − β⁻``, ``λ`` the
-    slip speed; ``w = (v_n, λ + v_t, λ − v_t, μ P_n − β⁺ − β⁻)``.
+    ``z = (Λ, β⁺, β⁻, λ)``: ``P_n = b + Λ`` per contact; for a contact with free friction
+    (``sense`` 0) ``P_t = β⁺ − β⁻`` and ``λ`` its slip speed, ``w = (v_n, λ + v_t, λ − v_t,
+    μ P_n − β⁺ − β⁻)``; a contact whose friction is held (``sense`` ±1) has
+    ``P_t = ∓μ P_n`` and no ``β⁺, β⁻, λ``. Returns ``(M, q, G, P_0)`` with the impulses
+    ``P = P_0 + G z[:m + 2f]`` (``f`` free contacts).
     """
     delassus, start = np.asarray(delassus, dtype=float), np.asarray(start, dtype=float)
     base, mu = np.asarray(base, dtype=float), np.asarray(mu, dtype=float)
     count = len(mu)
-    normal, tangent = np.arange(0, 2 * count, 2), np.arange(1, 2 * count, 2)
-    w_nn = delassus[np.ix_(normal, normal)]
-    w_nt = delassus[np.ix_(normal, tangent)]
-    w_tn = delassus[np.ix_(tangent, normal)]
-    w_tt = delassus[np.ix_(tangent, tangent)]
-    identity = np.eye(count)
-    blocks = np.s_[:count], np.s_[count:2 * count], np.s_[2 * count:3 * count], np.s_[3 * count:]
-    normal_rows, plus_rows, minus_rows, cone_rows = blocks
-    matrix = np.zeros((4 * count, 4 * count))
-    matrix[normal_rows, normal_rows] = w_nn
-    matrix[normal_rows, plus_rows], matrix[normal_rows, minus_rows] = w_nt, -w_nt
-    matrix[plus_rows, normal_rows], matrix[minus_rows, normal_rows] = w_tn, -w_tn
-    matrix[plus_rows, plus_rows] = matrix[minus_rows, minus_rows] = w_tt
-    matrix[plus_rows, minus_rows] = matrix[minus_rows, plus_rows] = -w_tt
-    matrix[plus_rows, cone_rows] = matrix[minus_rows, cone_rows] = identity
-    matrix[cone_rows, normal_rows] = np.diag(mu)
-    matrix[cone_rows, plus_rows] = matrix[cone_rows, minus_rows] = -identity
-    vn0 = start[normal] + w_nn @ base  # velocities with the base impulses applied
-    vt0 = start[tangent] + w_tn @ base
-    return matrix, np.concatenate([vn0, vt0, -vt0, mu * base])
+    sense = np.zeros(count) if sense is None else np.asarray(sense, dtype=float)
+    free = np.flatnonzero(sense == 0)
+    f = len(free)
+    held = sense * mu  # P_t = −held·P_n where held ≠ 0
+    constant = np.zeros(2 * count)
+    constant[0::2], constant[1::2] = base, -held * base
+    mapping = np.zeros((2 * count, count + 2 * f))
+    mapping[np.arange(0, 2 * count, 2), np.arange(count)] = 1.0
+    mapping[np.arange(1, 2 * count, 2), np.arange(count)] = -held
+    mapping[2 * free + 1, count + np.arange(f)] = 1.0
+    mapping[2 * free + 1, count + f + np.arange(f)] = -1.0
+    response = delassus @ mapping  # velocities per unit of (Λ, β⁺, β⁻)
+    velocity = start + delassus @ constant
+    normal_rows, slip_rows = response[0::2], response[2 * free + 1]
+    size = count + 3 * f
+    matrix = np.zeros((size, size))
+    q = np.zeros(size)
+    matrix[:count, :count + 2 * f] = normal_rows
+    q[:count] = velocity[0::2]
+    plus, minus, cone = (slice(count + k * f, count + (k + 1) * f) for k in range(3))
+    matrix[plus, :count + 2 * f], q[plus] = slip_rows, velocity[2 * free + 1]
+    matrix[minus, :count + 2 * f], q[minus] = -slip_rows, -velocity[2 * free + 1]
+    matrix[plus, cone] = matrix[minus, cone] = np.eye(f)
+    matrix[cone, free] = np.diag(mu[free])
+    matrix[cone, plus] = matrix[cone, minus] = -np.eye(f)
+    q[cone] = mu[free] * base[free]
+    return matrix, q, mapping, constant
 
 
 def lemke(matrix, q, max_pivots: int | None = None, pivot_tolerance: float = 1e-12):
@@ -328,22 +350,21 @@ def _lexicographic_min(tableau, candidates, column, basis, z0, size) -> int:
     return int(tied[0])
 
 
-def phase_by_lemke(delassus, start, base, mu, speed) -> PhaseSolution | None:
+def phase_by_lemke(delassus, start, base, mu, speed, sense=None) -> PhaseSolution | None:
     """One solution of one phase (arguments as :func:`phase_by_enumeration`'s) by
     :func:`lemke` on :func:`phase_lcp`, scaled to unit speed and impulse; None where
     Lemke's algorithm ends on a ray."""
     problem = _scaled(np.asarray(delassus, dtype=float)[None], np.asarray(start)[None],
                       np.asarray(base, dtype=float)[None], np.asarray(mu, dtype=float)[None],
-                      [speed])
-    delassus, start, base, mu = (problem.delassus[0], problem.start[0], problem.base[0],
-                                 problem.mu[0])
+                      [speed], None if sense is None else np.asarray(sense, dtype=float)[None])
+    delassus, start, base, mu, sense = (problem.delassus[0], problem.start[0],
+                                        problem.base[0], problem.mu[0], problem.sense[0])
     count = len(mu)
-    z = lemke(*phase_lcp(delassus, start, base, mu))
+    matrix, q, mapping, constant = phase_lcp(delassus, start, base, mu, sense)
+    z = lemke(matrix, q)
     if z is None:
         return None
-    impulses = np.empty(2 * count)
-    impulses[0::2] = base + z[:count]
-    impulses[1::2] = z[count:2 * count] - z[2 * count:3 * count]
+    impulses = constant + mapping @ z[:mapping.shape[1]]
     velocities = start + delassus @ impulses
     modes = []
     for i in range(count):
