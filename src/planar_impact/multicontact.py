@@ -376,6 +376,74 @@ def phase_by_lemke(delassus, start, base, mu, speed, sense=None) -> PhaseSolutio
     return _unscaled(problem, 0, impulses, velocities, modes)
 
 
+#: Most times a phase may be cut where a held slip reaches zero, per contact (plus a few):
+#: a branch cut more often is dropped (none has been seen to need more than two per contact).
+CUTS_PER_CONTACT = 8
+
+
+def phase_following_slip(delassus, start, base, mu, speed, method: str = "enumeration"
+                         ) -> list[PhaseSolution]:
+    """One phase with the slip followed, as the paper's process follows it for one contact.
+
+    The phase is taken in straight pieces. In each piece a contact that slides at its start
+    has its friction held against that slip (``P_t = −μ P_n sign(v_t)``), a contact that does
+    not slide is free (stick, or slide either way, decided at the piece's end), and the
+    piece solves what remains of the phase (the base normal impulse not yet given, then the
+    complementarity). Along the piece the speeds are linear in the fraction of its impulse;
+    where a held slip reaches zero first, the piece is cut there, that slip is set to zero,
+    and the rest of the phase is solved again from that state. For one contact the pieces
+    are the process's forward-sliding segment ending at ``P_G`` (A58) and its stick or
+    reverse-sliding segment: the paper's (25)–(51) in all five types.
+
+    Every piece is solved by ``method`` (:data:`METHODS`); where it has several solutions,
+    each is followed. Returns the phase's solutions (impulses summed over its pieces).
+    """
+    delassus = np.asarray(delassus, dtype=float)
+    count = len(mu)
+    slip_zero = SIGN_TOLERANCE * speed
+    limit = CUTS_PER_CONTACT * count + 4
+    branches = [(np.asarray(start, dtype=float), np.zeros(2 * count), 0)]
+    found: list[PhaseSolution] = []
+    impulse_scale = speed / float(np.min(np.diag(delassus)))
+    while branches:
+        velocities, given, cuts = branches.pop()
+        slips = velocities[1::2]
+        sense = np.where(np.abs(slips) > slip_zero, np.sign(slips), 0.0)
+        remaining = np.maximum(np.asarray(base, dtype=float) - given[0::2], 0.0)
+        pieces = _pieces(delassus, velocities, remaining, mu, speed, sense, method)
+        if not pieces and sense.any():
+            # Held friction cannot end the phase (the approach grows while the slip lasts,
+            # the paper's h ≤ 0): the rest is one velocity-level problem, as for one contact
+            # whose slip stops and then sticks (Type 1: the same end conditions).
+            sense = np.zeros(count)
+            pieces = _pieces(delassus, velocities, remaining, mu, speed, sense, method)
+        for piece in pieces:
+            end_slips = piece.velocities[1::2]
+            crossing = (sense * end_slips < -slip_zero)
+            if not crossing.any():
+                solution = PhaseSolution(given + piece.impulses, piece.velocities, piece.modes)
+                if _distinct(found, solution, speed, impulse_scale):
+                    found.append(solution)
+                continue
+            fractions = np.where(crossing, slips / np.where(crossing, slips - end_slips, 1.0),
+                                 np.inf)
+            first = int(np.argmin(fractions))
+            fraction = float(fractions[first])
+            if cuts >= limit:
+                continue
+            cut = velocities + fraction * (piece.velocities - velocities)
+            cut[2 * first + 1] = 0.0  # the held slip has reached zero here
+            branches.append((cut, given + fraction * piece.impulses, cuts + 1))
+    return found
+
+
+def _pieces(delassus, velocities, remaining, mu, speed, sense, method):
+    if method == "enumeration":
+        return phase_by_enumeration(delassus, velocities, remaining, mu, speed, sense)
+    piece = phase_by_lemke(delassus, velocities, remaining, mu, speed, sense)
+    return [] if piece is None else [piece]
+
+
 def _check_method(method: str) -> str:
     if method not in METHODS:
         raise ImpactInputError(f"method: {method!r}; allowed: {', '.join(METHODS)}")
@@ -392,23 +460,31 @@ def normal_split_unique(system: ContactSystem) -> bool:
     return bool(null.size == 0 or np.max(np.abs(null[:, 0::2])) <= 1e-9)
 
 
-def poisson_two_phase(system: ContactSystem, method: str = "enumeration"
-                      ) -> list[TwoPhaseSolution]:
+def poisson_two_phase(system: ContactSystem, method: str = "enumeration", *,
+                      follow_slip: bool = True) -> list[TwoPhaseSolution]:
     """The two-phase Poisson law for the ``m`` contacts of ``system`` (module docstring).
 
     Every answer by ``"enumeration"`` (a compression's every solution followed by each of
     its restitutions; answers with the same speeds after listed once), the one Lemke's
     algorithm reaches (or none, where it ends on a ray) by ``"lemke"``. Contacts that do
     not approach take part too: the complementarity decides whether they take an impulse.
+
+    ``follow_slip`` (default): each phase follows the slip (:func:`phase_following_slip`),
+    which makes the law the paper's Poisson law for one contact in all five types. Without
+    it each phase is one velocity-level problem (Coulomb at the phase's end only), as in
+    Glocker and Pfeiffer: the same answer wherever no slip reverses inside a phase.
     """
-    return poisson_two_phase_many([system], method)[0]
+    return poisson_two_phase_many([system], method, follow_slip=follow_slip)[0]
 
 
-def poisson_two_phase_many(systems, method: str = "enumeration"
+def poisson_two_phase_many(systems, method: str = "enumeration", *, follow_slip: bool = True
                            ) -> list[list[TwoPhaseSolution]]:
-    """:func:`poisson_two_phase` of many systems; by enumeration, the systems with the same
-    number of contacts have each phase's modes solved in one batched call."""
+    """:func:`poisson_two_phase` of many systems; by enumeration without ``follow_slip``, the
+    systems with the same number of contacts have each phase's modes solved in one batched
+    call."""
     _check_method(method)
+    if follow_slip:
+        return [_following_slip(system, method) for system in systems]
     systems = list(systems)
     compressions: list[list[PhaseSolution]] = [[] for _ in systems]
     for rows, phases in _phases(systems, method, [(i, s.approach, np.zeros(s.count))
@@ -432,6 +508,22 @@ def poisson_two_phase_many(systems, method: str = "enumeration"
             if all(np.max(np.abs(answer.u_after - other.u_after)) > scale
                    for other in answers[i]):
                 answers[i].append(answer)
+    return answers
+
+
+def _following_slip(system: ContactSystem, method: str) -> list[TwoPhaseSolution]:
+    speed = system.speed_scale()
+    unique_split = normal_split_unique(system)
+    scale = SAME_ANSWER * (speed + float(np.max(np.abs(system.u))))
+    answers: list[TwoPhaseSolution] = []
+    for compression in phase_following_slip(system.delassus, system.approach,
+                                            np.zeros(system.count), system.mu, speed, method):
+        base = system.e * compression.impulses[0::2]
+        for restitution in phase_following_slip(system.delassus, compression.velocities, base,
+                                                system.mu, speed, method):
+            answer = _assemble(system, compression, restitution, unique_split)
+            if all(np.max(np.abs(answer.u_after - other.u_after)) > scale for other in answers):
+                answers.append(answer)
     return answers
 
 
