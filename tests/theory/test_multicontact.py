@@ -83,44 +83,63 @@ def random_flat_face(rng):
 
 # --- one contact: the paper's Poisson law -------------------------------------------------
 
-def test_one_contact_is_the_poisson_law_where_the_slip_keeps_its_sense():
-    """Types 1, 2, 5 (docs/multi-contact.md, 'A two-phase Poisson law for m contacts'): the
-    process slides forward, then sticks or keeps sliding, so each phase's friction impulse
-    is what the velocity-level Coulomb law gives at the phase's end. Both methods equal
-    ``solve(..., law="poisson")`` to 1e-10 of the speeds (a 2×2 solve or pivots against
-    the closed forms (25)–(51): rounding times the condition of these well-conditioned
-    draws). Types 3 and 4 reverse the slip inside a phase: the velocity-level law gives
-    the full cone there, the process does not; every one of them differs."""
-    rng = np.random.default_rng(20)
-    problems, expected = [], []
-    while len(problems) < 1500:
+def one_contact_problems(count, seed):
+    """``count`` random one-contact problems with a Poisson answer: (problem, system,
+    ``solve(..., law="poisson")``)."""
+    rng = np.random.default_rng(seed)
+    out = []
+    while len(out) < count:
         problem = random_single(rng)
         try:
-            expected.append(pi.solve(**problem, law="poisson"))
+            expected = pi.solve(**problem, law="poisson")
         except pi.ImpactInputError:  # a jam (h ≤ 0): no Poisson answer to compare with
             continue
-        problems.append(problem)
-    systems = [sim.contact_system(**{**problem, "wn": problem["wn"][None],
-                                     "wt": problem["wt"][None]}) for problem in problems]
+        system = sim.contact_system(**{**problem, "wn": problem["wn"][None],
+                                       "wt": problem["wt"][None]})
+        out.append((problem, system, expected))
+    return out
+
+
+def speed_gap(answer, expected, problem) -> float:
+    return float(np.max(np.abs(answer.u_after - expected.u_after))) / float(
+        np.max(np.abs(problem["u"])))
+
+
+def test_one_contact_is_the_poisson_law_in_every_type():
+    """Following the slip (the default), the law is the paper's process for one contact:
+    forward sliding held to P_G (A58), then a stick or reverse-sliding piece. Both methods
+    equal ``solve(..., law="poisson")`` to 1e-10 of the speeds in all five types (pieces
+    solved to rounding against the closed forms (25)–(51); these draws are well
+    conditioned). The restitution is (6) exactly: no extra Λ for one contact."""
+    problems = one_contact_problems(500, 20)
     seen = {ctype: 0 for ctype in range(1, 6)}
     for method in mc.METHODS:
-        for problem, system, poisson, answers in zip(
-                problems, systems, expected, mc.poisson_two_phase_many(systems, method)):
-            (got,) = answers
-            seen[poisson.collision_type] += method == "lemke"
-            scale = float(np.max(np.abs(problem["u"])))
-            gap = float(np.max(np.abs(got.u_after - poisson.u_after))) / scale
-            if poisson.collision_type in (1, 2, 5):
-                assert gap <= 1e-10, (method, poisson.collision_type, gap)
-                impulse_scale = abs(poisson.normal_impulse) + abs(poisson.tangential_impulse)
-                assert abs(got.normal_impulse[0] - poisson.normal_impulse) <= (
-                    1e-10 * impulse_scale)
-            else:
-                assert gap > 1e-9, (method, poisson.collision_type, gap)
-            # One contact: the restitution is (6) exactly, no extra Λ.
+        for problem, system, expected in problems:
+            (got,) = mc.poisson_two_phase(system, method)
+            seen[expected.collision_type] += method == "lemke"
+            assert speed_gap(got, expected, problem) <= 1e-10, (method, expected.collision_type)
+            impulse_scale = abs(expected.normal_impulse) + abs(expected.tangential_impulse)
+            assert abs(got.normal_impulse[0] - expected.normal_impulse) <= 1e-10 * impulse_scale
             base = system.e[0] * got.compression.impulses[0]
             assert abs(got.restitution.impulses[0] - base) <= 1e-12 * got.normal_impulse[0]
-    assert min(seen.values()) >= 50, seen  # every type is exercised
+    assert min(seen.values()) >= 20, seen  # every type is exercised
+
+
+def test_without_following_the_slip_types_3_and_4_differ():
+    """One velocity-level problem per phase (``follow_slip=False``): the same equations as
+    the process where the slip keeps its sense within each phase (Types 1, 2, 5: equal to
+    1e-10 of the speeds), the cone's edge against the final slip where the process reverses
+    it inside a phase (Types 3, 4: every one differs)."""
+    problems = one_contact_problems(800, 21)
+    systems = [system for _, system, _ in problems]
+    for method in mc.METHODS:
+        answers = mc.poisson_two_phase_many(systems, method, follow_slip=False)
+        for (problem, _, expected), (got,) in zip(problems, answers):
+            gap = speed_gap(got, expected, problem)
+            if expected.collision_type in (1, 2, 5):
+                assert gap <= 1e-10, (method, expected.collision_type, gap)
+            else:
+                assert gap > 1e-9, (method, expected.collision_type, gap)
 
 
 def test_one_contact_compression_ends_the_approach():
@@ -136,31 +155,50 @@ def test_one_contact_compression_ends_the_approach():
 
 # --- two independent methods ---------------------------------------------------------------
 
-def lemke_reaches_an_enumerated_answer(systems):
-    """Per system: Lemke's answer is one of the enumeration's; returns the enumerations."""
-    enumerated = mc.poisson_two_phase_many(systems)
-    for system, answers, (lemke,) in zip(systems, enumerated,
-                                         mc.poisson_two_phase_many(systems, "lemke")):
-        assert any(same_speeds(lemke.u_after, answer.u_after, system) for answer in answers)
-    return enumerated
+def lemke_outside_enumeration(systems, follow_slip):
+    """How many systems' Lemke answer is none of the enumeration's answers; every system
+    has one Lemke answer and at least one enumerated."""
+    outside = 0
+    enumerated = mc.poisson_two_phase_many(systems, follow_slip=follow_slip)
+    reached = mc.poisson_two_phase_many(systems, "lemke", follow_slip=follow_slip)
+    for system, answers, (lemke,) in zip(systems, enumerated, reached):
+        assert answers
+        outside += not any(same_speeds(lemke.u_after, a.u_after, system) for a in answers)
+    return outside, enumerated
 
 
 def test_lemke_reaches_an_enumerated_answer_on_random_generic_problems():
-    """W regular: 800 two-contact and 150 three-contact problems; Lemke's answer is one of
-    the enumeration's (several where the frictional LCP has several)."""
+    """W regular: 600 two-contact and 100 three-contact problems, one velocity-level
+    problem per phase: Lemke's answer is one of the enumeration's (several where the
+    frictional LCP has several)."""
     rng = np.random.default_rng(22)
-    systems = [random_generic(rng, 2) for _ in range(800)]
-    systems += [random_generic(rng, 3) for _ in range(150)]
-    several = sum(len(answers) > 1 for answers in lemke_reaches_an_enumerated_answer(systems))
-    assert several < 30  # non-uniqueness needs strong friction coupling: rare in these draws
+    systems = [random_generic(rng, 2) for _ in range(600)]
+    systems += [random_generic(rng, 3) for _ in range(100)]
+    outside, enumerated = lemke_outside_enumeration(systems, follow_slip=False)
+    assert outside == 0
+    assert sum(len(answers) > 1 for answers in enumerated) < 30  # needs strong coupling
 
 
-def test_flat_faces_have_one_answer_both_methods_agree_and_no_energy_is_gained():
-    """1,000 random flat faces (W of rank 3): the friction split is a family, the normal
-    split is not (W's null vector is tangential), so the speeds after are unique."""
+def test_following_the_slip_lemke_and_enumeration_agree_on_generic_problems():
+    """300 two-contact problems, the slip followed: where a piece has several solutions
+    the enumeration follows each and Lemke one, and a slip within tolerance of zero may be
+    taken as sliding by one and not the other: Lemke's answer is elsewhere in at most 1%
+    (3 of 1,000 in docs/multi-contact.md's table)."""
+    rng = np.random.default_rng(26)
+    outside, _ = lemke_outside_enumeration([random_generic(rng, 2) for _ in range(300)], True)
+    assert outside <= 3
+
+
+@pytest.mark.parametrize(("follow_slip", "problems"), [(False, 1000), (True, 300)])
+def test_flat_faces_have_one_answer_both_methods_agree_and_no_energy_is_gained(follow_slip,
+                                                                             problems):
+    """Random flat faces (W of rank 3): the friction split is a family, the normal split is
+    not (W's null vector is tangential), so the speeds after are unique."""
     rng = np.random.default_rng(23)
-    systems = [random_flat_face(rng) for _ in range(1000)]
-    for system, answers in zip(systems, lemke_reaches_an_enumerated_answer(systems)):
+    systems = [random_flat_face(rng) for _ in range(problems)]
+    outside, enumerated = lemke_outside_enumeration(systems, follow_slip)
+    assert outside == 0
+    for system, answers in zip(systems, enumerated):
         assert mc.normal_split_unique(system)
         (answer,) = answers
         assert answer.energy_change <= ENERGY_ROUNDING * kinetic(system)
@@ -234,14 +272,28 @@ def test_with_friction_and_one_restitution_no_energy_gain_is_found(seed, family,
         assert answer.energy_change <= 1e-9 * kinetic(system)
 
 
-def test_different_restitutions_can_gain_energy():
-    """Glocker's condition: with unequal e_i Poisson's law is not dissipative in general
-    (ΔE = ½(‖EP_c‖²_W − ‖P_c‖²_W) − … without friction). Found within 2,000 draws."""
+@settings(max_examples=200, deadline=None)
+@given(seeds, st.sampled_from(["generic", "body", "flat"]))
+def test_frictionless_with_different_restitutions_no_energy_gain_is_found(seed, family):
+    """μ = 0, e_i as drawn: ΔE = ½(‖EP_c‖²_W − ‖P_c‖²_W − ‖Λ‖²_W); the first term can be
+    positive, but where it is, the restitution pulls another contact down and Λ takes it
+    back (docs/multi-contact.md). Not proved: measured, and searched for here."""
+    rng = np.random.default_rng(seed)
+    drawn = (random_flat_face(rng) if family == "flat"
+             else sim.random_two_contact_system(rng, family))
+    system = with_restitution(drawn, 0.0, drawn.e)
+    for answer in mc.poisson_two_phase(system):
+        assert answer.energy_change <= 1e-9 * kinetic(system)
+
+
+def test_friction_with_different_restitutions_can_gain_energy():
+    """With friction and unequal e_i a gain is found within 2,000 one-body draws (a few per
+    thousand, docs/multi-contact.md's table), one velocity-level problem per phase."""
     rng = np.random.default_rng(25)
-    for _ in range(2000):
-        system = sim.random_two_contact_system(rng, "body")
-        if any(a.energy_change > 1e-6 * kinetic(system) for a in mc.poisson_two_phase(system)):
-            assert system.e[0] != system.e[1]
+    systems = [sim.random_two_contact_system(rng, "body") for _ in range(2000)]
+    for system, answers in zip(systems, mc.poisson_two_phase_many(systems, follow_slip=False)):
+        if any(a.energy_change > 1e-6 * kinetic(system) for a in answers):
+            assert system.e[0] != system.e[1] and system.mu.min() > 0
             return
     pytest.fail("no energy gain in 2,000 draws")
 
@@ -250,13 +302,13 @@ def test_different_restitutions_can_gain_energy():
 
 @settings(max_examples=200, deadline=None)
 @given(st.floats(0.1, 3.0), st.floats(0.02, 2.0), st.floats(0.1, 10.0), st.floats(0.05, 5.0),
-       st.floats(0, 2), st.floats(0, 1), st.sampled_from(mc.METHODS))
+       st.floats(0, 2), st.floats(0, 1), st.sampled_from(mc.METHODS), st.booleans())
 def test_a_symmetric_flat_box_leaves_at_e_times_its_approach(width, height, mass, speed, mu,
-                                                            e, method):
+                                                            e, method, follow_slip):
     """v_y' = e|v_y|, no v_x, no spin: the compression stops both corners (P_nc = m|v_y|/2
     each, no friction needed), the restitution gives e times that."""
     system = flat_face(width, height, mass, (0.0, -speed, 0.0), mu, e)
-    (answer,) = mc.poisson_two_phase(system, method)
+    (answer,) = mc.poisson_two_phase(system, method, follow_slip=follow_slip)
     assert abs(answer.u_after[1] - e * speed) <= 1e-12 * speed
     assert abs(answer.u_after[0]) <= 1e-12 * speed
     assert abs(answer.u_after[2]) * width <= 1e-12 * speed
