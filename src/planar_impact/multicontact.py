@@ -27,10 +27,13 @@ the planar friction cone's two edges, Lemke's complementary pivoting with a lexi
 ratio test). ``W`` may be singular (a flat face: 4 constraints on 3 speeds): velocities are
 then unique where the impulse split is not, and the two methods are compared on velocities.
 
-What this law is not: the velocity-level Coulomb law sees only a phase's end velocity, so
-where the paper's process reverses the slip inside a phase (its Types 3 and 4) the friction
-impulse differs from (36)/(44). For one contact it equals ``solve(..., law="poisson")`` in
-Types 1, 2 and 5 (docs/multi-contact.md, 'A two-phase Poisson law for m contacts').
+Coulomb's law at a phase's end only is not the paper's process where the slip reverses
+inside a phase (its Types 3 and 4). So by default each phase follows the slip
+(:func:`phase_following_slip`): it is taken in straight pieces, sliding contacts' friction
+held against their slip, cut where a held slip reaches zero. For one contact this is the
+paper's process, and the law equals ``solve(..., law="poisson")`` in all five types;
+``follow_slip=False`` gives one velocity-level problem per phase (equal in Types 1, 2, 5
+only). docs/multi-contact.md, 'A two-phase Poisson law for m contacts'.
 """
 
 from __future__ import annotations
@@ -588,7 +591,8 @@ def random_flat_face(rng: np.random.Generator) -> ContactSystem:
                           mu=rng.uniform(0, 1, 2), e=rng.uniform(0, 1, 2))
 
 
-def measure(problems: int = 1000, seed: int = 0) -> dict[str, dict[str, int]]:
+def measure(problems: int = 1000, seed: int = 0, follow_slip: bool = True
+            ) -> dict[str, dict[str, int]]:
     """Per family of random two-contact problems (``generic``, ``body``: those of
     :func:`planar_impact.simultaneous.random_two_contact_system`; ``flat``:
     :func:`random_flat_face`): how many answers the enumeration finds (0, 1, 2+), whether
@@ -605,8 +609,9 @@ def measure(problems: int = 1000, seed: int = 0) -> dict[str, dict[str, int]]:
                    else random_two_contact_system(rng, family) for _ in range(problems)]
         counts = dict.fromkeys(("0", "1", "2+", "lemke-agrees", "lemke-ray", "lemke-other",
                                 "gains", "split-unique", "newton-coulomb-apart"), 0)
-        for system, found, reached in zip(systems, poisson_two_phase_many(systems),
-                                          poisson_two_phase_many(systems, "lemke")):
+        for system, found, reached in zip(
+                systems, poisson_two_phase_many(systems, follow_slip=follow_slip),
+                poisson_two_phase_many(systems, "lemke", follow_slip=follow_slip)):
             counts["0" if not found else "1" if len(found) == 1 else "2+"] += 1
             scale = SAME_ANSWER * (system.speed_scale() + float(np.max(np.abs(system.u))))
             if not reached:
@@ -623,11 +628,12 @@ def measure(problems: int = 1000, seed: int = 0) -> dict[str, dict[str, int]]:
                 np.max(np.abs(found[0].u_after - other.u_after)) > 1e-6 * speed
                 for other in newton_coulomb_solutions(system))
         table[family] = counts
-    table["one-contact"] = measure_one_contact(problems, rng)
+    table["one-contact"] = measure_one_contact(problems, rng, follow_slip)
     return table
 
 
-def measure_one_contact(problems: int, rng: np.random.Generator) -> dict[str, int]:
+def measure_one_contact(problems: int, rng: np.random.Generator, follow_slip: bool = True
+                        ) -> dict[str, int]:
     """On ``problems`` random one-contact problems (3 speeds, random SPD M and rows, μ ∈
     [0, 1.5], e ∈ [0, 1]) with a Poisson answer: per paper type, how many, and in how many
     this law's speeds after equal ``solve(..., law="poisson")``'s to 1e-10 of the speeds;
@@ -650,7 +656,7 @@ def measure_one_contact(problems: int, rng: np.random.Generator) -> dict[str, in
             continue
         system = contact_system(mass_matrix=mass_matrix, wn=wn[None], wt=wt[None], u=u,
                                 mu=mu, e=e)
-        (answer,) = poisson_two_phase(system)
+        (answer,) = poisson_two_phase(system, follow_slip=follow_slip)
         gap = float(np.max(np.abs(answer.u_after - poisson.u_after) / np.max(np.abs(u))))
         key = f"type {poisson.collision_type}"
         counts[f"{key} problems"] = counts.get(f"{key} problems", 0) + 1
@@ -662,9 +668,10 @@ def measure_one_contact(problems: int, rng: np.random.Generator) -> dict[str, in
     return dict(sorted(counts.items()))
 
 
-if __name__ == "__main__":  # python -m planar_impact.multicontact [problems] [seed]
+if __name__ == "__main__":  # python -m planar_impact.multicontact [problems] [seed] [plain]
     import sys
 
     arguments = [int(a) for a in sys.argv[1:3]]
-    for family, counts in measure(*arguments).items():
+    plain = sys.argv[3:4] == ["plain"]  # one velocity-level problem per phase
+    for family, counts in measure(*arguments, follow_slip=not plain).items():
         print(f"{family}: {counts}")
