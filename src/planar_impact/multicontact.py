@@ -379,9 +379,14 @@ def phase_by_lemke(delassus, start, base, mu, speed, sense=None) -> PhaseSolutio
     return _unscaled(problem, 0, impulses, velocities, modes)
 
 
-#: Most times a phase may be cut where a held slip reaches zero, per contact (plus a few):
-#: a branch cut more often is dropped (none has been seen to need more than two per contact).
+#: Most times a phase may be cut where a held slip reaches zero, per contact (plus a few);
+#: none of docs/multi-contact.md's draws came near it.
 CUTS_PER_CONTACT = 8
+
+
+class SlipFollowingCapped(RuntimeError):
+    """A phase was cut more than :data:`CUTS_PER_CONTACT` times per contact (a slip that
+    keeps reversing): raised, never an answer silently missing."""
 
 
 def phase_following_slip(delassus, start, base, mu, speed, method: str = "enumeration"
@@ -433,7 +438,9 @@ def phase_following_slip(delassus, start, base, mu, speed, method: str = "enumer
             first = int(np.argmin(fractions))
             fraction = float(fractions[first])
             if cuts >= limit:
-                continue
+                raise SlipFollowingCapped(
+                    f"a phase was cut {cuts} times where held slips reached zero (limit "
+                    f"{limit} for {count} contacts): the slip keeps reversing")
             cut = velocities + fraction * (piece.velocities - velocities)
             cut[2 * first + 1] = 0.0  # the held slip has reached zero here
             branches.append((cut, given + fraction * piece.impulses, cuts + 1))

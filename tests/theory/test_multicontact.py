@@ -329,3 +329,28 @@ def test_an_unknown_method_is_refused():
     system = flat_face(1.0, 0.5, 2.0, (0.0, -1.0, 0.0), 0.5, 0.5)
     with pytest.raises(pi.ImpactInputError, match="method"):
         mc.poisson_two_phase(system, "gauss-seidel")
+
+
+def test_runs_as_a_script_and_is_an_attribute_of_the_package():
+    """``python -m planar_impact.multicontact`` (docs/multi-contact.md's table) runs without
+    runpy's double-import warning: the package imports it only on first use."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    src = Path(__file__).resolve().parents[2] / "src"
+    done = subprocess.run([sys.executable, "-W", "error::RuntimeWarning", "-m",
+                           "planar_impact.multicontact", "3", "0"], capture_output=True,
+                          text=True, env=dict(os.environ, PYTHONPATH=str(src)), timeout=300)
+    assert done.returncode == 0 and "RuntimeWarning" not in done.stderr, done.stderr
+    assert done.stdout.startswith("generic: {'0': 0,")
+    assert pi.multicontact.poisson_two_phase is mc.poisson_two_phase
+
+
+def test_a_slip_that_keeps_reversing_is_reported(monkeypatch):
+    """With no cut allowed, a phase whose held slip reaches zero raises, naming why."""
+    monkeypatch.setattr(mc, "CUTS_PER_CONTACT", -2)  # a limit of 0 cuts for one contact
+    system = flat_face(1.0, 0.5, 2.0, (0.3, -1.0, 0.0), 0.5, 0.5)  # slides, then sticks
+    with pytest.raises(mc.SlipFollowingCapped, match="slip keeps reversing"):
+        mc.poisson_two_phase(system)
