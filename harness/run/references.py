@@ -158,11 +158,7 @@ def _simultaneous(scene, contacts, fixed, prefix: str) -> dict:
         keep(_named(NEWTON_COULOMB, len(found), k), solution.u_after, solution.energy_change)
     # Several answers only where the frictional LCP has several, or where W lets the
     # compression's normal split vary (never on one body lying flat).
-    try:
-        found = mc.poisson_two_phase(system)
-    except mc.SlipFollowingCapped:  # listed with no answer, the reason counted
-        found = []
-        counts[f"{TWO_PHASE_POISSON}/slip-keeps-reversing"] = 1
+    found = mc.poisson_two_phase(system)
     counts[TWO_PHASE_POISSON] = len(found)
     for k, solution in enumerate(found):
         keep(_named(TWO_PHASE_POISSON, len(found), k), solution.u_after, solution.energy_change)

@@ -235,12 +235,24 @@ seeds = st.integers(0, 2**32 - 1)
 @settings(max_examples=200, deadline=None)
 @given(seeds, st.sampled_from(["generic", "body", "flat"]))
 def test_the_compression_never_gains_energy(seed, family):
-    """ΔE_c = P·v̄ − ½PᵀWP with P_n·v̄_n = 0 and P_t·v̄_t ≤ 0 at the phase's end: ≤ 0."""
+    """One velocity-level problem per phase: ΔE_c = P·v̄ − ½PᵀWP with P_n·v̄_n = 0 and
+    P_t·v̄_t ≤ 0 at the phase's end: ≤ 0 (proved; docs/multi-contact.md)."""
     rng = np.random.default_rng(seed)
     system = (random_flat_face(rng) if family == "flat"
               else sim.random_two_contact_system(rng, family))
-    for answer in mc.poisson_two_phase(system):
+    for answer in mc.poisson_two_phase(system, follow_slip=False):
         assert answer.energy_change_compression <= ENERGY_ROUNDING * kinetic(system)
+
+
+@settings(max_examples=200, deadline=None)
+@given(seeds, st.sampled_from(mc.METHODS))
+def test_following_the_slip_a_flat_face_never_gains_energy(seed, method):
+    """Measured, not proved (docs/multi-contact.md, 'Energy'): searched for here on flat
+    faces, the scenes the harness takes this law as a reference for."""
+    system = random_flat_face(np.random.default_rng(seed))
+    for answer in mc.poisson_two_phase(system, method):
+        assert answer.energy_change_compression <= ENERGY_ROUNDING * kinetic(system)
+        assert answer.energy_change <= ENERGY_ROUNDING * kinetic(system)
 
 
 def with_restitution(system, mu, e):
@@ -263,12 +275,12 @@ def test_frictionless_with_one_restitution_never_gains_energy(seed, family, e):
 @settings(max_examples=300, deadline=None)
 @given(seeds, st.sampled_from(["generic", "body"]), st.floats(0, 1))
 def test_with_friction_and_one_restitution_no_energy_gain_is_found(seed, family, e):
-    """Not proved (the restitution's friction impulse is not e times the compression's):
-    measured, and searched for here."""
+    """One velocity-level problem per phase. Not proved (the restitution's friction
+    impulse is not e times the compression's): measured, and searched for here."""
     rng = np.random.default_rng(seed)
     drawn = sim.random_two_contact_system(rng, family)
     system = with_restitution(drawn, drawn.mu, e)
-    for answer in mc.poisson_two_phase(system):
+    for answer in mc.poisson_two_phase(system, follow_slip=False):
         assert answer.energy_change <= 1e-9 * kinetic(system)
 
 
@@ -348,9 +360,26 @@ def test_runs_as_a_script_and_is_an_attribute_of_the_package():
     assert pi.multicontact.poisson_two_phase is mc.poisson_two_phase
 
 
-def test_a_slip_that_keeps_reversing_is_reported(monkeypatch):
-    """With no cut allowed, a phase whose held slip reaches zero raises, naming why."""
-    monkeypatch.setattr(mc, "CUTS_PER_CONTACT", -2)  # a limit of 0 cuts for one contact
+def test_contacts_taking_turns_to_slide_end_the_phase_at_velocity_level():
+    """A restitution where two contacts take turns (one's slip stops while the other slides,
+    then the other way round; found by hypothesis): the phase is cut CUTS_PER_CONTACT times
+    per contact, then its rest is one velocity-level problem, and the answer says so. That
+    is one of the enumeration's branches; Lemke's path ends at one of its answers."""
+    system = sim.random_two_contact_system(np.random.default_rng(9919), "generic")
+    enumerated = mc.poisson_two_phase(system)
+    capped = [a for a in enumerated if not a.restitution.slip_followed_to_end]
+    assert capped and capped[0].restitution.cuts == mc.CUTS_PER_CONTACT * 2 + 4
+    (lemke,) = mc.poisson_two_phase(system, "lemke")
+    assert any(same_speeds(lemke.u_after, a.u_after, system) for a in enumerated)
+    # Every turn is a branch (each piece has two solutions), and the answers drift with the
+    # number of turns: 36 answers here, the later ones gaining energy (up to 28% of ½uᵀMu).
+    # A known defect of following the slip with strongly coupled contacts, pinned.
+    assert len(enumerated) > 30
+    assert max(a.energy_change for a in enumerated) > 0.25 * kinetic(system)
+
+
+def test_a_phase_without_turns_is_followed_to_its_end():
     system = flat_face(1.0, 0.5, 2.0, (0.3, -1.0, 0.0), 0.5, 0.5)  # slides, then sticks
-    with pytest.raises(mc.SlipFollowingCapped, match="slip keeps reversing"):
-        mc.poisson_two_phase(system)
+    (answer,) = mc.poisson_two_phase(system)
+    assert answer.compression.cuts == 1 and answer.compression.slip_followed_to_end
+    assert answer.restitution.cuts == 0 and answer.restitution.slip_followed_to_end
