@@ -388,6 +388,9 @@ def phase_by_lemke(delassus, start, base, mu, speed, sense=None) -> PhaseSolutio
 #: round), with cuts that shrink geometrically; past this, the rest of the phase is one
 #: velocity-level problem, and the answer says so (``slip_followed_to_end``).
 CUTS_PER_CONTACT = 16
+#: Most pieces one phase solves, over all its branches (a piece with several solutions
+#: branches): past this, every open branch ends at velocity level, as past the cuts.
+PIECES_PER_PHASE = 64
 
 
 def phase_following_slip(delassus, start, base, mu, speed, method: str = "enumeration"
@@ -414,12 +417,14 @@ def phase_following_slip(delassus, start, base, mu, speed, method: str = "enumer
     branches = [(np.asarray(start, dtype=float), np.zeros(2 * count), 0)]
     found: list[PhaseSolution] = []
     impulse_scale = speed / float(np.min(np.diag(delassus)))
+    solved = 0
     while branches:
         velocities, given, cuts = branches.pop()
+        solved += 1
         slips = velocities[1::2]
         sense = np.where(np.abs(slips) > slip_zero, np.sign(slips), 0.0)
         remaining = np.maximum(np.asarray(base, dtype=float) - given[0::2], 0.0)
-        capped = cuts >= limit
+        capped = cuts >= limit or solved > PIECES_PER_PHASE
         if capped:
             sense = np.zeros(count)
         pieces = _pieces(delassus, velocities, remaining, mu, speed, sense, method)
