@@ -247,8 +247,9 @@ def test_the_compression_never_gains_energy(seed, family):
 @settings(max_examples=200, deadline=None)
 @given(seeds, st.sampled_from(mc.METHODS))
 def test_following_the_slip_a_flat_face_never_gains_energy(seed, method):
-    """Measured, not proved (docs/multi-contact.md, 'Energy'): searched for here on flat
-    faces, the scenes the harness takes this law as a reference for."""
+    """Measured, not proved (docs/multi-contact.md, 'A two-phase Poisson law for m contacts',
+    its energy paragraph): searched for here on flat faces, the scenes the harness takes
+    this law as a reference for."""
     system = random_flat_face(np.random.default_rng(seed))
     for answer in mc.poisson_two_phase(system, method):
         assert answer.energy_change_compression <= ENERGY_ROUNDING * kinetic(system)
