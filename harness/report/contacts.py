@@ -15,10 +15,10 @@ import math
 from html import escape
 
 #: Solution counts shown, in this order: (key in the reference's "solutions", column title).
-COUNTS = (("newton-coulomb", "N–C"), ("coherent/poisson/literal", "P"),
-          ("coherent/stronge-paper/literal", "S"), ("coherent/newton/literal", "N"),
-          ("coherent/poisson/effective", "P eff*"), ("coherent/stronge-paper/effective", "S eff*"),
-          ("coherent/newton/effective", "N eff*"))
+COUNTS = (("newton-coulomb", "N–C"), ("two-phase/poisson", "P 2φ"),
+          ("coherent/poisson/literal", "P"), ("coherent/stronge-paper/literal", "S"),
+          ("coherent/newton/literal", "N"), ("coherent/poisson/effective", "P eff*"),
+          ("coherent/stronge-paper/effective", "S eff*"), ("coherent/newton/effective", "N eff*"))
 
 INTRO = (
     "Scenes with several contacts are compared with the reference that matches them "
@@ -26,7 +26,9 @@ INTRO = (
     "(contacts = \"simultaneous\") with the m-contact Newton–Coulomb law, the engines' law; a "
     "tilt (expect_sequence) with the event-driven sequence of single impacts (newton-lcp at "
     "each). Counts are the solutions of each m-contact law: Newton–Coulomb (N–C, solutions "
-    "with distinct post-impact velocities) and the coherent combinations of the paper's "
+    "with distinct post-impact velocities), the two-phase Poisson law for m contacts (P 2φ: "
+    "compression to zero approach, then e times each contact's compression impulse, Coulomb "
+    "friction in both phases) and the coherent combinations of the paper's "
     "proposal after eq. (75) for Poisson (P), the paper's Stronge (S) and Newton (N): each "
     "contact's type formulas at its own approach, 5^m (3^m) combinations, kept where the "
     "paper's three tests hold. *eff: the effective reading, an extension, not the paper's: "
@@ -36,7 +38,8 @@ INTRO = (
     "rounding band, counted apart from the clearly coherent ones. "
     "Engine columns: departure from the reference; for a tilt, in brackets, the cut of the "
     "sequence the run is nearest (full: all impacts; after-k: only the first k, with the "
-    "departure from that cut). A flagged run is shown as 'flagged' with its reasons and its "
+    "departure from that cut); for a flat face, after "P 2φ:", the departure from the "
+    "two-phase Poisson law. A flagged run is shown as 'flagged' with its reasons and its "
     "number in square brackets, never as a departure: a tilt's runs run until the sequence's "
     "last impact and one that stops short is truncated-sequence; a flat face struck corner "
     "after corner is not-simultaneous (docs/verdicts.md). N–C at pose, sequential at pose: "
@@ -85,6 +88,9 @@ def _rows(name: str, info: dict, records) -> tuple[list[str], list[list[str]]] |
                 cut, value = summary["nearest_cut"]
                 cut = cut.rsplit("/", 1)[-1]
                 cell += " (full)" if cut == "newton-lcp" else f" ({cut}: {_number(value)})"
+            two_phase = summary.get("departure", {}).get("two-phase/poisson")
+            if reference["kind"] == "simultaneous" and two_phase is not None:
+                cell += f" [P 2φ: {_number(two_phase)}]"
             if record is not None and record.skipped:
                 cell = "skipped"
             elif record is not None and not record.ok:  # not the situation: never a departure

@@ -11,7 +11,10 @@ Three situations (docs/multi-contact.md, 'Which reference a run is compared with
   primary reference, counted by post-impact velocity), every coherent solution of the paper's
   proposal after eq. (75) for Poisson, the paper's Stronge and Newton (the literal reading;
   0, 1 or several each), the same under the effective reading (an extension that counts
-  restitution twice), and the sequential reading in every order.
+  restitution twice), the sequential reading in every order, and the two-phase Poisson law
+  for m contacts (:func:`planar_impact.multicontact.poisson_two_phase`,
+  ``two-phase/poisson``): a reference that leaves a symmetric flat box at ``e|v_y|`` with no
+  spin, which the paper's proposal does not.
 * ``event-driven``: a tilt, declared with ``expect_sequence = true``. The primary reference
   is the event-driven sequence of :func:`harness.reference.event_driven.event_sequence` with
   ``newton-lcp`` at each impact; the sequence with every other law of the scenario, and the
@@ -51,6 +54,8 @@ COUPLINGS = ("literal", "effective")
 #: Laws of the sequential reading of a flat face (one contact at a time, every order).
 SEQUENTIAL_LAWS = ("newton-lcp", "poisson")
 NEWTON_COULOMB = "newton-coulomb"
+#: The two-phase Poisson law for m contacts (planar_impact.multicontact).
+TWO_PHASE_POISSON = "two-phase/poisson"
 
 
 def kind_of(scenario) -> str:
@@ -134,10 +139,12 @@ def _named(stem: str, count: int, k: int) -> str:
 
 
 def _simultaneous(scene, contacts, fixed, prefix: str) -> dict:
-    """Every m-contact law on the rows of ``contacts``: Newton–Coulomb, the coherent
-    solutions of the paper's proposal, the sequential reading in every order."""
+    """Every m-contact law on the rows of ``contacts``: Newton–Coulomb, the two-phase
+    Poisson law, the coherent solutions of the paper's proposal, the sequential reading in
+    every order."""
     from harness.scene import geometry
     from planar_impact import ImpactInputError
+    from planar_impact import multicontact as mc
     from planar_impact import simultaneous as sim
 
     wn, wt = geometry.contact_rows(scene, contacts)
@@ -154,6 +161,12 @@ def _simultaneous(scene, contacts, fixed, prefix: str) -> dict:
     counts[NEWTON_COULOMB] = len(found)
     for k, solution in enumerate(found):
         keep(_named(NEWTON_COULOMB, len(found), k), solution.u_after, solution.energy_change)
+    # Several answers only where the frictional LCP has several, or where W lets the
+    # compression's normal split vary (never on one body lying flat).
+    found = mc.poisson_two_phase(system)
+    counts[TWO_PHASE_POISSON] = len(found)
+    for k, solution in enumerate(found):
+        keep(_named(TWO_PHASE_POISSON, len(found), k), solution.u_after, solution.energy_change)
     for law in COHERENT_LAWS:
         for coupling in COUPLINGS:
             try:
@@ -307,5 +320,6 @@ def collect(records: Sequence) -> list[dict]:
     return out
 
 
-__all__ = ["COHERENT_LAWS", "COUPLINGS", "EVENT_DRIVEN", "SIMULTANEOUS", "SINGLE", "PointLaws",
-           "annotate", "applicable", "collect", "kind_of", "point_reference", "scene_reference"]
+__all__ = ["COHERENT_LAWS", "COUPLINGS", "EVENT_DRIVEN", "SIMULTANEOUS", "SINGLE",
+           "TWO_PHASE_POISSON", "PointLaws", "annotate", "applicable", "collect", "kind_of",
+           "point_reference", "scene_reference"]

@@ -2,7 +2,8 @@
 
 Djerassi, *Collision with friction; Part B: Poisson's and Stronge's hypotheses* (2009),
 with Part A's Newton law, Stronge's exact energetic law and the velocity-level
-Newton–Coulomb law of sequential-impulse engines.
+Newton–Coulomb law of sequential-impulse engines; several contacts in ``simultaneous`` and
+``multicontact`` (a two-phase Poisson law for m contacts).
 
 >>> import planar_impact as pi
 >>> problem = pi.builders.two_sleds(gamma=0.2, delta=0.85)
@@ -29,6 +30,7 @@ __all__ = [
     "errors",
     "impulse_process",
     "laws",
+    "multicontact",
     "process",
     "process_collision_type",
     "sequential_impulses",
@@ -39,12 +41,13 @@ __all__ = [
 
 
 def __getattr__(name: str):
-    """``planar_impact.simultaneous``, imported on first use: imported here, it was in
-    ``sys.modules`` before ``python -m planar_impact.simultaneous`` ran it, which runpy
-    warns about (the module would run as two copies)."""
-    if name == "simultaneous":
+    """``planar_impact.simultaneous`` and ``planar_impact.multicontact`` (which imports it),
+    imported on first use: imported here, simultaneous was in ``sys.modules`` before
+    ``python -m planar_impact.simultaneous`` ran it, which runpy warns about (the module
+    would run as two copies)."""
+    if name in ("simultaneous", "multicontact"):
         import importlib
 
-        return importlib.import_module(f"{__name__}.simultaneous")
+        return importlib.import_module(f"{__name__}.{name}")
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
