@@ -38,7 +38,7 @@ INTRO = (
     "rounding band, counted apart from the clearly coherent ones. "
     "Engine columns: departure from the reference; for a tilt, in brackets, the cut of the "
     "sequence the run is nearest (full: all impacts; after-k: only the first k, with the "
-    "departure from that cut); for a flat face, after "P 2φ:", the departure from the "
+    "departure from that cut); for a flat face, after 'P 2φ:', the departure from the "
     "two-phase Poisson law. A flagged run is shown as 'flagged' with its reasons and its "
     "number in square brackets, never as a departure: a tilt's runs run until the sequence's "
     "last impact and one that stops short is truncated-sequence; a flat face struck corner "
