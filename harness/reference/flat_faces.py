@@ -8,7 +8,7 @@ counted (0, 1, 2+), and the first scene of each count is kept as an example: thi
 library's flat scenes with none and with several coherent Poisson solutions were found.
 docs/multi-contact.md, 'Counting on flat landings', has the numbers::
 
-    PYTHONPATH=src:. python -m harness.reference.flat_faces 1000 0
+    PYTHONPATH=src:. python -m harness.reference.flat_faces 200 0
 """
 
 from __future__ import annotations

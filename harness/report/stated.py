@@ -1,0 +1,302 @@
+"""Numbers the README and ``docs/`` state about results, each produced by a named command.
+
+A stated number is marked in the Markdown so that it can be found, regenerated and compared:
+
+* inline, an HTML comment right after the number (no space between them), naming the source
+  and the key: ``67<!-- stated table3.reproduced -->``. The number is the run of digits
+  (with ``,`` ``.`` an exponent and a trailing ``%``) that ends where the comment begins;
+* a generated block (a whole table) between two comments on lines of their own::
+
+      <!-- begin stated flat-landings.table -->
+      ...
+      <!-- end stated -->
+
+Each source (:data:`SOURCES`) names the command a reader runs to get the same numbers and
+computes them as ``{key: text}``. ``impact-harness findings --check`` recomputes every source
+the text marks and lists each stated number that differs (exit 1);
+``impact-harness findings --write`` rewrites them in place. ``tests/report/test_stated.py``
+runs the check, so a number cannot go stale silently: a change to the code that moves it
+fails the tests until ``--write`` is run and the change reviewed.
+
+The ``library`` source counts the engine runs of the validation suite; it is read from a
+results file (``reports/results.json``, written by ``make validate``), and its test compares
+the text with a fresh run of the library (tests/run/test_suite_invariants.py).
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+# The texts that state results (paths relative to the repository root).
+TEXTS = ("README.md", "docs/*.md", "scenarios/README.md")
+
+_NUMBER = r"[-−]?\d[\d,.]*(?:e[-−]?\d+)?%?"
+_KEY = r"[a-z0-9][a-z0-9_.+-]*"
+INLINE = re.compile(rf"(?P<value>{_NUMBER})<!-- stated (?P<key>{_KEY}) -->")
+BLOCK = re.compile(rf"^<!-- begin stated (?P<key>{_KEY}) -->\n(?P<value>.*?)^<!-- end stated -->$",
+                   re.M | re.S)
+ANY_MARKER = re.compile(r"<!-- (?:begin |end )?stated\b[^>]*-->")
+
+
+@dataclass(frozen=True)
+class Source:
+    """Where a group of stated numbers comes from: the command a reader runs, and the
+    function that computes them (``{key: text}``, keys without the source's prefix)."""
+
+    command: str
+    compute: Callable[[], dict[str, str]]
+
+
+@dataclass(frozen=True)
+class Stated:
+    """One marked number (or block) in a text."""
+
+    path: Path
+    line: int
+    key: str  # "source.key"
+    value: str
+    block: bool
+
+    @property
+    def source(self) -> str:
+        return self.key.split(".", 1)[0]
+
+
+def share(part: int, whole: int, digits: int = 0) -> str:
+    """``part/whole`` as a percentage with ``digits`` decimals."""
+    return f"{100.0 * part / whole:.{digits}f}%"
+
+
+def findings_numbers(count: int = 100_000, seed: int = 2009) -> dict[str, str]:
+    """``impact-harness findings``: the solver findings of the README."""
+    from harness.report import findings
+
+    measured = findings.measure(count, seed)
+    numbers = {"count": f"{count:,}"}
+    bins = measured["pgs_bins"]
+    above = [b for b in bins if b["low"] >= 1.0]
+    below = [b for b in bins if b["high"] <= 0.9]
+    edge = [b for b in bins if b["low"] == 0.9]
+    numbers["pgs.above"] = f"{sum(b['problems'] for b in above):,}"
+    numbers["pgs.above-failed"] = f"{sum(b['failed'] for b in above):,}"
+    numbers["pgs.below"] = f"{sum(b['problems'] for b in below):,}"
+    numbers["pgs.below-failed"] = f"{sum(b['failed'] for b in below):,}"
+    numbers["pgs.edge"] = f"{sum(b['problems'] for b in edge):,}"
+    numbers["pgs.edge-failed"] = f"{sum(b['failed'] for b in edge):,}"
+    jump = measured["jump"]
+    numbers["jump.problems"] = f"{jump['problems']:,}"
+    numbers["jump.share"] = share(jump["large"], jump["problems"], 1)
+    numbers["jump.median-e-below"] = f"{jump['median_e_below']:.3g}"
+    numbers["jump.median-jump"] = f"{jump['median_jump']:.0%}"
+    for law, counts in measured["energy"].items():
+        numbers[f"energy.{law}"] = share(counts["gained"], counts["solved"], 2)
+        numbers[f"energy.{law}.rounded"] = share(counts["gained"], counts["solved"], 0)
+        numbers[f"energy.{law}.gained"] = f"{counts['gained']:,}"
+    return numbers
+
+
+def table3_numbers() -> dict[str, str]:
+    """``impact-harness paper``: how many of Table 3's printed cells reproduce."""
+    from harness.report.table3 import reproduce_table3
+
+    cells = [c for row in reproduce_table3() for c in row["cells"]]
+    reproduced = sum(c.reproduced for c in cells)
+    return {"printed": str(len(cells)), "reproduced": str(reproduced),
+            "missed": str(len(cells) - reproduced)}
+
+
+TWO_CONTACT_PROBLEMS, TWO_CONTACT_SEED = 200, 0
+_COUNT_LAWS = (("poisson", "Poisson"), ("stronge-paper", "Stronge (paper)"), ("newton", "Newton"))
+
+
+def two_contact_numbers() -> dict[str, str]:
+    """``python -m planar_impact.simultaneous 200 0`` (the ``generic`` family): coherent
+    solutions of the paper's proposal under both readings, and Newton–Coulomb's."""
+    from planar_impact.simultaneous import coherent_count_distribution
+
+    problems = TWO_CONTACT_PROBLEMS
+    counts = {coupling: coherent_count_distribution(problems, TWO_CONTACT_SEED, "generic",
+                                                    coupling)
+              for coupling in ("effective", "none")}
+    numbers = {"problems": str(problems)}
+    rows = ["| reading | law | 0 solutions | 1 | 2+ | gains |", "|---|---|---:|---:|---:|---:|"]
+    for coupling, reading in (("effective", "effective"), ("none", "literal")):
+        for law, name in _COUNT_LAWS:
+            c = counts[coupling][law]
+            rows.append(f"| {reading} | {name} | {c['0']} | {c['1']} | {c['2+']} | "
+                        f"{c['gains']} |")
+            for bucket in ("0", "1", "2+", "gains"):
+                numbers[f"{reading}.{law}.{bucket}"] = str(c[bucket])
+            numbers[f"{reading}.{law}.0-share"] = share(c["0"], problems)
+    c = counts["effective"]["newton-coulomb"]
+    rows.append(f"| — | Newton–Coulomb | {c['0']} | {c['1']} | {c['2+']} | {c['gains']} |")
+    for bucket in ("0", "1", "2+", "gains"):
+        numbers[f"newton-coulomb.{bucket}"] = str(c[bucket])
+    numbers["table"] = "\n".join(rows)
+    return numbers
+
+
+FLAT_LANDINGS, FLAT_SEED = 200, 0
+
+
+def flat_landing_numbers() -> dict[str, str]:
+    """``python -m harness.reference.flat_faces 200 0``: coherent solutions on random flat
+    landings."""
+    from harness.reference.flat_faces import count_flat
+
+    counts, _ = count_flat(FLAT_LANDINGS, FLAT_SEED)
+    numbers = {"landings": str(FLAT_LANDINGS)}
+    rows = ["| law | reading | 0 | 1 | 2+ |", "|---|---|---:|---:|---:|"]
+    for law, name in _COUNT_LAWS:
+        for coupling, reading in (("effective", "effective"), ("none", "literal")):
+            c = counts[f"{law}/{coupling}"]
+            rows.append(f"| {name} | {reading} | {c['0']} | {c['1']} | {c['2+']} |")
+            for bucket in ("0", "1", "2+"):
+                numbers[f"{reading}.{law}.{bucket}"] = str(c[bucket])
+                numbers[f"{reading}.{law}.{bucket}-share"] = share(c[bucket], FLAT_LANDINGS)
+    c = counts["newton-coulomb"]
+    rows.append(f"| Newton–Coulomb | — | {c['0']} | {c['1']} | {c['2+']} |")
+    for bucket in ("0", "1", "2+"):
+        numbers[f"newton-coulomb.{bucket}"] = str(c[bucket])
+        numbers[f"newton-coulomb.{bucket}-share"] = share(c[bucket], FLAT_LANDINGS)
+    numbers["table"] = "\n".join(rows)
+    return numbers
+
+
+RESULTS = ROOT / "reports" / "results.json"
+
+
+def library_numbers_of(records: Iterable, scenarios: int) -> dict[str, str]:
+    """The validation suite's counts from its records: scenarios, records, engine runs,
+    single impacts and the runs per verdict reason (as ``summary.md`` counts them)."""
+    from harness.run.records import ANALYTIC
+    from harness.run.verdicts import reason_counts
+
+    records = list(records)
+    engine_runs = [r for r in records if r.source != ANALYTIC and not r.skipped]
+    single = sum(r.ok for r in engine_runs)
+    numbers = {"scenarios": str(scenarios), "records": f"{len(records):,}",
+               "engine-runs": str(len(engine_runs)), "single-impacts": str(single),
+               "flagged": str(len(engine_runs) - single)}
+    for reason, count in reason_counts([r.reasons for r in engine_runs]).items():
+        numbers[f"reason.{reason.replace(' (law)', '-law')}"] = str(count)
+    return numbers
+
+
+def library_numbers(results: Path = RESULTS) -> dict[str, str]:
+    """``make validate``: the counts of its results file (``reports/results.json``)."""
+    from harness.run.records import read_results
+
+    records = read_results(results).records
+    return library_numbers_of(records, len({r.scenario for r in records}))
+
+
+SOURCES: dict[str, Source] = {
+    "findings": Source("impact-harness findings", findings_numbers),
+    "table3": Source("impact-harness paper", table3_numbers),
+    "two-contacts": Source(f"python -m planar_impact.simultaneous {TWO_CONTACT_PROBLEMS} "
+                           f"{TWO_CONTACT_SEED}", two_contact_numbers),
+    "flat-landings": Source(f"python -m harness.reference.flat_faces {FLAT_LANDINGS} "
+                            f"{FLAT_SEED}", flat_landing_numbers),
+    "library": Source("make validate (reports/results.json)", library_numbers),
+}
+
+
+def texts(root: Path = ROOT) -> list[Path]:
+    """The files that state results."""
+    return sorted(path for pattern in TEXTS for path in root.glob(pattern))
+
+
+def stated_in(path: Path) -> list[Stated]:
+    """Every marked number and block of ``path``, in order. A marker that is not part of a
+    well-formed inline number or block raises ``ValueError`` naming the file and line."""
+    text = path.read_text(encoding="utf-8")
+    found = []
+    spans = []
+    for pattern, block in ((INLINE, False), (BLOCK, True)):
+        for match in pattern.finditer(text):
+            line = text.count("\n", 0, match.start()) + 1
+            value = match["value"].strip("\n") if block else match["value"]
+            found.append(Stated(path, line, match["key"], value, block))
+            spans.append(match.span())
+    for marker in ANY_MARKER.finditer(text):
+        if not any(start <= marker.start() < end for start, end in spans):
+            line = text.count("\n", 0, marker.start()) + 1
+            raise ValueError(f"{path}:{line}: a 'stated' marker without a number right before "
+                             f"it (or a block without its end): {marker.group()}")
+    return sorted(found, key=lambda s: s.line)
+
+
+def compute(sources: Iterable[str]) -> dict[str, str]:
+    """``{"source.key": text}`` for the named sources."""
+    numbers = {}
+    for name in sources:
+        numbers.update({f"{name}.{key}": value for key, value in SOURCES[name].compute().items()})
+    return numbers
+
+
+def differences(stated: Iterable[Stated], numbers: Mapping[str, str]) -> list[str]:
+    """One line per stated number that differs from ``numbers`` or names no key of its
+    source (only sources present in ``numbers`` are compared)."""
+    computed_sources = {key.split(".", 1)[0] for key in numbers}
+    lines = []
+    for s in stated:
+        if s.source not in SOURCES:
+            lines.append(f"{s.path}:{s.line}: unknown source {s.source!r} "
+                         f"(known: {', '.join(SOURCES)})")
+        elif s.source not in computed_sources:
+            continue
+        elif s.key not in numbers:
+            lines.append(f"{s.path}:{s.line}: {s.key} is not a number "
+                         f"`{SOURCES[s.source].command}` gives")
+        elif numbers[s.key] != s.value:
+            shown = "the block" if s.block else repr(s.value)
+            lines.append(f"{s.path}:{s.line}: {s.key} states {shown}, "
+                         f"`{SOURCES[s.source].command}` gives "
+                         + ("another" if s.block else repr(numbers[s.key])))
+    return lines
+
+
+def rewrite(path: Path, numbers: Mapping[str, str]) -> bool:
+    """Write ``numbers`` over the marked numbers and blocks of ``path`` (keys not in
+    ``numbers`` left as they are); True when the file changed."""
+    text = path.read_text(encoding="utf-8")
+
+    def inline(match: re.Match) -> str:
+        value = numbers.get(match["key"], match["value"])
+        return f"{value}<!-- stated {match['key']} -->"
+
+    def block(match: re.Match) -> str:
+        if match["key"] not in numbers:
+            return match.group()
+        return (f"<!-- begin stated {match['key']} -->\n\n{numbers[match['key']]}\n\n"
+                "<!-- end stated -->")
+
+    new = BLOCK.sub(block, INLINE.sub(inline, text))
+    if new != text:
+        path.write_text(new, encoding="utf-8")
+    return new != text
+
+
+def check(write: bool = False, only: Iterable[str] | None = None,
+          root: Path = ROOT) -> list[str]:
+    """Recompute every source the texts mark (or those in ``only``), and return the stated
+    numbers that differ; with ``write``, rewrite them first (and return what is still
+    wrong: an unknown source or key)."""
+    paths = texts(root)
+    stated = [s for path in paths for s in stated_in(path)]
+    used = {s.source for s in stated if s.source in SOURCES}
+    numbers = compute(sorted(used if only is None else used & set(only)))
+    if write:
+        for path in paths:
+            rewrite(path, numbers)
+        stated = [s for path in paths for s in stated_in(path)]
+    return differences(stated, numbers)
+
+
+__all__ = ["SOURCES", "Source", "Stated", "check", "compute", "differences",
+           "library_numbers_of", "rewrite", "stated_in", "texts"]
