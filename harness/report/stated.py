@@ -4,7 +4,8 @@ A stated number is marked in the Markdown so that it can be found, regenerated a
 
 * inline, an HTML comment right after the number (no space between them), naming the source
   and the key: ``67<!-- stated table3.reproduced -->``. The number is the run of digits
-  (with ``,`` ``.`` an exponent and a trailing ``%``) that ends where the comment begins;
+  (with a sign, ``,`` ``.``, an exponent and a trailing ``%``) that ends where the comment
+  begins;
 * a generated block (a whole table) between two comments on lines of their own::
 
       <!-- begin stated flat-landings.table -->
@@ -34,7 +35,7 @@ ROOT = Path(__file__).resolve().parents[2]
 # The texts that state results (paths relative to the repository root).
 TEXTS = ("README.md", "docs/*.md", "scenarios/README.md")
 
-_NUMBER = r"[-−]?\d[\d,.]*(?:e[-−]?\d+)?%?"
+_NUMBER = r"[-+−]?\d[\d,.]*(?:e[-−]?\d+)?%?"
 _KEY = r"[a-z0-9][a-z0-9_.+-]*"
 INLINE = re.compile(rf"(?P<value>{_NUMBER})<!-- stated (?P<key>{_KEY}) -->")
 BLOCK = re.compile(rf"^<!-- begin stated (?P<key>{_KEY}) -->\n(?P<value>.*?)^<!-- end stated -->$",
@@ -64,6 +65,12 @@ class Stated:
     @property
     def source(self) -> str:
         return self.key.split(".", 1)[0]
+
+    @property
+    def where(self) -> str:
+        """``path:line``, the path relative to the repository when inside it."""
+        path = self.path.relative_to(ROOT) if self.path.is_relative_to(ROOT) else self.path
+        return f"{path}:{self.line}"
 
 
 def share(part: int, whole: int, digits: int = 0) -> str:
@@ -167,6 +174,43 @@ def flat_landing_numbers() -> dict[str, str]:
     return numbers
 
 
+MUJOCO_GAIN_SAMPLES, MUJOCO_GAIN_SEED = 200, 0
+MUJOCO_GAIN_POPULATIONS = ("populations/rod-ground.toml", "populations/box-corner.toml")
+
+
+def mujoco_gain_numbers() -> dict[str, str]:
+    """``impact-harness survey populations/rod-ground.toml populations/box-corner.toml
+    --samples 200 --engines mujoco --preset defaults,accurate``: how often MuJoCo's runs end
+    with more kinetic energy than they began with, per preset and family, and by how much."""
+    import numpy as np
+
+    from harness.survey import cli as survey_cli
+    from harness.survey.population import resolve_populations
+
+    survey = survey_cli.run_survey(
+        resolve_populations([str(ROOT / p) for p in MUJOCO_GAIN_POPULATIONS]),
+        MUJOCO_GAIN_SAMPLES, MUJOCO_GAIN_SEED, ["mujoco"], ["defaults", "accurate"],
+        workers=1, echo=lambda _: None)
+    runs = {key: np.asarray(values) for key, values in survey["runs"].items()}
+    numbers = {"samples": str(MUJOCO_GAIN_SAMPLES)}
+    for preset in ("defaults", "accurate"):
+        chosen = runs["preset"] == preset
+        gains = runs["gains_energy"][chosen].astype(bool)
+        numbers[f"{preset}.runs"] = str(int(chosen.sum()))
+        numbers[f"{preset}.gains"] = str(int(gains.sum()))
+        numbers[f"{preset}.share"] = share(int(gains.sum()), int(chosen.sum()), 1)
+        for family in sorted(set(runs["family"][chosen].tolist())):
+            member = runs["family"][chosen] == family
+            numbers[f"{preset}.{family}.share"] = share(int(gains[member].sum()),
+                                                       int(member.sum()), 1)
+        if gains.any():
+            change = runs["energy_change_relative"][chosen][gains]
+            numbers[f"{preset}.max-gain"] = f"+{change.max():.0%}"
+            numbers[f"{preset}.median-gain"] = f"+{np.median(change):.0%}"
+            numbers[f"{preset}.least-e"] = f"{runs['e'][chosen][gains].min():.2f}"
+    return numbers
+
+
 RESULTS = ROOT / "reports" / "results.json"
 
 
@@ -202,6 +246,9 @@ SOURCES: dict[str, Source] = {
                            f"{TWO_CONTACT_SEED}", two_contact_numbers),
     "flat-landings": Source(f"python -m harness.reference.flat_faces {FLAT_LANDINGS} "
                             f"{FLAT_SEED}", flat_landing_numbers),
+    "mujoco-gain": Source("impact-harness survey " + " ".join(MUJOCO_GAIN_POPULATIONS)
+                          + f" --samples {MUJOCO_GAIN_SAMPLES} --engines mujoco "
+                          "--preset defaults,accurate", mujoco_gain_numbers),
     "library": Source("make validate (reports/results.json)", library_numbers),
 }
 
@@ -246,16 +293,16 @@ def differences(stated: Iterable[Stated], numbers: Mapping[str, str]) -> list[st
     lines = []
     for s in stated:
         if s.source not in SOURCES:
-            lines.append(f"{s.path}:{s.line}: unknown source {s.source!r} "
+            lines.append(f"{s.where}: unknown source {s.source!r} "
                          f"(known: {', '.join(SOURCES)})")
         elif s.source not in computed_sources:
             continue
         elif s.key not in numbers:
-            lines.append(f"{s.path}:{s.line}: {s.key} is not a number "
+            lines.append(f"{s.where}: {s.key} is not a number "
                          f"`{SOURCES[s.source].command}` gives")
         elif numbers[s.key] != s.value:
             shown = "the block" if s.block else repr(s.value)
-            lines.append(f"{s.path}:{s.line}: {s.key} states {shown}, "
+            lines.append(f"{s.where}: {s.key} states {shown}, "
                          f"`{SOURCES[s.source].command}` gives "
                          + ("another" if s.block else repr(numbers[s.key])))
     return lines
