@@ -36,7 +36,7 @@ ROOT = Path(__file__).resolve().parents[2]
 TEXTS = ("README.md", "docs/*.md", "scenarios/README.md")
 
 _NUMBER = r"[-+−]?\d[\d,.]*(?:e[-−]?\d+)?%?"
-_KEY = r"[a-z0-9][a-z0-9_.+-]*"
+_KEY = r"[A-Za-z0-9][A-Za-z0-9_.+-]*"
 INLINE = re.compile(rf"(?P<value>{_NUMBER})<!-- stated (?P<key>{_KEY}) -->")
 BLOCK = re.compile(rf"^<!-- begin stated (?P<key>{_KEY}) -->\n(?P<value>.*?)^<!-- end stated -->$",
                    re.M | re.S)
@@ -68,9 +68,12 @@ class Stated:
 
     @property
     def where(self) -> str:
-        """``path:line``, the path relative to the repository when inside it."""
-        path = self.path.relative_to(ROOT) if self.path.is_relative_to(ROOT) else self.path
-        return f"{path}:{self.line}"
+        return f"{shown(self.path)}:{self.line}"
+
+
+def shown(path: Path) -> Path:
+    """``path`` relative to the repository when inside it."""
+    return path.relative_to(ROOT) if path.is_relative_to(ROOT) else path
 
 
 def share(part: int, whole: int, digits: int = 0) -> str:
@@ -106,14 +109,37 @@ def findings_numbers(count: int = 100_000, seed: int = 2009) -> dict[str, str]:
     return numbers
 
 
-def table3_numbers() -> dict[str, str]:
-    """``impact-harness paper``: how many of Table 3's printed cells reproduce."""
-    from harness.report.table3 import reproduce_table3
+def signed(value: float, decimals: int) -> str:
+    """``value`` with ``decimals`` decimals and a typographic minus, as the docs print it."""
+    return f"{value:.{decimals}f}".replace("-", "−")
 
-    cells = [c for row in reproduce_table3() for c in row["cells"]]
+
+def table3_numbers() -> dict[str, str]:
+    """``impact-harness paper``: how many of Table 3's printed cells reproduce; each cell's
+    computed value as the report prints it (``LAW.ROW.CELL``, and ``…​.3`` to 3 decimals);
+    the exact Stronge law's Δu and ΔE on the Stronge rows (``exact-stronge.ROW.CELL``); the
+    distance of the printed Stronge Δu from the reachable ones and the nearest ``e_i``."""
+    from harness.report.table3 import computed_cells, printed_du_residual, reproduce_table3
+
+    rows = reproduce_table3()
+    cells = [c for row in rows for c in row["cells"]]
     reproduced = sum(c.reproduced for c in cells)
-    return {"printed": str(len(cells)), "reproduced": str(reproduced),
-            "missed": str(len(cells) - reproduced)}
+    numbers = {"printed": str(len(cells)), "reproduced": str(reproduced),
+               "missed": str(len(cells) - reproduced)}
+    for c in cells:
+        numbers[f"{c.law}.{c.row}.{c.name}"] = signed(c.computed, max(c.decimals, 1) + 1)
+        numbers[f"{c.law}.{c.row}.{c.name}.3"] = signed(c.computed, 3)
+    for row in rows:
+        if row["law"] != "stronge":
+            continue
+        exact = computed_cells(row["solutions"]["stronge"])
+        for name in ("du1", "du3", "du4", "du6", "dE"):
+            numbers[f"exact-stronge.{row['index']}.{name}"] = signed(exact[name], 4)
+        distance, nearest_e = printed_du_residual(row["row"])
+        numbers[f"stronge.{row['index']}.du-distance"] = signed(distance, 3)
+        numbers[f"stronge.{row['index']}.du-distance.1"] = signed(distance, 1)
+        numbers[f"stronge.{row['index']}.du-nearest-e"] = signed(nearest_e, 3)
+    return numbers
 
 
 TWO_CONTACT_PROBLEMS, TWO_CONTACT_SEED = 200, 0
@@ -273,8 +299,8 @@ def stated_in(path: Path) -> list[Stated]:
     for marker in ANY_MARKER.finditer(text):
         if not any(start <= marker.start() < end for start, end in spans):
             line = text.count("\n", 0, marker.start()) + 1
-            raise ValueError(f"{path}:{line}: a 'stated' marker without a number right before "
-                             f"it (or a block without its end): {marker.group()}")
+            raise ValueError(f"{shown(path)}:{line}: a 'stated' marker without a number right "
+                             f"before it (or a block without its end): {marker.group()}")
     return sorted(found, key=lambda s: s.line)
 
 
