@@ -254,6 +254,70 @@ def library_numbers_of(records: Iterable, scenarios: int) -> dict[str, str]:
                "flagged": str(len(engine_runs) - single)}
     for reason, count in reason_counts([r.reasons for r in engine_runs]).items():
         numbers[f"reason.{reason.replace(' (law)', '-law')}"] = str(count)
+    numbers.update(flat_face_numbers(engine_runs))
+    return numbers
+
+
+FLAT_FACES = ("flat-box", "flat-box-slip", "flat-box-spin", "flat-rod")
+
+
+def short(value: float, digits: int = 2) -> str:
+    """``value`` to ``digits`` significant digits as the docs write it: ``0.17``, and below
+    0.01 with an exponent, ``2.4e-3`` and ``6e-6``."""
+    if abs(value) >= 0.01:
+        return f"{value:.{digits}g}"
+    mantissa, _, exponent = f"{value:.{digits - 1}e}".partition("e")
+    return f"{mantissa}e{int(exponent)}"
+
+
+def flat_face_numbers(engine_runs) -> dict[str, str]:
+    """docs/multi-contact.md, 'Engines on a flat face': the engines' departures from their
+    primary reference on the library's flat faces and on the tilt sweep of the box
+    (``flat.…`` and ``tilt.…`` keys)."""
+
+    def departures(scenarios, engine, preset, keep=lambda run: True, reference=None):
+        values = []
+        for run in engine_runs:
+            if not (run.scenario in scenarios and run.source == engine
+                    and run.preset == preset and keep(run)):
+                continue
+            summary = (run.diagnostics or {}).get("reference") or {}
+            values.append(summary["departure_from_primary"] if reference is None
+                          else min(value for name, value in summary["departure"].items()
+                                   if name.startswith(reference)))
+        return values
+
+    numbers = {}
+    pymunk = departures(FLAT_FACES, "pymunk", "defaults")
+    numbers["flat.pymunk-defaults.max"] = short(max(pymunk), 1)
+    pybullet = departures(FLAT_FACES, "pybullet", "accurate")
+    numbers["flat.pybullet-accurate.min"] = f"{min(pybullet):.2f}"
+    numbers["flat.pybullet-accurate.max"] = f"{max(pybullet):.2f}"
+    numbers["flat.mujoco-accurate.flat-box"] = short(
+        departures(FLAT_FACES[:1], "mujoco", "accurate")[0])
+    turning = departures(FLAT_FACES[1:], "mujoco", "accurate")
+    numbers["flat.mujoco-accurate.min"] = f"{min(turning):.2f}"
+    numbers["flat.mujoco-accurate.max"] = f"{max(turning):.2f}"
+    several = ("flat-box-several-poisson",)
+    numbers["flat.several-poisson.pymunk"] = short(
+        max(departures(several, "pymunk", "accurate")))
+    numbers["flat.several-poisson.pymunk-sequential"] = short(
+        max(departures(several, "pymunk", "accurate", reference="sequential/")))
+    tilt = ("sweep-tilted-box",)
+
+    def up_to(degrees):
+        return lambda run: float(run.point["value"]) <= degrees
+
+    def at(degrees):
+        return lambda run: float(run.point["value"]) == degrees
+
+    followed = departures(tilt, "pymunk", "accurate", up_to(1.0))
+    numbers["tilt.pymunk.min"] = short(min(followed), 1)
+    numbers["tilt.pymunk.max"] = short(max(followed), 1)
+    numbers["tilt.pymunk.flat-answer"] = short(
+        departures(tilt, "pymunk", "accurate", at(0.01), "at-pose/newton-coulomb")[0])
+    numbers["tilt.pybullet-accurate.below-0.3"] = short(
+        max(departures(tilt, "pybullet", "accurate", lambda run: float(run.point["value"]) < 0.3)))
     return numbers
 
 
