@@ -255,6 +255,21 @@ def library_numbers_of(records: Iterable, scenarios: int) -> dict[str, str]:
     for reason, count in reason_counts([r.reasons for r in engine_runs]).items():
         numbers[f"reason.{reason.replace(' (law)', '-law')}"] = str(count)
     numbers.update(flat_face_numbers(engine_runs))
+    numbers.update(departure_numbers(engine_runs))
+    return numbers
+
+
+def departure_numbers(engine_runs) -> dict[str, str]:
+    """Every single impact's departure from each law on the scenarios of one point, as the
+    report prints it: ``departure.SCENARIO.ENGINE.PRESET.LAW`` (``28.9%``)."""
+    from harness.report.views import fmt_departure
+
+    numbers = {}
+    for run in engine_runs:
+        if run.ok and not run.point.get("label") and run.departure:
+            for law, value in run.departure.items():
+                key = f"departure.{run.scenario}.{run.source}.{run.preset}.{law}"
+                numbers[key] = fmt_departure(value)
     return numbers
 
 
