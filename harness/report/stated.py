@@ -200,6 +200,22 @@ def flat_landing_numbers() -> dict[str, str]:
     return numbers
 
 
+def flat_scene_numbers() -> dict[str, str]:
+    """The coherent solutions of the library's two flat scenes kept from the random landings
+    (``NAME.LAW.READING``), as the runner's references count them."""
+    from harness.run.references import point_reference
+    from harness.scenarios import load_scenario
+
+    numbers = {}
+    for name in ("flat-box", "flat-box-several-poisson"):
+        reference = point_reference(load_scenario(ROOT / "scenarios" / f"{name}.toml"), None)
+        for key, count in reference["solutions"].items():
+            parts = key.split("/")
+            if parts[0] == "coherent":
+                numbers[f"{name}.{parts[1]}.{parts[2]}"] = str(count)
+    return numbers
+
+
 MUJOCO_GAIN_SAMPLES, MUJOCO_GAIN_SEED = 200, 0
 MUJOCO_GAIN_POPULATIONS = ("populations/rod-ground.toml", "populations/box-corner.toml")
 
@@ -351,6 +367,9 @@ SOURCES: dict[str, Source] = {
                            f"{TWO_CONTACT_SEED}", two_contact_numbers),
     "flat-landings": Source(f"python -m harness.reference.flat_faces {FLAT_LANDINGS} "
                             f"{FLAT_SEED}", flat_landing_numbers),
+    "flat-scenes": Source("impact-harness run scenarios/flat-box.toml "
+                          "scenarios/flat-box-several-poisson.toml --json R (the references "
+                          "of each point in R's scenario info)", flat_scene_numbers),
     "mujoco-gain": Source("impact-harness survey " + " ".join(MUJOCO_GAIN_POPULATIONS)
                           + f" --samples {MUJOCO_GAIN_SAMPLES} --engines mujoco "
                           "--preset defaults,accurate", mujoco_gain_numbers),
