@@ -43,7 +43,7 @@ of 1,000<!-- stated findings.count -->.
 
 
 def test_check_finds_a_stale_number_and_write_replaces_only_the_marked_ones(tmp_path):
-    path = tmp_path / "text.md"
+    path = tmp_path / "marked.txt"
     path.write_text(TEXT)
     found = stated.stated_in(path)
     assert [(s.key, s.value, s.block) for s in found] == [
@@ -71,9 +71,9 @@ def test_a_key_the_source_does_not_give_is_reported():
 @pytest.mark.parametrize("text", ["in 2.25% <!-- stated findings.share -->",
                                   "<!-- begin stated findings.table -->\n| a |\n"])
 def test_a_marker_without_its_number_or_its_end_is_refused(tmp_path, text):
-    path = tmp_path / "text.md"
+    path = tmp_path / "marked.txt"
     path.write_text(text)
-    with pytest.raises(ValueError, match="text.md:1: a 'stated' marker"):
+    with pytest.raises(ValueError, match="marked.txt:1: a 'stated' marker"):
         stated.stated_in(path)
 
 
