@@ -96,7 +96,7 @@ def out_problem(out) -> str | None:
 
 def main(argv: list[str] | None = None) -> int:
     # Nothing the command runs renders: MuJoCo then skips loading its OpenGL context (glfw,
-    # ~80 ms of every command that loads the engines). A value the user set is kept.
+    # a start-up cost every command that loads the engines would pay). A value the user set is kept.
     os.environ.setdefault("MUJOCO_GL", "disable")
     argv = list(sys.argv[1:] if argv is None else argv)
     command = next((arg for arg in argv if not arg.startswith("-")), None)

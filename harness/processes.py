@@ -38,9 +38,9 @@ def one_blas_thread() -> None:
     workers call it too.
 
     Each worker is one of ``workers`` processes sharing the cores; a BLAS's own threads
-    fight the other workers for them: measured on the 2-core machine, 141 several-contact
-    references (many small linear-algebra calls) took 6.7 s on two workers as on one, 3.4 s
-    with one BLAS thread each.
+    fight the other workers for them: several-contact references (many small linear-algebra
+    calls) once ran no faster on two workers than on one, and twice as fast with one BLAS
+    thread each.
     """
     if multiprocessing.parent_process() is None:
         return

@@ -332,7 +332,7 @@ def worker_speedup(quick: bool) -> dict:
     from harness.run.executor import run_tasks
 
     engine_name = None
-    # MuJoCo first: ~0.8 ms an impact, so the batch is compute, not pickling or start-up
+    # MuJoCo first: the slowest per impact, so the batch is compute, not pickling or start-up
     for name in ("mujoco", "pybullet", "pymunk"):
         try:
             load_engine(name)

@@ -173,8 +173,8 @@ CLIPPED_NOTE = ("Box2D clipped a velocity (b2_maxTranslation 2 m or b2_maxRotati
 
 
 # ---------------------------------------------------------------------- reading Box2D's state
-# pybox2d makes a Python wrapper object for every struct a getter returns (~1 µs each, about
-# ten per contact and step), which cost the readout far more than Box2D's step. So the
+# pybox2d makes a Python wrapper object for every struct a getter returns (about ten per
+# contact and step), which cost the readout far more than Box2D's step. So the
 # per-step readout reads Box2D's own structs at their addresses instead, one unpack each:
 # b2Body (transform, sweep angle, velocities, contact list), b2ContactEdge and b2Contact with
 # its b2Manifold, in the layouts of Box2D 2.3 as pybox2d 2.3.10 compiles them (64-bit).
@@ -534,7 +534,7 @@ def _add_impact(world, scene: Scene, length: float, skin: float, extent: float, 
     :func:`_place` to move), the fixtures with the pair's ``(e, μ)`` (None: Box2D's
     defaults, for :meth:`_World.configure` to set) in collision group ``group`` with mask
     0 (0: no group, every fixture collides). ``inertias``: the bodies' moments of inertia
-    in scene units when already known (a polygon's costs ~0.1 ms); None: the scene's.
+    in scene units when already known (a polygon's is computed); None: the scene's.
     ``definitions``: the :class:`_Definitions` to fill (None: new ones).
 
     Every fixture's userData is ``(padding, radius, body)``: how far it pads the scene's

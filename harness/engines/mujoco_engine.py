@@ -323,7 +323,7 @@ def _model_xml(scene: Scene) -> str:
 # volumes come from the compiler's own arithmetic (qhull, volume integrals).
 _EDITABLE_KINDS = frozenset(("disk", "rod", "box"))
 # Compiled models a polygon world keeps (least recently used dropped first), ~120 kB each.
-# A compile costs ~0.5 ms, mostly the bindings' wrapper of the new model; a survey part
+# A compile is costly (mostly the bindings' wrapper of the new model); a survey part
 # (at most 125 samples per family with two workers, harness/survey/parts.py) runs the same
 # polygons under each preset in turn, so the second preset finds them all compiled.
 _MAX_COMPILED = 128
@@ -628,7 +628,7 @@ def _contact_rows(world: _Model, contact) -> None:
     MuJoCo puts the contacts at the start of the data's arena (``mj_collision``; the arena
     is allocated with the data and ``mj_resetData`` points the contacts at its start), one
     fixed address for the data's life, and the bindings make new arrays of them at every
-    read (~10 µs with the address check); a view over every slot the arena can hold, read
+    read (with the address check); a view over every slot the arena can hold, read
     up to ``ncon``, costs one read per step. Made at the data's first contact (the fields'
     order checked) and kept by data (a polygon world's datas take turns).
     """
@@ -668,7 +668,7 @@ def _force_view(world: _Model, count: int, rows: int):
     return view
 
 
-# Per-run constants computed once: the solve for ζ costs ~10 µs, pure in its arguments.
+# Per-run constants computed once: the solve for ζ is a root search, pure in its arguments.
 @functools.lru_cache(maxsize=256)
 def _restitution_terms(restitution: float, time_step: float, contact_steps: float) -> tuple:
     """``(solref, ζ, restitution of ζ)`` of :func:`restitution_solref`."""

@@ -225,7 +225,7 @@ def _planar_multibody(client: int, body, collision: int, offset: float = 0.0,
     """The body's planar chain, its last link of shape ``collision``, its base at ``offset``
     along the engine's y (out of the plane); ``pair_values``: its (e, μ), if given."""
     mass, inertia = float(body.mass), float(body.moment_of_inertia)
-    # Positional (pybullet's order; keywords cost ~0.2 µs each): baseMass,
+    # Positional (pybullet's order; each keyword costs a lookup): baseMass,
     # baseCollisionShapeIndex, baseVisualShapeIndex, basePosition, baseOrientation,
     # baseInertialFramePosition, baseInertialFrameOrientation (their defaults), then the
     # links' masses, collision and visual shapes, positions, orientations, inertial frame
@@ -348,8 +348,8 @@ def _read_joints(world: _World) -> tuple:
 
 def _set_joints(client: int, bodies, joints) -> None:
     """Every body's joint positions and rates (``_prepare``'s form), one call per body:
-    the first reset of a new body's joints costs ~70 µs a call where a plane is in the
-    world (~20 µs for all three joints at once)."""
+    the first reset of a new body's joints is costly per call where a plane is in the
+    world, so all three joints go in one call."""
     for uid, (x, v_x, z, v_z, angle, rate) in zip(bodies, joints):
         # Lists: pybullet 3.2.7 crashes (segmentation fault) on tuples of values here.
         _reset_joints(uid, _JOINTS, [[x], [z], [angle]], [[v_x], [v_z], [rate]],
@@ -397,7 +397,7 @@ def _connect() -> int:
     """A new DIRECT client without its renderer plugin.
 
     pybullet's built-in TinyRenderer makes a visual mesh of every new link from its
-    collision shape (a sphere's costs ~270 µs of a ~430 µs ``createMultiBody``); nothing
+    collision shape (for a sphere, most of a ``createMultiBody`` call); nothing
     here renders. Plugins touch no physics (the bit-identity tests pin the runs).
     """
     client = p.connect(p.DIRECT)
@@ -436,8 +436,8 @@ def _slice_offsets(sizes: list[float], gap: float) -> list[float]:
 
     Bullet's broad phase keeps a bounding-volume tree that it does not rebalance as leaves
     are added or moved: slices made in order along a line make it a chain, and every body
-    made, first moved (its start state) or removed then walks it (measured: ~0.3 µs per
-    body already in the client, each). Made in bit-reversed order, each new body splits
+    made, first moved (its start state) or removed then walks it (a cost that grows with
+    every body already in the client). Made in bit-reversed order, each new body splits
     the longest gap so far, and the tree stays shallow.
     """
     count = len(sizes)

@@ -75,7 +75,8 @@ _DEFAULTS = {
 PRESETS: dict[str, dict] = {
     "defaults": dict(_DEFAULTS),
     # Coupled contacts (the rod) need >= 20 iterations; 100 reaches rounding on every test
-    # scene at ~0.1 µs per extra iteration. Slop and bias move positions only.
+    # scene, and an extra iteration costs little beside a run's fixed
+    # cost (`impact-harness bench --engines` measures it). Slop and bias move positions only.
     "accurate": dict(_DEFAULTS, iterations=100),
 }
 
@@ -324,12 +325,13 @@ class PymunkEngine(Engine):
         (the tests compare them bit for bit).
 
         The bodies and shapes are Chipmunk's own (the C calls of pymunk's constructors and
-        setters, in the same order, without their wrappers: ~20 µs an impact saved); the
+        setters, in the same order, without their wrappers, which cost more than the
+        impact's stepping); the
         batch owns them and :meth:`_release_many` frees them.
         """
         space_values, _, _, dt = plans[0].prepared  # one settings dict for every plan
-        # The last batch's space, empty again: a new space costs ~1 µs an impact (its pools
-        # are allocated and zeroed anew). Bodies and shapes are added in the same order,
+        # The last batch's space, empty again: a new space would allocate and zero its pools
+        # anew for every batch. Bodies and shapes are added in the same order,
         # so each impact's arithmetic is the same (the tests compare runs bit for bit).
         holder, self._batch_space = self._batch_space or _BatchSpace(), None
         space = holder.space

@@ -9,7 +9,7 @@ counted (0, 1, 2+ clearly coherent; at the boundary apart), and the first scene 
 is kept as an example: this is how the library's flat-box-receding-end was found.
 docs/multi-contact.md, 'Counting on flat landings', has the numbers::
 
-    PYTHONPATH=src:. python -m harness.reference.flat_faces 1000 0
+    PYTHONPATH=src:. python -m harness.reference.flat_faces 200 0
 """
 
 from __future__ import annotations

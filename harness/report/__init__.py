@@ -334,7 +334,8 @@ def _draw_pending(index: int) -> str | None:
 
 def _warm_matplotlib() -> None:
     """Import what the figures draw with and load the font, once here rather than in every
-    forked worker, which inherit them (~0.5 s of CPU per worker)."""
+    forked worker, which inherit them (loading them is a large part of a worker's CPU
+    otherwise)."""
     import matplotlib
 
     matplotlib.use("Agg")

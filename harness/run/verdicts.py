@@ -695,7 +695,8 @@ def judge_many(scenes: Sequence, problems: Sequence, runs: Sequence, u_after: np
     engine_impulse = np.full((count, 2), np.nan)
     impulse_checked = np.zeros(count, dtype=bool)
     run_caps = np.full((count, 2), np.nan)
-    # gathered in lists and written at once (an array's item assignment costs ~1 µs)
+    # gathered in lists and written at once (an array's item assignment is a slow
+    # Python call each)
     impulse_rows, impulses, cap_rows, caps_found = [], [], [], []
     for row, run in enumerate(runs):
         if run.normal_impulse is not None and run.impulse_source != "momentum":

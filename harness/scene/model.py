@@ -111,8 +111,9 @@ class Polygon:
     def inertia_per_mass(self) -> float:
         """Uniform-density polygon about the body origin (its centre of mass), per unit mass.
 
-        Worked out once per polygon (~20 µs of numpy on a few points; every engine, preset
-        and check asks for it) and kept on the instance, outside the dataclass fields.
+        Worked out once per polygon (numpy on a few points, whose fixed cost per call
+        dominates; every engine, preset and check asks for it) and kept on the instance,
+        outside the dataclass fields.
         """
         known = self.__dict__.get("_inertia_per_mass")
         if known is not None:

@@ -139,8 +139,10 @@ def _times(out: Path) -> dict[str, int]:
 
 
 def test_a_changed_record_redraws_its_figures_and_the_headline_only(results_file, tmp_path):
+    """Which PNGs are drawn again; a scenario's figures without their SVG twins (when a
+    twin is drawn with its PNG: test_scale.py and test_table3.py)."""
     out = tmp_path / "report"
-    report.write_report(read_results(results_file), out, workers=1)
+    report.write_report(read_results(results_file), out, workers=1, svg="headline")
     drawn = _times(out)
     first, second = read_results(results_file).scenario_names()
     assert {"heatmap.png", f"impulse-{slug(first)}.png",
@@ -153,7 +155,7 @@ def test_a_changed_record_redraws_its_figures_and_the_headline_only(results_file
             (item["diagnostics"] or {})["engine_wall_time_s"] = 4.5
 
     retimed = _rewrite(results_file, tmp_path / "retimed.json", new_times)
-    report.write_report(read_results(retimed), out, workers=1)
+    report.write_report(read_results(retimed), out, workers=1, svg="headline")
     assert _times(out) == drawn  # only times changed: nothing redrawn
 
     nudged = _rewrite(retimed, tmp_path / "nudged.json",
@@ -166,7 +168,7 @@ def test_a_changed_record_redraws_its_figures_and_the_headline_only(results_file
             item["status"] = "flagged"
 
     changed = _rewrite(retimed, tmp_path / "changed.json", decides_otherwise)
-    report.write_report(read_results(changed), out, workers=1)
+    report.write_report(read_results(changed), out, workers=1, svg="headline")
     after = _times(out)
     redrawn = {name for name in drawn if after[name] != drawn[name]}
     assert {"heatmap.png", f"impulse-{slug(first)}.png"} <= redrawn

@@ -11,7 +11,7 @@ from harness import report
 from harness.report import figures as figures_module
 from harness.report.views import engine_scenarios, slug
 from harness.run import runner
-from harness.run.records import read_results, write_results
+from harness.run.records import Results, read_results, write_results
 from harness.scenarios import load_scenarios
 
 
@@ -68,13 +68,28 @@ def small_results(tmp_path_factory):
     return read_results(path)
 
 
-@pytest.fixture()
-def aggregated(small_results, tmp_path, monkeypatch):
-    """A report of "many" scenarios: the threshold lowered below the quick set's size."""
-    monkeypatch.setattr(report, "MANY_SCENARIOS", 2)
-    written = report.write_report(small_results, tmp_path, workers=2,
-                                  figures_for=[small_results.scenario_names()[0]])
-    return small_results, tmp_path, written
+@pytest.fixture(scope="module")
+def few_results(small_results):
+    """Two scenarios of ``small_results``, one sweep and one not: a report of few scenarios
+    draws every figure of each, so the tests of such a report draw these two only."""
+    names = small_results.scenario_names()
+    sweep = next(n for n in names if small_results.scenarios.get(n, {}).get("sweep"))
+    single = next(n for n in names if n != sweep)
+    return Results([r for r in small_results.records if r.scenario in (single, sweep)],
+                   small_results.provenance,
+                   {n: small_results.scenarios[n] for n in (single, sweep)})
+
+
+@pytest.fixture(scope="module")
+def aggregated(small_results, tmp_path_factory):
+    """A report of "many" scenarios (the threshold lowered below the quick set's size),
+    written once for the tests that read it."""
+    out = tmp_path_factory.mktemp("aggregated")
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(report, "MANY_SCENARIOS", 2)
+        written = report.write_report(small_results, out, workers=2,
+                                      figures_for=[small_results.scenario_names()[0]])
+    return small_results, out, written
 
 
 def test_the_key_of_the_impulse_diagrams_is_drawn_only_with_one(small_results):
@@ -145,8 +160,8 @@ def test_many_scenarios_page_is_folded_per_tag_and_images_load_lazily(aggregated
         assert (out / href).is_file(), href
 
 
-def test_few_scenarios_keep_one_heat_map_every_figure_and_every_svg(small_results, tmp_path):
-    written = report.write_report(small_results, tmp_path, workers=2)
+def test_few_scenarios_keep_one_heat_map_every_figure_and_every_svg(few_results, tmp_path):
+    written = report.write_report(few_results, tmp_path, workers=2)
     names = {p.name for p in written["figures"]}
     assert "heatmap.png" in names and not any(n.startswith("heatmap-") for n in names)
     assert any(n.startswith("sweep-") for n in names)
@@ -155,15 +170,26 @@ def test_few_scenarios_keep_one_heat_map_every_figure_and_every_svg(small_result
     assert "<details class='group'>" not in page
 
 
-def test_a_figure_with_nothing_to_show_leaves_the_page_built_while_drawing(small_results,
+def test_a_figure_with_nothing_to_show_leaves_the_page_built_while_drawing(few_results,
                                                                           tmp_path, monkeypatch):
     """The page is built while the pool draws, assuming every figure has something to
-    show; one that has not (here the split) is missing from it as from a page built after."""
+    show; one that has not (here the split) is missing from it as from a page built after
+    the figures (one process). The thing tested is the page, not the figures: no
+    scenario's figure is asked for, and the other headline figures are stand-in files."""
+
+    def stand_in(path, tag):
+        path.write_bytes(b"a figure")
+        return path
+
     monkeypatch.setattr(report, "split_figure", lambda rows, path, tag: None)
+    monkeypatch.setattr(report, "heatmap_figure",
+                        lambda results, path, tag, groups: stand_in(path, tag))
+    monkeypatch.setattr(report, "table3_figure", stand_in)
     pages = {}
     for workers in (1, 2):
         out = tmp_path / f"workers-{workers}"
-        written = report.write_report(small_results, out, workers=workers)
+        written = report.write_report(few_results, out, workers=workers,
+                                      scenario_figures="none")
         assert out / "figures" / "split.png" not in written["figures"]
         assert out / "figures" / "heatmap.png" in written["figures"]
         pages[workers] = re.sub(r"Report generated [^<]*", "",

@@ -17,7 +17,7 @@ import pytest
 
 from harness import report
 from harness.engines import EngineNotInstalled
-from harness.report.survey import read_columns
+from harness.report.survey import read_columns, survey_section
 from harness.report.views import fmt_departure
 from harness.run import runner, suite
 from harness.run.records import read_results, write_results
@@ -200,15 +200,14 @@ def test_no_survey_no_section_and_its_figures_go(surveyed, results_path, tmp_pat
     assert not list((copy / "figures").glob("survey-*"))  # the report wrote them: removed
 
 
-def test_a_survey_without_engine_runs_has_a_section_without_table(results_path, tmp_path):
+def test_a_survey_without_engine_runs_has_a_section_without_table(tmp_path):
+    """The section itself (the page places it, test_the_table_is_the_surveys_statistics)."""
     survey = survey_cli.run_survey(resolve_populations(["spinning-disk"]), 2, 0, [],
                                    ["defaults"], workers=1, echo=lambda _: None)
     survey_cli.write_survey(survey, tmp_path / "survey",
                             {"samples": 2, "seed": 0, "engines": [], "presets": ["defaults"]},
                             figures=False)
-    written = report.write_report(read_results(results_path), tmp_path, workers=1,
-                                  scenario_figures="none")
-    section = section_of(written["html"].read_text(encoding="utf-8"))
+    section = survey_section(tmp_path / "survey", {})
     assert "No engine ran in this survey" in section and "<table" not in section
     assert "not selected" in section  # every engine, none asked for
 
@@ -298,7 +297,7 @@ def test_a_settings_file_that_is_not_an_object_reruns_the_survey(tmp_path, monke
     assert suite.quick_survey(args, out)[1] is True  # not a crash: surveyed again
 
 
-def test_a_survey_without_engines_removes_an_earlier_surveys_tables(results_path, tmp_path):
+def test_a_survey_without_engines_removes_an_earlier_surveys_tables(tmp_path):
     out = tmp_path / "survey"
     for engines in (["pymunk"], []):
         survey = survey_cli.run_survey(resolve_populations(["spinning-disk"]), 2, 0, engines,
@@ -306,6 +305,4 @@ def test_a_survey_without_engines_removes_an_earlier_surveys_tables(results_path
         survey_cli.write_survey(survey, out, {"samples": 2, "seed": 0, "engines": engines,
                                               "presets": ["accurate"]}, figures=False)
         assert (out / "statistics.parquet").exists() == bool(engines)
-    written = report.write_report(read_results(results_path), tmp_path, workers=1,
-                                  scenario_figures="none")
-    assert "<table" not in section_of(written["html"].read_text(encoding="utf-8"))
+    assert "<table" not in survey_section(out, {})

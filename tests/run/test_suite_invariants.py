@@ -113,3 +113,17 @@ def test_every_engine_case_of_the_library_has_a_record(runs):
         if scenario.analytic_only:
             assert not any(r.scenario == scenario.name and r.source != ANALYTIC
                            for r in runs[0]), "analytic-only systems never start an engine"
+
+
+def test_the_counts_the_readme_states_are_those_of_this_run(runs):
+    """The validation suite's counts stated in README.md (source ``library`` of
+    harness.report.stated: engine runs, single impacts, runs per verdict reason) equal this
+    fresh run's; on a failure, ``make validate`` then ``impact-harness findings --write
+    --only library`` rewrites them from reports/results.json."""
+    from harness.report import stated
+
+    numbers = {f"library.{key}": value
+               for key, value in stated.library_numbers_of(runs[0], len(SCENARIOS)).items()}
+    marked = [s for path in stated.texts() for s in stated.stated_in(path)
+              if s.source == "library"]
+    assert marked and stated.differences(marked, numbers) == []

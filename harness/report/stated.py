@@ -1,0 +1,473 @@
+"""Numbers the README and ``docs/`` state about results, each produced by a named command.
+
+A stated number is marked in the Markdown so that it can be found, regenerated and compared:
+
+* inline, an HTML comment right after the number (no space between them), naming the source
+  and the key: ``67<!-- stated table3.reproduced -->``. The number is the run of digits
+  (with a sign, ``,`` ``.``, an exponent and a trailing ``%``) that ends where the comment
+  begins;
+* a generated block (a whole table) between two comments on lines of their own::
+
+      <!-- begin stated flat-landings.table -->
+      ...
+      <!-- end stated -->
+
+Each source (:data:`SOURCES`) names the command a reader runs to get the same numbers and
+computes them as ``{key: text}``. ``impact-harness findings --check`` recomputes every source
+the text marks and lists each stated number that differs (exit 1);
+``impact-harness findings --write`` rewrites them in place. ``tests/report/test_stated.py``
+runs the check, so a number cannot go stale silently: a change to the code that moves it
+fails the tests until ``--write`` is run and the change reviewed.
+
+The ``library`` source counts the engine runs of the validation suite; it is read from a
+results file (``reports/results.json``, written by ``make validate``), and its test compares
+the text with a fresh run of the library (tests/run/test_suite_invariants.py).
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+# The texts that state results (paths relative to the repository root).
+TEXTS = ("README.md", "docs/*.md", "scenarios/README.md")
+
+_NUMBER = r"[-+−]?\d[\d,.]*(?:e[-−]?\d+)?%?"
+_KEY = r"[A-Za-z0-9][A-Za-z0-9_.+-]*"
+INLINE = re.compile(rf"(?P<value>{_NUMBER})<!-- stated (?P<key>{_KEY}) -->")
+BLOCK = re.compile(rf"^<!-- begin stated (?P<key>{_KEY}) -->\n(?P<value>.*?)^<!-- end stated -->$",
+                   re.M | re.S)
+ANY_MARKER = re.compile(r"<!-- (?:begin |end )?stated\b[^>]*-->")
+
+
+@dataclass(frozen=True)
+class Source:
+    """Where a group of stated numbers comes from: the command a reader runs, and the
+    function that computes them (``{key: text}``, keys without the source's prefix)."""
+
+    command: str
+    compute: Callable[[], dict[str, str]]
+
+
+@dataclass(frozen=True)
+class Stated:
+    """One marked number (or block) in a text."""
+
+    path: Path
+    line: int
+    key: str  # "source.key"
+    value: str
+    block: bool
+
+    @property
+    def source(self) -> str:
+        return self.key.split(".", 1)[0]
+
+    @property
+    def where(self) -> str:
+        return f"{shown(self.path)}:{self.line}"
+
+
+def shown(path: Path) -> Path:
+    """``path`` relative to the repository when inside it."""
+    return path.relative_to(ROOT) if path.is_relative_to(ROOT) else path
+
+
+def share(part: int, whole: int, digits: int = 0) -> str:
+    """``part/whole`` as a percentage with ``digits`` decimals."""
+    return f"{100.0 * part / whole:.{digits}f}%"
+
+
+def findings_numbers(count: int = 100_000, seed: int = 2009) -> dict[str, str]:
+    """``impact-harness findings``: the solver findings of the README."""
+    from harness.report import findings
+
+    measured = findings.measure(count, seed)
+    numbers = {"count": f"{count:,}"}
+    bins = measured["pgs_bins"]
+    above = [b for b in bins if b["low"] >= 1.0]
+    below = [b for b in bins if b["high"] <= 0.9]
+    edge = [b for b in bins if b["low"] == 0.9]
+    numbers["pgs.above"] = f"{sum(b['problems'] for b in above):,}"
+    numbers["pgs.above-failed"] = f"{sum(b['failed'] for b in above):,}"
+    numbers["pgs.below"] = f"{sum(b['problems'] for b in below):,}"
+    numbers["pgs.below-failed"] = f"{sum(b['failed'] for b in below):,}"
+    numbers["pgs.edge"] = f"{sum(b['problems'] for b in edge):,}"
+    numbers["pgs.edge-failed"] = f"{sum(b['failed'] for b in edge):,}"
+    jump = measured["jump"]
+    numbers["jump.problems"] = f"{jump['problems']:,}"
+    numbers["jump.share"] = share(jump["large"], jump["problems"], 1)
+    numbers["jump.median-e-below"] = f"{jump['median_e_below']:.3g}"
+    numbers["jump.median-jump"] = f"{jump['median_jump']:.0%}"
+    for law, counts in measured["energy"].items():
+        numbers[f"energy.{law}"] = share(counts["gained"], counts["solved"], 2)
+        numbers[f"energy.{law}.rounded"] = share(counts["gained"], counts["solved"], 0)
+        numbers[f"energy.{law}.gained"] = f"{counts['gained']:,}"
+    return numbers
+
+
+def signed(value: float, decimals: int) -> str:
+    """``value`` with ``decimals`` decimals and a typographic minus, as the docs print it."""
+    return f"{value:.{decimals}f}".replace("-", "−")
+
+
+def table3_numbers() -> dict[str, str]:
+    """``impact-harness paper``: how many of Table 3's printed cells reproduce; each cell's
+    computed value as the report prints it (``LAW.ROW.CELL``, and ``…​.3`` to 3 decimals);
+    the exact Stronge law's Δu and ΔE on the Stronge rows (``exact-stronge.ROW.CELL``); the
+    distance of the printed Stronge Δu from the reachable ones and the nearest ``e_i``."""
+    from harness.report.table3 import computed_cells, printed_du_residual, reproduce_table3
+
+    rows = reproduce_table3()
+    cells = [c for row in rows for c in row["cells"]]
+    reproduced = sum(c.reproduced for c in cells)
+    numbers = {"printed": str(len(cells)), "reproduced": str(reproduced),
+               "missed": str(len(cells) - reproduced)}
+    for c in cells:
+        numbers[f"{c.law}.{c.row}.{c.name}"] = signed(c.computed, max(c.decimals, 1) + 1)
+        numbers[f"{c.law}.{c.row}.{c.name}.3"] = signed(c.computed, 3)
+    for row in rows:
+        if row["law"] != "stronge":
+            continue
+        exact = computed_cells(row["solutions"]["stronge"])
+        for name in ("du1", "du3", "du4", "du6", "dE"):
+            numbers[f"exact-stronge.{row['index']}.{name}"] = signed(exact[name], 4)
+        distance, nearest_e = printed_du_residual(row["row"])
+        numbers[f"stronge.{row['index']}.du-distance"] = signed(distance, 3)
+        numbers[f"stronge.{row['index']}.du-distance.1"] = signed(distance, 1)
+        numbers[f"stronge.{row['index']}.du-nearest-e"] = signed(nearest_e, 3)
+    return numbers
+
+
+TWO_CONTACT_PROBLEMS, TWO_CONTACT_SEED = 200, 0
+_COUNT_LAWS = (("poisson", "Poisson"), ("stronge-paper", "Stronge (paper)"), ("newton", "Newton"))
+
+
+def two_contact_numbers() -> dict[str, str]:
+    """``python -m planar_impact.simultaneous 200 0`` (the ``generic`` family): coherent
+    solutions of the paper's proposal under both readings, and Newton–Coulomb's."""
+    from planar_impact.simultaneous import coherent_count_distribution
+
+    problems = TWO_CONTACT_PROBLEMS
+    counts = {coupling: coherent_count_distribution(problems, TWO_CONTACT_SEED, "generic",
+                                                    coupling)
+              for coupling in ("effective", "none")}
+    numbers = {"problems": str(problems)}
+    rows = ["| reading | law | 0 solutions | 1 | 2+ | gains |", "|---|---|---:|---:|---:|---:|"]
+    for coupling, reading in (("effective", "effective"), ("none", "literal")):
+        for law, name in _COUNT_LAWS:
+            c = counts[coupling][law]
+            rows.append(f"| {reading} | {name} | {c['0']} | {c['1']} | {c['2+']} | "
+                        f"{c['gains']} |")
+            for bucket in ("0", "1", "2+", "gains"):
+                numbers[f"{reading}.{law}.{bucket}"] = str(c[bucket])
+            numbers[f"{reading}.{law}.0-share"] = share(c["0"], problems)
+    c = counts["effective"]["newton-coulomb"]
+    rows.append(f"| — | Newton–Coulomb | {c['0']} | {c['1']} | {c['2+']} | {c['gains']} |")
+    for bucket in ("0", "1", "2+", "gains"):
+        numbers[f"newton-coulomb.{bucket}"] = str(c[bucket])
+    numbers["table"] = "\n".join(rows)
+    return numbers
+
+
+FLAT_LANDINGS, FLAT_SEED = 200, 0
+
+
+def flat_landing_numbers() -> dict[str, str]:
+    """``python -m harness.reference.flat_faces 200 0``: coherent solutions on random flat
+    landings."""
+    from harness.reference.flat_faces import count_flat
+
+    counts, _ = count_flat(FLAT_LANDINGS, FLAT_SEED)
+    numbers = {"landings": str(FLAT_LANDINGS)}
+    rows = ["| law | reading | 0 | 1 | 2+ |", "|---|---|---:|---:|---:|"]
+    for law, name in _COUNT_LAWS:
+        for coupling, reading in (("effective", "effective"), ("none", "literal")):
+            c = counts[f"{law}/{coupling}"]
+            rows.append(f"| {name} | {reading} | {c['0']} | {c['1']} | {c['2+']} |")
+            for bucket in ("0", "1", "2+"):
+                numbers[f"{reading}.{law}.{bucket}"] = str(c[bucket])
+                numbers[f"{reading}.{law}.{bucket}-share"] = share(c[bucket], FLAT_LANDINGS)
+    c = counts["newton-coulomb"]
+    rows.append(f"| Newton–Coulomb | — | {c['0']} | {c['1']} | {c['2+']} |")
+    for bucket in ("0", "1", "2+"):
+        numbers[f"newton-coulomb.{bucket}"] = str(c[bucket])
+        numbers[f"newton-coulomb.{bucket}-share"] = share(c[bucket], FLAT_LANDINGS)
+    numbers["table"] = "\n".join(rows)
+    return numbers
+
+
+def flat_scene_numbers() -> dict[str, str]:
+    """The coherent solutions of the library's two flat scenes kept from the random landings
+    (``NAME.LAW.READING``), as the runner's references count them."""
+    from harness.run.references import point_reference
+    from harness.scenarios import load_scenario
+
+    numbers = {}
+    for name in ("flat-box", "flat-box-several-poisson"):
+        reference = point_reference(load_scenario(ROOT / "scenarios" / f"{name}.toml"), None)
+        for key, count in reference["solutions"].items():
+            parts = key.split("/")
+            if parts[0] == "coherent":
+                numbers[f"{name}.{parts[1]}.{parts[2]}"] = str(count)
+    return numbers
+
+
+MUJOCO_GAIN_SAMPLES, MUJOCO_GAIN_SEED = 200, 0
+MUJOCO_GAIN_POPULATIONS = ("populations/rod-ground.toml", "populations/box-corner.toml")
+
+
+def mujoco_gain_numbers() -> dict[str, str]:
+    """``impact-harness survey populations/rod-ground.toml populations/box-corner.toml
+    --samples 200 --engines mujoco --preset defaults,accurate``: how often MuJoCo's runs end
+    with more kinetic energy than they began with, per preset and family, and by how much."""
+    import numpy as np
+
+    from harness.survey import cli as survey_cli
+    from harness.survey.population import resolve_populations
+
+    survey = survey_cli.run_survey(
+        resolve_populations([str(ROOT / p) for p in MUJOCO_GAIN_POPULATIONS]),
+        MUJOCO_GAIN_SAMPLES, MUJOCO_GAIN_SEED, ["mujoco"], ["defaults", "accurate"],
+        workers=1, echo=lambda _: None)
+    runs = {key: np.asarray(values) for key, values in survey["runs"].items()}
+    numbers = {"samples": str(MUJOCO_GAIN_SAMPLES)}
+    for preset in ("defaults", "accurate"):
+        chosen = runs["preset"] == preset
+        gains = runs["gains_energy"][chosen].astype(bool)
+        numbers[f"{preset}.runs"] = str(int(chosen.sum()))
+        numbers[f"{preset}.gains"] = str(int(gains.sum()))
+        numbers[f"{preset}.share"] = share(int(gains.sum()), int(chosen.sum()), 1)
+        for family in sorted(set(runs["family"][chosen].tolist())):
+            member = runs["family"][chosen] == family
+            numbers[f"{preset}.{family}.share"] = share(int(gains[member].sum()),
+                                                       int(member.sum()), 1)
+        if gains.any():
+            change = runs["energy_change_relative"][chosen][gains]
+            numbers[f"{preset}.max-gain"] = f"+{change.max():.0%}"
+            numbers[f"{preset}.median-gain"] = f"+{np.median(change):.0%}"
+            numbers[f"{preset}.least-e"] = f"{runs['e'][chosen][gains].min():.2f}"
+    return numbers
+
+
+RESULTS = ROOT / "reports" / "results.json"
+
+
+def library_numbers_of(records: Iterable, scenarios: int) -> dict[str, str]:
+    """The validation suite's counts from its records: scenarios, records, engine runs,
+    single impacts and the runs per verdict reason (as ``summary.md`` counts them)."""
+    from harness.run.records import ANALYTIC
+    from harness.run.verdicts import reason_counts
+
+    records = list(records)
+    engine_runs = [r for r in records if r.source != ANALYTIC and not r.skipped]
+    single = sum(r.ok for r in engine_runs)
+    numbers = {"scenarios": str(scenarios), "records": f"{len(records):,}",
+               "engine-runs": str(len(engine_runs)), "single-impacts": str(single),
+               "flagged": str(len(engine_runs) - single)}
+    for reason, count in reason_counts([r.reasons for r in engine_runs]).items():
+        numbers[f"reason.{reason.replace(' (law)', '-law')}"] = str(count)
+    numbers.update(flat_face_numbers(engine_runs))
+    numbers.update(departure_numbers(engine_runs))
+    return numbers
+
+
+def departure_numbers(engine_runs) -> dict[str, str]:
+    """Every single impact's departure from each law on the scenarios of one point, as the
+    report prints it: ``departure.SCENARIO.ENGINE.PRESET.LAW`` (``28.9%``)."""
+    from harness.report.views import fmt_departure
+
+    numbers = {}
+    for run in engine_runs:
+        if run.ok and not run.point.get("label") and run.departure:
+            for law, value in run.departure.items():
+                key = f"departure.{run.scenario}.{run.source}.{run.preset}.{law}"
+                numbers[key] = fmt_departure(value)
+    return numbers
+
+
+FLAT_FACES = ("flat-box", "flat-box-slip", "flat-box-spin", "flat-rod")
+
+
+def short(value: float, digits: int = 2) -> str:
+    """``value`` to ``digits`` significant digits as the docs write it: ``0.17``, and below
+    0.01 with an exponent, ``2.4e-3`` and ``6e-6``."""
+    if abs(value) >= 0.01:
+        return f"{value:.{digits}g}"
+    mantissa, _, exponent = f"{value:.{digits - 1}e}".partition("e")
+    return f"{mantissa}e{int(exponent)}"
+
+
+def flat_face_numbers(engine_runs) -> dict[str, str]:
+    """docs/multi-contact.md, 'Engines on a flat face': the engines' departures from their
+    primary reference on the library's flat faces and on the tilt sweep of the box
+    (``flat.…`` and ``tilt.…`` keys)."""
+
+    def departures(scenarios, engine, preset, keep=lambda run: True, reference=None):
+        values = []
+        for run in engine_runs:
+            if not (run.scenario in scenarios and run.source == engine
+                    and run.preset == preset and keep(run)):
+                continue
+            summary = (run.diagnostics or {}).get("reference") or {}
+            values.append(summary["departure_from_primary"] if reference is None
+                          else min(value for name, value in summary["departure"].items()
+                                   if name.startswith(reference)))
+        return values
+
+    numbers = {}
+    pymunk = departures(FLAT_FACES, "pymunk", "defaults")
+    numbers["flat.pymunk-defaults.max"] = short(max(pymunk), 1)
+    pybullet = departures(FLAT_FACES, "pybullet", "accurate")
+    numbers["flat.pybullet-accurate.min"] = f"{min(pybullet):.2f}"
+    numbers["flat.pybullet-accurate.max"] = f"{max(pybullet):.2f}"
+    numbers["flat.mujoco-accurate.flat-box"] = short(
+        departures(FLAT_FACES[:1], "mujoco", "accurate")[0])
+    turning = departures(FLAT_FACES[1:], "mujoco", "accurate")
+    numbers["flat.mujoco-accurate.min"] = f"{min(turning):.2f}"
+    numbers["flat.mujoco-accurate.max"] = f"{max(turning):.2f}"
+    several = ("flat-box-several-poisson",)
+    numbers["flat.several-poisson.pymunk"] = short(
+        max(departures(several, "pymunk", "accurate")))
+    numbers["flat.several-poisson.pymunk-sequential"] = short(
+        max(departures(several, "pymunk", "accurate", reference="sequential/")))
+    tilt = ("sweep-tilted-box",)
+
+    def up_to(degrees):
+        return lambda run: float(run.point["value"]) <= degrees
+
+    def at(degrees):
+        return lambda run: float(run.point["value"]) == degrees
+
+    followed = departures(tilt, "pymunk", "accurate", up_to(1.0))
+    numbers["tilt.pymunk.min"] = short(min(followed), 1)
+    numbers["tilt.pymunk.max"] = short(max(followed), 1)
+    numbers["tilt.pymunk.flat-answer"] = short(
+        departures(tilt, "pymunk", "accurate", at(0.01), "at-pose/newton-coulomb")[0])
+    numbers["tilt.pybullet-accurate.below-0.3"] = short(
+        max(departures(tilt, "pybullet", "accurate", lambda run: float(run.point["value"]) < 0.3)))
+    return numbers
+
+
+def library_numbers(results: Path = RESULTS) -> dict[str, str]:
+    """``make validate``: the counts of its results file (``reports/results.json``)."""
+    from harness.run.records import read_results
+
+    records = read_results(results).records
+    return library_numbers_of(records, len({r.scenario for r in records}))
+
+
+SOURCES: dict[str, Source] = {
+    "findings": Source("impact-harness findings", findings_numbers),
+    "table3": Source("impact-harness paper", table3_numbers),
+    "two-contacts": Source(f"python -m planar_impact.simultaneous {TWO_CONTACT_PROBLEMS} "
+                           f"{TWO_CONTACT_SEED}", two_contact_numbers),
+    "flat-landings": Source(f"python -m harness.reference.flat_faces {FLAT_LANDINGS} "
+                            f"{FLAT_SEED}", flat_landing_numbers),
+    "flat-scenes": Source("impact-harness run scenarios/flat-box.toml "
+                          "scenarios/flat-box-several-poisson.toml --json R (the references "
+                          "of each point in R's scenario info)", flat_scene_numbers),
+    "mujoco-gain": Source("impact-harness survey " + " ".join(MUJOCO_GAIN_POPULATIONS)
+                          + f" --samples {MUJOCO_GAIN_SAMPLES} --engines mujoco "
+                          "--preset defaults,accurate", mujoco_gain_numbers),
+    "library": Source("make validate (reports/results.json)", library_numbers),
+}
+
+
+def texts(root: Path = ROOT) -> list[Path]:
+    """The files that state results."""
+    return sorted(path for pattern in TEXTS for path in root.glob(pattern))
+
+
+def stated_in(path: Path) -> list[Stated]:
+    """Every marked number and block of ``path``, in order. A marker that is not part of a
+    well-formed inline number or block raises ``ValueError`` naming the file and line."""
+    text = path.read_text(encoding="utf-8")
+    found = []
+    spans = []
+    for pattern, block in ((INLINE, False), (BLOCK, True)):
+        for match in pattern.finditer(text):
+            line = text.count("\n", 0, match.start()) + 1
+            value = match["value"].strip("\n") if block else match["value"]
+            found.append(Stated(path, line, match["key"], value, block))
+            spans.append(match.span())
+    for marker in ANY_MARKER.finditer(text):
+        if not any(start <= marker.start() < end for start, end in spans):
+            line = text.count("\n", 0, marker.start()) + 1
+            raise ValueError(f"{shown(path)}:{line}: a 'stated' marker without a number right "
+                             f"before it (or a block without its end): {marker.group()}")
+    return sorted(found, key=lambda s: s.line)
+
+
+def compute(sources: Iterable[str]) -> dict[str, str]:
+    """``{"source.key": text}`` for the named sources."""
+    numbers = {}
+    for name in sources:
+        numbers.update({f"{name}.{key}": value for key, value in SOURCES[name].compute().items()})
+    return numbers
+
+
+def differences(stated: Iterable[Stated], numbers: Mapping[str, str]) -> list[str]:
+    """One line per stated number that differs from ``numbers`` or names no key of its
+    source (only sources present in ``numbers`` are compared)."""
+    computed_sources = {key.split(".", 1)[0] for key in numbers}
+    lines = []
+    for s in stated:
+        if s.source not in SOURCES:
+            lines.append(f"{s.where}: unknown source {s.source!r} "
+                         f"(known: {', '.join(SOURCES)})")
+        elif s.source not in computed_sources:
+            continue
+        elif s.key not in numbers:
+            lines.append(f"{s.where}: {s.key} is not a number "
+                         f"`{SOURCES[s.source].command}` gives")
+        elif numbers[s.key] != s.value:
+            shown = "the block" if s.block else repr(s.value)
+            lines.append(f"{s.where}: {s.key} states {shown}, "
+                         f"`{SOURCES[s.source].command}` gives "
+                         + ("another" if s.block else repr(numbers[s.key])))
+    return lines
+
+
+def rewrite(path: Path, numbers: Mapping[str, str]) -> bool:
+    """Write ``numbers`` over the marked numbers and blocks of ``path`` (keys not in
+    ``numbers`` left as they are); True when the file changed."""
+    text = path.read_text(encoding="utf-8")
+
+    def inline(match: re.Match) -> str:
+        value = numbers.get(match["key"], match["value"])
+        return f"{value}<!-- stated {match['key']} -->"
+
+    def block(match: re.Match) -> str:
+        if match["key"] not in numbers:
+            return match.group()
+        return (f"<!-- begin stated {match['key']} -->\n\n{numbers[match['key']]}\n\n"
+                "<!-- end stated -->")
+
+    new = BLOCK.sub(block, INLINE.sub(inline, text))
+    if new != text:
+        path.write_text(new, encoding="utf-8")
+    return new != text
+
+
+def check(write: bool = False, only: Iterable[str] | None = None,
+          root: Path = ROOT) -> list[str]:
+    """Recompute every source the texts mark (or those in ``only``), and return the stated
+    numbers that differ; with ``write``, rewrite them first (and return what is still
+    wrong: an unknown source or key)."""
+    paths = texts(root)
+    stated = [s for path in paths for s in stated_in(path)]
+    used = {s.source for s in stated if s.source in SOURCES}
+    numbers = compute(sorted(used if only is None else used & set(only)))
+    if write:
+        for path in paths:
+            rewrite(path, numbers)
+        stated = [s for path in paths for s in stated_in(path)]
+    return differences(stated, numbers)
+
+
+__all__ = ["SOURCES", "Source", "Stated", "check", "compute", "differences",
+           "library_numbers_of", "rewrite", "stated_in", "texts"]
