@@ -144,31 +144,37 @@ def table3_numbers() -> dict[str, str]:
 
 TWO_CONTACT_PROBLEMS, TWO_CONTACT_SEED = 200, 0
 _COUNT_LAWS = (("poisson", "Poisson"), ("stronge-paper", "Stronge (paper)"), ("newton", "Newton"))
+#: The readings of the paper's proposal, as the texts name them (harness and planar_impact
+#: call them by the coupling: ``literal`` is the paper's, ``effective`` our extension).
+_READINGS = (("literal", "literal (the paper's)"), ("effective", "effective (extension)"))
 
 
 def two_contact_numbers() -> dict[str, str]:
-    """``python -m planar_impact.simultaneous 200 0`` (the ``generic`` family): coherent
-    solutions of the paper's proposal under both readings, and Newton–Coulomb's."""
+    """``python -m planar_impact.simultaneous 200 0``: per family (``generic``, ``body``),
+    the coherent solutions of the paper's proposal under both readings, and Newton–Coulomb's
+    (``FAMILY.READING.LAW.BUCKET``, ``FAMILY.newton-coulomb.BUCKET``, and ``…-share``)."""
     from planar_impact.simultaneous import coherent_count_distribution
 
     problems = TWO_CONTACT_PROBLEMS
-    counts = {coupling: coherent_count_distribution(problems, TWO_CONTACT_SEED, "generic",
-                                                    coupling)
-              for coupling in ("effective", "none")}
     numbers = {"problems": str(problems)}
-    rows = ["| reading | law | 0 solutions | 1 | 2+ | gains |", "|---|---|---:|---:|---:|---:|"]
-    for coupling, reading in (("effective", "effective"), ("none", "literal")):
-        for law, name in _COUNT_LAWS:
-            c = counts[coupling][law]
-            rows.append(f"| {reading} | {name} | {c['0']} | {c['1']} | {c['2+']} | "
-                        f"{c['gains']} |")
-            for bucket in ("0", "1", "2+", "gains"):
-                numbers[f"{reading}.{law}.{bucket}"] = str(c[bucket])
-            numbers[f"{reading}.{law}.0-share"] = share(c["0"], problems)
-    c = counts["effective"]["newton-coulomb"]
-    rows.append(f"| — | Newton–Coulomb | {c['0']} | {c['1']} | {c['2+']} | {c['gains']} |")
-    for bucket in ("0", "1", "2+", "gains"):
-        numbers[f"newton-coulomb.{bucket}"] = str(c[bucket])
+    rows = ["| family | reading | law | 0 solutions | 1 | 2+ | at boundary | gains |",
+            "|---|---|---|---:|---:|---:|---:|---:|"]
+    for family in ("generic", "body"):
+        for coupling, reading in _READINGS:
+            counts = coherent_count_distribution(problems, TWO_CONTACT_SEED, family, coupling)
+            for law, name in _COUNT_LAWS:
+                c = counts[law]
+                rows.append(f"| {family} | {reading} | {name} | {c['0']} | {c['1']} | "
+                            f"{c['2+']} | {c['boundary']} | {c['gains']} |")
+                for bucket in ("0", "1", "2+", "boundary", "gains"):
+                    numbers[f"{family}.{coupling}.{law}.{bucket}"] = str(c[bucket])
+                    numbers[f"{family}.{coupling}.{law}.{bucket}-share"] = share(c[bucket],
+                                                                                problems)
+        c = counts["newton-coulomb"]  # the same under either reading
+        rows.append(f"| {family} | — | Newton–Coulomb | {c['0']} | {c['1']} | {c['2+']} | "
+                    f"— | {c['gains']} |")
+        for bucket in ("0", "1", "2+", "gains"):
+            numbers[f"{family}.newton-coulomb.{bucket}"] = str(c[bucket])
     numbers["table"] = "\n".join(rows)
     return numbers
 
@@ -178,41 +184,48 @@ FLAT_LANDINGS, FLAT_SEED = 200, 0
 
 def flat_landing_numbers() -> dict[str, str]:
     """``python -m harness.reference.flat_faces 200 0``: coherent solutions on random flat
-    landings."""
+    landings, those at the boundary of a decision apart, and Newton–Coulomb's solutions
+    with distinct velocities and non-unique impulse splits."""
     from harness.reference.flat_faces import count_flat
 
     counts, _ = count_flat(FLAT_LANDINGS, FLAT_SEED)
     numbers = {"landings": str(FLAT_LANDINGS)}
-    rows = ["| law | reading | 0 | 1 | 2+ |", "|---|---|---:|---:|---:|"]
+    rows = ["| law | reading | 0 | 1 | 2+ | at boundary | split not unique |",
+            "|---|---|---:|---:|---:|---:|---:|"]
     for law, name in _COUNT_LAWS:
-        for coupling, reading in (("effective", "effective"), ("none", "literal")):
+        for coupling, reading in _READINGS:
             c = counts[f"{law}/{coupling}"]
-            rows.append(f"| {name} | {reading} | {c['0']} | {c['1']} | {c['2+']} |")
-            for bucket in ("0", "1", "2+"):
-                numbers[f"{reading}.{law}.{bucket}"] = str(c[bucket])
-                numbers[f"{reading}.{law}.{bucket}-share"] = share(c[bucket], FLAT_LANDINGS)
+            rows.append(f"| {name} | {reading} | {c['0']} | {c['1']} | {c['2+']} | "
+                        f"{c['boundary']} | |")
+            for bucket in ("0", "1", "2+", "boundary"):
+                numbers[f"{coupling}.{law}.{bucket}"] = str(c[bucket])
+                numbers[f"{coupling}.{law}.{bucket}-share"] = share(c[bucket], FLAT_LANDINGS)
     c = counts["newton-coulomb"]
-    rows.append(f"| Newton–Coulomb | — | {c['0']} | {c['1']} | {c['2+']} |")
-    for bucket in ("0", "1", "2+"):
+    rows.append(f"| Newton–Coulomb | — | {c['0']} | {c['1']} | {c['2+']} | | {c['split']} |")
+    for bucket in ("0", "1", "2+", "split"):
         numbers[f"newton-coulomb.{bucket}"] = str(c[bucket])
         numbers[f"newton-coulomb.{bucket}-share"] = share(c[bucket], FLAT_LANDINGS)
     numbers["table"] = "\n".join(rows)
     return numbers
 
 
+#: The library's flat scenes whose solution counts the texts state.
+FLAT_SCENES = ("flat-box", "flat-box-receding-end")
+
+
 def flat_scene_numbers() -> dict[str, str]:
-    """The coherent solutions of the library's two flat scenes kept from the random landings
-    (``NAME.LAW.READING``), as the runner's references count them."""
+    """The coherent solutions of the library's flat scenes (``NAME.LAW.READING``, and
+    ``NAME.LAW.READING.at-boundary``), as the runner's references count them."""
     from harness.run.references import point_reference
     from harness.scenarios import load_scenario
 
     numbers = {}
-    for name in ("flat-box", "flat-box-several-poisson"):
+    for name in FLAT_SCENES:
         reference = point_reference(load_scenario(ROOT / "scenarios" / f"{name}.toml"), None)
         for key, count in reference["solutions"].items():
             parts = key.split("/")
             if parts[0] == "coherent":
-                numbers[f"{name}.{parts[1]}.{parts[2]}"] = str(count)
+                numbers[".".join([name, *parts[1:]])] = str(count)
     return numbers
 
 
@@ -329,11 +342,11 @@ def flat_face_numbers(engine_runs) -> dict[str, str]:
     turning = departures(FLAT_FACES[1:], "mujoco", "accurate")
     numbers["flat.mujoco-accurate.min"] = f"{min(turning):.2f}"
     numbers["flat.mujoco-accurate.max"] = f"{max(turning):.2f}"
-    several = ("flat-box-several-poisson",)
-    numbers["flat.several-poisson.pymunk"] = short(
-        max(departures(several, "pymunk", "accurate")))
-    numbers["flat.several-poisson.pymunk-sequential"] = short(
-        max(departures(several, "pymunk", "accurate", reference="sequential/")))
+    receding = ("flat-box-receding-end",)
+    numbers["flat.receding-end.pymunk"] = short(
+        max(departures(receding, "pymunk", "accurate")))
+    numbers["flat.receding-end.pymunk-sequential"] = short(
+        max(departures(receding, "pymunk", "accurate", reference="sequential/")))
     tilt = ("sweep-tilted-box",)
 
     def up_to(degrees):
@@ -368,7 +381,7 @@ SOURCES: dict[str, Source] = {
     "flat-landings": Source(f"python -m harness.reference.flat_faces {FLAT_LANDINGS} "
                             f"{FLAT_SEED}", flat_landing_numbers),
     "flat-scenes": Source("impact-harness run scenarios/flat-box.toml "
-                          "scenarios/flat-box-several-poisson.toml --json R (the references "
+                          "scenarios/flat-box-receding-end.toml --json R (the references "
                           "of each point in R's scenario info)", flat_scene_numbers),
     "mujoco-gain": Source("impact-harness survey " + " ".join(MUJOCO_GAIN_POPULATIONS)
                           + f" --samples {MUJOCO_GAIN_SAMPLES} --engines mujoco "
