@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 import os
+import stat
 import time
 
 import pytest
@@ -121,7 +122,15 @@ def test_a_device_a_directory_or_a_link_is_never_replaced(tmp_path):
     assert target.read_text() == "theirs" and link.is_symlink()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["dir.json", "link.json", "pipe.json",
                                                           "theirs.txt"]  # no temporary left
-    assert files.output_file_problem("/dev/null").startswith("is a character device")
+    device = tmp_path / "null"
+    try:  # a character device of /dev/null's numbers (where this user may make one)
+        os.mknod(device, stat.S_IFCHR | 0o666, os.makedev(1, 3))
+    except PermissionError:
+        return
+    assert files.output_file_problem(device).startswith("is a character device")
+    with pytest.raises(files.NotRegularFile, match="a character device"):
+        files.write_text_atomically(device, "mine")
+    assert stat.S_ISCHR(os.lstat(device).st_mode)
 
 
 def test_an_output_file_needs_an_existing_directory(tmp_path):

@@ -10,6 +10,7 @@ import importlib.util
 import json
 import os
 import pickle
+import stat
 from pathlib import Path
 
 import pytest
@@ -167,19 +168,25 @@ def test_an_entry_is_its_checksummed_payload(tmp_path):
 # --------------------------------------------------------------------------------------------
 # Item 2 and 10: outputs over regular files only, with the umask's mode
 # --------------------------------------------------------------------------------------------
-@pytest.mark.parametrize("target", ["/dev/null", "directory", "link", "missing/r.json"])
+@pytest.mark.parametrize("target", ["device", "pipe", "directory", "link", "missing/r.json"])
 def test_run_json_refuses_anything_but_a_regular_file_before_any_work(tmp_path, capsys,
                                                                       target):
     (tmp_path / "directory").mkdir()
     (tmp_path / "theirs").write_text("theirs")
     (tmp_path / "link").symlink_to(tmp_path / "theirs")
-    path = target if target.startswith("/") else str(tmp_path / target)
-    status = cli.main(["run", str(DISK), "--no-cache", "--json", path])
+    os.mkfifo(tmp_path / "pipe")
+    try:  # a character device of /dev/null's numbers, where this user may make one
+        os.mknod(tmp_path / "device", stat.S_IFCHR | 0o666, os.makedev(1, 3))
+    except PermissionError:
+        os.mkfifo(tmp_path / "device")
+    before = {name: os.lstat(tmp_path / name).st_mode for name in
+              ("device", "pipe", "directory", "link")}
+    status = cli.main(["run", str(DISK), "--no-cache", "--json", str(tmp_path / target)])
     err = capsys.readouterr().err
     assert status == 2 and err.count("\n") == 1 and "--json" in err
-    assert (tmp_path / "theirs").read_text() == "theirs" and (tmp_path / "link").is_symlink()
-    assert not (tmp_path / "missing").exists() and not Path("/dev/null.pickle").exists()
-    assert Path("/dev/null").is_char_device()
+    assert (tmp_path / "theirs").read_text() == "theirs"
+    assert {name: os.lstat(tmp_path / name).st_mode for name in before} == before
+    assert not (tmp_path / "missing").exists() and not list(tmp_path.glob("*.pickle"))
 
 
 def test_the_results_file_has_the_mode_the_umask_gives(tmp_path):
