@@ -88,7 +88,7 @@ def _rows(name: str, info: dict, records) -> tuple[list[str], list[list[str]]] |
                 cut, value = summary["nearest_cut"]
                 cut = cut.rsplit("/", 1)[-1]
                 cell += " (full)" if cut == "newton-lcp" else f" ({cut}: {_number(value)})"
-            two_phase = summary.get("departure", {}).get("two-phase/poisson")
+            two_phase = (record.departure or {}).get("two-phase/poisson") if record else None
             if reference["kind"] == "simultaneous" and two_phase is not None:
                 cell += f" [P 2φ: {_number(two_phase)}]"
             if record is not None and record.skipped:

@@ -327,7 +327,7 @@ def flat_face_numbers(engine_runs) -> dict[str, str]:
                 continue
             summary = (run.diagnostics or {}).get("reference") or {}
             values.append(summary["departure_from_primary"] if reference is None
-                          else min(value for name, value in summary["departure"].items()
+                          else min(value for name, value in run.departure.items()
                                    if name.startswith(reference)))
         return values
 
@@ -352,16 +352,9 @@ def flat_face_numbers(engine_runs) -> dict[str, str]:
     def up_to(degrees):
         return lambda run: float(run.point["value"]) <= degrees
 
-    def at(degrees):
-        return lambda run: float(run.point["value"]) == degrees
-
     followed = departures(tilt, "pymunk", "accurate", up_to(1.0))
     numbers["tilt.pymunk.min"] = short(min(followed), 1)
     numbers["tilt.pymunk.max"] = short(max(followed), 1)
-    numbers["tilt.pymunk.flat-answer"] = short(
-        departures(tilt, "pymunk", "accurate", at(0.01), "at-pose/newton-coulomb")[0])
-    numbers["tilt.pybullet-accurate.below-0.3"] = short(
-        max(departures(tilt, "pybullet", "accurate", lambda run: float(run.point["value"]) < 0.3)))
     return numbers
 
 

@@ -77,7 +77,15 @@ def read_columns(path: Path) -> dict:
     """A Parquet table as ``{column: numpy array}``."""
     import pyarrow.parquet as pq
 
-    return {name: np.asarray(values) for name, values in pq.read_table(path).to_pydict().items()}
+    columns = {}
+    for name, values in pq.read_table(path).to_pydict().items():
+        if values and isinstance(values[0], list):  # a list column (a run's reasons)
+            array = np.empty(len(values), dtype=object)
+            array[:] = values
+            columns[name] = array
+        else:
+            columns[name] = np.asarray(values)
+    return columns
 
 
 def surveyed_engines(directory: Path) -> list[str]:

@@ -160,7 +160,7 @@ def test_a_changed_record_redraws_its_figures_and_the_headline_only(results_file
 
     nudged = _rewrite(retimed, tmp_path / "nudged.json",
                       lambda item: item.update(_next_float(item)))
-    report.write_report(read_results(nudged), out, workers=1)
+    report.write_report(read_results(nudged), out, workers=1, svg="headline")
     assert _times(out) == drawn  # every float a last bit up (another CPU): nothing redrawn
 
     def decides_otherwise(item):
