@@ -29,7 +29,7 @@ from pathlib import Path
 
 # command name -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
-    "suite": ("harness.run.suite", "the validation suite (`make validate`): paper, run, report"),
+    "suite": ("harness.suite", "the validation suite (`make validate`): paper, run, report"),
     "paper": ("harness.report.table3",
               "reproduce the paper's Table 3 into reports/paper-table3.md"),
     "run": ("harness.run.runner", "run scenarios through every law and engine, write results"),

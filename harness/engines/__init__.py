@@ -23,6 +23,7 @@ from __future__ import annotations
 import importlib
 import json
 import os
+from collections.abc import Sequence
 
 from harness.engines.contract import (
     BLOW_UP_FACTOR,
@@ -198,6 +199,61 @@ def install_fingerprint(name: str) -> str | None:
     return json.dumps([spec.origin, stat.st_size, stat.st_mtime_ns, version])
 
 
+def parse_overrides(items: Sequence[str],
+                    engines: Sequence[str] = ENGINE_NAMES) -> dict[str, dict]:
+    """``["pymunk.iterations=50", ...]`` (``--set``) -> ``{"pymunk": {"iterations": 50}}``.
+
+    A value is read as JSON (``50``, ``1e-4``, ``true``, ``null``, ``[0.02, 1]``), else kept
+    as a string (``Euler``). Each is checked against the engine's settings under every preset
+    before any work; the first bad one raises ``ValueError`` with a one-line message naming
+    the engine, the key, the value and what is allowed. An engine that is not installed here
+    is checked for its name only (its runs are skipped anyway).
+    """
+    import json
+
+    from harness import bounds
+
+    overrides: dict[str, dict] = {}
+    for item in items:
+        target, equals, text = item.partition("=")
+        engine_name, dot, key = target.strip().partition(".")
+        where = f"--set {item}"
+        if not equals or not dot or not key:
+            raise ValueError(f"{where}: expected ENGINE.KEY=VALUE, e.g. pymunk.iterations=50")
+        if engine_name not in ENGINE_NAMES:
+            raise ValueError(f"{where}: engine {engine_name!r}, key {key!r}, value {text!r}: "
+                             f"unknown engine; allowed: {', '.join(ENGINE_NAMES)}")
+        if engine_name not in engines:
+            raise ValueError(f"{where}: engine {engine_name!r}, key {key!r}, value {text!r}: "
+                             f"engine not selected; allowed: {', '.join(engines)} (--engines)")
+        try:
+            value = json.loads(text)
+        except ValueError:
+            value = text
+        try:
+            engine = load_engine(engine_name)
+        except EngineNotInstalled:
+            overrides.setdefault(engine_name, {})[key] = value
+            continue
+        if key not in engine.setting_docs:
+            raise ValueError(f"{where}: engine {engine_name!r}, key {key!r}, value {text!r}: "
+                             f"unknown setting; allowed: {', '.join(sorted(engine.setting_docs))}")
+        reason = bounds.problem(key, value)  # the same table as a file's [engine_settings]
+        if reason is not None:
+            raise ValueError(f"{where}: engine {engine_name!r}, key {key!r}, value {text!r}: "
+                             f"{reason}")
+        candidate = {**overrides.get(engine_name, {}), key: value}
+        for preset in PRESET_ROLES:
+            try:
+                engine.settings(preset, candidate)
+            except ValueError as error:
+                # The settings' own message names the engine, the key and the value.
+                raise ValueError(f"{where} (preset {preset}): {error}; allowed: "
+                                 f"{engine.setting_docs[key]}") from None
+        overrides[engine_name] = candidate
+    return overrides
+
+
 def available_engines() -> dict[str, str | None]:
     """``{engine: None}`` when it loads, else ``{engine: reason}`` (with the install command)."""
     report: dict[str, str | None] = {}
@@ -234,6 +290,7 @@ __all__ = [
     "install_fingerprint",
     "ke_norm",
     "load_engine",
+    "parse_overrides",
     "preset_choices",
     "preset_label",
     "preset_role",

@@ -66,8 +66,8 @@ import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
+from harness.plotting import SVG_TWIN
 from harness.report.figures import (
-    SVG_TWIN,
     heatmap_figure,
     impulse_figure,
     impulse_legend_figure,

@@ -18,7 +18,7 @@ import math
 from collections.abc import Sequence
 from pathlib import Path
 
-from harness.report.figures import new_figure, save_png
+from harness.plotting import new_figure, save_png
 from harness.report.views import ENGINE_STYLE, LAW_STYLE
 from harness.run.records import ANALYTIC, Record
 

@@ -332,7 +332,8 @@ def write_figure(rows: list[dict], path: Path, metadata: dict | None = None) -> 
         ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=3,
                   frameon=False)
     fig.suptitle("Table 3, two sleds: impulse paths of each law (Routh's graph)")
-    from harness.report.figures import lay_out, save_figure, save_svg_twin
+    from harness.plotting import lay_out, save_svg_twin
+    from harness.run.files import save_figure
 
     lay_out(fig, 110)  # once, for the PNG and the SVG (figures.lay_out, save_svg_twin)
     save_figure(fig, path, "png", dpi=110, metadata=metadata)
@@ -341,7 +342,8 @@ def write_figure(rows: list[dict], path: Path, metadata: dict | None = None) -> 
 
 def write_report(out_dir: Path) -> tuple[Path, list[dict]]:
     out_dir.mkdir(parents=True, exist_ok=True)
-    from harness.report.figures import TAG_KEY, render_once, table3_payload
+    from harness.plotting import TAG_KEY
+    from harness.report.figures import render_once, table3_payload
 
     rows = reproduce_table3()
     figure = out_dir / "paper-table3.png"

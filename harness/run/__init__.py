@@ -7,5 +7,4 @@
 * :mod:`~harness.run.metrics` -- departures of an engine from a law;
 * :mod:`~harness.run.records` -- the records and the versioned results file;
 * :mod:`~harness.run.provenance` -- versions, commit and machine, for every output file;
-* :mod:`~harness.run.suite` -- ``impact-harness suite`` (``make validate``).
 """

@@ -92,7 +92,7 @@ import numpy as np
 
 from harness import bounds
 from harness.collector import collector_paused
-from harness.engines import load_engine, preset_choices, preset_role
+from harness.engines import load_engine, parse_overrides, preset_choices, preset_role
 from harness.run import metrics, references
 from harness.run.cache import Spelled
 from harness.run.history import contact_history
@@ -438,60 +438,6 @@ def parse_engines(text: str | Sequence[str] | None) -> tuple[str, ...]:
     if unknown:
         raise ValueError(f"--engines: unknown engine(s) {unknown}; allowed: {', '.join(ENGINES)}")
     return names
-
-
-def parse_overrides(items: Sequence[str], engines: Sequence[str] = ENGINES) -> dict[str, dict]:
-    """``["pymunk.iterations=50", ...]`` (``--set``) -> ``{"pymunk": {"iterations": 50}}``.
-
-    A value is read as JSON (``50``, ``1e-4``, ``true``, ``null``, ``[0.02, 1]``), else kept
-    as a string (``Euler``). Each is checked against the engine's settings under every preset
-    before any work; the first bad one raises ``ValueError`` with a one-line message naming
-    the engine, the key, the value and what is allowed. An engine that is not installed here
-    is checked for its name only (its runs are skipped anyway).
-    """
-    import json
-
-    from harness.engines import EngineNotInstalled, load_engine
-
-    overrides: dict[str, dict] = {}
-    for item in items:
-        target, equals, text = item.partition("=")
-        engine_name, dot, key = target.strip().partition(".")
-        where = f"--set {item}"
-        if not equals or not dot or not key:
-            raise ValueError(f"{where}: expected ENGINE.KEY=VALUE, e.g. pymunk.iterations=50")
-        if engine_name not in ENGINES:
-            raise ValueError(f"{where}: engine {engine_name!r}, key {key!r}, value {text!r}: "
-                             f"unknown engine; allowed: {', '.join(ENGINES)}")
-        if engine_name not in engines:
-            raise ValueError(f"{where}: engine {engine_name!r}, key {key!r}, value {text!r}: "
-                             f"engine not selected; allowed: {', '.join(engines)} (--engines)")
-        try:
-            value = json.loads(text)
-        except ValueError:
-            value = text
-        try:
-            engine = load_engine(engine_name)
-        except EngineNotInstalled:
-            overrides.setdefault(engine_name, {})[key] = value
-            continue
-        if key not in engine.setting_docs:
-            raise ValueError(f"{where}: engine {engine_name!r}, key {key!r}, value {text!r}: "
-                             f"unknown setting; allowed: {', '.join(sorted(engine.setting_docs))}")
-        reason = bounds.problem(key, value)  # the same table as a file's [engine_settings]
-        if reason is not None:
-            raise ValueError(f"{where}: engine {engine_name!r}, key {key!r}, value {text!r}: "
-                             f"{reason}")
-        candidate = {**overrides.get(engine_name, {}), key: value}
-        for preset in PRESETS:
-            try:
-                engine.settings(preset, candidate)
-            except ValueError as error:
-                # The settings' own message names the engine, the key and the value.
-                raise ValueError(f"{where} (preset {preset}): {error}; allowed: "
-                                 f"{engine.setting_docs[key]}") from None
-        overrides[engine_name] = candidate
-    return overrides
 
 
 def parse_presets(text: str | None) -> tuple[str, ...]:
@@ -1717,7 +1663,6 @@ __all__ = [
     "execute",
     "main",
     "parse_engines",
-    "parse_overrides",
     "parse_presets",
     "point_records",
     "run",

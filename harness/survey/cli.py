@@ -26,6 +26,7 @@ from harness.engines import (
     PRESET_ROLES,
     EngineNotInstalled,
     load_engine,
+    parse_overrides,
     preset_choices,
     preset_role,
     source_label,
@@ -301,8 +302,6 @@ def main(args: argparse.Namespace) -> int:
         print(f"impact-harness survey: {error}", file=sys.stderr)
         return 2
     left_out = {} if args.preset else DEFAULT_LEFT_OUT
-    from harness.run.runner import parse_overrides
-
     try:
         overrides = parse_overrides(args.settings_overrides, engines)
     except ValueError as error:

@@ -7,7 +7,7 @@
 * ``summary.md`` -- the statistics as Markdown tables, the rejected draws and the timings;
 * ``settings.json`` -- what was surveyed: samples, seed, engines, presets, the engines not
   installed and the pairs left out (with why), and under ``inputs`` the digest
-  ``impact-harness suite`` keys its quick survey by (harness/run/suite.py);
+  ``impact-harness suite`` keys its quick survey by (harness/suite.py);
 * ``figures/`` -- departure from Poisson against ``α / r_m`` and ``μ`` coloured by Poisson
   collision type, per engine and preset (:func:`map_figure`); the departure CDF per engine,
   a line per family and preset (:func:`cdf_figure`). PNG and SVG. ``impact-harness suite``
@@ -264,7 +264,7 @@ def _floor_axis(target) -> None:
     (exact agreement among them) is drawn there."""
     from matplotlib.ticker import FuncFormatter
 
-    from harness.report.figures import percent_tick
+    from harness.plotting import percent_tick
 
     def label(value, _):
         text = percent_tick(value)
@@ -276,9 +276,9 @@ def _floor_axis(target) -> None:
 def map_figure(runs: dict, engine: str, path: Path, tag: str | None = None) -> Path:
     """Departure from Poisson against ``α / r_m`` and against ``μ``, a point per ok run of
     ``engine``, coloured by the Poisson collision type; a row per preset. Saved as ``path``
-    (PNG, with its SVG twin unless :data:`harness.report.figures.SVG_TWIN` says not;
+    (PNG, with its SVG twin unless :data:`harness.plotting.SVG_TWIN` says not;
     ``tag``: the digest of the inputs, kept in the PNG)."""
-    from harness.report.figures import new_figure, save_png
+    from harness.plotting import new_figure, save_png
 
     presets = _presets(runs, engine)
     ok = runs["status"] == "ok"
@@ -324,7 +324,7 @@ def cdf_figure(runs: dict, engine: str, path: Path, tag: str | None = None) -> P
     preset, a line per family. Saved as :func:`map_figure` saves."""
     from matplotlib import colormaps
 
-    from harness.report.figures import new_figure, save_png
+    from harness.plotting import new_figure, save_png
 
     presets = _presets(runs, engine)
     ok = runs["status"] == "ok"

@@ -9,7 +9,7 @@ import re
 import numpy as np
 import pytest
 
-from harness import report
+from harness import plotting, report
 from harness.report import figures as figures_module
 from harness.report.reading import LazyResults, read_for_report
 from harness.run.records import Record, write_results
@@ -35,7 +35,7 @@ def _laid_out_figure():
     """A figure whose constrained layout moves its axes: long tick labels, titles, a colour
     bar and texts, as the heat map has; and markers drawn as an image in the SVG, as the
     split figure's."""
-    figure = figures_module.new_figure(6.0, 3.0)
+    figure = plotting.new_figure(6.0, 3.0)
     axes = figure.subplots(1, 2, sharey=True)
     for ax in axes:
         image = ax.imshow(np.arange(12.0).reshape(3, 4), aspect="auto")
@@ -53,11 +53,11 @@ def test_laid_out_once_the_png_and_svg_are_those_savefig_draws(tmp_path, dpi):
     _agg()
     expected = tmp_path / "savefig.png"
     _laid_out_figure().savefig(expected, dpi=dpi)  # laid out inside savefig
-    token = figures_module.SVG_TWIN.set(True)
+    token = plotting.SVG_TWIN.set(True)
     try:
-        saved = figures_module.save_png(_laid_out_figure(), tmp_path / "once.png", dpi=dpi)
+        saved = plotting.save_png(_laid_out_figure(), tmp_path / "once.png", dpi=dpi)
     finally:
-        figures_module.SVG_TWIN.reset(token)
+        plotting.SVG_TWIN.reset(token)
     assert np.array_equal(_pixels(saved), _pixels(expected))
     # the SVG twin: laid out as the PNG, drawn as before (savefig, then the engine set aside)
     figure = _laid_out_figure()
@@ -76,12 +76,12 @@ def test_the_same_figure_gives_the_same_svg_bytes(tmp_path):
     """A regenerated report leaves an unchanged figure's SVG as it was (matplotlib gives
     clip paths and glyphs random ids, and dates the file, unless told not to)."""
     _agg()
-    token = figures_module.SVG_TWIN.set(True)
+    token = plotting.SVG_TWIN.set(True)
     try:
-        first = figures_module.save_png(_laid_out_figure(), tmp_path / "first.png")
-        second = figures_module.save_png(_laid_out_figure(), tmp_path / "second.png")
+        first = plotting.save_png(_laid_out_figure(), tmp_path / "first.png")
+        second = plotting.save_png(_laid_out_figure(), tmp_path / "second.png")
     finally:
-        figures_module.SVG_TWIN.reset(token)
+        plotting.SVG_TWIN.reset(token)
     svg = first.with_suffix(".svg").read_bytes()
     assert b"clip-path" in svg  # the figure has ids that matplotlib would make random
     assert b"<dc:date>" not in svg
@@ -178,6 +178,6 @@ def test_records_read_for_a_frozen_caller_are_frozen_with_what_it_read(lazy_resu
     (0.5, "50%"), (0.01, "1%"), (0.001, "0.1%"), (0.0001, "0.01%"), (0.0005, "0.05%"),
     (1e-5, "1e-3%"), (1e-10, "1e-8%")])
 def test_percent_ticks_read_as_in_the_text(value, label):
-    from harness.report.figures import percent_tick
+    from harness.plotting import percent_tick
 
     assert percent_tick(value) == label

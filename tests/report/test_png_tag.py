@@ -6,18 +6,19 @@ from pathlib import Path
 
 import pytest
 
+from harness import plotting
 from harness.report import figures
 
 
 def test_png_tag_reads_the_saved_digest_like_pillow(tmp_path):
     image = pytest.importorskip("PIL.Image")
-    figure = figures.new_figure(2, 2)
+    figure = plotting.new_figure(2, 2)
     figure.add_subplot().plot([0, 1], [1, 0])
-    path = figures.save_png(figure, tmp_path / "f.png", tag="d" * 64)
+    path = plotting.save_png(figure, tmp_path / "f.png", tag="d" * 64)
     assert figures.png_tag(path) == "d" * 64
     with image.open(path) as opened:
-        assert opened.text[figures.TAG_KEY] == figures.png_tag(path)
-    untagged = figures.save_png(figure, tmp_path / "g.png")
+        assert opened.text[plotting.TAG_KEY] == figures.png_tag(path)
+    untagged = plotting.save_png(figure, tmp_path / "g.png")
     assert figures.png_tag(untagged) is None
 
 

@@ -1,7 +1,7 @@
 """The report's Survey section (harness/report/survey.py): its table is the survey's
 statistics, its figures exist and are drawn once, it says what was not run, and a report
 without a survey has none; the suite's quick survey is kept while its inputs are unchanged
-(harness/run/suite.py)."""
+(harness/suite.py)."""
 
 from __future__ import annotations
 
@@ -15,11 +15,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from harness import report
+from harness import report, suite
 from harness.engines import EngineNotInstalled
 from harness.report.survey import read_columns, survey_section
 from harness.report.views import fmt_departure
-from harness.run import runner, suite
+from harness.run import runner
 from harness.run.records import read_results, write_results
 from harness.scenarios import load_scenarios
 from harness.survey import cli as survey_cli
@@ -258,7 +258,7 @@ def test_the_quick_surveys_digest_is_the_same_under_other_kernels():
     other_kernels = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(other_kernels)
     environment, _ = other_kernels.kernel_environment()
-    script = ("from harness.run import suite\n"
+    script = ("from harness import suite\n"
               "from harness.survey.population import resolve_populations\n"
               "print(suite.survey_inputs(resolve_populations([]), ['pymunk'], ['accurate']))")
     there = subprocess.run([sys.executable, "-c", script], env=environment, check=True,

@@ -202,7 +202,7 @@ def test_the_results_file_has_the_mode_the_umask_gives(tmp_path):
 def test_a_link_planted_at_a_report_output_is_not_written_through(tmp_path):
     from matplotlib.figure import Figure
 
-    from harness.report.figures import save_png
+    from harness.plotting import save_png
 
     theirs = tmp_path / "theirs.png"
     theirs.write_bytes(b"theirs")

@@ -12,7 +12,7 @@ import json
 import pytest
 
 from harness import cli
-from harness.engines import load_engine
+from harness.engines import load_engine, parse_overrides
 from harness.run import runner
 from harness.run.cache import ResultCache
 from harness.scenarios import SCENARIO_DIR, load_scenario
@@ -21,7 +21,7 @@ DISK = SCENARIO_DIR / "disk-direct.toml"
 
 
 def test_values_are_json_else_strings_and_keys_of_one_engine_merge():
-    overrides = runner.parse_overrides(["pymunk.iterations=50", "pymunk.time_step=1e-4",
+    overrides = parse_overrides(["pymunk.iterations=50", "pymunk.time_step=1e-4",
                                         "mujoco.integrator=Euler", "mujoco.solref=[0.02, 1]"])
     assert overrides == {"pymunk": {"iterations": 50, "time_step": 1e-4},
                          "mujoco": {"integrator": "Euler", "solref": [0.02, 1]}}

@@ -136,7 +136,7 @@ def survey_inputs(populations, engines, presets) -> str:
     from harness.run.cache import cached_code_sources, code_version_of
     from harness.run.provenance import PACKAGES, package_versions
 
-    survey_code = Path(__file__).resolve().parents[1] / "survey"
+    survey_code = Path(__file__).resolve().parent / "survey"
     code = code_version_of((*cached_code_sources(), survey_code))
     text = json.dumps({
         "populations": [[population.name, Path(population.path).read_text(encoding="utf-8")
