@@ -156,12 +156,18 @@ def provenance_html(made: dict, report: dict, command: str) -> str:
             + (f" at commit <code>{escape_html(commit)}</code>{dirty}" if commit
                else " (commit not recorded)")
             + (f" on {escape_html(machine)}" if machine else "") + ".")
-    report_commit = ((report.get("git") or {}).get("commit") or "")[:10]
-    if report_commit and commit != report_commit:
-        text += (f" <b>Older than the report</b>, whose results are from commit "
-                 f"<code>{escape_html(report_commit)}</code> "
-                 f"({escape_html(report.get('created_utc', ''))}): these numbers may not "
-                 f"describe that code. <code>{escape_html(command)}</code> measures them again.")
+    # compared by the code's digest, not the commit: a commit of docs only, or a rerun of
+    # the suite, leaves the page as it was; an edit of the code makes the numbers stale
+    made_code, report_code = made.get("code_version"), report.get("code_version")
+    if report_code and made_code != report_code:
+        report_commit = ((report.get("git") or {}).get("commit") or "")[:10]
+        text += (" <b>Older than the report</b>: "
+                 + ("measured with other code than" if made_code else
+                    "its code version is not recorded, so it may predate")
+                 + " the report's results"
+                 + (f" (commit <code>{escape_html(report_commit)}</code>)" if report_commit
+                    else "")
+                 + f"; <code>{escape_html(command)}</code> measures them again.")
     return f"<p class='provenance'>{text}</p>"
 
 

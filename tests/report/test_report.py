@@ -367,15 +367,17 @@ def test_a_page_says_where_its_numbers_come_from_and_when_they_are_older():
     from harness.report.pages import provenance_html
 
     made = {"created_utc": "2026-11-01T10:00:00Z", "git": {"commit": "a" * 40, "dirty": False},
-            "machine": {"cpu_model": "AMD EPYC"}}
-    same = provenance_html(made, {"git": {"commit": "a" * 40}}, "make bench")
+            "machine": {"cpu_model": "AMD EPYC"}, "code_version": "c1"}
+    same = provenance_html(made, {"git": {"commit": "b" * 40}, "code_version": "c1"},
+                           "make bench")
     assert "Measured 2026-11-01T10:00:00Z at commit <code>aaaaaaaaaa</code> on AMD EPYC" in same
-    assert "Older" not in same
-    older = provenance_html(made, {"git": {"commit": "b" * 40},
-                                   "created_utc": "2026-11-20T00:00:00Z"}, "make bench")
+    assert "Older" not in same  # another commit, the same code: the numbers still hold
+    older = provenance_html(made, {"git": {"commit": "b" * 40}, "code_version": "c2"},
+                            "make bench")
     assert "<b>Older than the report</b>" in older and "bbbbbbbbbb" in older
     assert "<code>make bench</code>" in older
-    assert "commit not recorded" in provenance_html({"time": "2026"}, {}, "make stress")
+    unknown = provenance_html({"time": "2026"}, {"code_version": "c2"}, "make stress")
+    assert "commit not recorded" in unknown and "not recorded, so it may predate" in unknown
 
 
 def test_only_a_report_of_library_scenarios_reproduces_table3(tmp_path):
