@@ -159,15 +159,12 @@ def provenance_html(made: dict, report: dict, command: str) -> str:
     # compared by the code's digest, not the commit: a commit of docs only, or a rerun of
     # the suite, leaves the page as it was; an edit of the code makes the numbers stale
     made_code, report_code = made.get("code_version"), report.get("code_version")
-    if report_code and made_code != report_code:
-        report_commit = ((report.get("git") or {}).get("commit") or "")[:10]
+    if report_code and made_code != report_code:  # (not the report's commit: it moves)
         text += (" <b>Older than the report</b>: "
                  + ("measured with other code than" if made_code else
                     "its code version is not recorded, so it may predate")
-                 + " the report's results"
-                 + (f" (commit <code>{escape_html(report_commit)}</code>)" if report_commit
-                    else "")
-                 + f"; <code>{escape_html(command)}</code> measures them again.")
+                 + f" the report's results; <code>{escape_html(command)}</code> measures "
+                 "them again.")
     return f"<p class='provenance'>{text}</p>"
 
 
