@@ -284,6 +284,7 @@ def library_numbers_of(records: Iterable, scenarios: int) -> dict[str, str]:
     for reason, count in reason_counts([r.reasons for r in engine_runs]).items():
         numbers[f"reason.{reason.replace(' (law)', '-law')}"] = str(count)
     numbers.update(flat_face_numbers(engine_runs))
+    numbers.update(group_numbers(engine_runs))
     numbers.update(departure_numbers(engine_runs))
     return numbers
 
@@ -355,6 +356,27 @@ def flat_face_numbers(engine_runs) -> dict[str, str]:
     followed = departures(tilt, "pymunk", "accurate", up_to(1.0))
     numbers["tilt.pymunk.min"] = short(min(followed), 1)
     numbers["tilt.pymunk.max"] = short(max(followed), 1)
+    return numbers
+
+
+#: Groups of the library's scenarios whose verdict counts docs/verdicts.md states:
+#: ``group.NAME.runs``, ``….single``, ``….flagged`` and ``….reason.REASON``.
+GROUPS = {"flat": ("flat-",), "tilts": ("sweep-tilted-",)}
+
+
+def group_numbers(engine_runs) -> dict[str, str]:
+    """Verdict counts of the engine runs of each :data:`GROUPS` (scenario name prefixes)."""
+    from harness.run.verdicts import reason_counts
+
+    numbers = {}
+    for group, prefixes in GROUPS.items():
+        runs = [run for run in engine_runs if run.scenario.startswith(prefixes)]
+        single = sum(run.ok for run in runs)
+        numbers.update({f"group.{group}.runs": str(len(runs)),
+                        f"group.{group}.single": str(single),
+                        f"group.{group}.flagged": str(len(runs) - single)})
+        for reason, count in reason_counts([run.reasons for run in runs]).items():
+            numbers[f"group.{group}.reason.{reason.replace(' (law)', '-law')}"] = str(count)
     return numbers
 
 
