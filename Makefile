@@ -23,6 +23,8 @@ validate: $(STAMP)
 test: $(STAMP)
 	$(BIN)/ruff check .
 	$(BIN)/python -m pytest -q -n 2
+# the kernel_sensitive tests again on other kernels: OPENBLAS_CORETYPE=Prescott and
+# NPY_DISABLE_CPU_FEATURES (every numpy SIMD target off); see tests/other_kernels.py
 	$(BIN)/python tests/other_kernels.py -n 2
 
 bench: $(STAMP)

@@ -9,10 +9,8 @@ from __future__ import annotations
 
 import copyreg
 import hashlib
-import io
 import json
 import math
-import pickle
 from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
@@ -593,22 +591,20 @@ class PassedChecks:
         self._added = False
 
 
-def pickled(value: Any) -> bytes:
-    """``pickle.dumps(value)`` where ``value`` may hold read-only mappings (scenarios do)."""
-    buffer = io.BytesIO()
-    pickler = pickle.Pickler(buffer, protocol=pickle.HIGHEST_PROTOCOL)
-    pickler.dispatch_table = {**copyreg.dispatch_table, MappingProxyType: _reduce_proxy}
-    pickler.dump(value)
-    return buffer.getvalue()
-
-
 def _reduce_proxy(proxy: MappingProxyType):
-    """Pickle a read-only mapping (the scenario model's) as its items, read-only again."""
+    """A read-only mapping (the scenario model's) as its items, read-only again: the outcome
+    of a scenario check travels from a forked worker back to the run through the pool's
+    pipe, which plain pickling of a ``mappingproxy`` refuses."""
     return _read_only, (dict(proxy),)
 
 
 def _read_only(items: dict) -> MappingProxyType:
     return MappingProxyType(items)
+
+
+# For the process pool's own transport only (harness/scenarios/library.py): nothing is ever
+# unpickled from a file.
+copyreg.pickle(MappingProxyType, _reduce_proxy)
 
 
 def _checks_context(root=None) -> str:

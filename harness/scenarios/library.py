@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import pickle
 from pathlib import Path
 from typing import Iterable
 
@@ -127,7 +126,7 @@ def _load_files(files: list[Path], workers: int | None) -> list[Scenario | Scena
     count = min(workers * PIECES_PER_WORKER, len(to_check))
     pieces = [to_check[start::count] for start in range(count)]
     for piece, data in zip(pieces, map_forked(_check_piece, pieces, workers)):
-        for (index, _, _, key), (outcome, scenes) in zip(piece, pickle.loads(data)):
+        for (index, _, _, key), (outcome, scenes) in zip(piece, data):
             outcomes[index] = outcome
             if isinstance(outcome, Scenario):  # passed: remembered here, not in the worker
                 checks.passed_checks.add(key, outcome)
@@ -142,13 +141,14 @@ def _checked(path: Path, text: str, key: str | None) -> Scenario | ScenarioError
         return error
 
 
-def _check_piece(piece: list[tuple]) -> bytes:
-    """A worker's outcomes of a piece of :func:`_load_files`, pickled (scenarios hold
-    read-only mappings, which plain pickle refuses), each with the scenes its checks built
-    (a scenario's pickle leaves them out; sent, they cost a tenth of building them anew)."""
+def _check_piece(piece: list[tuple]) -> list:
+    """A worker's outcomes of a piece of :func:`_load_files` (the pool carries them back;
+    scenarios' read-only mappings travel as harness/scenarios/checks.py registers), each with
+    the scenes its checks built (a scenario's pickle leaves them out; sent, they cost a
+    tenth of building them anew)."""
     outcomes = [_checked(path, text, key) for _, path, text, key in piece]
-    return checks.pickled([(outcome, outcome.kept_scenes() if isinstance(outcome, Scenario)
-                            else {}) for outcome in outcomes])
+    return [(outcome, outcome.kept_scenes() if isinstance(outcome, Scenario) else {})
+            for outcome in outcomes]
 
 
 def _load_engines() -> None:
