@@ -1,0 +1,353 @@
+"""The scalar fast path of :func:`planar_impact.solve`: one problem in plain Python floats.
+
+numpy's fixed cost per call (~1 µs a ufunc, ~10 µs a LAPACK call) made ``solve`` cost
+120–200 µs; here the same steps run on floats and lists:
+
+* Contact terms (A20) by a Cholesky factor ``M = L Lᵀ`` written out for the few speeds of
+  planar bodies (``p ≤ MAX_SPEEDS``): ``a = L⁻¹ w_n``, ``b = L⁻¹ w_t``,
+  ``M⁻¹ w = L⁻ᵀ a``; ``m_nn = w_n·M⁻¹w_n`` etc. and ``Δ`` as the sum of the squared minors
+  ``a_i b_j − a_j b_i`` (Lagrange's identity, as :func:`planar_impact.solver.contact_terms`).
+  The order of the operations differs from LAPACK's, so these terms (and ``Δu``) agree with
+  the numpy path within rounding, not bit for bit: ``|Δm| ≤ 4 p ε κ(M) (m_nn m_tt)^½``
+  (backward-stable Cholesky and triangular solves; tests/theory/test_fastpath.py checks
+  ``1e-12`` relative on well-conditioned draws).
+* The law, given those terms: the very expressions of :mod:`planar_impact.laws` in the same
+  order, evaluated for the selected branch only. IEEE float64 ``+ − × ÷ √`` are correctly
+  rounded in Python as in numpy, so the answer equals :func:`planar_impact.solve_batch` on
+  the same ``(m_nn, m_nt, m_tt, v_n^A, v_t^A, μ, e, Δ)`` bit for bit (checked over thousands
+  of random problems of every law and type, also under ``OPENBLAS_CORETYPE=Prescott``).
+
+Anything else goes to the numpy path, which then raises or answers exactly as before:
+inputs that are not plain finite arrays of matching size, ``M`` not symmetric bit for bit
+(the tolerance check) or not positive definite, more than ``MAX_SPEEDS`` speeds, any error
+status (no approach, ``Δ ≤ 0``, a Painlevé jam, ``q ≤ 0`` in reverse sliding, no consistent
+``newton-lcp`` or ``stronge-paper`` answer), speeds or terms outside ``2^±64`` (scaled
+there), and any division by zero. Near Table 1's band (``laws.TYPE_BAND``: mostly
+``v_t^A = 0``) the batch's candidate search runs on numpy scalars, slower but the same.
+:func:`fast_solve` returns None for the declined cases.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import laws
+
+#: Most generalized speeds solved here (two free planar bodies have 6); beyond, numpy's
+#: O(p³) kernels win.
+MAX_SPEEDS = 8
+
+_POISSON_TYPES = tuple(int(x) for x in laws._POISSON_TYPE_BY_CASE_REGION.tolist())  # noqa: SLF001
+
+
+def _floats(value, size):
+    """``value`` as a list of ``size`` finite floats, or None (the numpy path reports why)."""
+    array = np.asarray(value, dtype=float)
+    if array.shape != (size,):
+        return None
+    values = array.tolist()
+    for x in values:
+        if not math.isfinite(x):
+            return None
+    return values
+
+
+def _number(value, low, high):
+    if not isinstance(value, (float, int)):  # numpy's floats too; anything else: numpy path
+        return None
+    value = float(value)
+    return value if low <= value <= high else None  # NaN and inf fail too (high ≤ ∞)
+
+
+def fast_solve(mass_matrix, wn, wt, u, mu, e, law, safe_low, safe_high):
+    """The fields of :class:`planar_impact.solver.ImpactResult` as a dict, or None where the
+    numpy path must decide (see the module docstring). ``law`` is already checked."""
+    matrix = np.asarray(mass_matrix, dtype=float)
+    if matrix.ndim != 2:
+        return None
+    size = matrix.shape[0]
+    if size == 0 or size > MAX_SPEEDS or matrix.shape[1] != size:
+        return None
+    rows = matrix.tolist()
+    for i in range(size):
+        row = rows[i]
+        for j in range(size):
+            if not math.isfinite(row[j]) or row[j] != rows[j][i]:
+                return None
+    wn, wt, u = _floats(wn, size), _floats(wt, size), _floats(u, size)
+    mu, e = _number(mu, 0.0, math.inf), _number(e, 0.0, 1.0)
+    if wn is None or wt is None or u is None or mu is None or e is None or mu == math.inf:
+        return None
+    try:
+        return _solve(rows, size, wn, wt, u, mu, e, law, safe_low, safe_high)
+    except (ZeroDivisionError, ValueError, OverflowError):  # a branch numpy answers with inf
+        return None
+
+
+def _solve(rows, size, wn, wt, u, mu, e, law, safe_low, safe_high):
+    cholesky = _cholesky(rows, size)
+    if cholesky is None:
+        return None
+    a, b = _forward(cholesky, wn), _forward(cholesky, wt)  # L⁻¹ w_n, L⁻¹ w_t
+    inv_wn, inv_wt = _backward(cholesky, a), _backward(cholesky, b)  # M⁻¹ w
+    mnn, mnt, mtt = _dot(wn, inv_wn), _dot(wn, inv_wt), _dot(wt, inv_wt)  # (A20)
+    vn, vt = _dot(wn, u), _dot(wt, u)
+    if not (safe_low < -vn < safe_high and abs(vt) < safe_high
+            and safe_low < mnn < safe_high and safe_low < mtt < safe_high):
+        return None
+    minors = [a[i] * b[j] - a[j] * b[i] for i in range(size) for j in range(i + 1, size)]
+    delta = math.fsum([minor * minor for minor in minors])  # (A20), Gram form
+    if not delta > 0:
+        return None
+    sign = -1.0 if vt < 0 or (vt == 0 and mnt < 0) else 1.0  # t → −t as in solve_batch
+    out = law_answer(law, mnn, sign * mnt, mtt, vn, abs(vt), mu, e, delta)
+    if out is None:
+        return None
+    normal, tangential = out["normal_impulse"], sign * out["tangential_impulse"]
+    delta_u = [x * normal + y * tangential for x, y in zip(inv_wn, inv_wt)]  # (A16)
+    if not math.isfinite(out["energy_change"]) or not all(map(math.isfinite, delta_u)):
+        return None
+    e_poisson = out["restitution_poisson"]
+    return {
+        "law": law, "normal_impulse": normal, "tangential_impulse": tangential,
+        "delta_u": np.array(delta_u), "u_after": np.array([x + y for x, y in zip(u, delta_u)]),
+        "vn_approach": vn, "vn_separation": out["vn_separation"], "vt_approach": vt,
+        "vt_separation": sign * out["vt_separation"], "energy_change": out["energy_change"],
+        "collision_type": out["collision_type"], "case": out["case"],
+        "restitution_poisson": None if law == "newton-lcp" else e_poisson,
+        "restitution_in_range": law == "newton-lcp" or 0.0 <= e_poisson <= 1.0,
+        "mnn": mnn, "mnt": mnt, "mtt": mtt,
+        "type_at_boundary": out["type_at_boundary"], "alternative_type": out["alternative_type"],
+    }
+
+
+def _cholesky(rows, size):
+    """Lower factor of ``M`` (lists), or None where a pivot is not positive."""
+    factor = [[0.0] * size for _ in range(size)]
+    for j in range(size):
+        row_j = factor[j]
+        pivot = rows[j][j]
+        for k in range(j):
+            pivot -= row_j[k] * row_j[k]
+        if not pivot > 0:
+            return None
+        root = math.sqrt(pivot)
+        row_j[j] = root
+        for i in range(j + 1, size):
+            row_i = factor[i]
+            value = rows[i][j]
+            for k in range(j):
+                value -= row_i[k] * row_j[k]
+            row_i[j] = value / root
+    return factor
+
+
+def _forward(factor, w):
+    """``L⁻¹ w``."""
+    x = []
+    for i, row in enumerate(factor):
+        value = w[i]
+        for k in range(i):
+            value -= row[k] * x[k]
+        x.append(value / row[i])
+    return x
+
+
+def _backward(factor, y):
+    """``L⁻ᵀ y``."""
+    size = len(y)
+    x = [0.0] * size
+    for i in range(size - 1, -1, -1):
+        value = y[i]
+        for k in range(i + 1, size):
+            value -= factor[k][i] * x[k]
+        x[i] = value / factor[i][i]
+    return x
+
+
+def _dot(x, y):
+    total = 0.0
+    for a, b in zip(x, y):
+        total += a * b
+    return total
+
+
+def law_answer(law, mnn, mnt, mtt, vn, vt, mu, e, delta):
+    """:func:`planar_impact.solver.contact_space_solution` of one row in the theory's ``t``
+    (``v_t ≥ 0``), bit for bit, as floats; None where the row is not cleanly solved (an
+    error status, or a division by zero). Rows near Table 1's band run the batch's candidate
+    search (:func:`planar_impact.laws.poisson_type_boundary`) on numpy scalars."""
+    vn_abs = -vn
+    mu_mtt, mu_mnt = mu * mtt, mu * mnt
+    g, h = mu_mtt - mnt, mnn - mu_mnt  # (A35)
+    p, q = mu_mtt + mnt, mnn + mu_mnt
+    if h <= 0 and g <= 0:  # Painlevé jam
+        return None
+    case = laws.table1_case(g, h, p, q)
+    if law in ("poisson", "stronge-paper"):
+        alpha, r_m = vt / vn_abs, g / h  # (A34), (A36)
+        upper = (1.0 + e) * r_m
+        ctype = _POISSON_TYPES[3 * case + int(alpha > r_m) + int(alpha > upper)]
+        at_boundary, alternative = False, 0
+        if _near_table1_boundary(g, h, p, q, alpha, r_m, upper):
+            # Rare (α ≈ 0 mostly): the candidate search of the batch, on numpy scalars.
+            terms = laws.ContactTerms(*(np.float64(x) for x in (mnn, mnt, mtt, vn, vt, mu)),
+                                      np.float64(delta))
+            with np.errstate(all="ignore"):
+                at_boundary, alternative = laws.poisson_type_boundary(terms, np.float64(e),
+                                                                      ctype)
+        e_poisson = e
+        if law == "stronge-paper":
+            e_poisson = _stronge_paper_restitution(mnt, mtt, mu, g, alpha, r_m, e, ctype)
+            if not math.isfinite(e_poisson):
+                return None
+        normal, tangential = _poisson_impulses(mnt, mtt, mu, vn_abs, vt, g, h, q, delta,
+                                               e_poisson, ctype)
+        reverse = ctype in (laws.REVERSE_FROM_COMPRESSION, laws.REVERSE_FROM_RESTITUTION)
+    elif law == "newton-lcp":
+        answer = _newton_lcp(mnn, mnt, mtt, vt, mu, vn_abs, g, h, p, q, delta, e)
+        if answer is None:
+            return None
+        normal, tangential, ctype = answer
+        at_boundary, alternative = False, 0  # laws not decided by Table 1
+        e_poisson = math.nan
+        reverse = ctype == laws.NEWTON_REVERSE
+    else:
+        normal, tangential, ctype, compression = _process(law, mnt, mtt, vt, mu, vn_abs, g, h,
+                                                          p, q, delta, e)
+        e_poisson = (normal - compression) / compression
+        at_boundary, alternative = False, 0
+        reverse = (ctype == laws.NEWTON_REVERSE if law == "newton"
+                   else ctype in (laws.REVERSE_FROM_COMPRESSION, laws.REVERSE_FROM_RESTITUTION))
+    if reverse and q <= 0:
+        return None
+    vn_separation = vn + (mnn * normal + mnt * tangential)  # (A22)
+    vt_separation = vt + (mnt * normal + mtt * tangential)  # (A23)
+    energy_change = 0.5 * (normal * (vn_separation + vn)
+                           + tangential * (vt_separation + vt))  # (A29)
+    return {"normal_impulse": normal, "tangential_impulse": tangential,
+            "vn_separation": vn_separation, "vt_separation": vt_separation,
+            "energy_change": energy_change, "collision_type": ctype, "case": case,
+            "restitution_poisson": e_poisson, "type_at_boundary": at_boundary,
+            "alternative_type": alternative}
+
+
+def _near_table1_boundary(g, h, p, q, alpha, r_m, upper, band=laws.TYPE_BAND):
+    """laws.poisson_type_boundary's screen (a superset of the rows inside the band), on
+    floats; the inputs are finite here, so Python's min/max equal numpy's."""
+    wide = 2.0 * band
+    abs_g, abs_p, abs_h, abs_q = abs(g), abs(p), abs(h), abs(q)
+    width = wide * (1.0 + abs(alpha) + abs(upper) + abs(r_m))
+    return (min(abs_g, abs_p) <= wide * max(abs_g, abs_p)
+            or min(abs_h, abs_q) <= wide * max(abs_h, abs_q)
+            or abs(alpha - r_m) <= width or abs(alpha - upper) <= width or alpha <= width)
+
+
+def _poisson_impulses(mnt, mtt, mu, vn_abs, vt, g, h, q, delta, e, ctype):
+    """laws.poisson_impulses for one type: (25)/(34)/(29, 40, 48), (26)/(36, 44)/(49)."""
+    if ctype == laws.STICK_IN_COMPRESSION:
+        compression = (mtt * vn_abs + mnt * vt) / delta  # (25)
+    elif ctype == laws.REVERSE_FROM_COMPRESSION:
+        compression = (vn_abs + mnt * (2.0 * mu * vt / g)) / q  # (34)
+    else:
+        compression = vn_abs / h  # (29), (40), (48)
+    normal = (1.0 + e) * compression
+    if ctype <= laws.STICK_IN_RESTITUTION:
+        tangential = -(mnt * normal + vt) / mtt  # (26), (29)
+    elif ctype == laws.FORWARD_SLIDING:
+        tangential = -(mu * normal)  # (49)
+    else:
+        tangential = mu * normal - 2.0 * mu * vt / g  # (36)/(44)
+    return normal, tangential
+
+
+def _stronge_paper_restitution(mnt, mtt, mu, g, alpha, r_m, e_energetic, ctype):
+    """laws.stronge_paper_restitution for one type: (64)/(67)/(70)/(73)/(74)."""
+    if ctype == laws.FORWARD_SLIDING:
+        return e_energetic  # (74)
+    e2 = e_energetic * e_energetic
+    ratio = mnt / mtt if ctype <= laws.STICK_IN_RESTITUTION else 2.0 * mu * mnt / g
+    linear = ratio * alpha  # r (62) or s (68)
+    in_restitution = ctype in (laws.STICK_IN_RESTITUTION, laws.REVERSE_FROM_RESTITUTION)
+    shift = ratio * (r_m - alpha) if in_restitution else 0.0  # y (65) or z (71)
+    a, b, c = 1.0 + linear + shift, linear + 2.0 * shift, shift - e2
+    discriminant = b * b - 4.0 * a * c
+    if discriminant < 0:
+        return math.nan
+    root = math.sqrt(discriminant)
+    if b >= 0:
+        b_plus_root = b + root
+        return -2.0 * c / b_plus_root if b_plus_root > 0 else 0.0 * root
+    return (root - b) / (2.0 * a)
+
+
+def _newton_lcp(mnn, mnt, mtt, vt, mu, vn_abs, g, h, p, q, delta, e):
+    """laws.newton_lcp for one row: ``(I_n, I_t, type)``, or None where inconsistent."""
+    closing = (1.0 + e) * vn_abs
+    stick_n = (mtt * closing + mnt * vt) / delta
+    stick_t = -(mnn * vt + mnt * closing) / delta
+    rounding = 1e-12
+    cone = mu * stick_n
+    stick_size = abs(stick_t)
+    if stick_n >= 0 and stick_size <= cone + rounding * (stick_size + cone):
+        return stick_n, stick_t, laws.NEWTON_STICK
+    slide_terms = abs(mnt) + mu * mtt
+    if h > 0:
+        forward_n = closing / h
+        if vt - g * forward_n >= -rounding * (vt + slide_terms * forward_n):
+            return forward_n, -mu * forward_n, laws.NEWTON_FORWARD
+    if q > 0:
+        reverse_n = closing / q
+        if vt + p * reverse_n <= rounding * (vt + slide_terms * reverse_n):
+            return reverse_n, mu * reverse_n, laws.NEWTON_REVERSE
+    return None
+
+
+def _process(law, mnt, mtt, vt, mu, vn_abs, g, h, p, q, delta, e):
+    """laws.TwoPhaseProcess.newton / .stronge for one row: ``(I_n, I_t, type, P_c)``."""
+    sticks = p >= 0
+    finite_g = False
+    if g > 0:
+        quotient = vt / g  # P_G (A58)
+        finite_g = math.isfinite(quotient)
+    p_g = quotient if finite_g else 0.0
+    vn_g = h * p_g - vn_abs
+    slope_n2 = delta / mtt if sticks else q
+    compression_in_phase1 = not finite_g or vn_g >= 0.0
+    compression = (vn_abs / h if compression_in_phase1
+                   else p_g - vn_g / slope_n2)
+    if law == "newton":
+        target = e * vn_abs
+        forward = not finite_g or vn_g >= target
+        normal = ((target + vn_abs) / h if forward
+                  else p_g + (target - vn_g) / slope_n2)
+        ctype = laws.NEWTON_FORWARD if forward else laws.NEWTON_STICK + int(not sticks)
+    else:
+        work_to_g = 0.5 * vn_g * (p_g - compression)
+        absorbed = (0.5 * vn_abs * compression if compression_in_phase1
+                    else 0.5 * (vn_abs - vn_g) * p_g + work_to_g)
+        work_target = (e * e) * absorbed
+        ends_in_phase1 = compression_in_phase1 and (not finite_g or work_to_g >= work_target)
+        if ends_in_phase1:
+            normal = compression + math.sqrt(2.0 * work_target / h)
+            ctype = laws.FORWARD_SLIDING
+        else:
+            start = p_g if compression_in_phase1 else compression
+            v_start = vn_g if compression_in_phase1 else 0.0
+            remaining = work_target - work_to_g if compression_in_phase1 else work_target
+            twice_remaining = 2.0 * (remaining if remaining >= 0.0 else 0.0)
+            root = math.sqrt(v_start * v_start + slope_n2 * twice_remaining)
+            denominator = v_start + root
+            step = (twice_remaining / denominator if denominator > 0
+                    else math.sqrt(twice_remaining / slope_n2))
+            normal = start + step
+            ctype = (laws.STICK_IN_COMPRESSION + int(compression_in_phase1)
+                     + 2 * int(not sticks))
+    if not finite_g or normal <= p_g:
+        tangential = -mu * normal
+    else:
+        slope_t2 = -mnt / mtt if sticks else mu
+        tangential = slope_t2 * (normal - p_g) - mu * p_g
+    return normal, tangential, ctype, compression
