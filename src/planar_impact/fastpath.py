@@ -48,17 +48,15 @@ def _floats(value, size):
     if array.shape != (size,):
         return None
     values = array.tolist()
-    for x in values:
-        if not math.isfinite(x):
-            return None
-    return values
+    total = sum(values)  # inf or NaN if any value is (or if the sum overflows: numpy path)
+    return values if total - total == 0.0 else None
 
 
 def _number(value, low, high):
     if not isinstance(value, (float, int)):  # numpy's floats too; anything else: numpy path
         return None
     value = float(value)
-    return value if low <= value <= high else None  # NaN and inf fail too (high ≤ ∞)
+    return value if low <= value <= high else None  # NaN fails too
 
 
 def fast_solve(mass_matrix, wn, wt, u, mu, e, law, safe_low, safe_high):
@@ -71,14 +69,12 @@ def fast_solve(mass_matrix, wn, wt, u, mu, e, law, safe_low, safe_high):
     if size == 0 or size > MAX_SPEEDS or matrix.shape[1] != size:
         return None
     rows = matrix.tolist()
-    for i in range(size):
-        row = rows[i]
-        for j in range(size):
-            if not math.isfinite(row[j]) or row[j] != rows[j][i]:
-                return None
+    total = sum(map(sum, rows))
+    if not total - total == 0.0 or list(map(list, zip(*rows))) != rows:  # finite, symmetric
+        return None
     wn, wt, u = _floats(wn, size), _floats(wt, size), _floats(u, size)
-    mu, e = _number(mu, 0.0, math.inf), _number(e, 0.0, 1.0)
-    if wn is None or wt is None or u is None or mu is None or e is None or mu == math.inf:
+    mu, e = _number(mu, 0.0, _LARGEST), _number(e, 0.0, 1.0)
+    if wn is None or wt is None or u is None or mu is None or e is None:
         return None
     try:
         return _solve(rows, size, wn, wt, u, mu, e, law, safe_low, safe_high)
@@ -86,20 +82,16 @@ def fast_solve(mass_matrix, wn, wt, u, mu, e, law, safe_low, safe_high):
         return None
 
 
+_LARGEST = 1.7976931348623157e308
+
+
 def _solve(rows, size, wn, wt, u, mu, e, law, safe_low, safe_high):
-    cholesky = _cholesky(rows, size)
-    if cholesky is None:
+    solved = _contact_terms(rows, size, wn, wt, u)
+    if solved is None:
         return None
-    a, b = _forward(cholesky, wn), _forward(cholesky, wt)  # L⁻¹ w_n, L⁻¹ w_t
-    inv_wn, inv_wt = _backward(cholesky, a), _backward(cholesky, b)  # M⁻¹ w
-    mnn, mnt, mtt = _dot(wn, inv_wn), _dot(wn, inv_wt), _dot(wt, inv_wt)  # (A20)
-    vn, vt = _dot(wn, u), _dot(wt, u)
+    mnn, mnt, mtt, vn, vt, delta, inv_wn, inv_wt = solved
     if not (safe_low < -vn < safe_high and abs(vt) < safe_high
-            and safe_low < mnn < safe_high and safe_low < mtt < safe_high):
-        return None
-    minors = [a[i] * b[j] - a[j] * b[i] for i in range(size) for j in range(i + 1, size)]
-    delta = math.fsum([minor * minor for minor in minors])  # (A20), Gram form
-    if not delta > 0:
+            and safe_low < mnn < safe_high and safe_low < mtt < safe_high and delta > 0):
         return None
     sign = -1.0 if vt < 0 or (vt == 0 and mnt < 0) else 1.0  # t → −t as in solve_batch
     out = law_answer(law, mnn, sign * mnt, mtt, vn, abs(vt), mu, e, delta)
@@ -107,7 +99,8 @@ def _solve(rows, size, wn, wt, u, mu, e, law, safe_low, safe_high):
         return None
     normal, tangential = out["normal_impulse"], sign * out["tangential_impulse"]
     delta_u = [x * normal + y * tangential for x, y in zip(inv_wn, inv_wt)]  # (A16)
-    if not math.isfinite(out["energy_change"]) or not all(map(math.isfinite, delta_u)):
+    total = sum(delta_u) + out["energy_change"]
+    if not total - total == 0.0:
         return None
     e_poisson = out["restitution_poisson"]
     return {
@@ -123,55 +116,56 @@ def _solve(rows, size, wn, wt, u, mu, e, law, safe_low, safe_high):
     }
 
 
-def _cholesky(rows, size):
-    """Lower factor of ``M`` (lists), or None where a pivot is not positive."""
-    factor = [[0.0] * size for _ in range(size)]
-    for j in range(size):
-        row_j = factor[j]
-        pivot = rows[j][j]
-        for k in range(j):
-            pivot -= row_j[k] * row_j[k]
+def _contact_terms(rows, size, wn, wt, u):
+    """``(m_nn, m_nt, m_tt, v_n^A, v_t^A, Δ, M⁻¹w_n, M⁻¹w_t)`` (A20), or None where ``M`` is
+    not positive definite. ``M = L Lᵀ`` row by row, with ``a = L⁻¹ w_n``, ``b = L⁻¹ w_t`` in
+    the same pass; then ``M⁻¹ w = L⁻ᵀ a`` (resp. ``b``)."""
+    factor, a, b = [], [], []
+    for i in range(size):
+        row, factor_i = rows[i], []
+        for j in range(i):
+            factor_j = factor[j]
+            value = row[j]
+            for k in range(j):
+                value -= factor_i[k] * factor_j[k]
+            factor_i.append(value / factor_j[j])
+        pivot, x, y = row[i], wn[i], wt[i]
+        for k in range(i):
+            entry = factor_i[k]
+            pivot -= entry * entry
+            x -= entry * a[k]
+            y -= entry * b[k]
         if not pivot > 0:
             return None
-        root = math.sqrt(pivot)
-        row_j[j] = root
-        for i in range(j + 1, size):
-            row_i = factor[i]
-            value = rows[i][j]
-            for k in range(j):
-                value -= row_i[k] * row_j[k]
-            row_i[j] = value / root
-    return factor
-
-
-def _forward(factor, w):
-    """``L⁻¹ w``."""
-    x = []
-    for i, row in enumerate(factor):
-        value = w[i]
-        for k in range(i):
-            value -= row[k] * x[k]
-        x.append(value / row[i])
-    return x
-
-
-def _backward(factor, y):
-    """``L⁻ᵀ y``."""
-    size = len(y)
-    x = [0.0] * size
+        diagonal = math.sqrt(pivot)
+        factor_i.append(diagonal)
+        factor.append(factor_i)
+        a.append(x / diagonal)
+        b.append(y / diagonal)
+    inv_wn, inv_wt = [0.0] * size, [0.0] * size
     for i in range(size - 1, -1, -1):
-        value = y[i]
+        x, y = a[i], b[i]
         for k in range(i + 1, size):
-            value -= factor[k][i] * x[k]
-        x[i] = value / factor[i][i]
-    return x
-
-
-def _dot(x, y):
-    total = 0.0
-    for a, b in zip(x, y):
-        total += a * b
-    return total
+            entry = factor[k][i]
+            x -= entry * inv_wn[k]
+            y -= entry * inv_wt[k]
+        diagonal = factor[i][i]
+        inv_wn[i], inv_wt[i] = x / diagonal, y / diagonal
+    mnn = mnt = mtt = vn = vt = 0.0
+    for i in range(size):
+        mnn += wn[i] * inv_wn[i]
+        mnt += wn[i] * inv_wt[i]
+        mtt += wt[i] * inv_wt[i]
+        vn += wn[i] * u[i]
+        vt += wt[i] * u[i]
+    # Δ by Lagrange's identity: the sum of the squared minors a_i b_j − a_j b_i (no
+    # cancellation, as planar_impact.solver.contact_terms).
+    squares = []
+    for i in range(size):
+        for j in range(i + 1, size):
+            minor = a[i] * b[j] - a[j] * b[i]
+            squares.append(minor * minor)
+    return mnn, mnt, mtt, vn, vt, math.fsum(squares), inv_wn, inv_wt
 
 
 def law_answer(law, mnn, mnt, mtt, vn, vt, mu, e, delta):
