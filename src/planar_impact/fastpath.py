@@ -44,10 +44,11 @@ _POISSON_TYPES = tuple(int(x) for x in laws._POISSON_TYPE_BY_CASE_REGION.tolist(
 
 def _floats(value, size):
     """``value`` as a list of ``size`` finite floats, or None (the numpy path reports why)."""
-    array = np.asarray(value, dtype=float)
-    if array.shape != (size,):
+    if type(value) is not np.ndarray or value.dtype != _FLOAT:
+        value = np.asarray(value, dtype=float)
+    if value.shape != (size,):
         return None
-    values = array.tolist()
+    values = value.tolist()
     total = sum(values)  # inf or NaN if any value is (or if the sum overflows: numpy path)
     return values if total - total == 0.0 else None
 
@@ -62,7 +63,9 @@ def _number(value, low, high):
 def fast_solve(mass_matrix, wn, wt, u, mu, e, law, safe_low, safe_high):
     """The fields of :class:`planar_impact.solver.ImpactResult` as a dict, or None where the
     numpy path must decide (see the module docstring). ``law`` is already checked."""
-    matrix = np.asarray(mass_matrix, dtype=float)
+    matrix = mass_matrix
+    if type(matrix) is not np.ndarray or matrix.dtype != _FLOAT:
+        matrix = np.asarray(matrix, dtype=float)
     if matrix.ndim != 2:
         return None
     size = matrix.shape[0]
@@ -83,6 +86,7 @@ def fast_solve(mass_matrix, wn, wt, u, mu, e, law, safe_low, safe_high):
 
 
 _LARGEST = 1.7976931348623157e308
+_FLOAT = np.dtype(float)
 
 
 def _solve(rows, size, wn, wt, u, mu, e, law, safe_low, safe_high):
@@ -103,17 +107,17 @@ def _solve(rows, size, wn, wt, u, mu, e, law, safe_low, safe_high):
     if not total - total == 0.0:
         return None
     e_poisson = out["restitution_poisson"]
-    return {
-        "law": law, "normal_impulse": normal, "tangential_impulse": tangential,
-        "delta_u": np.array(delta_u), "u_after": np.array([x + y for x, y in zip(u, delta_u)]),
-        "vn_approach": vn, "vn_separation": out["vn_separation"], "vt_approach": vt,
-        "vt_separation": sign * out["vt_separation"], "energy_change": out["energy_change"],
-        "collision_type": out["collision_type"], "case": out["case"],
-        "restitution_poisson": None if law == "newton-lcp" else e_poisson,
-        "restitution_in_range": law == "newton-lcp" or 0.0 <= e_poisson <= 1.0,
-        "mnn": mnn, "mnt": mnt, "mtt": mtt,
-        "type_at_boundary": out["type_at_boundary"], "alternative_type": out["alternative_type"],
-    }
+    # out becomes the result's fields (in the caller's t).
+    out["tangential_impulse"], out["vt_separation"] = tangential, sign * out["vt_separation"]
+    out["law"], out["mnn"], out["mnt"], out["mtt"] = law, mnn, mnt, mtt
+    out["vn_approach"], out["vt_approach"] = vn, vt
+    out["delta_u"] = np.array(delta_u)
+    out["u_after"] = np.array([x + y for x, y in zip(u, delta_u)])
+    if law == "newton-lcp":
+        out["restitution_poisson"], out["restitution_in_range"] = None, True
+    else:
+        out["restitution_in_range"] = 0.0 <= e_poisson <= 1.0
+    return out
 
 
 def _contact_terms(rows, size, wn, wt, u):
