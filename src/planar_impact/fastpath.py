@@ -71,16 +71,23 @@ def fast_solve(mass_matrix, wn, wt, u, mu, e, law, safe_low, safe_high):
     size = matrix.shape[0]
     if size == 0 or size > MAX_SPEEDS or matrix.shape[1] != size:
         return None
-    rows = matrix.tolist()
-    total = sum(map(sum, rows))
-    if not total - total == 0.0 or list(map(list, zip(*rows))) != rows:  # finite, symmetric
-        return None
+    key = matrix.tobytes()
+    cached_key, factor = _last_factor
+    if key != cached_key:  # a new M: check it, and factor it
+        rows = matrix.tolist()
+        total = sum(map(sum, rows))
+        if not total - total == 0.0 or list(map(list, zip(*rows))) != rows:  # finite, symmetric
+            return None
+        factor = _cholesky(rows, size)
+        if factor is None:
+            return None
+        _remember(key, factor)
     wn, wt, u = _floats(wn, size), _floats(wt, size), _floats(u, size)
     mu, e = _number(mu, 0.0, _LARGEST), _number(e, 0.0, 1.0)
     if wn is None or wt is None or u is None or mu is None or e is None:
         return None
     try:
-        return _solve(rows, size, wn, wt, u, mu, e, law, safe_low, safe_high)
+        return _solve(factor, size, wn, wt, u, mu, e, law, safe_low, safe_high)
     except (ZeroDivisionError, ValueError, OverflowError):  # a branch numpy answers with inf
         return None
 
@@ -89,14 +96,22 @@ _LARGEST = 1.7976931348623157e308
 _FLOAT = np.dtype(float)
 
 
-def _solve(rows, size, wn, wt, u, mu, e, law, safe_low, safe_high):
-    solved = _contact_terms(rows, size, wn, wt, u)
-    if solved is None:
-        return None
-    mnn, mnt, mtt, vn, vt, delta, inv_wn, inv_wt = solved
+# The factor of the last M checked here (a function of M's bytes alone, so reusing it changes
+# no result): a body's M stays while its contact and speeds change, as in a simulation or a
+# fit that solves one impact at a time.
+_last_factor: tuple = (None, None)
+
+
+def _remember(key, factor):
+    global _last_factor
+    _last_factor = (key, factor)  # one assignment: another thread sees the old pair or the new
+
+
+def _solve(factor, size, wn, wt, u, mu, e, law, safe_low, safe_high):
+    mnn, mnt, mtt, vn, vt, delta, inv_wn, inv_wt = _contact_terms(factor, size, wn, wt, u)
     if not (safe_low < -vn < safe_high and abs(vt) < safe_high
             and safe_low < mnn < safe_high and safe_low < mtt < safe_high and delta > 0):
-        return None
+        return None  # out of range (the numpy path rescales), or no approach, or Δ ≤ 0
     sign = -1.0 if vt < 0 or (vt == 0 and mnt < 0) else 1.0  # t → −t as in solve_batch
     out = law_answer(law, mnn, sign * mnt, mtt, vn, abs(vt), mu, e, delta)
     if out is None:
@@ -120,11 +135,10 @@ def _solve(rows, size, wn, wt, u, mu, e, law, safe_low, safe_high):
     return out
 
 
-def _contact_terms(rows, size, wn, wt, u):
-    """``(m_nn, m_nt, m_tt, v_n^A, v_t^A, Δ, M⁻¹w_n, M⁻¹w_t)`` (A20), or None where ``M`` is
-    not positive definite. ``M = L Lᵀ`` row by row, with ``a = L⁻¹ w_n``, ``b = L⁻¹ w_t`` in
-    the same pass; then ``M⁻¹ w = L⁻ᵀ a`` (resp. ``b``)."""
-    factor, a, b = [], [], []
+def _cholesky(rows, size):
+    """Lower factor ``L`` of ``M = L Lᵀ`` as lists of rows, or None where a pivot is not
+    positive (``M`` not positive definite: the numpy path raises)."""
+    factor = []
     for i in range(size):
         row, factor_i = rows[i], []
         for j in range(i):
@@ -133,19 +147,29 @@ def _contact_terms(rows, size, wn, wt, u):
             for k in range(j):
                 value -= factor_i[k] * factor_j[k]
             factor_i.append(value / factor_j[j])
-        pivot, x, y = row[i], wn[i], wt[i]
+        pivot = row[i]
         for k in range(i):
-            entry = factor_i[k]
-            pivot -= entry * entry
-            x -= entry * a[k]
-            y -= entry * b[k]
+            pivot -= factor_i[k] * factor_i[k]
         if not pivot > 0:
             return None
-        diagonal = math.sqrt(pivot)
-        factor_i.append(diagonal)
+        factor_i.append(math.sqrt(pivot))
         factor.append(factor_i)
-        a.append(x / diagonal)
-        b.append(y / diagonal)
+    return factor
+
+
+def _contact_terms(factor, size, wn, wt, u):
+    """``(m_nn, m_nt, m_tt, v_n^A, v_t^A, Δ, M⁻¹w_n, M⁻¹w_t)`` (A20) from ``M``'s factor:
+    ``a = L⁻¹ w_n``, ``b = L⁻¹ w_t`` in one pass, then ``M⁻¹ w = L⁻ᵀ a`` (resp. ``b``)."""
+    a, b = [], []
+    for i in range(size):
+        factor_i = factor[i]
+        x, y = wn[i], wt[i]
+        for k in range(i):
+            entry = factor_i[k]
+            x -= entry * a[k]
+            y -= entry * b[k]
+        a.append(x / factor_i[i])
+        b.append(y / factor_i[i])
     inv_wn, inv_wt = [0.0] * size, [0.0] * size
     for i in range(size - 1, -1, -1):
         x, y = a[i], b[i]
