@@ -81,6 +81,7 @@ def fast_solve(mass_matrix, wn, wt, u, mu, e, law, safe_low, safe_high):
         factor = _cholesky(rows, size)
         if factor is None:
             return None
+        factor = _sparse(factor, size)
         _remember(key, factor)
     wn, wt, u = _floats(wn, size), _floats(wt, size), _floats(u, size)
     mu, e = _number(mu, 0.0, _LARGEST), _number(e, 0.0, 1.0)
@@ -157,28 +158,37 @@ def _cholesky(rows, size):
     return factor
 
 
+def _sparse(factor, size):
+    """``L`` as ``(rows, columns, diagonal)``: per row ``i`` the pairs ``(k, L_ik)``, ``k < i``,
+    and per column ``i`` the pairs ``(k, L_ki)``, ``k > i``, of its non-zero entries. The
+    bodies' ``M`` are diagonal or block-diagonal; a term ``0·x`` left out (``x`` finite)
+    changes no value, at most the sign of a zero."""
+    rows = [[(k, factor[i][k]) for k in range(i) if factor[i][k] != 0.0] for i in range(size)]
+    columns = [[(k, factor[k][i]) for k in range(i + 1, size) if factor[k][i] != 0.0]
+               for i in range(size)]
+    return rows, columns, [factor[i][i] for i in range(size)]
+
+
 def _contact_terms(factor, size, wn, wt, u):
-    """``(m_nn, m_nt, m_tt, v_n^A, v_t^A, Δ, M⁻¹w_n, M⁻¹w_t)`` (A20) from ``M``'s factor:
-    ``a = L⁻¹ w_n``, ``b = L⁻¹ w_t`` in one pass, then ``M⁻¹ w = L⁻ᵀ a`` (resp. ``b``)."""
+    """``(m_nn, m_nt, m_tt, v_n^A, v_t^A, Δ, M⁻¹w_n, M⁻¹w_t)`` (A20) from ``M``'s factor
+    (:func:`_sparse`): ``a = L⁻¹ w_n``, ``b = L⁻¹ w_t`` in one pass, then ``M⁻¹ w = L⁻ᵀ a``
+    (resp. ``b``)."""
+    rows, columns, diagonal = factor
     a, b = [], []
     for i in range(size):
-        factor_i = factor[i]
         x, y = wn[i], wt[i]
-        for k in range(i):
-            entry = factor_i[k]
+        for k, entry in rows[i]:
             x -= entry * a[k]
             y -= entry * b[k]
-        a.append(x / factor_i[i])
-        b.append(y / factor_i[i])
+        a.append(x / diagonal[i])
+        b.append(y / diagonal[i])
     inv_wn, inv_wt = [0.0] * size, [0.0] * size
     for i in range(size - 1, -1, -1):
         x, y = a[i], b[i]
-        for k in range(i + 1, size):
-            entry = factor[k][i]
+        for k, entry in columns[i]:
             x -= entry * inv_wn[k]
             y -= entry * inv_wt[k]
-        diagonal = factor[i][i]
-        inv_wn[i], inv_wt[i] = x / diagonal, y / diagonal
+        inv_wn[i], inv_wt[i] = x / diagonal[i], y / diagonal[i]
     mnn = mnt = mtt = vn = vt = 0.0
     for i in range(size):
         mnn += wn[i] * inv_wn[i]
