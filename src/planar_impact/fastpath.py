@@ -127,8 +127,8 @@ def _solve(factor, size, wn, wt, u, mu, e, law, safe_low, safe_high):
     out["tangential_impulse"], out["vt_separation"] = tangential, sign * out["vt_separation"]
     out["law"], out["mnn"], out["mnt"], out["mtt"] = law, mnn, mnt, mtt
     out["vn_approach"], out["vt_approach"] = vn, vt
-    out["delta_u"] = np.array(delta_u)
-    out["u_after"] = np.array([x + y for x, y in zip(u, delta_u)])
+    # One array for both (two rows that never overlap): one numpy call fewer.
+    out["delta_u"], out["u_after"] = np.array([delta_u, [x + y for x, y in zip(u, delta_u)]])
     if law == "newton-lcp":
         out["restitution_poisson"], out["restitution_in_range"] = None, True
     else:
