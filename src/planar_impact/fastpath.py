@@ -25,6 +25,11 @@ status (no approach, ``Δ ≤ 0``, a Painlevé jam, ``q ≤ 0`` in reverse slidi
 there), and any division by zero. Near Table 1's band (``laws.TYPE_BAND``: mostly
 ``v_t^A = 0``) the batch's candidate search runs on numpy scalars, slower but the same.
 :func:`fast_solve` returns None for the declined cases.
+
+The last ``M``'s check and factor are kept, keyed on its bytes (a function of ``M`` alone,
+so reusing it changes no result): a body's ``M`` stays while its contact and speeds change.
+The factor keeps only its non-zero entries (planar bodies' ``M`` are diagonal or
+block-diagonal). Measured per call: README, 'Measured speed'.
 """
 
 from __future__ import annotations
@@ -39,7 +44,7 @@ from . import laws
 #: O(p³) kernels win.
 MAX_SPEEDS = 8
 
-_POISSON_TYPES = tuple(int(x) for x in laws._POISSON_TYPE_BY_CASE_REGION.tolist())  # noqa: SLF001
+_POISSON_TYPES = laws.POISSON_TYPE_BY_CASE_REGION
 
 
 def _floats(value, size):

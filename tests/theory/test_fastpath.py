@@ -20,6 +20,7 @@ from harness.scene.random_problems import random_problems, row
 from planar_impact import fastpath, solver
 
 COUNT = 4_000
+SAFE_LOW, SAFE_HIGH = 2.0**-solver.SAFE_EXPONENT, 2.0**solver.SAFE_EXPONENT
 FIELDS = ("normal_impulse", "tangential_impulse", "vn_separation", "vt_separation",
           "energy_change", "collision_type", "case", "restitution_poisson", "type_at_boundary",
           "alternative_type")
@@ -109,8 +110,7 @@ def test_solve_matches_the_numpy_path_and_solve_batch(kind):
         matrix, wn, wt, u = random_system(rng, kind)
         law = pi.LAWS[rng.integers(len(pi.LAWS))]
         mu, e = float(rng.uniform(0, 1.5)), float(rng.uniform(0, 1))
-        fields = fastpath.fast_solve(matrix, wn, wt, u, mu, e, law, solver._SAFE_LOW,  # noqa: SLF001
-                                     solver._SAFE_HIGH)  # noqa: SLF001
+        fields = fastpath.fast_solve(matrix, wn, wt, u, mu, e, law, SAFE_LOW, SAFE_HIGH)
         try:
             reference = numpy_path(matrix, wn, wt, u, mu, e, law)
         except pi.ImpactInputError as error:
