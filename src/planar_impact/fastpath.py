@@ -122,23 +122,27 @@ def _solve(factor, size, wn, wt, u, mu, e, law, safe_low, safe_high):
     out = law_answer(law, mnn, sign * mnt, mtt, vn, abs(vt), mu, e, delta)
     if out is None:
         return None
-    normal, tangential = out["normal_impulse"], sign * out["tangential_impulse"]
+    (normal, tangential, vn_separation, vt_separation, energy_change, ctype, case,
+     e_poisson, at_boundary, alternative) = out
+    tangential *= sign
     delta_u = [x * normal + y * tangential for x, y in zip(inv_wn, inv_wt)]  # (A16)
-    total = sum(delta_u) + out["energy_change"]
+    total = sum(delta_u) + energy_change
     if not total - total == 0.0:
         return None
-    e_poisson = out["restitution_poisson"]
-    # out becomes the result's fields (in the caller's t).
-    out["tangential_impulse"], out["vt_separation"] = tangential, sign * out["vt_separation"]
-    out["law"], out["mnn"], out["mnt"], out["mtt"] = law, mnn, mnt, mtt
-    out["vn_approach"], out["vt_approach"] = vn, vt
     # One array for both (two rows that never overlap): one numpy call fewer.
-    out["delta_u"], out["u_after"] = np.array([delta_u, [x + y for x, y in zip(u, delta_u)]])
-    if law == "newton-lcp":
-        out["restitution_poisson"], out["restitution_in_range"] = None, True
-    else:
-        out["restitution_in_range"] = 0.0 <= e_poisson <= 1.0
-    return out
+    delta_u, u_after = np.array([delta_u, [x + y for x, y in zip(u, delta_u)]])
+    lcp = law == "newton-lcp"
+    return {
+        "law": law, "normal_impulse": normal, "tangential_impulse": tangential,
+        "delta_u": delta_u, "u_after": u_after, "vn_approach": vn,
+        "vn_separation": vn_separation, "vt_approach": vt,
+        "vt_separation": sign * vt_separation, "energy_change": energy_change,
+        "collision_type": ctype, "case": case,
+        "restitution_poisson": None if lcp else e_poisson,
+        "restitution_in_range": lcp or 0.0 <= e_poisson <= 1.0,
+        "mnn": mnn, "mnt": mnt, "mtt": mtt,
+        "type_at_boundary": at_boundary, "alternative_type": alternative,
+    }
 
 
 def _cholesky(rows, size):
@@ -213,9 +217,10 @@ def _contact_terms(factor, size, wn, wt, u):
 
 def law_answer(law, mnn, mnt, mtt, vn, vt, mu, e, delta):
     """:func:`planar_impact.solver.contact_space_solution` of one row in the theory's ``t``
-    (``v_t ≥ 0``), bit for bit, as floats; None where the row is not cleanly solved (an
-    error status, or a division by zero). Rows near Table 1's band run the batch's candidate
-    search (:func:`planar_impact.laws.poisson_type_boundary`) on numpy scalars."""
+    (``v_t ≥ 0``), bit for bit, as floats (a tuple in :data:`LAW_FIELDS` order); None where
+    the row is not cleanly solved (an error status, or a division by zero). Rows near
+    Table 1's band run the batch's candidate search
+    (:func:`planar_impact.laws.poisson_type_boundary`) on numpy scalars."""
     vn_abs = -vn
     mu_mtt, mu_mnt = mu * mtt, mu * mnt
     g, h = mu_mtt - mnt, mnn - mu_mnt  # (A35)
@@ -264,11 +269,14 @@ def law_answer(law, mnn, mnt, mtt, vn, vt, mu, e, delta):
     vt_separation = vt + (mnt * normal + mtt * tangential)  # (A23)
     energy_change = 0.5 * (normal * (vn_separation + vn)
                            + tangential * (vt_separation + vt))  # (A29)
-    return {"normal_impulse": normal, "tangential_impulse": tangential,
-            "vn_separation": vn_separation, "vt_separation": vt_separation,
-            "energy_change": energy_change, "collision_type": ctype, "case": case,
-            "restitution_poisson": e_poisson, "type_at_boundary": at_boundary,
-            "alternative_type": alternative}
+    return (normal, tangential, vn_separation, vt_separation, energy_change, ctype, case,
+            e_poisson, at_boundary, alternative)
+
+
+#: What :func:`law_answer` returns, in order (names of :class:`planar_impact.BatchResult`).
+LAW_FIELDS = ("normal_impulse", "tangential_impulse", "vn_separation", "vt_separation",
+              "energy_change", "collision_type", "case", "restitution_poisson",
+              "type_at_boundary", "alternative_type")
 
 
 def _near_table1_boundary(g, h, p, q, alpha, r_m, upper, band=laws.TYPE_BAND):

@@ -33,9 +33,11 @@ def fast_row(law, r, delta):
     sign = -1.0 if r["vt"] < 0 or (r["vt"] == 0 and r["mnt"] < 0) else 1.0
     out = fastpath.law_answer(law, r["mnn"], sign * r["mnt"], r["mtt"], r["vn"], abs(r["vt"]),
                               r["mu"], r["e"], delta)
-    if out is not None:
-        out["tangential_impulse"] *= sign
-        out["vt_separation"] *= sign
+    if out is None:
+        return None
+    out = dict(zip(fastpath.LAW_FIELDS, out))
+    out["tangential_impulse"] *= sign
+    out["vt_separation"] *= sign
     return out
 
 
