@@ -189,3 +189,21 @@ def test_bad_inputs_raise_what_the_numpy_path_raises(change):
     with pytest.raises(pi.ImpactInputError) as got:
         pi.solve(**problem, law="poisson")
     assert str(got.value) == str(expected.value)
+
+
+def test_the_kept_factor_changes_no_result():
+    """A call that reuses the last M's factor answers as one that factors M anew."""
+    rng = np.random.default_rng(7)
+    first, second = random_system(rng, "random"), random_system(rng, "two bodies")
+    for law in pi.LAWS:
+        arguments = dict(zip(("mass_matrix", "wn", "wt", "u"), first), mu=0.4, e=0.6, law=law)
+        pi.solve(mass_matrix=second[0], wn=second[1], wt=second[2], u=second[3], mu=0.4, e=0.6,
+                 law=law)
+        fresh = pi.solve(**arguments)  # factors the first M
+        kept = pi.solve(**arguments)  # reuses its factor
+        for name, value in fresh.__dict__.items():
+            other = getattr(kept, name)
+            if isinstance(value, np.ndarray):
+                assert value.tobytes() == other.tobytes(), name
+            else:
+                assert value == other and type(value) is type(other), name
