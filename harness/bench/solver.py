@@ -212,7 +212,7 @@ def print_solver(results: dict) -> None:
               f"{entry['ratio_to_numpy_passes']:>7.2f} {entry['ratio_to_reused_passes']:>15.2f}")
     print("  scalar solve per call: "
           + ", ".join(f"{law} {t:.0f} µs" for law, t in results["scalar_solve_us"].items())
-          + " (target < 50 µs)")
+          + " (target ≤ 10 µs)")
     print("  exact impulse process per problem (pure Python): "
           + ", ".join(f"{law} {t:.1f} µs" for law, t in results["process_us"].items()))
 

@@ -123,9 +123,9 @@ class ContactTerms:
 # (from compression), 1 is r_m < α ≤ (1+e) r_m (from restitution), 2 is beyond (forward
 # sliding). Cases 1-2 stick, Case 3 reverses; Case 4 is Type 1 for every α > 0 (57) and
 # Case 5 Type 5 (55).
-_POISSON_TYPE_BY_CASE_REGION = np.array(
-    [0, 0, 0, 1, 2, 5, 1, 2, 5, 3, 4, 5, 1, 1, 1, 5, 5, 5], dtype=np.int8
-)
+POISSON_TYPE_BY_CASE_REGION: tuple[int, ...] = (
+    0, 0, 0, 1, 2, 5, 1, 2, 5, 3, 4, 5, 1, 1, 1, 5, 5, 5)
+_POISSON_TYPE_BY_CASE_REGION = np.array(POISSON_TYPE_BY_CASE_REGION, dtype=np.int8)
 
 
 def table1_case(g, h, p, q):

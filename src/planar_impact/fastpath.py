@@ -1,0 +1,398 @@
+"""The scalar fast path of :func:`planar_impact.solve`: one problem in plain Python floats.
+
+numpy's fixed cost per call (~1 µs a ufunc, ~10 µs a LAPACK call) made ``solve`` cost
+120–200 µs; here the same steps run on floats and lists:
+
+* Contact terms (A20) by a Cholesky factor ``M = L Lᵀ`` written out for the few speeds of
+  planar bodies (``p ≤ MAX_SPEEDS``): ``a = L⁻¹ w_n``, ``b = L⁻¹ w_t``,
+  ``M⁻¹ w = L⁻ᵀ a``; ``m_nn = w_n·M⁻¹w_n`` etc. and ``Δ`` as the sum of the squared minors
+  ``a_i b_j − a_j b_i`` (Lagrange's identity, as :func:`planar_impact.solver.contact_terms`).
+  The order of the operations differs from LAPACK's, so these terms (and ``Δu``) agree with
+  the numpy path within rounding, not bit for bit: ``|Δm| ≤ 4 p ε κ(M) (m_nn m_tt)^½``
+  (backward-stable Cholesky and triangular solves; tests/theory/test_fastpath.py checks
+  ``1e-12`` relative on well-conditioned draws).
+* The law, given those terms: the very expressions of :mod:`planar_impact.laws` in the same
+  order, evaluated for the selected branch only. IEEE float64 ``+ − × ÷ √`` are correctly
+  rounded in Python as in numpy, so the answer equals :func:`planar_impact.solve_batch` on
+  the same ``(m_nn, m_nt, m_tt, v_n^A, v_t^A, μ, e, Δ)`` bit for bit (checked over thousands
+  of random problems of every law and type, also under ``OPENBLAS_CORETYPE=Prescott``).
+
+Anything else goes to the numpy path, which then raises or answers exactly as before:
+inputs that are not plain finite arrays of matching size, ``M`` not symmetric bit for bit
+(the tolerance check) or not positive definite, more than ``MAX_SPEEDS`` speeds, any error
+status (no approach, ``Δ ≤ 0``, a Painlevé jam, ``q ≤ 0`` in reverse sliding, no consistent
+``newton-lcp`` or ``stronge-paper`` answer), speeds or terms outside ``2^±64`` (scaled
+there), and any division by zero. Near Table 1's band (``laws.TYPE_BAND``: mostly
+``v_t^A = 0``) the batch's candidate search runs on numpy scalars, slower but the same.
+:func:`fast_solve` returns None for the declined cases.
+
+The last ``M``'s check and factor are kept, keyed on its bytes (a function of ``M`` alone,
+so reusing it changes no result): a body's ``M`` stays while its contact and speeds change.
+The factor keeps only its non-zero entries (planar bodies' ``M`` are diagonal or
+block-diagonal). Measured per call: README, 'Measured speed'.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import laws
+
+#: Most generalized speeds solved here (two free planar bodies have 6); beyond, numpy's
+#: O(p³) kernels win.
+MAX_SPEEDS = 8
+
+_POISSON_TYPES = laws.POISSON_TYPE_BY_CASE_REGION
+
+
+def _floats(value, size):
+    """``value`` as a list of ``size`` finite floats, or None (the numpy path reports why)."""
+    if type(value) is not np.ndarray or value.dtype != _FLOAT:
+        value = np.asarray(value, dtype=float)
+    if value.shape != (size,):
+        return None
+    values = value.tolist()
+    total = sum(values)  # inf or NaN if any value is (or if the sum overflows: numpy path)
+    return values if total - total == 0.0 else None
+
+
+def _number(value, low, high):
+    if not isinstance(value, (float, int)):  # numpy's floats too; anything else: numpy path
+        return None
+    value = float(value)
+    return value if low <= value <= high else None  # NaN fails too
+
+
+def fast_solve(mass_matrix, wn, wt, u, mu, e, law, safe_low, safe_high):
+    """The fields of :class:`planar_impact.solver.ImpactResult` as a dict, or None where the
+    numpy path must decide (see the module docstring). ``law`` is already checked."""
+    matrix = mass_matrix
+    if type(matrix) is not np.ndarray or matrix.dtype != _FLOAT:
+        matrix = np.asarray(matrix, dtype=float)
+    if matrix.ndim != 2:
+        return None
+    size = matrix.shape[0]
+    if size == 0 or size > MAX_SPEEDS or matrix.shape[1] != size:
+        return None
+    key = matrix.tobytes()
+    cached_key, factor = _last_factor
+    if key != cached_key:  # a new M: check it, and factor it
+        rows = matrix.tolist()
+        total = sum(map(sum, rows))
+        if not total - total == 0.0 or list(map(list, zip(*rows))) != rows:  # finite, symmetric
+            return None
+        factor = _cholesky(rows, size)
+        if factor is None:
+            return None
+        factor = _sparse(factor, size)
+        _remember(key, factor)
+    wn, wt, u = _floats(wn, size), _floats(wt, size), _floats(u, size)
+    mu, e = _number(mu, 0.0, _LARGEST), _number(e, 0.0, 1.0)
+    if wn is None or wt is None or u is None or mu is None or e is None:
+        return None
+    try:
+        return _solve(factor, size, wn, wt, u, mu, e, law, safe_low, safe_high)
+    except (ZeroDivisionError, ValueError, OverflowError):  # a branch numpy answers with inf
+        return None
+
+
+_LARGEST = 1.7976931348623157e308
+_FLOAT = np.dtype(float)
+
+
+# The factor of the last M checked here (a function of M's bytes alone, so reusing it changes
+# no result): a body's M stays while its contact and speeds change, as in a simulation or a
+# fit that solves one impact at a time.
+_last_factor: tuple = (None, None)
+
+
+def _remember(key, factor):
+    global _last_factor
+    _last_factor = (key, factor)  # one assignment: another thread sees the old pair or the new
+
+
+def _solve(factor, size, wn, wt, u, mu, e, law, safe_low, safe_high):
+    mnn, mnt, mtt, vn, vt, delta, inv_wn, inv_wt = _contact_terms(factor, size, wn, wt, u)
+    if not (safe_low < -vn < safe_high and abs(vt) < safe_high
+            and safe_low < mnn < safe_high and safe_low < mtt < safe_high and delta > 0):
+        return None  # out of range (the numpy path rescales), or no approach, or Δ ≤ 0
+    sign = -1.0 if vt < 0 or (vt == 0 and mnt < 0) else 1.0  # t → −t as in solve_batch
+    out = law_answer(law, mnn, sign * mnt, mtt, vn, abs(vt), mu, e, delta)
+    if out is None:
+        return None
+    (normal, tangential, vn_separation, vt_separation, energy_change, ctype, case,
+     e_poisson, at_boundary, alternative) = out
+    tangential *= sign
+    delta_u = [x * normal + y * tangential for x, y in zip(inv_wn, inv_wt)]  # (A16)
+    total = sum(delta_u) + energy_change
+    if not total - total == 0.0:
+        return None
+    # One array for both (two rows that never overlap): one numpy call fewer.
+    delta_u, u_after = np.array([delta_u, [x + y for x, y in zip(u, delta_u)]])
+    lcp = law == "newton-lcp"
+    return {
+        "law": law, "normal_impulse": normal, "tangential_impulse": tangential,
+        "delta_u": delta_u, "u_after": u_after, "vn_approach": vn,
+        "vn_separation": vn_separation, "vt_approach": vt,
+        "vt_separation": sign * vt_separation, "energy_change": energy_change,
+        "collision_type": ctype, "case": case,
+        "restitution_poisson": None if lcp else e_poisson,
+        "restitution_in_range": lcp or 0.0 <= e_poisson <= 1.0,
+        "mnn": mnn, "mnt": mnt, "mtt": mtt,
+        "type_at_boundary": at_boundary, "alternative_type": alternative,
+    }
+
+
+def _cholesky(rows, size):
+    """Lower factor ``L`` of ``M = L Lᵀ`` as lists of rows, or None where a pivot is not
+    positive (``M`` not positive definite: the numpy path raises)."""
+    factor = []
+    for i in range(size):
+        row, factor_i = rows[i], []
+        for j in range(i):
+            factor_j = factor[j]
+            value = row[j]
+            for k in range(j):
+                value -= factor_i[k] * factor_j[k]
+            factor_i.append(value / factor_j[j])
+        pivot = row[i]
+        for k in range(i):
+            pivot -= factor_i[k] * factor_i[k]
+        if not pivot > 0:
+            return None
+        factor_i.append(math.sqrt(pivot))
+        factor.append(factor_i)
+    return factor
+
+
+def _sparse(factor, size):
+    """``L`` as ``(rows, columns, diagonal)``: per row ``i`` the pairs ``(k, L_ik)``, ``k < i``,
+    and per column ``i`` the pairs ``(k, L_ki)``, ``k > i``, of its non-zero entries. The
+    bodies' ``M`` are diagonal or block-diagonal; a term ``0·x`` left out (``x`` finite)
+    changes no value, at most the sign of a zero."""
+    rows = [[(k, factor[i][k]) for k in range(i) if factor[i][k] != 0.0] for i in range(size)]
+    columns = [[(k, factor[k][i]) for k in range(i + 1, size) if factor[k][i] != 0.0]
+               for i in range(size)]
+    return rows, columns, [factor[i][i] for i in range(size)]
+
+
+def _contact_terms(factor, size, wn, wt, u):
+    """``(m_nn, m_nt, m_tt, v_n^A, v_t^A, Δ, M⁻¹w_n, M⁻¹w_t)`` (A20) from ``M``'s factor
+    (:func:`_sparse`): ``a = L⁻¹ w_n``, ``b = L⁻¹ w_t`` in one pass, then ``M⁻¹ w = L⁻ᵀ a``
+    (resp. ``b``)."""
+    rows, columns, diagonal = factor
+    a, b = [], []
+    for i in range(size):
+        x, y = wn[i], wt[i]
+        for k, entry in rows[i]:
+            x -= entry * a[k]
+            y -= entry * b[k]
+        a.append(x / diagonal[i])
+        b.append(y / diagonal[i])
+    inv_wn, inv_wt = [0.0] * size, [0.0] * size
+    for i in range(size - 1, -1, -1):
+        x, y = a[i], b[i]
+        for k, entry in columns[i]:
+            x -= entry * inv_wn[k]
+            y -= entry * inv_wt[k]
+        inv_wn[i], inv_wt[i] = x / diagonal[i], y / diagonal[i]
+    mnn = mnt = mtt = vn = vt = 0.0
+    for i in range(size):
+        mnn += wn[i] * inv_wn[i]
+        mnt += wn[i] * inv_wt[i]
+        mtt += wt[i] * inv_wt[i]
+        vn += wn[i] * u[i]
+        vt += wt[i] * u[i]
+    # Δ by Lagrange's identity: the sum of the squared minors a_i b_j − a_j b_i (no
+    # cancellation, as planar_impact.solver.contact_terms).
+    squares = []
+    for i in range(size):
+        for j in range(i + 1, size):
+            minor = a[i] * b[j] - a[j] * b[i]
+            squares.append(minor * minor)
+    return mnn, mnt, mtt, vn, vt, math.fsum(squares), inv_wn, inv_wt
+
+
+def law_answer(law, mnn, mnt, mtt, vn, vt, mu, e, delta):
+    """:func:`planar_impact.solver.contact_space_solution` of one row in the theory's ``t``
+    (``v_t ≥ 0``), bit for bit, as floats (a tuple in :data:`LAW_FIELDS` order); None where
+    the row is not cleanly solved (an error status, or a division by zero). Rows near
+    Table 1's band run the batch's candidate search
+    (:func:`planar_impact.laws.poisson_type_boundary`) on numpy scalars."""
+    vn_abs = -vn
+    mu_mtt, mu_mnt = mu * mtt, mu * mnt
+    g, h = mu_mtt - mnt, mnn - mu_mnt  # (A35)
+    p, q = mu_mtt + mnt, mnn + mu_mnt
+    if h <= 0 and g <= 0:  # Painlevé jam
+        return None
+    case = laws.table1_case(g, h, p, q)
+    if law in ("poisson", "stronge-paper"):
+        alpha, r_m = vt / vn_abs, g / h  # (A34), (A36)
+        upper = (1.0 + e) * r_m
+        ctype = _POISSON_TYPES[3 * case + int(alpha > r_m) + int(alpha > upper)]
+        at_boundary, alternative = False, 0
+        if _near_table1_boundary(g, h, p, q, alpha, r_m, upper):
+            # Rare (α ≈ 0 mostly): the candidate search of the batch, on numpy scalars.
+            terms = laws.ContactTerms(*(np.float64(x) for x in (mnn, mnt, mtt, vn, vt, mu)),
+                                      np.float64(delta))
+            with np.errstate(all="ignore"):
+                at_boundary, alternative = laws.poisson_type_boundary(terms, np.float64(e),
+                                                                      ctype)
+        e_poisson = e
+        if law == "stronge-paper":
+            e_poisson = _stronge_paper_restitution(mnt, mtt, mu, g, alpha, r_m, e, ctype)
+            if not math.isfinite(e_poisson):
+                return None
+        normal, tangential = _poisson_impulses(mnt, mtt, mu, vn_abs, vt, g, h, q, delta,
+                                               e_poisson, ctype)
+        reverse = ctype in (laws.REVERSE_FROM_COMPRESSION, laws.REVERSE_FROM_RESTITUTION)
+    elif law == "newton-lcp":
+        answer = _newton_lcp(mnn, mnt, mtt, vt, mu, vn_abs, g, h, p, q, delta, e)
+        if answer is None:
+            return None
+        normal, tangential, ctype = answer
+        at_boundary, alternative = False, 0  # laws not decided by Table 1
+        e_poisson = math.nan
+        reverse = ctype == laws.NEWTON_REVERSE
+    else:
+        normal, tangential, ctype, compression = _process(law, mnt, mtt, vt, mu, vn_abs, g, h,
+                                                          p, q, delta, e)
+        e_poisson = (normal - compression) / compression
+        at_boundary, alternative = False, 0
+        reverse = (ctype == laws.NEWTON_REVERSE if law == "newton"
+                   else ctype in (laws.REVERSE_FROM_COMPRESSION, laws.REVERSE_FROM_RESTITUTION))
+    if reverse and q <= 0:
+        return None
+    vn_separation = vn + (mnn * normal + mnt * tangential)  # (A22)
+    vt_separation = vt + (mnt * normal + mtt * tangential)  # (A23)
+    energy_change = 0.5 * (normal * (vn_separation + vn)
+                           + tangential * (vt_separation + vt))  # (A29)
+    return (normal, tangential, vn_separation, vt_separation, energy_change, ctype, case,
+            e_poisson, at_boundary, alternative)
+
+
+#: What :func:`law_answer` returns, in order (names of :class:`planar_impact.BatchResult`).
+LAW_FIELDS = ("normal_impulse", "tangential_impulse", "vn_separation", "vt_separation",
+              "energy_change", "collision_type", "case", "restitution_poisson",
+              "type_at_boundary", "alternative_type")
+
+
+def _near_table1_boundary(g, h, p, q, alpha, r_m, upper, band=laws.TYPE_BAND):
+    """laws.poisson_type_boundary's screen (a superset of the rows inside the band), on
+    floats; the inputs are finite here, so Python's min/max equal numpy's."""
+    wide = 2.0 * band
+    abs_g, abs_p, abs_h, abs_q = abs(g), abs(p), abs(h), abs(q)
+    width = wide * (1.0 + abs(alpha) + abs(upper) + abs(r_m))
+    return (min(abs_g, abs_p) <= wide * max(abs_g, abs_p)
+            or min(abs_h, abs_q) <= wide * max(abs_h, abs_q)
+            or abs(alpha - r_m) <= width or abs(alpha - upper) <= width or alpha <= width)
+
+
+def _poisson_impulses(mnt, mtt, mu, vn_abs, vt, g, h, q, delta, e, ctype):
+    """laws.poisson_impulses for one type: (25)/(34)/(29, 40, 48), (26)/(36, 44)/(49)."""
+    if ctype == laws.STICK_IN_COMPRESSION:
+        compression = (mtt * vn_abs + mnt * vt) / delta  # (25)
+    elif ctype == laws.REVERSE_FROM_COMPRESSION:
+        compression = (vn_abs + mnt * (2.0 * mu * vt / g)) / q  # (34)
+    else:
+        compression = vn_abs / h  # (29), (40), (48)
+    normal = (1.0 + e) * compression
+    if ctype <= laws.STICK_IN_RESTITUTION:
+        tangential = -(mnt * normal + vt) / mtt  # (26), (29)
+    elif ctype == laws.FORWARD_SLIDING:
+        tangential = -(mu * normal)  # (49)
+    else:
+        tangential = mu * normal - 2.0 * mu * vt / g  # (36)/(44)
+    return normal, tangential
+
+
+def _stronge_paper_restitution(mnt, mtt, mu, g, alpha, r_m, e_energetic, ctype):
+    """laws.stronge_paper_restitution for one type: (64)/(67)/(70)/(73)/(74)."""
+    if ctype == laws.FORWARD_SLIDING:
+        return e_energetic  # (74)
+    e2 = e_energetic * e_energetic
+    ratio = mnt / mtt if ctype <= laws.STICK_IN_RESTITUTION else 2.0 * mu * mnt / g
+    linear = ratio * alpha  # r (62) or s (68)
+    in_restitution = ctype in (laws.STICK_IN_RESTITUTION, laws.REVERSE_FROM_RESTITUTION)
+    shift = ratio * (r_m - alpha) if in_restitution else 0.0  # y (65) or z (71)
+    a, b, c = 1.0 + linear + shift, linear + 2.0 * shift, shift - e2
+    discriminant = b * b - 4.0 * a * c
+    if discriminant < 0:
+        return math.nan
+    root = math.sqrt(discriminant)
+    if b >= 0:
+        b_plus_root = b + root
+        return -2.0 * c / b_plus_root if b_plus_root > 0 else 0.0 * root
+    return (root - b) / (2.0 * a)
+
+
+def _newton_lcp(mnn, mnt, mtt, vt, mu, vn_abs, g, h, p, q, delta, e):
+    """laws.newton_lcp for one row: ``(I_n, I_t, type)``, or None where inconsistent."""
+    closing = (1.0 + e) * vn_abs
+    stick_n = (mtt * closing + mnt * vt) / delta
+    stick_t = -(mnn * vt + mnt * closing) / delta
+    rounding = 1e-12
+    cone = mu * stick_n
+    stick_size = abs(stick_t)
+    if stick_n >= 0 and stick_size <= cone + rounding * (stick_size + cone):
+        return stick_n, stick_t, laws.NEWTON_STICK
+    slide_terms = abs(mnt) + mu * mtt
+    if h > 0:
+        forward_n = closing / h
+        if vt - g * forward_n >= -rounding * (vt + slide_terms * forward_n):
+            return forward_n, -mu * forward_n, laws.NEWTON_FORWARD
+    if q > 0:
+        reverse_n = closing / q
+        if vt + p * reverse_n <= rounding * (vt + slide_terms * reverse_n):
+            return reverse_n, mu * reverse_n, laws.NEWTON_REVERSE
+    return None
+
+
+def _process(law, mnt, mtt, vt, mu, vn_abs, g, h, p, q, delta, e):
+    """laws.TwoPhaseProcess.newton / .stronge for one row: ``(I_n, I_t, type, P_c)``."""
+    sticks = p >= 0
+    finite_g = False
+    if g > 0:
+        quotient = vt / g  # P_G (A58)
+        finite_g = math.isfinite(quotient)
+    p_g = quotient if finite_g else 0.0
+    vn_g = h * p_g - vn_abs
+    slope_n2 = delta / mtt if sticks else q
+    compression_in_phase1 = not finite_g or vn_g >= 0.0
+    compression = (vn_abs / h if compression_in_phase1
+                   else p_g - vn_g / slope_n2)
+    if law == "newton":
+        target = e * vn_abs
+        forward = not finite_g or vn_g >= target
+        normal = ((target + vn_abs) / h if forward
+                  else p_g + (target - vn_g) / slope_n2)
+        ctype = laws.NEWTON_FORWARD if forward else laws.NEWTON_STICK + int(not sticks)
+    else:
+        work_to_g = 0.5 * vn_g * (p_g - compression)
+        absorbed = (0.5 * vn_abs * compression if compression_in_phase1
+                    else 0.5 * (vn_abs - vn_g) * p_g + work_to_g)
+        work_target = (e * e) * absorbed
+        ends_in_phase1 = compression_in_phase1 and (not finite_g or work_to_g >= work_target)
+        if ends_in_phase1:
+            normal = compression + math.sqrt(2.0 * work_target / h)
+            ctype = laws.FORWARD_SLIDING
+        else:
+            start = p_g if compression_in_phase1 else compression
+            v_start = vn_g if compression_in_phase1 else 0.0
+            remaining = work_target - work_to_g if compression_in_phase1 else work_target
+            twice_remaining = 2.0 * (remaining if remaining >= 0.0 else 0.0)
+            root = math.sqrt(v_start * v_start + slope_n2 * twice_remaining)
+            denominator = v_start + root
+            step = (twice_remaining / denominator if denominator > 0
+                    else math.sqrt(twice_remaining / slope_n2))
+            normal = start + step
+            ctype = (laws.STICK_IN_COMPRESSION + int(compression_in_phase1)
+                     + 2 * int(not sticks))
+    if not finite_g or normal <= p_g:
+        tangential = -mu * normal
+    else:
+        slope_t2 = -mnt / mtt if sticks else mu
+        tangential = slope_t2 * (normal - p_g) - mu * p_g
+    return normal, tangential, ctype, compression
