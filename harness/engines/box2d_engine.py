@@ -947,6 +947,16 @@ def _speed_results(derived: dict, probe_speed: float | None, velocity: float,
 class Box2DEngine(Engine):
     name = "box2d"
     version = Box2D.__version__
+    # What the rest of the harness reads about this engine (docs/engines.md, 'The engine
+    # contract'): why it lands where it does, per engine and per preset, and its plot style.
+    description = (
+        "Box2D solves the velocity-level law (newton-lcp) by sequential impulses, like "
+        "pymunk; its measured behaviour is in docs/engines.md, 'Box2D'.")
+    preset_why = {
+        "defaults": ("Box2D's own defaults."),
+        "accurate": ("settings under which Box2D solves its law as exactly as it can."),
+    }
+    plot_style = ("#CC79A7", "D")
     presets = PRESETS
     setting_docs = SETTING_DOCS
     # Collision first: the first step finds the contact at the start pose. The start's

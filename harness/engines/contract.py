@@ -444,6 +444,17 @@ class Engine(abc.ABC):
     timing: StepTiming = StepTiming()
     no_impulse_relative: float = NO_IMPULSE_RELATIVE
     max_worlds: int | None = None
+    # What the rest of the harness knows about the engine, read through the registry
+    # (harness.engines.engine_trait); checked by harness.engines.conformance.check_engine.
+    #: One paragraph: why the engine lands where it does against the laws (the report shows it).
+    description: str = ""
+    #: preset role -> one line: what the preset changes and why (the report shows it).
+    preset_why: Mapping[str, str] = {}
+    #: (colour, marker) in every figure; colours from the Okabe–Ito colour-blind-safe palette.
+    plot_style: tuple[str, str] = ("#000000", "x")
+    #: (largest linear speed m/s, largest angular speed rad/s) the engine clamps to, or None
+    #: when it clamps nothing; runs reaching it are flagged clipped (docs/verdicts.md).
+    speed_caps: tuple[float, float] | None = None
     _last_checked: tuple | None = None  # (settings passed, resolved copy, preset)
     _last_scene: Scene | None = None  # the last scene that passed the checks
     _last_weights: tuple | None = None  # its energy_weights, from the checks

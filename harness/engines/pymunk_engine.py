@@ -237,6 +237,21 @@ _IDENTITY = (1.0, 0.0, 0.0, 1.0, 0.0, 0.0)  # pymunk's Transform.identity() for 
 class PymunkEngine(Engine):
     name = "pymunk"
     version = pymunk.version
+    # What the rest of the harness reads about this engine (docs/engines.md, 'The engine
+    # contract'): why it lands where it does, per engine and per preset, and its plot style.
+    description = (
+        "Chipmunk2D solves the engines' velocity-level law (newton-lcp): within one step it "
+        "iterates impulses until the normal contact velocity is e times the approach speed, "
+        "with Coulomb friction judged at the end state. Its departure from Poisson and "
+        "Stronge is therefore mostly the law itself: wherever the slip stops or reverses "
+        "during the impact, newton-lcp ends elsewhere (docs/engines.md, 'pymunk').")
+    preset_why = {
+        "defaults": ("10 solver iterations per step: exact on a lone contact, about "
+                     "1e-5 off on coupled contacts (a rod or a box corner)."),
+        "accurate": ("100 iterations: newton-lcp to rounding; only the iterations "
+                     "differ from defaults."),
+    }
+    plot_style = ("#0072B2", "o")
     presets = PRESETS
     setting_docs = SETTING_DOCS
     # Positions first: the contact of step k is found after the move, so the bodies start
