@@ -201,11 +201,11 @@ def engine_roles(results: Results) -> list[tuple[str, str]]:
     """``Results.engine_roles``: the ``(engine, preset role)`` pairs present, presets in
     order, engines in registry order, read from :mod:`harness.engines` (the scenario
     package that ``Results`` reads them from takes a third of a warm report's imports)."""
-    from harness.engines import ENGINE_NAMES, PRESET_ROLES
+    from harness.engines import PRESET_ROLES, engine_names
     from harness.report.reading import source_presets
 
     present = source_presets(results)  # from the file's lines when the report read them
-    return [(e, p) for p in PRESET_ROLES for e in ENGINE_NAMES if (e, p) in present]
+    return [(e, p) for p in PRESET_ROLES for e in engine_names() if (e, p) in present]
 
 
 def engine_labels(results: Results) -> list[str]:
