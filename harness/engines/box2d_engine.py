@@ -957,11 +957,26 @@ class Box2DEngine(Engine):
         "accurate": ("settings under which Box2D solves its law as exactly as it can."),
     }
     plot_style = ("#CC79A7", "D")
+    bench_impacts = (40, 300)
     presets = PRESETS
     setting_docs = SETTING_DOCS
     # Collision first: the first step finds the contact at the start pose. The start's
     # hair of overlap is a depth in lengths (detection_overlap), added in _prepare.
     timing = StepTiming(lead_steps=0.0, overlap=0.0)
+
+
+    @classmethod
+    def bench_sweep(cls, quick: bool) -> list[tuple[str, str, dict]]:
+        """The settings the accuracy bench measures (harness/bench/accuracy.py)."""
+        points: list[tuple[str, str, dict]] = []
+        points.append(("defaults", "defaults", {}))
+        # Box2D's own time step changes nothing for a one-step impact but the translation
+        # cap; the sweeps are what converge the coupled points (float32 floor ~1e-7).
+        iterations = (1, 2, 5, 8, 20, 100) if quick else (1, 2, 3, 5, 8, 10, 20, 50, 100, 200)
+        for count in iterations:
+            points.append((f"dt={1 / 60:.3g} it={count}", "accurate",
+                           {"velocity_iterations": count}))
+        return points
 
     def _validate_engine_settings(self, settings) -> None:
         check_int(self.name, settings, "velocity_iterations", low=1)

@@ -150,6 +150,9 @@ from harness.collector import collector_paused
 from harness.engines.settings import EngineSettingsError, check_int, check_number
 from harness.scene import Scene
 
+#: The accuracy bench's label of an engine's converged reference setting (own_law
+#: "converged").
+BENCH_REFERENCE_LABEL = "RK4 contact_steps=400 (reference)"
 # Relative size of a step's normal impulse (against the largest step's) below which the
 # step counts as "no impulse": rounding noise of re-solving a resting contact is ~1e-16.
 NO_IMPULSE_RELATIVE = 1e-12
@@ -455,6 +458,22 @@ class Engine(abc.ABC):
     #: (largest linear speed m/s, largest angular speed rad/s) the engine clamps to, or None
     #: when it clamps nothing; runs reaching it are flagged clipped (docs/verdicts.md).
     speed_caps: tuple[float, float] | None = None
+    #: The law the engine solves at its accurate limit: "newton-lcp" (sequential impulses)
+    #: or "converged" (its own run at the finest settings, BENCH_REFERENCE_LABEL); the
+    #: accuracy bench measures against it.
+    own_law: str = "newton-lcp"
+    #: Impacts per reference scene in ``impact-harness bench --engines`` (quick, full):
+    #: enough for a stable timing at the engine's speed.
+    bench_impacts: tuple[int, int] = (40, 300)
+    #: Rough seconds per rod-45 impact under ``accurate``: the executor bench takes the
+    #: slowest installed engine (compute, not pickling) and sizes its batch by it.
+    bench_impact_seconds: float = 1e-4
+
+    @classmethod
+    def bench_sweep(cls, quick: bool) -> list[tuple[str, str, dict]]:
+        """``[(label, preset, overrides)]``: the settings the accuracy bench measures
+        (default: the two presets)."""
+        return [("defaults", "defaults", {}), ("accurate", "accurate", {})]
     _last_checked: tuple | None = None  # (settings passed, resolved copy, preset)
     _last_scene: Scene | None = None  # the last scene that passed the checks
     _last_weights: tuple | None = None  # its energy_weights, from the checks

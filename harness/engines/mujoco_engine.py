@@ -93,6 +93,7 @@ import mujoco
 import numpy as np
 
 from harness.engines.contract import (
+    BENCH_REFERENCE_LABEL,
     Engine,
     RawContacts,
     StepTiming,
@@ -687,6 +688,11 @@ _reset_data = mujoco.mj_resetData
 _set_const = mujoco.mj_setConst
 
 
+#: The accurate preset's contact duration (s): 50 steps of 1e-5 s; the accuracy bench holds it
+#: while it refines the steps.
+BENCH_CONTACT_DURATION_S = 5e-4
+
+
 class MujocoEngine(Engine):
     name = "mujoco"
     version = mujoco.__version__
@@ -717,6 +723,9 @@ class MujocoEngine(Engine):
                      "m_nt ≠ 0 it can create energy (runs flagged energy-gain)."),
     }
     plot_style = ("#009E73", "^")
+    bench_impacts = (20, 150)
+    bench_impact_seconds = 8e-4
+    own_law = "converged"  # a soft contact solves no rigid law: its limit is itself
     presets = PRESETS
     setting_docs = SETTING_DOCS
     # A contact at exactly zero distance gets no constraint row in MuJoCo, so the start is a
@@ -725,6 +734,29 @@ class MujocoEngine(Engine):
     # The soft contact's force fades continuously and MuJoCo makes it exactly 0 once the
     # constraint is inactive: only an exact 0 counts as no impulse.
     no_impulse_relative = 0.0
+
+
+    @classmethod
+    def bench_sweep(cls, quick: bool) -> list[tuple[str, str, dict]]:
+        """The settings the accuracy bench measures (harness/bench/accuracy.py)."""
+        points: list[tuple[str, str, dict]] = []
+        points.append(("defaults", "defaults", {}))
+        for timeconst in ((0.005, 0.001) if quick else (0.01, 0.005, 0.002, 0.001)):
+            dt = timeconst / 20.0
+            points.append((f"solref tc={timeconst:g} dt={dt:.2g}", "defaults",
+                           {"solref": [timeconst, 1.0], "time_step": dt}))
+        # The accurate preset's spring-damper with the contact's duration held at 0.5 ms, so
+        # only the resolution changes: contact_steps steps of 0.5 ms / contact_steps.
+        contact_steps = (5, 10, 20, 50, 100) if quick else (5, 10, 20, 30, 50, 100, 200)
+        for integrator in ("Euler", "RK4"):
+            for count in contact_steps:
+                points.append((f"{integrator} contact_steps={count}", "accurate",
+                               {"integrator": integrator, "contact_steps": count,
+                                "time_step": BENCH_CONTACT_DURATION_S / count}))
+        points.append((BENCH_REFERENCE_LABEL, "accurate",
+                       {"integrator": "RK4", "contact_steps": 400,
+                        "time_step": BENCH_CONTACT_DURATION_S / 400}))
+        return points
 
     def _validate_engine_settings(self, settings) -> None:
         name = self.name

@@ -252,11 +252,27 @@ class PymunkEngine(Engine):
                      "differ from defaults."),
     }
     plot_style = ("#0072B2", "o")
+    bench_impacts = (400, 3000)
+    bench_impact_seconds = 2e-4
     presets = PRESETS
     setting_docs = SETTING_DOCS
     # Positions first: the contact of step k is found after the move, so the bodies start
     # one step (less a hair) before the touching pose.
     timing = StepTiming(lead_steps=1.0, overlap=_DETECTION_OVERLAP, recentre_y=False)
+
+
+    @classmethod
+    def bench_sweep(cls, quick: bool) -> list[tuple[str, str, dict]]:
+        """The settings the accuracy bench measures (harness/bench/accuracy.py)."""
+        points: list[tuple[str, str, dict]] = []
+        points.append(("defaults", "defaults", {}))
+        steps = (1 / 60, 1e-3) if quick else (1 / 60, 1e-3, 1e-4)
+        iterations = (1, 2, 5, 10, 20, 50, 100) if quick else (1, 2, 3, 5, 10, 20, 30, 50, 100, 200)
+        for dt in steps:
+            for count in iterations:
+                points.append((f"dt={dt:.3g} it={count}", "accurate",
+                               {"time_step": dt, "iterations": count}))
+        return points
 
     def __init__(self) -> None:
         self._bodies_out = ffi.new("cpBody **"), ffi.new("cpBody **")
