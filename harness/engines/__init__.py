@@ -85,6 +85,11 @@ def pinned_requirement(distribution: str) -> str:
     return distribution
 
 
+def engine_distribution(name: str) -> str:
+    """The distribution (pip name) of shipped engine ``name``'s package (provenance)."""
+    return _ENGINE_MODULES[name][2]
+
+
 def preset_label(engine: str, role: str | None) -> str | None:
     """The name users see for ``engine``'s preset ``role`` (the role itself unless renamed)."""
     if role is None:
@@ -339,6 +344,7 @@ __all__ = [
     "available_engines",
     "body_extent",
     "engine_class",
+    "engine_distribution",
     "engine_names",
     "engine_trait",
     "free_flight_poses",

@@ -956,6 +956,11 @@ class Box2DEngine(Engine):
         "defaults": ("Box2D's own defaults."),
         "accurate": ("settings under which Box2D solves its law as exactly as it can."),
     }
+    rounding = 1e-6  # float32 arithmetic: a few roundings of 6e-8 (ROUNDING in the tests)
+    # Box2D's default polygon skin (0.01 m) makes the rod's core box reach the ground beside
+    # its 5 mm end cap: three contact points at once.
+    reference_statuses = {("rod-45", "defaults"): "multi-contact"}
+    native_2d = True
     plot_style = ("#CC79A7", "D")
     bench_impacts = (40, 300)
     presets = PRESETS

@@ -92,6 +92,20 @@ def _attribute_failures(cls: type[Engine]) -> list[str]:
             and all(isinstance(v, float) and math.isfinite(v) and v > 0 for v in caps)):
         failures.append(f"{where}.speed_caps: None or (linear m/s, angular rad/s) positive "
                         f"finite floats, got {caps!r}")
+    if not (isinstance(cls.rounding, float) and 0.0 < cls.rounding < 1e-3):
+        failures.append(f"{where}.rounding: a float in (0, 1e-3), got {cls.rounding!r}")
+    statuses = cls.reference_statuses
+    if not (isinstance(statuses, Mapping) and all(
+            isinstance(key, tuple) and len(key) == 2 and key[1] in _ROLES
+            and value in set(Status) for key, value in statuses.items())):
+        failures.append(f"{where}.reference_statuses: (scene, role) -> a status, got "
+                        f"{statuses!r}")
+    if not isinstance(cls.own_law, str) or cls.own_law not in ("newton-lcp", "converged"):
+        failures.append(f"{where}.own_law: 'newton-lcp' or 'converged', got {cls.own_law!r}")
+    impacts = cls.bench_impacts
+    if not (isinstance(impacts, tuple) and len(impacts) == 2
+            and all(isinstance(v, int) and v > 0 for v in impacts)):
+        failures.append(f"{where}.bench_impacts: (quick, full) positive ints, got {impacts!r}")
     if not isinstance(cls.timing, StepTiming):
         failures.append(f"{where}.timing: a StepTiming, got {cls.timing!r}")
     return failures
@@ -142,6 +156,9 @@ def _run_failures(engine: Engine) -> list[str]:
                                 f"separated {run.separated}; expected a separation")
             if not run.contacts:
                 failures.append(f"{label}: no contact reported")
+            if (run.out_of_plane_drift is None) is not engine.native_2d:
+                failures.append(f"{label}: out_of_plane_drift {run.out_of_plane_drift!r} "
+                                f"but native_2d is {engine.native_2d}")
             if not all(math.isfinite(v) for body in run.velocities for v in body):
                 failures.append(f"{label}: non-finite velocities {run.velocities}")
             if engine.run(scene, settings) != run:

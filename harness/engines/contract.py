@@ -458,6 +458,16 @@ class Engine(abc.ABC):
     #: (largest linear speed m/s, largest angular speed rad/s) the engine clamps to, or None
     #: when it clamps nothing; runs reaching it are flagged clipped (docs/verdicts.md).
     speed_caps: tuple[float, float] | None = None
+    #: Absolute agreement (m/s, N s, unit normals) of quantities exact up to the engine's
+    #: arithmetic: 1e-9 in double precision; a float32 engine (Box2D) carries a few roundings
+    #: of 6e-8 each, so 1e-6 (the contract tests and check_engine hold an engine to it).
+    rounding: float = 1e-9
+    #: ``{(reference scene, preset role): status}`` where a reference scene's run is not
+    #: "ok", with the reason in a comment (tests/engines/test_contract.py expects these).
+    reference_statuses: Mapping[tuple[str, str], str] = {}
+    #: The engine is natively 2-D: no out-of-plane drift to measure (the adapter defines no
+    #: ``_out_of_plane_drift``; its runs report ``out_of_plane_drift`` None).
+    native_2d: bool = False
     #: The law the engine solves at its accurate limit: "newton-lcp" (sequential impulses)
     #: or "converged" (its own run at the finest settings, BENCH_REFERENCE_LABEL); the
     #: accuracy bench measures against it.

@@ -251,6 +251,7 @@ class PymunkEngine(Engine):
         "accurate": ("100 iterations: newton-lcp to rounding; only the iterations "
                      "differ from defaults."),
     }
+    native_2d = True
     plot_style = ("#0072B2", "o")
     bench_impacts = (400, 3000)
     bench_impact_seconds = 2e-4

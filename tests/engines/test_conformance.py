@@ -38,6 +38,11 @@ def test_the_toy_conforms_and_its_traits_come_from_its_class(toy):
     assert toy in registry.engine_names()
 
 
+@pytest.mark.parametrize("name", registry.ENGINE_NAMES)
+def test_every_shipped_engine_conforms(load_or_skip, name):
+    assert check_engine(load_or_skip(name)) == []
+
+
 def test_the_kit_names_each_broken_promise():
     class Undescribed(ToyEngine):
         description = ""
@@ -53,6 +58,14 @@ def test_the_kit_names_each_broken_promise():
             return contact if contact is not None else (((0.0, 0.0, 0.0),), (0.0, 1.0),
                                                         (0.0, 0.0), 1.0)
 
+    class Misdeclared(ToyEngine):
+        native_2d = False  # yet it measures no drift
+        rounding = 1
+
+    failures = check_engine(Misdeclared)
+    assert any(".rounding" in line for line in failures)
+    failures = check_engine(type("Misdeclared2d", (ToyEngine,), {"native_2d": False}))
+    assert any("native_2d is False" in line for line in failures)
     failures = check_engine(Undescribed)
     assert any(".description" in line for line in failures)
     assert any(".plot_style" in line for line in failures)

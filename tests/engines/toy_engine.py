@@ -50,6 +50,7 @@ class ToyEngine(Engine):
     setting_docs = SETTING_DOCS
     description = "A test-only engine: exact Poisson impulses applied in one step."
     preset_why = {"defaults": "a step of 1/60 s.", "accurate": "a step of 1/600 s."}
+    native_2d = True
     plot_style = ("#56B4E9", "P")
 
     def _validate_engine_settings(self, settings) -> None:
