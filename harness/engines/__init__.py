@@ -7,7 +7,10 @@ Every engine lives in its own module behind the contract of :mod:`harness.engine
 command while the others keep working.
 
 Adding an engine: write ``harness/engines/<name>_engine.py`` with an :class:`Engine`
-subclass bound to ``ENGINE_CLASS``, and add one line to ``_ENGINE_MODULES`` below.
+subclass bound to ``ENGINE_CLASS`` (everything the harness knows about the engine is an
+attribute of that class: :func:`engine_trait`), check it with
+:func:`harness.engines.conformance.check_engine`, and add one line to ``_ENGINE_MODULES``
+below, or :func:`register_engine` it at run time.
 
 Presets: every engine has the same two preset *roles* (:data:`PRESET_ROLES`), which the
 harness runs, caches and records by: ``defaults`` (what a user of the engine gets) and

@@ -28,6 +28,13 @@ Class attributes
     continuously and reach exactly 0, such as MuJoCo's soft contact).
 ``max_worlds``
     How many built worlds to keep (``None``: one per key, never evicted).
+``description``, ``preset_why``, ``plot_style``, ``speed_caps``, ``own_law``,
+``bench_impacts``, ``bench_impact_seconds``, ``bench_sweep``, ``rounding``,
+``reference_statuses``, ``native_2d``
+    What the rest of the harness knows about the engine (report text and style, verdicts'
+    speed caps, bench profile, test expectations), each with a default below, read through
+    the registry (``harness.engines.engine_trait``; docs/engines.md, 'The engine contract')
+    and checked by :func:`harness.engines.conformance.check_engine`.
 
 Methods (``world`` is whatever the adapter builds; the base class only passes it back)
 
