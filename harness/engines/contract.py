@@ -487,6 +487,12 @@ class Engine(abc.ABC):
     bench_impact_seconds: float = 1e-4
 
     @classmethod
+    def time_step_overrides(cls, role: str, time_step: float) -> dict:
+        """The overrides that run preset ``role`` at ``time_step`` (the stress test's step
+        sweep); an engine whose preset ties other settings to the step adjusts them."""
+        return {"time_step": time_step}
+
+    @classmethod
     def bench_sweep(cls, quick: bool) -> list[tuple[str, str, dict]]:
         """``[(label, preset, overrides)]``: the settings the accuracy bench measures
         (default: the two presets)."""

@@ -737,6 +737,15 @@ class MujocoEngine(Engine):
 
 
     @classmethod
+    def time_step_overrides(cls, role: str, time_step: float) -> dict:
+        """At ``accurate`` the contact's duration is tied to steps: keep the spring at the
+        preset's 0.5 ms contact, so that the time step is what changes."""
+        if role != "accurate":
+            return {"time_step": time_step}
+        return {"time_step": time_step,
+                "contact_steps": max(1, int(round(BENCH_CONTACT_DURATION_S / time_step)))}
+
+    @classmethod
     def bench_sweep(cls, quick: bool) -> list[tuple[str, str, dict]]:
         """The settings the accuracy bench measures (harness/bench/accuracy.py)."""
         points: list[tuple[str, str, dict]] = []
