@@ -29,7 +29,7 @@ Class attributes
 ``max_worlds``
     How many built worlds to keep (``None``: one per key, never evicted).
 ``description``, ``preset_why``, ``plot_style``, ``speed_caps``, ``own_law``,
-``bench_impacts``, ``bench_impact_seconds``, ``bench_sweep``, ``rounding``,
+``bench_impacts``, ``bench_impact_seconds``, ``bench_sweep``, ``time_step_overrides``, ``rounding``,
 ``reference_statuses``, ``native_2d``
     What the rest of the harness knows about the engine (report text and style, verdicts'
     speed caps, bench profile, test expectations), each with a default below, read through
