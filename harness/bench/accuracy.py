@@ -37,68 +37,24 @@ from pathlib import Path
 
 import numpy as np
 
+from harness.engines.contract import BENCH_REFERENCE_LABEL
 from harness.run.files import save_figure
 
 FAMILIES: dict[str, str] = {"disk": "disk", "rod": "rod-45", "box-corner": "box-corner",
                              "two-bodies": "two-disks"}
 THRESHOLDS: tuple[float, ...] = (1e-2, 1e-3)
-OWN_LAW = {"pymunk": "newton-lcp", "pybullet": "newton-lcp", "mujoco": "converged",
-           "box2d": "newton-lcp"}
 
 
 # ---------------------------------------------------------------------- sweeps
 def sweep(engine_name: str, quick: bool) -> list[tuple[str, str, dict]]:
-    """``[(label, preset, overrides)]`` for one engine: the settings to measure."""
-    points: list[tuple[str, str, dict]] = []
-    if engine_name == "pymunk":
-        points.append(("defaults", "defaults", {}))
-        steps = (1 / 60, 1e-3) if quick else (1 / 60, 1e-3, 1e-4)
-        iterations = (1, 2, 5, 10, 20, 50, 100) if quick else (1, 2, 3, 5, 10, 20, 30, 50, 100, 200)
-        for dt in steps:
-            for count in iterations:
-                points.append((f"dt={dt:.3g} it={count}", "accurate",
-                               {"time_step": dt, "iterations": count}))
-    elif engine_name == "pybullet":
-        points.append(("defaults", "defaults", {}))
-        points.append(("defaults it=200", "defaults", {"num_solver_iterations": 200}))
-        iterations = (1, 2, 5, 10, 20, 50, 100) if quick else (1, 2, 3, 5, 10, 20, 30, 50, 100, 200)
-        for dt in ((1 / 240,) if quick else (1 / 240, 1e-3)):
-            for count in iterations:
-                points.append((f"dt={dt:.3g} it={count}", "accurate",
-                               {"time_step": dt, "num_solver_iterations": count}))
-        for sub in ((4,) if quick else (2, 4, 8)):
-            points.append((f"dt={1 / 240:.3g} it=10 sub={sub}", "accurate",
-                           {"num_solver_iterations": 10, "num_sub_steps": sub}))
-    elif engine_name == "box2d":
-        points.append(("defaults", "defaults", {}))
-        # Box2D's own time step changes nothing for a one-step impact but the translation
-        # cap; the sweeps are what converge the coupled points (float32 floor ~1e-7).
-        iterations = (1, 2, 5, 8, 20, 100) if quick else (1, 2, 3, 5, 8, 10, 20, 50, 100, 200)
-        for count in iterations:
-            points.append((f"dt={1 / 60:.3g} it={count}", "accurate",
-                           {"velocity_iterations": count}))
-    elif engine_name == "mujoco":
-        points.append(("defaults", "defaults", {}))
-        for timeconst in ((0.005, 0.001) if quick else (0.01, 0.005, 0.002, 0.001)):
-            dt = timeconst / 20.0
-            points.append((f"solref tc={timeconst:g} dt={dt:.2g}", "defaults",
-                           {"solref": [timeconst, 1.0], "time_step": dt}))
-        # The accurate preset's spring-damper with the contact's duration held at 0.5 ms, so
-        # only the resolution changes: contact_steps steps of 0.5 ms / contact_steps.
-        contact_steps = (5, 10, 20, 50, 100) if quick else (5, 10, 20, 30, 50, 100, 200)
-        for integrator in ("Euler", "RK4"):
-            for count in contact_steps:
-                points.append((f"{integrator} contact_steps={count}", "accurate",
-                               {"integrator": integrator, "contact_steps": count,
-                                "time_step": CONTACT_DURATION_S / count}))
-        points.append((REFERENCE_LABEL, "accurate",
-                       {"integrator": "RK4", "contact_steps": 400,
-                        "time_step": CONTACT_DURATION_S / 400}))
-    return points
+    """``[(label, preset, overrides)]`` for one engine: the settings to measure (its
+    adapter's ``bench_sweep``)."""
+    from harness.engines import engine_class
+
+    return engine_class(engine_name).bench_sweep(quick)
 
 
-REFERENCE_LABEL = "RK4 contact_steps=400 (reference)"
-CONTACT_DURATION_S = 5e-4  # MuJoCo's accurate preset: 50 steps of 1e-5 s
+REFERENCE_LABEL = BENCH_REFERENCE_LABEL
 TIE_FRACTION = 0.1  # settings whose mean time is within 10% are within timing noise
 
 
@@ -163,14 +119,14 @@ def measure_engine(engine_name: str, quick: bool, progress=None) -> dict:
     for row in rows:
         if "departure" not in row:
             continue
-        if OWN_LAW[engine_name] == "newton-lcp":
+        if engine.own_law == "newton-lcp":
             row["departure"]["own"] = row["departure"]["newton-lcp"]
         else:
             reference = next(r for r in rows
                              if r["setting"] == REFERENCE_LABEL and r["family"] == row["family"])
             scene = scenes[FAMILIES[row["family"]]][0]
             row["departure"]["own"] = departure(scene, row["u_after"], reference["u_after"])
-    return {"engine": engine_name, "version": engine.version, "own_law": OWN_LAW[engine_name],
+    return {"engine": engine_name, "version": engine.version, "own_law": engine.own_law,
             "rows": rows}
 
 
@@ -327,23 +283,22 @@ def impact_chunk(task: dict) -> list[list[float]]:
 
 def worker_speedup(quick: bool) -> dict:
     """Wall time of a batch of engine impacts through run_tasks with 1 and with 2 workers."""
-    from harness.engines import EngineNotInstalled, load_engine
+    from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine
     from harness.processes import default_workers
     from harness.run.executor import run_tasks
 
-    engine_name = None
-    # MuJoCo first: the slowest per impact, so the batch is compute, not pickling or start-up
-    for name in ("mujoco", "pybullet", "pymunk"):
+    installed = {}
+    for name in ENGINE_NAMES:
         try:
-            load_engine(name)
-            engine_name = name
-            break
+            installed[name] = load_engine(name).bench_impact_seconds
         except EngineNotInstalled:
             continue
-    if engine_name is None:
+    if not installed:
         return {"skipped": "no engine installed"}
+    # The slowest per impact (MuJoCo), so the batch is compute, not pickling or start-up.
+    engine_name = max(installed, key=installed.get)
     # rod-45, accurate preset
-    per_impact_s = {"mujoco": 8e-4, "pybullet": 5e-5, "pymunk": 2e-4}[engine_name]
+    per_impact_s = installed[engine_name]
     chunks = 16 if quick else 32
     impacts = max(1, int((2.0 if quick else 10.0) / (per_impact_s * chunks)))  # ~2 s (10 s) serial
     tasks = [{"engine": engine_name, "scene": "rod-45", "preset": "accurate",

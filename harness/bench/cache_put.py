@@ -31,13 +31,13 @@ def engine_outputs(runs: int) -> list[dict]:
 
 def _library_outputs() -> Iterator[dict]:
     """The output of each engine task of the library (both presets), run as it is asked for."""
-    from harness.engines import EngineNotInstalled, load_engine
+    from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine
     from harness.run import runner
     from harness.scenarios import load_scenarios
 
     for scenario in load_scenarios(None):
         for point in scenario.point_list():
-            for name in scenario.engines_among(("pymunk", "pybullet", "mujoco", "box2d")):
+            for name in scenario.engines_among(ENGINE_NAMES):
                 try:
                     engine = load_engine(name)
                 except EngineNotInstalled:

@@ -109,8 +109,6 @@ def run_engine_overhead_benchmark(quick: bool = True) -> dict:
     """
     scenes = reference_scenes()
     chosen = ("disk", "rod-45", "two-disks") if quick else tuple(scenes)
-    impacts = {"pymunk": 400, "pybullet": 200, "mujoco": 20, "box2d": 40} if quick else {
-        "pymunk": 3000, "pybullet": 1000, "mujoco": 150, "box2d": 300}
     rounds = 5 if quick else 7
     try:
         import planar_impact  # noqa: F401
@@ -132,6 +130,7 @@ def run_engine_overhead_benchmark(quick: bool = True) -> dict:
         except EngineNotInstalled as error:
             report["engines"][name] = {"available": False, "reason": str(error), "rows": []}
             continue
+        impacts = engine.bench_impacts[0 if quick else 1]
         rows = []
         for preset in ("defaults", "accurate"):
             settings = engine.settings(preset)
@@ -148,13 +147,13 @@ def run_engine_overhead_benchmark(quick: bool = True) -> dict:
                 verdict = verdicts.judge(scene, problem, verdicts.numbers_from_run(first),
                                          law_energy_change=law_change)
                 law_error = None
-                if have_solver and name in ("pymunk", "pybullet", "box2d"):
+                if have_solver and engine.own_law == "newton-lcp":
                     law = newton_lcp_velocities(scene, contact, normal)
                     diff = first.u_after - law.u_after
                     law_error = ke_norm(scene, diff) / ke_norm(scene, scene.state())
                 steps = first.steps
                 prepare, step_n = _bare_stepper(engine, scene, settings)
-                count = impacts[name]
+                count = impacts
                 # Rounds interleaved (harness, bare, bare+reset; best of each): a burst of
                 # machine noise then hits all three alike instead of one of them.
                 harness = bare = bare_reset = math.inf

@@ -7,7 +7,10 @@ Every engine lives in its own module behind the contract of :mod:`harness.engine
 command while the others keep working.
 
 Adding an engine: write ``harness/engines/<name>_engine.py`` with an :class:`Engine`
-subclass bound to ``ENGINE_CLASS``, and add one line to ``_ENGINE_MODULES`` below.
+subclass bound to ``ENGINE_CLASS`` (everything the harness knows about the engine is an
+attribute of that class: :func:`engine_trait`), check it with
+:func:`harness.engines.conformance.check_engine`, and add one line to ``_ENGINE_MODULES``
+below, or :func:`register_engine` it at run time.
 
 Presets: every engine has the same two preset *roles* (:data:`PRESET_ROLES`), which the
 harness runs, caches and records by: ``defaults`` (what a user of the engine gets) and
@@ -85,6 +88,11 @@ def pinned_requirement(distribution: str) -> str:
     return distribution
 
 
+def engine_distribution(name: str) -> str:
+    """The distribution (pip name) of shipped engine ``name``'s package (provenance)."""
+    return _ENGINE_MODULES[name][2]
+
+
 def preset_label(engine: str, role: str | None) -> str | None:
     """The name users see for ``engine``'s preset ``role`` (the role itself unless renamed)."""
     if role is None:
@@ -159,19 +167,69 @@ def load_engine(name: str) -> Engine:
     Raises ``ValueError`` for a name not in :data:`ENGINE_NAMES` and
     :class:`EngineNotInstalled` when the engine's package cannot be imported.
     """
-    if name not in _ENGINE_MODULES:
-        raise ValueError(f"unknown engine {name!r}; allowed: {list(ENGINE_NAMES)}")
     if name in _LOADED:
         return _LOADED[name]
+    engine = engine_class(name)()
+    _LOADED[name] = engine
+    return engine
+
+
+# Engines registered at run time (register_engine): name -> adapter class. Tests and adapter
+# authors use it to run an engine that is not one of the shipped modules.
+_REGISTERED: dict[str, type[Engine]] = {}
+
+
+def register_engine(name: str, engine_class: type[Engine]) -> None:
+    """Make ``engine_class`` loadable as engine ``name`` in this process (tests, adapter
+    authors trying an adapter); undo it with :func:`unregister_engine`. Refuses a name that
+    is already taken or a class that is not an :class:`Engine` named ``name``."""
+    if name in _ENGINE_MODULES or name in _REGISTERED:
+        raise ValueError(f"engine {name!r} is already registered")
+    if not (isinstance(engine_class, type) and issubclass(engine_class, Engine)):
+        raise ValueError(f"engine {name!r}: {engine_class!r} is not an Engine subclass")
+    if engine_class.name != name:
+        raise ValueError(f"engine {name!r}: its class is named {engine_class.name!r}")
+    _REGISTERED[name] = engine_class
+
+
+def unregister_engine(name: str) -> None:
+    """Undo :func:`register_engine` (a shipped engine cannot be removed)."""
+    if name not in _REGISTERED:
+        raise ValueError(f"engine {name!r} was not registered with register_engine")
+    del _REGISTERED[name]
+    _LOADED.pop(name, None)
+
+
+def engine_names() -> tuple[str, ...]:
+    """The shipped engines (:data:`ENGINE_NAMES`) and then those registered at run time."""
+    return (*ENGINE_NAMES, *_REGISTERED)
+
+
+def engine_class(name: str) -> type[Engine]:
+    """The adapter class of engine ``name``, not instantiated (imports its module). Raises
+    ``ValueError`` for an unknown name, :class:`EngineNotInstalled` when its package is
+    missing."""
+    if name in _REGISTERED:
+        return _REGISTERED[name]
+    if name not in _ENGINE_MODULES:
+        raise ValueError(f"unknown engine {name!r}; allowed: {list(engine_names())}")
     module_name, package, _ = _ENGINE_MODULES[name]
     try:
         import_quietly(package)  # pybullet prints its build time from C
     except ImportError as error:  # the engine itself is missing or broken
         raise EngineNotInstalled(name, f"{type(error).__name__}: {error}") from error
-    module = importlib.import_module(module_name)
-    engine = module.ENGINE_CLASS()
-    _LOADED[name] = engine
-    return engine
+    return importlib.import_module(module_name).ENGINE_CLASS
+
+
+def engine_trait(name: str, trait: str):
+    """What the harness knows about engine ``name``: the class attribute ``trait``
+    (``description``, ``preset_why``, ``plot_style``, ``speed_caps``; docs/engines.md, 'The
+    engine contract'). An engine that is unknown or not installed here gets the contract's
+    default."""
+    try:
+        return getattr(engine_class(name), trait)
+    except (ValueError, EngineNotInstalled):
+        return getattr(Engine, trait)
 
 
 def install_fingerprint(name: str) -> str | None:
@@ -184,6 +242,9 @@ def install_fingerprint(name: str) -> str | None:
     """
     from importlib import metadata, util
 
+    if name in _REGISTERED:  # no package of its own: its class identifies it
+        registered = _REGISTERED[name]
+        return json.dumps([registered.__module__, registered.__qualname__, registered.version])
     _, package, distribution = _ENGINE_MODULES[name]
     try:
         spec = util.find_spec(package)
@@ -285,6 +346,10 @@ __all__ = [
     "UnsupportedScene",
     "available_engines",
     "body_extent",
+    "engine_class",
+    "engine_distribution",
+    "engine_names",
+    "engine_trait",
     "free_flight_poses",
     "geometry_key",
     "install_fingerprint",
@@ -294,6 +359,8 @@ __all__ = [
     "preset_choices",
     "preset_label",
     "preset_role",
+    "register_engine",
     "renamed_roles",
     "source_label",
+    "unregister_engine",
 ]

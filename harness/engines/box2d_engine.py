@@ -947,11 +947,41 @@ def _speed_results(derived: dict, probe_speed: float | None, velocity: float,
 class Box2DEngine(Engine):
     name = "box2d"
     version = Box2D.__version__
+    # What the rest of the harness reads about this engine (docs/engines.md, 'The engine
+    # contract'): why it lands where it does, per engine and per preset, and its plot style.
+    description = (
+        "Box2D solves the velocity-level law (newton-lcp) by sequential impulses, like "
+        "pymunk; its measured behaviour is in docs/engines.md, 'Box2D'.")
+    preset_why = {
+        "defaults": ("Box2D's own defaults."),
+        "accurate": ("settings under which Box2D solves its law as exactly as it can."),
+    }
+    rounding = 1e-6  # float32 arithmetic: a few roundings of 6e-8 (ROUNDING in the tests)
+    # Box2D's default polygon skin (0.01 m) makes the rod's core box reach the ground beside
+    # its 5 mm end cap: three contact points at once.
+    reference_statuses = {("rod-45", "defaults"): "multi-contact"}
+    native_2d = True
+    plot_style = ("#CC79A7", "D")
+    bench_impacts = (40, 300)
     presets = PRESETS
     setting_docs = SETTING_DOCS
     # Collision first: the first step finds the contact at the start pose. The start's
     # hair of overlap is a depth in lengths (detection_overlap), added in _prepare.
     timing = StepTiming(lead_steps=0.0, overlap=0.0)
+
+
+    @classmethod
+    def bench_sweep(cls, quick: bool) -> list[tuple[str, str, dict]]:
+        """The settings the accuracy bench measures (harness/bench/accuracy.py)."""
+        points: list[tuple[str, str, dict]] = []
+        points.append(("defaults", "defaults", {}))
+        # Box2D's own time step changes nothing for a one-step impact but the translation
+        # cap; the sweeps are what converge the coupled points (float32 floor ~1e-7).
+        iterations = (1, 2, 5, 8, 20, 100) if quick else (1, 2, 3, 5, 8, 10, 20, 50, 100, 200)
+        for count in iterations:
+            points.append((f"dt={1 / 60:.3g} it={count}", "accurate",
+                           {"velocity_iterations": count}))
+        return points
 
     def _validate_engine_settings(self, settings) -> None:
         check_int(self.name, settings, "velocity_iterations", low=1)

@@ -28,6 +28,13 @@ Class attributes
     continuously and reach exactly 0, such as MuJoCo's soft contact).
 ``max_worlds``
     How many built worlds to keep (``None``: one per key, never evicted).
+``description``, ``preset_why``, ``plot_style``, ``speed_caps``, ``own_law``,
+``bench_impacts``, ``bench_impact_seconds``, ``bench_sweep``, ``time_step_overrides``, ``rounding``,
+``reference_statuses``, ``native_2d``
+    What the rest of the harness knows about the engine (report text and style, verdicts'
+    speed caps, bench profile, test expectations), each with a default below, read through
+    the registry (``harness.engines.engine_trait``; docs/engines.md, 'The engine contract')
+    and checked by :func:`harness.engines.conformance.check_engine`.
 
 Methods (``world`` is whatever the adapter builds; the base class only passes it back)
 
@@ -150,6 +157,9 @@ from harness.collector import collector_paused
 from harness.engines.settings import EngineSettingsError, check_int, check_number
 from harness.scene import Scene
 
+#: The accuracy bench's label of an engine's converged reference setting (own_law
+#: "converged").
+BENCH_REFERENCE_LABEL = "RK4 contact_steps=400 (reference)"
 # Relative size of a step's normal impulse (against the largest step's) below which the
 # step counts as "no impulse": rounding noise of re-solving a resting contact is ~1e-16.
 NO_IMPULSE_RELATIVE = 1e-12
@@ -444,6 +454,49 @@ class Engine(abc.ABC):
     timing: StepTiming = StepTiming()
     no_impulse_relative: float = NO_IMPULSE_RELATIVE
     max_worlds: int | None = None
+    # What the rest of the harness knows about the engine, read through the registry
+    # (harness.engines.engine_trait); checked by harness.engines.conformance.check_engine.
+    #: One paragraph: why the engine lands where it does against the laws (the report shows it).
+    description: str = ""
+    #: preset role -> one line: what the preset changes and why (the report shows it).
+    preset_why: Mapping[str, str] = {}
+    #: (colour, marker) in every figure; colours from the Okabe–Ito colour-blind-safe palette.
+    plot_style: tuple[str, str] = ("#000000", "x")
+    #: (largest linear speed m/s, largest angular speed rad/s) the engine clamps to, or None
+    #: when it clamps nothing; runs reaching it are flagged clipped (docs/verdicts.md).
+    speed_caps: tuple[float, float] | None = None
+    #: Absolute agreement (m/s, N s, unit normals) of quantities exact up to the engine's
+    #: arithmetic: 1e-9 in double precision; a float32 engine (Box2D) carries a few roundings
+    #: of 6e-8 each, so 1e-6 (the contract tests and check_engine hold an engine to it).
+    rounding: float = 1e-9
+    #: ``{(reference scene, preset role): status}`` where a reference scene's run is not
+    #: "ok", with the reason in a comment (tests/engines/test_contract.py expects these).
+    reference_statuses: Mapping[tuple[str, str], str] = {}
+    #: The engine is natively 2-D: no out-of-plane drift to measure (the adapter defines no
+    #: ``_out_of_plane_drift``; its runs report ``out_of_plane_drift`` None).
+    native_2d: bool = False
+    #: The law the engine solves at its accurate limit: "newton-lcp" (sequential impulses)
+    #: or "converged" (its own run at the finest settings, BENCH_REFERENCE_LABEL); the
+    #: accuracy bench measures against it.
+    own_law: str = "newton-lcp"
+    #: Impacts per reference scene in ``impact-harness bench --engines`` (quick, full):
+    #: enough for a stable timing at the engine's speed.
+    bench_impacts: tuple[int, int] = (40, 300)
+    #: Rough seconds per rod-45 impact under ``accurate``: the executor bench takes the
+    #: slowest installed engine (compute, not pickling) and sizes its batch by it.
+    bench_impact_seconds: float = 1e-4
+
+    @classmethod
+    def time_step_overrides(cls, role: str, time_step: float) -> dict:
+        """The overrides that run preset ``role`` at ``time_step`` (the stress test's step
+        sweep); an engine whose preset ties other settings to the step adjusts them."""
+        return {"time_step": time_step}
+
+    @classmethod
+    def bench_sweep(cls, quick: bool) -> list[tuple[str, str, dict]]:
+        """``[(label, preset, overrides)]``: the settings the accuracy bench measures
+        (default: the two presets)."""
+        return [("defaults", "defaults", {}), ("accurate", "accurate", {})]
     _last_checked: tuple | None = None  # (settings passed, resolved copy, preset)
     _last_scene: Scene | None = None  # the last scene that passed the checks
     _last_weights: tuple | None = None  # its energy_weights, from the checks

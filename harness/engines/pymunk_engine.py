@@ -237,11 +237,43 @@ _IDENTITY = (1.0, 0.0, 0.0, 1.0, 0.0, 0.0)  # pymunk's Transform.identity() for 
 class PymunkEngine(Engine):
     name = "pymunk"
     version = pymunk.version
+    # What the rest of the harness reads about this engine (docs/engines.md, 'The engine
+    # contract'): why it lands where it does, per engine and per preset, and its plot style.
+    description = (
+        "Chipmunk2D solves the engines' velocity-level law (newton-lcp): within one step it "
+        "iterates impulses until the normal contact velocity is e times the approach speed, "
+        "with Coulomb friction judged at the end state. Its departure from Poisson and "
+        "Stronge is therefore mostly the law itself: wherever the slip stops or reverses "
+        "during the impact, newton-lcp ends elsewhere (docs/engines.md, 'pymunk').")
+    preset_why = {
+        "defaults": ("10 solver iterations per step: exact on a lone contact, about "
+                     "1e-5 off on coupled contacts (a rod or a box corner)."),
+        "accurate": ("100 iterations: newton-lcp to rounding; only the iterations "
+                     "differ from defaults."),
+    }
+    native_2d = True
+    plot_style = ("#0072B2", "o")
+    bench_impacts = (400, 3000)
+    bench_impact_seconds = 2e-4
     presets = PRESETS
     setting_docs = SETTING_DOCS
     # Positions first: the contact of step k is found after the move, so the bodies start
     # one step (less a hair) before the touching pose.
     timing = StepTiming(lead_steps=1.0, overlap=_DETECTION_OVERLAP, recentre_y=False)
+
+
+    @classmethod
+    def bench_sweep(cls, quick: bool) -> list[tuple[str, str, dict]]:
+        """The settings the accuracy bench measures (harness/bench/accuracy.py)."""
+        points: list[tuple[str, str, dict]] = []
+        points.append(("defaults", "defaults", {}))
+        steps = (1 / 60, 1e-3) if quick else (1 / 60, 1e-3, 1e-4)
+        iterations = (1, 2, 5, 10, 20, 50, 100) if quick else (1, 2, 3, 5, 10, 20, 30, 50, 100, 200)
+        for dt in steps:
+            for count in iterations:
+                points.append((f"dt={dt:.3g} it={count}", "accurate",
+                               {"time_step": dt, "iterations": count}))
+        return points
 
     def __init__(self) -> None:
         self._bodies_out = ffi.new("cpBody **"), ffi.new("cpBody **")

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.engines import preset_label
+from harness.engines import engine_names, preset_label
 from harness.plotting import (  # shared with the survey's figures
     SVG_TWIN,
     TAG_KEY,
@@ -27,7 +27,6 @@ from harness.plotting import (  # shared with the survey's figures
 )
 from harness.report.reading import LazyResults, inputs_digests, scenario_digest, with_inputs
 from harness.report.views import (
-    ENGINE_STYLE,
     HEADLINE_LAWS,
     HEAT_MAX,
     HEAT_MIN,
@@ -39,6 +38,7 @@ from harness.report.views import (
     engine_labels,
     engine_roles,
     engine_scenarios,
+    engine_style,
     flagged_count,
     fmt_departure,
     label_records,
@@ -357,7 +357,8 @@ def split_figure(rows: Sequence[dict], path: Path, tag: str | None = None) -> Pa
     figure = new_figure(4.6 * len(presets), 4.2)
     axes = figure.subplots(1, len(presets), sharex=True, sharey=True, squeeze=False)[0]
     for ax, preset in zip(axes, presets):
-        for engine, (colour, marker) in ENGINE_STYLE.items():
+        for engine in engine_names():
+            colour, marker = engine_style(engine)
             subset = [r for r in rows if r["preset"] == preset and r["engine"] == engine
                       and math.isfinite(r["law_part"]) and math.isfinite(r["solve_part"])]
             if not subset:
@@ -443,7 +444,7 @@ def impulse_figure(name: str, records: Sequence[Record], path: Path,
     for r, index, count in coincident_groups(
             drawn, lambda r: (r.normal_impulse, r.tangential_impulse),
             (0.02 * extent, 0.02 * max(ys_all + [1e-12]))):
-        colour, marker = ENGINE_STYLE.get(r.source, ("k", "x"))
+        colour, marker = engine_style(r.source)
         filled = r.preset == "accurate"
         transform = offset_transform(ax, index, count, step_points=6.0)
         ax.update_datalim([(r.normal_impulse, r.tangential_impulse)])
@@ -504,8 +505,8 @@ def impulse_legend_figure(path: Path, tag: str | None = None,
                        markeredgewidth=1.5, markeredgecolor=LAW_STYLE[law][0],
                        label=f"{LAW_STYLE[law][2]}: end point")
                 for law in ("stronge-paper", "newton-lcp")]
-    for engine in engines if engines is not None else ENGINE_STYLE:
-        colour, marker = ENGINE_STYLE.get(engine, ("k", "x"))
+    for engine in engines if engines is not None else engine_names():
+        colour, marker = engine_style(engine)
         handles.append(Line2D([], [], ls="none", marker=marker, ms=7, markerfacecolor=colour,
                               markeredgecolor=colour,
                               label=f"{engine} {preset_label(engine, 'accurate')}"))
@@ -601,7 +602,7 @@ def sweep_figure(name: str, info: dict, records: Sequence[Record], path: Path,
         groups = coincident_groups([r for r, _, _ in points], key, tolerance)
         for r, index, count in groups:
             x, y = position[id(r)]
-            colour, marker = ENGINE_STYLE.get(r.source, ("k", "x"))
+            colour, marker = engine_style(r.source)
             transform = offset_transform(ax, index, count, step_points=4.0)
             ax.update_datalim([(x, y)])  # shifted artists do not count for autoscaling
             ax.plot([x], [y], marker, ms=5, ls="none", label=r.label, transform=transform,

@@ -19,7 +19,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from harness.plotting import new_figure, save_png
-from harness.report.views import ENGINE_STYLE, LAW_STYLE
+from harness.report.views import LAW_STYLE, engine_style
 from harness.run.records import ANALYTIC, Record
 
 #: The process laws drawn as paths (the others end off the process: docs/theory.md).
@@ -77,7 +77,7 @@ def history_figure(name: str, records: Sequence[Record], path: Path,
                    zorder=2)
     for record in runs:
         history = record.diagnostics["history"]
-        colour, marker = ENGINE_STYLE.get(record.source, ("k", "x"))
+        colour, marker = engine_style(record.source)
         accurate = record.preset == "accurate"
         style = {"color": colour, "marker": marker, "ms": 4.5 if accurate else 6,
                  "markerfacecolor": colour if accurate else "none", "lw": 1.0,

@@ -17,22 +17,22 @@ from harness.engines import ENGINE_NAMES, PRESET_ROLES, preset_label, source_lab
 from harness.report.fragments import Prepared, prepare, split_order
 from harness.report.reading import scenarios_digest
 from harness.report.views import (
-    ENGINE_WHY,
     FIGURES,
     HEADLINE_LAWS,
     HEAT_MAX,
     HEAT_MIN,
     LAW_ORDER,
     LAW_STYLE,
-    PRESET_WHY,
     TYPE_NAMES,
     engine_roles,
+    engine_why,
     escape_html,
     fmt_departure,
     fmt_number,
     fmt_overrides,
     has_library_scenarios,
     overrides_of,
+    preset_why,
     record_label,
     run_notes,
     run_verdict,
@@ -434,13 +434,13 @@ def why_html(results: Results) -> str:
     parts = ['<dl class="why">']
     for engine in engines:
         parts.append(f"<dt>{escape_html(engine)}</dt><dd>"
-                     f"{escape_html(ENGINE_WHY.get(engine, 'No description of this engine.'))}"
+                     f"{escape_html(engine_why(engine))}"
                      "</dd>")
         for label, (source, role) in zip(labels, roles):
             if source != engine:
                 continue
             preset = preset_label(engine, role)
-            text = PRESET_WHY.get((engine, role), "")
+            text = preset_why(engine, role)
             runs = runs_of.get(label, [])
             notes: dict[str, int] = {}
             for run in runs:

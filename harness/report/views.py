@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from harness.engines import engine_trait
 from harness.run.metrics import departure_split, fmt_departure
 from harness.run.records import ANALYTIC, Record, Results
 from harness.run.references import SINGLE
@@ -28,8 +29,23 @@ LAW_STYLE = {  # colour, line style, label
     "newton": ("tab:gray", "-.", "Newton (process)"),
     "newton-lcp": ("tab:brown", ":", "newton-lcp (engines' law)"),
 }
-ENGINE_STYLE = {"pymunk": ("tab:blue", "o"), "pybullet": ("tab:orange", "s"),
-                "mujoco": ("tab:green", "^"), "box2d": ("tab:olive", "D")}
+
+
+def engine_style(engine: str) -> tuple[str, str]:
+    """(colour, marker) of ``engine`` in every figure: its adapter's ``plot_style``."""
+    return tuple(engine_trait(engine, "plot_style"))
+
+
+def engine_why(engine: str) -> str:
+    """Why ``engine`` lands where it does (its adapter's ``description``)."""
+    return engine_trait(engine, "description") or "No description of this engine."
+
+
+def preset_why(engine: str, role: str) -> str:
+    """What ``engine``'s preset ``role`` changes (its adapter's ``preset_why``)."""
+    return engine_trait(engine, "preset_why").get(role, "")
+
+
 TYPE_NAMES = {1: "stick in compression", 2: "stick in restitution",
               3: "reverse slide from compression", 4: "reverse slide from restitution",
               5: "forward slide"}
@@ -185,11 +201,11 @@ def engine_roles(results: Results) -> list[tuple[str, str]]:
     """``Results.engine_roles``: the ``(engine, preset role)`` pairs present, presets in
     order, engines in registry order, read from :mod:`harness.engines` (the scenario
     package that ``Results`` reads them from takes a third of a warm report's imports)."""
-    from harness.engines import ENGINE_NAMES, PRESET_ROLES
+    from harness.engines import PRESET_ROLES, engine_names
     from harness.report.reading import source_presets
 
     present = source_presets(results)  # from the file's lines when the report read them
-    return [(e, p) for p in PRESET_ROLES for e in ENGINE_NAMES if (e, p) in present]
+    return [(e, p) for p in PRESET_ROLES for e in engine_names() if (e, p) in present]
 
 
 def engine_labels(results: Results) -> list[str]:
@@ -352,60 +368,4 @@ def row_name(results: Results, name: str) -> str:
     return f"{name} (max of {len(sweep['values'])})" if sweep else name
 
 
-# --------------------------------------------------------------------------------------------
-# Why an engine lands where it does (docs/engines.md, per engine): one paragraph per engine
-# and one per preset. Shown in the report beside the numbers.
-# --------------------------------------------------------------------------------------------
-ENGINE_WHY = {
-    "pymunk": (
-        "Chipmunk2D solves the engines' velocity-level law (newton-lcp): within one step it "
-        "iterates impulses until the normal contact velocity is e times the approach speed, "
-        "with Coulomb friction judged at the end state. Its departure from Poisson and "
-        "Stronge is therefore mostly the law itself: wherever the slip stops or reverses "
-        "during the impact, newton-lcp ends elsewhere (docs/engines.md, 'pymunk')."),
-    "pybullet": (
-        "Bullet also solves newton-lcp (projected Gauss–Seidel), but out of the box it adds "
-        "two biases: contacts exist up to 2 cm before touch and the solver then aims at "
-        "e·|v_n| − gap/dt, and restitution is cut to zero below 0.2 m/s; a default contact "
-        "slop and link damping take about 0.2% more. Polygons keep a 1 mm collision margin "
-        "(docs/engines.md, 'pybullet')."),
-    "mujoco": (
-        "MuJoCo departs because it solves no rigid-body impact law: its contact is soft, a "
-        "spring–damper that cannot pull, and the bounce follows from the damping ratio "
-        "alone. Under defaults (critically damped) the scenario's e is not used at all: a "
-        "1 m/s drop bounces at about 0.11 m/s whatever e. Friction is soft too: its rows "
-        "carry only the contact's damping, so inside the cone the slip decays at that same "
-        "rate and the contact ends with about e² of the slip left; at e = 1 there is no "
-        "damping and therefore no friction at all. Its second preset, matched-bounce, picks "
-        "the damping from e so that the bounce is e·|v_n|; but a bounce of e·|v_n| that "
-        "removes only 1 − e² of the slip is not dissipative when the normal and tangential "
-        "motions are coupled (m_nt ≠ 0): it creates kinetic energy in 11.5% of random rod "
-        "and box-corner impacts (46 of 400, up to +210%), and each such run is flagged "
-        "energy-gain. No MuJoCo setting that keeps the bounce stops this "
-        "(docs/engines.md, 'MuJoCo')."),
-    "box2d": (
-        "Box2D solves the velocity-level law (newton-lcp) by sequential impulses, like "
-        "pymunk; its measured behaviour is in docs/engines.md, 'Box2D'."),
-}
-PRESET_WHY = {
-    ("pymunk", "defaults"): "10 solver iterations per step: exact on a lone contact, about "
-                            "1e-5 off on coupled contacts (a rod or a box corner).",
-    ("pymunk", "accurate"): "100 iterations: newton-lcp to rounding; only the iterations "
-                            "differ from defaults.",
-    ("pybullet", "defaults"): "Bullet's own defaults: 2 cm contact threshold, 0.2 m/s "
-                              "restitution threshold, contact slop and 0.04 1/s damping, "
-                              "so the bounce depends on where in a step the impact falls.",
-    ("pybullet", "accurate"): "threshold, position-error terms, warm starting and damping "
-                              "off, 100 iterations: newton-lcp to rounding (polygons: the "
-                              "1 mm margin remains).",
-    ("mujoco", "defaults"): "solref [0.02, 1] (critically damped): the scenario's e is not "
-                            "used (a 1 m/s drop bounces at 0.11 m/s for any e), and soft "
-                            "friction turns the body over the 20-step contact.",
-    ("mujoco", "accurate"): "matched-bounce: the damping ratio is chosen from e (solref "
-                            "\"restitution\") over a 50-step contact, RK4 integration, "
-                            "impedance 0.9999: the bounce is e·v within 1e-4, but friction "
-                            "removes only 1 − e² of the slip and none at e = 1, so with "
-                            "m_nt ≠ 0 it can create energy (runs flagged energy-gain).",
-    ("box2d", "defaults"): "Box2D's own defaults.",
-    ("box2d", "accurate"): "settings under which Box2D solves its law as exactly as it can.",
-}
+

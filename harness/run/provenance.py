@@ -14,8 +14,10 @@ import time
 from pathlib import Path
 from typing import Any, Iterable
 
+from harness.engines import ENGINE_NAMES, engine_distribution
+
 #: Packages whose versions every output file records (None when not installed).
-PACKAGES = ("numpy", "pymunk", "pybullet", "mujoco", "box2d", "matplotlib",
+PACKAGES = ("numpy", *(engine_distribution(name) for name in ENGINE_NAMES), "matplotlib",
             "planar-impact-harness")
 
 

@@ -92,7 +92,7 @@ import numpy as np
 
 from harness import bounds
 from harness.collector import collector_paused
-from harness.engines import load_engine, parse_overrides, preset_choices, preset_role
+from harness.engines import engine_names, load_engine, parse_overrides, preset_choices, preset_role
 from harness.run import metrics, references
 from harness.run.cache import Spelled
 from harness.run.history import contact_history
@@ -559,7 +559,7 @@ def run(
             cache.clean_temporaries()
         except OSError as error:
             warnings.append(f"cache {cache.root}: cannot clean temporaries: {error}")
-    wanted_engines = [name for name in ENGINES if name in engines]
+    wanted_engines = [name for name in engine_names() if name in engines]
     needs_engines = any(s.engines_among(wanted_engines) for s in scenarios)
     versions, missing, preset_settings = (_engine_status(wanted_engines, cache) if needs_engines
                                           else ({}, {}, {}))

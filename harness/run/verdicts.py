@@ -46,7 +46,7 @@ from typing import Any
 
 import numpy as np
 
-from harness.engines import Status, body_extent
+from harness.engines import Status, body_extent, engine_trait
 from harness.run import metrics
 
 #: Reason name -> what it says. Ordered: the first failing reason names the run's status.
@@ -93,12 +93,15 @@ NEWTON_COULOMB = "Newton–Coulomb"
 SEQUENCE_LAW = "the event-driven sequence with newton-lcp"
 FLAGGED = "flagged"
 
-#: Measured velocity caps: engine -> (largest |v_x|, |v_y| in m/s, largest |ω| in rad/s).
-#: pybullet (3.2.7) clamps every joint's speed to its ``maxJointVelocity``, 100 by default:
-#: a disk dropped at 150 m/s enters at 100 m/s, at 10⁶ m/s it leaves at [0, 100, 0] (e = 1)
-#: (docs/verdicts.md, 'Velocity caps'). pymunk 7.3.1 and MuJoCo 4.0.0 showed no cap up to
-#: 10⁶ m/s.
-SPEED_CAPS: dict[str, tuple[float, float]] = {"pybullet": (100.0, 100.0)}
+
+
+def speed_caps(engine: str) -> tuple[float, float] | None:
+    """Measured velocity cap of ``engine`` (largest |v_x|, |v_y| in m/s, largest |ω| in
+    rad/s), its adapter's ``speed_caps``; None when it clamps nothing (pybullet clamps at
+    100: docs/verdicts.md, 'Velocity caps')."""
+    return engine_trait(engine, "speed_caps")
+
+
 #: A cap an engine computes in single precision (Box2D) holds a clipped speed within a few
 #: float32 roundings (6e-8 each) of it: a run-reported cap counts from this fraction below.
 RUN_CAP_BAND = 1e-6
@@ -729,9 +732,12 @@ def judge_many(scenes: Sequence, problems: Sequence, runs: Sequence, u_after: np
                     clipped |= present & (value >= cap)
                     near |= present & (np.abs(value - cap) <= NEAR * np.abs(cap))
         engines = {run.engine for run in runs}
-        for name in engines & set(SPEED_CAPS):
+        for name in sorted(engines):
+            caps = speed_caps(name)
+            if caps is None:
+                continue
             rows = np.array([run.engine == name for run in runs]) & ~has_caps
-            linear, angular = SPEED_CAPS[name]
+            linear, angular = caps
             bounds = np.array([linear, linear, angular] * (ARRAY_WIDTH // 3)) * (1.0 - tol.cap)
             for speeds in (arrays.u, u_after):
                 clipped |= rows & (np.abs(speeds) >= bounds).any(axis=1)
@@ -895,7 +901,7 @@ def _implied_impulse(problem, delassus: tuple[float, float, float], u_after,
 
 def _clipped(engine: str, u_before: np.ndarray, u_after: np.ndarray,
              tolerances: Tolerances) -> list[Reason]:
-    caps = SPEED_CAPS.get(engine)
+    caps = speed_caps(engine)
     if caps is None:
         return []
     found = []
@@ -1474,7 +1480,7 @@ def reason_counts(reasons_per_run: Sequence[Sequence[Mapping[str, Any]]]) -> dic
     return counts
 
 
-__all__ = ["BOUNDARY_BAND", "DEFAULT_TOLERANCES", "REASONS", "REMARKS", "SPEED_CAPS",
+__all__ = ["BOUNDARY_BAND", "DEFAULT_TOLERANCES", "REASONS", "REMARKS", "speed_caps",
            "BodyFeatures", "ContactTrack", "Reason", "RunNumbers", "SceneScales", "SceneTerms",
            "StepContacts", "Tolerances", "Verdict", "body_features", "contact_features",
            "declared_contacts", "declared_impulses", "first_strikes", "sequence_contacts",

@@ -17,12 +17,12 @@ from typing import Any, Mapping, Union
 
 import numpy as np
 
+from harness.engines import engine_names
 from harness.scenarios.errors import ScenarioError
 from harness.scenarios.schema import (
     ANALYTIC_SYSTEMS,
     BODY_SWEEP_FIELDS,
     DEFAULT_GAP_TOLERANCE,
-    ENGINES,
     LAWS,
     SHAPE_FIELDS,
     TWO_SLED_DEFAULTS,
@@ -188,7 +188,7 @@ class Scenario:
         allow (every engine when it names none); none for an analytic-only system."""
         if self.analytic_only:
             return []
-        allowed = self.engines or ENGINES
+        allowed = self.engines or engine_names()  # engines registered at run time too
         return [name for name in wanted if name in allowed]
 
     def point_list(self) -> list[Point]:

@@ -126,11 +126,8 @@ def run_engine_case(task: dict) -> dict:
               "family": case["family"], "label": case["label"], "value": case["value"]}
     try:
         engine = load_engine(engine_name)
-        overrides = {"time_step": case["dt"]} if case["dt"] is not None else None
-        if overrides and engine_name == "mujoco" and preset == "accurate":
-            # MuJoCo's accurate preset ties the contact's duration to steps: keep its spring
-            # fixed at the preset's 0.5 ms contact so the time step is what changes
-            overrides["contact_steps"] = max(1, int(round(5e-4 / case["dt"])))
+        overrides = (engine.time_step_overrides(preset, case["dt"]) if case["dt"] is not None
+                     else None)
         settings = engine.settings(preset, overrides)
         run = engine.run(scene, settings)
     except Exception as error:  # noqa: BLE001 - any failure is an outcome to report

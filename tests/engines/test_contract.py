@@ -33,23 +33,12 @@ from harness.scene.reference import reference_scenes
 SCENES = reference_scenes()
 
 # ---------------------------------------------------------------------- per-engine facts
-#: Native 2-D engines: bodies live in the plane by construction, no drift to measure
-#: (``out_of_plane_drift`` is None); the 3-D engines hold them there with planar joints.
-PLANAR_ENGINES = frozenset({"pymunk", "box2d"})
-#: Absolute agreement (m/s, N s, unit normals) of quantities that are exact up to the
-#: engine's arithmetic. Double precision: 1e-9, as for every engine but Box2D. Box2D computes
-#: in float32: one rounding is 6e-8 of a value of order 1, and positions, velocities and
-#: impulses here carry a few of them (measured <= 6e-8), so 1e-6.
-ROUNDING = {"box2d": 1e-6}
-DOUBLE_ROUNDING = 1e-9
-#: Reference scenes whose run is not "ok" under a preset, with why (docs/engines.md):
-#: Box2D's default polygon skin (0.01 m) makes the rod's core box reach the ground beside
-#: its 5 mm end cap, three contact points at once.
-NOT_OK = {("box2d", "rod-45", "defaults"): "multi-contact"}
+# Per-engine expectations are the adapters' attributes (rounding, reference_statuses,
+# native_2d; harness/engines/contract.py).
 
 
 def rounding(engine) -> float:
-    return ROUNDING.get(engine.name, DOUBLE_ROUNDING)
+    return engine.rounding
 
 
 @pytest.fixture(params=ENGINE_NAMES)
@@ -194,7 +183,7 @@ def test_every_reference_scene_runs_ok(engine, preset, scene_name):
     scene = SCENES[scene_name][0]
     run = engine.run(scene, preset=preset)
     assert isinstance(run, EngineRun)
-    expected_status = NOT_OK.get((engine.name, scene_name, preset), "ok")
+    expected_status = engine.reference_statuses.get((scene_name, preset), "ok")
     assert run.status == expected_status, (run.status, run.notes)
     assert run.status in STATUSES
     assert len(run.velocities) == len(scene.bodies)
@@ -210,13 +199,13 @@ def test_every_reference_scene_runs_ok(engine, preset, scene_name):
     # pymunk's start is 1e-9 of a step short of the full rewind, which tilts a disk pair's
     # normal ~1e-10. MuJoCo's RK4 leaves the contact data of a later stage of the step, moved
     # by the relative tangential speed (~1 m/s) times dt (1e-5 s) over 0.25 m: ~4e-5, so 1e-4.
-    # Box2D: float32 positions (ROUNDING).
+    # Box2D: float32 positions (its rounding).
     expected = SCENES[scene_name][2]
     tolerance = 1e-4 if run.settings.get("integrator") == "RK4" else 1e-8
-    if engine.name in ROUNDING:
+    if rounding(engine) > tolerance:
         tolerance = rounding(engine)
     assert math.hypot(n_x - expected[0], n_y - expected[1]) < tolerance
-    if engine.name in PLANAR_ENGINES:
+    if engine.native_2d:
         assert run.out_of_plane_drift is None
     else:
         assert run.out_of_plane_drift == 0.0  # planar joints: exactly in the plane
@@ -224,7 +213,7 @@ def test_every_reference_scene_runs_ok(engine, preset, scene_name):
 
 
 def test_impulse_matches_momentum_change(engine):
-    # Reason for 1e-9 (ROUNDING for Box2D): the engines' reported contact impulses against
+    # Reason for 1e-9 (its rounding for Box2D): the engines' reported contact impulses against
     # m·Δv, both exact to rounding for one-step impacts; MuJoCo's is derived from momentum
     # (equal by definition).
     scene = SCENES["two-disks"][0]

@@ -1,0 +1,105 @@
+"""The conformance kit (harness.engines.conformance) and a fifth engine added in one module:
+the toy of tests/engines/toy_engine.py passes check_engine and shows up in the runner's
+records, the report and the survey once registered, with no other file naming it."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from harness import engines as registry
+from harness import report
+from harness.engines.conformance import check_engine
+from harness.run import runner
+from harness.run.records import Results
+from harness.scenarios import load_scenario
+from harness.survey import cli as survey_cli
+from harness.survey.population import resolve_populations
+from tests.engines.toy_engine import ToyEngine
+
+
+@pytest.fixture
+def toy():
+    registry.register_engine("toy", ToyEngine)
+    try:
+        yield "toy"
+    finally:
+        registry.unregister_engine("toy")
+    assert "toy" not in registry.engine_names()
+
+
+def test_the_toy_conforms_and_its_traits_come_from_its_class(toy):
+    assert check_engine(toy) == []
+    assert check_engine(ToyEngine) == []
+    assert registry.engine_trait(toy, "plot_style") == ToyEngine.plot_style
+    assert registry.engine_trait(toy, "speed_caps") is None  # the contract's default
+    assert toy in registry.engine_names()
+
+
+@pytest.mark.parametrize("name", registry.ENGINE_NAMES)
+def test_every_shipped_engine_conforms(load_or_skip, name):
+    assert check_engine(load_or_skip(name)) == []
+
+
+def test_the_kit_names_each_broken_promise():
+    class Undescribed(ToyEngine):
+        description = ""
+        plot_style = ("#000000",)
+
+    class Lenient(ToyEngine):
+        def _check_key(self, key):  # accepts any key
+            return None
+
+    class Unseparated(ToyEngine):
+        def _step(self, world):  # the contact never ends
+            contact = super()._step(world)
+            return contact if contact is not None else (((0.0, 0.0, 0.0),), (0.0, 1.0),
+                                                        (0.0, 0.0), 1.0)
+
+    class Misdeclared(ToyEngine):
+        native_2d = False  # yet it measures no drift
+        rounding = 1
+
+    failures = check_engine(Misdeclared)
+    assert any(".rounding" in line for line in failures)
+    failures = check_engine(type("Misdeclared2d", (ToyEngine,), {"native_2d": False}))
+    assert any("native_2d is False" in line for line in failures)
+    failures = check_engine(Undescribed)
+    assert any(".description" in line for line in failures)
+    assert any(".plot_style" in line for line in failures)
+    assert any("accepts an unknown key" in line for line in check_engine(Lenient))
+    assert any("expected a separation" in line for line in check_engine(Unseparated))
+
+
+def test_register_refuses_a_taken_name_or_a_misnamed_class(toy):
+    with pytest.raises(ValueError, match="already registered"):
+        registry.register_engine("pymunk", ToyEngine)
+    with pytest.raises(ValueError, match="already registered"):
+        registry.register_engine(toy, ToyEngine)
+    with pytest.raises(ValueError, match="named 'toy'"):
+        registry.register_engine("other", ToyEngine)
+
+
+def test_the_toy_runs_through_the_runner_the_report_and_the_survey(toy, tmp_path):
+    # A scenario file names the shipped engines (the reader's default); add the toy to it.
+    scenario = load_scenario("scenarios/disk-oblique.toml")
+    scenario = dataclasses.replace(scenario, engines=(*scenario.engines, toy))
+    outcome = runner.run([scenario], engines=("pymunk", toy), presets=("accurate",),
+                         cache=None, workers=1, log=None)
+    toy_records = [r for r in outcome.records if r.source == toy]
+    assert toy_records and all(r.status == "ok" for r in toy_records)
+    # The toy applies Poisson's impulse exactly: its departure from Poisson is rounding.
+    assert all(r.departure["poisson"] < 1e-9 for r in toy_records)
+    results = Results(records=outcome.records, provenance=outcome.provenance,
+                      scenarios=outcome.scenarios)
+    written = report.write_report(results, tmp_path / "report", workers=1,
+                                  scenario_figures="none", svg="none")
+    page = written["html"].read_text(encoding="utf-8")
+    assert ToyEngine.description in page and ToyEngine.preset_why["accurate"] in page
+
+    survey = survey_cli.run_survey(resolve_populations(["spinning-disk"]), 3, 0, [toy],
+                                   ["accurate"], workers=1, echo=lambda _: None)
+    engines = np.asarray(survey["runs"]["engine"])
+    assert (engines == toy).sum() == 3
