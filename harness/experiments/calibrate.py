@@ -7,10 +7,9 @@ median over the impacts of the paper's normalized error of the centre's velocity
 (:func:`metric.normalized_error`) against the measured speeds (``--to data``) or against a
 law's prediction at fixed settings ``law_mu``, ``law_e`` (``--to LAW``, on a population of
 ellipse drops generated here, no data needed). Flagged runs are never scored; a cell where
-fewer than half
-of the runs are single impacts has no objective. A knob that moves the objective by less
-than :data:`TOLERANCE` across its values (the others at the best cell) is reported as one
-the engine cannot be calibrated by.
+fewer than half of the runs are single impacts has no objective. A knob that moves the
+objective by less than :data:`TOLERANCE` across its values (the others at the best cell) is
+reported as one the engine cannot be calibrated by.
 """
 
 from __future__ import annotations
