@@ -87,7 +87,7 @@ def _score(engine, preset: str, impacts: MeasuredImpacts, thetas, mu: float, e: 
 
 
 def calibrate(engine, preset: str, impacts: MeasuredImpacts, thetas, target: str,
-              grid: str = "quick", law_mu: float = 0.3, law_e: float = 0.7) -> Calibration:
+              grid: str = "quick", law_mu: float = 0.3, law_e: float = 0.6) -> Calibration:
     """Every cell of the grid scored (``target``: "data" or a law of ``planar_impact``,
     then at ``law_mu``, ``law_e``: the engine's pair settings are knobs like the others)."""
     reference = (impacts.speeds_after if target == "data"

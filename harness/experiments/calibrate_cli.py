@@ -25,7 +25,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--drops", type=int, default=12,
                         help="impacts scored per cell (default 12; the first ones of the data)")
     parser.add_argument("--law-mu", type=float, default=0.3)
-    parser.add_argument("--law-e", type=float, default=0.7)
+    parser.add_argument("--law-e", type=float, default=0.6,
+                        help="the law's e (default 0.6, a cell of the quick grid)")
 
 
 def main(args) -> int:
