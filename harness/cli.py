@@ -47,6 +47,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "survey": ("harness.survey.cli", "departure distributions over families of impacts"),
     "experiments": ("harness.experiments.cli",
                     "the laws against measured impacts (Fazeli 2017 drops, Kharaz 2001)"),
+    "calibrate": ("harness.experiments.calibrate_cli",
+                  "fit an engine's own knobs to the drops or to a law by a small grid"),
     "cache": ("harness.run.cache", "the result cache: info (where, how big), prune, clear"),
 }
 

@@ -834,6 +834,9 @@ def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None
     from harness.report.survey import cached_survey_section
 
     parts.append(cached_survey_section(out_dir, figures, prepared))
+    from harness.report.experiments import experiments_section  # issue 25
+
+    parts.append(experiments_section(out_dir))
     parts.append("<h2 id='versions'>Versions and settings</h2>" + versions_html(prov))
     parts.append("<h3>Engine settings per preset</h3><p>Bold where the presets differ. "
                  "The table is the presets as run, with the command line's <code>--set</code> "
@@ -845,7 +848,8 @@ def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None
     parts.append(f"<p class='muted'>Report generated {generated} "
                  "by <code>impact-harness report</code>.</p></body></html>")
     extra = [(href, title) for href, title in (("#contacts", "Several contacts"),
-                                               ("#survey", "Survey"))
+                                               ("#survey", "Survey"),
+                                               ("#experiments", "Against experiments"))
              if any(f"id='{href[1:]}'" in part for part in parts)]
     parts[contents_at] = contents_html(names, pages, figures.get("groups"), extra, library)
     return "\n".join(parts)

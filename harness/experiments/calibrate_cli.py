@@ -1,0 +1,68 @@
+"""``impact-harness calibrate ENGINE --to data|LAW``: an engine's own knobs fitted by a small
+grid (:mod:`harness.experiments.calibrate`)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+import planar_impact as pi
+
+from . import calibrate, drops_engines, fazeli, registry
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from harness.engines import ENGINE_NAMES
+
+    parser.add_argument("engine", choices=ENGINE_NAMES)
+    parser.add_argument("--to", required=True, choices=("data", *pi.LAWS),
+                        help="the target: the Fazeli drops (data) or a law on a population "
+                             "of ellipse drops")
+    parser.add_argument("--preset", default=None, help="one preset (default: every preset)")
+    parser.add_argument("--data", metavar="DIR", default=None,
+                        help=f"the Fazeli files (default: ${registry.FAZELI_2017.env_var})")
+    parser.add_argument("--grid", choices=sorted(calibrate.PAIR_GRIDS), default="quick")
+    parser.add_argument("--drops", type=int, default=12,
+                        help="impacts scored per cell (default 12; the first ones of the data)")
+    parser.add_argument("--law-mu", type=float, default=0.3)
+    parser.add_argument("--law-e", type=float, default=0.6,
+                        help="the law's e (default 0.6, a cell of the quick grid)")
+
+
+def main(args) -> int:
+    from harness.engines import EngineNotInstalled, load_engine
+
+    if args.drops < 2:
+        print(f"impact-harness calibrate: --drops {args.drops}: at least 2", file=sys.stderr)
+        return 2
+    try:
+        engine = load_engine(args.engine)
+    except EngineNotInstalled as missing:
+        print(f"impact-harness calibrate: {args.engine}: not installed: {missing}",
+              file=sys.stderr)
+        return 2
+    presets = list(engine.presets) if args.preset is None else [args.preset]
+    unknown = [p for p in presets if p not in engine.presets]
+    if unknown:
+        print(f"impact-harness calibrate: --preset {unknown[0]}: allowed: "
+              f"{', '.join(engine.presets)}", file=sys.stderr)
+        return 2
+    if args.to == "data":
+        try:
+            data = fazeli.load(registry.locate(registry.FAZELI_2017, args.data))
+        except registry.DataMissing as missing:
+            print(f"impact-harness calibrate: --to data: {missing}", file=sys.stderr)
+            return 2
+        except registry.DataInvalid as invalid:
+            print(f"impact-harness calibrate: {invalid}", file=sys.stderr)
+            return 2
+        target = fazeli.without_post_offset(data.impacts)
+        rows = list(range(min(args.drops, len(target))))
+        impacts = target.subset(rows)
+        thetas, _ = drops_engines.jacobian_angles(impacts, data.pre_impact_angles[rows])
+    else:
+        impacts, thetas = calibrate.drop_population(args.drops)
+    for preset in presets:
+        print(calibrate.summary(calibrate.calibrate(engine, preset, impacts, thetas, args.to,
+                                                    args.grid, args.law_mu, args.law_e)))
+    return 0
