@@ -254,10 +254,10 @@ def heatmap_figure(results: Results, path: Path, tag: str | None = None,
     # each scenario's runs by label once (a scan of its records per cell was most of the time)
     grouped = {name: label_records(results.for_scenario(name)) for name in names}
     if groups is None:  # the panels side by side
-        figure = new_figure(2.2 + 0.95 * len(labels) * len(HEADLINE_LAWS), 1.6 + 0.25 * len(rows))
+        figure = new_figure(2.6 + 1.15 * len(labels) * len(HEADLINE_LAWS), 1.8 + 0.3 * len(rows))
         axes = figure.subplots(1, len(panels), sharey=True, squeeze=False)[0]
     else:  # wider cells ("median / max"): a row of panels per law
-        figure = new_figure(2.2 + 1.5 * len(labels), 2 * (1.1 + 0.25 * len(rows)))
+        figure = new_figure(2.6 + 1.8 * len(labels), 2 * (1.2 + 0.3 * len(rows)))
         axes = figure.subplots(len(HEADLINE_LAWS), len(presets), sharey=True,
                                squeeze=False).ravel()
     norm = LogNorm(vmin=HEAT_MIN, vmax=HEAT_MAX)
@@ -281,14 +281,14 @@ def heatmap_figure(results: Results, path: Path, tag: str | None = None,
             for j in range(len(panel_labels)):
                 colour = ("0.35" if skipped[i, j] or not np.isfinite(values[i, j])
                           else "white" if values[i, j] > 0.08 else "black")
-                ax.text(j, i, texts[i][j], ha="center", va="center", fontsize=7.5,
+                ax.text(j, i, texts[i][j], ha="center", va="center", fontsize=9,
                         color=colour, fontweight="bold" if flagged[i, j] else "normal")
         ax.set_xticks(range(len(panel_labels)), [label.split(".")[0] for label in panel_labels],
-                      fontsize=8.5)
+                      fontsize=9.5)
         ax.xaxis.tick_top()
-        ax.set_title(f"from {LAW_STYLE[law][2]} — {role_title(preset, roles)}", fontsize=9,
-                     pad=16)
-        ax.set_yticks(range(len(rows)), rows, fontsize=8.5)
+        ax.set_title(f"from {LAW_STYLE[law][2]} — {role_title(preset, roles)}", fontsize=11,
+                     pad=18)
+        ax.set_yticks(range(len(rows)), rows, fontsize=9.5)
         ax.tick_params(length=0)
     # Short label: the colour bar can be as short as one row (the caption gives the formula).
     bar = figure.colorbar(image, ax=list(axes), shrink=1.0 if len(rows) < 8 else 0.6,
@@ -386,12 +386,12 @@ def split_figure(rows: Sequence[dict], path: Path, tag: str | None = None) -> Pa
         percent_axis(ax.xaxis)
         percent_axis(ax.yaxis)
         pairs = {(r["engine"], r["preset"]) for r in rows}
-        ax.set_title(role_title(preset, sorted(pairs)), fontsize=10)
+        ax.set_title(role_title(preset, sorted(pairs)), fontsize=11)
         ax.grid(True, which="major", color="0.93")
     axes[0].set_ylabel("solve part: engine vs newton-lcp [%]")
     figure.suptitle("Above the dashed diagonal the solve (engine vs its own law) dominates, "
                     "below it the law. Values below the axes' ends are drawn at them.",
-                    fontsize=8.5)
+                    fontsize=10)
     handles = {}
     for ax in axes:
         for handle, label in zip(*ax.get_legend_handles_labels()):
@@ -400,7 +400,7 @@ def split_figure(rows: Sequence[dict], path: Path, tag: str | None = None) -> Pa
     if flag is not None:  # last in the key
         handles["flagged by the engine"] = flag
     axes[-1].legend(handles.values(), handles.keys(), loc="center left",
-                    bbox_to_anchor=(1.01, 0.5), fontsize=8, frameon=False)
+                    bbox_to_anchor=(1.01, 0.5), fontsize=9, frameon=False)
     return save_png(figure, path, tag=tag)
 
 
@@ -415,7 +415,9 @@ def impulse_figure(name: str, records: Sequence[Record], path: Path,
     d = laws[0].diagnostics or {}
     mnn, mnt, mtt, mu, e = (d.get(k) for k in ("mnn", "mnt", "mtt", "mu", "e"))
     vn, vt = laws[0].vn_approach, laws[0].vt_approach
-    figure = new_figure(4.6, 3.4)
+    engine_labels_here = {r.label for r in records if r.source != ANALYTIC}
+    key_rows = (len(engine_labels_here) + 8) // 2  # laws, end points, Routh's lines, ring
+    figure = new_figure(5.2, 3.6 + 0.2 * key_rows)
     ax = figure.subplots()
     extent = max([abs(r.normal_impulse) for r in records if r.normal_impulse is not None
                   and math.isfinite(r.normal_impulse)] + [1e-12])
@@ -459,10 +461,13 @@ def impulse_figure(name: str, records: Sequence[Record], path: Path,
     ax.plot(x, mu * x, color="0.75", lw=0.8, ls=":")
     ax.plot(x, -mu * x, color="0.75", lw=0.8, ls=":", label="friction cone |I_t| = μ I_n")
     if abs(mnt) > 1e-14 * mnn:
-        ax.plot(x, -(vn + mnn * x) / mnt, color="tab:cyan", lw=0.8, ls="--", label="v_n = 0")
+        ax.plot(x, -(vn + mnn * x) / mnt, color="tab:cyan", lw=0.8, ls="--",
+                label="v_n = 0 (end of compression)")
     else:
-        ax.axvline(-vn / mnn, color="tab:cyan", lw=0.8, ls="--", label="v_n = 0")
-    ax.plot(x, -(vt + mnt * x) / mtt, color="tab:olive", lw=0.8, ls="--", label="v_t = 0")
+        ax.axvline(-vn / mnn, color="tab:cyan", lw=0.8, ls="--",
+                   label="v_n = 0 (end of compression)")
+    ax.plot(x, -(vt + mnt * x) / mtt, color="tab:olive", lw=0.8, ls="--",
+            label="v_t = 0 (slip stops)")
     ys = [r.tangential_impulse for r in records if r.tangential_impulse is not None
           and math.isfinite(r.tangential_impulse)]
     span = max([abs(y) for y in ys] + [mu * extent, 0.1 * extent])
@@ -471,8 +476,23 @@ def impulse_figure(name: str, records: Sequence[Record], path: Path,
     ax.axhline(0, color="0.85", lw=0.6)
     ax.set_xlabel("normal impulse I_n [N s]")
     ax.set_ylabel("tangential impulse I_t [N s]")
-    ax.set_title(f"{name}: impulse diagram (Routh)", fontsize=9)
+    ax.set_title(f"{name}: impulse diagram (Routh)", fontsize=11)
+    impulse_key(figure, ax, flagged=any(not r.ok for r in drawn))
     return save_png(figure, path, dpi=90, tag=tag)
+
+
+def impulse_key(figure, ax, flagged: bool) -> None:
+    """The diagram's own key, below the axes (outside the data): what this diagram draws,
+    each label once (engines at the same point each draw their marker), and the red ring
+    when a run here is flagged, so that the PNG reads without the page's shared key."""
+    from matplotlib.lines import Line2D
+
+    handles, labels = ax.get_legend_handles_labels()
+    unique = dict(zip(labels, handles))
+    if flagged:
+        unique["flagged by the engine"] = Line2D([], [], ls="none", **FLAG_STYLE)
+    figure.legend(unique.values(), unique.keys(), loc="outside lower center", ncols=2,
+                  fontsize=8.5, frameon=False, handlelength=1.6, columnspacing=1.0)
 
 
 def coincident_groups(records, position, tolerance):
@@ -516,8 +536,8 @@ def impulse_legend_figure(path: Path, tag: str | None = None,
     handles += [Line2D([], [], color="0.75", ls=":", label="friction cone |I_t| = μ I_n"),
                 Line2D([], [], color="tab:cyan", ls="--", label="v_n = 0 (end of compression)"),
                 Line2D([], [], color="tab:olive", ls="--", label="v_t = 0 (slip stops)")]
-    figure = new_figure(9.5, 1.25)
-    figure.legend(handles=handles, loc="center", ncol=4, fontsize=7.5, frameon=False)
+    figure = new_figure(11.0, 1.6)
+    figure.legend(handles=handles, loc="center", ncol=4, fontsize=9, frameon=False)
     return save_png(figure, path, dpi=90, tag=tag)
 
 
@@ -620,7 +640,7 @@ def sweep_figure(name: str, info: dict, records: Sequence[Record], path: Path,
         for value, before, after in boundaries:
             ax.axvline(value, color="0.6", lw=0.8, ls="--")
             ax.text(value, 1.0, f"{before}→{after}", transform=ax.get_xaxis_transform(),
-                    ha="center", va="bottom", fontsize=7, color="0.35")
+                    ha="center", va="bottom", fontsize=9, color="0.35")
         ax.set_xlabel(parameter_name(parameter))
         ax.set_ylabel(label)
         ax.grid(True, color="0.93")
@@ -631,7 +651,7 @@ def sweep_figure(name: str, info: dict, records: Sequence[Record], path: Path,
         labels += panel_labels
     unique = dict(zip(labels, handles))
     figure.legend(unique.values(), unique.keys(), loc="outside lower center",
-                  ncol=min(5, len(unique)), fontsize=7, frameon=False)
+                  ncol=min(4, len(unique)), fontsize=9, frameon=False)
     figure.suptitle(f"{name}: sweep of {parameter_name(parameter)} (dashed: Poisson type "
-                    "changes)", fontsize=9)
+                    "changes)", fontsize=11)
     return save_png(figure, path, dpi=90, tag=tag)

@@ -96,15 +96,15 @@ def history_figure(name: str, records: Sequence[Record], path: Path,
     ax_vt.set_ylabel("v_t [m/s]")
     ax_depth.set_xlabel("accumulated normal impulse P [N s]")
     ax_depth.set_ylabel("penetration [mm]")
-    ax_vn.set_title("normal contact velocity (compression ends at 0)", fontsize=9)
-    ax_vt.set_title("tangential contact velocity (sticking at 0)", fontsize=9)
-    ax_depth.set_title("deepest overlap per step", fontsize=9)
+    ax_vn.set_title("normal contact velocity (compression ends at 0)", fontsize=11)
+    ax_vt.set_title("tangential contact velocity (sticking at 0)", fontsize=11)
+    ax_depth.set_title("deepest overlap per step", fontsize=11)
     handles, labels = ax_vn.get_legend_handles_labels()
     columns = max(1, math.ceil(len(labels) / 4))
     figure.legend(handles, labels, loc="outside lower center", ncols=min(columns, 4),
-                  fontsize=7, frameon=False)
+                  fontsize=9, frameon=False)
     figure.suptitle(f"{name}: the contact step by step (filled: accurate, hollow: defaults)",
-                    fontsize=10)
+                    fontsize=11)
     return save_png(figure, path, tag=tag)
 
 

@@ -63,7 +63,7 @@ margin:.8em 0} nav.contents ol{margin:.2em 0;padding-left:1.4em}
 nav.contents ol.scenarios{columns:3;font-size:.92em} code{background:#f4f4f4;padding:0 3px}
 details{margin:.3em 0 .8em} summary{cursor:pointer;color:#335}
 .scroll{overflow-x:auto;max-width:100%}
-.pair{flex-wrap:nowrap;gap:10px} .pair>div{flex:0 1 auto;min-width:0}
+.pair{flex-wrap:wrap;gap:10px} .pair>div{flex:0 1 auto;min-width:0}
 .pair>figure{flex:0 0 auto;margin:0}
 td.note,th.note{white-space:normal;min-width:11em;max-width:22em;text-align:left}
 td.wrap{white-space:normal;text-align:left;overflow-wrap:anywhere;max-width:70em}

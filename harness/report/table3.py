@@ -317,7 +317,7 @@ def write_figure(rows: list[dict], path: Path, metadata: dict | None = None) -> 
         pad = 0.15 * max(np.ptp(ends[:, 0]), np.ptp(ends[:, 1]), 0.02)
         inset.set_xlim(ends[:, 0].min() - pad, ends[:, 0].max() + pad)
         inset.set_ylim(ends[:, 1].min() - pad, ends[:, 1].max() + pad)
-        inset.set_title("end of impact (zoom)", fontsize=8)
+        inset.set_title("end of impact (zoom)", fontsize=9)
         inset.tick_params(labelsize=7)
         ax.indicate_inset_zoom(inset, edgecolor="0.5")
         # Printed Stronge Δu mapped back to impulses by least squares on M Δu = w_n I_n + w_t I_t.
@@ -329,7 +329,7 @@ def write_figure(rows: list[dict], path: Path, metadata: dict | None = None) -> 
         ax.set_xlabel("normal impulse $I_n$ [N·s]")
         ax.set_ylabel("tangential impulse $I_t$ [N·s]")
         ax.set_title(f"γ = {row['gamma']}, δ = {row['delta']}, μ = {row['mu']}, e = 0.8")
-        ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=3,
+        ax.legend(fontsize=9, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=3,
                   frameon=False)
     fig.suptitle("Table 3, two sleds: impulse paths of each law (Routh's graph)")
     from harness.plotting import lay_out, save_svg_twin

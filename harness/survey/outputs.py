@@ -306,15 +306,15 @@ def map_figure(runs: dict, engine: str, path: Path, tag: str | None = None) -> P
             axis.grid(True, which="major", color="0.92", lw=0.6)
         _floor_axis(left.yaxis)
         left.set_ylabel("departure from Poisson")
-        left.set_title(f"{preset_label(engine, preset)}: against α / r_m", fontsize=10)
-        right.set_title(f"{preset_label(engine, preset)}: against μ", fontsize=10)
+        left.set_title(f"{preset_label(engine, preset)}: against α / r_m", fontsize=11)
+        right.set_title(f"{preset_label(engine, preset)}: against μ", fontsize=11)
     axes[-1][0].set_xlabel("α / r_m (initial slip over Routh's sticking ratio; grey line: 1)")
     axes[-1][1].set_xlabel("μ")
     handles, labels = axes[0][0].get_legend_handles_labels()
     if handles:  # once for the figure, outside the panels (it hid points inside one)
         figure.legend(handles, labels, loc="outside lower center", ncols=len(handles),
-                      fontsize=8, markerscale=1.6, title="Poisson collision type",
-                      title_fontsize=8, frameon=False)
+                      fontsize=9, markerscale=1.6, title="Poisson collision type",
+                      title_fontsize=9, frameon=False)
     figure.suptitle(f"{engine}: where on Routh's map it departs from Poisson", fontsize=11)
     return save_png(figure, path, dpi=FIGURE_DPI, tag=tag)
 
@@ -330,27 +330,33 @@ def cdf_figure(runs: dict, engine: str, path: Path, tag: str | None = None) -> P
     ok = runs["status"] == "ok"
     families = sorted(set(np.asarray(runs["family"]).tolist()))
     colours = colormaps["tab10"]
-    figure = new_figure(4.6 * len(presets) + 0.4, 3.6)
+    figure = new_figure(4.6 * len(presets) + 0.4, 3.8 + 0.22 * ((len(families) + 1) // 2))
     axes = figure.subplots(1, len(presets), sharex=True, sharey=True, squeeze=False)[0]
     for axis, preset in zip(axes, presets):
         for index, family in enumerate(families):
             chosen = (ok & (runs["engine"] == engine) & (runs["preset"] == preset)
                       & (runs["family"] == family))
             values = np.sort(np.maximum(runs["departure_poisson"][chosen], DEPARTURE_FLOOR))
+            # n: the ok runs the line is drawn from, of all the family's runs (the rest
+            # flagged or skipped, never drawn)
+            total = int(np.count_nonzero((runs["engine"] == engine) & (runs["preset"] == preset)
+                                         & (runs["family"] == family)))
             if values.size:
                 axis.step(values, np.arange(1, values.size + 1) / values.size,
-                          where="post", color=colours(index % 10), label=family)
+                          where="post", color=colours(index % 10),
+                          label=f"{family} (n = {values.size} of {total})")
         _log_axis(axis, "x")
         _floor_axis(axis.xaxis)
         axis.set_ylim(0, 1.03)
         axis.grid(True, which="major", color="0.92", lw=0.6)
         axis.set_xlabel("departure from Poisson")
-        axis.set_title(f"{engine} {preset_label(engine, preset)}", fontsize=10)
-    axes[0].set_ylabel("fraction of ok runs ≤ x")
-    handles, labels = axes[0].get_legend_handles_labels()
-    if handles:
-        figure.legend(handles, labels, loc="outside right center", fontsize=8, frameon=False,
-                      title="family", title_fontsize=8)
+        axis.set_title(f"{engine} {preset_label(engine, preset)}", fontsize=11)
+    axes[0].set_ylabel("fraction of the n ok runs ≤ x")
+    for axis in axes:  # a key per panel, below it: each preset's n differ
+        if axis.get_legend_handles_labels()[0]:
+            axis.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), fontsize=9,
+                        frameon=False, title="family (n = ok runs of all)", title_fontsize=9,
+                        ncols=2)
     return save_png(figure, path, dpi=FIGURE_DPI, tag=tag)
 
 
