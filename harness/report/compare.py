@@ -237,11 +237,6 @@ def fmt_points(change: float) -> str:
     return "0 pp" if change == 0 else f"{100.0 * change:+.3g} pp"
 
 
-def fmt_percent(value: float | None) -> str:
-    """A departure (a fraction) in percent, as every page shows it; blank when absent."""
-    return "" if value is None or not math.isfinite(value) else f"{100.0 * value:.3g}%"
-
-
 #: A change of a departure smaller than this (a fraction: 1e-9 %) is "unchanged": rounding
 #: of a rerun on another CPU stays far below it, any setting's effect far above.
 UNCHANGED = 1e-11
@@ -379,7 +374,8 @@ def row_cells(c: Change, law: str, threshold: float) -> list[str]:
     status = f"{c.status_a} → {c.status_b}" if c.status_changed else c.status_b
     return ["EXCEEDS" if c.exceeds(threshold) else "ok",
             c.scenario + (f" [{c.point}]" if c.point else ""), c.source,
-            fmt_percent(before) or "—", fmt_percent(after) or "—",
+            "—" if before is None else metrics.fmt_departure(before),
+            "—" if after is None else metrics.fmt_departure(after),
             fmt_points(change) if change is not None else "—",
             "n/a" if math.isnan(c.speed_change) else f"{100 * c.speed_change:.3g}%", status]
 
