@@ -6,9 +6,10 @@ Every engine lives in its own module behind the contract of :mod:`harness.engine
 :class:`EngineNotInstalled` (an :class:`ImportError`) that names the engine and the install
 command while the others keep working.
 
-Adding an engine: write ``harness/engines/<name>_engine.py`` with an :class:`Engine`
-subclass bound to ``ENGINE_CLASS`` (everything the harness knows about the engine is an
-attribute of that class: :func:`engine_trait`), check it with
+Adding an engine: write ``harness/engines/<name>_engine.py`` (or a package, as
+``harness/engines/box2d/``) with an :class:`Engine` subclass bound to ``ENGINE_CLASS``
+(everything the harness knows about the engine is an attribute of that class:
+:func:`engine_trait`), check it with
 :func:`harness.engines.conformance.check_engine`, and add one line to ``_ENGINE_MODULES``
 below, or :func:`register_engine` it at run time.
 
@@ -55,7 +56,7 @@ _ENGINE_MODULES: dict[str, tuple[str, str, str]] = {
     "pymunk": ("harness.engines.pymunk_engine", "pymunk", "pymunk"),
     "pybullet": ("harness.engines.pybullet_engine", "pybullet", "pybullet"),
     "mujoco": ("harness.engines.mujoco_engine", "mujoco", "mujoco"),
-    "box2d": ("harness.engines.box2d_engine", "Box2D", "box2d"),
+    "box2d": ("harness.engines.box2d", "Box2D", "box2d"),
 }
 
 ENGINE_NAMES: tuple[str, ...] = tuple(_ENGINE_MODULES)
