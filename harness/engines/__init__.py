@@ -55,7 +55,7 @@ from harness.engines.settings import EngineSettingsError
 _ENGINE_MODULES: dict[str, tuple[str, str, str]] = {
     "pymunk": ("harness.engines.pymunk_engine", "pymunk", "pymunk"),
     "pybullet": ("harness.engines.pybullet_engine", "pybullet", "pybullet"),
-    "mujoco": ("harness.engines.mujoco_engine", "mujoco", "mujoco"),
+    "mujoco": ("harness.engines.mujoco", "mujoco", "mujoco"),
     "box2d": ("harness.engines.box2d", "Box2D", "box2d"),
 }
 
