@@ -54,7 +54,7 @@ from harness.engines.settings import EngineSettingsError
 # the pinned version lives once, in pyproject.toml's `harness` extra (see pinned_requirement).
 _ENGINE_MODULES: dict[str, tuple[str, str, str]] = {
     "pymunk": ("harness.engines.pymunk_engine", "pymunk", "pymunk"),
-    "pybullet": ("harness.engines.pybullet_engine", "pybullet", "pybullet"),
+    "pybullet": ("harness.engines.pybullet", "pybullet", "pybullet"),
     "mujoco": ("harness.engines.mujoco", "mujoco", "mujoco"),
     "box2d": ("harness.engines.box2d", "Box2D", "box2d"),
 }
