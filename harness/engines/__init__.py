@@ -1,10 +1,10 @@
 """Physics-engine adapters: one planar impact in, a typed :class:`EngineRun` out.
 
-Every engine lives in its own module behind the contract of :mod:`harness.engines.contract`
-(what an adapter supplies, what the base class does once) and is imported only when used:
-``load_engine("mujoco")`` never imports pymunk or pybullet, and a missing engine raises
-:class:`EngineNotInstalled` (an :class:`ImportError`) that names the engine and the install
-command while the others keep working.
+Every engine lives in its own module or package behind the contract of
+:mod:`harness.engines.contract` (what an adapter supplies, what the base class does once)
+and is imported only when used: ``load_engine("mujoco")`` never imports pymunk or
+pybullet, and a missing engine raises :class:`EngineNotInstalled` (an :class:`ImportError`)
+that names the engine and the install command while the others keep working.
 
 Adding an engine: write ``harness/engines/<name>_engine.py`` (or a package, as
 ``harness/engines/box2d/``) with an :class:`Engine` subclass bound to ``ENGINE_CLASS``
