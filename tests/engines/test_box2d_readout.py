@@ -8,12 +8,15 @@ checks at import, and falls back to the getters when they do not match
 
 from __future__ import annotations
 
+import importlib
+import pkgutil
 import struct
 
 import pytest
 
 pytest.importorskip("Box2D", reason="Box2D not installed (pip install box2d==2.3.10)")
 
+from harness.engines import box2d
 from harness.engines.box2d import Box2DEngine, adapter, manifold, readout
 from harness.engines.box2d import world as box2d_world
 from harness.scene.reference import reference_scenes
@@ -22,6 +25,11 @@ from harness.survey.sampling import sample_population
 
 SAMPLES = 8  # per population: 56 impacts, two batches
 GETTERS = (readout._state_by_getters, readout._touching_by_getters)
+
+
+def _box2d_modules() -> list:
+    return [importlib.import_module(f"{box2d.__name__}.{info.name}")
+            for info in pkgutil.iter_modules(box2d.__path__)]
 
 
 @pytest.fixture(scope="module")
@@ -54,7 +62,10 @@ def test_memory_and_getters_give_the_same_runs(monkeypatch, population_scenes, p
     settings = in_memory.settings(preset)
     batched = in_memory.run_many(population_scenes, settings)
     single = [in_memory.run(scene, settings) for scene in population_scenes]
-    for module in (box2d_world, manifold):  # the modules that read through _READERS
+    # Every module of the package that reads through _READERS binds it itself.
+    reading = [module for module in _box2d_modules() if hasattr(module, "_READERS")]
+    assert {box2d_world, manifold} <= set(reading)
+    for module in reading:
         monkeypatch.setattr(module, "_READERS", GETTERS)
     by_getters = Box2DEngine()
     assert by_getters.run_many(population_scenes, settings) == batched
