@@ -1,14 +1,15 @@
 """Physics-engine adapters: one planar impact in, a typed :class:`EngineRun` out.
 
-Every engine lives in its own module behind the contract of :mod:`harness.engines.contract`
-(what an adapter supplies, what the base class does once) and is imported only when used:
-``load_engine("mujoco")`` never imports pymunk or pybullet, and a missing engine raises
-:class:`EngineNotInstalled` (an :class:`ImportError`) that names the engine and the install
-command while the others keep working.
+Every engine lives in its own module or package behind the contract of
+:mod:`harness.engines.contract` (what an adapter supplies, what the base class does once)
+and is imported only when used: ``load_engine("mujoco")`` never imports pymunk or
+pybullet, and a missing engine raises :class:`EngineNotInstalled` (an :class:`ImportError`)
+that names the engine and the install command while the others keep working.
 
-Adding an engine: write ``harness/engines/<name>_engine.py`` with an :class:`Engine`
-subclass bound to ``ENGINE_CLASS`` (everything the harness knows about the engine is an
-attribute of that class: :func:`engine_trait`), check it with
+Adding an engine: write ``harness/engines/<name>_engine.py`` (or a package, as
+``harness/engines/box2d/``) with an :class:`Engine` subclass bound to ``ENGINE_CLASS``
+(everything the harness knows about the engine is an attribute of that class:
+:func:`engine_trait`), check it with
 :func:`harness.engines.conformance.check_engine`, and add one line to ``_ENGINE_MODULES``
 below, or :func:`register_engine` it at run time.
 
@@ -53,9 +54,9 @@ from harness.engines.settings import EngineSettingsError
 # the pinned version lives once, in pyproject.toml's `harness` extra (see pinned_requirement).
 _ENGINE_MODULES: dict[str, tuple[str, str, str]] = {
     "pymunk": ("harness.engines.pymunk_engine", "pymunk", "pymunk"),
-    "pybullet": ("harness.engines.pybullet_engine", "pybullet", "pybullet"),
-    "mujoco": ("harness.engines.mujoco_engine", "mujoco", "mujoco"),
-    "box2d": ("harness.engines.box2d_engine", "Box2D", "box2d"),
+    "pybullet": ("harness.engines.pybullet", "pybullet", "pybullet"),
+    "mujoco": ("harness.engines.mujoco", "mujoco", "mujoco"),
+    "box2d": ("harness.engines.box2d", "Box2D", "box2d"),
 }
 
 ENGINE_NAMES: tuple[str, ...] = tuple(_ENGINE_MODULES)

@@ -13,7 +13,7 @@ import Box2D
 from Box2D import b2
 
 from harness.engines import EngineSettingsError, ke_norm, load_engine
-from harness.engines.box2d_engine import (
+from harness.engines.box2d import (
     CLIPPED_NOTE,
     DETECTION_OVERLAP,
     PRESETS,

@@ -12,7 +12,8 @@ import pytest
 
 pytest.importorskip("Box2D", reason="Box2D not installed (pip install box2d==2.3.10)")
 
-from harness.engines import Status, UnsupportedScene, box2d_engine, load_engine
+from harness.engines import Status, UnsupportedScene, box2d, load_engine
+from harness.engines.box2d import scaling
 from harness.scenarios.library import load_scenarios
 from harness.survey.population import resolve_populations
 from harness.survey.sampling import sample_population
@@ -65,24 +66,24 @@ def test_batched_equals_single_on_every_population(engine, population_scenes, pr
 
 def _contiguous_chunks(self, scenes) -> list[range]:
     """Batches of MANY_CHUNK scenes in a row, whatever their speeds."""
-    return [range(begin, min(begin + box2d_engine.MANY_CHUNK, len(scenes)))
-            for begin in range(0, len(scenes), box2d_engine.MANY_CHUNK)]
+    return [range(begin, min(begin + box2d.MANY_CHUNK, len(scenes)))
+            for begin in range(0, len(scenes), box2d.MANY_CHUNK)]
 
 
 def test_batches_of_mixed_velocity_scales_equal_single(monkeypatch, engine, population_scenes):
     # "auto" gives impacts of one batch different Box2D time steps (one world each, the
     # largest group in the probe's world, the others built anew).
-    monkeypatch.setattr(box2d_engine.Box2DEngine, "_many_chunks", _contiguous_chunks)
+    monkeypatch.setattr(box2d.Box2DEngine, "_many_chunks", _contiguous_chunks)
     worlds = []
-    build_many = box2d_engine.Box2DEngine._build_many
+    build_many = box2d.Box2DEngine._build_many
 
     def counting(self, plans):
         batch, views, derived = build_many(self, plans)
         worlds.append(len(batch.worlds))
         return batch, views, derived
 
-    monkeypatch.setattr(box2d_engine.Box2DEngine, "_build_many", counting)
-    batched = box2d_engine.Box2DEngine()
+    monkeypatch.setattr(box2d.Box2DEngine, "_build_many", counting)
+    batched = box2d.Box2DEngine()
     assert not _mismatched(batched, population_scenes, batched.settings("accurate"))
     assert max(worlds) > 2
 
@@ -92,8 +93,8 @@ def test_batches_hold_scenes_of_one_speed_class(engine, population_scenes):
     assert sorted(index for chunk in chunks for index in chunk) == list(
         range(len(population_scenes)))
     for chunk in chunks:
-        assert 0 < len(chunk) <= box2d_engine.MANY_CHUNK
-        assert len({box2d_engine._speed_class(population_scenes[index])
+        assert 0 < len(chunk) <= box2d.MANY_CHUNK
+        assert len({scaling._speed_class(population_scenes[index])
                     for index in chunk}) == 1
 
 
@@ -106,7 +107,7 @@ def test_the_speed_class_foretells_the_velocity_scale_of_disks(engine, populatio
     runs = engine.run_many(disks, preset="accurate")
     assert len({run.derived["velocity_scale"] for run in runs}) > 2
     foretold = sum(run.derived["velocity_scale"]
-                   == 2.0 ** (1 - min(box2d_engine._speed_class(scene), 1))
+                   == 2.0 ** (1 - min(scaling._speed_class(scene), 1))
                    for scene, run in zip(disks, runs))
     assert foretold >= 0.9 * len(disks)
     # Over every scene, most impacts run in their batch's probe world.
@@ -148,7 +149,7 @@ def test_sub_stepping_runs_one_by_one(population_scenes):
     # depends on what its world ran before, and shared worlds would mix impacts. run_many
     # runs the impacts in order, as run does: two fresh engines give the same runs.
     scenes = population_scenes[::5]
-    batched_engine, single_engine = box2d_engine.Box2DEngine(), box2d_engine.Box2DEngine()
+    batched_engine, single_engine = box2d.Box2DEngine(), box2d.Box2DEngine()
     settings = batched_engine.settings("accurate", {"sub_stepping": True})
     assert batched_engine.run_many(scenes, settings) == [
         single_engine.run(scene, settings) for scene in scenes]
@@ -157,11 +158,11 @@ def test_sub_stepping_runs_one_by_one(population_scenes):
 def test_batched_notes_and_derived_come_from_each_impacts_own_probe(engine, population_scenes):
     # defaults measure Box2D's impact speed during the run itself: slow impacts get the
     # threshold's note, fast ones none, within one batch.
-    scenes = population_scenes[:box2d_engine.MANY_CHUNK]
+    scenes = population_scenes[:box2d.MANY_CHUNK]
     runs = engine.run_many(scenes, preset="defaults")
     cleared = [run.derived["restitution_threshold_cleared"] for run in runs]
     assert True in cleared and False in cleared
     for scene, run in zip(scenes, runs):
-        slow = run.derived["box2d_impact_speed"] <= box2d_engine.VELOCITY_THRESHOLD
+        slow = run.derived["box2d_impact_speed"] <= box2d.VELOCITY_THRESHOLD
         assert run.derived["restitution_threshold_cleared"] == (not slow)
-        assert (box2d_engine.THRESHOLD_NOTE in run.notes) == (slow and scene.restitution > 0)
+        assert (box2d.THRESHOLD_NOTE in run.notes) == (slow and scene.restitution > 0)

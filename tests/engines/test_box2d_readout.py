@@ -3,25 +3,33 @@ getters give, and a run measures its first contact's speed as the probe run woul
 
 The adapter reads b2Body, b2ContactEdge and b2Contact (with its b2Manifold) in the layouts it
 checks at import, and falls back to the getters when they do not match
-(harness/engines/box2d_engine.py, "reading Box2D's state"): both must give the same runs.
+(harness/engines/box2d/readout.py): both must give the same runs.
 """
 
 from __future__ import annotations
 
+import importlib
+import pkgutil
 import struct
 
 import pytest
 
 pytest.importorskip("Box2D", reason="Box2D not installed (pip install box2d==2.3.10)")
 
-from harness.engines import box2d_engine
-from harness.engines.box2d_engine import Box2DEngine
+from harness.engines import box2d
+from harness.engines.box2d import Box2DEngine, adapter, manifold, readout
+from harness.engines.box2d import world as box2d_world
 from harness.scene.reference import reference_scenes
 from harness.survey.population import resolve_populations
 from harness.survey.sampling import sample_population
 
 SAMPLES = 8  # per population: 56 impacts, two batches
-GETTERS = (box2d_engine._state_by_getters, box2d_engine._touching_by_getters)
+GETTERS = (readout._state_by_getters, readout._touching_by_getters)
+
+
+def _box2d_modules() -> list:
+    return [importlib.import_module(f"{box2d.__name__}.{info.name}")
+            for info in pkgutil.iter_modules(box2d.__path__)]
 
 
 @pytest.fixture(scope="module")
@@ -32,8 +40,8 @@ def population_scenes():
 
 def test_the_pinned_pybox2d_is_read_in_memory():
     # Else every run silently takes the getters' path, several times slower.
-    assert box2d_engine._IN_MEMORY
-    assert box2d_engine._READERS[0] is box2d_engine._state_in_memory
+    assert readout._IN_MEMORY
+    assert readout._READERS[0] is readout._state_in_memory
 
 
 @pytest.mark.parametrize("name, wrong", [
@@ -43,9 +51,9 @@ def test_the_pinned_pybox2d_is_read_in_memory():
     ("_CONTACT", struct.Struct("@8xI12xP64x2P12x2f2f4x2f2f4x2f2fiI")),  # manifold 4 late
 ])
 def test_the_layout_check_refuses_a_wrong_layout(monkeypatch, name, wrong):
-    assert box2d_engine._layout_matches()
-    monkeypatch.setattr(box2d_engine, name, wrong)
-    assert not box2d_engine._layout_matches()
+    assert readout._layout_matches()
+    monkeypatch.setattr(readout, name, wrong)
+    assert not readout._layout_matches()
 
 
 @pytest.mark.parametrize("preset", ["defaults", "accurate"])
@@ -54,7 +62,11 @@ def test_memory_and_getters_give_the_same_runs(monkeypatch, population_scenes, p
     settings = in_memory.settings(preset)
     batched = in_memory.run_many(population_scenes, settings)
     single = [in_memory.run(scene, settings) for scene in population_scenes]
-    monkeypatch.setattr(box2d_engine, "_READERS", GETTERS)
+    # Every module of the package that reads through _READERS binds it itself.
+    reading = [module for module in _box2d_modules() if hasattr(module, "_READERS")]
+    assert {box2d_world, manifold} <= set(reading)
+    for module in reading:
+        monkeypatch.setattr(module, "_READERS", GETTERS)
     by_getters = Box2DEngine()
     assert by_getters.run_many(population_scenes, settings) == batched
     assert [by_getters.run(scene, settings) for scene in population_scenes] == single
@@ -73,20 +85,20 @@ def test_states_and_contacts_read_in_memory_are_the_getters(population_scenes):
         engine._reset(world, plan.prepared)
         for _ in range(3):
             engine._step(world)
-            memory = box2d_engine._Memory()  # fresh buffers: none made before this step
+            memory = readout._Memory()  # fresh buffers: none made before this step
             for b2_body, address in world.dynamic:
-                state = box2d_engine._state_in_memory(b2_body, address, memory)
-                assert state[:8] == box2d_engine._state_by_getters(b2_body, address, memory)[:8]
-                touching = box2d_engine._touching_in_memory(b2_body, state, memory)
-                assert ([box2d_engine._used(values) for values in touching]
-                        == [box2d_engine._used(values) for values in
-                            box2d_engine._touching_by_getters(b2_body, state, memory)])
+                state = readout._state_in_memory(b2_body, address, memory)
+                assert state[:8] == readout._state_by_getters(b2_body, address, memory)[:8]
+                touching = readout._touching_in_memory(b2_body, state, memory)
+                assert ([readout._used(values) for values in touching]
+                        == [readout._used(values) for values in
+                            readout._touching_by_getters(b2_body, state, memory)])
                 compared += len(touching)
             # The world's contacts are its body B's (the readout walks that body's list).
-            assert ([box2d_engine._used(values) for values in box2d_engine._touching_in_memory(
-                world.body_b, box2d_engine._state_in_memory(world.body_b, world.body_b_id,
-                                                            memory), memory)]
-                    == [box2d_engine._used(box2d_engine._contact_values(contact))
+            assert ([readout._used(values) for values in readout._touching_in_memory(
+                world.body_b, readout._state_in_memory(world.body_b, world.body_b_id,
+                                                       memory), memory)]
+                    == [readout._used(readout._contact_values(contact))
                         for contact in world.world.contacts if contact.touching])
     assert compared > 0
 
@@ -98,7 +110,7 @@ def test_a_run_measures_its_first_contact_speed_as_the_probe_would(monkeypatch):
     runs = [measuring.run(scene, settings) for scene in scenes]
     assert all("box2d_impact_speed" in run.derived for run in runs)
     # The probe run, as accurate settings need it, in place of the run's own measurement.
-    monkeypatch.setattr(box2d_engine, "_probe_is_run", lambda prepared: False)
+    monkeypatch.setattr(adapter, "_probe_is_run", lambda prepared: False)
     probing = Box2DEngine()
     assert [probing.run(scene, settings) for scene in scenes] == runs
 
@@ -128,7 +140,7 @@ def _contact_by_geometry(touching: list, world):
             continue
         padding_a, radius_a, body_a_id = world.fixtures[values[2]]
         padding_b, radius_b, contact_body_b = world.fixtures[values[3]]
-        (n_x, n_y), contact_points = box2d_engine._manifold_geometry(
+        (n_x, n_y), contact_points = manifold._manifold_geometry(
             values, world.start[body_a_id], world.start[contact_body_b], radius_a, radius_b)
         sign = 1.0 if contact_body_b == body_b else -1.0
         for first in range(6, 6 + 4 * count, 4):
@@ -152,15 +164,15 @@ def test_the_contact_readout_is_the_manifold_geometrys(monkeypatch):
     scenes = [sample.scene for population in resolve_populations([])
               for sample in sample_population(population, 30, seed=11).samples]
     kinds = []
-    readout = box2d_engine._contact_of
+    readout_of = manifold._contact_of
 
     def compared(touching, world):
-        raw = readout(touching, world)
+        raw = readout_of(touching, world)
         assert raw == _contact_by_geometry(touching, world)
         kinds.extend(values[16] for values in touching if values[17])
         return raw
 
-    monkeypatch.setattr(box2d_engine, "_contact_of", compared)
+    monkeypatch.setattr(box2d_world, "_contact_of", compared)
     engine = Box2DEngine()
     for preset in ("defaults", "accurate"):
         engine.run_many(scenes, preset=preset)

@@ -11,7 +11,7 @@ import pytest
 pytest.importorskip("mujoco", reason="mujoco not installed (pip install mujoco==4.0.0)")
 
 from harness.engines import ke_norm, load_engine  # noqa: E402
-from harness.engines.mujoco_engine import (  # noqa: E402
+from harness.engines.mujoco import (  # noqa: E402
     MIN_RESTITUTION,
     contact_time_factor,
     damping_ratio_for_restitution,
@@ -192,7 +192,7 @@ MUJOCO_DT = 0.002
 DEFAULT_SOLREF = (0.02, 1.0)
 DEFAULT_SOLIMP = (0.9, 0.95, 0.001, 0.5, 2.0)
 # Steps: the harness starts a MuJoCo run a hair past the touching pose, so that the first
-# step finds the contact (harness/engines/mujoco_engine.py, its StepTiming overlap).
+# step finds the contact (harness/engines/mujoco/adapter.py, its StepTiming overlap).
 START_PAST_TOUCH = 1e-6
 
 
@@ -414,7 +414,7 @@ def test_accurate_slip_falls_to_e_squared(engine, e):
 def test_run_equals_a_fresh_adapters_whatever_ran_before(engine):
     # The model is rewritten only when settings, e or μ differ from what it holds: every run
     # in a sequence over one geometry must equal the same run on a fresh adapter (new model).
-    from harness.engines.mujoco_engine import MujocoEngine
+    from harness.engines.mujoco import MujocoEngine
 
     settings = engine.settings("accurate")
     sequence = [

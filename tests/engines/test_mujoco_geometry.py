@@ -19,12 +19,8 @@ import pytest
 mujoco = pytest.importorskip("mujoco", reason="mujoco not installed (pip install mujoco==4.0.0)")
 
 from harness.engines.contract import body_extent  # noqa: E402
-from harness.engines.mujoco_engine import (  # noqa: E402
-    MujocoEngine,
-    _Geometry,
-    _model_xml,
-    _topology,
-)
+from harness.engines.mujoco import MujocoEngine  # noqa: E402
+from harness.engines.mujoco.model import _Geometry, _model_xml, _topology  # noqa: E402
 from harness.scenarios.library import load_scenarios  # noqa: E402
 from harness.scene import Body, Box, Disk, Polygon, Rod, Scene  # noqa: E402
 from harness.scene.reference import reference_scenes  # noqa: E402

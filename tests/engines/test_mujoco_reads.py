@@ -20,13 +20,9 @@ import pytest
 
 mujoco = pytest.importorskip("mujoco", reason="mujoco not installed (pip install mujoco==4.0.0)")
 
-from harness.engines.mujoco_engine import (  # noqa: E402
-    MujocoEngine,
-    _layout,
-    _model_xml,
-    _xml_float32,
-    _xml_float32s,
-)
+from harness.engines.mujoco import MujocoEngine  # noqa: E402
+from harness.engines.mujoco.model import _model_xml, _xml_float32, _xml_float32s  # noqa: E402
+from harness.engines.mujoco.world import _layout  # noqa: E402
 from harness.scene import Body, Box, Disk, Polygon, Scene  # noqa: E402
 from harness.scene.geometry import place_on_ground  # noqa: E402
 from harness.survey.population import resolve_populations  # noqa: E402

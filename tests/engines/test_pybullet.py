@@ -213,20 +213,20 @@ def test_reused_clients_equal_fresh_adapters(order, monkeypatch):
     # resetSimulation, so it must not serve the presets (which leave sub-steps unset).
     import pybullet
 
-    from harness.engines import pybullet_engine
+    from harness.engines.pybullet import adapter
 
     scenes = [scene for scene, _, _ in SCENES.values()] + [triangle_scene()[0]] + survey_scenes()
     if order == "reverse":
         scenes.reverse()
-    assert len(scenes) > 2 * pybullet_engine._MAX_WORLDS  # worlds are evicted, clients reused
+    assert len(scenes) > 2 * adapter._MAX_WORLDS  # worlds are evicted, clients reused
     connect = pybullet.connect
     shared_connects = []
-    shared = pybullet_engine.PybulletEngine()
+    shared = adapter.PybulletEngine()
     sub_stepped = shared.settings("accurate", {"num_sub_steps": 2, "time_step": 1.0 / 120.0})
     try:
         for settings in (sub_stepped, shared.settings("accurate"), shared.settings("defaults")):
             for scene in scenes:
-                fresh = pybullet_engine.PybulletEngine()
+                fresh = adapter.PybulletEngine()
                 try:
                     expected = fresh.run(scene, settings)
                 finally:
@@ -239,4 +239,4 @@ def test_reused_clients_equal_fresh_adapters(order, monkeypatch):
     finally:
         shared.close()
     # The reuse path was taken: per settings, one client per kept world and one idle.
-    assert len(shared_connects) <= 3 * (pybullet_engine._MAX_WORLDS + 1)
+    assert len(shared_connects) <= 3 * (adapter._MAX_WORLDS + 1)

@@ -12,7 +12,7 @@ import pytest
 pybullet = pytest.importorskip("pybullet",
                                reason="pybullet not installed (pip install pybullet==3.2.7)")
 
-from harness.engines import pybullet_engine as adapter  # noqa: E402
+from harness.engines.pybullet import adapter  # noqa: E402
 from harness.survey.population import resolve_populations  # noqa: E402
 from harness.survey.sampling import sample_population  # noqa: E402
 

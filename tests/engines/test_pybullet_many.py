@@ -14,7 +14,7 @@ import pytest
 pytest.importorskip("pybullet", reason="pybullet not installed (pip install pybullet==3.2.7)")
 
 from harness.engines import Status, load_engine  # noqa: E402
-from harness.engines import pybullet_engine as adapter  # noqa: E402
+from harness.engines.pybullet import adapter, clients  # noqa: E402
 from harness.scenarios.library import load_scenarios  # noqa: E402
 from harness.scene.reference import reference_scenes  # noqa: E402
 from harness.survey.population import resolve_populations  # noqa: E402
@@ -127,7 +127,7 @@ def test_chunks_keep_ground_and_two_body_scenes_apart(engine, population_scenes)
 def test_slices_keep_their_gap_and_are_made_far_from_the_last(count):
     sizes = [0.05 + 0.37 * ((7 * slot) % 11) for slot in range(count)]
     gap = 1.04
-    offsets = adapter._slice_offsets(sizes, gap)
+    offsets = clients._slice_offsets(sizes, gap)
     assert len(offsets) == count and offsets[0] == 0.0
     # Every two slices at least their sizes plus the gap apart, to the sums' rounding (they
     # never meet: the gap holds twice the contact threshold with a metre to spare) ...

@@ -21,7 +21,7 @@ def _run(code: str) -> subprocess.CompletedProcess:
 
 @pytest.mark.parametrize("load", [
     "from harness.engines import load_engine; load_engine('pybullet')",
-    "import harness.engines.pybullet_engine",
+    "import harness.engines.pybullet",
 ])
 def test_pybullet_loads_without_its_banner(load):
     pytest.importorskip("pybullet")

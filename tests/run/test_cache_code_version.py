@@ -62,6 +62,15 @@ def test_a_new_engine_module_changes_the_key(tmp_path):
     assert _version(harness_dir, package) != before
 
 
+def test_a_new_engine_package_changes_the_key(tmp_path):
+    # An engine may be a package (harness/engines/box2d/): its modules are hashed too.
+    harness_dir, package = _tree(tmp_path)
+    before = _version(harness_dir, package)
+    (harness_dir / "engines" / "box2d").mkdir()
+    (harness_dir / "engines" / "box2d" / "adapter.py").write_text("y = 1\n")
+    assert _version(harness_dir, package) != before
+
+
 def test_a_listed_source_that_is_missing_is_an_error(tmp_path):
     harness_dir, package = _tree(tmp_path)
     (harness_dir / "run" / "metrics.py").unlink()

@@ -1,0 +1,287 @@
+"""Box2D (pybox2d 2.3.10) behind the engine contract: the hooks of :class:`Box2DEngine`.
+
+What the engine does and why is told in the package's docstring
+(:mod:`harness.engines.box2d`); the workarounds for pybox2d live in the package's other
+modules.
+"""
+
+from __future__ import annotations
+
+import Box2D
+
+from harness.engines.box2d.batch import (
+    MANY_CHUNK,
+    _Batch,
+    _many_world,
+    _ManyProbe,
+    _probe_many,
+    _replace,
+)
+from harness.engines.box2d.presets import _BOOL_KEYS, PRESETS, SETTING_DOCS
+from harness.engines.box2d.scaling import (
+    _Prepared,
+    _probe,
+    _probe_is_run,
+    _probe_starts,
+    _scaled,
+    _speed_class,
+    _speed_results,
+    _SpeedProbe,
+    _unprobed,
+)
+from harness.engines.box2d.world import _states_at_cap, _World
+from harness.engines.contract import Engine, RawContacts, StepTiming, geometry_key
+from harness.engines.settings import EngineSettingsError, check_int, check_number
+from harness.scene import Scene
+
+CLIPPED_NOTE = ("Box2D clipped a velocity (b2_maxTranslation 2 m or b2_maxRotation π/2 per "
+                "step; see derived speed_cap, angular_speed_cap)")
+
+
+# ---------------------------------------------------------------------- the adapter
+class Box2DEngine(Engine):
+    name = "box2d"
+    version = Box2D.__version__
+    # What the rest of the harness reads about this engine (docs/engines.md, 'The engine
+    # contract'): why it lands where it does, per engine and per preset, and its plot style.
+    description = (
+        "Box2D solves the velocity-level law (newton-lcp) by sequential impulses, like "
+        "pymunk; its measured behaviour is in docs/engines.md, 'Box2D'.")
+    preset_why = {
+        "defaults": ("Box2D's own defaults."),
+        "accurate": ("settings under which Box2D solves its law as exactly as it can."),
+    }
+    rounding = 1e-6  # float32 arithmetic: a few roundings of 6e-8 (ROUNDING in the tests)
+    # Box2D's default polygon skin (0.01 m) makes the rod's core box reach the ground beside
+    # its 5 mm end cap: three contact points at once.
+    reference_statuses = {("rod-45", "defaults"): "multi-contact"}
+    native_2d = True
+    plot_style = ("#CC79A7", "D")
+    bench_impacts = (40, 300)
+    presets = PRESETS
+    setting_docs = SETTING_DOCS
+    # Collision first: the first step finds the contact at the start pose. The start's
+    # hair of overlap is a depth in lengths (detection_overlap), added in _prepare.
+    timing = StepTiming(lead_steps=0.0, overlap=0.0)
+
+
+    @classmethod
+    def bench_sweep(cls, quick: bool) -> list[tuple[str, str, dict]]:
+        """The settings the accuracy bench measures (harness/bench/accuracy.py)."""
+        points: list[tuple[str, str, dict]] = []
+        points.append(("defaults", "defaults", {}))
+        # Box2D's own time step changes nothing for a one-step impact but the translation
+        # cap; the sweeps are what converge the coupled points (float32 floor ~1e-7).
+        iterations = (1, 2, 5, 8, 20, 100) if quick else (1, 2, 3, 5, 8, 10, 20, 50, 100, 200)
+        for count in iterations:
+            points.append((f"dt={1 / 60:.3g} it={count}", "accurate",
+                           {"velocity_iterations": count}))
+        return points
+
+    def _validate_engine_settings(self, settings) -> None:
+        check_int(self.name, settings, "velocity_iterations", low=1)
+        check_int(self.name, settings, "position_iterations", low=0)
+        for key in _BOOL_KEYS:
+            if not isinstance(settings[key], bool):
+                raise EngineSettingsError(
+                    f"engine {self.name!r}: setting {key!r} must be true or false, "
+                    f"got {settings[key]!r}")
+        check_number(self.name, settings, "polygon_radius", low=0.0)
+        if settings["velocity_scale"] != "auto":
+            check_number(self.name, settings, "velocity_scale", low=0.0, strict=True)
+        check_number(self.name, settings, "length_scale", low=0.0, strict=True)
+        check_number(self.name, settings, "detection_overlap", low=0.0)
+
+    def _world_key(self, scene: Scene, settings) -> tuple:
+        return (geometry_key(scene), float(settings["length_scale"]),
+                float(settings["polygon_radius"]))
+
+    def _build(self, scene: Scene, settings, *, contacts: bool = True) -> _World:
+        return _World(scene, float(settings["length_scale"]), float(settings["polygon_radius"]),
+                      measures=contacts)
+
+    def _prepare(self, world: _World | None, scene: Scene, settings, start, weights) -> _Prepared:
+        prepared = _unprobed(scene, settings, start)
+        if world is None:  # run_many: _build_many probes every impact of a batch at once
+            return prepared
+        if _probe_is_run(prepared):  # the run measures the speed itself (_reset), as in a batch
+            return _scaled(prepared, None)
+        # Measured for every plan: it tells whether the threshold zeroed the bounce.
+        probe = prepared.probe
+        probe_speed = _probe(world, prepared, _probe_starts(prepared),
+                             probe.time_step * probe.length, probe.max_steps)
+        return _scaled(prepared, probe_speed)
+
+    def _reset(self, world: _World, prepared: _Prepared) -> dict:
+        world.configure(prepared.world_values, prepared.pair_values)
+        world.dt, world.iterations, world.velocity = (prepared.dt, prepared.iterations,
+                                                      prepared.velocity)
+        world.notes = prepared.notes
+        world.place(prepared.starts)
+        # Already beyond a cap before the first step (place read the bodies).
+        world.clipped = _states_at_cap(world.states, world.dt, 1.0)
+        derived = world.derived = dict(prepared.derived)
+        if world.speed_probe is not None:  # the last run met no contact
+            world.world.contactListener = world.speed_probe = None
+        if world.measures and _probe_is_run(prepared):
+            world.speed_probe = _SpeedProbe(world)
+            world.world.contactListener = world.speed_probe
+            world.restitution = prepared.probe.restitution
+        return derived
+
+    def _advance(self, world: _World) -> None:
+        world.world.Step(world.dt, *world.iterations)
+
+    def _step(self, world: _World) -> RawContacts | None:
+        world.world.Step(world.dt, *world.iterations)
+        probe = world.speed_probe
+        if probe is not None and probe.speed is not None:  # measured in this step's PreSolve
+            world.notes = _speed_results(world.derived, probe.speed, world.velocity,
+                                         world.restitution)
+            world.world.contactListener = world.speed_probe = None
+        return world.read_step()
+
+    # ------------------------------------------------------------------ many impacts
+    def _runs_alone(self, settings) -> bool:
+        """With ``sub_stepping`` the impacts run one by one (:meth:`Engine.run_many`).
+
+        Sub-stepping handles one time-of-impact event per step in the whole world and leaves
+        the world's step unfinished (the next ``b2World::Step`` only resumes it): impacts
+        sharing a world would steer each other.
+        """
+        return bool(settings["sub_stepping"])
+
+    def _many_chunks(self, scenes) -> list[list[int]]:
+        """Up to :data:`MANY_CHUNK` scenes to a batch, those of one :func:`_speed_class`
+        together (in their order; a class's scenes split evenly among its batches).
+
+        ``auto`` gives each velocity scale a world of its own, and an impact outside its
+        batch's probe world's group is built a second time (:meth:`_build_many`): batches
+        of one class keep those few. Which scenes share a batch changes no run.
+        """
+        classes: dict[int, list[int]] = {}
+        for index, scene in enumerate(scenes):
+            classes.setdefault(_speed_class(scene), []).append(index)
+        chunks = []
+        for indices in classes.values():
+            size = -(-len(indices) // -(-len(indices) // MANY_CHUNK))  # ceil(n / batches)
+            chunks += [indices[begin:begin + size] for begin in range(0, len(indices), size)]
+        return chunks
+
+    def _build_many(self, plans) -> tuple[_Batch, list, list]:
+        """b2Worlds stepping many impacts, each impact as :meth:`run` steps it alone.
+
+        The impacts overlap in space (each at its own run-frame coordinates: moving one
+        would change its float32 roundings) and are kept apart by collision filters: every
+        fixture of impact k, its ground's included, is in group k+1 (always collide) with
+        mask 0 (collide with no other group). Box2D solves each island (an impact's bodies
+        and their touching contacts) by itself, collides contact by contact, and creates
+        the contacts of new pairs in the order of the proxies' ids, which keep each impact's
+        own order; time-of-impact events advance only their own bodies. So an impact's
+        arithmetic is the one it has alone (the tests compare them bit for bit).
+
+        First the probe runs of every impact in one world (unscaled, each impact put to
+        sleep once its speed is known); then one world per Box2D time step (the velocity
+        scales differ: a world steps by one time step, and warm starting scales impulses by
+        the ratio of consecutive steps). The largest group runs in the probe's world, placed
+        anew (:func:`_place` leaves nothing of the probe). When the probe run is the run's
+        own beginning (no velocity scale or start depth to set), the runs measure the speed
+        themselves.
+        """
+        prepared = [plan.prepared for plan in plans]
+        first = prepared[0]  # one settings dict for every plan
+        world_values, iterations = first.world_values, first.iterations
+        length, time_step, max_steps = (first.probe.length, first.probe.time_step,
+                                        first.probe.max_steps)
+        skin = float(plans[0].settings["polygon_radius"])
+        measure_in_run = _probe_is_run(first)
+        probe_world = None
+        if not measure_in_run:
+            speeds, probe_world, probe_views = _probe_many(
+                plans, prepared, length, skin, time_step * length, max_steps)
+            prepared = [_scaled(one.unprobed(), speed) for one, speed in zip(prepared, speeds)]
+        else:
+            prepared = [_scaled(one.unprobed(), None) for one in prepared]
+        groups: dict = {}
+        for slot, one in enumerate(prepared):
+            groups.setdefault(one.dt, []).append(slot)
+        batch = _Batch(len(plans))
+        # The largest group runs in the probe's world (placed anew, as run places a
+        # world's bodies after its probe); the others in worlds of their own.
+        for slots in sorted(groups.values(), key=len, reverse=True):
+            dt = prepared[slots[0]].dt
+            if probe_world is not None:
+                world, views = probe_world, [probe_views[slot] for slot in slots]
+                _replace(world, probe_views, set(slots), prepared)
+                probe_world = None
+            else:
+                world, views = _many_world([plans[slot] for slot in slots],
+                                           [prepared[slot] for slot in slots], slots, length,
+                                           skin, world_values)
+            for slot, view in zip(slots, views):
+                view.world = len(batch.worlds)
+                view.dt, view.velocity = dt, prepared[slot].velocity
+                view.notes = prepared[slot].notes
+                view.clipped = _states_at_cap(view.states, dt, 1.0)  # read when placed
+                batch.slots[slot] = view
+            batch.worlds.append((world, dt, iterations))
+            if measure_in_run:
+                listener = _ManyProbe(views, measure_run=True)
+                world.contactListener = listener
+                batch.listeners.append((world, listener))
+        derived = [one.derived for one in prepared]
+        for view, values in zip(batch.slots, derived):
+            view.derived = values
+        return batch, batch.slots, derived
+
+    def _step_many(self, batch: _Batch, active) -> dict:
+        slots, worlds = batch.slots, batch.worlds
+        if len(worlds) == 1:  # called with active impacts only
+            world, dt, iterations = worlds[0]
+            world.Step(dt, *iterations)
+        else:
+            stepping = {slots[slot].world for slot in active}
+            for index, (world, dt, iterations) in enumerate(worlds):
+                if index in stepping:
+                    world.Step(dt, *iterations)
+        contacts = {}
+        for slot in active:
+            view = slots[slot]
+            raw = view.read_step()
+            if raw is not None:
+                contacts[slot] = raw
+        if batch.listeners:
+            batch.listeners = [(world, listener) for world, listener in batch.listeners
+                               if not listener.done(world)]
+        return contacts
+
+    def _retire(self, batch: _Batch, slot: int) -> None:
+        view = batch.slots[slot]
+        for b2_body in view.bodies:
+            b2_body.awake = False  # a sleeping impact is neither collided nor solved
+
+    def _release_many(self, batch: _Batch) -> None:
+        for world, _ in batch.listeners:
+            world.contactListener = None
+        batch.listeners = []
+        batch.worlds = []
+        batch.slots = []
+
+    def _read_poses(self, world: _World) -> tuple:
+        return world.now  # read after the step (_Readout.read)
+
+    def _read_velocities(self, world: _World) -> tuple:
+        velocity, rate = world.velocity, world.length / world.velocity
+        # Read after the step (_Readout.read): the loop reads velocities only then, and
+        # the batch's _finish comes before _retire stops the bodies.
+        return tuple([(state[5] / velocity, state[6] / velocity, state[7] * rate)
+                      for state in world.states])
+
+    def _run_notes(self, world: _World) -> tuple[str, ...]:
+        if world.clipped:
+            return (*world.notes, CLIPPED_NOTE)
+        return world.notes
+
+
+
+ENGINE_CLASS = Box2DEngine
