@@ -19,8 +19,9 @@ from pathlib import Path
 import numpy as np
 
 import planar_impact as pi
+from harness.scene import ellipse
 
-from . import analysis, ellipse, fazeli, kharaz, metric, registry
+from . import analysis, fazeli, kharaz, metric, registry
 
 KHARAZ_ANGLES = (10, 20, 30, 40, 50, 60, 70, 80)
 GAP_MUS = (0.05, 0.1, 0.2, 0.3, 0.5, 1.0)

@@ -1,6 +1,7 @@
-"""The Fazeli drops through the engines: each drop a scene whose body is the polygon placed
-on the ellipse's lowest point (``ellipse``; exact contact point and Jacobian), at the angle
-the published Jacobian was evaluated at, with the ellipse's mass and inertia; every run
+"""The Fazeli drops through the engines: each drop a scene whose body is the ellipse
+(:class:`harness.scene.Ellipse`: MuJoCo's ellipsoid, elsewhere the polygon placed on its
+lowest point, exact contact point and Jacobian), at the angle the published Jacobian was
+evaluated at, with the ellipse's mass and inertia; every run
 judged by the suite's verdicts (harness/run/verdicts.py). Flagged runs are counted with
 their reason, never scored; only aggregates leave this module."""
 
@@ -8,10 +9,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import analysis, ellipse, fazeli, metric
+from harness.scene import ellipse
+from harness.scene.model import STAND_IN_VERTICES
+
+from . import analysis, fazeli, metric
 from .records import MeasuredImpacts
 
-VERTICES = 8  # Box2D's most; the placed 8-gon's next vertex is ≥ 7.3 mm above the contact
+VERTICES = STAND_IN_VERTICES  # the placed 8-gon's next vertex is ≥ 7.3 mm above the contact
 
 
 def jacobian_angles(impacts: MeasuredImpacts, guess: np.ndarray,
@@ -32,16 +36,15 @@ def jacobian_angles(impacts: MeasuredImpacts, guess: np.ndarray,
 
 
 def drop_scene(impacts: MeasuredImpacts, row: int, theta: float, mu: float, e: float):
-    from harness.scene.model import Body, Polygon, Scene
+    from harness.scene import Body, Ellipse, Scene, geometry
 
     a, b = fazeli.SEMI_AXES
-    phi, _, py = ellipse.lowest_point(theta, a, b)
-    phis = phi + 2 * np.pi * np.arange(VERTICES) / VERTICES  # increasing φ: anticlockwise
-    points = tuple((float(a * np.cos(p)), float(b * np.sin(p))) for p in phis)
+    _, py = ellipse.lowest_offset(theta, a, b)
     vx, vy, omega = (float(v) for v in impacts.speeds_before[row])
-    body = Body("ellipse", Polygon(points), fazeli.MASS, (0.0, float(-py)), float(theta),
-                (vx, vy), omega, inertia=float(impacts.mass_matrix[2, 2]))
-    return Scene((body,), e, mu, ground=True, name=f"drop-{int(impacts.drop_ids[row])}")
+    body = Body("ellipse", Ellipse(a, b), fazeli.MASS, (0.0, -py), float(theta), (vx, vy),
+                omega, inertia=float(impacts.mass_matrix[2, 2]))
+    return Scene((geometry.place_stand_in(body),), e, mu, ground=True,
+                 name=f"drop-{int(impacts.drop_ids[row])}")
 
 
 def run_drops(engine, preset: str, impacts: MeasuredImpacts, thetas: np.ndarray, mu: float,
