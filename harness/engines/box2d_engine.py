@@ -615,7 +615,10 @@ def _add_impact(world, scene: Scene, length: float, skin: float, extent: float, 
 
 def _outline(shape) -> list:
     """A box's or polygon's vertices as ``shape.vertices()`` gives them, as Python floats
-    (without the numpy array, which costs more than the rest of the body)."""
+    (without the numpy array, which costs more than the rest of the body); an ellipse's
+    placed stand-in polygon's (Box2D has no ellipse)."""
+    if shape.kind == "ellipse":
+        shape = shape.stand_in()
     if shape.kind == "box":
         half_w, half_h = shape.width / 2.0, shape.height / 2.0
         return [(-half_w, -half_h), (half_w, -half_h), (half_w, half_h), (-half_w, half_h)]
@@ -958,8 +961,10 @@ class Box2DEngine(Engine):
     }
     rounding = 1e-6  # float32 arithmetic: a few roundings of 6e-8 (ROUNDING in the tests)
     # Box2D's default polygon skin (0.01 m) makes the rod's core box reach the ground beside
-    # its 5 mm end cap: three contact points at once.
-    reference_statuses = {("rod-45", "defaults"): "multi-contact"}
+    # its 5 mm end cap: three contact points at once; on the ellipse's 8-gon, skins of 2 × 0.01
+    # m reach past the next vertex (8 mm up): two points.
+    reference_statuses = {("rod-45", "defaults"): "multi-contact",
+                          ("ellipse", "defaults"): "multi-contact"}
     native_2d = True
     plot_style = ("#CC79A7", "D")
     bench_impacts = (40, 300)
@@ -1228,7 +1233,7 @@ def _approach_estimate(scene: Scene) -> float:
             offsets = [(-half_w, -half_h), (half_w, -half_h), (half_w, half_h),
                        (-half_w, half_h)]
         else:
-            offsets = shape.points
+            offsets = _outline(shape)
         # The lowest point's x offset from the centre (the ground's normal is +y).
         _, lever = min((sin * x + cos * y, cos * x - sin * y) for x, y in offsets)
         return -(body.velocity[1] + body.angular_velocity * lever)
