@@ -64,3 +64,59 @@ def run_drops(engine, preset: str, impacts: MeasuredImpacts, thetas: np.ndarray,
         counts[verdict] = counts.get(verdict, 0) + 1
     return {"engine": engine.name, "preset": preset, "mu": mu, "e": e,
             "verdicts": dict(sorted(counts.items())), "errors": analysis.error_summary(errors)}
+
+
+#: Angles (rad) of the moment-arm measurement: every 5° over half a turn (the ellipse is
+#: symmetric about its centre, so θ and θ + π are the same body on the ground).
+ARM_ANGLES = tuple(np.radians(np.arange(0.0, 180.0, 5.0)).tolist())
+
+
+def moment_arm_errors(engine, preset: str, angles=ARM_ANGLES) -> dict:
+    """How far ``engine``'s contact point lies from the true ellipse's, per angle.
+
+    Each angle two drops of the Fazeli ellipse (no spin, e 0.5): one frictionless (v_y
+    −2.5 m/s), one sliding throughout (v (3, −1) m/s, μ 0.3: the tangential impulse a
+    third of the normal one, so the height is well conditioned). The run's velocity change gives the
+    impulse ``P = m Δv`` and its moment ``I Δω = p_x P_n − p_y P_t`` about the centre:
+    without friction ``P_t = 0`` and the moment arm the dynamics acted through is
+    ``p_x = I Δω / P_n``; with friction, given the true ``p_x``, the contact's height below
+    the centre is ``p_y = (p_x P_n − I Δω) / P_t``. Both against the lowest point at the
+    angle (the engine's representation and the body's turn during contact included).
+    Returns per angle the errors (m) and the verdicts ("ok" or the first failing check);
+    the largest errors over the single impacts and over every run.
+    """
+    from harness.scene import Body, Ellipse, Scene, geometry
+
+    from .engine_curves import judged
+
+    a, b = fazeli.SEMI_AXES
+    result: dict = {"engine": engine.name, "preset": preset, "angles": len(angles)}
+    for label, v_x, v_y, mu in (("arm", 0.0, -2.5, 0.0), ("height", 3.0, -1.0, 0.3)):
+        scenes = []
+        for angle in angles:
+            body = Body("ellipse", Ellipse(a, b), fazeli.MASS, (0.0, 0.0), float(angle),
+                        (v_x, v_y), 0.0)
+            body = geometry.place_stand_in(geometry.place_on_ground(body))
+            scenes.append(Scene((body,), 0.5, mu, ground=True, name=f"{label}-{angle:.4f}"))
+        errors, verdicts = [], []
+        for angle, scene, run in zip(angles, scenes, engine.run_many(scenes, preset=preset)):
+            body = scene.bodies[0]
+            d_x, d_y, d_omega = (float(after) - float(before) for after, before
+                                 in zip(run.u_after[:3], body.state()))
+            moment = body.moment_of_inertia * d_omega
+            p_x, p_y = ellipse.lowest_offset(float(angle), a, b)
+            if label == "arm":
+                errors.append(moment / (body.mass * d_y) - p_x)
+            else:
+                errors.append((p_x * body.mass * d_y - moment) / (body.mass * d_x) - p_y)
+            verdicts.append(judged(run, scene))
+        size = np.abs(np.array(errors))
+        ok = np.array([v == "ok" for v in verdicts]) & np.isfinite(size)
+        counts: dict[str, int] = {}
+        for verdict in verdicts:
+            counts[verdict] = counts.get(verdict, 0) + 1
+        result[label] = {"errors": errors, "verdicts": dict(sorted(counts.items())),
+                         "max_ok": float(size[ok].max()) if ok.any() else None,
+                         "max_all": (float(size[np.isfinite(size)].max())
+                                     if np.isfinite(size).any() else None)}
+    return result
