@@ -120,3 +120,44 @@ def moment_arm_errors(engine, preset: str, angles=ARM_ANGLES) -> dict:
                          "max_all": (float(size[np.isfinite(size)].max())
                                      if np.isfinite(size).any() else None)}
     return result
+
+
+#: Errors below this (m, 0.1 µm) are rounding (doubles in pymunk, float32 in Box2D): shown
+#: as a bound, so that a table does not carry a machine's last bits.
+ROUNDING_LEVEL = 1e-7
+
+
+def _millimetres(value: float | None) -> str:
+    if value is None:
+        return "—"
+    return f"< {ROUNDING_LEVEL * 1e3:g}" if value < ROUNDING_LEVEL else f"{value * 1e3:.3g}"
+
+
+def contact_error_table(engines) -> tuple[list[str], list[dict]]:
+    """The Markdown rows of :func:`moment_arm_errors` for ``engines`` (names; a missing
+    engine gets a row saying so) under both presets, and the results."""
+    from harness.engines import EngineNotInstalled, load_engine, preset_label
+
+    rows = ["| engine | preset | moment arm | contact height | verdicts (arm drops / height "
+            "drops) |", "|---|---|---:|---:|---|"]
+    results = []
+    for name in engines:
+        try:
+            engine = load_engine(name)
+        except EngineNotInstalled:
+            rows.append(f"| {name} | — | not installed | | |")
+            continue
+        for preset in ("defaults", "accurate"):
+            result = moment_arm_errors(engine, preset)
+            cells, counts = [], []
+            for part in ("arm", "height"):
+                ok, every = result[part]["max_ok"], result[part]["max_all"]
+                cell = _millimetres(ok)
+                if every is not None and (ok is None or every > max(ok, ROUNDING_LEVEL)):
+                    cell += f" ({_millimetres(every)})"
+                cells.append(cell)
+                counts.append(", ".join(f"{k} {v}" for k, v in result[part]["verdicts"].items()))
+            rows.append(f"| {name} | {preset_label(name, preset)} | {cells[0]} | {cells[1]} | "
+                        f"{' / '.join(counts)} |")
+            results.append(result)
+    return rows, results

@@ -10,7 +10,7 @@ from harness.engines import ENGINE_NAMES
 from harness.experiments import drops_engines
 
 #: Moment arm (w_n's third entry) of every single impact under ``accurate``: within 0.1 mm,
-#: 1% of this ellipse's largest arm (10 mm at ±46° of turn).
+#: 1% of this ellipse's largest arm (a − b = 10 mm, at a turn of 40°).
 ARM_BOUND = 1e-4
 #: Contact height below the centre (w_t's third entry): 0.3 mm, and pybullet's polygon
 #: collision margin (1 mm) on top, which puts its contact below the polygon.
