@@ -188,7 +188,8 @@ def drops_engines_section(engines: list[str], data: fazeli.FazeliData, target,
         return []
     thetas, residual = drops_engines.jacobian_angles(target, data.pre_impact_angles)
     print(f"\n### The engines on the drops (μ {fit.mu:.3f}, e {fit.e:.3f}: Poisson's fit)\n")
-    print(f"Each drop a placed {drops_engines.VERTICES}-gon at the angle of its published "
+    print(f"Each drop the ellipse (MuJoCo's ellipsoid, elsewhere the placed "
+          f"{drops_engines.VERTICES}-gon) at the angle of its published "
           f"Jacobian (contact within {residual.max() * 1e3:.1g} mm of it); flagged runs are "
           "counted with their reason, never scored.\n")
     print("| engine | preset | single impacts | flagged (reason: drops) | median error | "
