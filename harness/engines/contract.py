@@ -125,7 +125,9 @@ Input: the scene
     One body against the fixed ground half-space ``y <= 0`` (normal ``+y``) or two free
     bodies. Shapes: ``Disk(radius)``; ``Rod(length, radius)``, a capsule with end-cap centres
     at ``(±length/2, 0)`` in the body frame; ``Box(width, height)``, ``width`` along body x;
-    ``Polygon(points)``, convex, counter-clockwise, about the centre of mass. Mass, inertia
+    ``Polygon(points)``, convex, counter-clockwise, about the centre of mass;
+    ``Ellipse(semi_x, semi_y, vertex_at)`` (MuJoCo's ellipsoid; elsewhere its placed
+    ``stand_in()`` polygon), against the ground only. Mass, inertia
     (``Body.moment_of_inertia``), pose (centre-of-mass position, angle of the body x axis,
     CCW), centre-of-mass velocity and angular velocity (CCW positive). The pair's ``e`` and
     ``μ`` are ``Scene.restitution`` and ``Scene.friction``.
@@ -1119,6 +1121,8 @@ def body_extent(shape) -> float:
         return float(shape.radius)
     if kind == "rod":
         return float(shape.length / 2.0 + shape.radius)
+    if kind == "ellipse":
+        return float(max(shape.semi_x, shape.semi_y))
     # A box's or polygon's costs µs of numpy, and every run, check and adapter asks for it:
     # remembered per shape value (equal shapes, equal vertices, the same extent).
     try:
@@ -1153,6 +1157,8 @@ def geometry_key(scene: Scene) -> tuple:
             geometry = (shape.radius,)
         elif shape.kind == "rod":
             geometry = (shape.length, shape.radius)
+        elif shape.kind == "ellipse":  # with its stand-in's placement: another polygon
+            geometry = (shape.semi_x, shape.semi_y, shape.vertex_at)
         else:
             geometry = tuple(map(tuple, shape.vertices().tolist()))
         parts.append((shape.kind, geometry, float(body.mass), float(body.moment_of_inertia)))
@@ -1205,8 +1211,11 @@ def check_scene(engine: str, scene: Scene) -> tuple[tuple[float, float], ...]:
     :func:`energy_weights` (the masses and inertias checked)."""
     weights = []
     for body in scene.bodies:
-        if body.shape.kind not in ("disk", "rod", "box", "polygon"):
+        if body.shape.kind not in ("disk", "rod", "box", "polygon", "ellipse"):
             raise UnsupportedScene(f"engine {engine!r}: unknown shape {body.shape.kind!r}")
+        if body.shape.kind == "ellipse" and not scene.ground:
+            raise UnsupportedScene(f"engine {engine!r}: body {body.name!r}: an ellipse "
+                                   "touches only the ground (a scene with ground)")
         if len(body.position) != 2 or len(body.velocity) != 2:
             for name in ("position", "velocity"):
                 vector = getattr(body, name)

@@ -82,6 +82,8 @@ PRESETS: dict[str, dict] = {
 
 
 def _make_shape(pm_body: pymunk.Body, shape) -> pymunk.Shape:
+    if shape.kind == "ellipse":  # no ellipse in Chipmunk: its placed polygon
+        shape = shape.stand_in()
     if shape.kind == "disk":
         return pymunk.Circle(pm_body, shape.radius)
     if shape.kind == "rod":
@@ -93,6 +95,8 @@ def _make_shape(pm_body: pymunk.Body, shape) -> pymunk.Shape:
 def _new_shape_ptr(body_ptr, shape):
     """The C shape :func:`_make_shape` makes (the same constructor and arguments), without
     pymunk's wrapper: the caller frees it (``cpShapeFree``)."""
+    if shape.kind == "ellipse":  # no ellipse in Chipmunk: its placed polygon
+        shape = shape.stand_in()
     kind = shape.kind
     if kind == "disk":
         return lib.cpCircleShapeNew(body_ptr, shape.radius, (0, 0))

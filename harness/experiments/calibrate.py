@@ -20,7 +20,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import drops_engines, ellipse, fazeli, metric
+from harness.scene import ellipse
+
+from . import drops_engines, fazeli, metric
 from .predict import predict
 from .records import MeasuredImpacts
 

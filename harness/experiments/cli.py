@@ -19,8 +19,9 @@ from pathlib import Path
 import numpy as np
 
 import planar_impact as pi
+from harness.scene import ellipse
 
-from . import analysis, ellipse, fazeli, kharaz, metric, registry
+from . import analysis, fazeli, kharaz, metric, registry
 
 KHARAZ_ANGLES = (10, 20, 30, 40, 50, 60, 70, 80)
 GAP_MUS = (0.05, 0.1, 0.2, 0.3, 0.5, 1.0)
@@ -87,6 +88,7 @@ def main(args) -> int:
     if data is not None:
         output["fazeli2017"] = fazeli_section(data, args, engines)
     output["ellipse_polygons"] = ellipse_section(data)
+    output["ellipse_polygons"]["engines"] = ellipse_engines_section(engines)
     output["kharaz2001"] = kharaz_section()
     output["kharaz2001"]["engines"] = kharaz_engines_section(engines)
     if args.json:
@@ -186,7 +188,8 @@ def drops_engines_section(engines: list[str], data: fazeli.FazeliData, target,
         return []
     thetas, residual = drops_engines.jacobian_angles(target, data.pre_impact_angles)
     print(f"\n### The engines on the drops (μ {fit.mu:.3f}, e {fit.e:.3f}: Poisson's fit)\n")
-    print(f"Each drop a placed {drops_engines.VERTICES}-gon at the angle of its published "
+    print(f"Each drop the ellipse (MuJoCo's ellipsoid, elsewhere the placed "
+          f"{drops_engines.VERTICES}-gon) at the angle of its published "
           f"Jacobian (contact within {residual.max() * 1e3:.1g} mm of it); flagged runs are "
           "counted with their reason, never scored.\n")
     print("| engine | preset | single impacts | flagged (reason: drops) | median error | "
@@ -239,6 +242,19 @@ def ellipse_section(data: fazeli.FazeliData | None) -> dict:
               f"{np.quantile(gap, 0.99) * 1e3:.2f} mm at the 99th percentile, "
               f"{np.max(gap) * 1e3:.2f} mm at most.")
     return section
+
+
+def ellipse_engines_section(engines: list[str]) -> list[dict]:
+    """Each engine's ellipse (MuJoCo's ellipsoid, else the placed 8-gon) against the true
+    one (``drops_engines.contact_error_table``)."""
+    from . import drops_engines
+
+    print("\n## Each engine's ellipse against the true one\n")
+    print(f"{len(drops_engines.ARM_ANGLES)} angles, every 5° over half a turn; largest error "
+          "over the single impacts (over every run in brackets when larger), mm.\n")
+    rows, results = drops_engines.contact_error_table(engines)
+    print("\n".join(rows))
+    return results
 
 
 def kharaz_section() -> dict:

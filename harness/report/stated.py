@@ -380,6 +380,23 @@ def group_numbers(engine_runs) -> dict[str, str]:
     return numbers
 
 
+def ellipse_contact_numbers() -> dict[str, str]:
+    """Each engine's ellipse against the true one: the table, and per engine and preset
+    role the largest moment-arm and height errors of its single impacts (mm, 3 digits)."""
+    from harness.engines import ENGINE_NAMES
+    from harness.experiments import drops_engines
+
+    rows, results = drops_engines.contact_error_table(ENGINE_NAMES)
+    numbers = {"table": "\n".join(rows)}
+    for result in results:
+        for part in ("arm", "height"):
+            worst = result[part]["max_ok"]
+            if worst is not None and worst >= drops_engines.ROUNDING_LEVEL:
+                key = f"{result['engine']}.{result['preset']}.{part}"
+                numbers[key] = f"{worst * 1e3:.3g}"
+    return numbers
+
+
 def library_numbers(results: Path = RESULTS) -> dict[str, str]:
     """``make validate``: the counts of its results file (``reports/results.json``)."""
     from harness.run.records import read_results
@@ -402,6 +419,9 @@ SOURCES: dict[str, Source] = {
                           + f" --samples {MUJOCO_GAIN_SAMPLES} --engines mujoco "
                           "--preset defaults,accurate", mujoco_gain_numbers),
     "library": Source("make validate (reports/results.json)", library_numbers),
+    "ellipse-contact": Source("impact-harness experiments --engines all (its table \"Each "
+                              "engine's ellipse against the true one\")",
+                              ellipse_contact_numbers),
 }
 
 

@@ -960,7 +960,9 @@ def feature_points(shape) -> tuple[np.ndarray, float, tuple[str, ...]]:
         half = shape.length / 2.0
         return (np.array([[-half, 0.0], [half, 0.0]]), float(shape.radius),
                 ("end cap at -length/2", "end cap at +length/2"))
-    vertices = np.asarray(shape.vertices(), dtype=float)
+    # an ellipse: its stand-in polygon's vertices (MuJoCo's ellipsoid rolls far from them)
+    vertices = np.asarray((shape.stand_in() if kind == "ellipse" else shape).vertices(),
+                          dtype=float)
     return vertices, 0.0, tuple(f"corner {i}" for i in range(len(vertices)))
 
 

@@ -27,7 +27,7 @@ from harness.scenarios.library import scenario_files
 from harness.scenarios.reader import load_scenario
 from harness.scenarios.schema import NAME_PATTERN, SCENARIO_DIR
 
-SHAPES = ("disk", "rod", "box", "polygon")
+SHAPES = ("disk", "rod", "box", "polygon", "ellipse")
 
 
 # --------------------------------------------------------------------------------------------
@@ -113,11 +113,15 @@ _SHAPE_LINES = {
     "polygon": ['shape = "polygon"          # convex; vertices counter-clockwise, in m',
                 "# The harness moves the vertices so that their centroid is the body origin.",
                 "vertices = [[-0.1, -0.05], [0.1, -0.05], [0.0, 0.1]]"],
+    "ellipse": ['shape = "ellipse"          # against the ground only',
+                "semi_x = 0.035             # m, along the body x axis",
+                "semi_y = 0.025             # m, along the body y axis"],
 }
 # Ground scenes: an angle that gives one contact point (no face lying flat) and a velocity
 # that approaches the ground at about 1 m/s.
 _GROUND_POSE = {"disk": (0.0, "[1.0, -1.0]"), "rod": (45.0, "[0.5, -1.0]"),
-                "box": (30.0, "[1.0, -1.0]"), "polygon": (25.0, "[0.8, -1.0]")}
+                "box": (30.0, "[1.0, -1.0]"), "polygon": (25.0, "[0.8, -1.0]"),
+                "ellipse": (30.0, "[0.5, -1.0]")}
 # Two-body scenes: the shape at the origin (angle 0) and the top of it where a disk of
 # radius 0.05 m touches it: (x, y) of the disk centre.
 _STRIKE_POINT = {"disk": ("[0.075, 0.12990381056766578]", "# 0.15 m from a's centre at 60 degrees"),
@@ -206,6 +210,10 @@ def main_new(args: argparse.Namespace) -> int:
         print(f"impact-harness new: NAME = {name!r}: not a valid name "
               "(allowed: letters, digits, '_', '-' and '.', starting with a letter or digit)",
               file=sys.stderr)
+        return 2
+    if args.two_body and args.shape == "ellipse":
+        print("impact-harness new: --shape ellipse with --two-body: an ellipse touches only "
+              "the ground (allowed: --ground, the default)", file=sys.stderr)
         return 2
     directory = SCENARIO_DIR if args.library else Path(args.out or Path.cwd())
     path = (directory / f"{name}.toml").absolute()  # a link there is not followed

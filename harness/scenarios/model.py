@@ -28,7 +28,7 @@ from harness.scenarios.schema import (
     TWO_SLED_DEFAULTS,
     TWO_SLED_KEYS,
 )
-from harness.scene import Body, Box, Contact, Disk, Polygon, Rod, Scene, geometry
+from harness.scene import Body, Box, Contact, Disk, Ellipse, Polygon, Rod, Scene, geometry
 
 #: Where a :class:`Scenario` keeps its scenes by point index (:meth:`Scenario.scene`).
 _KEPT_SCENES = "_scenes"
@@ -39,7 +39,7 @@ class BodySpec:
     """One ``[[body]]`` table. ``position`` is None when the harness places it on the ground."""
 
     name: str
-    shape: Union[Disk, Rod, Box, Polygon]
+    shape: Union[Disk, Rod, Box, Polygon, Ellipse]
     mass: float  # kg
     inertia: float | None = None  # kg m², about the centre of mass; None = uniform density
     angle_deg: float = 0.0  # deg, CCW, of the body's x axis
@@ -61,6 +61,8 @@ class BodySpec:
         )
         if on_ground and self.position is None:
             body = geometry.place_on_ground(body)
+        if on_ground:  # an ellipse's stand-in polygon: a vertex on its first contact point
+            body = geometry.place_stand_in(body)
         return body
 
 

@@ -55,7 +55,7 @@ from harness.scenarios.schema import (
     TWO_SLED_KEYS,
     limit,
 )
-from harness.scene import Box, Disk, Polygon, Rod
+from harness.scene import Box, Disk, Ellipse, Polygon, Rod
 
 #: Largest |value| of a number whose field has no MAGNITUDES entry.
 LARGEST_NUMBER = 1e12
@@ -225,6 +225,10 @@ def _read_shape(reader: TableReader, table, prefix):
         width = reader.number(table, "width", prefix, low=0.0, low_open=True, field="length")
         height = reader.number(table, "height", prefix, low=0.0, low_open=True, field="length")
         return None if None in (width, height) else Box(width, height)
+    if kind == "ellipse":
+        semi_x = reader.number(table, "semi_x", prefix, low=0.0, low_open=True, field="length")
+        semi_y = reader.number(table, "semi_y", prefix, low=0.0, low_open=True, field="length")
+        return None if None in (semi_x, semi_y) else Ellipse(semi_x, semi_y)
     return _read_polygon(reader, table, prefix)
 
 
@@ -273,6 +277,10 @@ def _read_body(reader: TableReader, table, index: int, ground: bool) -> BodySpec
     else:  # a bad or missing shape is the one error: another shape's keys may be right
         reader.keys(table, prefix, BODY_KEYS + ANY_SHAPE_FIELDS, "a body")
     shape = _read_shape(reader, table, prefix)
+    if isinstance(shape, Ellipse) and not ground:
+        shape = reader.error(f"{prefix}.shape", "an ellipse touches only the ground (its "
+                             "contact with another body is not supported)", "ellipse",
+                             "an ellipse in a scene with [ground], or another shape")
     mass = reader.number(table, "mass", prefix, low=0.0, low_open=True, field="mass")
     inertia = reader.number(table, "inertia", prefix, default=None, low=0.0, low_open=True,
                             field="inertia")
@@ -631,6 +639,9 @@ def parse_scenario(doc: Mapping[str, Any], path=None, *, checks_key: str | None 
                 parameters, engines)
     if system == "matrix":
         required += (matrix,)
+    if expect_sequence and bodies and any(isinstance(spec.shape, Ellipse) for spec in bodies):
+        reader.error("expect_sequence", "an ellipse has no corners to strike in sequence "
+                     "(its one contact rolls)", True, "false (the default) with an ellipse")
     if reader.errors or any(value is None for value in required):
         raise ScenarioError(errors=reader.errors)
 

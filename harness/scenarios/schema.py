@@ -40,6 +40,7 @@ SHAPE_FIELDS = {
     "rod": ("length", "radius"),
     "box": ("width", "height"),
     "polygon": ("vertices",),
+    "ellipse": ("semi_x", "semi_y"),
 }
 #: Largest |gap| (m) allowed between bodies that must touch, unless a file sets ``gap_tolerance``.
 DEFAULT_GAP_TOLERANCE = 1e-6
@@ -90,7 +91,7 @@ DERIVED_TAGS = ("all",)
 MAGNITUDES: dict[str, tuple[float, float]] = {
     "mass": (1e-4, 1e4),  # kg
     "inertia": (1e-10, 1e4),  # kg m^2
-    "length": (1e-4, 1e2),  # m: radius, length, width, height
+    "length": (1e-4, 1e2),  # m: radius, length, width, height, semi-axes
     "coordinate": (0.0, 1e3),  # m: position, polygon vertex
     "speed": (0.0, 1e3),  # m/s: velocity components
     "angular_velocity": (0.0, 1e4),  # rad/s
@@ -113,7 +114,8 @@ SWEEP_MAGNITUDE = {
     "friction": "friction", "mass": "mass",
     "inertia": "inertia", "angle_deg": "angle_deg", "angular_velocity": "angular_velocity",
     "velocity.x": "speed", "velocity.y": "speed", "radius": "length", "length": "length",
-    "width": "length", "height": "length", "parameters.m": "two_sled_mass",
+    "width": "length", "height": "length", "semi_x": "length", "semi_y": "length",
+    "parameters.m": "two_sled_mass",
     "parameters.l": "two_sled_length", "parameters.s": "two_sled_offset",
     "parameters.c": "two_sled_offset", "parameters.q3": "two_sled_offset",
     "parameters.q6": "two_sled_offset",

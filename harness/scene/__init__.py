@@ -4,10 +4,12 @@
   velocities, the pair's ``e`` and ``μ``);
 * :mod:`harness.scene.geometry` -- the contact of a scene and its contact terms, the bridge
   from a scene to a ``planar_impact.ImpactProblem``;
+* :mod:`harness.scene.ellipse` -- the ellipse's lowest point and contact Jacobian in closed
+  form, and the error of a polygon in its place;
 * :mod:`harness.scene.random_problems` -- seeded random contact-space problems for the
   solver's tests, benchmarks and stress runs.
 """
 
-from harness.scene.model import Body, Box, Contact, Disk, Polygon, Rod, Scene
+from harness.scene.model import Body, Box, Contact, Disk, Ellipse, Polygon, Rod, Scene
 
-__all__ = ["Body", "Box", "Contact", "Disk", "Polygon", "Rod", "Scene"]
+__all__ = ["Body", "Box", "Contact", "Disk", "Ellipse", "Polygon", "Rod", "Scene"]

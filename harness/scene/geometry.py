@@ -11,6 +11,10 @@ Box       its four corners (counter-clockwise)   0
 Polygon   its vertices (counter-clockwise)       0
 ========  =====================================  ======
 
+The ellipse is the one shape without a core: its contact with the ground is its lowest
+point, in closed form (:mod:`harness.scene.ellipse`); against another body it is not
+supported (a :class:`ValueError` says so).
+
 The distance between two shapes is the distance between their cores minus both radii; the
 contact normal is the direction between the closest points of the cores. When the cores
 themselves overlap, the penetration is found by the separating-axis test over the edge
@@ -34,7 +38,7 @@ import math
 
 import numpy as np
 
-from harness.scene import Body, Box, Contact, Disk, Polygon, Rod, Scene
+from harness.scene import Body, Box, Contact, Disk, Ellipse, Polygon, Rod, Scene, ellipse
 
 #: Default tolerance (m) within which two closest-point pairs count as the same distance.
 DEFAULT_TOLERANCE = 1e-9
@@ -60,6 +64,9 @@ def local_core(shape) -> tuple[np.ndarray, float]:
         return np.array([[-half, 0.0], [half, 0.0]]), float(shape.radius)
     if isinstance(shape, (Box, Polygon)):
         return np.asarray(shape.vertices(), dtype=float), 0.0
+    if isinstance(shape, Ellipse):
+        raise TypeError("an ellipse has no polygonal core: its ground contact is its lowest "
+                        "point (harness.scene.ellipse); nothing else takes an ellipse")
     raise TypeError(f"unknown shape {shape!r}; allowed: Disk, Rod, Box, Polygon")
 
 
@@ -235,6 +242,8 @@ def _support_interval(core, normal, tangent, side, tolerance,
 # --------------------------------------------------------------------------------------------
 def ground_contact(body: Body, tolerance: float = DEFAULT_TOLERANCE) -> Contact:
     """Contact between the fixed ground (half-space ``y <= 0``, body A) and ``body`` (B)."""
+    if isinstance(body.shape, Ellipse):
+        return _ellipse_ground_contact(body)
     core, radius = world_core(body)
     return core_ground_contact(core, radius, tolerance)
 
@@ -254,8 +263,37 @@ def core_ground_contact(core: np.ndarray, radius: float,
                    point_count=point_count)
 
 
+def _ellipse_ground_contact(body: Body) -> Contact:
+    """:func:`ground_contact` of an ellipse: its lowest point, one point (strictly convex)."""
+    shape = body.shape
+    offset_x, offset_y = ellipse.lowest_offset(body.angle, shape.semi_x, shape.semi_y)
+    x, y = body.position
+    gap = float(y) + offset_y
+    return Contact(point=np.array([float(x) + offset_x, 0.5 * gap]),
+                   normal=GROUND_NORMAL.copy(), gap=gap, point_count=1)
+
+
+def place_stand_in(body: Body) -> Body:
+    """``body`` with its ellipse's stand-in polygon placed on its lowest point (at the body's
+    angle): the first contact point with the ground (:meth:`harness.scene.Ellipse.stand_in`);
+    any other body unchanged."""
+    shape = body.shape
+    if not isinstance(shape, Ellipse):
+        return body
+    phi = ellipse.lowest_parameter(body.angle, shape.semi_x, shape.semi_y)
+    return body.moved(shape=Ellipse(shape.semi_x, shape.semi_y, phi))
+
+
+def _refuse_ellipse(*bodies: Body) -> None:
+    for body in bodies:
+        if isinstance(body.shape, Ellipse):
+            raise ValueError(f"body {body.name!r}: an ellipse touches only the ground here "
+                             "(its contact with another body is not supported)")
+
+
 def body_contact(body_a: Body, body_b: Body, tolerance: float = DEFAULT_TOLERANCE) -> Contact:
     """Contact between two convex bodies; the normal points from ``body_a`` into ``body_b``."""
+    _refuse_ellipse(body_a, body_b)
     core_a, radius_a = world_core(body_a)
     core_b, radius_b = world_core(body_b)
     return core_contact(core_a, radius_a, core_b, radius_b, tolerance)
@@ -358,6 +396,8 @@ def scene_contact_each(scene: Scene, tolerances) -> list[Contact]:
     """:func:`scene_contact` at each of ``tolerances``, the cores and the separation found
     once for all of them (the scenario checks ask for two tolerances at every point)."""
     if scene.ground:
+        if isinstance(scene.bodies[0].shape, Ellipse):
+            return [_ellipse_ground_contact(scene.bodies[0])] * len(tolerances)
         core, radius = world_core(scene.bodies[0])
         return [core_ground_contact(core, radius, tolerance) for tolerance in tolerances]
     core_a, radius_a = world_core(scene.bodies[0])
@@ -377,6 +417,8 @@ def scene_contacts(scene: Scene, tolerance: float = DEFAULT_TOLERANCE) -> list[C
     ``tolerance`` gives one (docs/multi-contact.md, 'Scenes with several contacts').
     """
     if scene.ground:
+        if isinstance(scene.bodies[0].shape, Ellipse):
+            return [_ellipse_ground_contact(scene.bodies[0])]
         core, radius = world_core(scene.bodies[0])
         lowest = float(core[:, 1].min())
         near = core[core[:, 1] <= lowest + tolerance]
@@ -409,6 +451,10 @@ def contact_rows(scene: Scene, contacts) -> tuple[np.ndarray, np.ndarray]:
 
 def lowest_point(body: Body) -> float:
     """The lowest ``y`` (m) of the body's surface."""
+    if isinstance(body.shape, Ellipse):
+        shape = body.shape
+        return float(body.position[1]) + ellipse.lowest_offset(body.angle, shape.semi_x,
+                                                               shape.semi_y)[1]
     core, radius = world_core(body)
     return float(core[:, 1].min()) - radius
 

@@ -8,7 +8,9 @@ Conventions (shared by the engine contract and the scenario files):
 * Shapes are given in the body frame about the centre of mass:
   ``Disk(radius)``; ``Rod(length, radius)``, a capsule whose end-cap centres lie at
   ``(±length/2, 0)``; ``Box(width, height)``, ``width`` along the body's x axis;
-  ``Polygon(vertices)``, convex, counter-clockwise, about the centre of mass.
+  ``Polygon(vertices)``, convex, counter-clockwise, about the centre of mass;
+  ``Ellipse(semi_x, semi_y)``, ``semi_x`` along the body's x axis, about its centre (its
+  centre of mass), with the polygon that stands in for it in engines without an ellipse.
 * The ground, when present, is the fixed half-space ``y <= 0`` with normal ``+y``.
 * Velocities: centre-of-mass velocity ``(v_x, v_y)`` in m/s and angular velocity ``ω`` in
   rad/s (counter-clockwise positive).
@@ -127,7 +129,58 @@ class Polygon:
         return value
 
 
-Shape = Union[Disk, Rod, Box, Polygon]
+#: Vertices of the polygon standing in for an ellipse in the engines that take no ellipse
+#: (pymunk, pybullet, Box2D): few, so that the vertices next to the contact stay well above
+#: the ground (docs/engines.md, 'The ellipse').
+STAND_IN_VERTICES = 8
+
+
+@dataclass(frozen=True)
+class Ellipse:
+    """A uniform ellipse, semi-axes ``semi_x`` along the body's x axis and ``semi_y`` along
+    its y axis, centred on the body origin (its centre of mass).
+
+    Only MuJoCo takes an ellipse (its ellipsoid geom); the other engines get
+    :meth:`stand_in`, an inscribed polygon with a vertex at the ellipse's point of parameter
+    ``vertex_at`` (rad): the point ``(semi_x cos φ, semi_y sin φ)``. Placed there the
+    first contact point, the polygon's contact point, normal and Jacobian are the
+    ellipse's (every vertex lies on the ellipse, which lies on one side of its tangent);
+    :func:`harness.scene.geometry.place_stand_in` places it on a body's lowest point. The
+    default is the lowest point of an unturned ellipse.
+    """
+
+    semi_x: float  # m, along the body's x axis
+    semi_y: float  # m, along the body's y axis
+    vertex_at: float = -math.pi / 2  # rad, the parameter of the stand-in's first vertex
+
+    kind = "ellipse"
+
+    def area(self) -> float:
+        return math.pi * self.semi_x * self.semi_y
+
+    def inertia_per_mass(self) -> float:
+        """Polar moment of a uniform ellipse about its centre, divided by its mass."""
+        return (self.semi_x**2 + self.semi_y**2) / 4.0
+
+    def stand_in(self) -> Polygon:
+        """The inscribed :data:`STAND_IN_VERTICES`-gon with vertices at parameters
+        ``vertex_at + 2πk/N``, counter-clockwise. N even: the polygon is symmetric about the
+        centre, so its centroid is the ellipse's (its mass and inertia are the body's in
+        every engine all the same). Made once per instance."""
+        known = self.__dict__.get("_stand_in")
+        if known is not None:
+            return known
+        count = STAND_IN_VERTICES
+        points = []
+        for k in range(count):
+            phi = self.vertex_at + 2.0 * math.pi * k / count
+            points.append((self.semi_x * math.cos(phi), self.semi_y * math.sin(phi)))
+        polygon = Polygon(tuple(points))
+        object.__setattr__(self, "_stand_in", polygon)  # frozen: not a field
+        return polygon
+
+
+Shape = Union[Disk, Rod, Box, Polygon, Ellipse]
 
 
 @dataclass(frozen=True)

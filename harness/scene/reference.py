@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import math
 
-from harness.scene.geometry import impact_problem
-from harness.scene.model import Body, Box, Disk, Rod, Scene
+from harness.scene.geometry import ground_contact, impact_problem, place_stand_in
+from harness.scene.model import Body, Box, Disk, Ellipse, Rod, Scene
 
 
 def reference_scenes() -> dict[str, tuple[Scene, tuple[float, float], tuple[float, float]]]:
@@ -21,6 +21,9 @@ def reference_scenes() -> dict[str, tuple[Scene, tuple[float, float], tuple[floa
       ω 0.5 rad/s.
     * ``two-disks``: disks r 0.1 m (1 kg) and 0.15 m (2 kg) touching along 30°, with
       oblique velocities and spin.
+    * ``ellipse``: the Fazeli et al. (2017) ellipse (36.4 g, semi-axes 35 and 25 mm) at 30°,
+      lowest point on the ground, v (0.3, -2.5) m/s, ω 5 rad/s (MuJoCo's ellipsoid, a
+      placed 8-gon elsewhere).
     All with e = 0.5, μ = 0.3.
     """
     e, mu = 0.5, 0.3
@@ -52,6 +55,14 @@ def reference_scenes() -> dict[str, tuple[Scene, tuple[float, float], tuple[floa
              (-0.5, 0.0), 1.0)
     contact = (r_a * normal[0], r_a * normal[1])
     scenes["two-disks"] = (Scene((a, b), e, mu, ground=False, name="two-disks"), contact, normal)
+
+    ellipse = Body("ellipse", Ellipse(0.035, 0.025), 0.0364, (0.0, 0.0), math.radians(30.0),
+                   (0.3, -2.5), 5.0)
+    lowest = ground_contact(ellipse).gap
+    ellipse = place_stand_in(ellipse.moved(position=(0.0, -lowest)))
+    point = ground_contact(ellipse).point
+    scenes["ellipse"] = (Scene((ellipse,), e, mu, ground=True, name="ellipse"),
+                         (float(point[0]), 0.0), (0.0, 1.0))
     return scenes
 
 

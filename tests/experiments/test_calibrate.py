@@ -35,7 +35,8 @@ def test_a_knob_that_moves_nothing_cannot_calibrate(pymunk, monkeypatch):
     impacts.speeds_before[:, 0] = 0.0
     impacts.speeds_before[:, 2] = 0.0
     thetas = np.zeros_like(thetas)
-    from harness.experiments import ellipse, fazeli
+    from harness.experiments import fazeli
+    from harness.scene import ellipse
 
     wn, wt = ellipse.jacobians(thetas, *fazeli.SEMI_AXES)
     impacts.wn[:], impacts.wt[:] = wn, wt

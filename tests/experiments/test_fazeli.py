@@ -120,7 +120,7 @@ def test_real_files_reproduce_the_papers_median_errors():
     assert round(max(medians.values()), 2) == 0.57, medians
     # the Jacobians are of the pose one frame before impact: up to 1.7 mm from the lowest
     # point at the pre-impact angle (the dataset notes)
-    from harness.experiments import ellipse
+    from harness.scene import ellipse
 
     wn, wt = ellipse.jacobians(data.pre_impact_angles, *fazeli.SEMI_AXES)
     gap = np.hypot(wn[:, 2] - data.impacts.wn[:, 2], wt[:, 2] - data.impacts.wt[:, 2])

@@ -59,8 +59,10 @@ def test_validate_an_empty_directory(capsys, tmp_path):
     assert code == 2 and "no scenario files" in err
 
 
-@pytest.mark.parametrize("shape", ["disk", "rod", "box", "polygon"])
-@pytest.mark.parametrize("kind", ["--ground", "--two-body", None])
+@pytest.mark.parametrize("shape, kind", [
+    (shape, kind) for shape in ("disk", "rod", "box", "polygon", "ellipse")
+    for kind in ("--ground", "--two-body", None)
+    if not (shape == "ellipse" and kind == "--two-body")])  # refused: the test below
 def test_new_writes_a_file_that_validates(capsys, tmp_path, shape, kind):
     name = f"my-{shape}"
     argv = ["new", name, "--shape", shape, "--out", tmp_path] + ([kind] if kind else [])
@@ -94,3 +96,10 @@ def test_new_refuses_to_overwrite_and_bad_names(capsys, tmp_path):
     assert run(capsys, "new", "x", "--out", tmp_path, "--force")[0] == 0
     code, _, err = run(capsys, "new", "bad name", "--out", tmp_path)
     assert code == 2 and "'bad name'" in err and "allowed" in err
+
+
+def test_new_refuses_a_two_body_ellipse(capsys, tmp_path):
+    code, _, err = run(capsys, "new", "pair", "--shape", "ellipse", "--two-body", "--out",
+                       tmp_path)
+    assert code == 2 and "an ellipse touches only the ground" in err
+    assert len(err.strip().splitlines()) == 1 and not list(tmp_path.iterdir())

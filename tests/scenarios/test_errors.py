@@ -427,3 +427,45 @@ def test_an_unknown_tag_names_the_option(tmp_path):
     with pytest.raises(ScenarioError) as info:
         load_scenarios([tmp_path / "g.toml"], tags="nosuchtag")
     assert str(info.value).startswith("--tags 'nosuchtag': no scenario has this tag")
+
+
+# --------------------------------------------------------------------------------------------
+# Ellipses
+# --------------------------------------------------------------------------------------------
+ELLIPSE = 'shape = "ellipse"\nsemi_x = 0.035\nsemi_y = 0.025'
+
+
+def test_an_ellipse_on_the_ground_is_read_and_its_stand_in_placed(tmp_path):
+    import math
+
+    from harness.scene import ellipse
+
+    text = GROUND.replace('shape = "disk"\nradius = 0.1', ELLIPSE).replace(
+        "mass = 1.0", "mass = 0.0364\nangle_deg = 30.0")
+    scene = load_scenario(write(tmp_path, text)).scene()
+    body = scene.bodies[0]
+    assert (body.shape.semi_x, body.shape.semi_y) == (0.035, 0.025)
+    assert body.shape.vertex_at == ellipse.lowest_parameter(math.radians(30.0), 0.035, 0.025)
+    assert body.position[1] == pytest.approx(-ellipse.lowest_offset(body.angle, 0.035,
+                                                                     0.025)[1], abs=1e-15)
+
+
+@pytest.mark.parametrize("old, new, parts", [
+    ("semi_x = 0.035", "semi_x = -0.035", ["body.disk.semi_x", "-0.035"]),
+    ("semi_y = 0.025", "", ["body.disk.semi_y", "missing"]),
+    ("semi_y = 0.025", "semi_y = 0.025\nradius = 0.1", ["body.disk.radius", "unknown key",
+                                                        "semi_x, semi_y"]),
+    ("friction = 0.3", "friction = 0.3\nexpect_sequence = true",
+     ["expect_sequence", "an ellipse has no corners"]),
+])
+def test_bad_ellipse_fields_are_named(tmp_path, old, new, parts):
+    text = GROUND.replace('shape = "disk"\nradius = 0.1', ELLIPSE).replace(old, new)
+    assert_names(error_of(tmp_path, text), "bad.toml", *parts)
+
+
+def test_an_ellipse_between_two_bodies_is_refused(tmp_path):
+    text = TWO_BODY.replace('shape = "disk"\nradius = 0.1\nmass = 1.0\nposition = [0.0, 0.0]',
+                            f"{ELLIPSE}\nmass = 1.0\nposition = [0.0, 0.0]")
+    error = error_of(tmp_path, text)
+    assert [e.key for e in error.errors] == ["body.a.shape"], str(error)
+    assert_names(error, "an ellipse touches only the ground", "[ground]")

@@ -190,7 +190,7 @@ def test_library_covers_the_theory():
 
 def test_library_has_the_named_families():
     shapes = {spec.shape.kind for s in SCENARIOS for spec in s.bodies}
-    assert shapes == {"disk", "rod", "box", "polygon"}
+    assert shapes == {"disk", "rod", "box", "polygon", "ellipse"}
     assert any(s.system == "two-sled" for s in SCENARIOS)
     assert any(s.system == "matrix" for s in SCENARIOS)
     assert any(not s.ground and s.system == "bodies" for s in SCENARIOS)

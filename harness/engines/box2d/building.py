@@ -174,7 +174,10 @@ def _add_impact(world, scene: Scene, length: float, skin: float, extent: float, 
 
 def _outline(shape) -> list:
     """A box's or polygon's vertices as ``shape.vertices()`` gives them, as Python floats
-    (without the numpy array, which costs more than the rest of the body)."""
+    (without the numpy array, which costs more than the rest of the body); an ellipse's
+    placed stand-in polygon's (Box2D has no ellipse)."""
+    if shape.kind == "ellipse":
+        shape = shape.stand_in()
     if shape.kind == "box":
         half_w, half_h = shape.width / 2.0, shape.height / 2.0
         return [(-half_w, -half_h), (half_w, -half_h), (half_w, half_h), (-half_w, half_h)]

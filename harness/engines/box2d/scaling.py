@@ -204,8 +204,8 @@ def _approach_estimate(scene: Scene) -> float:
             half_w, half_h = shape.width / 2.0, shape.height / 2.0
             offsets = [(-half_w, -half_h), (half_w, -half_h), (half_w, half_h),
                        (-half_w, half_h)]
-        else:
-            offsets = shape.points
+        else:  # a polygon's points, or an ellipse's placed stand-in's
+            offsets = (shape.stand_in() if shape.kind == "ellipse" else shape).points
         # The lowest point's x offset from the centre (the ground's normal is +y).
         _, lever = min((sin * x + cos * y, cos * x - sin * y) for x, y in offsets)
         return -(body.velocity[1] + body.angular_velocity * lever)

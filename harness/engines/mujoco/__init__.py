@@ -23,7 +23,8 @@ and a flat ``solimp`` (``d = 0.9999`` at every depth). ``defaults`` is MuJoCo's
 Planar motion: slide x, slide z and hinge y joints with an explicit ``<inertial>`` (mass and
 the scene's inertia). The scene's (x, y) is MuJoCo's (x, z); the hinge's angle and rate are
 ``-θ`` and ``-ω``. Shapes: disk -> sphere; rod -> capsule along the body's x; box -> box;
-polygon -> mesh (the polygon extruded along y). Ground: an infinite plane, normal +z.
+polygon -> mesh (the polygon extruded along y); ellipse -> ellipsoid with semi-axes
+``(semi_x, c, semi_y)`` (:func:`_geom_size`). Ground: an infinite plane, normal +z.
 ``μ = 0`` uses ``condim = 1`` (frictionless contact); otherwise ``condim = 3``.
 
 Friction under ``matched-bounce``: the slip falls to ``e²`` of its start, and not at all at e = 1

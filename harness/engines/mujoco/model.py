@@ -23,14 +23,23 @@ def _geom_size(shape, extent: float) -> list[float]:
 
     A sphere's ``[r, 0, 0]``; a capsule's ``[r, half-length, 0]`` (the half-length its fromto
     along x gives, exact); a box's half-sizes, ``extent`` (its :func:`body_extent`, the depth
-    the prism gets along y) as the middle one. The one source of the sizes the XML, a spec
-    and an edited model get.
+    the prism gets along y) as the middle one; an ellipsoid's semi-axes, ``extent`` (the
+    larger of the ellipse's two) as the out-of-plane one. The one source of the sizes the
+    XML, a spec and an edited model get.
+
+    The ellipsoid's third semi-axis changes neither contact nor inertia: turned about y only
+    (the hinge), its height above the plane does not depend on y, so its lowest point, the
+    plane's one contact, lies in y = 0 on the ellipse itself for any value; the inertia is
+    the scene's, explicit. ``extent`` keeps its bounding sphere the ellipse's and the
+    ellipsoid no flatter than the ellipse.
     """
     kind = shape.kind
     if kind == "disk":
         return [float(shape.radius), 0.0, 0.0]
     if kind == "rod":
         return [float(shape.radius), shape.length / 2.0, 0.0]
+    if kind == "ellipse":
+        return [float(shape.semi_x), extent, float(shape.semi_y)]
     return [shape.width / 2.0, extent, shape.height / 2.0]
 
 
@@ -59,6 +68,8 @@ def _geom_xml(shape, name: str, extent: float) -> tuple[str, str]:
             f'<geom name="{name}" type="capsule" size="{size[0]!r}" '
             f'fromto="{-half!r} 0 0 {half!r} 0 0"/>'
         )
+    if kind == "ellipse":
+        return "", f'<geom name="{name}" type="ellipsoid" size="{" ".join(map(repr, size))}"/>'
     return "", f'<geom name="{name}" type="box" size="{" ".join(map(repr, size))}"/>'
 
 
@@ -176,6 +187,8 @@ def _body_key(body, inertia: float) -> tuple:
         dimensions = (shape.length, shape.radius)
     elif kind == "box":
         dimensions = (shape.width, shape.height)
+    elif kind == "ellipse":  # the true ellipse: its stand-in's placement does not matter
+        dimensions = (shape.semi_x, shape.semi_y)
     else:
         dimensions = tuple(map(tuple, shape.vertices().tolist()))
     return (kind, dimensions, float(body.mass), float(inertia))
@@ -274,7 +287,7 @@ def _write_spec(spec: mujoco.MjSpec, geometry: _Geometry) -> None:
             continue
         geom = spec.geom(f"g{index}")
         size = _geom_size(body.shape, extent)
-        if kind == "box":
+        if kind in ("box", "ellipse"):
             geom.size = size
         else:  # the XML gives a sphere and a capsule their radius; a capsule its fromto
             geom.size = [size[0], *geom.size[1:]]

@@ -183,7 +183,7 @@ class PybulletEngine(Engine):
             pass
 
     def _notes(self, scene: Scene, settings) -> tuple[str, ...]:
-        polygon = any(body.shape.kind == "polygon" for body in scene.bodies)
+        polygon = any(body.shape.kind in ("polygon", "ellipse") for body in scene.bodies)
         return (_POLYGON_NOTE,) if polygon else ()
 
     # ------------------------------------------------------------------ run

@@ -22,6 +22,8 @@ _CAPSULE_ALONG_X = p.getQuaternionFromEuler([0.0, math.pi / 2.0, 0.0])
 def _collision_shape(client: int, shape, extent: float) -> int:
     """The shape's collision shape; ``extent`` is its :func:`body_extent`."""
     depth = 2.0 * extent  # out-of-plane thickness; any value works with the chain
+    if shape.kind == "ellipse":  # Bullet's planar ellipse would be a mesh: its placed polygon
+        shape = shape.stand_in()
     if shape.kind == "disk":
         return p.createCollisionShape(p.GEOM_SPHERE, radius=shape.radius, physicsClientId=client)
     if shape.kind == "rod":

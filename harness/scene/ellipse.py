@@ -1,22 +1,41 @@
-"""The ellipse of the Fazeli drops as the laws and the engines see it: its lowest point and
-contact Jacobian at an angle, and the error a polygon in its place makes.
+"""The ellipse as the laws and the engines see it: its lowest point and contact Jacobian at
+an angle, in closed form, and the error a polygon in its place makes.
 
-Groundwork for running the drops through the engines (issue 25, item 2), which take an
-ellipse only in MuJoCo (ellipsoid geom) and polygons elsewhere (Box2D: 8 vertices at most).
-Two ways to make the polygon:
+Only MuJoCo takes an ellipse (ellipsoid geom); pymunk, pybullet and Box2D take polygons
+(:meth:`harness.scene.Ellipse.stand_in`). Two ways to make the polygon:
 
 * a fixed inscribed N-gon (vertices at equal parameter steps): close to the ellipse
   everywhere, but its lowest vertex is not the ellipse's lowest point, so the contact's
   moment arm — the horizontal offset of the contact from the centre, ``w_n``'s third
   entry — moves with the angle;
 * a placed N-gon, rotated in parameter so that one vertex is the ellipse's lowest point at
-  the drop's angle: every vertex is on the ellipse, which lies above its tangent at that
-  point, so that vertex is the polygon's lowest and the moment arm is exact.
+  the scene's angle: every vertex is on the ellipse, which lies above its tangent at that
+  point, so that vertex is the polygon's lowest and the moment arm is exact (the
+  harness's stand-in).
+
+The scalar forms (:func:`lowest_parameter`, :func:`lowest_offset`) serve the scene's
+geometry; the array forms the analyses over many angles.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+
+
+def lowest_parameter(angle: float, a: float, b: float) -> float:
+    """The parameter φ of the lowest point of the ellipse (semi-axes ``a`` along the body's
+    x, ``b`` along its y) turned by ``angle`` (rad): :func:`lowest_point`'s, by :mod:`math`."""
+    return math.atan2(-b * math.cos(angle), -a * math.sin(angle))
+
+
+def lowest_offset(angle: float, a: float, b: float) -> tuple[float, float]:
+    """``(p_x, p_y)``: the lowest point of the turned ellipse, from its centre (m)."""
+    phi = lowest_parameter(angle, a, b)
+    x, y = a * math.cos(phi), b * math.sin(phi)
+    c, s = math.cos(angle), math.sin(angle)
+    return c * x - s * y, s * x + c * y
 
 
 def lowest_point(theta, a: float, b: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
