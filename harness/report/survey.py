@@ -227,7 +227,7 @@ def statistics_table(stats: dict) -> str:
     """Per engine × preset × family over every collision type: runs, flagged and
     energy-gaining fractions, the departure from Poisson over the checked runs and over all
     runs (each median and p90 with its bootstrap interval), and from Stronge."""
-    from harness.report.html import html_table
+    from harness.report.markup import html_table
 
     every = "departure_poisson_all_median" in stats  # surveys before the all-runs columns
     header = ["engine", "preset", "family", "n", "flagged", "gains E",
@@ -255,7 +255,7 @@ def statistics_table(stats: dict) -> str:
 def reason_table(stats: dict) -> str:
     """The flagged runs by verdict reason, a row per engine × preset × family with any
     (over every collision type); "" when none is flagged."""
-    from harness.report.html import html_table
+    from harness.report.markup import html_table
 
     reasons = [key for key in stats if key.startswith("flagged_") and key != "flagged_fraction"
                and np.any(np.asarray(stats[key]) > 0)]
@@ -288,7 +288,7 @@ CDF_CAPTION = (
 
 
 def figures_html(figures: dict, engines: list[str], samples) -> str:
-    from harness.report.html import report_figure
+    from harness.report.markup import report_figure
 
     parts = []
     step = (f"{100 / samples:.0f}%" if isinstance(samples, int) and samples > 0

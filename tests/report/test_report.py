@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from harness import report
-from harness.report import html, table3, views
+from harness.report import html, markup, overview, scenario_sections, table3, views
 from harness.run import references, runner
 from harness.run.records import ANALYTIC, Record, Results, read_results, write_results
 from harness.scenarios import load_scenarios
@@ -201,7 +201,7 @@ def test_formatting():
     assert views.fmt_departure(0.0) == "0%"
     assert views.fmt_departure(3e-14) == "3e-12%"
     assert views.fmt_departure(float("nan")) == "n/a"
-    page = html.markdown_to_html("## Head\n\n| a | b |\n|---|---:|\n| 1 | `x` |\n")
+    page = markup.markdown_to_html("## Head\n\n| a | b |\n|---|---:|\n| 1 | `x` |\n")
     assert "<h3>Head</h3>" in page and "<code>x</code>" in page and "<td>1</td>" not in page
 
 
@@ -320,15 +320,15 @@ def test_a_flagged_runs_reasons_read_as_sentences_never_as_python():
     run = sweep_run(0, 0.03, "ok")
     run.diagnostics.update(verdict="flagged", reasons=[reason, remark])
     footnotes: dict[str, int] = {}
-    cell = html.status_cell(run, footnotes)
-    notes = html.footnotes_html(footnotes)
+    cell = scenario_sections.status_cell(run, footnotes)
+    notes = scenario_sections.footnotes_html(footnotes)
     assert "<sup>1</sup>" in cell and "<sup>2</sup>" in cell
     assert "penetration: deepest overlap 0.0057 m &gt; 0.005 m" in notes
     assert ("energy-gain: newton-lcp gains 0.1148 J on this problem (attributed to the law);"
             " reported, not a failure") in notes
     assert not PYTHON_REPR.search(cell + notes)
     # what the pattern catches: the page as it was before reasons were sentences
-    assert PYTHON_REPR.search(html.footnotes_html({str(reason): 1}))
+    assert PYTHON_REPR.search(scenario_sections.footnotes_html({str(reason): 1}))
 
 
 def test_no_python_repr_on_any_page(quick_report):
@@ -347,18 +347,18 @@ def test_overrides_are_labelled_by_where_they_were_set():
     run.source = "pymunk"
     command = {"pymunk": {"iterations": 2}}
     assert views.split_overrides(run, command) == ({"iterations": 2}, {"time_step": 0.001})
-    text = html.overrides_paragraph([run], command)
+    text = scenario_sections.overrides_paragraph([run], command)
     assert "on the command line (<code>--set</code>): pymunk: <code>iterations=2</code>" in text
     assert "by this scenario (<code>[engine_settings]</code>): pymunk: <code>time_step=0.001" \
         in text
     # only --set: nothing is said of the scenario
     only = sweep_run(0, 0.03, overrides={"iterations": 2})
     only.source = "pymunk"
-    text = html.overrides_paragraph([only], command)
+    text = scenario_sections.overrides_paragraph([only], command)
     assert "--set" in text and "by this scenario" not in text
     # the engine notes say the runs are not the preset the text describes
     results = Results(records=[only], provenance={"settings_overrides": command})
-    why = html.why_html(results)
+    why = overview.why_html(results)
     assert "every run with <code>--set iterations=2</code>" in why
     assert "runs with their scenario's overrides" not in why
 
