@@ -13,11 +13,15 @@ from pathlib import Path
 
 from harness.engines import preset_label
 from harness.report.fragments import Prepared, prepare
-from harness.report.markup import figure_html, html_table, page_head, report_figure
+from harness.report.markup import figure_html, folded, html_table, page_head, report_figure
 from harness.report.overview import (
     cached_departure_table,
+    flagged_scenarios,
     gates_html,
+    gates_summary,
+    headline_summary,
     record_counts,
+    split_summary,
     split_table,
     why_html,
 )
@@ -48,7 +52,8 @@ def cached_table3(figure: str | None, prepared: Prepared) -> str:
 
 
 def table3_html(figure: str | None) -> str:
-    """The paper's Table 3 reproduced, from the structured rows of ``table3``."""
+    """The section of the paper's Table 3 reproduced, from the structured rows of ``table3``,
+    folded under how many printed cells it reproduces."""
     from harness.report import table3
 
     rows = table3.reproduce_table3()
@@ -73,7 +78,13 @@ def table3_html(figure: str | None) -> str:
                                 row_classes=["flag" if m else "" for m in section.missed],
                                 column_classes=column_classes))
         parts += [f"<p>{escape_html(text)}</p>" for text in section.after]
-    return "\n".join(parts)
+    cells = [cell for row in rows for cell in row["cells"]]
+    unexplained = sum(cell.reason.startswith("UNEXPLAINED") for cell in cells)
+    headline = (f"{sum(cell.reproduced for cell in cells)} of {len(cells)} printed cells "
+                "reproduced; " + (f"<span class='fail'>{unexplained} misses unexplained</span>"
+                                  if unexplained else "every miss a known erratum"))
+    return folded("table3", "Table 3 of Djerassi (2009, Part B) reproduced", "\n".join(parts),
+                  headline)
 
 
 def settings_table(provenance: dict) -> str:
@@ -221,7 +232,9 @@ def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None
         f"{escape_html(prov.get('created_utc', ''))}.</p>")
     contents_at = len(parts)  # filled in at the end: some sections appear only when present
     parts.append("")
-    parts.append("<h2 id='headline'>Departure of every engine from the laws</h2>")
+    # the sections, each folded under its name and headline: the overview unfolded, the
+    # long ones (each scenario, several contacts, Table 3, survey, experiments) folded
+    headline = []
     caption = (
         "Departure from Poisson (left pair) and from exact Stronge (right pair), "
         "engines out of the box (<i>defaults</i>) and tuned (<i>accurate</i>; MuJoCo: "
@@ -239,74 +252,87 @@ def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None
                    "over the family's scenarios of each one's largest departure, the text "
                    "<i>median / max</i>. " + caption)
     if "heatmap" in figures:
-        parts.append(report_figure(figures, figures["heatmap"], "departure heat map",
-                                   caption=caption))
+        headline.append(report_figure(figures, figures["heatmap"], "departure heat map",
+                                      caption=caption))
     if groups:
-        parts.append("<p>Every scenario's departures, per family (unfold one):</p>")
+        headline.append("<p>Every scenario's departures, per family (unfold one):</p>")
         for tag, members in groups.items():
-            parts.append(f"<details><summary>{escape_html(tag)} ({len(members)} scenarios)"
-                         "</summary>" + cached_departure_table(members, prepared) + "</details>")
-    parts.append("<h2 id='why'>Why: what each engine and preset solves</h2>")
-    parts.append(
+            headline.append(f"<details><summary>{escape_html(tag)} ({len(members)} scenarios)"
+                            "</summary>" + cached_departure_table(members, prepared)
+                            + "</details>")
+    parts.append(folded("headline", "Departure of every engine from the laws",
+                        "\n".join(headline), headline_summary(names, prepared), unfolded=True))
+    why = (
         "<p>Most of the departure of pymunk and pybullet is the <b>law</b>, not the solver: "
         "they solve <code>newton-lcp</code> (restitution as a target on the normal velocity, "
         "Coulomb friction at the end state), which differs from Poisson and Stronge wherever "
         "the slip stops or reverses during the impact. MuJoCo solves no rigid impact law at "
         "all. Per engine and preset (details and measurements: <code>docs/engines.md</code>):"
         "</p>" + prepared.whole("why", lambda: why_html(results)))
-    parts.append("<h2 id='split'>Law vs solve: the law they solve against how well they "
-                 "solve it</h2>")
-    parts.append(
+    parts.append(folded("why", "Why: what each engine and preset solves", why,
+                        f"{escape_html(', '.join(engines))}; {len(labels)} engine presets"
+                        if labels else "no engine ran", unfolded=True))
+    split = [
         "<p>Each point is one engine run. <b>Law part</b>: how far the engines' own law "
         "(<code>newton-lcp</code>) is from Poisson at that impact; <b>solve part</b>: how far "
         "the engine is from <code>newton-lcp</code>. The total departure from Poisson is at "
-        "most their sum.</p>")
+        "most their sum.</p>"]
     if "split" in figures:
-        parts.append(report_figure(figures, figures["split"], "departure split"))
+        split.append(report_figure(figures, figures["split"], "departure split"))
     numbers = prepared.whole("split", lambda: split_table(results, prepared))
     if numbers:
-        parts.append("<details><summary>the numbers (largest over sweep points)</summary>"
+        split.append("<details><summary>the numbers (largest over sweep points)</summary>"
                      + numbers + "</details>")
-    parts.append("<h2 id='gates'>Gates</h2><p>Tolerance gates declared by the scenarios "
-                 "(<code>[expect.gate]</code>); a failing gate makes <code>impact-harness "
-                 "run</code> exit non-zero.</p>" + gates_html(prov))
+    parts.append(folded("split", "Law vs solve: the law they solve against how well they "
+                        "solve it", "\n".join(split), split_summary(names, prepared),
+                        unfolded=True))
+    parts.append(folded("gates", "Gates", "<p>Tolerance gates declared by the scenarios "
+                        "(<code>[expect.gate]</code>); a failing gate makes <code>impact-harness "
+                        "run</code> exit non-zero.</p>" + gates_html(prov), gates_summary(prov),
+                        unfolded=True))
     parts.append(cached_contacts(results, prepared))
-    parts.append("<h2 id='scenarios'>Scenarios</h2><p>Per scenario: post-impact speeds of "
-                 "every law and engine (engine rows shaded; red when the engine flagged the "
-                 "run), contact velocities after the impact (v<sub>n</sub>, v<sub>t</sub>, in "
-                 "the contact frame), energy change, collision type (Poisson/Stronge 1–5: "
-                 + "; ".join(f"{k} {v}" for k, v in TYPE_NAMES.items())
-                 + "; Newton laws and engines: 1 stick, 2 reverse slide, 3 forward slide) and "
-                 "each engine run's status beside its departures (its notes numbered under "
-                 "the table). "
-                 "The impulse diagram is Routh's graph (the paper's Fig. 1): the path of each "
-                 "law's impulse and every end point; filled engine markers are "
-                 "<i>accurate</i> (MuJoCo <i>matched-bounce</i>), hollow <i>defaults</i>, and "
-                 "engines that land on the same "
-                 "point are drawn side by side. Sweeps show post-impact quantities against "
-                 "the swept parameter instead, laws as lines and engines as points (flagged "
-                 "runs ringed in red), with the points where the Poisson collision type "
-                 "changes dashed. Every figure links to its SVG.</p>")
+    scenarios = [
+        "<p>Per scenario (each folded under its runs' counts; unfold one): post-impact "
+        "speeds of "
+        "every law and engine (engine rows shaded; red when the engine flagged the "
+        "run), contact velocities after the impact (v<sub>n</sub>, v<sub>t</sub>, in "
+        "the contact frame), energy change, collision type (Poisson/Stronge 1–5: "
+        + "; ".join(f"{k} {v}" for k, v in TYPE_NAMES.items())
+        + "; Newton laws and engines: 1 stick, 2 reverse slide, 3 forward slide) and "
+        "each engine run's status beside its departures (its notes numbered under "
+        "the table). "
+        "The impulse diagram is Routh's graph (the paper's Fig. 1): the path of each "
+        "law's impulse and every end point; filled engine markers are "
+        "<i>accurate</i> (MuJoCo <i>matched-bounce</i>), hollow <i>defaults</i>, and "
+        "engines that land on the same "
+        "point are drawn side by side. Sweeps show post-impact quantities against "
+        "the swept parameter instead, laws as lines and engines as points (flagged "
+        "runs ringed in red), with the points where the Poisson collision type "
+        "changes dashed. Every figure links to its SVG.</p>"]
     if "legend" in figures:
-        parts.append(report_figure(figures, figures["legend"],
-                                   "key of the impulse diagrams"))
+        scenarios.append(report_figure(figures, figures["legend"],
+                                       "key of the impulse diagrams"))
     if figures.get("many") and figures.get("scenario_figures") != "all":
-        parts.append(f"<p class='muted'>With {len(names)} scenarios the per-scenario figures "
-                     "are not drawn (they would take minutes); <code>impact-harness report "
-                     "--figures-for 'PATTERN'</code> draws those of the scenarios matching a "
-                     "pattern, <code>--scenario-figures all</code> every one.</p>")
-    groups = figures.get("groups") or {"": names}
-    for tag, members in groups.items():
+        scenarios.append(f"<p class='muted'>With {len(names)} scenarios the per-scenario "
+                         "figures are not drawn (they would take minutes); <code>impact-harness"
+                         " report --figures-for 'PATTERN'</code> draws those of the scenarios "
+                         "matching a pattern, <code>--scenario-figures all</code> every one."
+                         "</p>")
+    for tag, members in (figures.get("groups") or {"": names}).items():
         if tag:  # many scenarios: folded per tag
-            parts.append(f"<details class='group'><summary><b>{escape_html(tag)}</b> "
-                         f"({len(members)} scenarios)</summary>")
+            scenarios.append(f"<details class='group'><summary><b>{escape_html(tag)}</b> "
+                             f"({len(members)} scenarios)</summary>")
         for name in members:
-            parts.append(cached_section(name, results, figures, prepared))
+            scenarios.append(cached_section(name, results, figures, prepared))
         if tag:
-            parts.append("</details>")
+            scenarios.append("</details>")
+    with_flags = flagged_scenarios(names, prepared)
+    parts.append(folded("scenarios", "Scenarios", "\n".join(scenarios),
+                        f"{len(names)} scenarios"
+                        + (f", {with_flags} with flagged runs" if with_flags else ""),
+                        unfolded=True))
     library = has_library_scenarios(results)
     if library:
-        parts.append("<h2 id='table3'>Table 3 of Djerassi (2009, Part B) reproduced</h2>")
         parts.append(cached_table3(figures.get("table3"), prepared))
     # the survey in out_dir/survey (impact-harness suite's quick one), when there is one
     from harness.report.survey import cached_survey_section
@@ -315,13 +341,15 @@ def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None
     from harness.report.experiments import experiments_section  # issue 25
 
     parts.append(experiments_section(out_dir))
-    parts.append("<h2 id='versions'>Versions and settings</h2>" + versions_html(prov))
-    parts.append("<h3>Engine settings per preset</h3><p>Bold where the presets differ. "
-                 "The table is the presets as run, with the command line's <code>--set</code> "
-                 "overrides; scenario files may override settings too "
-                 "(<code>[engine_settings.&lt;engine&gt;]</code>); such runs carry the "
-                 "overrides in their labels and in each record's diagnostics in "
-                 "<code>results.json</code>.</p>" + settings_table(prov))
+    versions = (versions_html(prov) + "<h3>Engine settings per preset</h3><p>Bold where the "
+                "presets differ. The table is the presets as run, with the command line's "
+                "<code>--set</code> overrides; scenario files may override settings too "
+                "(<code>[engine_settings.&lt;engine&gt;]</code>); such runs carry the "
+                "overrides in their labels and in each record's diagnostics in "
+                "<code>results.json</code>.</p>" + settings_table(prov))
+    parts.append(folded("versions", "Versions and settings", versions,
+                        f"commit <code>{escape_html(str(git.get('commit'))[:10])}</code>, "
+                        f"results of {escape_html(prov.get('created_utc', ''))}"))
     generated = time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())
     parts.append(f"<p class='muted'>Report generated {generated} "
                  "by <code>impact-harness report</code>.</p></body></html>")

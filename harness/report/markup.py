@@ -1,6 +1,8 @@
 """HTML building blocks shared by every page of the report (``index.html``, the bench and
 stress pages, ``compare.html``): the style sheet, a page's head, tables, figures and the small
-Markdown the harness writes. Pages are self-contained: inline CSS, no external files."""
+Markdown the harness writes, and the sections folded in ``<details>``. Pages are
+self-contained: inline CSS, and one small inline script, which opens every folded section
+while the page prints."""
 
 from __future__ import annotations
 
@@ -41,16 +43,68 @@ p.notes{font-size:.8em;color:#733;margin:-.4em 0 .8em;max-width:60em}
 nav.contents ol.groups{columns:4;font-size:.92em} nav.contents ol.groups ol{columns:1}
 details.group>summary{font-size:1.1em;margin:.4em 0}
 span.heat{display:block;margin:-2px -6px;padding:2px 6px}
+details.fold>summary{margin-top:1.2em;border-bottom:1px solid #ddd;padding-bottom:.2em}
+summary>h2,summary>h3{display:inline;border:0;margin:0;padding:0}
+details.scenario>summary{margin-top:.5em;border-bottom:1px solid #eee}
+summary .headline{color:#555;font-size:.9em;margin-left:.6em}
+.folded{scroll-margin-top:4em}
+@media print{
+body{max-width:none;padding:0;font-size:10pt}
+nav.contents,.back,summary::marker{display:none}
+details::details-content{content-visibility:visible;display:block}
+summary{list-style:none;color:#222}
+figure,table,tr,.pair,summary{break-inside:avoid}
+summary,h2,h3,h4{break-after:avoid}
+.scroll{overflow:visible} table{font-size:7pt}
+.pair{display:block} img,.pair img.diagram{width:auto;max-width:100%;height:auto}
+figure img{width:100%} .pair figure img.diagram{width:60%}
+a{color:inherit;text-decoration:none}
+}
 """
+
+#: Printing shows every folded section: CSS alone cannot open a ``<details>`` (the print
+#: style sheet reveals their content where the browser supports ``::details-content``), so
+#: this opens the closed ones before printing and closes them again after.
+PRINT_SCRIPT = """<script>
+(function () {
+  var opened = [];
+  window.addEventListener('beforeprint', function () {
+    document.querySelectorAll('details:not([open])').forEach(function (d) {
+      d.open = true; opened.push(d);
+    });
+  });
+  window.addEventListener('afterprint', function () {
+    opened.forEach(function (d) { d.open = false; });
+    opened = [];
+  });
+})();
+</script>"""
 
 
 PAGE_HEAD = ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
              "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
-             "<title>{title}</title><style>{css}</style></head><body>")
+             "<title>{title}</title><style>{css}</style>{script}</head><body>")
 
 
 def page_head(title: str) -> str:
-    return PAGE_HEAD.format(title=escape_html(title), css=CSS)
+    return PAGE_HEAD.format(title=escape_html(title), css=CSS, script=PRINT_SCRIPT)
+
+
+def folded(anchor: str, title: str, body: str, headline: str = "", level: int = 2,
+           unfolded: bool = False, css_class: str = "fold") -> str:
+    """A section folded in a ``<details>``: its summary says the section's ``title`` (a
+    heading of ``level``) and its ``headline`` (HTML: the counts a reader decides by),
+    ``body`` (HTML) unfolds below; ``unfolded``: shown unfolded when the page opens.
+
+    The ``anchor`` id is on the body's wrapper, inside the folded content: a link to it
+    opens the section (browsers open the closed ``<details>`` around a fragment's target,
+    nested ones too), where an id on the ``<details>`` itself would scroll to a closed one.
+    """
+    summary = f"<h{level}>{escape_html(title)}</h{level}>" + (
+        f" <span class='headline'>{headline}</span>" if headline else "")
+    return (f"<details class='{css_class}'{' open' if unfolded else ''}><summary>{summary}"
+            f"</summary><div class='folded' id='{escape_html(anchor)}'>\n{body}\n</div>"
+            "</details>")
 
 
 def header_cell(text: str) -> str:

@@ -205,3 +205,49 @@ def split_table(results: Results, prepared: Prepared) -> str:
         body.append(cells)
     return html_table(["scenario", "law part [newton-lcp vs Poisson]",
                        *[f"solve part [{label}]" for label in labels]], body)
+
+
+def headline_summary(names: Sequence[str], prepared: Prepared) -> str:
+    """What the folded headline section says: per headline law, the largest departure over
+    every scenario's single impacts and where (the scenarios' views,
+    :func:`harness.report.fragments.scenario_view`)."""
+    found = []
+    for law in HEADLINE_LAWS:
+        cells = [(cell[0], label, name) for name in names
+                 if prepared.views[name].get("engine")
+                 for label, cell in zip(prepared.labels, prepared.views[name][law])
+                 if not cell[2] and math.isfinite(cell[0])]
+        if cells:
+            value, label, name = max(cells)
+            found.append(f"from {LAW_STYLE[law][2]} up to {fmt_departure(value)} "
+                         f"({escape_html(label)}, {escape_html(name)})")
+    return "largest departure " + "; ".join(found) if found else "no engine run to compare"
+
+
+def flagged_scenarios(names: Sequence[str], prepared: Prepared) -> int:
+    """How many scenarios have a run an engine flagged (any headline cell marked)."""
+    return sum(any(cell[1] for cell in prepared.views[name][HEADLINE_LAWS[0]])
+               for name in names)
+
+
+def split_summary(names: Sequence[str], prepared: Prepared) -> str:
+    """What the folded law-vs-solve section says: the largest law part and solve part."""
+    splits = [prepared.views[name]["split"] for name in names if prepared.views[name]["split"]]
+    law = [s["law_part"] for s in splits if s["law_part"] is not None]
+    solve = [v for s in splits for v in s["solve"].values() if v is not None]
+    if not law and not solve:
+        return ""
+    return (f"law part up to {fmt_departure(max(law, default=math.nan))}, solve part up to "
+            f"{fmt_departure(max(solve, default=math.nan))}")
+
+
+def gates_summary(provenance: dict) -> str:
+    """What the folded gates section says: how many passed, or failed."""
+    gates = provenance.get("gates", [])
+    failed = sum(g["status"] == "FAIL" for g in gates)
+    if not gates:
+        return "none declared"
+    if failed:
+        return f"<span class='fail'>{failed} of {len(gates)} FAILED</span>"
+    passed = sum(g["status"] == "pass" for g in gates)
+    return f"<span class='pass'>{passed} of {len(gates)} passed</span>"

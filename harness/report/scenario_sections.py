@@ -9,7 +9,7 @@ from collections.abc import Sequence
 
 from harness.engines import ENGINE_NAMES, PRESET_ROLES
 from harness.report.fragments import Prepared
-from harness.report.markup import html_table, report_figure
+from harness.report.markup import folded, html_table, report_figure
 from harness.report.views import (
     LAW_ORDER,
     LAW_STYLE,
@@ -25,6 +25,7 @@ from harness.report.views import (
     scenario_overrides,
     slug,
     split_overrides,
+    worst_record,
 )
 from harness.run.records import ANALYTIC, Record, Results
 
@@ -149,9 +150,11 @@ def cached_section(name: str, results: Results, figures: dict, prepared: Prepare
 
 def scenario_section(name: str, info: dict, records: Sequence[Record], figures: dict,
                      command: dict | None = None) -> str:
-    """One scenario's section; ``command``: the run's ``--set`` overrides (provenance)."""
-    parts = [f'<div class="scenario" id="{escape_html(slug(name))}">',
-             f"<h3>{escape_html(name)}</h3>"]
+    """One scenario's section, folded (:func:`harness.report.markup.folded`: the page has
+    one per scenario, and their tables and figures made it 48,000 px tall) under a summary
+    of its runs (:func:`scenario_headline`); ``command``: the run's ``--set`` overrides
+    (provenance)."""
+    parts = []
     tags = ", ".join(info.get("tags", []))
     parts.append(f"<p>{escape_html(info.get('description', ''))} <span class='muted'>"
                  f"[{escape_html(info.get('system', ''))}; tags: {escape_html(tags)}]</span></p>")
@@ -198,5 +201,27 @@ def scenario_section(name: str, info: dict, records: Sequence[Record], figures: 
                                        f"contact history of {name}",
                                        caption="The contact step by step against each law's "
                                        "impulse process (the paper's Fig. 1 in engine steps)."))
-    parts.append("</div>")
-    return "\n".join(parts)
+    return folded(slug(name), name, "\n".join(part for part in parts if part),
+                  scenario_headline(records), level=3, css_class="fold scenario")
+
+
+def scenario_headline(records: Sequence[Record]) -> str:
+    """What a scenario's folded section says of its runs: how many engine runs, how many
+    flagged and skipped, and the largest departure from Poisson over the single impacts
+    (with the run that makes it)."""
+    runs = [r for r in records if r.source != ANALYTIC]
+    if not runs:
+        return "the laws only (no engine ran)"
+    points = len({r.point["index"] for r in records})
+    flagged = sum(1 for r in runs if not r.ok and not r.skipped)
+    skipped = sum(1 for r in runs if r.skipped)
+    text = f"{len(runs)} engine runs" + (f" at {points} points" if points > 1 else "")
+    if flagged:
+        text += f", <span class='fail'>{flagged} flagged</span>"
+    if skipped:
+        text += f", {skipped} skipped"
+    worst = worst_record(runs, "poisson")
+    if worst is not None:
+        text += (f"; largest departure from Poisson {fmt_departure(worst.departure['poisson'])}"
+                 f" ({escape_html(record_label(worst))})")
+    return text
