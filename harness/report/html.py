@@ -309,9 +309,6 @@ def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None
         "the swept parameter instead, laws as lines and engines as points (flagged "
         "runs ringed in red), with the points where the Poisson collision type "
         "changes dashed. Every figure links to its SVG.</p>"]
-    if "legend" in figures:
-        scenarios.append(report_figure(figures, figures["legend"],
-                                       "key of the impulse diagrams"))
     if figures.get("many") and figures.get("scenario_figures") != "all":
         scenarios.append(f"<p class='muted'>With {len(names)} scenarios the per-scenario "
                          "figures are not drawn (they would take minutes); <code>impact-harness"
