@@ -28,18 +28,18 @@ shared one). Only the headline figures (heat map, law vs solve, Table 3) get SVG
 (``--svg headline``; ``--svg all`` for every one): an SVG costs about as much again as its
 PNG and is wanted for a paper's few figures, not for a thousand diagrams (the split figure's
 thousands of markers are an image in its SVG, its axes and text vector). Every image loads
-eagerly (a lazy one not yet scrolled to is left out of a printed page). Figures are drawn in a pool of forked processes (``--workers``) while this process
-builds the page; each figure's PNG carries the digest of its inputs, so a warm report draws
-nothing. A scenario's records enter those digests by what they were made from (its file,
-the code, the installed versions, the settings) and what they decided (statuses, verdicts,
-collision types), never by their floats, whose last bits depend on the CPU: a fresh clone
-on another machine draws none of the committed figures again
-(:func:`harness.report.reading.scenario_digest`). Likewise each scenario's HTML section and
-headline cells are kept in ``<out>/.report-fragments.json`` under the digest of its records
-(:mod:`harness.report.fragments`): a warm report formats only what changed, and reads the
-records themselves only when something is to be formatted (:mod:`harness.report.reading`:
-what it needs of them otherwise -- their digests, order, engines -- comes from the lines of
-the results file).
+eagerly (a lazy one not yet scrolled to is left out of a printed page). Figures are drawn in
+a pool of forked processes (``--workers``) while this process builds the page; each figure's
+PNG carries the digest of its inputs, so a warm report draws nothing. A scenario's records
+enter those digests by what they were made from (its file, the code, the installed versions,
+the settings) and what they decided (statuses, verdicts, collision types), never by their
+floats, whose last bits depend on the CPU: a fresh clone on another machine draws none of
+the committed figures again (:func:`harness.report.reading.scenario_digest`). Likewise each
+scenario's HTML section and headline cells are kept in ``<out>/.report-fragments.json``
+under the digest of its records (:mod:`harness.report.fragments`): a warm report formats
+only what changed, and reads the records themselves only when something is to be formatted
+(:mod:`harness.report.reading`: what it needs of them otherwise -- their digests, order,
+engines -- comes from the lines of the results file).
 
 What the page shows, in order: what this is; the headline heat maps (departure of every
 engine and preset from Poisson and from Stronge, per scenario); the split of each engine's

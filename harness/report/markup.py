@@ -55,9 +55,9 @@ details::details-content{content-visibility:visible;display:block}
 summary{list-style:none;color:#222}
 figure,table,tr,.pair,summary{break-inside:avoid}
 summary,h2,h3,h4{break-after:avoid}
-.scroll{overflow:visible} table{font-size:7pt}
-.pair{display:block} img,.pair img.diagram{width:auto;max-width:100%;height:auto}
-figure img{width:100%} .pair figure img.diagram{width:60%}
+.scroll{overflow:visible} table{font-size:7pt} th,td{white-space:normal;padding:1px 3px}
+.pair{display:block} img{width:auto;max-width:100%;height:auto}
+figure img{width:100%} figure img.diagram{width:60%}
 a{color:inherit;text-decoration:none}
 }
 """
