@@ -48,7 +48,10 @@ post-impact velocities of every law and engine side by side, the energy change a
 impulse diagram (Fig. 1 of the paper), or for sweeps the post-impact quantities against the
 swept parameter with the Poisson type boundaries marked; Table 3; the survey in
 ``<out>/survey/`` when there is one (what was surveyed and what was not, its table per engine
-× preset × family, its figures: :mod:`harness.report.survey`); versions and settings.
+× preset × family, its figures: :mod:`harness.report.survey`); against experiments;
+versions and settings. Each section is folded in a ``<details>`` under its name and headline
+(:func:`harness.report.markup.folded`): the overview unfolded, each scenario and the long
+sections folded, every fold opened for printing.
 """
 
 
