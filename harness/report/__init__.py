@@ -23,23 +23,23 @@ map has a row per family (median / max over its scenarios), each scenario's depa
 coloured HTML table folded under its family, the scenario sections are folded per family,
 and the per-scenario figures are drawn only on demand (``--figures-for PATTERN``,
 ``--scenario-figures all``): at 1,000 scenarios they were ~1,000 of the ~1,003 figures and
-nearly all of a 260 s cold report (the key of the impulse diagrams is drawn only with one of
-them). Only the headline figures (heat map, law vs solve, key, Table 3) get SVG twins then
+nearly all of a 260 s cold report (each impulse diagram carries its own key: the page has no
+shared one). Only the headline figures (heat map, law vs solve, Table 3) get SVG twins then
 (``--svg headline``; ``--svg all`` for every one): an SVG costs about as much again as its
 PNG and is wanted for a paper's few figures, not for a thousand diagrams (the split figure's
 thousands of markers are an image in its SVG, its axes and text vector). Every image loads
-lazily. Figures are drawn in a pool of forked processes (``--workers``) while this process
-builds the page; each figure's PNG carries the digest of its inputs, so a warm report draws
-nothing. A scenario's records enter those digests by what they were made from (its file,
-the code, the installed versions, the settings) and what they decided (statuses, verdicts,
-collision types), never by their floats, whose last bits depend on the CPU: a fresh clone
-on another machine draws none of the committed figures again
-(:func:`harness.report.reading.scenario_digest`). Likewise each scenario's HTML section and
-headline cells are kept in ``<out>/.report-fragments.json`` under the digest of its records
-(:mod:`harness.report.fragments`): a warm report formats only what changed, and reads the
-records themselves only when something is to be formatted (:mod:`harness.report.reading`:
-what it needs of them otherwise -- their digests, order, engines -- comes from the lines of
-the results file).
+eagerly (a lazy one not yet scrolled to is left out of a printed page). Figures are drawn in
+a pool of forked processes (``--workers``) while this process builds the page; each figure's
+PNG carries the digest of its inputs, so a warm report draws nothing. A scenario's records
+enter those digests by what they were made from (its file, the code, the installed versions,
+the settings) and what they decided (statuses, verdicts, collision types), never by their
+floats, whose last bits depend on the CPU: a fresh clone on another machine draws none of
+the committed figures again (:func:`harness.report.reading.scenario_digest`). Likewise each
+scenario's HTML section and headline cells are kept in ``<out>/.report-fragments.json``
+under the digest of its records (:mod:`harness.report.fragments`): a warm report formats
+only what changed, and reads the records themselves only when something is to be formatted
+(:mod:`harness.report.reading`: what it needs of them otherwise -- their digests, order,
+engines -- comes from the lines of the results file).
 
 What the page shows, in order: what this is; the headline heat maps (departure of every
 engine and preset from Poisson and from Stronge, per scenario); the split of each engine's
@@ -48,7 +48,10 @@ post-impact velocities of every law and engine side by side, the energy change a
 impulse diagram (Fig. 1 of the paper), or for sweeps the post-impact quantities against the
 swept parameter with the Poisson type boundaries marked; Table 3; the survey in
 ``<out>/survey/`` when there is one (what was surveyed and what was not, its table per engine
-× preset × family, its figures: :mod:`harness.report.survey`); versions and settings.
+× preset × family, its figures: :mod:`harness.report.survey`); against experiments;
+versions and settings. Each section is folded in a ``<details>`` under its name and headline
+(:func:`harness.report.markup.folded`): the overview unfolded, each scenario and the long
+sections folded, every fold opened for printing.
 """
 
 
@@ -70,7 +73,6 @@ from harness.plotting import SVG_TWIN
 from harness.report.figures import (
     heatmap_figure,
     impulse_figure,
-    impulse_legend_figure,
     inputs_digest,
     is_current,
     scenario_digests,
@@ -86,7 +88,7 @@ from harness.report.pages import write_pages
 from harness.report.reading import read_for_report
 from harness.report.summary import write_summary
 from harness.report.survey import survey_figure_tasks
-from harness.report.views import FIGURES, engine_labels, has_library_scenarios, slug, split_rows
+from harness.report.views import FIGURES, has_library_scenarios, slug, split_rows
 from harness.run.files import output_directory_problem, write_text_atomically
 from harness.run.records import DEFAULT_RESULTS, Results
 
@@ -104,12 +106,12 @@ DEFAULT_OUT = DEFAULT_RESULTS.parent
 SELECTION_TAGS = ("quick", "sweep", "slow")
 #: Figure kinds drawn once per report (not per scenario): their SVG twins are kept with
 #: ``--svg headline``.
-HEADLINE_KINDS = ("legend", "heatmap", "split", "table3", "survey_map", "survey_cdf")
+HEADLINE_KINDS = ("heatmap", "split", "table3", "survey_map", "survey_cdf")
 #: Rough drawing cost per kind [s] (CPU, PNG + SVG, measured at 1,000 scenarios: the headline
 #: figures with the heat map's row per family): the pool draws the dearest first so that no
 #: worker is left with the dearest at the end.
 KIND_COST = {"heatmap": 2.5, "sweep": 2.2, "table3": 1.7, "split": 1.8, "history": 1.0,
-             "impulse": 0.5, "legend": 0.35, "survey_map": 1.2, "survey_cdf": 0.6}
+             "impulse": 0.5, "survey_map": 1.2, "survey_cdf": 0.6}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -268,7 +270,6 @@ def figure_tasks(results: Results, many: bool, scenario_figures: str,
     later values.
     """
     names = results.scenario_names()
-    engines = list(dict.fromkeys(label.split(".")[0] for label in engine_labels(results)))
     headline_svg = svg in ("all", "headline")
     scenario_svg = svg == "all"
     digests = scenario_digests(results) if digests is None else digests
@@ -306,10 +307,6 @@ def figure_tasks(results: Results, many: bool, scenario_figures: str,
                 "history", f"history-{slug(name)}.png", history_inputs(name, records_digest[name]),
                 lambda path, tag, name=name, records=records:
                 history_figure(name, records, path, tag), ("history", name), scenario_svg))
-    if any(task.kind == "impulse" for task in tasks):  # the key of these diagrams, once
-        tasks.insert(0, FigureTask("legend", "impulse-legend.png", engines,
-                                   lambda path, tag: impulse_legend_figure(path, tag, engines),
-                                   ("legend",), headline_svg, reads_records=False))
     if has_library_scenarios(results):  # the paper's table only beside the library
         tasks.append(FigureTask("table3", "paper-table3.png", table3_payload(),
                                 lambda path, tag: table3_figure(path, tag), ("table3",),

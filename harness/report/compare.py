@@ -405,7 +405,8 @@ def write_html(path: Path, a_path: Path, b_path: Path, law: str, threshold: floa
                summary: list[SourceSummary], rows: list[list[str]],
                differences: list[tuple[str, str, str]]) -> Path:
     """The comparison as a page: the per-source summary, what differs, every changed row."""
-    from harness.report.html import escape_html, html_table, page_head
+    from harness.report.markup import html_table, page_head
+    from harness.report.views import escape_html
 
     parts = [page_head(f"compare {a_path.name} → {b_path.name}"),
              f"<h1>What changed from <code>{escape_html(a_path)}</code> to "

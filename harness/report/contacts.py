@@ -14,6 +14,11 @@ from __future__ import annotations
 import math
 from html import escape
 
+from harness.report.markup import folded
+from harness.report.views import single_contact
+
+TITLE = "Several contacts: flat faces and tilts"
+
 #: Solution counts shown, in this order: (key in the reference's "solutions", column title).
 COUNTS = (("newton-coulomb", "N–C"), ("two-phase/poisson", "P 2φ"),
           ("coherent/poisson/literal", "P"), ("coherent/stronge-paper/literal", "S"),
@@ -114,14 +119,21 @@ def _first_strike(reference: dict, feature: int) -> float:
 
 def contacts_section(results) -> tuple[str, str]:
     """``(html, markdown)`` of the section; both empty when no scene has several contacts.
+    The HTML is folded under how many scenarios, runs and flagged runs it shows.
 
     ``results`` is the report's :class:`harness.report.Results` (``scenarios`` with the
     runner's per-point ``references``, ``for_scenario(name)`` its records)."""
     html_parts, markdown_parts = [], []
+    runs = flagged = 0
     for name, info in results.scenarios.items():
-        table = _rows(name, info, results.for_scenario(name))
+        records = results.for_scenario(name)
+        table = _rows(name, info, records)
         if table is None:
             continue
+        judged = [r for r in records if r.source != "analytic" and not single_contact(r)
+                  and not r.skipped]
+        runs += len(judged)
+        flagged += sum(not r.ok for r in judged)
         header, rows = table
         # In a scrolling wrapper, as every table of the page: these have a column per engine.
         html_parts.append(f"<h3>{escape(name)}</h3><div class=\"scroll\"><table><tr>"
@@ -133,9 +145,11 @@ def contacts_section(results) -> tuple[str, str]:
                               + "".join("| " + " | ".join(row) + " |\n" for row in rows))
     if not html_parts:
         return "", ""
-    html = ("<h2 id='contacts'>Several contacts: flat faces and tilts</h2><p>"
-            + escape(INTRO) + "</p>" + "\n".join(html_parts))
-    markdown = "## Several contacts: flat faces and tilts\n\n" + INTRO + "\n\n" + "\n".join(
+    headline = (f"{len(html_parts)} scenarios, {runs} engine runs"
+                + (f", <span class='fail'>{flagged} flagged</span>" if flagged else ""))
+    html = folded("contacts", TITLE, "<p>" + escape(INTRO) + "</p>" + "\n".join(html_parts),
+                  headline)
+    markdown = f"## {TITLE}\n\n" + INTRO + "\n\n" + "\n".join(
         markdown_parts)
     return html, markdown
 

@@ -18,6 +18,7 @@ import planar_impact as pi
 from harness.experiments import kharaz, registry
 from harness.plotting import new_figure, save_png
 from harness.report.figures import render_once
+from harness.report.markup import folded
 from harness.report.views import FIGURES
 
 KHARAZ_FIGURE = "experiments-kharaz.png"
@@ -83,10 +84,9 @@ def data_directory(path: str | os.PathLike | None = None) -> Path | None:
 
 
 def experiments_section(out_dir: Path, data_path: str | os.PathLike | None = None) -> str:
-    """The section's HTML; draws its figures under ``out_dir`` only when their inputs
-    changed."""
-    parts = ["<h2 id='experiments'>Against experiments</h2>",
-             "<p>What real impacts did, beside what the laws say they would "
+    """The section's HTML, folded under what it shows; draws its figures under ``out_dir``
+    only when their inputs changed."""
+    parts = ["<p>What real impacts did, beside what the laws say they would "
              "(docs/experiments.md; <code>impact-harness experiments</code>).</p>"]
     directory = data_directory(data_path)
     if directory is None:
@@ -100,4 +100,7 @@ def experiments_section(out_dir: Path, data_path: str | os.PathLike | None = Non
                      "(aggregates only).</p>")
     parts.append("<h3>Oblique impacts of a sphere (Kharaz et al. 2001)</h3>")
     parts.append(kharaz_html(out_dir))
-    return "\n".join(parts)
+    recalled = "recalled points, unverified" if not kharaz.VERIFIED else "published points"
+    drops = "not shown (no copy)" if directory is None else "from your copy, aggregates only"
+    return folded("experiments", "Against experiments", "\n".join(parts),
+                  f"Kharaz et al. 2001 curves ({recalled}); Fazeli et al. 2017 drops {drops}")

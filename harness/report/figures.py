@@ -484,7 +484,8 @@ def impulse_figure(name: str, records: Sequence[Record], path: Path,
 def impulse_key(figure, ax, flagged: bool) -> None:
     """The diagram's own key, below the axes (outside the data): what this diagram draws,
     each label once (engines at the same point each draw their marker), and the red ring
-    when a run here is flagged, so that the PNG reads without the page's shared key."""
+    when a run here is flagged, so that the PNG reads on its own (the page has no shared
+    key)."""
     from matplotlib.lines import Line2D
 
     handles, labels = ax.get_legend_handles_labels()
@@ -510,35 +511,6 @@ def coincident_groups(records, position, tolerance):
             groups.append(((x, y), [record]))
     return [(record, index, len(members)) for _, members in groups
             for index, record in enumerate(members)]
-
-
-def impulse_legend_figure(path: Path, tag: str | None = None,
-                          engines: Sequence[str] | None = None) -> Path:
-    """The key shared by every impulse diagram (drawn once, not on each diagram); engines
-    are those in the results (all styled engines when None)."""
-    from matplotlib.lines import Line2D
-
-    handles = [Line2D([], [], color=LAW_STYLE[law][0], ls=LAW_STYLE[law][1], lw=1.4,
-                      label=f"{LAW_STYLE[law][2]}: impulse path")
-               for law in ("poisson", "stronge", "newton")]
-    handles += [Line2D([], [], ls="none", marker="D", markerfacecolor="none", ms=6,
-                       markeredgewidth=1.5, markeredgecolor=LAW_STYLE[law][0],
-                       label=f"{LAW_STYLE[law][2]}: end point")
-                for law in ("stronge-paper", "newton-lcp")]
-    for engine in engines if engines is not None else engine_names():
-        colour, marker = engine_style(engine)
-        handles.append(Line2D([], [], ls="none", marker=marker, ms=7, markerfacecolor=colour,
-                              markeredgecolor=colour,
-                              label=f"{engine} {preset_label(engine, 'accurate')}"))
-        handles.append(Line2D([], [], ls="none", marker=marker, ms=7, markerfacecolor="none",
-                              markeredgecolor=colour, label=f"{engine} defaults"))
-    handles.append(Line2D([], [], ls="none", label="flagged by the engine", **FLAG_STYLE))
-    handles += [Line2D([], [], color="0.75", ls=":", label="friction cone |I_t| = μ I_n"),
-                Line2D([], [], color="tab:cyan", ls="--", label="v_n = 0 (end of compression)"),
-                Line2D([], [], color="tab:olive", ls="--", label="v_t = 0 (slip stops)")]
-    figure = new_figure(11.0, 1.6)
-    figure.legend(handles=handles, loc="center", ncol=4, fontsize=9, frameon=False)
-    return save_png(figure, path, dpi=90, tag=tag)
 
 
 def type_boundaries(law_records: Sequence[Record]) -> list[tuple[float, int, int]]:

@@ -13,7 +13,7 @@ import math
 from collections.abc import Sequence
 from pathlib import Path
 
-from harness.report.html import html_table, markdown_to_html, page_head
+from harness.report.markup import html_table, markdown_to_html, page_head
 from harness.report.views import escape_html
 from harness.run.files import write_bytes_atomically, write_text_atomically
 

@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from harness.engines import ENGINE_NAMES, PRESET_ROLES, preset_label, source_label
+from harness.report.markup import folded, html_table, report_figure
 from harness.report.views import escape_html, fmt_departure
 
 #: The survey's directory under the report's.
@@ -227,8 +228,6 @@ def statistics_table(stats: dict) -> str:
     """Per engine × preset × family over every collision type: runs, flagged and
     energy-gaining fractions, the departure from Poisson over the checked runs and over all
     runs (each median and p90 with its bootstrap interval), and from Stronge."""
-    from harness.report.html import html_table
-
     every = "departure_poisson_all_median" in stats  # surveys before the all-runs columns
     header = ["engine", "preset", "family", "n", "flagged", "gains E",
               "from Poisson, checked runs: median", "p90", "max",
@@ -255,8 +254,6 @@ def statistics_table(stats: dict) -> str:
 def reason_table(stats: dict) -> str:
     """The flagged runs by verdict reason, a row per engine × preset × family with any
     (over every collision type); "" when none is flagged."""
-    from harness.report.html import html_table
-
     reasons = [key for key in stats if key.startswith("flagged_") and key != "flagged_fraction"
                and np.any(np.asarray(stats[key]) > 0)]
     flagged = [row for row in statistics_rows(stats) if stats["flagged_fraction"][row] > 0]
@@ -288,8 +285,6 @@ CDF_CAPTION = (
 
 
 def figures_html(figures: dict, engines: list[str], samples) -> str:
-    from harness.report.html import report_figure
-
     parts = []
     step = (f"{100 / samples:.0f}%" if isinstance(samples, int) and samples > 0
             else "one run")
@@ -308,7 +303,8 @@ def figures_html(figures: dict, engines: list[str], samples) -> str:
 
 
 def survey_section(directory: Path, figures: dict) -> str:
-    """The Survey section of the page, from the survey in ``directory``."""
+    """The Survey section of the page, from the survey in ``directory``, folded under
+    :func:`survey_headline`."""
     settings = read_settings(directory)
     stats = (read_columns(directory / "statistics.parquet")
              if (directory / "statistics.parquet").is_file() else {})
@@ -316,8 +312,7 @@ def survey_section(directory: Path, figures: dict) -> str:
         stats.get("family", [])).tolist()))
     samples = settings.get("samples")
     link = f"{SURVEY_DIR}/summary.md"
-    parts = ["<h2 id='survey'>Survey: departures over random families of impacts</h2>",
-             "<p>The scenarios above are picked by hand; the survey draws impacts at random "
+    parts = ["<p>The scenarios above are picked by hand; the survey draws impacts at random "
              "from families of them (<i>populations</i>: a body, its contact and ranges of "
              "speed, spin, friction and restitution) and measures each engine's departure "
              "over all of them, in percent as above. A run that fails a verdict check is "
@@ -358,7 +353,23 @@ def survey_section(directory: Path, figures: dict) -> str:
     parts.append(f"<p>The survey's files (<a href='{link}'>summary.md</a> has the tables per "
                  f"collision type): {files}. Each Parquet table is one "
                  "<code>pandas.read_parquet</code> call.</p>")
-    return "\n".join(parts)
+    return folded("survey", "Survey: departures over random families of impacts",
+                  "\n".join(parts), survey_headline(settings, families, stats))
+
+
+def survey_headline(settings: dict, families: list[str], stats: dict) -> str:
+    """What the folded section says: impacts per family and families, and how many of the
+    engine runs were flagged (over every collision type)."""
+    samples = settings.get("samples")
+    text = (f"{escape_html(samples)} impacts × {len(families)} families"
+            if samples is not None else f"{len(families)} families")
+    rows = [row for row, kind in enumerate(stats.get("poisson_type", ())) if int(kind) == 0]
+    if rows:
+        runs = sum(int(stats["n"][row]) for row in rows)
+        flagged = sum(int(stats["n"][row]) * float(stats["flagged_fraction"][row])
+                      for row in rows)
+        text += f"; {runs} engine runs, {_percent(flagged / runs if runs else math.nan)} flagged"
+    return text
 
 
 __all__ = ["cached_survey_section", "survey_figure_tasks", "survey_section"]

@@ -8,10 +8,11 @@
 For every page of the report (``index.html`` and, when present, ``bench.html`` and
 ``stress.html``) it writes ``<page>.png`` (the first ``--height`` pixels at ``--width``; with
 ``--full`` the whole page) and measures the page's layout in the same browser: a copy of the
-page with a small inline script (deleted afterwards; the report itself has no scripts) writes
-``document.documentElement.scrollWidth`` and every element sticking out to the right of the
-window into the DOM, which ``--dump-dom`` returns. Content inside a scrolling wrapper
-(``overflow-x: auto``) does not count: it scrolls inside the page instead of widening it.
+page with a small inline script (deleted afterwards; the report's own script only opens its
+folds for printing) writes ``document.documentElement.scrollWidth`` and every element sticking
+out to the right of the window into the DOM, which ``--dump-dom`` returns. Content inside a
+scrolling wrapper (``overflow-x: auto``) does not count: it scrolls inside the page instead of
+widening it.
 
 Exit status: 0 when no page overflows, 1 when one does (each culprit printed), 2 when
 Chromium or the report is missing.

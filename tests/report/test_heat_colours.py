@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from harness.report.figures import heat_cmap
-from harness.report.html import heat_colours
+from harness.report.overview import heat_colours
 from harness.report.views import HEAT_MAX, HEAT_MIN
 
 

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from harness import report
-from harness.report import html, table3, views
+from harness.report import html, markup, overview, scenario_sections, table3, views
 from harness.run import references, runner
 from harness.run.records import ANALYTIC, Record, Results, read_results, write_results
 from harness.scenarios import load_scenarios
@@ -33,8 +33,8 @@ class Assets(HTMLParser):
             self.images.append(attrs["src"])
         elif tag == "a":
             self.links.append(attrs.get("href", ""))
-        elif tag in ("script", "link"):
-            self.scripts.append(tag)
+        elif tag in ("script", "link"):  # a script's source, or where a link would load from
+            self.scripts.append((tag, attrs.get("src") or attrs.get("href")))
 
 
 @pytest.fixture(scope="module")
@@ -75,8 +75,9 @@ def test_report_writes_the_files(quick_report):
     for path in written["figures"]:
         assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     names = {p.name for p in written["figures"]}
-    assert {"heatmap.png", "split.png", "impulse-legend.png"} <= names
-    assert any(n.startswith("impulse-") for n in names - {"impulse-legend.png"})
+    assert {"heatmap.png", "split.png"} <= names
+    assert any(n.startswith("impulse-") for n in names)
+    assert "impulse-legend.png" not in names  # each impulse diagram carries its own key
     assert any(n.startswith("sweep-") for n in names)
 
 
@@ -95,12 +96,13 @@ def local_targets(page: Path) -> tuple[list[str], Assets]:
 
 
 def test_every_page_is_self_contained(quick_report):
-    """No external asset, no script, every image and link resolves inside the report."""
+    """No external asset, one inline script (printing opens the folded sections), every image
+    and link resolves inside the report."""
     out, _results, _ = quick_report
     pages = [out / "index.html", out / "bench.html", out / "stress.html"]
     for page in pages:
         targets, parser = local_targets(page)
-        assert parser.scripts == [], page.name
+        assert parser.scripts == [("script", None)], page.name
         for target in targets:
             assert not re.match(r"^[a-z]+://", target), f"external asset {target}"
             assert (out / target.split("#")[0]).is_file(), f"{page.name}: missing {target}"
@@ -130,7 +132,7 @@ def test_first_screen_and_contents(quick_report):
         < page.index("heatmap.png") < page.index("id='why'") < page.index("id='split'") \
         < page.index("id='scenarios'")
     for name in results.scenario_names():
-        assert f'id="{views.slug(name)}"' in page
+        assert f"id='{views.slug(name)}'" in page
         assert f"href='#{views.slug(name)}'" in page
     assert "Versions and settings" in page and "pybullet" in page
 
@@ -165,15 +167,15 @@ def test_why_notes_and_overrides_are_shown(quick_report):
     # every note an engine made appears in its scenario's section, beside the run's numbers
     for record in results.records:
         for note in views.run_notes(record):
-            section = page[page.index(f'id="{views.slug(record.scenario)}"'):]
-            section = section[:section.index("</div>\n<div class=\"scenario\"")] \
-                if "</div>\n<div class=\"scenario\"" in section else section
+            section = page[page.index(f"id='{views.slug(record.scenario)}'"):]
+            next_one = section.find("<details class='fold scenario'>")
+            section = section[:next_one] if next_one >= 0 else section
             assert views.escape_html(note) in section, (record.scenario, note)
     # the overridden scenario: its labels and its section say so, the others do not
-    overridden = page[page.index('id="disk-oblique-one-iteration"'):]
+    overridden = page[page.index("id='disk-oblique-one-iteration'"):]
     assert "pymunk.defaults</b><br><span class='override'>[iterations=1]" in overridden
     assert "Engine settings overridden by this scenario" in overridden
-    plain = page[page.index('id="disk-oblique"'):page.index('id="disk-oblique-one-iteration"')]
+    plain = page[page.index("id='disk-oblique'"):page.index("id='disk-oblique-one-iteration'")]
     assert "[iterations=1]" not in plain
     summary = (out / "summary.md").read_text(encoding="utf-8")
     line = next(row for row in summary.splitlines()
@@ -201,7 +203,7 @@ def test_formatting():
     assert views.fmt_departure(0.0) == "0%"
     assert views.fmt_departure(3e-14) == "3e-12%"
     assert views.fmt_departure(float("nan")) == "n/a"
-    page = html.markdown_to_html("## Head\n\n| a | b |\n|---|---:|\n| 1 | `x` |\n")
+    page = markup.markdown_to_html("## Head\n\n| a | b |\n|---|---:|\n| 1 | `x` |\n")
     assert "<h3>Head</h3>" in page and "<code>x</code>" in page and "<td>1</td>" not in page
 
 
@@ -320,15 +322,15 @@ def test_a_flagged_runs_reasons_read_as_sentences_never_as_python():
     run = sweep_run(0, 0.03, "ok")
     run.diagnostics.update(verdict="flagged", reasons=[reason, remark])
     footnotes: dict[str, int] = {}
-    cell = html.status_cell(run, footnotes)
-    notes = html.footnotes_html(footnotes)
+    cell = scenario_sections.status_cell(run, footnotes)
+    notes = scenario_sections.footnotes_html(footnotes)
     assert "<sup>1</sup>" in cell and "<sup>2</sup>" in cell
     assert "penetration: deepest overlap 0.0057 m &gt; 0.005 m" in notes
     assert ("energy-gain: newton-lcp gains 0.1148 J on this problem (attributed to the law);"
             " reported, not a failure") in notes
     assert not PYTHON_REPR.search(cell + notes)
     # what the pattern catches: the page as it was before reasons were sentences
-    assert PYTHON_REPR.search(html.footnotes_html({str(reason): 1}))
+    assert PYTHON_REPR.search(scenario_sections.footnotes_html({str(reason): 1}))
 
 
 def test_no_python_repr_on_any_page(quick_report):
@@ -347,18 +349,18 @@ def test_overrides_are_labelled_by_where_they_were_set():
     run.source = "pymunk"
     command = {"pymunk": {"iterations": 2}}
     assert views.split_overrides(run, command) == ({"iterations": 2}, {"time_step": 0.001})
-    text = html.overrides_paragraph([run], command)
+    text = scenario_sections.overrides_paragraph([run], command)
     assert "on the command line (<code>--set</code>): pymunk: <code>iterations=2</code>" in text
     assert "by this scenario (<code>[engine_settings]</code>): pymunk: <code>time_step=0.001" \
         in text
     # only --set: nothing is said of the scenario
     only = sweep_run(0, 0.03, overrides={"iterations": 2})
     only.source = "pymunk"
-    text = html.overrides_paragraph([only], command)
+    text = scenario_sections.overrides_paragraph([only], command)
     assert "--set" in text and "by this scenario" not in text
     # the engine notes say the runs are not the preset the text describes
     results = Results(records=[only], provenance={"settings_overrides": command})
-    why = html.why_html(results)
+    why = overview.why_html(results)
     assert "every run with <code>--set iterations=2</code>" in why
     assert "runs with their scenario's overrides" not in why
 
@@ -400,3 +402,153 @@ def test_bench_and_stress_figures_have_captions_that_say_what_to_read():
         "pareto-mujoco.png")
     assert "batch size" in caption("solver-throughput.png")
     assert caption("unknown-figure.png") == "unknown-figure.png"
+
+
+class Folds(HTMLParser):
+    """The page's ``<details>`` as it nests: per fold its summary's headings (``(level,
+    text)``), whether its summary has a headline, whether it opens unfolded, and the ids in
+    its content (outside its summary); also the headings and ids outside any fold's content,
+    and ids put on a ``<details>`` or ``<summary>`` itself."""
+
+    def __init__(self):
+        super().__init__()
+        self.folds, self.stack, self.loose_headings, self.loose_ids = [], [], [], set()
+        self.ids_on_folds, self.contents_links, self._heading, self._in_nav = [], [], None, False
+
+    def handle_starttag(self, tag, attrs):
+        attrs = dict(attrs)
+        top = self.stack[-1] if self.stack else None
+        if tag == "details":
+            self.stack.append({"open": "open" in attrs, "headings": [], "headline": False,
+                               "ids": set(), "in_summary": False, "class": attrs.get("class")})
+        elif tag == "summary" and top is not None:
+            top["in_summary"] = True
+        elif tag == "nav":
+            self._in_nav = True
+        elif tag == "a" and self._in_nav and attrs.get("href", "").startswith("#"):
+            self.contents_links.append(attrs["href"][1:])
+        elif tag in ("h2", "h3"):
+            self._heading = [int(tag[1]), ""]
+        elif tag == "span" and top is not None and top["in_summary"] \
+                and attrs.get("class") == "headline":
+            top["headline"] = True
+        if "id" in attrs:
+            if tag in ("details", "summary"):
+                self.ids_on_folds.append(attrs["id"])
+            elif top is not None and not top["in_summary"]:
+                top["ids"].add(attrs["id"])
+            else:
+                self.loose_ids.add(attrs["id"])
+
+    def handle_data(self, data):
+        if self._heading is not None:
+            self._heading[1] += data
+
+    def handle_endtag(self, tag):
+        if tag in ("h2", "h3") and self._heading is not None:
+            top = self.stack[-1] if self.stack else None
+            if top is not None and top["in_summary"]:
+                top["headings"].append(tuple(self._heading))
+            else:
+                self.loose_headings.append(tuple(self._heading))
+            self._heading = None
+        elif tag == "summary" and self.stack:
+            self.stack[-1]["in_summary"] = False
+        elif tag == "nav":
+            self._in_nav = False
+        elif tag == "details" and self.stack:
+            self.folds.append(self.stack.pop())
+
+
+def test_every_section_is_folded_with_its_anchor_inside(quick_report):
+    """Each section (h2) and each scenario (h3) is a ``<details>`` whose summary says its
+    name and a headline; its anchor is inside the folded content (a link to it opens the
+    fold), never on the ``<details>`` or ``<summary>``; the contents link only there. The
+    overview opens unfolded, each scenario folded."""
+    out, results, _ = quick_report
+    parser = Folds()
+    parser.feed((out / "index.html").read_text(encoding="utf-8"))
+    assert parser.stack == [] and parser.ids_on_folds == []
+    assert [h for h in parser.loose_headings if h[0] == 2] == []  # no section left unfolded
+    sections = {fold["headings"][0][1]: fold for fold in parser.folds
+                if fold["headings"] and fold["headings"][0][0] == 2}
+    assert len(sections) >= 8, list(sections)
+    for title, fold in sections.items():
+        assert fold["headline"] and fold["ids"], title
+    anchored = {anchor: fold for fold in parser.folds for anchor in fold["ids"]}
+    for anchor in ("headline", "why", "split", "gates", "scenarios"):
+        assert anchored[anchor]["open"], anchor  # the overview, unfolded
+    for anchor in ("table3", "experiments", "versions"):
+        assert not anchored[anchor]["open"], anchor  # long sections, folded
+    for name in results.scenario_names():
+        fold = anchored[views.slug(name)]
+        assert fold["headings"] == [(3, name)] and fold["headline"] and not fold["open"]
+        assert fold["class"] == "fold scenario"
+    assert parser.contents_links and all(link in anchored for link in parser.contents_links)
+
+
+def print_rules(page: str) -> str:
+    """The page's ``@media print`` block (its braces balanced)."""
+    start = page.index("@media print{") + len("@media print{")
+    depth, at = 1, start
+    while depth:
+        depth += {"{": 1, "}": -1}.get(page[at], 0)
+        at += 1
+    return page[start:at - 1]
+
+
+def test_printing_shows_every_fold_and_no_chrome(quick_report):
+    """Printed, the page unfolds every section (a script opens the closed ``<details>``
+    before printing and closes them after; the print style sheet reveals their content too),
+    hides the contents, keeps figures and tables whole on a page, fits images to its width,
+    and loads every image eagerly (a lazy one not yet scrolled to is missing from print)."""
+    out, _, _ = quick_report
+    for name in ("index.html", "bench.html", "stress.html"):
+        page = (out / name).read_text(encoding="utf-8")
+        rules = print_rules(page)
+        assert re.search(r"nav\.contents[^{]*\{display:none", rules), name
+        assert re.search(r"figure,table[^{]*\{break-inside:avoid", rules), name
+        assert "details::details-content{content-visibility:visible" in rules
+        assert re.search(r"img[^{]*\{[^}]*max-width:100%", rules), name
+        script = re.findall(r"<script>(.*?)</script>", page, re.DOTALL)
+        assert len(script) == 1, name
+        opens = script[0][script[0].index("'beforeprint'"):script[0].index("'afterprint'")]
+        assert "details:not([open])" in opens and "d.open = true" in opens
+        assert "d.open = false" in script[0][script[0].index("'afterprint'"):]
+        assert 'loading="lazy"' not in page and "loading='lazy'" not in page
+
+
+@pytest.mark.skipif(not Path("/usr/bin/chromium").exists(),
+                    reason="no /usr/bin/chromium: install it (apt-get install -y chromium)")
+def test_in_chromium_a_link_opens_its_fold_and_printing_opens_all(quick_report):
+    """In the browser: a link to a folded scenario opens its fold; ``beforeprint`` opens
+    every fold and ``afterprint`` closes again those it opened."""
+    out, results, _ = quick_report
+    script = load_screenshot_script()
+    name = views.slug(results.scenario_names()[-1])
+    probe = out / ".fold-probe.html"
+    check = ("<script>window.addEventListener('load', function () { setTimeout(function () {"
+             "var closed = function () { return document.querySelectorAll("
+             "'details:not([open])').length; };"
+             f"var target = document.getElementById('{name}'), ancestors = 0, opened = 0;"
+             "for (var e = target; e; e = e.parentElement) { if (e.tagName === 'DETAILS') {"
+             "ancestors += 1; if (e.open) { opened += 1; } } }"
+             "var before = closed(); window.dispatchEvent(new Event('beforeprint'));"
+             "var printing = closed(); window.dispatchEvent(new Event('afterprint'));"
+             "var out = document.createElement('pre'); out.id = 'fold-result';"
+             "out.textContent = JSON.stringify({ancestors: ancestors, opened: opened,"
+             "before: before, printing: printing, after: closed()});"
+             "document.body.appendChild(out); }, 100); });</script>")
+    page = (out / "index.html").read_text(encoding="utf-8")
+    probe.write_text(page.replace("</body>", check + "</body>"), encoding="utf-8")
+    try:
+        done = script.chromium(["--window-size=1400,1000", "--virtual-time-budget=5000",
+                                "--dump-dom", probe.resolve().as_uri() + f"#{name}"])
+    finally:
+        probe.unlink(missing_ok=True)
+    found = re.search(r'<pre id="fold-result">(.*?)</pre>', done.stdout, re.DOTALL)
+    assert found, done.stderr[-500:]
+    state = json.loads(found.group(1).replace("&quot;", '"'))
+    assert state["ancestors"] >= 1 and state["opened"] == state["ancestors"], state
+    assert state["before"] > 0 and state["printing"] == 0, state
+    assert state["after"] == state["before"], state

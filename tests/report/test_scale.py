@@ -8,18 +8,25 @@ from pathlib import Path
 import pytest
 
 from harness import report
-from harness.report import figures as figures_module
 from harness.report.views import engine_scenarios, slug
 from harness.run import runner
 from harness.run.records import Results, read_results, write_results
 from harness.scenarios import load_scenarios
 
 
+def _text_figure(path, tag, engines: list[str]):
+    """A small figure drawn from its inputs alone (no record): the engines' names."""
+    from harness.plotting import new_figure, save_png
+
+    figure = new_figure(2.0, 1.0)
+    figure.text(0.1, 0.5, ", ".join(engines))
+    return save_png(figure, path, tag=tag)
+
+
 def _legend_task(engines: list[str], svg: bool = True) -> report.FigureTask:
     return report.FigureTask(
         "legend", f"legend-{'-'.join(engines)}.png", engines,
-        lambda path, tag: figures_module.impulse_legend_figure(path, tag, engines),
-        ("legend",), svg)
+        lambda path, tag: _text_figure(path, tag, engines), ("legend",), svg)
 
 
 def test_the_pool_draws_the_same_files_as_one_process(tmp_path):
@@ -92,7 +99,7 @@ def aggregated(small_results, tmp_path_factory):
     return small_results, out, written
 
 
-def test_the_key_of_the_impulse_diagrams_is_drawn_only_with_one(small_results):
+def test_no_shared_key_is_drawn_each_impulse_diagram_has_its_own(small_results):
     def kinds(**options):
         arguments = {"many": True, "scenario_figures": "none", "figures_for": (),
                      "svg": "headline", **options}
@@ -102,10 +109,11 @@ def test_the_key_of_the_impulse_diagrams_is_drawn_only_with_one(small_results):
     sweeps = [n for n in names if small_results.scenarios.get(n, {}).get("sweep")]
     single = [n for n in names if n not in sweeps]
     assert sweeps and single
-    assert "legend" not in kinds() and "impulse" not in kinds()  # many: no diagram
-    assert "legend" not in kinds(figures_for=sweeps)  # a sweep's figure has its own key
-    assert kinds(figures_for=single[:1]).count("legend") == 1
-    assert kinds(many=False, scenario_figures="all").count("legend") == 1
+    assert "impulse" not in kinds()  # many: no diagram
+    assert kinds(figures_for=single[:1]).count("impulse") == 1
+    for options in ({}, {"figures_for": sweeps}, {"figures_for": single[:1]},
+                    {"many": False, "scenario_figures": "all"}):
+        assert "legend" not in kinds(**options)  # the key is in each diagram's PNG
 
 
 def test_families_skip_selection_tags():
@@ -135,11 +143,10 @@ def test_many_scenarios_draw_scenario_figures_only_on_demand_and_svg_for_headlin
     results, out, written = aggregated
     first = slug(results.scenario_names()[0])
     per_scenario = {p.name for p in written["figures"]
-                    if p.name.startswith(("impulse-", "sweep-", "history-"))
-                    and p.name != "impulse-legend.png"}
+                    if p.name.startswith(("impulse-", "sweep-", "history-"))}
     assert per_scenario and all(first in name for name in per_scenario)
     for path in written["figures"]:
-        headline = path.name.startswith(("heatmap", "split", "impulse-legend", "paper-table3"))
+        headline = path.name.startswith(("heatmap", "split", "paper-table3"))
         assert path.with_suffix(".svg").exists() == headline, path.name
 
 
@@ -154,9 +161,9 @@ def test_many_scenarios_page_is_folded_per_tag_and_its_images_print(aggregated):
     for tag, members in groups.items():
         # the section of every scenario lies inside its tag's <details>
         start = page.index(f"<details class='group'><summary><b>{tag}</b>")
-        end = page.index("</details>", page.index(f'id="{slug(members[-1])}"'))
+        end = page.index("</details>", page.index(f"id='{slug(members[-1])}'"))
         for name in members:
-            assert start < page.index(f'id="{slug(name)}"') < end
+            assert start < page.index(f"id='{slug(name)}'") < end
     # no SVG link to a file that was not written
     for href in re.findall(r"href=['\"](figures/[^'\"]+\.svg)['\"]", page):
         assert (out / href).is_file(), href

@@ -33,10 +33,10 @@ MISSING = "box2d"
 
 def section_of(page: str) -> str:
     """The HTML from the Survey heading to the next section's ("" when there is none)."""
-    start = page.find("<h2 id='survey'>")
+    start = page.find("id='survey'")
     if start < 0:
         return ""
-    end = page.find("<h2", start + 5)
+    end = page.find("<details class='fold'", start)
     return page[start:end if end >= 0 else len(page)]
 
 
