@@ -1,7 +1,7 @@
 """The Fazeli drops through the engines: each drop a scene whose body is the polygon placed
 on the ellipse's lowest point (``ellipse``; exact contact point and Jacobian), at the angle
 the published Jacobian was evaluated at, with the ellipse's mass and inertia; every run
-judged by the suite's verdicts (harness/run/verdicts.py). Flagged runs are counted with
+judged by the suite's verdicts (harness/run/verdicts/). Flagged runs are counted with
 their reason, never scored; only aggregates leave this module."""
 
 from __future__ import annotations

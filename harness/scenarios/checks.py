@@ -24,6 +24,7 @@ from harness.scenarios.errors import suggest
 from harness.scenarios.model import Point, Scenario
 from harness.scenarios.schema import ONE_POINT_TOLERANCE, PRESETS, SHAPE_FIELDS
 from harness.scene import Body, Disk, Scene, geometry
+from harness.scene.features import feature_points
 
 if TYPE_CHECKING:  # the reader imports the checks, not the other way round
     from harness.scenarios.reader import TableReader
@@ -300,8 +301,6 @@ def _preset_time_step(engine: str, preset: str, overrides: dict) -> float | None
 
 def _feature_points(body: Body) -> list[tuple[str, np.ndarray, float]]:
     """``(name, body-frame centre, radius)`` of each corner or end cap of ``body``."""
-    from harness.run.verdicts import feature_points
-
     centres, radius, names = feature_points(body.shape)
     return [(name, centre, radius) for name, centre, radius in
             zip(names, centres, [radius] * len(names))]
