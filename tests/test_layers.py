@@ -39,15 +39,13 @@ LAYERS = (
 )
 #: ``(importing package, imported module)`` pairs allowed against the order. The scenario
 #: checks keep the point checks that passed in the run's cache (``run.cache``, written
-#: through ``run.files``), ask the engines' facts recorded there (``run.engine_facts``) and
-#: judge a second feature's strike with the run's verdict geometry (``run.verdicts``): the
-#: storage and the verdicts' shape features still live in ``harness.run`` (issue 26: a
-#: storage layer below the scenarios, the shape features into ``harness.scene``).
+#: through ``run.files``) and ask the engines' facts recorded there (``run.engine_facts``):
+#: the storage still lives in ``harness.run`` (issue 26: a storage layer below the
+#: scenarios).
 ALLOWED_UPWARD = {
     ("harness.scenarios", "harness.run.cache"),
     ("harness.scenarios", "harness.run.files"),
     ("harness.scenarios", "harness.run.engine_facts"),
-    ("harness.scenarios", "harness.run.verdicts"),
 }
 
 

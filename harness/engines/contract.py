@@ -158,6 +158,7 @@ from harness import bounds
 from harness.collector import collector_paused
 from harness.engines.settings import EngineSettingsError, check_int, check_number
 from harness.scene import Scene
+from harness.scene.features import body_extent
 
 #: The accuracy bench's label of an engine's converged reference setting (own_law
 #: "converged").
@@ -1112,39 +1113,6 @@ def ke_norm(scene: Scene, u: Sequence[float] | np.ndarray) -> float:
         vx, vy, omega = (float(v) for v in u[3 * index : 3 * index + 3])
         total += body.mass * (vx * vx + vy * vy) + body.moment_of_inertia * omega * omega
     return math.sqrt(total)
-
-
-def body_extent(shape) -> float:
-    """Largest distance (m) of a point of ``shape`` from its body origin."""
-    kind = shape.kind
-    if kind == "disk":
-        return float(shape.radius)
-    if kind == "rod":
-        return float(shape.length / 2.0 + shape.radius)
-    if kind == "ellipse":
-        return float(max(shape.semi_x, shape.semi_y))
-    # A box's or polygon's costs µs of numpy, and every run, check and adapter asks for it:
-    # remembered per shape value (equal shapes, equal vertices, the same extent).
-    try:
-        return _EXTENTS[shape]
-    except KeyError:
-        pass
-    except TypeError:  # a shape that does not hash: worked out each time
-        return _vertex_extent(shape)
-    if len(_EXTENTS) >= _MAX_EXTENTS:
-        _EXTENTS.clear()
-    extent = _EXTENTS[shape] = _vertex_extent(shape)
-    return extent
-
-
-def _vertex_extent(shape) -> float:
-    """:func:`body_extent` of a shape with vertices (a box or polygon)."""
-    vertices = shape.vertices()
-    return float(np.max(np.hypot(vertices[:, 0], vertices[:, 1])))
-
-
-_EXTENTS: dict = {}  # box or polygon -> its body_extent
-_MAX_EXTENTS = 4096  # shapes remembered; emptied when full (a survey samples thousands)
 
 
 def geometry_key(scene: Scene) -> tuple:

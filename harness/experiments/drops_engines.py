@@ -2,7 +2,7 @@
 (:class:`harness.scene.Ellipse`: MuJoCo's ellipsoid, elsewhere the polygon placed on its
 lowest point, exact contact point and Jacobian), at the angle the published Jacobian was
 evaluated at, with the ellipse's mass and inertia; every run
-judged by the suite's verdicts (harness/run/verdicts.py). Flagged runs are counted with
+judged by the suite's verdicts (harness/run/verdicts/). Flagged runs are counted with
 their reason, never scored; only aggregates leave this module."""
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """The Kharaz et al. (2001) curves through the engines: the disk of ``kharaz`` as a scene
 (a realistic alumina mass, 2.6e-4 kg; I = 2/5 m r²), every incidence run by an engine under
-a preset, each run judged as the suite judges it (harness/run/verdicts.py) before its
+a preset, each run judged as the suite judges it (harness/run/verdicts/) before its
 numbers count: a flagged run is returned with its reason and NaN curves."""
 
 from __future__ import annotations

@@ -130,7 +130,7 @@ def worst_departure(records: Iterable[Record], law: str) -> tuple[float, bool, b
     """Largest departure from ``law`` over a scenario's single-impact runs.
 
     Returns ``(value, flagged, skipped)``. Only ``ok`` runs (single impacts,
-    harness/run/verdicts.py) enter the value: a flagged run is not a departure of the engine
+    harness/run/verdicts/) enter the value: a flagged run is not a departure of the engine
     from the law; ``flagged`` says that at least one run was flagged (shown by the flag and
     counted by :func:`flagged_count`), ``skipped`` that every run was skipped.
     """

@@ -75,7 +75,7 @@ _HARNESS_DIR = Path(__file__).resolve().parent.parent  # harness/, from harness/
 #: silently skipped.
 CACHED_CODE: tuple[str, ...] = (
     "__init__.py", "engines", "scene", "reference", "scenarios", "run/__init__.py",
-    "run/cache.py", "run/runner.py", "run/references.py", "run/metrics.py", "run/verdicts.py",
+    "run/cache.py", "run/runner.py", "run/references.py", "run/metrics.py", "run/verdicts",
     "run/history.py", "run/records.py",
 )
 

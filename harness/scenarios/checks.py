@@ -24,6 +24,7 @@ from harness.scenarios.errors import suggest
 from harness.scenarios.model import Point, Scenario
 from harness.scenarios.schema import ONE_POINT_TOLERANCE, PRESETS, SHAPE_FIELDS
 from harness.scene import Body, Disk, Scene, geometry
+from harness.scene.features import feature_points
 
 if TYPE_CHECKING:  # the reader imports the checks, not the other way round
     from harness.scenarios.reader import TableReader
@@ -302,8 +303,6 @@ def _feature_points(body: Body) -> list[tuple[str, np.ndarray, float]]:
     """``(name, body-frame centre, radius)`` of each corner or end cap of ``body``; none
     for an ellipse, whose one contact rolls (the vertices of the polygon standing in for it
     in some engines are judged run by run: the verdicts' ``multi-contact``)."""
-    from harness.run.verdicts import feature_points
-
     if body.shape.kind == "ellipse":
         return []
 

@@ -6,6 +6,8 @@
   from a scene to a ``planar_impact.ImpactProblem``;
 * :mod:`harness.scene.ellipse` -- the ellipse's lowest point and contact Jacobian in closed
   form, and the error of a polygon in its place;
+* :mod:`harness.scene.features` -- a shape's point features (corners, end caps), which one
+  a point is at, and its extent;
 * :mod:`harness.scene.random_problems` -- seeded random contact-space problems for the
   solver's tests, benchmarks and stress runs.
 """

@@ -94,7 +94,7 @@ _REASON_OUTCOMES = {"blow-up": "blow-up", "energy-gain": "energy-gain",
 
 
 def _outcome(run, scene) -> str:
-    """The run's stress outcome: its verdict (harness/run/verdicts.py), as for the suite and
+    """The run's stress outcome: its verdict (harness/run/verdicts/), as for the suite and
     the survey, with ``non-finite`` apart; the first failing reason decides."""
     from harness.run import verdicts
     from harness.scene.geometry import impact_problem, scene_contact

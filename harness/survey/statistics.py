@@ -7,7 +7,7 @@ departure from Poisson follows harness/run/metrics.py: ``law_part`` = newton-lcp
 Poisson (the same for every engine), ``solve_part`` = the engine from newton-lcp.
 
 Statistics are over the runs whose verdict is one impact (status ``ok``,
-harness/run/verdicts.py): a flagged run (the engine's status, or a failing verdict check:
+harness/run/verdicts/): a flagged run (the engine's status, or a failing verdict check:
 a second feature touched, still closing, deep penetration, Δu not one impulse at the
 contact, a numerics energy gain, …) is not the answer to one impact, so it is counted under
 each reason it fails instead. A run *gains energy* when its kinetic energy after exceeds

@@ -42,8 +42,8 @@ __all__ = [
 
 def __getattr__(name: str):
     """``planar_impact.simultaneous`` and ``planar_impact.multicontact`` (which imports it),
-    imported on first use: imported here, simultaneous was in ``sys.modules`` before
-    ``python -m planar_impact.simultaneous`` ran it, which runpy warns about (the module
+    imported on first use: imported here, multicontact was in ``sys.modules`` before
+    ``python -m planar_impact.multicontact`` ran it, which runpy warns about (the module
     would run as two copies)."""
     if name in ("simultaneous", "multicontact"):
         import importlib

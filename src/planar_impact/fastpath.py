@@ -29,7 +29,11 @@ there), and any division by zero. Near Table 1's band (``laws.TYPE_BAND``: mostl
 The last ``M``'s check and factor are kept, keyed on its bytes (a function of ``M`` alone,
 so reusing it changes no result): a body's ``M`` stays while its contact and speeds change.
 The factor keeps only its non-zero entries (planar bodies' ``M`` are diagonal or
-block-diagonal). Measured per call: README, 'Measured speed'.
+block-diagonal). Likewise the last contact's terms (``m_nn``, ``m_nt``, ``m_tt``, ``Δ``,
+``M⁻¹w``), keyed on that factor and the bytes of ``w_n`` and ``w_t`` given as float
+arrays: a fit, a sweep or a law solver solves one contact at many speeds, ``μ``, ``e`` and
+laws, and then pays only for the approach velocities, the law and the result. Measured per
+call: README, 'Measured speed'.
 """
 
 from __future__ import annotations
@@ -49,7 +53,7 @@ _POISSON_TYPES = laws.POISSON_TYPE_BY_CASE_REGION
 
 def _floats(value, size):
     """``value`` as a list of ``size`` finite floats, or None (the numpy path reports why)."""
-    if type(value) is not np.ndarray or value.dtype != _FLOAT:
+    if type(value) is not np.ndarray or value.dtype is not _FLOAT:
         value = np.asarray(value, dtype=float)
     if value.shape != (size,):
         return None
@@ -58,18 +62,11 @@ def _floats(value, size):
     return values if total - total == 0.0 else None
 
 
-def _number(value, low, high):
-    if not isinstance(value, (float, int)):  # numpy's floats too; anything else: numpy path
-        return None
-    value = float(value)
-    return value if low <= value <= high else None  # NaN fails too
-
-
 def fast_solve(mass_matrix, wn, wt, u, mu, e, law, safe_low, safe_high):
     """The fields of :class:`planar_impact.solver.ImpactResult` as a dict, or None where the
     numpy path must decide (see the module docstring). ``law`` is already checked."""
     matrix = mass_matrix
-    if type(matrix) is not np.ndarray or matrix.dtype != _FLOAT:
+    if type(matrix) is not np.ndarray or matrix.dtype is not _FLOAT:
         matrix = np.asarray(matrix, dtype=float)
     if matrix.ndim != 2:
         return None
@@ -88,12 +85,30 @@ def fast_solve(mass_matrix, wn, wt, u, mu, e, law, safe_low, safe_high):
             return None
         factor = _sparse(factor, size)
         _remember(key, factor)
-    wn, wt, u = _floats(wn, size), _floats(wt, size), _floats(u, size)
-    mu, e = _number(mu, 0.0, _LARGEST), _number(e, 0.0, 1.0)
-    if wn is None or wt is None or u is None or mu is None or e is None:
+    last = _last_contact
+    if (last[0] is factor and type(wn) is np.ndarray and type(wt) is np.ndarray
+            and wn.ndim == 1 and wt.ndim == 1 and wn.dtype is _FLOAT and wt.dtype is _FLOAT
+            and wn.tobytes() == last[1] and wt.tobytes() == last[2]):
+        terms = last[3]  # this M's contact at these w_n, w_t: its terms as worked out before
+    else:
+        terms = None
+        keys = (wn.tobytes() if type(wn) is np.ndarray and wn.dtype is _FLOAT else None,
+                wt.tobytes() if type(wt) is np.ndarray and wt.dtype is _FLOAT else None)
+        wn, wt = _floats(wn, size), _floats(wt, size)
+    u = _floats(u, size)
+    # μ and e: numbers in their ranges (NaN fails), else the numpy path decides
+    if not (isinstance(mu, (float, int)) and isinstance(e, (float, int))):
+        return None  # numpy's floats are floats too
+    mu, e = float(mu), float(e)
+    if (terms is None and (wn is None or wt is None)) or u is None or not (
+            0.0 <= mu <= _LARGEST and 0.0 <= e <= 1.0):  # NaN fails too
         return None
     try:
-        return _solve(factor, size, wn, wt, u, mu, e, law, safe_low, safe_high)
+        if terms is None:
+            terms = (wn, wt, *_contact_terms(factor, size, wn, wt))
+            if None not in keys:
+                _remember_contact(factor, *keys, terms)
+        return _solve(terms, u, mu, e, law, safe_low, safe_high)
     except (ZeroDivisionError, ValueError, OverflowError):  # a branch numpy answers with inf
         return None
 
@@ -113,8 +128,24 @@ def _remember(key, factor):
     _last_factor = (key, factor)  # one assignment: another thread sees the old pair or the new
 
 
-def _solve(factor, size, wn, wt, u, mu, e, law, safe_low, safe_high):
-    mnn, mnt, mtt, vn, vt, delta, inv_wn, inv_wt = _contact_terms(factor, size, wn, wt, u)
+# The last contact's terms: ``(factor, w_n's bytes, w_t's bytes, (w_n, w_t, m_nn, m_nt, m_tt,
+# Δ, M⁻¹w_n, M⁻¹w_t))``, a function of M (its factor, this very object) and of w_n, w_t
+# alone, so reusing them changes no result: a fit or a sweep solves one contact at many
+# speeds, μ, e and laws.
+_last_contact: tuple = (None, None, None, None)
+
+
+def _remember_contact(factor, wn_key, wt_key, terms):
+    global _last_contact
+    _last_contact = (factor, wn_key, wt_key, terms)  # one assignment, as _remember
+
+
+def _solve(terms, u, mu, e, law, safe_low, safe_high):
+    wn, wt, mnn, mnt, mtt, delta, inv_wn, inv_wt = terms
+    vn = vt = 0.0
+    for x, y, speed in zip(wn, wt, u):
+        vn += x * speed
+        vt += y * speed
     if not (safe_low < -vn < safe_high and abs(vt) < safe_high
             and safe_low < mnn < safe_high and safe_low < mtt < safe_high and delta > 0):
         return None  # out of range (the numpy path rescales), or no approach, or Δ ≤ 0
@@ -168,51 +199,59 @@ def _cholesky(rows, size):
 
 
 def _sparse(factor, size):
-    """``L`` as ``(rows, columns, diagonal)``: per row ``i`` the pairs ``(k, L_ik)``, ``k < i``,
-    and per column ``i`` the pairs ``(k, L_ki)``, ``k > i``, of its non-zero entries. The
-    bodies' ``M`` are diagonal or block-diagonal; a term ``0·x`` left out (``x`` finite)
-    changes no value, at most the sign of a zero."""
-    rows = [[(k, factor[i][k]) for k in range(i) if factor[i][k] != 0.0] for i in range(size)]
-    columns = [[(k, factor[k][i]) for k in range(i + 1, size) if factor[k][i] != 0.0]
+    """``L`` as :func:`_contact_terms` reads it: ``(rows, columns, diagonal, pairs)``, per row
+    ``i`` the pairs ``(k, L_ik)``, ``k < i``, per column ``i`` (last first) ``(i, L_ii)`` and
+    the pairs ``(k, L_ki)``, ``k > i``, of its non-zero entries, the diagonal, and the index
+    pairs ``i < j`` of Δ's minors; ``rows`` and ``columns`` are None for a diagonal ``L``.
+    The bodies' ``M`` are diagonal or block-diagonal; a term ``0·x`` left out (``x``
+    finite) changes no value, at most the sign of a zero."""
+    rows = [tuple((k, factor[i][k]) for k in range(i) if factor[i][k] != 0.0)
+            for i in range(size)]
+    columns = [tuple((k, factor[k][i]) for k in range(i + 1, size) if factor[k][i] != 0.0)
                for i in range(size)]
-    return rows, columns, [factor[i][i] for i in range(size)]
+    diagonal = [factor[i][i] for i in range(size)]
+    pairs = tuple((i, j) for i in range(size) for j in range(i + 1, size))
+    if not any(rows):  # L diagonal (so are its columns): divisions only
+        return None, None, diagonal, pairs
+    return (tuple(zip(diagonal, rows)),
+            tuple((i, diagonal[i], columns[i]) for i in range(size - 1, -1, -1)),
+            diagonal, pairs)
 
 
-def _contact_terms(factor, size, wn, wt, u):
-    """``(m_nn, m_nt, m_tt, v_n^A, v_t^A, Δ, M⁻¹w_n, M⁻¹w_t)`` (A20) from ``M``'s factor
+def _contact_terms(factor, size, wn, wt):
+    """``(m_nn, m_nt, m_tt, Δ, M⁻¹w_n, M⁻¹w_t)`` (A20) from ``M``'s factor
     (:func:`_sparse`): ``a = L⁻¹ w_n``, ``b = L⁻¹ w_t`` in one pass, then ``M⁻¹ w = L⁻ᵀ a``
-    (resp. ``b``)."""
-    rows, columns, diagonal = factor
-    a, b = [], []
-    for i in range(size):
-        x, y = wn[i], wt[i]
-        for k, entry in rows[i]:
-            x -= entry * a[k]
-            y -= entry * b[k]
-        a.append(x / diagonal[i])
-        b.append(y / diagonal[i])
-    inv_wn, inv_wt = [0.0] * size, [0.0] * size
-    for i in range(size - 1, -1, -1):
-        x, y = a[i], b[i]
-        for k, entry in columns[i]:
-            x -= entry * inv_wn[k]
-            y -= entry * inv_wt[k]
-        inv_wn[i], inv_wt[i] = x / diagonal[i], y / diagonal[i]
-    mnn = mnt = mtt = vn = vt = 0.0
-    for i in range(size):
-        mnn += wn[i] * inv_wn[i]
-        mnt += wn[i] * inv_wt[i]
-        mtt += wt[i] * inv_wt[i]
-        vn += wn[i] * u[i]
-        vt += wt[i] * u[i]
+    (resp. ``b``). A diagonal ``L`` takes the same divisions without the loops."""
+    rows, columns, diagonal, pairs = factor
+    if rows is None:
+        a = [x / d for x, d in zip(wn, diagonal)]
+        b = [y / d for y, d in zip(wt, diagonal)]
+        inv_wn = [x / d for x, d in zip(a, diagonal)]
+        inv_wt = [y / d for y, d in zip(b, diagonal)]
+    else:
+        a, b = [], []
+        for x, y, (d, entries) in zip(wn, wt, rows):
+            for k, entry in entries:
+                x -= entry * a[k]
+                y -= entry * b[k]
+            a.append(x / d)
+            b.append(y / d)
+        inv_wn, inv_wt = [0.0] * size, [0.0] * size
+        for i, d, entries in columns:
+            x, y = a[i], b[i]
+            for k, entry in entries:
+                x -= entry * inv_wn[k]
+                y -= entry * inv_wt[k]
+            inv_wn[i], inv_wt[i] = x / d, y / d
+    mnn = mnt = mtt = 0.0
+    for x, y, inverse_n, inverse_t in zip(wn, wt, inv_wn, inv_wt):
+        mnn += x * inverse_n
+        mnt += x * inverse_t
+        mtt += y * inverse_t
     # Δ by Lagrange's identity: the sum of the squared minors a_i b_j − a_j b_i (no
     # cancellation, as planar_impact.solver.contact_terms).
-    squares = []
-    for i in range(size):
-        for j in range(i + 1, size):
-            minor = a[i] * b[j] - a[j] * b[i]
-            squares.append(minor * minor)
-    return mnn, mnt, mtt, vn, vt, math.fsum(squares), inv_wn, inv_wt
+    minors = [a[i] * b[j] - a[j] * b[i] for i, j in pairs]
+    return mnn, mnt, mtt, math.fsum([minor * minor for minor in minors]), inv_wn, inv_wt
 
 
 def law_answer(law, mnn, mnt, mtt, vn, vt, mu, e, delta):
@@ -285,8 +324,9 @@ def _near_table1_boundary(g, h, p, q, alpha, r_m, upper, band=laws.TYPE_BAND):
     wide = 2.0 * band
     abs_g, abs_p, abs_h, abs_q = abs(g), abs(p), abs(h), abs(q)
     width = wide * (1.0 + abs(alpha) + abs(upper) + abs(r_m))
-    return (min(abs_g, abs_p) <= wide * max(abs_g, abs_p)
-            or min(abs_h, abs_q) <= wide * max(abs_h, abs_q)
+    # min(x, y) <= wide·max(x, y), written out (x, y >= 0, never NaN: no builtin calls)
+    return ((abs_g <= wide * abs_p if abs_g <= abs_p else abs_p <= wide * abs_g)
+            or (abs_h <= wide * abs_q if abs_h <= abs_q else abs_q <= wide * abs_h)
             or abs(alpha - r_m) <= width or abs(alpha - upper) <= width or alpha <= width)
 
 

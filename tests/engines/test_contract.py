@@ -26,8 +26,8 @@ from harness.engines import (
     ke_norm,
     load_engine,
 )
-from harness.run.verdicts import feature_at
 from harness.scene import Body, Disk, Scene
+from harness.scene.features import feature_at
 from harness.scene.reference import reference_scenes
 
 SCENES = reference_scenes()

@@ -7,14 +7,11 @@ one pass each (harness/engines/contract.py); these tests hold them to the defini
 
 from __future__ import annotations
 
-import dataclasses
-
-import numpy as np
 import pytest
 
 from harness.engines import contract, load_engine
 from harness.engines.contract import StepTiming
-from harness.scene import Body, Box, Disk, Polygon, Scene
+from harness.scene import Body, Disk, Polygon, Scene
 from harness.scene.reference import reference_scenes
 from harness.survey.population import resolve_populations
 from harness.survey.sampling import sample_population
@@ -114,44 +111,3 @@ def test_check_scene_accepts_finite_values_whose_sum_overflows():
     body = Body("a", Disk(0.1), 1.0e308, (0.0, 0.1), velocity=(1.0e308, -1.0), inertia=1.0e308)
     scene = Scene((body,), 0.5, 0.3, ground=True)
     assert contract.check_scene("pymunk", scene) == ((1.0e308, 1.0e308),)
-
-
-def _extent_by_definition(shape) -> float:
-    """Largest distance of a point of ``shape`` from its origin, from its vertices."""
-    vertices = shape.vertices()
-    return float(np.max(np.hypot(vertices[:, 0], vertices[:, 1])))
-
-
-def test_remembered_extents_are_each_shapes_own(scenes):
-    """body_extent remembers a box's or polygon's extent per shape value: every sampled
-    shape's is its own (asked twice: computed, then remembered), and a shape equal in value
-    but another object gets the same."""
-    shapes = [body.shape for scene in scenes for body in scene.bodies
-              if body.shape.kind in ("box", "polygon")]
-    assert {shape.kind for shape in shapes} == {"box", "polygon"}
-    contract._EXTENTS.clear()
-    for shape in shapes:
-        assert contract.body_extent(shape) == _extent_by_definition(shape)
-        assert contract.body_extent(shape) == _extent_by_definition(shape)
-        copy = dataclasses.replace(shape)
-        assert copy is not shape and contract.body_extent(copy) == _extent_by_definition(shape)
-    assert len(contract._EXTENTS) == len(set(shapes))
-
-
-def test_a_shape_that_does_not_hash_is_measured_each_time():
-    """A polygon whose points are lists cannot be remembered: it is measured every time."""
-    shape = Polygon([[0.2, 0.0], [0.0, 0.3], [-0.1, -0.1]])
-    with pytest.raises(TypeError):
-        hash(shape)
-    assert contract.body_extent(shape) == _extent_by_definition(shape)
-    shape.points[1][1] = 0.5  # the same object, other vertices: measured again
-    assert contract.body_extent(shape) == _extent_by_definition(shape) == pytest.approx(0.5)
-
-
-def test_the_remembered_extents_are_bounded():
-    contract._EXTENTS.clear()
-    boxes = [Box(0.1 + index * 1e-3, 0.2) for index in range(contract._MAX_EXTENTS + 5)]
-    for box in boxes:
-        contract.body_extent(box)
-    assert len(contract._EXTENTS) <= contract._MAX_EXTENTS
-    assert contract.body_extent(boxes[0]) == _extent_by_definition(boxes[0])

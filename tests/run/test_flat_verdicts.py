@@ -1,5 +1,5 @@
 """Verdicts of runs on a face lying flat, judged against its declared contacts
-(harness/run/verdicts.py, docs/verdicts.md, 'Declared simultaneous contacts').
+(harness/run/verdicts/, docs/verdicts.md, 'Declared simultaneous contacts').
 
 Unit checks build a run's numbers by hand around the exact Newton–Coulomb solution of
 ``planar_impact.simultaneous`` (what pymunk ``accurate`` returns on a flat face, to 1e-6) and
@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from harness.run import runner, verdicts
+from harness.run import metrics, runner, verdicts
 from harness.run.verdicts import RunNumbers, StepContacts, judge
 from harness.scenarios import load_scenarios
 from harness.scenarios.schema import ONE_POINT_TOLERANCE
@@ -169,7 +169,7 @@ def test_the_engines_summed_impulse_is_compared_with_the_sum_of_the_contacts():
 def test_an_energy_gain_is_the_laws_when_newton_coulomb_gains_too():
     u_after = np.array([0.3, 1.0, 1.5])  # bounces with e = 1 and spins up: both ends open
     run = exact_run(FLAT_BOX, u_after=u_after, normal_impulse=2.0, tangential_impulse=0.0)
-    gain = verdicts.metrics.energy_change(FLAT_BOX.mass_matrix(), FLAT_BOX.state(), u_after)
+    gain = metrics.energy_change(FLAT_BOX.mass_matrix(), FLAT_BOX.state(), u_after)
     assert gain > 0
     by_law = verdict_of(FLAT_BOX, run, law_energy_change=gain)
     reason = next(r for r in by_law.reasons if r.name == "energy-gain")

@@ -66,7 +66,7 @@ def test_finite_numbers_or_a_reported_status(runs, scenario, source, preset):
         else:
             assert (record.status in STATUSES or record.status in REASONS
                     or record.status.startswith("skipped: ")), record.status
-            # a run failing a verdict check is never ok (harness/run/verdicts.py)
+            # a run failing a verdict check is never ok (harness/run/verdicts/)
             if record.u_after is not None:
                 assert (record.status == "ok") == (record.verdict == SINGLE_IMPACT)
         if record.status != "ok":

@@ -1,4 +1,4 @@
-"""Verdicts of engine runs (harness/run/verdicts.py, docs/verdicts.md).
+"""Verdicts of engine runs (harness/run/verdicts/, docs/verdicts.md).
 
 Unit checks build an engine run's numbers by hand around an exact ``newton-lcp`` solution
 (what a perfect sequential-impulse engine returns) and break one thing at a time. The tilted

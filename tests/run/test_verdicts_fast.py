@@ -1,4 +1,4 @@
-"""The verdicts' fast path against the judge it replaced (harness/run/verdicts.py).
+"""The verdicts' fast path against the judge it replaced (harness/run/verdicts/).
 
 The survey judges thousands of engine runs, so the verdicts work out what a scene alone
 determines once (``prepare``) and place every contact point of a run against every feature at
@@ -44,16 +44,19 @@ from harness.run.verdicts import (
     StepContacts,
     Tolerances,
     Verdict,
-    _clipped,
-    _declared_separation,
-    _impulse_mismatch,
-    _penetration,
-    _run_caps,
     declared_impulses,
-    feature_points,
 )
+from harness.run.verdicts.checks import (
+    clipped_reasons,
+    impulse_mismatch_reasons,
+    penetration_reasons,
+    reported_caps,
+)
+from harness.run.verdicts.declared import _declared_separation
 from harness.scenarios import SCENARIO_DIR, load_scenario
+from harness.scene import features as scene_features
 from harness.scene import geometry
+from harness.scene.features import feature_points
 from harness.survey import laws as survey_laws
 from harness.survey.engines import run_engine
 from harness.survey.population import resolve_populations
@@ -86,7 +89,7 @@ def reference_numbers_from_output(engine: str, output: Mapping[str, Any]) -> Run
         impulse_source=output.get("impulse_source"),
         contact_normal=None if normal is None else tuple(normal),
         contacts=steps, notes=tuple(output.get("notes") or ()),
-        speed_caps=_run_caps(output.get("derived") or {}))
+        speed_caps=reported_caps(output.get("derived") or {}))
 
 
 def reference_numbers_from_run(run) -> RunNumbers:
@@ -97,7 +100,7 @@ def reference_numbers_from_run(run) -> RunNumbers:
         contact_normal=run.contact_normal,
         contacts=tuple(StepContacts(step.step, tuple(step.points), step.poses)
                        for step in run.contacts),
-        notes=tuple(run.notes), speed_caps=_run_caps(run.derived or {}))
+        notes=tuple(run.notes), speed_caps=reported_caps(run.derived or {}))
 
 
 def scene_scales(scene, problem) -> SceneScales:
@@ -134,7 +137,7 @@ def reference_judge(scene, problem, run: RunNumbers, *,
         reasons += _clipped_magnitudes(run.engine, run.speed_caps, problem.u, u_after,
                                        tolerances)
     else:
-        reasons += _clipped(run.engine, problem.u, u_after, tolerances)
+        reasons += clipped_reasons(run.engine, problem.u, u_after, tolerances)
     if run.contacts is not None:
         reasons += _second_features(scene, run.contacts, tolerances)
     vn_after, _ = metrics.contact_velocities(problem, u_after)
@@ -143,16 +146,16 @@ def reference_judge(scene, problem, run: RunNumbers, *,
         reasons.append(Reason("not-separated", vn_after, -bound,
                               f"v_n^S = {vn_after:.4g} m/s < -{bound:.3g} m/s "
                               f"({tolerances.separation:g}·|v_n^A|)"))
-    reasons += _penetration(run, scales, tolerances)
+    reasons += penetration_reasons(run, scales, tolerances)
     implied_n, implied_t, residual = impulse_from_velocities(problem, u_after,
                                                              scales.speed_norm)
     if residual > tolerances.impulse_residual:
         reasons.append(Reason("impulse-residual", residual, tolerances.impulse_residual,
                               f"‖Δu − M⁻¹(w_n I_n + w_t I_t)‖_M = {residual:.3g} of the "
                               f"frame-free speed norm"))
-    reasons += _impulse_mismatch(run, implied_n, implied_t, scales, tolerances,
-                                 engine="(I_n, I_t)", implied="by Δu",
-                                 scale="|v_n^A|/m_nn")
+    reasons += impulse_mismatch_reasons(run, implied_n, implied_t, scales, tolerances,
+                                        engine="(I_n, I_t)", implied="by Δu",
+                                        scale="|v_n^A|/m_nn")
     reasons += _energy_gain(problem, u_after, scales, law_energy_change, tolerances,
                             law=ENGINE_LAW)
     order = list(REASONS)
@@ -315,12 +318,12 @@ def reference_judge_declared(scene, problem, run: RunNumbers, contacts, *,
         reasons += _clipped_magnitudes(run.engine, run.speed_caps, problem.u, u_after,
                                        tolerances)
     else:
-        reasons += _clipped(run.engine, problem.u, u_after, tolerances)
+        reasons += clipped_reasons(run.engine, problem.u, u_after, tolerances)
     if run.contacts is not None:
         reasons += _undeclared_features(scene, contacts, run.contacts, tolerances)
         reasons += _staggered(scene, contacts, run.contacts, tolerances)
     reasons += _declared_separation(contacts, wn @ u_after, scales, tolerances)
-    reasons += _penetration(run, scales, tolerances)
+    reasons += penetration_reasons(run, scales, tolerances)
     impulses, residual = declared_impulses(problem.mass_matrix, wn, wt, problem.u, u_after,
                                            scales.speed_norm)
     if residual > tolerances.impulse_residual:
@@ -328,7 +331,7 @@ def reference_judge_declared(scene, problem, run: RunNumbers, contacts, *,
                               f"‖Δu − M⁻¹Σ_i(w_n^(i) I_n^(i) + w_t^(i) I_t^(i))‖_M = "
                               f"{residual:.3g} of the frame-free speed norm, over the "
                               f"{len(contacts)} declared contacts"))
-    reasons += _impulse_mismatch(
+    reasons += impulse_mismatch_reasons(
         run, float(np.sum(impulses[0])), float(np.sum(impulses[1])), scales, tolerances,
         engine="(ΣI_n, ΣI_t)", implied=f"by Δu over the {len(contacts)} declared contacts",
         scale="max_i |v_n^A(i)|/m_nn(i)")
@@ -527,6 +530,6 @@ def test_feature_at_is_the_reference_one_point_at_a_time(shape):
                  + rng.normal(scale=rng.choice([1e-4, 1e-2, 0.2]), size=2))
         reach = float(rng.choice([0.0, 1e-3, 0.02, 0.5]))
         expected = feature_at(body, state, point, reach)
-        assert verdicts.feature_at(body, state, point, reach) == expected
+        assert scene_features.feature_at(body, state, point, reach) == expected
         found.add(expected)
     assert len(found) == (1 if shape == "disk" else len(centres) + 1)  # every one, and None

@@ -15,7 +15,7 @@ import pytest
 
 from harness.engines import ENGINE_NAMES, PRESET_ROLES, load_engine
 from harness.run import verdicts
-from harness.run.verdicts import DEFAULT_TOLERANCES, Tolerances
+from harness.run.verdicts import DEFAULT_TOLERANCES, Tolerances, touching
 from harness.survey import laws as survey_laws
 from harness.survey.population import resolve_populations
 from harness.survey.sampling import sample_population
@@ -111,10 +111,10 @@ def test_second_features_of_many_runs_are_each_runs(load_or_skip, engine_name, p
         for order in (range(len(runs)), shuffled):
             records = [runs[row].contact_record for row in order]
             features = [prepared[row].features for row in order]
-            expected = [bool(verdicts._second_features(
+            expected = [bool(touching.second_features(
                 scenes[row], verdicts.ContactTrack.from_record(record), tolerances, bodies))
                 for row, record, bodies in zip(order, records, features)]
-            assert verdicts._second_features_many(records, features, tolerances,
+            assert touching.second_features_many(records, features, tolerances,
                                                   [scenes[row] for row in order]) == expected
 
 

@@ -207,3 +207,41 @@ def test_the_kept_factor_changes_no_result():
                 assert value.tobytes() == other.tobytes(), name
             else:
                 assert value == other and type(value) is type(other), name
+
+
+def test_the_kept_contact_changes_no_result():
+    """A call that reuses the last contact's terms (same M, w_n, w_t; other speeds, μ, e,
+    law) answers as one that works them out anew; a w_n changed in place is a new contact."""
+    rng = np.random.default_rng(8)
+    changed_in_place = 0
+    for kind in ("body", "two bodies", "random"):
+        matrix, wn, wt, u = random_system(rng, kind)
+        other = random_system(rng, kind)
+        for law in pi.LAWS:
+            for mu, e, speeds in ((0.4, 0.6, u), (0.1, 0.9, 1.5 * u)):
+                arguments = dict(mass_matrix=matrix, wn=wn, wt=wt, u=speeds, mu=mu, e=e,
+                                 law=law)
+                pi.solve(mass_matrix=other[0], wn=other[1], wt=other[2], u=other[3], mu=mu,
+                         e=e, law=law)
+                fresh = pi.solve(**arguments)  # works the contact's terms out
+                kept = pi.solve(**arguments)  # reuses them
+                assert fastpath._last_contact[1] == wn.tobytes()  # noqa: SLF001
+                for name, value in fresh.__dict__.items():
+                    other_value = getattr(kept, name)
+                    if isinstance(value, np.ndarray):
+                        assert value.tobytes() == other_value.tobytes(), name
+                    else:
+                        assert value == other_value and type(value) is type(other_value), name
+        changed = wn.copy()
+        pi.solve(mass_matrix=matrix, wn=changed, wt=wt, u=u, mu=0.4, e=0.6, law="poisson")
+        changed[0] += 0.5  # the same array, other values
+        if changed @ u < 0:
+            got = pi.solve(mass_matrix=matrix, wn=changed, wt=wt, u=u, mu=0.4, e=0.6,
+                           law="poisson")
+            fastpath._last_contact = (None, None, None, None)  # noqa: SLF001
+            anew = pi.solve(mass_matrix=matrix, wn=changed.copy(), wt=wt, u=u, mu=0.4, e=0.6,
+                            law="poisson")
+            assert got.u_after.tobytes() == anew.u_after.tobytes()
+            assert got.mnn == anew.mnn
+            changed_in_place += 1
+    assert changed_in_place >= 1

@@ -8,7 +8,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from planar_impact import simultaneous as sim
+from planar_impact.simultaneous import system
 
 
 def stacks(seed=0):
@@ -37,7 +37,7 @@ def test_each_row_is_np_linalg_lstsq_bit_for_bit(rcond, gufunc, monkeypatch):
         monkeypatch.setattr(np.linalg, "_umath_linalg", SimpleNamespace(lstsq=refuse))
     ranks_seen = set()
     for matrices, rhs in stacks():
-        solutions, ranks = sim._lstsq_rows(matrices, rhs, rcond=rcond)
+        solutions, ranks = system.lstsq_rows(matrices, rhs, rcond=rcond)
         assert solutions.shape == (len(matrices), matrices.shape[2])
         for matrix, side, solution, rank in zip(matrices, rhs, solutions, ranks):
             expected, _, expected_rank, _ = np.linalg.lstsq(matrix, side, rcond=rcond)
@@ -48,5 +48,5 @@ def test_each_row_is_np_linalg_lstsq_bit_for_bit(rcond, gufunc, monkeypatch):
 
 
 def test_an_empty_stack_gives_empty_answers():
-    solutions, ranks = sim._lstsq_rows(np.zeros((0, 4, 4)), np.zeros((0, 4)), rcond=1e-9)
+    solutions, ranks = system.lstsq_rows(np.zeros((0, 4, 4)), np.zeros((0, 4)), rcond=1e-9)
     assert solutions.shape == (0, 4) and ranks.shape == (0,)

@@ -25,6 +25,8 @@ from harness.run import references
 from harness.scenarios import load_scenario
 from planar_impact import laws
 from planar_impact import simultaneous as sim
+from planar_impact.simultaneous import coherent, type_map
+from planar_impact.simultaneous.system import frame_sign
 
 TYPE_LAWS = ("poisson", "stronge-paper", "newton")
 FIELDS = ("normal_impulse", "tangential_impulse", "delta_u", "u_after", "vn_approach",
@@ -122,9 +124,9 @@ def unscreened_coherent_solutions(system, law, coupling="effective", allow_separ
             impulses, converged, determinate = scalar_fixed_point(system, mapping)
             if not converged:
                 continue
-            solution = sim._check_combination(system, law, types, signs, impulses,
+            solution = coherent._check_combination(system, law, types, signs, impulses,
                                               determinate, tolerance, coupling)
-            if solution is not None and not sim._already_found(found, solution, system):
+            if solution is not None and not coherent._already_found(found, solution, system):
                 found.append(solution)
     return found
 
@@ -237,17 +239,17 @@ def test_the_screen_drops_most_combinations(monkeypatch):
     system = sim.random_two_contact_system(rng)
     tolerance = sim.VELOCITY_TOLERANCE * system.speed_scale()
     checked = []
-    original = sim._check_combination
+    original = coherent._check_combination
 
     def counted(*args, **options):
         checked.append(args[2:4])
         return original(*args, **options)
 
-    monkeypatch.setattr(sim, "_check_combination", counted)
+    monkeypatch.setattr(coherent, "_check_combination", counted)
     for law in TYPE_LAWS:
-        every = list(sim._combinations(sim.TYPE_LAWS[law], 2))
-        literal = sim._candidates(system, law, sim.TYPE_LAWS[law], "literal", tolerance)
-        effective = sim._candidates(system, law, sim.TYPE_LAWS[law], "effective", tolerance)
+        every = list(coherent._combinations(sim.TYPE_LAWS[law], 2))
+        literal = coherent._candidates(system, law, sim.TYPE_LAWS[law], "literal", tolerance)
+        effective = coherent._candidates(system, law, sim.TYPE_LAWS[law], "effective", tolerance)
         checked.clear()
         sim.coherent_solutions(system, law, coupling="effective")
         assert len(literal) == len(sim.TYPE_LAWS[law]) ** 2  # the paper's 5^m (3^m)
@@ -298,17 +300,17 @@ def test_the_block_jacobian_is_the_whole_map_jacobian_bit_for_bit(count):
     for _ in range(4):
         system = random_system(rng, count)
         for law in TYPE_LAWS:
-            combinations = list(sim._combinations((sim.SEPARATING,) + sim.TYPE_LAWS[law],
+            combinations = list(coherent._combinations((sim.SEPARATING,) + sim.TYPE_LAWS[law],
                                                   count))
             types = np.array([t for t, _ in combinations], dtype=np.int64)
             signs = np.array([s for _, s in combinations], dtype=float)
-            mapping = sim._contact_map(system, law, types, signs)
+            mapping = type_map.contact_map(system, law, types, signs)
             impulses = rng.normal(size=(len(combinations), 2 * count)) * system.impulse_scale()
             impulses[::7, 0] = np.nan
             impulses[1::7, 1] = 0.0
             rows = rng.permutation(len(combinations))
             step = 1e-6 * (system.impulse_scale() + np.max(np.abs(impulses), axis=1))
-            got = sim._map_and_jacobian(mapping, impulses, rows, step)
+            got = type_map.map_and_jacobian(mapping, impulses, rows, step)
             expected = whole_map_jacobian(mapping, impulses, rows, step)
             assert np.isfinite(got[1]).any() and np.isnan(got[1]).any()
             for new, old in zip(got, expected):
@@ -321,12 +323,12 @@ def test_the_batched_map_is_each_contacts_scalar_formulas():
     for count in (2, 3):
         system = random_system(rng, count)
         for law in TYPE_LAWS:
-            combinations = list(sim._combinations((sim.SEPARATING,) + sim.TYPE_LAWS[law],
+            combinations = list(coherent._combinations((sim.SEPARATING,) + sim.TYPE_LAWS[law],
                                                   count))
             types = np.array([t for t, _ in combinations], dtype=np.int64)
             signs = np.array([s for _, s in combinations], dtype=float)
             impulses = rng.normal(size=(len(combinations), 2 * count)) * system.impulse_scale()
-            got = sim._contact_map(system, law, types, signs)(impulses,
+            got = type_map.contact_map(system, law, types, signs)(impulses,
                                                                np.arange(len(combinations)))
             for row, (ctypes, csigns) in enumerate(combinations):
                 expected = scalar_contact_map(system, law, ctypes, csigns)(impulses[row])
@@ -343,12 +345,12 @@ def test_literal_candidates_are_the_orientation_filtered_enumeration(separating)
         tolerance = sim.VELOCITY_TOLERANCE * system.speed_scale()
         for law in TYPE_LAWS:
             choices = ((sim.SEPARATING,) if separating else ()) + sim.TYPE_LAWS[law]
-            own = [sim._frame_sign(float(system.approach[2 * i + 1]), system.single_terms(i)[1])
+            own = [frame_sign(float(system.approach[2 * i + 1]), system.single_terms(i)[1])
                    for i in range(system.count)]
-            expected = [(types, signs) for types, signs in sim._combinations(choices, 2)
+            expected = [(types, signs) for types, signs in coherent._combinations(choices, 2)
                         if all(t == sim.SEPARATING or s == own[i]
                                for i, (t, s) in enumerate(zip(types, signs)))]
-            got = sim._candidates(system, law, choices, "literal", tolerance)
+            got = coherent._candidates(system, law, choices, "literal", tolerance)
             assert got == expected
             assert len(expected) == len(choices) ** 2
 

@@ -1,0 +1,66 @@
+"""A shape's point features and extent (harness/scene/features.py).
+
+The extent of a box or polygon is remembered per shape value; these tests hold it to its
+definition, bit for bit, and bound what is remembered (moved here with ``body_extent`` from
+the engine contract's tests).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from harness.scene import Box, Polygon, features
+from harness.scene.reference import reference_scenes
+from harness.survey.population import resolve_populations
+from harness.survey.sampling import sample_population
+
+
+@pytest.fixture(scope="module")
+def scenes():
+    sampled = [sample.scene for population in resolve_populations([])
+               for sample in sample_population(population, 6, seed=5).samples]
+    return sampled + [scene for scene, _, _ in reference_scenes().values()]
+
+
+def _extent_by_definition(shape) -> float:
+    """Largest distance of a point of ``shape`` from its origin, from its vertices."""
+    vertices = shape.vertices()
+    return float(np.max(np.hypot(vertices[:, 0], vertices[:, 1])))
+
+
+def test_remembered_extents_are_each_shapes_own(scenes):
+    """body_extent remembers a box's or polygon's extent per shape value: every sampled
+    shape's is its own (asked twice: computed, then remembered), and a shape equal in value
+    but another object gets the same."""
+    shapes = [body.shape for scene in scenes for body in scene.bodies
+              if body.shape.kind in ("box", "polygon")]
+    assert {shape.kind for shape in shapes} == {"box", "polygon"}
+    features._EXTENTS.clear()
+    for shape in shapes:
+        assert features.body_extent(shape) == _extent_by_definition(shape)
+        assert features.body_extent(shape) == _extent_by_definition(shape)
+        copy = dataclasses.replace(shape)
+        assert copy is not shape and features.body_extent(copy) == _extent_by_definition(shape)
+    assert len(features._EXTENTS) == len(set(shapes))
+
+
+def test_a_shape_that_does_not_hash_is_measured_each_time():
+    """A polygon whose points are lists cannot be remembered: it is measured every time."""
+    shape = Polygon([[0.2, 0.0], [0.0, 0.3], [-0.1, -0.1]])
+    with pytest.raises(TypeError):
+        hash(shape)
+    assert features.body_extent(shape) == _extent_by_definition(shape)
+    shape.points[1][1] = 0.5  # the same object, other vertices: measured again
+    assert features.body_extent(shape) == _extent_by_definition(shape) == pytest.approx(0.5)
+
+
+def test_the_remembered_extents_are_bounded():
+    features._EXTENTS.clear()
+    boxes = [Box(0.1 + index * 1e-3, 0.2) for index in range(features._MAX_EXTENTS + 5)]
+    for box in boxes:
+        features.body_extent(box)
+    assert len(features._EXTENTS) <= features._MAX_EXTENTS
+    assert features.body_extent(boxes[0]) == _extent_by_definition(boxes[0])
