@@ -378,41 +378,50 @@ class _Progress:
     closes (see the module docstring).
     """
 
-    __slots__ = ("engine", "first_contact", "peak", "plan", "records", "separated",
-                 "velocities")
+    # What observe reads at every step is held here, not looked up on the engine and the
+    # plan each time (the loop's hot path: every step of every run).
+    __slots__ = ("_append", "_read_poses", "_read_velocities", "_relative", "_speed_scale",
+                 "_until", "first_contact", "peak", "records", "separated", "velocities")
 
     def __init__(self, engine: Engine, plan: _Plan) -> None:
-        self.engine, self.plan = engine, plan
         self.first_contact = None
         self.peak = 0.0
         self.separated = False
-        self.records = []
+        self.records = records = []
         self.velocities = None  # set where read at the step that ended the contact
+        self._append = records.append
+        self._read_poses = engine._read_poses
+        self._read_velocities = engine._read_velocities
+        self._relative = engine.no_impulse_relative
+        self._speed_scale = plan.speed_scale
+        self._until = plan.until_steps
 
     def observe(self, raw: RawContacts | None, steps: int, world) -> bool:
         """Take step ``steps``'s contact ``raw`` of ``world``; True when the run ends here."""
         if raw is None:
-            if self.first_contact is not None:
+            first = self.first_contact
+            if first is not None:
                 self.separated = True
-                return steps - self.first_contact >= self.plan.until_steps
+                return steps - first >= self._until
             return False
-        if self.first_contact is None:
-            self.first_contact = steps
+        first = self.first_contact
+        if first is None:
+            first = self.first_contact = steps
         self.separated = False  # a contact again, in a sequence of impacts (run_until)
         self.velocities = None
-        engine = self.engine
-        poses = engine._read_poses(world)
-        self.records.append((steps, raw, poses))
+        poses = self._read_poses(world)
+        self._append((steps, raw, poses))
         pressure = raw[3]
         if pressure is None:  # still pushing, by the adapter's knowledge
             return False
-        if pressure > self.peak:  # noqa: PLR1730 - a compare is cheaper than max() here
-            self.peak = pressure
-        if pressure <= engine.no_impulse_relative * self.peak:
-            velocities = engine._read_velocities(world)
-            if not _approaching(poses, velocities, raw, self.plan.speed_scale):
+        peak = self.peak
+        if pressure > peak:
+            peak = self.peak = pressure
+        if pressure <= self._relative * peak:
+            velocities = self._read_velocities(world)
+            if not _approaching(poses, velocities, raw, self._speed_scale):
                 self.separated = True
-                if steps - self.first_contact < self.plan.until_steps:
+                if steps - first < self._until:
                     return False  # the sequence may not be over: read again at the end
                 self.velocities = velocities
                 return True
@@ -916,6 +925,7 @@ class Engine(abc.ABC):
         max_penetration = 0.0
         impulse_x = impulse_y = 0.0
         engine_impulse = True
+        same = None  # plan.same_point, asked for once and only if a step has two points
         for _, (points, _, impulse, _), _ in records:
             for point in points:
                 if point[2] > max_penetration:  # noqa: PLR1730 - hot path
@@ -923,7 +933,8 @@ class Engine(abc.ABC):
             count = len(points)
             if count == 2:  # count_planar_points' two points (a prism's edge, in 3-D), inlined
                 (x, y, _), (a, b, _) = points
-                same = plan.same_point
+                if same is None:
+                    same = plan.same_point
                 count = 2 if abs(a - x) > same or abs(b - y) > same else 1
             elif count > 2:
                 count = count_planar_points([(x, y) for x, y, _ in points], plan.same_point)
