@@ -12,7 +12,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from harness.engines import contract, load_engine
+from harness.engines import contract, load_engine, scene_setup
 from harness.engines.contract import StepTiming
 from harness.scene import Body, Box, Disk, Polygon, Scene
 from harness.scene.reference import reference_scenes
@@ -129,13 +129,13 @@ def test_remembered_extents_are_each_shapes_own(scenes):
     shapes = [body.shape for scene in scenes for body in scene.bodies
               if body.shape.kind in ("box", "polygon")]
     assert {shape.kind for shape in shapes} == {"box", "polygon"}
-    contract._EXTENTS.clear()
+    scene_setup._EXTENTS.clear()
     for shape in shapes:
         assert contract.body_extent(shape) == _extent_by_definition(shape)
         assert contract.body_extent(shape) == _extent_by_definition(shape)
         copy = dataclasses.replace(shape)
         assert copy is not shape and contract.body_extent(copy) == _extent_by_definition(shape)
-    assert len(contract._EXTENTS) == len(set(shapes))
+    assert len(scene_setup._EXTENTS) == len(set(shapes))
 
 
 def test_a_shape_that_does_not_hash_is_measured_each_time():
@@ -149,9 +149,9 @@ def test_a_shape_that_does_not_hash_is_measured_each_time():
 
 
 def test_the_remembered_extents_are_bounded():
-    contract._EXTENTS.clear()
-    boxes = [Box(0.1 + index * 1e-3, 0.2) for index in range(contract._MAX_EXTENTS + 5)]
+    scene_setup._EXTENTS.clear()
+    boxes = [Box(0.1 + index * 1e-3, 0.2) for index in range(scene_setup._MAX_EXTENTS + 5)]
     for box in boxes:
         contract.body_extent(box)
-    assert len(contract._EXTENTS) <= contract._MAX_EXTENTS
+    assert len(scene_setup._EXTENTS) <= scene_setup._MAX_EXTENTS
     assert contract.body_extent(boxes[0]) == _extent_by_definition(boxes[0])
