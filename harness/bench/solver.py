@@ -249,6 +249,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--executors", action="store_true",
                         help="2,000 engine tasks: local pool against a local 2-worker Dask "
                         "cluster")
+    parser.add_argument("--workers", type=int, default=1,
+                        help="--survey: processes for the survey and, as many, for the bare "
+                        "stepping it is compared with (default 1)")
     parser.add_argument("--quick", action="store_true", help="smaller sizes; finishes in minutes")
     parser.add_argument("--out", type=Path, default=Path("reports/bench"),
                         help="output directory (default: reports/bench); the sections run "
@@ -284,7 +287,8 @@ def main(args) -> int:
         from harness.bench import survey as bench_survey
 
         samples = bench_survey.QUICK_SAMPLES if args.quick else bench_survey.SAMPLES
-        report = bench_survey.run(samples)
+        rounds = bench_survey.QUICK_ROUNDS if args.quick else bench_survey.ROUNDS
+        report = bench_survey.run(samples, rounds=rounds, workers=max(1, args.workers))
         print(bench_survey.format_report(report))
         table["survey"] = report
     if "executors" in selected:

@@ -1,5 +1,10 @@
 """The engine contract: what an adapter supplies, what the base class does once for all.
 
+(Over 600 lines because this docstring is the written contract, ~150 lines, and
+:class:`Engine` is one class: its hooks, settings, caches and run loop. What it uses lives
+apart: the run's result and status in ``run_result``, what is worked out from a scene alone
+in ``scene_setup``, the loop's state and bookkeeping in ``run_loop``.)
+
 An engine adapter turns one planar impact (a :class:`harness.scene.Scene`) into post-impact
 velocities. As scipy's ``OdeSolver.step`` does the bookkeeping around a solver's
 ``_step_impl``, :class:`Engine` runs the impact and finishes the run; an adapter writes only
@@ -144,282 +149,76 @@ from __future__ import annotations
 
 import abc
 import copy
-import enum
 import math
 import time
 from collections import OrderedDict
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
-from typing import Any, NamedTuple
-
-import numpy as np
+from typing import Any
 
 from harness import bounds
 from harness.collector import collector_paused
+from harness.engines.run_loop import (
+    APPROACH_RELATIVE,
+    NO_IMPULSE_RELATIVE,
+    SAME_POINT_RELATIVE,
+    SEQUENCE_MARGIN_STEPS,
+    Plan,
+    Progress,
+    count_planar_points,
+    tally,
+)
+from harness.engines.run_result import (
+    BLOW_UP_FACTOR,
+    OUT_OF_PLANE_TOLERANCE,
+    STATUSES,
+    BodyState,
+    ContactPoint,
+    ContactRecord,
+    ContactStep,
+    EngineRun,
+    Pose,
+    RawContacts,
+    Status,
+    Velocity,
+    decide_status,
+    multi_contact_note,
+    run_from_fields,
+)
+from harness.engines.scene_setup import (
+    StepTiming,
+    UnsupportedScene,
+    check_scene,
+    energy_before,
+    energy_weights,
+    free_flight_poses,
+    geometry_key,
+    is_immutable,
+    ke_norm,
+    start_states,
+)
 from harness.engines.settings import EngineSettingsError, check_int, check_number
 from harness.scene import Scene
 from harness.scene.features import body_extent
 
+# The contract's names, where the adapters and the registry import them from (the modules
+# above hold them: run_result, scene_setup, run_loop).
+__all__ = [
+    "APPROACH_RELATIVE", "BENCH_REFERENCE_LABEL", "BLOW_UP_FACTOR", "NO_IMPULSE_RELATIVE",
+    "OUT_OF_PLANE_TOLERANCE", "SAME_POINT_RELATIVE", "SEQUENCE_MARGIN_STEPS", "STATUSES",
+    "BareStepper", "BodyState", "ContactPoint", "ContactRecord", "ContactStep", "Engine",
+    "EngineRun", "Pose", "RawContacts", "Status", "StepTiming", "UnsupportedScene", "Velocity",
+    "body_extent", "check_scene", "count_planar_points", "decide_status", "energy_before",
+    "energy_weights", "free_flight_poses", "geometry_key", "ke_norm", "multi_contact_note",
+    "start_states",
+]
+
 #: The accuracy bench's label of an engine's converged reference setting (own_law
 #: "converged").
 BENCH_REFERENCE_LABEL = "RK4 contact_steps=400 (reference)"
-# Relative size of a step's normal impulse (against the largest step's) below which the
-# step counts as "no impulse": rounding noise of re-solving a resting contact is ~1e-16.
-NO_IMPULSE_RELATIVE = 1e-12
-# Kinetic-energy-norm growth that counts as a blow-up (an impact cannot multiply it by 1e3).
-BLOW_UP_FACTOR = 1e3
-# Out-of-plane displacement (m) above which a run is flagged: planar joints keep it at 0.
-OUT_OF_PLANE_TOLERANCE = 1e-9
-# A contact point still closes when its relative normal velocity is below this fraction of
-# the scene's largest speed (rounding of a resting contact is ~1e-16 of it).
-APPROACH_RELATIVE = 1e-9
-# In-plane points closer than this fraction of the largest body extent are one point.
-SAME_POINT_RELATIVE = 1e-6
-# Steps beyond a scene's ``run_until`` through which a separation does not end the run: an
-# engine resolves a strike up to a step or two from its exact time (it detects contacts at
-# the start or the end of a step, or through a skin), so the sequence's last strike may come
-# a step or two after the reference's.
-SEQUENCE_MARGIN_STEPS = 4
-
-_BLOW_UP_SQUARED = BLOW_UP_FACTOR**2
 _MAX_PLANS = 256  # (scene, settings) pairs remembered; the cache is emptied when full
 _DETACHED = object()  # _plan_for's world for run_many: the plan gets no world of its own
-
-
-class Status(enum.StrEnum):
-    """How a run ended, decided in this order (the first that applies wins).
-
-    A ``str``: a status compares equal to, and serialises as, its value (``"ok"``).
-    """
-
-    BLOW_UP = "blow-up"
-    NO_CONTACT = "no-contact"
-    NO_SEPARATION = "no-separation"
-    OUT_OF_PLANE = "out-of-plane"
-    MULTI_CONTACT = "multi-contact"
-    OK = "ok"
-
-    @property
-    def meaning(self) -> str:
-        """What the status says about a run, in one line."""
-        return _MEANINGS[self]
-
-
-_MEANINGS: dict[Status, str] = {
-    Status.BLOW_UP: "non-finite velocities, or kinetic-energy norm above 1e3 times the input's",
-    Status.NO_CONTACT: "the engine never reported a contact within the step cap",
-    Status.NO_SEPARATION: "still in contact when the step cap was hit",
-    Status.OUT_OF_PLANE: "a body left the plane by more than 1e-9 m (pybullet/MuJoCo)",
-    Status.MULTI_CONTACT: "more than one distinct contact point in the plane at once: the scene "
-    "is outside one-point impact theory",
-    Status.OK: "one contact point, separated within the cap, finite results",
-}
-
-#: ``status value -> meaning``, in the order statuses are decided.
-STATUSES: dict[str, str] = {status.value: status.meaning for status in Status}
-
-#: One body's ``(x, y, θ, v_x, v_y, ω)``: m, m, rad, m/s, m/s, rad/s.
-BodyState = tuple[float, float, float, float, float, float]
-#: One body's ``(x, y, θ)`` (m, m, rad) and ``(v_x, v_y, ω)`` (m/s, m/s, rad/s).
-Pose = tuple[float, float, float]
-Velocity = tuple[float, float, float]
-
-#: What an adapter's ``_step`` returns for a step with contact, in the run frame:
-#: ``(points, normal, impulse, normal_impulse)`` --
-#: ``points``: tuple of ``(x, y, depth)`` per contact point the engine reports (m; depth > 0
-#: is overlap); ``normal``: unit ``(n_x, n_y)`` from body A (or the ground) into body B (the
-#: last body); ``impulse``: ``(p_x, p_y)`` the contact impulse on body B in this step (N s),
-#: or ``None`` where the engine does not expose it; ``normal_impulse``: the engine's own
-#: measure of the step's normal impulse (N s, >= 0; exactly 0 when it applies none), or
-#: ``None`` when the adapter knows without measuring that the contact still pushes.
-RawContacts = tuple[tuple[tuple[float, float, float], ...], tuple[float, float],
-                    "tuple[float, float] | None", float]
-
-
-class ContactPoint(NamedTuple):
-    """One contact point of one step, in the scene frame."""
-
-    x: float  # m
-    y: float  # m
-    depth: float  # m, overlap (> 0) or gap (< 0) as the engine reports it
-
-
-class ContactStep(NamedTuple):
-    """What the engine reported in one step with contact, in the scene frame."""
-
-    step: int  # 1-based step number
-    points: tuple[ContactPoint, ...]
-    normal: tuple[float, float]  # unit, from body A (or the ground) into body B
-    impulse: tuple[float, float] | None  # N s on body B in this step; None: not exposed
-    normal_impulse: float | None  # N s, the engine's own measure (>= 0); None: not measured
-    poses: tuple[Pose, ...]  # every body's (x, y, θ) after the step
-
-
-
-class ContactRecord(NamedTuple):
-    """The raw per-step records of a run: kept as the adapter gave them (run frame), typed
-    on demand (the run's hot path does not build a record object per step)."""
-
-    shift: tuple[float, float]  # run frame = scene frame + shift
-    raw: tuple[tuple[int, RawContacts, tuple[Pose, ...]], ...]  # (step, contacts, poses)
-
-    def steps(self) -> tuple[ContactStep, ...]:
-        """The records as :class:`ContactStep` values in the scene frame."""
-        shift_x, shift_y = self.shift
-        return tuple(
-            ContactStep(
-                step,
-                tuple(ContactPoint(x - shift_x, y - shift_y, depth) for x, y, depth in points),
-                normal, impulse, pressure,
-                tuple((x - shift_x, y - shift_y, angle) for x, y, angle in poses),
-            )
-            for step, (points, normal, impulse, pressure), poses in self.raw
-        )
-
-
-@dataclass(frozen=True)
-class EngineRun:
-    """One impact simulated by one engine.
-
-    Equality compares everything but ``wall_time_s``: two runs of identical inputs compare
-    equal (bit-identical floats).
-    """
-
-    engine: str
-    engine_version: str
-    scene_name: str
-    preset: str | None  # None when a custom settings dict was passed
-    settings: Mapping[str, Any]  # the settings actually used (complete, JSON-able)
-    velocities: tuple[tuple[float, float, float], ...]  # per body (v_x m/s, v_y m/s, ω rad/s)
-    status: Status
-    status_reason: str  # why this run got its status, with its numbers
-    steps: int  # steps simulated
-    contact_steps: int  # steps in which the engine reported a contact
-    first_contact_step: int | None  # 1-based step of the first contact, None if never
-    max_contact_points: int  # most distinct in-plane contact points seen in one step
-    max_penetration: float  # m, largest penetration depth seen (>= 0)
-    separated: bool  # contact began and then ended within the cap
-    step_cap_hit: bool
-    # First contact's unit normal in the scene frame, from body A (or the ground) into body B
-    # (the single body of a ground scene, else bodies[1]).
-    contact_normal: tuple[float, float] | None
-    # Contact impulse on body B (N s) summed over the run, along contact_normal and along
-    # t = (n_y, -n_x) (so +x for the ground); None when there was no contact.
-    normal_impulse: float | None
-    tangential_impulse: float | None
-    impulse_source: str | None  # "engine" (summed per step) | "momentum" (m_B·Δv_B) | None
-    out_of_plane_drift: float | None  # m; None for 2-D engines
-    energy_before: float  # J, kinetic energy of the scene's input state
-    energy_after: float  # J, kinetic energy after the run
-    # Every step with contact as the adapter reported it, ``(shift, ((step, RawContacts,
-    # states), ...))`` in the run frame (scene frame + shift); ``contacts`` is the typed view.
-    contact_record: tuple = ((0.0, 0.0), ())
-    derived: Mapping[str, Any] = field(default_factory=dict)  # values computed from settings
-    notes: tuple[str, ...] = ()
-    wall_time_s: float = field(default=0.0, compare=False)  # s, build/reuse + stepping + readout
-
-    @property
-    def u_after(self) -> np.ndarray:
-        """Post-impact generalised speeds, ``(v_x, v_y, ω)`` per body in scene order."""
-        return np.array([value for body in self.velocities for value in body], dtype=float)
-
-    @property
-    def flagged(self) -> bool:
-        return self.status is not Status.OK
-
-    @property
-    def contacts(self) -> tuple[ContactStep, ...]:
-        """Every step with contact, in order, in the scene frame."""
-        return ContactRecord(*self.contact_record).steps()
-
-
-class UnsupportedScene(ValueError):
-    """The engine cannot build this scene (the reason is in the message)."""
-
-
-@dataclass(frozen=True)
-class StepTiming:
-    """Where an engine detects contacts within a step, and so where a run starts.
-
-    The bodies start ``approach_steps + lead_steps - overlap`` steps of free flight before
-    the touching pose. ``lead_steps = 1`` for an engine that moves before it detects (the
-    contact is found after the first move); ``overlap`` (a fraction of a step) makes the
-    first detection see a hair of overlap where the engine ignores an exact touch, or be
-    short of it. ``recentre_y``: the run frame also centres y when there is no ground.
-    """
-
-    lead_steps: float = 0.0
-    overlap: float = 0.0
-    recentre_y: bool = True
-
-
-class _Plan:
-    """Everything a run needs that depends only on the scene and the settings objects."""
-
-    __slots__ = ("_same_point", "before", "body_b_mass", "body_b_velocity", "dt", "max_steps",
-                 "notes", "prepared", "scene", "settings", "shift", "speed_scale", "until_steps",
-                 "weights", "world", "world_key")
-
-    @property
-    def same_point(self) -> float:
-        """In-plane points closer than this (m) are one point (:data:`SAME_POINT_RELATIVE`
-        of the largest body extent); worked out on first use: only a step with several
-        points needs it, and a polygon's extent costs µs."""
-        tolerance = self._same_point
-        if tolerance is None:
-            tolerance = self._same_point = SAME_POINT_RELATIVE * max(
-                max(body_extent(body.shape) for body in self.scene.bodies), 1e-12)
-        return tolerance
-
-
-class _Progress:
-    """One run's loop state, and the rule that ends it (shared by :meth:`Engine.run` and
-    :meth:`Engine.run_many`).
-
-    The contact ends at a step, after contact began, with no contact, or whose normal
-    impulse is at most ``no_impulse_relative`` of the largest while no contact point still
-    closes (see the module docstring).
-    """
-
-    __slots__ = ("engine", "first_contact", "peak", "plan", "records", "separated",
-                 "velocities")
-
-    def __init__(self, engine: Engine, plan: _Plan) -> None:
-        self.engine, self.plan = engine, plan
-        self.first_contact = None
-        self.peak = 0.0
-        self.separated = False
-        self.records = []
-        self.velocities = None  # set where read at the step that ended the contact
-
-    def observe(self, raw: RawContacts | None, steps: int, world) -> bool:
-        """Take step ``steps``'s contact ``raw`` of ``world``; True when the run ends here."""
-        if raw is None:
-            if self.first_contact is not None:
-                self.separated = True
-                return steps - self.first_contact >= self.plan.until_steps
-            return False
-        if self.first_contact is None:
-            self.first_contact = steps
-        self.separated = False  # a contact again, in a sequence of impacts (run_until)
-        self.velocities = None
-        engine = self.engine
-        poses = engine._read_poses(world)
-        self.records.append((steps, raw, poses))
-        pressure = raw[3]
-        if pressure is None:  # still pushing, by the adapter's knowledge
-            return False
-        if pressure > self.peak:  # noqa: PLR1730 - a compare is cheaper than max() here
-            self.peak = pressure
-        if pressure <= engine.no_impulse_relative * self.peak:
-            velocities = engine._read_velocities(world)
-            if not _approaching(poses, velocities, raw, self.plan.speed_scale):
-                self.separated = True
-                if steps - self.first_contact < self.plan.until_steps:
-                    return False  # the sequence may not be over: read again at the end
-                self.velocities = velocities
-                return True
-        return False
+_clock = time.perf_counter
+_set_attribute: Callable = object.__setattr__
 
 
 class BareStepper:
@@ -570,7 +369,7 @@ class Engine(abc.ABC):
 
     # Optional: many independent impacts in one world (run_many). An adapter that defines
     # _build_many defines _step_many too; the others have defaults.
-    def _build_many(self, plans: Sequence[_Plan]) -> tuple[Any, Sequence[Any], Sequence[dict]]:
+    def _build_many(self, plans: Sequence[Plan]) -> tuple[Any, Sequence[Any], Sequence[dict]]:
         """``(batch, worlds, derived)``: one world stepping every plan's impact (its start
         state ``plan.prepared``), a per-impact view each that ``_read_poses``,
         ``_read_velocities`` and ``_out_of_plane_drift`` accept, and each run's ``derived``."""
@@ -676,7 +475,7 @@ class Engine(abc.ABC):
         if scene is not self._last_scene:
             weights = check_scene(self.name, scene)
             # Checked once per scene object: only a hashable (immutable) scene is remembered.
-            immutable = _immutable(scene)
+            immutable = is_immutable(scene)
             self._last_scene = scene if immutable else None
             self._last_weights = weights if immutable else None
 
@@ -699,7 +498,7 @@ class Engine(abc.ABC):
             self._release(old)
         return world, key
 
-    def _plan_for(self, scene: Scene, settings: dict, world=None) -> _Plan:
+    def _plan_for(self, scene: Scene, settings: dict, world=None) -> Plan:
         key = (id(scene), id(settings))
         plans = self._plans
         if plans is None:
@@ -730,12 +529,11 @@ class Engine(abc.ABC):
         return plan
 
     def _new_plan(self, scene: Scene, settings: dict, world, world_key,
-                  weights: tuple[tuple[float, float], ...]) -> _Plan:
-        """The :class:`_Plan` of ``scene`` under ``settings`` (``weights``: its
-        :func:`energy_weights`), for ``world`` (``None``: run_many's, built with the batch)."""
-        plan = _Plan()
-        plan.scene, plan.settings = scene, settings
-        plan.world, plan.world_key = world, world_key
+                  weights: tuple[tuple[float, float], ...]) -> Plan:
+        """The :class:`harness.engines.run_loop.Plan` of ``scene`` under ``settings``
+        (``weights``: its :func:`energy_weights`), for ``world`` (``None``: run_many's, built
+        with the batch)."""
+        plan = Plan(scene, settings, world, world_key)
         plan.shift, start = start_states(scene, settings, self.timing)
         plan.prepared = self._prepare(world, scene, settings, start, weights)
         plan.dt = float(settings["time_step"])
@@ -758,7 +556,6 @@ class Engine(abc.ABC):
                     speed_scale = value
         plan.before = before
         plan.speed_scale = speed_scale
-        plan._same_point = None
         notes = self._notes(scene, settings)
         plan.notes = notes if type(notes) is tuple else tuple(notes)
         body_b = bodies[-1]
@@ -815,7 +612,8 @@ class Engine(abc.ABC):
         derived = self._reset(world, plan.prepared)
 
         step = self._step
-        progress = _Progress(self, plan)
+        progress = Progress(plan, self._read_poses, self._read_velocities,
+                            self.no_impulse_relative)
         observe = progress.observe
         max_steps = plan.max_steps
         steps = 0
@@ -880,7 +678,8 @@ class Engine(abc.ABC):
 
     def _run_chunk(self, batch, worlds, derived, plans, preset, start_time) -> list[EngineRun]:
         """The loop of :meth:`run` for every impact of one batch, in lockstep."""
-        progress = [_Progress(self, plan) for plan in plans]
+        progress = [Progress(plan, self._read_poses, self._read_velocities,
+                             self.no_impulse_relative) for plan in plans]
         observers = [one.observe for one in progress]
         finished: list[EngineRun | None] = [None] * len(plans)
         active = list(range(len(plans)))
@@ -905,7 +704,7 @@ class Engine(abc.ABC):
                                     worlds[slot], steps, start_time)
         return finished
 
-    def _finish(self, plan: _Plan, preset, derived, progress: _Progress, world, steps,
+    def _finish(self, plan: Plan, preset, derived, progress: Progress, world, steps,
                 start_time) -> EngineRun:
         """The :class:`EngineRun` of a finished loop (all the run's bookkeeping)."""
         records, first_contact = progress.records, progress.first_contact
@@ -915,28 +714,7 @@ class Engine(abc.ABC):
         # The base's hooks answer "nothing" without looking: not called (see __init_subclass__).
         drift = self._out_of_plane_drift(world) if self._drift_hook else None
         run_notes = self._run_notes(world) if self._run_notes_hook else ()
-        max_points = 0
-        max_penetration = 0.0
-        impulse_x = impulse_y = 0.0
-        engine_impulse = True
-        for _, (points, _, impulse, _), _ in records:
-            for point in points:
-                if point[2] > max_penetration:  # noqa: PLR1730 - hot path
-                    max_penetration = point[2]
-            count = len(points)
-            if count == 2:  # count_planar_points' two points (a prism's edge, in 3-D), inlined
-                (x, y, _), (a, b, _) = points
-                same = plan.same_point
-                count = 2 if abs(a - x) > same or abs(b - y) > same else 1
-            elif count > 2:
-                count = count_planar_points([(x, y) for x, y, _ in points], plan.same_point)
-            if count > max_points:  # noqa: PLR1730 - hot path
-                max_points = count
-            if impulse is None:
-                engine_impulse = False
-            else:
-                impulse_x += impulse[0]
-                impulse_y += impulse[1]
+        max_points, max_penetration, impulse_x, impulse_y, engine_impulse = tally(records, plan)
         if records:
             normal = records[0][1][1]
             n_x, n_y = normal
@@ -959,7 +737,7 @@ class Engine(abc.ABC):
         notes = plan.notes + run_notes if run_notes else plan.notes
         if max_points > 1:
             notes += (multi_contact_note(max_points),)
-        return _run_from_fields({
+        return run_from_fields({
             "engine": self.name,
             "engine_version": self.version,
             "scene_name": plan.scene.name,
@@ -987,226 +765,3 @@ class Engine(abc.ABC):
             "notes": notes,
             "wall_time_s": _clock() - start_time,
         })
-
-
-# ---------------------------------------------------------------------- the base's helpers
-def start_states(scene: Scene, settings: Mapping[str, Any],
-                 timing: StepTiming) -> tuple[tuple[float, float], tuple[BodyState, ...]]:
-    """``(shift, states)``: the run frame's offset from the scene frame, and every body's
-    start state in the run frame (rewound by free flight, see :class:`StepTiming`)."""
-    bodies = scene.bodies
-    count = len(bodies)
-    sum_x = sum_y = 0  # as sum() adds
-    for body in bodies:
-        sum_x += body.position[0]
-        sum_y += body.position[1]
-    shift_x = -sum_x / count
-    recentre_y = timing.recentre_y
-    shift_y = -sum_y / count if recentre_y and not scene.ground else 0.0
-    approach = settings["approach_steps"]
-    rewind = -((approach + timing.lead_steps) - timing.overlap) * float(settings["time_step"])
-    states = []
-    for body in bodies:  # free_flight_poses, inlined
-        (x, y), (vx, vy), rate = body.position, body.velocity, body.angular_velocity
-        x = x + vx * rewind
-        y = y + vy * rewind
-        if recentre_y:
-            y = y + shift_y  # adds 0.0 with ground, as the 3-D adapters always did
-        # Plain floats: a value a C setter refuses (a numpy array, say) fails here.
-        states.append((float(x + shift_x), float(y), float(body.angle + rate * rewind),
-                       float(vx), float(vy), float(rate)))
-    return (shift_x, shift_y), tuple(states)
-
-
-def free_flight_poses(scene: Scene, time_s: float) -> list[tuple[float, float, float]]:
-    """Poses ``(x, y, θ)`` of every body after ``time_s`` of free flight (negative: before)."""
-    poses = []
-    for body in scene.bodies:
-        vx, vy = body.velocity
-        poses.append(
-            (
-                body.position[0] + vx * time_s,
-                body.position[1] + vy * time_s,
-                body.angle + body.angular_velocity * time_s,
-            )
-        )
-    return poses
-
-
-def _approaching(poses: Sequence[Pose], velocities: Sequence[Velocity], raw: RawContacts,
-                 speed_scale: float) -> bool:
-    """Whether any contact point still closes (relative normal velocity below
-    ``-APPROACH_RELATIVE·speed_scale``): a step without impulse is then not a separation
-    (a contact found before touch carries none while the bodies still approach)."""
-    n_x, n_y = raw[1]
-    last = len(poses) - 1
-    for point_x, point_y, _ in raw[0]:
-        relative = 0.0
-        for index, ((x, y, _), (vx, vy, omega)) in enumerate(zip(poses, velocities)):
-            normal_velocity = ((vx - omega * (point_y - y)) * n_x
-                               + (vy + omega * (point_x - x)) * n_y)
-            relative += normal_velocity if index == last else -normal_velocity
-        if relative < -APPROACH_RELATIVE * speed_scale:
-            return True
-    return False
-
-
-def decide_status(
-    before: float,
-    after: float,
-    velocities: Sequence[Sequence[float]],
-    *,
-    steps: int,
-    contact_seen: bool,
-    separated: bool,
-    max_contact_points: int,
-    out_of_plane_drift: float | None,
-) -> tuple[Status, str]:
-    """The :class:`Status` of a finished run and its reason.
-
-    ``before``, ``after``: twice the kinetic energy of the input and of ``velocities``.
-    """
-    # With positive masses and inertias a finite sum means finite velocities: test them
-    # one by one only when it is not.
-    if not math.isfinite(after) and not all(math.isfinite(v) for body in velocities for v in body):
-        return Status.BLOW_UP, "non-finite velocities"
-    if after > _BLOW_UP_SQUARED * max(before, 1e-300):
-        return Status.BLOW_UP, (f"kinetic energy grew {after / max(before, 1e-300):.3g}-fold "
-                                f"(norm above {BLOW_UP_FACTOR:g} times the input's)")
-    if not contact_seen:
-        return Status.NO_CONTACT, f"no contact in {steps} steps"
-    if not separated:
-        return Status.NO_SEPARATION, f"still in contact at the step cap ({steps} steps)"
-    if out_of_plane_drift is not None and out_of_plane_drift > OUT_OF_PLANE_TOLERANCE:
-        return Status.OUT_OF_PLANE, (f"a body left the plane by {out_of_plane_drift:.3g} m "
-                                     f"(> {OUT_OF_PLANE_TOLERANCE:g} m)")
-    if max_contact_points > 1:
-        return Status.MULTI_CONTACT, multi_contact_note(max_contact_points)
-    return Status.OK, _MEANINGS[Status.OK]
-
-
-def multi_contact_note(points: int) -> str:
-    """The run note when a step saw more than one contact point (outside one-point theory)."""
-    return f"{points} distinct in-plane contact points in one step"
-
-
-def count_planar_points(points: Iterable[tuple[float, float]], tolerance: float) -> int:
-    """Number of distinct in-plane points (closer than ``tolerance`` in x and y count as one).
-
-    A 3-D engine may report a prism's edge touching the ground as two points at ±y; they
-    are the same point of the planar problem.
-    """
-    if type(points) is list and len(points) == 2:  # a prism's edge, every 3-D contact step
-        (x, y), (a, b) = points
-        return 2 if abs(a - x) > tolerance or abs(b - y) > tolerance else 1
-    distinct: list[tuple[float, float]] = []
-    for x, y in points:
-        if all(abs(x - a) > tolerance or abs(y - b) > tolerance for a, b in distinct):
-            distinct.append((x, y))
-    return len(distinct)
-
-
-def ke_norm(scene: Scene, u: Sequence[float] | np.ndarray) -> float:
-    """Kinetic-energy norm ``sqrt(uᵀ M u)`` of generalised speeds ``u`` of ``scene``."""
-    total = 0.0
-    for index, body in enumerate(scene.bodies):
-        vx, vy, omega = (float(v) for v in u[3 * index : 3 * index + 3])
-        total += body.mass * (vx * vx + vy * vy) + body.moment_of_inertia * omega * omega
-    return math.sqrt(total)
-
-
-def geometry_key(scene: Scene) -> tuple:
-    """What an engine model depends on: ground or not, and per body its shape, mass and
-    inertia (not its state, ``e`` or ``μ``)."""
-    parts = []
-    for body in scene.bodies:
-        shape = body.shape
-        if shape.kind == "disk":
-            geometry = (shape.radius,)
-        elif shape.kind == "rod":
-            geometry = (shape.length, shape.radius)
-        elif shape.kind == "ellipse":  # with its stand-in's placement: another polygon
-            geometry = (shape.semi_x, shape.semi_y, shape.vertex_at)
-        else:
-            geometry = tuple(map(tuple, shape.vertices().tolist()))
-        parts.append((shape.kind, geometry, float(body.mass), float(body.moment_of_inertia)))
-    return (scene.ground, tuple(parts))
-
-
-def energy_weights(scene: Scene) -> tuple[tuple[float, float], ...]:
-    """``(mass, moment of inertia)`` per body."""
-    return tuple((body.mass, body.moment_of_inertia) for body in scene.bodies)
-
-
-def energy_before(scene: Scene, weights: Sequence[tuple[float, float]] | None = None) -> float:
-    """Twice the kinetic energy of the scene's input state (the blow-up reference);
-    ``weights``: :func:`energy_weights` of the scene when already computed."""
-    before = 0.0
-    for body, (mass, inertia) in zip(scene.bodies, weights or energy_weights(scene)):
-        (ux, uy), uw = body.velocity, body.angular_velocity
-        before += mass * (ux * ux + uy * uy) + inertia * uw * uw
-    return before
-
-
-def _run_from_fields(values: dict) -> EngineRun:
-    """An :class:`EngineRun` from a dict holding every field, for the hot path.
-
-    The frozen dataclass ``__init__`` sets each field through ``object.__setattr__`` (about
-    as much as a whole pymunk impact costs); this takes the dict as the instance's
-    attributes, a tenth of that. The result is an ordinary EngineRun.
-    """
-    run = _new_object(EngineRun)
-    _set_attribute(run, "__dict__", values)
-    return run
-
-
-_clock = time.perf_counter
-_new_object: Callable = object.__new__
-_set_attribute: Callable = object.__setattr__
-
-
-def _immutable(scene: Scene) -> bool:
-    """Whether ``scene`` hashes, i.e. holds only immutable values (tuples, numbers, str)."""
-    try:
-        hash(scene)
-    except TypeError:
-        return False
-    return True
-
-
-def check_scene(engine: str, scene: Scene) -> tuple[tuple[float, float], ...]:
-    """Raise :class:`UnsupportedScene` unless every adapter can build ``scene``; return its
-    :func:`energy_weights` (the masses and inertias checked)."""
-    weights = []
-    for body in scene.bodies:
-        if body.shape.kind not in ("disk", "rod", "box", "polygon", "ellipse"):
-            raise UnsupportedScene(f"engine {engine!r}: unknown shape {body.shape.kind!r}")
-        if body.shape.kind == "ellipse" and not scene.ground:
-            raise UnsupportedScene(f"engine {engine!r}: body {body.name!r}: an ellipse "
-                                   "touches only the ground (a scene with ground)")
-        if len(body.position) != 2 or len(body.velocity) != 2:
-            for name in ("position", "velocity"):
-                vector = getattr(body, name)
-                if len(vector) != 2:
-                    raise UnsupportedScene(
-                        f"engine {engine!r}: body {body.name!r} {name} must be (x, y) in the "
-                        f"plane, got {tuple(vector)!r}"
-                    )
-        inertia = body.moment_of_inertia  # computed once: a polygon's is not cheap
-        values = (body.mass, inertia, *body.position, body.angle, *body.velocity,
-                  body.angular_velocity)
-        # A finite sum means finite values (one inf or nan makes it non-finite); only an
-        # overflowing sum of finite values needs the values checked one by one.
-        finite = math.isfinite(sum(values)) or all(math.isfinite(v) for v in values)
-        if not finite or body.mass <= 0 or inertia <= 0:
-            raise UnsupportedScene(
-                f"engine {engine!r}: body {body.name!r} needs finite state and positive mass "
-                f"and inertia (mass {body.mass}, inertia {inertia})"
-            )
-        weights.append((body.mass, inertia))
-    if not (0.0 <= scene.restitution <= 1.0) or scene.friction < 0:
-        raise UnsupportedScene(
-            f"engine {engine!r}: needs 0 <= e <= 1 and μ >= 0, got e {scene.restitution}, "
-            f"μ {scene.friction}"
-        )
-    return tuple(weights)

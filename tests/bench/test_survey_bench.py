@@ -1,4 +1,4 @@
-"""``impact-harness bench --survey``: both sides measured on the same impacts."""
+"""``impact-harness bench --survey``: both sides measured on the same impacts and processes."""
 
 from __future__ import annotations
 
@@ -9,13 +9,29 @@ from harness.bench import survey as bench_survey
 
 def test_survey_bench_times_the_survey_and_the_bare_stepping_of_its_impacts():
     pytest.importorskip("pymunk")
-    report = bench_survey.run(3, engines=("pymunk",))
+    report = bench_survey.run(3, engines=("pymunk",), rounds=2)
     assert report["impacts"] == 3 * 7  # every population
-    assert set(report["bare"]) == {"pymunk.defaults", "pymunk.accurate"}
-    assert report["bare_s"] == pytest.approx(sum(report["bare"].values()))
-    assert 0 < report["bare_s"] and 0 < report["survey_s"]
-    assert report["ratio"] == pytest.approx(report["survey_s"] / report["bare_s"])
-    assert report["ratio_cores"] == pytest.approx(report["survey_cores_s"] / report["bare_s"])
-    assert "engine pymunk accurate" in report["stages"]
+    assert report["rounds"] == 2 and report["workers"] == 1
+    assert set(report["pairs"]) == {"pymunk.defaults", "pymunk.accurate"}
+    assert len(report["survey_cpu_rounds"]) == len(report["bare_cpu_rounds"]) == 2
+    assert 0 < report["bare_cpu_s"] and 0 < report["survey_cpu_s"]
+    assert report["ratio"] == pytest.approx(report["survey_cpu_s"] / report["bare_cpu_s"])
+    for entry in report["pairs"].values():
+        assert 0 < entry["bare_s"] < entry["bare_world_s"]
+        assert entry["steps"] >= report["impacts"]  # at least one step per impact
+        assert entry["contract_ratio"] == pytest.approx(entry["contract_s"] / entry["bare_s"])
+        assert entry["world_ratio"] == pytest.approx(entry["contract_s"]
+                                                     / entry["bare_world_s"])
+        assert entry["judged_ratio"] == pytest.approx(entry["judged_s"] / entry["bare_s"])
     text = bench_survey.format_report(report)
     assert "ratio" in text and "pymunk.accurate" in text
+
+
+def test_survey_bench_splits_the_bare_stepping_over_as_many_processes_as_the_survey():
+    pytest.importorskip("pymunk")
+    report = bench_survey.run(2, engines=("pymunk",), presets=("accurate",), rounds=1,
+                              workers=2)
+    assert report["workers"] == 2
+    # the workers' CPU time is counted on both sides (forked, waited for)
+    assert 0 < report["bare_cpu_s"] and 0 < report["survey_cpu_s"]
+    assert "2 processes each" in bench_survey.format_report(report)
