@@ -23,9 +23,9 @@ import os
 import time
 
 from harness.engines import (
-    ENGINE_NAMES,
     PRESET_ROLES,
     EngineNotInstalled,
+    engine_names,
     load_engine,
     source_label,
 )
@@ -38,11 +38,11 @@ SAMPLES = 500  # per population
 QUICK_SAMPLES = 60
 
 
-def run(samples: int, engines=ENGINE_NAMES, presets=PRESET_ROLES, seed: int = 0) -> dict:
+def run(samples: int, engines=None, presets=PRESET_ROLES, seed: int = 0) -> dict:
     """``{"samples", "impacts", "survey_s", "bare_s", "ratio", "survey_cores_s",
-    "ratio_cores", "cores", "stages", "bare"}``."""
+    "ratio_cores", "cores", "stages", "bare"}``; ``engines`` None: every registered one."""
     installed = []
-    for name in engines:
+    for name in engine_names() if engines is None else engines:
         try:
             load_engine(name)
             installed.append(name)
