@@ -810,20 +810,26 @@ class PendingPuts:
     """Records to store, written a pack at a time (:meth:`ResultCache.put_many`): what a
     run's main process stores (the references its workers computed, the engine runs of an
     executor whose workers do not store them) in a few files, not one each. ``put`` writes
-    a pack once :data:`PACK_SIZE` wait; ``flush`` writes the rest (the runner calls it
-    when the work ends, however it ends: finished results are kept). Both raise
-    ``OSError`` as :meth:`ResultCache.put` does (the records not written are dropped).
-    ``cache`` None: stores nothing."""
+    a pack once :data:`PACK_SIZE` wait or the first of them has waited ``max_wait_s`` (a
+    process killed outright loses no more than that of finished work); ``flush`` writes the
+    rest (the runner calls it when the work ends, however it ends). Both raise ``OSError``
+    as :meth:`ResultCache.put` does (the records not written are dropped). ``cache`` None:
+    stores nothing."""
 
-    def __init__(self, cache: ResultCache | None) -> None:
+    def __init__(self, cache: ResultCache | None, max_wait_s: float = 2.0) -> None:
         self.cache = cache
+        self.max_wait_s = max_wait_s
         self.items: list[tuple[str, dict]] = []
+        self._first_at = 0.0  # when the first record waiting was put
 
     def put(self, key: str, record: dict) -> None:
         if self.cache is None or not self.cache.enabled:
             return
+        now = time.monotonic()
+        if not self.items:
+            self._first_at = now
         self.items.append((key, record))
-        if len(self.items) >= PACK_SIZE:
+        if len(self.items) >= PACK_SIZE or now - self._first_at >= self.max_wait_s:
             self.flush()
 
     def flush(self) -> None:

@@ -131,6 +131,21 @@ def test_pending_puts_write_a_pack_when_full_and_the_rest_when_flushed(tmp_path)
     PendingPuts(None).put("k", {})  # no cache: nothing stored, nothing raised
 
 
+def test_pending_puts_write_what_waited_too_long(tmp_path, monkeypatch):
+    clock = [100.0]
+    monkeypatch.setattr("harness.run.cache.time.monotonic", lambda: clock[0])
+    cache = ResultCache(tmp_path, version="v")
+    pending = PendingPuts(cache, max_wait_s=2.0)
+    first, second, third = _items(cache, 3)
+    pending.put(*first)
+    clock[0] += 1.0
+    pending.put(*second)
+    assert not _packs(tmp_path)
+    clock[0] += 1.5  # the first waited 2.5 s: the three written, a kill loses none of them
+    pending.put(*third)
+    assert len(_packs(tmp_path)) == 1 and not pending.items
+
+
 def test_clear_removes_the_packs_and_nothing_else_of_theirs(tmp_path):
     cache = ResultCache(tmp_path / "cache", version="v")
     cache.put_many(_items(cache, 3))
