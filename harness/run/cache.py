@@ -354,13 +354,11 @@ class ResultCache:
         if not self.enabled:
             self.misses += 1
             return None
-        packed = self._packed_entry(key)
-        if packed is None and self._unlisted(key, ".json"):
-            self.misses += 1
-            return None
-        path = self._path_text(key) if packed is None else packed[0]
+        path = self._path_text(key)
         try:
-            if packed is None:
+            try:  # a single entry first: the packs' index is read only when one is missing
+                if self._unlisted(key, ".json"):
+                    raise FileNotFoundError(path)
                 with open(path, "rb") as handle:
                     raw = handle.read()
                 head_end = raw.find(b"\n")
@@ -368,14 +366,17 @@ class ResultCache:
                 if not isinstance(header, dict) or header.get("key") != key:
                     raise ValueError("not a cache entry")
                 body, sha256 = memoryview(raw)[head_end + 1:], header.get("sha256")
-            else:
-                _, offset, size, sha256 = packed
-                path = f"{path} (record {key[:12]})"
-                with open(packed[0], "rb") as handle:
+            except FileNotFoundError:
+                packed = self._packed_entry(key)
+                if packed is None:
+                    raise
+                pack, offset, size, sha256 = packed
+                path = f"{pack} (record {key[:12]})"
+                with open(pack, "rb") as handle:
                     handle.seek(offset)
                     body = handle.read(size)
                 if len(body) != size:
-                    raise ValueError("truncated")
+                    raise ValueError("truncated") from None
             if sha256 != hashlib.sha256(body).hexdigest():
                 raise ValueError("checksum differs: changed after it was written")
             record = json.loads(str(body, "utf-8"))
