@@ -25,9 +25,10 @@ Files: many records in one pack, ``root/packs/<sha256 of the pack>.pack``
 (:meth:`ResultCache.put_many`: an engine chunk's runs, a run's references): a header line
 (the code version, and per record its key, size and SHA-256), then the records' JSON one
 after the other; a cold run of 1,000 scenario files wrote 16,056 engine runs and 481
-references one file each before, a few hundred packs now. The packs' headers are read once
-into an index of where each key lies, at the first lookup of a run (:meth:`ResultCache.
-listed`) or at a miss outside one. One record on its own at ``root/<key[:2]>/<key>.json``
+references one file each before, 292 packs now. The packs' headers are read into an index
+of where each key lies at the first lookup that finds no single entry: once within
+:meth:`ResultCache.listed` (a run's lookups), at each such miss outside it (a warm run, whose
+scenarios are read whole, reads none). One record on its own at ``root/<key[:2]>/<key>.json``
 (:meth:`ResultCache.put`): a header line (the key, the code version, the SHA-256 of what
 follows) and the record as JSON; ``<key>.jsonl`` for an entry of
 many lines (:meth:`ResultCache.put_lines`: a scenario's records, a header line with their
