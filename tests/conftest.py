@@ -72,3 +72,20 @@ def survey_identity():
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
+
+
+@pytest.fixture
+def toy_engine(monkeypatch):
+    """The test-only engine of tests/engines/toy_engine.py, registered for the test as the
+    only engine the harness lists (the shipped ones hidden from
+    :func:`harness.engines.engine_names`): a command that runs every engine then runs the toy
+    alone, in seconds. Yields its name."""
+    from harness import engines as registry
+    from tests.engines.toy_engine import ToyEngine
+
+    monkeypatch.setattr(registry, "ENGINE_NAMES", ())
+    registry.register_engine("toy", ToyEngine)
+    try:
+        yield "toy"
+    finally:
+        registry.unregister_engine("toy")

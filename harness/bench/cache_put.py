@@ -2,11 +2,11 @@
 
 ``python -m harness.bench.cache_put [--runs 600] [--repeats 3]`` runs the library's engine
 tasks once (both presets, every installed engine, repeated up to ``--runs``), then, per
-repeat, puts their outputs (:func:`harness.run.runner.engine_task`'s, what
-``_stored_by_worker`` stores) into a fresh cache directory whose shards already exist (as
-after the first few hundred puts of a cold run) and prints the time per put: wall, and the
-process's user and system CPU (the median repeat by user CPU). A cold run of the 1,000-file
-benchmark puts 16,056 of them, on the pool's workers.
+repeat, stores their outputs (:func:`harness.run.runner.engine_task`'s, what
+``_stored_by_worker`` stores) into a fresh cache directory, a pack per chunk of
+:data:`harness.run.executor.MAX_CHUNK` as a worker stores a chunk's runs, and prints the time
+per engine run: wall, and the process's user and system CPU (the median repeat by user CPU).
+A cold run of the 1,000-file benchmark stores 16,056 of them, on the pool's workers.
 """
 
 from __future__ import annotations
@@ -51,16 +51,17 @@ def _library_outputs() -> Iterator[dict]:
 
 
 def time_puts(outputs: list[dict], root: Path) -> tuple[float, float, float]:
-    """``(wall, user, system)`` seconds per put of every output into a cache at ``root``."""
+    """``(wall, user, system)`` seconds per output stored into a cache at ``root``, a pack
+    per chunk of :data:`harness.run.executor.MAX_CHUNK`."""
     from harness.run.cache import ResultCache
+    from harness.run.executor import MAX_CHUNK
 
     cache = ResultCache(root, version="bench")
     keys = [cache.key({"run": index}) for index in range(len(outputs))]
-    for shard in {key[:2] for key in keys}:
-        (root / shard).mkdir(parents=True, exist_ok=True)
+    items = list(zip(keys, outputs))
     before, start = os.times(), time.perf_counter()
-    for key, output in zip(keys, outputs):
-        cache.put(key, output)
+    for first in range(0, len(items), MAX_CHUNK):
+        cache.put_many(items[first:first + MAX_CHUNK])
     wall, after = time.perf_counter() - start, os.times()
     return (wall / len(keys), (after.user - before.user) / len(keys),
             (after.system - before.system) / len(keys))

@@ -38,8 +38,8 @@ import time
 from typing import Callable
 
 from harness.engines import (
-    ENGINE_NAMES,
     EngineNotInstalled,
+    engine_names,
     ke_norm,
     load_engine,
     preset_label,
@@ -99,8 +99,12 @@ def _time_bare(
     return best
 
 
-def run_engine_overhead_benchmark(quick: bool = True) -> dict:
+def run_engine_overhead_benchmark(quick: bool = True,
+                                  engines: tuple[str, ...] | None = None) -> dict:
     """Measure harness vs bare stepping per engine, preset and scene; returns a dict.
+
+    ``engines``: the engines to measure (default: every registered one,
+    :func:`harness.engines.engine_names`, those added at run time included).
 
     ``{"engines": {name: {"available": bool, "reason": str|None, "rows": [...]}}, ...}``;
     each row has ``scene, preset, steps, harness_us, bare_us, bare_reset_us, ratio,
@@ -124,7 +128,7 @@ def run_engine_overhead_benchmark(quick: bool = True) -> dict:
         "machine": platform.machine(),
         "engines": {},
     }
-    for name in ENGINE_NAMES:
+    for name in engine_names() if engines is None else engines:
         try:
             engine = load_engine(name)
         except EngineNotInstalled as error:

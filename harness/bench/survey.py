@@ -36,9 +36,9 @@ import time
 
 from harness.collector import collector_paused
 from harness.engines import (
-    ENGINE_NAMES,
     PRESET_ROLES,
     EngineNotInstalled,
+    engine_names,
     load_engine,
     source_label,
 )
@@ -124,13 +124,14 @@ def _bare_all_cpu(pairs, scenes, workers: int) -> float:
         _BARE_WORK.clear()
 
 
-def run(samples: int, engines=ENGINE_NAMES, presets=PRESET_ROLES, seed: int = 0,
+def run(samples: int, engines=None, presets=PRESET_ROLES, seed: int = 0,
         rounds: int = ROUNDS, workers: int = 1) -> dict:
     """``{"samples", "impacts", "engines", "presets", "rounds", "workers", "survey_cpu_s",
     "bare_cpu_s", "ratio", "pairs": {label: {"contract_s", "judged_s", "bare_s",
-    "contract_ratio", "judged_ratio", "steps"}}}`` (medians over ``rounds``)."""
+    "contract_ratio", "judged_ratio", "steps"}}}`` (medians over ``rounds``); ``engines``
+    None: every registered one."""
     installed = []
-    for name in engines:
+    for name in engine_names() if engines is None else engines:
         try:
             load_engine(name)
             installed.append(name)

@@ -21,15 +21,24 @@ entry, while a change to the report, the benchmarks or the CLI keeps the cache::
         record = simulate(...)
         cache.put(key, record)
 
-Files: one file per key at ``root/<key[:2]>/<key>.json``: a header line (the key, the code
-version, the SHA-256 of what follows) and the record as JSON; ``<key>.jsonl`` for an entry of
+Files: many records in one pack, ``root/packs/<sha256 of the pack>.pack``
+(:meth:`ResultCache.put_many`: an engine chunk's runs, a run's references): a header line
+(the code version, and per record its key, size and SHA-256), then the records' JSON one
+after the other; a cold run of 1,000 scenario files wrote 16,056 engine runs and 481
+references one file each before, 292 packs now. The packs' headers are read into an index
+of where each key lies at the first lookup that finds no single entry: once within
+:meth:`ResultCache.listed` (a run's lookups), at each such miss outside it (a warm run, whose
+scenarios are read whole, reads none). One record on its own at ``root/<key[:2]>/<key>.json``
+(:meth:`ResultCache.put`): a header line (the key, the code version, the SHA-256 of what
+follows) and the record as JSON; ``<key>.jsonl`` for an entry of
 many lines (:meth:`ResultCache.put_lines`: a scenario's records, a header line with their
 summary, the sizes of what follows and its SHA-256, then their lines as the results file
 holds them). Plain data only: nothing read from the cache is unpickled, evaluated or
 imported. Written atomically (a temporary file in the same directory, then ``os.replace``),
 so concurrent writers and an interrupted run never leave a half-written entry; a temporary
 left by a killed writer is removed by the next run (:meth:`ResultCache.clean_temporaries`).
-An unreadable, corrupted or edited file (its checksum differs) is a miss, and so is an entry
+An unreadable, corrupted or edited file (its checksum differs; in a pack, a record whose
+checksum differs, or every record of a pack whose header is not whole) is a miss, and so is an entry
 the caller's ``check`` rejects (a record without finite velocities of the right shape): both
 are listed in :attr:`ResultCache.rejected`, which the run prints as warnings, and the
 result is computed again. Beside the entries, ``root/passed-checks.json`` keeps the keys of
@@ -41,7 +50,8 @@ The harness deletes only what it made: the cache's root carries the marker file
 one, or one holding only cache entries); ``cache prune`` and ``cache clear`` refuse a
 directory without it (exit 2), and remove only the entries they recognise (the shard
 directories' ``<64 hex digits>.json``/``.jsonl`` files and temporaries, the checks' store),
-never the directory or anything else in it.
+never the directory or anything else in it. Packs are recognised the same way: the
+``packs`` directory's ``<64 hex digits>.pack`` files and temporaries.
 """
 
 from __future__ import annotations
@@ -97,6 +107,11 @@ _MARKER_TEXT = ("impact-harness result cache: made by the harness; `impact-harne
 #: An entry's name in its shard directory, and a shard directory's name.
 _ENTRY_NAME = re.compile(r"[0-9a-f]{64}\.jsonl?")
 _SHARD_NAME = re.compile(r"[0-9a-f]{2}")
+#: The directory of the packs in the root (:meth:`ResultCache.put_many`), a pack's name in it,
+#: and the most records one pack holds (a run's main process buffers at most as many).
+PACK_DIRECTORY = "packs"
+_PACK_NAME = re.compile(r"[0-9a-f]{64}\.pack")
+PACK_SIZE = 512
 
 
 class NotOurCache(Exception):
@@ -247,6 +262,11 @@ class ResultCache:
         self._root_seen = False  # whether this cache looked at its root's marker yet
         # shard -> the names in its directory, while listed() is active (None: not listed)
         self._listing: dict[str, set[str] | None] | None = None
+        # key -> (pack path, offset, size, SHA-256) of the packed records, from the headers
+        # of the packs named in _packs_read (read, or rejected)
+        self._packed: dict[str, tuple[str, int, int, str]] = {}
+        self._packs_read: set[str] = set()
+        self._packs_listed = False  # within listed(): the packs' directory was read
 
     @contextmanager
     def listed(self) -> Iterator[None]:
@@ -255,11 +275,11 @@ class ResultCache:
         (thousands of entries that are not there) cost a set lookup each. An entry another
         process writes meanwhile is a miss (its run simulated again); those this cache puts
         are listed."""
-        self._listing = {}
+        self._listing, self._packs_listed = {}, False
         try:
             yield
         finally:
-            self._listing = None
+            self._listing, self._packs_listed = None, False
 
     def _unlisted(self, key: str, suffix: str) -> bool:
         """True when :meth:`listed` is active and the shard's listing lacks the entry."""
@@ -332,19 +352,33 @@ class ResultCache:
                 return self.get(key, check)
             finally:
                 self.hits, self.misses = hits, misses
-        if not self.enabled or self._unlisted(key, ".json"):
+        if not self.enabled:
             self.misses += 1
             return None
         path = self._path_text(key)
         try:
-            with open(path, "rb") as handle:
-                raw = handle.read()
-            head_end = raw.find(b"\n")
-            header = json.loads(raw[:head_end]) if head_end > 0 else None
-            if not isinstance(header, dict) or header.get("key") != key:
-                raise ValueError("not a cache entry")
-            body = memoryview(raw)[head_end + 1:]
-            if header.get("sha256") != hashlib.sha256(body).hexdigest():
+            try:  # a single entry first: the packs' index is read only when one is missing
+                if self._unlisted(key, ".json"):
+                    raise FileNotFoundError(path)
+                with open(path, "rb") as handle:
+                    raw = handle.read()
+                head_end = raw.find(b"\n")
+                header = json.loads(raw[:head_end]) if head_end > 0 else None
+                if not isinstance(header, dict) or header.get("key") != key:
+                    raise ValueError("not a cache entry")
+                body, sha256 = memoryview(raw)[head_end + 1:], header.get("sha256")
+            except FileNotFoundError:
+                packed = self._packed_entry(key)
+                if packed is None:
+                    raise
+                pack, offset, size, sha256 = packed
+                path = f"{pack} (record {key[:12]})"
+                with open(pack, "rb") as handle:
+                    handle.seek(offset)
+                    body = handle.read(size)
+                if len(body) != size:
+                    raise ValueError("truncated") from None
+            if sha256 != hashlib.sha256(body).hexdigest():
                 raise ValueError("checksum differs: changed after it was written")
             record = json.loads(str(body, "utf-8"))
             if not isinstance(record, dict):
@@ -376,6 +410,88 @@ class ResultCache:
                              "sha256": hashlib.sha256(body).hexdigest()})
         self._write(self._path_text(key), (header.encode("utf-8"), b"\n", body), key)
         self._list(key[:2], f"{key}.json")
+
+    def put_many(self, items: Sequence[tuple[str, dict]]) -> None:
+        """Store each ``(key, record)`` of ``items`` as :meth:`put` does, in one pack (one
+        file: see the module docstring), named by its content's SHA-256; atomic (the pack is
+        whole or absent); no-op when disabled or empty. More than :data:`PACK_SIZE` records
+        make several packs. Raises ``OSError`` as :meth:`put` does."""
+        if not self.enabled or not items:
+            return
+        for start in range(0, len(items), PACK_SIZE):
+            self._put_pack(items[start:start + PACK_SIZE])
+
+    def _put_pack(self, items: Sequence[tuple[str, dict]]) -> None:
+        keys = [key for key, _ in items]
+        bodies = [_ENTRY_ENCODER.encode(record).encode("utf-8") for _, record in items]
+        sizes = [len(body) for body in bodies]
+        digests = [hashlib.sha256(body).hexdigest() for body in bodies]
+        header = json.dumps({"code_version": self.version, "keys": keys, "sizes": sizes,
+                             "sha256": digests},
+                            separators=(",", ":")).encode("utf-8") + b"\n"
+        digest = hashlib.sha256(header)
+        for body in bodies:
+            digest.update(body)
+        name = f"{digest.hexdigest()}.pack"
+        path = os.path.join(self.root, PACK_DIRECTORY, name)
+        self._write(path, (header, *bodies), name)
+        self._index_pack(path, header, keys, sizes, digests)
+        self._packs_read.add(name)
+
+    def _index_pack(self, path: str, header: bytes, keys: list, sizes: list,
+                    digests: list) -> None:
+        offset = len(header)
+        for key, size, sha256 in zip(keys, sizes, digests):
+            self._packed[key] = (path, offset, size, sha256)
+            offset += size
+
+    def _packed_entry(self, key: str) -> tuple[str, int, int, str] | None:
+        """Where ``key`` lies in a pack, or None. The packs' headers not read yet are read
+        at a miss: once within :meth:`listed` (the packs written meanwhile by other
+        processes are not seen; its own are), at every miss outside it."""
+        found = self._packed.get(key)
+        if found is not None or self._packs_listed:
+            return found
+        self._packs_listed = self._listing is not None
+        directory = os.path.join(self.root, PACK_DIRECTORY)
+        try:
+            names = os.listdir(directory)
+        except OSError:  # none yet, or not a directory: nothing packed
+            return None
+        for name in names:
+            if name in self._packs_read or not _PACK_NAME.fullmatch(name):
+                continue
+            self._packs_read.add(name)
+            path = os.path.join(directory, name)
+            try:
+                self._read_pack_header(path)
+            except (OSError, ValueError) as error:  # UnicodeDecodeError is a ValueError
+                self.rejected.append(f"{path}: {error}")
+        return self._packed.get(key)
+
+    def _read_pack_header(self, path: str) -> None:
+        """Index the records of the pack at ``path`` (those of this code version only: the
+        keys of another hold another version anyway); ``ValueError`` when its header is not
+        a pack's or its size is not the one the header gives."""
+        with open(path, "rb") as handle:
+            line = handle.readline()
+            size = os.fstat(handle.fileno()).st_size
+        header = json.loads(line)
+        if not isinstance(header, dict) or header.get("code_version") != self.version:
+            if isinstance(header, dict) and isinstance(header.get("code_version"), str):
+                return  # another code's: never a key of this one
+            raise ValueError("not a cache pack")
+        keys, sizes, digests = header.get("keys"), header.get("sizes"), header.get("sha256")
+        if not (isinstance(keys, list) and isinstance(sizes, list) and isinstance(digests, list)
+                and len(keys) == len(sizes) == len(digests)
+                and all(isinstance(key, str) for key in keys)
+                and all(isinstance(digest, str) for digest in digests)
+                and all(isinstance(n, int) and not isinstance(n, bool) and n >= 0
+                        for n in sizes)):
+            raise ValueError("not a cache pack")
+        if len(line) + sum(sizes) != size:
+            raise ValueError("truncated")
+        self._index_pack(path, line, keys, sizes, digests)
 
     def _write(self, path: str, parts: tuple, key: str) -> None:
         """Write an entry's ``parts`` at ``path`` atomically; the shard directory made when
@@ -457,6 +573,9 @@ class ResultCache:
         path = self.root / name
         if name in (SCENARIO_CHECKS_STORE, *OLD_CHECKS_STORES):
             return path.is_file() and not path.is_symlink()
+        if name == PACK_DIRECTORY and path.is_dir() and not path.is_symlink():
+            return all(_PACK_NAME.fullmatch(inner) or _is_temporary(inner)
+                       for inner in os.listdir(path))
         if not (_SHARD_NAME.fullmatch(name) and path.is_dir() and not path.is_symlink()):
             return False
         return all(_ENTRY_NAME.fullmatch(inner) or _is_temporary(inner)
@@ -580,6 +699,12 @@ class ResultCache:
                 path = directory / name
                 if _ENTRY_NAME.fullmatch(name) and path.is_file() and not path.is_symlink():
                     yield path
+        packs = self.root / PACK_DIRECTORY
+        if packs.is_dir() and not packs.is_symlink():
+            for name in os.listdir(packs):
+                path = packs / name
+                if _PACK_NAME.fullmatch(name) and path.is_file() and not path.is_symlink():
+                    yield path
         for name in (SCENARIO_CHECKS_STORE, *OLD_CHECKS_STORES):
             path = self.root / name
             if path.is_file() and not path.is_symlink():
@@ -601,10 +726,12 @@ class ResultCache:
         if not self.enabled or not self.root.is_dir():
             return 0
         removed, now = 0, time.time()
-        for temporary in self.root.glob("??/.*.tmp"):
+        for temporary in itertools.chain(self.root.glob("??/.*.tmp"),
+                                         self.root.glob(f"{PACK_DIRECTORY}/.*.tmp")):
             try:
-                if (_SHARD_NAME.fullmatch(temporary.parent.name)
-                        and not temporary.is_symlink()
+                if ((_SHARD_NAME.fullmatch(temporary.parent.name)
+                     or temporary.parent.name == PACK_DIRECTORY)
+                        and not temporary.is_symlink() and not temporary.parent.is_symlink()
                         and now - temporary.stat().st_mtime > older_than_s):
                     temporary.unlink()
                     removed += 1
@@ -666,7 +793,8 @@ class ResultCache:
                 continue
         self.clean_temporaries(older_than_s=-1.0)
         for shard in os.listdir(self.root):
-            if _SHARD_NAME.fullmatch(shard) and not (self.root / shard).is_symlink():
+            if ((_SHARD_NAME.fullmatch(shard) or shard == PACK_DIRECTORY)
+                    and not (self.root / shard).is_symlink()):
                 try:
                     (self.root / shard).rmdir()  # only when empty
                 except OSError:
@@ -678,6 +806,38 @@ class ResultCache:
         total = self.hits + self.misses
         return {"enabled": self.enabled, "hits": self.hits, "misses": self.misses,
                 "hit_rate": self.hits / total if total else 0.0}
+
+
+class PendingPuts:
+    """Records to store, written a pack at a time (:meth:`ResultCache.put_many`): what a
+    run's main process stores (the references its workers computed, the engine runs of an
+    executor whose workers do not store them) in a few files, not one each. ``put`` writes
+    a pack once :data:`PACK_SIZE` wait or the first of them has waited ``max_wait_s`` (a
+    process killed outright loses no more than that of finished work); ``flush`` writes the
+    rest (the runner calls it when the work ends, however it ends). Both raise ``OSError``
+    as :meth:`ResultCache.put` does (the records not written are dropped). ``cache`` None:
+    stores nothing."""
+
+    def __init__(self, cache: ResultCache | None, max_wait_s: float = 2.0) -> None:
+        self.cache = cache
+        self.max_wait_s = max_wait_s
+        self.items: list[tuple[str, dict]] = []
+        self._first_at = 0.0  # when the first record waiting was put
+
+    def put(self, key: str, record: dict) -> None:
+        if self.cache is None or not self.cache.enabled:
+            return
+        now = time.monotonic()
+        if not self.items:
+            self._first_at = now
+        self.items.append((key, record))
+        if len(self.items) >= PACK_SIZE or now - self._first_at >= self.max_wait_s:
+            self.flush()
+
+    def flush(self) -> None:
+        items, self.items = self.items, []
+        if items and self.cache is not None:
+            self.cache.put_many(items)
 
 
 def _is_temporary(name: str) -> bool:
@@ -757,6 +917,7 @@ def main(args) -> int:
     return 0
 
 
-__all__ = ["CACHED_CODE", "CACHE_DIR_VARIABLE", "CACHE_MARKER", "NotOurCache", "ResultCache",
+__all__ = ["CACHED_CODE", "CACHE_DIR_VARIABLE", "CACHE_MARKER", "PACK_DIRECTORY", "PACK_SIZE",
+           "NotOurCache", "PendingPuts", "ResultCache",
            "add_arguments", "cached_code_sources", "canonical_json", "code_version",
            "code_version_of", "default_cache_dir", "main"]

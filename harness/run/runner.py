@@ -94,7 +94,7 @@ from harness import bounds
 from harness.collector import collector_paused
 from harness.engines import engine_names, load_engine, parse_overrides, preset_choices, preset_role
 from harness.run import metrics, references
-from harness.run.cache import Spelled
+from harness.run.cache import PendingPuts, Spelled
 from harness.run.history import contact_history
 from harness.run.provenance import provenance
 from harness.run.records import (
@@ -160,7 +160,7 @@ def engine_task(task: dict) -> dict:
     except Exception as error:  # reported in the record, never dropped
         return {"status": f"error: {type(error).__name__}: {error}",
                 "wall_time_s": time.perf_counter() - start}
-    return _stored_by_worker(task, _task_output(engine, run, time.perf_counter() - start))
+    return _stored_by_worker([task], [_task_output(engine, run, time.perf_counter() - start)])[0]
 
 
 def engine_chunk(tasks: list[dict]) -> list[dict]:
@@ -185,8 +185,7 @@ def engine_chunk(tasks: list[dict]) -> list[dict]:
     engine = load_engine(first["engine"])
     runs = engine.run_many([task["scene"] for task in tasks], first["settings"])
     share = (time.perf_counter() - start) / len(tasks)
-    return [_stored_by_worker(task, _task_output(engine, run, share))
-            for task, run in zip(tasks, runs)]
+    return _stored_by_worker(tasks, [_task_output(engine, run, share) for run in runs])
 
 
 #: Keys of an engine task's output, popped by the runner: the worker stored it in the cache,
@@ -194,22 +193,26 @@ def engine_chunk(tasks: list[dict]) -> list[dict]:
 STORED_BY_WORKER, STORE_FAILED_IN_WORKER = "stored_by_worker", "store_failed_in_worker"
 
 
-def _stored_by_worker(task: dict, output: dict) -> dict:
-    """``output``, stored in the result cache by the process that ran the task when the
-    task says where (``task["store"]``: root, code version and key; the local pool), and
-    marked so (:data:`STORED_BY_WORKER`, or why not: :data:`STORE_FAILED_IN_WORKER`). A
-    skipped or failed run is never stored."""
-    where = task.get("store")
-    if where is None or output["status"].startswith(("skipped", "error")):
-        return output
-    root, version, key = where
+def _stored_by_worker(tasks: list[dict], outputs: list[dict]) -> list[dict]:
+    """``outputs`` (of ``tasks``, one chunk's), stored in the result cache by the process
+    that ran them when the tasks say where (``task["store"]``: root, code version and key;
+    the local pool), all in one pack, and marked so (:data:`STORED_BY_WORKER`, or why not:
+    :data:`STORE_FAILED_IN_WORKER`). A skipped or failed run is never stored."""
+    kept = [(task["store"], output) for task, output in zip(tasks, outputs)
+            if task.get("store") is not None
+            and not output["status"].startswith(("skipped", "error"))]
+    if not kept:
+        return outputs
+    root, version, _ = kept[0][0]
     try:
-        _worker_cache(root, version).put(key, output)
+        _worker_cache(root, version).put_many([(where[2], output) for where, output in kept])
     except OSError as error:
-        output[STORE_FAILED_IN_WORKER] = str(error)
-        return output
-    output[STORED_BY_WORKER] = True
-    return output
+        for _, output in kept:
+            output[STORE_FAILED_IN_WORKER] = str(error)
+        return outputs
+    for _, output in kept:
+        output[STORED_BY_WORKER] = True
+    return outputs
 
 
 @lru_cache(maxsize=4)
@@ -646,17 +649,17 @@ def run(
                         task_slots.append(item)
         # Several-contact references the records will need and the cache lacks: tasks of the
         # same executor, ahead of the engine runs (each takes up to a second).
+        # Stored by this process, a pack at a time (a worker computes one in a chunk).
         reference_tasks, reference_keys, computed_references = _reference_tasks(
             [s for s in scenarios if s.name not in stored], cache)
-        if store_in_worker is not None:  # each stored by the worker computing it, as runs
-            for task, key in zip(reference_tasks, reference_keys):
-                task["store"] = None if key is None else (*store_in_worker, key)
         if cache is not None:
             warnings += [f"cache entry rejected (simulated again): {entry}"
                          for entry in cache.rejected]
 
-    # 2. Run the misses; store each in the cache as it finishes.
+    # 2. Run the misses; store each in the cache as it finishes (those the workers did not
+    # store a pack at a time, the last when the work ends, however it ends).
     cache_failed: list[str] = []
+    pending = PendingPuts(cache)
 
     def store(index: int, output: dict) -> None:
         if index < len(reference_tasks):
@@ -669,7 +672,11 @@ def run(
                     cache_failed.append(f"cache {cache.root}: cannot store results ({problem}); "
                                         "the run goes on without the cache")
                 if not (stored or cache_failed or reference_keys[index] is None):
-                    _store_reference(cache, reference_keys[index], output["reference"])
+                    try:
+                        pending.put(reference_keys[index], output["reference"])
+                    except OSError as error:
+                        cache_failed.append(f"cache {cache.root}: cannot store results "
+                                            f"({error}); the run goes on without the cache")
             return
         index -= len(reference_tasks)
         stored = output.pop(STORED_BY_WORKER, False)
@@ -682,7 +689,7 @@ def run(
                 or output["status"].startswith(("skipped", "error"))):
             return
         try:
-            cache.put(task_keys[index], output)
+            pending.put(task_keys[index], output)
         except OSError as error:  # the run goes on without the cache
             cache_failed.append(f"cache {cache.root}: cannot store results ({error}); "
                                 "the run goes on without the cache")
@@ -694,9 +701,17 @@ def run(
                   f"skipped; {len(reference_tasks)} several-contact references to compute",
                   file=log, flush=True)
         simulating = time.perf_counter()
-        _run_tasks(reference_tasks + tasks, executor=executor, workers=workers,
-                   scheduler=scheduler, log=log, on_result=store, chunk_size=chunk_size,
-                   weight=len(tasks) + REFERENCE_TASK_WEIGHT * len(reference_tasks))
+        try:
+            _run_tasks(reference_tasks + tasks, executor=executor, workers=workers,
+                       scheduler=scheduler, log=log, on_result=store, chunk_size=chunk_size,
+                       weight=len(tasks) + REFERENCE_TASK_WEIGHT * len(reference_tasks))
+        finally:
+            try:
+                pending.flush()
+            except OSError as error:
+                if not cache_failed:
+                    cache_failed.append(f"cache {cache.root}: cannot store results ({error}); "
+                                        "the run goes on without the cache")
         if log is not None:
             print(f"engine runs: {len(tasks)} simulated, {len(reference_tasks)} references "
                   f"computed in {time.perf_counter() - simulating:.2f} s", file=log, flush=True)
@@ -1225,8 +1240,7 @@ def reference_task(task: dict) -> dict:
 
     ``task`` holds the situation (``situation``, :func:`harness.run.references.kind_of`), the
     ``scene`` at the point and its ``laws`` (:class:`harness.run.references.PointLaws`): a
-    scenario does not pickle; ``store`` where the worker keeps the reference (or None). The
-    result is ``{"reference": …}``
+    scenario does not pickle. The result is ``{"reference": …}``
     (:func:`harness.run.references.scene_reference`, the very dict the main process would
     compute) or, when it raises, ``{"error": "…"}``: the main process then builds the
     reference inline, where the exception becomes the point's internal-error records as
@@ -1239,26 +1253,7 @@ def reference_task(task: dict) -> dict:
         reference = references.scene_reference(task["situation"], task["scene"], task["laws"])
     except Exception as error:  # noqa: BLE001 - raised again, and reported, in the main process
         return {"error": f"{type(error).__name__}: {error}"}
-    return _reference_stored_by_worker(task, {"reference": reference})
-
-
-def _reference_stored_by_worker(task: dict, output: dict) -> dict:
-    """:func:`_stored_by_worker` of a reference task's output: the reference stored under
-    ``task["store"]`` when given (the local pool: the main process then spells and writes
-    none of them)."""
-    where = task.get("store")
-    if where is None:
-        return output
-    from harness.run.cache import ResultCache
-
-    root, version, key = where
-    try:
-        ResultCache(root, version=version).put(key, output["reference"])
-    except OSError as error:
-        output[STORE_FAILED_IN_WORKER] = str(error)
-        return output
-    output[STORED_BY_WORKER] = True
-    return output
+    return {"reference": reference}  # stored by the main process, a pack at a time
 
 
 def engine_record(scenario: Scenario, point_info: dict, engine_name: str, preset: str,

@@ -63,8 +63,10 @@ STRESS_FORMAT_VERSION = 2
 
 
 def run(quick: bool, out_dir: Path, executor: str = "local", workers: int | None = None,
-        scheduler: str | None = None, use_cache: bool = True, engines: bool = True) -> dict:
-    """The whole stress test; writes the report into ``out_dir`` and returns it."""
+        scheduler: str | None = None, use_cache: bool = True, engines: bool = True,
+        engine_names: tuple[str, ...] | None = None) -> dict:
+    """The whole stress test; writes the report into ``out_dir`` and returns it.
+    ``engine_names``: the engines stressed (default: every registered one)."""
     from harness.run.executor import progress_printer
 
     out_dir = Path(out_dir)
@@ -76,7 +78,7 @@ def run(quick: bool, out_dir: Path, executor: str = "local", workers: int | None
     if engines:
         progress = None if quick else progress_printer("stress engines")
         engine_report = engine_stress(quick, executor, workers, scheduler, use_cache,
-                                      progress=progress)
+                                      progress=progress, engines=engine_names)
     else:
         engine_report = {"versions": {}, "skipped": {}, "presets": [], "runs": [], "counts": {},
                          "cache": {"hits": 0, "misses": 0}, "tasks_run": 0}

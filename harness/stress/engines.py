@@ -156,15 +156,18 @@ def run_engine_case(task: dict) -> dict:
 
 def engine_stress(quick: bool, executor: str = "local", workers: int | None = None,
                   scheduler: str | None = None, use_cache: bool = True,
-                  cache_root: Path = Path(".cache/results"), progress=None) -> dict:
-    """All engine runs (cached), grouped; JSON-able."""
-    from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine, source_label
+                  cache_root: Path = Path(".cache/results"), progress=None,
+                  engines: tuple[str, ...] | None = None) -> dict:
+    """All engine runs (cached), grouped; JSON-able. ``engines``: those to stress (default:
+    every registered one, :func:`harness.engines.engine_names`, those added at run time
+    included)."""
+    from harness.engines import EngineNotInstalled, engine_names, load_engine, source_label
     from harness.run.cache import ResultCache
     from harness.run.executor import run_tasks
 
     presets = ("accurate",) if quick else ("defaults", "accurate")
     skipped, versions = {}, {}
-    for name in ENGINE_NAMES:
+    for name in engine_names() if engines is None else engines:
         try:
             versions[name] = load_engine(name).version
         except EngineNotInstalled as error:

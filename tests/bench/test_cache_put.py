@@ -1,4 +1,5 @@
-"""harness.bench.cache_put: it times puts of real engine outputs, each stored whole."""
+"""harness.bench.cache_put: it times stores of real engine outputs (a pack per chunk), each
+stored whole."""
 
 from __future__ import annotations
 

@@ -10,6 +10,7 @@ sees when a worker dies or the user presses Ctrl-C); one test kills a real proce
 from __future__ import annotations
 
 import importlib.util
+import json
 import math
 import os
 import shutil
@@ -125,18 +126,10 @@ def test_a_kill_mid_run_keeps_finished_chunks(tmp_path, monkeypatch):
     assert engine_outputs(rerun) == clean
 
 
-def engine_entries(cache_dir: Path) -> list[Path]:
-    """The cache's engine-run entries (it also keeps finished points and references, which
-    hold no velocities): the ones a rerun counts as ``cached`` records."""
-    entries = []
-    for path in cache_dir.rglob("*.json"):
-        try:
-            record = read_entry(path)[1]
-        except (OSError, ValueError):
-            continue
-        if isinstance(record, dict) and "velocities" in record:
-            entries.append(path)
-    return entries
+def engine_entries(cache_dir: Path) -> list[tuple[Path, int | None, dict]]:
+    """The cache's engine-run records, single or packed (it also keeps finished points and
+    references, which hold no velocities): the ones a rerun counts as ``cached`` records."""
+    return cache_entries.engine_run_records(cache_dir)
 
 
 def scenario_entries(cache_dir: Path) -> list[Path]:
@@ -230,10 +223,10 @@ def test_a_shard_removed_between_mkdir_and_the_write_is_made_again(tmp_path, mon
 
 
 def test_a_cache_that_cannot_be_written_costs_the_cache_not_the_run(tmp_path, monkeypatch):
-    def refuse(self, key, record):
+    def refuse(self, path, parts, key):  # every write: single entries, packs, scenarios
         raise PermissionError(13, "Permission denied", str(self.root))
 
-    monkeypatch.setattr(ResultCache, "put", refuse)
+    monkeypatch.setattr(ResultCache, "_write", refuse)
     outcome = sweep_run(ResultCache(tmp_path))
     assert len(engine_outputs(outcome)) == 9
     assert outcome.warnings and "Permission denied" in outcome.warnings[0]
@@ -443,8 +436,8 @@ def test_hostile_files_exit_2_and_the_good_ones_are_still_processed(tmp_path, co
 def test_a_bad_cache_entry_is_a_reported_miss(tmp_path, damage):
     cache = ResultCache(tmp_path)
     clean = engine_outputs(sweep_run(cache))
-    entry = min(engine_entries(tmp_path))  # an engine run's entry, not a finished point's
-    header, record = read_entry(entry)
+    # an engine run's record, not a finished point's
+    entry, index, record = min(engine_entries(tmp_path), key=lambda found: found[:2])
     if damage == "velocities-not-a-list":
         record["velocities"] = "oops"
     elif damage == "four-components":
@@ -454,9 +447,8 @@ def test_a_bad_cache_entry_is_a_reported_miss(tmp_path, damage):
     elif damage == "status-only":
         record = {"status": "ok"}
     # signed anew: a whole entry whose content the run's check rejects
-    write_entry(entry, header, record)
-    if damage == "not-json":
-        entry.write_text('{"key": "', encoding="utf-8")
+    body = b'{"key": "' if damage == "not-json" else json.dumps(record).encode()
+    cache_entries.replace_record(entry, index, body)
     # A rerun of the same selection reads the scenario's finished records, kept whole
     # (test_scenario_records_cache damages that entry); without it, the engine runs' entries.
     for whole in scenario_entries(tmp_path):

@@ -29,6 +29,7 @@ _spec = importlib.util.spec_from_file_location(
 cache_entries = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(cache_entries)
 read_entry, write_entry = cache_entries.read_entry, cache_entries.write_entry
+engine_run_records, replace_record = cache_entries.engine_run_records, cache_entries.replace_record
 
 DISK = SCENARIO_DIR / "disk-direct.toml"
 SWEEP = SCENARIO_DIR / "sweep-disk-alpha.toml"  # 9 points: 9 pymunk runs with one preset
@@ -128,10 +129,6 @@ def test_a_crafted_pickle_in_the_cache_runs_no_code(tmp_path):
 # --------------------------------------------------------------------------------------------
 # Item 9: every entry read is checked against its checksum
 # --------------------------------------------------------------------------------------------
-def _engine_run_entries(root: Path) -> list[Path]:
-    return [path for path in root.glob("??/*.json") if "velocities" in read_entry(path)[1]]
-
-
 def test_velocities_edited_in_the_cache_are_detected_and_recomputed(tmp_path):
     def run(cache):
         return runner.run([load_scenario(SWEEP)], engines=("pymunk",), presets=("defaults",),
@@ -140,12 +137,11 @@ def test_velocities_edited_in_the_cache_are_detected_and_recomputed(tmp_path):
     clean = run(ResultCache(tmp_path))
     for whole in tmp_path.glob("??/*.jsonl"):  # the scenario's records kept whole aside
         whole.unlink()
-    edited = _engine_run_entries(tmp_path)
+    edited = engine_run_records(tmp_path)
     assert len(edited) == 9
-    for path in edited:  # valid JSON, every speed ×1.5, the header as written
-        header, record = read_entry(path)
+    for path, index, record in edited:  # valid JSON, every speed ×1.5, the checksum as written
         record["velocities"] = [[1.5 * v for v in body] for body in record["velocities"]]
-        write_entry(path, header, record, sign=False)
+        replace_record(path, index, json.dumps(record).encode(), sign=False)
     again = ResultCache(tmp_path)
     outcome = run(again)
     assert [r.u_after for r in outcome.records] == [r.u_after for r in clean.records]

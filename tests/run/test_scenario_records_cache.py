@@ -28,7 +28,7 @@ _spec = importlib.util.spec_from_file_location(
     "cache_entries", Path(__file__).parent / "cache_entries.py")
 cache_entries = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(cache_entries)
-read_entry = cache_entries.read_entry
+read_entry, stored_records = cache_entries.read_entry, cache_entries.stored_records
 
 ROD = load_scenario(SCENARIO_DIR / "rod-45-slip-reversal.toml")
 SWEEP = load_scenario(SCENARIO_DIR / "sweep-disk-alpha.toml")  # 9 points
@@ -106,8 +106,8 @@ def test_warm_records_equal_those_of_a_run_without_the_cache_kept_once(tmp_path)
     flat = load_scenario(SCENARIO_DIR / "flat-rod.toml")  # a several-contact reference
     fresh = _run([ROD, flat], None)
     _run([ROD, flat], ResultCache(tmp_path))
-    stored = [record for path in tmp_path.glob("??/*.json")
-              if (record := read_entry(path)[1]).get("kind") != ENGINE_FACTS]
+    stored = [record for _, _, record in stored_records(tmp_path)
+              if record.get("kind") != ENGINE_FACTS]
     # engine runs and the flat face's reference; a point's records only in its scenario's
     assert sorted("velocities" in entry for entry in stored) == [False] + [True] * 4
     assert not any("records" in entry for entry in stored)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -189,3 +190,27 @@ def _tiny_solver_report() -> dict:
     report["totals"] = {"silent_non_finite": 0, "energy_gain_poisson_stronge": 0,
                         "scalar_silent_non_finite": report["scalar_api"]["silent_non_finite"]}
     return report
+
+
+def test_a_registered_engine_goes_through_impact_harness_stress(tmp_path, monkeypatch,
+                                                                 toy_engine):
+    """The test-only toy (tests/engines/toy_engine.py), registered and no other engine
+    listed: `impact-harness stress` runs it on every case and reports it (the solver's part
+    kept tiny, its figures not drawn: test_run_solver_only_writes_the_report draws them)."""
+    from harness import cli
+
+    monkeypatch.setattr(stress, "solver_stress", lambda quick: _tiny_solver_report())
+    monkeypatch.setattr(stress, "boundary_jumps_figure", lambda solver, path: None)
+    monkeypatch.setattr(stress, "energy_figure", lambda solver, path: None)
+    out = tmp_path / "stress"
+    assert cli.main(["stress", "--quick", "--out", str(out), "--no-cache", "--workers", "1"]) == 0
+    report = json.loads((out / "stress.json").read_text(encoding="utf-8"))
+    engines = report["engines"]
+    assert set(engines["versions"]) == {toy_engine} and not engines["skipped"]
+    cases = len(stress_engines.engine_cases(quick=True))
+    assert engines["counts"] == {"toy.accurate": {**dict.fromkeys(stress_engines.OUTCOMES, 0),
+                                                  "ok": cases}}  # exact impulses: all single
+    rows = (out / "stress-engines.csv").read_text(encoding="utf-8").splitlines()[1:]
+    assert len(rows) == cases and all(row.startswith("toy,accurate,") for row in rows)
+    assert "toy" in (out / "stress.md").read_text(encoding="utf-8")
+    assert (out / "engine-grid.png").stat().st_size > 0

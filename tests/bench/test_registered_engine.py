@@ -1,0 +1,31 @@
+"""A registered engine goes through `impact-harness bench` as the shipped ones do: the
+test-only toy of tests/engines/toy_engine.py, the only engine listed (the ``toy_engine``
+fixture of tests/conftest.py), measured by ``--engines`` and ``--survey``."""
+
+from __future__ import annotations
+
+import json
+
+from harness import cli
+from harness.bench import survey as bench_survey
+
+
+def test_the_toy_goes_through_bench_engines_and_survey(tmp_path, monkeypatch, capsys,
+                                                       toy_engine):
+    monkeypatch.setattr(bench_survey, "QUICK_SAMPLES", 2)  # 14 impacts: seconds
+    out = tmp_path / "bench"
+    assert cli.main(["bench", "--engines", "--survey", "--quick", "--out", str(out)]) == 0
+    table = json.loads((out / "bench.json").read_text(encoding="utf-8"))
+    overhead = table["engines"]["engines"]
+    assert list(overhead) == [toy_engine] and overhead[toy_engine]["available"]
+    rows = overhead[toy_engine]["rows"]
+    assert {row["preset"] for row in rows} == {"defaults", "accurate"}
+    # exact impulses: every benchmarked run a single impact, rerun bit for bit
+    assert all(row["verdict"] == "ok" and row["deterministic"] for row in rows)
+    assert all(row["harness_us"] > 0 and row["bare_us"] > 0 for row in rows)
+    survey = table["survey"]
+    assert survey["engines"] == [toy_engine]
+    assert set(survey["bare"]) == {"toy.defaults", "toy.accurate"}
+    assert survey["impacts"] == 2 * 7 and survey["survey_s"] > 0
+    printed = capsys.readouterr().out
+    assert "toy " in printed and "toy.accurate" in printed
