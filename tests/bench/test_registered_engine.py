@@ -25,7 +25,7 @@ def test_the_toy_goes_through_bench_engines_and_survey(tmp_path, monkeypatch, ca
     assert all(row["harness_us"] > 0 and row["bare_us"] > 0 for row in rows)
     survey = table["survey"]
     assert survey["engines"] == [toy_engine]
-    assert set(survey["bare"]) == {"toy.defaults", "toy.accurate"}
-    assert survey["impacts"] == 2 * 7 and survey["survey_s"] > 0
+    assert set(survey["pairs"]) == {"toy.defaults", "toy.accurate"}
+    assert survey["impacts"] == 2 * 7 and survey["survey_cpu_s"] > 0
     printed = capsys.readouterr().out
     assert "toy " in printed and "toy.accurate" in printed
