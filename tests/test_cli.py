@@ -119,7 +119,7 @@ def test_suite_quick(capsys, tmp_path):
     page = (out / "index.html").read_text(encoding="utf-8")
     assert "Table 3 of Djerassi" in page  # the paper's table embedded in the page
     assert f"href='{survey.as_posix()}'" in page
-    assert "<h2 id='survey'>" in page and "figures/survey-map-pymunk.png" in page
+    assert "<div class='folded' id='survey'>" in page and "figures/survey-map-pymunk.png" in page
     assert (out / "figures" / "survey-map-pymunk.png").is_file()
     table = (out / survey).read_text(encoding="utf-8")
     assert "| pymunk | accurate | rod-ground | all types | 20 |" in table  # SURVEY_SAMPLES each
