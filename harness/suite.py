@@ -42,8 +42,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def main(args) -> int:
     from harness import report
     from harness.report import table3 as paper
-    from harness.run.files import make_output_directory, output_directory_problem
     from harness.run.records import read_results
+    from harness.store.files import make_output_directory, output_directory_problem
 
     out: Path = args.out
     started = time.perf_counter()

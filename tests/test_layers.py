@@ -5,15 +5,16 @@ The layers, lowest first (README, 'Layout'):
 
 0. ``planar_impact`` -- the theory, numpy only;
 1. ``harness.bounds``, ``collector``, ``processes``, ``inputs`` -- shared tools;
-2. ``harness.scene`` -- the impact to simulate;
-3. ``harness.engines``, ``harness.reference`` -- engines behind one contract, reference
+2. ``harness.store`` -- storage and identity: atomic files, the result cache;
+3. ``harness.scene`` -- the impact to simulate;
+4. ``harness.engines``, ``harness.reference`` -- engines behind one contract, reference
    answers the single-contact laws do not give;
-4. ``harness.scenarios`` -- scenario files to checked scenarios;
-5. ``harness.run`` -- runs, records, verdicts, the cache;
-6. ``harness.plotting`` -- figures shared by the survey and the report;
-7. ``harness.survey``, ``harness.experiments``, ``harness.stress``;
-8. ``harness.report``, ``harness.bench``;
-9. commands on top: ``harness.suite``, ``harness.validate``, ``harness.cli``.
+5. ``harness.scenarios`` -- scenario files to checked scenarios;
+6. ``harness.run`` -- runs, records, verdicts;
+7. ``harness.plotting`` -- figures shared by the survey and the report;
+8. ``harness.survey``, ``harness.experiments``, ``harness.stress``;
+9. ``harness.report``, ``harness.bench``;
+10. commands on top: ``harness.suite``, ``harness.validate``, ``harness.cli``.
 
 One exception is written down, with why, in :data:`ALLOWED_UPWARD`; any other import
 against the order fails this test, which names it.
@@ -28,6 +29,7 @@ ROOT = Path(__file__).resolve().parents[1]
 LAYERS = (
     ("planar_impact",),
     ("harness.bounds", "harness.collector", "harness.processes", "harness.inputs"),
+    ("harness.store",),
     ("harness.scene",),
     ("harness.engines", "harness.reference"),
     ("harness.scenarios",),
@@ -38,14 +40,13 @@ LAYERS = (
     ("harness.suite", "harness.validate", "harness.cli"),
 )
 #: ``(importing package, imported module)`` pairs allowed against the order. The scenario
-#: checks keep the point checks that passed in the run's cache (``run.cache``, written
-#: through ``run.files``), ask the engines' facts recorded there (``run.engine_facts``) and
+#: checks keep the point checks that passed in the run's cache (``run.cache``), ask the
+#: engines' facts recorded there (``run.engine_facts``) and
 #: judge a second feature's strike with the run's verdict geometry (``run.verdicts``): the
 #: storage and the verdicts' shape features still live in ``harness.run`` (issue 26: a
 #: storage layer below the scenarios, the shape features into ``harness.scene``).
 ALLOWED_UPWARD = {
     ("harness.scenarios", "harness.run.cache"),
-    ("harness.scenarios", "harness.run.files"),
     ("harness.scenarios", "harness.run.engine_facts"),
     ("harness.scenarios", "harness.run.verdicts"),
 }

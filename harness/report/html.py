@@ -40,8 +40,8 @@ from harness.report.views import (
     slug,
     split_overrides,
 )
-from harness.run.files import write_text_atomically
 from harness.run.records import ANALYTIC, Record, Results
+from harness.store.files import write_text_atomically
 
 CSS = """
 body{font-family:-apple-system,Segoe UI,Helvetica,Arial,sans-serif;margin:0 auto;max-width:1280px;

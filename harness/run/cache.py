@@ -62,8 +62,8 @@ from pathlib import Path
 from typing import Any
 
 from harness.collector import collector_paused
-from harness.run.files import write_parts_atomically, write_text_atomically
 from harness.run.records import LINE_SEPARATOR  # an entry's lines as a results file holds them
+from harness.store.files import write_parts_atomically, write_text_atomically
 
 _HARNESS_DIR = Path(__file__).resolve().parent.parent  # harness/, from harness/run/
 #: The harness source (directories and files, relative to ``harness/``) that the cached
@@ -681,7 +681,7 @@ class ResultCache:
 
 
 def _is_temporary(name: str) -> bool:
-    """A writer's temporary file name (:func:`harness.run.files.write_parts_atomically`)."""
+    """A writer's temporary file name (:func:`harness.store.files.write_parts_atomically`)."""
     return name.startswith(".") and name.endswith(".tmp")
 
 

@@ -575,7 +575,7 @@ class PassedChecks:
         if self.root is None or not self._added:
             return
         from harness.run.cache import code_version
-        from harness.run.files import write_text_atomically
+        from harness.store.files import write_text_atomically
 
         text = json.dumps({"format": self.FORMAT, "code_version": code_version(),
                            "context": self._context_text(),

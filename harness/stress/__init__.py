@@ -46,8 +46,8 @@ import sys
 import time
 from pathlib import Path
 
-from harness.run.files import output_directory_problem, write_text_atomically
 from harness.run.provenance import provenance
+from harness.store.files import output_directory_problem, write_text_atomically
 from harness.stress.engines import engine_stress
 from harness.stress.outputs import (
     boundary_jumps_figure,
