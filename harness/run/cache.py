@@ -62,22 +62,26 @@ from pathlib import Path
 from typing import Any
 
 from harness.collector import collector_paused
-from harness.run.records import LINE_SEPARATOR  # an entry's lines as a results file holds them
 from harness.store.files import write_parts_atomically, write_text_atomically
 
 _HARNESS_DIR = Path(__file__).resolve().parent.parent  # harness/, from harness/run/
 #: The harness source (directories and files, relative to ``harness/``) that the cached
-#: values depend on: the engine runs (the adapters, the scene they build, ``engine_task`` in
-#: the runner), the several-contact references (the references, the event-driven solver,
-#: the departures they hold) and each scenario's finished records (the scenario model, the
-#: runner, metrics, contact histories, verdicts, the record layout). Add a module here when
+#: values depend on: the store (the keys' spelling, the entries' layout), the engine runs (the
+#: adapters, the scene they build, ``engine_task`` in the runner), the several-contact
+#: references (the references, the event-driven solver, the departures they hold) and each
+#: scenario's finished records (the scenario model, the runner, metrics, contact histories,
+#: verdicts, the record layout). Add a module here when
 #: a cached value starts to depend on it; a listed path that is missing is an error, never
 #: silently skipped.
 CACHED_CODE: tuple[str, ...] = (
-    "__init__.py", "engines", "scene", "reference", "scenarios", "run/__init__.py",
-    "run/cache.py", "run/runner.py", "run/references.py", "run/metrics.py", "run/verdicts.py",
+    "__init__.py", "store", "engines", "scene", "reference", "scenarios", "run/__init__.py",
+    "run/runner.py", "run/references.py", "run/metrics.py", "run/verdicts.py",
     "run/history.py", "run/records.py",
 )
+
+#: Between two lines of an entry of many lines (:meth:`ResultCache.put_lines`): the record
+#: lines of a results file (:mod:`harness.run.records`), which a warm run copies as stored.
+LINE_SEPARATOR = ",\n"
 
 CACHE_FORMAT = 2  # bump when the record layout changes (2: SHA-256 checked, no pickle)
 

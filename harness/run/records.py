@@ -54,14 +54,13 @@ from typing import Any, Iterable, Mapping, Sequence
 
 from harness import inputs
 from harness.collector import collector_paused
+from harness.run.cache import LINE_SEPARATOR  # between two record lines (never a raw newline)
 from harness.store.files import output_file_problem, write_parts_atomically
 
 FORMAT = "impact-harness-results"
 FORMAT_VERSION = 1
 DEFAULT_RESULTS = Path("reports") / "results.json"
 ANALYTIC = "analytic"
-#: Between two record lines of a results file (a line never holds a raw newline).
-LINE_SEPARATOR = ",\n"
 
 
 @dataclass

@@ -15,7 +15,7 @@ def _tree(root: Path) -> tuple[Path, Path]:
     files = ["src/planar_impact/solver.py", "harness/__init__.py",
              "harness/engines/pymunk_engine.py", "harness/scene/model.py",
              "harness/reference/event_driven.py", "harness/run/__init__.py",
-             "harness/run/cache.py", "harness/run/runner.py", "harness/run/references.py",
+             "harness/store/cache.py", "harness/run/runner.py", "harness/run/references.py",
              "harness/run/metrics.py", "harness/run/verdicts.py", "harness/run/history.py",
              "harness/run/records.py", "harness/scenarios/model.py",
              "harness/run/provenance.py", "harness/report/html.py",
@@ -47,7 +47,8 @@ def test_editing_code_the_cache_does_not_depend_on_keeps_the_key(tmp_path, edite
                                     "harness/engines/pymunk_engine.py", "harness/scene/model.py",
                                     "harness/reference/event_driven.py", "harness/run/runner.py",
                                     "harness/run/references.py", "harness/run/metrics.py",
-                                    "harness/run/verdicts.py", "harness/scenarios/model.py"])
+                                    "harness/run/verdicts.py", "harness/scenarios/model.py",
+                                    "harness/store/cache.py"])
 def test_editing_code_a_cached_value_depends_on_changes_the_key(tmp_path, edited):
     harness_dir, package = _tree(tmp_path)
     before = _version(harness_dir, package)
