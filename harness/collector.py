@@ -1,7 +1,7 @@
 """Pausing Python's cyclic garbage collector around work that makes many containers.
 
 Shared by the engines (:meth:`harness.engines.contract.Engine.run_many`) and the run side
-(:mod:`harness.run.records`, :mod:`harness.run.runner`, :mod:`harness.run.cache`), which must
+(:mod:`harness.run.records`, :mod:`harness.run.runner`, :mod:`harness.store.cache`), which must
 not depend on each other for it.
 """
 

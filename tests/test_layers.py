@@ -46,7 +46,6 @@ LAYERS = (
 #: storage and the verdicts' shape features still live in ``harness.run`` (issue 26: a
 #: storage layer below the scenarios, the shape features into ``harness.scene``).
 ALLOWED_UPWARD = {
-    ("harness.scenarios", "harness.run.cache"),
     ("harness.scenarios", "harness.run.engine_facts"),
     ("harness.scenarios", "harness.run.verdicts"),
 }

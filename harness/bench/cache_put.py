@@ -52,7 +52,7 @@ def _library_outputs() -> Iterator[dict]:
 
 def time_puts(outputs: list[dict], root: Path) -> tuple[float, float, float]:
     """``(wall, user, system)`` seconds per put of every output into a cache at ``root``."""
-    from harness.run.cache import ResultCache
+    from harness.store.cache import ResultCache
 
     cache = ResultCache(root, version="bench")
     keys = [cache.key({"run": index}) for index in range(len(outputs))]

@@ -37,7 +37,7 @@ class EngineFacts:
 
 def engine_facts(names: Sequence[str], cache=None) -> EngineFacts:
     """The :class:`EngineFacts` of ``names``, read from ``cache`` (a
-    :class:`harness.run.cache.ResultCache`; None or disabled: every engine loaded) where it
+    :class:`harness.store.cache.ResultCache`; None or disabled: every engine loaded) where it
     holds them for the installed package, else learnt by loading the adapter and kept."""
     facts = EngineFacts()
     for name in names:

@@ -86,7 +86,7 @@ def provenance(kind: str, format_version: int, *, command: Iterable[str] | None 
     command, package versions, the code version the cache keys on, the git commit, the
     machine (with its CPU model) and ``extra`` (e.g. ``engine_settings``).
     """
-    from harness.run.cache import code_version
+    from harness.store.cache import code_version
 
     return {
         "format": kind,

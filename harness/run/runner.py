@@ -26,7 +26,7 @@ What runs
 
 Parallelism and cache
     One task per (scenario, point, engine, preset). Each is looked up in the result cache
-    (:class:`harness.run.cache.ResultCache`, key: the scene at the point, the engine and its
+    (:class:`harness.store.cache.ResultCache`, key: the scene at the point, the engine and its
     version, the complete settings and the code version); only the misses run, through
     :func:`harness.run.executor.run_tasks` (local process pool, or Dask), and are stored. The
     cache holds the engine's raw output, and each scenario's finished records whole
@@ -94,7 +94,6 @@ from harness import bounds
 from harness.collector import collector_paused
 from harness.engines import engine_names, load_engine, parse_overrides, preset_choices, preset_role
 from harness.run import metrics, references
-from harness.run.cache import Spelled
 from harness.run.history import contact_history
 from harness.run.provenance import provenance
 from harness.run.records import (
@@ -110,6 +109,7 @@ from harness.run.records import (
     write_result_blocks,
 )
 from harness.scenarios import ENGINES, PRESETS, Scenario, load_scenarios
+from harness.store.cache import Spelled
 
 # harness.run.verdicts and harness.run.executor (a process pool's modules) are imported where
 # used: a warm run, whose records come whole from the cache, needs neither.
@@ -214,9 +214,9 @@ def _stored_by_worker(task: dict, output: dict) -> dict:
 
 @lru_cache(maxsize=4)
 def _worker_cache(root, version: str):
-    """The :class:`~harness.run.cache.ResultCache` a worker stores its runs in: one per
+    """The :class:`~harness.store.cache.ResultCache` a worker stores its runs in: one per
     cache and code version, made at the first task (a put keeps no state in it)."""
-    from harness.run.cache import ResultCache
+    from harness.store.cache import ResultCache
 
     return ResultCache(root, version=version)
 
@@ -492,7 +492,7 @@ def _point_dict(point) -> dict:
 
 def _scene_payload(scene):
     """The scene as a cache key's payload holds it: the dataclass itself, hashed field by
-    field (:func:`harness.run.cache.canonical_json`), never copied."""
+    field (:func:`harness.store.cache.canonical_json`), never copied."""
     return scene
 
 
@@ -538,7 +538,7 @@ def run(
 ) -> RunOutcome:
     """Run ``scenarios`` and return the records, the gates and the provenance.
 
-    ``cache`` is a :class:`harness.run.cache.ResultCache` (None: no cache). ``log`` gets the
+    ``cache`` is a :class:`harness.store.cache.ResultCache` (None: no cache). ``log`` gets the
     progress lines (a stream; ``"stderr"``, the default: ``sys.stderr`` at call time; None:
     quiet). ``time_limit_s`` bounds each engine task (None: no limit); ``selection`` (what
     was asked for) goes into the provenance. ``overrides`` (``{engine: {key: value}}``, from
@@ -1051,7 +1051,7 @@ def point_records(scenario: Scenario, point, engine_entries: Sequence, *,
                   cache=None, reference: dict | None = None) -> list[Record]:
     """The law records and the engine records of one sweep point.
 
-    ``cache`` (a :class:`harness.run.cache.ResultCache`, or None) keeps the point's
+    ``cache`` (a :class:`harness.store.cache.ResultCache`, or None) keeps the point's
     reference (:func:`point_reference_cached`) between runs. ``reference``: the point's
     reference already computed (a :func:`reference_task` of the run); None: read from the
     cache or computed here.
@@ -1249,7 +1249,7 @@ def _reference_stored_by_worker(task: dict, output: dict) -> dict:
     where = task.get("store")
     if where is None:
         return output
-    from harness.run.cache import ResultCache
+    from harness.store.cache import ResultCache
 
     root, version, key = where
     try:
@@ -1390,7 +1390,7 @@ def _progress_line(number, total, scenario, counts: Mapping, gates) -> str:
 # --------------------------------------------------------------------------------------------
 def add_common_arguments(parser: argparse.ArgumentParser) -> None:
     """Options shared by ``run`` and ``suite``."""
-    from harness.run.cache import default_cache_dir
+    from harness.store.cache import default_cache_dir
 
     parser.add_argument("--tags", default=None,
                         help="comma-separated tags (e.g. quick); scenarios with any of them")
@@ -1473,7 +1473,7 @@ def check_arguments(args, json_path: Path | None) -> str | None:
         if reason:
             return f"--json {json_path}: {reason}"
     if not args.no_cache:  # made and marked as the harness's, or refused when not its own
-        from harness.run.cache import ResultCache
+        from harness.store.cache import ResultCache
 
         reason = ResultCache(args.cache_dir, version="").prepare()
         if reason:
@@ -1561,8 +1561,8 @@ def _execute(args, *, json_path: Path, command: Sequence[str] | None,
             return _fail(f"{json_path} holds the results of another selection "
                          f"({_describe_selection(existing)}); write this run elsewhere with "
                          f"--json PATH, or replace them with --force"), None
-    from harness.run.cache import default_cache_dir
     from harness.scenarios.checks import use_passed_checks
+    from harness.store.cache import default_cache_dir
 
     # The cache also remembers which scenario texts passed the point checks (--no-cache:
     # every file is checked again).
@@ -1585,7 +1585,7 @@ def _execute(args, *, json_path: Path, command: Sequence[str] | None,
         return EXIT_BAD_INPUT, None
     cache = None
     if not args.no_cache:
-        from harness.run.cache import ResultCache
+        from harness.store.cache import ResultCache
 
         cache = ResultCache(root=args.cache_dir)
     try:

@@ -19,11 +19,11 @@ from typing import TYPE_CHECKING, Any, Mapping
 import numpy as np
 
 from harness.engines import EngineNotInstalled, load_engine
-from harness.run.cache import SCENARIO_CHECKS_STORE
 from harness.scenarios.errors import suggest
 from harness.scenarios.model import Point, Scenario
 from harness.scenarios.schema import ONE_POINT_TOLERANCE, PRESETS, SHAPE_FIELDS
 from harness.scene import Body, Disk, Scene, geometry
+from harness.store.cache import SCENARIO_CHECKS_STORE
 
 if TYPE_CHECKING:  # the reader imports the checks, not the other way round
     from harness.scenarios.reader import TableReader
@@ -495,7 +495,7 @@ class PassedChecks:
     :func:`check_points` (the second-feature strike check above all) costs about a
     millisecond per file, much of a warm run of a large library. Its outcome depends only on
     the file's text, the code (the scenarios, the scene and the engines: the result cache's
-    :func:`harness.run.cache.code_version`), the limits of :data:`LIMITS` and which engines
+    :func:`harness.store.cache.code_version`), the limits of :data:`LIMITS` and which engines
     are installed (:func:`engine_time_step`), so a text that passed is remembered under
     ``sha256`` of those: the file is read again (TOML, the table checks), its point checks
     are not. A file with problems is checked again each time (its errors are listed then).
@@ -574,7 +574,7 @@ class PassedChecks:
         said, never an error (the next run checks again)."""
         if self.root is None or not self._added:
             return
-        from harness.run.cache import code_version
+        from harness.store.cache import code_version
         from harness.store.files import write_text_atomically
 
         text = json.dumps({"format": self.FORMAT, "code_version": code_version(),
@@ -582,7 +582,7 @@ class PassedChecks:
                            "passed": sorted(self._passed or ())})
         try:
             if not self.root.is_dir():
-                from harness.run.cache import ResultCache
+                from harness.store.cache import ResultCache
 
                 ResultCache(self.root, version="").make_root()  # made here: marked as ours
             write_text_atomically(self.path, text, prefix=".checks-")
@@ -612,9 +612,9 @@ def _checks_context(root=None) -> str:
     which engines are installed is read from the result cache at ``root`` where it is kept
     (:mod:`harness.run.engine_facts`: no engine is imported for it on a warm run)."""
     from harness.engines import ENGINE_NAMES
-    from harness.run.cache import ResultCache, code_version
     from harness.run.engine_facts import engine_facts
     from harness.scenarios.schema import LIMITS, limit
+    from harness.store.cache import ResultCache, code_version
 
     installed = list(engine_facts(ENGINE_NAMES, None if root is None else ResultCache(root))
                      .versions)

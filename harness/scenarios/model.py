@@ -161,12 +161,12 @@ class Scenario:
     @cached_property
     def definition_digest(self) -> str:
         """sha256 of every field but the file's ``path`` spelled as canonical JSON
-        (:func:`harness.run.cache.canonical_json`): what a scenario's records depend on (the
+        (:func:`harness.store.cache.canonical_json`): what a scenario's records depend on (the
         runner's cache key of them). Spelled once per scenario object and kept with it (in the
         store of passed checks too, :meth:`located` copies it): a warm run of a large library
         spent a tenth of its time spelling definitions. ``TypeError`` for a value without a
         canonical spelling."""
-        from harness.run.cache import canonical_json
+        from harness.store.cache import canonical_json
 
         definition = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "path"}
         return hashlib.sha256(canonical_json(definition).encode()).hexdigest()

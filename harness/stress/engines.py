@@ -159,8 +159,8 @@ def engine_stress(quick: bool, executor: str = "local", workers: int | None = No
                   cache_root: Path = Path(".cache/results"), progress=None) -> dict:
     """All engine runs (cached), grouped; JSON-able."""
     from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine, source_label
-    from harness.run.cache import ResultCache
     from harness.run.executor import run_tasks
+    from harness.store.cache import ResultCache
 
     presets = ("accurate",) if quick else ("defaults", "accurate")
     skipped, versions = {}, {}

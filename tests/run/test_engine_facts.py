@@ -10,9 +10,9 @@ from harness import engines as registry
 from harness.engines import ENGINE_NAMES, EngineNotInstalled, install_fingerprint, load_engine
 from harness.run import engine_facts as facts_module
 from harness.run import runner
-from harness.run.cache import ResultCache
 from harness.run.engine_facts import engine_facts
 from harness.scenarios import PRESETS, SCENARIO_DIR, checks, load_scenario
+from harness.store.cache import ResultCache
 
 ROD = load_scenario(SCENARIO_DIR / "rod-45-slip-reversal.toml")
 

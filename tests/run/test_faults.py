@@ -24,10 +24,10 @@ import pytest
 
 from harness import cli
 from harness.run import runner
-from harness.run.cache import ResultCache
 from harness.run.records import Record, read_results, write_results
 from harness.scenarios import SCENARIO_DIR, ScenarioError, load_scenario
 from harness.scenarios import reader as scenario_reader
+from harness.store.cache import ResultCache
 
 # Entry files read and written by hand (shared by the cache tests).
 _spec = importlib.util.spec_from_file_location(
@@ -470,7 +470,7 @@ def test_a_bad_cache_entry_is_a_reported_miss(tmp_path, damage):
 
 
 def test_the_cache_has_one_home_whatever_the_working_directory(tmp_path, monkeypatch):
-    from harness.run.cache import default_cache_dir
+    from harness.store.cache import default_cache_dir
 
     monkeypatch.delenv("IMPACT_HARNESS_CACHE_DIR", raising=False)
     monkeypatch.chdir(tmp_path)

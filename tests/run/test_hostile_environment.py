@@ -18,10 +18,10 @@ import pytest
 from harness import cli
 from harness.engines import load_engine
 from harness.run import runner
-from harness.run.cache import CACHE_MARKER, OLD_CHECKS_STORES, ResultCache
 from harness.run.engine_facts import ENGINE_FACTS
 from harness.run.records import read_results
 from harness.scenarios import SCENARIO_DIR, load_scenario
+from harness.store.cache import CACHE_MARKER, OLD_CHECKS_STORES, ResultCache
 
 # Entry files read and written by hand (shared by the cache tests).
 _spec = importlib.util.spec_from_file_location(

@@ -9,8 +9,8 @@ from dataclasses import replace
 from pathlib import Path
 
 from harness.run import references, runner
-from harness.run.cache import ResultCache
 from harness.scenarios import load_scenario
+from harness.store.cache import ResultCache
 
 # Entry files read and written by hand (shared by the cache tests).
 _spec = importlib.util.spec_from_file_location(

@@ -9,9 +9,9 @@ import json
 import pytest
 
 from harness.run import references, runner
-from harness.run.cache import ResultCache
 from harness.run.executor import run_tasks
 from harness.scenarios import SCENARIO_DIR, load_scenario
+from harness.store.cache import ResultCache
 
 #: Flat faces (m-contact laws) and tilts (event sequences), one to six points each.
 SEVERAL_CONTACT = [load_scenario(SCENARIO_DIR / f"{name}.toml") for name in (

@@ -11,9 +11,9 @@ import pytest
 import harness.engines as engines_module
 from harness.engines import ENGINE_NAMES, EngineNotInstalled, UnsupportedScene
 from harness.run import metrics, runner
-from harness.run.cache import ResultCache
 from harness.run.records import ANALYTIC, read_results, write_results
 from harness.scenarios import SCENARIO_DIR, load_scenario
+from harness.store.cache import ResultCache
 
 ROD = load_scenario(SCENARIO_DIR / "rod-45-slip-reversal.toml")
 TWO_SLED = load_scenario(SCENARIO_DIR / "two-sled-row2.toml")

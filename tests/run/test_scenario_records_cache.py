@@ -17,11 +17,11 @@ import pytest
 from harness import cli
 from harness.engines import ENGINE_NAMES
 from harness.run import runner
-from harness.run.cache import ResultCache
 from harness.run.engine_facts import ENGINE_FACTS, engine_facts
 from harness.run.records import read_results
 from harness.scenarios import SCENARIO_DIR, checks, load_scenario
 from harness.scenarios.library import load_scenarios_reporting
+from harness.store.cache import ResultCache
 
 # Entry files read and written by hand (shared by the cache tests).
 _spec = importlib.util.spec_from_file_location(

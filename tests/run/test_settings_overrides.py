@@ -14,8 +14,8 @@ import pytest
 from harness import cli
 from harness.engines import load_engine, parse_overrides
 from harness.run import runner
-from harness.run.cache import ResultCache
 from harness.scenarios import SCENARIO_DIR, load_scenario
+from harness.store.cache import ResultCache
 
 DISK = SCENARIO_DIR / "disk-direct.toml"
 

@@ -9,8 +9,8 @@ import time
 
 import pytest
 
-from harness.run.cache import ResultCache
 from harness.store import files
+from harness.store.cache import ResultCache
 
 
 def test_parts_and_bytes_are_written_whole_and_leave_no_temporary(tmp_path):

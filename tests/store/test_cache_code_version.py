@@ -1,5 +1,5 @@
 """The cache's code version hashes only the code the cached values depend on
-(harness/run/cache.py, ``CACHED_CODE``): editing the report keeps every entry."""
+(harness/store/cache.py, ``CACHED_CODE``): editing the report keeps every entry."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from harness.run import cache as cache_module
+from harness.store import cache as cache_module
 
 
 def _tree(root: Path) -> tuple[Path, Path]:
