@@ -49,7 +49,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
                     "the laws against measured impacts (Fazeli 2017 drops, Kharaz 2001)"),
     "calibrate": ("harness.experiments.calibrate_cli",
                   "fit an engine's own knobs to the drops or to a law by a small grid"),
-    "cache": ("harness.store.cache", "the result cache: info (where, how big), prune, clear"),
+    "cache": ("harness.store.cli", "the result cache: info (where, how big), prune, clear"),
 }
 
 EXIT_STATUS_HELP = """exit status:

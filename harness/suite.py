@@ -127,14 +127,14 @@ def survey_inputs(populations, engines, presets) -> str:
     text), :data:`SURVEY_SAMPLES`, the seed, the engines and presets asked for, the installed
     versions of Python, numpy, pyarrow and the engines (an engine installed since is run),
     and the code -- what the run cache's entries depend on (the engines, scenes, verdicts,
-    metrics, ``planar_impact``: :func:`harness.store.cache.cached_code_sources`) and
+    metrics, ``planar_impact``: :func:`harness.store.identity.cached_code_sources`) and
     ``harness/survey/``. Any edit to that code runs the survey again: coarse, and cheap to
     get right."""
     import hashlib
     import json
 
     from harness.run.provenance import PACKAGES, package_versions
-    from harness.store.cache import cached_code_sources, code_version_of
+    from harness.store.identity import cached_code_sources, code_version_of
 
     survey_code = Path(__file__).resolve().parent / "survey"
     code = code_version_of((*cached_code_sources(), survey_code))

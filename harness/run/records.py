@@ -54,7 +54,7 @@ from typing import Any, Iterable, Mapping, Sequence
 
 from harness import inputs
 from harness.collector import collector_paused
-from harness.store.cache import LINE_SEPARATOR  # between two record lines (never a raw newline)
+from harness.store.cache import LINE_SEPARATOR  # between two record lines (no raw newline)
 from harness.store.files import output_file_problem, write_parts_atomically
 
 FORMAT = "impact-harness-results"

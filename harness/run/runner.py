@@ -109,7 +109,7 @@ from harness.run.records import (
     write_result_blocks,
 )
 from harness.scenarios import ENGINES, PRESETS, Scenario, load_scenarios
-from harness.store.cache import Spelled
+from harness.store.identity import Spelled
 
 # harness.run.verdicts and harness.run.executor (a process pool's modules) are imported where
 # used: a warm run, whose records come whole from the cache, needs neither.
@@ -492,7 +492,7 @@ def _point_dict(point) -> dict:
 
 def _scene_payload(scene):
     """The scene as a cache key's payload holds it: the dataclass itself, hashed field by
-    field (:func:`harness.store.cache.canonical_json`), never copied."""
+    field (:func:`harness.store.identity.canonical_json`), never copied."""
     return scene
 
 

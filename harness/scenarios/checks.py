@@ -574,8 +574,8 @@ class PassedChecks:
         said, never an error (the next run checks again)."""
         if self.root is None or not self._added:
             return
-        from harness.store.cache import code_version
         from harness.store.files import write_text_atomically
+        from harness.store.identity import code_version
 
         text = json.dumps({"format": self.FORMAT, "code_version": code_version(),
                            "context": self._context_text(),
@@ -614,7 +614,8 @@ def _checks_context(root=None) -> str:
     from harness.engines import ENGINE_NAMES
     from harness.run.engine_facts import engine_facts
     from harness.scenarios.schema import LIMITS, limit
-    from harness.store.cache import ResultCache, code_version
+    from harness.store.cache import ResultCache
+    from harness.store.identity import code_version
 
     installed = list(engine_facts(ENGINE_NAMES, None if root is None else ResultCache(root))
                      .versions)

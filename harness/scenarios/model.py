@@ -29,6 +29,7 @@ from harness.scenarios.schema import (
     TWO_SLED_KEYS,
 )
 from harness.scene import Body, Box, Contact, Disk, Polygon, Rod, Scene, geometry
+from harness.store.identity import canonical_json
 
 #: Where a :class:`Scenario` keeps its scenes by point index (:meth:`Scenario.scene`).
 _KEPT_SCENES = "_scenes"
@@ -161,13 +162,11 @@ class Scenario:
     @cached_property
     def definition_digest(self) -> str:
         """sha256 of every field but the file's ``path`` spelled as canonical JSON
-        (:func:`harness.store.cache.canonical_json`): what a scenario's records depend on (the
+        (:func:`harness.store.identity.canonical_json`): what a scenario's records depend on (the
         runner's cache key of them). Spelled once per scenario object and kept with it (in the
         store of passed checks too, :meth:`located` copies it): a warm run of a large library
         spent a tenth of its time spelling definitions. ``TypeError`` for a value without a
         canonical spelling."""
-        from harness.store.cache import canonical_json
-
         definition = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "path"}
         return hashlib.sha256(canonical_json(definition).encode()).hexdigest()
 

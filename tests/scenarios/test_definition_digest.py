@@ -7,7 +7,7 @@ from pathlib import Path
 
 from harness.scenarios import SCENARIO_DIR, checks, load_scenario
 from harness.scenarios.reader import load_scenario as read_file
-from harness.store.cache import canonical_json
+from harness.store.identity import canonical_json
 
 ROD = load_scenario(SCENARIO_DIR / "rod-45-slip-reversal.toml")
 
