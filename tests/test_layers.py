@@ -16,8 +16,7 @@ The layers, lowest first (README, 'Layout'):
 9. ``harness.report``, ``harness.bench``;
 10. commands on top: ``harness.suite``, ``harness.validate``, ``harness.cli``.
 
-One exception is written down, with why, in :data:`ALLOWED_UPWARD`; any other import
-against the order fails this test, which names it.
+There is no exception: any import against the order fails this test, which names it.
 """
 
 from __future__ import annotations
@@ -39,18 +38,6 @@ LAYERS = (
     ("harness.report", "harness.bench"),
     ("harness.suite", "harness.validate", "harness.cli"),
 )
-#: ``(importing package, imported module)`` pairs allowed against the order. The scenario
-#: checks keep the point checks that passed in the run's cache (``run.cache``), ask the
-#: engines' facts recorded there (``run.engine_facts``) and
-#: judge a second feature's strike with the run's verdict geometry (``run.verdicts``): the
-#: storage and the verdicts' shape features still live in ``harness.run`` (issue 26: a
-#: storage layer below the scenarios, the shape features into ``harness.scene``).
-ALLOWED_UPWARD = {
-    ("harness.scenarios", "harness.run.engine_facts"),
-    ("harness.scenarios", "harness.run.verdicts"),
-}
-
-
 def modules() -> dict[str, Path]:
     """Every module of ``harness`` and ``planar_impact``, by dotted name."""
     found = {}
@@ -102,20 +89,29 @@ def test_every_import_goes_down_or_across():
             continue
         for target in sorted(imports(name, path, known)):
             if layer_of(target) > layer_of(name):
-                package = next(member for members in LAYERS for member in members
-                               if name == member or name.startswith(member + "."))
-                if (package, target) not in ALLOWED_UPWARD:
-                    against.append(f"{name} imports {target}")
+                against.append(f"{name} imports {target}")
     assert not against, "imports against the layers:\n" + "\n".join(against)
 
 
-def test_the_exceptions_are_still_needed():
-    # an exception no module uses any more is removed from the list, not kept "just in case"
-    known = modules()
-    used = {(package, target) for package, target in ALLOWED_UPWARD
-            for name, path in known.items() if name.startswith(package + ".")
-            and target in imports(name, path, known)}
-    assert used == ALLOWED_UPWARD
+#: Packages and modules that import at module level only: an import inside a function hides a
+#: dependency from the reader (and kept cycles importable). Optional dependencies are the one
+#: reason to import late; none of these has any.
+MODULE_LEVEL_IMPORTS_ONLY = ("harness.store", "harness.scenarios", "harness.engines.facts",
+                             "harness.scene.features")
+
+
+def test_these_import_at_module_level_only():
+    late = []
+    for name, path in sorted(modules().items()):
+        if not any(name == member or name.startswith(member + ".")
+                   for member in MODULE_LEVEL_IMPORTS_ONLY):
+            continue
+        for function in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(function, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                late += [f"{name}:{node.lineno} in {function.name}()"
+                         for node in ast.walk(function)
+                         if isinstance(node, (ast.Import, ast.ImportFrom))]
+    assert not late, "imports inside functions:\n" + "\n".join(late)
 
 
 def test_the_theory_library_imports_numpy_and_the_standard_library_only():

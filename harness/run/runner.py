@@ -512,8 +512,8 @@ def _settings_of(engine, preset: str, overrides: dict, memo: dict) -> dict | str
 def _engine_status(engines: Sequence[str], cache=None) -> tuple[dict, dict, dict]:
     """``({engine: version}, {engine: reason it is skipped}, {engine: {preset: settings}})``
     of the installed engines, without importing those whose facts ``cache`` keeps
-    (:mod:`harness.run.engine_facts`)."""
-    from harness.run.engine_facts import engine_facts
+    (:mod:`harness.engines.facts`)."""
+    from harness.engines.facts import engine_facts
 
     facts = engine_facts(engines, cache)
     return facts.versions, facts.missing, facts.settings
@@ -1540,7 +1540,7 @@ def execute(args, *, json_path: Path, command: Sequence[str] | None = None,
     ``json_path`` when it holds the results of another selection (``run`` without ``--json``).
     Bad scenario files are reported one line each; the others still run (exit status 2).
     """
-    from harness.run.engine_facts import fingerprints_remembered
+    from harness.engines.facts import fingerprints_remembered
 
     with fingerprints_remembered():
         return _execute(args, json_path=json_path, command=command, log=log, guard=guard)

@@ -17,7 +17,7 @@ from typing import Any, Mapping, Union
 
 import numpy as np
 
-from harness.engines import engine_names
+from harness.engines import engine_names, source_label
 from harness.scenarios.errors import ScenarioError
 from harness.scenarios.schema import (
     ANALYTIC_SYSTEMS,
@@ -30,6 +30,7 @@ from harness.scenarios.schema import (
 )
 from harness.scene import Body, Box, Contact, Disk, Polygon, Rod, Scene, geometry
 from harness.store.identity import canonical_json
+from planar_impact import builders
 
 #: Where a :class:`Scenario` keeps its scenes by point index (:meth:`Scenario.scene`).
 _KEPT_SCENES = "_scenes"
@@ -85,8 +86,6 @@ class Gate:
     @property
     def source(self) -> str:
         """``"pymunk"``, ``"pymunk.accurate"``, ``"mujoco.matched-bounce"``: as users write it."""
-        from harness.engines import source_label
-
         return source_label(self.engine, self.preset)
 
 
@@ -277,8 +276,6 @@ class Scenario:
 
     def analytic_problem(self, which: Union[Point, int, None] = None):
         """The ``planar_impact.ImpactProblem`` (mass_matrix, wn, wt, u) at a point."""
-        from planar_impact import builders
-
         fixed = self.at(which)
         if fixed.system == "matrix":
             matrix = fixed.matrix

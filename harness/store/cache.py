@@ -34,7 +34,7 @@ An unreadable, corrupted or edited file (its checksum differs) is a miss, and so
 the caller's ``check`` rejects (a record without finite velocities of the right shape): both
 are listed in :attr:`ResultCache.rejected`, which the run prints as warnings, and the
 result is computed again. Beside the entries, ``root/passed-checks.json`` keeps the keys of
-the scenario texts that passed their checks (:class:`harness.scenarios.checks.PassedChecks`);
+the scenario texts that passed their checks (:class:`harness.store.passed_checks.PassedChecks`);
 ``cache info``, ``prune`` and ``clear`` count and remove it with them.
 
 The harness deletes only what it made: the cache's root carries the marker file
@@ -76,7 +76,7 @@ CACHE_DIR_VARIABLE = "IMPACT_HARNESS_CACHE_DIR"
 #: A temporary file older than this (s) belongs to a writer that died: removed.
 STALE_TEMPORARY_S = 60.0
 #: The scenario checks' store in the cache's directory
-#: (:class:`harness.scenarios.checks.PassedChecks`), and the names it had before (removed by
+#: (:class:`harness.store.passed_checks.PassedChecks`), and the names it had before (removed by
 #: ``prune`` and ``clear`` unread: the pickle is never loaded).
 SCENARIO_CHECKS_STORE = "passed-checks.json"
 OLD_CHECKS_STORES = ("scenario-checks.json", "scenario-checks.pickle")

@@ -17,8 +17,8 @@ import pytest
 
 from harness import cli
 from harness.engines import load_engine
+from harness.engines.facts import ENGINE_FACTS
 from harness.run import runner
-from harness.run.engine_facts import ENGINE_FACTS
 from harness.run.records import read_results
 from harness.scenarios import SCENARIO_DIR, load_scenario
 from harness.store.cache import CACHE_MARKER, OLD_CHECKS_STORES, ResultCache
