@@ -32,7 +32,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "suite": ("harness.suite", "the validation suite (`make validate`): paper, run, report"),
     "paper": ("harness.report.table3",
               "reproduce the paper's Table 3 into reports/paper-table3.md"),
-    "run": ("harness.run.runner", "run scenarios through every law and engine, write results"),
+    "run": ("harness.run.command", "run scenarios through every law and engine, write results"),
     "report": ("harness.report", "write reports/index.html and reports/summary.md from results"),
     "compare": ("harness.report.compare",
                 "compare two results files; exit 1 when a change exceeds --fail-above"),

@@ -25,7 +25,7 @@ import sys
 import time
 from pathlib import Path
 
-from harness.run import runner
+from harness.run import command, plan
 
 #: Samples per population in the suite's survey: 7 populations x 20 = 140 impacts per engine
 #: and preset, a few seconds with every engine (the distributions' tails need
@@ -36,7 +36,7 @@ SURVEY_SAMPLES = 20
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", type=Path, default=Path("reports"),
                         help="output directory (default: reports)")
-    runner.add_common_arguments(parser)
+    command.add_common_arguments(parser)
 
 
 def main(args) -> int:
@@ -52,10 +52,10 @@ def main(args) -> int:
         problem = f"--out {out}: {problem}"
     else:
         make_output_directory(out)  # the directory asked for (itself only)
-        problem = runner.check_arguments(args, out / "results.json")
+        problem = command.check_arguments(args, out / "results.json")
     if problem:  # before any work, the Table 3 included
         print(f"impact-harness suite: {problem}", file=sys.stderr)
-        return runner.EXIT_BAD_INPUT
+        return command.EXIT_BAD_INPUT
 
     tick = time.perf_counter()
     markdown, rows = paper.write_report(out)
@@ -68,7 +68,7 @@ def main(args) -> int:
 
     tick = time.perf_counter()
     results_path = out / "results.json"
-    status, outcome = runner.execute(args, json_path=results_path,
+    status, outcome = command.execute(args, json_path=results_path,
                                      command=["impact-harness", "suite", *sys.argv[2:]])
     if outcome is None:
         return status
@@ -105,8 +105,8 @@ def quick_survey(args, out: Path) -> tuple[Path, bool]:
     from harness.survey.cli import SETTINGS_FILE, run_survey, write_survey
     from harness.survey.population import resolve_populations
 
-    engines = runner.parse_engines(args.engines)
-    presets = runner.parse_presets(args.preset)
+    engines = plan.parse_engines(args.engines)
+    presets = plan.parse_presets(args.preset)
     populations = resolve_populations([])
     inputs = survey_inputs(populations, engines, presets)
     if _survey_is_current(out, inputs):

@@ -2,7 +2,7 @@
 
 ``python -m harness.bench.cache_put [--runs 600] [--repeats 3]`` runs the library's engine
 tasks once (both presets, every installed engine, repeated up to ``--runs``), then, per
-repeat, puts their outputs (:func:`harness.run.runner.engine_task`'s, what
+repeat, puts their outputs (:func:`harness.run.tasks.engine_task`'s, what
 ``_stored_by_worker`` stores) into a fresh cache directory whose shards already exist (as
 after the first few hundred puts of a cold run) and prints the time per put: wall, and the
 process's user and system CPU (the median repeat by user CPU). A cold run of the 1,000-file
@@ -32,7 +32,7 @@ def engine_outputs(runs: int) -> list[dict]:
 def _library_outputs() -> Iterator[dict]:
     """The output of each engine task of the library (both presets), run as it is asked for."""
     from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine
-    from harness.run import runner
+    from harness.run import tasks
     from harness.scenarios import load_scenarios
 
     for scenario in load_scenarios(None):
@@ -44,8 +44,8 @@ def _library_outputs() -> Iterator[dict]:
                     continue
                 for preset in ("defaults", "accurate"):
                     settings = engine.settings(preset, scenario.engine_settings.get(name, {}))
-                    output = runner.engine_task({"engine": name, "scene": scenario.scene(point),
-                                                 "settings": settings})
+                    output = tasks.engine_task({"engine": name, "scene": scenario.scene(point),
+                                                "settings": settings})
                     if "velocities" in output:
                         yield output
 

@@ -26,7 +26,7 @@ import planar_impact
 _HARNESS_DIR = Path(__file__).resolve().parent.parent  # harness/, from harness/store/
 #: The harness source (directories and files, relative to ``harness/``) that the cached
 #: values depend on: the store (the keys' spelling, the entries' layout), the engine runs (the
-#: adapters, the scene they build, ``engine_task`` in the runner), the several-contact
+#: adapters, the scene they build, ``engine_task`` in ``run/tasks.py``), the several-contact
 #: references (the references, the event-driven solver, the departures they hold) and each
 #: scenario's finished records (the scenario model, the runner, metrics, contact histories,
 #: verdicts, the record layout). Add a module here when
@@ -34,9 +34,11 @@ _HARNESS_DIR = Path(__file__).resolve().parent.parent  # harness/, from harness/
 #: silently skipped.
 CACHED_CODE: tuple[str, ...] = (
     "__init__.py", "store", "engines", "scene", "reference", "scenarios", "run/__init__.py",
-    "run/runner.py", "run/references.py", "run/metrics.py", "run/verdicts.py",
-    "run/history.py", "run/records.py",
+    "run/tasks.py", "run/plan.py", "run/point_records.py", "run/gates.py",
+    "run/scenario_records.py", "run/runner.py", "run/references.py", "run/metrics.py",
+    "run/verdicts.py", "run/history.py", "run/records.py",
 )
+
 
 def cached_code_sources(harness_dir: Path = _HARNESS_DIR,
                         planar_impact_dir: Path | None = None) -> tuple[Path, ...]:

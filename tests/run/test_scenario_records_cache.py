@@ -1,4 +1,4 @@
-"""A scenario's finished records kept whole in the result cache (harness/run/runner.py,
+"""A scenario's finished records kept whole in the result cache (harness/run/scenario_records.py,
 ``_scenario_key``): a warm run reads one entry per scenario, its results equal the cold
 run's, and a damaged entry is reported and rebuilt, never trusted. Also the scenario checks
 remembered by the file's text (harness/store/passed_checks.py)."""
@@ -17,7 +17,7 @@ import pytest
 from harness import cli
 from harness.engines import ENGINE_NAMES
 from harness.engines.facts import ENGINE_FACTS, engine_facts
-from harness.run import runner
+from harness.run import plan, runner, scenario_records
 from harness.run.records import read_results
 from harness.scenarios import SCENARIO_DIR, checks, load_scenario
 from harness.scenarios.library import load_scenarios_reporting
@@ -203,7 +203,7 @@ def test_another_selection_is_another_entry(tmp_path):
 def test_a_scenario_with_a_missing_engine_is_not_kept_whole(tmp_path, monkeypatch):
     from harness.engines import EngineNotInstalled
 
-    real = runner._engine_status
+    real = plan.engine_status
 
     def pymunk_missing(engines, cache=None):
         versions, missing, settings = real(engines, cache)
@@ -212,7 +212,7 @@ def test_a_scenario_with_a_missing_engine_is_not_kept_whole(tmp_path, monkeypatc
         missing["pymunk"] = str(EngineNotInstalled("pymunk", "not installed (test)"))
         return versions, missing, settings
 
-    monkeypatch.setattr(runner, "_engine_status", pymunk_missing)
+    monkeypatch.setattr(plan, "engine_status", pymunk_missing)
     outcome = _run([ROD], ResultCache(tmp_path))
     assert all(r.skipped for r in outcome.records if r.source != "analytic")
     assert not _scenario_entries(tmp_path)
@@ -320,7 +320,7 @@ def test_cache_info_and_prune_see_the_scenario_entries(tmp_path):
 def test_records_built_on_forked_workers_equal_those_built_inline(tmp_path, monkeypatch):
     scenarios = [ROD, SWEEP, TWO_SLED, load_scenario(SCENARIO_DIR / "flat-rod.toml")]
     inline = _run(scenarios, ResultCache(tmp_path / "inline"))
-    monkeypatch.setattr(runner, "MIN_PARALLEL_RECORDS", 1)
+    monkeypatch.setattr(scenario_records, "MIN_PARALLEL_RECORDS", 1)
     forked = runner.run(scenarios, engines=ENGINES, cache=ResultCache(tmp_path / "forked"),
                         log=None, workers=2)
     assert forked._records == [None] * len(inline.records)  # lines came back, not records

@@ -17,6 +17,9 @@ def _tree(root: Path) -> tuple[Path, Path]:
              "harness/engines/pymunk_engine.py", "harness/scene/model.py",
              "harness/reference/event_driven.py", "harness/run/__init__.py",
              "harness/store/cache.py", "harness/run/runner.py", "harness/run/references.py",
+             "harness/run/tasks.py", "harness/run/plan.py", "harness/run/point_records.py",
+             "harness/run/gates.py", "harness/run/scenario_records.py",
+             "harness/run/command.py",
              "harness/run/metrics.py", "harness/run/verdicts.py", "harness/run/history.py",
              "harness/run/records.py", "harness/scenarios/model.py",
              "harness/run/provenance.py", "harness/report/html.py",
@@ -34,7 +37,8 @@ def _version(harness_dir: Path, package: Path) -> str:
 
 
 @pytest.mark.parametrize("edited", ["harness/report/html.py", "harness/bench/solver.py",
-                                    "harness/cli.py", "harness/run/provenance.py"])
+                                    "harness/cli.py", "harness/run/provenance.py",
+                                    "harness/run/command.py"])
 def test_editing_code_the_cache_does_not_depend_on_keeps_the_key(tmp_path, edited):
     harness_dir, package = _tree(tmp_path)
     before = _version(harness_dir, package)
@@ -46,7 +50,8 @@ def test_editing_code_the_cache_does_not_depend_on_keeps_the_key(tmp_path, edite
 
 @pytest.mark.parametrize("edited", ["src/planar_impact/solver.py",
                                     "harness/engines/pymunk_engine.py", "harness/scene/model.py",
-                                    "harness/reference/event_driven.py", "harness/run/runner.py",
+                                    "harness/reference/event_driven.py", "harness/run/tasks.py",
+                                    "harness/run/point_records.py", "harness/run/runner.py",
                                     "harness/run/references.py", "harness/run/metrics.py",
                                     "harness/run/verdicts.py", "harness/scenarios/model.py",
                                     "harness/store/cache.py"])
