@@ -32,7 +32,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "suite": ("harness.suite", "the validation suite (`make validate`): paper, run, report"),
     "paper": ("harness.report.table3",
               "reproduce the paper's Table 3 into reports/paper-table3.md"),
-    "run": ("harness.run.runner", "run scenarios through every law and engine, write results"),
+    "run": ("harness.run.command", "run scenarios through every law and engine, write results"),
     "report": ("harness.report", "write reports/index.html and reports/summary.md from results"),
     "compare": ("harness.report.compare",
                 "compare two results files; exit 1 when a change exceeds --fail-above"),
@@ -49,7 +49,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
                     "the laws against measured impacts (Fazeli 2017 drops, Kharaz 2001)"),
     "calibrate": ("harness.experiments.calibrate_cli",
                   "fit an engine's own knobs to the drops or to a law by a small grid"),
-    "cache": ("harness.run.cache", "the result cache: info (where, how big), prune, clear"),
+    "cache": ("harness.store.cli", "the result cache: info (where, how big), prune, clear"),
 }
 
 EXIT_STATUS_HELP = """exit status:

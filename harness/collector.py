@@ -1,8 +1,8 @@
 """Pausing Python's cyclic garbage collector around work that makes many containers.
 
-Shared by the engines (:meth:`harness.engines.contract.Engine.run_many`) and the run side
-(:mod:`harness.run.records`, :mod:`harness.run.runner`, :mod:`harness.run.cache`), which must
-not depend on each other for it.
+Shared by the engines (:meth:`harness.engines.contract.Engine.run_many`), the run side
+(:mod:`harness.run.records`, :mod:`harness.run.scenario_records`) and the store
+(:mod:`harness.store.cache`), which must not depend on each other for it.
 """
 
 from __future__ import annotations

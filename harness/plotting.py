@@ -12,7 +12,7 @@ from __future__ import annotations
 import contextvars
 from pathlib import Path
 
-from harness.run.files import save_figure
+from harness.store.files import save_figure
 
 #: The PNG text chunk holding the digest of a figure's inputs (the report's redraw test).
 TAG_KEY = "impact-harness-inputs"

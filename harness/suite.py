@@ -25,7 +25,7 @@ import sys
 import time
 from pathlib import Path
 
-from harness.run import runner
+from harness.run import command, plan
 
 #: Samples per population in the suite's survey: 7 populations x 20 = 140 impacts per engine
 #: and preset, a few seconds with every engine (the distributions' tails need
@@ -36,14 +36,14 @@ SURVEY_SAMPLES = 20
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", type=Path, default=Path("reports"),
                         help="output directory (default: reports)")
-    runner.add_common_arguments(parser)
+    command.add_common_arguments(parser)
 
 
 def main(args) -> int:
     from harness import report
     from harness.report import table3 as paper
-    from harness.run.files import make_output_directory, output_directory_problem
     from harness.run.records import read_results
+    from harness.store.files import make_output_directory, output_directory_problem
 
     out: Path = args.out
     started = time.perf_counter()
@@ -52,10 +52,10 @@ def main(args) -> int:
         problem = f"--out {out}: {problem}"
     else:
         make_output_directory(out)  # the directory asked for (itself only)
-        problem = runner.check_arguments(args, out / "results.json")
+        problem = command.check_arguments(args, out / "results.json")
     if problem:  # before any work, the Table 3 included
         print(f"impact-harness suite: {problem}", file=sys.stderr)
-        return runner.EXIT_BAD_INPUT
+        return command.EXIT_BAD_INPUT
 
     tick = time.perf_counter()
     markdown, rows = paper.write_report(out)
@@ -68,7 +68,7 @@ def main(args) -> int:
 
     tick = time.perf_counter()
     results_path = out / "results.json"
-    status, outcome = runner.execute(args, json_path=results_path,
+    status, outcome = command.execute(args, json_path=results_path,
                                      command=["impact-harness", "suite", *sys.argv[2:]])
     if outcome is None:
         return status
@@ -105,8 +105,8 @@ def quick_survey(args, out: Path) -> tuple[Path, bool]:
     from harness.survey.cli import SETTINGS_FILE, run_survey, write_survey
     from harness.survey.population import resolve_populations
 
-    engines = runner.parse_engines(args.engines)
-    presets = runner.parse_presets(args.preset)
+    engines = plan.parse_engines(args.engines)
+    presets = plan.parse_presets(args.preset)
     populations = resolve_populations([])
     inputs = survey_inputs(populations, engines, presets)
     if _survey_is_current(out, inputs):
@@ -127,14 +127,14 @@ def survey_inputs(populations, engines, presets) -> str:
     text), :data:`SURVEY_SAMPLES`, the seed, the engines and presets asked for, the installed
     versions of Python, numpy, pyarrow and the engines (an engine installed since is run),
     and the code -- what the run cache's entries depend on (the engines, scenes, verdicts,
-    metrics, ``planar_impact``: :func:`harness.run.cache.cached_code_sources`) and
+    metrics, ``planar_impact``: :func:`harness.store.identity.cached_code_sources`) and
     ``harness/survey/``. Any edit to that code runs the survey again: coarse, and cheap to
     get right."""
     import hashlib
     import json
 
-    from harness.run.cache import cached_code_sources, code_version_of
     from harness.run.provenance import PACKAGES, package_versions
+    from harness.store.identity import cached_code_sources, code_version_of
 
     survey_code = Path(__file__).resolve().parent / "survey"
     code = code_version_of((*cached_code_sources(), survey_code))

@@ -5,18 +5,18 @@ The layers, lowest first (README, 'Layout'):
 
 0. ``planar_impact`` -- the theory, numpy only;
 1. ``harness.bounds``, ``collector``, ``processes``, ``inputs`` -- shared tools;
-2. ``harness.scene`` -- the impact to simulate;
-3. ``harness.engines``, ``harness.reference`` -- engines behind one contract, reference
+2. ``harness.store`` -- storage and identity: atomic files, the result cache;
+3. ``harness.scene`` -- the impact to simulate;
+4. ``harness.engines``, ``harness.reference`` -- engines behind one contract, reference
    answers the single-contact laws do not give;
-4. ``harness.scenarios`` -- scenario files to checked scenarios;
-5. ``harness.run`` -- runs, records, verdicts, the cache;
-6. ``harness.plotting`` -- figures shared by the survey and the report;
-7. ``harness.survey``, ``harness.experiments``, ``harness.stress``;
-8. ``harness.report``, ``harness.bench``;
-9. commands on top: ``harness.suite``, ``harness.validate``, ``harness.cli``.
+5. ``harness.scenarios`` -- scenario files to checked scenarios;
+6. ``harness.run`` -- runs, records, verdicts;
+7. ``harness.plotting`` -- figures shared by the survey and the report;
+8. ``harness.survey``, ``harness.experiments``, ``harness.stress``;
+9. ``harness.report``, ``harness.bench``;
+10. commands on top: ``harness.suite``, ``harness.validate``, ``harness.cli``.
 
-One exception is written down, with why, in :data:`ALLOWED_UPWARD`; any other import
-against the order fails this test, which names it.
+There is no exception: any import against the order fails this test, which names it.
 """
 
 from __future__ import annotations
@@ -28,6 +28,7 @@ ROOT = Path(__file__).resolve().parents[1]
 LAYERS = (
     ("planar_impact",),
     ("harness.bounds", "harness.collector", "harness.processes", "harness.inputs"),
+    ("harness.store",),
     ("harness.scene",),
     ("harness.engines", "harness.reference"),
     ("harness.scenarios",),
@@ -37,18 +38,6 @@ LAYERS = (
     ("harness.report", "harness.bench"),
     ("harness.suite", "harness.validate", "harness.cli"),
 )
-#: ``(importing package, imported module)`` pairs allowed against the order. The scenario
-#: checks keep the point checks that passed in the run's cache (``run.cache``, written
-#: through ``run.files``) and ask the engines' facts recorded there (``run.engine_facts``):
-#: the storage still lives in ``harness.run`` (issue 26: a storage layer below the
-#: scenarios).
-ALLOWED_UPWARD = {
-    ("harness.scenarios", "harness.run.cache"),
-    ("harness.scenarios", "harness.run.files"),
-    ("harness.scenarios", "harness.run.engine_facts"),
-}
-
-
 def modules() -> dict[str, Path]:
     """Every module of ``harness`` and ``planar_impact``, by dotted name."""
     found = {}
@@ -100,20 +89,32 @@ def test_every_import_goes_down_or_across():
             continue
         for target in sorted(imports(name, path, known)):
             if layer_of(target) > layer_of(name):
-                package = next(member for members in LAYERS for member in members
-                               if name == member or name.startswith(member + "."))
-                if (package, target) not in ALLOWED_UPWARD:
-                    against.append(f"{name} imports {target}")
+                against.append(f"{name} imports {target}")
     assert not against, "imports against the layers:\n" + "\n".join(against)
 
 
-def test_the_exceptions_are_still_needed():
-    # an exception no module uses any more is removed from the list, not kept "just in case"
-    known = modules()
-    used = {(package, target) for package, target in ALLOWED_UPWARD
-            for name, path in known.items() if name.startswith(package + ".")
-            and target in imports(name, path, known)}
-    assert used == ALLOWED_UPWARD
+#: Packages and modules that import at module level only: an import inside a function hides a
+#: dependency from the reader (and kept cycles importable). Optional dependencies are the one
+#: reason to import late; none of these has any.
+MODULE_LEVEL_IMPORTS_ONLY = ("harness.store", "harness.scenarios", "harness.engines.facts",
+                             "harness.scene.features", "harness.run.command",
+                             "harness.run.runner", "harness.run.plan", "harness.run.tasks",
+                             "harness.run.point_records", "harness.run.scenario_records",
+                             "harness.run.gates")
+
+
+def test_these_import_at_module_level_only():
+    late = []
+    for name, path in sorted(modules().items()):
+        if not any(name == member or name.startswith(member + ".")
+                   for member in MODULE_LEVEL_IMPORTS_ONLY):
+            continue
+        for function in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(function, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                late += [f"{name}:{node.lineno} in {function.name}()"
+                         for node in ast.walk(function)
+                         if isinstance(node, (ast.Import, ast.ImportFrom))]
+    assert not late, "imports inside functions:\n" + "\n".join(late)
 
 
 def test_the_theory_library_imports_numpy_and_the_standard_library_only():

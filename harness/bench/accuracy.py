@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from harness.engines.contract import BENCH_REFERENCE_LABEL
-from harness.run.files import save_figure
+from harness.store.files import save_figure
 
 FAMILIES: dict[str, str] = {"disk": "disk", "rod": "rod-45", "box-corner": "box-corner",
                              "two-bodies": "two-disks"}

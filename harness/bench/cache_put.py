@@ -2,7 +2,7 @@
 
 ``python -m harness.bench.cache_put [--runs 600] [--repeats 3]`` runs the library's engine
 tasks once (both presets, every installed engine, repeated up to ``--runs``), then, per
-repeat, stores their outputs (:func:`harness.run.runner.engine_task`'s, what
+repeat, stores their outputs (:func:`harness.run.tasks.engine_task`'s, what
 ``_stored_by_worker`` stores) into a fresh cache directory, a pack per chunk of
 :data:`harness.run.executor.MAX_CHUNK` as a worker stores a chunk's runs, and prints the time
 per engine run: wall, and the process's user and system CPU (the median repeat by user CPU).
@@ -32,7 +32,7 @@ def engine_outputs(runs: int) -> list[dict]:
 def _library_outputs() -> Iterator[dict]:
     """The output of each engine task of the library (both presets), run as it is asked for."""
     from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine
-    from harness.run import runner
+    from harness.run import tasks
     from harness.scenarios import load_scenarios
 
     for scenario in load_scenarios(None):
@@ -44,8 +44,8 @@ def _library_outputs() -> Iterator[dict]:
                     continue
                 for preset in ("defaults", "accurate"):
                     settings = engine.settings(preset, scenario.engine_settings.get(name, {}))
-                    output = runner.engine_task({"engine": name, "scene": scenario.scene(point),
-                                                 "settings": settings})
+                    output = tasks.engine_task({"engine": name, "scene": scenario.scene(point),
+                                                "settings": settings})
                     if "velocities" in output:
                         yield output
 
@@ -53,8 +53,8 @@ def _library_outputs() -> Iterator[dict]:
 def time_puts(outputs: list[dict], root: Path) -> tuple[float, float, float]:
     """``(wall, user, system)`` seconds per output stored into a cache at ``root``, a pack
     per chunk of :data:`harness.run.executor.MAX_CHUNK`."""
-    from harness.run.cache import ResultCache
     from harness.run.executor import MAX_CHUNK
+    from harness.store.cache import ResultCache
 
     cache = ResultCache(root, version="bench")
     keys = [cache.key({"run": index}) for index in range(len(outputs))]

@@ -45,10 +45,10 @@ from harness.engines import (
     preset_label,
 )
 from harness.run import verdicts
-from harness.run.files import write_text_atomically
 from harness.scene import Scene
 from harness.scene.geometry import impact_problem
 from harness.scene.reference import newton_lcp_velocities, reference_scenes
+from harness.store.files import write_text_atomically
 
 RATIO_TARGET = 1.3
 

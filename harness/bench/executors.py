@@ -52,7 +52,7 @@ def engine_tasks(count: int = TASKS, directory: Path | None = None,
     """
     from harness.bench.many_scenarios import write_copies
     from harness.engines import EngineNotInstalled, load_engine
-    from harness.run.runner import TASK_TIME_LIMIT_S
+    from harness.run.tasks import TASK_TIME_LIMIT_S
     from harness.scenarios import ENGINES, PRESETS, load_scenarios
 
     engines = {}
@@ -99,7 +99,7 @@ def run(count: int = TASKS, repeats: int = REPEATS, per_task: bool = True,
         end_to_end: bool = True) -> dict:
     """``{"tasks", "engines", "seconds": {way: [s, ...]}, "median", "ratio", ...}``."""
     from harness.run.executor import run_tasks, start_local_cluster, wait_for_shutdowns
-    from harness.run.runner import engine_chunk, engine_task, task_group
+    from harness.run.tasks import engine_chunk, engine_task, task_group
 
     with tempfile.TemporaryDirectory() as folder:
         files = Path(folder) / "scenarios"

@@ -38,14 +38,14 @@ from pathlib import Path
 import numpy as np
 
 import planar_impact as pi
-from harness.run.files import (
+from harness.run.provenance import provenance
+from harness.scene.random_problems import random_problems, row
+from harness.store.files import (
     make_output_directory,
     output_directory_problem,
     save_figure,
     write_text_atomically,
 )
-from harness.run.provenance import provenance
-from harness.scene.random_problems import random_problems, row
 
 BENCH_FORMAT = "impact-harness-bench"
 BENCH_FORMAT_VERSION = 2

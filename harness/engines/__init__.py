@@ -239,7 +239,7 @@ def install_fingerprint(name: str) -> str | None:
     version; None when no such package is found (then :func:`load_engine` fails at once).
 
     A reinstall, upgrade or removal changes it, so what was learnt by loading the adapter
-    (its version, its settings) can be kept under it (:mod:`harness.run.engine_facts`).
+    (its version, its settings) can be kept under it (:mod:`harness.engines.facts`).
     """
     from importlib import metadata, util
 

@@ -89,8 +89,8 @@ from harness.report.reading import read_for_report
 from harness.report.summary import write_summary
 from harness.report.survey import survey_figure_tasks
 from harness.report.views import FIGURES, has_library_scenarios, slug, split_rows
-from harness.run.files import output_directory_problem, write_text_atomically
 from harness.run.records import DEFAULT_RESULTS, Results
+from harness.store.files import output_directory_problem, write_text_atomically
 
 #: Above this many scenarios the report aggregates (``--scenario-figures auto``, ``--svg
 #: auto``): the headline heat map has one row per family of scenarios (:func:`scenario_group`)

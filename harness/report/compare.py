@@ -43,9 +43,9 @@ from pathlib import Path
 import numpy as np
 
 from harness.run import metrics
-from harness.run.files import output_file_problem, write_text_atomically
 from harness.run.records import Record, Results, read_results
 from harness.scenarios.errors import ScenarioError
+from harness.store.files import output_file_problem, write_text_atomically
 
 DEFAULT_THRESHOLD = "1%"
 LAWS = ("poisson", "stronge", "stronge-paper", "newton", "newton-lcp")

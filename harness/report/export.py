@@ -27,8 +27,8 @@ import io
 import json
 from pathlib import Path
 
-from harness.run.files import output_file_problem, write_bytes_atomically, write_text_atomically
 from harness.run.records import ANALYTIC, Results, read_results
+from harness.store.files import output_file_problem, write_bytes_atomically, write_text_atomically
 
 COLUMNS = ("scenario", "point", "point_index", "point_value", "source", "engine", "preset",
            "law", "departure", "departure_pct", "status", "verdict", "reasons", "overrides")

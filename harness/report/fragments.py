@@ -32,8 +32,8 @@ from harness.report.views import (
     single_contact,
     worst_departure,
 )
-from harness.run.files import write_parts_atomically
 from harness.run.records import ANALYTIC, Record, Results
+from harness.store.files import write_parts_atomically
 
 #: The cache's file in the report's directory.
 CACHE_FILE = ".report-fragments.json"

@@ -28,8 +28,8 @@ from harness.report.overview import (
 from harness.report.reading import scenarios_digest
 from harness.report.scenario_sections import cached_section
 from harness.report.views import TYPE_NAMES, escape_html, has_library_scenarios, slug
-from harness.run.files import write_text_atomically
 from harness.run.records import Results
+from harness.store.files import write_text_atomically
 
 
 def cached_contacts(results: Results, prepared: Prepared) -> str:

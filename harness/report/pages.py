@@ -15,7 +15,7 @@ from pathlib import Path
 
 from harness.report.markup import html_table, markdown_to_html, page_head
 from harness.report.views import escape_html
-from harness.run.files import write_bytes_atomically, write_text_atomically
+from harness.store.files import write_bytes_atomically, write_text_atomically
 
 BENCH_PAGE, STRESS_PAGE = "bench.html", "stress.html"
 PAGE_TITLES = {BENCH_PAGE: "Benchmarks: speed and accuracy",

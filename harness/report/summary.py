@@ -7,8 +7,8 @@ from pathlib import Path
 
 from harness.report.fragments import Prepared, prepare
 from harness.report.views import HEADLINE_LAWS, LAW_STYLE, fmt_departure, row_name
-from harness.run.files import write_text_atomically
 from harness.run.records import ANALYTIC, Results
+from harness.store.files import write_text_atomically
 
 _MARKDOWN_SPECIAL = re.compile(r"([\\`*_{}\[\]()#+!|~])")
 

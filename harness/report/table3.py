@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 import planar_impact as pi
-from harness.run.files import write_text_atomically
+from harness.store.files import write_text_atomically
 
 CELLS = ("e", "du1", "du3", "du4", "du6", "vnA", "vnS", "vtA", "vtS", "dE")
 CELL_LABELS = {
@@ -333,7 +333,7 @@ def write_figure(rows: list[dict], path: Path, metadata: dict | None = None) -> 
                   frameon=False)
     fig.suptitle("Table 3, two sleds: impulse paths of each law (Routh's graph)")
     from harness.plotting import lay_out, save_svg_twin
-    from harness.run.files import save_figure
+    from harness.store.files import save_figure
 
     lay_out(fig, 110)  # once, for the PNG and the SVG (figures.lay_out, save_svg_twin)
     save_figure(fig, path, "png", dpi=110, metadata=metadata)
@@ -361,7 +361,7 @@ def add_arguments(parser) -> None:
 
 
 def main(args) -> int:
-    from harness.run.files import output_directory_problem
+    from harness.store.files import output_directory_problem
 
     problem = output_directory_problem(args.out)
     if problem:

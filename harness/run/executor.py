@@ -1,5 +1,10 @@
 """Run independent tasks on local cores or a Dask cluster, results in task order.
 
+(Over 600 lines, one job: both executors behind :func:`run_tasks` share its chunking, its
+fall-back to one task at a time and its delivery in task order; about half the lines are the
+Dask path -- bundles, a quiet cluster, the waits that end -- and this docstring's measured
+costs of it, which would move to a module of their own beside the pool when it grows.)
+
 One entry point, :func:`run_tasks`, used by the runner, the stress test and the benchmarks::
 
     results = run_tasks(simulate_one, tasks)                       # all local cores
@@ -17,7 +22,7 @@ Determinism
 
 Chunks
     Tasks travel in chunks: one pool submission, one Dask future, and with ``batch`` one
-    ``batch(chunk)`` call (the runner's :func:`harness.run.runner.engine_chunk`, one
+    ``batch(chunk)`` call (the runner's :func:`harness.run.tasks.engine_chunk`, one
     ``Engine.run_many``) per chunk; ``group(task)`` keeps tasks of different keys (engine,
     settings) apart. Results are still delivered task by task (``on_result``) as each chunk
     finishes, so a kill loses at most the chunks under way. When ``batch`` raises, the

@@ -2,7 +2,7 @@
 
 An engine's record holds end points only (velocities after the impact, summed impulses).
 This module rebuilds, from the per-step contact records the engine task already returns
-(:func:`harness.run.runner.engine_task`, ``contacts``), what happened step by step: the
+(:func:`harness.run.tasks.engine_task`, ``contacts``), what happened step by step: the
 contact's normal and tangential velocity, the accumulated normal and tangential impulse, the
 penetration and the kinetic energy after every step with contact. Nothing is read from the
 engine for it: the engines' stepping loop is untouched.
@@ -64,7 +64,7 @@ def contact_history(problem, output: Mapping, scene, time_step: float) -> dict |
     problem : planar_impact.ImpactProblem
         The point's analytic problem: ``mass_matrix``, ``u`` (speeds before), ``wn``, ``wt``.
     output : Mapping
-        The engine task's output (:func:`harness.run.runner.engine_task`): ``contacts``,
+        The engine task's output (:func:`harness.run.tasks.engine_task`): ``contacts``,
         ``contact_normal``, ``velocities``, ``start_offset_steps``.
     scene : harness.scene.Scene
         The engine's scene at this point (touching poses, for the pose source).

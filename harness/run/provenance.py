@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from harness.engines import ENGINE_NAMES, engine_distribution
+from harness.store.identity import code_version
 
 #: Packages whose versions every output file records (None when not installed).
 PACKAGES = ("numpy", *(engine_distribution(name) for name in ENGINE_NAMES), "matplotlib",
@@ -86,8 +87,6 @@ def provenance(kind: str, format_version: int, *, command: Iterable[str] | None 
     command, package versions, the code version the cache keys on, the git commit, the
     machine (with its CPU model) and ``extra`` (e.g. ``engine_settings``).
     """
-    from harness.run.cache import code_version
-
     return {
         "format": kind,
         "format_version": format_version,

@@ -54,14 +54,13 @@ from typing import Any, Iterable, Mapping, Sequence
 
 from harness import inputs
 from harness.collector import collector_paused
-from harness.run.files import output_file_problem, write_parts_atomically
+from harness.store.cache import LINE_SEPARATOR  # between two record lines (no raw newline)
+from harness.store.files import output_file_problem, write_parts_atomically
 
 FORMAT = "impact-harness-results"
 FORMAT_VERSION = 1
 DEFAULT_RESULTS = Path("reports") / "results.json"
 ANALYTIC = "analytic"
-#: Between two record lines of a results file (a line never holds a raw newline).
-LINE_SEPARATOR = ",\n"
 
 
 @dataclass
@@ -363,7 +362,7 @@ RECORDS_END = "\n ]\n}\n"
 
 def check_writable(path: Path | str, *, make_parent: bool = False) -> str | None:
     """``None`` when a results file can be written at ``path``, else the reason it cannot
-    (:func:`harness.run.files.output_file_problem`: nothing there or a regular file, in an
+    (:func:`harness.store.files.output_file_problem`: nothing there or a regular file, in an
     existing writable directory).
 
     Checked before a run starts, so a bad ``--json`` costs nothing. ``make_parent``: the

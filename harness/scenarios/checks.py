@@ -8,23 +8,25 @@ The checks report through a :class:`harness.scenarios.reader.TableReader` (anyth
 from __future__ import annotations
 
 import copyreg
-import hashlib
 import json
 import math
 from dataclasses import dataclass
-from pathlib import Path
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, Mapping
 
 import numpy as np
 
-from harness.engines import EngineNotInstalled, load_engine
-from harness.run.cache import SCENARIO_CHECKS_STORE
+import planar_impact
+from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine
+from harness.engines.facts import engine_facts
 from harness.scenarios.errors import suggest
 from harness.scenarios.model import Point, Scenario
-from harness.scenarios.schema import ONE_POINT_TOLERANCE, PRESETS, SHAPE_FIELDS
+from harness.scenarios.schema import LIMITS, ONE_POINT_TOLERANCE, PRESETS, SHAPE_FIELDS, limit
 from harness.scene import Body, Disk, Scene, geometry
 from harness.scene.features import feature_points
+from harness.store.cache import ResultCache
+from harness.store.identity import code_version
+from harness.store.passed_checks import PassedChecks
 
 if TYPE_CHECKING:  # the reader imports the checks, not the other way round
     from harness.scenarios.reader import TableReader
@@ -195,8 +197,6 @@ def check_analytic(reader: TableReader, scenario: Scenario, point: Point, where:
 
 def check_expectations(scenario: Scenario) -> list[str]:
     """Compare ``[expect]`` with ``planar_impact``; one message per mismatch (empty: all agree)."""
-    import planar_impact
-
     problems = []
     where = scenario.path or scenario.name
     for point in scenario.point_list():
@@ -418,15 +418,13 @@ def second_strike(scene: Scene, contact, horizon_s: float, step_s: float) -> Str
     speeds of each of :data:`SEQUENCE_LAWS` for ``horizon_s``. A corner or end cap touching
     at the start (gap within ``ONE_POINT_TOLERANCE``) is the first contact's and is skipped.
     """
-    from planar_impact import ImpactInputError
-
     problem = geometry.impact_problem(scene, contact.point, contact.normal)
     motions = [("before the impact", problem.u, step_s)]
     solve_law = problem.law_solver(mu=scene.friction, e=scene.restitution)  # checked once
     for law in SEQUENCE_LAWS:
         try:
             result = solve_law(law)
-        except (ValueError, ImpactInputError):
+        except (ValueError, planar_impact.ImpactInputError):
             continue
         motions.append((f"after the impact ({law})", result.u_after, horizon_s))
     start = [(b.position[0], b.position[1], b.angle) for b in scene.bodies]
@@ -493,108 +491,6 @@ def second_strike(scene: Scene, contact, horizon_s: float, step_s: float) -> Str
 # --------------------------------------------------------------------------------------------
 # Checks passed, remembered by content (a warm run re-reads files, it need not re-check them)
 # --------------------------------------------------------------------------------------------
-class PassedChecks:
-    """The keys of the scenario texts that passed every check, kept in one file.
-
-    :func:`check_points` (the second-feature strike check above all) costs about a
-    millisecond per file, much of a warm run of a large library. Its outcome depends only on
-    the file's text, the code (the scenarios, the scene and the engines: the result cache's
-    :func:`harness.run.cache.code_version`), the limits of :data:`LIMITS` and which engines
-    are installed (:func:`engine_time_step`), so a text that passed is remembered under
-    ``sha256`` of those: the file is read again (TOML, the table checks), its point checks
-    are not. A file with problems is checked again each time (its errors are listed then).
-
-    The store is ``root/passed-checks.json`` (in the result cache's directory): plain JSON,
-    the keys only -- nothing read from it is unpickled or evaluated, and a key only ever
-    skips checks of a text whose hash it is. It is replaced atomically; it keeps the keys of
-    one code version and context only (a store of another is emptied when next written), and
-    ``impact-harness cache info|prune|clear`` count and remove it with the cache's entries.
-    One that cannot be read is empty (every file is checked again) and said in
-    :attr:`problems`. Disabled (``root=None``) nothing is remembered: the default, which
-    :func:`use_passed_checks` changes for a run.
-    """
-
-    FILE_NAME = SCENARIO_CHECKS_STORE
-    FORMAT = 3
-
-    def __init__(self, root=None):
-        self.root = None if root is None else Path(root)
-        self.problems: list[str] = []
-        self._passed: set[str] | None = None
-        self._added = False
-        self._context: str | None = None
-
-    @property
-    def path(self) -> Path | None:
-        return None if self.root is None else self.root / self.FILE_NAME
-
-    def key(self, text: str) -> str | None:
-        """The key of a scenario text (None when disabled)."""
-        if self.root is None:
-            return None
-        return hashlib.sha256(f"{self._context_text()}\0{text}".encode()).hexdigest()
-
-    def _context_text(self) -> str:
-        if self._context is None:
-            self._context = _checks_context(self.root)
-        return self._context
-
-    def _load(self) -> set[str]:
-        if self._passed is None:
-            self._passed = set()
-            try:
-                with open(self.path, "rb") as handle:
-                    stored = json.loads(handle.read())
-                if (not isinstance(stored, dict) or stored.get("format") != self.FORMAT
-                        or not isinstance(stored.get("passed"), list)
-                        or not all(isinstance(k, str) and len(k) == 64
-                                   for k in stored["passed"])):
-                    raise ValueError("not a store of passed checks")
-                if stored.get("context") == self._context_text():
-                    self._passed = set(stored["passed"])
-            except FileNotFoundError:
-                pass
-            except (OSError, ValueError) as error:  # any damage: every file checked again
-                self.problems.append(f"{self.path}: {type(error).__name__}: {error}")
-                self._added = True  # replaced by a good one
-        return self._passed
-
-    def passed(self, key: str | None) -> bool:
-        return key is not None and key in self._load()
-
-    def scenario(self, key: str | None) -> Scenario | None:
-        """None: the store keeps no scenarios (each file is read again; see the class)."""
-        return None
-
-    def add(self, key: str | None, scenario: Scenario | None = None) -> None:
-        """Remember that the text of ``key`` passed (``scenario``, read from it, is not
-        kept)."""
-        if key is not None and key not in self._load():
-            self._passed.add(key)
-            self._added = True
-
-    def save(self) -> None:
-        """Write the store when it gained keys; a store that cannot be written is a problem
-        said, never an error (the next run checks again)."""
-        if self.root is None or not self._added:
-            return
-        from harness.run.cache import code_version
-        from harness.run.files import write_text_atomically
-
-        text = json.dumps({"format": self.FORMAT, "code_version": code_version(),
-                           "context": self._context_text(),
-                           "passed": sorted(self._passed or ())})
-        try:
-            if not self.root.is_dir():
-                from harness.run.cache import ResultCache
-
-                ResultCache(self.root, version="").make_root()  # made here: marked as ours
-            write_text_atomically(self.path, text, prefix=".checks-")
-        except OSError as error:
-            self.problems.append(f"{self.path}: cannot write: {error}")
-        self._added = False
-
-
 def _reduce_proxy(proxy: MappingProxyType):
     """A read-only mapping (the scenario model's) as its items, read-only again: the outcome
     of a scenario check travels from a forked worker back to the run through the pool's
@@ -612,14 +508,12 @@ copyreg.pickle(MappingProxyType, _reduce_proxy)
 
 
 def _checks_context(root=None) -> str:
-    """What a check's outcome depends on besides the file's text (see :class:`PassedChecks`);
-    which engines are installed is read from the result cache at ``root`` where it is kept
-    (:mod:`harness.run.engine_facts`: no engine is imported for it on a warm run)."""
-    from harness.engines import ENGINE_NAMES
-    from harness.run.cache import ResultCache, code_version
-    from harness.run.engine_facts import engine_facts
-    from harness.scenarios.schema import LIMITS, limit
-
+    """What a check's outcome depends on besides the file's text
+    (:class:`harness.store.passed_checks.PassedChecks`): the code (the scenarios, the scene
+    and the engines, which :func:`harness.store.identity.code_version` covers), the limits of
+    :data:`LIMITS` and which engines are installed (:func:`engine_time_step`), read from the
+    result cache at ``root`` where it is kept (:mod:`harness.engines.facts`: no engine is
+    imported for it on a warm run)."""
     installed = list(engine_facts(ENGINE_NAMES, None if root is None else ResultCache(root))
                      .versions)
     return json.dumps({"code": code_version(), "limits": {k: limit(k) for k in sorted(LIMITS)},
@@ -633,5 +527,5 @@ passed_checks = PassedChecks()
 def use_passed_checks(root=None) -> PassedChecks:
     """Make ``root`` (None: disabled) the store of passed checks; returns it."""
     global passed_checks
-    passed_checks = PassedChecks(root)
+    passed_checks = PassedChecks(root, context=_checks_context)
     return passed_checks

@@ -15,17 +15,17 @@ import os
 import sys
 from pathlib import Path
 
-from harness.run.files import (
-    make_output_directory,
-    output_directory_problem,
-    output_file_problem,
-    write_text_atomically,
-)
 from harness.scenarios.checks import check_expectations
 from harness.scenarios.errors import ScenarioError
 from harness.scenarios.library import scenario_files
 from harness.scenarios.reader import load_scenario
 from harness.scenarios.schema import NAME_PATTERN, SCENARIO_DIR
+from harness.store.files import (
+    make_output_directory,
+    output_directory_problem,
+    output_file_problem,
+    write_text_atomically,
+)
 
 SHAPES = ("disk", "rod", "box", "polygon", "ellipse")
 

@@ -5,6 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Iterable
 
+from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine
+from harness.processes import default_workers, map_forked
 from harness.scenarios import checks
 from harness.scenarios.errors import OptionError, ScenarioError, suggest
 from harness.scenarios.model import Scenario
@@ -111,17 +113,13 @@ def _load_files(files: list[Path], workers: int | None) -> list[Scenario | Scena
         else:
             to_check.append((index, path, text, key))
     forked = workers != 1 and len(to_check) >= FORKED_CHECKS_MIN_FILES
-    if forked:  # imported here: a run whose files passed before (a warm run) forks nothing
-        from harness.processes import default_workers
-
+    if forked:
         workers = min(workers or default_workers(), default_workers())
         forked = workers > 1
     if not forked:
         for index, path, text, key in to_check:
             outcomes[index] = _checked(path, text, key)
         return outcomes
-    from harness.processes import map_forked
-
     _load_engines()  # imported here once, not by each worker
     count = min(workers * PIECES_PER_WORKER, len(to_check))
     pieces = [to_check[start::count] for start in range(count)]
@@ -153,8 +151,6 @@ def _check_piece(piece: list[tuple]) -> list:
 
 def _load_engines() -> None:
     """Import the installed engines' adapters (the checks ask them for settings)."""
-    from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine
-
     for name in ENGINE_NAMES:
         try:
             load_engine(name)

@@ -17,7 +17,7 @@ from typing import Any, Mapping, Union
 
 import numpy as np
 
-from harness.engines import engine_names
+from harness.engines import engine_names, source_label
 from harness.scenarios.errors import ScenarioError
 from harness.scenarios.schema import (
     ANALYTIC_SYSTEMS,
@@ -29,6 +29,8 @@ from harness.scenarios.schema import (
     TWO_SLED_KEYS,
 )
 from harness.scene import Body, Box, Contact, Disk, Ellipse, Polygon, Rod, Scene, geometry
+from harness.store.identity import canonical_json
+from planar_impact import builders
 
 #: Where a :class:`Scenario` keeps its scenes by point index (:meth:`Scenario.scene`).
 _KEPT_SCENES = "_scenes"
@@ -86,8 +88,6 @@ class Gate:
     @property
     def source(self) -> str:
         """``"pymunk"``, ``"pymunk.accurate"``, ``"mujoco.matched-bounce"``: as users write it."""
-        from harness.engines import source_label
-
         return source_label(self.engine, self.preset)
 
 
@@ -163,13 +163,11 @@ class Scenario:
     @cached_property
     def definition_digest(self) -> str:
         """sha256 of every field but the file's ``path`` spelled as canonical JSON
-        (:func:`harness.run.cache.canonical_json`): what a scenario's records depend on (the
+        (:func:`harness.store.identity.canonical_json`): what a scenario's records depend on (the
         runner's cache key of them). Spelled once per scenario object and kept with it (in the
         store of passed checks too, :meth:`located` copies it): a warm run of a large library
         spent a tenth of its time spelling definitions. ``TypeError`` for a value without a
         canonical spelling."""
-        from harness.run.cache import canonical_json
-
         definition = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "path"}
         return hashlib.sha256(canonical_json(definition).encode()).hexdigest()
 
@@ -280,8 +278,6 @@ class Scenario:
 
     def analytic_problem(self, which: Union[Point, int, None] = None):
         """The ``planar_impact.ImpactProblem`` (mass_matrix, wn, wt, u) at a point."""
-        from planar_impact import builders
-
         fixed = self.at(which)
         if fixed.system == "matrix":
             matrix = fixed.matrix

@@ -590,7 +590,7 @@ def parse_scenario(doc: Mapping[str, Any], path=None, *, checks_key: str | None 
                    ) -> Scenario:
     """Check a parsed TOML document and build its :class:`Scenario` (raises ScenarioError).
 
-    ``checks_key`` (:meth:`harness.scenarios.checks.PassedChecks.key` of the file's text):
+    ``checks_key`` (:meth:`harness.store.passed_checks.PassedChecks.key` of the file's text):
     the point checks are skipped when that text passed them before, and remembered when it
     passes now.
     """

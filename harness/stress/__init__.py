@@ -34,7 +34,7 @@ finer sweeps. Missing engines are reported as skipped.
 Outputs in ``--out`` (default ``reports/stress``): ``stress.md`` (the stability report),
 ``stress.json`` (everything, machine-readable), ``stress-engines.csv`` (one row per engine
 run), figures ``engine-grid.png``, ``solver-boundary-jumps.png``, ``solver-energy.png``.
-Engine runs are cached (:class:`harness.run.cache.ResultCache`; ``--no-cache`` forces them) and
+Engine runs are cached (:class:`harness.store.cache.ResultCache`; ``--no-cache`` forces them) and
 spread over local cores (:func:`harness.run.executor.run_tasks`; ``--executor dask``).
 """
 
@@ -46,8 +46,8 @@ import sys
 import time
 from pathlib import Path
 
-from harness.run.files import output_directory_problem, write_text_atomically
 from harness.run.provenance import provenance
+from harness.store.files import output_directory_problem, write_text_atomically
 from harness.stress.engines import engine_stress
 from harness.stress.outputs import (
     boundary_jumps_figure,

@@ -162,8 +162,8 @@ def engine_stress(quick: bool, executor: str = "local", workers: int | None = No
     every registered one, :func:`harness.engines.engine_names`, those added at run time
     included)."""
     from harness.engines import EngineNotInstalled, engine_names, load_engine, source_label
-    from harness.run.cache import ResultCache
     from harness.run.executor import run_tasks
+    from harness.store.cache import ResultCache
 
     presets = ("accurate",) if quick else ("defaults", "accurate")
     skipped, versions = {}, {}

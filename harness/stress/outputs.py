@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from harness.engines import source_label
-from harness.run.files import save_figure, write_text_atomically
+from harness.store.files import save_figure, write_text_atomically
 from harness.stress.engines import OUTCOME_COLOURS, OUTCOMES
 from harness.stress.solver import BOUNDARIES
 

@@ -31,12 +31,12 @@ from harness.engines import (
     preset_role,
     source_label,
 )
-from harness.run.files import (
+from harness.scenarios.errors import ScenarioError
+from harness.store.files import (
     make_output_directory,
     output_directory_problem,
     write_text_atomically,
 )
-from harness.scenarios.errors import ScenarioError
 from harness.survey import laws as survey_laws
 from harness.survey import outputs, statistics
 from harness.survey.engines import bare_stepping

@@ -83,7 +83,7 @@ def write_parquet(columns: dict, path: Path, metadata: dict | None = None) -> Pa
         arrays.append(array)
     schema = pa.schema(fields, metadata=None if metadata is None else {
         METADATA_KEY: json.dumps(metadata, sort_keys=True, default=str)})
-    from harness.run.files import write_bytes_atomically
+    from harness.store.files import write_bytes_atomically
 
     buffer = pa.BufferOutputStream()
     pq.write_table(pa.Table.from_arrays(arrays, schema=schema), buffer)

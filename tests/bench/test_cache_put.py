@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 
 from harness.bench import cache_put
-from harness.run.cache import ResultCache
+from harness.store.cache import ResultCache
 
 
 def test_the_timed_puts_store_every_output_whole(tmp_path):

@@ -19,8 +19,8 @@ from harness.engines import (
     preset_role,
     source_label,
 )
+from harness.run.plan import parse_presets
 from harness.run.records import Record, Results
-from harness.run.runner import parse_presets
 
 
 def test_only_mujoco_renames_a_role_and_roles_stay_the_harness_keys():

@@ -267,7 +267,8 @@ def test_the_quick_surveys_digest_is_the_same_under_other_kernels():
 
 
 def test_the_quick_surveys_digest_follows_its_files_versions_and_code(tmp_path, monkeypatch):
-    from harness.run import cache, provenance
+    from harness.run import provenance
+    from harness.store import identity
     from harness.survey.population import load_population, population_files
 
     shipped = population_files()[0]
@@ -284,7 +285,7 @@ def test_the_quick_surveys_digest_follows_its_files_versions_and_code(tmp_path, 
                         lambda names: {**versions(names), "pymunk": "0.0-other"})
     assert suite.survey_inputs([load_population(copy)], engines, presets) != before
     monkeypatch.undo()
-    monkeypatch.setattr(cache, "code_version_of", lambda sources: "other code")
+    monkeypatch.setattr(identity, "code_version_of", lambda sources: "other code")
     assert suite.survey_inputs([load_population(copy)], engines, presets) != before
 
 

@@ -12,6 +12,7 @@ import pytest
 import harness.engines as engines_module
 from harness.engines import load_engine
 from harness.run import runner
+from harness.run import tasks as worker_tasks
 from harness.run.executor import call_chunk, chunk_size_for, make_chunks, run_tasks
 from harness.scenarios import SCENARIO_DIR, load_scenario, load_scenarios
 
@@ -58,13 +59,13 @@ def record_fields(outcome) -> list[dict]:
 # --------------------------------------------------------------------------------------------
 def test_engine_chunk_equals_engine_task_output_for_output():
     tasks = library_tasks()
-    chunks = make_chunks(tasks, 16, runner.task_group)
+    chunks = make_chunks(tasks, 16, worker_tasks.task_group)
     assert any(len(chunk) > 1 for chunk in chunks)
     finished = 0
     for chunk in chunks:
         chunk_tasks = [tasks[index] for index in chunk]
-        batched = runner.engine_chunk(chunk_tasks)
-        single = [runner.engine_task(task) for task in chunk_tasks]
+        batched = worker_tasks.engine_chunk(chunk_tasks)
+        single = [worker_tasks.engine_task(task) for task in chunk_tasks]
         assert [without_times(out) for out in batched] == [without_times(out) for out in single]
         finished += sum("velocities" in out for out in batched)
     assert finished == len(tasks)  # every library task is a finished run, none skipped
@@ -85,13 +86,13 @@ def test_chunked_run_equals_unchunked_run_record_for_record(workers):
 def test_a_chunk_never_mixes_engines_or_settings_and_keeps_every_task_once():
     tasks = library_tasks()
     for size in (1, 3, 64):
-        chunks = make_chunks(tasks, size, runner.task_group)
+        chunks = make_chunks(tasks, size, worker_tasks.task_group)
         assert sorted(index for chunk in chunks for index in chunk) == list(range(len(tasks)))
         for chunk in chunks:
             assert 1 <= len(chunk) <= size and chunk == sorted(chunk)
-            assert len({runner.task_group(tasks[index]) for index in chunk}) == 1
+            assert len({worker_tasks.task_group(tasks[index]) for index in chunk}) == 1
     with pytest.raises(ValueError, match="share engine and settings"):
-        runner.engine_chunk([tasks[0], {**tasks[0], "engine": "box2d"}])
+        worker_tasks.engine_chunk([tasks[0], {**tasks[0], "engine": "box2d"}])
 
 
 def test_chunk_size_balances_small_runs_and_caps_large_ones():
@@ -171,13 +172,14 @@ def test_an_engine_failure_inside_a_chunk_is_reported_and_the_others_are_kept(mo
     scenes = [SWEEP.scene(point) for point in SWEEP.point_list()]
     tasks = [{"engine": "pymunk", "scene": scene, "settings": settings, "time_limit_s": 0.5}
              for scene in scenes]
-    clean = [without_times(runner.engine_task(task)) for task in tasks]
+    clean = [without_times(worker_tasks.engine_task(task)) for task in tasks]
     monkeypatch.setattr(engines_module, "load_engine",
                         lambda name: FaultyEngine(scenes[4], fault))
     delivered = {}
-    outputs = run_tasks(runner.engine_task, tasks, workers=1, batch=runner.engine_chunk,
-                        group=runner.task_group, chunk_size=9, on_result=delivered.__setitem__,
-                        time_limit=runner.task_time_limit, stopped=runner.stopped_task)
+    outputs = run_tasks(worker_tasks.engine_task, tasks, workers=1,
+                        batch=worker_tasks.engine_chunk, group=worker_tasks.task_group,
+                        chunk_size=9, on_result=delivered.__setitem__,
+                        time_limit=worker_tasks.task_time_limit, stopped=worker_tasks.stopped_task)
     expected = "error: time limit" if fault == "time limit" else "error: RuntimeError"
     assert outputs[4]["status"].startswith(expected)
     assert [without_times(out) for i, out in enumerate(outputs) if i != 4] == clean[:4] + clean[5:]
@@ -199,10 +201,11 @@ def test_dask_below_the_threshold_runs_locally_and_says_so():
 def test_dask_chunks_of_engine_tasks_equal_the_local_pool_bit_for_bit():
     pytest.importorskip("distributed", reason='dask is not installed (pip install -e ".[dask]")')
     tasks = library_tasks(limit=120)
-    chunked = {"batch": runner.engine_chunk, "group": runner.task_group, "chunk_size": 16}
-    local = run_tasks(runner.engine_task, tasks, workers=1, **chunked)
+    chunked = {"batch": worker_tasks.engine_chunk, "group": worker_tasks.task_group,
+               "chunk_size": 16}
+    local = run_tasks(worker_tasks.engine_task, tasks, workers=1, **chunked)
     delivered = []
-    distributed = run_tasks(runner.engine_task, tasks, executor="dask", workers=2,
+    distributed = run_tasks(worker_tasks.engine_task, tasks, executor="dask", workers=2,
                             dask_min_tasks=0, on_result=lambda index, _: delivered.append(index),
                             **chunked)
     assert [without_times(out) for out in distributed] == [without_times(out) for out in local]
@@ -237,7 +240,7 @@ def test_contact_steps_equal_the_typed_view_bit_for_bit():
     seen = {"shifted": 0, "impulses": 0, "several points": 0, "several bodies": 0}
     for task in tasks[::7]:
         run = load_engine(task["engine"]).run(task["scene"], task["settings"])
-        steps = runner._contact_steps(run)
+        steps = worker_tasks._contact_steps(run)
         assert exact(steps) == exact(typed_view_steps(run))
         seen["shifted"] += run.contact_record[0] != (0.0, 0.0) and bool(steps)
         seen["impulses"] += any(step["impulse"] is not None for step in steps)

@@ -24,11 +24,13 @@ from pathlib import Path
 import pytest
 
 from harness import cli
-from harness.run import runner
-from harness.run.cache import ResultCache
+from harness.run import command as run_command
+from harness.run import metrics, runner
+from harness.run import tasks as worker_tasks
 from harness.run.records import Record, read_results, write_results
 from harness.scenarios import SCENARIO_DIR, ScenarioError, load_scenario
 from harness.scenarios import reader as scenario_reader
+from harness.store.cache import ResultCache
 
 # Entry files read and written by hand (shared by the cache tests).
 _spec = importlib.util.spec_from_file_location(
@@ -74,7 +76,7 @@ def test_a_kill_mid_run_keeps_finished_results_and_the_rerun_recomputes_none(tmp
                                                                             monkeypatch):
     """One engine run per task (``chunk_size=1``): a kill loses only the unfinished runs."""
     clean = engine_outputs(sweep_run(None))
-    real_task = runner.engine_task
+    real_task = worker_tasks.engine_task
     calls = []
 
     def dies_at_the_fifth(task):
@@ -83,13 +85,13 @@ def test_a_kill_mid_run_keeps_finished_results_and_the_rerun_recomputes_none(tmp
         calls.append(task)
         return real_task(task)
 
-    monkeypatch.setattr(runner, "engine_task", dies_at_the_fifth)
+    monkeypatch.setattr(worker_tasks, "engine_task", dies_at_the_fifth)
     with pytest.raises(KeyboardInterrupt):
         sweep_run(ResultCache(tmp_path), chunk_size=1)
     assert len(engine_entries(tmp_path)) == 4  # each finished run stored at once
 
     calls.clear()
-    monkeypatch.setattr(runner, "engine_task", lambda task: (calls.append(task),
+    monkeypatch.setattr(worker_tasks, "engine_task", lambda task: (calls.append(task),
                                                              real_task(task))[1])
     rerun = sweep_run(ResultCache(tmp_path), chunk_size=1)
     assert len(calls) == 9 - 4  # nothing that had finished ran again
@@ -99,7 +101,7 @@ def test_a_kill_mid_run_keeps_finished_results_and_the_rerun_recomputes_none(tmp
 def test_a_kill_mid_run_keeps_finished_chunks(tmp_path, monkeypatch):
     """Chunks of 4 runs (``Engine.run_many``): a kill in the second keeps the first's 4."""
     clean = engine_outputs(sweep_run(None, chunk_size=1))
-    real_chunk = runner.engine_chunk
+    real_chunk = worker_tasks.engine_chunk
     chunks = []
 
     def dies_in_the_second_chunk(tasks):
@@ -108,17 +110,17 @@ def test_a_kill_mid_run_keeps_finished_chunks(tmp_path, monkeypatch):
         chunks.append(len(tasks))
         return real_chunk(tasks)
 
-    monkeypatch.setattr(runner, "engine_chunk", dies_in_the_second_chunk)
+    monkeypatch.setattr(worker_tasks, "engine_chunk", dies_in_the_second_chunk)
     with pytest.raises(KeyboardInterrupt):
         sweep_run(ResultCache(tmp_path), chunk_size=4)
     assert chunks == [4] and len(engine_entries(tmp_path)) == 4
 
     chunks.clear()
     singles = []
-    real_task = runner.engine_task
-    monkeypatch.setattr(runner, "engine_chunk", lambda tasks: (chunks.append(len(tasks)),
+    real_task = worker_tasks.engine_task
+    monkeypatch.setattr(worker_tasks, "engine_chunk", lambda tasks: (chunks.append(len(tasks)),
                                                                real_chunk(tasks))[1])
-    monkeypatch.setattr(runner, "engine_task", lambda task: (singles.append(task),
+    monkeypatch.setattr(worker_tasks, "engine_task", lambda task: (singles.append(task),
                                                              real_task(task))[1])
     rerun = sweep_run(ResultCache(tmp_path), chunk_size=4)
     # the 5 runs left, nothing that had finished: a chunk of 4, and 1 alone (no batch)
@@ -172,7 +174,7 @@ def test_a_real_kill_leaves_a_usable_cache(tmp_path):
 
 def test_deleting_the_cache_mid_run_the_run_completes(tmp_path, monkeypatch):
     clean = engine_outputs(sweep_run(None))
-    real_task = runner.engine_task
+    real_task = worker_tasks.engine_task
     cache_dir = tmp_path / "cache"
     calls = []
 
@@ -182,14 +184,14 @@ def test_deleting_the_cache_mid_run_the_run_completes(tmp_path, monkeypatch):
             shutil.rmtree(cache_dir, ignore_errors=True)  # rm -rf by hand, twice
         return real_task(task)
 
-    monkeypatch.setattr(runner, "engine_task", deletes_the_cache)
+    monkeypatch.setattr(worker_tasks, "engine_task", deletes_the_cache)
     outcome = sweep_run(ResultCache(cache_dir), chunk_size=1)
     assert len(calls) == 9 and engine_outputs(outcome) == clean
 
 
 def test_deleting_the_cache_between_chunks_the_run_completes(tmp_path, monkeypatch):
     clean = engine_outputs(sweep_run(None))
-    real_chunk = runner.engine_chunk
+    real_chunk = worker_tasks.engine_chunk
     cache_dir = tmp_path / "cache"
     chunks = []
 
@@ -199,7 +201,7 @@ def test_deleting_the_cache_between_chunks_the_run_completes(tmp_path, monkeypat
             shutil.rmtree(cache_dir, ignore_errors=True)
         return real_chunk(tasks)
 
-    monkeypatch.setattr(runner, "engine_chunk", deletes_the_cache)
+    monkeypatch.setattr(worker_tasks, "engine_chunk", deletes_the_cache)
     outcome = sweep_run(ResultCache(cache_dir), chunk_size=3)
     assert chunks == [3, 3, 3] and engine_outputs(outcome) == clean
 
@@ -233,7 +235,7 @@ def test_a_cache_that_cannot_be_written_costs_the_cache_not_the_run(tmp_path, mo
 
 
 def test_an_internal_error_in_one_point_keeps_every_other_record(monkeypatch):
-    real = runner.metrics.departures
+    real = metrics.departures
     calls = []
 
     def breaks_once(*args, **kwargs):
@@ -242,7 +244,7 @@ def test_an_internal_error_in_one_point_keeps_every_other_record(monkeypatch):
             raise ZeroDivisionError("injected")
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(runner.metrics, "departures", breaks_once)
+    monkeypatch.setattr(metrics, "departures", breaks_once)
     outcome = sweep_run(None)
     errors = [r for r in outcome.records if r.status.startswith("error: internal")]
     assert len(errors) >= 1 and "ZeroDivisionError: injected" in errors[0].status
@@ -462,7 +464,7 @@ def test_a_bad_cache_entry_is_a_reported_miss(tmp_path, damage):
 
 
 def test_the_cache_has_one_home_whatever_the_working_directory(tmp_path, monkeypatch):
-    from harness.run.cache import default_cache_dir
+    from harness.store.cache import default_cache_dir
 
     monkeypatch.delenv("IMPACT_HARNESS_CACHE_DIR", raising=False)
     monkeypatch.chdir(tmp_path)
@@ -534,8 +536,8 @@ def test_an_engine_task_stuck_in_c_is_stopped_and_the_run_goes_on(monkeypatch, w
              {"engine": "stuck", "settings": {}, "scene": scene, "time_limit_s": 1.0},
              {"engine": "pymunk", "settings": settings, "scene": scene, "time_limit_s": 30.0}]
     begin = time.monotonic()
-    outputs = runner._run_tasks(tasks, executor="local", workers=workers, scheduler=None,
-                                log=None)
+    outputs = worker_tasks.run_engine_tasks(tasks, executor="local", workers=workers,
+                                            scheduler=None, log=None)
     assert time.monotonic() - begin < 20  # the stuck one alone would run for hours
     assert outputs[1]["status"] == "error: time limit: stopped after 1 s (--task-time-limit)"
     assert outputs[0]["status"] == outputs[2]["status"] == "ok"  # the others ran
@@ -575,7 +577,8 @@ def test_a_worker_that_dies_costs_its_task_only(monkeypatch):
     settings = real("pymunk").settings("defaults", {})
     tasks = [{"engine": name, "settings": settings, "scene": scene, "time_limit_s": 30.0}
              for name in ("pymunk", "crash", "pymunk")]
-    outputs = runner._run_tasks(tasks, executor="local", workers=2, scheduler=None, log=None)
+    outputs = worker_tasks.run_engine_tasks(tasks, executor="local", workers=2, scheduler=None,
+                                            log=None)
     assert outputs[1]["status"] == "error: worker died (exit code 7)"
     assert outputs[0]["status"] == outputs[2]["status"] == "ok"
 
@@ -606,10 +609,7 @@ def test_bad_arguments_are_one_line_and_exit_2_before_any_work(tmp_path, monkeyp
     def no_work(*args, **kwargs):
         raise AssertionError("scenarios loaded before the arguments were checked")
 
-    from harness.scenarios import library
-
-    monkeypatch.setattr(runner, "select_scenarios", no_work)
-    monkeypatch.setattr(library, "load_scenarios_reporting", no_work)
+    monkeypatch.setattr(run_command, "load_scenarios_reporting", no_work)
     extra = () if option == "--json" else ("--json", str(tmp_path / "r.json"))
     status = cli.main(["run", str(DISK), option, value, *extra])
     err = capsys.readouterr().err

@@ -17,11 +17,11 @@ import pytest
 
 from harness import cli
 from harness.engines import load_engine
-from harness.run import runner
-from harness.run.cache import CACHE_MARKER, OLD_CHECKS_STORES, ResultCache
-from harness.run.engine_facts import ENGINE_FACTS
+from harness.engines.facts import ENGINE_FACTS
+from harness.run import command, runner
 from harness.run.records import read_results
 from harness.scenarios import SCENARIO_DIR, load_scenario
+from harness.store.cache import CACHE_MARKER, OLD_CHECKS_STORES, ResultCache
 
 # Entry files read and written by hand (shared by the cache tests).
 _spec = importlib.util.spec_from_file_location(
@@ -247,7 +247,7 @@ def test_an_engine_error_exits_4_and_the_results_are_written(tmp_path, monkeypat
     status = cli.main(["run", str(DISK), "--engines", "pymunk", "--no-cache", "--json",
                        str(path), "--workers", "1"])
     err = capsys.readouterr().err
-    assert status == runner.EXIT_ENGINE_ERROR == 4
+    assert status == command.EXIT_ENGINE_ERROR == 4
     engine_records = [r for r in read_results(path).records if r.source == "pymunk"]
     assert engine_records and all(r.status.startswith("error: TypeError") for r in engine_records)
     assert err.count("ENGINE ERROR:") == len(engine_records)

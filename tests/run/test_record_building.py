@@ -26,7 +26,7 @@ import numpy as np
 import pytest
 
 from harness.engines import EngineNotInstalled, load_engine
-from harness.run import history, metrics, records, runner, verdicts
+from harness.run import history, metrics, records, scenario_records, tasks, verdicts
 from harness.run.records import Record, plain_value, record_line
 from harness.scenarios import SCENARIO_DIR, load_scenario
 
@@ -224,12 +224,12 @@ def test_a_cached_line_is_the_line_of_the_cached_record(label):
     for _ in range(20):
         data = engine_line_record(rng, label).as_dict()
         stored = {**data, "cached": True}
-        assert runner._cached_line(record_line(data), stored) == record_line(stored)
+        assert scenario_records._cached_line(record_line(data), stored) == record_line(stored)
 
 
 def test_a_line_of_another_layout_is_spelled_in_full():
     stored = {"scenario": "s", "cached": True}
-    assert runner._cached_line('{"scenario":"s"}', stored) == record_line(stored)
+    assert scenario_records._cached_line('{"scenario":"s"}', stored) == record_line(stored)
     assert records.record_line(stored) == '{"scenario":"s","cached":true}'
 
 
@@ -257,7 +257,7 @@ def test_a_verdict_given_its_terms_and_implied_impulse_is_the_one_worked_out(eng
         if verdicts.declared_contacts(scenario, scene) is not None:
             continue
         problem = scenario.analytic_problem(point)
-        output = runner.engine_task({"engine": engine_name, "scene": scene,
+        output = tasks.engine_task({"engine": engine_name, "scene": scene,
                                      "settings": settings})
         if "velocities" not in output:
             continue
@@ -383,4 +383,4 @@ def test_a_dict_field_holding_the_cached_key_is_spelled_in_full():
     data = engine_line_record(rng, "label").as_dict()
     data["point"] = {"a": 1, "cached": False, "diagnostics": 1}
     stored = {**data, "cached": True}
-    assert runner._cached_line(record_line(data), stored) == record_line(stored)
+    assert scenario_records._cached_line(record_line(data), stored) == record_line(stored)

@@ -1,6 +1,6 @@
 """Several-contact references computed as tasks of the engine runs' executor
-(harness/run/runner.py, ``_reference_tasks`` and ``reference_task``): the same references,
-bit for bit, as the ones computed inline, kept in the cache as each finishes."""
+(harness/run/plan.py, ``reference_tasks``; harness/run/tasks.py, ``reference_task``): the same
+references, bit for bit, as the ones computed inline, kept in the cache as each finishes."""
 
 from __future__ import annotations
 
@@ -8,10 +8,11 @@ import json
 
 import pytest
 
-from harness.run import references, runner
-from harness.run.cache import ResultCache
+from harness.run import plan, references, runner
+from harness.run import tasks as worker_tasks
 from harness.run.executor import run_tasks
 from harness.scenarios import SCENARIO_DIR, load_scenario
+from harness.store.cache import ResultCache
 
 #: Flat faces (m-contact laws) and tilts (event sequences), one to six points each.
 SEVERAL_CONTACT = [load_scenario(SCENARIO_DIR / f"{name}.toml") for name in (
@@ -33,16 +34,16 @@ def _without_timing(record) -> dict:
 
 
 def test_only_the_several_contact_points_get_a_task():
-    tasks, keys, found = runner._reference_tasks([SINGLE_CONTACT, *SEVERAL_CONTACT], None)
+    tasks, keys, found = plan.reference_tasks([SINGLE_CONTACT, *SEVERAL_CONTACT], None)
     expected = [(s.name, p.index) for s in SEVERAL_CONTACT for p in s.point_list()]
     assert [(task["scenario"], task["point"]) for task in tasks] == expected
     assert keys == [None] * len(tasks) and found == {}
 
 
 def test_references_computed_in_the_pool_equal_the_inline_ones_bit_for_bit():
-    tasks, _, _ = runner._reference_tasks(SEVERAL_CONTACT, None)
-    pooled = run_tasks(runner.engine_task, tasks, workers=2, batch=runner.engine_chunk,
-                       group=runner.task_group)
+    tasks, _, _ = plan.reference_tasks(SEVERAL_CONTACT, None)
+    pooled = run_tasks(worker_tasks.engine_task, tasks, workers=2, batch=worker_tasks.engine_chunk,
+                       group=worker_tasks.task_group)
     by_name = {scenario.name: scenario for scenario in SEVERAL_CONTACT}
     kinds = set()
     for task, output in zip(tasks, pooled):
@@ -55,8 +56,8 @@ def test_references_computed_in_the_pool_equal_the_inline_ones_bit_for_bit():
 
 
 def test_each_reference_task_is_a_chunk_of_its_own():
-    tasks, _, _ = runner._reference_tasks(SEVERAL_CONTACT, None)
-    assert len({runner.task_group(task) for task in tasks}) == len(tasks)
+    tasks, _, _ = plan.reference_tasks(SEVERAL_CONTACT, None)
+    assert len({worker_tasks.task_group(task) for task in tasks}) == len(tasks)
 
 
 @pytest.mark.parametrize("use_cache", [False, True])
@@ -66,7 +67,7 @@ def test_a_run_gives_the_same_records_as_with_references_computed_inline(
     options = dict(engines=("pymunk",), workers=2, log=None)
     pooled = runner.run(scenarios, cache=ResultCache(tmp_path / "pooled") if use_cache else None,
                         **options)
-    monkeypatch.setattr(runner, "_reference_tasks", lambda scenarios, cache: ([], [], {}))
+    monkeypatch.setattr(plan, "reference_tasks", lambda scenarios, cache: ([], [], {}))
     inline = runner.run(scenarios, cache=ResultCache(tmp_path / "inline") if use_cache else None,
                         **options)
     assert ([_exact(_without_timing(r)) for r in pooled.records]
@@ -78,8 +79,8 @@ def test_a_run_gives_the_same_records_as_with_references_computed_inline(
 def test_each_reference_is_in_the_cache_once_the_run_is_over(tmp_path, monkeypatch, workers):
     cache = ResultCache(tmp_path)
     in_main = []
-    real = runner._store_reference
-    monkeypatch.setattr(runner, "_store_reference",
+    real = plan.store_reference
+    monkeypatch.setattr(plan, "store_reference",
                         lambda *args: in_main.append(args[1]) or real(*args))
     runner.run(SEVERAL_CONTACT[:2], engines=("pymunk",), workers=workers, log=None, cache=cache)
     # on the local executor each task stores its reference where it ran (a worker, or inline)
@@ -91,10 +92,10 @@ def test_each_reference_is_in_the_cache_once_the_run_is_over(tmp_path, monkeypat
     monkeypatch.setattr(references, "point_reference", never)
     for scenario in SEVERAL_CONTACT[:2]:
         for point in scenario.point_list():
-            stored = runner.point_reference_cached(scenario, point, cache)
+            stored = plan.point_reference_cached(scenario, point, cache)
             assert stored["kind"] == references.SIMULTANEOUS
     # and a second run has no reference left to compute: each read once, for the records
-    tasks, keys, found = runner._reference_tasks(SEVERAL_CONTACT[:2], cache)
+    tasks, keys, found = plan.reference_tasks(SEVERAL_CONTACT[:2], cache)
     assert (tasks, keys) == ([], [])
     assert sorted(found) == sorted((s.name, p.index) for s in SEVERAL_CONTACT[:2]
                                    for p in s.point_list())
@@ -108,7 +109,7 @@ def test_a_reference_that_raises_in_its_task_gives_the_points_internal_error_rec
 
     monkeypatch.setattr(references, "scene_reference", broken)
     scenario = load_scenario(SCENARIO_DIR / "flat-rod.toml")
-    assert runner.reference_task(runner._reference_tasks([scenario], None)[0][0]) == {
+    assert worker_tasks.reference_task(plan.reference_tasks([scenario], None)[0][0]) == {
         "error": "RuntimeError: broken reference"}
     outcome = runner.run([scenario], engines=("pymunk",), workers=1, log=None)
     assert outcome.records

@@ -10,10 +10,10 @@ import pytest
 
 import harness.engines as engines_module
 from harness.engines import ENGINE_NAMES, EngineNotInstalled, UnsupportedScene
-from harness.run import metrics, runner
-from harness.run.cache import ResultCache
+from harness.run import metrics, plan, runner, tasks
 from harness.run.records import ANALYTIC, read_results, write_results
 from harness.scenarios import SCENARIO_DIR, load_scenario
+from harness.store.cache import ResultCache
 
 ROD = load_scenario(SCENARIO_DIR / "rod-45-slip-reversal.toml")
 TWO_SLED = load_scenario(SCENARIO_DIR / "two-sled-row2.toml")
@@ -141,7 +141,7 @@ def test_engine_that_cannot_build_the_scene_is_skipped(monkeypatch):
             raise UnsupportedScene("test: no such shape here")
 
     monkeypatch.setattr(engines_module, "load_engine", lambda name: Refusing())
-    output = runner.engine_task({"engine": "pymunk", "settings": {}, "scene": ROD.scene()})
+    output = tasks.engine_task({"engine": "pymunk", "settings": {}, "scene": ROD.scene()})
     assert output["status"] == "skipped: engine cannot build the scene: test: no such shape here"
 
 
@@ -209,7 +209,7 @@ def test_non_finite_engine_numbers_are_written_as_null(tmp_path):
 
 
 def test_parse_options():
-    assert runner.parse_engines("pymunk, mujoco") == ("pymunk", "mujoco")
-    assert runner.parse_presets("all") == ("defaults", "accurate")
+    assert plan.parse_engines("pymunk, mujoco") == ("pymunk", "mujoco")
+    assert plan.parse_presets("all") == ("defaults", "accurate")
     with pytest.raises(ValueError, match="unknown engine"):
-        runner.parse_engines("bullet")
+        plan.parse_engines("bullet")

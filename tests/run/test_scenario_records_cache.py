@@ -1,7 +1,7 @@
-"""A scenario's finished records kept whole in the result cache (harness/run/runner.py,
+"""A scenario's finished records kept whole in the result cache (harness/run/scenario_records.py,
 ``_scenario_key``): a warm run reads one entry per scenario, its results equal the cold
 run's, and a damaged entry is reported and rebuilt, never trusted. Also the scenario checks
-remembered by the file's text (harness/scenarios/checks.py, ``PassedChecks``)."""
+remembered by the file's text (harness/store/passed_checks.py)."""
 
 from __future__ import annotations
 
@@ -16,12 +16,13 @@ import pytest
 
 from harness import cli
 from harness.engines import ENGINE_NAMES
-from harness.run import runner
-from harness.run.cache import ResultCache
-from harness.run.engine_facts import ENGINE_FACTS, engine_facts
+from harness.engines.facts import ENGINE_FACTS, engine_facts
+from harness.run import plan, runner, scenario_records
 from harness.run.records import read_results
 from harness.scenarios import SCENARIO_DIR, checks, load_scenario
 from harness.scenarios.library import load_scenarios_reporting
+from harness.store.cache import ResultCache
+from harness.store.passed_checks import PassedChecks
 
 # Entry files read and written by hand (shared by the cache tests).
 _spec = importlib.util.spec_from_file_location(
@@ -202,7 +203,7 @@ def test_another_selection_is_another_entry(tmp_path):
 def test_a_scenario_with_a_missing_engine_is_not_kept_whole(tmp_path, monkeypatch):
     from harness.engines import EngineNotInstalled
 
-    real = runner._engine_status
+    real = plan.engine_status
 
     def pymunk_missing(engines, cache=None):
         versions, missing, settings = real(engines, cache)
@@ -211,7 +212,7 @@ def test_a_scenario_with_a_missing_engine_is_not_kept_whole(tmp_path, monkeypatc
         missing["pymunk"] = str(EngineNotInstalled("pymunk", "not installed (test)"))
         return versions, missing, settings
 
-    monkeypatch.setattr(runner, "_engine_status", pymunk_missing)
+    monkeypatch.setattr(plan, "engine_status", pymunk_missing)
     outcome = _run([ROD], ResultCache(tmp_path))
     assert all(r.skipped for r in outcome.records if r.source != "analytic")
     assert not _scenario_entries(tmp_path)
@@ -275,7 +276,7 @@ def test_a_file_with_problems_is_checked_every_time(tmp_path, counted_checks):
 
 def test_a_damaged_checks_store_is_reported_and_every_file_checked(tmp_path, counted_checks):
     (tmp_path / "cache").mkdir()
-    store = tmp_path / "cache" / checks.PassedChecks.FILE_NAME
+    store = tmp_path / "cache" / PassedChecks.FILE_NAME
     store.write_text('{"format": 1, "passed": ["not a key"]}', encoding="utf-8")
     passed = checks.use_passed_checks(tmp_path / "cache")
     scenarios, errors = load_scenarios_reporting([SCENARIO_DIR / "disk-direct.toml"])
@@ -299,7 +300,7 @@ def test_the_run_command_remembers_checks_in_its_cache_and_not_with_no_cache(tmp
     for _ in range(2):
         assert cli.main(["run", file, "--cache-dir", str(cache_dir), "--json",
                          str(tmp_path / "r.json")]) == 0
-    assert len(counted_checks) == 1 and (cache_dir / checks.PassedChecks.FILE_NAME).is_file()
+    assert len(counted_checks) == 1 and (cache_dir / PassedChecks.FILE_NAME).is_file()
     assert cli.main(["run", file, "--no-cache", "--json", str(tmp_path / "r.json")]) == 0
     assert len(counted_checks) == 2
     assert checks.passed_checks.root is None  # the run leaves the store disabled
@@ -319,7 +320,7 @@ def test_cache_info_and_prune_see_the_scenario_entries(tmp_path):
 def test_records_built_on_forked_workers_equal_those_built_inline(tmp_path, monkeypatch):
     scenarios = [ROD, SWEEP, TWO_SLED, load_scenario(SCENARIO_DIR / "flat-rod.toml")]
     inline = _run(scenarios, ResultCache(tmp_path / "inline"))
-    monkeypatch.setattr(runner, "MIN_PARALLEL_RECORDS", 1)
+    monkeypatch.setattr(scenario_records, "MIN_PARALLEL_RECORDS", 1)
     forked = runner.run(scenarios, engines=ENGINES, cache=ResultCache(tmp_path / "forked"),
                         log=None, workers=2)
     assert forked._records == [None] * len(inline.records)  # lines came back, not records
@@ -378,7 +379,7 @@ def test_cache_info_and_prune_see_the_scenario_checks_store(tmp_path):
         load_scenarios_reporting([SCENARIO_DIR / "disk-direct.toml"])
     finally:
         checks.use_passed_checks(None)
-    store = tmp_path / checks.PassedChecks.FILE_NAME
+    store = tmp_path / PassedChecks.FILE_NAME
     # the store and the installed engines' facts (which engines the checks depend on)
     facts = len(engine_facts(ENGINE_NAMES).versions)
     assert ResultCache(tmp_path).info()["entries"] == 1 + facts

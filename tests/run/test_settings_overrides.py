@@ -13,9 +13,10 @@ import pytest
 
 from harness import cli
 from harness.engines import load_engine, parse_overrides
+from harness.run import command as run_command
 from harness.run import runner
-from harness.run.cache import ResultCache
 from harness.scenarios import SCENARIO_DIR, load_scenario
+from harness.store.cache import ResultCache
 
 DISK = SCENARIO_DIR / "disk-direct.toml"
 
@@ -100,7 +101,7 @@ def test_a_set_run_never_silently_replaces_results_of_the_plain_selection(tmp_pa
     assert "settings_overrides" not in recorded  # older results files compare equal
     args = cli.build_parser("run").parse_args(["run", str(DISK), "--engines", "pymunk",
                                           "--set", "pymunk.iterations=1"])
-    status, _ = runner.execute(args, json_path=results, guard=True, log=None)
+    status, _ = run_command.execute(args, json_path=results, guard=True, log=None)
     assert status == 2
     assert "another selection" in capsys.readouterr().err
     assert json.loads(results.read_text())["provenance"]["selection"] == recorded

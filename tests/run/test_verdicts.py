@@ -14,7 +14,7 @@ import math
 import numpy as np
 import pytest
 
-from harness.run import runner, verdicts
+from harness.run import plan, point_records, runner, tasks, verdicts
 from harness.run.verdicts import RunNumbers, StepContacts, Tolerances, judge
 from harness.scenarios import SCENARIO_DIR, load_scenario
 from harness.scene import Body, Box, Disk, Rod, Scene, geometry
@@ -238,7 +238,7 @@ def test_a_run_of_only_the_first_impact_is_truncated_and_not_counted():
 
     scenario = TILTED[0]
     point = scenario.point_list()[-1]  # 3°
-    whole = runner.engine_scene(scenario, point)
+    whole = plan.engine_scene(scenario, point)
     assert whole.run_until is not None and whole.run_until > 0
     first_only = scenario.scene(point)
     engine = load_engine("pymunk")
@@ -255,11 +255,11 @@ def test_a_run_of_only_the_first_impact_is_truncated_and_not_counted():
     assert judge(whole, problem, verdicts.numbers_from_run(full), contacts=struck,
                  sequence=True).single_impact
     # through the runner's records: flagged, out of the worst departure and of the gates
-    item = {"output": runner.engine_task({"engine": "pymunk", "scene": first_only,
+    item = {"output": tasks.engine_task({"engine": "pymunk", "scene": first_only,
                                           "settings": engine.settings("accurate")})}
-    record = runner.engine_record(scenario, runner._point_dict(point), "pymunk", "accurate",
-                                  item, problem, {}, scene=first_only, contacts=struck,
-                                  sequence=True)
+    record = point_records.engine_record(scenario, point_records.point_dict(point), "pymunk",
+                                         "accurate", item, problem, {}, scene=first_only,
+                                         contacts=struck, sequence=True)
     assert record.verdict == verdicts.FLAGGED and record.status == "truncated-sequence"
     value, any_flagged, _ = worst_departure([record], "newton-lcp")
     assert any_flagged and math.isnan(value)

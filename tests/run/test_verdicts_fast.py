@@ -29,7 +29,7 @@ from harness.engines import (
     UnsupportedScene,
     body_extent,
 )
-from harness.run import metrics, runner, verdicts
+from harness.run import metrics, tasks, verdicts
 from harness.run.verdicts import (
     DEFAULT_TOLERANCES,
     ENGINE_LAW,
@@ -487,7 +487,7 @@ def test_library_runs_get_the_reference_verdicts(engine_name, preset, monkeypatc
             continue
         monkeypatch.setattr(engines_module, "load_engine", lambda name, run=run: Replay(
             engine, run))
-        output = runner.engine_task({"engine": engine_name, "scene": scene,
+        output = tasks.engine_task({"engine": engine_name, "scene": scene,
                                      "settings": settings})
         assert output["status"] == run.status
         declared = verdicts.declared_contacts(scenario, scene)

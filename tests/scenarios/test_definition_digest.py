@@ -5,9 +5,9 @@ from __future__ import annotations
 from dataclasses import fields, replace
 from pathlib import Path
 
-from harness.run.cache import canonical_json
 from harness.scenarios import SCENARIO_DIR, checks, load_scenario
 from harness.scenarios.reader import load_scenario as read_file
+from harness.store.identity import canonical_json
 
 ROD = load_scenario(SCENARIO_DIR / "rod-45-slip-reversal.toml")
 

@@ -8,7 +8,6 @@ import shutil
 
 import pytest
 
-from harness import processes
 from harness.bench import many_scenarios
 from harness.scenarios import SCENARIO_DIR, checks, library
 from harness.scenarios.library import load_scenarios_reporting
@@ -39,7 +38,7 @@ def described(outcome):
 @pytest.fixture
 def library_dir(tmp_path, monkeypatch):
     """Enough files to fork for, on two workers however many cores the machine has."""
-    monkeypatch.setattr(processes, "default_workers", lambda: 2)
+    monkeypatch.setattr(library, "default_workers", lambda: 2)  # where the library looks it up
     directory = tmp_path / "scenarios"
     many_scenarios.write_copies(directory, library.FORKED_CHECKS_MIN_FILES + 10, seed=3)
     bad_files(directory)
@@ -54,9 +53,9 @@ def test_forked_checks_give_the_scenarios_and_errors_of_checks_in_order(library_
         forked.append(len(items))
         return map_forked(function, items, workers)
 
-    map_forked = processes.map_forked
+    map_forked = library.map_forked
     inline = described(load_scenarios_reporting(library_dir, workers=1))
-    monkeypatch.setattr(processes, "map_forked", spy)
+    monkeypatch.setattr(library, "map_forked", spy)
     assert described(load_scenarios_reporting(library_dir, workers=2)) == inline
     assert described(load_scenarios_reporting(library_dir, workers=None)) == inline
     assert forked == [2 * library.PIECES_PER_WORKER] * 2  # the forked path was taken

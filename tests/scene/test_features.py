@@ -12,7 +12,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from harness.scene import Box, Polygon, features
+from harness.scene import Box, Disk, Polygon, Rod, features
+from harness.scene.features import feature_points
 from harness.scene.reference import reference_scenes
 from harness.survey.population import resolve_populations
 from harness.survey.sampling import sample_population
@@ -64,3 +65,12 @@ def test_the_remembered_extents_are_bounded():
         features.body_extent(box)
     assert len(features._EXTENTS) <= features._MAX_EXTENTS
     assert features.body_extent(boxes[0]) == _extent_by_definition(boxes[0])
+
+
+def test_a_box_has_its_corners_a_rod_its_caps_a_disk_none():
+    centres, radius, names = feature_points(Box(0.3, 0.1))
+    assert radius == 0.0 and len(names) == 4
+    assert sorted(map(tuple, np.abs(centres))) == [(0.15, 0.05)] * 4
+    centres, radius, names = feature_points(Rod(0.4, 0.01))
+    assert radius == 0.01 and centres.tolist() == [[-0.2, 0.0], [0.2, 0.0]]
+    assert feature_points(Disk(0.05))[2] == () and feature_points(Disk(0.05))[0].shape == (0, 2)

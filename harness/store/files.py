@@ -8,6 +8,7 @@ an output path the user gave cannot be written (a command exits 2 with that line
 
 from __future__ import annotations
 
+import io
 import itertools
 import os
 import stat
@@ -101,8 +102,6 @@ def save_figure(figure, path: Path | str, kind: str, **options) -> Path | str:
     """``figure.savefig`` (a matplotlib figure, as ``kind``: ``"png"``, ``"svg"``) into
     memory, then written as :func:`write_bytes_atomically` writes: never through a link or
     onto a device planted at ``path``. Returns ``path``."""
-    import io
-
     buffer = io.BytesIO()
     figure.savefig(buffer, format=kind, **options)
     return write_bytes_atomically(path, buffer.getvalue())

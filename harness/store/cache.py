@@ -5,14 +5,15 @@ Home: :func:`default_cache_dir` -- ``$IMPACT_HARNESS_CACHE_DIR`` when set, else
 clean`` removes it), else, for an installed harness, ``$XDG_CACHE_HOME/impact-harness``
 (``~/.cache/impact-harness``). Never the working directory. Bounded by ``impact-harness cache
 prune`` (entries written by other code, or older than ``--older-than`` days) and ``cache
-clear``; ``cache info`` shows the size.
+clear``; ``cache info`` shows the size (:mod:`harness.store.cli`).
 
 A record is stored under the key ``sha256(canonical JSON of the payload + code version)``,
 where the payload names everything the result depends on (scenario, sweep point, engine and
-its version, settings ...) and :func:`code_version` hashes the source the stored values
-depend on (:data:`CACHED_CODE`: ``planar_impact``, the engines, the scene, the references
-and the run modules that compute what is stored), so a change there invalidates every
-entry, while a change to the report, the benchmarks or the CLI keeps the cache::
+its version, settings ...) and :func:`~harness.store.identity.code_version` hashes the
+source the stored values depend on (:data:`~harness.store.identity.CACHED_CODE`:
+``planar_impact``, the store, the engines, the scene, the references and the run modules
+that compute what is stored), so a change there invalidates every entry, while a change to
+the report, the benchmarks or the CLI keeps the cache::
 
     cache = ResultCache()                     # default_cache_dir(), or enabled=False for --no-cache
     key = cache.key({"scenario": name, "point": 3, "engine": "pymunk", "version": v, "settings": s})
@@ -42,7 +43,7 @@ checksum differs, or every record of a pack whose header is not whole) is a miss
 the caller's ``check`` rejects (a record without finite velocities of the right shape): both
 are listed in :attr:`ResultCache.rejected`, which the run prints as warnings, and the
 result is computed again. Beside the entries, ``root/passed-checks.json`` keeps the keys of
-the scenario texts that passed their checks (:class:`harness.scenarios.checks.PassedChecks`);
+the scenario texts that passed their checks (:class:`harness.store.passed_checks.PassedChecks`);
 ``cache info``, ``prune`` and ``clear`` count and remove it with them.
 
 The harness deletes only what it made: the cache's root carries the marker file
@@ -62,32 +63,21 @@ import json
 import os
 import re
 import secrets
-import sys
 import time
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from dataclasses import fields, is_dataclass
-from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
 from harness.collector import collector_paused
-from harness.run.files import write_parts_atomically, write_text_atomically
-from harness.run.records import LINE_SEPARATOR  # an entry's lines as a results file holds them
+from harness.store.files import write_parts_atomically, write_text_atomically
+from harness.store.identity import Spelled, canonical_json, code_version
 
-_HARNESS_DIR = Path(__file__).resolve().parent.parent  # harness/, from harness/run/
-#: The harness source (directories and files, relative to ``harness/``) that the cached
-#: values depend on: the engine runs (the adapters, the scene they build, ``engine_task`` in
-#: the runner), the several-contact references (the references, the event-driven solver,
-#: the departures they hold) and each scenario's finished records (the scenario model, the
-#: runner, metrics, contact histories, verdicts, the record layout). Add a module here when
-#: a cached value starts to depend on it; a listed path that is missing is an error, never
-#: silently skipped.
-CACHED_CODE: tuple[str, ...] = (
-    "__init__.py", "engines", "scene", "reference", "scenarios", "run/__init__.py",
-    "run/cache.py", "run/runner.py", "run/references.py", "run/metrics.py", "run/verdicts",
-    "run/history.py", "run/records.py",
-)
+_HARNESS_DIR = Path(__file__).resolve().parent.parent  # harness/, from harness/store/
+
+#: Between two lines of an entry of many lines (:meth:`ResultCache.put_lines`): the record
+#: lines of a results file (:mod:`harness.run.records`), which a warm run copies as stored.
+LINE_SEPARATOR = ",\n"
 
 CACHE_FORMAT = 2  # bump when the record layout changes (2: SHA-256 checked, no pickle)
 
@@ -96,7 +86,7 @@ CACHE_DIR_VARIABLE = "IMPACT_HARNESS_CACHE_DIR"
 #: A temporary file older than this (s) belongs to a writer that died: removed.
 STALE_TEMPORARY_S = 60.0
 #: The scenario checks' store in the cache's directory
-#: (:class:`harness.scenarios.checks.PassedChecks`), and the names it had before (removed by
+#: (:class:`harness.store.passed_checks.PassedChecks`), and the names it had before (removed by
 #: ``prune`` and ``clear`` unread: the pickle is never loaded).
 SCENARIO_CHECKS_STORE = "passed-checks.json"
 OLD_CHECKS_STORES = ("scenario-checks.json", "scenario-checks.pickle")
@@ -128,108 +118,6 @@ def default_cache_dir() -> Path:
         return project / ".cache" / "results"
     base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
     return Path(base) / "impact-harness"
-
-
-def cached_code_sources(harness_dir: Path = _HARNESS_DIR,
-                        planar_impact_dir: Path | None = None) -> tuple[Path, ...]:
-    """The source paths :func:`code_version` hashes: ``planar_impact`` (beside ``harness/``
-    under ``src/``, else the imported package) and :data:`CACHED_CODE` under ``harness_dir``."""
-    if planar_impact_dir is None:
-        planar_impact_dir = harness_dir.parent / "src" / "planar_impact"
-        if not planar_impact_dir.is_dir():  # installed (non-editable): the imported package
-            import planar_impact
-
-            planar_impact_dir = Path(planar_impact.__file__).resolve().parent
-    return (planar_impact_dir, *(harness_dir / name for name in CACHED_CODE))
-
-
-@lru_cache(maxsize=None)
-def code_version_of(sources: tuple[Path, ...]) -> str:
-    """sha256 over the ``*.py`` files of ``sources`` (directories, recursively, or files),
-    each named by its path from the source's parent."""
-    digest = hashlib.sha256()
-    for source in sources:
-        if source.is_file():
-            files = [source]
-        elif source.is_dir():
-            files = sorted(path for path in source.rglob("*.py")
-                           if "__pycache__" not in path.parts)
-        else:
-            raise FileNotFoundError(f"{source}: listed in the cached code, but missing")
-        for path in files:
-            name = (f"{source.parent.name}/{source.name}" if path is source
-                    else path.relative_to(source.parent).as_posix())
-            digest.update(name.encode())
-            digest.update(b"\0")
-            digest.update(path.read_bytes())
-            digest.update(b"\0")
-    return digest.hexdigest()
-
-
-def code_version() -> str:
-    """sha256 of the source the cached values depend on (:func:`cached_code_sources`).
-
-    Computed once per process (the source does not change under a running process).
-    """
-    return code_version_of(cached_code_sources())
-
-
-class Spelled:
-    """A value spelled once as canonical JSON (:attr:`text`), for the payloads of many keys
-    that hold it (a point's scene, in the key of each of its engine runs): a key's text holds
-    it exactly as if the value itself were in the payload."""
-
-    __slots__ = ("text",)
-
-    def __init__(self, value: Any) -> None:
-        self.text = canonical_json(value)
-
-
-#: The stand-in of a :class:`Spelled` value while its payload is spelled around it: a string
-#: no payload holds (random), which json writes as it is (letters and digits only).
-_SPELLED_MARK = f"spelled{secrets.token_hex(16)}"
-
-
-def _canonical_default(value: Any) -> Any:
-    """The JSON-able form of a value json does not know: numpy values as lists or numbers,
-    paths as POSIX text, dataclasses as their fields, read-only mappings as dicts; a
-    :class:`Spelled` value as :data:`_SPELLED_MARK` (:func:`canonical_json` splices its text
-    in)."""
-    if isinstance(value, Spelled):
-        return _SPELLED_MARK
-    if hasattr(value, "tolist"):  # numpy scalars and arrays
-        return value.tolist()
-    if isinstance(value, Path):
-        return value.as_posix()
-    if is_dataclass(value) and not isinstance(value, type):
-        return {f.name: getattr(value, f.name) for f in fields(value)}
-    if isinstance(value, Mapping):
-        return dict(value)
-    raise TypeError(
-        f"cache payload holds a value that is not JSON-able: {type(value).__name__} {value!r}"
-    )
-
-
-def canonical_json(payload: Any) -> str:
-    """Canonical JSON text: sorted keys, no spaces, floats exact (``repr``; a non-finite one
-    spelled ``NaN`` or ``Infinity``: a key's text, never read back), dataclasses as their
-    fields; written by json's C encoder (a task's scene and settings are hashed for every
-    engine run). A :class:`Spelled` value is its text, spliced in where json wrote its
-    stand-in (in the order json met them)."""
-    spelled: list[str] = []
-
-    def default(value: Any) -> Any:
-        if isinstance(value, Spelled):
-            spelled.append(value.text)
-        return _canonical_default(value)
-
-    text = json.dumps(payload, sort_keys=True, separators=(",", ":"), default=default)
-    if not spelled:
-        return text
-    pieces = text.split(f'"{_SPELLED_MARK}"')
-    if len(pieces) != len(spelled) + 1:  # cannot be: the stand-in is random
-        raise ValueError("a payload holds the stand-in of a spelled value")
-    return "".join(itertools.chain.from_iterable(zip(pieces, [*spelled, ""])))
 
 
 #: The stand-in of :meth:`ResultCache.slot_key`'s slot (a random string, spelled as json
@@ -841,7 +729,7 @@ class PendingPuts:
 
 
 def _is_temporary(name: str) -> bool:
-    """A writer's temporary file name (:func:`harness.run.files.write_parts_atomically`)."""
+    """A writer's temporary file name (:func:`harness.store.files.write_parts_atomically`)."""
     return name.startswith(".") and name.endswith(".tmp")
 
 
@@ -877,47 +765,5 @@ def _json_default(value: Any) -> Any:
 _ENTRY_ENCODER = json.JSONEncoder(default=_json_default, check_circular=False)
 
 
-# --------------------------------------------------------------------------------------------
-# impact-harness cache info|prune|clear
-# --------------------------------------------------------------------------------------------
-def add_arguments(parser) -> None:
-    parser.add_argument("action", choices=("info", "prune", "clear"),
-                        help="info: where and how big; prune: remove entries of other code "
-                        "versions (and older than --older-than); clear: remove every entry. "
-                        "prune and clear remove only the cache's own entries, and only in a "
-                        f"directory the harness made (it holds {CACHE_MARKER}); any other is "
-                        "refused with exit 2")
-    parser.add_argument("--cache-dir", type=Path, default=None,
-                        help=f"cache directory (default: {default_cache_dir()})")
-    parser.add_argument("--older-than", type=float, default=None, metavar="DAYS",
-                        help="prune: also remove entries older than DAYS days")
-
-
-def main(args) -> int:
-    cache = ResultCache(args.cache_dir)
-    if args.action == "info":
-        info = cache.info()
-        note = "" if info["marked"] or not cache.root.exists() else (
-            f" (no {CACHE_MARKER} file: not a cache the harness made)")
-        print(f"{info['root']}: {info['entries']} entries, {info['bytes'] / 1e6:.1f} MB{note}")
-        return 0
-    if args.older_than is not None and not args.older_than >= 0:
-        print(f"impact-harness cache: --older-than {args.older_than}: must be >= 0",
-              file=sys.stderr)
-        return 2
-    if not cache.root.exists():
-        print(f"{cache.root}: no cache there: removed 0 entries")
-        return 0
-    try:
-        done = cache.prune(args.older_than) if args.action == "prune" else cache.clear()
-    except NotOurCache as error:
-        print(f"impact-harness cache: {error}", file=sys.stderr)
-        return 2
-    print(f"{cache.root}: removed {done['entries']} entries, {done['bytes'] / 1e6:.1f} MB")
-    return 0
-
-
-__all__ = ["CACHED_CODE", "CACHE_DIR_VARIABLE", "CACHE_MARKER", "PACK_DIRECTORY", "PACK_SIZE",
-           "NotOurCache", "PendingPuts", "ResultCache",
-           "add_arguments", "cached_code_sources", "canonical_json", "code_version",
-           "code_version_of", "default_cache_dir", "main"]
+__all__ = ["CACHE_DIR_VARIABLE", "CACHE_MARKER", "LINE_SEPARATOR", "PACK_DIRECTORY", "PACK_SIZE",
+           "NotOurCache", "PendingPuts", "ResultCache", "default_cache_dir"]

@@ -3,8 +3,9 @@ around the slot made once, equals ResultCache.key of the payload holding the val
 
 from __future__ import annotations
 
-from harness.run.cache import ResultCache, Spelled
 from harness.scenarios import SCENARIO_DIR, load_scenario
+from harness.store.cache import ResultCache
+from harness.store.identity import Spelled
 
 
 def test_a_slot_key_is_the_key_of_the_payload_holding_the_value():

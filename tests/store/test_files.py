@@ -1,4 +1,4 @@
-"""harness.run.files: atomic writes, their temporaries' names, the directory made on need."""
+"""harness.store.files: atomic writes, their temporaries' names, the directory made on need."""
 
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ import time
 
 import pytest
 
-from harness.run import files
-from harness.run.cache import ResultCache
+from harness.store import files
+from harness.store.cache import ResultCache
 
 
 def test_parts_and_bytes_are_written_whole_and_leave_no_temporary(tmp_path):

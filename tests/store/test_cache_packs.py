@@ -11,11 +11,11 @@ from pathlib import Path
 import pytest
 
 from harness.run import runner
-from harness.run.cache import PACK_DIRECTORY, PACK_SIZE, NotOurCache, PendingPuts, ResultCache
 from harness.scenarios import load_scenario
+from harness.store.cache import PACK_DIRECTORY, PACK_SIZE, NotOurCache, PendingPuts, ResultCache
 
 _spec = importlib.util.spec_from_file_location(
-    "cache_entries", Path(__file__).parent / "cache_entries.py")
+    "cache_entries", Path(__file__).parent.parent / "run" / "cache_entries.py")
 cache_entries = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(cache_entries)
 
@@ -133,7 +133,7 @@ def test_pending_puts_write_a_pack_when_full_and_the_rest_when_flushed(tmp_path)
 
 def test_pending_puts_write_what_waited_too_long(tmp_path, monkeypatch):
     clock = [100.0]
-    monkeypatch.setattr("harness.run.cache.time.monotonic", lambda: clock[0])
+    monkeypatch.setattr("harness.store.cache.time.monotonic", lambda: clock[0])
     cache = ResultCache(tmp_path, version="v")
     pending = PendingPuts(cache, max_wait_s=2.0)
     first, second, third = _items(cache, 3)

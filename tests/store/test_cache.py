@@ -6,7 +6,8 @@ import json
 
 import pytest
 
-from harness.run.cache import ResultCache, canonical_json, code_version
+from harness.store.cache import ResultCache
+from harness.store.identity import canonical_json, code_version
 
 PAYLOAD = {"scenario": "disk-oblique", "point": 0, "engine": "pymunk", "engine_version": "7.3.1",
            "settings": {"time_step": 1e-4, "iterations": 50}}
@@ -46,7 +47,7 @@ def test_code_change_invalidates(tmp_path):
 
 
 def test_code_version_hashes_the_sources(tmp_path, monkeypatch):
-    from harness.run import cache as cache_module
+    from harness.store import identity
 
     package = tmp_path / "src" / "planar_impact"
     harness_dir = tmp_path / "harness" / "engines"
@@ -55,10 +56,10 @@ def test_code_version_hashes_the_sources(tmp_path, monkeypatch):
     (package / "solver.py").write_text("x = 1\n")
     (harness_dir / "pymunk_engine.py").write_text("y = 1\n")
     dirs = (package, tmp_path / "harness")
-    before = cache_module.code_version_of(dirs)
+    before = identity.code_version_of(dirs)
     (harness_dir / "pymunk_engine.py").write_text("y = 2\n")  # an engine adapter changes
-    cache_module.code_version_of.cache_clear()
-    assert cache_module.code_version_of(dirs) != before
+    identity.code_version_of.cache_clear()
+    assert identity.code_version_of(dirs) != before
 
 
 @pytest.mark.parametrize(
@@ -88,8 +89,8 @@ def test_payload_must_be_json_able():
 
 
 def test_a_spelled_value_keys_as_the_value_itself():
-    from harness.run.cache import Spelled
     from harness.scenarios import SCENARIO_DIR, load_scenario
+    from harness.store.identity import Spelled
 
     cache = ResultCache("unused", version="v1")
     scenario = load_scenario(SCENARIO_DIR / "sweep-tilted-box.toml")

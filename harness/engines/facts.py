@@ -18,8 +18,7 @@ from dataclasses import dataclass, field
 from typing import Iterator, Sequence
 
 from harness import engines as registry
-from harness.engines import EngineNotInstalled, install_fingerprint
-from harness.scenarios import PRESETS
+from harness.engines import PRESET_ROLES, EngineNotInstalled, install_fingerprint
 
 #: The cache entries' ``kind``.
 ENGINE_FACTS = "engine-facts"
@@ -37,7 +36,7 @@ class EngineFacts:
 
 def engine_facts(names: Sequence[str], cache=None) -> EngineFacts:
     """The :class:`EngineFacts` of ``names``, read from ``cache`` (a
-    :class:`harness.run.cache.ResultCache`; None or disabled: every engine loaded) where it
+    :class:`harness.store.cache.ResultCache`; None or disabled: every engine loaded) where it
     holds them for the installed package, else learnt by loading the adapter and kept."""
     facts = EngineFacts()
     for name in names:
@@ -55,7 +54,7 @@ def engine_facts(names: Sequence[str], cache=None) -> EngineFacts:
             facts.missing[name] = str(error)
             continue
         facts.versions[name] = adapter.version
-        facts.settings[name] = {preset: adapter.settings(preset, None) for preset in PRESETS}
+        facts.settings[name] = {preset: adapter.settings(preset, None) for preset in PRESET_ROLES}
         if key is not None:
             try:  # plain JSON (the settings are numbers, strings, booleans and lists)
                 cache.put(key, {"kind": ENGINE_FACTS, "engine": name,
@@ -97,7 +96,7 @@ def _stored(cache, key: str, name: str) -> tuple[str, dict] | None:
         return None
     version, settings = record.get("version"), record.get("settings")
     if not (isinstance(version, str) and isinstance(settings, dict)
-            and set(settings) == set(PRESETS)
+            and set(settings) == set(PRESET_ROLES)
             and all(isinstance(values, dict) for values in settings.values())):
         return None
     return version, settings

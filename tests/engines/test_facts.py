@@ -1,4 +1,4 @@
-"""The engines' facts kept in the result cache (harness/run/engine_facts.py): what a warm run
+"""The engines' facts kept in the result cache (harness/engines/facts.py): what a warm run
 reads instead of importing the engines equals what the loaded adapters report, and a warm
 run notices an engine installed, removed or reinstalled (its install fingerprint changes)."""
 
@@ -8,11 +8,11 @@ import pytest
 
 from harness import engines as registry
 from harness.engines import ENGINE_NAMES, EngineNotInstalled, install_fingerprint, load_engine
-from harness.run import engine_facts as facts_module
+from harness.engines import facts as facts_module
+from harness.engines.facts import engine_facts
 from harness.run import runner
-from harness.run.cache import ResultCache
-from harness.run.engine_facts import engine_facts
 from harness.scenarios import PRESETS, SCENARIO_DIR, checks, load_scenario
+from harness.store.cache import ResultCache
 
 ROD = load_scenario(SCENARIO_DIR / "rod-45-slip-reversal.toml")
 

@@ -1,5 +1,5 @@
 """The cache's code version hashes only the code the cached values depend on
-(harness/run/cache.py, ``CACHED_CODE``): editing the report keeps every entry."""
+(harness/store/identity.py, ``CACHED_CODE``): editing the report keeps every entry."""
 
 from __future__ import annotations
 
@@ -7,7 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from harness.run import cache as cache_module
+from harness.store import identity
+from harness.store.cache import ResultCache
 
 
 def _tree(root: Path) -> tuple[Path, Path]:
@@ -15,7 +16,10 @@ def _tree(root: Path) -> tuple[Path, Path]:
     files = ["src/planar_impact/solver.py", "harness/__init__.py",
              "harness/engines/pymunk_engine.py", "harness/scene/model.py",
              "harness/reference/event_driven.py", "harness/run/__init__.py",
-             "harness/run/cache.py", "harness/run/runner.py", "harness/run/references.py",
+             "harness/store/cache.py", "harness/run/runner.py", "harness/run/references.py",
+             "harness/run/tasks.py", "harness/run/plan.py", "harness/run/point_records.py",
+             "harness/run/gates.py", "harness/run/scenario_records.py",
+             "harness/run/command.py",
              "harness/run/metrics.py", "harness/run/verdicts/single.py", "harness/run/history.py",
              "harness/run/records.py", "harness/scenarios/model.py",
              "harness/run/provenance.py", "harness/report/html.py",
@@ -27,27 +31,30 @@ def _tree(root: Path) -> tuple[Path, Path]:
 
 
 def _version(harness_dir: Path, package: Path) -> str:
-    cache_module.code_version_of.cache_clear()
-    return cache_module.code_version_of(
-        cache_module.cached_code_sources(harness_dir, planar_impact_dir=package))
+    identity.code_version_of.cache_clear()
+    return identity.code_version_of(
+        identity.cached_code_sources(harness_dir, planar_impact_dir=package))
 
 
 @pytest.mark.parametrize("edited", ["harness/report/html.py", "harness/bench/solver.py",
-                                    "harness/cli.py", "harness/run/provenance.py"])
+                                    "harness/cli.py", "harness/run/provenance.py",
+                                    "harness/run/command.py"])
 def test_editing_code_the_cache_does_not_depend_on_keeps_the_key(tmp_path, edited):
     harness_dir, package = _tree(tmp_path)
     before = _version(harness_dir, package)
     (tmp_path / edited).write_text("x = 2\n")
     assert _version(harness_dir, package) == before
-    assert cache_module.ResultCache(tmp_path, version=before).key({"a": 1}) == \
-        cache_module.ResultCache(tmp_path, version=_version(harness_dir, package)).key({"a": 1})
+    assert ResultCache(tmp_path, version=before).key({"a": 1}) == \
+        ResultCache(tmp_path, version=_version(harness_dir, package)).key({"a": 1})
 
 
 @pytest.mark.parametrize("edited", ["src/planar_impact/solver.py",
                                     "harness/engines/pymunk_engine.py", "harness/scene/model.py",
-                                    "harness/reference/event_driven.py", "harness/run/runner.py",
+                                    "harness/reference/event_driven.py", "harness/run/tasks.py",
+                                    "harness/run/point_records.py", "harness/run/runner.py",
                                     "harness/run/references.py", "harness/run/metrics.py",
-                                    "harness/run/verdicts/single.py", "harness/scenarios/model.py"])
+                                    "harness/run/verdicts/single.py", "harness/scenarios/model.py",
+                                    "harness/store/cache.py"])
 def test_editing_code_a_cached_value_depends_on_changes_the_key(tmp_path, edited):
     harness_dir, package = _tree(tmp_path)
     before = _version(harness_dir, package)
@@ -79,5 +86,5 @@ def test_a_listed_source_that_is_missing_is_an_error(tmp_path):
 
 
 def test_every_listed_source_exists_in_this_checkout():
-    for source in cache_module.cached_code_sources():
+    for source in identity.cached_code_sources():
         assert source.exists(), source
