@@ -22,10 +22,12 @@ validate: $(STAMP)
 
 test: $(STAMP)
 	$(BIN)/ruff check .
-	$(BIN)/python -m pytest -q -n 2
+# --dist loadscope: a module's tests share one worker, so a module-scoped fixture (a
+# library run, a report) is built once, not once per worker
+	$(BIN)/python -m pytest -q -n 2 --dist loadscope
 # the kernel_sensitive tests again on other kernels: OPENBLAS_CORETYPE=Prescott and
 # NPY_DISABLE_CPU_FEATURES (every numpy SIMD target off); see tests/other_kernels.py
-	$(BIN)/python tests/other_kernels.py -n 2
+	$(BIN)/python tests/other_kernels.py -n 2 --dist loadscope
 
 bench: $(STAMP)
 	$(BIN)/impact-harness bench --quick
