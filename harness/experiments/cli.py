@@ -3,7 +3,7 @@
 Prints, for the Fazeli et al. (2017) drops when a copy is given, the paper's six models
 scored by its metric, every law fitted by the named objective (held-out error, bootstrap
 intervals, collision types), Poisson against Stronge, and where the drops lie on Routh's
-diagram; then the Kharaz et al. (2001) curves for every law beside the recalled points.
+diagram; then the Kharaz et al. (2001) curves for every law beside the digitised points.
 Only aggregates are printed or written: the Fazeli data carry no licence.
 Without a copy it says where to get one and goes on with the rest (exit 0).
 """
@@ -248,10 +248,7 @@ def kharaz_section() -> dict:
     print(f"Rigid disk, I = 2/5 m r²: rolling at separation below {limit:.1f}°"
           " (below it the real sphere's tangential compliance matters, which no rigid law "
           "has). m_nt = 0 here, so every law gives the same curve.")
-    if not kharaz.VERIFIED:
-        print("Measured points: recalled from the paper's figures, not digitised; "
-              f"uncertainty ±{kharaz.UNCERTAINTY[0]} (e_t), ±{kharaz.UNCERTAINTY[1]}° "
-              f"(rebound), ±{kharaz.UNCERTAINTY[2]:.0f} rad/s (spin); verify before use.\n")
+    print(f"Measured points: {kharaz.SOURCE}; checked against {kharaz.CROSS_CHECK_SOURCE}.\n")
     angles = np.array(KHARAZ_ANGLES, dtype=float)
     curves = {law: kharaz.curves(law, angles) for law in pi.LAWS}
     print("| incidence ° | " + " | ".join(f"{law} e_t / rebound° / spin" for law in pi.LAWS)
@@ -260,20 +257,25 @@ def kharaz_section() -> dict:
         print(f"| {angle:.0f} | " + " | ".join(
             f"{c.tangential_restitution[k]:.3f} / {c.rebound_deg[k]:.1f} / {c.spin[k]:.0f}"
             for c in curves.values()) + " |")
-    print("\n| incidence ° | recalled e_t | rebound ° | spin rad/s | poisson e_t | rebound ° "
-          "| spin |\n|---:|---:|---:|---:|---:|---:|---:|")
-    at_points = kharaz.curves("poisson", [p.incidence_deg for p in kharaz.POINTS])
-    for k, point in enumerate(kharaz.POINTS):
-        print(f"| {point.incidence_deg:.0f} | {point.tangential_restitution:.2f} | "
-              f"{point.rebound_deg:.1f} | {point.spin:.0f} | "
-              f"{at_points.tangential_restitution[k]:.3f} | {at_points.rebound_deg[k]:.1f} | "
-              f"{at_points.spin[k]:.0f} |")
-    return {"citation": registry.KHARAZ_2001.citation, "verified_points": kharaz.VERIFIED,
+    names = {"tangential_restitution": "tangential restitution", "rebound_deg": "rebound °",
+             "spin": "forward spin rad/s"}
+    print("\nMeasured against the rigid laws at the measured incidences (every law agrees):\n")
+    print("| quantity | incidence ° | measured | rigid laws | regime |\n|---|---:|---:|---:|---|")
+    for quantity in kharaz.QUANTITIES:
+        measured = kharaz.MEASURED[quantity]
+        rigid = getattr(kharaz.curves("poisson", measured.incidence_deg), quantity)
+        for angle, value, law_value in zip(measured.incidence_deg, measured.values, rigid):
+            regime = "sliding" if angle > limit else "rolls at separation (compliance)"
+            digits = {"tangential_restitution": 3, "rebound_deg": 1, "spin": 0}[quantity]
+            print(f"| {names[quantity]} | {angle:.1f} | {value:.{digits}f} "
+                  f"| {law_value:.{digits}f} | {regime} |")
+    return {"citation": registry.KHARAZ_2001.citation, "points_source": kharaz.SOURCE,
+            "cross_check_source": kharaz.CROSS_CHECK_SOURCE, "sticking_limit_deg": limit,
             "curves": {law: {"incidence_deg": c.incidence_deg,
                              "tangential_restitution": c.tangential_restitution,
                              "rebound_deg": c.rebound_deg, "spin": c.spin}
                        for law, c in curves.items()},
-            "points": kharaz.POINTS, "uncertainty": kharaz.UNCERTAINTY}
+            "measured": kharaz.MEASURED}
 
 
 def kharaz_engines_section(engines: list[str]) -> list:

@@ -1,8 +1,8 @@
 """The report's "Against experiments" section (issue 25, item 7).
 
 Always: the Kharaz curves (tangential restitution, rebound angle and spin of a disk against
-incidence) for every law, with the recalled published points marked as unverified
-(``kharaz.VERIFIED``). The Fazeli drops are unlicensed: this section never shows a per-drop
+incidence) for every law, with the measured points as digitised by others
+(``kharaz.MEASURED``, cited). The Fazeli drops are unlicensed: this section never shows a per-drop
 number; without a copy it says where to get one.
 """
 
@@ -22,37 +22,46 @@ from harness.report.views import FIGURES
 
 KHARAZ_FIGURE = "experiments-kharaz.png"
 #: Incidences of the drawn curves, degrees from the normal.
-INCIDENCES = np.linspace(5.0, 85.0, 161)
+INCIDENCES = np.linspace(1.0, 89.0, 177)
 
 
 def kharaz_payload() -> dict:
     """What the Kharaz figure shows (its redraw key, with the report's code digest)."""
     return {"laws": list(pi.LAWS), "mu": kharaz.MU, "e": kharaz.E,
-            "points": [list(vars(p).values()) for p in kharaz.POINTS],
-            "uncertainty": list(kharaz.UNCERTAINTY), "verified": kharaz.VERIFIED,
-            "incidences": INCIDENCES.tolist()}
+            "measured": {q: [m.incidence_deg, m.values] for q, m in kharaz.MEASURED.items()},
+            "source": kharaz.SOURCE, "incidences": INCIDENCES.tolist()}
+
+
+#: The three panels: the quantity, its axis label.
+KHARAZ_PANELS = (("tangential_restitution", r"tangential restitution of the centre, $v_x'/v_x$"),
+                 ("rebound_deg", "rebound angle (° from the normal)"),
+                 ("spin", "forward spin after impact (rad/s)"))
 
 
 def draw_kharaz(path: Path, tag: str | None) -> Path:
-    figure = new_figure(10.0, 3.4)
+    figure = new_figure(11.0, 3.8)
     axes = figure.subplots(1, 3)
     limit = kharaz.sticking_limit_deg()
-    fields = (("tangential_restitution", 0, "tangential restitution of the centre"),
-              ("rebound_deg", 1, "rebound angle (°)"), ("spin", 2, "forward spin (rad/s)"))
-    label = "recalled points (unverified)" if not kharaz.VERIFIED else "published points"
-    for name, column, title in fields:
-        axis = axes[column]
-        for law in pi.LAWS:
-            curve = kharaz.curves(law, INCIDENCES)
-            axis.plot(curve.incidence_deg, getattr(curve, name), label=law, linewidth=1.2)
-        points = np.array([[p.incidence_deg, p.tangential_restitution, p.rebound_deg, p.spin]
-                           for p in kharaz.POINTS])
-        axis.errorbar(points[:, 0], points[:, column + 1], yerr=kharaz.UNCERTAINTY[column],
-                      fmt="o", mfc="none", color="black", capsize=2, label=label)
-        axis.axvspan(0, limit, color="#eeeeee", zorder=0)
+    # Every law draws the same curve here (m_nt = 0): one line, named for all of them.
+    curve = kharaz.curves(pi.LAWS[0], INCIDENCES)
+    for axis, (quantity, label) in zip(axes, KHARAZ_PANELS):
+        axis.axvspan(0, limit, color="#eeeeee", zorder=0,
+                     label=f"rolls at separation (< {limit:.1f}°)")
+        axis.axvline(limit, color="#888888", linewidth=0.8, linestyle=":",
+                     label="stick–slip transition")
+        axis.plot(curve.incidence_deg, getattr(curve, quantity), color="#0072B2",
+                  linewidth=1.5, label=f"every law (μ {kharaz.MU}, e {kharaz.E})")
+        measured = kharaz.MEASURED[quantity]
+        axis.plot(measured.incidence_deg, measured.values, "o", mfc="none", color="black",
+                  markersize=6, label="measured (digitised)")
+        axis.set_xlim(0, 90)
         axis.set_xlabel("incidence (° from the normal)")
-        axis.set_title(title, fontsize=9)
-    axes[0].legend(fontsize=7)
+        axis.set_ylabel(label)
+        axis.grid(True, color="#dddddd", linewidth=0.5)
+    axes[1].plot([0, 90], [0, 90], color="#bbbbbb", linewidth=0.8, linestyle="--",
+                 label="rebound = incidence")
+    axes[0].legend(fontsize=8, loc="lower right")
+    axes[1].legend(fontsize=8, loc="upper left", handles=axes[1].get_lines()[-1:])
     return save_png(figure, path, tag=tag)
 
 
@@ -61,16 +70,26 @@ def kharaz_html(out_dir: Path) -> str:
     figures.mkdir(parents=True, exist_ok=True)
     render_once("experiments-kharaz", figures / KHARAZ_FIGURE, kharaz_payload(), draw_kharaz)
     limit = kharaz.sticking_limit_deg()
+    gaps = kharaz.digitisation_gaps()
+    spread = (f"{max(g[0] for g in gaps.values()):.2f}° of incidence, "
+              f"{gaps['tangential_restitution'][1]:.4f} in tangential restitution, "
+              f"{gaps['rebound_deg'][1]:.2f}° of rebound and {gaps['spin'][1]:.1f} rad/s "
+              "of spin")
     caption = (
-        f"A 5 mm alumina sphere at {kharaz.SPEED} m/s (Kharaz, Gorham &amp; Salman 2001) as a "
-        f"disk, μ = {kharaz.MU}, e = {kharaz.E}. Every law draws the same curve (m<sub>nt</sub> "
-        "= 0): read the curves as a test of the rigid picture and of μ, e, not of the law. "
-        f"Grey: below {limit:.1f}°, where the rigid disk rolls at separation and the real "
-        "sphere's tangential compliance, which no rigid law has, moves the measurement. "
-        "The circles are values recalled from the paper's figures, <b>not verified</b> "
-        "against a copy (bars: their uncertainty); no agreement is claimed.")
+        f"A 5 mm alumina sphere at {kharaz.SPEED} m/s on glass (Kharaz, Gorham &amp; Salman "
+        f"2001) as a disk with I = 2/5 m r², μ = {kharaz.MU}, e = {kharaz.E}. Every law draws "
+        "the same curve (m<sub>nt</sub> = 0): read it as a test of the rigid picture and of "
+        f"μ, e, not of the law. Grey: below {limit:.1f}°, where the rigid disk rolls at "
+        "separation and the real sphere's tangential compliance, which no rigid law has, "
+        "moves the measurement; dotted: the rigid stick–slip transition. Circles: the "
+        "measurements as others digitised them from the published figures "
+        f"({escape_html(kharaz.SOURCE)}); a second digitisation "
+        f"({escape_html(kharaz.CROSS_CHECK_SOURCE)}) agrees to {spread}. The sources give "
+        "no error bars. The engines' curves are printed by <code>impact-harness "
+        "experiments</code> (at this scale most engine runs are flagged).")
     image = (f"<a href='{FIGURES}/{KHARAZ_FIGURE[:-4]}.svg'><img src='{FIGURES}/"
-             f"{KHARAZ_FIGURE}' alt='Kharaz curves for every law'></a>")
+             f"{KHARAZ_FIGURE}' alt='Kharaz curves: the laws against the measured points'>"
+             "</a>")
     return f"<figure>{image}<figcaption>{caption}</figcaption></figure>"
 
 

@@ -12,7 +12,7 @@ def test_without_the_data_it_says_where_to_get_them_and_carries_on(monkeypatch, 
     out = capsys.readouterr().out
     assert "Fazeli et al. 2017: skipped" in out and "planar-impact-dataset" in out
     assert "## Kharaz, Gorham & Salman 2001" in out
-    assert "recalled from the paper's figures" in out  # the points' status is printed
+    assert "write_usr0.f" in out  # where the measured points come from is printed
 
 
 def test_a_copy_that_is_not_the_published_files_is_bad_input(synthetic_copy, capsys):
