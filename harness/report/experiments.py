@@ -8,7 +8,9 @@ number; without a copy it says where to get one.
 
 from __future__ import annotations
 
+import json
 import os
+import sys
 from html import escape as escape_html
 from pathlib import Path
 
@@ -16,9 +18,11 @@ import numpy as np
 
 import planar_impact as pi
 from harness.experiments import kharaz, registry
+from harness.experiments.aggregates import MIN_BIN_COUNT as MIN_BIN
 from harness.plotting import new_figure, save_png
-from harness.report.figures import render_once
-from harness.report.views import FIGURES
+from harness.report.figures import render_once, solver_digest
+from harness.report.views import FIGURES, engine_style
+from harness.run.files import write_text_atomically
 
 KHARAZ_FIGURE = "experiments-kharaz.png"
 #: Incidences of the drawn curves, degrees from the normal.
@@ -93,6 +97,289 @@ def kharaz_html(out_dir: Path) -> str:
     return f"<figure>{image}<figcaption>{caption}</figcaption></figure>"
 
 
+#: The drops' aggregates, kept beside the figures under the digest of what made them.
+DROPS_FILE = "experiments-drops.json"
+DENSITY_FIGURE = "experiments-drops-density.png"
+CDF_FIGURE = "experiments-drops-cdf.png"
+FITS_FIGURE = "experiments-drops-fits.png"
+#: Bootstrap replicates of the report's fits (the command's default is 200).
+REPORT_REPLICATES = 100
+#: Law colours and line styles (Okabe–Ito, as the rest of the report).
+LAW_COLOURS = {"newton": "#E69F00", "poisson": "#0072B2", "stronge": "#009E73",
+               "stronge-paper": "#CC79A7", "newton-lcp": "#D55E00"}
+LAW_LINES = {"newton": "-", "poisson": "-", "stronge": "--", "stronge-paper": ":",
+             "newton-lcp": "-."}
+
+
+def drops_key(hashes: dict[str, str]) -> str:
+    """The digest of everything the drops' aggregates depend on: the files (their SHA-256),
+    the code that reads, fits, runs and judges them, the installed versions and the
+    report's settings; never the results' floats."""
+    import hashlib
+
+    from harness.run.provenance import package_versions
+
+    root = Path(__file__).resolve().parents[1]
+    digest = hashlib.sha256()
+    digest.update(json.dumps({"hashes": hashes, "versions": package_versions(),
+                              "replicates": REPORT_REPLICATES,
+                              "solver": solver_digest()}, sort_keys=True).encode())
+    for folder in ("experiments", "engines"):
+        for path in sorted((root / folder).glob("*.py")):
+            digest.update(path.name.encode() + b"\0" + path.read_bytes())
+    digest.update((root / "run" / "verdicts.py").read_bytes())
+    return digest.hexdigest()
+
+
+def drops_aggregates(out_dir: Path, directory: Path) -> dict:
+    """The aggregates of the copy in ``directory`` (checked against the published SHA-256):
+    read from ``out_dir`` when made from the same inputs, else computed (minutes: every law
+    fitted twice, every engine on every drop) and kept there. Raises
+    :class:`registry.DataInvalid` for a copy that is not the published files."""
+    from harness.experiments import aggregates, fazeli
+
+    hashes = registry.verify(registry.FAZELI_2017, directory)
+    key = drops_key(hashes)
+    path = out_dir / DROPS_FILE
+    if path.is_file():
+        try:
+            kept = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            kept = {}
+        if kept.get("key") == key:
+            return kept["aggregates"]
+    data = fazeli.load(directory, check_hashes=False)  # just checked
+    result = aggregates.compute(data, engines=_installed_engines(),
+                                replicates=REPORT_REPLICATES, progress=_progress)
+    result["provenance"] = data.provenance()
+    if not path.exists() or path.is_file():  # only a regular file is written over
+        write_text_atomically(path, json.dumps({"key": key, "aggregates": result}, indent=1)
+                              + "\n")
+    return result
+
+
+def _progress(text: str) -> None:
+    print(f"report: Fazeli drops: {text}", file=sys.stderr, flush=True)
+
+
+def _installed_engines() -> list:
+    from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine
+
+    engines = []
+    for name in ENGINE_NAMES:
+        try:
+            engines.append(load_engine(name))
+        except EngineNotInstalled:
+            continue
+    return engines
+
+
+def draw_density(aggregates: dict, path: Path, tag: str | None) -> Path:
+    from matplotlib.colors import LogNorm
+
+    shown = aggregates["shown"]
+    figure = new_figure(11.0, 4.6)
+    figure.suptitle(f"{shown['law'].capitalize()}'s law at its {shown['objective']} fit (μ "
+                    f"{shown['mu']:.3f}, e {shown['e']:.3f}) against the "
+                    f"{aggregates['drops']} drops: post-impact speeds", fontsize=11)
+    axes = figure.subplots(1, 3)
+    peak = max(max(max(row) for row in d["counts"]) for d in shown["density"])
+    for axis, name, unit, panel in zip(axes, shown["speeds"], shown["units"],
+                                       shown["density"]):
+        edges = np.asarray(panel["edges"])
+        counts = np.asarray(panel["counts"], dtype=float).T  # rows: predicted
+        counts[counts == 0] = np.nan
+        mesh = axis.pcolormesh(edges, edges, counts, cmap="Blues",
+                               norm=LogNorm(vmin=MIN_BIN / 2, vmax=max(peak, MIN_BIN + 1)))
+        axis.plot(edges[[0, -1]], edges[[0, -1]], color="#888888", linewidth=0.8,
+                  linestyle="--", label="predicted = measured")
+        binned = panel["binned"]
+        axis.plot(binned["measured"], binned["q50"], color="#D55E00", linewidth=1.5,
+                  marker="o", markersize=3, label="median predicted per bin")
+        axis.fill_between(binned["measured"], binned["q25"], binned["q75"], color="#D55E00",
+                          alpha=0.2, linewidth=0, label="25–75 % per bin")
+        axis.set_xlim(edges[0], edges[-1])
+        axis.set_ylim(edges[0], edges[-1])
+        axis.set_aspect("equal")
+        axis.set_xlabel(f"measured {name} ({unit})")
+        axis.set_ylabel(f"predicted {name} ({unit})")
+    figure.legend(handles=axes[0].get_legend_handles_labels()[0], loc="outside lower center",
+                  ncols=3, fontsize=9)
+    bar = figure.colorbar(mesh, ax=axes, shrink=0.8,
+                          label=f"drops per bin (bins of < {MIN_BIN} not drawn)")
+    ticks = [t for t in (5, 10, 20, 50, 100, 200, 500) if MIN_BIN <= t <= max(peak, 5)]
+    bar.set_ticks(ticks, labels=[str(t) for t in ticks])
+    bar.minorticks_off()
+    return save_png(figure, path, tag=tag)
+
+
+def _cdf(axis, quantile_set: dict, label: str | None, **style) -> None:
+    if quantile_set["values"]:
+        axis.plot(quantile_set["values"], quantile_set["levels"], label=label, **style)
+
+
+def draw_cdf(aggregates: dict, path: Path, tag: str | None) -> Path:
+    figure = new_figure(11.0, 5.6)
+    axes = figure.subplots(1, 3, sharey=True)
+    drops = aggregates["drops"]
+    for axis, objective in zip(axes[:2], ("median-error", "impulse")):
+        for law, fit in aggregates["laws"][objective].items():
+            _cdf(axis, fit["errors"], f"{law} (μ {fit['mu']:.3f}, e {fit['e']:.3f})",
+                 color=LAW_COLOURS.get(law), linestyle=LAW_LINES.get(law, "-"), linewidth=1.3)
+        axis.set_title(f"every law fitted by {objective}", fontsize=10)
+    for k, quantile_set in enumerate(aggregates["paper_models"].values()):
+        _cdf(axes[0], quantile_set, "the paper's six models, as published" if k == 0 else None,
+             color="#999999", linewidth=0.8)
+    shown = aggregates["shown"]
+    reference = aggregates["laws"][shown["objective"]][shown["law"]]
+    _cdf(axes[2], reference["errors"], f"{shown['law']} (the law)", color="black",
+         linewidth=2.0)
+    for run in aggregates["engines"]:
+        colour, marker = engine_style(run["engine"])
+        hollow = run["preset"] == "defaults"
+        n = run["cdf"]["drops"]
+        subset = "" if n == drops else f", {n} of {drops}: a selected subset"
+        _cdf(axes[2], run["cdf"], f"{run['engine']} {run['preset']}{subset}", color=colour,
+             linestyle="--" if hollow else "-", linewidth=1.2)
+    flagged = [f"{r['engine']} {r['preset']}" for r in aggregates["engines"]
+               if r["cdf"]["drops"] == 0]
+    axes[2].set_title(f"engines at {shown['law']}'s {shown['objective']} fit "
+                      f"(μ {shown['mu']:.3f}, e {shown['e']:.3f})", fontsize=10)
+    if flagged:
+        axes[2].text(0.98, 0.03, "every run flagged, not drawn:\n" + "\n".join(flagged),
+                     transform=axes[2].transAxes, ha="right", va="bottom", fontsize=7)
+    for axis in axes:
+        axis.set_xlim(0, 1.5)
+        axis.set_ylim(0, 1)
+        axis.grid(True, color="#dddddd", linewidth=0.5)
+        axis.set_xlabel("normalized error ‖v̂ − v‖ / ‖v‖")
+        axis.legend(fontsize=7.5, loc="upper center", bbox_to_anchor=(0.5, -0.16),
+                    frameon=False)
+    axes[0].set_ylabel(f"share of the {drops} drops with a smaller error")
+    return save_png(figure, path, tag=tag)
+
+
+def draw_fits(aggregates: dict, path: Path, tag: str | None) -> Path:
+    figure = new_figure(9.0, 3.6)
+    axes = figure.subplots(1, 2)
+    rows = [(objective, law, fit) for objective in ("median-error", "impulse")
+            for law, fit in aggregates["laws"][objective].items()]
+    ticks = [f"{law} · {objective}" for objective, law, _ in rows]
+    for axis, name, symbol in zip(axes, ("mu", "e"), ("μ", "e")):
+        for k, (_, law, fit) in enumerate(rows):
+            low, high = fit[f"{name}_interval"]
+            value = fit[name]
+            axis.errorbar([value], [k], xerr=[[value - low], [high - value]], fmt="o",
+                          color=LAW_COLOURS.get(law), capsize=3, markersize=4)
+            edge = " (grid edge)" if name == "mu" and fit.get("on_grid_edge") else ""
+            axis.annotate(f"{value:.3f} [{low:.3f}, {high:.3f}]{edge}", (value, k),
+                          xytext=(0, 5), textcoords="offset points", ha="center",
+                          fontsize=7)
+        axis.set_yticks(range(len(rows)), ticks if name == "mu" else [""] * len(rows),
+                        fontsize=8)
+        axis.set_ylim(len(rows) - 0.5, -0.8)  # first row on top, room for its label
+        axis.set_title("friction μ" if name == "mu" else "restitution e", fontsize=10)
+        axis.axhline(len(rows) / 2 - 0.5, color="#bbbbbb", linewidth=0.8)
+        axis.grid(True, axis="x", color="#dddddd", linewidth=0.5)
+        axis.set_xlabel(f"fitted {symbol} (bars: 95 % bootstrap interval, "
+                        f"{aggregates['replicates']} replicates)", fontsize=9)
+    return save_png(figure, path, tag=tag)
+
+
+def calibration_table(aggregates: dict) -> str:
+    calibration = aggregates["calibration"]
+    rows = []
+    for result in calibration["results"]:
+        if result["best"] is None:
+            best, objective = "cannot be calibrated: no cell with single impacts on half", "—"
+        else:
+            best = ", ".join(f"{k} {v}" for k, v in result["best"].items())
+            objective = f"{result['objective']:.3f}"
+        cannot = ", ".join(result["cannot"]) or "—"
+        rows.append(f"<tr><td>{escape_html(result['engine'])}</td>"
+                    f"<td>{escape_html(result['preset'])}</td><td>{escape_html(best)}</td>"
+                    f"<td>{objective}</td><td>{escape_html(cannot)}</td></tr>")
+    sample = calibration["sample"]
+    return ("<table><tr><th>engine</th><th>preset</th><th>calibrated settings</th>"
+            "<th>median error</th><th>knobs that move it by &lt; "
+            f"{calibration['tolerance']:g} (cannot calibrate)</th></tr>" + "".join(rows)
+            + "</table><p class='muted'>Grid <i>quick</i> (μ 0.1, 0.3, 0.6 × e 0.3, 0.6, 0.9, "
+            "times MuJoCo's solref damping ratio or Box2D's length scale), scored on "
+            f"{sample['drops']} of the {sample['of']} drops drawn at random with seed "
+            f"{sample['seed']} (<code>impact-harness calibrate ENGINE --to data</code> for "
+            "more).</p>")
+
+
+def drops_html(out_dir: Path, aggregates: dict) -> str:
+    figures = out_dir / FIGURES
+    figures.mkdir(parents=True, exist_ok=True)
+    payload = {"aggregates_of": aggregates.get("provenance", {}),
+               "digest": aggregates_digest(aggregates)}
+    parts = []
+    for kind, file, draw in (("density", DENSITY_FIGURE, draw_density),
+                             ("cdf", CDF_FIGURE, draw_cdf), ("fits", FITS_FIGURE, draw_fits)):
+        render_once(f"experiments-drops-{kind}", figures / file, payload,
+                    lambda path, tag, draw=draw: draw(aggregates, path, tag))
+    shown = aggregates["shown"]
+    drops = aggregates["drops"]
+    hidden = sum(d["hidden_in_sparse_bins"] for d in shown["density"])
+    parts.append(_figure(DENSITY_FIGURE, "predicted against measured post-impact speeds",
+        f"{shown['law'].capitalize()}'s law at its <i>{shown['objective']}</i> fit (μ "
+        f"{shown['mu']:.3f}, e {shown['e']:.3f}) against the {drops} processed drops (raw "
+        "post-impact speeds): how many drops fall in each bin (log scale; "
+        f"{hidden} drop-bins holding fewer than {MIN_BIN} drops are left blank, so that no "
+        "drop can be read off the figure), and the quartiles of the prediction in bins of "
+        "the measured value. On the dashed line the prediction is exact."))
+    parts.append(_figure(CDF_FIGURE, "error distributions of the laws and engines",
+        "The distribution of the paper's error (the centre's velocity after impact, relative "
+        "to the measured one) over the drops. Left and middle: every law at its own fit by "
+        "each objective (they give different fits); grey, the paper's six models as "
+        "published (against the published speeds, as the paper scores them). Right: every "
+        f"engine and preset at {shown['law']}'s <i>{shown['objective']}</i> fit, on its "
+        "runs judged single impacts only (flagged runs are not scored; a curve of fewer "
+        "drops is of a selected subset and not comparable)."))
+    parts.append(_figure(FITS_FIGURE, "fitted friction and restitution per law",
+        "Each law's global (μ, e) by each objective with its 95 % bootstrap interval "
+        f"({aggregates['replicates']} resamples of the drops, seed {aggregates['seed']}). "
+        "The laws nearly coincide on this object; the objectives do not."))
+    parts.append("<h4>Calibrated engine settings</h4>" + calibration_table(aggregates))
+    return "\n".join(parts)
+
+
+def aggregates_digest(value) -> str:
+    """A digest of JSON ``value`` rounded to 6 significant digits (a figure's redraw key:
+    the last bits of a float, which differ between CPUs, do not redraw it)."""
+    import hashlib
+
+    def rounded(item):
+        if isinstance(item, float):
+            return float(f"{item:.6g}")
+        if isinstance(item, dict):
+            return {k: rounded(v) for k, v in item.items()}
+        if isinstance(item, list):
+            return [rounded(v) for v in item]
+        return item
+
+    return hashlib.sha256(json.dumps(rounded(value), sort_keys=True).encode()).hexdigest()
+
+
+def _figure(file: str, alt: str, caption: str) -> str:
+    return (f"<figure><a href='{FIGURES}/{file[:-4]}.svg'><img src='{FIGURES}/{file}' "
+            f"alt='{escape_html(alt)}'></a><figcaption>{caption}</figcaption></figure>")
+
+
+def data_option_problem(path: str | os.PathLike | None) -> str | None:
+    """Why ``--experiments-data PATH`` cannot be used (not a directory, or not the published
+    files), checked before any work; None when it can or was not given."""
+    if path is None:
+        return None
+    try:
+        registry.verify(registry.FAZELI_2017, registry.locate(registry.FAZELI_2017, path))
+    except registry.DataInvalid as invalid:
+        return str(invalid)
+    return None
+
+
 def data_directory(path: str | os.PathLike | None = None) -> Path | None:
     """The Fazeli copy's directory (``path`` or the environment variable), None without."""
     try:
@@ -103,20 +390,32 @@ def data_directory(path: str | os.PathLike | None = None) -> Path | None:
 
 def experiments_section(out_dir: Path, data_path: str | os.PathLike | None = None) -> str:
     """The section's HTML; draws its figures under ``out_dir`` only when their inputs
-    changed."""
+    changed. With a copy of the Fazeli drops (``data_path`` or the environment variable)
+    their aggregates and figures, else where to get them; a copy that is not the published
+    files is said so, and the rest of the section goes on."""
     parts = ["<h2 id='experiments'>Against experiments</h2>",
              "<p>What real impacts did, beside what the laws say they would "
-             "(docs/experiments.md; <code>impact-harness experiments</code>).</p>"]
-    directory = data_directory(data_path)
-    if directory is None:
-        parts.append(
-            "<p>The planar ellipse drops of Fazeli et al. (ICRA 2017) are not shown: the "
-            "files carry no licence and are read from your own copy. Get them from "
-            f"{escape_html(registry.FAZELI_2017.where_to_get)}.</p>")
+             "(docs/experiments.md; <code>impact-harness experiments</code>).</p>",
+             "<h3>Planar ellipse drops (Fazeli et al. 2017)</h3>"]
+    where = ("Get them from " + escape_html(registry.FAZELI_2017.where_to_get) + " (for "
+             "the report: <code>impact-harness report --experiments-data DIR</code>).")
+    try:
+        directory = registry.locate(registry.FAZELI_2017, data_path)
+        aggregates = drops_aggregates(out_dir, directory)
+    except registry.DataMissing:
+        parts.append("<p>The 1,718 processed drops of an ellipse (Fazeli et al., ICRA 2017) "
+                     "are not shown: the files carry no licence and are read from your own "
+                     f"copy, never committed. {where}</p>")
+    except registry.DataInvalid as invalid:
+        parts.append(f"<p>The drops are not shown: {escape_html(str(invalid))}. {where}</p>")
     else:
-        parts.append(f"<p>Fazeli drops read from <code>{escape_html(str(directory))}</code>; "
-                     "run <code>impact-harness experiments --data DIR</code> for the fits "
-                     "(aggregates only).</p>")
+        hashes = ", ".join(f"{name} {digest[:12]}…" for name, digest
+                           in aggregates["provenance"].get("hashes", {}).items())
+        parts.append(f"<p>{aggregates['drops']} processed drops read from "
+                     f"<code>{escape_html(str(directory))}</code> (SHA-256 {hashes}, the "
+                     "published files). Only aggregates are shown: the files carry no "
+                     "licence.</p>")
+        parts.append(drops_html(out_dir, aggregates))
     parts.append("<h3>Oblique impacts of a sphere (Kharaz et al. 2001)</h3>")
     parts.append(kharaz_html(out_dir))
     return "\n".join(parts)
