@@ -14,13 +14,23 @@ import argparse
 import json
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 import planar_impact as pi
 
-from . import analysis, ellipse, fazeli, kharaz, metric, registry
+from . import (
+    analysis,
+    drops_engines,
+    ellipse,
+    engine_curves,
+    fazeli,
+    kharaz,
+    metric,
+    registry,
+)
 
 KHARAZ_ANGLES = (10, 20, 30, 40, 50, 60, 70, 80)
 GAP_MUS = (0.05, 0.1, 0.2, 0.3, 0.5, 1.0)
@@ -84,18 +94,26 @@ def main(args) -> int:
     except registry.DataInvalid as invalid:
         print(f"impact-harness experiments: {invalid}", file=sys.stderr)
         return 2
+    drops = None
     if data is not None:
-        output["fazeli2017"] = fazeli_section(data, args, engines)
+        output["fazeli2017"], target, fit = fazeli_section(data, args)
+        thetas, residual = drops_engines.jacobian_angles(target, data.pre_impact_angles)
+        drops = (target, thetas, fit)
+    runs = run_engines(engines, drops)  # each engine loaded, each preset run, once
+    if data is not None:
+        output["fazeli2017"]["engines_on_drops"] = drops_engines_table(runs, fit, residual)
     output["ellipse_polygons"] = ellipse_section(data)
     output["kharaz2001"] = kharaz_section()
-    output["kharaz2001"]["engines"] = kharaz_engines_section(engines)
+    output["kharaz2001"]["engines"] = kharaz_engines_table(runs)
     if args.json:
         Path(args.json).write_text(json.dumps(output, indent=1, default=_plain) + "\n",
                                    encoding="utf-8")
     return 0
 
 
-def fazeli_section(data: fazeli.FazeliData, args, engines: list[str]) -> dict:
+def fazeli_section(data: fazeli.FazeliData, args):
+    """The drops' part of the output without the engines; returns it, the impacts the laws
+    were fitted to and Poisson's fit (at which the engines run)."""
     impacts = data.impacts
     print(f"## Fazeli et al. 2017: {len(impacts)} processed drops of {fazeli.RAW_DROPS}")
     for name, digest in data.hashes.items():
@@ -157,12 +175,10 @@ def fazeli_section(data: fazeli.FazeliData, args, engines: list[str]) -> dict:
         + f"; μ|m_nt|/m_nn {', '.join(f'{k} {v:.4f}' for k, v in routh['mu_coupling'].items())}"
         f"; m_nt opposes the slip in {routh['coupling_opposes_slip']} of {routh['drops']} drops."
         " Collision types (Routh's regions) per law in the table above.")
-    engine_results = drops_engines_section(engines, data, target, laws["poisson"].fit)
-    return {"provenance": data.provenance(), "paper_models": models,
-            "engines_on_drops": engine_results,
-            "laws": {law: _law_dict(result) for law, result in laws.items()},
-            "poisson_vs_stronge": difference, "poisson_stronge_gap": gaps, "routh": routh,
-            "fit_seconds": seconds}
+    return ({"provenance": data.provenance(), "paper_models": models,
+             "laws": {law: _law_dict(result) for law, result in laws.items()},
+             "poisson_vs_stronge": difference, "poisson_stronge_gap": gaps, "routh": routh,
+             "fit_seconds": seconds}, target, laws["poisson"].fit)
 
 
 def _law_dict(result: analysis.LawResult) -> dict:
@@ -175,16 +191,48 @@ def _law_dict(result: analysis.LawResult) -> dict:
             "per_drop_fits": result.per_drop, "unsolved_cells": result.unsolved_cells}
 
 
-def drops_engines_section(engines: list[str], data: fazeli.FazeliData, target,
-                          fit) -> list[dict]:
-    """Every engine and preset on every drop at Poisson's fitted (μ, e)."""
-    from harness.engines import EngineNotInstalled, load_engine, preset_label
+@dataclass(frozen=True)
+class EngineRuns:
+    """One engine's runs: per preset its aggregates on the drops (None without them) and its
+    Kharaz curves; ``missing`` says why it did not run (not installed)."""
 
-    from . import drops_engines
+    name: str
+    missing: str | None
+    presets: tuple = ()  # (preset, drops aggregates or None, engine_curves.EngineCurves)
 
-    if not engines:
+
+def run_engines(engines: list[str], drops=None) -> list[EngineRuns]:
+    """Each engine loaded once and each of its presets run, on the drops when ``drops`` is
+    ``(impacts, angles, fit)`` (at the fit's μ, e) and at the Kharaz incidences."""
+    from harness.engines import EngineNotInstalled, load_engine
+
+    angles = np.array(KHARAZ_ANGLES, dtype=float)
+    runs = []
+    for name in engines:
+        try:
+            engine = load_engine(name)
+        except EngineNotInstalled as missing:
+            runs.append(EngineRuns(name, str(missing)))
+            continue
+        presets = []
+        for preset in engine.presets:
+            on_drops = None
+            if drops is not None:
+                impacts, thetas, fit = drops
+                on_drops = drops_engines.run_drops(engine, preset, impacts, thetas, fit.mu,
+                                                   fit.e)
+            presets.append((preset, on_drops, engine_curves.engine_curves(engine, preset,
+                                                                          angles)))
+        runs.append(EngineRuns(name, None, tuple(presets)))
+    return runs
+
+
+def drops_engines_table(runs: list[EngineRuns], fit, residual) -> list[dict]:
+    """Every engine and preset on every drop at Poisson's fitted (μ, e), printed."""
+    from harness.engines import preset_label
+
+    if not runs:
         return []
-    thetas, residual = drops_engines.jacobian_angles(target, data.pre_impact_angles)
     print(f"\n### The engines on the drops (μ {fit.mu:.3f}, e {fit.e:.3f}: Poisson's fit)\n")
     print(f"Each drop a placed {drops_engines.VERTICES}-gon at the angle of its published "
           f"Jacobian (contact within {residual.max() * 1e3:.1g} mm of it); flagged runs are "
@@ -192,22 +240,19 @@ def drops_engines_section(engines: list[str], data: fazeli.FazeliData, target,
     print("| engine | preset | single impacts | flagged (reason: drops) | median error | "
           "q90 error |\n|---|---|---:|---|---:|---:|")
     results = []
-    for name in engines:
-        try:
-            engine = load_engine(name)
-        except EngineNotInstalled as missing:
-            print(f"| {name} | — | — | not installed: {missing} | | |")
+    for run in runs:
+        if run.missing is not None:
+            print(f"| {run.name} | — | — | not installed: {run.missing} | | |")
             continue
-        for preset in engine.presets:
-            result = drops_engines.run_drops(engine, preset, target, thetas, fit.mu, fit.e)
+        for preset, result, _ in run.presets:
             counts = dict(result["verdicts"])
             ok = counts.pop("ok", 0)
             flagged = ", ".join(f"{k}: {v}" for k, v in counts.items()) or "none"
             errors = result["errors"]
             median = "—" if not errors["drops"] else f"{errors['q50']:.3f}"
             q90 = "—" if not errors["drops"] else f"{errors['q90']:.3f}"
-            print(f"| {name} | {preset_label(name, preset)} | {ok} | {flagged} | {median} "
-                  f"| {q90} |")
+            print(f"| {run.name} | {preset_label(run.name, preset)} | {ok} | {flagged} "
+                  f"| {median} | {q90} |")
             results.append(result)
     return results
 
@@ -278,13 +323,12 @@ def kharaz_section() -> dict:
             "measured": kharaz.MEASURED}
 
 
-def kharaz_engines_section(engines: list[str]) -> list:
-    """The Kharaz curves through each engine and preset; flagged runs show their reason."""
-    from harness.engines import EngineNotInstalled, load_engine, preset_label
+def kharaz_engines_table(runs: list[EngineRuns]) -> list:
+    """The Kharaz curves through each engine and preset, printed; flagged runs show their
+    reason."""
+    from harness.engines import preset_label
 
-    from . import engine_curves
-
-    if not engines:
+    if not runs:
         return []
     angles = np.array(KHARAZ_ANGLES, dtype=float)
     print("\n### The Kharaz curves through the engines (e_t / rebound° / spin rad/s; a flagged "
@@ -292,18 +336,16 @@ def kharaz_engines_section(engines: list[str]) -> list:
     print("| engine | preset | " + " | ".join(f"{a:.0f}°" for a in angles) + " |\n|---|---|"
           + "---|" * angles.size)
     results = []
-    for name in engines:
-        try:
-            engine = load_engine(name)
-        except EngineNotInstalled as missing:
-            print(f"| {name} | — | not installed: {missing} |")
+    for run in runs:
+        if run.missing is not None:
+            print(f"| {run.name} | — | not installed: {run.missing} |")
             continue
-        for preset in engine.presets:
-            curves = engine_curves.engine_curves(engine, preset, angles)
+        for preset, _, curves in run.presets:
             cells = [f"{curves.tangential_restitution[k]:.3f} / {curves.rebound_deg[k]:.1f} / "
                      f"{curves.spin[k]:.0f}" if verdict == "ok" else f"flagged: {verdict}"
                      for k, verdict in enumerate(curves.verdicts)]
-            print(f"| {name} | {preset_label(name, preset)} | " + " | ".join(cells) + " |")
+            print(f"| {run.name} | {preset_label(run.name, preset)} | " + " | ".join(cells)
+                  + " |")
             results.append(curves)
     return results
 
