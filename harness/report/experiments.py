@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 import planar_impact as pi
+from harness.engines import preset_label
 from harness.experiments import kharaz, registry
 from harness.experiments.aggregates import MIN_BIN_COUNT as MIN_BIN
 from harness.plotting import new_figure, save_png
@@ -236,12 +237,14 @@ def draw_cdf(aggregates: dict, path: Path, tag: str | None) -> Path:
          linewidth=2.0)
     for run in aggregates["engines"]:
         colour, marker = engine_style(run["engine"])
-        hollow = run["preset"] == "defaults"
+        dashed = run["preset"] == "defaults"
         n = run["cdf"]["drops"]
         subset = "" if n == drops else f", {n} of {drops}: a selected subset"
-        _cdf(axes[2], run["cdf"], f"{run['engine']} {run['preset']}{subset}", color=colour,
-             linestyle="--" if hollow else "-", linewidth=1.2)
-    flagged = [f"{r['engine']} {r['preset']}" for r in aggregates["engines"]
+        label = preset_label(run["engine"], run["preset"])
+        _cdf(axes[2], run["cdf"], f"{run['engine']} {label}{subset}", color=colour,
+             linestyle="--" if dashed else "-", linewidth=1.2)
+    flagged = [f"{r['engine']} {preset_label(r['engine'], r['preset'])}"
+               for r in aggregates["engines"]
                if r["cdf"]["drops"] == 0]
     axes[2].set_title(f"engines at {shown['law']}'s {shown['objective']} fit "
                       f"(μ {shown['mu']:.3f}, e {shown['e']:.3f})", fontsize=10)
@@ -291,13 +294,15 @@ def calibration_table(aggregates: dict) -> str:
     rows = []
     for result in calibration["results"]:
         if result["best"] is None:
-            best, objective = "cannot be calibrated: no cell with single impacts on half", "—"
+            best = "cannot be calibrated: no setting tried gives single impacts on half the drops"
+            objective = "—"
         else:
             best = ", ".join(f"{k} {v}" for k, v in result["best"].items())
             objective = f"{result['objective']:.3f}"
         cannot = ", ".join(result["cannot"]) or "—"
         rows.append(f"<tr><td>{escape_html(result['engine'])}</td>"
-                    f"<td>{escape_html(result['preset'])}</td><td>{escape_html(best)}</td>"
+                    f"<td>{escape_html(preset_label(result['engine'], result['preset']))}</td>"
+                    f"<td>{escape_html(best)}</td>"
                     f"<td>{objective}</td><td>{escape_html(cannot)}</td></tr>")
     sample = calibration["sample"]
     return ("<table><tr><th>engine</th><th>preset</th><th>calibrated settings</th>"
@@ -335,9 +340,10 @@ def drops_html(out_dir: Path, aggregates: dict) -> str:
         "to the measured one) over the drops. Left and middle: every law at its own fit by "
         "each objective (they give different fits); grey, the paper's six models as "
         "published (against the published speeds, as the paper scores them). Right: every "
-        f"engine and preset at {shown['law']}'s <i>{shown['objective']}</i> fit, on its "
-        "runs judged single impacts only (flagged runs are not scored; a curve of fewer "
-        "drops is of a selected subset and not comparable)."))
+        f"engine and preset at {shown['law']}'s <i>{shown['objective']}</i> fit (dashed: "
+        "the engine's <i>defaults</i>), on its runs judged single impacts only (flagged "
+        "runs are not scored; a curve of fewer drops is of a selected subset and not "
+        "comparable)."))
     parts.append(_figure(FITS_FIGURE, "fitted friction and restitution per law",
         "Each law's global (μ, e) by each objective with its 95 % bootstrap interval "
         f"({aggregates['replicates']} resamples of the drops, seed {aggregates['seed']}). "
