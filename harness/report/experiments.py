@@ -1,9 +1,10 @@
 """The report's "Against experiments" section (issue 25, item 7).
 
 Always: the Kharaz curves (tangential restitution, rebound angle and spin of a disk against
-incidence) for every law, with the measured points as digitised by others
-(``kharaz.MEASURED``, cited). The Fazeli drops are unlicensed: this section never shows a per-drop
-number; without a copy it says where to get one.
+incidence) for every law and every installed engine and preset, with the measured points as
+digitised by others (``kharaz.MEASURED``, cited). The Fazeli drops are unlicensed: this
+section shows their aggregates only (``harness.experiments.aggregates``); without a copy it
+says where to get one.
 """
 
 from __future__ import annotations
@@ -30,11 +31,44 @@ KHARAZ_FIGURE = "experiments-kharaz.png"
 INCIDENCES = np.linspace(1.0, 89.0, 177)
 
 
+#: Incidences at which every engine and preset runs the disk for the figure.
+ENGINE_INCIDENCES = np.arange(5.0, 86.0, 5.0)
+
+
 def kharaz_payload() -> dict:
-    """What the Kharaz figure shows (its redraw key, with the report's code digest)."""
+    """What the Kharaz figure shows (its redraw key, with the report's code digest): the
+    laws' inputs, the points, and what the engines' runs depend on (their code, the
+    judging, the installed versions), not the runs' floats."""
+    from harness.run.provenance import package_versions
+
     return {"laws": list(pi.LAWS), "mu": kharaz.MU, "e": kharaz.E,
             "measured": {q: [m.incidence_deg, m.values] for q, m in kharaz.MEASURED.items()},
-            "source": kharaz.SOURCE, "incidences": INCIDENCES.tolist()}
+            "source": kharaz.SOURCE, "incidences": INCIDENCES.tolist(),
+            "engine_incidences": ENGINE_INCIDENCES.tolist(), "versions": package_versions(),
+            "engine_code": harness_code_digest()}
+
+
+def harness_code_digest() -> str:
+    """The sha256 of what runs and judges the engines here: harness/experiments,
+    harness/engines and the verdicts."""
+    import hashlib
+
+    root = Path(__file__).resolve().parents[1]
+    digest = hashlib.sha256()
+    for folder in ("experiments", "engines"):
+        for path in sorted((root / folder).glob("*.py")):
+            digest.update(path.name.encode() + b"\0" + path.read_bytes())
+    digest.update((root / "run" / "verdicts.py").read_bytes())
+    return digest.hexdigest()
+
+
+def kharaz_engine_runs() -> list:
+    """Every installed engine and preset on the disk at :data:`ENGINE_INCIDENCES`, each
+    run judged (harness/experiments/engine_curves.py)."""
+    from harness.experiments import engine_curves
+
+    return [engine_curves.engine_curves(engine, preset, ENGINE_INCIDENCES)
+            for engine in _installed_engines() for preset in engine.presets]
 
 
 #: The three panels: the quantity, its axis label.
@@ -44,8 +78,9 @@ KHARAZ_PANELS = (("tangential_restitution", r"tangential restitution of the cent
 
 
 def draw_kharaz(path: Path, tag: str | None) -> Path:
-    figure = new_figure(11.0, 3.8)
+    figure = new_figure(11.0, 4.9)
     axes = figure.subplots(1, 3)
+    runs = kharaz_engine_runs()
     limit = kharaz.sticking_limit_deg()
     # Every law draws the same curve here (m_nt = 0): one line, named for all of them.
     curve = kharaz.curves(pi.LAWS[0], INCIDENCES)
@@ -56,17 +91,30 @@ def draw_kharaz(path: Path, tag: str | None) -> Path:
                      label="stick–slip transition")
         axis.plot(curve.incidence_deg, getattr(curve, quantity), color="#0072B2",
                   linewidth=1.5, label=f"every law (μ {kharaz.MU}, e {kharaz.E})")
+        for run in runs:  # the engines' single impacts; flagged runs are not drawn
+            ok = np.array([verdict == "ok" for verdict in run.verdicts])
+            if ok.any():
+                colour, marker = engine_style(run.engine)
+                axis.plot(run.incidence_deg[ok], getattr(run, quantity)[ok], marker,
+                          color=colour, mfc="none" if run.preset == "defaults" else colour,
+                          markersize=5, linestyle="none",
+                          label=f"{run.engine} {preset_label(run.engine, run.preset)}")
         measured = kharaz.MEASURED[quantity]
         axis.plot(measured.incidence_deg, measured.values, "o", mfc="none", color="black",
-                  markersize=6, label="measured (digitised)")
+                  markersize=7, markeredgewidth=1.3, label="measured (digitised)")
         axis.set_xlim(0, 90)
         axis.set_xlabel("incidence (° from the normal)")
         axis.set_ylabel(label)
         axis.grid(True, color="#dddddd", linewidth=0.5)
     axes[1].plot([0, 90], [0, 90], color="#bbbbbb", linewidth=0.8, linestyle="--",
                  label="rebound = incidence")
-    axes[0].legend(fontsize=8, loc="lower right")
-    axes[1].legend(fontsize=8, loc="upper left", handles=axes[1].get_lines()[-1:])
+    flagged = [f"{run.engine} {preset_label(run.engine, run.preset)} "
+               f"({', '.join(sorted(set(run.verdicts)))})" for run in runs
+               if "ok" not in run.verdicts]
+    handles, labels = axes[1].get_legend_handles_labels()
+    figure.legend(handles, labels, loc="outside lower center", ncols=4, fontsize=8,
+                  title=("flagged at every incidence, not drawn: " + "; ".join(flagged))
+                  if flagged else None, title_fontsize=8)
     return save_png(figure, path, tag=tag)
 
 
@@ -86,12 +134,16 @@ def kharaz_html(out_dir: Path) -> str:
         "the same curve (m<sub>nt</sub> = 0): read it as a test of the rigid picture and of "
         f"μ, e, not of the law. Grey: below {limit:.1f}°, where the rigid disk rolls at "
         "separation and the real sphere's tangential compliance, which no rigid law has, "
-        "moves the measurement; dotted: the rigid stick–slip transition. Circles: the "
+        "moves the measurement; dotted: the rigid stick–slip transition. Coloured markers: "
+        "every installed engine and preset at every 5°, its runs judged single impacts only "
+        "(hollow: <i>defaults</i>; presets that agree overlap; a flagged run is not drawn, "
+        "and a preset flagged at every incidence is named above the key). Black circles: "
+        "the "
         "measurements as others digitised them from the published figures "
         f"({escape_html(kharaz.SOURCE)}); a second digitisation "
         f"({escape_html(kharaz.CROSS_CHECK_SOURCE)}) agrees to {spread}. The sources give "
-        "no error bars. The engines' curves are printed by <code>impact-harness "
-        "experiments</code> (at this scale most engine runs are flagged).")
+        "no error bars. <code>impact-harness experiments</code> prints the engines' numbers "
+        "with each flagged run's reason.")
     image = (f"<a href='{FIGURES}/{KHARAZ_FIGURE[:-4]}.svg'><img src='{FIGURES}/"
              f"{KHARAZ_FIGURE}' alt='Kharaz curves: the laws against the measured points'>"
              "</a>")
@@ -120,15 +172,10 @@ def drops_key(hashes: dict[str, str]) -> str:
 
     from harness.run.provenance import package_versions
 
-    root = Path(__file__).resolve().parents[1]
     digest = hashlib.sha256()
     digest.update(json.dumps({"hashes": hashes, "versions": package_versions(),
-                              "replicates": REPORT_REPLICATES,
-                              "solver": solver_digest()}, sort_keys=True).encode())
-    for folder in ("experiments", "engines"):
-        for path in sorted((root / folder).glob("*.py")):
-            digest.update(path.name.encode() + b"\0" + path.read_bytes())
-    digest.update((root / "run" / "verdicts.py").read_bytes())
+                              "replicates": REPORT_REPLICATES, "solver": solver_digest(),
+                              "code": harness_code_digest()}, sort_keys=True).encode())
     return digest.hexdigest()
 
 

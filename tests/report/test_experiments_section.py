@@ -13,6 +13,7 @@ def test_section_without_data_shows_kharaz_and_where_to_get(tmp_path, monkeypatc
     assert "id='experiments'" in html
     assert "github.com/mcubelab/planar-impact-dataset" in html
     assert "digitised" in html and "write_usr0.f" in html  # the points' source is cited
+    assert "every installed engine and preset" in html  # the engines drawn beside them
     figure = tmp_path / "figures" / experiments.KHARAZ_FIGURE
     assert figure.is_file() and figure.with_suffix(".svg").is_file()
     tag = png_tag(figure)
