@@ -194,7 +194,8 @@ def drops_aggregates(out_dir: Path, directory: Path) -> dict:
             kept = json.loads(path.read_text(encoding="utf-8"))
         except (OSError, ValueError):
             kept = {}
-        if kept.get("key") == key:
+        if (isinstance(kept, dict) and kept.get("key") == key
+                and isinstance(kept.get("aggregates"), dict)):
             return kept["aggregates"]
     data = fazeli.load(directory, check_hashes=False)  # just checked
     result = aggregates.compute(data, engines=_installed_engines(),
@@ -431,14 +432,6 @@ def data_option_problem(path: str | os.PathLike | None) -> str | None:
     except registry.DataInvalid as invalid:
         return str(invalid)
     return None
-
-
-def data_directory(path: str | os.PathLike | None = None) -> Path | None:
-    """The Fazeli copy's directory (``path`` or the environment variable), None without."""
-    try:
-        return registry.locate(registry.FAZELI_2017, path)
-    except registry.DataMissing:
-        return None
 
 
 def experiments_section(out_dir: Path, data_path: str | os.PathLike | None = None) -> str:

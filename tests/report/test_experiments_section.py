@@ -70,6 +70,31 @@ def test_report_refuses_a_bad_experiments_data_before_any_work(tmp_path, capsys)
     assert not (tmp_path / "out" / "index.html").exists()
 
 
+def test_the_aggregates_are_kept_and_computed_again_only_when_their_inputs_change(
+        tmp_path, monkeypatch):
+    from types import SimpleNamespace
+
+    from harness.experiments import aggregates, fazeli, registry
+
+    computed = []
+    hashes = {"data_ellipse.mat": "a" * 64}
+    monkeypatch.setattr(registry, "verify", lambda dataset, directory: dict(hashes))
+    monkeypatch.setattr(fazeli, "load", lambda directory, check_hashes=True: SimpleNamespace(
+        provenance=lambda: {"hashes": dict(hashes)}))
+    monkeypatch.setattr(aggregates, "compute",
+                        lambda data, **options: computed.append(1) or {"drops": 3})
+    monkeypatch.setattr(experiments, "_installed_engines", lambda: [])
+    first = experiments.drops_aggregates(tmp_path, tmp_path)
+    assert first["drops"] == 3 and len(computed) == 1
+    assert experiments.drops_aggregates(tmp_path, tmp_path) == first and len(computed) == 1
+    hashes["data_ellipse.mat"] = "b" * 64  # another copy of the files: computed again
+    experiments.drops_aggregates(tmp_path, tmp_path)
+    assert len(computed) == 2
+    (tmp_path / experiments.DROPS_FILE).write_text("[1, 2]")  # not ours: computed again
+    experiments.drops_aggregates(tmp_path, tmp_path)
+    assert len(computed) == 3
+
+
 def fake_aggregates() -> dict:
     import numpy as np
 
