@@ -25,6 +25,7 @@ import sys
 import time
 from pathlib import Path
 
+from harness.report import add_experiments_data_argument
 from harness.run import command, plan
 
 #: Samples per population in the suite's survey: 7 populations x 20 = 140 impacts per engine
@@ -37,6 +38,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", type=Path, default=Path("reports"),
                         help="output directory (default: reports)")
     command.add_common_arguments(parser)
+    add_experiments_data_argument(parser)
 
 
 def main(args) -> int:
@@ -53,6 +55,10 @@ def main(args) -> int:
     else:
         make_output_directory(out)  # the directory asked for (itself only)
         problem = command.check_arguments(args, out / "results.json")
+    if not problem:
+        problem = report.experiments_data_problem(args.experiments_data)
+        if problem:
+            problem = f"--experiments-data {args.experiments_data}: {problem}"
     if problem:  # before any work, the Table 3 included
         print(f"impact-harness suite: {problem}", file=sys.stderr)
         return command.EXIT_BAD_INPUT
@@ -82,7 +88,8 @@ def main(args) -> int:
           + f"({time.perf_counter() - tick:.1f} s)", file=sys.stderr, flush=True)
 
     tick = time.perf_counter()
-    written = report.write_report(read_results(results_path), out)
+    written = report.write_report(read_results(results_path), out,
+                                  experiments_data=args.experiments_data)
     print(f"[4/4] report: {written['html']}, {written['summary']}, "
           f"{len(written['figures'])} figures ({time.perf_counter() - tick:.1f} s)",
           file=sys.stderr, flush=True)

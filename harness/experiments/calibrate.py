@@ -52,12 +52,25 @@ class Calibration:
     best: dict | None  # the best cell's settings (None: no cell scored)
     best_objective: float | None
     moves: dict  # knob -> how far it moves the objective at the best cell (None: unscored)
+    #: Which impacts were scored: {"drops": n, "of": N, "seed": s} for a seeded random
+    #: sample of the data (:func:`sample_rows`) or of a generated population.
+    sample: dict | None = None
 
     def cannot(self) -> list[str]:
         """The knobs that do not move the objective (the engine cannot be calibrated by
         them)."""
         return [knob for knob, moved in self.moves.items()
                 if moved is not None and moved < TOLERANCE]
+
+
+def sample_rows(total: int, count: int, seed: int = 0) -> np.ndarray:
+    """``count`` distinct rows of ``total``, drawn at random with ``seed`` (all of them when
+    ``count >= total``), in increasing order: the drops a calibration scores. The first
+    drops of a file are not a sample (the recording's order follows the experiment's)."""
+    if count >= total:
+        return np.arange(total)
+    rng = np.random.default_rng(seed)
+    return np.sort(rng.choice(total, size=count, replace=False))
 
 
 def drop_population(count: int = 24, seed: int = 0) -> tuple[MeasuredImpacts, np.ndarray]:
@@ -89,9 +102,11 @@ def _score(engine, preset: str, impacts: MeasuredImpacts, thetas, mu: float, e: 
 
 
 def calibrate(engine, preset: str, impacts: MeasuredImpacts, thetas, target: str,
-              grid: str = "quick", law_mu: float = 0.3, law_e: float = 0.6) -> Calibration:
+              grid: str = "quick", law_mu: float = 0.3, law_e: float = 0.6,
+              sample: dict | None = None) -> Calibration:
     """Every cell of the grid scored (``target``: "data" or a law of ``planar_impact``,
-    then at ``law_mu``, ``law_e``: the engine's pair settings are knobs like the others)."""
+    then at ``law_mu``, ``law_e``: the engine's pair settings are knobs like the others);
+    ``sample`` records which impacts these are (kept in the result)."""
     reference = (impacts.speeds_after if target == "data"
                  else predict(impacts, target, law_mu, law_e).speeds_after)
     mus, es = PAIR_GRIDS[grid]
@@ -109,7 +124,7 @@ def calibrate(engine, preset: str, impacts: MeasuredImpacts, thetas, target: str
     scored = [cell for cell in cells if cell[1] is not None]
     if not scored:
         return Calibration(engine.name, preset, target, "median-error", knobs, cells, None,
-                           None, {name: None for name in names})
+                           None, {name: None for name in names}, sample)
     best, best_objective, _ = min(scored, key=lambda cell: cell[1])
     moves = {}
     for name in names:  # the knob's values, the others held at the best cell
@@ -118,7 +133,7 @@ def calibrate(engine, preset: str, impacts: MeasuredImpacts, thetas, target: str
                                                  for other in names if other != name)]
         moves[name] = float(max(line) - min(line)) if len(line) > 1 else None
     return Calibration(engine.name, preset, target, "median-error", knobs, cells, best,
-                       best_objective, moves)
+                       best_objective, moves, sample)
 
 
 def summary(calibration: Calibration) -> str:
@@ -127,6 +142,10 @@ def summary(calibration: Calibration) -> str:
              else f"{calibration.target} on a population of ellipse drops")
     lines = [f"{calibration.engine} ({calibration.preset}) against {where}; objective: "
              f"median normalized error of the centre's velocity (flagged runs not scored)"]
+    if calibration.sample is not None:
+        drawn = calibration.sample
+        lines.append(f"impacts scored: {drawn['drops']} of {drawn['of']}, a random sample "
+                     f"drawn with seed {drawn['seed']}")
     if calibration.best is None:
         lines.append("cannot be calibrated: no setting tried gives single impacts on half "
                      "of the drops")

@@ -23,7 +23,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help=f"the Fazeli files (default: ${registry.FAZELI_2017.env_var})")
     parser.add_argument("--grid", choices=sorted(calibrate.PAIR_GRIDS), default="quick")
     parser.add_argument("--drops", type=int, default=12,
-                        help="impacts scored per cell (default 12; the first ones of the data)")
+                        help="impacts scored per cell (default 12): a random sample of the "
+                             "data's drops, or of a generated population, drawn with --seed")
+    parser.add_argument("--seed", type=int, default=0,
+                        help="seed of that sample (default 0; printed with the result)")
     parser.add_argument("--law-mu", type=float, default=0.3)
     parser.add_argument("--law-e", type=float, default=0.6,
                         help="the law's e (default 0.6, a cell of the quick grid)")
@@ -34,6 +37,9 @@ def main(args) -> int:
 
     if args.drops < 2:
         print(f"impact-harness calibrate: --drops {args.drops}: at least 2", file=sys.stderr)
+        return 2
+    if args.seed < 0:
+        print(f"impact-harness calibrate: --seed {args.seed}: at least 0", file=sys.stderr)
         return 2
     try:
         engine = load_engine(args.engine)
@@ -57,12 +63,15 @@ def main(args) -> int:
             print(f"impact-harness calibrate: {invalid}", file=sys.stderr)
             return 2
         target = fazeli.without_post_offset(data.impacts)
-        rows = list(range(min(args.drops, len(target))))
+        rows = calibrate.sample_rows(len(target), args.drops, args.seed)
         impacts = target.subset(rows)
         thetas, _ = drops_engines.jacobian_angles(impacts, data.pre_impact_angles[rows])
+        sample = {"drops": len(rows), "of": len(target), "seed": args.seed}
     else:
-        impacts, thetas = calibrate.drop_population(args.drops)
+        impacts, thetas = calibrate.drop_population(args.drops, seed=args.seed)
+        sample = {"drops": args.drops, "of": "a generated population", "seed": args.seed}
     for preset in presets:
         print(calibrate.summary(calibrate.calibrate(engine, preset, impacts, thetas, args.to,
-                                                    args.grid, args.law_mu, args.law_e)))
+                                                    args.grid, args.law_mu, args.law_e,
+                                                    sample)))
     return 0

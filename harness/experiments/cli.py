@@ -3,7 +3,7 @@
 Prints, for the Fazeli et al. (2017) drops when a copy is given, the paper's six models
 scored by its metric, every law fitted by the named objective (held-out error, bootstrap
 intervals, collision types), Poisson against Stronge, and where the drops lie on Routh's
-diagram; then the Kharaz et al. (2001) curves for every law beside the recalled points.
+diagram; then the Kharaz et al. (2001) curves for every law beside the digitised points.
 Only aggregates are printed or written: the Fazeli data carry no licence.
 Without a copy it says where to get one and goes on with the rest (exit 0).
 """
@@ -14,6 +14,7 @@ import argparse
 import json
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -21,7 +22,15 @@ import numpy as np
 import planar_impact as pi
 from harness.scene import ellipse
 
-from . import analysis, fazeli, kharaz, metric, registry
+from . import (
+    analysis,
+    drops_engines,
+    engine_curves,
+    fazeli,
+    kharaz,
+    metric,
+    registry,
+)
 
 KHARAZ_ANGLES = (10, 20, 30, 40, 50, 60, 70, 80)
 GAP_MUS = (0.05, 0.1, 0.2, 0.3, 0.5, 1.0)
@@ -85,19 +94,27 @@ def main(args) -> int:
     except registry.DataInvalid as invalid:
         print(f"impact-harness experiments: {invalid}", file=sys.stderr)
         return 2
+    drops = None
     if data is not None:
-        output["fazeli2017"] = fazeli_section(data, args, engines)
+        output["fazeli2017"], target, fit = fazeli_section(data, args)
+        thetas, residual = drops_engines.jacobian_angles(target, data.pre_impact_angles)
+        drops = (target, thetas, fit)
+    runs = run_engines(engines, drops)  # each engine loaded, each preset run, once
+    if data is not None:
+        output["fazeli2017"]["engines_on_drops"] = drops_engines_table(runs, fit, residual)
     output["ellipse_polygons"] = ellipse_section(data)
     output["ellipse_polygons"]["engines"] = ellipse_engines_section(engines)
     output["kharaz2001"] = kharaz_section()
-    output["kharaz2001"]["engines"] = kharaz_engines_section(engines)
+    output["kharaz2001"]["engines"] = kharaz_engines_table(runs)
     if args.json:
         Path(args.json).write_text(json.dumps(output, indent=1, default=_plain) + "\n",
                                    encoding="utf-8")
     return 0
 
 
-def fazeli_section(data: fazeli.FazeliData, args, engines: list[str]) -> dict:
+def fazeli_section(data: fazeli.FazeliData, args):
+    """The drops' part of the output without the engines; returns it, the impacts the laws
+    were fitted to and Poisson's fit (at which the engines run)."""
     impacts = data.impacts
     print(f"## Fazeli et al. 2017: {len(impacts)} processed drops of {fazeli.RAW_DROPS}")
     for name, digest in data.hashes.items():
@@ -159,12 +176,10 @@ def fazeli_section(data: fazeli.FazeliData, args, engines: list[str]) -> dict:
         + f"; μ|m_nt|/m_nn {', '.join(f'{k} {v:.4f}' for k, v in routh['mu_coupling'].items())}"
         f"; m_nt opposes the slip in {routh['coupling_opposes_slip']} of {routh['drops']} drops."
         " Collision types (Routh's regions) per law in the table above.")
-    engine_results = drops_engines_section(engines, data, target, laws["poisson"].fit)
-    return {"provenance": data.provenance(), "paper_models": models,
-            "engines_on_drops": engine_results,
-            "laws": {law: _law_dict(result) for law, result in laws.items()},
-            "poisson_vs_stronge": difference, "poisson_stronge_gap": gaps, "routh": routh,
-            "fit_seconds": seconds}
+    return ({"provenance": data.provenance(), "paper_models": models,
+             "laws": {law: _law_dict(result) for law, result in laws.items()},
+             "poisson_vs_stronge": difference, "poisson_stronge_gap": gaps, "routh": routh,
+             "fit_seconds": seconds}, target, laws["poisson"].fit)
 
 
 def _law_dict(result: analysis.LawResult) -> dict:
@@ -177,16 +192,48 @@ def _law_dict(result: analysis.LawResult) -> dict:
             "per_drop_fits": result.per_drop, "unsolved_cells": result.unsolved_cells}
 
 
-def drops_engines_section(engines: list[str], data: fazeli.FazeliData, target,
-                          fit) -> list[dict]:
-    """Every engine and preset on every drop at Poisson's fitted (μ, e)."""
-    from harness.engines import EngineNotInstalled, load_engine, preset_label
+@dataclass(frozen=True)
+class EngineRuns:
+    """One engine's runs: per preset its aggregates on the drops (None without them) and its
+    Kharaz curves; ``missing`` says why it did not run (not installed)."""
 
-    from . import drops_engines
+    name: str
+    missing: str | None
+    presets: tuple = ()  # (preset, drops aggregates or None, engine_curves.EngineCurves)
 
-    if not engines:
+
+def run_engines(engines: list[str], drops=None) -> list[EngineRuns]:
+    """Each engine loaded once and each of its presets run, on the drops when ``drops`` is
+    ``(impacts, angles, fit)`` (at the fit's μ, e) and at the Kharaz incidences."""
+    from harness.engines import EngineNotInstalled, load_engine
+
+    angles = np.array(KHARAZ_ANGLES, dtype=float)
+    runs = []
+    for name in engines:
+        try:
+            engine = load_engine(name)
+        except EngineNotInstalled as missing:
+            runs.append(EngineRuns(name, str(missing)))
+            continue
+        presets = []
+        for preset in engine.presets:
+            on_drops = None
+            if drops is not None:
+                impacts, thetas, fit = drops
+                on_drops = drops_engines.run_drops(engine, preset, impacts, thetas, fit.mu,
+                                                   fit.e)
+            presets.append((preset, on_drops, engine_curves.engine_curves(engine, preset,
+                                                                          angles)))
+        runs.append(EngineRuns(name, None, tuple(presets)))
+    return runs
+
+
+def drops_engines_table(runs: list[EngineRuns], fit, residual) -> list[dict]:
+    """Every engine and preset on every drop at Poisson's fitted (μ, e), printed."""
+    from harness.engines import preset_label
+
+    if not runs:
         return []
-    thetas, residual = drops_engines.jacobian_angles(target, data.pre_impact_angles)
     print(f"\n### The engines on the drops (μ {fit.mu:.3f}, e {fit.e:.3f}: Poisson's fit)\n")
     print(f"Each drop the ellipse (MuJoCo's ellipsoid, elsewhere the placed "
           f"{drops_engines.VERTICES}-gon) at the angle of its published "
@@ -195,22 +242,19 @@ def drops_engines_section(engines: list[str], data: fazeli.FazeliData, target,
     print("| engine | preset | single impacts | flagged (reason: drops) | median error | "
           "q90 error |\n|---|---|---:|---|---:|---:|")
     results = []
-    for name in engines:
-        try:
-            engine = load_engine(name)
-        except EngineNotInstalled as missing:
-            print(f"| {name} | — | — | not installed: {missing} | | |")
+    for run in runs:
+        if run.missing is not None:
+            print(f"| {run.name} | — | — | not installed: {run.missing} | | |")
             continue
-        for preset in engine.presets:
-            result = drops_engines.run_drops(engine, preset, target, thetas, fit.mu, fit.e)
+        for preset, result, _ in run.presets:
             counts = dict(result["verdicts"])
             ok = counts.pop("ok", 0)
             flagged = ", ".join(f"{k}: {v}" for k, v in counts.items()) or "none"
             errors = result["errors"]
             median = "—" if not errors["drops"] else f"{errors['q50']:.3f}"
             q90 = "—" if not errors["drops"] else f"{errors['q90']:.3f}"
-            print(f"| {name} | {preset_label(name, preset)} | {ok} | {flagged} | {median} "
-                  f"| {q90} |")
+            print(f"| {run.name} | {preset_label(run.name, preset)} | {ok} | {flagged} "
+                  f"| {median} | {q90} |")
             results.append(result)
     return results
 
@@ -264,10 +308,7 @@ def kharaz_section() -> dict:
     print(f"Rigid disk, I = 2/5 m r²: rolling at separation below {limit:.1f}°"
           " (below it the real sphere's tangential compliance matters, which no rigid law "
           "has). m_nt = 0 here, so every law gives the same curve.")
-    if not kharaz.VERIFIED:
-        print("Measured points: recalled from the paper's figures, not digitised; "
-              f"uncertainty ±{kharaz.UNCERTAINTY[0]} (e_t), ±{kharaz.UNCERTAINTY[1]}° "
-              f"(rebound), ±{kharaz.UNCERTAINTY[2]:.0f} rad/s (spin); verify before use.\n")
+    print(f"Measured points: {kharaz.SOURCE}; checked against {kharaz.CROSS_CHECK_SOURCE}.\n")
     angles = np.array(KHARAZ_ANGLES, dtype=float)
     curves = {law: kharaz.curves(law, angles) for law in pi.LAWS}
     print("| incidence ° | " + " | ".join(f"{law} e_t / rebound° / spin" for law in pi.LAWS)
@@ -276,29 +317,33 @@ def kharaz_section() -> dict:
         print(f"| {angle:.0f} | " + " | ".join(
             f"{c.tangential_restitution[k]:.3f} / {c.rebound_deg[k]:.1f} / {c.spin[k]:.0f}"
             for c in curves.values()) + " |")
-    print("\n| incidence ° | recalled e_t | rebound ° | spin rad/s | poisson e_t | rebound ° "
-          "| spin |\n|---:|---:|---:|---:|---:|---:|---:|")
-    at_points = kharaz.curves("poisson", [p.incidence_deg for p in kharaz.POINTS])
-    for k, point in enumerate(kharaz.POINTS):
-        print(f"| {point.incidence_deg:.0f} | {point.tangential_restitution:.2f} | "
-              f"{point.rebound_deg:.1f} | {point.spin:.0f} | "
-              f"{at_points.tangential_restitution[k]:.3f} | {at_points.rebound_deg[k]:.1f} | "
-              f"{at_points.spin[k]:.0f} |")
-    return {"citation": registry.KHARAZ_2001.citation, "verified_points": kharaz.VERIFIED,
+    names = {"tangential_restitution": "tangential restitution", "rebound_deg": "rebound °",
+             "spin": "forward spin rad/s"}
+    print("\nMeasured against the rigid laws at the measured incidences (every law agrees):\n")
+    print("| quantity | incidence ° | measured | rigid laws | regime |\n|---|---:|---:|---:|---|")
+    for quantity in kharaz.QUANTITIES:
+        measured = kharaz.MEASURED[quantity]
+        rigid = getattr(kharaz.curves("poisson", measured.incidence_deg), quantity)
+        for angle, value, law_value in zip(measured.incidence_deg, measured.values, rigid):
+            regime = "sliding" if angle > limit else "rolls at separation (compliance)"
+            digits = {"tangential_restitution": 3, "rebound_deg": 1, "spin": 0}[quantity]
+            print(f"| {names[quantity]} | {angle:.1f} | {value:.{digits}f} "
+                  f"| {law_value:.{digits}f} | {regime} |")
+    return {"citation": registry.KHARAZ_2001.citation, "points_source": kharaz.SOURCE,
+            "cross_check_source": kharaz.CROSS_CHECK_SOURCE, "sticking_limit_deg": limit,
             "curves": {law: {"incidence_deg": c.incidence_deg,
                              "tangential_restitution": c.tangential_restitution,
                              "rebound_deg": c.rebound_deg, "spin": c.spin}
                        for law, c in curves.items()},
-            "points": kharaz.POINTS, "uncertainty": kharaz.UNCERTAINTY}
+            "measured": kharaz.MEASURED}
 
 
-def kharaz_engines_section(engines: list[str]) -> list:
-    """The Kharaz curves through each engine and preset; flagged runs show their reason."""
-    from harness.engines import EngineNotInstalled, load_engine, preset_label
+def kharaz_engines_table(runs: list[EngineRuns]) -> list:
+    """The Kharaz curves through each engine and preset, printed; flagged runs show their
+    reason."""
+    from harness.engines import preset_label
 
-    from . import engine_curves
-
-    if not engines:
+    if not runs:
         return []
     angles = np.array(KHARAZ_ANGLES, dtype=float)
     print("\n### The Kharaz curves through the engines (e_t / rebound° / spin rad/s; a flagged "
@@ -306,18 +351,16 @@ def kharaz_engines_section(engines: list[str]) -> list:
     print("| engine | preset | " + " | ".join(f"{a:.0f}°" for a in angles) + " |\n|---|---|"
           + "---|" * angles.size)
     results = []
-    for name in engines:
-        try:
-            engine = load_engine(name)
-        except EngineNotInstalled as missing:
-            print(f"| {name} | — | not installed: {missing} |")
+    for run in runs:
+        if run.missing is not None:
+            print(f"| {run.name} | — | not installed: {run.missing} |")
             continue
-        for preset in engine.presets:
-            curves = engine_curves.engine_curves(engine, preset, angles)
+        for preset, _, curves in run.presets:
             cells = [f"{curves.tangential_restitution[k]:.3f} / {curves.rebound_deg[k]:.1f} / "
                      f"{curves.spin[k]:.0f}" if verdict == "ok" else f"flagged: {verdict}"
                      for k, verdict in enumerate(curves.verdicts)]
-            print(f"| {name} | {preset_label(name, preset)} | " + " | ".join(cells) + " |")
+            print(f"| {run.name} | {preset_label(run.name, preset)} | " + " | ".join(cells)
+                  + " |")
             results.append(curves)
     return results
 

@@ -48,9 +48,11 @@ def drop_scene(impacts: MeasuredImpacts, row: int, theta: float, mu: float, e: f
 
 
 def run_drops(engine, preset: str, impacts: MeasuredImpacts, thetas: np.ndarray, mu: float,
-              e: float) -> dict:
+              e: float, keep_errors: bool = False) -> dict:
     """Aggregates of ``engine`` under ``preset`` on every drop: verdict counts and the
-    paper's normalized error of the runs judged single impacts."""
+    paper's normalized error of the runs judged single impacts. ``keep_errors`` adds the
+    per-drop errors (NaN where flagged) as ``per_drop_errors``, for the caller to reduce:
+    they must not be written anywhere."""
     from .engine_curves import judged
 
     scenes = [drop_scene(impacts, i, float(thetas[i]), mu, e) for i in range(len(impacts))]
@@ -62,8 +64,12 @@ def run_drops(engine, preset: str, impacts: MeasuredImpacts, thetas: np.ndarray,
     counts: dict[str, int] = {}
     for verdict in verdicts:
         counts[verdict] = counts.get(verdict, 0) + 1
-    return {"engine": engine.name, "preset": preset, "mu": mu, "e": e,
-            "verdicts": dict(sorted(counts.items())), "errors": analysis.error_summary(errors)}
+    result = {"engine": engine.name, "preset": preset, "mu": mu, "e": e,
+              "verdicts": dict(sorted(counts.items())),
+              "errors": analysis.error_summary(errors)}
+    if keep_errors:
+        result["per_drop_errors"] = errors
+    return result
 
 
 #: Angles (rad) of the moment-arm measurement: every 5° over half a turn (the ellipse is

@@ -14,9 +14,24 @@ Here ``m_nt = 0``: every law of ``planar_impact`` gives the same answer (the law
 only through the coupling of normal and tangential impulse), so these curves test the
 rigid-body picture and μ, e, not the choice of law; engines may differ from it.
 
-``POINTS`` are values recalled from the paper's published figures, NOT digitised from a
-copy; each carries a wide uncertainty and ``VERIFIED`` stays False until someone checks
-them against the paper. They are shown beside the laws' curves, never used to fit.
+``MEASURED`` holds the paper's points as others digitised them, cited as such (no one here
+has read them off a copy of the paper). They are the arrays ``IMPT_ANGLE`` / ``EXP_COEFF``,
+``EXP_ANGLE`` and ``EXP_OMEGA`` of ``tests/dem/DEM05/write_usr0.f`` of the MFIX DEM05
+verification test ("DEM05: Oblique particle collision"), in the GitHub copy
+``CurtinIDS/mfix`` at commit aa5da900933766e158dd4188220765689855bde7, whose comments say
+they are "Data taken from Figure 6 [tangential restitution], 7(b) [rebound angle], 8
+[angular velocity] of Di Renzo and Di Maio (2004)" (Chem. Eng. Sci. 59:525-541), which plot
+Kharaz et al.'s measurements; NETL's V&V manual
+(https://mfix.netl.doe.gov/doc/vvuq-manual/main/html/dem/dem-05.html) says the test
+"utilizes the experimental data of Kharaz, Gorham, and Salman". ``CROSS_CHECK`` is a second
+digitisation, the lists ``*_exp`` of
+``examples/dem/3d-oblique-wall-impact/oblique_wall_impact_postprocessing.py`` in
+``chaos-polymtl/lethe`` at commit 255b519263fbb22f758d40763a12290296d53200, commented
+"Experimental data from A.H. Kharaz, D.A. Gorham, and A.D. Salman" (which figure it read is
+not stated). The two agree to a fraction of a degree and of a percent (a test checks it):
+that bounds the reading of the figures and catches a transcription slip, not the
+measurements' scatter, which neither source gives. The points are shown beside the curves,
+never used to fit.
 """
 
 from __future__ import annotations
@@ -36,33 +51,74 @@ SPEED = 3.9  # m/s
 #: restitution (nearly constant with incidence).
 MU = 0.092
 E = 0.98
-VERIFIED = False
+#: Where ``MEASURED`` and ``CROSS_CHECK`` were read (see the module's docstring).
+SOURCE = ("MFIX DEM05 verification test, tests/dem/DEM05/write_usr0.f (github.com/"
+          "CurtinIDS/mfix @ aa5da90): Kharaz et al. 2001's measurements digitised from "
+          "Di Renzo & Di Maio 2004, Figs. 6, 7(b), 8")
+CROSS_CHECK_SOURCE = ("Lethe, examples/dem/3d-oblique-wall-impact/"
+                      "oblique_wall_impact_postprocessing.py (github.com/chaos-polymtl/lethe "
+                      "@ 255b519)")
+#: The three quantities the paper plots against incidence, in the order of its figures here.
+QUANTITIES = ("tangential_restitution", "rebound_deg", "spin")
 
 
 @dataclass(frozen=True)
-class Point:
-    incidence_deg: float
-    tangential_restitution: float
-    rebound_deg: float
-    spin: float  # forward spin after impact, rad/s
+class Digitised:
+    """One quantity's points: incidence (degrees from the normal) and value, as the source
+    tabulates them (its own rounding)."""
+
+    quantity: str
+    incidence_deg: tuple[float, ...]
+    values: tuple[float, ...]
 
 
-#: (incidence°, e_t, rebound°, ω rad/s), recalled from the paper's figures (see above).
-POINTS = (
-    Point(10.0, 0.62, 6.5, 250.0),
-    Point(20.0, 0.66, 14.0, 450.0),
-    Point(30.0, 0.71, 23.0, 580.0),
-    Point(45.0, 0.82, 40.0, 500.0),
-    Point(60.0, 0.89, 57.5, 355.0),
-    Point(80.0, 0.97, 80.0, 125.0),
-)
-#: Half-widths of the recalled points' uncertainty (e_t, rebound°, spin rad/s).
-UNCERTAINTY = (0.08, 4.0, 80.0)
+#: From SOURCE, column by column as tabulated there.
+MEASURED = {
+    "tangential_restitution": Digitised(
+        "tangential_restitution",
+        (2.0275, 3.9282, 9.6304, 20.0845, 30.2218, 39.3031, 49.5459, 59.8416),
+        (0.7938, 0.7450, 0.6728, 0.5964, 0.6883, 0.7719, 0.8469, 0.9019)),
+    "rebound_deg": Digitised(
+        "rebound_deg",
+        (0.2397, 2.2945, 4.2922, 9.9429, 20.5594, 30.3767, 39.6233, 49.7831, 60.0571),
+        (0.1194, 1.7630, 2.9577, 6.6917, 12.3645, 21.7809, 32.5455, 45.1051, 57.3652)),
+    "spin": Digitised(
+        "spin",
+        (6.0025, 10.9840, 21.1931, 31.0947, 39.0283, 50.2214, 60.2460),
+        (135.5703, 264.5493, 577.0096, 612.6481, 595.4843, 452.9444, 381.3185)),
+}
+#: From CROSS_CHECK_SOURCE (the same figures read by other hands), as tabulated there.
+CROSS_CHECK = {
+    "tangential_restitution": Digitised(
+        "tangential_restitution",
+        (1.84, 3.703, 9.496, 20.012, 30.127, 39.382, 49.694, 60.02),
+        (0.79344, 0.74533, 0.67257, 0.59691, 0.68756, 0.77148, 0.84761, 0.90142)),
+    "rebound_deg": Digitised(
+        "rebound_deg",
+        (0.016, 2.15, 4.096, 9.826, 20.567, 30.29, 39.535, 49.747, 60.208),
+        (0.074, 1.733, 2.962, 6.518, 12.208, 21.67, 32.613, 45.125, 57.474)),
+    "spin": Digitised(
+        "spin",
+        (6.143, 10.991, 21.251, 31.157, 39.143, 50.348, 60.328),
+        (136.18, 265.69, 577.65, 612.88, 595.49, 453.21, 382.09)),
+}
+
+
+def digitisation_gaps() -> dict[str, tuple[float, float]]:
+    """Per quantity, the largest differences between ``MEASURED`` and ``CROSS_CHECK``, point
+    by point: (incidence in degrees, value in the quantity's unit)."""
+    gaps = {}
+    for quantity in QUANTITIES:
+        first, second = MEASURED[quantity], CROSS_CHECK[quantity]
+        gaps[quantity] = (
+            float(np.max(np.abs(np.subtract(first.incidence_deg, second.incidence_deg)))),
+            float(np.max(np.abs(np.subtract(first.values, second.values)))))
+    return gaps
 
 
 def impacts(incidence_deg) -> MeasuredImpacts:
     """The disk at ``SPEED`` and each incidence (degrees from the normal), no spin; the
-    speeds after are NaN (there is no per-angle measurement record, only ``POINTS``)."""
+    speeds after are NaN (the sources give the quantities of ``MEASURED``, not the speeds)."""
     angles = np.radians(np.atleast_1d(np.asarray(incidence_deg, dtype=float)))
     rows = angles.size
     before = np.stack([SPEED * np.sin(angles), -SPEED * np.cos(angles), np.zeros(rows)], axis=1)

@@ -77,7 +77,8 @@ KHARAZ_2001 = Dataset(
     name="kharaz2001",
     citation=("A. H. Kharaz, D. A. Gorham, A. D. Salman, \"An experimental study of the "
               "elastic rebound of spheres\", Powder Technology 120 (2001) 281-291"),
-    licence="published measurements, cited as a small table of points read off the figures",
+    licence=("published measurements, cited as a small table of points others digitised "
+             "from the figures (harness/experiments/kharaz.py names them)"),
     where_to_get="inside the harness (harness/experiments/kharaz.py)",
     env_var=None,
 )

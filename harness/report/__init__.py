@@ -151,7 +151,7 @@ def scenario_groups(results: Results, names: Sequence[str]) -> dict[str, list[st
 def write_report(results: Results, out_dir: Path | str,
                  sources: Sequence[Path] = (DEFAULT_RESULTS.parent,), workers: int | None = None,
                  scenario_figures: str = "auto", figures_for: Sequence[str] = (),
-                 svg: str = "auto") -> dict:
+                 svg: str = "auto", experiments_data: str | os.PathLike | None = None) -> dict:
     """Write index.html, summary.md, the figures (PNG and SVG) and, when the benchmark's
     ``bench.json`` or the stress test's ``stress.md`` exist (in ``bench/`` and ``stress/``
     under ``out_dir`` or one of ``sources``, by default where ``bench`` and ``stress`` write
@@ -169,6 +169,10 @@ def write_report(results: Results, out_dir: Path | str,
     svg
         ``"all"``, ``"headline"`` (SVG twins of :data:`HEADLINE_KINDS` only) or ``"auto"``
         (all up to :data:`MANY_SCENARIOS` scenarios, headline above).
+    experiments_data
+        The directory of a copy of the Fazeli et al. 2017 drops (else
+        ``IMPACT_HARNESS_FAZELI_DIR``'s): the "Against experiments" section shows their
+        aggregates (harness/report/experiments.py).
     """
     out_dir = Path(out_dir)
     figure_dir = out_dir / FIGURES
@@ -195,12 +199,14 @@ def write_report(results: Results, out_dir: Path | str,
         groups = scenario_groups(results, names) if many else {}
         pages = write_pages(out_dir, sources, results.provenance)
         page = html_page(results, out_dir, figure_map(tasks, expected, many, groups,
-                                                      scenario_figures), pages, prepared)
+                                                      scenario_figures), pages, prepared,
+                         experiments_data)
     finally:  # the pool ends either way
         drawn = finish_drawing()
     if drawn != expected:
         page = html_page(results, out_dir, figure_map(tasks, drawn, many, groups,
-                                                      scenario_figures), pages, prepared)
+                                                      scenario_figures), pages, prepared,
+                         experiments_data)
     wanted = {task.file for task, path in zip(tasks, drawn) if path is not None}
     wanted |= {str(Path(task.file).with_suffix(".svg")) for task, path in zip(tasks, drawn)
                if path is not None and task.svg}
@@ -496,6 +502,24 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--svg", choices=("auto", "all", "headline"), default="auto",
                         help="SVG twins of every figure, of the headline figures only, or "
                              f"auto (all up to {MANY_SCENARIOS} scenarios, headline above)")
+    add_experiments_data_argument(parser)
+
+
+def add_experiments_data_argument(parser: argparse.ArgumentParser) -> None:
+    """``--experiments-data PATH``, of ``report`` and ``suite``."""
+    parser.add_argument("--experiments-data", metavar="PATH", default=None,
+                        help="directory of a copy of the Fazeli et al. 2017 drops (default: "
+                             "$IMPACT_HARNESS_FAZELI_DIR): the report's 'Against experiments' "
+                             "section shows their aggregates (the first time: minutes)")
+
+
+def experiments_data_problem(path) -> str | None:
+    """Why ``--experiments-data`` cannot be used (checked before any work), or None."""
+    if path is None:
+        return None
+    from harness.report.experiments import data_option_problem
+
+    return data_option_problem(path)
 
 
 def replaces_another_report(results: Path, out: Path) -> bool:
@@ -523,6 +547,12 @@ def main(args) -> int:
     if problem:  # before any work
         print(f"impact-harness report: --out {out}: {problem}", file=sys.stderr)
         return 2
+    experiments_data = getattr(args, "experiments_data", None)
+    problem = experiments_data_problem(experiments_data)
+    if problem:
+        print(f"impact-harness report: --experiments-data {experiments_data}: {problem}",
+              file=sys.stderr)
+        return 2
     try:
         results = read_for_report(args.results)  # the records only when asked for
     except (FileNotFoundError, ValueError) as error:  # the message names the file
@@ -538,7 +568,7 @@ def main(args) -> int:
                            workers=getattr(args, "workers", None),
                            scenario_figures=getattr(args, "scenario_figures", "auto"),
                            figures_for=getattr(args, "figures_for", ()),
-                           svg=getattr(args, "svg", "auto"))
+                           svg=getattr(args, "svg", "auto"), experiments_data=experiments_data)
     print(f"wrote {written['html']} and {written['summary']} with {len(written['figures'])} "
           f"figures in {time.perf_counter() - start:.1f} s")
     return 0

@@ -1,59 +1,121 @@
 """The report's "Against experiments" section (issue 25, item 7).
 
 Always: the Kharaz curves (tangential restitution, rebound angle and spin of a disk against
-incidence) for every law, with the recalled published points marked as unverified
-(``kharaz.VERIFIED``). The Fazeli drops are unlicensed: this section never shows a per-drop
-number; without a copy it says where to get one.
+incidence) for every law and every installed engine and preset, with the measured points as
+digitised by others (``kharaz.MEASURED``, cited). The Fazeli drops are unlicensed: this
+section shows their aggregates only (``harness.experiments.aggregates``); without a copy it
+says where to get one.
 """
 
 from __future__ import annotations
 
+import json
 import os
+import sys
 from html import escape as escape_html
 from pathlib import Path
 
 import numpy as np
 
 import planar_impact as pi
+from harness.engines import preset_label
 from harness.experiments import kharaz, registry
+from harness.experiments.aggregates import MIN_BIN_COUNT as MIN_BIN
 from harness.plotting import new_figure, save_png
-from harness.report.figures import render_once
+from harness.report.figures import render_once, solver_digest
 from harness.report.markup import folded
-from harness.report.views import FIGURES
+from harness.report.views import FIGURES, engine_style
+from harness.store.files import write_text_atomically
 
 KHARAZ_FIGURE = "experiments-kharaz.png"
 #: Incidences of the drawn curves, degrees from the normal.
-INCIDENCES = np.linspace(5.0, 85.0, 161)
+INCIDENCES = np.linspace(1.0, 89.0, 177)
+
+
+#: Incidences at which every engine and preset runs the disk for the figure.
+ENGINE_INCIDENCES = np.arange(5.0, 86.0, 5.0)
 
 
 def kharaz_payload() -> dict:
-    """What the Kharaz figure shows (its redraw key, with the report's code digest)."""
+    """What the Kharaz figure shows (its redraw key, with the report's code digest): the
+    laws' inputs, the points, and what the engines' runs depend on (their code, the
+    judging, the installed versions), not the runs' floats."""
+    from harness.run.provenance import package_versions
+
     return {"laws": list(pi.LAWS), "mu": kharaz.MU, "e": kharaz.E,
-            "points": [list(vars(p).values()) for p in kharaz.POINTS],
-            "uncertainty": list(kharaz.UNCERTAINTY), "verified": kharaz.VERIFIED,
-            "incidences": INCIDENCES.tolist()}
+            "measured": {q: [m.incidence_deg, m.values] for q, m in kharaz.MEASURED.items()},
+            "source": kharaz.SOURCE, "incidences": INCIDENCES.tolist(),
+            "engine_incidences": ENGINE_INCIDENCES.tolist(), "versions": package_versions(),
+            "engine_code": harness_code_digest()}
+
+
+def harness_code_digest() -> str:
+    """The sha256 of what runs and judges the engines here: harness/experiments,
+    harness/engines and the verdicts."""
+    import hashlib
+
+    root = Path(__file__).resolve().parents[1]
+    digest = hashlib.sha256()
+    for folder in ("experiments", "engines"):
+        for path in sorted((root / folder).glob("*.py")):
+            digest.update(path.name.encode() + b"\0" + path.read_bytes())
+    digest.update((root / "run" / "verdicts.py").read_bytes())
+    return digest.hexdigest()
+
+
+def kharaz_engine_runs() -> list:
+    """Every installed engine and preset on the disk at :data:`ENGINE_INCIDENCES`, each
+    run judged (harness/experiments/engine_curves.py)."""
+    from harness.experiments import engine_curves
+
+    return [engine_curves.engine_curves(engine, preset, ENGINE_INCIDENCES)
+            for engine in _installed_engines() for preset in engine.presets]
+
+
+#: The three panels: the quantity, its axis label.
+KHARAZ_PANELS = (("tangential_restitution", r"tangential restitution of the centre, $v_x'/v_x$"),
+                 ("rebound_deg", "rebound angle (° from the normal)"),
+                 ("spin", "forward spin after impact (rad/s)"))
 
 
 def draw_kharaz(path: Path, tag: str | None) -> Path:
-    figure = new_figure(10.0, 3.4)
+    figure = new_figure(11.0, 4.9)
     axes = figure.subplots(1, 3)
+    runs = kharaz_engine_runs()
     limit = kharaz.sticking_limit_deg()
-    fields = (("tangential_restitution", 0, "tangential restitution of the centre"),
-              ("rebound_deg", 1, "rebound angle (°)"), ("spin", 2, "forward spin (rad/s)"))
-    label = "recalled points (unverified)" if not kharaz.VERIFIED else "published points"
-    for name, column, title in fields:
-        axis = axes[column]
-        for law in pi.LAWS:
-            curve = kharaz.curves(law, INCIDENCES)
-            axis.plot(curve.incidence_deg, getattr(curve, name), label=law, linewidth=1.2)
-        points = np.array([[p.incidence_deg, p.tangential_restitution, p.rebound_deg, p.spin]
-                           for p in kharaz.POINTS])
-        axis.errorbar(points[:, 0], points[:, column + 1], yerr=kharaz.UNCERTAINTY[column],
-                      fmt="o", mfc="none", color="black", capsize=2, label=label)
-        axis.axvspan(0, limit, color="#eeeeee", zorder=0)
+    # Every law draws the same curve here (m_nt = 0): one line, named for all of them.
+    curve = kharaz.curves(pi.LAWS[0], INCIDENCES)
+    for axis, (quantity, label) in zip(axes, KHARAZ_PANELS):
+        axis.axvspan(0, limit, color="#eeeeee", zorder=0,
+                     label=f"rolls at separation (< {limit:.1f}°)")
+        axis.axvline(limit, color="#888888", linewidth=0.8, linestyle=":",
+                     label="stick–slip transition")
+        axis.plot(curve.incidence_deg, getattr(curve, quantity), color="#0072B2",
+                  linewidth=1.5, label=f"every law (μ {kharaz.MU}, e {kharaz.E})")
+        for run in runs:  # the engines' single impacts; flagged runs are not drawn
+            ok = np.array([verdict == "ok" for verdict in run.verdicts])
+            if ok.any():
+                colour, marker = engine_style(run.engine)
+                axis.plot(run.incidence_deg[ok], getattr(run, quantity)[ok], marker,
+                          color=colour, mfc="none" if run.preset == "defaults" else colour,
+                          markersize=5, linestyle="none",
+                          label=f"{run.engine} {preset_label(run.engine, run.preset)}")
+        measured = kharaz.MEASURED[quantity]
+        axis.plot(measured.incidence_deg, measured.values, "o", mfc="none", color="black",
+                  markersize=7, markeredgewidth=1.3, label="measured (digitised)")
+        axis.set_xlim(0, 90)
         axis.set_xlabel("incidence (° from the normal)")
-        axis.set_title(title, fontsize=9)
-    axes[0].legend(fontsize=7)
+        axis.set_ylabel(label)
+        axis.grid(True, color="#dddddd", linewidth=0.5)
+    axes[1].plot([0, 90], [0, 90], color="#bbbbbb", linewidth=0.8, linestyle="--",
+                 label="rebound = incidence")
+    flagged = [f"{run.engine} {preset_label(run.engine, run.preset)} "
+               f"({', '.join(sorted(set(run.verdicts)))})" for run in runs
+               if "ok" not in run.verdicts]
+    handles, labels = axes[1].get_legend_handles_labels()
+    figure.legend(handles, labels, loc="outside lower center", ncols=4, fontsize=8,
+                  title=("flagged at every incidence, not drawn: " + "; ".join(flagged))
+                  if flagged else None, title_fontsize=8)
     return save_png(figure, path, tag=tag)
 
 
@@ -62,42 +124,344 @@ def kharaz_html(out_dir: Path) -> str:
     figures.mkdir(parents=True, exist_ok=True)
     render_once("experiments-kharaz", figures / KHARAZ_FIGURE, kharaz_payload(), draw_kharaz)
     limit = kharaz.sticking_limit_deg()
+    gaps = kharaz.digitisation_gaps()
+    spread = (f"{max(g[0] for g in gaps.values()):.2f}° of incidence, "
+              f"{gaps['tangential_restitution'][1]:.4f} in tangential restitution, "
+              f"{gaps['rebound_deg'][1]:.2f}° of rebound and {gaps['spin'][1]:.1f} rad/s "
+              "of spin")
     caption = (
-        f"A 5 mm alumina sphere at {kharaz.SPEED} m/s (Kharaz, Gorham &amp; Salman 2001) as a "
-        f"disk, μ = {kharaz.MU}, e = {kharaz.E}. Every law draws the same curve (m<sub>nt</sub> "
-        "= 0): read the curves as a test of the rigid picture and of μ, e, not of the law. "
-        f"Grey: below {limit:.1f}°, where the rigid disk rolls at separation and the real "
-        "sphere's tangential compliance, which no rigid law has, moves the measurement. "
-        "The circles are values recalled from the paper's figures, <b>not verified</b> "
-        "against a copy (bars: their uncertainty); no agreement is claimed.")
+        f"A 5 mm alumina sphere at {kharaz.SPEED} m/s on glass (Kharaz, Gorham &amp; Salman "
+        f"2001) as a disk with I = 2/5 m r², μ = {kharaz.MU}, e = {kharaz.E}. Every law draws "
+        "the same curve (m<sub>nt</sub> = 0): read it as a test of the rigid picture and of "
+        f"μ, e, not of the law. Grey: below {limit:.1f}°, where the rigid disk rolls at "
+        "separation and the real sphere's tangential compliance, which no rigid law has, "
+        "moves the measurement; dotted: the rigid stick–slip transition. Coloured markers: "
+        "every installed engine and preset at every 5°, its runs judged single impacts only "
+        "(hollow: <i>defaults</i>; presets that agree overlap; a flagged run is not drawn, "
+        "and a preset flagged at every incidence is named above the key). Black circles: "
+        "the "
+        "measurements as others digitised them from the published figures "
+        f"({escape_html(kharaz.SOURCE)}); a second digitisation "
+        f"({escape_html(kharaz.CROSS_CHECK_SOURCE)}) agrees to {spread}. The sources give "
+        "no error bars. <code>impact-harness experiments</code> prints the engines' numbers "
+        "with each flagged run's reason.")
     image = (f"<a href='{FIGURES}/{KHARAZ_FIGURE[:-4]}.svg'><img src='{FIGURES}/"
-             f"{KHARAZ_FIGURE}' alt='Kharaz curves for every law'></a>")
+             f"{KHARAZ_FIGURE}' alt='Kharaz curves: the laws against the measured points'>"
+             "</a>")
     return f"<figure>{image}<figcaption>{caption}</figcaption></figure>"
 
 
-def data_directory(path: str | os.PathLike | None = None) -> Path | None:
-    """The Fazeli copy's directory (``path`` or the environment variable), None without."""
-    try:
-        return registry.locate(registry.FAZELI_2017, path)
-    except registry.DataMissing:
+#: The drops' aggregates, kept beside the figures under the digest of what made them.
+DROPS_FILE = "experiments-drops.json"
+DENSITY_FIGURE = "experiments-drops-density.png"
+CDF_FIGURE = "experiments-drops-cdf.png"
+FITS_FIGURE = "experiments-drops-fits.png"
+#: Bootstrap replicates of the report's fits (the command's default is 200).
+REPORT_REPLICATES = 100
+#: Law colours and line styles (Okabe–Ito, as the rest of the report).
+LAW_COLOURS = {"newton": "#E69F00", "poisson": "#0072B2", "stronge": "#009E73",
+               "stronge-paper": "#CC79A7", "newton-lcp": "#D55E00"}
+LAW_LINES = {"newton": "-", "poisson": "-", "stronge": "--", "stronge-paper": ":",
+             "newton-lcp": "-."}
+
+
+def drops_key(hashes: dict[str, str]) -> str:
+    """The digest of everything the drops' aggregates depend on: the files (their SHA-256),
+    the code that reads, fits, runs and judges them, the installed versions and the
+    report's settings; never the results' floats."""
+    import hashlib
+
+    from harness.run.provenance import package_versions
+
+    digest = hashlib.sha256()
+    digest.update(json.dumps({"hashes": hashes, "versions": package_versions(),
+                              "replicates": REPORT_REPLICATES, "solver": solver_digest(),
+                              "code": harness_code_digest()}, sort_keys=True).encode())
+    return digest.hexdigest()
+
+
+def drops_aggregates(out_dir: Path, directory: Path) -> dict:
+    """The aggregates of the copy in ``directory`` (checked against the published SHA-256):
+    read from ``out_dir`` when made from the same inputs, else computed (minutes: every law
+    fitted twice, every engine on every drop) and kept there. Raises
+    :class:`registry.DataInvalid` for a copy that is not the published files."""
+    from harness.experiments import aggregates, fazeli
+
+    hashes = registry.verify(registry.FAZELI_2017, directory)
+    key = drops_key(hashes)
+    path = out_dir / DROPS_FILE
+    if path.is_file():
+        try:
+            kept = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            kept = {}
+        if (isinstance(kept, dict) and kept.get("key") == key
+                and isinstance(kept.get("aggregates"), dict)):
+            return kept["aggregates"]
+    data = fazeli.load(directory, check_hashes=False)  # just checked
+    result = aggregates.compute(data, engines=_installed_engines(),
+                                replicates=REPORT_REPLICATES, progress=_progress)
+    result["provenance"] = data.provenance()
+    if not path.exists() or path.is_file():  # only a regular file is written over
+        write_text_atomically(path, json.dumps({"key": key, "aggregates": result}, indent=1)
+                              + "\n")
+    return result
+
+
+def _progress(text: str) -> None:
+    print(f"report: Fazeli drops: {text}", file=sys.stderr, flush=True)
+
+
+def _installed_engines() -> list:
+    from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine
+
+    engines = []
+    for name in ENGINE_NAMES:
+        try:
+            engines.append(load_engine(name))
+        except EngineNotInstalled:
+            continue
+    return engines
+
+
+def draw_density(aggregates: dict, path: Path, tag: str | None) -> Path:
+    from matplotlib.colors import LogNorm
+
+    shown = aggregates["shown"]
+    figure = new_figure(11.0, 4.6)
+    figure.suptitle(f"{shown['law'].capitalize()}'s law at its {shown['objective']} fit (μ "
+                    f"{shown['mu']:.3f}, e {shown['e']:.3f}) against the "
+                    f"{aggregates['drops']} drops: post-impact speeds", fontsize=11)
+    axes = figure.subplots(1, 3)
+    peak = max(max(max(row) for row in d["counts"]) for d in shown["density"])
+    for axis, name, unit, panel in zip(axes, shown["speeds"], shown["units"],
+                                       shown["density"]):
+        edges = np.asarray(panel["edges"])
+        counts = np.asarray(panel["counts"], dtype=float).T  # rows: predicted
+        counts[counts == 0] = np.nan
+        mesh = axis.pcolormesh(edges, edges, counts, cmap="Blues",
+                               norm=LogNorm(vmin=MIN_BIN / 2, vmax=max(peak, MIN_BIN + 1)))
+        axis.plot(edges[[0, -1]], edges[[0, -1]], color="#888888", linewidth=0.8,
+                  linestyle="--", label="predicted = measured")
+        binned = panel["binned"]
+        axis.plot(binned["measured"], binned["q50"], color="#D55E00", linewidth=1.5,
+                  marker="o", markersize=3, label="median predicted per bin")
+        axis.fill_between(binned["measured"], binned["q25"], binned["q75"], color="#D55E00",
+                          alpha=0.2, linewidth=0, label="25–75 % per bin")
+        axis.set_xlim(edges[0], edges[-1])
+        axis.set_ylim(edges[0], edges[-1])
+        axis.set_aspect("equal")
+        axis.set_xlabel(f"measured {name} ({unit})")
+        axis.set_ylabel(f"predicted {name} ({unit})")
+    figure.legend(handles=axes[0].get_legend_handles_labels()[0], loc="outside lower center",
+                  ncols=3, fontsize=9)
+    bar = figure.colorbar(mesh, ax=axes, shrink=0.8,
+                          label=f"drops per bin (bins of < {MIN_BIN} not drawn)")
+    ticks = [t for t in (5, 10, 20, 50, 100, 200, 500) if MIN_BIN <= t <= max(peak, 5)]
+    bar.set_ticks(ticks, labels=[str(t) for t in ticks])
+    bar.minorticks_off()
+    return save_png(figure, path, tag=tag)
+
+
+def _cdf(axis, quantile_set: dict, label: str | None, **style) -> None:
+    if quantile_set["values"]:
+        axis.plot(quantile_set["values"], quantile_set["levels"], label=label, **style)
+
+
+def draw_cdf(aggregates: dict, path: Path, tag: str | None) -> Path:
+    figure = new_figure(11.0, 5.6)
+    axes = figure.subplots(1, 3, sharey=True)
+    drops = aggregates["drops"]
+    for axis, objective in zip(axes[:2], ("median-error", "impulse")):
+        for law, fit in aggregates["laws"][objective].items():
+            _cdf(axis, fit["errors"], f"{law} (μ {fit['mu']:.3f}, e {fit['e']:.3f})",
+                 color=LAW_COLOURS.get(law), linestyle=LAW_LINES.get(law, "-"), linewidth=1.3)
+        axis.set_title(f"every law fitted by {objective}", fontsize=10)
+    for k, quantile_set in enumerate(aggregates["paper_models"].values()):
+        _cdf(axes[0], quantile_set, "the paper's six models, as published" if k == 0 else None,
+             color="#999999", linewidth=0.8)
+    shown = aggregates["shown"]
+    reference = aggregates["laws"][shown["objective"]][shown["law"]]
+    _cdf(axes[2], reference["errors"], f"{shown['law']} (the law)", color="black",
+         linewidth=2.0)
+    for run in aggregates["engines"]:
+        colour, marker = engine_style(run["engine"])
+        dashed = run["preset"] == "defaults"
+        n = run["cdf"]["drops"]
+        subset = "" if n == drops else f", {n} of {drops}: a selected subset"
+        label = preset_label(run["engine"], run["preset"])
+        _cdf(axes[2], run["cdf"], f"{run['engine']} {label}{subset}", color=colour,
+             linestyle="--" if dashed else "-", linewidth=1.2)
+    flagged = [f"{r['engine']} {preset_label(r['engine'], r['preset'])}"
+               for r in aggregates["engines"]
+               if r["cdf"]["drops"] == 0]
+    axes[2].set_title(f"engines at {shown['law']}'s {shown['objective']} fit "
+                      f"(μ {shown['mu']:.3f}, e {shown['e']:.3f})", fontsize=10)
+    if flagged:
+        axes[2].text(0.98, 0.03, "every run flagged, not drawn:\n" + "\n".join(flagged),
+                     transform=axes[2].transAxes, ha="right", va="bottom", fontsize=7)
+    for axis in axes:
+        axis.set_xlim(0, 1.5)
+        axis.set_ylim(0, 1)
+        axis.grid(True, color="#dddddd", linewidth=0.5)
+        axis.set_xlabel("normalized error ‖v̂ − v‖ / ‖v‖")
+        axis.legend(fontsize=7.5, loc="upper center", bbox_to_anchor=(0.5, -0.16),
+                    frameon=False)
+    axes[0].set_ylabel(f"share of the {drops} drops with a smaller error")
+    return save_png(figure, path, tag=tag)
+
+
+def draw_fits(aggregates: dict, path: Path, tag: str | None) -> Path:
+    figure = new_figure(9.0, 3.6)
+    axes = figure.subplots(1, 2)
+    rows = [(objective, law, fit) for objective in ("median-error", "impulse")
+            for law, fit in aggregates["laws"][objective].items()]
+    ticks = [f"{law} · {objective}" for objective, law, _ in rows]
+    for axis, name, symbol in zip(axes, ("mu", "e"), ("μ", "e")):
+        for k, (_, law, fit) in enumerate(rows):
+            low, high = fit[f"{name}_interval"]
+            value = fit[name]
+            axis.errorbar([value], [k], xerr=[[value - low], [high - value]], fmt="o",
+                          color=LAW_COLOURS.get(law), capsize=3, markersize=4)
+            edge = " (grid edge)" if name == "mu" and fit.get("on_grid_edge") else ""
+            axis.annotate(f"{value:.3f} [{low:.3f}, {high:.3f}]{edge}", (value, k),
+                          xytext=(0, 5), textcoords="offset points", ha="center",
+                          fontsize=7)
+        axis.set_yticks(range(len(rows)), ticks if name == "mu" else [""] * len(rows),
+                        fontsize=8)
+        axis.set_ylim(len(rows) - 0.5, -0.8)  # first row on top, room for its label
+        axis.set_title("friction μ" if name == "mu" else "restitution e", fontsize=10)
+        axis.axhline(len(rows) / 2 - 0.5, color="#bbbbbb", linewidth=0.8)
+        axis.grid(True, axis="x", color="#dddddd", linewidth=0.5)
+        axis.set_xlabel(f"fitted {symbol} (bars: 95 % bootstrap interval, "
+                        f"{aggregates['replicates']} replicates)", fontsize=9)
+    return save_png(figure, path, tag=tag)
+
+
+def calibration_table(aggregates: dict) -> str:
+    calibration = aggregates["calibration"]
+    rows = []
+    for result in calibration["results"]:
+        if result["best"] is None:
+            best = "cannot be calibrated: no setting tried gives single impacts on half the drops"
+            objective = "—"
+        else:
+            best = ", ".join(f"{k} {v}" for k, v in result["best"].items())
+            objective = f"{result['objective']:.3f}"
+        cannot = ", ".join(result["cannot"]) or "—"
+        rows.append(f"<tr><td>{escape_html(result['engine'])}</td>"
+                    f"<td>{escape_html(preset_label(result['engine'], result['preset']))}</td>"
+                    f"<td>{escape_html(best)}</td>"
+                    f"<td>{objective}</td><td>{escape_html(cannot)}</td></tr>")
+    sample = calibration["sample"]
+    return ("<table><tr><th>engine</th><th>preset</th><th>calibrated settings</th>"
+            "<th>median error</th><th>knobs that move it by &lt; "
+            f"{calibration['tolerance']:g} (cannot calibrate)</th></tr>" + "".join(rows)
+            + "</table><p class='muted'>Grid <i>quick</i> (μ 0.1, 0.3, 0.6 × e 0.3, 0.6, 0.9, "
+            "times MuJoCo's solref damping ratio or Box2D's length scale), scored on "
+            f"{sample['drops']} of the {sample['of']} drops drawn at random with seed "
+            f"{sample['seed']} (<code>impact-harness calibrate ENGINE --to data</code> for "
+            "more).</p>")
+
+
+def drops_html(out_dir: Path, aggregates: dict) -> str:
+    figures = out_dir / FIGURES
+    figures.mkdir(parents=True, exist_ok=True)
+    payload = {"aggregates_of": aggregates.get("provenance", {}),
+               "digest": aggregates_digest(aggregates)}
+    parts = []
+    for kind, file, draw in (("density", DENSITY_FIGURE, draw_density),
+                             ("cdf", CDF_FIGURE, draw_cdf), ("fits", FITS_FIGURE, draw_fits)):
+        render_once(f"experiments-drops-{kind}", figures / file, payload,
+                    lambda path, tag, draw=draw: draw(aggregates, path, tag))
+    shown = aggregates["shown"]
+    drops = aggregates["drops"]
+    hidden = sum(d["hidden_in_sparse_bins"] for d in shown["density"])
+    parts.append(_figure(DENSITY_FIGURE, "predicted against measured post-impact speeds",
+        f"{shown['law'].capitalize()}'s law at its <i>{shown['objective']}</i> fit (μ "
+        f"{shown['mu']:.3f}, e {shown['e']:.3f}) against the {drops} processed drops (raw "
+        "post-impact speeds): how many drops fall in each bin (log scale; "
+        f"{hidden} drop-bins holding fewer than {MIN_BIN} drops are left blank, so that no "
+        "drop can be read off the figure), and the quartiles of the prediction in bins of "
+        "the measured value. On the dashed line the prediction is exact."))
+    parts.append(_figure(CDF_FIGURE, "error distributions of the laws and engines",
+        "The distribution of the paper's error (the centre's velocity after impact, relative "
+        "to the measured one) over the drops. Left and middle: every law at its own fit by "
+        "each objective (they give different fits); grey, the paper's six models as "
+        "published (against the published speeds, as the paper scores them). Right: every "
+        f"engine and preset at {shown['law']}'s <i>{shown['objective']}</i> fit (dashed: "
+        "the engine's <i>defaults</i>), on its runs judged single impacts only (flagged "
+        "runs are not scored; a curve of fewer drops is of a selected subset and not "
+        "comparable)."))
+    parts.append(_figure(FITS_FIGURE, "fitted friction and restitution per law",
+        "Each law's global (μ, e) by each objective with its 95 % bootstrap interval "
+        f"({aggregates['replicates']} resamples of the drops, seed {aggregates['seed']}). "
+        "The laws nearly coincide on this object; the objectives do not."))
+    parts.append("<h4>Calibrated engine settings</h4>" + calibration_table(aggregates))
+    return "\n".join(parts)
+
+
+def aggregates_digest(value) -> str:
+    """A digest of JSON ``value`` rounded to 6 significant digits (a figure's redraw key:
+    the last bits of a float, which differ between CPUs, do not redraw it)."""
+    import hashlib
+
+    def rounded(item):
+        if isinstance(item, float):
+            return float(f"{item:.6g}")
+        if isinstance(item, dict):
+            return {k: rounded(v) for k, v in item.items()}
+        if isinstance(item, list):
+            return [rounded(v) for v in item]
+        return item
+
+    return hashlib.sha256(json.dumps(rounded(value), sort_keys=True).encode()).hexdigest()
+
+
+def _figure(file: str, alt: str, caption: str) -> str:
+    return (f"<figure><a href='{FIGURES}/{file[:-4]}.svg'><img src='{FIGURES}/{file}' "
+            f"alt='{escape_html(alt)}'></a><figcaption>{caption}</figcaption></figure>")
+
+
+def data_option_problem(path: str | os.PathLike | None) -> str | None:
+    """Why ``--experiments-data PATH`` cannot be used (not a directory, or not the published
+    files), checked before any work; None when it can or was not given."""
+    if path is None:
         return None
+    try:
+        registry.verify(registry.FAZELI_2017, registry.locate(registry.FAZELI_2017, path))
+    except registry.DataInvalid as invalid:
+        return str(invalid)
+    return None
 
 
 def experiments_section(out_dir: Path, data_path: str | os.PathLike | None = None) -> str:
-    """The section's HTML, folded under what it shows; draws its figures under ``out_dir``
-    only when their inputs changed."""
+    """The section's HTML; draws its figures under ``out_dir`` only when their inputs
+    changed. With a copy of the Fazeli drops (``data_path`` or the environment variable)
+    their aggregates and figures, else where to get them; a copy that is not the published
+    files is said so, and the rest of the section goes on. Folded under what it shows."""
     parts = ["<p>What real impacts did, beside what the laws say they would "
-             "(docs/experiments.md; <code>impact-harness experiments</code>).</p>"]
-    directory = data_directory(data_path)
-    if directory is None:
-        parts.append(
-            "<p>The planar ellipse drops of Fazeli et al. (ICRA 2017) are not shown: the "
-            "files carry no licence and are read from your own copy. Get them from "
-            f"{escape_html(registry.FAZELI_2017.where_to_get)}.</p>")
+             "(docs/experiments.md; <code>impact-harness experiments</code>).</p>",
+             "<h3>Planar ellipse drops (Fazeli et al. 2017)</h3>"]
+    where = ("Get them from " + escape_html(registry.FAZELI_2017.where_to_get) + " (for "
+             "the report: <code>impact-harness report --experiments-data DIR</code>).")
+    try:
+        directory = registry.locate(registry.FAZELI_2017, data_path)
+        aggregates = drops_aggregates(out_dir, directory)
+    except registry.DataMissing:
+        parts.append("<p>The 1,718 processed drops of an ellipse (Fazeli et al., ICRA 2017) "
+                     "are not shown: the files carry no licence and are read from your own "
+                     f"copy, never committed. {where}</p>")
+    except registry.DataInvalid as invalid:
+        parts.append(f"<p>The drops are not shown: {escape_html(str(invalid))}. {where}</p>")
     else:
-        parts.append(f"<p>Fazeli drops read from <code>{escape_html(str(directory))}</code>; "
-                     "run <code>impact-harness experiments --data DIR</code> for the fits "
-                     "(aggregates only).</p>")
+        hashes = ", ".join(f"{name} {digest[:12]}…" for name, digest
+                           in aggregates["provenance"].get("hashes", {}).items())
+        parts.append(f"<p>{aggregates['drops']} processed drops read from "
+                     f"<code>{escape_html(str(directory))}</code> (SHA-256 {hashes}, the "
+                     "published files). Only aggregates are shown: the files carry no "
+                     "licence.</p>")
+        parts.append(drops_html(out_dir, aggregates))
     parts.append("<h3>Oblique impacts of a sphere (Kharaz et al. 2001)</h3>")
     parts.append(kharaz_html(out_dir))
     recalled = "recalled points, unverified" if not kharaz.VERIFIED else "published points"

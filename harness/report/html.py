@@ -7,6 +7,7 @@ beside it: :mod:`~harness.report.markup` (style, tables, figures),
 from __future__ import annotations
 
 import json
+import os
 import time
 from collections.abc import Sequence
 from pathlib import Path
@@ -177,20 +178,24 @@ def contents_html(names: Sequence[str], pages: dict,
 
 
 def write_html(results: Results, out_dir: Path, figures: dict, pages: dict | None = None,
-               prepared: Prepared | None = None) -> Path:
+               prepared: Prepared | None = None,
+               experiments_data: str | os.PathLike | None = None) -> Path:
     """Write ``index.html``; ``pages`` maps further pages of the report (``bench.html`` …)
     to their titles, linked from the contents; ``prepared``: the scenarios' pieces
     (:func:`harness.report.fragments.prepare`, computed here when not given), whose cache
     keeps each scenario's section for the next report."""
     path = out_dir / "index.html"
-    write_text_atomically(path, html_page(results, out_dir, figures, pages, prepared))
+    write_text_atomically(path, html_page(results, out_dir, figures, pages, prepared,
+                                          experiments_data))
     return path
 
 
 def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None = None,
-              prepared: Prepared | None = None) -> str:
+              prepared: Prepared | None = None,
+              experiments_data: str | os.PathLike | None = None) -> str:
     """The text of ``index.html`` (:func:`write_html`); reads nothing of the figures but
-    their names in ``figures``, so that it can be built while they are drawn."""
+    their names in ``figures``, so that it can be built while they are drawn.
+    ``experiments_data``: the Fazeli drops' directory (else the environment variable's)."""
     pages = pages or {}
     prepared = prepare(results) if prepared is None else prepared
     prov = results.provenance
@@ -337,7 +342,7 @@ def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None
     parts.append(cached_survey_section(out_dir, figures, prepared))
     from harness.report.experiments import experiments_section  # issue 25
 
-    parts.append(experiments_section(out_dir))
+    parts.append(experiments_section(out_dir, experiments_data))
     versions = (versions_html(prov) + "<h3>Engine settings per preset</h3><p>Bold where the "
                 "presets differ. The table is the presets as run, with the command line's "
                 "<code>--set</code> overrides; scenario files may override settings too "

@@ -12,7 +12,7 @@ def test_without_the_data_it_says_where_to_get_them_and_carries_on(monkeypatch, 
     out = capsys.readouterr().out
     assert "Fazeli et al. 2017: skipped" in out and "planar-impact-dataset" in out
     assert "## Kharaz, Gorham & Salman 2001" in out
-    assert "recalled from the paper's figures" in out  # the points' status is printed
+    assert "write_usr0.f" in out  # where the measured points come from is printed
 
 
 def test_a_copy_that_is_not_the_published_files_is_bad_input(synthetic_copy, capsys):
@@ -38,11 +38,16 @@ def test_the_json_holds_aggregates_only(synthetic_copy, tmp_path, monkeypatch, c
     skipped here only)."""
     import json
 
+    import harness.engines
     from harness.experiments import fazeli
 
     directory, truth = synthetic_copy
     real_load = fazeli.load
     monkeypatch.setattr(fazeli, "load", lambda path: real_load(path, check_hashes=False))
+    loaded = []  # each engine is loaded once for both of its tables
+    real_engine = harness.engines.load_engine
+    monkeypatch.setattr(harness.engines, "load_engine",
+                        lambda name: loaded.append(name) or real_engine(name))
     out = tmp_path / "experiments.json"
     assert cli.main(["experiments", "--data", str(directory), "--replicates", "10",
                      "--workers", "1", "--objective", "impulse", "--engines", "pymunk",
@@ -50,6 +55,7 @@ def test_the_json_holds_aggregates_only(synthetic_copy, tmp_path, monkeypatch, c
     printed = capsys.readouterr().out
     assert "### Every law fitted: objective impulse" in printed
     assert "### The engines on the drops" in printed and "| pymunk | accurate | " in printed
+    assert "### The Kharaz curves through the engines" in printed and loaded == ["pymunk"]
     document = json.loads(out.read_text())
     assert document["objective"] == "impulse"
     section = document["fazeli2017"]

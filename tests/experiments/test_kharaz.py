@@ -31,8 +31,24 @@ def test_curves_follow_the_rolling_and_sliding_closed_forms(law):
     assert np.all(sliding == (ANGLES > limit))
 
 
-def test_recalled_points_are_flagged_and_carry_their_uncertainty():
-    assert kharaz.VERIFIED is False  # until checked against the paper's figures
-    assert len(kharaz.UNCERTAINTY) == 3 and all(u > 0 for u in kharaz.UNCERTAINTY)
-    incidences = [p.incidence_deg for p in kharaz.POINTS]
-    assert incidences == sorted(incidences) and 10 <= incidences[0] and incidences[-1] <= 80
+def test_the_cited_digitisation_agrees_with_the_second_one():
+    """Two digitisations of the same figures (kharaz.SOURCE, kharaz.CROSS_CHECK_SOURCE),
+    point by point: a slip in copying either table shows here. The bounds are the reading of
+    a figure: a quarter of a degree along the incidence axis, and on the values about the
+    width of a marker."""
+    bounds = {"tangential_restitution": 0.002, "rebound_deg": 0.25, "spin": 2.0}
+    gaps = kharaz.digitisation_gaps()
+    for quantity in kharaz.QUANTITIES:
+        first, second = kharaz.MEASURED[quantity], kharaz.CROSS_CHECK[quantity]
+        assert first.quantity == second.quantity == quantity
+        assert len(first.incidence_deg) == len(first.values) == len(second.values)
+        assert list(first.incidence_deg) == sorted(first.incidence_deg)
+        assert 0 <= first.incidence_deg[0] and first.incidence_deg[-1] < 90
+        incidence_gap, value_gap = gaps[quantity]
+        assert incidence_gap <= 0.25 and value_gap <= bounds[quantity], quantity
+
+
+def test_every_quantity_has_a_cited_source():
+    assert "write_usr0.f" in kharaz.SOURCE and "aa5da90" in kharaz.SOURCE
+    assert "lethe" in kharaz.CROSS_CHECK_SOURCE and "255b519" in kharaz.CROSS_CHECK_SOURCE
+    assert set(kharaz.MEASURED) == set(kharaz.CROSS_CHECK) == set(kharaz.QUANTITIES)

@@ -1,5 +1,6 @@
 """The report's "Against experiments" section without the Fazeli data (issue 25, item 7)."""
 
+import functools
 import os
 
 from harness.report import experiments
@@ -11,7 +12,8 @@ def test_section_without_data_shows_kharaz_and_where_to_get(tmp_path, monkeypatc
     html = experiments.experiments_section(tmp_path)
     assert "id='experiments'" in html
     assert "github.com/mcubelab/planar-impact-dataset" in html
-    assert "not verified" in html
+    assert "digitised" in html and "write_usr0.f" in html  # the points' source is cited
+    assert "every installed engine and preset" in html  # the engines drawn beside them
     figure = tmp_path / "figures" / experiments.KHARAZ_FIGURE
     assert figure.is_file() and figure.with_suffix(".svg").is_file()
     tag = png_tag(figure)
@@ -21,9 +23,108 @@ def test_section_without_data_shows_kharaz_and_where_to_get(tmp_path, monkeypatc
     assert os.stat(figure).st_mtime_ns == before and png_tag(figure) == tag
 
 
-def test_section_with_a_directory_names_it(tmp_path, monkeypatch):
+def test_section_with_an_empty_directory_names_what_is_missing(tmp_path, monkeypatch):
     data = tmp_path / "data"
     data.mkdir()
     monkeypatch.setenv("IMPACT_HARNESS_FAZELI_DIR", str(data))
+    monkeypatch.setattr(experiments, "kharaz_html", lambda out_dir: "")  # drawn above
     html = experiments.experiments_section(tmp_path / "out")
-    assert str(data) in html and "mcubelab" not in html
+    assert "The drops are not shown" in html and str(data / "data_ellipse.mat") in html
+
+
+def test_a_copy_that_is_not_the_published_files_is_said_so_and_the_rest_goes_on(
+        tmp_path, monkeypatch):
+    data = tmp_path / "data"
+    data.mkdir()
+    (data / "data_ellipse.mat").write_bytes(b"not the published file")
+    monkeypatch.setattr(experiments, "kharaz_html", lambda out_dir: "<kharaz>")  # drawn above
+    html = experiments.experiments_section(tmp_path / "out", data)
+    assert "The drops are not shown" in html and "is not the published file" in html
+    assert html.endswith("<kharaz>")  # the Kharaz part follows
+
+
+def test_the_drops_figures_and_calibration_table_from_aggregates(tmp_path, monkeypatch):
+    """With aggregates (here made up, of the shape aggregates.compute returns) the section
+    draws the three figures of the drops and tabulates the calibrated settings."""
+    fake = fake_aggregates()
+    monkeypatch.setattr(experiments, "drops_aggregates", lambda out_dir, directory: fake)
+    monkeypatch.setattr(experiments, "kharaz_html", lambda out_dir: "")  # drawn above
+    monkeypatch.setattr(experiments, "render_once",  # PNGs only: an SVG costs as much again
+                        functools.partial(experiments.render_once, svg=False))
+    data = tmp_path / "data"
+    data.mkdir()
+    html = experiments.experiments_section(tmp_path / "out", data)
+    for name in (experiments.DENSITY_FIGURE, experiments.CDF_FIGURE, experiments.FITS_FIGURE):
+        assert (tmp_path / "out" / "figures" / name).is_file() and name in html
+    assert "Calibrated engine settings" in html and "cannot be calibrated" in html
+    assert "seed 0" in html and "mcubelab" not in html
+
+
+def test_report_refuses_a_bad_experiments_data_before_any_work(tmp_path, capsys):
+    from harness import cli
+
+    status = cli.main(["report", "--out", str(tmp_path / "out"), "--experiments-data",
+                       str(tmp_path / "absent")])
+    error = capsys.readouterr().err.strip().splitlines()
+    assert status == 2 and len(error) == 1 and "--experiments-data" in error[0]
+    assert not (tmp_path / "out" / "index.html").exists()
+
+
+def test_the_aggregates_are_kept_and_computed_again_only_when_their_inputs_change(
+        tmp_path, monkeypatch):
+    from types import SimpleNamespace
+
+    from harness.experiments import aggregates, fazeli, registry
+
+    computed = []
+    hashes = {"data_ellipse.mat": "a" * 64}
+    monkeypatch.setattr(registry, "verify", lambda dataset, directory: dict(hashes))
+    monkeypatch.setattr(fazeli, "load", lambda directory, check_hashes=True: SimpleNamespace(
+        provenance=lambda: {"hashes": dict(hashes)}))
+    monkeypatch.setattr(aggregates, "compute",
+                        lambda data, **options: computed.append(1) or {"drops": 3})
+    monkeypatch.setattr(experiments, "_installed_engines", lambda: [])
+    first = experiments.drops_aggregates(tmp_path, tmp_path)
+    assert first["drops"] == 3 and len(computed) == 1
+    assert experiments.drops_aggregates(tmp_path, tmp_path) == first and len(computed) == 1
+    hashes["data_ellipse.mat"] = "b" * 64  # another copy of the files: computed again
+    experiments.drops_aggregates(tmp_path, tmp_path)
+    assert len(computed) == 2
+    (tmp_path / experiments.DROPS_FILE).write_text("[1, 2]")  # not ours: computed again
+    experiments.drops_aggregates(tmp_path, tmp_path)
+    assert len(computed) == 3
+
+
+def fake_aggregates() -> dict:
+    import numpy as np
+
+    from harness.experiments import aggregates
+
+    rng = np.random.default_rng(0)
+    measured = rng.normal(0.0, 1.0, 400)
+    panel = aggregates.density(measured + rng.normal(0, 0.2, 400), measured)
+    errors = aggregates.quantiles(rng.uniform(0, 1, 400))
+    fit = {"mu": 0.04, "e": 0.55, "objective": 0.01, "held_out": 0.01,
+           "mu_interval": [0.03, 0.05], "e_interval": [0.54, 0.56], "replicates": 10,
+           "confidence": 0.95, "at_window_edge": 0, "on_grid_edge": False, "errors": errors}
+    laws = {objective: {law: fit for law in ("newton", "poisson", "stronge")}
+            for objective in aggregates.OBJECTIVES}
+    return {
+        "drops": 400, "seed": 0, "replicates": 10, "paper_models": {"AP Poisson": errors},
+        "laws": laws,
+        "shown": {"law": "poisson", "objective": "impulse", "mu": 0.04, "e": 0.55,
+                  "speeds": ["v_x'", "v_y'", "ω'"], "units": ["m/s", "m/s", "rad/s"],
+                  "density": [panel] * 3},
+        "engines": [{"engine": "pymunk", "preset": "accurate", "verdicts": {"ok": 400},
+                     "cdf": errors},
+                    {"engine": "mujoco", "preset": "defaults",
+                     "verdicts": {"multi-contact": 400}, "cdf": aggregates.quantiles([])}],
+        "calibration": {"sample": {"drops": 12, "of": 400, "seed": 0}, "grid": "quick",
+                        "tolerance": 1e-3, "results": [
+                            {"engine": "pymunk", "preset": "accurate",
+                             "best": {"mu": 0.1, "e": 0.6}, "objective": 0.4,
+                             "moves": {"mu": 0.1, "e": 0.2}, "cannot": [], "knobs": {}},
+                            {"engine": "mujoco", "preset": "defaults", "best": None,
+                             "objective": None, "moves": {}, "cannot": [], "knobs": {}}]},
+        "provenance": {"hashes": {"data_ellipse.mat": "0" * 64}},
+    }

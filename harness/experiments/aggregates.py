@@ -1,0 +1,139 @@
+"""What the report shows of the Fazeli drops: aggregates only (issue 25, item 7).
+
+The files carry no licence, so nothing here keeps a per-drop number: the fits with their
+intervals, error distributions as quantiles, predicted against measured as a 2-D histogram
+whose bins holding fewer than :data:`MIN_BIN_COUNT` drops are emptied (a bin of one or two
+drops would give those drops away) with medians per bin of the measured value, and the
+calibrated settings of each engine. Everything returned is plain JSON (numbers, lists,
+dicts), written by the report beside its figures.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+import planar_impact as pi
+
+from . import analysis, calibrate, drops_engines, fazeli, fitting, metric
+from .predict import predict
+
+#: A bin of the predicted-against-measured histogram with fewer drops than this is emptied.
+MIN_BIN_COUNT = 5
+#: The error distributions are kept as their quantiles at these levels.
+CDF_LEVELS = tuple(np.round(np.linspace(0.0, 1.0, 101), 2))
+#: Objectives the laws are fitted by (both: they give different fits, docs/experiments.md).
+OBJECTIVES = ("median-error", "impulse")
+#: The law whose predictions are set against the measurements, and the fit the engines run
+#: at (the authors' own cost, which does not fit friction away).
+SHOWN_LAW, SHOWN_OBJECTIVE = "poisson", "impulse"
+#: Post-impact speeds: names and units of the predicted-against-measured panels.
+SPEEDS = (("v_x'", "m/s"), ("v_y'", "m/s"), ("ω'", "rad/s"))
+
+
+def quantiles(errors) -> dict:
+    """The distribution of per-drop errors as quantiles at :data:`CDF_LEVELS` (finite ones;
+    ``drops`` counts them)."""
+    errors = np.asarray(errors, dtype=float)
+    valid = errors[np.isfinite(errors)]
+    values = np.quantile(valid, CDF_LEVELS).tolist() if valid.size else []
+    return {"drops": int(valid.size), "levels": list(CDF_LEVELS), "values": values}
+
+
+def density(predicted, measured, bins: int = 20, median_bins: int = 12) -> dict:
+    """Predicted against measured, one quantity: a ``bins`` × ``bins`` histogram over the
+    central 99 % of both (bins of fewer than :data:`MIN_BIN_COUNT` drops emptied) and, in
+    ``median_bins`` bins of the measured value holding at least that many drops, the
+    quartiles of the predicted one."""
+    predicted, measured = np.asarray(predicted, float), np.asarray(measured, float)
+    both = np.concatenate([predicted, measured])
+    low, high = np.quantile(both, [0.005, 0.995])
+    edges = np.linspace(low, high, bins + 1)
+    counts, _, _ = np.histogram2d(measured, predicted, bins=[edges, edges])
+    hidden = int(counts[(counts > 0) & (counts < MIN_BIN_COUNT)].sum())
+    counts[counts < MIN_BIN_COUNT] = 0
+    coarse = np.linspace(low, high, median_bins + 1)
+    which = np.digitize(measured, coarse) - 1
+    centres, q25, q50, q75 = [], [], [], []
+    for k in range(median_bins):
+        inside = predicted[which == k]
+        if inside.size >= MIN_BIN_COUNT:
+            centres.append(float((coarse[k] + coarse[k + 1]) / 2))
+            a, b, c = np.quantile(inside, [0.25, 0.5, 0.75])
+            q25.append(float(a))
+            q50.append(float(b))
+            q75.append(float(c))
+    outside = int(np.count_nonzero((measured < low) | (measured > high)
+                                   | (predicted < low) | (predicted > high)))
+    return {"edges": edges.tolist(), "counts": counts.astype(int).tolist(),
+            "hidden_in_sparse_bins": hidden, "outside_range": outside,
+            "binned": {"measured": centres, "q25": q25, "q50": q50, "q75": q75},
+            "drops": int(measured.size)}
+
+
+def law_fits(target, *, replicates: int, seed: int, workers: int | None, laws=pi.LAWS,
+             mus=fitting.MU_GRID, es=fitting.E_GRID) -> dict:
+    """Every law fitted by each of :data:`OBJECTIVES`: (μ, e) with bootstrap intervals,
+    held-out value and the normalized errors' quantiles at the fit."""
+    drop_errors = fitting.DropErrors(target)
+    fits: dict = {}
+    for objective in OBJECTIVES:
+        results = analysis.fit_laws(target, objective, laws, replicates=replicates,
+                                    seed=seed, workers=workers, mus=mus, es=es)
+        fits[objective] = {}
+        for law, result in results.items():
+            fit, boot = result.fit, result.bootstrap
+            errors, status = drop_errors(law, fit.mu, fit.e)
+            normalized = np.where(status == 0, errors["median-error"], np.nan)
+            fits[objective][law] = {
+                "mu": fit.mu, "e": fit.e, "objective": fit.value,
+                "held_out": result.held_out.held_out,
+                "mu_interval": [boot.mu.low, boot.mu.high],
+                "e_interval": [boot.e.low, boot.e.high],
+                "replicates": boot.replicates, "confidence": boot.confidence,
+                "at_window_edge": boot.at_window_edge, "on_grid_edge": fit.on_grid_edge,
+                "errors": quantiles(normalized)}
+    return fits
+
+
+def compute(data: fazeli.FazeliData, *, engines=(), replicates: int = 100, seed: int = 0,
+            workers: int | None = None, calibration_drops: int = 12, laws=pi.LAWS,
+            mus=fitting.MU_GRID, es=fitting.E_GRID, progress=lambda text: None) -> dict:
+    """The report's aggregates of ``data``: the paper's six models, every law under both
+    objectives, Poisson's predictions against the measurements, each engine (loaded, with
+    its presets) on every drop at Poisson's ``impulse`` fit, and each engine's calibrated
+    (μ, e) and own settings on ``calibration_drops`` drops drawn with ``seed``. ``laws``
+    must include :data:`SHOWN_LAW`."""
+    impacts = data.impacts
+    target = fazeli.without_post_offset(impacts)  # the laws predict impulses only
+    models = {name: quantiles(metric.normalized_error(speeds, impacts.speeds_after))
+              for name, speeds in data.model_speeds.items()}
+    progress("fitting every law by both objectives")
+    fits = law_fits(target, replicates=replicates, seed=seed, workers=workers, laws=laws,
+                    mus=mus, es=es)
+    shown = fits[SHOWN_OBJECTIVE][SHOWN_LAW]
+    predicted = predict(target, SHOWN_LAW, shown["mu"], shown["e"]).speeds_after
+    densities = [density(predicted[:, k], target.speeds_after[:, k]) for k in range(3)]
+    thetas, _ = drops_engines.jacobian_angles(target, data.pre_impact_angles)
+    rows = calibrate.sample_rows(len(target), calibration_drops, seed)
+    sample = {"drops": int(rows.size), "of": len(target), "seed": seed}
+    on_drops, calibrated = [], []
+    for engine in engines:
+        for preset in engine.presets:
+            progress(f"{engine.name} ({preset}) on every drop, then calibrated")
+            run = drops_engines.run_drops(engine, preset, target, thetas, shown["mu"],
+                                          shown["e"], keep_errors=True)
+            errors = run.pop("per_drop_errors")
+            on_drops.append({**run, "cdf": quantiles(errors)})
+            result = calibrate.calibrate(engine, preset, target.subset(rows), thetas[rows],
+                                         "data", sample=sample)
+            calibrated.append({"engine": engine.name, "preset": preset, "best": result.best,
+                               "objective": result.best_objective, "moves": result.moves,
+                               "cannot": result.cannot(), "knobs": result.knobs})
+    return {"drops": len(target), "post_speeds": "raw", "seed": seed,
+            "replicates": replicates, "paper_models": models, "laws": fits,
+            "shown": {"law": SHOWN_LAW, "objective": SHOWN_OBJECTIVE, "mu": shown["mu"],
+                      "e": shown["e"], "speeds": [name for name, _ in SPEEDS],
+                      "units": [unit for _, unit in SPEEDS], "density": densities},
+            "engines": on_drops, "calibration": {"sample": sample, "grid": "quick",
+                                                 "tolerance": calibrate.TOLERANCE,
+                                                 "results": calibrated}}
