@@ -103,7 +103,8 @@ def main(args) -> int:
     if data is not None:
         output["fazeli2017"]["engines_on_drops"] = drops_engines_table(runs, fit, residual)
     output["ellipse_polygons"] = ellipse_section(data)
-    output["ellipse_polygons"]["engines"] = ellipse_engines_section(engines)
+    output["ellipse_polygons"]["engines"] = ellipse_engines_section(
+        [run.engine if run.engine is not None else run.name for run in runs])
     output["kharaz2001"] = kharaz_section()
     output["kharaz2001"]["engines"] = kharaz_engines_table(runs)
     if args.json:
@@ -200,6 +201,7 @@ class EngineRuns:
     name: str
     missing: str | None
     presets: tuple = ()  # (preset, drops aggregates or None, engine_curves.EngineCurves)
+    engine: object = None  # the loaded engine (None when missing)
 
 
 def run_engines(engines: list[str], drops=None) -> list[EngineRuns]:
@@ -224,7 +226,7 @@ def run_engines(engines: list[str], drops=None) -> list[EngineRuns]:
                                                    fit.e)
             presets.append((preset, on_drops, engine_curves.engine_curves(engine, preset,
                                                                           angles)))
-        runs.append(EngineRuns(name, None, tuple(presets)))
+        runs.append(EngineRuns(name, None, tuple(presets), engine))
     return runs
 
 
@@ -288,7 +290,7 @@ def ellipse_section(data: fazeli.FazeliData | None) -> dict:
     return section
 
 
-def ellipse_engines_section(engines: list[str]) -> list[dict]:
+def ellipse_engines_section(engines: list) -> list[dict]:
     """Each engine's ellipse (MuJoCo's ellipsoid, else the placed 8-gon) against the true
     one (``drops_engines.contact_error_table``)."""
     from . import drops_engines

@@ -140,19 +140,22 @@ def _millimetres(value: float | None) -> str:
 
 
 def contact_error_table(engines) -> tuple[list[str], list[dict]]:
-    """The Markdown rows of :func:`moment_arm_errors` for ``engines`` (names; a missing
-    engine gets a row saying so) under both presets, and the results."""
+    """The Markdown rows of :func:`moment_arm_errors` for ``engines`` (loaded engines, or
+    names loaded here; a missing engine gets a row saying so) under both presets, and the
+    results."""
     from harness.engines import EngineNotInstalled, load_engine, preset_label
 
     rows = ["| engine | preset | moment arm | contact height | verdicts (arm drops / height "
             "drops) |", "|---|---|---:|---:|---|"]
     results = []
-    for name in engines:
-        try:
-            engine = load_engine(name)
-        except EngineNotInstalled:
-            rows.append(f"| {name} | — | not installed | | |")
-            continue
+    for engine in engines:
+        if isinstance(engine, str):
+            try:
+                engine = load_engine(engine)
+            except EngineNotInstalled:
+                rows.append(f"| {engine} | — | not installed | | |")
+                continue
+        name = engine.name
         for preset in ("defaults", "accurate"):
             result = moment_arm_errors(engine, preset)
             cells, counts = [], []

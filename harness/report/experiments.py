@@ -50,16 +50,16 @@ def kharaz_payload() -> dict:
 
 
 def harness_code_digest() -> str:
-    """The sha256 of what runs and judges the engines here: harness/experiments,
-    harness/engines and the verdicts."""
+    """The sha256 of what runs and judges the engines here: harness/experiments, the engines
+    (modules and packages), the scene they build and the verdicts."""
     import hashlib
 
     root = Path(__file__).resolve().parents[1]
     digest = hashlib.sha256()
-    for folder in ("experiments", "engines"):
-        for path in sorted((root / folder).glob("*.py")):
-            digest.update(path.name.encode() + b"\0" + path.read_bytes())
-    digest.update((root / "run" / "verdicts.py").read_bytes())
+    for folder in ("experiments", "engines", "scene", "run/verdicts"):
+        for path in sorted((root / folder).rglob("*.py")):
+            digest.update(path.relative_to(root).as_posix().encode() + b"\0"
+                          + path.read_bytes())
     return digest.hexdigest()
 
 
@@ -445,6 +445,7 @@ def experiments_section(out_dir: Path, data_path: str | os.PathLike | None = Non
              "<h3>Planar ellipse drops (Fazeli et al. 2017)</h3>"]
     where = ("Get them from " + escape_html(registry.FAZELI_2017.where_to_get) + " (for "
              "the report: <code>impact-harness report --experiments-data DIR</code>).")
+    drops = "not shown (no copy)"
     try:
         directory = registry.locate(registry.FAZELI_2017, data_path)
         aggregates = drops_aggregates(out_dir, directory)
@@ -454,7 +455,9 @@ def experiments_section(out_dir: Path, data_path: str | os.PathLike | None = Non
                      f"copy, never committed. {where}</p>")
     except registry.DataInvalid as invalid:
         parts.append(f"<p>The drops are not shown: {escape_html(str(invalid))}. {where}</p>")
+        drops = "not shown (not the published files)"
     else:
+        drops = "from your copy, aggregates only"
         hashes = ", ".join(f"{name} {digest[:12]}…" for name, digest
                            in aggregates["provenance"].get("hashes", {}).items())
         parts.append(f"<p>{aggregates['drops']} processed drops read from "
@@ -464,7 +467,6 @@ def experiments_section(out_dir: Path, data_path: str | os.PathLike | None = Non
         parts.append(drops_html(out_dir, aggregates))
     parts.append("<h3>Oblique impacts of a sphere (Kharaz et al. 2001)</h3>")
     parts.append(kharaz_html(out_dir))
-    recalled = "recalled points, unverified" if not kharaz.VERIFIED else "published points"
-    drops = "not shown (no copy)" if directory is None else "from your copy, aggregates only"
     return folded("experiments", "Against experiments", "\n".join(parts),
-                  f"Kharaz et al. 2001 curves ({recalled}); Fazeli et al. 2017 drops {drops}")
+                  "Kharaz et al. 2001 curves with digitised measured points; Fazeli et al. "
+                  f"2017 drops {drops}")

@@ -14,7 +14,8 @@ import json
 from dataclasses import dataclass, field, replace
 from typing import Any, Sequence
 
-from harness.engines import load_engine, preset_choices, preset_role
+from harness import engines as registry
+from harness.engines import preset_choices, preset_role
 from harness.engines.facts import engine_facts
 from harness.reference.event_driven import sequence_outline
 from harness.run import references
@@ -131,7 +132,7 @@ def plan_engine_runs(scenarios: Sequence[Scenario], *, wanted_engines: Sequence[
                     if engine_name in missing:
                         item["output"] = {"status": f"skipped: {missing[engine_name]}"}
                         continue
-                    engine = load_engine(engine_name)  # loaded once, for runs to build
+                    engine = registry.load_engine(engine_name)  # at call time: tests replace it
                     overrides = {**scenario.engine_settings.get(engine_name, {}),
                                  **command_overrides.get(engine_name, {})}
                     item["overrides"] = overrides

@@ -33,8 +33,9 @@ from contextlib import nullcontext
 from dataclasses import asdict, dataclass, field
 from typing import Mapping, Sequence, TextIO
 
+from harness import engines as registry
 from harness.collector import collector_paused
-from harness.engines import engine_names, load_engine
+from harness.engines import engine_names
 from harness.run import plan, scenario_records
 from harness.run.gates import GateResult
 from harness.run.provenance import provenance
@@ -236,7 +237,7 @@ def run(
     # 4. The provenance: what ran, how, with what.
     settings_table = {  # the presets as run: with the command line's --set overrides
         name: (preset_settings[name] if name not in command_overrides else
-               {preset: load_engine(name).settings(preset, command_overrides[name])
+               {preset: registry.load_engine(name).settings(preset, command_overrides[name])
                 for preset in PRESETS})
         for name in versions
     }

@@ -40,7 +40,7 @@ def test_a_copy_that_is_not_the_published_files_is_said_so_and_the_rest_goes_on(
     monkeypatch.setattr(experiments, "kharaz_html", lambda out_dir: "<kharaz>")  # drawn above
     html = experiments.experiments_section(tmp_path / "out", data)
     assert "The drops are not shown" in html and "is not the published file" in html
-    assert html.endswith("<kharaz>")  # the Kharaz part follows
+    assert html.endswith("<kharaz>\n</div></details>")  # the Kharaz part follows, folded
 
 
 def test_the_drops_figures_and_calibration_table_from_aggregates(tmp_path, monkeypatch):
