@@ -165,6 +165,11 @@ LAW_LINES = {"newton": "-", "poisson": "-", "stronge": "--", "stronge-paper": ":
              "newton-lcp": "-."}
 
 
+#: The kept aggregates' layout: bump when what is kept changes (2: the files' SHA-256 in the
+#: provenance, never the copy's path).
+DROPS_LAYOUT = 2
+
+
 def drops_key(hashes: dict[str, str]) -> str:
     """The digest of everything the drops' aggregates depend on: the files (their SHA-256),
     the code that reads, fits, runs and judges them, the installed versions and the
@@ -174,7 +179,8 @@ def drops_key(hashes: dict[str, str]) -> str:
     from harness.run.provenance import package_versions
 
     digest = hashlib.sha256()
-    digest.update(json.dumps({"hashes": hashes, "versions": package_versions(),
+    digest.update(json.dumps({"layout": DROPS_LAYOUT, "hashes": hashes,
+                              "versions": package_versions(),
                               "replicates": REPORT_REPLICATES, "solver": solver_digest(),
                               "code": harness_code_digest()}, sort_keys=True).encode())
     return digest.hexdigest()
@@ -201,7 +207,9 @@ def drops_aggregates(out_dir: Path, directory: Path) -> dict:
     data = fazeli.load(directory, check_hashes=False)  # just checked
     result = aggregates.compute(data, engines=_installed_engines(),
                                 replicates=REPORT_REPLICATES, progress=_progress)
-    result["provenance"] = data.provenance()
+    # the files' hashes (checked above), never the copy's path: the page is committed
+    result["provenance"] = {**data.provenance(), "sha256": hashes}
+    result["provenance"].pop("directory", None)
     if not path.exists() or path.is_file():  # only a regular file is written over
         write_text_atomically(path, json.dumps({"key": key, "aggregates": result}, indent=1)
                               + "\n")
@@ -458,12 +466,11 @@ def experiments_section(out_dir: Path, data_path: str | os.PathLike | None = Non
         drops = "not shown (not the published files)"
     else:
         drops = "from your copy, aggregates only"
-        hashes = ", ".join(f"{name} {digest[:12]}…" for name, digest
-                           in aggregates["provenance"].get("hashes", {}).items())
-        parts.append(f"<p>{aggregates['drops']} processed drops read from "
-                     f"<code>{escape_html(str(directory))}</code> (SHA-256 {hashes}, the "
-                     "published files). Only aggregates are shown: the files carry no "
-                     "licence.</p>")
+        hashes = ", ".join(f"{escape_html(name)} {digest[:12]}…" for name, digest
+                           in aggregates["provenance"].get("sha256", {}).items())
+        parts.append(f"<p>{aggregates['drops']} processed drops read from your copy (SHA-256 "
+                     f"{hashes}: the published files). Only aggregates are shown: the files "
+                     "carry no licence.</p>")
         parts.append(drops_html(out_dir, aggregates))
     parts.append("<h3>Oblique impacts of a sphere (Kharaz et al. 2001)</h3>")
     parts.append(kharaz_html(out_dir))

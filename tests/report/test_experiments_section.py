@@ -80,12 +80,14 @@ def test_the_aggregates_are_kept_and_computed_again_only_when_their_inputs_chang
     hashes = {"data_ellipse.mat": "a" * 64}
     monkeypatch.setattr(registry, "verify", lambda dataset, directory: dict(hashes))
     monkeypatch.setattr(fazeli, "load", lambda directory, check_hashes=True: SimpleNamespace(
-        provenance=lambda: {"hashes": dict(hashes)}))
+        provenance=lambda: {"directory": "/a/copy", "sha256": {}}))
     monkeypatch.setattr(aggregates, "compute",
                         lambda data, **options: computed.append(1) or {"drops": 3})
     monkeypatch.setattr(experiments, "_installed_engines", lambda: [])
     first = experiments.drops_aggregates(tmp_path, tmp_path)
     assert first["drops"] == 3 and len(computed) == 1
+    # the checked hashes are kept, the copy's path never (the page is committed)
+    assert first["provenance"] == {"sha256": hashes}
     assert experiments.drops_aggregates(tmp_path, tmp_path) == first and len(computed) == 1
     hashes["data_ellipse.mat"] = "b" * 64  # another copy of the files: computed again
     experiments.drops_aggregates(tmp_path, tmp_path)
@@ -126,5 +128,5 @@ def fake_aggregates() -> dict:
                              "moves": {"mu": 0.1, "e": 0.2}, "cannot": [], "knobs": {}},
                             {"engine": "mujoco", "preset": "defaults", "best": None,
                              "objective": None, "moves": {}, "cannot": [], "knobs": {}}]},
-        "provenance": {"hashes": {"data_ellipse.mat": "0" * 64}},
+        "provenance": {"sha256": {"data_ellipse.mat": "0" * 64}},
     }
