@@ -108,7 +108,6 @@ def quick_survey(args, out: Path) -> tuple[Path, bool]:
     and presets the run selected; returns the written ``summary.md`` and whether the survey
     ran (False: the one in ``out`` was made from the same inputs, :func:`survey_inputs`, and
     is kept as it is)."""
-
     engines = plan.parse_engines(args.engines)
     presets = plan.parse_presets(args.preset)
     populations = resolve_populations([])
@@ -149,7 +148,6 @@ def survey_inputs(populations, engines, presets) -> str:
 def _survey_is_current(out: Path, inputs: str) -> bool:
     """Whether ``out`` holds a quick survey written from the inputs whose digest is
     ``inputs``, every table of it present."""
-
     settings = read_settings(out)  # {} when missing, unreadable or not an object
     tables = ["summary.md", "samples.parquet"]
     if settings.get("engines"):

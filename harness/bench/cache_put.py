@@ -37,7 +37,6 @@ def engine_outputs(runs: int) -> list[dict]:
 
 def _library_outputs() -> Iterator[dict]:
     """The output of each engine task of the library (both presets), run as it is asked for."""
-
     for scenario in load_scenarios(None):
         for point in scenario.point_list():
             for name in scenario.engines_among(ENGINE_NAMES):
@@ -56,7 +55,6 @@ def _library_outputs() -> Iterator[dict]:
 def time_puts(outputs: list[dict], root: Path) -> tuple[float, float, float]:
     """``(wall, user, system)`` seconds per output stored into a cache at ``root``, a pack
     per chunk of :data:`harness.run.executor.MAX_CHUNK`."""
-
     cache = ResultCache(root, version="bench")
     keys = [cache.key({"run": index}) for index in range(len(outputs))]
     items = list(zip(keys, outputs))

@@ -56,7 +56,6 @@ def engine_tasks(count: int = TASKS, directory: Path | None = None,
     ``keep``: a directory that receives the scenario files whose tasks these are (the first
     files up to the last one contributing a task).
     """
-
     engines = {}
     for name in ENGINES:
         try:
@@ -100,7 +99,6 @@ def _comparable(outputs: list[dict]) -> list:
 def run(count: int = TASKS, repeats: int = REPEATS, per_task: bool = True,
         end_to_end: bool = True) -> dict:
     """``{"tasks", "engines", "seconds": {way: [s, ...]}, "median", "ratio", ...}``."""
-
     with tempfile.TemporaryDirectory() as folder:
         files = Path(folder) / "scenarios"
         tasks = engine_tasks(count, keep=files)

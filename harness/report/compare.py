@@ -124,7 +124,6 @@ class MassMatrices:
     def candidates(self, name: str) -> list[Path]:
         """Where the scenario's file may be: the paths the results record (B's first), then
         the file of that name in the library (a results file made on another machine)."""
-
         paths = [info.get("path") for results in reversed(self.results)
                  if isinstance(info := results.scenarios.get(name), dict)]
         found = [Path(path) for path in paths if path]
@@ -406,7 +405,6 @@ def write_html(path: Path, a_path: Path, b_path: Path, law: str, threshold: floa
                summary: list[SourceSummary], rows: list[list[str]],
                differences: list[tuple[str, str, str]]) -> Path:
     """The comparison as a page: the per-source summary, what differs, every changed row."""
-
     parts = [page_head(f"compare {a_path.name} → {b_path.name}"),
              f"<h1>What changed from <code>{escape_html(a_path)}</code> to "
              f"<code>{escape_html(b_path)}</code></h1>",

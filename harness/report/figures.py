@@ -119,7 +119,6 @@ def code_digest() -> bytes:
     edit to any of them redraws), the engines' preset names users see (titles and legends
     show them; harness/engines) and matplotlib's version, read without importing it (a
     warm report draws nothing)."""
-
     sources = [*sorted(Path(__file__).parent.glob("*.py")),
                Path(__file__).parents[1] / "plotting.py"]
     labels = json.dumps({engine: renamed_roles(engine) for engine in ENGINE_NAMES},
@@ -419,7 +418,6 @@ def split_figure(rows: Sequence[dict], path: Path, tag: str | None = None) -> Pa
 def impulse_figure(name: str, records: Sequence[Record], path: Path,
                    tag: str | None = None) -> Path | None:
     """Routh's graph (Fig. 1): I_t against I_n, each law's path and every end point."""
-
     laws = [r for r in records if r.source == ANALYTIC and r.ok]
     if not laws:
         return None

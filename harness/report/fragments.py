@@ -149,7 +149,6 @@ def split_view(records: Sequence[Record]) -> dict:
     """One scenario's rows of :func:`harness.report.views.split_rows` reduced to what the
     split table shows: the largest finite law part (None if none), per label (in the rows'
     order) the largest finite solve part (None if none); no rows: ``{}``."""
-
     lcp = {r.point["index"]: r for r in records
            if r.source == ANALYTIC and r.law == "newton-lcp" and r.ok}
     law_part = -math.inf
@@ -224,7 +223,6 @@ def prepare(results: Results, out_dir: Path | None = None,
     """The views of every scenario, from ``<out_dir>/`` :data:`CACHE_FILE` (or ``cache``,
     :func:`open_cache`'s) where their records are unchanged (``out_dir`` None: computed,
     nothing kept)."""
-
     labels = engine_labels(results)
     cache = open_cache(results, out_dir) if cache is None else cache
     digests = scenario_digests(results, cache.get) if digests is None else digests

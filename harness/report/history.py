@@ -52,7 +52,6 @@ def history_figure(name: str, records: Sequence[Record], path: Path,
     """``v_n`` and ``v_t`` against the accumulated normal impulse, each law's path and every
     engine's steps; the penetration per step beside them. ``None`` when no engine run of the
     scenario has a single-contact history."""
-
     runs = history_records(records)
     laws = [r for r in records if r.source == ANALYTIC and r.ok]
     if not runs or not laws:

@@ -40,7 +40,6 @@ from harness.store.files import write_text_atomically
 def cached_contacts(results: Results, prepared: Prepared) -> str:
     """The HTML of :func:`harness.report.contacts.contacts_section`, kept in the report's
     cache under what it reads: every record and what the runner says of each scenario."""
-
     key = f"contacts\0{prepared.records_digest}\0{scenarios_digest(results)}"
     return prepared.cache.get(key, lambda: contacts_section(results)[0])
 
@@ -49,7 +48,6 @@ def cached_table3(figure: str | None, prepared: Prepared) -> str:
     """:func:`table3_html`, kept in the report's cache under what it reads: ``table3`` and
     its data (:func:`harness.report.figures.table3_inputs`), the solver's code and
     ``figure``."""
-
     key = f"table3\0{table3_inputs()}\0{solver_digest()}\0{figure}"
     return prepared.cache.get(key, lambda: table3_html(figure))
 
@@ -57,7 +55,6 @@ def cached_table3(figure: str | None, prepared: Prepared) -> str:
 def table3_html(figure: str | None) -> str:
     """The section of the paper's Table 3 reproduced, from the structured rows of ``table3``,
     folded under how many printed cells it reproduces."""
-
     rows = table3.reproduce_table3()
     parts = [f"<p>{escape_html(table3.table3_intro(rows))}</p>"]
     if figure:

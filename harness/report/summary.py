@@ -25,7 +25,6 @@ def escape(text) -> str:
 def runs_lines(results: Results) -> list[str]:
     """The lines of ``summary.md`` on the engine runs: how many are single impacts, the runs
     per reason and every run not ok."""
-
     flagged = [r for r in results.records if r.source != ANALYTIC and not r.ok]
     engine_runs = [r for r in results.records if r.source != ANALYTIC and not r.skipped]
     counts = reason_counts([r.reasons for r in engine_runs])

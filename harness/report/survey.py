@@ -109,7 +109,6 @@ def survey_figure_tasks(out_dir: Path, svg: bool) -> list:
     FigureTask`): per engine ``survey-map-<engine>.png`` and ``survey-cdf-<engine>.png``,
     keyed by the digest of ``runs.parquet`` and of the code drawing them; none without a
     survey."""
-
     directory = survey_dir(out_dir)
     if directory is None:
         return []

@@ -203,7 +203,6 @@ def engine_roles(results: Results) -> list[tuple[str, str]]:
     """``Results.engine_roles``: the ``(engine, preset role)`` pairs present, presets in
     order, engines in registry order, read from :mod:`harness.engines` (the scenario
     package that ``Results`` reads them from takes a third of a warm report's imports)."""
-
     present = source_presets(results)  # from the file's lines when the report read them
     return [(e, p) for p in PRESET_ROLES for e in engine_names() if (e, p) in present]
 
@@ -280,7 +279,6 @@ def has_library_scenarios(results: Results) -> bool:
     """True when some scenario of ``results`` is a file of the library (``scenarios/``): the
     report then also reproduces the paper's Table 3, which the library's scenarios are about.
     A report of a user's own scenarios shows only what applies to them."""
-
     library = SCENARIO_DIR.resolve()
     for info in results.scenarios.values():
         path = (info or {}).get("path")

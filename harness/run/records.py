@@ -96,7 +96,6 @@ class Record:
     def label(self) -> str:
         """``"poisson"`` for a law, ``"pymunk.accurate"`` for an engine run: the engine and
         the name it shows for the run's preset role (``"mujoco.matched-bounce"``)."""
-
         return self.law if self.source == ANALYTIC else source_label(self.source, self.preset)
 
     @property
@@ -176,12 +175,10 @@ class Results:
 
     def engine_labels(self) -> list[str]:
         """``engine.preset`` labels present, engines in registry order, ``defaults`` first."""
-
         return [source_label(e, p) for e, p in self.engine_roles()]
 
     def engine_roles(self) -> list[tuple[str, str]]:
         """``(engine, preset role)`` pairs present, in :meth:`engine_labels`' order."""
-
         present = self._engine_runs()
         return [(e, p) for p in PRESETS for e in ENGINES if (e, p) in present]
 

@@ -146,7 +146,6 @@ def _simultaneous(scene, contacts, fixed, prefix: str) -> dict:
     """Every m-contact law on the rows of ``contacts``: Newton–Coulomb, the two-phase
     Poisson law, the coherent solutions of the paper's proposal, the sequential reading in
     every order."""
-
     wn, wt = geometry.contact_rows(scene, contacts)
     system = sim.contact_system(mass_matrix=scene.mass_matrix(), wn=wn, wt=wt, u=scene.state(),
                                 mu=fixed.friction, e=fixed.restitution)
@@ -199,7 +198,6 @@ def _simultaneous(scene, contacts, fixed, prefix: str) -> dict:
 def _event_driven(scene, fixed) -> dict:
     """The tilt's references: the event sequence per law, and the m-contact laws on the
     features it strikes, taken at the tilted pose."""
-
     if not scene.ground:
         return {"kind": UNAVAILABLE, "contacts": None, "primary": None,
                 "why": "a tilt between two bodies: the event-driven reference is built for one "

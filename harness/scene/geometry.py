@@ -489,7 +489,6 @@ def contact_velocity(scene: Scene, contact: Contact) -> tuple[float, float]:
 def impact_problem(scene: Scene, point, normal):
     """The scene's impact as a :class:`planar_impact.builders.ImpactProblem`: the bodies'
     masses, inertias and state with the contact at ``point`` along ``normal`` (A into B)."""
-
     planar = [builders.PlanarBody(mass=b.mass, inertia=b.moment_of_inertia,
                                   position=tuple(b.position), velocity=tuple(b.velocity),
                                   angular_velocity=b.angular_velocity)

@@ -68,7 +68,6 @@ def run(quick: bool, out_dir: Path, executor: str = "local", workers: int | None
         engine_names: tuple[str, ...] | None = None) -> dict:
     """The whole stress test; writes the report into ``out_dir`` and returns it.
     ``engine_names``: the engines stressed (default: every registered one)."""
-
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()

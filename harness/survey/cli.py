@@ -232,7 +232,6 @@ def table_metadata(settings: dict) -> dict:
     """What every survey table carries in its Parquet metadata: what was surveyed (samples,
     seed, engines, presets), the installed versions and each engine's preset settings as
     run, so a table read alone says where it came from."""
-
     engine_settings = {}
     for name in settings.get("engines", []):
         engine = load_engine(name)

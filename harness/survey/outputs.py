@@ -278,7 +278,6 @@ def map_figure(runs: dict, engine: str, path: Path, tag: str | None = None) -> P
     ``engine``, coloured by the Poisson collision type; a row per preset. Saved as ``path``
     (PNG, with its SVG twin unless :data:`harness.plotting.SVG_TWIN` says not;
     ``tag``: the digest of the inputs, kept in the PNG)."""
-
     presets = _presets(runs, engine)
     ok = runs["status"] == "ok"
     figure = new_figure(10, 3.2 * len(presets) + 0.5)
