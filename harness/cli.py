@@ -43,7 +43,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "bench": ("harness.bench.solver",
               "benchmarks: solver throughput, engine overhead, speed-accuracy"),
     "stress": ("harness.stress", "numerical stress of the solver and the engines"),
-    "findings": ("harness.report.findings", "re-measure the README's findings on the laws"),
+    "findings": ("harness.report.findings_command", "re-measure the README's findings on the laws"),
     "survey": ("harness.survey.cli", "departure distributions over families of impacts"),
     "experiments": ("harness.experiments.cli",
                     "the laws against measured impacts (Fazeli 2017 drops, Kharaz 2001)"),

@@ -21,12 +21,23 @@ whenever the run wrote results.
 from __future__ import annotations
 
 import argparse
+import hashlib
+import json
 import sys
 import time
 from pathlib import Path
 
+from harness import report
 from harness.report import add_experiments_data_argument
+from harness.report import table3 as paper
+from harness.report.survey import read_settings
 from harness.run import command, plan
+from harness.run.provenance import PACKAGES, package_versions
+from harness.run.records import read_results
+from harness.store.files import make_output_directory, output_directory_problem
+from harness.store.identity import cached_code_sources, code_version_of
+from harness.survey.cli import SETTINGS_FILE, run_survey, write_survey
+from harness.survey.population import resolve_populations
 
 #: Samples per population in the suite's survey: 7 populations x 20 = 140 impacts per engine
 #: and preset, a few seconds with every engine (the distributions' tails need
@@ -42,11 +53,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def main(args) -> int:
-    from harness import report
-    from harness.report import table3 as paper
-    from harness.run.records import read_results
-    from harness.store.files import make_output_directory, output_directory_problem
-
     out: Path = args.out
     started = time.perf_counter()
     problem = output_directory_problem(out)
@@ -109,9 +115,6 @@ def quick_survey(args, out: Path) -> tuple[Path, bool]:
     and presets the run selected; returns the written ``summary.md`` and whether the survey
     ran (False: the one in ``out`` was made from the same inputs, :func:`survey_inputs`, and
     is kept as it is)."""
-    from harness.survey.cli import SETTINGS_FILE, run_survey, write_survey
-    from harness.survey.population import resolve_populations
-
     engines = plan.parse_engines(args.engines)
     presets = plan.parse_presets(args.preset)
     populations = resolve_populations([])
@@ -137,12 +140,6 @@ def survey_inputs(populations, engines, presets) -> str:
     metrics, ``planar_impact``: :func:`harness.store.identity.cached_code_sources`) and
     ``harness/survey/``. Any edit to that code runs the survey again: coarse, and cheap to
     get right."""
-    import hashlib
-    import json
-
-    from harness.run.provenance import PACKAGES, package_versions
-    from harness.store.identity import cached_code_sources, code_version_of
-
     survey_code = Path(__file__).resolve().parent / "survey"
     code = code_version_of((*cached_code_sources(), survey_code))
     text = json.dumps({
@@ -158,8 +155,6 @@ def survey_inputs(populations, engines, presets) -> str:
 def _survey_is_current(out: Path, inputs: str) -> bool:
     """Whether ``out`` holds a quick survey written from the inputs whose digest is
     ``inputs``, every table of it present."""
-    from harness.report.survey import read_settings
-
     settings = read_settings(out)  # {} when missing, unreadable or not an object
     tables = ["summary.md", "samples.parquet"]
     if settings.get("engines"):

@@ -18,6 +18,7 @@ from pathlib import Path
 
 from harness.scenarios import cli as scenarios_cli
 from harness.scenarios.errors import ScenarioError
+from harness.survey.population import load_population
 
 #: A population's ``[approach]`` table header, at the start of a line.
 APPROACH_TABLE = re.compile(rb"^\s*\[\s*approach\s*\]", re.MULTILINE)
@@ -70,8 +71,6 @@ def expand(items: list[str]) -> tuple[list[Path], list[str]]:
 
 
 def main(args: argparse.Namespace) -> int:
-    from harness.survey.population import load_population
-
     populations, others = expand(list(args.files or []))
     bad = 0
     for path in populations:

@@ -17,6 +17,11 @@ The layers, lowest first (README, 'Layout'):
 10. commands on top: ``harness.suite``, ``harness.validate``, ``harness.cli``.
 
 There is no exception: any import against the order fails this test, which names it.
+
+An import of the project's own modules sits at module level (an import inside a function hides
+a dependency from the reader and kept cycles importable), except in the few modules of
+:data:`INNER_IMPORTS_ALLOWED`, each with its reason; third-party optional dependencies
+(matplotlib, the engines' bindings, scipy, dask, pyarrow, pandas) may be imported late.
 """
 
 from __future__ import annotations
@@ -115,6 +120,93 @@ def test_these_import_at_module_level_only():
                          for node in ast.walk(function)
                          if isinstance(node, (ast.Import, ast.ImportFrom))]
     assert not late, "imports inside functions:\n" + "\n".join(late)
+
+
+#: Where an import of a project module may sit inside a function, and why. Nothing else:
+#: an import of ``harness`` or ``planar_impact`` inside a function anywhere else fails
+#: :func:`test_project_modules_are_imported_at_module_level`.
+EDITED_CONCURRENTLY = "being edited concurrently; to lift next"
+INNER_IMPORTS_ALLOWED: dict[str, str] = {
+    "harness.experiments": EDITED_CONCURRENTLY,
+    "harness.engines.box2d": EDITED_CONCURRENTLY,
+    "harness.engines.mujoco": EDITED_CONCURRENTLY,
+    "harness.engines.pybullet": EDITED_CONCURRENTLY,
+    "harness.engines.pymunk_engine": EDITED_CONCURRENTLY,
+    "planar_impact.multicontact": EDITED_CONCURRENTLY,
+}
+
+#: The modules (exactly these, not their submodules) that import by name at run time
+#: (``importlib.import_module``), each with its reason: the command dispatcher is the one
+#: exception for the project's own modules; the others import optional dependencies.
+DYNAMIC_IMPORTS_ALLOWED: dict[str, str] = {
+    "harness.cli": "the command dispatcher: imports only the chosen command's module "
+                   "(COMMANDS), so `impact-harness --help` imports no command",
+    "harness.engines": "the engine registry: an adapter is imported when its engine is "
+                       "loaded, since each needs an optional binding (pymunk, pybullet, "
+                       "mujoco, Box2D) that may be absent",
+    "harness.engines.quiet": "import_quietly: imports an engine's optional binding by name "
+                             "with the C library's start-up output dropped",
+    "planar_impact": "simultaneous and multicontact on first attribute access: imported by "
+                     "the package, `python -m planar_impact.multicontact` would run a second "
+                     "copy of the module (runpy's warning)",
+}
+
+
+def allowed(name: str, table: dict[str, str]) -> bool:
+    return any(name == member or name.startswith(member + ".") for member in table)
+
+
+def late_project_imports(name: str, path: Path) -> list[str]:
+    """``name:line in function()`` for each import of a project module inside a function of
+    ``path``, and each ``importlib.import_module``/``__import__`` call inside one."""
+    late = []
+    for function in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if not isinstance(function, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            continue
+        for node in ast.walk(function):
+            if isinstance(node, ast.Import):
+                project = any(alias.name.split(".")[0] in ("harness", "planar_impact")
+                              for alias in node.names)
+            elif isinstance(node, ast.ImportFrom):
+                project = bool(node.level) or (node.module or "").split(".")[0] in (
+                    "harness", "planar_impact")
+            elif isinstance(node, ast.Call):
+                called = ast.unparse(node.func)
+                project = (called in ("importlib.import_module", "import_module", "__import__")
+                           and name not in DYNAMIC_IMPORTS_ALLOWED)
+            else:
+                continue
+            if project:
+                late.append(f"{name}:{node.lineno} in {function.name}()")
+    return sorted(set(late))
+
+
+def test_project_modules_are_imported_at_module_level():
+    late = []
+    for name, path in sorted(modules().items()):
+        if not allowed(name, INNER_IMPORTS_ALLOWED):
+            late += late_project_imports(name, path)
+    assert not late, ("imports of the project's modules inside functions (lift them; a cycle "
+                      "this makes is the defect: move the shared thing down a layer):\n"
+                      + "\n".join(late))
+
+
+def test_the_allowed_inner_imports_name_modules_that_exist():
+    known = modules()
+    for table in (INNER_IMPORTS_ALLOWED, DYNAMIC_IMPORTS_ALLOWED):
+        for member, reason in table.items():
+            assert member in known and reason, member
+
+
+def test_the_late_import_check_sees_an_inner_and_a_dynamic_import(tmp_path):
+    module = tmp_path / "probe.py"
+    module.write_text("import importlib\n\n\ndef f():\n    from . import views\n"
+                      "    import harness.scene\n    return importlib.import_module('x')\n")
+    assert late_project_imports("harness.report.probe", module) == [
+        "harness.report.probe:5 in f()", "harness.report.probe:6 in f()",
+        "harness.report.probe:7 in f()"]
+    assert late_project_imports("harness.cli", module) == [
+        "harness.cli:5 in f()", "harness.cli:6 in f()"]
 
 
 def test_the_theory_library_imports_numpy_and_the_standard_library_only():

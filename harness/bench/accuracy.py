@@ -37,7 +37,12 @@ from pathlib import Path
 
 import numpy as np
 
+from harness.engines import ENGINE_NAMES, EngineNotInstalled, engine_class, ke_norm, load_engine
 from harness.engines.contract import BENCH_REFERENCE_LABEL
+from harness.processes import default_workers
+from harness.run.executor import progress_printer, run_tasks
+from harness.scene.geometry import impact_problem
+from harness.scene.reference import reference_scenes
 from harness.store.files import save_figure
 
 FAMILIES: dict[str, str] = {"disk": "disk", "rod": "rod-45", "box-corner": "box-corner",
@@ -49,8 +54,6 @@ THRESHOLDS: tuple[float, ...] = (1e-2, 1e-3)
 def sweep(engine_name: str, quick: bool) -> list[tuple[str, str, dict]]:
     """``[(label, preset, overrides)]`` for one engine: the settings to measure (its
     adapter's ``bench_sweep``)."""
-    from harness.engines import engine_class
-
     return engine_class(engine_name).bench_sweep(quick)
 
 
@@ -61,8 +64,6 @@ TIE_FRACTION = 0.1  # settings whose mean time is within 10% are within timing n
 # ---------------------------------------------------------------------- laws
 def law_velocities(scene, contact, normal) -> dict[str, np.ndarray]:
     """Post-impact generalised speeds of ``scene`` under Poisson, Stronge and newton-lcp."""
-    from harness.scene.geometry import impact_problem
-
     problem = impact_problem(scene, contact, normal)
     return {law: np.asarray(problem.solve(mu=scene.friction, e=scene.restitution,
                                           law=law).u_after, dtype=float)
@@ -71,8 +72,6 @@ def law_velocities(scene, contact, normal) -> dict[str, np.ndarray]:
 
 def departure(scene, u_engine, u_law) -> float:
     """``‖u_engine − u_law‖_M / ‖u_before‖_M`` (the runner's metric)."""
-    from harness.engines import ke_norm
-
     difference = np.asarray(u_engine, dtype=float) - np.asarray(u_law, dtype=float)
     return ke_norm(scene, difference) / ke_norm(scene, scene.state())
 
@@ -80,9 +79,6 @@ def departure(scene, u_engine, u_law) -> float:
 # ---------------------------------------------------------------------- measuring
 def measure_engine(engine_name: str, quick: bool, progress=None) -> dict:
     """All sweep points × families for one engine (runs inline: timings undisturbed)."""
-    from harness.engines import load_engine
-    from harness.scene.reference import reference_scenes
-
     engine = load_engine(engine_name)
     scenes = reference_scenes()
     repeats = 3 if quick else 7
@@ -272,9 +268,6 @@ def write_pareto_figure(result: dict, path: Path) -> None:
 # ---------------------------------------------------------------------- scaling
 def impact_chunk(task: dict) -> list[list[float]]:
     """``task["impacts"]`` engine impacts of one reference scene (top-level: worker processes)."""
-    from harness.engines import load_engine
-    from harness.scene.reference import reference_scenes
-
     engine = load_engine(task["engine"])
     scene = reference_scenes()[task["scene"]][0]
     settings = engine.settings(task["preset"])
@@ -283,10 +276,6 @@ def impact_chunk(task: dict) -> list[list[float]]:
 
 def worker_speedup(quick: bool) -> dict:
     """Wall time of a batch of engine impacts through run_tasks with 1 and with 2 workers."""
-    from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine
-    from harness.processes import default_workers
-    from harness.run.executor import run_tasks
-
     installed = {}
     for name in ENGINE_NAMES:
         try:
@@ -354,9 +343,6 @@ def format_table(report: dict) -> str:
 
 def run(quick: bool, out_dir: Path) -> dict:
     """The speed–accuracy benchmark; writes ``pareto-*.png`` into ``out_dir``, returns the table."""
-    from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine
-    from harness.run.executor import progress_printer
-
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()

@@ -19,6 +19,12 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
+from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine
+from harness.run import tasks
+from harness.run.executor import MAX_CHUNK
+from harness.scenarios import load_scenarios
+from harness.store.cache import ResultCache
+
 
 def engine_outputs(runs: int) -> list[dict]:
     """``runs`` outputs of the library's engine tasks (cycled when there are fewer), skipped
@@ -31,10 +37,6 @@ def engine_outputs(runs: int) -> list[dict]:
 
 def _library_outputs() -> Iterator[dict]:
     """The output of each engine task of the library (both presets), run as it is asked for."""
-    from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine
-    from harness.run import tasks
-    from harness.scenarios import load_scenarios
-
     for scenario in load_scenarios(None):
         for point in scenario.point_list():
             for name in scenario.engines_among(ENGINE_NAMES):
@@ -53,9 +55,6 @@ def _library_outputs() -> Iterator[dict]:
 def time_puts(outputs: list[dict], root: Path) -> tuple[float, float, float]:
     """``(wall, user, system)`` seconds per output stored into a cache at ``root``, a pack
     per chunk of :data:`harness.run.executor.MAX_CHUNK`."""
-    from harness.run.executor import MAX_CHUNK
-    from harness.store.cache import ResultCache
-
     cache = ResultCache(root, version="bench")
     keys = [cache.key({"run": index}) for index in range(len(outputs))]
     items = list(zip(keys, outputs))

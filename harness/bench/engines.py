@@ -22,7 +22,7 @@ the read-out the contract needs, the bookkeeping, the status and the result obje
 MuJoCo's soft contact takes ~50 steps, where ``ratio`` is meaningful.
 
 The benchmark checks its own results: reruns are bit-identical, and pymunk/pybullet
-``accurate`` agree with ``planar_impact``'s ``newton-lcp`` to 1e-6 where the solver is importable.
+``accurate`` agree with ``planar_impact``'s ``newton-lcp`` to 1e-6.
 
 ``python -m harness.bench.engines [--quick] [--json PATH]``.
 """
@@ -114,12 +114,6 @@ def run_engine_overhead_benchmark(quick: bool = True,
     scenes = reference_scenes()
     chosen = ("disk", "rod-45", "two-disks") if quick else tuple(scenes)
     rounds = 5 if quick else 7
-    try:
-        import planar_impact  # noqa: F401
-
-        have_solver = True
-    except ImportError:
-        have_solver = False
 
     report: dict = {
         "quick": quick,
@@ -151,7 +145,7 @@ def run_engine_overhead_benchmark(quick: bool = True,
                 verdict = verdicts.judge(scene, problem, verdicts.numbers_from_run(first),
                                          law_energy_change=law_change)
                 law_error = None
-                if have_solver and engine.own_law == "newton-lcp":
+                if engine.own_law == "newton-lcp":
                     law = newton_lcp_velocities(scene, contact, normal)
                     diff = first.u_after - law.u_after
                     law_error = ke_norm(scene, diff) / ke_norm(scene, scene.state())

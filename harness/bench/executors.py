@@ -35,6 +35,12 @@ import tempfile
 import time
 from pathlib import Path
 
+from harness.bench.many_scenarios import write_copies
+from harness.engines import EngineNotInstalled, load_engine
+from harness.run.executor import run_tasks, start_local_cluster, wait_for_shutdowns
+from harness.run.tasks import TASK_TIME_LIMIT_S, engine_chunk, engine_task, task_group
+from harness.scenarios import ENGINES, PRESETS, load_scenarios
+
 RATIO_TARGET = 1.2
 TASKS = 2000
 WORKERS = 2
@@ -50,11 +56,6 @@ def engine_tasks(count: int = TASKS, directory: Path | None = None,
     ``keep``: a directory that receives the scenario files whose tasks these are (the first
     files up to the last one contributing a task).
     """
-    from harness.bench.many_scenarios import write_copies
-    from harness.engines import EngineNotInstalled, load_engine
-    from harness.run.tasks import TASK_TIME_LIMIT_S
-    from harness.scenarios import ENGINES, PRESETS, load_scenarios
-
     engines = {}
     for name in ENGINES:
         try:
@@ -98,9 +99,6 @@ def _comparable(outputs: list[dict]) -> list:
 def run(count: int = TASKS, repeats: int = REPEATS, per_task: bool = True,
         end_to_end: bool = True) -> dict:
     """``{"tasks", "engines", "seconds": {way: [s, ...]}, "median", "ratio", ...}``."""
-    from harness.run.executor import run_tasks, start_local_cluster, wait_for_shutdowns
-    from harness.run.tasks import engine_chunk, engine_task, task_group
-
     with tempfile.TemporaryDirectory() as folder:
         files = Path(folder) / "scenarios"
         tasks = engine_tasks(count, keep=files)

@@ -38,6 +38,11 @@ from pathlib import Path
 import numpy as np
 
 import planar_impact as pi
+from harness.bench import accuracy as bench_accuracy
+from harness.bench import engines as bench_engines
+from harness.bench import executors as bench_executors
+from harness.bench import survey as bench_survey
+from harness.run.executor import DaskNotInstalled, check_arguments
 from harness.run.provenance import provenance
 from harness.scene.random_problems import random_problems, row
 from harness.store.files import (
@@ -274,27 +279,18 @@ def main(args) -> int:
         write_solver_figure(results, args.out / "solver-throughput.png")
         table["solver"] = results
     if "engines" in selected:
-        from harness.bench import engines as bench_engines
-
         report = bench_engines.run_engine_overhead_benchmark(quick=args.quick)
         print(bench_engines.format_table(report))
         table["engines"] = report
     if "speed_accuracy" in selected:
-        from harness.bench import accuracy as bench_accuracy
-
         table["speed_accuracy"] = bench_accuracy.run(args.quick, args.out)
     if "survey" in selected:
-        from harness.bench import survey as bench_survey
-
         samples = bench_survey.QUICK_SAMPLES if args.quick else bench_survey.SAMPLES
         rounds = bench_survey.QUICK_ROUNDS if args.quick else bench_survey.ROUNDS
         report = bench_survey.run(samples, rounds=rounds, workers=max(1, args.workers))
         print(bench_survey.format_report(report))
         table["survey"] = report
     if "executors" in selected:
-        from harness.bench import executors as bench_executors
-        from harness.run.executor import DaskNotInstalled, check_arguments
-
         try:
             check_arguments("dask")
         except DaskNotInstalled as error:

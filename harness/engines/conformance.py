@@ -23,6 +23,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 
+from harness.engines import load_engine
 from harness.engines.contract import Engine, Status, StepTiming, UnsupportedScene
 from harness.engines.settings import EngineSettingsError
 from harness.scene.reference import reference_scenes
@@ -38,8 +39,6 @@ def check_engine(engine: type[Engine] | Engine | str) -> list[str]:
     """The contract's promises ``engine`` (a class, an instance or a registered name)
     breaks, one line each; an empty list when it conforms."""
     if isinstance(engine, str):
-        from harness.engines import load_engine  # the registry sits above this module
-
         instance = load_engine(engine)
     elif isinstance(engine, type):
         instance = engine()

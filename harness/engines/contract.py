@@ -157,6 +157,7 @@ from typing import Any
 
 from harness import bounds
 from harness.collector import collector_paused
+from harness.engines.preset_names import preset_role
 from harness.engines.run_loop import (
     APPROACH_RELATIVE,
     NO_IMPULSE_RELATIVE,
@@ -414,8 +415,6 @@ class Engine(abc.ABC):
 
 
     def _role_named(self, name: str) -> str:
-        from harness.engines import preset_role
-
         try:
             role = preset_role(self.name, name)
         except ValueError as error:

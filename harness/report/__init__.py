@@ -58,7 +58,6 @@ sections folded, every fold opened for printing.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import fnmatch
 import gc
 import json
@@ -70,7 +69,9 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from harness.plotting import SVG_TWIN
+from harness.processes import start_forked
 from harness.report.figures import (
+    FigureTask,
     heatmap_figure,
     impulse_figure,
     inputs_digest,
@@ -78,7 +79,6 @@ from harness.report.figures import (
     scenario_digests,
     split_figure,
     sweep_figure,
-    table3_figure,
     table3_payload,
 )
 from harness.report.fragments import DIGESTS_FILE, open_cache, prepare
@@ -88,6 +88,7 @@ from harness.report.pages import write_pages
 from harness.report.reading import read_for_report
 from harness.report.summary import write_summary
 from harness.report.survey import survey_figure_tasks
+from harness.report.table3 import table3_figure
 from harness.report.views import FIGURES, has_library_scenarios, slug, split_rows
 from harness.run.records import DEFAULT_RESULTS, Results
 from harness.store.files import output_directory_problem, write_text_atomically
@@ -112,25 +113,6 @@ HEADLINE_KINDS = ("heatmap", "split", "table3", "survey_map", "survey_cdf")
 #: worker is left with the dearest at the end.
 KIND_COST = {"heatmap": 2.5, "sweep": 2.2, "table3": 1.7, "split": 1.8, "history": 1.0,
              "impulse": 0.5, "survey_map": 1.2, "survey_cdf": 0.6}
-
-
-@dataclasses.dataclass(frozen=True)
-class FigureTask:
-    """One figure of the report: drawn by ``draw(path, tag)`` from inputs whose digest is
-    ``tag``; deterministic, so that any worker draws the same file.
-
-    ``slot`` says where the file goes in the report's ``figures`` mapping: ``(key,)`` or
-    ``(key, scenario)``; ``svg`` whether its SVG twin is written; ``reads_records``
-    whether ``draw`` reads the records (a figure of Table 3 or the key reads none).
-    """
-
-    kind: str
-    file: str
-    payload: object
-    draw: Callable[[Path, str], Path | None]
-    slot: tuple
-    svg: bool = True
-    reads_records: bool = True
 
 
 def scenario_group(info: dict) -> str:
@@ -405,7 +387,6 @@ def start_drawing(tasks: Sequence[FigureTask], figure_dir: Path, workers: int | 
     stale.sort(key=lambda item: (item[1][0].reads_records,
                                  -KIND_COST.get(item[1][0].kind, 1.0)))
     _PENDING = [item for _, item in stale]
-    from harness.processes import start_forked
 
     reading = [i for i, (task, _, _) in enumerate(_PENDING) if task.reads_records]
     stages = []  # (pending indexes, the function waiting for their drawing)

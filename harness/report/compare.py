@@ -42,9 +42,13 @@ from pathlib import Path
 
 import numpy as np
 
+from harness.report.markup import html_table, page_head
+from harness.report.views import escape_html
 from harness.run import metrics
 from harness.run.records import Record, Results, read_results
 from harness.scenarios.errors import ScenarioError
+from harness.scenarios.reader import load_scenario
+from harness.scenarios.schema import SCENARIO_DIR
 from harness.store.files import output_file_problem, write_text_atomically
 
 DEFAULT_THRESHOLD = "1%"
@@ -120,8 +124,6 @@ class MassMatrices:
     def candidates(self, name: str) -> list[Path]:
         """Where the scenario's file may be: the paths the results record (B's first), then
         the file of that name in the library (a results file made on another machine)."""
-        from harness.scenarios.schema import SCENARIO_DIR
-
         paths = [info.get("path") for results in reversed(self.results)
                  if isinstance(info := results.scenarios.get(name), dict)]
         found = [Path(path) for path in paths if path]
@@ -130,8 +132,6 @@ class MassMatrices:
 
     def scenario(self, name: str):
         if name not in self.scenarios:
-            from harness.scenarios.reader import load_scenario
-
             self.scenarios[name] = None
             for path in dict.fromkeys(self.candidates(name)):
                 try:
@@ -405,9 +405,6 @@ def write_html(path: Path, a_path: Path, b_path: Path, law: str, threshold: floa
                summary: list[SourceSummary], rows: list[list[str]],
                differences: list[tuple[str, str, str]]) -> Path:
     """The comparison as a page: the per-source summary, what differs, every changed row."""
-    from harness.report.markup import html_table, page_head
-    from harness.report.views import escape_html
-
     parts = [page_head(f"compare {a_path.name} → {b_path.name}"),
              f"<h1>What changed from <code>{escape_html(a_path)}</code> to "
              f"<code>{escape_html(b_path)}</code></h1>",

@@ -7,17 +7,18 @@ A figure's PNG carries the digest of its inputs (a scenario's records by
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import hashlib
 import itertools
 import json
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
 
-from harness.engines import engine_names, preset_label
+from harness.engines import ENGINE_NAMES, engine_names, preset_label, renamed_roles
 from harness.plotting import (  # shared with the survey's figures
     SVG_TWIN,
     TAG_KEY,
@@ -47,6 +48,26 @@ from harness.report.views import (
     single_contact,
 )
 from harness.run.records import ANALYTIC, Record, Results, record_line
+from planar_impact import impulse_process
+
+
+@dataclasses.dataclass(frozen=True)
+class FigureTask:
+    """One figure of the report: drawn by ``draw(path, tag)`` from inputs whose digest is
+    ``tag``; deterministic, so that any worker draws the same file.
+
+    ``slot`` says where the file goes in the report's ``figures`` mapping: ``(key,)`` or
+    ``(key, scenario)``; ``svg`` whether its SVG twin is written; ``reads_records``
+    whether ``draw`` reads the records (a figure of Table 3 or the key reads none).
+    """
+
+    kind: str
+    file: str
+    payload: object
+    draw: Callable[[Path, str], Path | None]
+    slot: tuple
+    svg: bool = True
+    reads_records: bool = True
 
 
 def offset_transform(ax, index: int, count: int, step_points: float = 4.0):
@@ -98,8 +119,6 @@ def code_digest() -> bytes:
     edit to any of them redraws), the engines' preset names users see (titles and legends
     show them; harness/engines) and matplotlib's version, read without importing it (a
     warm report draws nothing)."""
-    from harness.engines import ENGINE_NAMES, renamed_roles
-
     sources = [*sorted(Path(__file__).parent.glob("*.py")),
                Path(__file__).parents[1] / "plotting.py"]
     labels = json.dumps({engine: renamed_roles(engine) for engine in ENGINE_NAMES},
@@ -213,14 +232,6 @@ def solver_digest() -> str:
         for path in sorted(Path(folder).glob("*.py")):
             digest.update(path.name.encode() + b"\0" + path.read_bytes())
     return digest.hexdigest()
-
-
-def table3_figure(path: Path, tag: str | None = None) -> Path:
-    """The paper's Table 3 impulse diagrams (``table3.write_figure``), tagged like the rest."""
-    from harness.report import table3
-
-    table3.write_figure(table3.reproduce_table3(), path, metadata={TAG_KEY: tag} if tag else None)
-    return path
 
 
 def heatmap_figure(results: Results, path: Path, tag: str | None = None,
@@ -407,8 +418,6 @@ def split_figure(rows: Sequence[dict], path: Path, tag: str | None = None) -> Pa
 def impulse_figure(name: str, records: Sequence[Record], path: Path,
                    tag: str | None = None) -> Path | None:
     """Routh's graph (Fig. 1): I_t against I_n, each law's path and every end point."""
-    from planar_impact import impulse_process
-
     laws = [r for r in records if r.source == ANALYTIC and r.ok]
     if not laws:
         return None

@@ -23,6 +23,9 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from harness.engines import ENGINE_NAMES, PRESET_ROLES
+from harness.report.figures import code_digest, scenario_digests
+from harness.report.reading import record_scenarios
 from harness.report.views import (
     HEADLINE_LAWS,
     departure_cell,
@@ -32,6 +35,7 @@ from harness.report.views import (
     single_contact,
     worst_departure,
 )
+from harness.run.metrics import departure_split
 from harness.run.records import ANALYTIC, Record, Results
 from harness.store.files import write_parts_atomically
 
@@ -50,8 +54,6 @@ def cache_context(labels: Sequence[str]) -> str:
     (the departure split), the engine labels and the engines' and presets' order."""
     from importlib.util import find_spec
 
-    from harness.engines import ENGINE_NAMES, PRESET_ROLES
-    from harness.report.figures import code_digest
 
     digest = hashlib.sha256(code_digest())
     digest.update(Path(find_spec("harness.run.metrics").origin).read_bytes())  # not imported
@@ -147,8 +149,6 @@ def split_view(records: Sequence[Record]) -> dict:
     """One scenario's rows of :func:`harness.report.views.split_rows` reduced to what the
     split table shows: the largest finite law part (None if none), per label (in the rows'
     order) the largest finite solve part (None if none); no rows: ``{}``."""
-    from harness.run.metrics import departure_split
-
     lcp = {r.point["index"]: r for r in records
            if r.source == ANALYTIC and r.law == "newton-lcp" and r.ok}
     law_part = -math.inf
@@ -223,9 +223,6 @@ def prepare(results: Results, out_dir: Path | None = None,
     """The views of every scenario, from ``<out_dir>/`` :data:`CACHE_FILE` (or ``cache``,
     :func:`open_cache`'s) where their records are unchanged (``out_dir`` None: computed,
     nothing kept)."""
-    from harness.report.figures import scenario_digests
-    from harness.report.reading import record_scenarios
-
     labels = engine_labels(results)
     cache = open_cache(results, out_dir) if cache is None else cache
     digests = scenario_digests(results, cache.get) if digests is None else digests

@@ -21,6 +21,7 @@ from pathlib import Path
 from harness.plotting import new_figure, save_png
 from harness.report.views import LAW_STYLE, engine_style
 from harness.run.records import ANALYTIC, Record
+from planar_impact import impulse_process
 
 #: The process laws drawn as paths (the others end off the process: docs/theory.md).
 PROCESS_LAWS = ("newton", "poisson", "stronge")
@@ -51,8 +52,6 @@ def history_figure(name: str, records: Sequence[Record], path: Path,
     """``v_n`` and ``v_t`` against the accumulated normal impulse, each law's path and every
     engine's steps; the penetration per step beside them. ``None`` when no engine run of the
     scenario has a single-contact history."""
-    from planar_impact import impulse_process
-
     runs = history_records(records)
     laws = [r for r in records if r.source == ANALYTIC and r.ok]
     if not runs or not laws:

@@ -13,6 +13,10 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from harness.engines import preset_label
+from harness.report import table3
+from harness.report.contacts import contacts_section
+from harness.report.experiments import experiments_section
+from harness.report.figures import solver_digest, table3_inputs
 from harness.report.fragments import Prepared, prepare
 from harness.report.markup import figure_html, folded, html_table, page_head, report_figure
 from harness.report.overview import (
@@ -28,6 +32,7 @@ from harness.report.overview import (
 )
 from harness.report.reading import scenarios_digest
 from harness.report.scenario_sections import cached_section
+from harness.report.survey import cached_survey_section
 from harness.report.views import TYPE_NAMES, escape_html, has_library_scenarios, slug
 from harness.run.records import Results
 from harness.store.files import write_text_atomically
@@ -36,8 +41,6 @@ from harness.store.files import write_text_atomically
 def cached_contacts(results: Results, prepared: Prepared) -> str:
     """The HTML of :func:`harness.report.contacts.contacts_section`, kept in the report's
     cache under what it reads: every record and what the runner says of each scenario."""
-    from harness.report.contacts import contacts_section  # several contacts (issue 13)
-
     key = f"contacts\0{prepared.records_digest}\0{scenarios_digest(results)}"
     return prepared.cache.get(key, lambda: contacts_section(results)[0])
 
@@ -46,8 +49,6 @@ def cached_table3(figure: str | None, prepared: Prepared) -> str:
     """:func:`table3_html`, kept in the report's cache under what it reads: ``table3`` and
     its data (:func:`harness.report.figures.table3_inputs`), the solver's code and
     ``figure``."""
-    from harness.report.figures import solver_digest, table3_inputs
-
     key = f"table3\0{table3_inputs()}\0{solver_digest()}\0{figure}"
     return prepared.cache.get(key, lambda: table3_html(figure))
 
@@ -55,8 +56,6 @@ def cached_table3(figure: str | None, prepared: Prepared) -> str:
 def table3_html(figure: str | None) -> str:
     """The section of the paper's Table 3 reproduced, from the structured rows of ``table3``,
     folded under how many printed cells it reproduces."""
-    from harness.report import table3
-
     rows = table3.reproduce_table3()
     parts = [f"<p>{escape_html(table3.table3_intro(rows))}</p>"]
     if figure:
@@ -337,10 +336,8 @@ def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None
     if library:
         parts.append(cached_table3(figures.get("table3"), prepared))
     # the survey in out_dir/survey (impact-harness suite's quick one), when there is one
-    from harness.report.survey import cached_survey_section
 
     parts.append(cached_survey_section(out_dir, figures, prepared))
-    from harness.report.experiments import experiments_section  # issue 25
 
     parts.append(experiments_section(out_dir, experiments_data))
     versions = (versions_html(prov) + "<h3>Engine settings per preset</h3><p>Bold where the "

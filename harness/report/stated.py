@@ -31,6 +31,20 @@ from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+from harness.engines import ENGINE_NAMES
+from harness.experiments import drops_engines
+from harness.reference.flat_faces import count_flat
+from harness.report import findings
+from harness.report.table3 import computed_cells, printed_du_residual, reproduce_table3
+from harness.report.views import fmt_departure
+from harness.run.records import ANALYTIC, read_results
+from harness.run.references import point_reference
+from harness.run.verdicts import reason_counts
+from harness.scenarios import load_scenario
+from harness.survey import cli as survey_cli
+from harness.survey.population import resolve_populations
+from planar_impact.simultaneous import coherent_count_distribution
+
 ROOT = Path(__file__).resolve().parents[2]
 # The texts that state results (paths relative to the repository root).
 TEXTS = ("README.md", "docs/*.md", "scenarios/README.md")
@@ -83,8 +97,6 @@ def share(part: int, whole: int, digits: int = 0) -> str:
 
 def findings_numbers(count: int = 100_000, seed: int = 2009) -> dict[str, str]:
     """``impact-harness findings``: the solver findings of the README."""
-    from harness.report import findings
-
     measured = findings.measure(count, seed)
     numbers = {"count": f"{count:,}"}
     bins = measured["pgs_bins"]
@@ -119,8 +131,6 @@ def table3_numbers() -> dict[str, str]:
     computed value as the report prints it (``LAW.ROW.CELL``, and ``…​.3`` to 3 decimals);
     the exact Stronge law's Δu and ΔE on the Stronge rows (``exact-stronge.ROW.CELL``); the
     distance of the printed Stronge Δu from the reachable ones and the nearest ``e_i``."""
-    from harness.report.table3 import computed_cells, printed_du_residual, reproduce_table3
-
     rows = reproduce_table3()
     cells = [c for row in rows for c in row["cells"]]
     reproduced = sum(c.reproduced for c in cells)
@@ -153,8 +163,6 @@ def two_contact_numbers() -> dict[str, str]:
     """``python -m planar_impact.simultaneous 200 0``: per family (``generic``, ``body``),
     the coherent solutions of the paper's proposal under both readings, and Newton–Coulomb's
     (``FAMILY.READING.LAW.BUCKET``, ``FAMILY.newton-coulomb.BUCKET``, and ``…-share``)."""
-    from planar_impact.simultaneous import coherent_count_distribution
-
     problems = TWO_CONTACT_PROBLEMS
     numbers = {"problems": str(problems)}
     rows = ["| family | reading | law | 0 solutions | 1 | 2+ | at boundary | gains |",
@@ -186,8 +194,6 @@ def flat_landing_numbers() -> dict[str, str]:
     """``python -m harness.reference.flat_faces 200 0``: coherent solutions on random flat
     landings, those at the boundary of a decision apart, and Newton–Coulomb's solutions
     with distinct velocities and non-unique impulse splits."""
-    from harness.reference.flat_faces import count_flat
-
     counts, _ = count_flat(FLAT_LANDINGS, FLAT_SEED)
     numbers = {"landings": str(FLAT_LANDINGS)}
     rows = ["| law | reading | 0 | 1 | 2+ | at boundary | split not unique |",
@@ -216,9 +222,6 @@ FLAT_SCENES = ("flat-box", "flat-box-receding-end")
 def flat_scene_numbers() -> dict[str, str]:
     """The coherent solutions of the library's flat scenes (``NAME.LAW.READING``, and
     ``NAME.LAW.READING.at-boundary``), as the runner's references count them."""
-    from harness.run.references import point_reference
-    from harness.scenarios import load_scenario
-
     numbers = {}
     for name in FLAT_SCENES:
         reference = point_reference(load_scenario(ROOT / "scenarios" / f"{name}.toml"), None)
@@ -239,8 +242,6 @@ def mujoco_gain_numbers() -> dict[str, str]:
     with more kinetic energy than they began with, per preset and family, and by how much."""
     import numpy as np
 
-    from harness.survey import cli as survey_cli
-    from harness.survey.population import resolve_populations
 
     survey = survey_cli.run_survey(
         resolve_populations([str(ROOT / p) for p in MUJOCO_GAIN_POPULATIONS]),
@@ -272,9 +273,6 @@ RESULTS = ROOT / "reports" / "results.json"
 def library_numbers_of(records: Iterable, scenarios: int) -> dict[str, str]:
     """The validation suite's counts from its records: scenarios, records, engine runs,
     single impacts and the runs per verdict reason (as ``summary.md`` counts them)."""
-    from harness.run.records import ANALYTIC
-    from harness.run.verdicts import reason_counts
-
     records = list(records)
     engine_runs = [r for r in records if r.source != ANALYTIC and not r.skipped]
     single = sum(r.ok for r in engine_runs)
@@ -292,8 +290,6 @@ def library_numbers_of(records: Iterable, scenarios: int) -> dict[str, str]:
 def departure_numbers(engine_runs) -> dict[str, str]:
     """Every single impact's departure from each law on the scenarios of one point, as the
     report prints it: ``departure.SCENARIO.ENGINE.PRESET.LAW`` (``28.9%``)."""
-    from harness.report.views import fmt_departure
-
     numbers = {}
     for run in engine_runs:
         if run.ok and not run.point.get("label") and run.departure:
@@ -366,8 +362,6 @@ GROUPS = {"flat": ("flat-",), "tilts": ("sweep-tilted-",)}
 
 def group_numbers(engine_runs) -> dict[str, str]:
     """Verdict counts of the engine runs of each :data:`GROUPS` (scenario name prefixes)."""
-    from harness.run.verdicts import reason_counts
-
     numbers = {}
     for group, prefixes in GROUPS.items():
         runs = [run for run in engine_runs if run.scenario.startswith(prefixes)]
@@ -383,9 +377,6 @@ def group_numbers(engine_runs) -> dict[str, str]:
 def ellipse_contact_numbers() -> dict[str, str]:
     """Each engine's ellipse against the true one: the table, and per engine and preset
     role the largest moment-arm and height errors of its single impacts (mm, 3 digits)."""
-    from harness.engines import ENGINE_NAMES
-    from harness.experiments import drops_engines
-
     rows, results = drops_engines.contact_error_table(ENGINE_NAMES)
     numbers = {"table": "\n".join(rows)}
     for result in results:
@@ -399,8 +390,6 @@ def ellipse_contact_numbers() -> dict[str, str]:
 
 def library_numbers(results: Path = RESULTS) -> dict[str, str]:
     """``make validate``: the counts of its results file (``reports/results.json``)."""
-    from harness.run.records import read_results
-
     records = read_results(results).records
     return library_numbers_of(records, len({r.scenario for r in records}))
 

@@ -5,9 +5,11 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+from harness.report.contacts import contacts_section
 from harness.report.fragments import Prepared, prepare
 from harness.report.views import HEADLINE_LAWS, LAW_STYLE, fmt_departure, row_name
 from harness.run.records import ANALYTIC, Results
+from harness.run.verdicts import reason_counts
 from harness.store.files import write_text_atomically
 
 _MARKDOWN_SPECIAL = re.compile(r"([\\`*_{}\[\]()#+!|~])")
@@ -23,8 +25,6 @@ def escape(text) -> str:
 def runs_lines(results: Results) -> list[str]:
     """The lines of ``summary.md`` on the engine runs: how many are single impacts, the runs
     per reason and every run not ok."""
-    from harness.run.verdicts import reason_counts
-
     flagged = [r for r in results.records if r.source != ANALYTIC and not r.ok]
     engine_runs = [r for r in results.records if r.source != ANALYTIC and not r.skipped]
     counts = reason_counts([r.reasons for r in engine_runs])
@@ -68,7 +68,6 @@ def write_summary(results: Results, out_dir: Path, prepared: Prepared | None = N
             lines.append(f"| {escape(row_name(results, name))} | " + " | ".join(cells) + " |")
         lines.append("")
     # flat faces and tilts: departures from the references that apply to them only
-    from harness.report.contacts import contacts_section
 
     contacts = prepared.whole("summary-contacts", lambda: contacts_section(results)[1])
     if contacts:

@@ -24,8 +24,11 @@ from pathlib import Path
 import numpy as np
 
 from harness.engines import ENGINE_NAMES, PRESET_ROLES, preset_label, source_label
+from harness.report.figures import FigureTask
 from harness.report.markup import folded, html_table, report_figure
 from harness.report.views import escape_html, fmt_departure
+from harness.survey import outputs
+from harness.survey.outputs import figure_engines as engines_of
 
 #: The survey's directory under the report's.
 SURVEY_DIR = "survey"
@@ -97,7 +100,6 @@ def surveyed_engines(directory: Path) -> list[str]:
         return sorted(settings["engines"]) if (directory / "runs.parquet").is_file() else []
     if not (directory / "runs.parquet").is_file():
         return []
-    from harness.survey.outputs import figure_engines as engines_of
 
     return engines_of(read_columns(directory / "runs.parquet"))
 
@@ -107,8 +109,6 @@ def survey_figure_tasks(out_dir: Path, svg: bool) -> list:
     FigureTask`): per engine ``survey-map-<engine>.png`` and ``survey-cdf-<engine>.png``,
     keyed by the digest of ``runs.parquet`` and of the code drawing them; none without a
     survey."""
-    from harness.report import FigureTask
-
     directory = survey_dir(out_dir)
     if directory is None:
         return []
@@ -127,8 +127,6 @@ def survey_figure_tasks(out_dir: Path, svg: bool) -> list:
 
 
 def _draw(kind: str, runs_path: Path, engine: str, path: Path, tag: str) -> Path:
-    from harness.survey import outputs
-
     draw = outputs.map_figure if kind == "map" else outputs.cdf_figure
     return draw(read_columns(runs_path), engine, path, tag)
 

@@ -19,7 +19,9 @@ from pathlib import Path
 import numpy as np
 
 import planar_impact as pi
-from harness.store.files import write_text_atomically
+from harness.plotting import TAG_KEY, lay_out, save_svg_twin
+from harness.report.figures import render_once, table3_payload
+from harness.store.files import output_directory_problem, save_figure, write_text_atomically
 
 CELLS = ("e", "du1", "du3", "du4", "du6", "vnA", "vnS", "vtA", "vtS", "dE")
 CELL_LABELS = {
@@ -332,18 +334,21 @@ def write_figure(rows: list[dict], path: Path, metadata: dict | None = None) -> 
         ax.legend(fontsize=9, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=3,
                   frameon=False)
     fig.suptitle("Table 3, two sleds: impulse paths of each law (Routh's graph)")
-    from harness.plotting import lay_out, save_svg_twin
-    from harness.store.files import save_figure
 
     lay_out(fig, 110)  # once, for the PNG and the SVG (figures.lay_out, save_svg_twin)
     save_figure(fig, path, "png", dpi=110, metadata=metadata)
     return [path, save_svg_twin(fig, path)]
 
 
+def table3_figure(path: Path, tag: str | None = None) -> Path:
+    """The paper's Table 3 impulse diagrams (:func:`write_figure`), tagged like the report's
+    other figures (``tag``: the digest of their inputs, :func:`table3_payload`)."""
+    write_figure(reproduce_table3(), path, metadata={TAG_KEY: tag} if tag else None)
+    return path
+
+
 def write_report(out_dir: Path) -> tuple[Path, list[dict]]:
     out_dir.mkdir(parents=True, exist_ok=True)
-    from harness.plotting import TAG_KEY
-    from harness.report.figures import render_once, table3_payload
 
     rows = reproduce_table3()
     figure = out_dir / "paper-table3.png"
@@ -361,8 +366,6 @@ def add_arguments(parser) -> None:
 
 
 def main(args) -> int:
-    from harness.store.files import output_directory_problem
-
     problem = output_directory_problem(args.out)
     if problem:
         print(f"impact-harness paper: --out {args.out}: {problem}", file=sys.stderr)

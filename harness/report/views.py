@@ -14,10 +14,12 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.engines import engine_trait
+from harness.engines import PRESET_ROLES, engine_names, engine_trait, source_label
+from harness.report.reading import source_presets
 from harness.run.metrics import departure_split, fmt_departure
 from harness.run.records import ANALYTIC, Record, Results
 from harness.run.references import SINGLE
+from harness.scenarios.schema import SCENARIO_DIR
 
 FIGURES = "figures"
 LAW_ORDER = ("poisson", "stronge", "stronge-paper", "newton", "newton-lcp")
@@ -201,9 +203,6 @@ def engine_roles(results: Results) -> list[tuple[str, str]]:
     """``Results.engine_roles``: the ``(engine, preset role)`` pairs present, presets in
     order, engines in registry order, read from :mod:`harness.engines` (the scenario
     package that ``Results`` reads them from takes a third of a warm report's imports)."""
-    from harness.engines import PRESET_ROLES, engine_names
-    from harness.report.reading import source_presets
-
     present = source_presets(results)  # from the file's lines when the report read them
     return [(e, p) for p in PRESET_ROLES for e in engine_names() if (e, p) in present]
 
@@ -215,8 +214,6 @@ def engine_labels(results: Results) -> list[str]:
 
 @functools.cache
 def _engine_label(source: str, preset: str | None) -> str:
-    from harness.engines import source_label
-
     return source_label(source, preset)
 
 
@@ -282,8 +279,6 @@ def has_library_scenarios(results: Results) -> bool:
     """True when some scenario of ``results`` is a file of the library (``scenarios/``): the
     report then also reproduces the paper's Table 3, which the library's scenarios are about.
     A report of a user's own scenarios shows only what applies to them."""
-    from harness.scenarios.schema import SCENARIO_DIR
-
     library = SCENARIO_DIR.resolve()
     for info in results.scenarios.values():
         path = (info or {}).get("path")

@@ -54,6 +54,8 @@ from typing import Any, Iterable, Mapping, Sequence
 
 from harness import inputs
 from harness.collector import collector_paused
+from harness.engines import source_label
+from harness.scenarios import ENGINES, PRESETS
 from harness.store.cache import LINE_SEPARATOR  # between two record lines (no raw newline)
 from harness.store.files import output_file_problem, write_parts_atomically
 
@@ -94,8 +96,6 @@ class Record:
     def label(self) -> str:
         """``"poisson"`` for a law, ``"pymunk.accurate"`` for an engine run: the engine and
         the name it shows for the run's preset role (``"mujoco.matched-bounce"``)."""
-        from harness.engines import source_label
-
         return self.law if self.source == ANALYTIC else source_label(self.source, self.preset)
 
     @property
@@ -175,14 +175,10 @@ class Results:
 
     def engine_labels(self) -> list[str]:
         """``engine.preset`` labels present, engines in registry order, ``defaults`` first."""
-        from harness.engines import source_label
-
         return [source_label(e, p) for e, p in self.engine_roles()]
 
     def engine_roles(self) -> list[tuple[str, str]]:
         """``(engine, preset role)`` pairs present, in :meth:`engine_labels`' order."""
-        from harness.scenarios import ENGINES, PRESETS
-
         present = self._engine_runs()
         return [(e, p) for p in PRESETS for e in ENGINES if (e, p) in present]
 

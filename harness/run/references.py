@@ -39,7 +39,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from harness.reference.event_driven import event_sequence
 from harness.run import metrics
+from harness.scenarios.schema import ONE_POINT_TOLERANCE
+from harness.scene import Contact, geometry
+from planar_impact import ImpactInputError
+from planar_impact import multicontact as mc
+from planar_impact import simultaneous as sim
 
 SINGLE, SIMULTANEOUS, EVENT_DRIVEN, UNAVAILABLE = (
     "single-contact", "simultaneous", "event-driven", "unavailable")
@@ -106,8 +112,6 @@ def scene_reference(kind: str, scene, fixed: PointLaws | None) -> dict:
         return {"kind": SINGLE, "contacts": 1, "primary": ENGINE_LAW,
                 "why": "one contact point (verified by the scenario checks): the "
                        "single-contact laws"}
-    from harness.scenarios.schema import ONE_POINT_TOLERANCE
-    from harness.scene import geometry
 
     if kind == SIMULTANEOUS:
         contacts = geometry.scene_contacts(scene, tolerance=ONE_POINT_TOLERANCE)
@@ -142,11 +146,6 @@ def _simultaneous(scene, contacts, fixed, prefix: str) -> dict:
     """Every m-contact law on the rows of ``contacts``: Newton–Coulomb, the two-phase
     Poisson law, the coherent solutions of the paper's proposal, the sequential reading in
     every order."""
-    from harness.scene import geometry
-    from planar_impact import ImpactInputError
-    from planar_impact import multicontact as mc
-    from planar_impact import simultaneous as sim
-
     wn, wt = geometry.contact_rows(scene, contacts)
     system = sim.contact_system(mass_matrix=scene.mass_matrix(), wn=wn, wt=wt, u=scene.state(),
                                 mu=fixed.friction, e=fixed.restitution)
@@ -199,9 +198,6 @@ def _simultaneous(scene, contacts, fixed, prefix: str) -> dict:
 def _event_driven(scene, fixed) -> dict:
     """The tilt's references: the event sequence per law, and the m-contact laws on the
     features it strikes, taken at the tilted pose."""
-    from harness.reference.event_driven import event_sequence
-    from harness.scene import Contact, geometry
-
     if not scene.ground:
         return {"kind": UNAVAILABLE, "contacts": None, "primary": None,
                 "why": "a tilt between two bodies: the event-driven reference is built for one "

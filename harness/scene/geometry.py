@@ -39,6 +39,7 @@ import math
 import numpy as np
 
 from harness.scene import Body, Box, Contact, Disk, Ellipse, Polygon, Rod, Scene, ellipse
+from planar_impact import builders
 
 #: Default tolerance (m) within which two closest-point pairs count as the same distance.
 DEFAULT_TOLERANCE = 1e-9
@@ -488,8 +489,6 @@ def contact_velocity(scene: Scene, contact: Contact) -> tuple[float, float]:
 def impact_problem(scene: Scene, point, normal):
     """The scene's impact as a :class:`planar_impact.builders.ImpactProblem`: the bodies'
     masses, inertias and state with the contact at ``point`` along ``normal`` (A into B)."""
-    from planar_impact import builders
-
     planar = [builders.PlanarBody(mass=b.mass, inertia=b.moment_of_inertia,
                                   position=tuple(b.position), velocity=tuple(b.velocity),
                                   angular_velocity=b.angular_velocity)

@@ -46,6 +46,7 @@ import sys
 import time
 from pathlib import Path
 
+from harness.run.executor import progress_printer
 from harness.run.provenance import provenance
 from harness.store.files import output_directory_problem, write_text_atomically
 from harness.stress.engines import engine_stress
@@ -67,8 +68,6 @@ def run(quick: bool, out_dir: Path, executor: str = "local", workers: int | None
         engine_names: tuple[str, ...] | None = None) -> dict:
     """The whole stress test; writes the report into ``out_dir`` and returns it.
     ``engine_names``: the engines stressed (default: every registered one)."""
-    from harness.run.executor import progress_printer
-
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()

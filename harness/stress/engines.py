@@ -8,6 +8,20 @@ from pathlib import Path
 
 import numpy as np
 
+from harness.engines import (
+    EngineNotInstalled,
+    body_extent,
+    engine_names,
+    ke_norm,
+    load_engine,
+    source_label,
+)
+from harness.run import verdicts
+from harness.run.executor import run_tasks
+from harness.scene import Body, Disk, Rod, Scene
+from harness.scene.geometry import impact_problem, scene_contact
+from harness.store.cache import ResultCache
+
 OUTCOMES: dict[str, str] = {
     "error": "the adapter or engine raised an exception",
     "non-finite": "NaN or infinite post-impact velocities",
@@ -68,8 +82,6 @@ def engine_cases(quick: bool) -> list[dict]:
 
 def build_scene(case: dict):
     """The stressed scene: a disk (r 0.1·size) or the 45° rod (1·size) on the ground."""
-    from harness.scene import Body, Disk, Rod, Scene
-
     size, mass, speed = case["size"], case["mass"], case["speed"]
     # approach direction: |v_n|/|v_t| = grazing ratio (1 = 45°)
     vn = -speed * case["grazing"] / math.hypot(1.0, case["grazing"])
@@ -96,9 +108,6 @@ _REASON_OUTCOMES = {"blow-up": "blow-up", "energy-gain": "energy-gain",
 def _outcome(run, scene) -> str:
     """The run's stress outcome: its verdict (harness/run/verdicts/), as for the suite and
     the survey, with ``non-finite`` apart; the first failing reason decides."""
-    from harness.run import verdicts
-    from harness.scene.geometry import impact_problem, scene_contact
-
     u_after = np.asarray(run.u_after, dtype=float)
     if not np.all(np.isfinite(u_after)):
         return "non-finite"
@@ -118,8 +127,6 @@ def _outcome(run, scene) -> str:
 
 def run_engine_case(task: dict) -> dict:
     """One engine stress run (top-level: runs in worker processes)."""
-    from harness.engines import body_extent, ke_norm, load_engine
-
     case, engine_name, preset = task["case"], task["engine"], task["preset"]
     scene = build_scene(case)
     record = {"engine": engine_name, "preset": preset, "shape": case["shape"],
@@ -161,10 +168,6 @@ def engine_stress(quick: bool, executor: str = "local", workers: int | None = No
     """All engine runs (cached), grouped; JSON-able. ``engines``: those to stress (default:
     every registered one, :func:`harness.engines.engine_names`, those added at run time
     included)."""
-    from harness.engines import EngineNotInstalled, engine_names, load_engine, source_label
-    from harness.run.executor import run_tasks
-    from harness.store.cache import ResultCache
-
     presets = ("accurate",) if quick else ("defaults", "accurate")
     skipped, versions = {}, {}
     for name in engine_names() if engines is None else engines:

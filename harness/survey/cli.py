@@ -31,6 +31,7 @@ from harness.engines import (
     preset_role,
     source_label,
 )
+from harness.run.provenance import package_versions
 from harness.scenarios.errors import ScenarioError
 from harness.store.files import (
     make_output_directory,
@@ -231,8 +232,6 @@ def table_metadata(settings: dict) -> dict:
     """What every survey table carries in its Parquet metadata: what was surveyed (samples,
     seed, engines, presets), the installed versions and each engine's preset settings as
     run, so a table read alone says where it came from."""
-    from harness.run.provenance import package_versions
-
     engine_settings = {}
     for name in settings.get("engines", []):
         engine = load_engine(name)

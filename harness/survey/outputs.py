@@ -26,7 +26,9 @@ from pathlib import Path
 import numpy as np
 
 from harness.engines import PRESET_ROLES, preset_label
+from harness.plotting import new_figure, percent_tick, save_png
 from harness.run.metrics import fmt_departure
+from harness.store.files import write_bytes_atomically
 
 TYPE_NAMES = {1: "1 stick (compr.)", 2: "2 stick (restit.)", 3: "3 reverse (compr.)",
               4: "4 reverse (restit.)", 5: "5 forward slide"}
@@ -83,7 +85,6 @@ def write_parquet(columns: dict, path: Path, metadata: dict | None = None) -> Pa
         arrays.append(array)
     schema = pa.schema(fields, metadata=None if metadata is None else {
         METADATA_KEY: json.dumps(metadata, sort_keys=True, default=str)})
-    from harness.store.files import write_bytes_atomically
 
     buffer = pa.BufferOutputStream()
     pq.write_table(pa.Table.from_arrays(arrays, schema=schema), buffer)
@@ -264,7 +265,6 @@ def _floor_axis(target) -> None:
     (exact agreement among them) is drawn there."""
     from matplotlib.ticker import FuncFormatter
 
-    from harness.plotting import percent_tick
 
     def label(value, _):
         text = percent_tick(value)
@@ -278,8 +278,6 @@ def map_figure(runs: dict, engine: str, path: Path, tag: str | None = None) -> P
     ``engine``, coloured by the Poisson collision type; a row per preset. Saved as ``path``
     (PNG, with its SVG twin unless :data:`harness.plotting.SVG_TWIN` says not;
     ``tag``: the digest of the inputs, kept in the PNG)."""
-    from harness.plotting import new_figure, save_png
-
     presets = _presets(runs, engine)
     ok = runs["status"] == "ok"
     figure = new_figure(10, 3.2 * len(presets) + 0.5)
@@ -324,7 +322,6 @@ def cdf_figure(runs: dict, engine: str, path: Path, tag: str | None = None) -> P
     preset, a line per family. Saved as :func:`map_figure` saves."""
     from matplotlib import colormaps
 
-    from harness.plotting import new_figure, save_png
 
     presets = _presets(runs, engine)
     ok = runs["status"] == "ok"

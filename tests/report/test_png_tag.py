@@ -41,14 +41,14 @@ def test_figure_digests_cover_every_module_of_the_report_package():
 
 
 def test_figure_digests_cover_the_preset_names_users_see(monkeypatch):
-    # titles and legends show preset_label's names (harness/engines): a rename redraws
-    from harness import engines
+    # titles and legends show preset_label's names (harness/engines/preset_names): a rename
+    # redraws
+    from harness.engines import preset_names
     from harness.report import figures
 
     figures.code_digest.cache_clear()  # computed once per process
     before = figures.code_digest()
-    monkeypatch.setattr(engines, "renamed_roles",
-                        lambda engine: {"accurate": "renamed"} if engine == "pymunk" else {})
+    monkeypatch.setitem(preset_names._PRESET_NAMES, "pymunk", {"accurate": "renamed"})
     figures.code_digest.cache_clear()
     try:
         assert figures.code_digest() != before

@@ -7,9 +7,11 @@ tests/run/test_suite_invariants.py, on the run of the library that module alread
 
 from __future__ import annotations
 
+from argparse import Namespace
+
 import pytest
 
-from harness.report import stated
+from harness.report import findings_command, stated
 
 STATED = [s for path in stated.texts() for s in stated.stated_in(path)]
 COMPUTED_HERE = sorted(set(stated.SOURCES) - {"library"})
@@ -83,11 +85,7 @@ def test_a_marker_without_its_number_or_its_end_is_refused(tmp_path, text):
 
 
 def test_findings_check_refuses_an_unknown_source_in_one_line(capsys):
-    from argparse import Namespace
-
-    from harness.report import findings
-
     args = Namespace(check=True, write=False, only=["tabel3"], count=10, seed=0)
-    assert findings.main(args) == 2
+    assert findings_command.main(args) == 2
     error = capsys.readouterr().err
     assert error.count("\n") == 1 and "--only tabel3" in error and "table3" in error

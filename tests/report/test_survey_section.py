@@ -267,8 +267,6 @@ def test_the_quick_surveys_digest_is_the_same_under_other_kernels():
 
 
 def test_the_quick_surveys_digest_follows_its_files_versions_and_code(tmp_path, monkeypatch):
-    from harness.run import provenance
-    from harness.store import identity
     from harness.survey.population import load_population, population_files
 
     shipped = population_files()[0]
@@ -280,12 +278,12 @@ def test_the_quick_surveys_digest_follows_its_files_versions_and_code(tmp_path, 
     copy.write_text(shipped.read_text(encoding="utf-8") + "\n# edited\n", encoding="utf-8")
     assert suite.survey_inputs([load_population(copy)], engines, presets) != before
     copy.write_text(shipped.read_text(encoding="utf-8"), encoding="utf-8")
-    versions = provenance.package_versions
-    monkeypatch.setattr(provenance, "package_versions",
+    versions = suite.package_versions  # harness.run.provenance's, as the suite reads it
+    monkeypatch.setattr(suite, "package_versions",
                         lambda names: {**versions(names), "pymunk": "0.0-other"})
     assert suite.survey_inputs([load_population(copy)], engines, presets) != before
     monkeypatch.undo()
-    monkeypatch.setattr(identity, "code_version_of", lambda sources: "other code")
+    monkeypatch.setattr(suite, "code_version_of", lambda sources: "other code")
     assert suite.survey_inputs([load_population(copy)], engines, presets) != before
 
 
