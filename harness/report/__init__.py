@@ -70,6 +70,7 @@ from pathlib import Path
 
 from harness.plotting import SVG_TWIN
 from harness.processes import start_forked
+from harness.report.experiments import data_option_problem
 from harness.report.figures import (
     FigureTask,
     heatmap_figure,
@@ -498,8 +499,6 @@ def experiments_data_problem(path) -> str | None:
     """Why ``--experiments-data`` cannot be used (checked before any work), or None."""
     if path is None:
         return None
-    from harness.report.experiments import data_option_problem
-
     return data_option_problem(path)
 
 

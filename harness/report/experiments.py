@@ -9,6 +9,7 @@ says where to get one.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import sys
@@ -18,13 +19,14 @@ from pathlib import Path
 import numpy as np
 
 import planar_impact as pi
-from harness.engines import preset_label
-from harness.experiments import kharaz, registry
+from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine, preset_label
+from harness.experiments import aggregates, engine_curves, fazeli, kharaz, registry
 from harness.experiments.aggregates import MIN_BIN_COUNT as MIN_BIN
 from harness.plotting import new_figure, save_png
 from harness.report.figures import render_once, solver_digest
 from harness.report.markup import folded
 from harness.report.views import FIGURES, engine_style
+from harness.run.provenance import package_versions
 from harness.store.files import write_text_atomically
 
 KHARAZ_FIGURE = "experiments-kharaz.png"
@@ -40,8 +42,6 @@ def kharaz_payload() -> dict:
     """What the Kharaz figure shows (its redraw key, with the report's code digest): the
     laws' inputs, the points, and what the engines' runs depend on (their code, the
     judging, the installed versions), not the runs' floats."""
-    from harness.run.provenance import package_versions
-
     return {"laws": list(pi.LAWS), "mu": kharaz.MU, "e": kharaz.E,
             "measured": {q: [m.incidence_deg, m.values] for q, m in kharaz.MEASURED.items()},
             "source": kharaz.SOURCE, "incidences": INCIDENCES.tolist(),
@@ -52,8 +52,6 @@ def kharaz_payload() -> dict:
 def harness_code_digest() -> str:
     """The sha256 of what runs and judges the engines here: harness/experiments, the engines
     (modules and packages), the scene they build and the verdicts."""
-    import hashlib
-
     root = Path(__file__).resolve().parents[1]
     digest = hashlib.sha256()
     for folder in ("experiments", "engines", "scene", "run/verdicts"):
@@ -66,8 +64,6 @@ def harness_code_digest() -> str:
 def kharaz_engine_runs() -> list:
     """Every installed engine and preset on the disk at :data:`ENGINE_INCIDENCES`, each
     run judged (harness/experiments/engine_curves.py)."""
-    from harness.experiments import engine_curves
-
     return [engine_curves.engine_curves(engine, preset, ENGINE_INCIDENCES)
             for engine in _installed_engines() for preset in engine.presets]
 
@@ -174,10 +170,6 @@ def drops_key(hashes: dict[str, str]) -> str:
     """The digest of everything the drops' aggregates depend on: the files (their SHA-256),
     the code that reads, fits, runs and judges them, the installed versions and the
     report's settings; never the results' floats."""
-    import hashlib
-
-    from harness.run.provenance import package_versions
-
     digest = hashlib.sha256()
     digest.update(json.dumps({"layout": DROPS_LAYOUT, "hashes": hashes,
                               "versions": package_versions(),
@@ -191,8 +183,6 @@ def drops_aggregates(out_dir: Path, directory: Path) -> dict:
     read from ``out_dir`` when made from the same inputs, else computed (minutes: every law
     fitted twice, every engine on every drop) and kept there. Raises
     :class:`registry.DataInvalid` for a copy that is not the published files."""
-    from harness.experiments import aggregates, fazeli
-
     hashes = registry.verify(registry.FAZELI_2017, directory)
     key = drops_key(hashes)
     path = out_dir / DROPS_FILE
@@ -221,8 +211,6 @@ def _progress(text: str) -> None:
 
 
 def _installed_engines() -> list:
-    from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine
-
     engines = []
     for name in ENGINE_NAMES:
         try:
@@ -412,8 +400,6 @@ def drops_html(out_dir: Path, aggregates: dict) -> str:
 def aggregates_digest(value) -> str:
     """A digest of JSON ``value`` rounded to 6 significant digits (a figure's redraw key:
     the last bits of a float, which differ between CPUs, do not redraw it)."""
-    import hashlib
-
     def rounded(item):
         if isinstance(item, float):
             return float(f"{item:.6g}")
