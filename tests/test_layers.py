@@ -132,7 +132,6 @@ INNER_IMPORTS_ALLOWED: dict[str, str] = {
     "harness.engines.mujoco": EDITED_CONCURRENTLY,
     "harness.engines.pybullet": EDITED_CONCURRENTLY,
     "harness.engines.pymunk_engine": EDITED_CONCURRENTLY,
-    "planar_impact.multicontact": EDITED_CONCURRENTLY,
 }
 
 #: The modules (exactly these, not their submodules) that import by name at run time
