@@ -71,17 +71,14 @@ from pathlib import Path
 from harness.plotting import SVG_TWIN
 from harness.processes import start_forked
 from harness.report.experiments import data_option_problem
-from harness.report.figures import (
+from harness.report.figure_cache import (
     FigureTask,
-    heatmap_figure,
-    impulse_figure,
     inputs_digest,
     is_current,
     scenario_digests,
-    split_figure,
-    sweep_figure,
     table3_payload,
 )
+from harness.report.figures import heatmap_figure, impulse_figure, split_figure, sweep_figure
 from harness.report.fragments import DIGESTS_FILE, open_cache, prepare
 from harness.report.history import history_figure, history_inputs
 from harness.report.html import html_page

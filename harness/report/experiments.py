@@ -23,7 +23,7 @@ from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine, prese
 from harness.experiments import aggregates, engine_curves, fazeli, kharaz, registry
 from harness.experiments.aggregates import MIN_BIN_COUNT as MIN_BIN
 from harness.plotting import new_figure, save_png
-from harness.report.figures import render_once, solver_digest
+from harness.report.figure_cache import render_once, solver_digest
 from harness.report.markup import folded
 from harness.report.views import FIGURES, engine_style
 from harness.run.provenance import package_versions

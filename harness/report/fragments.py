@@ -4,7 +4,7 @@ A report of 1,000 scenarios formats ~28,000 records into ~2,400 velocity tables 
 headline cells: most of a warm report's time, when nothing has changed since the last one.
 Each scenario's pieces -- its HTML section and its :func:`scenario_view` (headline cells,
 departure split) -- are stored in ``<out>/`` :data:`CACHE_FILE` under a key made of the
-scenario's records digest (:func:`harness.report.figures.scenario_digests`) and whatever
+scenario's records digest (:func:`harness.report.figure_cache.scenario_digests`) and whatever
 else the piece reads; a later report reuses a piece whose key is unchanged and computes the
 rest. The file as a whole holds only for the same code (:func:`cache_context`): an edit to
 the report, or another set of engine labels, starts it afresh.
@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from harness.engines import ENGINE_NAMES, PRESET_ROLES
-from harness.report.figures import code_digest, scenario_digests
+from harness.report.figure_cache import code_digest, scenario_digests
 from harness.report.reading import record_scenarios
 from harness.report.views import (
     HEADLINE_LAWS,
@@ -50,7 +50,7 @@ DIGESTS_FILE = ".report-digests.json"
 
 def cache_context(labels: Sequence[str]) -> str:
     """What every stored piece depends on besides its own key: the report's code (with
-    matplotlib's version, :func:`harness.report.figures.code_digest`), the metrics module
+    matplotlib's version, :func:`harness.report.figure_cache.code_digest`), the metrics module
     (the departure split), the engine labels and the engines' and presets' order."""
     from importlib.util import find_spec
 

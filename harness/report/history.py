@@ -40,9 +40,9 @@ def history_records(records: Sequence[Record]) -> list[Record]:
 
 
 def history_inputs(name: str, records_digest: str) -> list:
-    """What the figure depends on (for :func:`harness.report.figures.render_once`): this
+    """What the figure depends on (for :func:`harness.report.figure_cache.render_once`): this
     module and the scenario's records (their digest,
-    :func:`harness.report.figures.scenario_digests`)."""
+    :func:`harness.report.figure_cache.scenario_digests`)."""
     source = hashlib.sha256(Path(__file__).read_bytes()).hexdigest()
     return [name, source, records_digest]
 

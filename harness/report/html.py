@@ -16,7 +16,7 @@ from harness.engines import preset_label
 from harness.report import table3
 from harness.report.contacts import contacts_section
 from harness.report.experiments import experiments_section
-from harness.report.figures import solver_digest, table3_inputs
+from harness.report.figure_cache import solver_digest, table3_inputs
 from harness.report.fragments import Prepared, prepare
 from harness.report.markup import figure_html, folded, html_table, page_head, report_figure
 from harness.report.overview import (
@@ -47,7 +47,7 @@ def cached_contacts(results: Results, prepared: Prepared) -> str:
 
 def cached_table3(figure: str | None, prepared: Prepared) -> str:
     """:func:`table3_html`, kept in the report's cache under what it reads: ``table3`` and
-    its data (:func:`harness.report.figures.table3_inputs`), the solver's code and
+    its data (:func:`harness.report.figure_cache.table3_inputs`), the solver's code and
     ``figure``."""
     key = f"table3\0{table3_inputs()}\0{solver_digest()}\0{figure}"
     return prepared.cache.get(key, lambda: table3_html(figure))

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from harness.engines import ENGINE_NAMES, PRESET_ROLES, preset_label, source_label
-from harness.report.figures import FigureTask
+from harness.report.figure_cache import FigureTask
 from harness.report.markup import folded, html_table, report_figure
 from harness.report.views import escape_html, fmt_departure
 from harness.survey import outputs
@@ -60,7 +60,7 @@ def _file_digest(path: Path) -> str:
 def figure_code_digest() -> str:
     """The sha256 of the module drawing the survey's figures (harness/survey/outputs.py,
     read, not imported); this package's modules are in every figure's digest already
-    (:func:`harness.report.figures.inputs_digest`)."""
+    (:func:`harness.report.figure_cache.inputs_digest`)."""
     from importlib.util import find_spec
 
     spec = find_spec("harness.survey")

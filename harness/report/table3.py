@@ -20,7 +20,7 @@ import numpy as np
 
 import planar_impact as pi
 from harness.plotting import TAG_KEY, lay_out, save_svg_twin
-from harness.report.figures import render_once, table3_payload
+from harness.report.figure_cache import render_once, table3_payload
 from harness.store.files import output_directory_problem, save_figure, write_text_atomically
 
 CELLS = ("e", "du1", "du3", "du4", "du6", "vnA", "vnS", "vtA", "vtS", "dE")

@@ -78,7 +78,8 @@ from harness.run.tasks import TASK_TIME_LIMIT_S
 from harness.scenarios import ENGINES, PRESETS, parse_tags
 from harness.scenarios.checks import use_passed_checks
 from harness.scenarios.library import load_scenarios_reporting
-from harness.store.cache import ResultCache, default_cache_dir
+from harness.store.cache import ResultCache
+from harness.store.cache_directory import default_cache_dir
 
 #: Exit statuses (documented in harness.cli): EXIT_ENGINE_ERROR when an engine run ended in
 #: an error (an exception of the engine, a time limit): the results are written, but lack it.

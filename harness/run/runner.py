@@ -49,7 +49,7 @@ from harness.run.tasks import (
     run_engine_tasks,
 )
 from harness.scenarios import ENGINES, PRESETS, Scenario
-from harness.store.cache import PendingPuts
+from harness.store.packs import PendingPuts
 
 
 class RunOutcome:

@@ -15,7 +15,11 @@ Modules, in the order data flows through them:
 * :mod:`~harness.scenarios.schema` -- names, keys and limits;
 * :mod:`~harness.scenarios.errors` -- :class:`ScenarioError`;
 * :mod:`~harness.scenarios.model` -- the frozen dataclasses and their sweep points;
-* :mod:`~harness.scenarios.reader` -- TOML to a :class:`Scenario`, every problem collected;
+* :mod:`~harness.scenarios.table_reader` -- typed reads of a TOML document's keys, every
+  problem collected;
+* :mod:`~harness.scenarios.system_reader` -- the bodies, the matrix system or the two sleds;
+* :mod:`~harness.scenarios.run_reader` -- ``[sweep]``, ``[expect]``, ``[engine_settings]``;
+* :mod:`~harness.scenarios.reader` -- TOML to a :class:`Scenario`, from the readers above;
 * :mod:`~harness.scenarios.checks` -- physics of every point, engine settings, ``[expect]``;
 * :mod:`~harness.scenarios.library` -- the library under ``scenarios/`` and its tag sets;
 * :mod:`~harness.scenarios.cli` -- ``impact-harness validate`` and ``new``.

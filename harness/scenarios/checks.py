@@ -1,8 +1,9 @@
 """Checks a scenario must pass before any engine runs: physics of every point, engine
 settings, and the ``[expect]`` table against the solver.
 
-The checks report through a :class:`harness.scenarios.reader.TableReader` (anything with its
-``error(key, problem, value, allowed)``), so every problem in a file is listed at once.
+The checks report through a :class:`harness.scenarios.table_reader.TableReader` (anything
+with its ``error(key, problem, value, allowed)``), so every problem in a file is listed at
+once.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ import json
 import math
 from dataclasses import dataclass
 from types import MappingProxyType
-from typing import TYPE_CHECKING, Any, Mapping
+from typing import Any, Mapping
 
 import numpy as np
 
@@ -22,14 +23,12 @@ from harness.engines.facts import engine_facts
 from harness.scenarios.errors import suggest
 from harness.scenarios.model import Point, Scenario
 from harness.scenarios.schema import LIMITS, ONE_POINT_TOLERANCE, PRESETS, SHAPE_FIELDS, limit
+from harness.scenarios.table_reader import TableReader
 from harness.scene import Body, Disk, Scene, geometry
 from harness.scene.features import feature_points
 from harness.store.cache import ResultCache
 from harness.store.identity import code_version
 from harness.store.passed_checks import PassedChecks
-
-if TYPE_CHECKING:  # the reader imports the checks, not the other way round
-    from harness.scenarios.reader import TableReader
 
 
 def check_engine_settings(reader: TableReader, engine: str, table: Mapping[str, Any]) -> None:

@@ -5,6 +5,9 @@
 * :mod:`~harness.store.identity` -- canonical JSON of what a result depends on, and the
   version of the code that computed it;
 * :mod:`~harness.store.cache` -- the content-addressed result cache;
+* :mod:`~harness.store.packs` -- the cache's packs (many records in one file) and their index;
+* :mod:`~harness.store.cache_directory` -- the cache's directory: its home, its marker, its
+  upkeep;
 * :mod:`~harness.store.passed_checks` -- the scenario texts that passed their checks;
 * :mod:`~harness.store.cli` -- ``impact-harness cache info|prune|clear``.
 

@@ -1,11 +1,12 @@
 """Content-addressed cache of results: rerunning an unchanged suite does no engine work.
 
-Home: :func:`default_cache_dir` -- ``$IMPACT_HARNESS_CACHE_DIR`` when set, else
-``.cache/results`` under the project root (the checkout holding ``pyproject.toml``; ``make
-clean`` removes it), else, for an installed harness, ``$XDG_CACHE_HOME/impact-harness``
-(``~/.cache/impact-harness``). Never the working directory. Bounded by ``impact-harness cache
-prune`` (entries written by other code, or older than ``--older-than`` days) and ``cache
-clear``; ``cache info`` shows the size (:mod:`harness.store.cli`).
+Home: :func:`~harness.store.cache_directory.default_cache_dir` --
+``$IMPACT_HARNESS_CACHE_DIR`` when set, else ``.cache/results`` under the project root (the
+checkout holding ``pyproject.toml``; ``make clean`` removes it), else, for an installed
+harness, ``$XDG_CACHE_HOME/impact-harness`` (``~/.cache/impact-harness``). Never the working
+directory. Bounded by ``impact-harness cache prune`` (entries written by other code, or older
+than ``--older-than`` days) and ``cache clear``; ``cache info`` shows the size
+(:mod:`harness.store.cli`).
 
 A record is stored under the key ``sha256(canonical JSON of the payload + code version)``,
 where the payload names everything the result depends on (scenario, sweep point, engine and
@@ -46,13 +47,11 @@ result is computed again. Beside the entries, ``root/passed-checks.json`` keeps 
 the scenario texts that passed their checks (:class:`harness.store.passed_checks.PassedChecks`);
 ``cache info``, ``prune`` and ``clear`` count and remove it with them.
 
-The harness deletes only what it made: the cache's root carries the marker file
-:data:`CACHE_MARKER`, written when the harness creates the directory (or adopts an empty
-one, or one holding only cache entries); ``cache prune`` and ``cache clear`` refuse a
-directory without it (exit 2), and remove only the entries they recognise (the shard
-directories' ``<64 hex digits>.json``/``.jsonl`` files and temporaries, the checks' store),
-never the directory or anything else in it. Packs are recognised the same way: the
-``packs`` directory's ``<64 hex digits>.pack`` files and temporaries.
+The harness deletes only what it made (the marker file, :mod:`harness.store.cache_directory`).
+
+The modules: this one (keys, lookups, entries of one record or of many lines),
+:mod:`harness.store.packs` (the packs, their index, :class:`~harness.store.packs.PendingPuts`),
+:mod:`harness.store.cache_directory` (the root, its marker, ``info``, ``prune``, ``clear``).
 """
 
 from __future__ import annotations
@@ -61,19 +60,17 @@ import hashlib
 import itertools
 import json
 import os
-import re
 import secrets
-import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
 from harness.collector import collector_paused
-from harness.store.files import write_parts_atomically, write_text_atomically
+from harness.store.cache_directory import CacheDirectory
+from harness.store.files import write_parts_atomically
 from harness.store.identity import Spelled, canonical_json, code_version
-
-_HARNESS_DIR = Path(__file__).resolve().parent.parent  # harness/, from harness/store/
+from harness.store.packs import PACK_DIRECTORY, PACK_SIZE, PackIndex, make_pack
 
 #: Between two lines of an entry of many lines (:meth:`ResultCache.put_lines`): the record
 #: lines of a results file (:mod:`harness.run.records`), which a warm run copies as stored.
@@ -81,58 +78,19 @@ LINE_SEPARATOR = ",\n"
 
 CACHE_FORMAT = 2  # bump when the record layout changes (2: SHA-256 checked, no pickle)
 
-#: Environment variable that moves the cache (tests, shared machines).
-CACHE_DIR_VARIABLE = "IMPACT_HARNESS_CACHE_DIR"
-#: A temporary file older than this (s) belongs to a writer that died: removed.
-STALE_TEMPORARY_S = 60.0
-#: The scenario checks' store in the cache's directory
-#: (:class:`harness.store.passed_checks.PassedChecks`), and the names it had before (removed by
-#: ``prune`` and ``clear`` unread: the pickle is never loaded).
-SCENARIO_CHECKS_STORE = "passed-checks.json"
-OLD_CHECKS_STORES = ("scenario-checks.json", "scenario-checks.pickle")
-#: The file that marks a directory as a cache the harness made (see the module docstring).
-CACHE_MARKER = "IMPACT-HARNESS-CACHE"
-_MARKER_TEXT = ("impact-harness result cache: made by the harness; `impact-harness cache "
-                "clear` removes its entries\n")
-#: An entry's name in its shard directory, and a shard directory's name.
-_ENTRY_NAME = re.compile(r"[0-9a-f]{64}\.jsonl?")
-_SHARD_NAME = re.compile(r"[0-9a-f]{2}")
-#: The directory of the packs in the root (:meth:`ResultCache.put_many`), a pack's name in it,
-#: and the most records one pack holds (a run's main process buffers at most as many).
-PACK_DIRECTORY = "packs"
-_PACK_NAME = re.compile(r"[0-9a-f]{64}\.pack")
-PACK_SIZE = 512
-
-
-class NotOurCache(Exception):
-    """A directory that is not a cache the harness made: nothing in it is removed."""
-
-
-def default_cache_dir() -> Path:
-    """The cache's one home; see the module docstring."""
-    override = os.environ.get(CACHE_DIR_VARIABLE)
-    if override:
-        return Path(override).expanduser().resolve()
-    project = _HARNESS_DIR.parent
-    if (project / "pyproject.toml").is_file():
-        return project / ".cache" / "results"
-    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
-    return Path(base) / "impact-harness"
-
-
 #: The stand-in of :meth:`ResultCache.slot_key`'s slot (a random string, spelled as json
 #: spells it).
 _SLOT = Spelled(f"slot{secrets.token_hex(16)}")
 
 
-class ResultCache:
+class ResultCache(CacheDirectory):
     """Results on disk, keyed by a content hash of what they depend on.
 
     Parameters
     ----------
     root
         Directory of the cache (created on the first ``put``); default
-        :func:`default_cache_dir`.
+        :func:`~harness.store.cache_directory.default_cache_dir`.
     enabled
         ``False`` (the runner's ``--no-cache``): ``get`` always misses, ``put`` writes nothing.
     version
@@ -141,20 +99,14 @@ class ResultCache:
 
     def __init__(self, root: Path | str | None = None, enabled: bool = True,
                  version: str | None = None):
-        self.root = default_cache_dir() if root is None else Path(root)
-        self.enabled = bool(enabled)
-        self.version = code_version() if version is None else version
+        super().__init__(root, enabled, code_version() if version is None else version)
         self.hits = 0
         self.misses = 0
         self.rejected: list[str] = []  # "<entry path>: <why>" of entries read as a miss
         self._root_seen = False  # whether this cache looked at its root's marker yet
         # shard -> the names in its directory, while listed() is active (None: not listed)
         self._listing: dict[str, set[str] | None] | None = None
-        # key -> (pack path, offset, size, SHA-256) of the packed records, from the headers
-        # of the packs named in _packs_read (read, or rejected)
-        self._packed: dict[str, tuple[str, int, int, str]] = {}
-        self._packs_read: set[str] = set()
-        self._packs_listed = False  # within listed(): the packs' directory was read
+        self._packs = PackIndex(self.root, self.version)  # where each packed record lies
 
     @contextmanager
     def listed(self) -> Iterator[None]:
@@ -163,11 +115,11 @@ class ResultCache:
         (thousands of entries that are not there) cost a set lookup each. An entry another
         process writes meanwhile is a miss (its run simulated again); those this cache puts
         are listed."""
-        self._listing, self._packs_listed = {}, False
+        self._listing, self._packs.listed = {}, False
         try:
             yield
         finally:
-            self._listing, self._packs_listed = None, False
+            self._listing, self._packs.listed = None, False
 
     def _unlisted(self, key: str, suffix: str) -> bool:
         """True when :meth:`listed` is active and the shard's listing lacks the entry."""
@@ -256,7 +208,7 @@ class ResultCache:
                     raise ValueError("not a cache entry")
                 body, sha256 = memoryview(raw)[head_end + 1:], header.get("sha256")
             except FileNotFoundError:
-                packed = self._packed_entry(key)
+                packed = self._packs.entry(key, self._listing is not None, self.rejected)
                 if packed is None:
                     raise
                 pack, offset, size, sha256 = packed
@@ -307,79 +259,10 @@ class ResultCache:
         if not self.enabled or not items:
             return
         for start in range(0, len(items), PACK_SIZE):
-            self._put_pack(items[start:start + PACK_SIZE])
-
-    def _put_pack(self, items: Sequence[tuple[str, dict]]) -> None:
-        keys = [key for key, _ in items]
-        bodies = [_ENTRY_ENCODER.encode(record).encode("utf-8") for _, record in items]
-        sizes = [len(body) for body in bodies]
-        digests = [hashlib.sha256(body).hexdigest() for body in bodies]
-        header = json.dumps({"code_version": self.version, "keys": keys, "sizes": sizes,
-                             "sha256": digests},
-                            separators=(",", ":")).encode("utf-8") + b"\n"
-        digest = hashlib.sha256(header)
-        for body in bodies:
-            digest.update(body)
-        name = f"{digest.hexdigest()}.pack"
-        path = os.path.join(self.root, PACK_DIRECTORY, name)
-        self._write(path, (header, *bodies), name)
-        self._index_pack(path, header, keys, sizes, digests)
-        self._packs_read.add(name)
-
-    def _index_pack(self, path: str, header: bytes, keys: list, sizes: list,
-                    digests: list) -> None:
-        offset = len(header)
-        for key, size, sha256 in zip(keys, sizes, digests):
-            self._packed[key] = (path, offset, size, sha256)
-            offset += size
-
-    def _packed_entry(self, key: str) -> tuple[str, int, int, str] | None:
-        """Where ``key`` lies in a pack, or None. The packs' headers not read yet are read
-        at a miss: once within :meth:`listed` (the packs written meanwhile by other
-        processes are not seen; its own are), at every miss outside it."""
-        found = self._packed.get(key)
-        if found is not None or self._packs_listed:
-            return found
-        self._packs_listed = self._listing is not None
-        directory = os.path.join(self.root, PACK_DIRECTORY)
-        try:
-            names = os.listdir(directory)
-        except OSError:  # none yet, or not a directory: nothing packed
-            return None
-        for name in names:
-            if name in self._packs_read or not _PACK_NAME.fullmatch(name):
-                continue
-            self._packs_read.add(name)
-            path = os.path.join(directory, name)
-            try:
-                self._read_pack_header(path)
-            except (OSError, ValueError) as error:  # UnicodeDecodeError is a ValueError
-                self.rejected.append(f"{path}: {error}")
-        return self._packed.get(key)
-
-    def _read_pack_header(self, path: str) -> None:
-        """Index the records of the pack at ``path`` (those of this code version only: the
-        keys of another hold another version anyway); ``ValueError`` when its header is not
-        a pack's or its size is not the one the header gives."""
-        with open(path, "rb") as handle:
-            line = handle.readline()
-            size = os.fstat(handle.fileno()).st_size
-        header = json.loads(line)
-        if not isinstance(header, dict) or header.get("code_version") != self.version:
-            if isinstance(header, dict) and isinstance(header.get("code_version"), str):
-                return  # another code's: never a key of this one
-            raise ValueError("not a cache pack")
-        keys, sizes, digests = header.get("keys"), header.get("sizes"), header.get("sha256")
-        if not (isinstance(keys, list) and isinstance(sizes, list) and isinstance(digests, list)
-                and len(keys) == len(sizes) == len(digests)
-                and all(isinstance(key, str) for key in keys)
-                and all(isinstance(digest, str) for digest in digests)
-                and all(isinstance(n, int) and not isinstance(n, bool) and n >= 0
-                        for n in sizes)):
-            raise ValueError("not a cache pack")
-        if len(line) + sum(sizes) != size:
-            raise ValueError("truncated")
-        self._index_pack(path, line, keys, sizes, digests)
+            pack = make_pack(items[start:start + PACK_SIZE], self.version, _ENTRY_ENCODER.encode)
+            path = os.path.join(self.root, PACK_DIRECTORY, pack.name)
+            self._write(path, (pack.header, *pack.bodies), pack.name)
+            self._packs.written(path, pack)
 
     def _write(self, path: str, parts: tuple, key: str) -> None:
         """Write an entry's ``parts`` at ``path`` atomically; the shard directory made when
@@ -405,75 +288,6 @@ class ResultCache:
                 if not os.path.isdir(self.root):
                     self.make_root()
                 os.makedirs(os.path.dirname(path), exist_ok=True)
-
-    # ----------------------------------------------------------------------------------------
-    # The root and its marker: what tells the harness the directory is its own
-    # ----------------------------------------------------------------------------------------
-    @property
-    def marker(self) -> Path:
-        return self.root / CACHE_MARKER
-
-    def marked(self) -> bool:
-        """Whether the root carries the cache's marker (a regular file, not a link)."""
-        try:
-            return os.path.isfile(self.marker) and not os.path.islink(self.marker)
-        except OSError:
-            return False
-
-    def make_root(self) -> None:
-        """Make the root (with its parents: the user named it, or it is the default) and
-        mark it as the harness's."""
-        self.root.mkdir(parents=True, exist_ok=True)
-        write_text_atomically(self.marker, _MARKER_TEXT)
-
-    def prepare(self) -> str | None:
-        """Make the cache ready before a run: ``None``, or why the root is not usable.
-
-        A missing root is made and marked; an empty one, or one that holds only what a
-        cache holds (shard directories, the checks' store: a cache of a harness before the
-        marker), is marked; a marked one is used as it is. A directory holding anything else
-        is not a cache the harness made: refused (nothing in it is written or removed).
-        """
-        try:
-            if not self.root.exists():
-                self.make_root()
-                return None
-            if not self.root.is_dir():
-                return "is not a directory"
-            if self.marked():
-                if not os.access(self.root, os.W_OK | os.X_OK):
-                    return "cannot write there: not writable"
-                return None
-            foreign = sorted(name for name in os.listdir(self.root)
-                             if not self._cache_like(name))
-            if foreign:
-                return (f"not a cache the harness made (no {CACHE_MARKER} file, and it holds "
-                        f"{foreign[0]!r}{' ...' if len(foreign) > 1 else ''}): choose another "
-                        "--cache-dir, or a new or empty directory")
-            self.make_root()
-        except OSError as error:
-            return f"cannot write there: {error.strerror or error}"
-        return None
-
-    def _cache_like(self, name: str) -> bool:
-        """Whether ``name`` in the root is what a cache holds: a shard directory of entries
-        (and temporaries) only, or the checks' store."""
-        path = self.root / name
-        if name in (SCENARIO_CHECKS_STORE, *OLD_CHECKS_STORES):
-            return path.is_file() and not path.is_symlink()
-        if name == PACK_DIRECTORY and path.is_dir() and not path.is_symlink():
-            return all(_PACK_NAME.fullmatch(inner) or _is_temporary(inner)
-                       for inner in os.listdir(path))
-        if not (_SHARD_NAME.fullmatch(name) and path.is_dir() and not path.is_symlink()):
-            return False
-        return all(_ENTRY_NAME.fullmatch(inner) or _is_temporary(inner)
-                   for inner in os.listdir(path))
-
-    def _require_marked(self) -> None:
-        if not self.marked():
-            raise NotOurCache(f"{self.root}: not a cache the harness made (no {CACHE_MARKER} "
-                              "file in it): nothing removed")
-
     def lines_path(self, key: str) -> Path:
         return self.root / key[:2] / f"{key}.jsonl"
 
@@ -568,169 +382,11 @@ class ResultCache:
         self._write(os.fspath(self.lines_path(key)),
                     (header.encode("utf-8"), b"\n", text, *parts), key)
         self._list(key[:2], f"{key}.jsonl")
-
-    def _entries(self) -> Iterator[Path]:
-        """Every entry's path: the keyed entries the shard directories hold (by name: a
-        file of any other name is never counted or removed) and the scenario checks'
-        stores."""
-        if not self.root.is_dir():
-            return
-        for shard in sorted(os.listdir(self.root)):
-            directory = self.root / shard
-            if not _SHARD_NAME.fullmatch(shard) or directory.is_symlink():
-                continue
-            try:
-                names = os.listdir(directory)
-            except OSError:  # not a directory
-                continue
-            for name in names:
-                path = directory / name
-                if _ENTRY_NAME.fullmatch(name) and path.is_file() and not path.is_symlink():
-                    yield path
-        packs = self.root / PACK_DIRECTORY
-        if packs.is_dir() and not packs.is_symlink():
-            for name in os.listdir(packs):
-                path = packs / name
-                if _PACK_NAME.fullmatch(name) and path.is_file() and not path.is_symlink():
-                    yield path
-        for name in (SCENARIO_CHECKS_STORE, *OLD_CHECKS_STORES):
-            path = self.root / name
-            if path.is_file() and not path.is_symlink():
-                yield path
-
-    @staticmethod
-    def _stored_version(path: Path) -> Any:
-        """The code version an entry was written by (its header line; the checks' store is
-        one JSON document; an old store of another name has none)."""
-        if path.name in OLD_CHECKS_STORES:
-            return None  # never read (the old one was a pickle): removed by prune
-        with open(path, "rb") as handle:
-            text = handle.read() if path.name == SCENARIO_CHECKS_STORE else handle.readline()
-        stored = json.loads(text)
-        return stored.get("code_version") if isinstance(stored, dict) else None
-
-    def clean_temporaries(self, older_than_s: float = STALE_TEMPORARY_S) -> int:
-        """Remove temporary files older than ``older_than_s`` (left by killed writers)."""
-        if not self.enabled or not self.root.is_dir():
-            return 0
-        removed, now = 0, time.time()
-        for temporary in itertools.chain(self.root.glob("??/.*.tmp"),
-                                         self.root.glob(f"{PACK_DIRECTORY}/.*.tmp")):
-            try:
-                if ((_SHARD_NAME.fullmatch(temporary.parent.name)
-                     or temporary.parent.name == PACK_DIRECTORY)
-                        and not temporary.is_symlink() and not temporary.parent.is_symlink()
-                        and now - temporary.stat().st_mtime > older_than_s):
-                    temporary.unlink()
-                    removed += 1
-            except OSError:  # another run removed or replaced it first
-                continue
-        return removed
-
-    def info(self) -> dict:
-        """``{"root", "entries", "bytes", "marked"}`` of the cache on disk."""
-        entries, size = 0, 0
-        for path in self._entries():
-            try:
-                size += path.stat().st_size
-                entries += 1
-            except OSError:
-                continue
-        return {"root": str(self.root), "entries": entries, "bytes": size,
-                "marked": self.marked()}
-
-    def prune(self, max_age_days: float | None = None, other_versions: bool = True) -> dict:
-        """Remove entries written by other code (``other_versions``) or older than a bound.
-
-        Returns ``{"entries", "bytes"}`` removed. An entry that cannot be read is removed too.
-        Raises :class:`NotOurCache` (nothing removed) when the root is not marked.
-        """
-        self._require_marked()
-        removed, size, now = 0, 0, time.time()
-        self.clean_temporaries()
-        for path in list(self._entries()):
-            try:
-                status = path.stat()
-                old = max_age_days is not None and now - status.st_mtime > max_age_days * 86400
-                stale = False
-                if other_versions and not old:
-                    try:
-                        stale = self._stored_version(path) != self.version
-                    except (OSError, ValueError):  # unreadable, not JSON
-                        stale = True
-                if old or stale:
-                    path.unlink()
-                    removed += 1
-                    size += status.st_size
-            except OSError:
-                continue
-        return {"entries": removed, "bytes": size}
-
-    def clear(self) -> dict:
-        """Remove every entry, the temporaries and the emptied shard directories; the root
-        and its marker stay (and anything else in it: never the harness's to remove).
-        Raises :class:`NotOurCache` (nothing removed) when the root is not marked."""
-        self._require_marked()
-        removed, size = 0, 0
-        for path in list(self._entries()):
-            try:
-                size += path.stat().st_size
-                path.unlink()
-                removed += 1
-            except OSError:
-                continue
-        self.clean_temporaries(older_than_s=-1.0)
-        for shard in os.listdir(self.root):
-            if ((_SHARD_NAME.fullmatch(shard) or shard == PACK_DIRECTORY)
-                    and not (self.root / shard).is_symlink()):
-                try:
-                    (self.root / shard).rmdir()  # only when empty
-                except OSError:
-                    pass
-        return {"entries": removed, "bytes": size}
-
     @property
     def stats(self) -> dict:
         total = self.hits + self.misses
         return {"enabled": self.enabled, "hits": self.hits, "misses": self.misses,
                 "hit_rate": self.hits / total if total else 0.0}
-
-
-class PendingPuts:
-    """Records to store, written a pack at a time (:meth:`ResultCache.put_many`): what a
-    run's main process stores (the references its workers computed, the engine runs of an
-    executor whose workers do not store them) in a few files, not one each. ``put`` writes
-    a pack once :data:`PACK_SIZE` wait or the first of them has waited ``max_wait_s`` (a
-    process killed outright loses no more than that of finished work); ``flush`` writes the
-    rest (the runner calls it when the work ends, however it ends). Both raise ``OSError``
-    as :meth:`ResultCache.put` does (the records not written are dropped). ``cache`` None:
-    stores nothing."""
-
-    def __init__(self, cache: ResultCache | None, max_wait_s: float = 2.0) -> None:
-        self.cache = cache
-        self.max_wait_s = max_wait_s
-        self.items: list[tuple[str, dict]] = []
-        self._first_at = 0.0  # when the first record waiting was put
-
-    def put(self, key: str, record: dict) -> None:
-        if self.cache is None or not self.cache.enabled:
-            return
-        now = time.monotonic()
-        if not self.items:
-            self._first_at = now
-        self.items.append((key, record))
-        if len(self.items) >= PACK_SIZE or now - self._first_at >= self.max_wait_s:
-            self.flush()
-
-    def flush(self) -> None:
-        items, self.items = self.items, []
-        if items and self.cache is not None:
-            self.cache.put_many(items)
-
-
-def _is_temporary(name: str) -> bool:
-    """A writer's temporary file name (:func:`harness.store.files.write_parts_atomically`)."""
-    return name.startswith(".") and name.endswith(".tmp")
 
 
 def split_block(text: bytes | memoryview, count: int) -> list[str]:
@@ -765,5 +421,4 @@ def _json_default(value: Any) -> Any:
 _ENTRY_ENCODER = json.JSONEncoder(default=_json_default, check_circular=False)
 
 
-__all__ = ["CACHE_DIR_VARIABLE", "CACHE_MARKER", "LINE_SEPARATOR", "PACK_DIRECTORY", "PACK_SIZE",
-           "NotOurCache", "PendingPuts", "ResultCache", "default_cache_dir"]
+__all__ = ["CACHE_FORMAT", "LINE_SEPARATOR", "ResultCache", "split_block"]

@@ -7,7 +7,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from harness.store.cache import CACHE_MARKER, NotOurCache, ResultCache, default_cache_dir
+from harness.store.cache import ResultCache
+from harness.store.cache_directory import CACHE_MARKER, NotOurCache, default_cache_dir
 
 
 def add_arguments(parser) -> None:

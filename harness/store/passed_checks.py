@@ -25,7 +25,8 @@ import json
 from pathlib import Path
 from typing import Any, Callable
 
-from harness.store.cache import SCENARIO_CHECKS_STORE, ResultCache
+from harness.store.cache import ResultCache
+from harness.store.cache_directory import SCENARIO_CHECKS_STORE
 from harness.store.files import write_text_atomically
 from harness.store.identity import code_version
 

@@ -24,7 +24,7 @@ Every numeric parameter is a *distribution*: a plain number (fixed), or a one-ke
 A file is read into the frozen :class:`Population`; every problem is collected and raised as
 one :class:`harness.scenarios.errors.ScenarioError` naming the file, the key, the value and
 what is allowed (the scenario files' error style, through their
-:class:`harness.scenarios.reader.TableReader`).
+:class:`harness.scenarios.table_reader.TableReader`).
 """
 
 from __future__ import annotations
@@ -38,8 +38,8 @@ from typing import Any
 
 from harness import inputs
 from harness.scenarios.errors import NO_VALUE, OptionError, ScenarioError, suggest
-from harness.scenarios.reader import TableReader
 from harness.scenarios.schema import BOUNDS, NAME_PATTERN, TAG_PATTERN
+from harness.scenarios.table_reader import TableReader
 
 #: The shipped populations, beside ``scenarios/`` at the repository root.
 POPULATION_DIR = Path(__file__).resolve().parent.parent.parent / "populations"

@@ -13,10 +13,12 @@ Newton–Coulomb law of sequential-impulse engines; several contacts in ``simult
 """
 
 from . import builders, errors, laws, process
+from .batch import BatchResult, solve_batch
 from .builders import ImpactProblem, PlanarBody
+from .contact_space import LAWS
 from .errors import STATUS_MESSAGES, ImpactInputError
 from .process import impulse_process, process_collision_type, sequential_impulses
-from .solver import LAWS, BatchResult, ImpactResult, solve, solve_batch
+from .solver import ImpactResult, solve
 
 __all__ = [
     "LAWS",

@@ -255,7 +255,7 @@ def _contact_terms(factor, size, wn, wt):
 
 
 def law_answer(law, mnn, mnt, mtt, vn, vt, mu, e, delta):
-    """:func:`planar_impact.solver.contact_space_solution` of one row in the theory's ``t``
+    """:func:`planar_impact.contact_space.contact_space_solution` of one row in the theory's ``t``
     (``v_t ≥ 0``), bit for bit, as floats (a tuple in :data:`LAW_FIELDS` order); None where
     the row is not cleanly solved (an error status, or a division by zero). Rows near
     Table 1's band run the batch's candidate search

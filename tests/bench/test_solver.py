@@ -34,9 +34,9 @@ def test_output_write_covers_every_array_of_a_batch_result():
     assert len(arrays) == 14  # status + the 13 result fields
     assert sorted(map(str, bench.result_dtypes())) == sorted(str(v.dtype) for v in arrays)
     # ... which is what the solver allocates per result, from its own table.
-    from planar_impact import solver
+    from planar_impact import batch
     assert sorted(map(str, bench.result_dtypes())) == sorted(
-        str(np.dtype(d)) for d in solver._BATCH_DTYPES.values())
+        str(np.dtype(d)) for d in batch.BATCH_DTYPES.values())
     assert bench.output_write_time(10, repeat=1) > 0
 
 

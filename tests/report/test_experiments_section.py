@@ -4,7 +4,7 @@ import functools
 import os
 
 from harness.report import experiments
-from harness.report.figures import png_tag
+from harness.report.figure_cache import png_tag
 
 
 def test_section_without_data_shows_kharaz_and_where_to_get(tmp_path, monkeypatch):

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from harness import report
-from harness.report.figures import scenario_digests
+from harness.report.figure_cache import scenario_digests
 from harness.report.views import slug
 from harness.run import runner
 from harness.run.records import Record, Results, read_results, write_results
@@ -198,7 +198,7 @@ def test_a_report_with_nothing_to_draw_never_imports_matplotlib(results_file, tm
 def test_a_sweep_figures_digest_is_the_same_in_any_checkout():
     """The results record each scenario file's absolute path; a figure reading only the
     sweep must not be redrawn because the repository sits elsewhere (a fresh clone)."""
-    from harness.report.figures import inputs_digest
+    from harness.report.figure_cache import inputs_digest
 
     results = read_results(ROOT / "reports" / "results.json")
 

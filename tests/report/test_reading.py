@@ -13,7 +13,7 @@ import pytest
 
 from harness import report
 from harness.report import reading
-from harness.report.figures import scenario_digests
+from harness.report.figure_cache import scenario_digests
 from harness.report.reading import (
     LazyResults,
     read_for_report,

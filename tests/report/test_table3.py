@@ -139,7 +139,7 @@ def test_a_reachable_du_is_at_distance_zero_and_its_e_is_found(table, index):
 
 
 def test_the_paper_figure_is_drawn_again_only_when_its_inputs_change(tmp_path, monkeypatch):
-    from harness.report import figures
+    from harness.report import figure_cache
 
     figure = tmp_path / "paper-table3.png"
     paper.write_report(tmp_path)
@@ -150,11 +150,11 @@ def test_the_paper_figure_is_drawn_again_only_when_its_inputs_change(tmp_path, m
     assert calls == []
     assert (figure.stat().st_mtime_ns, figure.with_suffix(".svg").stat().st_mtime_ns) == drawn
     # the solver's code is an input: another digest redraws
-    solver_digest = figures.solver_digest
-    monkeypatch.setattr(figures, "solver_digest", lambda: "another solver")
+    solver_digest = figure_cache.solver_digest
+    monkeypatch.setattr(figure_cache, "solver_digest", lambda: "another solver")
     paper.write_report(tmp_path)
     assert len(calls) == 1
-    monkeypatch.setattr(figures, "solver_digest", solver_digest)  # the figure is current again
+    monkeypatch.setattr(figure_cache, "solver_digest", solver_digest)  # the figure is current again
     figure.with_suffix(".svg").unlink()  # a missing twin redraws too
     paper.write_report(tmp_path)
     assert len(calls) == 2

@@ -464,7 +464,7 @@ def test_a_bad_cache_entry_is_a_reported_miss(tmp_path, damage):
 
 
 def test_the_cache_has_one_home_whatever_the_working_directory(tmp_path, monkeypatch):
-    from harness.store.cache import default_cache_dir
+    from harness.store.cache_directory import default_cache_dir
 
     monkeypatch.delenv("IMPACT_HARNESS_CACHE_DIR", raising=False)
     monkeypatch.chdir(tmp_path)

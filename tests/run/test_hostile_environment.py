@@ -21,7 +21,8 @@ from harness.engines.facts import ENGINE_FACTS
 from harness.run import command, runner
 from harness.run.records import read_results
 from harness.scenarios import SCENARIO_DIR, load_scenario
-from harness.store.cache import CACHE_MARKER, OLD_CHECKS_STORES, ResultCache
+from harness.store.cache import ResultCache
+from harness.store.cache_directory import CACHE_MARKER, OLD_CHECKS_STORES
 
 # Entry files read and written by hand (shared by the cache tests).
 _spec = importlib.util.spec_from_file_location(

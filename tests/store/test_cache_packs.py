@@ -12,7 +12,9 @@ import pytest
 
 from harness.run import runner
 from harness.scenarios import load_scenario
-from harness.store.cache import PACK_DIRECTORY, PACK_SIZE, NotOurCache, PendingPuts, ResultCache
+from harness.store.cache import ResultCache
+from harness.store.cache_directory import NotOurCache
+from harness.store.packs import PACK_DIRECTORY, PACK_SIZE, PendingPuts
 
 _spec = importlib.util.spec_from_file_location(
     "cache_entries", Path(__file__).parent.parent / "run" / "cache_entries.py")
@@ -133,7 +135,7 @@ def test_pending_puts_write_a_pack_when_full_and_the_rest_when_flushed(tmp_path)
 
 def test_pending_puts_write_what_waited_too_long(tmp_path, monkeypatch):
     clock = [100.0]
-    monkeypatch.setattr("harness.store.cache.time.monotonic", lambda: clock[0])
+    monkeypatch.setattr("harness.store.packs.time.monotonic", lambda: clock[0])
     cache = ResultCache(tmp_path, version="v")
     pending = PendingPuts(cache, max_wait_s=2.0)
     first, second, third = _items(cache, 3)

@@ -17,10 +17,10 @@ from hypothesis import strategies as st
 
 import planar_impact as pi
 from harness.scene.random_problems import random_problems, row
-from planar_impact import fastpath, solver
+from planar_impact import contact_space, fastpath, solver
 
 COUNT = 4_000
-SAFE_LOW, SAFE_HIGH = 2.0**-solver.SAFE_EXPONENT, 2.0**solver.SAFE_EXPONENT
+SAFE_LOW, SAFE_HIGH = contact_space.SAFE_LOW, contact_space.SAFE_HIGH
 FIELDS = ("normal_impulse", "tangential_impulse", "vn_separation", "vt_separation",
           "energy_change", "collision_type", "case", "restitution_poisson", "type_at_boundary",
           "alternative_type")

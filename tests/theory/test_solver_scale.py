@@ -22,7 +22,7 @@ from hypothesis import strategies as st
 import planar_impact as pi
 from harness.scene.random_problems import random_problems
 from planar_impact import builders, errors
-from planar_impact.solver import contact_space_solution
+from planar_impact.contact_space import contact_space_solution
 
 FIELDS = ("normal_impulse", "tangential_impulse", "vn_separation", "vt_separation",
           "energy_change")

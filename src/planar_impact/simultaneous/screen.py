@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import laws, solver
+from .. import contact_space, laws
 from .system import (
     SEPARATING,
 )
@@ -220,7 +220,7 @@ def _types_within_margin(system, law, types, signs, effective, margin):
 
     signs_of = [signs[rows, i, None] for i, rows, _, _ in parts]
     with np.errstate(all="ignore"):
-        out = solver.contact_space_solution(
+        out = contact_space.contact_space_solution(
             law, stacked([t[0][0] for t in terms]),
             stacked([sign * t[0][1] for sign, t in zip(signs_of, terms)]),
             stacked([t[0][2] for t in terms]), stacked([vn for _, _, vn, _ in parts]),

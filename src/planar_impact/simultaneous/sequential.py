@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import solver
+from .. import contact_space, solver
 from ..errors import ImpactInputError
 from .system import (
     ContactSystem,
@@ -57,7 +57,7 @@ def sequential_impacts(system: ContactSystem, law: str, order, max_impacts: int 
             if len(impacts) >= max_impacts:
                 capped = True
                 break
-            solver.check_law(law)  # as solve() would, at the first impact
+            contact_space.check_law(law)  # as solve() would, at the first impact
             # solve() of contact i, its M⁻¹ w and (A20) terms formed once per system.
             result = solver.solve_contact(system.checked_contacts[i], speeds,
                                           float(system.mu[i]), float(system.e[i]), law)

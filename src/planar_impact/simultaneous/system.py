@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import errors, solver
+from .. import contact_space, errors, solver
 from ..errors import ImpactInputError
 
 #: Laws of :func:`coherent_solutions` and their collision types (Newton numbers its three).
@@ -274,8 +274,8 @@ def law_at(system, law, i, vn, vt, sign):
     scalars = [np.float64(x) for x in (mnn, sign * mnt, mtt, vn, sign * vt,
                                        system.mu[i], system.e[i])]
     with np.errstate(all="ignore"):
-        out = solver.contact_space_solution(law, *scalars, delta=delta)
-        status = int(solver.answer_status(law, errors.SOLVED, out))
+        out = contact_space.contact_space_solution(law, *scalars, delta=delta)
+        status = int(contact_space.answer_status(law, errors.SOLVED, out))
     return out if status == errors.SOLVED else None
 
 

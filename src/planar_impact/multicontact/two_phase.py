@@ -1,0 +1,155 @@
+"""The two-phase Poisson law for ``m`` contacts: a compression phase, then a restitution
+phase whose base normal impulse is ``e`` times the compression's (the package's docstring)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..simultaneous import ContactSystem
+from .enumeration import phases_by_enumeration
+from .lemke import phase_by_lemke
+from .phase import SAME_ANSWER, PhaseSolution, check_method
+from .slip import phase_following_slip
+
+
+@dataclass(frozen=True)
+class TwoPhaseSolution:
+    """One answer of the two-phase Poisson law; arrays per contact, caller's ``t``.
+
+    ``normal_split_unique`` is False where ``W`` has a null vector with a normal component:
+    then the compression's normal impulses are a family, and so is the restitution that
+    scales them (velocities after the impact need not be unique). On one body lying flat the
+    null vectors are tangential only (the friction split), and this is True.
+    """
+
+    compression: PhaseSolution
+    restitution: PhaseSolution
+    normal_impulse: np.ndarray
+    tangential_impulse: np.ndarray
+    delta_u: np.ndarray
+    u_after: np.ndarray
+    vn_separation: np.ndarray
+    vt_separation: np.ndarray
+    energy_change: float  # J: ½ u'ᵀMu' − ½ uᵀMu
+    energy_change_compression: float
+    normal_split_unique: bool
+
+    def impulses(self) -> np.ndarray:
+        return np.ravel(np.column_stack([self.normal_impulse, self.tangential_impulse]))
+
+
+
+def normal_split_unique(system: ContactSystem) -> bool:
+    """False where ``W`` has a null vector with a normal component (relative 1e-9)."""
+    _, singular, right = np.linalg.svd(system.delassus)
+    null = right[singular <= 1e-10 * singular[0]]
+    return bool(null.size == 0 or np.max(np.abs(null[:, 0::2])) <= 1e-9)
+
+
+def poisson_two_phase(system: ContactSystem, method: str = "enumeration", *,
+                      follow_slip: bool = True) -> list[TwoPhaseSolution]:
+    """The two-phase Poisson law for the ``m`` contacts of ``system`` (module docstring).
+
+    Every answer by ``"enumeration"`` (a compression's every solution followed by each of
+    its restitutions; answers with the same speeds after listed once), the one Lemke's
+    algorithm reaches (or none, where it ends on a ray) by ``"lemke"``. Contacts that do
+    not approach take part too: the complementarity decides whether they take an impulse.
+
+    ``follow_slip`` (default): each phase follows the slip (:func:`phase_following_slip`),
+    which makes the law the paper's Poisson law for one contact in all five types. Without
+    it each phase is one velocity-level problem (Coulomb at the phase's end only), as in
+    Glocker and Pfeiffer: the same answer wherever no slip reverses inside a phase.
+    """
+    return poisson_two_phase_many([system], method, follow_slip=follow_slip)[0]
+
+
+def poisson_two_phase_many(systems, method: str = "enumeration", *, follow_slip: bool = True
+                           ) -> list[list[TwoPhaseSolution]]:
+    """:func:`poisson_two_phase` of many systems; by enumeration without ``follow_slip``, the
+    systems with the same number of contacts have each phase's modes solved in one batched
+    call."""
+    check_method(method)
+    if follow_slip:
+        return [_following_slip(system, method) for system in systems]
+    systems = list(systems)
+    compressions: list[list[PhaseSolution]] = [[] for _ in systems]
+    for rows, phases in _phases(systems, method, [(i, s.approach, np.zeros(s.count))
+                                                  for i, s in enumerate(systems)]):
+        for row, found in zip(rows, phases):
+            compressions[row] = found
+    starts = [(i, phase.velocities, systems[i].e * phase.impulses[0::2])
+              for i, found in enumerate(compressions) for phase in found]
+    pairs = [(i, phase) for i, found in enumerate(compressions) for phase in found]
+    restitutions: list[list[PhaseSolution]] = [[] for _ in pairs]
+    for rows, phases in _phases(systems, method, starts):
+        for row, found in zip(rows, phases):
+            restitutions[row] = found
+    answers: list[list[TwoPhaseSolution]] = [[] for _ in systems]
+    unique_split = [normal_split_unique(system) for system in systems]
+    for (i, compression), found in zip(pairs, restitutions):
+        system = systems[i]
+        scale = SAME_ANSWER * (system.speed_scale() + float(np.max(np.abs(system.u))))
+        for restitution in found:
+            answer = _assemble(system, compression, restitution, unique_split[i])
+            if all(np.max(np.abs(answer.u_after - other.u_after)) > scale
+                   for other in answers[i]):
+                answers[i].append(answer)
+    return answers
+
+
+def _following_slip(system: ContactSystem, method: str) -> list[TwoPhaseSolution]:
+    speed = system.speed_scale()
+    unique_split = normal_split_unique(system)
+    scale = SAME_ANSWER * (speed + float(np.max(np.abs(system.u))))
+    answers: list[TwoPhaseSolution] = []
+    for compression in phase_following_slip(system.delassus, system.approach,
+                                            np.zeros(system.count), system.mu, speed, method):
+        base = system.e * compression.impulses[0::2]
+        for restitution in phase_following_slip(system.delassus, compression.velocities, base,
+                                                system.mu, speed, method):
+            answer = _assemble(system, compression, restitution, unique_split)
+            if all(np.max(np.abs(answer.u_after - other.u_after)) > scale for other in answers):
+                answers.append(answer)
+    return answers
+
+
+def _phases(systems, method, starts):
+    """Each phase of ``starts`` (``(system index, start velocities, base)``), grouped by
+    contact count: yields ``(positions in starts, their solutions)``."""
+    groups: dict[int, list[int]] = {}
+    for position, (i, _, _) in enumerate(starts):
+        groups.setdefault(systems[i].count, []).append(position)
+    for positions in groups.values():
+        chosen = [starts[p] for p in positions]
+        owners = [systems[i] for i, _, _ in chosen]
+        if method == "enumeration":
+            yield positions, phases_by_enumeration(
+                np.array([s.delassus for s in owners]), np.array([v for _, v, _ in chosen]),
+                np.array([b for _, _, b in chosen]), np.array([s.mu for s in owners]),
+                np.array([s.speed_scale() for s in owners]))
+        else:
+            found = [phase_by_lemke(s.delassus, v, b, s.mu, s.speed_scale())
+                     for s, (_, v, b) in zip(owners, chosen)]
+            yield positions, [[] if phase is None else [phase] for phase in found]
+
+
+def _kinetic(system: ContactSystem, speeds) -> float:
+    return 0.5 * float(speeds @ system.mass_matrix @ speeds)
+
+
+def _assemble(system, compression, restitution, unique_split) -> TwoPhaseSolution:
+    total = compression.impulses + restitution.impulses
+    delta_u = system.delta_u(total)  # (75)
+    u_after = system.u + delta_u
+    before = _kinetic(system, system.u)
+    after_compression = _kinetic(system, system.u + system.delta_u(compression.impulses))
+    return TwoPhaseSolution(
+        compression=compression, restitution=restitution,
+        normal_impulse=total[0::2].copy(), tangential_impulse=total[1::2].copy(),
+        delta_u=delta_u, u_after=u_after,
+        vn_separation=system.wn @ u_after, vt_separation=system.wt @ u_after,
+        energy_change=_kinetic(system, u_after) - before,
+        energy_change_compression=after_compression - before,
+        normal_split_unique=unique_split)
