@@ -23,6 +23,7 @@ import numpy as np
 from harness.scene import ellipse
 
 from . import drops_engines, fazeli, metric
+from .engine_curves import judged
 from .predict import predict
 from .records import MeasuredImpacts
 
@@ -89,8 +90,6 @@ def drop_population(count: int = 24, seed: int = 0) -> tuple[MeasuredImpacts, np
 
 def _score(engine, preset: str, impacts: MeasuredImpacts, thetas, mu: float, e: float,
            overrides: dict, reference: np.ndarray) -> tuple[float | None, float]:
-    from .engine_curves import judged
-
     scenes = [drops_engines.drop_scene(impacts, i, float(thetas[i]), mu, e)
               for i in range(len(impacts))]
     runs = engine.run_many(scenes, preset=preset, overrides=overrides or None)

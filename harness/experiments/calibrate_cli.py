@@ -7,13 +7,12 @@ import argparse
 import sys
 
 import planar_impact as pi
+from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine
 
 from . import calibrate, drops_engines, fazeli, registry
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from harness.engines import ENGINE_NAMES
-
     parser.add_argument("engine", choices=ENGINE_NAMES)
     parser.add_argument("--to", required=True, choices=("data", *pi.LAWS),
                         help="the target: the Fazeli drops (data) or a law on a population "
@@ -33,8 +32,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def main(args) -> int:
-    from harness.engines import EngineNotInstalled, load_engine
-
     if args.drops < 2:
         print(f"impact-harness calibrate: --drops {args.drops}: at least 2", file=sys.stderr)
         return 2
