@@ -125,10 +125,11 @@ def compute(data: fazeli.FazeliData, *, engines=(), replicates: int = 100, seed:
             errors = run.pop("per_drop_errors")
             on_drops.append({**run, "cdf": quantiles(errors)})
             result = calibrate.calibrate(engine, preset, target.subset(rows), thetas[rows],
-                                         "data", sample=sample)
+                                         "data", sample=sample, seed=seed)
             calibrated.append({"engine": engine.name, "preset": preset, "best": result.best,
                                "objective": result.best_objective, "moves": result.moves,
-                               "cannot": result.cannot(), "knobs": result.knobs})
+                               "cannot": result.cannot(), "knobs": result.knobs,
+                               **calibration_uncertainty(result.uncertainty)})
     return {"drops": len(target), "post_speeds": "raw", "seed": seed,
             "replicates": replicates, "paper_models": models, "laws": fits,
             "shown": {"law": SHOWN_LAW, "objective": SHOWN_OBJECTIVE, "mu": shown["mu"],
@@ -136,4 +137,30 @@ def compute(data: fazeli.FazeliData, *, engines=(), replicates: int = 100, seed:
                       "units": [unit for _, unit in SPEEDS], "density": densities},
             "engines": on_drops, "calibration": {"sample": sample, "grid": "quick",
                                                  "tolerance": calibrate.TOLERANCE,
+                                                 "replicates": calibrate.REPLICATES,
+                                                 "confidence": calibrate.CONFIDENCE,
                                                  "results": calibrated}}
+
+
+def calibration_uncertainty(found: calibrate.Uncertainty | None) -> dict:
+    """A calibration's intervals and held-out error, as plain JSON (None: no cell scored):
+    the best objective's interval, each setting's interval (values tried), the share of
+    resamples that re-picked the best cell, and the split's in-sample and held-out values
+    with the fitting half's pick."""
+    if found is None:
+        return {"objective_interval": None, "settings_interval": None, "agree": None,
+                "held_out": None}
+    scored = bool(found.settings)
+    return {"objective_interval": ([found.objective.low, found.objective.high] if scored
+                                   else None),
+            "settings_interval": found.settings if scored else None,
+            "agree": found.agree if scored else None, "unscored": found.unscored,
+            "held_out": {"in_sample": _finite(found.in_sample),
+                         "held_out": _finite(found.held_out),
+                         "fitting_drops": int(sum(found.split.held_out_drops[1:])),
+                         "held_out_drops": int(found.split.held_out_drops[0]),
+                         "picked": found.split_best[0]}}
+
+
+def _finite(value: float) -> float | None:
+    return float(value) if np.isfinite(value) else None

@@ -25,7 +25,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="impacts scored per cell (default 12): a random sample of the "
                              "data's drops, or of a generated population, drawn with --seed")
     parser.add_argument("--seed", type=int, default=0,
-                        help="seed of that sample (default 0; printed with the result)")
+                        help="seed of that sample, of the bootstrap's resamples and of the "
+                             "held-out split (default 0; printed with the result)")
+    parser.add_argument("--replicates", type=int, default=calibrate.REPLICATES,
+                        help="bootstrap resamples of the scored drops behind the intervals "
+                             f"(default {calibrate.REPLICATES})")
     parser.add_argument("--law-mu", type=float, default=0.3)
     parser.add_argument("--law-e", type=float, default=0.6,
                         help="the law's e (default 0.6, a cell of the quick grid)")
@@ -34,6 +38,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def main(args) -> int:
     if args.drops < 2:
         print(f"impact-harness calibrate: --drops {args.drops}: at least 2", file=sys.stderr)
+        return 2
+    if args.replicates < 10:
+        print(f"impact-harness calibrate: --replicates {args.replicates}: at least 10",
+              file=sys.stderr)
         return 2
     if args.seed < 0:
         print(f"impact-harness calibrate: --seed {args.seed}: at least 0", file=sys.stderr)
@@ -68,7 +76,7 @@ def main(args) -> int:
         impacts, thetas = calibrate.drop_population(args.drops, seed=args.seed)
         sample = {"drops": args.drops, "of": "a generated population", "seed": args.seed}
     for preset in presets:
-        print(calibrate.summary(calibrate.calibrate(engine, preset, impacts, thetas, args.to,
-                                                    args.grid, args.law_mu, args.law_e,
-                                                    sample)))
+        print(calibrate.summary(calibrate.calibrate(
+            engine, preset, impacts, thetas, args.to, args.grid, args.law_mu, args.law_e,
+            sample, replicates=args.replicates, seed=args.seed)))
     return 0

@@ -162,8 +162,9 @@ LAW_LINES = {"newton": "-", "poisson": "-", "stronge": "--", "stronge-paper": ":
 
 
 #: The kept aggregates' layout: bump when what is kept changes (2: the files' SHA-256 in the
-#: provenance, never the copy's path).
-DROPS_LAYOUT = 2
+#: provenance, never the copy's path; 3: the calibration's bootstrap intervals and held-out
+#: error).
+DROPS_LAYOUT = 3
 
 
 def drops_key(hashes: dict[str, str]) -> str:
@@ -335,29 +336,50 @@ def draw_fits(aggregates: dict, path: Path, tag: str | None) -> Path:
 
 
 def calibration_table(aggregates: dict) -> str:
+    """The calibrated settings of every engine and preset, with the bootstrap intervals of
+    the median error and of each setting chosen, and the held-out error (split by drop)."""
     calibration = aggregates["calibration"]
+    level = f"{calibration['confidence']:.0%}"
     rows = []
     for result in calibration["results"]:
+        interval = chosen = held = "—"
         if result["best"] is None:
             best = "cannot be calibrated: no setting tried gives single impacts on half the drops"
             objective = "—"
         else:
             best = ", ".join(f"{k} {v}" for k, v in result["best"].items())
             objective = f"{result['objective']:.3f}"
+            if result["objective_interval"] is not None:
+                low, high = result["objective_interval"]
+                interval = f"[{low:.3f}, {high:.3f}]"
+                chosen = "; ".join(f"{k} {low}" if low == high else f"{k} {low} to {high}"
+                                   for k, (low, high) in result["settings_interval"].items())
+                chosen += f" (the best cell re-picked on {result['agree']:.0%})"
+            split = result["held_out"]
+            if split["held_out"] is not None:
+                held = (f"{split['held_out']:.3f} ({split['held_out_drops']} drops; in-sample "
+                        f"{split['in_sample']:.3f} on {split['fitting_drops']})")
         cannot = ", ".join(result["cannot"]) or "—"
         rows.append(f"<tr><td>{escape_html(result['engine'])}</td>"
                     f"<td>{escape_html(preset_label(result['engine'], result['preset']))}</td>"
-                    f"<td>{escape_html(best)}</td>"
-                    f"<td>{objective}</td><td>{escape_html(cannot)}</td></tr>")
+                    f"<td>{escape_html(best)}</td><td>{objective}</td><td>{interval}</td>"
+                    f"<td>{escape_html(chosen)}</td><td>{held}</td>"
+                    f"<td>{escape_html(cannot)}</td></tr>")
     sample = calibration["sample"]
     return ("<table><tr><th>engine</th><th>preset</th><th>calibrated settings</th>"
-            "<th>median error</th><th>knobs that move it by &lt; "
+            f"<th>median error</th><th>its {level} interval</th>"
+            f"<th>settings chosen ({level} of resamples)</th>"
+            "<th>held-out error (in-sample)</th><th>knobs that move it by &lt; "
             f"{calibration['tolerance']:g} (cannot calibrate)</th></tr>" + "".join(rows)
             + "</table><p class='muted'>Grid <i>quick</i> (μ 0.1, 0.3, 0.6 × e 0.3, 0.6, 0.9, "
             "times MuJoCo's solref damping ratio or Box2D's length scale), scored on "
             f"{sample['drops']} of the {sample['of']} drops drawn at random with seed "
             f"{sample['seed']} (<code>impact-harness calibrate ENGINE --to data</code> for "
-            "more).</p>")
+            f"more). Intervals: {calibration['replicates']:,} bootstrap resamples of those "
+            "drops (seed as above), the best cell re-picked on each; percentile intervals, "
+            "the settings' on the values tried. Held-out: the drops split by drop into "
+            "halves (same seed), the best cell of one half scored on the other; its "
+            "in-sample value beside it.</p>")
 
 
 def drops_html(out_dir: Path, aggregates: dict) -> str:

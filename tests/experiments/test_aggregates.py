@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-from harness.experiments import aggregates, fazeli
+from harness.experiments import aggregates, calibrate, fazeli
 
 from .conftest import write_synthetic
 
@@ -87,3 +87,13 @@ def test_engines_are_run_judged_and_calibrated_on_a_seeded_sample(computed):
     sample = result["calibration"]["sample"]
     assert sample == {"drops": 4, "of": truth["drops"], "seed": 0}
     assert all(row["best"] is not None for row in result["calibration"]["results"])
+    calibration = result["calibration"]
+    assert calibration["replicates"] == calibrate.REPLICATES
+    for row in calibration["results"]:  # the intervals and the held-out error, as aggregates
+        low, high = row["objective_interval"]
+        assert low <= row["objective"] <= high
+        for knob, value in row["best"].items():
+            assert row["settings_interval"][knob][0] <= value <= row["settings_interval"][knob][1]
+        split = row["held_out"]
+        assert split["fitting_drops"] + split["held_out_drops"] == sample["drops"]
+        assert split["held_out"] is None or split["held_out"] >= 0
