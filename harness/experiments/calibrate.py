@@ -262,12 +262,14 @@ def summary(calibration: Calibration) -> str:
             text = f"moves the objective by {moved:.4f}"
         lines.append(f"  {knob} {calibration.knobs[knob]}: {text}")
     if calibration.uncertainty is not None:
-        lines += uncertainty_lines(calibration.uncertainty, len(calibration.errors[0]))
+        lines += uncertainty_lines(calibration.uncertainty, len(calibration.errors[0]),
+                                   calibration.cannot())
     return "\n".join(lines)
 
 
-def uncertainty_lines(found: Uncertainty, drops: int) -> list[str]:
-    """The bootstrap intervals and the held-out error, in plain lines."""
+def uncertainty_lines(found: Uncertainty, drops: int, cannot=()) -> list[str]:
+    """The bootstrap intervals and the held-out error, in plain lines; a knob of ``cannot``
+    ties (the first value wins every tie), so its interval is shown as no interval."""
     level = f"{found.confidence:.0%}"
     lines = [f"bootstrap: {found.replicates} resamples of the {drops} drops with seed "
              f"{found.seed}, the best cell re-picked on each"
@@ -277,17 +279,18 @@ def uncertainty_lines(found: Uncertainty, drops: int) -> list[str]:
         lines.append(f"  best objective, {level} interval: [{low:.4f}, {high:.4f}]; the best "
                      f"cell above re-picked on {found.agree:.0%} of the resamples")
         lines.append(f"  settings chosen, {level} interval: " + "; ".join(
-            f"{knob} {json.dumps(low)}" if low == high
+            f"{knob} any (ties)" if knob in cannot
+            else f"{knob} {json.dumps(low)}" if low == high
             else f"{knob} {json.dumps(low)} to {json.dumps(high)}"
             for knob, (low, high) in found.settings.items()))
     else:
         lines.append("  no resample had a scored cell: no interval")
     split = found.split
     sizes = [drops - split.held_out_drops[0], split.held_out_drops[0]]  # fitting, held out
-    picked = "none scored" if found.split_best[0] is None else json.dumps(found.split_best[0])
+    picks = ["none scored" if best is None else json.dumps(best) for best in found.split_best]
     lines.append(f"held out: the drops split by drop into halves with seed {found.seed}; the "
-                 f"best cell of the fitting half ({sizes[0]} drops: {picked}) scores "
+                 f"best cell of the fitting half ({sizes[0]} drops: {picks[0]}) scores "
                  f"{found.in_sample:.4f} on it and {found.held_out:.4f} on the held-out half "
-                 f"({sizes[1]} drops); the other way round {split.in_sample[1]:.4f} and "
-                 f"{split.held_out[1]:.4f}")
+                 f"({sizes[1]} drops); fitted on the held-out half instead: {picks[1]}, "
+                 f"{split.in_sample[1]:.4f} on it and {split.held_out[1]:.4f} on the other")
     return lines

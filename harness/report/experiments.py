@@ -352,7 +352,8 @@ def calibration_table(aggregates: dict) -> str:
             if result["objective_interval"] is not None:
                 low, high = result["objective_interval"]
                 interval = f"[{low:.3f}, {high:.3f}]"
-                chosen = "; ".join(f"{k} {low}" if low == high else f"{k} {low} to {high}"
+                chosen = "; ".join(f"{k} any (ties)" if k in result["cannot"]
+                                   else f"{k} {low}" if low == high else f"{k} {low} to {high}"
                                    for k, (low, high) in result["settings_interval"].items())
                 chosen += f" (the best cell re-picked on {result['agree']:.0%})"
             split = result["held_out"]
