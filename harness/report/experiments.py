@@ -163,7 +163,7 @@ LAW_LINES = {"newton": "-", "poisson": "-", "stronge": "--", "stronge-paper": ":
 
 #: The kept aggregates' layout: bump when what is kept changes (2: the files' SHA-256 in the
 #: provenance, never the copy's path; 3: the calibration's bootstrap intervals and held-out
-#: error).
+#: error, Poisson against Stronge with its interval, the drops on Routh's diagram).
 DROPS_LAYOUT = 3
 
 
@@ -335,6 +335,35 @@ def draw_fits(aggregates: dict, path: Path, tag: str | None) -> Path:
     return save_png(figure, path, tag=tag)
 
 
+def laws_apart_html(aggregates: dict) -> str:
+    """Whether the data tell Poisson from Stronge (each objective, with its interval), and
+    where the drops lie on Routh's diagram."""
+    parts = ["<h4>Can the data tell Poisson from Stronge?</h4><ul>"]
+    for objective, found in aggregates["poisson_vs_stronge"].items():
+        if found is None:
+            continue
+        low, high = found["interval"]
+        parts.append(
+            f"<li><i>{escape_html(objective)}</i>: objective(Poisson) − objective(Stronge) = "
+            f"{found['difference']:.3g}, {found['confidence']:.0%} interval {low:.3g} to "
+            f"{high:.3g} (paired bootstrap, {found['replicates']:,} resamples of the drops); "
+            f"their predictions of the centre's velocity differ by "
+            f"{found['prediction_gap']['median']:.2%} of |v| on the median drop "
+            f"({found['prediction_gap']['q99']:.2%} at the 99th percentile), against a "
+            f"median error of {found['median_error']:.1%}. "
+            f"{escape_html(found['verdict'].capitalize())}.</li>")
+    routh = aggregates["routh"]
+    ratio = ", ".join(f"{v:.3f}" for v in routh["incidence_ratio"].values())
+    coupling = ", ".join(f"{v:.4f}" for v in routh["mu_coupling"].values())
+    levels = ", ".join(routh["incidence_ratio"])
+    parts.append("</ul><p>Where the drops lie on Routh's diagram (at the shown fit's μ): the "
+                 f"incidence |v<sub>t</sub>|/|v<sub>n</sub>| has quantiles ({levels}) "
+                 f"{ratio}; the coupling μ|m<sub>nt</sub>|/m<sub>nn</sub>, through which the "
+                 f"laws differ, {coupling}; m<sub>nt</sub> opposes the slip in "
+                 f"{routh['coupling_opposes_slip']} of {routh['drops']} drops.</p>")
+    return "".join(parts)
+
+
 def calibration_table(aggregates: dict) -> str:
     """The calibrated settings of every engine and preset, with the bootstrap intervals of
     the median error and of each setting chosen, and the held-out error (split by drop)."""
@@ -416,6 +445,7 @@ def drops_html(out_dir: Path, aggregates: dict) -> str:
         "Each law's global (μ, e) by each objective with its 95 % bootstrap interval "
         f"({aggregates['replicates']} resamples of the drops, seed {aggregates['seed']}). "
         "The laws nearly coincide on this object; the objectives do not."))
+    parts.append(laws_apart_html(aggregates))
     parts.append("<h4>Calibrated engine settings</h4>" + calibration_table(aggregates))
     return "\n".join(parts)
 

@@ -42,6 +42,16 @@ def test_the_fits_recover_the_truth_under_the_impulse_objective(computed):
     assert set(result["laws"]) == set(aggregates.OBJECTIVES)
 
 
+def test_poisson_against_stronge_has_an_interval_and_a_verdict(computed):
+    result, truth, _ = computed
+    for objective in aggregates.OBJECTIVES:
+        found = result["poisson_vs_stronge"][objective]
+        low, high = found["interval"]
+        assert low <= high and found["replicates"] == aggregates.COMPARE_REPLICATES
+        assert ("contains 0" in found["verdict"]) == (low <= 0 <= high)
+    assert result["routh"]["drops"] == truth["drops"]
+
+
 def test_nothing_per_drop_is_kept(computed):
     """No list as long as the drops (a per-drop column) anywhere in the result, and every
     histogram bin shown holds at least MIN_BIN_COUNT drops."""
