@@ -126,7 +126,6 @@ def test_these_import_at_module_level_only():
 #: :func:`test_project_modules_are_imported_at_module_level`.
 EDITED_CONCURRENTLY = "being edited concurrently; to lift next"
 INNER_IMPORTS_ALLOWED: dict[str, str] = {
-    "harness.experiments": EDITED_CONCURRENTLY,
     "harness.engines.box2d": EDITED_CONCURRENTLY,
     "harness.engines.mujoco": EDITED_CONCURRENTLY,
     "harness.engines.pybullet": EDITED_CONCURRENTLY,

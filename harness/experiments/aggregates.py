@@ -26,6 +26,8 @@ OBJECTIVES = ("median-error", "impulse")
 #: The law whose predictions are set against the measurements, and the fit the engines run
 #: at (the authors' own cost, which does not fit friction away).
 SHOWN_LAW, SHOWN_OBJECTIVE = "poisson", "impulse"
+#: Paired bootstrap resamples of the comparison of Poisson with Stronge.
+COMPARE_REPLICATES = 1000
 #: Post-impact speeds: names and units of the predicted-against-measured panels.
 SPEEDS = (("v_x'", "m/s"), ("v_y'", "m/s"), ("ω'", "rad/s"))
 
@@ -71,14 +73,17 @@ def density(predicted, measured, bins: int = 20, median_bins: int = 12) -> dict:
 
 
 def law_fits(target, *, replicates: int, seed: int, workers: int | None, laws=pi.LAWS,
-             mus=fitting.MU_GRID, es=fitting.E_GRID) -> dict:
+             mus=fitting.MU_GRID, es=fitting.E_GRID) -> tuple[dict, dict]:
     """Every law fitted by each of :data:`OBJECTIVES`: (μ, e) with bootstrap intervals,
-    held-out value and the normalized errors' quantiles at the fit."""
+    held-out value and the normalized errors' quantiles at the fit; and per objective
+    whether the data tell Poisson from Stronge (:func:`laws_apart`)."""
     drop_errors = fitting.DropErrors(target)
     fits: dict = {}
+    apart: dict = {}
     for objective in OBJECTIVES:
         results = analysis.fit_laws(target, objective, laws, replicates=replicates,
                                     seed=seed, workers=workers, mus=mus, es=es)
+        apart[objective] = laws_apart(target, objective, results, seed)
         fits[objective] = {}
         for law, result in results.items():
             fit, boot = result.fit, result.bootstrap
@@ -92,25 +97,48 @@ def law_fits(target, *, replicates: int, seed: int, workers: int | None, laws=pi
                 "replicates": boot.replicates, "confidence": boot.confidence,
                 "at_window_edge": boot.at_window_edge, "on_grid_edge": fit.on_grid_edge,
                 "errors": quantiles(normalized)}
-    return fits
+    return fits, apart
+
+
+def laws_apart(target, objective: str, results: dict, seed: int) -> dict | None:
+    """Poisson against Stronge, each at its own fit by ``objective``: the difference of
+    their objectives with its paired-bootstrap interval (:data:`COMPARE_REPLICATES`
+    resamples), how far their predictions lie apart, and the verdict with its stated band
+    (:func:`analysis.compare_laws`). None when either law was not fitted."""
+    if not {"poisson", "stronge"} <= set(results):
+        return None
+    found = analysis.compare_laws(target, objective, results["poisson"].fit,
+                                  results["stronge"].fit, replicates=COMPARE_REPLICATES,
+                                  seed=seed)
+    return {"difference": found.objective_difference,
+            "interval": [float(found.interval.low), float(found.interval.high)],
+            "confidence": found.confidence, "replicates": COMPARE_REPLICATES,
+            "objective_of_stronge": found.objective_value,
+            "prediction_gap": {"median": found.prediction_gap_median,
+                               "q99": found.prediction_gap_q99},
+            "median_error": found.measurement_scale, "band": analysis.PRACTICAL_BAND,
+            "verdict": found.verdict()}
 
 
 def compute(data: fazeli.FazeliData, *, engines=(), replicates: int = 100, seed: int = 0,
             workers: int | None = None, calibration_drops: int = 12, laws=pi.LAWS,
             mus=fitting.MU_GRID, es=fitting.E_GRID, progress=lambda text: None) -> dict:
     """The report's aggregates of ``data``: the paper's six models, every law under both
-    objectives, Poisson's predictions against the measurements, each engine (loaded, with
-    its presets) on every drop at Poisson's ``impulse`` fit, and each engine's calibrated
-    (μ, e) and own settings on ``calibration_drops`` drops drawn with ``seed``. ``laws``
-    must include :data:`SHOWN_LAW`."""
+    objectives (and whether Poisson and Stronge differ; where the drops lie on Routh's
+    diagram, at the shown fit's μ), Poisson's predictions against the measurements, each
+    engine (loaded, with its presets) on every drop at Poisson's ``impulse`` fit, and each
+    engine's calibrated (μ, e) and own settings on ``calibration_drops`` drops drawn with
+    ``seed``, with intervals and a held-out error. ``laws`` must include
+    :data:`SHOWN_LAW`."""
     impacts = data.impacts
     target = fazeli.without_post_offset(impacts)  # the laws predict impulses only
     models = {name: quantiles(metric.normalized_error(speeds, impacts.speeds_after))
               for name, speeds in data.model_speeds.items()}
     progress("fitting every law by both objectives")
-    fits = law_fits(target, replicates=replicates, seed=seed, workers=workers, laws=laws,
-                    mus=mus, es=es)
+    fits, apart = law_fits(target, replicates=replicates, seed=seed, workers=workers,
+                           laws=laws, mus=mus, es=es)
     shown = fits[SHOWN_OBJECTIVE][SHOWN_LAW]
+    routh = analysis.routh_position(target, shown["mu"])
     predicted = predict(target, SHOWN_LAW, shown["mu"], shown["e"]).speeds_after
     densities = [density(predicted[:, k], target.speeds_after[:, k]) for k in range(3)]
     thetas, _ = drops_engines.jacobian_angles(target, data.pre_impact_angles)
@@ -125,15 +153,43 @@ def compute(data: fazeli.FazeliData, *, engines=(), replicates: int = 100, seed:
             errors = run.pop("per_drop_errors")
             on_drops.append({**run, "cdf": quantiles(errors)})
             result = calibrate.calibrate(engine, preset, target.subset(rows), thetas[rows],
-                                         "data", sample=sample)
+                                         "data", sample=sample, seed=seed)
             calibrated.append({"engine": engine.name, "preset": preset, "best": result.best,
                                "objective": result.best_objective, "moves": result.moves,
-                               "cannot": result.cannot(), "knobs": result.knobs})
+                               "cannot": result.cannot(), "knobs": result.knobs,
+                               **calibration_uncertainty(result.uncertainty)})
     return {"drops": len(target), "post_speeds": "raw", "seed": seed,
             "replicates": replicates, "paper_models": models, "laws": fits,
+            "poisson_vs_stronge": apart, "routh": routh,
             "shown": {"law": SHOWN_LAW, "objective": SHOWN_OBJECTIVE, "mu": shown["mu"],
                       "e": shown["e"], "speeds": [name for name, _ in SPEEDS],
                       "units": [unit for _, unit in SPEEDS], "density": densities},
             "engines": on_drops, "calibration": {"sample": sample, "grid": "quick",
                                                  "tolerance": calibrate.TOLERANCE,
+                                                 "replicates": calibrate.REPLICATES,
+                                                 "confidence": calibrate.CONFIDENCE,
                                                  "results": calibrated}}
+
+
+def calibration_uncertainty(found: calibrate.Uncertainty | None) -> dict:
+    """A calibration's intervals and held-out error, as plain JSON (None: no cell scored):
+    the best objective's interval, each setting's interval (values tried), the share of
+    resamples that re-picked the best cell, and the split's in-sample and held-out values
+    with the fitting half's pick."""
+    if found is None:
+        return {"objective_interval": None, "settings_interval": None, "agree": None,
+                "held_out": None}
+    scored = bool(found.settings)
+    return {"objective_interval": ([found.objective.low, found.objective.high] if scored
+                                   else None),
+            "settings_interval": found.settings if scored else None,
+            "agree": found.agree if scored else None, "unscored": found.unscored,
+            "held_out": {"in_sample": _finite(found.in_sample),
+                         "held_out": _finite(found.held_out),
+                         "fitting_drops": int(sum(found.split.held_out_drops[1:])),
+                         "held_out_drops": int(found.split.held_out_drops[0]),
+                         "picked": found.split_best[0]}}
+
+
+def _finite(value: float) -> float | None:
+    return float(value) if np.isfinite(value) else None

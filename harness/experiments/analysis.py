@@ -16,6 +16,7 @@ import planar_impact as pi
 
 from .. import processes
 from . import fitting, metric
+from .predict import predict
 from .records import MeasuredImpacts
 
 QUANTILES = (0.25, 0.5, 0.75, 0.9)
@@ -154,8 +155,6 @@ def compare_laws(impacts: MeasuredImpacts, objective: str, fit_a: fitting.Fit,
 
 
 def _speeds(impacts: MeasuredImpacts, fitted: fitting.Fit) -> np.ndarray:
-    from .predict import predict
-
     return predict(impacts, fitted.law, fitted.mu, fitted.e).speeds_after
 
 
@@ -181,8 +180,6 @@ def law_gap(impacts: MeasuredImpacts, law_a: str, law_b: str, mus, e: float) -> 
     """How far two laws' predictions lie apart at the same (μ, e), per μ: the median and
     99th percentile over drops of ‖v̂_A − v̂_B‖ / ‖v‖ (centre of mass, measured |v|).
     Where this is far below the measurement error, no fit of these data can separate them."""
-    from .predict import predict
-
     mus = np.asarray(mus, dtype=float)
     a = predict(impacts, law_a, mus[:, None], e).speeds_after
     b = predict(impacts, law_b, mus[:, None], e).speeds_after

@@ -10,6 +10,15 @@ ellipse drops generated here, no data needed). Flagged runs are never scored; a 
 fewer than half of the runs are single impacts has no objective. A knob that moves the
 objective by less than :data:`TOLERANCE` across its values (the others at the best cell) is
 reported as one the engine cannot be calibrated by.
+
+How far to trust the pick: every cell keeps its per-drop errors (NaN for a flagged run), so
+that the drops can be resampled without running the engine again. A seeded bootstrap of
+:data:`REPLICATES` resamples of the drops re-picks the best cell on each and gives the
+central :data:`CONFIDENCE` percentile interval of the best objective and of each setting
+chosen; the drops split by drop into :data:`HELD_OUT_FOLDS` halves (seeded) give a held-out
+error: the best cell of one half scored on the other, beside its in-sample value. Both reuse
+the law fits' resampling (:mod:`.fitting`). The per-drop errors stay in memory: only
+aggregates leave this module.
 """
 
 from __future__ import annotations
@@ -22,13 +31,22 @@ import numpy as np
 
 from harness.scene import ellipse
 
-from . import drops_engines, fazeli, metric
+from . import drops_engines, fazeli, fitting, metric
+from .engine_curves import judged
 from .predict import predict
 from .records import MeasuredImpacts
 
 #: A knob whose values move the objective by less than this (absolute, in units of the
 #: normalized error) does not calibrate the engine.
 TOLERANCE = 1e-3
+#: A cell is scored when at least this share of its runs are single impacts.
+MIN_SCORED_SHARE = 0.5
+#: Bootstrap resamples of the scored drops, and the intervals' confidence.
+REPLICATES = 1000
+CONFIDENCE = 0.95
+#: The held-out error's split: two halves by drop, the best cell of one (the fitting half)
+#: scored on the other (the held-out half); the other way round is shown beside it.
+HELD_OUT_FOLDS = 2
 #: The (μ, e) grids: ``quick`` (the default) and ``fine``.
 PAIR_GRIDS = {"quick": ((0.1, 0.3, 0.6), (0.3, 0.6, 0.9)),
               "fine": (tuple(np.round(np.linspace(0.0, 1.0, 11), 2)),
@@ -39,6 +57,35 @@ ENGINE_KNOBS = {
     "mujoco": (("solref", ([0.02, 0.5], [0.02, 1.0], [0.02, 2.0])),),
     "box2d": (("length_scale", (1.0, 8.0, 64.0)),),
 }
+
+
+@dataclass(frozen=True)
+class Uncertainty:
+    """How far the pick of a calibration holds: a bootstrap over the drops (the best cell
+    re-picked on each resample) and a held-out error (split by drop)."""
+
+    replicates: int
+    confidence: float
+    seed: int
+    objective: fitting.Interval  # percentile interval of the best cell's objective
+    #: knob -> [low, high]: the percentile interval of the value chosen, on values tried
+    settings: dict
+    agree: float  # share of the scored resamples that chose the full sample's best cell
+    unscored: int  # resamples on which no cell was scored
+    split: fitting.CrossValidation  # the halves: each one's best cell scored on the other
+    split_best: tuple  # the settings picked on each fitting half (None: no cell scored)
+
+    # The split's first fold is the held-out half, the others the fitting half; a mean over
+    # both ways round would make in-sample and held-out equal whenever the halves agree.
+    @property
+    def in_sample(self) -> float:
+        """The objective of the fitting half's best cell on the fitting half."""
+        return self.split.in_sample[0]
+
+    @property
+    def held_out(self) -> float:
+        """The objective of the fitting half's best cell on the held-out half."""
+        return self.split.held_out[0]
 
 
 @dataclass(frozen=True)
@@ -55,6 +102,11 @@ class Calibration:
     #: Which impacts were scored: {"drops": n, "of": N, "seed": s} for a seeded random
     #: sample of the data (:func:`sample_rows`) or of a generated population.
     sample: dict | None = None
+    #: (cells, drops): each cell's per-drop error, NaN for a flagged run, in the order of
+    #: ``cells``. In memory only: never written (the Fazeli data carry no licence).
+    errors: np.ndarray | None = field(default=None, repr=False)
+    #: The bootstrap intervals and the held-out error (None: no cell scored).
+    uncertainty: Uncertainty | None = None
 
     def cannot(self) -> list[str]:
         """The knobs that do not move the objective (the engine cannot be calibrated by
@@ -87,26 +139,71 @@ def drop_population(count: int = 24, seed: int = 0) -> tuple[MeasuredImpacts, np
     return impacts, theta
 
 
-def _score(engine, preset: str, impacts: MeasuredImpacts, thetas, mu: float, e: float,
-           overrides: dict, reference: np.ndarray) -> tuple[float | None, float]:
-    from .engine_curves import judged
+def cell_objectives(errors) -> np.ndarray:
+    """The objective of every cell from per-drop errors ``(cells..., drops)`` (NaN for a
+    flagged run): the median over the scored runs, NaN for a cell fewer than
+    :data:`MIN_SCORED_SHARE` of whose runs are scored."""
+    errors = np.asarray(errors, dtype=float)
+    flat = errors.reshape(-1, errors.shape[-1])
+    flat = np.where(np.isfinite(flat), flat, np.nan)
+    scored = np.mean(np.isfinite(flat), axis=1) >= MIN_SCORED_SHARE
+    values = np.full(flat.shape[0], np.nan)
+    if scored.any():
+        values[scored] = metric.aggregate("median-error", flat[scored])
+    return values.reshape(errors.shape[:-1])
 
+
+def _per_drop_errors(engine, preset: str, impacts: MeasuredImpacts, thetas, mu: float,
+                     e: float, overrides: dict, reference: np.ndarray) -> np.ndarray:
+    """The normalized error of each impact's run against ``reference``, NaN where the run
+    is flagged (not judged a single impact)."""
     scenes = [drops_engines.drop_scene(impacts, i, float(thetas[i]), mu, e)
               for i in range(len(impacts))]
     runs = engine.run_many(scenes, preset=preset, overrides=overrides or None)
     ok = np.array([judged(run, scene) == "ok" for run, scene in zip(runs, scenes)])
     after = np.array([np.asarray(run.u_after, dtype=float)[:3] for run in runs])
-    errors = metric.normalized_error(after[ok], reference[ok])
-    share = float(ok.mean())
-    return (float(np.median(errors)) if share >= 0.5 else None), share
+    return np.where(ok, metric.normalized_error(after, reference), np.nan)
+
+
+def uncertainty(errors: np.ndarray, cells: list[dict], best_index: int, knobs: dict,
+                replicates: int = REPLICATES, seed: int = 0,
+                confidence: float = CONFIDENCE) -> Uncertainty:
+    """The bootstrap and held-out error of a calibration from its per-drop errors
+    ``(cells, drops)`` (``cells``: each row's settings; ``best_index``: the full sample's
+    best row)."""
+    chosen, values = [], []
+    for rows in fitting.resampled_rows(errors.shape[-1], replicates, seed):
+        grid = cell_objectives(errors[:, rows])
+        if np.all(np.isnan(grid)):
+            continue
+        (row,) = fitting.best_cell(grid)
+        chosen.append(row)
+        values.append(grid[row])
+    if chosen:
+        objective = fitting.percentile_interval(values, confidence)
+        settings = {}
+        for knob, tried in knobs.items():
+            # position in the values tried (a setting may be a list, as MuJoCo's solref)
+            picked = [tried.index(cells[row][knob]) for row in chosen]
+            span = fitting.percentile_interval(picked, confidence, method="inverted_cdf")
+            settings[knob] = [tried[int(span.low)], tried[int(span.high)]]
+        agree = float(np.mean(np.array(chosen) == best_index))
+    else:
+        objective, settings, agree = fitting.Interval(np.nan, np.nan), {}, float("nan")
+    split = fitting.cross_validate(errors, cell_objectives, HELD_OUT_FOLDS, seed)
+    split_best = tuple(None if cell is None else cells[cell[0]] for cell in split.cells)
+    return Uncertainty(replicates, confidence, seed, objective, settings, agree,
+                       replicates - len(chosen), split, split_best)
 
 
 def calibrate(engine, preset: str, impacts: MeasuredImpacts, thetas, target: str,
               grid: str = "quick", law_mu: float = 0.3, law_e: float = 0.6,
-              sample: dict | None = None) -> Calibration:
+              sample: dict | None = None, replicates: int = REPLICATES,
+              seed: int = 0) -> Calibration:
     """Every cell of the grid scored (``target``: "data" or a law of ``planar_impact``,
     then at ``law_mu``, ``law_e``: the engine's pair settings are knobs like the others);
-    ``sample`` records which impacts these are (kept in the result)."""
+    ``sample`` records which impacts these are (kept in the result). ``replicates`` and
+    ``seed``: the bootstrap's resamples and the seed of those and of the held-out split."""
     reference = (impacts.speeds_after if target == "data"
                  else predict(impacts, target, law_mu, law_e).speeds_after)
     mus, es = PAIR_GRIDS[grid]
@@ -114,18 +211,22 @@ def calibrate(engine, preset: str, impacts: MeasuredImpacts, thetas, target: str
     for setting, values in ENGINE_KNOBS.get(engine.name, ()):
         knobs[setting] = list(values)
     names = list(knobs)
-    cells = []
-    for values in itertools.product(*(knobs[name] for name in names)):
-        settings = dict(zip(names, values))
-        overrides = {k: v for k, v in settings.items() if k not in ("mu", "e")}
-        objective, share = _score(engine, preset, impacts, thetas, settings["mu"],
-                                  settings["e"], overrides, reference)
-        cells.append((settings, objective, share))
-    scored = [cell for cell in cells if cell[1] is not None]
-    if not scored:
+    settings_of = [dict(zip(names, values))
+                   for values in itertools.product(*(knobs[name] for name in names))]
+    errors = np.array([
+        _per_drop_errors(engine, preset, impacts, thetas, settings["mu"], settings["e"],
+                         {k: v for k, v in settings.items() if k not in ("mu", "e")},
+                         reference)
+        for settings in settings_of]).reshape(len(settings_of), len(impacts))
+    objectives = cell_objectives(errors)
+    shares = np.mean(np.isfinite(errors), axis=1)
+    cells = [(settings, None if np.isnan(value) else float(value), float(share))
+             for settings, value, share in zip(settings_of, objectives, shares)]
+    if np.all(np.isnan(objectives)):
         return Calibration(engine.name, preset, target, "median-error", knobs, cells, None,
-                           None, {name: None for name in names}, sample)
-    best, best_objective, _ = min(scored, key=lambda cell: cell[1])
+                           None, {name: None for name in names}, sample, errors)
+    (best_index,) = fitting.best_cell(objectives)
+    best, best_objective, _ = cells[best_index]
     moves = {}
     for name in names:  # the knob's values, the others held at the best cell
         line = [objective for settings, objective, _ in cells
@@ -133,7 +234,8 @@ def calibrate(engine, preset: str, impacts: MeasuredImpacts, thetas, target: str
                                                  for other in names if other != name)]
         moves[name] = float(max(line) - min(line)) if len(line) > 1 else None
     return Calibration(engine.name, preset, target, "median-error", knobs, cells, best,
-                       best_objective, moves, sample)
+                       best_objective, moves, sample, errors,
+                       uncertainty(errors, settings_of, best_index, knobs, replicates, seed))
 
 
 def summary(calibration: Calibration) -> str:
@@ -159,4 +261,36 @@ def summary(calibration: Calibration) -> str:
         else:
             text = f"moves the objective by {moved:.4f}"
         lines.append(f"  {knob} {calibration.knobs[knob]}: {text}")
+    if calibration.uncertainty is not None:
+        lines += uncertainty_lines(calibration.uncertainty, len(calibration.errors[0]),
+                                   calibration.cannot())
     return "\n".join(lines)
+
+
+def uncertainty_lines(found: Uncertainty, drops: int, cannot=()) -> list[str]:
+    """The bootstrap intervals and the held-out error, in plain lines; a knob of ``cannot``
+    ties (the first value wins every tie), so its interval is shown as no interval."""
+    level = f"{found.confidence:.0%}"
+    lines = [f"bootstrap: {found.replicates} resamples of the {drops} drops with seed "
+             f"{found.seed}, the best cell re-picked on each"
+             + (f" ({found.unscored} with no cell scored, left out)" if found.unscored else "")]
+    if found.settings:
+        low, high = found.objective.low, found.objective.high
+        lines.append(f"  best objective, {level} interval: [{low:.4f}, {high:.4f}]; the best "
+                     f"cell above re-picked on {found.agree:.0%} of the resamples")
+        lines.append(f"  settings chosen, {level} interval: " + "; ".join(
+            f"{knob} any (ties)" if knob in cannot
+            else f"{knob} {json.dumps(low)}" if low == high
+            else f"{knob} {json.dumps(low)} to {json.dumps(high)}"
+            for knob, (low, high) in found.settings.items()))
+    else:
+        lines.append("  no resample had a scored cell: no interval")
+    split = found.split
+    sizes = [drops - split.held_out_drops[0], split.held_out_drops[0]]  # fitting, held out
+    picks = ["none scored" if best is None else json.dumps(best) for best in found.split_best]
+    lines.append(f"held out: the drops split by drop into halves with seed {found.seed}; the "
+                 f"best cell of the fitting half ({sizes[0]} drops: {picks[0]}) scores "
+                 f"{found.in_sample:.4f} on it and {found.held_out:.4f} on the held-out half "
+                 f"({sizes[1]} drops); fitted on the held-out half instead: {picks[1]}, "
+                 f"{split.in_sample[1]:.4f} on it and {split.held_out[1]:.4f} on the other")
+    return lines

@@ -7,13 +7,12 @@ import argparse
 import sys
 
 import planar_impact as pi
+from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine
 
 from . import calibrate, drops_engines, fazeli, registry
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from harness.engines import ENGINE_NAMES
-
     parser.add_argument("engine", choices=ENGINE_NAMES)
     parser.add_argument("--to", required=True, choices=("data", *pi.LAWS),
                         help="the target: the Fazeli drops (data) or a law on a population "
@@ -26,17 +25,23 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="impacts scored per cell (default 12): a random sample of the "
                              "data's drops, or of a generated population, drawn with --seed")
     parser.add_argument("--seed", type=int, default=0,
-                        help="seed of that sample (default 0; printed with the result)")
+                        help="seed of that sample, of the bootstrap's resamples and of the "
+                             "held-out split (default 0; printed with the result)")
+    parser.add_argument("--replicates", type=int, default=calibrate.REPLICATES,
+                        help="bootstrap resamples of the scored drops behind the intervals "
+                             f"(default {calibrate.REPLICATES})")
     parser.add_argument("--law-mu", type=float, default=0.3)
     parser.add_argument("--law-e", type=float, default=0.6,
                         help="the law's e (default 0.6, a cell of the quick grid)")
 
 
 def main(args) -> int:
-    from harness.engines import EngineNotInstalled, load_engine
-
     if args.drops < 2:
         print(f"impact-harness calibrate: --drops {args.drops}: at least 2", file=sys.stderr)
+        return 2
+    if args.replicates < 10:
+        print(f"impact-harness calibrate: --replicates {args.replicates}: at least 10",
+              file=sys.stderr)
         return 2
     if args.seed < 0:
         print(f"impact-harness calibrate: --seed {args.seed}: at least 0", file=sys.stderr)
@@ -71,7 +76,7 @@ def main(args) -> int:
         impacts, thetas = calibrate.drop_population(args.drops, seed=args.seed)
         sample = {"drops": args.drops, "of": "a generated population", "seed": args.seed}
     for preset in presets:
-        print(calibrate.summary(calibrate.calibrate(engine, preset, impacts, thetas, args.to,
-                                                    args.grid, args.law_mu, args.law_e,
-                                                    sample)))
+        print(calibrate.summary(calibrate.calibrate(
+            engine, preset, impacts, thetas, args.to, args.grid, args.law_mu, args.law_e,
+            sample, replicates=args.replicates, seed=args.seed)))
     return 0

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 import planar_impact as pi
+from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine, preset_label
 from harness.scene import ellipse
 
 from . import (
@@ -70,8 +71,6 @@ def main(args) -> int:
         print(f"impact-harness experiments: --workers {args.workers}: at least 1",
               file=sys.stderr)
         return 2
-    from harness.engines import ENGINE_NAMES
-
     engines = (list(ENGINE_NAMES) if args.engines == "all" else [] if args.engines == "none"
                else [name.strip() for name in args.engines.split(",") if name.strip()])
     unknown = [name for name in engines if name not in ENGINE_NAMES]
@@ -207,8 +206,6 @@ class EngineRuns:
 def run_engines(engines: list[str], drops=None) -> list[EngineRuns]:
     """Each engine loaded once and each of its presets run, on the drops when ``drops`` is
     ``(impacts, angles, fit)`` (at the fit's μ, e) and at the Kharaz incidences."""
-    from harness.engines import EngineNotInstalled, load_engine
-
     angles = np.array(KHARAZ_ANGLES, dtype=float)
     runs = []
     for name in engines:
@@ -232,8 +229,6 @@ def run_engines(engines: list[str], drops=None) -> list[EngineRuns]:
 
 def drops_engines_table(runs: list[EngineRuns], fit, residual) -> list[dict]:
     """Every engine and preset on every drop at Poisson's fitted (μ, e), printed."""
-    from harness.engines import preset_label
-
     if not runs:
         return []
     print(f"\n### The engines on the drops (μ {fit.mu:.3f}, e {fit.e:.3f}: Poisson's fit)\n")
@@ -293,8 +288,6 @@ def ellipse_section(data: fazeli.FazeliData | None) -> dict:
 def ellipse_engines_section(engines: list) -> list[dict]:
     """Each engine's ellipse (MuJoCo's ellipsoid, else the placed 8-gon) against the true
     one (``drops_engines.contact_error_table``)."""
-    from . import drops_engines
-
     print("\n## Each engine's ellipse against the true one\n")
     print(f"{len(drops_engines.ARM_ANGLES)} angles, every 5° over half a turn; largest error "
           "over the single impacts (over every run in brackets when larger), mm.\n")
@@ -343,8 +336,6 @@ def kharaz_section() -> dict:
 def kharaz_engines_table(runs: list[EngineRuns]) -> list:
     """The Kharaz curves through each engine and preset, printed; flagged runs show their
     reason."""
-    from harness.engines import preset_label
-
     if not runs:
         return []
     angles = np.array(KHARAZ_ANGLES, dtype=float)

@@ -9,10 +9,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from harness.scene import ellipse
+from harness.engines import EngineNotInstalled, load_engine, preset_label
+from harness.scene import Body, Ellipse, Scene, ellipse, geometry
 from harness.scene.model import STAND_IN_VERTICES
 
 from . import analysis, fazeli, metric
+from .engine_curves import judged
 from .records import MeasuredImpacts
 
 VERTICES = STAND_IN_VERTICES  # the placed 8-gon's next vertex is ≥ 7.3 mm above the contact
@@ -36,8 +38,6 @@ def jacobian_angles(impacts: MeasuredImpacts, guess: np.ndarray,
 
 
 def drop_scene(impacts: MeasuredImpacts, row: int, theta: float, mu: float, e: float):
-    from harness.scene import Body, Ellipse, Scene, geometry
-
     a, b = fazeli.SEMI_AXES
     _, py = ellipse.lowest_offset(theta, a, b)
     vx, vy, omega = (float(v) for v in impacts.speeds_before[row])
@@ -53,8 +53,6 @@ def run_drops(engine, preset: str, impacts: MeasuredImpacts, thetas: np.ndarray,
     paper's normalized error of the runs judged single impacts. ``keep_errors`` adds the
     per-drop errors (NaN where flagged) as ``per_drop_errors``, for the caller to reduce:
     they must not be written anywhere."""
-    from .engine_curves import judged
-
     scenes = [drop_scene(impacts, i, float(thetas[i]), mu, e) for i in range(len(impacts))]
     runs = engine.run_many(scenes, preset=preset)
     verdicts = [judged(run, scene) for run, scene in zip(runs, scenes)]
@@ -91,10 +89,6 @@ def moment_arm_errors(engine, preset: str, angles=ARM_ANGLES) -> dict:
     Returns per angle the errors (m) and the verdicts ("ok" or the first failing check);
     the largest errors over the single impacts and over every run.
     """
-    from harness.scene import Body, Ellipse, Scene, geometry
-
-    from .engine_curves import judged
-
     a, b = fazeli.SEMI_AXES
     result: dict = {"engine": engine.name, "preset": preset, "angles": len(angles)}
     for label, v_x, v_y, mu in (("arm", 0.0, -2.5, 0.0), ("height", 3.0, -1.0, 0.3)):
@@ -143,8 +137,6 @@ def contact_error_table(engines) -> tuple[list[str], list[dict]]:
     """The Markdown rows of :func:`moment_arm_errors` for ``engines`` (loaded engines, or
     names loaded here; a missing engine gets a row saying so) under both presets, and the
     results."""
-    from harness.engines import EngineNotInstalled, load_engine, preset_label
-
     rows = ["| engine | preset | moment arm | contact height | verdicts (arm drops / height "
             "drops) |", "|---|---|---:|---:|---|"]
     results = []

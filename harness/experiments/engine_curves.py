@@ -10,6 +10,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from harness.run import verdicts
+from harness.scene.geometry import impact_problem, scene_contact
+from harness.scene.model import Body, Disk, Scene
+
 from . import kharaz
 
 DENSITY = 3950.0  # kg/m³, alumina
@@ -27,8 +31,6 @@ class EngineCurves:
 
 
 def scene(incidence_deg: float):
-    from harness.scene.model import Body, Disk, Scene
-
     radius = kharaz.RADIUS
     mass = DENSITY * 4.0 / 3.0 * math.pi * radius**3
     angle = math.radians(incidence_deg)
@@ -40,9 +42,6 @@ def scene(incidence_deg: float):
 
 def judged(run, scene_) -> str:
     """"ok" for a run judged a single impact, else the first failing check's name."""
-    from harness.run import verdicts
-    from harness.scene.geometry import impact_problem, scene_contact
-
     if not np.all(np.isfinite(np.asarray(run.u_after, dtype=float))):
         return "non-finite"
     contact = scene_contact(scene_)

@@ -94,9 +94,12 @@ class Fit:
     on_grid_edge: bool  # the best μ is the grid's largest (the optimum may lie beyond it)
 
 
-def best_cell(grid: np.ndarray) -> tuple[int, int]:
-    flat = np.nanargmin(grid)  # first minimum in (μ, e) order: deterministic
-    return divmod(int(flat), grid.shape[1])
+def best_cell(grid: np.ndarray) -> tuple[int, ...]:
+    """The index of the grid's smallest value (NaN cells left out), on any number of axes:
+    the first minimum in C order (on a law's grid, (μ, e) order), so ties are deterministic.
+    The grid must hold a number."""
+    flat = np.nanargmin(grid)
+    return tuple(int(i) for i in np.unravel_index(int(flat), np.shape(grid)))
 
 
 def fit(drop_errors: DropErrors, table: ErrorTable, objective: str, refine: int = 10) -> Fit:
@@ -131,6 +134,48 @@ def per_drop_fits(table: ErrorTable, objective: str) -> np.ndarray:
 
 
 @dataclass(frozen=True)
+class CrossValidation:
+    """Per fold: the objective at the cell fitted on the other folds, on those fitting drops
+    (``in_sample``) and on the fold's own drops (``held_out``), and that cell (None, and
+    NaN values, where no cell scored on the fitting drops)."""
+
+    folds: int
+    seed: int
+    in_sample: tuple[float, ...]
+    held_out: tuple[float, ...]
+    cells: tuple[tuple[int, ...] | None, ...]
+    held_out_drops: tuple[int, ...]  # drops in each fold (the rest fit it)
+
+
+def fold_splits(drops: int, folds: int, seed: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """``(fitting rows, held-out rows)`` per fold: the drops shuffled with ``seed`` and cut
+    into ``folds`` parts as equal as can be (split by drop: a drop is never on both sides)."""
+    order = np.random.default_rng(seed).permutation(drops)
+    return [(np.setdiff1d(order, fold), fold) for fold in np.array_split(order, folds)]
+
+
+def cross_validate(errors: np.ndarray, aggregate, folds: int, seed: int) -> CrossValidation:
+    """K-fold by drop over any grid of cells: ``errors`` is (cells..., N) per-drop errors,
+    ``aggregate(errors[..., rows])`` the objective per cell over those rows (NaN for a cell
+    that cannot be scored on them); each fold's cell is the best on the other folds."""
+    inside, outside, cells = [], [], []
+    splits = fold_splits(errors.shape[-1], folds, seed)
+    for train, fold in splits:
+        grid = np.asarray(aggregate(errors[..., train]), dtype=float)
+        if np.all(np.isnan(grid)):
+            inside.append(float("nan"))
+            outside.append(float("nan"))
+            cells.append(None)
+            continue
+        cell = best_cell(grid)
+        inside.append(float(grid[cell]))
+        outside.append(float(aggregate(errors[cell][fold])))
+        cells.append(cell)
+    return CrossValidation(folds, seed, tuple(inside), tuple(outside), tuple(cells),
+                           tuple(fold.size for _, fold in splits))
+
+
+@dataclass(frozen=True)
 class HeldOut:
     folds: int
     in_sample: float  # mean over folds of the objective on the fitting drops
@@ -139,23 +184,35 @@ class HeldOut:
 
 
 def held_out(table: ErrorTable, objective: str, folds: int = 5, seed: int = 0) -> HeldOut:
-    """K-fold by drop: fit on the other folds (grid resolution), score the held-out one."""
-    drops = table.errors[objective].shape[-1]
-    order = np.random.default_rng(seed).permutation(drops)
-    inside, outside, fits = [], [], []
-    for fold in np.array_split(order, folds):
-        train = np.setdiff1d(order, fold)
-        i, j = best_cell(table.objective_grid(objective, train))
-        inside.append(metric.aggregate(objective, table.errors[objective][i, j, train]))
-        outside.append(metric.aggregate(objective, table.errors[objective][i, j, fold]))
-        fits.append((float(table.mus[i]), float(table.es[j])))
-    return HeldOut(folds, float(np.mean(inside)), float(np.mean(outside)), tuple(fits))
+    """K-fold by drop (:func:`cross_validate`): fit on the other folds (grid resolution),
+    score the held-out one."""
+    folded = cross_validate(table.errors[objective],
+                            lambda errors: metric.aggregate(objective, errors), folds, seed)
+    fits = tuple((float(table.mus[i]), float(table.es[j])) for i, j in folded.cells)
+    return HeldOut(folds, float(np.mean(folded.in_sample)), float(np.mean(folded.held_out)),
+                   fits)
 
 
 @dataclass(frozen=True)
 class Interval:
     low: float
     high: float
+
+
+def percentile_interval(values, confidence: float = 0.95,
+                        method: str = "linear") -> Interval:
+    """The central ``confidence`` percentile interval of ``values`` (bootstrap replicates);
+    ``method`` as numpy's percentile (``"inverted_cdf"`` keeps both ends on values taken)."""
+    tails = 100 * (1 - confidence) / 2, 100 * (1 + confidence) / 2
+    return Interval(*(float(x) for x in np.percentile(values, tails, method=method)))
+
+
+def resampled_rows(drops: int, replicates: int, seed: int):
+    """``replicates`` bootstrap samples of ``drops`` row indices, drawn with replacement
+    with ``seed``, one array at a time."""
+    rng = np.random.default_rng(seed)
+    for _ in range(replicates):
+        yield rng.integers(0, drops, drops)
 
 
 @dataclass(frozen=True)
@@ -182,17 +239,13 @@ def bootstrap(drop_errors: DropErrors, fitted: Fit, replicates: int = 200, seed:
 
     mus, es = local(fitted.mu, np.inf), local(fitted.e, 1.0)
     table = error_table(drop_errors, fitted.law, mus, es).errors[fitted.objective]
-    rng = np.random.default_rng(seed)
-    drops = table.shape[-1]
     fits, values, edge = np.empty((replicates, 2)), np.empty(replicates), 0
-    for r in range(replicates):
-        grid = metric.aggregate(fitted.objective, table[..., rng.integers(0, drops, drops)])
+    for r, rows in enumerate(resampled_rows(table.shape[-1], replicates, seed)):
+        grid = metric.aggregate(fitted.objective, table[..., rows])
         a, b = best_cell(grid)
         edge += bool((a == 0 and mus[0] > 0) or a == mus.size - 1
                      or (b == 0 and es[0] > 0) or (b == es.size - 1 and es[-1] < 1))
         fits[r] = mus[a], es[b]
         values[r] = grid[a, b]
-    tails = 100 * (1 - confidence) / 2, 100 * (1 + confidence) / 2
-    interval = [Interval(*map(float, np.percentile(x, tails)))
-                for x in (fits[:, 0], fits[:, 1], values)]
+    interval = [percentile_interval(x, confidence) for x in (fits[:, 0], fits[:, 1], values)]
     return Bootstrap(replicates, confidence, *interval, step, edge, fits)

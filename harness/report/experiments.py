@@ -162,8 +162,9 @@ LAW_LINES = {"newton": "-", "poisson": "-", "stronge": "--", "stronge-paper": ":
 
 
 #: The kept aggregates' layout: bump when what is kept changes (2: the files' SHA-256 in the
-#: provenance, never the copy's path).
-DROPS_LAYOUT = 2
+#: provenance, never the copy's path; 3: the calibration's bootstrap intervals and held-out
+#: error, Poisson against Stronge with its interval, the drops on Routh's diagram).
+DROPS_LAYOUT = 3
 
 
 def drops_key(hashes: dict[str, str]) -> str:
@@ -334,30 +335,81 @@ def draw_fits(aggregates: dict, path: Path, tag: str | None) -> Path:
     return save_png(figure, path, tag=tag)
 
 
+def laws_apart_html(aggregates: dict) -> str:
+    """Whether the data tell Poisson from Stronge (each objective, with its interval), and
+    where the drops lie on Routh's diagram."""
+    parts = ["<h4>Can the data tell Poisson from Stronge?</h4><ul>"]
+    for objective, found in aggregates["poisson_vs_stronge"].items():
+        if found is None:
+            continue
+        low, high = found["interval"]
+        parts.append(
+            f"<li><i>{escape_html(objective)}</i>: objective(Poisson) − objective(Stronge) = "
+            f"{found['difference']:.3g}, {found['confidence']:.0%} interval {low:.3g} to "
+            f"{high:.3g} (paired bootstrap, {found['replicates']:,} resamples of the drops); "
+            f"their predictions of the centre's velocity differ by "
+            f"{found['prediction_gap']['median']:.2%} of |v| on the median drop "
+            f"({found['prediction_gap']['q99']:.2%} at the 99th percentile), against a "
+            f"median error of {found['median_error']:.1%}. "
+            f"{escape_html(found['verdict'].capitalize())}.</li>")
+    routh = aggregates["routh"]
+    ratio = ", ".join(f"{v:.3f}" for v in routh["incidence_ratio"].values())
+    coupling = ", ".join(f"{v:.4f}" for v in routh["mu_coupling"].values())
+    levels = ", ".join(routh["incidence_ratio"])
+    parts.append("</ul><p>Where the drops lie on Routh's diagram (at the shown fit's μ): the "
+                 f"incidence |v<sub>t</sub>|/|v<sub>n</sub>| has quantiles ({levels}) "
+                 f"{ratio}; the coupling μ|m<sub>nt</sub>|/m<sub>nn</sub>, through which the "
+                 f"laws differ, {coupling}; m<sub>nt</sub> opposes the slip in "
+                 f"{routh['coupling_opposes_slip']} of {routh['drops']} drops.</p>")
+    return "".join(parts)
+
+
 def calibration_table(aggregates: dict) -> str:
+    """The calibrated settings of every engine and preset, with the bootstrap intervals of
+    the median error and of each setting chosen, and the held-out error (split by drop)."""
     calibration = aggregates["calibration"]
+    level = f"{calibration['confidence']:.0%}"
     rows = []
     for result in calibration["results"]:
+        interval = chosen = held = "—"
         if result["best"] is None:
             best = "cannot be calibrated: no setting tried gives single impacts on half the drops"
             objective = "—"
         else:
             best = ", ".join(f"{k} {v}" for k, v in result["best"].items())
             objective = f"{result['objective']:.3f}"
+            if result["objective_interval"] is not None:
+                low, high = result["objective_interval"]
+                interval = f"[{low:.3f}, {high:.3f}]"
+                chosen = "; ".join(f"{k} any (ties)" if k in result["cannot"]
+                                   else f"{k} {low}" if low == high else f"{k} {low} to {high}"
+                                   for k, (low, high) in result["settings_interval"].items())
+                chosen += f" (the best cell re-picked on {result['agree']:.0%})"
+            split = result["held_out"]
+            if split["held_out"] is not None:
+                held = (f"{split['held_out']:.3f} ({split['held_out_drops']} drops; in-sample "
+                        f"{split['in_sample']:.3f} on {split['fitting_drops']})")
         cannot = ", ".join(result["cannot"]) or "—"
         rows.append(f"<tr><td>{escape_html(result['engine'])}</td>"
                     f"<td>{escape_html(preset_label(result['engine'], result['preset']))}</td>"
-                    f"<td>{escape_html(best)}</td>"
-                    f"<td>{objective}</td><td>{escape_html(cannot)}</td></tr>")
+                    f"<td>{escape_html(best)}</td><td>{objective}</td><td>{interval}</td>"
+                    f"<td>{escape_html(chosen)}</td><td>{held}</td>"
+                    f"<td>{escape_html(cannot)}</td></tr>")
     sample = calibration["sample"]
     return ("<table><tr><th>engine</th><th>preset</th><th>calibrated settings</th>"
-            "<th>median error</th><th>knobs that move it by &lt; "
+            f"<th>median error</th><th>its {level} interval</th>"
+            f"<th>settings chosen ({level} of resamples)</th>"
+            "<th>held-out error (in-sample)</th><th>knobs that move it by &lt; "
             f"{calibration['tolerance']:g} (cannot calibrate)</th></tr>" + "".join(rows)
             + "</table><p class='muted'>Grid <i>quick</i> (μ 0.1, 0.3, 0.6 × e 0.3, 0.6, 0.9, "
             "times MuJoCo's solref damping ratio or Box2D's length scale), scored on "
             f"{sample['drops']} of the {sample['of']} drops drawn at random with seed "
             f"{sample['seed']} (<code>impact-harness calibrate ENGINE --to data</code> for "
-            "more).</p>")
+            f"more). Intervals: {calibration['replicates']:,} bootstrap resamples of those "
+            "drops (seed as above), the best cell re-picked on each; percentile intervals, "
+            "the settings' on the values tried. Held-out: the drops split by drop into "
+            "halves (same seed), the best cell of one half scored on the other; its "
+            "in-sample value beside it.</p>")
 
 
 def drops_html(out_dir: Path, aggregates: dict) -> str:
@@ -393,6 +445,7 @@ def drops_html(out_dir: Path, aggregates: dict) -> str:
         "Each law's global (μ, e) by each objective with its 95 % bootstrap interval "
         f"({aggregates['replicates']} resamples of the drops, seed {aggregates['seed']}). "
         "The laws nearly coincide on this object; the objectives do not."))
+    parts.append(laws_apart_html(aggregates))
     parts.append("<h4>Calibrated engine settings</h4>" + calibration_table(aggregates))
     return "\n".join(parts)
 

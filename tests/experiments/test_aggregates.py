@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-from harness.experiments import aggregates, fazeli
+from harness.experiments import aggregates, calibrate, fazeli
 
 from .conftest import write_synthetic
 
@@ -40,6 +40,16 @@ def test_the_fits_recover_the_truth_under_the_impulse_objective(computed):
     low, high = fit["e_interval"]
     assert low <= fit["e"] <= high and fit["replicates"] == 10
     assert set(result["laws"]) == set(aggregates.OBJECTIVES)
+
+
+def test_poisson_against_stronge_has_an_interval_and_a_verdict(computed):
+    result, truth, _ = computed
+    for objective in aggregates.OBJECTIVES:
+        found = result["poisson_vs_stronge"][objective]
+        low, high = found["interval"]
+        assert low <= high and found["replicates"] == aggregates.COMPARE_REPLICATES
+        assert ("contains 0" in found["verdict"]) == (low <= 0 <= high)
+    assert result["routh"]["drops"] == truth["drops"]
 
 
 def test_nothing_per_drop_is_kept(computed):
@@ -87,3 +97,13 @@ def test_engines_are_run_judged_and_calibrated_on_a_seeded_sample(computed):
     sample = result["calibration"]["sample"]
     assert sample == {"drops": 4, "of": truth["drops"], "seed": 0}
     assert all(row["best"] is not None for row in result["calibration"]["results"])
+    calibration = result["calibration"]
+    assert calibration["replicates"] == calibrate.REPLICATES
+    for row in calibration["results"]:  # the intervals and the held-out error, as aggregates
+        low, high = row["objective_interval"]
+        assert low <= row["objective"] <= high
+        for knob, value in row["best"].items():
+            assert row["settings_interval"][knob][0] <= value <= row["settings_interval"][knob][1]
+        split = row["held_out"]
+        assert split["fitting_drops"] + split["held_out_drops"] == sample["drops"]
+        assert split["held_out"] is None or split["held_out"] >= 0

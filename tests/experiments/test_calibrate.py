@@ -52,7 +52,9 @@ def test_a_knob_that_moves_nothing_cannot_calibrate(pymunk, monkeypatch):
     impacts.wn[:], impacts.wt[:] = wn, wt
     result = calibrate.calibrate(pymunk, "accurate", impacts, thetas, "poisson")
     assert "mu" in result.cannot() and "e" not in result.cannot()
-    assert "cannot be calibrated" in calibrate.summary(result)
+    text = calibrate.summary(result)
+    assert "cannot be calibrated" in text
+    assert "mu any (ties)" in text  # the first value wins every tie: no interval to show
 
 
 def test_data_target_on_a_synthetic_copy(tmp_path, pymunk):
@@ -105,3 +107,120 @@ def test_real_files_a_seeded_sample_is_scored_and_recorded(capsys, pymunk):
     assert "best:" in first
     assert cli_main(arguments) == 0
     assert capsys.readouterr().out == first
+
+
+# --- the intervals and the held-out error (the toy engine of tests/engines: exact Poisson) ---
+
+@pytest.fixture(scope="module")
+def toy():
+    from tests.engines.toy_engine import ToyEngine
+
+    return ToyEngine()
+
+
+@pytest.fixture(scope="module")
+def toy_on_synthetic_drops(tmp_path_factory, toy):
+    """The toy (exact Poisson impulses) calibrated to a synthetic copy drawn from Poisson's
+    law at μ 0.3, e 0.7 plus noise: on the quick grid the nearest cell, (0.3, 0.6), is the
+    best one."""
+    from harness.experiments import drops_engines, fazeli
+
+    directory = tmp_path_factory.mktemp("calibrate_toy")
+    write_synthetic(directory, drops=40, flagged=2, noise=0.05)
+    data = fazeli.load(directory, check_hashes=False)  # synthetic: not the published hashes
+    target = fazeli.without_post_offset(data.impacts)
+    rows = calibrate.sample_rows(len(target), 16, seed=2)
+    impacts = target.subset(rows)
+    thetas, _ = drops_engines.jacobian_angles(impacts, data.pre_impact_angles[rows])
+    return calibrate.calibrate(toy, "accurate", impacts, thetas, "data", replicates=300,
+                               seed=2)
+
+
+def test_the_toy_recovers_the_known_cell_inside_its_intervals(toy_on_synthetic_drops):
+    result = toy_on_synthetic_drops
+    assert result.best == {"mu": 0.3, "e": 0.6}
+    found = result.uncertainty
+    assert found.replicates == 300 and found.unscored == 0
+    for knob, value in result.best.items():
+        low, high = found.settings[knob]
+        assert low <= value <= high and {low, high} <= set(result.knobs[knob])
+    assert found.objective.low <= result.best_objective <= found.objective.high
+    assert found.objective.low < found.objective.high  # the noise gives the objective a spread
+    assert found.agree > 0.5
+
+
+def test_the_held_out_error_is_the_fitting_halfs_pick_on_the_other_half(
+        toy_on_synthetic_drops):
+    from harness.experiments import fitting
+
+    result = toy_on_synthetic_drops
+    found = result.uncertainty
+    fitting_rows, held_rows = fitting.fold_splits(16, 2, seed=2)[0]
+    assert len(held_rows) == found.split.held_out_drops[0] == 8
+    pick = result.cells.index(next(cell for cell in result.cells
+                                   if cell[0] == found.split_best[0]))
+    assert found.held_out == pytest.approx(np.median(result.errors[pick, held_rows]))
+    assert found.in_sample == pytest.approx(np.median(result.errors[pick, fitting_rows]))
+    # no cell beats the pick on the fitting half
+    assert found.in_sample == pytest.approx(min(
+        np.median(result.errors[k, fitting_rows]) for k in range(len(result.cells))))
+    text = calibrate.summary(result)
+    assert "bootstrap: 300 resamples of the 16 drops with seed 2" in text
+    assert f"{found.held_out:.4f} on the held-out half (8 drops)" in text
+
+
+def test_the_same_seed_gives_the_same_intervals(toy):
+    impacts, thetas = calibrate.drop_population(6, seed=1)
+    first, second = (calibrate.calibrate(toy, "accurate", impacts, thetas, "poisson",
+                                         replicates=50, seed=5) for _ in range(2))
+    assert first.uncertainty == second.uncertainty
+    assert first.uncertainty.settings == {"mu": [0.3, 0.3], "e": [0.6, 0.6]}
+
+
+def test_flagged_runs_are_nan_and_a_cell_mostly_flagged_is_never_picked(toy, monkeypatch):
+    """The law's own cell is flagged on 4 of 6 drops (fewer than half scored): its per-drop
+    errors are NaN there, it has no objective, and neither the full sample nor the halves
+    pick it."""
+    impacts, thetas = calibrate.drop_population(6, seed=1)
+    real_judged = calibrate.judged
+    flagged_drops = {"drop-0", "drop-1", "drop-2", "drop-3"}
+
+    def judged(run, scene):
+        if (scene.friction, scene.restitution) == (0.3, 0.6) and scene.name in flagged_drops:
+            return "multi-contact"
+        return real_judged(run, scene)
+
+    monkeypatch.setattr(calibrate, "judged", judged)
+    result = calibrate.calibrate(toy, "accurate", impacts, thetas, "poisson", replicates=50)
+    row = [settings for settings, _, _ in result.cells].index({"mu": 0.3, "e": 0.6})
+    assert np.isnan(result.errors[row, :4]).all() and np.isfinite(result.errors[row, 4:]).all()
+    assert result.cells[row][1] is None and result.cells[row][2] == pytest.approx(2 / 6)
+    assert result.best != {"mu": 0.3, "e": 0.6}
+    assert all(best != {"mu": 0.3, "e": 0.6} for best in result.uncertainty.split_best)
+
+
+def test_resampling_a_near_tie_spreads_the_chosen_settings():
+    """Made-up per-drop errors of three cells: the first two nearly tie, the third is far
+    worse: the resamples pick both of the first two (the interval spans them), never the
+    third."""
+    rng = np.random.default_rng(0)
+    errors = np.stack([rng.normal(0.30, 0.05, 40), rng.normal(0.30, 0.05, 40),
+                       rng.normal(0.90, 0.05, 40)])
+    cells = [{"k": 1.0}, {"k": 2.0}, {"k": 3.0}]
+    (best,) = np.nonzero(calibrate.cell_objectives(errors)
+                         == np.nanmin(calibrate.cell_objectives(errors)))[0]
+    found = calibrate.uncertainty(errors, cells, int(best), {"k": [1.0, 2.0, 3.0]},
+                                  replicates=400, seed=0)
+    assert found.settings == {"k": [1.0, 2.0]}
+    assert 0.05 < found.agree < 0.95
+    assert found.objective.low < 0.30 < found.objective.high
+
+
+def test_the_cli_prints_the_intervals_and_refuses_few_replicates(capsys, pymunk):
+    status = cli_main(["calibrate", "pymunk", "--to", "poisson", "--preset", "accurate",
+                       "--drops", "4", "--replicates", "20", "--seed", "3"])
+    out = capsys.readouterr().out
+    assert status == 0 and "bootstrap: 20 resamples of the 4 drops with seed 3" in out
+    assert "held out: the drops split by drop into halves with seed 3" in out
+    assert cli_main(["calibrate", "pymunk", "--to", "poisson", "--replicates", "5"]) == 2
+    assert "--replicates 5" in capsys.readouterr().err

@@ -38,15 +38,15 @@ def test_the_json_holds_aggregates_only(synthetic_copy, tmp_path, monkeypatch, c
     skipped here only)."""
     import json
 
-    import harness.engines
+    from harness.experiments import cli as experiments_cli
     from harness.experiments import fazeli
 
     directory, truth = synthetic_copy
     real_load = fazeli.load
     monkeypatch.setattr(fazeli, "load", lambda path: real_load(path, check_hashes=False))
     loaded = []  # each engine is loaded once for both of its tables
-    real_engine = harness.engines.load_engine
-    monkeypatch.setattr(harness.engines, "load_engine",
+    real_engine = experiments_cli.load_engine  # the name the command calls
+    monkeypatch.setattr(experiments_cli, "load_engine",
                         lambda name: loaded.append(name) or real_engine(name))
     out = tmp_path / "experiments.json"
     assert cli.main(["experiments", "--data", str(directory), "--replicates", "10",

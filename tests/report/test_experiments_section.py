@@ -57,7 +57,12 @@ def test_the_drops_figures_and_calibration_table_from_aggregates(tmp_path, monke
     for name in (experiments.DENSITY_FIGURE, experiments.CDF_FIGURE, experiments.FITS_FIGURE):
         assert (tmp_path / "out" / "figures" / name).is_file() and name in html
     assert "Calibrated engine settings" in html and "cannot be calibrated" in html
+    # the pymunk row: its interval, the settings chosen over the resamples, the held-out error
+    assert "[0.350, 0.470]" in html and "mu 0.1 to 0.3; e 0.6" in html and "80%" in html
+    assert "0.520 (6 drops; in-sample 0.380 on 6)" in html and "1,000 bootstrap" in html
     assert "seed 0" in html and "mcubelab" not in html
+    assert "The data do not tell poisson from stronge" in html and "-0.0001 to 0.0001" in html
+    assert "opposes the slip in 200 of 400 drops" in html
 
 
 def test_report_refuses_a_bad_experiments_data_before_any_work(tmp_path, capsys):
@@ -122,11 +127,31 @@ def fake_aggregates() -> dict:
                     {"engine": "mujoco", "preset": "defaults",
                      "verdicts": {"multi-contact": 400}, "cdf": aggregates.quantiles([])}],
         "calibration": {"sample": {"drops": 12, "of": 400, "seed": 0}, "grid": "quick",
-                        "tolerance": 1e-3, "results": [
+                        "tolerance": 1e-3, "replicates": 1000, "confidence": 0.95,
+                        "results": [
                             {"engine": "pymunk", "preset": "accurate",
                              "best": {"mu": 0.1, "e": 0.6}, "objective": 0.4,
-                             "moves": {"mu": 0.1, "e": 0.2}, "cannot": [], "knobs": {}},
+                             "moves": {"mu": 0.1, "e": 0.2}, "cannot": [], "knobs": {},
+                             "objective_interval": [0.35, 0.47],
+                             "settings_interval": {"mu": [0.1, 0.3], "e": [0.6, 0.6]},
+                             "agree": 0.8, "unscored": 0,
+                             "held_out": {"in_sample": 0.38, "held_out": 0.52,
+                                          "fitting_drops": 6, "held_out_drops": 6,
+                                          "picked": {"mu": 0.1, "e": 0.6}}},
                             {"engine": "mujoco", "preset": "defaults", "best": None,
-                             "objective": None, "moves": {}, "cannot": [], "knobs": {}}]},
+                             "objective": None, "moves": {}, "cannot": [], "knobs": {},
+                             "objective_interval": None, "settings_interval": None,
+                             "agree": None, "held_out": None}]},
+        "poisson_vs_stronge": {
+            "median-error": {"difference": 0.0, "interval": [-1e-4, 1e-4], "confidence": 0.95,
+                             "replicates": 1000, "objective_of_stronge": 0.36,
+                             "prediction_gap": {"median": 0.001, "q99": 0.03},
+                             "median_error": 0.36, "band": 0.01,
+                             "verdict": "the data do not tell poisson from stronge (the "
+                                        "interval contains 0)"},
+            "impulse": None},
+        "routh": {"incidence_ratio": {"q25": 0.16, "q50": 0.22, "q75": 0.27, "q90": 0.33},
+                  "mu_coupling": {"q25": 0.01, "q50": 0.02, "q75": 0.03, "q90": 0.04},
+                  "coupling_opposes_slip": 200, "drops": 400},
         "provenance": {"sha256": {"data_ellipse.mat": "0" * 64}},
     }
