@@ -128,10 +128,6 @@ def test_these_import_at_module_level_only():
 EDITED_CONCURRENTLY = "being edited concurrently; to lift next"
 INNER_IMPORTS_ALLOWED: dict[str, str] = {
     "harness.experiments": EDITED_CONCURRENTLY,
-    "harness.engines.box2d": EDITED_CONCURRENTLY,
-    "harness.engines.mujoco": EDITED_CONCURRENTLY,
-    "harness.engines.pybullet": EDITED_CONCURRENTLY,
-    "harness.engines.pymunk_engine": EDITED_CONCURRENTLY,
     "planar_impact.multicontact": EDITED_CONCURRENTLY,
 }
 
