@@ -101,6 +101,11 @@ def _attribute_failures(cls: type[Engine]) -> list[str]:
                         f"{statuses!r}")
     if not isinstance(cls.own_law, str) or cls.own_law not in ("newton-lcp", "converged"):
         failures.append(f"{where}.own_law: 'newton-lcp' or 'converged', got {cls.own_law!r}")
+    left_out = cls.survey_left_out
+    if not (isinstance(left_out, Mapping) and set(left_out) <= set(_ROLES)
+            and all(isinstance(v, str) and v for v in left_out.values())):
+        failures.append(f"{where}.survey_left_out: role -> why, roles among {list(_ROLES)}, "
+                        f"got {left_out!r}")
     impacts = cls.bench_impacts
     if not (isinstance(impacts, tuple) and len(impacts) == 2
             and all(isinstance(v, int) and v > 0 for v in impacts)):

@@ -153,3 +153,21 @@ def test_the_toy_alone_goes_through_the_cache_put_bench(tmp_path, toy_engine):
     cache = ResultCache(tmp_path, version="bench")
     stored = [cache.get(cache.key({"run": index})) for index in range(len(outputs))]
     assert stored == [json.loads(json.dumps(output)) for output in outputs]
+
+
+def test_a_default_survey_leaves_out_the_pairs_the_engine_class_names(tmp_path, monkeypatch,
+                                                                       toy_engine):
+    # survey_left_out is read from the engine's class (MuJoCo's matched-bounce declares it):
+    # here the toy's accurate preset, left out of a default survey with the class's reason.
+    monkeypatch.setattr(ToyEngine, "survey_left_out", {"accurate": "a reason of the test"})
+    arguments = ["survey", "spinning-disk", "--samples", "2", "--workers", "1", "--no-figures"]
+    assert cli.main([*arguments, "--out", str(tmp_path / "default")]) == 0
+    settings = json.loads((tmp_path / "default" / survey_cli.SETTINGS_FILE).read_text("utf-8"))
+    assert settings["engines"] == [toy_engine] and settings["presets"] == ["defaults",
+                                                                           "accurate"]
+    assert settings["left_out"] == {f"{toy_engine}.accurate": "a reason of the test"}
+    # Named presets run every pair.
+    assert cli.main([*arguments, "--preset", "defaults,accurate",
+                     "--out", str(tmp_path / "named")]) == 0
+    settings = json.loads((tmp_path / "named" / survey_cli.SETTINGS_FILE).read_text("utf-8"))
+    assert settings["left_out"] == {}
