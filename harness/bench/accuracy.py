@@ -17,7 +17,8 @@ runs, caches warm, set-up outside the timed region) and the departure
 the engine's own law, which its class declares (``own_law``) beside its sweep
 (``bench_sweep``):
 
-* ``newton-lcp``: the velocity-level Newton–Coulomb law (pymunk, pybullet, Box2D solve it);
+* a law: ``newton-lcp``, the velocity-level Newton–Coulomb law (pymunk, pybullet, Box2D
+  solve it), or ``poisson`` or ``stronge``;
 * ``converged``: no closed form exists (MuJoCo's soft contact), so its own law is its
   converged limit: the sweep's point labelled :data:`REFERENCE_LABEL` (MuJoCo: RK4, the
   0.5 ms contact resolved over 400 steps; its sweep holds the contact's duration and refines
@@ -119,12 +120,12 @@ def measure_engine(engine_name: str, quick: bool, progress=None) -> dict:
             rows.append(row)
         if progress is not None:
             progress(index + 1, len(points))
-    # the own law: newton-lcp, or MuJoCo's converged reference run
+    # the own law: one of the laws, or the engine's converged reference run (MuJoCo's)
     for row in rows:
         if "departure" not in row:
             continue
-        if engine.own_law == "newton-lcp":
-            row["departure"]["own"] = row["departure"]["newton-lcp"]
+        if engine.own_law in row["departure"]:
+            row["departure"]["own"] = row["departure"][engine.own_law]
         else:
             reference = next(r for r in rows
                              if r["setting"] == REFERENCE_LABEL and r["family"] == row["family"])

@@ -279,9 +279,9 @@ class Engine(abc.ABC):
     #: The engine is natively 2-D: no out-of-plane drift to measure (the adapter defines no
     #: ``_out_of_plane_drift``; its runs report ``out_of_plane_drift`` None).
     native_2d: bool = False
-    #: The law the engine solves at its accurate limit: "newton-lcp" (sequential impulses)
-    #: or "converged" (its own run at the finest settings, BENCH_REFERENCE_LABEL); the
-    #: accuracy bench measures against it.
+    #: The law the engine solves at its accurate limit: "newton-lcp" (sequential impulses),
+    #: "poisson" or "stronge", or "converged" (its own run at the finest settings,
+    #: BENCH_REFERENCE_LABEL); the accuracy bench measures against it.
     own_law: str = "newton-lcp"
     #: Impacts per reference scene in ``impact-harness bench --engines`` (quick, full):
     #: enough for a stable timing at the engine's speed.

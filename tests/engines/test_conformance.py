@@ -124,8 +124,12 @@ def test_the_toy_alone_goes_through_bench_speed_accuracy(tmp_path, capsys, toy_e
     assert len(result["rows"]) == len(ToyEngine.bench_sweep(True)) * 4  # four families
     assert all(row["status"] == "ok" and row["time_per_impact_s"] > 0
                for row in result["rows"])
-    # The toy applies Poisson's impulse exactly, on every family and setting.
-    assert all(row["departure"]["poisson"] < 1e-9 for row in result["rows"])
+    # The toy applies Poisson's impulse exactly, on every family and setting, and declares
+    # Poisson its own law: the cheapest setting reaches it within each threshold.
+    assert result["own_law"] == "poisson"
+    assert all(row["departure"]["poisson"] < 1e-9 and row["departure"]["own"] < 1e-9
+               for row in result["rows"])
+    assert all(cell["setting"] != "not reachable" for cell in result["cheapest"].values())
     assert (out / result["figure"]).is_file() and result["figure"] == f"pareto-{toy_engine}.png"
     # The batch of the worker scaling is the slowest listed engine's: the toy's.
     assert table["scaling"]["engine"] == toy_engine and table["scaling"]["identical_results"]
