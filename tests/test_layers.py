@@ -124,13 +124,8 @@ def test_these_import_at_module_level_only():
 #: Where an import of a project module may sit inside a function, and why. Nothing else:
 #: an import of ``harness`` or ``planar_impact`` inside a function anywhere else fails
 #: :func:`test_project_modules_are_imported_at_module_level`.
-EDITED_CONCURRENTLY = "being edited concurrently; to lift next"
-INNER_IMPORTS_ALLOWED: dict[str, str] = {
-    "harness.engines.box2d": EDITED_CONCURRENTLY,
-    "harness.engines.mujoco": EDITED_CONCURRENTLY,
-    "harness.engines.pybullet": EDITED_CONCURRENTLY,
-    "harness.engines.pymunk_engine": EDITED_CONCURRENTLY,
-}
+#: Empty now: every project import sits at module level.
+INNER_IMPORTS_ALLOWED: dict[str, str] = {}
 
 #: The modules (exactly these, not their submodules) that import by name at run time
 #: (``importlib.import_module``), each with its reason: the command dispatcher is the one
@@ -143,9 +138,6 @@ DYNAMIC_IMPORTS_ALLOWED: dict[str, str] = {
                        "mujoco, Box2D) that may be absent",
     "harness.engines.quiet": "import_quietly: imports an engine's optional binding by name "
                              "with the C library's start-up output dropped",
-    "planar_impact": "simultaneous and multicontact on first attribute access: imported by "
-                     "the package, `python -m planar_impact.multicontact` would run a second "
-                     "copy of the module (runpy's warning)",
 }
 
 

@@ -1,7 +1,8 @@
 """Speed against accuracy per engine (``impact-harness bench --speed-accuracy``).
 
-For every installed engine, a sweep of the knobs that trade cost for accuracy (time step,
-solver iterations, sub-steps, presets, MuJoCo's contact time constant and integrator) over
+For every installed engine the registry lists (those registered at run time too), a sweep of
+the knobs that trade cost for accuracy (time step, solver iterations, sub-steps, presets,
+MuJoCo's contact time constant and integrator) over
 four scenario families (:func:`harness.bench.engines.reference_scenes`):
 
 * ``disk``       disk r 0.1 m, v (1, −1) m/s (sticks under newton-lcp);
@@ -13,13 +14,15 @@ four scenario families (:func:`harness.bench.engines.reference_scenes`):
 Measured per (engine, setting, family): wall time per impact (s; the least of ``repeats``
 runs, caches warm, set-up outside the timed region) and the departure
 ``‖u_engine − u_law‖_M / ‖u_before‖_M`` from Poisson, from Stronge (exact energetic) and from
-the engine's own law:
+the engine's own law, which its class declares (``own_law``) beside its sweep
+(``bench_sweep``):
 
-* pymunk, pybullet, Box2D: ``newton-lcp`` (the velocity-level Newton–Coulomb law they
-  solve);
-* MuJoCo: no closed form exists for its soft contact, so its own law is its converged limit:
-  the run at the sweep's most refined setting (RK4, the 0.5 ms contact resolved over 400
-  steps); the sweep holds the contact's duration and refines its time step.
+* a law: ``newton-lcp``, the velocity-level Newton–Coulomb law (pymunk, pybullet, Box2D
+  solve it), or ``poisson`` or ``stronge``;
+* ``converged``: no closed form exists (MuJoCo's soft contact), so its own law is its
+  converged limit: the sweep's point labelled :data:`REFERENCE_LABEL` (MuJoCo: RK4, the
+  0.5 ms contact resolved over 400 steps; its sweep holds the contact's duration and refines
+  its time step).
 
 Outputs: ``pareto-<engine>.png`` in ``out_dir`` (time per impact vs departure from the own law,
 one panel per family, the Pareto front drawn, Poisson and Stronge departures as faint marks),
@@ -37,7 +40,13 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.engines import ENGINE_NAMES, EngineNotInstalled, engine_class, ke_norm, load_engine
+from harness.engines import (
+    EngineNotInstalled,
+    engine_class,
+    engine_names,
+    ke_norm,
+    load_engine,
+)
 from harness.engines.contract import BENCH_REFERENCE_LABEL
 from harness.processes import default_workers
 from harness.run.executor import progress_printer, run_tasks
@@ -111,12 +120,12 @@ def measure_engine(engine_name: str, quick: bool, progress=None) -> dict:
             rows.append(row)
         if progress is not None:
             progress(index + 1, len(points))
-    # the own law: newton-lcp, or MuJoCo's converged reference run
+    # the own law: one of the laws, or the engine's converged reference run (MuJoCo's)
     for row in rows:
         if "departure" not in row:
             continue
-        if engine.own_law == "newton-lcp":
-            row["departure"]["own"] = row["departure"]["newton-lcp"]
+        if engine.own_law in row["departure"]:
+            row["departure"]["own"] = row["departure"][engine.own_law]
         else:
             reference = next(r for r in rows
                              if r["setting"] == REFERENCE_LABEL and r["family"] == row["family"])
@@ -277,14 +286,15 @@ def impact_chunk(task: dict) -> list[list[float]]:
 def worker_speedup(quick: bool) -> dict:
     """Wall time of a batch of engine impacts through run_tasks with 1 and with 2 workers."""
     installed = {}
-    for name in ENGINE_NAMES:
+    for name in engine_names():
         try:
             installed[name] = load_engine(name).bench_impact_seconds
         except EngineNotInstalled:
             continue
     if not installed:
         return {"skipped": "no engine installed"}
-    # The slowest per impact (MuJoCo), so the batch is compute, not pickling or start-up.
+    # The slowest per impact (its class's bench_impact_seconds), so the batch is compute,
+    # not pickling or start-up.
     engine_name = max(installed, key=installed.get)
     # rod-45, accurate preset
     per_impact_s = installed[engine_name]
@@ -348,7 +358,7 @@ def run(quick: bool, out_dir: Path) -> dict:
     started = time.perf_counter()
     report: dict = {"quick": quick, "families": FAMILIES, "thresholds": list(THRESHOLDS),
                     "engines": {}}
-    for name in ENGINE_NAMES:
+    for name in engine_names():
         try:
             load_engine(name)
         except EngineNotInstalled as error:

@@ -1,9 +1,9 @@
 """The cost of storing one engine run in the result cache, as a pool worker stores it.
 
 ``python -m harness.bench.cache_put [--runs 600] [--repeats 3]`` runs the library's engine
-tasks once (both presets, every installed engine, repeated up to ``--runs``), then, per
-repeat, stores their outputs (:func:`harness.run.tasks.engine_task`'s, what
-``_stored_by_worker`` stores) into a fresh cache directory, a pack per chunk of
+tasks once (both presets, every installed engine the registry lists, repeated up to
+``--runs``), then, per repeat, stores their outputs (:func:`harness.run.tasks.engine_task`'s,
+what ``_stored_by_worker`` stores) into a fresh cache directory, a pack per chunk of
 :data:`harness.run.executor.MAX_CHUNK` as a worker stores a chunk's runs, and prints the time
 per engine run: wall, and the process's user and system CPU (the median repeat by user CPU).
 A cold run of the 1,000-file benchmark stores 16,056 of them, on the pool's workers.
@@ -16,35 +16,37 @@ import itertools
 import os
 import tempfile
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 
-from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine
+from harness.engines import PRESET_ROLES, EngineNotInstalled, engine_names, load_engine
 from harness.run import tasks
 from harness.run.executor import MAX_CHUNK
-from harness.scenarios import load_scenarios
+from harness.scenarios import Scenario, load_scenarios
 from harness.store.cache import ResultCache
 
 
-def engine_outputs(runs: int) -> list[dict]:
-    """``runs`` outputs of the library's engine tasks (cycled when there are fewer), skipped
-    runs left out."""
-    outputs = list(itertools.islice(_library_outputs(), runs))
+def engine_outputs(runs: int, scenarios: Sequence[Scenario] | None = None) -> list[dict]:
+    """``runs`` outputs of the engine tasks of ``scenarios`` (default: the library), cycled
+    when there are fewer, skipped runs left out."""
+    outputs = list(itertools.islice(_task_outputs(scenarios), runs))
     if not outputs:
         raise SystemExit("cache_put: no engine is installed")
     return [outputs[index % len(outputs)] for index in range(runs)]
 
 
-def _library_outputs() -> Iterator[dict]:
-    """The output of each engine task of the library (both presets), run as it is asked for."""
-    for scenario in load_scenarios(None):
+def _task_outputs(scenarios: Sequence[Scenario] | None) -> Iterator[dict]:
+    """The output of each engine task of ``scenarios`` (default: the library), every engine
+    the registry lists (those registered at run time too) under each preset role, run as it
+    is asked for."""
+    for scenario in load_scenarios(None) if scenarios is None else scenarios:
         for point in scenario.point_list():
-            for name in scenario.engines_among(ENGINE_NAMES):
+            for name in scenario.engines_among(engine_names()):
                 try:
                     engine = load_engine(name)
                 except EngineNotInstalled:
                     continue
-                for preset in ("defaults", "accurate"):
+                for preset in PRESET_ROLES:
                     settings = engine.settings(preset, scenario.engine_settings.get(name, {}))
                     output = tasks.engine_task({"engine": name, "scene": scenario.scene(point),
                                                 "settings": settings})

@@ -33,6 +33,9 @@ from harness.scene.reference import reference_scenes
 _BROKEN = (Status.BLOW_UP, Status.NO_CONTACT, Status.NO_SEPARATION)
 # The preset roles every engine has (the registry's PRESET_ROLES, which imports this layer).
 _ROLES = ("defaults", "accurate")
+# What an engine may declare as its own law (the accuracy bench measures against it): a law
+# the bench solves, or "converged" (its own run at the finest settings).
+_OWN_LAWS = ("newton-lcp", "poisson", "stronge", "converged")
 
 
 def check_engine(engine: type[Engine] | Engine | str) -> list[str]:
@@ -99,8 +102,13 @@ def _attribute_failures(cls: type[Engine]) -> list[str]:
             and value in set(Status) for key, value in statuses.items())):
         failures.append(f"{where}.reference_statuses: (scene, role) -> a status, got "
                         f"{statuses!r}")
-    if not isinstance(cls.own_law, str) or cls.own_law not in ("newton-lcp", "converged"):
-        failures.append(f"{where}.own_law: 'newton-lcp' or 'converged', got {cls.own_law!r}")
+    if not isinstance(cls.own_law, str) or cls.own_law not in _OWN_LAWS:
+        failures.append(f"{where}.own_law: one of {list(_OWN_LAWS)}, got {cls.own_law!r}")
+    left_out = cls.survey_left_out
+    if not (isinstance(left_out, Mapping) and set(left_out) <= set(_ROLES)
+            and all(isinstance(v, str) and v for v in left_out.values())):
+        failures.append(f"{where}.survey_left_out: role -> why, roles among {list(_ROLES)}, "
+                        f"got {left_out!r}")
     impacts = cls.bench_impacts
     if not (isinstance(impacts, tuple) and len(impacts) == 2
             and all(isinstance(v, int) and v > 0 for v in impacts)):

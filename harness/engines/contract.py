@@ -34,12 +34,13 @@ Class attributes
 ``max_worlds``
     How many built worlds to keep (``None``: one per key, never evicted).
 ``description``, ``preset_why``, ``plot_style``, ``speed_caps``, ``own_law``,
-``bench_impacts``, ``bench_impact_seconds``, ``bench_sweep``, ``time_step_overrides``, ``rounding``,
-``reference_statuses``, ``native_2d``
+``bench_impacts``, ``bench_impact_seconds``, ``bench_sweep``, ``time_step_overrides``,
+``rounding``, ``reference_statuses``, ``native_2d``, ``survey_left_out``
     What the rest of the harness knows about the engine (report text and style, verdicts'
-    speed caps, bench profile, test expectations), each with a default below, read through
-    the registry (``harness.engines.engine_trait``; docs/engines.md, 'The engine contract')
-    and checked by :func:`harness.engines.conformance.check_engine`.
+    speed caps, bench profile, test expectations, the default survey's pairs), each with a
+    default below, read through the registry (``harness.engines.engine_trait``;
+    docs/engines.md, 'The engine contract') and checked by
+    :func:`harness.engines.conformance.check_engine`.
 
 Methods (``world`` is whatever the adapter builds; the base class only passes it back)
 
@@ -278,9 +279,9 @@ class Engine(abc.ABC):
     #: The engine is natively 2-D: no out-of-plane drift to measure (the adapter defines no
     #: ``_out_of_plane_drift``; its runs report ``out_of_plane_drift`` None).
     native_2d: bool = False
-    #: The law the engine solves at its accurate limit: "newton-lcp" (sequential impulses)
-    #: or "converged" (its own run at the finest settings, BENCH_REFERENCE_LABEL); the
-    #: accuracy bench measures against it.
+    #: The law the engine solves at its accurate limit: "newton-lcp" (sequential impulses),
+    #: "poisson" or "stronge", or "converged" (its own run at the finest settings,
+    #: BENCH_REFERENCE_LABEL); the accuracy bench measures against it.
     own_law: str = "newton-lcp"
     #: Impacts per reference scene in ``impact-harness bench --engines`` (quick, full):
     #: enough for a stable timing at the engine's speed.
@@ -288,6 +289,9 @@ class Engine(abc.ABC):
     #: Rough seconds per rod-45 impact under ``accurate``: the executor bench takes the
     #: slowest installed engine (compute, not pickling) and sizes its batch by it.
     bench_impact_seconds: float = 1e-4
+    #: preset role -> why ``impact-harness survey`` leaves the engine's pair out unless the
+    #: user names presets (``--preset``); the survey's summary lists it with the reason.
+    survey_left_out: Mapping[str, str] = {}
 
     @classmethod
     def time_step_overrides(cls, role: str, time_step: float) -> dict:

@@ -181,13 +181,14 @@ def table3_payload() -> list[str]:
 
 @functools.cache
 def solver_digest() -> str:
-    """The sha256 of the modules of ``planar_impact`` (read, not imported), which solves what
-    the Table 3 reproduction shows."""
+    """The sha256 of the modules of ``planar_impact`` and its subpackages (read, not
+    imported), which solves what the Table 3 reproduction shows."""
     from importlib.util import find_spec
 
     spec = find_spec("planar_impact")
     digest = hashlib.sha256()
     for folder in (spec.submodule_search_locations or []) if spec else []:
-        for path in sorted(Path(folder).glob("*.py")):
-            digest.update(path.name.encode() + b"\0" + path.read_bytes())
+        for path in sorted(Path(folder).rglob("*.py")):
+            name = path.relative_to(folder).as_posix()
+            digest.update(name.encode() + b"\0" + path.read_bytes())
     return digest.hexdigest()

@@ -23,7 +23,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from harness.engines import ENGINE_NAMES, PRESET_ROLES
+from harness.engines import PRESET_ROLES, engine_names
 from harness.report.figure_cache import code_digest, scenario_digests
 from harness.report.reading import record_scenarios
 from harness.report.views import (
@@ -57,7 +57,7 @@ def cache_context(labels: Sequence[str]) -> str:
 
     digest = hashlib.sha256(code_digest())
     digest.update(Path(find_spec("harness.run.metrics").origin).read_bytes())  # not imported
-    digest.update(json.dumps([list(labels), list(ENGINE_NAMES), list(PRESET_ROLES)]).encode())
+    digest.update(json.dumps([list(labels), list(engine_names()), list(PRESET_ROLES)]).encode())
     return digest.hexdigest()
 
 

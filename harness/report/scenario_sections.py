@@ -7,7 +7,7 @@ from __future__ import annotations
 import json
 from collections.abc import Sequence
 
-from harness.engines import ENGINE_NAMES, PRESET_ROLES
+from harness.engines import PRESET_ROLES, engine_names
 from harness.report.fragments import Prepared
 from harness.report.markup import folded, html_table, report_figure
 from harness.report.views import (
@@ -33,7 +33,7 @@ from harness.run.records import ANALYTIC, Record, Results
 def sorted_point_records(records: Sequence[Record]) -> list[Record]:
     laws = sorted((r for r in records if r.source == ANALYTIC),
                   key=lambda r: LAW_ORDER.index(r.law) if r.law in LAW_ORDER else 99)
-    ENGINES, PRESETS = ENGINE_NAMES, PRESET_ROLES
+    ENGINES, PRESETS = engine_names(), PRESET_ROLES
 
     engines = sorted((r for r in records if r.source != ANALYTIC),
                      key=lambda r: (PRESETS.index(r.preset) if r.preset in PRESETS else 9,

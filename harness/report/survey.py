@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.engines import ENGINE_NAMES, PRESET_ROLES, preset_label, source_label
+from harness.engines import PRESET_ROLES, engine_names, preset_label, source_label
 from harness.report.figure_cache import FigureTask
 from harness.report.markup import folded, html_table, report_figure
 from harness.report.views import escape_html, fmt_departure
@@ -177,7 +177,7 @@ def settings_paragraph(settings: dict, families: list[str]) -> str:
         missing.append(f"<b>{escape_html(label)}</b> left out ({escape_html(why)})")
     for engine, why in settings.get("skipped", {}).items():
         missing.append(f"<b>{escape_html(engine)}</b> not installed ({escape_html(why)})")
-    unselected = [engine for engine in ENGINE_NAMES if engine not in engines
+    unselected = [engine for engine in engine_names() if engine not in engines
                   and engine not in settings.get("skipped", {})]
     if unselected:
         missing.append(f"<b>{_names(unselected)}</b> not selected (<code>--engines</code>)")
@@ -186,12 +186,19 @@ def settings_paragraph(settings: dict, families: list[str]) -> str:
     return text
 
 
+def engine_order(engine: str) -> tuple[int, str]:
+    """Where ``engine`` goes in the section's tables: the registry's order
+    (:func:`harness.engines.engine_names`), then by name for one unknown here."""
+    names = engine_names()
+    return (names.index(engine) if engine in names else len(names), engine)
+
+
 def statistics_rows(stats: dict) -> list[int]:
     """The rows of ``statistics.parquet`` over every collision type, ordered as the rest of
     the page orders engines and presets (out of the box first), then by family."""
     def order(row: int) -> tuple:
         engine, preset = str(stats["engine"][row]), str(stats["preset"][row])
-        return (ENGINE_NAMES.index(engine) if engine in ENGINE_NAMES else 99, engine,
+        return (*engine_order(engine),
                 PRESET_ROLES.index(preset) if preset in PRESET_ROLES else 99, preset,
                 str(stats["family"][row]))
 
@@ -340,9 +347,7 @@ def survey_section(directory: Path, figures: dict) -> str:
             parts.append("<h3>Flagged runs by reason</h3><p>The rows with flagged runs; a run "
                          "failing several checks counts under each (docs/verdicts.md).</p>"
                          + reasons)
-        engines = sorted(set(np.asarray(stats["engine"]).tolist()),
-                         key=lambda name: (ENGINE_NAMES.index(name) if name in ENGINE_NAMES
-                                           else 99, name))
+        engines = sorted(set(np.asarray(stats["engine"]).tolist()), key=engine_order)
         parts.append("<h3>Where and how often they depart</h3>")
         parts.append(figures_html(figures, engines, samples))
     files = "; ".join(

@@ -22,13 +22,15 @@ import numpy as np
 
 from harness import bounds
 from harness.engines import (
-    ENGINE_NAMES,
     PRESET_ROLES,
     EngineNotInstalled,
+    engine_names,
+    engine_trait,
     load_engine,
     parse_overrides,
     preset_choices,
     preset_role,
+    renamed_roles,
     source_label,
 )
 from harness.run.provenance import package_versions
@@ -50,14 +52,14 @@ QUICK_SAMPLES = 40  # per family: 7 families give 280 samples, for `make validat
 DEFAULT_OUT = Path("reports") / "survey"
 #: What a survey wrote down of its settings, beside its tables (harness/survey/outputs.py).
 SETTINGS_FILE = "settings.json"
-#: Engine and preset pairs a survey leaves out unless ``--preset`` names presets: MuJoCo's
-#: matched-bounce steps a stiff soft contact for hundreds of steps (more bare stepping
-#: per impact than every other pair together; `impact-harness bench --survey` measures
-#: it), so the default survey of thousands of impacts per family runs MuJoCo at ``defaults`` only.
-DEFAULT_LEFT_OUT = {
-    ("mujoco", "accurate"): "more stepping per impact than every other pair together; "
-                            "`--preset defaults,accurate` includes it",
-}
+
+
+def default_left_out(engines) -> dict[tuple[str, str], str]:
+    """``{(engine, preset role): why}``: the pairs of ``engines`` a survey leaves out unless
+    ``--preset`` names presets, as each engine's class declares them (``survey_left_out``;
+    MuJoCo's matched-bounce: hundreds of steps of a stiff soft contact per impact)."""
+    return {(engine, role): why for engine in engines
+            for role, why in engine_trait(engine, "survey_left_out").items()}
 
 
 def _names(values, allowed, option) -> list[str]:
@@ -77,12 +79,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              f"--quick {QUICK_SAMPLES})")
     parser.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
     parser.add_argument("--engines", action="append", metavar="E[,E…]",
-                        help=f"engines (default every installed one of {', '.join(ENGINE_NAMES)})")
+                        help="engines (default every installed one of "
+                             f"{', '.join(engine_names())})")
+    renamed = [f"{engine} calls {role} {name}" for engine in engine_names()
+               for role, name in renamed_roles(engine).items()]
     parser.add_argument("--preset", action="append", metavar="P[,P…]",
-                        help=f"presets (default {', '.join(PRESET_ROLES)}, without "
-                        + ", ".join(source_label(*pair) for pair in DEFAULT_LEFT_OUT)
-                        + "; MuJoCo calls accurate matched-bounce, and either name selects "
-                        "it)")
+                        help=f"presets (default {', '.join(PRESET_ROLES)}, without the pairs "
+                        "an engine leaves out of a default survey, which the summary lists "
+                        "with why" + "".join(f"; {text}" for text in renamed)
+                        + (", and either name selects it" if renamed else "") + ")")
     parser.add_argument("--out", type=Path, default=None,
                         help=f"output directory (default {DEFAULT_OUT}; there a survey of other "
                              "populations, samples, seed, engines, presets or settings is not "
@@ -110,7 +115,7 @@ def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: 
     """The survey in memory: ``{"samples", "runs", "statistics", "rejections", "timings",
     "engine_results", "skipped", "left_out"}`` (columns as ``{name: array}``).
 
-    ``left_out``: ``{(engine, preset): why}`` pairs not run (:data:`DEFAULT_LEFT_OUT` when
+    ``left_out``: ``{(engine, preset): why}`` pairs not run (:func:`default_left_out` when
     the user named no preset); they are listed in the summary, not dropped silently.
     ``workers``: processes (default: every core; the result does not depend on it,
     harness/survey/parts.py): each samples, solves, runs and judges parts of the samples.
@@ -276,7 +281,7 @@ def check_options(args: argparse.Namespace) -> tuple[list[str], list[str], int]:
     """``(engines, presets, samples)`` of the options, each checked before any work (the
     numbers against :data:`harness.bounds.BOUNDS`, as ``run``'s); ``ValueError`` names the
     first bad one."""
-    engines = _names(args.engines, ENGINE_NAMES, "--engines") or list(ENGINE_NAMES)
+    engines = _names(args.engines, engine_names(), "--engines") or list(engine_names())
     # A preset's shown name (matched-bounce) selects its role for every engine.
     presets = [preset_role(None, name) for name in
                _names(args.preset, preset_choices(), "--preset")] or list(PRESET_ROLES)
@@ -300,7 +305,7 @@ def main(args: argparse.Namespace) -> int:
     except ValueError as error:
         print(f"impact-harness survey: {error}", file=sys.stderr)
         return 2
-    left_out = {} if args.preset else DEFAULT_LEFT_OUT
+    left_out = {} if args.preset else default_left_out(engines)
     try:
         overrides = parse_overrides(args.settings_overrides, engines)
     except ValueError as error:

@@ -12,7 +12,7 @@ Newton–Coulomb law of sequential-impulse engines; several contacts in ``simult
 (3, 0.82)
 """
 
-from . import builders, errors, laws, process
+from . import builders, errors, laws, multicontact, process, simultaneous
 from .batch import BatchResult, solve_batch
 from .builders import ImpactProblem, PlanarBody
 from .contact_space import LAWS
@@ -40,16 +40,4 @@ __all__ = [
     "solve",
     "solve_batch",
 ]
-
-
-def __getattr__(name: str):
-    """``planar_impact.simultaneous`` and ``planar_impact.multicontact`` (which imports it),
-    imported on first use: imported here, multicontact was in ``sys.modules`` before
-    ``python -m planar_impact.multicontact`` ran it, which runpy warns about (the module
-    would run as two copies)."""
-    if name in ("simultaneous", "multicontact"):
-        import importlib
-
-        return importlib.import_module(f"{__name__}.{name}")
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 

@@ -1,20 +1,25 @@
 """The conformance kit (harness.engines.conformance) and a fifth engine added in one module:
 the toy of tests/engines/toy_engine.py passes check_engine and shows up in the runner's
-records, the report and the survey once registered, with no other file naming it."""
+records, the report, the survey, `bench --speed-accuracy` and the cache-put bench once
+registered, with no other file naming it."""
 
 from __future__ import annotations
 
 import dataclasses
+import json
 
 import numpy as np
 import pytest
 
+from harness import cli, report
 from harness import engines as registry
-from harness import report
+from harness.bench import cache_put
 from harness.engines.conformance import check_engine
 from harness.run import runner
 from harness.run.records import Results
 from harness.scenarios import load_scenario
+from harness.scene.geometry import impact_problem, scene_contact
+from harness.store.cache import ResultCache
 from harness.survey import cli as survey_cli
 from harness.survey.population import resolve_populations
 from tests.engines.toy_engine import ToyEngine
@@ -103,3 +108,70 @@ def test_the_toy_runs_through_the_runner_the_report_and_the_survey(toy, tmp_path
                                    ["accurate"], workers=1, echo=lambda _: None)
     engines = np.asarray(survey["runs"]["engine"])
     assert (engines == toy).sum() == 3
+
+
+def test_the_toy_alone_goes_through_bench_speed_accuracy(tmp_path, capsys, toy_engine):
+    # The toy_engine fixture lists the toy as the only engine: `bench --speed-accuracy`
+    # measures what the registry lists, the shipped four named nowhere in the bench.
+    out = tmp_path / "bench"
+    assert cli.main(["bench", "--speed-accuracy", "--quick", "--out", str(out)]) == 0
+    table = json.loads((out / "bench.json").read_text(encoding="utf-8"))["speed_accuracy"]
+    assert list(table["engines"]) == [toy_engine]
+    result = table["engines"][toy_engine]
+    assert result["own_law"] == ToyEngine.own_law and result["version"] == ToyEngine.version
+    assert {row["setting"] for row in result["rows"]} == {label for label, _, _ in
+                                                         ToyEngine.bench_sweep(True)}
+    assert len(result["rows"]) == len(ToyEngine.bench_sweep(True)) * 4  # four families
+    assert all(row["status"] == "ok" and row["time_per_impact_s"] > 0
+               for row in result["rows"])
+    # The toy applies Poisson's impulse exactly, on every family and setting, and declares
+    # Poisson its own law: the cheapest setting reaches it within each threshold.
+    assert result["own_law"] == "poisson"
+    assert all(row["departure"]["poisson"] < 1e-9 and row["departure"]["own"] < 1e-9
+               for row in result["rows"])
+    assert all(cell["setting"] != "not reachable" for cell in result["cheapest"].values())
+    assert (out / result["figure"]).is_file() and result["figure"] == f"pareto-{toy_engine}.png"
+    # The batch of the worker scaling is the slowest listed engine's: the toy's.
+    assert table["scaling"]["engine"] == toy_engine and table["scaling"]["identical_results"]
+    assert capsys.readouterr().out.count(f"\n{toy_engine} ") == 1  # its row of the table
+
+
+def test_the_toy_alone_goes_through_the_cache_put_bench(tmp_path, toy_engine):
+    # Library scenario files name the shipped engines (the reader's default): add the toy.
+    scenario = load_scenario("scenarios/disk-oblique.toml")
+    scenario = dataclasses.replace(scenario, engines=(*scenario.engines, toy_engine))
+    outputs = cache_put.engine_outputs(4, scenarios=[scenario])
+    assert len(outputs) == 4
+    # Every output is the toy's (the only engine listed), one per preset role, cycled: its
+    # velocities are Poisson's for the scene, its step the preset's.
+    scene = scenario.scene(scenario.point_list()[0])
+    contact = scene_contact(scene)
+    poisson = impact_problem(scene, contact.point, contact.normal).solve(
+        mu=scene.friction, e=scene.restitution, law="poisson").u_after
+    steps = [ToyEngine.presets[role]["time_step"] for role in registry.PRESET_ROLES]
+    assert [output["time_step"] for output in outputs] == steps * 2
+    for output in outputs:
+        assert np.allclose(np.ravel(output["velocities"]), poisson, rtol=0, atol=1e-12)
+    wall, user, system = cache_put.time_puts(outputs, tmp_path)
+    assert wall > 0 and user >= 0 and system >= 0
+    cache = ResultCache(tmp_path, version="bench")
+    stored = [cache.get(cache.key({"run": index})) for index in range(len(outputs))]
+    assert stored == [json.loads(json.dumps(output)) for output in outputs]
+
+
+def test_a_default_survey_leaves_out_the_pairs_the_engine_class_names(tmp_path, monkeypatch,
+                                                                       toy_engine):
+    # survey_left_out is read from the engine's class (MuJoCo's matched-bounce declares it):
+    # here the toy's accurate preset, left out of a default survey with the class's reason.
+    monkeypatch.setattr(ToyEngine, "survey_left_out", {"accurate": "a reason of the test"})
+    arguments = ["survey", "spinning-disk", "--samples", "2", "--workers", "1", "--no-figures"]
+    assert cli.main([*arguments, "--out", str(tmp_path / "default")]) == 0
+    settings = json.loads((tmp_path / "default" / survey_cli.SETTINGS_FILE).read_text("utf-8"))
+    assert settings["engines"] == [toy_engine] and settings["presets"] == ["defaults",
+                                                                           "accurate"]
+    assert settings["left_out"] == {f"{toy_engine}.accurate": "a reason of the test"}
+    # Named presets run every pair.
+    assert cli.main([*arguments, "--preset", "defaults,accurate",
+                     "--out", str(tmp_path / "named")]) == 0
+    settings = json.loads((tmp_path / "named" / survey_cli.SETTINGS_FILE).read_text("utf-8"))
+    assert settings["left_out"] == {}

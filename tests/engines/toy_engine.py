@@ -52,6 +52,7 @@ class ToyEngine(Engine):
     preset_why = {"defaults": "a step of 1/60 s.", "accurate": "a step of 1/600 s."}
     native_2d = True
     plot_style = ("#56B4E9", "P")
+    own_law = "poisson"  # the accuracy bench measures it against Poisson's law
 
     def _validate_engine_settings(self, settings) -> None:
         approach = float(settings["approach_steps"])
