@@ -48,7 +48,7 @@ from harness.run import metrics
 from harness.run.records import Record, Results, read_results
 from harness.scenarios.errors import ScenarioError
 from harness.scenarios.reader import load_scenario
-from harness.scenarios.schema import SCENARIO_DIR
+from harness.scenarios.schema import SCENARIO_DIR, recorded_location
 from harness.store.files import output_file_problem, write_text_atomically
 
 DEFAULT_THRESHOLD = "1%"
@@ -126,7 +126,7 @@ class MassMatrices:
         the file of that name in the library (a results file made on another machine)."""
         paths = [info.get("path") for results in reversed(self.results)
                  if isinstance(info := results.scenarios.get(name), dict)]
-        found = [Path(path) for path in paths if path]
+        found = [recorded_location(path) for path in paths if path]
         found += [SCENARIO_DIR / path.name for path in found]
         return found + [SCENARIO_DIR / f"{name}.toml"]
 

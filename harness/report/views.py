@@ -10,7 +10,6 @@ import html
 import math
 import re
 from collections.abc import Iterable, Sequence
-from pathlib import Path
 
 import numpy as np
 
@@ -19,7 +18,7 @@ from harness.report.reading import source_presets
 from harness.run.metrics import departure_split, fmt_departure
 from harness.run.records import ANALYTIC, Record, Results
 from harness.run.references import SINGLE
-from harness.scenarios.schema import SCENARIO_DIR
+from harness.scenarios.schema import SCENARIO_DIR, recorded_location
 
 FIGURES = "figures"
 LAW_ORDER = ("poisson", "stronge", "stronge-paper", "newton", "newton-lcp")
@@ -282,7 +281,7 @@ def has_library_scenarios(results: Results) -> bool:
     library = SCENARIO_DIR.resolve()
     for info in results.scenarios.values():
         path = (info or {}).get("path")
-        if path and Path(path).resolve().parent == library:
+        if path and recorded_location(path).resolve().parent == library:
             return True
     return False
 

@@ -49,6 +49,7 @@ from harness.run.tasks import (
     run_engine_tasks,
 )
 from harness.scenarios import ENGINES, PRESETS, Scenario
+from harness.scenarios.schema import recorded_path
 from harness.store.packs import PendingPuts
 
 
@@ -141,7 +142,7 @@ def scenario_info(scenario: Scenario) -> dict:
         "definition": scenario.definition_digest,
         "tags": list(scenario.tags),
         "system": scenario.system,
-        "path": None if scenario.path is None else str(scenario.path),
+        "path": None if scenario.path is None else recorded_path(scenario.path),
         "analytic_only": scenario.analytic_only,
         "laws": list(scenario.laws),
         "sweep": None if scenario.sweep is None else {

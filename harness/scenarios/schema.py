@@ -19,6 +19,22 @@ from harness.engines import ENGINE_NAMES, PRESET_ROLES
 from planar_impact import builders
 
 SCENARIO_DIR = Path(__file__).resolve().parent.parent.parent / "scenarios"
+PROJECT_DIR = SCENARIO_DIR.parent
+
+
+def recorded_path(path: Path | str) -> str:
+    """A scenario file's path as results record it: relative to the project for a file inside
+    it (a committed report names no machine's directory), absolute otherwise."""
+    resolved = Path(path).resolve()
+    if resolved.is_relative_to(PROJECT_DIR):
+        return resolved.relative_to(PROJECT_DIR).as_posix()
+    return str(resolved)
+
+
+def recorded_location(text: str) -> Path:
+    """The file a results file's recorded path names (:func:`recorded_path`'s inverse)."""
+    path = Path(text)
+    return path if path.is_absolute() else PROJECT_DIR / path
 
 #: Impact laws, by the names of ``planar_impact.LAWS``.
 LAWS: tuple[str, ...] = planar_impact.LAWS

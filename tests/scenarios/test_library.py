@@ -13,6 +13,7 @@ import pytest
 
 import planar_impact as pi
 from harness.engines import ENGINE_NAMES
+from harness.scenarios.schema import SCENARIO_DIR, recorded_location, recorded_path
 from harness.scenarios import (
     LAWS,
     SCENARIO_DIR,
@@ -384,3 +385,16 @@ def test_load_by_tags():
 def test_load_a_list_of_files():
     loaded = load_scenarios([FILES[0], FILES[1]])
     assert [s.path for s in loaded] == FILES[:2]
+
+
+def test_results_record_library_paths_relative_to_the_project(tmp_path):
+    """A committed results file names no machine's directory: a library file's path is
+    recorded relative to the project and found again from there; a file elsewhere keeps its
+    absolute path."""
+    library_file = next(SCENARIO_DIR.glob("*.toml"))
+    recorded = recorded_path(library_file)
+    assert recorded == f"scenarios/{library_file.name}"
+    assert recorded_location(recorded) == library_file
+    elsewhere = tmp_path / "mine.toml"
+    assert recorded_path(elsewhere) == str(elsewhere.resolve())
+    assert recorded_location(recorded_path(elsewhere)) == elsewhere.resolve()
