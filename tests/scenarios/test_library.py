@@ -13,7 +13,6 @@ import pytest
 
 import planar_impact as pi
 from harness.engines import ENGINE_NAMES
-from harness.scenarios.schema import SCENARIO_DIR, recorded_location, recorded_path
 from harness.scenarios import (
     LAWS,
     SCENARIO_DIR,
@@ -25,6 +24,7 @@ from harness.scenarios import (
     load_scenarios,
     tag_sets,
 )
+from harness.scenarios.schema import recorded_location, recorded_path
 from harness.scene import Scene, geometry
 
 FILES = sorted(SCENARIO_DIR.glob("*.toml"))
