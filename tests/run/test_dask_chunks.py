@@ -4,7 +4,9 @@ cluster (the results themselves: test_executor.py)."""
 
 from __future__ import annotations
 
+import os
 import pickle
+import sys
 
 import pytest
 
@@ -205,3 +207,28 @@ def test_a_started_cluster_runs_without_the_dashboards_bookkeeping():
     assert "memory_monitor" in callbacks  # kept: it stops a worker running out of memory
     assert tick_ms == parse_timedelta(QUIET_CLUSTER_CONFIG["distributed.admin.tick.interval"],
                                       default="ms") * 1000
+
+
+def worker_parent_and_filters() -> tuple[int, list[str]]:
+    import logging
+    import os
+
+    return os.getppid(), [type(one).__name__
+                          for one in logging.getLogger("distributed.worker").filters]
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the fork server is Linux's")
+def test_a_started_clusters_workers_come_from_the_fork_server_with_the_log_filter():
+    # Not forked from this process, which has threads (Dask's event loop; in CI a worker
+    # forked beside them never started): their parent is the fork server, and the heartbeat
+    # filter reaches them through the preload hook, not through inherited memory.
+    cluster = start_local_cluster(2)
+    try:
+        with distributed.Client(cluster) as client:
+            seen = client.run(worker_parent_and_filters)
+    finally:
+        cluster.close()
+    assert len(seen) == 2
+    for parent, filters in seen.values():
+        assert parent != os.getpid()
+        assert "HeartbeatAfterClose" in filters
