@@ -252,7 +252,7 @@ def run(
         engines=list(wanted_engines),
         presets=list(presets),
         executor={"executor": executor, "workers": workers, "scheduler": scheduler},
-        cache={**stats, "root": None if cache is None else str(cache.root),
+        cache={**stats, "root": None if cache is None else recorded_path(cache.root),
                "engine_runs": len(work.entries) + stored.engine_runs,
                "simulated": len(work.tasks)},
         selection=selection,

@@ -23,8 +23,9 @@ PROJECT_DIR = SCENARIO_DIR.parent
 
 
 def recorded_path(path: Path | str) -> str:
-    """A scenario file's path as results record it: relative to the project for a file inside
-    it (a committed report names no machine's directory), absolute otherwise."""
+    """A path (a scenario file, the result cache) as results record it: relative to the
+    project for one inside it (a committed report names no machine's directory), absolute
+    otherwise."""
     resolved = Path(path).resolve()
     if resolved.is_relative_to(PROJECT_DIR):
         return resolved.relative_to(PROJECT_DIR).as_posix()

@@ -6,7 +6,9 @@ state their tolerance where they are made.
 
 from __future__ import annotations
 
+import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -24,7 +26,7 @@ from harness.scenarios import (
     load_scenarios,
     tag_sets,
 )
-from harness.scenarios.schema import recorded_location, recorded_path
+from harness.scenarios.schema import PROJECT_DIR, recorded_location, recorded_path
 from harness.scene import Scene, geometry
 
 FILES = sorted(SCENARIO_DIR.glob("*.toml"))
@@ -398,3 +400,12 @@ def test_results_record_library_paths_relative_to_the_project(tmp_path):
     elsewhere = tmp_path / "mine.toml"
     assert recorded_path(elsewhere) == str(elsewhere.resolve())
     assert recorded_location(recorded_path(elsewhere)) == elsewhere.resolve()
+
+
+def test_the_committed_results_name_no_machines_directory():
+    """The committed results file records the library's files and the result cache by paths
+    relative to the project, never by the directory of the machine that wrote them."""
+    results = json.loads((PROJECT_DIR / "reports" / "results.json").read_text())
+    recorded = [entry["path"] for entry in results["scenarios"].values()]
+    recorded.append(results["provenance"]["cache"]["root"])
+    assert recorded and all(not Path(path).is_absolute() for path in recorded), recorded
