@@ -256,8 +256,8 @@ def summary(calibration: Calibration) -> str:
         lines.append(f"impacts scored: {drawn['drops']} of {drawn['of']}, a random sample "
                      f"drawn with seed {drawn['seed']}")
     if calibration.no_knobs_why is not None:
-        lines.append(f"its own settings: cannot be calibrated (no knobs): "
-                     f"{calibration.no_knobs_why}; only the pair's mu and e are tried")
+        lines.append(f"its own settings: cannot be calibrated (no knobs; the pair's mu and e "
+                     f"alone are tried): {calibration.no_knobs_why}")
     if calibration.best is None:
         lines.append("cannot be calibrated: no setting tried gives single impacts on half "
                      "of the drops")

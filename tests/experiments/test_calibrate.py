@@ -236,8 +236,8 @@ def test_cli_calibrates_a_registered_engine_without_knobs_and_says_why(capsys, t
                        "--drops", "4", "--replicates", "10"])
     out = capsys.readouterr().out
     assert status == 0 and "best:" in out
-    assert (f"its own settings: cannot be calibrated (no knobs): "
-            f"{Engine.no_calibration_knobs_why}") in out
+    assert (f"its own settings: cannot be calibrated (no knobs; the pair's mu and e alone are "
+            f"tried): {Engine.no_calibration_knobs_why}") in out
     assert "  mu [" in out and "  e [" in out and "approach_steps" not in out
 
 
