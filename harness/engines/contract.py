@@ -15,7 +15,8 @@ What an adapter supplies (an :class:`Engine` subclass)
 Class attributes
 
 ``name``, ``version``
-    One of the registry's ``ENGINE_NAMES``; the engine package's version (provenance).
+    The name the registry lists it by (``engine_names()``); the engine package's version
+    (provenance).
 ``presets``
     Exactly ``"defaults"`` (what a user gets out of the box: engine defaults, only the pair's
     ``e``, ``μ`` and the geometry set) and ``"accurate"`` (the settings under which the
