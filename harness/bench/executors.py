@@ -36,10 +36,10 @@ import time
 from pathlib import Path
 
 from harness.bench.many_scenarios import write_copies
-from harness.engines import EngineNotInstalled, load_engine
+from harness.engines import EngineNotInstalled, engine_names, load_engine
 from harness.run.executor import run_tasks, start_local_cluster, wait_for_shutdowns
 from harness.run.tasks import TASK_TIME_LIMIT_S, engine_chunk, engine_task, task_group
-from harness.scenarios import ENGINES, PRESETS, load_scenarios
+from harness.scenarios import PRESETS, load_scenarios
 
 RATIO_TARGET = 1.2
 TASKS = 2000
@@ -57,7 +57,7 @@ def engine_tasks(count: int = TASKS, directory: Path | None = None,
     files up to the last one contributing a task).
     """
     engines = {}
-    for name in ENGINES:
+    for name in engine_names():
         try:
             engines[name] = load_engine(name)
         except EngineNotInstalled:

@@ -116,7 +116,7 @@ _LOADED: dict[str, Engine] = {}
 def load_engine(name: str) -> Engine:
     """The adapter for ``name`` (one shared instance per process, caches reused).
 
-    Raises ``ValueError`` for a name not in :data:`ENGINE_NAMES` and
+    Raises ``ValueError`` for a name not in :func:`engine_names` and
     :class:`EngineNotInstalled` when the engine's package cannot be imported.
     """
     if name in _LOADED:
@@ -213,18 +213,18 @@ def install_fingerprint(name: str) -> str | None:
 
 
 def parse_overrides(items: Sequence[str],
-                    engines: Sequence[str] = ENGINE_NAMES) -> dict[str, dict]:
+                    engines: Sequence[str] | None = None) -> dict[str, dict]:
     """``["pymunk.iterations=50", ...]`` (``--set``) -> ``{"pymunk": {"iterations": 50}}``.
 
     A value is read as JSON (``50``, ``1e-4``, ``true``, ``null``, ``[0.02, 1]``), else kept
     as a string (``Euler``). Each is checked against the engine's settings under every preset
     before any work; the first bad one raises ``ValueError`` with a one-line message naming
     the engine, the key, the value and what is allowed. An engine that is not installed here
-    is checked for its name only (its runs are skipped anyway).
+    is checked for its name only (its runs are skipped anyway). ``engines``: those selected
+    (None: every engine registered now, :func:`engine_names`).
     """
-    import json
-
-
+    registered = engine_names()
+    engines = registered if engines is None else engines
     overrides: dict[str, dict] = {}
     for item in items:
         target, equals, text = item.partition("=")
@@ -232,9 +232,9 @@ def parse_overrides(items: Sequence[str],
         where = f"--set {item}"
         if not equals or not dot or not key:
             raise ValueError(f"{where}: expected ENGINE.KEY=VALUE, e.g. pymunk.iterations=50")
-        if engine_name not in ENGINE_NAMES:
+        if engine_name not in registered:
             raise ValueError(f"{where}: engine {engine_name!r}, key {key!r}, value {text!r}: "
-                             f"unknown engine; allowed: {', '.join(ENGINE_NAMES)}")
+                             f"unknown engine; allowed: {', '.join(registered)}")
         if engine_name not in engines:
             raise ValueError(f"{where}: engine {engine_name!r}, key {key!r}, value {text!r}: "
                              f"engine not selected; allowed: {', '.join(engines)} (--engines)")
@@ -267,9 +267,10 @@ def parse_overrides(items: Sequence[str],
 
 
 def available_engines() -> dict[str, str | None]:
-    """``{engine: None}`` when it loads, else ``{engine: reason}`` (with the install command)."""
+    """``{engine: None}`` when it loads, else ``{engine: reason}`` (with the install command),
+    for every engine registered now."""
     report: dict[str, str | None] = {}
-    for name in ENGINE_NAMES:
+    for name in engine_names():
         try:
             load_engine(name)
             report[name] = None

@@ -7,9 +7,10 @@ under each preset role:
 
 * the class attributes the rest of the harness reads are present and well formed (name,
   version, presets with the same keys as ``setting_docs``, description, per-preset why,
-  plot style, speed caps, timing);
-* settings: each preset resolves and validates; an unknown key and a non-positive time step
-  are refused with :class:`EngineSettingsError`;
+  plot style, speed caps, timing, calibration knobs or why there are none);
+* settings: each preset resolves and validates, also at every value of a calibration knob;
+  an unknown key and a non-positive time step are refused with
+  :class:`EngineSettingsError`;
 * runs: every scene the engine supports ends separated (no blow-up, no missing contact, no
   step cap; a multi-contact or out-of-plane status is a finding, not a fault), reports at
   least one contact, with finite velocities; ``run_many`` of the scenes equals ``run`` of
@@ -115,6 +116,17 @@ def _attribute_failures(cls: type[Engine]) -> list[str]:
         failures.append(f"{where}.bench_impacts: (quick, full) positive ints, got {impacts!r}")
     if not isinstance(cls.timing, StepTiming):
         failures.append(f"{where}.timing: a StepTiming, got {cls.timing!r}")
+    knobs = cls.calibration_knobs
+    if not (isinstance(knobs, tuple) and all(
+            isinstance(knob, tuple) and len(knob) == 2 and isinstance(docs, Mapping)
+            and knob[0] in docs and isinstance(knob[1], tuple) and len(knob[1]) >= 2
+            for knob in knobs)):
+        failures.append(f"{where}.calibration_knobs: ((setting of setting_docs, (two or more "
+                        f"values)), ...), got {knobs!r}")
+    if not knobs and not (isinstance(cls.no_calibration_knobs_why, str)
+                          and cls.no_calibration_knobs_why.strip()):
+        failures.append(f"{where}.no_calibration_knobs_why: one line of text, got "
+                        f"{cls.no_calibration_knobs_why!r}")
     return failures
 
 
@@ -138,6 +150,13 @@ def _settings_failures(engine: Engine) -> list[str]:
                                 "not EngineSettingsError")
                 continue
             failures.append(f"settings({role!r}, {bad}) accepts {what}")
+        for knob, values in engine.calibration_knobs:  # every value calibrate may try
+            for value in values:
+                try:
+                    engine.validate_settings(engine.settings(role, {knob: value}))
+                except (ValueError, TypeError) as error:
+                    failures.append(f"calibration_knobs: settings({role!r}, {{{knob!r}: "
+                                    f"{value!r}}}) fails: {error}")
     return failures
 
 

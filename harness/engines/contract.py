@@ -15,7 +15,8 @@ What an adapter supplies (an :class:`Engine` subclass)
 Class attributes
 
 ``name``, ``version``
-    One of the registry's ``ENGINE_NAMES``; the engine package's version (provenance).
+    The name the registry lists it by (``engine_names()``); the engine package's version
+    (provenance).
 ``presets``
     Exactly ``"defaults"`` (what a user gets out of the box: engine defaults, only the pair's
     ``e``, ``μ`` and the geometry set) and ``"accurate"`` (the settings under which the
@@ -35,7 +36,8 @@ Class attributes
     How many built worlds to keep (``None``: one per key, never evicted).
 ``description``, ``preset_why``, ``plot_style``, ``speed_caps``, ``own_law``,
 ``bench_impacts``, ``bench_impact_seconds``, ``bench_sweep``, ``time_step_overrides``,
-``rounding``, ``reference_statuses``, ``native_2d``, ``survey_left_out``
+``rounding``, ``reference_statuses``, ``native_2d``, ``survey_left_out``,
+``calibration_knobs``, ``no_calibration_knobs_why``
     What the rest of the harness knows about the engine (report text and style, verdicts'
     speed caps, bench profile, test expectations, the default survey's pairs), each with a
     default below, read through the registry (``harness.engines.engine_trait``;
@@ -292,6 +294,14 @@ class Engine(abc.ABC):
     #: preset role -> why ``impact-harness survey`` leaves the engine's pair out unless the
     #: user names presets (``--preset``); the survey's summary lists it with the reason.
     survey_left_out: Mapping[str, str] = {}
+    #: The engine's own settings ``impact-harness calibrate`` tries beside the pair's (μ, e),
+    #: which every engine takes: ``((setting, values tried), ...)``, each a key of
+    #: ``setting_docs`` that every preset accepts at every value. Empty (the default): the
+    #: engine cannot be calibrated by a setting of its own, for ``no_calibration_knobs_why``.
+    calibration_knobs: tuple[tuple[str, tuple], ...] = ()
+    #: Why an engine without ``calibration_knobs`` has none (calibrate prints it).
+    no_calibration_knobs_why: str = ("its adapter names no setting of its own to calibrate "
+                                     "(Engine.calibration_knobs is empty)")
 
     @classmethod
     def time_step_overrides(cls, role: str, time_step: float) -> dict:

@@ -259,6 +259,9 @@ class PymunkEngine(Engine):
     plot_style = ("#0072B2", "o")
     bench_impacts = (400, 3000)
     bench_impact_seconds = 2e-4
+    no_calibration_knobs_why = (
+        "no setting of pymunk's own enters its impact law beside the pair's μ and e: the "
+        "iterations and the step only converge its solve, slop and bias move positions only")
     presets = PRESETS
     setting_docs = SETTING_DOCS
     # Positions first: the contact of step k is found after the move, so the bodies start

@@ -2,14 +2,15 @@
 item 4).
 
 A small grid over the pair's (μ, e), which every engine takes, times a few values of the
-engine's own settings (:data:`ENGINE_KNOBS`), each cell scored by a named objective: the
-median over the impacts of the paper's normalized error of the centre's velocity
-(:func:`metric.normalized_error`) against the measured speeds (``--to data``) or against a
-law's prediction at fixed settings ``law_mu``, ``law_e`` (``--to LAW``, on a population of
-ellipse drops generated here, no data needed). Flagged runs are never scored; a cell where
-fewer than half of the runs are single impacts has no objective. A knob that moves the
-objective by less than :data:`TOLERANCE` across its values (the others at the best cell) is
-reported as one the engine cannot be calibrated by.
+engine's own settings (its class's ``calibration_knobs``; none by default: then it cannot be
+calibrated by a setting of its own, for its ``no_calibration_knobs_why``), each cell scored
+by a named objective: the median over the impacts of the paper's normalized error of the
+centre's velocity (:func:`metric.normalized_error`) against the measured speeds
+(``--to data``) or against a law's prediction at fixed settings ``law_mu``, ``law_e``
+(``--to LAW``, on a population of ellipse drops generated here, no data needed). Flagged
+runs are never scored; a cell where fewer than half of the runs are single impacts has no
+objective. A knob that moves the objective by less than :data:`TOLERANCE` across its values
+(the others at the best cell) is reported as one the engine cannot be calibrated by.
 
 How far to trust the pick: every cell keeps its per-drop errors (NaN for a flagged run), so
 that the drops can be resampled without running the engine again. A seeded bootstrap of
@@ -51,12 +52,13 @@ HELD_OUT_FOLDS = 2
 PAIR_GRIDS = {"quick": ((0.1, 0.3, 0.6), (0.3, 0.6, 0.9)),
               "fine": (tuple(np.round(np.linspace(0.0, 1.0, 11), 2)),
                        tuple(np.round(np.linspace(0.0, 1.0, 11), 2)))}
-#: Each engine's own settings tried beside the pair, as ``(setting, values)``; a preset that
-#: ignores a setting shows it as "cannot be calibrated" rather than being special-cased.
-ENGINE_KNOBS = {
-    "mujoco": (("solref", ([0.02, 0.5], [0.02, 1.0], [0.02, 2.0])),),
-    "box2d": (("length_scale", (1.0, 8.0, 64.0)),),
-}
+
+
+def engine_knobs(engine) -> dict:
+    """``{setting: [values]}``: the engine's own settings tried beside the pair, from its
+    class (``Engine.calibration_knobs``; empty: none of its own). A preset that ignores a
+    setting shows it as "cannot be calibrated" rather than being special-cased."""
+    return {setting: list(values) for setting, values in type(engine).calibration_knobs}
 
 
 @dataclass(frozen=True)
@@ -107,6 +109,9 @@ class Calibration:
     errors: np.ndarray | None = field(default=None, repr=False)
     #: The bootstrap intervals and the held-out error (None: no cell scored).
     uncertainty: Uncertainty | None = None
+    #: Why no setting of the engine's own is among ``knobs`` (its class's
+    #: ``no_calibration_knobs_why``); None when it has some.
+    no_knobs_why: str | None = None
 
     def cannot(self) -> list[str]:
         """The knobs that do not move the objective (the engine cannot be calibrated by
@@ -207,9 +212,7 @@ def calibrate(engine, preset: str, impacts: MeasuredImpacts, thetas, target: str
     reference = (impacts.speeds_after if target == "data"
                  else predict(impacts, target, law_mu, law_e).speeds_after)
     mus, es = PAIR_GRIDS[grid]
-    knobs = {"mu": list(mus), "e": list(es)}
-    for setting, values in ENGINE_KNOBS.get(engine.name, ()):
-        knobs[setting] = list(values)
+    knobs = {"mu": list(mus), "e": list(es), **engine_knobs(engine)}
     names = list(knobs)
     settings_of = [dict(zip(names, values))
                    for values in itertools.product(*(knobs[name] for name in names))]
@@ -222,9 +225,12 @@ def calibrate(engine, preset: str, impacts: MeasuredImpacts, thetas, target: str
     shares = np.mean(np.isfinite(errors), axis=1)
     cells = [(settings, None if np.isnan(value) else float(value), float(share))
              for settings, value, share in zip(settings_of, objectives, shares)]
+    no_knobs_why = (None if type(engine).calibration_knobs
+                    else type(engine).no_calibration_knobs_why)
     if np.all(np.isnan(objectives)):
         return Calibration(engine.name, preset, target, "median-error", knobs, cells, None,
-                           None, {name: None for name in names}, sample, errors)
+                           None, {name: None for name in names}, sample, errors,
+                           no_knobs_why=no_knobs_why)
     (best_index,) = fitting.best_cell(objectives)
     best, best_objective, _ = cells[best_index]
     moves = {}
@@ -235,7 +241,8 @@ def calibrate(engine, preset: str, impacts: MeasuredImpacts, thetas, target: str
         moves[name] = float(max(line) - min(line)) if len(line) > 1 else None
     return Calibration(engine.name, preset, target, "median-error", knobs, cells, best,
                        best_objective, moves, sample, errors,
-                       uncertainty(errors, settings_of, best_index, knobs, replicates, seed))
+                       uncertainty(errors, settings_of, best_index, knobs, replicates, seed),
+                       no_knobs_why)
 
 
 def summary(calibration: Calibration) -> str:
@@ -248,6 +255,9 @@ def summary(calibration: Calibration) -> str:
         drawn = calibration.sample
         lines.append(f"impacts scored: {drawn['drops']} of {drawn['of']}, a random sample "
                      f"drawn with seed {drawn['seed']}")
+    if calibration.no_knobs_why is not None:
+        lines.append(f"its own settings: cannot be calibrated (no knobs; the pair's mu and e "
+                     f"alone are tried): {calibration.no_knobs_why}")
     if calibration.best is None:
         lines.append("cannot be calibrated: no setting tried gives single impacts on half "
                      "of the drops")

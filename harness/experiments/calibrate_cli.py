@@ -7,13 +7,14 @@ import argparse
 import sys
 
 import planar_impact as pi
-from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine
+from harness.engines import EngineNotInstalled, engine_names, load_engine
 
 from . import calibrate, drops_engines, fazeli, registry
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("engine", choices=ENGINE_NAMES)
+    # the engines registered when the command line is parsed (run-time ones too)
+    parser.add_argument("engine", choices=engine_names())
     parser.add_argument("--to", required=True, choices=("data", *pi.LAWS),
                         help="the target: the Fazeli drops (data) or a law on a population "
                              "of ellipse drops")

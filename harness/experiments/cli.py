@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 import planar_impact as pi
-from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine, preset_label
+from harness.engines import EngineNotInstalled, engine_names, load_engine, preset_label
 from harness.scene import ellipse
 
 from . import (
@@ -71,12 +71,13 @@ def main(args) -> int:
         print(f"impact-harness experiments: --workers {args.workers}: at least 1",
               file=sys.stderr)
         return 2
-    engines = (list(ENGINE_NAMES) if args.engines == "all" else [] if args.engines == "none"
+    registered = engine_names()  # those registered at run time too
+    engines = (list(registered) if args.engines == "all" else [] if args.engines == "none"
                else [name.strip() for name in args.engines.split(",") if name.strip()])
-    unknown = [name for name in engines if name not in ENGINE_NAMES]
+    unknown = [name for name in engines if name not in registered]
     if unknown:
         print(f"impact-harness experiments: --engines: unknown {', '.join(unknown)}; allowed: "
-              f"all, none or {', '.join(ENGINE_NAMES)}", file=sys.stderr)
+              f"all, none or {', '.join(registered)}", file=sys.stderr)
         return 2
     if args.json and Path(args.json).exists() and not Path(args.json).is_file():
         print(f"impact-harness experiments: --json {args.json}: exists and is not a regular "

@@ -19,7 +19,13 @@ from pathlib import Path
 import numpy as np
 
 import planar_impact as pi
-from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine, preset_label
+from harness.engines import (
+    EngineNotInstalled,
+    engine_names,
+    engine_trait,
+    load_engine,
+    preset_label,
+)
 from harness.experiments import aggregates, engine_curves, fazeli, kharaz, registry
 from harness.experiments.aggregates import MIN_BIN_COUNT as MIN_BIN
 from harness.plotting import new_figure, save_png
@@ -169,11 +175,12 @@ DROPS_LAYOUT = 3
 
 def drops_key(hashes: dict[str, str]) -> str:
     """The digest of everything the drops' aggregates depend on: the files (their SHA-256),
-    the code that reads, fits, runs and judges them, the installed versions and the
-    report's settings; never the results' floats."""
+    the code that reads, fits, runs and judges them, the registered engines (those added at
+    run time too), the installed versions and the report's settings; never the results'
+    floats."""
     digest = hashlib.sha256()
     digest.update(json.dumps({"layout": DROPS_LAYOUT, "hashes": hashes,
-                              "versions": package_versions(),
+                              "versions": package_versions(), "engines": list(engine_names()),
                               "replicates": REPORT_REPLICATES, "solver": solver_digest(),
                               "code": harness_code_digest()}, sort_keys=True).encode())
     return digest.hexdigest()
@@ -213,7 +220,7 @@ def _progress(text: str) -> None:
 
 def _installed_engines() -> list:
     engines = []
-    for name in ENGINE_NAMES:
+    for name in engine_names():
         try:
             engines.append(load_engine(name))
         except EngineNotInstalled:
@@ -402,7 +409,8 @@ def calibration_table(aggregates: dict) -> str:
             "<th>held-out error (in-sample)</th><th>knobs that move it by &lt; "
             f"{calibration['tolerance']:g} (cannot calibrate)</th></tr>" + "".join(rows)
             + "</table><p class='muted'>Grid <i>quick</i> (μ 0.1, 0.3, 0.6 × e 0.3, 0.6, 0.9, "
-            "times MuJoCo's solref damping ratio or Box2D's length scale), scored on "
+            f"times {escape_html(_own_knobs([r['engine'] for r in calibration['results']]))})"
+            ", scored on "
             f"{sample['drops']} of the {sample['of']} drops drawn at random with seed "
             f"{sample['seed']} (<code>impact-harness calibrate ENGINE --to data</code> for "
             f"more). Intervals: {calibration['replicates']:,} bootstrap resamples of those "
@@ -410,6 +418,15 @@ def calibration_table(aggregates: dict) -> str:
             "the settings' on the values tried. Held-out: the drops split by drop into "
             "halves (same seed), the best cell of one half scored on the other; its "
             "in-sample value beside it.</p>")
+
+
+def _own_knobs(engines) -> str:
+    """The engines' own settings the calibration tries (their classes'
+    ``calibration_knobs``), in words: ``"mujoco's solref [0.02, 0.5], ..."``."""
+    knobs = [f"{engine}'s {setting} {', '.join(json.dumps(value) for value in values)}"
+             for engine in dict.fromkeys(engines)
+             for setting, values in engine_trait(engine, "calibration_knobs")]
+    return "; ".join(knobs) if knobs else "no engine's own setting"
 
 
 def drops_html(out_dir: Path, aggregates: dict) -> str:

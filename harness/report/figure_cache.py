@@ -15,7 +15,7 @@ import json
 from collections.abc import Callable
 from pathlib import Path
 
-from harness.engines import ENGINE_NAMES, renamed_roles
+from harness.engines import engine_names, renamed_roles
 from harness.plotting import (  # shared with the survey's figures
     SVG_TWIN,
     TAG_KEY,
@@ -80,7 +80,7 @@ def code_digest() -> bytes:
     warm report draws nothing)."""
     sources = [*sorted(Path(__file__).parent.glob("*.py")),
                Path(__file__).parents[1] / "plotting.py"]
-    labels = json.dumps({engine: renamed_roles(engine) for engine in ENGINE_NAMES},
+    labels = json.dumps({engine: renamed_roles(engine) for engine in engine_names()},
                         sort_keys=True).encode()
     return b"".join(path.read_bytes() for path in sources) + labels + _matplotlib_version()
 

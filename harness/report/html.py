@@ -12,7 +12,7 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
-from harness.engines import preset_label
+from harness.engines import preset_label, renamed_roles
 from harness.report import table3
 from harness.report.contacts import contacts_section
 from harness.report.experiments import experiments_section
@@ -206,6 +206,11 @@ def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None
                                                             lambda: record_counts(results))
     labels = prepared.labels
     engines = list(dict.fromkeys(label.split(".")[0] for label in labels))
+    # the engines shown that call their accurate role by a name of their own (the registry's
+    # preset names), e.g. "mujoco <i>matched-bounce</i>"
+    renamed = "; ".join(f"{escape_html(engine)} <i>{escape_html(name)}</i>"
+                        for engine in engines
+                        for role, name in renamed_roles(engine).items() if role == "accurate")
     git = prov.get("git", {})
     parts = [page_head("Planar impact with friction: engines against the exact laws"),
              "<h1>Planar impact with friction: physics engines against the exact laws</h1>"]
@@ -216,8 +221,9 @@ def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None
         "Stronge's hypotheses after Djerassi 2009, Newton's, and the velocity-level "
         "<code>newton-lcp</code> law that sequential-impulse engines solve) and simulated by "
         f"the physics engines {escape_html(', '.join(engines) or '(none)')} with their "
-        "out-of-the-box <i>defaults</i> and with <i>accurate</i> settings (for MuJoCo "
-        "<i>matched-bounce</i>: it matches the bounce, not a dissipative law). The "
+        "out-of-the-box <i>defaults</i> and with <i>accurate</i> settings"
+        + (f" (for {renamed}: its own name where <i>accurate</i> would mislead, see the "
+           "engine's preset below)" if renamed else "") + ". The "
         "<b>departure</b> of an engine from a law is the error of its post-impact velocities "
         "in the kinetic-energy norm, relative to the motion before the impact measured in a "
         "frame no common velocity or rotation changes (the ground's, or the centre of mass's "
@@ -241,8 +247,8 @@ def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None
     headline = []
     caption = (
         "Departure from Poisson (left pair) and from exact Stronge (right pair), "
-        "engines out of the box (<i>defaults</i>) and tuned (<i>accurate</i>; MuJoCo: "
-        "<i>matched-bounce</i>). Sweeps show "
+        "engines out of the box (<i>defaults</i>) and tuned (<i>accurate</i>"
+        + (f"; {renamed}" if renamed else "") + "). Sweeps show "
         "their largest departure over the sweep's single impacts. “(k!)”: k runs were "
         "flagged (multi-contact, not separated, …) and are not in the value; “*”: the "
         "runs' settings differ from the preset's, by the scenario's <code>[engine_settings]"
@@ -307,7 +313,7 @@ def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None
         "the table). "
         "The impulse diagram is Routh's graph (the paper's Fig. 1): the path of each "
         "law's impulse and every end point; filled engine markers are "
-        "<i>accurate</i> (MuJoCo <i>matched-bounce</i>), hollow <i>defaults</i>, and "
+        "<i>accurate</i>" + (f" ({renamed})" if renamed else "") + ", hollow <i>defaults</i>, and "
         "engines that land on the same "
         "point are drawn side by side. Sweeps show post-impact quantities against "
         "the swept parameter instead, laws as lines and engines as points (flagged "

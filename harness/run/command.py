@@ -66,7 +66,7 @@ from pathlib import Path
 from typing import Sequence, TextIO
 
 from harness import bounds
-from harness.engines import parse_overrides, preset_choices
+from harness.engines import ENGINE_NAMES, engine_names, parse_overrides, preset_choices
 from harness.engines.facts import fingerprints_remembered
 from harness.run import runner
 from harness.run.executor import DaskNotInstalled
@@ -75,7 +75,7 @@ from harness.run.plan import parse_engines, parse_presets
 from harness.run.records import DEFAULT_RESULTS, check_writable, write_result_blocks
 from harness.run.runner import RunOutcome
 from harness.run.tasks import TASK_TIME_LIMIT_S
-from harness.scenarios import ENGINES, PRESETS, parse_tags
+from harness.scenarios import PRESETS, parse_tags
 from harness.scenarios.checks import use_passed_checks
 from harness.scenarios.library import load_scenarios_reporting
 from harness.store.cache import ResultCache
@@ -93,7 +93,8 @@ def add_common_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--tags", default=None,
                         help="comma-separated tags (e.g. quick); scenarios with any of them")
     parser.add_argument("--engines", default=None,
-                        help=f"comma-separated engines (default: all of {', '.join(ENGINES)})")
+                        help="comma-separated engines (default: all of "
+                             f"{', '.join(engine_names())})")
     parser.add_argument("--preset", default="all", choices=(*preset_choices(), "all"),
                         help="engine preset(s) to run (default: all); matched-bounce is "
                         "MuJoCo's name for its accurate role and selects that role")
@@ -181,7 +182,8 @@ def selection_of(args) -> dict:
     tags = parse_tags_text(args.tags)
     selection = {"files": None if files is None else sorted(str(Path(f).resolve()) for f in files),
                  "tags": tags,
-                 "engines": [name for name in ENGINES if name in parse_engines(args.engines)],
+                 "engines": [name for name in engine_names()
+                             if name in parse_engines(args.engines)],
                  "presets": list(parse_presets(args.preset))}
     overrides = getattr(args, "settings_overrides", None)
     if overrides:  # only then: a --set experiment never silently replaces the suite's results
@@ -200,7 +202,8 @@ def _describe_selection(selection: dict) -> str:
         f" and {len(files) - 3} more" if len(files) > 3 else "")
     if selection.get("tags"):
         what += f" tagged {','.join(selection['tags'])}"
-    described = (f"{what}; engines {','.join(selection.get('engines') or ENGINES)}; presets "
+    engines = selection.get("engines") or engine_names()
+    described = (f"{what}; engines {','.join(engines)}; presets "
                  f"{','.join(selection.get('presets') or PRESETS)}")
     if selection.get("settings_overrides"):
         described += f"; --set {' '.join(selection['settings_overrides'])}"
@@ -215,7 +218,8 @@ def _existing_selection(path: Path) -> dict | None:
     except (OSError, ValueError, KeyError, TypeError, AttributeError):
         return None  # unreadable: nothing worth keeping is lost by replacing it
     if recorded is None:  # written before selections were recorded: by the suite
-        recorded = {"files": None, "tags": None, "engines": list(ENGINES),
+        # the suite then ran the shipped engines, the only ones there were
+        recorded = {"files": None, "tags": None, "engines": list(ENGINE_NAMES),
                     "presets": list(PRESETS)}
     return recorded
 

@@ -20,21 +20,25 @@ from harness.engines.facts import engine_facts
 from harness.reference.event_driven import sequence_outline
 from harness.run import references
 from harness.run.tasks import POINT_REFERENCE, check_engine_output
-from harness.scenarios import ENGINES, PRESETS, Scenario
+from harness.scenarios import PRESETS, Scenario
 from harness.scenarios.schema import ONE_POINT_TOLERANCE
 from harness.store.identity import Spelled
 
 
 def parse_engines(text: str | Sequence[str] | None) -> tuple[str, ...]:
-    """``"pymunk,mujoco"`` (or a list) -> engine names; raises ``ValueError`` for unknown ones."""
+    """``"pymunk,mujoco"`` (or a list) -> engine names; None: every engine registered now
+    (:func:`harness.engines.engine_names`, those registered at run time too). Raises
+    ``ValueError`` for a name not registered, naming the registered ones."""
+    registered = registry.engine_names()
     if text is None:
-        return ENGINES
+        return registered
     items = text.split(",") if isinstance(text, str) else [
         part for item in text for part in str(item).split(",")]
     names = tuple(dict.fromkeys(item.strip() for item in items if item.strip()))
-    unknown = [name for name in names if name not in ENGINES]
+    unknown = [name for name in names if name not in registered]
     if unknown:
-        raise ValueError(f"--engines: unknown engine(s) {unknown}; allowed: {', '.join(ENGINES)}")
+        raise ValueError(f"--engines: unknown engine(s) {unknown}; allowed (the registered "
+                         f"engines): {', '.join(registered)}")
     return names
 
 

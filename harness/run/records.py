@@ -54,8 +54,8 @@ from typing import Any, Iterable, Mapping, Sequence
 
 from harness import inputs
 from harness.collector import collector_paused
-from harness.engines import source_label
-from harness.scenarios import ENGINES, PRESETS
+from harness.engines import engine_names, source_label
+from harness.scenarios import PRESETS
 from harness.store.cache import LINE_SEPARATOR  # between two record lines (no raw newline)
 from harness.store.files import output_file_problem, write_parts_atomically
 
@@ -174,13 +174,16 @@ class Results:
         return index
 
     def engine_labels(self) -> list[str]:
-        """``engine.preset`` labels present, engines in registry order, ``defaults`` first."""
+        """``engine.preset`` labels present, engines in registry order (one not registered
+        here, from a run where it was, after them by name), ``defaults`` first."""
         return [source_label(e, p) for e, p in self.engine_roles()]
 
     def engine_roles(self) -> list[tuple[str, str]]:
         """``(engine, preset role)`` pairs present, in :meth:`engine_labels`' order."""
         present = self._engine_runs()
-        return [(e, p) for p in PRESETS for e in ENGINES if (e, p) in present]
+        registered = engine_names()
+        others = sorted({e for e, _ in present if e not in registered})
+        return [(e, p) for p in PRESETS for e in (*registered, *others) if (e, p) in present]
 
     def _engine_runs(self) -> frozenset:
         """The ``(engine, preset)`` pairs of the records, found once per records list (a

@@ -48,7 +48,7 @@ from harness.run.tasks import (
     TASK_TIME_LIMIT_S,
     run_engine_tasks,
 )
-from harness.scenarios import ENGINES, PRESETS, Scenario
+from harness.scenarios import PRESETS, Scenario
 from harness.scenarios.schema import recorded_path
 from harness.store.packs import PendingPuts
 
@@ -156,7 +156,7 @@ def scenario_info(scenario: Scenario) -> dict:
 def run(
     scenarios: Sequence[Scenario],
     *,
-    engines: Sequence[str] = ENGINES,
+    engines: Sequence[str] | None = None,
     presets: Sequence[str] = PRESETS,
     cache=None,
     executor: str = "local",
@@ -172,7 +172,9 @@ def run(
 ) -> RunOutcome:
     """Run ``scenarios`` and return the records, the gates and the provenance.
 
-    ``cache`` is a :class:`harness.store.cache.ResultCache` (None: no cache). ``log`` gets the
+    ``engines``: the engines run (None: every engine registered now,
+    :func:`harness.engines.engine_names`). ``cache`` is a
+    :class:`harness.store.cache.ResultCache` (None: no cache). ``log`` gets the
     progress lines (a stream; ``"stderr"``, the default: ``sys.stderr`` at call time; None:
     quiet). ``time_limit_s`` bounds each engine task (None: no limit); ``selection`` (what
     was asked for) goes into the provenance. ``overrides`` (``{engine: {key: value}}``, from
@@ -188,7 +190,7 @@ def run(
     command_overrides = {name: dict(values) for name, values in (overrides or {}).items()}
     started = time.perf_counter()
     warnings = _clean_temporaries(cache)
-    wanted_engines = [name for name in engine_names() if name in engines]
+    wanted_engines = [name for name in engine_names() if engines is None or name in engines]
     needs_engines = any(s.engines_among(wanted_engines) for s in scenarios)
     versions, missing, preset_settings = (plan.engine_status(wanted_engines, cache)
                                           if needs_engines else ({}, {}, {}))

@@ -47,7 +47,6 @@ from harness.scenarios.model import (
 )
 from harness.scenarios.reader import load_scenario, parse_scenario
 from harness.scenarios.schema import (
-    ENGINES,
     LAW_TYPES,
     LAWS,
     ONE_POINT_TOLERANCE,
@@ -57,7 +56,7 @@ from harness.scenarios.schema import (
 )
 
 __all__ = [
-    "ENGINES", "LAWS", "LAW_TYPES", "ONE_POINT_TOLERANCE", "PRESETS", "SCENARIO_DIR",
+    "LAWS", "LAW_TYPES", "ONE_POINT_TOLERANCE", "PRESETS", "SCENARIO_DIR",
     "TWO_SLED_DEFAULTS", "BodySpec", "Expectation", "Gate", "MatrixSystem", "Point",
     "Scenario", "ScenarioError", "SweepSpec", "check_expectations", "load_scenario",
     "load_scenarios", "parse_scenario", "parse_tags", "scenario_files", "sweep_parameters",

@@ -18,7 +18,7 @@ from typing import Any, Mapping
 import numpy as np
 
 import planar_impact
-from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine
+from harness.engines import EngineNotInstalled, engine_names, load_engine
 from harness.engines.facts import engine_facts
 from harness.scenarios.errors import suggest
 from harness.scenarios.model import Point, Scenario
@@ -510,10 +510,11 @@ def _checks_context(root=None) -> str:
     """What a check's outcome depends on besides the file's text
     (:class:`harness.store.passed_checks.PassedChecks`): the code (the scenarios, the scene
     and the engines, which :func:`harness.store.identity.code_version` covers), the limits of
-    :data:`LIMITS` and which engines are installed (:func:`engine_time_step`), read from the
+    :data:`LIMITS` and which of the registered engines are installed
+    (:func:`engine_time_step`; those registered at run time too), read from the
     result cache at ``root`` where it is kept (:mod:`harness.engines.facts`: no engine is
     imported for it on a warm run)."""
-    installed = list(engine_facts(ENGINE_NAMES, None if root is None else ResultCache(root))
+    installed = list(engine_facts(engine_names(), None if root is None else ResultCache(root))
                      .versions)
     return json.dumps({"code": code_version(), "limits": {k: limit(k) for k in sorted(LIMITS)},
                        "engines": installed}, sort_keys=True)

@@ -15,6 +15,7 @@ import os
 import sys
 from pathlib import Path
 
+from harness.engines import engine_names
 from harness.scenarios.checks import check_expectations
 from harness.scenarios.errors import ScenarioError
 from harness.scenarios.library import scenario_files
@@ -130,6 +131,11 @@ _STRIKE_POINT = {"disk": ("[0.075, 0.12990381056766578]", "# 0.15 m from a's cen
                  "polygon": ("[0.0, 0.15]", "# on the apex, 0.1 + 0.05 above the centroid")}
 
 
+def _toml_names(names) -> str:
+    """``["pymunk", "box2d"]``: names as a TOML array of strings."""
+    return "[" + ", ".join(f'"{name}"' for name in names) + "]"
+
+
 def scenario_template(name: str, shape: str, two_body: bool = False) -> str:
     """The text of a commented starting scenario file (it validates as written)."""
     shape_lines = "\n".join(_SHAPE_LINES[shape])
@@ -141,7 +147,7 @@ description = "A {shape} {'struck by a disk' if two_body else 'hitting the groun
 tags = ["custom"]          # e.g. "quick", "slip-reversal"; "all" is implied
 restitution = 0.5          # e, in [0, 1]
 friction = 0.3             # mu, >= 0
-# engines = ["pymunk", "pybullet", "mujoco", "box2d"]   # default: every engine
+# engines = {_toml_names(engine_names())}   # default: every registered engine
 # laws = ["newton", "poisson", "stronge", "stronge-paper", "newton-lcp"]   # default: all
 '''
     if not two_body:

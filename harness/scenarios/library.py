@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Iterable
 
-from harness.engines import ENGINE_NAMES, EngineNotInstalled, load_engine
+from harness.engines import EngineNotInstalled, engine_names, load_engine
 from harness.processes import default_workers, map_forked
 from harness.scenarios import checks
 from harness.scenarios.errors import OptionError, ScenarioError, suggest
@@ -151,7 +151,7 @@ def _check_piece(piece: list[tuple]) -> list:
 
 def _load_engines() -> None:
     """Import the installed engines' adapters (the checks ask them for settings)."""
-    for name in ENGINE_NAMES:
+    for name in engine_names():
         try:
             load_engine(name)
         except EngineNotInstalled:

@@ -14,6 +14,7 @@ from types import MappingProxyType
 from typing import Any, Mapping
 
 from harness import inputs
+from harness.engines import engine_names
 from harness.scenarios import checks
 from harness.scenarios.checks import check_points
 from harness.scenarios.errors import ScenarioError
@@ -23,7 +24,6 @@ from harness.scenarios.schema import (
     CONTACT_KINDS,
     DEFAULT_GAP_TOLERANCE,
     DERIVED_TAGS,
-    ENGINES,
     LAWS,
     NAME_PATTERN,
     SYSTEMS,
@@ -78,7 +78,10 @@ def parse_scenario(doc: Mapping[str, Any], path=None, *, checks_key: str | None 
             reader.error("ground", "must be a table or true/false", raw_ground,
                          "[ground] (an empty table) or ground = true")
         bodies = read_bodies(reader, doc, ground)
-        engines = reader.names(doc, "engines", "", ENGINES, default=ENGINES)
+        # The engines registered now (those added at run time too); a file naming none runs
+        # every one of them, spelled out so that its definition (and digest) says which.
+        registered = engine_names()
+        engines = reader.names(doc, "engines", "", registered, default=registered)
     elif system == "two-sled":
         parameters = read_two_sled(reader, doc)
     else:

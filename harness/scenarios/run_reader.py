@@ -10,13 +10,12 @@ from typing import Mapping
 import numpy as np
 
 from harness import bounds
-from harness.engines import preset_role, renamed_roles, source_label
+from harness.engines import engine_names, preset_role, renamed_roles, source_label
 from harness.scenarios.checks import check_engine_settings
 from harness.scenarios.errors import suggest
 from harness.scenarios.model import Expectation, Gate, Scenario, SweepSpec, sweep_parameters
 from harness.scenarios.schema import (
     BOUNDS,
-    ENGINES,
     EXPECT_KEYS,
     GATE_KEYS,
     LAW_TYPES,
@@ -195,7 +194,7 @@ def _read_gates(reader: TableReader, raw, scenario: Scenario) -> list[Gate]:
 def read_engine_settings(reader: TableReader, raw, scenario: Scenario):
     if not isinstance(raw, dict):
         reader.error("engine_settings", "must be a table of engine tables", raw,
-                     ", ".join(ENGINES))
+                     ", ".join(scenario.engines or engine_names()))
         return MappingProxyType({})
     reader.keys(raw, "engine_settings", scenario.engines, "[engine_settings] (engines of this "
                 "scenario)")

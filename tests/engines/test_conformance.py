@@ -137,9 +137,10 @@ def test_the_toy_alone_goes_through_bench_speed_accuracy(tmp_path, capsys, toy_e
 
 
 def test_the_toy_alone_goes_through_the_cache_put_bench(tmp_path, toy_engine):
-    # Library scenario files name the shipped engines (the reader's default): add the toy.
-    scenario = load_scenario("scenarios/disk-oblique.toml")
-    scenario = dataclasses.replace(scenario, engines=(*scenario.engines, toy_engine))
+    # A library file that names no engines (nor gates on the shipped ones, which are hidden
+    # here) runs every registered engine: the toy alone.
+    scenario = load_scenario("scenarios/disk-topspin.toml")
+    assert scenario.engines == (toy_engine,)
     outputs = cache_put.engine_outputs(4, scenarios=[scenario])
     assert len(outputs) == 4
     # Every output is the toy's (the only engine listed), one per preset role, cycled: its

@@ -224,3 +224,48 @@ def test_the_cli_prints_the_intervals_and_refuses_few_replicates(capsys, pymunk)
     assert "held out: the drops split by drop into halves with seed 3" in out
     assert cli_main(["calibrate", "pymunk", "--to", "poisson", "--replicates", "5"]) == 2
     assert "--replicates 5" in capsys.readouterr().err
+
+
+def test_cli_calibrates_a_registered_engine_without_knobs_and_says_why(capsys, toy_engine):
+    """The toy declares no calibration knobs: calibrate takes it (any registered engine),
+    fits the pair alone and says that its own settings cannot calibrate it, and why (the
+    contract's default reason)."""
+    from harness.engines import Engine
+
+    status = cli_main(["calibrate", toy_engine, "--to", "poisson", "--preset", "accurate",
+                       "--drops", "4", "--replicates", "10"])
+    out = capsys.readouterr().out
+    assert status == 0 and "best:" in out
+    assert (f"its own settings: cannot be calibrated (no knobs; the pair's mu and e alone are "
+            f"tried): {Engine.no_calibration_knobs_why}") in out
+    assert "  mu [" in out and "  e [" in out and "approach_steps" not in out
+
+
+def test_an_engines_calibration_knobs_are_tried_beside_the_pair(toy):
+    """A class that declares knobs has them in the grid, each value run (the toy's
+    ``approach_steps``: whole steps of free flight before the touch, which move nothing of
+    its exact impulse: it cannot be calibrated by them)."""
+    knobbed = type("KnobbedToy", (type(toy),),
+                   {"calibration_knobs": (("approach_steps", (0.0, 2.0)),)})()
+    impacts, thetas = calibrate.drop_population(4, seed=1)
+    result = calibrate.calibrate(knobbed, "accurate", impacts, thetas, "poisson",
+                                 replicates=10)
+    assert result.knobs["approach_steps"] == [0.0, 2.0] and result.no_knobs_why is None
+    assert len(result.cells) == 3 * 3 * 2
+    assert "approach_steps" in result.cannot()
+    text = calibrate.summary(result)
+    assert "approach_steps [0.0, 2.0]: cannot be calibrated" in text
+    assert "no knobs" not in text
+
+
+def test_the_shipped_knobs_live_on_the_engine_classes():
+    from harness.engines import Engine, engine_class, engine_names
+
+    for name in engine_names():
+        try:
+            cls = engine_class(name)
+        except ImportError:
+            continue
+        assert cls.calibration_knobs or cls.no_calibration_knobs_why != \
+            Engine.no_calibration_knobs_why, f"{name}: no knobs and no reason of its own"
+        assert {knob for knob, _ in cls.calibration_knobs} <= set(cls.setting_docs)

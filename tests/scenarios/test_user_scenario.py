@@ -15,8 +15,9 @@ from pathlib import Path
 import pytest
 
 from harness import cli
+from harness.engines import engine_names
 from harness.run import runner
-from harness.scenarios import ENGINES, PRESETS, SCENARIO_DIR, load_scenarios
+from harness.scenarios import PRESETS, SCENARIO_DIR, load_scenarios
 
 TESTS = Path(__file__).resolve().parents[1]
 
@@ -73,7 +74,8 @@ def test_a_fresh_scenario_in_a_copy_of_the_library_passes_its_tests(tmp_path, ca
     invariants.SCENARIOS = [fresh]
     runs = (runner.run([fresh], cache=None, workers=1, log=None).records,
             runner.run([fresh], cache=None, workers=1, log=None).records)
-    sources = [("analytic", None)] + [(engine, preset) for engine in (fresh.engines or ENGINES)
+    engines = fresh.engines or engine_names()
+    sources = [("analytic", None)] + [(engine, preset) for engine in engines
                                       for preset in PRESETS]
     for source, preset in sources:
         call(invariants.test_finite_numbers_or_a_reported_status, runs, fresh.name, source,

@@ -60,6 +60,9 @@ class Box2DEngine(Engine):
     native_2d = True
     plot_style = ("#CC79A7", "D")
     bench_impacts = (40, 300)
+    # The scale Box2D's world is built at: it moves the float32 rounding and the per-step
+    # translation cap relative to the bodies (`impact-harness calibrate box2d`).
+    calibration_knobs = (("length_scale", (1.0, 8.0, 64.0)),)
     presets = PRESETS
     setting_docs = SETTING_DOCS
     # Collision first: the first step finds the contact at the start pose. The start's

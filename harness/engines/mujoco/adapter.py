@@ -99,6 +99,9 @@ class MujocoEngine(Engine):
     # a default survey of thousands of impacts per family runs MuJoCo at `defaults` only.
     survey_left_out = {"accurate": "more stepping per impact than every other pair together; "
                                    "`--preset defaults,accurate` includes it"}
+    # The soft contact's damping ratio (solref's second entry) at its 0.02 s time constant:
+    # what sets MuJoCo's bounce in place of e (`impact-harness calibrate mujoco`).
+    calibration_knobs = (("solref", ([0.02, 0.5], [0.02, 1.0], [0.02, 2.0])),)
     presets = PRESETS
     setting_docs = SETTING_DOCS
     # A contact at exactly zero distance gets no constraint row in MuJoCo, so the start is a

@@ -72,6 +72,10 @@ class PybulletEngine(Engine):
     #: a disk dropped at 150 m/s enters at 100 m/s, at 10⁶ m/s it leaves at [0, 100, 0]
     #: (e = 1) (docs/verdicts.md, 'Velocity caps').
     speed_caps = (100.0, 100.0)
+    no_calibration_knobs_why = (
+        "none of Bullet's own settings is tried: its iterations, sub-steps and step converge "
+        "the solve, the ERP terms, slop and contact threshold correct positions or add the "
+        "biases `accurate` removes")
     presets = PRESETS
     setting_docs = SETTING_DOCS
     max_worlds = _MAX_WORLDS
