@@ -15,12 +15,11 @@ import numpy as np
 import planar_impact as pi
 
 from . import analysis, calibrate, drops_engines, fazeli, fitting, metric
+from .analysis import quantiles
 from .predict import predict
 
 #: A bin of the predicted-against-measured histogram with fewer drops than this is emptied.
 MIN_BIN_COUNT = 5
-#: The error distributions are kept as their quantiles at these levels.
-CDF_LEVELS = tuple(np.round(np.linspace(0.0, 1.0, 101), 2))
 #: Objectives the laws are fitted by (both: they give different fits, docs/experiments.md).
 OBJECTIVES = ("median-error", "impulse")
 #: The law whose predictions are set against the measurements, and the fit the engines run
@@ -30,15 +29,6 @@ SHOWN_LAW, SHOWN_OBJECTIVE = "poisson", "impulse"
 COMPARE_REPLICATES = 1000
 #: Post-impact speeds: names and units of the predicted-against-measured panels.
 SPEEDS = (("v_x'", "m/s"), ("v_y'", "m/s"), ("ω'", "rad/s"))
-
-
-def quantiles(errors) -> dict:
-    """The distribution of per-drop errors as quantiles at :data:`CDF_LEVELS` (finite ones;
-    ``drops`` counts them)."""
-    errors = np.asarray(errors, dtype=float)
-    valid = errors[np.isfinite(errors)]
-    values = np.quantile(valid, CDF_LEVELS).tolist() if valid.size else []
-    return {"drops": int(valid.size), "levels": list(CDF_LEVELS), "values": values}
 
 
 def density(predicted, measured, bins: int = 20, median_bins: int = 12) -> dict:
