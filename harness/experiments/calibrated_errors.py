@@ -129,13 +129,15 @@ def calibrate_engine(engine, preset: str, target: MeasuredImpacts, thetas, seed:
 
 def compute(target: MeasuredImpacts, thetas, law_fits: dict, engine_runs, *, seed: int = 0,
             replicates: int = REPLICATES, calibration_drops: int = CALIBRATION_DROPS,
-            calibrations: dict | None = None, progress=lambda text: None) -> dict:
+            calibrations: dict | None = None, curves: bool = True,
+            progress=lambda text: None) -> dict:
     """The aggregates: ``law_fits`` maps each law to its fit ``{"mu", "e"}`` on every drop
     (it must hold :data:`REFERENCE_LAW`); ``engine_runs`` is ``[(engine, preset, run)]``
     with ``run`` a :func:`drops_engines.run_drops` result on every drop of ``target``
     made with ``keep_errors``; its per-drop errors are read, never kept. ``calibrations``:
     ``(engine name, preset) -> Calibration`` made already by :func:`calibrate_engine` with
-    the same ``seed`` and ``calibration_drops``; the others are made here."""
+    the same ``seed`` and ``calibration_drops``; the others are made here. ``curves``:
+    keep the held-out error distributions as quantile curves (for a figure)."""
     if REFERENCE_LAW not in law_fits:
         raise ValueError(f"law_fits: must hold {REFERENCE_LAW!r}; has {', '.join(law_fits)}")
     training, held = split(len(target), seed)
@@ -153,7 +155,7 @@ def compute(target: MeasuredImpacts, thetas, law_fits: dict, engine_runs, *, see
                      "unsolved": int(np.count_nonzero(~np.isfinite(at_fit))),
                      "training_fit": {"mu": trained.mu, "e": trained.e},
                      "held_out": median_interval(held_out, replicates, seed),
-                     "held_out_cdf": analysis.quantiles(held_out)})
+                     **({"held_out_cdf": analysis.quantiles(held_out)} if curves else {})})
     reference_held = cdfs[REFERENCE_LAW]
     for row in laws:
         row["held_out_vs_reference"] = paired_difference(cdfs[row["law"]], reference_held,
@@ -176,6 +178,8 @@ def compute(target: MeasuredImpacts, thetas, law_fits: dict, engine_runs, *, see
             found = calibrate_engine(engine, preset, target, thetas, seed, calibration_drops)
         row.update(calibrated_row(engine, preset, found, thetas, held, on_held,
                                   reference_held, seed, replicates))
+        if not curves and row["calibrated"] is not None:
+            row["calibrated"].pop("cdf")
         engines.append(row)
     return {"objective": OBJECTIVE, "reference": REFERENCE_LAW, "seed": seed,
             "replicates": replicates, "confidence": CONFIDENCE,
