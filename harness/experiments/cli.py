@@ -277,7 +277,9 @@ def calibrated_errors_table(runs: list[EngineRuns], target, thetas, laws: dict,
         curves=False)  # 101 quantiles of a few drops would give them away; no figure here
     found["seconds"] = time.perf_counter() - started
     print(f"\n### Every engine and law at its fitted or calibrated settings, with intervals "
-          f"({found['seconds']:.1f} s)\n")
+          f"({found['seconds']:.1f} s)\n\nAt preset: every drop at the engines' (μ, e) above; "
+          f"the laws' fit to all drops by {args.objective}, to the training half by "
+          f"{calibrated_errors.OBJECTIVE}.")
     print("\n".join(calibrated_errors.markdown(found, preset_label)))
     return found
 
