@@ -187,7 +187,8 @@ def compute(target: MeasuredImpacts, thetas, law_fits: dict, engine_runs, *, see
             "calibration": {"drops": int(sample.size), "grid": "quick",
                             "mus": list(calibrate.PAIR_GRIDS["quick"][0]),
                             "es": list(calibrate.PAIR_GRIDS["quick"][1]),
-                            "knobs": {name: [values for _, values in knobs]
+                            "knobs": {name: {setting: list(values) for setting, values
+                                             in knobs}
                                       for name, knobs in calibrate.ENGINE_KNOBS.items()},
                             "tolerance": calibrate.TOLERANCE},
             "law_grid": {"mus": list(LAW_MUS), "es": list(LAW_ES)},

@@ -10,15 +10,17 @@ from harness.engines import preset_label
 from harness.experiments.calibrated_errors import interval_text, settings_text
 from harness.report.markup import html_table
 
-ENGINE_HEADER = ("engine", "preset", "calibrated settings", "median error at preset",
-                 "vs Poisson at preset", "median error at calibrated settings, held out",
-                 "vs Poisson, held out", "scored (preset / held out)",
-                 "flagged (preset / held out)")
+#: A bracket puts the rest of a header on a second line (markup.header_cell): the headers
+#: stay narrow.
+ENGINE_HEADER = ("engine", "preset", "calibrated settings", "median error [at preset]",
+                 "vs Poisson [at preset]", "median error [calibrated, held out]",
+                 "vs Poisson [held out]", "scored [preset / held out]",
+                 "flagged [preset / held out]")
 #: Text columns wrap (a "cannot" reason, the flagged runs' reasons): the table stays
 #: within the page at 1400 px.
 ENGINE_COLUMNS = ("l", "l", "note", "", "", "", "", "", "note")
-LAW_HEADER = ("law", "fit (all drops)", "median error at fit", "fit (training half)",
-              "median error held out", "vs Poisson, held out", "unsolved")
+LAW_HEADER = ("law", "fit [all drops]", "median error [at fit]", "fit [training half]",
+              "median error [held out]", "vs Poisson [held out]", "unsolved")
 
 
 def _flagged(part: dict | None) -> str:
@@ -65,8 +67,12 @@ def calibrated_html(aggregates: dict) -> str:
     split, calibration = result["split"], result["calibration"]
     shown = aggregates["shown"]
     rows, classes = engine_rows(result)
-    knobs = "; ".join(f"{engine}: {', '.join(map(str, values))}"
-                      for engine, values in calibration["knobs"].items())
+    knobs = "; ".join(f"{engine}'s {setting} " + ", ".join(
+        f"({', '.join(f'{v:g}' for v in value)})" if isinstance(value, list) else f"{value:g}"
+        for value in values)
+        for engine, settings in calibration["knobs"].items()
+        for setting, values in settings.items())
+    es = result["law_grid"]["es"]
     parts = [
         "<h4>Every engine and law at its fitted or calibrated settings</h4>",
         f"<p>The drops split by drop into halves with seed {result['seed']}: "
@@ -90,7 +96,7 @@ def calibrated_html(aggregates: dict) -> str:
         html_table(LAW_HEADER, law_rows(result), left=1),
         f"<p class='muted'>Every law at its <i>{escape_html(result['objective'])}</i> fit "
         "to every drop (the median there is in-sample), and fitted to the training half "
-        f"on μ {', '.join(f'{m:g}' for m in result['law_grid']['mus'])} × e "
-        f"{', '.join(f'{e:g}' for e in result['law_grid']['es'])}, refined ten times "
+        f"on μ {', '.join(f'{m:g}' for m in result['law_grid']['mus'])} × e {es[0]:g} to "
+        f"{es[-1]:g} in steps of {es[1] - es[0]:.2g}, refined ten times "
         "finer, scored on the held-out half beside the engines.</p>"]
     return "\n".join(parts)

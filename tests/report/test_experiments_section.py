@@ -72,6 +72,7 @@ def test_the_drops_figures_and_calibration_table_from_aggregates(tmp_path, monke
     assert "<i>cannot be calibrated</i>: no setting tried" in html
     assert "0 / —" in html and "multi-contact: 400 / —" in html
     assert "200 training, 200 held out" in html
+    assert "length_scale 1, 8, 64" in html and "solref (0.02, 0.5), (0.02, 1)" in html
     # its text columns wrap: the table stays readable at 1400 px
     table = html[html.index("Every engine and law at its fitted"):]
     assert '<td class="note"><i>cannot be calibrated</i>' in table
@@ -189,7 +190,9 @@ def fake_calibrated_errors(rng) -> dict:
         "objective": "median-error", "reference": "poisson", "seed": 0, "replicates": 50,
         "confidence": 0.95, "split": {"training": 200, "held_out": 200},
         "calibration": {"drops": 12, "grid": "quick", "mus": [0.0, 0.1, 0.3],
-                        "es": [0.3, 0.6, 0.9], "knobs": {"box2d": [[1.0, 8.0, 64.0]]},
+                        "es": [0.3, 0.6, 0.9],
+                        "knobs": {"box2d": {"length_scale": [1.0, 8.0, 64.0]},
+                                  "mujoco": {"solref": [[0.02, 0.5], [0.02, 1.0]]}},
                         "tolerance": 1e-3},
         "law_grid": {"mus": [0.0, 0.1, 0.3], "es": [0.0, 0.5, 1.0]},
         "laws": [{"law": "poisson", "fit": {"mu": 0.0, "e": 0.589}, "at_fit": summary(reference),
