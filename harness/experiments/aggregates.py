@@ -14,31 +14,32 @@ import numpy as np
 
 import planar_impact as pi
 
-from . import analysis, calibrate, drops_engines, fazeli, fitting, metric
+from . import (
+    analysis,
+    calibrate,
+    calibrated_errors,
+    drops_engines,
+    fazeli,
+    fitting,
+    metric,
+)
+from .analysis import quantiles
 from .predict import predict
 
 #: A bin of the predicted-against-measured histogram with fewer drops than this is emptied.
 MIN_BIN_COUNT = 5
-#: The error distributions are kept as their quantiles at these levels.
-CDF_LEVELS = tuple(np.round(np.linspace(0.0, 1.0, 101), 2))
 #: Objectives the laws are fitted by (both: they give different fits, docs/experiments.md).
 OBJECTIVES = ("median-error", "impulse")
 #: The law whose predictions are set against the measurements, and the fit the engines run
 #: at (the authors' own cost, which does not fit friction away).
 SHOWN_LAW, SHOWN_OBJECTIVE = "poisson", "impulse"
+#: The law fits the calibrated engines are set beside: the objective the calibration
+#: minimises too.
+CALIBRATED_OBJECTIVE = calibrated_errors.OBJECTIVE
 #: Paired bootstrap resamples of the comparison of Poisson with Stronge.
 COMPARE_REPLICATES = 1000
 #: Post-impact speeds: names and units of the predicted-against-measured panels.
 SPEEDS = (("v_x'", "m/s"), ("v_y'", "m/s"), ("ω'", "rad/s"))
-
-
-def quantiles(errors) -> dict:
-    """The distribution of per-drop errors as quantiles at :data:`CDF_LEVELS` (finite ones;
-    ``drops`` counts them)."""
-    errors = np.asarray(errors, dtype=float)
-    valid = errors[np.isfinite(errors)]
-    values = np.quantile(valid, CDF_LEVELS).tolist() if valid.size else []
-    return {"drops": int(valid.size), "levels": list(CDF_LEVELS), "values": values}
 
 
 def density(predicted, measured, bins: int = 20, median_bins: int = 12) -> dict:
@@ -121,15 +122,18 @@ def laws_apart(target, objective: str, results: dict, seed: int) -> dict | None:
 
 
 def compute(data: fazeli.FazeliData, *, engines=(), replicates: int = 100, seed: int = 0,
-            workers: int | None = None, calibration_drops: int = 12, laws=pi.LAWS,
+            workers: int | None = None,
+            calibration_drops: int = calibrated_errors.CALIBRATION_DROPS, laws=pi.LAWS,
             mus=fitting.MU_GRID, es=fitting.E_GRID, progress=lambda text: None) -> dict:
     """The report's aggregates of ``data``: the paper's six models, every law under both
     objectives (and whether Poisson and Stronge differ; where the drops lie on Routh's
     diagram, at the shown fit's μ), Poisson's predictions against the measurements, each
     engine (loaded, with its presets) on every drop at Poisson's ``impulse`` fit, and each
-    engine's calibrated (μ, e) and own settings on ``calibration_drops`` drops drawn with
-    ``seed``, with intervals and a held-out error. ``laws`` must include
-    :data:`SHOWN_LAW`."""
+    engine's calibrated (μ, e) and own settings on ``calibration_drops`` drops of the
+    training half drawn with ``seed``, with intervals and a held-out error; then
+    (:mod:`.calibrated_errors`) every law at its ``median-error`` fit and every engine at
+    its preset and at that calibration, scored on the held-out half, with intervals.
+    ``laws`` must include :data:`SHOWN_LAW`."""
     impacts = data.impacts
     target = fazeli.without_post_offset(impacts)  # the laws predict impulses only
     models = {name: quantiles(metric.normalized_error(speeds, impacts.speeds_after))
@@ -142,22 +146,32 @@ def compute(data: fazeli.FazeliData, *, engines=(), replicates: int = 100, seed:
     predicted = predict(target, SHOWN_LAW, shown["mu"], shown["e"]).speeds_after
     densities = [density(predicted[:, k], target.speeds_after[:, k]) for k in range(3)]
     thetas, _ = drops_engines.jacobian_angles(target, data.pre_impact_angles)
-    rows = calibrate.sample_rows(len(target), calibration_drops, seed)
-    sample = {"drops": int(rows.size), "of": len(target), "seed": seed}
-    on_drops, calibrated = [], []
+    sample = {"drops": int(calibrated_errors.calibration_sample(
+        len(target), seed, calibration_drops).size), "of": len(target), "seed": seed,
+        "from": "training half"}
+    on_drops, calibrated, engine_runs, calibrations = [], [], [], {}
     for engine in engines:
         for preset in engine.presets:
             progress(f"{engine.name} ({preset}) on every drop, then calibrated")
             run = drops_engines.run_drops(engine, preset, target, thetas, shown["mu"],
                                           shown["e"], keep_errors=True)
+            engine_runs.append((engine, preset, dict(run)))  # its errors, in memory only
             errors = run.pop("per_drop_errors")
             on_drops.append({**run, "cdf": quantiles(errors)})
-            result = calibrate.calibrate(engine, preset, target.subset(rows), thetas[rows],
-                                         "data", sample=sample, seed=seed)
+            # on the training half of calibrated_errors' split: its held-out half scores it
+            result = calibrated_errors.calibrate_engine(engine, preset, target, thetas, seed,
+                                                        calibration_drops)
+            calibrations[engine.name, preset] = result
             calibrated.append({"engine": engine.name, "preset": preset, "best": result.best,
                                "objective": result.best_objective, "moves": result.moves,
                                "cannot": result.cannot(), "knobs": result.knobs,
                                **calibration_uncertainty(result.uncertainty)})
+    progress("every law and engine at its fitted or calibrated settings, with intervals")
+    at_settings = calibrated_errors.compute(
+        target, thetas, {law: {"mu": fit["mu"], "e": fit["e"]}
+                         for law, fit in fits[CALIBRATED_OBJECTIVE].items()},
+        engine_runs, seed=seed, calibration_drops=calibration_drops,
+        calibrations=calibrations)
     return {"drops": len(target), "post_speeds": "raw", "seed": seed,
             "replicates": replicates, "paper_models": models, "laws": fits,
             "poisson_vs_stronge": apart, "routh": routh,
@@ -168,7 +182,8 @@ def compute(data: fazeli.FazeliData, *, engines=(), replicates: int = 100, seed:
                                                  "tolerance": calibrate.TOLERANCE,
                                                  "replicates": calibrate.REPLICATES,
                                                  "confidence": calibrate.CONFIDENCE,
-                                                 "results": calibrated}}
+                                                 "results": calibrated},
+            "calibrated_errors": at_settings}
 
 
 def calibration_uncertainty(found: calibrate.Uncertainty | None) -> dict:

@@ -20,6 +20,8 @@ from .predict import predict
 from .records import MeasuredImpacts
 
 QUANTILES = (0.25, 0.5, 0.75, 0.9)
+#: Error distributions are kept as their quantiles at these levels (a curve, no drop).
+CDF_LEVELS = tuple(np.round(np.linspace(0.0, 1.0, 101), 2))
 #: Two laws whose objectives differ by less than this fraction are the same in practice.
 PRACTICAL_BAND = 0.01
 
@@ -33,6 +35,15 @@ def error_summary(errors: np.ndarray) -> dict:
     for q in QUANTILES:
         summary[f"q{round(q * 100)}"] = float(np.quantile(valid, q)) if valid.size else None
     return summary
+
+
+def quantiles(errors) -> dict:
+    """The distribution of per-drop errors as quantiles at :data:`CDF_LEVELS` (finite ones;
+    ``drops`` counts them)."""
+    errors = np.asarray(errors, dtype=float)
+    valid = errors[np.isfinite(errors)]
+    values = np.quantile(valid, CDF_LEVELS).tolist() if valid.size else []
+    return {"drops": int(valid.size), "levels": list(CDF_LEVELS), "values": values}
 
 
 def paper_models(model_speeds: dict[str, np.ndarray], impacts: MeasuredImpacts) -> dict:

@@ -48,13 +48,14 @@ def drop_scene(impacts: MeasuredImpacts, row: int, theta: float, mu: float, e: f
 
 
 def run_drops(engine, preset: str, impacts: MeasuredImpacts, thetas: np.ndarray, mu: float,
-              e: float, keep_errors: bool = False) -> dict:
+              e: float, keep_errors: bool = False, overrides: dict | None = None) -> dict:
     """Aggregates of ``engine`` under ``preset`` on every drop: verdict counts and the
     paper's normalized error of the runs judged single impacts. ``keep_errors`` adds the
     per-drop errors (NaN where flagged) as ``per_drop_errors``, for the caller to reduce:
-    they must not be written anywhere."""
+    they must not be written anywhere. ``overrides``: the engine's own settings changed
+    from the preset's (a calibration's pick), recorded in the result."""
     scenes = [drop_scene(impacts, i, float(thetas[i]), mu, e) for i in range(len(impacts))]
-    runs = engine.run_many(scenes, preset=preset)
+    runs = engine.run_many(scenes, preset=preset, overrides=overrides or None)
     verdicts = [judged(run, scene) for run, scene in zip(runs, scenes)]
     ok = np.array([v == "ok" for v in verdicts])
     after = np.array([np.asarray(run.u_after, dtype=float)[:3] for run in runs])
@@ -63,6 +64,7 @@ def run_drops(engine, preset: str, impacts: MeasuredImpacts, thetas: np.ndarray,
     for verdict in verdicts:
         counts[verdict] = counts.get(verdict, 0) + 1
     result = {"engine": engine.name, "preset": preset, "mu": mu, "e": e,
+              **({"overrides": dict(overrides)} if overrides else {}),
               "verdicts": dict(sorted(counts.items())),
               "errors": analysis.error_summary(errors)}
     if keep_errors:

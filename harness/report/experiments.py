@@ -26,9 +26,18 @@ from harness.engines import (
     load_engine,
     preset_label,
 )
-from harness.experiments import aggregates, engine_curves, fazeli, kharaz, registry
+from harness.experiments import (
+    aggregates,
+    calibrate,
+    engine_curves,
+    fazeli,
+    kharaz,
+    registry,
+)
 from harness.experiments.aggregates import MIN_BIN_COUNT as MIN_BIN
+from harness.experiments.calibrated_errors import settings_text
 from harness.plotting import new_figure, save_png
+from harness.report.calibrated_drops import calibrated_html
 from harness.report.figure_cache import render_once, solver_digest
 from harness.report.markup import folded
 from harness.report.views import FIGURES, engine_style
@@ -169,8 +178,10 @@ LAW_LINES = {"newton": "-", "poisson": "-", "stronge": "--", "stronge-paper": ":
 
 #: The kept aggregates' layout: bump when what is kept changes (2: the files' SHA-256 in the
 #: provenance, never the copy's path; 3: the calibration's bootstrap intervals and held-out
-#: error, Poisson against Stronge with its interval, the drops on Routh's diagram).
-DROPS_LAYOUT = 3
+#: error, Poisson against Stronge with its interval, the drops on Routh's diagram; 4: every
+#: engine and law at its fitted or calibrated settings with intervals, the calibration's
+#: drops from the training half).
+DROPS_LAYOUT = 4
 
 
 def drops_key(hashes: dict[str, str]) -> str:
@@ -272,9 +283,14 @@ def _cdf(axis, quantile_set: dict, label: str | None, **style) -> None:
         axis.plot(quantile_set["values"], quantile_set["levels"], label=label, **style)
 
 
+#: The error-distribution figure's panels, rows × columns: every law by each objective, the
+#: engines at the shown fit, and the held-out half (engines calibrated, laws fitted).
+CDF_LAYOUT = (2, 2)
+
+
 def draw_cdf(aggregates: dict, path: Path, tag: str | None) -> Path:
-    figure = new_figure(11.0, 5.6)
-    axes = figure.subplots(1, 3, sharey=True)
+    figure = new_figure(11.0, 11.0)
+    axes = figure.subplots(*CDF_LAYOUT, sharey=True).ravel()
     drops = aggregates["drops"]
     for axis, objective in zip(axes[:2], ("median-error", "impulse")):
         for law, fit in aggregates["laws"][objective].items():
@@ -304,6 +320,7 @@ def draw_cdf(aggregates: dict, path: Path, tag: str | None) -> Path:
     if flagged:
         axes[2].text(0.98, 0.03, "every run flagged, not drawn:\n" + "\n".join(flagged),
                      transform=axes[2].transAxes, ha="right", va="bottom", fontsize=7)
+    draw_calibrated_cdf(axes[3], aggregates.get("calibrated_errors"))
     for axis in axes:
         axis.set_xlim(0, 1.5)
         axis.set_ylim(0, 1)
@@ -312,7 +329,40 @@ def draw_cdf(aggregates: dict, path: Path, tag: str | None) -> Path:
         axis.legend(fontsize=7.5, loc="upper center", bbox_to_anchor=(0.5, -0.16),
                     frameon=False)
     axes[0].set_ylabel(f"share of the {drops} drops with a smaller error")
+    axes[2].set_ylabel("share of the drops with a smaller error")
     return save_png(figure, path, tag=tag)
+
+
+def draw_calibrated_cdf(axis, found: dict | None) -> None:
+    """The fourth panel: on the held-out half, every engine at its calibrated settings
+    beside every law at its fit to the training half (``calibrated_errors`` aggregates)."""
+    if not found:
+        axis.set_axis_off()
+        return
+    for row in found["laws"]:
+        # black, as the law in the panel beside it: the engines keep their colours
+        _cdf(axis, row["held_out_cdf"], f"{row['law']} (fitted to the training half)",
+             color="black", linestyle=LAW_LINES.get(row["law"], "-"), linewidth=2.0)
+    held = found["split"]["held_out"]
+    cannot = []
+    for row in found["engines"]:
+        label = f"{row['engine']} {preset_label(row['engine'], row['preset'])}"
+        calibrated = row["calibrated"]
+        if calibrated is None or not calibrated["cdf"]["drops"]:
+            cannot.append(label)
+            continue
+        colour, _ = engine_style(row["engine"])
+        n = calibrated["cdf"]["drops"]
+        subset = "" if n == held else f", {n} of {held}"
+        _cdf(axis, calibrated["cdf"], f"{label}: {settings_text(calibrated['settings'])}"
+             f"{subset}", color=colour,
+             linestyle="--" if row["preset"] == "defaults" else "-", linewidth=1.2)
+    axis.set_title(f"held-out half ({held} drops): engines calibrated on the training half",
+                   fontsize=10)
+    if cannot:
+        axis.text(0.98, 0.03, "cannot be calibrated or every run flagged, not drawn:\n"
+                  + "\n".join(cannot), transform=axis.transAxes, ha="right", va="bottom",
+                  fontsize=7)
 
 
 def draw_fits(aggregates: dict, path: Path, tag: str | None) -> Path:
@@ -403,17 +453,20 @@ def calibration_table(aggregates: dict) -> str:
                     f"<td>{escape_html(chosen)}</td><td>{held}</td>"
                     f"<td>{escape_html(cannot)}</td></tr>")
     sample = calibration["sample"]
+    mus, es = calibrate.PAIR_GRIDS[calibration["grid"]]
     return ("<table><tr><th>engine</th><th>preset</th><th>calibrated settings</th>"
             f"<th>median error</th><th>its {level} interval</th>"
             f"<th>settings chosen ({level} of resamples)</th>"
             "<th>held-out error (in-sample)</th><th>knobs that move it by &lt; "
             f"{calibration['tolerance']:g} (cannot calibrate)</th></tr>" + "".join(rows)
-            + "</table><p class='muted'>Grid <i>quick</i> (μ 0.1, 0.3, 0.6 × e 0.3, 0.6, 0.9, "
+            + f"</table><p class='muted'>Grid <i>quick</i> (μ {', '.join(map(str, mus))} × e "
+            f"{', '.join(map(str, es))}, "
             f"times {escape_html(_own_knobs([r['engine'] for r in calibration['results']]))})"
             ", scored on "
             f"{sample['drops']} of the {sample['of']} drops drawn at random with seed "
-            f"{sample['seed']} (<code>impact-harness calibrate ENGINE --to data</code> for "
-            f"more). Intervals: {calibration['replicates']:,} bootstrap resamples of those "
+            f"{sample['seed']} from the {sample.get('from', 'whole set')} (the held-out half "
+            "scores the pick below; <code>impact-harness calibrate ENGINE --to data</code> "
+            f"for more). Intervals: {calibration['replicates']:,} bootstrap resamples of those "
             "drops (seed as above), the best cell re-picked on each; percentile intervals, "
             "the settings' on the values tried. Held-out: the drops split by drop into "
             "halves (same seed), the best cell of one half scored on the other; its "
@@ -451,19 +504,22 @@ def drops_html(out_dir: Path, aggregates: dict) -> str:
         "the measured value. On the dashed line the prediction is exact."))
     parts.append(_figure(CDF_FIGURE, "error distributions of the laws and engines",
         "The distribution of the paper's error (the centre's velocity after impact, relative "
-        "to the measured one) over the drops. Left and middle: every law at its own fit by "
+        "to the measured one) over the drops. Top: every law at its own fit by "
         "each objective (they give different fits); grey, the paper's six models as "
-        "published (against the published speeds, as the paper scores them). Right: every "
+        "published (against the published speeds, as the paper scores them). Bottom left: every "
         f"engine and preset at {shown['law']}'s <i>{shown['objective']}</i> fit (dashed: "
         "the engine's <i>defaults</i>), on its runs judged single impacts only (flagged "
         "runs are not scored; a curve of fewer drops is of a selected subset and not "
-        "comparable)."))
+        "comparable). Bottom right: the held-out half of the drops, every engine and preset "
+        "at its settings calibrated on the training half beside every law at its fit to the "
+        "training half (the table below gives their medians with intervals)."))
     parts.append(_figure(FITS_FIGURE, "fitted friction and restitution per law",
         "Each law's global (μ, e) by each objective with its 95 % bootstrap interval "
         f"({aggregates['replicates']} resamples of the drops, seed {aggregates['seed']}). "
         "The laws nearly coincide on this object; the objectives do not."))
     parts.append(laws_apart_html(aggregates))
     parts.append("<h4>Calibrated engine settings</h4>" + calibration_table(aggregates))
+    parts.append(calibrated_html(aggregates))
     return "\n".join(parts)
 
 

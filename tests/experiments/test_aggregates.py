@@ -95,7 +95,7 @@ def test_engines_are_run_judged_and_calibrated_on_a_seeded_sample(computed):
         assert sum(run["verdicts"].values()) == truth["drops"]
         assert run["cdf"]["drops"] == run["verdicts"].get("ok", 0)
     sample = result["calibration"]["sample"]
-    assert sample == {"drops": 4, "of": truth["drops"], "seed": 0}
+    assert sample == {"drops": 4, "of": truth["drops"], "seed": 0, "from": "training half"}
     assert all(row["best"] is not None for row in result["calibration"]["results"])
     calibration = result["calibration"]
     assert calibration["replicates"] == calibrate.REPLICATES

@@ -63,6 +63,19 @@ def test_the_drops_figures_and_calibration_table_from_aggregates(tmp_path, monke
     assert "seed 0" in html and "mcubelab" not in html
     assert "The data do not tell poisson from stronge" in html and "-0.0001 to 0.0001" in html
     assert "opposes the slip in 200 of 400 drops" in html
+    # every engine and law at its fitted or calibrated settings, with intervals
+    found = fake["calibrated_errors"]
+    pymunk, mujoco = found["engines"]
+    low, high = pymunk["calibrated"]["interval"]
+    assert f"{pymunk['calibrated']['median']:.3f} [{low:.3f}, {high:.3f}]" in html
+    assert "μ 0, e 0.6" in html and "200 / 200" in html and "none / clipped: 2" in html
+    assert "<i>cannot be calibrated</i>: no setting tried" in html
+    assert "0 / —" in html and "multi-contact: 400 / —" in html
+    assert "200 training, 200 held out" in html
+    assert "length_scale 1, 8, 64" in html and "solref (0.02, 0.5), (0.02, 1)" in html
+    # its text columns wrap: the table stays readable at 1400 px
+    table = html[html.index("Every engine and law at its fitted"):]
+    assert '<td class="note"><i>cannot be calibrated</i>' in table
 
 
 def test_report_refuses_a_bad_experiments_data_before_any_work(tmp_path, capsys):
@@ -154,4 +167,46 @@ def fake_aggregates() -> dict:
                   "mu_coupling": {"q25": 0.01, "q50": 0.02, "q75": 0.03, "q90": 0.04},
                   "coupling_opposes_slip": 200, "drops": 400},
         "provenance": {"sha256": {"data_ellipse.mat": "0" * 64}},
+        "calibrated_errors": fake_calibrated_errors(rng),
     }
+
+
+def fake_calibrated_errors(rng) -> dict:
+    """Made-up per-drop errors reduced by calibrated_errors' own functions: pymunk
+    calibrated, MuJoCo flagged on every drop and so not calibrated."""
+    import numpy as np
+
+    from harness.experiments import aggregates, calibrated_errors
+
+    held = rng.uniform(0, 1, 200)
+    reference = held + rng.normal(0, 0.01, 200)
+    summary = functools.partial(calibrated_errors.median_interval, replicates=50)
+    paired = functools.partial(calibrated_errors.paired_difference, replicates=50)
+    calibrated = {"settings": {"mu": 0.0, "e": 0.6}, "training_objective": 0.3,
+                  **summary(held), "flagged": {"clipped": 2},
+                  "vs_reference": paired(held, reference), "cdf": aggregates.quantiles(held)}
+    nothing = summary(np.full(400, np.nan))
+    return {
+        "objective": "median-error", "reference": "poisson", "seed": 0, "replicates": 50,
+        "confidence": 0.95, "split": {"training": 200, "held_out": 200},
+        "calibration": {"drops": 12, "grid": "quick", "mus": [0.0, 0.1, 0.3],
+                        "es": [0.3, 0.6, 0.9],
+                        "knobs": {"box2d": {"length_scale": [1.0, 8.0, 64.0]},
+                                  "mujoco": {"solref": [[0.02, 0.5], [0.02, 1.0]]}},
+                        "tolerance": 1e-3},
+        "law_grid": {"mus": [0.0, 0.1, 0.3], "es": [0.0, 0.5, 1.0]},
+        "laws": [{"law": "poisson", "fit": {"mu": 0.0, "e": 0.589}, "at_fit": summary(reference),
+                  "unsolved": 0, "training_fit": {"mu": 0.0, "e": 0.57},
+                  "held_out": summary(reference),
+                  "held_out_vs_reference": paired(reference, reference),
+                  "held_out_cdf": aggregates.quantiles(reference)}],
+        "engines": [
+            {"engine": "pymunk", "preset": "accurate", "cannot": None, "cannot_knobs": [],
+             "at_preset": {"mu": 0.04, "e": 0.55, **summary(held), "flagged": {},
+                           "vs_reference": paired(held, reference)},
+             "calibrated": calibrated},
+            {"engine": "mujoco", "preset": "defaults", "calibrated": None,
+             "cannot": "no setting tried gives single impacts on half of the 12 training drops",
+             "cannot_knobs": ["mu", "e", "solref"],
+             "at_preset": {"mu": 0.04, "e": 0.55, **nothing,
+                           "flagged": {"multi-contact": 400}, "vs_reference": None}}]}
