@@ -39,7 +39,7 @@ from harness.experiments.calibrated_errors import settings_text
 from harness.plotting import new_figure, save_png
 from harness.report.calibrated_drops import calibrated_html
 from harness.report.figure_cache import render_once, solver_digest
-from harness.report.markup import folded
+from harness.report.markup import folded, html_table
 from harness.report.views import FIGURES, engine_style
 from harness.run.provenance import package_versions
 from harness.store.files import write_text_atomically
@@ -447,19 +447,20 @@ def calibration_table(aggregates: dict) -> str:
                 held = (f"{split['held_out']:.3f} ({split['held_out_drops']} drops; in-sample "
                         f"{split['in_sample']:.3f} on {split['fitting_drops']})")
         cannot = ", ".join(result["cannot"]) or "—"
-        rows.append(f"<tr><td>{escape_html(result['engine'])}</td>"
-                    f"<td>{escape_html(preset_label(result['engine'], result['preset']))}</td>"
-                    f"<td>{escape_html(best)}</td><td>{objective}</td><td>{interval}</td>"
-                    f"<td>{escape_html(chosen)}</td><td>{held}</td>"
-                    f"<td>{escape_html(cannot)}</td></tr>")
+        rows.append([escape_html(result["engine"]),
+                     escape_html(preset_label(result["engine"], result["preset"])),
+                     escape_html(best), objective, interval, escape_html(chosen), held,
+                     escape_html(cannot)])
     sample = calibration["sample"]
     mus, es = calibrate.PAIR_GRIDS[calibration["grid"]]
-    return ("<table><tr><th>engine</th><th>preset</th><th>calibrated settings</th>"
-            f"<th>median error</th><th>its {level} interval</th>"
-            f"<th>settings chosen ({level} of resamples)</th>"
-            "<th>held-out error (in-sample)</th><th>knobs that move it by &lt; "
-            f"{calibration['tolerance']:g} (cannot calibrate)</th></tr>" + "".join(rows)
-            + f"</table><p class='muted'>Grid <i>quick</i> (μ {', '.join(map(str, mus))} × e "
+    header = ["engine", "preset", "calibrated settings", "median error",
+              f"its {level} interval", f"settings chosen ({level} of resamples)",
+              "held-out error (in-sample)",
+              f"knobs that move it by < {calibration['tolerance']:g} (cannot calibrate)"]
+    # The long text columns wrap: the table fits a 1400 px page without scrolling.
+    return (html_table(header, rows, left=2,
+                       column_classes=["", "", "note", "", "", "note", "note", "note"])
+            + f"<p class='muted'>Grid <i>quick</i> (μ {', '.join(map(str, mus))} × e "
             f"{', '.join(map(str, es))}, "
             f"times {escape_html(_own_knobs([r['engine'] for r in calibration['results']]))})"
             ", scored on "
