@@ -433,13 +433,15 @@ def calibration_table(aggregates: dict) -> str:
             best = "cannot be calibrated: no setting tried gives single impacts on half the drops"
             objective = "—"
         else:
-            best = ", ".join(f"{k} {v}" for k, v in result["best"].items())
+            best = ", ".join(f"{_symbol(k)} {v:g}" if isinstance(v, float) else
+                             f"{_symbol(k)} {v}" for k, v in result["best"].items())
             objective = f"{result['objective']:.3f}"
             if result["objective_interval"] is not None:
                 low, high = result["objective_interval"]
                 interval = f"[{low:.3f}, {high:.3f}]"
-                chosen = "; ".join(f"{k} any (ties)" if k in result["cannot"]
-                                   else f"{k} {low}" if low == high else f"{k} {low} to {high}"
+                chosen = "; ".join(f"{_symbol(k)} any (ties)" if k in result["cannot"]
+                                   else f"{_symbol(k)} {low}" if low == high
+                                   else f"{_symbol(k)} {low} to {high}"
                                    for k, (low, high) in result["settings_interval"].items())
                 chosen += f" (the best cell re-picked on {result['agree']:.0%})"
             split = result["held_out"]
@@ -456,14 +458,15 @@ def calibration_table(aggregates: dict) -> str:
     header = ["engine", "preset", "calibrated settings", "median error",
               f"its {level} interval", f"settings chosen ({level} of resamples)",
               "held-out error (in-sample)",
-              f"knobs that move it by < {calibration['tolerance']:g} (cannot calibrate)"]
+              "knobs that cannot calibrate it"]
     # The long text columns wrap: the table fits a 1400 px page without scrolling.
     return (html_table(header, rows, left=2,
                        column_classes=["", "", "note", "", "", "note", "note", "note"])
             + f"<p class='muted'>Grid <i>quick</i> (μ {', '.join(map(str, mus))} × e "
             f"{', '.join(map(str, es))}, "
             f"times {escape_html(_own_knobs([r['engine'] for r in calibration['results']]))})"
-            ", scored on "
+            ", a knob cannot calibrate an engine when none of its values moves the median "
+            f"error by {calibration['tolerance']:g} or more; scored on "
             f"{sample['drops']} of the {sample['of']} drops drawn at random with seed "
             f"{sample['seed']} from the {sample.get('from', 'whole set')} (the held-out half "
             "scores the pick below; <code>impact-harness calibrate ENGINE --to data</code> "
@@ -472,6 +475,11 @@ def calibration_table(aggregates: dict) -> str:
             "the settings' on the values tried. Held-out: the drops split by drop into "
             "halves (same seed), the best cell of one half scored on the other; its "
             "in-sample value beside it.</p>")
+
+
+def _symbol(setting: str) -> str:
+    """A fitted setting's name as the rest of the page writes it (μ, not mu)."""
+    return "μ" if setting == "mu" else setting
 
 
 def _own_knobs(engines) -> str:

@@ -58,7 +58,7 @@ def test_the_drops_figures_and_calibration_table_from_aggregates(tmp_path, monke
         assert (tmp_path / "out" / "figures" / name).is_file() and name in html
     assert "Calibrated engine settings" in html and "cannot be calibrated" in html
     # the pymunk row: its interval, the settings chosen over the resamples, the held-out error
-    assert "[0.350, 0.470]" in html and "mu 0.1 to 0.3; e 0.6" in html and "80%" in html
+    assert "[0.350, 0.470]" in html and "μ 0.1 to 0.3; e 0.6" in html and "80%" in html
     assert "0.520 (6 drops; in-sample 0.380 on 6)" in html and "1,000 bootstrap" in html
     assert "seed 0" in html and "mcubelab" not in html
     assert "The data do not tell poisson from stronge" in html and "-0.0001 to 0.0001" in html
