@@ -56,11 +56,24 @@ PAIR_GRIDS = {"quick": ((0.0, 0.1, 0.3), (0.3, 0.6, 0.9)),
                        tuple(np.round(np.linspace(0.0, 1.0, 11), 2)))}
 
 
-def engine_knobs(engine) -> dict:
+def engine_knobs(engine, preset: str | None = None) -> dict:
     """``{setting: [values]}``: the engine's own settings tried beside the pair, from its
-    class (``Engine.calibration_knobs``; empty: none of its own). A preset that ignores a
-    setting shows it as "cannot be calibrated" rather than being special-cased."""
-    return {setting: list(values) for setting, values in type(engine).calibration_knobs}
+    class (``Engine.calibration_knobs``; empty: none of its own), and under ``preset`` that
+    preset's own value of each as well (first, where the class does not list it): the
+    calibration never does worse than the preset's settings on the pair's grid. (MuJoCo's
+    ``matched-bounce`` maps e to its damping, ``solref = "restitution"``; without its own
+    value every cell tried replaced that mapping by a fixed damping and no cell gave single
+    impacts.) A preset that ignores a setting shows it as "cannot be calibrated" rather than
+    being special-cased."""
+    knobs = {}
+    for setting, values in type(engine).calibration_knobs:
+        values = list(values)
+        if preset is not None:
+            own = engine.presets[preset].get(setting)
+            if own is not None and own not in values:
+                values.insert(0, own)
+        knobs[setting] = values
+    return knobs
 
 
 @dataclass(frozen=True)
@@ -214,7 +227,7 @@ def calibrate(engine, preset: str, impacts: MeasuredImpacts, thetas, target: str
     reference = (impacts.speeds_after if target == "data"
                  else predict(impacts, target, law_mu, law_e).speeds_after)
     mus, es = PAIR_GRIDS[grid]
-    knobs = {"mu": list(mus), "e": list(es), **engine_knobs(engine)}
+    knobs = {"mu": list(mus), "e": list(es), **engine_knobs(engine, preset)}
     names = list(knobs)
     settings_of = [dict(zip(names, values))
                    for values in itertools.product(*(knobs[name] for name in names))]

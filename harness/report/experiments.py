@@ -488,7 +488,8 @@ def _own_knobs(engines) -> str:
     knobs = [f"{engine}'s {setting} {', '.join(json.dumps(value) for value in values)}"
              for engine in dict.fromkeys(engines)
              for setting, values in engine_trait(engine, "calibration_knobs")]
-    return "; ".join(knobs) if knobs else "no engine's own setting"
+    return ("; ".join(knobs) + ", and each preset's own value") if knobs else \
+        "no engine's own setting"
 
 
 def drops_html(out_dir: Path, aggregates: dict) -> str:

@@ -258,6 +258,24 @@ def test_an_engines_calibration_knobs_are_tried_beside_the_pair(toy):
     assert "no knobs" not in text
 
 
+def test_a_presets_own_value_of_a_knob_is_always_tried(toy):
+    """Calibration never does worse than the preset on the pair's grid: the preset's own
+    value of a knob is tried first where the class does not list it (MuJoCo's
+    matched-bounce maps e to its damping; a grid of fixed dampings alone flagged every
+    cell)."""
+    knobbed = type("KnobbedToy", (type(toy),),
+                   {"calibration_knobs": (("approach_steps", (1.0, 2.0)),)})()
+    own = knobbed.presets["accurate"]["approach_steps"]
+    assert own not in (1.0, 2.0)
+    assert calibrate.engine_knobs(knobbed) == {"approach_steps": [1.0, 2.0]}
+    assert calibrate.engine_knobs(knobbed, "accurate") == {"approach_steps": [own, 1.0, 2.0]}
+    impacts, thetas = calibrate.drop_population(4, seed=1)
+    result = calibrate.calibrate(knobbed, "accurate", impacts, thetas, "poisson",
+                                 replicates=10)
+    assert len(result.cells) == 3 * 3 * 3
+    assert {settings["approach_steps"] for settings, _, _ in result.cells} == {own, 1.0, 2.0}
+
+
 def test_the_shipped_knobs_live_on_the_engine_classes():
     from harness.engines import Engine, engine_class, engine_names
 
