@@ -228,9 +228,13 @@ def interval_text(found: dict | None, key: str = "median") -> str:
     """``0.364 [0.348, 0.388]``; a difference signed; "—" when nothing was scored."""
     if found is None or found.get(key) is None:
         return "—"
-    low, high = found["interval"]
     sign = "+" if key == "difference" else ""
-    return f"{found[key]:{sign}.3f} [{low:{sign}.3f}, {high:{sign}.3f}]"
+
+    def shown(value: float) -> str:  # rounded first: a difference of -1e-17 reads +0.000
+        return f"{round(value, 3) + 0.0:{sign}.3f}"
+
+    low, high = found["interval"]
+    return f"{shown(found[key])} [{shown(low)}, {shown(high)}]"
 
 
 def settings_text(settings: dict) -> str:
