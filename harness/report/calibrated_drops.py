@@ -72,6 +72,7 @@ def calibrated_html(aggregates: dict) -> str:
         for value in values)
         for engine, settings in calibration["knobs"].items()
         for setting, values in settings.items())
+    own_values = ", and each preset's own value" if knobs else ""
     es = result["law_grid"]["es"]
     parts = [
         "<h4>Every engine and law at its fitted or calibrated settings</h4>",
@@ -82,7 +83,8 @@ def calibrated_html(aggregates: dict) -> str:
         "preset's own settings untouched. <i>Calibrated</i>: the engine's (μ, e) and own "
         f"settings picked on {calibration['drops']} training drops (quick grid μ "
         f"{', '.join(f'{m:g}' for m in calibration['mus'])} × e "
-        f"{', '.join(f'{e:g}' for e in calibration['es'])}; {escape_html(knobs)}), then "
+        f"{', '.join(f'{e:g}' for e in calibration['es'])}; {escape_html(knobs)}"
+        f"{own_values}), then "
         "scored on every held-out drop. Medians of the paper's normalized error over the "
         f"runs judged single impacts (flagged runs are counted, never scored), each with "
         f"the {level} percentile interval of {result['replicates']:,} bootstrap resamples "
