@@ -7,6 +7,7 @@ from __future__ import annotations
 import copy
 import json
 import math
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -124,6 +125,26 @@ def results_file(tmp_path_factory):
                          outcome.scenarios)
 
 
+#: The report options of every report written here: SVG twins of the headline figures only
+#: (a scenario's SVG twins are tested in test_scale.py and test_table3.py).
+OPTIONS = {"workers": 1, "svg": "headline"}
+
+
+@pytest.fixture(scope="module")
+def drawn_report(results_file, tmp_path_factory) -> Path:
+    """The report of ``results_file``, drawn once: each test starts from a copy of it (the
+    drawing is most of these tests' time, and what each tests comes after it)."""
+    out = tmp_path_factory.mktemp("drawn") / "report"
+    report.write_report(read_results(results_file), out, **OPTIONS)
+    return out
+
+
+def _copy_of(report_dir: Path, target: Path) -> Path:
+    """A copy of a written report, the files' times kept (they tell a redrawn figure)."""
+    shutil.copytree(report_dir, target)
+    return target
+
+
 def _rewrite(source: Path, target: Path, change) -> Path:
     """``source`` with ``change(record dict)`` applied to every record, as `run` writes."""
     results = read_results(source)
@@ -138,11 +159,11 @@ def _times(out: Path) -> dict[str, int]:
     return {p.name: p.stat().st_mtime_ns for p in (out / "figures").glob("*.png")}
 
 
-def test_a_changed_record_redraws_its_figures_and_the_headline_only(results_file, tmp_path):
+def test_a_changed_record_redraws_its_figures_and_the_headline_only(results_file, drawn_report,
+                                                                   tmp_path):
     """Which PNGs are drawn again; a scenario's figures without their SVG twins (when a
     twin is drawn with its PNG: test_scale.py and test_table3.py)."""
-    out = tmp_path / "report"
-    report.write_report(read_results(results_file), out, workers=1, svg="headline")
+    out = _copy_of(drawn_report, tmp_path / "report")
     drawn = _times(out)
     first, second = read_results(results_file).scenario_names()
     assert {"heatmap.png", f"impulse-{slug(first)}.png",
@@ -155,12 +176,12 @@ def test_a_changed_record_redraws_its_figures_and_the_headline_only(results_file
             (item["diagnostics"] or {})["engine_wall_time_s"] = 4.5
 
     retimed = _rewrite(results_file, tmp_path / "retimed.json", new_times)
-    report.write_report(read_results(retimed), out, workers=1, svg="headline")
+    report.write_report(read_results(retimed), out, **OPTIONS)
     assert _times(out) == drawn  # only times changed: nothing redrawn
 
     nudged = _rewrite(retimed, tmp_path / "nudged.json",
                       lambda item: item.update(_next_float(item)))
-    report.write_report(read_results(nudged), out, workers=1, svg="headline")
+    report.write_report(read_results(nudged), out, **OPTIONS)
     assert _times(out) == drawn  # every float a last bit up (another CPU): nothing redrawn
 
     def decides_otherwise(item):
@@ -168,7 +189,7 @@ def test_a_changed_record_redraws_its_figures_and_the_headline_only(results_file
             item["status"] = "flagged"
 
     changed = _rewrite(retimed, tmp_path / "changed.json", decides_otherwise)
-    report.write_report(read_results(changed), out, workers=1, svg="headline")
+    report.write_report(read_results(changed), out, **OPTIONS)
     after = _times(out)
     redrawn = {name for name in drawn if after[name] != drawn[name]}
     assert {"heatmap.png", f"impulse-{slug(first)}.png"} <= redrawn
@@ -177,17 +198,17 @@ def test_a_changed_record_redraws_its_figures_and_the_headline_only(results_file
 
 
 @pytest.mark.parametrize("many", [False, True])
-def test_a_report_with_nothing_to_draw_never_imports_matplotlib(results_file, tmp_path,
-                                                                monkeypatch, many):
+def test_a_report_with_nothing_to_draw_never_imports_matplotlib(results_file, drawn_report,
+                                                                tmp_path, monkeypatch, many):
     threshold = 1 if many else report.MANY_SCENARIOS  # many: the aggregated page's heat table
     monkeypatch.setattr(report, "MANY_SCENARIOS", threshold)
-    out = tmp_path / "report"
-    report.write_report(read_results(results_file), out, workers=1)
+    out = _copy_of(drawn_report, tmp_path / "report")
+    report.write_report(read_results(results_file), out, **OPTIONS)  # draws what is missing
     script = ("import sys\nfrom harness import report\n"
               "from harness.run.records import read_results\n"
               f"report.MANY_SCENARIOS = {threshold}\n"
               f"report.write_report(read_results({str(results_file)!r}), {str(out)!r}, "
-              "workers=1)\n"
+              f"**{OPTIONS!r})\n"
               "print(json.dumps(sorted(m for m in sys.modules if m.split('.')[0] in "
               "('matplotlib', 'PIL'))))\n")
     done = subprocess.run([sys.executable, "-c", "import json\n" + script], cwd=ROOT,
