@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import pytest
@@ -53,6 +54,10 @@ def test_run_fails_on_a_failing_gate_and_names_it(capsys, tmp_path):
     code, _, err = cli(capsys, "run", strict, "--json", tmp_path / "r.json", "--no-cache")
     assert code == 1
     assert "GATE FAILED" in err and '"mujoco.defaults"' in err and "'strict'" in err
+    # in percent as the report shows it, and the limit also as the file writes it
+    assert "vs max 0.1% (max_departure = 0.001)" in err
+    assert re.search(r"departure from poisson \d[\d.e+-]*% vs", err), err
+    assert "records from 1 scenario;" in err
 
 
 def test_run_skips_a_missing_engine_with_the_reason(capsys, tmp_path, monkeypatch):

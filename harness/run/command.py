@@ -312,8 +312,9 @@ def _report(outcome: RunOutcome, json_path: Path, scenario_count: int,
     """What was written (to ``log``), the failed gates and the errors (to stderr)."""
     stats = outcome.provenance["cache"]
     if log is not None:
+        scenarios = "scenario" if scenario_count == 1 else "scenarios"
         print(f"wrote {json_path}: {outcome.record_count} records from {scenario_count} "
-              f"scenarios; {stats['simulated']} engine runs simulated, {stats['hits']} from the "
+              f"{scenarios}; {stats['simulated']} engine runs simulated, {stats['hits']} from the "
               f"cache; {outcome.provenance['wall_time_s']:.2f} s", file=log)
         for name, reason in outcome.provenance["engines_missing"].items():
             print(f"skipped engine {name}: {reason}", file=log)

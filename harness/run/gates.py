@@ -10,6 +10,7 @@ from dataclasses import dataclass
 from typing import Sequence
 
 from harness.run import references, verdicts
+from harness.run.metrics import fmt_departure
 from harness.run.records import Record
 from harness.scenarios import Scenario
 
@@ -33,9 +34,12 @@ class GateResult:
 
     def describe(self) -> str:
         where = f" at {self.point}" if self.point else ""
-        value = "n/a" if self.departure is None else f"{self.departure:.3g}"
+        # In percent, as the report shows departures; the gate's limit also as the scenario
+        # file writes it (a fraction), so that the two can be matched.
         return (f"scenario {self.scenario!r} [expect.gate] \"{self.gate}\" ({self.record}{where}): "
-                f"departure from {self.law} {value} vs max {self.max_departure:g}: {self.status}")
+                f"departure from {self.law} {fmt_departure(self.departure)} vs max "
+                f"{fmt_departure(self.max_departure)} (max_departure = {self.max_departure:g}): "
+                f"{self.status}")
 
 
 def check_gates(scenario: Scenario, records: Sequence[Record]) -> list[GateResult]:

@@ -246,7 +246,11 @@ def run_engine_tasks(tasks, *, executor, workers, scheduler, log, on_result=None
     weight = len(tasks) if weight is None else weight
     if executor == "local" and workers is None and weight < MIN_PARALLEL_TASKS:
         workers = 1
-    progress = progress_printer("engine runs", stream=log) if log is not None else None
+    # The progress counts every task: say so where several-contact references are among them
+    # (the runner's line before announced the two counts apart).
+    label = ("engine runs and references"
+             if any(task.get("kind") == POINT_REFERENCE for task in tasks) else "engine runs")
+    progress = progress_printer(label, stream=log) if log is not None else None
     note = None if log is None else (lambda text: print(text, file=log, flush=True))
     batch = None if chunk_size == 1 else engine_chunk
     return run_tasks(engine_task, tasks, executor=executor, workers=workers,

@@ -115,3 +115,24 @@ def test_a_reference_that_raises_in_its_task_gives_the_points_internal_error_rec
     assert outcome.records
     assert all(record.status == "error: internal: RuntimeError: broken reference"
                for record in outcome.records)
+
+
+def test_the_progress_names_references_where_they_are_among_the_tasks(monkeypatch):
+    """The runner announces "N engine runs to simulate; K references"; the progress counts
+    both, so its label says so (else "engine runs: 0/N+K" reads as a different count)."""
+    labels = []
+
+    def fake_run_tasks(function, tasks, *, progress, **options):
+        progress(0, len(tasks))
+        return [None] * len(tasks)
+
+    monkeypatch.setattr(worker_tasks, "run_tasks", fake_run_tasks)
+    monkeypatch.setattr(worker_tasks, "progress_printer",
+                        lambda label, stream=None: lambda done, total: labels.append(label))
+    references_only, _, _ = plan.reference_tasks(SEVERAL_CONTACT[:1], None)
+    engine_like = [{"engine": "pymunk"}]
+    worker_tasks.run_engine_tasks(engine_like, executor="local", workers=1, scheduler=None,
+                                  log=object())
+    worker_tasks.run_engine_tasks(references_only + engine_like, executor="local", workers=1,
+                                  scheduler=None, log=object())
+    assert labels == ["engine runs", "engine runs and references"]
