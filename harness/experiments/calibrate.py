@@ -277,7 +277,12 @@ def summary(calibration: Calibration) -> str:
         lines.append("cannot be calibrated: no setting tried gives single impacts on half "
                      "of the drops")
         return "\n".join(lines)
-    lines.append(f"best: {json.dumps(calibration.best)} -> {calibration.best_objective:.4f}")
+    lines.append(f"best: {settings_text(calibration.best)} -> median normalized error "
+                 f"{calibration.best_objective:.4f}")
+    for knob, value in calibration.best.items():
+        if at_open_edge(knob, value, calibration.knobs[knob]):
+            lines.append(f"  {knob} {value:g} is the edge of the values tried: a value beyond "
+                         f"it may score better (--grid fine tries more)")
     for knob, moved in calibration.moves.items():
         if moved is None:
             text = "not scored along this knob"
@@ -290,6 +295,28 @@ def summary(calibration: Calibration) -> str:
         lines += uncertainty_lines(calibration.uncertainty, len(calibration.errors[0]),
                                    calibration.cannot())
     return "\n".join(lines)
+
+
+def settings_text(settings: dict) -> str:
+    """``{"mu": 0.3, "e": 0.6}`` as ``mu 0.3, e 0.6``."""
+    return ", ".join(f"{knob} {value:g}" if isinstance(value, float) else f"{knob} {value}"
+                     for knob, value in settings.items())
+
+
+#: The ends of a knob's range that are the physics' own bounds (no value lies beyond them).
+BOUNDS = {"mu": (0.0, None), "e": (0.0, 1.0)}
+
+
+def at_open_edge(knob: str, value, tried) -> bool:
+    """Whether ``value`` is the smallest or largest of three or more numbers ``tried`` for
+    ``knob``, at an end that is not a bound of the physics (μ ≥ 0, 0 ≤ e ≤ 1): the best may
+    then lie beyond the values tried."""
+    numbers = [item for item in tried if isinstance(item, (int, float))]
+    if len(set(numbers)) < 3 or not isinstance(value, (int, float)):
+        return False
+    low, high = BOUNDS.get(knob, (None, None))
+    return ((value == min(numbers) and value != low)
+            or (value == max(numbers) and value != high))
 
 
 def uncertainty_lines(found: Uncertainty, drops: int, cannot=()) -> list[str]:
@@ -312,7 +339,8 @@ def uncertainty_lines(found: Uncertainty, drops: int, cannot=()) -> list[str]:
         lines.append("  no resample had a scored cell: no interval")
     split = found.split
     sizes = [drops - split.held_out_drops[0], split.held_out_drops[0]]  # fitting, held out
-    picks = ["none scored" if best is None else json.dumps(best) for best in found.split_best]
+    picks = ["none scored" if best is None else settings_text(best)
+             for best in found.split_best]
     lines.append(f"held out: the drops split by drop into halves with seed {found.seed}; the "
                  f"best cell of the fitting half ({sizes[0]} drops: {picks[0]}) scores "
                  f"{found.in_sample:.4f} on it and {found.held_out:.4f} on the held-out half "

@@ -14,14 +14,19 @@ from . import calibrate, drops_engines, fazeli, registry
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     # the engines registered when the command line is parsed (run-time ones too)
-    parser.add_argument("engine", choices=engine_names())
+    parser.add_argument("engine", choices=engine_names(),
+                        help="the engine whose settings are fitted")
     parser.add_argument("--to", required=True, choices=("data", *pi.LAWS),
                         help="the target: the Fazeli drops (data) or a law on a population "
                              "of ellipse drops")
     parser.add_argument("--preset", default=None, help="one preset (default: every preset)")
     parser.add_argument("--data", metavar="DIR", default=None,
                         help=f"the Fazeli files (default: ${registry.FAZELI_2017.env_var})")
-    parser.add_argument("--grid", choices=sorted(calibrate.PAIR_GRIDS), default="quick")
+    parser.add_argument("--grid", choices=sorted(calibrate.PAIR_GRIDS), default="quick",
+                        help="the (mu, e) values tried, beside the engine's own knobs: "
+                             + "; ".join(f"{name}: mu {_values(mus)}, e {_values(es)}"
+                                         for name, (mus, es) in calibrate.PAIR_GRIDS.items())
+                             + " (default quick)")
     parser.add_argument("--drops", type=int, default=12,
                         help="impacts scored per cell (default 12): a random sample of the "
                              "data's drops, or of a generated population, drawn with --seed")
@@ -31,9 +36,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--replicates", type=int, default=calibrate.REPLICATES,
                         help="bootstrap resamples of the scored drops behind the intervals "
                              f"(default {calibrate.REPLICATES})")
-    parser.add_argument("--law-mu", type=float, default=0.3)
+    parser.add_argument("--law-mu", type=float, default=0.3,
+                        help="--to LAW: the law's mu (default 0.3, a cell of the quick grid)")
     parser.add_argument("--law-e", type=float, default=0.6,
-                        help="the law's e (default 0.6, a cell of the quick grid)")
+                        help="--to LAW: the law's e (default 0.6, a cell of the quick "
+                             "grid)")
+
+
+def _values(values) -> str:
+    return ", ".join(f"{value:g}" for value in values)
 
 
 def main(args) -> int:
@@ -46,6 +57,10 @@ def main(args) -> int:
         return 2
     if args.seed < 0:
         print(f"impact-harness calibrate: --seed {args.seed}: at least 0", file=sys.stderr)
+        return 2
+    if args.data is not None and args.to != "data":
+        print(f"impact-harness calibrate: --data {args.data}: read only with --to data (here "
+              f"--to {args.to}, a generated population)", file=sys.stderr)
         return 2
     try:
         engine = load_engine(args.engine)

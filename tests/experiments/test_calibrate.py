@@ -224,6 +224,23 @@ def test_the_cli_prints_the_intervals_and_refuses_few_replicates(capsys, pymunk)
     assert "held out: the drops split by drop into halves with seed 3" in out
     assert cli_main(["calibrate", "pymunk", "--to", "poisson", "--replicates", "5"]) == 2
     assert "--replicates 5" in capsys.readouterr().err
+    # settings as words, never a dict; a data path where no data are read is refused
+    assert "best: mu " in out and '{"mu"' not in out
+    assert cli_main(["calibrate", "pymunk", "--to", "poisson", "--data", "/nonexistent"]) == 2
+    assert "--data /nonexistent: read only with --to data" in capsys.readouterr().err
+
+
+def test_a_best_value_at_an_open_end_of_the_values_tried_is_said():
+    """μ's largest value tried, or either end of an engine's knob, may hide a better value
+    beyond it; μ = 0 and e's 0 and 1 are the physics' bounds."""
+    assert calibrate.at_open_edge("mu", 0.3, [0.0, 0.1, 0.3])
+    assert not calibrate.at_open_edge("mu", 0.0, [0.0, 0.1, 0.3])
+    assert not calibrate.at_open_edge("mu", 0.1, [0.0, 0.1, 0.3])
+    assert calibrate.at_open_edge("e", 0.9, [0.3, 0.6, 0.9])  # e could be 1
+    assert not calibrate.at_open_edge("e", 1.0, [0.0, 0.5, 1.0])
+    assert calibrate.at_open_edge("damping", 0.5, [1.0, 0.5, 2.0])
+    assert not calibrate.at_open_edge("damping", 0.5, [0.5, 2.0])  # two values: no inside
+    assert calibrate.settings_text({"mu": 0.3, "e": 0.6, "scale": 2}) == "mu 0.3, e 0.6, scale 2"
 
 
 def test_cli_calibrates_a_registered_engine_without_knobs_and_says_why(capsys, toy_engine):
