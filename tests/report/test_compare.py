@@ -154,6 +154,12 @@ def test_summary_per_source_against_one_law_with_the_settings_that_differ(tmp_pa
     assert "10%" in text and "11.5%" in text and "+1.5 pp" in text
     html = page.read_text(encoding="utf-8")
     assert "Per source" in html and "pymunk.defaults.iterations" in html and "11.5%" in html
+    # closer to the law chosen, never "improved" (closer is not better for a gate on another
+    # law); the threshold in the unit of each thing it bounds
+    for shown in (text, html):
+        assert "closer to stronge" in shown and "further from stronge" in shown
+        assert "improved" not in shown
+        assert "more than 1 pp (a departure) or 1% of the motion (the speeds)" in shown
 
 
 def test_help_documents_the_exit_status(capsys):
