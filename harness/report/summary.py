@@ -33,11 +33,19 @@ def runs_lines(results: Results) -> list[str]:
              f"impacts; runs per reason (a run can fail several checks):", ""]
     lines += [f"- {name}: {count}" for name, count in sorted(counts.items())] or ["- none"]
     lines += ["", "## Runs not ok", ""]
-    lines += [f"- {escape(r.scenario)} {escape(r.point['label'])} {escape(r.label)}: "
-              f"{escape(r.status)}"
-              + (f" ({escape(', '.join(r.failing_reasons))})" if r.failing_reasons else "")
-              for r in flagged] or ["None."]
+    lines += [f"- {run_not_ok_line(r)}" for r in flagged] or ["None."]
     return lines
+
+
+def run_not_ok_line(record) -> str:
+    """``scenario point source: status (reasons)``: a single-point scenario's empty point
+    label and the reasons that only repeat the status (an engine's ``penetration`` is also
+    its reason) left out."""
+    where = " ".join(escape(part) for part in (record.scenario, record.point["label"],
+                                               record.label) if part)
+    reasons = [reason for reason in record.failing_reasons if reason != record.status]
+    return (f"{where}: {escape(record.status)}"
+            + (f" ({escape(', '.join(reasons))})" if reasons else ""))
 
 
 def write_summary(results: Results, out_dir: Path, prepared: Prepared | None = None) -> Path:
