@@ -52,25 +52,50 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "cache": ("harness.store.cli", "the result cache: info (where, how big), prune, clear"),
 }
 
-EXIT_STATUS_HELP = """exit status:
-  0 done, every check passed
-  1 done, but a gate (or, for suite, an unexplained Table 3 miss) failed
-  2 bad input: an option, a scenario file or a results file (one line each)
-  3 internal error: a bug in the harness (IMPACT_HARNESS_TRACEBACK=1 shows it)
-  4 run and suite: done, results written, but an engine run ended in an error (an
-    exception of the engine, or its --task-time-limit): its record says which"""
+#: What exit status 1 means, for the commands that return it (every other command returns
+#: 0, 2 or 3 only; compare and export write their own).
+EXIT_ONE = {
+    "suite": "done, but a gate or an unexplained miss of Table 3 failed",
+    "run": "done, but a gate of a scenario ([expect.gate]) failed",
+    "paper": "done, but a printed cell of Table 3 is neither reproduced nor explained",
+    "bench": "done, but a self-check failed (an engine not bit-identical on a rerun, or "
+             "accurate off newton-lcp)",
+    "stress": "done, but a stress check failed",
+    "findings": "--check: a number the README or docs state differs from what its command "
+                "gives",
+    "new": "the file exists (use --force to overwrite it)",
+}
+#: The commands that write results even when an engine run ended in an error (status 4).
+EXIT_FOUR = ("run", "suite")
+
+
+def exit_status_help(command: str | None) -> str:
+    """The exit statuses ``command`` can return (all of them for the top-level help)."""
+    lines = ["exit status:", "  0 done, every check passed"]
+    if command is None:
+        lines += ["  1 done, but a check failed: a gate for run and suite; paper, bench, stress",
+                  "    and findings --check their own (see each command's help)"]
+    elif command in EXIT_ONE:
+        lines.append(f"  1 {EXIT_ONE[command]}")
+    lines += ["  2 bad input: an option, a scenario file or a results file (one line each)",
+              "  3 internal error: a bug in the harness (IMPACT_HARNESS_TRACEBACK=1 shows it)"]
+    if command is None or command in EXIT_FOUR:
+        lines += ["  4 run and suite: done, results written, but an engine run ended in an "
+                  "error (an", "    exception of the engine, or its --task-time-limit): its "
+                  "record says which"]
+    return "\n".join(lines)
 
 
 def build_parser(command: str | None) -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="impact-harness",
         description="Validation harness for planar rigid-body impact with friction.",
-        epilog=EXIT_STATUS_HELP, formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog=exit_status_help(None), formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name, (module_name, help_text) in COMMANDS.items():
         sub = subparsers.add_parser(name, help=help_text, description=help_text,
-                                    epilog=EXIT_STATUS_HELP,
+                                    epilog=exit_status_help(name),
                                     formatter_class=argparse.RawDescriptionHelpFormatter)
         if name == command:
             module = importlib.import_module(module_name)

@@ -187,3 +187,18 @@ def test_help_gives_the_default_output_directory(capsys, command, default):
         main([command, "--help"])
     help_text = " ".join(capsys.readouterr().out.split())
     assert f"--out OUT output directory (default: {default}" in help_text
+
+
+@pytest.mark.parametrize(("command", "one", "four"), [
+    ("run", "a gate of a scenario", True), ("paper", "Table 3", False),
+    ("cache", None, False), ("new", "the file exists", False)])
+def test_each_command_lists_the_exit_statuses_it_returns(capsys, command, one, four):
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    text = capsys.readouterr().out
+    epilogue = text[text.index("exit status:"):]
+    assert ("\n  1 " in epilogue) == (one is not None)
+    if one is not None:
+        assert one in epilogue.split("\n  1 ")[1].split("\n  2 ")[0]
+    assert ("\n  4 " in epilogue) == four
+    assert "\n  2 bad input" in epilogue and "\n  3 internal error" in epilogue
