@@ -9,7 +9,7 @@ from harness.report.contacts import contacts_section
 from harness.report.fragments import Prepared, prepare
 from harness.report.views import HEADLINE_LAWS, LAW_STYLE, fmt_departure, row_name
 from harness.run.records import ANALYTIC, Results
-from harness.run.verdicts import reason_counts
+from harness.run.verdicts import REASONS, reason_counts
 from harness.store.files import write_text_atomically
 
 _MARKDOWN_SPECIAL = re.compile(r"([\\`*_{}\[\]()#+!|~])")
@@ -31,7 +31,10 @@ def runs_lines(results: Results) -> list[str]:
     lines = ["", "## Verdicts", "",
              f"{sum(r.ok for r in engine_runs)} of {len(engine_runs)} engine runs are single "
              f"impacts; runs per reason (a run can fail several checks):", ""]
-    lines += [f"- {name}: {count}" for name, count in sorted(counts.items())] or ["- none"]
+    # each with what it says: 'no-separation' (the engine's status) and 'not-separated' (a
+    # check of the speeds after) are easily taken for one another
+    lines += [f"- {name}: {count}" + (f" ({escape(REASONS[name])})" if name in REASONS else "")
+              for name, count in sorted(counts.items())] or ["- none"]
     lines += ["", "## Runs not ok", ""]
     lines += [f"- {run_not_ok_line(r)}" for r in flagged] or ["None."]
     return lines

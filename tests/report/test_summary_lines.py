@@ -21,3 +21,15 @@ def test_reasons_beyond_the_status_are_listed():
     line = run_not_ok_line(_run("angle=90", "flagged", ["multi-contact", "penetration"]))
     assert line.endswith(": flagged (multi-contact, penetration)")
     assert line.startswith("disk-strikes-rod angle=90 ")
+
+
+def test_the_counts_per_reason_say_what_each_reason_means():
+    from harness.report.summary import escape, runs_lines
+    from harness.run.records import Results
+    from harness.run.verdicts import REASONS
+
+    runs = [_run("", "no-separation", ["no-separation"]), _run("", "flagged", ["not-separated"])]
+    lines = runs_lines(Results(runs))
+    for name in ("no-separation", "not-separated"):
+        (line,) = [text for text in lines if text.startswith(f"- {name}: 1")]
+        assert line.endswith(f" ({escape(REASONS[name])})")
