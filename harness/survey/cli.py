@@ -120,7 +120,10 @@ def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: 
     ``workers``: processes (default: every core; the result does not depend on it,
     harness/survey/parts.py): each samples, solves, runs and judges parts of the samples.
     The sampling, laws, verdict-terms and per-pair ``engine`` and ``verdicts`` timings are
-    seconds on one core, summed over the parts.
+    seconds on one core, summed over the parts. ``timings``: ``{stage: (seconds, engine
+    runs)}``, the engine runs being those the stage covers (one per impact and engine/preset
+    pair; 0 for the stages before the engines), so a stage over every pair is not read per
+    impact of one (harness/survey/outputs.py divides every row by the impacts too).
     """
     left_out = dict(left_out or {})
     clock = time.perf_counter
@@ -150,11 +153,10 @@ def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: 
     law_results = survey_laws.solve_laws(terms)
     routh = survey_laws.routh_coordinates(terms)
     timings: dict[str, tuple[float, int]] = {
-        "sampling": (survey.timings["sampling"], impacts),
-        "laws (contact terms + solve_batch × 5)": (survey.timings["laws"] + clock() - begin,
-                                                   impacts),
-        "verdict terms (once per scene)": (survey.timings["verdict terms"], impacts),
-        "parts (wall: sampling, laws, engines, verdicts)": (wall, impacts * max(len(pairs), 1)),
+        "sampling": (survey.timings["sampling"], 0),
+        "laws (contact terms + solve_batch × 5)": (survey.timings["laws"] + clock() - begin, 0),
+        "verdict terms (once per scene)": (survey.timings["verdict terms"], 0),
+        "parts (wall: sampling, laws, engines, verdicts)": (wall, impacts * len(results)),
     }
     scenes = survey_scenes(populations, samples, seed) if bare and results else None
     for result in results:
@@ -178,7 +180,7 @@ def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: 
     index = np.asarray([row.index for row in survey.rows])
     runs = statistics.run_columns(family, index, terms, law_results, routh, results)
     stats = statistics.statistics(runs) if results else {}
-    timings["departures + statistics"] = (clock() - begin, impacts * max(len(results), 1))
+    timings["departures + statistics"] = (clock() - begin, impacts * len(results))
     return {
         "samples": sample_columns(survey.rows, terms, law_results, routh),
         "runs": runs,

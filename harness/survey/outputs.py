@@ -208,14 +208,39 @@ def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dic
         "| family | accepted | " + " | ".join(next(iter(rejections.values()), {}).keys()) + " |",
         "|---|---|" + "---|" * len(next(iter(rejections.values()), {})),
     ]
+    impacts = settings["samples"] * len(rejections)  # every family, samples each
     for family, reasons in rejections.items():
         lines.append(f"| {family} | {settings['samples']} | "
                      + " | ".join(str(count) for count in reasons.values()) + " |")
-    lines += ["", "## Timings", "", "| stage | seconds | per impact (µs) |", "|---|---|---|"]
-    for stage, (seconds, impacts) in timings.items():
-        per = "" if not impacts else f"{seconds / impacts * 1e6:.1f}"
-        lines.append(f"| {stage} | {seconds:.3f} | {per} |")
+    lines += ["", "## Timings", "", timings_caption(timings, impacts), "",
+              timings_table(timings, impacts)]
     return "\n".join(lines) + "\n"
+
+
+def timings_caption(timings: dict, impacts: int) -> str:
+    """What the timings table divides by what (``timings``: ``{stage: (seconds, engine
+    runs)}``, harness/survey/cli.py's ``run_survey``)."""
+    # the stages over every pair cover the most engine runs: impacts × pairs
+    pairs = max((runs // impacts for _, runs in timings.values() if impacts), default=0)
+    return (f"*Per impact*: the stage's seconds ÷ the {impacts:,} impacts (samples × families), "
+            "on every row. *Per engine run*: the stage's seconds ÷ the engine runs it covers, "
+            f"one per impact and engine/preset pair: {impacts:,} on a pair's own rows"
+            + (f", {impacts * pairs:,} ({impacts:,} × {pairs} pairs) on the rows over every "
+               "pair" if pairs > 1 else "")
+            + "; blank where the stage runs no engine. The sampling, laws, verdict terms, "
+            "engine and verdicts rows are seconds on one core summed over the parts; *parts* "
+            "is the wall time of them all.")
+
+
+def timings_table(timings: dict, impacts: int) -> str:
+    """The timings as a Markdown table: seconds, per impact and per engine run, in µs
+    (:func:`timings_caption` says what each divides by)."""
+    lines = ["| stage | seconds | per impact (µs) | per engine run (µs) |", "|---|---|---|---|"]
+    for stage, (seconds, runs) in timings.items():
+        per_impact = "" if not impacts else f"{seconds / impacts * 1e6:.1f}"
+        per_run = "" if not runs else f"{seconds / runs * 1e6:.1f}"
+        lines.append(f"| {stage} | {seconds:.3f} | {per_impact} | {per_run} |")
+    return "\n".join(lines)
 
 
 def _log_axis(axis, which: str, ticks: int = 6) -> None:

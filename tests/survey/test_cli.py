@@ -155,3 +155,36 @@ def test_without_out_another_survey_is_not_replaced(tmp_path, monkeypatch, capsy
     assert main(argv + ["--force"]) == 0
     # the same survey again replaces it without --force
     assert main(argv) == 0
+
+
+def _timings_rows(summary: str) -> dict[str, list[str]]:
+    """The Timings table of a summary: ``{stage: [seconds, per impact, per engine run]}``."""
+    table = summary.split("## Timings", 1)[1]
+    rows = [line.strip("|").split(" | ") for line in table.splitlines()
+            if line.startswith("| ") and not line.startswith("| stage")]
+    return {cells[0].strip(): [cell.strip() for cell in cells[1:]] for cells in rows}
+
+
+def test_timings_divide_every_row_by_the_impacts_and_say_so():
+    from harness.survey.cli import run_survey
+    from harness.survey.outputs import summary_markdown
+
+    populations = resolve_populations(["spinning-disk"])
+    samples = 2
+    survey = run_survey(populations, samples, 0, ["pymunk"], ["defaults", "accurate"],
+                        workers=1, echo=lambda _: None)
+    settings = {"samples": samples, "seed": 0, "engines": ["pymunk"],
+                "presets": ["defaults", "accurate"]}
+    summary = summary_markdown(survey["statistics"], survey["rejections"], survey["timings"],
+                               settings)
+    rows = _timings_rows(summary)
+    impacts = samples * len(populations)
+    assert set(rows) == set(survey["timings"])
+    for stage, (seconds, runs) in survey["timings"].items():
+        # one divisor for the whole column: the impacts, on the rows over both pairs too
+        assert rows[stage][1] == f"{seconds / impacts * 1e6:.1f}", stage
+        assert rows[stage][2] == ("" if not runs else f"{seconds / runs * 1e6:.1f}"), stage
+    both_pairs = survey["timings"]["parts (wall: sampling, laws, engines, verdicts)"][1]
+    assert both_pairs == impacts * 2
+    assert survey["timings"]["engine pymunk accurate"][1] == impacts
+    assert f"÷ the {impacts:,} impacts" in summary and f"{impacts:,} × 2 pairs" in summary
