@@ -54,6 +54,17 @@ def test_summary_lists_every_family_and_the_timings(survey_dir):
     assert "## Rejected draws" in text and "| engine pymunk accurate |" in text
 
 
+def test_the_summarys_p90_note_names_this_surveys_run_counts(survey_dir):
+    from harness.survey.outputs import p90_runs
+
+    text = (survey_dir / "summary.md").read_text()
+    stats = pq.read_table(survey_dir / "statistics.parquet").to_pydict()
+    most = max(n for n, kind in zip(stats["n"], stats["poisson_type"]) if kind == 0)
+    intro = text.split("## Every")[0]
+    assert most == SAMPLES and f"{most} runs" in intro and p90_runs(most) in intro
+    assert "with 20 runs" not in text
+
+
 def test_bad_engine_name_is_bad_input_exit_2_in_one_line(capsys):
     assert main(["survey", "--engines", "pymunck", "--samples", "1"]) == 2
     err = capsys.readouterr().err
