@@ -29,6 +29,7 @@ from harness.engines import (
     load_engine,
     parse_overrides,
     preset_choices,
+    preset_label,
     preset_role,
     renamed_roles,
     source_label,
@@ -57,9 +58,21 @@ SETTINGS_FILE = "settings.json"
 def default_left_out(engines) -> dict[tuple[str, str], str]:
     """``{(engine, preset role): why}``: the pairs of ``engines`` a survey leaves out unless
     ``--preset`` names presets, as each engine's class declares them (``survey_left_out``;
-    MuJoCo's matched-bounce: hundreds of steps of a stiff soft contact per impact)."""
-    return {(engine, role): why for engine in engines
+    MuJoCo's matched-bounce: hundreds of steps of a stiff soft contact per impact), each with
+    the ``--preset`` that runs it (:func:`including_option`)."""
+    return {(engine, role): f"{why}; naming presets leaves no pair out, so "
+                            f"{including_option(engine)} runs it"
+            for engine in engines
             for role, why in engine_trait(engine, "survey_left_out").items()}
+
+
+def including_option(engine: str) -> str:
+    """The ``--preset`` that runs every preset of ``engine``, a left-out pair too, under the
+    names the summary shows (``--preset defaults,matched-bounce`` for MuJoCo). The default
+    presets' names alone would read as a no-op: they are the presets the summary says ran;
+    what includes the pair is naming presets at all, which leaves nothing out."""
+    names = ",".join(preset_label(engine, role) for role in PRESET_ROLES)
+    return f"`--preset {names}`"
 
 
 def _names(values, allowed, option) -> list[str]:
@@ -86,7 +99,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--preset", action="append", metavar="P[,P…]",
                         help=f"presets (default {', '.join(PRESET_ROLES)}, without the pairs "
                         "an engine leaves out of a default survey, which the summary lists "
-                        "with why" + "".join(f"; {text}" for text in renamed)
+                        "with why; naming presets leaves no pair out"
+                        + "".join(f"; {text}" for text in renamed)
                         + (", and either name selects it" if renamed else "") + ")")
     parser.add_argument("--out", type=Path, default=None,
                         help=f"output directory (default {DEFAULT_OUT}; there a survey of other "
