@@ -49,7 +49,14 @@ from harness.survey.population import resolve_populations
 from harness.survey.sampling import sample_population
 
 DEFAULT_SAMPLES = 2000
-QUICK_SAMPLES = 40  # per family: 7 families give 280 samples, for `make validate`
+#: ``--quick``: a default survey (its pairs, so MuJoCo's matched-bounce left out, and its
+#: figures) at this many samples per family, a first look in seconds. Not ``make
+#: validate``'s survey: that is :data:`SUITE_SAMPLES` (:func:`suite_survey_command`).
+QUICK_SAMPLES = 40
+#: Samples per population of ``impact-harness suite``'s survey (``make validate``'s step 3,
+#: harness/suite.py): every population, engine and preset, matched-bounce included, seed 0,
+#: no figures (its report draws them).
+SUITE_SAMPLES = 20
 DEFAULT_OUT = Path("reports") / "survey"
 #: What a survey wrote down of its settings, beside its tables (harness/survey/outputs.py).
 SETTINGS_FILE = "settings.json"
@@ -73,6 +80,15 @@ def including_option(engine: str) -> str:
     what includes the pair is naming presets at all, which leaves nothing out."""
     names = ",".join(preset_label(engine, role) for role in PRESET_ROLES)
     return f"`--preset {names}`"
+
+
+def suite_survey_command(out: str = "DIR") -> str:
+    """The ``impact-harness survey`` command that computes the tables of ``impact-harness
+    suite``'s survey (harness/suite.py runs ``run_survey`` itself): its samples, every
+    population, engine and preset at the default seed, and no figures. The presets are named
+    because naming them leaves no pair out, as the suite leaves none."""
+    return (f"impact-harness survey --samples {SUITE_SAMPLES} --preset "
+            f"{','.join(PRESET_ROLES)} --no-figures --out {out}")
 
 
 def _names(values, allowed, option) -> list[str]:
@@ -114,7 +130,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="change one engine setting from every preset, as `run --set` "
                              "(repeatable); the tables and summary record it")
     parser.add_argument("--quick", action="store_true",
-                        help=f"{QUICK_SAMPLES} samples per population")
+                        help=f"the default survey at {QUICK_SAMPLES} samples per population: "
+                             "every population, engine and preset but the pairs a default "
+                             "survey leaves out (the summary names them), with the figures. "
+                             f"`make validate`'s survey differs ({SUITE_SAMPLES} samples, no "
+                             "pair left out, no figures); "
+                             f"`{suite_survey_command()}` computes its tables")
     parser.add_argument("--bare", action="store_true",
                         help="also time the engines' bare stepping of the same impacts")
     parser.add_argument("--no-figures", action="store_true", help="skip the figures")

@@ -205,3 +205,40 @@ def test_timings_divide_every_row_by_the_impacts_and_say_so():
     assert both_pairs == impacts * 2
     assert survey["timings"]["engine pymunk accurate"][1] == impacts
     assert f"÷ the {impacts:,} impacts" in summary and f"{impacts:,} × 2 pairs" in summary
+
+
+def test_the_suite_survey_command_computes_the_suites_survey(tmp_path):
+    """The command ``survey --quick``'s help gives for ``make validate``'s survey computes
+    the same tables as ``impact-harness suite``'s own survey (every engine installed here)."""
+    import argparse
+    import shlex
+
+    from harness import suite
+    from harness.survey.cli import suite_survey_command
+
+    suite.quick_survey(argparse.Namespace(engines=None, preset=None), tmp_path / "suite")
+    command = shlex.split(suite_survey_command(str(tmp_path / "command")))
+    assert command[:2] == ["impact-harness", "survey"]
+    assert main(command[1:]) == 0
+    for table in ("samples", "runs", "statistics"):
+        ours = pq.read_table(tmp_path / "command" / f"{table}.parquet")
+        theirs = pq.read_table(tmp_path / "suite" / f"{table}.parquet")
+        assert ours.column_names == theirs.column_names, table
+        assert ours.num_rows == theirs.num_rows, table
+        for name in ours.column_names:
+            pairs = zip(ours[name].to_pylist(), theirs[name].to_pylist())
+            assert all(a == b or (a != a and b != b) for a, b in pairs), f"{table}.{name}"
+    assert not (tmp_path / "command" / "figures").exists()
+
+
+def test_quick_help_says_what_it_runs_and_how_to_get_the_suites_survey(capsys):
+    from harness import suite
+    from harness.survey.cli import QUICK_SAMPLES, suite_survey_command
+
+    with pytest.raises(SystemExit):
+        main(["survey", "--help"])
+    help_text = " ".join(capsys.readouterr().out.split())
+    quick = help_text.split("--quick", 2)[2]
+    assert f"{QUICK_SAMPLES} samples per population" in quick
+    assert f"({suite.SURVEY_SAMPLES} samples, no pair left out, no figures)" in quick
+    assert suite_survey_command() in quick
