@@ -29,6 +29,7 @@ from harness.engines import (
     load_engine,
     parse_overrides,
     preset_choices,
+    preset_label,
     preset_role,
     renamed_roles,
     source_label,
@@ -48,7 +49,14 @@ from harness.survey.population import resolve_populations
 from harness.survey.sampling import sample_population
 
 DEFAULT_SAMPLES = 2000
-QUICK_SAMPLES = 40  # per family: 7 families give 280 samples, for `make validate`
+#: ``--quick``: a default survey (its pairs, so MuJoCo's matched-bounce left out, and its
+#: figures) at this many samples per family, a first look in seconds. Not ``make
+#: validate``'s survey: that is :data:`SUITE_SAMPLES` (:func:`suite_survey_command`).
+QUICK_SAMPLES = 40
+#: Samples per population of ``impact-harness suite``'s survey (``make validate``'s step 3,
+#: harness/suite.py): every population, engine and preset, matched-bounce included, seed 0,
+#: no figures (its report draws them).
+SUITE_SAMPLES = 20
 DEFAULT_OUT = Path("reports") / "survey"
 #: What a survey wrote down of its settings, beside its tables (harness/survey/outputs.py).
 SETTINGS_FILE = "settings.json"
@@ -57,9 +65,30 @@ SETTINGS_FILE = "settings.json"
 def default_left_out(engines) -> dict[tuple[str, str], str]:
     """``{(engine, preset role): why}``: the pairs of ``engines`` a survey leaves out unless
     ``--preset`` names presets, as each engine's class declares them (``survey_left_out``;
-    MuJoCo's matched-bounce: hundreds of steps of a stiff soft contact per impact)."""
-    return {(engine, role): why for engine in engines
+    MuJoCo's matched-bounce: hundreds of steps of a stiff soft contact per impact), each with
+    the ``--preset`` that runs it (:func:`including_option`)."""
+    return {(engine, role): f"{why}; naming presets leaves no pair out, so "
+                            f"{including_option(engine)} runs it"
+            for engine in engines
             for role, why in engine_trait(engine, "survey_left_out").items()}
+
+
+def including_option(engine: str) -> str:
+    """The ``--preset`` that runs every preset of ``engine``, a left-out pair too, under the
+    names the summary shows (``--preset defaults,matched-bounce`` for MuJoCo). The default
+    presets' names alone would read as a no-op: they are the presets the summary says ran;
+    what includes the pair is naming presets at all, which leaves nothing out."""
+    names = ",".join(preset_label(engine, role) for role in PRESET_ROLES)
+    return f"`--preset {names}`"
+
+
+def suite_survey_command(out: str = "DIR") -> str:
+    """The ``impact-harness survey`` command that computes the tables of ``impact-harness
+    suite``'s survey (harness/suite.py runs ``run_survey`` itself): its samples, every
+    population, engine and preset at the default seed, and no figures. The presets are named
+    because naming them leaves no pair out, as the suite leaves none."""
+    return (f"impact-harness survey --samples {SUITE_SAMPLES} --preset "
+            f"{','.join(PRESET_ROLES)} --no-figures --out {out}")
 
 
 def _names(values, allowed, option) -> list[str]:
@@ -86,7 +115,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--preset", action="append", metavar="P[,P…]",
                         help=f"presets (default {', '.join(PRESET_ROLES)}, without the pairs "
                         "an engine leaves out of a default survey, which the summary lists "
-                        "with why" + "".join(f"; {text}" for text in renamed)
+                        "with why; naming presets leaves no pair out"
+                        + "".join(f"; {text}" for text in renamed)
                         + (", and either name selects it" if renamed else "") + ")")
     parser.add_argument("--out", type=Path, default=None,
                         help=f"output directory (default {DEFAULT_OUT}; there a survey of other "
@@ -100,7 +130,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="change one engine setting from every preset, as `run --set` "
                              "(repeatable); the tables and summary record it")
     parser.add_argument("--quick", action="store_true",
-                        help=f"{QUICK_SAMPLES} samples per population")
+                        help=f"the default survey at {QUICK_SAMPLES} samples per population: "
+                             "every population, engine and preset but the pairs a default "
+                             "survey leaves out (the summary names them), with the figures. "
+                             f"`make validate`'s survey differs ({SUITE_SAMPLES} samples, no "
+                             "pair left out, no figures); "
+                             f"`{suite_survey_command()}` computes its tables")
     parser.add_argument("--bare", action="store_true",
                         help="also time the engines' bare stepping of the same impacts")
     parser.add_argument("--no-figures", action="store_true", help="skip the figures")
@@ -120,7 +155,10 @@ def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: 
     ``workers``: processes (default: every core; the result does not depend on it,
     harness/survey/parts.py): each samples, solves, runs and judges parts of the samples.
     The sampling, laws, verdict-terms and per-pair ``engine`` and ``verdicts`` timings are
-    seconds on one core, summed over the parts.
+    seconds on one core, summed over the parts. ``timings``: ``{stage: (seconds, engine
+    runs)}``, the engine runs being those the stage covers (one per impact and engine/preset
+    pair; 0 for the stages before the engines), so a stage over every pair is not read per
+    impact of one (harness/survey/outputs.py divides every row by the impacts too).
     """
     left_out = dict(left_out or {})
     clock = time.perf_counter
@@ -150,11 +188,10 @@ def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: 
     law_results = survey_laws.solve_laws(terms)
     routh = survey_laws.routh_coordinates(terms)
     timings: dict[str, tuple[float, int]] = {
-        "sampling": (survey.timings["sampling"], impacts),
-        "laws (contact terms + solve_batch × 5)": (survey.timings["laws"] + clock() - begin,
-                                                   impacts),
-        "verdict terms (once per scene)": (survey.timings["verdict terms"], impacts),
-        "parts (wall: sampling, laws, engines, verdicts)": (wall, impacts * max(len(pairs), 1)),
+        "sampling": (survey.timings["sampling"], 0),
+        "laws (contact terms + solve_batch × 5)": (survey.timings["laws"] + clock() - begin, 0),
+        "verdict terms (once per scene)": (survey.timings["verdict terms"], 0),
+        "parts (wall: sampling, laws, engines, verdicts)": (wall, impacts * len(results)),
     }
     scenes = survey_scenes(populations, samples, seed) if bare and results else None
     for result in results:
@@ -178,7 +215,7 @@ def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: 
     index = np.asarray([row.index for row in survey.rows])
     runs = statistics.run_columns(family, index, terms, law_results, routh, results)
     stats = statistics.statistics(runs) if results else {}
-    timings["departures + statistics"] = (clock() - begin, impacts * max(len(results), 1))
+    timings["departures + statistics"] = (clock() - begin, impacts * len(results))
     return {
         "samples": sample_columns(survey.rows, terms, law_results, routh),
         "runs": runs,

@@ -143,6 +143,45 @@ def markdown_table(stats: dict, types: str = "all") -> str:
     return "\n".join(lines)
 
 
+def _ordinal(rank: int) -> str:
+    """``2`` -> ``"2nd"``, ``11`` -> ``"11th"``, ``21`` -> ``"21st"``."""
+    suffix = "th" if rank % 100 in (11, 12, 13) else {1: "st", 2: "nd", 3: "rd"}.get(
+        rank % 10, "th")
+    return f"{rank}{suffix}"
+
+
+def p90_runs(count: int) -> str:
+    """Which of ``count`` runs a p90 is (numpy's linear quantile, as
+    harness/survey/statistics.py computes it): ``"the only run"``, ``"the 2nd largest"``,
+    ``"between the 3rd and 2nd largest"`` or ``"between the 2nd largest and the largest"``."""
+    if count == 1:
+        return "the only run"
+    virtual = (count - 1) * 0.9  # the p90's index among the runs sorted, from 0
+    below = math.floor(virtual + 1e-9)  # 0.9 × 10 is 9 for the rank, not 8.999…
+    lower = count - below  # that run's rank from the top, 1 the largest
+    if virtual - below < 1e-9:
+        return f"the {_ordinal(lower)} largest"
+    if lower == 2:
+        return "between the 2nd largest and the largest"
+    return f"between the {_ordinal(lower)} and {_ordinal(lower - 1)} largest"
+
+
+def p90_note(stats: dict, types: str = "all") -> str:
+    """What a p90 is of the fewest and the most runs a p90 of the table's rows (``types`` as
+    :func:`markdown_table`'s) is taken over, checked runs or all of them: a sentence."""
+    rows = [row for row in range(len(stats.get("engine", ())))
+            if (types == "all") == (int(stats["poisson_type"][row]) == 0)]
+    counts = sorted({int(stats[key][row]) for row in rows for key in ("n", "n_ok")
+                     if key in stats} - {0})
+    if not counts:
+        return ""
+    fewest, most = counts[0], counts[-1]
+    if fewest == most:
+        return f"Every p90 here is of {most} runs: {p90_runs(most)}."
+    return (f"A p90 here is of {fewest} to {most} runs (a group's checked runs or all of "
+            f"them): of {fewest}, {p90_runs(fewest)}; of {most}, {p90_runs(most)}.")
+
+
 def reason_table(stats: dict) -> str:
     """Per engine × preset × family, the fraction of runs failing each verdict reason that
     any run fails."""
@@ -181,8 +220,8 @@ def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dic
          "impact by the verdict checks (docs/verdicts.md); *all runs*: every run, flagged "
          "ones included, so a large flagged share cannot hide the worst runs; *flagged* = "
          "runs failing a check, counted by reason below. [95% CI]: a percentile-bootstrap "
-         "interval (1,000 resamples of the group's runs); with 20 runs a p90 is one of the "
-         "two largest. *gains E* = checked runs ending "
+         "interval (1,000 resamples of the group's runs). " + p90_note(stats, "all")
+         + " *gains E* = checked runs ending "
          "with more kinetic energy than they began with (by more than 1e-9 of it). "
          "*law part* = newton-lcp from Poisson, *solve part* = engine from newton-lcp."),
         "",
@@ -199,7 +238,8 @@ def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dic
         "## Per Poisson collision type",
         "",
         ("Types: 1 sticking in compression, 2 sticking in restitution, 3 reverse sliding from "
-         "compression, 4 reverse sliding from restitution, 5 forward sliding."),
+         "compression, 4 reverse sliding from restitution, 5 forward sliding. "
+         + p90_note(stats, "each")),
         "",
         markdown_table(stats, "each"),
         "",
@@ -208,14 +248,39 @@ def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dic
         "| family | accepted | " + " | ".join(next(iter(rejections.values()), {}).keys()) + " |",
         "|---|---|" + "---|" * len(next(iter(rejections.values()), {})),
     ]
+    impacts = settings["samples"] * len(rejections)  # every family, samples each
     for family, reasons in rejections.items():
         lines.append(f"| {family} | {settings['samples']} | "
                      + " | ".join(str(count) for count in reasons.values()) + " |")
-    lines += ["", "## Timings", "", "| stage | seconds | per impact (µs) |", "|---|---|---|"]
-    for stage, (seconds, impacts) in timings.items():
-        per = "" if not impacts else f"{seconds / impacts * 1e6:.1f}"
-        lines.append(f"| {stage} | {seconds:.3f} | {per} |")
+    lines += ["", "## Timings", "", timings_caption(timings, impacts), "",
+              timings_table(timings, impacts)]
     return "\n".join(lines) + "\n"
+
+
+def timings_caption(timings: dict, impacts: int) -> str:
+    """What the timings table divides by what (``timings``: ``{stage: (seconds, engine
+    runs)}``, harness/survey/cli.py's ``run_survey``)."""
+    # the stages over every pair cover the most engine runs: impacts × pairs
+    pairs = max((runs // impacts for _, runs in timings.values() if impacts), default=0)
+    return (f"*Per impact*: the stage's seconds ÷ the {impacts:,} impacts (samples × families), "
+            "on every row. *Per engine run*: the stage's seconds ÷ the engine runs it covers, "
+            f"one per impact and engine/preset pair: {impacts:,} on a pair's own rows"
+            + (f", {impacts * pairs:,} ({impacts:,} × {pairs} pairs) on the rows over every "
+               "pair" if pairs > 1 else "")
+            + "; blank where the stage runs no engine. The sampling, laws, verdict terms, "
+            "engine and verdicts rows are seconds on one core summed over the parts; *parts* "
+            "is the wall time of them all.")
+
+
+def timings_table(timings: dict, impacts: int) -> str:
+    """The timings as a Markdown table: seconds, per impact and per engine run, in µs
+    (:func:`timings_caption` says what each divides by)."""
+    lines = ["| stage | seconds | per impact (µs) | per engine run (µs) |", "|---|---|---|---|"]
+    for stage, (seconds, runs) in timings.items():
+        per_impact = "" if not impacts else f"{seconds / impacts * 1e6:.1f}"
+        per_run = "" if not runs else f"{seconds / runs * 1e6:.1f}"
+        lines.append(f"| {stage} | {seconds:.3f} | {per_impact} | {per_run} |")
+    return "\n".join(lines)
 
 
 def _log_axis(axis, which: str, ticks: int = 6) -> None:

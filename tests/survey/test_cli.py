@@ -3,6 +3,8 @@ reads, and the laws' departures against the solver's own types."""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pyarrow.parquet as pq
 import pytest
@@ -54,6 +56,17 @@ def test_summary_lists_every_family_and_the_timings(survey_dir):
     assert "## Rejected draws" in text and "| engine pymunk accurate |" in text
 
 
+def test_the_summarys_p90_note_names_this_surveys_run_counts(survey_dir):
+    from harness.survey.outputs import p90_runs
+
+    text = (survey_dir / "summary.md").read_text()
+    stats = pq.read_table(survey_dir / "statistics.parquet").to_pydict()
+    most = max(n for n, kind in zip(stats["n"], stats["poisson_type"]) if kind == 0)
+    intro = text.split("## Every")[0]
+    assert most == SAMPLES and f"{most} runs" in intro and p90_runs(most) in intro
+    assert "with 20 runs" not in text
+
+
 def test_bad_engine_name_is_bad_input_exit_2_in_one_line(capsys):
     assert main(["survey", "--engines", "pymunck", "--samples", "1"]) == 2
     err = capsys.readouterr().err
@@ -81,10 +94,14 @@ def test_default_survey_leaves_mujoco_matched_bounce_out_and_says_so(tmp_path):
                  "--out", str(tmp_path / "default"), "--no-figures"]) == 0
     runs = pq.read_table(tmp_path / "default" / "runs.parquet").to_pydict()
     assert set(runs["preset"]) == {"defaults"}
-    assert "Not run: mujoco.matched-bounce" in (tmp_path / "default" / "summary.md").read_text()
-    # naming the presets runs every pair named
+    summary = (tmp_path / "default" / "summary.md").read_text()
+    assert "Not run: mujoco.matched-bounce" in summary
+    # the option the summary gives runs it: its own name, not the presets that already ran
+    advised = re.search(r"Not run: mujoco\.matched-bounce \([^)]*`--preset ([^`]+)`",
+                        summary).group(1)
+    assert "matched-bounce" in advised.split(",")
     assert main(["survey", "spinning-disk", "--samples", "1", "--engines", "mujoco",
-                 "--preset", "defaults,accurate", "--out", str(tmp_path / "both"),
+                 "--preset", advised, "--out", str(tmp_path / "both"),
                  "--no-figures"]) == 0
     runs = pq.read_table(tmp_path / "both" / "runs.parquet").to_pydict()
     assert set(runs["preset"]) == {"defaults", "accurate"}
@@ -155,3 +172,73 @@ def test_without_out_another_survey_is_not_replaced(tmp_path, monkeypatch, capsy
     assert main(argv + ["--force"]) == 0
     # the same survey again replaces it without --force
     assert main(argv) == 0
+
+
+def _timings_rows(summary: str) -> dict[str, list[str]]:
+    """The Timings table of a summary: ``{stage: [seconds, per impact, per engine run]}``."""
+    table = summary.split("## Timings", 1)[1]
+    rows = [line.strip("|").split(" | ") for line in table.splitlines()
+            if line.startswith("| ") and not line.startswith("| stage")]
+    return {cells[0].strip(): [cell.strip() for cell in cells[1:]] for cells in rows}
+
+
+def test_timings_divide_every_row_by_the_impacts_and_say_so():
+    from harness.survey.cli import run_survey
+    from harness.survey.outputs import summary_markdown
+
+    populations = resolve_populations(["spinning-disk"])
+    samples = 2
+    survey = run_survey(populations, samples, 0, ["pymunk"], ["defaults", "accurate"],
+                        workers=1, echo=lambda _: None)
+    settings = {"samples": samples, "seed": 0, "engines": ["pymunk"],
+                "presets": ["defaults", "accurate"]}
+    summary = summary_markdown(survey["statistics"], survey["rejections"], survey["timings"],
+                               settings)
+    rows = _timings_rows(summary)
+    impacts = samples * len(populations)
+    assert set(rows) == set(survey["timings"])
+    for stage, (seconds, runs) in survey["timings"].items():
+        # one divisor for the whole column: the impacts, on the rows over both pairs too
+        assert rows[stage][1] == f"{seconds / impacts * 1e6:.1f}", stage
+        assert rows[stage][2] == ("" if not runs else f"{seconds / runs * 1e6:.1f}"), stage
+    both_pairs = survey["timings"]["parts (wall: sampling, laws, engines, verdicts)"][1]
+    assert both_pairs == impacts * 2
+    assert survey["timings"]["engine pymunk accurate"][1] == impacts
+    assert f"÷ the {impacts:,} impacts" in summary and f"{impacts:,} × 2 pairs" in summary
+
+
+def test_the_suite_survey_command_computes_the_suites_survey(tmp_path):
+    """The command ``survey --quick``'s help gives for ``make validate``'s survey computes
+    the same tables as ``impact-harness suite``'s own survey (every engine installed here)."""
+    import argparse
+    import shlex
+
+    from harness import suite
+    from harness.survey.cli import suite_survey_command
+
+    suite.quick_survey(argparse.Namespace(engines=None, preset=None), tmp_path / "suite")
+    command = shlex.split(suite_survey_command(str(tmp_path / "command")))
+    assert command[:2] == ["impact-harness", "survey"]
+    assert main(command[1:]) == 0
+    for table in ("samples", "runs", "statistics"):
+        ours = pq.read_table(tmp_path / "command" / f"{table}.parquet")
+        theirs = pq.read_table(tmp_path / "suite" / f"{table}.parquet")
+        assert ours.column_names == theirs.column_names, table
+        assert ours.num_rows == theirs.num_rows, table
+        for name in ours.column_names:
+            pairs = zip(ours[name].to_pylist(), theirs[name].to_pylist())
+            assert all(a == b or (a != a and b != b) for a, b in pairs), f"{table}.{name}"
+    assert not (tmp_path / "command" / "figures").exists()
+
+
+def test_quick_help_says_what_it_runs_and_how_to_get_the_suites_survey(capsys):
+    from harness import suite
+    from harness.survey.cli import QUICK_SAMPLES, suite_survey_command
+
+    with pytest.raises(SystemExit):
+        main(["survey", "--help"])
+    help_text = " ".join(capsys.readouterr().out.split())
+    quick = help_text.split("--quick", 2)[2]
+    assert f"{QUICK_SAMPLES} samples per population" in quick
+    assert f"({suite.SURVEY_SAMPLES} samples, no pair left out, no figures)" in quick
+    assert suite_survey_command() in quick

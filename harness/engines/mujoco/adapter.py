@@ -97,8 +97,7 @@ class MujocoEngine(Engine):
     # matched-bounce steps a stiff soft contact for hundreds of steps: more bare stepping per
     # impact than every other pair together (`impact-harness bench --survey` measures it), so
     # a default survey of thousands of impacts per family runs MuJoCo at `defaults` only.
-    survey_left_out = {"accurate": "more stepping per impact than every other pair together; "
-                                   "`--preset defaults,accurate` includes it"}
+    survey_left_out = {"accurate": "more stepping per impact than every other pair together"}
     # The soft contact's damping ratio (solref's second entry) at its 0.02 s time constant:
     # what sets MuJoCo's bounce in place of e (`impact-harness calibrate mujoco`).
     calibration_knobs = (("solref", ([0.02, 0.5], [0.02, 1.0], [0.02, 2.0])),)
