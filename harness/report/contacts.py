@@ -64,7 +64,8 @@ def _rows(name: str, info: dict, records) -> tuple[list[str], list[list[str]]] |
     references = [r for r in info.get("references", []) if r.get("kind") != "single-contact"]
     if not references:
         return None
-    engines = sorted({f"{r.source}.{r.preset}" for r in records if r.source != "analytic"})
+    # each run under the name users see for its preset (mujoco.matched-bounce), as elsewhere
+    engines = sorted({r.label for r in records if r.source != "analytic"})
     tilt = any(r["kind"] == "event-driven" for r in references)
     header = ["point", "reference", *[title for _, title in COUNTS]]
     if tilt:
@@ -84,7 +85,7 @@ def _rows(name: str, info: dict, records) -> tuple[list[str], list[list[str]]] |
                         reference, f)))
             row += [fmt_departure(gaps.get("at-pose/newton-coulomb")),
                     fmt_departure(gaps.get(f"at-pose/sequential/newton-lcp/{order}"))]
-        by_engine = {f"{r.source}.{r.preset}": r for r in records
+        by_engine = {r.label: r for r in records
                      if r.source != "analytic" and r.point.get("label", "") == reference.get(
                          "point", "")}
         for engine in engines:

@@ -154,11 +154,23 @@ def reason_table(stats: dict) -> str:
     for row in range(len(stats.get("engine", ()))):
         if int(stats["poisson_type"][row]) != 0:
             continue
-        lines.append(f"| {stats['engine'][row]} | {stats['preset'][row]} | "
+        engine = stats["engine"][row]
+        lines.append(f"| {engine} | {preset_label(engine, stats['preset'][row])} | "
                      f"{stats['family'][row]} | {stats['n'][row]} | "
                      f"{_percent(stats['flagged_fraction'][row])} | "
                      + " | ".join(_percent(stats[key][row]) for key in reasons) + " |")
     return "\n".join(lines)
+
+
+def _preset_names(settings: dict) -> list[str]:
+    """The surveyed preset roles, each with the names the surveyed engines give it where they
+    rename it: ``accurate (mujoco: matched-bounce)``."""
+    names = []
+    for role in settings["presets"]:
+        renamed = [f"{engine}: {preset_label(engine, role)}" for engine in settings["engines"]
+                   if preset_label(engine, role) != role]
+        names.append(f"{role} ({', '.join(renamed)})" if renamed else role)
+    return names
 
 
 def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dict) -> str:
@@ -168,7 +180,7 @@ def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dic
         "",
         (f"Samples per family: {settings['samples']}, seed {settings['seed']}; engines "
          f"{', '.join(settings['engines']) or 'none'}; presets "
-         f"{', '.join(settings['presets'])}."
+         f"{', '.join(_preset_names(settings))}."
          + "".join(f" Not run: {label} ({why})." for label, why in
                    settings.get("left_out", {}).items())
          + "".join(f" Not installed: {engine} ({why})." for engine, why in
