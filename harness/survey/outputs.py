@@ -27,7 +27,12 @@ import numpy as np
 
 from harness.engines import PRESET_ROLES, preset_label
 from harness.plotting import new_figure, percent_tick, save_png
-from harness.run.metrics import fmt_departure
+from harness.run.metrics import (
+    SCIENTIFIC_BELOW_PERCENT,
+    SHARED_SCIENTIFIC_BELOW_PERCENT,
+    fmt_departure,
+    fmt_departures,
+)
 from harness.store.files import write_bytes_atomically
 
 TYPE_NAMES = {1: "1 stick (compr.)", 2: "2 stick (restit.)", 3: "3 reverse (compr.)",
@@ -106,10 +111,10 @@ def _percent(value: float) -> str:
 def _with_interval(value: dict, prefix: str) -> str:
     """A quantile in percent with its bootstrap interval: ``2.6% [1.1%, 4.0%]``."""
     low, high = value.get(f"{prefix}_low"), value.get(f"{prefix}_high")
-    text = fmt_departure(value[prefix])
     if low is None or high is None or not (math.isfinite(low) and math.isfinite(high)):
-        return text
-    return f"{text} [{fmt_departure(low)}, {fmt_departure(high)}]"
+        return fmt_departure(value[prefix])
+    text, low_text, high_text = fmt_departures([value[prefix], low, high])  # one style
+    return f"{text} [{low_text}, {high_text}]"
 
 
 def markdown_table(stats: dict, types: str = "all") -> str:
@@ -189,10 +194,14 @@ def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dic
                    + ", ".join(f"{key}={json.dumps(value)}" for key, value in values.items())
                    + "." for engine, values in settings.get("overrides", {}).items())),
         ("Departure = ‖u − u_law‖_M / ‖u_before‖_M (kinetic-energy norm; two free bodies in "
-         "their centre of mass's frame), in percent. *Checked runs*: the runs judged one "
-         "impact by the verdict checks (docs/verdicts.md); *all runs*: every run, flagged "
-         "ones included, so a large flagged share cannot hide the worst runs; *flagged* = "
-         "runs failing a check, counted by reason below. [95% CI]: a percentile-bootstrap "
+         "their centre of mass's frame), in percent: decimals down to "
+         f"{SCIENTIFIC_BELOW_PERCENT:g}%, scientific notation below it; a median or p90 and "
+         "its interval are written alike, all in scientific notation when one of them is "
+         f"below {SCIENTIFIC_BELOW_PERCENT:g}% and none reaches "
+         f"{SHARED_SCIENTIFIC_BELOW_PERCENT:g}%. *Checked runs*: the runs judged one impact "
+         "by the verdict checks (docs/verdicts.md); *all runs*: every run, flagged ones "
+         "included, so a large flagged share cannot hide the worst runs; *flagged* = runs "
+         "failing a check, counted by reason below. [95% CI]: a percentile-bootstrap "
          "interval (1,000 resamples of the group's runs); with 20 runs a p90 is one of the "
          "two largest. *gains E* = checked runs ending "
          "with more kinetic energy than they began with (by more than 1e-9 of it). "
