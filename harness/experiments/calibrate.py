@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from harness.engines import preset_label
 from harness.scene import ellipse
 
 from . import drops_engines, fazeli, fitting, metric
@@ -264,7 +265,8 @@ def summary(calibration: Calibration) -> str:
     """Plain lines: the objective, the best settings, and what cannot be calibrated."""
     where = ("the measured drops" if calibration.target == "data"
              else f"{calibration.target} on a population of ellipse drops")
-    lines = [f"{calibration.engine} ({calibration.preset}) against {where}; objective: "
+    shown = preset_label(calibration.engine, calibration.preset)  # the name users see
+    lines = [f"{calibration.engine} ({shown}) against {where}; objective: "
              f"median normalized error of the centre's velocity (flagged runs not scored)"]
     if calibration.sample is not None:
         drawn = calibration.sample

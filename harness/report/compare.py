@@ -42,6 +42,7 @@ from pathlib import Path
 
 import numpy as np
 
+from harness.engines import source_label
 from harness.report.markup import html_table, page_head
 from harness.report.views import escape_html
 from harness.run import metrics
@@ -309,7 +310,9 @@ def setting_differences(a: Results, b: Results) -> list[tuple[str, str, str]]:
             keys_a, keys_b = mapping(presets_a.get(preset)), mapping(presets_b.get(preset))
             for key in sorted(set(keys_a) | set(keys_b)):
                 if keys_a.get(key) != keys_b.get(key):
-                    rows.append((f"{engine}.{preset}.{key}", json_text(keys_a.get(key, "—")),
+                    # the preset under the name users see (mujoco.matched-bounce)
+                    rows.append((f"{source_label(engine, preset)}.{key}",
+                                 json_text(keys_a.get(key, "—")),
                                  json_text(keys_b.get(key, "—"))))
     return rows
 

@@ -15,7 +15,7 @@ import math
 from html import escape
 
 from harness.report.markup import folded
-from harness.report.views import single_contact
+from harness.report.views import fmt_departure, single_contact
 
 TITLE = "Several contacts: flat faces and tilts"
 
@@ -41,7 +41,8 @@ INTRO = (
     "restitution is counted twice (it gains energy on a symmetric flat box even with μ = 0). "
     "\"+k at boundary\": solutions with a decision (Table 1's type, I_n > 0) inside the "
     "rounding band, counted apart from the clearly coherent ones. "
-    "Engine columns: departure from the reference; for a tilt, in brackets, the cut of the "
+    "Engine columns: departure from the reference (in percent, as everywhere in the "
+    "report); for a tilt, in brackets, the cut of the "
     "sequence the run is nearest (full: all impacts; after-k: only the first k, with the "
     "departure from that cut); for a flat face, after 'P 2φ:', the departure from the "
     "two-phase Poisson law. A flagged run is shown as 'flagged' with its reasons and its "
@@ -52,17 +53,19 @@ INTRO = (
     "event sequence.")
 
 
-def _number(value) -> str:
+def _count_text(value) -> str:
+    """A number of solutions; ``n/a`` where the law was not solved."""
     if value is None or (isinstance(value, float) and not math.isfinite(value)):
         return "n/a"
-    return f"{value:.2g}" if isinstance(value, float) else str(value)
+    return str(value)
 
 
 def _rows(name: str, info: dict, records) -> tuple[list[str], list[list[str]]] | None:
     references = [r for r in info.get("references", []) if r.get("kind") != "single-contact"]
     if not references:
         return None
-    engines = sorted({f"{r.source}.{r.preset}" for r in records if r.source != "analytic"})
+    # each run under the name users see for its preset (mujoco.matched-bounce), as elsewhere
+    engines = sorted({r.label for r in records if r.source != "analytic"})
     tilt = any(r["kind"] == "event-driven" for r in references)
     header = ["point", "reference", *[title for _, title in COUNTS]]
     if tilt:
@@ -80,22 +83,23 @@ def _rows(name: str, info: dict, records) -> tuple[list[str], list[list[str]]] |
                 {impact[0] for impact in reference.get("sequences", {}).get(
                     "newton-lcp", {}).get("impacts", [])}, key=lambda f: _first_strike(
                         reference, f)))
-            row += [_number(gaps.get("at-pose/newton-coulomb")),
-                    _number(gaps.get(f"at-pose/sequential/newton-lcp/{order}"))]
-        by_engine = {f"{r.source}.{r.preset}": r for r in records
+            row += [fmt_departure(gaps.get("at-pose/newton-coulomb")),
+                    fmt_departure(gaps.get(f"at-pose/sequential/newton-lcp/{order}"))]
+        by_engine = {r.label: r for r in records
                      if r.source != "analytic" and r.point.get("label", "") == reference.get(
                          "point", "")}
         for engine in engines:
             record = by_engine.get(engine)
             summary = (record.diagnostics or {}).get("reference", {}) if record else {}
-            cell = _number(summary.get("departure_from_primary"))
+            # every value in an engine cell is a departure (harness/run/references.py)
+            cell = fmt_departure(summary.get("departure_from_primary"))
             if summary.get("nearest_cut"):
                 cut, value = summary["nearest_cut"]
                 cut = cut.rsplit("/", 1)[-1]
-                cell += " (full)" if cut == "newton-lcp" else f" ({cut}: {_number(value)})"
+                cell += " (full)" if cut == "newton-lcp" else f" ({cut}: {fmt_departure(value)})"
             two_phase = (record.departure or {}).get("two-phase/poisson") if record else None
             if reference["kind"] == "simultaneous" and two_phase is not None:
-                cell += f" [P 2φ: {_number(two_phase)}]"
+                cell += f" [P 2φ: {fmt_departure(two_phase)}]"
             if record is not None and record.skipped:
                 cell = "skipped"
             elif record is not None and not record.ok:  # not the situation: never a departure
@@ -107,7 +111,7 @@ def _rows(name: str, info: dict, records) -> tuple[list[str], list[list[str]]] |
 
 def _count(counts: dict, key: str) -> str:
     """A law's number of solutions, and those at the boundary of a decision apart."""
-    text = _number(counts.get(key))
+    text = _count_text(counts.get(key))
     boundary = counts.get(f"{key}/at-boundary")
     return f"{text} (+{boundary} at boundary)" if boundary else text
 

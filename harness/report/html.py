@@ -34,6 +34,7 @@ from harness.report.reading import scenarios_digest
 from harness.report.scenario_sections import cached_section
 from harness.report.survey import cached_survey_section
 from harness.report.views import TYPE_NAMES, escape_html, has_library_scenarios, slug
+from harness.run.metrics import SCIENTIFIC_BELOW_PERCENT
 from harness.run.records import Results
 from harness.store.files import write_text_atomically
 
@@ -230,7 +231,8 @@ def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None
         "for two free bodies): "
         "‖u<sub>engine</sub> − u<sub>law</sub>‖<sub>M</sub> / ‖u<sub>before</sub>‖<sub>M, "
         "frame-free</sub>, in percent throughout (0 = identical, 10% = a tenth of the motion "
-        "is wrong). Only single impacts have a departure: a run that fails a verdict check "
+        f"is wrong; decimals down to {SCIENTIFIC_BELOW_PERCENT:g}%, scientific notation "
+        "below it). Only single impacts have a departure: a run that fails a verdict check "
         "(docs/verdicts.md) is shown with its reason and counted, never averaged in.</p>")
     parts.append(
         f'<p class="facts"><b>{len(names)}</b> scenarios, <b>{records}</b> '

@@ -27,6 +27,7 @@ from harness.engines import PRESET_ROLES, engine_names, preset_label, source_lab
 from harness.report.figure_cache import FigureTask
 from harness.report.markup import folded, html_table, report_figure
 from harness.report.views import escape_html, fmt_departure
+from harness.run.metrics import fmt_departures
 from harness.survey import outputs
 from harness.survey.outputs import figure_engines as engines_of
 
@@ -221,12 +222,13 @@ def _group_cells(stats: dict, rows: list[int]) -> list[list[str]]:
 
 def _interval_cell(stats: dict, prefix: str, row: int) -> str:
     """A quantile in percent, its 95% bootstrap interval below it in small type."""
-    value = fmt_departure(float(stats[prefix][row]))
     low, high = (stats.get(f"{prefix}_{end}") for end in ("low", "high"))
     if low is None or high is None or not (math.isfinite(low[row]) and math.isfinite(high[row])):
-        return value
-    return (f"{value}<br><small>[{fmt_departure(float(low[row]))}, "
-            f"{fmt_departure(float(high[row]))}]</small>")
+        return fmt_departure(float(stats[prefix][row]))
+    # the quantile and its bounds in one style (harness/run/metrics.py, fmt_departures)
+    value, low_text, high_text = fmt_departures(
+        [float(stats[prefix][row]), float(low[row]), float(high[row])])
+    return f"{value}<br><small>[{low_text}, {high_text}]</small>"
 
 
 def statistics_table(stats: dict) -> str:

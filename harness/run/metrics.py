@@ -33,17 +33,59 @@ import numpy as np
 STICK_TOLERANCE = 1e-6
 
 
+#: Departures of at least this many percent are written as decimals (``0.00812%``), smaller
+#: ones in scientific notation (``2e-05%``): agreement to round-off reads as such, and one
+#: cut-off keeps a column from mixing ``8e-03%`` with ``0.0118%``.
+SCIENTIFIC_BELOW_PERCENT = 0.001
+
+#: Departures read together (a quantile and its interval) share the scientific style only
+#: while all are below this many percent: ``1.61e+00%`` would not read as 1.61%.
+SHARED_SCIENTIFIC_BELOW_PERCENT = 1.0
+
+
+def _is_missing(value) -> bool:
+    return value is None or (isinstance(value, float) and not math.isfinite(value))
+
+
+def _below_cutoff(percent: float) -> bool:
+    # as rounded to the one digit it would be written with: 0.0009999% is 0.001%, not 1e-03%
+    return abs(float(f"{percent:.0e}")) < SCIENTIFIC_BELOW_PERCENT
+
+
+def _scientific(percent: float) -> str:
+    """``percent`` in scientific notation: one digit below the cut-off (round-off level, as
+    ``2e-05%``), three significant ones above it (``1.18e-02%``), trailing zeros dropped."""
+    if _below_cutoff(percent):
+        return f"{percent:.0e}%"
+    mantissa, exponent = f"{percent:.2e}".split("e")
+    return f"{mantissa.rstrip('0').rstrip('.')}e{exponent}%"
+
+
 def fmt_departure(value) -> str:
     """A departure as every page shows it, in percent with its unit even at zero: ``20.7%``,
-    ``0.18%``, ``2e-12%``, ``0%``; ``n/a`` where there is none."""
-    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+    ``0.18%``, ``0.00812%`` (decimals down to :data:`SCIENTIFIC_BELOW_PERCENT`), ``2e-12%``
+    below it, ``0%``; ``n/a`` where there is none."""
+    if _is_missing(value):
         return "n/a"
     percent = 100.0 * float(value)
     if percent == 0:
         return "0%"
-    if abs(percent) < 0.01:
-        return f"{percent:.0e}%"
+    if _below_cutoff(percent):
+        return _scientific(percent)
     return f"{percent:.3g}%"
+
+
+def fmt_departures(values: Sequence) -> list[str]:
+    """Departures read together, as a quantile and its interval, in one style: all in
+    scientific notation when one is below :data:`SCIENTIFIC_BELOW_PERCENT` and none reaches
+    :data:`SHARED_SCIENTIFIC_BELOW_PERCENT` (``1.18e-02% [1e-04%, 9.31e-02%]``), else each
+    as :func:`fmt_departure` writes it. Zero stays ``0%``, a missing one ``n/a``."""
+    percents = [abs(100.0 * float(v)) for v in values if not _is_missing(v) and v != 0]
+    if (percents and _below_cutoff(min(percents))
+            and max(percents) < SHARED_SCIENTIFIC_BELOW_PERCENT):
+        return [fmt_departure(v) if _is_missing(v) or v == 0 else _scientific(100.0 * float(v))
+                for v in values]
+    return [fmt_departure(v) for v in values]
 
 
 def ke_norm(mass_matrix: np.ndarray, u: Sequence[float] | np.ndarray) -> float:

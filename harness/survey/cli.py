@@ -196,16 +196,17 @@ def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: 
     scenes = survey_scenes(populations, samples, seed) if bare and results else None
     for result in results:
         engine, preset = result.engine, result.preset
-        timings[f"engine {engine} {preset}"] = (result.wall_s, impacts)
-        timings[f"verdicts {engine} {preset}"] = (result.judge_s, impacts)
-        echo(f"{engine} {preset}: {impacts} impacts in {result.wall_s:.2f} s "
+        shown = preset_label(engine, preset)  # the name users see, not the role
+        timings[f"engine {engine} {shown}"] = (result.wall_s, impacts)
+        timings[f"verdicts {engine} {shown}"] = (result.judge_s, impacts)
+        echo(f"{engine} {shown}: {impacts} impacts in {result.wall_s:.2f} s "
              f"({result.wall_s / impacts * 1e6:.0f} µs each), verdicts "
              f"{result.judge_s:.2f} s")
         if bare:
             bare_times = bare_stepping(engine, preset, scenes, result.steps,
                                        (overrides or {}).get(engine))
-            timings[f"bare {engine} {preset} (steps only)"] = (bare_times["bare_s"], impacts)
-            timings[f"bare {engine} {preset} (reset + steps)"] = (
+            timings[f"bare {engine} {shown} (steps only)"] = (bare_times["bare_s"], impacts)
+            timings[f"bare {engine} {shown} (reset + steps)"] = (
                 bare_times["bare_reset_s"], impacts)
             echo(f"  bare stepping of the same impacts: {bare_times['bare_s']:.3f} s, "
                  f"with the reset {bare_times['bare_reset_s']:.3f} s")

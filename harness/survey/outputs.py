@@ -27,7 +27,12 @@ import numpy as np
 
 from harness.engines import PRESET_ROLES, preset_label
 from harness.plotting import new_figure, percent_tick, save_png
-from harness.run.metrics import fmt_departure
+from harness.run.metrics import (
+    SCIENTIFIC_BELOW_PERCENT,
+    SHARED_SCIENTIFIC_BELOW_PERCENT,
+    fmt_departure,
+    fmt_departures,
+)
 from harness.store.files import write_bytes_atomically
 
 TYPE_NAMES = {1: "1 stick (compr.)", 2: "2 stick (restit.)", 3: "3 reverse (compr.)",
@@ -106,10 +111,10 @@ def _percent(value: float) -> str:
 def _with_interval(value: dict, prefix: str) -> str:
     """A quantile in percent with its bootstrap interval: ``2.6% [1.1%, 4.0%]``."""
     low, high = value.get(f"{prefix}_low"), value.get(f"{prefix}_high")
-    text = fmt_departure(value[prefix])
     if low is None or high is None or not (math.isfinite(low) and math.isfinite(high)):
-        return text
-    return f"{text} [{fmt_departure(low)}, {fmt_departure(high)}]"
+        return fmt_departure(value[prefix])
+    text, low_text, high_text = fmt_departures([value[prefix], low, high])  # one style
+    return f"{text} [{low_text}, {high_text}]"
 
 
 def markdown_table(stats: dict, types: str = "all") -> str:
@@ -193,11 +198,23 @@ def reason_table(stats: dict) -> str:
     for row in range(len(stats.get("engine", ()))):
         if int(stats["poisson_type"][row]) != 0:
             continue
-        lines.append(f"| {stats['engine'][row]} | {stats['preset'][row]} | "
+        engine = stats["engine"][row]
+        lines.append(f"| {engine} | {preset_label(engine, stats['preset'][row])} | "
                      f"{stats['family'][row]} | {stats['n'][row]} | "
                      f"{_percent(stats['flagged_fraction'][row])} | "
                      + " | ".join(_percent(stats[key][row]) for key in reasons) + " |")
     return "\n".join(lines)
+
+
+def _preset_names(settings: dict) -> list[str]:
+    """The surveyed preset roles, each with the names the surveyed engines give it where they
+    rename it: ``accurate (mujoco: matched-bounce)``."""
+    names = []
+    for role in settings["presets"]:
+        renamed = [f"{engine}: {preset_label(engine, role)}" for engine in settings["engines"]
+                   if preset_label(engine, role) != role]
+        names.append(f"{role} ({', '.join(renamed)})" if renamed else role)
+    return names
 
 
 def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dict) -> str:
@@ -207,7 +224,7 @@ def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dic
         "",
         (f"Samples per family: {settings['samples']}, seed {settings['seed']}; engines "
          f"{', '.join(settings['engines']) or 'none'}; presets "
-         f"{', '.join(settings['presets'])}."
+         f"{', '.join(_preset_names(settings))}."
          + "".join(f" Not run: {label} ({why})." for label, why in
                    settings.get("left_out", {}).items())
          + "".join(f" Not installed: {engine} ({why})." for engine, why in
@@ -216,10 +233,14 @@ def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dic
                    + ", ".join(f"{key}={json.dumps(value)}" for key, value in values.items())
                    + "." for engine, values in settings.get("overrides", {}).items())),
         ("Departure = ‖u − u_law‖_M / ‖u_before‖_M (kinetic-energy norm; two free bodies in "
-         "their centre of mass's frame), in percent. *Checked runs*: the runs judged one "
-         "impact by the verdict checks (docs/verdicts.md); *all runs*: every run, flagged "
-         "ones included, so a large flagged share cannot hide the worst runs; *flagged* = "
-         "runs failing a check, counted by reason below. [95% CI]: a percentile-bootstrap "
+         "their centre of mass's frame), in percent: decimals down to "
+         f"{SCIENTIFIC_BELOW_PERCENT:g}%, scientific notation below it; a median or p90 and "
+         "its interval are written alike, all in scientific notation when one of them is "
+         f"below {SCIENTIFIC_BELOW_PERCENT:g}% and none reaches "
+         f"{SHARED_SCIENTIFIC_BELOW_PERCENT:g}%. *Checked runs*: the runs judged one impact "
+         "by the verdict checks (docs/verdicts.md); *all runs*: every run, flagged ones "
+         "included, so a large flagged share cannot hide the worst runs; *flagged* = runs "
+         "failing a check, counted by reason below. [95% CI]: a percentile-bootstrap "
          "interval (1,000 resamples of the group's runs). " + p90_note(stats, "all")
          + " *gains E* = checked runs ending "
          "with more kinetic energy than they began with (by more than 1e-9 of it). "

@@ -20,6 +20,7 @@ from harness.engines import EngineNotInstalled
 from harness.report.survey import read_columns, survey_section
 from harness.report.views import fmt_departure
 from harness.run import runner
+from harness.run.metrics import fmt_departures
 from harness.run.records import read_results, write_results
 from harness.scenarios import load_scenarios
 from harness.survey import cli as survey_cli
@@ -123,11 +124,11 @@ def test_the_table_is_the_surveys_statistics(surveyed):
                           "from Poisson, all runs: median", "p90",
                           "from Stronge, checked: median", "p90"]
 
-    def cell(i, prefix, interval=True):
-        text = fmt_departure(float(stats[prefix][i]))
-        low, high = stats[f"{prefix}_low"][i], stats[f"{prefix}_high"][i]
-        return (text, f"[{fmt_departure(float(low))}, {fmt_departure(float(high))}]"
-                if interval else "")
+    def cell(i, prefix):  # a quantile and its interval in one style (fmt_departures)
+        text, low, high = fmt_departures([float(stats[prefix][i]),
+                                          float(stats[f"{prefix}_low"][i]),
+                                          float(stats[f"{prefix}_high"][i])])
+        return text, f"[{low}, {high}]"
 
     def split(text):  # a cell's value, then its interval in small type (if any)
         value, _, rest = text.partition("[")
