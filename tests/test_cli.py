@@ -202,3 +202,13 @@ def test_each_command_lists_the_exit_statuses_it_returns(capsys, command, one, f
         assert one in epilogue.split("\n  1 ")[1].split("\n  2 ")[0]
     assert ("\n  4 " in epilogue) == four
     assert "\n  2 bad input" in epilogue and "\n  3 internal error" in epilogue
+
+
+def test_a_failed_gate_just_above_its_limit_never_reads_as_equal_to_it():
+    from harness.run.gates import GateResult
+
+    gate = GateResult("s", "pymunk", "poisson", 0.001, "", "pymunk.defaults", 0.0010004, "FAIL")
+    text = gate.describe()
+    value = text.split("departure from poisson ")[1].split(" vs max ")[0]
+    limit = text.split(" vs max ")[1].split(" (")[0]
+    assert value != limit and value.endswith("%") and limit.endswith("%"), text

@@ -282,9 +282,16 @@ def summary(calibration: Calibration) -> str:
     lines.append(f"best: {settings_text(calibration.best)} -> median normalized error "
                  f"{calibration.best_objective:.4f}")
     for knob, value in calibration.best.items():
-        if at_open_edge(knob, value, calibration.knobs[knob]):
-            lines.append(f"  {knob} {value:g} is the edge of the values tried: a value beyond "
-                         f"it may score better (--grid fine tries more)")
+        tried = calibration.knobs[knob]
+        if at_open_edge(knob, value, tried):
+            if knob not in BOUNDS:  # an engine's own knob: its class lists the values
+                advice = " (the values tried are the engine's calibration_knobs)"
+            elif len(tried) < len(PAIR_GRIDS["fine"][0]):
+                advice = " (--grid fine tries more)"
+            else:
+                advice = ""
+            lines.append(f"  {knob} {json.dumps(value)} is at an end of the values tried: a "
+                         f"value beyond it may score better{advice}")
     for knob, moved in calibration.moves.items():
         if moved is None:
             text = "not scored along this knob"
@@ -310,10 +317,20 @@ BOUNDS = {"mu": (0.0, None), "e": (0.0, 1.0)}
 
 
 def at_open_edge(knob: str, value, tried) -> bool:
-    """Whether ``value`` is the smallest or largest of three or more numbers ``tried`` for
+    """Whether ``value`` is the smallest or largest of three or more values ``tried`` for
     ``knob``, at an end that is not a bound of the physics (μ ≥ 0, 0 ≤ e ≤ 1): the best may
-    then lie beyond the values tried."""
-    numbers = [item for item in tried if isinstance(item, (int, float))]
+    then lie beyond the values tried. A list value (MuJoCo's ``solref``) is placed by its one
+    entry that varies among the lists tried; others are not placed."""
+    if isinstance(value, (list, tuple)):
+        lists = [item for item in tried if isinstance(item, (list, tuple))
+                 and len(item) == len(value)]
+        varying = [index for index in range(len(value))
+                   if len({item[index] for item in lists}) > 1]
+        if len(varying) != 1:
+            return False
+        value, tried = value[varying[0]], [item[varying[0]] for item in lists]
+    numbers = [item for item in tried
+               if isinstance(item, (int, float)) and not isinstance(item, bool)]
     if len(set(numbers)) < 3 or not isinstance(value, (int, float)):
         return False
     low, high = BOUNDS.get(knob, (None, None))

@@ -7,7 +7,13 @@ import argparse
 import sys
 
 import planar_impact as pi
-from harness.engines import EngineNotInstalled, engine_names, load_engine
+from harness.engines import (
+    EngineNotInstalled,
+    engine_names,
+    load_engine,
+    preset_label,
+    preset_role,
+)
 
 from . import calibrate, drops_engines, fazeli, registry
 
@@ -68,12 +74,18 @@ def main(args) -> int:
         print(f"impact-harness calibrate: {args.engine}: not installed: {missing}",
               file=sys.stderr)
         return 2
-    presets = list(engine.presets) if args.preset is None else [args.preset]
-    unknown = [p for p in presets if p not in engine.presets]
-    if unknown:
-        print(f"impact-harness calibrate: --preset {unknown[0]}: allowed: "
-              f"{', '.join(engine.presets)}", file=sys.stderr)
-        return 2
+    allowed = ", ".join(preset_label(engine.name, role) for role in engine.presets)
+    if args.preset is None:
+        presets = list(engine.presets)
+    else:  # the name users see (mujoco's matched-bounce) selects its role
+        try:
+            presets = [preset_role(engine.name, args.preset)]
+        except ValueError:
+            presets = [None]
+        if presets[0] not in engine.presets:
+            print(f"impact-harness calibrate: --preset {args.preset}: allowed: {allowed}",
+                  file=sys.stderr)
+            return 2
     if args.to == "data":
         try:
             data = fazeli.load(registry.locate(registry.FAZELI_2017, args.data))

@@ -36,10 +36,13 @@ class GateResult:
         where = f" at {self.point}" if self.point else ""
         # In percent, as the report shows departures; the gate's limit also as the scenario
         # file writes it (a fraction), so that the two can be matched.
+        value, limit = fmt_departure(self.departure), fmt_departure(self.max_departure)
+        if value == limit and self.departure is not None:  # apart only beyond 3 digits
+            value, limit = (f"{100.0 * self.departure:.6g}%",
+                            f"{100.0 * self.max_departure:.6g}%")
         return (f"scenario {self.scenario!r} [expect.gate] \"{self.gate}\" ({self.record}{where}): "
-                f"departure from {self.law} {fmt_departure(self.departure)} vs max "
-                f"{fmt_departure(self.max_departure)} (max_departure = {self.max_departure:g}): "
-                f"{self.status}")
+                f"departure from {self.law} {value} vs max {limit} (max_departure = "
+                f"{self.max_departure:g}): {self.status}")
 
 
 def check_gates(scenario: Scenario, records: Sequence[Record]) -> list[GateResult]:

@@ -48,15 +48,18 @@ def _is_missing(value) -> bool:
 
 
 def _below_cutoff(percent: float) -> bool:
-    # as rounded to the one digit it would be written with: 0.0009999% is 0.001%, not 1e-03%
-    return abs(float(f"{percent:.0e}")) < SCIENTIFIC_BELOW_PERCENT
+    return abs(percent) < SCIENTIFIC_BELOW_PERCENT
 
 
 def _scientific(percent: float) -> str:
     """``percent`` in scientific notation: one digit below the cut-off (round-off level, as
-    ``2e-05%``), three significant ones above it (``1.18e-02%``), trailing zeros dropped."""
+    ``2e-05%``; a value that rounds up to the cut-off is written as it, ``0.001%``), three
+    significant ones above it (``1.18e-02%``), trailing zeros dropped."""
     if _below_cutoff(percent):
-        return f"{percent:.0e}%"
+        rounded = f"{percent:.0e}"
+        if abs(float(rounded)) >= SCIENTIFIC_BELOW_PERCENT:  # 0.00095% -> 0.001%
+            return f"{float(rounded):g}%"
+        return f"{rounded}%"
     mantissa, exponent = f"{percent:.2e}".split("e")
     return f"{mantissa.rstrip('0').rstrip('.')}e{exponent}%"
 
@@ -81,8 +84,9 @@ def fmt_departures(values: Sequence) -> list[str]:
     :data:`SHARED_SCIENTIFIC_BELOW_PERCENT` (``1.18e-02% [1e-04%, 9.31e-02%]``), else each
     as :func:`fmt_departure` writes it. Zero stays ``0%``, a missing one ``n/a``."""
     percents = [abs(100.0 * float(v)) for v in values if not _is_missing(v) and v != 0]
+    # the largest as it would be written (0.9999% is written 1%): never 1e+00%
     if (percents and _below_cutoff(min(percents))
-            and max(percents) < SHARED_SCIENTIFIC_BELOW_PERCENT):
+            and float(f"{max(percents):.3g}") < SHARED_SCIENTIFIC_BELOW_PERCENT):
         return [fmt_departure(v) if _is_missing(v) or v == 0 else _scientific(100.0 * float(v))
                 for v in values]
     return [fmt_departure(v) for v in values]

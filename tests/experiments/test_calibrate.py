@@ -228,6 +228,27 @@ def test_the_cli_prints_the_intervals_and_refuses_few_replicates(capsys, pymunk)
     assert "best: mu " in out and '{"mu"' not in out
     assert cli_main(["calibrate", "pymunk", "--to", "poisson", "--data", "/nonexistent"]) == 2
     assert "--data /nonexistent: read only with --to data" in capsys.readouterr().err
+    assert "mu 0.3 is at an end of the values tried" in out and "--grid fine tries more" in out
+
+
+def test_the_cli_takes_the_preset_names_users_see(capsys, monkeypatch):
+    """MuJoCo's second preset is matched-bounce wherever it is printed, so calibrate takes
+    that name for its role (an unknown name is refused, naming the allowed ones)."""
+    from harness.engines import EngineNotInstalled, load_engine
+
+    try:
+        load_engine("mujoco")
+    except EngineNotInstalled as missing:
+        pytest.skip(f"mujoco: {missing}")
+    asked = []
+    monkeypatch.setattr(calibrate, "calibrate", lambda engine, preset, *a, **k: asked.append(
+        preset))
+    monkeypatch.setattr(calibrate, "summary", lambda result: "")
+    assert cli_main(["calibrate", "mujoco", "--to", "poisson", "--preset", "matched-bounce",
+                     "--drops", "2"]) == 0
+    assert asked == ["accurate"]  # the role the name selects
+    assert cli_main(["calibrate", "mujoco", "--to", "poisson", "--preset", "bogus"]) == 2
+    assert "allowed: defaults, matched-bounce" in capsys.readouterr().err
 
 
 def test_a_best_value_at_an_open_end_of_the_values_tried_is_said():
@@ -241,6 +262,13 @@ def test_a_best_value_at_an_open_end_of_the_values_tried_is_said():
     assert calibrate.at_open_edge("damping", 0.5, [1.0, 0.5, 2.0])
     assert not calibrate.at_open_edge("damping", 0.5, [0.5, 2.0])  # two values: no inside
     assert calibrate.settings_text({"mu": 0.3, "e": 0.6, "scale": 2}) == "mu 0.3, e 0.6, scale 2"
+    # a list-valued knob, by the entry that varies (MuJoCo's solref damping ratio)
+    solrefs = [[0.02, 0.5], [0.02, 1.0], [0.02, 2.0]]
+    assert calibrate.at_open_edge("solref", [0.02, 2.0], solrefs)
+    assert calibrate.at_open_edge("solref", [0.02, 0.5], solrefs)
+    assert not calibrate.at_open_edge("solref", [0.02, 1.0], solrefs)
+    two_varying = [[0.02, 0.5], [0.03, 1.0], [0.04, 2.0]]
+    assert not calibrate.at_open_edge("solref", [0.03, 2.0], two_varying)
 
 
 def test_cli_calibrates_a_registered_engine_without_knobs_and_says_why(capsys, toy_engine):

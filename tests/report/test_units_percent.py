@@ -44,3 +44,20 @@ def test_a_quantile_and_its_interval_share_one_style():
     assert fmt_departures(wide) == [fmt_departure(v) for v in wide]
     # zero and a missing bound stay as they are
     assert fmt_departures([0.0, 0.1 * small, math.nan])[::2] == ["0%", "n/a"]
+
+
+def test_the_band_just_below_the_cut_off_is_written_at_it_or_in_scientific_notation():
+    """Below the cut-off a value is scientific, unless its one digit rounds up to the cut-off:
+    then it is the cut-off itself (never 0.000995%, a decimal below the stated cut-off)."""
+    cut_off = SCIENTIFIC_BELOW_PERCENT / 100
+    assert fmt_departure(0.995 * cut_off) == "0.001%"
+    assert fmt_departure(0.9 * cut_off) == "9e-04%"
+    for factor in (0.9, 0.949, 0.95, 0.995, 0.99996):
+        text = fmt_departure(factor * cut_off)
+        assert scientific(text) or text == "0.001%", (factor, text)
+
+
+def test_an_interval_just_below_the_shared_limit_as_written_is_never_1e00():
+    limit = SHARED_SCIENTIFIC_BELOW_PERCENT / 100
+    texts = fmt_departures([1e-9, 0.995 * limit, 0.99999 * limit])
+    assert not any("e+00" in text for text in texts), texts
