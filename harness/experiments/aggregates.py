@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 import planar_impact as pi
+from harness.engines import preset_label
 
 from . import (
     analysis,
@@ -152,7 +153,8 @@ def compute(data: fazeli.FazeliData, *, engines=(), replicates: int = 100, seed:
     on_drops, calibrated, engine_runs, calibrations = [], [], [], {}
     for engine in engines:
         for preset in engine.presets:
-            progress(f"{engine.name} ({preset}) on every drop, then calibrated")
+            progress(f"{engine.name} ({preset_label(engine.name, preset)}) on every drop, "
+                     "then calibrated")
             run = drops_engines.run_drops(engine, preset, target, thetas, shown["mu"],
                                           shown["e"], keep_errors=True)
             engine_runs.append((engine, preset, dict(run)))  # its errors, in memory only

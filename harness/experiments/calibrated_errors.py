@@ -30,6 +30,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from harness.engines import preset_label
+
 from . import analysis, calibrate, drops_engines, fitting
 from .records import MeasuredImpacts
 
@@ -163,7 +165,8 @@ def compute(target: MeasuredImpacts, thetas, law_fits: dict, engine_runs, *, see
     sample = calibration_sample(len(target), seed, calibration_drops)
     engines = []
     for engine, preset, run in engine_runs:
-        progress(f"{engine.name} ({preset}): calibrated on the training half, scored on "
+        progress(f"{engine.name} ({preset_label(engine.name, preset)}): calibrated on the "
+                 "training half, scored on "
                  "the held-out half")
         preset_errors = np.asarray(run["per_drop_errors"], dtype=float)
         reference = law_errors(everywhere, REFERENCE_LAW, run["mu"], run["e"])

@@ -302,19 +302,10 @@ def departure_numbers(engine_runs) -> dict[str, str]:
 FLAT_FACES = ("flat-box", "flat-box-slip", "flat-box-spin", "flat-rod")
 
 
-def short(value: float, digits: int = 2) -> str:
-    """``value`` to ``digits`` significant digits as the docs write it: ``0.17``, and below
-    0.01 with an exponent, ``2.4e-3`` and ``6e-6``."""
-    if abs(value) >= 0.01:
-        return f"{value:.{digits}g}"
-    mantissa, _, exponent = f"{value:.{digits - 1}e}".partition("e")
-    return f"{mantissa}e{int(exponent)}"
-
-
 def flat_face_numbers(engine_runs) -> dict[str, str]:
     """docs/multi-contact.md, 'Engines on a flat face': the engines' departures from their
     primary reference on the library's flat faces and on the tilt sweep of the box
-    (``flat.…`` and ``tilt.…`` keys)."""
+    (``flat.…`` and ``tilt.…`` keys), in percent as the report writes them."""
 
     def departures(scenarios, engine, preset, keep=lambda run: True, reference=None):
         values = []
@@ -330,19 +321,19 @@ def flat_face_numbers(engine_runs) -> dict[str, str]:
 
     numbers = {}
     pymunk = departures(FLAT_FACES, "pymunk", "defaults")
-    numbers["flat.pymunk-defaults.max"] = short(max(pymunk), 1)
+    numbers["flat.pymunk-defaults.max"] = fmt_departure(max(pymunk))
     pybullet = departures(FLAT_FACES, "pybullet", "accurate")
-    numbers["flat.pybullet-accurate.min"] = f"{min(pybullet):.2f}"
-    numbers["flat.pybullet-accurate.max"] = f"{max(pybullet):.2f}"
-    numbers["flat.mujoco-accurate.flat-box"] = short(
+    numbers["flat.pybullet-accurate.min"] = fmt_departure(min(pybullet))
+    numbers["flat.pybullet-accurate.max"] = fmt_departure(max(pybullet))
+    numbers["flat.mujoco-accurate.flat-box"] = fmt_departure(
         departures(FLAT_FACES[:1], "mujoco", "accurate")[0])
     turning = departures(FLAT_FACES[1:], "mujoco", "accurate")
-    numbers["flat.mujoco-accurate.min"] = f"{min(turning):.2f}"
-    numbers["flat.mujoco-accurate.max"] = f"{max(turning):.2f}"
+    numbers["flat.mujoco-accurate.min"] = fmt_departure(min(turning))
+    numbers["flat.mujoco-accurate.max"] = fmt_departure(max(turning))
     receding = ("flat-box-receding-end",)
-    numbers["flat.receding-end.pymunk"] = short(
+    numbers["flat.receding-end.pymunk"] = fmt_departure(
         max(departures(receding, "pymunk", "accurate")))
-    numbers["flat.receding-end.pymunk-sequential"] = short(
+    numbers["flat.receding-end.pymunk-sequential"] = fmt_departure(
         max(departures(receding, "pymunk", "accurate", reference="sequential/")))
     tilt = ("sweep-tilted-box",)
 
@@ -350,8 +341,8 @@ def flat_face_numbers(engine_runs) -> dict[str, str]:
         return lambda run: float(run.point["value"]) <= degrees
 
     followed = departures(tilt, "pymunk", "accurate", up_to(1.0))
-    numbers["tilt.pymunk.min"] = short(min(followed), 1)
-    numbers["tilt.pymunk.max"] = short(max(followed), 1)
+    numbers["tilt.pymunk.min"] = fmt_departure(min(followed))
+    numbers["tilt.pymunk.max"] = fmt_departure(max(followed))
     return numbers
 
 
