@@ -74,18 +74,18 @@ def main(args) -> int:
         print(f"impact-harness calibrate: {args.engine}: not installed: {missing}",
               file=sys.stderr)
         return 2
-    allowed = ", ".join(preset_label(engine.name, role) for role in engine.presets)
-    if args.preset is None:
-        presets = list(engine.presets)
-    else:  # the name users see (mujoco's matched-bounce) selects its role
+    presets = list(engine.presets)
+    if args.preset is not None:  # the name users see (mujoco's matched-bounce) selects its role
         try:
-            presets = [preset_role(engine.name, args.preset)]
+            role = preset_role(engine.name, args.preset)
         except ValueError:
-            presets = [None]
-        if presets[0] not in engine.presets:
+            role = None
+        if role not in engine.presets:
+            allowed = ", ".join(preset_label(engine.name, name) for name in engine.presets)
             print(f"impact-harness calibrate: --preset {args.preset}: allowed: {allowed}",
                   file=sys.stderr)
             return 2
+        presets = [role]
     if args.to == "data":
         try:
             data = fazeli.load(registry.locate(registry.FAZELI_2017, args.data))

@@ -166,8 +166,7 @@ def compute(target: MeasuredImpacts, thetas, law_fits: dict, engine_runs, *, see
     engines = []
     for engine, preset, run in engine_runs:
         progress(f"{engine.name} ({preset_label(engine.name, preset)}): calibrated on the "
-                 "training half, scored on "
-                 "the held-out half")
+                 "training half, scored on the held-out half")
         preset_errors = np.asarray(run["per_drop_errors"], dtype=float)
         reference = law_errors(everywhere, REFERENCE_LAW, run["mu"], run["e"])
         row = {"engine": engine.name, "preset": preset,

@@ -384,6 +384,8 @@ def row_cells(c: Change, law: str, threshold: float) -> list[str]:
 
 
 ROW_HEADER = ["", "scenario", "source", "before", "after", "change", "speeds", "status"]
+
+
 def summary_header(law: str) -> list[str]:
     """The per-source summary's columns. A smaller departure is *closer to the law*, which is
     not always better: an engine cut to fewer iterations may move closer to Poisson while it
