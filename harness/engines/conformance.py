@@ -32,7 +32,7 @@ under each preset role:
   - restitution is used: the separation speed of a direct impact grows with e by at least
     half the laws' growth, unless the preset declares it does not (``restitution_unused``);
   - a preset that claims a law meets it: under ``accurate``, an engine whose ``own_law`` is a
-    law of :data:`planar_impact.LAWS` departs from ``planar_impact``'s answer by at most
+    law (:data:`harness.laws.LAW_NAMES`) departs from ``planar_impact``'s answer by at most
     :data:`OWN_LAW_DEPARTURE` on each canonical case; one whose own law is ``converged``
     names its reference point in every bench sweep (``bench_reference``).
 
@@ -47,7 +47,6 @@ from collections.abc import Mapping
 
 import numpy as np
 
-import planar_impact as pi
 from harness.engines import load_engine
 from harness.engines.contract import (
     Engine,
@@ -58,6 +57,7 @@ from harness.engines.contract import (
     ke_norm,
 )
 from harness.engines.settings import EngineSettingsError
+from harness.laws import LAW_NAMES
 from harness.scene import Body, Disk, Scene
 from harness.scene.geometry import impact_problem, scene_contact
 from harness.scene.reference import reference_scenes
@@ -69,7 +69,7 @@ _BROKEN = (Status.BLOW_UP, Status.NO_CONTACT, Status.NO_SEPARATION)
 _ROLES = ("defaults", "accurate")
 # What an engine may declare as its own law (the accuracy bench measures against it): a law
 # the bench solves, or "converged" (its own run at the finest settings).
-_OWN_LAWS = ("newton-lcp", "poisson", "stronge", "converged")
+_OWN_LAWS = (*LAW_NAMES, "converged")
 #: Largest departure ``‖u_engine − u_law‖_M / ‖u_before‖_M`` of an ``accurate`` run from the
 #: engine's own law on a canonical case (the accuracy bench's tighter threshold, 0.1%): the
 #: shipped rigid engines reach 5e-8 or less (Box2D's float32), the toy 1e-16.
@@ -468,7 +468,7 @@ def _restitution_failures(engine: Engine, scenes, runs, role: str) -> list[str]:
 
 def _own_law_failures(engine: Engine, scenes, runs) -> list[str]:
     law = engine.own_law
-    if law not in pi.LAWS:  # "converged": its reference is checked with the attributes
+    if law not in LAW_NAMES:  # "converged": its reference is checked with the attributes
         return []
     cases = [(scenes[key], run) for key, run in runs.items()]
     rod = reference_scenes()["rod-45"][0]
