@@ -68,9 +68,31 @@ def law(name: str) -> Law:
         raise ValueError(f"unknown law {name!r}; allowed: {', '.join(LAW_NAMES)}") from None
 
 
+#: Rounding band of the cone promise, relative to ``|I_n| + |I_t|``: the closed forms put
+#: ``I_t`` at ``±μ I_n`` up to a few roundings (~1e-16); 1e-9 leaves every CPU's last bits in.
+CONE_BAND = 1e-9
+
+
+def broken_promises(name: str, result, mu: float) -> list[str]:
+    """What law ``name``'s solution ``result`` (a :class:`planar_impact.ImpactResult`)
+    breaks of its entry's promises, one sentence each (checked on every solution the runner
+    keeps: a solver fault shows in the results, never silently)."""
+    entry = law(name)
+    broken = []
+    normal, tangential = result.normal_impulse, result.tangential_impulse
+    if entry.no_energy_gain and result.energy_gained:  # the solver's 1e-12 relative bar
+        broken.append(f"{name} promises no energy gain but gains {result.energy_change:.3g} J")
+    band = CONE_BAND * (abs(normal) + abs(tangential))
+    if entry.in_cone and (normal < -band or abs(tangential) > mu * normal + band):
+        broken.append(f"{name} promises an impulse in the friction cone but gives I_n = "
+                      f"{normal:.6g}, I_t = {tangential:.6g} N s at μ = {mu:g}")
+    return broken
+
+
 def law_order(name: str) -> int:
     """The position of ``name`` in :data:`LAW_NAMES` (an unknown name sorts last)."""
     return LAW_NAMES.index(name) if name in _BY_NAME else len(LAW_NAMES)
 
 
-__all__ = ["HEADLINE_LAWS", "LAW_NAMES", "PROCESS_LAWS", "REGISTRY", "Law", "law", "law_order"]
+__all__ = ["CONE_BAND", "HEADLINE_LAWS", "LAW_NAMES", "PROCESS_LAWS", "REGISTRY", "Law",
+           "broken_promises", "law", "law_order"]

@@ -5,6 +5,7 @@ promises on broad random families."""
 from __future__ import annotations
 
 import ast
+import dataclasses
 import json
 from pathlib import Path
 
@@ -121,3 +122,42 @@ def test_each_law_keeps_its_promises_on_random_problems(entry):
     else:  # the promise is withheld because the law does gain energy (README's findings)
         assert gained.any()
     assert set(np.unique(batch.collision_type[solved]).tolist()) <= set(entry.collision_types)
+
+
+def test_a_broken_promise_is_named_on_the_solution_and_in_the_runner(monkeypatch):
+    # Newton's law gains energy on some problems (README's findings): held to Poisson's
+    # promise, that solution is named; Poisson's own solution breaks nothing.
+    problems = random_problems(2_000, seed=7)
+    batch = pi.solve_batch(**problems, law="newton")
+    row = int(np.flatnonzero((batch.status == 0) & (batch.energy_change > 1e-6))[0])
+    one = {name: float(np.broadcast_to(values, batch.status.shape)[row])
+           for name, values in problems.items()}
+    mass = np.array([[one["mnn"], one["mnt"]], [one["mnt"], one["mtt"]]])
+    problem = dict(mass_matrix=np.linalg.inv(mass), wn=np.array([1.0, 0.0]),
+                   wt=np.array([0.0, 1.0]), u=np.array([one["vn"], one["vt"]]))
+    newton = pi.solve(**problem, mu=one["mu"], e=one["e"], law="newton")
+    assert newton.energy_gained and laws.broken_promises("newton", newton, one["mu"]) == []
+    strict = {entry.name: (entry if entry.name != "newton" else
+                           dataclasses.replace(entry, no_energy_gain=True))
+              for entry in laws.REGISTRY}
+    monkeypatch.setattr(laws, "_BY_NAME", strict)
+    broken = laws.broken_promises("newton", newton, one["mu"])
+    assert len(broken) == 1 and broken[0].startswith("newton promises no energy gain but gains")
+    poisson = pi.solve(**problem, mu=one["mu"], e=one["e"], law="poisson")
+    assert laws.broken_promises("poisson", poisson, one["mu"]) == []
+    outside = dataclasses.replace(poisson, tangential_impulse=2 * one["mu"] * poisson.normal_impulse
+                                  + 1.0)
+    assert "promises an impulse in the friction cone" in laws.broken_promises(
+        "poisson", outside, one["mu"])[0]
+    # The runner checks every law solution it keeps: a broken promise is the record's error.
+    from harness.run import point_records
+    from harness.scenarios import load_scenario
+
+    scenario = load_scenario(ROOT / "scenarios" / "disk-oblique.toml")
+    monkeypatch.setattr(point_records, "broken_promises",
+                        lambda name, result, mu: ["a promise of the test"] if name == "newton"
+                        else [])
+    records = point_records.point_records(scenario, scenario.point_list()[0], [], cache=None)
+    statuses = {record.law: record.status for record in records}
+    assert statuses["newton"] == "error: a promise of the test"
+    assert {status for law, status in statuses.items() if law != "newton"} == {"ok"}
