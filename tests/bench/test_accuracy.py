@@ -73,3 +73,17 @@ def test_a_converged_engine_is_measured_against_the_point_it_names(monkeypatch, 
     assert rows and all(row["departure"]["own"] == 0.0 for row in rows)  # itself
     cheapest = bench_accuracy.cheapest_settings(result)
     assert {cell["setting"] for cell in cheapest.values()} == {"defaults"}  # not the reference
+
+
+def test_an_engine_claiming_any_law_of_the_registry_is_measured_from_it(monkeypatch,
+                                                                         toy_engine):
+    # The bench measures every engine from Poisson, Stronge and newton-lcp; an engine that
+    # claims another law of the registry (here Newton's, which check_engine would hold its
+    # accurate preset to) is measured from that one too.
+    from tests.engines.toy_engine import ToyEngine
+
+    monkeypatch.setattr(ToyEngine, "own_law", "newton")
+    result = bench_accuracy.measure_engine(toy_engine, quick=True)
+    for row in result["rows"]:
+        assert set(row["departure"]) == {*bench_accuracy.BENCH_LAWS, "newton", "own"}
+        assert row["departure"]["own"] == row["departure"]["newton"]
