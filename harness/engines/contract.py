@@ -314,10 +314,11 @@ class Engine(abc.ABC):
     #: The engine is natively 2-D: no out-of-plane drift to measure (the adapter defines no
     #: ``_out_of_plane_drift``; its runs report ``out_of_plane_drift`` None).
     native_2d: bool = False
-    #: The law the engine solves at its accurate limit: "newton-lcp" (sequential impulses),
-    #: "poisson" or "stronge", or "converged" (its own run at the finest settings, the sweep
-    #: point named by ``bench_reference``); the accuracy bench measures against it, and
-    #: check_engine holds the ``accurate`` preset of an engine claiming a law to it.
+    #: The law the engine solves at its accurate limit: a law of the registry
+    #: (harness.laws.LAW_NAMES; "newton-lcp" for sequential impulses), or "converged" (its
+    #: own run at the finest settings, the sweep point named by ``bench_reference``); the
+    #: accuracy bench measures against it, and check_engine holds the ``accurate`` preset of
+    #: an engine claiming a law to it.
     own_law: str = "newton-lcp"
     #: own_law "converged": the label of the :meth:`bench_sweep` point that is the engine's
     #: converged limit, present in the quick and the full sweep (MuJoCo:
