@@ -99,6 +99,7 @@ def test_the_copy_detector_finds_a_copy():
     assert sorted(line for line, _, _ in _law_literals(ast.parse(source))) == [1, 2, 4]
 
 
+@pytest.mark.kernel_sensitive  # decisions on 20,000 solutions (far from their bars)
 @pytest.mark.parametrize("entry", laws.REGISTRY, ids=lambda entry: entry.name)
 def test_each_law_keeps_its_promises_on_random_problems(entry):
     # 20,000 seeded problems over every sign of m_nt and v_t, μ in [0, 2], e in [0, 1]

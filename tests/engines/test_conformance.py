@@ -44,6 +44,7 @@ def test_the_toy_conforms_and_its_traits_come_from_its_class(toy):
     assert toy in registry.engine_names()
 
 
+@pytest.mark.kernel_sensitive  # its physics checks decide within stated bands
 @pytest.mark.parametrize("name", registry.ENGINE_NAMES)
 def test_every_shipped_engine_conforms(load_or_skip, name):
     assert check_engine(load_or_skip(name)) == []
