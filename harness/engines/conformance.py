@@ -26,15 +26,24 @@ under each preset role:
   - the normal points out of the ground (two bodies: from A into B) and carries a positive
     normal impulse; the spin changes with the sign of ``r × P``, the moment of the
     tangential impulse at its offset from the centre;
+  - every reported contact point lies where the scene touches body B, at the step's pose
+    (the verdicts read the touching feature from it), within one step of travel, twice over,
+    plus the overlap and 1 mm (the contract tests' bound);
   - friction is used: an oblique impact with μ > 0 changes the slip at the contact by at
     least half what the laws' Newton–Coulomb answer does, and with μ = 0 leaves it within
     :data:`FRICTIONLESS_SLIP` of itself;
+  - the pair's μ is the one used (Coulomb): a disk sliding throughout the impact gets a
+    tangential impulse of μ times the normal one, against the slip, within :data:`PAIR_BAND`
+    (a μ doubled, halved or combined with the engine's own value shows here);
   - restitution is used: the separation speed of a direct impact grows with e by at least
     half the laws' growth, unless the preset declares it does not (``restitution_unused``);
+    and it is the pair's e: the separation speed is the laws' within :data:`PAIR_BAND`;
   - a preset that claims a law meets it: under ``accurate``, an engine whose ``own_law`` is a
     law (:data:`harness.laws.LAW_NAMES`) departs from ``planar_impact``'s answer by at most
-    :data:`OWN_LAW_DEPARTURE` on each canonical case; one whose own law is ``converged``
-    names its reference point in every bench sweep (``bench_reference``).
+    :data:`OWN_LAW_DEPARTURE` on each canonical case, and it builds at least one of the
+    scenes where the laws part (:data:`PARTING_SCENES`; on a disk they agree, so a claim
+    checked on disks alone is no check); one whose own law is ``converged`` names its
+    reference point in every bench sweep (``bench_reference``).
 
 A scene the engine refuses with :class:`UnsupportedScene` is skipped, not failed, here and
 in the contract tests alike (tests/engines/test_contract.py); the canonical disks must run.
@@ -82,6 +91,12 @@ FRICTIONLESS_SLIP = 1e-2
 #: soft friction 0.74 under matched-bounce, every other engine and preset 0.999 to 1.034; the
 #: separation speed's growth with e 0.999 to 1, MuJoCo's defaults aside, restitution_unused).
 USED_FRACTION = 0.5
+#: The pair gets exactly its e and μ (the contract's guarantee): a direct impact's separation
+#: speed, and a sliding impact's ratio of tangential to normal impulse over μ, may depart from
+#: the laws' by at most this fraction (measured: the separation speed 4.9e-3 under pybullet's
+#: defaults, 1e-4 or less elsewhere, MuJoCo's defaults aside, restitution_unused; the impulse
+#: ratio 1e-6 or less for every engine and preset).
+PAIR_BAND = 0.05
 
 
 def check_engine(engine: type[Engine] | Engine | str) -> list[str]:
@@ -292,16 +307,24 @@ def _run_failures(engine: Engine) -> list[str]:
 #: μ 0.3 (it sticks under Newton–Coulomb: the slip of 1 m/s stops) and μ 0, and direct at
 #: 3 m/s (above Box2D's 1 m/s and pybullet's 0.2 m/s restitution thresholds) with e 0.2 and
 #: 0.8; and the reference pair of disks (two free bodies, normal along 30°). Every law gives
-#: the disks one answer; the own-law check adds the reference 45° rod under ``accurate``,
-#: where they part (slip reversal under Poisson: docs/theory.md, 'The velocity-level law
-#: (newton-lcp)'; the laws' answers differ by 20% and more there).
+#: the disks one answer; the own-law check adds the reference 45° rod and box corner under
+#: ``accurate``, where they part (:data:`PARTING_SCENES`; slip reversal under Poisson:
+#: docs/theory.md, 'The velocity-level law (newton-lcp)'). Besides, a 2 kg disk sliding
+#: throughout, (2, -2) m/s with μ 0.1 and e 0.5 (Coulomb's bound takes 0.9 m/s of its 2 m/s
+#: slip; slower than would show pybullet's link damping under defaults beyond its
+#: impulse_band): its friction impulse is μ times the normal one, and its mass, other than
+#: 1 kg, shows a reported impulse that is Δv, not m Δv, on an engine of the ground only.
 RESTITUTIONS = (0.2, 0.8)
+#: The reference scenes where the laws part, against which the own-law check holds a claim:
+#: the 45° rod and the box on a corner (any two laws differ there by 0.7% or more, above
+#: OWN_LAW_DEPARTURE), each where the engine builds it; one of them must run.
+PARTING_SCENES = ("rod-45", "box-corner")
 
 
 def physics_scenes() -> dict[str, Scene]:
     """The scenes of the kit's physics checks, by name (see :data:`RESTITUTIONS`)."""
-    def disk(name, velocity, e, mu):
-        body = Body("disk", Disk(0.1), 1.0, (0.0, 0.1), 0.0, velocity, 0.0)
+    def disk(name, velocity, e, mu, mass=1.0):
+        body = Body("disk", Disk(0.1), mass, (0.0, 0.1), 0.0, velocity, 0.0)
         return Scene((body,), e, mu, ground=True, name=f"kit-{name}")
 
     low, high = RESTITUTIONS
@@ -309,6 +332,7 @@ def physics_scenes() -> dict[str, Scene]:
             "frictionless": disk("frictionless", (1.0, -2.0), 0.5, 0.0),
             "direct-low-e": disk("direct-low-e", (0.0, -3.0), low, 0.3),
             "direct-high-e": disk("direct-high-e", (0.0, -3.0), high, 0.3),
+            "sliding": disk("sliding", (2.0, -2.0), 0.5, 0.1, mass=2.0),
             "two-disks": reference_scenes()["two-disks"][0]}
 
 
@@ -386,6 +410,33 @@ def _normal_failures(scene: Scene, run: EngineRun, where: str) -> list[tuple[str
     return failures
 
 
+def _point_failures(scene: Scene, run: EngineRun, where: str) -> list[tuple[str, str]]:
+    """Each reported point where the scene touches body B at the step's reported pose: a
+    disk's lowest point stays its lowest, so on the ground every step's; two disks' line of
+    centres turns as they roll on each other during a soft contact, so there the first
+    step's. Allowed: the pose is read after the step, and an engine may report the point
+    before the step moves the bodies or anywhere across the overlap, so twice one step of
+    body B's travel, plus the run's largest overlap and 1 mm (the contract tests' bound)."""
+    body = scene.bodies[-1]
+    point = scene_contact(scene).point
+    offset = (float(point[0]) - body.position[0], float(point[1]) - body.position[1])
+    speed = max(math.hypot(*body.velocity), math.hypot(*run.velocities[-1][:2]))
+    reach = 2.0 * float(run.settings["time_step"]) * speed + run.max_penetration + 1e-3
+    steps = run.contacts if scene.ground else run.contacts[:1]
+    for step in steps:
+        x, y, _ = step.poses[-1]
+        for found in step.points:
+            miss = math.hypot(found.x - x - offset[0], found.y - y - offset[1])
+            if not miss <= reach:
+                return [("point",
+                    f"{where}: the reported contact point ({found.x:.6g}, {found.y:.6g}) of step "
+                    f"{step.step} is {miss:.3g} m from where the scene touches body B (its "
+                    f"centre ({x:.6g}, {y:.6g}) + ({offset[0]:.6g}, {offset[1]:.6g})), more "
+                    f"than two steps of travel plus the overlap ({reach:.3g} m): a point on "
+                    "the wrong body, side or frame?")]
+    return []
+
+
 def _physics_failures(engine: Engine) -> list[str]:
     scenes = physics_scenes()
     failures = []
@@ -412,7 +463,8 @@ def _physics_failures(engine: Engine) -> list[str]:
                                 f"{run.status}): the physics cannot be checked")
                 continue
             found = (_normal_failures(scene, run, where)
-                     + _momentum_failures(engine, scene, run, where))
+                     + _momentum_failures(engine, scene, run, where)
+                     + _point_failures(scene, run, where))
             for promise, sentence in found:
                 broken.setdefault(promise, []).append(sentence)
             if not found:  # the checks below read speeds the impulse explains
@@ -422,6 +474,7 @@ def _physics_failures(engine: Engine) -> list[str]:
             failures.append(sentences[0] + (f" (and {more} more like it under this preset)"
                                             if more else ""))
         failures += _friction_failures(scenes, runs, role)
+        failures += _coulomb_failures(scenes, runs, role)
         failures += _restitution_failures(engine, scenes, runs, role)
         if role == "accurate":
             failures += _own_law_failures(engine, scenes, runs)
@@ -451,6 +504,24 @@ def _friction_failures(scenes, runs, role: str) -> list[str]:
     return failures
 
 
+def _coulomb_failures(scenes, runs, role: str) -> list[str]:
+    """A disk sliding throughout: the reported friction impulse is μ times the normal one,
+    against the slip (Coulomb's law at sliding, which every law and engine shares)."""
+    if "sliding" not in runs:
+        return []
+    scene, run = scenes["sliding"], runs["sliding"]
+    # t = +x on the ground; the slip is +x, so friction's impulse is along -t.
+    ratio = -run.tangential_impulse / (scene.friction * run.normal_impulse)
+    if abs(ratio - 1.0) <= PAIR_BAND:
+        return []
+    return [f"preset {role!r}: the pair's μ is not the one used: a disk sliding at "
+            f"{scene.bodies[0].velocity[0]:g} m/s with μ = {scene.friction:g} gets a friction "
+            f"impulse of {-run.tangential_impulse:.4g} N s against the slip for a normal "
+            f"impulse of {run.normal_impulse:.4g} N s, an effective μ of "
+            f"{ratio * scene.friction:.4g} (Coulomb: μ times it, within {PAIR_BAND:g}; a μ "
+            "scaled, or combined with the engine's own value?)"]
+
+
 def _restitution_failures(engine: Engine, scenes, runs, role: str) -> list[str]:
     if role in engine.restitution_unused or not {"direct-low-e", "direct-high-e"} <= set(runs):
         return []
@@ -464,6 +535,14 @@ def _restitution_failures(engine: Engine, scenes, runs, role: str) -> list[str]:
                 f"e = {low.restitution:g} and {separation[1]:.4g} m/s with e = "
                 f"{high.restitution:g} (the laws: {expected[0]:.4g} and {expected[1]:.4g}); a "
                 "preset that ignores e by design says so in restitution_unused"]
+    for scene, speed, law in zip((low, high), separation, expected, strict=True):
+        if abs(speed - law) > PAIR_BAND * law:
+            return [f"preset {role!r}: the pair's e is not the one used: a direct impact at "
+                    f"{-scene.bodies[0].velocity[1]:g} m/s with e = {scene.restitution:g} "
+                    f"separates at {speed:.4g} m/s where the laws give {law:.4g} m/s (within "
+                    f"{PAIR_BAND:g} of it), an effective e of "
+                    f"{speed / -scene.bodies[0].velocity[1]:.4g} (e scaled, or combined with "
+                    "the engine's own value?)"]
     return []
 
 
@@ -472,15 +551,23 @@ def _own_law_failures(engine: Engine, scenes, runs) -> list[str]:
     if law not in LAW_NAMES:  # "converged": its reference is checked with the attributes
         return []
     cases = [(scenes[key], run) for key, run in runs.items()]
-    rod = reference_scenes()["rod-45"][0]
-    try:
-        cases.append((rod, engine.run(rod, engine.settings("accurate"))))
-    except UnsupportedScene:
-        pass  # a capsule the engine cannot build: the disks only
-    except Exception as error:  # noqa: BLE001 - the kit reports, it does not stop
-        return [f"physics, preset 'accurate', scene {rod.name!r}: raises "
-                f"{type(error).__name__}: {error}"]
+    parting = 0  # the cases where the laws part: every law gives the disks one answer
+    for name in PARTING_SCENES:
+        scene = reference_scenes()[name][0]
+        try:
+            cases.append((scene, engine.run(scene, engine.settings("accurate"))))
+        except UnsupportedScene:
+            continue  # a shape the engine cannot build
+        except Exception as error:  # noqa: BLE001 - the kit reports, it does not stop
+            return [f"physics, preset 'accurate', scene {scene.name!r}: raises "
+                    f"{type(error).__name__}: {error}"]
+        parting += 1
     failures = []
+    if not parting:
+        failures.append(
+            f"preset 'accurate': own_law {law!r} cannot be checked: the engine refuses "
+            f"{' and '.join(map(repr, PARTING_SCENES))}, where the laws part (on the disks "
+            "every law gives one answer); claim 'converged' (with bench_reference) instead")
     for scene, run in cases:
         answer = _law_answer(scene, law)
         departure = ke_norm(scene, run.u_after - answer) / ke_norm(scene, scene.state())
@@ -492,5 +579,5 @@ def _own_law_failures(engine: Engine, scenes, runs) -> list[str]:
     return failures
 
 
-__all__ = ["FRICTIONLESS_SLIP", "OWN_LAW_DEPARTURE", "USED_FRACTION", "check_engine",
-           "physics_scenes"]
+__all__ = ["FRICTIONLESS_SLIP", "OWN_LAW_DEPARTURE", "PAIR_BAND", "PARTING_SCENES", "USED_FRACTION",
+           "check_engine", "physics_scenes"]

@@ -149,9 +149,12 @@ What every adapter guarantees
     * Physics :func:`harness.engines.conformance.check_engine` checks under every preset:
       the reported normal points out of the ground (from A into B) and, with the impulses
       along it and ``t``, explains the change of speeds (``M Δu = Jᵀ P`` within ``rounding
-      + impulse_band·|P|``); friction is used (μ > 0 changes the slip, μ = 0 does not);
-      restitution is used (unless ``restitution_unused`` says why not); the ``accurate``
-      preset meets ``own_law``.
+      + impulse_band·|P|``); each reported contact point is where the scene touches body
+      B; friction is used (μ > 0 changes the slip, μ = 0 does not) and a sliding disk's
+      friction impulse is μ times the normal one; restitution is used and a direct impact
+      separates at e times its approach speed (unless ``restitution_unused`` says why not);
+      the ``accurate`` preset meets ``own_law``, checked where the laws part (an engine that
+      builds neither the 45° rod nor the box claims ``converged``).
     * A scene the engine cannot build raises :class:`UnsupportedScene` (a ``ValueError``)
       from ``_build`` or the checks, before any stepping: the runner records it as skipped,
       check_engine and the contract tests skip that scene; a disk on the ground must run.

@@ -73,7 +73,8 @@ class PybulletEngine(Engine):
     #: (e = 1) (docs/verdicts.md, 'Velocity caps').
     speed_caps = (100.0, 100.0)
     # Under defaults the 0.04 1/s link damping also acts over the contact's steps: m Δv
-    # differs from the reported impulse by up to 5.1e-4 of it on check_engine's scenes.
+    # differs from the reported impulse by up to 7.5e-4 of it on check_engine's scenes (the
+    # 2 m/s sliding disk; a faster slide would show more of the damping).
     impulse_band = 1e-3
     no_calibration_knobs_why = (
         "none of Bullet's own settings is tried: its iterations, sub-steps and step converge "
