@@ -30,12 +30,18 @@ def _edges(core):
     return [(core[i], core[(i + 1) % count]) for i in range(count)]
 
 
+def _dot(a, b):
+    # x-products first, then y, one rounding each: what the library computes (never numpy's
+    # ``@``, which goes through a BLAS kernel that rounds differently on another CPU)
+    return float(a[0] * b[0] + a[1] * b[1])
+
+
 def _closest_on_segment(x, a, b):
     ab = b - a
-    length2 = float(ab @ ab)
+    length2 = _dot(ab, ab)
     if length2 == 0.0:
         return a.copy()
-    t = min(1.0, max(0.0, float((x - a) @ ab) / length2))
+    t = min(1.0, max(0.0, _dot(x - a, ab) / length2))
     return a + t * ab
 
 
@@ -77,15 +83,30 @@ def _axes(core):
     return axes
 
 
+def _times(core, direction):
+    """``core @ direction`` elementwise (:func:`_dot` row by row)."""
+    return core[:, 0] * direction[0] + core[:, 1] * direction[1]
+
+
 def _support_interval(core, normal, tangent, side, tolerance):
-    heights = side * (core @ normal)
+    heights = side * _times(core, normal)
     near = core[heights >= heights.max() - tolerance]
-    along = near @ tangent
+    along = _times(near, tangent)
     return float(along.min()), float(along.max())
 
 
+def reference_world_core(body):
+    """The body's core turned and placed, ``R(θ) p + position`` row by row (elementwise, as
+    the library writes it, never a BLAS product)."""
+    local, radius = geometry.local_core(body.shape)
+    c, s = math.cos(body.angle), math.sin(body.angle)
+    rows = [(x * c - y * s + body.position[0], x * s + y * c + body.position[1])
+            for x, y in local.tolist()]
+    return np.array(rows, dtype=float), radius
+
+
 def reference_ground_contact(body, tolerance=geometry.DEFAULT_TOLERANCE):
-    core, radius = geometry.world_core(body)
+    core, radius = reference_world_core(body)
     lowest = float(core[:, 1].min())
     gap = lowest - radius
     near = core[core[:, 1] <= lowest + tolerance]
@@ -97,19 +118,19 @@ def reference_ground_contact(body, tolerance=geometry.DEFAULT_TOLERANCE):
 
 
 def reference_body_contact(body_a, body_b, tolerance=geometry.DEFAULT_TOLERANCE):
-    core_a, radius_a = geometry.world_core(body_a)
-    core_b, radius_b = geometry.world_core(body_b)
+    core_a, radius_a = reference_world_core(body_a)
+    core_b, radius_b = reference_world_core(body_b)
     scale = max(1.0, float(np.abs(np.vstack([core_a, core_b])).max()))
     touching_cores = 1e-12 * scale
     pairs = []
     for vertex in core_a:
         for b0, b1 in _edges(core_b):
             closest = _closest_on_segment(vertex, b0, b1)
-            pairs.append((float(np.linalg.norm(closest - vertex)), vertex, closest))
+            pairs.append((math.sqrt(_dot(closest - vertex, closest - vertex)), vertex, closest))
     for vertex in core_b:
         for a0, a1 in _edges(core_a):
             closest = _closest_on_segment(vertex, a0, a1)
-            pairs.append((float(np.linalg.norm(vertex - closest)), closest, vertex))
+            pairs.append((math.sqrt(_dot(vertex - closest, vertex - closest)), closest, vertex))
     distance, closest_a, closest_b = min(pairs, key=lambda pair: pair[0])
     if distance > touching_cores and not _cores_intersect(core_a, core_b):
         normal = (closest_b - closest_a) / distance
@@ -118,7 +139,8 @@ def reference_body_contact(body_a, body_b, tolerance=geometry.DEFAULT_TOLERANCE)
         axes = _axes(core_a) + _axes(core_b)
         if not axes:
             axes = [geometry.GROUND_NORMAL.copy()]
-        separations = [float((core_b @ axis).min() - (core_a @ axis).max()) for axis in axes]
+        separations = [float(_times(core_b, axis).min() - _times(core_a, axis).max())
+                       for axis in axes]
         best = int(np.argmax(separations))
         normal, core_separation = axes[best], min(0.0, separations[best])
     tangent = np.array([normal[1], -normal[0]])
@@ -130,8 +152,8 @@ def reference_body_contact(body_a, body_b, tolerance=geometry.DEFAULT_TOLERANCE)
     if point_count == 1 and core_separation > 0.0:
         point = 0.5 * ((closest_a + radius_a * normal) + (closest_b - radius_b * normal))
     else:
-        plane_a = float((core_a @ normal).max()) + radius_a
-        plane_b = float((core_b @ normal).min()) - radius_b
+        plane_a = float(_times(core_a, normal).max()) + radius_a
+        plane_b = float(_times(core_b, normal).min()) - radius_b
         along = 0.5 * (low + high) if high >= low else 0.5 * (max(a_lo, b_lo) + min(a_hi, b_hi))
         point = along * tangent + 0.5 * (plane_a + plane_b) * normal
     return Contact(point=point, normal=normal, gap=float(gap), point_count=point_count)
