@@ -1,0 +1,118 @@
+"""This machine's contacts against contacts another machine computed, within the derived bound.
+
+A results file from a CPU the development machines may lack (AVX-512 with OpenBLAS's
+SkylakeX kernel, and the same machine under its Haswell kernel) is read where it is kept
+beside the project: ``../shared/kernels/`` from the repository root (or the main checkout's,
+from a git worktree), or the folder named by ``IMPACT_HARNESS_KERNEL_DATA``. A user's clone
+has no such folder: the test skips, saying so. Nothing of the file is copied here.
+
+Each recorded contact, the library's and the reference form's (tests/scene/
+test_geometry_reference.py) under both kernels, must be within the sum of two forward error
+bounds of this machine's :func:`harness.scene.geometry.body_contact` (tests/scene/
+contact_bounds.py derives it; tests/error_bounds.py holds the formulas): a derived bound, no
+count of units in the last place. Where a decision (which pair is closest, which axis
+separates most, which points are near, one point or two) is within its band, either outcome
+is accepted: the gap is compared still, the normal against each outcome's, the point not.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from harness.scene import Body, Box, Disk, Polygon, Rod, geometry
+from tests.scene.contact_bounds import contact_bound
+
+FILE_NAME = "avx512-geometry-contacts.json"
+#: names a folder holding the file, where the repository's ../shared/kernels/ does not
+ENVIRONMENT = "IMPACT_HARNESS_KERNEL_DATA"
+RECORDED = ("implementation_skylakex", "implementation_haswell", "reference_skylakex",
+            "reference_haswell")
+
+
+def data_file() -> Path | None:
+    """The other machine's file, or ``None`` where this checkout has none."""
+    root = Path(__file__).resolve().parents[2]
+    folders = [Path(os.environ[ENVIRONMENT])] if os.environ.get(ENVIRONMENT) else []
+    folders.append(root.parent / "shared" / "kernels")
+    try:  # a git worktree: beside the main checkout
+        common = subprocess.run(["git", "rev-parse", "--path-format=absolute",
+                                 "--git-common-dir"], cwd=root, capture_output=True,
+                                text=True, timeout=30, check=True).stdout.strip()
+        folders.append(Path(common).parent.parent / "shared" / "kernels")
+    except (OSError, subprocess.SubprocessError):
+        pass
+    for folder in folders:
+        if (folder / FILE_NAME).is_file():
+            return folder / FILE_NAME
+    return None
+
+
+def shape_of(document: dict):
+    number = float.fromhex
+    kind = document["kind"]
+    if kind == "disk":
+        return Disk(number(document["radius"]))
+    if kind == "rod":
+        return Rod(number(document["length"]), number(document["radius"]))
+    if kind == "box":
+        return Box(number(document["width"]), number(document["height"]))
+    if kind == "polygon":
+        return Polygon(tuple((number(x), number(y)) for x, y in document["points"]))
+    raise ValueError(f"{FILE_NAME}: shape kind {kind!r}; allowed: disk, rod, box, polygon")
+
+
+def body_of(name: str, document: dict) -> Body:
+    return Body(name, shape_of(document["shape"]), 1.0,
+                tuple(float.fromhex(v) for v in document["position"]),
+                float.fromhex(document["angle"]))
+
+
+def vector(values) -> np.ndarray:
+    return np.array([float.fromhex(v) for v in values])
+
+
+@pytest.fixture(scope="module")
+def cases():
+    path = data_file()
+    if path is None:
+        pytest.skip(f"no {FILE_NAME} beside this checkout (../shared/kernels/ or "
+                    f"${ENVIRONMENT}): the other machine's contacts are not here")
+    return json.loads(path.read_text())["cases"]
+
+
+def test_another_machines_contacts_are_this_machines_within_the_derived_bound(cases):
+    decided = undecided = 0
+    kinds = set()
+    for case in cases:
+        a, b = body_of("a", case["a"]), body_of("b", case["b"])
+        tolerance = float.fromhex(case["tolerance"])
+        here = geometry.body_contact(a, b, tolerance)
+        bound = contact_bound(a, b, tolerance)
+        # a bound that says nothing would pass anything
+        assert max(bound.normal, bound.gap / (1.0 + abs(here.gap))) < 1e-6, (case["case"], bound)
+        for name in RECORDED:
+            there = case[name]
+            what = f"case {case['case']}, {name}: {bound}"
+            gap = abs(float.fromhex(there["gap"]) - here.gap)
+            assert gap <= 2 * bound.gap, f"gap {gap:.3g} > {2 * bound.gap:.3g} in {what}"
+            normal = min(np.abs(vector(there["normal"]) - n).max() for n in bound.normals)
+            assert normal <= 2 * bound.normal, f"normal {normal:.3g} in {what}"
+            if bound.undecided:
+                continue
+            assert there["point_count"] == here.point_count, what
+            point = np.abs(vector(there["point"]) - here.point).max()
+            assert point <= 2 * bound.point, f"point {point:.3g} in {what}"
+        if not bound.undecided:
+            kinds.add((here.gap > 0, here.point_count))
+        decided += not bound.undecided
+        undecided += bool(bound.undecided)
+    # cores apart and overlapping, one point and two, are among the decided cases
+    assert {apart for apart, _ in kinds} == {True, False}, kinds
+    assert {count for _, count in kinds} == {1, 2}, kinds
+    assert decided > undecided, (decided, undecided)
