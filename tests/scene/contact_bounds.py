@@ -159,8 +159,12 @@ def contact_bound(body_a: Body, body_b: Body, tolerance: float) -> ContactBound:
     else:
         lengths = [float(math.hypot(*(end - start))) for core in (core_a, core_b)
                    for start, end in _edges(core) if np.any(end != start)]
-        shortest = min(lengths, default=math.inf)
-        normal = direction_bound(2.0 * r + math.sqrt(2.0) * U * shortest, shortest) + gamma(3)
+        if lengths:
+            shortest = min(lengths)
+            normal = direction_bound(2.0 * r + math.sqrt(2.0) * U * shortest,
+                                     shortest) + gamma(3)
+        else:  # two coincident points: the normal is the fixed (0, 1), exact
+            normal = 0.0
         projection = largest * math.sqrt(2.0) * normal + r + gamma(2) * 2.0 * largest
         separation = contact.gap + radii
         gap = 2.0 * projection + U * abs(separation) + gamma(2) * (abs(separation) + radii)
