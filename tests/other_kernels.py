@@ -13,14 +13,17 @@ differ in the last bits between such kernels as they do between CPUs; these test
 on each (issue 35): a kernel a CPU lacks cannot be tried here, so a bound found by trying
 kernels is not a bound, and the tests compare within derived bounds (tests/error_bounds.py).
 
-The passes, chosen to keep ``make test`` short (about 25 s of CPU each on the development
-machine, -n 1):
+The passes, chosen to keep ``make test`` short:
 
 * Prescott with every SIMD target numpy dispatches to at run time turned off
   (``NPY_DISABLE_CPU_FEATURES``: numpy then runs its baseline loops): the whole
-  kernel_sensitive set, the oldest arithmetic against this run's newest;
-* each other core type the CPU can run: the whole kernel_sensitive set too, numpy's SIMD as
-  it is (its loops' results do not depend on the BLAS kernel).
+  kernel_sensitive set, the oldest arithmetic against this run's newest (about 21 s of CPU
+  on the development machine);
+* each other core type the CPU can run: the kernel_sensitive tests but those marked
+  ``blas_free`` (the contact geometry compared with its reference form, bit for bit: their
+  arithmetic takes no BLAS product, so a BLAS kernel cannot move them, and
+  ``test_contacts_are_the_same_bits_under_another_kernel``, which is run, checks exactly
+  that under each), numpy's SIMD as it is (about 12 s of CPU each).
 
 Off x86-64 the BLAS kernel is left as it is (one pass, SIMD off, with a note). Every pass
 runs even when one fails; the report at the end names each kernel with its outcome and time,
@@ -31,6 +34,7 @@ from __future__ import annotations
 
 import os
 import platform
+import resource
 import subprocess
 import sys
 import time
@@ -102,18 +106,28 @@ def kernel_environment(core_type: str | None = OLD_KERNEL,
     return environment, changes
 
 
-def passes(flags: set[str]) -> list[tuple[str | None, bool]]:
-    """``(core type, SIMD off)`` of each pass (module docstring)."""
+#: The tests of every pass, and of the passes under the other BLAS core types.
+ALL_TESTS, BLAS_TESTS = "kernel_sensitive", "kernel_sensitive and not blas_free"
+
+
+def passes(flags: set[str]) -> list[tuple[str | None, bool, str]]:
+    """``(core type, SIMD off, pytest marker expression)`` of each pass (module docstring)."""
     if platform.machine().lower() not in ("x86_64", "amd64"):
-        return [(None, True)]
+        return [(None, True, ALL_TESTS)]
     others = [name for name in runnable_core_types(flags) if name != OLD_KERNEL]
-    return [(OLD_KERNEL, True)] + [(name, False) for name in others]
+    return [(OLD_KERNEL, True, ALL_TESTS)] + [(name, False, BLAS_TESTS) for name in others]
+
+
+def children_cpu_seconds() -> float:
+    """User and system CPU time of the finished child processes so far (s)."""
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
 
 
 def main(arguments: list[str]) -> int:
     flags = cpu_flags()
     planned = passes(flags)
-    names = [core_type or "as is" for core_type, _ in planned]
+    names = [core_type or "as is" for core_type, _, _ in planned]
     lacking = [name for name in CORE_TYPES if name not in names]
     print(f"kernel_sensitive tests again under {len(planned)} kernels: {', '.join(names)}"
           + (f" (this CPU cannot run {', '.join(lacking)})" if lacking else ""), flush=True)
@@ -121,18 +135,19 @@ def main(arguments: list[str]) -> int:
         return 0
     root = Path(__file__).resolve().parent.parent
     outcomes = []
-    for core_type, simd_off in planned:
+    for core_type, simd_off, tests in planned:
         environment, changes = kernel_environment(core_type, simd_off)
-        print(f"\n== kernel_sensitive tests with {', '.join(changes)}", flush=True)
-        started = time.monotonic()
-        status = subprocess.call([sys.executable, "-m", "pytest", "-q", "-m",
-                                  "kernel_sensitive", *arguments], cwd=root, env=environment)
-        outcomes.append((", ".join(changes), status, time.monotonic() - started))
-    print("\nkernel_sensitive tests on other kernels:")
-    for changes, status, seconds in outcomes:
+        print(f"\n== {tests} with {', '.join(changes)}", flush=True)
+        started, cpu = time.monotonic(), children_cpu_seconds()
+        status = subprocess.call([sys.executable, "-m", "pytest", "-q", "-m", tests,
+                                  *arguments], cwd=root, env=environment)
+        outcomes.append((f"{', '.join(changes)}: {tests}", status,
+                         time.monotonic() - started, children_cpu_seconds() - cpu))
+    print("\nkernel_sensitive tests on other kernels (wall time, CPU time of the pass):")
+    for changes, status, seconds, cpu in outcomes:
         verdict = "passed" if status == 0 else f"FAILED (pytest exit status {status})"
-        print(f"  {verdict:<34} {seconds:6.1f} s  {changes}")
-    return next((status for _, status, _ in outcomes if status != 0), 0)
+        print(f"  {verdict:<34} {seconds:6.1f} s {cpu:6.1f} s CPU  {changes}")
+    return next((status for _, status, _, _ in outcomes if status != 0), 0)
 
 
 if __name__ == "__main__":

@@ -13,7 +13,9 @@ between machines is libm's ``cos`` and ``sin``, the same in both forms (one call
 tests/scene/test_geometry_other_machines.py bounds that and every BLAS rounding of an older
 form against another machine's contacts, and
 :func:`test_contacts_are_the_same_bits_under_another_kernel` reruns the library under the
-oldest kernel.
+oldest kernel. The comparisons that take no BLAS product are marked ``blas_free`` too:
+tests/other_kernels.py runs them with numpy's SIMD off, not again under each BLAS kernel
+(they cannot see it; the rerun test checks that claim under each).
 """
 
 from __future__ import annotations
@@ -208,6 +210,7 @@ TOLERANCES = (geometry.DEFAULT_TOLERANCE, 1e-6)
 
 # ---------------------------------------------------------------------------------- tests
 @pytest.mark.kernel_sensitive
+@pytest.mark.blas_free
 def test_random_pairs_apart_touching_and_overlapping_give_the_reference_contact():
     rng = np.random.default_rng(20261122)
     branches = {"apart": 0, "cores touch or overlap": 0, "two points": 0}
@@ -225,6 +228,7 @@ def test_random_pairs_apart_touching_and_overlapping_give_the_reference_contact(
 
 
 @pytest.mark.kernel_sensitive
+@pytest.mark.blas_free
 def test_faces_lying_exactly_on_faces_give_the_reference_contact():
     # Stacked boxes and polygons touching along a face: two points, exact zeros, ties.
     rng = np.random.default_rng(7)
@@ -245,6 +249,7 @@ def test_faces_lying_exactly_on_faces_give_the_reference_contact():
 
 
 @pytest.mark.kernel_sensitive
+@pytest.mark.blas_free
 def test_ground_contacts_give_the_reference_contact():
     rng = np.random.default_rng(11)
     for _ in range(2000):
@@ -271,6 +276,7 @@ def test_largest_and_smallest_keep_numpys_signed_zero(values):
 
 
 @pytest.mark.kernel_sensitive
+@pytest.mark.blas_free
 def test_contacts_at_several_tolerances_are_each_tolerances_reference_contact():
     # core_contacts shares the support intervals of equal near points between tolerances:
     # random pairs and faces lying flat (where the tolerances pick different near points),
@@ -300,6 +306,7 @@ def test_contacts_at_several_tolerances_are_each_tolerances_reference_contact():
 
 
 @pytest.mark.kernel_sensitive
+@pytest.mark.blas_free
 def test_scene_contact_each_is_scene_contact_at_each_tolerance():
     # The scenario checks' two contacts of a point from one world core per body: ground
     # scenes (resting and lifted bodies, faces flat) and pairs, tolerances in either order.
