@@ -27,7 +27,8 @@ The steps (``u`` the unit roundoff, ``γ_n`` as in tests/error_bounds.py, ``|·|
    * Rounding on the computed cores: ``d`` and ``w`` within ``u`` per component; ``w·d`` within
      ``γ_2 Σ|w_i d_i|`` plus what ``d`` and ``w`` carry; ``|d|²`` within ``γ_2 |d|²``; one
      division: ``t |d|`` within ``γ_6 (|w| + t|d|)``; then ``S + t d`` and ``F − X``, two and
-     one roundings per component: ``√2 (γ_2 (|S|_∞ + t|d|_∞) + u t|d|_∞ + u |v|_∞)``.
+     one roundings per component: ``√2 (γ_2 (|S|_∞ + t|d|_∞) + u t|d|_∞ + u |v|_∞)``, with
+     ``|S|_∞ <= |F|_∞ + t|d|`` (the code takes Euclidean lengths, never smaller).
    * ``δv`` is the sum; the normal ``v / D`` is within :func:`direction_bound` ``(δv, D)``
      plus ``γ_3`` (the sum of squares, the square root and the division); the gap
      ``D − r_a − r_b`` within ``δv + γ_4 (D + r_a + r_b)``; the point (midway between the
@@ -117,7 +118,8 @@ def _difference_bound(r, pair) -> float:
     """``δv`` of step 2 for one vertex-edge pair."""
     distance, on_a, on_b, t, d, w = pair
     moved = 2.0 * r if t in (0.0, 1.0) or d == 0.0 else r * (8.0 + 4.0 * w / d)
-    start = max(np.abs(on_a).max(), np.abs(on_b).max())  # |S|_∞, |F|_∞ bounded alike
+    # |S|_∞ <= |F|_∞ + t|d|, and F is one of the pair's two points
+    start = max(np.abs(on_a).max(), np.abs(on_b).max()) + t * d
     rounded = gamma(6) * (w + t * d) + math.sqrt(2.0) * (
         gamma(2) * (start + t * d) + U * t * d + U * distance)
     return moved + rounded

@@ -35,10 +35,13 @@ RECORDED = ("implementation_skylakex", "implementation_haswell", "reference_skyl
             "reference_haswell")
 
 
-def data_file() -> Path | None:
-    """The other machine's file, or ``None`` where this checkout has none."""
-    root = Path(__file__).resolve().parents[2]
-    folders = [Path(os.environ[ENVIRONMENT])] if os.environ.get(ENVIRONMENT) else []
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def data_file(root: Path = ROOT, environment=os.environ) -> Path | None:
+    """The other machine's file beside the checkout at ``root``, or ``None`` where it has
+    none."""
+    folders = [Path(environment[ENVIRONMENT])] if environment.get(ENVIRONMENT) else []
     folders.append(root.parent / "shared" / "kernels")
     try:  # a git worktree: beside the main checkout
         common = subprocess.run(["git", "rev-parse", "--path-format=absolute",
@@ -134,6 +137,21 @@ def test_another_machines_contacts_are_this_machines_within_the_derived_bound(ca
         decided += outcomes == {True}
         undecided += outcomes != {True}
     assert_checks_have_teeth(kinds, decided, undecided)
+
+
+def test_the_file_is_found_beside_the_checkout_or_where_named_and_else_skipped(tmp_path):
+    clone = tmp_path / "clone"  # not a git checkout, nothing beside it: the test skips
+    clone.mkdir()
+    assert data_file(clone, {}) is None
+    assert data_file(clone, {ENVIRONMENT: str(tmp_path / "absent")}) is None
+    named = tmp_path / "named"
+    named.mkdir()
+    (named / FILE_NAME).write_text("{}")
+    assert data_file(clone, {ENVIRONMENT: str(named)}) == named / FILE_NAME
+    beside = tmp_path / "shared" / "kernels"
+    beside.mkdir(parents=True)
+    (beside / FILE_NAME).write_text("{}")
+    assert data_file(clone, {}) == beside / FILE_NAME
 
 
 def blas_world_core(body):
