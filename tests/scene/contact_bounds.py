@@ -19,10 +19,11 @@ The steps (``u`` the unit roundoff, ``γ_n`` as in tests/error_bounds.py, ``|·|
    (``d = T − S``, ``w = X − S``, ``t = w·d / |d|²`` clamped to ``[0, 1]``), ``v = F − X``
    (signed from A to B) and ``D = |v|``.
 
-   * Moving every core point by at most ``r`` moves ``v`` by at most ``r (8 + 4|w|/|d|)``:
-     ``X`` moves ``r``; the line through ``S`` and ``T`` moves ``r`` and turns its unit
-     direction by at most ``4r/|d|`` (:func:`direction_bound` of ``2r``), which moves the
-     foot by ``2r + 4r|w|/|d|`` along it and ``4r t`` with its length (at an end, ``F`` is
+   * Moving every core point by at most ``r`` moves ``v`` by at most
+     ``4r + (|w| + t|d|) δd`` with ``δd`` = :func:`direction_bound` ``(2r, |d|)`` (about
+     ``r (8 + 4|w|/|d|)``): ``X`` moves ``r``, ``S`` moves ``r``, ``w`` by ``2r`` and the
+     edge's unit direction by ``δd``, so the foot's distance ``w·d/|d|`` along it moves by
+     ``2r + |w| δd`` and the foot by that plus ``r`` plus ``t|d| δd`` (at an end, ``F`` is
      that end: ``2r`` in all).
    * Rounding on the computed cores: ``d`` and ``w`` within ``u`` per component; ``w·d`` within
      ``γ_2 Σ|w_i d_i|`` plus what ``d`` and ``w`` carry; ``|d|²`` within ``γ_2 |d|²``; one
@@ -117,7 +118,8 @@ def _pairs(core_a, core_b):
 def _difference_bound(r, pair) -> float:
     """``δv`` of step 2 for one vertex-edge pair."""
     distance, on_a, on_b, t, d, w = pair
-    moved = 2.0 * r if t in (0.0, 1.0) or d == 0.0 else r * (8.0 + 4.0 * w / d)
+    moved = (2.0 * r if t in (0.0, 1.0) or d == 0.0
+             else 4.0 * r + (w + t * d) * direction_bound(2.0 * r, d))
     # |S|_∞ <= |F|_∞ + t|d|, and F is one of the pair's two points
     start = max(np.abs(on_a).max(), np.abs(on_b).max()) + t * d
     rounded = gamma(6) * (w + t * d) + math.sqrt(2.0) * (
