@@ -18,6 +18,7 @@ is accepted: the gap is compared still, the normal against each outcome's, the p
 from __future__ import annotations
 
 import json
+import math
 import os
 import subprocess
 from pathlib import Path
@@ -189,3 +190,80 @@ def test_a_blas_form_of_the_contacts_is_within_the_derived_bound(monkeypatch):
             else:
                 undecided += 1
     assert_checks_have_teeth(kinds, decided, undecided)
+
+
+def exact_apart_contact(body_a: Body, body_b: Body):
+    """The contact of two bodies whose cores are apart, in exact arithmetic (rationals; one
+    square root to 50 digits): ``(gap, normal, point)`` as Decimals, from the library's own
+    ``cos`` and ``sin`` taken as exact (their libm error is step 1's other part)."""
+    from decimal import Decimal, localcontext
+    from fractions import Fraction
+
+    def core(body):
+        local, radius = geometry.local_core(body.shape)
+        c, s = Fraction(math.cos(body.angle)), Fraction(math.sin(body.angle))
+        px, py = (Fraction(v) for v in body.position)
+        return [(Fraction(x) * c - Fraction(y) * s + px, Fraction(x) * s + Fraction(y) * c + py)
+                for x, y in local.tolist()], Fraction(radius)
+
+    def edges(points):
+        return [(points[0], points[-1])] if len(points) <= 2 else list(
+            zip(points, points[1:] + points[:1]))
+
+    def foot(x, start, end):
+        d = (end[0] - start[0], end[1] - start[1])
+        length2 = d[0] * d[0] + d[1] * d[1]
+        if length2 == 0:
+            return start
+        t = ((x[0] - start[0]) * d[0] + (x[1] - start[1]) * d[1]) / length2
+        t = min(Fraction(1), max(Fraction(0), t))
+        return (start[0] + t * d[0], start[1] + t * d[1])
+
+    (core_a, radius_a), (core_b, radius_b) = core(body_a), core(body_b)
+    pairs = [(x, foot(x, *edge)) for x in core_a for edge in edges(core_b)]
+    pairs += [(foot(x, *edge), x) for x in core_b for edge in edges(core_a)]
+    on_a, on_b = min(pairs, key=lambda pair: (pair[1][0] - pair[0][0]) ** 2
+                     + (pair[1][1] - pair[0][1]) ** 2)
+    with localcontext() as context:
+        context.prec = 50
+
+        def decimal(value):
+            return Decimal(value.numerator) / Decimal(value.denominator)
+
+        vx, vy = decimal(on_b[0] - on_a[0]), decimal(on_b[1] - on_a[1])
+        distance = (vx * vx + vy * vy).sqrt()
+        normal = (vx / distance, vy / distance)
+        ra, rb = decimal(radius_a), decimal(radius_b)
+        point = tuple((decimal(on_a[i]) + ra * normal[i] + decimal(on_b[i]) - rb * normal[i]) / 2
+                      for i in range(2))
+        return distance - ra - rb, normal, point
+
+
+def test_the_derived_bound_holds_against_exact_arithmetic():
+    # The bound is a claim about the distance from the exact contact: checked against exact
+    # rational arithmetic where the cores are apart and one point touches (steps 1 and 2).
+    from decimal import Decimal
+
+    from tests.scene import test_geometry_reference as reference
+
+    rng = np.random.default_rng(2035)
+    checked = 0
+    for _ in range(400):
+        a = Body("a", reference.random_shape(rng), 1.0, (0.0, 0.0), reference.random_angle(rng))
+        position = rng.uniform(-1.0, 1.0, 2) * float(rng.choice([0.1, 0.5, 1.0]))
+        b = Body("b", reference.random_shape(rng), 1.0, (float(position[0]), float(position[1])),
+                 reference.random_angle(rng))
+        here = geometry.body_contact(a, b)
+        bound = contact_bound(a, b, geometry.DEFAULT_TOLERANCE)
+        radii = geometry.local_core(a.shape)[1] + geometry.local_core(b.shape)[1]
+        if here.gap + radii <= 0.0 or here.point_count != 1 or bound.undecided:
+            continue
+        gap, normal, point = exact_apart_contact(a, b)
+        what = (a, b, bound)
+        assert abs(Decimal(here.gap) - gap) <= Decimal(bound.gap), what
+        assert max(abs(Decimal(float(v)) - n) for v, n in zip(here.normal, normal)) <= Decimal(
+            bound.normal), what
+        assert max(abs(Decimal(float(v)) - p) for v, p in zip(here.point, point)) <= Decimal(
+            bound.point), what
+        checked += 1
+    assert checked > 100, checked
