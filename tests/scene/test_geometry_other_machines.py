@@ -13,6 +13,10 @@ contact_bounds.py derives it; tests/error_bounds.py holds the formulas): a deriv
 count of units in the last place. Where a decision (which pair is closest, which axis
 separates most, which points are near, one point or two) is within its band, either outcome
 is accepted: the gap is compared still, the normal against each outcome's, the point not.
+
+Two checks need no file: a BLAS form of the contacts (every product through numpy's ``@``,
+under whichever kernel tests/other_kernels.py chose) within the same bound, and the bound
+itself against the exact contact (rational arithmetic) where the cores are apart.
 """
 
 from __future__ import annotations
