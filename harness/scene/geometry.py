@@ -83,15 +83,19 @@ def turned_core(body: Body) -> tuple[np.ndarray, float]:
     CPU')."""
     points, radius = local_core(body.shape)
     c, s = math.cos(body.angle), math.sin(body.angle)
-    x, y = points[:, 0], points[:, 1]
-    return np.stack([x * c - y * s, x * s + y * c], axis=1), radius
+    # plain floats: a core has a few points, where numpy's cost per call exceeds the arithmetic
+    turned = [(x * c - y * s, x * s + y * c) for x, y in points.tolist()]
+    return np.array(turned, dtype=float).reshape(-1, 2), radius
 
 
-def _along(core: np.ndarray, direction) -> list[float]:
-    """``core @ direction`` for a 2-D direction, as a list, elementwise (``x d_x + y d_y``,
-    one rounding per operation on every CPU, never through a BLAS kernel)."""
+def _along(points, direction) -> list[float]:
+    """``core @ direction`` for a 2-D direction and a core as an array or a list of ``(x, y)``,
+    as a list, written out (``x d_x + y d_y``: one rounding per operation on every CPU, never
+    through a BLAS kernel; plain floats, as :func:`turned_core`)."""
+    if isinstance(points, np.ndarray):
+        points = points.tolist()
     dx, dy = float(direction[0]), float(direction[1])
-    return (core[:, 0] * dx + core[:, 1] * dy).tolist()
+    return [x * dx + y * dy for x, y in points]
 
 
 def world_core(body: Body) -> tuple[np.ndarray, float]:
@@ -338,9 +342,11 @@ def core_separation(core_a: np.ndarray, core_b: np.ndarray):
     axes = _axis_list(edges_a) + _axis_list(edges_b)
     if not axes:  # two coincident points (concentric disks): no defined direction
         axes = [(0.0, 1.0)]
-    # Each axis's products with both cores (:func:`_along`, elementwise: no BLAS kernel).
-    along_b = [_along(core_b, axis) for axis in axes]
-    along_a = [_along(core_a, axis) for axis in axes]
+    # Each axis's products with both cores, x a_x + y a_y as :func:`_along` writes them (no
+    # BLAS kernel), for every axis at once: numpy's elementwise products and sum, broadcast.
+    columns = np.array(axes)
+    along_b = (columns[:, :1] * core_b[:, 0] + columns[:, 1:] * core_b[:, 1]).tolist()
+    along_a = (columns[:, :1] * core_a[:, 0] + columns[:, 1:] * core_a[:, 1]).tolist()
     # Python's min and max may keep another zero than numpy's; a zero separation becomes
     # min(0.0, ±0.0) = 0.0 below either way, and ±0.0 tie in the argmax.
     separations = [min(b) - max(a) for a, b in zip(along_a, along_b)]
