@@ -12,7 +12,15 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from tests.error_bounds import LIBM_RELATIVE, U, direction_bound, dot_bound, gamma
+from tests.error_bounds import (
+    LIBM_RELATIVE,
+    U,
+    bilinear_bound,
+    direction_bound,
+    dot_bound,
+    gamma,
+    solve_backward_bounds,
+)
 
 finite = st.floats(min_value=-1e6, max_value=1e6, allow_nan=False, allow_infinity=False)
 
@@ -94,3 +102,53 @@ def test_direction_bound_holds(length, angle, relative_error, error_angle):
 def test_direction_bound_is_infinite_where_no_direction_is_known():
     assert direction_bound(1.0, 1.0) == math.inf
     assert direction_bound(1e-3, 1.0) == pytest.approx(2e-3 / (1 - 1e-3))
+
+
+def exact_solve(matrix, rhs):
+    """``M⁻¹ b`` in rational arithmetic (Gauss–Jordan on Fractions)."""
+    size = len(matrix)
+    rows = [[Fraction(v) for v in row] + [Fraction(b)] for row, b in zip(matrix, rhs)]
+    for k in range(size):
+        pivot = next(i for i in range(k, size) if rows[i][k] != 0)
+        rows[k], rows[pivot] = rows[pivot], rows[k]
+        for i in range(size):
+            if i != k:
+                factor = rows[i][k] / rows[k][k]
+                rows[i] = [a - factor * b for a, b in zip(rows[i], rows[k])]
+    return [rows[i][size] / rows[i][i] for i in range(size)]
+
+
+def cholesky_solve(matrix, rhs):
+    """``M⁻¹ b`` by the Cholesky factor ``L`` and two substitutions, ``L y = b``, ``Lᵀ x = y``."""
+    factor = np.linalg.cholesky(matrix).tolist()
+    size = len(factor)
+    y = []
+    for i in range(size):
+        y.append((rhs[i] - sum(factor[i][k] * y[k] for k in range(i))) / factor[i][i])
+    x = [0.0] * size
+    for i in reversed(range(size)):
+        x[i] = (y[i] - sum(factor[k][i] * x[k] for k in range(i + 1, size))) / factor[i][i]
+    return np.array(x)
+
+
+def test_bilinear_bound_holds_for_both_solves_against_exact_rationals():
+    # w_iᵀ M⁻¹ w_j by numpy's LU solve and by a Cholesky solve, each within its own bound of
+    # the exact value, on random SPD matrices up to κ ~ 1e6 (graded diagonals).
+    rng = np.random.default_rng(9)
+    worst = 0.0
+    for _ in range(200):
+        size = int(rng.integers(2, 7))
+        root = rng.normal(size=(size, size)) * 10.0 ** rng.uniform(-3, 0, size)
+        matrix = root @ root.T + 1e-3 * np.eye(size)
+        wi, wj = rng.normal(size=(2, size))
+        backward = solve_backward_bounds(matrix)
+        exact = sum(Fraction(a) * b for a, b in zip(wi.tolist(), exact_solve(matrix.tolist(),
+                                                                               wj.tolist())))
+        solves = {"lu": np.linalg.solve(matrix, wj), "cholesky": cholesky_solve(matrix, wj)}
+        x_i = np.linalg.solve(matrix, wi)
+        for method, x_j in solves.items():
+            bound = bilinear_bound(backward[method], x_i, x_j, wi)
+            error = abs(Fraction(float(wi @ x_j)) - exact)
+            assert error <= Fraction(bound), (method, float(error), bound)
+            worst = max(worst, float(error) / bound)
+    assert worst > 1e-4  # the bound is not vacuous: some draws come within 1e4 of it
