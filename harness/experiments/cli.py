@@ -15,13 +15,14 @@ import json
 import sys
 import time
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 import planar_impact as pi
+from harness import bounds
 from harness.engines import EngineNotInstalled, engine_names, load_engine, preset_label
 from harness.scene import ellipse
+from harness.store.files import output_file_problem, write_text_atomically
 
 from . import (
     analysis,
@@ -63,14 +64,29 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="also write the aggregates (with the data's SHA-256) as JSON")
 
 
+def option_problem(args) -> str | None:
+    """The first count outside its bounds (:data:`harness.bounds.BOUNDS`) or a ``--json``
+    that cannot be written (:func:`harness.store.files.output_file_problem`: a link, a
+    missing or read-only directory), as one line; None when every option can be used.
+    Checked before any work."""
+    for option, value in (("replicates", args.replicates), ("seed", args.seed),
+                          ("workers", args.workers)):
+        try:
+            if value is not None:
+                bounds.check(f"--{option} {value}", option, value)
+        except bounds.OutOfBounds as out:
+            return str(out)
+    if args.json is not None:
+        reason = output_file_problem(args.json)
+        if reason is not None:
+            return f"--json {args.json}: {reason}"
+    return None
+
+
 def main(args) -> int:
-    if args.replicates < 10:
-        print(f"impact-harness experiments: --replicates {args.replicates}: at least 10",
-              file=sys.stderr)
-        return 2
-    if args.workers is not None and args.workers < 1:
-        print(f"impact-harness experiments: --workers {args.workers}: at least 1",
-              file=sys.stderr)
+    problem = option_problem(args)
+    if problem is not None:
+        print(f"impact-harness experiments: {problem}", file=sys.stderr)
         return 2
     registered = engine_names()  # those registered at run time too
     engines = (list(registered) if args.engines == "all" else [] if args.engines == "none"
@@ -79,10 +95,6 @@ def main(args) -> int:
     if unknown:
         print(f"impact-harness experiments: --engines: unknown {', '.join(unknown)}; allowed: "
               f"all, none or {', '.join(registered)}", file=sys.stderr)
-        return 2
-    if args.json and Path(args.json).exists() and not Path(args.json).is_file():
-        print(f"impact-harness experiments: --json {args.json}: exists and is not a regular "
-              "file (only a regular file is written over)", file=sys.stderr)
         return 2
     output: dict = {"objective": args.objective, "objective_means": metric.OBJECTIVES[
         args.objective], "post_speeds": args.post_speeds}
@@ -110,9 +122,8 @@ def main(args) -> int:
         [run.engine if run.engine is not None else run.name for run in runs])
     output["kharaz2001"] = kharaz_section()
     output["kharaz2001"]["engines"] = kharaz_engines_table(runs)
-    if args.json:
-        Path(args.json).write_text(json.dumps(output, indent=1, default=_plain) + "\n",
-                                   encoding="utf-8")
+    if args.json:  # atomically, never through a link (checked before the work too)
+        write_text_atomically(args.json, json.dumps(output, indent=1, default=_plain) + "\n")
     return 0
 
 

@@ -332,3 +332,21 @@ def test_the_shipped_knobs_live_on_the_engine_classes():
         assert cls.calibration_knobs or cls.no_calibration_knobs_why != \
             Engine.no_calibration_knobs_why, f"{name}: no knobs and no reason of its own"
         assert {knob for knob, _ in cls.calibration_knobs} <= set(cls.setting_docs)
+
+
+@pytest.mark.parametrize("option, value", [("--drops", "100000000"), ("--drops", "1"),
+                                           ("--replicates", "1000000000000"),
+                                           ("--law-mu", "nan"), ("--law-e", "1.5"),
+                                           ("--law-mu", "-0.1")])
+def test_cli_bounds_every_count_and_setting_before_any_work(option, value, capsys,
+                                                             monkeypatch):
+    """``--drops 100000000`` grew to 23.8 GB before it was killed; ``--law-mu nan`` ran."""
+    from harness.experiments import calibrate_cli
+
+    def no_work(name):
+        raise AssertionError("work started before the options were checked")
+
+    monkeypatch.setattr(calibrate_cli, "load_engine", no_work)
+    assert cli_main(["calibrate", "pymunk", "--to", "poisson", option, value]) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert f"{option} {value}: " in line and "out of range; allowed: " in line

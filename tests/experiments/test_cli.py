@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import pytest
+
 from harness import cli
 from harness.experiments import registry
 
@@ -70,3 +72,61 @@ def test_the_json_holds_aggregates_only(synthetic_copy, tmp_path, monkeypatch, c
         return 0
 
     assert longest_list(section) < truth["drops"] / 10
+
+
+@pytest.mark.parametrize("option, value", [("--replicates", "1000000000000"),
+                                           ("--replicates", "3"), ("--seed", "-1"),
+                                           ("--workers", "0")])
+def test_every_count_is_bounded_before_any_work(option, value, monkeypatch, capsys):
+    """``--replicates 10^12`` was accepted and would have run for ever; the bound is in
+    harness/bounds.py's table, one line names the option, the value and what is allowed."""
+    from harness.experiments import cli as experiments_cli
+
+    monkeypatch.setattr(experiments_cli, "run_engines", _no_work)
+    assert cli.main(["experiments", option, value]) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert f"{option} {value}: " in line and "out of range; allowed: an integer" in line
+
+
+def _no_work(*args, **kwargs):
+    raise AssertionError("work started before the options were checked")
+
+
+def test_json_through_a_link_is_refused_and_its_target_kept(tmp_path, monkeypatch, capsys):
+    from harness.experiments import cli as experiments_cli
+
+    monkeypatch.setattr(experiments_cli, "run_engines", _no_work)
+    target = tmp_path / "precious.txt"
+    target.write_text("keep me")
+    link = tmp_path / "out.json"
+    link.symlink_to(target)
+    assert cli.main(["experiments", "--json", str(link)]) == 2
+    assert "symbolic link" in capsys.readouterr().err
+    assert target.read_text() == "keep me" and link.is_symlink()
+
+
+@pytest.mark.parametrize("where", ["missing", "read-only"])
+def test_json_into_a_directory_it_cannot_write_is_refused_first(where, tmp_path, monkeypatch,
+                                                                 capsys):
+    import os
+
+    from harness.experiments import cli as experiments_cli
+
+    monkeypatch.setattr(experiments_cli, "run_engines", _no_work)
+    directory = tmp_path / "out"
+    if where == "read-only":
+        directory.mkdir()
+        directory.chmod(0o500)
+        if os.access(directory, os.W_OK):  # root writes anyway
+            pytest.skip("running as a user who writes into read-only directories")
+    assert cli.main(["experiments", "--json", str(directory / "x.json")]) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert f"--json {directory / 'x.json'}: its directory" in line
+
+
+def test_json_is_written_atomically_over_a_regular_file(tmp_path, monkeypatch, capsys):
+    monkeypatch.delenv(registry.FAZELI_2017.env_var, raising=False)
+    out = tmp_path / "out.json"
+    out.write_text("old")
+    assert cli.main(["experiments", "--engines", "none", "--json", str(out)]) == 0
+    assert out.read_text().startswith("{") and not list(tmp_path.glob("*.tmp"))
