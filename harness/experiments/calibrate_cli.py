@@ -15,8 +15,9 @@ from harness.engines import (
     preset_label,
     preset_role,
 )
+from harness.store.cache import ResultCache
 
-from . import calibrate, drops_engines, fazeli, registry
+from . import cached, calibrate, drops_engines, fazeli, registry
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -48,6 +49,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--law-e", type=float, default=0.6,
                         help="--to LAW: the law's e (default 0.6, a cell of the quick "
                              "grid)")
+    parser.add_argument("--no-cache", action="store_true",
+                        help="compute again (by default a rerun with the same data, code, "
+                             "installed versions and options reads the result cache)")
 
 
 def _values(values) -> str:
@@ -95,9 +99,17 @@ def main(args) -> int:
                   file=sys.stderr)
             return 2
         presets = [role]
+    cache = None if args.no_cache else ResultCache()
+    problem = cached.cache_problem(cache)
+    if problem is not None:
+        print(f"impact-harness calibrate: the cache {cache.root}: {problem} (or --no-cache)",
+              file=sys.stderr)
+        return 2
+    data_sha256 = None
     if args.to == "data":
         try:
             data = fazeli.load(registry.locate(registry.FAZELI_2017, args.data))
+            data_sha256 = data.hashes
         except registry.DataMissing as missing:
             print(f"impact-harness calibrate: --to data: {missing}", file=sys.stderr)
             return 2
@@ -112,8 +124,18 @@ def main(args) -> int:
     else:
         impacts, thetas = calibrate.drop_population(args.drops, seed=args.seed)
         sample = {"drops": args.drops, "of": "a generated population", "seed": args.seed}
+    progress = cached.Progress("impact-harness calibrate")
+    settings = {"engine": engine.name, "to": args.to, "grid": args.grid, "drops": args.drops,
+                "seed": args.seed, "replicates": args.replicates, "law_mu": args.law_mu,
+                "law_e": args.law_e}
     for preset in presets:
-        print(calibrate.summary(calibrate.calibrate(
-            engine, preset, impacts, thetas, args.to, args.grid, args.law_mu, args.law_e,
-            sample, replicates=args.replicates, seed=args.seed)))
+        def compute(preset=preset) -> dict:
+            print(calibrate.summary(calibrate.calibrate(
+                engine, preset, impacts, thetas, args.to, args.grid, args.law_mu, args.law_e,
+                sample, replicates=args.replicates, seed=args.seed, progress=progress.step)))
+            return {}
+
+        progress(f"{engine.name} ({preset_label(engine.name, preset)})")
+        cached.printed_once(cache, cached.payload("calibrate", {**settings, "preset": preset},
+                                                  data_sha256), compute, progress)
     return 0

@@ -119,14 +119,14 @@ def calibration_sample(drops: int, seed: int, count: int = CALIBRATION_DROPS) ->
 
 
 def calibrate_engine(engine, preset: str, target: MeasuredImpacts, thetas, seed: int,
-                     count: int = CALIBRATION_DROPS,
-                     replicates: int = calibrate.REPLICATES) -> calibrate.Calibration:
+                     count: int = CALIBRATION_DROPS, replicates: int = calibrate.REPLICATES,
+                     progress=lambda text: None) -> calibrate.Calibration:
     """``engine`` under ``preset`` calibrated to the drops of :func:`calibration_sample`."""
     rows = calibration_sample(len(target), seed, count)
     return calibrate.calibrate(engine, preset, target.subset(rows), np.asarray(thetas)[rows],
                                "data", sample={"drops": int(rows.size), "of": len(target),
                                                "seed": seed, "from": "training half"},
-                               replicates=replicates, seed=seed)
+                               replicates=replicates, seed=seed, progress=progress)
 
 
 def compute(target: MeasuredImpacts, thetas, law_fits: dict, engine_runs, *, seed: int = 0,
@@ -177,7 +177,9 @@ def compute(target: MeasuredImpacts, thetas, law_fits: dict, engine_runs, *, see
                                                                replicates, seed)}}
         found = calibrations.get((engine.name, preset))
         if found is None:
-            found = calibrate_engine(engine, preset, target, thetas, seed, calibration_drops)
+            found = calibrate_engine(engine, preset, target, thetas, seed, calibration_drops,
+                                     # a cached.Progress tells the cells every 2 s at most
+                                     progress=getattr(progress, "step", progress))
         row.update(calibrated_row(engine, preset, found, thetas, held, on_held,
                                   reference_held, seed, replicates))
         if not curves and row["calibrated"] is not None:

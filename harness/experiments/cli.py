@@ -22,10 +22,12 @@ import planar_impact as pi
 from harness import bounds
 from harness.engines import EngineNotInstalled, engine_names, load_engine, preset_label
 from harness.scene import ellipse
+from harness.store.cache import ResultCache
 from harness.store.files import output_file_problem, write_text_atomically
 
 from . import (
     analysis,
+    cached,
     calibrated_errors,
     drops_engines,
     engine_curves,
@@ -62,6 +64,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "'none', or names separated by commas")
     parser.add_argument("--json", metavar="PATH", default=None,
                         help="also write the aggregates (with the data's SHA-256) as JSON")
+    parser.add_argument("--no-cache", action="store_true",
+                        help="compute everything again (by default a rerun with the same data, "
+                             "code, installed versions and options reads the result cache)")
 
 
 def option_problem(args) -> str | None:
@@ -96,8 +101,12 @@ def main(args) -> int:
         print(f"impact-harness experiments: --engines: unknown {', '.join(unknown)}; allowed: "
               f"all, none or {', '.join(registered)}", file=sys.stderr)
         return 2
-    output: dict = {"objective": args.objective, "objective_means": metric.OBJECTIVES[
-        args.objective], "post_speeds": args.post_speeds}
+    cache = None if args.no_cache else ResultCache()
+    problem = cached.cache_problem(cache)
+    if problem is not None:
+        print(f"impact-harness experiments: the cache {cache.root}: {problem} (or --no-cache)",
+              file=sys.stderr)
+        return 2
     try:
         directory = registry.locate(registry.FAZELI_2017, args.data)
         data = fazeli.load(directory)
@@ -107,27 +116,42 @@ def main(args) -> int:
     except registry.DataInvalid as invalid:
         print(f"impact-harness experiments: {invalid}", file=sys.stderr)
         return 2
+    progress = cached.Progress("impact-harness experiments")
+    settings = {"objective": args.objective, "post_speeds": args.post_speeds,
+                "replicates": args.replicates, "seed": args.seed, "engines": engines}
+    found = cached.printed_once(
+        cache, cached.payload("experiments", settings, None if data is None else data.hashes),
+        lambda: {"output": compute(args, data, engines, progress)}, progress)
+    if args.json:  # atomically, never through a link (checked before the work too)
+        write_text_atomically(args.json, json.dumps(found["output"], indent=1) + "\n")
+    return 0
+
+
+def compute(args, data: fazeli.FazeliData | None, engines: list[str], progress) -> dict:
+    """Everything the command prints (printed as it goes) and its ``--json`` document, as
+    plain JSON."""
+    output: dict = {"objective": args.objective, "objective_means": metric.OBJECTIVES[
+        args.objective], "post_speeds": args.post_speeds}
     drops = None
     if data is not None:
-        output["fazeli2017"], target, fit = fazeli_section(data, args)
+        output["fazeli2017"], target, fit = fazeli_section(data, args, progress)
         thetas, residual = drops_engines.jacobian_angles(target, data.pre_impact_angles)
         drops = (target, thetas, fit)
-    runs = run_engines(engines, drops)  # each engine loaded, each preset run, once
+    runs = run_engines(engines, drops, progress)  # each engine loaded, each preset run, once
     if data is not None:
         output["fazeli2017"]["engines_on_drops"] = drops_engines_table(runs, fit, residual)
         output["fazeli2017"]["calibrated_errors"] = calibrated_errors_table(
-            runs, target, thetas, output["fazeli2017"]["laws"], args)
+            runs, target, thetas, output["fazeli2017"]["laws"], args, progress)
     output["ellipse_polygons"] = ellipse_section(data)
+    progress("each engine's ellipse against the true one")
     output["ellipse_polygons"]["engines"] = ellipse_engines_section(
         [run.engine if run.engine is not None else run.name for run in runs])
     output["kharaz2001"] = kharaz_section()
     output["kharaz2001"]["engines"] = kharaz_engines_table(runs)
-    if args.json:  # atomically, never through a link (checked before the work too)
-        write_text_atomically(args.json, json.dumps(output, indent=1, default=_plain) + "\n")
-    return 0
+    return json.loads(json.dumps(output, default=_plain))
 
 
-def fazeli_section(data: fazeli.FazeliData, args):
+def fazeli_section(data: fazeli.FazeliData, args, progress=lambda text: None):
     """The drops' part of the output without the engines; returns it, the impacts the laws
     were fitted to and Poisson's fit (at which the engines run)."""
     impacts = data.impacts
@@ -142,6 +166,7 @@ def fazeli_section(data: fazeli.FazeliData, args):
         print(f"| {name} | {summary['q50']:.3f} | {summary['q25']:.3f} | {summary['q75']:.3f} "
               f"| {summary['q90']:.3f} |")
     target = impacts if args.post_speeds == "published" else fazeli.without_post_offset(impacts)
+    progress(f"fitting every law by {args.objective} ({args.replicates} bootstrap replicates)")
     started = time.perf_counter()
     laws = analysis.fit_laws(target, args.objective, replicates=args.replicates,
                              seed=args.seed, workers=args.workers)
@@ -169,6 +194,7 @@ def fazeli_section(data: fazeli.FazeliData, args):
         print(f"- {law}: μ {own['mu']['q25']:.2f} / {own['mu']['q50']:.2f} / "
               f"{own['mu']['q75']:.2f}; e {own['e']['q25']:.2f} / {own['e']['q50']:.2f} / "
               f"{own['e']['q75']:.2f}")
+    progress("Poisson against Stronge (paired bootstrap)")
     difference = analysis.compare_laws(target, args.objective, laws["poisson"].fit,
                                        laws["stronge"].fit, seed=args.seed)
     print(f"\n### Poisson against Stronge\n\nobjective(poisson) − objective(stronge) = "
@@ -221,7 +247,8 @@ class EngineRuns:
     drop_errors: dict = field(default_factory=dict, repr=False, compare=False)
 
 
-def run_engines(engines: list[str], drops=None) -> list[EngineRuns]:
+def run_engines(engines: list[str], drops=None,
+                progress=lambda text: None) -> list[EngineRuns]:
     """Each engine loaded once and each of its presets run, on the drops when ``drops`` is
     ``(impacts, angles, fit)`` (at the fit's μ, e) and at the Kharaz incidences."""
     angles = np.array(KHARAZ_ANGLES, dtype=float)
@@ -234,6 +261,8 @@ def run_engines(engines: list[str], drops=None) -> list[EngineRuns]:
             continue
         presets, errors = [], {}
         for preset in engine.presets:
+            progress(f"{name} ({preset_label(name, preset)}): "
+                     + ("every drop, then " if drops is not None else "") + "the Kharaz curves")
             on_drops = None
             if drops is not None:
                 impacts, thetas, fit = drops
@@ -276,7 +305,7 @@ def drops_engines_table(runs: list[EngineRuns], fit, residual) -> list[dict]:
 
 
 def calibrated_errors_table(runs: list[EngineRuns], target, thetas, laws: dict,
-                            args) -> dict:
+                            args, progress=lambda text: None) -> dict:
     """Every engine at its preset and at its calibrated settings, every law at its fit,
     with intervals (:mod:`.calibrated_errors`), printed; the aggregates returned."""
     started = time.perf_counter()
@@ -286,7 +315,8 @@ def calibrated_errors_table(runs: list[EngineRuns], target, thetas, laws: dict,
     found = calibrated_errors.compute(
         target, thetas, {law: {"mu": law_fit["fit"].mu, "e": law_fit["fit"].e}
                          for law, law_fit in laws.items()}, engine_runs, seed=args.seed,
-        curves=False)  # 101 quantiles of a few drops would give them away; no figure here
+        curves=False, progress=progress)  # 101 quantiles of a few drops would give them
+    # away; no figure here
     found["seconds"] = time.perf_counter() - started
     print(f"\n### Every engine and law at its fitted or calibrated settings, with intervals "
           f"({found['seconds']:.1f} s)\n\nAt preset: every drop at the engines' (μ, e) above; "

@@ -74,3 +74,12 @@ def synthetic_copy(tmp_path_factory):
     directory = tmp_path_factory.mktemp("fazeli_synthetic")
     truth = write_synthetic(directory)
     return directory, truth
+
+
+@pytest.fixture(autouse=True)
+def own_cache(tmp_path, monkeypatch):
+    """Each test's ``experiments`` and ``calibrate`` keep their results in a cache of their
+    own (never the project's)."""
+    cache = tmp_path / "cache"
+    monkeypatch.setenv("IMPACT_HARNESS_CACHE_DIR", str(cache))
+    return cache

@@ -350,3 +350,22 @@ def test_cli_bounds_every_count_and_setting_before_any_work(option, value, capsy
     assert cli_main(["calibrate", "pymunk", "--to", "poisson", option, value]) == 2
     (line,) = capsys.readouterr().err.strip().splitlines()
     assert f"{option} {value}: " in line and "out of range; allowed: " in line
+
+
+def test_cli_a_rerun_reads_the_cache(capsys, pymunk, monkeypatch):
+    """calibrate's second run with the same options runs no engine; progress on stderr."""
+    command = ["calibrate", "pymunk", "--to", "poisson", "--drops", "3", "--replicates", "10",
+               "--preset", "defaults"]
+    assert cli_main(command) == 0
+    first = capsys.readouterr()
+    assert "impact-harness calibrate: pymunk (defaults)" in first.err
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("computed again")
+
+    monkeypatch.setattr(calibrate, "calibrate", no_work)
+    assert cli_main(command) == 0
+    second = capsys.readouterr()
+    assert second.out == first.out and "read from the cache" in second.err
+    assert cli_main([*command, "--law-e", "0.3"]) != 0  # the cli reports the failure
+    assert "computed again" in capsys.readouterr().err

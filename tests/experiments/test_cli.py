@@ -130,3 +130,53 @@ def test_json_is_written_atomically_over_a_regular_file(tmp_path, monkeypatch, c
     out.write_text("old")
     assert cli.main(["experiments", "--engines", "none", "--json", str(out)]) == 0
     assert out.read_text().startswith("{") and not list(tmp_path.glob("*.tmp"))
+
+
+def test_a_rerun_reads_the_cache_and_prints_the_same(synthetic_copy, monkeypatch, capsys,
+                                                     tmp_path):
+    """The second run with nothing changed computes nothing (the work is replaced by a
+    failure) and prints and writes what the first did; another setting computes again;
+    progress goes to stderr, never into the printed results."""
+    from harness.experiments import analysis, fazeli
+
+    directory, _ = synthetic_copy
+    real_load = fazeli.load
+    monkeypatch.setattr(fazeli, "load", lambda path: real_load(path, check_hashes=False))
+    first_json, second_json = tmp_path / "1.json", tmp_path / "2.json"
+    command = ["experiments", "--data", str(directory), "--replicates", "10", "--workers",
+               "1", "--engines", "none"]
+    assert cli.main([*command, "--json", str(first_json)]) == 0
+    first = capsys.readouterr()
+    assert "impact-harness experiments: fitting every law" in first.err
+    assert "impact-harness experiments" not in first.out
+
+    def no_fit(*args, **kwargs):
+        raise AssertionError("computed again")
+
+    monkeypatch.setattr(analysis, "fit_laws", no_fit)
+    assert cli.main([*command, "--json", str(second_json)]) == 0
+    second = capsys.readouterr()
+    assert second.out == first.out and "read from the cache" in second.err
+    assert second_json.read_text() == first_json.read_text()
+    for changed in (["--seed", "1"], ["--no-cache"]):
+        assert cli.main([*command, *changed]) != 0  # the cli reports the failure
+        assert "computed again" in capsys.readouterr().err
+
+
+def test_an_edited_cache_entry_is_computed_again(synthetic_copy, monkeypatch, capsys,
+                                                 own_cache):
+    from harness.experiments import fazeli
+
+    directory, _ = synthetic_copy
+    real_load = fazeli.load
+    monkeypatch.setattr(fazeli, "load", lambda path: real_load(path, check_hashes=False))
+    command = ["experiments", "--data", str(directory), "--replicates", "10", "--workers",
+               "1", "--engines", "none", "--objective", "impulse"]
+    assert cli.main(command) == 0
+    first = capsys.readouterr().out
+    (entry,) = [p for p in own_cache.rglob("*.json")]
+    entry.write_text(entry.read_text().replace("Poisson", "Poissin"))
+    assert cli.main(command) == 0
+    again = capsys.readouterr()
+    assert "read from the cache" not in again.err and again.out.count("Poisson") == \
+        first.count("Poisson")
