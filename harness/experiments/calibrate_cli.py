@@ -17,7 +17,7 @@ from harness.engines import (
 )
 from harness.store.cache import ResultCache
 
-from . import cached, calibrate, drops_engines, fazeli, registry
+from . import cached, calibrate, drops_engines, fazeli, frames, registry
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -116,7 +116,7 @@ def main(args) -> int:
         except registry.DataInvalid as invalid:
             print(f"impact-harness calibrate: {invalid}", file=sys.stderr)
             return 2
-        target = fazeli.without_post_offset(data.impacts)
+        target = frames.in_frame(data.impacts, frames.DEFAULT_FRAME)  # experiments' frame
         rows = calibrate.sample_rows(len(target), args.drops, args.seed)
         impacts = target.subset(rows)
         thetas, _ = drops_engines.jacobian_angles(impacts, data.pre_impact_angles[rows])

@@ -26,12 +26,15 @@ from harness.store.cache import ResultCache
 from harness.store.files import output_file_problem, write_text_atomically
 
 from . import (
+    aggregates,
     analysis,
     cached,
     calibrated_errors,
     drops_engines,
     engine_curves,
     fazeli,
+    fitting,
+    frames,
     kharaz,
     metric,
     registry,
@@ -46,14 +49,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="directory holding the Fazeli et al. 2017 files (default: "
                              f"${registry.FAZELI_2017.env_var})")
     parser.add_argument("--objective", choices=sorted(metric.OBJECTIVES),
-                        default="median-error",
-                        help="what the fit minimises: " + "; ".join(
-                            f"{name}: {text}" for name, text in metric.OBJECTIVES.items()))
-    parser.add_argument("--post-speeds", choices=("published", "raw"), default="raw",
-                        help="post-impact speeds the laws are fitted to: raw (default; the "
-                             "processed v_y's +3gh offset removed, as an impulse law "
-                             "predicts) or as published (the six models' scores always use "
-                             "these, as the paper does)")
+                        default=aggregates.SHOWN_OBJECTIVE,
+                        help="what the fit minimises (default "
+                             f"{aggregates.SHOWN_OBJECTIVE}: {aggregates.SHOWN_LAW}'s fit by it "
+                             "is the headline fit the engines run at, here and in the "
+                             "report): " + "; ".join(
+                                 f"{name}: {text}" for name, text in metric.OBJECTIVES.items()))
+    parser.add_argument("--post-speeds", choices=tuple(frames.FRAMES),
+                        default=frames.DEFAULT_FRAME,
+                        help="the frame of the post-impact speeds the laws are fitted to and "
+                             "every law, model and engine is scored against: " + "; ".join(
+                                 f"{name}: {text}" for name, text in frames.FRAMES.items())
+                             + f" (default {frames.DEFAULT_FRAME}; the command prints both "
+                             "frames side by side and why)")
     parser.add_argument("--replicates", type=int, default=200,
                         help="bootstrap replicates (default 200)")
     parser.add_argument("--seed", type=int, default=0, help="seed of folds and bootstrap")
@@ -139,7 +147,8 @@ def compute(args, data: fazeli.FazeliData | None, engines: list[str], progress) 
         drops = (target, thetas, fit)
     runs = run_engines(engines, drops, progress)  # each engine loaded, each preset run, once
     if data is not None:
-        output["fazeli2017"]["engines_on_drops"] = drops_engines_table(runs, fit, residual)
+        output["fazeli2017"]["engines_on_drops"] = drops_engines_table(runs, target, fit,
+                                                                       residual, args.seed)
         output["fazeli2017"]["calibrated_errors"] = calibrated_errors_table(
             runs, target, thetas, output["fazeli2017"]["laws"], args, progress)
     output["ellipse_polygons"] = ellipse_section(data)
@@ -159,13 +168,17 @@ def fazeli_section(data: fazeli.FazeliData, args, progress=lambda text: None):
     for name, digest in data.hashes.items():
         print(f"- {name}: SHA-256 {digest} (matches the published file)")
     print("- raw drops flagged: " + ", ".join(f"{k} {v}" for k, v in data.flag_counts().items()))
-    print("\n### The paper's metric on its six models (post-impact speeds as published)\n")
-    models = analysis.paper_models(data.model_speeds, impacts)
+    target = frames.in_frame(impacts, args.post_speeds)
+    print(f"\n### The paper's metric on its six models (post-impact speeds: "
+          f"{args.post_speeds})\n")
+    models = analysis.paper_models(data.model_speeds, target)
     print("| model | median | q25 | q75 | q90 |\n|---|---:|---:|---:|---:|")
     for name, summary in models.items():
         print(f"| {name} | {summary['q50']:.3f} | {summary['q25']:.3f} | {summary['q75']:.3f} "
               f"| {summary['q90']:.3f} |")
-    target = impacts if args.post_speeds == "published" else fazeli.without_post_offset(impacts)
+    in_frames = frames.compare(data, seed=args.seed, progress=progress)
+    print("\n### Laws and models in one frame, both frames\n")
+    print("\n".join(frames.markdown(in_frames)))
     progress(f"fitting every law by {args.objective} ({args.replicates} bootstrap replicates)")
     started = time.perf_counter()
     laws = analysis.fit_laws(target, args.objective, replicates=args.replicates,
@@ -217,10 +230,22 @@ def fazeli_section(data: fazeli.FazeliData, args, progress=lambda text: None):
         + f"; μ|m_nt|/m_nn {', '.join(f'{k} {v:.4f}' for k, v in routh['mu_coupling'].items())}"
         f"; m_nt opposes the slip in {routh['coupling_opposes_slip']} of {routh['drops']} drops."
         " Collision types (Routh's regions) per law in the table above.")
-    return ({"provenance": data.provenance(), "paper_models": models,
+    headline = laws[aggregates.SHOWN_LAW].fit
+    print(f"\n### The headline fit: {aggregates.SHOWN_LAW} by {args.objective}, μ "
+          f"{headline.mu:.3f}, e {headline.e:.3f} ({args.post_speeds} speeds)\n\nThe engines "
+          "below run at it"
+          + (" (the report's figures and engines use the same fit)."
+             if args.objective == aggregates.SHOWN_OBJECTIVE
+             and args.post_speeds == frames.DEFAULT_FRAME else
+             f"; the report's headline is {aggregates.SHOWN_LAW} by "
+             f"{aggregates.SHOWN_OBJECTIVE} on {frames.DEFAULT_FRAME} speeds (the defaults)."))
+    return ({"provenance": data.provenance(), "paper_models": models, "frames": in_frames,
+             "headline": {"law": aggregates.SHOWN_LAW, "objective": args.objective,
+                          "post_speeds": args.post_speeds, "mu": headline.mu,
+                          "e": headline.e},
              "laws": {law: _law_dict(result) for law, result in laws.items()},
              "poisson_vs_stronge": difference, "poisson_stronge_gap": gaps, "routh": routh,
-             "fit_seconds": seconds}, target, laws["poisson"].fit)
+             "fit_seconds": seconds}, target, headline)
 
 
 def _law_dict(result: analysis.LawResult) -> dict:
@@ -275,32 +300,41 @@ def run_engines(engines: list[str], drops=None,
     return runs
 
 
-def drops_engines_table(runs: list[EngineRuns], fit, residual) -> list[dict]:
-    """Every engine and preset on every drop at Poisson's fitted (μ, e), printed."""
+def drops_engines_table(runs: list[EngineRuns], target, fit, residual,
+                        seed: int = 0) -> list[dict]:
+    """Every engine and preset on every drop at the headline fit (μ, e), printed, each
+    beside that law on the drops it scored (paired bootstrap) with the drops it lost."""
     if not runs:
         return []
-    print(f"\n### The engines on the drops (μ {fit.mu:.3f}, e {fit.e:.3f}: Poisson's fit)\n")
+    law = calibrated_errors.law_errors(fitting.DropErrors(target), fit.law, fit.mu, fit.e)
+    print(f"\n### The engines on the drops (μ {fit.mu:.3f}, e {fit.e:.3f}: the headline "
+          "fit)\n")
     print(f"Each drop the ellipse (MuJoCo's ellipsoid, elsewhere the placed "
           f"{drops_engines.VERTICES}-gon) at the angle of its published "
           f"Jacobian (contact within {residual.max() * 1e3:.1g} mm of it); flagged runs are "
-          "counted with their reason, never scored.\n")
-    print("| engine | preset | single impacts | flagged (reason: drops) | median error | "
-          "q90 error |\n|---|---|---:|---|---:|---:|")
+          f"counted with their reason, never scored. Each engine's median beside {fit.law}'s "
+          "at the same (μ, e) on the drops it scored, their difference (95% intervals, "
+          f"{calibrated_errors.REPLICATES} paired bootstrap resamples), and the drops it lost "
+          f"with {fit.law}'s median error on them.\n")
+    print(f"| engine | preset | single impacts | flagged (reason: drops) | median error | "
+          f"{fit.law}, same drops | difference | lost ({fit.law}'s median on them) | q90 error "
+          "|\n|---|---|---:|---|---:|---:|---:|---:|---:|")
     results = []
     for run in runs:
         if run.missing is not None:
-            print(f"| {run.name} | — | — | not installed: {run.missing} | | |")
+            print(f"| {run.name} | — | — | not installed: {run.missing} | | | | | |")
             continue
         for preset, result, _ in run.presets:
             counts = dict(result["verdicts"])
             ok = counts.pop("ok", 0)
             flagged = ", ".join(f"{k}: {v}" for k, v in counts.items()) or "none"
             errors = result["errors"]
-            median = "—" if not errors["drops"] else f"{errors['q50']:.3f}"
             q90 = "—" if not errors["drops"] else f"{errors['q90']:.3f}"
-            print(f"| {run.name} | {preset_label(run.name, preset)} | {ok} | {flagged} "
-                  f"| {median} | {q90} |")
-            results.append(result)
+            beside = calibrated_errors.paired_difference(run.drop_errors[preset], law,
+                                                         seed=seed)
+            print(f"| {run.name} | {preset_label(run.name, preset)} | {ok} | {flagged} | "
+                  + " | ".join(calibrated_errors.paired_cells(beside)) + f" | {q90} |")
+            results.append({**result, "vs_reference": beside})
     return results
 
 
