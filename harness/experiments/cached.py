@@ -64,19 +64,22 @@ class _Tee(io.TextIOBase):
 
 
 def printed_once(cache: ResultCache | None, key_payload: dict,
-                 compute: Callable[[], dict], progress: Callable[[str], None]) -> dict:
+                 compute: Callable[[], dict], progress: Callable[[str], None],
+                 echo: bool = True) -> dict:
     """``{"text": what compute printed, **compute()}``: from the cache when ``key_payload``
     was computed before (its text printed again), else computed (its printing shown as it
-    goes and kept) and stored. ``cache`` None: always computed, nothing stored."""
+    goes and kept) and stored. ``cache`` None: always computed, nothing stored. ``echo``
+    False: the text is kept, never printed."""
     key = None if cache is None else cache.key(key_payload)
     if key is not None:
         found = cache.get(key, _check, count=False)
         if found is not None:
             progress(f"read from the cache (computed in {found['seconds']:.0f} s; "
                      "--no-cache computes it again)")
-            sys.stdout.write(found["text"])
+            if echo:
+                sys.stdout.write(found["text"])
             return found
-    tee = _Tee(sys.stdout)
+    tee = _Tee(sys.stdout if echo else io.StringIO())
     started = time.perf_counter()
     with contextlib.redirect_stdout(tee):
         result = compute()

@@ -124,15 +124,31 @@ def main(args) -> int:
     except registry.DataInvalid as invalid:
         print(f"impact-harness experiments: {invalid}", file=sys.stderr)
         return 2
-    progress = cached.Progress("impact-harness experiments")
-    settings = {"objective": args.objective, "post_speeds": args.post_speeds,
-                "replicates": args.replicates, "seed": args.seed, "engines": engines}
-    found = cached.printed_once(
-        cache, cached.payload("experiments", settings, None if data is None else data.hashes),
-        lambda: {"output": compute(args, data, engines, progress)}, progress)
+    found = computed_once(args, data, engines, cache)
     if args.json:  # atomically, never through a link (checked before the work too)
         write_text_atomically(args.json, json.dumps(found["output"], indent=1) + "\n")
     return 0
+
+
+def computed_once(args, data: fazeli.FazeliData | None, engines: list[str],
+                  cache: ResultCache | None, echo: bool = True) -> dict:
+    """``{"text": what the command prints, "output": its --json document, "seconds"}``,
+    read from ``cache`` when these options, data, code and versions were computed before
+    (:mod:`.cached`); ``echo``: print the text."""
+    progress = cached.Progress("impact-harness experiments")
+    settings = {"objective": args.objective, "post_speeds": args.post_speeds,
+                "replicates": args.replicates, "seed": args.seed, "engines": engines}
+    return cached.printed_once(
+        cache, cached.payload("experiments", settings, None if data is None else data.hashes),
+        lambda: {"output": compute(args, data, engines, progress)}, progress, echo)
+
+
+def default_options() -> argparse.Namespace:
+    """The command's options when none is given (what the texts' stated numbers come
+    from: harness/report/experiments.py, ``stated_numbers``)."""
+    parser = argparse.ArgumentParser()
+    add_arguments(parser)
+    return parser.parse_args([])
 
 
 def compute(args, data: fazeli.FazeliData | None, engines: list[str], progress) -> dict:

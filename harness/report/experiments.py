@@ -34,6 +34,7 @@ from harness.experiments import (
     kharaz,
     registry,
 )
+from harness.experiments import cli as experiments_cli
 from harness.experiments.aggregates import MIN_BIN_COUNT as MIN_BIN
 from harness.experiments.calibrated_errors import interval_text, settings_text
 from harness.plotting import new_figure, save_png
@@ -42,6 +43,7 @@ from harness.report.figure_cache import render_once, solver_digest
 from harness.report.markup import folded, html_table
 from harness.report.views import FIGURES, engine_style
 from harness.run.provenance import package_versions
+from harness.store.cache import ResultCache
 from harness.store.files import write_text_atomically
 
 KHARAZ_FIGURE = "experiments-kharaz.png"
@@ -644,3 +646,61 @@ def experiments_section(out_dir: Path, data_path: str | os.PathLike | None = Non
     return folded("experiments", "Against experiments", "\n".join(parts),
                   "Kharaz et al. 2001 curves with digitised measured points; Fazeli et al. "
                   f"2017 drops {drops}")
+
+
+def stated_numbers() -> dict[str, str]:
+    """The numbers docs/experiments.md states (``stated experiments.KEY``): what
+    ``impact-harness experiments`` gives with its defaults on the copy that
+    ``IMPACT_HARNESS_FAZELI_DIR`` names, its tables as the command prints them. Read from
+    the result cache when those were computed before (minutes otherwise). Raises
+    :class:`registry.DataMissing` without a copy."""
+    data = fazeli.load(registry.locate(registry.FAZELI_2017, None))
+    options = experiments_cli.default_options()
+    found = experiments_cli.computed_once(options, data, list(engine_names()), ResultCache(),
+                                          echo=False)
+    text, drops = found["text"], found["output"]["fazeli2017"]
+    numbers = {name: section_tables(text, heading) for name, heading in (
+        ("models", "### The paper's metric on its six models"),
+        ("frames", "### Laws and models in one frame"), ("laws", "### Every law fitted"),
+        ("engines", "### The engines on the drops"),
+        ("calibrated", "### Every engine and law at its fitted or calibrated settings"))}
+    headline = drops["headline"]
+    numbers["headline.mu"], numbers["headline.e"] = f"{headline['mu']:.3f}", \
+        f"{headline['e']:.3f}"
+    frames_found = drops["frames"]
+    for frame, row in frames_found["frames"].items():
+        medians = [model["median"] for model in row["models"].values()]
+        numbers[f"{frame}.models-low"] = f"{min(medians):.3f}"
+        numbers[f"{frame}.models-high"] = f"{max(medians):.3f}"
+        for objective, fit in row["fits"].items():
+            numbers[f"{frame}.{objective}"] = f"{fit['median']:.3f}"
+            numbers[f"{frame}.{objective}.vs-best"] = f"{fit['vs_best_model']['difference']:+.3f}"
+            numbers[f"{frame}.{objective}.e"] = f"{fit['e']:.3f}"
+        numbers[f"{frame}.span"] = f"{row['outside_impulse_span']['median']:.3f}"
+    numbers["models-span"] = f"{frames_found['models_outside_impulse_span_max']:.0e}"
+    apart = drops["poisson_vs_stronge"]
+    numbers["apart.gap-median"] = f"{apart['prediction_gap_median']:.2%}"
+    numbers["apart.gap-q99"] = f"{apart['prediction_gap_q99']:.2%}"
+    routh = drops["routh"]
+    numbers["routh.opposes"] = f"{routh['coupling_opposes_slip']:,}"
+    numbers["routh.coupling"] = f"{routh['mu_coupling']['q50']:.2f}"
+    return numbers
+
+
+def section_tables(text: str, heading: str) -> str:
+    """The Markdown tables (their lines starting with ``|``) of the section of ``text``
+    under the first line starting with ``heading``, up to the next heading; a blank line
+    between two tables."""
+    lines = text.splitlines()
+    start = next(k for k, line in enumerate(lines) if line.startswith(heading))
+    tables: list[list[str]] = []
+    previous = False
+    for line in lines[start + 1:]:
+        if line.startswith("#"):
+            break
+        if line.startswith("|"):
+            if not previous:
+                tables.append([])
+            tables[-1].append(line)
+        previous = line.startswith("|")
+    return "\n\n".join("\n".join(table) for table in tables)
