@@ -678,7 +678,32 @@ def stated_numbers() -> dict[str, str]:
             numbers[f"{frame}.{objective}.e"] = f"{fit['e']:.3f}"
         numbers[f"{frame}.span"] = f"{row['outside_impulse_span']['median']:.3f}"
     numbers["models-span"] = f"{frames_found['models_outside_impulse_span_max']:.0e}"
+    for row in drops["engines_on_drops"]:  # at the headline fit, beside the law
+        name, vs = f"engines.{row['engine']}.{row['preset']}", row["vs_reference"]
+        numbers[f"{name}.scored"] = f"{row['verdicts'].get('ok', 0):,}"
+        if vs is not None:
+            numbers[f"{name}.median"] = f"{vs['median']['median']:.3f}"
+            numbers[f"{name}.law"] = f"{vs['reference']['median']:.3f}"
+            numbers[f"{name}.difference"] = f"{vs['difference']:+.3f}"
+            if vs["lost"]["drops"]:
+                numbers[f"{name}.lost-law"] = f"{vs['lost']['reference_median']:.3f}"
+    for row in drops["calibrated_errors"]["engines"]:  # calibrated, on the held-out half
+        name = f"calibrated.{row['engine']}.{row['preset']}"
+        vs = row["calibrated"] and row["calibrated"]["vs_reference"]
+        if vs:
+            numbers[f"{name}.median"] = f"{vs['median']['median']:.3f}"
+            numbers[f"{name}.law"] = f"{vs['reference']['median']:.3f}"
+            numbers[f"{name}.difference"] = f"{vs['difference']:+.3f}"
+            numbers[f"{name}.lost"] = f"{vs['lost']['drops']:,}"
+            if vs["lost"]["drops"]:
+                numbers[f"{name}.lost-law"] = f"{vs['lost']['reference_median']:.3f}"
+    law = next(row for row in drops["calibrated_errors"]["laws"] if row["law"] == "poisson")
+    numbers["calibrated.poisson.held-out"] = f"{law['held_out']['median']:.3f}"
+    numbers["calibrated.poisson.e"] = f"{law['training_fit']['e']:.3f}"
     apart = drops["poisson_vs_stronge"]
+    numbers["apart.difference"] = f"{apart['objective_difference']:.3g}"
+    numbers["apart.low"] = f"{apart['interval']['low']:.3g}"
+    numbers["apart.high"] = f"{apart['interval']['high']:.3g}"
     numbers["apart.gap-median"] = f"{apart['prediction_gap_median']:.2%}"
     numbers["apart.gap-q99"] = f"{apart['prediction_gap_q99']:.2%}"
     routh = drops["routh"]

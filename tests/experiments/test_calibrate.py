@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from harness.cli import main as cli_main
-from harness.experiments import calibrate, registry
+from harness.experiments import calibrate, frames, registry
 
 from .conftest import write_synthetic
 
@@ -62,7 +62,7 @@ def test_data_target_on_a_synthetic_copy(tmp_path, pymunk):
 
     write_synthetic(tmp_path, drops=30, flagged=4)  # Poisson, μ 0.3, e 0.7, plus noise
     data = fazeli.load(tmp_path, check_hashes=False)  # synthetic: not the published hashes
-    impacts = fazeli.without_post_offset(data.impacts).subset(range(6))
+    impacts = frames.in_frame(data.impacts, frames.DEFAULT_FRAME).subset(range(6))
     thetas, _ = drops_engines.jacobian_angles(impacts, data.pre_impact_angles[:6])
     result = calibrate.calibrate(pymunk, "accurate", impacts, thetas, "data")
     assert result.best["mu"] == 0.3 and result.best["e"] == 0.6  # nearest cells of 0.3, 0.7
@@ -128,7 +128,7 @@ def toy_on_synthetic_drops(tmp_path_factory, toy):
     directory = tmp_path_factory.mktemp("calibrate_toy")
     write_synthetic(directory, drops=40, flagged=2, noise=0.05)
     data = fazeli.load(directory, check_hashes=False)  # synthetic: not the published hashes
-    target = fazeli.without_post_offset(data.impacts)
+    target = frames.in_frame(data.impacts, frames.DEFAULT_FRAME)
     rows = calibrate.sample_rows(len(target), 16, seed=2)
     impacts = target.subset(rows)
     thetas, _ = drops_engines.jacobian_angles(impacts, data.pre_impact_angles[rows])
