@@ -125,8 +125,12 @@ def main(args) -> int:
         print(f"impact-harness experiments: {invalid}", file=sys.stderr)
         return 2
     found = computed_once(args, data, engines, cache)
+    output = found["output"]
+    if data is not None:  # this copy's place, not the one a cached run read (same hashes)
+        output["fazeli2017"]["provenance"] = json.loads(json.dumps(data.provenance(),
+                                                                   default=_plain))
     if args.json:  # atomically, never through a link (checked before the work too)
-        write_text_atomically(args.json, json.dumps(found["output"], indent=1) + "\n")
+        write_text_atomically(args.json, json.dumps(output, indent=1) + "\n")
     return 0
 
 

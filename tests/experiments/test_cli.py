@@ -180,3 +180,38 @@ def test_an_edited_cache_entry_is_computed_again(synthetic_copy, monkeypatch, ca
     again = capsys.readouterr()
     assert "read from the cache" not in again.err and again.out.count("Poisson") == \
         first.count("Poisson")
+
+
+def test_the_command_and_the_report_lead_with_one_headline_fit():
+    """The command's defaults are the report's headline: Poisson fitted by the same
+    objective to the same frame of post-impact speeds (aggregates.SHOWN_*,
+    frames.DEFAULT_FRAME), so the engines run at the same (μ, e) in both."""
+    from harness.experiments import aggregates, frames
+    from harness.experiments import cli as experiments_cli
+
+    options = experiments_cli.default_options()
+    assert options.objective == aggregates.SHOWN_OBJECTIVE
+    assert options.post_speeds == frames.DEFAULT_FRAME == "published"
+    assert aggregates.SHOWN_LAW == frames.LAW == "poisson"
+
+
+def test_a_cached_run_writes_this_copys_place_in_the_json(synthetic_copy, tmp_path,
+                                                          monkeypatch, capsys):
+    """The cache is keyed by the files' SHA-256, not their place: a copy moved elsewhere
+    reads the same entry, and the --json provenance names where the copy is now."""
+    import json
+    import shutil
+
+    from harness.experiments import fazeli
+
+    directory, _ = synthetic_copy
+    moved = tmp_path / "moved"
+    shutil.copytree(directory, moved)
+    real_load = fazeli.load
+    monkeypatch.setattr(fazeli, "load", lambda path: real_load(path, check_hashes=False))
+    command = ["experiments", "--replicates", "10", "--workers", "1", "--engines", "none"]
+    assert cli.main([*command, "--data", str(directory)]) == 0
+    out = tmp_path / "moved.json"
+    assert cli.main([*command, "--data", str(moved), "--json", str(out)]) == 0
+    assert "read from the cache" in capsys.readouterr().err
+    assert json.loads(out.read_text())["fazeli2017"]["provenance"]["directory"] == str(moved)
