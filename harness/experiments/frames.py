@@ -115,37 +115,50 @@ def _normalized(speeds, target: MeasuredImpacts) -> np.ndarray:
         target.speeds_after[:, 0], target.speeds_after[:, 1])
 
 
+def rows(found: dict, text=None) -> tuple[list[str], list[list[str]]]:
+    """The table of both frames, transposed so that it stays narrow: the header (what, then
+    one column per frame) and a row per model, per fit of :data:`LAW` with its difference
+    from the best model, and the impulse-span test. ``text(summary, key)`` writes a median
+    or difference with its interval (default :func:`calibrated_errors.interval_text`)."""
+    text = text or calibrated_errors.interval_text
+    frames = found["frames"]
+    header = ["what"] + [f"{frame} (default)" if frame == found["default"] else frame
+                         for frame in frames]
+    table = [[f"model: {name}"] + [text(row["models"][name], "median")
+                                   for row in frames.values()]
+             for name in frames[found["default"]]["models"]]
+    for objective in OBJECTIVES:
+        table.append([f"{found['law']} by {objective}: median (μ, e)"] + [
+            f"{text(row['fits'][objective], 'median')} (μ {row['fits'][objective]['mu']:.3f}, "
+            f"e {row['fits'][objective]['e']:.3f})" for row in frames.values()])
+        table.append([f"{found['law']} by {objective} − best model, same drops"] + [
+            f"{text(row['fits'][objective]['vs_best_model'], 'difference')} "
+            f"({row['best_model']})" for row in frames.values()])
+    table.append(["share of the change outside any contact impulse: median / q90"] + [
+        f"{row['outside_impulse_span']['median']:.3f} / "
+        f"{row['outside_impulse_span']['q90']:.3f}" for row in frames.values()])
+    return header, table
+
+
 def markdown(found: dict) -> list[str]:
     """The command's table of both frames (Markdown lines) and what it says."""
     level = f"{found['confidence']:.0%}"
-    text = calibrated_errors.interval_text
+    header, table = rows(found)
     lines = [f"Medians of the paper's error with {level} intervals ({found['replicates']} "
              "bootstrap resamples of the drops); "
-             f"{found['law']} fitted to each frame's speeds by each objective (5-fold "
-             "held-out objective beside it); *vs best model*: its median less the best "
-             "model's on the same drops (paired bootstrap).\n",
-             "| frame | what it is | " + " | ".join(found["frames"]["published"]["models"])
-             + f" | {found['law']} by median-error | vs best model | {found['law']} by "
-             "impulse | vs best model | outside any impulse (median / q90) |",
-             "|---|---|" + "---:|" * (len(found["frames"]["published"]["models"]) + 5)]
-    for frame, row in found["frames"].items():
-        default = " (default)" if frame == found["default"] else ""
-        cells = [text(model) for model in row["models"].values()]
-        for objective in OBJECTIVES:
-            fit = row["fits"][objective]
-            cells.append(f"{text(fit)} (μ {fit['mu']:.3f}, e {fit['e']:.3f})")
-            cells.append(text(fit["vs_best_model"], "difference")
-                         + f" ({row['best_model']})")
-        span = row["outside_impulse_span"]
-        cells.append(f"{span['median']:.3f} / {span['q90']:.3f}")
-        lines.append(f"| {frame}{default} | {row['means']} | " + " | ".join(cells) + " |")
+             f"{found['law']} fitted to each frame's speeds by each objective; its median "
+             "less the best model's on the same drops (paired bootstrap). Frames: "
+             + "; ".join(f"{frame}: {row['means']}" for frame, row in found["frames"].items())
+             + ".\n",
+             "| " + " | ".join(header) + " |", "|---|" + "---:|" * (len(header) - 1)]
+    lines += ["| " + " | ".join(row) + " |" for row in table]
     lines.append(f"\nThe six models' own changes of speed lie outside any contact impulse by "
                  f"{found['models_outside_impulse_span_max']:.1e} at most (pure impulse "
-                 "predictions); the measured ones by the last column in either frame, so "
+                 "predictions); the measured ones by the last row in either frame, so "
                  "that test does not choose a frame. The default is the frame the paper "
                  "scores its models in.")
     return lines
 
 
 __all__ = ["DEFAULT_FRAME", "FRAMES", "LAW", "OBJECTIVES", "compare", "in_frame", "markdown",
-           "outside_impulse_span"]
+           "outside_impulse_span", "rows"]

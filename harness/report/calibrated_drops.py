@@ -17,11 +17,10 @@ from harness.report.markup import html_table
 
 #: A bracket puts the rest of a header on a second line (markup.header_cell): the headers
 #: stay narrow.
-ENGINE_HEADER = ("engine", "preset", "calibrated settings", "median error [at preset]",
-                 "Poisson [same drops]", "difference [at preset]", "lost [Poisson on them]",
-                 "median error [calibrated, held out]", "Poisson [same drops]",
-                 "difference [held out]", "lost [Poisson on them]",
-                 "flagged [preset / held out]")
+ENGINE_HEADER = ("engine", "preset", "calibrated settings", "median [at preset]",
+                 "Poisson [same drops]", "difference", "lost [Poisson there]",
+                 "median [calibrated, held out]", "Poisson [same drops]", "difference",
+                 "lost [Poisson there]", "flagged [preset / held out]")
 #: Text columns wrap (a "cannot" reason, the flagged runs' reasons): the table stays
 #: within the page at 1400 px.
 ENGINE_COLUMNS = ("l", "l", "note", "", "", "", "", "", "", "", "", "note")
@@ -36,6 +35,11 @@ def _flagged(part: dict | None) -> str:
         or "none"
 
 
+def _narrow(cells: list[str]) -> list[str]:
+    """Paired cells with each interval below its value: the wide table fits the page."""
+    return [cell.replace(" [", "<br>[", 1).replace(" (law", "<br>(law", 1) for cell in cells]
+
+
 def engine_rows(result: dict) -> tuple[list[list[str]], list[str]]:
     """The engines' rows (HTML cells) and their row classes (a "cannot" row is shaded)."""
     rows, classes = [], []
@@ -47,8 +51,8 @@ def engine_rows(result: dict) -> tuple[list[list[str]], list[str]]:
                 else ["—"] * len(PAIRED_COLUMNS))
         rows.append([escape_html(row["engine"]),
                      escape_html(preset_label(row["engine"], row["preset"])), settings,
-                     *paired_cells(preset["vs_reference"]), *held,
-                     escape_html(f"{_flagged(preset)} / {_flagged(calibrated)}")])
+                     *_narrow(paired_cells(preset["vs_reference"])), *_narrow(held),
+                     escape_html(_flagged(preset)) + "<br>/ " + escape_html(_flagged(calibrated))])
         classes.append("flag" if calibrated is None else "")
     return rows, classes
 
@@ -104,8 +108,9 @@ def calibrated_html(aggregates: dict) -> str:
         html_table(ENGINE_HEADER, rows, left=2, row_classes=classes,
                    column_classes=ENGINE_COLUMNS),
         html_table(LAW_HEADER, law_rows(result), left=1),
-        f"<p class='muted'>Every law at its <i>{escape_html(result['objective'])}</i> fit "
-        "to every drop (the median there is in-sample), and fitted to the training half "
+        f"<p class='muted'>Every law at its <i>{escape_html(shown['objective'])}</i> fit "
+        "to every drop (the headline objective; the median there is in-sample), and fitted "
+        f"by <i>{escape_html(result['objective'])}</i> to the training half "
         f"on μ {', '.join(f'{m:g}' for m in result['law_grid']['mus'])} × e {es[0]:g} to "
         f"{es[-1]:g} in steps of {es[1] - es[0]:.2g}, refined ten times "
         "finer, scored on the held-out half beside the engines.</p>"]

@@ -31,6 +31,7 @@ from harness.experiments import (
     calibrate,
     engine_curves,
     fazeli,
+    frames,
     kharaz,
     registry,
 )
@@ -401,40 +402,32 @@ def frames_html(aggregates: dict) -> str:
     found = aggregates.get("frames")
     if not found:
         return ""
+    header, rows = frames.rows(found, text=_two_lines)
+    rows = [[escape_html(row[0]), *row[1:]] for row in rows]
     law = found["law"].capitalize()
-    models = list(found["frames"][found["default"]]["models"])
-    header = ["frame", *models, f"{law} [median-error fit]", "vs best model",
-              f"{law} [impulse fit]", "vs best model", "outside any impulse [median / q90]"]
-    rows = []
-    for frame, row in found["frames"].items():
-        cells = [escape_html(frame + (" (default)" if frame == found["default"] else ""))]
-        cells += [interval_text(model) for model in row["models"].values()]
-        for objective in ("median-error", "impulse"):
-            fit = row["fits"][objective]
-            cells.append(f"{interval_text(fit)} (μ {fit['mu']:.3f}, e {fit['e']:.3f})")
-            cells.append(f"{interval_text(fit['vs_best_model'], 'difference')} "
-                         f"({escape_html(row['best_model'])})")
-        span = row["outside_impulse_span"]
-        cells.append(f"{span['median']:.3f} / {span['q90']:.3f}")
-        rows.append(cells)
     level = f"{found['confidence']:.0%}"
     return ("<h4>Laws and models in one frame</h4>"
             "<p>The published post-impact v<sub>y</sub> is the raw one plus 3gh (0.118 m/s, "
             "what gravity takes from a rising body in three frames of 1/250 s); a median "
-            "error is comparable only with another in the same frame. Each row scores the "
+            "error is comparable only with another in the same frame. Each column scores the "
             f"six models and {law} (fitted to that frame's speeds by each objective) against "
             f"the same speeds: medians with {level} intervals ({found['replicates']:,} "
             f"bootstrap resamples), and {law}'s median less the best model's on the same "
             "drops (paired).</p>"
-            + html_table(header, rows, left=1)
+            + html_table([escape_html(cell) for cell in header], rows, left=1)
             + "<p class='muted'>Why the published frame is the default: the six models' "
             "changes of speed are pure impulse predictions (outside any contact impulse by "
             f"{found['models_outside_impulse_span_max']:.0e} at most), and the paper scores "
             "them against the published speeds, where they reproduce its 0.43–0.57; adding "
             "3gh to a rising body's speed refers it to an earlier instant, towards the "
-            "impact, where an impulse law predicts. The last column is the share of each "
+            "impact, where an impulse law predicts. The last row is the share of each "
             "measured change of speed that no contact impulse can produce: the same in both "
             "frames, so the data alone do not choose one.</p>")
+
+
+def _two_lines(found: dict | None, key: str = "median") -> str:
+    """A median or difference with its interval below it (a narrow table cell)."""
+    return interval_text(found, key).replace(" [", "<br>[", 1)
 
 
 def laws_apart_html(aggregates: dict) -> str:

@@ -67,15 +67,15 @@ def test_the_drops_figures_and_calibration_table_from_aggregates(tmp_path, monke
     found = fake["calibrated_errors"]
     pymunk, mujoco = found["engines"]
     low, high = pymunk["calibrated"]["interval"]
-    assert f"{pymunk['calibrated']['median']:.3f} [{low:.3f}, {high:.3f}]" in html
-    assert "μ 0, e 0.6" in html and "none / clipped: 2" in html
+    assert f"{pymunk['calibrated']['median']:.3f}<br>[{low:.3f}, {high:.3f}]" in html
+    assert "μ 0, e 0.6" in html and "none<br>/ clipped: 2" in html
     # each engine beside Poisson on the drops it scored, and the drops it lost
     vs = pymunk["calibrated"]["vs_reference"]
     low, high = vs["reference"]["interval"]
-    assert f"{vs['reference']['median']:.3f} [{low:.3f}, {high:.3f}]" in html
-    assert f"5 (law {vs['lost']['reference_median']:.3f})" in html
+    assert f"{vs['reference']['median']:.3f}<br>[{low:.3f}, {high:.3f}]" in html
+    assert f"5<br>(law {vs['lost']['reference_median']:.3f})" in html
     assert "<i>cannot be calibrated</i>: no setting tried" in html
-    assert "every drop" in html and "multi-contact: 400 / —" in html
+    assert "every drop" in html and "multi-contact: 400<br>/ —" in html
     # laws and models in one frame, both frames
     assert "Laws and models in one frame" in html and "published (default)" in html
     assert "0.191 / 0.330" in html
