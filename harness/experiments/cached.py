@@ -4,7 +4,8 @@ they print while computing it.
 
 An entry is keyed by everything its numbers depend on: the command and its settings, the
 SHA-256 of the data files read (none without a copy), the installed versions, the engines
-registered, the code of ``harness/experiments`` (:func:`experiments_code`) and, through the
+registered at run time (their source), the code of ``harness/experiments``
+(:func:`experiments_code`) and, through the
 cache's own code version, ``planar_impact``, the engines, the scene, the verdicts and the
 store. It holds plain JSON only (the text the command printed, and its ``--json``
 document): never a per-drop number beyond what the command prints, as the Fazeli data carry
@@ -15,13 +16,15 @@ computes it again. An unreadable or edited entry is a miss (the cache checks its
 from __future__ import annotations
 
 import contextlib
+import hashlib
+import inspect
 import io
 import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
 
-from harness.engines import engine_names
+from harness.engines import ENGINE_NAMES, engine_class, engine_names
 from harness.run.provenance import package_versions
 from harness.store.cache import ResultCache
 from harness.store.identity import code_version_of
@@ -40,10 +43,24 @@ def experiments_code() -> str:
 
 
 def payload(command: str, settings: dict, data_sha256: dict | None) -> dict:
-    """The key's payload: ``settings`` of ``command`` with the data, code and versions."""
+    """The key's payload: ``settings`` of ``command`` with the data, code and versions.
+    An engine registered at run time (not a shipped module, so not in the cache's code
+    version) is named by the SHA-256 of its class's source file."""
     return {"layout": ENTRY_LAYOUT, "command": command, "settings": settings,
             "data_sha256": data_sha256, "versions": package_versions(),
-            "engines_registered": list(engine_names()), "experiments_code": experiments_code()}
+            "engines_registered": {name: _registered_source(name) for name in engine_names()
+                                   if name not in ENGINE_NAMES},
+            "experiments_code": experiments_code()}
+
+
+def _registered_source(name: str) -> str:
+    """SHA-256 of the source file of run-time engine ``name``'s class (its module and
+    name when the file cannot be read)."""
+    registered = engine_class(name)
+    try:
+        return hashlib.sha256(Path(inspect.getfile(registered)).read_bytes()).hexdigest()
+    except (OSError, TypeError):
+        return f"{registered.__module__}.{registered.__qualname__}"
 
 
 class _Tee(io.TextIOBase):

@@ -369,3 +369,18 @@ def test_cli_a_rerun_reads_the_cache(capsys, pymunk, monkeypatch):
     assert second.out == first.out and "read from the cache" in second.err
     assert cli_main([*command, "--law-e", "0.3"]) != 0  # the cli reports the failure
     assert "computed again" in capsys.readouterr().err
+
+
+def test_the_cache_key_names_a_run_time_engine_by_its_source(toy_engine):
+    """An engine registered at run time is not in the cache's code version: its class's
+    source file names it in the key, so an edited adapter is computed again."""
+    import hashlib
+    import inspect
+
+    from harness.experiments import cached
+
+    found = cached.payload("calibrate", {"engine": toy_engine}, None)["engines_registered"]
+    from harness.engines import engine_class
+
+    source = Path(inspect.getfile(engine_class(toy_engine))).read_bytes()
+    assert found == {toy_engine: hashlib.sha256(source).hexdigest()}
