@@ -251,14 +251,14 @@ def fazeli_section(data: fazeli.FazeliData, args, progress=lambda text: None):
         f"; m_nt opposes the slip in {routh['coupling_opposes_slip']} of {routh['drops']} drops."
         " Collision types (Routh's regions) per law in the table above.")
     headline = laws[aggregates.SHOWN_LAW].fit
-    print(f"\n### The headline fit: {aggregates.SHOWN_LAW} by {args.objective}, μ "
-          f"{headline.mu:.3f}, e {headline.e:.3f} ({args.post_speeds} speeds)\n\nThe engines "
-          "below run at it"
-          + (" (the report's figures and engines use the same fit)."
-             if args.objective == aggregates.SHOWN_OBJECTIVE
-             and args.post_speeds == frames.DEFAULT_FRAME else
-             f"; the report's headline is {aggregates.SHOWN_LAW} by "
-             f"{aggregates.SHOWN_OBJECTIVE} on {frames.DEFAULT_FRAME} speeds (the defaults)."))
+    shared = (args.objective == aggregates.SHOWN_OBJECTIVE
+              and args.post_speeds == frames.DEFAULT_FRAME)
+    print(f"\n### The fit the engines run at: {aggregates.SHOWN_LAW} by {args.objective}, μ "
+          f"{headline.mu:.3f}, e {headline.e:.3f} ({args.post_speeds} speeds)\n\n"
+          + ("The headline fit: the report's figures and engines use the same." if shared else
+             f"Not the headline fit (the defaults: {aggregates.SHOWN_LAW} by "
+             f"{aggregates.SHOWN_OBJECTIVE} on {frames.DEFAULT_FRAME} speeds), which the "
+             "report shows."))
     return ({"provenance": data.provenance(), "paper_models": models, "frames": in_frames,
              "headline": {"law": aggregates.SHOWN_LAW, "objective": args.objective,
                           "post_speeds": args.post_speeds, "mu": headline.mu,
@@ -327,8 +327,8 @@ def drops_engines_table(runs: list[EngineRuns], target, fit, residual,
     if not runs:
         return []
     law = calibrated_errors.law_errors(fitting.DropErrors(target), fit.law, fit.mu, fit.e)
-    print(f"\n### The engines on the drops (μ {fit.mu:.3f}, e {fit.e:.3f}: the headline "
-          "fit)\n")
+    print(f"\n### The engines on the drops (μ {fit.mu:.3f}, e {fit.e:.3f}: {fit.law}'s fit "
+          f"by {fit.objective})\n")
     print(f"Each drop the ellipse (MuJoCo's ellipsoid, elsewhere the placed "
           f"{drops_engines.VERTICES}-gon) at the angle of its published "
           f"Jacobian (contact within {residual.max() * 1e3:.1g} mm of it); flagged runs are "
