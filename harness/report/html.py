@@ -248,14 +248,17 @@ def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None
     # long ones (each scenario, several contacts, Table 3, survey, experiments) folded
     headline = []
     caption = (
-        "Departure from Poisson (left pair) and from exact Stronge (right pair), "
+        "Departure from Poisson (top row) and from exact Stronge (bottom row), "
         "engines out of the box (<i>defaults</i>) and tuned (<i>accurate</i>"
         + (f"; {renamed}" if renamed else "") + "). Sweeps show "
-        "their largest departure over the sweep's single impacts. “(k!)”: k runs were "
-        "flagged (multi-contact, not separated, …) and are not in the value; “*”: the "
-        "runs' settings differ from the preset's, by the scenario's <code>[engine_settings]"
-        "</code> or the command line's <code>--set</code> (see its section); grey cells were "
-        "skipped. Light = agrees, "
+        "their largest departure over the sweep's single impacts. A <b>hatched</b> cell "
+        "holds flagged runs (not single impacts: multi-contact, not separated, …; "
+        "docs/verdicts.md), counted by “(k!)” and never in the value: its colour and "
+        "number are those of the other runs, and “flagged (k!)” on grey means every run "
+        "was flagged. “*”: the runs' settings differ from the preset's, by the scenario's "
+        "<code>[engine_settings]</code> or the command line's <code>--set</code> (see its "
+        "section); “skipped” on grey: the engine did not run"
+        + (f" ({skipped} runs)" if skipped else " (none was)") + ". Light = agrees, "
         "dark red = far off.")
     groups = figures.get("groups") or {}
     if groups:  # many scenarios: a row per family in the figure, the scenarios in tables

@@ -98,17 +98,17 @@ def departure_table_html(names: Sequence[str], prepared: Prepared) -> str:
         rgb = heat_colours(values)  # all cells at once (a call per cell was most of the time)
         for i, row in enumerate(cells):
             for j, (value, flagged, skipped, text) in enumerate(row):
-                if skipped or not math.isfinite(value):
-                    rows[i].append("<span class='muted'>"
-                                   + ("skipped" if skipped else "n/a") + "</span>")
+                if skipped or not math.isfinite(value):  # "skipped", "flagged (2!)"
+                    kind = "heat flagged" if flagged else "muted"
+                    rows[i].append(f"<span class='{kind}'>{escape_html(text)}</span>")
                     continue
                 colour = "#{:02x}{:02x}{:02x}".format(*rgb[i, j])
-                ink = "#fff" if value > 0.08 else "#000"  # as on the figure
+                ink = "#000" if flagged or value <= 0.08 else "#fff"  # as on the figure
                 text = escape_html(text)
-                if flagged:
+                if flagged:  # hatched as on the figure: some runs are not in the value
                     text = f"<b>{text}</b>"
-                rows[i].append(f"<span class='heat' style='background:{colour};"
-                               f"color:{ink}'>{text}</span>")
+                rows[i].append(f"<span class='heat{' flagged' if flagged else ''}' "
+                               f"style='background-color:{colour};color:{ink}'>{text}</span>")
     return html_table(header, rows)
 
 

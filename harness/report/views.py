@@ -166,8 +166,9 @@ def departure_cell(records: Sequence[Record], law: str) -> str:
     if not records or all(r.skipped for r in records):
         return "skipped"
     value, _, _ = worst_departure(records, law)
-    text = fmt_departure(value) if math.isfinite(value) else "flagged"
     flagged = flagged_count(records)
+    text = (fmt_departure(value) if math.isfinite(value) else "flagged" if flagged
+            else "n/a")
     if flagged:
         text += f" ({flagged}!)"
     if any(overrides_of(r) for r in records):
