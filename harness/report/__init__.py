@@ -177,16 +177,16 @@ def write_report(results: Results, out_dir: Path | str,
     try:
         prepared = prepare(results, out_dir, digests, cache)
         groups = scenario_groups(results, names) if many else {}
-        pages = write_pages(out_dir, sources, results.provenance)
+        pages, stale_pages = write_pages(out_dir, sources, results.provenance)
         page = html_page(results, out_dir, figure_map(tasks, expected, many, groups,
                                                       scenario_figures), pages, prepared,
-                         experiments_data)
+                         experiments_data, stale_pages)
     finally:  # the pool ends either way
         drawn = finish_drawing()
     if drawn != expected:
         page = html_page(results, out_dir, figure_map(tasks, drawn, many, groups,
                                                       scenario_figures), pages, prepared,
-                         experiments_data)
+                         experiments_data, stale_pages)
     wanted = {task.file for task, path in zip(tasks, drawn) if path is not None}
     wanted |= {str(Path(task.file).with_suffix(".svg")) for task, path in zip(tasks, drawn)
                if path is not None and task.svg}

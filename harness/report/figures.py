@@ -25,6 +25,7 @@ from harness.report.views import (
     LAW_ORDER,
     LAW_STYLE,
     X_FLOOR,
+    command_overrides,
     departure_cell,
     departure_grid,
     engine_labels,
@@ -100,6 +101,13 @@ def heatmap_figure(results: Results, path: Path, tag: str | None = None,
                            squeeze=False).ravel()
     norm = LogNorm(vmin=HEAT_MIN, vmax=HEAT_MAX)
     cmap = heat_cmap()
+    # the command line's --set: named under the figure and on its engines' columns
+    given = {engine for engine, values in
+             (results.provenance.get("settings_overrides") or {}).items() if values}
+    command = command_overrides(results.provenance)
+    if command:
+        figure.supxlabel(f"Not the presets as shipped: --set {command} on the command line",
+                         fontsize=10, color="#a40")
     image = None
     for ax, (law, preset) in zip(axes, panels):
         panel_labels = [label for label, (_, role) in zip(labels, roles) if role == preset]
@@ -124,7 +132,9 @@ def heatmap_figure(results: Results, path: Path, tag: str | None = None,
                 ax.text(j, i, texts[i][j], ha="center", va="center", fontsize=9,
                         color=colour, fontweight="bold" if flagged[i, j] else "normal",
                         bbox=CELL_TEXT_BOX if flagged[i, j] else None)
-        ax.set_xticks(range(len(panel_labels)), [label.split(".")[0] for label in panel_labels],
+        ax.set_xticks(range(len(panel_labels)),
+                      [label.split(".")[0] + (" (--set)" if label.split(".")[0] in given
+                                              else "") for label in panel_labels],
                       fontsize=9.5)
         ax.xaxis.tick_top()
         # two lines: on one, a renamed preset's title ran past its panel

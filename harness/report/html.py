@@ -33,7 +33,13 @@ from harness.report.overview import (
 from harness.report.reading import scenarios_digest
 from harness.report.scenario_sections import cached_section
 from harness.report.survey import cached_survey_section
-from harness.report.views import TYPE_NAMES, escape_html, has_library_scenarios, slug
+from harness.report.views import (
+    TYPE_NAMES,
+    command_overrides,
+    escape_html,
+    has_library_scenarios,
+    slug,
+)
 from harness.run.metrics import SCIENTIFIC_BELOW_PERCENT
 from harness.run.records import Results
 from harness.store.files import write_text_atomically
@@ -141,12 +147,32 @@ def scenario_links(names: Sequence[str]) -> str:
                    for n in names)
 
 
-def contents_html(names: Sequence[str], pages: dict,
+#: The page's sections as the contents name them; the contents list those present, in the
+#: order they appear on the page (:func:`page_sections`).
+SECTION_TITLES = {"headline": "Departure of every engine from the laws",
+                  "why": "Why: what each engine and preset solves",
+                  "split": "Law vs solve", "gates": "Gates", "contacts": "Several contacts",
+                  "scenarios": "Scenarios", "table3": "Table 3 of the paper",
+                  "survey": "Survey", "experiments": "Against experiments",
+                  "versions": "Versions and settings"}
+
+
+def page_sections(parts: Sequence[str]) -> list[str]:
+    """The anchors of :data:`SECTION_TITLES` present in the page's ``parts``, in page
+    order."""
+    page = "\n".join(parts)
+    found = [(page.find(f"id='{anchor}'"), anchor) for anchor in SECTION_TITLES]
+    return [anchor for at, anchor in sorted(found) if at >= 0]
+
+
+def contents_html(names: Sequence[str], pages: dict, sections: Sequence[str],
                   groups: dict[str, list[str]] | None = None,
-                  extra: Sequence[tuple[str, str]] = (), table3: bool = True) -> str:
-    """The table of contents at the top of the page (sections, scenarios, other pages);
-    with ``groups`` (``{tag: names}``, a report of many scenarios) the scenarios are folded
-    per tag."""
+                  stale: dict[str, str] | None = None) -> str:
+    """The table of contents at the top of the page: ``sections`` (anchors of
+    :data:`SECTION_TITLES`, in page order) with the scenarios under theirs, then the other
+    pages; with ``groups`` (``{tag: names}``, a report of many scenarios) the scenarios are
+    folded per tag. ``stale``: ``{title: why}`` of the pages not linked (older than the
+    results)."""
     if groups:
         scenarios = "".join(
             f"<li><details><summary>{escape_html(tag)} ({len(members)})</summary>"
@@ -154,25 +180,19 @@ def contents_html(names: Sequence[str], pages: dict,
             for tag, members in groups.items())
     else:
         scenarios = scenario_links(names)
-    items = [("#headline", "Departure of every engine from the laws"),
-             ("#why", "Why: what each engine and preset solves"),
-             ("#split", "Law vs solve"), ("#gates", "Gates"),
-             ("#scenarios", "Scenarios")]
     out = ["<nav class='contents'><b>Contents</b><ol>"]
-    for href, text in items:
-        out.append(f"<li><a href='{href}'>{text}</a>")
-        if href == "#scenarios":
+    for anchor in sections:
+        out.append(f"<li><a href='#{anchor}'>{escape_html(SECTION_TITLES[anchor])}</a>")
+        if anchor == "scenarios":
             kind = "groups" if groups else "scenarios"
             out.append(f"<ol class='{kind}'>{scenarios}</ol>")
         out.append("</li>")
-    for href, text in extra:  # sections present only in some reports
-        out.append(f"<li><a href='{href}'>{escape_html(text)}</a></li>")
-    if table3:
-        out.append("<li><a href='#table3'>Table 3 of the paper</a></li>")
-    out.append("<li><a href='#versions'>Versions and settings</a></li>")
     for file, title in pages.items():
         out.append(f"<li><a href='{escape_html(file)}'>{escape_html(title)}</a> "
                    "<span class='muted'>(separate page)</span></li>")
+    for title, why in (stale or {}).items():
+        out.append(f"<li>{escape_html(title)} <span class='muted'>(not linked: "
+                   f"{why})</span></li>")
     out.append("</ol></nav>")
     return "\n".join(out)
 
@@ -192,10 +212,13 @@ def write_html(results: Results, out_dir: Path, figures: dict, pages: dict | Non
 
 def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None = None,
               prepared: Prepared | None = None,
-              experiments_data: str | os.PathLike | None = None) -> str:
+              experiments_data: str | os.PathLike | None = None,
+              stale_pages: dict[str, str] | None = None) -> str:
     """The text of ``index.html`` (:func:`write_html`); reads nothing of the figures but
     their names in ``figures``, so that it can be built while they are drawn.
-    ``experiments_data``: the Fazeli drops' directory (else the environment variable's)."""
+    ``experiments_data``: the Fazeli drops' directory (else the environment variable's);
+    ``stale_pages``: ``{title: why}`` of the pages named but not linked
+    (:func:`harness.report.pages.write_pages`)."""
     pages = pages or {}
     prepared = prepare(results) if prepared is None else prepared
     prov = results.provenance
@@ -242,6 +265,12 @@ def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None
            else f'<span class="pass">{len(gates)} passed</span>')
         + f"; commit <code>{escape_html(str(git.get('commit'))[:10])}</code>, "
         f"{escape_html(prov.get('created_utc', ''))}.</p>")
+    command = command_overrides(prov)
+    if command:  # shared alone, the page would pass for the presets' numbers
+        parts.append("<p class='override'>Not the presets as shipped: this run set "
+                     f"<code>{escape_html(command)}</code> on the command line "
+                     "(<code>--set</code>), in every preset of those engines; every number "
+                     "of theirs below is with those settings.</p>")
     contents_at = len(parts)  # filled in at the end: some sections appear only when present
     parts.append("")
     # the sections, each folded under its name and headline: the overview unfolded, the
@@ -363,9 +392,6 @@ def html_page(results: Results, out_dir: Path, figures: dict, pages: dict | None
     generated = time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())
     parts.append(f"<p class='muted'>Report generated {generated} "
                  "by <code>impact-harness report</code>.</p></body></html>")
-    extra = [(href, title) for href, title in (("#contacts", "Several contacts"),
-                                               ("#survey", "Survey"),
-                                               ("#experiments", "Against experiments"))
-             if any(f"id='{href[1:]}'" in part for part in parts)]
-    parts[contents_at] = contents_html(names, pages, figures.get("groups"), extra, library)
+    parts[contents_at] = contents_html(names, pages, page_sections(parts),
+                                       figures.get("groups"), stale_pages)
     return "\n".join(parts)

@@ -250,6 +250,15 @@ def fmt_overrides(overrides: dict) -> str:
     return ", ".join(f"{key}={short_value(value)}" for key, value in overrides.items())
 
 
+def command_overrides(provenance: dict) -> str:
+    """The run's ``--set`` overrides as a reader's text, ``pymunk: iterations=3; mujoco:
+    …``; "" when the run had none. Every output that shows the numbers names them: shared
+    alone, a table of a ``--set`` run would pass for the presets' numbers."""
+    given = (provenance or {}).get("settings_overrides") or {}
+    return "; ".join(f"{engine}: {fmt_overrides(values)}" for engine, values in given.items()
+                     if values)
+
+
 def short_value(value) -> str:
     if isinstance(value, float):
         return f"{value:.6g}"
