@@ -175,15 +175,18 @@ def gates_html(provenance: dict) -> str:
     gates = provenance.get("gates", [])
     if not gates:
         return "<p>No scenario in this run declares a gate.</p>"
+    # a sweep's gate is checked at each point: the point tells its rows apart
+    points = any(g.get("point") for g in gates)
     rows = []
     for g in gates:
         cls = "fail" if g["status"] == "FAIL" else ("pass" if g["status"] == "pass" else "muted")
-        rows.append([escape_html(g["scenario"]), escape_html(g["gate"]),
-                     escape_html(g["record"]), escape_html(g["law"]),
+        rows.append([escape_html(g["scenario"]),
+                     *([escape_html(g.get("point") or "")] if points else []),
+                     escape_html(g["gate"]), escape_html(g["record"]), escape_html(g["law"]),
                      fmt_departure(g["departure"]), fmt_departure(g["max_departure"]),
                      f'<span class="{cls}">{escape_html(g["status"])}</span>'])
-    return html_table(["scenario", "gate", "record", "law", "departure", "max", "result"], rows,
-                  left=4)
+    return html_table(["scenario", *(["point"] if points else []), "gate", "record", "law",
+                       "departure", "max", "result"], rows, left=5 if points else 4)
 
 
 def split_table(results: Results, prepared: Prepared) -> str:

@@ -101,10 +101,14 @@ def write_summary(results: Results, out_dir: Path, prepared: Prepared | None = N
     gates = prov.get("gates", [])
     lines += ["## Gates", ""]
     if gates:
-        lines += ["| scenario | gate | record | law | departure | max | result |",
-                  "|---|---|---|---|---:|---:|---|"]
+        points = any(g.get("point") for g in gates)  # a sweep's rows told apart
+        lines += ["| scenario | " + ("point | " if points else "")
+                  + "gate | record | law | departure | max | result |",
+                  "|---|" + ("---|" if points else "") + "---|---|---|---:|---:|---|"]
         for g in gates:
-            lines.append(f"| {escape(g['scenario'])} | {escape(g['gate'])} | "
+            lines.append(f"| {escape(g['scenario'])} | "
+                         + (f"{escape(g.get('point') or '')} | " if points else "")
+                         + f"{escape(g['gate'])} | "
                          f"{escape(g['record'])} | {escape(g['law'])} | "
                          f"{fmt_departure(g['departure'])} | {fmt_departure(g['max_departure'])}"
                          f" | {escape(g['status'])} |")

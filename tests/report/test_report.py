@@ -630,3 +630,14 @@ def test_a_set_run_is_named_in_every_output_that_shows_its_numbers(quick_report,
         lambda artist: hasattr(artist, "get_text"))]
     assert "Not the presets as shipped: --set pymunk: iterations=3 on the command line" in texts
     assert "pymunk (--set)" in texts
+
+
+def test_a_sweeps_gate_rows_name_their_points():
+    gate = {"scenario": "sweep-x", "gate": "pymunk.accurate", "record": "pymunk.accurate",
+            "law": "newton-lcp", "departure": 1e-16, "max_departure": 1e-6, "status": "pass"}
+    gates = [{**gate, "point": "alpha=0.5"}, {**gate, "point": "alpha=1"}]
+    table = overview.gates_html({"gates": gates})
+    assert ">point<" in table
+    assert "alpha=0.5" in table and "alpha=1" in table
+    single = overview.gates_html({"gates": [{**gate, "point": ""}]})
+    assert ">point<" not in single
