@@ -38,6 +38,7 @@ from harness.report.views import (
     command_overrides,
     escape_html,
     has_library_scenarios,
+    setting_unit,
     slug,
 )
 from harness.run.metrics import SCIENTIFIC_BELOW_PERCENT
@@ -103,14 +104,25 @@ def settings_table(provenance: dict) -> str:
         rows = []
         for key in keys:
             values = [presets[p].get(key) for p in presets]
-            cells = [escape_html(json_short(v)) for v in values]
+            cells = [escape_html(setting_text(v, engine)) for v in values]
             if len(set(map(json_short, values))) > 1:
                 cells = [f"<b>{c}</b>" for c in cells]
-            rows.append([f"<code>{escape_html(key)}</code>", *cells])
+            rows.append([f"<code>{escape_html(key)}</code>", escape_html(setting_unit(key)),
+                         *cells])
         version = provenance.get("engine_versions", {}).get(engine, "")
         parts.append(f"<h4>{escape_html(engine)} {escape_html(version)}</h4>")
-        parts.append(html_table(["setting", *names], rows))
+        parts.append(html_table(["setting", "unit", *names], rows, left=2))
     return "\n".join(parts) or "<p>No engine ran.</p>"
+
+
+def setting_text(value, engine: str) -> str:
+    """A setting's value in the settings table: ``None`` (not set) as the engine's own
+    default, ``true``/``false`` as on/off, numbers short."""
+    if value is None:
+        return f"{engine}'s default"
+    if isinstance(value, bool):
+        return "on" if value else "off"
+    return json_short(value)
 
 
 def json_short(value) -> str:

@@ -250,6 +250,39 @@ def fmt_overrides(overrides: dict) -> str:
     return ", ".join(f"{key}={short_value(value)}" for key, value in overrides.items())
 
 
+#: The unit of each engine setting, as the report's settings table writes it beside the
+#: setting (docs/engines.md, each engine's settings table): "–" for a dimensionless share or
+#: factor, a count or a choice is named as such.
+SETTING_UNITS = {
+    "time_step": "s", "max_steps": "steps", "approach_steps": "steps",
+    "contact_steps": "steps", "collision_persistence": "steps",
+    "iterations": "iterations per step", "num_solver_iterations": "iterations per step",
+    "velocity_iterations": "iterations per step", "position_iterations": "iterations per step",
+    "ls_iterations": "iterations per step", "noslip_iterations": "iterations per step",
+    "num_sub_steps": "sub-steps per step",
+    "collision_slop": "m", "contact_breaking_threshold": "m", "contact_slop": "m",
+    "margin": "m", "polygon_radius": "m", "detection_overlap": "body extents",
+    "restitution_velocity_threshold": "m/s",
+    "collision_bias": "share of overlap left after 1 s",
+    "damping": "share of velocity kept after 1 s",
+    "linear_damping": "1/s", "angular_damping": "1/s",
+    "contact_erp": "share per step", "erp": "share per step", "friction_erp": "share per step",
+    "warm_starting_factor": "share", "global_cfm": "–", "solver_residual_threshold": "–",
+    "tolerance": "–", "noslip_tolerance": "–", "impratio": "–",
+    "solref": "[s, –] or restitution", "solimp": "–", "velocity_scale": "–",
+    "length_scale": "–", "integrator": "choice", "cone": "choice", "solver": "choice",
+    "enable_cone_friction": "on/off", "use_split_impulse": "on/off",
+    "warm_starting": "on/off", "continuous_physics": "on/off", "sub_stepping": "on/off",
+    "allow_sleeping": "on/off",
+}
+
+
+def setting_unit(key: str) -> str:
+    """:data:`SETTING_UNITS`' unit of ``key``; "–" for a setting it does not know (an engine
+    registered at run time)."""
+    return SETTING_UNITS.get(key, "–")
+
+
 def command_overrides(provenance: dict) -> str:
     """The run's ``--set`` overrides as a reader's text, ``pymunk: iterations=3; mujoco:
     …``; "" when the run had none. Every output that shows the numbers names them: shared

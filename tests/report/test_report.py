@@ -641,3 +641,19 @@ def test_a_sweeps_gate_rows_name_their_points():
     assert "alpha=0.5" in table and "alpha=1" in table
     single = overview.gates_html({"gates": [{**gate, "point": ""}]})
     assert ">point<" not in single
+
+
+def test_every_engine_setting_has_a_unit_and_none_reads_as_the_engines_default():
+    from harness.engines import engine_class, engine_names
+
+    keys = {key for name in engine_names() for preset in engine_class(name).presets.values()
+            for key in preset}
+    assert keys and keys <= set(views.SETTING_UNITS), keys - set(views.SETTING_UNITS)
+    table = html.settings_table({"engine_settings": {"pybullet": {
+        "defaults": {"time_step": 1 / 240, "num_sub_steps": None, "use_split_impulse": True},
+        "accurate": {"time_step": 1 / 240, "num_sub_steps": None, "use_split_impulse": False}}}})
+    import html as html_text
+
+    table = html_text.unescape(table)
+    assert "null" not in table and "pybullet's default" in table
+    assert ">s<" in table and ">sub-steps per step<" in table and ">on<" in table
