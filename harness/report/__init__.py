@@ -83,6 +83,7 @@ from harness.report.fragments import DIGESTS_FILE, open_cache, prepare
 from harness.report.history import history_figure, history_inputs
 from harness.report.html import html_page
 from harness.report.pages import write_pages
+from harness.report.progress import Progress, Silent
 from harness.report.reading import read_for_report
 from harness.report.summary import write_summary
 from harness.report.survey import survey_figure_tasks
@@ -131,7 +132,8 @@ def scenario_groups(results: Results, names: Sequence[str]) -> dict[str, list[st
 def write_report(results: Results, out_dir: Path | str,
                  sources: Sequence[Path] = (DEFAULT_RESULTS.parent,), workers: int | None = None,
                  scenario_figures: str = "auto", figures_for: Sequence[str] = (),
-                 svg: str = "auto", experiments_data: str | os.PathLike | None = None) -> dict:
+                 svg: str = "auto", experiments_data: str | os.PathLike | None = None,
+                 progress: Progress | Silent | None = None) -> dict:
     """Write index.html, summary.md, the figures (PNG and SVG) and, when the benchmark's
     ``bench.json`` or the stress test's ``stress.md`` exist (in ``bench/`` and ``stress/``
     under ``out_dir`` or one of ``sources``, by default where ``bench`` and ``stress`` write
@@ -153,7 +155,12 @@ def write_report(results: Results, out_dir: Path | str,
         The directory of a copy of the Fazeli et al. 2017 drops (else
         ``IMPACT_HARNESS_FAZELI_DIR``'s): the "Against experiments" section shows their
         aggregates (harness/report/experiments.py).
+    progress
+        Where the report says the step it is at (:class:`harness.report.progress.Progress`:
+        stderr once it has taken two seconds); by default nowhere.
     """
+    progress = Silent() if progress is None else progress
+    progress.step("reading the results' digests")
     out_dir = Path(out_dir)
     figure_dir = out_dir / FIGURES
     figure_dir.mkdir(parents=True, exist_ok=True)
@@ -172,17 +179,22 @@ def write_report(results: Results, out_dir: Path | str,
     # The figures are drawn by forked workers while this process builds the page, which
     # needs only their names: it assumes that every figure to be drawn has something to
     # show, and is built again in the rare case one had not.
+    progress.step("reading the records")
     expected, finish_drawing = start_drawing(tasks, figure_dir, workers,
-                                             read_records=lambda: read_records(results))
+                                             read_records=lambda: read_records(results),
+                                             on_stale=progress.drawing)
     try:
+        progress.step("building the page while the figures are drawn")
         prepared = prepare(results, out_dir, digests, cache)
         groups = scenario_groups(results, names) if many else {}
         pages, stale_pages = write_pages(out_dir, sources, results.provenance)
         page = html_page(results, out_dir, figure_map(tasks, expected, many, groups,
                                                       scenario_figures), pages, prepared,
                          experiments_data, stale_pages)
+        progress.step("drawing the figures")
     finally:  # the pool ends either way
         drawn = finish_drawing()
+    progress.step("writing the page and summary.md")
     if drawn != expected:
         page = html_page(results, out_dir, figure_map(tasks, drawn, many, groups,
                                                       scenario_figures), pages, prepared,
@@ -345,7 +357,8 @@ def draw_figures(tasks: Sequence[FigureTask], figure_dir: Path,
 
 
 def start_drawing(tasks: Sequence[FigureTask], figure_dir: Path, workers: int | None = None,
-                  read_records: Callable[[], None] | None = None
+                  read_records: Callable[[], None] | None = None,
+                  on_stale: Callable[[list[Path]], None] | None = None
                   ) -> tuple[list[Path], Callable[[], list[Path | None]]]:
     """:func:`draw_figures` started: the pool's workers draw while this process goes on.
 
@@ -357,7 +370,8 @@ def start_drawing(tasks: Sequence[FigureTask], figure_dir: Path, workers: int | 
     ``read_records`` (:func:`read_records`), when given, reads the records here before the
     workers drawing from them are forked, so that they inherit them instead of each reading
     them; the figures that read none (:attr:`FigureTask.reads_records`) are forked first,
-    in a pool of their own, and drawn meanwhile.
+    in a pool of their own, and drawn meanwhile. ``on_stale`` is told the files to be
+    drawn (the rest are current), before any is.
     """
     global _PENDING
     expected: list[Path] = []
@@ -372,6 +386,8 @@ def start_drawing(tasks: Sequence[FigureTask], figure_dir: Path, workers: int | 
         else:
             result.append(None)
             stale.append((index, (task, path, tag)))
+    if on_stale is not None:
+        on_stale([path for _, (_, path, _) in stale])
     if not stale:  # matplotlib only when something is drawn (its import is a warm report's tenth)
         return expected, lambda: result
     workers = min(workers or os.cpu_count() or 1, len(stale))
@@ -541,11 +557,13 @@ def main(args) -> int:
     start = time.perf_counter()
     # the bench and stress pages beside the results only: a report of a user's results in
     # another directory does not take the library's pages from reports/
-    written = write_report(results, out, sources=[args.results.parent],
-                           workers=getattr(args, "workers", None),
-                           scenario_figures=getattr(args, "scenario_figures", "auto"),
-                           figures_for=getattr(args, "figures_for", ()),
-                           svg=getattr(args, "svg", "auto"), experiments_data=experiments_data)
+    with Progress() as progress:  # on stderr once the report has taken two seconds
+        written = write_report(results, out, sources=[args.results.parent],
+                               workers=getattr(args, "workers", None),
+                               scenario_figures=getattr(args, "scenario_figures", "auto"),
+                               figures_for=getattr(args, "figures_for", ()),
+                               svg=getattr(args, "svg", "auto"),
+                               experiments_data=experiments_data, progress=progress)
     print(f"wrote {written['html']} and {written['summary']} with {len(written['figures'])} "
           f"figures in {time.perf_counter() - start:.1f} s")
     return 0
