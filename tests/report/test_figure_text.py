@@ -95,3 +95,31 @@ def test_every_figure_of_the_report_has_its_texts_whole_and_apart(drawn_texts):
     kinds = {name.split("-")[0].removesuffix(".png") for name in drawn_texts}
     assert kinds >= {"heatmap", "split", "impulse", "history", "sweep", "paper"}
     assert {name: problems for name, problems in drawn_texts.items() if problems} == {}
+
+
+def test_the_survey_figures_have_their_texts_whole_and_apart(tmp_path):
+    """The report's survey section draws the survey's maps and CDFs (a CDF's two-column
+    keys once ran into each other and past the figure's edge)."""
+    from harness.survey import outputs
+    from harness.survey.cli import run_survey
+    from harness.survey.population import resolve_populations
+
+    _agg()
+    survey = run_survey(resolve_populations([]), 12, 0, ("pymunk",), ("defaults", "accurate"),
+                        echo=lambda _: None)
+    found: dict[str, list[str]] = {}
+
+    def check(figure, path, fmt, dpi=100, metadata=None):
+        if fmt == "png":
+            found[Path(path).name] = plotting.text_problems(figure, dpi)
+
+    patch = pytest.MonkeyPatch()
+    patch.setattr(plotting, "save_figure", check)
+    token = plotting.SVG_TWIN.set(False)
+    try:
+        outputs.figures(survey["runs"], tmp_path)
+    finally:
+        plotting.SVG_TWIN.reset(token)
+        patch.undo()
+    assert set(found) == {"map-pymunk.png", "cdf-pymunk.png"}
+    assert {name: problems for name, problems in found.items() if problems} == {}
