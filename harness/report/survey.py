@@ -225,7 +225,7 @@ def _interval_cell(stats: dict, prefix: str, row: int) -> str:
     low, high = (stats.get(f"{prefix}_{end}") for end in ("low", "high"))
     if low is None or high is None or not (math.isfinite(low[row]) and math.isfinite(high[row])):
         return fmt_departure(float(stats[prefix][row]))
-    # the quantile and its bounds in one style (harness/run/metrics.py, fmt_departures)
+    # the quantile and its bounds, each as it reads alone (harness/run/metrics.py)
     value, low_text, high_text = fmt_departures(
         [float(stats[prefix][row]), float(low[row]), float(high[row])])
     return f"{value}<br><small>[{low_text}, {high_text}]</small>"

@@ -29,7 +29,6 @@ from harness.engines import PRESET_ROLES, preset_label
 from harness.plotting import new_figure, percent_tick, save_png
 from harness.run.metrics import (
     SCIENTIFIC_BELOW_PERCENT,
-    SHARED_SCIENTIFIC_BELOW_PERCENT,
     fmt_departure,
     fmt_departures,
 )
@@ -113,7 +112,7 @@ def _with_interval(value: dict, prefix: str) -> str:
     low, high = value.get(f"{prefix}_low"), value.get(f"{prefix}_high")
     if low is None or high is None or not (math.isfinite(low) and math.isfinite(high)):
         return fmt_departure(value[prefix])
-    text, low_text, high_text = fmt_departures([value[prefix], low, high])  # one style
+    text, low_text, high_text = fmt_departures([value[prefix], low, high])  # each as alone
     return f"{text} [{low_text}, {high_text}]"
 
 
@@ -234,10 +233,8 @@ def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dic
                    + "." for engine, values in settings.get("overrides", {}).items())),
         ("Departure = ‖u − u_law‖_M / ‖u_before‖_M (kinetic-energy norm; two free bodies in "
          "their centre of mass's frame), in percent: decimals down to "
-         f"{SCIENTIFIC_BELOW_PERCENT:g}%, scientific notation below it; a median or p90 and "
-         "its interval are written alike, all in scientific notation when one of them is "
-         f"below {SCIENTIFIC_BELOW_PERCENT:g}% and none reaches "
-         f"{SHARED_SCIENTIFIC_BELOW_PERCENT:g}%. *Checked runs*: the runs judged one impact "
+         f"{SCIENTIFIC_BELOW_PERCENT:g}%, scientific notation below it, each number alike "
+         "wherever it stands. *Checked runs*: the runs judged one impact "
          "by the verdict checks (docs/verdicts.md); *all runs*: every run, flagged ones "
          "included, so a large flagged share cannot hide the worst runs; *flagged* = runs "
          "failing a check, counted by reason below. [95% CI]: a percentile-bootstrap "
