@@ -97,6 +97,30 @@ def test_every_figure_of_the_report_has_its_texts_whole_and_apart(drawn_texts):
     assert {name: problems for name, problems in drawn_texts.items() if problems} == {}
 
 
+@pytest.mark.parametrize("engines", [("pymunk", "mujoco"), ("box2d",)])
+def test_a_heat_map_of_few_engines_has_its_texts_whole_and_apart(tmp_path, engines):
+    """Narrow panels: their titles (MuJoCo's renamed preset the longest) once overlapped."""
+    _agg()
+    scenarios = [s for s in load_scenarios(tags="quick")][:2]
+    outcome = runner.run(scenarios, engines=engines, cache=None, workers=1, log=None)
+    results = read_results(write_results(tmp_path / "results.json", outcome.records,
+                                         outcome.provenance, outcome.scenarios))
+    found = []
+    patch = pytest.MonkeyPatch()
+    patch.setattr(plotting, "save_figure",
+                  lambda figure, path, fmt, dpi=100, metadata=None:
+                  found.append(plotting.text_problems(figure, dpi)) if fmt == "png" else None)
+    token = plotting.SVG_TWIN.set(False)
+    try:
+        from harness.report.figures import heatmap_figure
+
+        heatmap_figure(results, tmp_path / "heatmap.png")
+    finally:
+        plotting.SVG_TWIN.reset(token)
+        patch.undo()
+    assert found == [[]]
+
+
 def test_the_survey_figures_have_their_texts_whole_and_apart(tmp_path):
     """The report's survey section draws the survey's maps and CDFs (a CDF's two-column
     keys once ran into each other and past the figure's edge)."""
