@@ -85,6 +85,11 @@ def drawn_texts(tmp_path_factory):
     try:
         for task in report.figure_tasks(results, False, "all", (), "none"):
             task.draw(out / task.file, None)
+        # the heat map of many scenarios: a row per family, "median / max (k!)" cells
+        from harness.report.figures import heatmap_figure
+
+        groups = report.scenario_groups(results, results.scenario_names())
+        heatmap_figure(results, out / "heatmap-families.png", groups=groups)
     finally:
         plotting.SVG_TWIN.reset(token)
         patch.undo()
