@@ -72,6 +72,7 @@ from harness.plotting import SVG_TWIN
 from harness.processes import start_forked
 from harness.report.experiments import data_option_problem
 from harness.report.figure_cache import (
+    FIGURE_KINDS,
     FigureTask,
     inputs_digest,
     is_current,
@@ -105,13 +106,8 @@ DEFAULT_OUT = DEFAULT_RESULTS.parent
 #: Tags that select scenarios for a run rather than say what they are: never a family.
 SELECTION_TAGS = ("quick", "sweep", "slow")
 #: Figure kinds drawn once per report (not per scenario): their SVG twins are kept with
-#: ``--svg headline``.
-HEADLINE_KINDS = ("heatmap", "split", "table3", "survey_map", "survey_cdf")
-#: Rough drawing cost per kind [s] (CPU, PNG + SVG, measured at 1,000 scenarios: the headline
-#: figures with the heat map's row per family): the pool draws the dearest first so that no
-#: worker is left with the dearest at the end.
-KIND_COST = {"heatmap": 2.5, "sweep": 2.2, "table3": 1.7, "split": 1.8, "history": 1.0,
-             "impulse": 0.5, "survey_map": 1.2, "survey_cdf": 0.6}
+#: ``--svg headline`` (:data:`~harness.report.figure_cache.FIGURE_KINDS`).
+HEADLINE_KINDS = tuple(name for name, kind in FIGURE_KINDS.items() if kind.headline)
 
 
 def scenario_group(info: dict) -> str:
@@ -175,7 +171,7 @@ def write_report(results: Results, out_dir: Path | str,
     digests = scenario_digests(results, known.get)
     tasks = figure_tasks(results, many, scenario_figures, figures_for, svg, digests)
     # the survey's, when out_dir holds one (harness/report/survey.py): headline figures
-    tasks += survey_figure_tasks(out_dir, svg in ("all", "headline"))
+    tasks += survey_figure_tasks(out_dir, svg)
     # The figures are drawn by forked workers while this process builds the page, which
     # needs only their names: it assumes that every figure to be drawn has something to
     # show, and is built again in the rare case one had not.
@@ -268,20 +264,19 @@ def figure_tasks(results: Results, many: bool, scenario_figures: str,
     later values.
     """
     names = results.scenario_names()
-    headline_svg = svg in ("all", "headline")
-    scenario_svg = svg == "all"
+    kinds = FIGURE_KINDS
     digests = scenario_digests(results) if digests is None else digests
     records_digest = {name: digests.get(name, "") for name in names}
     tasks = []
     groups = scenario_groups(results, names) if many else None
     # above MANY_SCENARIOS one row per family (the scenarios' rows are HTML tables instead)
-    tasks.append(FigureTask("heatmap", "heatmap.png", [groups, records_digest],
-                            lambda path, tag: heatmap_figure(results, path, tag, groups),
-                            ("heatmap",), headline_svg))
+    tasks.append(kinds["heatmap"].task(
+        [groups, records_digest], lambda path, tag: heatmap_figure(results, path, tag, groups),
+        kinds["heatmap"].svg(svg)))
     # the split rows are the records' (views.split_rows): drawn from them only when stale
-    tasks.append(FigureTask("split", "split.png", records_digest,
-                            lambda path, tag: split_figure(split_rows(results), path, tag),
-                            ("split",), headline_svg))
+    tasks.append(kinds["split"].task(
+        records_digest, lambda path, tag: split_figure(split_rows(results), path, tag),
+        kinds["split"].svg(svg)))
     for name in names:
         if scenario_figures != "all" and not any(fnmatch.fnmatchcase(name, pattern)
                                                  for pattern in figures_for):
@@ -289,27 +284,36 @@ def figure_tasks(results: Results, many: bool, scenario_figures: str,
         records = results.for_scenario(name)
         info = results.scenarios.get(name, {})
         if info.get("sweep"):
-            tasks.append(FigureTask(
+            tasks.append(kinds["sweep"].task(
                 # what the figure reads of the scenario: its sweep (not its file's path,
                 # which differs between checkouts and would redraw every clone's figures)
-                "sweep", f"sweep-{slug(name)}.png", [name, info["sweep"], records_digest[name]],
+                [name, info["sweep"], records_digest[name]],
                 lambda path, tag, name=name, info=info, records=records:
-                sweep_figure(name, info, records, path, tag), ("sweep", name), scenario_svg))
+                sweep_figure(name, info, records, path, tag), kinds["sweep"].svg(svg),
+                key=name, file_key=slug(name)))
         else:
-            tasks.append(FigureTask(
-                "impulse", f"impulse-{slug(name)}.png", [name, records_digest[name]],
+            tasks.append(kinds["impulse"].task(
+                [name, records_digest[name]],
                 lambda path, tag, name=name, records=records:
-                impulse_figure(name, records, path, tag), ("impulse", name), scenario_svg))
+                impulse_figure(name, records, path, tag), kinds["impulse"].svg(svg),
+                key=name, file_key=slug(name)))
             # the contact in time (harness.report.history)
-            tasks.append(FigureTask(
-                "history", f"history-{slug(name)}.png", history_inputs(name, records_digest[name]),
+            tasks.append(kinds["history"].task(
+                history_inputs(name, records_digest[name]),
                 lambda path, tag, name=name, records=records:
-                history_figure(name, records, path, tag), ("history", name), scenario_svg))
+                history_figure(name, records, path, tag), kinds["history"].svg(svg),
+                key=name, file_key=slug(name)))
     if has_library_scenarios(results):  # the paper's table only beside the library
-        tasks.append(FigureTask("table3", "paper-table3.png", table3_payload(),
-                                lambda path, tag: table3_figure(path, tag), ("table3",),
-                                headline_svg, reads_records=False))
+        tasks.append(kinds["table3"].task(table3_payload(),
+                                          lambda path, tag: table3_figure(path, tag),
+                                          kinds["table3"].svg(svg), reads_records=False))
     return tasks
+
+
+def _cost(kind: str) -> float:
+    """A kind's rough drawing cost (:class:`~harness.report.figure_cache.FigureKind`); 1 s
+    for a kind not registered (a caller's own task)."""
+    return FIGURE_KINDS[kind].cost if kind in FIGURE_KINDS else 1.0
 
 
 #: The figure tasks being drawn, read by the pool's forked workers (which inherit it: the
@@ -399,7 +403,7 @@ def start_drawing(tasks: Sequence[FigureTask], figure_dir: Path, workers: int | 
         matplotlib.use("Agg")
     # Those that read no record first: forked before the records are read (below).
     stale.sort(key=lambda item: (item[1][0].reads_records,
-                                 -KIND_COST.get(item[1][0].kind, 1.0)))
+                                 -_cost(item[1][0].kind)))
     _PENDING = [item for _, item in stale]
 
     reading = [i for i, (task, _, _) in enumerate(_PENDING) if task.reads_records]
