@@ -6,6 +6,12 @@
     impact-harness report --results /tmp/r.json --out /tmp/report
     impact-harness report --figures-for 'rod-*' --workers 2   # many scenarios: some figures
 
+The bench and stress pages (``bench.html``, ``stress.html``) are written when their inputs
+exist, and linked from the contents only when measured by the code that made the results;
+otherwise the contents name them with when they were measured and ``make bench`` or ``make
+stress`` (``make validate`` measures neither: minutes each). Past two seconds the command
+prints the step it is at on stderr (:mod:`harness.report.progress`).
+
 Without ``--out`` the report goes to ``reports/``, where it replaces an existing report only
 when made from ``reports/results.json`` (the results that report was made from, as ``make
 validate`` does): a report of another results file there is refused (exit status 2, before
