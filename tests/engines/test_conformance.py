@@ -44,6 +44,7 @@ def test_the_toy_conforms_and_its_traits_come_from_its_class(toy):
     assert toy in registry.engine_names()
 
 
+@pytest.mark.kernel_sensitive  # its physics checks decide within stated bands
 @pytest.mark.parametrize("name", registry.ENGINE_NAMES)
 def test_every_shipped_engine_conforms(load_or_skip, name):
     assert check_engine(load_or_skip(name)) == []
@@ -77,6 +78,110 @@ def test_the_kit_names_each_broken_promise():
     assert any(".plot_style" in line for line in failures)
     assert any("accepts an unknown key" in line for line in check_engine(Lenient))
     assert any("expected a separation" in line for line in check_engine(Unseparated))
+
+
+# Broken adapters an author could write from the docs (the tester's four of issue 36): each
+# keeps the contract's shape and determinism, and breaks one physical promise.
+class SpinFlipped(ToyEngine):
+    """Reads ω with the wrong sign (a 3-D engine's joint about +y turns clockwise)."""
+
+    def _read_velocities(self, world):
+        return tuple((v_x, v_y, -omega) for v_x, v_y, omega in super()._read_velocities(world))
+
+
+class NormalFlipped(ToyEngine):
+    """Reports the contact normal from B into A."""
+
+    def _step(self, world):
+        contact = super()._step(world)
+        if contact is None:
+            return None
+        points, (n_x, n_y), impulse, pressure = contact
+        return points, (-n_x, -n_y), impulse, pressure
+
+
+class FrictionIgnored(ToyEngine):
+    """Never gives the pair its μ (the engine's 0 stays)."""
+
+    def _prepare(self, world, scene, settings, start, weights):
+        return super()._prepare(world, dataclasses.replace(scene, friction=0.0), settings,
+                                start, weights)
+
+
+class ImpulseZeroed(ToyEngine):
+    """Reports no impulse for a step that applied one."""
+
+    def _step(self, world):
+        contact = super()._step(world)
+        if contact is None:
+            return None
+        points, normal, _, _ = contact
+        return points, normal, (0.0, 0.0), 0.0
+
+
+@pytest.mark.parametrize("broken, sentence", [
+    (SpinFlipped, "the spin of body B turns against the moment of the impulse"),
+    (NormalFlipped, "does not point out of the ground (+y): a normal flipped?"),
+    (FrictionIgnored, "friction is not used: with μ = 0.3 the oblique impact changes the slip "
+                      "by 0 m/s"),
+    (ImpulseZeroed, "the reported impulse does not explain the change of momentum of body B"),
+])
+def test_the_kit_fails_each_broken_physical_promise_with_its_sentence(broken, sentence):
+    failures = check_engine(broken)
+    for role in registry.PRESET_ROLES:  # under each preset, once per promise
+        named = [line for line in failures if sentence in line and f"preset {role!r}" in line]
+        assert len(named) == 1, (role, failures)
+    # the shape, the settings and the runs' determinism are still the contract's
+    assert not [line for line in failures if "physics" not in line and "preset" not in line]
+
+
+def test_the_physics_checks_bite_on_a_shipped_engine(load_or_skip):
+    # The same flip in pymunk's adapter: its physics is exact, so only the kit's sentence
+    # tells them apart (the checks are not the toy's alone).
+    engine_class = type(load_or_skip("pymunk"))
+
+    class PymunkSpinFlipped(engine_class):
+        def _read_velocities(self, world):
+            return tuple((v_x, v_y, -omega)
+                         for v_x, v_y, omega in super()._read_velocities(world))
+
+    failures = check_engine(PymunkSpinFlipped)
+    assert any("turns against the moment of the impulse" in line for line in failures)
+    assert check_engine(engine_class) == []
+
+
+def test_the_kit_holds_a_restitution_and_an_own_law_claim():
+    class Plastic(ToyEngine):  # always e = 0
+        def _prepare(self, world, scene, settings, start, weights):
+            return super()._prepare(world, dataclasses.replace(scene, restitution=0.0),
+                                    settings, start, weights)
+
+    failures = check_engine(Plastic)
+    assert sum("restitution is not used" in line for line in failures) == 2  # both presets
+    assert any("does not meet its own law 'poisson'" in line for line in failures)
+    # A preset that ignores e by design says why, and is not held to it.
+    declared = type("PlasticDefaults", (Plastic,), {
+        "restitution_unused": {"defaults": "a reason of the test"}})
+    assert sum("restitution is not used" in line for line in check_engine(declared)) == 1
+    # Claiming another law than the one it solves: the toy solves Poisson's, not Newton's.
+    claims = type("ClaimsNewtonLcp", (ToyEngine,), {"own_law": "newton-lcp"})
+    assert any("does not meet its own law 'newton-lcp'" in line
+               for line in check_engine(claims))
+
+
+def test_the_kit_names_an_unhashable_world_key_and_a_converged_law_without_reference():
+    class ListKeyed(ToyEngine):
+        def _world_key(self, scene, settings):
+            return [len(scene.bodies)]
+
+    assert any("returns an unhashable key" in line
+               for line in check_engine(ListKeyed))
+    converged = type("Converged", (ToyEngine,), {"own_law": "converged"})
+    assert any(".bench_reference: own_law 'converged' needs the label" in line
+               for line in check_engine(converged))
+    named = type("ConvergedNamed", (ToyEngine,), {"own_law": "converged",
+                                                  "bench_reference": "accurate"})
+    assert check_engine(named) == []
 
 
 def test_register_refuses_a_taken_name_or_a_misnamed_class(toy):
