@@ -157,8 +157,9 @@ def flagged_count(records: Iterable[Record]) -> int:
 
 def departure_cell(records: Sequence[Record], law: str) -> str:
     """A headline cell: the largest departure over the single-impact runs, ``(k!)`` when k
-    runs were flagged (kept out of the value), ``*`` if the scenario overrode the engine's
-    settings."""
+    runs were flagged (kept out of the value; ``(k of n!)`` for a sweep's n runs, so that
+    a value from 2 of 7 points does not pass for the sweep's), ``*`` if the scenario
+    overrode the engine's settings."""
     records = list(records)
     if not records or all(r.skipped for r in records):
         return "skipped"
@@ -167,7 +168,8 @@ def departure_cell(records: Sequence[Record], law: str) -> str:
     text = (fmt_departure(value) if math.isfinite(value) else "flagged" if flagged
             else "n/a")
     if flagged:
-        text += f" ({flagged}!)"
+        ran = sum(1 for r in records if not r.skipped)
+        text += f" ({flagged} of {ran}!)" if ran > 1 else f" ({flagged}!)"
     if any(overrides_of(r) for r in records):
         text += " *"
     return text

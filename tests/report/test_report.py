@@ -228,11 +228,11 @@ def sweep_run(index: int, departure: float, status: str = "ok", overrides=None) 
 def test_flagged_runs_are_counted_never_in_the_value():
     # the largest single-impact departure (3%) is the value; the flagged run is counted
     runs = [sweep_run(0, 0.03), sweep_run(1, 0.01, "multi-contact"), sweep_run(2, 0.02)]
-    assert views.departure_cell(runs, "poisson") == "3% (1!)"
+    assert views.departure_cell(runs, "poisson") == "3% (1 of 3!)"  # of the sweep's runs
     assert views.worst_departure(runs, "poisson") == (0.03, True, False)
     # a flagged run with a larger departure does not become the value
     runs[1] = sweep_run(1, 0.05, "multi-contact")
-    assert views.departure_cell(runs, "poisson") == "3% (1!)"
+    assert views.departure_cell(runs, "poisson") == "3% (1 of 3!)"
     # every run flagged: no value at all
     assert views.departure_cell([sweep_run(0, 0.05, "multi-contact")], "poisson") \
         == "flagged (1!)"
