@@ -303,7 +303,9 @@ def summary(calibration: Calibration) -> str:
             text = f"cannot be calibrated: moves the objective by {moved:.2g} < {TOLERANCE}"
         else:
             text = f"moves the objective by {moved:.4f}"
-        lines.append(f"  {knob} {calibration.knobs[knob]}: {text}")
+        tried = ", ".join(f"{v:g}" if isinstance(v, float) else str(v)
+                          for v in calibration.knobs[knob])  # not Python's list
+        lines.append(f"  {knob} (tried {tried}): {text}")
     if calibration.uncertainty is not None:
         lines += uncertainty_lines(calibration.uncertainty, len(calibration.errors[0]),
                                    calibration.cannot())

@@ -332,7 +332,8 @@ def write_figure(rows: list[dict], path: Path, metadata: dict | None = None) -> 
         ax.set_xlabel("normal impulse $I_n$ [N·s]")
         ax.set_ylabel("tangential impulse $I_t$ [N·s]")
         ax.set_title(f"γ = {row['gamma']}, δ = {row['delta']}, μ = {row['mu']}, e = 0.8")
-        ax.legend(fontsize=9, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=3,
+        # two columns: at three, the two panels' legends ran into each other
+        ax.legend(fontsize=9, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2,
                   frameon=False)
     fig.suptitle("Table 3, two sleds: impulse paths of each law (Routh's graph)")
 

@@ -33,7 +33,7 @@ block-diagonal). Likewise the last contact's terms (``m_nn``, ``m_nt``, ``m_tt``
 ``M⁻¹w``), keyed on that factor and the bytes of ``w_n`` and ``w_t`` given as float
 arrays: a fit, a sweep or a law solver solves one contact at many speeds, ``μ``, ``e`` and
 laws, and then pays only for the approach velocities, the law and the result. Measured per
-call: README, 'Measured speed'.
+call: docs/performance.md, 'Measured speed (`make bench` = `impact-harness bench --quick`)'.
 """
 
 from __future__ import annotations

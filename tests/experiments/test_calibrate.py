@@ -283,7 +283,7 @@ def test_cli_calibrates_a_registered_engine_without_knobs_and_says_why(capsys, t
     assert status == 0 and "best:" in out
     assert (f"its own settings: cannot be calibrated (no knobs; the pair's mu and e alone are "
             f"tried): {Engine.no_calibration_knobs_why}") in out
-    assert "  mu [" in out and "  e [" in out and "approach_steps" not in out
+    assert "  mu (tried " in out and "  e (tried " in out and "approach_steps" not in out
 
 
 def test_an_engines_calibration_knobs_are_tried_beside_the_pair(toy):
@@ -299,7 +299,7 @@ def test_an_engines_calibration_knobs_are_tried_beside_the_pair(toy):
     assert len(result.cells) == 3 * 3 * 2
     assert "approach_steps" in result.cannot()
     text = calibrate.summary(result)
-    assert "approach_steps [0.0, 2.0]: cannot be calibrated" in text
+    assert "approach_steps (tried 0, 2): cannot be calibrated" in text  # not a list repr
     assert "no knobs" not in text
 
 
