@@ -67,6 +67,7 @@ _ENGINE_MODULES: dict[str, tuple[str, str, str]] = {
     "pybullet": ("harness.engines.pybullet", "pybullet", "pybullet"),
     "mujoco": ("harness.engines.mujoco", "mujoco", "mujoco"),
     "box2d": ("harness.engines.box2d", "Box2D", "box2d"),
+    "drake": ("harness.engines.drake", "pydrake", "drake"),
 }
 
 ENGINE_NAMES: tuple[str, ...] = tuple(_ENGINE_MODULES)
@@ -88,6 +89,32 @@ def pinned_requirement(distribution: str) -> str:
     return distribution
 
 
+def _drake_platform_problem() -> str | None:
+    """Why Drake's pinned wheel cannot install here (it ships for glibc >= 2.34 on x86_64
+    or aarch64 Linux, and for macOS), or None where it can."""
+    import platform
+    import sys
+
+    if sys.platform == "darwin":
+        return None
+    machine = platform.machine()
+    if not sys.platform.startswith("linux"):
+        return f"Drake ships no wheel for {sys.platform}"
+    if machine not in ("x86_64", "aarch64"):
+        return f"Drake ships no Linux wheel for {machine} (x86_64 and aarch64 only)"
+    library, version = platform.libc_ver()
+    parts = tuple(int(part) for part in version.split(".")[:2] if part.isdigit())
+    if library != "glibc" or parts < (2, 34):
+        return (f"Drake's Linux wheels need glibc >= 2.34; this machine has "
+                f"{library or 'no glibc'} {version}".rstrip())
+    return None
+
+
+# engine -> why its pinned wheel cannot install on this platform (None: it can), added to
+# the not-installed message.
+_PLATFORM_PROBLEMS = {"drake": _drake_platform_problem}
+
+
 def engine_distribution(name: str) -> str:
     """The distribution (pip name) of shipped engine ``name``'s package (provenance)."""
     return _ENGINE_MODULES[name][2]
@@ -101,10 +128,13 @@ class EngineNotInstalled(ImportError):
         requirement = pinned_requirement(distribution)
         self.engine = engine
         self.install_command = f"pip install {requirement}"
+        platform_problem = _PLATFORM_PROBLEMS.get(engine, lambda: None)()
+        if platform_problem:
+            reason = f"{reason or f'cannot import {package}'}; {platform_problem}"
         message = (
             f"engine {engine!r} is not installed ({reason or f'cannot import {package}'}); "
             f"install it with `{self.install_command}` or all engines with "
-            f'`pip install -e ".[harness]"`'
+            f'`pip install -e ".[harness,drake]"`'
         )
         super().__init__(message, name=package)
 
