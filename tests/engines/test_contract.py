@@ -48,7 +48,7 @@ def engine(load_or_skip, request):
 
 # ---------------------------------------------------------------------- registry
 def test_engine_names_and_presets():
-    assert ENGINE_NAMES == ("pymunk", "pybullet", "mujoco", "box2d")
+    assert ENGINE_NAMES == ("pymunk", "pybullet", "mujoco", "box2d", "drake")
     assert PRESET_ROLES == ("defaults", "accurate")
 
 
@@ -75,7 +75,7 @@ def test_missing_engine_raises_import_error_naming_install(monkeypatch):
     assert isinstance(error, ImportError)
     assert error.engine == "pymunk"
     assert "pip install pymunk==7.3.1" in str(error)
-    assert 'pip install -e ".[harness]"' in str(error)
+    assert 'pip install -e ".[harness,drake]"' in str(error)
     report = available_engines()
     assert report["pymunk"] is not None and "pymunk" in report["pymunk"]
     # The other engines are unaffected (when installed).
@@ -359,7 +359,8 @@ def test_contact_records_give_point_and_touching_feature(engine, scene_name):
 def test_impulse_source_and_energies(engine):
     scene = SCENES["two-disks"][0]
     run = engine.run(scene, preset="accurate")
-    assert run.impulse_source == ("momentum" if engine.name == "mujoco" else "engine")
+    # MuJoCo and Drake leave the impulse to momentum (their adapters say why)
+    assert run.impulse_source == ("momentum" if engine.name in ("mujoco", "drake") else "engine")
     u_before, u_after = scene.state(), run.u_after
     mass = scene.mass_matrix()
     # Reason for rel 1e-14: the same sums as u^T M u in another order (rounding only).
