@@ -63,7 +63,7 @@ class DrakeEngine(Engine):
                      "map (lagged approximation, 10 µs steps): a central drop bounces at "
                      "e·v."),
     }
-    plot_style = ("#CC79A7", "D")
+    plot_style = ("#D55E00", "v")  # Okabe–Ito vermillion; the others are taken
     bench_impacts = (10, 60)
     bench_impact_seconds = 3e-2
     own_law = "converged"  # a compliant contact solves no rigid law: its limit is itself
