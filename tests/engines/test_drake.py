@@ -149,8 +149,9 @@ def test_stiffness_sets_the_contact_steps(engine):
     """k = m_nn·(π/(N·h))² with both geometries' values combined: a d = 0 contact lasts N."""
     run = engine.run(drop(1.0, 1.0, mass=3.0), preset="accurate",
                      overrides={"contact_steps": 60})
+    step = engine.settings("accurate")["time_step"]
     assert run.derived["point_contact_stiffness"] == pytest.approx(
-        3.0 * (math.pi / (60 * 1e-5)) ** 2)
+        3.0 * (math.pi / (60 * step)) ** 2)
     assert run.derived["hunt_crossley_dissipation"] == 0.0
     assert abs(len(run.contacts) - 60) <= 2
 

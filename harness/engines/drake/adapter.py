@@ -29,9 +29,9 @@ from harness.scene.geometry import contact_velocity, impact_problem, scene_conta
 # reports a point pair only for an overlap.
 _DETECTION_OVERLAP = 1e-6
 
-#: The accurate preset's undamped contact duration (s): 500 steps of 1e-5 s; the accuracy
+#: The accurate preset's undamped contact duration (s): 500 steps of 1e-6 s; the accuracy
 #: bench and the stress test's step sweep hold it while they change the steps.
-CONTACT_DURATION_S = 5e-3
+CONTACT_DURATION_S = 5e-4
 
 
 def _contact_terms(scene: Scene) -> tuple[float, float]:
@@ -64,7 +64,7 @@ class DrakeEngine(Engine):
                      "and dissipation from a 1 mm penetration allowance): e is not used and "
                      "a 1 m/s drop bounces at about 0.02 m/s."),
         "accurate": ("stiffness from the normal effective mass over a 500-step contact of "
-                     "10 µs steps, Hunt–Crossley d from e and the approach speed through "
+                     "1 µs steps, Hunt–Crossley d from e and the approach speed through "
                      "the discrete contact's map, TAMSI (as exact as SAP here and 2.8x "
                      "cheaper): a central drop bounces at e·v."),
     }
@@ -88,7 +88,7 @@ class DrakeEngine(Engine):
 
     @classmethod
     def time_step_overrides(cls, role: str, time_step: float) -> dict:
-        """At ``accurate`` the stiffness is tied to steps: keep the preset's 5 ms contact, so
+        """At ``accurate`` the stiffness is tied to steps: keep the preset's 0.5 ms contact, so
         that the time step is what changes."""
         if role != "accurate":
             return {"time_step": time_step}
@@ -97,7 +97,7 @@ class DrakeEngine(Engine):
 
     @classmethod
     def bench_sweep(cls, quick: bool) -> list[tuple[str, str, dict]]:
-        """The settings the accuracy bench measures: the accurate contact's 5 ms cut into
+        """The settings the accuracy bench measures: the accurate contact's 0.5 ms cut into
         more and more steps (a longer contact would also sink deeper and move the lever
         arms: another impact, not a finer one)."""
         points: list[tuple[str, str, dict]] = [("defaults", "defaults", {})]
