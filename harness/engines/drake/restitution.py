@@ -7,13 +7,13 @@ integral of ``m·ẋ·dẋ/dx = -k·x·(1 + d·ẋ)`` from first touch (``ẋ = 
 
     a - ln(1 + a) = -e·a - ln(1 - e·a)
 
-which ties ``e`` to ``a = d·v`` alone, neither ``k`` nor ``m`` (Hunt and Crossley 1975;
-Marhefka and Orin 1999, eq. (9) for the linear spring). ``e → 1 - 2a/3`` for small ``a``,
+which ties ``e`` to ``a = d·v`` alone, neither ``k`` nor ``m`` (the linear spring of Hunt
+and Crossley 1975, integrated as Marhefka and Orin 1999 do). ``e → 1 - 2a/3`` for small ``a``,
 ``e → 1/a`` for large ``a``. So ``d = a(e) / v``: the dissipation that gives the scene's ``e``
 depends on its normal approach speed ``v`` (one value per run).
 
 Drake's discrete contact (SAP's ``similar`` and ``lagged`` approximations, and TAMSI within
-1e-6 on the drops measured) is implicit: on one degree of freedom it is backward Euler on
+1e-5 on the drops measured) is implicit: on one degree of freedom it is backward Euler on
 that law (``m·(u₁ - u₀) = -h·k·x₁·(1 + d·u₁)``,
 ``x₁ = x₀ + h·u₁``; :func:`discrete_restitution` reproduces Drake's measured bounces to
 their printed digits), which removes energy of its own: with ``d = 0`` over a contact of
