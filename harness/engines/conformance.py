@@ -89,13 +89,15 @@ FRICTIONLESS_SLIP = 1e-2
 #: With μ > 0 (or a larger e) the slip (the separation speed) must move by at least this
 #: fraction of what the laws' answer moves it by (measured on the kit's scenes: MuJoCo's
 #: soft friction 0.74 under matched-bounce, every other engine and preset 0.999 to 1.034; the
-#: separation speed's growth with e 0.999 to 1, MuJoCo's defaults aside, restitution_unused).
+#: separation speed's growth with e 0.999 to 1, MuJoCo's and Drake's defaults aside,
+#: restitution_unused).
 USED_FRACTION = 0.5
 #: The pair gets exactly its e and μ (the contract's guarantee): a direct impact's separation
 #: speed, and a sliding impact's ratio of tangential to normal impulse over μ, may depart from
 #: the laws' by at most this fraction (measured: the separation speed 4.9e-3 under pybullet's
-#: defaults, 1e-4 or less elsewhere, MuJoCo's defaults aside, restitution_unused; the impulse
-#: ratio 1e-6 or less for every engine and preset).
+#: defaults, 1e-4 or less elsewhere, MuJoCo's and Drake's defaults aside, restitution_unused;
+#: the impulse ratio 1e-6 or less for every engine and preset but Drake's defaults, 2.4e-5:
+#: its regularised friction).
 PAIR_BAND = 0.05
 
 

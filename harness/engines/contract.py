@@ -163,7 +163,8 @@ Shipping an adapter (docs/engines.md, 'Adding an engine')
     The adapter module (or package) binding ``ENGINE_CLASS``; one line in the registry
     (``_ENGINE_MODULES`` in ``harness/engines/__init__.py``: module, importable package,
     distribution); the engine's exact version pinned in ``pyproject.toml``'s ``harness``
-    extra (the install message and provenance read it there); its section in
+    extra, or in an extra of its own where its wheels do not install everywhere (Drake's
+    ``drake``; the install message and provenance read it there); its section in
     docs/engines.md. Generic tests (tests/engines/test_contract.py) iterate the registry and
     read the traits above, never an engine's name; ``check_engine`` must return ``[]``.
     * Only the impact window is simulated: gravity off, no rendering.
@@ -302,14 +303,17 @@ class Engine(abc.ABC):
     #: the reported normal and impulses at the scene's contact point (``M Δu = Jᵀ P``,
     #: check_engine's physics): 0 for an engine whose reported impulse is the one it applied
     #: at that point in one step; a contact spread over steps, or applied through a skin,
-    #: moves its point (MuJoCo, Box2D's defaults: 2e-2, the verdicts' impulse-residual bar).
+    #: moves its point (MuJoCo, Box2D's defaults: 2e-2, the verdicts' impulse-residual bar;
+    #: Drake's force inside its compliant contact's overlap: 2e-3).
     impulse_band: float = 0.0
     #: The contact is compliant: it lasts many steps with the bodies overlapping (MuJoCo's
-    #: soft contact, ~20-50 steps), so a generic test may not assume a near-rigid one (a
-    #: one-step cap leaves it unseparated; its normal and point move during it).
+    #: soft contact, ~20-50 steps; Drake's, 5-630), so a generic test may not assume a
+    #: near-rigid one (a one-step cap leaves it unseparated; its normal and point move
+    #: during it).
     soft_contact: bool = False
     #: preset role -> why that preset does not use the pair's e by design (MuJoCo's defaults:
-    #: the default solref sets the bounce); check_engine's restitution check skips it.
+    #: the default solref sets the bounce; Drake's: its default dissipation); check_engine's
+    #: restitution check skips it.
     restitution_unused: Mapping[str, str] = {}
     #: ``{(reference scene, preset role): status}`` where a reference scene's run is not
     #: "ok", with the reason in a comment (tests/engines/test_contract.py expects these).

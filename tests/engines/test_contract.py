@@ -59,13 +59,27 @@ def test_preset_roles():
     assert PRESET_ROLES == ("defaults", "accurate")
 
 
-def _pinned_harness_extra() -> dict[str, str]:
-    """``{distribution (lower case): version}`` pinned with ``==`` in pyproject.toml's
-    ``harness`` extra."""
+def _pinned_engine_extras() -> dict[str, tuple[str, str]]:
+    """``{distribution (lower case): (extra, version)}`` for every requirement pinned with
+    ``==`` in pyproject.toml's extras (an engine is pinned in ``harness`` or, where its
+    wheels do not install everywhere, in an extra of its own)."""
     text = (Path(__file__).resolve().parents[2] / "pyproject.toml").read_text("utf-8")
-    extra = tomllib.loads(text)["project"]["optional-dependencies"]["harness"]
-    return {name.strip().lower(): version.strip() for name, _, version in
-            (requirement.partition("==") for requirement in extra) if version}
+    extras = tomllib.loads(text)["project"]["optional-dependencies"]
+    return {name.strip().lower(): (extra, version.strip())
+            for extra, requirements in extras.items()
+            for name, _, version in (requirement.partition("==") for requirement in requirements)
+            if version}
+
+
+def _engine_extras() -> list[str]:
+    """The extras that pin a shipped engine, ``harness`` first, then in pyproject's order:
+    what the install message's ``pip install -e ".[...]"`` names."""
+    pins = _pinned_engine_extras()
+    holding = {pins[engine_distribution(name).lower()][0] for name in ENGINE_NAMES
+               if engine_distribution(name).lower() in pins}
+    text = (Path(__file__).resolve().parents[2] / "pyproject.toml").read_text("utf-8")
+    order = list(tomllib.loads(text)["project"]["optional-dependencies"])
+    return sorted(holding, key=lambda extra: (extra != "harness", order.index(extra)))
 
 
 @pytest.mark.parametrize("name", ENGINE_NAMES)
@@ -73,8 +87,8 @@ def test_every_shipped_engine_is_pinned_and_documented(name):
     # Shipping an engine names its exact version in pyproject.toml (the install message and
     # provenance read the pin there) and gives it a section of docs/engines.md.
     distribution = engine_distribution(name)
-    assert distribution.lower() in _pinned_harness_extra(), (
-        f"pin {distribution} with == in pyproject.toml's harness extra")
+    assert distribution.lower() in _pinned_engine_extras(), (
+        f"pin {distribution} with == in an extra of pyproject.toml (harness, or its own)")
     docs = (Path(__file__).resolve().parents[2] / "docs" / "engines.md").read_text("utf-8")
     headings = {line[3:].strip().lower() for line in docs.splitlines()
                 if line.startswith("## ")}
@@ -108,9 +122,9 @@ def test_missing_engine_raises_import_error_naming_install(monkeypatch, name):
     assert isinstance(error, ImportError)
     assert error.engine == name
     distribution = engine_distribution(name)
-    version = _pinned_harness_extra()[distribution.lower()]
+    version = _pinned_engine_extras()[distribution.lower()][1]
     assert f"pip install {distribution}=={version}" in str(error)
-    assert 'pip install -e ".[harness]"' in str(error)
+    assert f'pip install -e ".[{",".join(_engine_extras())}]"' in str(error)
     report = available_engines()
     assert report[name] is not None and name in report[name]
     # The other engines are unaffected (when installed).
