@@ -383,7 +383,8 @@ def why_section(page: Page) -> str:
         "Coulomb friction at the end state), which differs from Poisson and Stronge wherever "
         "the slip stops or reverses during the impact. MuJoCo and Drake solve no rigid impact "
         "law at all (their contacts are compliant). Per engine and preset (details and "
-        "measurements: <code>docs/engines.md</code>):</p>" + page.prepared.whole("why", lambda: why_html(page.results)))
+        "measurements: <code>docs/engines.md</code>):</p>"
+        + page.prepared.whole("why", lambda: why_html(page.results)))
     return folded("why", "Why: what each engine and preset solves", why,
                   f"{escape_html(', '.join(page.engines))}; {len(page.labels)} engine presets"
                   if page.labels else "no engine ran", unfolded=True)
