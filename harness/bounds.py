@@ -36,6 +36,9 @@ LIMITS: dict[str, float] = {
     "max_input_bytes": 4 * 2**20,
     # Largest results file read (bytes): the library's is about 2 MB, a 1,000-file run's 40.
     "max_results_bytes": 2**31,
+    # Largest cache entry read (bytes): a larger one is a miss, computed again. The
+    # library's largest (a scenario's records with their histories) is about 1 MB.
+    "max_cache_entry_bytes": 2**30,
 }
 
 
