@@ -37,6 +37,7 @@ from harness.engines import (
 from harness.run.provenance import package_versions
 from harness.scenarios.errors import ScenarioError
 from harness.store.files import (
+    inner_directory_problem,
     make_output_directory,
     output_directory_problem,
     write_text_atomically,
@@ -301,7 +302,7 @@ def write_survey(survey: dict, out: Path, settings: dict, figures: bool = True) 
             (out / stale).unlink(missing_ok=True)
     if figures and survey["engine_results"]:
         begin = time.perf_counter()
-        written += outputs.figures(survey["runs"], out / "figures")
+        written += outputs.figures(survey["runs"], out / outputs.FIGURES_DIRECTORY)
         survey["timings"]["figures"] = (time.perf_counter() - begin, 0)
     summary = out / "summary.md"
     write_text_atomically(summary, outputs.summary_markdown(
@@ -331,7 +332,8 @@ def check_options(args: argparse.Namespace) -> tuple[list[str], list[str], int]:
         if value is not None:
             bounds.check(f"--{option} {value}", option, value)
     out = DEFAULT_OUT if args.out is None else Path(args.out)
-    problem = output_directory_problem(out)
+    problem = (output_directory_problem(out)
+               or inner_directory_problem(out, outputs.FIGURES_DIRECTORY))
     if problem is not None:
         raise ValueError(f"--out {out}: {problem}")
     return engines, presets, samples
