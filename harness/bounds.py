@@ -111,6 +111,11 @@ BOUNDS: dict[str, Bound] = {
     "seed": Bound(0, 2**32 - 1, integer=True, why="numpy's seeds"),
     "chunk-size": Bound(1, 100_000, integer=True),
     "task-time-limit": Bound(0, 86_400, low_open=True, why="seconds, a day at most"),
+    "count": Bound(1, 10_000_000, integer=True,
+                   why="findings' random problems; 100,000 by default take seconds"),
+    "show": Bound(0, 1_000_000, integer=True, why="rows printed"),
+    "replicates": Bound(1, 100_000, integer=True, why="bootstrap replicates"),
+    "older-than": Bound(0, 36_500, why="days, a century at most"),
     # population files
     "sides": Bound(3, 64, integer=True,
                    why="a regular polygon; beyond 64 sides it is a disk to the engines"),
@@ -147,4 +152,50 @@ def check(source: str, knob: str, value) -> None:
         raise OutOfBounds(f"{source}: {knob} = {value!r}: {reason}")
 
 
-__all__ = ["BOUNDS", "LIMITS", "Bound", "OutOfBounds", "check", "limit", "problem"]
+def option(knob: str):
+    """An ``argparse`` ``type`` for the command-line option of ``knob``: the text read as
+    a number (an integer for an integer knob; ``1e3`` is 1000), within :data:`BOUNDS`;
+    otherwise ``argparse.ArgumentTypeError`` whose message is a sentence saying what was
+    given and what is allowed (argparse prints it after the option's name and exits 2)."""
+    import argparse  # only the command line needs it
+
+    bound = BOUNDS[knob]
+
+    def parse(text: str):
+        value = _number(text, bound.integer)
+        reason = None if value is None else problem(knob, value)
+        if value is None or reason is not None:
+            raise argparse.ArgumentTypeError(
+                f"{_shown(text)} is {'not a number' if value is None else 'out of range'}; "
+                f"allowed: {bound.allowed()}")
+        return value
+
+    parse.__name__ = knob  # what argparse names in its own messages
+    return parse
+
+
+def _number(text: str, integer: bool):
+    """``text`` as an int (``integer``: also a float's text holding a whole number) or a
+    float, or None when it is neither (or a whole number of more digits than any bound)."""
+    text = text.strip()
+    if len(text) > 40:  # no bound has so many digits; int() of thousands is slow
+        return None
+    try:
+        return int(text)
+    except ValueError:
+        pass
+    try:
+        value = float(text)
+    except ValueError:
+        return None
+    if integer and math.isfinite(value) and value.is_integer():
+        return int(value)
+    return value
+
+
+def _shown(text: str) -> str:
+    """The user's text, cut short when long."""
+    return repr(text if len(text) <= 40 else text[:37] + "...")
+
+
+__all__ = ["BOUNDS", "LIMITS", "Bound", "OutOfBounds", "check", "limit", "option", "problem"]

@@ -86,13 +86,22 @@ def exit_status_help(command: str | None) -> str:
     return "\n".join(lines)
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """A parser whose refusal of an option is one line on stderr, exit status 2: the
+    command, the option, what was given and what is allowed (its usage is in --help)."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: {message} (see --help)\n")
+
+
 def build_parser(command: str | None) -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="impact-harness",
         description="Validation harness for planar rigid-body impact with friction.",
         epilog=exit_status_help(None), formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND",
+                                       parser_class=OneLineParser)
     for name, (module_name, help_text) in COMMANDS.items():
         sub = subparsers.add_parser(name, help=help_text, description=help_text,
                                     epilog=exit_status_help(name),
@@ -128,7 +137,7 @@ def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     command = next((arg for arg in argv if not arg.startswith("-")), None)
     parser = build_parser(command if command in COMMANDS else None)
-    args = parser.parse_args(argv)  # argparse exits with 2 on a bad option
+    args = parser.parse_args(argv)  # a bad option: one line, SystemExit(2)
     if getattr(args, "handler", None) is None:
         parser.print_help()
         return 2

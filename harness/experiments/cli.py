@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 import planar_impact as pi
+from harness import bounds
 from harness.engines import EngineNotInstalled, engine_names, load_engine, preset_label
 from harness.scene import ellipse
 
@@ -51,10 +52,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "processed v_y's +3gh offset removed, as an impulse law "
                              "predicts) or as published (the six models' scores always use "
                              "these, as the paper does)")
-    parser.add_argument("--replicates", type=int, default=200,
+    parser.add_argument("--replicates", type=bounds.option("replicates"), default=200,
                         help="bootstrap replicates (default 200)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of folds and bootstrap")
-    parser.add_argument("--workers", type=int, default=None,
+    parser.add_argument("--seed", type=bounds.option("seed"),
+                        default=0, help="seed of folds and bootstrap")
+    parser.add_argument("--workers", type=bounds.option("workers"), default=None,
                         help="forked workers for the law fits (default: the local cores)")
     parser.add_argument("--engines", default="all",
                         help="engines for the Kharaz curves: 'all' (the installed ones), "

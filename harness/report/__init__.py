@@ -67,6 +67,7 @@ import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
+from harness import bounds
 from harness.plotting import SVG_TWIN
 from harness.processes import start_forked
 from harness.report.experiments import data_option_problem
@@ -470,7 +471,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help=f"without --out, replace the report in {DEFAULT_OUT}/ (its "
                         f"index.html, summary.md and figures) even when made from another "
                         f"results file than {DEFAULT_OUT}/results.json")
-    parser.add_argument("--workers", type=int, default=None,
+    parser.add_argument("--workers", type=bounds.option("workers"), default=None,
                         help="processes drawing the figures (default: all cores; 1: none)")
     parser.add_argument("--scenario-figures", choices=("auto", "all", "none"), default="auto",
                         help="per-scenario figures: all, none, or auto (all up to "

@@ -42,6 +42,7 @@ from pathlib import Path
 
 import numpy as np
 
+from harness import bounds
 from harness.engines import source_label
 from harness.report.markup import html_table, page_head
 from harness.report.views import escape_html
@@ -462,7 +463,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "percent) here")
     parser.add_argument("--html", type=Path, default=None, metavar="OUT",
                         help="also write the same tables as an HTML page here")
-    parser.add_argument("--show", type=int, default=20, metavar="N",
+    parser.add_argument("--show", type=bounds.option("show"), default=20, metavar="N",
                         help="print the N largest changes (default 20; 0 prints none)")
 
 

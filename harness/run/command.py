@@ -108,7 +108,7 @@ def add_common_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--scheduler", default=None,
                         help="Dask scheduler address (with --executor dask; default: a local "
                         "cluster)")
-    parser.add_argument("--workers", type=int, default=None,
+    parser.add_argument("--workers", type=bounds.option("workers"), default=None,
                         help="local worker processes (default: all cores; small runs run inline)")
     parser.add_argument("--set", dest="settings_overrides", action="append", default=[],
                         metavar="ENGINE.KEY=VALUE",
@@ -120,11 +120,12 @@ def add_common_arguments(parser: argparse.ArgumentParser) -> None:
                         help="record each engine run's per-step contact history (v_n, v_t, "
                         "impulses, penetration, energy) in its record (default: only for "
                         "scenarios without a sweep, the ones the report draws step by step)")
-    parser.add_argument("--chunk-size", type=int, default=None, metavar="N",
+    parser.add_argument("--chunk-size", type=bounds.option("chunk-size"), default=None, metavar="N",
                         help="engine runs per Engine.run_many call and per task sent to a "
                         "worker (default: chosen from the run's size, at most "
                         "64; 1: one Engine.run per task)")
-    parser.add_argument("--task-time-limit", type=float, default=TASK_TIME_LIMIT_S,
+    parser.add_argument("--task-time-limit", type=bounds.option("task-time-limit"),
+                        default=TASK_TIME_LIMIT_S,
                         metavar="SECONDS",
                         help=f"wall-clock limit of one engine run (default: {TASK_TIME_LIMIT_S:g})")
 

@@ -104,10 +104,11 @@ def _names(values, allowed, option) -> list[str]:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("populations", nargs="*", metavar="POPULATION",
                         help="population names (files of populations/) or paths; default all")
-    parser.add_argument("--samples", type=int, default=None,
+    parser.add_argument("--samples", type=bounds.option("samples"), default=None,
                         help=f"samples per population (default {DEFAULT_SAMPLES}; "
                              f"--quick {QUICK_SAMPLES})")
-    parser.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
+    parser.add_argument("--seed", type=bounds.option("seed"),
+                        default=0, help="sampling seed (default 0)")
     parser.add_argument("--engines", action="append", metavar="E[,E…]",
                         help="engines (default every installed one of "
                              f"{', '.join(engine_names())})")
@@ -140,7 +141,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--bare", action="store_true",
                         help="also time the engines' bare stepping of the same impacts")
     parser.add_argument("--no-figures", action="store_true", help="skip the figures")
-    parser.add_argument("--workers", type=int, default=None,
+    parser.add_argument("--workers", type=bounds.option("workers"), default=None,
                         help="processes for the engine runs (default: every core; the "
                              "results do not depend on it)")
 
