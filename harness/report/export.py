@@ -57,6 +57,19 @@ def long_rows(results: Results) -> list[dict]:
     return rows
 
 
+#: What a spreadsheet reads as the start of a formula in a cell (CWE-1236).
+_FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
+
+
+def csv_cell(value):
+    """``value`` as a CSV cell a spreadsheet shows as text: a string starting like a formula
+    (``=HYPERLINK(...)`` in a scenario's name read from a results file) gets a leading
+    ``'``; numbers and other strings are as they are."""
+    if isinstance(value, str) and value.startswith(_FORMULA_START):
+        return "'" + value
+    return value
+
+
 def write_long(results: Results, path: Path) -> int:
     """Write :func:`long_rows` to ``path`` (``.csv`` or ``.parquet``); the row count."""
     rows = long_rows(results)
@@ -87,9 +100,10 @@ def write_long(results: Results, path: Path) -> int:
         writer = csv.DictWriter(handle, COLUMNS)
         writer.writeheader()
         for row in rows:
-            writer.writerow({**row, "reasons": ";".join(row["reasons"]),
-                             **{key: "" if row[key] is None else row[key]
-                                for key in ("point_value", "departure", "departure_pct")}})
+            row = {**row, "reasons": ";".join(row["reasons"]),
+                   **{key: "" if row[key] is None else row[key]
+                      for key in ("point_value", "departure", "departure_pct")}}
+            writer.writerow({key: csv_cell(value) for key, value in row.items()})
         write_text_atomically(path, handle.getvalue())  # a regular file only
     return len(rows)
 
