@@ -12,6 +12,8 @@ Exit status of every command:
 * 2 -- bad input: an option, a scenario file (each bad file is one line naming the file,
   the key, the value and what is allowed; the good files are still processed) or a results
   file; nothing is written that the input could not support;
+* 2 also when the machine refuses a write (a full disk, a read-only one, a quota: one
+  line naming the file);
 * 3 -- internal error: a bug in the harness (one line on stderr; set
   ``IMPACT_HARNESS_TRACEBACK=1`` for the traceback). Finished engine runs stay in the cache.
 
@@ -21,6 +23,7 @@ Exit status of every command:
 from __future__ import annotations
 
 import argparse
+import errno
 import importlib
 import os
 import sys
@@ -151,12 +154,28 @@ def main(argv: list[str] | None = None) -> int:
         print("impact-harness: interrupted; finished engine runs are in the cache",
               file=sys.stderr)
         return 130
+    except OSError as error:
+        if error.errno not in ENVIRONMENT_ERRORS:
+            return _internal_error(args.command, error)
+        # the machine, not the harness: a full disk, a read-only one, a quota
+        print(f"impact-harness {args.command}: cannot write {error.filename or 'an output'}: "
+              f"{error.strerror or error} (finished engine runs are in the cache; free "
+              "space or choose another place)", file=sys.stderr)
+        return 2
     except Exception as error:  # noqa: BLE001 - any bug: one line, the traceback on request
-        if os.environ.get("IMPACT_HARNESS_TRACEBACK"):
-            traceback.print_exc()
-        print(f"impact-harness {args.command}: internal error: {type(error).__name__}: {error} "
-              "(a bug; set IMPACT_HARNESS_TRACEBACK=1 for the traceback)", file=sys.stderr)
-        return 3
+        return _internal_error(args.command, error)
+
+
+#: The errors of writing that are the machine's, not a bug (exit status 2, one line).
+ENVIRONMENT_ERRORS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EFBIG})
+
+
+def _internal_error(command: str, error: BaseException) -> int:
+    if os.environ.get("IMPACT_HARNESS_TRACEBACK"):
+        traceback.print_exception(error)
+    print(f"impact-harness {command}: internal error: {type(error).__name__}: {error} "
+          "(a bug; set IMPACT_HARNESS_TRACEBACK=1 for the traceback)", file=sys.stderr)
+    return 3
 
 
 if __name__ == "__main__":  # pragma: no cover

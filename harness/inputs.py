@@ -111,6 +111,11 @@ def parse_toml(text: str) -> dict:
         document = tomllib.loads(text)
     except RecursionError:
         raise InputError(_too_deep()) from None
+    except tomllib.TOMLDecodeError:
+        raise
+    except ValueError as error:  # an integer of more than 4,300 digits, which int() refuses
+        raise InputError(f"a value that cannot be read ({str(error).split(':')[0][:80]}); "
+                         "allowed: integers of at most 4300 digits") from None
     check_depth(document)
     return document
 

@@ -61,6 +61,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
 from typing import Sequence, TextIO
@@ -181,7 +182,7 @@ def selection_of(args) -> dict:
     and, when any, the ``--set`` overrides."""
     files = getattr(args, "files", None) or None
     tags = parse_tags_text(args.tags)
-    selection = {"files": None if files is None else sorted(str(Path(f).resolve()) for f in files),
+    selection = {"files": None if files is None else sorted(_resolved(f) for f in files),
                  "tags": tags,
                  "engines": [name for name in engine_names()
                              if name in parse_engines(args.engines)],
@@ -190,6 +191,15 @@ def selection_of(args) -> dict:
     if overrides:  # only then: a --set experiment never silently replaces the suite's results
         selection["settings_overrides"] = sorted(overrides)
     return selection
+
+
+def _resolved(path) -> str:
+    """``path`` resolved, or made absolute when it cannot be (a loop of links: the file's
+    reader says why it cannot be read)."""
+    try:
+        return str(Path(path).resolve())
+    except (OSError, RuntimeError):
+        return os.path.abspath(path)
 
 
 def parse_tags_text(text) -> list[str] | None:

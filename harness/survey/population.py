@@ -38,7 +38,7 @@ from typing import Any
 
 from harness import inputs
 from harness.scenarios.errors import NO_VALUE, OptionError, ScenarioError, suggest
-from harness.scenarios.schema import BOUNDS, NAME_PATTERN, TAG_PATTERN
+from harness.scenarios.schema import BOUNDS, NAME_ALLOWED, NAME_PATTERN, TAG_PATTERN
 from harness.scenarios.table_reader import TableReader
 
 #: The shipped populations, beside ``scenarios/`` at the repository root.
@@ -184,7 +184,7 @@ def _read_body(reader: TableReader, table, index: int, *, mass_from_ratio: bool)
     if not isinstance(table, dict):
         return reader.error(prefix, "must be a table", table, "[[body]] tables")
     name = reader.string(table, "name", prefix, pattern=NAME_PATTERN,
-                         allowed="letters, digits, '_', '-' and '.'")
+                         allowed=NAME_ALLOWED)
     if name is not None:
         prefix = f"body.{name}"
     shape = reader.string(table, "shape", prefix, choices=SHAPES)
@@ -235,7 +235,7 @@ def parse_population(doc: Mapping[str, Any], path=None) -> Population:
     reader = TableReader(path)
     reader.keys(doc, "", TOP_KEYS, "a population file")
     name = reader.string(doc, "name", "", pattern=NAME_PATTERN,
-                         allowed="letters, digits, '_', '-' and '.'")
+                         allowed=NAME_ALLOWED)
     description = reader.line_of_text(doc, "description", "", default="")
     tags = doc.get("tags", [])
     if not isinstance(tags, list) or not all(isinstance(t, str) and TAG_PATTERN.match(t)
