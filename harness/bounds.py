@@ -73,18 +73,27 @@ class Bound:
     integer: bool = False
     low_open: bool = False
     why: str = ""
+    nonzero: bool = False  # 0 itself is refused (MuJoCo's solref entries)
+    #: For a list of numbers: each entry's own bound, in order (``low``/``high`` unused).
+    elements: tuple[Bound, ...] | None = None
+    unit: str = ""
 
     def range(self) -> tuple[float, float]:
         return (limit(self.low) if isinstance(self.low, str) else self.low,
                 limit(self.high) if isinstance(self.high, str) else self.high)
 
     def allowed(self) -> str:
+        if self.elements is not None:
+            return (f"a list of {len(self.elements)} numbers: "
+                    + "; ".join(f"[{i}] {entry.allowed()}"
+                                for i, entry in enumerate(self.elements)))
         low, high = (_spelled(end) for end in self.range())
         kind = "an integer" if self.integer else "a number"
         relation = "<" if self.low_open else "<="
         raise_it = [f"IMPACT_HARNESS_{end.upper()}" for end in (self.low, self.high)
                     if isinstance(end, str)]
         return (f"{kind}, {low} {relation} value <= {high}"
+                + (f" {self.unit}" if self.unit else "") + (", not 0" if self.nonzero else "")
                 + (f" ({', '.join(raise_it)} changes it)" if raise_it else ""))
 
 
@@ -104,6 +113,44 @@ BOUNDS: dict[str, Bound] = {
     "ls_iterations": Bound(1, "max_solver_iterations", integer=True),
     "noslip_iterations": Bound(0, "max_solver_iterations", integer=True),
     "contact_steps": Bound(1, "max_engine_steps"),
+    # lengths in metres: the scenes span 1e-4 ... 1e2 m (scenarios/schema.py MAGNITUDES)
+    "collision_slop": Bound(0, 1, unit="m", why="pymunk's allowed overlap"),
+    "contact_breaking_threshold": Bound(0, 1, unit="m"),
+    "contact_slop": Bound(0, 1, unit="m"),
+    "margin": Bound(0, 1, unit="m", why="MuJoCo's contact margin: a larger one makes every "
+                    "geom touch (1e300 overflowed)"),
+    "polygon_radius": Bound(0, 1, unit="m"),
+    "detection_overlap": Bound(0, 1, unit="m"),
+    # fractions
+    "collision_bias": Bound(0, 1, why="pymunk: the overlap left after 1 s"),
+    "damping": Bound(0, 1, why="pymunk: the velocity kept after 1 s (1: none lost)"),
+    "linear_damping": Bound(0, 1),
+    "angular_damping": Bound(0, 1),
+    "contact_erp": Bound(0, 1),
+    "erp": Bound(0, 1),
+    "friction_erp": Bound(0, 1),
+    "warm_starting_factor": Bound(0, 1),
+    "global_cfm": Bound(0, 1),
+    "tolerance": Bound(0, 1),
+    "noslip_tolerance": Bound(0, 1),
+    "solver_residual_threshold": Bound(0, 1e3),
+    "restitution_velocity_threshold": Bound(0, 1e3, unit="m/s"),
+    "impratio": Bound(0, 1e4, low_open=True),
+    # counts
+    "collision_persistence": Bound(0, 1000, integer=True, why="steps a contact is kept"),
+    "num_sub_steps": Bound(0, 1000, integer=True,
+                           why="pybullet's substeps per step, each solved (1e9 never ended)"),
+    # scales of Box2D's units (its tolerances are tuned for 0.1 ... 10 m)
+    "length_scale": Bound(1e-3, 1e3, low_open=True, why="Box2D metres per scene metre"),
+    "velocity_scale": Bound(1e-3, 1e3, low_open=True),
+    # MuJoCo's soft contact: solref [timeconst, dampratio] (or [-stiffness, -damping]) and
+    # solimp [dmin, dmax, width, midpoint, power] (mujoco.readthedocs.io, 'Solver parameters')
+    "solref": Bound(0, 0, elements=(
+        Bound(-1e9, 10, nonzero=True, why="timeconst (s), or -stiffness"),
+        Bound(-1e9, 1e3, nonzero=True, why="dampratio, or -damping"))),
+    "solimp": Bound(0, 0, elements=(
+        Bound(1e-4, 0.9999), Bound(1e-4, 0.9999), Bound(0, 1, unit="m"),
+        Bound(1e-4, 0.9999), Bound(1, 100))),
     # command-line options
     "samples": Bound(1, 1_000_000, integer=True,
                      why="samples per population; 2,000 by default, 10^6 takes minutes"),
@@ -119,6 +166,8 @@ BOUNDS: dict[str, Bound] = {
     # population files
     "sides": Bound(3, 64, integer=True,
                    why="a regular polygon; beyond 64 sides it is a disk to the engines"),
+    "max_attempts": Bound(1, 100_000, integer=True,
+                          why="draws per sample before the population is refused"),
 }
 
 
@@ -127,16 +176,31 @@ def problem(knob: str, value) -> str | None:
     None when it is within them or ``knob`` has none. A value of the wrong type is left to
     the knob's own check (which says what type it takes)."""
     bound = BOUNDS.get(knob)
-    if bound is None or isinstance(value, bool) or not isinstance(value, numbers.Real):
+    if bound is None:
         return None
+    if bound.elements is not None:
+        if not isinstance(value, (list, tuple)):
+            return None  # a string ("restitution") or another type: the knob's own check
+        if len(value) != len(bound.elements) or any(
+                not _within(entry, item) for entry, item in zip(bound.elements, value)):
+            return f"out of range; allowed: {bound.allowed()}"
+        return None
+    if _within(bound, value):
+        return None
+    return f"out of range; allowed: {bound.allowed()}"
+
+
+def _within(bound: Bound, value) -> bool:
+    """Whether ``value`` is inside ``bound`` (a value that is not a number is: its knob's
+    own check says what type it takes)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        return True
     low, high = bound.range()
     if bound.integer and isinstance(value, float) and value.is_integer():
         value = int(value) if math.isfinite(value) else value
     inside = (math.isfinite(value) and (value > low if bound.low_open else value >= low)
-              and value <= high)
-    if inside and (not bound.integer or isinstance(value, numbers.Integral)):
-        return None
-    return f"out of range; allowed: {bound.allowed()}"
+              and value <= high and not (bound.nonzero and value == 0))
+    return inside and (not bound.integer or isinstance(value, numbers.Integral))
 
 
 class OutOfBounds(ValueError):

@@ -130,6 +130,7 @@ MAGNITUDES: dict[str, tuple[float, float]] = {
     "two_sled_mass": (1e-4, 1e4),  # kg, parameters.m
     "two_sled_length": (1e-4, 1e2),  # m, parameters.l
     "two_sled_offset": (0.0, 1e3),  # parameters.s, c, q3, q6
+    "mass_ratio": (1e-8, 1e8),  # a population's m_B / m_A: two masses of 1e-4 ... 1e4 kg
 }
 #: Any non-zero number smaller in magnitude than this is refused (subnormals, 1e-300 ...).
 TINY = 1e-12
