@@ -94,7 +94,11 @@ def suite_survey_command(out: str = "DIR") -> str:
 
 def _names(values, allowed, option) -> list[str]:
     """The names of a comma-separated option; ``ValueError`` (bad input) for an unknown one."""
-    names = [name for value in values or () for name in value.split(",") if name]
+    names = [name.strip() for value in values or () for name in value.split(",")
+             if name.strip()]
+    if values is not None and not names:  # `--engines ''` ran every engine
+        raise ValueError(f"{option} {values[-1]!r} names none; allowed: one or more of "
+                         f"{', '.join(allowed)} (leave the option out for all)")
     bad = [name for name in names if name not in allowed]
     if bad:
         raise ValueError(f"{option}: unknown {bad}; allowed: {', '.join(allowed)}")
