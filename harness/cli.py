@@ -53,6 +53,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "calibrate": ("harness.experiments.calibrate_cli",
                   "fit an engine's own knobs to the drops or to a law by a small grid"),
     "cache": ("harness.store.cli", "the result cache: info (where, how big), prune, clear"),
+    "engines": ("harness.engines.listing",
+                "the engines: installed or why not, presets, settings with units and bounds"),
 }
 
 #: What exit status 1 means, for the commands that return it (every other command returns
