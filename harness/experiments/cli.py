@@ -23,6 +23,7 @@ import planar_impact as pi
 from harness import bounds
 from harness.engines import EngineNotInstalled, engine_names, load_engine, preset_label
 from harness.scene import ellipse
+from harness.store.files import write_text_atomically
 
 from . import (
     analysis,
@@ -113,8 +114,7 @@ def main(args) -> int:
     output["kharaz2001"] = kharaz_section()
     output["kharaz2001"]["engines"] = kharaz_engines_table(runs)
     if args.json:
-        Path(args.json).write_text(json.dumps(output, indent=1, default=_plain) + "\n",
-                                   encoding="utf-8")
+        write_text_atomically(args.json, json.dumps(output, indent=1, default=_plain) + "\n")
     return 0
 
 

@@ -38,6 +38,7 @@ from harness.run.provenance import package_versions
 from harness.scenarios.errors import ScenarioError
 from harness.store.files import (
     inner_directory_problem,
+    keep_manifest,
     make_output_directory,
     output_directory_problem,
     write_text_atomically,
@@ -59,6 +60,8 @@ QUICK_SAMPLES = 40
 #: no figures (its report draws them).
 SUITE_SAMPLES = 20
 DEFAULT_OUT = Path("reports") / "survey"
+#: The survey's manifest in its --out: the files it wrote there, with their SHA-256.
+WRITTEN_BY_SURVEY = ".written-by-survey.json"
 #: What a survey wrote down of its settings, beside its tables (harness/survey/outputs.py).
 SETTINGS_FILE = "settings.json"
 
@@ -302,9 +305,6 @@ def write_survey(survey: dict, out: Path, settings: dict, figures: bool = True) 
                                              {**about, "table": "runs"}))
         written.append(outputs.write_parquet(survey["statistics"], out / "statistics.parquet",
                                              {**about, "table": "statistics"}))
-    else:  # no engine ran: an earlier survey's tables here would be read as this one's
-        for stale in ("runs.parquet", "statistics.parquet"):
-            (out / stale).unlink(missing_ok=True)
     if figures and survey["engine_results"]:
         begin = time.perf_counter()
         written += outputs.figures(survey["runs"], out / outputs.FIGURES_DIRECTORY)
@@ -318,7 +318,12 @@ def write_survey(survey: dict, out: Path, settings: dict, figures: bool = True) 
              "left_out": settings.get("left_out", survey["left_out"])}
     settings_path = out / SETTINGS_FILE
     write_text_atomically(settings_path, json.dumps(shown, indent=1) + "\n")
-    return written + [summary, settings_path]
+    written += [summary, settings_path]
+    # An earlier survey's tables this one did not write (no engine ran) would be read as
+    # this one's: removed, but only those the manifest says a survey wrote, as written.
+    keep_manifest(out, WRITTEN_BY_SURVEY, [path.name for path in written
+                                           if path.parent == out], (".parquet",))
+    return written
 
 
 def check_options(args: argparse.Namespace) -> tuple[list[str], list[str], int]:
