@@ -76,6 +76,7 @@ class Change:
     u_a: list | None
     u_b: list | None
     speed_change: float  # ‖u_B − u_A‖_M / s, nan without speeds or the scenario's M
+    malformed: tuple[str, ...] = ()  # what compare() found wrong with B's record
 
     @property
     def departure_change(self) -> dict[str, float]:
@@ -92,7 +93,7 @@ class Change:
         """What makes the pair a change whatever its size: a departure or speeds not finite
         in one file only (the results file writes a value that is not finite as null), a
         departure or a speed that is not a number, speeds of different lengths."""
-        found = []
+        found = list(self.malformed)
         for law in LAWS:
             if law not in self.departure_a or law not in self.departure_b:
                 continue  # a law one run did not solve: no pair
@@ -115,14 +116,14 @@ class Change:
     def largest(self) -> float:
         """The largest absolute change (departures and speeds), for sorting and gating."""
         values = [abs(v) for v in self.departure_change.values()]
-        if math.isfinite(self.speed_change):
+        if not math.isnan(self.speed_change):  # inf: speeds too large to weigh, a change
             values.append(self.speed_change)
         return max(values, default=0.0)
 
     @property
     def largest_is_speeds(self) -> bool:
         """Whether :attr:`largest` is the speeds' change (else a departure's)."""
-        return (math.isfinite(self.speed_change) and self.speed_change > 0
+        return (not math.isnan(self.speed_change) and self.speed_change > 0
                 and self.speed_change == self.largest)
 
     @property
@@ -248,9 +249,10 @@ class MassMatrices:
         if before.shape != (len(mass_matrix),) or after.shape != before.shape:
             self.mismatched.add(record.scenario)
             return False
-        energy_before = 0.5 * before @ mass_matrix @ before
-        recomputed = 0.5 * after @ mass_matrix @ after - energy_before
-        if abs(recomputed - record.energy_change) > 1e-9 * max(energy_before, 1e-300):
+        with np.errstate(over="ignore", invalid="ignore"):  # 1e308 speeds: inf, a mismatch
+            energy_before = 0.5 * before @ mass_matrix @ before
+            recomputed = 0.5 * after @ mass_matrix @ after - energy_before
+        if not abs(recomputed - record.energy_change) <= 1e-9 * max(energy_before, 1e-300):
             self.mismatched.add(record.scenario)
             return False
         return True
@@ -308,9 +310,14 @@ def compare(a: Results, b: Results,
         if rb is None:
             continue
         has_speeds = ra.u_after is not None and rb.u_after is not None
-        change = speed_change(ra, rb, weights(rb) if has_speeds else None)
+        weights_b = weights(rb) if has_speeds else None
+        change = speed_change(ra, rb, weights_b)
+        # B's speeds that do not give B's own recorded energy change, where A's give A's
+        # (so the scenario's file is the runs'): B's record is malformed, not "n/a"
+        malformed = (("speeds not those of its own energy change",)
+                     if has_speeds and weights_b is None and weights(ra) is not None else ())
         changes.append(Change(*key, ra.status, rb.status, dict(ra.departure),
-                              dict(rb.departure), ra.u_after, rb.u_after, change))
+                              dict(rb.departure), ra.u_after, rb.u_after, change, malformed))
     only_a = [key for key in records_a if key not in records_b]
     only_b = [key for key in records_b if key not in records_a]
     return changes, only_a, only_b

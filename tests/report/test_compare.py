@@ -334,3 +334,20 @@ def test_csv_cells_never_start_a_formula(tmp_path):
     run_compare(before, after, "--csv", out, "--fail-above", "100%")
     (row,) = list(csv.DictReader(out.open()))
     assert row["scenario"] == "'" + name
+
+
+def test_speeds_that_are_not_those_of_their_own_energy_change_are_a_change(tmp_path, capsys):
+    """B's speeds scaled (or 1e308) while its recorded energy change stays: B's record is
+    malformed (A's speeds give A's energy change, so the scenario's masses are the runs')."""
+    def record(u_after):
+        made = engine_record(0.1, u_after=u_after)
+        made.energy_change = -10.0  # ½(1 + 4) − ½·25 with disk-direct's 1 kg
+        return made
+
+    before = results_file(tmp_path, "a.json", [record((1.0, 2.0, 0.0))])
+    for u_after in ((1e3, 2e3, 0.0), (1e308, 1e308, 0.0)):
+        after = results_file(tmp_path, "b.json", [record(u_after)])
+        capsys.readouterr()
+        assert run_compare(before, after, "--fail-above", "100%") == 1
+        said = capsys.readouterr()
+        assert "speeds not those of its own energy change" in said.out and not said.err
