@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from harness.scenarios.library import scenario_files
+from harness.store.files import write_text_atomically
 
 SPREAD = 0.1  # relative perturbation of the perturbed values
 
@@ -54,7 +55,7 @@ def write_copies(directory: Path, count: int, seed: int = 0) -> list[Path]:
     paths = []
     for file_name, table in perturbed_copies(count, seed):
         path = directory / file_name
-        path.write_text(_dumps(table), encoding="utf-8")
+        write_text_atomically(path, _dumps(table))  # never through a link
         paths.append(path)
     return paths
 
