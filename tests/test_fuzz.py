@@ -332,6 +332,9 @@ def _command_lines(tmp_path) -> dict[str, list[str]]:
                                            "box2d.length_scale=1e300", "--json", json_out],
         "--set mujoco.solimp=[2,2,2,2,2]": ["run", disk, "--engines", "mujoco", "--set",
                                             "mujoco.solimp=[2,2,2,2,2]", "--json", json_out],
+        "--set nested 30,000 deep": ["run", disk, "--engines", "pymunk", "--set",
+                                     "pymunk.iterations=" + "[" * 30_000 + "]" * 30_000,
+                                     "--json", json_out],
         "cache prune --older-than nan": ["cache", "prune", "--older-than", "nan",
                                          "--cache-dir", str(tmp_path / "c")],
     }
