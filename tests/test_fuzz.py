@@ -258,6 +258,8 @@ def test_mutated_results_files(tmp_path, capsys):
             path.write_text("[" * 100_000 + "]" * 100_000, encoding="utf-8")
         argv = ["compare", str(good), str(path), "--csv", str(tmp_path / "c.csv")]
         assert_clean(f"seed {SEED + 3}, case {number}", argv, *run_main(argv, capsys))
+        argv = ["export", str(path), "--out", str(tmp_path / "e.csv")]
+        assert_clean(f"seed {SEED + 3}, export case {number}", argv, *run_main(argv, capsys))
 
 
 # --------------------------------------------------------------------------------------------
@@ -366,3 +368,23 @@ def test_a_full_disk_is_one_line_exit_2_not_an_internal_error(tmp_path, capsys, 
     status, out, err = run_main(argv, capsys)
     assert_clean("disk full", argv, status, out, err)
     assert status == 2 and "No space left on device" in err and "x.csv" in err
+
+
+@pytest.mark.parametrize("damage", ["departure-a-list", "diagnostics-a-number"])
+def test_export_of_a_malformed_record_is_bad_input(tmp_path, capsys, damage):
+    good = tmp_path / "good.json"
+    argv = ["run", str(SCENARIO_DIR / "disk-direct.toml"), "--engines", "pymunk", "--preset",
+            "defaults", "--no-cache", "--json", str(good)]
+    assert run_main(argv, capsys)[0] == 0
+    document = json.loads(good.read_text(encoding="utf-8"))
+    record = document["records"][-1]
+    if damage == "departure-a-list":
+        record["departure"] = {"poisson": [1.0]}
+    else:
+        record["diagnostics"] = 7
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(document), encoding="utf-8")
+    argv = ["export", str(bad), "--out", str(tmp_path / "e.csv")]
+    status, out, err = run_main(argv, capsys)
+    assert_clean(damage, argv, status, out, err)
+    assert status == 2 and "a record is malformed" in err and not (tmp_path / "e.csv").exists()

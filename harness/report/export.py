@@ -25,6 +25,7 @@ import argparse
 import csv
 import io
 import json
+import sys
 from pathlib import Path
 
 from harness.run.records import ANALYTIC, Results, read_results
@@ -130,7 +131,14 @@ def main(args) -> int:
     except (OSError, ValueError, KeyError, TypeError) as error:
         print(f"impact-harness export: {error}")
         return 2
-    count = write_long(results, out)
+    try:
+        count = write_long(results, out)
+    except (TypeError, ValueError, AttributeError, KeyError, IndexError) as error:
+        # read_results checks a record's fields, not every value's type: a departure that
+        # is a list, a diagnostics that is a number fail here, before anything is written
+        print(f"impact-harness export: {args.results}: a record is malformed: "
+              f"{type(error).__name__}: {str(error)[:200]}", file=sys.stderr)
+        return 2
     print(f"wrote {count} rows (run × law) to {out}")
     return 0
 
