@@ -387,4 +387,30 @@ def test_export_of_a_malformed_record_is_bad_input(tmp_path, capsys, damage):
     argv = ["export", str(bad), "--out", str(tmp_path / "e.csv")]
     status, out, err = run_main(argv, capsys)
     assert_clean(damage, argv, status, out, err)
-    assert status == 2 and "a record is malformed" in err and not (tmp_path / "e.csv").exists()
+    assert status == 2 and "record" in err and not (tmp_path / "e.csv").exists()
+
+
+@pytest.mark.parametrize("damage", ["gates-a-string", "cached-a-string", "speed-a-string",
+                                    "scenario-info-a-list"])
+def test_report_of_values_of_the_wrong_type_is_refused_before_any_work(tmp_path, capsys,
+                                                                         damage):
+    """read_results checks every value a report reads (was: exit 3 half-way through)."""
+    good = tmp_path / "good.json"
+    argv = ["run", str(SCENARIO_DIR / "disk-direct.toml"), "--engines", "pymunk", "--preset",
+            "defaults", "--no-cache", "--json", str(good)]
+    assert run_main(argv, capsys)[0] == 0
+    document = json.loads(good.read_text(encoding="utf-8"))
+    if damage == "gates-a-string":
+        document["provenance"]["gates"] = "x"
+    elif damage == "cached-a-string":
+        document["records"][-1]["cached"] = "\u0000"
+    elif damage == "speed-a-string":
+        document["records"][-1]["u_after"][0] = "fast"
+    else:
+        document["scenarios"]["disk-direct"] = []
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(document), encoding="utf-8")
+    argv = ["report", "--results", str(bad), "--out", str(tmp_path / "rep")]
+    status, out, err = run_main(argv, capsys)
+    assert_clean(damage, argv, status, out, err)
+    assert status == 2 and str(bad) in err and not (tmp_path / "rep").exists()

@@ -120,16 +120,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def main(args) -> int:
     out = args.out
     if out.suffix not in (".csv", ".parquet"):
-        print(f"impact-harness export: --out {out}: the file must end in .csv or .parquet")
+        print(f"impact-harness export: --out {out}: the file must end in .csv or .parquet",
+              file=sys.stderr)
         return 2
     problem = output_file_problem(out)
     if problem:
-        print(f"impact-harness export: --out {out}: {problem}")
+        print(f"impact-harness export: --out {out}: {problem}", file=sys.stderr)
         return 2
     try:
         results = read_results(args.results)
     except (OSError, ValueError, KeyError, TypeError) as error:
-        print(f"impact-harness export: {error}")
+        print(f"impact-harness export: {error}", file=sys.stderr)
         return 2
     try:
         count = write_long(results, out)
