@@ -163,6 +163,10 @@ BOUNDS: dict[str, Bound] = {
     "show": Bound(0, 1_000_000, integer=True, why="rows printed"),
     "replicates": Bound(1, 100_000, integer=True, why="bootstrap replicates"),
     "older-than": Bound(0, 36_500, why="days, a century at most"),
+    "drops": Bound(1, 100_000, integer=True, why="impacts scored per calibration cell"),
+    "law-mu": Bound(0, 1e3, why="a law's friction coefficient (a scenario's magnitude)"),
+    "law-e": Bound(0, 1, why="a law's restitution"),
+    "repeats": Bound(1, 1000, integer=True, why="a benchmark's repetitions"),
     # population files
     "sides": Bound(3, 64, integer=True,
                    why="a regular polygon; beyond 64 sides it is a disk to the engines"),

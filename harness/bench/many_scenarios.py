@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from harness import bounds
 from harness.scenarios.library import scenario_files
 from harness.store.files import write_text_atomically
 
@@ -100,8 +101,8 @@ def _dumps(table: dict, prefix: str = "") -> str:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("directory", type=Path)
-    parser.add_argument("--count", type=int, default=1000)
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--count", type=bounds.option("count"), default=1000)
+    parser.add_argument("--seed", type=bounds.option("seed"), default=0)
     args = parser.parse_args(argv)
     paths = write_copies(args.directory, args.count, args.seed)
     print(f"wrote {len(paths)} scenario files to {args.directory}")
