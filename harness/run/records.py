@@ -497,6 +497,17 @@ def provenance_problem(provenance: dict, scenarios: dict) -> str | None:
                                                for value in gate.values())
                 and isinstance(gate.get("status"), str)):
             return f"provenance.gates[{number}] = {gate!r:.80}: not a gate's record"
+    for engine, presets in (provenance.get("engine_settings") or {}).items():
+        if not (isinstance(presets, dict) and all(isinstance(settings, dict)
+                                                  for settings in presets.values())):
+            return (f"provenance.engine_settings.{engine} = {presets!r:.80}: not settings by "
+                    "preset")
+    for name in ("versions", "engine_versions", "engines_missing"):
+        for key, value in (provenance.get(name) or {}).items():
+            if not isinstance(value, (str, type(None))):
+                return f"provenance.{name}.{key} = {value!r:.80}: not a string"
+    if not all(isinstance(word, str) for word in provenance.get("command") or ()):
+        return f"provenance.command = {provenance['command']!r:.80}: not a list of strings"
     for name, value in scenarios.items():
         if not isinstance(value, dict):
             return f"scenarios.{name} = {value!r:.80}: not a JSON object"
