@@ -42,6 +42,38 @@ LIMITS: dict[str, float] = {
 }
 
 
+#: How far the environment may move each limit: ``(lowest, highest)`` (a byte count beyond
+#: what a read can take overflowed; NaN or a word was an internal error).
+LIMIT_RANGES: dict[str, tuple[float, float]] = {
+    "max_sweep_points": (1, 10_000_000),
+    "max_engine_steps": (1, 1e9),
+    "min_time_step": (1e-12, 1.0),
+    "max_solver_iterations": (1, 1e6),
+    "max_input_bytes": (1, 2**40),
+    "max_results_bytes": (1, 2**40),
+    "max_cache_entry_bytes": (1, 2**40),
+}
+
+
+def environment_problem() -> str | None:
+    """Why a limit set in the environment (``IMPACT_HARNESS_<NAME>``) cannot be used, or
+    None: each must be a number within :data:`LIMIT_RANGES`. Checked before any work."""
+    for name in LIMITS:
+        variable = f"IMPACT_HARNESS_{name.upper()}"
+        text = os.environ.get(variable)
+        if not text:
+            continue
+        low, high = LIMIT_RANGES[name]
+        try:
+            value = float(text) if len(text) <= 40 else math.nan
+        except ValueError:
+            value = math.nan
+        if not low <= value <= high:  # NaN fails it too
+            return (f"{variable}={text[:40]!r}: not a number within the range allowed; "
+                    f"allowed: {_spelled(low)} <= value <= {_spelled(high)}")
+    return None
+
+
 def limit(name: str) -> float:
     """``LIMITS[name]``, or the value of ``IMPACT_HARNESS_<NAME>`` when set and a number."""
     text = os.environ.get(f"IMPACT_HARNESS_{name.upper()}")
@@ -266,4 +298,5 @@ def _shown(text: str) -> str:
     return repr(text if len(text) <= 40 else text[:37] + "...")
 
 
-__all__ = ["BOUNDS", "LIMITS", "Bound", "OutOfBounds", "check", "limit", "option", "problem"]
+__all__ = ["BOUNDS", "LIMITS", "LIMIT_RANGES", "Bound", "OutOfBounds", "check",
+           "environment_problem", "limit", "option", "problem"]

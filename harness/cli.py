@@ -30,6 +30,8 @@ import sys
 import traceback
 from pathlib import Path
 
+from harness import bounds
+
 # command name -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
     "suite": ("harness.suite", "the validation suite (`make validate`): paper, run, report"),
@@ -145,6 +147,10 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)  # a bad option: one line, SystemExit(2)
     if getattr(args, "handler", None) is None:
         parser.print_help()
+        return 2
+    problem = bounds.environment_problem()
+    if problem is not None:
+        print(f"impact-harness {args.command}: {problem}", file=sys.stderr)
         return 2
     problem = out_problem(getattr(args, "out", None))
     if problem is not None:

@@ -414,3 +414,16 @@ def test_report_of_values_of_the_wrong_type_is_refused_before_any_work(tmp_path,
     status, out, err = run_main(argv, capsys)
     assert_clean(damage, argv, status, out, err)
     assert status == 2 and str(bad) in err and not (tmp_path / "rep").exists()
+
+
+@pytest.mark.parametrize("variable,value", [("IMPACT_HARNESS_MAX_INPUT_BYTES", "1e300"),
+                                            ("IMPACT_HARNESS_MAX_INPUT_BYTES", "abc"),
+                                            ("IMPACT_HARNESS_MIN_TIME_STEP", "nan"),
+                                            ("IMPACT_HARNESS_MAX_SWEEP_POINTS", "-5")])
+def test_a_limit_set_in_the_environment_out_of_its_range_is_bad_input(capsys, monkeypatch,
+                                                                      variable, value):
+    monkeypatch.setenv(variable, value)
+    argv = ["validate", str(SCENARIO_DIR / "disk-direct.toml")]
+    status, out, err = run_main(argv, capsys)
+    assert_clean(variable, argv, status, out, err)
+    assert status == 2 and variable in err and err.count("\n") == 1
