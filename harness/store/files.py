@@ -285,21 +285,7 @@ def keep_manifest(directory: Path | str, manifest_name: str, wanted: Iterable[st
     SHA-256, written atomically."""
     directory = Path(directory)
     manifest = directory / manifest_name
-    recorded: dict[str, str] = {}
-    try:
-        descriptor = os.open(manifest, _OPEN_NO_LINK)
-        try:
-            status = os.fstat(descriptor)
-            if stat.S_ISREG(status.st_mode) and status.st_size <= MAX_MANIFEST_BYTES:
-                stored = json.loads(os.read(descriptor, MAX_MANIFEST_BYTES + 1))
-                if (isinstance(stored, dict) and stored.get("format") == MANIFEST_FORMAT
-                        and isinstance(stored.get("written"), dict)):
-                    recorded = {name: digest for name, digest in stored["written"].items()
-                                if isinstance(digest, str)}
-        finally:
-            os.close(descriptor)
-    except (OSError, ValueError):  # none, a link, damaged: nothing is removed
-        recorded = {}
+    recorded = _read_manifest(manifest)
     wanted = set(wanted)
     removed = []
     for name in sorted(set(recorded) - wanted):
@@ -321,6 +307,43 @@ def keep_manifest(directory: Path | str, manifest_name: str, wanted: Iterable[st
     write_text_atomically(manifest, json.dumps({"format": MANIFEST_FORMAT, "written": written},
                                                indent=0) + "\n")
     return removed
+
+
+def _read_manifest(manifest: Path) -> dict[str, str]:
+    """``{name: SHA-256}`` of a manifest :func:`keep_manifest` wrote (a regular file, never
+    read through a link, of bounded size); empty when there is none or it is not one."""
+    try:
+        descriptor = os.open(manifest, _OPEN_NO_LINK)
+        try:
+            status = os.fstat(descriptor)
+            if not stat.S_ISREG(status.st_mode) or status.st_size > MAX_MANIFEST_BYTES:
+                return {}
+            stored = json.loads(os.read(descriptor, MAX_MANIFEST_BYTES + 1))
+        finally:
+            os.close(descriptor)
+    except (OSError, ValueError):  # none, a link, damaged: nothing is removed
+        return {}
+    if not (isinstance(stored, dict) and stored.get("format") == MANIFEST_FORMAT
+            and isinstance(stored.get("written"), dict)):
+        return {}
+    return {name: digest for name, digest in stored["written"].items()
+            if isinstance(name, str) and isinstance(digest, str)}
+
+
+def remove_written(directory: Path | str, manifest_name: str, name: str) -> bool:
+    """Remove ``directory/name`` when the manifest there records it and it still holds
+    what was written (:func:`keep_manifest`'s rule); whether it was removed."""
+    directory = Path(directory)
+    recorded = _read_manifest(directory / manifest_name).get(name)
+    if recorded is None or os.path.basename(name) != name or name == manifest_name:
+        return False
+    if regular_file_sha256(directory / name) != recorded:
+        return False
+    try:
+        os.unlink(directory / name)
+    except OSError:
+        return False
+    return True
 
 
 def make_output_directory(path: Path | str) -> Path:

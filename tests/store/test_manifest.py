@@ -116,3 +116,17 @@ def test_survey_refuses_a_symlinked_figures_directory_before_any_work(tmp_path, 
     err = capsys.readouterr().err
     assert status == 2 and "symbolic link" in err
     assert sorted(p.name for p in target.iterdir()) == [WRITTEN, "theirs.png"]
+
+
+def test_a_file_is_removed_by_name_only_as_written(tmp_path):
+    from harness.store.files import remove_written
+
+    (tmp_path / "settings.json").write_text("{}")
+    keep_manifest(tmp_path, ".written.json", {"settings.json"}, (".parquet",))
+    (tmp_path / "settings.json").write_text('{"the user": "edited it"}')
+    assert not remove_written(tmp_path, ".written.json", "settings.json")
+    assert (tmp_path / "settings.json").exists()
+    (tmp_path / "settings.json").write_text("{}")
+    assert remove_written(tmp_path, ".written.json", "settings.json")
+    assert not (tmp_path / "settings.json").exists()
+    assert not remove_written(tmp_path, ".written.json", "../elsewhere")
