@@ -109,6 +109,7 @@ class Bound:
     #: For a list of numbers: each entry's own bound, in order (``low``/``high`` unused).
     elements: tuple[Bound, ...] | None = None
     unit: str = ""
+    words: tuple[str, ...] = ()  # names the knob also takes instead of a number ("auto")
 
     def range(self) -> tuple[float, float]:
         return (limit(self.low) if isinstance(self.low, str) else self.low,
@@ -118,7 +119,8 @@ class Bound:
         if self.elements is not None:
             return (f"a list of {len(self.elements)} numbers: "
                     + "; ".join(f"[{i}] {entry.allowed()}"
-                                for i, entry in enumerate(self.elements)))
+                                for i, entry in enumerate(self.elements))
+                    + "".join(f'; or "{word}"' for word in self.words))
         low, high = (_spelled(end) for end in self.range())
         kind = "an integer" if self.integer else "a number"
         relation = "<" if self.low_open else "<="
@@ -126,6 +128,7 @@ class Bound:
                     if isinstance(end, str)]
         return (f"{kind}, {low} {relation} value <= {high}"
                 + (f" {self.unit}" if self.unit else "") + (", not 0" if self.nonzero else "")
+                + "".join(f', or "{word}"' for word in self.words)
                 + (f" ({', '.join(raise_it)} changes it)" if raise_it else ""))
 
 
@@ -152,7 +155,7 @@ BOUNDS: dict[str, Bound] = {
     "margin": Bound(0, 1, unit="m", why="MuJoCo's contact margin: a larger one makes every "
                     "geom touch (1e300 overflowed)"),
     "polygon_radius": Bound(0, 1, unit="m"),
-    "detection_overlap": Bound(0, 1, unit="m"),
+    "detection_overlap": Bound(0, 1, why="Box2D: a fraction of the largest body's extent"),
     # fractions
     "collision_bias": Bound(0, 1, why="pymunk: the overlap left after 1 s"),
     "damping": Bound(0, 1, why="pymunk: the velocity kept after 1 s (1: none lost)"),
@@ -174,10 +177,10 @@ BOUNDS: dict[str, Bound] = {
                            why="pybullet's substeps per step, each solved (1e9 never ended)"),
     # scales of Box2D's units (its tolerances are tuned for 0.1 ... 10 m)
     "length_scale": Bound(1e-3, 1e3, low_open=True, why="Box2D metres per scene metre"),
-    "velocity_scale": Bound(1e-3, 1e3, low_open=True),
+    "velocity_scale": Bound(1e-3, 1e3, low_open=True, words=("auto",)),
     # MuJoCo's soft contact: solref [timeconst, dampratio] (or [-stiffness, -damping]) and
     # solimp [dmin, dmax, width, midpoint, power] (mujoco.readthedocs.io, 'Solver parameters')
-    "solref": Bound(0, 0, elements=(
+    "solref": Bound(0, 0, words=("restitution",), elements=(
         Bound(-1e9, 10, nonzero=True, why="timeconst (s), or -stiffness"),
         Bound(-1e9, 1e3, nonzero=True, why="dampratio, or -damping"))),
     "solimp": Bound(0, 0, elements=(

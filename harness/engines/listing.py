@@ -116,7 +116,7 @@ def bounds_markdown() -> str:
     as Markdown."""
     rows = ["| knob | allowed | why |", "|---|---|---|"]
     for knob, bound in bounds.BOUNDS.items():
-        why = bound.why or " ".join(entry.why for entry in bound.elements or () if entry.why)
+        why = bound.why or "; ".join(entry.why for entry in bound.elements or () if entry.why)
         rows.append(f"| `{knob}` | {bound.allowed()} | {why} |")
     limits = ["| limit | value | environment variable | the variable's range |",
               "|---|---|---|---|"]
