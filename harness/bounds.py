@@ -148,13 +148,13 @@ BOUNDS: dict[str, Bound] = {
     "ls_iterations": Bound(1, "max_solver_iterations", integer=True),
     "noslip_iterations": Bound(0, "max_solver_iterations", integer=True),
     "contact_steps": Bound(1, "max_engine_steps"),
-    # lengths in metres: the scenes span 1e-4 ... 1e2 m (scenarios/schema.py MAGNITUDES)
-    "collision_slop": Bound(0, 1, unit="m", why="pymunk's allowed overlap"),
-    "contact_breaking_threshold": Bound(0, 1, unit="m"),
-    "contact_slop": Bound(0, 1, unit="m"),
-    "margin": Bound(0, 1, unit="m", why="MuJoCo's contact margin: a larger one makes every "
-                    "geom touch (1e300 overflowed)"),
-    "polygon_radius": Bound(0, 1, unit="m"),
+    # lengths in metres: at most the largest length a scene holds (1e2 m, the scenario
+    # files' magnitudes, scenarios/schema.py MAGNITUDES)
+    "collision_slop": Bound(0, 100, unit="m", why="pymunk's allowed overlap"),
+    "contact_breaking_threshold": Bound(0, 100, unit="m"),
+    "contact_slop": Bound(0, 100, unit="m"),
+    "margin": Bound(0, 100, unit="m", why="MuJoCo's contact margin (1e300 overflowed)"),
+    "polygon_radius": Bound(0, 100, unit="m"),
     "detection_overlap": Bound(0, 1, why="Box2D: a fraction of the largest body's extent"),
     # fractions
     "collision_bias": Bound(0, 1, why="pymunk: the overlap left after 1 s"),
@@ -176,8 +176,9 @@ BOUNDS: dict[str, Bound] = {
     "num_sub_steps": Bound(0, 1000, integer=True,
                            why="pybullet's substeps per step, each solved (1e9 never ended)"),
     # scales of Box2D's units (its tolerances are tuned for 0.1 ... 10 m)
-    "length_scale": Bound(1e-3, 1e3, low_open=True, why="Box2D metres per scene metre"),
-    "velocity_scale": Bound(1e-3, 1e3, low_open=True, words=("auto",)),
+    "length_scale": Bound(2**-20, 2**20, why="Box2D metres per scene metre (1e300 "
+                          "overflowed); powers of 2 are exact"),
+    "velocity_scale": Bound(2**-20, 2**20, words=("auto",)),
     # MuJoCo's soft contact: solref [timeconst, dampratio] (or [-stiffness, -damping]) and
     # solimp [dmin, dmax, width, midpoint, power] (mujoco.readthedocs.io, 'Solver parameters')
     "solref": Bound(0, 0, words=("restitution",), elements=(

@@ -26,7 +26,7 @@ def test_every_registered_engine_is_listed_with_its_settings_and_bounds(capsys):
             assert f"    {key}" in block, (name, key)
             if key in bounds.BOUNDS:
                 assert bounds.BOUNDS[key].allowed() in block, (name, key)
-    assert "margin [m]: defaults 0, matched-bounce 0; allowed: a number, 0 <= value <= 1 m" \
+    assert "margin [m]: defaults 0, matched-bounce 0; allowed: a number, 0 <= value <= 100 m" \
         in out
 
 
