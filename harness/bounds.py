@@ -36,7 +36,42 @@ LIMITS: dict[str, float] = {
     "max_input_bytes": 4 * 2**20,
     # Largest results file read (bytes): the library's is about 2 MB, a 1,000-file run's 40.
     "max_results_bytes": 2**31,
+    # Largest cache entry read (bytes): a larger one is a miss, computed again. The
+    # library's largest (a scenario's records with their histories) is about 1 MB.
+    "max_cache_entry_bytes": 2**30,
 }
+
+
+#: How far the environment may move each limit: ``(lowest, highest)`` (a byte count beyond
+#: what a read can take overflowed; NaN or a word was an internal error).
+LIMIT_RANGES: dict[str, tuple[float, float]] = {
+    "max_sweep_points": (1, 10_000_000),
+    "max_engine_steps": (1, 1e12),
+    "min_time_step": (1e-12, 1.0),
+    "max_solver_iterations": (1, 1e12),  # the tests raise it to run a runaway engine
+    "max_input_bytes": (1, 2**40),
+    "max_results_bytes": (1, 2**40),
+    "max_cache_entry_bytes": (1, 2**40),
+}
+
+
+def environment_problem() -> str | None:
+    """Why a limit set in the environment (``IMPACT_HARNESS_<NAME>``) cannot be used, or
+    None: each must be a number within :data:`LIMIT_RANGES`. Checked before any work."""
+    for name in LIMITS:
+        variable = f"IMPACT_HARNESS_{name.upper()}"
+        text = os.environ.get(variable)
+        if not text:
+            continue
+        low, high = LIMIT_RANGES[name]
+        try:
+            value = float(text) if len(text) <= 40 else math.nan
+        except ValueError:
+            value = math.nan
+        if not low <= value <= high:  # NaN fails it too
+            return (f"{variable}={text[:40]!r}: not a number within the range allowed; "
+                    f"allowed: {_spelled(low)} <= value <= {_spelled(high)}")
+    return None
 
 
 def limit(name: str) -> float:
@@ -70,18 +105,30 @@ class Bound:
     integer: bool = False
     low_open: bool = False
     why: str = ""
+    nonzero: bool = False  # 0 itself is refused (MuJoCo's solref entries)
+    #: For a list of numbers: each entry's own bound, in order (``low``/``high`` unused).
+    elements: tuple[Bound, ...] | None = None
+    unit: str = ""
+    words: tuple[str, ...] = ()  # names the knob also takes instead of a number ("auto")
 
     def range(self) -> tuple[float, float]:
         return (limit(self.low) if isinstance(self.low, str) else self.low,
                 limit(self.high) if isinstance(self.high, str) else self.high)
 
     def allowed(self) -> str:
+        if self.elements is not None:
+            return (f"a list of {len(self.elements)} numbers: "
+                    + "; ".join(f"[{i}] {entry.allowed()}"
+                                for i, entry in enumerate(self.elements))
+                    + "".join(f'; or "{word}"' for word in self.words))
         low, high = (_spelled(end) for end in self.range())
         kind = "an integer" if self.integer else "a number"
         relation = "<" if self.low_open else "<="
         raise_it = [f"IMPACT_HARNESS_{end.upper()}" for end in (self.low, self.high)
                     if isinstance(end, str)]
         return (f"{kind}, {low} {relation} value <= {high}"
+                + (f" {self.unit}" if self.unit else "") + (", not 0" if self.nonzero else "")
+                + "".join(f', or "{word}"' for word in self.words)
                 + (f" ({', '.join(raise_it)} changes it)" if raise_it else ""))
 
 
@@ -101,6 +148,45 @@ BOUNDS: dict[str, Bound] = {
     "ls_iterations": Bound(1, "max_solver_iterations", integer=True),
     "noslip_iterations": Bound(0, "max_solver_iterations", integer=True),
     "contact_steps": Bound(1, "max_engine_steps"),
+    # lengths in metres: at most the largest length a scene holds (1e2 m, the scenario
+    # files' magnitudes, scenarios/schema.py MAGNITUDES)
+    "collision_slop": Bound(0, 100, unit="m", why="pymunk's allowed overlap"),
+    "contact_breaking_threshold": Bound(0, 100, unit="m"),
+    "contact_slop": Bound(0, 100, unit="m"),
+    "margin": Bound(0, 100, unit="m", why="MuJoCo's contact margin (1e300 overflowed)"),
+    "polygon_radius": Bound(0, 100, unit="m"),
+    "detection_overlap": Bound(0, 1, why="Box2D: a fraction of the largest body's extent"),
+    # fractions
+    "collision_bias": Bound(0, 1, why="pymunk: the overlap left after 1 s"),
+    "damping": Bound(0, 1, why="pymunk: the velocity kept after 1 s (1: none lost)"),
+    "linear_damping": Bound(0, 1),
+    "angular_damping": Bound(0, 1),
+    "contact_erp": Bound(0, 1),
+    "erp": Bound(0, 1),
+    "friction_erp": Bound(0, 1),
+    "warm_starting_factor": Bound(0, 1),
+    "global_cfm": Bound(0, 1),
+    "tolerance": Bound(0, 1),
+    "noslip_tolerance": Bound(0, 1),
+    "solver_residual_threshold": Bound(0, 1e3),
+    "restitution_velocity_threshold": Bound(0, 1e3, unit="m/s"),
+    "impratio": Bound(0, 1e4, low_open=True),
+    # counts
+    "collision_persistence": Bound(0, 1000, integer=True, why="steps a contact is kept"),
+    "num_sub_steps": Bound(0, 1000, integer=True,
+                           why="pybullet's substeps per step, each solved (1e9 never ended)"),
+    # scales of Box2D's units (its tolerances are tuned for 0.1 ... 10 m)
+    "length_scale": Bound(2**-20, 2**20, why="Box2D metres per scene metre (1e300 "
+                          "overflowed); powers of 2 are exact"),
+    "velocity_scale": Bound(2**-20, 2**20, words=("auto",)),
+    # MuJoCo's soft contact: solref [timeconst, dampratio] (or [-stiffness, -damping]) and
+    # solimp [dmin, dmax, width, midpoint, power] (mujoco.readthedocs.io, 'Solver parameters')
+    "solref": Bound(0, 0, words=("restitution",), elements=(
+        Bound(-1e9, 10, nonzero=True, why="timeconst (s), or -stiffness"),
+        Bound(-1e9, 1e3, nonzero=True, why="dampratio, or -damping"))),
+    "solimp": Bound(0, 0, elements=(
+        Bound(1e-4, 0.9999), Bound(1e-4, 0.9999), Bound(0, 1, unit="m"),
+        Bound(1e-4, 0.9999), Bound(1, 100))),
     # command-line options
     "samples": Bound(1, 1_000_000, integer=True,
                      why="samples per population; 2,000 by default, 10^6 takes minutes"),
@@ -118,9 +204,17 @@ BOUNDS: dict[str, Bound] = {
     "law-mu": Bound(0, 100,
                     why="the friction coefficient calibrate's target law runs at"),
     "law-e": Bound(0, 1, why="the restitution coefficient calibrate's target law runs at"),
+    # other commands' counts
+    "count": Bound(1, 10_000_000, integer=True,
+                   why="findings' random problems; 100,000 by default take seconds"),
+    "show": Bound(0, 1_000_000, integer=True, why="rows printed"),
+    "older-than": Bound(0, 36_500, why="days, a century at most"),
+    "repeats": Bound(1, 1000, integer=True, why="a benchmark's repetitions"),
     # population files
     "sides": Bound(3, 64, integer=True,
                    why="a regular polygon; beyond 64 sides it is a disk to the engines"),
+    "max_attempts": Bound(1, 100_000, integer=True,
+                          why="draws per sample before the population is refused"),
 }
 
 
@@ -129,16 +223,31 @@ def problem(knob: str, value) -> str | None:
     None when it is within them or ``knob`` has none. A value of the wrong type is left to
     the knob's own check (which says what type it takes)."""
     bound = BOUNDS.get(knob)
-    if bound is None or isinstance(value, bool) or not isinstance(value, numbers.Real):
+    if bound is None:
         return None
+    if bound.elements is not None:
+        if not isinstance(value, (list, tuple)):
+            return None  # a string ("restitution") or another type: the knob's own check
+        if len(value) != len(bound.elements) or any(
+                not _within(entry, item) for entry, item in zip(bound.elements, value)):
+            return f"out of range; allowed: {bound.allowed()}"
+        return None
+    if _within(bound, value):
+        return None
+    return f"out of range; allowed: {bound.allowed()}"
+
+
+def _within(bound: Bound, value) -> bool:
+    """Whether ``value`` is inside ``bound`` (a value that is not a number is: its knob's
+    own check says what type it takes)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        return True
     low, high = bound.range()
     if bound.integer and isinstance(value, float) and value.is_integer():
         value = int(value) if math.isfinite(value) else value
     inside = (math.isfinite(value) and (value > low if bound.low_open else value >= low)
-              and value <= high)
-    if inside and (not bound.integer or isinstance(value, numbers.Integral)):
-        return None
-    return f"out of range; allowed: {bound.allowed()}"
+              and value <= high and not (bound.nonzero and value == 0))
+    return inside and (not bound.integer or isinstance(value, numbers.Integral))
 
 
 class OutOfBounds(ValueError):
@@ -154,4 +263,51 @@ def check(source: str, knob: str, value) -> None:
         raise OutOfBounds(f"{source}: {knob} = {value!r}: {reason}")
 
 
-__all__ = ["BOUNDS", "LIMITS", "Bound", "OutOfBounds", "check", "limit", "problem"]
+def option(knob: str):
+    """An ``argparse`` ``type`` for the command-line option of ``knob``: the text read as
+    a number (an integer for an integer knob; ``1e3`` is 1000), within :data:`BOUNDS`;
+    otherwise ``argparse.ArgumentTypeError`` whose message is a sentence saying what was
+    given and what is allowed (argparse prints it after the option's name and exits 2)."""
+    import argparse  # only the command line needs it
+
+    bound = BOUNDS[knob]
+
+    def parse(text: str):
+        value = _number(text, bound.integer)
+        reason = None if value is None else problem(knob, value)
+        if value is None or reason is not None:
+            raise argparse.ArgumentTypeError(
+                f"{_shown(text)} is {'not a number' if value is None else 'out of range'}; "
+                f"allowed: {bound.allowed()}")
+        return value
+
+    parse.__name__ = knob  # what argparse names in its own messages
+    return parse
+
+
+def _number(text: str, integer: bool):
+    """``text`` as an int (``integer``: also a float's text holding a whole number) or a
+    float, or None when it is neither (or a whole number of more digits than any bound)."""
+    text = text.strip()
+    if len(text) > 40:  # no bound has so many digits; int() of thousands is slow
+        return None
+    try:
+        return int(text)
+    except ValueError:
+        pass
+    try:
+        value = float(text)
+    except ValueError:
+        return None
+    if integer and math.isfinite(value) and value.is_integer():
+        return int(value)
+    return value
+
+
+def _shown(text: str) -> str:
+    """The user's text, cut short when long."""
+    return repr(text if len(text) <= 40 else text[:37] + "...")
+
+
+__all__ = ["BOUNDS", "LIMITS", "LIMIT_RANGES", "Bound", "OutOfBounds", "check",
+           "environment_problem", "limit", "option", "problem"]

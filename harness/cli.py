@@ -12,6 +12,8 @@ Exit status of every command:
 * 2 -- bad input: an option, a scenario file (each bad file is one line naming the file,
   the key, the value and what is allowed; the good files are still processed) or a results
   file; nothing is written that the input could not support;
+* 2 also when the machine refuses a write (a full disk, a read-only one, a quota: one
+  line naming the file);
 * 3 -- internal error: a bug in the harness (one line on stderr; set
   ``IMPACT_HARNESS_TRACEBACK=1`` for the traceback). Finished engine runs stay in the cache.
 
@@ -21,11 +23,14 @@ Exit status of every command:
 from __future__ import annotations
 
 import argparse
+import errno
 import importlib
 import os
 import sys
 import traceback
 from pathlib import Path
+
+from harness import bounds
 
 # command name -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -50,6 +55,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "calibrate": ("harness.experiments.calibrate_cli",
                   "fit an engine's own knobs to the drops or to a law by a small grid"),
     "cache": ("harness.store.cli", "the result cache: info (where, how big), prune, clear"),
+    "engines": ("harness.engines.listing",
+                "the engines: installed or why not, presets, settings with units and bounds"),
 }
 
 #: What exit status 1 means, for the commands that return it (every other command returns
@@ -86,13 +93,22 @@ def exit_status_help(command: str | None) -> str:
     return "\n".join(lines)
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """A parser whose refusal of an option is one line on stderr, exit status 2: the
+    command, the option, what was given and what is allowed (its usage is in --help)."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: {message} (see --help)\n")
+
+
 def build_parser(command: str | None) -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="impact-harness",
         description="Validation harness for planar rigid-body impact with friction.",
         epilog=exit_status_help(None), formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND",
+                                       parser_class=OneLineParser)
     for name, (module_name, help_text) in COMMANDS.items():
         sub = subparsers.add_parser(name, help=help_text, description=help_text,
                                     epilog=exit_status_help(name),
@@ -128,9 +144,13 @@ def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     command = next((arg for arg in argv if not arg.startswith("-")), None)
     parser = build_parser(command if command in COMMANDS else None)
-    args = parser.parse_args(argv)  # argparse exits with 2 on a bad option
+    args = parser.parse_args(argv)  # a bad option: one line, SystemExit(2)
     if getattr(args, "handler", None) is None:
         parser.print_help()
+        return 2
+    problem = bounds.environment_problem()
+    if problem is not None:
+        print(f"impact-harness {args.command}: {problem}", file=sys.stderr)
         return 2
     problem = out_problem(getattr(args, "out", None))
     if problem is not None:
@@ -142,12 +162,28 @@ def main(argv: list[str] | None = None) -> int:
         print("impact-harness: interrupted; finished engine runs are in the cache",
               file=sys.stderr)
         return 130
+    except OSError as error:
+        if error.errno not in ENVIRONMENT_ERRORS:
+            return _internal_error(args.command, error)
+        # the machine, not the harness: a full disk, a read-only one, a quota
+        print(f"impact-harness {args.command}: cannot write {error.filename or 'an output'}: "
+              f"{error.strerror or error} (finished engine runs are in the cache; free "
+              "space or choose another place)", file=sys.stderr)
+        return 2
     except Exception as error:  # noqa: BLE001 - any bug: one line, the traceback on request
-        if os.environ.get("IMPACT_HARNESS_TRACEBACK"):
-            traceback.print_exc()
-        print(f"impact-harness {args.command}: internal error: {type(error).__name__}: {error} "
-              "(a bug; set IMPACT_HARNESS_TRACEBACK=1 for the traceback)", file=sys.stderr)
-        return 3
+        return _internal_error(args.command, error)
+
+
+#: The errors of writing that are the machine's, not a bug (exit status 2, one line).
+ENVIRONMENT_ERRORS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EFBIG})
+
+
+def _internal_error(command: str, error: BaseException) -> int:
+    if os.environ.get("IMPACT_HARNESS_TRACEBACK"):
+        traceback.print_exception(error)
+    print(f"impact-harness {command}: internal error: {type(error).__name__}: {error} "
+          "(a bug; set IMPACT_HARNESS_TRACEBACK=1 for the traceback)", file=sys.stderr)
+    return 3
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -12,6 +12,7 @@ Shared by the scenarios, the survey and the run, which must not depend on each o
 from __future__ import annotations
 
 import os
+import re
 import stat
 import tomllib
 
@@ -27,6 +28,22 @@ class InputError(ValueError):
 #: deepest is 3, a results file's 5; code walking a document recursively needs headroom
 #: below Python's recursion limit (1,000).
 MAX_DEPTH = 64
+#: Most parts of one dotted key (``a.b.c`` has 3), in a table header or before ``=``: a
+#: scenario's longest has 3. ``tomllib`` takes time quadratic in a key's parts (a 120 kB
+#: dotted key took 40-66 s to refuse, issue 37), so they are counted before it runs.
+MAX_KEY_PARTS = 32
+
+#: What the structure check of :func:`check_structure` looks at, outside strings and
+#: comments: strings (skipped whole), comments, brackets, dots, and what ends a key.
+_TOKENS = re.compile("|".join((  # each string ends at its end, or at the text's end (or,
+    # one on one line, its line's) when unterminated: every match advances, none is retried
+    r'"""(?:[^\\]|\\.)*?(?:"""|\Z)',  # multi-line basic string, escapes skipped
+    r"'''.*?(?:'''|\Z)",  # multi-line literal string
+    r'"(?:[^"\\\n]|\\.)*"?',  # basic string
+    r"'[^'\n]*'?",  # literal string
+    r"#[^\n]*",  # comment
+    r"[\[\]{}.=,\n]",  # what the check counts
+)), re.DOTALL)
 
 
 def read_bytes(path, *, cap_name: str = "max_input_bytes") -> bytes:
@@ -84,14 +101,49 @@ def read_text(path, *, cap_name: str = "max_input_bytes") -> str:
 
 
 def parse_toml(text: str) -> dict:
-    """``tomllib.loads(text)``, nested at most :data:`MAX_DEPTH` deep. Raises
-    ``tomllib.TOMLDecodeError`` for bad TOML and :class:`InputError` for too deep a one."""
+    """``tomllib.loads(text)``, nested at most :data:`MAX_DEPTH` deep, with keys of at most
+    :data:`MAX_KEY_PARTS` parts. Raises ``tomllib.TOMLDecodeError`` for bad TOML and
+    :class:`InputError` for too deep a one; the structure is checked in one pass over the
+    text before the parser sees it (:func:`check_structure`), so the time taken is linear
+    in the text's size."""
+    check_structure(text)
     try:
         document = tomllib.loads(text)
     except RecursionError:
         raise InputError(_too_deep()) from None
+    except tomllib.TOMLDecodeError:
+        raise
+    except ValueError as error:  # an integer of more than 4,300 digits, which int() refuses
+        raise InputError(f"a value that cannot be read ({str(error).split(':')[0][:80]}); "
+                         "allowed: integers of at most 4300 digits") from None
     check_depth(document)
     return document
+
+
+def check_structure(text: str) -> None:
+    """:class:`InputError` when the TOML ``text``, read in one linear pass outside strings
+    and comments, nests brackets more than :data:`MAX_DEPTH` deep or has a dotted key of
+    more than :data:`MAX_KEY_PARTS` parts (dots between two of ``[ ] { } = , newline``).
+    An unterminated string is read as text: the parser refuses the file anyway."""
+    depth = dots = 0
+    for token in _TOKENS.finditer(text):
+        mark = token.group()
+        if mark == ".":
+            dots += 1
+            if dots >= MAX_KEY_PARTS:
+                line = text.count("\n", 0, token.start()) + 1
+                raise InputError(f"a dotted key of more than {MAX_KEY_PARTS} parts at line "
+                                 f"{line}; allowed: at most {MAX_KEY_PARTS} parts")
+            continue
+        if mark in "[{":
+            depth += 1
+            if depth > MAX_DEPTH:
+                raise InputError(_too_deep())
+        elif mark in "]}":
+            depth = max(depth - 1, 0)
+        elif mark[0] in "\"'#":
+            continue  # a string or a comment: a key's quoted part leaves the count as it is
+        dots = 0
 
 
 def check_depth(document, most: int = MAX_DEPTH) -> None:
@@ -116,5 +168,6 @@ def _too_deep(most: int = MAX_DEPTH) -> str:
     return f"nested too deep; allowed: tables and arrays at most {most} deep"
 
 
-__all__ = ["MAX_DEPTH", "InputError", "check_depth", "decode", "parse_toml", "read_bytes",
+__all__ = ["MAX_DEPTH", "MAX_KEY_PARTS", "InputError", "check_depth", "check_structure",
+           "decode", "parse_toml", "read_bytes",
            "read_bytes_and_status", "read_text"]

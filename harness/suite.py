@@ -35,9 +35,15 @@ from harness.report.survey import read_settings
 from harness.run import command, plan
 from harness.run.provenance import PACKAGES, package_versions
 from harness.run.records import read_results
-from harness.store.files import make_output_directory, output_directory_problem
+from harness.store.files import make_output_directory, output_directory_problem, remove_written
 from harness.store.identity import cached_code_sources, code_version_of
-from harness.survey.cli import SETTINGS_FILE, SUITE_SAMPLES, run_survey, write_survey
+from harness.survey.cli import (
+    SETTINGS_FILE,
+    SUITE_SAMPLES,
+    WRITTEN_BY_SURVEY,
+    run_survey,
+    write_survey,
+)
 from harness.survey.population import resolve_populations
 
 #: Samples per population in the suite's survey: 7 populations x 20 = 140 impacts per engine
@@ -131,7 +137,8 @@ def quick_survey(args, out: Path) -> tuple[Path, bool]:
                 "engines": [name for name in engines if name not in survey["skipped"]],
                 "presets": list(presets), "skipped": survey["skipped"],
                 "left_out": survey["left_out"], "inputs": inputs}
-    (out / SETTINGS_FILE).unlink(missing_ok=True)  # no key over files half rewritten
+    # no key over files half rewritten: removed, only as the survey wrote it (its manifest)
+    remove_written(out, WRITTEN_BY_SURVEY, SETTINGS_FILE)
     write_survey(survey, out, settings, figures=False)
     return out / "summary.md", True
 

@@ -10,11 +10,15 @@ hang. A failure names the seed and the case, so it can be replayed alone.
 
 from __future__ import annotations
 
+import errno
 import json
 import random
 import re
 import signal
+import time
 from pathlib import Path
+
+import pytest
 
 from harness import cli
 from harness.scenarios import SCENARIO_DIR
@@ -196,7 +200,7 @@ def _small(argv: list[str]) -> bool:
     """Whether the ``--samples`` of a survey's command line is refused or small."""
     text = argv[argv.index("--samples") + 1]
     try:
-        return not 100 < int(text) <= 1_000_000
+        return not 100 < float(text) <= 1_000_000  # 1e3 is read as 1000 samples
     except ValueError:
         return True
 
@@ -254,3 +258,172 @@ def test_mutated_results_files(tmp_path, capsys):
             path.write_text("[" * 100_000 + "]" * 100_000, encoding="utf-8")
         argv = ["compare", str(good), str(path), "--csv", str(tmp_path / "c.csv")]
         assert_clean(f"seed {SEED + 3}, case {number}", argv, *run_main(argv, capsys))
+        argv = ["export", str(path), "--out", str(tmp_path / "e.csv")]
+        assert_clean(f"seed {SEED + 3}, export case {number}", argv, *run_main(argv, capsys))
+
+
+# --------------------------------------------------------------------------------------------
+# Issue 37 (second round): the fuzzer's findings, each a clean refusal (exit 2) in a second or
+# so, nothing outside the named outputs changed
+# --------------------------------------------------------------------------------------------
+#: Seconds of CPU one case of the corpus may take (the dotted key took 40-66 s before).
+CORPUS_CPU_S = 5.0
+DISK_TEXT = (SCENARIO_DIR / "disk-direct.toml").read_text(encoding="utf-8")
+POPULATION_TEXT = (ROOT / "populations" / "disk-disk.toml").read_text(encoding="utf-8")
+
+#: Scenario or population files: (name, text); each must be refused by `validate`.
+HOSTILE_FILES = {
+    "dotted-key-120kB.toml": DISK_TEXT + "\na" + ".a" * 60_000 + " = 1\n",
+    "dotted-header.toml": DISK_TEXT + "\n[a" + ".a" * 60_000 + "]\n",
+    "integer-5000-digits.toml": DISK_TEXT.replace("mass = 1.0", "mass = " + "9" * 5000),
+    "engines-empty.toml": DISK_TEXT.replace("[ground]", 'engines = []\n\n[ground]', 1),
+    "laws-empty.toml": DISK_TEXT.replace("[ground]", 'laws = []\n\n[ground]', 1),
+    "bidi-description.toml": DISK_TEXT.replace('description = "', 'description = "\u202e', 1),
+    "long-name.toml": DISK_TEXT.replace('name = "disk-direct"', f'name = "{"n" * 243}"'),
+    "population-attempts.toml": POPULATION_TEXT + "\nmax_attempts = 1e12\n",
+    "population-attempts-fraction.toml": POPULATION_TEXT + "\nmax_attempts = 2.5\n",
+    "population-speed.toml": POPULATION_TEXT.replace(
+        "speed = { log_uniform = [0.3, 3.0] }", "speed = 1e6"),
+    "population-radius.toml": POPULATION_TEXT.replace(
+        "radius = { uniform = [0.05, 0.3] }", "radius = 1e-6", 1),
+    "population-mass-ratio.toml": POPULATION_TEXT.replace(
+        "mass_ratio = { log_uniform = [0.1, 10.0] }", "mass_ratio = 1e-10"),
+}
+
+
+def _cpu_limited(case: str, argv: list[str], capsys) -> tuple:
+    started = time.process_time()
+    said = run_main(argv, capsys)
+    spent = time.process_time() - started
+    assert spent < CORPUS_CPU_S, f"{case}: {spent:.1f} s of CPU"
+    return said
+
+
+@pytest.mark.parametrize("name", sorted(HOSTILE_FILES))
+def test_second_round_files_are_refused_fast(tmp_path, capsys, name):
+    path = tmp_path / name
+    path.write_text(HOSTILE_FILES[name], encoding="utf-8")
+    assert HOSTILE_FILES[name] != (DISK_TEXT if "population" not in name else POPULATION_TEXT)
+    argv = ["validate", str(path)]
+    status, out, err = _cpu_limited(name, argv, capsys)
+    assert_clean(name, argv, status, out, err)
+    assert status == 2, f"{name}: exit {status}: {out[-300:]}{err[-300:]}"
+
+
+def _command_lines(tmp_path) -> dict[str, list[str]]:
+    loop = tmp_path / "loop.toml"
+    loop.symlink_to(tmp_path / "loop2.toml")
+    (tmp_path / "loop2.toml").symlink_to(loop)
+    disk = str(SCENARIO_DIR / "disk-direct.toml")
+    json_out = str(tmp_path / "r.json")
+    return {
+        "symlink loop as a scenario": ["run", str(loop), "--no-cache", "--json", json_out],
+        "findings --count -1": ["findings", "--count", "-1"],
+        "stress --workers 0": ["stress", "--workers", "0"],
+        "a bad --scheduler": ["run", disk, "--executor", "dask", "--scheduler", "bogus",
+                              "--no-cache", "--json", json_out],
+        "report --workers 0": ["report", "--workers", "0", "--out", str(tmp_path / "rep")],
+        "compare --show -1": ["compare", json_out, json_out, "--show", "-1"],
+        "compare --fail-above 5": ["compare", json_out, json_out, "--fail-above", "5"],
+        "compare --fail-above abc": ["compare", json_out, json_out, "--fail-above", "abc"],
+        "--engines ''": ["run", disk, "--engines", "", "--no-cache", "--json", json_out],
+        "survey --engines ''": ["survey", "disk-disk", "--engines", "", "--samples", "2",
+                                "--out", str(tmp_path / "s")],
+        "a 5000-digit --workers": ["run", disk, "--workers", "9" * 5000, "--json", json_out],
+        "--set box2d.length_scale=1e300": ["run", disk, "--engines", "box2d", "--set",
+                                           "box2d.length_scale=1e300", "--json", json_out],
+        "--set mujoco.solimp=[2,2,2,2,2]": ["run", disk, "--engines", "mujoco", "--set",
+                                            "mujoco.solimp=[2,2,2,2,2]", "--json", json_out],
+        "--set nested 30,000 deep": ["run", disk, "--engines", "pymunk", "--set",
+                                     "pymunk.iterations=" + "[" * 30_000 + "]" * 30_000,
+                                     "--json", json_out],
+        "cache prune --older-than nan": ["cache", "prune", "--older-than", "nan",
+                                         "--cache-dir", str(tmp_path / "c")],
+    }
+
+
+def test_second_round_command_lines_are_refused_before_any_work(tmp_path, capsys):
+    lines = _command_lines(tmp_path)
+    before = sorted(p.name for p in tmp_path.iterdir())
+    for case, argv in lines.items():
+        status, out, err = _cpu_limited(case, argv, capsys)
+        assert_clean(case, argv, status, out, err)
+        assert status == 2, f"{case}: exit {status}: {out[-300:]}{err[-300:]}"
+        assert len(err.strip().splitlines()) == 1, f"{case}: {err}"
+    assert sorted(p.name for p in tmp_path.iterdir()) == before  # nothing written
+
+
+def test_a_full_disk_is_one_line_exit_2_not_an_internal_error(tmp_path, capsys, monkeypatch):
+    from harness.report import export
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device", str(tmp_path / "x.csv"))
+
+    good = tmp_path / "good.json"
+    argv = ["run", str(SCENARIO_DIR / "disk-direct.toml"), "--engines", "pymunk", "--preset",
+            "defaults", "--no-cache", "--json", str(good)]
+    assert run_main(argv, capsys)[0] == 0
+    monkeypatch.setattr(export, "write_long", full)
+    argv = ["export", str(good), "--out", str(tmp_path / "x.csv")]
+    status, out, err = run_main(argv, capsys)
+    assert_clean("disk full", argv, status, out, err)
+    assert status == 2 and "No space left on device" in err and "x.csv" in err
+
+
+@pytest.mark.parametrize("damage", ["departure-a-list", "diagnostics-a-number"])
+def test_export_of_a_malformed_record_is_bad_input(tmp_path, capsys, damage):
+    good = tmp_path / "good.json"
+    argv = ["run", str(SCENARIO_DIR / "disk-direct.toml"), "--engines", "pymunk", "--preset",
+            "defaults", "--no-cache", "--json", str(good)]
+    assert run_main(argv, capsys)[0] == 0
+    document = json.loads(good.read_text(encoding="utf-8"))
+    record = document["records"][-1]
+    if damage == "departure-a-list":
+        record["departure"] = {"poisson": [1.0]}
+    else:
+        record["diagnostics"] = 7
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(document), encoding="utf-8")
+    argv = ["export", str(bad), "--out", str(tmp_path / "e.csv")]
+    status, out, err = run_main(argv, capsys)
+    assert_clean(damage, argv, status, out, err)
+    assert status == 2 and "record" in err and not (tmp_path / "e.csv").exists()
+
+
+@pytest.mark.parametrize("damage", ["gates-a-string", "cached-a-string", "speed-a-string",
+                                    "scenario-info-a-list"])
+def test_report_of_values_of_the_wrong_type_is_refused_before_any_work(tmp_path, capsys,
+                                                                         damage):
+    """read_results checks every value a report reads (was: exit 3 half-way through)."""
+    good = tmp_path / "good.json"
+    argv = ["run", str(SCENARIO_DIR / "disk-direct.toml"), "--engines", "pymunk", "--preset",
+            "defaults", "--no-cache", "--json", str(good)]
+    assert run_main(argv, capsys)[0] == 0
+    document = json.loads(good.read_text(encoding="utf-8"))
+    if damage == "gates-a-string":
+        document["provenance"]["gates"] = "x"
+    elif damage == "cached-a-string":
+        document["records"][-1]["cached"] = "\u0000"
+    elif damage == "speed-a-string":
+        document["records"][-1]["u_after"][0] = "fast"
+    else:
+        document["scenarios"]["disk-direct"] = []
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(document), encoding="utf-8")
+    argv = ["report", "--results", str(bad), "--out", str(tmp_path / "rep")]
+    status, out, err = run_main(argv, capsys)
+    assert_clean(damage, argv, status, out, err)
+    assert status == 2 and str(bad) in err and not (tmp_path / "rep").exists()
+
+
+@pytest.mark.parametrize("variable,value", [("IMPACT_HARNESS_MAX_INPUT_BYTES", "1e300"),
+                                            ("IMPACT_HARNESS_MAX_INPUT_BYTES", "abc"),
+                                            ("IMPACT_HARNESS_MIN_TIME_STEP", "nan"),
+                                            ("IMPACT_HARNESS_MAX_SWEEP_POINTS", "-5")])
+def test_a_limit_set_in_the_environment_out_of_its_range_is_bad_input(capsys, monkeypatch,
+                                                                      variable, value):
+    monkeypatch.setenv(variable, value)
+    argv = ["validate", str(SCENARIO_DIR / "disk-direct.toml")]
+    status, out, err = run_main(argv, capsys)
+    assert_clean(variable, argv, status, out, err)
+    assert status == 2 and variable in err and err.count("\n") == 1

@@ -7,10 +7,13 @@ from __future__ import annotations
 import json
 import os
 import threading
+import time
+import tomllib
 
 import pytest
 
 from harness import cli, inputs
+from harness.bounds import limit
 from harness.scenarios import SCENARIO_DIR
 
 DISK = SCENARIO_DIR / "disk-direct.toml"
@@ -159,3 +162,52 @@ def test_every_commands_out_at_a_file_a_device_or_a_bad_name_is_one_line_exit_2(
     out = out if out.startswith("/") else str(tmp_path / out)
     one_line_exit_2(cli.main([*command, "--out", out]), capsys, "--out")
     assert (tmp_path / "a-file").read_text() == "x"
+
+
+# Issue 37, item 5: the structure is checked in one linear pass before tomllib sees the text
+# (a 120 kB dotted key took tomllib 40-66 s to refuse, a 4 MiB file hours).
+LINEAR_CASES = {
+    "dotted key": "a" + ".a" * 60_000 + " = 1",
+    "dotted key, spaced": "a" + " . a" * 30_000 + " = 1",
+    "dotted key, quoted parts": "a" + '."a"' * 30_000 + " = 1",
+    "dotted table header": "[a" + ".a" * 60_000 + "]",
+    "nested arrays": "x = " + "[" * 60_000 + "]" * 60_000,
+    "unterminated strings": '"""' + '\\"""' * 30_000,
+}
+
+
+@pytest.mark.parametrize("case", sorted(LINEAR_CASES))
+def test_hostile_toml_is_refused_fast_before_the_parser(case):
+    started = time.process_time()
+    with pytest.raises((inputs.InputError, tomllib.TOMLDecodeError)):
+        inputs.parse_toml(LINEAR_CASES[case])
+    assert time.process_time() - started < 1.0  # CPU seconds; tomllib alone took 40+
+
+
+def test_the_structure_check_takes_time_linear_in_the_size():
+    """A file of the largest size read, of the costliest shapes the check lets through
+    (keys of MAX_KEY_PARTS - 1 dots, strings holding dots and brackets), is read in
+    seconds: its CPU time grows as its size (the ratio of 4x the text within 8x)."""
+    unit = ("a" + ".b" * (inputs.MAX_KEY_PARTS - 2) + "{0} = '[.]'\n"
+            "s{0} = \"\"\"x.y\n[z]\"\"\"  # a.b.c\n")
+
+    def cost(lines: int) -> float:
+        text = "".join(unit.format(n) for n in range(lines))
+        started = time.process_time()
+        inputs.check_structure(text)
+        return time.process_time() - started, len(text)
+
+    small, small_size = cost(4_000)
+    large, large_size = cost(16_000)
+    assert large_size < limit("max_input_bytes") and large_size > 3.9 * small_size
+    assert large < 8 * max(small, 0.005)
+
+
+def test_keys_within_the_bound_and_dots_inside_strings_and_comments_are_read():
+    text = ("a.b.c = 1.5\nd = 'x.y.z.w.v'\ne = \"\"\"a.b.\nc.d\"\"\"\n[t.u]\nv = {w.x = 2}\n"
+            "# " + "a." * 100 + "\n" + "k" + ".k" * (inputs.MAX_KEY_PARTS - 1) + " = 1\n"
+            f"f = '{'.' * 100}'\n")
+    document = inputs.parse_toml(text)
+    assert document["a"]["b"]["c"] == 1.5 and document["t"]["u"]["v"]["w"]["x"] == 2
+    with pytest.raises(inputs.InputError, match=f"more than {inputs.MAX_KEY_PARTS} parts"):
+        inputs.parse_toml("k" + ".k" * inputs.MAX_KEY_PARTS + " = 1\n")

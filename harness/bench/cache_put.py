@@ -19,6 +19,7 @@ import time
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 
+from harness import bounds
 from harness.engines import PRESET_ROLES, EngineNotInstalled, engine_names, load_engine
 from harness.run import tasks
 from harness.run.executor import MAX_CHUNK
@@ -70,8 +71,9 @@ def time_puts(outputs: list[dict], root: Path) -> tuple[float, float, float]:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--runs", type=int, default=600, help="engine outputs to put")
-    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--runs", type=bounds.option("count"), default=600,
+                        help="engine outputs to put")
+    parser.add_argument("--repeats", type=bounds.option("repeats"), default=3)
     args = parser.parse_args(argv)
     outputs = engine_outputs(args.runs)
     with tempfile.TemporaryDirectory(prefix="cache-put-") as directory:

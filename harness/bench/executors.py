@@ -40,6 +40,7 @@ from harness.engines import EngineNotInstalled, engine_names, load_engine
 from harness.run.executor import run_tasks, start_local_cluster, wait_for_shutdowns
 from harness.run.tasks import TASK_TIME_LIMIT_S, engine_chunk, engine_task, task_group
 from harness.scenarios import PRESETS, load_scenarios
+from harness.store.files import write_text_atomically
 
 RATIO_TARGET = 1.2
 TASKS = 2000
@@ -86,8 +87,7 @@ def engine_tasks(count: int = TASKS, directory: Path | None = None,
         if keep is not None:
             keep.mkdir(parents=True, exist_ok=True)
             for path in dict.fromkeys(sources[:count]):
-                (keep / path.name).write_text(path.read_text(encoding="utf-8"),
-                                              encoding="utf-8")
+                write_text_atomically(keep / path.name, path.read_text(encoding="utf-8"))
     return tasks[:count]
 
 

@@ -20,7 +20,9 @@ from pathlib import Path
 
 import numpy as np
 
+from harness import bounds
 from harness.scenarios.library import scenario_files
+from harness.store.files import write_text_atomically
 
 SPREAD = 0.1  # relative perturbation of the perturbed values
 
@@ -54,7 +56,7 @@ def write_copies(directory: Path, count: int, seed: int = 0) -> list[Path]:
     paths = []
     for file_name, table in perturbed_copies(count, seed):
         path = directory / file_name
-        path.write_text(_dumps(table), encoding="utf-8")
+        write_text_atomically(path, _dumps(table))  # never through a link
         paths.append(path)
     return paths
 
@@ -99,8 +101,8 @@ def _dumps(table: dict, prefix: str = "") -> str:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("directory", type=Path)
-    parser.add_argument("--count", type=int, default=1000)
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--count", type=bounds.option("count"), default=1000)
+    parser.add_argument("--seed", type=bounds.option("seed"), default=0)
     args = parser.parse_args(argv)
     paths = write_copies(args.directory, args.count, args.seed)
     print(f"wrote {len(paths)} scenario files to {args.directory}")

@@ -38,6 +38,7 @@ from pathlib import Path
 import numpy as np
 
 import planar_impact as pi
+from harness import bounds
 from harness.bench import accuracy as bench_accuracy
 from harness.bench import engines as bench_engines
 from harness.bench import executors as bench_executors
@@ -254,7 +255,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--executors", action="store_true",
                         help="2,000 engine tasks: local pool against a local 2-worker Dask "
                         "cluster")
-    parser.add_argument("--workers", type=int, default=1,
+    parser.add_argument("--workers", type=bounds.option("workers"), default=1,
                         help="--survey: processes for the survey and, as many, for the bare "
                         "stepping it is compared with (default 1)")
     parser.add_argument("--quick", action="store_true", help="smaller sizes; finishes in minutes")

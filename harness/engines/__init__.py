@@ -246,6 +246,10 @@ def install_fingerprint(name: str) -> str | None:
     return json.dumps([spec.origin, stat.st_size, stat.st_mtime_ns, version])
 
 
+#: The longest value ``--set`` takes (characters): parsed as JSON, nested at most as deep.
+MAX_SET_VALUE = 200
+
+
 def parse_overrides(items: Sequence[str],
                     engines: Sequence[str] | None = None) -> dict[str, dict]:
     """``["pymunk.iterations=50", ...]`` (``--set``) -> ``{"pymunk": {"iterations": 50}}``.
@@ -263,7 +267,10 @@ def parse_overrides(items: Sequence[str],
     for item in items:
         target, equals, text = item.partition("=")
         engine_name, dot, key = target.strip().partition(".")
-        where = f"--set {item}"
+        where = f"--set {item if len(item) <= 120 else item[:117] + '...'}"
+        if len(text) > MAX_SET_VALUE:  # a setting's value is a number, a name or a short list
+            raise ValueError(f"{where}: a value of {len(text)} characters; allowed: at most "
+                             f"{MAX_SET_VALUE}")
         if not equals or not dot or not key:
             raise ValueError(f"{where}: expected ENGINE.KEY=VALUE, e.g. pymunk.iterations=50")
         if engine_name not in registered:

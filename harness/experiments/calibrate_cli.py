@@ -35,18 +35,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              + "; ".join(f"{name}: mu {_values(mus)}, e {_values(es)}"
                                          for name, (mus, es) in calibrate.PAIR_GRIDS.items())
                              + " (default quick)")
-    parser.add_argument("--drops", type=int, default=12,
+    parser.add_argument("--drops", type=bounds.option("drops"), default=12,
                         help="impacts scored per cell (default 12): a random sample of the "
                              "data's drops, or of a generated population, drawn with --seed")
-    parser.add_argument("--seed", type=int, default=0,
+    parser.add_argument("--seed", type=bounds.option("seed"), default=0,
                         help="seed of that sample, of the bootstrap's resamples and of the "
                              "held-out split (default 0; printed with the result)")
-    parser.add_argument("--replicates", type=int, default=calibrate.REPLICATES,
+    parser.add_argument("--replicates", type=bounds.option("replicates"),
+                        default=calibrate.REPLICATES,
                         help="bootstrap resamples of the scored drops behind the intervals "
                              f"(default {calibrate.REPLICATES})")
-    parser.add_argument("--law-mu", type=float, default=0.3,
+    parser.add_argument("--law-mu", type=bounds.option("law-mu"), default=0.3,
                         help="--to LAW: the law's mu (default 0.3, a cell of the quick grid)")
-    parser.add_argument("--law-e", type=float, default=0.6,
+    parser.add_argument("--law-e", type=bounds.option("law-e"), default=0.6,
                         help="--to LAW: the law's e (default 0.6, a cell of the quick "
                              "grid)")
     parser.add_argument("--no-cache", action="store_true",

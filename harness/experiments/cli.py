@@ -62,10 +62,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                                  f"{name}: {text}" for name, text in frames.FRAMES.items())
                              + f" (default {frames.DEFAULT_FRAME}; the command prints both "
                              "frames side by side and why)")
-    parser.add_argument("--replicates", type=int, default=200,
+    parser.add_argument("--replicates", type=bounds.option("replicates"), default=200,
                         help="bootstrap replicates (default 200)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of folds and bootstrap")
-    parser.add_argument("--workers", type=int, default=None,
+    parser.add_argument("--seed", type=bounds.option("seed"),
+                        default=0, help="seed of folds and bootstrap")
+    parser.add_argument("--workers", type=bounds.option("workers"), default=None,
                         help="forked workers for the law fits (default: the local cores)")
     parser.add_argument("--engines", default="all",
                         help="engines for the Kharaz curves: 'all' (the installed ones), "

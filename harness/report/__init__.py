@@ -66,7 +66,6 @@ from __future__ import annotations
 import argparse
 import fnmatch
 import gc
-import json
 import multiprocessing
 import os
 import sys
@@ -74,6 +73,7 @@ import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
+from harness import bounds
 from harness.plotting import SVG_TWIN
 from harness.processes import start_forked
 from harness.report.experiments import data_option_problem
@@ -89,7 +89,7 @@ from harness.report.figures import heatmap_figure, impulse_figure, split_figure,
 from harness.report.fragments import DIGESTS_FILE, open_cache, prepare
 from harness.report.history import history_figure, history_inputs
 from harness.report.html import html_page
-from harness.report.pages import write_pages
+from harness.report.pages import PAGE_DIRECTORIES, write_pages
 from harness.report.progress import Progress, Silent
 from harness.report.reading import read_for_report
 from harness.report.summary import write_summary
@@ -97,7 +97,13 @@ from harness.report.survey import survey_figure_tasks
 from harness.report.table3 import table3_figure
 from harness.report.views import FIGURES, has_library_scenarios, slug, split_rows
 from harness.run.records import DEFAULT_RESULTS, Results
-from harness.store.files import output_directory_problem, write_text_atomically
+from harness.store.files import (
+    inner_directory_problem,
+    keep_manifest,
+    make_inner_directory,
+    output_directory_problem,
+    write_text_atomically,
+)
 
 #: Above this many scenarios the report aggregates (``--scenario-figures auto``, ``--svg
 #: auto``): the headline heat map has one row per family of scenarios (:func:`scenario_group`)
@@ -164,8 +170,8 @@ def write_report(results: Results, out_dir: Path | str,
     progress = Silent() if progress is None else progress
     progress.step("reading the results' digests")
     out_dir = Path(out_dir)
-    figure_dir = out_dir / FIGURES
-    figure_dir.mkdir(parents=True, exist_ok=True)
+    out_dir.mkdir(parents=True, exist_ok=True)  # the directory asked for (a link is fine)
+    figure_dir = make_inner_directory(out_dir, FIGURES)  # the report's own: never a link
     names = results.scenario_names()
     many = len(names) > MANY_SCENARIOS
     if scenario_figures == "auto":
@@ -464,6 +470,8 @@ def _wait_quietly(stages) -> None:
             continue
 
 
+#: The directories the report makes in its --out (never written through a link planted there).
+INNER_DIRECTORIES = (FIGURES, *PAGE_DIRECTORIES)
 #: The figures a report wrote into its directory; only these may be removed by a later report.
 WRITTEN = ".written-by-report.json"
 
@@ -471,19 +479,12 @@ WRITTEN = ".written-by-report.json"
 def _remove_stale_figures(figure_dir: Path, wanted: set) -> None:
     """Remove the figures an earlier report wrote here that this one no longer draws.
 
-    Only names listed in :data:`WRITTEN` (by an earlier report) are ever removed: a file the
-    report did not write -- someone's figure, a tracked file -- stays.
+    Only files :data:`WRITTEN` lists with the SHA-256 of what the report wrote, still
+    holding exactly that, are ever removed (:func:`harness.store.files.keep_manifest`): a
+    file the report did not write -- someone's figure, a tracked file, a name planted in
+    the manifest -- stays.
     """
-    manifest = figure_dir / WRITTEN
-    try:
-        written_before = set(json.loads(manifest.read_text(encoding="utf-8")))
-    except (OSError, ValueError, TypeError):
-        written_before = set()
-    for name in sorted(written_before - wanted):
-        stale = figure_dir / name
-        if Path(name).name == name and stale.suffix in (".png", ".svg"):  # only figures/
-            stale.unlink(missing_ok=True)
-    write_text_atomically(manifest, json.dumps(sorted(wanted), indent=0) + "\n")
+    keep_manifest(figure_dir, WRITTEN, wanted, (".png", ".svg"))
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -496,7 +497,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help=f"without --out, replace the report in {DEFAULT_OUT}/ (its "
                         f"index.html, summary.md and figures) even when made from another "
                         f"results file than {DEFAULT_OUT}/results.json")
-    parser.add_argument("--workers", type=int, default=None,
+    parser.add_argument("--workers", type=bounds.option("workers"), default=None,
                         help="processes drawing the figures (default: all cores; 1: none)")
     parser.add_argument("--scenario-figures", choices=("auto", "all", "none"), default="auto",
                         help="per-scenario figures: all, none, or auto (all up to "
@@ -546,7 +547,8 @@ def main(args) -> int:
                   f"{args.results}; write this report "
                   f"elsewhere with --out DIR, or replace it with --force", file=sys.stderr)
             return 2
-    problem = output_directory_problem(out)
+    problem = output_directory_problem(out) or next(
+        filter(None, (inner_directory_problem(out, name) for name in INNER_DIRECTORIES)), None)
     if problem:  # before any work
         print(f"impact-harness report: --out {out}: {problem}", file=sys.stderr)
         return 2

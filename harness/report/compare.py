@@ -26,7 +26,11 @@ comparison (a quick run compared with a full one is not a regression).
 
 Exit status, for gating an engine upgrade or a settings change in CI:
 0 no pair exceeds the threshold; 1 at least one does; 2 bad input (a file missing or not a
-results file, a bad threshold, or no record in common).
+results file, a file holding one run twice, a bad threshold, or no record in common).
+A pair whose result is not finite in one file only (a departure or speeds that became NaN),
+or whose speeds differ in length, exceeds whatever the threshold, as a changed status does.
+``--fail-above`` takes its unit: ``1%`` or ``1pp`` (a bare ``5`` was read as a fraction,
+500 pp, while the default printed ``1%``: it is refused).
 """
 
 from __future__ import annotations
@@ -42,8 +46,10 @@ from pathlib import Path
 
 import numpy as np
 
+from harness import bounds
 from harness.engines import source_label
 from harness.laws import LAW_NAMES
+from harness.report.export import csv_cell
 from harness.report.markup import html_table, page_head
 from harness.report.views import escape_html
 from harness.run import metrics
@@ -71,6 +77,7 @@ class Change:
     u_a: list | None
     u_b: list | None
     speed_change: float  # ‖u_B − u_A‖_M / s, nan without speeds or the scenario's M
+    malformed: tuple[str, ...] = ()  # what compare() found wrong with B's record
 
     @property
     def departure_change(self) -> dict[str, float]:
@@ -83,32 +90,109 @@ class Change:
         return changes
 
     @property
+    def problems(self) -> list[str]:
+        """What makes the pair a change whatever its size: a departure or speeds not finite
+        in one file only (the results file writes a value that is not finite as null), a
+        departure or a speed that is not a number, speeds of different lengths."""
+        found = list(self.malformed)
+        for law in LAWS:
+            if law not in self.departure_a or law not in self.departure_b:
+                continue  # a law one run did not solve: no pair
+            a, b = self.departure_a[law], self.departure_b[law]
+            if not all(v is None or _is_number(v) for v in (a, b)):
+                found.append(f"departure from {law} not a number")
+            elif _finite(a) != _finite(b):
+                found.append(f"departure from {law} {_spelled(a)} → {_spelled(b)}")
+        if self.u_a is not None and self.u_b is not None:
+            if not all(v is None or _is_number(v) for v in (*self.u_a, *self.u_b)):
+                found.append("speeds not numbers")
+            elif len(self.u_a) != len(self.u_b):
+                found.append(f"{len(self.u_a)} speeds → {len(self.u_b)}")
+            elif all(map(_finite, self.u_a)) != all(map(_finite, self.u_b)):
+                found.append("speeds " + ("became" if all(map(_finite, self.u_a))
+                                          else "were") + " not finite")
+        return found
+
+    @property
     def largest(self) -> float:
         """The largest absolute change (departures and speeds), for sorting and gating."""
         values = [abs(v) for v in self.departure_change.values()]
-        if math.isfinite(self.speed_change):
+        if not math.isnan(self.speed_change):  # inf: speeds too large to weigh, a change
             values.append(self.speed_change)
         return max(values, default=0.0)
+
+    @property
+    def largest_is_speeds(self) -> bool:
+        """Whether :attr:`largest` is the speeds' change (else a departure's)."""
+        return (not math.isnan(self.speed_change) and self.speed_change > 0
+                and self.speed_change == self.largest)
 
     @property
     def status_changed(self) -> bool:
         return self.status_a != self.status_b
 
     def exceeds(self, threshold: float) -> bool:
-        return self.status_changed or self.largest > threshold
+        return self.status_changed or bool(self.problems) or self.largest > threshold
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _finite(value) -> bool:
+    return _is_number(value) and math.isfinite(value)
+
+
+def _spelled(value) -> str:
+    """A departure as the row shows it: null (not finite) or its value."""
+    return "null" if value is None else f"{value:g}"
 
 
 def parse_threshold(text: str) -> float:
-    """``"1%"`` -> 0.01, ``"0.01"`` -> 0.01; raises ValueError for a negative or bad value."""
-    text = text.strip()
-    value = float(text[:-1]) / 100.0 if text.endswith("%") else float(text)
+    """``--fail-above``'s text as a fraction: ``"1%"`` and ``"1pp"`` are 0.01 (a departure's
+    change in percentage points, the speeds' in percent of the motion before: one scale);
+    ``"0"`` alone may go without a unit. A bare number is refused as ambiguous (``5`` read
+    as a fraction was 500 pp, 100 times looser than the ``1%`` the default prints), as is
+    a negative or not finite one: ``ValueError`` with a sentence saying what is allowed."""
+    spelled = text.strip()
+    number, unit = spelled, None
+    for suffix in ("%", "pp"):
+        if spelled.lower().endswith(suffix):
+            number, unit = spelled[:-len(suffix)].strip(), suffix
+            break
+    allowed = ("allowed: a change in percentage points with its unit, e.g. 1% or 1pp (of a "
+               "departure, and percent of the motion for the speeds); 0 alone needs none")
+    try:
+        value = float(number) if len(number) <= 40 else math.nan
+    except ValueError:
+        raise ValueError(f"--fail-above {text!r} is not a number; {allowed}") from None
+    if unit is None and value != 0:
+        raise ValueError(f"--fail-above {text!r} has no unit: is it {value:g}% or a fraction "
+                         f"({100 * value:g}%)? A bare number is ambiguous; {allowed}")
     if not math.isfinite(value) or value < 0:
-        raise ValueError(f"threshold must be a non-negative number or percentage, not {text!r}")
-    return value
+        raise ValueError(f"--fail-above {text!r} is not a non-negative finite number; "
+                         f"{allowed}")
+    return value / 100.0
 
 
 def record_key(record: Record) -> tuple[str, str, str]:
     return record.scenario, str(record.point.get("label", record.point.get("index"))), record.label
+
+
+def duplicate_problem(results: Results, path) -> str | None:
+    """Why ``results`` cannot be compared record by record: two records of one run (the
+    same scenario, point and source), which a results file of one run never holds (the
+    comparison kept the last silently); None when every key is unique."""
+    seen: set = set()
+    for record in results.records:
+        key = record_key(record)
+        if key in seen:
+            scenario, point, source = key
+            return (f"{path}: two records of one run: scenario {scenario!r}"
+                    + (f", point {point!r}" if point else "") + f", source {source!r} "
+                    "(a results file holds each run once: duplicates are refused)")
+        seen.add(key)
+    return None
 
 
 class MassMatrices:
@@ -166,9 +250,10 @@ class MassMatrices:
         if before.shape != (len(mass_matrix),) or after.shape != before.shape:
             self.mismatched.add(record.scenario)
             return False
-        energy_before = 0.5 * before @ mass_matrix @ before
-        recomputed = 0.5 * after @ mass_matrix @ after - energy_before
-        if abs(recomputed - record.energy_change) > 1e-9 * max(energy_before, 1e-300):
+        with np.errstate(over="ignore", invalid="ignore"):  # 1e308 speeds: inf, a mismatch
+            energy_before = 0.5 * before @ mass_matrix @ before
+            recomputed = 0.5 * after @ mass_matrix @ after - energy_before
+        if not abs(recomputed - record.energy_change) <= 1e-9 * max(energy_before, 1e-300):
             self.mismatched.add(record.scenario)
             return False
         return True
@@ -226,9 +311,14 @@ def compare(a: Results, b: Results,
         if rb is None:
             continue
         has_speeds = ra.u_after is not None and rb.u_after is not None
-        change = speed_change(ra, rb, weights(rb) if has_speeds else None)
+        weights_b = weights(rb) if has_speeds else None
+        change = speed_change(ra, rb, weights_b)
+        # B's speeds that do not give B's own recorded energy change, where A's give A's
+        # (so the scenario's file is the runs'): B's record is malformed, not "n/a"
+        malformed = (("speeds not those of its own energy change",)
+                     if has_speeds and weights_b is None and weights(ra) is not None else ())
         changes.append(Change(*key, ra.status, rb.status, dict(ra.departure),
-                              dict(rb.departure), ra.u_after, rb.u_after, change))
+                              dict(rb.departure), ra.u_after, rb.u_after, change, malformed))
     only_a = [key for key in records_a if key not in records_b]
     only_b = [key for key in records_b if key not in records_a]
     return changes, only_a, only_b
@@ -348,13 +438,17 @@ def write_csv(changes: list[Change], path: Path, b: Results | None = None) -> Pa
     header += ["speed_change_pct", "largest_change_pct"]
 
     def percent(value):
-        return "" if value is None or not math.isfinite(value) else 100.0 * value
+        return "" if not _is_number(value) or not math.isfinite(value) else 100.0 * value
+
+    def _cell(values, index):  # speeds of different lengths leave the shorter's cells empty
+        return csv_cell(values[index]) if index < len(values) else ""
 
     handle = io.StringIO(newline="")  # the rows in memory, then written atomically
     writer = csv.writer(handle)
     writer.writerow(header)
     for c in changes:
-        row = [c.scenario, c.point, c.source, c.status_a, c.status_b]
+        row = [csv_cell(text) for text in (c.scenario, c.point, c.source, c.status_a,
+                                           c.status_b)]
         deltas = c.departure_change
         for law in LAWS:
             row += [percent(c.departure_a.get(law)), percent(c.departure_b.get(law)),
@@ -363,8 +457,8 @@ def write_csv(changes: list[Change], path: Path, b: Results | None = None) -> Pa
         names = speed_names(b, c, count) if b is not None else [
             f"u{i + 1}" for i in range(count)]
         for i in range(size):
-            row += ([names[i], (c.u_a or [""] * count)[i], (c.u_b or [""] * count)[i]]
-                    if i < count else ["", "", ""])
+            row += ([csv_cell(names[i]), _cell((c.u_a or [""] * count), i),
+                     _cell((c.u_b or [""] * count), i)] if i < count else ["", "", ""])
         row += [percent(c.speed_change), percent(c.largest)]
         writer.writerow(row)
     write_text_atomically(path, handle.getvalue())
@@ -376,15 +470,22 @@ def row_cells(c: Change, law: str, threshold: float) -> list[str]:
     before, after = c.departure_a.get(law), c.departure_b.get(law)
     change = c.departure_change.get(law)
     status = f"{c.status_a} → {c.status_b}" if c.status_changed else c.status_b
+    status = "; ".join([status, *c.problems])
+    largest = (f"{100 * c.largest:.3g}" + ("% (speeds)" if c.largest_is_speeds else " pp")
+               if c.largest > 0 else "0")
     return ["EXCEEDS" if c.exceeds(threshold) else "ok",
             c.scenario + (f" [{c.point}]" if c.point else ""), c.source,
-            "—" if before is None else metrics.fmt_departure(before),
-            "—" if after is None else metrics.fmt_departure(after),
+            "—" if not _is_number(before) else metrics.fmt_departure(before),
+            "—" if not _is_number(after) else metrics.fmt_departure(after),
             fmt_points(change) if change is not None else "—",
-            "n/a" if math.isnan(c.speed_change) else f"{100 * c.speed_change:.3g}%", status]
+            "n/a" if math.isnan(c.speed_change) else f"{100 * c.speed_change:.3g}%",
+            largest, status]
 
 
-ROW_HEADER = ["", "scenario", "source", "before", "after", "change", "speeds", "status"]
+#: The rows' columns: ``largest`` is what the rows are sorted by and --fail-above bounds
+#: (the largest change of any law's departure, or of the speeds).
+ROW_HEADER = ["", "scenario", "source", "before", "after", "change", "speeds", "largest",
+              "status"]
 
 
 def summary_header(law: str) -> list[str]:
@@ -453,8 +554,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("a", type=Path, help="the reference results file (before)")
     parser.add_argument("b", type=Path, help="the results file to check (after)")
     parser.add_argument("--fail-above", default=DEFAULT_THRESHOLD, metavar="X",
-                        help="largest allowed change, as a percentage (1%%) or a fraction "
-                             f"(0.01); default {DEFAULT_THRESHOLD.replace('%', '%%')}")
+                        help="largest allowed change with its unit: 1%% or 1pp (percentage "
+                             "points of a departure, percent of the motion for the speeds); "
+                             "a bare number other than 0 is refused as ambiguous; default "
+                             f"{DEFAULT_THRESHOLD.replace('%', '%%')}")
     parser.add_argument("--law", default="poisson", choices=LAWS,
                         help="the law whose departures the rows and the summary show, before "
                              "and after (default poisson); the gate weighs every law")
@@ -463,7 +566,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "percent) here")
     parser.add_argument("--html", type=Path, default=None, metavar="OUT",
                         help="also write the same tables as an HTML page here")
-    parser.add_argument("--show", type=int, default=20, metavar="N",
+    parser.add_argument("--show", type=bounds.option("show"), default=20, metavar="N",
                         help="print the N largest changes (default 20; 0 prints none)")
 
 
@@ -498,14 +601,18 @@ def main(args) -> int:
 
 def _compare_and_show(args, loaded: list[Results], threshold: float) -> int:
     """:func:`main` once both files are read: the comparison, printed."""
+    for path, results in zip((args.a, args.b), loaded):
+        problem = duplicate_problem(results, path)
+        if problem:
+            return _bad_input(problem)
     weights = MassMatrices(*loaded)
     changes, only_a, only_b = compare(*loaded, weights)
     if not changes:
         return _bad_input(f"{args.a} and {args.b} have no record in common")
     law = getattr(args, "law", "poisson")
-    changes.sort(key=lambda c: (not c.status_changed, -c.largest))
+    changes.sort(key=lambda c: (not c.status_changed, not c.problems, -c.largest))
     exceeding = [c for c in changes if c.exceeds(threshold)]
-    changed = [c for c in changes if c.status_changed or c.largest > 0]
+    changed = [c for c in changes if c.status_changed or c.problems or c.largest > 0]
     summary = summarise(changes, only_a, only_b, law, threshold)
     differences = setting_differences(*loaded)
     rows = [row_cells(c, law, threshold) for c in changed]
@@ -524,7 +631,8 @@ def _compare_and_show(args, loaded: list[Results], threshold: float) -> int:
         for what, before, after in differences:
             print(f"  {what}: {before} → {after}")
     if rows[:args.show]:
-        print(f"\nthe {min(args.show, len(rows))} largest changes of {len(rows)}:")
+        print(f"\nthe {min(args.show, len(rows))} largest changes of {len(rows)} (a changed "
+              "status or a result not finite first, then by the largest column):")
         print(text_table(ROW_HEADER, rows[:args.show]))
     for label, keys in (("only in A", only_a), ("only in B", only_b)):
         if keys:
@@ -540,7 +648,8 @@ def _compare_and_show(args, loaded: list[Results], threshold: float) -> int:
               f"masses their runs used (edited since?), e.g. {', '.join(names[:3])}")
     written = [str(p) for p in (args.csv, getattr(args, "html", None)) if p is not None]
     print(f"compared {len(changes)} records ({len(changed)} changed at all): {len(exceeding)} "
-          f"changed by more than {threshold_text(threshold)} or changed status"
+          f"changed by more than {threshold_text(threshold)}, changed status or hold a "
+          "result not finite in one file only"
           + (f"; wrote {', '.join(written)}" if written else ""))
     return 1 if exceeding else 0
 

@@ -46,7 +46,7 @@ from harness.report.markup import folded, html_table
 from harness.report.views import FIGURES, engine_style
 from harness.run.provenance import package_versions
 from harness.store.cache import ResultCache
-from harness.store.files import write_text_atomically
+from harness.store.files import make_inner_directory, write_text_atomically
 
 KHARAZ_FIGURE = "experiments-kharaz.png"
 #: Incidences of the drawn curves, degrees from the normal.
@@ -135,8 +135,7 @@ def draw_kharaz(path: Path, tag: str | None) -> Path:
 
 
 def kharaz_html(out_dir: Path) -> str:
-    figures = out_dir / FIGURES
-    figures.mkdir(parents=True, exist_ok=True)
+    figures = make_inner_directory(out_dir, FIGURES)  # never through a link
     render_once("experiments-kharaz", figures / KHARAZ_FIGURE, kharaz_payload(), draw_kharaz)
     limit = kharaz.sticking_limit_deg()
     gaps = kharaz.digitisation_gaps()
@@ -531,8 +530,7 @@ def _own_knobs(engines) -> str:
 
 
 def drops_html(out_dir: Path, aggregates: dict) -> str:
-    figures = out_dir / FIGURES
-    figures.mkdir(parents=True, exist_ok=True)
+    figures = make_inner_directory(out_dir, FIGURES)  # never through a link
     payload = {"aggregates_of": aggregates.get("provenance", {}),
                "digest": aggregates_digest(aggregates)}
     parts = []

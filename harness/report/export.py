@@ -25,6 +25,7 @@ import argparse
 import csv
 import io
 import json
+import sys
 from pathlib import Path
 
 from harness.run.records import ANALYTIC, Results, read_results
@@ -57,6 +58,19 @@ def long_rows(results: Results) -> list[dict]:
     return rows
 
 
+#: What a spreadsheet reads as the start of a formula in a cell (CWE-1236).
+_FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
+
+
+def csv_cell(value):
+    """``value`` as a CSV cell a spreadsheet shows as text: a string starting like a formula
+    (``=HYPERLINK(...)`` in a scenario's name read from a results file) gets a leading
+    ``'``; numbers and other strings are as they are."""
+    if isinstance(value, str) and value.startswith(_FORMULA_START):
+        return "'" + value
+    return value
+
+
 def write_long(results: Results, path: Path) -> int:
     """Write :func:`long_rows` to ``path`` (``.csv`` or ``.parquet``); the row count."""
     rows = long_rows(results)
@@ -87,9 +101,10 @@ def write_long(results: Results, path: Path) -> int:
         writer = csv.DictWriter(handle, COLUMNS)
         writer.writeheader()
         for row in rows:
-            writer.writerow({**row, "reasons": ";".join(row["reasons"]),
-                             **{key: "" if row[key] is None else row[key]
-                                for key in ("point_value", "departure", "departure_pct")}})
+            row = {**row, "reasons": ";".join(row["reasons"]),
+                   **{key: "" if row[key] is None else row[key]
+                      for key in ("point_value", "departure", "departure_pct")}}
+            writer.writerow({key: csv_cell(value) for key, value in row.items()})
         write_text_atomically(path, handle.getvalue())  # a regular file only
     return len(rows)
 
@@ -105,18 +120,26 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def main(args) -> int:
     out = args.out
     if out.suffix not in (".csv", ".parquet"):
-        print(f"impact-harness export: --out {out}: the file must end in .csv or .parquet")
+        print(f"impact-harness export: --out {out}: the file must end in .csv or .parquet",
+              file=sys.stderr)
         return 2
     problem = output_file_problem(out)
     if problem:
-        print(f"impact-harness export: --out {out}: {problem}")
+        print(f"impact-harness export: --out {out}: {problem}", file=sys.stderr)
         return 2
     try:
         results = read_results(args.results)
     except (OSError, ValueError, KeyError, TypeError) as error:
-        print(f"impact-harness export: {error}")
+        print(f"impact-harness export: {error}", file=sys.stderr)
         return 2
-    count = write_long(results, out)
+    try:
+        count = write_long(results, out)
+    except (TypeError, ValueError, AttributeError, KeyError, IndexError) as error:
+        # read_results checks a record's fields, not every value's type: a departure that
+        # is a list, a diagnostics that is a number fail here, before anything is written
+        print(f"impact-harness export: {args.results}: a record is malformed: "
+              f"{type(error).__name__}: {str(error)[:200]}", file=sys.stderr)
+        return 2
     print(f"wrote {count} rows (run × law) to {out}")
     return 0
 

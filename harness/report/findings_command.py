@@ -12,14 +12,16 @@ from __future__ import annotations
 import argparse
 import sys
 
+from harness import bounds
 from harness.report import stated
 from harness.report.findings import markdown, measure
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--count", type=int, default=100_000,
+    parser.add_argument("--count", type=bounds.option("count"), default=100_000,
                         help="random problems to draw (default: 100000)")
-    parser.add_argument("--seed", type=int, default=2009, help="random seed (default: 2009)")
+    parser.add_argument("--seed", type=bounds.option("seed"),
+                        default=2009, help="random seed (default: 2009)")
     what = parser.add_mutually_exclusive_group()
     what.add_argument("--check", action="store_true",
                       help="recompute every number README.md and docs/ state about results "

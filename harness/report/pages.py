@@ -15,7 +15,7 @@ from pathlib import Path
 
 from harness.report.markup import html_table, markdown_to_html, page_head
 from harness.report.views import escape_html
-from harness.store.files import write_bytes_atomically, write_text_atomically
+from harness.store.files import make_inner_directory, write_bytes_atomically, write_text_atomically
 
 BENCH_PAGE, STRESS_PAGE = "bench.html", "stress.html"
 PAGE_TITLES = {BENCH_PAGE: "Benchmarks: speed and accuracy",
@@ -31,9 +31,14 @@ def find_input(kind: str, file: str, sources: Sequence[Path]) -> Path | None:
     return None
 
 
+#: The directories of ``out`` the bench and stress pages copy their figures into.
+PAGE_DIRECTORIES = ("bench", "stress")
+
+
 def copy_figures(source_dir: Path, target_dir: Path) -> list[str]:
-    """Copy the PNG (and SVG) figures of ``source_dir`` into ``target_dir``; PNG names."""
-    target_dir.mkdir(parents=True, exist_ok=True)
+    """Copy the PNG (and SVG) figures of ``source_dir`` into ``target_dir`` (made in its
+    parent, never through a link); PNG names."""
+    make_inner_directory(target_dir.parent, target_dir.name)
     names = []
     for figure in sorted(source_dir.glob("*.png")) + sorted(source_dir.glob("*.svg")):
         target = target_dir / figure.name
@@ -172,7 +177,7 @@ def write_bench_page(bench_json: Path, out_dir: Path, report: dict | None = None
     """``bench.html`` from ``bench.json`` and the figures beside it; ``report``: the
     report's results' provenance (the page says when it is older)."""
     data = json.loads(bench_json.read_text(encoding="utf-8"))
-    names = copy_figures(bench_json.parent, out_dir / "bench")
+    names = copy_figures(bench_json.parent, out_dir / PAGE_DIRECTORIES[0])
     body = [provenance_html(data.get("provenance") or {}, report or {},
                             PAGE_COMMANDS[BENCH_PAGE]),
             ("<p>Written by <code>impact-harness bench</code>; machine-readable: "
@@ -192,7 +197,7 @@ def write_bench_page(bench_json: Path, out_dir: Path, report: dict | None = None
 def write_stress_page(stress_md: Path, out_dir: Path, report: dict | None = None) -> Path:
     """``stress.html`` from ``stress.md`` (and the provenance of ``stress.json`` beside it)
     and the figures beside it."""
-    names = copy_figures(stress_md.parent, out_dir / "stress")
+    names = copy_figures(stress_md.parent, out_dir / PAGE_DIRECTORIES[1])
     made = made_by(stress_md.parent / "stress.json")
     text = stress_md.read_text(encoding="utf-8")
     lines = text.splitlines()

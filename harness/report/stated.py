@@ -41,6 +41,7 @@ from harness.run.records import ANALYTIC, read_results
 from harness.run.references import point_reference
 from harness.run.verdicts import reason_counts
 from harness.scenarios import load_scenario
+from harness.store.files import write_text_atomically
 from harness.survey import cli as survey_cli
 from harness.survey.population import resolve_populations
 from planar_impact.simultaneous import coherent_count_distribution
@@ -503,7 +504,7 @@ def rewrite(path: Path, numbers: Mapping[str, str]) -> bool:
 
     new = BLOCK.sub(block, INLINE.sub(inline, text))
     if new != text:
-        path.write_text(new, encoding="utf-8")
+        write_text_atomically(path, new)  # whole or not at all, never through a link
     return new != text
 
 

@@ -6,6 +6,7 @@ Nothing here draws or writes; figures, html and summary all read the same views.
 from __future__ import annotations
 
 import functools
+import hashlib
 import html
 import math
 import re
@@ -66,8 +67,18 @@ def fmt_number(value, digits: int = 4) -> str:
     return f"{value:.{digits}g}"
 
 
+#: The longest slug: a figure's file name holds one with a prefix and a suffix, within the
+#: 255 bytes a file name may take (a results file may hold a name of any length).
+MAX_SLUG = 120
+
+
 def slug(name: str) -> str:
-    return re.sub(r"[^A-Za-z0-9_.-]+", "-", name)
+    """``name`` as a file name's part: characters other than letters, digits, ``_.-``
+    replaced; a long one cut, with a hash of the whole name, so names stay apart."""
+    text = re.sub(r"[^A-Za-z0-9_.-]+", "-", name)
+    if len(text) <= MAX_SLUG:
+        return text
+    return f"{text[:MAX_SLUG - 17]}-{hashlib.sha256(name.encode()).hexdigest()[:16]}"
 
 
 # Axis names of the sweep parameters (harness/scenarios/schema.py, BODY_SWEEP_FIELDS).

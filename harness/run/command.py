@@ -61,6 +61,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
 from typing import Sequence, TextIO
@@ -108,7 +109,7 @@ def add_common_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--scheduler", default=None,
                         help="Dask scheduler address (with --executor dask; default: a local "
                         "cluster)")
-    parser.add_argument("--workers", type=int, default=None,
+    parser.add_argument("--workers", type=bounds.option("workers"), default=None,
                         help="local worker processes (default: all cores; small runs run inline)")
     parser.add_argument("--set", dest="settings_overrides", action="append", default=[],
                         metavar="ENGINE.KEY=VALUE",
@@ -120,11 +121,12 @@ def add_common_arguments(parser: argparse.ArgumentParser) -> None:
                         help="record each engine run's per-step contact history (v_n, v_t, "
                         "impulses, penetration, energy) in its record (default: only for "
                         "scenarios without a sweep, the ones the report draws step by step)")
-    parser.add_argument("--chunk-size", type=int, default=None, metavar="N",
+    parser.add_argument("--chunk-size", type=bounds.option("chunk-size"), default=None, metavar="N",
                         help="engine runs per Engine.run_many call and per task sent to a "
                         "worker (default: chosen from the run's size, at most "
                         "64; 1: one Engine.run per task)")
-    parser.add_argument("--task-time-limit", type=float, default=TASK_TIME_LIMIT_S,
+    parser.add_argument("--task-time-limit", type=bounds.option("task-time-limit"),
+                        default=TASK_TIME_LIMIT_S,
                         metavar="SECONDS",
                         help=f"wall-clock limit of one engine run (default: {TASK_TIME_LIMIT_S:g})")
 
@@ -180,7 +182,7 @@ def selection_of(args) -> dict:
     and, when any, the ``--set`` overrides."""
     files = getattr(args, "files", None) or None
     tags = parse_tags_text(args.tags)
-    selection = {"files": None if files is None else sorted(str(Path(f).resolve()) for f in files),
+    selection = {"files": None if files is None else sorted(_resolved(f) for f in files),
                  "tags": tags,
                  "engines": [name for name in engine_names()
                              if name in parse_engines(args.engines)],
@@ -189,6 +191,15 @@ def selection_of(args) -> dict:
     if overrides:  # only then: a --set experiment never silently replaces the suite's results
         selection["settings_overrides"] = sorted(overrides)
     return selection
+
+
+def _resolved(path) -> str:
+    """``path`` resolved, or made absolute when it cannot be (a loop of links: the file's
+    reader says why it cannot be read)."""
+    try:
+        return str(Path(path).resolve())
+    except (OSError, RuntimeError):
+        return os.path.abspath(path)
 
 
 def parse_tags_text(text) -> list[str] | None:

@@ -94,6 +94,7 @@ from __future__ import annotations
 import functools
 import logging
 import math
+import re
 import sys
 import threading
 from typing import Any, Callable, Hashable, Iterable, Sequence
@@ -148,8 +149,20 @@ def check_arguments(executor: str = "local", workers: int | None = None,
         raise ValueError(f"--workers {workers!r}: must be a positive integer")
     if scheduler is not None and executor != "dask":
         raise ValueError(f"--scheduler {scheduler!r}: needs --executor dask")
+    if scheduler is not None and not _SCHEDULER_ADDRESS.fullmatch(scheduler):
+        raise ValueError(f"--scheduler {scheduler[:100]!r}: not a scheduler's address; "
+                         "allowed: [tcp://|tls://]HOST:PORT, e.g. tcp://host:8786")
+    if scheduler is not None and not 1 <= int(scheduler.rpartition(":")[2]) <= 65535:
+        raise ValueError(f"--scheduler {scheduler!r}: the port is not 1 to 65535")
     if executor == "dask":
         _require_distributed()
+
+
+#: A Dask scheduler's address as --scheduler takes it: a protocol, a host name or address
+#: (an IPv6 one in brackets) and a port.
+_SCHEDULER_ADDRESS = re.compile(
+    r"(?:(?:tcp|tls|ucx|ws|wss)://)?(?:\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9][A-Za-z0-9.\-_]{0,252}):"
+    r"[0-9]{1,5}")
 
 
 def run_tasks(

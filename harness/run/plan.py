@@ -36,6 +36,9 @@ def parse_engines(text: str | Sequence[str] | None) -> tuple[str, ...]:
     items = text.split(",") if isinstance(text, str) else [
         part for item in text for part in str(item).split(",")]
     names = tuple(dict.fromkeys(item.strip() for item in items if item.strip()))
+    if not names:  # `--engines ''` ran every engine
+        raise ValueError(f"--engines {text!r} names no engine; allowed: one or more of "
+                         f"{', '.join(registered)} (leave the option out for all)")
     unknown = [name for name in names if name not in registered]
     if unknown:
         raise ValueError(f"--engines: unknown engine(s) {', '.join(unknown)}; allowed (the "

@@ -416,6 +416,9 @@ def _read_results(path: Path) -> Results:
     provenance, scenarios = document.get("provenance", {}), document.get("scenarios", {})
     if not isinstance(provenance, dict) or not isinstance(scenarios, dict):
         raise ValueError(f"{path}: 'provenance' and 'scenarios' must be JSON objects")
+    problem = provenance_problem(provenance, scenarios)
+    if problem:
+        raise ValueError(f"{path}: {problem}")
     records = []
     for number, item in enumerate(items):
         try:
@@ -440,6 +443,77 @@ _REQUIRED_TYPES = {"scenario": (str,), "point": (dict,), "source": (str,),
                    "status": (str,), "departure": (dict,)}
 
 
+_NUMBER = (int, float, type(None))
+#: The type of each other field, when a record holds it.
+_OPTIONAL_TYPES = {"vn_approach": _NUMBER, "vt_approach": _NUMBER, "vn_separation": _NUMBER,
+                   "vt_separation": _NUMBER, "energy_change": _NUMBER,
+                   "collision_type": (int, type(None)), "normal_impulse": _NUMBER,
+                   "tangential_impulse": _NUMBER, "wall_time_s": _NUMBER, "cached": (bool,),
+                   "diagnostics": (dict, type(None)), "verdict": (str, type(None)),
+                   "reasons": (list,)}
+#: The provenance's values the report and compare read, by key, with their types.
+_PROVENANCE_TYPES = {"gates": (list,), "engine_settings": (dict,), "versions": (dict,),
+                     "git": (dict, type(None)), "machine": (dict,), "cache": (dict,),
+                     "selection": (dict,), "engines": (list,), "presets": (list,),
+                     "executor": (dict,), "settings_overrides": (dict,), "command": (list,),
+                     "engine_versions": (dict,), "engines_missing": (dict,),
+                     "created_utc": (str,), "code_version": (str,), "history": (str,),
+                     "wall_time_s": _NUMBER, "task_time_limit_s": _NUMBER}
+
+
+def _kinds(kinds: tuple) -> str:
+    return " or ".join("null" if kind is type(None) else kind.__name__ for kind in kinds)
+
+
+def _value_problem(item: dict) -> str | None:
+    """Why a record's values (past the required fields' own types) are not those a run
+    writes: an optional field of another type, a departure or a speed that is not a
+    number (a report or a comparison of it would fail late, or be wrong)."""
+    for name, kinds in _OPTIONAL_TYPES.items():
+        value = item.get(name)
+        if name in item and (not isinstance(value, kinds)
+                             or isinstance(value, bool) and bool not in kinds):
+            return f"{name} = {value!r}: not a {_kinds(kinds)}"
+    for name in ("u_before", "u_after"):
+        if item[name] is not None and not all(
+                isinstance(v, _NUMBER) and not isinstance(v, bool) for v in item[name]):
+            return f"{name} = {item[name]!r}: not a list of numbers"
+    if not all(isinstance(law, str) and isinstance(v, _NUMBER) and not isinstance(v, bool)
+               for law, v in item["departure"].items()):
+        return f"departure = {item['departure']!r}: not numbers by law"
+    if not all(isinstance(reason, dict) and isinstance(reason.get("name"), str)
+               for reason in item.get("reasons", ())):
+        return f"reasons = {item['reasons']!r:.120}: not a list of named reasons"
+    return None
+
+
+def provenance_problem(provenance: dict, scenarios: dict) -> str | None:
+    """Why a results file's provenance or scenarios are not as a run writes them."""
+    for name, kinds in _PROVENANCE_TYPES.items():  # null: a value the run did not record
+        if name in provenance and not isinstance(provenance[name], (*kinds, type(None))):
+            return f"provenance.{name} = {provenance[name]!r:.80}: not a {_kinds(kinds)}"
+    for number, gate in enumerate(provenance.get("gates") or []):
+        if not (isinstance(gate, dict) and all(isinstance(value, str | int | float | None)
+                                               for value in gate.values())
+                and isinstance(gate.get("status"), str)):
+            return f"provenance.gates[{number}] = {gate!r:.80}: not a gate's record"
+    for engine, presets in (provenance.get("engine_settings") or {}).items():
+        if not (isinstance(presets, dict) and all(isinstance(settings, dict)
+                                                  for settings in presets.values())):
+            return (f"provenance.engine_settings.{engine} = {presets!r:.80}: not settings by "
+                    "preset")
+    for name in ("versions", "engine_versions", "engines_missing"):
+        for key, value in (provenance.get(name) or {}).items():
+            if not isinstance(value, (str, type(None))):
+                return f"provenance.{name}.{key} = {value!r:.80}: not a string"
+    if not all(isinstance(word, str) for word in provenance.get("command") or ()):
+        return f"provenance.command = {provenance['command']!r:.80}: not a list of strings"
+    for name, value in scenarios.items():
+        if not isinstance(value, dict):
+            return f"scenarios.{name} = {value!r:.80}: not a JSON object"
+    return None
+
+
 def records_problem(items: Any) -> str | None:
     """Why the records of a results file cannot be read (None: they can): each must be an
     object holding :data:`REQUIRED_FIELDS` with values of their types; the first bad one
@@ -458,6 +532,9 @@ def records_problem(items: Any) -> str | None:
                 return (f"record {number}: {name} = {item[name]!r}: not a "
                         + " or ".join("null" if kind is type(None) else kind.__name__
                                       for kind in _REQUIRED_TYPES[name]))
+        problem = _value_problem(item)
+        if problem:
+            return f"record {number}: {problem}"
     return None
 
 

@@ -25,6 +25,7 @@ from harness.scenarios.schema import (
     DEFAULT_GAP_TOLERANCE,
     DERIVED_TAGS,
     LAWS,
+    NAME_ALLOWED,
     NAME_PATTERN,
     SYSTEMS,
     TAG_PATTERN,
@@ -50,7 +51,7 @@ def parse_scenario(doc: Mapping[str, Any], path=None, *, checks_key: str | None 
     reader.keys(doc, "", TOP_KEYS[system],
                 "a scenario file" if system == "bodies" else f'a system = "{system}" file')
     name = reader.string(doc, "name", "", pattern=NAME_PATTERN,
-                         allowed="letters, digits, '_', '-' and '.'")
+                         allowed=NAME_ALLOWED)
     description = reader.line_of_text(doc, "description", "", default="")
     tags = _read_tags(reader, doc)
     restitution = reader.number(doc, "restitution", "", low=0.0, high=1.0, field="restitution")

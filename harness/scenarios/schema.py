@@ -87,12 +87,18 @@ TOP_KEYS = {
 }
 EXPECT_KEYS = ("collision_type", "case", "energy_gain", "gate")
 GATE_KEYS = ("law", "max_departure")
-NAME_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
+#: A scenario's or a body's name: it names files (figures, at most 255 bytes) and table cells.
+MAX_NAME = 100
+NAME_PATTERN = re.compile(rf"^[A-Za-z0-9][A-Za-z0-9_.-]{{0,{MAX_NAME - 1}}}$")
+NAME_ALLOWED = f"letters, digits, '_', '-' and '.', at most {MAX_NAME} characters"
 #: A character a description may not hold: the C0 and C1 control characters (NUL, newline,
-#: carriage return, tab, escape ...) and the line and paragraph separators: a description is
-#: one line of text in the reports, the results file and a terminal.
-CONTROL_CHARACTER = re.compile("[\x00-\x1f\x7f-\x9f\u2028\u2029]")
-DESCRIPTION_ALLOWED = "one line of text, without control characters (no NUL, newline or tab)"
+#: carriage return, tab, escape ...), the line and paragraph separators (a description is
+#: one line of text in the reports, the results file and a terminal) and the bidirectional
+#: controls (U+202E shows a text's end reversed: what is read is not what is written).
+CONTROL_CHARACTER = re.compile("[\x00-\x1f\x7f-\x9f\u2028\u2029\u061c\u200e\u200f"
+                               "\u202a-\u202e\u2066-\u2069]")
+DESCRIPTION_ALLOWED = ("one line of text, without control characters (no NUL, newline, tab "
+                       "or bidirectional control)")
 TAG_PATTERN = re.compile(r"^[a-z0-9][a-z0-9-]*$")
 DERIVED_TAGS = ("all",)
 
@@ -119,6 +125,7 @@ MAGNITUDES: dict[str, tuple[float, float]] = {
     "two_sled_mass": (1e-4, 1e4),  # kg, parameters.m
     "two_sled_length": (1e-4, 1e2),  # m, parameters.l
     "two_sled_offset": (0.0, 1e3),  # parameters.s, c, q3, q6
+    "mass_ratio": (1e-8, 1e8),  # a population's m_B / m_A: two masses of 1e-4 ... 1e4 kg
 }
 #: Any non-zero number smaller in magnitude than this is refused (subnormals, 1e-300 ...).
 TINY = 1e-12

@@ -13,6 +13,7 @@ import numpy as np
 from harness.scenarios.model import BodySpec, MatrixSystem
 from harness.scenarios.schema import (
     BODY_KEYS,
+    NAME_ALLOWED,
     NAME_PATTERN,
     SHAPE_FIELDS,
     TWO_SLED_KEYS,
@@ -82,7 +83,7 @@ def _read_body(reader: TableReader, table, index: int, ground: bool) -> BodySpec
     if not isinstance(table, dict):
         return reader.error(prefix, "must be a table", table, "[[body]] tables")
     name = reader.string(table, "name", prefix, pattern=NAME_PATTERN,
-                         allowed="letters, digits, '_', '-' and '.'")
+                         allowed=NAME_ALLOWED)
     if name is not None:
         prefix = f"body.{name}"
     kind = table.get("shape")

@@ -155,6 +155,9 @@ class TableReader:
         value = table[key]
         if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
             return self.error(dotted, "must be a list of strings", value, ", ".join(choices))
+        if not value:  # neither "all" nor "none": engines = [] ran all, laws = [] none
+            return self.error(dotted, "an empty list", value,
+                              f"one or more of {', '.join(choices)}; leave {key} out for all")
         bad = [v for v in value if v not in choices]
         for v in bad:
             self.error(f"{dotted}", f"unknown name {v!r}{suggest(v, choices)}", value,

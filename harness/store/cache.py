@@ -39,8 +39,13 @@ holds them). Plain data only: nothing read from the cache is unpickled, evaluate
 imported. Written atomically (a temporary file in the same directory, then ``os.replace``),
 so concurrent writers and an interrupted run never leave a half-written entry; a temporary
 left by a killed writer is removed by the next run (:meth:`ResultCache.clean_temporaries`).
-An unreadable, corrupted or edited file (its checksum differs; in a pack, a record whose
-checksum differs, or every record of a pack whose header is not whole) is a miss, and so is an entry
+Every header carries the cache's seal (:mod:`harness.store.sealing`: an HMAC under a key
+made with mode 0600 in the root, over the header, which holds the SHA-256 of what follows),
+so a header or a body edited after it was written, its checksum recomputed or not, is not
+believed. Reads are bounded (``max_cache_entry_bytes`` of :mod:`harness.bounds`), of regular
+files only. An unreadable, corrupted, edited or unsealed file (its seal does not verify, its
+checksum differs; in a pack, a record whose checksum differs, or every record of a pack
+whose header is not whole or not sealed) is a miss, and so is an entry
 the caller's ``check`` rejects (a record without finite velocities of the right shape): both
 are listed in :attr:`ResultCache.rejected`, which the run prints as warnings, and the
 result is computed again. Beside the entries, ``root/passed-checks.json`` keeps the keys of
@@ -67,16 +72,19 @@ from pathlib import Path
 from typing import Any
 
 from harness.collector import collector_paused
+from harness.inputs import read_bytes
 from harness.store.cache_directory import CacheDirectory
 from harness.store.files import write_parts_atomically
 from harness.store.identity import Spelled, canonical_json, code_version
-from harness.store.packs import PACK_DIRECTORY, PACK_SIZE, PackIndex, make_pack
+from harness.store.packs import PACK_DIRECTORY, PACK_SIZE, PackIndex, make_pack, open_regular
+from harness.store.sealing import KeyProblem, Seal
 
 #: Between two lines of an entry of many lines (:meth:`ResultCache.put_lines`): the record
 #: lines of a results file (:mod:`harness.run.records`), which a warm run copies as stored.
 LINE_SEPARATOR = ",\n"
 
-CACHE_FORMAT = 2  # bump when the record layout changes (2: SHA-256 checked, no pickle)
+CACHE_FORMAT = 3  # bump when the record layout changes (2: SHA-256 checked, no pickle;
+#                  3: every header sealed, harness.store.sealing)
 
 #: The stand-in of :meth:`ResultCache.slot_key`'s slot (a random string, spelled as json
 #: spells it).
@@ -106,7 +114,41 @@ class ResultCache(CacheDirectory):
         self._root_seen = False  # whether this cache looked at its root's marker yet
         # shard -> the names in its directory, while listed() is active (None: not listed)
         self._listing: dict[str, set[str] | None] | None = None
-        self._packs = PackIndex(self.root, self.version)  # where each packed record lies
+        self.seal = Seal(self.root)  # the keyed check of every header (harness.store.sealing)
+        self._packs = PackIndex(self.root, self.version, self.seal)  # where packed records lie
+
+    def _untrusted(self, error: KeyProblem) -> None:
+        """The key cannot be believed: nothing is read from the cache or written to it from
+        now on, said once among the rejected entries."""
+        self.rejected.append(f"{error}: nothing in the cache is believed or written (remove "
+                             "the file: the next run makes a new key)")
+        self.enabled = False
+
+    def _sealed(self, header: dict) -> dict | None:
+        """``header`` sealed for writing, or None when the key cannot be believed (the root
+        made first when missing: the key lies in it)."""
+        self._first_write()
+        try:
+            try:
+                return self.seal.sealed(header)
+            except FileNotFoundError:  # no root yet, or removed under a running writer
+                self.make_root()
+                return self.seal.sealed(header)
+        except KeyProblem as error:
+            self._untrusted(error)
+            return None
+
+    def _first_write(self) -> None:
+        """At the first write, a root that exists empty and unmarked is marked (made by the
+        caller for the cache); one holding anything else is written into unmarked (the
+        caller chose it; ``prepare`` refuses it for a run), so never cleared."""
+        if not self._root_seen:
+            self._root_seen = True
+            try:
+                if not self.marked() and self.root.is_dir() and not any(self.root.iterdir()):
+                    self.make_root()
+            except OSError:
+                pass
 
     @contextmanager
     def listed(self) -> Iterator[None]:
@@ -200,12 +242,12 @@ class ResultCache(CacheDirectory):
             try:  # a single entry first: the packs' index is read only when one is missing
                 if self._unlisted(key, ".json"):
                     raise FileNotFoundError(path)
-                with open(path, "rb") as handle:
-                    raw = handle.read()
+                raw = read_bytes(path, cap_name="max_cache_entry_bytes")
                 head_end = raw.find(b"\n")
                 header = json.loads(raw[:head_end]) if head_end > 0 else None
                 if not isinstance(header, dict) or header.get("key") != key:
                     raise ValueError("not a cache entry")
+                self.seal.check(header)
                 body, sha256 = memoryview(raw)[head_end + 1:], header.get("sha256")
             except FileNotFoundError:
                 packed = self._packs.entry(key, self._listing is not None, self.rejected)
@@ -213,7 +255,7 @@ class ResultCache(CacheDirectory):
                     raise
                 pack, offset, size, sha256 = packed
                 path = f"{pack} (record {key[:12]})"
-                with open(pack, "rb") as handle:
+                with open_regular(pack) as handle:
                     handle.seek(offset)
                     body = handle.read(size)
                 if len(body) != size:
@@ -227,6 +269,10 @@ class ResultCache(CacheDirectory):
             if reason is not None:
                 raise ValueError(reason)
         except FileNotFoundError:
+            self.misses += 1
+            return None
+        except KeyProblem as error:
+            self._untrusted(error)
             self.misses += 1
             return None
         except (OSError, ValueError) as error:  # UnicodeDecodeError is a ValueError
@@ -246,8 +292,11 @@ class ResultCache(CacheDirectory):
         if not self.enabled:
             return
         body = _ENTRY_ENCODER.encode(record).encode("utf-8")
-        header = json.dumps({"key": key, "code_version": self.version,
-                             "sha256": hashlib.sha256(body).hexdigest()})
+        sealed = self._sealed({"key": key, "code_version": self.version,
+                               "sha256": hashlib.sha256(body).hexdigest()})
+        if sealed is None:
+            return
+        header = json.dumps(sealed)
         self._write(self._path_text(key), (header.encode("utf-8"), b"\n", body), key)
         self._list(key[:2], f"{key}.json")
 
@@ -259,7 +308,10 @@ class ResultCache(CacheDirectory):
         if not self.enabled or not items:
             return
         for start in range(0, len(items), PACK_SIZE):
-            pack = make_pack(items[start:start + PACK_SIZE], self.version, _ENTRY_ENCODER.encode)
+            pack = make_pack(items[start:start + PACK_SIZE], self.version, _ENTRY_ENCODER.encode,
+                             self._sealed)
+            if pack is None:
+                return
             path = os.path.join(self.root, PACK_DIRECTORY, pack.name)
             self._write(path, (pack.header, *pack.bodies), pack.name)
             self._packs.written(path, pack)
@@ -267,17 +319,9 @@ class ResultCache(CacheDirectory):
     def _write(self, path: str, parts: tuple, key: str) -> None:
         """Write an entry's ``parts`` at ``path`` atomically; the shard directory made when
         missing (only then: a cold run puts thousands of small entries, whose mkdir calls
-        would cost as much as their writes), and the root first, marked, when it is missing.
-        At the first write, a root that exists empty and unmarked is marked (made by the
-        caller for the cache); one holding anything else is written into unmarked (the
-        caller chose it; ``prepare`` refuses it for a run), so never cleared."""
-        if not self._root_seen:
-            self._root_seen = True
-            try:
-                if not self.marked() and self.root.is_dir() and not any(self.root.iterdir()):
-                    self.make_root()
-            except OSError:
-                pass
+        would cost as much as their writes), and the root first, marked, when it is missing
+        (:meth:`_first_write`)."""
+        self._first_write()
         for attempt in (1, 2, 3):
             try:
                 write_parts_atomically(path, parts, prefix=f".{key[:8]}-")
@@ -329,8 +373,7 @@ class ResultCache(CacheDirectory):
             return None
         path = self.lines_path(key)
         try:
-            with open(path, "rb") as handle:
-                raw = handle.read()
+            raw = read_bytes(path, cap_name="max_cache_entry_bytes")
             head_end = raw.find(b"\n")
             header = json.loads(raw[:head_end if head_end >= 0 else len(raw)])
             data = memoryview(raw)  # slices of it copy nothing
@@ -340,6 +383,7 @@ class ResultCache(CacheDirectory):
                     or not isinstance(sizes, list) or not sizes
                     or not all(isinstance(size, int) and size >= 0 for size in sizes)):
                 raise ValueError("not a cache entry")
+            self.seal.check(header)
             if head_end + 1 + sum(sizes) != len(data):
                 raise ValueError("truncated")
             if header.get("sha256") != hashlib.sha256(data[head_end + 1:]).hexdigest():
@@ -353,6 +397,9 @@ class ResultCache(CacheDirectory):
             if reason is not None:
                 raise ValueError(reason)
         except FileNotFoundError:
+            return None
+        except KeyProblem as error:
+            self._untrusted(error)
             return None
         except (OSError, ValueError) as error:  # UnicodeDecodeError is a ValueError
             self.rejected.append(f"{path}: {error}")
@@ -375,10 +422,12 @@ class ResultCache(CacheDirectory):
         digest = hashlib.sha256(text)
         for part in parts:
             digest.update(part)
-        header = json.dumps({"key": key, "code_version": self.version, "count": len(lines),
-                             "sizes": [len(text), *(len(part) for part in parts)],
-                             "sha256": digest.hexdigest(), "summary": summary},
-                            ensure_ascii=False, allow_nan=False)
+        sealed = self._sealed({"key": key, "code_version": self.version, "count": len(lines),
+                               "sizes": [len(text), *(len(part) for part in parts)],
+                               "sha256": digest.hexdigest(), "summary": summary})
+        if sealed is None:
+            return
+        header = json.dumps(sealed, ensure_ascii=False, allow_nan=False)
         self._write(os.fspath(self.lines_path(key)),
                     (header.encode("utf-8"), b"\n", text, *parts), key)
         self._list(key[:2], f"{key}.jsonl")

@@ -8,8 +8,8 @@ one, or one holding only cache entries); ``cache prune`` and ``cache clear`` ref
 directory without it (exit 2), and remove only the entries they recognise (the shard
 directories' ``<64 hex digits>.json``/``.jsonl`` files and temporaries, the checks' store,
 the ``packs`` directory's ``<64 hex digits>.pack`` files and temporaries), never the
-directory or anything else in it. :mod:`harness.store.cache` has the entries' layout.
-"""
+directory, its key (:mod:`harness.store.sealing`) or anything else in it.
+:mod:`harness.store.cache` has the entries' layout."""
 
 from __future__ import annotations
 
@@ -24,6 +24,7 @@ from typing import Any
 
 from harness.store.files import write_text_atomically
 from harness.store.packs import PACK_DIRECTORY, PACK_NAME
+from harness.store.sealing import KEY_FILE
 
 _HARNESS_DIR = Path(__file__).resolve().parent.parent  # harness/, from harness/store/
 
@@ -120,7 +121,7 @@ class CacheDirectory:
         """Whether ``name`` in the root is what a cache holds: a shard directory of entries
         (and temporaries) only, or the checks' store."""
         path = self.root / name
-        if name in (SCENARIO_CHECKS_STORE, *OLD_CHECKS_STORES):
+        if name in (SCENARIO_CHECKS_STORE, *OLD_CHECKS_STORES, KEY_FILE):
             return path.is_file() and not path.is_symlink()
         if name == PACK_DIRECTORY and path.is_dir() and not path.is_symlink():
             return all(PACK_NAME.fullmatch(inner) or _is_temporary(inner)

@@ -7,6 +7,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from harness import bounds
 from harness.store.cache import ResultCache
 from harness.store.cache_directory import CACHE_MARKER, NotOurCache, default_cache_dir
 
@@ -20,7 +21,8 @@ def add_arguments(parser) -> None:
                         "refused with exit 2")
     parser.add_argument("--cache-dir", type=Path, default=None,
                         help=f"cache directory (default: {default_cache_dir()})")
-    parser.add_argument("--older-than", type=float, default=None, metavar="DAYS",
+    parser.add_argument("--older-than", type=bounds.option("older-than"),
+                        default=None, metavar="DAYS",
                         help="prune: also remove entries older than DAYS days")
 
 

@@ -8,8 +8,10 @@ an output path the user gave cannot be written (a command exits 2 with that line
 
 from __future__ import annotations
 
+import hashlib
 import io
 import itertools
+import json
 import os
 import stat
 import tempfile
@@ -201,6 +203,147 @@ def _directory_problem(path: Path) -> str | None:
     if not os.access(path.parent, os.W_OK | os.X_OK):
         return f"cannot be made: {path.parent} is not writable"
     return None
+
+
+def inner_directory_problem(base: Path | str, *names: str) -> str | None:
+    """Why the directory ``base/names[0]/names[1]/...`` a command writes into beneath the
+    output directory the user named cannot be used (``None``: it can; missing parts are
+    made by :func:`make_inner_directory`): each part that exists must be a directory itself,
+    never a symbolic link (a link planted at ``out/figures`` would have every figure written,
+    and old ones removed, wherever it points)."""
+    path = Path(base)
+    for name in names:
+        path = path / name
+        try:
+            mode = os.lstat(path).st_mode
+        except FileNotFoundError:
+            return None
+        except OSError as error:
+            return f"{path}: cannot be used: {error.strerror or error}"
+        if not stat.S_ISDIR(mode):
+            kind = next((what for test, what in _KINDS if test(mode)), "a file")
+            return (f"{path}: is {kind}, not a directory: nothing is written through it "
+                    "(remove it, or choose another --out)")
+    return None
+
+
+def make_inner_directory(base: Path | str, *names: str) -> Path:
+    """The directory ``base/names...`` (see :func:`inner_directory_problem`), each missing
+    part made; :class:`NotRegularFile` when a part is a link or not a directory."""
+    path = Path(base)
+    for name in names:
+        path = path / name
+        try:
+            path.mkdir()
+        except FileExistsError:
+            pass
+        mode = os.lstat(path).st_mode
+        if not stat.S_ISDIR(mode):
+            raise NotRegularFile(inner_directory_problem(base, *names) or f"{path}: changed")
+    return path
+
+
+#: The format of a manifest of written files (:func:`keep_manifest`); an older one (a bare
+#: list of names) removes nothing.
+MANIFEST_FORMAT = 2
+#: Largest manifest read (a report of 10,000 scenarios lists about 40,000 figures).
+MAX_MANIFEST_BYTES = 16 * 2**20
+_OPEN_NO_LINK = (os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0)
+                 | getattr(os, "O_CLOEXEC", 0))
+
+
+def regular_file_sha256(path: Path | str) -> str | None:
+    """The SHA-256 of the regular file at ``path`` (never through a link), or None when it
+    is missing, a link or anything but a regular file."""
+    try:
+        descriptor = os.open(path, _OPEN_NO_LINK)
+    except OSError:
+        return None
+    try:
+        if not stat.S_ISREG(os.fstat(descriptor).st_mode):
+            return None
+        digest = hashlib.sha256()
+        with open(descriptor, "rb", closefd=False) as handle:
+            for block in iter(lambda: handle.read(2**20), b""):
+                digest.update(block)
+        return digest.hexdigest()
+    finally:
+        os.close(descriptor)
+
+
+def keep_manifest(directory: Path | str, manifest_name: str, wanted: Iterable[str],
+                  suffixes: tuple[str, ...]) -> list[str]:
+    """Record the files ``wanted`` (names in ``directory``) as written by the harness, and
+    remove those an earlier manifest recorded that are no longer wanted; returns the names
+    removed.
+
+    A file is removed only when the manifest in ``directory`` (``manifest_name``, a regular
+    file, never a link) names it with the SHA-256 of what was written, the name is a plain
+    name with one of ``suffixes``, and the file is still a regular file holding exactly
+    that: a name planted in a manifest, a file the user put in its place, a link, are never
+    removed (issue 37, item 3). The new manifest lists each wanted file present with its
+    SHA-256, written atomically."""
+    directory = Path(directory)
+    manifest = directory / manifest_name
+    recorded = _read_manifest(manifest)
+    wanted = set(wanted)
+    removed = []
+    for name in sorted(set(recorded) - wanted):
+        if (os.path.basename(name) != name or name in ("", ".", "..")
+                or not name.endswith(suffixes) or name == manifest_name):
+            continue
+        path = directory / name
+        if regular_file_sha256(path) == recorded[name]:
+            try:
+                os.unlink(path)
+                removed.append(name)
+            except OSError:
+                continue
+    written = {}
+    for name in sorted(wanted):
+        digest = regular_file_sha256(directory / name)
+        if digest is not None:
+            written[name] = digest
+    write_text_atomically(manifest, json.dumps({"format": MANIFEST_FORMAT, "written": written},
+                                               indent=0) + "\n")
+    return removed
+
+
+def _read_manifest(manifest: Path) -> dict[str, str]:
+    """``{name: SHA-256}`` of a manifest :func:`keep_manifest` wrote (a regular file, never
+    read through a link, of bounded size); empty when there is none or it is not one."""
+    try:
+        descriptor = os.open(manifest, _OPEN_NO_LINK)
+        try:
+            status = os.fstat(descriptor)
+            if not stat.S_ISREG(status.st_mode) or status.st_size > MAX_MANIFEST_BYTES:
+                return {}
+            stored = json.loads(os.read(descriptor, MAX_MANIFEST_BYTES + 1))
+        finally:
+            os.close(descriptor)
+    except (OSError, ValueError):  # none, a link, damaged: nothing is removed
+        return {}
+    if not (isinstance(stored, dict) and stored.get("format") == MANIFEST_FORMAT
+            and isinstance(stored.get("written"), dict)):
+        return {}
+    return {name: digest for name, digest in stored["written"].items()
+            if isinstance(name, str) and isinstance(digest, str)}
+
+
+def remove_written(directory: Path | str, manifest_name: str, name: str) -> bool:
+    """Remove ``directory/name`` when the manifest there records it and it still holds
+    what was written (:func:`keep_manifest`'s rule); whether it was removed."""
+    directory = Path(directory)
+    recorded = _read_manifest(directory / manifest_name).get(name)
+    if recorded is None or os.path.basename(name) != name or name == manifest_name:
+        return False
+    if regular_file_sha256(directory / name) != recorded:
+        return False
+    try:
+        os.unlink(directory / name)
+    except OSError:
+        return False
+    return True
 
 
 def make_output_directory(path: Path | str) -> Path:

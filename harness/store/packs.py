@@ -13,13 +13,20 @@ import hashlib
 import json
 import os
 import re
+import stat
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from harness.bounds import limit
+from harness.store.sealing import Seal
+
 if TYPE_CHECKING:  # the cache writes packs; a pack never needs the cache to be made
     from harness.store.cache import ResultCache
+
+#: The longest header line read (512 records' keys, sizes and digests take about 70 kB).
+MAX_HEADER_BYTES = 2**20
 
 #: The directory of the packs in the root (:meth:`ResultCache.put_many`), a pack's name in it,
 #: and the most records one pack holds (a run's main process buffers at most as many).
@@ -42,15 +49,19 @@ class Pack:
 
 
 def make_pack(items: Sequence[tuple[str, dict]], version: str,
-              encode: Callable[[dict], str]) -> Pack:
-    """The pack of ``items`` (``(key, record)``), each record's JSON made by ``encode``."""
+              encode: Callable[[dict], str], seal: Callable[[dict], dict | None]
+              ) -> Pack | None:
+    """The pack of ``items`` (``(key, record)``), each record's JSON made by ``encode``, its
+    header sealed by ``seal`` (:mod:`harness.store.sealing`; None: no pack, the key is not
+    believed)."""
     keys = [key for key, _ in items]
     bodies = [encode(record).encode("utf-8") for _, record in items]
     sizes = [len(body) for body in bodies]
     digests = [hashlib.sha256(body).hexdigest() for body in bodies]
-    header = json.dumps({"code_version": version, "keys": keys, "sizes": sizes,
-                         "sha256": digests},
-                        separators=(",", ":")).encode("utf-8") + b"\n"
+    sealed = seal({"code_version": version, "keys": keys, "sizes": sizes, "sha256": digests})
+    if sealed is None:
+        return None
+    header = json.dumps(sealed, separators=(",", ":")).encode("utf-8") + b"\n"
     digest = hashlib.sha256(header)
     for body in bodies:
         digest.update(body)
@@ -61,9 +72,10 @@ class PackIndex:
     """Where each packed record of one cache root lies: key -> (pack path, offset, size,
     SHA-256), from the headers of the packs read so far (or written by this cache)."""
 
-    def __init__(self, root, version: str) -> None:
+    def __init__(self, root, version: str, seal: Seal) -> None:
         self.root = root
         self.version = version
+        self.seal = seal  # a header is indexed only when its seal verifies
         # key -> (pack path, offset, size, SHA-256) of the packed records, from the headers
         # of the packs named in read (read, or rejected)
         self.where: dict[str, tuple[str, int, int, str]] = {}
@@ -111,9 +123,11 @@ class PackIndex:
         """Index the records of the pack at ``path`` (those of this code version only: the
         keys of another hold another version anyway); ``ValueError`` when its header is not
         a pack's or its size is not the one the header gives."""
-        with open(path, "rb") as handle:
-            line = handle.readline()
+        with open_regular(path) as handle:
+            line = handle.readline(MAX_HEADER_BYTES)
             size = os.fstat(handle.fileno()).st_size
+        if not line.endswith(b"\n"):
+            raise ValueError("not a cache pack (no header line)")
         header = json.loads(line)
         if not isinstance(header, dict) or header.get("code_version") != self.version:
             if isinstance(header, dict) and isinstance(header.get("code_version"), str):
@@ -129,7 +143,21 @@ class PackIndex:
             raise ValueError("not a cache pack")
         if len(line) + sum(sizes) != size:
             raise ValueError("truncated")
+        if any(n > limit("max_cache_entry_bytes") for n in sizes):
+            raise ValueError("a record larger than the cache reads")
+        self.seal.check(header)
         self.add(path, line, keys, sizes, digests)
+
+
+def open_regular(path: str):
+    """``path`` opened for reading in binary, without blocking on a FIFO or a device:
+    ``ValueError`` when it is not a regular file."""
+    descriptor = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0)
+                         | getattr(os, "O_CLOEXEC", 0))
+    if not stat.S_ISREG(os.fstat(descriptor).st_mode):
+        os.close(descriptor)
+        raise ValueError("not a regular file")
+    return os.fdopen(descriptor, "rb")
 
 
 class PendingPuts:

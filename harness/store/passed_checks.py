@@ -10,13 +10,14 @@ file is read again (TOML, the table checks), its point checks are not. A file wi
 is checked again each time (its errors are listed then).
 
 The store is ``root/passed-checks.json`` (in the result cache's directory): plain JSON, the
-keys only -- nothing read from it is unpickled or evaluated, and a key only ever skips checks
-of a text whose hash it is. It is replaced atomically; it keeps the keys of one code version
-and context only (a store of another is emptied when next written), and ``impact-harness
-cache info|prune|clear`` count and remove it with the cache's entries. One that cannot be
-read is empty (every file is checked again) and said in :attr:`PassedChecks.problems`.
-Disabled (``root=None``) nothing is remembered.
-"""
+keys only -- nothing read from it is unpickled or evaluated, a key only ever skips checks of
+a text whose hash it is, and the store is believed only under the cache's seal
+(:mod:`harness.store.sealing`: a key planted in it would skip a bad file's checks). It is
+replaced atomically; it keeps the keys of one code version and context only (a store of
+another is emptied when next written), and ``impact-harness cache info|prune|clear`` count
+and remove it with the cache's entries. One that cannot be read is empty (every file is
+checked again) and said in :attr:`PassedChecks.problems`. Disabled (``root=None``) nothing
+is remembered."""
 
 from __future__ import annotations
 
@@ -25,10 +26,12 @@ import json
 from pathlib import Path
 from typing import Any, Callable
 
+from harness.inputs import read_bytes
 from harness.store.cache import ResultCache
 from harness.store.cache_directory import SCENARIO_CHECKS_STORE
 from harness.store.files import write_text_atomically
 from harness.store.identity import code_version
+from harness.store.sealing import KeyProblem, Seal
 
 
 class PassedChecks:
@@ -66,9 +69,11 @@ class PassedChecks:
         if self._passed is None:
             self._passed = set()
             try:
-                with open(self.path, "rb") as handle:
-                    stored = json.loads(handle.read())
-                if (not isinstance(stored, dict) or stored.get("format") != self.FORMAT
+                stored = json.loads(read_bytes(self.path))
+                if not isinstance(stored, dict):
+                    raise ValueError("not a store of passed checks")
+                Seal(self.root).check(stored)  # a key in it skips checks: believed if sealed
+                if (stored.get("format") != self.FORMAT
                         or not isinstance(stored.get("passed"), list)
                         or not all(isinstance(k, str) and len(k) == 64
                                    for k in stored["passed"])):
@@ -101,14 +106,14 @@ class PassedChecks:
         said, never an error (the next run checks again)."""
         if self.root is None or not self._added:
             return
-        text = json.dumps({"format": self.FORMAT, "code_version": code_version(),
-                           "context": self._context_text(),
-                           "passed": sorted(self._passed or ())})
+        stored = {"format": self.FORMAT, "code_version": code_version(),
+                  "context": self._context_text(), "passed": sorted(self._passed or ())}
         try:
             if not self.root.is_dir():
                 ResultCache(self.root, version="").make_root()  # made here: marked as ours
+            text = json.dumps(Seal(self.root).sealed(stored))
             write_text_atomically(self.path, text, prefix=".checks-")
-        except OSError as error:
+        except (OSError, KeyProblem) as error:
             self.problems.append(f"{self.path}: cannot write: {error}")
         self._added = False
 

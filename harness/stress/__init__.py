@@ -46,6 +46,7 @@ import sys
 import time
 from pathlib import Path
 
+from harness import bounds
 from harness.run.executor import progress_printer
 from harness.run.provenance import provenance
 from harness.store.files import output_directory_problem, write_text_atomically
@@ -107,7 +108,7 @@ def add_arguments(parser) -> None:
                         help="output directory (default: reports/stress)")
     parser.add_argument("--executor", choices=("local", "dask"), default="local",
                         help="where engine runs execute (default: a local process pool)")
-    parser.add_argument("--workers", type=int, default=None,
+    parser.add_argument("--workers", type=bounds.option("workers"), default=None,
                         help="worker processes (default: all cores)")
     parser.add_argument("--scheduler", default=None,
                         help="Dask scheduler address (with --executor dask)")

@@ -37,6 +37,8 @@ from harness.engines import (
 from harness.run.provenance import package_versions
 from harness.scenarios.errors import ScenarioError
 from harness.store.files import (
+    inner_directory_problem,
+    keep_manifest,
     make_output_directory,
     output_directory_problem,
     write_text_atomically,
@@ -58,6 +60,8 @@ QUICK_SAMPLES = 40
 #: no figures (its report draws them).
 SUITE_SAMPLES = 20
 DEFAULT_OUT = Path("reports") / "survey"
+#: The survey's manifest in its --out: the files it wrote there, with their SHA-256.
+WRITTEN_BY_SURVEY = ".written-by-survey.json"
 #: What a survey wrote down of its settings, beside its tables (harness/survey/outputs.py).
 SETTINGS_FILE = "settings.json"
 
@@ -93,7 +97,11 @@ def suite_survey_command(out: str = "DIR") -> str:
 
 def _names(values, allowed, option) -> list[str]:
     """The names of a comma-separated option; ``ValueError`` (bad input) for an unknown one."""
-    names = [name for value in values or () for name in value.split(",") if name]
+    names = [name.strip() for value in values or () for name in value.split(",")
+             if name.strip()]
+    if values is not None and not names:  # `--engines ''` ran every engine
+        raise ValueError(f"{option} {values[-1]!r} names none; allowed: one or more of "
+                         f"{', '.join(allowed)} (leave the option out for all)")
     bad = [name for name in names if name not in allowed]
     if bad:
         raise ValueError(f"{option}: unknown {bad}; allowed: {', '.join(allowed)}")
@@ -103,10 +111,11 @@ def _names(values, allowed, option) -> list[str]:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("populations", nargs="*", metavar="POPULATION",
                         help="population names (files of populations/) or paths; default all")
-    parser.add_argument("--samples", type=int, default=None,
+    parser.add_argument("--samples", type=bounds.option("samples"), default=None,
                         help=f"samples per population (default {DEFAULT_SAMPLES}; "
                              f"--quick {QUICK_SAMPLES})")
-    parser.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
+    parser.add_argument("--seed", type=bounds.option("seed"),
+                        default=0, help="sampling seed (default 0)")
     parser.add_argument("--engines", action="append", metavar="E[,E…]",
                         help="engines (default every installed one of "
                              f"{', '.join(engine_names())})")
@@ -139,7 +148,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--bare", action="store_true",
                         help="also time the engines' bare stepping of the same impacts")
     parser.add_argument("--no-figures", action="store_true", help="skip the figures")
-    parser.add_argument("--workers", type=int, default=None,
+    parser.add_argument("--workers", type=bounds.option("workers"), default=None,
                         help="processes for the engine runs (default: every core; the "
                              "results do not depend on it)")
 
@@ -296,12 +305,9 @@ def write_survey(survey: dict, out: Path, settings: dict, figures: bool = True) 
                                              {**about, "table": "runs"}))
         written.append(outputs.write_parquet(survey["statistics"], out / "statistics.parquet",
                                              {**about, "table": "statistics"}))
-    else:  # no engine ran: an earlier survey's tables here would be read as this one's
-        for stale in ("runs.parquet", "statistics.parquet"):
-            (out / stale).unlink(missing_ok=True)
     if figures and survey["engine_results"]:
         begin = time.perf_counter()
-        written += outputs.figures(survey["runs"], out / "figures")
+        written += outputs.figures(survey["runs"], out / outputs.FIGURES_DIRECTORY)
         survey["timings"]["figures"] = (time.perf_counter() - begin, 0)
     summary = out / "summary.md"
     write_text_atomically(summary, outputs.summary_markdown(
@@ -312,7 +318,12 @@ def write_survey(survey: dict, out: Path, settings: dict, figures: bool = True) 
              "left_out": settings.get("left_out", survey["left_out"])}
     settings_path = out / SETTINGS_FILE
     write_text_atomically(settings_path, json.dumps(shown, indent=1) + "\n")
-    return written + [summary, settings_path]
+    written += [summary, settings_path]
+    # An earlier survey's tables this one did not write (no engine ran) would be read as
+    # this one's: removed, but only those the manifest says a survey wrote, as written.
+    keep_manifest(out, WRITTEN_BY_SURVEY, [path.name for path in written
+                                           if path.parent == out], (".parquet",))
+    return written
 
 
 def check_options(args: argparse.Namespace) -> tuple[list[str], list[str], int]:
@@ -331,7 +342,8 @@ def check_options(args: argparse.Namespace) -> tuple[list[str], list[str], int]:
         if value is not None:
             bounds.check(f"--{option} {value}", option, value)
     out = DEFAULT_OUT if args.out is None else Path(args.out)
-    problem = output_directory_problem(out)
+    problem = (output_directory_problem(out)
+               or inner_directory_problem(out, outputs.FIGURES_DIRECTORY))
     if problem is not None:
         raise ValueError(f"--out {out}: {problem}")
     return engines, presets, samples

@@ -32,7 +32,7 @@ from harness.run.metrics import (
     fmt_departure,
     fmt_departures,
 )
-from harness.store.files import write_bytes_atomically
+from harness.store.files import make_inner_directory, write_bytes_atomically
 
 TYPE_NAMES = {1: "1 stick (compr.)", 2: "2 stick (restit.)", 3: "3 reverse (compr.)",
               4: "4 reverse (restit.)", 5: "5 forward slide"}
@@ -439,6 +439,10 @@ def cdf_figure(runs: dict, engine: str, path: Path, tag: str | None = None) -> P
     return save_png(figure, path, dpi=FIGURE_DPI, tag=tag)
 
 
+#: The survey's figures' directory in its --out (made there, never through a link).
+FIGURES_DIRECTORY = "figures"
+
+
 def figures(runs: dict, directory: Path) -> list[Path]:
     """Per engine, a departure map (a row per preset, :func:`map_figure`) and the CDFs (a
     panel per preset, a line per family, :func:`cdf_figure`); returns the files written
@@ -446,7 +450,7 @@ def figures(runs: dict, directory: Path) -> list[Path]:
     import matplotlib
 
     matplotlib.use("Agg")
-    directory.mkdir(parents=True, exist_ok=True)
+    make_inner_directory(directory.parent, directory.name)
     written: list[Path] = []
     for engine in figure_engines(runs):
         for draw, stem in ((map_figure, "map"), (cdf_figure, "cdf")):

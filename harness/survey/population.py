@@ -38,7 +38,7 @@ from typing import Any
 
 from harness import inputs
 from harness.scenarios.errors import NO_VALUE, OptionError, ScenarioError, suggest
-from harness.scenarios.schema import BOUNDS, NAME_PATTERN, TAG_PATTERN
+from harness.scenarios.schema import BOUNDS, NAME_ALLOWED, NAME_PATTERN, TAG_PATTERN
 from harness.scenarios.table_reader import TableReader
 
 #: The shipped populations, beside ``scenarios/`` at the repository root.
@@ -127,7 +127,11 @@ class Population:
 # ---------------------------------------------------------------------------------- reading
 def _distribution(reader: TableReader, table: Mapping, key: str, prefix: str, *,
                   low: float | None = None, high: float | None = None, low_open: bool = False,
-                  integer: bool = False, default: Any = NO_VALUE) -> Distribution | None:
+                  integer: bool = False, default: Any = NO_VALUE,
+                  field: str | None = None) -> Distribution | None:
+    """The distribution of ``key``: each number within ``low`` … ``high`` and within the
+    magnitudes a scenario file allows for ``field`` (:data:`MAGNITUDES`), so that a
+    population never samples a scene its scenario file would refuse."""
     dotted = f"{prefix}.{key}" if prefix else key
     allowed_bounds = _bounds_text(low, high, low_open)
     allowed = (f"a number{allowed_bounds} or one of {{ uniform = [low, high] }}, "
@@ -143,7 +147,8 @@ def _distribution(reader: TableReader, table: Mapping, key: str, prefix: str, *,
     def number(where: str, value) -> float | None:
         if integer and (isinstance(value, bool) or not isinstance(value, int)):
             return reader.error(where, "must be an integer", value, allowed)
-        return reader.check_number(where, value, low=low, high=high, low_open=low_open)
+        return reader.check_number(where, value, low=low, high=high, low_open=low_open,
+                                   field=field)
 
     if not isinstance(raw, dict):
         value = number(dotted, raw)
@@ -184,7 +189,7 @@ def _read_body(reader: TableReader, table, index: int, *, mass_from_ratio: bool)
     if not isinstance(table, dict):
         return reader.error(prefix, "must be a table", table, "[[body]] tables")
     name = reader.string(table, "name", prefix, pattern=NAME_PATTERN,
-                         allowed="letters, digits, '_', '-' and '.'")
+                         allowed=NAME_ALLOWED)
     if name is not None:
         prefix = f"body.{name}"
     shape = reader.string(table, "shape", prefix, choices=SHAPES)
@@ -199,7 +204,8 @@ def _read_body(reader: TableReader, table, index: int, *, mass_from_ratio: bool)
             low, high = BOUNDS["sides"].range()
             value = _distribution(reader, table, key, prefix, low=low, high=high, integer=True)
         else:
-            value = _distribution(reader, table, key, prefix, low=0.0, low_open=True)
+            value = _distribution(reader, table, key, prefix, low=0.0, low_open=True,
+                                  field="length")
         parameters.append((key, value))
     if mass_from_ratio:
         if "mass" in table:
@@ -207,10 +213,12 @@ def _read_body(reader: TableReader, table, index: int, *, mass_from_ratio: bool)
                          "no mass for the second body when mass_ratio is given")
         mass = None
     else:
-        mass = _distribution(reader, table, "mass", prefix, low=0.0, low_open=True)
-    angle = _distribution(reader, table, "angle_deg", prefix, default=Distribution("fixed", (0.0,)))
+        mass = _distribution(reader, table, "mass", prefix, low=0.0, low_open=True,
+                             field="mass")
+    angle = _distribution(reader, table, "angle_deg", prefix, default=Distribution("fixed", (0.0,)),
+                          field="angle_deg")
     spin = _distribution(reader, table, "angular_velocity", prefix,
-                         default=Distribution("fixed", (0.0,)))
+                         default=Distribution("fixed", (0.0,)), field="angular_velocity")
     if name is None or shape is None or any(v is None for _, v in parameters):
         return None
     if (mass is None and not mass_from_ratio) or angle is None or spin is None:
@@ -235,7 +243,7 @@ def parse_population(doc: Mapping[str, Any], path=None) -> Population:
     reader = TableReader(path)
     reader.keys(doc, "", TOP_KEYS, "a population file")
     name = reader.string(doc, "name", "", pattern=NAME_PATTERN,
-                         allowed="letters, digits, '_', '-' and '.'")
+                         allowed=NAME_ALLOWED)
     description = reader.line_of_text(doc, "description", "", default="")
     tags = doc.get("tags", [])
     if not isinstance(tags, list) or not all(isinstance(t, str) and TAG_PATTERN.match(t)
@@ -246,10 +254,12 @@ def parse_population(doc: Mapping[str, Any], path=None) -> Population:
     ground = "ground" in doc
     if ground and doc["ground"] != {}:
         reader.error("ground", "takes no keys", doc["ground"], "an empty [ground] table")
-    restitution = _distribution(reader, doc, "restitution", "", low=0.0, high=1.0)
-    friction = _distribution(reader, doc, "friction", "", low=0.0)
+    restitution = _distribution(reader, doc, "restitution", "", low=0.0, high=1.0,
+                                field="restitution")
+    friction = _distribution(reader, doc, "friction", "", low=0.0, field="friction")
     approach = _table(reader, doc, "approach", APPROACH_KEYS) or {}
-    speed = _distribution(reader, approach, "speed", "approach", low=0.0, low_open=True)
+    speed = _distribution(reader, approach, "speed", "approach", low=0.0, low_open=True,
+                          field="speed")
     direction = _distribution(reader, approach, "direction_deg", "approach", low=-90.0,
                               high=90.0)
     if direction is not None and (direction.low <= -90.0 or direction.high >= 90.0):
@@ -263,10 +273,16 @@ def parse_population(doc: Mapping[str, Any], path=None) -> Population:
                              "remove it, or remove [ground]")
     else:
         mass_ratio = _distribution(reader, doc, "mass_ratio", "", low=0.0, low_open=True,
-                                   default=None)
+                                   default=None, field="mass_ratio")
         placement_table = _table(reader, doc, "placement", PLACEMENT_KEYS) or {}
-        placement = _distribution(reader, placement_table, "direction_deg", "placement")
-    max_attempts = reader.number(doc, "max_attempts", "", default=DEFAULT_MAX_ATTEMPTS, low=1)
+        placement = _distribution(reader, placement_table, "direction_deg", "placement",
+                                  field="angle_deg")
+    attempts = BOUNDS["max_attempts"]  # bounded as every knob is (harness/bounds.py)
+    max_attempts = reader.number(doc, "max_attempts", "", default=DEFAULT_MAX_ATTEMPTS,
+                                 low=attempts.range()[0], high=attempts.range()[1],
+                                 allowed=attempts.allowed())
+    if max_attempts is not None and not float(max_attempts).is_integer():
+        reader.error("max_attempts", "must be an integer", max_attempts, attempts.allowed())
     raw_bodies = doc.get("body")
     expected = 1 if ground else 2
     bodies = None

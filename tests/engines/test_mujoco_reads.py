@@ -185,3 +185,19 @@ def test_layout_holds_every_size_the_attributes_hold():
         assert sorted(model._size_fields) == names
         assert model._sizes.tolist() == [getattr(model, name) for name in model._size_fields]
     assert _layout(models[0]) == _layout(models[1]) != _layout(models[2])
+
+
+def test_a_mujoco_warning_leaves_no_log_file_in_the_working_directory(tmp_path, monkeypatch):
+    """MuJoCo's default warning handler appended to MUJOCO_LOG.TXT in the working directory
+    (issue 37, item 11): the adapter keeps the text in memory instead."""
+    from harness.engines.mujoco import adapter
+
+    mujoco = pytest.importorskip("mujoco")
+    monkeypatch.chdir(tmp_path)
+    model = mujoco.MjModel.from_xml_string(
+        '<mujoco><worldbody><body><freejoint/><geom size="0.1"/></body></worldbody></mujoco>')
+    data = mujoco.MjData(model)
+    data.qvel[:] = np.nan
+    mujoco.mj_step(model, data)
+    assert list(tmp_path.iterdir()) == []
+    assert "unstable" in adapter.WARNINGS[-1]

@@ -91,8 +91,10 @@ def test_the_scored_drops_are_a_seeded_random_sample():
 
 
 def test_cli_refuses_a_negative_seed(capsys):
-    assert cli_main(["calibrate", "pymunk", "--to", "poisson", "--seed", "-1"]) == 2
-    assert "--seed -1" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as refused:  # by the option's type, in one sentence
+        cli_main(["calibrate", "pymunk", "--to", "poisson", "--seed", "-1"])
+    assert refused.value.code == 2
+    assert "--seed: '-1' is out of range" in capsys.readouterr().err
 
 
 @needs_real

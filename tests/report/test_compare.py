@@ -49,10 +49,24 @@ def run_compare(*argv) -> int:
 
 def test_threshold_parsing():
     assert compare.parse_threshold("1%") == pytest.approx(0.01)
-    assert compare.parse_threshold("0.002") == pytest.approx(0.002)
-    for bad in ("x", "-1%", "nan"):
-        with pytest.raises(ValueError):
+    assert compare.parse_threshold("0.2pp") == pytest.approx(0.002)
+    assert compare.parse_threshold(" 5 PP ") == pytest.approx(0.05)
+    assert compare.parse_threshold("0") == 0.0
+    for bad in ("x", "-1%", "nan%", "inf pp", "%", "9" * 5000 + "%"):
+        with pytest.raises(ValueError, match="allowed: a change in percentage points"):
             compare.parse_threshold(bad)
+
+
+@pytest.mark.parametrize("bare", ["5", "0.05", "1e-2"])
+def test_a_bare_threshold_is_refused_as_ambiguous(bare, tmp_path, capsys):
+    """`--fail-above 5` meant 500 pp (a fraction) while the default printed 1%."""
+    with pytest.raises(ValueError, match="ambiguous"):
+        compare.parse_threshold(bare)
+    good = results_file(tmp_path, "a.json", [engine_record(0.1)])
+    capsys.readouterr()
+    assert run_compare(good, good, "--fail-above", bare) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err and "ambiguous" in err
 
 
 def test_a_change_below_the_threshold_passes_and_above_fails(tmp_path):
@@ -61,7 +75,7 @@ def test_a_change_below_the_threshold_passes_and_above_fails(tmp_path):
     # +1.5 percentage points on both departures; the speeds are unchanged.
     assert run_compare(before, after, "--fail-above", "2%") == 0
     assert run_compare(before, after, "--fail-above", "1%") == 1
-    assert run_compare(before, after, "--fail-above", "0.014") == 1
+    assert run_compare(before, after, "--fail-above", "1.4pp") == 1
     assert run_compare(before, before) == 0  # identical files never fail
 
 
@@ -257,3 +271,83 @@ def test_speeds_are_weighed_only_by_a_file_with_the_runs_masses(tmp_path, capsys
         assert changes[0].speed_change == pytest.approx((1 / 12) ** 0.5 * 0.5 / 1.25 ** 0.5)
     else:
         assert np.isnan(changes[0].speed_change)  # n/a
+
+
+# Issue 37, item 7: a result that became NaN, duplicated records, speeds of the wrong length
+@pytest.mark.parametrize("what", ["departure", "speeds"])
+def test_a_result_that_became_not_finite_is_a_change_whatever_the_threshold(tmp_path, capsys,
+                                                                             what):
+    before = results_file(tmp_path, "a.json", [law_record(), engine_record(0.1)])
+    broken = (engine_record(float("nan")) if what == "departure"
+              else engine_record(0.1, u_after=(1.0, float("nan"), 0.0)))
+    after = results_file(tmp_path, "b.json", [law_record(), broken])
+    capsys.readouterr()
+    assert run_compare(before, after, "--fail-above", "100%") == 1
+    out = capsys.readouterr().out
+    assert "1 changed by more than" in out
+    assert ("0.1 → null" if what == "departure" else "speeds became not finite") in out
+    assert "0 changed" not in out
+
+
+def test_speeds_of_another_length_are_a_change_not_a_silent_na(tmp_path, capsys):
+    before = results_file(tmp_path, "a.json", [engine_record(0.1)])
+    after = results_file(tmp_path, "b.json", [engine_record(0.1, u_after=(1.0, 2.0))])
+    capsys.readouterr()
+    assert run_compare(before, after, "--fail-above", "100%") == 1
+    assert "3 speeds → 2" in capsys.readouterr().out
+
+
+def test_a_file_holding_a_run_twice_is_refused(tmp_path, capsys):
+    good = results_file(tmp_path, "a.json", [engine_record(0.1)])
+    twice = results_file(tmp_path, "b.json", [engine_record(0.1), engine_record(0.9)])
+    capsys.readouterr()
+    assert run_compare(good, twice) == 2
+    err = capsys.readouterr().err
+    assert "two records of one run" in err and "pymunk.defaults" in err
+
+
+def test_the_rows_are_sorted_by_a_column_they_show(tmp_path, capsys):
+    """The largest change of any law (stronge here) sorts the rows: it is shown."""
+    def record(preset, poisson, stronge):
+        made = engine_record(0.1, preset=preset)
+        made.departure = {"poisson": poisson, "stronge": stronge}
+        return made
+
+    before = results_file(tmp_path, "a.json", [record("defaults", 0.1, 0.1),
+                                               record("accurate", 0.1, 0.1)])
+    after = results_file(tmp_path, "b.json", [record("defaults", 0.12, 0.12),
+                                              record("accurate", 0.1, 0.15)])
+    capsys.readouterr()
+    run_compare(before, after, "--fail-above", "100%")
+    out = capsys.readouterr().out
+    table = out[out.index("largest changes"):]
+    assert "largest" in table.splitlines()[1]
+    accurate, defaults = table.index("pymunk.accurate"), table.index("pymunk.defaults")
+    assert accurate < defaults and "5 pp" in table and "2 pp" in table
+
+
+def test_csv_cells_never_start_a_formula(tmp_path):
+    name = '=HYPERLINK("http://example.invalid","x")'
+    before = results_file(tmp_path, "a.json", [engine_record(0.1, scenario=name)])
+    after = results_file(tmp_path, "b.json", [engine_record(0.2, scenario=name)])
+    out = tmp_path / "diff.csv"
+    run_compare(before, after, "--csv", out, "--fail-above", "100%")
+    (row,) = list(csv.DictReader(out.open()))
+    assert row["scenario"] == "'" + name
+
+
+def test_speeds_that_are_not_those_of_their_own_energy_change_are_a_change(tmp_path, capsys):
+    """B's speeds scaled (or 1e308) while its recorded energy change stays: B's record is
+    malformed (A's speeds give A's energy change, so the scenario's masses are the runs')."""
+    def record(u_after):
+        made = engine_record(0.1, u_after=u_after)
+        made.energy_change = -10.0  # ½(1 + 4) − ½·25 with disk-direct's 1 kg
+        return made
+
+    before = results_file(tmp_path, "a.json", [record((1.0, 2.0, 0.0))])
+    for u_after in ((1e3, 2e3, 0.0), (1e308, 1e308, 0.0)):
+        after = results_file(tmp_path, "b.json", [record(u_after)])
+        capsys.readouterr()
+        assert run_compare(before, after, "--fail-above", "100%") == 1
+        said = capsys.readouterr()
+        assert "speeds not those of its own energy change" in said.out and not said.err

@@ -1,11 +1,23 @@
 """A result-cache entry file (``<key>.json``: a header line, then the record's JSON) read and
-written by hand, for tests that damage or inspect entries."""
+written by hand, for tests that damage or inspect entries.
+
+What these write is sealed with the cache's own key (:mod:`harness.store.sealing`): it
+stands for damage the seal cannot tell (a bug of the harness writing a bad record), so the
+checksums and the record checks behind the seal are what the tests reach. A forgery without
+the key is ``tests/store/test_sealing.py``'s."""
 
 from __future__ import annotations
 
 import hashlib
 import json
 from pathlib import Path
+
+from harness.store.sealing import Seal
+
+
+def _sealed(path: Path, header: dict) -> dict:
+    """``header`` sealed with the key of the cache holding ``path`` (in a shard or packs)."""
+    return Seal(Path(path).parent.parent).sealed(header)
 
 
 def read_entry(path: Path) -> tuple[dict, dict]:
@@ -20,6 +32,7 @@ def write_entry(path: Path, header: dict, record, *, sign: bool = True) -> None:
     body = json.dumps(record).encode("utf-8")
     if sign:
         header = {**header, "sha256": hashlib.sha256(body).hexdigest()}
+    header = _sealed(path, header)
     Path(path).write_bytes(json.dumps(header).encode("utf-8") + b"\n" + body)
 
 
@@ -42,6 +55,7 @@ def write_pack(path: Path, header: dict, bodies: list[bytes], *, sign: bool = Tr
     header = {**header, "sizes": [len(body) for body in bodies]}
     if sign:
         header["sha256"] = [hashlib.sha256(body).hexdigest() for body in bodies]
+    header = _sealed(path, header)
     Path(path).write_bytes(json.dumps(header).encode("utf-8") + b"\n" + b"".join(bodies))
 
 
@@ -76,6 +90,7 @@ def replace_record(path: Path, index: int | None, body: bytes, *, sign: bool = T
         header = json.loads(Path(path).read_bytes().partition(b"\n")[0])
         if sign:
             header["sha256"] = hashlib.sha256(body).hexdigest()
+        header = _sealed(path, header)
         Path(path).write_bytes(json.dumps(header).encode("utf-8") + b"\n" + body)
         return
     header, bodies = read_pack(path)

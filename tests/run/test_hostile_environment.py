@@ -23,6 +23,7 @@ from harness.run.records import read_results
 from harness.scenarios import SCENARIO_DIR, load_scenario
 from harness.store.cache import ResultCache
 from harness.store.cache_directory import CACHE_MARKER, OLD_CHECKS_STORES
+from harness.store.sealing import KEY_FILE, Seal
 
 # Entry files read and written by hand (shared by the cache tests).
 _spec = importlib.util.spec_from_file_location(
@@ -90,7 +91,7 @@ def test_cache_clear_removes_only_the_entries_of_a_cache_it_made(tmp_path, capsy
     assert cli.main(["cache", "clear", "--cache-dir", str(root)]) == 0
     assert f"removed {entries} entries" in capsys.readouterr().out
     assert sorted(str(p.relative_to(root)) for p in root.rglob("*")) == sorted(
-        [CACHE_MARKER, "notes.txt", shard.name, f"{shard.name}/notes.txt"])
+        [CACHE_MARKER, KEY_FILE, "notes.txt", shard.name, f"{shard.name}/notes.txt"])
 
 
 # --------------------------------------------------------------------------------------------
@@ -158,7 +159,8 @@ def test_an_entry_is_its_checksummed_payload(tmp_path):
     header, _ = read_entry(cache.path(key))
     body = cache.path(key).read_bytes().partition(b"\n")[2]
     assert header == {"key": key, "code_version": "v",
-                      "sha256": hashlib.sha256(body).hexdigest()}
+                      "sha256": hashlib.sha256(body).hexdigest(), "mac": header["mac"]}
+    Seal(tmp_path).check(header)  # sealed with the cache's key (tests/store/test_sealing.py)
     assert cache.get(key) == {"velocities": [[0.1, 0.2, 0.3]], "status": "ok"}
 
 

@@ -140,7 +140,10 @@ def test_the_base_files_are_good(tmp_path):
         # a description is one line of text: no NUL, newline or other control character
         ('description = "a disk on the ground"', 'description = "a disk\\u0000"',
          ["description", "'a disk\\x00'", "control character '\\x00' at offset 6",
-          "no NUL, newline or tab"]),
+          "no NUL, newline, tab or bidirectional control"]),
+        # ... nor a bidirectional control: U+202E shows the text's end reversed
+        ('description = "a disk on the ground"', 'description = "a disk \u202egnp.exe"',
+         ["description", "control character '\\u202e' at offset 7"]),
         ('description = "a disk on the ground"', 'description = """a disk\non the ground"""',
          ["description", "control character '\\n' at offset 6"]),
         ('description = "a disk on the ground"', 'description = "a disk\\u001b[31m"',

@@ -40,6 +40,20 @@ from harness.engines.settings import (
 )
 from harness.scene import Scene
 
+#: MuJoCo's warnings of this process, the latest last (at most 100). Its default handler
+#: prints them and appends them to MUJOCO_LOG.TXT in the working directory (a file left in
+#: the user's directory by a run, issue 37): the runs' own checks (finite speeds, the
+#: verdicts) already tell a run that went wrong, so the text is kept here only.
+WARNINGS: list[str] = []
+
+
+def _keep_warning(text: str) -> None:
+    WARNINGS.append(text)
+    del WARNINGS[:-100]
+
+
+mujoco.set_mju_user_warning(_keep_warning)
+
 # Fraction of a step of free flight by which the start is past the touching pose.
 _DETECTION_OVERLAP = 1e-6
 
