@@ -21,6 +21,11 @@ nearest, whatever order or fused multiply-adds a kernel uses:
   :func:`solve_backward_bounds`), so a contact term ``w_iᵀ M⁻¹ w_j`` is within
   ``‖ΔM‖₂ |x_i| |x_j|`` plus its dot product's rounding (:func:`bilinear_bound`).
 
+* a straight-line computation of a few scalars (a closed form, a root, a residual) carries its
+  own bound as it goes (:class:`Tracked`: running error analysis, Higham §3.3): each result
+  is ``fl(x op y)``, within ``u |fl(x op y)|`` of ``x op y`` (Higham eq. (2.5)), and the
+  operands' bounds are carried through each operation exactly (not only to first order).
+
 The libm functions are not IEEE operations: glibc documents ``cos`` and ``sin`` within 1 ulp
 on x86-64 (its manual, 'Known Maximum Errors in Math Functions'), i.e. relative error at most
 ``2 u`` (:data:`LIBM_RELATIVE`); two machines' libms may round them differently.
@@ -121,3 +126,85 @@ def bilinear_bound(backward: float, x_i, x_j, w_i) -> float:
     x_i, x_j = np.asarray(x_i, dtype=float), np.asarray(x_j, dtype=float)
     return (backward * float(np.linalg.norm(x_i) * np.linalg.norm(x_j))
             + dot_bound(np.asarray(w_i, dtype=float).tolist(), x_j.tolist()))
+
+
+class Tracked:
+    """A float ``value`` with ``error``, a bound on its distance from the exact value of the
+    same expression of exact inputs (running error analysis, Higham §3.3).
+
+    Arithmetic (``+ - * /`` with floats or other ``Tracked``, :meth:`sqrt`) rounds the value
+    as IEEE does (each result is the float the same operation on plain floats gives, so a
+    computation written with ``Tracked`` can be checked bit for bit against the code it
+    follows) and bounds the new error by the operands' errors carried through the exact
+    operation plus the rounding, ``u |result|`` (Higham eq. (2.5)):
+
+    * ``a ± b``: ``e_a + e_b``;
+    * ``a b``: ``|a| e_b + |b| e_a + e_a e_b``;
+    * ``a / b``: ``(|a| e_b + |b| e_a) / (|b| (|b| − e_b))``, infinite unless ``|b| > e_b``;
+    * ``√a`` (of an exact ``a >= 0``): ``min(√e_a, e_a / √a)``, since
+      ``|√x − √y| = |x − y| / (√x + √y)`` and ``|√x − √y| <= √|x − y|``.
+
+    A plain float is exact (error 0). The bound's own arithmetic rounds too: a relative
+    ``O(u)`` of the bound, a second-order effect. Divisions by zero and NaNs are not
+    handled: the bound is for the finite results the tests look at."""
+
+    __slots__ = ("value", "error")
+
+    def __init__(self, value: float, error: float = 0.0):
+        self.value, self.error = float(value), float(error)
+
+    @staticmethod
+    def _of(x) -> Tracked:
+        return x if isinstance(x, Tracked) else Tracked(x)
+
+    @staticmethod
+    def _rounded(value: float, carried: float) -> Tracked:
+        return Tracked(value, carried + U * abs(value))
+
+    def __add__(self, other):
+        other = Tracked._of(other)
+        return Tracked._rounded(self.value + other.value, self.error + other.error)
+
+    def __sub__(self, other):
+        other = Tracked._of(other)
+        return Tracked._rounded(self.value - other.value, self.error + other.error)
+
+    def __mul__(self, other):
+        other = Tracked._of(other)
+        carried = (abs(self.value) * other.error + abs(other.value) * self.error
+                   + self.error * other.error)
+        return Tracked._rounded(self.value * other.value, carried)
+
+    def __truediv__(self, other):
+        other = Tracked._of(other)
+        if not abs(other.value) > other.error:
+            return Tracked(self.value / other.value, math.inf)
+        carried = ((abs(self.value) * other.error + abs(other.value) * self.error)
+                   / (abs(other.value) * (abs(other.value) - other.error)))
+        return Tracked._rounded(self.value / other.value, carried)
+
+    def __radd__(self, other):
+        return Tracked._of(other) + self
+
+    def __rsub__(self, other):
+        return Tracked._of(other) - self
+
+    def __rmul__(self, other):
+        return Tracked._of(other) * self
+
+    def __rtruediv__(self, other):
+        return Tracked._of(other) / self
+
+    def __neg__(self):
+        return Tracked(-self.value, self.error)  # exact
+
+    def sqrt(self) -> Tracked:
+        """``√a``, the exact ``a`` taken as ``>= 0`` (a real root exists)."""
+        root = math.sqrt(self.value)
+        carried = math.sqrt(self.error)
+        if root > 0.0:
+            carried = min(carried, self.error / root)
+        return Tracked._rounded(root, carried)
+
+    def __repr__(self) -> str:
+        return f"Tracked({self.value!r}, error={self.error:.3g})"
