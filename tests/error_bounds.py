@@ -146,15 +146,26 @@ class Tracked:
 
     A plain float is exact (error 0). The bound's own arithmetic rounds too: a relative
     ``O(u)`` of the bound, a second-order effect. Divisions by zero and NaNs are not
-    handled: the bound is for the finite results the tests look at."""
+    handled: the bound is for the finite results the tests look at.
+
+    Comparisons compare the values, so code written for floats takes the branches it takes
+    on floats. The bound assumes the exact computation takes the same ones: a comparison
+    whose sides are within their errors of each other could go the other way in exact
+    arithmetic, and adds one to :attr:`Tracked.close_decisions` (reset it before a
+    computation; where it is not 0 the bound is not established, and the result is a
+    decision within its band). ``float()`` gives the value (a check such as
+    ``math.isfinite``); ``math.sqrt`` would drop the error: use :meth:`sqrt`."""
 
     __slots__ = ("value", "error")
+
+    #: Comparisons so far whose outcome the errors leave open (see above).
+    close_decisions = 0
 
     def __init__(self, value: float, error: float = 0.0):
         self.value, self.error = float(value), float(error)
 
     @staticmethod
-    def _of(x) -> Tracked:
+    def of(x) -> Tracked:
         return x if isinstance(x, Tracked) else Tracked(x)
 
     @staticmethod
@@ -162,21 +173,23 @@ class Tracked:
         return Tracked(value, carried + U * abs(value))
 
     def __add__(self, other):
-        other = Tracked._of(other)
+        other = Tracked.of(other)
         return Tracked._rounded(self.value + other.value, self.error + other.error)
 
     def __sub__(self, other):
-        other = Tracked._of(other)
+        if other is self:  # x − x is 0 in exact arithmetic too
+            return Tracked(0.0)
+        other = Tracked.of(other)
         return Tracked._rounded(self.value - other.value, self.error + other.error)
 
     def __mul__(self, other):
-        other = Tracked._of(other)
+        other = Tracked.of(other)
         carried = (abs(self.value) * other.error + abs(other.value) * self.error
                    + self.error * other.error)
         return Tracked._rounded(self.value * other.value, carried)
 
     def __truediv__(self, other):
-        other = Tracked._of(other)
+        other = Tracked.of(other)
         if not abs(other.value) > other.error:
             return Tracked(self.value / other.value, math.inf)
         carried = ((abs(self.value) * other.error + abs(other.value) * self.error)
@@ -184,19 +197,70 @@ class Tracked:
         return Tracked._rounded(self.value / other.value, carried)
 
     def __radd__(self, other):
-        return Tracked._of(other) + self
+        return Tracked.of(other) + self
 
     def __rsub__(self, other):
-        return Tracked._of(other) - self
+        return Tracked.of(other) - self
 
     def __rmul__(self, other):
-        return Tracked._of(other) * self
+        return Tracked.of(other) * self
 
     def __rtruediv__(self, other):
-        return Tracked._of(other) / self
+        return Tracked.of(other) / self
 
     def __neg__(self):
         return Tracked(-self.value, self.error)  # exact
+
+    def __abs__(self):
+        return Tracked(abs(self.value), self.error)  # exact
+
+    def __float__(self) -> float:
+        return self.value
+
+    def _compare(self, other) -> tuple[float, float]:
+        if other is self:
+            return self.value, self.value
+        other = Tracked.of(other)
+        if (abs(self.value - other.value) <= self.error + other.error
+                and self.error + other.error > 0.0):
+            Tracked.close_decisions += 1
+        return self.value, other.value
+
+    def __lt__(self, other):
+        a, b = self._compare(other)
+        return a < b
+
+    def __le__(self, other):
+        a, b = self._compare(other)
+        return a <= b
+
+    def __gt__(self, other):
+        a, b = self._compare(other)
+        return a > b
+
+    def __ge__(self, other):
+        a, b = self._compare(other)
+        return a >= b
+
+    def __eq__(self, other):
+        if not isinstance(other, (Tracked, float, int)):
+            return NotImplemented
+        a, b = self._compare(other)
+        return a == b
+
+    def __ne__(self, other):
+        if not isinstance(other, (Tracked, float, int)):
+            return NotImplemented
+        a, b = self._compare(other)
+        return a != b
+
+    __hash__ = None
+
+    @staticmethod
+    def math_sqrt(x):
+        """``math.sqrt`` that keeps a :class:`Tracked` tracked (for code that calls
+        ``math.sqrt``: the tests put it in that module's ``math``)."""
+        return x.sqrt() if isinstance(x, Tracked) else math.sqrt(x)
 
     def sqrt(self) -> Tracked:
         """``√a``, the exact ``a`` taken as ``>= 0`` (a real root exists)."""
