@@ -55,20 +55,27 @@ def tracked_sqrt() -> Iterator[None]:
         fastpath.math, process.math, fastpath._near_table1_boundary = saved
 
 
-def closed_form(law: str, mnn, mnt, mtt, vn, vt, mu, e) -> dict[str, Tracked] | None:
+def closed_form(law: str, mnn, mnt, mtt, vn, vt, mu, e, delta=None) -> dict[str, Tracked] | None:
     """The closed form's answer to one row in the caller's ``t`` (``solve_batch``'s: ``t``
-    turned so that ``v_t ≥ 0``, ``Δ = m_nn m_tt − m_nt²``), its fields :data:`FIELDS` and
-    ``restitution_poisson`` as ``Tracked``; None where the fast path declines the row."""
+    turned so that ``v_t ≥ 0``; ``Δ = m_nn m_tt − m_nt²`` unless given), its fields
+    :data:`FIELDS` and ``restitution_poisson`` as ``Tracked``; None where the fast path
+    declines the row. Inputs are floats (exact) or ``Tracked`` (known within their error)."""
     sign = -1.0 if vt < 0 or (vt == 0 and mnt < 0) else 1.0  # as solve_batch turns t
-    tracked = [Tracked(x) for x in (mnn, sign * mnt, mtt, vn, abs(vt), mu, e)]
-    delta = tracked[0] * tracked[2] - tracked[1] * tracked[1]  # (A20), laws.ContactTerms
+    tracked = [Tracked.of(x) for x in (mnn, mnt, mtt, vn, vt, mu, e)]
+    tracked[4] = abs(tracked[4])  # turning t is exact
+    if sign < 0:
+        tracked[1] = -tracked[1]
+    if delta is None:
+        delta = tracked[0] * tracked[2] - tracked[1] * tracked[1]  # (A20), laws.ContactTerms
     with tracked_sqrt():
         out = fastpath.law_answer(law, *tracked, delta)
     if out is None:
         return None
     normal, tangential, vn_separation, vt_separation, energy = out[:5]
-    return {"normal_impulse": normal, "tangential_impulse": sign * tangential,
-            "vn_separation": vn_separation, "vt_separation": sign * vt_separation,
+    if sign < 0:
+        tangential, vt_separation = -tangential, -vt_separation
+    return {"normal_impulse": normal, "tangential_impulse": tangential,
+            "vn_separation": vn_separation, "vt_separation": vt_separation,
             "energy_change": energy, "restitution_poisson": Tracked.of(out[7])}
 
 
