@@ -128,6 +128,9 @@ def bilinear_bound(backward: float, x_i, x_j, w_i) -> float:
             + dot_bound(np.asarray(w_i, dtype=float).tolist(), x_j.tolist()))
 
 
+_new = object.__new__
+
+
 class Tracked:
     """A float ``value`` with ``error``, a bound on its distance from the exact value of the
     same expression of exact inputs (running error analysis, Higham §3.3).
@@ -166,27 +169,50 @@ class Tracked:
 
     @staticmethod
     def of(x) -> Tracked:
-        return x if isinstance(x, Tracked) else Tracked(x)
+        return x if type(x) is Tracked else Tracked(x)
 
-    @staticmethod
-    def _rounded(value: float, carried: float) -> Tracked:
-        return Tracked(value, carried + U * abs(value))
-
+    # The operations below are written out (no helper calls): the laws' replays run them a
+    # few million times per test.
     def __add__(self, other):
-        other = Tracked.of(other)
-        return Tracked._rounded(self.value + other.value, self.error + other.error)
+        if type(other) is Tracked:
+            value, carried = self.value + other.value, self.error + other.error
+        else:
+            value, carried = self.value + other, self.error
+        result = _new(Tracked)
+        result.value, result.error = value, carried + U * abs(value)
+        return result
+
+    __radd__ = __add__
 
     def __sub__(self, other):
         if other is self:  # x − x is 0 in exact arithmetic too
             return Tracked(0.0)
-        other = Tracked.of(other)
-        return Tracked._rounded(self.value - other.value, self.error + other.error)
+        if type(other) is Tracked:
+            value, carried = self.value - other.value, self.error + other.error
+        else:
+            value, carried = self.value - other, self.error
+        result = _new(Tracked)
+        result.value, result.error = value, carried + U * abs(value)
+        return result
+
+    def __rsub__(self, other):
+        value = other - self.value
+        result = _new(Tracked)
+        result.value, result.error = value, self.error + U * abs(value)
+        return result
 
     def __mul__(self, other):
-        other = Tracked.of(other)
-        carried = (abs(self.value) * other.error + abs(other.value) * self.error
-                   + self.error * other.error)
-        return Tracked._rounded(self.value * other.value, carried)
+        if type(other) is Tracked:
+            value = self.value * other.value
+            carried = (abs(self.value) * other.error + abs(other.value) * self.error
+                       + self.error * other.error)
+        else:
+            value, carried = self.value * other, abs(other) * self.error
+        result = _new(Tracked)
+        result.value, result.error = value, carried + U * abs(value)
+        return result
+
+    __rmul__ = __mul__
 
     def __truediv__(self, other):
         other = Tracked.of(other)
@@ -194,19 +220,11 @@ class Tracked:
             return Tracked(self.value / other.value, math.inf)
         carried = ((abs(self.value) * other.error + abs(other.value) * self.error)
                    / (abs(other.value) * (abs(other.value) - other.error)))
-        return Tracked._rounded(self.value / other.value, carried)
-
-    def __radd__(self, other):
-        return Tracked.of(other) + self
-
-    def __rsub__(self, other):
-        return Tracked.of(other) - self
-
-    def __rmul__(self, other):
-        return Tracked.of(other) * self
+        value = self.value / other.value
+        return Tracked(value, carried + U * abs(value))
 
     def __rtruediv__(self, other):
-        return Tracked.of(other) / self
+        return Tracked(other) / self
 
     def __neg__(self):
         return Tracked(-self.value, self.error)  # exact
@@ -220,11 +238,13 @@ class Tracked:
     def _compare(self, other) -> tuple[float, float]:
         if other is self:
             return self.value, self.value
-        other = Tracked.of(other)
-        if (abs(self.value - other.value) <= self.error + other.error
-                and self.error + other.error > 0.0):
+        if type(other) is Tracked:
+            value, errors = other.value, self.error + other.error
+        else:
+            value, errors = other, self.error
+        if errors > 0.0 and abs(self.value - value) <= errors:
             Tracked.close_decisions += 1
-        return self.value, other.value
+        return self.value, value
 
     def __lt__(self, other):
         a, b = self._compare(other)
@@ -268,7 +288,7 @@ class Tracked:
         carried = math.sqrt(self.error)
         if root > 0.0:
             carried = min(carried, self.error / root)
-        return Tracked._rounded(root, carried)
+        return Tracked(root, carried + U * root)
 
     def __repr__(self) -> str:
         return f"Tracked({self.value!r}, error={self.error:.3g})"

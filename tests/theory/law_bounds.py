@@ -31,12 +31,16 @@ FIELDS = ("normal_impulse", "tangential_impulse", "vn_separation", "vt_separatio
           "energy_change")
 
 
+#: ``math`` with :meth:`Tracked.math_sqrt` for its ``sqrt``.
+_TRACKED_MATH = types.SimpleNamespace(**{name: getattr(math, name) for name in dir(math)
+                                         if not name.startswith("_")})
+_TRACKED_MATH.sqrt = Tracked.math_sqrt
+
+
 @contextmanager
 def tracked_sqrt() -> Iterator[None]:
     """fastpath's and process's ``math`` with :meth:`Tracked.math_sqrt`, for the ``with``."""
-    shim = types.SimpleNamespace(**{name: getattr(math, name) for name in dir(math)
-                                    if not name.startswith("_")})
-    shim.sqrt = Tracked.math_sqrt
+    shim = _TRACKED_MATH
     saved = fastpath.math, process.math, fastpath._near_table1_boundary
 
     def screen(*arguments):
