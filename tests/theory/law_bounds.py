@@ -24,8 +24,10 @@ import types
 from collections.abc import Iterator
 from contextlib import contextmanager
 
+import numpy as np
+
 from planar_impact import fastpath, process
-from tests.error_bounds import Tracked
+from tests.error_bounds import Tracked, bilinear_bound, gamma, solve_backward_bounds
 
 FIELDS = ("normal_impulse", "tangential_impulse", "vn_separation", "vt_separation",
           "energy_change")
@@ -101,3 +103,67 @@ def fraction(one: Tracked, other: Tracked) -> float:
     computations of one exact quantity uses (at most 1 where both bounds hold)."""
     gap = abs(one.value - other.value)
     return 0.0 if gap == 0.0 else gap / (one.error + other.error)
+
+
+def term_bounds(matrix, wn, wt, method: str) -> dict[str, float]:
+    """How far one path's contact terms ``w_iᵀ M⁻¹ w_j`` can be from the exact ones, its
+    ``M⁻¹w`` from ``method``'s solve (``"cholesky"``, ``"lu"``: solve_backward_bounds)."""
+    w = {"n": np.asarray(wn, dtype=float), "t": np.asarray(wt, dtype=float)}
+    x = {key: np.linalg.solve(matrix, value) for key, value in w.items()}
+    backward = solve_backward_bounds(matrix)[method]
+    return {name: bilinear_bound(backward, x[name[1]], x[name[2]], w[name[1]])
+            for name in ("mnn", "mnt", "mtt")}
+
+
+def delta_u_bound(matrix, inverse, replay, method: str) -> np.ndarray:
+    """How far one path's ``Δu = x̂_n I_n + x̂_t I_t`` can be from the exact one, per speed:
+    its ``x̂ = M⁻¹w`` solves ``(M + ΔM) x̂ = w``, so ``M (x̂ − x) = −ΔM x̂`` and
+    ``|x̂ − x| <= ‖M⁻¹‖₂ ‖ΔM‖₂ |x̂|`` in each component (``method``'s backward bound,
+    solve_backward_bounds); the impulses are within their replays' errors; each component's
+    two products and sum round by ``γ_2`` of its terms."""
+    matrix_inverse_norm = 1.0 / float(np.linalg.eigvalsh(matrix)[0])  # M is SPD
+    backward = solve_backward_bounds(matrix)[method]
+    bound = 0.0
+    for x, impulse in zip(inverse, (replay["normal_impulse"], replay["tangential_impulse"])):
+        x = np.abs(np.asarray(x, dtype=float))
+        solve_error = matrix_inverse_norm * backward * float(np.linalg.norm(x))
+        bound = (bound + solve_error * abs(impulse.value) + (x + solve_error) * impulse.error
+                 + gamma(2) * x * abs(impulse.value))
+    return bound
+
+
+def replayed_law(law, fields, delta, bounds, speed_bounds, mu, e):
+    """One path of ``solve``'s law fields replayed (:func:`closed_form`) from its own contact
+    terms and speeds ``fields`` and Gram ``delta``: the terms within ``bounds``
+    (:func:`term_bounds`), the speeds within ``speed_bounds``, and ``Δ`` within its distance
+    from ``m_nn m_tt − m_nt²`` plus that product's own bound."""
+    m = {name: Tracked(float(fields[name]), bounds[name]) for name in ("mnn", "mnt", "mtt")}
+    product = m["mnn"] * m["mtt"] - m["mnt"] * m["mnt"]  # within product.error of the exact Δ
+    gram = Tracked(float(delta), abs(float(delta) - product.value) + product.error)
+    return closed_form(law, m["mnn"], m["mnt"], m["mtt"],
+                       Tracked(float(fields["vn_approach"]), speed_bounds[0]),
+                       Tracked(float(fields["vt_approach"]), speed_bounds[1]), mu, e,
+                       delta=gram)
+
+
+def kinetic_bound(matrix, u, u_after, u_after_error) -> float:
+    """How far ``½ u'ᵀ M u' − ½ uᵀ M u``, computed as numpy computes it (``(0.5 u') @ M``, then
+    ``@ u'``; the same for ``u``; ``u`` exact), can be from the exact change of kinetic energy
+    to the exact ``u'*``, ``|u' − u'*| <= u_after_error`` per speed: the products' rounding
+    (:func:`dot_bound` of each column, carried through the second product) and the
+    subtraction's, plus ``|K(u') − K(u'*)| = ½ |(u' − u'*)ᵀ M (u' + u'*)|``."""
+    from tests.error_bounds import U, dot_bound
+
+    matrix = np.asarray(matrix, dtype=float)
+    rounding = 0.0
+    for speeds in (np.asarray(u_after, dtype=float), np.asarray(u, dtype=float)):
+        half = 0.5 * speeds  # exact
+        row = half @ matrix
+        row_error = np.array([dot_bound(half.tolist(), column) for column in matrix.T.tolist()])
+        rounding += (float(np.abs(speeds) @ row_error)
+                     + dot_bound(row.tolist(), speeds.tolist()))
+    kinetic = 0.5 * u_after @ matrix @ u_after - 0.5 * u @ matrix @ u
+    rounding += U * abs(kinetic)
+    distance = np.asarray(u_after_error, dtype=float)
+    moved = 0.5 * float(distance @ (np.abs(matrix) @ (2.0 * np.abs(u_after) + distance)))
+    return rounding + moved

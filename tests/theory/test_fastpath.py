@@ -19,7 +19,7 @@ from hypothesis import strategies as st
 import planar_impact as pi
 from harness.scene.random_problems import random_problems, row
 from planar_impact import contact_space, fastpath, solver
-from tests.error_bounds import Tracked, bilinear_bound, dot_bound, gamma, solve_backward_bounds
+from tests.error_bounds import Tracked, dot_bound
 from tests.theory import law_bounds
 
 COUNT = 4_000
@@ -106,57 +106,20 @@ def numpy_path(matrix, wn, wt, u, mu, e, law):
 # (Higham Theorems 10.4 and 9.4: tests/error_bounds.solve_backward_bounds), so each term
 # w_iᵀ x̂_j is within ‖ΔM‖₂ |x_i| |x_j| plus its dot product's rounding of the exact one
 # (bilinear_bound), and the two paths within the sum. The law fields: a derived bound too
-# (:func:`law_fields_bound`): each path's law replayed in Tracked from its own terms, known
+# (law_bounds.replayed_law): each path's law replayed in Tracked from its own terms, known
 # within those bounds, its v_n, v_t within a dot product's, and its Gram Δ within its distance
 # from m_nn m_tt − m_nt² plus that product's bound; where a replay compares values within
 # their errors (Tracked.close_decisions), a decision within the stated band rel 1e-9, NOT
-# derived. Δu (M⁻¹w times the impulses): a derived bound too (:func:`delta_u_bound`). The kept
-# factor and kept contact tests further down: bit for bit, rerun against rerun in one process.
-
-
-def term_bounds(matrix, wn, wt, method: str) -> dict[str, float]:
-    """How far one path's contact terms ``w_iᵀ M⁻¹ w_j`` can be from the exact ones, its
-    ``M⁻¹w`` from ``method``'s solve (``"cholesky"``, ``"lu"``: solve_backward_bounds)."""
-    w = {"n": np.asarray(wn, dtype=float), "t": np.asarray(wt, dtype=float)}
-    x = {key: np.linalg.solve(matrix, value) for key, value in w.items()}
-    backward = solve_backward_bounds(matrix)[method]
-    return {name: bilinear_bound(backward, x[name[1]], x[name[2]], w[name[1]])
-            for name in ("mnn", "mnt", "mtt")}
+# derived. Δu (M⁻¹w times the impulses): a derived bound too (law_bounds.delta_u_bound). The
+# kept factor and kept contact tests further down: bit for bit, rerun against rerun in one
+# process.
 
 
 def terms_bound(matrix, wn, wt, i: str, j: str) -> float:
     """How far the fast path's and the numpy path's contact term ``w_iᵀ M⁻¹ w_j`` (``i``,
     ``j`` in ``"n"``, ``"t"``) can be apart: the sum of both paths' derived bounds."""
-    return sum(term_bounds(matrix, wn, wt, method)[f"m{i}{j}"] for method in ("cholesky", "lu"))
-
-
-def delta_u_bound(matrix, inverse, replay, method: str) -> np.ndarray:
-    """How far one path's ``Δu = x̂_n I_n + x̂_t I_t`` can be from the exact one, per speed:
-    its ``x̂ = M⁻¹w`` solves ``(M + ΔM) x̂ = w``, so ``M (x̂ − x) = −ΔM x̂`` and
-    ``|x̂ − x| <= ‖M⁻¹‖₂ ‖ΔM‖₂ |x̂|`` in each component (``method``'s backward bound,
-    solve_backward_bounds); the impulses are within their replays' errors; each component's
-    two products and sum round by ``γ_2`` of its terms."""
-    matrix_inverse_norm = 1.0 / float(np.linalg.eigvalsh(matrix)[0])  # M is SPD
-    backward = solve_backward_bounds(matrix)[method]
-    bound = 0.0
-    for x, impulse in zip(inverse, (replay["normal_impulse"], replay["tangential_impulse"])):
-        x = np.abs(np.asarray(x, dtype=float))
-        solve_error = matrix_inverse_norm * backward * float(np.linalg.norm(x))
-        bound = (bound + solve_error * abs(impulse.value) + (x + solve_error) * impulse.error
-                 + gamma(2) * x * abs(impulse.value))
-    return bound
-
-
-def replayed_law(law, fields, delta, bounds, speed_bounds, mu, e):
-    """One path's law fields replayed in Tracked (tests/theory/law_bounds.py) from its own
-    terms ``fields`` and Gram ``delta``, each known within its derived bound."""
-    m = {name: Tracked(float(fields[name]), bounds[name]) for name in ("mnn", "mnt", "mtt")}
-    product = m["mnn"] * m["mtt"] - m["mnt"] * m["mnt"]  # within product.error of the exact Δ
-    gram = Tracked(float(delta), abs(float(delta) - product.value) + product.error)
-    return law_bounds.closed_form(law, m["mnn"], m["mnt"], m["mtt"],
-                                  Tracked(float(fields["vn_approach"]), speed_bounds[0]),
-                                  Tracked(float(fields["vt_approach"]), speed_bounds[1]),
-                                  mu, e, delta=gram)
+    return sum(law_bounds.term_bounds(matrix, wn, wt, method)[f"m{i}{j}"]
+               for method in ("cholesky", "lu"))
 
 
 @pytest.mark.parametrize("kind", ["body", "two bodies", "random"])
@@ -190,8 +153,9 @@ def test_solve_matches_the_numpy_path_and_solve_batch(kind):
         contact = solver.checked_contact(matrix, wn, wt)
         speed_bounds = (dot_bound(wn.tolist(), u.tolist()), dot_bound(wt.tolist(), u.tolist()))
         Tracked.close_decisions = 0
-        replays = [replayed_law(law, path, delta, term_bounds(matrix, wn, wt, method),
-                                speed_bounds, mu, e)
+        replays = [law_bounds.replayed_law(law, path, delta,
+                                           law_bounds.term_bounds(matrix, wn, wt, method),
+                                           speed_bounds, mu, e)
                    for path, delta, method in (
                        (fields, kept[5], "cholesky"),
                        ({name: getattr(reference, name) for name in
@@ -212,7 +176,7 @@ def test_solve_matches_the_numpy_path_and_solve_batch(kind):
             np.testing.assert_allclose(fields["delta_u"], reference.delta_u, rtol=1e-9,
                                        atol=1e-12)
         else:
-            bound = sum(delta_u_bound(matrix, inverse, replay, method)
+            bound = sum(law_bounds.delta_u_bound(matrix, inverse, replay, method)
                         for inverse, replay, method in (
                             ((kept[6], kept[7]), replays[0], "cholesky"),
                             ((contact.inv_w[:, 0], contact.inv_w[:, 1]), replays[1], "lu")))
