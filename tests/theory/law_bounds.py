@@ -27,7 +27,14 @@ from contextlib import contextmanager
 import numpy as np
 
 from planar_impact import fastpath, process
-from tests.error_bounds import Tracked, bilinear_bound, gamma, solve_backward_bounds
+from tests.error_bounds import (
+    Tracked,
+    U,
+    bilinear_bound,
+    dot_bound,
+    gamma,
+    solve_backward_bounds,
+)
 
 FIELDS = ("normal_impulse", "tangential_impulse", "vn_separation", "vt_separation",
           "energy_change")
@@ -152,8 +159,6 @@ def kinetic_bound(matrix, u, u_after, u_after_error) -> float:
     to the exact ``u'*``, ``|u' − u'*| <= u_after_error`` per speed: the products' rounding
     (:func:`dot_bound` of each column, carried through the second product) and the
     subtraction's, plus ``|K(u') − K(u'*)| = ½ |(u' − u'*)ᵀ M (u' + u'*)|``."""
-    from tests.error_bounds import U, dot_bound
-
     matrix = np.asarray(matrix, dtype=float)
     rounding = 0.0
     for speeds in (np.asarray(u_after, dtype=float), np.asarray(u, dtype=float)):
