@@ -21,6 +21,11 @@ nearest, whatever order or fused multiply-adds a kernel uses:
   :func:`solve_backward_bounds`), so a contact term ``w_iᵀ M⁻¹ w_j`` is within
   ``‖ΔM‖₂ |x_i| |x_j|`` plus its dot product's rounding (:func:`bilinear_bound`).
 
+* a straight-line computation of a few scalars (a closed form, a root, a residual) carries its
+  own bound as it goes (:class:`Tracked`: running error analysis, Higham §3.3): each result
+  is ``fl(x op y)``, within ``u |fl(x op y)|`` of ``x op y`` (Higham eq. (2.5)), and the
+  operands' bounds are carried through each operation exactly (not only to first order).
+
 The libm functions are not IEEE operations: glibc documents ``cos`` and ``sin`` within 1 ulp
 on x86-64 (its manual, 'Known Maximum Errors in Math Functions'), i.e. relative error at most
 ``2 u`` (:data:`LIBM_RELATIVE`); two machines' libms may round them differently.
@@ -121,3 +126,169 @@ def bilinear_bound(backward: float, x_i, x_j, w_i) -> float:
     x_i, x_j = np.asarray(x_i, dtype=float), np.asarray(x_j, dtype=float)
     return (backward * float(np.linalg.norm(x_i) * np.linalg.norm(x_j))
             + dot_bound(np.asarray(w_i, dtype=float).tolist(), x_j.tolist()))
+
+
+_new = object.__new__
+
+
+class Tracked:
+    """A float ``value`` with ``error``, a bound on its distance from the exact value of the
+    same expression of exact inputs (running error analysis, Higham §3.3).
+
+    Arithmetic (``+ - * /`` with floats or other ``Tracked``, :meth:`sqrt`) rounds the value
+    as IEEE does (each result is the float the same operation on plain floats gives, so a
+    computation written with ``Tracked`` can be checked bit for bit against the code it
+    follows) and bounds the new error by the operands' errors carried through the exact
+    operation plus the rounding, ``u |result|`` (Higham eq. (2.5)):
+
+    * ``a ± b``: ``e_a + e_b``;
+    * ``a b``: ``|a| e_b + |b| e_a + e_a e_b``;
+    * ``a / b``: ``(|a| e_b + |b| e_a) / (|b| (|b| − e_b))``, infinite unless ``|b| > e_b``;
+    * ``√a`` (of an exact ``a >= 0``): ``min(√e_a, e_a / √a)``, since
+      ``|√x − √y| = |x − y| / (√x + √y)`` and ``|√x − √y| <= √|x − y|``.
+
+    A plain float is exact (error 0). The bound's own arithmetic rounds too: a relative
+    ``O(u)`` of the bound, a second-order effect. Divisions by zero and NaNs are not
+    handled: the bound is for the finite results the tests look at.
+
+    Comparisons compare the values, so code written for floats takes the branches it takes
+    on floats. The bound assumes the exact computation takes the same ones: a comparison
+    whose sides are within their errors of each other could go the other way in exact
+    arithmetic, and adds one to :attr:`Tracked.close_decisions` (reset it before a
+    computation; where it is not 0 the bound is not established, and the result is a
+    decision within its band). ``float()`` gives the value (a check such as
+    ``math.isfinite``); ``math.sqrt`` would drop the error: use :meth:`sqrt`."""
+
+    __slots__ = ("value", "error")
+
+    #: Comparisons so far whose outcome the errors leave open (see above).
+    close_decisions = 0
+
+    def __init__(self, value: float, error: float = 0.0):
+        self.value, self.error = float(value), float(error)
+
+    @staticmethod
+    def of(x) -> Tracked:
+        return x if type(x) is Tracked else Tracked(x)
+
+    # The operations below are written out (no helper calls): the laws' replays run them a
+    # few million times per test.
+    def __add__(self, other):
+        if type(other) is Tracked:
+            value, carried = self.value + other.value, self.error + other.error
+        else:
+            value, carried = self.value + other, self.error
+        result = _new(Tracked)
+        result.value, result.error = value, carried + U * abs(value)
+        return result
+
+    __radd__ = __add__
+
+    def __sub__(self, other):
+        if other is self:  # x − x is 0 in exact arithmetic too
+            return Tracked(0.0)
+        if type(other) is Tracked:
+            value, carried = self.value - other.value, self.error + other.error
+        else:
+            value, carried = self.value - other, self.error
+        result = _new(Tracked)
+        result.value, result.error = value, carried + U * abs(value)
+        return result
+
+    def __rsub__(self, other):
+        value = other - self.value
+        result = _new(Tracked)
+        result.value, result.error = value, self.error + U * abs(value)
+        return result
+
+    def __mul__(self, other):
+        if type(other) is Tracked:
+            value = self.value * other.value
+            carried = (abs(self.value) * other.error + abs(other.value) * self.error
+                       + self.error * other.error)
+        else:
+            value, carried = self.value * other, abs(other) * self.error
+        result = _new(Tracked)
+        result.value, result.error = value, carried + U * abs(value)
+        return result
+
+    __rmul__ = __mul__
+
+    def __truediv__(self, other):
+        other = Tracked.of(other)
+        if not abs(other.value) > other.error:
+            return Tracked(self.value / other.value, math.inf)
+        carried = ((abs(self.value) * other.error + abs(other.value) * self.error)
+                   / (abs(other.value) * (abs(other.value) - other.error)))
+        value = self.value / other.value
+        return Tracked(value, carried + U * abs(value))
+
+    def __rtruediv__(self, other):
+        return Tracked(other) / self
+
+    def __neg__(self):
+        return Tracked(-self.value, self.error)  # exact
+
+    def __abs__(self):
+        return Tracked(abs(self.value), self.error)  # exact
+
+    def __float__(self) -> float:
+        return self.value
+
+    def _compare(self, other) -> tuple[float, float]:
+        if other is self:
+            return self.value, self.value
+        if type(other) is Tracked:
+            value, errors = other.value, self.error + other.error
+        else:
+            value, errors = other, self.error
+        if errors > 0.0 and abs(self.value - value) <= errors:
+            Tracked.close_decisions += 1
+        return self.value, value
+
+    def __lt__(self, other):
+        a, b = self._compare(other)
+        return a < b
+
+    def __le__(self, other):
+        a, b = self._compare(other)
+        return a <= b
+
+    def __gt__(self, other):
+        a, b = self._compare(other)
+        return a > b
+
+    def __ge__(self, other):
+        a, b = self._compare(other)
+        return a >= b
+
+    def __eq__(self, other):
+        if not isinstance(other, (Tracked, float, int)):
+            return NotImplemented
+        a, b = self._compare(other)
+        return a == b
+
+    def __ne__(self, other):
+        if not isinstance(other, (Tracked, float, int)):
+            return NotImplemented
+        a, b = self._compare(other)
+        return a != b
+
+    __hash__ = None
+
+    @staticmethod
+    def math_sqrt(x):
+        """``math.sqrt`` that keeps a :class:`Tracked` tracked (for code that calls
+        ``math.sqrt``: the tests put it in that module's ``math``)."""
+        return x.sqrt() if isinstance(x, Tracked) else math.sqrt(x)
+
+    def sqrt(self) -> Tracked:
+        """``√a``, the exact ``a`` taken as ``>= 0`` (a real root exists)."""
+        root = math.sqrt(self.value)
+        carried = math.sqrt(self.error)
+        if root > 0.0:
+            carried = min(carried, self.error / root)
+        return Tracked(root, carried + U * root)
+
+    def __repr__(self) -> str:
+        return f"Tracked({self.value!r}, error={self.error:.3g})"

@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 
 from tests.error_bounds import (
     LIBM_RELATIVE,
+    Tracked,
     U,
     bilinear_bound,
     direction_bound,
@@ -152,3 +153,66 @@ def test_bilinear_bound_holds_for_both_solves_against_exact_rationals():
             assert error <= Fraction(bound), (method, float(error), bound)
             worst = max(worst, float(error) / bound)
     assert worst > 1e-4  # the bound is not vacuous: some draws come within 1e4 of it
+
+
+def exact_sqrt(value: Fraction) -> Fraction:
+    """``√value`` to 80 significant digits (decimal), far below a double's rounding."""
+    from decimal import Context, Decimal
+
+    context = Context(prec=80)
+    quotient = context.divide(Decimal(value.numerator), Decimal(value.denominator))
+    return Fraction(context.sqrt(quotient))
+
+
+def test_tracked_bounds_hold_against_exact_rationals():
+    # Random straight-line programs of + − × ÷ √ over exact inputs and inputs known within a
+    # bound (their exact value drawn inside it): every intermediate within its Tracked error
+    # of the exact value, computed with Fractions (√ to 80 digits).
+    rng = np.random.default_rng(35)
+    checked = 0
+    for _ in range(300):
+        pool = []
+        for _ in range(4):
+            value = float(rng.normal() * 10.0 ** rng.uniform(-3, 3))
+            error = 0.0 if rng.random() < 0.5 else abs(value) * 10.0 ** rng.uniform(-16, -6)
+            exact = Fraction(value) + Fraction(float(rng.uniform(-1, 1))) * Fraction(error)
+            pool.append((Tracked(value, error), exact))
+        for _ in range(12):
+            (a, exact_a), (b, exact_b) = (pool[int(i)] for i in rng.integers(len(pool), size=2))
+            operation = int(rng.integers(5))
+            if operation == 0:
+                result = (a + b, exact_a + exact_b)
+            elif operation == 1:
+                result = (a - b, exact_a - exact_b)
+            elif operation == 2:
+                result = (a * b, exact_a * exact_b)
+            elif operation == 3 and exact_b != 0 and b.value != 0.0:
+                result = (a / b, exact_a / exact_b)
+            elif operation == 4 and exact_a > 0 and a.value > 0.0:
+                result = (a.sqrt(), exact_sqrt(exact_a))
+            else:
+                continue
+            got, exact = result
+            if not (math.isfinite(got.value) and abs(got.value) < 1e100):
+                continue
+            assert abs(Fraction(got.value) - exact) <= Fraction(got.error), (got, float(exact))
+            # the same float as plain arithmetic gives
+            pool.append(result)
+            checked += 1
+    assert checked > 2500
+
+
+def test_tracked_values_are_plain_floats_and_the_bound_is_tight_for_a_sum():
+    a, b = 0.1, 0.7
+    assert (Tracked(a) * b - a / b).value == a * b - a / b
+    assert (Tracked(a) + b).sqrt().value == math.sqrt(a + b)
+    assert (1.0 - Tracked(a)).value == 1.0 - a and (-Tracked(a)).error == 0.0
+    # n positive terms summed left to right: at most γ_(n−1) of their sum (Higham (3.5)),
+    # the running bound being Σ u |partial sums|.
+    terms = np.random.default_rng(1).uniform(0, 1, 50).tolist()
+    total = Tracked(0.0)
+    for term in terms:
+        total = total + term
+    assert total.error <= gamma(49) * math.fsum(terms)
+    assert total.error >= 0.5 * U * math.fsum(terms)  # not absurdly loose either
+    assert (Tracked(1.0) / Tracked(1e-20, 1e-20)).error == math.inf

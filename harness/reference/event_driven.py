@@ -23,7 +23,7 @@ import numpy as np
 
 import planar_impact as pi
 from harness.scene import Body, Scene
-from harness.scene.geometry import local_core, rotation
+from harness.scene.geometry import local_core, turn
 
 # A feature counts as touching when its gap is below this fraction of the body's size: the
 # event times are found to rounding (~1e-16 of the size), so 1e-12 separates "touching" from
@@ -67,7 +67,8 @@ class EventSequence:
 
 def _feature_state(body: Body, position, angle):
     points, radius = local_core(body.shape)
-    world = points @ rotation(angle).T + np.asarray(position, dtype=float)
+    # elementwise, the same bits on every CPU (geometry.turn; a BLAS product is not)
+    world = turn(points, angle) + np.asarray(position, dtype=float)
     return world, radius
 
 

@@ -314,7 +314,8 @@ def _feature_gap(scene: Scene, index: int, centre: np.ndarray, radius: float,
                  poses: list[tuple[float, float, float]]) -> float:
     """Signed distance (m) from a feature of body ``index`` to its partner at ``poses``."""
     x, y, angle = poses[index]
-    world = geometry.rotation(angle) @ centre + np.array([x, y])
+    # elementwise, the same bits on every CPU (geometry.turn; a BLAS product is not)
+    world = geometry.turn(centre, angle)[0] + np.array([x, y])
     if scene.ground:
         return float(world[1]) - radius
     other = 1 - index

@@ -97,18 +97,30 @@ def feature_at(shape, state: Sequence[float], point: Sequence[float],
     return None if found[0] < 0 else int(found[0])
 
 
-def pose_rotations(poses: np.ndarray) -> np.ndarray:
-    """Each pose's ``(x, y, θ)`` rotation as the matrix ``R`` with ``p @ R`` turning a row
-    vector ``p`` by ``θ``; stacked, shape ``(n, 2, 2)``."""
+_SIGNS = np.array([-1.0, 1.0])
+
+
+def pose_turns(poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each pose's ``(x, y, θ)`` cosine and sine of ``θ``, two arrays of shape ``(n,)``."""
     # math's cos and sin, one pose at a time: numpy's array ones may round differently
     angles = poses[:, 2].tolist()
     cos = np.fromiter(map(math.cos, angles), float, len(angles))
     sin = np.fromiter(map(math.sin, angles), float, len(angles))
-    rotations = np.empty((len(angles), 2, 2))
-    rotations[:, 0, 0] = rotations[:, 1, 1] = cos
-    rotations[:, 0, 1] = sin
-    rotations[:, 1, 0] = -sin
-    return rotations
+    return cos, sin
+
+
+def centres_at_poses(centres: np.ndarray, poses: np.ndarray) -> np.ndarray:
+    """Body-frame points ``centres`` (``(k, 2)``, or ``(n, k, 2)``: pose ``i``'s own) turned by
+    each of the ``n`` poses' ``θ`` and moved to its ``(x, y)``: shape ``(n, k, 2)``.
+
+    Written elementwise, ``(x cos θ − y sin θ + p_x, x sin θ + y cos θ + p_y)``, not as the
+    stack of products ``centres @ R``: numpy's ``@`` goes through BLAS, whose kernels (FMA or
+    not) round differently from CPU to CPU, while separate IEEE multiplies and additions give
+    the same bits on every one (docs/verdicts.md, 'Same answers on every CPU')."""
+    cos, sin = pose_turns(poses)
+    # (x c, y c) + (y, x)·(−s, s): x c − y s and y c + x s, the negation exact, in few calls
+    return ((centres * cos[:, None, None] + centres[..., ::-1] * (sin[:, None, None] * _SIGNS))
+            + poses[:, None, :2])
 
 
 def features_at(features: BodyFeatures, poses: np.ndarray, points: np.ndarray,
@@ -120,9 +132,7 @@ def features_at(features: BodyFeatures, poses: np.ndarray, points: np.ndarray,
     count = len(points)
     if not len(features.centres) or not count:
         return np.full(count, -1, dtype=np.int64)
-    rotations = pose_rotations(poses)
-    # centres @ R per pose (a stack of the same 2-D products), then moved to the pose
-    world = (features.centres @ rotations + poses[:, None, :2])[pose_of]
+    world = centres_at_poses(features.centres, poses)[pose_of]
     distances = np.hypot(world[:, :, 0] - points[:, None, 0],
                          world[:, :, 1] - points[:, None, 1]) - features.radius
     # the least distance is the nearest one's (NaN, as argmin's pick, when there is one)
@@ -131,4 +141,4 @@ def features_at(features: BodyFeatures, poses: np.ndarray, points: np.ndarray,
 
 
 __all__ = ["BodyFeatures", "body_extent", "body_features", "feature_at", "feature_points",
-           "features_at", "pose_rotations"]
+           "features_at", "centres_at_poses", "pose_turns"]

@@ -82,10 +82,21 @@ def turned_core(body: Body) -> tuple[np.ndarray, float]:
     subtractions round the same everywhere (docs/verdicts.md, 'Same answers on every
     CPU')."""
     points, radius = local_core(body.shape)
-    c, s = math.cos(body.angle), math.sin(body.angle)
+    return turn(points, body.angle), radius
+
+
+def turn(points, angle: float) -> np.ndarray:
+    """Points ``(k, 2)`` (or one point ``(2,)``) turned by ``angle`` (rad, CCW), as ``(k, 2)``:
+    ``(x cos θ − y sin θ, x sin θ + y cos θ)`` written elementwise, the same bits on every CPU
+    (:func:`turned_core`; never ``rotation(angle) @ p``, which a BLAS kernel rounds)."""
+    c, s = math.cos(angle), math.sin(angle)
     # plain floats: a core has a few points, where numpy's cost per call exceeds the arithmetic
+    points = np.asarray(points, dtype=float)
+    if points.ndim == 1:
+        x, y = points.tolist()
+        return np.array([[x * c - y * s, x * s + y * c]])
     turned = [(x * c - y * s, x * s + y * c) for x, y in points.tolist()]
-    return np.array(turned, dtype=float).reshape(-1, 2), radius
+    return np.array(turned, dtype=float).reshape(-1, 2)
 
 
 def _along(points, direction) -> list[float]:

@@ -90,7 +90,9 @@ def impulse_process(mnn, mnt, mtt, vn, vt, mu, e, law, max_segments: int = 16) -
         mode, slope_t = _phase(vt, mnt, mtt, mu)
         path.append(PathVertex(impulse, tangential, vn, vt, work, mode))
         dvn = mnn + mnt * slope_t
-        dvt = mnt + mtt * slope_t
+        # sticking, s = −m_nt/m_tt makes dv_t/dP exactly 0: its rounded form (an ulp either
+        # way) would let the slip drift off the sticking line and the next phase slide
+        dvt = 0.0 if mode == "stick" else mnt + mtt * slope_t
         # Distance in P to each candidate event; math.inf where it never happens.
         stick_at = -vt / dvt if vt != 0.0 and vt * dvt < 0 else math.inf
         if compression_impulse is None:

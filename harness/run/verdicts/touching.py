@@ -17,7 +17,7 @@ import numpy as np
 from harness.run.verdicts.reasons import DEFAULT_TOLERANCES, Reason, Tolerances
 from harness.run.verdicts.tracks import ContactTrack, StepContacts, as_track, records_many
 from harness.scene import geometry
-from harness.scene.features import BodyFeatures, body_features, features_at, pose_rotations
+from harness.scene.features import BodyFeatures, body_features, centres_at_poses, features_at
 
 
 def contact_features(scene, features: Sequence[BodyFeatures] | None = None,
@@ -137,7 +137,6 @@ def second_features_many(contact_records: Sequence,
         records = in_group[run_of_record]
         at = np.flatnonzero(in_group[run_of_point])
         group_poses = poses[records, body]
-        rotations = pose_rotations(group_poses)
         centres = np.stack([features[run][body].centres for run in runs])[
             position[run_of_record[records]]]
         pose_of = (np.cumsum(records) - 1)[record_of_point[at]]
@@ -146,7 +145,7 @@ def second_features_many(contact_records: Sequence,
         radius = np.array([features[run][body].radius for run in runs])[owner]
         reach = (np.array([tolerances.penetration * features[run][body].extent
                            for run in runs])[owner] + depth[at])
-        world = (centres @ rotations + group_poses[:, None, :2])[pose_of]
+        world = centres_at_poses(centres, group_poses)[pose_of]
         distances = np.hypot(world[:, :, 0] - group_points[:, None, 0],
                              world[:, :, 1] - group_points[:, None, 1]) - radius[:, None]
         within = distances.min(axis=1) <= reach
