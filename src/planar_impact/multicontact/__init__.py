@@ -66,6 +66,7 @@ from .two_phase import (
     normal_split_unique,
     poisson_two_phase,
     poisson_two_phase_many,
+    two_phase_phases,
 )
 
 __all__ = ["CUTS_PER_CONTACT", "METHODS", "NORMAL_ACTIVE", "NORMAL_BASE", "PIECES_PER_PHASE",
@@ -73,4 +74,5 @@ __all__ = ["CUTS_PER_CONTACT", "METHODS", "NORMAL_ACTIVE", "NORMAL_BASE", "PIECE
            "SLIDE_POSITIVE", "STICK", "PhaseSolution", "TwoPhaseSolution", "lemke", "measure",
            "measure_one_contact", "normal_split_unique", "phase_by_enumeration",
            "phase_by_lemke", "phase_following_slip", "phase_lcp", "phases_by_enumeration",
-           "poisson_two_phase", "poisson_two_phase_many", "random_flat_face"]
+           "poisson_two_phase", "poisson_two_phase_many", "random_flat_face",
+           "two_phase_phases"]

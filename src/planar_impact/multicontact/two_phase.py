@@ -3,14 +3,16 @@ phase whose base normal impulse is ``e`` times the compression's (the package's 
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..simultaneous import ContactSystem
-from .enumeration import phases_by_enumeration
+from ..simultaneous import ContactSystem, Phase
+from ..simultaneous.admissible import COMPRESSION, RESTITUTION
+from .enumeration import phase_by_enumeration, phases_by_enumeration
 from .lemke import phase_by_lemke
-from .phase import SAME_ANSWER, PhaseSolution, check_method
+from .phase import SAME_ANSWER, PhaseSolution, check_method, complementary, distinct
 from .slip import phase_following_slip
 
 
@@ -104,15 +106,38 @@ def _following_slip(system: ContactSystem, method: str) -> list[TwoPhaseSolution
     unique_split = normal_split_unique(system)
     scale = SAME_ANSWER * (speed + float(np.max(np.abs(system.u))))
     answers: list[TwoPhaseSolution] = []
-    for compression in phase_following_slip(system.delassus, system.approach,
-                                            np.zeros(system.count), system.mu, speed, method):
+    for compression in _complementary_phase(system, system.approach, np.zeros(system.count),
+                                            method):
         base = system.e * compression.impulses[0::2]
-        for restitution in phase_following_slip(system.delassus, compression.velocities, base,
-                                                system.mu, speed, method):
+        for restitution in _complementary_phase(system, compression.velocities, base, method):
             answer = _assemble(system, compression, restitution, unique_split)
             if all(np.max(np.abs(answer.u_after - other.u_after)) > scale for other in answers):
                 answers.append(answer)
     return answers
+
+
+def _complementary_phase(system: ContactSystem, start, base, method: str
+                         ) -> list[PhaseSolution]:
+    """A phase with the slip followed (:func:`phase_following_slip`); a solution whose
+    pieces' sum is not complementary at the phase's end (a contact took impulse in one piece
+    and recedes at the end) is replaced by the phase as one velocity-level problem, which is
+    complementary by construction (``slip_followed`` False on those)."""
+    speed = system.speed_scale()
+    impulse = speed / float(np.min(np.diag(system.delassus)))
+    followed = phase_following_slip(system.delassus, start, base, system.mu, speed, method)
+    kept = [phase for phase in followed if complementary(phase, base, speed, impulse)]
+    if len(kept) == len(followed):
+        return kept
+    if method == "enumeration":
+        plain = phase_by_enumeration(system.delassus, start, base, system.mu, speed)
+    else:
+        found = phase_by_lemke(system.delassus, start, base, system.mu, speed)
+        plain = [] if found is None else [found]
+    for phase in plain:
+        phase = dataclasses.replace(phase, slip_followed=False)
+        if distinct(kept, phase, speed, impulse):
+            kept.append(phase)
+    return kept
 
 
 def _phases(systems, method, starts):
@@ -153,3 +178,14 @@ def _assemble(system, compression, restitution, unique_split) -> TwoPhaseSolutio
         energy_change=_kinetic(system, u_after) - before,
         energy_change_compression=after_compression - before,
         normal_split_unique=unique_split)
+
+
+def two_phase_phases(system: ContactSystem, answer: TwoPhaseSolution) -> tuple[Phase, ...]:
+    """The answer's compression and restitution as the phases that
+    :func:`planar_impact.simultaneous.violations` checks (the restitution owed
+    ``e_i P_nc``)."""
+    compression = answer.compression.impulses
+    start = system.approach + system.delassus @ compression
+    return (Phase(COMPRESSION, system.approach.copy(), compression.copy()),
+            Phase(RESTITUTION, start, answer.restitution.impulses.copy(),
+                  system.e * compression[0::2]))
