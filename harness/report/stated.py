@@ -192,25 +192,33 @@ FLAT_LANDINGS, FLAT_SEED = 200, 0
 
 def flat_landing_numbers() -> dict[str, str]:
     """``python -m harness.reference.flat_faces 200 0``: coherent solutions on random flat
-    landings, those at the boundary of a decision apart, and Newton–Coulomb's solutions
-    with distinct velocities and non-unique impulse splits."""
+    landings, those at the boundary of a decision apart, Newton–Coulomb's and the two-phase
+    Poisson law's solutions with distinct velocities and Newton–Coulomb's non-unique impulse
+    splits; per law the draws with a solution that breaks admissibility or gains energy."""
     counts, _ = count_flat(FLAT_LANDINGS, FLAT_SEED)
     numbers = {"landings": str(FLAT_LANDINGS)}
-    rows = ["| law | reading | 0 | 1 | 2+ | at boundary | split not unique |",
-            "|---|---|---:|---:|---:|---:|---:|"]
+    rows = ["| law | reading | 0 | 1 | 2+ | at boundary | split not unique | inadmissible "
+            "| gains |",
+            "|---|---|---:|---:|---:|---:|---:|---:|---:|"]
+    buckets = ("0", "1", "2+", "boundary", "inadmissible", "gains")
     for law, name in _COUNT_LAWS:
         for coupling, reading in _READINGS:
             c = counts[f"{law}/{coupling}"]
             rows.append(f"| {name} | {reading} | {c['0']} | {c['1']} | {c['2+']} | "
-                        f"{c['boundary']} | |")
-            for bucket in ("0", "1", "2+", "boundary"):
+                        f"{c['boundary']} | | {c['inadmissible']} | {c['gains']} |")
+            for bucket in buckets:
                 numbers[f"{coupling}.{law}.{bucket}"] = str(c[bucket])
                 numbers[f"{coupling}.{law}.{bucket}-share"] = share(c[bucket], FLAT_LANDINGS)
-    c = counts["newton-coulomb"]
-    rows.append(f"| Newton–Coulomb | — | {c['0']} | {c['1']} | {c['2+']} | | {c['split']} |")
-    for bucket in ("0", "1", "2+", "split"):
-        numbers[f"newton-coulomb.{bucket}"] = str(c[bucket])
-        numbers[f"newton-coulomb.{bucket}-share"] = share(c[bucket], FLAT_LANDINGS)
+    for key, name in (("newton-coulomb", "Newton–Coulomb"),
+                      ("two-phase/poisson", "two-phase Poisson")):
+        c = counts[key]
+        split = f" {c['split']} " if key == "newton-coulomb" else " "
+        rows.append(f"| {name} | — | {c['0']} | {c['1']} | {c['2+']} | |{split}| "
+                    f"{c['inadmissible']} | {c['gains']} |")
+        for bucket in ("0", "1", "2+", "split", "inadmissible", "gains"):
+            stem = key.replace("/", "-")
+            numbers[f"{stem}.{bucket}"] = str(c[bucket])
+            numbers[f"{stem}.{bucket}-share"] = share(c[bucket], FLAT_LANDINGS)
     numbers["table"] = "\n".join(rows)
     return numbers
 
