@@ -26,8 +26,8 @@ import numpy as np
 import pytest
 
 from planar_impact import multicontact as mc
-from planar_impact.multicontact import families
 from planar_impact import simultaneous as sim
+from planar_impact.multicontact import families
 
 #: Draws per test in ``make test``; the environment's ADMISSIBILITY_DRAWS for the full search.
 DRAWS = int(os.environ.get("ADMISSIBILITY_DRAWS", "150"))
