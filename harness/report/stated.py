@@ -43,6 +43,7 @@ from harness.run.verdicts import reason_counts
 from harness.scenarios import load_scenario
 from harness.survey import cli as survey_cli
 from harness.survey.population import resolve_populations
+from planar_impact.multicontact.families import scan as multicontact_scan
 from planar_impact.simultaneous import coherent_count_distribution
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -219,6 +220,41 @@ def flat_landing_numbers() -> dict[str, str]:
             stem = key.replace("/", "-")
             numbers[f"{stem}.{bucket}"] = str(c[bucket])
             numbers[f"{stem}.{bucket}-share"] = share(c[bucket], FLAT_LANDINGS)
+    numbers["table"] = "\n".join(rows)
+    return numbers
+
+
+ADMISSIBLE_DRAWS, ADMISSIBLE_SEED = 500, 0
+#: The references of :func:`planar_impact.multicontact.families.scan`, as the table names them.
+_ADMISSIBLE_ROWS = (
+    ("newton-coulomb", "Newton–Coulomb"), ("two-phase/poisson", "two-phase Poisson"),
+    ("coherent/poisson/literal", "Poisson, literal (the paper's)"),
+    ("coherent/stronge-paper/literal", "Stronge (paper), literal"),
+    ("coherent/newton/literal", "Newton, literal"),
+    ("coherent/poisson/effective", "Poisson, effective (extension)"),
+    ("coherent/stronge-paper/effective", "Stronge (paper), effective"),
+    ("coherent/newton/effective", "Newton, effective"),
+    ("sequential/newton-lcp", "sequential, newton-lcp (both orders)"),
+    ("sequential/poisson", "sequential, Poisson (both orders)"))
+
+
+def admissible_numbers() -> dict[str, str]:
+    """``python -m planar_impact.multicontact admissible 500 0``: per m-contact reference on
+    broad flat landings, its solutions, the inadmissible ones, those that gain energy and
+    the draws with one that gains (``NAME.BUCKET``, ``/`` in names as ``-``)."""
+    table = multicontact_scan(ADMISSIBLE_DRAWS, ADMISSIBLE_SEED)
+    numbers = {"draws": f"{ADMISSIBLE_DRAWS:,}"}
+    rows = ["| reference | solutions | inadmissible | gain energy | draws with a gain | "
+            "draws with several |", "|---|---:|---:|---:|---:|---:|"]
+    for key, name in _ADMISSIBLE_ROWS:
+        c = table.get(key, dict.fromkeys(("solutions", "inadmissible", "gains",
+                                          "draws-gaining", "draws-several"), 0))
+        rows.append(f"| {name} | {c['solutions']} | {c['inadmissible']} | {c['gains']} | "
+                    f"{c['draws-gaining']} | {c['draws-several']} |")
+        stem = key.replace("/", "-")
+        for bucket, value in c.items():
+            numbers[f"{stem}.{bucket}"] = str(value)
+        numbers[f"{stem}.draws-gaining-share"] = share(c["draws-gaining"], ADMISSIBLE_DRAWS, 1)
     numbers["table"] = "\n".join(rows)
     return numbers
 
@@ -400,6 +436,8 @@ SOURCES: dict[str, Source] = {
                            f"{TWO_CONTACT_SEED}", two_contact_numbers),
     "flat-landings": Source(f"python -m harness.reference.flat_faces {FLAT_LANDINGS} "
                             f"{FLAT_SEED}", flat_landing_numbers),
+    "admissible": Source(f"python -m planar_impact.multicontact admissible {ADMISSIBLE_DRAWS} "
+                         f"{ADMISSIBLE_SEED}", admissible_numbers),
     "flat-scenes": Source("impact-harness run scenarios/flat-box.toml "
                           "scenarios/flat-box-receding-end.toml --json R (the references "
                           "of each point in R's scenario info)", flat_scene_numbers),

@@ -24,7 +24,7 @@ from ..simultaneous import (
     solution_phases,
     violations,
 )
-from ..simultaneous.admissible import IMPACT, Phase, energy_change
+from ..simultaneous.admissible import ADMISSIBLE_ENERGY, IMPACT, Phase, energy_change
 from .two_phase import poisson_two_phase, two_phase_phases
 
 SHAPES = ("box", "rod", "polygon")
@@ -127,19 +127,31 @@ def reference_solutions(system: ContactSystem):
 
 
 def scan(draws: int = 1000, seed: int = 0) -> dict[str, dict[str, int]]:
-    """Per reference: solutions, inadmissible ones (a break of any check), and solutions
-    that gain energy (for a law that does not promise otherwise, a property, not a break)."""
+    """Per reference: its solutions, the inadmissible ones (a break of any check), those
+    that gain energy (for a law that does not promise otherwise a property, not a break),
+    the draws with a solution that gains (``draws-gaining``) and the draws with several
+    solutions (``draws-several``; the sequential reading: more than its two orders)."""
     rng = np.random.default_rng(seed)
     table: dict[str, dict[str, int]] = {}
     for _ in range(draws):
         system = random_flat_body(rng)
         kinetic = 0.5 * float(system.u @ system.mass_matrix @ system.u)
+        gaining, solved = set(), []
         for name, law, phases in reference_solutions(system):
-            row = table.setdefault(name, {"solutions": 0, "inadmissible": 0, "gains": 0})
+            row = table.setdefault(name, dict.fromkeys(
+                ("solutions", "inadmissible", "gains", "draws-gaining", "draws-several"), 0))
             row["solutions"] += 1
+            solved.append(name)
             row["inadmissible"] += bool(violations(system, phases,
                                                    promises_no_gain=promises_no_gain(law)))
-            row["gains"] += energy_change(system, phases) > 1e-9 * kinetic
+            if energy_change(system, phases) > ADMISSIBLE_ENERGY * kinetic:
+                row["gains"] += 1
+                gaining.add(name)
+        for name in gaining:
+            table[name]["draws-gaining"] += 1
+        for name in set(solved):  # the sequential reading: one solution per order
+            table[name]["draws-several"] += solved.count(name) > (
+                2 if name.startswith("sequential/") else 1)
     return table
 
 

@@ -118,15 +118,15 @@ def _following_slip(system: ContactSystem, method: str) -> list[TwoPhaseSolution
 
 def _complementary_phase(system: ContactSystem, start, base, method: str
                          ) -> list[PhaseSolution]:
-    """A phase with the slip followed (:func:`phase_following_slip`); a solution whose
-    pieces' sum is not complementary at the phase's end (a contact took impulse in one piece
-    and recedes at the end) is replaced by the phase as one velocity-level problem, which is
-    complementary by construction (``slip_followed`` False on those)."""
+    """A phase with the slip followed (:func:`phase_following_slip`), its solutions that are
+    complementary at the phase's end; a solution that is not (a contact took impulse in one
+    piece and recedes at the end) is dropped, and where none is left the phase is solved as
+    one velocity-level problem, complementary by construction (``slip_followed`` False)."""
     speed = system.speed_scale()
     impulse = speed / float(np.min(np.diag(system.delassus)))
     followed = phase_following_slip(system.delassus, start, base, system.mu, speed, method)
     kept = [phase for phase in followed if complementary(phase, base, speed, impulse)]
-    if len(kept) == len(followed):
+    if kept or not followed:
         return kept
     if method == "enumeration":
         plain = phase_by_enumeration(system.delassus, start, base, system.mu, speed)
