@@ -66,9 +66,10 @@ def count_flat(problems: int = 1000, seed: int = 0) -> tuple[dict, dict]:
     # post-impact velocities); "boundary": draws with a solution at the boundary of a
     # decision (not in 0/1/2+); "split": Newton–Coulomb draws whose impulse split is not
     # unique; "inadmissible", "gains": draws with a solution (any) that breaks an
-    # admissibility check, or that gains energy.
+    # admissibility check, or that gains energy; "max-gain": the largest gain of a
+    # solution, a fraction of ½uᵀMu (0 where none gains).
     counts = {key: dict.fromkeys(("0", "1", "2+", "boundary", "split", "inadmissible",
-                                  "gains"), 0) for key in keys}
+                                  "gains", "max-gain"), 0) for key in keys}
     examples: dict[str, dict[str, Scene]] = {key: {} for key in keys}
     for _ in range(problems):
         scene = random_flat_scene(rng)
@@ -98,6 +99,8 @@ def count_flat(problems: int = 1000, seed: int = 0) -> tuple[dict, dict]:
                 for _, phases, law in checked)
             counts[key]["gains"] += any(gain > sim.ADMISSIBLE_ENERGY * kinetic
                                         for gain, _, _ in checked)
+            counts[key]["max-gain"] = max([counts[key]["max-gain"]]  # of ½uᵀMu
+                                          + [gain / kinetic for gain, _, _ in checked])
             bucket = "0" if number == 0 else "1" if number == 1 else "2+"
             counts[key][bucket] += 1
             examples[key].setdefault(bucket, scene)
@@ -123,7 +126,8 @@ if __name__ == "__main__":  # python -m harness.reference.flat_faces [problems] 
     for key, row in table.items():
         print(f"{key:24s} 0: {row['0']:5d}  1: {row['1']:5d}  2+: {row['2+']:5d}  "
               f"at boundary: {row['boundary']:5d}  split not unique: {row['split']:5d}  "
-              f"inadmissible: {row['inadmissible']:5d}  gains: {row['gains']:5d}")
+              f"inadmissible: {row['inadmissible']:5d}  gains: {row['gains']:5d} "
+              f"(largest {row['max-gain']:.1%})")
     for key in ("poisson/literal", "poisson/effective"):
         for bucket, scene in found[key].items():
             print(f"first {key} with {bucket}: {describe(scene)}")

@@ -220,6 +220,7 @@ def flat_landing_numbers() -> dict[str, str]:
             stem = key.replace("/", "-")
             numbers[f"{stem}.{bucket}"] = str(c[bucket])
             numbers[f"{stem}.{bucket}-share"] = share(c[bucket], FLAT_LANDINGS)
+        numbers[f"{stem}.max-gain"] = f"{100 * c['max-gain']:.0f}%"
     numbers["table"] = "\n".join(rows)
     return numbers
 
