@@ -47,7 +47,8 @@ class PhaseSolution:
     slip_followed_to_end: bool = True
     #: Following the slip: False where the pieces' sum broke the phase's complementarity (a
     #: contact that took impulse in one piece receded by the phase's end) and the phase was
-    #: solved instead as one velocity-level problem (docs/multi-contact.md, 'Energy').
+    #: solved instead as one velocity-level problem (docs/multi-contact.md, 'A two-phase
+    #: Poisson law for m contacts').
     slip_followed: bool = True
 
 

@@ -30,7 +30,9 @@ def phase_following_slip(delassus, start, base, mu, speed, method: str = "enumer
     piece solves what remains of the phase (the base normal impulse not yet given, then the
     complementarity). Along the piece the speeds are linear in the fraction of its impulse;
     where a held slip reaches zero first, the piece is cut there, that slip is set to zero,
-    and the rest of the phase is solved again from that state. For one contact the pieces
+    and the rest of the phase is solved again from that state. A contact that recedes at the
+    piece's start and is owed no base takes no impulse in the piece; where the others drive
+    it back to ``v_n = 0``, the piece is cut there too. For one contact the pieces
     are the process's forward-sliding segment ending at ``P_G`` (A58) and its stick or
     reverse-sliding segment: the paper's (25)–(51) in all five types.
 
@@ -55,8 +57,9 @@ def phase_following_slip(delassus, start, base, mu, speed, method: str = "enumer
         if capped:
             sense = np.zeros(count)
         # A contact that recedes at the piece's start and is owed no base takes no impulse in
-        # the piece: an impulse there would do positive work (docs/multi-contact.md, 'Energy').
-        # If the others drive it back to v_n = 0 inside the piece, the piece is cut there.
+        # the piece: an impulse there would do positive work (docs/multi-contact.md, 'A
+        # two-phase Poisson law for m contacts', its energy paragraph). If the others drive
+        # it back to v_n = 0 inside the piece, the piece is cut there.
         receding = (velocities[0::2] > slip_zero) & (remaining <= 0.0)
         pieces = _pieces(delassus, velocities, remaining, mu, speed, sense, method, receding)
         if not pieces and sense.any():
