@@ -115,7 +115,7 @@ def two_phase(answer, system):
     compression = per_contact(answer.compression.impulses)
     return [("compression", compression, None),
             ("restitution", per_contact(answer.restitution.impulses),
-             system.e * compression[:, 0])]
+             answer.restitution_scale * system.e * compression[:, 0])]
 
 
 def test_the_checker_finds_each_break_it_checks():

@@ -37,6 +37,10 @@ class TwoPhaseSolution:
     energy_change: float  # J: ½ u'ᵀMu' − ½ uᵀMu
     energy_change_compression: float
     normal_split_unique: bool
+    #: The common factor ``λ`` of the restitution's base impulses ``λ e_i P_nc,i``: 1 (Poisson's
+    #: hypothesis) unless that restitution would gain energy, then the largest ``λ`` found
+    #: that does not (docs/multi-contact.md, 'A two-phase Poisson law for m contacts').
+    restitution_scale: float = 1.0
 
     def impulses(self) -> np.ndarray:
         return np.ravel(np.column_stack([self.normal_impulse, self.tangential_impulse]))
@@ -109,11 +113,45 @@ def _following_slip(system: ContactSystem, method: str) -> list[TwoPhaseSolution
     for compression in _complementary_phase(system, system.approach, np.zeros(system.count),
                                             method):
         base = system.e * compression.impulses[0::2]
-        for restitution in _complementary_phase(system, compression.velocities, base, method):
-            answer = _assemble(system, compression, restitution, unique_split)
+        restitutions = _complementary_phase(system, compression.velocities, base, method)
+        factor = 1.0
+        if not _loses_energy(system, compression, restitutions):
+            factor, restitutions = _energy_capped(system, compression, base, method)
+        for restitution in restitutions:
+            answer = _assemble(system, compression, restitution, unique_split, factor)
             if all(np.max(np.abs(answer.u_after - other.u_after)) > scale for other in answers):
                 answers.append(answer)
     return answers
+
+
+#: Bisection steps for the restitution's energy cap: λ to 2⁻⁴⁰ ≈ 1e-12.
+CAP_STEPS = 40
+
+
+def _loses_energy(system: ContactSystem, compression, restitutions) -> bool:
+    """Whether every restitution ends with no more kinetic energy than before the impact
+    (and there is one)."""
+    before = _kinetic(system, system.u)
+    return bool(restitutions) and all(
+        _kinetic(system, system.u + system.delta_u(compression.impulses + r.impulses))
+        <= before for r in restitutions)
+
+
+def _energy_capped(system: ContactSystem, compression, base, method: str):
+    """``(λ, restitutions)`` with the base ``λ·base``: the largest ``λ ∈ [0, 1]`` found by
+    bisection whose restitutions lose energy. ``λ = 0`` always does: its base is nothing, the
+    compression's end is complementary (``v̄_n ≥ 0``), so the restitution gives nothing and
+    the impact's energy change is the compression's, ``≤ 0`` (proved)."""
+    low, high = 0.0, 1.0
+    kept = _complementary_phase(system, compression.velocities, 0.0 * base, method)
+    for _ in range(CAP_STEPS):
+        middle = 0.5 * (low + high)
+        found = _complementary_phase(system, compression.velocities, middle * base, method)
+        if _loses_energy(system, compression, found):
+            low, kept = middle, found
+        else:
+            high = middle
+    return low, kept
 
 
 def _complementary_phase(system: ContactSystem, start, base, method: str
@@ -164,7 +202,7 @@ def _kinetic(system: ContactSystem, speeds) -> float:
     return 0.5 * float(speeds @ system.mass_matrix @ speeds)
 
 
-def _assemble(system, compression, restitution, unique_split) -> TwoPhaseSolution:
+def _assemble(system, compression, restitution, unique_split, factor=1.0) -> TwoPhaseSolution:
     total = compression.impulses + restitution.impulses
     delta_u = system.delta_u(total)  # (75)
     u_after = system.u + delta_u
@@ -177,15 +215,15 @@ def _assemble(system, compression, restitution, unique_split) -> TwoPhaseSolutio
         vn_separation=system.wn @ u_after, vt_separation=system.wt @ u_after,
         energy_change=_kinetic(system, u_after) - before,
         energy_change_compression=after_compression - before,
-        normal_split_unique=unique_split)
+        normal_split_unique=unique_split, restitution_scale=factor)
 
 
 def two_phase_phases(system: ContactSystem, answer: TwoPhaseSolution) -> tuple[Phase, ...]:
     """The answer's compression and restitution as the phases that
     :func:`planar_impact.simultaneous.violations` checks (the restitution owed
-    ``e_i P_nc``)."""
+    ``λ e_i P_nc``, ``λ`` its :attr:`~TwoPhaseSolution.restitution_scale`)."""
     compression = answer.compression.impulses
     start = system.approach + system.delassus @ compression
     return (Phase(COMPRESSION, system.approach.copy(), compression.copy()),
             Phase(RESTITUTION, start, answer.restitution.impulses.copy(),
-                  system.e * compression[0::2]))
+                  answer.restitution_scale * system.e * compression[0::2]))
