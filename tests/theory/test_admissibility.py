@@ -224,3 +224,27 @@ def test_the_property_family_seeds_that_gained(seed):
     for method in mc.METHODS:
         for answer in mc.poisson_two_phase(system, method):
             assert breaks(problem, two_phase(answer, system), True) == []
+
+
+def test_a_restitution_that_would_gain_is_scaled_down_to_lose_energy():
+    """A body whose centre of mass is 0.6 mm from one end of a 35 mm face, spinning fast,
+    e = 0.27 and 0.97 (found by this file's full search): the compression stops it, and
+    Poisson's restitution e_i P_nc alone would give back 5.3% more than ½uᵀMu (Glocker's
+    consistency condition fails for different e_i). The law scales the restitution's base
+    by the largest λ that loses no energy (≈ 0.975); the plain law, not scaled, gains."""
+    mass, inertia = 0.23544997845, 1.7572188e-06
+    problem = (np.diag([mass, mass, inertia]),
+               np.array([[0, 1, -0.00055838], [0, 1, 0.03460829]]),
+               np.array([[1, 0, 0.0038720416594], [1, 0, 0.0038720416594]]),
+               np.array([0.66419303, -0.59843889, -126.39346352]),
+               np.array([1.1987958, 1.25749849]), np.array([0.27119267, 0.97354755]))
+    system = sim.contact_system(mass_matrix=problem[0], wn=problem[1], wt=problem[2],
+                                u=problem[3], mu=problem[4], e=problem[5])
+    kinetic = 0.5 * problem[3] @ problem[0] @ problem[3]
+    for method in mc.METHODS:
+        (answer,) = mc.poisson_two_phase(system, method)
+        assert 0.95 < answer.restitution_scale < 0.99
+        assert -1e-9 * kinetic < answer.energy_change <= 0.0
+        assert breaks(problem, two_phase(answer, system), True) == []
+    (plain,) = mc.poisson_two_phase(system, follow_slip=False)
+    assert plain.restitution_scale == 1.0 and plain.energy_change > 0.05 * kinetic
