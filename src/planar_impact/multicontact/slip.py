@@ -60,7 +60,7 @@ def phase_following_slip(delassus, start, base, mu, speed, method: str = "enumer
         # the piece: an impulse there would do positive work (docs/multi-contact.md, 'A
         # two-phase Poisson law for m contacts', its energy paragraph). If the others drive
         # it back to v_n = 0 inside the piece, the piece is cut there.
-        receding = (velocities[0::2] > slip_zero) & (remaining <= 0.0)
+        receding = (velocities[0::2] > slip_zero) & (remaining <= 0.0) & (not capped)
         pieces = _pieces(delassus, velocities, remaining, mu, speed, sense, method, receding)
         if not pieces and sense.any():
             # Held friction cannot end the phase (the approach grows while the slip lasts,
@@ -69,8 +69,6 @@ def phase_following_slip(delassus, start, base, mu, speed, method: str = "enumer
             sense = np.zeros(count)
             pieces = _pieces(delassus, velocities, remaining, mu, speed, sense, method,
                              receding)
-        slips_and_gaps = np.where(np.arange(2 * count) % 2 == 1, velocities, 0.0)
-        slips_and_gaps[0::2] = np.where(receding, velocities[0::2], 0.0)
         for piece in pieces:
             end_slips = piece.velocities[1::2]
             crossing = np.zeros(2 * count, dtype=bool)
@@ -82,9 +80,11 @@ def phase_following_slip(delassus, start, base, mu, speed, method: str = "enumer
                 if distinct(found, solution, speed, impulse_scale):
                     found.append(solution)
                 continue
-            ends = np.where(crossing, piece.velocities, 0.0)
-            fractions = np.where(crossing, slips_and_gaps / np.where(
-                crossing, slips_and_gaps - ends, 1.0), np.inf)
+            # Where along the piece each crossing quantity (a held slip, a receding contact's
+            # v_n) reaches zero; the first one cuts it.
+            fractions = np.full(2 * count, np.inf)
+            fractions[crossing] = velocities[crossing] / (velocities[crossing]
+                                                          - piece.velocities[crossing])
             first = int(np.argmin(fractions))
             fraction = float(fractions[first])
             cut = velocities + fraction * (piece.velocities - velocities)
