@@ -254,3 +254,22 @@ def test_a_restitution_that_would_gain_is_scaled_down_to_lose_energy():
         assert breaks(problem, two_phase(answer, system), True) == []
     (plain,) = mc.poisson_two_phase(system, follow_slip=False)
     assert plain.restitution_scale == 1.0 and plain.energy_change > 0.05 * kinetic
+
+
+def test_the_scan_runs_as_a_script_and_counts_every_reference():
+    """``python -m planar_impact.multicontact admissible DRAWS SEED`` (docs/multi-contact.md,
+    'Admissible references'): one line per reference, the two-phase law never inadmissible."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    src = Path(__file__).resolve().parents[2] / "src"
+    done = subprocess.run([sys.executable, "-m", "planar_impact.multicontact", "admissible",
+                           "6", "0"], capture_output=True, text=True, timeout=300,
+                          env=dict(os.environ, PYTHONPATH=str(src)))
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    assert lines[0] == "6 flat landings (boxes, rods, polygons), seed 0"
+    rows = dict(line.split(": ", 1) for line in lines[1:])
+    assert rows["newton-coulomb"].startswith("{'solutions': 6,")
+    assert "'inadmissible': 0," in rows["two-phase/poisson"]
