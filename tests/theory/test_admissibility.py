@@ -250,7 +250,7 @@ def test_a_restitution_that_would_gain_is_scaled_down_to_lose_energy():
     for method in mc.METHODS:
         (answer,) = mc.poisson_two_phase(system, method)
         assert 0.95 < answer.restitution_scale < 0.99
-        assert -1e-9 * kinetic < answer.energy_change <= 0.0
+        assert -1e-9 * kinetic < answer.energy_change <= 1e-12 * kinetic
         assert breaks(problem, two_phase(answer, system), True) == []
     (plain,) = mc.poisson_two_phase(system, follow_slip=False)
     assert plain.restitution_scale == 1.0 and plain.energy_change > 0.05 * kinetic

@@ -126,15 +126,18 @@ def _following_slip(system: ContactSystem, method: str) -> list[TwoPhaseSolution
 
 #: Bisection steps for the restitution's energy cap: λ to 2⁻⁴⁰ ≈ 1e-12.
 CAP_STEPS = 40
+#: A gain up to this fraction of ½uᵀMu is rounding (½u'ᵀMu' is formed to ~1e-16 of it), not
+#: a gain: an elastic impact (ΔE = 0) keeps λ = 1.
+ENERGY_ROUNDING = 1e-12
 
 
 def _loses_energy(system: ContactSystem, compression, restitutions) -> bool:
-    """Whether every restitution ends with no more kinetic energy than before the impact
-    (and there is one)."""
+    """Whether every restitution ends with no more kinetic energy than before the impact,
+    to rounding (:data:`ENERGY_ROUNDING`), and there is one."""
     before = _kinetic(system, system.u)
     return bool(restitutions) and all(
         _kinetic(system, system.u + system.delta_u(compression.impulses + r.impulses))
-        <= before for r in restitutions)
+        <= before * (1.0 + ENERGY_ROUNDING) for r in restitutions)
 
 
 def _energy_capped(system: ContactSystem, compression, base, method: str):
