@@ -14,7 +14,7 @@ masses, sizes and speeds log-uniform over four decades; spin; ``μ_i`` ∈ [0, 1
 ``e_i`` ∈ [0, 1] drawn per contact. ``make test`` draws :data:`DRAWS`; the full search,
 10^5 draws::
 
-    ADMISSIBILITY_DRAWS=100000 .venv/bin/python -m pytest -q -p no:xdist \\
+    ADMISSIBILITY_DRAWS=100000 .venv/bin/python -m pytest -q -p no:xdist --timeout=0 \\
         tests/theory/test_admissibility.py
 """
 
