@@ -108,6 +108,16 @@ BOUNDS: dict[str, Bound] = {
     "seed": Bound(0, 2**32 - 1, integer=True, why="numpy's seeds"),
     "chunk-size": Bound(1, 100_000, integer=True),
     "task-time-limit": Bound(0, 86_400, low_open=True, why="seconds, a day at most"),
+    # experiments and calibrate (harness/experiments): counts of drops and resamples
+    "replicates": Bound(10, 10_000, integer=True,
+                        why="bootstrap resamples; experiments refits every law on each (200 "
+                            "by default, 10,000 take tens of minutes)"),
+    "drops": Bound(2, 5_000, integer=True,
+                   why="impacts calibrate runs per cell of its grid (12 by default; the "
+                       "measured set has 1,718; MuJoCo's grid has 27 cells)"),
+    "law-mu": Bound(0, 100,
+                    why="the friction coefficient calibrate's target law runs at"),
+    "law-e": Bound(0, 1, why="the restitution coefficient calibrate's target law runs at"),
     # population files
     "sides": Bound(3, 64, integer=True,
                    why="a regular polygon; beyond 64 sides it is a disk to the engines"),

@@ -91,10 +91,19 @@ def save_svg(figure, svg: Path) -> Path:
 
 
 def percent_axis(axis) -> None:
-    """Tick labels of a log axis of fractions, written in percent (0.01 -> 1%)."""
-    from matplotlib.ticker import FuncFormatter
+    """Tick labels of a log axis of fractions, written in percent (0.01 -> 1%), the minor
+    ticks' too: on an axis spanning less than a few decades matplotlib labels some of them,
+    and in its own style ``2×10⁻¹`` beside a major tick's ``10%``."""
+    from matplotlib.ticker import FuncFormatter, LogFormatter
+
+    class PercentLogFormatter(LogFormatter):
+        """matplotlib's choice of which minor ticks to label, each in percent."""
+
+        def _num_to_string(self, x, vmin, vmax):
+            return percent_tick(x)
 
     axis.set_major_formatter(FuncFormatter(lambda value, _: percent_tick(value)))
+    axis.set_minor_formatter(PercentLogFormatter(labelOnlyBase=False))
 
 
 def percent_tick(value: float) -> str:
@@ -107,3 +116,48 @@ def percent_tick(value: float) -> str:
     return f"{percent:.0e}%".replace("e-0", "e-")
 
 
+
+
+def text_problems(figure, dpi: float = 100, slack: float = 1.0) -> list[str]:
+    """What is wrong with the texts of ``figure`` drawn at ``dpi`` (laid out as
+    :func:`save_png` lays it out): each text cut by the figure's edge, and each pair of texts
+    that overlap, by more than ``slack`` pixels. Empty when every text is whole and apart.
+
+    Only the texts the drawing actually draws are measured (a renderer that notes each
+    text as it is drawn: tick labels outside the axes' range are never drawn).
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    lay_out(figure, dpi)
+    resolution = figure.dpi
+    figure.dpi = dpi
+    try:
+        canvas = FigureCanvasAgg(figure)
+        renderer = canvas.get_renderer()
+        drawn: dict[int, object] = {}
+        draw_text = renderer.draw_text
+
+        def noting(gc, x, y, s, prop, angle, ismath=False, mtext=None):
+            if mtext is not None and s.strip():
+                drawn[id(mtext)] = mtext
+            return draw_text(gc, x, y, s, prop, angle, ismath=ismath, mtext=mtext)
+
+        renderer.draw_text = noting
+        figure.draw(renderer)
+        boxes = [(text.get_text().replace("\n", " | "), text.get_window_extent(renderer))
+                 for text in drawn.values()]
+        width, height = figure.bbox.width, figure.bbox.height
+    finally:
+        figure.dpi = resolution
+    problems = []
+    for text, box in boxes:
+        if (box.x0 < -slack or box.y0 < -slack or box.x1 > width + slack
+                or box.y1 > height + slack):
+            problems.append(f"cut by the figure's edge: {text!r}")
+    for index, (first, a) in enumerate(boxes):
+        for second, b in boxes[index + 1:]:
+            across = min(a.x1, b.x1) - max(a.x0, b.x0)
+            up = min(a.y1, b.y1) - max(a.y0, b.y0)
+            if across > slack and up > slack:
+                problems.append(f"overlap: {first!r} and {second!r}")
+    return problems

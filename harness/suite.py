@@ -30,6 +30,7 @@ from pathlib import Path
 from harness import report
 from harness.report import add_experiments_data_argument
 from harness.report import table3 as paper
+from harness.report.progress import Progress
 from harness.report.survey import read_settings
 from harness.run import command, plan
 from harness.run.provenance import PACKAGES, package_versions
@@ -95,8 +96,10 @@ def main(args) -> int:
           + f"({time.perf_counter() - tick:.1f} s)", file=sys.stderr, flush=True)
 
     tick = time.perf_counter()
-    written = report.write_report(read_results(results_path), out,
-                                  experiments_data=args.experiments_data)
+    with Progress(label="[4/4] report") as progress:  # once it has taken two seconds
+        written = report.write_report(read_results(results_path), out,
+                                      experiments_data=args.experiments_data,
+                                      progress=progress)
     print(f"[4/4] report: {written['html']}, {written['summary']}, "
           f"{len(written['figures'])} figures ({time.perf_counter() - tick:.1f} s)",
           file=sys.stderr, flush=True)

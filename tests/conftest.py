@@ -7,11 +7,15 @@ property test fails or passes for a reason in the code, never by the draw of a s
 
 Mark ``@pytest.mark.kernel_sensitive`` (or ``pytestmark = pytest.mark.kernel_sensitive`` for a
 whole module) every test whose outcome rests on arithmetic that BLAS, libm or SIMD kernels
-round differently on another CPU: a pin of stored results (compared within a stated bound,
-never bit for bit), a count, a decision, a finding. ``make test`` runs those tests a second
-time under another OpenBLAS kernel with numpy's SIMD dispatch off (tests/other_kernels.py,
-which also runs them by hand); the kernels in use head every run's output
-(:func:`pytest_report_header`). Keep them quick: they run twice.
+round differently on another CPU: a pin of stored results, a count, a decision, a finding.
+Each such comparison says which kind it is (docs/verdicts.md, 'Same answers on every CPU'):
+bit for bit (IEEE operations only, no BLAS product), within a derived forward error bound
+(tests/error_bounds.py), or a decision with a tolerance band. ``make test`` runs those tests
+again under every OpenBLAS core type the CPU can execute, and with numpy's SIMD dispatch off
+(tests/other_kernels.py, which also runs them by hand); mark ``blas_free`` as well those
+whose arithmetic takes no BLAS product (they then run once more, with SIMD off, not under each
+core type). The kernels in use head every run's output (:func:`pytest_report_header`). Keep
+them quick: they run up to eight times.
 """
 
 from __future__ import annotations

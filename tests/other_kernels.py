@@ -2,53 +2,152 @@
 the whole suite, and it can be run by hand (arguments go to pytest)::
 
     .venv/bin/python tests/other_kernels.py -n 2
+    .venv/bin/python tests/other_kernels.py --list      # the kernels it would run, and stop
 
 The tests marked ``kernel_sensitive`` (pins of stored results, counts, decisions, findings:
-see tests/conftest.py) run once more with OpenBLAS's Prescott kernels (SSE3, which every
-x86-64 CPU runs; elsewhere the BLAS kernel is left as it is, with a note) and with every
-SIMD target numpy dispatches to at run time turned off (``NPY_DISABLE_CPU_FEATURES``: numpy
-then runs its baseline loops). Results through BLAS, libm or SIMD differ in the last bits
-between such kernels as they do between CPUs; these tests must pass on each (issue 22).
+see tests/conftest.py) run once more under every OpenBLAS core type this CPU can execute
+(``OPENBLAS_CORETYPE``; :data:`CORE_TYPES`, each with the CPU flags its kernels need, read
+from /proc/cpuinfo): Prescott (SSE3, every x86-64 CPU), Nehalem, SandyBridge, Haswell, Zen,
+and SkylakeX and Cooperlake where the CPU has AVX-512. Results through BLAS, libm or SIMD
+differ in the last bits between such kernels as they do between CPUs; these tests must pass
+on each (issue 35): a kernel a CPU lacks cannot be tried here, so a bound found by trying
+kernels is not a bound, and the tests compare within derived bounds (tests/error_bounds.py).
+
+The passes, chosen to keep ``make test`` short:
+
+* Prescott with every SIMD target numpy dispatches to at run time turned off
+  (``NPY_DISABLE_CPU_FEATURES``: numpy then runs its baseline loops): the whole
+  kernel_sensitive set, the oldest arithmetic against this run's newest (about 21 s of CPU
+  on the development machine);
+* each other core type the CPU can run: the kernel_sensitive tests but those marked
+  ``blas_free`` (the contact geometry compared with its reference form, bit for bit: their
+  arithmetic takes no BLAS product, so a BLAS kernel cannot move them, and
+  ``test_contacts_are_the_same_bits_under_another_kernel``, which is run, checks exactly
+  that under each), numpy's SIMD as it is (about 12 s of CPU each).
+
+Off x86-64 the BLAS kernel is left as it is (one pass, SIMD off, with a note). Every pass
+runs even when one fails; the report at the end names each kernel with its outcome and time,
+and the exit status is the first failure's (0 when all pass).
 """
 
 from __future__ import annotations
 
 import os
 import platform
+import resource
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 #: OpenBLAS's kernels for the oldest x86-64 CPUs it knows (SSE3): they run on every x86-64.
 OLD_KERNEL = "Prescott"
 
+#: OpenBLAS core types tried, oldest first, each with the /proc/cpuinfo flags its kernels use
+#: (a CPU without one of them would stop at an illegal instruction).
+CORE_TYPES = {
+    "Prescott": ("pni",),  # SSE3
+    "Nehalem": ("ssse3", "sse4_1", "sse4_2", "popcnt"),
+    "SandyBridge": ("avx",),
+    "Haswell": ("avx2", "fma"),
+    "Zen": ("avx2", "fma"),
+    "SkylakeX": ("avx512f", "avx512cd", "avx512bw", "avx512dq", "avx512vl"),
+    "Cooperlake": ("avx512f", "avx512cd", "avx512bw", "avx512dq", "avx512vl", "avx512_bf16"),
+}
 
-def kernel_environment() -> tuple[dict[str, str], list[str]]:
-    """The environment of the second run, and what it changes (for the log)."""
+
+def cpu_flags(cpuinfo: str | None = None) -> set[str]:
+    """The flags of the first processor in /proc/cpuinfo (empty where there is none)."""
+    if cpuinfo is None:
+        try:
+            cpuinfo = Path("/proc/cpuinfo").read_text()
+        except OSError:
+            return set()
+    for line in cpuinfo.splitlines():
+        name, _, value = line.partition(":")
+        if name.strip() == "flags":
+            return set(value.split())
+    return set()
+
+
+def runnable_core_types(flags: set[str]) -> list[str]:
+    """The core types of :data:`CORE_TYPES` whose every flag the CPU has, oldest first."""
+    return [name for name, needs in CORE_TYPES.items() if flags.issuperset(needs)]
+
+
+def numpy_simd_targets() -> list[str]:
+    """numpy's SIMD targets dispatched at run time (what ``NPY_DISABLE_CPU_FEATURES`` turns
+    off)."""
     try:
         from numpy._core._multiarray_umath import __cpu_dispatch__
     except ImportError:  # numpy < 2
         from numpy.core._multiarray_umath import __cpu_dispatch__
+    return list(__cpu_dispatch__)
 
+
+def kernel_environment(core_type: str | None = OLD_KERNEL,
+                       simd_off: bool = True) -> tuple[dict[str, str], list[str]]:
+    """The environment of a pass under ``core_type`` (``None``: the BLAS kernel as it is),
+    numpy's SIMD dispatch off when ``simd_off``, and what it changes (for the log)."""
     environment = dict(os.environ)
     changes = []
-    if platform.machine().lower() in ("x86_64", "amd64"):
-        environment["OPENBLAS_CORETYPE"] = OLD_KERNEL
-        changes.append(f"OPENBLAS_CORETYPE={OLD_KERNEL}")
+    if core_type is not None and platform.machine().lower() in ("x86_64", "amd64"):
+        environment["OPENBLAS_CORETYPE"] = core_type
+        changes.append(f"OPENBLAS_CORETYPE={core_type}")
     else:
-        changes.append(f"BLAS kernel left as is ({platform.machine()} is not x86-64)")
-    if __cpu_dispatch__:  # disabling a target the CPU lacks is allowed (and does nothing)
-        environment["NPY_DISABLE_CPU_FEATURES"] = " ".join(__cpu_dispatch__)
-        changes.append(f"NPY_DISABLE_CPU_FEATURES={' '.join(__cpu_dispatch__)}")
+        environment.pop("OPENBLAS_CORETYPE", None)
+        changes.append(f"BLAS kernel left as is ({platform.machine()})")
+    targets = numpy_simd_targets()
+    if simd_off and targets:  # disabling a target the CPU lacks is allowed (and does nothing)
+        environment["NPY_DISABLE_CPU_FEATURES"] = " ".join(targets)
+        changes.append(f"NPY_DISABLE_CPU_FEATURES={' '.join(targets)}")
+    else:
+        environment.pop("NPY_DISABLE_CPU_FEATURES", None)
     return environment, changes
 
 
+#: The tests of every pass, and of the passes under the other BLAS core types.
+ALL_TESTS, BLAS_TESTS = "kernel_sensitive", "kernel_sensitive and not blas_free"
+
+
+def passes(flags: set[str]) -> list[tuple[str | None, bool, str]]:
+    """``(core type, SIMD off, pytest marker expression)`` of each pass (module docstring)."""
+    if platform.machine().lower() not in ("x86_64", "amd64"):
+        return [(None, True, ALL_TESTS)]
+    others = [name for name in runnable_core_types(flags) if name != OLD_KERNEL]
+    return [(OLD_KERNEL, True, ALL_TESTS)] + [(name, False, BLAS_TESTS) for name in others]
+
+
+def children_cpu_seconds() -> float:
+    """User and system CPU time of the finished child processes so far (s)."""
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
 def main(arguments: list[str]) -> int:
-    environment, changes = kernel_environment()
-    print(f"kernel_sensitive tests again with {', '.join(changes)}", flush=True)
+    flags = cpu_flags()
+    planned = passes(flags)
+    names = [core_type or "as is" for core_type, _, _ in planned]
+    lacking = [name for name in CORE_TYPES if name not in names]
+    print(f"kernel_sensitive tests again under {len(planned)} kernels: {', '.join(names)}"
+          + (f" (this CPU cannot run {', '.join(lacking)})" if lacking else ""), flush=True)
+    if "--list" in arguments:
+        return 0
     root = Path(__file__).resolve().parent.parent
-    return subprocess.call([sys.executable, "-m", "pytest", "-q", "-m", "kernel_sensitive",
-                            *arguments], cwd=root, env=environment)
+    outcomes = []
+    for core_type, simd_off, tests in planned:
+        environment, changes = kernel_environment(core_type, simd_off)
+        print(f"\n== {tests} with {', '.join(changes)}", flush=True)
+        started, cpu = time.monotonic(), children_cpu_seconds()
+        status = subprocess.call([sys.executable, "-m", "pytest", "-q", "-m", tests,
+                                  *arguments], cwd=root, env=environment)
+        outcomes.append((f"{', '.join(changes)}: {tests}", status,
+                         time.monotonic() - started, children_cpu_seconds() - cpu))
+    print("\nkernel_sensitive tests on other kernels (wall time, CPU time of the pass):")
+    for changes, status, seconds, cpu in outcomes:
+        verdict = "passed" if status == 0 else f"FAILED (pytest exit status {status})"
+        print(f"  {verdict:<34} {seconds:6.1f} s {cpu:6.1f} s CPU  {changes}")
+    return next((status for _, status, _, _ in outcomes if status != 0), 0)
 
 
 if __name__ == "__main__":

@@ -1,4 +1,5 @@
-"""The examples users copy first must run: the package docstring and the README's snippet."""
+"""The examples users copy first must run: the package docstring and the solver snippet of
+docs/usage.md."""
 
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ def test_package_docstring_example_runs():
 
 
 def test_readme_solver_snippet_runs_and_prints_what_it_says():
-    readme = (Path(__file__).parent.parent / "README.md").read_text()
+    readme = (Path(__file__).parent.parent / "docs/usage.md").read_text()
     snippet = re.search(r"## The solver in five lines\n\n```python\n(.*?)```", readme,
                         re.S).group(1)
     namespace: dict = {}
@@ -26,10 +27,10 @@ def test_readme_solver_snippet_runs_and_prints_what_it_says():
 
 
 def test_readme_layout_table_matches_the_tree():
-    """Every path in the README's layout table exists, and every package of ``harness/`` and
+    """Every path in the layout table (docs/usage.md) exists, and every package of ``harness/`` and
     every top-level folder of the repository is in the table."""
     root = Path(__file__).parent.parent
-    readme = (root / "README.md").read_text()
+    readme = (root / "docs/usage.md").read_text()
     table = re.search(r"## Layout\n(.*?)\n## ", readme, re.S).group(1)
     listed = set(re.findall(r"^\| `([^`]+)`", table, re.M))
     missing = sorted(path for path in listed if not (root / path).exists())

@@ -1,10 +1,10 @@
 """The layers of the code, enforced: a module imports only from its own layer or below, at
 module level or inside a function alike (an import inside a function is still a dependency).
 
-The layers, lowest first (README, 'Layout'):
+The layers, lowest first (docs/usage.md, 'Layout'):
 
 0. ``planar_impact`` -- the theory, numpy only;
-1. ``harness.bounds``, ``collector``, ``processes``, ``inputs`` -- shared tools;
+1. ``harness.bounds``, ``collector``, ``processes``, ``inputs``, ``laws`` -- shared tools;
 2. ``harness.store`` -- storage and identity: atomic files, the result cache;
 3. ``harness.scene`` -- the impact to simulate;
 4. ``harness.engines``, ``harness.reference`` -- engines behind one contract, reference
@@ -32,7 +32,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 LAYERS = (
     ("planar_impact",),
-    ("harness.bounds", "harness.collector", "harness.processes", "harness.inputs"),
+    ("harness.bounds", "harness.collector", "harness.processes", "harness.inputs",
+     "harness.laws"),
     ("harness.store",),
     ("harness.scene",),
     ("harness.engines", "harness.reference"),
@@ -82,7 +83,7 @@ def layer_of(name: str) -> int:
     for number, members in enumerate(LAYERS):
         if any(name == member or name.startswith(member + ".") for member in members):
             return number
-    raise AssertionError(f"{name} is in no layer: add it to LAYERS (and to the README)")
+    raise AssertionError(f"{name} is in no layer: add it to LAYERS (and to docs/usage.md)")
 
 
 def test_every_import_goes_down_or_across():

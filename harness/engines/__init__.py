@@ -11,7 +11,10 @@ Adding an engine: write ``harness/engines/<name>_engine.py`` (or a package, as
 (everything the harness knows about the engine is an attribute of that class:
 :func:`engine_trait`), check it with
 :func:`harness.engines.conformance.check_engine`, and add one line to ``_ENGINE_MODULES``
-below, or :func:`register_engine` it at run time.
+below, or :func:`register_engine` it at run time. A shipped engine also pins its version in
+``pyproject.toml``'s ``harness`` extra (or an extra of its own, as Drake's ``drake``) and
+has its section in docs/engines.md (docs/engines.md, 'Adding an engine', has the whole list;
+tests/engines/test_contract.py checks both).
 
 Presets: every engine has the same two preset *roles* (:data:`PRESET_ROLES`), which the
 harness runs, caches and records by: ``defaults`` (what a user of the engine gets) and
@@ -61,18 +64,20 @@ from harness.engines.quiet import import_quietly
 from harness.engines.settings import EngineSettingsError
 
 # engine name -> (adapter module, importable package the adapter needs, distribution name);
-# the pinned version lives once, in pyproject.toml's `harness` extra (see pinned_requirement).
+# the pinned version lives once, in pyproject.toml's `harness` extra or the engine's own
+# (Drake's `drake`; see pinned_requirement).
 _ENGINE_MODULES: dict[str, tuple[str, str, str]] = {
     "pymunk": ("harness.engines.pymunk_engine", "pymunk", "pymunk"),
     "pybullet": ("harness.engines.pybullet", "pybullet", "pybullet"),
     "mujoco": ("harness.engines.mujoco", "mujoco", "mujoco"),
     "box2d": ("harness.engines.box2d", "Box2D", "box2d"),
+    "drake": ("harness.engines.drake", "pydrake", "drake"),
 }
 
 ENGINE_NAMES: tuple[str, ...] = tuple(_ENGINE_MODULES)
 
 def pinned_requirement(distribution: str) -> str:
-    """``distribution`` as pinned by this project's ``harness`` extra (``"pymunk==7.3.1"``),
+    """``distribution`` as pinned by one of this project's extras (``"pymunk==7.3.1"``),
     read from the installed project's metadata; the bare name when that is unavailable."""
     from importlib import metadata
 
@@ -88,6 +93,32 @@ def pinned_requirement(distribution: str) -> str:
     return distribution
 
 
+def _drake_platform_problem() -> str | None:
+    """Why Drake's pinned wheel cannot install here (it ships for glibc >= 2.34 on x86_64
+    or aarch64 Linux, and for macOS), or None where it can."""
+    import platform
+    import sys
+
+    if sys.platform == "darwin":
+        return None
+    machine = platform.machine()
+    if not sys.platform.startswith("linux"):
+        return f"Drake ships no wheel for {sys.platform}"
+    if machine not in ("x86_64", "aarch64"):
+        return f"Drake ships no Linux wheel for {machine} (x86_64 and aarch64 only)"
+    library, version = platform.libc_ver()
+    parts = tuple(int(part) for part in version.split(".")[:2] if part.isdigit())
+    if library != "glibc" or parts < (2, 34):
+        return (f"Drake's Linux wheels need glibc >= 2.34; this machine has "
+                f"{library or 'no glibc'} {version}".rstrip())
+    return None
+
+
+# engine -> why its pinned wheel cannot install on this platform (None: it can), added to
+# the not-installed message.
+_PLATFORM_PROBLEMS = {"drake": _drake_platform_problem}
+
+
 def engine_distribution(name: str) -> str:
     """The distribution (pip name) of shipped engine ``name``'s package (provenance)."""
     return _ENGINE_MODULES[name][2]
@@ -101,10 +132,13 @@ class EngineNotInstalled(ImportError):
         requirement = pinned_requirement(distribution)
         self.engine = engine
         self.install_command = f"pip install {requirement}"
+        platform_problem = _PLATFORM_PROBLEMS.get(engine, lambda: None)()
+        if platform_problem:
+            reason = f"{reason or f'cannot import {package}'}; {platform_problem}"
         message = (
             f"engine {engine!r} is not installed ({reason or f'cannot import {package}'}); "
             f"install it with `{self.install_command}` or all engines with "
-            f'`pip install -e ".[harness]"`'
+            f'`pip install -e ".[harness,drake]"`'
         )
         super().__init__(message, name=package)
 

@@ -220,11 +220,12 @@ def uncertainty(errors: np.ndarray, cells: list[dict], best_index: int, knobs: d
 def calibrate(engine, preset: str, impacts: MeasuredImpacts, thetas, target: str,
               grid: str = "quick", law_mu: float = 0.3, law_e: float = 0.6,
               sample: dict | None = None, replicates: int = REPLICATES,
-              seed: int = 0) -> Calibration:
+              seed: int = 0, progress=lambda text: None) -> Calibration:
     """Every cell of the grid scored (``target``: "data" or a law of ``planar_impact``,
     then at ``law_mu``, ``law_e``: the engine's pair settings are knobs like the others);
     ``sample`` records which impacts these are (kept in the result). ``replicates`` and
-    ``seed``: the bootstrap's resamples and the seed of those and of the held-out split."""
+    ``seed``: the bootstrap's resamples and the seed of those and of the held-out split.
+    ``progress(text)`` is told each cell as it starts (it may print at most some)."""
     reference = (impacts.speeds_after if target == "data"
                  else predict(impacts, target, law_mu, law_e).speeds_after)
     mus, es = PAIR_GRIDS[grid]
@@ -232,11 +233,14 @@ def calibrate(engine, preset: str, impacts: MeasuredImpacts, thetas, target: str
     names = list(knobs)
     settings_of = [dict(zip(names, values))
                    for values in itertools.product(*(knobs[name] for name in names))]
-    errors = np.array([
-        _per_drop_errors(engine, preset, impacts, thetas, settings["mu"], settings["e"],
-                         {k: v for k, v in settings.items() if k not in ("mu", "e")},
-                         reference)
-        for settings in settings_of]).reshape(len(settings_of), len(impacts))
+    rows = []
+    for cell, settings in enumerate(settings_of):
+        progress(f"{engine.name} ({preset_label(engine.name, preset)}): cell {cell + 1} of "
+                 f"{len(settings_of)}, {len(impacts)} impacts each")
+        rows.append(_per_drop_errors(
+            engine, preset, impacts, thetas, settings["mu"], settings["e"],
+            {k: v for k, v in settings.items() if k not in ("mu", "e")}, reference))
+    errors = np.array(rows).reshape(len(settings_of), len(impacts))
     objectives = cell_objectives(errors)
     shares = np.mean(np.isfinite(errors), axis=1)
     cells = [(settings, None if np.isnan(value) else float(value), float(share))
@@ -299,7 +303,9 @@ def summary(calibration: Calibration) -> str:
             text = f"cannot be calibrated: moves the objective by {moved:.2g} < {TOLERANCE}"
         else:
             text = f"moves the objective by {moved:.4f}"
-        lines.append(f"  {knob} {calibration.knobs[knob]}: {text}")
+        tried = ", ".join(f"{v:g}" if isinstance(v, float) else str(v)
+                          for v in calibration.knobs[knob])  # not Python's list
+        lines.append(f"  {knob} (tried {tried}): {text}")
     if calibration.uncertainty is not None:
         lines += uncertainty_lines(calibration.uncertainty, len(calibration.errors[0]),
                                    calibration.cannot())

@@ -74,17 +74,28 @@ def paired_difference(errors, reference, replicates: int = REPLICATES, seed: int
                       confidence: float = CONFIDENCE) -> dict | None:
     """median(``errors``) − median(``reference``) over the drops where both are scored,
     with the percentile interval of a paired bootstrap (the same resampled drops for
-    both). None when no drop is scored by both."""
+    both); beside it each median on those drops with its interval from the same resamples
+    (``median``, ``reference``), and the drops ``errors`` loses (NaN: flagged) where the
+    reference is scored, with the reference's median error on them (``lost``): an engine's
+    median over the drops it keeps is set beside the law's on the very same drops, never
+    against the law's on all of them. None when no drop is scored by both."""
     errors, reference = np.asarray(errors, dtype=float), np.asarray(reference, dtype=float)
     both = np.isfinite(errors) & np.isfinite(reference)
     a, b = errors[both], reference[both]
     if a.size == 0:
         return None
-    differences = [np.median(a[rows]) - np.median(b[rows])
-                   for rows in fitting.resampled_rows(a.size, replicates, seed)]
-    found = fitting.percentile_interval(differences, confidence)
+    resampled = [(np.median(a[rows]), np.median(b[rows]))
+                 for rows in fitting.resampled_rows(a.size, replicates, seed)]
+    medians = np.array(resampled)
+    found = fitting.percentile_interval(medians[:, 0] - medians[:, 1], confidence)
+    own, other = (fitting.percentile_interval(medians[:, k], confidence) for k in (0, 1))
+    lost = reference[~np.isfinite(errors) & np.isfinite(reference)]
     return {"difference": float(np.median(a) - np.median(b)),
-            "interval": [found.low, found.high], "drops": int(a.size)}
+            "interval": [found.low, found.high], "drops": int(a.size),
+            "median": {"median": float(np.median(a)), "interval": [own.low, own.high]},
+            "reference": {"median": float(np.median(b)), "interval": [other.low, other.high]},
+            "lost": {"drops": int(lost.size),
+                     "reference_median": float(np.median(lost)) if lost.size else None}}
 
 
 def law_errors(drop_errors: fitting.DropErrors, law: str, mu: float, e: float) -> np.ndarray:
@@ -119,14 +130,14 @@ def calibration_sample(drops: int, seed: int, count: int = CALIBRATION_DROPS) ->
 
 
 def calibrate_engine(engine, preset: str, target: MeasuredImpacts, thetas, seed: int,
-                     count: int = CALIBRATION_DROPS,
-                     replicates: int = calibrate.REPLICATES) -> calibrate.Calibration:
+                     count: int = CALIBRATION_DROPS, replicates: int = calibrate.REPLICATES,
+                     progress=lambda text: None) -> calibrate.Calibration:
     """``engine`` under ``preset`` calibrated to the drops of :func:`calibration_sample`."""
     rows = calibration_sample(len(target), seed, count)
     return calibrate.calibrate(engine, preset, target.subset(rows), np.asarray(thetas)[rows],
                                "data", sample={"drops": int(rows.size), "of": len(target),
                                                "seed": seed, "from": "training half"},
-                               replicates=replicates, seed=seed)
+                               replicates=replicates, seed=seed, progress=progress)
 
 
 def compute(target: MeasuredImpacts, thetas, law_fits: dict, engine_runs, *, seed: int = 0,
@@ -177,7 +188,9 @@ def compute(target: MeasuredImpacts, thetas, law_fits: dict, engine_runs, *, see
                                                                replicates, seed)}}
         found = calibrations.get((engine.name, preset))
         if found is None:
-            found = calibrate_engine(engine, preset, target, thetas, seed, calibration_drops)
+            found = calibrate_engine(engine, preset, target, thetas, seed, calibration_drops,
+                                     # a cached.Progress tells the cells every 2 s at most
+                                     progress=getattr(progress, "step", progress))
         row.update(calibrated_row(engine, preset, found, thetas, held, on_held,
                                   reference_held, seed, replicates))
         if not curves and row["calibrated"] is not None:
@@ -246,39 +259,56 @@ def settings_text(settings: dict) -> str:
                      else f"{names.get(k, k)} {v}" for k, v in settings.items())
 
 
+def paired_cells(vs: dict | None) -> list[str]:
+    """An engine beside the reference law on the same drops, as four cells: its median,
+    the law's median on the drops it scored, their paired difference (each with its
+    interval), and the drops it lost with the law's median error on them."""
+    if vs is None:
+        return ["—", "—", "—", "every drop"]
+    lost = vs["lost"]
+    lost_text = "none" if not lost["drops"] else (
+        f"{lost['drops']:,} (law {lost['reference_median']:.3f})")
+    return [interval_text(vs["median"]), interval_text(vs["reference"]),
+            interval_text(vs, "difference"), lost_text]
+
+
+#: The paired columns of an engine (after each of "at preset" and "calibrated, held out").
+PAIRED_COLUMNS = ("median", "{law}, same drops", "difference", "lost (law's median on them)")
+
+
 def markdown(result: dict, label=lambda engine, preset: preset) -> list[str]:
     """The command's tables (Markdown lines): the engines, then the laws; ``label(engine,
     preset)`` names a preset."""
     level = f"{result['confidence']:.0%}"
     split = result["split"]
+    law = result["reference"]
+    paired = [f"{part}: {column.format(law=law)}" for part in ("preset", "held out")
+              for column in PAIRED_COLUMNS]
     lines = [f"Drops split by drop with seed {result['seed']}: {split['training']} training, "
              f"{split['held_out']} held out; engines calibrated on "
              f"{result['calibration']['drops']} training drops (quick grid μ "
              f"{', '.join(f'{m:g}' for m in result['calibration']['mus'])} × e "
              f"{', '.join(f'{e:g}' for e in result['calibration']['es'])}, own knobs); "
              f"medians with {level} intervals ({result['replicates']} bootstrap resamples); "
-             f"vs {result['reference']}: paired difference of medians on the same drops.\n",
-             f"| engine | preset | calibrated settings | median at preset | vs "
-             f"{result['reference']} | median calibrated, held out | vs "
-             f"{result['reference']} | scored (preset / held out) | flagged (preset / held "
-             "out) |",
-             "|---|---|---|---:|---:|---:|---:|---:|---|"]
+             f"each engine's median beside {law}'s on the drops it scored (paired bootstrap "
+             f"of the difference), and the drops it lost with {law}'s median error on them.\n",
+             "| engine | preset | calibrated settings | " + " | ".join(paired)
+             + " | flagged (preset / held out) |",
+             "|---|---|---|" + "---:|" * len(paired) + "---|"]
     for row in result["engines"]:
         preset, calibrated = row["at_preset"], row["calibrated"]
         flagged = [", ".join(f"{k}: {v}" for k, v in part["flagged"].items()) or "none"
                    for part in (preset, calibrated) if part is not None]
+        held = (paired_cells(calibrated["vs_reference"]) if calibrated is not None
+                else ["—"] * len(PAIRED_COLUMNS))
         lines.append(
             f"| {row['engine']} | {label(row['engine'], row['preset'])} | "
             + (f"cannot be calibrated: {row['cannot']}" if calibrated is None
                else settings_text(calibrated["settings"]))
-            + f" | {interval_text(preset)} | "
-            + f"{interval_text(preset['vs_reference'], 'difference')} | "
-            + f"{interval_text(calibrated)} | "
-            + f"{interval_text(calibrated and calibrated['vs_reference'], 'difference')} | "
-            + f"{preset['scored']} / {calibrated['scored'] if calibrated else '—'} | "
+            + " | " + " | ".join(paired_cells(preset["vs_reference"]) + held) + " | "
             + " / ".join(flagged) + " |")
     lines += ["", f"| law | fit (all drops) | median at fit | fit (training half) | median "
-              f"held out | vs {result['reference']} | unsolved |",
+              f"held out | vs {law} | unsolved |",
               "|---|---|---:|---|---:|---:|---:|"]
     for row in result["laws"]:
         lines.append(f"| {row['law']} | μ {row['fit']['mu']:.3f}, e {row['fit']['e']:.3f} | "
@@ -287,4 +317,3 @@ def markdown(result: dict, label=lambda engine, preset: preset) -> list[str]:
                      f"{interval_text(row['held_out_vs_reference'], 'difference')} | "
                      f"{row['unsolved']} |")
     return lines
-

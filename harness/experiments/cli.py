@@ -15,20 +15,26 @@ import json
 import sys
 import time
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 import planar_impact as pi
+from harness import bounds
 from harness.engines import EngineNotInstalled, engine_names, load_engine, preset_label
 from harness.scene import ellipse
+from harness.store.cache import ResultCache
+from harness.store.files import output_file_problem, write_text_atomically
 
 from . import (
+    aggregates,
     analysis,
+    cached,
     calibrated_errors,
     drops_engines,
     engine_curves,
     fazeli,
+    fitting,
+    frames,
     kharaz,
     metric,
     registry,
@@ -43,14 +49,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="directory holding the Fazeli et al. 2017 files (default: "
                              f"${registry.FAZELI_2017.env_var})")
     parser.add_argument("--objective", choices=sorted(metric.OBJECTIVES),
-                        default="median-error",
-                        help="what the fit minimises: " + "; ".join(
-                            f"{name}: {text}" for name, text in metric.OBJECTIVES.items()))
-    parser.add_argument("--post-speeds", choices=("published", "raw"), default="raw",
-                        help="post-impact speeds the laws are fitted to: raw (default; the "
-                             "processed v_y's +3gh offset removed, as an impulse law "
-                             "predicts) or as published (the six models' scores always use "
-                             "these, as the paper does)")
+                        default=aggregates.SHOWN_OBJECTIVE,
+                        help="what the fit minimises (default "
+                             f"{aggregates.SHOWN_OBJECTIVE}: {aggregates.SHOWN_LAW}'s fit by it "
+                             "is the headline fit the engines run at, here and in the "
+                             "report): " + "; ".join(
+                                 f"{name}: {text}" for name, text in metric.OBJECTIVES.items()))
+    parser.add_argument("--post-speeds", choices=tuple(frames.FRAMES),
+                        default=frames.DEFAULT_FRAME,
+                        help="the frame of the post-impact speeds the laws are fitted to and "
+                             "every law, model and engine is scored against: " + "; ".join(
+                                 f"{name}: {text}" for name, text in frames.FRAMES.items())
+                             + f" (default {frames.DEFAULT_FRAME}; the command prints both "
+                             "frames side by side and why)")
     parser.add_argument("--replicates", type=int, default=200,
                         help="bootstrap replicates (default 200)")
     parser.add_argument("--seed", type=int, default=0, help="seed of folds and bootstrap")
@@ -61,16 +72,34 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "'none', or names separated by commas")
     parser.add_argument("--json", metavar="PATH", default=None,
                         help="also write the aggregates (with the data's SHA-256) as JSON")
+    parser.add_argument("--no-cache", action="store_true",
+                        help="compute everything again (by default a rerun with the same data, "
+                             "code, installed versions and options reads the result cache)")
+
+
+def option_problem(args) -> str | None:
+    """The first count outside its bounds (:data:`harness.bounds.BOUNDS`) or a ``--json``
+    that cannot be written (:func:`harness.store.files.output_file_problem`: a link, a
+    missing or read-only directory), as one line; None when every option can be used.
+    Checked before any work."""
+    for option, value in (("replicates", args.replicates), ("seed", args.seed),
+                          ("workers", args.workers)):
+        try:
+            if value is not None:
+                bounds.check(f"--{option} {value}", option, value)
+        except bounds.OutOfBounds as out:
+            return str(out)
+    if args.json is not None:
+        reason = output_file_problem(args.json)
+        if reason is not None:
+            return f"--json {args.json}: {reason}"
+    return None
 
 
 def main(args) -> int:
-    if args.replicates < 10:
-        print(f"impact-harness experiments: --replicates {args.replicates}: at least 10",
-              file=sys.stderr)
-        return 2
-    if args.workers is not None and args.workers < 1:
-        print(f"impact-harness experiments: --workers {args.workers}: at least 1",
-              file=sys.stderr)
+    problem = option_problem(args)
+    if problem is not None:
+        print(f"impact-harness experiments: {problem}", file=sys.stderr)
         return 2
     registered = engine_names()  # those registered at run time too
     engines = (list(registered) if args.engines == "all" else [] if args.engines == "none"
@@ -80,12 +109,12 @@ def main(args) -> int:
         print(f"impact-harness experiments: --engines: unknown {', '.join(unknown)}; allowed: "
               f"all, none or {', '.join(registered)}", file=sys.stderr)
         return 2
-    if args.json and Path(args.json).exists() and not Path(args.json).is_file():
-        print(f"impact-harness experiments: --json {args.json}: exists and is not a regular "
-              "file (only a regular file is written over)", file=sys.stderr)
+    cache = None if args.no_cache else ResultCache()
+    problem = cached.cache_problem(cache)
+    if problem is not None:
+        print(f"impact-harness experiments: the cache {cache.root}: {problem} (or --no-cache)",
+              file=sys.stderr)
         return 2
-    output: dict = {"objective": args.objective, "objective_means": metric.OBJECTIVES[
-        args.objective], "post_speeds": args.post_speeds}
     try:
         directory = registry.locate(registry.FAZELI_2017, args.data)
         data = fazeli.load(directory)
@@ -95,28 +124,63 @@ def main(args) -> int:
     except registry.DataInvalid as invalid:
         print(f"impact-harness experiments: {invalid}", file=sys.stderr)
         return 2
+    found = computed_once(args, data, engines, cache)
+    output = found["output"]
+    if data is not None:  # this copy's place, not the one a cached run read (same hashes)
+        output["fazeli2017"]["provenance"] = json.loads(json.dumps(data.provenance(),
+                                                                   default=_plain))
+    if args.json:  # atomically, never through a link (checked before the work too)
+        write_text_atomically(args.json, json.dumps(output, indent=1) + "\n")
+    return 0
+
+
+def computed_once(args, data: fazeli.FazeliData | None, engines: list[str],
+                  cache: ResultCache | None, echo: bool = True) -> dict:
+    """``{"text": what the command prints, "output": its --json document, "seconds"}``,
+    read from ``cache`` when these options, data, code and versions were computed before
+    (:mod:`.cached`); ``echo``: print the text."""
+    progress = cached.Progress("impact-harness experiments")
+    settings = {"objective": args.objective, "post_speeds": args.post_speeds,
+                "replicates": args.replicates, "seed": args.seed, "engines": engines}
+    return cached.printed_once(
+        cache, cached.payload("experiments", settings, None if data is None else data.hashes),
+        lambda: {"output": compute(args, data, engines, progress)}, progress, echo)
+
+
+def default_options() -> argparse.Namespace:
+    """The command's options when none is given (what the texts' stated numbers come
+    from: harness/report/experiments.py, ``stated_numbers``)."""
+    parser = argparse.ArgumentParser()
+    add_arguments(parser)
+    return parser.parse_args([])
+
+
+def compute(args, data: fazeli.FazeliData | None, engines: list[str], progress) -> dict:
+    """Everything the command prints (printed as it goes) and its ``--json`` document, as
+    plain JSON."""
+    output: dict = {"objective": args.objective, "objective_means": metric.OBJECTIVES[
+        args.objective], "post_speeds": args.post_speeds}
     drops = None
     if data is not None:
-        output["fazeli2017"], target, fit = fazeli_section(data, args)
+        output["fazeli2017"], target, fit = fazeli_section(data, args, progress)
         thetas, residual = drops_engines.jacobian_angles(target, data.pre_impact_angles)
         drops = (target, thetas, fit)
-    runs = run_engines(engines, drops)  # each engine loaded, each preset run, once
+    runs = run_engines(engines, drops, progress)  # each engine loaded, each preset run, once
     if data is not None:
-        output["fazeli2017"]["engines_on_drops"] = drops_engines_table(runs, fit, residual)
+        output["fazeli2017"]["engines_on_drops"] = drops_engines_table(runs, target, fit,
+                                                                       residual, args.seed)
         output["fazeli2017"]["calibrated_errors"] = calibrated_errors_table(
-            runs, target, thetas, output["fazeli2017"]["laws"], args)
+            runs, target, thetas, output["fazeli2017"]["laws"], args, progress)
     output["ellipse_polygons"] = ellipse_section(data)
+    progress("each engine's ellipse against the true one")
     output["ellipse_polygons"]["engines"] = ellipse_engines_section(
         [run.engine if run.engine is not None else run.name for run in runs])
     output["kharaz2001"] = kharaz_section()
     output["kharaz2001"]["engines"] = kharaz_engines_table(runs)
-    if args.json:
-        Path(args.json).write_text(json.dumps(output, indent=1, default=_plain) + "\n",
-                                   encoding="utf-8")
-    return 0
+    return json.loads(json.dumps(output, default=_plain))
 
 
-def fazeli_section(data: fazeli.FazeliData, args):
+def fazeli_section(data: fazeli.FazeliData, args, progress=lambda text: None):
     """The drops' part of the output without the engines; returns it, the impacts the laws
     were fitted to and Poisson's fit (at which the engines run)."""
     impacts = data.impacts
@@ -124,13 +188,18 @@ def fazeli_section(data: fazeli.FazeliData, args):
     for name, digest in data.hashes.items():
         print(f"- {name}: SHA-256 {digest} (matches the published file)")
     print("- raw drops flagged: " + ", ".join(f"{k} {v}" for k, v in data.flag_counts().items()))
-    print("\n### The paper's metric on its six models (post-impact speeds as published)\n")
-    models = analysis.paper_models(data.model_speeds, impacts)
+    target = frames.in_frame(impacts, args.post_speeds)
+    print(f"\n### The paper's metric on its six models (post-impact speeds: "
+          f"{args.post_speeds})\n")
+    models = analysis.paper_models(data.model_speeds, target)
     print("| model | median | q25 | q75 | q90 |\n|---|---:|---:|---:|---:|")
     for name, summary in models.items():
         print(f"| {name} | {summary['q50']:.3f} | {summary['q25']:.3f} | {summary['q75']:.3f} "
               f"| {summary['q90']:.3f} |")
-    target = impacts if args.post_speeds == "published" else fazeli.without_post_offset(impacts)
+    in_frames = frames.compare(data, seed=args.seed, progress=progress)
+    print("\n### Laws and models in one frame, both frames\n")
+    print("\n".join(frames.markdown(in_frames)))
+    progress(f"fitting every law by {args.objective} ({args.replicates} bootstrap replicates)")
     started = time.perf_counter()
     laws = analysis.fit_laws(target, args.objective, replicates=args.replicates,
                              seed=args.seed, workers=args.workers)
@@ -158,6 +227,7 @@ def fazeli_section(data: fazeli.FazeliData, args):
         print(f"- {law}: μ {own['mu']['q25']:.2f} / {own['mu']['q50']:.2f} / "
               f"{own['mu']['q75']:.2f}; e {own['e']['q25']:.2f} / {own['e']['q50']:.2f} / "
               f"{own['e']['q75']:.2f}")
+    progress("Poisson against Stronge (paired bootstrap)")
     difference = analysis.compare_laws(target, args.objective, laws["poisson"].fit,
                                        laws["stronge"].fit, seed=args.seed)
     print(f"\n### Poisson against Stronge\n\nobjective(poisson) − objective(stronge) = "
@@ -180,10 +250,22 @@ def fazeli_section(data: fazeli.FazeliData, args):
         + f"; μ|m_nt|/m_nn {', '.join(f'{k} {v:.4f}' for k, v in routh['mu_coupling'].items())}"
         f"; m_nt opposes the slip in {routh['coupling_opposes_slip']} of {routh['drops']} drops."
         " Collision types (Routh's regions) per law in the table above.")
-    return ({"provenance": data.provenance(), "paper_models": models,
+    headline = laws[aggregates.SHOWN_LAW].fit
+    shared = (args.objective == aggregates.SHOWN_OBJECTIVE
+              and args.post_speeds == frames.DEFAULT_FRAME)
+    print(f"\n### The fit the engines run at: {aggregates.SHOWN_LAW} by {args.objective}, μ "
+          f"{headline.mu:.3f}, e {headline.e:.3f} ({args.post_speeds} speeds)\n\n"
+          + ("The headline fit: the report's figures and engines use the same." if shared else
+             f"Not the headline fit (the defaults: {aggregates.SHOWN_LAW} by "
+             f"{aggregates.SHOWN_OBJECTIVE} on {frames.DEFAULT_FRAME} speeds), which the "
+             "report shows."))
+    return ({"provenance": data.provenance(), "paper_models": models, "frames": in_frames,
+             "headline": {"law": aggregates.SHOWN_LAW, "objective": args.objective,
+                          "post_speeds": args.post_speeds, "mu": headline.mu,
+                          "e": headline.e},
              "laws": {law: _law_dict(result) for law, result in laws.items()},
              "poisson_vs_stronge": difference, "poisson_stronge_gap": gaps, "routh": routh,
-             "fit_seconds": seconds}, target, laws["poisson"].fit)
+             "fit_seconds": seconds}, target, headline)
 
 
 def _law_dict(result: analysis.LawResult) -> dict:
@@ -210,7 +292,8 @@ class EngineRuns:
     drop_errors: dict = field(default_factory=dict, repr=False, compare=False)
 
 
-def run_engines(engines: list[str], drops=None) -> list[EngineRuns]:
+def run_engines(engines: list[str], drops=None,
+                progress=lambda text: None) -> list[EngineRuns]:
     """Each engine loaded once and each of its presets run, on the drops when ``drops`` is
     ``(impacts, angles, fit)`` (at the fit's μ, e) and at the Kharaz incidences."""
     angles = np.array(KHARAZ_ANGLES, dtype=float)
@@ -223,6 +306,8 @@ def run_engines(engines: list[str], drops=None) -> list[EngineRuns]:
             continue
         presets, errors = [], {}
         for preset in engine.presets:
+            progress(f"{name} ({preset_label(name, preset)}): "
+                     + ("every drop, then " if drops is not None else "") + "the Kharaz curves")
             on_drops = None
             if drops is not None:
                 impacts, thetas, fit = drops
@@ -235,37 +320,46 @@ def run_engines(engines: list[str], drops=None) -> list[EngineRuns]:
     return runs
 
 
-def drops_engines_table(runs: list[EngineRuns], fit, residual) -> list[dict]:
-    """Every engine and preset on every drop at Poisson's fitted (μ, e), printed."""
+def drops_engines_table(runs: list[EngineRuns], target, fit, residual,
+                        seed: int = 0) -> list[dict]:
+    """Every engine and preset on every drop at the headline fit (μ, e), printed, each
+    beside that law on the drops it scored (paired bootstrap) with the drops it lost."""
     if not runs:
         return []
-    print(f"\n### The engines on the drops (μ {fit.mu:.3f}, e {fit.e:.3f}: Poisson's fit)\n")
+    law = calibrated_errors.law_errors(fitting.DropErrors(target), fit.law, fit.mu, fit.e)
+    print(f"\n### The engines on the drops (μ {fit.mu:.3f}, e {fit.e:.3f}: {fit.law}'s fit "
+          f"by {fit.objective})\n")
     print(f"Each drop the ellipse (MuJoCo's ellipsoid, elsewhere the placed "
           f"{drops_engines.VERTICES}-gon) at the angle of its published "
           f"Jacobian (contact within {residual.max() * 1e3:.1g} mm of it); flagged runs are "
-          "counted with their reason, never scored.\n")
-    print("| engine | preset | single impacts | flagged (reason: drops) | median error | "
-          "q90 error |\n|---|---|---:|---|---:|---:|")
+          f"counted with their reason, never scored. Each engine's median beside {fit.law}'s "
+          "at the same (μ, e) on the drops it scored, their difference (95% intervals, "
+          f"{calibrated_errors.REPLICATES} paired bootstrap resamples), and the drops it lost "
+          f"with {fit.law}'s median error on them.\n")
+    print(f"| engine | preset | single impacts | flagged (reason: drops) | median error | "
+          f"{fit.law}, same drops | difference | lost ({fit.law}'s median on them) | q90 error "
+          "|\n|---|---|---:|---|---:|---:|---:|---:|---:|")
     results = []
     for run in runs:
         if run.missing is not None:
-            print(f"| {run.name} | — | — | not installed: {run.missing} | | |")
+            print(f"| {run.name} | — | — | not installed: {run.missing} | | | | | |")
             continue
         for preset, result, _ in run.presets:
             counts = dict(result["verdicts"])
             ok = counts.pop("ok", 0)
             flagged = ", ".join(f"{k}: {v}" for k, v in counts.items()) or "none"
             errors = result["errors"]
-            median = "—" if not errors["drops"] else f"{errors['q50']:.3f}"
             q90 = "—" if not errors["drops"] else f"{errors['q90']:.3f}"
-            print(f"| {run.name} | {preset_label(run.name, preset)} | {ok} | {flagged} "
-                  f"| {median} | {q90} |")
-            results.append(result)
+            beside = calibrated_errors.paired_difference(run.drop_errors[preset], law,
+                                                         seed=seed)
+            print(f"| {run.name} | {preset_label(run.name, preset)} | {ok} | {flagged} | "
+                  + " | ".join(calibrated_errors.paired_cells(beside)) + f" | {q90} |")
+            results.append({**result, "vs_reference": beside})
     return results
 
 
 def calibrated_errors_table(runs: list[EngineRuns], target, thetas, laws: dict,
-                            args) -> dict:
+                            args, progress=lambda text: None) -> dict:
     """Every engine at its preset and at its calibrated settings, every law at its fit,
     with intervals (:mod:`.calibrated_errors`), printed; the aggregates returned."""
     started = time.perf_counter()
@@ -275,7 +369,8 @@ def calibrated_errors_table(runs: list[EngineRuns], target, thetas, laws: dict,
     found = calibrated_errors.compute(
         target, thetas, {law: {"mu": law_fit["fit"].mu, "e": law_fit["fit"].e}
                          for law, law_fit in laws.items()}, engine_runs, seed=args.seed,
-        curves=False)  # 101 quantiles of a few drops would give them away; no figure here
+        curves=False, progress=progress)  # 101 quantiles of a few drops would give them
+    # away; no figure here
     found["seconds"] = time.perf_counter() - started
     print(f"\n### Every engine and law at its fitted or calibrated settings, with intervals "
           f"({found['seconds']:.1f} s)\n\nAt preset: every drop at the engines' (μ, e) above; "

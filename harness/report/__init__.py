@@ -6,6 +6,12 @@
     impact-harness report --results /tmp/r.json --out /tmp/report
     impact-harness report --figures-for 'rod-*' --workers 2   # many scenarios: some figures
 
+The bench and stress pages (``bench.html``, ``stress.html``) are written when their inputs
+exist, and linked from the contents only when measured by the code that made the results;
+otherwise the contents name them with when they were measured and ``make bench`` or ``make
+stress`` (``make validate`` measures neither: minutes each). Past two seconds the command
+prints the step it is at on stderr (:mod:`harness.report.progress`).
+
 Without ``--out`` the report goes to ``reports/``, where it replaces an existing report only
 when made from ``reports/results.json`` (the results that report was made from, as ``make
 validate`` does): a report of another results file there is refused (exit status 2, before
@@ -72,6 +78,7 @@ from harness.plotting import SVG_TWIN
 from harness.processes import start_forked
 from harness.report.experiments import data_option_problem
 from harness.report.figure_cache import (
+    FIGURE_KINDS,
     FigureTask,
     inputs_digest,
     is_current,
@@ -83,6 +90,7 @@ from harness.report.fragments import DIGESTS_FILE, open_cache, prepare
 from harness.report.history import history_figure, history_inputs
 from harness.report.html import html_page
 from harness.report.pages import write_pages
+from harness.report.progress import Progress, Silent
 from harness.report.reading import read_for_report
 from harness.report.summary import write_summary
 from harness.report.survey import survey_figure_tasks
@@ -104,13 +112,8 @@ DEFAULT_OUT = DEFAULT_RESULTS.parent
 #: Tags that select scenarios for a run rather than say what they are: never a family.
 SELECTION_TAGS = ("quick", "sweep", "slow")
 #: Figure kinds drawn once per report (not per scenario): their SVG twins are kept with
-#: ``--svg headline``.
-HEADLINE_KINDS = ("heatmap", "split", "table3", "survey_map", "survey_cdf")
-#: Rough drawing cost per kind [s] (CPU, PNG + SVG, measured at 1,000 scenarios: the headline
-#: figures with the heat map's row per family): the pool draws the dearest first so that no
-#: worker is left with the dearest at the end.
-KIND_COST = {"heatmap": 2.5, "sweep": 2.2, "table3": 1.7, "split": 1.8, "history": 1.0,
-             "impulse": 0.5, "survey_map": 1.2, "survey_cdf": 0.6}
+#: ``--svg headline`` (:data:`~harness.report.figure_cache.FIGURE_KINDS`).
+HEADLINE_KINDS = tuple(name for name, kind in FIGURE_KINDS.items() if kind.headline)
 
 
 def scenario_group(info: dict) -> str:
@@ -131,7 +134,8 @@ def scenario_groups(results: Results, names: Sequence[str]) -> dict[str, list[st
 def write_report(results: Results, out_dir: Path | str,
                  sources: Sequence[Path] = (DEFAULT_RESULTS.parent,), workers: int | None = None,
                  scenario_figures: str = "auto", figures_for: Sequence[str] = (),
-                 svg: str = "auto", experiments_data: str | os.PathLike | None = None) -> dict:
+                 svg: str = "auto", experiments_data: str | os.PathLike | None = None,
+                 progress: Progress | Silent | None = None) -> dict:
     """Write index.html, summary.md, the figures (PNG and SVG) and, when the benchmark's
     ``bench.json`` or the stress test's ``stress.md`` exist (in ``bench/`` and ``stress/``
     under ``out_dir`` or one of ``sources``, by default where ``bench`` and ``stress`` write
@@ -153,7 +157,12 @@ def write_report(results: Results, out_dir: Path | str,
         The directory of a copy of the Fazeli et al. 2017 drops (else
         ``IMPACT_HARNESS_FAZELI_DIR``'s): the "Against experiments" section shows their
         aggregates (harness/report/experiments.py).
+    progress
+        Where the report says the step it is at (:class:`harness.report.progress.Progress`:
+        stderr once it has taken two seconds); by default nowhere.
     """
+    progress = Silent() if progress is None else progress
+    progress.step("reading the results' digests")
     out_dir = Path(out_dir)
     figure_dir = out_dir / FIGURES
     figure_dir.mkdir(parents=True, exist_ok=True)
@@ -168,25 +177,30 @@ def write_report(results: Results, out_dir: Path | str,
     digests = scenario_digests(results, known.get)
     tasks = figure_tasks(results, many, scenario_figures, figures_for, svg, digests)
     # the survey's, when out_dir holds one (harness/report/survey.py): headline figures
-    tasks += survey_figure_tasks(out_dir, svg in ("all", "headline"))
+    tasks += survey_figure_tasks(out_dir, svg)
     # The figures are drawn by forked workers while this process builds the page, which
     # needs only their names: it assumes that every figure to be drawn has something to
     # show, and is built again in the rare case one had not.
+    progress.step("reading the records")
     expected, finish_drawing = start_drawing(tasks, figure_dir, workers,
-                                             read_records=lambda: read_records(results))
+                                             read_records=lambda: read_records(results),
+                                             on_stale=progress.drawing)
     try:
+        progress.step("building the page while the figures are drawn")
         prepared = prepare(results, out_dir, digests, cache)
         groups = scenario_groups(results, names) if many else {}
-        pages = write_pages(out_dir, sources, results.provenance)
+        pages, stale_pages = write_pages(out_dir, sources, results.provenance)
         page = html_page(results, out_dir, figure_map(tasks, expected, many, groups,
                                                       scenario_figures), pages, prepared,
-                         experiments_data)
+                         experiments_data, stale_pages)
+        progress.step("drawing the figures")
     finally:  # the pool ends either way
         drawn = finish_drawing()
+    progress.step("writing the page and summary.md")
     if drawn != expected:
         page = html_page(results, out_dir, figure_map(tasks, drawn, many, groups,
                                                       scenario_figures), pages, prepared,
-                         experiments_data)
+                         experiments_data, stale_pages)
     wanted = {task.file for task, path in zip(tasks, drawn) if path is not None}
     wanted |= {str(Path(task.file).with_suffix(".svg")) for task, path in zip(tasks, drawn)
                if path is not None and task.svg}
@@ -256,20 +270,19 @@ def figure_tasks(results: Results, many: bool, scenario_figures: str,
     later values.
     """
     names = results.scenario_names()
-    headline_svg = svg in ("all", "headline")
-    scenario_svg = svg == "all"
+    kinds = FIGURE_KINDS
     digests = scenario_digests(results) if digests is None else digests
     records_digest = {name: digests.get(name, "") for name in names}
     tasks = []
     groups = scenario_groups(results, names) if many else None
     # above MANY_SCENARIOS one row per family (the scenarios' rows are HTML tables instead)
-    tasks.append(FigureTask("heatmap", "heatmap.png", [groups, records_digest],
-                            lambda path, tag: heatmap_figure(results, path, tag, groups),
-                            ("heatmap",), headline_svg))
+    tasks.append(kinds["heatmap"].task(
+        [groups, records_digest], lambda path, tag: heatmap_figure(results, path, tag, groups),
+        kinds["heatmap"].svg(svg)))
     # the split rows are the records' (views.split_rows): drawn from them only when stale
-    tasks.append(FigureTask("split", "split.png", records_digest,
-                            lambda path, tag: split_figure(split_rows(results), path, tag),
-                            ("split",), headline_svg))
+    tasks.append(kinds["split"].task(
+        records_digest, lambda path, tag: split_figure(split_rows(results), path, tag),
+        kinds["split"].svg(svg)))
     for name in names:
         if scenario_figures != "all" and not any(fnmatch.fnmatchcase(name, pattern)
                                                  for pattern in figures_for):
@@ -277,27 +290,36 @@ def figure_tasks(results: Results, many: bool, scenario_figures: str,
         records = results.for_scenario(name)
         info = results.scenarios.get(name, {})
         if info.get("sweep"):
-            tasks.append(FigureTask(
+            tasks.append(kinds["sweep"].task(
                 # what the figure reads of the scenario: its sweep (not its file's path,
                 # which differs between checkouts and would redraw every clone's figures)
-                "sweep", f"sweep-{slug(name)}.png", [name, info["sweep"], records_digest[name]],
+                [name, info["sweep"], records_digest[name]],
                 lambda path, tag, name=name, info=info, records=records:
-                sweep_figure(name, info, records, path, tag), ("sweep", name), scenario_svg))
+                sweep_figure(name, info, records, path, tag), kinds["sweep"].svg(svg),
+                key=name, file_key=slug(name)))
         else:
-            tasks.append(FigureTask(
-                "impulse", f"impulse-{slug(name)}.png", [name, records_digest[name]],
+            tasks.append(kinds["impulse"].task(
+                [name, records_digest[name]],
                 lambda path, tag, name=name, records=records:
-                impulse_figure(name, records, path, tag), ("impulse", name), scenario_svg))
+                impulse_figure(name, records, path, tag), kinds["impulse"].svg(svg),
+                key=name, file_key=slug(name)))
             # the contact in time (harness.report.history)
-            tasks.append(FigureTask(
-                "history", f"history-{slug(name)}.png", history_inputs(name, records_digest[name]),
+            tasks.append(kinds["history"].task(
+                history_inputs(name, records_digest[name]),
                 lambda path, tag, name=name, records=records:
-                history_figure(name, records, path, tag), ("history", name), scenario_svg))
+                history_figure(name, records, path, tag), kinds["history"].svg(svg),
+                key=name, file_key=slug(name)))
     if has_library_scenarios(results):  # the paper's table only beside the library
-        tasks.append(FigureTask("table3", "paper-table3.png", table3_payload(),
-                                lambda path, tag: table3_figure(path, tag), ("table3",),
-                                headline_svg, reads_records=False))
+        tasks.append(kinds["table3"].task(table3_payload(),
+                                          lambda path, tag: table3_figure(path, tag),
+                                          kinds["table3"].svg(svg), reads_records=False))
     return tasks
+
+
+def _cost(kind: str) -> float:
+    """A kind's rough drawing cost (:class:`~harness.report.figure_cache.FigureKind`); 1 s
+    for a kind not registered (a caller's own task)."""
+    return FIGURE_KINDS[kind].cost if kind in FIGURE_KINDS else 1.0
 
 
 #: The figure tasks being drawn, read by the pool's forked workers (which inherit it: the
@@ -345,7 +367,8 @@ def draw_figures(tasks: Sequence[FigureTask], figure_dir: Path,
 
 
 def start_drawing(tasks: Sequence[FigureTask], figure_dir: Path, workers: int | None = None,
-                  read_records: Callable[[], None] | None = None
+                  read_records: Callable[[], None] | None = None,
+                  on_stale: Callable[[list[Path]], None] | None = None
                   ) -> tuple[list[Path], Callable[[], list[Path | None]]]:
     """:func:`draw_figures` started: the pool's workers draw while this process goes on.
 
@@ -357,7 +380,8 @@ def start_drawing(tasks: Sequence[FigureTask], figure_dir: Path, workers: int | 
     ``read_records`` (:func:`read_records`), when given, reads the records here before the
     workers drawing from them are forked, so that they inherit them instead of each reading
     them; the figures that read none (:attr:`FigureTask.reads_records`) are forked first,
-    in a pool of their own, and drawn meanwhile.
+    in a pool of their own, and drawn meanwhile. ``on_stale`` is told the files to be
+    drawn (the rest are current), before any is.
     """
     global _PENDING
     expected: list[Path] = []
@@ -372,6 +396,8 @@ def start_drawing(tasks: Sequence[FigureTask], figure_dir: Path, workers: int | 
         else:
             result.append(None)
             stale.append((index, (task, path, tag)))
+    if on_stale is not None:
+        on_stale([path for _, (_, path, _) in stale])
     if not stale:  # matplotlib only when something is drawn (its import is a warm report's tenth)
         return expected, lambda: result
     workers = min(workers or os.cpu_count() or 1, len(stale))
@@ -383,7 +409,7 @@ def start_drawing(tasks: Sequence[FigureTask], figure_dir: Path, workers: int | 
         matplotlib.use("Agg")
     # Those that read no record first: forked before the records are read (below).
     stale.sort(key=lambda item: (item[1][0].reads_records,
-                                 -KIND_COST.get(item[1][0].kind, 1.0)))
+                                 -_cost(item[1][0].kind)))
     _PENDING = [item for _, item in stale]
 
     reading = [i for i, (task, _, _) in enumerate(_PENDING) if task.reads_records]
@@ -541,11 +567,13 @@ def main(args) -> int:
     start = time.perf_counter()
     # the bench and stress pages beside the results only: a report of a user's results in
     # another directory does not take the library's pages from reports/
-    written = write_report(results, out, sources=[args.results.parent],
-                           workers=getattr(args, "workers", None),
-                           scenario_figures=getattr(args, "scenario_figures", "auto"),
-                           figures_for=getattr(args, "figures_for", ()),
-                           svg=getattr(args, "svg", "auto"), experiments_data=experiments_data)
+    with Progress() as progress:  # on stderr once the report has taken two seconds
+        written = write_report(results, out, sources=[args.results.parent],
+                               workers=getattr(args, "workers", None),
+                               scenario_figures=getattr(args, "scenario_figures", "auto"),
+                               figures_for=getattr(args, "figures_for", ()),
+                               svg=getattr(args, "svg", "auto"),
+                               experiments_data=experiments_data, progress=progress)
     print(f"wrote {written['html']} and {written['summary']} with {len(written['figures'])} "
           f"figures in {time.perf_counter() - start:.1f} s")
     return 0

@@ -7,18 +7,23 @@ from __future__ import annotations
 from html import escape as escape_html
 
 from harness.engines import preset_label
-from harness.experiments.calibrated_errors import interval_text, settings_text
+from harness.experiments.calibrated_errors import (
+    PAIRED_COLUMNS,
+    interval_text,
+    paired_cells,
+    settings_text,
+)
 from harness.report.markup import html_table
 
 #: A bracket puts the rest of a header on a second line (markup.header_cell): the headers
 #: stay narrow.
-ENGINE_HEADER = ("engine", "preset", "calibrated settings", "median error [at preset]",
-                 "vs Poisson [at preset]", "median error [calibrated, held out]",
-                 "vs Poisson [held out]", "scored [preset / held out]",
-                 "flagged [preset / held out]")
+ENGINE_HEADER = ("engine", "preset", "calibrated settings", "median [at preset]",
+                 "Poisson [same drops]", "difference", "lost [Poisson there]",
+                 "median [calibrated, held out]", "Poisson [same drops]", "difference",
+                 "lost [Poisson there]", "flagged [preset / held out]")
 #: Text columns wrap (a "cannot" reason, the flagged runs' reasons): the table stays
 #: within the page at 1400 px.
-ENGINE_COLUMNS = ("l", "l", "note", "", "", "", "", "", "note")
+ENGINE_COLUMNS = ("l", "l", "note", "", "", "", "", "", "", "", "", "note")
 LAW_HEADER = ("law", "fit [all drops]", "median error [at fit]", "fit [training half]",
               "median error [held out]", "vs Poisson [held out]", "unsolved")
 
@@ -30,6 +35,11 @@ def _flagged(part: dict | None) -> str:
         or "none"
 
 
+def _narrow(cells: list[str]) -> list[str]:
+    """Paired cells with each interval below its value: the wide table fits the page."""
+    return [cell.replace(" [", "<br>[", 1).replace(" (law", "<br>(law", 1) for cell in cells]
+
+
 def engine_rows(result: dict) -> tuple[list[list[str]], list[str]]:
     """The engines' rows (HTML cells) and their row classes (a "cannot" row is shaded)."""
     rows, classes = [], []
@@ -37,14 +47,12 @@ def engine_rows(result: dict) -> tuple[list[list[str]], list[str]]:
         preset, calibrated = row["at_preset"], row["calibrated"]
         settings = (f"<i>cannot be calibrated</i>: {escape_html(row['cannot'])}"
                     if calibrated is None else escape_html(settings_text(calibrated["settings"])))
-        scored = f"{preset['scored']:,} / " + (f"{calibrated['scored']:,}" if calibrated
-                                                else "—")
+        held = (paired_cells(calibrated["vs_reference"]) if calibrated is not None
+                else ["—"] * len(PAIRED_COLUMNS))
         rows.append([escape_html(row["engine"]),
                      escape_html(preset_label(row["engine"], row["preset"])), settings,
-                     interval_text(preset), interval_text(preset["vs_reference"], "difference"),
-                     interval_text(calibrated),
-                     interval_text(calibrated and calibrated["vs_reference"], "difference"),
-                     scored, escape_html(f"{_flagged(preset)} / {_flagged(calibrated)}")])
+                     *_narrow(paired_cells(preset["vs_reference"])), *_narrow(held),
+                     escape_html(_flagged(preset)) + "<br>/ " + escape_html(_flagged(calibrated))])
         classes.append("flag" if calibrated is None else "")
     return rows, classes
 
@@ -85,19 +93,24 @@ def calibrated_html(aggregates: dict) -> str:
         f"{', '.join(f'{m:g}' for m in calibration['mus'])} × e "
         f"{', '.join(f'{e:g}' for e in calibration['es'])}; {escape_html(knobs)}"
         f"{own_values}), then "
-        "scored on every held-out drop. Medians of the paper's normalized error over the "
-        f"runs judged single impacts (flagged runs are counted, never scored), each with "
-        f"the {level} percentile interval of {result['replicates']:,} bootstrap resamples "
-        "of its drops; <i>vs Poisson</i>: the engine's median less Poisson's on the same "
-        "drops (at the same (μ, e) for the preset; Poisson fitted to the training half for "
-        "the held-out half), its interval from resampling the drops in pairs. A row "
-        "shaded cannot be calibrated (the reason given) and keeps its preset's numbers. "
-        "A median over fewer drops than the others is of a selected subset.</p>",
+        "scored on every held-out drop. An engine's median of the paper's normalized error "
+        "is over its runs judged single impacts (flagged runs are counted, never scored) "
+        "and stands beside Poisson's median on the very same drops (at the same (μ, e) for "
+        "the preset; Poisson fitted to the training half for the held-out half), with "
+        "their difference; all three with the "
+        f"{level} percentile interval of {result['replicates']:,} bootstrap resamples of "
+        "those drops taken in pairs, so the drops' own spread, which both share, cancels "
+        "in the difference. The drops an engine loses are counted with Poisson's median "
+        "error on them: an engine that loses the hard drops has a lower median over the "
+        "rest, not a better answer, so compare the difference, never two medians of "
+        "different drops. A row shaded cannot be calibrated (the reason given) and keeps "
+        "its preset's numbers.</p>",
         html_table(ENGINE_HEADER, rows, left=2, row_classes=classes,
                    column_classes=ENGINE_COLUMNS),
         html_table(LAW_HEADER, law_rows(result), left=1),
-        f"<p class='muted'>Every law at its <i>{escape_html(result['objective'])}</i> fit "
-        "to every drop (the median there is in-sample), and fitted to the training half "
+        f"<p class='muted'>Every law at its <i>{escape_html(shown['objective'])}</i> fit "
+        "to every drop (the headline objective; the median there is in-sample), and fitted "
+        f"by <i>{escape_html(result['objective'])}</i> to the training half "
         f"on μ {', '.join(f'{m:g}' for m in result['law_grid']['mus'])} × e {es[0]:g} to "
         f"{es[-1]:g} in steps of {es[1] - es[0]:.2g}, refined ten times "
         "finer, scored on the held-out half beside the engines.</p>"]

@@ -31,17 +31,21 @@ from harness.experiments import (
     calibrate,
     engine_curves,
     fazeli,
+    frames,
     kharaz,
     registry,
 )
+from harness.experiments import cli as experiments_cli
 from harness.experiments.aggregates import MIN_BIN_COUNT as MIN_BIN
-from harness.experiments.calibrated_errors import settings_text
+from harness.experiments.calibrated_errors import interval_text, settings_text
+from harness.laws import REGISTRY as LAW_REGISTRY
 from harness.plotting import new_figure, save_png
 from harness.report.calibrated_drops import calibrated_html
 from harness.report.figure_cache import render_once, solver_digest
 from harness.report.markup import folded, html_table
 from harness.report.views import FIGURES, engine_style
 from harness.run.provenance import package_versions
+from harness.store.cache import ResultCache
 from harness.store.files import write_text_atomically
 
 KHARAZ_FIGURE = "experiments-kharaz.png"
@@ -169,19 +173,18 @@ CDF_FIGURE = "experiments-drops-cdf.png"
 FITS_FIGURE = "experiments-drops-fits.png"
 #: Bootstrap replicates of the report's fits (the command's default is 200).
 REPORT_REPLICATES = 100
-#: Law colours and line styles (Okabe–Ito, as the rest of the report).
-LAW_COLOURS = {"newton": "#E69F00", "poisson": "#0072B2", "stronge": "#009E73",
-               "stronge-paper": "#CC79A7", "newton-lcp": "#D55E00"}
-LAW_LINES = {"newton": "-", "poisson": "-", "stronge": "--", "stronge-paper": ":",
-             "newton-lcp": "-."}
+#: Law colours and line styles: the law registry's (harness/laws.py), as the rest of the report.
+LAW_COLOURS = {entry.name: entry.colour for entry in LAW_REGISTRY}
+LAW_LINES = {entry.name: entry.line for entry in LAW_REGISTRY}
 
 
 #: The kept aggregates' layout: bump when what is kept changes (2: the files' SHA-256 in the
 #: provenance, never the copy's path; 3: the calibration's bootstrap intervals and held-out
 #: error, Poisson against Stronge with its interval, the drops on Routh's diagram; 4: every
 #: engine and law at its fitted or calibrated settings with intervals, the calibration's
-#: drops from the training half).
-DROPS_LAYOUT = 4
+#: drops from the training half; 5: both frames of the post-impact speeds, the published
+#: one the default, every engine paired with the headline law on the drops it scored).
+DROPS_LAYOUT = 5
 
 
 def drops_key(hashes: dict[str, str]) -> str:
@@ -298,8 +301,9 @@ def draw_cdf(aggregates: dict, path: Path, tag: str | None) -> Path:
                  color=LAW_COLOURS.get(law), linestyle=LAW_LINES.get(law, "-"), linewidth=1.3)
         axis.set_title(f"every law fitted by {objective}", fontsize=10)
     for k, quantile_set in enumerate(aggregates["paper_models"].values()):
+        # lighter than Newton's grey (the law registry's), which shares these axes
         _cdf(axes[0], quantile_set, "the paper's six models, as published" if k == 0 else None,
-             color="#999999", linewidth=0.8)
+             color="#cccccc", linewidth=0.8)
     shown = aggregates["shown"]
     reference = aggregates["laws"][shown["objective"]][shown["law"]]
     _cdf(axes[2], reference["errors"], f"{shown['law']} (the law)", color="black",
@@ -390,6 +394,40 @@ def draw_fits(aggregates: dict, path: Path, tag: str | None) -> Path:
         axis.set_xlabel(f"fitted {symbol} (bars: 95 % bootstrap interval, "
                         f"{aggregates['replicates']} replicates)", fontsize=9)
     return save_png(figure, path, tag=tag)
+
+
+def frames_html(aggregates: dict) -> str:
+    """The laws and the six models in one frame, for both frames of the post-impact speeds
+    (:mod:`harness.experiments.frames`), and why the default is the default."""
+    found = aggregates.get("frames")
+    if not found:
+        return ""
+    header, rows = frames.rows(found, text=_two_lines)
+    rows = [[escape_html(row[0]), *row[1:]] for row in rows]
+    law = found["law"].capitalize()
+    level = f"{found['confidence']:.0%}"
+    return ("<h4>Laws and models in one frame</h4>"
+            "<p>The published post-impact v<sub>y</sub> is the raw one plus 3gh (0.118 m/s, "
+            "what gravity takes from a rising body in three frames of 1/250 s); a median "
+            "error is comparable only with another in the same frame. Each column scores the "
+            f"six models and {law} (fitted to that frame's speeds by each objective) against "
+            f"the same speeds: medians with {level} intervals ({found['replicates']:,} "
+            f"bootstrap resamples), and {law}'s median less the best model's on the same "
+            "drops (paired).</p>"
+            + html_table([escape_html(cell) for cell in header], rows, left=1)
+            + "<p class='muted'>Why the published frame is the default: the six models' "
+            "changes of speed are pure impulse predictions (outside any contact impulse by "
+            f"{found['models_outside_impulse_span_max']:.0e} at most), and the paper scores "
+            "them against the published speeds, where they reproduce its 0.43–0.57; adding "
+            "3gh to a rising body's speed refers it to an earlier instant, towards the "
+            "impact, where an impulse law predicts. The last row is the share of each "
+            "measured change of speed that no contact impulse can produce: the same in both "
+            "frames, so the data alone do not choose one.</p>")
+
+
+def _two_lines(found: dict | None, key: str = "median") -> str:
+    """A median or difference with its interval below it (a narrow table cell)."""
+    return interval_text(found, key).replace(" [", "<br>[", 1)
 
 
 def laws_apart_html(aggregates: dict) -> str:
@@ -507,16 +545,17 @@ def drops_html(out_dir: Path, aggregates: dict) -> str:
     hidden = sum(d["hidden_in_sparse_bins"] for d in shown["density"])
     parts.append(_figure(DENSITY_FIGURE, "predicted against measured post-impact speeds",
         f"{shown['law'].capitalize()}'s law at its <i>{shown['objective']}</i> fit (μ "
-        f"{shown['mu']:.3f}, e {shown['e']:.3f}) against the {drops} processed drops (raw "
-        "post-impact speeds): how many drops fall in each bin (log scale; "
+        f"{shown['mu']:.3f}, e {shown['e']:.3f}) against the {drops} processed drops "
+        f"({escape_html(aggregates['post_speeds'])} post-impact speeds): how many drops "
+        "fall in each bin (log scale; "
         f"{hidden} drop-bins holding fewer than {MIN_BIN} drops are left blank, so that no "
         "drop can be read off the figure), and the quartiles of the prediction in bins of "
         "the measured value. On the dashed line the prediction is exact."))
     parts.append(_figure(CDF_FIGURE, "error distributions of the laws and engines",
         "The distribution of the paper's error (the centre's velocity after impact, relative "
         "to the measured one) over the drops. Top: every law at its own fit by "
-        "each objective (they give different fits); grey, the paper's six models as "
-        "published (against the published speeds, as the paper scores them). Bottom left: every "
+        "each objective (they give different fits); grey, the paper's six models, scored "
+        "against the same speeds. Bottom left: every "
         f"engine and preset at {shown['law']}'s <i>{shown['objective']}</i> fit (dashed: "
         "the engine's <i>defaults</i>), on its runs judged single impacts only (flagged "
         "runs are not scored; a curve of fewer drops is of a selected subset and not "
@@ -527,6 +566,7 @@ def drops_html(out_dir: Path, aggregates: dict) -> str:
         "Each law's global (μ, e) by each objective with its 95 % bootstrap interval "
         f"({aggregates['replicates']} resamples of the drops, seed {aggregates['seed']}). "
         "The laws nearly coincide on this object; the objectives do not."))
+    parts.append(frames_html(aggregates))
     parts.append(laws_apart_html(aggregates))
     parts.append("<h4>Calibrated engine settings</h4>" + calibration_table(aggregates))
     parts.append(calibrated_html(aggregates))
@@ -599,3 +639,86 @@ def experiments_section(out_dir: Path, data_path: str | os.PathLike | None = Non
     return folded("experiments", "Against experiments", "\n".join(parts),
                   "Kharaz et al. 2001 curves with digitised measured points; Fazeli et al. "
                   f"2017 drops {drops}")
+
+
+def stated_numbers() -> dict[str, str]:
+    """The numbers docs/experiments.md states (``stated experiments.KEY``): what
+    ``impact-harness experiments`` gives with its defaults on the copy that
+    ``IMPACT_HARNESS_FAZELI_DIR`` names, its tables as the command prints them. Read from
+    the result cache when those were computed before (minutes otherwise). Raises
+    :class:`registry.DataMissing` without a copy."""
+    data = fazeli.load(registry.locate(registry.FAZELI_2017, None))
+    options = experiments_cli.default_options()
+    found = experiments_cli.computed_once(options, data, list(engine_names()), ResultCache(),
+                                          echo=False)
+    text, drops = found["text"], found["output"]["fazeli2017"]
+    numbers = {name: section_tables(text, heading) for name, heading in (
+        ("models", "### The paper's metric on its six models"),
+        ("frames", "### Laws and models in one frame"), ("laws", "### Every law fitted"),
+        ("engines", "### The engines on the drops"),
+        ("calibrated", "### Every engine and law at its fitted or calibrated settings"))}
+    headline = drops["headline"]
+    numbers["headline.mu"], numbers["headline.e"] = f"{headline['mu']:.3f}", \
+        f"{headline['e']:.3f}"
+    frames_found = drops["frames"]
+    for frame, row in frames_found["frames"].items():
+        medians = [model["median"] for model in row["models"].values()]
+        numbers[f"{frame}.models-low"] = f"{min(medians):.3f}"
+        numbers[f"{frame}.models-high"] = f"{max(medians):.3f}"
+        for objective, fit in row["fits"].items():
+            numbers[f"{frame}.{objective}"] = f"{fit['median']:.3f}"
+            numbers[f"{frame}.{objective}.vs-best"] = f"{fit['vs_best_model']['difference']:+.3f}"
+            numbers[f"{frame}.{objective}.e"] = f"{fit['e']:.3f}"
+        numbers[f"{frame}.span"] = f"{row['outside_impulse_span']['median']:.3f}"
+    numbers["models-span"] = f"{frames_found['models_outside_impulse_span_max']:.0e}"
+    for row in drops["engines_on_drops"]:  # at the headline fit, beside the law
+        name, vs = f"engines.{row['engine']}.{row['preset']}", row["vs_reference"]
+        numbers[f"{name}.scored"] = f"{row['verdicts'].get('ok', 0):,}"
+        if vs is not None:
+            numbers[f"{name}.median"] = f"{vs['median']['median']:.3f}"
+            numbers[f"{name}.law"] = f"{vs['reference']['median']:.3f}"
+            numbers[f"{name}.difference"] = f"{vs['difference']:+.3f}"
+            if vs["lost"]["drops"]:
+                numbers[f"{name}.lost-law"] = f"{vs['lost']['reference_median']:.3f}"
+    for row in drops["calibrated_errors"]["engines"]:  # calibrated, on the held-out half
+        name = f"calibrated.{row['engine']}.{row['preset']}"
+        vs = row["calibrated"] and row["calibrated"]["vs_reference"]
+        if vs:
+            numbers[f"{name}.median"] = f"{vs['median']['median']:.3f}"
+            numbers[f"{name}.law"] = f"{vs['reference']['median']:.3f}"
+            numbers[f"{name}.difference"] = f"{vs['difference']:+.3f}"
+            numbers[f"{name}.lost"] = f"{vs['lost']['drops']:,}"
+            if vs["lost"]["drops"]:
+                numbers[f"{name}.lost-law"] = f"{vs['lost']['reference_median']:.3f}"
+    law = next(row for row in drops["calibrated_errors"]["laws"] if row["law"] == "poisson")
+    numbers["calibrated.poisson.held-out"] = f"{law['held_out']['median']:.3f}"
+    numbers["calibrated.poisson.e"] = f"{law['training_fit']['e']:.3f}"
+    apart = drops["poisson_vs_stronge"]
+    numbers["apart.difference"] = f"{apart['objective_difference']:.3g}"
+    numbers["apart.low"] = f"{apart['interval']['low']:.3g}"
+    numbers["apart.high"] = f"{apart['interval']['high']:.3g}"
+    numbers["apart.gap-median"] = f"{apart['prediction_gap_median']:.2%}"
+    numbers["apart.gap-q99"] = f"{apart['prediction_gap_q99']:.2%}"
+    routh = drops["routh"]
+    numbers["routh.opposes"] = f"{routh['coupling_opposes_slip']:,}"
+    numbers["routh.coupling"] = f"{routh['mu_coupling']['q50']:.2f}"
+    return numbers
+
+
+def section_tables(text: str, heading: str) -> str:
+    """The Markdown tables (their lines starting with ``|``) of the section of ``text``
+    under the first line starting with ``heading``, up to the next heading; a blank line
+    between two tables."""
+    lines = text.splitlines()
+    start = next(k for k, line in enumerate(lines) if line.startswith(heading))
+    tables: list[list[str]] = []
+    previous = False
+    for line in lines[start + 1:]:
+        if line.startswith("#"):
+            break
+        if line.startswith("|"):
+            if not previous:
+                tables.append([])
+            tables[-1].append(line)
+        previous = line.startswith("|")
+    return "\n\n".join("\n".join(table) for table in tables)

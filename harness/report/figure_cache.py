@@ -42,6 +42,51 @@ class FigureTask:
     svg: bool = True
     reads_records: bool = True
 
+@dataclasses.dataclass(frozen=True)
+class FigureKind:
+    """A kind of the report's figures, registered once in :data:`FIGURE_KINDS`: its name
+    (the digest's kind and the key of the page's ``figures`` mapping), its file (``{}``: the
+    scenario's slug or the engine, for a figure per scenario or engine), its rough drawing
+    cost and whether it is a headline figure (drawn once per report)."""
+
+    name: str
+    file: str
+    #: CPU seconds, PNG and SVG, measured at 1,000 scenarios (the headline figures with the
+    #: heat map's row per family): the pool draws the dearest first, so that no worker is
+    #: left with the dearest at the end
+    cost: float
+    #: drawn once per report, not per scenario: its SVG twin is kept with ``--svg headline``
+    headline: bool
+
+    def svg(self, choice: str) -> bool:
+        """Whether its SVG twin is written under ``--svg`` ``choice`` (``all``,
+        ``headline``)."""
+        return choice == "all" or (self.headline and choice == "headline")
+
+    def task(self, payload, draw: Callable[[Path, str], Path | None], svg: bool,
+             key: str | None = None, file_key: str | None = None,
+             reads_records: bool = True) -> FigureTask:
+        """The :class:`FigureTask` of one figure of this kind: ``key`` (a scenario's name,
+        an engine) its place in the page's mapping, ``file_key`` (default ``key``) the
+        part of its file's name that tells it apart."""
+        file = self.file.format(key if file_key is None else file_key)
+        slot = (self.name,) if key is None else (self.name, key)
+        return FigureTask(self.name, file, payload, draw, slot, svg, reads_records)
+
+
+#: Every kind of figure the report draws (:class:`FigureKind`).
+FIGURE_KINDS: dict[str, FigureKind] = {kind.name: kind for kind in (
+    FigureKind("heatmap", "heatmap.png", 2.5, headline=True),
+    FigureKind("split", "split.png", 1.8, headline=True),
+    FigureKind("table3", "paper-table3.png", 1.7, headline=True),
+    FigureKind("survey_map", "survey-map-{}.png", 1.2, headline=True),
+    FigureKind("survey_cdf", "survey-cdf-{}.png", 0.6, headline=True),
+    FigureKind("sweep", "sweep-{}.png", 2.2, headline=False),
+    FigureKind("impulse", "impulse-{}.png", 0.5, headline=False),
+    FigureKind("history", "history-{}.png", 1.0, headline=False),
+)}
+
+
 def scenario_digests(results: Results, known=None) -> dict[str, str]:
     """``{scenario: sha256 of its records}``, what every figure of a scenario (and the
     headline figures, of all) depends on besides the code: of what they decided and of what

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from harness.engines import engine_names, preset_label
+from harness.laws import PROCESS_LAWS
 from harness.plotting import (  # shared with the survey's figures
     new_figure,
     percent_axis,
@@ -25,6 +26,7 @@ from harness.report.views import (
     LAW_ORDER,
     LAW_STYLE,
     X_FLOOR,
+    command_overrides,
     departure_cell,
     departure_grid,
     engine_labels,
@@ -54,6 +56,13 @@ def offset_transform(ax, index: int, count: int, step_points: float = 4.0):
 FLAG_STYLE = {"marker": "o", "markerfacecolor": "none", "markeredgecolor": "red",
               "markeredgewidth": 1.4, "ms": 12}  # a red ring around a run the engine flagged
 
+#: The hatching of a heat-map cell holding flagged runs (its text counts them: ``(k!)``),
+#: and the box that keeps the text readable over it.
+FLAG_HATCH = "///"
+CELL_TEXT_BOX = {"boxstyle": "square,pad=0.15", "facecolor": "white", "alpha": 0.75,
+                 "edgecolor": "none"}
+
+
 def heatmap_figure(results: Results, path: Path, tag: str | None = None,
                    groups: dict[str, list[str]] | None = None) -> Path | None:
     """Departure from Poisson and from Stronge: scenario × engine, one panel per law × preset.
@@ -64,6 +73,7 @@ def heatmap_figure(results: Results, path: Path, tag: str | None = None,
     flagged runs of the whole family (none of them in a value).
     """
     from matplotlib.colors import LogNorm
+    from matplotlib.patches import Rectangle
 
     labels = engine_labels(results)
     if not labels:
@@ -84,15 +94,21 @@ def heatmap_figure(results: Results, path: Path, tag: str | None = None,
     panels = [(law, preset) for law in HEADLINE_LAWS for preset in presets]
     # each scenario's runs by label once (a scan of its records per cell was most of the time)
     grouped = {name: label_records(results.for_scenario(name)) for name in names}
-    if groups is None:  # the panels side by side
-        figure = new_figure(2.6 + 1.15 * len(labels) * len(HEADLINE_LAWS), 1.8 + 0.3 * len(rows))
-        axes = figure.subplots(1, len(panels), sharey=True, squeeze=False)[0]
-    else:  # wider cells ("median / max"): a row of panels per law
-        figure = new_figure(2.6 + 1.8 * len(labels), 2 * (1.2 + 0.3 * len(rows)))
-        axes = figure.subplots(len(HEADLINE_LAWS), len(presets), sharey=True,
-                               squeeze=False).ravel()
+    # A row of panels per law (not all four side by side: at the page's 1,280 px their cell
+    # text was shrunk to about 7 px); family cells ("median / max") are wider.
+    cell_width = 1.35 if groups is None else 1.8  # "8e-06% (5 of 7!)" fits
+    figure = new_figure(2.8 + cell_width * len(labels), 2 * (1.2 + 0.3 * len(rows)))
+    axes = figure.subplots(len(HEADLINE_LAWS), len(presets), sharey=True,
+                           squeeze=False).ravel()
     norm = LogNorm(vmin=HEAT_MIN, vmax=HEAT_MAX)
     cmap = heat_cmap()
+    # the command line's --set: named under the figure and on its engines' columns
+    given = {engine for engine, values in
+             (results.provenance.get("settings_overrides") or {}).items() if values}
+    command = command_overrides(results.provenance)
+    if command:
+        figure.supxlabel(f"Not the presets as shipped: --set {command} on the command line",
+                         fontsize=10, color="#a40")
     image = None
     for ax, (law, preset) in zip(axes, panels):
         panel_labels = [label for label, (_, role) in zip(labels, roles) if role == preset]
@@ -101,23 +117,29 @@ def heatmap_figure(results: Results, path: Path, tag: str | None = None,
         if groups is not None:
             values, flagged, skipped, texts = family_cells(grouped, groups, names, values,
                                                            skipped, panel_labels)
-        else:
-            texts = [[("skipped" if skipped[i, j] else "n/a") if skipped[i, j]
-                      or not np.isfinite(values[i, j])
-                      else departure_cell(grouped[name].get(label, []), law)
-                      for j, label in enumerate(panel_labels)] for i, name in enumerate(names)]
+        else:  # the cell as summary.md writes it: "flagged (1!)", "8e-06% (5!)", "skipped"
+            texts = [[departure_cell(grouped[name].get(label, []), law)
+                      for label in panel_labels] for name in names]
         shown = np.where(np.isfinite(values), np.clip(values, HEAT_MIN, HEAT_MAX), np.nan)
         image = ax.imshow(np.ma.masked_invalid(shown), cmap=cmap, norm=norm, aspect="auto")
         for i in range(len(rows)):
             for j in range(len(panel_labels)):
-                colour = ("0.35" if skipped[i, j] or not np.isfinite(values[i, j])
-                          else "white" if values[i, j] > 0.08 else "black")
+                colour = ("0.35" if skipped[i, j] else "black" if flagged[i, j]
+                          or not np.isfinite(values[i, j]) or values[i, j] <= 0.08
+                          else "white")
+                if flagged[i, j]:  # hatched: some runs here are not in the value
+                    ax.add_patch(Rectangle((j - 0.5, i - 0.5), 1, 1, fill=False,
+                                           hatch=FLAG_HATCH, edgecolor="0.45", lw=0))
                 ax.text(j, i, texts[i][j], ha="center", va="center", fontsize=9,
-                        color=colour, fontweight="bold" if flagged[i, j] else "normal")
-        ax.set_xticks(range(len(panel_labels)), [label.split(".")[0] for label in panel_labels],
+                        color=colour, fontweight="bold" if flagged[i, j] else "normal",
+                        bbox=CELL_TEXT_BOX if flagged[i, j] else None)
+        ax.set_xticks(range(len(panel_labels)),
+                      [label.split(".")[0] + (" (--set)" if label.split(".")[0] in given
+                                              else "") for label in panel_labels],
                       fontsize=9.5)
         ax.xaxis.tick_top()
-        ax.set_title(f"from {LAW_STYLE[law][2]} — {role_title(preset, roles)}", fontsize=11,
+        # two lines: on one, a renamed preset's title ran past its panel
+        ax.set_title(f"from {LAW_STYLE[law][2]}\n{role_title(preset, roles)}", fontsize=11,
                      pad=18)
         ax.set_yticks(range(len(rows)), rows, fontsize=9.5)
         ax.tick_params(length=0)
@@ -153,7 +175,7 @@ def family_cells(grouped: dict[str, dict[str, list[Record]]], groups: dict[str, 
                 medians[g, j] = float(np.median(finite))
                 text = f"{fmt_departure(medians[g, j])} / {fmt_departure(float(finite.max()))}"
             else:
-                text = "skipped" if all_skipped[g, j] else "n/a"
+                text = "skipped" if all_skipped[g, j] else "flagged" if count else "n/a"
             line.append(text + (f" ({count}!)" if count else ""))
         texts.append(line)
     return medians, flagged, all_skipped, texts
@@ -220,8 +242,9 @@ def split_figure(rows: Sequence[dict], path: Path, tag: str | None = None) -> Pa
         ax.set_title(role_title(preset, sorted(pairs)), fontsize=11)
         ax.grid(True, which="major", color="0.93")
     axes[0].set_ylabel("solve part: engine vs newton-lcp [%]")
+    # two lines: on one, the title was wider than the figure and cut at both edges
     figure.suptitle("Above the dashed diagonal the solve (engine vs its own law) dominates, "
-                    "below it the law. Values below the axes' ends are drawn at them.",
+                    "below it the law.\nValues below the axes' ends are drawn at them.",
                     fontsize=10)
     handles = {}
     for ax in axes:
@@ -250,7 +273,7 @@ def impulse_figure(name: str, records: Sequence[Record], path: Path,
     ax = figure.subplots()
     extent = max([abs(r.normal_impulse) for r in records if r.normal_impulse is not None
                   and math.isfinite(r.normal_impulse)] + [1e-12])
-    for law in ("newton", "poisson", "stronge"):
+    for law in PROCESS_LAWS:
         if not any(r.law == law for r in laws):
             continue
         colour, style, label = LAW_STYLE[law]
@@ -386,8 +409,9 @@ def sweep_figure(name: str, info: dict, records: Sequence[Record], path: Path,
     if engines:
         against = ("Poisson" if set(own.values()) == {"poisson"} else "its reference"
                    if len(set(own.values())) > 1 else str(next(iter(own.values()))))
-        panels.append(("departure", f"engine departure from {against} [%]\n"
-                                    "(0 drawn at 1e-14%)"))
+        # short, what it is from in the title: a long label reached over the panel to its
+        # left, or past its own panel's height
+        panels.append(("departure", "engines' departure [%]"))
     figure = new_figure(9.5, 5.6 if len(panels) > 3 else 3.2)
     grid = figure.subplots(2 if len(panels) > 3 else 1, 2 if len(panels) > 3 else 3,
                            squeeze=False)
@@ -454,5 +478,6 @@ def sweep_figure(name: str, info: dict, records: Sequence[Record], path: Path,
     figure.legend(unique.values(), unique.keys(), loc="outside lower center",
                   ncol=min(4, len(unique)), fontsize=9, frameon=False)
     figure.suptitle(f"{name}: sweep of {parameter_name(parameter)} (dashed: Poisson type "
-                    "changes)", fontsize=11)
+                    "changes)" + (f"\nengines' departure from {against}; exact agreement "
+                                  "(0) drawn at 1e-14%" if engines else ""), fontsize=11)
     return save_png(figure, path, dpi=90, tag=tag)

@@ -43,6 +43,8 @@ p.notes{font-size:.8em;color:#733;margin:-.4em 0 .8em;max-width:60em}
 nav.contents ol.groups{columns:4;font-size:.92em} nav.contents ol.groups ol{columns:1}
 details.group>summary{font-size:1.1em;margin:.4em 0}
 span.heat{display:block;margin:-2px -6px;padding:2px 6px}
+span.heat.flagged{background-image:repeating-linear-gradient(135deg,
+ rgba(90,90,90,.45) 0 1px,transparent 1px 6px)}
 details.fold>summary{margin-top:1.2em;border-bottom:1px solid #ddd;padding-bottom:.2em}
 summary>h2,summary>h3{display:inline;border:0;margin:0;padding:0}
 details.scenario>summary{margin-top:.5em;border-bottom:1px solid #eee}

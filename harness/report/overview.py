@@ -98,17 +98,17 @@ def departure_table_html(names: Sequence[str], prepared: Prepared) -> str:
         rgb = heat_colours(values)  # all cells at once (a call per cell was most of the time)
         for i, row in enumerate(cells):
             for j, (value, flagged, skipped, text) in enumerate(row):
-                if skipped or not math.isfinite(value):
-                    rows[i].append("<span class='muted'>"
-                                   + ("skipped" if skipped else "n/a") + "</span>")
+                if skipped or not math.isfinite(value):  # "skipped", "flagged (2!)"
+                    kind = "heat flagged" if flagged else "muted"
+                    rows[i].append(f"<span class='{kind}'>{escape_html(text)}</span>")
                     continue
                 colour = "#{:02x}{:02x}{:02x}".format(*rgb[i, j])
-                ink = "#fff" if value > 0.08 else "#000"  # as on the figure
+                ink = "#000" if flagged or value <= 0.08 else "#fff"  # as on the figure
                 text = escape_html(text)
-                if flagged:
+                if flagged:  # hatched as on the figure: some runs are not in the value
                     text = f"<b>{text}</b>"
-                rows[i].append(f"<span class='heat' style='background:{colour};"
-                               f"color:{ink}'>{text}</span>")
+                rows[i].append(f"<span class='heat{' flagged' if flagged else ''}' "
+                               f"style='background-color:{colour};color:{ink}'>{text}</span>")
     return html_table(header, rows)
 
 
@@ -175,15 +175,18 @@ def gates_html(provenance: dict) -> str:
     gates = provenance.get("gates", [])
     if not gates:
         return "<p>No scenario in this run declares a gate.</p>"
+    # a sweep's gate is checked at each point: the point tells its rows apart
+    points = any(g.get("point") for g in gates)
     rows = []
     for g in gates:
         cls = "fail" if g["status"] == "FAIL" else ("pass" if g["status"] == "pass" else "muted")
-        rows.append([escape_html(g["scenario"]), escape_html(g["gate"]),
-                     escape_html(g["record"]), escape_html(g["law"]),
+        rows.append([escape_html(g["scenario"]),
+                     *([escape_html(g.get("point") or "")] if points else []),
+                     escape_html(g["gate"]), escape_html(g["record"]), escape_html(g["law"]),
                      fmt_departure(g["departure"]), fmt_departure(g["max_departure"]),
                      f'<span class="{cls}">{escape_html(g["status"])}</span>'])
-    return html_table(["scenario", "gate", "record", "law", "departure", "max", "result"], rows,
-                  left=4)
+    return html_table(["scenario", *(["point"] if points else []), "gate", "record", "law",
+                       "departure", "max", "result"], rows, left=5 if points else 4)
 
 
 def split_table(results: Results, prepared: Prepared) -> str:

@@ -173,7 +173,8 @@ def write_bench_page(bench_json: Path, out_dir: Path, report: dict | None = None
     report's results' provenance (the page says when it is older)."""
     data = json.loads(bench_json.read_text(encoding="utf-8"))
     names = copy_figures(bench_json.parent, out_dir / "bench")
-    body = [provenance_html(data.get("provenance") or {}, report or {}, "make bench"),
+    body = [provenance_html(data.get("provenance") or {}, report or {},
+                            PAGE_COMMANDS[BENCH_PAGE]),
             ("<p>Written by <code>impact-harness bench</code>; machine-readable: "
              "<a href='bench/bench.json'>bench.json</a>.</p>"), figures_html("bench", names)]
     copy = out_dir / "bench" / "bench.json"
@@ -192,33 +193,61 @@ def write_stress_page(stress_md: Path, out_dir: Path, report: dict | None = None
     """``stress.html`` from ``stress.md`` (and the provenance of ``stress.json`` beside it)
     and the figures beside it."""
     names = copy_figures(stress_md.parent, out_dir / "stress")
-    try:
-        made = json.loads((stress_md.parent / "stress.json").read_text(
-            encoding="utf-8")).get("provenance") or {}
-    except (OSError, ValueError, AttributeError):
-        made = {}
+    made = made_by(stress_md.parent / "stress.json")
     text = stress_md.read_text(encoding="utf-8")
     lines = text.splitlines()
     if lines and lines[0].startswith("# "):  # the page has its own title
         text = "\n".join(lines[1:])
-    body = [provenance_html(made if isinstance(made, dict) else {}, report or {},
-                            "make stress"),
+    body = [provenance_html(made, report or {}, PAGE_COMMANDS[STRESS_PAGE]),
             markdown_to_html(text, heading_shift=1), "<h2>Figures</h2>",
             figures_html("stress", names)]
     return write_page(out_dir, STRESS_PAGE, body)
 
 
-def write_pages(out_dir: Path, sources: Sequence[Path],
-                report: dict | None = None) -> dict[str, str]:
-    """Write the pages whose inputs exist; ``{file: title}`` of those written. ``report``:
+#: The command that measures each page again (``make validate`` does not: minutes each).
+PAGE_COMMANDS = {BENCH_PAGE: "make bench", STRESS_PAGE: "make stress"}
+
+
+def is_current(made: dict, report: dict) -> bool:
+    """Whether a page measured with provenance ``made`` holds for the report's results
+    (provenance ``report``): made by the same code (its digest, not the commit, which a
+    change of docs moves)."""
+    return bool(made.get("code_version")) and made.get("code_version") == report.get(
+        "code_version")
+
+
+def made_by(json_file: Path) -> dict:
+    """The provenance a page's JSON input (``bench.json``, ``stress.json``) records; {}
+    when it is missing or unreadable."""
+    try:
+        made = json.loads(json_file.read_text(encoding="utf-8")).get("provenance")
+    except (OSError, ValueError, AttributeError):
+        return {}
+    return made if isinstance(made, dict) else {}
+
+
+def write_pages(out_dir: Path, sources: Sequence[Path], report: dict | None = None
+                ) -> tuple[dict[str, str], dict[str, str]]:
+    """Write the pages whose inputs exist; returns ``({file: title}, {title: why})``: the
+    pages the report links, those made by the report's code, and those it names without a
+    link, older than its results (each written anyway, saying so at its top). ``report``:
     the provenance of the report's results, which each page compares its own with."""
-    written = {}
-    bench = find_input("bench", "bench.json", [out_dir, *sources])
-    if bench is not None:
-        write_bench_page(bench, out_dir, report)
-        written[BENCH_PAGE] = PAGE_TITLES[BENCH_PAGE]
-    stress = find_input("stress", "stress.md", [out_dir, *sources])
-    if stress is not None:
-        write_stress_page(stress, out_dir, report)
-        written[STRESS_PAGE] = PAGE_TITLES[STRESS_PAGE]
-    return written
+    report = report or {}
+    linked, stale = {}, {}
+    inputs = {BENCH_PAGE: (find_input("bench", "bench.json", [out_dir, *sources]), "bench.json"),
+              STRESS_PAGE: (find_input("stress", "stress.md", [out_dir, *sources]),
+                            "stress.json")}
+    for page, (found, provenance_file) in inputs.items():
+        if found is None:
+            continue
+        (write_bench_page if page == BENCH_PAGE else write_stress_page)(found, out_dir, report)
+        made = made_by(found.parent / provenance_file)
+        if is_current(made, report):
+            linked[page] = PAGE_TITLES[page]
+        else:
+            when = made.get("created_utc") or made.get("time") or "at an unknown date"
+            stale[PAGE_TITLES[page]] = (f"measured {escape_html(when)} with other code than "
+                                        "these results; <code>"
+                                        f"{PAGE_COMMANDS[page]}</code> then <code>"
+                                        "impact-harness report</code> measure and link it")
+    return linked, stale

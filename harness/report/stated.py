@@ -32,9 +32,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from harness.engines import ENGINE_NAMES
-from harness.experiments import drops_engines
+from harness.experiments import drops_engines, registry
 from harness.reference.flat_faces import count_flat
-from harness.report import findings
+from harness.report import experiments, findings
 from harness.report.table3 import computed_cells, printed_du_residual, reproduce_table3
 from harness.report.views import fmt_departure
 from harness.run.records import ANALYTIC, read_results
@@ -424,6 +424,21 @@ def ellipse_contact_numbers() -> dict[str, str]:
     return numbers
 
 
+class Unavailable(Exception):
+    """A source whose inputs are not on this machine (the Fazeli drops, never committed):
+    its numbers are not checked, and ``findings`` says so."""
+
+
+def experiments_numbers() -> dict[str, str]:
+    """``impact-harness experiments`` with its defaults, on the copy of the Fazeli drops
+    that ``IMPACT_HARNESS_FAZELI_DIR`` names (:func:`experiments.stated_numbers`; read from
+    the result cache when computed before)."""
+    try:
+        return experiments.stated_numbers()
+    except registry.DataMissing as missing:
+        raise Unavailable(str(missing)) from None
+
+
 def library_numbers(results: Path = RESULTS) -> dict[str, str]:
     """``make validate``: the counts of its results file (``reports/results.json``)."""
     records = read_results(results).records
@@ -446,6 +461,9 @@ SOURCES: dict[str, Source] = {
                           + f" --samples {MUJOCO_GAIN_SAMPLES} --engines mujoco "
                           "--preset defaults,accurate", mujoco_gain_numbers),
     "library": Source("make validate (reports/results.json)", library_numbers),
+    "experiments": Source("impact-harness experiments (its defaults, with "
+                          "IMPACT_HARNESS_FAZELI_DIR set to a copy of the Fazeli drops)",
+                          experiments_numbers),
     "ellipse-contact": Source("impact-harness experiments --engines all (its table \"Each "
                               "engine's ellipse against the true one\")",
                               ellipse_contact_numbers),
@@ -477,11 +495,19 @@ def stated_in(path: Path) -> list[Stated]:
     return sorted(found, key=lambda s: s.line)
 
 
-def compute(sources: Iterable[str]) -> dict[str, str]:
-    """``{"source.key": text}`` for the named sources."""
+def compute(sources: Iterable[str], skipped: dict[str, str] | None = None) -> dict[str, str]:
+    """``{"source.key": text}`` for the named sources. A source :class:`Unavailable` here
+    raises, or with ``skipped`` is left out and put there with the reason."""
     numbers = {}
     for name in sources:
-        numbers.update({f"{name}.{key}": value for key, value in SOURCES[name].compute().items()})
+        try:
+            computed = SOURCES[name].compute()
+        except Unavailable as why:
+            if skipped is None:
+                raise
+            skipped[name] = str(why)
+            continue
+        numbers.update({f"{name}.{key}": value for key, value in computed.items()})
     return numbers
 
 
@@ -529,14 +555,15 @@ def rewrite(path: Path, numbers: Mapping[str, str]) -> bool:
 
 
 def check(write: bool = False, only: Iterable[str] | None = None,
-          root: Path = ROOT) -> list[str]:
+          root: Path = ROOT, skipped: dict[str, str] | None = None) -> list[str]:
     """Recompute every source the texts mark (or those in ``only``), and return the stated
     numbers that differ; with ``write``, rewrite them first (and return what is still
-    wrong: an unknown source or key)."""
+    wrong: an unknown source or key). A source :class:`Unavailable` here is put in
+    ``skipped`` with the reason (raised when ``skipped`` is None)."""
     paths = texts(root)
     stated = [s for path in paths for s in stated_in(path)]
     used = {s.source for s in stated if s.source in SOURCES}
-    numbers = compute(sorted(used if only is None else used & set(only)))
+    numbers = compute(sorted(used if only is None else used & set(only)), skipped)
     if write:
         for path in paths:
             rewrite(path, numbers)
@@ -544,5 +571,5 @@ def check(write: bool = False, only: Iterable[str] | None = None,
     return differences(stated, numbers)
 
 
-__all__ = ["SOURCES", "Source", "Stated", "check", "compute", "differences",
+__all__ = ["SOURCES", "Source", "Stated", "Unavailable", "check", "compute", "differences",
            "library_numbers_of", "rewrite", "stated_in", "texts"]

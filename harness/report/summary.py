@@ -7,7 +7,13 @@ from pathlib import Path
 
 from harness.report.contacts import contacts_section
 from harness.report.fragments import Prepared, prepare
-from harness.report.views import HEADLINE_LAWS, LAW_STYLE, fmt_departure, row_name
+from harness.report.views import (
+    HEADLINE_LAWS,
+    LAW_STYLE,
+    command_overrides,
+    fmt_departure,
+    row_name,
+)
 from harness.run.records import ANALYTIC, Results
 from harness.run.verdicts import REASONS, reason_counts
 from harness.store.files import write_text_atomically
@@ -62,17 +68,27 @@ def write_summary(results: Results, out_dir: Path, prepared: Prepared | None = N
              "`‖u_engine − u_law‖_M / ‖u_before‖_M` with `u_before` in the ground's frame, or "
              "the centre of mass's for two free bodies (relative error of the post-impact "
              "velocities in the kinetic-energy norm; sweeps: the largest over the sweep). "
-             "`(k!)` counts the flagged runs (not single impacts: the engine's status or a "
-             "failed verdict check, docs/verdicts.md), never included in the value; `*` marks "
-             "a scenario that overrides the engine's settings, `skipped` an engine that did "
-             "not run. "
-             "Figures, per-scenario tables and settings: [index.html](index.html); the "
-             "paper's Table 3: [paper-table3.md](paper-table3.md).", ""]
+             "`(k!)` counts the flagged runs, `(k of n!)` of a sweep's n (not single impacts: the "
+             "engine's status or a failed verdict check, docs/verdicts.md), never included "
+             "in the value; `*` marks "
+             "runs whose settings differ from the preset's (a scenario's `[engine_settings]` "
+             "or the command line's `--set`), `skipped` an engine that did not run. "
+             "Figures, per-scenario tables and settings: [index.html](index.html)"
+             + ("; the paper's Table 3: [paper-table3.md](paper-table3.md)"
+                if (out_dir / "paper-table3.md").is_file() else "") + ".", ""]
+    command = command_overrides(prov)
+    if command:  # the columns are not the presets' numbers
+        lines += [f"**Not the presets as shipped**: this run set `{escape(command)}` on the "
+                  "command line (`--set`), in every preset of those engines; their columns "
+                  "(marked `--set`) are the departures with those settings.", ""]
+    given = prov.get("settings_overrides") or {}
+    headers = [label + (" (--set)" if given.get(label.split(".")[0]) else "")
+               for label in labels]
     # the heat map's rows (views.engine_scenarios)
     names = [name for name, view in prepared.views.items() if view["engine"]]
     for law in HEADLINE_LAWS:
         lines += [f"## Departure from {LAW_STYLE[law][2]}", "",
-                  "| scenario | " + " | ".join(labels) + " |",
+                  "| scenario | " + " | ".join(headers) + " |",
                   "|---|" + "---:|" * len(labels)]
         for name in names:
             cells = [cell[3] for cell in prepared.views[name][law]]  # views.departure_cell
@@ -86,10 +102,14 @@ def write_summary(results: Results, out_dir: Path, prepared: Prepared | None = N
     gates = prov.get("gates", [])
     lines += ["## Gates", ""]
     if gates:
-        lines += ["| scenario | gate | record | law | departure | max | result |",
-                  "|---|---|---|---|---:|---:|---|"]
+        points = any(g.get("point") for g in gates)  # a sweep's rows told apart
+        lines += ["| scenario | " + ("point | " if points else "")
+                  + "gate | record | law | departure | max | result |",
+                  "|---|" + ("---|" if points else "") + "---|---|---|---:|---:|---|"]
         for g in gates:
-            lines.append(f"| {escape(g['scenario'])} | {escape(g['gate'])} | "
+            lines.append(f"| {escape(g['scenario'])} | "
+                         + (f"{escape(g.get('point') or '')} | " if points else "")
+                         + f"{escape(g['gate'])} | "
                          f"{escape(g['record'])} | {escape(g['law'])} | "
                          f"{fmt_departure(g['departure'])} | {fmt_departure(g['max_departure'])}"
                          f" | {escape(g['status'])} |")

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from harness.engines import PRESET_ROLES, engine_names, preset_label, source_label
-from harness.report.figure_cache import FigureTask
+from harness.report.figure_cache import FIGURE_KINDS
 from harness.report.markup import folded, html_table, report_figure
 from harness.report.views import escape_html, fmt_departure
 from harness.run.metrics import fmt_departures
@@ -105,11 +105,11 @@ def surveyed_engines(directory: Path) -> list[str]:
     return engines_of(read_columns(directory / "runs.parquet"))
 
 
-def survey_figure_tasks(out_dir: Path, svg: bool) -> list:
+def survey_figure_tasks(out_dir: Path, svg: str) -> list:
     """The survey's figures as tasks of the report's pool (:class:`harness.report.
     FigureTask`): per engine ``survey-map-<engine>.png`` and ``survey-cdf-<engine>.png``,
     keyed by the digest of ``runs.parquet`` and of the code drawing them; none without a
-    survey."""
+    survey. ``svg``: the report's ``--svg`` choice."""
     directory = survey_dir(out_dir)
     if directory is None:
         return []
@@ -118,12 +118,12 @@ def survey_figure_tasks(out_dir: Path, svg: bool) -> list:
     tasks = []
     for engine in surveyed_engines(directory):
         for kind in ("map", "cdf"):
-            tasks.append(FigureTask(
-                f"survey_{kind}", f"survey-{kind}-{engine}.png",
+            figure = FIGURE_KINDS[f"survey_{kind}"]
+            tasks.append(figure.task(
                 [runs_digest, figure_code_digest(), engine],
                 lambda path, tag, kind=kind, engine=engine:
                 _draw(kind, runs_path, engine, path, tag),
-                (f"survey_{kind}", engine), svg, reads_records=False))
+                figure.svg(svg), key=engine, reads_records=False))
     return tasks
 
 
@@ -225,7 +225,7 @@ def _interval_cell(stats: dict, prefix: str, row: int) -> str:
     low, high = (stats.get(f"{prefix}_{end}") for end in ("low", "high"))
     if low is None or high is None or not (math.isfinite(low[row]) and math.isfinite(high[row])):
         return fmt_departure(float(stats[prefix][row]))
-    # the quantile and its bounds in one style (harness/run/metrics.py, fmt_departures)
+    # the quantile and its bounds, each as it reads alone (harness/run/metrics.py)
     value, low_text, high_text = fmt_departures(
         [float(stats[prefix][row]), float(low[row]), float(high[row])])
     return f"{value}<br><small>[{low_text}, {high_text}]</small>"

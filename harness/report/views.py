@@ -14,6 +14,8 @@ from collections.abc import Iterable, Sequence
 import numpy as np
 
 from harness.engines import PRESET_ROLES, engine_names, engine_trait, source_label
+from harness.laws import HEADLINE_LAWS, LAW_NAMES  # noqa: F401 - HEADLINE_LAWS re-exported
+from harness.laws import REGISTRY as LAW_REGISTRY
 from harness.report.reading import source_presets
 from harness.run.metrics import departure_split, fmt_departure
 from harness.run.records import ANALYTIC, Record, Results
@@ -21,15 +23,10 @@ from harness.run.references import SINGLE
 from harness.scenarios.schema import SCENARIO_DIR, recorded_location
 
 FIGURES = "figures"
-LAW_ORDER = ("poisson", "stronge", "stronge-paper", "newton", "newton-lcp")
-HEADLINE_LAWS = ("poisson", "stronge")
-LAW_STYLE = {  # colour, line style, label
-    "poisson": ("black", "-", "Poisson"),
-    "stronge": ("tab:red", "-", "Stronge (exact)"),
-    "stronge-paper": ("tab:purple", "--", "Stronge (paper's mapping)"),
-    "newton": ("tab:gray", "-.", "Newton (process)"),
-    "newton-lcp": ("tab:brown", ":", "newton-lcp (engines' law)"),
-}
+# The laws' order, headline laws and style: the law registry's (harness/laws.py).
+LAW_ORDER = LAW_NAMES
+LAW_STYLE = {entry.name: (entry.colour, entry.line, entry.label)  # colour, line style, label
+             for entry in LAW_REGISTRY}
 
 
 def engine_style(engine: str) -> tuple[str, str]:
@@ -160,16 +157,19 @@ def flagged_count(records: Iterable[Record]) -> int:
 
 def departure_cell(records: Sequence[Record], law: str) -> str:
     """A headline cell: the largest departure over the single-impact runs, ``(k!)`` when k
-    runs were flagged (kept out of the value), ``*`` if the scenario overrode the engine's
-    settings."""
+    runs were flagged (kept out of the value; ``(k of n!)`` for a sweep's n runs, so that
+    a value from 2 of 7 points does not pass for the sweep's), ``*`` if the scenario
+    overrode the engine's settings."""
     records = list(records)
     if not records or all(r.skipped for r in records):
         return "skipped"
     value, _, _ = worst_departure(records, law)
-    text = fmt_departure(value) if math.isfinite(value) else "flagged"
     flagged = flagged_count(records)
+    text = (fmt_departure(value) if math.isfinite(value) else "flagged" if flagged
+            else "n/a")
     if flagged:
-        text += f" ({flagged}!)"
+        ran = sum(1 for r in records if not r.skipped)
+        text += f" ({flagged} of {ran}!)" if ran > 1 else f" ({flagged}!)"
     if any(overrides_of(r) for r in records):
         text += " *"
     return text
@@ -247,6 +247,48 @@ def overrides_of(record: Record) -> dict:
 def fmt_overrides(overrides: dict) -> str:
     """``iterations=1, time_step=0.001``; "" for none."""
     return ", ".join(f"{key}={short_value(value)}" for key, value in overrides.items())
+
+
+#: The unit of each engine setting, as the report's settings table writes it beside the
+#: setting (docs/engines.md, each engine's settings table): "–" for a dimensionless share or
+#: factor, a count or a choice is named as such.
+SETTING_UNITS = {
+    "time_step": "s", "max_steps": "steps", "approach_steps": "steps",
+    "contact_steps": "steps", "collision_persistence": "steps",
+    "iterations": "iterations per step", "num_solver_iterations": "iterations per step",
+    "velocity_iterations": "iterations per step", "position_iterations": "iterations per step",
+    "ls_iterations": "iterations per step", "noslip_iterations": "iterations per step",
+    "num_sub_steps": "sub-steps per step",
+    "collision_slop": "m", "contact_breaking_threshold": "m", "contact_slop": "m",
+    "margin": "m", "polygon_radius": "m", "detection_overlap": "body extents",
+    "restitution_velocity_threshold": "m/s",
+    "collision_bias": "share of overlap left after 1 s",
+    "damping": "share of velocity kept after 1 s",
+    "linear_damping": "1/s", "angular_damping": "1/s",
+    "contact_erp": "share per step", "erp": "share per step", "friction_erp": "share per step",
+    "warm_starting_factor": "share", "global_cfm": "–", "solver_residual_threshold": "–",
+    "tolerance": "–", "noslip_tolerance": "–", "impratio": "–",
+    "solref": "[s, –] or restitution", "solimp": "–", "velocity_scale": "–",
+    "length_scale": "–", "integrator": "choice", "cone": "choice", "solver": "choice",
+    "enable_cone_friction": "on/off", "use_split_impulse": "on/off",
+    "warm_starting": "on/off", "continuous_physics": "on/off", "sub_stepping": "on/off",
+    "allow_sleeping": "on/off",
+}
+
+
+def setting_unit(key: str) -> str:
+    """:data:`SETTING_UNITS`' unit of ``key``; "–" for a setting it does not know (an engine
+    registered at run time)."""
+    return SETTING_UNITS.get(key, "–")
+
+
+def command_overrides(provenance: dict) -> str:
+    """The run's ``--set`` overrides as a reader's text, ``pymunk: iterations=3; mujoco:
+    …``; "" when the run had none. Every output that shows the numbers names them: shared
+    alone, a table of a ``--set`` run would pass for the presets' numbers."""
+    given = (provenance or {}).get("settings_overrides") or {}
+    return "; ".join(f"{engine}: {fmt_overrides(values)}" for engine, values in given.items()
+                     if values)
 
 
 def short_value(value) -> str:

@@ -93,7 +93,7 @@ def add_common_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--tags", default=None,
                         help="comma-separated tags (e.g. quick); scenarios with any of them")
     parser.add_argument("--engines", default=None,
-                        help="comma-separated engines (default: all of "
+                        help="comma-separated engines, or all (the default: "
                              f"{', '.join(engine_names())})")
     parser.add_argument("--preset", default="all", choices=(*preset_choices(), "all"),
                         help="engine preset(s) to run (default: all); matched-bounce is "

@@ -38,11 +38,6 @@ STICK_TOLERANCE = 1e-6
 #: cut-off keeps a column from mixing ``8e-03%`` with ``0.0118%``.
 SCIENTIFIC_BELOW_PERCENT = 0.001
 
-#: Departures read together (a quantile and its interval) share the scientific style only
-#: while all are below this many percent: ``1.61e+00%`` would not read as 1.61%.
-SHARED_SCIENTIFIC_BELOW_PERCENT = 1.0
-
-
 def _is_missing(value) -> bool:
     return value is None or (isinstance(value, float) and not math.isfinite(value))
 
@@ -52,16 +47,13 @@ def _below_cutoff(percent: float) -> bool:
 
 
 def _scientific(percent: float) -> str:
-    """``percent`` in scientific notation: one digit below the cut-off (round-off level, as
-    ``2e-05%``; a value that rounds up to the cut-off is written as it, ``0.001%``), three
-    significant ones above it (``1.18e-02%``), trailing zeros dropped."""
-    if _below_cutoff(percent):
-        rounded = f"{percent:.0e}"
-        if abs(float(rounded)) >= SCIENTIFIC_BELOW_PERCENT:  # 0.00095% -> 0.001%
-            return f"{float(rounded):g}%"
-        return f"{rounded}%"
-    mantissa, exponent = f"{percent:.2e}".split("e")
-    return f"{mantissa.rstrip('0').rstrip('.')}e{exponent}%"
+    """``percent``, below the cut-off, in scientific notation with one digit (round-off
+    level, as ``2e-05%``); a value that rounds up to the cut-off is written as it,
+    ``0.001%``."""
+    rounded = f"{percent:.0e}"
+    if abs(float(rounded)) >= SCIENTIFIC_BELOW_PERCENT:  # 0.00095% -> 0.001%
+        return f"{float(rounded):g}%"
+    return f"{rounded}%"
 
 
 def fmt_departure(value) -> str:
@@ -79,16 +71,11 @@ def fmt_departure(value) -> str:
 
 
 def fmt_departures(values: Sequence) -> list[str]:
-    """Departures read together, as a quantile and its interval, in one style: all in
-    scientific notation when one is below :data:`SCIENTIFIC_BELOW_PERCENT` and none reaches
-    :data:`SHARED_SCIENTIFIC_BELOW_PERCENT` (``1.18e-02% [1e-04%, 9.31e-02%]``), else each
-    as :func:`fmt_departure` writes it. Zero stays ``0%``, a missing one ``n/a``."""
-    percents = [abs(100.0 * float(v)) for v in values if not _is_missing(v) and v != 0]
-    # the largest as it would be written (0.9999% is written 1%): never 1e+00%
-    if (percents and _below_cutoff(min(percents))
-            and float(f"{max(percents):.3g}") < SHARED_SCIENTIFIC_BELOW_PERCENT):
-        return [fmt_departure(v) if _is_missing(v) or v == 0 else _scientific(100.0 * float(v))
-                for v in values]
+    """Departures read together (a quantile and its interval), each as :func:`fmt_departure`
+    writes it: a number reads the same wherever it stands, so that a row holding a median
+    beside its interval and the same median alone never writes it two ways (``1.19e-02%
+    [5e-09%, 9.31e-02%]`` beside ``0.0119%`` read as two numbers). Zero stays ``0%``, a
+    missing one ``n/a``."""
     return [fmt_departure(v) for v in values]
 
 

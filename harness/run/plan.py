@@ -26,19 +26,20 @@ from harness.store.identity import Spelled
 
 
 def parse_engines(text: str | Sequence[str] | None) -> tuple[str, ...]:
-    """``"pymunk,mujoco"`` (or a list) -> engine names; None: every engine registered now
-    (:func:`harness.engines.engine_names`, those registered at run time too). Raises
-    ``ValueError`` for a name not registered, naming the registered ones."""
+    """``"pymunk,mujoco"`` (or a list) -> engine names; None or ``all`` (as ``experiments
+    --engines all`` takes it): every engine registered now (:func:`harness.engines.
+    engine_names`, those registered at run time too). Raises ``ValueError`` for a name not
+    registered, naming the registered ones."""
     registered = registry.engine_names()
-    if text is None:
+    if text is None or (isinstance(text, str) and text.strip() == "all"):
         return registered
     items = text.split(",") if isinstance(text, str) else [
         part for item in text for part in str(item).split(",")]
     names = tuple(dict.fromkeys(item.strip() for item in items if item.strip()))
     unknown = [name for name in names if name not in registered]
     if unknown:
-        raise ValueError(f"--engines: unknown engine(s) {unknown}; allowed (the registered "
-                         f"engines): {', '.join(registered)}")
+        raise ValueError(f"--engines: unknown engine(s) {', '.join(unknown)}; allowed (the "
+                         f"registered engines): {', '.join(registered)}, or all")
     return names
 
 

@@ -10,9 +10,25 @@ NO_VALUE = object()
 
 
 def show_value(value: Any) -> str:
-    """``repr(value)``, cut to 80 characters for a one-line message."""
-    text = repr(value)
+    """``repr(value)``, a table or a list as the file writes it (``{ iterations = 50 }``,
+    not Python's ``{'iterations': 50}``), cut to 80 characters for a one-line message."""
+    text = toml_value(value) if isinstance(value, (dict, list, tuple)) else repr(value)
     return text if len(text) <= 80 else text[:77] + "..."
+
+
+def toml_value(value: Any) -> str:
+    """``value`` as TOML writes it inline: tables ``{ key = value, … }``, arrays ``[1, 2]``,
+    strings in double quotes, booleans ``true``/``false``."""
+    if isinstance(value, dict):
+        inner = ", ".join(f"{key} = {toml_value(item)}" for key, item in value.items())
+        return f"{{ {inner} }}" if inner else "{}"
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(toml_value(item) for item in value) + "]"
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    return repr(value)
 
 
 class ScenarioError(ValueError):

@@ -74,9 +74,28 @@ def local_core(shape) -> tuple[np.ndarray, float]:
 def turned_core(body: Body) -> tuple[np.ndarray, float]:
     """Core points of ``body`` turned by its angle, before its position is added, and its
     radius (m): :func:`world_core` is these plus the position, so a body moved without
-    turning needs only the addition."""
+    turning needs only the addition.
+
+    Written elementwise, ``(x cos θ − y sin θ, x sin θ + y cos θ)``, not as a product with
+    :func:`rotation`: numpy's ``@`` goes through BLAS, whose kernels (FMA or not, AVX-512
+    or not) round such products differently from CPU to CPU; separate IEEE multiplies and
+    subtractions round the same everywhere (docs/verdicts.md, 'Same answers on every
+    CPU')."""
     points, radius = local_core(body.shape)
-    return points @ rotation(body.angle).T, radius
+    c, s = math.cos(body.angle), math.sin(body.angle)
+    # plain floats: a core has a few points, where numpy's cost per call exceeds the arithmetic
+    turned = [(x * c - y * s, x * s + y * c) for x, y in points.tolist()]
+    return np.array(turned, dtype=float).reshape(-1, 2), radius
+
+
+def _along(points, direction) -> list[float]:
+    """``core @ direction`` for a 2-D direction and a core as an array or a list of ``(x, y)``,
+    as a list, written out (``x d_x + y d_y``: one rounding per operation on every CPU, never
+    through a BLAS kernel; plain floats, as :func:`turned_core`)."""
+    if isinstance(points, np.ndarray):
+        points = points.tolist()
+    dx, dy = float(direction[0]), float(direction[1])
+    return [x * dx + y * dy for x, y in points]
 
 
 def world_core(body: Body) -> tuple[np.ndarray, float]:
@@ -224,14 +243,13 @@ def _support_interval(core, normal, tangent, side, tolerance,
     mostly picks the same points).
     """
     if along_normal is None:
-        along_normal = (core @ normal).tolist()
+        along_normal = _along(core, normal)
     heights = [side * value for value in along_normal]
     threshold = _largest(heights) - tolerance
     near = [index for index, height in enumerate(heights) if height >= threshold]
     if intervals is not None and tuple(near) in intervals:
         return intervals[tuple(near)]
-    # The near points' own product (numpy rounds one point's and several points' differently).
-    along = (core[near] @ tangent).tolist()
+    along = _along(core[near], tangent)
     interval = _smallest(along), _largest(along)
     if intervals is not None:
         intervals[tuple(near)] = interval
@@ -324,11 +342,11 @@ def core_separation(core_a: np.ndarray, core_b: np.ndarray):
     axes = _axis_list(edges_a) + _axis_list(edges_b)
     if not axes:  # two coincident points (concentric disks): no defined direction
         axes = [(0.0, 1.0)]
-    # Each axis's products with both cores, as ``core @ axis`` would give them one at a time
-    # (a stack of matrix-vector products: the same product per axis, unlike ``core @ axes.T``).
-    columns = np.array(axes)[:, :, None]
-    along_b = np.matmul(core_b[None], columns)[:, :, 0].tolist()
-    along_a = np.matmul(core_a[None], columns)[:, :, 0].tolist()
+    # Each axis's products with both cores, x a_x + y a_y as :func:`_along` writes them (no
+    # BLAS kernel), for every axis at once: numpy's elementwise products and sum, broadcast.
+    columns = np.array(axes)
+    along_b = (columns[:, :1] * core_b[:, 0] + columns[:, 1:] * core_b[:, 1]).tolist()
+    along_a = (columns[:, :1] * core_a[:, 0] + columns[:, 1:] * core_a[:, 1]).tolist()
     # Python's min and max may keep another zero than numpy's; a zero separation becomes
     # min(0.0, ±0.0) = 0.0 below either way, and ±0.0 tie in the argmax.
     separations = [min(b) - max(a) for a, b in zip(along_a, along_b)]
@@ -350,8 +368,8 @@ def core_contacts(core_a: np.ndarray, radius_a: float, core_b: np.ndarray, radiu
     if separation is None:
         separation = core_separation(core_a, core_b)
     tangent = _tangent(separation[1])
-    along_normal_a = (core_a @ separation[1]).tolist()
-    along_normal_b = (core_b @ separation[1]).tolist()
+    along_normal_a = _along(core_a, separation[1])
+    along_normal_b = _along(core_b, separation[1])
     intervals_a: dict = {}
     intervals_b: dict = {}
     return [_core_contact(core_a, radius_a, core_b, radius_b, tolerance, separation, tangent,
@@ -436,7 +454,7 @@ def scene_contacts(scene: Scene, tolerance: float = DEFAULT_TOLERANCE) -> list[C
     tangent = _tangent(normal)
     a_lo, a_hi = _support_interval(core_a, normal, tangent, +1, tolerance)
     b_lo, b_hi = _support_interval(core_b, normal, tangent, -1, tolerance)
-    offset = contact.point - float(contact.point @ tangent) * tangent  # the mid-plane
+    offset = contact.point - _along(contact.point[None], tangent)[0] * tangent  # mid-plane
     return [Contact(point=offset + along * tangent, normal=normal.copy(), gap=contact.gap,
                     point_count=1) for along in (max(a_lo, b_lo), min(a_hi, b_hi))]
 
@@ -483,7 +501,7 @@ def contact_velocity(scene: Scene, contact: Contact) -> tuple[float, float]:
     if not scene.ground:
         velocity = velocity - point_velocity(scene.bodies[0], contact.point)
     normal = np.asarray(contact.normal, dtype=float)
-    return float(velocity @ normal), float(velocity @ _tangent(normal))
+    return _along(velocity[None], normal)[0], _along(velocity[None], _tangent(normal))[0]
 
 
 def impact_problem(scene: Scene, point, normal):

@@ -115,6 +115,12 @@ def add_arguments(parser) -> None:
     parser.add_argument("--solver-only", action="store_true", help="skip the engines")
 
 
+def counts_text(counts: dict) -> str:
+    """``{"silent_non_finite": 0, "energy_gain": 2}`` as a reader's line, ``silent non-finite
+    0, energy gain 2`` (not Python's dict)."""
+    return ", ".join(f"{str(name).replace('_', ' ')} {count}" for name, count in counts.items())
+
+
 def main(args) -> int:
     problem = output_directory_problem(args.out)
     if problem:
@@ -125,10 +131,10 @@ def main(args) -> int:
                  scheduler=args.scheduler, use_cache=not args.no_cache,
                  engines=not args.solver_only)
     totals = report["solver"]["totals"]
-    print(f"solver: {totals}")
+    print(f"solver: {counts_text(totals)}")
     for group, counts in report["engines"]["counts"].items():
         bad = {name: count for name, count in counts.items() if count and name != "ok"}
-        print(f"{group}: ok {counts['ok']}, {bad or 'no failures'}")
+        print(f"{group}: ok {counts['ok']}, {counts_text(bad) or 'no failures'}")
     for name, reason in report["engines"]["skipped"].items():
         print(f"{name}: skipped ({reason})")
     print(f"written {args.out / 'stress.md'} ({time.perf_counter() - started:.1f} s)")

@@ -29,7 +29,6 @@ from harness.engines import PRESET_ROLES, preset_label
 from harness.plotting import new_figure, percent_tick, save_png
 from harness.run.metrics import (
     SCIENTIFIC_BELOW_PERCENT,
-    SHARED_SCIENTIFIC_BELOW_PERCENT,
     fmt_departure,
     fmt_departures,
 )
@@ -113,7 +112,7 @@ def _with_interval(value: dict, prefix: str) -> str:
     low, high = value.get(f"{prefix}_low"), value.get(f"{prefix}_high")
     if low is None or high is None or not (math.isfinite(low) and math.isfinite(high)):
         return fmt_departure(value[prefix])
-    text, low_text, high_text = fmt_departures([value[prefix], low, high])  # one style
+    text, low_text, high_text = fmt_departures([value[prefix], low, high])  # each as alone
     return f"{text} [{low_text}, {high_text}]"
 
 
@@ -234,10 +233,8 @@ def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dic
                    + "." for engine, values in settings.get("overrides", {}).items())),
         ("Departure = ‖u − u_law‖_M / ‖u_before‖_M (kinetic-energy norm; two free bodies in "
          "their centre of mass's frame), in percent: decimals down to "
-         f"{SCIENTIFIC_BELOW_PERCENT:g}%, scientific notation below it; a median or p90 and "
-         "its interval are written alike, all in scientific notation when one of them is "
-         f"below {SCIENTIFIC_BELOW_PERCENT:g}% and none reaches "
-         f"{SHARED_SCIENTIFIC_BELOW_PERCENT:g}%. *Checked runs*: the runs judged one impact "
+         f"{SCIENTIFIC_BELOW_PERCENT:g}%, scientific notation below it, each number alike "
+         "wherever it stands. *Checked runs*: the runs judged one impact "
          "by the verdict checks (docs/verdicts.md); *all runs*: every run, flagged ones "
          "included, so a large flagged share cannot hide the worst runs; *flagged* = runs "
          "failing a check, counted by reason below. [95% CI]: a percentile-bootstrap "
@@ -413,7 +410,7 @@ def cdf_figure(runs: dict, engine: str, path: Path, tag: str | None = None) -> P
     ok = runs["status"] == "ok"
     families = sorted(set(np.asarray(runs["family"]).tolist()))
     colours = colormaps["tab10"]
-    figure = new_figure(4.6 * len(presets) + 0.4, 3.8 + 0.22 * ((len(families) + 1) // 2))
+    figure = new_figure(4.6 * len(presets) + 0.4, 3.8 + 0.22 * len(families))
     axes = figure.subplots(1, len(presets), sharex=True, sharey=True, squeeze=False)[0]
     for axis, preset in zip(axes, presets):
         for index, family in enumerate(families):
@@ -436,10 +433,9 @@ def cdf_figure(runs: dict, engine: str, path: Path, tag: str | None = None) -> P
         axis.set_title(f"{engine} {preset_label(engine, preset)}", fontsize=11)
     axes[0].set_ylabel("fraction of the n ok runs ≤ x")
     for axis in axes:  # a key per panel, below it: each preset's n differ
-        if axis.get_legend_handles_labels()[0]:
+        if axis.get_legend_handles_labels()[0]:  # one column: two ran into the next panel's
             axis.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), fontsize=9,
-                        frameon=False, title="family (n = ok runs of all)", title_fontsize=9,
-                        ncols=2)
+                        frameon=False, title="family (n = ok runs of all)", title_fontsize=9)
     return save_png(figure, path, dpi=FIGURE_DPI, tag=tag)
 
 

@@ -33,7 +33,7 @@ block-diagonal). Likewise the last contact's terms (``m_nn``, ``m_nt``, ``m_tt``
 ``M⁻¹w``), keyed on that factor and the bytes of ``w_n`` and ``w_t`` given as float
 arrays: a fit, a sweep or a law solver solves one contact at many speeds, ``μ``, ``e`` and
 laws, and then pays only for the approach velocities, the law and the result. Measured per
-call: README, 'Measured speed'.
+call: docs/performance.md, 'Measured speed (`make bench` = `impact-harness bench --quick`)'.
 """
 
 from __future__ import annotations
@@ -43,6 +43,7 @@ import math
 import numpy as np
 
 from . import laws
+from .contact_space import missing_branch
 
 #: Most generalized speeds solved here (two free planar bodies have 6); beyond, numpy's
 #: O(p³) kernels win.
@@ -295,13 +296,15 @@ def law_answer(law, mnn, mnt, mtt, vn, vt, mu, e, delta):
         at_boundary, alternative = False, 0  # laws not decided by Table 1
         e_poisson = math.nan
         reverse = ctype == laws.NEWTON_REVERSE
-    else:
+    elif law == "newton" or law == "stronge":
         normal, tangential, ctype, compression = _process(law, mnt, mtt, vt, mu, vn_abs, g, h,
                                                           p, q, delta, e)
         e_poisson = (normal - compression) / compression
         at_boundary, alternative = False, 0
         reverse = (ctype == laws.NEWTON_REVERSE if law == "newton"
                    else ctype in (laws.REVERSE_FROM_COMPRESSION, laws.REVERSE_FROM_RESTITUTION))
+    else:  # a law named in LAWS without its branch must not run another law's
+        raise NotImplementedError(missing_branch(law, "fastpath.law_answer"))
     if reverse and q <= 0:
         return None
     vn_separation = vn + (mnn * normal + mnt * tangential)  # (A22)

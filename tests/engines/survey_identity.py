@@ -69,10 +69,13 @@ def stored_path(engine: str, commit: str) -> Path:
     return DATA / f"{engine}-survey-runs-{commit}.json"
 
 
-#: A float's bound, relative to its magnitude or (near zero) to the run's largest speed: a
-#: last bit moved in the engine's inputs moved velocities by relative 1e-13 under another
-#: OpenBLAS kernel (tests/run/test_bit_identity.py); a change of the adapter moves them by
-#: far more.
+#: A float's bound, relative to its magnitude or (near zero) to the run's largest speed.
+#: Kind (docs/verdicts.md, 'Same answers on every CPU'): a decision with a tolerance band,
+#: "is this the stored run?", not a derived bound: no forward error bound exists for a
+#: thousand steps of an engine's contact solver. The band lies between the drift of the last
+#: bits (relative 1e-13 measured under other OpenBLAS kernels, tests/run/test_bit_identity.py;
+#: the scenes' geometry now takes no BLAS product at all) and a change of the adapter, which
+#: moves velocities by far more (``test_the_bound_takes_the_last_bits_and_catches_a_change``).
 RELATIVE = 1e-9
 
 

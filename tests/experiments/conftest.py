@@ -45,8 +45,9 @@ def write_synthetic(directory, drops: int = 240, flagged: int = 40, noise: float
     positions = np.zeros((drops, 3))
     positions[:, 2] = theta + rng.normal(0.0, 0.02, drops)  # the real θ differs a frame's worth
     states_i = np.hstack([positions, before])
-    published = after + np.array([0.0, fazeli.POST_VY_OFFSET, 0.0])
-    states_f = np.hstack([positions, published])
+    # the law's answer is the published frame (the default); the raw file holds it less 3gh
+    raw = after - np.array([0.0, fazeli.POST_VY_OFFSET, 0.0])
+    states_f = np.hstack([positions, after])
     data = {"states_i": states_i, "states_f": states_f, "n": wn, "d": wt}
     scipy.io.savemat(directory / "data_ellipse.mat", {"data": data})
     v_models = np.hstack([after] * len(fazeli.MODEL_NAMES))
@@ -59,7 +60,7 @@ def write_synthetic(directory, drops: int = 240, flagged: int = 40, noise: float
     for row in range(total):
         if row in raw_rows:
             i = next(clean)
-            bounce[0, row] = (np.hstack([states_i[i], positions[i], after[i]])[None],
+            bounce[0, row] = (np.hstack([states_i[i], positions[i], raw[i]])[None],
                               wn[i][None], wt[i][None], np.zeros((1, 6), np.uint8))
         else:
             flags = np.zeros((1, 6), np.uint8)
@@ -74,3 +75,12 @@ def synthetic_copy(tmp_path_factory):
     directory = tmp_path_factory.mktemp("fazeli_synthetic")
     truth = write_synthetic(directory)
     return directory, truth
+
+
+@pytest.fixture(autouse=True)
+def own_cache(tmp_path, monkeypatch):
+    """Each test's ``experiments`` and ``calibrate`` keep their results in a cache of their
+    own (never the project's)."""
+    cache = tmp_path / "cache"
+    monkeypatch.setenv("IMPACT_HARNESS_CACHE_DIR", str(cache))
+    return cache

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from harness.cli import main as cli_main
-from harness.experiments import calibrate, registry
+from harness.experiments import calibrate, frames, registry
 
 from .conftest import write_synthetic
 
@@ -62,7 +62,7 @@ def test_data_target_on_a_synthetic_copy(tmp_path, pymunk):
 
     write_synthetic(tmp_path, drops=30, flagged=4)  # Poisson, μ 0.3, e 0.7, plus noise
     data = fazeli.load(tmp_path, check_hashes=False)  # synthetic: not the published hashes
-    impacts = fazeli.without_post_offset(data.impacts).subset(range(6))
+    impacts = frames.in_frame(data.impacts, frames.DEFAULT_FRAME).subset(range(6))
     thetas, _ = drops_engines.jacobian_angles(impacts, data.pre_impact_angles[:6])
     result = calibrate.calibrate(pymunk, "accurate", impacts, thetas, "data")
     assert result.best["mu"] == 0.3 and result.best["e"] == 0.6  # nearest cells of 0.3, 0.7
@@ -128,7 +128,7 @@ def toy_on_synthetic_drops(tmp_path_factory, toy):
     directory = tmp_path_factory.mktemp("calibrate_toy")
     write_synthetic(directory, drops=40, flagged=2, noise=0.05)
     data = fazeli.load(directory, check_hashes=False)  # synthetic: not the published hashes
-    target = fazeli.without_post_offset(data.impacts)
+    target = frames.in_frame(data.impacts, frames.DEFAULT_FRAME)
     rows = calibrate.sample_rows(len(target), 16, seed=2)
     impacts = target.subset(rows)
     thetas, _ = drops_engines.jacobian_angles(impacts, data.pre_impact_angles[rows])
@@ -283,7 +283,7 @@ def test_cli_calibrates_a_registered_engine_without_knobs_and_says_why(capsys, t
     assert status == 0 and "best:" in out
     assert (f"its own settings: cannot be calibrated (no knobs; the pair's mu and e alone are "
             f"tried): {Engine.no_calibration_knobs_why}") in out
-    assert "  mu [" in out and "  e [" in out and "approach_steps" not in out
+    assert "  mu (tried " in out and "  e (tried " in out and "approach_steps" not in out
 
 
 def test_an_engines_calibration_knobs_are_tried_beside_the_pair(toy):
@@ -299,7 +299,7 @@ def test_an_engines_calibration_knobs_are_tried_beside_the_pair(toy):
     assert len(result.cells) == 3 * 3 * 2
     assert "approach_steps" in result.cannot()
     text = calibrate.summary(result)
-    assert "approach_steps [0.0, 2.0]: cannot be calibrated" in text
+    assert "approach_steps (tried 0, 2): cannot be calibrated" in text  # not a list repr
     assert "no knobs" not in text
 
 
@@ -332,3 +332,55 @@ def test_the_shipped_knobs_live_on_the_engine_classes():
         assert cls.calibration_knobs or cls.no_calibration_knobs_why != \
             Engine.no_calibration_knobs_why, f"{name}: no knobs and no reason of its own"
         assert {knob for knob, _ in cls.calibration_knobs} <= set(cls.setting_docs)
+
+
+@pytest.mark.parametrize("option, value", [("--drops", "100000000"), ("--drops", "1"),
+                                           ("--replicates", "1000000000000"),
+                                           ("--law-mu", "nan"), ("--law-e", "1.5"),
+                                           ("--law-mu", "-0.1")])
+def test_cli_bounds_every_count_and_setting_before_any_work(option, value, capsys,
+                                                             monkeypatch):
+    """``--drops 100000000`` grew to 23.8 GB before it was killed; ``--law-mu nan`` ran."""
+    from harness.experiments import calibrate_cli
+
+    def no_work(name):
+        raise AssertionError("work started before the options were checked")
+
+    monkeypatch.setattr(calibrate_cli, "load_engine", no_work)
+    assert cli_main(["calibrate", "pymunk", "--to", "poisson", option, value]) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert f"{option} {value}: " in line and "out of range; allowed: " in line
+
+
+def test_cli_a_rerun_reads_the_cache(capsys, pymunk, monkeypatch):
+    """calibrate's second run with the same options runs no engine; progress on stderr."""
+    command = ["calibrate", "pymunk", "--to", "poisson", "--drops", "3", "--replicates", "10",
+               "--preset", "defaults"]
+    assert cli_main(command) == 0
+    first = capsys.readouterr()
+    assert "impact-harness calibrate: pymunk (defaults)" in first.err
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("computed again")
+
+    monkeypatch.setattr(calibrate, "calibrate", no_work)
+    assert cli_main(command) == 0
+    second = capsys.readouterr()
+    assert second.out == first.out and "read from the cache" in second.err
+    assert cli_main([*command, "--law-e", "0.3"]) != 0  # the cli reports the failure
+    assert "computed again" in capsys.readouterr().err
+
+
+def test_the_cache_key_names_a_run_time_engine_by_its_source(toy_engine):
+    """An engine registered at run time is not in the cache's code version: its class's
+    source file names it in the key, so an edited adapter is computed again."""
+    import hashlib
+    import inspect
+
+    from harness.experiments import cached
+
+    found = cached.payload("calibrate", {"engine": toy_engine}, None)["engines_registered"]
+    from harness.engines import engine_class
+
+    source = Path(inspect.getfile(engine_class(toy_engine))).read_bytes()
+    assert found == {toy_engine: hashlib.sha256(source).hexdigest()}

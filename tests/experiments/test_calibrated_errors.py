@@ -10,7 +10,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from harness.experiments import calibrate, calibrated_errors, drops_engines, fazeli, registry
+from harness.experiments import (
+    calibrate,
+    calibrated_errors,
+    drops_engines,
+    fazeli,
+    frames,
+    registry,
+)
 
 from .conftest import TRUE_E, TRUE_MU, write_synthetic
 
@@ -34,7 +41,7 @@ def drops(tmp_path_factory):
     directory = tmp_path_factory.mktemp("calibrated_errors")
     write_synthetic(directory, drops=60, flagged=3, noise=0.05)
     data = fazeli.load(directory, check_hashes=False)  # synthetic: not the published hashes
-    target = fazeli.without_post_offset(data.impacts)
+    target = frames.in_frame(data.impacts, frames.DEFAULT_FRAME)
     thetas, _ = drops_engines.jacobian_angles(target, data.pre_impact_angles)
     return target, thetas
 
@@ -153,7 +160,7 @@ def test_real_files_pymunk_at_its_calibrated_settings_beside_poisson():
     except EngineNotInstalled as missing:
         pytest.skip(f"pymunk not installed: {missing}")
     data = fazeli.load(Path(REAL_DIR))
-    target = fazeli.without_post_offset(data.impacts)
+    target = frames.in_frame(data.impacts, frames.DEFAULT_FRAME)
     thetas, _ = drops_engines.jacobian_angles(target, data.pre_impact_angles)
     fit = calibrated_errors.training_fit(target, "poisson")
     assert fit.mu == 0.0  # every law's best fit to these drops is frictionless

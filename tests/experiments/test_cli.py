@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import pytest
+
 from harness import cli
 from harness.experiments import registry
 
@@ -70,3 +72,131 @@ def test_the_json_holds_aggregates_only(synthetic_copy, tmp_path, monkeypatch, c
         return 0
 
     assert longest_list(section) < truth["drops"] / 10
+
+
+@pytest.mark.parametrize("option, value", [("--replicates", "1000000000000"),
+                                           ("--replicates", "3"), ("--seed", "-1"),
+                                           ("--workers", "0")])
+def test_every_count_is_bounded_before_any_work(option, value, monkeypatch, capsys):
+    """``--replicates 10^12`` was accepted and would have run for ever; the bound is in
+    harness/bounds.py's table, one line names the option, the value and what is allowed."""
+    from harness.experiments import cli as experiments_cli
+
+    monkeypatch.setattr(experiments_cli, "run_engines", _no_work)
+    assert cli.main(["experiments", option, value]) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert f"{option} {value}: " in line and "out of range; allowed: an integer" in line
+
+
+def _no_work(*args, **kwargs):
+    raise AssertionError("work started before the options were checked")
+
+
+def test_json_through_a_link_is_refused_and_its_target_kept(tmp_path, monkeypatch, capsys):
+    from harness.experiments import cli as experiments_cli
+
+    monkeypatch.setattr(experiments_cli, "run_engines", _no_work)
+    target = tmp_path / "precious.txt"
+    target.write_text("keep me")
+    link = tmp_path / "out.json"
+    link.symlink_to(target)
+    assert cli.main(["experiments", "--json", str(link)]) == 2
+    assert "symbolic link" in capsys.readouterr().err
+    assert target.read_text() == "keep me" and link.is_symlink()
+
+
+@pytest.mark.parametrize("where", ["missing", "read-only"])
+def test_json_into_a_directory_it_cannot_write_is_refused_first(where, tmp_path, monkeypatch,
+                                                                 capsys):
+    import os
+
+    from harness.experiments import cli as experiments_cli
+
+    monkeypatch.setattr(experiments_cli, "run_engines", _no_work)
+    directory = tmp_path / "out"
+    if where == "read-only":
+        directory.mkdir()
+        directory.chmod(0o500)
+        if os.access(directory, os.W_OK):  # root writes anyway
+            pytest.skip("running as a user who writes into read-only directories")
+    assert cli.main(["experiments", "--json", str(directory / "x.json")]) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert f"--json {directory / 'x.json'}: its directory" in line
+
+
+def test_json_is_written_atomically_over_a_regular_file(tmp_path, monkeypatch, capsys):
+    monkeypatch.delenv(registry.FAZELI_2017.env_var, raising=False)
+    out = tmp_path / "out.json"
+    out.write_text("old")
+    assert cli.main(["experiments", "--engines", "none", "--json", str(out)]) == 0
+    assert out.read_text().startswith("{") and not list(tmp_path.glob("*.tmp"))
+
+
+def test_a_rerun_reads_the_cache_and_prints_the_same(synthetic_copy, monkeypatch, capsys,
+                                                     tmp_path, own_cache):
+    """The second run with nothing changed computes nothing (the work is replaced by a
+    failure) and prints and writes what the first did; another setting computes again;
+    progress goes to stderr, never into the printed results."""
+    from harness.experiments import analysis, fazeli
+
+    directory, _ = synthetic_copy
+    real_load = fazeli.load
+    monkeypatch.setattr(fazeli, "load", lambda path: real_load(path, check_hashes=False))
+    first_json, second_json = tmp_path / "1.json", tmp_path / "2.json"
+    command = ["experiments", "--data", str(directory), "--replicates", "10", "--workers",
+               "1", "--engines", "none"]
+    assert cli.main([*command, "--json", str(first_json)]) == 0
+    first = capsys.readouterr()
+    assert "impact-harness experiments: fitting every law" in first.err
+    assert "impact-harness experiments" not in first.out
+
+    def no_fit(*args, **kwargs):
+        raise AssertionError("computed again")
+
+    monkeypatch.setattr(analysis, "fit_laws", no_fit)
+    assert cli.main([*command, "--json", str(second_json)]) == 0
+    second = capsys.readouterr()
+    assert second.out == first.out and "read from the cache" in second.err
+    assert second_json.read_text() == first_json.read_text()
+    for changed in (["--seed", "1"], ["--no-cache"]):
+        assert cli.main([*command, *changed]) != 0  # the cli reports the failure
+        assert "computed again" in capsys.readouterr().err
+    # an entry edited after it was written is a miss (its SHA-256 differs): computed again
+    (entry,) = own_cache.rglob("*.json")
+    entry.write_text(entry.read_text().replace("poisson", "poissin"))
+    assert cli.main(command) != 0 and "computed again" in capsys.readouterr().err
+
+
+def test_the_command_and_the_report_lead_with_one_headline_fit():
+    """The command's defaults are the report's headline: Poisson fitted by the same
+    objective to the same frame of post-impact speeds (aggregates.SHOWN_*,
+    frames.DEFAULT_FRAME), so the engines run at the same (μ, e) in both."""
+    from harness.experiments import aggregates, frames
+    from harness.experiments import cli as experiments_cli
+
+    options = experiments_cli.default_options()
+    assert options.objective == aggregates.SHOWN_OBJECTIVE
+    assert options.post_speeds == frames.DEFAULT_FRAME == "published"
+    assert aggregates.SHOWN_LAW == frames.LAW == "poisson"
+
+
+def test_a_cached_run_writes_this_copys_place_in_the_json(synthetic_copy, tmp_path,
+                                                          monkeypatch, capsys):
+    """The cache is keyed by the files' SHA-256, not their place: a copy moved elsewhere
+    reads the same entry, and the --json provenance names where the copy is now."""
+    import json
+    import shutil
+
+    from harness.experiments import fazeli
+
+    directory, _ = synthetic_copy
+    moved = tmp_path / "moved"
+    shutil.copytree(directory, moved)
+    real_load = fazeli.load
+    monkeypatch.setattr(fazeli, "load", lambda path: real_load(path, check_hashes=False))
+    command = ["experiments", "--replicates", "10", "--workers", "1", "--engines", "none"]
+    assert cli.main([*command, "--data", str(directory)]) == 0
+    out = tmp_path / "moved.json"
+    assert cli.main([*command, "--data", str(moved), "--json", str(out)]) == 0
+    assert "read from the cache" in capsys.readouterr().err
+    assert json.loads(out.read_text())["fazeli2017"]["provenance"]["directory"] == str(moved)

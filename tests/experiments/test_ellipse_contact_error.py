@@ -35,8 +35,9 @@ def test_every_engine_touches_where_the_ellipse_does(engine):
     assert height["max_ok"] <= HEIGHT_BOUND + MARGIN.get(engine.name, 0.0)
     if engine.name in ("pymunk", "box2d"):
         assert arm["max_ok"] <= EXACT and height["max_ok"] <= EXACT
-    # the measurement can fail: a stand-in not placed on the lowest point is caught
-    assert engine.name == "mujoco" or _unplaced_error(engine) > 10 * ARM_BOUND
+    # the measurement can fail: a stand-in not placed on the lowest point is caught (MuJoCo
+    # and Drake collide the true ellipsoid: no stand-in to misplace)
+    assert engine.name in ("mujoco", "drake") or _unplaced_error(engine) > 10 * ARM_BOUND
 
 
 def _unplaced_error(engine) -> float:

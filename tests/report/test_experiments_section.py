@@ -67,10 +67,18 @@ def test_the_drops_figures_and_calibration_table_from_aggregates(tmp_path, monke
     found = fake["calibrated_errors"]
     pymunk, mujoco = found["engines"]
     low, high = pymunk["calibrated"]["interval"]
-    assert f"{pymunk['calibrated']['median']:.3f} [{low:.3f}, {high:.3f}]" in html
-    assert "μ 0, e 0.6" in html and "200 / 200" in html and "none / clipped: 2" in html
+    assert f"{pymunk['calibrated']['median']:.3f}<br>[{low:.3f}, {high:.3f}]" in html
+    assert "μ 0, e 0.6" in html and "none<br>/ clipped: 2" in html
+    # each engine beside Poisson on the drops it scored, and the drops it lost
+    vs = pymunk["calibrated"]["vs_reference"]
+    low, high = vs["reference"]["interval"]
+    assert f"{vs['reference']['median']:.3f}<br>[{low:.3f}, {high:.3f}]" in html
+    assert f"5<br>(law {vs['lost']['reference_median']:.3f})" in html
     assert "<i>cannot be calibrated</i>: no setting tried" in html
-    assert "0 / —" in html and "multi-contact: 400 / —" in html
+    assert "every drop" in html and "multi-contact: 400<br>/ —" in html
+    # laws and models in one frame, both frames
+    assert "Laws and models in one frame" in html and "published (default)" in html
+    assert "0.191 / 0.330" in html
     assert "200 training, 200 held out" in html
     assert "length_scale 1, 8, 64" in html and "solref (0.02, 0.5), (0.02, 1)" in html
     # its text columns wrap: the table stays readable at 1400 px
@@ -130,7 +138,8 @@ def fake_aggregates() -> dict:
     laws = {objective: {law: fit for law in ("newton", "poisson", "stronge")}
             for objective in aggregates.OBJECTIVES}
     return {
-        "drops": 400, "seed": 0, "replicates": 10, "paper_models": {"AP Poisson": errors},
+        "drops": 400, "post_speeds": "published", "seed": 0, "replicates": 10,
+        "paper_models": {"AP Poisson": errors}, "frames": fake_frames(rng),
         "laws": laws,
         "shown": {"law": "poisson", "objective": "impulse", "mu": 0.04, "e": 0.55,
                   "speeds": ["v_x'", "v_y'", "ω'"], "units": ["m/s", "m/s", "rad/s"],
@@ -171,6 +180,22 @@ def fake_aggregates() -> dict:
     }
 
 
+def fake_frames(rng) -> dict:
+    """Both frames of made-up errors, reduced by calibrated_errors' own functions."""
+    from harness.experiments import calibrated_errors, frames
+
+    law, model = rng.uniform(0, 0.8, 400), rng.uniform(0, 1, 400)
+    summary = functools.partial(calibrated_errors.median_interval, replicates=50)
+    fit = {"mu": 0.0, "e": 0.6, "objective": 0.3, "held_out_objective": 0.31, **summary(law),
+           "vs_best_model": calibrated_errors.paired_difference(law, model, replicates=50)}
+    row = {"models": {"AP Poisson": summary(model)}, "best_model": "AP Poisson",
+           "fits": {"median-error": fit, "impulse": fit},
+           "outside_impulse_span": {"median": 0.191, "q90": 0.33}}
+    return {"frames": {name: {**row, "means": text} for name, text in frames.FRAMES.items()},
+            "default": frames.DEFAULT_FRAME, "law": "poisson", "replicates": 50,
+            "confidence": 0.95, "models_outside_impulse_span_max": 3e-16}
+
+
 def fake_calibrated_errors(rng) -> dict:
     """Made-up per-drop errors reduced by calibrated_errors' own functions: pymunk
     calibrated, MuJoCo flagged on every drop and so not calibrated."""
@@ -182,6 +207,7 @@ def fake_calibrated_errors(rng) -> dict:
     reference = held + rng.normal(0, 0.01, 200)
     summary = functools.partial(calibrated_errors.median_interval, replicates=50)
     paired = functools.partial(calibrated_errors.paired_difference, replicates=50)
+    held[:5] = np.nan  # lost: flagged
     calibrated = {"settings": {"mu": 0.0, "e": 0.6}, "training_objective": 0.3,
                   **summary(held), "flagged": {"clipped": 2},
                   "vs_reference": paired(held, reference), "cdf": aggregates.quantiles(held)}

@@ -54,8 +54,10 @@ def quick_report(tmp_path_factory):
     # inputs of the bench and stress pages, as `impact-harness bench` / `stress` write them
     sources = tmp_path_factory.mktemp("inputs")
     (sources / "bench").mkdir()
+    # made by the results' code: linked (older pages are named, not linked)
+    made = {"python": "3.11", "code_version": outcome.provenance["code_version"]}
     (sources / "bench" / "bench.json").write_text(json.dumps(
-        {"provenance": {"python": "3.11"}, "solver": {"laws": {
+        {"provenance": made, "solver": {"laws": {
             "poisson": {"batch_s": 0.05, "problems_per_s": 2.0e7},
             "stronge": {"batch_s": 0.06, "problems_per_s": 1.7e7}}}}))
     (sources / "bench" / "solver-throughput.png").write_bytes(b"\x89PNG\r\n\x1a\n")
@@ -63,6 +65,7 @@ def quick_report(tmp_path_factory):
     (sources / "stress" / "stress.md").write_text(
         "# Stress report\n\n## Solver\n\n| check | count |\n|---|---|\n| silent non finite | 0 |\n")
     (sources / "stress" / "engine-grid.png").write_bytes(b"\x89PNG\r\n\x1a\n")
+    (sources / "stress" / "stress.json").write_text(json.dumps({"provenance": made}))
     results = read_results(path)
     written = report.write_report(results, out, sources=[sources])
     return out, results, written
@@ -225,11 +228,11 @@ def sweep_run(index: int, departure: float, status: str = "ok", overrides=None) 
 def test_flagged_runs_are_counted_never_in_the_value():
     # the largest single-impact departure (3%) is the value; the flagged run is counted
     runs = [sweep_run(0, 0.03), sweep_run(1, 0.01, "multi-contact"), sweep_run(2, 0.02)]
-    assert views.departure_cell(runs, "poisson") == "3% (1!)"
+    assert views.departure_cell(runs, "poisson") == "3% (1 of 3!)"  # of the sweep's runs
     assert views.worst_departure(runs, "poisson") == (0.03, True, False)
     # a flagged run with a larger departure does not become the value
     runs[1] = sweep_run(1, 0.05, "multi-contact")
-    assert views.departure_cell(runs, "poisson") == "3% (1!)"
+    assert views.departure_cell(runs, "poisson") == "3% (1 of 3!)"
     # every run flagged: no value at all
     assert views.departure_cell([sweep_run(0, 0.05, "multi-contact")], "poisson") \
         == "flagged (1!)"
@@ -365,6 +368,45 @@ def test_overrides_are_labelled_by_where_they_were_set():
     assert "runs with their scenario's overrides" not in why
 
 
+def test_a_page_of_other_code_is_named_not_linked(tmp_path):
+    """The contents link a bench or stress page only when measured by the results' code;
+    an older one is named with the command that measures it again."""
+    from harness.report.pages import BENCH_PAGE, STRESS_PAGE, write_pages
+
+    sources = tmp_path / "inputs"
+    (sources / "bench").mkdir(parents=True)
+    (sources / "bench" / "bench.json").write_text(json.dumps(
+        {"provenance": {"code_version": "old", "created_utc": "2026-11-22T18:23:00Z"}}))
+    (sources / "stress").mkdir()
+    (sources / "stress" / "stress.md").write_text("# Stress\n\nno numbers\n")
+    (sources / "stress" / "stress.json").write_text(json.dumps(
+        {"provenance": {"code_version": "new"}}))
+    out = tmp_path / "out"
+    out.mkdir()
+    linked, stale = write_pages(out, [sources], {"code_version": "new"})
+    assert linked == {STRESS_PAGE: "Stress test: the solver and the engines at extremes"}
+    assert list(stale) == ["Benchmarks: speed and accuracy"]
+    assert "2026-11-22T18:23:00Z" in stale["Benchmarks: speed and accuracy"]
+    assert "<code>make bench</code>" in stale["Benchmarks: speed and accuracy"]
+    assert (out / BENCH_PAGE).is_file()  # written, saying at its top that it is older
+    assert "Older than the report" in (out / BENCH_PAGE).read_text(encoding="utf-8")
+    contents = html.contents_html([], linked, ["headline", "versions"], stale=stale)
+    assert f"href='{STRESS_PAGE}'" in contents and f"href='{BENCH_PAGE}'" not in contents
+    assert "Benchmarks: speed and accuracy <span class='muted'>(not linked: measured" in contents
+
+
+def test_the_contents_follow_the_page():
+    parts = ["<div id='headline'>", "<div id='gates'>", "<div id='contacts'>",
+             "<div id='scenarios'>", "<div id='table3'>", "<div id='survey'>",
+             "<div id='versions'>"]
+    sections = html.page_sections(parts)
+    assert sections == ["headline", "gates", "contacts", "scenarios", "table3", "survey",
+                        "versions"]
+    contents = html.contents_html(["a"], {}, sections)
+    order = [contents.index(f"href='#{anchor}'") for anchor in sections]
+    assert order == sorted(order)
+
+
 def test_a_page_says_where_its_numbers_come_from_and_when_they_are_older():
     from harness.report.pages import provenance_html
 
@@ -391,8 +433,8 @@ def test_only_a_report_of_library_scenarios_reproduces_table3(tmp_path):
         "mine": {"path": str(tmp_path / "mine.toml")},
         "disk-oblique": {"path": str(SCENARIO_DIR / "disk-oblique.toml")}})
     assert views.has_library_scenarios(library)
-    assert "#table3" not in html.contents_html(["mine"], {}, None, (), False)
-    assert "#table3" in html.contents_html(["mine"], {}, None, (), True)
+    assert "#table3" not in html.contents_html(["mine"], {}, ["headline", "versions"])
+    assert "#table3" in html.contents_html(["mine"], {}, ["headline", "table3", "versions"])
 
 
 def test_bench_and_stress_figures_have_captions_that_say_what_to_read():
@@ -552,3 +594,66 @@ def test_in_chromium_a_link_opens_its_fold_and_printing_opens_all(quick_report):
     assert state["ancestors"] >= 1 and state["opened"] == state["ancestors"], state
     assert state["before"] > 0 and state["printing"] == 0, state
     assert state["after"] == state["before"], state
+
+
+def test_a_set_run_is_named_in_every_output_that_shows_its_numbers(quick_report, tmp_path):
+    """summary.md, the page and the heat map of a run with ``--set`` say so: shared alone,
+    its tables would pass for the presets' numbers."""
+    from harness.report.figures import heatmap_figure
+    from harness.report.summary import write_summary
+
+    _out, results, _ = quick_report
+    provenance = {**results.provenance, "settings_overrides": {"pymunk": {"iterations": 3}}}
+    set_run = Results(records=results.records, provenance=provenance,
+                      scenarios=results.scenarios)
+    summary = write_summary(set_run, tmp_path).read_text(encoding="utf-8")
+    assert "**Not the presets as shipped**: this run set `pymunk: iterations=3`" in summary
+    header = next(line for line in summary.splitlines() if line.startswith("| scenario |"))
+    assert "pymunk.defaults (--set)" in header and "pybullet.defaults |" in header
+    assert "paper-table3.md" not in summary  # not written in this directory
+    plain = write_summary(results, tmp_path).read_text(encoding="utf-8")
+    assert "Not the presets" not in plain and "(--set)" not in plain
+    page = html.html_page(set_run, tmp_path, {"svg": set()})
+    assert "Not the presets as shipped: this run set <code>pymunk: iterations=3</code>" in page
+    import matplotlib
+
+    matplotlib.use("Agg")
+    drawn = []
+    patch = pytest.MonkeyPatch()
+    patch.setattr("harness.report.figures.save_png",
+                  lambda figure, path, **_: drawn.append(figure))
+    try:
+        heatmap_figure(set_run, tmp_path / "heatmap.png")
+    finally:
+        patch.undo()
+    texts = [t.get_text() for t in drawn[0].findobj(
+        lambda artist: hasattr(artist, "get_text"))]
+    assert "Not the presets as shipped: --set pymunk: iterations=3 on the command line" in texts
+    assert "pymunk (--set)" in texts
+
+
+def test_a_sweeps_gate_rows_name_their_points():
+    gate = {"scenario": "sweep-x", "gate": "pymunk.accurate", "record": "pymunk.accurate",
+            "law": "newton-lcp", "departure": 1e-16, "max_departure": 1e-6, "status": "pass"}
+    gates = [{**gate, "point": "alpha=0.5"}, {**gate, "point": "alpha=1"}]
+    table = overview.gates_html({"gates": gates})
+    assert ">point<" in table
+    assert "alpha=0.5" in table and "alpha=1" in table
+    single = overview.gates_html({"gates": [{**gate, "point": ""}]})
+    assert ">point<" not in single
+
+
+def test_every_engine_setting_has_a_unit_and_none_reads_as_the_engines_default():
+    from harness.engines import engine_class, engine_names
+
+    keys = {key for name in engine_names() for preset in engine_class(name).presets.values()
+            for key in preset}
+    assert keys and keys <= set(views.SETTING_UNITS), keys - set(views.SETTING_UNITS)
+    table = html.settings_table({"engine_settings": {"pybullet": {
+        "defaults": {"time_step": 1 / 240, "num_sub_steps": None, "use_split_impulse": True},
+        "accurate": {"time_step": 1 / 240, "num_sub_steps": None, "use_split_impulse": False}}}})
+    import html as html_text
+
+    table = html_text.unescape(table)
+    assert "null" not in table and "pybullet's default" in table
+    assert ">s<" in table and ">sub-steps per step<" in table and ">on<" in table

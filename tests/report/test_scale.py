@@ -136,7 +136,7 @@ def test_many_scenarios_give_one_heat_map_row_per_family_and_a_table_per_family(
         for name in members:
             assert f"<a href='#{slug(name)}'>" in table
         if engine_rows & set(members):
-            assert "class='heat' style='background:#" in table
+            assert "class='heat' style='background-color:#" in table
 
 
 def test_many_scenarios_draw_scenario_figures_only_on_demand_and_svg_for_headline(aggregated):

@@ -27,6 +27,17 @@ def test_the_stated_numbers_are_what_the_command_gives(source, load_or_skip):
     ``impact-harness findings --write --only SOURCE`` and review the change."""
     if source == "mujoco-gain":
         load_or_skip("mujoco")
+    if source == "experiments":  # the Fazeli drops, never committed; a row per engine
+        import os
+
+        from harness.engines import ENGINE_NAMES
+        from harness.experiments import registry
+
+        if not os.environ.get(registry.FAZELI_2017.env_var):
+            pytest.skip(f"the Fazeli et al. 2017 files are not redistributable: set "
+                        f"{registry.FAZELI_2017.env_var} to a copy to check these numbers")
+        for name in ENGINE_NAMES:
+            load_or_skip(name)
     if source == "ellipse-contact":  # a row per engine
         from harness.engines import ENGINE_NAMES
 
@@ -82,6 +93,20 @@ def test_a_marker_without_its_number_or_its_end_is_refused(tmp_path, text):
     path.write_text(text)
     with pytest.raises(ValueError, match="marked.txt:1: a 'stated' marker"):
         stated.stated_in(path)
+
+
+def test_a_source_whose_inputs_are_absent_is_said_not_checked(monkeypatch, capsys):
+    """Without a copy of the Fazeli drops the experiments' numbers cannot be checked:
+    findings says so on stderr and checks the rest, never a silent pass of them."""
+    from harness.experiments import registry
+
+    monkeypatch.delenv(registry.FAZELI_2017.env_var, raising=False)
+    args = Namespace(check=True, write=False, only=["experiments"], count=10, seed=0)
+    assert findings_command.main(args) == 0
+    error = capsys.readouterr().err
+    assert "experiments: not checked:" in error and registry.FAZELI_2017.env_var in error
+    with pytest.raises(stated.Unavailable):
+        stated.compute(["experiments"])
 
 
 def test_findings_check_refuses_an_unknown_source_in_one_line(capsys):

@@ -12,6 +12,10 @@ import pytest
 
 from harness.report import table3 as paper
 
+# Kind (docs/verdicts.md, 'Same answers on every CPU'): a derived bound, the print's: half a
+# unit of the 4th decimal the paper rounds to; (1 + 1e-9) keeps a value printed exactly on a
+# half unit from failing by our own rounding (~1e-16 relative on these well-conditioned rows).
+# Collision types: decisions, compared exactly.
 ROUNDING_4DP = 0.5e-4 * (1 + 1e-9)
 
 

@@ -1,5 +1,6 @@
 """Departures in percent in one style (harness/run/metrics.py): decimals down to a stated
-cut-off, scientific notation only below it, and a quantile with its interval written alike."""
+cut-off, scientific notation only below it, each number alike wherever it stands (a quantile
+beside its interval too)."""
 
 from __future__ import annotations
 
@@ -7,7 +8,6 @@ import math
 
 from harness.run.metrics import (
     SCIENTIFIC_BELOW_PERCENT,
-    SHARED_SCIENTIFIC_BELOW_PERCENT,
     fmt_departure,
     fmt_departures,
 )
@@ -29,21 +29,15 @@ def test_decimals_down_to_the_cut_off_and_scientific_only_below_it():
     assert fmt_departure(math.nan) == "n/a" and fmt_departure(None) == "n/a"
 
 
-def test_a_quantile_and_its_interval_share_one_style():
+def test_a_quantile_and_its_interval_are_each_written_as_alone():
+    """A row once wrote a median 1.19e-02% [5e-09%, 9.31e-02%] beside the same median alone,
+    0.0119%: each number is written as fmt_departure writes it, wherever it stands."""
     small = SCIENTIFIC_BELOW_PERCENT / 100
-    # all below the shared limit, the low end below the cut-off: all three scientific
-    median, low, high = fmt_departures([12 * small, 0.1 * small, 93 * small])
-    assert all(scientific(text) for text in (median, low, high))
-    assert median == "1.2e-02%" and low == "1e-04%"
-    # all at or above the cut-off: all decimals, as fmt_departure writes each
-    values = [12 * small, 8 * small, 93 * small]
-    assert fmt_departures(values) == [fmt_departure(v) for v in values]
-    assert not any(scientific(text) for text in fmt_departures(values))
-    # an interval reaching the shared limit keeps each number readable (never 1.61e+00%)
-    wide = [0.0228 / 100, 2e-7, 1.2 * SHARED_SCIENTIFIC_BELOW_PERCENT / 100]
-    assert fmt_departures(wide) == [fmt_departure(v) for v in wide]
+    values = [11.9 * small, 5e-11, 93.1 * small]
+    assert fmt_departures(values) == ["0.0119%", "5e-09%", "0.0931%"]
+    assert fmt_departures(values)[0] == fmt_departure(values[0])
     # zero and a missing bound stay as they are
-    assert fmt_departures([0.0, 0.1 * small, math.nan])[::2] == ["0%", "n/a"]
+    assert fmt_departures([0.0, 0.1 * small, math.nan]) == ["0%", "1e-04%", "n/a"]
 
 
 def test_the_band_just_below_the_cut_off_is_written_at_it_or_in_scientific_notation():
@@ -55,9 +49,3 @@ def test_the_band_just_below_the_cut_off_is_written_at_it_or_in_scientific_notat
     for factor in (0.9, 0.949, 0.95, 0.995, 0.99996):
         text = fmt_departure(factor * cut_off)
         assert scientific(text) or text == "0.001%", (factor, text)
-
-
-def test_an_interval_just_below_the_shared_limit_as_written_is_never_1e00():
-    limit = SHARED_SCIENTIFIC_BELOW_PERCENT / 100
-    texts = fmt_departures([1e-9, 0.995 * limit, 0.99999 * limit])
-    assert not any("e+00" in text for text in texts), texts

@@ -10,6 +10,11 @@ them inputs a last bit apart, which a thousand steps carry on: relative 1e-13 of
 velocities seen under OpenBLAS's Prescott kernel. A run departs when a velocity moves more
 than :data:`RELATIVE` of the run's largest speed (before or after); a change to a scenario
 or an engine setting, which moves them by far more, must regenerate the file on purpose.
+
+Kind of comparison (docs/verdicts.md, 'Same answers on every CPU'): a decision with a
+tolerance band ("is this the stored run?"), not a derived bound: the error of a thousand
+engine steps has no forward bound, so the band is set between the measured drift of the last
+bits and the smallest change the pin must catch, four orders of magnitude either side.
 """
 
 from __future__ import annotations
@@ -22,7 +27,8 @@ from pathlib import Path
 import pytest
 
 STORED = Path(__file__).parent.parent / "data" / "engine-velocities-7a12dc3.json"
-#: How far an engine's velocity may move, relative to the run's largest speed (docstring).
+#: How far an engine's velocity may move, relative to the run's largest speed: a band, not a
+#: derived bound (docstring).
 RELATIVE = 1e-9
 
 

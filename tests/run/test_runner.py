@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import harness.engines as engines_module
-from harness.engines import ENGINE_NAMES, EngineNotInstalled, UnsupportedScene
+from harness.engines import ENGINE_NAMES, EngineNotInstalled, UnsupportedScene, engine_names
 from harness.run import metrics, plan, runner, tasks
 from harness.run.records import ANALYTIC, read_results, write_results
 from harness.scenarios import SCENARIO_DIR, load_scenario
@@ -210,6 +210,8 @@ def test_non_finite_engine_numbers_are_written_as_null(tmp_path):
 
 def test_parse_options():
     assert plan.parse_engines("pymunk, mujoco") == ("pymunk", "mujoco")
+    # as experiments --engines all takes it
+    assert plan.parse_engines("all") == plan.parse_engines(None) == engine_names()
     assert plan.parse_presets("all") == ("defaults", "accurate")
     with pytest.raises(ValueError, match="unknown engine"):
         plan.parse_engines("bullet")

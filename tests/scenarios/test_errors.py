@@ -469,3 +469,13 @@ def test_an_ellipse_between_two_bodies_is_refused(tmp_path):
     error = error_of(tmp_path, text)
     assert [e.key for e in error.errors] == ["body.a.shape"], str(error)
     assert_names(error, "an ellipse touches only the ground", "[ground]")
+
+
+def test_a_table_in_a_message_reads_as_the_file_writes_it(tmp_path):
+    """An unknown engine's table is shown as TOML, not as Python's dict."""
+    text = GROUND + '\n[engine_settings.foo]\niterations = 50\nmode = "x"\n'
+    with pytest.raises(ScenarioError) as caught:
+        load_scenario(write(tmp_path, text))
+    message = str(caught.value)
+    assert 'engine_settings.foo = { iterations = 50, mode = "x" }' in message, message
+    assert "{'" not in message

@@ -18,6 +18,7 @@ from hypothesis import strategies as st
 import planar_impact as pi
 from harness.scene.random_problems import random_problems, row
 from planar_impact import contact_space, fastpath, solver
+from tests.error_bounds import bilinear_bound, solve_backward_bounds
 
 COUNT = 4_000
 SAFE_LOW, SAFE_HIGH = contact_space.SAFE_LOW, contact_space.SAFE_HIGH
@@ -97,11 +98,24 @@ def numpy_path(matrix, wn, wt, u, mu, e, law):
     return solver.solve_contact(*solver._checked_inputs(matrix, wn, wt, u, mu, e), law)  # noqa: SLF001
 
 
-# Contact terms: Cholesky and triangular solves in Python's order against LAPACK's. Both are
-# backward stable, so each term differs by at most ~4pε·κ(M)·(m_nn m_tt)^½; the draws have
-# κ(M) ≤ ~10^3 and p ≤ 6, a bound of 1e-12 relative. The law is then exact (test above), so
-# results differ from the numpy path by the law's conditioning times that.
-TERMS_RTOL = 1e-12
+# Contact terms: Cholesky and triangular solves in Python's order against LAPACK's LU solve
+# (numpy.linalg.solve). Kind (docs/verdicts.md, 'Same answers on every CPU'): a derived bound.
+# Each path's M⁻¹w solves (M + ΔM) x̂ = w exactly with ‖ΔM‖₂ bounded by its factors
+# (Higham Theorems 10.4 and 9.4: tests/error_bounds.solve_backward_bounds), so each term
+# w_iᵀ x̂_j is within ‖ΔM‖₂ |x_i| |x_j| plus its dot product's rounding of the exact one
+# (bilinear_bound), and the two paths within the sum. The law is then exact (test above), so
+# the answers differ from the numpy path by the law's conditioning times that: the law fields'
+# rel 1e-9 below is a stated band, NOT derived (issue 35 lists it). The kept factor and kept
+# contact tests further down: bit for bit, rerun against rerun in one process.
+
+
+def terms_bound(matrix, wn, wt, i: str, j: str) -> float:
+    """How far the fast path's and the numpy path's contact term ``w_iᵀ M⁻¹ w_j`` (``i``,
+    ``j`` in ``"n"``, ``"t"``) can be apart: the sum of both paths' derived bounds."""
+    w = {"n": np.asarray(wn, dtype=float), "t": np.asarray(wt, dtype=float)}
+    x = {key: np.linalg.solve(matrix, value) for key, value in w.items()}
+    return sum(bilinear_bound(backward, x[i], x[j], w[i])
+               for backward in solve_backward_bounds(matrix).values())
 
 
 @pytest.mark.parametrize("kind", ["body", "two bodies", "random"])
@@ -123,9 +137,9 @@ def test_solve_matches_the_numpy_path_and_solve_batch(kind):
         if fields is None:  # declined only where a division by zero or the scale needs numpy
             continue
         fast += 1
-        scale = math.sqrt(reference.mnn * reference.mtt)
         for name in ("mnn", "mnt", "mtt"):
-            assert abs(fields[name] - getattr(reference, name)) <= TERMS_RTOL * scale
+            bound = terms_bound(matrix, wn, wt, name[1], name[2])
+            assert abs(fields[name] - getattr(reference, name)) <= bound, (name, bound)
         if not reference.type_at_boundary:  # inside the band the terms' rounding may decide
             assert fields["collision_type"] == reference.collision_type
         for name in ("normal_impulse", "tangential_impulse", "vn_separation", "energy_change"):

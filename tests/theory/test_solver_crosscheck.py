@@ -26,6 +26,11 @@ COUNT = 12_000  # the issue asks for ≥ 10,000 per law
 # Both methods are exact up to rounding; with Δ/(m_nn m_tt) ≥ 1e-3 in the draws the
 # rounding error is amplified by at most ~1/Δ' = 1e3, and the largest error seen on 200,000
 # draws was 9e-11. 1e-9 leaves a margin of 10 while still catching any wrong formula.
+# Kind (docs/verdicts.md, 'Same answers on every CPU'): two implementations on one machine
+# within a stated band, NOT yet a derived bound: the factor 1e3 is derived (the draws'
+# conditioning), the count of roundings it multiplies is not (issue 35 lists it). Collision
+# types: a decision with a band (near_type_boundary, laws.TYPE_BAND); PGS below: its stopping
+# rule's bound (derived, 2e-12) with a margin of 50.
 IMPULSE_RTOL = 1e-9
 
 

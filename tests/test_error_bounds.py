@@ -1,0 +1,154 @@
+"""The forward error bounds of tests/error_bounds.py hold: each against exact rational
+arithmetic (:class:`fractions.Fraction`) on random and adversarial inputs, summed in several
+orders as different kernels would, and each is tight enough to mean something."""
+
+from __future__ import annotations
+
+import math
+from fractions import Fraction
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from tests.error_bounds import (
+    LIBM_RELATIVE,
+    U,
+    bilinear_bound,
+    direction_bound,
+    dot_bound,
+    gamma,
+    solve_backward_bounds,
+)
+
+finite = st.floats(min_value=-1e6, max_value=1e6, allow_nan=False, allow_infinity=False)
+
+
+def test_gamma_is_n_u_over_one_minus_n_u_and_refuses_nonsense():
+    assert gamma(0) == 0.0
+    assert gamma(1) == pytest.approx(U, rel=1e-15)
+    assert gamma(3) == 3 * U / (1 - 3 * U)
+    assert gamma(2) + gamma(3) + gamma(2) * gamma(3) <= gamma(5)  # Higham Lemma 3.3
+    assert LIBM_RELATIVE == 2 * U
+    with pytest.raises(ValueError, match="n u < 1"):
+        gamma(-1)
+    with pytest.raises(ValueError, match="n u < 1"):
+        gamma(2 ** 53)
+
+
+def sums(a, b):
+    """``Σ a_i b_i`` as kernels form it: left to right, right to left, pairwise, and with
+    fused multiply-adds (each product exact, one rounding per addition)."""
+    products = [x * y for x, y in zip(a, b)]
+    left = 0.0
+    for value in products:
+        left += value
+    right = 0.0
+    for value in reversed(products):
+        right += value
+    pairwise = list(products)
+    while len(pairwise) > 1:
+        pairwise = [pairwise[i] + pairwise[i + 1] if i + 1 < len(pairwise) else pairwise[i]
+                    for i in range(0, len(pairwise), 2)]
+    fused = 0.0
+    for x, y in zip(a, b):
+        fused = float(Fraction(x) * Fraction(y) + Fraction(fused))  # fma: one rounding
+    return [left, right, pairwise[0], fused]
+
+
+@given(st.lists(st.tuples(finite, finite), min_size=1, max_size=12))
+def test_dot_bound_holds_in_every_order(pairs):
+    a, b = [x for x, _ in pairs], [y for _, y in pairs]
+    exact = sum(Fraction(x) * Fraction(y) for x, y in pairs)
+    bound = Fraction(dot_bound(a, b))
+    for value in sums(a, b):
+        assert abs(Fraction(value) - exact) <= bound, (value, float(exact), float(bound))
+
+
+def test_dot_bound_is_reached_within_a_small_factor_where_terms_cancel():
+    # Cancellation is where the bound matters: a sum near zero of large terms. The error of
+    # some random draws must come within a factor 100 of γ_n Σ|a_i b_i| (the bound is sharp
+    # to first order; a bound 1e6 too loose would catch nothing).
+    rng = np.random.default_rng(35)
+    worst = 0.0
+    for _ in range(2000):
+        a = rng.uniform(-1, 1, 4).tolist()
+        b = rng.uniform(-1, 1, 4).tolist()
+        b[-1] = -sum(x * y for x, y in zip(a[:-1], b[:-1])) / a[-1]  # exact sum near 0
+        exact = sum(Fraction(x) * Fraction(y) for x, y in zip(a, b))
+        error = abs(Fraction(sums(a, b)[0]) - exact)
+        worst = max(worst, float(error) / dot_bound(a, b))
+    assert 0.01 < worst <= 1.0
+
+
+def test_dot_bound_refuses_unequal_lengths():
+    with pytest.raises(ValueError, match="3 terms against 2"):
+        dot_bound([1.0, 2.0, 3.0], [1.0, 2.0])
+
+
+@given(st.floats(min_value=1e-3, max_value=1e3), st.floats(min_value=-math.pi, max_value=math.pi),
+       st.floats(min_value=0.0, max_value=0.3), st.floats(min_value=-math.pi, max_value=math.pi))
+def test_direction_bound_holds(length, angle, relative_error, error_angle):
+    exact = np.array([length * math.cos(angle), length * math.sin(angle)])
+    error = relative_error * length
+    computed = exact + error * np.array([math.cos(error_angle), math.sin(error_angle)])
+    computed_length = float(np.hypot(*computed))
+    moved = np.hypot(*(computed / computed_length - exact / length))
+    # the bound takes the computed length (all a program knows) and the error's size
+    assert moved <= direction_bound(error, computed_length) * (1 + 1e-12) + 4 * U
+
+
+def test_direction_bound_is_infinite_where_no_direction_is_known():
+    assert direction_bound(1.0, 1.0) == math.inf
+    assert direction_bound(1e-3, 1.0) == pytest.approx(2e-3 / (1 - 1e-3))
+
+
+def exact_solve(matrix, rhs):
+    """``M⁻¹ b`` in rational arithmetic (Gauss–Jordan on Fractions)."""
+    size = len(matrix)
+    rows = [[Fraction(v) for v in row] + [Fraction(b)] for row, b in zip(matrix, rhs)]
+    for k in range(size):
+        pivot = next(i for i in range(k, size) if rows[i][k] != 0)
+        rows[k], rows[pivot] = rows[pivot], rows[k]
+        for i in range(size):
+            if i != k:
+                factor = rows[i][k] / rows[k][k]
+                rows[i] = [a - factor * b for a, b in zip(rows[i], rows[k])]
+    return [rows[i][size] / rows[i][i] for i in range(size)]
+
+
+def cholesky_solve(matrix, rhs):
+    """``M⁻¹ b`` by the Cholesky factor ``L`` and two substitutions, ``L y = b``, ``Lᵀ x = y``."""
+    factor = np.linalg.cholesky(matrix).tolist()
+    size = len(factor)
+    y = []
+    for i in range(size):
+        y.append((rhs[i] - sum(factor[i][k] * y[k] for k in range(i))) / factor[i][i])
+    x = [0.0] * size
+    for i in reversed(range(size)):
+        x[i] = (y[i] - sum(factor[k][i] * x[k] for k in range(i + 1, size))) / factor[i][i]
+    return np.array(x)
+
+
+def test_bilinear_bound_holds_for_both_solves_against_exact_rationals():
+    # w_iᵀ M⁻¹ w_j by numpy's LU solve and by a Cholesky solve, each within its own bound of
+    # the exact value, on random SPD matrices up to κ ~ 1e6 (graded diagonals).
+    rng = np.random.default_rng(9)
+    worst = 0.0
+    for _ in range(200):
+        size = int(rng.integers(2, 7))
+        root = rng.normal(size=(size, size)) * 10.0 ** rng.uniform(-3, 0, size)
+        matrix = root @ root.T + 1e-3 * np.eye(size)
+        wi, wj = rng.normal(size=(2, size))
+        backward = solve_backward_bounds(matrix)
+        exact = sum(Fraction(a) * b for a, b in zip(wi.tolist(), exact_solve(matrix.tolist(),
+                                                                               wj.tolist())))
+        solves = {"lu": np.linalg.solve(matrix, wj), "cholesky": cholesky_solve(matrix, wj)}
+        x_i = np.linalg.solve(matrix, wi)
+        for method, x_j in solves.items():
+            bound = bilinear_bound(backward[method], x_i, x_j, wi)
+            error = abs(Fraction(float(wi @ x_j)) - exact)
+            assert error <= Fraction(bound), (method, float(error), bound)
+            worst = max(worst, float(error) / bound)
+    assert worst > 1e-4  # the bound is not vacuous: some draws come within 1e4 of it
