@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from harness.scene import Body, Box, Rod, Scene, geometry
+from planar_impact import multicontact as mc
 from planar_impact import simultaneous as sim
 
 LAWS = ("poisson", "stronge-paper", "newton")
@@ -53,28 +54,53 @@ def flat_system(scene: Scene) -> sim.ContactSystem:
 
 
 def count_flat(problems: int = 1000, seed: int = 0) -> tuple[dict, dict]:
-    """``(counts, examples)``: per ``"law/coupling"`` (and ``"newton-coulomb"``) how many of
-    ``problems`` random flat landings have 0, 1, 2+ solutions, and the first scene of each."""
+    """``(counts, examples)``: per ``"law/coupling"`` (and ``"newton-coulomb"``,
+    ``"two-phase/poisson"``) how many of ``problems`` random flat landings have 0, 1, 2+
+    solutions, how many have a solution that breaks admissibility
+    (:func:`planar_impact.simultaneous.violations`) or gains energy, and the first scene of
+    each count."""
     rng = np.random.default_rng(seed)
-    keys = [f"{law}/{coupling}" for law in LAWS for coupling in COUPLINGS] + ["newton-coulomb"]
-    # 0/1/2+: clearly coherent solutions (Newton–Coulomb: distinct post-impact velocities);
-    # "boundary": draws with a solution at the boundary of a decision (not in 0/1/2+);
-    # "split": Newton–Coulomb draws whose impulse split is not unique.
-    counts = {key: {"0": 0, "1": 0, "2+": 0, "boundary": 0, "split": 0} for key in keys}
+    keys = ([f"{law}/{coupling}" for law in LAWS for coupling in COUPLINGS]
+            + ["newton-coulomb", "two-phase/poisson"])
+    # 0/1/2+: clearly coherent solutions (Newton–Coulomb and the two-phase law: distinct
+    # post-impact velocities); "boundary": draws with a solution at the boundary of a
+    # decision (not in 0/1/2+); "split": Newton–Coulomb draws whose impulse split is not
+    # unique; "inadmissible", "gains": draws with a solution (any) that breaks an
+    # admissibility check, or that gains energy; "max-gain": the largest gain of a
+    # solution, a fraction of ½uᵀMu (0 where none gains).
+    counts = {key: dict.fromkeys(("0", "1", "2+", "boundary", "split", "inadmissible",
+                                  "gains", "max-gain"), 0) for key in keys}
     examples: dict[str, dict[str, Scene]] = {key: {} for key in keys}
     for _ in range(problems):
         scene = random_flat_scene(rng)
         system = flat_system(scene)
+        kinetic = 0.5 * float(system.u @ system.mass_matrix @ system.u)
         for key in keys:
             if key == "newton-coulomb":
                 outcome = sim.newton_coulomb(system)
                 number = len(outcome.solutions)
                 counts[key]["split"] += outcome.status == sim.NC_SPLIT_NOT_UNIQUE
+                checked = [(s.energy_change, sim.solution_phases(system, s), key)
+                           for s in outcome.solutions]
+            elif key == "two-phase/poisson":
+                answers = mc.poisson_two_phase(system)
+                number = len(answers)
+                checked = [(a.energy_change, mc.two_phase_phases(system, a), key)
+                           for a in answers]
             else:
                 law, coupling = key.split("/")
                 found = sim.coherent_solutions(system, law, coupling=coupling)
                 number = sum(not s.at_boundary for s in found)
                 counts[key]["boundary"] += any(s.at_boundary for s in found)
+                checked = [(s.energy_change, sim.solution_phases(system, s), law)
+                           for s in found]
+            counts[key]["inadmissible"] += any(
+                sim.violations(system, phases, promises_no_gain=sim.promises_no_gain(law))
+                for _, phases, law in checked)
+            counts[key]["gains"] += any(gain > sim.ADMISSIBLE_ENERGY * kinetic
+                                        for gain, _, _ in checked)
+            counts[key]["max-gain"] = max([counts[key]["max-gain"]]  # of ½uᵀMu
+                                          + [gain / kinetic for gain, _, _ in checked])
             bucket = "0" if number == 0 else "1" if number == 1 else "2+"
             counts[key][bucket] += 1
             examples[key].setdefault(bucket, scene)
@@ -99,7 +125,9 @@ if __name__ == "__main__":  # python -m harness.reference.flat_faces [problems] 
     print(f"{number} random flat landings, seed {seed}")
     for key, row in table.items():
         print(f"{key:24s} 0: {row['0']:5d}  1: {row['1']:5d}  2+: {row['2+']:5d}  "
-              f"at boundary: {row['boundary']:5d}  split not unique: {row['split']:5d}")
+              f"at boundary: {row['boundary']:5d}  split not unique: {row['split']:5d}  "
+              f"inadmissible: {row['inadmissible']:5d}  gains: {row['gains']:5d} "
+              f"(largest {row['max-gain']:.1%})")
     for key in ("poisson/literal", "poisson/effective"):
         for bucket, scene in found[key].items():
             print(f"first {key} with {bucket}: {describe(scene)}")

@@ -40,7 +40,14 @@ INTRO = (
     "each contact's formulas see the other contacts' whole impulses in their approach, so "
     "restitution is counted twice (it gains energy on a symmetric flat box even with μ = 0). "
     "\"+k at boundary\": solutions with a decision (Table 1's type, I_n > 0) inside the "
-    "rounding band, counted apart from the clearly coherent ones. "
+    "rounding band, counted apart from the clearly coherent ones. Every solution is checked "
+    "for admissibility as it is computed (docs/multi-contact.md, 'Admissible references'): "
+    "\"k inadmissible\" counts those that break a check (an impulse at a contact that "
+    "recedes at its start, complementarity at a phase's end, the friction cone, an energy "
+    "gain where the law promises none); none is ever the reference. Newton–Coulomb can gain "
+    "energy, a property of Newton's law (on a few percent of random flat landings: "
+    "docs/multi-contact.md, 'Where Newton–Coulomb gains energy'): the reference column says "
+    "so where it does, and an engine's gain is excused only up to the reference's own. "
     "Engine columns: departure from the reference (in percent, as everywhere in the "
     "report); for a tilt, in brackets, the cut of the "
     "sequence the run is nearest (full: all impacts; after-k: only the first k, with the "
@@ -75,8 +82,10 @@ def _rows(name: str, info: dict, records) -> tuple[list[str], list[list[str]]] |
     for reference in references:
         label = reference.get("point") or "(single point)"
         counts = reference.get("solutions", {})
-        row = [label, f"{reference['kind']}: {reference.get('primary')}"]
-        row += [_count(counts, key) for key, _ in COUNTS]
+        primary = reference.get("primary")
+        gains = " (gains energy)" if primary in reference.get("gains_energy", ()) else ""
+        row = [label, f"{reference['kind']}: {primary}{gains}"]
+        row += [_count(counts, key, reference.get("inadmissible", {})) for key, _ in COUNTS]
         if tilt:
             gaps = reference.get("departure_from_primary", {})
             order = "-".join(str(i) for i in sorted(
@@ -109,11 +118,18 @@ def _rows(name: str, info: dict, records) -> tuple[list[str], list[list[str]]] |
     return header, rows
 
 
-def _count(counts: dict, key: str) -> str:
-    """A law's number of solutions, and those at the boundary of a decision apart."""
+def _count(counts: dict, key: str, inadmissible: dict) -> str:
+    """A law's number of solutions, those at the boundary of a decision apart, and how many
+    of all of them break admissibility."""
     text = _count_text(counts.get(key))
-    boundary = counts.get(f"{key}/at-boundary")
-    return f"{text} (+{boundary} at boundary)" if boundary else text
+    notes = []
+    if counts.get(f"{key}/at-boundary"):
+        notes.append(f"+{counts[f'{key}/at-boundary']} at boundary")
+    broken = sum(name == key or name.startswith((f"{key}#", f"{key}/at-boundary"))
+                 for name in inadmissible)
+    if broken:
+        notes.append(f"{broken} inadmissible")
+    return f"{text} ({'; '.join(notes)})" if notes else text
 
 
 def _first_strike(reference: dict, feature: int) -> float:

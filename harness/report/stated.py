@@ -44,6 +44,7 @@ from harness.scenarios import load_scenario
 from harness.store.files import write_text_atomically
 from harness.survey import cli as survey_cli
 from harness.survey.population import resolve_populations
+from planar_impact.multicontact.families import scan as multicontact_scan
 from planar_impact.simultaneous import coherent_count_distribution
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -193,25 +194,69 @@ FLAT_LANDINGS, FLAT_SEED = 200, 0
 
 def flat_landing_numbers() -> dict[str, str]:
     """``python -m harness.reference.flat_faces 200 0``: coherent solutions on random flat
-    landings, those at the boundary of a decision apart, and Newton–Coulomb's solutions
-    with distinct velocities and non-unique impulse splits."""
+    landings, those at the boundary of a decision apart, Newton–Coulomb's and the two-phase
+    Poisson law's solutions with distinct velocities and Newton–Coulomb's non-unique impulse
+    splits; per law the draws with a solution that breaks admissibility or gains energy."""
     counts, _ = count_flat(FLAT_LANDINGS, FLAT_SEED)
     numbers = {"landings": str(FLAT_LANDINGS)}
-    rows = ["| law | reading | 0 | 1 | 2+ | at boundary | split not unique |",
-            "|---|---|---:|---:|---:|---:|---:|"]
+    rows = ["| law | reading | 0 | 1 | 2+ | at boundary | split not unique | inadmissible "
+            "| gains |",
+            "|---|---|---:|---:|---:|---:|---:|---:|---:|"]
+    buckets = ("0", "1", "2+", "boundary", "inadmissible", "gains")
     for law, name in _COUNT_LAWS:
         for coupling, reading in _READINGS:
             c = counts[f"{law}/{coupling}"]
             rows.append(f"| {name} | {reading} | {c['0']} | {c['1']} | {c['2+']} | "
-                        f"{c['boundary']} | |")
-            for bucket in ("0", "1", "2+", "boundary"):
+                        f"{c['boundary']} | | {c['inadmissible']} | {c['gains']} |")
+            for bucket in buckets:
                 numbers[f"{coupling}.{law}.{bucket}"] = str(c[bucket])
                 numbers[f"{coupling}.{law}.{bucket}-share"] = share(c[bucket], FLAT_LANDINGS)
-    c = counts["newton-coulomb"]
-    rows.append(f"| Newton–Coulomb | — | {c['0']} | {c['1']} | {c['2+']} | | {c['split']} |")
-    for bucket in ("0", "1", "2+", "split"):
-        numbers[f"newton-coulomb.{bucket}"] = str(c[bucket])
-        numbers[f"newton-coulomb.{bucket}-share"] = share(c[bucket], FLAT_LANDINGS)
+    for key, name in (("newton-coulomb", "Newton–Coulomb"),
+                      ("two-phase/poisson", "two-phase Poisson")):
+        c = counts[key]
+        split = f" {c['split']} " if key == "newton-coulomb" else " "
+        rows.append(f"| {name} | — | {c['0']} | {c['1']} | {c['2+']} | |{split}| "
+                    f"{c['inadmissible']} | {c['gains']} |")
+        for bucket in ("0", "1", "2+", "split", "inadmissible", "gains"):
+            stem = key.replace("/", "-")
+            numbers[f"{stem}.{bucket}"] = str(c[bucket])
+            numbers[f"{stem}.{bucket}-share"] = share(c[bucket], FLAT_LANDINGS)
+        numbers[f"{stem}.max-gain"] = f"{100 * c['max-gain']:.0f}%"
+    numbers["table"] = "\n".join(rows)
+    return numbers
+
+
+ADMISSIBLE_DRAWS, ADMISSIBLE_SEED = 500, 0
+#: The references of :func:`planar_impact.multicontact.families.scan`, as the table names them.
+_ADMISSIBLE_ROWS = (
+    ("newton-coulomb", "Newton–Coulomb"), ("two-phase/poisson", "two-phase Poisson"),
+    ("coherent/poisson/literal", "Poisson, literal (the paper's)"),
+    ("coherent/stronge-paper/literal", "Stronge (paper), literal"),
+    ("coherent/newton/literal", "Newton, literal"),
+    ("coherent/poisson/effective", "Poisson, effective (extension)"),
+    ("coherent/stronge-paper/effective", "Stronge (paper), effective"),
+    ("coherent/newton/effective", "Newton, effective"),
+    ("sequential/newton-lcp", "sequential, newton-lcp (both orders)"),
+    ("sequential/poisson", "sequential, Poisson (both orders)"))
+
+
+def admissible_numbers() -> dict[str, str]:
+    """``python -m planar_impact.multicontact admissible 500 0``: per m-contact reference on
+    broad flat landings, its solutions, the inadmissible ones, those that gain energy and
+    the draws with one that gains (``NAME.BUCKET``, ``/`` in names as ``-``)."""
+    table = multicontact_scan(ADMISSIBLE_DRAWS, ADMISSIBLE_SEED)
+    numbers = {"draws": f"{ADMISSIBLE_DRAWS:,}"}
+    rows = ["| reference | solutions | inadmissible | gain energy | draws with a gain | "
+            "draws with several |", "|---|---:|---:|---:|---:|---:|"]
+    for key, name in _ADMISSIBLE_ROWS:
+        c = table.get(key, dict.fromkeys(("solutions", "inadmissible", "gains",
+                                          "draws-gaining", "draws-several"), 0))
+        rows.append(f"| {name} | {c['solutions']} | {c['inadmissible']} | {c['gains']} | "
+                    f"{c['draws-gaining']} | {c['draws-several']} |")
+        stem = key.replace("/", "-")
+        for bucket, value in c.items():
+            numbers[f"{stem}.{bucket}"] = str(value)
+        numbers[f"{stem}.draws-gaining-share"] = share(c["draws-gaining"], ADMISSIBLE_DRAWS, 1)
     numbers["table"] = "\n".join(rows)
     return numbers
 
@@ -408,6 +453,8 @@ SOURCES: dict[str, Source] = {
                            f"{TWO_CONTACT_SEED}", two_contact_numbers),
     "flat-landings": Source(f"python -m harness.reference.flat_faces {FLAT_LANDINGS} "
                             f"{FLAT_SEED}", flat_landing_numbers),
+    "admissible": Source(f"python -m planar_impact.multicontact admissible {ADMISSIBLE_DRAWS} "
+                         f"{ADMISSIBLE_SEED}", admissible_numbers),
     "flat-scenes": Source("impact-harness run scenarios/flat-box.toml "
                           "scenarios/flat-box-receding-end.toml --json R (the references "
                           "of each point in R's scenario info)", flat_scene_numbers),

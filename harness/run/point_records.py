@@ -118,14 +118,16 @@ def point_records(scenario: Scenario, point, engine_entries: Sequence, *,
     sequence = struck is not None  # strikes, the run judged on finishing it
     if sequence:
         declared = struck
+    primary = None
     if declared is not None:  # a gain is the law's when the m-contact or sequence reference
         lcp_gain = reference.get("energy_change", {}).get(reference.get("primary"))  # gains
+        primary = None if sequence else reference.get("primary")  # admissible, or None
     # What judging any run of the point's scene needs: worked out once, not once per run.
     terms = verdicts.prepare(scene, problem) if declared is None else None
     engine_records = [
         engine_record(scenario, point_info, engine_name, preset, item, problem, law_speeds,
                       scene=scene, law_energy_change=lcp_gain, contacts=declared,
-                      terms=terms, sequence=sequence)
+                      terms=terms, sequence=sequence, reference_name=primary)
         for _, _, engine_name, preset, item in engine_entries
     ]
     references.annotate(scenario, point, engine_records, reference)
@@ -135,7 +137,8 @@ def point_records(scenario: Scenario, point, engine_entries: Sequence, *,
 def engine_record(scenario: Scenario, point_info: dict, engine_name: str, preset: str,
                   item: dict, problem, law_speeds: dict, *, scene=None,
                   law_energy_change: float | None = None, contacts=None,
-                  terms=None, sequence: bool = False) -> Record:
+                  terms=None, sequence: bool = False, reference_name: str | None = None
+                  ) -> Record:
     """An engine's record from its raw output and the point's law solutions.
 
     With ``scene`` (the engine's scene at this point) the record gets its verdict
@@ -145,7 +148,8 @@ def engine_record(scenario: Scenario, point_info: dict, engine_name: str, preset
     ``contacts``: a flat face's declared contacts (:func:`verdicts.declared_contacts`), or
     with ``sequence`` the features a tilt's sequence strikes (:func:`verdicts.sequence_contacts`);
     ``terms``: ``verdicts.prepare(scene, problem)`` when the caller has it (None: worked out
-    by the verdict).
+    by the verdict); ``reference_name``: a flat face's primary reference, the one
+    ``law_energy_change`` is of.
     """
     output = item["output"]
     free_bodies = scene is not None and not scene.ground
@@ -196,7 +200,8 @@ def engine_record(scenario: Scenario, point_info: dict, engine_name: str, preset
         verdict = verdicts.judge(scene, problem,
                                  verdicts.numbers_from_output(engine_name, output),
                                  law_energy_change=law_energy_change, contacts=contacts,
-                                 terms=terms, implied=implied, sequence=sequence)
+                                 terms=terms, implied=implied, sequence=sequence,
+                                 reference=reference_name)
         record.verdict, record.reasons = verdict.label, verdict.as_list()
         record.status = verdict.status(record.status)
     return record

@@ -119,7 +119,15 @@ def scene_reference(kind: str, scene, fixed: PointLaws | None) -> dict:
                      "why": f"a face lying flat ({len(contacts)} contact points): the "
                             "m-contact laws, eq. (75)"}
         reference.update(_simultaneous(scene, contacts, fixed, prefix=""))
-        reference["primary"] = _first(reference["speeds"], NEWTON_COULOMB)
+        reference["primary"] = _first_admissible(reference, NEWTON_COULOMB)
+        if reference["primary"] is None:  # Newton–Coulomb broke admissibility (or had none)
+            reference["primary"] = _first_admissible(reference, TWO_PHASE_POISSON)
+        if reference["primary"] is None:
+            reference["why"] += ("; no admissible Newton–Coulomb or two-phase Poisson "
+                                 "solution: no primary reference")
+        elif reference["primary"] in reference["gains_energy"]:
+            reference["why"] += (f"; {reference['primary']} gains energy here (a property of "
+                                 "Newton's law, flagged)")
     else:
         reference = _event_driven(scene, fixed)
     if reference.get("primary") is not None:
@@ -132,8 +140,12 @@ def scene_reference(kind: str, scene, fixed: PointLaws | None) -> dict:
     return reference
 
 
-def _first(speeds: dict, stem: str) -> str | None:
-    names = [name for name in speeds if name == stem or name.startswith(stem + "#")]
+def _first_admissible(reference: dict, stem: str) -> str | None:
+    """The first solution named ``stem`` (or ``stem#k``) that breaks no admissibility check:
+    a reference that breaks one is never primary (docs/multi-contact.md, 'Admissible
+    references')."""
+    names = [name for name in reference["speeds"] if (name == stem or name.startswith(stem + "#"))
+             and name not in reference.get("inadmissible", {})]
     return names[0] if names else None
 
 
@@ -149,23 +161,34 @@ def _simultaneous(scene, contacts, fixed, prefix: str) -> dict:
     wn, wt = geometry.contact_rows(scene, contacts)
     system = sim.contact_system(mass_matrix=scene.mass_matrix(), wn=wn, wt=wt, u=scene.state(),
                                 mu=fixed.friction, e=fixed.restitution)
-    speeds, energy, counts = {}, {}, {}
+    speeds, energy, counts, inadmissible, gains = {}, {}, {}, {}, []
+    kinetic = 0.5 * float(system.u @ system.mass_matrix @ system.u)
 
-    def keep(name, u_after, energy_change):
+    def keep(name, u_after, energy_change, law, phases):
+        """Keep one solution, with what it breaks of admissibility checked on it here
+        (planar_impact.simultaneous.violations; docs/multi-contact.md, 'Admissible
+        references') and whether it gains energy (a property of some laws, flagged)."""
         speeds[prefix + name] = [float(v) for v in u_after]
         energy[prefix + name] = float(energy_change)
+        broken = sim.violations(system, phases, promises_no_gain=sim.promises_no_gain(law))
+        if broken:
+            inadmissible[prefix + name] = [f"{law}: {line}" for line in broken]
+        if energy_change > sim.ADMISSIBLE_ENERGY * kinetic:
+            gains.append(prefix + name)
 
     outcome = sim.newton_coulomb(system)
     found = outcome.solutions
     counts[NEWTON_COULOMB] = len(found)
     for k, solution in enumerate(found):
-        keep(_named(NEWTON_COULOMB, len(found), k), solution.u_after, solution.energy_change)
+        keep(_named(NEWTON_COULOMB, len(found), k), solution.u_after, solution.energy_change,
+             NEWTON_COULOMB, sim.solution_phases(system, solution))
     # Several answers only where the frictional LCP has several, or where W lets the
     # compression's normal split vary (never on one body lying flat).
     found = mc.poisson_two_phase(system)
     counts[TWO_PHASE_POISSON] = len(found)
     for k, solution in enumerate(found):
-        keep(_named(TWO_PHASE_POISSON, len(found), k), solution.u_after, solution.energy_change)
+        keep(_named(TWO_PHASE_POISSON, len(found), k), solution.u_after, solution.energy_change,
+             TWO_PHASE_POISSON, mc.two_phase_phases(system, solution))
     for law in COHERENT_LAWS:
         for coupling in COUPLINGS:
             try:
@@ -181,17 +204,20 @@ def _simultaneous(scene, contacts, fixed, prefix: str) -> dict:
             counts[stem] = len(clear)
             counts[f"{stem}/at-boundary"] = len(boundary)
             for k, solution in enumerate(clear):
-                keep(_named(stem, len(clear), k), solution.u_after, solution.energy_change)
+                keep(_named(stem, len(clear), k), solution.u_after, solution.energy_change,
+                     law, sim.solution_phases(system, solution))
             for k, solution in enumerate(boundary):
                 keep(_named(f"{stem}/at-boundary", len(boundary), k), solution.u_after,
-                     solution.energy_change)
+                     solution.energy_change, law, sim.solution_phases(system, solution))
     for law in SEQUENTIAL_LAWS:
         results, spread = sim.all_orders(system, law)
         counts[f"sequential/{law}/order-spread"] = float(spread)
         for result in results:
             order = "-".join(str(i) for i in result.order)
-            keep(f"sequential/{law}/{order}", result.u_after, result.energy_change)
+            keep(f"sequential/{law}/{order}", result.u_after, result.energy_change, law,
+                 tuple(sim.Phase(sim.IMPACT, start, impulse) for start, impulse in result.steps))
     return {"speeds": speeds, "energy_change": energy, "solutions": counts,
+            "inadmissible": inadmissible, "gains_energy": gains,
             "newton_coulomb": {"status": outcome.status, "explanation": outcome.explanation}}
 
 
@@ -238,6 +264,8 @@ def _event_driven(scene, fixed) -> dict:
         extra = _simultaneous(scene, contacts, fixed, prefix="at-pose/")
         speeds.update(extra["speeds"])
         energy.update(extra["energy_change"])
+        reference["inadmissible"] = extra["inadmissible"]
+        reference["gains_energy"] = extra["gains_energy"]
         reference["solutions"] = extra["solutions"]
     return reference
 

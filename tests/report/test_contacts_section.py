@@ -25,11 +25,21 @@ def test_a_flat_scene_gets_a_table_and_a_single_contact_scene_none():
     counts = outcome.scenarios["flat-box"]["references"][0]["solutions"]
     # The reference's own counts; those at the boundary of a decision apart (docs/multi-contact.md,
     # 'Decisions at a boundary'): flat-box's effective Poisson solution sits on Types 4 | 5.
+    # Each law's solutions that break admissibility are counted too (docs/multi-contact.md,
+    # 'Admissible references'): the effective reading's at-boundary one gains energy.
+    inadmissible = outcome.scenarios["flat-box"]["references"][0]["inadmissible"]
     shown = cells[2:2 + len(COUNTS)]
-    assert shown == [str(counts[key]) + (
-        f" (+{counts[key + '/at-boundary']} at boundary)"
-        if counts.get(key + "/at-boundary") else "") for key, _ in COUNTS]
-    assert "0 (+1 at boundary)" in shown
+
+    def expected(key):
+        notes = ([f"+{counts[key + '/at-boundary']} at boundary"]
+                 if counts.get(key + "/at-boundary") else [])
+        broken = [name for name in inadmissible if name.split("#")[0] in (
+            key, key + "/at-boundary")]
+        notes += [f"{len(broken)} inadmissible"] if broken else []
+        return str(counts[key]) + (f" ({'; '.join(notes)})" if notes else "")
+
+    assert shown == [expected(key) for key, _ in COUNTS]
+    assert "0 (+1 at boundary; 1 inadmissible)" in shown
     # pymunk.accurate against Newton–Coulomb, then against the two-phase Poisson law (on the
     # symmetric flat box both leave at e|v_y| without spin: the same answer)
     departure, two_phase = cells[-1].split(" [P 2φ: ")

@@ -270,3 +270,47 @@ def test_library_flat_scene_counts_do_not_move_under_a_few_ulps(name):
             -3, 4, size=np.shape(value)) * 2.0 ** -52) for key, value in problem.items()}
         shaken["mass_matrix"] = np.diag(np.diag(shaken["mass_matrix"]))  # one body: diagonal
         assert counts(shaken) == expected
+
+
+# ---------------------------------------------------------------------- admissibility
+@pytest.mark.parametrize("name", ["flat-box", "flat-box-receding-end", "flat-rod"])
+def test_every_flat_reference_solution_is_checked_and_the_primary_is_admissible(name):
+    """Each solution's breaks are recorded under ``inadmissible`` (law: what broke); the
+    effective reading's impulse at the receding end and its energy gains are named; the
+    primary is never one of them."""
+    reference = references.point_reference(load_scenario(f"scenarios/{name}.toml"), None)
+    broken = reference["inadmissible"]
+    assert reference["primary"] == "newton-coulomb" and reference["primary"] not in broken
+    assert set(broken) <= set(reference["speeds"])
+    assert not any(key.startswith(("newton-coulomb", "two-phase")) for key in broken)
+    effective = [lines for key, lines in broken.items() if "/effective" in key]
+    assert effective and all(line.split(":")[0] in ("poisson", "stronge-paper", "newton")
+                             for lines in effective for line in lines)
+    if name == "flat-box-receding-end":
+        assert any("recedes at the start" in line for lines in effective for line in lines)
+    else:
+        assert any("energy gain" in line for lines in effective for line in lines)
+
+
+def test_an_inadmissible_newton_coulomb_solution_is_never_primary(monkeypatch):
+    """Where Newton–Coulomb broke a check, the two-phase Poisson law is primary and the
+    reference's ``why`` says so; where both broke, there is no primary."""
+    real = references.sim.violations
+
+    def breaking(stems):
+        def violations(system, phases, *, promises_no_gain):
+            kinds = {phase.kind for phase in phases}
+            if ("newton" in kinds and "newton-coulomb" in stems
+                    or "compression" in kinds and "two-phase" in stems):
+                return ("made up for the test",)
+            return real(system, phases, promises_no_gain=promises_no_gain)
+        return violations
+
+    scenario = load_scenario("scenarios/flat-box.toml")
+    monkeypatch.setattr(references.sim, "violations", breaking({"newton-coulomb"}))
+    reference = references.point_reference(scenario, None)
+    assert reference["primary"] == "two-phase/poisson"
+    assert "newton-coulomb" in reference["inadmissible"]
+    monkeypatch.setattr(references.sim, "violations", breaking({"newton-coulomb", "two-phase"}))
+    reference = references.point_reference(scenario, None)
+    assert reference["primary"] is None and "no primary reference" in reference["why"]

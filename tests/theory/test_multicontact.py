@@ -315,13 +315,15 @@ def test_friction_with_different_restitutions_can_gain_energy():
 
 @settings(max_examples=200, deadline=None)
 @given(st.floats(0.1, 3.0), st.floats(0.02, 2.0), st.floats(0.1, 10.0), st.floats(0.05, 5.0),
-       st.floats(0, 2), st.floats(0, 1), st.sampled_from(mc.METHODS), st.booleans())
+       st.floats(0, 2), st.one_of(st.floats(0, 1), st.just(1.0)), st.sampled_from(mc.METHODS),
+       st.booleans())
 def test_a_symmetric_flat_box_leaves_at_e_times_its_approach(width, height, mass, speed, mu,
                                                             e, method, follow_slip):
     """v_y' = e|v_y|, no v_x, no spin: the compression stops both corners (P_nc = m|v_y|/2
     each, no friction needed), the restitution gives e times that."""
     system = flat_face(width, height, mass, (0.0, -speed, 0.0), mu, e)
     (answer,) = mc.poisson_two_phase(system, method, follow_slip=follow_slip)
+    assert answer.restitution_scale == 1.0  # nothing to cap: one e, no gain (e = 1 included)
     assert abs(answer.u_after[1] - e * speed) <= 1e-12 * speed
     assert abs(answer.u_after[0]) <= 1e-12 * speed
     assert abs(answer.u_after[2]) * width <= 1e-12 * speed
@@ -361,22 +363,18 @@ def test_runs_as_a_script_and_is_an_attribute_of_the_package():
     assert pi.multicontact.poisson_two_phase is mc.poisson_two_phase
 
 
-def test_contacts_taking_turns_to_slide_end_the_phase_at_velocity_level():
-    """A restitution where two contacts take turns (one's slip stops while the other slides,
-    then the other way round; found by hypothesis): the phase is cut CUTS_PER_CONTACT times
-    per contact, then its rest is one velocity-level problem, and the answer says so. That
-    is one of the enumeration's branches; Lemke's path ends at one of its answers."""
+def test_contacts_that_took_turns_no_longer_branch():
+    """Generic seed 9919 (found by hypothesis): before a receding contact was left out of a
+    piece, its restitution had two contacts taking turns, 36 answers drifting with the
+    number of turns, the later ones gaining up to 28% of ½uᵀMu. A contact that recedes at a
+    piece's start now takes no impulse in it: one answer, followed to its end without a cut,
+    losing energy, and Lemke's path ends on it."""
     system = sim.random_two_contact_system(np.random.default_rng(9919), "generic")
-    enumerated = mc.poisson_two_phase(system)
-    capped = [a for a in enumerated if not a.restitution.slip_followed_to_end]
-    assert capped and capped[0].restitution.cuts == mc.CUTS_PER_CONTACT * 2 + 4
+    (answer,) = mc.poisson_two_phase(system)
+    assert answer.restitution.slip_followed_to_end and answer.compression.slip_followed_to_end
+    assert answer.energy_change < -0.1 * kinetic(system)
     (lemke,) = mc.poisson_two_phase(system, "lemke")
-    assert any(same_speeds(lemke.u_after, a.u_after, system) for a in enumerated)
-    # Every turn is a branch (each piece has two solutions), and the answers drift with the
-    # number of turns: 36 answers here, the later ones gaining energy (up to 28% of ½uᵀMu).
-    # A known defect of following the slip with strongly coupled contacts, pinned.
-    assert len(enumerated) > 30
-    assert max(a.energy_change for a in enumerated) > 0.25 * kinetic(system)
+    assert same_speeds(lemke.u_after, answer.u_after, system)
 
 
 def test_a_phase_without_turns_is_followed_to_its_end():

@@ -98,7 +98,7 @@ def truncated_sequence(scene, run: RunNumbers, scales: SceneScales,
 def judge_declared(scene, problem, run: RunNumbers, contacts, *,
                    law_energy_change: float | None = None,
                    tolerances: Tolerances = DEFAULT_TOLERANCES,
-                   sequence: bool = False) -> Verdict:
+                   sequence: bool = False, reference: str | None = None) -> Verdict:
     """The verdict of an engine run of a scene declared to touch at ``contacts`` at once.
 
     The checks of :func:`judge`, held against every declared contact instead of one: a
@@ -106,8 +106,10 @@ def judge_declared(scene, problem, run: RunNumbers, contacts, *,
     reason: two points are what was declared); each contact must separate; ``Δu`` must be
     explained by impulses at the declared contacts together (:func:`declared_impulses`), and
     the engine's summed impulse must match their sum; an energy gain is the law's when the
-    Newton–Coulomb reference gains too (``law_energy_change``). docs/verdicts.md, 'Declared
-    simultaneous contacts'.
+    primary reference gains too (``law_energy_change`` of ``reference``, Newton–Coulomb
+    unless it broke admissibility; an inadmissible solution is never primary, so a gain is
+    never excused against one: docs/multi-contact.md, 'Admissible references').
+    docs/verdicts.md, 'Declared simultaneous contacts'.
 
     ``sequence``: the contacts are the features a tilt's reference sequence strikes one after
     another (:func:`sequence_contacts`), not at once; the run must also have finished the
@@ -153,7 +155,7 @@ def judge_declared(scene, problem, run: RunNumbers, contacts, *,
         scale="max_i |v_n^A(i)|/m_nn(i)")
     reasons += energy_gain_reasons(metrics.energy_change(problem.mass_matrix, problem.u, u_after),
                             scales, law_energy_change, tolerances,
-                            law=SEQUENCE_LAW if sequence else NEWTON_COULOMB)
+                            law=reference or (SEQUENCE_LAW if sequence else NEWTON_COULOMB))
     reasons.sort(key=lambda reason: REASON_ORDER[reason.name])
     return Verdict(tuple(reasons))
 

@@ -70,7 +70,7 @@ def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = 
           tolerances: Tolerances = DEFAULT_TOLERANCES, contacts=None,
           terms: SceneTerms | None = None,
           implied: tuple[float, float, float] | None = None,
-          sequence: bool = False) -> Verdict:
+          sequence: bool = False, reference: str | None = None) -> Verdict:
     """The verdict of one engine run of ``scene``.
 
     Parameters
@@ -91,6 +91,10 @@ def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = 
         :func:`declared_contacts`): the run is judged against all of them
         (:func:`judge_declared`). None: one contact, ``problem``'s. With ``sequence``, the
         features a tilt's reference sequence strikes (:func:`sequence_contacts`).
+    reference : str, optional
+        With ``contacts``: the name of the reference ``law_energy_change`` is of (a flat
+        face's primary, always admissible: docs/multi-contact.md, 'Admissible references');
+        None: Newton–Coulomb, or the sequence's law with ``sequence``.
     sequence : bool
         ``contacts`` are struck one after another, a sequence the run must finish
         (``truncated-sequence``).
@@ -106,7 +110,7 @@ def judge(scene, problem, run: RunNumbers, *, law_energy_change: float | None = 
     if contacts is not None:
         return judge_declared(scene, problem, run, contacts,
                               law_energy_change=law_energy_change, tolerances=tolerances,
-                              sequence=sequence)
+                              sequence=sequence, reference=reference)
     if terms is None:
         terms = prepare(scene, problem)
     reasons: list[Reason] = []

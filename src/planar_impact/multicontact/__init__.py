@@ -31,15 +31,21 @@ Coulomb's law at a phase's end only is not the paper's process where the slip re
 inside a phase (its Types 3 and 4). So by default each phase follows the slip
 (:func:`phase_following_slip`): it is taken in straight pieces, sliding contacts' friction
 held against their slip, cut where a held slip reaches zero. For one contact this is the
-paper's process, and the law equals ``solve(..., law="poisson")`` in all five types;
+paper's process, and the law equals ``solve(..., law="poisson")`` in all five types; a
+contact receding at a piece's start takes no impulse in it, and a phase whose pieces' sum
+is not complementary at its end is solved as one velocity-level problem instead.
 ``follow_slip=False`` gives one velocity-level problem per phase (equal in Types 1, 2, 5
-only). docs/multi-contact.md, 'A two-phase Poisson law for m contacts'.
+only). docs/multi-contact.md, 'A two-phase Poisson law for m contacts'. Every answer is
+checked by :func:`planar_impact.simultaneous.violations` where the harness uses it
+(:func:`two_phase_phases` gives its phases).
 
 The package, one job a module: :mod:`.phase` (a phase's answer, mode codes, tolerances and
 scaling), :mod:`.enumeration` and :mod:`.lemke` (the two methods for one phase),
-:mod:`.slip` (a phase with the slip followed), :mod:`.two_phase` (the law), and
+:mod:`.slip` (a phase with the slip followed), :mod:`.two_phase` (the law),
 :mod:`.measure` (measurements on random problems;
-``python -m planar_impact.multicontact [problems] [seed] [plain]``).
+``python -m planar_impact.multicontact [problems] [seed] [plain]``) and :mod:`.families`
+(every m-contact reference checked on broad flat landings;
+``python -m planar_impact.multicontact admissible [draws] [seed]``).
 """
 
 from __future__ import annotations
@@ -66,6 +72,7 @@ from .two_phase import (
     normal_split_unique,
     poisson_two_phase,
     poisson_two_phase_many,
+    two_phase_phases,
 )
 
 __all__ = ["CUTS_PER_CONTACT", "METHODS", "NORMAL_ACTIVE", "NORMAL_BASE", "PIECES_PER_PHASE",
@@ -73,4 +80,5 @@ __all__ = ["CUTS_PER_CONTACT", "METHODS", "NORMAL_ACTIVE", "NORMAL_BASE", "PIECE
            "SLIDE_POSITIVE", "STICK", "PhaseSolution", "TwoPhaseSolution", "lemke", "measure",
            "measure_one_contact", "normal_split_unique", "phase_by_enumeration",
            "phase_by_lemke", "phase_following_slip", "phase_lcp", "phases_by_enumeration",
-           "poisson_two_phase", "poisson_two_phase_many", "random_flat_face"]
+           "poisson_two_phase", "poisson_two_phase_many", "random_flat_face",
+           "two_phase_phases"]

@@ -42,8 +42,9 @@ def measure(problems: int = 1000, seed: int = 0, follow_slip: bool = True
     :func:`random_flat_face`): how many answers the enumeration finds (0, 1, 2+), whether
     Lemke's answer is one of them (``lemke-agrees``; ``lemke-ray``: it ended on a ray), how
     many answers gain energy (relative 1e-9 of ``½uᵀMu``), where the normal split is
-    unique, and how many first answers are more than 1e-6 of the speeds from every
-    Newton–Coulomb solution (``newton-coulomb-apart``)."""
+    unique, where an answer's restitution was scaled down not to gain energy
+    (``restitution-capped``), and how many first answers are more than 1e-6 of the speeds
+    from every Newton–Coulomb solution (``newton-coulomb-apart``)."""
     rng = np.random.default_rng(seed)
     table = {}
     for family in ("generic", "body", "flat"):
@@ -51,7 +52,7 @@ def measure(problems: int = 1000, seed: int = 0, follow_slip: bool = True
                    else random_two_contact_system(rng, family) for _ in range(problems)]
         counts = dict.fromkeys(("0", "1", "2+", "lemke-agrees", "lemke-ray", "lemke-other",
                                 "gains", "split-unique", "newton-coulomb-apart",
-                                "slip-not-followed-to-end"), 0)
+                                "slip-not-followed-to-end", "restitution-capped"), 0)
         for system, found, reached in zip(
                 systems, poisson_two_phase_many(systems, follow_slip=follow_slip),
                 poisson_two_phase_many(systems, "lemke", follow_slip=follow_slip)):
@@ -69,6 +70,7 @@ def measure(problems: int = 1000, seed: int = 0, follow_slip: bool = True
             counts["slip-not-followed-to-end"] += any(
                 not (a.compression.slip_followed_to_end and a.restitution.slip_followed_to_end)
                 for a in found)
+            counts["restitution-capped"] += any(a.restitution_scale < 1.0 for a in found)
             speed = float(np.max(np.abs(system.u)))
             counts["newton-coulomb-apart"] += bool(found) and all(
                 np.max(np.abs(found[0].u_after - other.u_after)) > 1e-6 * speed

@@ -45,6 +45,11 @@ class PhaseSolution:
     #: :data:`CUTS_PER_CONTACT` times per contact and its rest was one velocity-level problem.
     cuts: int = 0
     slip_followed_to_end: bool = True
+    #: Following the slip: False where the pieces' sum broke the phase's complementarity (a
+    #: contact that took impulse in one piece receded by the phase's end) and the phase was
+    #: solved instead as one velocity-level problem (docs/multi-contact.md, 'A two-phase
+    #: Poisson law for m contacts').
+    slip_followed: bool = True
 
 
 
@@ -94,6 +99,15 @@ def distinct(found: list[PhaseSolution], candidate: PhaseSolution, speed, impuls
         if np.max(normals) <= SAME_ANSWER * impulse:
             return False
     return True
+
+
+def complementary(solution: PhaseSolution, base, speed: float, impulse: float) -> bool:
+    """Whether a phase's total impulses and end velocities are complementary: no contact
+    both takes more than its base normal impulse and recedes at the phase's end (beyond
+    :data:`SIGN_TOLERANCE` of the speed and impulse scales)."""
+    owed = solution.impulses[0::2] - np.asarray(base, dtype=float)
+    receding = solution.velocities[0::2] > SIGN_TOLERANCE * speed
+    return not bool(np.any(receding & (owed > SIGN_TOLERANCE * impulse)))
 
 
 def check_method(method: str) -> str:

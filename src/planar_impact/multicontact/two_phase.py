@@ -3,14 +3,16 @@ phase whose base normal impulse is ``e`` times the compression's (the package's 
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..simultaneous import ContactSystem
-from .enumeration import phases_by_enumeration
+from ..simultaneous import ContactSystem, Phase
+from ..simultaneous.admissible import COMPRESSION, RESTITUTION
+from .enumeration import phase_by_enumeration, phases_by_enumeration
 from .lemke import phase_by_lemke
-from .phase import SAME_ANSWER, PhaseSolution, check_method
+from .phase import SAME_ANSWER, PhaseSolution, check_method, complementary, distinct
 from .slip import phase_following_slip
 
 
@@ -35,6 +37,10 @@ class TwoPhaseSolution:
     energy_change: float  # J: ½ u'ᵀMu' − ½ uᵀMu
     energy_change_compression: float
     normal_split_unique: bool
+    #: The common factor ``λ`` of the restitution's base impulses ``λ e_i P_nc,i``: 1 (Poisson's
+    #: hypothesis) unless that restitution would gain energy, then the largest ``λ`` found
+    #: that does not (docs/multi-contact.md, 'A two-phase Poisson law for m contacts').
+    restitution_scale: float = 1.0
 
     def impulses(self) -> np.ndarray:
         return np.ravel(np.column_stack([self.normal_impulse, self.tangential_impulse]))
@@ -104,15 +110,75 @@ def _following_slip(system: ContactSystem, method: str) -> list[TwoPhaseSolution
     unique_split = normal_split_unique(system)
     scale = SAME_ANSWER * (speed + float(np.max(np.abs(system.u))))
     answers: list[TwoPhaseSolution] = []
-    for compression in phase_following_slip(system.delassus, system.approach,
-                                            np.zeros(system.count), system.mu, speed, method):
+    for compression in _complementary_phase(system, system.approach, np.zeros(system.count),
+                                            method):
         base = system.e * compression.impulses[0::2]
-        for restitution in phase_following_slip(system.delassus, compression.velocities, base,
-                                                system.mu, speed, method):
-            answer = _assemble(system, compression, restitution, unique_split)
+        restitutions = _complementary_phase(system, compression.velocities, base, method)
+        factor = 1.0
+        if not _loses_energy(system, compression, restitutions):
+            factor, restitutions = _energy_capped(system, compression, base, method)
+        for restitution in restitutions:
+            answer = _assemble(system, compression, restitution, unique_split, factor)
             if all(np.max(np.abs(answer.u_after - other.u_after)) > scale for other in answers):
                 answers.append(answer)
     return answers
+
+
+#: Bisection steps for the restitution's energy cap: λ to 2⁻⁴⁰ ≈ 1e-12.
+CAP_STEPS = 40
+#: A gain up to this fraction of ½uᵀMu is rounding (½u'ᵀMu' is formed to ~1e-16 of it), not
+#: a gain: an elastic impact (ΔE = 0) keeps λ = 1.
+ENERGY_ROUNDING = 1e-12
+
+
+def _loses_energy(system: ContactSystem, compression, restitutions) -> bool:
+    """Whether every restitution ends with no more kinetic energy than before the impact,
+    to rounding (:data:`ENERGY_ROUNDING`), and there is one."""
+    before = _kinetic(system, system.u)
+    return bool(restitutions) and all(
+        _kinetic(system, system.u + system.delta_u(compression.impulses + r.impulses))
+        <= before * (1.0 + ENERGY_ROUNDING) for r in restitutions)
+
+
+def _energy_capped(system: ContactSystem, compression, base, method: str):
+    """``(λ, restitutions)`` with the base ``λ·base``: the largest ``λ ∈ [0, 1]`` found by
+    bisection whose restitutions lose energy. ``λ = 0`` always does: its base is nothing, the
+    compression's end is complementary (``v̄_n ≥ 0``), so the restitution gives nothing and
+    the impact's energy change is the compression's, ``≤ 0`` (proved)."""
+    low, high = 0.0, 1.0
+    kept = _complementary_phase(system, compression.velocities, 0.0 * base, method)
+    for _ in range(CAP_STEPS):
+        middle = 0.5 * (low + high)
+        found = _complementary_phase(system, compression.velocities, middle * base, method)
+        if _loses_energy(system, compression, found):
+            low, kept = middle, found
+        else:
+            high = middle
+    return low, kept
+
+
+def _complementary_phase(system: ContactSystem, start, base, method: str
+                         ) -> list[PhaseSolution]:
+    """A phase with the slip followed (:func:`phase_following_slip`), its solutions that are
+    complementary at the phase's end; a solution that is not (a contact took impulse in one
+    piece and recedes at the end) is dropped, and where none is left the phase is solved as
+    one velocity-level problem, complementary by construction (``slip_followed`` False)."""
+    speed = system.speed_scale()
+    impulse = speed / float(np.min(np.diag(system.delassus)))
+    followed = phase_following_slip(system.delassus, start, base, system.mu, speed, method)
+    kept = [phase for phase in followed if complementary(phase, base, speed, impulse)]
+    if kept or not followed:
+        return kept
+    if method == "enumeration":
+        plain = phase_by_enumeration(system.delassus, start, base, system.mu, speed)
+    else:
+        found = phase_by_lemke(system.delassus, start, base, system.mu, speed)
+        plain = [] if found is None else [found]
+    for phase in plain:
+        phase = dataclasses.replace(phase, slip_followed=False)
+        if distinct(kept, phase, speed, impulse):
+            kept.append(phase)
+    return kept
 
 
 def _phases(systems, method, starts):
@@ -139,7 +205,7 @@ def _kinetic(system: ContactSystem, speeds) -> float:
     return 0.5 * float(speeds @ system.mass_matrix @ speeds)
 
 
-def _assemble(system, compression, restitution, unique_split) -> TwoPhaseSolution:
+def _assemble(system, compression, restitution, unique_split, factor=1.0) -> TwoPhaseSolution:
     total = compression.impulses + restitution.impulses
     delta_u = system.delta_u(total)  # (75)
     u_after = system.u + delta_u
@@ -152,4 +218,15 @@ def _assemble(system, compression, restitution, unique_split) -> TwoPhaseSolutio
         vn_separation=system.wn @ u_after, vt_separation=system.wt @ u_after,
         energy_change=_kinetic(system, u_after) - before,
         energy_change_compression=after_compression - before,
-        normal_split_unique=unique_split)
+        normal_split_unique=unique_split, restitution_scale=factor)
+
+
+def two_phase_phases(system: ContactSystem, answer: TwoPhaseSolution) -> tuple[Phase, ...]:
+    """The answer's compression and restitution as the phases that
+    :func:`planar_impact.simultaneous.violations` checks (the restitution owed
+    ``λ e_i P_nc``, ``λ`` its :attr:`~TwoPhaseSolution.restitution_scale`)."""
+    compression = answer.compression.impulses
+    start = system.approach + system.delassus @ compression
+    return (Phase(COMPRESSION, system.approach.copy(), compression.copy()),
+            Phase(RESTITUTION, start, answer.restitution.impulses.copy(),
+                  answer.restitution_scale * system.e * compression[0::2]))

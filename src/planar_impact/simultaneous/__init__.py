@@ -30,6 +30,19 @@ of their coherent solutions; ``python -m planar_impact.simultaneous [problems] [
 
 from __future__ import annotations
 
+from .admissible import (
+    ADMISSIBLE_ENERGY,
+    ADMISSIBLE_IMPULSE,
+    ADMISSIBLE_SPEED,
+    COMPRESSION,
+    IMPACT,
+    NEWTON,
+    RESTITUTION,
+    Phase,
+    promises_no_gain,
+    solution_phases,
+    violations,
+)
 from .coherent import coherent_solutions
 from .newton_coulomb import (
     LCP_FORWARD,
@@ -66,13 +79,15 @@ from .system import (
 )
 from .type_map import COUPLINGS, EFFECTIVE, LITERAL
 
-__all__ = ["AFFINE_LAWS", "BOUNDARY_BAND", "COUPLINGS", "EFFECTIVE", "FIXED_POINT_TOLERANCE",
-           "LCP_FORWARD", "LCP_REVERSE", "LCP_SEPARATE", "LCP_STICK", "LITERAL",
+__all__ = ["ADMISSIBLE_ENERGY", "ADMISSIBLE_IMPULSE", "ADMISSIBLE_SPEED", "AFFINE_LAWS",
+           "BOUNDARY_BAND", "COMPRESSION", "COUPLINGS", "EFFECTIVE", "FIXED_POINT_TOLERANCE",
+           "IMPACT", "LCP_FORWARD", "LCP_REVERSE", "LCP_SEPARATE", "LCP_STICK", "LITERAL",
            "NC_GAUSS_SEIDEL_SWEEPS", "NC_NONE", "NC_SEVERAL", "NC_SPLIT_NOT_UNIQUE",
-           "NC_STATUSES", "NC_UNIQUE", "ROUNDING_RESIDUAL", "SCREEN_CONDITION", "SCREEN_MARGIN",
-           "SCREEN_SINGULAR_CONDITION", "SEPARATING", "SINGULAR_CUT", "TYPE_LAWS",
-           "VELOCITY_TOLERANCE", "ContactSystem", "GaussSeidelResult", "MultiContactSolution",
-           "NewtonCoulombResult", "SequentialResult", "all_orders", "coherent_count_distribution",
-           "coherent_solutions", "contact_system", "newton_coulomb", "newton_coulomb_solutions",
-           "projected_gauss_seidel", "random_two_contact_system", "restitution_targets",
-           "sequential_impacts"]
+           "NC_STATUSES", "NC_UNIQUE", "NEWTON", "RESTITUTION", "ROUNDING_RESIDUAL",
+           "SCREEN_CONDITION", "SCREEN_MARGIN", "SCREEN_SINGULAR_CONDITION", "SEPARATING",
+           "SINGULAR_CUT", "TYPE_LAWS", "VELOCITY_TOLERANCE", "all_orders",
+           "coherent_count_distribution", "coherent_solutions", "contact_system", "ContactSystem",
+           "GaussSeidelResult", "MultiContactSolution", "newton_coulomb",
+           "newton_coulomb_solutions", "NewtonCoulombResult", "Phase", "projected_gauss_seidel",
+           "promises_no_gain", "random_two_contact_system", "restitution_targets",
+           "sequential_impacts", "SequentialResult", "solution_phases", "violations"]

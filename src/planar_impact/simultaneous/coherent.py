@@ -160,11 +160,15 @@ def _candidates(system, law, choices, coupling, tolerance):
     """
     if coupling == LITERAL:
         # Each contact's tangent is oriented by its own v^A(i) (as solve() orients it); every
-        # type tuple is a candidate, the paper's tests decide (_check_combination).
+        # type tuple is a candidate, the paper's tests decide (_check_combination). A contact
+        # that does not approach (v_n^A ≥ 0) has no impact: no impulse, type 0 only (the
+        # types' formulas at |v_n^A| would push a receding contact).
         signs = tuple(frame_sign(float(system.approach[2 * i + 1]), system.single_terms(i)[1])
                       for i in range(system.count))
+        per_contact = [choices if system.approach[2 * i] < 0 else (SEPARATING,)
+                       for i in range(system.count)]
         return [(types, tuple(1.0 if t == SEPARATING else sign for t, sign in zip(types, signs)))
-                for types in itertools.product(choices, repeat=system.count)]
+                for types in itertools.product(*per_contact)]
     combinations = list(_combinations(choices, system.count))
     if system.count == 1 or law not in AFFINE_LAWS:
         return combinations

@@ -34,6 +34,10 @@ class SequentialResult:
     vt_separation: np.ndarray
     energy_change: float
     capped: bool
+    #: Per impact, the contact velocities at its start and its impulses, both
+    #: ``(v_n^(1), v_t^(1), …)``-ordered (zero but at the struck contact): the phases that
+    #: :func:`planar_impact.simultaneous.admissible.violations` checks.
+    steps: tuple[tuple[np.ndarray, np.ndarray], ...] = ()
 
 
 def sequential_impacts(system: ContactSystem, law: str, order, max_impacts: int = 10_000
@@ -48,6 +52,7 @@ def sequential_impacts(system: ContactSystem, law: str, order, max_impacts: int 
     speeds = system.u.copy()
     threshold = -1e-12 * system.speed_scale()  # below rounding, above any real approach
     impacts: list[tuple[int, int]] = []
+    steps: list[tuple[np.ndarray, np.ndarray]] = []
     capped = False
     while True:
         struck = False
@@ -61,6 +66,10 @@ def sequential_impacts(system: ContactSystem, law: str, order, max_impacts: int 
             # solve() of contact i, its M⁻¹ w and (A20) terms formed once per system.
             result = solver.solve_contact(system.checked_contacts[i], speeds,
                                           float(system.mu[i]), float(system.e[i]), law)
+            impulse = np.zeros(2 * system.count)
+            impulse[2 * i], impulse[2 * i + 1] = result.normal_impulse, result.tangential_impulse
+            start = np.ravel(np.column_stack([system.wn @ speeds, system.wt @ speeds]))
+            steps.append((start, impulse))
             speeds = result.u_after
             impacts.append((i, result.collision_type))
             struck = True
@@ -72,7 +81,7 @@ def sequential_impacts(system: ContactSystem, law: str, order, max_impacts: int 
     return SequentialResult(order=order, law=law, impacts=tuple(impacts), u_after=speeds,
                             delta_u=delta_u, vn_separation=system.wn @ speeds,
                             vt_separation=system.wt @ speeds, energy_change=float(kinetic),
-                            capped=capped)
+                            capped=capped, steps=tuple(steps))
 
 
 def all_orders(system: ContactSystem, law: str, max_impacts: int = 10_000
