@@ -187,6 +187,14 @@ BOUNDS: dict[str, Bound] = {
     "solimp": Bound(0, 0, elements=(
         Bound(1e-4, 0.9999), Bound(1e-4, 0.9999), Bound(0, 1, unit="m"),
         Bound(1e-4, 0.9999), Bound(1, 100))),
+    # Drake's point contact (drake.mit.edu, MultibodyPlantConfig; harness/engines/drake)
+    "penetration_allowance": Bound(0, 100, low_open=True, unit="m",
+                                   why="Drake: the overlap its default stiffness allows"),
+    "stiction_tolerance": Bound(0, 1e3, low_open=True, unit="m/s",
+                                why="Drake: the slip speed below which friction sticks"),
+    "hunt_crossley_dissipation": Bound(0, 1e6, unit="s/m", words=("restitution",),
+                                       why="Drake: d of the Hunt–Crossley force; "
+                                           "\"restitution\" derives it from e"),
     # command-line options
     "samples": Bound(1, 1_000_000, integer=True,
                      why="samples per population; 2,000 by default, 10^6 takes minutes"),

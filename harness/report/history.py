@@ -97,8 +97,10 @@ def history_figure(name: str, records: Sequence[Record], path: Path,
     ax_vt.set_title("tangential contact velocity (sticking at 0)", fontsize=11)
     ax_depth.set_title("deepest overlap per step", fontsize=11)
     handles, labels = ax_vn.get_legend_handles_labels()
+    # at most three columns: a label runs to ~45 characters ("pybullet.accurate (12 steps,
+    # engine impulse)"), and four such columns at 9 pt are wider than the 10.5 in figure
     columns = max(1, math.ceil(len(labels) / 4))
-    figure.legend(handles, labels, loc="outside lower center", ncols=min(columns, 4),
+    figure.legend(handles, labels, loc="outside lower center", ncols=min(columns, 3),
                   fontsize=9, frameon=False)
     figure.suptitle(f"{name}: the contact step by step (filled: accurate, hollow: defaults)",
                     fontsize=11)

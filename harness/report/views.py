@@ -284,6 +284,8 @@ SETTING_UNITS = {
     "enable_cone_friction": "on/off", "use_split_impulse": "on/off",
     "warm_starting": "on/off", "continuous_physics": "on/off", "sub_stepping": "on/off",
     "allow_sleeping": "on/off",
+    "penetration_allowance": "m", "stiction_tolerance": "m/s",
+    "hunt_crossley_dissipation": "s/m or restitution", "discrete_contact_approximation": "choice",
 }
 
 

@@ -30,8 +30,8 @@ def test_a_data_path_that_is_no_directory_is_bad_input(tmp_path, capsys):
 
 
 def test_bad_options_are_refused_before_any_work(capsys):
-    assert cli.main(["experiments", "--replicates", "3"]) == 2
-    assert "--replicates 3" in capsys.readouterr().err
+    assert exit_status(cli.main, ["experiments", "--replicates", "3"]) == 2
+    assert "--replicates: '3' is out of range" in capsys.readouterr().err
 
 
 def test_the_json_holds_aggregates_only(synthetic_copy, tmp_path, monkeypatch, capsys):
@@ -83,9 +83,10 @@ def test_every_count_is_bounded_before_any_work(option, value, monkeypatch, caps
     from harness.experiments import cli as experiments_cli
 
     monkeypatch.setattr(experiments_cli, "run_engines", _no_work)
-    assert cli.main(["experiments", option, value]) == 2
-    (line,) = capsys.readouterr().err.strip().splitlines()
-    assert f"{option} {value}: " in line and "out of range; allowed: an integer" in line
+    assert exit_status(cli.main, ["experiments", option, value]) == 2
+    # argparse's usage line, then one line naming the option, the value and what is allowed
+    line = capsys.readouterr().err.strip().splitlines()[-1]
+    assert f"{option}: '{value}' is out of range; allowed: an integer" in line
 
 
 def _no_work(*args, **kwargs):
@@ -200,3 +201,12 @@ def test_a_cached_run_writes_this_copys_place_in_the_json(synthetic_copy, tmp_pa
     assert cli.main([*command, "--data", str(moved), "--json", str(out)]) == 0
     assert "read from the cache" in capsys.readouterr().err
     assert json.loads(out.read_text())["fazeli2017"]["provenance"]["directory"] == str(moved)
+
+
+def exit_status(main, argv):
+    """The status a command line ends with: what ``main`` returns, or the status argparse
+    exits with when an option's type (harness.bounds.option) refuses its value."""
+    try:
+        return main(argv)
+    except SystemExit as stop:
+        return stop.code

@@ -53,6 +53,7 @@ def test_the_drops_figures_and_calibration_table_from_aggregates(tmp_path, monke
                         functools.partial(experiments.render_once, svg=False))
     data = tmp_path / "data"
     data.mkdir()
+    (tmp_path / "out").mkdir()  # the report's directory exists before its sections are made
     html = experiments.experiments_section(tmp_path / "out", data)
     for name in (experiments.DENSITY_FIGURE, experiments.CDF_FIGURE, experiments.FITS_FIGURE):
         assert (tmp_path / "out" / "figures" / name).is_file() and name in html
