@@ -11,7 +11,11 @@ frictions and restitutions (:data:`EXTREMES`). They were recorded with the code 
 written in later from the code of the day, each checked to have its stored fingerprint), and
 recorded again when the paper's literal reading became the default, solutions at the
 boundary of a decision were counted apart and flat-box-several-poisson was renamed
-flat-box-receding-end.
+flat-box-receding-end, and again at 68855a9 (issue 34: every solution carries what it breaks,
+``inadmissible``, and whether it gains energy, ``gains_energy``; the literal reading gives no
+impulse to a contact that does not approach, so flat-box-receding-end at μ 0 or 0.3 with e 0
+gains 2 and 3 literal solutions; checked before recording that no other value moved beyond
+the bound).
 
 Every kind, name, count, contact index and flag must be equal; every float within
 :func:`float_bound`: the references go through numpy's linear algebra (OpenBLAS/LAPACK,
