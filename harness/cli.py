@@ -31,6 +31,7 @@ import traceback
 from pathlib import Path
 
 from harness import bounds
+from harness.store.files import NotRegularFile
 
 # command name -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -163,6 +164,10 @@ def main(argv: list[str] | None = None) -> int:
               file=sys.stderr)
         return 130
     except OSError as error:
+        if isinstance(error, NotRegularFile):  # a link or a device found at an output
+            print(f"impact-harness {args.command}: {error} (remove it, or choose another "
+                  "output; finished engine runs are in the cache)", file=sys.stderr)
+            return 2
         if error.errno not in ENVIRONMENT_ERRORS:
             return _internal_error(args.command, error)
         # the machine, not the harness: a full disk, a read-only one, a quota
