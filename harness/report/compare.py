@@ -103,7 +103,9 @@ class Change:
                 found.append(f"departure from {law} not a number")
             elif _finite(a) != _finite(b):
                 found.append(f"departure from {law} {_spelled(a)} → {_spelled(b)}")
-        if self.u_a is not None and self.u_b is not None:
+        if (self.u_a is None) != (self.u_b is None):  # a result in one file only
+            found.append("speeds " + ("gone" if self.u_b is None else "new"))
+        elif self.u_a is not None and self.u_b is not None:
             if not all(v is None or _is_number(v) for v in (*self.u_a, *self.u_b)):
                 found.append("speeds not numbers")
             elif len(self.u_a) != len(self.u_b):

@@ -48,6 +48,7 @@ import itertools
 import json
 import math
 import os
+import sys
 from dataclasses import asdict, dataclass, field, fields, is_dataclass
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
@@ -461,6 +462,15 @@ _PROVENANCE_TYPES = {"gates": (list,), "engine_settings": (dict,), "versions": (
                      "wall_time_s": _NUMBER, "task_time_limit_s": _NUMBER}
 
 
+def _is_float_value(value) -> bool:
+    """Whether ``value`` is null or a number a float holds (an integer of 400 digits is
+    not: it would end in an OverflowError far from the file)."""
+    if value is None or isinstance(value, float):
+        return True
+    return (isinstance(value, int) and not isinstance(value, bool)
+            and abs(value) <= sys.float_info.max)
+
+
 def _kinds(kinds: tuple) -> str:
     return " or ".join("null" if kind is type(None) else kind.__name__ for kind in kinds)
 
@@ -475,12 +485,11 @@ def _value_problem(item: dict) -> str | None:
                              or isinstance(value, bool) and bool not in kinds):
             return f"{name} = {value!r}: not a {_kinds(kinds)}"
     for name in ("u_before", "u_after"):
-        if item[name] is not None and not all(
-                isinstance(v, _NUMBER) and not isinstance(v, bool) for v in item[name]):
-            return f"{name} = {item[name]!r}: not a list of numbers"
-    if not all(isinstance(law, str) and isinstance(v, _NUMBER) and not isinstance(v, bool)
+        if item[name] is not None and not all(map(_is_float_value, item[name])):
+            return f"{name} = {item[name]!r:.120}: not a list of numbers"
+    if not all(isinstance(law, str) and _is_float_value(v)
                for law, v in item["departure"].items()):
-        return f"departure = {item['departure']!r}: not numbers by law"
+        return f"departure = {item['departure']!r:.120}: not numbers by law"
     if not all(isinstance(reason, dict) and isinstance(reason.get("name"), str)
                for reason in item.get("reasons", ())):
         return f"reasons = {item['reasons']!r:.120}: not a list of named reasons"
