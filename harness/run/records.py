@@ -57,6 +57,7 @@ from harness import inputs
 from harness.collector import collector_paused
 from harness.engines import engine_names, source_label
 from harness.scenarios import PRESETS
+from harness.scenarios.schema import NAME_ALLOWED, NAME_PATTERN
 from harness.store.cache import LINE_SEPARATOR  # between two record lines (no raw newline)
 from harness.store.files import output_file_problem, write_parts_atomically
 
@@ -479,6 +480,8 @@ def _value_problem(item: dict) -> str | None:
     """Why a record's values (past the required fields' own types) are not those a run
     writes: an optional field of another type, a departure or a speed that is not a
     number (a report or a comparison of it would fail late, or be wrong)."""
+    if not NAME_PATTERN.match(item["scenario"]):  # it names files and HTML anchors
+        return f"scenario = {item['scenario']!r:.120}: not a scenario's name ({NAME_ALLOWED})"
     for name, kinds in _OPTIONAL_TYPES.items():
         value = item.get(name)
         if name in item and (not isinstance(value, kinds)
