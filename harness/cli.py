@@ -122,8 +122,14 @@ def build_parser(command: str | None) -> argparse.ArgumentParser:
     return parser
 
 
+#: The commands whose --out is a file, checked by the command itself (a second export to
+#: the same file was refused as "not a directory").
+FILE_OUT_COMMANDS = frozenset({"export"})
+
+
 def out_problem(out) -> str | None:
-    """Why ``--out`` (every command's is a directory) cannot be written into, or None (also
+    """Why ``--out`` (a directory: every command's but :data:`FILE_OUT_COMMANDS`') cannot be
+    written into, or None (also
     when it does not exist yet: the command makes it). Checked before any work."""
     if out is None:
         return None
@@ -153,7 +159,8 @@ def main(argv: list[str] | None = None) -> int:
     if problem is not None:
         print(f"impact-harness {args.command}: {problem}", file=sys.stderr)
         return 2
-    problem = out_problem(getattr(args, "out", None))
+    out = None if args.command in FILE_OUT_COMMANDS else getattr(args, "out", None)
+    problem = out_problem(out)
     if problem is not None:
         print(f"impact-harness {args.command}: --out {args.out}: {problem}", file=sys.stderr)
         return 2

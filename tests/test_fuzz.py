@@ -550,3 +550,47 @@ def test_the_cache_never_writes_through_a_linked_shard_directory(tmp_path, capsy
     assert_clean("linked shard", argv, status, out, err)
     assert status == 0 and "symbolic link" in err
     assert list(elsewhere.iterdir()) == []
+
+
+@pytest.mark.parametrize("name", ["disk\u202egnp.exe", "a\u0000b", "n" * 300, "../../x",
+                                  '=HYPERLINK("http://x")', "disk-direct\n"])
+def test_a_results_file_with_a_name_no_scenario_file_takes_is_refused(tmp_path, capsys, name):
+    """A scenario's name in a results file obeys the scenario file's rule: a 300-character
+    one ended compare in exit 3 (a file name too long), a bidi control or a NUL went into
+    the report's page and figures."""
+    good = _good_results(tmp_path, capsys)
+    document = json.loads(good.read_text(encoding="utf-8"))
+    for record in document["records"]:
+        record["scenario"] = name
+    document["scenarios"] = {name: next(iter(document["scenarios"].values()))}
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(document), encoding="utf-8")
+    for argv in (["compare", str(bad), str(bad)], ["export", str(bad), "--out",
+                                                   str(tmp_path / "e.csv")],
+                 ["report", "--results", str(bad), "--out", str(tmp_path / "rep")]):
+        status, out, err = run_main(argv, capsys)
+        assert_clean(name, argv, status, out, err)
+        assert status == 2 and "not a scenario's name" in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.json", "good.json"]
+
+
+@pytest.mark.parametrize("field", ["name", "tag"])
+def test_a_name_or_tag_ending_in_a_newline_is_refused(tmp_path, capsys, field):
+    """``$`` in the name's pattern matched before a final newline: "disk-direct\\n" was a
+    valid name (and a file name, an HTML anchor, a table cell with a line break)."""
+    text = DISK_TEXT.replace('name = "disk-direct"', 'name = "disk-direct\\n"', 1) \
+        if field == "name" else DISK_TEXT.replace('"quick"', '"quick\\n"', 1)
+    assert text != DISK_TEXT
+    path = tmp_path / "s.toml"
+    path.write_text(text, encoding="utf-8")
+    status, out, err = run_main(["validate", "--no-solve", str(path)], capsys)
+    assert status == 2 and "\\n" in out + err
+
+
+def test_export_replaces_its_own_file(tmp_path, capsys):
+    """`export --out FILE` a second time was refused: FILE "is not a directory"."""
+    good = _good_results(tmp_path, capsys)
+    argv = ["export", str(good), "--out", str(tmp_path / "e.csv")]
+    assert run_main(argv, capsys)[0] == 0
+    status, out, err = run_main(argv, capsys)
+    assert status == 0, err
