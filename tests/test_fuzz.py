@@ -594,3 +594,14 @@ def test_export_replaces_its_own_file(tmp_path, capsys):
     assert run_main(argv, capsys)[0] == 0
     status, out, err = run_main(argv, capsys)
     assert status == 0, err
+
+
+def test_a_file_of_100_000_unknown_tables_prints_a_bounded_list(tmp_path, capsys):
+    """Each unknown key is an error; 100,000 of them printed 100,000 lines."""
+    path = tmp_path / "tables.toml"
+    path.write_text(DISK_TEXT + "".join(f"\n[t{i}]\n" for i in range(2000)), encoding="utf-8")
+    argv = ["validate", "--no-solve", str(path)]
+    status, out, err = _cpu_limited("tables", argv, capsys)
+    assert_clean("tables", argv, status, out, err)
+    assert status == 2 and "1980 more errors not shown" in out
+    assert len((out + err).splitlines()) < 30
