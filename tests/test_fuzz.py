@@ -605,3 +605,28 @@ def test_a_file_of_100_000_unknown_tables_prints_a_bounded_list(tmp_path, capsys
     assert_clean("tables", argv, status, out, err)
     assert status == 2 and "1980 more errors not shown" in out
     assert len((out + err).splitlines()) < 30
+
+
+def test_compare_never_writes_its_table_over_a_file_it_compares(tmp_path, capsys):
+    """`compare a.json b.json --csv b.json` replaced b.json by the table (exit 0)."""
+    good = _good_results(tmp_path, capsys)
+    text = good.read_text(encoding="utf-8")
+    for option in ("--csv", "--html"):
+        argv = ["compare", str(good), str(good), option, str(good)]
+        status, out, err = run_main(argv, capsys)
+        assert_clean(option, argv, status, out, err)
+        assert status == 2 and "being compared" in err
+    assert good.read_text(encoding="utf-8") == text
+
+
+def test_compare_of_a_departure_gone_is_a_change(tmp_path, capsys):
+    """An engine record whose departures vanished in B compared as "0 changed", exit 0."""
+    good = _good_results(tmp_path, capsys)
+    document = json.loads(good.read_text(encoding="utf-8"))
+    document["records"][-1]["departure"] = {}
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(document), encoding="utf-8")
+    status, out, err = run_main(["compare", str(good), str(bad)], capsys)
+    assert status == 1 and "gone" in out, out + err
+    status, out, err = run_main(["compare", str(bad), str(good)], capsys)  # a law added
+    assert status == 0, out + err
