@@ -173,7 +173,7 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as error:
         if isinstance(error, NotRegularFile):  # a link or a device found at an output
             print(f"impact-harness {args.command}: {error} (remove it, or choose another "
-                  "output; finished engine runs are in the cache)", file=sys.stderr)
+                  "output)", file=sys.stderr)
             return 2
         if error.errno not in ENVIRONMENT_ERRORS:
             return _internal_error(args.command, error)
