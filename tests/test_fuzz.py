@@ -339,6 +339,10 @@ def _command_lines(tmp_path) -> dict[str, list[str]]:
                                      "--json", json_out],
         "stress: a bad --scheduler": ["stress", "--executor", "dask", "--scheduler", "bogus",
                                       "--solver-only", "--out", str(tmp_path / "st")],
+        "cache info, a --cache-dir too long": ["cache", "info", "--cache-dir",
+                                               str(tmp_path / ("x" * 300))],
+        "cache clear, a --cache-dir a file": ["cache", "clear", "--cache-dir",
+                                              str(SCENARIO_DIR / "disk-direct.toml")],
         "cache prune --older-than nan": ["cache", "prune", "--older-than", "nan",
                                          "--cache-dir", str(tmp_path / "c")],
     }
