@@ -634,3 +634,18 @@ def test_compare_of_a_departure_gone_is_a_change(tmp_path, capsys):
     assert status == 1 and "gone" in out, out + err
     status, out, err = run_main(["compare", str(bad), str(good)], capsys)  # a law added
     assert status == 0, out + err
+
+
+@pytest.mark.parametrize("name", ["summary.md", "runs.parquet", ".written-by-survey.json"])
+def test_survey_refuses_a_link_at_its_own_files_before_any_work(tmp_path, capsys, name):
+    """A link at out/summary.md was found by the write after the survey's work (exit 3)."""
+    out = tmp_path / "survey"
+    out.mkdir()
+    (out / name).symlink_to(tmp_path / "elsewhere")
+    argv = ["survey", "disk-disk", "--samples", "2", "--engines", "pymunk", "--preset",
+            "defaults", "--workers", "1", "--no-figures", "--out", str(out)]
+    status, out_text, err = _cpu_limited(name, argv, capsys)
+    assert_clean(name, argv, status, out_text, err)
+    assert status == 2 and name in err and "symbolic link" in err
+    assert sorted(p.name for p in out.iterdir()) == [name]
+    assert not (tmp_path / "elsewhere").exists()
