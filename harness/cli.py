@@ -31,6 +31,7 @@ import traceback
 from pathlib import Path
 
 from harness import bounds
+from harness.store.files import NotRegularFile
 
 # command name -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -121,8 +122,14 @@ def build_parser(command: str | None) -> argparse.ArgumentParser:
     return parser
 
 
+#: The commands whose --out is a file, checked by the command itself (a second export to
+#: the same file was refused as "not a directory").
+FILE_OUT_COMMANDS = frozenset({"export"})
+
+
 def out_problem(out) -> str | None:
-    """Why ``--out`` (every command's is a directory) cannot be written into, or None (also
+    """Why ``--out`` (a directory: every command's but :data:`FILE_OUT_COMMANDS`') cannot be
+    written into, or None (also
     when it does not exist yet: the command makes it). Checked before any work."""
     if out is None:
         return None
@@ -152,7 +159,8 @@ def main(argv: list[str] | None = None) -> int:
     if problem is not None:
         print(f"impact-harness {args.command}: {problem}", file=sys.stderr)
         return 2
-    problem = out_problem(getattr(args, "out", None))
+    out = None if args.command in FILE_OUT_COMMANDS else getattr(args, "out", None)
+    problem = out_problem(out)
     if problem is not None:
         print(f"impact-harness {args.command}: --out {args.out}: {problem}", file=sys.stderr)
         return 2
@@ -163,6 +171,10 @@ def main(argv: list[str] | None = None) -> int:
               file=sys.stderr)
         return 130
     except OSError as error:
+        if isinstance(error, NotRegularFile):  # a link or a device found at an output
+            print(f"impact-harness {args.command}: {error} (remove it, or choose another "
+                  "output)", file=sys.stderr)
+            return 2
         if error.errno not in ENVIRONMENT_ERRORS:
             return _internal_error(args.command, error)
         # the machine, not the harness: a full disk, a read-only one, a quota

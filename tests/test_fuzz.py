@@ -337,6 +337,12 @@ def _command_lines(tmp_path) -> dict[str, list[str]]:
         "--set nested 30,000 deep": ["run", disk, "--engines", "pymunk", "--set",
                                      "pymunk.iterations=" + "[" * 30_000 + "]" * 30_000,
                                      "--json", json_out],
+        "stress: a bad --scheduler": ["stress", "--executor", "dask", "--scheduler", "bogus",
+                                      "--solver-only", "--out", str(tmp_path / "st")],
+        "cache info, a --cache-dir too long": ["cache", "info", "--cache-dir",
+                                               str(tmp_path / ("x" * 300))],
+        "cache clear, a --cache-dir a file": ["cache", "clear", "--cache-dir",
+                                              str(SCENARIO_DIR / "disk-direct.toml")],
         "cache prune --older-than nan": ["cache", "prune", "--older-than", "nan",
                                          "--cache-dir", str(tmp_path / "c")],
     }
@@ -427,3 +433,219 @@ def test_a_limit_set_in_the_environment_out_of_its_range_is_bad_input(capsys, mo
     status, out, err = run_main(argv, capsys)
     assert_clean(variable, argv, status, out, err)
     assert status == 2 and variable in err and err.count("\n") == 1
+
+
+def _good_results(tmp_path, capsys) -> Path:
+    good = tmp_path / "good.json"
+    argv = ["run", str(SCENARIO_DIR / "disk-direct.toml"), "--engines", "pymunk", "--preset",
+            "defaults", "--no-cache", "--json", str(good)]
+    assert run_main(argv, capsys)[0] == 0
+    return good
+
+
+@pytest.mark.parametrize("name", ["index.html", "summary.md", ".report-fragments.json",
+                                  ".report-digests.json"])
+def test_report_refuses_a_link_at_its_own_files_before_any_work(tmp_path, capsys, name):
+    """Third round: a symbolic link at out/index.html ended in exit 3 after the work, and
+    one at out/.report-fragments.json to /dev/zero was read until memory ran out (24 GB)."""
+    good = _good_results(tmp_path, capsys)
+    out = tmp_path / "rep"
+    out.mkdir()
+    (out / name).symlink_to(tmp_path / "elsewhere")
+    argv = ["report", "--results", str(good), "--out", str(out), "--workers", "1",
+            "--scenario-figures", "none"]
+    status, out_text, err = _cpu_limited(name, argv, capsys)
+    assert_clean(name, argv, status, out_text, err)
+    assert status == 2 and name in err and "symbolic link" in err
+    assert sorted(p.name for p in out.iterdir()) == [name]  # nothing written
+    assert not (tmp_path / "elsewhere").exists()
+
+
+def test_report_fragments_are_read_bounded_never_from_a_device(tmp_path):
+    """The report's own cache in its directory is read as a regular file of bounded size:
+    a FIFO or a device there is a cache to compute anew, never read (nor waited on)."""
+    import os
+
+    from harness.report.fragments import FragmentCache
+
+    fifo = tmp_path / "fragments.json"
+    os.mkfifo(fifo)
+    previous = signal.signal(signal.SIGALRM, _alarm)
+    signal.setitimer(signal.ITIMER_REAL, 5)
+    try:
+        assert FragmentCache(fifo, "context").stored == {}
+    except Hang:
+        pytest.fail("waited on a FIFO for its content")
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+    big = tmp_path / "big.json"
+    big.write_text('{"context": "context", "entries": {"a": 1}, "texts": {}}\n' + "x" * 100)
+    assert FragmentCache(big, "context").stored == {"a": 1}
+
+
+def test_a_figure_replaced_by_a_fifo_is_redrawn_not_waited_on(tmp_path):
+    import os
+
+    from harness.report.figure_cache import png_tag
+
+    os.mkfifo(tmp_path / "heatmap.png")
+    previous = signal.signal(signal.SIGALRM, _alarm)
+    signal.setitimer(signal.ITIMER_REAL, 5)
+    try:
+        assert png_tag(tmp_path / "heatmap.png") is None
+    except Hang:
+        pytest.fail("waited on a FIFO for its content")
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+@pytest.mark.parametrize("damage", ["departure-400-digits", "speed-400-digits",
+                                    "speeds-gone"])
+def test_compare_of_a_huge_integer_or_a_result_gone_is_refused_or_a_change(tmp_path, capsys,
+                                                                           damage):
+    """A 400-digit integer as a departure ended in an OverflowError (exit 3); speeds null in
+    one file only compared as "0 changed" (exit 0)."""
+    good = _good_results(tmp_path, capsys)
+    text = good.read_text(encoding="utf-8")
+    document = json.loads(text)
+    record = document["records"][-1]
+    if damage == "speeds-gone":
+        record["u_after"] = None
+        bad_text = json.dumps(document)
+    else:
+        field = "departure" if damage.startswith("departure") else "u_after"
+        marker = 123.25
+        if field == "departure":
+            record["departure"]["poisson"] = marker
+        else:
+            record["u_after"][0] = marker
+        bad_text = json.dumps(document).replace("123.25", "9" * 400)
+    bad = tmp_path / "bad.json"
+    bad.write_text(bad_text, encoding="utf-8")
+    argv = ["compare", str(good), str(bad)]
+    status, out, err = run_main(argv, capsys)
+    assert_clean(damage, argv, status, out, err)
+    if damage == "speeds-gone":
+        assert status == 1 and "speeds gone" in out
+    else:
+        assert status == 2 and str(bad) in err and "not" in err
+
+
+def test_the_cache_never_writes_through_a_linked_shard_directory(tmp_path, capsys):
+    """A shard directory of the cache replaced by a link to elsewhere: the run goes on
+    without the cache, nothing lands where the link points."""
+    cache = tmp_path / "cache"
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    argv = ["run", str(SCENARIO_DIR / "disk-direct.toml"), "--engines", "pymunk", "--preset",
+            "defaults", "--workers", "1", "--cache-dir", str(cache), "--json",
+            str(tmp_path / "r.json"), "--force"]
+    assert run_main(argv, capsys)[0] == 0
+    shards = [p for p in cache.iterdir() if p.is_dir()]
+    assert shards
+    for shard in shards:  # every entry gone, every directory a link: each put is refused
+        for entry in shard.iterdir():
+            entry.unlink()
+        shard.rmdir()
+        shard.symlink_to(elsewhere)
+    status, out, err = run_main(argv, capsys)
+    assert_clean("linked shard", argv, status, out, err)
+    assert status == 0 and "symbolic link" in err
+    assert list(elsewhere.iterdir()) == []
+
+
+@pytest.mark.parametrize("name", ["disk\u202egnp.exe", "a\u0000b", "n" * 300, "../../x",
+                                  '=HYPERLINK("http://x")', "disk-direct\n"])
+def test_a_results_file_with_a_name_no_scenario_file_takes_is_refused(tmp_path, capsys, name):
+    """A scenario's name in a results file obeys the scenario file's rule: a 300-character
+    one ended compare in exit 3 (a file name too long), a bidi control or a NUL went into
+    the report's page and figures."""
+    good = _good_results(tmp_path, capsys)
+    document = json.loads(good.read_text(encoding="utf-8"))
+    for record in document["records"]:
+        record["scenario"] = name
+    document["scenarios"] = {name: next(iter(document["scenarios"].values()))}
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(document), encoding="utf-8")
+    for argv in (["compare", str(bad), str(bad)], ["export", str(bad), "--out",
+                                                   str(tmp_path / "e.csv")],
+                 ["report", "--results", str(bad), "--out", str(tmp_path / "rep")]):
+        status, out, err = run_main(argv, capsys)
+        assert_clean(name, argv, status, out, err)
+        assert status == 2 and "not a scenario's name" in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.json", "good.json"]
+
+
+@pytest.mark.parametrize("field", ["name", "tag"])
+def test_a_name_or_tag_ending_in_a_newline_is_refused(tmp_path, capsys, field):
+    """``$`` in the name's pattern matched before a final newline: "disk-direct\\n" was a
+    valid name (and a file name, an HTML anchor, a table cell with a line break)."""
+    text = DISK_TEXT.replace('name = "disk-direct"', 'name = "disk-direct\\n"', 1) \
+        if field == "name" else DISK_TEXT.replace('"quick"', '"quick\\n"', 1)
+    assert text != DISK_TEXT
+    path = tmp_path / "s.toml"
+    path.write_text(text, encoding="utf-8")
+    status, out, err = run_main(["validate", "--no-solve", str(path)], capsys)
+    assert status == 2 and "\\n" in out + err
+
+
+def test_export_replaces_its_own_file(tmp_path, capsys):
+    """`export --out FILE` a second time was refused: FILE "is not a directory"."""
+    good = _good_results(tmp_path, capsys)
+    argv = ["export", str(good), "--out", str(tmp_path / "e.csv")]
+    assert run_main(argv, capsys)[0] == 0
+    status, out, err = run_main(argv, capsys)
+    assert status == 0, err
+
+
+def test_a_file_of_100_000_unknown_tables_prints_a_bounded_list(tmp_path, capsys):
+    """Each unknown key is an error; 100,000 of them printed 100,000 lines."""
+    path = tmp_path / "tables.toml"
+    path.write_text(DISK_TEXT + "".join(f"\n[t{i}]\n" for i in range(2000)), encoding="utf-8")
+    argv = ["validate", "--no-solve", str(path)]
+    status, out, err = _cpu_limited("tables", argv, capsys)
+    assert_clean("tables", argv, status, out, err)
+    assert status == 2 and "1980 more errors not shown" in out
+    assert len((out + err).splitlines()) < 30
+
+
+def test_compare_never_writes_its_table_over_a_file_it_compares(tmp_path, capsys):
+    """`compare a.json b.json --csv b.json` replaced b.json by the table (exit 0)."""
+    good = _good_results(tmp_path, capsys)
+    text = good.read_text(encoding="utf-8")
+    for option in ("--csv", "--html"):
+        argv = ["compare", str(good), str(good), option, str(good)]
+        status, out, err = run_main(argv, capsys)
+        assert_clean(option, argv, status, out, err)
+        assert status == 2 and "being compared" in err
+    assert good.read_text(encoding="utf-8") == text
+
+
+def test_compare_of_a_departure_gone_is_a_change(tmp_path, capsys):
+    """An engine record whose departures vanished in B compared as "0 changed", exit 0."""
+    good = _good_results(tmp_path, capsys)
+    document = json.loads(good.read_text(encoding="utf-8"))
+    document["records"][-1]["departure"] = {}
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(document), encoding="utf-8")
+    status, out, err = run_main(["compare", str(good), str(bad)], capsys)
+    assert status == 1 and "gone" in out, out + err
+    status, out, err = run_main(["compare", str(bad), str(good)], capsys)  # a law added
+    assert status == 0, out + err
+
+
+@pytest.mark.parametrize("name", ["summary.md", "runs.parquet", ".written-by-survey.json"])
+def test_survey_refuses_a_link_at_its_own_files_before_any_work(tmp_path, capsys, name):
+    """A link at out/summary.md was found by the write after the survey's work (exit 3)."""
+    out = tmp_path / "survey"
+    out.mkdir()
+    (out / name).symlink_to(tmp_path / "elsewhere")
+    argv = ["survey", "disk-disk", "--samples", "2", "--engines", "pymunk", "--preset",
+            "defaults", "--workers", "1", "--no-figures", "--out", str(out)]
+    status, out_text, err = _cpu_limited(name, argv, capsys)
+    assert_clean(name, argv, status, out_text, err)
+    assert status == 2 and name in err and "symbolic link" in err
+    assert sorted(p.name for p in out.iterdir()) == [name]
+    assert not (tmp_path / "elsewhere").exists()

@@ -86,7 +86,7 @@ from harness.report.figure_cache import (
     table3_payload,
 )
 from harness.report.figures import heatmap_figure, impulse_figure, split_figure, sweep_figure
-from harness.report.fragments import DIGESTS_FILE, open_cache, prepare
+from harness.report.fragments import CACHE_FILE, DIGESTS_FILE, open_cache, prepare
 from harness.report.history import history_figure, history_inputs
 from harness.report.html import html_page
 from harness.report.pages import PAGE_DIRECTORIES, write_pages
@@ -102,6 +102,7 @@ from harness.store.files import (
     keep_manifest,
     make_inner_directory,
     output_directory_problem,
+    replaceable_problem,
     write_text_atomically,
 )
 
@@ -549,6 +550,10 @@ def main(args) -> int:
             return 2
     problem = output_directory_problem(out) or next(
         filter(None, (inner_directory_problem(out, name) for name in INNER_DIRECTORIES)), None)
+    if not problem:  # the page's own files: a link or a device there is refused now
+        problem = next(filter(None, (
+            f"{name}: {why}" for name in ("index.html", "summary.md", CACHE_FILE, DIGESTS_FILE)
+            if (why := replaceable_problem(Path(out) / name)))), None)
     if problem:  # before any work
         print(f"impact-harness report: --out {out}: {problem}", file=sys.stderr)
         return 2

@@ -40,6 +40,7 @@ import csv
 import io
 import json
 import math
+import os
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -96,14 +97,19 @@ class Change:
         departure or a speed that is not a number, speeds of different lengths."""
         found = list(self.malformed)
         for law in LAWS:
+            if law in self.departure_a and law not in self.departure_b:
+                found.append(f"departure from {law} gone")  # a result lost: never passes
+                continue
             if law not in self.departure_a or law not in self.departure_b:
-                continue  # a law one run did not solve: no pair
+                continue  # a law A's run did not solve (one added since): no pair
             a, b = self.departure_a[law], self.departure_b[law]
             if not all(v is None or _is_number(v) for v in (a, b)):
                 found.append(f"departure from {law} not a number")
             elif _finite(a) != _finite(b):
                 found.append(f"departure from {law} {_spelled(a)} → {_spelled(b)}")
-        if self.u_a is not None and self.u_b is not None:
+        if (self.u_a is None) != (self.u_b is None):  # a result in one file only
+            found.append("speeds " + ("gone" if self.u_b is None else "new"))
+        elif self.u_a is not None and self.u_b is not None:
             if not all(v is None or _is_number(v) for v in (*self.u_a, *self.u_b)):
                 found.append("speeds not numbers")
             elif len(self.u_a) != len(self.u_b):
@@ -570,6 +576,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="print the N largest changes (default 20; 0 prints none)")
 
 
+def _same_file(one, other) -> bool:
+    """Whether two paths name one existing file (through links, ``..`` or hard links), or
+    are the same path."""
+    if one is None or other is None:
+        return False
+    try:
+        return os.path.samefile(one, other)
+    except OSError:  # one is missing: the same only if spelled to the same place
+        return os.path.abspath(one) == os.path.abspath(other)
+
+
 def _bad_input(message: str) -> int:
     print(f"impact-harness compare: {message}", file=sys.stderr)
     return 2
@@ -584,6 +601,11 @@ def main(args) -> int:
         problem = None if target is None else output_file_problem(target)
         if problem:
             return _bad_input(f"{option} {target}: {problem}")
+        if target is not None and any(_same_file(target, path) for path in (args.a, args.b)):
+            return _bad_input(f"{option} {target}: is a results file being compared; allowed: "
+                              "another file (it would be replaced by the table)")
+    if args.csv is not None and _same_file(args.csv, getattr(args, "html", None)):
+        return _bad_input(f"--csv and --html name one file, {args.csv}; allowed: two files")
     loaded = []
     for path in (args.a, args.b):
         try:

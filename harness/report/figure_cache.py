@@ -12,6 +12,8 @@ import dataclasses
 import functools
 import hashlib
 import json
+import os
+import stat
 from collections.abc import Callable
 from pathlib import Path
 
@@ -170,8 +172,12 @@ def png_tag(path: Path) -> str | None:
     (a warm report opens every figure and draws none).
     """
     key = TAG_KEY.encode("latin-1") + b"\0"
-    try:
-        with open(path, "rb") as handle:
+    try:  # a regular file only, never through a link: a FIFO planted there would block
+        descriptor = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0)
+                             | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
+        with open(descriptor, "rb") as handle:
+            if not stat.S_ISREG(os.fstat(descriptor).st_mode):
+                return None
             if handle.read(8) != PNG_SIGNATURE:
                 return None
             while True:

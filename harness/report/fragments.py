@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from harness.engines import PRESET_ROLES, engine_names
+from harness.inputs import read_bytes
 from harness.report.figure_cache import code_digest, scenario_digests
 from harness.report.reading import record_scenarios
 from harness.report.views import (
@@ -73,9 +74,8 @@ class FragmentCache:
         self.computed = 0
         if path is None:
             return
-        try:  # newline="": the offsets count the characters as written
-            with open(path, encoding="utf-8", newline="") as handle:
-                text = handle.read()
+        try:  # a regular file of bounded size only (never a device: /dev/zero filled memory)
+            text = read_bytes(path, cap_name="max_results_bytes").decode("utf-8")
             head, _, texts = text.partition("\n")
             data = json.loads(head)
             if data.get("context") == context:

@@ -48,6 +48,7 @@ import itertools
 import json
 import math
 import os
+import sys
 from dataclasses import asdict, dataclass, field, fields, is_dataclass
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
@@ -56,6 +57,7 @@ from harness import inputs
 from harness.collector import collector_paused
 from harness.engines import engine_names, source_label
 from harness.scenarios import PRESETS
+from harness.scenarios.schema import NAME_ALLOWED, NAME_PATTERN
 from harness.store.cache import LINE_SEPARATOR  # between two record lines (no raw newline)
 from harness.store.files import output_file_problem, write_parts_atomically
 
@@ -461,6 +463,15 @@ _PROVENANCE_TYPES = {"gates": (list,), "engine_settings": (dict,), "versions": (
                      "wall_time_s": _NUMBER, "task_time_limit_s": _NUMBER}
 
 
+def _is_float_value(value) -> bool:
+    """Whether ``value`` is null or a number a float holds (an integer of 400 digits is
+    not: it would end in an OverflowError far from the file)."""
+    if value is None or isinstance(value, float):
+        return True
+    return (isinstance(value, int) and not isinstance(value, bool)
+            and abs(value) <= sys.float_info.max)
+
+
 def _kinds(kinds: tuple) -> str:
     return " or ".join("null" if kind is type(None) else kind.__name__ for kind in kinds)
 
@@ -469,18 +480,19 @@ def _value_problem(item: dict) -> str | None:
     """Why a record's values (past the required fields' own types) are not those a run
     writes: an optional field of another type, a departure or a speed that is not a
     number (a report or a comparison of it would fail late, or be wrong)."""
+    if not NAME_PATTERN.match(item["scenario"]):  # it names files and HTML anchors
+        return f"scenario = {item['scenario']!r:.120}: not a scenario's name ({NAME_ALLOWED})"
     for name, kinds in _OPTIONAL_TYPES.items():
         value = item.get(name)
         if name in item and (not isinstance(value, kinds)
                              or isinstance(value, bool) and bool not in kinds):
             return f"{name} = {value!r}: not a {_kinds(kinds)}"
     for name in ("u_before", "u_after"):
-        if item[name] is not None and not all(
-                isinstance(v, _NUMBER) and not isinstance(v, bool) for v in item[name]):
-            return f"{name} = {item[name]!r}: not a list of numbers"
-    if not all(isinstance(law, str) and isinstance(v, _NUMBER) and not isinstance(v, bool)
+        if item[name] is not None and not all(map(_is_float_value, item[name])):
+            return f"{name} = {item[name]!r:.120}: not a list of numbers"
+    if not all(isinstance(law, str) and _is_float_value(v)
                for law, v in item["departure"].items()):
-        return f"departure = {item['departure']!r}: not numbers by law"
+        return f"departure = {item['departure']!r:.120}: not numbers by law"
     if not all(isinstance(reason, dict) and isinstance(reason.get("name"), str)
                for reason in item.get("reasons", ())):
         return f"reasons = {item['reasons']!r:.120}: not a list of named reasons"

@@ -5,6 +5,8 @@ from __future__ import annotations
 import difflib
 from typing import Any, Iterable
 
+#: Errors of one file listed at most; the rest are counted in one more line.
+MAX_LISTED_ERRORS = 20
 #: Marks "no value given" (None is a value a file may hold).
 NO_VALUE = object()
 
@@ -47,8 +49,14 @@ class ScenarioError(ValueError):
         self.allowed = allowed
         self.problem = message
         self.errors = tuple(errors) or (self,)
+        total = len(self.errors)
+        if total > MAX_LISTED_ERRORS:  # 100,000 unknown tables printed 100,000 lines
+            hidden = total - MAX_LISTED_ERRORS
+            self.errors = (*self.errors[:MAX_LISTED_ERRORS],
+                           ScenarioError(f"{hidden} more errors not shown (fix those above "
+                                         "first)", path=self.errors[0].path))
         if len(self.errors) > 1:
-            text = f"{len(self.errors)} errors:\n" + "\n".join(f"  {e}" for e in self.errors)
+            text = f"{total} errors:\n" + "\n".join(f"  {e}" for e in self.errors)
         elif self.errors[0] is not self:
             only = self.errors[0]
             self.path, self.key, self.value = only.path, only.key, only.value

@@ -89,7 +89,8 @@ EXPECT_KEYS = ("collision_type", "case", "energy_gain", "gate")
 GATE_KEYS = ("law", "max_departure")
 #: A scenario's or a body's name: it names files (figures, at most 255 bytes) and table cells.
 MAX_NAME = 100
-NAME_PATTERN = re.compile(rf"^[A-Za-z0-9][A-Za-z0-9_.-]{{0,{MAX_NAME - 1}}}$")
+#: ``\Z``, not ``$``: ``$`` also matches before a final newline ("disk\n" passed as a name)
+NAME_PATTERN = re.compile(rf"^[A-Za-z0-9][A-Za-z0-9_.-]{{0,{MAX_NAME - 1}}}\Z")
 NAME_ALLOWED = f"letters, digits, '_', '-' and '.', at most {MAX_NAME} characters"
 #: A character a description may not hold: the C0 and C1 control characters (NUL, newline,
 #: carriage return, tab, escape ...), the line and paragraph separators (a description is
@@ -99,7 +100,7 @@ CONTROL_CHARACTER = re.compile("[\x00-\x1f\x7f-\x9f\u2028\u2029\u061c\u200e\u200
                                "\u202a-\u202e\u2066-\u2069]")
 DESCRIPTION_ALLOWED = ("one line of text, without control characters (no NUL, newline, tab "
                        "or bidirectional control)")
-TAG_PATTERN = re.compile(r"^[a-z0-9][a-z0-9-]*$")
+TAG_PATTERN = re.compile(r"^[a-z0-9][a-z0-9-]*\Z")
 DERIVED_TAGS = ("all",)
 
 #: Supported magnitudes of the numeric fields: ``(smallest, largest)`` allowed |value| (a

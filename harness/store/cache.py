@@ -66,6 +66,7 @@ import itertools
 import json
 import os
 import secrets
+import stat
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
@@ -74,7 +75,7 @@ from typing import Any
 from harness.collector import collector_paused
 from harness.inputs import read_bytes
 from harness.store.cache_directory import CacheDirectory
-from harness.store.files import write_parts_atomically
+from harness.store.files import NotRegularFile, write_parts_atomically
 from harness.store.identity import Spelled, canonical_json, code_version
 from harness.store.packs import PACK_DIRECTORY, PACK_SIZE, PackIndex, make_pack, open_regular
 from harness.store.sealing import KeyProblem, Seal
@@ -114,6 +115,7 @@ class ResultCache(CacheDirectory):
         self._root_seen = False  # whether this cache looked at its root's marker yet
         # shard -> the names in its directory, while listed() is active (None: not listed)
         self._listing: dict[str, set[str] | None] | None = None
+        self._real_directories: set[str] = set()  # shards seen to be directories, not links
         self.seal = Seal(self.root)  # the keyed check of every header (harness.store.sealing)
         self._packs = PackIndex(self.root, self.version, self.seal)  # where packed records lie
 
@@ -322,8 +324,11 @@ class ResultCache(CacheDirectory):
         would cost as much as their writes), and the root first, marked, when it is missing
         (:meth:`_first_write`)."""
         self._first_write()
+        directory = os.path.dirname(path)
         for attempt in (1, 2, 3):
             try:
+                if directory not in self._real_directories:
+                    self._check_directory(directory)
                 write_parts_atomically(path, parts, prefix=f".{key[:8]}-")
                 return
             except FileNotFoundError:
@@ -332,6 +337,18 @@ class ResultCache(CacheDirectory):
                 if not os.path.isdir(self.root):
                     self.make_root()
                 os.makedirs(os.path.dirname(path), exist_ok=True)
+    def _check_directory(self, directory: str) -> None:
+        """Raise :class:`NotRegularFile` when the shard (or packs) directory ``directory`` is
+        a symbolic link or not a directory: an entry is never written through a link planted
+        in the cache (it would land wherever the link points). ``FileNotFoundError`` when it
+        is missing. Looked at once per directory and process."""
+        mode = os.lstat(directory).st_mode
+        if not stat.S_ISDIR(mode):
+            what = "a symbolic link" if stat.S_ISLNK(mode) else "not a directory"
+            raise NotRegularFile(f"{directory}: is {what}, not a directory of the cache: "
+                                 "no entry is written through it")
+        self._real_directories.add(directory)
+
     def lines_path(self, key: str) -> Path:
         return self.root / key[:2] / f"{key}.jsonl"
 

@@ -28,6 +28,16 @@ def add_arguments(parser) -> None:
 
 def main(args) -> int:
     cache = ResultCache(args.cache_dir)
+    try:  # before anything: a name too long was an OSError (exit 3), a file read as empty
+        is_file = cache.root.exists() and not cache.root.is_dir()
+    except OSError as error:
+        print(f"impact-harness cache: --cache-dir {str(cache.root)[:200]}: cannot be used: "
+              f"{error.strerror or error}", file=sys.stderr)
+        return 2
+    if is_file:
+        print(f"impact-harness cache: --cache-dir {cache.root}: is not a directory; allowed: "
+              "a cache's directory", file=sys.stderr)
+        return 2
     if args.action == "info":
         info = cache.info()
         note = "" if info["marked"] or not cache.root.exists() else (

@@ -157,6 +157,13 @@ def _replaceable_problem(path: Path | str) -> str | None:
     return f"is {kind}, not a regular file: not replaced"
 
 
+def replaceable_problem(path: Path | str) -> str | None:
+    """Why a file a command writes under a fixed name at ``path`` would not be replaced
+    (``None``: nothing is there or a regular file): a link, a directory, a device planted
+    there is refused before any work, not found by the write at the end."""
+    return _replaceable_problem(path)
+
+
 def output_file_problem(path: Path | str) -> str | None:
     """Why a file the user named cannot be written at ``path`` (``None``: it can): it must
     be nothing yet or a regular file (not a link, a device or a directory), in a directory

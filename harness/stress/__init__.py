@@ -47,7 +47,7 @@ import time
 from pathlib import Path
 
 from harness import bounds
-from harness.run.executor import progress_printer
+from harness.run.executor import DaskNotInstalled, check_arguments, progress_printer
 from harness.run.provenance import provenance
 from harness.store.files import output_directory_problem, write_text_atomically
 from harness.stress.engines import engine_stress
@@ -126,6 +126,11 @@ def main(args) -> int:
     problem = output_directory_problem(args.out)
     if problem:
         print(f"impact-harness stress: --out {args.out}: {problem}", file=sys.stderr)
+        return 2
+    try:  # --executor, --workers and --scheduler as `run` checks them, before any work
+        check_arguments(args.executor, args.workers, args.scheduler)
+    except (ValueError, DaskNotInstalled) as error:
+        print(f"impact-harness stress: {error}", file=sys.stderr)
         return 2
     started = time.perf_counter()
     report = run(args.quick, args.out, executor=args.executor, workers=args.workers,

@@ -41,6 +41,7 @@ from harness.store.files import (
     keep_manifest,
     make_output_directory,
     output_directory_problem,
+    replaceable_problem,
     write_text_atomically,
 )
 from harness.survey import laws as survey_laws
@@ -64,6 +65,9 @@ DEFAULT_OUT = Path("reports") / "survey"
 WRITTEN_BY_SURVEY = ".written-by-survey.json"
 #: What a survey wrote down of its settings, beside its tables (harness/survey/outputs.py).
 SETTINGS_FILE = "settings.json"
+#: The files a survey writes in its directory under fixed names.
+SURVEY_FILES = ("samples.parquet", "runs.parquet", "statistics.parquet", "summary.md",
+                SETTINGS_FILE, WRITTEN_BY_SURVEY)
 
 
 def default_left_out(engines) -> dict[tuple[str, str], str]:
@@ -343,8 +347,10 @@ def check_options(args: argparse.Namespace) -> tuple[list[str], list[str], int]:
             bounds.check(f"--{option} {value}", option, value)
     out = DEFAULT_OUT if args.out is None else Path(args.out)
     problem = (output_directory_problem(out)
-               or inner_directory_problem(out, outputs.FIGURES_DIRECTORY))
-    if problem is not None:
+               or inner_directory_problem(out, outputs.FIGURES_DIRECTORY)
+               or next((f"{name}: {why}" for name in SURVEY_FILES
+                        if (why := replaceable_problem(out / name))), None))
+    if problem is not None:  # a link at a file it writes: refused now, not after the work
         raise ValueError(f"--out {out}: {problem}")
     return engines, presets, samples
 

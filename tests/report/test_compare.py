@@ -327,13 +327,15 @@ def test_the_rows_are_sorted_by_a_column_they_show(tmp_path, capsys):
 
 
 def test_csv_cells_never_start_a_formula(tmp_path):
+    """A status is free text from the results file (a scenario's name is refused unless it
+    is a scenario's name, which never starts a formula)."""
     name = '=HYPERLINK("http://example.invalid","x")'
-    before = results_file(tmp_path, "a.json", [engine_record(0.1, scenario=name)])
-    after = results_file(tmp_path, "b.json", [engine_record(0.2, scenario=name)])
+    before = results_file(tmp_path, "a.json", [engine_record(0.1, status=name)])
+    after = results_file(tmp_path, "b.json", [engine_record(0.2, status="+" + name)])
     out = tmp_path / "diff.csv"
     run_compare(before, after, "--csv", out, "--fail-above", "100%")
     (row,) = list(csv.DictReader(out.open()))
-    assert row["scenario"] == "'" + name
+    assert row["status_a"] == "'" + name and row["status_b"] == "'+" + name
 
 
 def test_speeds_that_are_not_those_of_their_own_energy_change_are_a_change(tmp_path, capsys):
