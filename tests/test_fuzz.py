@@ -649,3 +649,36 @@ def test_survey_refuses_a_link_at_its_own_files_before_any_work(tmp_path, capsys
     assert status == 2 and name in err and "symbolic link" in err
     assert sorted(p.name for p in out.iterdir()) == [name]
     assert not (tmp_path / "elsewhere").exists()
+
+
+def test_cache_clear_under_a_planted_marker_removes_only_what_the_key_sealed(tmp_path,
+                                                                            capsys):
+    """Fourth round: a marker file planted in a directory of files named like cache entries
+    got them all removed by `cache clear`; only entries the cache's key sealed are, and
+    what is left is counted."""
+    from harness.store.cache import ResultCache
+    from harness.store.cache_directory import CACHE_MARKER
+
+    planted = tmp_path / "theirs"
+    (planted / "ab").mkdir(parents=True)
+    (planted / CACHE_MARKER).write_text("planted")
+    users = [planted / "ab" / f"{'ab' + '0' * 62}.json", planted / "passed-checks.json"]
+    for path in users:
+        path.write_text('{"key": "mine", "sha256": "0"}\nthe user\'s own\n')
+    argv = ["cache", "clear", "--cache-dir", str(planted)]
+    status, out, err = run_main(argv, capsys)
+    assert_clean("planted marker", argv, status, out, err)
+    assert status == 0 and "removed 0 entries" in out and "left 2 files" in out, out + err
+    assert all(path.read_text().endswith("the user's own\n") for path in users)
+    # the cache's own entries, sealed by its key, are removed; a forged one beside them stays
+    cache = ResultCache(tmp_path / "cache", version="v")
+    key = cache.key({"a": 1})
+    cache.put(key, {"status": "ok"})
+    cache.put_lines(cache.key({"b": 2}), ['{"x": 1}'])
+    forged = cache.path(cache.key({"c": 3}))
+    forged.parent.mkdir(exist_ok=True)
+    forged.write_bytes(cache.path(key).read_bytes())  # a sealed header, not its name
+    argv = ["cache", "clear", "--cache-dir", str(cache.root)]
+    status, out, err = run_main(argv, capsys)
+    assert status == 0 and "removed 2 entries" in out and "left 1 files" in out, out + err
+    assert forged.exists() and not cache.path(key).exists()

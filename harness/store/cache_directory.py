@@ -8,11 +8,19 @@ one, or one holding only cache entries); ``cache prune`` and ``cache clear`` ref
 directory without it (exit 2), and remove only the entries they recognise (the shard
 directories' ``<64 hex digits>.json``/``.jsonl`` files and temporaries, the checks' store,
 the ``packs`` directory's ``<64 hex digits>.pack`` files and temporaries), never the
-directory, its key (:mod:`harness.store.sealing`) or anything else in it.
+directory, its key (:mod:`harness.store.sealing`) or anything else in it. ``cache clear``
+removes an entry only when its seal verifies under the cache's key and the file holds
+exactly what the seal covers: a marker planted in a directory of files named like entries
+removes none of them (issue 37); what it leaves it counts.
+
+:func:`output_seal` is the seal, under the same key, of what the harness writes outside its
+cache and believes later (a report's cached pieces, the manifests of written files): the key
+never lies in the output directory, so whoever can write there cannot forge one.
 :mod:`harness.store.cache` has the entries' layout."""
 
 from __future__ import annotations
 
+import hashlib
 import itertools
 import json
 import os
@@ -23,8 +31,8 @@ from pathlib import Path
 from typing import Any
 
 from harness.store.files import write_text_atomically
-from harness.store.packs import PACK_DIRECTORY, PACK_NAME
-from harness.store.sealing import KEY_FILE
+from harness.store.packs import PACK_DIRECTORY, PACK_NAME, open_regular
+from harness.store.sealing import KEY_FILE, Seal
 
 _HARNESS_DIR = Path(__file__).resolve().parent.parent  # harness/, from harness/store/
 
@@ -60,6 +68,23 @@ def default_cache_dir() -> Path:
         return project / ".cache" / "results"
     base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
     return Path(base) / "impact-harness"
+
+
+class OutputSeal(Seal):
+    """The seal of the default cache (:func:`output_seal`): the cache's directory is made
+    (and marked) when a seal is first needed and it is missing."""
+
+    def key(self, create: bool) -> bytes | None:
+        if create and not self.root.exists():
+            CacheDirectory(self.root, True, "").make_root()
+        return super().key(create)
+
+
+def output_seal() -> Seal:
+    """The seal, under the key of the default cache (:func:`default_cache_dir`, which
+    ``IMPACT_HARNESS_CACHE_DIR`` moves), of a file the harness writes in an output
+    directory and believes on a later run only when the seal verifies."""
+    return OutputSeal(default_cache_dir())
 
 
 class CacheDirectory:
@@ -233,13 +258,20 @@ class CacheDirectory:
         return {"entries": removed, "bytes": size}
 
     def clear(self) -> dict:
-        """Remove every entry, the temporaries and the emptied shard directories; the root
-        and its marker stay (and anything else in it: never the harness's to remove).
-        Raises :class:`NotOurCache` (nothing removed) when the root is not marked."""
+        """Remove every entry whose seal verifies under this cache's key (:meth:`_sealed_whole`),
+        the temporaries and the emptied shard directories; the root, its marker and its key
+        stay, and so does every file the cache cannot tell it wrote (counted in ``left``:
+        never the harness's to remove, whatever its name). Returns ``{"entries", "bytes",
+        "left"}``. Raises :class:`NotOurCache` (nothing removed) when the root is not
+        marked."""
         self._require_marked()
-        removed, size = 0, 0
+        removed, size, left = 0, 0, 0
+        seal = Seal(self.root)
         for path in list(self._entries()):
             try:
+                if not self._sealed_whole(path, seal):
+                    left += 1
+                    continue
                 size += path.stat().st_size
                 path.unlink()
                 removed += 1
@@ -253,7 +285,45 @@ class CacheDirectory:
                     (self.root / shard).rmdir()  # only when empty
                 except OSError:
                     pass
-        return {"entries": removed, "bytes": size}
+        return {"entries": removed, "bytes": size, "left": left}
+
+    @staticmethod
+    def _sealed_whole(path: Path, seal: Seal) -> bool:
+        """Whether the file at ``path`` (never read through a link) is what this cache
+        wrote: its header's seal verifies under the cache's key and covers every byte of it
+        (the SHA-256 of a single entry's or a scenario's body and its key as the name, each
+        record of a pack, the checks' store whole)."""
+        try:
+            with open_regular(os.fspath(path)) as handle:
+                data = handle.read()
+            if path.name in OLD_CHECKS_STORES:
+                return False  # never sealed (nor read: the old one was a pickle)
+            if path.name == SCENARIO_CHECKS_STORE:
+                stored = json.loads(data)
+                if not isinstance(stored, dict):
+                    return False
+                seal.check(stored)
+                return True
+            head_end = data.find(b"\n")
+            header = json.loads(data[:head_end]) if head_end > 0 else None
+            if not isinstance(header, dict):
+                return False
+            seal.check(header)
+            body = memoryview(data)[head_end + 1:]
+            if path.parent.name == PACK_DIRECTORY:
+                sizes, digests = header.get("sizes"), header.get("sha256")
+                if not (isinstance(sizes, list) and isinstance(digests, list)
+                        and len(sizes) == len(digests)
+                        and all(isinstance(n, int) and n >= 0 for n in sizes)
+                        and sum(sizes) == len(body)):
+                    return False
+                bounds = list(itertools.accumulate(sizes, initial=0))
+                return all(hashlib.sha256(body[start:stop]).hexdigest() == digest
+                           for start, stop, digest in zip(bounds, bounds[1:], digests))
+            return (header.get("key") == path.name.split(".")[0]
+                    and header.get("sha256") == hashlib.sha256(body).hexdigest())
+        except (OSError, ValueError):  # unreadable, not JSON, no key, seal differs
+            return False
 
 def _is_temporary(name: str) -> bool:
     """A writer's temporary file name (:func:`harness.store.files.write_parts_atomically`)."""

@@ -15,7 +15,8 @@ from harness.store.cache_directory import CACHE_MARKER, NotOurCache, default_cac
 def add_arguments(parser) -> None:
     parser.add_argument("action", choices=("info", "prune", "clear"),
                         help="info: where and how big; prune: remove entries of other code "
-                        "versions (and older than --older-than); clear: remove every entry. "
+                        "versions (and older than --older-than); clear: remove every entry "
+                        "its key sealed (any other file is left, and counted). "
                         "prune and clear remove only the cache's own entries, and only in a "
                         f"directory the harness made (it holds {CACHE_MARKER}); any other is "
                         "refused with exit 2")
@@ -56,7 +57,10 @@ def main(args) -> int:
     except NotOurCache as error:
         print(f"impact-harness cache: {error}", file=sys.stderr)
         return 2
-    print(f"{cache.root}: removed {done['entries']} entries, {done['bytes'] / 1e6:.1f} MB")
+    left = done.get("left", 0)
+    print(f"{cache.root}: removed {done['entries']} entries, {done['bytes'] / 1e6:.1f} MB"
+          + (f"; left {left} files named like entries that the cache cannot tell it wrote "
+             "(no seal of its key over them)" if left else ""))
     return 0
 
 
