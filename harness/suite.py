@@ -35,6 +35,7 @@ from harness.report.survey import read_settings
 from harness.run import command, plan
 from harness.run.provenance import PACKAGES, package_versions
 from harness.run.records import read_results
+from harness.store.cache_directory import output_seal
 from harness.store.files import make_output_directory, output_directory_problem, remove_written
 from harness.store.identity import cached_code_sources, code_version_of
 from harness.survey.cli import (
@@ -138,7 +139,7 @@ def quick_survey(args, out: Path) -> tuple[Path, bool]:
                 "presets": list(presets), "skipped": survey["skipped"],
                 "left_out": survey["left_out"], "inputs": inputs}
     # no key over files half rewritten: removed, only as the survey wrote it (its manifest)
-    remove_written(out, WRITTEN_BY_SURVEY, SETTINGS_FILE)
+    remove_written(out, WRITTEN_BY_SURVEY, SETTINGS_FILE, output_seal())
     write_survey(survey, out, settings, figures=False)
     return out / "summary.md", True
 

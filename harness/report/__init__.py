@@ -97,6 +97,7 @@ from harness.report.survey import survey_figure_tasks
 from harness.report.table3 import table3_figure
 from harness.report.views import FIGURES, has_library_scenarios, slug, split_rows
 from harness.run.records import DEFAULT_RESULTS, Results
+from harness.store.cache_directory import output_seal
 from harness.store.files import (
     inner_directory_problem,
     keep_manifest,
@@ -481,11 +482,12 @@ def _remove_stale_figures(figure_dir: Path, wanted: set) -> None:
     """Remove the figures an earlier report wrote here that this one no longer draws.
 
     Only files :data:`WRITTEN` lists with the SHA-256 of what the report wrote, still
-    holding exactly that, are ever removed (:func:`harness.store.files.keep_manifest`): a
-    file the report did not write -- someone's figure, a tracked file, a name planted in
-    the manifest -- stays.
+    holding exactly that, are ever removed, and only when the manifest is sealed under the
+    key of the result cache (:func:`harness.store.files.keep_manifest`): a file the report
+    did not write -- someone's figure, a tracked file, a name planted in the manifest --
+    stays.
     """
-    keep_manifest(figure_dir, WRITTEN, wanted, (".png", ".svg"))
+    keep_manifest(figure_dir, WRITTEN, wanted, (".png", ".svg"), output_seal())
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -14,9 +14,12 @@ import itertools
 import json
 import os
 import stat
+import sys
 import tempfile
 from pathlib import Path
 from typing import Iterable
+
+from harness.store.sealing import Seal
 
 #: Numbers the temporaries of this process (with its pid: a unique name without the random
 #: draw of ``tempfile.mkstemp``, a sizeable share of a small cache entry's write).
@@ -279,20 +282,24 @@ def regular_file_sha256(path: Path | str) -> str | None:
 
 
 def keep_manifest(directory: Path | str, manifest_name: str, wanted: Iterable[str],
-                  suffixes: tuple[str, ...]) -> list[str]:
+                  suffixes: tuple[str, ...], seal: Seal) -> list[str]:
     """Record the files ``wanted`` (names in ``directory``) as written by the harness, and
     remove those an earlier manifest recorded that are no longer wanted; returns the names
     removed.
 
     A file is removed only when the manifest in ``directory`` (``manifest_name``, a regular
-    file, never a link) names it with the SHA-256 of what was written, the name is a plain
-    name with one of ``suffixes``, and the file is still a regular file holding exactly
-    that: a name planted in a manifest, a file the user put in its place, a link, are never
-    removed (issue 37, item 3). The new manifest lists each wanted file present with its
-    SHA-256, written atomically."""
+    file, never a link) is sealed by ``seal`` (the HMAC of :mod:`harness.store.sealing`
+    under a key kept outside ``directory``,
+    :func:`harness.store.cache_directory.output_seal`), names it with the SHA-256 of what
+    was written, the name is a plain name with one of ``suffixes``, and the file is still a
+    regular file holding exactly that: a name planted in a manifest -- even with the right
+    hash of a user's file --, a file the user put in its place, a link, are never removed
+    (issue 37, item 3). A manifest there that is not sealed removes nothing, said once on
+    stderr. The new manifest lists each wanted file present with its SHA-256, sealed
+    (unsealed when the key cannot be had: it then removes nothing), written atomically."""
     directory = Path(directory)
     manifest = directory / manifest_name
-    recorded = _read_manifest(manifest)
+    recorded = _read_manifest(manifest, seal)
     wanted = set(wanted)
     removed = []
     for name in sorted(set(recorded) - wanted):
@@ -311,14 +318,30 @@ def keep_manifest(directory: Path | str, manifest_name: str, wanted: Iterable[st
         digest = regular_file_sha256(directory / name)
         if digest is not None:
             written[name] = digest
-    write_text_atomically(manifest, json.dumps({"format": MANIFEST_FORMAT, "written": written},
-                                               indent=0) + "\n")
+    stored = {"format": MANIFEST_FORMAT, "written": written}
+    try:
+        stored = seal.sealed(stored)
+    except (OSError, ValueError) as error:  # KeyProblem is a ValueError
+        _warn_once(manifest, f"cannot be sealed ({error}): the next run removes nothing "
+                   "it lists")
+    write_text_atomically(manifest, json.dumps(stored, indent=0) + "\n")
     return removed
 
 
-def _read_manifest(manifest: Path) -> dict[str, str]:
+#: The manifests :func:`_warn_once` spoke of in this process.
+_WARNED: set[str] = set()
+
+
+def _warn_once(manifest: Path, what: str) -> None:
+    if os.fspath(manifest) not in _WARNED:
+        _WARNED.add(os.fspath(manifest))
+        print(f"impact-harness: warning: {manifest}: {what}", file=sys.stderr)
+
+
+def _read_manifest(manifest: Path, seal: Seal) -> dict[str, str]:
     """``{name: SHA-256}`` of a manifest :func:`keep_manifest` wrote (a regular file, never
-    read through a link, of bounded size); empty when there is none or it is not one."""
+    read through a link, of bounded size, sealed by ``seal``); empty when there is none or
+    it is not one (said once when it is there but not sealed)."""
     try:
         descriptor = os.open(manifest, _OPEN_NO_LINK)
         try:
@@ -333,15 +356,21 @@ def _read_manifest(manifest: Path) -> dict[str, str]:
     if not (isinstance(stored, dict) and stored.get("format") == MANIFEST_FORMAT
             and isinstance(stored.get("written"), dict)):
         return {}
+    try:
+        seal.check(stored)
+    except ValueError as error:  # KeyProblem too
+        _warn_once(manifest, f"not sealed by the harness, nothing it lists is removed ({error})")
+        return {}
     return {name: digest for name, digest in stored["written"].items()
             if isinstance(name, str) and isinstance(digest, str)}
 
 
-def remove_written(directory: Path | str, manifest_name: str, name: str) -> bool:
-    """Remove ``directory/name`` when the manifest there records it and it still holds
-    what was written (:func:`keep_manifest`'s rule); whether it was removed."""
+def remove_written(directory: Path | str, manifest_name: str, name: str, seal: Seal) -> bool:
+    """Remove ``directory/name`` when the manifest there, sealed by ``seal``, records it and
+    it still holds what was written (:func:`keep_manifest`'s rule); whether it was
+    removed."""
     directory = Path(directory)
-    recorded = _read_manifest(directory / manifest_name).get(name)
+    recorded = _read_manifest(directory / manifest_name, seal).get(name)
     if recorded is None or os.path.basename(name) != name or name == manifest_name:
         return False
     if regular_file_sha256(directory / name) != recorded:

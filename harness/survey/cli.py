@@ -36,6 +36,7 @@ from harness.engines import (
 )
 from harness.run.provenance import package_versions
 from harness.scenarios.errors import ScenarioError
+from harness.store.cache_directory import output_seal
 from harness.store.files import (
     inner_directory_problem,
     keep_manifest,
@@ -326,7 +327,8 @@ def write_survey(survey: dict, out: Path, settings: dict, figures: bool = True) 
     # An earlier survey's tables this one did not write (no engine ran) would be read as
     # this one's: removed, but only those the manifest says a survey wrote, as written.
     keep_manifest(out, WRITTEN_BY_SURVEY, [path.name for path in written
-                                           if path.parent == out], (".parquet",))
+                                           if path.parent == out], (".parquet",),
+                  output_seal())
     return written
 
 
