@@ -22,6 +22,7 @@ import pytest
 
 from harness import cli
 from harness.scenarios import SCENARIO_DIR
+from harness.store.sealing import Seal
 
 ROOT = Path(__file__).resolve().parents[1]
 SEED = 20261128
@@ -480,8 +481,50 @@ def test_report_fragments_are_read_bounded_never_from_a_device(tmp_path):
         signal.setitimer(signal.ITIMER_REAL, 0)
         signal.signal(signal.SIGALRM, previous)
     big = tmp_path / "big.json"
-    big.write_text('{"context": "context", "entries": {"a": 1}, "texts": {}}\n' + "x" * 100)
-    assert FragmentCache(big, "context").stored == {"a": 1}
+    seal = Seal(tmp_path)
+    kept = FragmentCache(big, "context", seal)
+    kept.get("a", lambda: 1)
+    kept.get("b", lambda: "x" * 100)
+    kept.save()
+    assert FragmentCache(big, "context", seal).stored == {"a": 1, "b": "x" * 100}
+
+
+def test_report_fragments_edited_or_unsealed_are_computed_anew(tmp_path, capsys):
+    """Fourth round: whoever could write the report's directory could edit
+    .report-fragments.json and get their HTML into index.html (only a hash of the code
+    guarded it). The file is sealed under a key kept apart (the result cache's); an edited,
+    unsealed or otherwise sealed file is not believed, said in one line."""
+    from harness.report.fragments import FragmentCache
+
+    (tmp_path / "key-home").mkdir()
+    seal = Seal(tmp_path / "key-home")
+    path = tmp_path / ".report-fragments.json"
+    kept = FragmentCache(path, "context", seal)
+    kept.get("section", lambda: "<p>computed</p>")
+    kept.get("view", lambda: {"cells": [1.5, None]})
+    kept.save()
+    assert capsys.readouterr().err == ""
+    assert FragmentCache(path, "context", seal).stored == {"section": "<p>computed</p>",
+                                                           "view": {"cells": [1.5, None]}}
+    assert capsys.readouterr().err == ""
+    sealed = path.read_bytes()
+    header, rest = sealed.split(b"\n", 1)
+    other = Seal(tmp_path / "other")
+    (tmp_path / "other").mkdir()
+    forged_header = json.dumps(other.sealed(json.loads(header))).encode()
+    unsealed = {key: value for key, value in json.loads(header).items() if key != "mac"}
+    for case, text in (
+            ("a section edited", sealed.replace(b"computed", b"<script>x</script>")),
+            ("sealed by another key", forged_header + b"\n" + rest),
+            ("unsealed", json.dumps(unsealed).encode() + b"\n" + rest),
+            ("the old format", b'{"context": "context", "entries": {}, "texts": '
+                               b'{"section": [0, 17]}}\n<script>x</script>')):
+        path.write_bytes(text)
+        cache = FragmentCache(path, "context", seal)
+        assert cache.stored == {}, case
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "not believed" in err and str(path) in err, case
+        assert cache.get("section", lambda: "<p>computed</p>") == "<p>computed</p>"
 
 
 def test_a_figure_replaced_by_a_fifo_is_redrawn_not_waited_on(tmp_path):

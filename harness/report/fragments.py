@@ -12,6 +12,13 @@ the report, or another set of engine labels, starts it afresh.
 The cache changes when a piece is computed, never what it holds: a stored piece is the JSON
 of what the code returned (the code returns only JSON values, so that a computed and a read
 piece are the same).
+
+Anyone who can write the report's directory could edit a stored section and get their HTML
+into index.html (issue 37): the file's first line is sealed -- the HMAC of
+:mod:`harness.store.sealing` under the result cache's key, which never lies in the report's
+directory (:func:`harness.store.cache_directory.output_seal`) -- and holds the SHA-256 of
+everything after it. A file whose seal or checksum does not verify is not believed: its
+pieces are computed anew, said in one line on stderr.
 """
 
 from __future__ import annotations
@@ -19,6 +26,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -38,7 +46,9 @@ from harness.report.views import (
 )
 from harness.run.metrics import departure_split
 from harness.run.records import ANALYTIC, Record, Results
+from harness.store.cache_directory import output_seal
 from harness.store.files import write_parts_atomically
+from harness.store.sealing import Seal
 
 #: The cache's file in the report's directory.
 CACHE_FILE = ".report-fragments.json"
@@ -66,24 +76,45 @@ class FragmentCache:
     """Pieces of a report by key, read from ``path`` when it was written for ``context``;
     :meth:`save` keeps only the pieces this report asked for."""
 
-    def __init__(self, path: Path | None, context: str):
+    def __init__(self, path: Path | None, context: str, seal: Seal | None = None):
         self.path = path
         self.context = context
+        self.seal = output_seal() if seal is None and path is not None else seal
         self.stored: dict = {}
         self.kept: dict = {}
         self.computed = 0
         if path is None:
             return
         try:  # a regular file of bounded size only (never a device: /dev/zero filled memory)
-            text = read_bytes(path, cap_name="max_results_bytes").decode("utf-8")
-            head, _, texts = text.partition("\n")
+            raw = read_bytes(path, cap_name="max_results_bytes")
+        except FileNotFoundError:
+            return
+        except (OSError, ValueError) as error:  # a device, a pipe, too large (InputError)
+            self._not_believed(f"cannot be read ({getattr(error, 'strerror', None) or error})")
+            return
+        try:
+            head_end = raw.find(b"\n")
+            header = json.loads(raw[:head_end]) if head_end > 0 else None
+            if not isinstance(header, dict):
+                raise ValueError("not a report's cached pieces")
+            self.seal.check(header)  # KeyProblem is a ValueError
+            if header.get("context") != context:
+                return  # written by other code: computed anew, nothing to say
+            rest = memoryview(raw)[head_end + 1:]
+            if header.get("sha256") != hashlib.sha256(rest).hexdigest():
+                raise ValueError("checksum differs: changed after it was written")
+            head, _, texts = str(rest, "utf-8").partition("\n")
             data = json.loads(head)
-            if data.get("context") == context:
-                self.stored = dict(data["entries"])
-                self.stored.update((key, texts[start:end])
-                                   for key, (start, end) in data["texts"].items())
-        except (OSError, ValueError, AttributeError, KeyError, TypeError):  # computed anew
-            self.stored = {}
+            stored = dict(data["entries"])
+            stored.update((key, texts[start:end]) for key, (start, end) in data["texts"].items())
+            self.stored = stored
+        except (ValueError, AttributeError, KeyError, TypeError) as error:
+            self._not_believed(str(error))
+
+    def _not_believed(self, why: str) -> None:
+        """Say in one line that the file is not believed (its pieces are computed anew)."""
+        print(f"impact-harness report: warning: {self.path}: not believed, its pieces are "
+              f"computed anew: {why[:200]}", file=sys.stderr)
 
     def get(self, key: str, make: Callable[[], object]):
         """The piece stored under ``key``, else ``make()`` (as its JSON reads back)."""
@@ -101,10 +132,11 @@ class FragmentCache:
         """Write the pieces asked for (written whole and then renamed: a report stopped
         half-way leaves the previous file).
 
-        The file is a line of JSON -- the context, the pieces that are not text, and where
-        each text piece is -- followed by the text pieces one after another: the sections
-        are most of it, and reading them as JSON strings took longer than the rest of a
-        warm report.
+        The file is a sealed line of JSON -- the context and the SHA-256 of what follows
+        (see the module) --, a line of JSON -- the pieces that are not text, and where each
+        text piece is -- followed by the text pieces one after another: the sections are
+        most of it, and reading them as JSON strings took longer than the rest of a warm
+        report. A file that cannot be sealed (the key cannot be had) is not written.
         """
         if self.path is None or (not self.computed and self.kept.keys() == self.stored.keys()):
             return
@@ -112,12 +144,21 @@ class FragmentCache:
         for key, value in self.kept.items():
             if isinstance(value, str):
                 spans[key] = (at, at + len(value))
-                texts.append(value)
+                texts.append(value.encode("utf-8"))
                 at += len(value)
             else:
                 entries[key] = value
-        head = json.dumps({"context": self.context, "entries": entries, "texts": spans})
-        write_parts_atomically(self.path, (head, "\n", *texts))  # over a regular file only
+        head = json.dumps({"entries": entries, "texts": spans}).encode("utf-8")
+        digest = hashlib.sha256(head + b"\n")
+        for text in texts:
+            digest.update(text)
+        try:
+            sealed = self.seal.sealed({"context": self.context, "sha256": digest.hexdigest()})
+        except (OSError, ValueError) as error:  # KeyProblem is a ValueError
+            print(f"impact-harness report: warning: {self.path}: not kept (cannot be sealed: "
+                  f"{error}); the next report computes its pieces anew", file=sys.stderr)
+            return
+        write_parts_atomically(self.path, (json.dumps(sealed), "\n", head, b"\n", *texts))
 
 
 def scenario_view(records: Sequence[Record], labels: Sequence[str]) -> dict:
