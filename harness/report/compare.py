@@ -21,12 +21,16 @@ each pair it reports
 
 and a change of status (``ok`` against ``multi-contact`` …). A pair *exceeds* the threshold
 when the largest of its departure changes or its speed change is above ``--fail-above``,
-or when its status changed. Records only in A or only in B are listed but do not fail the
-comparison (a quick run compared with a full one is not a regression).
+or when its status changed. A record of A gone from B fails the comparison (a result the
+checked run lost: a gate must not pass on what it no longer sees); a record only in B (new)
+is listed and counted, never failing (a run that does more is not a regression). A law the
+registry does not hold (:data:`harness.laws.LAW_NAMES`), as a record's law or in its
+departures, is refused as bad input: its changes would not be weighed.
 
 Exit status, for gating an engine upgrade or a settings change in CI:
-0 no pair exceeds the threshold; 1 at least one does; 2 bad input (a file missing or not a
-results file, a file holding one run twice, a bad threshold, or no record in common).
+0 no pair exceeds the threshold and no record is gone; 1 at least one does or is; 2 bad
+input (a file missing or not a results file, a file holding one run twice, a law the
+harness does not know, a bad threshold, or no record in common).
 A pair whose result is not finite in one file only (a departure or speeds that became NaN),
 or whose speeds differ in length, exceeds whatever the threshold, as a changed status does.
 ``--fail-above`` takes its unit: ``1%`` or ``1pp`` (a bare ``5`` was read as a fraction,
@@ -54,7 +58,7 @@ from harness.report.export import csv_cell
 from harness.report.markup import html_table, page_head
 from harness.report.views import escape_html
 from harness.run import metrics
-from harness.run.records import Record, Results, read_results
+from harness.run.records import ANALYTIC, Record, Results, read_results
 from harness.scenarios.errors import ScenarioError
 from harness.scenarios.reader import load_scenario
 from harness.scenarios.schema import SCENARIO_DIR, recorded_location
@@ -198,6 +202,24 @@ def duplicate_problem(results: Results, path) -> str | None:
                     + (f", point {point!r}" if point else "") + f", source {source!r} "
                     "(a results file holds each run once: duplicates are refused)")
         seen.add(key)
+    return None
+
+
+def unknown_law_problem(results: Results, path) -> str | None:
+    """Why ``results`` cannot be compared law by law: a record of a law, or a departure
+    from a law, the registry (:data:`harness.laws.LAW_NAMES`) does not hold -- a departure
+    the gate would not weigh, so a change in it would pass unseen; None when every law is
+    known."""
+    for record in results.records:
+        laws = list(record.departure)
+        if record.source == ANALYTIC:
+            laws.insert(0, record.law)
+        for law in laws:
+            if law not in LAW_NAMES:
+                return (f"{path}: scenario {record.scenario!r}, source {record.label!r}: "
+                        f"law {str(law)[:80]!r} is not one the harness knows; allowed: "
+                        f"{', '.join(LAW_NAMES)} (a file of another version of the harness: "
+                        "run it again)")
     return None
 
 
@@ -555,8 +577,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "Exit status: 0 when no matched record changed by more than --fail-above (departure "
         "change in percentage points, or speed change ‖u_B − u_A‖_M / s in the departures' "
         "kinetic-energy norm, M from the scenario's file) and none changed "
-        "status; 1 when one did; 2 on bad input (missing or invalid file, bad threshold, no "
-        "record in common). Records only in one file are listed but do not fail.")
+        "status, and no record of A is gone from B; 1 when one did or one is gone; 2 on bad "
+        "input (missing or invalid file, bad threshold, no record in common, a record held "
+        "twice, a law the harness does not know). Records only in B (new) are listed and "
+        "counted but do not fail.")
     parser.add_argument("a", type=Path, help="the reference results file (before)")
     parser.add_argument("b", type=Path, help="the results file to check (after)")
     parser.add_argument("--fail-above", default=DEFAULT_THRESHOLD, metavar="X",
@@ -624,7 +648,7 @@ def main(args) -> int:
 def _compare_and_show(args, loaded: list[Results], threshold: float) -> int:
     """:func:`main` once both files are read: the comparison, printed."""
     for path, results in zip((args.a, args.b), loaded):
-        problem = duplicate_problem(results, path)
+        problem = duplicate_problem(results, path) or unknown_law_problem(results, path)
         if problem:
             return _bad_input(problem)
     weights = MassMatrices(*loaded)
@@ -656,7 +680,8 @@ def _compare_and_show(args, loaded: list[Results], threshold: float) -> int:
         print(f"\nthe {min(args.show, len(rows))} largest changes of {len(rows)} (a changed "
               "status or a result not finite first, then by the largest column):")
         print(text_table(ROW_HEADER, rows[:args.show]))
-    for label, keys in (("only in A", only_a), ("only in B", only_b)):
+    for label, keys in (("only in A (gone from B: each fails the gate)", only_a),
+                        ("only in B (new: listed, never failing)", only_b)):
         if keys:
             print(f"{len(keys)} records {label}, e.g. " + ", ".join(
                 " ".join(part for part in key if part) for key in keys[:3]))
@@ -671,10 +696,11 @@ def _compare_and_show(args, loaded: list[Results], threshold: float) -> int:
     written = [str(p) for p in (args.csv, getattr(args, "html", None)) if p is not None]
     print(f"compared {len(changes)} records ({len(changed)} changed at all): {len(exceeding)} "
           f"changed by more than {threshold_text(threshold)}, changed status or hold a "
-          "result not finite in one file only"
+          f"result not finite in one file only; {len(only_a)} gone, {len(only_b)} new"
           + (f"; wrote {', '.join(written)}" if written else ""))
-    return 1 if exceeding else 0
+    return 1 if exceeding or only_a else 0
 
 
 __all__ = ["Change", "MassMatrices", "SourceSummary", "add_arguments", "compare", "main",
-           "parse_threshold", "setting_differences", "summarise", "write_csv", "write_html"]
+           "parse_threshold", "setting_differences", "summarise", "unknown_law_problem",
+           "write_csv", "write_html"]

@@ -94,12 +94,37 @@ def test_a_status_change_fails_whatever_the_threshold(tmp_path):
     assert run_compare(before, after, "--fail-above", "100%") == 1
 
 
-def test_records_in_one_file_only_are_listed_but_do_not_fail(tmp_path, capsys):
+def test_records_new_in_b_are_listed_and_records_gone_from_b_fail(tmp_path, capsys):
+    """A CI gate: a run that does more passes (its new records listed and counted); one
+    that lost a record fails, whatever --fail-above (it no longer sees what it checked)."""
     before = results_file(tmp_path, "a.json", [engine_record(0.1)])
     after = results_file(tmp_path, "b.json",
                          [engine_record(0.1), engine_record(0.5, scenario="rod")])
     assert run_compare(before, after) == 0
-    assert "1 records only in B" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "1 records only in B (new" in out and "0 gone, 1 new" in out
+    assert run_compare(after, before, "--fail-above", "100%") == 1
+    out = capsys.readouterr().out
+    assert "1 records only in A (gone" in out and "1 gone, 0 new" in out
+
+
+@pytest.mark.parametrize("where", ["departure", "law"])
+def test_a_law_the_registry_does_not_hold_is_refused(tmp_path, capsys, where):
+    """A departure from a law the harness does not know was never weighed: a change in it
+    passed the gate unseen. Refused as bad input, naming the file, record and law."""
+    before = results_file(tmp_path, "a.json", [law_record(), engine_record(0.1)])
+    document = json.loads(before.read_text(encoding="utf-8"))
+    record = document["records"][0 if where == "law" else 1]
+    if where == "law":
+        record["law"] = "newton-typo"
+    else:
+        record["departure"]["newton-typo"] = 0.5
+    after = tmp_path / "b.json"
+    after.write_text(json.dumps(document), encoding="utf-8")
+    for argv in ((before, after), (after, before)):
+        assert run_compare(*argv) == 2
+        err = capsys.readouterr().err
+        assert str(after) in err and "newton-typo" in err and "allowed: poisson" in err
 
 
 def test_bad_input_exits_2(tmp_path):
