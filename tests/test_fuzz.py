@@ -725,3 +725,25 @@ def test_cache_clear_under_a_planted_marker_removes_only_what_the_key_sealed(tmp
     status, out, err = run_main(argv, capsys)
     assert status == 0 and "removed 2 entries" in out and "left 1 files" in out, out + err
     assert forged.exists() and not cache.path(key).exists()
+
+
+def test_a_report_never_shows_html_planted_in_its_cached_pieces(tmp_path, capsys,
+                                                                monkeypatch):
+    """Fourth round, end to end: an edited .report-fragments.json put its HTML into
+    index.html. The edited file is not believed (one warning line), the page is computed
+    anew, and the next report is warm again without a word."""
+    monkeypatch.setenv("IMPACT_HARNESS_CACHE_DIR", str(tmp_path / "cache"))
+    good = _good_results(tmp_path, capsys)
+    out = tmp_path / "rep"
+    argv = ["report", "--results", str(good), "--out", str(out), "--workers", "1",
+            "--scenario-figures", "none"]
+    assert run_main(argv, capsys)[0] == 0
+    pieces = out / ".report-fragments.json"
+    text = pieces.read_bytes()
+    assert b"disk-direct" in text and b"<script>" not in text
+    pieces.write_bytes(text.replace(b"disk-direct", b"<script>alert(1)</script>", 1))
+    status, _, err = run_main(argv, capsys)
+    assert status == 0 and err.count("not believed") == 1 and str(pieces) in err, err
+    assert "<script>alert(1)</script>" not in (out / "index.html").read_text(encoding="utf-8")
+    status, _, err = run_main(argv, capsys)
+    assert status == 0 and "not believed" not in err, err
