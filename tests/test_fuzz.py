@@ -708,10 +708,11 @@ def test_cache_clear_under_a_planted_marker_removes_only_what_the_key_sealed(tmp
     users = [planted / "ab" / f"{'ab' + '0' * 62}.json", planted / "passed-checks.json"]
     for path in users:
         path.write_text('{"key": "mine", "sha256": "0"}\nthe user\'s own\n')
-    argv = ["cache", "clear", "--cache-dir", str(planted)]
-    status, out, err = run_main(argv, capsys)
-    assert_clean("planted marker", argv, status, out, err)
-    assert status == 0 and "removed 0 entries" in out and "left 2 files" in out, out + err
+    for action in ("prune", "clear"):
+        argv = ["cache", action, "--cache-dir", str(planted)]
+        status, out, err = run_main(argv, capsys)
+        assert_clean("planted marker", argv, status, out, err)
+        assert status == 0 and "removed 0 entries" in out and "left 2 files" in out, out + err
     assert all(path.read_text().endswith("the user's own\n") for path in users)
     # the cache's own entries, sealed by its key, are removed; a forged one beside them stays
     cache = ResultCache(tmp_path / "cache", version="v")

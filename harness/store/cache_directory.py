@@ -8,10 +8,11 @@ one, or one holding only cache entries); ``cache prune`` and ``cache clear`` ref
 directory without it (exit 2), and remove only the entries they recognise (the shard
 directories' ``<64 hex digits>.json``/``.jsonl`` files and temporaries, the checks' store,
 the ``packs`` directory's ``<64 hex digits>.pack`` files and temporaries), never the
-directory, its key (:mod:`harness.store.sealing`) or anything else in it. ``cache clear``
-removes an entry only when its seal verifies under the cache's key and the file holds
+directory, its key (:mod:`harness.store.sealing`) or anything else in it. Of those, an
+entry is removed only when its seal verifies under the cache's key and the file holds
 exactly what the seal covers: a marker planted in a directory of files named like entries
-removes none of them (issue 37); what it leaves it counts.
+removes none of them (issue 37), and the checks' stores of old names (never sealed) stay
+too; what is left is counted.
 
 :func:`output_seal` is the seal, under the same key, of what the harness writes outside its
 cache and believes later (a report's cached pieces, the manifests of written files): the key
@@ -41,8 +42,8 @@ CACHE_DIR_VARIABLE = "IMPACT_HARNESS_CACHE_DIR"
 #: A temporary file older than this (s) belongs to a writer that died: removed.
 STALE_TEMPORARY_S = 60.0
 #: The scenario checks' store in the cache's directory
-#: (:class:`harness.store.passed_checks.PassedChecks`), and the names it had before (removed by
-#: ``prune`` and ``clear`` unread: the pickle is never loaded).
+#: (:class:`harness.store.passed_checks.PassedChecks`), and the names it had before (never
+#: read: the pickle is never loaded; never sealed, so never removed by name).
 SCENARIO_CHECKS_STORE = "passed-checks.json"
 OLD_CHECKS_STORES = ("scenario-checks.json", "scenario-checks.pickle")
 #: The file that marks a directory as a cache the harness made (see the module docstring).
@@ -233,11 +234,14 @@ class CacheDirectory:
     def prune(self, max_age_days: float | None = None, other_versions: bool = True) -> dict:
         """Remove entries written by other code (``other_versions``) or older than a bound.
 
-        Returns ``{"entries", "bytes"}`` removed. An entry that cannot be read is removed too.
-        Raises :class:`NotOurCache` (nothing removed) when the root is not marked.
+        Returns ``{"entries", "bytes", "left"}``: only an entry whose seal verifies under
+        this cache's key (:meth:`_sealed_whole`) is removed; a file named like one that
+        does not is left, and counted (as by :meth:`clear`). Raises :class:`NotOurCache`
+        (nothing removed) when the root is not marked.
         """
         self._require_marked()
-        removed, size, now = 0, 0, time.time()
+        removed, size, left, now = 0, 0, 0, time.time()
+        seal = Seal(self.root)
         self.clean_temporaries()
         for path in list(self._entries()):
             try:
@@ -249,13 +253,17 @@ class CacheDirectory:
                         stale = self._stored_version(path) != self.version
                     except (OSError, ValueError):  # unreadable, not JSON
                         stale = True
-                if old or stale:
-                    path.unlink()
-                    removed += 1
-                    size += status.st_size
+                if not (old or stale):
+                    continue
+                if not self._sealed_whole(path, seal):
+                    left += 1
+                    continue
+                path.unlink()
+                removed += 1
+                size += status.st_size
             except OSError:
                 continue
-        return {"entries": removed, "bytes": size}
+        return {"entries": removed, "bytes": size, "left": left}
 
     def clear(self) -> dict:
         """Remove every entry whose seal verifies under this cache's key (:meth:`_sealed_whole`),

@@ -124,7 +124,8 @@ def test_a_crafted_pickle_in_the_cache_runs_no_code(tmp_path):
     assert cli.main(["cache", "info", "--cache-dir", str(root)]) == 0
     assert cli.main(["cache", "prune", "--cache-dir", str(root)]) == 0
     assert not ran.exists()
-    assert not any((root / name).exists() for name in OLD_CHECKS_STORES)  # pruned unread
+    # never read, and never removed by their name alone (no seal of the key over them)
+    assert all((root / name).read_bytes() == crafted for name in OLD_CHECKS_STORES)
     assert not list(tmp_path.glob("*.pickle"))  # and the results are JSON alone
 
 
