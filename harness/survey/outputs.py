@@ -217,8 +217,10 @@ def _preset_names(settings: dict) -> list[str]:
     return names
 
 
-def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dict) -> str:
-    """The whole ``summary.md``."""
+def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dict,
+                     skipped_runs: dict | None = None) -> str:
+    """The whole ``summary.md``; ``skipped_runs``: ``{"engine preset": ({family: runs},
+    why)}`` of the runs an engine could not build (left out of the statistics)."""
     lines = [
         "# Survey: departures over families of impacts",
         "",
@@ -264,6 +266,7 @@ def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dic
         "",
         markdown_table(stats, "each"),
         "",
+        *skipped_lines(skipped_runs or {}),
         "## Rejected draws (redrawn, by reason)",
         "",
         "| family | accepted | " + " | ".join(next(iter(rejections.values()), {}).keys()) + " |",
@@ -276,6 +279,20 @@ def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dic
     lines += ["", "## Timings", "", timings_caption(timings, impacts), "",
               timings_table(timings, impacts)]
     return "\n".join(lines) + "\n"
+
+
+def skipped_lines(skipped_runs: dict) -> list[str]:
+    """The summary's section on runs an engine could not build (none: no lines)."""
+    if not skipped_runs:
+        return []
+    lines = ["## Skipped runs (the engine cannot build the scene)", "",
+             "Left out of every statistic above, as `impact-harness run` records such a "
+             "run `skipped`.", "", "| engine preset | family | runs | why (first) |",
+             "|---|---|---|---|"]
+    for pair, (counts, why) in skipped_runs.items():
+        for family, count in counts.items():
+            lines.append(f"| {pair} | {family} | {count} | {why} |")
+    return lines + [""]
 
 
 def timings_caption(timings: dict, impacts: int) -> str:
