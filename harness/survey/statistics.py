@@ -38,9 +38,9 @@ INTERVAL_QUANTILES = (("median", 0.5), ("p90", 0.9))
 #: of a 95% percentile interval within about ±1 rank of where 10,000 would.
 BOOTSTRAP_RESAMPLES = 1000
 INTERVAL = 0.95
-#: Most resampled values drawn at once (8 bytes each as indices, 8 as values: 64 MB): a
-#: group of up to 4,000 runs draws its 1,000 resamples in one block.
-BOOTSTRAP_BLOCK = 4_000_000
+#: Most resampled values drawn at once (8 bytes each as indices, 8 as values: 16 MB): a
+#: group of up to 1,000 runs draws its 1,000 resamples in one block.
+BOOTSTRAP_BLOCK = 1_000_000
 #: The bootstrap's seed: the intervals are a function of the runs alone (a rerun, or the
 #: same runs on another machine, gives the same intervals).
 BOOTSTRAP_SEED = 20170529

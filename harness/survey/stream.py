@@ -59,7 +59,7 @@ DATASET = "dataset"
 #: Most impacts (samples × populations) in one chunk: a worker holds one chunk's scenes,
 #: runs and contact records at a time (tens of KB an impact), a kill loses at most a chunk
 #: per worker, and the per-chunk cost (a task, a few files) stays small beside its runs.
-CHUNK_IMPACTS = 2048
+CHUNK_IMPACTS = 512
 #: Chunks a survey is cut into at least (when it has the samples): both cores busy to the end.
 MIN_CHUNKS = 16
 #: Seconds one chunk may run by default (``--task-time-limit``): a chunk of
@@ -390,36 +390,55 @@ def totals(dataset: Path, populations) -> dict:
 def pair_table(dataset: Path, engine: str, preset: str, columns, families=None,
                max_sample: int | None = None) -> dict:
     """``{column: array}`` of one pair's runs in the dataset, of ``families`` (all when None)
-    and samples below ``max_sample``, ordered by family (as given) then sample."""
-    import pyarrow.dataset as ds
+    and samples below ``max_sample``, ordered by family (as given) then sample.
+
+    The files are read one at a time, the rows kept filtered at once: a scan of the whole
+    dataset reads many files ahead (tens of MB for 80 files of 500 runs)."""
+    import pyarrow.parquet as pq
 
     directory = _pair_directory(dataset, engine, preset)
-    files = sorted(str(path) for path in directory.glob("part-*.parquet"))
+    files = sorted(directory.glob("part-*.parquet"))
     if not files:
         return {}
-    source = ds.dataset(files, format="parquet")
-    blocks = []
-    for family in families if families is not None else [None]:
-        condition = None if family is None else ds.field("family") == family
+    wanted = list(dict.fromkeys([*columns, "family", "sample"]))
+    kept: list[dict] = []
+    for file in files:
+        table = pq.read_table(file, columns=wanted, use_threads=False)
+        family = table.column("family").to_numpy(zero_copy_only=False)
+        keep = np.ones(len(family), dtype=bool) if families is None else np.isin(family,
+                                                                                  families)
         if max_sample is not None:
-            below = ds.field("sample") < max_sample
-            condition = below if condition is None else condition & below
-        table = source.to_table(columns=list(columns), filter=condition)
-        block = _columns(table)
-        order = np.argsort(block["sample"], kind="stable")
-        blocks.append({name: values[order] for name, values in block.items()})
-    return {name: np.concatenate([block[name] for block in blocks]) for name in columns}
+            keep &= table.column("sample").to_numpy() < max_sample
+        if keep.any():
+            kept.append(_columns(table.filter(keep)))
+    if not kept:
+        return {name: np.asarray([]) for name in columns}
+    joined = {name: np.concatenate([block[name] for block in kept]) for name in wanted}
+    rank = {name: place for place, name in enumerate(
+        families if families is not None else sorted(set(joined["family"].tolist())))}
+    order = np.lexsort((joined["sample"], [rank[name] for name in joined["family"].tolist()]))
+    return {name: joined[name][order] for name in columns}
 
 
 def _columns(table) -> dict:
-    """A table's columns as numpy arrays; ``reasons`` (a list column) comma-joined again."""
+    """A table's columns as numpy arrays; ``reasons`` (a list column) comma-joined again.
+    A text column becomes an object array of its few distinct texts, shared (8 bytes a
+    row, not a string object each)."""
+    import pyarrow as pa
+    import pyarrow.compute as pc
+
     columns = {}
     for name in table.column_names:
-        if name == "reasons":
-            columns[name] = np.asarray([",".join(item) for item in
-                                        table.column(name).to_pylist()], dtype=object)
+        column = table.column(name)
+        if pa.types.is_list(column.type):
+            column = pc.binary_join(column, ",")
+        if pa.types.is_string(column.type) or pa.types.is_large_string(column.type):
+            encoded = column.combine_chunks().dictionary_encode()
+            texts = np.asarray(encoded.dictionary.to_pylist() + [""], dtype=object)
+            codes = encoded.indices.fill_null(len(texts) - 1).to_numpy(zero_copy_only=False)
+            columns[name] = texts[codes]
         else:
-            columns[name] = table.column(name).to_numpy(zero_copy_only=False)
+            columns[name] = column.to_numpy()
     return columns
 
 
