@@ -46,8 +46,10 @@ from pathlib import Path
 import numpy as np
 
 from harness.run.executor import run_tasks
+from harness.run.provenance import package_versions
 from harness.scenarios.errors import ScenarioError
 from harness.store.files import write_text_atomically
+from harness.store.identity import cached_code_sources, code_version_of
 from harness.survey import laws as survey_laws
 from harness.survey import outputs, statistics
 from harness.survey.engines import SKIPPED
@@ -186,7 +188,8 @@ def sample_columns(every, terms, law_results, routh) -> dict:
 
 def plan_of(populations, samples: int, seed: int, pairs, overrides: dict) -> dict:
     """What a survey's dataset holds the chunks of: a chunk written under one plan is
-    reused only under the same plan (the populations by their files' text)."""
+    reused only under the same plan (the populations by their files' text, the code of
+    the engines, verdicts, solver and survey, the installed versions)."""
     texts = []
     for population in populations:
         path = getattr(population, "path", None)
@@ -195,7 +198,9 @@ def plan_of(populations, samples: int, seed: int, pairs, overrides: dict) -> dic
         except OSError:
             text = repr(population).encode()
         texts.append([population.name, hashlib.sha256(text).hexdigest()])
-    return {"format": "impact-harness-survey-dataset", "populations": texts,
+    return {"format": "impact-harness-survey-dataset", "code": code_version_of(
+                (*cached_code_sources(), Path(__file__).resolve().parent)),
+            "versions": package_versions(), "populations": texts,
             "samples": samples, "seed": seed, "pairs": [list(pair) for pair in pairs],
             "overrides": overrides, "chunks": [list(b) for b in
                                                chunk_bounds(samples, len(populations))]}
