@@ -69,10 +69,12 @@ def column_unit(name: str) -> str | None:
     return BODY_UNITS.get(field) if "." in name else None
 
 
-def write_parquet(columns: dict, path: Path, metadata: dict | None = None) -> Path:
+def write_parquet(columns: dict, path: Path, metadata: dict | None = None,
+                  row_group_size: int | None = None) -> Path:
     """Write ``{name: array}`` as one Parquet table; each column carries its unit
     (:func:`column_unit`) and the table ``metadata`` as JSON under :data:`METADATA_KEY`.
-    A column of comma-joined names (a run's failing ``reasons``) is written as a list column."""
+    A column of comma-joined names (a run's failing ``reasons``) is written as a list column.
+    ``row_group_size``: rows per row group (default pyarrow's: one group here)."""
 
     import pyarrow as pa
     import pyarrow.parquet as pq
@@ -92,7 +94,8 @@ def write_parquet(columns: dict, path: Path, metadata: dict | None = None) -> Pa
         METADATA_KEY: json.dumps(metadata, sort_keys=True, default=str)})
 
     buffer = pa.BufferOutputStream()
-    pq.write_table(pa.Table.from_arrays(arrays, schema=schema), buffer)
+    pq.write_table(pa.Table.from_arrays(arrays, schema=schema), buffer,
+                   row_group_size=row_group_size)
     write_bytes_atomically(path, buffer.getvalue().to_pybytes())  # over a regular file only
     return path
 

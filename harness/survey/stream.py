@@ -277,11 +277,15 @@ class ChunkWriter:
 
     def write(self, output: ChunkOutput) -> None:
         name = _part_name(output.index, "parquet")
+        # A row group per population (the chunk's rows are population after population, the
+        # same count of each): a family's rows are read without the others'.
+        size = output.bounds[1] - output.bounds[0]
         for (engine, preset), columns in zip(self.pairs, output.runs):
             directory = _directory(_pair_directory(self.dataset, engine, preset))
-            outputs.write_parquet(columns, directory / name, {**self.metadata, "table": "runs"})
+            outputs.write_parquet(columns, directory / name, {**self.metadata, "table": "runs"},
+                                  row_group_size=size)
         outputs.write_parquet(output.samples, _directory(self.dataset / "samples") / name,
-                              {**self.metadata, "table": "samples"})
+                              {**self.metadata, "table": "samples"}, row_group_size=size)
         record = {"bounds": list(output.bounds), "rejections": output.rejections,
                   "timings": output.timings, "skipped": output.skipped,
                   "cpu_s": output.cpu_s}
@@ -392,37 +396,43 @@ def totals(dataset: Path, populations) -> dict:
             "impacts": impacts, "cpu_s": cpu}
 
 
-def pair_table(dataset: Path, engine: str, preset: str, columns, families=None,
-               max_sample: int | None = None) -> dict:
-    """``{column: array}`` of one pair's runs in the dataset, of ``families`` (all when None)
-    and samples below ``max_sample``, ordered by family (as given) then sample.
-
-    The files are read one at a time, the rows kept filtered at once: a scan of the whole
-    dataset reads many files ahead (tens of MB for 80 files of 500 runs)."""
+def family_blocks(directory: Path, family: str, position: int, columns=None):
+    """The rows of ``family`` (the population at ``position``) in every chunk file of
+    ``directory``, chunk after chunk, as pyarrow tables: each file's row group
+    ``position`` (:class:`ChunkWriter` writes one per population), read alone."""
     import pyarrow.parquet as pq
 
+    for path in sorted(directory.glob("part-*.parquet")):
+        source = pq.ParquetFile(path)
+        if position >= source.num_row_groups:
+            continue
+        block = source.read_row_group(position, columns=columns, use_threads=False)
+        families = set(block.column("family").to_pylist()) if "family" in block.column_names \
+            else {family}
+        if families != {family}:
+            raise ValueError(f"{path}: row group {position} holds {sorted(families)}, not "
+                             f"{family!r}: not a chunk file of this survey")
+        yield block
+
+
+def pair_table(dataset: Path, engine: str, preset: str, columns, families,
+               max_sample: int | None = None) -> dict:
+    """``{column: array}`` of one pair's runs in the dataset, of ``families`` (``[(name,
+    position among the populations)]``) and samples below ``max_sample``, ordered by family
+    (as given) then sample: a row group of a file at a time (a scan of the whole dataset
+    would read many files ahead: tens of MB for 80 files of 500 runs)."""
     directory = _pair_directory(dataset, engine, preset)
-    files = sorted(directory.glob("part-*.parquet"))
-    if not files:
-        return {}
     wanted = list(dict.fromkeys([*columns, "family", "sample"]))
     kept: list[dict] = []
-    for file in files:
-        table = pq.read_table(file, columns=wanted, use_threads=False)
-        family = table.column("family").to_numpy(zero_copy_only=False)
-        keep = np.ones(len(family), dtype=bool) if families is None else np.isin(family,
-                                                                                  families)
-        if max_sample is not None:
-            keep &= table.column("sample").to_numpy() < max_sample
-        if keep.any():
-            kept.append(_columns(table.filter(keep)))
+    for family, position in families:
+        for block in family_blocks(directory, family, position, wanted):
+            if max_sample is not None:
+                block = block.filter(block.column("sample").to_numpy() < max_sample)
+            if block.num_rows:
+                kept.append(_columns(block))
     if not kept:
-        return {name: np.asarray([]) for name in columns}
-    joined = {name: np.concatenate([block[name] for block in kept]) for name in wanted}
-    rank = {name: place for place, name in enumerate(
-        families if families is not None else sorted(set(joined["family"].tolist())))}
-    order = np.lexsort((joined["sample"], [rank[name] for name in joined["family"].tolist()]))
-    return {name: joined[name][order] for name in columns}
+        return {}
+    return {name: np.concatenate([block[name] for block in kept]) for name in columns}
 
 
 def _columns(table) -> dict:
@@ -449,11 +459,14 @@ def _columns(table) -> dict:
 
 def dataset_statistics(dataset: Path, pairs, families) -> dict:
     """The statistics of every run in ``dataset``, one engine × preset × family group read at
-    a time (rows and bits of :func:`harness.survey.statistics.statistics` of every run)."""
+    a time (rows and bits of :func:`harness.survey.statistics.statistics` of every run);
+    ``families``: the populations' names in the survey's order."""
     rows: list[dict] = []
+    positions = {family: position for position, family in enumerate(families)}
     for engine, preset in sorted(pairs):
         for family in sorted(families):
-            runs = pair_table(dataset, engine, preset, STATISTICS_COLUMNS, [family])
+            runs = pair_table(dataset, engine, preset, STATISTICS_COLUMNS,
+                              [(family, positions[family])])
             if not runs or not len(runs["engine"]):
                 continue
             stats = statistics.statistics(runs)
@@ -467,7 +480,8 @@ def dataset_statistics(dataset: Path, pairs, families) -> dict:
 def figure_runs(dataset: Path, pairs, families) -> dict:
     """The runs the figures draw: the first :data:`FIGURE_SAMPLES` samples of every family,
     every pair, in the order of ``runs.parquet``."""
-    blocks = [pair_table(dataset, engine, preset, FIGURE_COLUMNS, families, FIGURE_SAMPLES)
+    placed = [(family, position) for position, family in enumerate(families)]
+    blocks = [pair_table(dataset, engine, preset, FIGURE_COLUMNS, placed, FIGURE_SAMPLES)
               for engine, preset in pairs]
     blocks = [block for block in blocks if block]
     if not blocks:
@@ -480,26 +494,22 @@ def concatenate(dataset: Path, pairs, families, path: Path, metadata: dict,
     """One Parquet file of a dataset table (``"runs"``: pair after pair, family after family,
     by sample, as the survey held in memory orders them; ``"samples"``: family after family),
     written a chunk file and family at a time, atomically."""
-    import pyarrow.dataset as ds
     import pyarrow.parquet as pq
 
     directories = ([_pair_directory(dataset, engine, preset) for engine, preset in pairs]
                    if table == "runs" else [dataset / "samples"])
-    sources = [sorted(directory.glob("part-*.parquet")) for directory in directories]
-    sources = [files for files in sources if files]
-    schema = pq.read_schema(sources[0][0]) if sources else None
+    directories = [directory for directory in directories
+                   if any(directory.glob("part-*.parquet"))]
+    schema = pq.read_schema(next(directories[0].glob("part-*.parquet")))
     temporary = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
         with pq.ParquetWriter(temporary, schema.with_metadata(
                 {outputs.METADATA_KEY: json.dumps({**metadata, "table": table},
                                                   sort_keys=True, default=str)})) as writer:
-            for files in sources:
-                for family in families:
-                    for file in files:
-                        part = ds.dataset(str(file), format="parquet").to_table(
-                            filter=ds.field("family") == family)
-                        if part.num_rows:
-                            writer.write_table(part.cast(writer.schema))
+            for directory in directories:
+                for position, family in enumerate(families):
+                    for block in family_blocks(directory, family, position):
+                        writer.write_table(block.cast(writer.schema))
         if path.is_symlink() or (path.exists() and not path.is_file()):
             raise ValueError(f"{path}: not a regular file; not replaced")
         os.replace(temporary, path)
