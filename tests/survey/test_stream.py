@@ -192,3 +192,15 @@ def test_a_polygon_box2d_cannot_build_is_recorded_skipped(tmp_path):
     summary = (out / "summary.md").read_text()
     assert "## Skipped runs (the engine cannot build the scene)" in summary
     assert f"| box2d defaults | big-polygons | {big.sum()} | engine cannot build" in summary
+
+
+def test_bare_stepping_is_timed_chunk_by_chunk(tmp_path):
+    out = tmp_path / "bare"
+    assert main(["survey", "spinning-disk", "--samples", "10", "--engines", "pymunk",
+                 "--preset", "defaults", "--bare", "--no-figures", "--quiet", "--out",
+                 str(out), "--workers", "1"]) == 0
+    summary = (out / "summary.md").read_text()
+    assert "| bare pymunk defaults (steps only) |" in summary
+    assert "| bare pymunk defaults (reset + steps) |" in summary
+    records = stream.chunk_records(out / "dataset")
+    assert all("bare pymunk defaults (steps only)" in record["timings"] for record in records)
