@@ -44,7 +44,7 @@ from harness.store.files import (
 )
 from harness.survey import laws as survey_laws
 from harness.survey import outputs, statistics, stream
-from harness.survey.engines import bare_stepping
+from harness.survey.engines import SKIPPED, bare_stepping
 from harness.survey.parts import run_parts
 from harness.survey.population import resolve_populations
 from harness.survey.sampling import sample_population
@@ -296,7 +296,8 @@ def write_survey(survey: dict, out: Path, settings: dict, figures: bool = True) 
         survey["timings"]["figures"] = (time.perf_counter() - begin, 0)
     summary = out / "summary.md"
     write_text_atomically(summary, outputs.summary_markdown(
-        survey["statistics"], survey["rejections"], survey["timings"], settings))
+        survey["statistics"], survey["rejections"], survey["timings"], settings,
+        skipped_runs=skipped_in_memory(survey)))
     # What was surveyed, for the report (harness/report/survey.py) to read without Parquet.
     shown = {**settings, "families": list(survey["rejections"]),
              "skipped": settings.get("skipped", survey["skipped"]),
@@ -304,6 +305,23 @@ def write_survey(survey: dict, out: Path, settings: dict, figures: bool = True) 
     settings_path = out / SETTINGS_FILE
     write_text_atomically(settings_path, json.dumps(shown, indent=1) + "\n")
     return written + [summary, settings_path]
+
+
+def skipped_in_memory(survey: dict) -> dict:
+    """The summary's skipped runs (``outputs.summary_markdown``) of a survey held in memory:
+    ``{"engine preset": ({family: runs}, why)}``."""
+    found: dict[str, tuple[dict, str]] = {}
+    runs = survey["runs"]
+    if not survey["engine_results"]:
+        return found
+    skipped = np.flatnonzero(np.asarray(runs["status"]) == SKIPPED)
+    why = {f"{result.engine} {result.preset}": result.skipped_why
+           for result in survey["engine_results"]}
+    for row in skipped.tolist():
+        pair = f"{runs['engine'][row]} {runs['preset'][row]}"
+        counts, _ = found.setdefault(pair, ({}, why.get(pair, "")))
+        counts[runs["family"][row]] = counts.get(runs["family"][row], 0) + 1
+    return found
 
 
 def check_options(args: argparse.Namespace) -> tuple[list[str], list[str], int]:

@@ -204,3 +204,17 @@ def test_bare_stepping_is_timed_chunk_by_chunk(tmp_path):
     assert "| bare pymunk defaults (reset + steps) |" in summary
     records = stream.chunk_records(out / "dataset")
     assert all("bare pymunk defaults (steps only)" in record["timings"] for record in records)
+
+
+def test_the_survey_held_in_memory_lists_skipped_runs_alike(tmp_path):
+    pytest.importorskip("Box2D")
+    from harness.survey.population import load_population
+
+    population = tmp_path / "big-polygons.toml"
+    population.write_text(POLYGONS)
+    survey = survey_cli.run_survey([load_population(population)], 12, 0, ["box2d"],
+                                   ["defaults"], workers=1, echo=lambda _: None)
+    found = survey_cli.skipped_in_memory(survey)
+    (counts, why), = found.values()
+    assert counts["big-polygons"] == int(np.sum(survey["runs"]["status"] == "skipped")) > 0
+    assert why.startswith("engine cannot build the scene")
