@@ -15,21 +15,25 @@ writes it as soon as it arrives (:func:`ChunkWriter`), then drops it. The datase
 * ``chunks/part-NNNNN.json`` -- the chunk's rejected draws, timings and skipped runs, written
   last: a chunk is done when its JSON exists (every file is written atomically);
 * ``plan.json`` -- what is surveyed (populations' texts, samples, seed, pairs, settings,
-  chunks): a survey run again with the same plan continues from the chunks done; another
-  plan clears the dataset (the files above only) first.
+  chunks, the code and the installed versions): a survey run again with the same plan
+  continues from the chunks done; another plan clears the dataset (the files above only)
+  first.
 
-Every Parquet file carries the survey's metadata (:func:`harness.survey.cli.table_metadata`);
-``pyarrow.dataset.dataset("OUT/dataset/runs")`` reads the runs of every chunk at once.
+Every Parquet file carries the survey's metadata (:func:`harness.survey.cli.table_metadata`)
+and a row group per population (a chunk's rows are population after population);
+``pyarrow.dataset.dataset("OUT/dataset/runs", partitioning="hive")`` reads the runs of every
+chunk at once.
 
 Statistics out of core (:func:`dataset_statistics`): for one engine × preset × family at a
-time, the columns the statistics need (about 60 bytes a run) are read from the dataset,
-ordered by sample, and given to :func:`harness.survey.statistics.statistics`: the rows and
-bits of the statistics of the survey held in memory (tests/survey/test_stream.py). Peak
-memory is therefore one chunk per worker (its scenes, runs and contact records:
-:data:`CHUNK_IMPACTS` impacts) plus, in this process, the statistics of the largest
-engine × preset × family group (~60 bytes a run) and a bootstrap block
-(:data:`harness.survey.statistics.BOOTSTRAP_BLOCK`); the whole tables ``runs.parquet`` and
-``samples.parquet`` are written chunk file by chunk file (:func:`concatenate`).
+time, the columns the statistics need are read from the dataset (the family's row group of
+each chunk file; texts shared: ~100 bytes a run), ordered by sample, and given to
+:func:`harness.survey.statistics.statistics`: the rows and bits of the statistics of the
+survey held in memory (tests/survey/test_stream.py). Peak memory is therefore one chunk per
+worker (its scenes, runs and contact records: :data:`CHUNK_IMPACTS` impacts at most) plus,
+in this process, the largest engine × preset × family group (~100 bytes a run) and a
+bootstrap block (:data:`harness.survey.statistics.BOOTSTRAP_BLOCK`); the whole tables
+``runs.parquet`` and ``samples.parquet`` are written a row group at a time
+(:func:`concatenate`).
 """
 
 from __future__ import annotations
