@@ -218,3 +218,34 @@ def test_the_survey_held_in_memory_lists_skipped_runs_alike(tmp_path):
     (counts, why), = found.values()
     assert counts["big-polygons"] == int(np.sum(survey["runs"]["status"] == "skipped")) > 0
     assert why.startswith("engine cannot build the scene")
+
+
+def test_a_survey_killed_for_real_resumes_to_the_same_tables(tmp_path, capsys):
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "killed"
+    command = [sys.executable, "-m", "harness.cli", "survey", "spinning-disk", "--samples",
+               "2000", "--engines", "pymunk", "--preset", "defaults", "--workers", "1",
+               "--quiet", "--no-figures", "--out", str(out)]
+    process = subprocess.Popen(command, stdout=subprocess.DEVNULL)
+    chunks = out / "dataset" / "chunks"
+    try:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline and not list(chunks.glob("part-*.json")):
+            time.sleep(0.005)
+    finally:
+        process.send_signal(signal.SIGKILL)
+        process.wait()
+    done = len(list(chunks.glob("part-*.json")))
+    assert 1 <= done < len(stream.chunk_bounds(2000, 1))
+    assert not (out / "statistics.parquet").exists()
+    capsys.readouterr()
+    assert main(command[3:]) == 0
+    assert f"resuming: {done} of 16 chunks" in capsys.readouterr().out
+    fresh = tmp_path / "fresh"
+    assert main([*command[3:-1], str(fresh)]) == 0
+    for table in ("statistics.parquet", "runs.parquet", "samples.parquet"):
+        _same(_read(fresh / table), _read(out / table))
