@@ -4,7 +4,7 @@ module level or inside a function alike (an import inside a function is still a 
 The layers, lowest first (README, 'Layout'):
 
 0. ``planar_impact`` -- the theory, numpy only;
-1. ``harness.bounds``, ``collector``, ``processes``, ``inputs`` -- shared tools;
+1. ``harness.bounds``, ``collector``, ``processes``, ``inputs``, ``laws`` -- shared tools;
 2. ``harness.store`` -- storage and identity: atomic files, the result cache;
 3. ``harness.scene`` -- the impact to simulate;
 4. ``harness.engines``, ``harness.reference`` -- engines behind one contract, reference
@@ -32,7 +32,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 LAYERS = (
     ("planar_impact",),
-    ("harness.bounds", "harness.collector", "harness.processes", "harness.inputs"),
+    ("harness.bounds", "harness.collector", "harness.processes", "harness.inputs",
+     "harness.laws"),
     ("harness.store",),
     ("harness.scene",),
     ("harness.engines", "harness.reference"),

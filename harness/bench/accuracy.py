@@ -20,9 +20,10 @@ the engine's own law, which its class declares (``own_law``) beside its sweep
 * a law: ``newton-lcp``, the velocity-level Newton–Coulomb law (pymunk, pybullet, Box2D
   solve it), or ``poisson`` or ``stronge``;
 * ``converged``: no closed form exists (MuJoCo's soft contact), so its own law is its
-  converged limit: the sweep's point labelled :data:`REFERENCE_LABEL` (MuJoCo: RK4, the
-  0.5 ms contact resolved over 400 steps; its sweep holds the contact's duration and refines
-  its time step).
+  converged limit: the sweep's point its class names in ``bench_reference`` (MuJoCo: RK4,
+  the 0.5 ms contact resolved over 400 steps; its sweep holds the contact's duration and
+  refines its time step). An engine declaring ``converged`` without naming a point of its
+  sweep is refused before any engine runs (:func:`reference_label`).
 
 Outputs: ``pareto-<engine>.png`` in ``out_dir`` (time per impact vs departure from the own law,
 one panel per family, the Pareto front drawn, Poisson and Stronge departures as faint marks),
@@ -47,7 +48,7 @@ from harness.engines import (
     ke_norm,
     load_engine,
 )
-from harness.engines.contract import BENCH_REFERENCE_LABEL
+from harness.laws import LAW_NAMES
 from harness.processes import default_workers
 from harness.run.executor import progress_printer, run_tasks
 from harness.scene.geometry import impact_problem
@@ -66,17 +67,50 @@ def sweep(engine_name: str, quick: bool) -> list[tuple[str, str, dict]]:
     return engine_class(engine_name).bench_sweep(quick)
 
 
-REFERENCE_LABEL = BENCH_REFERENCE_LABEL
 TIE_FRACTION = 0.1  # settings whose mean time is within 10% are within timing noise
 
 
 # ---------------------------------------------------------------------- laws
-def law_velocities(scene, contact, normal) -> dict[str, np.ndarray]:
-    """Post-impact generalised speeds of ``scene`` under Poisson, Stronge and newton-lcp."""
+def reference_label(engine_name: str, quick: bool) -> str | None:
+    """The label of the sweep point engine ``engine_name`` converges to (own_law
+    ``converged``: its class's ``bench_reference``), None for an engine whose own law is a
+    law. Raises ``ValueError`` naming the engine, the attribute and the sweep's labels when
+    it names no point of the sweep."""
+    cls = engine_class(engine_name)
+    if cls.own_law != "converged":
+        return None
+    labels = [label for label, _, _ in sweep(engine_name, quick)]
+    if cls.bench_reference not in labels:
+        raise ValueError(f"engine {engine_name!r}: own_law 'converged' needs bench_reference, "
+                         f"the label of its converged point in bench_sweep(quick={quick}); got "
+                         f"{cls.bench_reference!r}, allowed: {labels}")
+    return cls.bench_reference
+
+
+def reference_problems(quick: bool) -> list[str]:
+    """What :func:`reference_label` refuses, for every installed engine the registry lists
+    (``bench`` checks it before any work starts)."""
+    problems = []
+    for name in engine_names():
+        try:
+            reference_label(name, quick)
+        except EngineNotInstalled:
+            continue
+        except ValueError as error:
+            problems.append(str(error))
+    return problems
+
+
+#: The laws every engine's departures are measured from (and its own law, when another).
+BENCH_LAWS = ("poisson", "stronge", "newton-lcp")
+
+
+def law_velocities(scene, contact, normal, laws=BENCH_LAWS) -> dict[str, np.ndarray]:
+    """Post-impact generalised speeds of ``scene`` under each of ``laws``."""
     problem = impact_problem(scene, contact, normal)
     return {law: np.asarray(problem.solve(mu=scene.friction, e=scene.restitution,
                                           law=law).u_after, dtype=float)
-            for law in ("poisson", "stronge", "newton-lcp")}
+            for law in laws}
 
 
 def departure(scene, u_engine, u_law) -> float:
@@ -89,10 +123,15 @@ def departure(scene, u_engine, u_law) -> float:
 def measure_engine(engine_name: str, quick: bool, progress=None) -> dict:
     """All sweep points × families for one engine (runs inline: timings undisturbed)."""
     engine = load_engine(engine_name)
+    reference_setting = reference_label(engine_name, quick)  # checked before any run
     scenes = reference_scenes()
     repeats = 3 if quick else 7
     points = sweep(engine_name, quick)
-    laws = {family: law_velocities(*scenes[key]) for family, key in FAMILIES.items()}
+    # its own law too, when it claims one the bench does not measure every engine from
+    solved = BENCH_LAWS + ((engine.own_law,) if engine.own_law in LAW_NAMES
+                           and engine.own_law not in BENCH_LAWS else ())
+    laws = {family: law_velocities(*scenes[key], laws=solved)
+            for family, key in FAMILIES.items()}
     rows = []
     for index, (label, preset, overrides) in enumerate(points):
         settings = engine.settings(preset, overrides)
@@ -128,11 +167,12 @@ def measure_engine(engine_name: str, quick: bool, progress=None) -> dict:
             row["departure"]["own"] = row["departure"][engine.own_law]
         else:
             reference = next(r for r in rows
-                             if r["setting"] == REFERENCE_LABEL and r["family"] == row["family"])
+                             if r["setting"] == reference_setting
+                             and r["family"] == row["family"])
             scene = scenes[FAMILIES[row["family"]]][0]
             row["departure"]["own"] = departure(scene, row["u_after"], reference["u_after"])
     return {"engine": engine_name, "version": engine.version, "own_law": engine.own_law,
-            "rows": rows}
+            "reference_setting": reference_setting, "rows": rows}
 
 
 def cheapest_settings(result: dict) -> dict:
@@ -143,8 +183,8 @@ def cheapest_settings(result: dict) -> dict:
         by_setting.setdefault(row["setting"], []).append(row)
     candidates = []
     for label, rows in by_setting.items():
-        if label == REFERENCE_LABEL or any("departure" not in r or r["status"] != "ok"
-                                           for r in rows):
+        if label == result.get("reference_setting") or any(
+                "departure" not in r or r["status"] != "ok" for r in rows):
             continue
         worst = max(r["departure"]["own"] for r in rows)
         mean_time = float(np.mean([r["time_per_impact_s"] for r in rows]))
@@ -216,7 +256,7 @@ def write_pareto_figure(result: dict, path: Path) -> None:
     varying = varying_keys(result["rows"])
     for axis, family in zip(axes, FAMILIES):
         rows = [r for r in result["rows"] if r["family"] == family and "departure" in r
-                and r["setting"] != REFERENCE_LABEL]
+                and r["setting"] != result.get("reference_setting")]
         times = np.array([r["time_per_impact_s"] for r in rows]) * 1e6
         for law, style in (("poisson", dict(marker="x", color="#777777", alpha=0.6)),
                            ("stronge", dict(marker="+", color="#b8860b", alpha=0.7))):
@@ -358,12 +398,16 @@ def run(quick: bool, out_dir: Path) -> dict:
     started = time.perf_counter()
     report: dict = {"quick": quick, "families": FAMILIES, "thresholds": list(THRESHOLDS),
                     "engines": {}}
+    installed = []
     for name in engine_names():
         try:
             load_engine(name)
         except EngineNotInstalled as error:
             report["engines"][name] = {"skipped": str(error)}
             continue
+        reference_label(name, quick)  # a converged engine without its point: refused now
+        installed.append(name)
+    for name in installed:
         progress = None if quick else progress_printer(f"speed-accuracy {name}")
         result = measure_engine(name, quick, progress=progress)
         result["cheapest"] = cheapest_settings(result)

@@ -270,6 +270,10 @@ def main(args) -> int:
     if problem:
         print(f"impact-harness bench: --out {args.out}: {problem}", file=sys.stderr)
         return 2
+    if "speed_accuracy" in selected:
+        for problem in bench_accuracy.reference_problems(args.quick):
+            print(f"impact-harness bench --speed-accuracy: {problem}", file=sys.stderr)
+            return 2
     make_output_directory(args.out)  # the directory asked for (itself only)
     table = {"provenance": provenance(BENCH_FORMAT, BENCH_FORMAT_VERSION),
              "quick": bool(args.quick)}

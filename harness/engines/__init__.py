@@ -11,7 +11,9 @@ Adding an engine: write ``harness/engines/<name>_engine.py`` (or a package, as
 (everything the harness knows about the engine is an attribute of that class:
 :func:`engine_trait`), check it with
 :func:`harness.engines.conformance.check_engine`, and add one line to ``_ENGINE_MODULES``
-below, or :func:`register_engine` it at run time.
+below, or :func:`register_engine` it at run time. A shipped engine also pins its version in
+``pyproject.toml``'s ``harness`` extra and has its section in docs/engines.md (docs/engines.md,
+'Adding an engine', has the whole list; tests/engines/test_contract.py checks both).
 
 Presets: every engine has the same two preset *roles* (:data:`PRESET_ROLES`), which the
 harness runs, caches and records by: ``defaults`` (what a user of the engine gets) and

@@ -35,8 +35,9 @@ Class attributes
 ``max_worlds``
     How many built worlds to keep (``None``: one per key, never evicted).
 ``description``, ``preset_why``, ``plot_style``, ``speed_caps``, ``own_law``,
-``bench_impacts``, ``bench_impact_seconds``, ``bench_sweep``, ``time_step_overrides``,
-``rounding``, ``reference_statuses``, ``native_2d``, ``survey_left_out``,
+``bench_reference``, ``bench_impacts``, ``bench_impact_seconds``, ``bench_sweep``,
+``time_step_overrides``, ``rounding``, ``impulse_band``, ``soft_contact``,
+``restitution_unused``, ``reference_statuses``, ``native_2d``, ``survey_left_out``,
 ``calibration_knobs``, ``no_calibration_knobs_why``
     What the rest of the harness knows about the engine (report text and style, verdicts'
     speed caps, bench profile, test expectations, the default survey's pairs), each with a
@@ -81,7 +82,9 @@ Methods (``world`` is whatever the adapter builds; the base class only passes it
     Box2D clipping a velocity to its per-step translation cap.
 ``_validate_engine_settings(settings)``, ``_world_key(scene, settings)``,
 ``_release(world)``
-    Engine-specific value checks; the world cache key; freeing an evicted world.
+    Engine-specific value checks; the world cache key (a dict key: hashable for every
+    scene, e.g. a tuple of floats and strings, never a list or an array); freeing an
+    evicted world.
 
 Optional, for :meth:`Engine.run_many` (many independent impacts in one world; an adapter
 without them runs the impacts one by one)
@@ -143,6 +146,26 @@ Input: the scene
 What every adapter guarantees
     * The pair gets exactly ``e`` and ``μ`` whatever the engine's combining rule (the partner
       of ``bodies[0]`` gets the neutral value of the rule). The tests measure this.
+    * Physics :func:`harness.engines.conformance.check_engine` checks under every preset:
+      the reported normal points out of the ground (from A into B) and, with the impulses
+      along it and ``t``, explains the change of speeds (``M Δu = Jᵀ P`` within ``rounding
+      + impulse_band·|P|``); each reported contact point is where the scene touches body
+      B; friction is used (μ > 0 changes the slip, μ = 0 does not) and a sliding disk's
+      friction impulse is μ times the normal one; restitution is used and a direct impact
+      separates at e times its approach speed (unless ``restitution_unused`` says why not);
+      the ``accurate`` preset meets ``own_law``, checked where the laws part (an engine that
+      builds neither the 45° rod nor the box claims ``converged``).
+    * A scene the engine cannot build raises :class:`UnsupportedScene` (a ``ValueError``)
+      from ``_build`` or the checks, before any stepping: the runner records it as skipped,
+      check_engine and the contract tests skip that scene; a disk on the ground must run.
+
+Shipping an adapter (docs/engines.md, 'Adding an engine')
+    The adapter module (or package) binding ``ENGINE_CLASS``; one line in the registry
+    (``_ENGINE_MODULES`` in ``harness/engines/__init__.py``: module, importable package,
+    distribution); the engine's exact version pinned in ``pyproject.toml``'s ``harness``
+    extra (the install message and provenance read it there); its section in
+    docs/engines.md. Generic tests (tests/engines/test_contract.py) iterate the registry and
+    read the traits above, never an engine's name; ``check_engine`` must return ``[]``.
     * Only the impact window is simulated: gravity off, no rendering.
     * Motion stays planar; a 3-D engine maps the scene's (x, y) to its x-z plane with joints
       or equivalent, and measures the drift out of it.
@@ -216,8 +239,8 @@ __all__ = [
     "start_states",
 ]
 
-#: The accuracy bench's label of an engine's converged reference setting (own_law
-#: "converged").
+#: MuJoCo's label of its converged reference setting (own_law "converged"; an engine names
+#: its own in ``Engine.bench_reference``).
 BENCH_REFERENCE_LABEL = "RK4 contact_steps=400 (reference)"
 _MAX_PLANS = 256  # (scene, settings) pairs remembered; the cache is emptied when full
 _DETACHED = object()  # _plan_for's world for run_many: the plan gets no world of its own
@@ -280,16 +303,35 @@ class Engine(abc.ABC):
     #: arithmetic: 1e-9 in double precision; a float32 engine (Box2D) carries a few roundings
     #: of 6e-8 each, so 1e-6 (the contract tests and check_engine hold an engine to it).
     rounding: float = 1e-9
+    #: Relative disagreement allowed, beyond ``rounding``, between the change of speeds and
+    #: the reported normal and impulses at the scene's contact point (``M Δu = Jᵀ P``,
+    #: check_engine's physics): 0 for an engine whose reported impulse is the one it applied
+    #: at that point in one step; a contact spread over steps, or applied through a skin,
+    #: moves its point (MuJoCo, Box2D's defaults: 2e-2, the verdicts' impulse-residual bar).
+    impulse_band: float = 0.0
+    #: The contact is compliant: it lasts many steps with the bodies overlapping (MuJoCo's
+    #: soft contact, ~20-50 steps), so a generic test may not assume a near-rigid one (a
+    #: one-step cap leaves it unseparated; its normal and point move during it).
+    soft_contact: bool = False
+    #: preset role -> why that preset does not use the pair's e by design (MuJoCo's defaults:
+    #: the default solref sets the bounce); check_engine's restitution check skips it.
+    restitution_unused: Mapping[str, str] = {}
     #: ``{(reference scene, preset role): status}`` where a reference scene's run is not
     #: "ok", with the reason in a comment (tests/engines/test_contract.py expects these).
     reference_statuses: Mapping[tuple[str, str], str] = {}
     #: The engine is natively 2-D: no out-of-plane drift to measure (the adapter defines no
     #: ``_out_of_plane_drift``; its runs report ``out_of_plane_drift`` None).
     native_2d: bool = False
-    #: The law the engine solves at its accurate limit: "newton-lcp" (sequential impulses),
-    #: "poisson" or "stronge", or "converged" (its own run at the finest settings,
-    #: BENCH_REFERENCE_LABEL); the accuracy bench measures against it.
+    #: The law the engine solves at its accurate limit: a law of the registry
+    #: (harness.laws.LAW_NAMES; "newton-lcp" for sequential impulses), or "converged" (its
+    #: own run at the finest settings, the sweep point named by ``bench_reference``); the
+    #: accuracy bench measures against it, and check_engine holds the ``accurate`` preset of
+    #: an engine claiming a law to it.
     own_law: str = "newton-lcp"
+    #: own_law "converged": the label of the :meth:`bench_sweep` point that is the engine's
+    #: converged limit, present in the quick and the full sweep (MuJoCo:
+    #: BENCH_REFERENCE_LABEL); None for an engine whose own law is a law.
+    bench_reference: str | None = None
     #: Impacts per reference scene in ``impact-harness bench --engines`` (quick, full):
     #: enough for a stable timing at the engine's speed.
     bench_impacts: tuple[int, int] = (40, 300)

@@ -65,11 +65,13 @@ Velocity = tuple[float, float, float]
 #: What an adapter's ``_step`` returns for a step with contact, in the run frame:
 #: ``(points, normal, impulse, normal_impulse)`` --
 #: ``points``: tuple of ``(x, y, depth)`` per contact point the engine reports (m; depth > 0
-#: is overlap); ``normal``: unit ``(n_x, n_y)`` from body A (or the ground) into body B (the
-#: last body); ``impulse``: ``(p_x, p_y)`` the contact impulse on body B in this step (N s),
-#: or ``None`` where the engine does not expose it; ``normal_impulse``: the engine's own
-#: measure of the step's normal impulse (N s, >= 0; exactly 0 when it applies none), or
-#: ``None`` when the adapter knows without measuring that the contact still pushes.
+#: is overlap), where the bodies touch (on either surface or across the overlap: the
+#: verdicts read the touching feature from it, check_engine holds it there); ``normal``:
+#: unit ``(n_x, n_y)`` from body A (or the ground) into body B (the last body); ``impulse``:
+#: ``(p_x, p_y)`` the contact impulse on body B in this step (N s), or ``None`` where the
+#: engine does not expose it; ``normal_impulse``: the engine's own measure of the step's
+#: normal impulse (N s, >= 0; exactly 0 when it applies none), or ``None`` when the adapter
+#: knows without measuring that the contact still pushes.
 RawContacts = tuple[tuple[tuple[float, float, float], ...], tuple[float, float],
                     "tuple[float, float] | None", float]
 

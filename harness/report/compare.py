@@ -43,6 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from harness.engines import source_label
+from harness.laws import LAW_NAMES
 from harness.report.markup import html_table, page_head
 from harness.report.views import escape_html
 from harness.run import metrics
@@ -53,7 +54,7 @@ from harness.scenarios.schema import SCENARIO_DIR, recorded_location
 from harness.store.files import output_file_problem, write_text_atomically
 
 DEFAULT_THRESHOLD = "1%"
-LAWS = ("poisson", "stronge", "stronge-paper", "newton", "newton-lcp")
+LAWS = LAW_NAMES  # the law registry's order (harness/laws.py)
 
 
 @dataclass

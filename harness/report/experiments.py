@@ -36,6 +36,7 @@ from harness.experiments import (
 )
 from harness.experiments.aggregates import MIN_BIN_COUNT as MIN_BIN
 from harness.experiments.calibrated_errors import settings_text
+from harness.laws import REGISTRY as LAW_REGISTRY
 from harness.plotting import new_figure, save_png
 from harness.report.calibrated_drops import calibrated_html
 from harness.report.figure_cache import render_once, solver_digest
@@ -169,11 +170,9 @@ CDF_FIGURE = "experiments-drops-cdf.png"
 FITS_FIGURE = "experiments-drops-fits.png"
 #: Bootstrap replicates of the report's fits (the command's default is 200).
 REPORT_REPLICATES = 100
-#: Law colours and line styles (Okabe–Ito, as the rest of the report).
-LAW_COLOURS = {"newton": "#E69F00", "poisson": "#0072B2", "stronge": "#009E73",
-               "stronge-paper": "#CC79A7", "newton-lcp": "#D55E00"}
-LAW_LINES = {"newton": "-", "poisson": "-", "stronge": "--", "stronge-paper": ":",
-             "newton-lcp": "-."}
+#: Law colours and line styles: the law registry's (harness/laws.py), as the rest of the report.
+LAW_COLOURS = {entry.name: entry.colour for entry in LAW_REGISTRY}
+LAW_LINES = {entry.name: entry.line for entry in LAW_REGISTRY}
 
 
 #: The kept aggregates' layout: bump when what is kept changes (2: the files' SHA-256 in the
@@ -298,8 +297,9 @@ def draw_cdf(aggregates: dict, path: Path, tag: str | None) -> Path:
                  color=LAW_COLOURS.get(law), linestyle=LAW_LINES.get(law, "-"), linewidth=1.3)
         axis.set_title(f"every law fitted by {objective}", fontsize=10)
     for k, quantile_set in enumerate(aggregates["paper_models"].values()):
+        # lighter than Newton's grey (the law registry's), which shares these axes
         _cdf(axes[0], quantile_set, "the paper's six models, as published" if k == 0 else None,
-             color="#999999", linewidth=0.8)
+             color="#cccccc", linewidth=0.8)
     shown = aggregates["shown"]
     reference = aggregates["laws"][shown["objective"]][shown["law"]]
     _cdf(axes[2], reference["errors"], f"{shown['law']} (the law)", color="black",

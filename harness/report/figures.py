@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from harness.engines import engine_names, preset_label
+from harness.laws import PROCESS_LAWS
 from harness.plotting import (  # shared with the survey's figures
     new_figure,
     percent_axis,
@@ -250,7 +251,7 @@ def impulse_figure(name: str, records: Sequence[Record], path: Path,
     ax = figure.subplots()
     extent = max([abs(r.normal_impulse) for r in records if r.normal_impulse is not None
                   and math.isfinite(r.normal_impulse)] + [1e-12])
-    for law in ("newton", "poisson", "stronge"):
+    for law in PROCESS_LAWS:
         if not any(r.law == law for r in laws):
             continue
         colour, style, label = LAW_STYLE[law]

@@ -24,6 +24,7 @@ import itertools
 import numpy as np
 
 import planar_impact as pi
+from harness.laws import LAW_NAMES
 from harness.scene.random_problems import random_problems
 
 # PGS: iterations allowed, and the relative change below which it has converged (as in
@@ -40,7 +41,7 @@ LARGE_JUMP = 0.01
 # solver's own ImpactResult.energy_gained threshold; rounding stays far below it).
 GAIN_THRESHOLD = 1e-12
 
-ENERGY_LAWS = ("newton", "newton-lcp", "stronge-paper", "poisson", "stronge")
+ENERGY_LAWS = LAW_NAMES  # every law, in the law registry's order (harness/laws.py)
 
 
 def pgs_converges(mnn, mnt, mtt, vn, vt, mu, e, iterations=PGS_ITERATIONS,

@@ -18,13 +18,11 @@ import math
 from collections.abc import Sequence
 from pathlib import Path
 
+from harness.laws import PROCESS_LAWS  # drawn as paths (the others end off the process)
 from harness.plotting import new_figure, save_png
 from harness.report.views import LAW_STYLE, engine_style
 from harness.run.records import ANALYTIC, Record
 from planar_impact import impulse_process
-
-#: The process laws drawn as paths (the others end off the process: docs/theory.md).
-PROCESS_LAWS = ("newton", "poisson", "stronge")
 
 
 def history_records(records: Sequence[Record]) -> list[Record]:

@@ -19,6 +19,8 @@ from pathlib import Path
 import numpy as np
 
 import planar_impact as pi
+from harness.laws import LAW_NAMES
+from harness.laws import REGISTRY as LAW_REGISTRY
 from harness.plotting import TAG_KEY, lay_out, save_svg_twin
 from harness.report.figure_cache import render_once, table3_payload
 from harness.store.files import output_directory_problem, save_figure, write_text_atomically
@@ -125,8 +127,7 @@ def reproduce_table3() -> list[dict]:
         # The e column is an input for Newton and Poisson; only Stronge's e_i is computed.
         names = CELLS if law == "stronge" else CELLS[1:]
         cells = [Cell(law, counters[law], name, row[name], float(values[name])) for name in names]
-        solutions = {h: solve_row(row, h)
-                     for h in ("newton", "poisson", "stronge-paper", "stronge", "newton-lcp")}
+        solutions = {h: solve_row(row, h) for h in LAW_NAMES}
         rows.append({"row": row, "law": law, "index": counters[law], "hypothesis": solver_law,
                      "result": result, "cells": cells, "solutions": solutions,
                      "type_printed": int(row["type"]), "type_computed": result.collision_type})
@@ -277,10 +278,10 @@ def write_markdown(rows: list[dict], path: Path, figure_name: str) -> None:
     write_text_atomically(path, "\n".join(lines).rstrip("\n") + "\n")  # regular files only
 
 
-LAW_STYLES = {  # colour, line style, end marker
-    "newton": ("tab:orange", "-", "s"), "poisson": ("tab:blue", "-", "o"),
-    "stronge": ("tab:green", "-", "^"), "stronge-paper": ("tab:red", "--", "v"),
-}
+# The laws drawn as impulse paths: the process laws and the paper's Stronge mapping (Poisson's
+# process at its e_i); newton-lcp is velocity-level, no path. Styles: the law registry's.
+LAW_STYLES = {entry.name: (entry.colour, entry.line, entry.marker)  # colour, line, end marker
+              for entry in LAW_REGISTRY if entry.process or entry.name == "stronge-paper"}
 
 
 def write_figure(rows: list[dict], path: Path, metadata: dict | None = None) -> list[Path]:

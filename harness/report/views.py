@@ -14,6 +14,8 @@ from collections.abc import Iterable, Sequence
 import numpy as np
 
 from harness.engines import PRESET_ROLES, engine_names, engine_trait, source_label
+from harness.laws import HEADLINE_LAWS, LAW_NAMES  # noqa: F401 - HEADLINE_LAWS re-exported
+from harness.laws import REGISTRY as LAW_REGISTRY
 from harness.report.reading import source_presets
 from harness.run.metrics import departure_split, fmt_departure
 from harness.run.records import ANALYTIC, Record, Results
@@ -21,15 +23,10 @@ from harness.run.references import SINGLE
 from harness.scenarios.schema import SCENARIO_DIR, recorded_location
 
 FIGURES = "figures"
-LAW_ORDER = ("poisson", "stronge", "stronge-paper", "newton", "newton-lcp")
-HEADLINE_LAWS = ("poisson", "stronge")
-LAW_STYLE = {  # colour, line style, label
-    "poisson": ("black", "-", "Poisson"),
-    "stronge": ("tab:red", "-", "Stronge (exact)"),
-    "stronge-paper": ("tab:purple", "--", "Stronge (paper's mapping)"),
-    "newton": ("tab:gray", "-.", "Newton (process)"),
-    "newton-lcp": ("tab:brown", ":", "newton-lcp (engines' law)"),
-}
+# The laws' order, headline laws and style: the law registry's (harness/laws.py).
+LAW_ORDER = LAW_NAMES
+LAW_STYLE = {entry.name: (entry.colour, entry.line, entry.label)  # colour, line style, label
+             for entry in LAW_REGISTRY}
 
 
 def engine_style(engine: str) -> tuple[str, str]:

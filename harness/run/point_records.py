@@ -14,6 +14,7 @@ from typing import Sequence
 
 import numpy as np
 
+from harness.laws import broken_promises
 from harness.run import metrics, references, verdicts
 from harness.run.history import contact_history
 from harness.run.plan import engine_scene, point_reference_cached
@@ -81,6 +82,7 @@ def point_records(scenario: Scenario, point, engine_entries: Sequence, *,
             continue
         law_speeds[law] = result.u_after
         law_gains[law] = result.energy_change
+        broken = broken_promises(law, result, mu)  # the registry's promises, on every solution
         law_records.append(Record(
             scenario=scenario.name, point=point_info, source=ANALYTIC, law=law,
             u_before=u_before.tolist(), u_after=result.u_after.tolist(),
@@ -88,7 +90,8 @@ def point_records(scenario: Scenario, point, engine_entries: Sequence, *,
             vn_separation=result.vn_separation, vt_separation=result.vt_separation,
             energy_change=result.energy_change, collision_type=result.collision_type,
             normal_impulse=result.normal_impulse, tangential_impulse=result.tangential_impulse,
-            status="ok", wall_time_s=time.perf_counter() - tick,
+            status=f"error: {'; '.join(broken)}" if broken else "ok",
+            wall_time_s=time.perf_counter() - tick,
             diagnostics={**contact_space, "case": result.case,
                          "restitution_poisson": result.restitution_poisson,
                          "restitution_in_range": result.restitution_in_range}))

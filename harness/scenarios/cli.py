@@ -20,7 +20,7 @@ from harness.scenarios.checks import check_expectations
 from harness.scenarios.errors import ScenarioError
 from harness.scenarios.library import scenario_files
 from harness.scenarios.reader import load_scenario
-from harness.scenarios.schema import NAME_PATTERN, SCENARIO_DIR
+from harness.scenarios.schema import LAWS, NAME_PATTERN, SCENARIO_DIR
 from harness.store.files import (
     make_output_directory,
     output_directory_problem,
@@ -148,7 +148,7 @@ tags = ["custom"]          # e.g. "quick", "slip-reversal"; "all" is implied
 restitution = 0.5          # e, in [0, 1]
 friction = 0.3             # mu, >= 0
 # engines = {_toml_names(engine_names())}   # default: every registered engine
-# laws = ["newton", "poisson", "stronge", "stronge-paper", "newton-lcp"]   # default: all
+# laws = {_toml_names(LAWS)}   # default: all
 '''
     if not two_body:
         angle, velocity = _GROUND_POSE[shape]

@@ -17,6 +17,7 @@ import planar_impact
 # value is set (harness/bounds.py): re-exported, the scenario modules read them here.
 from harness.bounds import BOUNDS, LIMITS, limit  # noqa: F401
 from harness.engines import PRESET_ROLES
+from harness.laws import REGISTRY as LAW_REGISTRY
 from planar_impact import builders
 
 SCENARIO_DIR = Path(__file__).resolve().parent.parent.parent / "scenarios"
@@ -40,15 +41,9 @@ def recorded_location(text: str) -> Path:
 
 #: Impact laws, by the names of ``planar_impact.LAWS``.
 LAWS: tuple[str, ...] = planar_impact.LAWS
-#: Collision types each law reports: Poisson/Stronge 1–5, Newton laws 1 stick, 2 reverse
-#: sliding, 3 forward sliding.
-LAW_TYPES = {
-    "newton": (1, 2, 3),
-    "poisson": (1, 2, 3, 4, 5),
-    "stronge": (1, 2, 3, 4, 5),
-    "stronge-paper": (1, 2, 3, 4, 5),
-    "newton-lcp": (1, 2, 3),
-}
+#: Collision types each law reports (the law registry's, harness/laws.py): Poisson/Stronge
+#: 1–5, Newton laws 1 stick, 2 reverse sliding, 3 forward sliding.
+LAW_TYPES = {entry.name: entry.collision_types for entry in LAW_REGISTRY}
 # No ENGINES here: the engines a file may name are the registry's at the time it is read
 # (harness.engines.engine_names), those registered at run time included.
 PRESETS = PRESET_ROLES

@@ -30,6 +30,12 @@ def check_law(law: str) -> str:
     return law
 
 
+def missing_branch(law: str, where: str) -> str:
+    """The error of a law in :data:`LAWS` that ``where`` has no branch for."""
+    return (f"law {law!r} is in planar_impact's LAWS but {where} has no branch for it "
+            "(docs/theory.md, 'The law registry and adding a law')")
+
+
 def contact_space_solution(law, mnn, mnt, mtt, vn, vt, mu, e, out=None, delta=None):
     """Run one law on contact-space arrays (vt ≥ 0, rows assumed valid).
 
@@ -60,12 +66,14 @@ def contact_space_solution(law, mnn, mnt, mtt, vn, vt, mu, e, out=None, delta=No
     elif law == "newton-lcp":
         normal, tangential, ctype, consistent = laws.newton_lcp(terms, e)
         e_poisson = np.float64(np.nan)  # not a process law: no I_nr/I_nc (NaN on every row)
-    else:
+    elif law == "newton" or law == "stronge":
         process = laws.TwoPhaseProcess(terms)
         run = process.newton if law == "newton" else process.stronge
         normal, tangential, ctype, compression = run(e)
         # Poisson's e of the process each law runs, I_nr/I_nc (6).
         e_poisson = (normal - compression) / compression
+    else:  # a law named in LAWS without its branch must not run another law's
+        raise NotImplementedError(missing_branch(law, "contact_space.contact_space_solution"))
     if out is None:
         out = {"vn_separation": None, "vt_separation": None, "energy_change": None}
     vn_separation = np.add(vn, mnn * normal + mnt * tangential, out=out["vn_separation"])  # (A22)

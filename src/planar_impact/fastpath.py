@@ -43,6 +43,7 @@ import math
 import numpy as np
 
 from . import laws
+from .contact_space import missing_branch
 
 #: Most generalized speeds solved here (two free planar bodies have 6); beyond, numpy's
 #: O(p³) kernels win.
@@ -295,13 +296,15 @@ def law_answer(law, mnn, mnt, mtt, vn, vt, mu, e, delta):
         at_boundary, alternative = False, 0  # laws not decided by Table 1
         e_poisson = math.nan
         reverse = ctype == laws.NEWTON_REVERSE
-    else:
+    elif law == "newton" or law == "stronge":
         normal, tangential, ctype, compression = _process(law, mnt, mtt, vt, mu, vn_abs, g, h,
                                                           p, q, delta, e)
         e_poisson = (normal - compression) / compression
         at_boundary, alternative = False, 0
         reverse = (ctype == laws.NEWTON_REVERSE if law == "newton"
                    else ctype in (laws.REVERSE_FROM_COMPRESSION, laws.REVERSE_FROM_RESTITUTION))
+    else:  # a law named in LAWS without its branch must not run another law's
+        raise NotImplementedError(missing_branch(law, "fastpath.law_answer"))
     if reverse and q <= 0:
         return None
     vn_separation = vn + (mnn * normal + mnt * tangential)  # (A22)

@@ -50,3 +50,40 @@ def test_measure_pymunk_on_two_points(monkeypatch, load_or_skip):
     # one iteration on the coupled rod is far off (docs/engines.md, 'pymunk': 2-5 iterations
     # are badly wrong)
     assert rows[("it=1", "rod")]["departure"]["own"] > 1e-3
+
+
+def test_a_converged_engine_is_measured_against_the_point_it_names(monkeypatch, toy_engine,
+                                                                   tmp_path, capsys):
+    # own_law "converged" used to need MuJoCo's reference label in the sweep (a StopIteration
+    # otherwise); an engine names its own point (bench_reference) or bench refuses it at once.
+    from harness import cli
+    from tests.engines.toy_engine import ToyEngine
+
+    monkeypatch.setattr(ToyEngine, "own_law", "converged")
+    out = tmp_path / "bench"
+    assert cli.main(["bench", "--speed-accuracy", "--quick", "--out", str(out)]) == 2
+    error = capsys.readouterr().err
+    assert "engine 'toy': own_law 'converged' needs bench_reference" in error
+    assert "allowed: ['defaults', 'accurate']" in error
+    assert not out.exists()  # refused before any work
+    monkeypatch.setattr(ToyEngine, "bench_reference", "accurate")
+    result = bench_accuracy.measure_engine(toy_engine, quick=True)
+    assert result["reference_setting"] == "accurate"
+    rows = [row for row in result["rows"] if row["setting"] == "accurate"]
+    assert rows and all(row["departure"]["own"] == 0.0 for row in rows)  # itself
+    cheapest = bench_accuracy.cheapest_settings(result)
+    assert {cell["setting"] for cell in cheapest.values()} == {"defaults"}  # not the reference
+
+
+def test_an_engine_claiming_any_law_of_the_registry_is_measured_from_it(monkeypatch,
+                                                                         toy_engine):
+    # The bench measures every engine from Poisson, Stronge and newton-lcp; an engine that
+    # claims another law of the registry (here Newton's, which check_engine would hold its
+    # accurate preset to) is measured from that one too.
+    from tests.engines.toy_engine import ToyEngine
+
+    monkeypatch.setattr(ToyEngine, "own_law", "newton")
+    result = bench_accuracy.measure_engine(toy_engine, quick=True)
+    for row in result["rows"]:
+        assert set(row["departure"]) == {*bench_accuracy.BENCH_LAWS, "newton", "own"}
+        assert row["departure"]["own"] == row["departure"]["newton"]

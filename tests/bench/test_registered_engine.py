@@ -29,3 +29,28 @@ def test_the_toy_goes_through_bench_engines_and_survey(tmp_path, monkeypatch, ca
     assert survey["impacts"] == 2 * 7 and survey["survey_cpu_s"] > 0
     printed = capsys.readouterr().out
     assert "toy " in printed and "toy.accurate" in printed
+
+
+def test_bench_engines_skips_a_scene_the_engine_refuses(monkeypatch, toy_engine):
+    # UnsupportedScene is a skip everywhere (the runner, check_engine, the contract tests,
+    # the bench), never a crash: the toy refusing capsules benchmarks the other scenes.
+    from harness.bench import engines as bench_engines
+    from harness.engines import UnsupportedScene
+    from tests.engines.toy_engine import ToyEngine
+
+    def refuse_rods(self, scene, settings, *, contacts=True):
+        if any(body.shape.kind == "rod" for body in scene.bodies):
+            raise UnsupportedScene("engine 'toy': no capsules (a test's refusal)")
+        return original(self, scene, settings, contacts=contacts)
+
+    original = ToyEngine._build
+    monkeypatch.setattr(ToyEngine, "_build", refuse_rods)
+    report = bench_engines.run_engine_overhead_benchmark(quick=True, engines=[toy_engine])
+    rows = report["engines"][toy_engine]["rows"]
+    skipped = [row for row in rows if "skipped" in row]
+    assert {(row["scene"], row["preset"]) for row in skipped} == {
+        ("rod-45", "defaults"), ("rod-45", "accurate")}
+    assert all("no capsules" in row["skipped"] for row in skipped)
+    assert all(row["deterministic"] for row in rows if "skipped" not in row)
+    table = bench_engines.format_table(report)
+    assert "rod-45      skipped: engine 'toy': no capsules" in table

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 import re
 
 import numpy as np
@@ -16,6 +17,7 @@ from harness import cli, report
 from harness import engines as registry
 from harness.bench import cache_put
 from harness.engines.conformance import check_engine
+from harness.engines.contract import UnsupportedScene
 from harness.run import runner
 from harness.run.records import Results
 from harness.scenarios import load_scenario
@@ -44,6 +46,7 @@ def test_the_toy_conforms_and_its_traits_come_from_its_class(toy):
     assert toy in registry.engine_names()
 
 
+@pytest.mark.kernel_sensitive  # its physics checks decide within stated bands
 @pytest.mark.parametrize("name", registry.ENGINE_NAMES)
 def test_every_shipped_engine_conforms(load_or_skip, name):
     assert check_engine(load_or_skip(name)) == []
@@ -77,6 +80,238 @@ def test_the_kit_names_each_broken_promise():
     assert any(".plot_style" in line for line in failures)
     assert any("accepts an unknown key" in line for line in check_engine(Lenient))
     assert any("expected a separation" in line for line in check_engine(Unseparated))
+
+
+# Broken adapters an author could write from the docs (the tester's four of issue 36): each
+# keeps the contract's shape and determinism, and breaks one physical promise.
+class SpinFlipped(ToyEngine):
+    """Reads ω with the wrong sign (a 3-D engine's joint about +y turns clockwise)."""
+
+    def _read_velocities(self, world):
+        return tuple((v_x, v_y, -omega) for v_x, v_y, omega in super()._read_velocities(world))
+
+
+class NormalFlipped(ToyEngine):
+    """Reports the contact normal from B into A."""
+
+    def _step(self, world):
+        contact = super()._step(world)
+        if contact is None:
+            return None
+        points, (n_x, n_y), impulse, pressure = contact
+        return points, (-n_x, -n_y), impulse, pressure
+
+
+class FrictionIgnored(ToyEngine):
+    """Never gives the pair its μ (the engine's 0 stays)."""
+
+    def _prepare(self, world, scene, settings, start, weights):
+        return super()._prepare(world, dataclasses.replace(scene, friction=0.0), settings,
+                                start, weights)
+
+
+class ImpulseZeroed(ToyEngine):
+    """Reports no impulse for a step that applied one."""
+
+    def _step(self, world):
+        contact = super()._step(world)
+        if contact is None:
+            return None
+        points, normal, _, _ = contact
+        return points, normal, (0.0, 0.0), 0.0
+
+
+@pytest.mark.parametrize("broken, sentence", [
+    (SpinFlipped, "the spin of body B turns against the moment of the impulse"),
+    (NormalFlipped, "does not point out of the ground (+y): a normal flipped?"),
+    (FrictionIgnored, "friction is not used: with μ = 0.3 the oblique impact changes the slip "
+                      "by 0 m/s"),
+    (ImpulseZeroed, "the reported impulse does not explain the change of momentum of body B"),
+])
+def test_the_kit_fails_each_broken_physical_promise_with_its_sentence(broken, sentence):
+    failures = check_engine(broken)
+    for role in registry.PRESET_ROLES:  # under each preset, once per promise
+        named = [line for line in failures if sentence in line and f"preset {role!r}" in line]
+        assert len(named) == 1, (role, failures)
+    # the shape, the settings and the runs' determinism are still the contract's
+    assert not [line for line in failures if "physics" not in line and "preset" not in line]
+
+
+def test_the_physics_checks_bite_on_a_shipped_engine(load_or_skip):
+    # The same flip in pymunk's adapter: its physics is exact, so only the kit's sentence
+    # tells them apart (the checks are not the toy's alone).
+    engine_class = type(load_or_skip("pymunk"))
+
+    class PymunkSpinFlipped(engine_class):
+        def _read_velocities(self, world):
+            return tuple((v_x, v_y, -omega)
+                         for v_x, v_y, omega in super()._read_velocities(world))
+
+    failures = check_engine(PymunkSpinFlipped)
+    assert any("turns against the moment of the impulse" in line for line in failures)
+    assert check_engine(engine_class) == []
+
+
+def test_the_kit_holds_a_restitution_and_an_own_law_claim():
+    class Plastic(ToyEngine):  # always e = 0
+        def _prepare(self, world, scene, settings, start, weights):
+            return super()._prepare(world, dataclasses.replace(scene, restitution=0.0),
+                                    settings, start, weights)
+
+    failures = check_engine(Plastic)
+    assert sum("restitution is not used" in line for line in failures) == 2  # both presets
+    assert any("does not meet its own law 'poisson'" in line for line in failures)
+    # A preset that ignores e by design says why, and is not held to it.
+    declared = type("PlasticDefaults", (Plastic,), {
+        "restitution_unused": {"defaults": "a reason of the test"}})
+    assert sum("restitution is not used" in line for line in check_engine(declared)) == 1
+    # Claiming another law than the one it solves: the toy solves Poisson's, not Newton's.
+    claims = type("ClaimsNewtonLcp", (ToyEngine,), {"own_law": "newton-lcp"})
+    assert any("does not meet its own law 'newton-lcp'" in line
+               for line in check_engine(claims))
+
+
+# The reviewer's broken adapters of issue 36: each breaks one more promise. The kit as first
+# merged passed six of them (μ or e scaled, the impulse as Δv on an engine of the ground alone,
+# a contact point misplaced): the sliding disk, the pair's-e band and the point check catch them.
+def _pair(name, **change):
+    """A toy that gives the pair other values than the scene's (``change``: field -> f(scene))."""
+    def _prepare(self, world, scene, settings, start, weights):
+        values = {field: rule(scene) for field, rule in change.items()}
+        return ToyEngine._prepare(self, world, dataclasses.replace(scene, **values), settings,
+                                  start, weights)
+    return type(name, (ToyEngine,), {"_prepare": _prepare})
+
+
+def _reported(name, edit):
+    """A toy whose ``_step`` reports ``edit(world, contact)`` for the contact it applied."""
+    def _step(self, world):
+        contact = ToyEngine._step(self, world)
+        return None if contact is None else edit(self, world, contact)
+    return type(name, (ToyEngine,), {"_step": _step})
+
+
+def _ground_only(cls):
+    """``cls`` refusing two bodies: the two disks are no longer among the kit's cases."""
+    def _build(self, scene, settings, *, contacts=True):
+        if not scene.ground:
+            raise UnsupportedScene("ground only")
+        return cls._build(self, scene, settings, contacts=contacts)
+    return type(f"GroundOnly{cls.__name__}", (cls,), {"_build": _build})
+
+
+def _tangential_flipped(self, world, contact):
+    points, (n_x, n_y), (p_x, p_y), pressure = contact
+    normal, tangential = p_x * n_x + p_y * n_y, p_x * n_y - p_y * n_x
+    return points, (n_x, n_y), (normal * n_x - tangential * n_y,
+                                normal * n_y + tangential * n_x), pressure
+
+
+def _point_at_centre(self, world, contact):
+    _, normal, impulse, pressure = contact
+    x, y, _ = self._read_poses(world)[-1]
+    return ((x, y, 0.0),), normal, impulse, pressure
+
+
+def _point_on_the_far_side(self, world, contact):
+    points, normal, impulse, pressure = contact
+    x, y, _ = self._read_poses(world)[-1]
+    return (tuple((2 * x - p_x, 2 * y - p_y, depth) for p_x, p_y, depth in points), normal,
+            impulse, pressure)
+
+
+def _mass_ignored(self, world, contact):  # reports Δv for the impulse m Δv
+    points, normal, (p_x, p_y), pressure = contact
+    return points, normal, (p_x / world.mass, p_y / world.mass), pressure / world.mass
+
+
+class BodyFrameVelocities(ToyEngine):
+    """Reads the velocities in the body's frame, not the world's."""
+
+    def _read_velocities(self, world):
+        poses = self._read_poses(world)
+        return tuple((math.cos(theta) * v_x + math.sin(theta) * v_y,
+                      -math.sin(theta) * v_x + math.cos(theta) * v_y, omega)
+                     for (v_x, v_y, omega), (_, _, theta)
+                     in zip(super()._read_velocities(world), poses))
+
+
+class SpinInDegrees(ToyEngine):
+    def _read_velocities(self, world):
+        return tuple((v_x, v_y, math.degrees(omega))
+                     for v_x, v_y, omega in super()._read_velocities(world))
+
+
+@pytest.mark.parametrize("broken, sentence", [
+    (_pair("MuDoubled", friction=lambda scene: 2.0 * scene.friction),
+     "the pair's μ is not the one used: a disk sliding at 2 m/s with μ = 0.1 gets a friction "
+     "impulse of 1.2 N s against the slip for a normal impulse of 6 N s, an effective μ of 0.2"),
+    (_pair("MuHalved", friction=lambda scene: 0.5 * scene.friction),
+     "an effective μ of 0.05"),
+    (_pair("EScaled", restitution=lambda scene: 0.7 * scene.restitution),
+     "the pair's e is not the one used: a direct impact at 3 m/s with e = 0.2 separates at "
+     "0.42 m/s where the laws give 0.6 m/s"),
+    (_pair("EPlastic", restitution=lambda scene: 0.0), "restitution is not used"),
+    (_pair("EElastic", restitution=lambda scene: 1.0), "restitution is not used"),
+    (_reported("TangentialFlipped", _tangential_flipped),
+     "the reported impulse does not explain the change of momentum of body B"),
+    (_ground_only(_reported("MassIgnored", _mass_ignored)),
+     "scene 'kit-sliding': the reported impulse does not explain the change of momentum of "
+     "body B: m Δv = (-0.6, 6) N s but the normal and impulses reported give (-0.3, 3) N s"),
+    (_reported("PointAtCentre", _point_at_centre),
+     "scene 'kit-oblique': the reported contact point"),
+    (_reported("PointOnTheFarSide", _point_on_the_far_side),
+     "scene 'kit-oblique': the reported contact point"),
+    (BodyFrameVelocities, "the reported impulse does not explain the change of momentum"),
+    (SpinInDegrees, "the reported impulse does not explain the change of spin of body B"),
+])
+def test_the_kit_fails_the_reviewers_broken_adapters_with_their_sentence(broken, sentence):
+    failures = check_engine(broken)
+    for role in registry.PRESET_ROLES:  # under each preset, once per promise
+        named = [line for line in failures if sentence in line and f"preset {role!r}" in line]
+        assert len(named) == 1, (role, failures)
+
+
+def test_a_law_claimed_is_checked_where_the_laws_part():
+    def refusing(cls, kinds):
+        def _build(self, scene, settings, *, contacts=True):
+            if any(body.shape.kind in kinds for body in scene.bodies):
+                raise UnsupportedScene(f"no {kinds}")
+            return cls._build(self, scene, settings, contacts=contacts)
+        return type(f"Refusing{cls.__name__}", (cls,), {"_build": _build})
+
+    # The toy solves Poisson's law; on the disks every law gives its answer, so a claim of
+    # Newton's is caught on the box alone when the engine builds no capsule ...
+    claims = type("ClaimsNewtonLcp", (ToyEngine,), {"own_law": "newton-lcp"})
+    assert [line for line in check_engine(refusing(claims, ("rod",)))
+            if "own law" in line] == [
+        "preset 'accurate' does not meet its own law 'newton-lcp' (own_law) on the canonical "
+        "case 'box-corner': departure 0.206 > 0.001 from planar_impact's answer"]
+    assert check_engine(refusing(ToyEngine, ("rod",))) == []
+    # ... and an engine of disks alone cannot back a claim of a law at all.
+    disks_only = refusing(ToyEngine, ("rod", "box", "polygon", "ellipse"))
+    assert check_engine(disks_only) == [
+        "preset 'accurate': own_law 'poisson' cannot be checked: the engine refuses 'rod-45' "
+        "and 'box-corner', where the laws part (on the disks every law gives one answer); "
+        "claim 'converged' (with bench_reference) instead"]
+    converged = type("Converged", (disks_only,), {"own_law": "converged",
+                                                  "bench_reference": "accurate"})
+    assert check_engine(converged) == []
+
+
+def test_the_kit_names_an_unhashable_world_key_and_a_converged_law_without_reference():
+    class ListKeyed(ToyEngine):
+        def _world_key(self, scene, settings):
+            return [len(scene.bodies)]
+
+    assert any("returns an unhashable key" in line
+               for line in check_engine(ListKeyed))
+    converged = type("Converged", (ToyEngine,), {"own_law": "converged"})
+    assert any(".bench_reference: own_law 'converged' needs the label" in line
+               for line in check_engine(converged))
+    named = type("ConvergedNamed", (ToyEngine,), {"own_law": "converged",
+                                                  "bench_reference": "accurate"})
+    assert check_engine(named) == []
 
 
 def test_register_refuses_a_taken_name_or_a_misnamed_class(toy):
