@@ -458,12 +458,9 @@ def write_streamed(dataset: Path, populations, pairs, out: Path, settings: dict,
         written += outputs.figures(stream.figure_runs(dataset, pairs, families),
                                    out / "figures")
         timings["figures"] = (clock() - begin, 0)
-    skipped_runs = stream.skipped_runs(dataset, pairs, families)
     summary = out / "summary.md"
     write_text_atomically(summary, outputs.summary_markdown(
-        stats, done["rejections"], timings, settings,
-        skipped_runs={pair: (counts, done["skipped"].get(pair, ""))
-                      for pair, counts in skipped_runs.items()}))
+        stats, done["rejections"], timings, settings, skipped_runs=done["skipped_runs"]))
     shown = {**settings, "families": families}
     settings_path = out / SETTINGS_FILE
     write_text_atomically(settings_path, json.dumps(shown, indent=1) + "\n")

@@ -109,6 +109,7 @@ class ChunkOutput:
     rejections: list | None = None  # per population, {reason: draws}
     timings: dict = dataclasses.field(default_factory=dict)  # stage -> seconds on one core
     skipped: dict = dataclasses.field(default_factory=dict)  # "engine preset" -> why
+    skipped_counts: dict = dataclasses.field(default_factory=dict)  # pair -> {family: runs}
     cpu_s: float = 0.0
     refused: dict | None = None  # a ScenarioError's fields and its sample
     stopped: str = ""  # why the chunk was stopped (time limit, worker died)
@@ -158,8 +159,14 @@ def run_chunk(task: ChunkTask) -> ChunkOutput:
         timings[f"verdicts {result.engine} {result.preset}"] = result.judge_s
     skipped = {f"{result.engine} {result.preset}": result.skipped_why
                for result in part.results if result.skipped_why}
+    counts: dict[str, dict[str, int]] = {}
+    for result, columns in zip(part.results, runs):
+        refused = columns["family"][columns["status"] == SKIPPED].tolist()
+        for family in refused:
+            found = counts.setdefault(f"{result.engine} {result.preset}", {})
+            found[family] = found.get(family, 0) + 1
     return ChunkOutput(task.index, task.bounds, samples, runs, part.rejections, timings,
-                       skipped, time.process_time() - cpu)
+                       skipped, counts, time.process_time() - cpu)
 
 
 def sample_columns(every, terms, law_results, routh) -> dict:
@@ -297,7 +304,7 @@ class ChunkWriter:
                               {**self.metadata, "table": "samples"}, row_group_size=size)
         record = {"bounds": list(output.bounds), "rejections": output.rejections,
                   "timings": output.timings, "skipped": output.skipped,
-                  "cpu_s": output.cpu_s}
+                  "skipped_counts": output.skipped_counts, "cpu_s": output.cpu_s}
         write_text_atomically(_directory(self.dataset / "chunks")
                               / _part_name(output.index, "json"),
                               json.dumps(record, indent=1) + "\n")
@@ -386,10 +393,12 @@ def chunk_records(dataset: Path) -> list[dict]:
 
 def totals(dataset: Path, populations) -> dict:
     """The done chunks' rejected draws per population, timings summed over chunks (seconds
-    on one core), the skipped pairs' reasons, and the impacts and CPU seconds they hold."""
+    on one core), the skipped pairs' reasons and runs per family (``skipped_runs``: ``{pair:
+    ({family: runs}, why)}``), and the impacts and CPU seconds they hold."""
     rejections = {population.name: dict.fromkeys(REJECTIONS, 0) for population in populations}
     timings: dict[str, float] = {}
     skipped: dict[str, str] = {}
+    skipped_counts: dict[str, dict[str, int]] = {}
     impacts, cpu = 0, 0.0
     for record in chunk_records(dataset):
         for population, counts in zip(populations, record["rejections"]):
@@ -399,10 +408,18 @@ def totals(dataset: Path, populations) -> dict:
             timings[stage] = timings.get(stage, 0.0) + seconds
         for pair, why in record["skipped"].items():
             skipped.setdefault(pair, why)
+        for pair, counts in record["skipped_counts"].items():
+            found = skipped_counts.setdefault(pair, {})
+            for family, count in counts.items():
+                found[family] = found.get(family, 0) + count
         impacts += (record["bounds"][1] - record["bounds"][0]) * len(populations)
         cpu += record["cpu_s"]
+    families = [population.name for population in populations]
+    skipped_runs = {pair: ({family: counts[family] for family in families if family in counts},
+                           skipped.get(pair, ""))
+                    for pair, counts in skipped_counts.items()}
     return {"rejections": rejections, "timings": timings, "skipped": skipped,
-            "impacts": impacts, "cpu_s": cpu}
+            "skipped_runs": skipped_runs, "impacts": impacts, "cpu_s": cpu}
 
 
 def family_blocks(directory: Path, family: str, position: int, columns=None):
@@ -534,29 +551,3 @@ def concatenate(dataset: Path, pairs, families, path: Path, metadata: dict,
         if temporary.exists():
             temporary.unlink()
     return path
-
-
-def dataset_pairs(dataset: Path) -> list[tuple[str, str]]:
-    """The pairs with runs in the dataset, as ``(engine, preset)``."""
-    return [(directory.parent.name.partition("=")[2], directory.name.partition("=")[2])
-            for directory in sorted((dataset / "runs").glob("engine=*/preset=*"))
-            if directory.is_dir()]
-
-
-def skipped_runs(dataset: Path, pairs, families) -> dict:
-    """``{"engine preset": {family: runs}}`` of the runs the engine could not build."""
-    import pyarrow.dataset as ds
-
-    found: dict[str, dict[str, int]] = {}
-    for engine, preset in pairs:
-        files = sorted(str(path) for path in
-                       _pair_directory(dataset, engine, preset).glob("part-*.parquet"))
-        if not files:
-            continue
-        table = ds.dataset(files, format="parquet").to_table(
-            columns=["family"], filter=ds.field("status") == SKIPPED)
-        for family in table.column("family").to_pylist():
-            counts = found.setdefault(f"{engine} {preset}", {})
-            counts[family] = counts.get(family, 0) + 1
-    return {pair: {family: counts[family] for family in families if family in counts}
-            for pair, counts in found.items()}
