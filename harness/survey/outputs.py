@@ -433,7 +433,8 @@ def cdf_figure(runs: dict, engine: str, path: Path, tag: str | None = None) -> P
     ok = runs["status"] == "ok"
     families = sorted(set(np.asarray(runs["family"]).tolist()))
     colours = colormaps["tab10"]
-    figure = new_figure(4.6 * len(presets) + 0.4, 3.8 + 0.22 * ((len(families) + 1) // 2))
+    # one key column per panel: two overflowed the panel once n reached four digits
+    figure = new_figure(4.6 * len(presets) + 0.4, 3.8 + 0.2 * len(families))
     axes = figure.subplots(1, len(presets), sharex=True, sharey=True, squeeze=False)[0]
     for axis, preset in zip(axes, presets):
         for index, family in enumerate(families):
@@ -458,8 +459,7 @@ def cdf_figure(runs: dict, engine: str, path: Path, tag: str | None = None) -> P
     for axis in axes:  # a key per panel, below it: each preset's n differ
         if axis.get_legend_handles_labels()[0]:
             axis.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), fontsize=9,
-                        frameon=False, title="family (n = ok runs of all)", title_fontsize=9,
-                        ncols=2)
+                        frameon=False, title="family (n = ok runs of all)", title_fontsize=9)
     return save_png(figure, path, dpi=FIGURE_DPI, tag=tag)
 
 
