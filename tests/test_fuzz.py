@@ -681,7 +681,7 @@ def test_compare_of_a_departure_gone_is_a_change(tmp_path, capsys):
 
 @pytest.mark.parametrize("name", ["summary.md", "runs.parquet", ".written-by-survey.json"])
 def test_survey_refuses_a_link_at_its_own_files_before_any_work(tmp_path, capsys, name):
-    """A link at out/summary.md was found by the write after the survey's work (exit 3)."""
+    """A link at the survey's own summary.md was found by the write after the work (exit 3)."""
     out = tmp_path / "survey"
     out.mkdir()
     (out / name).symlink_to(tmp_path / "elsewhere")

@@ -293,6 +293,8 @@ def main(args) -> int:
         samples = bench_survey.QUICK_SAMPLES if args.quick else bench_survey.SAMPLES
         rounds = bench_survey.QUICK_ROUNDS if args.quick else bench_survey.ROUNDS
         report = bench_survey.run(samples, rounds=rounds, workers=max(1, args.workers))
+        report["memory"] = bench_survey.memory(
+            bench_survey.QUICK_MEMORY_SIZES if args.quick else bench_survey.MEMORY_SIZES)
         print(bench_survey.format_report(report))
         table["survey"] = report
     if "executors" in selected:

@@ -268,6 +268,11 @@ class BareStepper:
         for _ in range(count):
             advance(world)
 
+    def velocities(self) -> tuple:
+        """The bodies' velocities now, as the adapter reads them at a run's end (what a
+        user's own loop reads after its steps)."""
+        return self._engine._read_velocities(self._world)
+
     def close(self) -> None:
         if self._world is not None:
             self._engine._release(self._world)

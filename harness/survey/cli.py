@@ -34,6 +34,7 @@ from harness.engines import (
     renamed_roles,
     source_label,
 )
+from harness.run.executor import EXECUTORS, DaskNotInstalled, check_arguments
 from harness.run.provenance import package_versions
 from harness.scenarios.errors import ScenarioError
 from harness.store.cache_directory import output_seal
@@ -46,11 +47,12 @@ from harness.store.files import (
     write_text_atomically,
 )
 from harness.survey import laws as survey_laws
-from harness.survey import outputs, statistics
-from harness.survey.engines import bare_stepping
+from harness.survey import outputs, statistics, stream
+from harness.survey.engines import SKIPPED, bare_stepping
 from harness.survey.parts import run_parts
 from harness.survey.population import resolve_populations
 from harness.survey.sampling import sample_population
+from harness.survey.stream import sample_columns
 
 DEFAULT_SAMPLES = 2000
 #: ``--quick``: a default survey (its pairs, so MuJoCo's matched-bounce left out, and its
@@ -156,6 +158,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--workers", type=bounds.option("workers"), default=None,
                         help="processes for the engine runs (default: every core; the "
                              "results do not depend on it)")
+    parser.add_argument("--executor", choices=EXECUTORS, default="local",
+                        help="where the chunks run: local processes (default) or a Dask "
+                             "cluster (a LocalCluster of --workers processes, or the one at "
+                             "--scheduler); the results do not depend on it")
+    parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                        help="a running Dask scheduler (tcp://host:8786), with --executor dask")
+    parser.add_argument("--task-time-limit", type=float, default=stream.CHUNK_TIME_LIMIT_S,
+                        metavar="SECONDS",
+                        help="wall-clock seconds one chunk (at most "
+                             f"{stream.CHUNK_IMPACTS} impacts) may run (default "
+                             f"{stream.CHUNK_TIME_LIMIT_S:g}); a chunk over it is stopped, "
+                             "the others go on, and the survey exits 4 with the finished "
+                             "chunks kept (local executor; Dask workers are not stopped)")
+    parser.add_argument("--quiet", action="store_true",
+                        help="no progress lines on stderr")
 
 
 def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: bool = False,
@@ -176,15 +193,7 @@ def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: 
     """
     left_out = dict(left_out or {})
     clock = time.perf_counter
-    pairs, skipped = [], {}
-    for engine in engines:
-        try:
-            load_engine(engine)
-        except EngineNotInstalled as error:
-            skipped[engine] = str(error)
-            echo(f"skipping {engine}: {error}")
-            continue
-        pairs += [(engine, preset) for preset in presets if (engine, preset) not in left_out]
+    pairs, skipped = installed_pairs(engines, presets, left_out, echo)
     begin = clock()
     survey = run_parts(populations, samples, seed, pairs, workers or os.cpu_count() or 1,
                        overrides)
@@ -246,43 +255,25 @@ def run_survey(populations, samples: int, seed: int, engines, presets, *, bare: 
     }
 
 
+def installed_pairs(engines, presets, left_out: dict, echo=print) -> tuple[list, dict]:
+    """``(pairs, skipped)``: the ``(engine, preset)`` pairs to run, those of an engine not
+    installed left out and named in ``skipped`` (engine -> why)."""
+    pairs, skipped = [], {}
+    for engine in engines:
+        try:
+            load_engine(engine)
+        except EngineNotInstalled as error:
+            skipped[engine] = str(error)
+            echo(f"skipping {engine}: {error}")
+            continue
+        pairs += [(engine, preset) for preset in presets if (engine, preset) not in left_out]
+    return pairs, skipped
+
+
 def survey_scenes(populations, samples: int, seed: int) -> list:
     """The scenes of the survey's samples, in its row order (for the bare stepping)."""
     return [sample.scene for population in populations
             for sample in sample_population(population, samples, seed).samples]
-
-
-def sample_columns(every, terms, law_results, routh) -> dict:
-    """Columns of ``samples.parquet`` (``every``: the samples, or their
-    :class:`harness.survey.parts.SampleRow`)."""
-    columns = {
-        "family": np.asarray([s.population for s in every]),
-        "sample": np.asarray([s.index for s in every]),
-        "attempts": np.asarray([s.attempts for s in every]),
-    }
-    # The drawn parameters, NaN where a sample has none of that name; the samples of one
-    # population draw the same names in the same order, so they fill the columns as a block.
-    blocks: dict[tuple, list[int]] = {}
-    for row, sample in enumerate(every):
-        blocks.setdefault(tuple(sample.parameters), []).append(row)
-    keys = list(dict.fromkeys(key for names in blocks for key in names))
-    columns.update((key, np.full(len(every), np.nan)) for key in keys)
-    for names, rows in blocks.items():
-        values = np.array([list(every[row].parameters.values()) for row in rows], dtype=float)
-        for place, key in enumerate(names):
-            columns[key][rows] = values[:, place]
-    for key in ("mnn", "mnt", "mtt", "vn", "vt"):
-        columns[key] = getattr(terms, key)
-    columns.update(routh)
-    poisson = law_results["poisson"].u_after
-    scales = statistics.row_scales(terms)
-    for law, result in law_results.items():
-        columns[f"{law}.status"] = result.batch.status.astype(np.int64)
-        columns[f"{law}.collision_type"] = result.batch.collision_type.astype(np.int64)
-        columns[f"{law}.energy_change"] = result.batch.energy_change
-        columns[f"{law}.from_poisson"] = statistics.row_departures(terms, result.u_after, poisson,
-                                                                   scales)
-    return columns
 
 
 def table_metadata(settings: dict) -> dict:
@@ -316,7 +307,8 @@ def write_survey(survey: dict, out: Path, settings: dict, figures: bool = True) 
         survey["timings"]["figures"] = (time.perf_counter() - begin, 0)
     summary = out / "summary.md"
     write_text_atomically(summary, outputs.summary_markdown(
-        survey["statistics"], survey["rejections"], survey["timings"], settings))
+        survey["statistics"], survey["rejections"], survey["timings"], settings,
+        skipped_runs=skipped_in_memory(survey)))
     # What was surveyed, for the report (harness/report/survey.py) to read without Parquet.
     shown = {**settings, "families": list(survey["rejections"]),
              "skipped": settings.get("skipped", survey["skipped"]),
@@ -332,6 +324,23 @@ def write_survey(survey: dict, out: Path, settings: dict, figures: bool = True) 
     return written
 
 
+def skipped_in_memory(survey: dict) -> dict:
+    """The summary's skipped runs (``outputs.summary_markdown``) of a survey held in memory:
+    ``{"engine preset": ({family: runs}, why)}``."""
+    found: dict[str, tuple[dict, str]] = {}
+    runs = survey["runs"]
+    if not survey["engine_results"]:
+        return found
+    skipped = np.flatnonzero(np.asarray(runs["status"]) == SKIPPED)
+    why = {f"{result.engine} {result.preset}": result.skipped_why
+           for result in survey["engine_results"]}
+    for row in skipped.tolist():
+        pair = f"{runs['engine'][row]} {runs['preset'][row]}"
+        counts, _ = found.setdefault(pair, ({}, why.get(pair, "")))
+        counts[runs["family"][row]] = counts.get(runs["family"][row], 0) + 1
+    return found
+
+
 def check_options(args: argparse.Namespace) -> tuple[list[str], list[str], int]:
     """``(engines, presets, samples)`` of the options, each checked before any work (the
     numbers against :data:`harness.bounds.BOUNDS`, as ``run``'s); ``ValueError`` names the
@@ -344,9 +353,15 @@ def check_options(args: argparse.Namespace) -> tuple[list[str], list[str], int]:
     samples = (QUICK_SAMPLES if args.quick else DEFAULT_SAMPLES) if args.samples is None \
         else args.samples
     for option, value in (("samples", samples), ("workers", args.workers),
-                          ("seed", args.seed)):
+                          ("seed", args.seed),
+                          ("task-time-limit", getattr(args, "task_time_limit", None))):
         if value is not None:
             bounds.check(f"--{option} {value}", option, value)
+    try:
+        check_arguments(getattr(args, "executor", "local"), args.workers,
+                        getattr(args, "scheduler", None))
+    except DaskNotInstalled as error:
+        raise ValueError(str(error)) from error
     out = DEFAULT_OUT if args.out is None else Path(args.out)
     problem = (output_directory_problem(out)
                or inner_directory_problem(out, outputs.FIGURES_DIRECTORY)
@@ -381,20 +396,95 @@ def main(args: argparse.Namespace) -> int:
             print(f"impact-harness survey: {out} holds a survey of {other}; write this one "
                   "elsewhere with --out DIR, or replace it with --force", file=sys.stderr)
             return 2
-    try:
-        survey = run_survey(populations, samples, args.seed, engines, presets, bare=args.bare,
-                            left_out=left_out, workers=args.workers, overrides=overrides)
-    except ScenarioError as error:
-        print(f"impact-harness survey: {error}", file=sys.stderr)
-        return 2
+    pairs, skipped = installed_pairs(engines, presets, left_out)
     settings = {"samples": samples, "seed": args.seed,
-                "engines": [r for r in engines if r not in survey["skipped"]],
-                "presets": presets, "left_out": survey["left_out"],
-                "skipped": survey["skipped"], "overrides": overrides}
+                "engines": [r for r in engines if r not in skipped],
+                "presets": presets,
+                "left_out": {source_label(engine, preset): why
+                             for (engine, preset), why in left_out.items()
+                             if engine in engines and preset in presets
+                             and engine not in skipped},
+                "skipped": skipped, "overrides": overrides}
     make_output_directory(out)  # the directory asked for (itself only)
-    written = write_survey(survey, out, settings, figures=not args.no_figures)
+    try:
+        streamed = stream.stream_survey(
+            populations, samples, args.seed, pairs, out, table_metadata(settings),
+            overrides=overrides, workers=args.workers,
+            executor=getattr(args, "executor", "local"),
+            scheduler=getattr(args, "scheduler", None),
+            time_limit_s=getattr(args, "task_time_limit", stream.CHUNK_TIME_LIMIT_S),
+            bare=args.bare, progress=not getattr(args, "quiet", False))
+    except ScenarioError as error:
+        print(f"impact-harness survey: {error} (the chunks done are kept in "
+              f"{out / stream.DATASET})", file=sys.stderr)
+        return 2
+    if streamed["stopped"]:
+        for index, why in sorted(streamed["stopped"].items()):
+            begin, end = stream.chunk_bounds(samples, len(populations))[index]
+            print(f"SURVEY CHUNK STOPPED: chunk {index} (samples {begin}-{end - 1} of every "
+                  f"population): {why}", file=sys.stderr)
+        print(f"impact-harness survey: {len(streamed['stopped'])} of {streamed['chunks']} "
+              f"chunks stopped; the {streamed['chunks'] - len(streamed['stopped'])} done are "
+              f"kept in {streamed['dataset']}: the same command runs only the others "
+              "(a larger --task-time-limit, or narrower distributions)", file=sys.stderr)
+        return 4
+    written = write_streamed(streamed["dataset"], populations, pairs, out, settings,
+                             figures=not args.no_figures, wall_s=streamed["wall_s"])
     print(f"wrote {len(written)} files to {out}")
     return 0
+
+
+def write_streamed(dataset: Path, populations, pairs, out: Path, settings: dict, *,
+                   figures: bool = True, wall_s: float = 0.0) -> list[Path]:
+    """The survey's tables, summary, settings and figures from its dataset
+    (harness/survey/stream.py), in bounded memory: the statistics a group at a time, the
+    whole tables a chunk file at a time, the figures from the first samples."""
+    clock = time.perf_counter
+    families = [population.name for population in populations]
+    done = stream.totals(dataset, populations)
+    impacts = done["impacts"]
+    about = table_metadata(settings)
+    begin = clock()
+    stats = stream.dataset_statistics(dataset, pairs, families)
+    statistics_s = clock() - begin
+    timings: dict[str, tuple[float, int]] = {
+        "sampling": (done["timings"].get("sampling", 0.0), 0),
+        "laws (contact terms + solve_batch × 5)": (done["timings"].get("laws", 0.0), 0),
+        "verdict terms (once per scene)": (done["timings"].get("verdict terms", 0.0), 0),
+        "parts (wall: sampling, laws, engines, verdicts)": (wall_s, impacts * len(pairs)),
+    }
+    for engine, preset in pairs:
+        shown = preset_label(engine, preset)
+        for stage in ("engine", "verdicts"):
+            timings[f"{stage} {engine} {shown}"] = (
+                done["timings"].get(f"{stage} {engine} {preset}", 0.0), impacts)
+        for kind in ("steps only", "reset + steps"):
+            key = f"bare {engine} {preset} ({kind})"
+            if key in done["timings"]:
+                timings[f"bare {engine} {shown} ({kind})"] = (done["timings"][key], impacts)
+    timings["departures + statistics"] = (statistics_s, impacts * len(pairs))
+    written = [stream.concatenate(dataset, [], families, out / "samples.parquet", about,
+                                  "samples")]
+    if pairs:
+        written.append(stream.concatenate(dataset, pairs, families, out / "runs.parquet",
+                                          about, "runs"))
+        written.append(outputs.write_parquet(stats, out / "statistics.parquet",
+                                             {**about, "table": "statistics"}))
+    else:
+        for stale in ("runs.parquet", "statistics.parquet"):
+            (out / stale).unlink(missing_ok=True)
+    if figures and pairs:
+        begin = clock()
+        written += outputs.figures(stream.figure_runs(dataset, pairs, families),
+                                   out / "figures")
+        timings["figures"] = (clock() - begin, 0)
+    summary = out / "summary.md"
+    write_text_atomically(summary, outputs.summary_markdown(
+        stats, done["rejections"], timings, settings, skipped_runs=done["skipped_runs"]))
+    shown = {**settings, "families": families}
+    settings_path = out / SETTINGS_FILE
+    write_text_atomically(settings_path, json.dumps(shown, indent=1) + "\n")
+    return written + [summary, settings_path]
 
 
 def other_survey(out: Path, populations, samples: int, seed: int, engines, presets,

@@ -23,13 +23,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from harness.collector import collector_paused
-from harness.engines import STATUSES, load_engine
+from harness.engines import STATUSES, UnsupportedScene, load_engine
 from harness.run import verdicts
 from harness.survey.laws import WIDTH
 
 #: Scenes handed to ``run_many`` at once: the runs (with their contact records) of one slice
 #: are judged and dropped before the next, so memory does not grow with the survey.
 SLICE = 2048
+#: ``status`` and ``engine_status`` of a run the engine cannot build (``UnsupportedScene``:
+#: Box2D's polygons of more than ``b2_maxPolygonVertices`` sides), as ``run`` records such a
+#: task ``skipped``; the statistics leave these runs out and count them (``n_skipped``).
+SKIPPED = "skipped"
 
 
 @dataclass(frozen=True)
@@ -46,6 +50,7 @@ class EngineResults:
     steps: np.ndarray  # (n,) steps simulated
     wall_s: float  # s, engine runs only (run_many)
     judge_s: float  # s, the verdict checks
+    skipped_why: str = ""  # the engine's message for the first skipped run ("" if none)
 
 
 def run_engine(engine_name: str, preset: str, scenes, problems=None,
@@ -71,6 +76,7 @@ def run_engine(engine_name: str, preset: str, scenes, problems=None,
     reasons = np.full(count, "", dtype=object)
     steps = np.zeros(count, dtype=np.int64)
     wall = judging = 0.0
+    skipped_why = ""
     clock = time.perf_counter
     if problems is not None and (terms is None or arrays is None):
         tick = clock()
@@ -82,10 +88,20 @@ def run_engine(engine_name: str, preset: str, scenes, problems=None,
     with collector_paused():
         for begin in range(0, count, SLICE):
             tick = clock()
-            runs = engine.run_many(scenes[begin:begin + SLICE], settings)
+            end = min(count, begin + SLICE)
+            built, runs, why = _run_supported(engine, scenes, begin, end, settings)
+            skipped_why = skipped_why or why
             wall += clock() - tick
             tick = clock()
-            end = begin + len(runs)
+            if len(built) < end - begin:  # judge the runs that were built, alone
+                for row in sorted(set(range(begin, end)) - set(built)):
+                    velocities[row] = np.nan
+                    engine_status[row] = status[row] = SKIPPED
+                _judge(built, runs, scenes, problems, law_energy_change, terms, arrays,
+                       velocities, engine_status, status, reasons, steps)
+                judging += clock() - tick
+                del runs
+                continue
             for row, run in enumerate(runs, start=begin):
                 speeds = run.velocities
                 velocities[row, :3 * len(speeds)] = [value for body in speeds for value in body]
@@ -103,10 +119,52 @@ def run_engine(engine_name: str, preset: str, scenes, problems=None,
                     status[row], reasons[row] = verdict_status, names
             judging += clock() - tick
             del runs
-    assert set(engine_status) <= set(STATUSES), set(engine_status) - set(STATUSES)
+    assert set(engine_status) <= {*STATUSES, SKIPPED}, set(engine_status) - set(STATUSES)
     return EngineResults(engine_name, engine.version, preset, velocities,
                          engine_status.astype(str), status.astype(str), reasons.astype(str),
-                         steps, wall, judging)
+                         steps, wall, judging, skipped_why)
+
+
+def _run_supported(engine, scenes, begin: int, end: int, settings):
+    """``(rows, runs, why)``: ``run_many`` of scenes ``begin`` to ``end``; when the engine
+    refuses one (:class:`UnsupportedScene`, raised for the whole call), every scene is run
+    alone and the refused ones are left out of ``rows`` (``why``: the first refusal)."""
+    try:
+        return list(range(begin, end)), engine.run_many(scenes[begin:end], settings), ""
+    except UnsupportedScene:
+        pass
+    rows, runs, why = [], [], ""
+    for row in range(begin, end):
+        try:
+            runs += engine.run_many([scenes[row]], settings)
+        except UnsupportedScene as error:
+            why = why or f"engine cannot build the scene: {error}"
+            continue
+        rows.append(row)
+    return rows, runs, why
+
+
+def _judge(rows, runs, scenes, problems, law_energy_change, terms, arrays, velocities,
+           engine_status, status, reasons, steps) -> None:
+    """Fill the rows ``rows`` (not consecutive: skipped ones between) from their ``runs``."""
+    for row, run in zip(rows, runs):
+        speeds = run.velocities
+        velocities[row, :3 * len(speeds)] = [value for body in speeds for value in body]
+        engine_status[row] = run.status.value
+        steps[row] = run.steps
+    if not rows:
+        return
+    if problems is None:
+        status[rows] = engine_status[rows]
+        return
+    index = np.asarray(rows)
+    judged = verdicts.judge_many(
+        [scenes[row] for row in rows], [problems[row] for row in rows], runs, velocities[index],
+        [terms[row] for row in rows],
+        type(arrays)(*(getattr(arrays, name)[index] for name in arrays.__dataclass_fields__)),
+        law_energy_change=None if law_energy_change is None else law_energy_change[index])
+    for row, (verdict_status, names) in zip(rows, judged):
+        status[row], reasons[row] = verdict_status, names
 
 
 def bare_stepping(engine_name: str, preset: str, scenes, steps,

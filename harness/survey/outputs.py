@@ -68,10 +68,12 @@ def column_unit(name: str) -> str | None:
     return BODY_UNITS.get(field) if "." in name else None
 
 
-def write_parquet(columns: dict, path: Path, metadata: dict | None = None) -> Path:
+def write_parquet(columns: dict, path: Path, metadata: dict | None = None,
+                  row_group_size: int | None = None) -> Path:
     """Write ``{name: array}`` as one Parquet table; each column carries its unit
     (:func:`column_unit`) and the table ``metadata`` as JSON under :data:`METADATA_KEY`.
-    A column of comma-joined names (a run's failing ``reasons``) is written as a list column."""
+    A column of comma-joined names (a run's failing ``reasons``) is written as a list column.
+    ``row_group_size``: rows per row group (default pyarrow's: one group here)."""
 
     import pyarrow as pa
     import pyarrow.parquet as pq
@@ -91,7 +93,8 @@ def write_parquet(columns: dict, path: Path, metadata: dict | None = None) -> Pa
         METADATA_KEY: json.dumps(metadata, sort_keys=True, default=str)})
 
     buffer = pa.BufferOutputStream()
-    pq.write_table(pa.Table.from_arrays(arrays, schema=schema), buffer)
+    pq.write_table(pa.Table.from_arrays(arrays, schema=schema), buffer,
+                   row_group_size=row_group_size)
     write_bytes_atomically(path, buffer.getvalue().to_pybytes())  # over a regular file only
     return path
 
@@ -216,8 +219,10 @@ def _preset_names(settings: dict) -> list[str]:
     return names
 
 
-def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dict) -> str:
-    """The whole ``summary.md``."""
+def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dict,
+                     skipped_runs: dict | None = None) -> str:
+    """The whole ``summary.md``; ``skipped_runs``: ``{"engine preset": ({family: runs},
+    why)}`` of the runs an engine could not build (left out of the statistics)."""
     lines = [
         "# Survey: departures over families of impacts",
         "",
@@ -261,6 +266,7 @@ def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dic
         "",
         markdown_table(stats, "each"),
         "",
+        *skipped_lines(skipped_runs or {}),
         "## Rejected draws (redrawn, by reason)",
         "",
         "| family | accepted | " + " | ".join(next(iter(rejections.values()), {}).keys()) + " |",
@@ -273,6 +279,20 @@ def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dic
     lines += ["", "## Timings", "", timings_caption(timings, impacts), "",
               timings_table(timings, impacts)]
     return "\n".join(lines) + "\n"
+
+
+def skipped_lines(skipped_runs: dict) -> list[str]:
+    """The summary's section on runs an engine could not build (none: no lines)."""
+    if not skipped_runs:
+        return []
+    lines = ["## Skipped runs (the engine cannot build the scene)", "",
+             "Left out of every statistic above, as `impact-harness run` records such a "
+             "run `skipped`.", "", "| engine preset | family | runs | why (first) |",
+             "|---|---|---|---|"]
+    for pair, (counts, why) in skipped_runs.items():
+        for family, count in counts.items():
+            lines.append(f"| {pair} | {family} | {count} | {why} |")
+    return lines + [""]
 
 
 def timings_caption(timings: dict, impacts: int) -> str:
@@ -410,6 +430,7 @@ def cdf_figure(runs: dict, engine: str, path: Path, tag: str | None = None) -> P
     ok = runs["status"] == "ok"
     families = sorted(set(np.asarray(runs["family"]).tolist()))
     colours = colormaps["tab10"]
+    # one key column per panel: two overflowed the panel once n reached four digits
     figure = new_figure(4.6 * len(presets) + 0.4, 3.8 + 0.22 * len(families))
     axes = figure.subplots(1, len(presets), sharex=True, sharey=True, squeeze=False)[0]
     for axis, preset in zip(axes, presets):

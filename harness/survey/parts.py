@@ -31,7 +31,7 @@ from harness.processes import map_forked
 from harness.run import verdicts
 from harness.scenarios.errors import ScenarioError
 from harness.survey import laws as survey_laws
-from harness.survey.engines import EngineResults, run_engine
+from harness.survey.engines import EngineResults, bare_stepping, run_engine
 from harness.survey.laws import ContactTerms
 from harness.survey.sampling import REJECTIONS, sample_range
 
@@ -115,9 +115,16 @@ def run_parts(populations, samples: int, seed: int, pairs, workers: int = 1,
 
 
 def run_part(bounds: tuple[int, int]) -> PartResult:
-    """Samples ``bounds`` of every population, their contact terms, newton-lcp's energy
-    change (the verdicts' attribution of a gain), every pair's runs and verdicts."""
+    """:func:`compute_part` of ``bounds`` with the survey's shared settings (forked workers)."""
     populations, seed, pairs, overrides = _SHARED
+    return compute_part(populations, seed, pairs, overrides, bounds)
+
+
+def compute_part(populations, seed: int, pairs, overrides: dict, bounds: tuple[int, int],
+                 bare: bool = False) -> PartResult:
+    """Samples ``bounds`` of every population, their contact terms, newton-lcp's energy
+    change (the verdicts' attribution of a gain), every pair's runs and verdicts; with
+    ``bare``, also each pair's bare stepping of the same scenes (timings ``bare …``)."""
     begin, end = bounds
     clock = time.perf_counter
     cpu = time.process_time()
@@ -144,6 +151,13 @@ def run_part(bounds: tuple[int, int]) -> PartResult:
     results = [run_engine(engine, preset, scenes, terms.problems, energy, prepared, arrays,
                           overrides.get(engine))
                for engine, preset in pairs]
+    if bare:
+        for result in results:
+            times = bare_stepping(result.engine, result.preset, scenes, result.steps,
+                                  overrides.get(result.engine))
+            timings[f"bare {result.engine} {result.preset} (steps only)"] = times["bare_s"]
+            timings[f"bare {result.engine} {result.preset} (reset + steps)"] = \
+                times["bare_reset_s"]
     return PartResult([SampleRow(s.population, s.index, s.attempts, s.parameters)
                        for s in every],
                       [sample_set.rejections for sample_set in sets],
@@ -171,7 +185,8 @@ def _join(parts: list[PartResult], sizes: list[int], populations: int, pairs: in
             first.engine, first.engine_version, first.preset,
             *(np.concatenate([getattr(part, name) for part in slices])[order]
               for name in ("velocities", "engine_status", "status", "reasons", "steps")),
-            sum(part.wall_s for part in slices), sum(part.judge_s for part in slices)))
+            sum(part.wall_s for part in slices), sum(part.judge_s for part in slices),
+            next((part.skipped_why for part in slices if part.skipped_why), "")))
     rejections = [{reason: sum(part.rejections[position][reason] for part in parts)
                    for reason in REJECTIONS} for position in range(populations)]
     timings = {stage: sum(part.timings[stage] for part in parts) for stage in parts[0].timings}

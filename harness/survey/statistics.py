@@ -22,6 +22,7 @@ import zlib
 import numpy as np
 
 from harness.run import metrics, verdicts
+from harness.survey.engines import SKIPPED
 
 #: Relative energy increase above which a run counts as gaining energy: engines' rounding is
 #: ~1e-15 of the energy and their iterative solvers stop ~1e-12 from their law; a gain a
@@ -37,6 +38,9 @@ INTERVAL_QUANTILES = (("median", 0.5), ("p90", 0.9))
 #: of a 95% percentile interval within about ±1 rank of where 10,000 would.
 BOOTSTRAP_RESAMPLES = 1000
 INTERVAL = 0.95
+#: Most resampled values drawn at once (8 bytes each as indices, 8 as values: 16 MB): a
+#: group of up to 1,000 runs draws its 1,000 resamples in one block.
+BOOTSTRAP_BLOCK = 1_000_000
 #: The bootstrap's seed: the intervals are a function of the runs alone (a rerun, or the
 #: same runs on another machine, gives the same intervals).
 BOOTSTRAP_SEED = 20170529
@@ -144,6 +148,15 @@ def _sorted_codes(values) -> tuple[np.ndarray, np.ndarray]:
 def statistics(runs: dict) -> dict:
     """Columns of ``statistics.parquet``: one row per engine × preset × family × Poisson type,
     plus a row per engine × preset × family over every type (``poisson_type`` = 0)."""
+    skipped = np.asarray(runs["status"]) == SKIPPED if len(runs["engine"]) else ()
+    skipped_counts: dict[tuple, int] = {}
+    if np.any(skipped):  # the engine could not build the scene: counted, not judged
+        for key in zip(*(np.asarray(runs[name])[skipped].tolist()
+                         for name in ("engine", "preset", "family", "poisson_type"))):
+            for kind in (key[3], ALL_TYPES):
+                group = (*key[:3], int(kind))
+                skipped_counts[group] = skipped_counts.get(group, 0) + 1
+        runs = {name: np.asarray(values)[~skipped] for name, values in runs.items()}
     count = len(runs["engine"])
     if not count:
         return {}
@@ -215,6 +228,8 @@ def statistics(runs: dict) -> dict:
         for subset, prefix in ((values_ok, "departure_poisson"),
                                (values, "departure_poisson_all")):
             row.update(bootstrap_interval(subset[np.isfinite(subset)], prefix, generator))
+        row["n_skipped"] = skipped_counts.get(
+            (row["engine"], row["preset"], row["family"], row["poisson_type"]), 0)
     return {key: np.asarray([row[key] for row in rows]) for key in rows[0]}
 
 
@@ -226,8 +241,14 @@ def bootstrap_interval(values: np.ndarray, prefix: str, generator) -> dict:
              for end in ("low", "high")]
     if values.size < 2:
         return dict.fromkeys(names, math.nan)
-    picks = generator.integers(0, values.size, size=(BOOTSTRAP_RESAMPLES, values.size))
-    estimates = np.quantile(values[picks], [q for _, q in INTERVAL_QUANTILES], axis=1)
+    # In blocks of resamples of at most BOOTSTRAP_BLOCK values: the memory of a group of
+    # any size is bounded (one block for up to BOOTSTRAP_BLOCK / 1,000 values, as before).
+    block = max(1, BOOTSTRAP_BLOCK // values.size)
+    estimates = np.concatenate([
+        np.quantile(values[generator.integers(0, values.size, size=(
+            min(block, BOOTSTRAP_RESAMPLES - first), values.size))],
+            [q for _, q in INTERVAL_QUANTILES], axis=1)
+        for first in range(0, BOOTSTRAP_RESAMPLES, block)], axis=1)
     tail = (1.0 - INTERVAL) / 2.0
     ends = np.quantile(estimates, [tail, 1.0 - tail], axis=1)  # (2 ends, quantiles)
     return {name: float(ends[end, quantile]) for quantile in range(len(INTERVAL_QUANTILES))

@@ -35,3 +35,24 @@ def test_survey_bench_splits_the_bare_stepping_over_as_many_processes_as_the_sur
     # the workers' CPU time is counted on both sides (forked, waited for)
     assert 0 < report["bare_cpu_s"] and 0 < report["survey_cpu_s"]
     assert "2 processes each" in bench_survey.format_report(report)
+
+
+def test_survey_bench_measures_the_peak_memory_of_two_survey_sizes():
+    pytest.importorskip("pymunk")
+    report = bench_survey.memory((8, 40))
+    assert report["sizes"] == [8, 40]
+    # A Python with numpy, pyarrow and an engine: tens of MB, never the benchmark's own
+    # peak (a process forked from it would keep that until its exec).
+    assert all(30_000 < peak < 1_000_000 for peak in report["peak_kb"])
+    assert report["ratio"] == pytest.approx(report["peak_kb"][1] / report["peak_kb"][0])
+    assert "ratio" in bench_survey.format_memory(report)
+
+
+def test_survey_bench_reports_targets_and_the_tripwire():
+    pytest.importorskip("pymunk")
+    report = bench_survey.run(2, engines=("pymunk",), presets=("defaults",), rounds=1)
+    text = bench_survey.format_report(report)
+    assert f"target <= {bench_survey.END_TO_END_TARGET}" in text
+    assert f"tripwire at {bench_survey.CONTRACT_TRIPWIRE}" in text
+    entry = report["pairs"]["pymunk.defaults"]
+    assert entry["bare_s"] < entry["bare_world_s"]  # the user's loop builds worlds too
