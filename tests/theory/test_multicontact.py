@@ -382,3 +382,33 @@ def test_a_phase_without_turns_is_followed_to_its_end():
     (answer,) = mc.poisson_two_phase(system)
     assert answer.compression.cuts == 1 and answer.compression.slip_followed_to_end
     assert answer.restitution.cuts == 0 and answer.restitution.slip_followed_to_end
+
+
+def test_a_uniform_box_with_mu_below_one_branches():
+    """Branching is not confined to μ_i > 1.2 (docs/multi-contact.md, 'When it branches'):
+    a tall uniform box, 0.729 × 2.443 m, 77 g, sliding and spinning fast, μ = (0, 0.984),
+    e = (0.935, 0.686), found by an independent check of issue 34, has three answers; each
+    loses energy, and Lemke's one path ends on the first."""
+    system = flat_face(0.7294650562646473, 2.44250786841943, 0.07713546615838893,
+                       (5.553152083121667, -2.528828206870402, 2.519296958893384),
+                       (0.0, 0.9839406614522477), (0.9353146198139344, 0.6860746500850579))
+    answers = mc.poisson_two_phase(system)
+    assert len(answers) == 3
+    assert all(a.energy_change < -0.02 * kinetic(system) for a in answers)
+    assert max(abs(a.u_after[1] - b.u_after[1]) for a in answers for b in answers) > 0.5
+    (reached,) = mc.poisson_two_phase(system, "lemke")
+    assert same_speeds(reached.u_after, answers[0].u_after, system)
+
+
+def test_an_off_centre_body_with_low_friction_branches():
+    """The centre of mass 28 mm from one end of a 283 mm face, spinning fast, μ = (0.39,
+    0.65) (issue 34's independent check): three answers, each losing energy."""
+    system = sim.contact_system(
+        mass_matrix=np.diag([0.0825290951330363, 0.0825290951330363, 0.0014274489054655773]),
+        wn=[[0.0, 1.0, -0.027902180595939616], [0.0, 1.0, 0.2554202898000641]],
+        wt=[[1.0, 0.0, 0.7040405423878981], [1.0, 0.0, 0.7040405423878981]],
+        u=[0.46355714511077367, -0.19435436618499066, 2.3063851089493363],
+        mu=[0.39313026931728684, 0.649884513435001], e=[0.6506447875030227, 0.9659434903714954])
+    answers = mc.poisson_two_phase(system)
+    assert len(answers) == 3
+    assert all(a.energy_change < -0.2 * kinetic(system) for a in answers)
