@@ -2,16 +2,19 @@
 
 from __future__ import annotations
 
+from fractions import Fraction
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import planar_impact as pi
+from planar_impact import laws, solver
 from planar_impact import simultaneous as sim
-from planar_impact import solver
 from planar_impact.simultaneous import system as sim_system
 from tests import error_bounds
+from tests.error_bounds import Tracked
 
 TYPE_LAWS = ("poisson", "stronge-paper", "newton")
 
@@ -198,6 +201,107 @@ def test_flat_box_newton_coulomb_and_gauss_seidel():
     assert np.allclose(pgs.impulses[0::2], solution.normal_impulse, atol=1e-12)
 
 
+# Hand-worked values (derived bound). The flat box's inputs are exact binary fractions but
+# for its inertia, 5/24, which is rounded once; the hand values are exact rationals. The
+# library's straight-line arithmetic is replayed on Tracked numbers (tests/error_bounds.py:
+# running error analysis, each IEEE operation within u of its result), in the library's own
+# order, from the exact inputs: each replayed value is checked equal to the library's, bit
+# for bit, so its carried error bounds the library's distance from the exact answer, and
+# the hand value (a Fraction) must lie within it, exactly compared.
+HAND_INERTIA = Fraction(5, 24)
+
+
+def tracked_dot(a, b):
+    """``Σ a_k b_k`` in index order (numpy's order on 3 terms; the tests check the value)."""
+    total = a[0] * b[0]
+    for x, y in zip(a[1:], b[1:]):
+        total = total + x * y
+    return total
+
+
+def hand_replay(system, law, solution):
+    """The literal reading's answer (each contact's forced type's formulas at its v^A: the
+    map's constant value) and assemble()'s Δu, u_after and (A29), replayed on Tracked
+    numbers from the exact hand problem: the mass matrix diagonal (checked), its inertia
+    within its rounding of 5/24. Returns the Tracked fields, each checked bit for bit
+    against ``solution``."""
+    matrix = system.mass_matrix
+    assert np.array_equal(matrix, np.diag(np.diag(matrix)))  # a diagonal M: LU is division
+    inertia = float(matrix[2, 2])
+    rounding = float(abs(Fraction(inertia) - HAND_INERTIA)) * (1 + 4 * error_bounds.U)
+    diagonal = [Tracked(float(matrix[0, 0])), Tracked(float(matrix[1, 1])),
+                Tracked(inertia, rounding)]
+    # LAPACK's getrf on a diagonal matrix: no swap, zero multipliers, so getrs's solve is one
+    # division per entry (the zeros' products are exact).
+    inverse = [[[Tracked(float(w)) / d for w, d in zip(rows[i], diagonal)]
+                for rows in (system.wn, system.wt)] for i in range(system.count)]
+    for i, columns in enumerate(inverse):
+        assert [[x.value for x in column] for column in columns] == (
+            system.inverse_rows[i].T.tolist())
+    speeds = [Tracked(float(x)) for x in system.u]
+    normal, tangential, approach, own_terms = [], [], [], []
+    for i in range(system.count):
+        wn, wt = ([Tracked(float(x)) for x in row] for row in (system.wn[i], system.wt[i]))
+        mnn, mnt, mtt = (tracked_dot(wn, inverse[i][0]), tracked_dot(wn, inverse[i][1]),
+                         tracked_dot(wt, inverse[i][1]))
+        assert (mnn.value, mnt.value, mtt.value) == system.single_terms(i)
+        vn, vt = tracked_dot(wn, speeds), tracked_dot(wt, speeds)
+        assert (vn.value, vt.value) == tuple(system.approach[2 * i:2 * i + 2])
+        approach.append((vn, vt))
+        own_terms.append((mnn, mnt, mtt))
+        # Δ as solve forms it: within its distance from m_nn m_tt − m_nt² plus that
+        # product's own bound (tests/theory/law_bounds.py, replayed_law).
+        product = mnn * mtt - mnt * mnt
+        gram = Tracked(float(system.deltas[i]),
+                       abs(float(system.deltas[i]) - product.value) + product.error)
+        sign = sim_system.frame_sign(vt.value, mnt.value)
+        # The contact's forced type's formulas at v^A(i) (type_map.ContactMap.at_approach).
+        assert law == "poisson" and solution.types[i] != sim_system.SEPARATING
+        terms = laws.ContactTerms(mnn, sign * mnt, mtt, vn, sign * vt,
+                                  Tracked(float(system.mu[i])), gram)
+        out = laws.poisson_impulses(terms, Tracked(float(system.e[i])), solution.types[i])
+        normal.append(Tracked.of(out[0]))
+        tangential.append(sign * Tracked.of(out[1]))
+    assert [x.value for x in normal] == solution.normal_impulse.tolist()
+    assert [x.value for x in tangential] == solution.tangential_impulse.tolist()
+    # Δu as ContactSystem.delta_u sums it, then u + Δu.
+    delta_u = None
+    for i in range(system.count):
+        term = [x_n * normal[i] + x_t * tangential[i]
+                for x_n, x_t in zip(inverse[i][0], inverse[i][1])]
+        delta_u = term if delta_u is None else [a + b for a, b in zip(delta_u, term)]
+    u_after = [s + d for s, d in zip(speeds, delta_u)]
+    assert [x.value for x in u_after] == solution.u_after.tolist()
+    # (A22), (A23) at the effective approach and (A29) summed, as assemble() forms them.
+    rows = [[Tracked(float(x)) for x in row] for row in (*system.wn, *system.wt)]
+    energy = None
+    for i in range(system.count):
+        (vn, vt), wn, wt = approach[i], rows[i], rows[system.count + i]
+        vn_a, vt_a = vn, vt
+        for j in range(system.count):
+            if j != i:
+                vn = vn + (tracked_dot(wn, inverse[j][0]) * normal[j]
+                           + tracked_dot(wn, inverse[j][1]) * tangential[j])
+                vt = vt + (tracked_dot(wt, inverse[j][0]) * normal[j]
+                           + tracked_dot(wt, inverse[j][1]) * tangential[j])
+        mnn, mnt, mtt = own_terms[i]
+        vn_s = vn + (mnn * normal[i] + mnt * tangential[i])
+        vt_s = vt + (mnt * normal[i] + mtt * tangential[i])
+        term = normal[i] * (vn_s + vn_a) + tangential[i] * (vt_s + vt_a)
+        energy = term if energy is None else energy + term
+    energy = 0.5 * energy
+    assert energy.value == solution.energy_change
+    return {"normal_impulse": normal, "tangential_impulse": tangential, "u_after": u_after,
+            "energy_change": energy}
+
+
+def assert_hand_value(replayed, hand):
+    """The exact hand value lies within the replay's bound of the library's value, using at
+    most half of it (a modest share: a bound at its edge is suspect)."""
+    distance = abs(Fraction(replayed.value) - hand)
+    assert distance <= Fraction(replayed.error) / 2, (replayed, hand)
+
+
 def test_flat_box_hand_worked_example():
     """docs/multi-contact.md, 'Worked example: a box landing flat': the literal reading, by hand
     (its Table 1 combination; the others are in the next test)."""
@@ -205,10 +309,13 @@ def test_flat_box_hand_worked_example():
     # m_nn = 1/2 + (1/2)²/(5/24) = 1.7, m_nt = ∓0.6, m_tt = 0.8; g = 0.4 − 0.6 < 0: Case 5,
     # forward sliding; h = 1.7 − 0.5·0.6 = 1.4; I_n = (1 + 1/2)/1.4 = 15/14 by (48)–(49).
     assert solution.types == (5, 5)
-    assert solution.normal_impulse == pytest.approx([15 / 14, 15 / 14], rel=1e-14)
-    assert solution.tangential_impulse == pytest.approx([15 / 28, -15 / 28], rel=1e-14)
-    assert solution.u_after[1] == pytest.approx(1 / 14, rel=1e-13)
-    assert solution.energy_change == pytest.approx(1 / 196 - 1, rel=1e-14)
+    # Derived bound: the replay's (hand_replay), against the exact rationals.
+    replayed = hand_replay(flat_box(), "poisson", solution)
+    for i, side in enumerate((1, -1)):
+        assert_hand_value(replayed["normal_impulse"][i], Fraction(15, 14))
+        assert_hand_value(replayed["tangential_impulse"][i], side * Fraction(15, 28))
+    assert_hand_value(replayed["u_after"][1], Fraction(1, 14))
+    assert_hand_value(replayed["energy_change"], Fraction(1, 196) - 1)
 
 
 def test_flat_box_effective_reading_gains_energy():
@@ -295,8 +402,10 @@ def test_flat_box_literal_reading_by_hand():
     assert [s.types for s in found] == [(1, 1), (1, 2), (2, 1), (2, 2), (4, 4), (5, 5)]
     # (1, 1): both corners' Type 1 formulas (25)–(26) at v^A: I_n = 1.5·0.8/Δ, Δ = 1.7·0.8 −
     # 0.36 = 1; v_y after = −1 + 2·1.2/2 = 0.2 m/s.
-    assert found[0].normal_impulse == pytest.approx([1.2, 1.2], rel=1e-14)
-    assert found[0].u_after[1] == pytest.approx(0.2, rel=1e-13)
+    replayed = hand_replay(flat_box(), "poisson", found[0])  # derived bound, as above
+    for normal in replayed["normal_impulse"]:
+        assert_hand_value(normal, Fraction(6, 5))
+    assert_hand_value(replayed["u_after"][1], Fraction(1, 5))
     assert max(abs(s.u_after[1] - 0.5) for s in found) > 0.2
 
 
