@@ -193,12 +193,29 @@ def test_flat_box_newton_coulomb_and_gauss_seidel():
     # Both corners stick; v_y after = e·1 m/s, and the two tangential impulses are a family
     # (equal and opposite, any size in the cone): not determinate.
     assert solution.types == (1, 1) and not solution.determinate
-    assert solution.u_after[1] == pytest.approx(0.5, abs=1e-12)
     pgs = sim.projected_gauss_seidel(system)
     assert pgs.converged
-    # PGS lands on another member of the family: same Δu, same normal impulses.
-    assert np.allclose(system.delta_u(pgs.impulses), solution.delta_u, atol=1e-12)
-    assert np.allclose(pgs.impulses[0::2], solution.normal_impulse, atol=1e-12)
+    # PGS lands on another member of the family: the same Δu, the same normal impulses,
+    # each within its derived bound (flat_box_delta_u_bound) of the exact answer by hand:
+    # both stick and leave at v_y = e·1 m/s, so u' = (0, 0.5, 0), Δu* = (0, 1.5, 0), and
+    # I_n = 1.5 at each corner (M Δu = Jᵀ I: the y row gives I_n0 + I_n1 = 3, the x row
+    # I_t0 + I_t1 = 0, the ω row I_n1 − I_n0 = 0).
+    exact = np.array([0.0, 1.5, 0.0])
+    # Newton–Coulomb's least squares: its residual, evaluated a posteriori (Tracked),
+    # bounds the exact residual; PGS: its stopping criterion (pgs_residual_bound).
+    least_squares = solution.impulses()
+    for impulses, residual in ((least_squares, computed_residual_bound(system, least_squares)),
+                               (pgs.impulses, pgs_residual_bound(system, pgs.impulses))):
+        delta_u = system.delta_u(impulses)
+        bound = flat_box_delta_u_bound(system, impulses, residual)
+        assert np.linalg.norm(delta_u - exact) <= bound / 2, (delta_u, bound)
+        # I_n0,1 = d_y ∓ (2 I d_ω − d_x)/2 exactly for d = M⁻¹Jᵀ I: within (1 + I + 1/2)
+        # times ‖d − Δu*‖₂ of 1.5 (I = 5/24 < 1/4).
+        assert np.max(np.abs(impulses[0::2] - 1.5)) <= (1.75 + 0.25) * bound / 2
+    # u' = u + Δu: Δu's bound plus the addition's rounding.
+    assert abs(solution.u_after[1] - 0.5) <= flat_box_delta_u_bound(
+        system, least_squares, computed_residual_bound(system, least_squares)) / 2 + (
+        error_bounds.U * abs(solution.u_after[1]))
 
 
 # Hand-worked values (derived bound). The flat box's inputs are exact binary fractions but
@@ -219,12 +236,10 @@ def tracked_dot(a, b):
     return total
 
 
-def hand_replay(system, law, solution):
-    """The literal reading's answer (each contact's forced type's formulas at its v^A: the
-    map's constant value) and assemble()'s Δu, u_after and (A29), replayed on Tracked
-    numbers from the exact hand problem: the mass matrix diagonal (checked), its inertia
-    within its rounding of 5/24. Returns the Tracked fields, each checked bit for bit
-    against ``solution``."""
+def tracked_inverse(system):
+    """``M⁻¹ w`` per contact and row (``[i][0]`` normal, ``[i][1]`` tangential) as Tracked,
+    within their bound of the exact hand problem's: the mass matrix diagonal (checked), its
+    inertia within its rounding of 5/24; each value checked against the library's."""
     matrix = system.mass_matrix
     assert np.array_equal(matrix, np.diag(np.diag(matrix)))  # a diagonal M: LU is division
     inertia = float(matrix[2, 2])
@@ -238,6 +253,16 @@ def hand_replay(system, law, solution):
     for i, columns in enumerate(inverse):
         assert [[x.value for x in column] for column in columns] == (
             system.inverse_rows[i].T.tolist())
+    return inverse
+
+
+def hand_replay(system, law, solution):
+    """The literal reading's answer (each contact's forced type's formulas at its v^A: the
+    map's constant value) and assemble()'s Δu, u_after and (A29), replayed on Tracked
+    numbers from the exact hand problem: the mass matrix diagonal (checked), its inertia
+    within its rounding of 5/24. Returns the Tracked fields, each checked bit for bit
+    against ``solution``."""
+    inverse = tracked_inverse(system)
     speeds = [Tracked(float(x)) for x in system.u]
     normal, tangential, approach, own_terms = [], [], [], []
     for i in range(system.count):
@@ -300,6 +325,87 @@ def assert_hand_value(replayed, hand):
     most half of it (a modest share: a bound at its edge is suspect)."""
     distance = abs(Fraction(replayed.value) - hand)
     assert distance <= Fraction(replayed.error) / 2, (replayed, hand)
+
+
+def tracked_delassus(system):
+    """W's entries ``w_kᵀ M⁻¹ w_l`` (rows n0, t0, n1, t1 as the library orders them) and
+    the approach speeds ``w_kᵀ u``, Tracked from the exact hand problem (tracked_inverse),
+    each value checked equal to the library's."""
+    inverse = tracked_inverse(system)
+    rows = [[Tracked(float(x)) for x in (system.wn if k % 2 == 0 else system.wt)[k // 2]]
+            for k in range(2 * system.count)]
+    columns = [inverse[k // 2][k % 2] for k in range(2 * system.count)]
+    delassus = [[tracked_dot(row, column) for column in columns] for row in rows]
+    assert [[x.value for x in row] for row in delassus] == system.delassus.tolist()
+    approach = [tracked_dot(row, [Tracked(float(x)) for x in system.u]) for row in rows]
+    assert [x.value for x in approach] == system.approach.tolist()
+    return delassus, approach
+
+
+def computed_residual_bound(system, impulses):
+    """A bound on each component of the exact ``W I + v^A − v^S`` (both contacts stick:
+    ``v^S = (e|v_n^A|, 0, …)``) at the float impulses ``I``, from its evaluation on Tracked
+    numbers (the entries of W and v^A within their bounds)."""
+    delassus, approach = tracked_delassus(system)
+    targets = [Tracked(float(system.e[k // 2])) * -approach[k] if k % 2 == 0 else 0.0
+               for k in range(2 * system.count)]
+    residual = [tracked_dot(row, impulses.tolist()) + a - target
+                for row, a, target in zip(delassus, approach, targets)]
+    return np.array([abs(r.value) + r.error for r in residual])
+
+
+def pgs_residual_bound(system, impulses, tolerance=1e-13):
+    """A bound on each component of the exact residual at PGS's last iterate, from its
+    stopping criterion: each component's last update moved it by at most
+    ``δ = tolerance × impulse scale`` and, unclamped, set its own computed residual to 0
+    (a clamped one, ``|I_t| = μ I_n`` or ``I_n = 0``, says nothing of its residual: there the
+    residual is evaluated a posteriori, computed_residual_bound), and the later updates of
+    the sweep moved that residual by at most ``Σ_(l≠k) |W_kl| δ``; the computed residual is
+    within the Tracked bound of its evaluation (W, v^A, the target and the dot product),
+    and the update's own rounding
+    (``I − r/W_kk``: a quotient and a difference) within ``2u (|I_k| + |r/W_kk|)`` of
+    ``I_k``, i.e. ``|W_kk|`` times that in the residual."""
+    step = tolerance * system.impulse_scale()
+    normal, tangential = impulses[0::2], impulses[1::2]
+    clamped = np.zeros(len(impulses), dtype=bool)
+    clamped[0::2] = normal <= 0
+    clamped[1::2] = np.abs(tangential) >= system.mu * normal
+    evaluated_bound = computed_residual_bound(system, impulses)
+    delassus, approach = tracked_delassus(system)
+    size = 2 * system.count
+    bound = np.empty(size)
+    for k in range(size):
+        moved = sum(abs(delassus[k][m].value) + delassus[k][m].error
+                    for m in range(size) if m != k) * step
+        target = (Tracked(float(system.e[k // 2])) * -approach[k] if k % 2 == 0
+                  else Tracked(0.0))
+        evaluated = tracked_dot(delassus[k], impulses.tolist()) + approach[k] - target
+        diagonal = abs(delassus[k][k].value) + delassus[k][k].error
+        update = 2 * error_bounds.U * (diagonal * (abs(impulses[k]) + step)
+                                       + abs(evaluated.value) + evaluated.error)
+        bound[k] = (evaluated_bound[k] if clamped[k]
+                    else moved + 2 * evaluated.error + update)
+    return bound
+
+
+def flat_box_delta_u_bound(system, impulses, residual):
+    """‖Δu(I) − Δu*‖₂ for the library's Δu of the float impulses ``I``: its rounding and
+    M⁻¹'s (Tracked replay of ContactSystem.delta_u) plus ‖J⁺‖₂ ‖r‖₂, r the exact
+    residual (within ``residual``): the exact d = M⁻¹Jᵀ I has J d − J Δu* = W I − (v^S −
+    v^A) = r, and J (the four rows wn, wt, 4 × 3) has full column rank."""
+    inverse = tracked_inverse(system)
+    delta_u = None
+    for i in range(system.count):
+        term = [x_n * float(impulses[2 * i]) + x_t * float(impulses[2 * i + 1])
+                for x_n, x_t in zip(inverse[i][0], inverse[i][1])]
+        delta_u = term if delta_u is None else [a + b for a, b in zip(delta_u, term)]
+    assert [x.value for x in delta_u] == system.delta_u(impulses).tolist()
+    jacobian = np.array([row for i in range(system.count)
+                         for row in (system.wn[i], system.wt[i])])
+    pseudo_inverse_norm = 1.0 / float(np.linalg.svd(jacobian, compute_uv=False)[-1])
+    # (the singular value's own rounding: a relative O(u) of the bound, second order)
+    return (float(np.linalg.norm([x.error for x in delta_u]))
+            + pseudo_inverse_norm * float(np.linalg.norm(residual)))
 
 
 def test_flat_box_hand_worked_example():
