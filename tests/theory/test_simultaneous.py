@@ -23,11 +23,17 @@ TYPE_LAWS = ("poisson", "stronge-paper", "newton")
 # Kinds (docs/verdicts.md, 'Same answers on every CPU'): counts and types are decisions
 # (exact; their bands are the library's, sim.BOUNDARY_BAND); one contact against solve's numpy
 # path: bit for bit (the same LAPACK terms and law kernels in one process; the fast path
-# against the numpy path is derived in test_fastpath.py); the least-squares answers against
-# the closed form, PGS, and the hand-worked values within stated bands (mostly 1e-12
-# relative, ~100 times γ_100 ≈ 1.1e-14, the rounding of a hundred operations on O(1) values,
-# times the draws' conditioning, which is not bounded here: LAPACK's SVD least squares is
-# backward stable with constants it does not state), NOT derived bounds.
+# against the numpy path is derived in test_fastpath.py). Derived bounds: the one-contact
+# least squares against the closed form (both backward-stable solves of the mode's 2×2
+# system, κ₂ computed: LSTSQ_C, CLOSED_FORM_ROUNDINGS; measured ≤ 12 % of the bound); the
+# flat box's hand-worked literal values (the library's arithmetic replayed on Tracked
+# numbers from the exact inputs, checked bit for bit; measured ≤ 7 %); its Newton–Coulomb
+# and PGS Δu and normal impulses against the hand answer (PGS's stopping criterion, the
+# least squares' a-posteriori residual, through ‖J⁺‖₂; measured ≤ 7 %). Still stated bands,
+# NOT derived: the mirror-symmetry checks and the sequential orders (1e-12), the effective
+# reading's hand values (1e-12: a Newton fixed point, no straight-line replay), the
+# properties' 1e-9 (the library's own tolerances) and random PGS against Newton–Coulomb
+# (1e-7).
 pytestmark = pytest.mark.kernel_sensitive
 
 
