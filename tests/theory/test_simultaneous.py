@@ -15,6 +15,7 @@ from planar_impact import simultaneous as sim
 from planar_impact.simultaneous import system as sim_system
 from tests import error_bounds
 from tests.error_bounds import Tracked
+from tests.theory import flat_face_bounds as ffb
 
 TYPE_LAWS = ("poisson", "stronge-paper", "newton")
 
@@ -202,64 +203,40 @@ def test_flat_box_newton_coulomb_and_gauss_seidel():
     pgs = sim.projected_gauss_seidel(system)
     assert pgs.converged
     # PGS lands on another member of the family: the same Δu, the same normal impulses,
-    # each within its derived bound (flat_box_delta_u_bound) of the exact answer by hand:
+    # each within its derived bound (flat_face_bounds.delta_u_bound) of the exact answer by hand:
     # both stick and leave at v_y = e·1 m/s, so u' = (0, 0.5, 0), Δu* = (0, 1.5, 0), and
     # I_n = 1.5 at each corner (M Δu = Jᵀ I: the y row gives I_n0 + I_n1 = 3, the x row
     # I_t0 + I_t1 = 0, the ω row I_n1 − I_n0 = 0).
     exact = np.array([0.0, 1.5, 0.0])
     # Newton–Coulomb's least squares: its residual, evaluated a posteriori (Tracked),
-    # bounds the exact residual; PGS: its stopping criterion (pgs_residual_bound).
+    # bounds the exact residual; PGS: its stopping criterion (ffb.pgs_residual_bound).
     least_squares = solution.impulses()
-    for impulses, residual in ((least_squares, computed_residual_bound(system, least_squares)),
-                               (pgs.impulses, pgs_residual_bound(system, pgs.impulses))):
+    residuals = (ffb.computed_residual_bound(system, least_squares, FLAT_BOX),
+                 ffb.pgs_residual_bound(system, pgs.impulses, FLAT_BOX))
+    for impulses, residual in zip((least_squares, pgs.impulses), residuals):
         delta_u = system.delta_u(impulses)
-        bound = flat_box_delta_u_bound(system, impulses, residual)
+        bound = ffb.delta_u_bound(system, impulses, residual, FLAT_BOX)
         assert np.linalg.norm(delta_u - exact) <= bound / 2, (delta_u, bound)
         # I_n0,1 = d_y ∓ (2 I d_ω − d_x)/2 exactly for d = M⁻¹Jᵀ I: within (1 + I + 1/2)
         # times ‖d − Δu*‖₂ of 1.5 (I = 5/24 < 1/4).
         assert np.max(np.abs(impulses[0::2] - 1.5)) <= (1.75 + 0.25) * bound / 2
     # u' = u + Δu: Δu's bound plus the addition's rounding.
-    assert abs(solution.u_after[1] - 0.5) <= flat_box_delta_u_bound(
-        system, least_squares, computed_residual_bound(system, least_squares)) / 2 + (
+    assert abs(solution.u_after[1] - 0.5) <= ffb.delta_u_bound(
+        system, least_squares, ffb.computed_residual_bound(system, least_squares, FLAT_BOX),
+        FLAT_BOX) / 2 + (
         error_bounds.U * abs(solution.u_after[1]))
 
 
 # Hand-worked values (derived bound). The flat box's inputs are exact binary fractions but
 # for its inertia, 5/24, which is rounded once; the hand values are exact rationals. The
-# library's straight-line arithmetic is replayed on Tracked numbers (tests/error_bounds.py:
-# running error analysis, each IEEE operation within u of its result), in the library's own
-# order, from the exact inputs: each replayed value is checked equal to the library's, bit
-# for bit, so its carried error bounds the library's distance from the exact answer, and
-# the hand value (a Fraction) must lie within it, exactly compared.
-HAND_INERTIA = Fraction(5, 24)
-
-
-def tracked_dot(a, b):
-    """``Σ a_k b_k`` in index order (numpy's order on 3 terms; the tests check the value)."""
-    total = a[0] * b[0]
-    for x, y in zip(a[1:], b[1:]):
-        total = total + x * y
-    return total
-
-
-def tracked_inverse(system):
-    """``M⁻¹ w`` per contact and row (``[i][0]`` normal, ``[i][1]`` tangential) as Tracked,
-    within their bound of the exact hand problem's: the mass matrix diagonal (checked), its
-    inertia within its rounding of 5/24; each value checked against the library's."""
-    matrix = system.mass_matrix
-    assert np.array_equal(matrix, np.diag(np.diag(matrix)))  # a diagonal M: LU is division
-    inertia = float(matrix[2, 2])
-    rounding = float(abs(Fraction(inertia) - HAND_INERTIA)) * (1 + 4 * error_bounds.U)
-    diagonal = [Tracked(float(matrix[0, 0])), Tracked(float(matrix[1, 1])),
-                Tracked(inertia, rounding)]
-    # LAPACK's getrf on a diagonal matrix: no swap, zero multipliers, so getrs's solve is one
-    # division per entry (the zeros' products are exact).
-    inverse = [[[Tracked(float(w)) / d for w, d in zip(rows[i], diagonal)]
-                for rows in (system.wn, system.wt)] for i in range(system.count)]
-    for i, columns in enumerate(inverse):
-        assert [[x.value for x in column] for column in columns] == (
-            system.inverse_rows[i].T.tolist())
-    return inverse
+# library's straight-line arithmetic is replayed on Tracked numbers
+# (tests/theory/flat_face_bounds.py), in the library's own order, from the exact inputs: each
+# replayed value is checked equal to the library's, bit for bit, so its carried error bounds
+# the library's distance from the exact answer, and the hand value (a Fraction) must lie
+# within it, exactly compared.
+#: The flat box's exact inputs: 2 kg, 5/24 kg m², corners at (∓1/2, −1/4).
+FLAT_BOX = ffb.HandProblem(Fraction(2), Fraction(5, 24), tuple(
+    ((0, 1, rx), (1, 0, Fraction(1, 4))) for rx in (Fraction(-1, 2), Fraction(1, 2))))
 
 
 def hand_replay(system, law, solution):
@@ -268,15 +245,16 @@ def hand_replay(system, law, solution):
     numbers from the exact hand problem: the mass matrix diagonal (checked), its inertia
     within its rounding of 5/24. Returns the Tracked fields, each checked bit for bit
     against ``solution``."""
-    inverse = tracked_inverse(system)
+    inverse = ffb.tracked_inverse(system, FLAT_BOX)
+    contact_rows = ffb.tracked_rows(system, FLAT_BOX)
     speeds = [Tracked(float(x)) for x in system.u]
     normal, tangential, approach, own_terms = [], [], [], []
     for i in range(system.count):
-        wn, wt = ([Tracked(float(x)) for x in row] for row in (system.wn[i], system.wt[i]))
-        mnn, mnt, mtt = (tracked_dot(wn, inverse[i][0]), tracked_dot(wn, inverse[i][1]),
-                         tracked_dot(wt, inverse[i][1]))
+        wn, wt = contact_rows[i]
+        mnn, mnt, mtt = (ffb.tracked_dot(wn, inverse[i][0]), ffb.tracked_dot(wn, inverse[i][1]),
+                         ffb.tracked_dot(wt, inverse[i][1]))
         assert (mnn.value, mnt.value, mtt.value) == system.single_terms(i)
-        vn, vt = tracked_dot(wn, speeds), tracked_dot(wt, speeds)
+        vn, vt = ffb.tracked_dot(wn, speeds), ffb.tracked_dot(wt, speeds)
         assert (vn.value, vt.value) == tuple(system.approach[2 * i:2 * i + 2])
         approach.append((vn, vt))
         own_terms.append((mnn, mnt, mtt))
@@ -304,17 +282,18 @@ def hand_replay(system, law, solution):
     u_after = [s + d for s, d in zip(speeds, delta_u)]
     assert [x.value for x in u_after] == solution.u_after.tolist()
     # (A22), (A23) at the effective approach and (A29) summed, as assemble() forms them.
-    rows = [[Tracked(float(x)) for x in row] for row in (*system.wn, *system.wt)]
+    rows = [contact_rows[i][0] for i in range(system.count)] + [
+        contact_rows[i][1] for i in range(system.count)]
     energy = None
     for i in range(system.count):
         (vn, vt), wn, wt = approach[i], rows[i], rows[system.count + i]
         vn_a, vt_a = vn, vt
         for j in range(system.count):
             if j != i:
-                vn = vn + (tracked_dot(wn, inverse[j][0]) * normal[j]
-                           + tracked_dot(wn, inverse[j][1]) * tangential[j])
-                vt = vt + (tracked_dot(wt, inverse[j][0]) * normal[j]
-                           + tracked_dot(wt, inverse[j][1]) * tangential[j])
+                vn = vn + (ffb.tracked_dot(wn, inverse[j][0]) * normal[j]
+                           + ffb.tracked_dot(wn, inverse[j][1]) * tangential[j])
+                vt = vt + (ffb.tracked_dot(wt, inverse[j][0]) * normal[j]
+                           + ffb.tracked_dot(wt, inverse[j][1]) * tangential[j])
         mnn, mnt, mtt = own_terms[i]
         vn_s = vn + (mnn * normal[i] + mnt * tangential[i])
         vt_s = vt + (mnt * normal[i] + mtt * tangential[i])
@@ -331,87 +310,6 @@ def assert_hand_value(replayed, hand):
     most half of it (a modest share: a bound at its edge is suspect)."""
     distance = abs(Fraction(replayed.value) - hand)
     assert distance <= Fraction(replayed.error) / 2, (replayed, hand)
-
-
-def tracked_delassus(system):
-    """W's entries ``w_kᵀ M⁻¹ w_l`` (rows n0, t0, n1, t1 as the library orders them) and
-    the approach speeds ``w_kᵀ u``, Tracked from the exact hand problem (tracked_inverse),
-    each value checked equal to the library's."""
-    inverse = tracked_inverse(system)
-    rows = [[Tracked(float(x)) for x in (system.wn if k % 2 == 0 else system.wt)[k // 2]]
-            for k in range(2 * system.count)]
-    columns = [inverse[k // 2][k % 2] for k in range(2 * system.count)]
-    delassus = [[tracked_dot(row, column) for column in columns] for row in rows]
-    assert [[x.value for x in row] for row in delassus] == system.delassus.tolist()
-    approach = [tracked_dot(row, [Tracked(float(x)) for x in system.u]) for row in rows]
-    assert [x.value for x in approach] == system.approach.tolist()
-    return delassus, approach
-
-
-def computed_residual_bound(system, impulses):
-    """A bound on each component of the exact ``W I + v^A − v^S`` (both contacts stick:
-    ``v^S = (e|v_n^A|, 0, …)``) at the float impulses ``I``, from its evaluation on Tracked
-    numbers (the entries of W and v^A within their bounds)."""
-    delassus, approach = tracked_delassus(system)
-    targets = [Tracked(float(system.e[k // 2])) * -approach[k] if k % 2 == 0 else 0.0
-               for k in range(2 * system.count)]
-    residual = [tracked_dot(row, impulses.tolist()) + a - target
-                for row, a, target in zip(delassus, approach, targets)]
-    return np.array([abs(r.value) + r.error for r in residual])
-
-
-def pgs_residual_bound(system, impulses, tolerance=1e-13):
-    """A bound on each component of the exact residual at PGS's last iterate, from its
-    stopping criterion: each component's last update moved it by at most
-    ``δ = tolerance × impulse scale`` and, unclamped, set its own computed residual to 0
-    (a clamped one, ``|I_t| = μ I_n`` or ``I_n = 0``, says nothing of its residual: there the
-    residual is evaluated a posteriori, computed_residual_bound), and the later updates of
-    the sweep moved that residual by at most ``Σ_(l≠k) |W_kl| δ``; the computed residual is
-    within the Tracked bound of its evaluation (W, v^A, the target and the dot product),
-    and the update's own rounding
-    (``I − r/W_kk``: a quotient and a difference) within ``2u (|I_k| + |r/W_kk|)`` of
-    ``I_k``, i.e. ``|W_kk|`` times that in the residual."""
-    step = tolerance * system.impulse_scale()
-    normal, tangential = impulses[0::2], impulses[1::2]
-    clamped = np.zeros(len(impulses), dtype=bool)
-    clamped[0::2] = normal <= 0
-    clamped[1::2] = np.abs(tangential) >= system.mu * normal
-    evaluated_bound = computed_residual_bound(system, impulses)
-    delassus, approach = tracked_delassus(system)
-    size = 2 * system.count
-    bound = np.empty(size)
-    for k in range(size):
-        moved = sum(abs(delassus[k][m].value) + delassus[k][m].error
-                    for m in range(size) if m != k) * step
-        target = (Tracked(float(system.e[k // 2])) * -approach[k] if k % 2 == 0
-                  else Tracked(0.0))
-        evaluated = tracked_dot(delassus[k], impulses.tolist()) + approach[k] - target
-        diagonal = abs(delassus[k][k].value) + delassus[k][k].error
-        update = 2 * error_bounds.U * (diagonal * (abs(impulses[k]) + step)
-                                       + abs(evaluated.value) + evaluated.error)
-        bound[k] = (evaluated_bound[k] if clamped[k]
-                    else moved + 2 * evaluated.error + update)
-    return bound
-
-
-def flat_box_delta_u_bound(system, impulses, residual):
-    """‖Δu(I) − Δu*‖₂ for the library's Δu of the float impulses ``I``: its rounding and
-    M⁻¹'s (Tracked replay of ContactSystem.delta_u) plus ‖J⁺‖₂ ‖r‖₂, r the exact
-    residual (within ``residual``): the exact d = M⁻¹Jᵀ I has J d − J Δu* = W I − (v^S −
-    v^A) = r, and J (the four rows wn, wt, 4 × 3) has full column rank."""
-    inverse = tracked_inverse(system)
-    delta_u = None
-    for i in range(system.count):
-        term = [x_n * float(impulses[2 * i]) + x_t * float(impulses[2 * i + 1])
-                for x_n, x_t in zip(inverse[i][0], inverse[i][1])]
-        delta_u = term if delta_u is None else [a + b for a, b in zip(delta_u, term)]
-    assert [x.value for x in delta_u] == system.delta_u(impulses).tolist()
-    jacobian = np.array([row for i in range(system.count)
-                         for row in (system.wn[i], system.wt[i])])
-    pseudo_inverse_norm = 1.0 / float(np.linalg.svd(jacobian, compute_uv=False)[-1])
-    # (the singular value's own rounding: a relative O(u) of the bound, second order)
-    return (float(np.linalg.norm([x.error for x in delta_u]))
-            + pseudo_inverse_norm * float(np.linalg.norm(residual)))
 
 
 def test_flat_box_hand_worked_example():
