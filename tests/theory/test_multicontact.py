@@ -385,10 +385,11 @@ def test_a_phase_without_turns_is_followed_to_its_end():
 
 
 def test_a_uniform_box_with_mu_below_one_branches():
-    """Branching is not confined to μ_i > 1.2 (docs/multi-contact.md, 'A two-phase Poisson
-    law for m contacts', its paragraph on when it branches): a tall uniform box, 0.729 × 2.443 m, 77 g, sliding and spinning fast, μ = (0, 0.984),
-    e = (0.935, 0.686), found by an independent check of issue 34, has three answers; each
-    loses energy, and Lemke's one path ends on the first."""
+    """Branching is not confined to μ_i > 1.2 (its paragraph on when it branches in
+    docs/multi-contact.md, 'A two-phase Poisson law for m contacts'): a tall uniform box,
+    0.729 × 2.443 m, 77 g, sliding and spinning fast, μ = (0, 0.984), e = (0.935, 0.686),
+    found by an independent check of issue 34, has three answers; each loses energy, and
+    Lemke's one path ends on the first."""
     system = flat_face(0.7294650562646473, 2.44250786841943, 0.07713546615838893,
                        (5.553152083121667, -2.528828206870402, 2.519296958893384),
                        (0.0, 0.9839406614522477), (0.9353146198139344, 0.6860746500850579))
