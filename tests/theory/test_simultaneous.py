@@ -32,11 +32,12 @@ TYPE_LAWS = ("poisson", "stronge-paper", "newton")
 # numbers from the exact inputs, checked bit for bit; measured ≤ 7 %); its Newton–Coulomb
 # and PGS Δu and normal impulses against the hand answer (PGS's stopping criterion, the
 # least squares' a-posteriori residual, through ‖J⁺‖₂; measured ≤ 7 %). Still stated bands,
-# NOT derived: the mirror-symmetry checks and the sequential orders (1e-12), the effective
-# reading's hand values (1e-12: a Newton fixed point, no straight-line replay) and the
-# properties' 1e-9 (the library's own tolerances). Random PGS against Newton–Coulomb: derived
-# (its stopping rule, and the solve's exact residual, through the mode's exact |A⁻¹|:
-# pgs_against_newton_coulomb_bound; measured ≤ 54 %).
+# NOT derived: the effective reading's mirror (EFFECTIVE_MIRROR_BAND, 1e-12) and hand values
+# (1e-12: a Newton fixed point, no straight-line replay) and the properties' 1e-9 (the
+# library's own tolerances). Bit for bit: the literal reading's mirror symmetry and the
+# sequential orders' mirror (mirrored arithmetic: see assert_mirror's comment). Random PGS
+# against Newton–Coulomb: derived (its stopping rule, and the solve's exact residual,
+# through the mode's exact |A⁻¹|: pgs_against_newton_coulomb_bound; measured ≤ 54 %).
 pytestmark = pytest.mark.kernel_sensitive
 
 
@@ -169,12 +170,31 @@ def flat_box(vx=0.0, omega=0.0, mu=0.5, e=0.5):
                               u=[vx, -1.0, omega], mu=mu, e=e)
 
 
-def assert_mirror(solution):
-    """The mirror x → −x swaps the corners and flips t: I_n equal, I_t opposite, no v_x, ω."""
-    tolerance = 1e-12 * (1.0 + np.max(np.abs(solution.impulses())))
+# Mirror symmetry, bit for bit where the arithmetic is mirrored (not a band): the mirror
+# x → −x is D = diag(−1, 1, −1) on (v_x, v_y, ω); the flat box's M is diagonal, so D M D = M,
+# and it maps contact 0's rows to contact 1's with (w_n, w_t) → (D w_n, −D w_t). Each
+# contact's M⁻¹w is one division per entry (the diagonal M), each term w_kᵀ M⁻¹ w_l and
+# approach w_kᵀ u a dot product whose products are the mirrored one's, equal or all negated
+# (D's signs pair up), so the same terms on any kernel; round to nearest is sign-symmetric
+# (fl(−x) = −fl(x), FMA too); the literal reading solves each contact's law from its own
+# terms (closed forms, no LAPACK), and (75) sums the two contacts' terms, a + b = b + a. So
+# the mirrored solution is the same bits, signs flipped, and v_x = a + (−a) = 0 exactly.
+# The effective reading (a fixed point iterated over the coupled contacts) and
+# Newton–Coulomb (LAPACK's SVD least squares of the mode's 4 × 4 system) are not mirrored
+# arithmetic: there the measured asymmetry is 4.4e-16 N s and its bound is derived for
+# Newton–Coulomb below (test_flat_box_newton_coulomb_and_gauss_seidel); the effective
+# reading's mirror is a stated band, EFFECTIVE_MIRROR_BAND.
+EFFECTIVE_MIRROR_BAND = 1e-12
+
+
+def assert_mirror(solution, band=0.0):
+    """The mirror x → −x swaps the corners and flips t: I_n equal, I_t opposite, no v_x, ω
+    (bit for bit at ``band`` 0, the literal reading; else within ``band`` of the impulse
+    scale, the effective reading's stated band)."""
+    tolerance = band * (1.0 + np.max(np.abs(solution.impulses())))
     assert abs(solution.normal_impulse[0] - solution.normal_impulse[1]) <= tolerance
     assert abs(solution.tangential_impulse[0] + solution.tangential_impulse[1]) <= tolerance
-    assert abs(solution.u_after[0]) <= 1e-12 and abs(solution.u_after[2]) <= 1e-12
+    assert abs(solution.u_after[0]) <= band and abs(solution.u_after[2]) <= band
 
 
 @pytest.mark.parametrize("law", TYPE_LAWS)
@@ -184,24 +204,28 @@ def test_flat_box_solutions_are_symmetric(law, coupling):
     # The effective reading has none for the paper's Stronge here (docs/multi-contact.md).
     assert found or (law, coupling) == ("stronge-paper", "effective")
     # The set is mirror-symmetric: x → −x swaps the corners and flips t, so each solution's
-    # mirror image (I_n swapped, I_t swapped and negated) is a solution, itself or another.
+    # mirror image (I_n swapped, I_t swapped and negated) is a solution, itself or another:
+    # bit for bit in the literal reading (mirrored arithmetic, see above), else within the
+    # effective reading's stated band.
+    band = 0.0 if coupling == sim.LITERAL else EFFECTIVE_MIRROR_BAND
     for solution in found:
         mirrors = [s for s in found
-                   if np.allclose(s.normal_impulse[::-1], solution.normal_impulse, atol=1e-12)
-                   and np.allclose(s.tangential_impulse[::-1], -solution.tangential_impulse,
-                                   atol=1e-12)]
+                   if np.all(np.abs(s.normal_impulse[::-1] - solution.normal_impulse) <= band)
+                   and np.all(np.abs(s.tangential_impulse[::-1] + solution.tangential_impulse)
+                              <= band)]
         assert mirrors
         if mirrors == [solution]:
-            assert_mirror(solution)
+            assert_mirror(solution, band)
 
 
 def test_flat_box_newton_coulomb_and_gauss_seidel():
     system = flat_box()
     (solution,) = sim.newton_coulomb_solutions(system)
-    assert_mirror(solution)
     # Both corners stick; v_y after = e·1 m/s, and the two tangential impulses are a family
     # (equal and opposite, any size in the cone): not determinate.
     assert solution.types == (1, 1) and not solution.determinate
+    # Its mirror symmetry (LAPACK's least squares: not mirrored arithmetic) is checked below
+    # within the derived bound: I_n each near 1.5, I_t0 + I_t1 near 0, Δu near (0, 1.5, 0).
     pgs = sim.projected_gauss_seidel(system)
     assert pgs.converged
     # PGS lands on another member of the family: the same Δu, the same normal impulses,
@@ -222,6 +246,9 @@ def test_flat_box_newton_coulomb_and_gauss_seidel():
         # I_n0,1 = d_y ∓ (2 I d_ω − d_x)/2 exactly for d = M⁻¹Jᵀ I: within (1 + I + 1/2)
         # times ‖d − Δu*‖₂ of 1.5 (I = 5/24 < 1/4).
         assert np.max(np.abs(impulses[0::2] - 1.5)) <= (1.75 + 0.25) * bound / 2
+        # The x row of M d = Jᵀ I: I_t0 + I_t1 = m d_x exactly (w_n's x is 0, w_t's 1), and
+        # Δu*'s x is 0: the mirror's I_t within m = 2 kg times ‖d − Δu*‖₂.
+        assert abs(impulses[1] + impulses[3]) <= 2.0 * bound / 2
     # u' = u + Δu: Δu's bound plus the addition's rounding.
     assert abs(solution.u_after[1] - 0.5) <= ffb.delta_u_bound(
         system, least_squares, ffb.computed_residual_bound(system, least_squares, FLAT_BOX),
@@ -345,8 +372,10 @@ def test_flat_box_sequential_orders_mirror_each_other():
     first, second = results
     assert not first.capped and not second.capped
     mirror = np.array([-1.0, 1.0, -1.0])
-    assert np.allclose(first.u_after, mirror * second.u_after, atol=1e-12)
-    assert spread == pytest.approx(2 * abs(first.u_after[2]), rel=1e-12)
+    # Bit for bit: each order is single-contact impacts on a mirrored state (mirrored
+    # arithmetic, see assert_mirror's comment), and the spread's ω − (−ω) = 2ω is exact.
+    assert np.array_equal(first.u_after, mirror * second.u_after)
+    assert spread == 2 * abs(first.u_after[2])
     assert spread > 0.1  # the order matters: the first corner struck sets the spin
 
 
