@@ -1,8 +1,8 @@
 """Which reference a run is compared with (harness/run/references.py), the m-contact geometry
 it needs (harness/scene/geometry.py), and the scenario checks for flat faces.
 
-Numbers worked by hand are compared within derived bounds where the arithmetic is replayed
-(Tracked), else at HAND = 1e-12, a stated band (see the comment above pytestmark).
+Numbers worked by hand are compared within derived bounds (the arithmetic replayed on Tracked
+numbers) or bit for bit (see the comment above pytestmark).
 """
 
 from __future__ import annotations
@@ -21,22 +21,19 @@ from planar_impact import simultaneous as sim
 from tests.error_bounds import Tracked, U
 from tests.theory import flat_face_bounds as ffb
 
-HAND = 1e-12
-
-
 # coherent counts and the references' decisions: run again on other kernels (conftest.py).
 # Kinds (docs/verdicts.md, 'Same answers on every CPU'): counts are decisions, checked not to
 # move under a few ulps of every input (a band found by perturbing, not by trying kernels);
 # the flat box's Newton–Coulomb and two-phase Poisson speeds against the hand answer, and
 # the ground contacts' gaps, points and rows: derived bounds (assert_hand_speeds,
 # placed_ground_replay: measured 8 to 11 % and 8 to 27 % of the bound); the box on a wider
-# box's normal: exact (derived). Still stated bands, NOT derived: HAND on the box on a
-# wider box's points (IEEE operations only, no BLAS: the same bits on every CPU, as
-# tests/scene/test_geometry_reference.py checks; measured 0 against the decimals) and on the
-# sequential orders' mirror (LAPACK's least squares), and the 1e-9 against Lemke: Lemke's
-# two phases against the enumeration's, each a pivoting solve of a mode's system chained
-# through the compression's impulse, would need each phase's mode matrix and its
-# conditioning (not done yet).
+# box's normal: exact (derived); its two points: derived (Tracked replay from the exact
+# decimals, IEEE operations only, no BLAS; measured 13 to 44 % of the bound); the
+# sequential orders' mirror: bit for bit (mirrored arithmetic). Still a stated band, NOT
+# derived: the 1e-9 against Lemke: Lemke's two phases against the enumeration's, each a
+# pivoting solve of a mode's system chained through the compression's impulse; their modes
+# differ at a stick–slide boundary and the flat faces' tangential split is not unique, so
+# each phase's own basis gives no bound on the speeds (not done yet).
 pytestmark = pytest.mark.kernel_sensitive
 
 
@@ -111,8 +108,29 @@ def test_a_box_resting_flat_on_a_wider_box_touches_at_the_ends_of_the_shared_fac
     lower = Body("a", Box(2.0, 0.2), 1.0, (0.0, 0.0))
     upper = Body("b", Box(1.0, 0.2), 1.0, (0.3, 0.2), velocity=(0.0, -1.0))
     contacts = geometry.scene_contacts(Scene((lower, upper), 0.5, 0.3))
-    np.testing.assert_allclose([c.point for c in contacts], [[-0.2, 0.1], [0.8, 0.1]],
-                               atol=HAND)
+    # Derived bound, not HAND: at angle 0 (cos 0 = 1, sin 0 = 0 exactly) each world corner is
+    # x_local + p, one rounding; the normal is exactly (0, 1) (below), so the tangent is
+    # (1, −0) and every projection on it or on the normal, the mid-plane offset and the
+    # ends placed along the tangent are exact (products by 0 and 1, sums with ±0): the
+    # points are (the shared interval's ends, the upper's bottom corners' x, since
+    # −1 < −0.2 and 0.8 < 1; the mid-plane, ½(top of the lower + bottom of the upper)).
+    # Replayed on Tracked numbers from the exact decimals (0.3, 0.2, and the local corners
+    # ±1/2, ±1/10 each within its rounding), each value checked equal to the library's bit
+    # for bit; at most half the carried bound (a few 1e-17 m) may be used.
+    corners, _ = geometry.local_core(upper.shape)
+    half_width = Tracked(float(corners[:, 0].max()))  # 1.0 / 2: exact
+    assert Fraction(half_width.value) == Fraction(1, 2)
+    half_height = float(corners[:, 1].max())
+    upper_y = Tracked(half_height, ffb.rounding(half_height, Fraction(1, 10)))
+    x = Tracked(float(upper.position[0]), ffb.rounding(upper.position[0], Fraction(3, 10)))
+    y = Tracked(float(upper.position[1]), ffb.rounding(upper.position[1], Fraction(1, 5)))
+    lower_top = Tracked(0.0) + upper_y  # the lower box's local top is the same ±0.1 float
+    assert float(geometry.local_core(lower.shape)[0][:, 1].max()) == half_height
+    middle = (lower_top + (y - upper_y)) * 0.5
+    for contact, end, exact_x in zip(contacts, (x - half_width, x + half_width),
+                                     (Fraction(-1, 5), Fraction(4, 5))):
+        assert_within(contact.point[0], exact_x, end)
+        assert_within(contact.point[1], Fraction(1, 10), middle)
     # Derived: exact. At angle 0 both ends of the upper face are p_y + h/2, the same float,
     # so the edge (d_x, 0) gives the normal (0, −d_x)/|d_x| = (0, ±1) with no rounding.
     assert [c.normal.tolist() for c in contacts] == [[0.0, 1.0]] * 2
@@ -187,9 +205,12 @@ def test_a_flat_box_without_slip_is_compared_with_newton_coulomb_which_is_symmet
     system = flat_system(scenario)
     (solution,) = sim.newton_coulomb(system).solutions
     assert_hand_speeds(system, solution.impulses(), reference["speeds"]["newton-coulomb"])
-    # The two orders of the sequential reading are mirror images: v_x and ω change sign.
+    # The two orders of the sequential reading are mirror images: v_x and ω change sign, bit
+    # for bit (mirrored arithmetic: the box's M is diagonal and its corners' rows mirror
+    # each other, so each single-contact impact is the same operations on equal or negated
+    # operands, and fl(−x) = −fl(x); tests/theory/test_simultaneous.py, assert_mirror).
     one, other = (np.array(reference["speeds"][f"sequential/poisson/{o}"]) for o in ("0-1", "1-0"))
-    np.testing.assert_allclose(one * [-1, 1, -1], other, atol=HAND)
+    assert np.array_equal(one * [-1, 1, -1], other), (one, other)
     assert reference["departure_from_primary"]["newton-coulomb"] == 0.0
 
 
@@ -237,6 +258,7 @@ def test_flat_faces_are_compared_with_the_two_phase_poisson_law_too(name):
     scene = scenario.scene(None)
     system = flat_system(scenario)
     (lemke,) = mc.poisson_two_phase(system, "lemke")
+    # Stated band, NOT derived (see the comment above pytestmark): 1e-9 of the speeds.
     np.testing.assert_allclose(reference["speeds"][references.TWO_PHASE_POISSON],
                                lemke.u_after, atol=1e-9 * np.max(np.abs(scene.state())))
     if name == "flat-box":  # symmetric: e|v_y| = 0.5 m/s, no slip, no spin
