@@ -459,14 +459,17 @@ def pgs_stopping_bound(system, impulses, k):
     residual ``r̂`` within ``E = γ_(2m+2) (|v^A_k| + Σ|W_kl|(|I_l| + δ) + |target_k|)``
     (a sum of 2m products and two more terms, any order, FMA or not) and set
     ``I_k' = fl(I_k − fl(r̂/W_kk))``, leaving ``r = r̂ − r̂(1 + δ₁) + W_kk δ₂ I_k'/(1 + δ₂)``
-    plus E, so ``|r| <= E + u W_kk δ (1 + 3u) + u W_kk |I_k|/(1 − u)`` (``|r̂| <= W_kk δ
-    (1 + 3u)``); the sweep's later updates moved r by at most ``Σ_(l≠k) |W_kl| δ``."""
+    plus E, so ``|r| <= E + u |r̂| + u W_kk |I_k|/(1 − u)``, and ``|I_k − I_k'| <= δ`` gives
+    ``|r̂| <= W_kk (δ + u |I_k|/(1 − u))/(1 − u)``: ``|r| <= E + u W_kk δ (1 + 3u) +
+    u W_kk |I_k| (1 + 2u)/(1 − u)``; the sweep's later updates moved r by at most
+    ``Σ_(l≠k) |W_kl| δ``."""
     u, step = error_bounds.U, 1e-13 * system.impulse_scale()
     row = np.abs(system.delassus[k])
     target = sim.restitution_targets(system)[k // 2] if k % 2 == 0 else 0.0
     evaluation = error_bounds.gamma(2 * system.count + 2) * math.fsum(
         [abs(system.approach[k]), abs(target)] + (row * (np.abs(impulses) + step)).tolist())
-    update = u * row[k] * step * (1 + 3 * u) + u * row[k] * abs(impulses[k]) / (1 - u)
+    update = (u * row[k] * step * (1 + 3 * u)
+              + u * row[k] * abs(impulses[k]) * (1 + 2 * u) / (1 - u))
     moved = math.fsum(row[m] * step for m in range(len(row)) if m != k)
     return evaluation + update + moved
 
