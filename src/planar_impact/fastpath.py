@@ -259,8 +259,8 @@ def law_answer(law, mnn, mnt, mtt, vn, vt, mu, e, delta):
     (``v_t ≥ 0``), bit for bit, as floats (a tuple in :data:`LAW_FIELDS` order); None where
     the row is not cleanly solved (an error status, or a division by zero). The law's own
     part is its ``row`` solver of :data:`planar_impact.law_table.LAW_TABLE`."""
-    solver = LAW_TABLE.get(law)
-    if solver is None:  # a name in LAWS without its table entry must not run another law
+    row = _ROW_SOLVERS.get(law)
+    if row is None:  # a name in LAWS without its table entry must not run another law
         raise NotImplementedError(missing_branch(law, "fastpath.law_answer"))
     vn_abs = -vn
     mu_mtt, mu_mnt = mu * mtt, mu * mnt
@@ -269,7 +269,7 @@ def law_answer(law, mnn, mnt, mtt, vn, vt, mu, e, delta):
     if h <= 0 and g <= 0:  # Painlevé jam
         return None
     case = laws.table1_case(g, h, p, q)
-    answer = solver.row(mnn, mnt, mtt, vn, vt, mu, e, delta, vn_abs, g, h, p, q, case)
+    answer = row(mnn, mnt, mtt, vn, vt, mu, e, delta, vn_abs, g, h, p, q, case)
     if answer is None:
         return None
     normal, tangential, ctype, e_poisson, at_boundary, alternative, reverse = answer
@@ -282,6 +282,9 @@ def law_answer(law, mnn, mnt, mtt, vn, vt, mu, e, delta):
     return (normal, tangential, vn_separation, vt_separation, energy_change, ctype, case,
             e_poisson, at_boundary, alternative)
 
+
+#: Each law's scalar solver, looked up once per call (LAW_TABLE's ``row``).
+_ROW_SOLVERS = {name: solvers.row for name, solvers in LAW_TABLE.items()}
 
 #: What :func:`law_answer` returns, in order (names of :class:`planar_impact.BatchResult`).
 LAW_FIELDS = ("normal_impulse", "tangential_impulse", "vn_separation", "vt_separation",

@@ -69,16 +69,14 @@ def _process_rows(run, e):
     return (normal, tangential, ctype, e_poisson, np.True_, *_NOT_BY_TABLE1)
 
 
-def poisson_row(mnn, mnt, mtt, vn, vt, mu, e, delta, vn_abs, g, h, p, q, case):
-    return _table1_row(mnn, mnt, mtt, vn, vt, mu, e, delta, vn_abs, g, h, p, q, case, False)
-
-
 def stronge_paper_row(mnn, mnt, mtt, vn, vt, mu, e, delta, vn_abs, g, h, p, q, case):
-    return _table1_row(mnn, mnt, mtt, vn, vt, mu, e, delta, vn_abs, g, h, p, q, case, True)
+    return poisson_row(mnn, mnt, mtt, vn, vt, mu, e, delta, vn_abs, g, h, p, q, case, True)
 
 
-def _table1_row(mnn, mnt, mtt, vn, vt, mu, e, delta, vn_abs, g, h, p, q, case, stronge_paper):
-    """Poisson's law, or with ``stronge_paper`` the paper's Stronge mapping, on one row.
+def poisson_row(mnn, mnt, mtt, vn, vt, mu, e, delta, vn_abs, g, h, p, q, case,
+                stronge_paper=False):
+    """Poisson's law, or with ``stronge_paper`` the paper's Stronge mapping, on one row
+    (Poisson's called directly: one call less on ``solve``'s scalar path).
     Rows near Table 1's band run the batch's candidate search
     (:func:`planar_impact.laws.poisson_type_boundary`) on numpy scalars."""
     alpha, r_m = vt / vn_abs, g / h  # (A34), (A36)
