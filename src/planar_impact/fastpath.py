@@ -11,7 +11,8 @@ numpy's fixed cost per call (~1 µs a ufunc, ~10 µs a LAPACK call) made ``solve
   the numpy path within rounding, not bit for bit: ``|Δm| ≤ 4 p ε κ(M) (m_nn m_tt)^½``
   (backward-stable Cholesky and triangular solves; tests/theory/test_fastpath.py checks
   ``1e-12`` relative on well-conditioned draws).
-* The law, given those terms: the very expressions of :mod:`planar_impact.laws` in the same
+* The law, given those terms: its scalar solver in :mod:`planar_impact.law_branches` (from
+  ``law_table.LAW_TABLE``), the very expressions of :mod:`planar_impact.laws` in the same
   order, evaluated for the selected branch only. IEEE float64 ``+ − × ÷ √`` are correctly
   rounded in Python as in numpy, so the answer equals :func:`planar_impact.solve_batch` on
   the same ``(m_nn, m_nt, m_tt, v_n^A, v_t^A, μ, e, Δ)`` bit for bit (checked over thousands
