@@ -1,14 +1,16 @@
 """The impact laws as the harness shows them: one entry per law, read everywhere.
 
-The solver of each law lives in :mod:`planar_impact` (``pi.LAWS`` names them, ``pi.solve``
-and ``pi.solve_batch`` run them); what the harness adds is here and nowhere else: the order
+The solvers of each law live in :mod:`planar_impact` (one line of its
+``law_table.LAW_TABLE``, whose names are ``pi.LAWS``; ``pi.solve`` and ``pi.solve_batch``
+run them); what the harness adds is here and nowhere else: the order
 laws are listed in (tables, figures' legends, ``compare``), the report's label, the figures'
 style, the collision types a law reports, and what a law promises (docs/theory.md, 'The
 laws'). Modules ask :data:`LAW_NAMES`, :func:`law` or :data:`REGISTRY`; no module keeps its
 own list of the laws (tests/test_laws.py fails on one).
 
-Adding a law: its solver in ``planar_impact`` (its name in ``pi.LAWS``), one :class:`Law`
-line in :data:`REGISTRY` below, and its section in docs/theory.md.
+Adding a law: its solvers' module and one line of ``planar_impact.law_table.LAW_TABLE``,
+one :class:`Law` line in :data:`REGISTRY` below (tests/test_laws.py checks the two name the
+same laws), and its section in docs/theory.md.
 """
 
 from __future__ import annotations

@@ -20,7 +20,7 @@ from harness.report.experiments import LAW_COLOURS, LAW_LINES
 from harness.scenarios import cli as scenarios_cli
 from harness.scenarios.schema import LAW_TYPES
 from harness.scene.random_problems import random_problems
-from planar_impact import contact_space
+from planar_impact import contact_space, fastpath, law_table
 from planar_impact.process import PROCESS_LAWS
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -40,19 +40,57 @@ def test_the_registry_holds_each_solved_law_once():
     assert {entry.name for entry in laws.REGISTRY if entry.process} == set(PROCESS_LAWS)
 
 
-def test_a_law_named_without_its_branches_is_refused_not_solved_as_another(monkeypatch):
+def test_the_registry_presents_the_laws_of_the_solvers_table():
+    # planar_impact's one table of laws and solvers is pi.LAWS; the harness's registry
+    # presents exactly those laws, and each law's reverse-sliding types (the solver's
+    # q > 0 check) are among the types its registry entry says it reports.
+    assert pi.LAWS == tuple(law_table.LAW_TABLE)
+    assert set(laws.LAW_NAMES) == set(law_table.LAW_TABLE)
+    for name, solvers in law_table.LAW_TABLE.items():
+        assert callable(solvers.rows) and callable(solvers.row), name
+        assert solvers.reverse_types, name
+        assert set(solvers.reverse_types) <= set(laws.law(name).collision_types), name
+
+
+def test_each_law_s_two_solvers_give_one_answer_in_its_types():
+    # Both paths of every law of the table (solve_batch: its rows solver; fastpath.law_answer:
+    # its scalar solver) agree bit for bit, in the registry's types; tests/theory/
+    # test_fastpath.py holds them to it over broad families.
+    rng = np.random.default_rng(36)
+    size = 64
+    rows = {"mnn": rng.uniform(0.5, 2.0, size), "mnt": rng.uniform(-0.6, 0.6, size),
+            "mtt": rng.uniform(0.8, 2.0, size), "vn": -rng.uniform(0.1, 2.0, size),
+            "vt": rng.uniform(0.0, 3.0, size)}
+    for name in law_table.LAW_TABLE:
+        batch = pi.solve_batch(**rows, mu=0.4, e=0.6, law=name)
+        solved = 0
+        for i in np.flatnonzero(batch.status == 0):
+            row = [float(rows[key][i]) for key in ("mnn", "mnt", "mtt", "vn", "vt")]
+            delta = row[0] * row[2] - row[1] * row[1]
+            answer = fastpath.law_answer(name, *row, 0.4, 0.6, delta)
+            assert answer is not None, (name, i)
+            assert answer[0] == batch.normal_impulse[i], (name, i)
+            assert answer[1] == batch.tangential_impulse[i], (name, i)
+            assert answer[5] in laws.law(name).collision_types, (name, i)
+            solved += 1
+        assert solved > size // 2, name
+
+
+def test_a_law_named_without_its_solvers_is_refused_not_solved_as_another(monkeypatch):
     # Both dispatch points once ended in an `else` that ran Stronge's process: a law added to
-    # pi.LAWS (and the registry) without its branches was solved as Stronge, silently.
+    # pi.LAWS without its branches was solved as Stronge, silently. LAWS is now the table's
+    # names, but a name that reaches a path without its table entry still ends in an error.
     monkeypatch.setattr(contact_space, "LAWS", (*pi.LAWS, "unbranched"))
     problem = dict(mass_matrix=np.eye(2), wn=np.array([1.0, 0.0]), wt=np.array([0.0, 1.0]),
                    u=np.array([-1.0, 0.5]), mu=0.3, e=0.5)
     with pytest.raises(NotImplementedError, match=r"law 'unbranched' is in planar_impact's "
-                                                  r"LAWS but fastpath.law_answer has no branch"):
+                                                  r"LAWS but fastpath.law_answer finds no "
+                                                  r"solver of it in law_table.LAW_TABLE"):
         pi.solve(**problem, law="unbranched")
     batch = {"mnn": np.array([1.0]), "mnt": np.array([0.0]), "mtt": np.array([1.0]),
              "vn": np.array([-1.0]), "vt": np.array([0.5]), "mu": 0.3, "e": 0.5}
-    with pytest.raises(NotImplementedError, match=r"contact_space.contact_space_solution has "
-                                                  r"no branch"):
+    with pytest.raises(NotImplementedError, match=r"contact_space.contact_space_solution finds "
+                                                  r"no solver"):
         pi.solve_batch(**batch, law="unbranched")
 
 

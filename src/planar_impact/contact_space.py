@@ -18,8 +18,7 @@ import numpy as np
 
 from . import errors, laws
 from .errors import ImpactInputError
-
-LAWS: tuple[str, ...] = ("newton", "poisson", "stronge", "stronge-paper", "newton-lcp")
+from .law_table import LAW_TABLE, LAWS
 
 
 def check_law(law: str) -> str:
@@ -31,8 +30,9 @@ def check_law(law: str) -> str:
 
 
 def missing_branch(law: str, where: str) -> str:
-    """The error of a law in :data:`LAWS` that ``where`` has no branch for."""
-    return (f"law {law!r} is in planar_impact's LAWS but {where} has no branch for it "
+    """The error of a law in :data:`LAWS` that ``where`` finds no solver of."""
+    return (f"law {law!r} is in planar_impact's LAWS but {where} finds no solver of it "
+            "in law_table.LAW_TABLE "
             "(docs/theory.md, 'The law registry and adding a law')")
 
 
@@ -47,33 +47,12 @@ def contact_space_solution(law, mnn, mnt, mtt, vn, vt, mu, e, out=None, delta=No
     copy each. ``delta`` is ``Δ`` (A20) when the caller has it more accurately than
     ``m_nn m_tt − m_nt²``.
     """
-    terms = laws.ContactTerms(mnn, mnt, mtt, vn, vt, mu, delta)
-    consistent = np.True_
-    at_boundary, alternative = np.False_, np.int8(0)  # laws not decided by Table 1
-    if law == "poisson":
-        ctype = laws.poisson_type(terms, e)
-        at_boundary, alternative = laws.poisson_type_boundary(terms, e, ctype)
-        normal, tangential = laws.poisson_impulses(terms, e, ctype)
-        e_poisson = e
-    elif law == "stronge-paper":
-        # Type from Table 1 with e_e in place of e (end of the paper's Section 4), then
-        # e_i by (64)/(67)/(70)/(73)/(74), then Poisson's closed forms with e_i.
-        ctype = laws.poisson_type(terms, e)
-        at_boundary, alternative = laws.poisson_type_boundary(terms, e, ctype)
-        e_poisson = laws.stronge_paper_restitution(terms, e, ctype)
-        consistent = np.isfinite(e_poisson)
-        normal, tangential = laws.poisson_impulses(terms, e_poisson, ctype)
-    elif law == "newton-lcp":
-        normal, tangential, ctype, consistent = laws.newton_lcp(terms, e)
-        e_poisson = np.float64(np.nan)  # not a process law: no I_nr/I_nc (NaN on every row)
-    elif law == "newton" or law == "stronge":
-        process = laws.TwoPhaseProcess(terms)
-        run = process.newton if law == "newton" else process.stronge
-        normal, tangential, ctype, compression = run(e)
-        # Poisson's e of the process each law runs, I_nr/I_nc (6).
-        e_poisson = (normal - compression) / compression
-    else:  # a law named in LAWS without its branch must not run another law's
+    solver = LAW_TABLE.get(law)
+    if solver is None:  # a name in LAWS without its table entry must not run another law
         raise NotImplementedError(missing_branch(law, "contact_space.contact_space_solution"))
+    terms = laws.ContactTerms(mnn, mnt, mtt, vn, vt, mu, delta)
+    (normal, tangential, ctype, e_poisson, consistent, at_boundary,
+     alternative) = solver.rows(terms, e)
     if out is None:
         out = {"vn_separation": None, "vt_separation": None, "energy_change": None}
     vn_separation = np.add(vn, mnn * normal + mnt * tangential, out=out["vn_separation"])  # (A22)
@@ -180,6 +159,9 @@ def solve_scaled(law, mnn, mnt, mtt, vn, vt, mu, e, speed_exponent, mass_exponen
 
 
 def reverse_sliding(law, ctype):
-    if law in ("newton", "newton-lcp"):
-        return ctype == laws.NEWTON_REVERSE
-    return (ctype == laws.REVERSE_FROM_COMPRESSION) | (ctype == laws.REVERSE_FROM_RESTITUTION)
+    """Where the law's type slides in reverse (law_table's ``reverse_types``)."""
+    first, *others = LAW_TABLE[law].reverse_types
+    sliding = ctype == first
+    for other in others:
+        sliding = sliding | (ctype == other)
+    return sliding

@@ -26,7 +26,7 @@ from contextlib import contextmanager
 
 import numpy as np
 
-from planar_impact import fastpath, process
+from planar_impact import fastpath, law_branches, process
 from tests.error_bounds import (
     Tracked,
     U,
@@ -48,9 +48,10 @@ _TRACKED_MATH.sqrt = Tracked.math_sqrt
 
 @contextmanager
 def tracked_sqrt() -> Iterator[None]:
-    """fastpath's and process's ``math`` with :meth:`Tracked.math_sqrt`, for the ``with``."""
+    """The laws' scalar solvers' and process's ``math`` with :meth:`Tracked.math_sqrt`, for
+    the ``with``."""
     shim = _TRACKED_MATH
-    saved = fastpath.math, process.math, fastpath._near_table1_boundary
+    saved = law_branches.math, process.math, law_branches._near_table1_boundary
 
     def screen(*arguments):
         # Table 1's band screen decides only whether to look for the type at a boundary
@@ -60,12 +61,12 @@ def tracked_sqrt() -> Iterator[None]:
         Tracked.close_decisions = before
         return near
 
-    fastpath.math = process.math = shim
-    fastpath._near_table1_boundary = screen
+    law_branches.math = process.math = shim
+    law_branches._near_table1_boundary = screen
     try:
         yield
     finally:
-        fastpath.math, process.math, fastpath._near_table1_boundary = saved
+        law_branches.math, process.math, law_branches._near_table1_boundary = saved
 
 
 def closed_form(law: str, mnn, mnt, mtt, vn, vt, mu, e, delta=None) -> dict[str, Tracked] | None:
