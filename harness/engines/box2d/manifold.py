@@ -150,28 +150,17 @@ def _contact_of(touching: list, world) -> RawContacts | None:
             plane_y = s_ref * local_x + c_ref * local_y + p_ref_y
             # Box2D's normal points from fixture A to fixture B: the impulses' normal.
             f_x, f_y = (n_x, n_y) if kind == _FACE_A else (-n_x, -n_y)
-            # The first point, then the second if in use (written out: no tuples a step).
-            qx = c_inc * l0_x - s_inc * l0_y + p_inc_x
-            qy = s_inc * l0_x + c_inc * l0_y + p_inc_y
-            height = (qx - plane_x) * n_x + (qy - plane_y) * n_y
-            c_ref_x, c_ref_y = qx + (r_ref - height) * n_x, qy + (r_ref - height) * n_y
-            c_inc_x, c_inc_y = qx - r_inc * n_x, qy - r_inc * n_y
-            points.append((0.5 * (c_ref_x + c_inc_x) / length,
-                           0.5 * (c_ref_y + c_inc_y) / length,
-                           -(height - r_ref - r_inc + padding) / length))
-            step_x += sign * (n0 * f_x + t0 * f_y)
-            step_y += sign * (n0 * f_y - t0 * f_x)
-            if count > 1:
-                qx = c_inc * l1_x - s_inc * l1_y + p_inc_x
-                qy = s_inc * l1_x + c_inc * l1_y + p_inc_y
+            for lx, ly, p_n, p_t in ((l0_x, l0_y, n0, t0), (l1_x, l1_y, n1, t1))[:count]:
+                qx = c_inc * lx - s_inc * ly + p_inc_x
+                qy = s_inc * lx + c_inc * ly + p_inc_y
                 height = (qx - plane_x) * n_x + (qy - plane_y) * n_y
                 c_ref_x, c_ref_y = qx + (r_ref - height) * n_x, qy + (r_ref - height) * n_y
                 c_inc_x, c_inc_y = qx - r_inc * n_x, qy - r_inc * n_y
                 points.append((0.5 * (c_ref_x + c_inc_x) / length,
                                0.5 * (c_ref_y + c_inc_y) / length,
                                -(height - r_ref - r_inc + padding) / length))
-                step_x += sign * (n1 * f_x + t1 * f_y)
-                step_y += sign * (n1 * f_y - t1 * f_x)
+                step_x += sign * (p_n * f_x + p_t * f_y)
+                step_y += sign * (p_n * f_y - p_t * f_x)
             n_x, n_y = f_x, f_y
         if normal is None:
             normal = (sign * n_x, sign * n_y)

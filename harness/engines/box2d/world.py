@@ -23,16 +23,7 @@ from harness.engines.box2d.building import (
 )
 from harness.engines.box2d.manifold import _contact_of
 from harness.engines.box2d.presets import MAX_ROTATION, MAX_TRANSLATION
-from harness.engines.box2d.readout import (
-    _CONTACT,
-    _EDGE,
-    _READERS,
-    _TOUCHING,
-    _body_id,
-    _buffer,
-    _Memory,
-    _state_in_memory,
-)
+from harness.engines.box2d.readout import _READERS, _body_id, _Memory, _state_in_memory
 from harness.engines.contract import RawContacts
 from harness.scene import Scene
 
@@ -41,9 +32,6 @@ if TYPE_CHECKING:
 
 # A velocity Box2D clipped sits at the cap to float32 rounding: this band counts as "at".
 _CAP_BAND = 1.0 - 1e-6
-# The products _states_at_cap compares with at _CAP_BAND, worked out once.
-_CAP_TRANSLATION = _CAP_BAND * MAX_TRANSLATION
-_CAP_ROTATION = _CAP_BAND * MAX_ROTATION
 
 
 class _Readout:
@@ -96,48 +84,19 @@ class _Readout:
         poses the step started from), then the bodies now (as :meth:`read`), and whether a
         velocity reached a cap (``clipped``, from the first step that does)."""
         buffers = self.buffers
-        if buffers is None:  # pybox2d's getters
-            state_of, memory = _READERS[0], self.memory
-            states = [state_of(b2_body, key, memory) for b2_body, key in self.dynamic]
-            touching = _READERS[1](self.body_b, states[-1], memory)
-        else:  # _state_in_memory and _touching_in_memory, written out (every step)
+        if buffers is not None:  # _state_in_memory, on the buffers made once
             unpack = self.memory.state.unpack_from
             states = [unpack(buffer) for buffer in buffers]
-            touching = []
-            edge = states[-1][8]
-            if edge:
-                memory = self.memory
-                edges, contacts = memory.edges, memory.contacts
-                while edge:
-                    buffer = edges.get(edge)
-                    if buffer is None:
-                        buffer = edges[edge] = _buffer(edge, _EDGE.size)
-                    contact, edge = _EDGE.unpack_from(buffer)
-                    buffer = contacts.get(contact)
-                    if buffer is None:
-                        buffer = contacts[contact] = _buffer(contact, _CONTACT.size)
-                    values = _CONTACT.unpack_from(buffer)
-                    if values[0] & _TOUCHING:
-                        touching.append(values)
-                if len(touching) > 1:
-                    touching.reverse()
+        else:
+            state_of, memory = _READERS[0], self.memory
+            states = [state_of(b2_body, key, memory) for b2_body, key in self.dynamic]
         # Every contact of an impact involves its body B (the ground's partner or the other
         # body, the last one); the body's list keeps the world's order of them.
+        touching = _READERS[1](self.body_b, states[-1], self.memory)
         raw = _contact_of(touching, self) if touching else None
-        # _take and _states_at_cap, written out.
-        length, start = self.length, self.start
-        now = []
-        for key, (x, y, sin, cos, angle, _, _, _, _) in zip(self.keys, states):
-            start[key] = (x, y, cos, sin)
-            now.append((x / length, y / length, angle))
-        self.now, self.states = tuple(now), states
-        if not self.clipped:  # _states_at_cap(states, self.dt, _CAP_BAND), written out
-            dt, hypot = self.dt, math.hypot
-            for state in states:
-                if (hypot(state[5], state[6]) * dt > _CAP_TRANSLATION
-                        or abs(state[7]) * dt > _CAP_ROTATION):
-                    self.clipped = True
-                    break
+        self._take(states)
+        if not self.clipped:
+            self.clipped = _states_at_cap(states, self.dt, _CAP_BAND)
         return raw
 
     def _take(self, states: list) -> None:
