@@ -11,6 +11,8 @@ from __future__ import annotations
 import functools
 import math
 
+from harness.engines.bisection import decreasing_inverse
+
 # Smallest restitution the unilateral spring-damper is asked for: e = 0 needs ζ = ∞.
 MIN_RESTITUTION = 1e-3
 
@@ -56,18 +58,7 @@ def damping_ratio_for_restitution(restitution: float) -> float:
     e = min(max(float(restitution), MIN_RESTITUTION), 1.0)
     if e == 1.0:
         return 0.0
-    low, high = 0.0, 1.0
-    while restitution_of_damping_ratio(high) > e:
-        high *= 2.0
-    for _ in range(200):
-        middle = 0.5 * (low + high)
-        if restitution_of_damping_ratio(middle) > e:
-            low = middle
-        else:
-            high = middle
-        if high - low <= 1e-15 * high:
-            break
-    return 0.5 * (low + high)
+    return decreasing_inverse(restitution_of_damping_ratio, e)
 
 
 def restitution_solref(
