@@ -79,17 +79,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def option_problem(args) -> str | None:
-    """The first count outside its bounds (:data:`harness.bounds.BOUNDS`) or a ``--json``
-    that cannot be written (:func:`harness.store.files.output_file_problem`: a link, a
-    missing or read-only directory), as one line; None when every option can be used.
-    Checked before any work."""
-    for option, value in (("replicates", args.replicates), ("seed", args.seed),
-                          ("workers", args.workers)):
-        try:
-            if value is not None:
-                bounds.check(f"--{option} {value}", option, value)
-        except bounds.OutOfBounds as out:
-            return str(out)
+    """A ``--json`` that cannot be written (:func:`harness.store.files.output_file_problem`:
+    a link, a missing or read-only directory), as one line; None when it can. Checked before
+    any work (the counts were bounded by their argparse types, harness.bounds.option)."""
     if args.json is not None:
         reason = output_file_problem(args.json)
         if reason is not None:
