@@ -39,7 +39,10 @@ columns), but every member gives the same ``Δu = X (P_c + P_r)`` with ``X`` the
   products, any order; Higham eq. (3.5)) and of the addition (``u |u_after_j|``) of ``u*``.
 
 No constant of a solver's backward error enters (the enumeration's pseudo-inverse, Lemke's
-pivots): the residuals are those of the answers the methods returned.
+pivots): the residuals are those of the answers the methods returned. The bound is therefore
+only as small as they are: each is checked against the library's own promise for a phase it
+keeps (``RESIDUAL_TOLERANCE`` of the phase's scales, a decision band: ``residual_share``), so
+an answer off its end state cannot pass inside its own bound.
 """
 
 from __future__ import annotations
@@ -47,7 +50,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from fractions import Fraction
 
-from planar_impact.multicontact.phase import SIGN_TOLERANCE
+from planar_impact.multicontact.phase import RESIDUAL_TOLERANCE, SIGN_TOLERANCE
 from tests.error_bounds import U, gamma
 
 
@@ -92,13 +95,18 @@ def _solve_exact(matrix, rhs):
 class ExactAnswer:
     """One method's answer rebuilt exactly: ``u_after`` (Fractions), ``error`` per component
     of ``u`` a float bound on the computed ``u_after``'s distance from it, ``exact_error``
-    its part ``|X (P̂ − P*)|`` (rounded up), and ``kinds`` the end conditions chosen per
-    phase and contact ``(normal, friction)``."""
+    its part ``|X (P̂ − P*)|`` (rounded up), ``kinds`` the end conditions chosen per
+    phase and contact ``(normal, friction)``, and ``residual_share`` the computed impulses'
+    largest exact residual in those conditions as a share of the library's own promise
+    (``RESIDUAL_TOLERANCE`` of the speed scale in a velocity row, of the impulse scale in
+    an impulse row): the a posteriori part of ``error`` is only as small as that residual,
+    and a share above 1 is an answer the library should not have returned."""
 
     u_after: tuple
     error: tuple
     exact_error: tuple
     kinds: tuple
+    residual_share: float
 
 
 def _columns(system):
@@ -139,6 +147,9 @@ def rebuild(system, answer) -> ExactAnswer:
         return row, Fraction(0)
 
     matrix, rhs, kinds, checks = [], [], [], []
+    speed = system.speed_scale()
+    impulse = speed / min(float(x) for x in system.delassus.diagonal())
+    row_scales = []  # per condition: the scale its residual is in (a speed or an impulse)
     phases = (answer.compression, answer.restitution)
     starts = (system.approach, answer.compression.velocities)
     for phase, (solution, start) in enumerate(zip(phases, starts)):
@@ -151,22 +162,26 @@ def rebuild(system, answer) -> ExactAnswer:
                 normal = "base"
                 matrix.append([a - b for a, b in zip(p_n, b_row)])
                 rhs.append(b_const)
+                row_scales.append(impulse)
             else:
                 normal = "active"
                 row, constant = velocity(phase, n)
                 matrix.append(row)
                 rhs.append(-constant)
+                row_scales.append(speed)
             start_slip, end_slip = float(start[t]), float(solution.velocities[t])
             if normal == "base" and solution.impulses[n] == 0.0 and (
                     phase == 0 or answer.compression.impulses[n] == 0.0):
                 friction, sense = "none", 0  # no normal impulse: no friction
                 matrix.append(p_t)
                 rhs.append(Fraction(0))
+                row_scales.append(impulse)
             elif abs(end_slip) <= band:
                 friction, sense = "stick", 0
                 row, constant = velocity(phase, t)
                 matrix.append(row)
                 rhs.append(-constant)
+                row_scales.append(speed)
             else:
                 sense = 1 if end_slip > 0 else -1
                 held = abs(start_slip) > band and (start_slip > 0) == (end_slip > 0)
@@ -176,6 +191,7 @@ def rebuild(system, answer) -> ExactAnswer:
                 friction = "held" if held else "slide"
                 matrix.append([a + sense * mu[i] * b for a, b in zip(p_t, p_n)])
                 rhs.append(Fraction(0))
+                row_scales.append(impulse)
             phase_kinds.append((normal, friction))
             checks.append((phase, i, normal, friction, sense))
         kinds.append(tuple(phase_kinds))
@@ -196,6 +212,9 @@ def rebuild(system, answer) -> ExactAnswer:
     computed = [exact(x) for x in answer.compression.impulses] + [
         exact(x) for x in answer.restitution.impulses]
     exact_error = [abs(a - b) for a, b in zip(delta_u(computed), delta_u(solution))]
+    residual_share = max(float(abs(sum(a * z for a, z in zip(row, computed)) - b))
+                         / (RESIDUAL_TOLERANCE * scale_)
+                         for row, b, scale_ in zip(matrix, rhs, row_scales))
     totals = answer.compression.impulses + answer.restitution.impulses
     assert answer.u_after.tolist() == (system.u + system.delta_u(totals)).tolist()
     rounding = [gamma(size) * sum(abs(float(columns[k][j]) * float(totals[k]))
@@ -205,7 +224,7 @@ def rebuild(system, answer) -> ExactAnswer:
     # The computed impulses' exact Δu is within ``exact_error`` of Δu*; fl(X P̂) and the
     # addition within ``rounding`` of it.
     return ExactAnswer(tuple(u_exact), tuple(a + b for a, b in zip(exact_float, rounding)),
-                       exact_float, tuple(kinds))
+                       exact_float, tuple(kinds), residual_share)
 
 
 def _check_decisions(system, z, checks, delassus, approach, mu, e, scale):
