@@ -242,6 +242,32 @@ def test_on_broad_flat_landings_lemke_and_the_enumeration_reach_one_exact_end_st
     assert max(shares) < 1.0
 
 
+def test_the_exact_rebuild_notices_an_answer_off_its_end_state():
+    """tests/theory/two_phase_bounds.py's checks can fail: an answer whose compression gave
+    one corner 1e-6 of its normal impulse too much has a residual far past the library's
+    promise, and one whose end velocities say the other corner recedes while it pushes
+    (v_n = 0 exactly) has conditions the exact answer breaks."""
+    import dataclasses
+
+    from tests.theory import two_phase_bounds as tpb
+
+    system = flat_face(1.0, 0.2, 1.0, (0.3, -1.0, 0.5), (0.3, 0.3), (0.5, 0.5))
+    (answer,) = mc.poisson_two_phase(system)
+    assert tpb.rebuild(system, answer).residual_share < 1
+    impulses = answer.compression.impulses.copy()
+    impulses[0] *= 1 + 1e-6
+    pushed = dataclasses.replace(answer, compression=dataclasses.replace(
+        answer.compression, impulses=impulses), u_after=system.u + system.delta_u(
+            impulses + answer.restitution.impulses))
+    assert tpb.rebuild(system, pushed).residual_share > 1
+    velocities = answer.compression.velocities.copy()
+    velocities[2] = 0.1  # said to recede: took its base (nothing) in the compression
+    receding = dataclasses.replace(answer, compression=dataclasses.replace(
+        answer.compression, velocities=velocities))
+    with pytest.raises(AssertionError):
+        tpb.rebuild(system, receding)
+
+
 def test_one_body_on_two_random_obstacles_agrees_in_the_compression():
     """One body, two random normals: W's null vector has normal components, so the
     compression's normal split is a family and the restitution that scales it is too
