@@ -34,6 +34,7 @@ on x86-64 (its manual, 'Known Maximum Errors in Math Functions'), i.e. relative 
 from __future__ import annotations
 
 import math
+from fractions import Fraction
 
 import numpy as np
 
@@ -292,3 +293,90 @@ class Tracked:
 
     def __repr__(self) -> str:
         return f"Tracked({self.value!r}, error={self.error:.3g})"
+
+
+class Exact:
+    """A rational number whose arithmetic with floats is exact too (``Fraction`` turns
+    ``Fraction * float`` into a float): the library's straight-line formulas, written with
+    float constants such as ``2.0 * mu``, run on ``Exact`` inputs give the exact value of the
+    same expression of the same inputs, for comparison with their float results. ``value``
+    is the ``Fraction``."""
+
+    __slots__ = ("value",)
+
+    def __init__(self, value):
+        self.value = value.value if type(value) is Exact else Fraction(value)
+
+    @staticmethod
+    def _of(other):
+        if type(other) is Exact:
+            return other.value
+        if isinstance(other, (int, float, Fraction, np.floating, np.integer)):
+            return Fraction(other)
+        return NotImplemented
+
+    def _apply(self, other, operation):
+        other = Exact._of(other)
+        if other is NotImplemented:
+            return NotImplemented
+        return Exact(operation(self.value, other))
+
+    def __add__(self, other):
+        return self._apply(other, lambda a, b: a + b)
+
+    __radd__ = __add__
+
+    def __sub__(self, other):
+        return self._apply(other, lambda a, b: a - b)
+
+    def __rsub__(self, other):
+        return self._apply(other, lambda a, b: b - a)
+
+    def __mul__(self, other):
+        return self._apply(other, lambda a, b: a * b)
+
+    __rmul__ = __mul__
+
+    def __truediv__(self, other):
+        return self._apply(other, lambda a, b: a / b)
+
+    def __rtruediv__(self, other):
+        return self._apply(other, lambda a, b: b / a)
+
+    def __neg__(self):
+        return Exact(-self.value)
+
+    def __abs__(self):
+        return Exact(abs(self.value))
+
+    def _compare(self, other, operation):
+        other = Exact._of(other)
+        if other is NotImplemented:
+            return NotImplemented
+        return operation(self.value, other)
+
+    def __lt__(self, other):
+        return self._compare(other, lambda a, b: a < b)
+
+    def __le__(self, other):
+        return self._compare(other, lambda a, b: a <= b)
+
+    def __gt__(self, other):
+        return self._compare(other, lambda a, b: a > b)
+
+    def __ge__(self, other):
+        return self._compare(other, lambda a, b: a >= b)
+
+    def __eq__(self, other):
+        return self._compare(other, lambda a, b: a == b)
+
+    def __ne__(self, other):
+        return self._compare(other, lambda a, b: a != b)
+
+    __hash__ = None
+
+    def __float__(self) -> float:
+        return float(self.value)
+
+    def __repr__(self) -> str:
+        return f"Exact({self.value})"
