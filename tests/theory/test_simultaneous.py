@@ -161,7 +161,7 @@ def test_one_contact_newton_coulomb_is_newton_lcp_to_rounding():
     23 %), the difference at most 60 % of the sum (the least squares' share is its exact
     error, up to the last conversion)."""
     rng = np.random.default_rng(14)
-    largest_share = 0.0
+    largest_share, compared = 0.0, 0
     for _ in range(100):
         problem = random_single(rng)
         system = single_as_system(problem)
@@ -189,9 +189,10 @@ def test_one_contact_newton_coulomb_is_newton_lcp_to_rounding():
                                                 for x, y in zip(both, exact))))
         assert closed_form_error <= closed_form_bound, (closed_form_error, closed_form_bound)
         largest_share = max(largest_share, closed_form_error / closed_form_bound)
+        compared += 1
     # Each case is checked against x* exactly above; the largest share shows the a priori
     # bound is a worst case, not a fit (measured 57 %, the next 23 %).
-    assert 0.0 < largest_share < 1.0
+    assert compared >= 50 and largest_share < 1.0
 
 
 # --- a box landing flat on its face ------------------------------------------------------
@@ -355,7 +356,7 @@ def mirror_share(solution, impulse_bound, speed_bound) -> float:
              (abs(solution.tangential_impulse[0] + solution.tangential_impulse[1]), b[1] + b[3]),
              (abs(solution.u_after[0]), speed_bound[0]), (abs(solution.u_after[2]),
                                                           speed_bound[2])]
-    return max(gap / bound for gap, bound in pairs)
+    return max(gap / bound if gap else 0.0 for gap, bound in pairs)  # an exact answer: 0
 
 
 def mirrored(impulses):
@@ -585,7 +586,8 @@ def test_flat_box_effective_reading_gains_energy():
     distance = np.array([float(abs(Fraction(float(x)) - f))
                          for x, f in zip(solution.impulses(), fixed)])
     assert np.all(distance <= bound), (distance, bound)
-    assert np.max(distance / bound) < 0.5
+    # (an exact answer, as under OpenBLAS's SkylakeX kernel, has distance and bound 0)
+    assert all(d <= b / 2 for d, b in zip(distance, bound))
     u_exact, speed_bound = effective_speeds_bound(system, solution, fixed, bound)
     assert u_exact == [0, 2, 0]
     assert np.all(np.abs(solution.u_after - [0.0, 2.0, 0.0]) <= speed_bound)
