@@ -15,7 +15,11 @@ from harness.report import table3 as paper
 # Kind (docs/verdicts.md, 'Same answers on every CPU'): a derived bound, the print's: half a
 # unit of the 4th decimal the paper rounds to; (1 + 1e-9) keeps a value printed exactly on a
 # half unit from failing by our own rounding (~1e-16 relative on these well-conditioned rows).
-# Collision types: decisions, compared exactly.
+# Collision types: decisions, compared exactly. Still stated, NOT derived: the 1e-12
+# distance and 1e-9 e_i of test_a_reachable_du_is_at_distance_zero_and_its_e_is_found (three
+# solves and a line fit in the kinetic-energy norm, rounding ~1e-16 of |Δu| ~ 1, against an
+# exact 0 and 0.37: a derivation would bound the fit's quotient), and the 1e-5 for the second
+# order of the energy check in test_poisson_row2_misprints_pinned.
 ROUNDING_4DP = 0.5e-4 * (1 + 1e-9)
 
 
