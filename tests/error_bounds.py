@@ -26,6 +26,12 @@ nearest, whatever order or fused multiply-adds a kernel uses:
   is ``fl(x op y)``, within ``u |fl(x op y)|`` of ``x op y`` (Higham eq. (2.5)), and the
   operands' bounds are carried through each operation exactly (not only to first order).
 
+* a solve's or an iteration's answer ``x̂`` is within ``|A⁻¹| |A x̂ − b|`` of the exact
+  solution of ``A x = b`` (a posteriori): with ``A``, ``b`` rebuilt exactly in Fractions from
+  the floats the computation read, the residual and the inverse are exact, and no constant
+  of the solver's backward error enters; :class:`Exact` runs the library's formulas (written
+  with float constants) in exact arithmetic to build them.
+
 The libm functions are not IEEE operations: glibc documents ``cos`` and ``sin`` within 1 ulp
 on x86-64 (its manual, 'Known Maximum Errors in Math Functions'), i.e. relative error at most
 ``2 u`` (:data:`LIBM_RELATIVE`); two machines' libms may round them differently.
