@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 
 from tests.error_bounds import (
     LIBM_RELATIVE,
+    Exact,
     Tracked,
     U,
     bilinear_bound,
@@ -216,3 +217,18 @@ def test_tracked_values_are_plain_floats_and_the_bound_is_tight_for_a_sum():
     assert total.error <= gamma(49) * math.fsum(terms)
     assert total.error >= 0.5 * U * math.fsum(terms)  # not absurdly loose either
     assert (Tracked(1.0) / Tracked(1e-20, 1e-20)).error == math.inf
+
+
+@given(finite, finite, st.floats(min_value=0.5, max_value=4.0))
+def test_exact_keeps_float_constants_exact(a, b, c):
+    """Fraction * float is a float; Exact * float stays exact, through every operation and
+    comparison the laws' formulas use."""
+    x, y = Exact(a), Exact(b)
+    expected = (Fraction(a) + 2 * Fraction(b)) / Fraction(c) - Fraction(1, 10)
+    got = (x + 2.0 * y) / c - Fraction(1, 10)
+    assert type(got) is Exact and got.value == expected
+    assert (1.0 - x).value == 1 - Fraction(a) and (-x).value == -Fraction(a)
+    assert abs(x).value == abs(Fraction(a)) and (c / Exact(c)).value == 1
+    assert (x < y) == (a < b) and (x <= b) == (a <= b) and (x == a) and not (x != a)
+    assert float(x * 0.1) == float(Fraction(a) * Fraction(0.1))
+    assert Exact(x).value == Fraction(a)
