@@ -372,7 +372,8 @@ def mirrored(impulses):
 def test_flat_box_solutions_are_symmetric(law, coupling):
     system = flat_box()
     found = sim.coherent_solutions(system, law, coupling=coupling)
-    assert found
+    # The effective reading may have none for the paper's Stronge here (docs/multi-contact.md).
+    assert found or (law, coupling) == ("stronge-paper", "effective")
     # The set is mirror-symmetric: x → −x swaps the corners and flips t, so each solution's
     # mirror image (I_n swapped, I_t swapped and negated) is a solution, itself or another:
     # bit for bit in the literal reading (mirrored arithmetic, see above); in the effective
