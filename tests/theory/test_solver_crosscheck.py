@@ -247,19 +247,22 @@ def pgs_against_closed_form_bound(r, pgs, closed):
     step = 1e-13 * (abs(normal) + abs(tangential))
     mnn, mnt, mtt = r["mnn"], abs(r["mnt"]), r["mtt"]
 
-    def exact_residual(values):
-        values = [Fraction(x) for x in values]
-        return [abs(sum(a * x for a, x in zip(row, values)) - b) for row, b in zip(matrix, rhs)]
+    def exact_residual(values, k):
+        return abs(sum(a * Fraction(x) for a, x in zip(matrix[k], values)) - rhs[k])
 
-    residual = exact_residual(pgs)
     if normal > 0:  # unclamped at its last update
         evaluated = gamma(4) * (abs(r["e"] * r["vn"]) + abs(r["vn"]) + mnn * (normal + step)
                                 + mnt * (abs(tangential) + step))
-        residual[0] = Fraction(pgs_row_bound(mnn, evaluated, normal, step) + mnt * step)
+        normal_residual = Fraction(pgs_row_bound(mnn, evaluated, normal, step) + mnt * step)
+    else:
+        normal_residual = exact_residual(pgs, 0)
     if sticks and abs(tangential) < r["mu"] * normal:
         evaluated = gamma(3) * (abs(r["vt"]) + mnt * normal + mtt * (abs(tangential) + step))
-        residual[1] = Fraction(pgs_row_bound(mtt, evaluated, tangential, step))
-    closed_residual = exact_residual(closed)
+        tangential_residual = Fraction(pgs_row_bound(mtt, evaluated, tangential, step))
+    else:
+        tangential_residual = exact_residual(pgs, 1)
+    residual = (normal_residual, tangential_residual)
+    closed_residual = (exact_residual(closed, 0), exact_residual(closed, 1))
     inverse = [[matrix[1][1], -matrix[0][1]], [-matrix[1][0], matrix[0][0]]]
     determinant = matrix[0][0] * matrix[1][1] - matrix[0][1] * matrix[1][0]
     return np.array([float(sum(abs(a / determinant) * (x + y) for a, x, y in zip(
