@@ -271,7 +271,8 @@ def effective_fixed_point(system, law, solution):
     against the exact hand problem's fixed point, a posteriori: ``(I*, bound)`` with
     ``|Î − I*| <= bound`` per component.
 
-    The map is ``I ↦ c + B I`` (checked exactly at Î), so ``Î − I* = (Id − B)⁻¹ r`` with
+    The map is ``I ↦ c + B I`` with ``c = map(0)``, ``B``'s columns ``map(e_k) − c`` (checked
+    exactly at Î and at I*, the points used), so ``Î − I* = (Id − B)⁻¹ r`` with
     ``r = Î − map(Î)`` Î's exact residual in the exact problem (the floats' rounding of the
     inputs, the Newton steps' stopping and the law's last evaluation all in it):
     ``bound = |(Id − B)⁻¹| |r|``, exact up to the final conversion. No stopping rule or
