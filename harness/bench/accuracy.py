@@ -327,14 +327,14 @@ def write_pareto_figure(result: dict, path: Path) -> None:
 
 
 def time_axis(axis, times_us: np.ndarray) -> None:
-    """A log axis of wall times (µs) that names its values: powers of ten over two decades or
-    more (2×10², 3×10² … would overlap), else 1, 2 and 5 times them, over at least a factor
+    """A log axis of wall times (µs) that names its values: powers of ten over three decades
+    or more (2×10², 5×10² … would crowd), else 1, 2 and 5 times them, over at least a factor
     of 2.56, which holds one of them (times within one decade may hold no power of ten,
     and so show no number)."""
     from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
     finite = times_us[np.isfinite(times_us) & (times_us > 0)]
-    if finite.size and finite.max() / finite.min() < 100.0:
+    if finite.size and finite.max() / finite.min() < 1000.0:
         middle = math.sqrt(finite.max() * finite.min())
         half = max(1.6, 1.15 * math.sqrt(finite.max() / finite.min()))
         axis.set_xlim(middle / half, middle * half)
