@@ -43,6 +43,12 @@ def case_text(record: dict) -> str:
     return f"{name} {number_text(value)} {unit}".rstrip()
 
 
+def table_cell(text: str) -> str:
+    """``text`` as one cell of a Markdown table: its ``|`` (``|v_n|/|v_t|``, an engine's
+    message) as ``∣``, which does not end the cell."""
+    return text.replace("|", "∣")
+
+
 def grid_rows(engines: dict) -> list[tuple[str, str | None]]:
     """The grid's rows, ``(label, engine or None)``: each engine and preset in the order they
     ran (the registry's, by :func:`engine_stress`), then each engine not installed."""
@@ -224,9 +230,9 @@ def stress_markdown(report: dict) -> str:
     for record in engines["runs"]:
         if record["outcome"] != "ok":
             ratio = record.get("energy_ratio")
-            message = (record.get("error") or "")[:160].replace("|", "/")  # a cell of its own
+            message = table_cell((record.get("error") or "")[:160])
             lines.append(f"| {source_label(record['engine'], record['preset'])} | "
-                         f"{record['shape']}: {case_text(record)} | "
+                         f"{record['shape']}: {table_cell(case_text(record))} | "
                          f"{record['outcome']} | {record['status']} | {fmt(ratio)} | "
                          f"{fmt(record.get('max_penetration_relative'))} | {message} |")
     cache = engines["cache"]

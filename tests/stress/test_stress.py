@@ -317,3 +317,25 @@ def test_an_engine_that_raises_refuses_or_dies_is_reported(tmp_path, monkeypatch
     again = stress_engines.engine_stress(quick=True, workers=1, use_cache=True,
                                          cache_root=tmp_path / "cache")
     assert again["tasks_run"] == len(PRESET_ROLES)  # the stopped runs only
+
+
+def test_a_case_or_message_with_a_bar_stays_in_its_cell():
+    # |v_n|/|v_t| (the grazing cases) and an engine's message may hold "|", which would
+    # split the Markdown row the stress page is made of
+    record = {"engine": "pymunk", "preset": "accurate", "shape": "disk", "family": "grazing",
+              "label": "grazing=0.001", "value": 0.001, "outcome": "no-contact",
+              "status": "no-contact", "energy_ratio": 1.0, "max_penetration_relative": 0.0,
+              "error": "a | b"}
+    engines = {"runs": [record], "skipped": {}, "cache": {"hits": 0, "misses": 1},
+               "tasks_run": 1,
+               "counts": {"pymunk.accurate": {**dict.fromkeys(stress_engines.OUTCOMES, 0),
+                                              "no-contact": 1}}}
+    text = stress_outputs.stress_markdown({"quick": True, "solver": _tiny_solver_report(),
+                                           "engines": engines,
+                                           "provenance": {"created_utc": "now"},
+                                           "timings": {"solver_s": 0.0, "engines_s": 0.0}})
+    lines = text.splitlines()
+    header = lines.index("Runs not ok:") + 2
+    row = next(line for line in lines[header:] if line.startswith("| pymunk.accurate"))
+    assert row.count("|") == lines[header].count("|") == 8
+    assert "disk: ∣v_n∣/∣v_t∣ 0.001" in row and "a ∣ b" in row
