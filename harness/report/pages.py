@@ -112,11 +112,13 @@ CAPTIONS = {
     "solver-throughput": ("Problems solved per second by <code>solve_batch</code> against the "
                           "batch size, per law; the dotted line is the pure-Python exact "
                           "impulse process, one problem at a time."),
-    "engine-grid": ("Each engine and preset (rows) on each extreme stress scene (columns): "
-                    "the outcome of its run, coloured as the key says."),
+    "engine-grid": ("Each engine and preset (rows; an engine not installed is a row of its "
+                    "own) on each stress case (columns, with units; the disk above, the rod "
+                    "below): the outcome of its run, the first that applies, coloured as the "
+                    "key says."),
     "solver-energy": ("Per stress family, the largest relative change of kinetic energy "
-                      "against the family's parameter, for Poisson, Stronge and Newton: "
-                      "above zero is a gain."),
+                      "against the family's parameter, for Poisson, Stronge and Newton, on a "
+                      "symmetric log scale: above zero is a gain."),
     "solver-boundary-jumps": ("Per boundary of Table 1, the solution's jump when the "
                               "problem crosses it by a tiny step, per law: a jump that does "
                               "not shrink with the step is a discontinuity of the law."),

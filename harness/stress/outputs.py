@@ -148,23 +148,32 @@ def energy_figure(solver: dict, path: Path) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import NullLocator
 
     families = [name for name in solver["families"] if name != "e-mu-extremes"]
-    figure, axes = plt.subplots(1, len(families), figsize=(4 * len(families), 3.6), sharey=True)
+    figure, axes = plt.subplots(1, len(families), figsize=(4 * len(families), 4.2), sharey=True)
     for axis, family in zip(np.atleast_1d(axes), families):
         for law in ("poisson", "stronge", "newton"):
             by_value = solver["families"][family][law]["max_relative_energy_change_by_parameter"]
             xs = np.array([float(k) for k in by_value])
             ys = np.array([np.nan if v is None else v for v in by_value.values()])
-            # symmetric log: sign(y)·log10(1 + |y|/1e-16)
-            axis.semilogx(xs, np.sign(ys) * np.log10(1 + np.abs(ys) / 1e-16), marker="o",
-                          markersize=3, label=law)
+            axis.plot(xs, ys, marker="o", markersize=3, label=law)
+        axis.set_xscale("log")
+        # gains and losses from rounding (1e-16) to order one, both signs, on one axis
+        axis.set_yscale("symlog", linthresh=1e-16, linscale=0.5)
+        ticks = [-1.0, -1e-5, -1e-10, 0.0, 1e-10, 1e-5, 1.0]
+        axis.set_yticks(ticks, ["−1", "−1e-5", "−1e-10", "0", "1e-10", "1e-5", "1"])
+        axis.yaxis.set_minor_locator(NullLocator())
         axis.axhline(0.0, color="grey", linewidth=0.8)
+        if family == "grazing":  # 1e-9 … 1, then 1e-100 … 1e-300: name the ends only
+            axis.set_xticks([1e-300, 1e-200, 1e-100, 1.0], ["1e-300", "1e-200", "1e-100", "1"])
+            axis.xaxis.set_minor_locator(NullLocator())
         axis.set_title(family)
         axis.set_xlabel({"conditioning": "Δ/(m_nn m_tt)", "mass-ratio": "mass ratio k",
                          "speed": "speed (m/s)", "grazing": "|v_n|/|v_t|",
                          "size": "size L (m)"}.get(family, family))
-    np.atleast_1d(axes)[0].set_ylabel("max ΔE / (|v_n|I_n+|v_t I_t|)\nsign·log10(1+|x|/1e-16)")
+    np.atleast_1d(axes)[0].set_ylabel("largest ΔE / (|v_n| I_n + |v_t I_t|)\n"
+                                      "(symmetric log scale, linear within ±1e-16)")
     np.atleast_1d(axes)[0].legend(fontsize=8)
     figure.suptitle("Largest energy change per stress value "
                     "(> 0 is a gain; Newton may gain, Poisson/Stronge must not)")
