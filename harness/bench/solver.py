@@ -52,6 +52,7 @@ from harness.store.files import (
     save_figure,
     write_text_atomically,
 )
+from harness.store.identity import code_version_of
 
 BENCH_FORMAT = "impact-harness-bench"
 BENCH_FORMAT_VERSION = 2
@@ -276,7 +277,11 @@ def main(args) -> int:
             print(f"impact-harness bench --speed-accuracy: {problem}", file=sys.stderr)
             return 2
     make_output_directory(args.out)  # the directory asked for (itself only)
-    table = {"provenance": provenance(BENCH_FORMAT, BENCH_FORMAT_VERSION),
+    # the digest of harness/bench/ beside the cached code's: the report links the bench page
+    # only while both are today's (harness/report/pages.py)
+    command_code = code_version_of((Path(__file__).resolve().parent,))
+    table = {"provenance": provenance(BENCH_FORMAT, BENCH_FORMAT_VERSION,
+                                      command_code_version=command_code),
              "quick": bool(args.quick)}
     path = args.out / "bench.json"
 

@@ -54,6 +54,7 @@ from harness import bounds
 from harness.run.executor import DaskNotInstalled, check_arguments, progress_printer
 from harness.run.provenance import provenance
 from harness.store.files import output_directory_problem, write_text_atomically
+from harness.store.identity import code_version_of
 from harness.stress.engines import engine_stress
 from harness.stress.outputs import (
     boundary_jumps_figure,
@@ -66,6 +67,9 @@ from harness.stress.solver import solver_stress
 
 STRESS_FORMAT = "impact-harness-stress"
 STRESS_FORMAT_VERSION = 2
+#: The digest of this package's code, beside the cached code's (``code_version``): the report
+#: links the stress page only while both are today's (harness/report/pages.py).
+COMMAND_CODE_VERSION = code_version_of((Path(__file__).resolve().parent,))
 
 
 def run(quick: bool, out_dir: Path, executor: str = "local", workers: int | None = None,
@@ -90,7 +94,8 @@ def run(quick: bool, out_dir: Path, executor: str = "local", workers: int | None
     report = {
         "quick": quick,
         "provenance": provenance(STRESS_FORMAT, STRESS_FORMAT_VERSION,
-                                 engine_versions=engine_report["versions"], executor=executor),
+                                 engine_versions=engine_report["versions"], executor=executor,
+                                 command_code_version=COMMAND_CODE_VERSION),
         "timings": {"solver_s": solver_s, "engines_s": engines_s},
         "solver": solver,
         "engines": engine_report,

@@ -94,6 +94,10 @@ def test_a_run_into_a_new_directory_holds_its_sections_only(tmp_path, monkeypatc
     assert bench.main(_bench_args(tmp_path / "new", solver=True)) == 0
     table = json.loads((tmp_path / "new" / "bench.json").read_text())
     assert set(table["measured"]) == {"solver"} and "survey" not in table
+    # the digest of harness/bench/ the report compares with today's before linking the page
+    from harness.report.pages import command_code_version
+
+    assert table["provenance"]["command_code_version"] == command_code_version("bench")
 
 
 def test_a_section_that_fails_leaves_the_finished_ones_in_bench_json(tmp_path, monkeypatch):
