@@ -327,21 +327,22 @@ def write_pareto_figure(result: dict, path: Path) -> None:
 
 
 def time_axis(axis, times_us: np.ndarray) -> None:
-    """A log axis of wall times (µs) that names its values: powers of ten over three decades
-    or more (2×10², 5×10² … would crowd), else 1, 2 and 5 times them, over at least a factor
-    of 2.56, which holds one of them (times within one decade may hold no power of ten,
-    and so show no number)."""
+    """A log axis of wall times (µs) that names its values as numbers (``20``, ``5000``):
+    1, 2 and 5 times the powers of ten when the times span less than two decades (over at
+    least a factor of 2.56, which holds one of them: times within one decade may hold no
+    power of ten, and so show no number), the powers of ten alone beyond (more would
+    crowd)."""
     from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
     finite = times_us[np.isfinite(times_us) & (times_us > 0)]
-    if finite.size and finite.max() / finite.min() < 1000.0:
+    if finite.size and finite.max() / finite.min() < 100.0:
         middle = math.sqrt(finite.max() * finite.min())
         half = max(1.6, 1.15 * math.sqrt(finite.max() / finite.min()))
         axis.set_xlim(middle / half, middle * half)
         axis.xaxis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
-        axis.xaxis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
     else:
-        axis.xaxis.set_major_locator(LogLocator(base=10, numticks=5))
+        axis.xaxis.set_major_locator(LogLocator(base=10, numticks=6))
+    axis.xaxis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
     axis.xaxis.set_minor_formatter(NullFormatter())
 
 
