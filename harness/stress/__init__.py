@@ -54,8 +54,7 @@ from harness import bounds
 from harness.run.executor import DaskNotInstalled, check_arguments, progress_printer
 from harness.run.provenance import provenance
 from harness.store.files import output_directory_problem, write_text_atomically
-from harness.store.identity import code_version_of
-from harness.stress.engines import engine_stress
+from harness.stress.engines import COMMAND_CODE_VERSION, engine_stress
 from harness.stress.outputs import (
     boundary_jumps_figure,
     energy_figure,
@@ -67,9 +66,6 @@ from harness.stress.solver import solver_stress
 
 STRESS_FORMAT = "impact-harness-stress"
 STRESS_FORMAT_VERSION = 2
-#: The digest of this package's code, beside the cached code's (``code_version``): the report
-#: links the stress page only while both are today's (harness/report/pages.py).
-COMMAND_CODE_VERSION = code_version_of((Path(__file__).resolve().parent,))
 
 
 def run(quick: bool, out_dir: Path, executor: str = "local", workers: int | None = None,

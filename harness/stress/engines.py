@@ -23,6 +23,7 @@ from harness.run.executor import run_tasks
 from harness.scene import Body, Disk, Rod, Scene
 from harness.scene.geometry import impact_problem, scene_contact
 from harness.store.cache import ResultCache
+from harness.store.identity import code_version_of
 
 OUTCOMES: dict[str, str] = {
     "stopped": "the run was stopped: over its time limit, or its worker process died (a crash "
@@ -50,6 +51,10 @@ OUTCOME_COLOURS = {"stopped": "#08306b", "error": "#000000", "unsupported": "#6b
 #: whole contact) take a few seconds; one 20 times slower is stuck, and is reported as
 #: ``stopped``, the other runs going on.
 RUN_TIME_LIMIT_S = 120.0
+#: The digest of harness/stress/ (the cases, the outcomes and how a run is judged), which the
+#: cached code's version (``code_version``) does not cover: in each run's cache key, and in
+#: the provenance the report compares with today's before it links the stress page.
+COMMAND_CODE_VERSION = code_version_of((Path(__file__).resolve().parent,))
 
 
 
@@ -204,7 +209,8 @@ def engine_stress(quick: bool, executor: str = "local", workers: int | None = No
              for name in versions for preset in presets for case in cases]
     cache = ResultCache(cache_root, enabled=use_cache)
     keys = [cache.key({"kind": "stress-engine", "task": task,
-                       "engine_version": versions[task["engine"]]})
+                       "engine_version": versions[task["engine"]],
+                       "stress_code": COMMAND_CODE_VERSION})
             for task in tasks]
     records: list[dict | None] = [cache.get(key) for key in keys]
     todo = [index for index, record in enumerate(records) if record is None]

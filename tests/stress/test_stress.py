@@ -317,6 +317,11 @@ def test_an_engine_that_raises_refuses_or_dies_is_reported(tmp_path, monkeypatch
     again = stress_engines.engine_stress(quick=True, workers=1, use_cache=True,
                                          cache_root=tmp_path / "cache")
     assert again["tasks_run"] == len(PRESET_ROLES)  # the stopped runs only
+    # another harness/stress/ (how a run is judged) names every run anew: none is reused
+    monkeypatch.setattr(stress_engines, "COMMAND_CODE_VERSION", "another stress code")
+    anew = stress_engines.engine_stress(quick=True, workers=1, use_cache=True,
+                                        cache_root=tmp_path / "cache")
+    assert anew["tasks_run"] == len(anew["runs"]) == 2 * 5
 
 
 def test_a_case_or_message_with_a_bar_stays_in_its_cell():
