@@ -436,6 +436,10 @@ def run(quick: bool, out_dir: Path) -> dict:
             load_engine(name)
         except EngineNotInstalled as error:
             report["engines"][name] = {"skipped": str(error)}
+            # an earlier run's figure would show on the bench page as this run's
+            stale = out_dir / f"pareto-{name}.png"
+            if stale.is_file() and not stale.is_symlink():
+                stale.unlink()
             continue
         reference_label(name, quick)  # a converged engine without its point: refused now
         installed.append(name)

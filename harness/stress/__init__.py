@@ -100,8 +100,11 @@ def run(quick: bool, out_dir: Path, executor: str = "local", workers: int | None
     write_engine_csv(engine_report, out_dir / "stress-engines.csv")
     boundary_jumps_figure(solver, out_dir / "solver-boundary-jumps.png")
     energy_figure(solver, out_dir / "solver-energy.png")
+    grid = out_dir / "engine-grid.png"
     if engine_report["runs"]:
-        engine_grid_figure(engine_report, out_dir / "engine-grid.png")
+        engine_grid_figure(engine_report, grid)
+    elif grid.is_file() and not grid.is_symlink():  # an earlier run's, not this one's
+        grid.unlink()
     write_text_atomically(out_dir / "stress.md", stress_markdown(report))
     return report
 

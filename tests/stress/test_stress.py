@@ -177,7 +177,9 @@ def test_engine_case_smoke():
 
 def test_run_solver_only_writes_the_report(tmp_path, monkeypatch):
     monkeypatch.setattr(stress, "solver_stress", lambda quick: _tiny_solver_report())
+    (tmp_path / "engine-grid.png").write_bytes(b"\x89PNG\r\n\x1a\n")  # an earlier run's
     report = stress.run(quick=True, out_dir=tmp_path, engines=False)
+    assert not (tmp_path / "engine-grid.png").exists()  # no engine ran: no grid shown
     for name in ("stress.md", "stress.json", "stress-engines.csv", "solver-boundary-jumps.png",
                  "solver-energy.png"):
         assert (tmp_path / name).exists(), name
