@@ -248,12 +248,13 @@ def write_pareto_figure(result: dict, path: Path) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from matplotlib.ticker import LogLocator, NullFormatter
+    from matplotlib.ticker import LogLocator
 
     figure, axes = plt.subplots(1, len(FAMILIES), figsize=(4.6 * len(FAMILIES), 6.6),
                                 sharey=True)
     floor = 1e-17  # departures of exactly 0 are drawn here
     varying = varying_keys(result["rows"])
+    listed = 0  # the most settings listed under a panel
     for axis, family in zip(axes, FAMILIES):
         rows = [r for r in result["rows"] if r["family"] == family and "departure" in r
                 and r["setting"] != result.get("reference_setting")]
@@ -272,28 +273,30 @@ def write_pareto_figure(result: dict, path: Path) -> None:
         if front:
             axis.step(*zip(*front), where="post", color="#0072b2", linewidth=1,
                       label="Pareto front (numbered: settings below)")
-            # the front's points numbered on the plot, their settings listed under the panel
-            on_front = {point: None for point in front}
+            # the front's points numbered on the plot from the fastest, their settings
+            # listed under the panel
             names = []
-            for row, time_us, value in zip(rows, times.tolist(), own.tolist()):
-                if row["status"] == "ok" and (time_us, value) in on_front \
-                        and on_front[(time_us, value)] is None:
-                    names.append(setting_label(row, varying))
-                    on_front[(time_us, value)] = len(names)
-                    axis.annotate(str(len(names)), (time_us, value), fontsize=9,
-                                  xytext=(4, 2), textcoords="offset points",
-                                  color="#0072b2", fontweight="bold")
-            listing = axis.text(0.0, -0.2, "\n".join(f"{number}  {name}" for number, name
-                                                    in enumerate(names, 1)),
-                                transform=axis.transAxes, va="top", ha="left", fontsize=8.5)
+            for time_us, value in front:
+                row = next(r for r, t, v in zip(rows, times.tolist(), own.tolist())
+                           if r["status"] == "ok" and (t, v) == (time_us, value))
+                names.append(setting_label(row, varying))
+                axis.annotate(str(len(names)), (time_us, value), fontsize=9,
+                              xytext=(4, 2), textcoords="offset points",
+                              color="#0072b2", fontweight="bold")
+            # under the tick labels and the axis label (about 30 points), whatever the height
+            listing = axis.annotate("\n".join(f"{number}  {name}" for number, name
+                                              in enumerate(names, 1)),
+                                    (0.0, 0.0), xycoords="axes fraction", xytext=(0, -40),
+                                    textcoords="offset points", va="top", ha="left",
+                                    fontsize=8.5)
             listing.set_in_layout(False)
+            listed = max(listed, len(names))
         for threshold in THRESHOLDS:
             axis.axhline(threshold, color="black", linestyle=":", linewidth=0.8)
         axis.set_xscale("log")
         axis.set_yscale("log")
         axis.yaxis.set_major_locator(LogLocator(base=10, numticks=7))
-        axis.xaxis.set_major_locator(LogLocator(base=10, numticks=5))
-        axis.xaxis.set_minor_formatter(NullFormatter())  # 2×10², 3×10² … overlapped
+        time_axis(axis, times)
         axis.set_title(family, fontsize=12)
         axis.set_xlabel("wall time per impact [µs]", fontsize=11)
         axis.tick_params(labelsize=10)
@@ -309,9 +312,38 @@ def write_pareto_figure(result: dict, path: Path) -> None:
                   frameon=False, bbox_to_anchor=(0.5, 0.955))
     figure.suptitle(f"{result['engine']} {result['version']}: time against departure per "
                     "setting (dotted: 1% and 0.1%)", fontsize=13)
-    figure.tight_layout(rect=(0, 0.3, 1, 0.93))
+    # inches, top to bottom: title and legend, panel titles, panels, tick labels and axis
+    # label, the longest listing of settings (placed, not left to tight_layout, which left
+    # gaps of an inch around a listing it could not see)
+    above, titles, panels, labels, below = 0.8, 0.3, 3.0, 0.6, 0.15 * listed + 0.3
+    height = above + titles + panels + labels + below
+    width = 4.6 * len(FAMILIES)
+    figure.set_size_inches(width, height)
+    figure.legends[0].set_bbox_to_anchor((0.5, 1 - 0.4 / height))
+    figure.subplots_adjust(left=0.75 / width, right=1 - 0.15 / width, wspace=0.08,
+                           top=1 - (above + titles) / height, bottom=(labels + below) / height)
     save_figure(figure, path, "png", dpi=110)  # over a regular file only
     plt.close(figure)
+
+
+def time_axis(axis, times_us: np.ndarray) -> None:
+    """A log axis of wall times (µs) that names its values as numbers (``20``, ``5000``):
+    1, 2 and 5 times the powers of ten when the times span less than two decades (over at
+    least a factor of 2.56, which holds one of them: times within one decade may hold no
+    power of ten, and so show no number), the powers of ten alone beyond (more would
+    crowd)."""
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
+    finite = times_us[np.isfinite(times_us) & (times_us > 0)]
+    if finite.size and finite.max() / finite.min() < 100.0:
+        middle = math.sqrt(finite.max() * finite.min())
+        half = max(1.6, 1.15 * math.sqrt(finite.max() / finite.min()))
+        axis.set_xlim(middle / half, middle * half)
+        axis.xaxis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+    else:
+        axis.xaxis.set_major_locator(LogLocator(base=10, numticks=6))
+    axis.xaxis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
+    axis.xaxis.set_minor_formatter(NullFormatter())
 
 
 # ---------------------------------------------------------------------- scaling
@@ -404,6 +436,10 @@ def run(quick: bool, out_dir: Path) -> dict:
             load_engine(name)
         except EngineNotInstalled as error:
             report["engines"][name] = {"skipped": str(error)}
+            # an earlier run's figure would show on the bench page as this run's
+            stale = out_dir / f"pareto-{name}.png"
+            if stale.is_file() and not stale.is_symlink():
+                stale.unlink()
             continue
         reference_label(name, quick)  # a converged engine without its point: refused now
         installed.append(name)

@@ -52,6 +52,7 @@ from harness.store.files import (
     save_figure,
     write_text_atomically,
 )
+from harness.store.identity import code_version_of
 
 BENCH_FORMAT = "impact-harness-bench"
 BENCH_FORMAT_VERSION = 2
@@ -276,19 +277,34 @@ def main(args) -> int:
             print(f"impact-harness bench --speed-accuracy: {problem}", file=sys.stderr)
             return 2
     make_output_directory(args.out)  # the directory asked for (itself only)
-    table = {"provenance": provenance(BENCH_FORMAT, BENCH_FORMAT_VERSION),
+    # the digest of harness/bench/ beside the cached code's: the report links the bench page
+    # only while both are today's (harness/report/pages.py)
+    command_code = code_version_of((Path(__file__).resolve().parent,))
+    table = {"provenance": provenance(BENCH_FORMAT, BENCH_FORMAT_VERSION,
+                                      command_code_version=command_code),
              "quick": bool(args.quick)}
+    path = args.out / "bench.json"
+
+    def keep() -> None:
+        """bench.json with every section measured so far: a section that fails later (an
+        engine, a subprocess) leaves the finished ones written."""
+        write_text_atomically(path, json.dumps(merged_table(path, table, names), indent=1,
+                                               default=str))
+
     if "solver" in selected:
         results = solver_benchmark(args.quick)
         print_solver(results)
         write_solver_figure(results, args.out / "solver-throughput.png")
         table["solver"] = results
+        keep()
     if "engines" in selected:
         report = bench_engines.run_engine_overhead_benchmark(quick=args.quick)
         print(bench_engines.format_table(report))
         table["engines"] = report
+        keep()
     if "speed_accuracy" in selected:
         table["speed_accuracy"] = bench_accuracy.run(args.quick, args.out)
+        keep()
     if "survey" in selected:
         samples = bench_survey.QUICK_SAMPLES if args.quick else bench_survey.SAMPLES
         rounds = bench_survey.QUICK_ROUNDS if args.quick else bench_survey.ROUNDS
@@ -297,6 +313,7 @@ def main(args) -> int:
             bench_survey.QUICK_MEMORY_SIZES if args.quick else bench_survey.MEMORY_SIZES)
         print(bench_survey.format_report(report))
         table["survey"] = report
+        keep()
     if "executors" in selected:
         try:
             check_arguments("dask")
@@ -308,9 +325,8 @@ def main(args) -> int:
                 per_task=not args.quick)
             print(bench_executors.format_report(report))
             table["executors"] = report
-    path = args.out / "bench.json"
-    write_text_atomically(path, json.dumps(merged_table(path, table, names), indent=1,
-                                           default=str))
+            keep()
+    keep()  # (the sections not run this time kept from the file, as each keep() did)
     print(f"written {path}")
     return 0
 

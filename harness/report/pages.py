@@ -16,6 +16,7 @@ from pathlib import Path
 from harness.report.markup import html_table, markdown_to_html, page_head
 from harness.report.views import escape_html
 from harness.store.files import make_inner_directory, write_bytes_atomically, write_text_atomically
+from harness.store.identity import code_version_of
 
 BENCH_PAGE, STRESS_PAGE = "bench.html", "stress.html"
 PAGE_TITLES = {BENCH_PAGE: "Benchmarks: speed and accuracy",
@@ -112,11 +113,13 @@ CAPTIONS = {
     "solver-throughput": ("Problems solved per second by <code>solve_batch</code> against the "
                           "batch size, per law; the dotted line is the pure-Python exact "
                           "impulse process, one problem at a time."),
-    "engine-grid": ("Each engine and preset (rows) on each extreme stress scene (columns): "
-                    "the outcome of its run, coloured as the key says."),
+    "engine-grid": ("Each engine and preset (rows; an engine not installed is a row of its "
+                    "own) on each stress case (columns, with units; the disk above, the rod "
+                    "below): the outcome of its run, the first that applies, coloured as the "
+                    "key says."),
     "solver-energy": ("Per stress family, the largest relative change of kinetic energy "
-                      "against the family's parameter, for Poisson, Stronge and Newton: "
-                      "above zero is a gain."),
+                      "against the family's parameter, for Poisson, Stronge and Newton, on a "
+                      "symmetric log scale: above zero is a gain."),
     "solver-boundary-jumps": ("Per boundary of Table 1, the solution's jump when the "
                               "problem crosses it by a tiny step, per law: a jump that does "
                               "not shrink with the step is a discontinuity of the law."),
@@ -148,9 +151,10 @@ def write_page(out_dir: Path, file: str, body: Sequence[str]) -> Path:
     return path
 
 
-def provenance_html(made: dict, report: dict, command: str) -> str:
+def provenance_html(made: dict, report: dict, command: str, page: str | None = None) -> str:
     """Where a page's numbers come from (commit, date, machine) and, when that differs from
-    the report's own results, a warning that they may be stale and how to refresh them."""
+    the report's own results (or, for ``page``, its command's code from today's), a warning
+    that they may be stale and how to refresh them."""
     commit = ((made.get("git") or {}).get("commit") or "")[:10]
     dirty = " with uncommitted changes" if (made.get("git") or {}).get("dirty") else ""
     when = made.get("created_utc") or made.get("time") or "an unknown date"
@@ -170,6 +174,10 @@ def provenance_html(made: dict, report: dict, command: str) -> str:
                     "its code version is not recorded, so it may predate")
                  + f" the report's results; <code>{escape_html(command)}</code> measures "
                  "them again.")
+    elif page is not None and not command_code_holds(made, page):
+        text += (f" <b>Older than the report</b>: measured by another version of "
+                 f"<code>harness/{PAGE_CODE[page]}/</code> than today's; "
+                 f"<code>{escape_html(command)}</code> measures them again.")
     return f"<p class='provenance'>{text}</p>"
 
 
@@ -179,7 +187,7 @@ def write_bench_page(bench_json: Path, out_dir: Path, report: dict | None = None
     data = json.loads(bench_json.read_text(encoding="utf-8"))
     names = copy_figures(bench_json.parent, out_dir / PAGE_DIRECTORIES[0])
     body = [provenance_html(data.get("provenance") or {}, report or {},
-                            PAGE_COMMANDS[BENCH_PAGE]),
+                            PAGE_COMMANDS[BENCH_PAGE], BENCH_PAGE),
             ("<p>Written by <code>impact-harness bench</code>; machine-readable: "
              "<a href='bench/bench.json'>bench.json</a>.</p>"), figures_html("bench", names)]
     copy = out_dir / "bench" / "bench.json"
@@ -203,7 +211,7 @@ def write_stress_page(stress_md: Path, out_dir: Path, report: dict | None = None
     lines = text.splitlines()
     if lines and lines[0].startswith("# "):  # the page has its own title
         text = "\n".join(lines[1:])
-    body = [provenance_html(made, report or {}, PAGE_COMMANDS[STRESS_PAGE]),
+    body = [provenance_html(made, report or {}, PAGE_COMMANDS[STRESS_PAGE], STRESS_PAGE),
             markdown_to_html(text, heading_shift=1), "<h2>Figures</h2>",
             figures_html("stress", names)]
     return write_page(out_dir, STRESS_PAGE, body)
@@ -213,12 +221,33 @@ def write_stress_page(stress_md: Path, out_dir: Path, report: dict | None = None
 PAGE_COMMANDS = {BENCH_PAGE: "make bench", STRESS_PAGE: "make stress"}
 
 
-def is_current(made: dict, report: dict) -> bool:
+#: The command package behind each page, whose code makes its numbers beside the cached
+#: code that ``code_version`` hashes (the solver, the engines' adapters, the scenes).
+PAGE_CODE = {BENCH_PAGE: "bench", STRESS_PAGE: "stress"}
+_HARNESS_DIR = Path(__file__).resolve().parent.parent  # harness/, from harness/report/
+
+
+def command_code_version(package: str) -> str:
+    """The SHA-256 of ``harness/<package>/`` today, as :func:`code_version_of` hashes code;
+    ``bench`` and ``stress`` record theirs in their provenance (``command_code_version``)."""
+    return code_version_of((_HARNESS_DIR / package,))
+
+
+def command_code_holds(made: dict, page: str) -> bool:
+    """Whether the command code a page was measured by is today's: a file that does not
+    record it (written before it was recorded) is judged by ``code_version`` alone."""
+    recorded = made.get("command_code_version")
+    return recorded is None or recorded == command_code_version(PAGE_CODE[page])
+
+
+def is_current(made: dict, report: dict, page: str | None = None) -> bool:
     """Whether a page measured with provenance ``made`` holds for the report's results
     (provenance ``report``): made by the same code (its digest, not the commit, which a
-    change of docs moves)."""
-    return bool(made.get("code_version")) and made.get("code_version") == report.get(
-        "code_version")
+    change of docs moves) and, for ``page``, by today's code of its command
+    (:func:`command_code_holds`)."""
+    return (bool(made.get("code_version"))
+            and made.get("code_version") == report.get("code_version")
+            and (page is None or command_code_holds(made, page)))
 
 
 def made_by(json_file: Path) -> dict:
@@ -247,12 +276,15 @@ def write_pages(out_dir: Path, sources: Sequence[Path], report: dict | None = No
             continue
         (write_bench_page if page == BENCH_PAGE else write_stress_page)(found, out_dir, report)
         made = made_by(found.parent / provenance_file)
-        if is_current(made, report):
+        if is_current(made, report, page):
             linked[page] = PAGE_TITLES[page]
         else:
             when = made.get("created_utc") or made.get("time") or "at an unknown date"
-            stale[PAGE_TITLES[page]] = (f"measured {escape_html(when)} with other code than "
-                                        "these results; <code>"
+            other = ("other code than these results"
+                     if made.get("code_version") != report.get("code_version") or
+                     not made.get("code_version")
+                     else f"another version of harness/{PAGE_CODE[page]}/ than today's")
+            stale[PAGE_TITLES[page]] = (f"measured {escape_html(when)} with {other}; <code>"
                                         f"{PAGE_COMMANDS[page]}</code> then <code>"
                                         "impact-harness report</code> measure and link it")
     return linked, stale

@@ -31,7 +31,7 @@ from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-from harness.engines import ENGINE_NAMES
+from harness.engines import ENGINE_NAMES, source_label
 from harness.experiments import drops_engines, registry
 from harness.reference.flat_faces import count_flat
 from harness.report import experiments, findings
@@ -42,6 +42,7 @@ from harness.run.references import point_reference
 from harness.run.verdicts import reason_counts
 from harness.scenarios import load_scenario
 from harness.store.files import write_text_atomically
+from harness.stress import engines as stress_engines
 from harness.survey import cli as survey_cli
 from harness.survey.population import resolve_populations
 from planar_impact.multicontact.families import scan as multicontact_scan
@@ -425,6 +426,31 @@ def ellipse_contact_numbers() -> dict[str, str]:
     return numbers
 
 
+def stress_numbers() -> dict[str, str]:
+    """``impact-harness stress --quick``, its engine runs (read from the result cache when
+    run before): the table of outcomes per engine and preset (docs/stress.md), and each count
+    as ``ENGINE.PRESET.OUTCOME`` (the preset's role: ``mujoco.accurate.no-contact``), with
+    ``cases`` (runs per engine and preset)."""
+    report = stress_engines.engine_stress(quick=True)
+    cases = len(stress_engines.engine_cases(quick=True))
+    numbers = {"cases": str(cases), "engine-runs": str(len(report["runs"]))}
+    rows = ["| engine.preset | runs | ok | not ok, by outcome (the first that applies) |",
+            "|---|---:|---:|---|"]
+    for name in report["versions"]:
+        for role in report["presets"]:
+            counts = report["counts"][source_label(name, role)]
+            for outcome, count in counts.items():
+                numbers[f"{name}.{role}.{outcome}"] = str(count)
+            bad = ", ".join(f"{outcome} {count}" for outcome, count in counts.items()
+                            if count and outcome != "ok")
+            rows.append(f"| {source_label(name, role)} | {sum(counts.values())} | "
+                        f"{counts['ok']} | {bad or '–'} |")
+    rows += [f"| {name} | – | – | not installed: {reason} |"
+             for name, reason in report["skipped"].items()]
+    numbers["table"] = "\n".join(rows)
+    return numbers
+
+
 class Unavailable(Exception):
     """A source whose inputs are not on this machine (the Fazeli drops, never committed):
     its numbers are not checked, and ``findings`` says so."""
@@ -465,6 +491,7 @@ SOURCES: dict[str, Source] = {
     "experiments": Source("impact-harness experiments (its defaults, with "
                           "IMPACT_HARNESS_FAZELI_DIR set to a copy of the Fazeli drops)",
                           experiments_numbers),
+    "stress": Source("impact-harness stress --quick (its engine runs)", stress_numbers),
     "ellipse-contact": Source("impact-harness experiments --engines all (its table \"Each "
                               "engine's ellipse against the true one\")",
                               ellipse_contact_numbers),

@@ -21,15 +21,19 @@ conditioning ``c = Δ/(m_nn m_tt)`` is counted; raw gains above 1e-10 are report
 Newton's gains are counted too, as information (Newton can gain energy; docs/theory.md,
 'Newton's law').
 
-Engines (every installed engine, via :func:`harness.engines.load_engine`): a disk and the
-45° rod against the ground, scaled in mass (1e-6 … 1e6 kg), size (1e-4 … 1e3 m), speed
-(1e-6 … 1e4 m/s), near grazing, e ∈ {0, 1}, μ ∈ {0, 10}, and time steps 1e-6 … 1e-1 s.
-Each run's outcome is the first that applies of: ``error`` (exception), ``non-finite``,
-``blow-up``, ``energy-gain`` (kinetic energy up by more than 1e-6 relative),
-``no-separation`` (step cap hit in contact), ``deep-penetration`` (deeper than 10% of the
-body's extent), ``no-contact`` (never touched within the cap), ``flagged`` (multi-contact,
-out-of-plane), ``ok``. Quick mode runs the ``accurate`` presets; full mode both presets over
-finer sweeps. Missing engines are reported as skipped.
+Engines (every engine of the registry, :func:`harness.engines.engine_names`, those
+registered at run time too; each installed one under both presets, ``defaults`` and
+``accurate``, quick or full): a disk and the 45° rod against the ground, scaled in mass
+(1e-6 … 1e6 kg), size (1e-4 … 1e3 m), speed (1e-6 … 1e4 m/s), near grazing, e ∈ {0, 1},
+μ ∈ {0, 10}, and time steps 1e-6 … 1e-1 s (MuJoCo and Drake keep their contact's duration at
+``accurate``: ``time_step_overrides``). Each run's outcome is the first that applies of:
+``stopped`` (over its time limit, or its worker died), ``error`` (exception),
+``unsupported`` (the adapter refuses the scene: Box2D's polygons below its area floor at
+size 1e-4 m), ``non-finite``, ``blow-up``, ``energy-gain``, ``no-separation`` (step cap hit
+in contact), ``no-contact`` (never touched within the cap), ``deep-penetration`` (deeper
+than 10% of the body's extent), ``clipped`` (a speed at the engine's cap), ``flagged``
+(another failed verdict check), ``ok``. Full mode sweeps finer. An engine not installed is
+reported as such (``skipped``, with the reason), never dropped.
 
 Outputs in ``--out`` (default ``reports/stress``): ``stress.md`` (the stability report),
 ``stress.json`` (everything, machine-readable), ``stress-engines.csv`` (one row per engine
@@ -50,7 +54,7 @@ from harness import bounds
 from harness.run.executor import DaskNotInstalled, check_arguments, progress_printer
 from harness.run.provenance import provenance
 from harness.store.files import output_directory_problem, write_text_atomically
-from harness.stress.engines import engine_stress
+from harness.stress.engines import COMMAND_CODE_VERSION, engine_stress
 from harness.stress.outputs import (
     boundary_jumps_figure,
     energy_figure,
@@ -86,7 +90,8 @@ def run(quick: bool, out_dir: Path, executor: str = "local", workers: int | None
     report = {
         "quick": quick,
         "provenance": provenance(STRESS_FORMAT, STRESS_FORMAT_VERSION,
-                                 engine_versions=engine_report["versions"], executor=executor),
+                                 engine_versions=engine_report["versions"], executor=executor,
+                                 command_code_version=COMMAND_CODE_VERSION),
         "timings": {"solver_s": solver_s, "engines_s": engines_s},
         "solver": solver,
         "engines": engine_report,
@@ -95,8 +100,11 @@ def run(quick: bool, out_dir: Path, executor: str = "local", workers: int | None
     write_engine_csv(engine_report, out_dir / "stress-engines.csv")
     boundary_jumps_figure(solver, out_dir / "solver-boundary-jumps.png")
     energy_figure(solver, out_dir / "solver-energy.png")
+    grid = out_dir / "engine-grid.png"
     if engine_report["runs"]:
-        engine_grid_figure(engine_report, out_dir / "engine-grid.png")
+        engine_grid_figure(engine_report, grid)
+    elif grid.is_file() and not grid.is_symlink():  # an earlier run's, not this one's
+        grid.unlink()
     write_text_atomically(out_dir / "stress.md", stress_markdown(report))
     return report
 

@@ -9,7 +9,9 @@ from pathlib import Path
 import numpy as np
 
 from harness.engines import (
+    PRESET_ROLES,
     EngineNotInstalled,
+    UnsupportedScene,
     body_extent,
     engine_names,
     ke_norm,
@@ -21,9 +23,14 @@ from harness.run.executor import run_tasks
 from harness.scene import Body, Disk, Rod, Scene
 from harness.scene.geometry import impact_problem, scene_contact
 from harness.store.cache import ResultCache
+from harness.store.identity import code_version_of
 
 OUTCOMES: dict[str, str] = {
+    "stopped": "the run was stopped: over its time limit, or its worker process died (a crash "
+               "inside the engine)",
     "error": "the adapter or engine raised an exception",
+    "unsupported": "the adapter refuses to build the scene (UnsupportedScene: the engine cannot "
+                   "represent it, as Box2D's polygons below its area floor b2_epsilon)",
     "non-finite": "NaN or infinite post-impact velocities",
     "blow-up": "kinetic-energy norm grew more than 1e3 times",
     "energy-gain": "kinetic energy gained where newton-lcp does not (the numerics')",
@@ -35,10 +42,19 @@ OUTCOMES: dict[str, str] = {
                "docs/verdicts.md)",
     "ok": "a single impact: every verdict check holds",
 }
-OUTCOME_COLOURS = {"error": "#000000", "non-finite": "#7f0000", "blow-up": "#d7301f",
-                   "energy-gain": "#fc8d59", "no-separation": "#fdcc8a", "no-contact": "#ffffb2",
-                   "deep-penetration": "#c994c7", "clipped": "#8c6bb1",
-                   "flagged": "#bdbdbd", "ok": "#1a9850", "skipped": "#ffffff"}
+OUTCOME_COLOURS = {"stopped": "#08306b", "error": "#000000", "unsupported": "#6baed6",
+                   "non-finite": "#7f0000", "blow-up": "#d7301f", "energy-gain": "#fc8d59",
+                   "no-separation": "#fdcc8a", "no-contact": "#ffffb2",
+                   "deep-penetration": "#c994c7", "clipped": "#8c6bb1", "flagged": "#bdbdbd",
+                   "ok": "#1a9850", "skipped": "#ffffff"}
+#: Wall-clock seconds one stress run may take: the slowest (Drake at a 1 µs step over the
+#: whole contact) take a few seconds; one 20 times slower is stuck, and is reported as
+#: ``stopped``, the other runs going on.
+RUN_TIME_LIMIT_S = 120.0
+#: The digest of harness/stress/ (the cases, the outcomes and how a run is judged), which the
+#: cached code's version (``code_version``) does not cover: in each run's cache key, and in
+#: the provenance the report compares with today's before it links the stress page.
+COMMAND_CODE_VERSION = code_version_of((Path(__file__).resolve().parent,))
 
 
 
@@ -137,6 +153,9 @@ def run_engine_case(task: dict) -> dict:
                      else None)
         settings = engine.settings(preset, overrides)
         run = engine.run(scene, settings)
+    except UnsupportedScene as error:  # the engine's own limit, stated by its adapter
+        record.update(outcome="unsupported", status="unsupported", error=str(error)[:300])
+        return record
     except Exception as error:  # noqa: BLE001 - any failure is an outcome to report
         record.update(outcome="error", status="error",
                       error=f"{type(error).__name__}: {error}"[:300])
@@ -161,14 +180,24 @@ def run_engine_case(task: dict) -> dict:
     return record
 
 
+def stopped_run(task: dict, reason: str) -> dict:
+    """The record of a run the executor stopped (over :data:`RUN_TIME_LIMIT_S`, or its
+    worker died): reported as ``stopped`` with the reason, never dropped."""
+    case = task["case"]
+    return {"engine": task["engine"], "preset": task["preset"], "shape": case["shape"],
+            "family": case["family"], "label": case["label"], "value": case["value"],
+            "outcome": "stopped", "status": "stopped", "error": reason[:300]}
+
+
 def engine_stress(quick: bool, executor: str = "local", workers: int | None = None,
                   scheduler: str | None = None, use_cache: bool = True,
                   cache_root: Path = Path(".cache/results"), progress=None,
                   engines: tuple[str, ...] | None = None) -> dict:
     """All engine runs (cached), grouped; JSON-able. ``engines``: those to stress (default:
     every registered one, :func:`harness.engines.engine_names`, those added at run time
-    included)."""
-    presets = ("accurate",) if quick else ("defaults", "accurate")
+    included); each installed one runs every case under both preset roles (quick or full),
+    one not installed is listed in ``skipped`` with the reason."""
+    presets = PRESET_ROLES  # both roles, quick or full: an engine's defaults fail differently
     skipped, versions = {}, {}
     for name in engine_names() if engines is None else engines:
         try:
@@ -180,17 +209,25 @@ def engine_stress(quick: bool, executor: str = "local", workers: int | None = No
              for name in versions for preset in presets for case in cases]
     cache = ResultCache(cache_root, enabled=use_cache)
     keys = [cache.key({"kind": "stress-engine", "task": task,
-                       "engine_version": versions[task["engine"]]})
+                       "engine_version": versions[task["engine"]],
+                       "stress_code": COMMAND_CODE_VERSION})
             for task in tasks]
     records: list[dict | None] = [cache.get(key) for key in keys]
     todo = [index for index, record in enumerate(records) if record is None]
-    started = time.perf_counter()
-    fresh = run_tasks(run_engine_case, [tasks[i] for i in todo], executor=executor, workers=workers,
-                      scheduler=scheduler, progress=progress)
-    for index, record in zip(todo, fresh):
+
+    def keep(position: int, record: dict) -> None:
+        """Store each run as soon as its chunk finishes: an interrupted stress test keeps
+        what it finished (a stopped run is not stored: a rerun tries it again)."""
+        index = todo[position]
         records[index] = record
-        if record["outcome"] != "error" or "not installed" not in record.get("error", ""):
+        if record["outcome"] != "stopped" and (
+                record["outcome"] != "error" or "not installed" not in record.get("error", "")):
             cache.put(keys[index], record)
+
+    started = time.perf_counter()
+    run_tasks(run_engine_case, [tasks[i] for i in todo], executor=executor, workers=workers,
+              scheduler=scheduler, progress=progress, on_result=keep,
+              time_limit=lambda task: RUN_TIME_LIMIT_S, stopped=stopped_run)
     counts: dict = {}
     for record in records:
         group = counts.setdefault(source_label(record["engine"], record["preset"]),

@@ -14,8 +14,52 @@ from harness.store.files import save_figure, write_text_atomically
 from harness.stress.engines import OUTCOME_COLOURS, OUTCOMES
 from harness.stress.solver import BOUNDARIES
 
+#: The stress families' values as a reader names them, with units (``engine_cases``).
+CASE_UNITS = {"mass": ("mass", "kg"), "size": ("size L", "m"), "speed": ("speed", "m/s"),
+              "grazing": ("|v_n|/|v_t|", ""), "time_step": ("time step", "s")}
+SHAPE_TITLES = {"disk": "disk (radius 0.1 L) on the ground",
+                "rod": "45° rod (length L) on the ground"}
+
+
+#: What every case keeps but the one quantity its family changes (``engine_cases``' base).
+REFERENCE_CASE = "1 kg, L = 1 m, 1 m/s at 45°, e 0.5, μ 0.3, the preset's time step"
+
+
+def number_text(value: float) -> str:
+    """``1e6``, ``1e-6``, ``0.001``, ``100``: ``{:g}`` without its exponent's sign and zeros."""
+    text = f"{value:g}"
+    mantissa, _, exponent = text.partition("e")
+    return f"{mantissa}e{int(exponent)}" if exponent else text
+
+
+def case_text(record: dict) -> str:
+    """A stress case's column label, with its unit: ``speed 1e4 m/s``, ``e 1, μ 10``."""
+    family, value = record["family"], record["value"]
+    if family == "reference":
+        return "reference"
+    if family == "e-mu":
+        return f"e {value[0]:g}, μ {value[1]:g}"
+    name, unit = CASE_UNITS.get(family, (family, ""))
+    return f"{name} {number_text(value)} {unit}".rstrip()
+
+
+def table_cell(text: str) -> str:
+    """``text`` as one cell of a Markdown table: its ``|`` (``|v_n|/|v_t|``, an engine's
+    message) as ``∣``, which does not end the cell."""
+    return text.replace("|", "∣")
+
+
+def grid_rows(engines: dict) -> list[tuple[str, str | None]]:
+    """The grid's rows, ``(label, engine or None)``: each engine and preset in the order they
+    ran (the registry's, by :func:`engine_stress`), then each engine not installed."""
+    rows = dict.fromkeys(source_label(r["engine"], r["preset"]) for r in engines["runs"])
+    return ([(label, None) for label in rows]
+            + [(f"{name}: not installed", name) for name in engines["skipped"]])
+
 
 def engine_grid_figure(engines: dict, path: Path) -> None:
+    """Each engine and preset (rows) on each stress case (columns), coloured by outcome; one
+    panel per shape, engines not installed as rows of their own."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -24,33 +68,45 @@ def engine_grid_figure(engines: dict, path: Path) -> None:
     from matplotlib.patches import Patch
 
     order = list(OUTCOME_COLOURS)
-    rows = sorted({source_label(r['engine'], r['preset']) for r in engines["runs"]})
-    rows += [f"{name} (skipped)" for name in engines["skipped"]]
-    columns = []
-    for record in engines["runs"]:
-        column = f"{record['shape']}: {record['label']}"
-        if column not in columns:
-            columns.append(column)
-    grid = np.full((len(rows), len(columns)), order.index("skipped"))
-    for record in engines["runs"]:
-        row_index = rows.index(source_label(record['engine'], record['preset']))
-        column_index = columns.index(f"{record['shape']}: {record['label']}")
-        grid[row_index, column_index] = order.index(record["outcome"])
-    figure, axes = plt.subplots(figsize=(max(8, 0.32 * len(columns) + 3), 1.0 + 0.45 * len(rows)))
-    axes.imshow(grid, cmap=ListedColormap([OUTCOME_COLOURS[name] for name in order]), vmin=-0.5,
-                vmax=len(order) - 0.5, aspect="auto")
-    axes.set_xticks(range(len(columns)), columns, rotation=90, fontsize=7)
-    axes.set_yticks(range(len(rows)), rows, fontsize=8)
-    axes.set_xticks(np.arange(-0.5, len(columns)), minor=True)
-    axes.set_yticks(np.arange(-0.5, len(rows)), minor=True)
-    axes.grid(which="minor", color="white", linewidth=0.8)
-    axes.tick_params(which="minor", length=0)
-    used = sorted({order[v] for v in grid.ravel()}, key=order.index)
-    axes.legend(handles=[Patch(facecolor=OUTCOME_COLOURS[n], edgecolor="grey", label=n)
-                         for n in used],
-                loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
-    axes.set_title("Engine stress outcomes (engine/preset × stress case)")
-    figure.tight_layout()
+    rows = grid_rows(engines)
+    labels = [label for label, _ in rows]
+    shapes = list(dict.fromkeys(r["shape"] for r in engines["runs"]))
+    columns = {shape: list(dict.fromkeys(case_text(r) for r in engines["runs"]
+                                         if r["shape"] == shape)) for shape in shapes}
+    width = max(len(names) for names in columns.values())
+    figure, axes = plt.subplots(len(shapes), 1, squeeze=False,
+                                figsize=(4.0 + 0.42 * width, len(shapes) * (2.6 + 0.3 * len(rows))))
+    used = {"skipped"} if engines["skipped"] else set()
+    for axis, shape in zip(axes[:, 0], shapes):
+        grid = np.full((len(rows), len(columns[shape])), order.index("skipped"))
+        for record in engines["runs"]:
+            if record["shape"] != shape:
+                continue
+            row = labels.index(source_label(record["engine"], record["preset"]))
+            grid[row, columns[shape].index(case_text(record))] = order.index(record["outcome"])
+            used.add(record["outcome"])
+        axis.imshow(grid, cmap=ListedColormap([OUTCOME_COLOURS[name] for name in order]),
+                    vmin=-0.5, vmax=len(order) - 0.5, aspect="auto")
+        axis.set_xticks(range(len(columns[shape])), columns[shape], rotation=60, ha="right",
+                        rotation_mode="anchor", fontsize=9)
+        axis.set_yticks(range(len(rows)), labels, fontsize=9.5)
+        axis.set_xticks(np.arange(-0.5, len(columns[shape])), minor=True)
+        axis.set_yticks(np.arange(-0.5, len(rows)), minor=True)
+        axis.grid(which="minor", color="white", linewidth=1.0)
+        axis.tick_params(which="minor", length=0)
+        for row in range(1, len(rows)):  # a black rule between one engine and the next
+            if rows[row][1] or labels[row].split(".")[0] != labels[row - 1].split(".")[0]:
+                axis.axhline(row - 0.5, color="black", linewidth=1.2)
+        axis.set_title(SHAPE_TITLES.get(shape, shape), fontsize=11)
+    key = [Patch(facecolor=OUTCOME_COLOURS[name], edgecolor="grey",
+                 label="not installed" if name == "skipped" else name)
+           for name in order if name in used]
+    figure.legend(handles=key, loc="upper right", bbox_to_anchor=(0.995, 0.99), fontsize=9,
+                  title="outcome (first that applies)", title_fontsize=9, frameon=False)
+    figure.suptitle("Engine stress outcomes: each engine and preset on each extreme case\n"
+                    f"(each case changes one quantity of the reference: {REFERENCE_CASE})",
+                    fontsize=11, x=0.02, ha="left")
+    figure.tight_layout(rect=(0, 0, 0.86, 0.97))
     save_figure(figure, path, "png", dpi=120)  # over a regular file only
     plt.close(figure)
 
@@ -92,23 +148,32 @@ def energy_figure(solver: dict, path: Path) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import NullLocator
 
     families = [name for name in solver["families"] if name != "e-mu-extremes"]
-    figure, axes = plt.subplots(1, len(families), figsize=(4 * len(families), 3.6), sharey=True)
+    figure, axes = plt.subplots(1, len(families), figsize=(4 * len(families), 4.2), sharey=True)
     for axis, family in zip(np.atleast_1d(axes), families):
         for law in ("poisson", "stronge", "newton"):
             by_value = solver["families"][family][law]["max_relative_energy_change_by_parameter"]
             xs = np.array([float(k) for k in by_value])
             ys = np.array([np.nan if v is None else v for v in by_value.values()])
-            # symmetric log: sign(y)·log10(1 + |y|/1e-16)
-            axis.semilogx(xs, np.sign(ys) * np.log10(1 + np.abs(ys) / 1e-16), marker="o",
-                          markersize=3, label=law)
+            axis.plot(xs, ys, marker="o", markersize=3, label=law)
+        axis.set_xscale("log")
+        # gains and losses from rounding (1e-16) to order one, both signs, on one axis
+        axis.set_yscale("symlog", linthresh=1e-16, linscale=0.5)
+        ticks = [-1.0, -1e-5, -1e-10, 0.0, 1e-10, 1e-5, 1.0]
+        axis.set_yticks(ticks, ["−1", "−1e-5", "−1e-10", "0", "1e-10", "1e-5", "1"])
+        axis.yaxis.set_minor_locator(NullLocator())
         axis.axhline(0.0, color="grey", linewidth=0.8)
+        if family == "grazing":  # 1e-9 … 1, then 1e-100 … 1e-300: name the ends only
+            axis.set_xticks([1e-300, 1e-200, 1e-100, 1.0], ["1e-300", "1e-200", "1e-100", "1"])
+            axis.xaxis.set_minor_locator(NullLocator())
         axis.set_title(family)
         axis.set_xlabel({"conditioning": "Δ/(m_nn m_tt)", "mass-ratio": "mass ratio k",
                          "speed": "speed (m/s)", "grazing": "|v_n|/|v_t|",
                          "size": "size L (m)"}.get(family, family))
-    np.atleast_1d(axes)[0].set_ylabel("max ΔE / (|v_n|I_n+|v_t I_t|)\nsign·log10(1+|x|/1e-16)")
+    np.atleast_1d(axes)[0].set_ylabel("largest ΔE / (|v_n| I_n + |v_t I_t|)\n"
+                                      "(symmetric log scale, linear within ±1e-16)")
     np.atleast_1d(axes)[0].legend(fontsize=8)
     figure.suptitle("Largest energy change per stress value "
                     "(> 0 is a gain; Newton may gain, Poisson/Stronge must not)")
@@ -165,19 +230,20 @@ def stress_markdown(report: dict) -> str:
               "|---|" + "---|" * len(OUTCOMES)]
     for group, counts in engines["counts"].items():
         lines.append(f"| {group} | " + " | ".join(str(counts[name]) for name in OUTCOMES) + " |")
-    for name, reason in engines["skipped"].items():
-        lines.append(f"| {name} | skipped: {reason} |")
+    if engines["skipped"]:
+        lines += ["", "Not installed, so not stressed (`make venv` installs every engine):", ""]
+        lines += [f"- **{name}**: {reason}" for name, reason in engines["skipped"].items()]
     lines += ["", "Runs not ok:", "",
-              "| engine/preset | case | outcome | status | energy ratio | penetration/extent |",
-              "|---|---|---|---|---|---|"]
+              "| engine/preset | case | outcome | status | energy ratio | penetration/extent "
+              "| message |", "|---|---|---|---|---|---|---|"]
     for record in engines["runs"]:
         if record["outcome"] != "ok":
             ratio = record.get("energy_ratio")
+            message = table_cell((record.get("error") or "")[:160])
             lines.append(f"| {source_label(record['engine'], record['preset'])} | "
-                         f"{record['shape']}: {record['label']} | "
+                         f"{record['shape']}: {table_cell(case_text(record))} | "
                          f"{record['outcome']} | {record['status']} | {fmt(ratio)} | "
-                         f"{fmt(record.get('max_penetration_relative'))} |"
-                         + (f" {record['error'][:120]}" if record.get("error") else ""))
+                         f"{fmt(record.get('max_penetration_relative'))} | {message} |")
     cache = engines["cache"]
     lines += ["", f"Engine runs: {engines['tasks_run']} simulated, {cache['hits']} from the cache "
               f"(`--no-cache` forces them).", "",

@@ -87,3 +87,56 @@ def test_an_engine_claiming_any_law_of_the_registry_is_measured_from_it(monkeypa
     for row in result["rows"]:
         assert set(row["departure"]) == {*bench_accuracy.BENCH_LAWS, "newton", "own"}
         assert row["departure"]["own"] == row["departure"]["newton"]
+
+
+def test_speed_accuracy_covers_every_registered_engine(tmp_path, monkeypatch):
+    """The coverage rule: `bench --speed-accuracy` measures every engine of the registry (the
+    five shipped ones) and draws its pareto-<engine>.png, or reports it not installed with
+    the reason; none is dropped. One engine is made to look missing, so both branches are
+    taken wherever the test runs; the others are measured for real on two settings each."""
+    from harness.engines import EngineNotInstalled, engine_class, engine_names
+
+    hidden = engine_names()[0]
+    real_load, real_sweep = bench_accuracy.load_engine, bench_accuracy.sweep
+
+    def load(name):
+        if name == hidden:
+            raise EngineNotInstalled(name, "hidden by the test")
+        return real_load(name)
+
+    def two_points(name, quick):
+        """The engine's two first settings (seconds, not its finest)."""
+        return real_sweep(name, quick)[:2]
+
+    for name in engine_names():  # a converged engine converges to its second, here
+        try:
+            if engine_class(name).own_law == "converged":
+                monkeypatch.setattr(engine_class(name), "bench_reference",
+                                    two_points(name, True)[1][0])
+        except EngineNotInstalled:
+            continue
+    monkeypatch.setattr(bench_accuracy, "load_engine", load)
+    monkeypatch.setattr(bench_accuracy, "sweep", two_points)
+    monkeypatch.setattr(bench_accuracy, "worker_speedup",
+                        lambda quick: {"skipped": "not measured by this test"})
+    # an earlier run's figure of the engine now missing: not shown as this run's
+    (tmp_path / f"pareto-{hidden}.png").write_bytes(b"\x89PNG\r\n\x1a\n")
+    report = bench_accuracy.run(quick=True, out_dir=tmp_path)
+    assert list(report["engines"]) == list(engine_names())  # the registry's order
+    assert "hidden by the test" in report["engines"][hidden]["skipped"]
+    assert sorted(path.name for path in tmp_path.glob("pareto-*.png")) == sorted(
+        f"pareto-{name}.png" for name, entry in report["engines"].items()
+        if "skipped" not in entry)
+    for name, entry in report["engines"].items():
+        if "skipped" in entry:
+            try:  # skipped only when it is not installed (here: the one hidden)
+                real_load(name)
+            except EngineNotInstalled:
+                continue
+            assert name == hidden, entry["skipped"]
+            continue
+        assert entry["figure"] == f"pareto-{name}.png"
+        measured = {(row["setting"], row["family"]) for row in entry["rows"]}
+        assert measured == {(label, family) for label, _, _ in two_points(name, True)
+                            for family in bench_accuracy.FAMILIES}
+    assert f"{hidden:9} skipped: " in bench_accuracy.format_table(report)

@@ -94,3 +94,48 @@ def test_a_run_into_a_new_directory_holds_its_sections_only(tmp_path, monkeypatc
     assert bench.main(_bench_args(tmp_path / "new", solver=True)) == 0
     table = json.loads((tmp_path / "new" / "bench.json").read_text())
     assert set(table["measured"]) == {"solver"} and "survey" not in table
+    # the digest of harness/bench/ the report compares with today's before linking the page
+    from harness.report.pages import command_code_version
+
+    assert table["provenance"]["command_code_version"] == command_code_version("bench")
+
+
+def test_a_section_that_fails_leaves_the_finished_ones_in_bench_json(tmp_path, monkeypatch):
+    """A fault late in the run (here the speed-accuracy section raising, after the solver's
+    section finished) never throws the finished sections away: bench.json holds them."""
+    import json
+
+    from harness.bench import accuracy as bench_accuracy
+
+    def fails(quick, out_dir):
+        raise RuntimeError("a section's fault")
+
+    monkeypatch.setattr(bench, "solver_benchmark", lambda quick: {"batch": {"poisson": 1.0}})
+    monkeypatch.setattr(bench, "print_solver", lambda results: None)
+    monkeypatch.setattr(bench, "write_solver_figure", lambda results, path: None)
+    monkeypatch.setattr(bench_accuracy, "reference_problems", lambda quick: [])
+    monkeypatch.setattr(bench_accuracy, "run", fails)
+    with pytest.raises(RuntimeError, match="a section's fault"):
+        bench.main(_bench_args(tmp_path, solver=True, speed_accuracy=True))
+    table = json.loads((tmp_path / "bench.json").read_text())
+    assert table["solver"] == {"batch": {"poisson": 1.0}} and "speed_accuracy" not in table
+    assert set(table["measured"]) == {"solver"}
+
+
+@pytest.mark.parametrize(("status", "complete"), [(0, True), (1, True), (4, True), (3, False)])
+def test_the_executors_bench_times_a_run_whose_engine_erred(status, complete, tmp_path,
+                                                            monkeypatch):
+    # `run` exits 4 when an engine run ended in an error its record reports (Drake's TAMSI on
+    # a perturbed rod): a complete run, timed; an internal error (3) is not
+    import subprocess
+
+    from harness.bench import executors
+
+    monkeypatch.setattr(executors.subprocess, "run", lambda command, **_: (
+        subprocess.CompletedProcess(command, status, "", "its stderr")))
+    timer = executors._run_command(tmp_path, tmp_path, "local")
+    if complete:
+        assert timer() >= 0.0
+    else:
+        with pytest.raises(RuntimeError, match="exited 3: its stderr"):
+            timer()

@@ -395,6 +395,40 @@ def test_a_page_of_other_code_is_named_not_linked(tmp_path):
     assert "Benchmarks: speed and accuracy <span class='muted'>(not linked: measured" in contents
 
 
+def test_a_page_measured_by_another_version_of_its_command_is_named_not_linked(tmp_path):
+    """The same cached code (the solver, the engines) but another harness/stress/ (its
+    outcomes, its cases) or harness/bench/: named, not linked; today's: linked. What
+    `stress` records is what the report computes (`bench`'s: tests/bench/test_solver.py)."""
+    from harness.report.pages import (
+        BENCH_PAGE,
+        STRESS_PAGE,
+        command_code_version,
+        write_pages,
+    )
+    from harness.stress import COMMAND_CODE_VERSION
+
+    assert COMMAND_CODE_VERSION == command_code_version("stress")
+    sources = tmp_path / "inputs"
+    (sources / "bench").mkdir(parents=True)
+    (sources / "stress").mkdir()
+    (sources / "stress" / "stress.md").write_text("# Stress\n\nno numbers\n")
+    for stress_code, linked_pages in (("other", {BENCH_PAGE}),
+                                      (COMMAND_CODE_VERSION, {BENCH_PAGE, STRESS_PAGE})):
+        (sources / "stress" / "stress.json").write_text(json.dumps({"provenance": {
+            "code_version": "new", "command_code_version": stress_code}}))
+        (sources / "bench" / "bench.json").write_text(json.dumps({"provenance": {
+            "code_version": "new", "command_code_version": command_code_version("bench")}}))
+        out = tmp_path / f"out-{stress_code[:5]}"
+        out.mkdir()
+        linked, stale = write_pages(out, [sources], {"code_version": "new"})
+        assert set(linked) == linked_pages
+        if STRESS_PAGE not in linked:
+            assert "another version of harness/stress/" in stale[
+                "Stress test: the solver and the engines at extremes"]
+            assert "another version of <code>harness/stress/</code>" in (
+                out / STRESS_PAGE).read_text(encoding="utf-8")
+
+
 def test_the_contents_follow_the_page():
     parts = ["<div id='headline'>", "<div id='gates'>", "<div id='contacts'>",
              "<div id='scenarios'>", "<div id='table3'>", "<div id='survey'>",

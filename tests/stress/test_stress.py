@@ -12,7 +12,15 @@ from hypothesis import strategies as st
 
 import planar_impact as pi
 from harness import stress
+from harness.engines import (
+    PRESET_ROLES,
+    EngineNotInstalled,
+    UnsupportedScene,
+    engine_names,
+    source_label,
+)
 from harness.stress import engines as stress_engines
+from harness.stress import outputs as stress_outputs
 from harness.stress import solver as stress_solver
 
 LAWS = pi.LAWS
@@ -169,7 +177,9 @@ def test_engine_case_smoke():
 
 def test_run_solver_only_writes_the_report(tmp_path, monkeypatch):
     monkeypatch.setattr(stress, "solver_stress", lambda quick: _tiny_solver_report())
+    (tmp_path / "engine-grid.png").write_bytes(b"\x89PNG\r\n\x1a\n")  # an earlier run's
     report = stress.run(quick=True, out_dir=tmp_path, engines=False)
+    assert not (tmp_path / "engine-grid.png").exists()  # no engine ran: no grid shown
     for name in ("stress.md", "stress.json", "stress-engines.csv", "solver-boundary-jumps.png",
                  "solver-energy.png"):
         assert (tmp_path / name).exists(), name
@@ -208,9 +218,131 @@ def test_a_registered_engine_goes_through_impact_harness_stress(tmp_path, monkey
     engines = report["engines"]
     assert set(engines["versions"]) == {toy_engine} and not engines["skipped"]
     cases = len(stress_engines.engine_cases(quick=True))
-    assert engines["counts"] == {"toy.accurate": {**dict.fromkeys(stress_engines.OUTCOMES, 0),
-                                                  "ok": cases}}  # exact impulses: all single
+    # both presets, quick or not; exact impulses: every run a single impact
+    assert engines["counts"] == {f"toy.{role}": {**dict.fromkeys(stress_engines.OUTCOMES, 0),
+                                                 "ok": cases} for role in PRESET_ROLES}
     rows = (out / "stress-engines.csv").read_text(encoding="utf-8").splitlines()[1:]
-    assert len(rows) == cases and all(row.startswith("toy,accurate,") for row in rows)
+    assert len(rows) == 2 * cases
+    assert {row.split(",")[1] for row in rows} == set(PRESET_ROLES)
     assert "toy" in (out / "stress.md").read_text(encoding="utf-8")
     assert (out / "engine-grid.png").stat().st_size > 0
+
+
+ENGINE_CASES = stress_engines.engine_cases  # the real ones, before a test replaces them
+
+
+def _two_cases(quick: bool) -> list[dict]:
+    """The reference disk and the 1e-4 m rod (Box2D refuses it: ``unsupported``)."""
+    return [case for case in ENGINE_CASES(quick)
+            if (case["shape"], case["label"]) in {("disk", "reference"), ("rod", "size=0.0001")}]
+
+
+def test_every_registered_engine_is_stressed_or_reported_not_installed(tmp_path, monkeypatch):
+    """The coverage rule: every engine of the registry (the five shipped ones) runs every
+    case under both presets, or is listed as not installed with the reason; none is dropped.
+    One engine is made to look missing here, so both branches are taken wherever the test
+    runs; the others run for real on two cases."""
+    hidden = engine_names()[-1]
+    real_load = stress_engines.load_engine
+
+    def load(name):
+        if name == hidden:
+            raise EngineNotInstalled(name, "hidden by the test")
+        return real_load(name)
+
+    monkeypatch.setattr(stress_engines, "load_engine", load)
+    monkeypatch.setattr(stress_engines, "engine_cases", _two_cases)
+    report = stress_engines.engine_stress(quick=True, workers=1, use_cache=False,
+                                          cache_root=tmp_path / "cache")
+    assert set(report["versions"]) | set(report["skipped"]) == set(engine_names())
+    assert not set(report["versions"]) & set(report["skipped"])
+    assert "hidden by the test" in report["skipped"][hidden]
+    ran = {(r["engine"], r["preset"], r["shape"], r["label"]) for r in report["runs"]}
+    assert ran == {(name, role, case["shape"], case["label"]) for name in report["versions"]
+                   for role in PRESET_ROLES for case in _two_cases(True)}
+    assert all(r["outcome"] in stress_engines.OUTCOMES for r in report["runs"])
+    # what the outputs show of it: a row per engine and preset, one for the missing engine
+    rows = [label for label, _ in stress_outputs.grid_rows(report)]
+    assert rows[-1] == f"{hidden}: not installed" and len(rows) == 2 * len(report["versions"]) + 1
+    text = stress_outputs.stress_markdown({"quick": True, "solver": _tiny_solver_report(),
+                                           "engines": report,
+                                           "provenance": {"created_utc": "now"},
+                                           "timings": {"solver_s": 0.0, "engines_s": 0.0}})
+    assert f"- **{hidden}**: engine {hidden!r} is not installed" in text
+    for name in report["versions"]:
+        assert all(f"| {source_label(name, role)} |" in text for role in PRESET_ROLES)
+
+
+def test_box2d_refusing_a_tiny_body_is_reported_as_unsupported(load_or_skip):
+    # Box2D's polygons have an area floor (b2_epsilon): the adapter refuses the 1e-4 m rod
+    # (UnsupportedScene), an engine's stated limit, not a crash of the run
+    load_or_skip("box2d")
+    case = next(c for c in _two_cases(True) if c["shape"] == "rod")
+    record = stress_engines.run_engine_case({"case": case, "engine": "box2d",
+                                             "preset": "accurate"})
+    assert record["outcome"] == "unsupported" and "b2_epsilon" in record["error"]
+
+
+def test_an_engine_that_raises_refuses_or_dies_is_reported(tmp_path, monkeypatch, toy_engine):
+    """An exception is ``error``, a refusal ``unsupported``, a worker that dies ``stopped``
+    (the other runs go on, each with its outcome); none is dropped, and the stopped run is
+    not cached, so a rerun tries it again."""
+    import os
+
+    from tests.engines.toy_engine import ToyEngine
+
+    def faulty(self, scene, settings):
+        speed = abs(scene.bodies[0].velocity[0])
+        if math.isclose(speed, 100.0 / math.sqrt(2.0)):
+            raise UnsupportedScene("engine 'toy': too fast (a test's refusal)")
+        if math.isclose(speed, 1e-3 / math.sqrt(2.0)):
+            raise RuntimeError("a test's blow-up")
+        if math.isclose(speed, 1e4 / math.sqrt(2.0)):
+            os._exit(3)  # the worker dies, as an engine crashing in C would take it
+        return original(self, scene, settings)
+
+    original = ToyEngine.run
+    monkeypatch.setattr(ToyEngine, "run", faulty)
+    monkeypatch.setattr(stress_engines, "engine_cases", lambda quick: [
+        case for case in ENGINE_CASES(quick) if case["shape"] == "disk"
+        and case["family"] in ("reference", "speed")])
+    report = stress_engines.engine_stress(quick=True, workers=2, use_cache=True,
+                                          cache_root=tmp_path / "cache")
+    outcomes = {(r["preset"], r["label"]): r["outcome"] for r in report["runs"]}
+    for role in PRESET_ROLES:
+        assert outcomes[(role, "speed=100")] == "unsupported"
+        assert outcomes[(role, "speed=0.001")] == "error"
+        assert outcomes[(role, "speed=10000")] == "stopped"
+        assert outcomes[(role, "reference")] == outcomes[(role, "speed=1e-06")] == "ok"
+    stopped = next(r for r in report["runs"] if r["outcome"] == "stopped")
+    assert "died" in stopped["error"] or "exit" in stopped["error"], stopped["error"]
+    again = stress_engines.engine_stress(quick=True, workers=1, use_cache=True,
+                                         cache_root=tmp_path / "cache")
+    assert again["tasks_run"] == len(PRESET_ROLES)  # the stopped runs only
+    # another harness/stress/ (how a run is judged) names every run anew: none is reused
+    monkeypatch.setattr(stress_engines, "COMMAND_CODE_VERSION", "another stress code")
+    anew = stress_engines.engine_stress(quick=True, workers=1, use_cache=True,
+                                        cache_root=tmp_path / "cache")
+    assert anew["tasks_run"] == len(anew["runs"]) == 2 * 5
+
+
+def test_a_case_or_message_with_a_bar_stays_in_its_cell():
+    # |v_n|/|v_t| (the grazing cases) and an engine's message may hold "|", which would
+    # split the Markdown row the stress page is made of
+    record = {"engine": "pymunk", "preset": "accurate", "shape": "disk", "family": "grazing",
+              "label": "grazing=0.001", "value": 0.001, "outcome": "no-contact",
+              "status": "no-contact", "energy_ratio": 1.0, "max_penetration_relative": 0.0,
+              "error": "a | b"}
+    engines = {"runs": [record], "skipped": {}, "cache": {"hits": 0, "misses": 1},
+               "tasks_run": 1,
+               "counts": {"pymunk.accurate": {**dict.fromkeys(stress_engines.OUTCOMES, 0),
+                                              "no-contact": 1}}}
+    text = stress_outputs.stress_markdown({"quick": True, "solver": _tiny_solver_report(),
+                                           "engines": engines,
+                                           "provenance": {"created_utc": "now"},
+                                           "timings": {"solver_s": 0.0, "engines_s": 0.0}})
+    lines = text.splitlines()
+    header = lines.index("Runs not ok:") + 2
+    row = next(line for line in lines[header:] if line.startswith("| pymunk.accurate"))
+    assert row.count("|") == lines[header].count("|") == 8
+    assert "disk: ∣v_n∣/∣v_t∣ 0.001" in row and "a ∣ b" in row
