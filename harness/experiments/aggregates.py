@@ -131,7 +131,7 @@ def compute(data: fazeli.FazeliData, *, engines=(), replicates: int = 100, seed:
             workers: int | None = None,
             calibration_drops: int = calibrated_errors.CALIBRATION_DROPS, laws=pi.LAWS,
             mus=fitting.MU_GRID, es=fitting.E_GRID, progress=lambda text: None,
-            cache=None) -> dict:
+            cache=None, data_sha256: dict | None = None) -> dict:
     """The report's aggregates of ``data``: the paper's six models, every law under both
     objectives (and whether Poisson and Stronge differ; where the drops lie on Routh's
     diagram, at the shown fit's μ), Poisson's predictions against the measurements, each
@@ -144,7 +144,9 @@ def compute(data: fazeli.FazeliData, *, engines=(), replicates: int = 100, seed:
     ``laws`` must include :data:`SHOWN_LAW`. With ``cache`` (a result cache), the engines
     on the drops and the calibrated errors are kept there as ``impact-harness experiments``
     makes them from the same inputs (:data:`cached.ENGINES_ON_DROPS`): the command, and
-    ``findings --check`` through it, read them instead of computing them again."""
+    ``findings --check`` through it, read them instead of computing them again, keyed by
+    the files' SHA-256 ``data_sha256`` (checked by the caller; None: ``data.hashes``; never
+    kept for a copy whose files were not hashed)."""
     target = frames.in_frame(data.impacts, frames.DEFAULT_FRAME)  # as the command's default
     models = {name: quantiles(metric.normalized_error(speeds, target.speeds_after))
               for name, speeds in data.model_speeds.items()}
@@ -190,8 +192,9 @@ def compute(data: fazeli.FazeliData, *, engines=(), replicates: int = 100, seed:
                          for law, fit in fits[SHOWN_OBJECTIVE].items()},  # as the command
         engine_runs, seed=seed, calibration_drops=calibration_drops,
         calibrations=calibrations)
-    if cache is not None:
-        _keep_engines_on_drops(cache, data, shown, fits[SHOWN_OBJECTIVE], engines, seed,
+    data_sha256 = data.hashes if data_sha256 is None else data_sha256
+    if cache is not None and data_sha256:
+        _keep_engines_on_drops(cache, data_sha256, shown, fits[SHOWN_OBJECTIVE], engines, seed,
                                calibration_drops, on_drops, at_settings,
                                time.perf_counter() - started, progress)
     return {"drops": len(target), "post_speeds": frames.DEFAULT_FRAME, "seed": seed,
@@ -209,14 +212,14 @@ def compute(data: fazeli.FazeliData, *, engines=(), replicates: int = 100, seed:
             "calibrated_errors": at_settings}
 
 
-def _keep_engines_on_drops(cache, data, shown: dict, law_fits: dict, engines, seed: int,
-                           calibration_drops: int, on_drops: list, at_settings: dict,
+def _keep_engines_on_drops(cache, data_sha256: dict, shown: dict, law_fits: dict, engines,
+                           seed: int, calibration_drops: int, on_drops: list, at_settings: dict,
                            seconds: float, progress) -> None:
     """The engines on the drops and the calibrated errors kept in ``cache`` as the command
     makes them (:data:`cached.ENGINES_ON_DROPS`): its rows have no ``cdf``, its calibrated
     errors no curves (``calibrated_errors.compute(curves=False)``)."""
     key = cached.engines_on_drops_payload(
-        data.hashes, frames.DEFAULT_FRAME,
+        data_sha256, frames.DEFAULT_FRAME,
         {"law": SHOWN_LAW, "objective": SHOWN_OBJECTIVE, "mu": shown["mu"], "e": shown["e"]},
         {law: [fit["mu"], fit["e"]] for law, fit in law_fits.items()},
         [[engine.name, preset] for engine in engines for preset in engine.presets], seed,

@@ -314,6 +314,8 @@ def engines_on_drops(runs: list[EngineRuns], data: fazeli.FazeliData, target, fi
         {law: [law_fit["fit"].mu, law_fit["fit"].e] for law, law_fit in laws.items()},
         [[run.name, preset] for run in installed for preset, _ in run.presets], args.seed,
         calibrated_errors.CALIBRATION_DROPS, calibrated_errors.REPLICATES)
+    if not data.hashes:  # files not hashed: no key would tell this copy from another
+        cache = None
     found = cached.engines_on_drops_get(cache, key)
     if found is not None:
         progress(f"the engines on the drops: read from the cache (computed in "

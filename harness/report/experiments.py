@@ -220,7 +220,7 @@ def drops_aggregates(out_dir: Path, directory: Path) -> dict:
     # findings --check through it) reads them rather than computing them again.
     result = aggregates.compute(data, engines=_installed_engines(),
                                 replicates=REPORT_REPLICATES, progress=_progress,
-                                cache=ResultCache())
+                                cache=ResultCache(), data_sha256=hashes)
     # the files' hashes (checked above), never the copy's path: the page is committed
     result["provenance"] = {**data.provenance(), "sha256": hashes}
     result["provenance"].pop("directory", None)

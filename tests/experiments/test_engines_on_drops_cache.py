@@ -9,13 +9,21 @@ tables and ``--json`` parts from the report's entry must be those it computes it
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import pytest
 
 from harness import cli
 from harness.engines import load_engine
-from harness.experiments import aggregates, cached, calibrated_errors, drops_engines, fazeli
+from harness.experiments import (
+    aggregates,
+    cached,
+    calibrated_errors,
+    drops_engines,
+    fazeli,
+    registry,
+)
 from harness.report.experiments import section_tables
 from harness.store.cache import ResultCache
 
@@ -24,10 +32,18 @@ HEADINGS = ("### The engines on the drops",
             "### Every engine and law at its fitted or calibrated settings")
 
 
-def _unchecked_load(monkeypatch):
-    real_load = fazeli.load  # the synthetic copy's hashes are not the published ones
-    monkeypatch.setattr(fazeli, "load",
-                        lambda path, check_hashes=True: real_load(path, check_hashes=False))
+def _hashed_load(monkeypatch):
+    """``fazeli.load`` with the files hashed but not checked against the published hashes
+    (the synthetic copy's are not those)."""
+    real_load = fazeli.load
+
+    def load(path, check_hashes=True):
+        data = real_load(path, check_hashes=False)
+        return dataclasses.replace(data, hashes={
+            file.name: registry.sha256_of(path / file.name)
+            for file in registry.FAZELI_2017.files})
+
+    monkeypatch.setattr(fazeli, "load", load)
 
 
 def _parts(path) -> dict:
@@ -45,7 +61,7 @@ def _no_engine_on_the_drops(*args, **kwargs):
 def test_the_command_reads_what_the_reports_aggregates_kept(synthetic_copy, own_cache,
                                                             monkeypatch, capsys, tmp_path):
     directory, _ = synthetic_copy
-    _unchecked_load(monkeypatch)
+    _hashed_load(monkeypatch)
     command = ["experiments", "--data", str(directory), *COMMAND]
     # the command alone, in the cache of its own: computed
     assert cli.main([*command, "--json", str(tmp_path / "alone.json")]) == 0
@@ -64,6 +80,19 @@ def test_the_command_reads_what_the_reports_aggregates_kept(synthetic_copy, own_
     for heading in HEADINGS:
         assert section_tables(after_report.out, heading) == section_tables(alone.out, heading)
     assert _parts(tmp_path / "after-report.json") == _parts(tmp_path / "alone.json")
+
+
+def test_nothing_is_kept_for_files_not_hashed(synthetic_copy, tmp_path, monkeypatch):
+    """A copy loaded without its hashes has no key that tells it from another copy: the
+    report keeps nothing of it (and the command reads nothing)."""
+    directory, _ = synthetic_copy
+    data = fazeli.load(directory, check_hashes=False)
+    assert data.hashes == {}
+    kept = []
+    monkeypatch.setattr(cached, "engines_on_drops_put", lambda *args, **kw: kept.append(1))
+    aggregates.compute(data, engines=[], replicates=10, workers=1,
+                       cache=ResultCache(tmp_path / "cache"))
+    assert kept == []
 
 
 def test_an_entry_is_keyed_by_its_inputs_and_an_edited_one_is_not_believed(tmp_path):
