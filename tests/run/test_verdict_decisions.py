@@ -193,7 +193,7 @@ def gaining(gain: float) -> np.ndarray:
 
 @pytest.mark.parametrize(("share", "fails", "at_boundary"), [
     (1.01, True, False), (0.99, False, False),
-    # the band is 1e-9 of 2E (the energies ΔE is the difference of), 4e-3 of the bound
+    # the band is 1e-9 of 2E (the energies ΔE is the difference of), 2e-3 of the bound
     (1 + 1e-4, True, True), (1 - 1e-4, False, True), (1 + 1e-2, True, False),
 ])
 def test_an_energy_gain_is_decided_at_a_millionth_of_the_kinetic_energy(share, fails,
