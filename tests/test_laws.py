@@ -205,6 +205,87 @@ def test_the_copy_detector_finds_a_copy():
                                                                                7, 8]
 
 
+#: Where a module may compare a value with a law's name, each with its reason. Everywhere
+#: else in src/planar_impact/ and harness/ a law's properties are read from its line of
+#: ``planar_impact.law_table.LAW_TABLE`` or its :data:`harness.laws.REGISTRY` entry (or a
+#: named role such as ``verdicts.ENGINE_LAW``), so a law added there is solved and shown by
+#: the same code as the others. A folder (ending in /) holds for every module under it.
+NAME_BRANCHES_KEPT = {
+    "src/planar_impact/process.py": "the independent method: the impulse process walked "
+    "with each law's own rule for the end of a phase (Newton's v_n target, Poisson's "
+    "(1 + e) I_nc, Stronge's energy), the laws' definitions themselves",
+    "src/planar_impact/simultaneous/": "the m-contact laws (docs/multi-contact.md): a set of "
+    "their own whose names repeat some of these",
+    "harness/report/": "what the report draws of a particular law: the paper's Table 3 rows "
+    "and its Stronge mapping, Routh's diagram, the engines' law beside the headline ones",
+    "harness/bench/": "what is timed per law and its independent check (newton-lcp has no "
+    "process to walk, the paper's mapping walks Poisson's at e_i)",
+    "harness/experiments/": "Poisson against Stronge on the measured drops, the question "
+    "docs/experiments.md asks of those two laws",
+    "harness/scenarios/checks.py": "a scenario's expected case is Table 1's row, Poisson's",
+}
+
+
+def _name_branches(tree: ast.AST) -> list[tuple[int, str]]:
+    """Comparisons with a law's name: ``x == "law"``, ``x != "law"``, ``x in ("law", ...)``,
+    ``"law" in x`` and ``case "law":`` (the name as a literal on either side)."""
+    every = set(pi.LAWS)
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Compare):
+            sides = [node.left, *node.comparators]
+            names = set().union(*(_names([side] if isinstance(side, ast.Constant)
+                                         else getattr(side, "elts", ())) for side in sides))
+            if names & every:
+                found.append((node.lineno, ast.unparse(node)))
+        elif isinstance(node, ast.MatchValue) and _names([node.value]) & every:
+            found.append((node.lineno, f"case {ast.unparse(node.value)}"))
+    return found
+
+
+def _kept_branches(where: str) -> bool:
+    return any(where == kept or (kept.endswith("/") and where.startswith(kept))
+               for kept in NAME_BRANCHES_KEPT)
+
+
+def test_no_module_branches_on_a_laws_name():
+    """``solve`` and the fast path once reported ``restitution_poisson`` by ``law ==
+    "newton-lcp"``: now a field of the law table (``poisson_restitution``)."""
+    branches = []
+    for folder in (ROOT / "src" / "planar_impact", ROOT / "harness"):
+        for path in sorted(folder.rglob("*.py")):
+            where = str(path.relative_to(ROOT))
+            if path == REGISTRY_FILE or _kept_branches(where):
+                continue
+            branches += [f"{where}:{line}: {text}"
+                         for line, text in _name_branches(ast.parse(path.read_text("utf-8")))]
+    assert not branches, ("read the law's line of law_table.LAW_TABLE or its harness.laws "
+                          "entry instead: " + "; ".join(branches))
+    # every exemption names something that exists and still branches (no stale reason)
+    for kept in NAME_BRANCHES_KEPT:
+        paths = ([ROOT / kept] if not kept.endswith("/")
+                 else sorted((ROOT / kept).rglob("*.py")))
+        assert any(_name_branches(ast.parse(path.read_text("utf-8"))) for path in paths), kept
+
+
+def test_the_name_branch_detector_finds_a_branch():
+    first, second, last = pi.LAWS[0], pi.LAWS[1], pi.LAWS[-1]
+    source = "\n".join([
+        f"lcp = law == {last!r}",  # 1
+        f"e = None if {last!r} == law else 1",  # 2
+        f"if law != {first!r}: pass",  # 3
+        f"ok = law in ({first!r}, {second!r})",  # 4
+        f"gain = gains.get({last!r}) if {last!r} in gains else None",  # 5
+        "match law:",  # 6
+        f"    case {second!r}: pass",  # 7
+        "same = law == other_law",  # 8: two variables, no name
+        f"label = {{{first!r}: 1}}[law]",  # 9: a lookup, not a comparison
+        "text = law == 'stronge-pape'",  # 10: not a law's name
+    ]) + "\n"
+    assert sorted(line for line, _ in _name_branches(ast.parse(source))) == [1, 2, 3, 4, 5, 7]
+    assert _kept_branches("harness/report/views.py") and not _kept_branches("harness/run/x.py")
+
+
 @pytest.mark.kernel_sensitive  # decisions on 20,000 solutions (far from their bars)
 @pytest.mark.parametrize("entry", laws.REGISTRY, ids=lambda entry: entry.name)
 def test_each_law_keeps_its_promises_on_random_problems(entry):

@@ -10,6 +10,9 @@ dicts), written by the report beside its figures.
 
 from __future__ import annotations
 
+import copy
+import time
+
 import numpy as np
 
 import planar_impact as pi
@@ -17,6 +20,7 @@ from harness.engines import preset_label
 
 from . import (
     analysis,
+    cached,
     calibrate,
     calibrated_errors,
     drops_engines,
@@ -126,7 +130,8 @@ def laws_apart(target, objective: str, results: dict, seed: int) -> dict | None:
 def compute(data: fazeli.FazeliData, *, engines=(), replicates: int = 100, seed: int = 0,
             workers: int | None = None,
             calibration_drops: int = calibrated_errors.CALIBRATION_DROPS, laws=pi.LAWS,
-            mus=fitting.MU_GRID, es=fitting.E_GRID, progress=lambda text: None) -> dict:
+            mus=fitting.MU_GRID, es=fitting.E_GRID, progress=lambda text: None,
+            cache=None, data_sha256: dict | None = None) -> dict:
     """The report's aggregates of ``data``: the paper's six models, every law under both
     objectives (and whether Poisson and Stronge differ; where the drops lie on Routh's
     diagram, at the shown fit's μ), Poisson's predictions against the measurements, each
@@ -136,7 +141,12 @@ def compute(data: fazeli.FazeliData, *, engines=(), replicates: int = 100, seed:
     (:mod:`.calibrated_errors`) every law at its :data:`SHOWN_OBJECTIVE` fit (as the
     command's default) and every engine at its preset and at that calibration, scored on
     the held-out half, with intervals.
-    ``laws`` must include :data:`SHOWN_LAW`."""
+    ``laws`` must include :data:`SHOWN_LAW`. With ``cache`` (a result cache), the engines
+    on the drops and the calibrated errors are kept there as ``impact-harness experiments``
+    makes them from the same inputs (:data:`cached.ENGINES_ON_DROPS`): the command, and
+    ``findings --check`` through it, read them instead of computing them again, keyed by
+    the files' SHA-256 ``data_sha256`` (checked by the caller; None: ``data.hashes``; never
+    kept for a copy whose files were not hashed)."""
     target = frames.in_frame(data.impacts, frames.DEFAULT_FRAME)  # as the command's default
     models = {name: quantiles(metric.normalized_error(speeds, target.speeds_after))
               for name, speeds in data.model_speeds.items()}
@@ -156,6 +166,7 @@ def compute(data: fazeli.FazeliData, *, engines=(), replicates: int = 100, seed:
         len(target), seed, calibration_drops).size), "of": len(target), "seed": seed,
         "from": "training half"}
     on_drops, calibrated, engine_runs, calibrations = [], [], [], {}
+    started = time.perf_counter()
     for engine in engines:
         for preset in engine.presets:
             progress(f"{engine.name} ({preset_label(engine.name, preset)}) on every drop, "
@@ -181,6 +192,11 @@ def compute(data: fazeli.FazeliData, *, engines=(), replicates: int = 100, seed:
                          for law, fit in fits[SHOWN_OBJECTIVE].items()},  # as the command
         engine_runs, seed=seed, calibration_drops=calibration_drops,
         calibrations=calibrations)
+    data_sha256 = data.hashes if data_sha256 is None else data_sha256
+    if cache is not None and data_sha256:
+        _keep_engines_on_drops(cache, data_sha256, shown, fits[SHOWN_OBJECTIVE], engines, seed,
+                               calibration_drops, on_drops, at_settings,
+                               time.perf_counter() - started, progress)
     return {"drops": len(target), "post_speeds": frames.DEFAULT_FRAME, "seed": seed,
             "replicates": replicates, "paper_models": models, "frames": in_frames,
             "laws": fits,
@@ -194,6 +210,29 @@ def compute(data: fazeli.FazeliData, *, engines=(), replicates: int = 100, seed:
                                                  "confidence": calibrate.CONFIDENCE,
                                                  "results": calibrated},
             "calibrated_errors": at_settings}
+
+
+def _keep_engines_on_drops(cache, data_sha256: dict, shown: dict, law_fits: dict, engines,
+                           seed: int, calibration_drops: int, on_drops: list, at_settings: dict,
+                           seconds: float, progress) -> None:
+    """The engines on the drops and the calibrated errors kept in ``cache`` as the command
+    makes them (:data:`cached.ENGINES_ON_DROPS`): its rows have no ``cdf``, its calibrated
+    errors no curves (``calibrated_errors.compute(curves=False)``)."""
+    key = cached.engines_on_drops_payload(
+        data_sha256, frames.DEFAULT_FRAME,
+        {"law": SHOWN_LAW, "objective": SHOWN_OBJECTIVE, "mu": shown["mu"], "e": shown["e"]},
+        {law: [fit["mu"], fit["e"]] for law, fit in law_fits.items()},
+        [[engine.name, preset] for engine in engines for preset in engine.presets], seed,
+        calibration_drops, calibrated_errors.REPLICATES)
+    rows = [{k: v for k, v in row.items() if k != "cdf"} for row in on_drops]
+    uncurved = copy.deepcopy(at_settings)
+    for row in uncurved["laws"]:
+        row.pop("held_out_cdf", None)
+    for row in uncurved["engines"]:
+        if row["calibrated"] is not None:
+            row["calibrated"].pop("cdf", None)
+    cached.engines_on_drops_put(cache, key, rows, {**uncurved, "seconds": seconds}, seconds,
+                                progress)
 
 
 def calibration_uncertainty(found: calibrate.Uncertainty | None) -> dict:

@@ -19,10 +19,13 @@ import contextlib
 import hashlib
 import inspect
 import io
+import json
 import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
+
+import numpy as np
 
 from harness.engines import ENGINE_NAMES, engine_class, engine_names
 from harness.run.provenance import package_versions
@@ -109,6 +112,81 @@ def printed_once(cache: ResultCache | None, key_payload: dict,
     return found
 
 
+#: The entry both the report's aggregates (:func:`harness.experiments.aggregates.compute`)
+#: and ``impact-harness experiments`` make of the engines on the drops: every engine and
+#: preset on every drop at the headline fit, beside that law (the command's table "The
+#: engines on the drops"), and every engine and law at its fitted or calibrated settings
+#: (:func:`harness.experiments.calibrated_errors.compute` without its curves). The two
+#: compute it from the same inputs, which its key names; whichever runs first keeps it, the
+#: other reads it (``findings --check`` after a suite, whose report made it). Aggregates
+#: only, as the command prints them and its ``--json`` holds them: no per-drop number.
+ENGINES_ON_DROPS = "engines-on-drops"
+
+
+def engines_on_drops_payload(data_sha256: dict, frame: str, fit: dict, law_fits: dict,
+                             engines: list, seed: int, calibration_drops: int,
+                             replicates: int) -> dict:
+    """The key's payload of the :data:`ENGINES_ON_DROPS` entry: the drops (their files'
+    SHA-256, the frame of their post-impact speeds), the headline fit the engines run at
+    (``{"law", "objective", "mu", "e"}``), each law's fit ``{law: [mu, e]}`` (the laws'
+    rows), the engines and presets in order ``[[engine, preset], ...]``, the seed of the
+    split and the bootstrap, the calibration's drops and the bootstrap's replicates; the
+    code and versions through :func:`payload`."""
+    settings = {"frame": frame, "fit": fit, "law_fits": law_fits, "engines": engines,
+                "seed": seed, "calibration_drops": calibration_drops,
+                "replicates": replicates}
+    return payload(ENGINES_ON_DROPS, json_plain(settings), data_sha256)
+
+
+def engines_on_drops_get(cache: ResultCache | None, key_payload: dict) -> dict | None:
+    """The kept entry ``{"rows", "calibrated", "seconds"}`` of ``key_payload``, or None
+    (no cache, never computed, or not believed: the cache's seal and checksum)."""
+    if cache is None:
+        return None
+    return cache.get(cache.key(key_payload), _check_engines_on_drops, count=False)
+
+
+def engines_on_drops_put(cache: ResultCache | None, key_payload: dict, rows: list,
+                         calibrated: dict, seconds: float,
+                         progress: Callable[[str], None] = lambda text: None) -> dict:
+    """``{"rows", "calibrated", "seconds"}`` as plain JSON, kept under ``key_payload``
+    (when there is a cache; a failed write, said through ``progress``, loses only the
+    reuse) and returned."""
+    entry = json_plain({"rows": rows, "calibrated": calibrated, "seconds": seconds})
+    if cache is not None:
+        try:
+            cache.put(cache.key(key_payload), entry)
+        except OSError as error:
+            progress(f"the engines on the drops not kept in the cache "
+                     f"({error.strerror or error})")
+    return entry
+
+
+def _check_engines_on_drops(record: dict) -> str | None:
+    if not (isinstance(record.get("rows"), list) and isinstance(record.get("calibrated"), dict)
+            and isinstance(record.get("seconds"), int | float)):
+        return "not an engines-on-drops entry"
+    return None
+
+
+def json_plain(value):
+    """``value`` as plain JSON (dicts, lists, floats, ...): dataclasses as dicts (their
+    arrays of 64 or more values left out), numpy arrays as lists, numpy scalars as
+    Python's."""
+    return json.loads(json.dumps(value, default=_plain))
+
+
+def _plain(value):
+    if hasattr(value, "__dataclass_fields__"):
+        return {k: getattr(value, k) for k in value.__dataclass_fields__
+                if not isinstance(getattr(value, k), np.ndarray) or getattr(value, k).size < 64}
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    raise TypeError(f"not JSON: {type(value).__name__}")
+
+
 def _check(record: dict) -> str | None:
     if not isinstance(record.get("text"), str) or not isinstance(record.get("seconds"),
                                                                  int | float):
@@ -140,5 +218,6 @@ class Progress:
             self.stage(text)
 
 
-__all__ = ["ENTRY_LAYOUT", "PROGRESS_EVERY_S", "Progress", "cache_problem", "experiments_code",
-           "payload", "printed_once"]
+__all__ = ["ENGINES_ON_DROPS", "ENTRY_LAYOUT", "PROGRESS_EVERY_S", "Progress", "cache_problem",
+           "engines_on_drops_get", "engines_on_drops_payload", "engines_on_drops_put",
+           "experiments_code", "json_plain", "payload", "printed_once"]

@@ -14,7 +14,7 @@ import argparse
 import json
 import sys
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -120,8 +120,7 @@ def main(args) -> int:
     found = computed_once(args, data, engines, cache)
     output = found["output"]
     if data is not None:  # this copy's place, not the one a cached run read (same hashes)
-        output["fazeli2017"]["provenance"] = json.loads(json.dumps(data.provenance(),
-                                                                   default=_plain))
+        output["fazeli2017"]["provenance"] = cached.json_plain(data.provenance())
     if args.json:  # atomically, never through a link (checked before the work too)
         write_text_atomically(args.json, json.dumps(output, indent=1) + "\n")
     return 0
@@ -137,7 +136,7 @@ def computed_once(args, data: fazeli.FazeliData | None, engines: list[str],
                 "replicates": args.replicates, "seed": args.seed, "engines": engines}
     return cached.printed_once(
         cache, cached.payload("experiments", settings, None if data is None else data.hashes),
-        lambda: {"output": compute(args, data, engines, progress)}, progress, echo)
+        lambda: {"output": compute(args, data, engines, progress, cache)}, progress, echo)
 
 
 def default_options() -> argparse.Namespace:
@@ -148,29 +147,28 @@ def default_options() -> argparse.Namespace:
     return parser.parse_args([])
 
 
-def compute(args, data: fazeli.FazeliData | None, engines: list[str], progress) -> dict:
+def compute(args, data: fazeli.FazeliData | None, engines: list[str], progress,
+            cache: ResultCache | None = None) -> dict:
     """Everything the command prints (printed as it goes) and its ``--json`` document, as
-    plain JSON."""
+    plain JSON. The engines on the drops are read from ``cache`` when the report (or an
+    earlier run) made them from the same inputs (:data:`cached.ENGINES_ON_DROPS`)."""
     output: dict = {"objective": args.objective, "objective_means": metric.OBJECTIVES[
         args.objective], "post_speeds": args.post_speeds}
-    drops = None
     if data is not None:
         output["fazeli2017"], target, fit = fazeli_section(data, args, progress)
-        thetas, residual = drops_engines.jacobian_angles(target, data.pre_impact_angles)
-        drops = (target, thetas, fit)
-    runs = run_engines(engines, drops, progress)  # each engine loaded, each preset run, once
+    runs = run_engines(engines, progress)  # each engine loaded, each preset's curves, once
     if data is not None:
-        output["fazeli2017"]["engines_on_drops"] = drops_engines_table(runs, target, fit,
-                                                                       residual, args.seed)
-        output["fazeli2017"]["calibrated_errors"] = calibrated_errors_table(
-            runs, target, thetas, output["fazeli2017"]["laws"], args, progress)
+        rows, calibrated = engines_on_drops(runs, data, target, fit, output["fazeli2017"]["laws"],
+                                            args, cache, progress)
+        output["fazeli2017"]["engines_on_drops"] = rows
+        output["fazeli2017"]["calibrated_errors"] = calibrated
     output["ellipse_polygons"] = ellipse_section(data)
     progress("each engine's ellipse against the true one")
     output["ellipse_polygons"]["engines"] = ellipse_engines_section(
         [run.engine if run.engine is not None else run.name for run in runs])
     output["kharaz2001"] = kharaz_section()
     output["kharaz2001"]["engines"] = kharaz_engines_table(runs)
-    return json.loads(json.dumps(output, default=_plain))
+    return cached.json_plain(output)
 
 
 def fazeli_section(data: fazeli.FazeliData, args, progress=lambda text: None):
@@ -273,22 +271,17 @@ def _law_dict(result: analysis.LawResult) -> dict:
 
 @dataclass(frozen=True)
 class EngineRuns:
-    """One engine's runs: per preset its aggregates on the drops (None without them) and its
-    Kharaz curves; ``missing`` says why it did not run (not installed)."""
+    """One engine's runs: per preset its Kharaz curves; ``missing`` says why it did not run
+    (not installed)."""
 
     name: str
     missing: str | None
-    presets: tuple = ()  # (preset, drops aggregates or None, engine_curves.EngineCurves)
+    presets: tuple = ()  # (preset, engine_curves.EngineCurves)
     engine: object = None  # the loaded engine (None when missing)
-    #: per preset the per-drop errors on the drops (NaN: flagged), in memory only: never
-    #: printed or written (the Fazeli data carry no licence)
-    drop_errors: dict = field(default_factory=dict, repr=False, compare=False)
 
 
-def run_engines(engines: list[str], drops=None,
-                progress=lambda text: None) -> list[EngineRuns]:
-    """Each engine loaded once and each of its presets run, on the drops when ``drops`` is
-    ``(impacts, angles, fit)`` (at the fit's μ, e) and at the Kharaz incidences."""
+def run_engines(engines: list[str], progress=lambda text: None) -> list[EngineRuns]:
+    """Each engine loaded once and each of its presets run at the Kharaz incidences."""
     angles = np.array(KHARAZ_ANGLES, dtype=float)
     runs = []
     for name in engines:
@@ -297,29 +290,63 @@ def run_engines(engines: list[str], drops=None,
         except EngineNotInstalled as missing:
             runs.append(EngineRuns(name, str(missing)))
             continue
-        presets, errors = [], {}
+        presets = []
         for preset in engine.presets:
-            progress(f"{name} ({preset_label(name, preset)}): "
-                     + ("every drop, then " if drops is not None else "") + "the Kharaz curves")
-            on_drops = None
-            if drops is not None:
-                impacts, thetas, fit = drops
-                on_drops = drops_engines.run_drops(engine, preset, impacts, thetas, fit.mu,
-                                                   fit.e, keep_errors=True)
-                errors[preset] = on_drops.pop("per_drop_errors")
-            presets.append((preset, on_drops, engine_curves.engine_curves(engine, preset,
-                                                                          angles)))
-        runs.append(EngineRuns(name, None, tuple(presets), engine, errors))
+            progress(f"{name} ({preset_label(name, preset)}): the Kharaz curves")
+            presets.append((preset, engine_curves.engine_curves(engine, preset, angles)))
+        runs.append(EngineRuns(name, None, tuple(presets), engine))
     return runs
 
 
-def drops_engines_table(runs: list[EngineRuns], target, fit, residual,
-                        seed: int = 0) -> list[dict]:
-    """Every engine and preset on every drop at the headline fit (μ, e), printed, each
-    beside that law on the drops it scored (paired bootstrap) with the drops it lost."""
+def engines_on_drops(runs: list[EngineRuns], data: fazeli.FazeliData, target, fit,
+                     laws: dict, args, cache: ResultCache | None,
+                     progress=lambda text: None) -> tuple[list[dict], dict]:
+    """Every installed engine and preset on every drop at the headline ``fit``, beside that
+    law, and every engine and law at its fitted or calibrated settings (the laws' fits
+    ``laws``), printed as two tables; returned as plain JSON. Read from ``cache`` when made
+    before from the same inputs, by the report or this command
+    (:data:`cached.ENGINES_ON_DROPS`), else computed and kept there."""
+    thetas, residual = drops_engines.jacobian_angles(target, data.pre_impact_angles)
+    installed = [run for run in runs if run.missing is None]
+    key = cached.engines_on_drops_payload(
+        data.hashes, args.post_speeds,
+        {"law": fit.law, "objective": fit.objective, "mu": fit.mu, "e": fit.e},
+        {law: [law_fit["fit"].mu, law_fit["fit"].e] for law, law_fit in laws.items()},
+        [[run.name, preset] for run in installed for preset, _ in run.presets], args.seed,
+        calibrated_errors.CALIBRATION_DROPS, calibrated_errors.REPLICATES)
+    if not data.hashes:  # files not hashed: no key would tell this copy from another
+        cache = None
+    found = cached.engines_on_drops_get(cache, key)
+    if found is not None:
+        progress(f"the engines on the drops: read from the cache (computed in "
+                 f"{found['seconds']:.0f} s)")
+    else:
+        started = time.perf_counter()
+        law = calibrated_errors.law_errors(fitting.DropErrors(target), fit.law, fit.mu, fit.e)
+        rows, engine_runs = [], []
+        for run in installed:
+            for preset, _ in run.presets:
+                progress(f"{run.name} ({preset_label(run.name, preset)}): every drop")
+                result = drops_engines.run_drops(run.engine, preset, target, thetas, fit.mu,
+                                                 fit.e, keep_errors=True)
+                engine_runs.append((run.engine, preset, dict(result)))
+                errors = result.pop("per_drop_errors")  # in memory only: never kept
+                rows.append({**result, "vs_reference": calibrated_errors.paired_difference(
+                    errors, law, seed=args.seed)})
+        calibrated = calibrated_errors_table(engine_runs, target, thetas, laws, args, progress)
+        found = cached.engines_on_drops_put(cache, key, rows, calibrated,
+                                            time.perf_counter() - started, progress)
+    drops_engines_table(runs, found["rows"], fit, residual)
+    print_calibrated_errors(found["calibrated"], args)
+    return found["rows"], found["calibrated"]
+
+
+def drops_engines_table(runs: list[EngineRuns], rows: list[dict], fit, residual) -> None:
+    """Every engine and preset on every drop at the headline fit (μ, e), printed from its
+    ``rows`` (in the order of ``runs``' installed engines and presets), each beside that
+    law on the drops it scored (paired bootstrap) with the drops it lost."""
     if not runs:
-        return []
-    law = calibrated_errors.law_errors(fitting.DropErrors(target), fit.law, fit.mu, fit.e)
+        return
     print(f"\n### The engines on the drops (μ {fit.mu:.3f}, e {fit.e:.3f}: {fit.law}'s fit "
           f"by {fit.objective})\n")
     print(f"Each drop the ellipse (MuJoCo's ellipsoid, elsewhere the placed "
@@ -332,45 +359,45 @@ def drops_engines_table(runs: list[EngineRuns], target, fit, residual,
     print(f"| engine | preset | single impacts | flagged (reason: drops) | median error | "
           f"{fit.law}, same drops | difference | lost ({fit.law}'s median on them) | q90 error "
           "|\n|---|---|---:|---|---:|---:|---:|---:|---:|")
-    results = []
+    remaining = iter(rows)
     for run in runs:
         if run.missing is not None:
-            print(f"| {run.name} | — | — | not installed: {run.missing} | | | | | |")
+            print(f"| {run.name} | — | not installed: {run.missing} | | | | | |")
             continue
-        for preset, result, _ in run.presets:
+        for preset, _ in run.presets:
+            result = next(remaining)
             counts = dict(result["verdicts"])
             ok = counts.pop("ok", 0)
             flagged = ", ".join(f"{k}: {v}" for k, v in counts.items()) or "none"
             errors = result["errors"]
             q90 = "—" if not errors["drops"] else f"{errors['q90']:.3f}"
-            beside = calibrated_errors.paired_difference(run.drop_errors[preset], law,
-                                                         seed=seed)
             print(f"| {run.name} | {preset_label(run.name, preset)} | {ok} | {flagged} | "
-                  + " | ".join(calibrated_errors.paired_cells(beside)) + f" | {q90} |")
-            results.append({**result, "vs_reference": beside})
-    return results
+                  + " | ".join(calibrated_errors.paired_cells(result["vs_reference"]))
+                  + f" | {q90} |")
 
 
-def calibrated_errors_table(runs: list[EngineRuns], target, thetas, laws: dict,
-                            args, progress=lambda text: None) -> dict:
+def calibrated_errors_table(engine_runs: list, target, thetas, laws: dict, args,
+                            progress=lambda text: None) -> dict:
     """Every engine at its preset and at its calibrated settings, every law at its fit,
-    with intervals (:mod:`.calibrated_errors`), printed; the aggregates returned."""
+    with intervals (:mod:`.calibrated_errors`; ``engine_runs`` ``[(engine, preset, run)]``
+    with each run's per-drop errors): the aggregates."""
     started = time.perf_counter()
-    engine_runs = [(run.engine, preset, {**result, "per_drop_errors": run.drop_errors[preset]})
-                   for run in runs if run.missing is None
-                   for preset, result, _ in run.presets]
     found = calibrated_errors.compute(
         target, thetas, {law: {"mu": law_fit["fit"].mu, "e": law_fit["fit"].e}
                          for law, law_fit in laws.items()}, engine_runs, seed=args.seed,
         curves=False, progress=progress)  # 101 quantiles of a few drops would give them
     # away; no figure here
     found["seconds"] = time.perf_counter() - started
+    return found
+
+
+def print_calibrated_errors(found: dict, args) -> None:
+    """The aggregates of :func:`calibrated_errors_table`, printed."""
     print(f"\n### Every engine and law at its fitted or calibrated settings, with intervals "
           f"({found['seconds']:.1f} s)\n\nAt preset: every drop at the engines' (μ, e) above; "
           f"the laws' fit to all drops by {args.objective}, to the training half by "
           f"{calibrated_errors.OBJECTIVE}.")
     print("\n".join(calibrated_errors.markdown(found, preset_label)))
-    return found
 
 
 def ellipse_section(data: fazeli.FazeliData | None) -> dict:
@@ -465,7 +492,7 @@ def kharaz_engines_table(runs: list[EngineRuns]) -> list:
         if run.missing is not None:
             print(f"| {run.name} | — | not installed: {run.missing} |")
             continue
-        for preset, _, curves in run.presets:
+        for preset, curves in run.presets:
             cells = [f"{curves.tangential_restitution[k]:.3f} / {curves.rebound_deg[k]:.1f} / "
                      f"{curves.spin[k]:.0f}" if verdict == "ok" else f"flagged: {verdict}"
                      for k, verdict in enumerate(curves.verdicts)]
@@ -475,13 +502,3 @@ def kharaz_engines_table(runs: list[EngineRuns]) -> list:
     return results
 
 
-def _plain(value):
-    """JSON for the dataclasses and numpy values of the results."""
-    if hasattr(value, "__dataclass_fields__"):
-        return {k: getattr(value, k) for k in value.__dataclass_fields__
-                if not isinstance(getattr(value, k), np.ndarray) or getattr(value, k).size < 64}
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, np.generic):
-        return value.item()
-    raise TypeError(f"not JSON: {type(value).__name__}")

@@ -216,8 +216,11 @@ def drops_aggregates(out_dir: Path, directory: Path) -> dict:
                 and isinstance(kept.get("aggregates"), dict)):
             return kept["aggregates"]
     data = fazeli.load(directory, check_hashes=False)  # just checked
+    # The engines on the drops kept in the result cache too, where the command (and
+    # findings --check through it) reads them rather than computing them again.
     result = aggregates.compute(data, engines=_installed_engines(),
-                                replicates=REPORT_REPLICATES, progress=_progress)
+                                replicates=REPORT_REPLICATES, progress=_progress,
+                                cache=ResultCache(), data_sha256=hashes)
     # the files' hashes (checked above), never the copy's path: the page is committed
     result["provenance"] = {**data.provenance(), "sha256": hashes}
     result["provenance"].pop("directory", None)

@@ -106,11 +106,12 @@ def point_records(scenario: Scenario, point, engine_entries: Sequence, *,
     if not engine_entries:
         return law_records
     scene = engine_scene(scenario, point)
-    if "newton-lcp" in law_speeds:  # solved above (or failed: the same solve fails again)
-        lcp_gain = law_gains.get("newton-lcp")
+    # the engines' own law, to attribute an energy gain (docs/verdicts.md)
+    if verdicts.ENGINE_LAW in law_speeds:  # solved above (or failed: it fails again)
+        lcp_gain = law_gains.get(verdicts.ENGINE_LAW)
     else:
-        try:  # the engines' own law, to attribute an energy gain (docs/verdicts.md)
-            lcp_gain = solve_law("newton-lcp").energy_change
+        try:
+            lcp_gain = solve_law(verdicts.ENGINE_LAW).energy_change
         except ValueError:
             lcp_gain = None
     declared = verdicts.declared_contacts(scenario, scene)  # a flat face: judged against all

@@ -24,6 +24,7 @@ from .contact_space import (
     scale_exponents,
     solve_scaled,
 )
+from .law_table import LAW_TABLE
 
 
 @dataclass(frozen=True)
@@ -33,9 +34,11 @@ class BatchResult:
     ``status`` codes are in :data:`planar_impact.errors.STATUS_MESSAGES`.
     ``collision_type`` and ``case`` are 0 where the row is not solved.
     ``restitution_in_range`` is False where the ``e_i`` used leaves [0, 1] (the paper's
-    Table 2 for ``"stronge-paper"``). ``type_at_boundary`` is True where Table 1's type is
-    decided inside its band (:data:`planar_impact.laws.TYPE_BAND`: a point that close has
-    another type), ``alternative_type`` that other type (0 elsewhere); only ``poisson`` and
+    Table 2 for ``"stronge-paper"``); a law with no ``e_i`` (``newton-lcp``: its
+    ``restitution_poisson`` is NaN) is in range, as ``solve`` says. ``type_at_boundary``
+    is True where Table 1's type is decided inside its band
+    (:data:`planar_impact.laws.TYPE_BAND`: a point that close has another type),
+    ``alternative_type`` that other type (0 elsewhere); only ``poisson`` and
     ``stronge-paper`` take their type from Table 1 (False and 0 for the other laws).
     """
 
@@ -156,6 +159,8 @@ def _solve_chunk(law, inputs, out):
     out["restitution_poisson"][...] = e_poisson
     if e_poisson is e:  # Poisson: e passed the screen wherever the row is solved
         out["restitution_in_range"][...] = True
+    elif not LAW_TABLE[law].poisson_restitution:  # no e_i (NaN) to leave the range
+        out["restitution_in_range"][...] = True
     else:
         out["restitution_in_range"][...] = (e_poisson >= 0) & (e_poisson <= 1)
     if not ok.all():
@@ -212,7 +217,8 @@ def _solve_rows_scaled(law, rows, inputs, sign, out):
     out["alternative_type"][rows] = solution["alternative_type"]
     e_poisson = solution["restitution_poisson"]
     out["restitution_poisson"][rows] = e_poisson
-    out["restitution_in_range"][rows] = (e_poisson >= 0) & (e_poisson <= 1)
+    out["restitution_in_range"][rows] = (not LAW_TABLE[law].poisson_restitution
+                                         or (e_poisson >= 0) & (e_poisson <= 1))
     # An impulse can overflow where the energy does not (v < 1 with m < v/1.8e308).
     answers = ("normal_impulse", "tangential_impulse", "vn_separation", "vt_separation")
     finite_answer = np.isfinite(solution["energy_change"])

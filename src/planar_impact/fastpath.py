@@ -163,15 +163,15 @@ def _solve(terms, u, mu, e, law, safe_low, safe_high):
         return None
     # One array for both (two rows that never overlap): one numpy call fewer.
     delta_u, u_after = np.array([delta_u, [x + y for x, y in zip(u, delta_u)]])
-    lcp = law == "newton-lcp"
+    has_e = _POISSON_RESTITUTION[law]
     return {
         "law": law, "normal_impulse": normal, "tangential_impulse": tangential,
         "delta_u": delta_u, "u_after": u_after, "vn_approach": vn,
         "vn_separation": vn_separation, "vt_approach": vt,
         "vt_separation": sign * vt_separation, "energy_change": energy_change,
         "collision_type": ctype, "case": case,
-        "restitution_poisson": None if lcp else e_poisson,
-        "restitution_in_range": lcp or 0.0 <= e_poisson <= 1.0,
+        "restitution_poisson": e_poisson if has_e else None,
+        "restitution_in_range": not has_e or 0.0 <= e_poisson <= 1.0,
         "mnn": mnn, "mnt": mnt, "mtt": mtt,
         "type_at_boundary": at_boundary, "alternative_type": alternative,
     }
@@ -286,6 +286,9 @@ def law_answer(law, mnn, mnt, mtt, vn, vt, mu, e, delta):
 
 #: Each law's scalar solver, looked up once per call (LAW_TABLE's ``row``).
 _ROW_SOLVERS = {name: solvers.row for name, solvers in LAW_TABLE.items()}
+#: Whether each law reports a Poisson restitution e_i (LAW_TABLE's ``poisson_restitution``).
+_POISSON_RESTITUTION = {name: solvers.poisson_restitution
+                        for name, solvers in LAW_TABLE.items()}
 
 #: What :func:`law_answer` returns, in order (names of :class:`planar_impact.BatchResult`).
 LAW_FIELDS = ("normal_impulse", "tangential_impulse", "vn_separation", "vt_separation",

@@ -28,6 +28,7 @@ from .contact_space import (
     solve_scaled,
 )
 from .errors import ImpactInputError
+from .law_table import LAW_TABLE
 
 
 @dataclass(frozen=True)
@@ -292,6 +293,7 @@ def solve_contact(contact: CheckedContact, u, mu: float, e: float, law: str) -> 
         raise ImpactInputError(f"{detail} [{errors.STATUS_MESSAGES[status]}]")
     normal, tangential = float(out["normal_impulse"]), sign * float(out["tangential_impulse"])
     e_poisson = float(out["restitution_poisson"])
+    has_e = LAW_TABLE[law].poisson_restitution  # a velocity-level law has no e_i
     delta_u = inv_wn * normal + inv_wt * tangential  # M Δu = w_n I_n + w_t I_t (A16)
     if not (math.isfinite(float(out["energy_change"])) and np.isfinite(delta_u).all()):
         raise ImpactInputError(
@@ -312,8 +314,8 @@ def solve_contact(contact: CheckedContact, u, mu: float, e: float, law: str) -> 
         energy_change=float(out["energy_change"]),
         collision_type=int(out["collision_type"]),
         case=int(out["case"]),
-        restitution_poisson=None if law == "newton-lcp" else e_poisson,
-        restitution_in_range=law == "newton-lcp" or 0.0 <= e_poisson <= 1.0,
+        restitution_poisson=e_poisson if has_e else None,
+        restitution_in_range=not has_e or 0.0 <= e_poisson <= 1.0,
         mnn=mnn,
         mnt=mnt,
         mtt=mtt,

@@ -8,6 +8,7 @@ against the exact impulse process walked segment by segment
 
 from __future__ import annotations
 
+import math
 from fractions import Fraction
 
 import numpy as np
@@ -15,7 +16,7 @@ import pytest
 
 import planar_impact as pi
 from harness.scene.random_problems import random_problems, row
-from planar_impact import fastpath
+from planar_impact import fastpath, law_table
 from planar_impact.process import (
     impulse_process,
     newton_lcp_modes,
@@ -327,6 +328,14 @@ def test_scalar_solve_equals_batch(law):
         for name in ("normal_impulse", "tangential_impulse", "vn_separation", "vt_separation",
                      "energy_change", "collision_type", "case"):
             assert float(getattr(single, name)).hex() == float(getattr(batch, name)).hex(), name
+        # Poisson's e_i: the same bits, None in solve where the batch holds NaN (a law with
+        # no e_i, law_table's poisson_restitution), and the same range flag either way
+        e_batch = float(batch.restitution_poisson)
+        assert (single.restitution_poisson is None) == (not law_table.LAW_TABLE[
+            law].poisson_restitution) == math.isnan(e_batch)
+        if single.restitution_poisson is not None:
+            assert single.restitution_poisson.hex() == e_batch.hex()
+        assert single.restitution_in_range == bool(batch.restitution_in_range)
         # (A16): M Δu = w_n I_n + w_t I_t, and the energy change is that of ½ uᵀMu (A29).
         difference = np.abs(matrix @ single.delta_u
                             - (wn * single.normal_impulse + wt * single.tangential_impulse))
