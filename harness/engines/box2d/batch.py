@@ -136,14 +136,19 @@ def _probe_many(plans, prepared, length: float, skin: float, dt: float,
     iterations = prepared[0].iterations
     asleep: set[int] = set()
     try:
-        for _ in range(max_steps):
-            world.Step(dt, *iterations)
+        # A step's collision pass first, alone (_probe says why): most impacts touch at
+        # their start, and their speeds are known without solving a step.
+        world.contactManager.Collide()
+        steps = 0
+        while True:
             for slot in listener.speeds.keys() - asleep:
                 for b2_body in views[slot].bodies:
                     b2_body.awake = False
                 asleep.add(slot)
-            if len(asleep) == len(views):
+            if len(asleep) == len(views) or steps == max_steps:
                 break
+            world.Step(dt, *iterations)
+            steps += 1
     finally:
         world.contactListener = None
     return [listener.speeds.get(slot) for slot in slots], world, views

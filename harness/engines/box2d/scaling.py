@@ -178,10 +178,16 @@ def _probe(world: _World, prepared: _Prepared, starts: tuple, dt: float,
     b2_world = world.world
     b2_world.contactListener = probe
     try:
+        # The first step's collision pass alone: b2World::Step begins with it (after looking
+        # for new pairs, which place did), and PreSolve sees the contact there, at the start
+        # pose with the start velocities. Found there (the usual case: the scene starts
+        # touching), the speed costs no solve; else the steps follow (their first collision
+        # pass redoes this one at the same poses, with the same results).
+        b2_world.contactManager.Collide()
         for _ in range(max_steps):
-            b2_world.Step(dt, *prepared.iterations)
             if probe.speed is not None:
                 break
+            b2_world.Step(dt, *prepared.iterations)
     finally:
         b2_world.contactListener = None
     return probe.speed
