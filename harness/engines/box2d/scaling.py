@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, NamedTuple
 from Box2D import b2
 
 from harness.engines.box2d.building import _extent
-from harness.engines.box2d.manifold import _approach_speed
+from harness.engines.box2d.manifold import _approach_speed, _speed_after_collide
 from harness.engines.box2d.presets import (
     _BOOL_KEYS,
     MAX_ROTATION,
@@ -174,16 +174,16 @@ def _probe(world: _World, prepared: _Prepared, starts: tuple, dt: float,
     """Box2D's approach speed (m/s, scene units) at the first contact of an unscaled run."""
     world.configure(prepared.world_values, prepared.pair_values)
     world.place(starts)
-    probe = _SpeedProbe(world)
     b2_world = world.world
+    # The first step's collision pass alone (_speed_after_collide): a scene touching at its
+    # start (the usual case) gives its speed without a listener or a solved step.
+    b2_world.contactManager.Collide()
+    speed = _speed_after_collide(world)
+    if speed is not None:
+        return speed
+    probe = _SpeedProbe(world)
     b2_world.contactListener = probe
     try:
-        # The first step's collision pass alone: b2World::Step begins with it (after looking
-        # for new pairs, which place did), and PreSolve sees the contact there, at the start
-        # pose with the start velocities. Found there (the usual case: the scene starts
-        # touching), the speed costs no solve; else the steps follow (their first collision
-        # pass redoes this one at the same poses, with the same results).
-        b2_world.contactManager.Collide()
         for _ in range(max_steps):
             if probe.speed is not None:
                 break
