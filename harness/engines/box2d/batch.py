@@ -18,7 +18,7 @@ from harness.engines.box2d.world import _Readout
 
 # ---------------------------------------------------------------------- many impacts
 #: Impacts per batch in run_many (measured: see docs/engines.md, Box2D).
-MANY_CHUNK = 32
+MANY_CHUNK = 16
 
 
 class _Slot(_Readout):
