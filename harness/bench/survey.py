@@ -19,10 +19,11 @@ then hits both alike. The median of the rounds is reported.
   own step calls as the contract's run took, in a tight loop (``Engine.bare_stepper``, each
   scene's world built outside the timed region): the least any Python driver spends.
   ``contract_ratio = contract_s / bare_s`` and ``judged_ratio = judged_s / bare_s``.
-  ``bare_world_s``: the same bare stepping with each scene's world built and freed, timed
-  too (the survey's shapes are all different, so the contract's run builds a world, or
-  the bodies of a batch world, for every impact); ``world_ratio = contract_s /
-  bare_world_s``.
+  ``bare_world_s``: a user's own loop, the same bare stepping with each scene's world built
+  and freed and the velocities read, timed too (the survey's shapes are all different, so
+  the contract's run builds a world, or the bodies of a batch world, for every impact), the
+  harness's preparation of the run (checks, start state, Box2D's speed probe) left out;
+  ``world_ratio = contract_s / bare_world_s``.
 
 An untimed survey runs first, so that every round finds the engines' caches (MuJoCo's
 compiled polygons, say) equally warm. Every ratio's target is :data:`RATIO_TARGET`.
