@@ -4,8 +4,9 @@ run that measures the impact speed it needs.
 Box2D's problem: ``b2_velocityThreshold`` (1 m/s) is compiled into pybox2d, and a contact
 point slower than it gets ``e = 0``. The laws are homogeneous in lengths and velocities, so
 the run is a scaled copy of the scene (package docstring, "The restitution threshold"): a
-probe run measures Box2D's approach speed at the first contact (:func:`_probe`, a PreSolve
-:class:`_SpeedProbe`), :func:`_scaled` picks the velocity scale and the start a hair deep
+probe run measures Box2D's approach speed at the first contact (:func:`_probe`: after a
+collision pass alone, else a PreSolve :class:`_SpeedProbe`), :func:`_scaled` picks the
+velocity scale and the start a hair deep
 from it, and :func:`_speed_class` groups the scenes of a batch likely to get one scale.
 """
 
