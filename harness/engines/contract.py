@@ -254,11 +254,15 @@ class BareStepper:
 
     ``reset()`` is the adapter's own per-run reset to the run's start state; ``step(n)``
     calls the engine's step ``n`` times. The world is the stepper's own (built without
-    contact reporting where the engine allows); :meth:`close` frees it.
+    contact reporting where the engine allows); :meth:`close` frees it. ``build_cpu_s``:
+    the CPU seconds building the world took, apart from the run's preparation (which may
+    measure the scene in the world, as Box2D's speed probe does: a user's own loop, which
+    the survey bench times, knows its settings and never does that).
     """
 
-    def __init__(self, engine: Engine, world, prepared) -> None:
+    def __init__(self, engine: Engine, world, prepared, build_cpu_s: float = 0.0) -> None:
         self._engine, self._world, self._prepared = engine, world, prepared
+        self.build_cpu_s = build_cpu_s
 
     def reset(self) -> None:
         self._engine._reset(self._world, self._prepared)
@@ -640,9 +644,11 @@ class Engine(abc.ABC):
         """Reset and stepping of ``scene`` under ``settings`` without the run's bookkeeping."""
         resolved, _ = self._resolve(settings, "accurate", None)
         self._checked_scene(scene)
+        tick = time.process_time()
         world = self._build(scene, resolved, contacts=False)
+        build_cpu_s = time.process_time() - tick
         plan = self._plan_for(scene, resolved, world=world)
-        return BareStepper(self, world, plan.prepared)
+        return BareStepper(self, world, plan.prepared, build_cpu_s)
 
     def run(
         self,

@@ -56,3 +56,36 @@ def test_survey_bench_reports_targets_and_the_tripwire():
     assert f"tripwire at {bench_survey.CONTRACT_TRIPWIRE}" in text
     entry = report["pairs"]["pymunk.defaults"]
     assert entry["bare_s"] < entry["bare_world_s"]  # the user's loop builds worlds too
+
+
+def test_a_users_loop_times_the_world_built_not_the_harness_preparing_the_run(monkeypatch):
+    # A user's own loop knows its settings: Box2D's speed probe under ``accurate`` (a second
+    # simulation in the world, inside the run's preparation) must not count as its time.
+    pytest.importorskip("Box2D")
+    import time
+
+    from harness.engines import load_engine
+    from harness.scene.reference import reference_scenes
+
+    engine = load_engine("box2d")
+    settings = engine.settings("accurate")
+    scenes = [reference_scenes()[name][0] for name in ("disk", "rod-45")]
+    ticks = [0.0]
+
+    def clock() -> float:  # one second per reading, a thousand per preparation
+        ticks[0] += 1.0
+        return ticks[0]
+
+    preparations = []
+    original = type(engine)._prepare
+
+    def prepare(self, *args):
+        preparations.append(args[0] is not None)  # with a world: the stepper's, probed
+        ticks[0] += 1000.0
+        return original(self, *args)
+
+    monkeypatch.setattr(time, "process_time", clock)
+    monkeypatch.setattr(type(engine), "_prepare", prepare)
+    stepping, with_world = bench_survey._bare_cpu(engine, settings, scenes, [3, 3])
+    assert preparations == [True, True]
+    assert 0 < stepping < with_world < 100  # a few clock readings, no preparation

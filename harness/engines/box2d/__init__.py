@@ -19,8 +19,10 @@ is scaled back. Powers of two keep every scaling exact in binary floating point.
 picks the smallest power of two ``V >= 1`` that lifts the impact speed Box2D sees at the
 first contact (measured once per scene and settings by a probe run in :meth:`_prepare`) to
 ``2 · b2_velocityThreshold``. Where the probe run would be the run's own beginning (``V = 1``
-and no start depth, as under ``defaults``), the run measures that speed itself (a PreSolve
-listener until the first contact), in ``run`` as in ``run_many``.
+and no start depth, as under ``defaults``), the run measures that speed itself, in ``run``
+as in ``run_many``. Either way the speed is read after the first step's collision pass
+called alone (:func:`.manifold._speed_after_collide`), or, for a scene not touching at its
+start, by a PreSolve listener until the first contact.
 
 Other compiled-in limits: ``b2_maxTranslation`` (2 m per step) and ``b2_maxRotation`` (π/2
 per step) clip a body's velocity for good when a step would move it further. In scene units

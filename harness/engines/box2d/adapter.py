@@ -17,6 +17,7 @@ from harness.engines.box2d.batch import (
     _probe_many,
     _replace,
 )
+from harness.engines.box2d.manifold import _speed_after_collide
 from harness.engines.box2d.presets import _BOOL_KEYS, PRESETS, SETTING_DOCS
 from harness.engines.box2d.scaling import (
     _Prepared,
@@ -134,9 +135,16 @@ class Box2DEngine(Engine):
         if world.speed_probe is not None:  # the last run met no contact
             world.world.contactListener = world.speed_probe = None
         if world.measures and _probe_is_run(prepared):
-            world.speed_probe = _SpeedProbe(world)
-            world.world.contactListener = world.speed_probe
             world.restitution = prepared.probe.restitution
+            # The first step's collision pass, alone: a scene touching at its start gives its
+            # speed there (_speed_after_collide); only the others need the listener.
+            world.world.contactManager.Collide()
+            speed = _speed_after_collide(world)
+            if speed is not None:
+                world.notes = _speed_results(derived, speed, world.velocity, world.restitution)
+            else:
+                world.speed_probe = _SpeedProbe(world)
+                world.world.contactListener = world.speed_probe
         return derived
 
     def _advance(self, world: _World) -> None:
@@ -232,17 +240,28 @@ class Box2DEngine(Engine):
                 view.world = len(batch.worlds)
                 view.dt, view.velocity = dt, prepared[slot].velocity
                 view.notes = prepared[slot].notes
+                view.derived = prepared[slot].derived
                 view.clipped = _states_at_cap(view.states, dt, 1.0)  # read when placed
                 batch.slots[slot] = view
             batch.worlds.append((world, dt, iterations))
             if measure_in_run:
-                listener = _ManyProbe(views, measure_run=True)
-                world.contactListener = listener
-                batch.listeners.append((world, listener))
-        derived = [one.derived for one in prepared]
-        for view, values in zip(batch.slots, derived):
-            view.derived = values
-        return batch, batch.slots, derived
+                # The first step's collision pass, alone (_speed_after_collide): the
+                # impacts touching at their start give their speeds there, the others
+                # through the listener.
+                world.contactManager.Collide()
+                pending = []
+                for view in views:
+                    speed = _speed_after_collide(view)
+                    if speed is None:
+                        pending.append(view)
+                    else:
+                        view.notes = _speed_results(view.derived, speed, view.velocity,
+                                                    view.restitution)
+                if pending:
+                    listener = _ManyProbe(pending, measure_run=True)
+                    world.contactListener = listener
+                    batch.listeners.append((world, listener))
+        return batch, batch.slots, [one.derived for one in prepared]
 
     def _step_many(self, batch: _Batch, active) -> dict:
         slots, worlds = batch.slots, batch.worlds

@@ -11,14 +11,14 @@ from __future__ import annotations
 from Box2D import b2
 
 from harness.engines.box2d.building import _add_impact, _Definitions, _place, _set_switches
-from harness.engines.box2d.manifold import _approach_speed
+from harness.engines.box2d.manifold import _approach_speed, _speed_after_collide
 from harness.engines.box2d.readout import _TOUCHING, _contact_in
 from harness.engines.box2d.scaling import _probe_starts, _speed_results
 from harness.engines.box2d.world import _Readout
 
 # ---------------------------------------------------------------------- many impacts
 #: Impacts per batch in run_many (measured: see docs/engines.md, Box2D).
-MANY_CHUNK = 32
+MANY_CHUNK = 16
 
 
 class _Slot(_Readout):
@@ -76,7 +76,8 @@ def _many_world(plans, prepared, slots, length: float, skin: float, world_values
 
 class _ManyProbe(b2.contactListener):
     """PreSolve listener of a batch world: each impact's approach speed at its first
-    touching contact (:class:`_SpeedProbe` for many impacts)."""
+    touching contact (:class:`_SpeedProbe` for many impacts), for the impacts of ``views``
+    (those a collision pass alone left unmeasured: :func:`_speed_after_collide`)."""
 
     def __init__(self, views, measure_run: bool = False):
         super().__init__()
@@ -91,8 +92,8 @@ class _ManyProbe(b2.contactListener):
         values = _contact_in(contact)
         if not values[0] & _TOUCHING or not values[17]:
             return
-        slot = self.slots[values[3]]
-        if slot in self.speeds:
+        slot = self.slots.get(values[3])
+        if slot is None or slot in self.speeds:  # not measured here, or measured already
             return
         view = self.views[slot]
         speed = self.speeds[slot] = _approach_speed(values, view)
@@ -131,19 +132,32 @@ def _probe_many(plans, prepared, length: float, skin: float, dt: float,
     slots = list(range(len(plans)))
     world, views = _many_world(plans, prepared, slots, length, skin,
                                prepared[0].world_values, probe=True)
-    listener = _ManyProbe(views)
-    world.contactListener = listener
     iterations = prepared[0].iterations
+    # The first step's collision pass alone (_speed_after_collide): most impacts touch at
+    # their start, and their speeds are known without a listener or a solved step.
+    world.contactManager.Collide()
+    speeds: dict[int, float] = {}
+    for slot, view in enumerate(views):
+        speed = _speed_after_collide(view)
+        if speed is not None:
+            speeds[slot] = speed
+    pending = [view for slot, view in enumerate(views) if slot not in speeds]
+    if pending:
+        listener = _ManyProbe(pending)
+        listener.speeds = speeds  # the measured ones asleep, the others measured here
+        world.contactListener = listener
     asleep: set[int] = set()
     try:
-        for _ in range(max_steps):
-            world.Step(dt, *iterations)
-            for slot in listener.speeds.keys() - asleep:
+        steps = 0
+        while True:
+            for slot in speeds.keys() - asleep:
                 for b2_body in views[slot].bodies:
                     b2_body.awake = False
                 asleep.add(slot)
-            if len(asleep) == len(views):
+            if len(asleep) == len(views) or steps == max_steps:
                 break
+            world.Step(dt, *iterations)
+            steps += 1
     finally:
         world.contactListener = None
-    return [listener.speeds.get(slot) for slot in slots], world, views
+    return [speeds.get(slot) for slot in slots], world, views

@@ -95,6 +95,27 @@ def _approach_speed(values: tuple, view: _Readout) -> float:
 
 
 
+def _speed_after_collide(view: _Readout) -> float | None:
+    """The approach speed a PreSolve listener would have measured at the impact's first
+    touching contact in the collision pass just made (``b2ContactManager::Collide`` called
+    alone, outside a step), or None when none touches.
+
+    b2World::Step begins with that pass (after looking for new pairs, which placing the
+    bodies did), and the pass calls PreSolve for every touching contact in the world's
+    contact list order, newest first, before any velocity or pose changes: read after it,
+    the manifolds, poses and velocities are those PreSolve sees, and no listener (a Python
+    call per contact and step, through SWIG's director) is needed. The step that follows
+    redoes the pass at the same poses with the same results (the contacts are updated from
+    themselves, their impulses still 0). ``view``: the impact's :class:`_Readout`.
+    """
+    state = _READERS[0](view.body_b, view.body_b_id, view.memory)
+    touching = _READERS[1](view.body_b, state, view.memory)  # oldest first
+    for values in reversed(touching):
+        if values[17]:
+            return _approach_speed(values, view)
+    return None
+
+
 def _contact_of(touching: list, world) -> RawContacts | None:
     """The step's contact of one impact from its ``touching`` Box2D contacts (oldest
     first, as :data:`_CONTACT` tuples); ``world``: its :class:`_World` or :class:`_Slot`

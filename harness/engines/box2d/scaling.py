@@ -4,8 +4,9 @@ run that measures the impact speed it needs.
 Box2D's problem: ``b2_velocityThreshold`` (1 m/s) is compiled into pybox2d, and a contact
 point slower than it gets ``e = 0``. The laws are homogeneous in lengths and velocities, so
 the run is a scaled copy of the scene (package docstring, "The restitution threshold"): a
-probe run measures Box2D's approach speed at the first contact (:func:`_probe`, a PreSolve
-:class:`_SpeedProbe`), :func:`_scaled` picks the velocity scale and the start a hair deep
+probe run measures Box2D's approach speed at the first contact (:func:`_probe`: after a
+collision pass alone, else a PreSolve :class:`_SpeedProbe`), :func:`_scaled` picks the
+velocity scale and the start a hair deep
 from it, and :func:`_speed_class` groups the scenes of a batch likely to get one scale.
 """
 
@@ -17,7 +18,7 @@ from typing import TYPE_CHECKING, NamedTuple
 from Box2D import b2
 
 from harness.engines.box2d.building import _extent
-from harness.engines.box2d.manifold import _approach_speed
+from harness.engines.box2d.manifold import _approach_speed, _speed_after_collide
 from harness.engines.box2d.presets import (
     _BOOL_KEYS,
     MAX_ROTATION,
@@ -174,14 +175,20 @@ def _probe(world: _World, prepared: _Prepared, starts: tuple, dt: float,
     """Box2D's approach speed (m/s, scene units) at the first contact of an unscaled run."""
     world.configure(prepared.world_values, prepared.pair_values)
     world.place(starts)
-    probe = _SpeedProbe(world)
     b2_world = world.world
+    # The first step's collision pass alone (_speed_after_collide): a scene touching at its
+    # start (the usual case) gives its speed without a listener or a solved step.
+    b2_world.contactManager.Collide()
+    speed = _speed_after_collide(world)
+    if speed is not None:
+        return speed
+    probe = _SpeedProbe(world)
     b2_world.contactListener = probe
     try:
         for _ in range(max_steps):
-            b2_world.Step(dt, *prepared.iterations)
             if probe.speed is not None:
                 break
+            b2_world.Step(dt, *prepared.iterations)
     finally:
         b2_world.contactListener = None
     return probe.speed
