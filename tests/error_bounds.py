@@ -32,6 +32,10 @@ nearest, whatever order or fused multiply-adds a kernel uses:
   of the solver's backward error enters; :class:`Exact` runs the library's formulas (written
   with float constants) in exact arithmetic to build them.
 
+* a square root inside such an exact evaluation (a quadratic's root at a computed point) is
+  bracketed by two Fractions from an integer square root (:func:`sqrt_bracket`), exact where
+  the radicand is a rational square.
+
 The libm functions are not IEEE operations: glibc documents ``cos`` and ``sin`` within 1 ulp
 on x86-64 (its manual, 'Known Maximum Errors in Math Functions'), i.e. relative error at most
 ``2 u`` (:data:`LIBM_RELATIVE`); two machines' libms may round them differently.
@@ -386,3 +390,20 @@ class Exact:
 
     def __repr__(self) -> str:
         return f"Exact({self.value})"
+
+
+def sqrt_bracket(value, bits: int = 256) -> tuple[Fraction, Fraction]:
+    """``(lo, hi)``, Fractions with ``lo <= √value <= hi`` and ``hi − lo <= 2**-bits / q`` for
+    ``value = p/q >= 0`` in lowest terms; ``lo == hi`` exactly where ``value`` is the square of
+    a rational. ``√(p/q) = √(p q)/q``, and ``s = isqrt(p q 4**bits)`` is the largest integer
+    with ``s² <= p q 4**bits``: an exact-integer bracket, no rounding anywhere (for a root
+    that enters exact arithmetic: a quadratic's root at a computed point)."""
+    value = Fraction(value)
+    if value < 0:
+        raise ValueError(f"no real square root of {value}")
+    p, q = value.numerator, value.denominator
+    whole = math.isqrt(p * q)
+    if whole * whole == p * q:  # a rational square: √(p/q) = √(pq)/q exactly
+        return Fraction(whole, q), Fraction(whole, q)
+    scaled = math.isqrt(p * q << (2 * bits))
+    return Fraction(scaled, q << bits), Fraction(scaled + 1, q << bits)

@@ -22,6 +22,7 @@ from tests.error_bounds import (
     dot_bound,
     gamma,
     solve_backward_bounds,
+    sqrt_bracket,
 )
 
 finite = st.floats(min_value=-1e6, max_value=1e6, allow_nan=False, allow_infinity=False)
@@ -232,3 +233,23 @@ def test_exact_keeps_float_constants_exact(a, b, c):
     assert (x < y) == (a < b) and (x <= b) == (a <= b) and (x == a) and not (x != a)
     assert float(x * 0.1) == float(Fraction(a) * Fraction(0.1))
     assert Exact(x).value == Fraction(a)
+
+
+@given(st.fractions(min_value=0, max_value=10**6, max_denominator=10**9))
+def test_sqrt_bracket_holds_exactly_and_is_narrow(value):
+    lo, hi = sqrt_bracket(value, bits=64)
+    assert lo * lo <= value <= hi * hi  # a bracket, compared exactly
+    assert hi - lo <= Fraction(1, 2**64 * Fraction(value).denominator)
+    # the float root of the float radicand lies within 2u of the bracket (the conversion's
+    # u, halved by the root, and the root's own u): a check that can fail
+    root = math.sqrt(float(value))
+    assert lo * (1 - 2 * Fraction(U)) <= Fraction(root) <= hi * (1 + 2 * Fraction(U))
+
+
+def test_sqrt_bracket_is_a_point_on_rational_squares_and_refuses_negatives():
+    assert sqrt_bracket(Fraction(121, 400)) == (Fraction(11, 20), Fraction(11, 20))
+    assert sqrt_bracket(0) == (0, 0)
+    lo, hi = sqrt_bracket(2)
+    assert lo < hi and lo * lo < 2 < hi * hi
+    with pytest.raises(ValueError):
+        sqrt_bracket(Fraction(-1, 3))
