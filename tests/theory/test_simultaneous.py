@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 from fractions import Fraction
 
@@ -10,6 +11,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from scipy import optimize
 
 import planar_impact as pi
 from planar_impact import laws, solver
@@ -524,7 +526,7 @@ def mirrored(impulses):
 def test_flat_box_solutions_are_symmetric(law, coupling):
     system = flat_box()
     found = sim.coherent_solutions(system, law, coupling=coupling)
-    assert found  # the effective reading's count: test_flat_box_effective_stronge_...
+    assert found  # the effective reading: one each (test_flat_box_effective_reading_has_one_…)
     # The set is mirror-symmetric: x → −x swaps the corners and flips t, so each solution's
     # mirror image (I_n swapped, I_t swapped and negated) is a solution, itself or another:
     # bit for bit in the literal reading (mirrored arithmetic, see above); in the effective
@@ -555,6 +557,121 @@ def test_flat_box_solutions_are_symmetric(law, coupling):
         assert mirrors
         if mirrors == [solution]:
             assert_mirror(solution)
+
+
+def slip_ratio_fixed_points(system, law, points=801):
+    """The effective reading's fixed points of two contacts, found apart from
+    coherent_solutions (which runs Newton's method on the impulses from map(0), one start per
+    combination): each contact takes its own law's answer (Table 1's type) at its effective
+    approach, and that answer is homogeneous of degree 1 in the approach, so with
+    ``w_i = |v_n(i)|`` and the slip ratio ``σ_i = v_t(i)/w_i`` it is ``w_i P_i(σ_i)``,
+    ``P_i(σ) = `` the law at ``(−1, σ)`` (solve_batch, the caller's t). Given σ, (75)'s normal
+    rows are linear in w: ``w_0 + a_01(σ_1) w_1 = −v_n^A(0)`` and the same for contact 1,
+    ``a_ij = W_(n_i n_j) P_nj + W_(n_i t_j) P_tj``; the tangential rows leave two residuals
+    ``R_i = σ_i w_i − v_t^A(i) − w_j b_ij(σ_j)`` (``b_ij`` as ``a_ij`` from the t_i row). The
+    whole (σ_0, σ_1) plane is scanned on a grid in ``θ = arctan σ`` (``points`` per axis);
+    each cell where both residuals take both signs and some corner has ``w > 0`` is refined
+    by scipy's fsolve from its centre. Returns ``(cells, roots)``: each candidate cell (the
+    θ indices) and the σ it converged to, or None where it did not (a jump of the law, as at
+    σ = 0 where a corner's orientation flips its Table 1 case, changes sign without a
+    root)."""
+    assert system.count == 2
+    delassus, approach = system.delassus, system.approach
+
+    def residuals(first, second):
+        (n0, t0), (n1, t1) = (
+            (lambda out: (out.normal_impulse, out.tangential_impulse))(pi.solve_batch(
+                *system.single_terms(i), -1.0, sigma, system.mu[i], system.e[i], law,
+                delta=system.deltas[i])) for i, sigma in ((0, first), (1, second)))
+        a01, a10 = (delassus[0, 2] * n1 + delassus[0, 3] * t1,
+                    delassus[2, 0] * n0 + delassus[2, 1] * t0)
+        b01, b10 = (delassus[1, 2] * n1 + delassus[1, 3] * t1,
+                    delassus[3, 0] * n0 + delassus[3, 1] * t0)
+        determinant = 1.0 - a01 * a10
+        w0 = (-approach[0] + a01 * approach[2]) / determinant
+        w1 = (-approach[2] + a10 * approach[0]) / determinant
+        return first * w0 - approach[1] - w1 * b01, second * w1 - approach[3] - w0 * b10, w0, w1
+
+    theta = np.linspace(-np.pi / 2, np.pi / 2, points)[1:-1]
+    sigma = np.tan(theta)
+    with np.errstate(all="ignore"):
+        r0, r1, w0, w1 = residuals(sigma[:, None], sigma[None, :])
+
+    def corners(values):
+        return np.stack([values[:-1, :-1], values[1:, :-1], values[:-1, 1:], values[1:, 1:]])
+
+    def changes_sign(values):  # NaN (no answer at a corner) compares False
+        return (corners(values).min(axis=0) <= 0) & (corners(values).max(axis=0) >= 0)
+
+    approaching = corners((w0 > 0) & (w1 > 0)).any(axis=0)
+    cells = [tuple(int(x) for x in c)
+             for c in np.argwhere(changes_sign(r0) & changes_sign(r1) & approaching)]
+    roots = []
+    for a, b in cells:
+        def both(angles):
+            with np.errstate(all="ignore"):
+                values = residuals(np.tan(angles[0]), np.tan(angles[1]))[:2]
+            return np.array(values, dtype=float)
+
+        start = [(theta[a] + theta[a + 1]) / 2, (theta[b] + theta[b + 1]) / 2]
+        angles, _info, found, _message = optimize.fsolve(both, start, full_output=True,
+                                                         xtol=1e-14)
+        residual = both(angles)
+        # converged: the residuals at rounding of the speeds (|v^A| = 1 m/s here)
+        ok = found == 1 and np.all(np.abs(residual) <= 1e-12 * system.speed_scale())
+        roots.append(np.tan(angles) if ok else None)
+    return cells, roots
+
+
+@pytest.mark.parametrize("law", TYPE_LAWS)
+def test_flat_box_effective_reading_has_one_solution_at_a_type_boundary(law):
+    """docs/multi-contact.md, 'Where energy is gained': on the flat box each law's effective
+    reading has exactly one coherent solution, I* = (3, −3/2, 3, 3/2) N s, on a boundary
+    of Table 1's types at both corners; for the paper's Stronge too (an earlier test allowed
+    none). Its exact fixed point is rational (stronge_effective_fixed_point): at I* each
+    corner's effective approach is (v_n, v_t) = (−4, ±3) m/s, α = 3/4 = (1 + e) r_m
+    exactly (r_m = g/h = 1/2), the Type 4 | 5 cut, where (73) reads 0.7 e_i² − 0.15 e_i − 0.1
+    = 0 with the '+√' root e_i = 1/2 = e_e: Types 4 and 5 give the same impulses, and every
+    combination of them has I* as its exact fixed point. The count is checked by a second
+    method (slip_ratio_fixed_points: the slip ratios' plane scanned, each candidate refined):
+    every candidate cell converges to σ = (3/4, −3/4), the slip ratios of I*."""
+    system = flat_box()
+    found = sim.coherent_solutions(system, law, coupling="effective")
+    assert len(found) == 1
+    (solution,) = found
+    if law == "stronge-paper":
+        fixed, bound = stronge_effective_fixed_point(system, solution)
+    else:
+        fixed, bound = effective_fixed_point(system, law, solution)
+    assert fixed == [3, Fraction(-3, 2), 3, Fraction(3, 2)]
+    delassus, approach, _ = exact_flat_box()
+    mu, e = Fraction(1, 2), Fraction(1, 2)
+    ratios = []
+    for i, sign in enumerate((1, -1)):
+        terms = exact_effective_terms(i, sign, fixed, delassus, approach, mu)
+        assert (terms.vn_abs.value, terms.vt.value) == (4, 3)  # in the slip's frame
+        assert terms.alpha.value == (1 + e) * terms.r_m.value == Fraction(3, 4)
+        ratios.append(sign * terms.alpha.value)
+        if law == "stronge-paper":
+            quadratic = stronge_quadratic(terms, e, laws.REVERSE_FROM_RESTITUTION,
+                                          terms.alpha.value)
+            assert quadratic == (Fraction(7, 10), Fraction(-3, 20), Fraction(-1, 10))
+            assert stronge_root_bracket(*quadratic) == (e, e)
+    if law != "newton":  # Poisson's and the paper's Stronge's Types 4 and 5 (e_i = e_e)
+        for types in itertools.product((4, 5), repeat=2):
+            assert exact_effective_map("poisson", types, (1.0, -1.0), fixed, delassus,
+                                       approach, mu, e) == fixed, types
+    # Table 1's two types at both corners, within the library's BOUNDARY_BAND: a decision
+    # exactly at its cut, so reported at the boundary (either outcome is right).
+    pair = "2 | 3" if law == "newton" else "4 | 5"
+    assert solution.boundary == tuple(f"contact {i}: Table 1 type {pair}" for i in (0, 1))
+    # The second method: one fixed point in the whole plane of slip ratios, the grid's
+    # resolution (a cell) the only judgement; no candidate is left unrefined.
+    cells, roots = slip_ratio_fixed_points(system, law)
+    assert cells and all(root is not None for root in roots), (cells, roots)
+    spacing = np.pi / 800
+    target = np.arctan([float(x) for x in ratios])
+    assert all(np.all(np.abs(np.arctan(root) - target) <= spacing) for root in roots), roots
 
 
 def test_stronge_effective_bound_holds_off_the_fixed_point():
