@@ -10,7 +10,9 @@ inputs (each float input exact), they return their usual values, bit for bit (th
 it against the library's own answers), each carrying a bound on its distance from the exact
 answer of the exact problem (running error analysis, Higham §3.3). Both are exact in exact
 arithmetic, so where neither took a decision its errors leave open
-(``Tracked.close_decisions``), the two answers are within the sum of their bounds.
+(``Tracked.close_decisions``), the two answers are within the sum of their bounds; where one
+did, :func:`branched` follows it along every path the exact computation could take and widens
+each bound to cover them all (infinite where that cannot be settled: a decision at a boundary).
 
 The modules' ``math.sqrt`` is swapped for :meth:`Tracked.math_sqrt` while they run (it gives
 the same bits for floats, and keeps a ``Tracked`` tracked), and the close calls of Table 1's
@@ -32,8 +34,10 @@ from tests.error_bounds import (
     U,
     bilinear_bound,
     dot_bound,
+    every_branch,
     gamma,
     solve_backward_bounds,
+    widened,
 )
 
 FIELDS = ("normal_impulse", "tangential_impulse", "vn_separation", "vt_separation",
@@ -104,6 +108,27 @@ def walked(law: str, mnn, mnt, mtt, vn, vt, mu, e) -> dict[str, Tracked]:
 def lcp_modes(mnn, mnt, mtt, vn, vt, mu, e) -> list[tuple[str, Tracked, Tracked]]:
     """:func:`newton_lcp_modes` with ``Tracked`` impulses."""
     return process.newton_lcp_modes(*(Tracked(x) for x in (mnn, mnt, mtt, vn, vt, mu, e)))
+
+
+#: Paths of a replay followed before it counts as undecided (a few dozen at a boundary).
+BRANCH_LIMIT = 256
+
+
+def branched(replay) -> dict:
+    """``replay()`` (a function returning a dict of ``Tracked`` fields, such as
+    :func:`closed_form` or :func:`walked` of one row) where it compared values within their
+    errors (``Tracked.close_decisions``): followed along every path an exact computation
+    could take (error_bounds.every_branch), each ``Tracked`` field widened to a bound
+    whichever path the exact computation takes (error_bounds.widened). Its error is infinite
+    where a path fails or the replay branches more than :data:`BRANCH_LIMIT` ways: a decision
+    at a boundary that the test cannot settle. The values are the floats' path's."""
+    try:
+        paths = every_branch(replay, limit=BRANCH_LIMIT)
+    except RuntimeError:
+        paths = [replay(), None]
+    first = paths[0]
+    return {name: widened([path and path[name] for path in paths])
+            if type(value) is Tracked else value for name, value in first.items()}
 
 
 def fraction(one: Tracked, other: Tracked) -> float:
