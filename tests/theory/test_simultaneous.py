@@ -374,12 +374,15 @@ def stronge_effective_fixed_point(system, solution):
     residual in the Stronge map (its e_i, ê_i, bracketed exactly: stronge_root_bracket; the
     map is affine in each e_i, so r's extremes are at the bracket's ends), D_i the map's slope
     in e_i at Î (contact i's block). Both quadratics vanish at their roots, so exactly
-    ``ê − e* = −(α̂ − α*)(a′e*² + b′e* + c′) / (a(α̂)(ê + e*) + b(α̂))`` (′: the slope in α),
-    and ``|α̂ − α*| <= L_α δ`` with ``δ = max|Î − I*|`` and
-    ``L_α = (Σ_(k∉i)|W_tk| |v_n*| + |v_t*| Σ_(k∉i)|W_nk|) / (|v̂_n| |v_n*|)`` (α = v_t/|v_n|,
-    v affine in the other contacts' impulses): ``|ê_i − e_i*| <= Λ_i δ``. So
-    ``|Î − I*| <= |(Id − B)⁻¹| |r| + |(Id − B)⁻¹| Σ_i |D_i| Λ_i δ =: k_r + k_d δ``, whence
-    ``δ <= max k_r / (1 − max k_d)`` (max k_d < 1 checked) and ``bound = k_r + k_d δ``, every
+    ``ê − e* = −(α̂ − α*)(a′e*² + b′e* + c′) / den``, ``den = a(α̂)(ê + e*) + b(α̂)`` (′: the
+    slope in α), and α = v_t/|v_n| with v affine in the other contacts' impulses gives
+    exactly ``α̂ − α* = Σ_(k∉i) ((sign W_tk) |v_n*| + v_t* W_nk) Δ_k / (|v̂_n| |v_n*|)``,
+    ``Δ = Î − I*``: ``ê_i − e_i* = g_i·Δ / den_i`` with g_i exact. So exactly
+    ``(Id − B − Σ_i D_i g_iᵀ / den_i) Δ = r``, the map's secant at Î and I*, and
+    ``|Δ| <= |M| |r|`` with M that secant matrix's inverse, in exact Fractions. den_i is known
+    within ê_i's bracket: M is taken at one end (M₀) and widened by
+    ``‖M − M₀‖_∞ <= ‖M₀‖² ε / (1 − ‖M₀‖ ε)``, ε bounding the secant's change over the bracket
+    (a perturbation bound; ε is below 1e-100 here, so the widening is nil), every
     term exact up to the final conversion. The residual is checked within the library's
     FIXED_POINT_TOLERANCE (an answer off the fixed point cannot pass inside its own bound);
     the types are the solution's, its signs the library's orientation at Î, and the exact
