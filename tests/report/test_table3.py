@@ -172,6 +172,7 @@ def poisson_with_delta_u_bound(problem, mu, e):
     return result, bound
 
 
+@pytest.mark.kernel_sensitive  # three solves and a fit against their derived bounds
 @pytest.mark.parametrize("index", [1, 2, 3])
 def test_a_reachable_du_is_at_distance_zero_and_its_e_is_found(table, index, monkeypatch):
     """Δu at any e_i is on the measured line (affine in e_i within one collision type,
