@@ -462,3 +462,18 @@ def widened(values) -> Tracked:
             return Tracked(first.value, math.inf)
         reach = max(reach, (abs(first.value - other.value) + other.error) * (1 + 2 * U))
     return Tracked(first.value, reach)
+
+
+def exact_inverse(matrix):
+    """``A⁻¹`` by Gauss–Jordan in Fractions (exact; A nonsingular)."""
+    size = len(matrix)
+    rows = [[Fraction(x) for x in row] + [Fraction(int(i == j)) for j in range(size)]
+            for i, row in enumerate(matrix)]
+    for k in range(size):
+        pivot = next(i for i in range(k, size) if rows[i][k] != 0)
+        rows[k], rows[pivot] = rows[pivot], rows[k]
+        rows[k] = [x / rows[k][k] for x in rows[k]]
+        for i in range(size):
+            if i != k and rows[i][k] != 0:
+                rows[i] = [a - rows[i][k] * b for a, b in zip(rows[i], rows[k])]
+    return [row[size:] for row in rows]

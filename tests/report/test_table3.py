@@ -8,14 +8,12 @@ given there (half a unit of the 4th decimal is the rounding of those printed cor
 from __future__ import annotations
 
 import types
-from functools import partial
 
 import numpy as np
 import pytest
 
 from harness.report import table3 as paper
-from planar_impact import fastpath
-from tests.error_bounds import Tracked, dot_bound
+from tests.error_bounds import Tracked
 from tests.theory import law_bounds
 
 # Kind (docs/verdicts.md, 'Same answers on every CPU'): a derived bound, the print's: half a
@@ -145,33 +143,6 @@ def test_paper_command_writes_report_and_figure(tmp_path):
     assert (tmp_path / "paper-table3.png").stat().st_size > 10_000
 
 
-def poisson_with_delta_u_bound(problem, mu, e):
-    """``problem.solve``'s Poisson answer and a derived bound per speed on its Δu's distance
-    from the exact Δu of the same (float) inputs: the law replayed on Tracked numbers from the
-    fast path's own contact terms, known within their solves' backward errors and dot
-    products' rounding, then Δu = x̂_n I_n + x̂_t I_t's bound (tests/theory/law_bounds.py,
-    as tests/theory/test_fastpath.py uses it; widened where the replay branches close)."""
-    result = problem.solve(mu=mu, e=e, law="poisson")
-    _, wn_key, _, kept = fastpath._last_contact  # noqa: SLF001
-    assert wn_key == problem.wn.tobytes() and kept[2] == result.mnn
-    fields = {name: getattr(result, name) for name in
-              ("mnn", "mnt", "mtt", "vn_approach", "vt_approach")}
-    speed_bounds = (dot_bound(problem.wn.tolist(), problem.u.tolist()),
-                    dot_bound(problem.wt.tolist(), problem.u.tolist()))
-    replay = partial(law_bounds.replayed_law, "poisson", fields, kept[5],
-                     law_bounds.term_bounds(problem.mass_matrix, problem.wn, problem.wt,
-                                            "cholesky"), speed_bounds, mu, e)
-    Tracked.close_decisions = 0
-    replayed = replay()
-    assert replayed["normal_impulse"].value == result.normal_impulse
-    assert replayed["tangential_impulse"].value == result.tangential_impulse
-    if Tracked.close_decisions:
-        replayed = law_bounds.branched(replay)
-    bound = law_bounds.delta_u_bound(problem.mass_matrix, (kept[6], kept[7]), replayed,
-                                     "cholesky")
-    return result, bound
-
-
 @pytest.mark.kernel_sensitive  # three solves and a fit against their derived bounds
 @pytest.mark.parametrize("index", [1, 2, 3])
 def test_a_reachable_du_is_at_distance_zero_and_its_e_is_found(table, index, monkeypatch):
@@ -179,7 +150,7 @@ def test_a_reachable_du_is_at_distance_zero_and_its_e_is_found(table, index, mon
     missing the origin for types 1 and 3): put the solver's own Δu at e_i = 0.37 in the row,
     and in exact arithmetic the distance is 0 and the e_i found is 0.37 (the float input).
     Derived bound: the three solves' Δu each within its bound of the exact one
-    (poisson_with_delta_u_bound), and the line fit (table3.line_distance, written out, no
+    (law_bounds.solve_with_delta_u_bound), and the line fit (table3.line_distance, written out, no
     BLAS) replayed on Tracked numbers from them, checked bit for bit: the distance within
     its bound of 0, the e_i within its bound of 0.37. Measured (the same on every kernel):
     the distance 1e-16 against bounds of 1e-13 to 9e-13, at most 0.07 % of its bound, the
@@ -187,7 +158,8 @@ def test_a_reachable_du_is_at_distance_zero_and_its_e_is_found(table, index, mon
     row = dict(entry(table, "stronge", index)["row"])
     problem = paper.table3_problem(row)
     mu = float(row["mu"])
-    solved = [poisson_with_delta_u_bound(problem, mu, e) for e in (0.0, 0.37, 1.0)]
+    solved = [law_bounds.solve_with_delta_u_bound(problem, mu, e, "poisson")
+              for e in (0.0, 0.37, 1.0)]
     # one collision type at the three (a decision, far from its cut): Δu affine in e between
     assert len({result.collision_type for result, _ in solved}) == 1
     assert not any(result.type_at_boundary for result, _ in solved)

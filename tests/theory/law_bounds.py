@@ -25,16 +25,20 @@ import math
 import types
 from collections.abc import Iterator
 from contextlib import contextmanager
+from fractions import Fraction
+from functools import partial
 
 import numpy as np
 
 from planar_impact import fastpath, law_branches, process
 from tests.error_bounds import (
+    Exact,
     Tracked,
     U,
     bilinear_bound,
     dot_bound,
     every_branch,
+    exact_inverse,
     gamma,
     solve_backward_bounds,
     widened,
@@ -198,3 +202,53 @@ def kinetic_bound(matrix, u, u_after, u_after_error) -> float:
     distance = np.asarray(u_after_error, dtype=float)
     moved = 0.5 * float(distance @ (np.abs(matrix) @ (2.0 * np.abs(u_after) + distance)))
     return rounding + moved
+
+
+def solve_with_delta_u_bound(problem, mu, e, law):
+    """``problem.solve``'s answer (an ``ImpactProblem``, solved by the fast path) and a
+    derived bound per speed on its Δu's distance from the exact Δu of the same float inputs:
+    the law replayed on Tracked numbers from the fast path's own contact terms, known within
+    their solves' backward errors and dot products' rounding (:func:`replayed_law`; widened
+    by :func:`branched` where it branches close), then Δu = x̂_n I_n + x̂_t I_t's bound
+    (:func:`delta_u_bound`)."""
+    result = problem.solve(mu=mu, e=e, law=law)
+    _, wn_key, _, kept = fastpath._last_contact  # noqa: SLF001 - the terms it solved with
+    assert wn_key == problem.wn.tobytes() and kept[2] == result.mnn
+    fields = {name: getattr(result, name) for name in
+              ("mnn", "mnt", "mtt", "vn_approach", "vt_approach")}
+    speed_bounds = (dot_bound(problem.wn.tolist(), problem.u.tolist()),
+                    dot_bound(problem.wt.tolist(), problem.u.tolist()))
+    replay = partial(replayed_law, law, fields, kept[5],
+                     term_bounds(problem.mass_matrix, problem.wn, problem.wt, "cholesky"),
+                     speed_bounds, mu, e)
+    Tracked.close_decisions = 0
+    replayed = replay()
+    assert replayed["normal_impulse"].value == result.normal_impulse
+    assert replayed["tangential_impulse"].value == result.tangential_impulse
+    if Tracked.close_decisions:
+        replayed = branched(replay)
+    bound = delta_u_bound(problem.mass_matrix, (kept[6], kept[7]), replayed, "cholesky")
+    return result, bound
+
+
+def exact_u_after(problem, mu, e, law) -> list:
+    """The exact ``u_after`` (Fractions) of ``problem``, its float inputs taken as exact, under
+    a law without square roots (Poisson, Newton, newton-lcp): ``X = M⁻¹ [w_n w_t]`` solved in
+    Fractions, the contact terms and speeds formed exactly, the law's closed form
+    (fastpath.law_answer) run on error_bounds.Exact numbers, so the exact computation takes
+    its own branches, then ``u + X (I_n, I_t)``."""
+    assert law in ("poisson", "newton", "newton-lcp"), law
+    inverse = exact_inverse(problem.mass_matrix.tolist())
+    rows = [[Fraction(x) for x in problem.wn], [Fraction(x) for x in problem.wt]]
+    speeds = [Fraction(x) for x in problem.u]
+    columns = [[sum(a * w for a, w in zip(line, row)) for line in inverse] for row in rows]
+    mnn, mnt, mtt = (sum(a * b for a, b in zip(rows[i], columns[j]))
+                     for i, j in ((0, 0), (0, 1), (1, 1)))
+    vn, vt = (sum(a * b for a, b in zip(row, speeds)) for row in rows)
+    sign = -1 if vt < 0 or (vt == 0 and mnt < 0) else 1  # as closed_form turns t
+    inputs = [Exact(x) for x in (mnn, sign * mnt, mtt, vn, sign * vt, Fraction(mu), Fraction(e))]
+    out = fastpath.law_answer(law, *inputs, inputs[0] * inputs[2] - inputs[1] * inputs[1])
+    assert out is not None
+    normal, tangential = Exact(out[0]).value, sign * Exact(out[1]).value
+    return [s + x_n * normal + x_t * tangential
+            for s, x_n, x_t in zip(speeds, columns[0], columns[1])]

@@ -19,7 +19,7 @@ from planar_impact import simultaneous as sim
 from planar_impact.simultaneous import system as sim_system
 from planar_impact.simultaneous import type_map
 from tests import error_bounds
-from tests.error_bounds import Tracked
+from tests.error_bounds import Tracked, exact_inverse
 from tests.theory import flat_face_bounds as ffb
 from tests.theory import law_bounds
 
@@ -1061,21 +1061,6 @@ def newton_coulomb_mode(system, solution):
             matrix[t][t] = Fraction(1)
             matrix[t][n] = Fraction(slide) * Fraction(float(system.mu[i]))
     return matrix, rhs, w_row
-
-
-def exact_inverse(matrix):
-    """``A⁻¹`` by Gauss–Jordan in Fractions (exact; A nonsingular)."""
-    size = len(matrix)
-    rows = [list(row) + [Fraction(int(i == j)) for j in range(size)]
-            for i, row in enumerate(matrix)]
-    for k in range(size):
-        pivot = next(i for i in range(k, size) if rows[i][k] != 0)
-        rows[k], rows[pivot] = rows[pivot], rows[k]
-        rows[k] = [x / rows[k][k] for x in rows[k]]
-        for i in range(size):
-            if i != k and rows[i][k] != 0:
-                rows[i] = [a - rows[i][k] * b for a, b in zip(rows[i], rows[k])]
-    return [row[size:] for row in rows]
 
 
 def pgs_stopping_bound(system, impulses, k):
