@@ -32,6 +32,10 @@ nearest, whatever order or fused multiply-adds a kernel uses:
   of the solver's backward error enters; :class:`Exact` runs the library's formulas (written
   with float constants) in exact arithmetic to build them.
 
+* a square root inside such an exact evaluation (a quadratic's root at a computed point) is
+  bracketed by two Fractions from an integer square root (:func:`sqrt_bracket`), exact where
+  the radicand is a rational square.
+
 The libm functions are not IEEE operations: glibc documents ``cos`` and ``sin`` within 1 ulp
 on x86-64 (its manual, 'Known Maximum Errors in Math Functions'), i.e. relative error at most
 ``2 u`` (:data:`LIBM_RELATIVE`); two machines' libms may round them differently.
@@ -40,6 +44,7 @@ on x86-64 (its manual, 'Known Maximum Errors in Math Functions'), i.e. relative 
 from __future__ import annotations
 
 import math
+import operator
 from fractions import Fraction
 
 import numpy as np
@@ -170,6 +175,9 @@ class Tracked:
 
     #: Comparisons so far whose outcome the errors leave open (see above).
     close_decisions = 0
+    #: The indices (in close_decisions' count) of the close comparisons to decide the other
+    #: way: :func:`every_branch` follows each path an exact computation could take.
+    flipped: frozenset[int] = frozenset()
 
     def __init__(self, value: float, error: float = 0.0):
         self.value, self.error = float(value), float(error)
@@ -242,44 +250,43 @@ class Tracked:
     def __float__(self) -> float:
         return self.value
 
-    def _compare(self, other) -> tuple[float, float]:
+    def _decide(self, other, outcome) -> bool:
+        """``outcome(a, b)`` of the values; a close comparison (see the class docstring) is
+        counted, and decided the other way where its index is in :attr:`Tracked.flipped`."""
         if other is self:
-            return self.value, self.value
+            return outcome(self.value, self.value)
         if type(other) is Tracked:
             value, errors = other.value, self.error + other.error
         else:
             value, errors = other, self.error
+        decided = outcome(self.value, value)
         if errors > 0.0 and abs(self.value - value) <= errors:
+            if Tracked.close_decisions in Tracked.flipped:
+                decided = not decided
             Tracked.close_decisions += 1
-        return self.value, value
+        return decided
 
     def __lt__(self, other):
-        a, b = self._compare(other)
-        return a < b
+        return self._decide(other, operator.lt)
 
     def __le__(self, other):
-        a, b = self._compare(other)
-        return a <= b
+        return self._decide(other, operator.le)
 
     def __gt__(self, other):
-        a, b = self._compare(other)
-        return a > b
+        return self._decide(other, operator.gt)
 
     def __ge__(self, other):
-        a, b = self._compare(other)
-        return a >= b
+        return self._decide(other, operator.ge)
 
     def __eq__(self, other):
         if not isinstance(other, (Tracked, float, int)):
             return NotImplemented
-        a, b = self._compare(other)
-        return a == b
+        return self._decide(other, operator.eq)
 
     def __ne__(self, other):
         if not isinstance(other, (Tracked, float, int)):
             return NotImplemented
-        a, b = self._compare(other)
-        return a != b
+        return self._decide(other, operator.ne)
 
     __hash__ = None
 
@@ -386,3 +393,87 @@ class Exact:
 
     def __repr__(self) -> str:
         return f"Exact({self.value})"
+
+
+def sqrt_bracket(value, bits: int = 256) -> tuple[Fraction, Fraction]:
+    """``(lo, hi)``, Fractions with ``lo <= √value <= hi`` and ``hi − lo <= 2**-bits / q`` for
+    ``value = p/q >= 0`` in lowest terms; ``lo == hi`` exactly where ``value`` is the square of
+    a rational. ``√(p/q) = √(p q)/q``, and ``s = isqrt(p q 4**bits)`` is the largest integer
+    with ``s² <= p q 4**bits``: an exact-integer bracket, no rounding anywhere (for a root
+    that enters exact arithmetic: a quadratic's root at a computed point)."""
+    value = Fraction(value)
+    if value < 0:
+        raise ValueError(f"no real square root of {value}")
+    p, q = value.numerator, value.denominator
+    whole = math.isqrt(p * q)
+    if whole * whole == p * q:  # a rational square: √(p/q) = √(pq)/q exactly
+        return Fraction(whole, q), Fraction(whole, q)
+    scaled = math.isqrt(p * q << (2 * bits))
+    return Fraction(scaled, q << bits), Fraction(scaled + 1, q << bits)
+
+
+def every_branch(replay, limit: int = 64) -> list:
+    """``replay()``, a computation on :class:`Tracked` numbers with branches, along every
+    path an exact computation could take: first as the floats decide, then with each close
+    comparison (one whose sides are within their errors: :attr:`Tracked.close_decisions`)
+    decided the other way (:attr:`Tracked.flipped`), recursively, the later close
+    comparisons counted again on each path. Returns one result per path, the floats' path
+    first; a path on which the replay raises (a flipped branch dividing by zero, say) gives
+    None. Along a path each comparison that is not close goes as it would in exact
+    arithmetic (its sides lie further apart than their errors) and the close ones are fixed,
+    so the path's errors bound its distance from the exact computation along it, and the
+    exact computation follows one of the paths: :func:`widened` turns that into a bound.
+    More than ``limit`` paths raise (a replay that branches that often is no decision at a
+    point)."""
+    results, pending = [], [frozenset()]
+    saved = Tracked.close_decisions, Tracked.flipped
+    try:
+        while pending:
+            flipped = pending.pop(0)
+            Tracked.close_decisions, Tracked.flipped = 0, flipped
+            try:
+                results.append(replay())
+            except (ArithmeticError, ValueError):
+                if not flipped:
+                    raise
+                results.append(None)
+                continue
+            start = max(flipped) + 1 if flipped else 0
+            pending += [flipped | {index} for index in range(start, Tracked.close_decisions)]
+            if len(results) + len(pending) > limit:
+                raise RuntimeError(f"more than {limit} paths")
+    finally:
+        Tracked.close_decisions, Tracked.flipped = saved
+    return results
+
+
+def widened(values) -> Tracked:
+    """The first of ``values`` (one quantity along each path of :func:`every_branch`, None
+    where a path gave none) with a bound on its distance from the exact answer whichever path
+    the exact computation takes: the largest, over the paths, of its distance from that
+    path's value plus that path's error (rounded up; infinite where a path has no finite
+    value). One path: the value itself."""
+    first = values[0]
+    if len(values) == 1:
+        return first
+    reach = first.error
+    for other in values[1:]:
+        if other is None or not (math.isfinite(other.value) and math.isfinite(other.error)):
+            return Tracked(first.value, math.inf)
+        reach = max(reach, (abs(first.value - other.value) + other.error) * (1 + 2 * U))
+    return Tracked(first.value, reach)
+
+
+def exact_inverse(matrix):
+    """``A⁻¹`` by Gauss–Jordan in Fractions (exact; A nonsingular)."""
+    size = len(matrix)
+    rows = [[Fraction(x) for x in row] + [Fraction(int(i == j)) for j in range(size)]
+            for i, row in enumerate(matrix)]
+    for k in range(size):
+        pivot = next(i for i in range(k, size) if rows[i][k] != 0)
+        rows[k], rows[pivot] = rows[pivot], rows[k]
+        rows[k] = [x / rows[k][k] for x in rows[k]]
+        for i in range(size):
+            if i != k and rows[i][k] != 0:
+                rows[i] = [a - rows[i][k] * b for a, b in zip(rows[i], rows[k])]
+    return [row[size:] for row in rows]

@@ -20,8 +20,11 @@ from tests.error_bounds import (
     bilinear_bound,
     direction_bound,
     dot_bound,
+    every_branch,
     gamma,
     solve_backward_bounds,
+    sqrt_bracket,
+    widened,
 )
 
 finite = st.floats(min_value=-1e6, max_value=1e6, allow_nan=False, allow_infinity=False)
@@ -232,3 +235,72 @@ def test_exact_keeps_float_constants_exact(a, b, c):
     assert (x < y) == (a < b) and (x <= b) == (a <= b) and (x == a) and not (x != a)
     assert float(x * 0.1) == float(Fraction(a) * Fraction(0.1))
     assert Exact(x).value == Fraction(a)
+
+
+@given(st.fractions(min_value=0, max_value=10**6, max_denominator=10**9))
+def test_sqrt_bracket_holds_exactly_and_is_narrow(value):
+    lo, hi = sqrt_bracket(value, bits=64)
+    assert lo * lo <= value <= hi * hi  # a bracket, compared exactly
+    assert hi - lo <= Fraction(1, 2**64 * Fraction(value).denominator)
+    # the float root of the float radicand lies within 2u of the bracket (the conversion's
+    # u, halved by the root, and the root's own u): a check that can fail
+    root = math.sqrt(float(value))
+    assert lo * (1 - 2 * Fraction(U)) <= Fraction(root) <= hi * (1 + 2 * Fraction(U))
+
+
+def test_sqrt_bracket_is_a_point_on_rational_squares_and_refuses_negatives():
+    assert sqrt_bracket(Fraction(121, 400)) == (Fraction(11, 20), Fraction(11, 20))
+    assert sqrt_bracket(0) == (0, 0)
+    lo, hi = sqrt_bracket(2)
+    assert lo < hi and lo * lo < 2 < hi * hi
+    with pytest.raises(ValueError):
+        sqrt_bracket(Fraction(-1, 3))
+
+
+def clamped_ramp(x: Tracked, y: Tracked):
+    """A continuous function with a branch: ``x − y`` where ``x > y``, else ``(x − y)/4``
+    (the two pieces meet at x = y), the branch decided on the computed values."""
+    gap = x - y
+    return {"value": gap if x > y else gap / 4}
+
+
+@given(st.floats(0.1, 10), st.integers(-3, 3), st.floats(1e-15, 1e-13))
+def test_every_branch_covers_the_exact_answer_where_the_floats_branch_the_other_way(
+        x, ulps, error):
+    """x and y within their errors of each other: the floats may take the other branch than
+    exact arithmetic; the widened bound holds against the exact answer of the exact inputs
+    (the Tracked inputs' exact values are x and y shifted inside their errors)."""
+    y = x
+    for _ in range(abs(ulps)):
+        y = math.nextafter(y, math.inf if ulps > 0 else -math.inf)
+    tx, ty = Tracked(x, error * x), Tracked(y, error * x)
+    paths = every_branch(lambda: clamped_ramp(tx, ty))
+    assert Tracked.flipped == frozenset() and Tracked.close_decisions == 0  # restored
+    assert len(paths) == 2  # the comparison is close: both branches followed
+    value = widened([p["value"] for p in paths])
+    assert value.value == clamped_ramp(Tracked(x), Tracked(y))["value"].value
+    for shift_x, shift_y in ((-1, 1), (1, -1), (0, 0), (1, 1)):  # exact inputs in the errors
+        exact_x = Fraction(x) + shift_x * Fraction(error * x)
+        exact_y = Fraction(y) + shift_y * Fraction(error * x)
+        gap = exact_x - exact_y
+        exact = gap if exact_x > exact_y else gap / 4
+        assert abs(Fraction(value.value) - exact) <= Fraction(value.error), (exact, value)
+
+
+def test_every_branch_counts_failed_paths_and_refuses_too_many():
+    def failing():
+        x = Tracked(1.0, 1e-16)
+        return {"value": Tracked(1.0) / Tracked(0.0, 1.0) if x > 1.0 else Tracked(1.0)}
+
+    paths = every_branch(failing)
+    assert len(paths) == 2
+    assert widened([p and p["value"] for p in paths]).error == math.inf
+    assert widened([Tracked(2.0, 0.5)]).error == 0.5  # one path: unchanged
+
+    def many():
+        x = Tracked(1.0, 1e-16)
+        return sum(1 for _ in range(10) if x > 1.0)
+
+    with pytest.raises(RuntimeError):
+        every_branch(many, limit=64)
+    assert Tracked.flipped == frozenset()

@@ -81,7 +81,9 @@ _ROLES = ("defaults", "accurate")
 _OWN_LAWS = (*LAW_NAMES, "converged")
 #: Largest departure ``‖u_engine − u_law‖_M / ‖u_before‖_M`` of an ``accurate`` run from the
 #: engine's own law on a canonical case (the accuracy bench's tighter threshold, 0.1%): the
-#: shipped rigid engines reach 5e-8 or less (Box2D's float32), the toy 1e-16.
+#: shipped rigid engines reach 5e-8 or less (Box2D's float32), the toy 1e-16. Kind (docs/
+#: verdicts.md, 'Same answers on every CPU'): a decision with a stated band on an engine's
+#: accuracy (its discretisation and its solver's stopping), not a comparison of rounding.
 OWN_LAW_DEPARTURE = 1e-3
 #: With μ = 0 the slip at the contact may move by at most this fraction of itself (measured:
 #: 9.4e-4 under pybullet's defaults, 0 for every other engine and preset).

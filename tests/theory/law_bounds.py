@@ -10,7 +10,9 @@ inputs (each float input exact), they return their usual values, bit for bit (th
 it against the library's own answers), each carrying a bound on its distance from the exact
 answer of the exact problem (running error analysis, Higham §3.3). Both are exact in exact
 arithmetic, so where neither took a decision its errors leave open
-(``Tracked.close_decisions``), the two answers are within the sum of their bounds.
+(``Tracked.close_decisions``), the two answers are within the sum of their bounds; where one
+did, :func:`branched` follows it along every path the exact computation could take and widens
+each bound to cover them all (infinite where that cannot be settled: a decision at a boundary).
 
 The modules' ``math.sqrt`` is swapped for :meth:`Tracked.math_sqrt` while they run (it gives
 the same bits for floats, and keeps a ``Tracked`` tracked), and the close calls of Table 1's
@@ -23,17 +25,23 @@ import math
 import types
 from collections.abc import Iterator
 from contextlib import contextmanager
+from fractions import Fraction
+from functools import partial
 
 import numpy as np
 
 from planar_impact import fastpath, law_branches, process
 from tests.error_bounds import (
+    Exact,
     Tracked,
     U,
     bilinear_bound,
     dot_bound,
+    every_branch,
+    exact_inverse,
     gamma,
     solve_backward_bounds,
+    widened,
 )
 
 FIELDS = ("normal_impulse", "tangential_impulse", "vn_separation", "vt_separation",
@@ -106,6 +114,27 @@ def lcp_modes(mnn, mnt, mtt, vn, vt, mu, e) -> list[tuple[str, Tracked, Tracked]
     return process.newton_lcp_modes(*(Tracked(x) for x in (mnn, mnt, mtt, vn, vt, mu, e)))
 
 
+#: Paths of a replay followed before it counts as undecided (a few dozen at a boundary).
+BRANCH_LIMIT = 256
+
+
+def branched(replay) -> dict:
+    """``replay()`` (a function returning a dict of ``Tracked`` fields, such as
+    :func:`closed_form` or :func:`walked` of one row) where it compared values within their
+    errors (``Tracked.close_decisions``): followed along every path an exact computation
+    could take (error_bounds.every_branch), each ``Tracked`` field widened to a bound
+    whichever path the exact computation takes (error_bounds.widened). Its error is infinite
+    where a path fails or the replay branches more than :data:`BRANCH_LIMIT` ways: a decision
+    at a boundary that the test cannot settle. The values are the floats' path's."""
+    try:
+        paths = every_branch(replay, limit=BRANCH_LIMIT)
+    except RuntimeError:
+        paths = [replay(), None]
+    first = paths[0]
+    return {name: widened([path and path[name] for path in paths])
+            if type(value) is Tracked else value for name, value in first.items()}
+
+
 def fraction(one: Tracked, other: Tracked) -> float:
     """How much of the two bounds' sum ``e_a + e_b`` the distance ``|a − b|`` of two
     computations of one exact quantity uses (at most 1 where both bounds hold)."""
@@ -173,3 +202,53 @@ def kinetic_bound(matrix, u, u_after, u_after_error) -> float:
     distance = np.asarray(u_after_error, dtype=float)
     moved = 0.5 * float(distance @ (np.abs(matrix) @ (2.0 * np.abs(u_after) + distance)))
     return rounding + moved
+
+
+def solve_with_delta_u_bound(problem, mu, e, law):
+    """``problem.solve``'s answer (an ``ImpactProblem``, solved by the fast path) and a
+    derived bound per speed on its Δu's distance from the exact Δu of the same float inputs:
+    the law replayed on Tracked numbers from the fast path's own contact terms, known within
+    their solves' backward errors and dot products' rounding (:func:`replayed_law`; widened
+    by :func:`branched` where it branches close), then Δu = x̂_n I_n + x̂_t I_t's bound
+    (:func:`delta_u_bound`)."""
+    result = problem.solve(mu=mu, e=e, law=law)
+    _, wn_key, _, kept = fastpath._last_contact  # noqa: SLF001 - the terms it solved with
+    assert wn_key == problem.wn.tobytes() and kept[2] == result.mnn
+    fields = {name: getattr(result, name) for name in
+              ("mnn", "mnt", "mtt", "vn_approach", "vt_approach")}
+    speed_bounds = (dot_bound(problem.wn.tolist(), problem.u.tolist()),
+                    dot_bound(problem.wt.tolist(), problem.u.tolist()))
+    replay = partial(replayed_law, law, fields, kept[5],
+                     term_bounds(problem.mass_matrix, problem.wn, problem.wt, "cholesky"),
+                     speed_bounds, mu, e)
+    Tracked.close_decisions = 0
+    replayed = replay()
+    assert replayed["normal_impulse"].value == result.normal_impulse
+    assert replayed["tangential_impulse"].value == result.tangential_impulse
+    if Tracked.close_decisions:
+        replayed = branched(replay)
+    bound = delta_u_bound(problem.mass_matrix, (kept[6], kept[7]), replayed, "cholesky")
+    return result, bound
+
+
+def exact_u_after(problem, mu, e, law) -> list:
+    """The exact ``u_after`` (Fractions) of ``problem``, its float inputs taken as exact, under
+    a law without square roots (Poisson, Newton, newton-lcp): ``X = M⁻¹ [w_n w_t]`` solved in
+    Fractions, the contact terms and speeds formed exactly, the law's closed form
+    (fastpath.law_answer) run on error_bounds.Exact numbers, so the exact computation takes
+    its own branches, then ``u + X (I_n, I_t)``."""
+    assert law in ("poisson", "newton", "newton-lcp"), law
+    inverse = exact_inverse(problem.mass_matrix.tolist())
+    rows = [[Fraction(x) for x in problem.wn], [Fraction(x) for x in problem.wt]]
+    speeds = [Fraction(x) for x in problem.u]
+    columns = [[sum(a * w for a, w in zip(line, row)) for line in inverse] for row in rows]
+    mnn, mnt, mtt = (sum(a * b for a, b in zip(rows[i], columns[j]))
+                     for i, j in ((0, 0), (0, 1), (1, 1)))
+    vn, vt = (sum(a * b for a, b in zip(row, speeds)) for row in rows)
+    sign = -1 if vt < 0 or (vt == 0 and mnt < 0) else 1  # as closed_form turns t
+    inputs = [Exact(x) for x in (mnn, sign * mnt, mtt, vn, sign * vt, Fraction(mu), Fraction(e))]
+    out = fastpath.law_answer(law, *inputs, inputs[0] * inputs[2] - inputs[1] * inputs[1])
+    assert out is not None
+    normal, tangential = Exact(out[0]).value, sign * Exact(out[1]).value
+    return [s + x_n * normal + x_t * tangential
+            for s, x_n, x_t in zip(speeds, columns[0], columns[1])]

@@ -15,9 +15,18 @@ import planar_impact as pi
 from planar_impact import multicontact as mc
 from planar_impact import simultaneous as sim
 
-#: Two answers are one when their speeds agree to this fraction of the speed scale: both are
-#: solved to rounding (a 2m×2m solve, or a few pivots of an 8m-row tableau), far below it.
+#: Which of the enumeration's answers Lemke's is: a decision band, not a tolerance. Both
+#: methods solve to rounding (a 2m×2m solve, or a few pivots of an 8m-row tableau) and
+#: distinct answers lie far apart (at least 1.8e-4 of the speed scale on these draws), so a
+#: distance up to SAME_SPEEDS (of speed_scale) is one answer and beyond it two. Within a factor
+#: BOUNDARY_FACTOR of the band, either side, the decision is at the boundary (its last bits
+#: could flip it): there two full answers are told apart by derived bounds where the exact
+#: rebuild covers them (same_answer: tests/theory/two_phase_bounds.py, the same exact end
+#: state and each within its bound; measured: 2 of 2,642 comparisons, 5.9e-12 and 2.3e-10,
+#: both on ill-conditioned generic problems, both settled so), else counted as at the
+#: boundary, and a single comparison (same_speeds) refuses to decide there.
 SAME_SPEEDS = 1e-9
+BOUNDARY_FACTOR = 1e3
 #: Energy gain counted as real above this fraction of the kinetic energy before (rounding
 #: of ½uᵀMu is ~1e-16 of it).
 ENERGY_ROUNDING = 1e-12
@@ -27,8 +36,46 @@ def speed_scale(system) -> float:
     return float(np.max(np.abs(system.u))) + system.speed_scale()
 
 
+def speeds_apart(a, b, system) -> float:
+    """The largest difference of two answers' speeds, in units of the speed scale."""
+    return float(np.max(np.abs(a - b))) / speed_scale(system)
+
+
+def at_boundary(distance) -> bool:
+    return SAME_SPEEDS / BOUNDARY_FACTOR < distance <= SAME_SPEEDS * BOUNDARY_FACTOR
+
+
 def same_speeds(a, b, system) -> bool:
-    return float(np.max(np.abs(a - b))) <= SAME_SPEEDS * speed_scale(system)
+    """The SAME_SPEEDS decision; a distance at its boundary fails the test, named so."""
+    distance = speeds_apart(a, b, system)
+    assert not at_boundary(distance), ("at the boundary of SAME_SPEEDS", distance)
+    return distance <= SAME_SPEEDS
+
+
+def same_answer(one, other, system) -> bool | None:
+    """Whether two two-phase answers of ``system`` are one: the SAME_SPEEDS decision, and at
+    its boundary the derived one (both rebuilt exactly: the same exact end state, and the
+    computed speeds within the sum of their bounds); None where the rebuild does not cover
+    them (not a flat face, or a slide from no slip after a cut): at the boundary, either
+    outcome right."""
+    from tests.theory import two_phase_bounds as tpb
+
+    distance = speeds_apart(one.u_after, other.u_after, system)
+    if not at_boundary(distance):
+        return distance <= SAME_SPEEDS
+    tangential_rows = system.delassus[1::2]
+    if not (tangential_rows == tangential_rows[0]).all():  # the rebuild is for flat faces
+        return None
+    try:
+        exact_one, exact_other = tpb.rebuild(system, one), tpb.rebuild(system, other)
+    except NotImplementedError:
+        return None
+    if exact_one.u_after != exact_other.u_after:
+        return False
+    assert exact_one.residual_share < 1 and exact_other.residual_share < 1
+    assert np.all(np.abs(one.u_after - other.u_after)
+                  <= np.add(exact_one.error, exact_other.error))
+    return True
 
 
 def kinetic(system) -> float:
@@ -156,16 +203,25 @@ def test_one_contact_compression_ends_the_approach():
 # --- two independent methods ---------------------------------------------------------------
 
 def lemke_outside_enumeration(systems, follow_slip):
-    """How many systems' Lemke answer is none of the enumeration's answers (within
-    SAME_SPEEDS: a decision band, which answer is which), the enumeration's answers and
-    Lemke's; every system has one Lemke answer and at least one enumerated."""
+    """How many systems' Lemke answer is none of the enumeration's answers (same_answer:
+    the SAME_SPEEDS decision, settled by derived bounds at its boundary), the enumeration's
+    answers and Lemke's; every system has one Lemke answer and at least one enumerated. A
+    system whose match is left at the boundary (same_answer None, none True) is counted
+    apart, not outside: ``(outside, at_boundary, enumerated, reached)``."""
     outside = 0
     enumerated = mc.poisson_two_phase_many(systems, follow_slip=follow_slip)
     reached = mc.poisson_two_phase_many(systems, "lemke", follow_slip=follow_slip)
+    undecided = 0
     for system, answers, (lemke,) in zip(systems, enumerated, reached):
         assert answers
-        outside += not any(same_speeds(lemke.u_after, a.u_after, system) for a in answers)
-    return outside, enumerated, reached
+        matches = [same_answer(lemke, a, system) for a in answers]
+        if True in matches:
+            continue
+        if None in matches:
+            undecided += 1
+        else:
+            outside += 1
+    return outside, undecided, enumerated, reached
 
 
 def test_lemke_reaches_an_enumerated_answer_on_random_generic_problems():
@@ -175,8 +231,10 @@ def test_lemke_reaches_an_enumerated_answer_on_random_generic_problems():
     rng = np.random.default_rng(22)
     systems = [random_generic(rng, 2) for _ in range(600)]
     systems += [random_generic(rng, 3) for _ in range(100)]
-    outside, enumerated, _ = lemke_outside_enumeration(systems, follow_slip=False)
-    assert outside == 0
+    outside, boundary, enumerated, _ = lemke_outside_enumeration(systems, follow_slip=False)
+    # at the boundary: Lemke's answer 5.9e-12 and 2.3e-10 of the speed scale from one of
+    # the enumeration's (ill-conditioned W; not a flat face, so not rebuilt): either outcome
+    assert outside == 0 and boundary <= 2, (outside, boundary)
     assert sum(len(answers) > 1 for answers in enumerated) < 30  # needs strong coupling
 
 
@@ -186,9 +244,9 @@ def test_following_the_slip_lemke_and_enumeration_agree_on_generic_problems():
     taken as sliding by one and not the other: Lemke's answer is elsewhere in at most 1%
     (3 of 1,000 in docs/multi-contact.md's table)."""
     rng = np.random.default_rng(26)
-    outside, _, _ = lemke_outside_enumeration([random_generic(rng, 2) for _ in range(300)],
-                                              True)
-    assert outside <= 3
+    outside, boundary, _, _ = lemke_outside_enumeration(
+        [random_generic(rng, 2) for _ in range(300)], True)
+    assert outside + boundary <= 3, (outside, boundary)
 
 
 @pytest.mark.parametrize(("follow_slip", "problems"), [(False, 1000), (True, 300)])
@@ -200,8 +258,8 @@ def test_flat_faces_have_one_answer_both_methods_agree_and_no_energy_is_gained(f
 
     rng = np.random.default_rng(23)
     systems = [random_flat_face(rng) for _ in range(problems)]
-    outside, enumerated, reached = lemke_outside_enumeration(systems, follow_slip)
-    assert outside == 0
+    outside, boundary, enumerated, reached = lemke_outside_enumeration(systems, follow_slip)
+    assert outside == boundary == 0
     uncovered = 0
     for index, (system, answers, (lemke,)) in enumerate(zip(systems, enumerated, reached)):
         assert mc.normal_split_unique(system)
