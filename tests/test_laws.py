@@ -287,7 +287,7 @@ def test_the_name_branch_detector_finds_a_branch():
     assert _kept_branches("harness/report/views.py") and not _kept_branches("harness/run/x.py")
 
 
-@pytest.mark.kernel_sensitive  # decisions on 20,000 solutions (far from their bars)
+@pytest.mark.kernel_sensitive  # decisions on 20,000 solutions, outside their derived band
 @pytest.mark.parametrize("entry", laws.REGISTRY, ids=lambda entry: entry.name)
 def test_each_law_keeps_its_promises_on_random_problems(entry):
     # 20,000 seeded problems over every sign of m_nt and v_t, μ in [0, 2], e in [0, 1]
