@@ -65,7 +65,7 @@ def test_stronge_paper_jump_matches_the_paper_formulas():
     assert len(used) > 50
     # The bounds are worst cases: the residuals use a modest fraction of theirs, the jumps
     # at most 42 % of theirs (measured: 2.7e-16 against 6.7e-16 at e_i = 0.57; 3.6e-15 against
-    # 3.2e-14 at e_i = 26.2, the largest departure).
+    # 3.0e-14 at e_i = 26.2, the largest departure).
     assert max(used) < 0.5, max(used)
     assert max(shares) < 0.5, max(shares)
 
