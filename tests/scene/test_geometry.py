@@ -2,6 +2,8 @@
 
 Tolerances: the geometry is a handful of floating-point operations on O(1 m) numbers, so
 results agree with the closed forms to a few ulps; ``TOL = 1e-12`` m leaves a wide margin.
+Every ``assert_allclose`` passes ``rtol=0``: numpy's default ``rtol=1e-7`` would otherwise
+allow a unit normal 1e-7 off, five orders above ``TOL``.
 """
 
 from __future__ import annotations
@@ -37,8 +39,8 @@ def test_disk_disk_off_centre_touching():
     b = disk((0.25 * math.cos(angle), 0.25 * math.sin(angle)), 0.15, "b")
     contact = body_contact(a, b)
     assert contact.gap == pytest.approx(0.0, abs=TOL)
-    np.testing.assert_allclose(contact.normal, [math.cos(angle), math.sin(angle)], atol=TOL)
-    np.testing.assert_allclose(contact.point, 0.1 * contact.normal, atol=TOL)
+    np.testing.assert_allclose(contact.normal, [math.cos(angle), math.sin(angle)], atol=TOL, rtol=0)
+    np.testing.assert_allclose(contact.point, 0.1 * contact.normal, atol=TOL, rtol=0)
     assert contact.point_count == 1
 
 
@@ -47,28 +49,28 @@ def test_disk_disk_gap_and_overlap_are_signed():
     assert body_contact(a, disk((0.0, 0.3), 0.1, "b")).gap == pytest.approx(0.1, abs=TOL)
     overlap = body_contact(a, disk((0.0, 0.15), 0.1, "b"))
     assert overlap.gap == pytest.approx(-0.05, abs=TOL)
-    np.testing.assert_allclose(overlap.normal, [0.0, 1.0], atol=TOL)
+    np.testing.assert_allclose(overlap.normal, [0.0, 1.0], atol=TOL, rtol=0)
     # The point is midway between the two surfaces: y = (0.1 + 0.05) / 2.
-    np.testing.assert_allclose(overlap.point, [0.0, 0.075], atol=TOL)
+    np.testing.assert_allclose(overlap.point, [0.0, 0.075], atol=TOL, rtol=0)
 
 
 def test_normal_points_from_a_into_b():
     a, b = disk((0.0, 0.0), 0.1, "a"), disk((0.2, 0.0), 0.1, "b")
-    np.testing.assert_allclose(body_contact(a, b).normal, [1.0, 0.0], atol=TOL)
-    np.testing.assert_allclose(body_contact(b, a).normal, [-1.0, 0.0], atol=TOL)
+    np.testing.assert_allclose(body_contact(a, b).normal, [1.0, 0.0], atol=TOL, rtol=0)
+    np.testing.assert_allclose(body_contact(b, a).normal, [-1.0, 0.0], atol=TOL, rtol=0)
 
 
 def test_disk_on_rod_middle_and_end():
     rod = Body("rod", Rod(1.0, 0.02), 1.0, (0.0, 0.0))
     middle = body_contact(rod, disk((0.2, 0.12)))
     assert middle.gap == pytest.approx(0.0, abs=TOL)
-    np.testing.assert_allclose(middle.normal, [0.0, 1.0], atol=TOL)
-    np.testing.assert_allclose(middle.point, [0.2, 0.02], atol=TOL)
+    np.testing.assert_allclose(middle.normal, [0.0, 1.0], atol=TOL, rtol=0)
+    np.testing.assert_allclose(middle.point, [0.2, 0.02], atol=TOL, rtol=0)
     # Beyond the end cap the normal is radial from the cap centre (0.5, 0).
     direction = np.array([math.cos(0.7), math.sin(0.7)])
     end = body_contact(rod, disk(np.array([0.5, 0.0]) + 0.12 * direction))
     assert end.gap == pytest.approx(0.0, abs=TOL)
-    np.testing.assert_allclose(end.normal, direction, atol=TOL)
+    np.testing.assert_allclose(end.normal, direction, atol=TOL, rtol=0)
     assert end.point_count == 1
 
 
@@ -86,7 +88,7 @@ def test_rod_on_ground_at_angles(angle_deg):
     assert placed.point_count == 1
     # The lowest cap centre is the end whose y is lowest; the contact is right below it.
     end_x = 0.3 - math.copysign(1.0, math.sin(angle)) * 0.5 * length * math.cos(angle)
-    np.testing.assert_allclose(placed.point, [end_x, 0.0], atol=TOL)
+    np.testing.assert_allclose(placed.point, [end_x, 0.0], atol=TOL, rtol=0)
 
 
 def test_flat_rod_and_flat_box_give_two_points():
@@ -95,7 +97,7 @@ def test_flat_rod_and_flat_box_give_two_points():
     contact = ground_contact(box)
     assert contact.point_count == 2
     assert contact.gap == pytest.approx(0.0, abs=TOL)
-    np.testing.assert_allclose(contact.point, [0.0, 0.0], atol=TOL)
+    np.testing.assert_allclose(contact.point, [0.0, 0.0], atol=TOL, rtol=0)
 
 
 def test_box_corner_on_ground():
@@ -106,10 +108,10 @@ def test_box_corner_on_ground():
     assert contact.gap == pytest.approx(0.0, abs=TOL)
     corners, _ = world_core(box)
     lowest = corners[np.argmin(corners[:, 1])]
-    np.testing.assert_allclose(contact.point, lowest, atol=TOL)
+    np.testing.assert_allclose(contact.point, lowest, atol=TOL, rtol=0)
     # Corner (-w/2, -h/2) rotated by 30° is the lowest one.
     expected = np.array([-0.1 * math.cos(angle) + 0.05 * math.sin(angle), 0.0])
-    np.testing.assert_allclose(contact.point, expected, atol=TOL)
+    np.testing.assert_allclose(contact.point, expected, atol=TOL, rtol=0)
 
 
 def test_box_face_on_box_face_gives_two_points_and_corner_gives_one():
@@ -118,15 +120,15 @@ def test_box_face_on_box_face_gives_two_points_and_corner_gives_one():
     contact = body_contact(a, b)
     assert contact.point_count == 2
     assert contact.gap == pytest.approx(0.0, abs=TOL)
-    np.testing.assert_allclose(contact.normal, [0.0, 1.0], atol=TOL)
-    np.testing.assert_allclose(contact.point, [0.05, 0.1], atol=TOL)
+    np.testing.assert_allclose(contact.normal, [0.0, 1.0], atol=TOL, rtol=0)
+    np.testing.assert_allclose(contact.point, [0.05, 0.1], atol=TOL, rtol=0)
     # B turned by 45° rests on A's top face with one corner.
     half_diagonal = 0.1 * math.sqrt(2.0)
     corner = Body("b", Box(0.2, 0.2), 1.0, (0.05, 0.1 + half_diagonal), angle=math.pi / 4)
     contact = body_contact(a, corner)
     assert contact.point_count == 1
     assert contact.gap == pytest.approx(0.0, abs=TOL)
-    np.testing.assert_allclose(contact.point, [0.05, 0.1], atol=TOL)
+    np.testing.assert_allclose(contact.point, [0.05, 0.1], atol=TOL, rtol=0)
 
 
 def test_overlapping_boxes_report_penetration():
@@ -134,7 +136,7 @@ def test_overlapping_boxes_report_penetration():
     b = Body("b", Box(0.2, 0.2), 1.0, (0.0, 0.17))
     contact = body_contact(a, b)
     assert contact.gap == pytest.approx(-0.03, abs=TOL)
-    np.testing.assert_allclose(contact.normal, [0.0, 1.0], atol=TOL)
+    np.testing.assert_allclose(contact.normal, [0.0, 1.0], atol=TOL, rtol=0)
 
 
 def test_polygons():
@@ -159,7 +161,7 @@ def test_disk_on_box_corner_and_crossing_rods():
     direction = np.array([1.0, 1.0]) / math.sqrt(2.0)
     ball = disk(np.array([0.1, 0.1]) + 0.05 * direction, 0.05)
     contact = body_contact(box, ball)
-    np.testing.assert_allclose(contact.normal, direction, atol=TOL)
+    np.testing.assert_allclose(contact.normal, direction, atol=TOL, rtol=0)
     assert contact.gap == pytest.approx(0.0, abs=TOL)
     a = Body("a", Rod(1.0, 0.01), 1.0, (0.0, 0.0))
     b = Body("b", Rod(1.0, 0.01), 1.0, (0.0, 0.0), angle=math.pi / 2)
