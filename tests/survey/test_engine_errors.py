@@ -123,6 +123,14 @@ def test_errored_runs_are_recorded_and_the_others_are_unchanged(clean, faulty_to
     settings = json.loads((out / "settings.json").read_text(encoding="utf-8"))
     assert settings["engine_errors"]["runs"] == 2 * len(FAULTY)
     assert [error[2] for error in settings["engine_errors"]["shown"]] == [*FAULTY, *FAULTY]
+    # the report's survey section lists them too, and its headline counts them
+    from harness.report.survey import survey_section
+    from harness.report.views import escape_html
+
+    section = survey_section(out, {})
+    assert "<h3>Engine errors</h3>" in section
+    assert escape_html(f"RuntimeError: {MESSAGE}") in section
+    assert f"; {2 * len(FAULTY)} engine errors" in section
 
 
 def test_a_resumed_survey_gives_the_same_tables_and_errors(faulty_toy, tmp_path, capsys):
