@@ -196,3 +196,48 @@ def test_drakes_failure_to_converge_is_an_engine_error(load_or_skip):
     assert result.status[0] != ERROR and result.errors[0] == ""
     alone = run_engine("drake", "accurate", scenes[:1])
     assert np.array_equal(alone.velocities[0], result.velocities[0])
+
+
+@pytest.fixture
+def toy_beside_the_others():
+    """The toy registered beside the shipped engines (the scenarios' gates name those)."""
+    from harness import engines as registry
+    from tests.engines.toy_engine import ToyEngine
+
+    registry.register_engine("toy", ToyEngine)
+    try:
+        yield "toy"
+    finally:
+        registry.unregister_engine("toy")
+
+
+def test_the_suite_exits_4_when_its_survey_had_an_engine_error(toy_beside_the_others,
+                                                               monkeypatch, tmp_path, capsys):
+    from harness import suite
+    from tests.engines.toy_engine import ToyEngine
+
+    population, = resolve_populations([FAMILY])
+    drawn = sample_range(population, 4, 5, 0).samples[0].scene  # the suite's seed is 0
+    original = ToyEngine._prepare
+
+    def prepare(self, world, scene, settings, start, weights):
+        if (scene.friction, scene.restitution) == (drawn.friction, drawn.restitution):
+            raise RuntimeError(MESSAGE)
+        return original(self, world, scene, settings, start, weights)
+
+    monkeypatch.setattr(ToyEngine, "_prepare", prepare)
+    out = tmp_path / "reports"
+    arguments = ["suite", "--tags", "dumbbell", "--engines", "toy", "--out", str(out),
+                 "--cache-dir", str(tmp_path / "cache")]
+    code = main(arguments)
+    err = capsys.readouterr().err
+    assert code == 4, err[-3000:]
+    assert f"ENGINE ERROR: survey: 2 engine runs raised (listed in {out / 'survey'}" in err
+    summary = (out / "survey" / "summary.md").read_text(encoding="utf-8")
+    assert f"| toy accurate | {FAMILY} | 4 | RuntimeError: {MESSAGE} |" in summary
+    assert suite.SURVEY_SAMPLES > 4
+    # a warm rerun keeps the survey, and says so again
+    code = main(arguments)
+    again = capsys.readouterr().err
+    assert code == 4, again[-2000:]
+    assert "ENGINE ERROR: survey: 2 engine runs raised" in again
