@@ -8,8 +8,7 @@
 * ``settings.json`` -- what was surveyed: samples, seed, engines, presets, the engines not
   installed and the pairs left out (with why), the runs whose engine raised
   (``engine_errors``: their count and the first :data:`SHOWN_ERRORS`), and under ``inputs``
-  the digest
-  ``impact-harness suite`` keys its quick survey by (harness/suite.py);
+  the digest ``impact-harness suite`` keys its quick survey by (harness/suite.py);
 * ``figures/`` -- departure from Poisson against ``α / r_m`` and ``μ`` coloured by Poisson
   collision type, per engine and preset (:func:`map_figure`); the departure CDF per engine,
   a line per family and preset (:func:`cdf_figure`). PNG and SVG. ``impact-harness suite``
