@@ -74,7 +74,7 @@ EXIT_ONE = {
     "new": "the file exists (use --force to overwrite it)",
 }
 #: The commands that write results even when an engine run ended in an error (status 4).
-EXIT_FOUR = ("run", "suite")
+EXIT_FOUR = ("run", "suite", "survey")
 
 
 def exit_status_help(command: str | None) -> str:
@@ -87,10 +87,15 @@ def exit_status_help(command: str | None) -> str:
         lines.append(f"  1 {EXIT_ONE[command]}")
     lines += ["  2 bad input: an option, a scenario file or a results file (one line each)",
               "  3 internal error: a bug in the harness (IMPACT_HARNESS_TRACEBACK=1 shows it)"]
-    if command is None or command in EXIT_FOUR:
-        lines += ["  4 run and suite: done, results written, but an engine run ended in an "
-                  "error (an", "    exception of the engine, or its --task-time-limit): its "
-                  "record says which"]
+    if command == "survey":
+        lines += ["  4 done, tables written, but an engine run raised (each an ENGINE ERROR "
+                  "line, its", "    run recorded error with why); or chunks were stopped by "
+                  "--task-time-limit:", "    the finished chunks kept, no tables (the same "
+                  "command runs the others)"]
+    elif command is None or command in EXIT_FOUR:
+        lines += ["  4 run, suite and survey: done, but an engine run ended in an error (an",
+                  "    exception of the engine, or its --task-time-limit): its record says "
+                  "which"]
     return "\n".join(lines)
 
 

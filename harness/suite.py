@@ -14,8 +14,9 @@ Four steps, each timed on stderr::
 Options select scenarios and engines exactly as for ``impact-harness run`` (``--tags quick``
 for a fast subset, ``--out`` for another directory). The exit status (see :mod:`harness.cli`)
 is 1 when a scenario's gate fails or the paper's table has a miss no known erratum explains,
-2 for bad options or scenario files, 3 for an internal error, else 0; the report is written
-whenever the run wrote results.
+2 for bad options or scenario files, 3 for an internal error, 4 when an engine run of the
+scenarios or of the survey ended in an error (each an ``ENGINE ERROR:`` line), else 0; the
+report is written whenever the run wrote results.
 """
 
 from __future__ import annotations
@@ -101,6 +102,13 @@ def main(args) -> int:
     print(f"[3/4] survey: {SURVEY_SAMPLES} samples per population -> {summary} "
           + ("" if surveyed else "(unchanged: same populations, settings, versions and code) ")
           + f"({time.perf_counter() - tick:.1f} s)", file=sys.stderr, flush=True)
+
+    survey_errors = read_settings(out / "survey").get("engine_errors") or {}
+    if survey_errors.get("runs"):  # listed in its summary and the report; 4 outranks 1
+        print(f"ENGINE ERROR: survey: {survey_errors['runs']} engine runs raised (listed in "
+              f"{summary})", file=sys.stderr)
+        if status in (command.EXIT_OK, command.EXIT_GATE_FAILED):
+            status = command.EXIT_ENGINE_ERROR
 
     tick = time.perf_counter()
     with Progress(label="[4/4] report") as progress:  # once it has taken two seconds

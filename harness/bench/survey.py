@@ -27,6 +27,15 @@ then hits both alike. The median of the rounds is reported.
 
 An untimed survey runs first, so that every round finds the engines' caches (MuJoCo's
 compiled polygons, say) equally warm. Every ratio's target is :data:`RATIO_TARGET`.
+
+A scene whose engine run raises (the survey records it ``error``: Drake's discrete solver
+failing to converge under ``accurate``) has no run to time and no step count for the bare
+stepping: the untimed survey finds them, and each pair's comparisons (contract, survey's
+per-pair work, bare stepping, user loop, and the user loops of the end-to-end comparison)
+leave that pair's errored scenes out of both sides, counted (``errored``) and printed with
+the first reason. The end-to-end survey side cannot leave them out (it samples the
+populations itself): it includes their raising runs and the reruns of their slices scene by
+scene, a cost counted against the survey.
 """
 
 from __future__ import annotations
@@ -53,7 +62,7 @@ from harness.survey import cli as survey_cli
 from harness.survey import laws as survey_laws
 from harness.survey import stream
 from harness.survey.cli import run_survey
-from harness.survey.engines import SLICE, run_engine
+from harness.survey.engines import ERROR, SLICE, run_engine
 from harness.survey.population import resolve_populations
 from harness.survey.sampling import sample_population
 
@@ -132,20 +141,22 @@ _BARE_WORK: dict = {}
 
 
 def _bare_part(part: tuple[int, int, int]) -> float:
-    """One worker's share of the end-to-end user loops: pair ``part[0]``, scenes
+    """One worker's share of the end-to-end user loops: pair ``part[0]``, its scenes
     ``part[1]:part[2]``, each scene's world built and freed; its CPU seconds."""
     pair, begin, end = part
-    engine, settings, steps = _BARE_WORK["pairs"][pair]
-    return _bare_cpu(engine, settings, _BARE_WORK["scenes"][begin:end], steps[begin:end])[1]
+    engine, settings, scenes, steps = _BARE_WORK["pairs"][pair]
+    return _bare_cpu(engine, settings, scenes[begin:end], steps[begin:end])[1]
 
 
-def _bare_all_cpu(pairs, scenes, workers: int) -> float:
-    """CPU seconds of every pair's user loop (worlds built, steps, velocities read) over
-    ``scenes``, split over ``workers``."""
-    _BARE_WORK.update(pairs=pairs, scenes=scenes)
-    share = -(-len(scenes) // max(workers, 1))
-    parts = [(pair, begin, min(begin + share, len(scenes)))
-             for pair in range(len(pairs)) for begin in range(0, len(scenes), share)]
+def _bare_all_cpu(pairs, workers: int) -> float:
+    """CPU seconds of every pair's user loop (worlds built, steps, velocities read) over its
+    scenes (``pairs``: ``(engine, settings, scenes, steps)``), split over ``workers``."""
+    _BARE_WORK.update(pairs=pairs)
+    parts = []
+    for pair, (_, _, scenes, _) in enumerate(pairs):
+        share = max(1, -(-len(scenes) // max(workers, 1)))
+        parts += [(pair, begin, min(begin + share, len(scenes)))
+                  for begin in range(0, len(scenes), share)]
     try:
         return sum(map_forked(_bare_part, parts, workers))
     finally:
@@ -171,8 +182,10 @@ def run(samples: int, engines=None, presets=PRESET_ROLES, seed: int = 0,
         rounds: int = ROUNDS, workers: int = 1) -> dict:
     """``{"samples", "impacts", "engines", "presets", "rounds", "workers", "survey_cpu_s",
     "bare_cpu_s", "ratio", "pairs": {label: {"contract_s", "judged_s", "bare_s",
-    "contract_ratio", "judged_ratio", "steps"}}}`` (medians over ``rounds``); ``engines``
-    None: every registered one."""
+    "contract_ratio", "judged_ratio", "steps", "errored", "error"}}}`` (medians over
+    ``rounds``; ``errored``: the scenes where the pair's engine raised, left out of both
+    sides of its comparisons, ``error`` the first one's reason); ``engines`` None: every
+    registered one."""
     installed = []
     for name in engine_names() if engines is None else engines:
         try:
@@ -189,7 +202,6 @@ def run(samples: int, engines=None, presets=PRESET_ROLES, seed: int = 0,
     problems = terms.problems
     energy = survey_laws.solve_laws(terms, ("newton-lcp",))["newton-lcp"].batch.energy_change
     scene_terms = verdicts.prepare_many(scenes, problems)
-    arrays = verdicts.term_arrays(problems, scene_terms)
     pair_names = [(name, preset) for name in installed for preset in presets]
     measured = {pair: {"contract_s": [], "judged_s": [], "bare_s": [], "bare_world_s": []}
                 for pair in pair_names}
@@ -197,24 +209,39 @@ def run(samples: int, engines=None, presets=PRESET_ROLES, seed: int = 0,
     prepared: dict = {}
     # One untimed pass first: the engines' caches (MuJoCo's compiled polygons, extents) are
     # then as warm for the first round as for the others, whichever side it times first.
-    run_survey(populations, samples, seed, installed, presets, workers=1, echo=lambda _: None)
+    warm = run_survey(populations, samples, seed, installed, presets, workers=1,
+                      echo=lambda _: None)
+    # Its errored runs (rows in the order of `scenes`): left out of both sides per pair.
+    errored = {(result.engine, result.preset): result
+               for result in warm["engine_results"]}
+    kept_work = {}
+    for pair in pair_names:
+        result = errored[pair]
+        kept = [row for row in range(len(scenes)) if result.status[row] != ERROR]
+        kept_problems, kept_terms = [problems[row] for row in kept], [scene_terms[row]
+                                                                       for row in kept]
+        kept_work[pair] = ([scenes[row] for row in kept], kept_problems, energy[kept],
+                           kept_terms, verdicts.term_arrays(kept_problems, kept_terms))
     for _ in range(max(rounds, 1)):
         # Per pair, on this process: the contract's run, the survey's per-pair work, bare.
         for name, preset in pair_names:
             engine = load_engine(name)
             settings = engine.settings(preset)
-            contract_s, steps = _contract_cpu(engine, settings, scenes)
+            pair_scenes, pair_problems, pair_energy, pair_terms, pair_arrays = \
+                kept_work[(name, preset)]
+            contract_s, steps = _contract_cpu(engine, settings, pair_scenes)
             tick = time.process_time()
             with collector_paused():
-                run_engine(name, preset, scenes, problems, energy, scene_terms, arrays)
+                run_engine(name, preset, pair_scenes, pair_problems, pair_energy, pair_terms,
+                           pair_arrays)
             judged_s = time.process_time() - tick
-            bare_s, bare_world_s = _bare_cpu(engine, settings, scenes, steps)
+            bare_s, bare_world_s = _bare_cpu(engine, settings, pair_scenes, steps)
             entry = measured[(name, preset)]
             entry["contract_s"].append(contract_s)
             entry["judged_s"].append(judged_s)
             entry["bare_s"].append(bare_s)
             entry["bare_world_s"].append(bare_world_s)
-            prepared[(name, preset)] = (engine, settings, steps)
+            prepared[(name, preset)] = (engine, settings, pair_scenes, steps)
         # End to end, both sides on `workers` processes: the survey as the command runs
         # it (streamed to its dataset, then the tables and summary; no figures).
         with tempfile.TemporaryDirectory(prefix="bench-survey-") as directory:
@@ -222,8 +249,7 @@ def run(samples: int, engines=None, presets=PRESET_ROLES, seed: int = 0,
             streamed_survey(populations, samples, seed, installed, presets, workers,
                             Path(directory))
             survey_cpu.append(_cpu_with_children() - tick)
-        bare_cpu.append(_bare_all_cpu([prepared[pair] for pair in pair_names], scenes,
-                                      workers))
+        bare_cpu.append(_bare_all_cpu([prepared[pair] for pair in pair_names], workers))
     pairs = {}
     for (name, preset), entry in measured.items():
         contract_s, judged_s, bare_s, bare_world_s = (
@@ -235,7 +261,9 @@ def run(samples: int, engines=None, presets=PRESET_ROLES, seed: int = 0,
             "world_ratio": contract_s / bare_world_s if bare_world_s > 0 else float("nan"),
             "contract_ratio": contract_s / bare_s if bare_s > 0 else float("nan"),
             "judged_ratio": judged_s / bare_s if bare_s > 0 else float("nan"),
-            "steps": int(sum(prepared[(name, preset)][2])),
+            "steps": int(sum(prepared[(name, preset)][3])),
+            "errored": len(scenes) - len(kept_work[(name, preset)][0]),
+            "error": next((why for why in errored[(name, preset)].errors if why), ""),
         }
     survey_s, bare_s = statistics.median(survey_cpu), statistics.median(bare_cpu)
     return {"samples": samples, "impacts": len(scenes), "engines": installed,
@@ -276,6 +304,13 @@ def format_report(report: dict) -> str:
               f"{verdict(entry['contract_ratio'], CONTRACT_TRIPWIRE, 'ok'):>7} "
               f"{entry['judged_s']:8.3f}"
               for pair, entry in report["pairs"].items()]
+    errored = {pair: entry for pair, entry in report["pairs"].items() if entry.get("errored")}
+    if errored:
+        lines.append("  scenes where the engine raised, left out of both sides of the pair's "
+                     "comparisons and of its user loops end to end (the survey side keeps "
+                     "them):")
+        lines += [f"    {pair}: {entry['errored']} of {impacts} ({entry['error']})"
+                  for pair, entry in errored.items()]
     if "memory" in report:
         lines.append("  " + format_memory(report["memory"]))
     return "\n".join(lines)

@@ -276,6 +276,27 @@ def reason_table(stats: dict) -> str:
     return html_table(header, rows, left=3)
 
 
+def engine_errors_html(settings: dict) -> str:
+    """The runs whose engine raised (``settings.json``'s ``engine_errors``: their count and
+    the first ones), each with its reason; "" when none did."""
+    errors = settings.get("engine_errors")
+    if not isinstance(errors, dict) or not errors.get("runs"):
+        return ""
+    shown = [error for error in errors.get("shown", [])
+             if isinstance(error, list) and len(error) == 4]
+    rows = [[escape_html(pair), escape_html(family), escape_html(sample), escape_html(why)]
+            for pair, family, sample, why in shown]
+    more = int(errors["runs"]) - len(shown)
+    return ("<h3>Engine errors</h3><p>" + f"{int(errors['runs'])} runs raised an exception "
+            "of the engine: recorded with status <code>error</code> and the exception's type "
+            "and first line, in no statistic above (counted in <code>n_error</code> of "
+            "statistics.parquet), as <code>impact-harness run</code> records an engine "
+            "error.</p>" + html_table(["engine preset", "family", "sample", "error"], rows,
+                                      left=4)
+            + (f"<p>{more} more: the rows of runs.parquet with status error.</p>"
+               if more > 0 else ""))
+
+
 MAP_CAPTION = (
     "Each point is one run of {engine} that passed the verdict checks, placed on Routh's map "
     "of the impact: its initial slip over the sticking ratio, α / r<sub>m</sub> (left edge: "
@@ -349,6 +370,9 @@ def survey_section(directory: Path, figures: dict) -> str:
             parts.append("<h3>Flagged runs by reason</h3><p>The rows with flagged runs; a run "
                          "failing several checks counts under each (docs/verdicts.md).</p>"
                          + reasons)
+        errors = engine_errors_html(settings)
+        if errors:
+            parts.append(errors)
         engines = sorted(set(np.asarray(stats["engine"]).tolist()), key=engine_order)
         parts.append("<h3>Where and how often they depart</h3>")
         parts.append(figures_html(figures, engines, samples))
@@ -374,6 +398,9 @@ def survey_headline(settings: dict, families: list[str], stats: dict) -> str:
         flagged = sum(int(stats["n"][row]) * float(stats["flagged_fraction"][row])
                       for row in rows)
         text += f"; {runs} engine runs, {_percent(flagged / runs if runs else math.nan)} flagged"
+    errors = settings.get("engine_errors")
+    if isinstance(errors, dict) and errors.get("runs"):
+        text += f"; {int(errors['runs'])} engine errors"
     return text
 
 

@@ -48,7 +48,7 @@ from harness.store.files import (
 )
 from harness.survey import laws as survey_laws
 from harness.survey import outputs, statistics, stream
-from harness.survey.engines import SKIPPED, bare_stepping
+from harness.survey.engines import ERROR, SKIPPED, bare_stepping
 from harness.survey.parts import run_parts
 from harness.survey.population import resolve_populations
 from harness.survey.sampling import sample_population
@@ -71,6 +71,12 @@ SETTINGS_FILE = "settings.json"
 #: The files a survey writes in its directory under fixed names.
 SURVEY_FILES = ("samples.parquet", "runs.parquet", "statistics.parquet", "summary.md",
                 SETTINGS_FILE, WRITTEN_BY_SURVEY)
+#: Errored runs printed as ``ENGINE ERROR:`` lines on stderr (as ``run`` prints its own); the
+#: rest are counted there, and all are in the summary's count and ``runs.parquet``.
+SHOWN_ENGINE_ERRORS = 10
+#: The exit status of a survey whose tables were written but an engine run raised, or whose
+#: chunks were stopped (``run``'s: harness/run/command.py EXIT_ENGINE_ERROR).
+EXIT_ENGINE_ERROR = 4
 
 
 def default_left_out(engines) -> dict[tuple[str, str], str]:
@@ -306,13 +312,15 @@ def write_survey(survey: dict, out: Path, settings: dict, figures: bool = True) 
         written += outputs.figures(survey["runs"], out / outputs.FIGURES_DIRECTORY)
         survey["timings"]["figures"] = (time.perf_counter() - begin, 0)
     summary = out / "summary.md"
+    errors = errors_in_memory(survey)
     write_text_atomically(summary, outputs.summary_markdown(
         survey["statistics"], survey["rejections"], survey["timings"], settings,
-        skipped_runs=skipped_in_memory(survey)))
+        skipped_runs=skipped_in_memory(survey), engine_errors=errors))
     # What was surveyed, for the report (harness/report/survey.py) to read without Parquet.
     shown = {**settings, "families": list(survey["rejections"]),
              "skipped": settings.get("skipped", survey["skipped"]),
-             "left_out": settings.get("left_out", survey["left_out"])}
+             "left_out": settings.get("left_out", survey["left_out"]),
+             "engine_errors": errors_setting(errors)}
     settings_path = out / SETTINGS_FILE
     write_text_atomically(settings_path, json.dumps(shown, indent=1) + "\n")
     written += [summary, settings_path]
@@ -339,6 +347,37 @@ def skipped_in_memory(survey: dict) -> dict:
         counts, _ = found.setdefault(pair, ({}, why.get(pair, "")))
         counts[runs["family"][row]] = counts.get(runs["family"][row], 0) + 1
     return found
+
+
+def errors_in_memory(survey: dict) -> list[list]:
+    """The runs whose engine raised in a survey held in memory, as
+    :func:`harness.survey.stream.totals` lists them: ``[pair, family, sample, why]`` by
+    pair, family (the survey's order) and sample."""
+    if not survey["engine_results"]:
+        return []
+    runs = survey["runs"]
+    place = {family: position for position, family in enumerate(survey["rejections"])}
+    found = [[f"{runs['engine'][row]} {runs['preset'][row]}", str(runs["family"][row]),
+              int(runs["sample"][row]), str(runs["error"][row])]
+             for row in np.flatnonzero(np.asarray(runs["status"]) == ERROR).tolist()]
+    return sorted(found, key=lambda error: (error[0], place.get(error[1], 0), error[2]))
+
+
+def errors_setting(errors: list) -> dict:
+    """``settings.json``'s ``engine_errors``: how many runs raised and the first
+    :data:`harness.survey.outputs.SHOWN_ERRORS` of them (for the report's survey section)."""
+    return {"runs": len(errors), "shown": [list(error) for error in
+                                           errors[:outputs.SHOWN_ERRORS]]}
+
+
+def print_engine_errors(errors: list, out: Path) -> None:
+    """Each errored run as an ``ENGINE ERROR:`` line on stderr (the first
+    :data:`SHOWN_ENGINE_ERRORS`; the others counted), as ``impact-harness run`` prints its."""
+    for pair, family, sample, why in errors[:SHOWN_ENGINE_ERRORS]:
+        print(f"ENGINE ERROR: {pair} {family} sample {sample}: {why}", file=sys.stderr)
+    if len(errors) > SHOWN_ENGINE_ERRORS:
+        print(f"ENGINE ERROR: {len(errors) - SHOWN_ENGINE_ERRORS} more (in "
+              f"{out / 'summary.md'} and runs.parquet, status error)", file=sys.stderr)
 
 
 def check_options(args: argparse.Namespace) -> tuple[list[str], list[str], int]:
@@ -427,10 +466,14 @@ def main(args: argparse.Namespace) -> int:
               f"chunks stopped; the {streamed['chunks'] - len(streamed['stopped'])} done are "
               f"kept in {streamed['dataset']}: the same command runs only the others "
               "(a larger --task-time-limit, or narrower distributions)", file=sys.stderr)
-        return 4
+        return EXIT_ENGINE_ERROR
     written = write_streamed(streamed["dataset"], populations, pairs, out, settings,
                              figures=not args.no_figures, wall_s=streamed["wall_s"])
     print(f"wrote {len(written)} files to {out}")
+    errors = stream.totals(streamed["dataset"], populations)["errors"]
+    if errors:  # the tables are written; the errored runs are in them, in no statistic
+        print_engine_errors(errors, out)
+        return EXIT_ENGINE_ERROR
     return 0
 
 
@@ -480,8 +523,9 @@ def write_streamed(dataset: Path, populations, pairs, out: Path, settings: dict,
         timings["figures"] = (clock() - begin, 0)
     summary = out / "summary.md"
     write_text_atomically(summary, outputs.summary_markdown(
-        stats, done["rejections"], timings, settings, skipped_runs=done["skipped_runs"]))
-    shown = {**settings, "families": families}
+        stats, done["rejections"], timings, settings, skipped_runs=done["skipped_runs"],
+        engine_errors=done["errors"]))
+    shown = {**settings, "families": families, "engine_errors": errors_setting(done["errors"])}
     settings_path = out / SETTINGS_FILE
     write_text_atomically(settings_path, json.dumps(shown, indent=1) + "\n")
     return written + [summary, settings_path]

@@ -5,7 +5,12 @@
 where the adapter can (pymunk, pybullet, Box2D) and one by one elsewhere, with the same
 result bit for bit.
 Every run is then judged by the verdict checks (:func:`harness.run.verdicts.judge`): a run
-is one impact only if it fails none, and its ``status`` is the first failing reason. What the
+is one impact only if it fails none, and its ``status`` is the first failing reason.
+A scene the engine cannot build is recorded :data:`SKIPPED`; a scene whose run raises is
+recorded :data:`ERROR` with the exception's type and first line (``errors``), as
+``impact-harness run`` records an engine's exception, and the other runs go on: the call
+that raised is run again scene by scene, so every other scene's run is a lone run's, bit for
+bit (``run_many`` equals ``run`` scene by scene). What the
 checks need of a scene alone (:func:`harness.run.verdicts.prepare`) is worked out once for
 every engine and preset.
 
@@ -34,6 +39,12 @@ SLICE = 2048
 #: Box2D's polygons of more than ``b2_maxPolygonVertices`` sides), as ``run`` records such a
 #: task ``skipped``; the statistics leave these runs out and count them (``n_skipped``).
 SKIPPED = "skipped"
+#: ``status`` and ``engine_status`` of a run whose engine raised (anything raised inside
+#: ``Engine.run_many``: the adapter's code and the engine's library alike, as ``run``
+#: records it ``error: …``; a bug of the survey's own code, outside that call, stops the
+#: survey instead: exit status 3). NaN speeds; left out of the statistics and counted
+#: (``n_error``), listed with its reason in the summary; the survey exits 4.
+ERROR = "error"
 
 
 @dataclass(frozen=True)
@@ -51,6 +62,11 @@ class EngineResults:
     wall_s: float  # s, engine runs only (run_many)
     judge_s: float  # s, the verdict checks
     skipped_why: str = ""  # the engine's message for the first skipped run ("" if none)
+    errors: np.ndarray | None = None  # (n,) str, "Type: first line" of an ERROR run, else ""
+
+    def __post_init__(self) -> None:
+        if self.errors is None:
+            object.__setattr__(self, "errors", np.full(len(self.status), "", dtype=str))
 
 
 def run_engine(engine_name: str, preset: str, scenes, problems=None,
@@ -74,6 +90,7 @@ def run_engine(engine_name: str, preset: str, scenes, problems=None,
     engine_status = np.empty(count, dtype=object)
     status = np.empty(count, dtype=object)
     reasons = np.full(count, "", dtype=object)
+    errors = np.full(count, "", dtype=object)
     steps = np.zeros(count, dtype=np.int64)
     wall = judging = 0.0
     skipped_why = ""
@@ -89,14 +106,15 @@ def run_engine(engine_name: str, preset: str, scenes, problems=None,
         for begin in range(0, count, SLICE):
             tick = clock()
             end = min(count, begin + SLICE)
-            built, runs, why = _run_supported(engine, scenes, begin, end, settings)
+            built, runs, why, raised = _run_supported(engine, scenes, begin, end, settings)
             skipped_why = skipped_why or why
             wall += clock() - tick
             tick = clock()
             if len(built) < end - begin:  # judge the runs that were built, alone
                 for row in sorted(set(range(begin, end)) - set(built)):
                     velocities[row] = np.nan
-                    engine_status[row] = status[row] = SKIPPED
+                    engine_status[row] = status[row] = ERROR if row in raised else SKIPPED
+                    errors[row] = raised.get(row, "")
                 _judge(built, runs, scenes, problems, law_energy_change, terms, arrays,
                        velocities, engine_status, status, reasons, steps)
                 judging += clock() - tick
@@ -119,29 +137,45 @@ def run_engine(engine_name: str, preset: str, scenes, problems=None,
                     status[row], reasons[row] = verdict_status, names
             judging += clock() - tick
             del runs
-    assert set(engine_status) <= {*STATUSES, SKIPPED}, set(engine_status) - set(STATUSES)
+    assert set(engine_status) <= {*STATUSES, SKIPPED, ERROR}, set(engine_status) - set(STATUSES)
     return EngineResults(engine_name, engine.version, preset, velocities,
                          engine_status.astype(str), status.astype(str), reasons.astype(str),
-                         steps, wall, judging, skipped_why)
+                         steps, wall, judging, skipped_why, errors.astype(str))
+
+
+def error_text(error: BaseException) -> str:
+    """An engine's exception as a run's reason: its type and the first line of its message
+    (Drake's run 'failed to converge' messages go on for lines of advice)."""
+    lines = str(error).strip().splitlines()
+    return f"{type(error).__name__}: {lines[0]}" if lines else type(error).__name__
 
 
 def _run_supported(engine, scenes, begin: int, end: int, settings):
-    """``(rows, runs, why)``: ``run_many`` of scenes ``begin`` to ``end``; when the engine
-    refuses one (:class:`UnsupportedScene`, raised for the whole call), every scene is run
-    alone and the refused ones are left out of ``rows`` (``why``: the first refusal)."""
+    """``(rows, runs, why, errors)``: ``run_many`` of scenes ``begin`` to ``end``; when it
+    raises (for the whole call: a scene the engine refuses, :class:`UnsupportedScene`, or an
+    exception of the engine), every scene is run alone and those refused or raising are left
+    out of ``rows`` (``why``: the first refusal; ``errors``: ``{row: error_text}`` of those
+    that raised). ``MemoryError`` is not a scene's fault and stops the survey."""
     try:
-        return list(range(begin, end)), engine.run_many(scenes[begin:end], settings), ""
-    except UnsupportedScene:
+        return list(range(begin, end)), engine.run_many(scenes[begin:end], settings), "", {}
+    except MemoryError:
+        raise
+    except Exception:  # noqa: BLE001 - UnsupportedScene or the engine's: each scene alone
         pass
-    rows, runs, why = [], [], ""
+    rows, runs, why, errors = [], [], "", {}
     for row in range(begin, end):
         try:
             runs += engine.run_many([scenes[row]], settings)
         except UnsupportedScene as error:
             why = why or f"engine cannot build the scene: {error}"
             continue
+        except MemoryError:
+            raise
+        except Exception as error:  # noqa: BLE001 - the engine's: recorded, never dropped
+            errors[row] = error_text(error)
+            continue
         rows.append(row)
-    return rows, runs, why
+    return rows, runs, why, errors
 
 
 def _judge(rows, runs, scenes, problems, law_energy_change, terms, arrays, velocities,

@@ -6,8 +6,9 @@
 * ``statistics.parquet`` -- one row per engine × preset × family × Poisson type;
 * ``summary.md`` -- the statistics as Markdown tables, the rejected draws and the timings;
 * ``settings.json`` -- what was surveyed: samples, seed, engines, presets, the engines not
-  installed and the pairs left out (with why), and under ``inputs`` the digest
-  ``impact-harness suite`` keys its quick survey by (harness/suite.py);
+  installed and the pairs left out (with why), the runs whose engine raised
+  (``engine_errors``: their count and the first :data:`SHOWN_ERRORS`), and under ``inputs``
+  the digest ``impact-harness suite`` keys its quick survey by (harness/suite.py);
 * ``figures/`` -- departure from Poisson against ``α / r_m`` and ``μ`` coloured by Poisson
   collision type, per engine and preset (:func:`map_figure`); the departure CDF per engine,
   a line per family and preset (:func:`cdf_figure`). PNG and SVG. ``impact-harness suite``
@@ -220,9 +221,10 @@ def _preset_names(settings: dict) -> list[str]:
 
 
 def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dict,
-                     skipped_runs: dict | None = None) -> str:
+                     skipped_runs: dict | None = None, engine_errors=()) -> str:
     """The whole ``summary.md``; ``skipped_runs``: ``{"engine preset": ({family: runs},
-    why)}`` of the runs an engine could not build (left out of the statistics)."""
+    why)}`` of the runs an engine could not build, ``engine_errors``: ``[pair, family,
+    sample, why]`` of the runs whose engine raised (both left out of the statistics)."""
     lines = [
         "# Survey: departures over families of impacts",
         "",
@@ -235,7 +237,9 @@ def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dic
                    settings.get("skipped", {}).items())
          + "".join(f" Settings changed from every {engine} preset by --set: "
                    + ", ".join(f"{key}={json.dumps(value)}" for key, value in values.items())
-                   + "." for engine, values in settings.get("overrides", {}).items())),
+                   + "." for engine, values in settings.get("overrides", {}).items())
+         + (f" **Engine errors: {len(engine_errors)} runs raised** (listed under *Engine "
+            "errors*, in no statistic)." if engine_errors else "")),
         ("Departure = ‖u − u_law‖_M / ‖u_before‖_M (kinetic-energy norm; two free bodies in "
          "their centre of mass's frame), in percent: decimals down to "
          f"{SCIENTIFIC_BELOW_PERCENT:g}%, scientific notation below it, each number alike "
@@ -267,6 +271,7 @@ def summary_markdown(stats: dict, rejections: dict, timings: dict, settings: dic
         markdown_table(stats, "each"),
         "",
         *skipped_lines(skipped_runs or {}),
+        *error_lines(engine_errors),
         "## Rejected draws (redrawn, by reason)",
         "",
         "| family | accepted | " + " | ".join(next(iter(rejections.values()), {}).keys()) + " |",
@@ -293,6 +298,41 @@ def skipped_lines(skipped_runs: dict) -> list[str]:
         for family, count in counts.items():
             lines.append(f"| {pair} | {family} | {count} | {why} |")
     return lines + [""]
+
+
+#: Errored runs the summary lists one by one (the rest are counted, and in ``runs.parquet``).
+SHOWN_ERRORS = 50
+
+
+def error_lines(engine_errors) -> list[str]:
+    """The summary's section on runs whose engine raised (none: no lines): the count per
+    engine × preset × family, then each run with its reason (the first
+    :data:`SHOWN_ERRORS`)."""
+    if not len(engine_errors):
+        return []
+    counts: dict[tuple[str, str], int] = {}
+    for pair, family, _sample, _why in engine_errors:
+        counts[(pair, family)] = counts.get((pair, family), 0) + 1
+    lines = ["## Engine errors (the engine raised)", "",
+             "The engine's run of these scenes raised an exception: recorded with status "
+             "`error` and the exception's type and first line (column `error` of "
+             "`runs.parquet`), left out of every statistic above (counted in `n_error`), as "
+             "`impact-harness run` records an engine error; the survey exits 4. The other "
+             "runs are a lone run's, bit for bit.", "",
+             "| engine preset | family | runs |", "|---|---|---|"]
+    lines += [f"| {pair} | {family} | {count} |" for (pair, family), count in counts.items()]
+    lines += ["", "| engine preset | family | sample | error |", "|---|---|---|---|"]
+    lines += [f"| {pair} | {family} | {sample} | {_table_cell(why)} |"
+              for pair, family, sample, why in engine_errors[:SHOWN_ERRORS]]
+    if len(engine_errors) > SHOWN_ERRORS:
+        lines += ["", f"{len(engine_errors) - SHOWN_ERRORS} more: the rows of `runs.parquet` "
+                      "with status `error`."]
+    return lines + [""]
+
+
+def _table_cell(text: str) -> str:
+    """``text`` in a Markdown table cell: its bars escaped."""
+    return str(text).replace("|", "\\|")
 
 
 def timings_caption(timings: dict, impacts: int) -> str:

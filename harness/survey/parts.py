@@ -186,7 +186,8 @@ def _join(parts: list[PartResult], sizes: list[int], populations: int, pairs: in
             *(np.concatenate([getattr(part, name) for part in slices])[order]
               for name in ("velocities", "engine_status", "status", "reasons", "steps")),
             sum(part.wall_s for part in slices), sum(part.judge_s for part in slices),
-            next((part.skipped_why for part in slices if part.skipped_why), "")))
+            next((part.skipped_why for part in slices if part.skipped_why), ""),
+            np.concatenate([part.errors for part in slices])[order]))
     rejections = [{reason: sum(part.rejections[position][reason] for part in parts)
                    for reason in REJECTIONS} for position in range(populations)]
     timings = {stage: sum(part.timings[stage] for part in parts) for stage in parts[0].timings}

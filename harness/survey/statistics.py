@@ -10,8 +10,11 @@ Statistics are over the runs whose verdict is one impact (status ``ok``,
 harness/run/verdicts/): a flagged run (the engine's status, or a failing verdict check:
 a second feature touched, still closing, deep penetration, Δu not one impulse at the
 contact, a numerics energy gain, …) is not the answer to one impact, so it is counted under
-each reason it fails instead. A run *gains energy* when its kinetic energy after exceeds
-the energy before by more than :data:`ENERGY_GAIN_TOLERANCE` of it.
+each reason it fails instead. A run the engine did not finish -- it could not build the
+scene (``skipped``) or raised (``error``, harness/survey/engines.py) -- has no speeds: it is
+in no group's ``n`` and counted apart (``n_skipped``, ``n_error``). A run *gains energy*
+when its kinetic energy after exceeds the energy before by more than
+:data:`ENERGY_GAIN_TOLERANCE` of it.
 """
 
 from __future__ import annotations
@@ -22,7 +25,7 @@ import zlib
 import numpy as np
 
 from harness.run import metrics, verdicts
-from harness.survey.engines import SKIPPED
+from harness.survey.engines import ERROR, SKIPPED
 
 #: Relative energy increase above which a run counts as gaining energy: engines' rounding is
 #: ~1e-15 of the energy and their iterative solvers stop ~1e-12 from their law; a gain a
@@ -83,6 +86,7 @@ def run_columns(family, sample_index, terms, laws, routh, engine_results) -> dic
             "status": result.status,
             "engine_status": result.engine_status,
             "reasons": result.reasons,
+            "error": result.errors,
             "steps": result.steps,
             "poisson_type": poisson_type,
             "alpha": routh["alpha"],
@@ -148,15 +152,18 @@ def _sorted_codes(values) -> tuple[np.ndarray, np.ndarray]:
 def statistics(runs: dict) -> dict:
     """Columns of ``statistics.parquet``: one row per engine × preset × family × Poisson type,
     plus a row per engine × preset × family over every type (``poisson_type`` = 0)."""
-    skipped = np.asarray(runs["status"]) == SKIPPED if len(runs["engine"]) else ()
-    skipped_counts: dict[tuple, int] = {}
-    if np.any(skipped):  # the engine could not build the scene: counted, not judged
-        for key in zip(*(np.asarray(runs[name])[skipped].tolist()
-                         for name in ("engine", "preset", "family", "poisson_type"))):
-            for kind in (key[3], ALL_TYPES):
-                group = (*key[:3], int(kind))
-                skipped_counts[group] = skipped_counts.get(group, 0) + 1
-        runs = {name: np.asarray(values)[~skipped] for name, values in runs.items()}
+    status = np.asarray(runs["status"])
+    not_run = np.isin(status, (SKIPPED, ERROR)) if len(runs["engine"]) else ()
+    # the engine could not build the scene (skipped) or raised (error): counted, not judged
+    not_run_counts: dict[str, dict[tuple, int]] = {SKIPPED: {}, ERROR: {}}
+    if np.any(not_run):
+        for key in zip(*(np.asarray(runs[name])[not_run].tolist()
+                         for name in ("status", "engine", "preset", "family", "poisson_type"))):
+            counts = not_run_counts[key[0]]
+            for kind in (key[4], ALL_TYPES):
+                group = (*key[1:4], int(kind))
+                counts[group] = counts.get(group, 0) + 1
+        runs = {name: np.asarray(values)[~not_run] for name, values in runs.items()}
     count = len(runs["engine"])
     if not count:
         return {}
@@ -228,8 +235,9 @@ def statistics(runs: dict) -> dict:
         for subset, prefix in ((values_ok, "departure_poisson"),
                                (values, "departure_poisson_all")):
             row.update(bootstrap_interval(subset[np.isfinite(subset)], prefix, generator))
-        row["n_skipped"] = skipped_counts.get(
-            (row["engine"], row["preset"], row["family"], row["poisson_type"]), 0)
+        group = (row["engine"], row["preset"], row["family"], row["poisson_type"])
+        row["n_skipped"] = not_run_counts[SKIPPED].get(group, 0)
+        row["n_error"] = not_run_counts[ERROR].get(group, 0)
     return {key: np.asarray([row[key] for row in rows]) for key in rows[0]}
 
 

@@ -12,8 +12,9 @@ writes it as soon as it arrives (:func:`ChunkWriter`), then drops it. The datase
 * ``runs/engine=E/preset=P/part-NNNNN.parquet`` -- the chunk's runs of one pair (the
   columns of ``runs.parquet``);
 * ``samples/part-NNNNN.parquet`` -- the chunk's samples;
-* ``chunks/part-NNNNN.json`` -- the chunk's rejected draws, timings and skipped runs, written
-  last: a chunk is done when its JSON exists (every file is written atomically);
+* ``chunks/part-NNNNN.json`` -- the chunk's rejected draws, timings, skipped runs and engine
+  errors (each errored run's pair, family, sample and reason), written last: a chunk is done
+  when its JSON exists (every file is written atomically);
 * ``plan.json`` -- what is surveyed (populations' texts, samples, seed, pairs, settings,
   chunks, the code and the installed versions): a survey run again with the same plan
   continues from the chunks done; another plan clears the dataset (the files above only)
@@ -56,7 +57,7 @@ from harness.store.files import write_text_atomically
 from harness.store.identity import cached_code_sources, code_version_of
 from harness.survey import laws as survey_laws
 from harness.survey import outputs, statistics
-from harness.survey.engines import SKIPPED
+from harness.survey.engines import ERROR, SKIPPED
 from harness.survey.parts import MIN_PART, compute_part
 from harness.survey.sampling import REJECTIONS
 
@@ -110,6 +111,7 @@ class ChunkOutput:
     timings: dict = dataclasses.field(default_factory=dict)  # stage -> seconds on one core
     skipped: dict = dataclasses.field(default_factory=dict)  # "engine preset" -> why
     skipped_counts: dict = dataclasses.field(default_factory=dict)  # pair -> {family: runs}
+    errors: list = dataclasses.field(default_factory=list)  # [pair, family, sample, why]
     cpu_s: float = 0.0
     refused: dict | None = None  # a ScenarioError's fields and its sample
     stopped: str = ""  # why the chunk was stopped (time limit, worker died)
@@ -165,8 +167,12 @@ def run_chunk(task: ChunkTask) -> ChunkOutput:
         for family in refused:
             found = counts.setdefault(f"{result.engine} {result.preset}", {})
             found[family] = found.get(family, 0) + 1
+    errors = [[f"{result.engine} {result.preset}", str(columns["family"][row]),
+               int(columns["sample"][row]), str(columns["error"][row])]
+              for result, columns in zip(part.results, runs)
+              for row in np.flatnonzero(columns["status"] == ERROR).tolist()]
     return ChunkOutput(task.index, task.bounds, samples, runs, part.rejections, timings,
-                       skipped, counts, time.process_time() - cpu)
+                       skipped, counts, errors, time.process_time() - cpu)
 
 
 def sample_columns(every, terms, law_results, routh) -> dict:
@@ -304,7 +310,8 @@ class ChunkWriter:
                               {**self.metadata, "table": "samples"}, row_group_size=size)
         record = {"bounds": list(output.bounds), "rejections": output.rejections,
                   "timings": output.timings, "skipped": output.skipped,
-                  "skipped_counts": output.skipped_counts, "cpu_s": output.cpu_s}
+                  "skipped_counts": output.skipped_counts, "errors": output.errors,
+                  "cpu_s": output.cpu_s}
         write_text_atomically(_directory(self.dataset / "chunks")
                               / _part_name(output.index, "json"),
                               json.dumps(record, indent=1) + "\n")
@@ -394,11 +401,13 @@ def chunk_records(dataset: Path) -> list[dict]:
 def totals(dataset: Path, populations) -> dict:
     """The done chunks' rejected draws per population, timings summed over chunks (seconds
     on one core), the skipped pairs' reasons and runs per family (``skipped_runs``: ``{pair:
-    ({family: runs}, why)}``), and the impacts and CPU seconds they hold."""
+    ({family: runs}, why)}``), the runs whose engine raised (``errors``: ``[pair, family,
+    sample, why]`` by pair, family and sample), and the impacts and CPU seconds they hold."""
     rejections = {population.name: dict.fromkeys(REJECTIONS, 0) for population in populations}
     timings: dict[str, float] = {}
     skipped: dict[str, str] = {}
     skipped_counts: dict[str, dict[str, int]] = {}
+    errors: list[list] = []
     impacts, cpu = 0, 0.0
     for record in chunk_records(dataset):
         for population, counts in zip(populations, record["rejections"]):
@@ -412,14 +421,17 @@ def totals(dataset: Path, populations) -> dict:
             found = skipped_counts.setdefault(pair, {})
             for family, count in counts.items():
                 found[family] = found.get(family, 0) + count
+        errors += record.get("errors", [])
         impacts += (record["bounds"][1] - record["bounds"][0]) * len(populations)
         cpu += record["cpu_s"]
     families = [population.name for population in populations]
+    place = {family: position for position, family in enumerate(families)}
+    errors.sort(key=lambda error: (error[0], place.get(error[1], len(place)), error[2]))
     skipped_runs = {pair: ({family: counts[family] for family in families if family in counts},
                            skipped.get(pair, ""))
                     for pair, counts in skipped_counts.items()}
     return {"rejections": rejections, "timings": timings, "skipped": skipped,
-            "skipped_runs": skipped_runs, "impacts": impacts, "cpu_s": cpu}
+            "skipped_runs": skipped_runs, "errors": errors, "impacts": impacts, "cpu_s": cpu}
 
 
 def family_blocks(directory: Path, family: str, position: int, columns=None):

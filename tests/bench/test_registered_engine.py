@@ -54,3 +54,39 @@ def test_bench_engines_skips_a_scene_the_engine_refuses(monkeypatch, toy_engine)
     assert all(row["deterministic"] for row in rows if "skipped" not in row)
     table = bench_engines.format_table(report)
     assert "rod-45      skipped: engine 'toy': no capsules" in table
+
+
+def test_bench_survey_leaves_out_the_scenes_where_the_engine_raised(monkeypatch, toy_engine):
+    # An engine raising on a scene (Drake's accurate failing to converge) is an error the
+    # survey records; the bench times every pair on the other scenes, both sides alike.
+    from harness.engines import load_engine
+    from harness.survey.population import resolve_populations
+    from harness.survey.sampling import sample_population
+    from tests.engines.toy_engine import ToyEngine
+
+    monkeypatch.setattr(bench_survey, "QUICK_SAMPLES", 2)
+    scenes = [sample.scene for population in resolve_populations([])
+              for sample in sample_population(population, 2, 0).samples]
+    faulty = scenes[1]
+    engine = load_engine(toy_engine)
+    clean_steps = {preset: [run.steps for run in engine.run_many(scenes,
+                                                                 engine.settings(preset))]
+                   for preset in ("defaults", "accurate")}
+    original = ToyEngine._prepare
+
+    def prepare(self, world, scene, settings, start, weights):
+        if scene is faulty or (scene.friction, scene.restitution, scene.bodies[-1].velocity) \
+                == (faulty.friction, faulty.restitution, faulty.bodies[-1].velocity):
+            raise RuntimeError("toy failed to converge (a test's fault)\nmore advice")
+        return original(self, world, scene, settings, start, weights)
+
+    monkeypatch.setattr(ToyEngine, "_prepare", prepare)
+    report = bench_survey.run(2, engines=[toy_engine], rounds=1)
+    for preset in ("defaults", "accurate"):
+        entry = report["pairs"][f"toy.{preset}"]
+        assert entry["errored"] == 1
+        assert entry["error"] == "RuntimeError: toy failed to converge (a test's fault)"
+        # the contract's run (whose steps the bare sides repeat) is of the other scenes
+        assert entry["steps"] == sum(clean_steps[preset]) - clean_steps[preset][1]
+    text = bench_survey.format_report(report)
+    assert "toy.accurate: 1 of 14 (RuntimeError: toy failed to converge" in text
