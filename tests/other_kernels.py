@@ -17,13 +17,13 @@ The passes, chosen to keep ``make test`` short:
 
 * Prescott with every SIMD target numpy dispatches to at run time turned off
   (``NPY_DISABLE_CPU_FEATURES``: numpy then runs its baseline loops): the whole
-  kernel_sensitive set, the oldest arithmetic against this run's newest (about 21 s of CPU
+  kernel_sensitive set, the oldest arithmetic against this run's newest (about 25 s of CPU
   on the development machine);
 * each other core type the CPU can run: the kernel_sensitive tests but those marked
   ``blas_free`` (the contact geometry compared with its reference form, bit for bit: their
   arithmetic takes no BLAS product, so a BLAS kernel cannot move them, and
   ``test_contacts_are_the_same_bits_under_another_kernel``, which is run, checks exactly
-  that under each), numpy's SIMD as it is (about 12 s of CPU each).
+  that under each), numpy's SIMD as it is (about 21 s of CPU each).
 
 Off x86-64 the BLAS kernel is left as it is (one pass, SIMD off, with a note). Every pass
 runs even when one fails; the report at the end names each kernel with its outcome and time,
@@ -31,15 +31,17 @@ and the exit status is the first failure's (0 when all pass).
 
 What keeps it short: each pass is one pytest process given only the test files that name
 ``kernel_sensitive`` (:func:`kernel_sensitive_files`), not the whole suite. ``-m`` alone
-would still import and collect every test module (about 8 s of CPU, as much again per
-pytest-xdist worker) to run a tenth of them. The rule is a plain text search, so a marked
-test can escape it only by being marked from another file (a conftest hook, a shared mark
-object); ``tests/test_other_kernels.py`` checks, on the whole suite's collection, that
-every test carrying the mark sits in a file the rule names. And the passes, each a single
-process, run ``--passes-at-once N`` at a time (default 1) instead of each spreading over
-pytest-xdist workers: a pass's tests then share one import of the engines, and the two cores
-stay busy while one pass finishes its slowest test. A pass's output is printed whole when it
-ends (live when one runs at a time); its CPU time is its own process tree's (``os.wait4``).
+would still import and collect every test module (about 8 s of CPU without bytecode caches,
+3 s with them, in each pytest-xdist worker) to run a thirtieth of the tests. The rule is a
+plain text search, so a marked test can escape it only by being marked from another file (a
+conftest hook, a shared mark object); ``tests/test_other_kernels.py`` checks, on the whole
+suite's collection, that every test carrying the mark sits in a file the rule names. And the
+passes, each a single process, run ``--passes-at-once N`` at a time (default 1) instead of
+each spreading over pytest-xdist workers: a pass's tests then share one import of the
+engines, and the two cores stay busy while one pass finishes its slowest test (each pass
+took about 38 s of CPU over two workers before, 21 s alone). A pass's output is printed
+whole when it ends (live when one runs at a time); its CPU time is its own process tree's
+(``os.wait4``).
 """
 
 from __future__ import annotations
