@@ -32,13 +32,19 @@ test: $(STAMP)
 # then the kernel_sensitive tests again on other kernels (tests/other_kernels.py): the whole
 # set under OPENBLAS_CORETYPE=Prescott with NPY_DISABLE_CPU_FEATURES (every numpy SIMD target
 # off), and under every other OpenBLAS core type this CPU can run (Nehalem, SandyBridge,
-# Haswell, Zen; SkylakeX and Cooperlake with AVX-512), read from /proc/cpuinfo. Both steps
+# Haswell, Zen; SkylakeX and Cooperlake with AVX-512), read from /proc/cpuinfo. Each pass is
+# one pytest process over only the files that name kernel_sensitive, two passes at a time
+# (tests/other_kernels.py's docstring says why that is quicker than xdist workers). Both steps
 # run even when the first fails; the last line reports both, and make fails if either did.
-	@suite=0; kernels=0; \
+# Both steps write Python's bytecode caches even where PYTHONDONTWRITEBYTECODE is set (empty
+# is unset for Python): without them every pytest process compiles each test module it
+# collects again, its asserts rewritten: 5 s of CPU per xdist worker for the whole suite,
+# 1 s per kernel pass (measured; __pycache__/ is git-ignored).
+	@export PYTHONDONTWRITEBYTECODE=; suite=0; kernels=0; \
 	echo "$(BIN)/python -m pytest -q -n 2 --dist loadscope"; \
 	$(BIN)/python -m pytest -q -n 2 --dist loadscope || suite=$$?; \
-	echo "$(BIN)/python tests/other_kernels.py -n 2 --dist loadscope"; \
-	$(BIN)/python tests/other_kernels.py -n 2 --dist loadscope || kernels=$$?; \
+	echo "$(BIN)/python tests/other_kernels.py --passes-at-once 2"; \
+	$(BIN)/python tests/other_kernels.py --passes-at-once 2 || kernels=$$?; \
 	if [ $$suite = 0 ]; then s=passed; else s="FAILED (pytest exit status $$suite)"; fi; \
 	if [ $$kernels = 0 ]; then k=passed; else k="FAILED (exit status $$kernels)"; fi; \
 	echo "make test: whole suite $$s; kernel_sensitive tests on other kernels $$k"; \

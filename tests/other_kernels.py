@@ -1,7 +1,7 @@
 """Run the numerically sensitive tests again on other kernels: ``make test`` runs this after
 the whole suite, and it can be run by hand (arguments go to pytest)::
 
-    .venv/bin/python tests/other_kernels.py -n 2
+    .venv/bin/python tests/other_kernels.py --passes-at-once 2   # what make test runs
     .venv/bin/python tests/other_kernels.py --list      # the kernels it would run, and stop
 
 The tests marked ``kernel_sensitive`` (pins of stored results, counts, decisions, findings:
@@ -17,26 +17,40 @@ The passes, chosen to keep ``make test`` short:
 
 * Prescott with every SIMD target numpy dispatches to at run time turned off
   (``NPY_DISABLE_CPU_FEATURES``: numpy then runs its baseline loops): the whole
-  kernel_sensitive set, the oldest arithmetic against this run's newest (about 21 s of CPU
+  kernel_sensitive set, the oldest arithmetic against this run's newest (about 25 s of CPU
   on the development machine);
 * each other core type the CPU can run: the kernel_sensitive tests but those marked
   ``blas_free`` (the contact geometry compared with its reference form, bit for bit: their
   arithmetic takes no BLAS product, so a BLAS kernel cannot move them, and
   ``test_contacts_are_the_same_bits_under_another_kernel``, which is run, checks exactly
-  that under each), numpy's SIMD as it is (about 12 s of CPU each).
+  that under each), numpy's SIMD as it is (about 21 s of CPU each).
 
 Off x86-64 the BLAS kernel is left as it is (one pass, SIMD off, with a note). Every pass
 runs even when one fails; the report at the end names each kernel with its outcome and time,
 and the exit status is the first failure's (0 when all pass).
+
+What keeps it short: each pass is one pytest process given only the test files that name
+``kernel_sensitive`` (:func:`kernel_sensitive_files`), not the whole suite. ``-m`` alone
+would still import and collect every test module (about 8 s of CPU without bytecode caches,
+3 s with them, in each pytest-xdist worker) to run a thirtieth of the tests. The rule is a
+plain text search, so a marked test can escape it only by being marked from another file (a
+conftest hook, a shared mark object); ``tests/test_other_kernels.py`` checks, on the whole
+suite's collection, that every test carrying the mark sits in a file the rule names. And the
+passes, each a single process, run ``--passes-at-once N`` at a time (default 1) instead of
+each spreading over pytest-xdist workers: a pass's tests then share one import of the
+engines, and the two cores stay busy while one pass finishes its slowest test (each pass
+took about 38 s of CPU over two workers before, 21 s alone). A pass's output is printed
+whole when it ends (live when one runs at a time); its CPU time is its own process tree's
+(``os.wait4``).
 """
 
 from __future__ import annotations
 
 import os
 import platform
-import resource
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -118,10 +132,76 @@ def passes(flags: set[str]) -> list[tuple[str | None, bool, str]]:
     return [(OLD_KERNEL, True, ALL_TESTS)] + [(name, False, BLAS_TESTS) for name in others]
 
 
-def children_cpu_seconds() -> float:
-    """User and system CPU time of the finished child processes so far (s)."""
-    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return usage.ru_utime + usage.ru_stime
+def kernel_sensitive_files(tests_directory: Path) -> list[Path]:
+    """The test files under ``tests_directory`` (pytest's default names: test_*.py, *_test.py)
+    whose text names the ``kernel_sensitive`` mark, sorted: every file where a test can be
+    marked with it (the rule's check: tests/test_other_kernels.py)."""
+    return sorted(path for path in tests_directory.rglob("*.py")
+                  if (path.name.startswith("test_") or path.name.endswith("_test.py"))
+                  and "kernel_sensitive" in path.read_text(encoding="utf-8"))
+
+
+def run_passes(runs: list[tuple[str, list[str], dict[str, str]]], at_once: int,
+               cwd: Path) -> list[tuple[int, float, float]]:
+    """Run each ``(title, command, environment)`` of ``runs`` in order, up to ``at_once`` at a
+    time. One at a time, each prints as it goes under its title; else each one's output is
+    kept in a file and printed whole, under its title, when it ends (never interleaved).
+    Returns each run's exit status, wall time and CPU time (user + system of its process
+    tree, s), in the order of ``runs``."""
+    outcomes: list[tuple[int, float, float] | None] = [None] * len(runs)
+    waiting = list(enumerate(runs))
+    running = {}  # index: (process, its output file or None, started)
+    while waiting or running:
+        while waiting and len(running) < at_once:
+            index, (title, command, environment) = waiting.pop(0)
+            output = None
+            if at_once == 1:
+                print(f"\n== {title}", flush=True)
+            else:
+                output = tempfile.TemporaryFile()
+            process = subprocess.Popen(command, cwd=cwd, env=environment, stdout=output,
+                                       stderr=None if output is None else subprocess.STDOUT)
+            running[index] = (process, output, time.monotonic())
+        finished = []
+        for index, (process, output, started) in running.items():
+            pid, status, usage = os.wait4(process.pid, os.WNOHANG)
+            if pid == 0:
+                continue
+            process.returncode = os.waitstatus_to_exitcode(status)  # reaped here, not by Popen
+            outcomes[index] = (process.returncode, time.monotonic() - started,
+                               usage.ru_utime + usage.ru_stime)
+            if output is not None:
+                output.seek(0)
+                print(f"\n== {runs[index][0]}", flush=True)
+                sys.stdout.buffer.write(output.read())
+                sys.stdout.flush()
+                output.close()
+            finished.append(index)
+        for index in finished:
+            del running[index]
+        if running and not finished:
+            time.sleep(0.1)
+    return outcomes
+
+
+def passes_at_once(arguments: list[str]) -> tuple[int, list[str]]:
+    """The ``--passes-at-once N`` (or ``=N``) of ``arguments`` (1 without it), and the
+    arguments left for pytest."""
+    at_once, rest = 1, []
+    iterator = iter(arguments)
+    for argument in iterator:
+        if argument == "--passes-at-once":
+            value = next(iterator, "")
+        elif argument.startswith("--passes-at-once="):
+            value = argument.partition("=")[2]
+        else:
+            rest.append(argument)
+            continue
+        if not value.isdigit() or int(value) < 1:
+            raise SystemExit(f"other_kernels.py: --passes-at-once takes a count >= 1, "
+                             f"not {value!r}")
+        at_once = int(value)
+    return at_once, rest
 
 
 def main(arguments: list[str]) -> int:
@@ -133,21 +213,25 @@ def main(arguments: list[str]) -> int:
           + (f" (this CPU cannot run {', '.join(lacking)})" if lacking else ""), flush=True)
     if "--list" in arguments:
         return 0
+    at_once, pytest_arguments = passes_at_once(arguments)
     root = Path(__file__).resolve().parent.parent
-    outcomes = []
+    files = [str(path.relative_to(root)) for path in kernel_sensitive_files(root / "tests")]
+    runs, labels = [], []
     for core_type, simd_off, tests in planned:
         environment, changes = kernel_environment(core_type, simd_off)
-        print(f"\n== {tests} with {', '.join(changes)}", flush=True)
-        started, cpu = time.monotonic(), children_cpu_seconds()
-        status = subprocess.call([sys.executable, "-m", "pytest", "-q", "-m", tests,
-                                  *arguments], cwd=root, env=environment)
-        outcomes.append((f"{', '.join(changes)}: {tests}", status,
-                         time.monotonic() - started, children_cpu_seconds() - cpu))
+        runs.append((f"{tests} with {', '.join(changes)}",
+                     [sys.executable, "-m", "pytest", "-q", "-m", tests, *pytest_arguments,
+                      *files], environment))
+        labels.append(f"{', '.join(changes)}: {tests}")
+    if at_once > 1:
+        print(f"{len(runs)} passes, {at_once} at a time, each over the {len(files)} files "
+              "that name kernel_sensitive; each pass's output when it ends", flush=True)
+    outcomes = run_passes(runs, at_once, root)
     print("\nkernel_sensitive tests on other kernels (wall time, CPU time of the pass):")
-    for changes, status, seconds, cpu in outcomes:
+    for label, (status, seconds, cpu) in zip(labels, outcomes):
         verdict = "passed" if status == 0 else f"FAILED (pytest exit status {status})"
-        print(f"  {verdict:<34} {seconds:6.1f} s {cpu:6.1f} s CPU  {changes}")
-    return next((status for _, status, _, _ in outcomes if status != 0), 0)
+        print(f"  {verdict:<34} {seconds:6.1f} s {cpu:6.1f} s CPU  {label}")
+    return next((status for status, _, _ in outcomes if status != 0), 0)
 
 
 if __name__ == "__main__":
