@@ -303,8 +303,11 @@ class Box2DEngine(Engine):
         velocity, rate = world.velocity, world.length / world.velocity
         # Read after the step (_Readout.read): the loop reads velocities only then, and
         # the batch's _finish comes before _retire stops the bodies.
-        return tuple([(state[5] / velocity, state[6] / velocity, state[7] * rate)
-                      for state in world.states])
+        # A loop, not a comprehension (its frame): read at most steps of a run's contact.
+        velocities = []
+        for state in world.states:
+            velocities.append((state[5] / velocity, state[6] / velocity, state[7] * rate))
+        return tuple(velocities)
 
     def _run_notes(self, world: _World) -> tuple[str, ...]:
         if world.clipped:

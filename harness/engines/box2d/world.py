@@ -10,6 +10,7 @@ warm-start impulses, sleep timers and proxies' boxes from the last one, which
 from __future__ import annotations
 
 import math
+from math import hypot as _hypot
 from typing import TYPE_CHECKING
 
 from Box2D import b2
@@ -32,6 +33,8 @@ if TYPE_CHECKING:
 
 # A velocity Box2D clipped sits at the cap to float32 rounding: this band counts as "at".
 _CAP_BAND = 1.0 - 1e-6
+# The caps times the band (what read_step compares with, every step).
+_TRANSLATION_BAND, _ROTATION_BAND = _CAP_BAND * MAX_TRANSLATION, _CAP_BAND * MAX_ROTATION
 
 
 class _Readout:
@@ -82,11 +85,13 @@ class _Readout:
     def read_step(self) -> RawContacts | None:
         """After a step: its contact (:func:`_contact_of`: body B's touching contacts, at the
         poses the step started from), then the bodies now (as :meth:`read`), and whether a
-        velocity reached a cap (``clipped``, from the first step that does)."""
+        velocity reached a cap (``clipped``, from the first step that does).
+
+        The hot path (every step of every impact): :meth:`_take` and
+        :func:`_states_at_cap` are written out here, operation for operation."""
         buffers = self.buffers
         if buffers is not None:  # _state_in_memory, on the buffers made once
-            unpack = self.memory.state.unpack_from
-            states = [unpack(buffer) for buffer in buffers]
+            states = list(map(self.memory.state.unpack_from, buffers))
         else:
             state_of, memory = _READERS[0], self.memory
             states = [state_of(b2_body, key, memory) for b2_body, key in self.dynamic]
@@ -94,9 +99,16 @@ class _Readout:
         # body, the last one); the body's list keeps the world's order of them.
         touching = _READERS[1](self.body_b, states[-1], self.memory)
         raw = _contact_of(touching, self) if touching else None
-        self._take(states)
-        if not self.clipped:
-            self.clipped = _states_at_cap(states, self.dt, _CAP_BAND)
+        length, start = self.length, self.start
+        now = []
+        clipped, dt = self.clipped, self.dt
+        for key, (x, y, sin, cos, angle, v_x, v_y, omega, _) in zip(self.keys, states):
+            start[key] = (x, y, cos, sin)
+            now.append((x / length, y / length, angle))
+            if not clipped:
+                clipped = (_hypot(v_x, v_y) * dt > _TRANSLATION_BAND
+                           or abs(omega) * dt > _ROTATION_BAND)
+        self.now, self.states, self.clipped = tuple(now), states, clipped
         return raw
 
     def _take(self, states: list) -> None:
