@@ -245,6 +245,12 @@ def test_rotating_a_rigid_body_scene_leaves_the_result_unchanged(angle, mass_a, 
                           rotate((vx, vy - 3.0), theta), omega)
         return pi.builders.two_bodies(a, b, rotate(point, theta), rotate(normal, theta))
 
+    # A stated band (rel 1e-9, abs 1e-12), not derived: the turned scene is another problem,
+    # its inputs rounded by cos, sin (libm) and the turn, solved through Cholesky, and the
+    # two answers are compared on this machine's kernel (not kernel_sensitive: no CPU's
+    # last bits come near it). Measured at most 0.53 % of the band on 2,000 seeded draws of
+    # this family. The geometry's turns are checked bit for bit elsewhere
+    # (tests/scene/test_turns.py); here it is the law's invariance that is tested.
     base, turned = scene(0.0), scene(angle)
     assume(base.wn @ base.u < -1e-3)
     first = base.solve(mu=mu, e=e, law=law)
