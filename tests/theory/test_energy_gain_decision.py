@@ -91,3 +91,34 @@ def test_the_decision_on_both_sides_of_the_bar_and_inside_the_band():
                              (cut - 2 * width, (False, False))]:
         moved = dataclasses.replace(result, energy_change=energy)
         assert (moved.energy_gained, moved.energy_gain_at_boundary) == expected
+
+
+def test_a_scenarios_energy_gain_expectation_is_the_solvers_decision(monkeypatch):
+    # harness.scenarios.checks.check_expectations holds expect.energy_gain to the solver's
+    # decision: a clear answer must match; inside the band either expectation is right.
+    from pathlib import Path
+
+    from harness.scenarios import checks, load_scenario
+
+    path = Path(__file__).resolve().parents[2] / "scenarios" / "rod-50-newton-energy-gain.toml"
+    scenario = load_scenario(path)
+    assert checks.check_expectations(scenario) == []  # newton gains, poisson does not
+    original = pi.ImpactProblem.solve
+
+    def at(offset_in_bands):
+        def solve(self, **kwargs):
+            result = original(self, **kwargs)
+            cut = ENERGY_GAIN_BAR * (abs(result.vn_approach * result.normal_impulse)
+                                     + abs(result.vt_approach * result.tangential_impulse))
+            band = energy_rounding_bound(result.normal_impulse, result.tangential_impulse,
+                                         result.vn_approach, result.vt_approach, result.mnn,
+                                         result.mnt, result.mtt)
+            return dataclasses.replace(result, energy_change=cut + offset_in_bands * band)
+        return solve
+
+    monkeypatch.setattr(pi.ImpactProblem, "solve", at(0.5))  # every law inside its band
+    assert checks.check_expectations(scenario) == []
+    monkeypatch.setattr(pi.ImpactProblem, "solve", at(2.0))  # every law clearly gains
+    problems = checks.check_expectations(scenario)
+    assert {p.split(":")[1].strip().split(" ")[0] for p in problems} == {
+        "expect.energy_gain.poisson", "expect.energy_gain.stronge"}, problems
