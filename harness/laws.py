@@ -82,7 +82,7 @@ def broken_promises(name: str, result, mu: float) -> list[str]:
     entry = law(name)
     broken = []
     normal, tangential = result.normal_impulse, result.tangential_impulse
-    if entry.no_energy_gain and result.energy_gained:  # the solver's 1e-12 relative bar
+    if entry.no_energy_gain and result.energy_gained:  # the bar, beyond (A29)'s rounding band
         broken.append(f"{name} promises no energy gain but gains {result.energy_change:.3g} J")
     band = CONE_BAND * (abs(normal) + abs(tangential))
     if entry.in_cone and (normal < -band or abs(tangential) > mu * normal + band):

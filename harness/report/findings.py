@@ -26,6 +26,7 @@ import numpy as np
 import planar_impact as pi
 from harness.laws import LAW_NAMES
 from harness.scene.random_problems import random_problems
+from planar_impact.solver import ENERGY_GAIN_BAR, energy_gain_decision
 
 # PGS: iterations allowed, and the relative change below which it has converged (as in
 # planar_impact.process.sequential_impulses, whose defaults are 1e-13 and 100,000).
@@ -37,9 +38,10 @@ PGS_BINS = (0.0, 0.5, 0.9, 1.0, 1.1, 1.5, 2.0, np.inf)
 BOUNDARY_OFFSET = 1e-9
 LARGE_JUMP = 0.01
 
-# (c): an energy change above this fraction of |v_n^A| I_n + |v_t^A I_t| is a gain (the
-# solver's own ImpactResult.energy_gained threshold; rounding stays far below it).
-GAIN_THRESHOLD = 1e-12
+# (c): an energy change above this fraction of |v_n^A I_n| + |v_t^A I_t|, beyond (A29)'s
+# derived rounding band, is a gain: the solver's own ImpactResult.energy_gained decision
+# (planar_impact.solver.energy_gain_decision); a row inside the band is at the boundary.
+GAIN_THRESHOLD = ENERGY_GAIN_BAR
 
 ENERGY_LAWS = LAW_NAMES  # every law, in the law registry's order (harness/laws.py)
 
@@ -105,11 +107,13 @@ def energy_gain(problems: dict, law: str) -> np.ndarray:
     """(c): per problem, True where ``law`` gains energy, False where it does not, and
     False for rows it cannot solve (returned with them in ``solved``)."""
     result = pi.solve_batch(**problems, law=law)
-    scale = (np.abs(result.vn_approach) * result.normal_impulse
-             + np.abs(result.vt_approach * result.tangential_impulse))
     solved = result.status == 0
-    gained = solved & (result.energy_change > GAIN_THRESHOLD * scale)
-    return gained, solved
+    mnn, mnt, mtt = (np.broadcast_to(problems[name], solved.shape)
+                     for name in ("mnn", "mnt", "mtt"))
+    gained, _ = energy_gain_decision(
+        result.energy_change, result.normal_impulse, result.tangential_impulse,
+        result.vn_approach, result.vt_approach, mnn, mnt, mtt)
+    return solved & gained, solved
 
 
 def measure(count: int, seed: int) -> dict:
@@ -167,7 +171,8 @@ def markdown(findings: dict) -> str:
         (f"| {j['problems']} | {j['large']} | {share} | {j['median_e_below']:.3g} | "
          f"{j['median_jump']:.0%} |"),
         "",
-        (f"(c) Energy gain (ΔE > {GAIN_THRESHOLD:g}·(abs(v_n^A)·I_n + abs(v_t^A·I_t))), "
+        (f"(c) Energy gain (ΔE > {GAIN_THRESHOLD:g}·(abs(v_n^A)·I_n + abs(v_t^A·I_t)) "
+         "beyond (A29)'s rounding bound), "
          "among the problems each law solves:"),
         "",
         "| law | solved | gain energy | fraction |",

@@ -68,10 +68,66 @@ class ImpactResult:
 
     @property
     def energy_gained(self) -> bool:
-        """True where the law created kinetic energy (Newton's law can, Table 1 of Part A)."""
-        scale = (abs(self.vn_approach) * self.normal_impulse
-                 + abs(self.vt_approach * self.tangential_impulse))
-        return self.energy_change > 1e-12 * scale
+        """True where the law created kinetic energy (Newton's law can, Table 1 of Part A):
+        ``ΔE`` above :data:`ENERGY_GAIN_BAR` of the work beyond (A29)'s rounding
+        (:func:`energy_gain_decision`); False inside that band (``energy_gain_at_boundary``)."""
+        return bool(self._energy_decision()[0])
+
+    @property
+    def energy_gain_at_boundary(self) -> bool:
+        """True where ``ΔE`` lies within (A29)'s rounding bound of the gain bar: either
+        answer is right, and another CPU's last bits may give the other one."""
+        return bool(self._energy_decision()[1])
+
+    def _energy_decision(self):
+        return energy_gain_decision(self.energy_change, self.normal_impulse,
+                                    self.tangential_impulse, self.vn_approach,
+                                    self.vt_approach, self.mnn, self.mnt, self.mtt)
+
+
+#: The gain bar, relative to the work ``|v_n^A I_n| + |v_t^A I_t|``: a stated judgement, not
+#: a bound. It stands for the impulses' own error, which (A29) carries to ΔE and no a priori
+#: bound covers for every law (the closed forms are good to a few units of 2⁻⁵³ relative);
+#: (A29)'s own rounding, which can exceed it where the terms cancel, is the derived band
+#: :func:`energy_rounding_bound` around it.
+ENERGY_GAIN_BAR = 1e-12
+
+#: Roundings along each term of (A29) as the library evaluates it (contact_space, fastpath):
+#: ``m I`` (1), ``+ m I`` (2), ``+ v`` (3), ``+ v`` (4), ``× I`` (5), the two axes' sum (6);
+#: the half is exact. One more covers the bound's own evaluation (a few u of a bound that is
+#: itself ~6u of the terms).
+ENERGY_ROUNDINGS = 7
+_UNIT_ROUNDOFF = 2.0 ** -53
+#: The subnormal spacing, per product (six) that may underflow outside the 1 + δ model.
+_UNDERFLOW = 6 * 2.0 ** -1074
+
+
+def energy_rounding_bound(normal, tangential, vn, vt, mnn, mnt, mtt):
+    """Forward error bound of (A29) ``ΔE = ½ I_n (v_n' + v_n) + ½ I_t (v_t' + v_t)``, with
+    ``v'`` from (A22), (A23), as evaluated from the impulses: ``γ_7 ½ Σ_axis |I| (|v| + |v|
+    + |m_·n I_n| + |m_·t I_t|)`` (Higham (3.5): every term of the expanded sum rounded at
+    most :data:`ENERGY_ROUNDINGS` times, in any order). Against the exact ΔE of the same
+    floats; scalars or arrays. The solver's rescaling (``ldexp``) is exact save subnormals."""
+    gamma = ENERGY_ROUNDINGS * _UNIT_ROUNDOFF / (1 - ENERGY_ROUNDINGS * _UNIT_ROUNDOFF)
+    reach_n = 2 * abs(vn) + abs(mnn * normal) + abs(mnt * tangential)
+    reach_t = 2 * abs(vt) + abs(mnt * normal) + abs(mtt * tangential)
+    return gamma * 0.5 * (abs(normal) * reach_n + abs(tangential) * reach_t) + _UNDERFLOW
+
+
+def energy_gain_decision(energy_change, normal, tangential, vn, vt, mnn, mnt, mtt):
+    """``(gained, at_boundary)``: whether the law created energy, a decision with a derived
+    band (docs/verdicts.md, 'Same answers on every CPU'). The cut is the bar
+    ``ENERGY_GAIN_BAR · (|v_n I_n| + |v_t I_t|)``; the band is
+    :func:`energy_rounding_bound`. ``gained`` where ΔE exceeds the cut by more than the band
+    (the exact ΔE of these impulses is above the bar); ``at_boundary`` where ΔE lies within
+    the band of the cut (then ``gained`` is False: no gain is claimed on rounding). Scalars
+    or arrays (numpy's elementwise ``+ − ×``, the same bits on every CPU)."""
+    work = abs(vn * normal) + abs(vt * tangential)
+    cut = ENERGY_GAIN_BAR * work
+    band = energy_rounding_bound(normal, tangential, vn, vt, mnn, mnt, mtt)
+    gained = energy_change > cut + band
+    at_boundary = abs(energy_change - cut) <= band
+    return gained, at_boundary
 
 
 def _impact_result(fields: dict) -> ImpactResult:

@@ -38,6 +38,15 @@ FILE_NAME = "avx512-geometry-contacts.json"
 ENVIRONMENT = "IMPACT_HARNESS_KERNEL_DATA"
 RECORDED = ("implementation_skylakex", "implementation_haswell", "reference_skylakex",
             "reference_haswell")
+#: A sanity cap on the derived bound itself (of the normal, and of the gap relative to
+#: 1 + |gap|), not a tolerance of any comparison: it fails a derivation gone vacuous (inf,
+#: NaN, or O(1) where cores nearly touch), under which every comparison would pass. Not
+#: derived, and not meant to be tight: how much of the bound the contacts use is checked
+#: against exact rational arithmetic (test_the_derived_bound_holds_against_exact_arithmetic)
+#: and the bound's size is the derivation's (tests/scene/contact_bounds.py). 1e-6 stays far
+#: below what the contacts decide downstream (engine departures are read at 1e-3 and
+#: above). Measured on the AVX-512 file's 512 cases: at most 1.1e-11 (case 670), 1e-5 of it.
+USEFUL_BOUND = 1e-6
 
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -134,7 +143,8 @@ def test_another_machines_contacts_are_this_machines_within_the_derived_bound(ca
         tolerance = float.fromhex(case["tolerance"])
         here = geometry.body_contact(a, b, tolerance)
         bound = contact_bound(a, b, tolerance)
-        assert max(bound.normal, bound.gap / (1.0 + abs(here.gap))) < 1e-6, (case["case"], bound)
+        assert max(bound.normal, bound.gap / (1.0 + abs(here.gap))) < USEFUL_BOUND, (
+            case["case"], bound)
         outcomes = {assert_within_bound(contact_of(case[name]), here, bound,
                                         f"case {case['case']}, {name}") for name in RECORDED}
         if outcomes == {True}:

@@ -31,6 +31,16 @@ BOUNDARY_FACTOR = 1e3
 #: of ½uᵀMu is ~1e-16 of it).
 ENERGY_ROUNDING = 1e-12
 
+# Kinds of the other comparisons here (docs/verdicts.md, 'Same answers on every CPU'): the
+# worked flat box's speeds and energy are derived (hand_answer_bounds, kinetic_bound); the
+# symmetric flat box and the impulses compared with the hand answer are stated bands
+# (1e-12, 1e-13 relative; measured under 2.4 % of them, every kernel), kernel_sensitive.
+# The one-contact comparisons with solve (1e-10 of the speeds and impulses, the restitution
+# base to 1e-12) and the sign checks (compression velocity, separation ≥ −1e-12 of the
+# speed scale) are stated bands too, not yet derived: they compare the two-phase law's
+# pieces (pseudo-inverse or Lemke) with the closed forms through solve's Cholesky, and run
+# on this machine's kernel only (not kernel_sensitive).
+
 
 def speed_scale(system) -> float:
     return float(np.max(np.abs(system.u))) + system.speed_scale()
@@ -454,6 +464,31 @@ def test_friction_with_different_restitutions_can_gain_energy():
 
 # --- the symmetric flat box ----------------------------------------------------------------
 
+def hand_answer_bounds(system, answer, hand_u_after):
+    """The two-phase answer's speeds against the hand-worked ``hand_u_after``, split in two:
+    the answer's end conditions rebuilt exactly from the floats the method read
+    (tests/theory/two_phase_bounds.py) give the exact end state ``u*`` of the system as
+    rounded, and the computed speeds lie within the rebuild's derived bound of it; ``u*``
+    itself differs from the hand answer only by the rounding of the system's data (its
+    Delassus terms and ``M⁻¹ w`` columns, through LAPACK), computed exactly here. Returns
+    the bound per speed, the largest share of it used, and ``max |u* − hand|`` (a float of
+    an exact difference)."""
+    from fractions import Fraction
+
+    from tests.theory import two_phase_bounds as tpb
+
+    rebuilt = tpb.rebuild(system, answer)
+    assert rebuilt.residual_share < 1
+    error = np.array(rebuilt.error)
+    difference = [abs(Fraction(x) - exact)
+                  for x, exact in zip(answer.u_after.tolist(), rebuilt.u_after)]
+    assert all(d <= Fraction(b) for d, b in zip(difference, error)), (difference, error)
+    share = max(float(d / Fraction(b)) for d, b in zip(difference, error) if b > 0)
+    data = max(abs(x - Fraction(h)) for x, h in zip(rebuilt.u_after, hand_u_after))
+    return error, share, float(data)
+
+
+@pytest.mark.kernel_sensitive  # stated bands through LAPACK (the docstring); rerun per kernel
 @settings(max_examples=200, deadline=None)
 @given(st.floats(0.1, 3.0), st.floats(0.02, 2.0), st.floats(0.1, 10.0), st.floats(0.05, 5.0),
        st.floats(0, 2), st.one_of(st.floats(0, 1), st.just(1.0)), st.sampled_from(mc.METHODS),
@@ -461,7 +496,16 @@ def test_friction_with_different_restitutions_can_gain_energy():
 def test_a_symmetric_flat_box_leaves_at_e_times_its_approach(width, height, mass, speed, mu,
                                                             e, method, follow_slip):
     """v_y' = e|v_y|, no v_x, no spin: the compression stops both corners (P_nc = m|v_y|/2
-    each, no friction needed), the restitution gives e times that."""
+    each, no friction needed), the restitution gives e times that. Compared within stated
+    bands (relative 1e-12 of the speed and of the impulse), not derived bounds: the answers
+    go through LAPACK (the system's ``M⁻¹ w`` and the enumeration's pseudo-inverse or
+    Lemke's pivots), and the exact rebuild that bounds them (hand_answer_bounds, used on the
+    worked box below) costs ~0.5 s an example, too slow for 200 examples; its exact end
+    state also differs from the hand answer by the rounding of the system's data where the
+    mass is not a power of two. Measured on 400 seeded draws of this family, both methods,
+    with and without the slip followed: at most 8.0e-15 of the speed and 2.4e-14 of the
+    impulse (under 2.4 % of the bands), under this machine's kernel and under Prescott with
+    numpy's SIMD off alike."""
     system = flat_face(width, height, mass, (0.0, -speed, 0.0), mu, e)
     (answer,) = mc.poisson_two_phase(system, method, follow_slip=follow_slip)
     assert answer.restitution_scale == 1.0  # nothing to cap: one e, no gain (e = 1 included)
@@ -471,14 +515,25 @@ def test_a_symmetric_flat_box_leaves_at_e_times_its_approach(width, height, mass
     assert answer.normal_impulse == pytest.approx([(1 + e) * mass * speed / 2] * 2, rel=1e-12)
 
 
+@pytest.mark.kernel_sensitive  # speeds and energy derived; the impulses a stated band
 def test_the_worked_flat_box():
     """docs/multi-contact.md's box (2 kg, 1 m × 0.5 m, 1 m/s, μ = e = 0.5): P_nc = 1 N·s per
-    corner, P_nr = 0.5, v_y' = 0.5 m/s, ΔE = ½·2·(0.25 − 1) = −0.75 J."""
+    corner, P_nr = 0.5, v_y' = 0.5 m/s, ΔE = ½·2·(0.25 − 1) = −0.75 J. The speeds within
+    their derived bounds (hand_answer_bounds), the energy within law_bounds.kinetic_bound of
+    them (the quadratic forms' rounding and the speeds moved; measured 12 % of it); the
+    speeds' share is ~1 where the exact speed is 0 (the bound is then the answer's own
+    exact distance, the a posteriori part). The impulses within a stated band, relative
+    1e-13 (as the symmetric box's test says)."""
+    from tests.theory.law_bounds import kinetic_bound
+
     system = flat_face(1.0, 0.5, 2.0, (0.0, -1.0, 0.0), 0.5, 0.5)
     (answer,) = mc.poisson_two_phase(system)
+    error, _, data = hand_answer_bounds(system, answer, (0.0, 0.5, 0.0))
+    assert data == 0  # 2 kg, 1 m, 0.5 m: the system's data are exact, so is its end state
+    energy_bound = kinetic_bound(system.mass_matrix, system.u, answer.u_after, error)
+    assert abs(answer.energy_change - (-0.75)) <= energy_bound
     assert answer.compression.impulses[0::2] == pytest.approx([1.0, 1.0], rel=1e-13)
     assert answer.restitution.impulses[0::2] == pytest.approx([0.5, 0.5], rel=1e-13)
-    assert answer.energy_change == pytest.approx(-0.75, rel=1e-13)
 
 
 def test_an_unknown_method_is_refused():

@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 
 import planar_impact as pi
 from planar_impact import errors, laws
+from planar_impact.solver import energy_gain_decision
 
 PROCESS_LAWS = ("newton", "poisson", "stronge")
 
@@ -40,12 +41,6 @@ def impulse_scale(p):
     return abs(p["vn"]) / p["mnn"] + abs(p["vt"]) / p["mtt"]
 
 
-def energy_scale(result):
-    """Size of the work terms in (A29): rounding in ΔE is relative to this."""
-    return float(abs(result.normal_impulse * result.vn_approach)
-                 + abs(result.tangential_impulse * result.vt_approach)) + 1e-300
-
-
 # --- energy ------------------------------------------------------------------------------
 
 @settings(max_examples=400, deadline=None)
@@ -53,8 +48,13 @@ def energy_scale(result):
 def test_poisson_and_exact_stronge_never_gain_energy(problem):
     for law in ("poisson", "stronge"):
         result = solve(problem, law)
-        # Exact laws dissipate; 1e-12 of the work terms absorbs rounding in (A29).
-        assert result.energy_change <= 1e-12 * energy_scale(result), law
+        # Exact laws dissipate: no gain by the solver's decision (the bar, beyond (A29)'s
+        # derived rounding band; inside the band no gain is claimed).
+        gained, _ = energy_gain_decision(
+            result.energy_change, result.normal_impulse, result.tangential_impulse,
+            result.vn_approach, result.vt_approach, problem["mnn"], problem["mnt"],
+            problem["mtt"])
+        assert not gained, law
 
 
 def test_newton_energy_gain_is_reported_where_it_occurs():
@@ -65,14 +65,18 @@ def test_newton_energy_gain_is_reported_where_it_occurs():
     draws = random_problems(20_000, seed=11)
     newton = pi.solve_batch(**draws, law="newton")
     poisson = pi.solve_batch(**draws, law="poisson")
-    scale = (np.abs(newton.normal_impulse * newton.vn_approach)
-             + np.abs(newton.tangential_impulse * newton.vt_approach))
-    gained = newton.energy_change > 1e-12 * scale
+    terms = [draws[k] for k in ("mnn", "mnt", "mtt")]
+    gained, _ = energy_gain_decision(newton.energy_change, newton.normal_impulse,
+                                     newton.tangential_impulse, newton.vn_approach,
+                                     newton.vt_approach, *terms)
+    poisson_gained, _ = energy_gain_decision(poisson.energy_change, poisson.normal_impulse,
+                                             poisson.tangential_impulse, poisson.vn_approach,
+                                             poisson.vt_approach, *terms)
     # docs/theory.md, 'Newton's law': about 3% of the problems with reversal.
     assert 0.005 < gained.mean() < 0.1
     # Forward sliding is Poisson's Type 5 exactly (comment f), so never a gain there.
     assert pi.laws.NEWTON_FORWARD not in set(np.unique(newton.collision_type[gained]))
-    assert np.all(poisson.energy_change[gained] <= 1e-12 * scale[gained])
+    assert not poisson_gained[gained].any()
 
 
 def test_energy_gained_flag_on_a_known_case():
@@ -241,6 +245,12 @@ def test_rotating_a_rigid_body_scene_leaves_the_result_unchanged(angle, mass_a, 
                           rotate((vx, vy - 3.0), theta), omega)
         return pi.builders.two_bodies(a, b, rotate(point, theta), rotate(normal, theta))
 
+    # A stated band (rel 1e-9, abs 1e-12), not derived: the turned scene is another problem,
+    # its inputs rounded by cos, sin (libm) and the turn, solved through Cholesky, and the
+    # two answers are compared on this machine's kernel (not kernel_sensitive: no CPU's
+    # last bits come near it). Measured at most 0.53 % of the band on 2,000 seeded draws of
+    # this family. The geometry's turns are checked bit for bit elsewhere
+    # (tests/scene/test_turns.py); here it is the law's invariance that is tested.
     base, turned = scene(0.0), scene(angle)
     assume(base.wn @ base.u < -1e-3)
     first = base.solve(mu=mu, e=e, law=law)

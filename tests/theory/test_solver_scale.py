@@ -254,6 +254,7 @@ def test_every_law_solves_the_heavy_rod(angle):
     assert result.tangential_impulse == pytest.approx(float(tangential), rel=1e-12, abs=0.0)
 
 
+@pytest.mark.kernel_sensitive  # through LAPACK and two paths: a stated band (the docstring)
 @settings(max_examples=100, deadline=None)
 @given(problem=moderate_problems(), law=st.sampled_from(pi.LAWS),
        velocity_exponent=st.integers(-996, 996), mass_exponent=st.integers(-500, 500))
@@ -262,8 +263,14 @@ def test_scalar_solve_scales_with_the_mass_matrix(problem, law, velocity_exponen
     """``solve`` in generalized speeds: u times s = 2^a and M times k = 2^b give impulses
     times s·k (the inverse-inertia terms scale by 1/k), velocities times s, energy times
     s²·k. The moderate problem is built on M = I with w_n, w_t spanning the contact terms.
-    Tolerance 1e-13 relative: Δ and the terms go through Cholesky and solve at either
-    scale, a few ulps each."""
+    A stated band, relative 1e-13, not derived and not bit for bit: for an odd mass
+    exponent Cholesky's √k = 2^c √2 is rounded (another problem by an ulp), and at any
+    exponent the two solves may take different paths (the fast path of plain floats for
+    the moderate problem, numpy's path with its BLAS products for the scaled one: under
+    OpenBLAS's SkylakeX kernel m_tt came out 1 − 2⁻⁵³ on one and exact on the other), so
+    their contact terms round differently. Measured at most 8.9e-16 of the impulses on
+    1,500 seeded problems (0.9 % of the band); the batch solver's power-of-two scaling,
+    one path, is bit for bit (test_power_of_two_scaling_is_exact_from_1e_minus_300_to_1e300)."""
     mnn, mnt, mtt = problem["mnn"], problem["mnt"], problem["mtt"]
     # w_n, w_t in R² with w_n·w_n = m_nn, w_n·w_t = m_nt, w_t·w_t = m_tt (M = I).
     wn = np.array([math.sqrt(mnn), 0.0])
