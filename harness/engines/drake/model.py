@@ -116,8 +116,8 @@ class World:
         self.plant_context = plant.GetMyMutableContextFromRoot(self.context)
         self.geometry_context = scene_graph.GetMyMutableContextFromRoot(self.context)
         self.simulator = Simulator(self.diagram, self.context)
-        # What a run calls every step, bound once: each attribute looked up through the
-        # bindings costs about as much as the step's own reading of its contact.
+        # What a run calls every step, bound once: every lookup through the bindings costs
+        # (the step's read-out is a third of its instructions; docs/engines.md, 'Drake').
         self.advance_to = self.simulator.AdvanceTo
         self.contact_results = partial(plant.get_contact_results_output_port().Eval,
                                        self.plant_context)
