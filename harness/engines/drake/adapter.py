@@ -200,13 +200,13 @@ class DrakeEngine(Engine):
 
     def _advance(self, world: World) -> None:
         world.steps += 1
-        world.simulator.AdvanceTo(world.steps * world.time_step)
+        world.advance_to(world.steps * world.time_step)
 
     def _step(self, world: World) -> RawContacts | None:
         world.steps += 1
-        world.simulator.AdvanceTo(world.steps * world.time_step)
+        world.advance_to(world.steps * world.time_step)
         # Sampled output port: the contact the step just taken solved (from its start state)
-        results = world.contact_port.Eval(world.plant_context)
+        results = world.contact_results()
         count = results.num_point_pair_contacts()
         if not count:
             return None
@@ -214,35 +214,37 @@ class DrakeEngine(Engine):
         impulse_x = impulse_y = 0.0
         normal = None
         h = world.time_step
+        geometry_b = world.geometry_b
+        # Vectors read as lists of floats: one call each, and float arithmetic (the same
+        # IEEE operations as numpy's scalars, without their per-operation cost).
         for index in range(count):
             info = results.point_pair_contact_info(index)
             pair = info.point_pair()
-            n_ba = pair.nhat_BA_W  # from Drake's body B into its body A
-            force = info.contact_force()  # on Drake's body B
-            if info.bodyB_index() == world.index_b:
+            force_x, force_y, _ = info.contact_force().tolist()  # on Drake's body B
+            if pair.id_B == geometry_b:
                 sign = 1.0
             else:  # Drake's B is the scene's A (or the world): the other way round
                 sign = -1.0
             if normal is None:
+                n_ba = pair.nhat_BA_W.tolist()  # from Drake's body B into its body A
                 normal = (-sign * n_ba[0], -sign * n_ba[1])
-            impulse_x += sign * force[0] * h
-            impulse_y += sign * force[1] * h
-            point = info.contact_point()
-            points.append((float(point[0]), float(point[1]), float(pair.depth)))
+            impulse_x += sign * force_x * h
+            impulse_y += sign * force_y * h
+            point_x, point_y, _ = info.contact_point().tolist()
+            points.append((point_x, point_y, pair.depth))
         normal_impulse = abs(impulse_x * normal[0] + impulse_y * normal[1])
         # The impulse vector is left to momentum (m_B·Δv_B, exact here): SAP's reported
         # contact forces agree with the velocity update only to its solver tolerance
         # (~1e-8 N s a step on the reference pair); the normal impulse still tells a step
         # that pushes from one that does not (exactly 0 once the force is gone).
-        return (tuple(points), (float(normal[0]), float(normal[1])), None,
-                float(normal_impulse))
+        return tuple(points), normal, None, normal_impulse
 
     def _read_poses(self, world: World) -> tuple:
-        q = world.plant.GetPositions(world.plant_context).tolist()
+        q = world.positions().tolist()
         return tuple([(q[i], q[i + 1], q[i + 2]) for i in range(0, len(q), 3)])
 
     def _read_velocities(self, world: World) -> tuple:
-        v = world.plant.GetVelocities(world.plant_context).tolist()
+        v = world.velocities().tolist()
         return tuple([(v[i], v[i + 1], v[i + 2]) for i in range(0, len(v), 3)])
 
     def _out_of_plane_drift(self, world: World) -> float:

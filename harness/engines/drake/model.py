@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import logging
 import math
+from functools import partial
 
 import numpy as np
 from pydrake.geometry import (
@@ -115,12 +116,19 @@ class World:
         self.plant_context = plant.GetMyMutableContextFromRoot(self.context)
         self.geometry_context = scene_graph.GetMyMutableContextFromRoot(self.context)
         self.simulator = Simulator(self.diagram, self.context)
-        self.contact_port = plant.get_contact_results_output_port()
+        # What a run calls every step, bound once: every lookup through the bindings costs
+        # (the step's read-out is a third of its instructions; docs/engines.md, 'Drake').
+        self.advance_to = self.simulator.AdvanceTo
+        self.contact_results = partial(plant.get_contact_results_output_port().Eval,
+                                       self.plant_context)
+        self.positions = partial(plant.GetPositions, self.plant_context)
+        self.velocities = partial(plant.GetVelocities, self.plant_context)
         self.source = plant.get_source_id()
         self.time_step = float(settings["time_step"])
         self.extents = [body_extent(body.shape) for body in scene.bodies]
-        # Drake's body index of the scene's body B (the last) and of A (or the world).
-        self.index_b = self.bodies[-1].index()
+        # The geometry of the scene's body B (the last; one geometry a body): a point pair
+        # whose Drake B it is reports the force on the scene's B.
+        self.geometry_b = self.geometries[-1]
         self.steps = 0
         self.held = None  # the contact properties the geometry holds (by value)
 
