@@ -25,6 +25,11 @@ The passes, chosen to keep ``make test`` short:
   ``test_contacts_are_the_same_bits_under_another_kernel``, which is run, checks exactly
   that under each), numpy's SIMD as it is (about 21 s of CPU each).
 
+``--skip-native`` (``make test``, right after the whole suite) leaves out the pass of this
+run's own core type with numpy's SIMD as it is (``OPENBLAS_CORETYPE`` where set, else what
+OpenBLAS chose, read by threadpoolctl): the whole suite has just run every kernel_sensitive
+test exactly so, and the report names the kernel left out. Run by hand, every pass runs.
+
 Off x86-64 the BLAS kernel is left as it is (one pass, SIMD off, with a note). Every pass
 runs even when one fails; the report at the end names each kernel with its outcome and time,
 and the exit status is the first failure's (0 when all pass).
@@ -184,6 +189,29 @@ def run_passes(runs: list[tuple[str, list[str], dict[str, str]]], at_once: int,
     return outcomes
 
 
+def native_core_type() -> str | None:
+    """The OpenBLAS core type this process runs (``OPENBLAS_CORETYPE`` where set, else what
+    OpenBLAS chose for the CPU, as threadpoolctl reads it), ``None`` where unknown."""
+    if os.environ.get("OPENBLAS_CORETYPE"):
+        return os.environ["OPENBLAS_CORETYPE"]
+    try:
+        from threadpoolctl import threadpool_info
+    except ImportError:
+        return None
+    import numpy  # noqa: F401  (loads numpy's OpenBLAS, which threadpoolctl then sees)
+    found = [entry.get("architecture") for entry in threadpool_info()
+             if entry.get("internal_api") == "openblas"]
+    return next((name for name in found if name in CORE_TYPES), None)
+
+
+def without_native(planned, native: str | None):
+    """``(planned, skipped)``: the passes but the native kernel's own (its core type with
+    numpy's SIMD as it is: exactly how the whole suite, which ``make test`` runs first, ran
+    every kernel_sensitive test), and the name of the one left out (``None`` if none)."""
+    kept = [entry for entry in planned if not (entry[0] == native and not entry[1])]
+    return kept, (native if len(kept) < len(planned) else None)
+
+
 def passes_at_once(arguments: list[str]) -> tuple[int, list[str]]:
     """The ``--passes-at-once N`` (or ``=N``) of ``arguments`` (1 without it), and the
     arguments left for pytest."""
@@ -209,7 +237,14 @@ def main(arguments: list[str]) -> int:
     planned = passes(flags)
     names = [core_type or "as is" for core_type, _, _ in planned]
     lacking = [name for name in CORE_TYPES if name not in names]
-    print(f"kernel_sensitive tests again under {len(planned)} kernels: {', '.join(names)}"
+    skipped = None
+    if "--skip-native" in arguments:  # make test: the whole suite has just run natively
+        arguments = [argument for argument in arguments if argument != "--skip-native"]
+        planned, skipped = without_native(planned, native_core_type())
+    print(f"kernel_sensitive tests again under {len(planned)} kernels: "
+          f"{', '.join(core_type or 'as is' for core_type, _, _ in planned)}"
+          + (f" ({skipped}, this run's own kernel: the whole suite ran them under it)"
+             if skipped else "")
           + (f" (this CPU cannot run {', '.join(lacking)})" if lacking else ""), flush=True)
     if "--list" in arguments:
         return 0

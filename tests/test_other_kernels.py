@@ -140,3 +140,20 @@ def test_every_kernel_sensitive_test_is_in_a_file_the_rule_names(request):
         pytest.skip("this session collected no kernel_sensitive test")
     missed = marked - set(other_kernels.kernel_sensitive_files(TESTS))
     assert not missed, f"kernel_sensitive tests in files the rule misses: {sorted(missed)}"
+
+
+def test_skip_native_leaves_out_only_the_pass_the_whole_suite_just_ran(monkeypatch):
+    """make test's --skip-native: the native core type's pass with numpy's SIMD as it is
+    goes (the whole suite ran every kernel_sensitive test so), never Prescott's SIMD-off
+    pass, nor anything when the native kernel is unknown or not among the passes."""
+    planned = other_kernels.passes(other_kernels.cpu_flags(AVX512_CPU))
+    kept, skipped = other_kernels.without_native(planned, "Haswell")
+    assert skipped == "Haswell" and len(kept) == len(planned) - 1
+    assert [entry for entry in planned if entry not in kept] == [
+        ("Haswell", False, "kernel_sensitive and not blas_free")]
+    # Prescott's pass turns numpy's SIMD off: not what the suite ran, so it stays
+    assert other_kernels.without_native(planned, "Prescott") == (planned, None)
+    assert other_kernels.without_native(planned, None) == (planned, None)
+    assert other_kernels.without_native(planned, "Sapphire") == (planned, None)
+    monkeypatch.setenv("OPENBLAS_CORETYPE", "SkylakeX")
+    assert other_kernels.native_core_type() == "SkylakeX"
