@@ -125,6 +125,18 @@ def kernel_environment(core_type: str | None = OLD_KERNEL,
     return environment, changes
 
 
+def printed_under_old_kernel(module: str, function: str) -> str:
+    """What ``module.function()`` prints in a fresh Python process under
+    :data:`OLD_KERNEL` with numpy's SIMD off (:func:`kernel_environment`): the bit-for-bit
+    rerun tests compare a digest made there with this process's."""
+    environment, _ = kernel_environment(OLD_KERNEL)
+    root = Path(__file__).resolve().parent.parent
+    script = f"from {module} import {function}; print({function}())"
+    there = subprocess.run([sys.executable, "-c", script], cwd=root, env=environment,
+                           capture_output=True, text=True, timeout=600, check=True)
+    return there.stdout.strip()
+
+
 #: The tests of every pass, and of the passes under the other BLAS core types.
 ALL_TESTS, BLAS_TESTS = "kernel_sensitive", "kernel_sensitive and not blas_free"
 

@@ -395,16 +395,7 @@ def test_contacts_are_the_same_bits_under_another_kernel():
     # Bit for bit, rerun against rerun on this machine: the contacts take no BLAS product, so
     # OpenBLAS's oldest kernel (Prescott, x86-64) with numpy's SIMD loops off must give the
     # same bits as this run's kernels (whichever tests/other_kernels.py chose).
-    import subprocess
-    import sys
-    from pathlib import Path
+    from tests.other_kernels import printed_under_old_kernel
 
-    from tests.other_kernels import kernel_environment
-
-    environment, _ = kernel_environment("Prescott")
-    root = Path(__file__).resolve().parents[2]
-    script = ("from tests.scene.test_geometry_reference import contacts_digest; "
-              "print(contacts_digest())")
-    there = subprocess.run([sys.executable, "-c", script], cwd=root, env=environment,
-                           capture_output=True, text=True, timeout=600, check=True)
-    assert there.stdout.strip() == contacts_digest()
+    there = printed_under_old_kernel("tests.scene.test_geometry_reference", "contacts_digest")
+    assert there == contacts_digest()

@@ -102,16 +102,7 @@ def test_random_problems_are_the_same_bits_with_numpy_simd_off():
     # so numpy's baseline loops (SIMD off) and OpenBLAS's oldest kernel must give the same
     # bits as this run (with 10.0 ** x, about 5 % of m_nn, m_tt, v_n, v_t differed by an
     # ulp on an AVX-512 CPU).
-    import subprocess
-    import sys
-    from pathlib import Path
+    from tests.other_kernels import printed_under_old_kernel
 
-    from tests.other_kernels import kernel_environment
-
-    environment, _ = kernel_environment("Prescott")
-    root = Path(__file__).resolve().parents[2]
-    script = ("from tests.scene.test_random_problems import draws_digest; "
-              "print(draws_digest())")
-    there = subprocess.run([sys.executable, "-c", script], cwd=root, env=environment,
-                           capture_output=True, text=True, timeout=600, check=True)
-    assert there.stdout.strip() == draws_digest()
+    there = printed_under_old_kernel("tests.scene.test_random_problems", "draws_digest")
+    assert there == draws_digest()

@@ -842,6 +842,28 @@ def test_flat_box_hand_worked_example():
     assert_hand_value(replayed["energy_change"], Fraction(1, 196) - 1)
 
 
+def replayed_a29(w, v, impulses, solution):
+    """assemble's (A29) ``½ Σ_i I^(i)·(v^S(i) + v^A(i))`` in its order, on ``w`` (W's
+    entries), ``v`` (v^A) and ``impulses`` given as Tracked numbers; checked equal to the
+    library's energy, bit for bit."""
+    count = len(v) // 2
+    energy = None
+    for i in range(count):
+        n, t = 2 * i, 2 * i + 1
+        vn, vt = v[n], v[t]
+        for j in range(count):  # effective_approach: v += w_nn I_n + w_nt I_t, j ≠ i
+            if j != i:
+                vn = vn + (w[n][2 * j] * impulses[2 * j] + w[n][2 * j + 1] * impulses[2 * j + 1])
+                vt = vt + (w[t][2 * j] * impulses[2 * j] + w[t][2 * j + 1] * impulses[2 * j + 1])
+        vn_s = vn + (w[n][n] * impulses[n] + w[n][t] * impulses[t])  # (A22)
+        vt_s = vt + (w[n][t] * impulses[n] + w[t][t] * impulses[t])  # (A23)
+        term = impulses[n] * (vn_s + v[n]) + impulses[t] * (vt_s + v[t])
+        energy = term if energy is None else energy + term
+    energy = 0.5 * energy
+    assert energy.value == solution.energy_change
+    return energy
+
+
 def tracked_energy(system, solution, fixed, bound):
     """assemble's (A29) energy, ``½ Σ_i I^(i)·(v^S(i) + v^A(i))`` with (75)'s cross terms,
     replayed on Tracked numbers in its order from the exact hand problem: W's terms within
@@ -858,21 +880,7 @@ def tracked_energy(system, solution, fixed, bound):
         n, t = 2 * i, 2 * i + 1
         assert system.single_terms(i) == (system.delassus[n, n], system.delassus[n, t],
                                           system.delassus[t, t])
-    energy = None
-    for i in range(count):
-        n, t = 2 * i, 2 * i + 1
-        vn, vt = v[n], v[t]
-        for j in range(count):  # effective_approach: v += w_nn I_n + w_nt I_t, j ≠ i
-            if j != i:
-                vn = vn + (w[n][2 * j] * impulses[2 * j] + w[n][2 * j + 1] * impulses[2 * j + 1])
-                vt = vt + (w[t][2 * j] * impulses[2 * j] + w[t][2 * j + 1] * impulses[2 * j + 1])
-        vn_s = vn + (w[n][n] * impulses[n] + w[n][t] * impulses[t])  # (A22)
-        vt_s = vt + (w[n][t] * impulses[n] + w[t][t] * impulses[t])  # (A23)
-        term = impulses[n] * (vn_s + v[n]) + impulses[t] * (vt_s + v[t])
-        energy = term if energy is None else energy + term
-    energy = 0.5 * energy
-    assert energy.value == solution.energy_change
-    return energy
+    return replayed_a29(w, v, impulses, solution)
 
 
 def test_flat_box_effective_reading_gains_energy():
@@ -959,23 +967,11 @@ def a29_replay(system, solution):
     v = [Tracked(float(system.approach[k]), error_bounds.dot_bound(rows[k], system.u))
          for k in range(len(rows))]
     impulses = [Tracked(float(x)) for x in solution.impulses()]
-    energy = None
-    for i in range(system.count):
+    for i in range(system.count):  # the floats assemble reads are W's entries, bit for bit
         n, t = 2 * i, 2 * i + 1
         assert system.single_terms(i) == (system.delassus[n, n], system.delassus[n, t],
                                           system.delassus[t, t])
-        vn, vt = v[n], v[t]
-        for j in range(system.count):  # effective_approach: v += w_nn I_n + w_nt I_t, j ≠ i
-            if j != i:
-                vn = vn + (w[n][2 * j] * impulses[2 * j] + w[n][2 * j + 1] * impulses[2 * j + 1])
-                vt = vt + (w[t][2 * j] * impulses[2 * j] + w[t][2 * j + 1] * impulses[2 * j + 1])
-        vn_s = vn + (w[n][n] * impulses[n] + w[n][t] * impulses[t])  # (A22)
-        vt_s = vt + (w[n][t] * impulses[n] + w[t][t] * impulses[t])  # (A23)
-        term = impulses[n] * (vn_s + v[n]) + impulses[t] * (vt_s + v[t])
-        energy = term if energy is None else energy + term
-    energy = 0.5 * energy
-    assert energy.value == solution.energy_change
-    return energy
+    return replayed_a29(w, v, impulses, solution)
 
 
 def kinetic_change_bound(system, solution):
