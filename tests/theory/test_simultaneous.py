@@ -864,11 +864,11 @@ def replayed_a29(w, v, impulses, solution):
     return energy
 
 
-def tracked_energy(system, solution, fixed, bound):
+def tracked_energy(system, solution, bound):
     """assemble's (A29) energy, ``½ Σ_i I^(i)·(v^S(i) + v^A(i))`` with (75)'s cross terms,
     replayed on Tracked numbers in its order from the exact hand problem: W's terms within
     their rounding of the exact ones, the impulses within ``bound`` of the exact fixed
-    point ``fixed``; the value checked equal to the library's, bit for bit."""
+    point; the value checked equal to the library's, bit for bit."""
     delassus, approach, _ = exact_flat_box()
     count = system.count
     w = [[Tracked(float(x), ffb.rounding(x, exact)) for x, exact in zip(row, exact_row)]
@@ -903,7 +903,7 @@ def test_flat_box_effective_reading_gains_energy():
     u_exact, speed_bound = effective_speeds_bound(system, solution, fixed, bound)
     assert u_exact == [0, 2, 0]
     assert np.all(np.abs(solution.u_after - [0.0, 2.0, 0.0]) <= speed_bound)
-    energy = tracked_energy(system, solution, fixed, bound)
+    energy = tracked_energy(system, solution, bound)
     assert abs(energy.value - 3.0) <= energy.error / 2, energy
 
 
