@@ -6,11 +6,16 @@ of the worker processes a side forked and waited for), never wall time, and the 
 every comparison run in turn, round after round (``rounds``): a drift of the machine's speed
 then hits both alike. The median of the rounds is reported.
 
-* End to end -- ``survey_cpu_s``: :func:`harness.survey.cli.run_survey` in memory on
-  ``workers`` processes (sampling, the laws, every engine and preset through
-  ``Engine.run_many``, the verdicts, the departures and statistics; no files), against
-  ``bare_cpu_s``: the bare stepping (below) of every pair, its scenes split over the same
-  ``workers`` processes. ``ratio = survey_cpu_s / bare_cpu_s``.
+* End to end -- ``survey_cpu_s``: the survey as ``impact-harness survey --no-figures`` runs
+  it (:func:`streamed_survey`: sampling, the laws, every pair through ``Engine.run_many``,
+  the verdicts, the dataset streamed to files, the tables and statistics read back) on
+  ``workers`` processes, against ``bare_cpu_s``: a user's loop (below) of every pair it ran,
+  its scenes split over the same ``workers`` processes. ``ratio = survey_cpu_s /
+  bare_cpu_s``. Like the command, with the default presets it leaves out the pairs each
+  engine's ``survey_left_out`` names (Drake's and MuJoCo's ``accurate``); their per-pair
+  ratios below still count. ``end_to_end_samples`` sets its size apart from the per-pair
+  comparisons': the survey's statistics and files cost a fixed amount per family and pair,
+  which a survey of a few dozen samples measures instead of its cost per impact.
 * Per engine and preset, on this one process -- ``contract_s``: ``Engine.run_many`` of every
   scene (the contract's run: set-up, stepping with the per-step contact records, read-out,
   status, the :class:`EngineRun`); ``judged_s``: the survey's whole per-pair work,
@@ -164,13 +169,18 @@ def _bare_all_cpu(pairs, workers: int) -> float:
 
 
 def streamed_survey(populations, samples: int, seed: int, engines, presets, workers: int,
-                    out: Path) -> None:
+                    out: Path, left_out: dict | None = None) -> None:
     """``impact-harness survey --no-figures --quiet`` into ``out``, without its option
     checks: chunks streamed to the dataset on ``workers`` processes, then the tables,
-    statistics and summary read back from it."""
-    pairs, _ = survey_cli.installed_pairs(engines, presets, {}, echo=lambda _: None)
+    statistics and summary read back from it (``left_out``: the pairs not run, as
+    :func:`harness.survey.cli.default_left_out` gives them)."""
+    left_out = dict(left_out or {})
+    pairs, _ = survey_cli.installed_pairs(engines, presets, left_out, echo=lambda _: None)
     settings = {"samples": samples, "seed": seed, "engines": list(engines),
-                "presets": list(presets), "left_out": {}, "skipped": {}, "overrides": {}}
+                "presets": list(presets),
+                "left_out": {source_label(engine, preset): why
+                             for (engine, preset), why in left_out.items()},
+                "skipped": {}, "overrides": {}}
     done = stream.stream_survey(populations, samples, seed, pairs, out,
                                 survey_cli.table_metadata(settings), workers=workers,
                                 time_limit_s=None, progress=False, echo=lambda _: None)
@@ -178,14 +188,30 @@ def streamed_survey(populations, samples: int, seed: int, engines, presets, work
                               figures=False, wall_s=done["wall_s"])
 
 
+def _user_loop_work(result, engine, settings, scenes) -> tuple:
+    """``(engine, settings, scenes, steps)`` of a user's loop of one pair's impacts, from
+    that pair's ``result`` (:class:`harness.survey.engines.EngineResult`) in a survey of
+    ``scenes``: the scenes whose run raised left out (they have no steps to take)."""
+    kept = [row for row in range(len(scenes)) if result.status[row] != ERROR]
+    return engine, settings, [scenes[row] for row in kept], [int(result.steps[row])
+                                                           for row in kept]
+
+
 def run(samples: int, engines=None, presets=PRESET_ROLES, seed: int = 0,
-        rounds: int = ROUNDS, workers: int = 1) -> dict:
+        rounds: int = ROUNDS, workers: int = 1, end_to_end_samples: int | None = None) -> dict:
     """``{"samples", "impacts", "engines", "presets", "rounds", "workers", "survey_cpu_s",
-    "bare_cpu_s", "ratio", "pairs": {label: {"contract_s", "judged_s", "bare_s",
-    "contract_ratio", "judged_ratio", "steps", "errored", "error"}}}`` (medians over
-    ``rounds``; ``errored``: the scenes where the pair's engine raised, left out of both
-    sides of its comparisons, ``error`` the first one's reason); ``engines`` None: every
-    registered one."""
+    "bare_cpu_s", "ratio", "end_to_end_samples", "end_to_end_pairs", "end_to_end_left_out",
+    "pairs": {label: {"contract_s", "judged_s", "bare_s", "contract_ratio", "judged_ratio",
+    "steps", "errored", "error"}}}`` (medians over ``rounds``; ``errored``: the scenes where
+    the pair's engine raised, left out of both sides of its comparisons, ``error`` the first
+    one's reason); ``engines`` None: every registered one.
+
+    The end to end is the survey a user runs: with the default presets, the pairs each
+    engine's ``survey_left_out`` leaves out of a default survey are left out of it too (and
+    listed), as ``impact-harness survey`` leaves them out; named presets leave none out.
+    It runs ``end_to_end_samples`` per population (default ``samples``): the survey's cost
+    per family and pair (statistics, files) is fixed, so a small survey measures that, not
+    the cost per impact."""
     installed = []
     for name in engine_names() if engines is None else engines:
         try:
@@ -203,10 +229,13 @@ def run(samples: int, engines=None, presets=PRESET_ROLES, seed: int = 0,
     energy = survey_laws.solve_laws(terms, ("newton-lcp",))["newton-lcp"].batch.energy_change
     scene_terms = verdicts.prepare_many(scenes, problems)
     pair_names = [(name, preset) for name in installed for preset in presets]
+    left_out = (survey_cli.default_left_out(installed)
+                if tuple(presets) == tuple(PRESET_ROLES) else {})
+    end_pairs = [pair for pair in pair_names if pair not in left_out]
+    end_samples = samples if end_to_end_samples is None else end_to_end_samples
     measured = {pair: {"contract_s": [], "judged_s": [], "bare_s": [], "bare_world_s": []}
                 for pair in pair_names}
     survey_cpu, bare_cpu = [], []
-    prepared: dict = {}
     # One untimed pass first: the engines' caches (MuJoCo's compiled polygons, extents) are
     # then as warm for the first round as for the others, whichever side it times first.
     warm = run_survey(populations, samples, seed, installed, presets, workers=1,
@@ -222,6 +251,20 @@ def run(samples: int, engines=None, presets=PRESET_ROLES, seed: int = 0,
                                                                        for row in kept]
         kept_work[pair] = ([scenes[row] for row in kept], kept_problems, energy[kept],
                            kept_terms, verdicts.term_arrays(kept_problems, kept_terms))
+    # The user loops of the end to end: each pair's impacts of the survey it times, with
+    # the steps its runs took (an untimed survey of that size, unless it is this one).
+    end_warm, end_scenes = warm, scenes
+    if end_samples != samples:
+        end_warm = run_survey(populations, end_samples, seed, installed, presets,
+                              left_out=left_out, workers=1, echo=lambda _: None)
+        end_scenes = survey_cli.survey_scenes(populations, end_samples, seed)
+    end_results = {(result.engine, result.preset): result
+                   for result in end_warm["engine_results"]}
+    end_work = []
+    for name, preset in end_pairs:
+        engine = load_engine(name)
+        end_work.append(_user_loop_work(end_results[(name, preset)], engine,
+                                        engine.settings(preset), end_scenes))
     for _ in range(max(rounds, 1)):
         # Per pair, on this process: the contract's run, the survey's per-pair work, bare.
         for name, preset in pair_names:
@@ -241,15 +284,15 @@ def run(samples: int, engines=None, presets=PRESET_ROLES, seed: int = 0,
             entry["judged_s"].append(judged_s)
             entry["bare_s"].append(bare_s)
             entry["bare_world_s"].append(bare_world_s)
-            prepared[(name, preset)] = (engine, settings, pair_scenes, steps)
+            entry.setdefault("steps", steps)
         # End to end, both sides on `workers` processes: the survey as the command runs
         # it (streamed to its dataset, then the tables and summary; no figures).
         with tempfile.TemporaryDirectory(prefix="bench-survey-") as directory:
             tick = _cpu_with_children()
-            streamed_survey(populations, samples, seed, installed, presets, workers,
-                            Path(directory))
+            streamed_survey(populations, end_samples, seed, installed, presets, workers,
+                            Path(directory), left_out)
             survey_cpu.append(_cpu_with_children() - tick)
-        bare_cpu.append(_bare_all_cpu([prepared[pair] for pair in pair_names], workers))
+        bare_cpu.append(_bare_all_cpu(end_work, workers))
     pairs = {}
     for (name, preset), entry in measured.items():
         contract_s, judged_s, bare_s, bare_world_s = (
@@ -261,7 +304,7 @@ def run(samples: int, engines=None, presets=PRESET_ROLES, seed: int = 0,
             "world_ratio": contract_s / bare_world_s if bare_world_s > 0 else float("nan"),
             "contract_ratio": contract_s / bare_s if bare_s > 0 else float("nan"),
             "judged_ratio": judged_s / bare_s if bare_s > 0 else float("nan"),
-            "steps": int(sum(prepared[(name, preset)][3])),
+            "steps": int(sum(entry["steps"])),
             "errored": len(scenes) - len(kept_work[(name, preset)][0]),
             "error": next((why for why in errored[(name, preset)].errors if why), ""),
         }
@@ -270,12 +313,21 @@ def run(samples: int, engines=None, presets=PRESET_ROLES, seed: int = 0,
             "presets": list(presets), "rounds": max(rounds, 1), "workers": workers,
             "survey_cpu_s": survey_s, "bare_cpu_s": bare_s,
             "ratio": survey_s / bare_s if bare_s > 0 else float("nan"),
+            "end_to_end_samples": end_samples,
+            "end_to_end_impacts": len(end_scenes),
+            "end_to_end_pairs": [source_label(name, preset) for name, preset in end_pairs],
+            "end_to_end_left_out": {source_label(name, preset): why
+                                    for (name, preset), why in left_out.items()
+                                    if (name, preset) in pair_names},
             "survey_cpu_rounds": survey_cpu, "bare_cpu_rounds": bare_cpu, "pairs": pairs}
 
 
 def format_report(report: dict) -> str:
     """The printed table: end to end, then every engine and preset."""
-    impacts = report["impacts"]
+    impacts, samples = report["impacts"], report["samples"]
+    end_samples = report.get("end_to_end_samples", samples)
+    end_impacts = report.get("end_to_end_impacts", impacts)
+    end_pairs = report.get("end_to_end_pairs", list(report["pairs"]))
     workers = report["workers"]
     processes = "one process" if workers == 1 else f"{workers} processes each"
     def verdict(ratio: float, target: float, word: str = "met") -> str:
@@ -285,10 +337,15 @@ def format_report(report: dict) -> str:
         (f"survey: {report['samples']} samples x {impacts // report['samples']} populations"
          f" = {impacts} impacts, {len(report['pairs'])} engine/preset pairs; CPU seconds, "
          f"median of {report['rounds']} alternating round(s)"),
-        (f"  end to end on {processes}: survey (streamed, tables and statistics written) "
-         f"{report['survey_cpu_s']:.2f} s, a user's loops of every pair (worlds built, steps,"
-         f" velocities read) {report['bare_cpu_s']:.2f} s, ratio {report['ratio']:.2f} "
+        (f"  end to end on {processes}, {end_samples} samples x {impacts // samples} "
+         f"populations = {end_impacts} impacts, the survey's {len(end_pairs)} "
+         f"pair{'' if len(end_pairs) == 1 else 's'}: survey "
+         f"(streamed, tables and statistics written) {report['survey_cpu_s']:.2f} s, a "
+         f"user's loops of those pairs (worlds built, steps, velocities read) "
+         f"{report['bare_cpu_s']:.2f} s, ratio {report['ratio']:.2f} "
          f"(target <= {END_TO_END_TARGET}: {verdict(report['ratio'], END_TO_END_TARGET)})"),
+        *(f"    left out as a default survey leaves it out: {pair} ({why})"
+          for pair, why in report.get("end_to_end_left_out", {}).items()),
         "  per engine and preset, one process: contract = Engine.run_many; user loop = "
         "each scene's world built and freed, the same steps, the velocities read",
         f"  (target: contract / user loop <= {RATIO_TARGET}; contract / bare stepping without "

@@ -89,3 +89,26 @@ def test_a_users_loop_times_the_world_built_not_the_harness_preparing_the_run(mo
     stepping, with_world = bench_survey._bare_cpu(engine, settings, scenes, [3, 3])
     assert preparations == [True, True]
     assert 0 < stepping < with_world < 100  # a few clock readings, no preparation
+
+
+def test_the_end_to_end_is_the_survey_a_user_runs_of_its_own_size():
+    # With the default presets a survey leaves out the pairs an engine names in
+    # survey_left_out (MuJoCo's matched-bounce), so the end to end does too, and says so;
+    # its size is its own (end_to_end_samples), the per-pair comparisons keep theirs.
+    pytest.importorskip("mujoco")
+    from harness.engines import load_engine
+
+    left = load_engine("mujoco").survey_left_out
+    assert "accurate" in left
+    report = bench_survey.run(2, engines=("mujoco",), rounds=1, end_to_end_samples=3)
+    assert set(report["pairs"]) == {"mujoco.defaults", "mujoco.matched-bounce"}
+    assert report["end_to_end_pairs"] == ["mujoco.defaults"]
+    assert list(report["end_to_end_left_out"]) == ["mujoco.matched-bounce"]
+    assert report["impacts"] == 2 * 7 and report["end_to_end_impacts"] == 3 * 7
+    text = bench_survey.format_report(report)
+    assert "3 samples x 7 populations = 21 impacts, the survey's 1 pair:" in text
+    assert "left out as a default survey leaves it out: mujoco.matched-bounce" in text
+    # Naming presets leaves no pair out, as `impact-harness survey --preset` does.
+    named = bench_survey.run(2, engines=("mujoco",), presets=("accurate",), rounds=1)
+    assert named["end_to_end_pairs"] == ["mujoco.matched-bounce"]
+    assert named["end_to_end_left_out"] == {} and named["end_to_end_impacts"] == 2 * 7
