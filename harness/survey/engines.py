@@ -143,11 +143,22 @@ def run_engine(engine_name: str, preset: str, scenes, problems=None,
                          steps, wall, judging, skipped_why, errors.astype(str))
 
 
+#: A message's first line longer than this is cut after its first sentence.
+ERROR_TEXT_CHARACTERS = 160
+
+
 def error_text(error: BaseException) -> str:
-    """An engine's exception as a run's reason: its type and the first line of its message
-    (Drake's run 'failed to converge' messages go on for lines of advice)."""
+    """An engine's exception as a run's reason: its type and the first line of its message,
+    only its first sentence where that line is long (Drake's 'failed to converge' goes on
+    for 600 characters of advice in its first line, and for lines after it)."""
     lines = str(error).strip().splitlines()
-    return f"{type(error).__name__}: {lines[0]}" if lines else type(error).__name__
+    if not lines:
+        return type(error).__name__
+    first = lines[0]
+    if len(first) > ERROR_TEXT_CHARACTERS:
+        sentence, stop, _ = first.partition(". ")
+        first = sentence + "." if stop else first
+    return f"{type(error).__name__}: {first}"
 
 
 def _run_supported(engine, scenes, begin: int, end: int, settings):

@@ -193,9 +193,27 @@ def test_drakes_failure_to_converge_is_an_engine_error(load_or_skip):
     assert result.errors[1].startswith(
         "RuntimeError: MultibodyPlant's discrete update solver failed to converge")
     assert "\n" not in result.errors[1]
+    # its first sentence, not the paragraph of advice that follows on the same line
+    assert result.errors[1].endswith("with discrete update period = 1e-06.")
     assert result.status[0] != ERROR and result.errors[0] == ""
     alone = run_engine("drake", "accurate", scenes[:1])
     assert np.array_equal(alone.velocities[0], result.velocities[0])
+
+
+@pytest.mark.parametrize(("message", "expected"), [
+    ("short. Two sentences on one short line stay", "short. Two sentences on one short "
+                                                    "line stay"),
+    ("a" * 200 + ". then advice. more advice", "a" * 200 + "."),
+    ("b" * 200 + " without a sentence's end", "b" * 200 + " without a sentence's end"),
+    ("first line\nsecond line", "first line"),
+    ("", None),
+])
+def test_an_error_reads_as_its_type_and_first_line_or_sentence(message, expected):
+    from harness.survey.engines import ERROR_TEXT_CHARACTERS, error_text
+
+    assert len("a" * 200) > ERROR_TEXT_CHARACTERS
+    text = error_text(ValueError(message))
+    assert text == ("ValueError" if expected is None else f"ValueError: {expected}")
 
 
 @pytest.fixture
