@@ -38,10 +38,9 @@ PGS_BINS = (0.0, 0.5, 0.9, 1.0, 1.1, 1.5, 2.0, np.inf)
 BOUNDARY_OFFSET = 1e-9
 LARGE_JUMP = 0.01
 
-# (c): an energy change above this fraction of |v_n^A I_n| + |v_t^A I_t|, beyond (A29)'s
+# (c): an energy change above ENERGY_GAIN_BAR of |v_n^A I_n| + |v_t^A I_t|, beyond (A29)'s
 # derived rounding band, is a gain: the solver's own ImpactResult.energy_gained decision
 # (planar_impact.solver.energy_gain_decision); a row inside the band is at the boundary.
-GAIN_THRESHOLD = ENERGY_GAIN_BAR
 
 ENERGY_LAWS = LAW_NAMES  # every law, in the law registry's order (harness/laws.py)
 
@@ -171,7 +170,7 @@ def markdown(findings: dict) -> str:
         (f"| {j['problems']} | {j['large']} | {share} | {j['median_e_below']:.3g} | "
          f"{j['median_jump']:.0%} |"),
         "",
-        (f"(c) Energy gain (ΔE > {GAIN_THRESHOLD:g}·(abs(v_n^A)·I_n + abs(v_t^A·I_t)) "
+        (f"(c) Energy gain (ΔE > {ENERGY_GAIN_BAR:g}·(abs(v_n^A)·I_n + abs(v_t^A·I_t)) "
          "beyond (A29)'s rounding bound), "
          "among the problems each law solves:"),
         "",

@@ -11,7 +11,7 @@ import planar_impact as pi
 from harness.report import findings
 from harness.scene.random_problems import random_problems, row
 from planar_impact.process import impulse_process, newton_lcp_modes, sequential_impulses
-from planar_impact.solver import energy_rounding_bound
+from planar_impact.solver import ENERGY_GAIN_BAR, energy_rounding_bound
 from tests.error_bounds import Tracked, gamma
 from tests.theory import law_bounds
 
@@ -186,7 +186,7 @@ def test_energy_gain_flags_match_the_impulse_process(law):
         assert closed.value == batch.energy_change[i], r
         walked = energy_by_process(r, law, e_i)
         normal, tangential = batch.normal_impulse[i], batch.tangential_impulse[i]
-        cut = findings.GAIN_THRESHOLD * (abs(r["vn"] * normal) + abs(r["vt"] * tangential))
+        cut = ENERGY_GAIN_BAR * (abs(r["vn"] * normal) + abs(r["vt"] * tangential))
         band = float(energy_rounding_bound(normal, tangential, r["vn"], r["vt"], r["mnn"],
                                            r["mnt"], r["mtt"]))
         reach = walked.error + closed.error
