@@ -122,6 +122,8 @@ def first_touch_speed(scene: Scene) -> tuple[float, float]:
     if sorted(kinds) == ["disk", "rod"]:
         rod, disk = (body_a, body_b) if kinds[0] == "rod" else (body_b, body_a)
         return _rod_disk_speed(rod, disk)
+    if all(kind in ("box", "polygon") for kind in kinds):
+        return _polygons_speed(scene), _pair_bound(scene)
     return _geometry_speed(scene)
 
 
@@ -150,17 +152,69 @@ def _rod_disk_speed(rod, disk) -> tuple[float, float]:
     return speed, 16.0 * u * size * (1.0 + math.hypot(w_x, w_y) / distance)
 
 
+def _world_points(body) -> list:
+    """A box's or polygon's vertices in the world frame, counter-clockwise."""
+    cos, sin = math.cos(body.angle), math.sin(body.angle)
+    x_0, y_0 = body.position
+    return [(cos * x - sin * y + x_0, sin * x + cos * y + y_0) for x, y in _outline(body.shape)]
+
+
+def _polygons_speed(scene: Scene) -> float:
+    """:func:`first_touch_speed` of two convex polygons, as
+    :func:`harness.scene.geometry.scene_contacts` finds their contact: the normal of the
+    face of least penetration (separating axes: every edge of both), the contact the
+    overlap of the points within the touch band of that face on both bodies, along the
+    face; the relative normal velocity is linear along the face, so its largest value is at
+    an end of that overlap."""
+    body_a, body_b = scene.bodies
+    points_a, points_b = _world_points(body_a), _world_points(body_b)
+    best = None
+    for sign, reference, incident in ((1.0, points_a, points_b), (-1.0, points_b, points_a)):
+        for index, (x_0, y_0) in enumerate(reference):
+            x_1, y_1 = reference[index - len(reference) + 1]
+            edge = math.hypot(x_1 - x_0, y_1 - y_0)
+            n_x, n_y = (y_1 - y_0) / edge, (x_0 - x_1) / edge  # outward (counter-clockwise)
+            separation = min((x - x_0) * n_x + (y - y_0) * n_y for x, y in incident)
+            if best is None or separation > best[0]:
+                best = (separation, sign * n_x, sign * n_y)  # from A into B
+    _, n_x, n_y = best
+    t_x, t_y = n_y, -n_x
+    band = _TOUCH_EXTENTS * _extent(scene)
+    # Each body's points nearest the other along the normal, and their extent along t.
+    ends = []
+    for side, points in ((1.0, points_a), (-1.0, points_b)):
+        heights = [side * (x * n_x + y * n_y) for x, y in points]
+        near = max(heights) - band
+        along = [x * t_x + y * t_y for (x, y), height in zip(points, heights) if height >= near]
+        ends.append((min(along), max(along)))
+    low, high = max(ends[0][0], ends[1][0]), min(ends[0][1], ends[1][1])
+    (ax, ay), (bx, by) = body_a.position, body_b.position
+    rate_a, rate_b = body_a.angular_velocity, body_b.angular_velocity
+    # Any point on the line along t at ``along``: its offset along n adds nothing to v_n.
+    fastest = -math.inf
+    for along in (low, high):
+        x, y = along * t_x, along * t_y
+        dv_x = (body_b.velocity[0] - rate_b * (y - by)) - (body_a.velocity[0] - rate_a * (y - ay))
+        dv_y = (body_b.velocity[1] + rate_b * (x - bx)) - (body_a.velocity[1] + rate_a * (x - ax))
+        fastest = max(fastest, -(dv_x * n_x + dv_y * n_y))
+    return fastest
+
+
 def _geometry_speed(scene: Scene) -> tuple[float, float]:
     """:func:`first_touch_speed` of any other pair: the contact points and normal of
     :func:`harness.scene.geometry.scene_contacts` (closest points of the world cores, or
     the separating-axis face), the relative velocity at each."""
-    u = _UNIT_ROUNDOFF
     tolerance = _TOUCH_EXTENTS * _extent(scene)
     contacts = geometry.scene_contacts(scene, tolerance)
     fastest = max(-geometry.contact_velocity(scene, contact)[0] for contact in contacts)
-    # The world cores carry u·(|position| + extent); a normal from two closest points a
-    # distance D apart (or a face of length D) carries that over D; taken 32u for the
-    # few dozen operations.
+    return fastest, _pair_bound(scene)
+
+
+def _pair_bound(scene: Scene) -> float:
+    """The rounding bound of a two-body :func:`first_touch_speed` from world cores: they
+    carry u·(|position| + extent) (libm's cos and sin within 2u); a normal from two closest
+    points a distance D apart, or from a face of length D, carries that over D; taken 32u
+    for the few dozen operations, of the velocities' and lever arms' sizes."""
     size = reach = 0.0
     closest = math.inf
     for body in scene.bodies:
@@ -173,7 +227,7 @@ def _geometry_speed(scene: Scene) -> tuple[float, float]:
         for (x_0, y_0), (x_1, y_1) in zip(points, points[1:] + points[:1]):
             if (x_0, y_0) != (x_1, y_1):
                 closest = min(closest, math.hypot(x_1 - x_0, y_1 - y_0))
-    return fastest, 32.0 * u * size * (1.0 + reach / closest)
+    return 32.0 * _UNIT_ROUNDOFF * size * (1.0 + reach / closest)
 
 
 def _auto_scale(speed: float, bound: float) -> tuple[float, bool]:
