@@ -73,7 +73,7 @@ def _core(shape) -> tuple[list, float]:
     return _outline(shape), 0.0
 
 
-def first_touch_speed(scene: Scene) -> tuple[float, float]:
+def first_touch_speed(scene: Scene, extent: float | None = None) -> tuple[float, float]:
     """``(speed, bound)``: the normal approach speed (m/s, positive approaching) at the
     fastest-approaching point of the scene's first touch, in double precision, and a bound on
     its distance from the exact value of the same formula (the rounding of its IEEE
@@ -84,15 +84,18 @@ def first_touch_speed(scene: Scene) -> tuple[float, float]:
     computes at its first touching contact (``v_rel``, :func:`_approach_speed`), there from
     float32 state. The points are those within :data:`_TOUCH_EXTENTS` body extents of the
     closest (a flat landing's several); the fastest of them counts, as Box2D's fastest
-    point of its first contact did.
+    point of its first contact did. ``extent``: the scene's largest body extent (m), when
+    known.
     """
     u = _UNIT_ROUNDOFF
+    if extent is None:
+        extent = _extent(scene)
     if scene.ground:
         (body,) = scene.bodies
         points, _ = _core(body.shape)
         cos, sin = math.cos(body.angle), math.sin(body.angle)
         heights = [sin * x + cos * y for x, y in points]  # above the centre, +y the normal
-        near = min(heights) + _TOUCH_EXTENTS * _extent(scene)
+        near = min(heights) + _TOUCH_EXTENTS * extent
         v_y, rate = body.velocity[1], body.angular_velocity
         fastest, size = -math.inf, 0.0
         for (x, y), height in zip(points, heights):
@@ -123,7 +126,7 @@ def first_touch_speed(scene: Scene) -> tuple[float, float]:
         rod, disk = (body_a, body_b) if kinds[0] == "rod" else (body_b, body_a)
         return _rod_disk_speed(rod, disk)
     if all(kind in ("box", "polygon") for kind in kinds):
-        return _polygons_speed(scene), _pair_bound(scene)
+        return _polygons_speed(scene, extent), _pair_bound(scene)
     return _geometry_speed(scene)
 
 
@@ -159,7 +162,7 @@ def _world_points(body) -> list:
     return [(cos * x - sin * y + x_0, sin * x + cos * y + y_0) for x, y in _outline(body.shape)]
 
 
-def _polygons_speed(scene: Scene) -> float:
+def _polygons_speed(scene: Scene, extent: float) -> float:
     """:func:`first_touch_speed` of two convex polygons, as
     :func:`harness.scene.geometry.scene_contacts` finds their contact: the normal of the
     face of least penetration (separating axes: every edge of both), the contact the
@@ -179,7 +182,7 @@ def _polygons_speed(scene: Scene) -> float:
                 best = (separation, sign * n_x, sign * n_y)  # from A into B
     _, n_x, n_y = best
     t_x, t_y = n_y, -n_x
-    band = _TOUCH_EXTENTS * _extent(scene)
+    band = _TOUCH_EXTENTS * extent
     # Each body's points nearest the other along the normal, and their extent along t.
     ends = []
     for side, points in ((1.0, points_a), (-1.0, points_b)):
@@ -242,8 +245,8 @@ def _auto_scale(speed: float, bound: float) -> tuple[float, bool]:
     scale = 1.0
     while scale * (speed - bound) < target and scale < _MAX_AUTO_SCALE:
         scale *= 2.0
-    at_boundary = any(abs(candidate * speed - target) <= 3.0 * candidate * bound
-                      for candidate in (scale, scale / 2.0) if candidate >= 1.0)
+    at_boundary = abs(scale * speed - target) <= 3.0 * scale * bound or (
+        scale > 1.0 and abs(scale / 2.0 * speed - target) <= 1.5 * scale * bound)
     return scale, at_boundary
 
 
@@ -283,7 +286,7 @@ def _prepared(scene: Scene, settings, start) -> _Prepared:
     at_boundary = None
     speed = 0.0
     if scale == "auto" or overlap > 0.0:
-        speed, bound = first_touch_speed(scene)
+        speed, bound = first_touch_speed(scene, extent)
     if scale == "auto":
         scale, at_boundary = _auto_scale(speed, bound)
     velocity = prepared.velocity = float(scale)
