@@ -126,7 +126,7 @@ def first_touch_speed(scene: Scene, extent: float | None = None) -> tuple[float,
         rod, disk = (body_a, body_b) if kinds[0] == "rod" else (body_b, body_a)
         return _rod_disk_speed(rod, disk)
     if all(kind in ("box", "polygon") for kind in kinds):
-        return _polygons_speed(scene, extent), _pair_bound(scene)
+        return _polygons_speed(scene, extent), _pair_bound(scene, extent)
     return _geometry_speed(scene)
 
 
@@ -207,29 +207,33 @@ def _geometry_speed(scene: Scene) -> tuple[float, float]:
     """:func:`first_touch_speed` of any other pair: the contact points and normal of
     :func:`harness.scene.geometry.scene_contacts` (closest points of the world cores, or
     the separating-axis face), the relative velocity at each."""
-    tolerance = _TOUCH_EXTENTS * _extent(scene)
-    contacts = geometry.scene_contacts(scene, tolerance)
+    extent = _extent(scene)
+    contacts = geometry.scene_contacts(scene, _TOUCH_EXTENTS * extent)
     fastest = max(-geometry.contact_velocity(scene, contact)[0] for contact in contacts)
-    return fastest, _pair_bound(scene)
+    return fastest, _pair_bound(scene, extent)
 
 
-def _pair_bound(scene: Scene) -> float:
+def _pair_bound(scene: Scene, extent: float) -> float:
     """The rounding bound of a two-body :func:`first_touch_speed` from world cores: they
     carry u·(|position| + extent) (libm's cos and sin within 2u); a normal from two closest
     points a distance D apart, or from a face of length D, carries that over D; taken 32u
-    for the few dozen operations, of the velocities' and lever arms' sizes."""
+    for the few dozen operations, of the velocities' and lever arms' sizes. ``extent``: the
+    scene's largest body extent, an upper bound of each body's."""
     size = reach = 0.0
     closest = math.inf
     for body in scene.bodies:
-        points, radius = _core(body.shape)
-        extent = max(math.hypot(x, y) for x, y in points) + radius
         size += abs(body.velocity[0]) + abs(body.velocity[1]) + abs(body.angular_velocity) * extent
         reach += abs(body.position[0]) + abs(body.position[1]) + extent
-        if radius > 0.0:
-            closest = min(closest, radius)
-        for (x_0, y_0), (x_1, y_1) in zip(points, points[1:] + points[:1]):
-            if (x_0, y_0) != (x_1, y_1):
-                closest = min(closest, math.hypot(x_1 - x_0, y_1 - y_0))
+        shape = body.shape
+        if shape.kind == "box":
+            closest = min(closest, shape.width, shape.height)
+        elif shape.kind in ("disk", "rod"):
+            closest = min(closest, shape.radius)
+        else:
+            points, _ = _core(shape)
+            for (x_0, y_0), (x_1, y_1) in zip(points, points[1:] + points[:1]):
+                if (x_0, y_0) != (x_1, y_1):
+                    closest = min(closest, math.hypot(x_1 - x_0, y_1 - y_0))
     return 32.0 * _UNIT_ROUNDOFF * size * (1.0 + reach / closest)
 
 
