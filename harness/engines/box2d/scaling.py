@@ -176,6 +176,8 @@ def _polygons_speed(scene: Scene, extent: float) -> float:
         for index, (x_0, y_0) in enumerate(reference):
             x_1, y_1 = reference[index - len(reference) + 1]
             edge = math.hypot(x_1 - x_0, y_1 - y_0)
+            if edge == 0.0:  # a repeated vertex: no face (Box2D's build refuses it)
+                continue
             n_x, n_y = (y_1 - y_0) / edge, (x_0 - x_1) / edge  # outward (counter-clockwise)
             separation = min((x - x_0) * n_x + (y - y_0) * n_y for x, y in incident)
             if best is None or separation > best[0]:
