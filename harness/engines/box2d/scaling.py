@@ -39,6 +39,7 @@ _AUTO_MARGIN = 2.0
 _MAX_AUTO_SCALE = 2.0**40  # a scene slower than 2^-39 m/s is refused rather than scaled
 THRESHOLD_NOTE = "impact at or below b2_velocityThreshold (1 m/s): Box2D used e = 0"
 _UNIT_ROUNDOFF = 2.0**-53
+_POLYGONS = ("box", "polygon")
 # Points of the first touch: those within this many body extents of the closest (the
 # accurate preset's start depth, 2^-22 extents: the points Box2D finds touching at its start).
 _TOUCH_EXTENTS = 2.0**-22
@@ -125,7 +126,7 @@ def first_touch_speed(scene: Scene, extent: float | None = None) -> tuple[float,
     if sorted(kinds) == ["disk", "rod"]:
         rod, disk = (body_a, body_b) if kinds[0] == "rod" else (body_b, body_a)
         return _rod_disk_speed(rod, disk)
-    if all(kind in ("box", "polygon") for kind in kinds):
+    if kinds[0] in _POLYGONS and kinds[1] in _POLYGONS:
         return _polygons_speed(scene, extent), _pair_bound(scene, extent)
     return _geometry_speed(scene)
 
@@ -179,7 +180,11 @@ def _polygons_speed(scene: Scene, extent: float) -> float:
             if edge == 0.0:  # a repeated vertex: no face (Box2D's build refuses it)
                 continue
             n_x, n_y = (y_1 - y_0) / edge, (x_0 - x_1) / edge  # outward (counter-clockwise)
-            separation = min((x - x_0) * n_x + (y - y_0) * n_y for x, y in incident)
+            separation = math.inf
+            for x, y in incident:  # a loop: a generator costs a frame per edge
+                height = (x - x_0) * n_x + (y - y_0) * n_y
+                if height < separation:  # noqa: PLR1730 - hot path
+                    separation = height
             if best is None or separation > best[0]:
                 best = (separation, sign * n_x, sign * n_y)  # from A into B
     _, n_x, n_y = best
@@ -258,15 +263,15 @@ def _auto_scale(speed: float, bound: float) -> tuple[float, bool]:
 
 def _box2d_starts(start, velocity: float, length: float, advance: float = 0.0) -> tuple:
     """The run-frame start states in Box2D units, ``advance`` s further along free flight."""
-    return tuple(
-        (
+    starts = []
+    for x, y, angle, vx, vy, omega in start:  # a loop: a generator costs a frame per plan
+        starts.append((
             (float((x + vx * advance) * length), float((y + vy * advance) * length)),
             float(angle + omega * advance),
             (float(vx * velocity), float(vy * velocity)),
             float(omega * velocity / length),
-        )
-        for x, y, angle, vx, vy, omega in start
-    )
+        ))
+    return tuple(starts)
 
 
 class _Prepared:
@@ -283,7 +288,7 @@ def _prepared(scene: Scene, settings, start) -> _Prepared:
     at that speed, the Box2D time step and the derived values."""
     prepared = _Prepared()
     length = float(settings["length_scale"])
-    prepared.world_values = tuple(bool(settings[key]) for key in _BOOL_KEYS)
+    prepared.world_values = tuple(map(bool, map(settings.__getitem__, _BOOL_KEYS)))
     prepared.pair_values = (float(scene.restitution), float(scene.friction))
     prepared.iterations = (int(settings["velocity_iterations"]),
                            int(settings["position_iterations"]))
