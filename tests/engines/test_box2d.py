@@ -203,9 +203,15 @@ def test_defaults_serve_e_above_the_threshold(engine):
 @pytest.mark.parametrize("speed", [1e-3, 0.25, 0.9, 1.0, 5.0])
 def test_accurate_scales_slow_impacts_over_the_threshold(engine, speed):
     run = engine.run(drop(speed, 0.8), preset="accurate")
-    # The smallest power of two V >= 1 with V·speed >= 2 m/s (twice the threshold).
+    # The smallest power of two V >= 1 with V·speed >= 2 m/s (twice the threshold); where
+    # V·speed is 2 m/s exactly (0.25 and 1 m/s), the decision is at its boundary and the
+    # larger scale is taken.
     expected_scale = max(1.0, 2.0 ** math.ceil(math.log2(2.0 / speed)))
+    at_boundary = expected_scale * speed == 2.0
+    if at_boundary:
+        expected_scale *= 2.0
     assert run.derived["velocity_scale"] == expected_scale
+    assert run.derived["velocity_scale_at_boundary"] is at_boundary
     assert run.derived["box2d_impact_speed"] == pytest.approx(
         expected_scale * speed, rel=FLOAT32_ROUNDING)
     assert run.derived["box2d_time_step"] == pytest.approx(

@@ -1,11 +1,15 @@
-"""Box2D's runs of survey scenes are the runs of the adapter before session 6's speed-ups
-(in-place reads, shared shapes, batches by speed class, inline geometry), to the bound of
-tests/engines/survey_identity.py (bit for bit on the machine that recorded them).
+"""Box2D's runs of survey scenes are the runs of the adapter at commit fc059af, to the
+bound of tests/engines/survey_identity.py (bit for bit on the machine that recorded them).
 
 The stored file (see tests/engines/survey_identity.py) holds 350 survey scenes and, per
 preset, the values of each of their runs -- velocities, status, steps, impulses, the
-contact record, derived values and notes -- recorded with the adapter at commit 41a1da8
-(``run_many``, batches of scenes in a row).
+contact record, derived values and notes -- recorded with the adapter at commit fc059af
+(``run_many``). It replaced the pin of commit 41a1da8 (the adapter before session 6's
+speed-ups) when ``accurate``'s velocity scale and start depth came to be computed from the
+scene instead of a probe run: ``defaults`` the same runs bit for bit; ``accurate`` the same
+statuses, steps and notes, velocities within 2e-6 of the largest speed (the start depth
+from the computed speed), three velocity scales other where the probe had misread the
+speed, and ``derived`` with ``velocity_scale_at_boundary``.
 """
 
 from __future__ import annotations
@@ -16,7 +20,7 @@ import pytest
 
 pytest.importorskip("Box2D", reason="Box2D not installed (pip install box2d==2.3.10)")
 
-STORED = Path(__file__).parent.parent / "data" / "box2d-survey-runs-41a1da8.json"
+STORED = Path(__file__).parent.parent / "data" / "box2d-survey-runs-fc059af.json"
 
 
 # pins of stored engine runs: run again on other kernels (tests/conftest.py). Kind: a

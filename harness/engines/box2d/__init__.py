@@ -16,13 +16,14 @@ lengths times ``L`` (``length_scale``), velocities times ``V`` (``velocity_scale
 ``L/V`` (the time step passed to Box2D is ``time_step·L/V``), angular velocities times
 ``V/L``, inertias times ``L²``, masses unchanged, impulses times ``V``. Everything read back
 is scaled back. Powers of two keep every scaling exact in binary floating point. ``"auto"``
-picks the smallest power of two ``V >= 1`` that lifts the impact speed Box2D sees at the
-first contact (measured once per scene and settings by a probe run in :meth:`_prepare`) to
-``2 · b2_velocityThreshold``. Where the probe run would be the run's own beginning (``V = 1``
-and no start depth, as under ``defaults``), the run measures that speed itself, in ``run``
-as in ``run_many``. Either way the speed is read after the first step's collision pass
-called alone (:func:`.manifold._speed_after_collide`), or, for a scene not touching at its
-start, by a PreSolve listener until the first contact.
+picks the smallest power of two ``V >= 1`` that lifts the impact speed at the first contact,
+computed from the scene in double precision (:func:`.scaling.first_touch_speed`), to
+``2 · b2_velocityThreshold``; where rounding could tip that choice between machines, the
+larger scale is taken and ``derived["velocity_scale_at_boundary"]`` says so. Every run
+measures the speed Box2D itself saw (``derived["box2d_impact_speed"]``, in the scaled
+world): after the first step's collision pass called alone
+(:func:`.manifold._speed_after_collide`), or, for a scene not touching at its start, by a
+PreSolve listener until the first contact.
 
 Other compiled-in limits: ``b2_maxTranslation`` (2 m per step) and ``b2_maxRotation`` (π/2
 per step) clip a body's velocity for good when a step would move it further. In scene units
@@ -82,7 +83,7 @@ docstring names the pybox2d problem it answers):
   (pybox2d's keyword constructors cost more than the rest of the build);
 - :mod:`.world` -- one impact's b2World kept across runs, and what the readout keeps of it;
 - :mod:`.scaling` -- the velocity scaling that serves ``e`` below Box2D's compiled-in
-  restitution threshold, and the probe run that measures the impact speed;
+  restitution threshold, and the impact speed it is chosen from;
 - :mod:`.batch` -- many impacts in one b2World (``run_many``).
 
 The names with a leading underscore are the package's own, shared among its modules; the

@@ -9,32 +9,22 @@ from __future__ import annotations
 
 import Box2D
 
-from harness.engines.box2d.batch import (
-    MANY_CHUNK,
-    _Batch,
-    _many_world,
-    _ManyProbe,
-    _probe_many,
-    _replace,
-)
+from harness.engines.box2d.batch import MANY_CHUNK, _Batch, _many_world, _ManyProbe
 from harness.engines.box2d.manifold import _speed_after_collide
 from harness.engines.box2d.presets import _BOOL_KEYS, PRESETS, SETTING_DOCS
 from harness.engines.box2d.scaling import (
     _Prepared,
-    _probe,
-    _probe_is_run,
-    _probe_starts,
-    _scaled,
+    _prepared,
     _speed_class,
     _speed_results,
     _SpeedProbe,
-    _unprobed,
 )
 from harness.engines.box2d.world import _states_at_cap, _World
 from harness.engines.contract import Engine, RawContacts, StepTiming, geometry_key
 from harness.engines.settings import EngineSettingsError, check_int, check_number
 from harness.scene import Scene
 
+_MAX_PLANNED = 100_000  # scenes remembered by _prepare for _many_chunks, at most
 CLIPPED_NOTE = ("Box2D clipped a velocity (b2_maxTranslation 2 m or b2_maxRotation π/2 per "
                 "step; see derived speed_cap, angular_speed_cap)")
 
@@ -111,17 +101,21 @@ class Box2DEngine(Engine):
         return _World(scene, float(settings["length_scale"]), float(settings["polygon_radius"]),
                       measures=contacts)
 
+    # run_many: each planned scene's Box2D time step by id(scene), for _many_chunks (the
+    # contract plans every scene before it asks for chunks). A stale or reused id can only
+    # put a scene in another batch, which changes no run.
+    _planned_steps: dict | None = None
+
     def _prepare(self, world: _World | None, scene: Scene, settings, start, weights) -> _Prepared:
-        prepared = _unprobed(scene, settings, start)
-        if world is None:  # run_many: _build_many probes every impact of a batch at once
-            return prepared
-        if _probe_is_run(prepared):  # the run measures the speed itself (_reset), as in a batch
-            return _scaled(prepared, None)
-        # Measured for every plan: it tells whether the threshold zeroed the bounce.
-        probe = prepared.probe
-        probe_speed = _probe(world, prepared, _probe_starts(prepared),
-                             probe.time_step * probe.length, probe.max_steps)
-        return _scaled(prepared, probe_speed)
+        # The velocity scale and start depth come from the scene (scaling.first_touch_speed);
+        # the speed Box2D saw is read in the run itself (_reset).
+        prepared = _prepared(scene, settings, start)
+        if world is None:
+            planned = self._planned_steps
+            if planned is None or len(planned) >= _MAX_PLANNED:
+                planned = self._planned_steps = {}
+            planned[id(scene)] = prepared.dt
+        return prepared
 
     def _reset(self, world: _World, prepared: _Prepared) -> dict:
         world.configure(prepared.world_values, prepared.pair_values)
@@ -134,14 +128,14 @@ class Box2DEngine(Engine):
         derived = world.derived = dict(prepared.derived)
         if world.speed_probe is not None:  # the last run met no contact
             world.world.contactListener = world.speed_probe = None
-        if world.measures and _probe_is_run(prepared):
-            world.restitution = prepared.probe.restitution
+        if world.measures:
+            world.restitution = prepared.pair_values[0]
             # The first step's collision pass, alone: a scene touching at its start gives its
             # speed there (_speed_after_collide); only the others need the listener.
             world.world.contactManager.Collide()
             speed = _speed_after_collide(world)
             if speed is not None:
-                world.notes = _speed_results(derived, speed, world.velocity, world.restitution)
+                world.notes = _speed_results(derived, speed, world.restitution, world.notes)
             else:
                 world.speed_probe = _SpeedProbe(world)
                 world.world.contactListener = world.speed_probe
@@ -154,8 +148,8 @@ class Box2DEngine(Engine):
         world.world.Step(world.dt, *world.iterations)
         probe = world.speed_probe
         if probe is not None and probe.speed is not None:  # measured in this step's PreSolve
-            world.notes = _speed_results(world.derived, probe.speed, world.velocity,
-                                         world.restitution)
+            world.notes = _speed_results(world.derived, probe.speed, world.restitution,
+                                         world.notes)
             world.world.contactListener = world.speed_probe = None
         return world.read_step()
 
@@ -170,16 +164,20 @@ class Box2DEngine(Engine):
         return bool(settings["sub_stepping"])
 
     def _many_chunks(self, scenes) -> list[list[int]]:
-        """Up to :data:`MANY_CHUNK` scenes to a batch, those of one :func:`_speed_class`
-        together (in their order; a class's scenes split evenly among its batches).
+        """Up to :data:`MANY_CHUNK` scenes to a batch, those of one Box2D time step together
+        (in their order; a group's scenes split evenly among its batches).
 
-        ``auto`` gives each velocity scale a world of its own, and an impact outside its
-        batch's probe world's group is built a second time (:meth:`_build_many`): batches
-        of one class keep those few. Which scenes share a batch changes no run.
+        ``auto`` gives each velocity scale a world of its own (:meth:`_build_many`): a batch
+        of one time step is one world. The time steps are the plans' (:meth:`_prepare`); a
+        scene planned elsewhere goes by its :func:`_speed_class`, an estimate. Which scenes
+        share a batch changes no run.
         """
-        classes: dict[int, list[int]] = {}
+        planned, self._planned_steps = self._planned_steps or {}, None
+        classes: dict[tuple, list[int]] = {}
         for index, scene in enumerate(scenes):
-            classes.setdefault(_speed_class(scene), []).append(index)
+            time_step = planned.get(id(scene))
+            key = ("class", _speed_class(scene)) if time_step is None else ("dt", time_step)
+            classes.setdefault(key, []).append(index)
         chunks = []
         for indices in classes.values():
             size = -(-len(indices) // -(-len(indices) // MANY_CHUNK))  # ceil(n / batches)
@@ -198,70 +196,52 @@ class Box2DEngine(Engine):
         own order; time-of-impact events advance only their own bodies. So an impact's
         arithmetic is the one it has alone (the tests compare them bit for bit).
 
-        First the probe runs of every impact in one world (unscaled, each impact put to
-        sleep once its speed is known); then one world per Box2D time step (the velocity
-        scales differ: a world steps by one time step, and warm starting scales impulses by
-        the ratio of consecutive steps). The largest group runs in the probe's world, placed
-        anew (:func:`_place` leaves nothing of the probe). When the probe run is the run's
-        own beginning (no velocity scale or start depth to set), the runs measure the speed
-        themselves.
+        One world per Box2D time step (the velocity scales differ: a world steps by one
+        time step, and warm starting scales impulses by the ratio of consecutive steps),
+        each impact built once at its run's start. The runs measure the speed Box2D sees
+        themselves, as :meth:`_reset` does.
         """
         prepared = [plan.prepared for plan in plans]
         first = prepared[0]  # one settings dict for every plan
         world_values, iterations = first.world_values, first.iterations
-        length, time_step, max_steps = (first.probe.length, first.probe.time_step,
-                                        first.probe.max_steps)
+        length = float(plans[0].settings["length_scale"])
         skin = float(plans[0].settings["polygon_radius"])
-        measure_in_run = _probe_is_run(first)
-        probe_world = None
-        if not measure_in_run:
-            speeds, probe_world, probe_views = _probe_many(
-                plans, prepared, length, skin, time_step * length, max_steps)
-            prepared = [_scaled(one.unprobed(), speed) for one, speed in zip(prepared, speeds)]
-        else:
-            prepared = [_scaled(one.unprobed(), None) for one in prepared]
         groups: dict = {}
         for slot, one in enumerate(prepared):
             groups.setdefault(one.dt, []).append(slot)
         batch = _Batch(len(plans))
-        # The largest group runs in the probe's world (placed anew, as run places a
-        # world's bodies after its probe); the others in worlds of their own.
-        for slots in sorted(groups.values(), key=len, reverse=True):
+        # The plans' own derived values: run_many's plans are made for this call alone.
+        derived = [one.derived for one in prepared]
+        for slots in groups.values():
             dt = prepared[slots[0]].dt
-            if probe_world is not None:
-                world, views = probe_world, [probe_views[slot] for slot in slots]
-                _replace(world, probe_views, set(slots), prepared)
-                probe_world = None
-            else:
-                world, views = _many_world([plans[slot] for slot in slots],
-                                           [prepared[slot] for slot in slots], slots, length,
-                                           skin, world_values)
+            world, views = _many_world([plans[slot] for slot in slots],
+                                       [prepared[slot] for slot in slots], slots, length,
+                                       skin, world_values)
             for slot, view in zip(slots, views):
                 view.world = len(batch.worlds)
                 view.dt, view.velocity = dt, prepared[slot].velocity
                 view.notes = prepared[slot].notes
-                view.derived = prepared[slot].derived
+                view.derived = derived[slot]
                 view.clipped = _states_at_cap(view.states, dt, 1.0)  # read when placed
                 batch.slots[slot] = view
             batch.worlds.append((world, dt, iterations))
-            if measure_in_run:
-                # The first step's collision pass, alone (_speed_after_collide): the
-                # impacts touching at their start give their speeds there, the others
-                # through the listener.
-                world.contactManager.Collide()
-                pending = []
-                for view in views:
-                    speed = _speed_after_collide(view)
-                    if speed is None:
-                        pending.append(view)
-                    else:
-                        view.notes = _speed_results(view.derived, speed, view.velocity,
-                                                    view.restitution)
-                if pending:
-                    listener = _ManyProbe(pending, measure_run=True)
-                    world.contactListener = listener
-                    batch.listeners.append((world, listener))
-        return batch, batch.slots, [one.derived for one in prepared]
+            # The first step's collision pass, alone (_speed_after_collide): the impacts
+            # touching at their start give their speeds there, the others through the
+            # listener.
+            world.contactManager.Collide()
+            pending = []
+            for view in views:
+                speed = _speed_after_collide(view)
+                if speed is None:
+                    pending.append(view)
+                else:
+                    view.notes = _speed_results(view.derived, speed, view.restitution,
+                                                view.notes)
+            if pending:
+                listener = _ManyProbe(pending)
+                world.contactListener = listener
+                batch.listeners.append((world, listener))
+        return batch, batch.slots, derived
 
     def _step_many(self, batch: _Batch, active) -> dict:
         slots, worlds = batch.slots, batch.worlds

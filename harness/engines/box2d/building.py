@@ -34,6 +34,10 @@ _set_vertices = _B2.b2PolygonShape___set_vertices_internal  # b2PolygonShape::Se
 # arguments and found no fixtures or shapes to add (a definition is always given here).
 _create_body = _B2.b2World___CreateBody
 _create_fixture = _B2.b2Body___CreateFixture
+# A fixture definition's filter fields, set in place (pybox2d's groupIndex and maskBits
+# properties fetch a new filter wrapper on every set).
+_set_group_index = _B2.b2Filter_groupIndex_set
+_set_mask_bits = _B2.b2Filter_maskBits_set
 
 
 def _polygon_shape(vertices, radius: float):
@@ -70,16 +74,18 @@ def _circle_shape(radius: float, x: float = 0.0):
 
 
 class _Definitions:
-    """A body definition, a fixture definition (density 0) and a mass record (centre at the
-    origin), filled anew for every body and fixture of :func:`_add_impact`: the impacts of
-    a batch share one set (each costs several µs to make, as much as a fixture)."""
+    """A body definition, a fixture definition (density 0) and its filter, and a mass record
+    (centre at the origin), filled anew for every body and fixture of :func:`_add_impact`:
+    the impacts of a batch share one set (each costs several µs to make, as much as a
+    fixture)."""
 
-    __slots__ = ("body", "fixture", "mass")
+    __slots__ = ("body", "filter", "fixture", "mass")
 
     def __init__(self) -> None:
         self.body = b2.bodyDef()
         self.fixture = b2.fixtureDef()
         self.fixture.density = 0.0
+        self.filter = self.fixture.filter  # the definition's own (a pointer into it)
         self.mass = b2.massData()
         self.mass.center = (0.0, 0.0)
 
@@ -113,8 +119,8 @@ def _add_impact(world, scene: Scene, length: float, skin: float, extent: float, 
     if pair_values is not None:
         fixture_definition.restitution, fixture_definition.friction = pair_values
     if group:
-        fixture_definition.groupIndex = group
-        fixture_definition.maskBits = 0
+        _set_group_index(definitions.filter, group)
+        _set_mask_bits(definitions.filter, 0)
     fixtures = []
     body_id = 0
 

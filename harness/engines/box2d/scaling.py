@@ -1,24 +1,26 @@
-"""The velocity scaling that serves ``e`` below Box2D's restitution threshold, and the probe
-run that measures the impact speed it needs.
+"""The velocity scaling that serves ``e`` below Box2D's restitution threshold, and the
+impact speed it needs, computed from the scene.
 
 Box2D's problem: ``b2_velocityThreshold`` (1 m/s) is compiled into pybox2d, and a contact
 point slower than it gets ``e = 0``. The laws are homogeneous in lengths and velocities, so
-the run is a scaled copy of the scene (package docstring, "The restitution threshold"): a
-probe run measures Box2D's approach speed at the first contact (:func:`_probe`: after a
-collision pass alone, else a PreSolve :class:`_SpeedProbe`), :func:`_scaled` picks the
-velocity scale and the start a hair deep
-from it, and :func:`_speed_class` groups the scenes of a batch likely to get one scale.
+the run is a scaled copy of the scene (package docstring, "The restitution threshold"):
+:func:`first_touch_speed` computes the approach speed at the first touch from the scene in
+double precision, with a bound on its rounding; :func:`_prepared` picks the velocity scale
+(a decision within a band, :func:`_auto_scale`) and the start a hair deep from it, and
+:func:`_speed_class` groups the scenes of a batch likely to get one scale. Box2D's own
+view of the speed (float32, in the scaled world) is read in the run itself
+(:func:`_speed_results`).
 """
 
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, NamedTuple
+from typing import TYPE_CHECKING
 
 from Box2D import b2
 
-from harness.engines.box2d.building import _extent
-from harness.engines.box2d.manifold import _approach_speed, _speed_after_collide
+from harness.engines.box2d.building import _extent, _outline
+from harness.engines.box2d.manifold import _approach_speed
 from harness.engines.box2d.presets import (
     _BOOL_KEYS,
     MAX_ROTATION,
@@ -26,7 +28,7 @@ from harness.engines.box2d.presets import (
     VELOCITY_THRESHOLD,
 )
 from harness.engines.box2d.readout import _TOUCHING, _contact_in
-from harness.scene import Scene
+from harness.scene import Scene, geometry
 
 if TYPE_CHECKING:
     from harness.engines.box2d.world import _World
@@ -36,11 +38,16 @@ if TYPE_CHECKING:
 _AUTO_MARGIN = 2.0
 _MAX_AUTO_SCALE = 2.0**40  # a scene slower than 2^-39 m/s is refused rather than scaled
 THRESHOLD_NOTE = "impact at or below b2_velocityThreshold (1 m/s): Box2D used e = 0"
+_UNIT_ROUNDOFF = 2.0**-53
+_POLYGONS = ("box", "polygon")
+# Points of the first touch: those within this many body extents of the closest (the
+# accurate preset's start depth, 2^-22 extents: the points Box2D finds touching at its start).
+_TOUCH_EXTENTS = 2.0**-22
 
 
 class _SpeedProbe(b2.contactListener):
-    """PreSolve listener of a :class:`_World`: the approach speed at the first touching
-    contact (:func:`_approach_speed`)."""
+    """PreSolve listener of a :class:`_World`: the approach speed at the run's first touching
+    contact (:func:`_approach_speed`), for a run not touching at its start."""
 
     def __init__(self, world: _World):
         super().__init__()
@@ -55,95 +62,249 @@ class _SpeedProbe(b2.contactListener):
             self.speed = _approach_speed(values, self.world)
 
 
+# ---------------------------------------------------------------------- the impact speed
+def _core(shape) -> tuple[list, float]:
+    """The body-frame core points and swept radius Box2D is given (:mod:`.building`: an
+    ellipse is its stand-in polygon, a rod its two end caps' centres)."""
+    if shape.kind == "disk":
+        return [(0.0, 0.0)], float(shape.radius)
+    if shape.kind == "rod":
+        half = shape.length / 2.0
+        return [(-half, 0.0), (half, 0.0)], float(shape.radius)
+    return _outline(shape), 0.0
+
+
+def first_touch_speed(scene: Scene, extent: float | None = None) -> tuple[float, float]:
+    """``(speed, bound)``: the normal approach speed (m/s, positive approaching) at the
+    fastest-approaching point of the scene's first touch, in double precision, and a bound on
+    its distance from the exact value of the same formula (the rounding of its IEEE
+    operations and of libm's ``cos``/``sin``, each within 1 ulp, 2u relative).
+
+    The scene's pose is its first touch (the run's start is that pose rewound or advanced
+    along free flight, which keeps every velocity), so this is the quantity Box2D's solver
+    computes at its first touching contact (``v_rel``, :func:`_approach_speed`), there from
+    float32 state. The points are those within :data:`_TOUCH_EXTENTS` body extents of the
+    closest (a flat landing's several); the fastest of them counts, as Box2D's fastest
+    point of its first contact did. ``extent``: the scene's largest body extent (m), when
+    known.
+    """
+    u = _UNIT_ROUNDOFF
+    if extent is None:
+        extent = _extent(scene)
+    if scene.ground:
+        (body,) = scene.bodies
+        points, _ = _core(body.shape)
+        cos, sin = math.cos(body.angle), math.sin(body.angle)
+        heights = [sin * x + cos * y for x, y in points]  # above the centre, +y the normal
+        near = min(heights) + _TOUCH_EXTENTS * extent
+        v_y, rate = body.velocity[1], body.angular_velocity
+        fastest, size = -math.inf, 0.0
+        for (x, y), height in zip(points, heights):
+            if height <= near:
+                lever = cos * x - sin * y  # the point's x offset from the centre
+                fastest = max(fastest, -(v_y + rate * lever))
+                size = max(size, abs(v_y) + abs(rate) * (abs(cos * x) + abs(sin * y)))
+        # lever: c·x and s·y within 3u each (libm's 2u, the product's u), their difference
+        # u more; ω·lever and the sum a u each: within 6u of size (1 + O(u)).
+        return fastest, 8.0 * u * size
+    body_a, body_b = scene.bodies
+    kinds = (body_a.shape.kind, body_b.shape.kind)
+    if kinds == ("disk", "disk"):
+        # The line of centres is the normal; a disk's spin moves its contact point along
+        # the tangent only.
+        d_x = body_b.position[0] - body_a.position[0]
+        d_y = body_b.position[1] - body_a.position[1]
+        distance = math.hypot(d_x, d_y)
+        if distance == 0.0:
+            return 0.0, 0.0
+        dv_x = body_b.velocity[0] - body_a.velocity[0]
+        dv_y = body_b.velocity[1] - body_a.velocity[1]
+        # d and dv within u of themselves, hypot within 1 ulp: the normal within 4u per
+        # component, the dot product 3u more, of |dv_x| + |dv_y|.
+        return (-(dv_x * d_x + dv_y * d_y) / distance,
+                8.0 * u * (abs(dv_x) + abs(dv_y)))
+    if sorted(kinds) == ["disk", "rod"]:
+        rod, disk = (body_a, body_b) if kinds[0] == "rod" else (body_b, body_a)
+        return _rod_disk_speed(rod, disk)
+    if kinds[0] in _POLYGONS and kinds[1] in _POLYGONS:
+        return _polygons_speed(scene, extent), _pair_bound(scene, extent)
+    return _geometry_speed(scene)
+
+
+def _rod_disk_speed(rod, disk) -> tuple[float, float]:
+    """:func:`first_touch_speed` of a rod and a disk: the normal from the closest point of
+    the rod's segment to the disk's centre (the sign of ``v_n`` is the same whichever body
+    is A)."""
+    u = _UNIT_ROUNDOFF
+    cos, sin = math.cos(rod.angle), math.sin(rod.angle)
+    half = rod.shape.length / 2.0
+    w_x = disk.position[0] - rod.position[0]
+    w_y = disk.position[1] - rod.position[1]
+    along = min(max(w_x * cos + w_y * sin, -half), half)
+    d_x, d_y = w_x - along * cos, w_y - along * sin
+    distance = math.hypot(d_x, d_y)
+    if distance == 0.0:
+        return 0.0, 0.0
+    rate = rod.angular_velocity  # the rod's point at along·(cos, sin) from its centre
+    dv_x = disk.velocity[0] - (rod.velocity[0] - rate * along * sin)
+    dv_y = disk.velocity[1] - (rod.velocity[1] + rate * along * cos)
+    speed = -(dv_x * d_x + dv_y * d_y) / distance
+    # d within ~6u of |w| (w's u, the projection's 5u with libm's), so the normal within
+    # 12u |w| / distance; the velocities within 5u of their terms, the dot product 3u more.
+    size = (abs(disk.velocity[0]) + abs(disk.velocity[1]) + abs(rod.velocity[0])
+            + abs(rod.velocity[1]) + abs(rate) * half)
+    return speed, 16.0 * u * size * (1.0 + math.hypot(w_x, w_y) / distance)
+
+
+def _world_points(body) -> list:
+    """A box's or polygon's vertices in the world frame, counter-clockwise."""
+    cos, sin = math.cos(body.angle), math.sin(body.angle)
+    x_0, y_0 = body.position
+    return [(cos * x - sin * y + x_0, sin * x + cos * y + y_0) for x, y in _outline(body.shape)]
+
+
+def _polygons_speed(scene: Scene, extent: float) -> float:
+    """:func:`first_touch_speed` of two convex polygons, as
+    :func:`harness.scene.geometry.scene_contacts` finds their contact: the normal of the
+    face of least penetration (separating axes: every edge of both), the contact the
+    overlap of the points within the touch band of that face on both bodies, along the
+    face; the relative normal velocity is linear along the face, so its largest value is at
+    an end of that overlap."""
+    body_a, body_b = scene.bodies
+    points_a, points_b = _world_points(body_a), _world_points(body_b)
+    best = None
+    for sign, reference, incident in ((1.0, points_a, points_b), (-1.0, points_b, points_a)):
+        for index, (x_0, y_0) in enumerate(reference):
+            x_1, y_1 = reference[index - len(reference) + 1]
+            edge = math.hypot(x_1 - x_0, y_1 - y_0)
+            if edge == 0.0:  # a repeated vertex: no face (Box2D's build refuses it)
+                continue
+            n_x, n_y = (y_1 - y_0) / edge, (x_0 - x_1) / edge  # outward (counter-clockwise)
+            separation = math.inf
+            for x, y in incident:  # a loop: a generator costs a frame per edge
+                height = (x - x_0) * n_x + (y - y_0) * n_y
+                if height < separation:  # noqa: PLR1730 - hot path
+                    separation = height
+            if best is None or separation > best[0]:
+                best = (separation, sign * n_x, sign * n_y)  # from A into B
+    _, n_x, n_y = best
+    t_x, t_y = n_y, -n_x
+    band = _TOUCH_EXTENTS * extent
+    # Each body's points nearest the other along the normal, and their extent along t.
+    ends = []
+    for side, points in ((1.0, points_a), (-1.0, points_b)):
+        heights = [side * (x * n_x + y * n_y) for x, y in points]
+        near = max(heights) - band
+        along = [x * t_x + y * t_y for (x, y), height in zip(points, heights) if height >= near]
+        ends.append((min(along), max(along)))
+    low, high = max(ends[0][0], ends[1][0]), min(ends[0][1], ends[1][1])
+    (ax, ay), (bx, by) = body_a.position, body_b.position
+    rate_a, rate_b = body_a.angular_velocity, body_b.angular_velocity
+    # Any point on the line along t at ``along``: its offset along n adds nothing to v_n.
+    fastest = -math.inf
+    for along in (low, high):
+        x, y = along * t_x, along * t_y
+        dv_x = (body_b.velocity[0] - rate_b * (y - by)) - (body_a.velocity[0] - rate_a * (y - ay))
+        dv_y = (body_b.velocity[1] + rate_b * (x - bx)) - (body_a.velocity[1] + rate_a * (x - ax))
+        fastest = max(fastest, -(dv_x * n_x + dv_y * n_y))
+    return fastest
+
+
+def _geometry_speed(scene: Scene) -> tuple[float, float]:
+    """:func:`first_touch_speed` of any other pair: the contact points and normal of
+    :func:`harness.scene.geometry.scene_contacts` (closest points of the world cores, or
+    the separating-axis face), the relative velocity at each."""
+    extent = _extent(scene)
+    contacts = geometry.scene_contacts(scene, _TOUCH_EXTENTS * extent)
+    fastest = max(-geometry.contact_velocity(scene, contact)[0] for contact in contacts)
+    return fastest, _pair_bound(scene, extent)
+
+
+def _pair_bound(scene: Scene, extent: float) -> float:
+    """The rounding bound of a two-body :func:`first_touch_speed` from world cores: they
+    carry u·(|position| + extent) (libm's cos and sin within 2u); a normal from two closest
+    points a distance D apart, or from a face of length D, carries that over D; taken 32u
+    for the few dozen operations, of the velocities' and lever arms' sizes. ``extent``: the
+    scene's largest body extent, an upper bound of each body's."""
+    size = reach = 0.0
+    closest = math.inf
+    for body in scene.bodies:
+        size += abs(body.velocity[0]) + abs(body.velocity[1]) + abs(body.angular_velocity) * extent
+        reach += abs(body.position[0]) + abs(body.position[1]) + extent
+        shape = body.shape
+        if shape.kind == "box":
+            closest = min(closest, shape.width, shape.height)
+        elif shape.kind in ("disk", "rod"):
+            closest = min(closest, shape.radius)
+        else:
+            points, _ = _core(shape)
+            for (x_0, y_0), (x_1, y_1) in zip(points, points[1:] + points[:1]):
+                if (x_0, y_0) != (x_1, y_1):
+                    closest = min(closest, math.hypot(x_1 - x_0, y_1 - y_0))
+    return 32.0 * _UNIT_ROUNDOFF * size * (1.0 + reach / closest)
+
+
+def _auto_scale(speed: float, bound: float) -> tuple[float, bool]:
+    """``(scale, at_boundary)``: the smallest power of two ``V >= 1`` with ``V·(speed −
+    bound) >= 2 m/s`` (within the band the larger scale: harmless, the margin of 2 keeps
+    either above the threshold), and whether another machine's ``speed`` (within ``2·bound``
+    of this one's) could pick another scale; a speed within its bound of 0 is no approach
+    (scale 1), at the boundary unless it is exactly 0."""
+    target = _AUTO_MARGIN * VELOCITY_THRESHOLD
+    if speed - bound <= 0.0:
+        return 1.0, speed + bound > 0.0
+    scale = 1.0
+    while scale * (speed - bound) < target and scale < _MAX_AUTO_SCALE:
+        scale *= 2.0
+    at_boundary = abs(scale * speed - target) <= 3.0 * scale * bound or (
+        scale > 1.0 and abs(scale / 2.0 * speed - target) <= 1.5 * scale * bound)
+    return scale, at_boundary
+
+
 def _box2d_starts(start, velocity: float, length: float, advance: float = 0.0) -> tuple:
     """The run-frame start states in Box2D units, ``advance`` s further along free flight."""
-    return tuple(
-        (
+    starts = []
+    for x, y, angle, vx, vy, omega in start:  # a loop: a generator costs a frame per plan
+        starts.append((
             (float((x + vx * advance) * length), float((y + vy * advance) * length)),
             float(angle + omega * advance),
             (float(vx * velocity), float(vy * velocity)),
             float(omega * velocity / length),
-        )
-        for x, y, angle, vx, vy, omega in start
-    )
-
-
-class _ProbeInputs(NamedTuple):
-    """What the probe run needs, and the settings that act on its result."""
-
-    start: tuple  # run-frame start state (contract BodyState per body)
-    length: float  # length_scale
-    time_step: float  # s, scene units
-    max_steps: int
-    velocity_scale: float | str  # the setting: a number or "auto"
-    overlap: float  # detection_overlap, body extents
-    extent: float  # m, the largest body extent
-    restitution: float
+        ))
+    return tuple(starts)
 
 
 class _Prepared:
-    """A run's Box2D form: switches, pair values, sweeps, scales, start state, derived.
+    """A run's Box2D form: switches, pair values, sweeps, scales, start state, derived
+    values and notes known before it runs, the largest body extent (m)."""
 
-    ``probe``: what the probe run needs (the run-frame start state, the Box2D time step
-    without velocity scale, the step cap, the settings that act on the probe's result);
-    :func:`_scaled` fills in the rest from the probe's speed.
-    """
-
-    __slots__ = ("derived", "dt", "iterations", "notes", "pair_values", "probe", "starts",
+    __slots__ = ("derived", "dt", "extent", "iterations", "notes", "pair_values", "starts",
                  "velocity", "world_values")
 
-    def unprobed(self) -> _Prepared:
-        """A copy of what :func:`_unprobed` sets (copy.copy costs several times more)."""
-        copied = _Prepared()
-        copied.world_values, copied.pair_values = self.world_values, self.pair_values
-        copied.iterations, copied.probe = self.iterations, self.probe
-        return copied
 
-
-def _unprobed(scene: Scene, settings, start) -> _Prepared:
-    """A run's :class:`_Prepared` up to the probe run."""
+def _prepared(scene: Scene, settings, start) -> _Prepared:
+    """A run's :class:`_Prepared`: the velocity scale (``auto``: :func:`_auto_scale` of
+    :func:`first_touch_speed`), the start ``detection_overlap`` extents deep along the path
+    at that speed, the Box2D time step and the derived values."""
     prepared = _Prepared()
     length = float(settings["length_scale"])
-    time_step = float(settings["time_step"])
-    prepared.world_values = tuple(bool(settings[key]) for key in _BOOL_KEYS)
+    prepared.world_values = tuple(map(bool, map(settings.__getitem__, _BOOL_KEYS)))
     prepared.pair_values = (float(scene.restitution), float(scene.friction))
     prepared.iterations = (int(settings["velocity_iterations"]),
                            int(settings["position_iterations"]))
-    prepared.probe = _ProbeInputs(start, length, time_step, int(settings["max_steps"]),
-                                  settings["velocity_scale"],
-                                  float(settings["detection_overlap"]), _extent(scene),
-                                  float(scene.restitution))
-    return prepared
-
-
-def _probe_starts(prepared: _Prepared) -> tuple:
-    """The probe run's start state in Box2D units (unscaled velocities)."""
-    return _box2d_starts(prepared.probe.start, 1.0, prepared.probe.length)
-
-
-def _probe_is_run(prepared: _Prepared) -> bool:
-    """Whether the probe run is the run itself up to its first contact: no velocity scale
-    and no start depth that the probe's speed would set."""
-    scale = prepared.probe.velocity_scale
-    return scale != "auto" and float(scale) == 1.0 and prepared.probe.overlap == 0.0
-
-
-def _scaled(prepared: _Prepared, probe_speed: float | None) -> _Prepared:
-    """Complete ``prepared`` with the velocity scale, start state and derived values that
-    Box2D's approach speed at the first contact of the probe run (``probe_speed``) sets."""
-    start, length, time_step, _, scale, overlap, extent, restitution = prepared.probe
+    extent = prepared.extent = _extent(scene)
+    scale, overlap = settings["velocity_scale"], float(settings["detection_overlap"])
+    at_boundary = None
+    speed = 0.0
+    if scale == "auto" or overlap > 0.0:
+        speed, bound = first_touch_speed(scene, extent)
     if scale == "auto":
-        scale = 1.0
-        if probe_speed is not None and probe_speed > 0.0:
-            target = _AUTO_MARGIN * VELOCITY_THRESHOLD
-            while scale * probe_speed < target and scale < _MAX_AUTO_SCALE:
-                scale *= 2.0
+        scale, at_boundary = _auto_scale(speed, bound)
     velocity = prepared.velocity = float(scale)
     # The overlap as a time along the path: depth = overlap·extent at the approach speed.
-    advance = 0.0
-    if overlap > 0.0 and probe_speed is not None and probe_speed > 0.0:
-        advance = overlap * extent / probe_speed
+    advance = overlap * extent / speed if overlap > 0.0 and speed > 0.0 else 0.0
     prepared.starts = _box2d_starts(start, velocity, length, advance)
+    time_step = float(settings["time_step"])
     prepared.dt = time_step * length / velocity
     prepared.derived = {
         "velocity_scale": velocity,
@@ -152,47 +313,23 @@ def _scaled(prepared: _Prepared, probe_speed: float | None) -> _Prepared:
         "speed_cap": MAX_TRANSLATION / (length * time_step),
         "angular_speed_cap": MAX_ROTATION / time_step,
     }
-    prepared.notes = _speed_results(prepared.derived, probe_speed, velocity, restitution)
+    prepared.notes = ()
+    if at_boundary is not None:  # another machine's rounding could pick another scale
+        prepared.derived["velocity_scale_at_boundary"] = at_boundary
     return prepared
 
 
-def _speed_results(derived: dict, probe_speed: float | None, velocity: float,
-                   restitution: float) -> tuple[str, ...]:
-    """Add the impact speed Box2D saw to ``derived``; the threshold's note if it zeroed e."""
-    if probe_speed is None:
-        return ()
-    derived["box2d_impact_speed"] = probe_speed * velocity
-    cleared = probe_speed * velocity > VELOCITY_THRESHOLD
+def _speed_results(derived: dict, speed: float, restitution: float,
+                   notes: tuple[str, ...]) -> tuple[str, ...]:
+    """Add the impact speed Box2D saw (``speed``, m/s in Box2D's units: its ``v_rel`` at
+    the run's first touching contact, scaled by the velocity scale) to ``derived``;
+    ``notes`` with the threshold's note added if it zeroed e."""
+    derived["box2d_impact_speed"] = speed
+    cleared = speed > VELOCITY_THRESHOLD
     derived["restitution_threshold_cleared"] = cleared
     if not cleared and restitution > 0.0:
-        return (THRESHOLD_NOTE,)
-    return ()
-
-
-
-def _probe(world: _World, prepared: _Prepared, starts: tuple, dt: float,
-           max_steps: int) -> float | None:
-    """Box2D's approach speed (m/s, scene units) at the first contact of an unscaled run."""
-    world.configure(prepared.world_values, prepared.pair_values)
-    world.place(starts)
-    b2_world = world.world
-    # The first step's collision pass alone (_speed_after_collide): a scene touching at its
-    # start (the usual case) gives its speed without a listener or a solved step.
-    b2_world.contactManager.Collide()
-    speed = _speed_after_collide(world)
-    if speed is not None:
-        return speed
-    probe = _SpeedProbe(world)
-    b2_world.contactListener = probe
-    try:
-        for _ in range(max_steps):
-            if probe.speed is not None:
-                break
-            b2_world.Step(dt, *prepared.iterations)
-    finally:
-        b2_world.contactListener = None
-    return probe.speed
-
+        return (*notes, THRESHOLD_NOTE)
+    return notes
 
 
 def _approach_estimate(scene: Scene) -> float:

@@ -1,0 +1,93 @@
+"""Box2D's velocity scale: the first-touch speed computed from the scene, and the scale
+decided from it within a band (harness/engines/box2d/scaling.py)."""
+
+from __future__ import annotations
+
+import math
+import random
+
+import pytest
+
+pytest.importorskip("Box2D", reason="Box2D not installed (pip install box2d==2.3.10)")
+
+from harness.engines.box2d import scaling  # noqa: E402
+from harness.scene import Body, Box, Rod, Scene  # noqa: E402
+from harness.scene.reference import reference_scenes  # noqa: E402
+from harness.survey.population import resolve_populations  # noqa: E402
+from harness.survey.sampling import sample_population  # noqa: E402
+
+SAMPLES = 40  # per population
+
+
+@pytest.fixture(scope="module")
+def scenes():
+    return ([sample.scene for population in resolve_populations([])
+             for sample in sample_population(population, SAMPLES, seed=7).samples]
+            + [entry[0] for entry in reference_scenes().values()])
+
+
+def test_the_written_out_speed_is_the_geometry_modules(scenes):
+    # Two methods: the written-out formulas (ground, two disks, rod and disk) against the
+    # contact points and normal of harness.scene.geometry and its contact_velocity. Both
+    # compute the same exact quantity, so they agree within the sum of their bounds.
+    compared = 0
+    for scene in scenes:
+        if scene.bodies[-1].shape.kind == "ellipse":
+            continue  # the geometry module's ellipse is exact, Box2D's is its stand-in
+        written, bound = scaling.first_touch_speed(scene)
+        geometric, geometric_bound = scaling._geometry_speed(scene)
+        assert abs(written - geometric) <= bound + geometric_bound, scene.name
+        assert 0.0 < bound < 1e-12 * max(abs(written), 1.0)
+        compared += 1
+    assert compared > 250
+
+
+@pytest.mark.parametrize("shape", [Rod(length=0.4, radius=0.01), Box(width=0.4, height=0.1)])
+def test_a_flat_landing_takes_its_fastest_point(shape):
+    # Both ends touch at once: the faster approaching one counts.
+    lowest = shape.radius if shape.kind == "rod" else shape.height / 2.0
+    body = Body("flat", shape, 1.0, (0.3, lowest), velocity=(0.5, -0.4), angular_velocity=3.0)
+    scene = Scene((body,), 0.5, 0.3, ground=True)
+    speed, _ = scaling.first_touch_speed(scene)
+    assert speed == max(-(-0.4 + 3.0 * x) for x in (-0.2, 0.2)) == 1.0
+    # Tilted by more than the touch band, only the lower end touches (the left one).
+    tilted = Scene((body.moved(angle=1e-3),), 0.5, 0.3, ground=True)
+    x, y = -0.2, (0.0 if shape.kind == "rod" else -0.05)
+    lever = math.cos(1e-3) * x - math.sin(1e-3) * y
+    assert scaling.first_touch_speed(tilted)[0] == -(-0.4 + 3.0 * lever)
+
+
+def _scale_on_another_machine(speed: float, bound: float, shift: float) -> float:
+    return scaling._auto_scale(speed + shift * bound, bound)[0]
+
+
+def test_the_scale_is_the_smallest_power_of_two_lifting_the_speed_to_the_margin():
+    generator = random.Random(3)
+    target = scaling._AUTO_MARGIN * scaling.VELOCITY_THRESHOLD
+    for _ in range(20000):
+        speed = 10.0 ** generator.uniform(-6.0, 3.0)
+        bound = speed * 10.0 ** generator.uniform(-16.0, -8.0)
+        scale, at_boundary = scaling._auto_scale(speed, bound)
+        assert scale >= 1.0 and math.frexp(scale)[0] == 0.5  # a power of two
+        if not at_boundary:
+            assert scale * speed >= target
+            assert scale == 1.0 or scale / 2.0 * speed < target
+        # Another machine's speed lies within 2·bound of this one's: a different scale
+        # there only where this run says it is at the boundary.
+        for shift in (-2.0, -1.0, 1.0, 2.0):
+            if _scale_on_another_machine(speed, bound, shift) != scale:
+                assert at_boundary, (speed, bound, shift)
+
+
+@pytest.mark.parametrize("speed, expected, at_boundary", [
+    (0.25, 16.0, True),  # 8 · 0.25 is 2 m/s exactly: the larger scale, at the boundary
+    (0.3, 8.0, False),
+    (1.0, 4.0, True),
+    (2.0, 2.0, True),
+    (2.5, 1.0, False),
+    (0.0, 1.0, False),  # no approach: no scale
+    (-1.0, 1.0, False),
+])
+def test_the_scale_at_and_off_the_boundary(speed, expected, at_boundary):
+    bound = 8.0 * 2.0**-53 * abs(speed)
+    assert scaling._auto_scale(speed, bound) == (expected, at_boundary)
