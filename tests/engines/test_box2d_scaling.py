@@ -91,3 +91,46 @@ def test_the_scale_is_the_smallest_power_of_two_lifting_the_speed_to_the_margin(
 def test_the_scale_at_and_off_the_boundary(speed, expected, at_boundary):
     bound = 8.0 * 2.0**-53 * abs(speed)
     assert scaling._auto_scale(speed, bound) == (expected, at_boundary)
+
+
+def _exact_rod_disk_speed(rod, disk) -> float:
+    # The rod-and-disk formula of first_touch_speed in exact rational arithmetic, given the
+    # cos and sin libm returned (their own error is a separate 2u of the bound).
+    from decimal import Decimal, localcontext
+    from fractions import Fraction as F
+
+    cos, sin = F(math.cos(rod.angle)), F(math.sin(rod.angle))
+    half = F(rod.shape.length) / 2
+    w_x = F(disk.position[0]) - F(rod.position[0])
+    w_y = F(disk.position[1]) - F(rod.position[1])
+    along = min(max(w_x * cos + w_y * sin, -half), half)
+    d_x, d_y = w_x - along * cos, w_y - along * sin
+    rate = F(rod.angular_velocity)
+    dv_x = F(disk.velocity[0]) - (F(rod.velocity[0]) - rate * along * sin)
+    dv_y = F(disk.velocity[1]) - (F(rod.velocity[1]) + rate * along * cos)
+    numerator, square = -(dv_x * d_x + dv_y * d_y), d_x * d_x + d_y * d_y
+    with localcontext() as context:
+        context.prec = 60
+        root = (Decimal(square.numerator) / Decimal(square.denominator)).sqrt()
+        return float(Decimal(numerator.numerator) / Decimal(numerator.denominator) / root)
+
+
+@pytest.mark.parametrize("radius", [1.0, 50.0, 1e3, 1e5])
+@pytest.mark.parametrize("phi", [0.7, 1.3, 2.2, -0.4])
+def test_a_spinning_rod_lying_on_a_large_disk_is_within_the_bound(radius, phi):
+    # The rod tangent to the disk: the closest point of its segment to the disk's centre
+    # sits mid-rod, where ``along`` (a dot product of the centres' offset |w|, about the
+    # disk's radius) carries rounding of |w|, which the spin turns into normal speed.
+    from harness.scene.model import Disk
+
+    rod_radius, half = 0.001, 0.01
+    cos, sin = math.cos(phi), math.sin(phi)
+    disk = Body("disk", Disk(radius), 1.0, (0.0, 0.0))
+    rod = Body("rod", Rod(length=2 * half, radius=rod_radius), 1.0,
+               ((radius + rod_radius) * cos, (radius + rod_radius) * sin),
+               angle=phi + math.pi / 2, velocity=(-0.1 * cos, -0.1 * sin),
+               angular_velocity=1000.0)
+    exact = _exact_rod_disk_speed(rod, disk)
+    for bodies in ((rod, disk), (disk, rod)):
+        speed, bound = scaling.first_touch_speed(Scene(bodies, 0.5, 0.3))
+        assert abs(speed - exact) <= bound, (speed, exact, bound)

@@ -151,9 +151,13 @@ def _rod_disk_speed(rod, disk) -> tuple[float, float]:
     speed = -(dv_x * d_x + dv_y * d_y) / distance
     # d within ~6u of |w| (w's u, the projection's 5u with libm's), so the normal within
     # 12u |w| / distance; the velocities within 5u of their terms, the dot product 3u more.
+    # ``along`` itself carries that 6u |w|, which the spin turns into 6u |ω| |w| of normal
+    # speed (the rod's point moves along the normal): |w| is about the disk's radius, far
+    # more than ``half`` for a rod lying on a large disk.
     size = (abs(disk.velocity[0]) + abs(disk.velocity[1]) + abs(rod.velocity[0])
             + abs(rod.velocity[1]) + abs(rate) * half)
-    return speed, 16.0 * u * size * (1.0 + math.hypot(w_x, w_y) / distance)
+    reach = math.hypot(w_x, w_y)
+    return speed, 16.0 * u * (size * (1.0 + reach / distance) + abs(rate) * reach)
 
 
 def _world_points(body) -> list:
