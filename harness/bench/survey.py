@@ -197,7 +197,7 @@ def _user_loop_work(result, engine, settings, scenes) -> tuple:
                                                            for row in kept]
 
 
-def run(samples: int, engines=None, presets=PRESET_ROLES, seed: int = 0,
+def run(samples: int, engines=None, presets=None, seed: int = 0,
         rounds: int = ROUNDS, workers: int = 1, end_to_end_samples: int | None = None) -> dict:
     """``{"samples", "impacts", "engines", "presets", "rounds", "workers", "survey_cpu_s",
     "bare_cpu_s", "ratio", "end_to_end_samples", "end_to_end_pairs", "end_to_end_left_out",
@@ -208,7 +208,8 @@ def run(samples: int, engines=None, presets=PRESET_ROLES, seed: int = 0,
 
     The end to end is the survey a user runs: with the default presets, the pairs each
     engine's ``survey_left_out`` leaves out of a default survey are left out of it too (and
-    listed), as ``impact-harness survey`` leaves them out; named presets leave none out.
+    listed), as ``impact-harness survey`` leaves them out; named presets (``presets`` not
+    None, the default ones too, as ``--preset defaults,accurate``) leave none out.
     It runs ``end_to_end_samples`` per population (default ``samples``): the survey's cost
     per family and pair (statistics, files) is fixed, so a small survey measures that, not
     the cost per impact."""
@@ -228,9 +229,10 @@ def run(samples: int, engines=None, presets=PRESET_ROLES, seed: int = 0,
     problems = terms.problems
     energy = survey_laws.solve_laws(terms, ("newton-lcp",))["newton-lcp"].batch.energy_change
     scene_terms = verdicts.prepare_many(scenes, problems)
+    # As the command: naming presets at all leaves no pair out, the default ones included.
+    left_out = survey_cli.default_left_out(installed) if presets is None else {}
+    presets = tuple(PRESET_ROLES if presets is None else presets)
     pair_names = [(name, preset) for name in installed for preset in presets]
-    left_out = (survey_cli.default_left_out(installed)
-                if tuple(presets) == tuple(PRESET_ROLES) else {})
     end_pairs = [pair for pair in pair_names if pair not in left_out]
     end_samples = samples if end_to_end_samples is None else end_to_end_samples
     measured = {pair: {"contract_s": [], "judged_s": [], "bare_s": [], "bare_world_s": []}
