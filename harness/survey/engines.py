@@ -157,7 +157,8 @@ def error_text(error: BaseException) -> str:
     first = lines[0]
     if len(first) > ERROR_TEXT_CHARACTERS:
         sentence, stop, _ = first.partition(". ")
-        first = sentence + "." if stop else first
+        # a line opening with ". " keeps its text: its "first sentence" would say nothing
+        first = sentence + "." if stop and sentence.strip() else first
     return f"{type(error).__name__}: {first}"
 
 

@@ -259,3 +259,12 @@ def test_the_suite_exits_4_when_its_survey_had_an_engine_error(toy_beside_the_ot
     again = capsys.readouterr().err
     assert code == 4, again[-2000:]
     assert "ENGINE ERROR: survey: 2 engine runs raised" in again
+
+
+def test_a_long_line_opening_with_a_full_stop_keeps_its_text():
+    # The first ". " is the line's opening: cut there, the reason would read "ValueError: ."
+    # and say nothing of the error.
+    from harness.survey.engines import error_text
+
+    message = ". " + "z" * 200 + ". advice"
+    assert error_text(ValueError(message)) == f"ValueError: {message}"
