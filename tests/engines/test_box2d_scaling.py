@@ -134,3 +134,52 @@ def test_a_spinning_rod_lying_on_a_large_disk_is_within_the_bound(radius, phi):
     for bodies in ((rod, disk), (disk, rod)):
         speed, bound = scaling.first_touch_speed(Scene(bodies, 0.5, 0.3))
         assert abs(speed - exact) <= bound, (speed, exact, bound)
+
+
+def _nudged_math(cos_way: int, sin_way: int):
+    # math with cos and sin one ulp off (another libm, within its 1 ulp)
+    import types
+
+    nudged = types.SimpleNamespace(**{name: getattr(math, name) for name in dir(math)
+                                      if not name.startswith("_")})
+    nudged.cos = lambda x: math.nextafter(math.cos(x), cos_way * math.inf) if cos_way \
+        else math.cos(x)
+    nudged.sin = lambda x: math.nextafter(math.sin(x), sin_way * math.inf) if sin_way \
+        else math.sin(x)
+    return nudged
+
+
+def test_a_point_at_the_touch_bands_edge_is_a_decision_at_the_boundary(monkeypatch):
+    # A triangle landing on a face tilted so that the face's far end lies at the touch
+    # band's edge (2^-22 extents above the lowest point): whether it counts rests on the
+    # last bits of cos and sin. The far end approaches at 0.26 m/s (scale 8), the near one
+    # at 0.24 (scale 16): where machines a libm ulp apart pick different scales, each must
+    # say it is at the boundary.
+    from harness.engines.box2d.building import _extent
+    from harness.scene.model import Polygon
+
+    raw = [(0.0, 0.0), (0.3, 0.1), (0.0, 0.3)]
+    centre = (sum(x for x, _ in raw) / 3, sum(y for _, y in raw) / 3)
+    shape = Polygon(tuple((x - centre[0], y - centre[1]) for x, y in raw))
+    band = scaling._TOUCH_EXTENTS * _extent(Scene((Body("p", shape, 1.0, (0.0, 0.5)),), 0.5,
+                                                  0.3, ground=True))
+    edge = -math.atan2(0.1, 0.3) + band / math.hypot(0.3, 0.1)
+    cos, sin = math.cos(edge), math.sin(edge)
+    (x_0, y_0), (x_1, y_1) = shape.points[:2]
+    lever_0, lever_1 = cos * x_0 - sin * y_0, cos * x_1 - sin * y_1
+    rate = -0.02 / (lever_1 - lever_0)
+    v_y = -0.24 - rate * lever_0
+    flipped = 0
+    for step in range(-300, 300):
+        body = Body("p", shape, 1.0, (0.0, 0.5), angle=edge + step * 1e-18,
+                    velocity=(0.0, v_y), angular_velocity=rate)
+        scene = Scene((body,), 0.5, 0.3, ground=True)
+        decisions = set()
+        for ways in ((0, 0), (1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (-1, -1)):
+            monkeypatch.setattr(scaling, "math", _nudged_math(*ways))
+            decisions.add(scaling._scale_decision(scene, _extent(scene))[2:])
+        monkeypatch.setattr(scaling, "math", math)
+        if len({scale for scale, _ in decisions}) > 1:
+            flipped += 1
+            assert all(at_boundary for _, at_boundary in decisions), (step, decisions)
+    assert flipped > 0  # the window holds the edge

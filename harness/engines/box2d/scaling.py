@@ -75,6 +75,11 @@ def _core(shape) -> tuple[list, float]:
 
 
 def first_touch_speed(scene: Scene, extent: float | None = None) -> tuple[float, float]:
+    """``(speed, bound)`` of :func:`_first_touch` (its docstring)."""
+    return _first_touch(scene, extent)[:2]
+
+
+def _first_touch(scene: Scene, extent: float | None = None) -> tuple[float, float, tuple]:
     """``(speed, bound)``: the normal approach speed (m/s, positive approaching) at the
     fastest-approaching point of the scene's first touch, in double precision, and a bound on
     its distance from the exact value of the same formula (the rounding of its IEEE
@@ -87,6 +92,11 @@ def first_touch_speed(scene: Scene, extent: float | None = None) -> tuple[float,
     closest (a flat landing's several); the fastest of them counts, as Box2D's fastest
     point of its first contact did. ``extent``: the scene's largest body extent (m), when
     known.
+
+    The third value: the speeds the first touch has where another machine's rounding could
+    count another set of points (on the ground, a point within rounding of the touch band's
+    edge: in or out, the fastest changes by far more than ``bound``); empty elsewhere.
+    :func:`_scale_decision` is at the boundary where one of them picks another scale.
     """
     u = _UNIT_ROUNDOFF
     if extent is None:
@@ -98,15 +108,30 @@ def first_touch_speed(scene: Scene, extent: float | None = None) -> tuple[float,
         heights = [sin * x + cos * y for x, y in points]  # above the centre, +y the normal
         near = min(heights) + _TOUCH_EXTENTS * extent
         v_y, rate = body.velocity[1], body.angular_velocity
-        fastest, size = -math.inf, 0.0
+        # A height is within 4u of |s·x| + |c·y| (libm's 2u, the product's and the sum's u),
+        # near within that of the lowest's and u of itself: a point's height - near within
+        # ``slack`` here, within 2·slack on another machine.
+        reach = max(abs(sin * x) + abs(cos * y) for x, y in points)
+        slack = 16.0 * u * (reach + abs(near))
+        fastest, size, edge = -math.inf, 0.0, []
         for (x, y), height in zip(points, heights):
+            lever = cos * x - sin * y  # the point's x offset from the centre
             if height <= near:
-                lever = cos * x - sin * y  # the point's x offset from the centre
                 fastest = max(fastest, -(v_y + rate * lever))
                 size = max(size, abs(v_y) + abs(rate) * (abs(cos * x) + abs(sin * y)))
+            if abs(height - near) <= 2.0 * slack:  # in or out, as another machine counts it
+                edge.append((height <= near, -(v_y + rate * lever)))
         # lever: c·x and s·y within 3u each (libm's 2u, the product's u), their difference
         # u more; ω·lever and the sum a u each: within 6u of size (1 + O(u)).
-        return fastest, 8.0 * u * size
+        others = []
+        if edge:  # the fastest of the points counted without, or with, each edge point
+            certain = max((-(v_y + rate * (cos * x - sin * y))
+                           for (x, y), height in zip(points, heights)
+                           if height <= near and abs(height - near) > 2.0 * slack),
+                          default=-math.inf)
+            others = [certain] + [max(certain, speed) for _, speed in edge]
+            others = [other for other in others if other != fastest and other > -math.inf]
+        return fastest, 8.0 * u * size, tuple(others)
     body_a, body_b = scene.bodies
     kinds = (body_a.shape.kind, body_b.shape.kind)
     if kinds == ("disk", "disk"):
@@ -116,19 +141,19 @@ def first_touch_speed(scene: Scene, extent: float | None = None) -> tuple[float,
         d_y = body_b.position[1] - body_a.position[1]
         distance = math.hypot(d_x, d_y)
         if distance == 0.0:
-            return 0.0, 0.0
+            return 0.0, 0.0, ()
         dv_x = body_b.velocity[0] - body_a.velocity[0]
         dv_y = body_b.velocity[1] - body_a.velocity[1]
         # d and dv within u of themselves, hypot within 1 ulp: the normal within 4u per
         # component, the dot product 3u more, of |dv_x| + |dv_y|.
         return (-(dv_x * d_x + dv_y * d_y) / distance,
-                8.0 * u * (abs(dv_x) + abs(dv_y)))
+                8.0 * u * (abs(dv_x) + abs(dv_y)), ())
     if sorted(kinds) == ["disk", "rod"]:
         rod, disk = (body_a, body_b) if kinds[0] == "rod" else (body_b, body_a)
-        return _rod_disk_speed(rod, disk)
+        return (*_rod_disk_speed(rod, disk), ())
     if kinds[0] in _POLYGONS and kinds[1] in _POLYGONS:
-        return _polygons_speed(scene, extent), _pair_bound(scene, extent)
-    return _geometry_speed(scene)
+        return _polygons_speed(scene, extent), _pair_bound(scene, extent), ()
+    return (*_geometry_speed(scene), ())
 
 
 def _rod_disk_speed(rod, disk) -> tuple[float, float]:
@@ -265,6 +290,19 @@ def _auto_scale(speed: float, bound: float) -> tuple[float, bool]:
     return scale, at_boundary
 
 
+def _scale_decision(scene: Scene, extent: float) -> tuple[float, float, float, bool]:
+    """``(speed, bound, scale, at_boundary)``: :func:`_first_touch`'s speed and bound, and
+    :func:`_auto_scale`'s decision, at the boundary too where a speed another machine's
+    rounding could count instead (a point at the touch band's edge) picks another scale or
+    is at its own boundary."""
+    speed, bound, others = _first_touch(scene, extent)
+    scale, at_boundary = _auto_scale(speed, bound)
+    for other in others:
+        other_scale, other_at_boundary = _auto_scale(other, bound)
+        at_boundary = at_boundary or other_scale != scale or other_at_boundary
+    return speed, bound, scale, at_boundary
+
+
 def _box2d_starts(start, velocity: float, length: float, advance: float = 0.0) -> tuple:
     """The run-frame start states in Box2D units, ``advance`` s further along free flight."""
     starts = []
@@ -301,9 +339,9 @@ def _prepared(scene: Scene, settings, start) -> _Prepared:
     at_boundary = None
     speed = 0.0
     if scale == "auto" or overlap > 0.0:
-        speed, bound = first_touch_speed(scene, extent)
+        speed, bound, scale_auto, at_boundary_auto = _scale_decision(scene, extent)
     if scale == "auto":
-        scale, at_boundary = _auto_scale(speed, bound)
+        scale, at_boundary = scale_auto, at_boundary_auto
     velocity = prepared.velocity = float(scale)
     # The overlap as a time along the path: depth = overlap·extent at the approach speed.
     advance = overlap * extent / speed if overlap > 0.0 and speed > 0.0 else 0.0
