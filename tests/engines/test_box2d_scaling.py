@@ -183,3 +183,35 @@ def test_a_point_at_the_touch_bands_edge_is_a_decision_at_the_boundary(monkeypat
             flipped += 1
             assert all(at_boundary for _, at_boundary in decisions), (step, decisions)
     assert flipped > 0  # the window holds the edge
+
+
+def test_a_corner_at_the_touch_bands_edge_between_two_boxes_is_at_the_boundary(monkeypatch):
+    # A box landing on another's top face tilted so that its far bottom corner lies at the
+    # touch band's edge: in or out of the contact as the last bits of cos and sin fall. The
+    # near corner approaches at about 0.24 m/s (scale 16), the far at 0.26 (scale 8).
+    from harness.engines.box2d.building import _extent
+
+    width, height, base = 0.4, 0.1, 0.3
+    lower = Body("a", Box(1.0, 0.2), 1.0, (0.0, 0.0), angle=base)
+    band = scaling._TOUCH_EXTENTS * math.hypot(0.5, 0.1)
+    edge = base + math.asin(band / width)
+    cos_a, sin_a = math.cos(base), math.sin(base)
+    corner = (cos_a * 0.05 - sin_a * 0.1, sin_a * 0.05 + cos_a * 0.1)  # on a's top face
+    flipped = 0
+    for step in range(-300, 300):
+        angle = edge + step * 1e-18
+        cos_b, sin_b = math.cos(angle), math.sin(angle)
+        centre = (corner[0] + cos_b * width / 2 - sin_b * height / 2,
+                  corner[1] + sin_b * width / 2 + cos_b * height / 2)
+        upper = Body("b", Box(width, height), 1.0, centre, angle=angle,
+                     velocity=(sin_a * 0.25, -cos_a * 0.25), angular_velocity=-0.05)
+        scene = Scene((lower, upper), 0.5, 0.3)
+        decisions = set()
+        for ways in ((0, 0), (1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (-1, -1)):
+            monkeypatch.setattr(scaling, "math", _nudged_math(*ways))
+            decisions.add(scaling._scale_decision(scene, _extent(scene))[2:])
+        monkeypatch.setattr(scaling, "math", math)
+        if len({scale for scale, _ in decisions}) > 1:
+            flipped += 1
+            assert all(at_boundary for _, at_boundary in decisions), (step, decisions)
+    assert flipped > 0  # the window holds the edge

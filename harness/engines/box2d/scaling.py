@@ -152,7 +152,8 @@ def _first_touch(scene: Scene, extent: float | None = None) -> tuple[float, floa
         rod, disk = (body_a, body_b) if kinds[0] == "rod" else (body_b, body_a)
         return (*_rod_disk_speed(rod, disk), ())
     if kinds[0] in _POLYGONS and kinds[1] in _POLYGONS:
-        return _polygons_speed(scene, extent), _pair_bound(scene, extent), ()
+        speed, others = _polygons_speed(scene, extent)
+        return speed, _pair_bound(scene, extent), others
     return (*_geometry_speed(scene), ())
 
 
@@ -192,13 +193,16 @@ def _world_points(body) -> list:
     return [(cos * x - sin * y + x_0, sin * x + cos * y + y_0) for x, y in _outline(body.shape)]
 
 
-def _polygons_speed(scene: Scene, extent: float) -> float:
+def _polygons_speed(scene: Scene, extent: float) -> tuple[float, tuple]:
     """:func:`first_touch_speed` of two convex polygons, as
     :func:`harness.scene.geometry.scene_contacts` finds their contact: the normal of the
     face of least penetration (separating axes: every edge of both), the contact the
     overlap of the points within the touch band of that face on both bodies, along the
     face; the relative normal velocity is linear along the face, so its largest value is at
-    an end of that overlap."""
+    an end of that overlap. With it the speeds another machine's rounding could give, where
+    a point lies at the touch band's edge (the overlap's ends between those with only the
+    points surely in and those with every point possibly in): :func:`_first_touch`'s third
+    value. (Two faces of equal separation, another such decision, are not looked for.)"""
     body_a, body_b = scene.bodies
     points_a, points_b = _world_points(body_a), _world_points(body_b)
     best = None
@@ -219,24 +223,47 @@ def _polygons_speed(scene: Scene, extent: float) -> float:
     _, n_x, n_y = best
     t_x, t_y = n_y, -n_x
     band = _TOUCH_EXTENTS * extent
-    # Each body's points nearest the other along the normal, and their extent along t.
-    ends = []
+    # A height x·n_x + y·n_y carries u of |x| + |y| per operation, and the normal's rounding
+    # (u of the positions over a face's length) times |x| + |y|: ``slack`` covers a height
+    # and the edge ``near`` here, twice it another machine's.
+    reach = max(abs(x) + abs(y) for x, y in points_a + points_b)
+    shortest = min(math.hypot(x_1 - x_0, y_1 - y_0)
+                   for points in (points_a, points_b)
+                   for (x_0, y_0), (x_1, y_1) in zip(points, points[1:] + points[:1])
+                   if (x_0, y_0) != (x_1, y_1))
+    slack = 16.0 * _UNIT_ROUNDOFF * reach * (1.0 + reach / shortest)
+    # Each body's points nearest the other along the normal, and their extent along t (also
+    # with only the points surely within the band, and with every point possibly within it).
+    ends, inner, outer = [], [], []
     for side, points in ((1.0, points_a), (-1.0, points_b)):
         heights = [side * (x * n_x + y * n_y) for x, y in points]
         near = max(heights) - band
         along = [x * t_x + y * t_y for (x, y), height in zip(points, heights) if height >= near]
         ends.append((min(along), max(along)))
+        sure = [x * t_x + y * t_y for (x, y), height in zip(points, heights)
+                if height >= near + 2.0 * slack]
+        maybe = [x * t_x + y * t_y for (x, y), height in zip(points, heights)
+                 if height >= near - 2.0 * slack]
+        inner.append((min(sure), max(sure)) if sure else ends[-1])
+        outer.append((min(maybe), max(maybe)))
     low, high = max(ends[0][0], ends[1][0]), min(ends[0][1], ends[1][1])
     (ax, ay), (bx, by) = body_a.position, body_b.position
     rate_a, rate_b = body_a.angular_velocity, body_b.angular_velocity
     # Any point on the line along t at ``along``: its offset along n adds nothing to v_n.
-    fastest = -math.inf
-    for along in (low, high):
+    def approach(along: float) -> float:
         x, y = along * t_x, along * t_y
         dv_x = (body_b.velocity[0] - rate_b * (y - by)) - (body_a.velocity[0] - rate_a * (y - ay))
         dv_y = (body_b.velocity[1] + rate_b * (x - bx)) - (body_a.velocity[1] + rate_a * (x - ax))
-        fastest = max(fastest, -(dv_x * n_x + dv_y * n_y))
-    return fastest
+        return -(dv_x * n_x + dv_y * n_y)
+
+    fastest = max(approach(low), approach(high))
+    if inner == ends and outer == ends:
+        return fastest, ()
+    # Linear along t: the extremes of the largest end's speed at the ranges' corners.
+    lows = (max(inner[0][0], inner[1][0]), max(outer[0][0], outer[1][0]))
+    highs = (min(inner[0][1], inner[1][1]), min(outer[0][1], outer[1][1]))
+    others = {max(approach(one), approach(other)) for one in lows for other in highs}
+    return fastest, tuple(sorted(others - {fastest}))
 
 
 def _geometry_speed(scene: Scene) -> tuple[float, float]:
