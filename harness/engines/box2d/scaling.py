@@ -219,19 +219,16 @@ def _polygons_speed(scene: Scene, extent: float) -> tuple[float, tuple]:
                 if height < separation:  # noqa: PLR1730 - hot path
                     separation = height
             if best is None or separation > best[0]:
-                best = (separation, sign * n_x, sign * n_y)  # from A into B
-    _, n_x, n_y = best
+                best = (separation, sign * n_x, sign * n_y, edge)  # from A into B
+    _, n_x, n_y, face = best
     t_x, t_y = n_y, -n_x
     band = _TOUCH_EXTENTS * extent
     # A height x·n_x + y·n_y carries u of |x| + |y| per operation, and the normal's rounding
-    # (u of the positions over a face's length) times |x| + |y|: ``slack`` covers a height
+    # (u of the positions over its face's length) times |x| + |y|: ``slack`` covers a height
     # and the edge ``near`` here, twice it another machine's.
-    reach = max(abs(x) + abs(y) for x, y in points_a + points_b)
-    shortest = min(math.hypot(x_1 - x_0, y_1 - y_0)
-                   for points in (points_a, points_b)
-                   for (x_0, y_0), (x_1, y_1) in zip(points, points[1:] + points[:1])
-                   if (x_0, y_0) != (x_1, y_1))
-    slack = 16.0 * _UNIT_ROUNDOFF * reach * (1.0 + reach / shortest)
+    reach = max(max(abs(x) + abs(y) for x, y in points_a),
+                max(abs(x) + abs(y) for x, y in points_b))
+    slack = 16.0 * _UNIT_ROUNDOFF * reach * (1.0 + reach / face)
     # Each body's points nearest the other along the normal, and their extent along t (also
     # with only the points surely within the band, and with every point possibly within it).
     ends, inner, outer = [], [], []
@@ -240,6 +237,10 @@ def _polygons_speed(scene: Scene, extent: float) -> tuple[float, tuple]:
         near = max(heights) - band
         along = [x * t_x + y * t_y for (x, y), height in zip(points, heights) if height >= near]
         ends.append((min(along), max(along)))
+        if all(abs(height - near) > 2.0 * slack for height in heights):
+            inner.append(ends[-1])
+            outer.append(ends[-1])
+            continue
         sure = [x * t_x + y * t_y for (x, y), height in zip(points, heights)
                 if height >= near + 2.0 * slack]
         maybe = [x * t_x + y * t_y for (x, y), height in zip(points, heights)
