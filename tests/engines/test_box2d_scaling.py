@@ -215,3 +215,28 @@ def test_a_corner_at_the_touch_bands_edge_between_two_boxes_is_at_the_boundary(m
             flipped += 1
             assert all(at_boundary for _, at_boundary in decisions), (step, decisions)
     assert flipped > 0  # the window holds the edge
+
+
+def test_a_corner_on_a_corner_is_a_decision_at_the_boundary(monkeypatch):
+    # Two boxes corner to corner: A's top face and its right face are equally the face of
+    # least penetration, and which one wins (so the normal, and the speed: 0.24 m/s along
+    # one, 0.26 along the other) rests on the last bits of cos and sin.
+    from harness.engines.box2d.building import _extent
+
+    flipped = 0
+    for step in range(40):
+        angle = 0.3 + step * 1e-3
+        cos, sin = math.cos(angle), math.sin(angle)
+        lower = Body("a", Box(0.4, 0.1), 1.0, (0.0, 0.0), angle=angle)
+        upper = Body("b", Box(0.4, 0.1), 1.0, (cos * 0.4 - sin * 0.1, sin * 0.4 + cos * 0.1),
+                     angle=angle, velocity=(-cos * 0.26 + sin * 0.24, -sin * 0.26 - cos * 0.24))
+        scene = Scene((lower, upper), 0.5, 0.3)
+        decisions = set()
+        for ways in ((0, 0), (1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (-1, -1)):
+            monkeypatch.setattr(scaling, "math", _nudged_math(*ways))
+            decisions.add(scaling._scale_decision(scene, _extent(scene))[2:])
+        monkeypatch.setattr(scaling, "math", math)
+        if len({scale for scale, _ in decisions}) > 1:
+            flipped += 1
+            assert all(at_boundary for _, at_boundary in decisions), (angle, decisions)
+    assert flipped > 0

@@ -199,13 +199,15 @@ def _polygons_speed(scene: Scene, extent: float) -> tuple[float, tuple]:
     face of least penetration (separating axes: every edge of both), the contact the
     overlap of the points within the touch band of that face on both bodies, along the
     face; the relative normal velocity is linear along the face, so its largest value is at
-    an end of that overlap. With it the speeds another machine's rounding could give, where
-    a point lies at the touch band's edge (the overlap's ends between those with only the
-    points surely in and those with every point possibly in): :func:`_first_touch`'s third
-    value. (Two faces of equal separation, another such decision, are not looked for.)"""
+    an end of that overlap. With it the speeds another machine's rounding could give
+    (:func:`_first_touch`'s third value): where a point lies at the touch band's edge (the
+    overlap's ends between those with only the points surely in and those with every point
+    possibly in), and where another face's separation is the least penetration's within
+    rounding (a corner on a corner: that face's normal and contact)."""
     body_a, body_b = scene.bodies
     points_a, points_b = _world_points(body_a), _world_points(body_b)
     best = None
+    faces = []
     for sign, reference, incident in ((1.0, points_a, points_b), (-1.0, points_b, points_a)):
         for index, (x_0, y_0) in enumerate(reference):
             x_1, y_1 = reference[index - len(reference) + 1]
@@ -218,17 +220,39 @@ def _polygons_speed(scene: Scene, extent: float) -> tuple[float, tuple]:
                 height = (x - x_0) * n_x + (y - y_0) * n_y
                 if height < separation:  # noqa: PLR1730 - hot path
                     separation = height
+            face = (separation, sign * n_x, sign * n_y, edge)  # from A into B
+            faces.append(face)
             if best is None or separation > best[0]:
-                best = (separation, sign * n_x, sign * n_y, edge)  # from A into B
-    _, n_x, n_y, face = best
-    t_x, t_y = n_y, -n_x
-    band = _TOUCH_EXTENTS * extent
+                best = face
     # A height x·n_x + y·n_y carries u of |x| + |y| per operation, and the normal's rounding
     # (u of the positions over its face's length) times |x| + |y|: ``slack`` covers a height
-    # and the edge ``near`` here, twice it another machine's.
+    # (a separation) and the edge ``near`` here, twice it another machine's.
     reach = max(max(abs(x) + abs(y) for x, y in points_a),
                 max(abs(x) + abs(y) for x, y in points_b))
-    slack = 16.0 * _UNIT_ROUNDOFF * reach * (1.0 + reach / face)
+
+    def slack_of(face: float) -> float:
+        return 16.0 * _UNIT_ROUNDOFF * reach * (1.0 + reach / face)
+
+    fastest, others = _polygons_contact(body_a, body_b, points_a, points_b, best[1], best[2],
+                                        _TOUCH_EXTENTS * extent, slack_of(best[3]))
+    others = set(others)
+    for face in faces:  # another face as good within rounding: its contact's speeds too
+        if face is not best and face[0] >= best[0] - 2.0 * (slack_of(face[3])
+                                                              + slack_of(best[3])):
+            speed, more = _polygons_contact(body_a, body_b, points_a, points_b, face[1],
+                                            face[2], _TOUCH_EXTENTS * extent,
+                                            slack_of(face[3]))
+            others.update((speed, *more))
+    return fastest, tuple(sorted(others - {fastest}))
+
+
+def _polygons_contact(body_a, body_b, points_a, points_b, n_x: float, n_y: float,
+                      band: float, slack: float) -> tuple[float, tuple]:
+    """:func:`_polygons_speed` at the normal ``(n_x, n_y)`` (from A into B): the fastest
+    approach at the ends of the overlap of the points within ``band`` of each body's
+    nearest, and the speeds with the points within ``2·slack`` of that band's edge in or
+    out."""
+    t_x, t_y = n_y, -n_x
     # Each body's points nearest the other along the normal, and their extent along t (also
     # with only the points surely within the band, and with every point possibly within it).
     ends, inner, outer = [], [], []
@@ -250,6 +274,7 @@ def _polygons_speed(scene: Scene, extent: float) -> tuple[float, tuple]:
     low, high = max(ends[0][0], ends[1][0]), min(ends[0][1], ends[1][1])
     (ax, ay), (bx, by) = body_a.position, body_b.position
     rate_a, rate_b = body_a.angular_velocity, body_b.angular_velocity
+
     # Any point on the line along t at ``along``: its offset along n adds nothing to v_n.
     def approach(along: float) -> float:
         x, y = along * t_x, along * t_y
