@@ -123,12 +123,20 @@ class World:
                                        self.plant_context)
         self.positions = partial(plant.GetPositions, self.plant_context)
         self.velocities = partial(plant.GetVelocities, self.plant_context)
+        # The plant's discrete state [q; v] as a numpy view of the context's own vector (no
+        # copy, no call): a step writes its values in place (tests/engines/test_drake.py).
+        self.state = self.plant_context.get_discrete_state_vector().get_value()
+        self.positions_count = plant.num_positions()
         self.source = plant.get_source_id()
         self.time_step = float(settings["time_step"])
         self.extents = [body_extent(body.shape) for body in scene.bodies]
         # The geometry of the scene's body B (the last; one geometry a body): a point pair
         # whose Drake B it is reports the force on the scene's B.
         self.geometry_b = self.geometries[-1]
+        # +1 when a point pair's Drake B is the scene's body B, -1 the other way round: read
+        # at a run's first contact step and kept (Drake orders a pair's ids, id_A < id_B, so
+        # the one pair of two geometries keeps its order).
+        self.sign = None
         self.steps = 0
         self.held = None  # the contact properties the geometry holds (by value)
 
