@@ -185,10 +185,12 @@ def test_sap_loses_the_normal_impulse_beside_a_large_tangential_speed(engine):
 @needs_drake
 @pytest.mark.parametrize("preset", ["defaults", "accurate"])
 def test_one_pair_read_out_is_the_general_one_and_the_state_view_the_plants(engine, preset):
-    """At every step of survey runs (a body on the ground, two bodies): the one-pair read-out
-    gives what the general one gives from the same contact results (which reads the pair's
-    order at every pair, where the fast path keeps the run's first), and the view of the
-    context's state vector holds GetPositions and GetVelocities (after a reset too)."""
+    """At every step of survey runs (a body on the ground, two bodies): the contact results
+    the step read (the port's value, held, brought up to date by EvalAbstract) are the
+    port's Eval; the one-pair read-out gives what the general one gives from them (which
+    reads the pair's order at every pair, where the fast path keeps the run's first); and
+    the view of the context's state vector holds GetPositions and GetVelocities (after a
+    reset too)."""
     from harness.survey.population import resolve_populations
     from harness.survey.sampling import sample_population
 
@@ -214,6 +216,7 @@ def test_one_pair_read_out_is_the_general_one_and_the_state_view_the_plants(engi
                     continue
                 contact_steps += 1
                 results = world.contact_results()
+                assert results is world.results  # the held value is the port's
                 assert raw == engine._several_pairs(world, results, 1)
                 assert engine._read_poses(world) == tuple(
                     tuple(q) for q in world.positions().reshape(-1, 3).tolist())

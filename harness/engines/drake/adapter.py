@@ -207,7 +207,8 @@ class DrakeEngine(Engine):
         world.steps += 1
         world.advance_to(world.steps * world.time_step)
         # Sampled output port: the contact the step just taken solved (from its start state)
-        results = world.contact_results()
+        world.update_contact_results()
+        results = world.results
         count = results.num_point_pair_contacts()
         if count != 1:
             return self._several_pairs(world, results, count) if count else None
