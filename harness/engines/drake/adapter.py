@@ -88,8 +88,9 @@ class DrakeEngine(Engine):
                                       "stiffness and Hunt–Crossley dissipation from a 1 mm "
                                       "penetration allowance set the bounce (0.02 m/s of a "
                                       "1 or 3 m/s drop for any e)"}
-    # A 500-step contact at ~20 µs a step (Python drives every step): the slowest pair by
-    # far, so a default survey runs Drake at defaults only (`impact-harness bench --survey`).
+    # A 500-step contact at ~15-20 µs a step (Python drives every step and reads its contact):
+    # the slowest pair by far, so a default survey runs Drake at defaults only
+    # (`impact-harness bench --survey`; docs/populations.md).
     survey_left_out = {"accurate": "hundreds of Python-driven steps per impact: the slowest "
                                    "pair by far"}
     # Hunt–Crossley's dissipation d (s/m) as a number, what sets Drake's bounce in place of
