@@ -210,6 +210,8 @@ class DrakeEngine(Engine):
         # Sampled output port: the contact the step just taken solved (from its start state)
         world.update_contact_results()
         results = world.results
+        if results is None:  # the world's first step with a read-out
+            results = world.results = world.contact_results()
         count = results.num_point_pair_contacts()
         if count != 1:
             return self._several_pairs(world, results, count) if count else None
