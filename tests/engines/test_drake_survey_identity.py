@@ -6,10 +6,11 @@ on the machine that recorded them).
 The stored file (see tests/engines/survey_identity.py) holds 350 survey scenes and, per
 preset, the values of each of their runs -- velocities, status, steps, impulses, energies,
 drift, the contact record, derived values and notes -- recorded with the adapter at commit
-1a3f597 (``run_many``). Drake's step is Eigen code built into its wheel (no BLAS), but the
+1a3f597 (``run_many``). Drake's step is Eigen code built into its wheel (libdrake.so holds
+and links no BLAS; it does call glibc's libm, whose functions pick their code by CPU), and the
 adapter's stiffness comes from the scene's normal effective mass through numpy's
-``linalg.solve`` (LAPACK): on another CPU it may move in its last bits, which 500 steps of a
-contact carry on; hence the band, not bits.
+``linalg.solve`` (OpenBLAS's LAPACK, kernels by CPU): on another CPU a run may move in its
+last bits, which 500 steps of a contact carry on; hence the band, not bits.
 """
 
 from __future__ import annotations
