@@ -180,3 +180,46 @@ def test_sap_loses_the_normal_impulse_beside_a_large_tangential_speed(engine):
     lagged = engine.run(scene, preset="accurate",
                         overrides={"discrete_contact_approximation": "lagged"})
     assert lagged.velocities[0][1] == pytest.approx(0.8793 * 0.5e-3, rel=1e-3)
+
+
+@needs_drake
+@pytest.mark.parametrize("preset", ["defaults", "accurate"])
+def test_one_pair_read_out_is_the_general_one_and_the_state_view_the_plants(engine, preset):
+    """At every step of survey runs (a body on the ground, two bodies): the contact results
+    the step read (the port's value, held, brought up to date by EvalAbstract) are the
+    port's Eval; the one-pair read-out gives what the general one gives from them (which
+    reads the pair's order at every pair, where the fast path keeps the run's first); and
+    the view of the context's state vector holds GetPositions and GetVelocities (after a
+    reset too)."""
+    from harness.survey.population import resolve_populations
+    from harness.survey.sampling import sample_population
+
+    settings = engine.settings(preset)
+    scenes = [sample.scene for population in resolve_populations([])
+              for sample in sample_population(population, 2, seed=5).samples]
+    assert {len(scene.bodies) for scene in scenes} == {1, 2}
+    signs = set()
+    for scene in scenes:
+        plan = engine._plan_for(scene, settings)
+        world = plan.world
+        for _ in range(2):  # a second reset of the same world reads the same way
+            engine._reset(world, plan.prepared)
+            contact_steps = 0
+            for _ in range(plan.max_steps):
+                raw = engine._step(world)
+                plant = world.plant
+                assert world.state.tolist() == (plant.GetPositions(world.plant_context).tolist()
+                                                + plant.GetVelocities(world.plant_context).tolist())
+                if raw is None:
+                    if contact_steps:
+                        break
+                    continue
+                contact_steps += 1
+                results = world.contact_results()
+                assert results is world.results  # the held value is the port's
+                assert raw == engine._several_pairs(world, results, 1)
+                assert engine._read_poses(world) == tuple(
+                    tuple(q) for q in world.positions().reshape(-1, 3).tolist())
+            assert contact_steps > 0, scene.name
+            signs.add(world.sign)
+    assert signs == {1.0, -1.0}  # both orders of the pair met

@@ -88,8 +88,9 @@ class DrakeEngine(Engine):
                                       "stiffness and Hunt–Crossley dissipation from a 1 mm "
                                       "penetration allowance set the bounce (0.02 m/s of a "
                                       "1 or 3 m/s drop for any e)"}
-    # A 500-step contact at ~20 µs a step (Python drives every step): the slowest pair by
-    # far, so a default survey runs Drake at defaults only (`impact-harness bench --survey`).
+    # A 500-step contact at ~15-20 µs a step (Python drives every step and reads its contact):
+    # the slowest pair by far, so a default survey runs Drake at defaults only
+    # (`impact-harness bench --survey`; docs/populations.md).
     survey_left_out = {"accurate": "hundreds of Python-driven steps per impact: the slowest "
                                    "pair by far"}
     # Hunt–Crossley's dissipation d (s/m) as a number, what sets Drake's bounce in place of
@@ -196,6 +197,7 @@ class DrakeEngine(Engine):
             joint.set_angular_velocity(plant_context, v[2])
         world.simulator.Initialize()
         world.steps = 0
+        world.sign = None
         return dict(derived)
 
     def _advance(self, world: World) -> None:
@@ -206,10 +208,33 @@ class DrakeEngine(Engine):
         world.steps += 1
         world.advance_to(world.steps * world.time_step)
         # Sampled output port: the contact the step just taken solved (from its start state)
-        results = world.contact_results()
+        world.update_contact_results()
+        results = world.results
+        if results is None:  # the world's first step with a read-out
+            results = world.results = world.contact_results()
         count = results.num_point_pair_contacts()
-        if not count:
-            return None
+        if count != 1:
+            return self._several_pairs(world, results, count) if count else None
+        # One point pair, the scene's two geometries (the ground and a body, or two bodies):
+        # the fewest binding calls, every value as the general read-out below reads it.
+        info = results.point_pair_contact_info(0)
+        pair = info.point_pair()
+        sign = world.sign
+        if sign is None:  # the run's first contact: which of the pair is the scene's B
+            sign = world.sign = 1.0 if pair.id_B == world.geometry_b else -1.0
+        force_x, force_y, _ = info.contact_force().tolist()  # on Drake's body B
+        n_x, n_y, _ = pair.nhat_BA_W.tolist()  # from Drake's body B into its body A
+        point_x, point_y, _ = info.contact_point().tolist()
+        h = world.time_step
+        normal = (-sign * n_x, -sign * n_y)
+        impulse_x = 0.0 + sign * force_x * h  # the general read-out's sum, from 0.0
+        impulse_y = 0.0 + sign * force_y * h
+        normal_impulse = abs(impulse_x * normal[0] + impulse_y * normal[1])
+        return ((point_x, point_y, pair.depth),), normal, None, normal_impulse
+
+    def _several_pairs(self, world: World, results, count: int) -> RawContacts:
+        """The contact of a step with ``count`` point pairs (not met with one pair of
+        geometries a scene; kept general)."""
         points = []
         impulse_x = impulse_y = 0.0
         normal = None
@@ -240,12 +265,15 @@ class DrakeEngine(Engine):
         return tuple(points), normal, None, normal_impulse
 
     def _read_poses(self, world: World) -> tuple:
-        q = world.positions().tolist()
-        return tuple([(q[i], q[i + 1], q[i + 2]) for i in range(0, len(q), 3)])
+        x = world.state.tolist()  # [q; v], q and v (x, y, θ) and (v_x, v_y, ω) per body
+        if world.positions_count == 3:  # one body (on the ground): the loop's hot path
+            return ((x[0], x[1], x[2]),)
+        return tuple([(x[i], x[i + 1], x[i + 2]) for i in range(0, world.positions_count, 3)])
 
     def _read_velocities(self, world: World) -> tuple:
-        v = world.velocities().tolist()
-        return tuple([(v[i], v[i + 1], v[i + 2]) for i in range(0, len(v), 3)])
+        x = world.state.tolist()
+        return tuple([(x[i], x[i + 1], x[i + 2])
+                      for i in range(world.positions_count, len(x), 3)])
 
     def _out_of_plane_drift(self, world: World) -> float:
         """The body origin's z plus the tilt of its z axis times its size (0 by the joint)."""
