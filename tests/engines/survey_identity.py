@@ -20,7 +20,7 @@ populations or the survey's sampling leaves the pin on the old adapter. A change
 adapter's arithmetic, settings or records must regenerate the file on purpose, from a clean
 tree at COMMIT::
 
-    python tests/engines/survey_identity.py ENGINE COMMIT
+    python tests/engines/survey_identity.py ENGINE COMMIT [SAMPLES]
 
 (:func:`write_stored`), then point the test's ``STORED`` at the new file and delete the old.
 """
@@ -168,14 +168,14 @@ def read_stored(path: Path) -> Stored:
     return stored
 
 
-def write_stored(engine_name: str, commit: str) -> Path:
-    """Record the runs of survey scenes by ``engine_name``'s adapter as it is now, at
-    ``commit``, in :func:`stored_path`; return that path."""
+def write_stored(engine_name: str, commit: str, samples: int = SAMPLES) -> Path:
+    """Record the runs of survey scenes (``samples`` per population) by ``engine_name``'s
+    adapter as it is now, at ``commit``, in :func:`stored_path`; return that path."""
     from harness.engines import load_engine
     from harness.survey.cli import survey_scenes
     from harness.survey.population import resolve_populations
 
-    scenes = survey_scenes(resolve_populations([]), SAMPLES, 0)
+    scenes = survey_scenes(resolve_populations([]), samples, 0)
     engine = load_engine(engine_name)
     try:
         runs = {preset: [run_values(run, RUN_FIELDS)
@@ -190,13 +190,14 @@ def write_stored(engine_name: str, commit: str) -> Path:
     return path
 
 
-def assert_runs_unchanged(engine, path: Path, preset: str) -> None:
+def assert_runs_unchanged(engine, path: Path, preset: str, least: int = 300) -> None:
     """``engine``'s runs of the scenes stored at ``path`` under ``preset`` -- all of them by
     ``run_many``, every :data:`SINGLE_EVERY`-th alone by ``run`` -- have the stored values
-    (:func:`differences`); a run alone is its run in the batch, bit for bit (one machine)."""
+    (:func:`differences`); a run alone is its run in the batch, bit for bit (one machine).
+    ``least``: the fewest scenes the file must hold."""
     stored = read_stored(path)
     expected = stored.runs[preset]
-    assert len(stored.scenes) == len(expected) > 300
+    assert len(stored.scenes) == len(expected) > least
     settings = engine.settings(preset)
     batched = [run_values(run, stored.fields)
                for run in engine.run_many(stored.scenes, settings)]
@@ -220,4 +221,4 @@ def assert_runs_unchanged(engine, path: Path, preset: str) -> None:
 if __name__ == "__main__":
     import sys
 
-    print(write_stored(sys.argv[1], sys.argv[2]))
+    print(write_stored(sys.argv[1], sys.argv[2], *map(int, sys.argv[3:4])))

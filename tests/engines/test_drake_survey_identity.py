@@ -3,7 +3,9 @@ per-step read-out (one point pair read with the fewest binding calls, the state 
 view of the context's vector), to the bound of tests/engines/survey_identity.py (bit for bit
 on the machine that recorded them).
 
-The stored file (see tests/engines/survey_identity.py) holds 350 survey scenes and, per
+The stored file (see tests/engines/survey_identity.py) holds 140 survey scenes (the first
+20 samples of each population, ``survey_identity.py drake COMMIT 20``: a Drake run under
+``accurate`` is 500 steps driven from Python, and the pin runs again on every kernel) and, per
 preset, the values of each of their runs -- velocities, status, steps, impulses, energies,
 drift, the contact record, derived values and notes -- recorded with the adapter at commit
 1a3f597 (``run_many``). Drake's step is Eigen code built into its wheel (libdrake.so holds
@@ -30,4 +32,4 @@ pytestmark = pytest.mark.kernel_sensitive
 
 @pytest.mark.parametrize("preset", ["defaults", "accurate"])
 def test_survey_runs_are_those_stored_within_the_bound(survey_identity, load_or_skip, preset):
-    survey_identity.assert_runs_unchanged(load_or_skip("drake"), STORED, preset)
+    survey_identity.assert_runs_unchanged(load_or_skip("drake"), STORED, preset, least=100)
