@@ -41,9 +41,13 @@ def body_extent(shape) -> float:
 
 
 def _vertex_extent(shape) -> float:
-    """:func:`body_extent` of a shape with vertices (a box or polygon)."""
-    vertices = shape.vertices()
-    return float(np.max(np.hypot(vertices[:, 0], vertices[:, 1])))
+    """:func:`body_extent` of a shape with vertices (a box or polygon): numpy's hypot
+    (libm's, which ``math.hypot`` is not bit for bit) of each vertex, the largest; a box's
+    four are one (its vertices differ only in sign)."""
+    if shape.kind == "box":
+        return float(np.hypot(shape.width / 2.0, shape.height / 2.0))
+    points = shape.points
+    return float(np.max(np.hypot([float(x) for x, _ in points], [float(y) for _, y in points])))
 
 
 _EXTENTS: dict = {}  # box or polygon -> its body_extent

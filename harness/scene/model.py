@@ -113,18 +113,24 @@ class Polygon:
     def inertia_per_mass(self) -> float:
         """Uniform-density polygon about the body origin (its centre of mass), per unit mass.
 
-        Worked out once per polygon (numpy on a few points, whose fixed cost per call
-        dominates; every engine, preset and check asks for it) and kept on the instance,
-        outside the dataclass fields.
+        Worked out once per polygon and kept on the instance, outside the dataclass
+        fields: each vertex's terms in plain floats (numpy's elementwise arithmetic, the
+        same roundings, costs µs a call on a few points), the two sums numpy's (its
+        pairwise order), so the value is what numpy alone gives, bit for bit.
         """
         known = self.__dict__.get("_inertia_per_mass")
         if known is not None:
             return known
-        x, y = self.vertices().T
-        x1, y1 = np.roll(x, -1), np.roll(y, -1)
-        cross = x * y1 - x1 * y
-        numerator = np.sum(cross * (x * x + x * x1 + x1 * x1 + y * y + y * y1 + y1 * y1))
-        value = float(numerator / (6.0 * np.sum(cross)))
+        points = self.points
+        count = len(points)
+        crosses, terms = [], []
+        for index in range(count):  # vertex k and k + 1 (np.roll(·, -1))
+            x, y = float(points[index][0]), float(points[index][1])
+            x1, y1 = map(float, points[index + 1 - count])
+            cross = x * y1 - x1 * y
+            crosses.append(cross)
+            terms.append(cross * (x * x + x * x1 + x1 * x1 + y * y + y * y1 + y1 * y1))
+        value = float(np.add.reduce(terms) / (6.0 * np.add.reduce(crosses)))
         object.__setattr__(self, "_inertia_per_mass", value)  # frozen: not a field
         return value
 

@@ -74,3 +74,32 @@ def test_a_box_has_its_corners_a_rod_its_caps_a_disk_none():
     centres, radius, names = feature_points(Rod(0.4, 0.01))
     assert radius == 0.01 and centres.tolist() == [[-0.2, 0.0], [0.2, 0.0]]
     assert feature_points(Disk(0.05))[2] == () and feature_points(Disk(0.05))[0].shape == (0, 2)
+
+
+def _random_shapes(count: int) -> list:
+    """Boxes and convex polygons of 3 to 20 vertices (points on a circle at sorted random
+    angles, about their centroid), of sizes over six decades."""
+    rng = np.random.default_rng(38)
+    shapes = []
+    for _ in range(count):
+        size = 10.0 ** rng.uniform(-3.0, 3.0)
+        shapes.append(Box(*(size * rng.uniform(0.05, 1.0, 2)).tolist()))
+        angles = np.sort(rng.uniform(0.0, 2.0 * np.pi, rng.integers(3, 21)))
+        points = size * np.column_stack([np.cos(angles), rng.uniform(0.2, 1.0) * np.sin(angles)])
+        points -= Polygon(tuple(map(tuple, points.tolist()))).centroid()
+        shapes.append(Polygon(tuple(map(tuple, points.tolist()))))
+    return shapes
+
+
+def test_extents_and_inertias_are_numpys_own_bit_for_bit():
+    """A box's or polygon's extent and a polygon's inertia per mass, worked out in plain
+    floats for speed, are what numpy's arrays give, bit for bit: its hypot (libm's, which
+    math.hypot is not) and its sums (pairwise order)."""
+    for shape in _random_shapes(2000):
+        assert features._vertex_extent(shape) == _extent_by_definition(shape)
+        if shape.kind == "polygon":
+            x, y = shape.vertices().T
+            x1, y1 = np.roll(x, -1), np.roll(y, -1)
+            cross = x * y1 - x1 * y
+            numerator = np.sum(cross * (x * x + x * x1 + x1 * x1 + y * y + y * y1 + y1 * y1))
+            assert shape.inertia_per_mass() == float(numerator / (6.0 * np.sum(cross)))
