@@ -13,11 +13,15 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
-from harness.engines.box2d.readout import _CIRCLES, _FACE_A, _READERS
+from harness.engines.box2d.readout import _B2, _CIRCLES, _FACE_A, _READERS
 from harness.engines.contract import RawContacts
 
 if TYPE_CHECKING:
     from harness.engines.box2d.world import _Readout
+
+# b2Body::GetLinearVelocityFromWorldPoint and a b2Vec2's fields, SWIG's functions.
+_velocity_at = _B2.b2Body_GetLinearVelocityFromWorldPoint
+_x_of, _y_of = _B2.b2Vec2_x_get, _B2.b2Vec2_y_get
 
 # ---------------------------------------------------------------------- contact readout
 def _manifold_geometry(values: tuple, pose_a: tuple, pose_b: tuple, radius_a: float,
@@ -72,25 +76,34 @@ def _manifold_geometry(values: tuple, pose_a: tuple, pose_b: tuple, radius_a: fl
     return (nx, ny), points
 
 
-def _approach_speed(values: tuple, view: _Readout) -> float:
+def _approach_speed(values: tuple, view: _Readout, poses: dict | None = None) -> float:
     """The normal approach speed at a touching contact's fastest point, computed as the
     solver computes ``v_rel`` (from the velocities before the step: call from PreSolve).
     ``values``: the contact (:func:`_contact_in`); ``view``: its impact's :class:`_Readout`
-    (the fixtures and bodies)."""
+    (the fixtures and bodies); ``poses``: the bodies' ``(x, y, cos θ, sin θ)`` by
+    :data:`_body_id` when known to be those now (None: read now; a PreSolve inside a
+    time-of-impact pass sees other poses than the step's start)."""
     _, radius_a, body_a_id = view.fixtures[values[2]]
     _, radius_b, body_b_id = view.fixtures[values[3]]
     body_a, body_b = view.by_id[body_a_id], view.by_id[body_b_id]
-    memory = view.memory
-    x_a, y_a, sin_a, cos_a = _READERS[0](body_a, body_a_id, memory)[:4]  # the poses now
-    x_b, y_b, sin_b, cos_b = _READERS[0](body_b, body_b_id, memory)[:4]
-    normal, points = _manifold_geometry(values, (x_a, y_a, cos_a, sin_a),
-                                        (x_b, y_b, cos_b, sin_b), radius_a, radius_b)
+    if poses is None:
+        memory = view.memory
+        x_a, y_a, sin_a, cos_a = _READERS[0](body_a, body_a_id, memory)[:4]  # the poses now
+        x_b, y_b, sin_b, cos_b = _READERS[0](body_b, body_b_id, memory)[:4]
+        pose_a, pose_b = (x_a, y_a, cos_a, sin_a), (x_b, y_b, cos_b, sin_b)
+    else:
+        pose_a, pose_b = poses[body_a_id], poses[body_b_id]
+    (normal_x, normal_y), points = _manifold_geometry(values, pose_a, pose_b, radius_a,
+                                                      radius_b)
     fastest = 0.0
     for x, y, _ in points:
-        va = body_a.GetLinearVelocityFromWorldPoint((x, y))
-        vb = body_b.GetLinearVelocityFromWorldPoint((x, y))
-        approach = -((vb[0] - va[0]) * normal[0] + (vb[1] - va[1]) * normal[1])
-        fastest = max(fastest, approach)
+        # Box2D's own float32 arithmetic, through SWIG's functions (pybox2d's methods and
+        # a vector's indexing each add a Python-level call).
+        va = _velocity_at(body_a, (x, y))
+        vb = _velocity_at(body_b, (x, y))
+        approach = -((_x_of(vb) - _x_of(va)) * normal_x + (_y_of(vb) - _y_of(va)) * normal_y)
+        if approach > fastest:  # noqa: PLR1730 - as max() kept the first of equals
+            fastest = approach
     return fastest
 
 
@@ -112,7 +125,8 @@ def _speed_after_collide(view: _Readout) -> float | None:
     touching = _READERS[1](view.body_b, state, view.memory)  # oldest first
     for values in reversed(touching):
         if values[17]:
-            return _approach_speed(values, view)
+            # The poses the bodies were placed at, read then (a collision pass moves none).
+            return _approach_speed(values, view, view.start)
     return None
 
 
