@@ -251,13 +251,58 @@ def bootstrap_interval(values: np.ndarray, prefix: str, generator) -> dict:
         return dict.fromkeys(names, math.nan)
     # In blocks of resamples of at most BOOTSTRAP_BLOCK values: the memory of a group of
     # any size is bounded (one block for up to BOOTSTRAP_BLOCK / 1,000 values, as before).
+    # Each block's quantiles from its draws' counts over the sorted values
+    # (:func:`resample_quantiles`: np.quantile's bits, without partitioning every resample).
     block = max(1, BOOTSTRAP_BLOCK // values.size)
+    order = np.argsort(values, kind="stable")
+    ordered = values[order]
+    rank = np.empty(values.size, dtype=np.intp)
+    rank[order] = np.arange(values.size)
+    quantiles = [q for _, q in INTERVAL_QUANTILES]
     estimates = np.concatenate([
-        np.quantile(values[generator.integers(0, values.size, size=(
-            min(block, BOOTSTRAP_RESAMPLES - first), values.size))],
-            [q for _, q in INTERVAL_QUANTILES], axis=1)
+        resample_quantiles(ordered, rank[generator.integers(0, values.size, size=(
+            min(block, BOOTSTRAP_RESAMPLES - first), values.size))], quantiles)
         for first in range(0, BOOTSTRAP_RESAMPLES, block)], axis=1)
     tail = (1.0 - INTERVAL) / 2.0
     ends = np.quantile(estimates, [tail, 1.0 - tail], axis=1)  # (2 ends, quantiles)
     return {name: float(ends[end, quantile]) for quantile in range(len(INTERVAL_QUANTILES))
             for end, name in enumerate(names[2 * quantile:2 * quantile + 2])}
+
+
+def resample_quantiles(ordered: np.ndarray, ranks: np.ndarray, quantiles) -> np.ndarray:
+    """``numpy.quantile(ordered[ranks], quantiles, axis=1)`` (its default, 'linear' method)
+    to the last bit, for ``ordered`` finite and sorted and ``ranks`` a ``(resamples, n)``
+    block of indices into it, each row as long as ``ordered``: each row's order statistics
+    from how often it drew each rank (the counts' running sum over the block, searched), then
+    numpy's own interpolation (``_get_indexes``, ``_get_gamma`` and ``_lerp`` of
+    numpy/lib/_function_base_impl.py, the same operations on the same values) -- no
+    partition of every resample (tests/survey/test_laws_and_statistics.py compares).
+    """
+    rows, count = ranks.shape
+    # running count of draws up to each rank, row after row: row j's counts sum to
+    # (j + 1) * count, so the whole block's running sum is one increasing array
+    offsets = np.arange(rows, dtype=np.intp)[:, None] * count
+    running = np.cumsum(np.bincount((ranks + offsets).ravel(), minlength=rows * count))
+    virtual = (count - 1) * np.asanyarray(quantiles, dtype=float)  # numpy's 'linear' index
+    previous = np.floor(virtual)
+    following = previous + 1
+    above = virtual >= count - 1
+    previous[above] = -1
+    following[above] = -1
+    gamma = np.asanyarray(virtual - previous, dtype=virtual.dtype)[:, None]
+    previous, following = previous.astype(np.intp), following.astype(np.intp)
+
+    def order_statistic(position):
+        # the value of sorted rank `position` (-1: the last) of each resample: the first
+        # rank whose running count passes it
+        position = np.where(position < 0, count + position, position)
+        targets = offsets + position[None, :]  # (rows, quantiles)
+        found = np.searchsorted(running, targets, side="right") - offsets
+        return ordered[found].T  # (quantiles, rows)
+
+    low, high = order_statistic(previous), order_statistic(following)
+    step = high - low
+    result = np.add(low, step * gamma)
+    np.subtract(high, step * (1 - gamma), out=result, where=gamma >= 0.5,
+                casting="unsafe", dtype=type(result.dtype))
+    return result

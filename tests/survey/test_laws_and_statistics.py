@@ -235,6 +235,68 @@ def test_linear_quantile_is_numpys_to_the_bit():
                 np.float64(expected).tobytes(), (count, q)
 
 
+
+def test_resample_quantiles_are_numpys_to_the_bit():
+    # Groups of 2 to 100,000 values, with ties and exact zeros, every quantile the
+    # statistics use and a few more (the ends included): the counts' order statistics and
+    # numpy's interpolation give np.quantile's bits on the same resamples.
+    rng = np.random.default_rng(38)
+    quantiles = [q for _, q in statistics.INTERVAL_QUANTILES + statistics.QUANTILES] + [
+        0.0, 0.025, 0.975, 0.1, 1 / 3, 0.999]
+    sizes = [2, 3, 4, 5, 7, 10, 19, 20, 21, 99, 100, 101, 999, 1000, 1001, 4999, 100_000]
+    sizes += rng.integers(2, 3000, 120).tolist()
+    for case, count in enumerate(sizes):
+        values = rng.lognormal(-8.0, 4.0, count)
+        if case % 3 == 1:  # ties and exact zeros
+            values = np.round(values * 1e3, 0) / 1e3
+        elif case % 3 == 2:  # few distinct values
+            values = rng.integers(0, 4, count) * 0.25
+        ranks, ordered = _ranks(values)
+        draws = rng.integers(0, count, size=(max(1, min(40, 400_000 // count)), count))
+        expected = np.quantile(values[draws], quantiles, axis=1)
+        found = statistics.resample_quantiles(ordered, ranks[draws], quantiles)
+        assert found.shape == expected.shape and found.tobytes() == expected.tobytes(), count
+
+
+def _ranks(values):
+    order = np.argsort(values, kind="stable")
+    ranks = np.empty(values.size, dtype=np.intp)
+    ranks[order] = np.arange(values.size)
+    return ranks, values[order]
+
+
+def reference_bootstrap_interval(values, prefix, generator):
+    """statistics.bootstrap_interval as first written: np.quantile of each block of
+    resamples."""
+    names = [f"{prefix}_{name}_{end}" for name, _ in statistics.INTERVAL_QUANTILES
+             for end in ("low", "high")]
+    if values.size < 2:
+        return dict.fromkeys(names, math.nan)
+    block = max(1, statistics.BOOTSTRAP_BLOCK // values.size)
+    estimates = np.concatenate([
+        np.quantile(values[generator.integers(0, values.size, size=(
+            min(block, statistics.BOOTSTRAP_RESAMPLES - first), values.size))],
+            [q for _, q in statistics.INTERVAL_QUANTILES], axis=1)
+        for first in range(0, statistics.BOOTSTRAP_RESAMPLES, block)], axis=1)
+    tail = (1.0 - statistics.INTERVAL) / 2.0
+    ends = np.quantile(estimates, [tail, 1.0 - tail], axis=1)
+    return {name: float(ends[end, quantile])
+            for quantile in range(len(statistics.INTERVAL_QUANTILES))
+            for end, name in enumerate(names[2 * quantile:2 * quantile + 2])}
+
+
+@pytest.mark.parametrize("count", [0, 1, 2, 3, 20, 257, 1000, 1001, 2500])
+def test_bootstrap_interval_is_the_np_quantile_one_to_the_bit(count):
+    # one block (up to 1,000 values) and several (1,001 and 2,500: blocks of 999 and 400)
+    rng = np.random.default_rng(count)
+    for values in (rng.lognormal(-3.0, 1.0, count), np.round(rng.random(count), 1)):
+        found = statistics.bootstrap_interval(values, "x", np.random.default_rng([5, count]))
+        expected = reference_bootstrap_interval(values, "x", np.random.default_rng([5, count]))
+        assert list(found) == list(expected)
+        assert np.array(list(found.values())).tobytes() == \
+            np.array(list(expected.values())).tobytes()
+
+
 def reference_statistics(runs):
     """statistics.statistics as first written: np.quantile and np.mean per group."""
     keys = list(zip(runs["engine"], runs["preset"], runs["family"], runs["poisson_type"]))
