@@ -282,7 +282,8 @@ def resample_quantiles(ordered: np.ndarray, ranks: np.ndarray, quantiles) -> np.
     # running count of draws up to each rank, row after row: row j's counts sum to
     # (j + 1) * count, so the whole block's running sum is one increasing array
     offsets = np.arange(rows, dtype=np.intp)[:, None] * count
-    running = np.cumsum(np.bincount((ranks + offsets).ravel(), minlength=rows * count))
+    running = np.bincount((ranks + offsets).ravel(), minlength=rows * count)
+    np.cumsum(running, out=running)
     virtual = (count - 1) * np.asanyarray(quantiles, dtype=float)  # numpy's 'linear' index
     previous = np.floor(virtual)
     following = previous + 1
