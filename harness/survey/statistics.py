@@ -261,7 +261,8 @@ def bootstrap_interval(values: np.ndarray, prefix: str, generator) -> dict:
     quantiles = [q for _, q in INTERVAL_QUANTILES]
     estimates = np.concatenate([
         resample_quantiles(ordered, rank[generator.integers(0, values.size, size=(
-            min(block, BOOTSTRAP_RESAMPLES - first), values.size))], quantiles)
+            min(block, BOOTSTRAP_RESAMPLES - first), values.size))], quantiles,
+            overwrite=True)
         for first in range(0, BOOTSTRAP_RESAMPLES, block)], axis=1)
     tail = (1.0 - INTERVAL) / 2.0
     ends = np.quantile(estimates, [tail, 1.0 - tail], axis=1)  # (2 ends, quantiles)
@@ -269,7 +270,8 @@ def bootstrap_interval(values: np.ndarray, prefix: str, generator) -> dict:
             for end, name in enumerate(names[2 * quantile:2 * quantile + 2])}
 
 
-def resample_quantiles(ordered: np.ndarray, ranks: np.ndarray, quantiles) -> np.ndarray:
+def resample_quantiles(ordered: np.ndarray, ranks: np.ndarray, quantiles,
+                       overwrite: bool = False) -> np.ndarray:
     """``numpy.quantile(ordered[ranks], quantiles, axis=1)`` (its default, 'linear' method)
     to the last bit, for ``ordered`` finite and sorted and ``ranks`` a ``(resamples, n)``
     block of indices into it, each row as long as ``ordered``: each row's order statistics
@@ -277,12 +279,16 @@ def resample_quantiles(ordered: np.ndarray, ranks: np.ndarray, quantiles) -> np.
     numpy's own interpolation (``_get_indexes``, ``_get_gamma`` and ``_lerp`` of
     numpy/lib/_function_base_impl.py, the same operations on the same values) -- no
     partition of every resample (tests/survey/test_laws_and_statistics.py compares).
+    ``overwrite``: ``ranks`` may be overwritten (a block's array fewer: each fresh array of
+    a few MB costs its page faults, more than the arithmetic).
     """
     rows, count = ranks.shape
     # running count of draws up to each rank, row after row: row j's counts sum to
     # (j + 1) * count, so the whole block's running sum is one increasing array
     offsets = np.arange(rows, dtype=np.intp)[:, None] * count
-    running = np.bincount((ranks + offsets).ravel(), minlength=rows * count)
+    placed = np.add(ranks, offsets, out=ranks if overwrite else None)
+    running = np.bincount(placed.ravel(), minlength=rows * count)
+    del placed
     np.cumsum(running, out=running)
     virtual = (count - 1) * np.asanyarray(quantiles, dtype=float)  # numpy's 'linear' index
     previous = np.floor(virtual)
