@@ -31,7 +31,8 @@ each chunk file; texts shared: ~100 bytes a run), ordered by sample, and given t
 :func:`harness.survey.statistics.statistics`: the rows and bits of the statistics of the
 survey held in memory (tests/survey/test_stream.py). Peak memory is therefore one chunk per
 worker (its scenes, runs and contact records: :data:`CHUNK_IMPACTS` impacts at most) plus,
-in this process, the largest engine × preset × family group (~100 bytes a run) and a
+in this process, the largest engine × preset × family group (~100 bytes a run), at most
+:data:`READ_ROWS` rows of a pair's families read together (:func:`family_batches`) and a
 bootstrap block (:data:`harness.survey.statistics.BOOTSTRAP_BLOCK`); the whole tables
 ``runs.parquet`` and ``samples.parquet`` are written a row group at a time
 (:func:`concatenate`).
