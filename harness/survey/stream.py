@@ -31,8 +31,7 @@ each chunk file; texts shared: ~100 bytes a run), ordered by sample, and given t
 :func:`harness.survey.statistics.statistics`: the rows and bits of the statistics of the
 survey held in memory (tests/survey/test_stream.py). Peak memory is therefore one chunk per
 worker (its scenes, runs and contact records: :data:`CHUNK_IMPACTS` impacts at most) plus,
-in this process, the largest engine × preset × family group (~100 bytes a run), at most
-:data:`READ_ROWS` rows of a pair's families read together (:func:`family_batches`) and a
+in this process, the largest engine × preset × family group (~100 bytes a run) and a
 bootstrap block (:data:`harness.survey.statistics.BOOTSTRAP_BLOCK`); the whole tables
 ``runs.parquet`` and ``samples.parquet`` are written a row group at a time
 (:func:`concatenate`).
@@ -82,9 +81,6 @@ FIGURE_SAMPLES = 2000
 #: (a million impacts in row groups of 73 rows held 600 MB of it), while a row group of the
 #: samples' ~60 columns is gathered whole (65,536 rows: 75 MB more at the peak).
 ROW_GROUP_ROWS = 16384
-#: Most rows of a pair's chunk files read at once (:func:`family_batches`): the families
-#: that fit together are read from each file in one go, a larger family alone.
-READ_ROWS = ROW_GROUP_ROWS
 #: Columns the statistics read from the dataset.
 STATISTICS_COLUMNS = ("engine", "preset", "family", "sample", "status", "reasons",
                       "poisson_type", "gains_energy", "departure_poisson",
@@ -438,89 +434,40 @@ def totals(dataset: Path, populations) -> dict:
             "skipped_runs": skipped_runs, "errors": errors, "impacts": impacts, "cpu_s": cpu}
 
 
-def family_batches(directory: Path, placed, columns=None):
-    """The rows of the families ``placed`` (``[(name, position among the populations)]``) in
-    every chunk file of ``directory``, chunk after chunk: yields ``(batch, files)``, a batch of
-    ``placed`` in its order and, per chunk file, ``(table, [(family, first row, rows)])``:
-    the file's row groups of the batch's families (:class:`ChunkWriter` writes one per
-    population) read in one call, each file opened once a batch. A batch holds the families
-    whose rows fit in :data:`READ_ROWS` together (counted from the first file's row groups
-    times the files), a larger family alone: memory stays bounded by a family or that."""
-    import pyarrow.compute as pc
+def family_blocks(directory: Path, family: str, position: int, columns=None):
+    """The rows of ``family`` (the population at ``position``) in every chunk file of
+    ``directory``, chunk after chunk, as pyarrow tables: each file's row group
+    ``position`` (:class:`ChunkWriter` writes one per population), read alone."""
     import pyarrow.parquet as pq
 
-    paths = sorted(directory.glob("part-*.parquet"))
-    if not paths:
-        return
-    first = pq.read_metadata(paths[0])
-    batches: list[list] = [[]]
-    rows = 0
-    for family, position in placed:
-        size = (first.row_group(position).num_rows if position < first.num_row_groups
-                else 0) * len(paths)
-        if batches[-1] and rows + size > READ_ROWS:
-            batches.append([])
-            rows = 0
-        batches[-1].append((family, position))
-        rows += size
-    for batch in batches:
-        files = []
-        for path in paths:
-            source = pq.ParquetFile(path)
-            present = [(family, position) for family, position in batch
-                       if position < source.num_row_groups]
-            if not present:
-                continue
-            table = source.read_row_groups([position for _, position in present],
-                                           columns=columns, use_threads=False)
-            spans, offset = [], 0
-            for family, position in present:
-                size = source.metadata.row_group(position).num_rows
-                if "family" in table.column_names:
-                    found = set(pc.unique(table.column("family").slice(offset, size))
-                                .to_pylist())
-                    if found != {family}:
-                        raise ValueError(f"{path}: row group {position} holds {sorted(found)}, "
-                                         f"not {family!r}: not a chunk file of this survey")
-                spans.append((family, offset, size))
-                offset += size
-            files.append((table, spans))
-        yield batch, files
-
-
-def pair_tables(dataset: Path, engine: str, preset: str, columns, families,
-                max_sample: int | None = None):
-    """Yields ``(family, {column: array})`` of one pair's runs in the dataset, for each of
-    ``families`` (``[(name, position among the populations)]``, in that order) with runs,
-    of samples below ``max_sample``, ordered by sample: read a batch of families at a time
-    (:func:`family_batches`), each chunk file opened once a batch (a scan of the whole
-    dataset would read many files ahead: tens of MB for 80 files of 500 runs)."""
-    directory = _pair_directory(dataset, engine, preset)
-    wanted = list(dict.fromkeys([*columns, "family", "sample"]))
-    for batch, files in family_batches(directory, families, wanted):
-        kept: dict[str, list] = {family: [] for family, _ in batch}
-        for table, spans in files:
-            every = _columns(table)
-            for family, offset, size in spans:
-                block = {name: every[name][offset:offset + size] for name in columns}
-                if max_sample is not None:
-                    keep = every["sample"][offset:offset + size] < max_sample
-                    block = {name: values[keep] for name, values in block.items()}
-                if len(block[columns[0]]):
-                    kept[family].append(block)
-        for family, _ in batch:
-            if kept[family]:
-                yield family, {name: np.concatenate([block[name] for block in kept[family]])
-                               for name in columns}
+    for path in sorted(directory.glob("part-*.parquet")):
+        source = pq.ParquetFile(path)
+        if position >= source.num_row_groups:
+            continue
+        block = source.read_row_group(position, columns=columns, use_threads=False)
+        families = set(block.column("family").to_pylist()) if "family" in block.column_names \
+            else {family}
+        if families != {family}:
+            raise ValueError(f"{path}: row group {position} holds {sorted(families)}, not "
+                             f"{family!r}: not a chunk file of this survey")
+        yield block
 
 
 def pair_table(dataset: Path, engine: str, preset: str, columns, families,
                max_sample: int | None = None) -> dict:
     """``{column: array}`` of one pair's runs in the dataset, of ``families`` (``[(name,
     position among the populations)]``) and samples below ``max_sample``, ordered by family
-    (as given) then sample (:func:`pair_tables`)."""
-    kept = [block for _, block in pair_tables(dataset, engine, preset, columns, families,
-                                              max_sample)]
+    (as given) then sample: a row group of a file at a time (a scan of the whole dataset
+    would read many files ahead: tens of MB for 80 files of 500 runs)."""
+    directory = _pair_directory(dataset, engine, preset)
+    wanted = list(dict.fromkeys([*columns, "family", "sample"]))
+    kept: list[dict] = []
+    for family, position in families:
+        for block in family_blocks(directory, family, position, wanted):
+            if max_sample is not None:
+                block = block.filter(block.column("sample").to_numpy() < max_sample)
+            if block.num_rows:
+                kept.append(_columns(block))
     if not kept:
         return {}
     return {name: np.concatenate([block[name] for block in kept]) for name in columns}
@@ -554,10 +501,11 @@ def dataset_statistics(dataset: Path, pairs, families) -> dict:
     ``families``: the populations' names in the survey's order."""
     rows: list[dict] = []
     positions = {family: position for position, family in enumerate(families)}
-    placed = [(family, positions[family]) for family in sorted(families)]
     for engine, preset in sorted(pairs):
-        for _family, runs in pair_tables(dataset, engine, preset, STATISTICS_COLUMNS, placed):
-            if not len(runs["engine"]):
+        for family in sorted(families):
+            runs = pair_table(dataset, engine, preset, STATISTICS_COLUMNS,
+                              [(family, positions[family])])
+            if not runs or not len(runs["engine"]):
                 continue
             stats = statistics.statistics(runs)
             if stats:
@@ -599,20 +547,13 @@ def concatenate(dataset: Path, pairs, families, path: Path, metadata: dict,
                 {outputs.METADATA_KEY: json.dumps({**metadata, "table": table},
                                                   sort_keys=True, default=str)})) as writer:
             pending: list = []  # blocks gathered into row groups of ROW_GROUP_ROWS
-            placed = [(family, position) for position, family in enumerate(families)]
             for directory in directories:
-                for batch, files in family_batches(directory, placed):
-                    kept: dict[str, list] = {family: [] for family, _ in batch}
-                    for table, spans in files:
-                        table = table.cast(writer.schema)
-                        for family, offset, size in spans:
-                            kept[family].append(table.slice(offset, size))
-                    for family, _ in batch:
-                        for block in kept.pop(family):
-                            pending.append(block)
-                            if sum(part.num_rows for part in pending) >= ROW_GROUP_ROWS:
-                                writer.write_table(pa.concat_tables(pending))
-                                pending = []
+                for position, family in enumerate(families):
+                    for block in family_blocks(directory, family, position):
+                        pending.append(block.cast(writer.schema))
+                        if sum(part.num_rows for part in pending) >= ROW_GROUP_ROWS:
+                            writer.write_table(pa.concat_tables(pending))
+                            pending = []
             if pending:
                 writer.write_table(pa.concat_tables(pending))
         if path.is_symlink() or (path.exists() and not path.is_file()):

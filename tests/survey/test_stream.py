@@ -86,26 +86,6 @@ def test_the_dataset_is_partitioned_by_pair_and_read_in_one_call(streamed):
     assert metadata["table"] == "samples" and metadata["settings"]["samples"] == SAMPLES
 
 
-
-@pytest.mark.parametrize("read_rows", [1, 25, 10**6])
-def test_families_read_alone_or_together_give_the_same_tables(streamed, tmp_path,
-                                                              monkeypatch, read_rows):
-    # READ_ROWS 1: each family alone (as a family larger than it is read); 25: the first
-    # family's 20 rows and the next apart; 10^6: both families from each file in one call
-    monkeypatch.setattr(stream, "READ_ROWS", read_rows)
-    dataset = streamed / "dataset"
-    pairs = [("pymunk", "defaults"), ("pymunk", "accurate")]
-    _same(_read(streamed / "statistics.parquet"),
-          stream.dataset_statistics(dataset, pairs, FAMILIES))
-    for table, name in (("runs", "runs.parquet"), ("samples", "samples.parquet")):
-        path = stream.concatenate(dataset, pairs if table == "runs" else [], FAMILIES,
-                                  tmp_path / name, {"x": 1}, table)
-        _same(_read(streamed / name), _read(path))
-    figure = stream.figure_runs(dataset, pairs, FAMILIES)
-    runs = _read(streamed / "runs.parquet")
-    _same({name: runs[name] for name in stream.FIGURE_COLUMNS}, figure)
-
-
 def test_a_killed_survey_resumes_from_the_chunks_done(streamed, tmp_path, capsys):
     out = tmp_path / "again"
     assert _survey(out, "--workers", "1") == 0
