@@ -255,7 +255,10 @@ def bootstrap_interval(values: np.ndarray, prefix: str, generator) -> dict:
     # (:func:`resample_quantiles`: np.quantile's bits, without partitioning every resample).
     block = max(1, BOOTSTRAP_BLOCK // values.size)
     order = np.argsort(values, kind="stable")
-    ordered = values[order]
+    # + 0.0: a -0.0 read as +0.0. Equal to +0.0, it sorts among the zeros anywhere, and
+    # np.quantile's partition returns either sign of a tie at its own choice: with one
+    # sign of zero the counts' order statistics are np.quantile's bits.
+    ordered = values[order] + 0.0
     rank = np.empty(values.size, dtype=np.intp)
     rank[order] = np.arange(values.size)
     quantiles = [q for _, q in INTERVAL_QUANTILES]
@@ -273,7 +276,8 @@ def bootstrap_interval(values: np.ndarray, prefix: str, generator) -> dict:
 def resample_quantiles(ordered: np.ndarray, ranks: np.ndarray, quantiles,
                        overwrite: bool = False) -> np.ndarray:
     """``numpy.quantile(ordered[ranks], quantiles, axis=1)`` (its default, 'linear' method)
-    to the last bit, for ``ordered`` finite and sorted and ``ranks`` a ``(resamples, n)``
+    to the last bit, for ``ordered`` finite and sorted, its zeros of one sign (numpy's
+    partition picks either of -0.0 and +0.0 at its own choice), and ``ranks`` a ``(resamples, n)``
     block of indices into it, each row as long as ``ordered``: each row's order statistics
     from how often it drew each rank (the counts' running sum over the block, searched), then
     numpy's own interpolation (``_get_indexes``, ``_get_gamma`` and ``_lerp`` of
