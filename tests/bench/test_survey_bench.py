@@ -59,8 +59,9 @@ def test_survey_bench_reports_targets_and_the_tripwire():
 
 
 def test_a_users_loop_times_the_world_built_not_the_harness_preparing_the_run(monkeypatch):
-    # A user's own loop knows its settings: Box2D's speed probe under ``accurate`` (a second
-    # simulation in the world, inside the run's preparation) must not count as its time.
+    # A user's own loop knows its settings: the harness's preparation of a run (its checks,
+    # start state and, under Box2D's ``accurate``, the first-touch speed that sets the
+    # velocity scale; once a second simulation, the speed probe) must not count as its time.
     pytest.importorskip("Box2D")
     import time
 
