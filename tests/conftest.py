@@ -93,3 +93,18 @@ def toy_engine(monkeypatch):
         yield "toy"
     finally:
         registry.unregister_engine("toy")
+
+
+@pytest.fixture
+def plans_of():
+    """``plans_of(engine, scenes, preset)``: the plans ``Engine.run_many`` makes of
+    ``scenes`` under ``preset`` before it asks the adapter for its batches
+    (``_many_chunks``)."""
+    from harness.engines.scene_setup import check_scene
+
+    def plans(engine, scenes, preset: str) -> list:
+        settings, _ = engine._resolve(engine.settings(preset), preset, None)
+        return [engine._new_plan(scene, settings, None, None, check_scene(engine.name, scene))
+                for scene in scenes]
+
+    return plans

@@ -95,8 +95,8 @@ without them runs the impacts one by one)
     and ``_out_of_plane_drift`` accept, and each run's ``derived``.
 ``_step_many(batch, active) -> {slot: RawContacts}``
     One step of the whole batch; the contact of every active impact that has one.
-``_many_chunks(scenes)``, ``_retire(batch, slot)``, ``_release_many(batch)``
-    Which scenes share a batch; taking a finished impact out; freeing a batch.
+``_many_chunks(plans)``, ``_retire(batch, slot)``, ``_release_many(batch)``
+    Which plans' impacts share a batch; taking a finished impact out; freeing a batch.
 ``_runs_alone(settings) -> bool``
     Whether impacts under these (checked) settings must run one by one (default ``False``).
 
@@ -449,9 +449,9 @@ class Engine(abc.ABC):
         """One step of the batch; ``{slot: contact}`` for the ``active`` slots with contact."""
         raise NotImplementedError
 
-    def _many_chunks(self, scenes: Sequence[Scene]) -> Iterable[Sequence[int]]:
-        """Indices of the scenes that share one batch (default: all)."""
-        return [range(len(scenes))]
+    def _many_chunks(self, plans: Sequence[Plan]) -> Iterable[Sequence[int]]:
+        """Indices of the plans whose impacts share one batch (default: all)."""
+        return [range(len(plans))]
 
     def _retire(self, batch, slot: int) -> None:  # noqa: B027 - optional hook, default keeps it
         """Take a finished impact out of the batch (default: leave it)."""
@@ -731,7 +731,7 @@ class Engine(abc.ABC):
                 weights, last_scene = check_scene(name, scene), scene
             plans.append(new_plan(scene, resolved, None, None, weights))
         runs: list[EngineRun | None] = [None] * len(plans)
-        for chunk in self._many_chunks([plan.scene for plan in plans]):
+        for chunk in self._many_chunks(plans):
             start_time = _clock()
             chunk_plans = [plans[index] for index in chunk]
             batch, worlds, derived = self._build_many(chunk_plans)

@@ -345,12 +345,12 @@ class PymunkEngine(Engine):
         return _contact_of(arbiter, out_a[0] == world.body_ptrs[-1])
 
     # ------------------------------------------------------------------ many impacts
-    def _many_chunks(self, scenes) -> list[list[int]]:
+    def _many_chunks(self, plans) -> list[list[int]]:
         """Ground scenes :data:`MANY_GROUND` to a space, two-body scenes :data:`MANY_PAIRS`
         (one collision category bit per pair)."""
         chunks = []
         for ground, size in ((True, MANY_GROUND), (False, MANY_PAIRS)):
-            rows = [index for index, scene in enumerate(scenes) if scene.ground == ground]
+            rows = [index for index, plan in enumerate(plans) if plan.scene.ground == ground]
             chunks += [rows[begin:begin + size] for begin in range(0, len(rows), size)]
         return chunks
 

@@ -2,7 +2,7 @@
 
 ``EngineRun`` equality compares every field but the wall time (velocities, status, steps,
 contact records, impulses, derived values, notes) as exact floats. The batches put impacts of
-different velocity scales, ground and two-body scenes, and probe runs of different lengths
+different velocity scales, ground and two-body scenes, and impacts of different lengths
 side by side (docs/engines.md, Box2D).
 """
 
@@ -13,7 +13,6 @@ import pytest
 pytest.importorskip("Box2D", reason="Box2D not installed (pip install box2d==2.3.10)")
 
 from harness.engines import Status, UnsupportedScene, box2d, load_engine
-from harness.engines.box2d import scaling
 from harness.scenarios.library import load_scenarios
 from harness.survey.population import resolve_populations
 from harness.survey.sampling import sample_population
@@ -55,24 +54,27 @@ def _mismatched(engine, scenes, settings) -> list[str]:
 
 
 @pytest.mark.parametrize("preset", ["defaults", "accurate"])
-def test_batched_equals_single_on_every_population(engine, population_scenes, preset):
-    assert not _mismatched(engine, population_scenes, engine.settings(preset))
+def test_batched_equals_single_on_every_population(engine, population_scenes, preset,
+                                                   plans_of):
+    # The populations' samples taken in turn, so that batches of impacts in a row hold
+    # ground and two-body scenes together (a batch is a time step's impacts in their order).
+    mixed = [population_scenes[index] for start in range(SAMPLES)
+             for index in range(start, len(population_scenes), SAMPLES)]
+    assert not _mismatched(engine, mixed, engine.settings(preset))
     # The batches are real ones: several chunks, ground and two-body scenes in each.
-    chunks = engine._many_chunks(population_scenes)
+    chunks = engine._many_chunks(plans_of(engine, mixed, preset))
     assert len(chunks) > 2
-    assert any({population_scenes[index].ground for index in chunk} == {True, False}
-               for chunk in chunks)
+    assert any({mixed[index].ground for index in chunk} == {True, False} for chunk in chunks)
 
 
-def _contiguous_chunks(self, scenes) -> list[range]:
-    """Batches of MANY_CHUNK scenes in a row, whatever their speeds."""
-    return [range(begin, min(begin + box2d.MANY_CHUNK, len(scenes)))
-            for begin in range(0, len(scenes), box2d.MANY_CHUNK)]
+def _contiguous_chunks(self, plans) -> list[range]:
+    """Batches of MANY_CHUNK impacts in a row, whatever their time steps."""
+    return [range(begin, min(begin + box2d.MANY_CHUNK, len(plans)))
+            for begin in range(0, len(plans), box2d.MANY_CHUNK)]
 
 
 def test_batches_of_mixed_velocity_scales_equal_single(monkeypatch, engine, population_scenes):
-    # "auto" gives impacts of one batch different Box2D time steps (one world each, the
-    # largest group in the probe's world, the others built anew).
+    # "auto" gives impacts of one batch different Box2D time steps (one world each).
     monkeypatch.setattr(box2d.Box2DEngine, "_many_chunks", _contiguous_chunks)
     worlds = []
     build_many = box2d.Box2DEngine._build_many
@@ -88,35 +90,18 @@ def test_batches_of_mixed_velocity_scales_equal_single(monkeypatch, engine, popu
     assert max(worlds) > 2
 
 
-def test_batches_hold_scenes_of_one_speed_class(engine, population_scenes):
-    chunks = engine._many_chunks(population_scenes)
+def test_batches_hold_impacts_of_one_box2d_time_step(engine, population_scenes, plans_of):
+    # "auto" gives impacts different velocity scales, so different Box2D time steps: a
+    # batch is one world, so it holds the impacts of one time step (the plans' own), every
+    # impact in one batch, at most MANY_CHUNK to a batch.
+    chunks = engine._many_chunks(plans_of(engine, population_scenes, "accurate"))
     assert sorted(index for chunk in chunks for index in chunk) == list(
         range(len(population_scenes)))
+    runs = engine.run_many(population_scenes, preset="accurate")
+    assert len({run.derived["box2d_time_step"] for run in runs}) > 2
     for chunk in chunks:
         assert 0 < len(chunk) <= box2d.MANY_CHUNK
-        assert len({scaling._speed_class(population_scenes[index])
-                    for index in chunk}) == 1
-
-
-def test_the_speed_class_foretells_the_velocity_scale_of_disks(engine, population_scenes):
-    # For disks the estimate is the computed first-touch speed ("auto" gives class c <= 0
-    # the scale 2^(1 - c), class 1 the scale 1), but where V·speed is 2 m/s within its
-    # rounding (the larger scale taken).
-    disks = [scene for scene in population_scenes
-             if all(body.shape.kind == "disk" for body in scene.bodies)]
-    runs = engine.run_many(disks, preset="accurate")
-    assert len({run.derived["velocity_scale"] for run in runs}) > 2
-    assert all(run.derived["velocity_scale"]
-               == 2.0 ** (1 - min(scaling._speed_class(scene), 1))
-               or run.derived["velocity_scale_at_boundary"]
-               for scene, run in zip(disks, runs))
-    # Over every scene, most impacts run in their batch's largest world.
-    runs = engine.run_many(population_scenes, preset="accurate")
-    outside = 0
-    for chunk in engine._many_chunks(population_scenes):
-        scales = [runs[index].derived["velocity_scale"] for index in chunk]
-        outside += len(scales) - max(scales.count(scale) for scale in scales)
-    assert outside < 0.25 * len(population_scenes)
+        assert len({runs[index].derived["box2d_time_step"] for index in chunk}) == 1
 
 
 @pytest.mark.parametrize("preset", ["defaults", "accurate"])

@@ -114,8 +114,8 @@ def test_batched_equals_a_fresh_adapters_single_runs(population_scenes):
     assert not mismatches(scenes, again, single)
 
 
-def test_chunks_keep_ground_and_two_body_scenes_apart(engine, population_scenes):
-    chunks = engine._many_chunks(population_scenes)
+def test_chunks_keep_ground_and_two_body_scenes_apart(engine, population_scenes, plans_of):
+    chunks = engine._many_chunks(plans_of(engine, population_scenes, "defaults"))
     assert sorted(index for chunk in chunks for index in chunk) == list(
         range(len(population_scenes)))
     for chunk in chunks:

@@ -15,7 +15,6 @@ from harness.engines.box2d.presets import _BOOL_KEYS, PRESETS, SETTING_DOCS
 from harness.engines.box2d.scaling import (
     _Prepared,
     _prepared,
-    _speed_class,
     _speed_results,
     _SpeedProbe,
 )
@@ -24,7 +23,6 @@ from harness.engines.contract import Engine, RawContacts, StepTiming, geometry_k
 from harness.engines.settings import EngineSettingsError, check_int, check_number
 from harness.scene import Scene
 
-_MAX_PLANNED = 100_000  # scenes remembered by _prepare for _many_chunks, at most
 CLIPPED_NOTE = ("Box2D clipped a velocity (b2_maxTranslation 2 m or b2_maxRotation π/2 per "
                 "step; see derived speed_cap, angular_speed_cap)")
 
@@ -101,21 +99,10 @@ class Box2DEngine(Engine):
         return _World(scene, float(settings["length_scale"]), float(settings["polygon_radius"]),
                       measures=contacts)
 
-    # run_many: each planned scene's Box2D time step by id(scene), for _many_chunks (the
-    # contract plans every scene before it asks for chunks). A stale or reused id can only
-    # put a scene in another batch, which changes no run.
-    _planned_steps: dict | None = None
-
     def _prepare(self, world: _World | None, scene: Scene, settings, start, weights) -> _Prepared:
         # The velocity scale and start depth come from the scene (scaling.first_touch_speed);
         # the speed Box2D saw is read in the run itself (_reset).
-        prepared = _prepared(scene, settings, start)
-        if world is None:
-            planned = self._planned_steps
-            if planned is None or len(planned) >= _MAX_PLANNED:
-                planned = self._planned_steps = {}
-            planned[id(scene)] = prepared.dt
-        return prepared
+        return _prepared(scene, settings, start)
 
     def _reset(self, world: _World, prepared: _Prepared) -> dict:
         world.configure(prepared.world_values, prepared.pair_values)
@@ -163,21 +150,14 @@ class Box2DEngine(Engine):
         """
         return bool(settings["sub_stepping"])
 
-    def _many_chunks(self, scenes) -> list[list[int]]:
-        """Up to :data:`MANY_CHUNK` scenes to a batch, those of one Box2D time step together
-        (in their order; a group's scenes split evenly among its batches).
-
-        ``auto`` gives each velocity scale a world of its own (:meth:`_build_many`): a batch
-        of one time step is one world. The time steps are the plans' (:meth:`_prepare`); a
-        scene planned elsewhere goes by its :func:`_speed_class`, an estimate. Which scenes
-        share a batch changes no run.
-        """
-        planned, self._planned_steps = self._planned_steps or {}, None
-        classes: dict[tuple, list[int]] = {}
-        for index, scene in enumerate(scenes):
-            time_step = planned.get(id(scene))
-            key = ("class", _speed_class(scene)) if time_step is None else ("dt", time_step)
-            classes.setdefault(key, []).append(index)
+    def _many_chunks(self, plans) -> list[list[int]]:
+        """Up to :data:`MANY_CHUNK` impacts to a batch, those of one Box2D time step (the
+        plans' own: ``auto`` gives each velocity scale one) together, in their order, a
+        time step's impacts split evenly among its batches: a batch is one world
+        (:meth:`_build_many`). Which impacts share a batch changes no run."""
+        classes: dict[float, list[int]] = {}
+        for index, plan in enumerate(plans):
+            classes.setdefault(plan.prepared.dt, []).append(index)
         chunks = []
         for indices in classes.values():
             size = -(-len(indices) // -(-len(indices) // MANY_CHUNK))  # ceil(n / batches)

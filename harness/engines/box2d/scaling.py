@@ -6,9 +6,8 @@ point slower than it gets ``e = 0``. The laws are homogeneous in lengths and vel
 the run is a scaled copy of the scene (package docstring, "The restitution threshold"):
 :func:`first_touch_speed` computes the approach speed at the first touch from the scene in
 double precision, with a bound on its rounding; :func:`_prepared` picks the velocity scale
-(a decision within a band, :func:`_auto_scale`) and the start a hair deep from it, and
-:func:`_speed_class` groups the scenes of a batch likely to get one scale. Box2D's own
-view of the speed (float32, in the scaled world) is read in the run itself
+(a decision within a band, :func:`_auto_scale`) and the start a hair deep from it. Box2D's
+own view of the speed (float32, in the scaled world) is read in the run itself
 (:func:`_speed_results`).
 """
 
@@ -426,43 +425,3 @@ def _speed_results(derived: dict, speed: float, restitution: float,
         return (*notes, THRESHOLD_NOTE)
     return notes
 
-
-def _approach_estimate(scene: Scene) -> float:
-    """The normal approach speed at first touch (m/s), as the bodies' centres and a ground
-    body's lowest point give it: about the speed the probe run measures (exact for a disk
-    on the ground or two disks), for :func:`_speed_class`."""
-    if scene.ground:
-        (body,) = scene.bodies
-        shape, angle = body.shape, body.angle
-        cos, sin = math.cos(angle), math.sin(angle)
-        if shape.kind == "disk":
-            offsets = [(0.0, 0.0)]
-        elif shape.kind == "rod":
-            offsets = [(-shape.length / 2.0, 0.0), (shape.length / 2.0, 0.0)]
-        elif shape.kind == "box":
-            half_w, half_h = shape.width / 2.0, shape.height / 2.0
-            offsets = [(-half_w, -half_h), (half_w, -half_h), (half_w, half_h),
-                       (-half_w, half_h)]
-        else:  # a polygon's points, or an ellipse's placed stand-in's
-            offsets = (shape.stand_in() if shape.kind == "ellipse" else shape).points
-        # The lowest point's x offset from the centre (the ground's normal is +y).
-        _, lever = min((sin * x + cos * y, cos * x - sin * y) for x, y in offsets)
-        return -(body.velocity[1] + body.angular_velocity * lever)
-    body_a, body_b = scene.bodies
-    d_x = body_b.position[0] - body_a.position[0]
-    d_y = body_b.position[1] - body_a.position[1]
-    distance = math.hypot(d_x, d_y)
-    if distance == 0.0:
-        return 0.0
-    return -((body_b.velocity[0] - body_a.velocity[0]) * d_x
-             + (body_b.velocity[1] - body_a.velocity[1]) * d_y) / distance
-
-
-def _speed_class(scene: Scene) -> int:
-    """The binary exponent of :func:`_approach_estimate` relative to the speed ``auto``
-    lifts impacts to, 1 at and above it: scenes of one class likely get one ``auto``
-    velocity scale."""
-    speed = _approach_estimate(scene) / (_AUTO_MARGIN * VELOCITY_THRESHOLD)
-    if not 0.0 < speed < 1.0 or not math.isfinite(speed):
-        return 1
-    return max(math.frexp(speed)[1], -64)

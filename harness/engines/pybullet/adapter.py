@@ -244,12 +244,12 @@ class PybulletEngine(Engine):
         return _contact_of(points, world.bodies[-1], world.dt)
 
     # ------------------------------------------------------------------ many impacts
-    def _many_chunks(self, scenes) -> list[list[int]]:
+    def _many_chunks(self, plans) -> list[list[int]]:
         """Ground scenes and two-body scenes apart (a two-body world has no plane),
         :data:`MANY_IMPACTS` to a world."""
         chunks = []
         for ground in (True, False):
-            rows = [index for index, scene in enumerate(scenes) if scene.ground == ground]
+            rows = [index for index, plan in enumerate(plans) if plan.scene.ground == ground]
             chunks += [rows[begin:begin + MANY_IMPACTS]
                        for begin in range(0, len(rows), MANY_IMPACTS)]
         return chunks
