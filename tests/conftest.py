@@ -108,3 +108,18 @@ def plans_of():
                 for scene in scenes]
 
     return plans
+
+
+@pytest.fixture
+def toy_beside_the_others():
+    """The test-only engine of tests/engines/toy_engine.py registered beside the shipped
+    ones (where a scenario's gates name those), unregistered after. Yields its name."""
+    from harness import engines as registry
+    from tests.engines.toy_engine import ToyEngine
+
+    registry.register_engine("toy", ToyEngine)
+    try:
+        yield "toy"
+    finally:
+        registry.unregister_engine("toy")
+    assert "toy" not in registry.engine_names()

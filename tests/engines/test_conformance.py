@@ -33,13 +33,9 @@ from tests.theory import law_bounds
 
 
 @pytest.fixture
-def toy():
-    registry.register_engine("toy", ToyEngine)
-    try:
-        yield "toy"
-    finally:
-        registry.unregister_engine("toy")
-    assert "toy" not in registry.engine_names()
+def toy(toy_beside_the_others):
+    """The toy registered beside the shipped engines (tests/conftest.py)."""
+    return toy_beside_the_others
 
 
 def test_the_toy_conforms_and_its_traits_come_from_its_class(toy):

@@ -216,19 +216,6 @@ def test_an_error_reads_as_its_type_and_first_line_or_sentence(message, expected
     assert text == ("ValueError" if expected is None else f"ValueError: {expected}")
 
 
-@pytest.fixture
-def toy_beside_the_others():
-    """The toy registered beside the shipped engines (the scenarios' gates name those)."""
-    from harness import engines as registry
-    from tests.engines.toy_engine import ToyEngine
-
-    registry.register_engine("toy", ToyEngine)
-    try:
-        yield "toy"
-    finally:
-        registry.unregister_engine("toy")
-
-
 def test_the_suite_exits_4_when_its_survey_had_an_engine_error(toy_beside_the_others,
                                                                monkeypatch, tmp_path, capsys):
     from harness import suite
